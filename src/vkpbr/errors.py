@@ -1,0 +1,70 @@
+"""vkpbr's exception hierarchy: every error a user can cause derives from VkpbrError.
+
+The CLI turns a VkpbrError into one line on stderr and a non-zero exit; anything else is a bug.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "VkpbrError",
+    "UsageError",
+    "SceneError",
+    "BakeFormatError",
+    "VulkanError",
+    "NoVulkanError",
+    "OutOfDeviceMemoryError",
+    "DeviceLostError",
+    "ValidationError",
+    "ShaderError",
+]
+
+
+class VkpbrError(Exception):
+    """Base class of every error vkpbr raises on purpose."""
+
+
+class UsageError(VkpbrError, ValueError):
+    """A bad option value: unknown view name, image size of 0, malformed camera, ..."""
+
+
+class SceneError(VkpbrError):
+    """A scene file that cannot be loaded. The message names the file and the problem."""
+
+    def __init__(self, path: object, problem: str) -> None:
+        self.path = str(path)
+        self.problem = problem
+        super().__init__(f"{self.path}: {problem}")
+
+
+class BakeFormatError(SceneError):
+    """A baked file that is truncated, corrupt, of another version or stale."""
+
+
+class VulkanError(VkpbrError):
+    """A Vulkan call failed; carries the VkResult name and the function."""
+
+    def __init__(self, function: str, result: str, hint: str = "") -> None:
+        self.function = function
+        self.result = result
+        message = f"{function} failed with {result}"
+        super().__init__(f"{message}: {hint}" if hint else message)
+
+
+class NoVulkanError(VulkanError):
+    """No Vulkan loader or no driver: tells the user what to install."""
+
+
+class OutOfDeviceMemoryError(VulkanError, MemoryError):
+    """The GPU (or lavapipe's heap) ran out of memory."""
+
+
+class DeviceLostError(VulkanError):
+    """The device was lost (driver crash, GPU reset)."""
+
+
+class ValidationError(VkpbrError):
+    """The Khronos validation layer reported one or more errors."""
+
+
+class ShaderError(VkpbrError):
+    """A SPIR-V module is missing or stale, or glslc failed."""

@@ -1,0 +1,115 @@
+"""Buffers: device-local with staging upload, or host-visible and persistently mapped.
+
+Host-visible buffers stay mapped for their whole life: per-frame uniform updates and readbacks
+are then a NumPy copy into or out of `Buffer.array(...)`, with no Vulkan call at all.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.vk import translate_errors
+
+__all__ = ["Buffer", "upload_buffer"]
+
+
+class Buffer:
+    """One VkBuffer with its own VkDeviceMemory (allocations are few and large here)."""
+
+    def __init__(
+        self,
+        device: Device,
+        size: int,
+        usage: int,
+        host_visible: bool = False,
+        name: str = "",
+    ) -> None:
+        vk = device.vk
+        self.device = device
+        self.size = max(int(size), 4)
+        self.name = name
+        self.host_visible = host_visible
+        self._mapped: Any = None
+        self.memory = None
+        with translate_errors("vkCreateBuffer"):
+            self.handle = vk.vkCreateBuffer(
+                device.handle,
+                vk.VkBufferCreateInfo(
+                    size=self.size, usage=usage, sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE
+                ),
+                None,
+            )
+        device.track(self)
+        req = vk.vkGetBufferMemoryRequirements(device.handle, self.handle)
+        if host_visible:
+            required = (
+                vk.VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | vk.VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
+            )
+            # Cached memory makes CPU reads of readback buffers fast on discrete GPUs.
+            preferred = required | vk.VK_MEMORY_PROPERTY_HOST_CACHED_BIT
+        else:
+            required = preferred = vk.VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT
+        mtype = device.memory_type(req.memoryTypeBits, required, preferred)
+        with translate_errors("vkAllocateMemory"):
+            self.memory = vk.vkAllocateMemory(
+                device.handle,
+                vk.VkMemoryAllocateInfo(allocationSize=req.size, memoryTypeIndex=mtype),
+                None,
+            )
+        vk.vkBindBufferMemory(device.handle, self.handle, self.memory, 0)
+        if host_visible:
+            with translate_errors("vkMapMemory"):
+                self._mapped = vk.vkMapMemory(device.handle, self.memory, 0, self.size, 0)
+
+    def array(self, dtype: Any = np.uint8, count: int = -1, offset: int = 0) -> np.ndarray:
+        """A zero-copy NumPy view of the mapped memory (host-visible buffers only).
+
+        The view dangles once the buffer is destroyed: do not keep it beyond that.
+        """
+        if self._mapped is None:
+            raise RuntimeError(f"buffer {self.name!r} is not host-visible")
+        return np.frombuffer(self._mapped, dtype=dtype, count=count, offset=offset)
+
+    def write(self, data: np.ndarray | bytes, offset: int = 0) -> None:
+        """Copy bytes into a mapped buffer."""
+        src = np.frombuffer(memoryview(data).cast("B"), dtype=np.uint8)
+        self.array(np.uint8, len(src), offset)[:] = src
+
+    def destroy(self) -> None:
+        if self.handle is None:
+            return
+        vk = self.device.vk
+        dev = self.device.handle
+        handle, self.handle = self.handle, None
+        if self._mapped is not None:
+            vk.vkUnmapMemory(dev, self.memory)
+            self._mapped = None
+        vk.vkDestroyBuffer(dev, handle, None)
+        if self.memory is not None:
+            vk.vkFreeMemory(dev, self.memory, None)
+            self.memory = None
+        self.device.untrack(self)
+
+
+def upload_buffer(device: Device, data: np.ndarray, usage: int, name: str = "") -> Buffer:
+    """A device-local buffer filled with `data` through a temporary staging buffer."""
+    vk = device.vk
+    data = np.ascontiguousarray(data)
+    dst = Buffer(device, data.nbytes, usage | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, name=name)
+    if data.nbytes == 0:
+        return dst
+    staging = Buffer(
+        device, data.nbytes, vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT, host_visible=True
+    )
+    try:
+        staging.write(data)
+        with device.one_time_commands() as cmd:
+            vk.vkCmdCopyBuffer(
+                cmd, staging.handle, dst.handle, 1, [vk.VkBufferCopy(size=data.nbytes)]
+            )
+    finally:
+        staging.destroy()
+    return dst

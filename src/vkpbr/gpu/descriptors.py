@@ -1,0 +1,162 @@
+"""Descriptor set layouts from a binding table, a pool, and a batched writer.
+
+A layout is described as rows of (binding, kind, stages) in plain words: kind is "uniform" or
+"sampler" (combined image sampler); stages is a subset of "vertex", "fragment".
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.vk import translate_errors
+
+__all__ = ["BindingSpec", "DescriptorSetLayout", "DescriptorPool", "DescriptorWriter"]
+
+
+@dataclass(frozen=True)
+class BindingSpec:
+    binding: int
+    kind: str  # "uniform" | "sampler"
+    stages: tuple[str, ...]
+    name: str = ""
+
+
+def _descriptor_type(vk: Any, kind: str) -> int:
+    return {
+        "uniform": vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
+        "sampler": vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+    }[kind]
+
+
+def _stage_flags(vk: Any, stages: Sequence[str]) -> int:
+    bits = {"vertex": vk.VK_SHADER_STAGE_VERTEX_BIT, "fragment": vk.VK_SHADER_STAGE_FRAGMENT_BIT}
+    flags = 0
+    for s in stages:
+        flags |= bits[s]
+    return flags
+
+
+class DescriptorSetLayout:
+    def __init__(self, device: Device, bindings: Sequence[BindingSpec]) -> None:
+        vk = device.vk
+        self.device = device
+        self.bindings = tuple(bindings)
+        with translate_errors("vkCreateDescriptorSetLayout"):
+            self.handle = vk.vkCreateDescriptorSetLayout(
+                device.handle,
+                vk.VkDescriptorSetLayoutCreateInfo(
+                    pBindings=[
+                        vk.VkDescriptorSetLayoutBinding(
+                            binding=b.binding,
+                            descriptorType=_descriptor_type(vk, b.kind),
+                            descriptorCount=1,
+                            stageFlags=_stage_flags(vk, b.stages),
+                        )
+                        for b in self.bindings
+                    ]
+                ),
+                None,
+            )
+        device.track(self)
+
+    def destroy(self) -> None:
+        if self.handle is None:
+            return
+        handle, self.handle = self.handle, None
+        self.device.vk.vkDestroyDescriptorSetLayout(self.device.handle, handle, None)
+        self.device.untrack(self)
+
+
+class DescriptorPool:
+    """A pool sized for `max_sets` sets of the given layouts' mix of descriptors."""
+
+    def __init__(
+        self, device: Device, layouts_and_counts: Sequence[tuple[DescriptorSetLayout, int]]
+    ) -> None:
+        vk = device.vk
+        self.device = device
+        totals: dict[str, int] = {}
+        max_sets = 0
+        for layout, count in layouts_and_counts:
+            max_sets += count
+            for b in layout.bindings:
+                totals[b.kind] = totals.get(b.kind, 0) + count
+        with translate_errors("vkCreateDescriptorPool"):
+            self.handle = vk.vkCreateDescriptorPool(
+                device.handle,
+                vk.VkDescriptorPoolCreateInfo(
+                    maxSets=max(max_sets, 1),
+                    pPoolSizes=[
+                        vk.VkDescriptorPoolSize(
+                            type=_descriptor_type(vk, kind), descriptorCount=n
+                        )
+                        for kind, n in totals.items()
+                    ],
+                ),
+                None,
+            )
+        device.track(self)
+
+    def allocate(self, layout: DescriptorSetLayout) -> Any:
+        vk = self.device.vk
+        with translate_errors("vkAllocateDescriptorSets"):
+            return vk.vkAllocateDescriptorSets(
+                self.device.handle,
+                vk.VkDescriptorSetAllocateInfo(
+                    descriptorPool=self.handle, pSetLayouts=[layout.handle]
+                ),
+            )[0]
+
+    def destroy(self) -> None:
+        if self.handle is None:
+            return
+        handle, self.handle = self.handle, None
+        self.device.vk.vkDestroyDescriptorPool(self.device.handle, handle, None)
+        self.device.untrack(self)
+
+
+class DescriptorWriter:
+    """Collect writes, then `update()` them in one vkUpdateDescriptorSets call.
+
+    The info structs are kept referenced in `self._keep` until the update returns.
+    """
+
+    def __init__(self, device: Device) -> None:
+        self.device = device
+        self._writes: list[Any] = []
+        self._keep: list[Any] = []
+
+    def uniform(self, dst_set: Any, binding: int, buffer: Any, size: int, offset: int = 0) -> None:
+        vk = self.device.vk
+        info = vk.VkDescriptorBufferInfo(buffer=buffer.handle, offset=offset, range=size)
+        self._keep.append(info)
+        self._writes.append(
+            vk.VkWriteDescriptorSet(
+                dstSet=dst_set, dstBinding=binding, descriptorCount=1,
+                descriptorType=vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, pBufferInfo=[info],
+            )
+        )
+
+    def sampler(self, dst_set: Any, binding: int, view: Any, sampler: Any) -> None:
+        vk = self.device.vk
+        info = vk.VkDescriptorImageInfo(
+            sampler=sampler.handle, imageView=view.handle,
+            imageLayout=vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+        )
+        self._keep.append(info)
+        self._writes.append(
+            vk.VkWriteDescriptorSet(
+                dstSet=dst_set, dstBinding=binding, descriptorCount=1,
+                descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, pImageInfo=[info],
+            )
+        )
+
+    def update(self) -> None:
+        if self._writes:
+            vk = self.device.vk
+            vk.vkUpdateDescriptorSets(self.device.handle, len(self._writes), self._writes, 0, None)
+        self._writes.clear()
+        self._keep.clear()

@@ -1,0 +1,228 @@
+"""Logical device, graphics queue, command pool, memory types, and child-object lifetime.
+
+`Device` owns every object created through the gpu layer: children register themselves and
+`close()` destroys them in reverse creation order, then the device, then the instance (the
+order Sascha Willems' renderheadless and vkguide's deletion queue use). Nothing is freed from
+`__del__`: GC order is arbitrary and the device must outlive its children.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator
+from typing import Any, Protocol
+
+from vkpbr.errors import VkpbrError
+from vkpbr.gpu.instance import Instance, PhysicalDeviceInfo
+from vkpbr.gpu.vk import translate_errors
+
+__all__ = ["Device", "Destroyable"]
+
+
+class Destroyable(Protocol):
+    def destroy(self) -> None: ...
+
+
+class Device:
+    """A VkDevice with one graphics queue. Use as a context manager or call `close()`."""
+
+    def __init__(
+        self,
+        device: str | int | None = None,
+        validation: bool = False,
+        sync_validation: bool = False,
+    ) -> None:
+        self.instance = Instance(validation=validation, sync_validation=sync_validation)
+        self.vk = vk = self.instance.vk
+        self._children: list[Destroyable] = []
+        self.handle = None
+        try:
+            self.info: PhysicalDeviceInfo = self.instance.choose_device(device)
+            self.physical = self.info.handle
+            self.properties = vk.vkGetPhysicalDeviceProperties(self.physical)
+            self.limits = self.properties.limits
+            self.memory_properties = vk.vkGetPhysicalDeviceMemoryProperties(self.physical)
+            self.queue_family = self._graphics_queue_family()
+            self._create_device()
+            self.queue = vk.vkGetDeviceQueue(self.handle, self.queue_family, 0)
+            with translate_errors("vkCreateCommandPool"):
+                self.command_pool = vk.vkCreateCommandPool(
+                    self.handle,
+                    vk.VkCommandPoolCreateInfo(
+                        flags=vk.VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT,
+                        queueFamilyIndex=self.queue_family,
+                    ),
+                    None,
+                )
+        except BaseException:
+            self.close()
+            raise
+
+    # --- creation ---------------------------------------------------------------------------
+    def _graphics_queue_family(self) -> int:
+        vk = self.vk
+        families = vk.vkGetPhysicalDeviceQueueFamilyProperties(self.physical)
+        for i, fam in enumerate(families):
+            if fam.queueFlags & vk.VK_QUEUE_GRAPHICS_BIT:
+                return i
+        raise VkpbrError(f"{self.info.name}: no graphics queue")
+
+    def _create_device(self) -> None:
+        vk = self.vk
+        supported = self._query_features()
+        self.anisotropy = bool(supported["samplerAnisotropy"])
+        self.timestamps = bool(self.limits.timestampComputeAndGraphics)
+        f13 = vk.VkPhysicalDeviceVulkan13Features(
+            dynamicRendering=vk.VK_TRUE, synchronization2=vk.VK_TRUE
+        )
+        f11 = vk.VkPhysicalDeviceVulkan11Features(
+            pNext=f13, shaderDrawParameters=supported["shaderDrawParameters"]
+        )
+        core = vk.VkPhysicalDeviceFeatures(
+            samplerAnisotropy=supported["samplerAnisotropy"],
+            multiDrawIndirect=supported["multiDrawIndirect"],
+            drawIndirectFirstInstance=supported["drawIndirectFirstInstance"],
+        )
+        features = vk.VkPhysicalDeviceFeatures2(pNext=f11, features=core)
+        self.extensions: list[str] = []
+        available = {
+            e.extensionName
+            for e in vk.vkEnumerateDeviceExtensionProperties(self.physical, None)
+        }
+        for ext in getattr(self, "wanted_extensions", ()):
+            if ext in available:
+                self.extensions.append(ext)
+        info = vk.VkDeviceCreateInfo(
+            pNext=features,
+            pQueueCreateInfos=[
+                vk.VkDeviceQueueCreateInfo(
+                    queueFamilyIndex=self.queue_family, pQueuePriorities=[1.0]
+                )
+            ],
+            ppEnabledExtensionNames=self.extensions,
+        )
+        with translate_errors("vkCreateDevice"):
+            self.handle = vk.vkCreateDevice(self.physical, info, None)
+
+    def _query_features(self) -> dict[str, int]:
+        vk = self.vk
+        f13 = vk.VkPhysicalDeviceVulkan13Features()
+        f11 = vk.VkPhysicalDeviceVulkan11Features(pNext=f13)
+        f2 = vk.VkPhysicalDeviceFeatures2(
+            sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, pNext=f11
+        )
+        vk.vkGetPhysicalDeviceFeatures2(self.physical, f2)
+        if not (f13.dynamicRendering and f13.synchronization2):
+            raise VkpbrError(
+                f"{self.info.name}: Vulkan 1.3 dynamic rendering and synchronization2 are "
+                "required (update the driver; Mesa >= 22 lavapipe has them)"
+            )
+        c = f2.features
+        return {
+            "samplerAnisotropy": c.samplerAnisotropy,
+            "multiDrawIndirect": c.multiDrawIndirect,
+            "drawIndirectFirstInstance": c.drawIndirectFirstInstance,
+            "shaderDrawParameters": f11.shaderDrawParameters,
+        }
+
+    # --- helpers ----------------------------------------------------------------------------
+    def memory_type(self, type_bits: int, required: int, preferred: int = 0) -> int:
+        """Index of a memory type allowed by `type_bits` with `required` (and ideally
+        `preferred`) property flags."""
+        mp = self.memory_properties
+        candidates = [
+            i
+            for i in range(mp.memoryTypeCount)
+            if type_bits & (1 << i)
+            and (mp.memoryTypes[i].propertyFlags & required) == required
+        ]
+        if not candidates:
+            raise VkpbrError(f"{self.info.name}: no memory type with flags {required:#x}")
+        for i in candidates:
+            if (mp.memoryTypes[i].propertyFlags & preferred) == preferred:
+                return i
+        return candidates[0]
+
+    def allocate_command_buffer(self) -> Any:
+        vk = self.vk
+        with translate_errors("vkAllocateCommandBuffers"):
+            return vk.vkAllocateCommandBuffers(
+                self.handle,
+                vk.VkCommandBufferAllocateInfo(
+                    commandPool=self.command_pool,
+                    level=vk.VK_COMMAND_BUFFER_LEVEL_PRIMARY,
+                    commandBufferCount=1,
+                ),
+            )[0]
+
+    def free_command_buffer(self, cmd: Any) -> None:
+        if self.handle is not None:
+            self.vk.vkFreeCommandBuffers(self.handle, self.command_pool, 1, [cmd])
+
+    @contextlib.contextmanager
+    def one_time_commands(self) -> Iterator[Any]:
+        """Record commands, then submit them and wait (uploads, mip generation)."""
+        vk = self.vk
+        cmd = self.allocate_command_buffer()
+        try:
+            vk.vkBeginCommandBuffer(
+                cmd,
+                vk.VkCommandBufferBeginInfo(
+                    flags=vk.VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT
+                ),
+            )
+            yield cmd
+            vk.vkEndCommandBuffer(cmd)
+            fence = vk.vkCreateFence(self.handle, vk.VkFenceCreateInfo(), None)
+            try:
+                with translate_errors("vkQueueSubmit"):
+                    vk.vkQueueSubmit(
+                        self.queue, 1, [vk.VkSubmitInfo(pCommandBuffers=[cmd])], fence
+                    )
+                    vk.vkWaitForFences(self.handle, 1, [fence], vk.VK_TRUE, 2**63 - 1)
+            finally:
+                vk.vkDestroyFence(self.handle, fence, None)
+        finally:
+            self.free_command_buffer(cmd)
+
+    def wait_idle(self) -> None:
+        if self.handle is not None:
+            with translate_errors("vkDeviceWaitIdle"):
+                self.vk.vkDeviceWaitIdle(self.handle)
+
+    # --- lifetime ---------------------------------------------------------------------------
+    def track(self, child: Destroyable) -> None:
+        self._children.append(child)
+
+    def untrack(self, child: Destroyable) -> None:
+        with contextlib.suppress(ValueError):
+            self._children.remove(child)
+
+    @property
+    def live_children(self) -> int:
+        return len(self._children)
+
+    def check_validation(self) -> None:
+        self.instance.check()
+
+    def close(self) -> None:
+        """Destroy every child (reverse order), the device, then the instance. Idempotent."""
+        vk = self.vk if hasattr(self, "vk") else None
+        if self.handle is not None and vk is not None:
+            with contextlib.suppress(Exception):
+                vk.vkDeviceWaitIdle(self.handle)
+            while self._children:
+                self._children.pop().destroy()
+            if getattr(self, "command_pool", None) is not None:
+                vk.vkDestroyCommandPool(self.handle, self.command_pool, None)
+                self.command_pool = None
+            handle, self.handle = self.handle, None
+            vk.vkDestroyDevice(handle, None)
+        if getattr(self, "instance", None) is not None:
+            self.instance.destroy()
+
+    def __enter__(self) -> Device:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,301 @@
+"""Images, image views (with component swizzles), samplers, and texture upload with mips.
+
+Textures are uploaded in batches: many images share one command buffer and a bounded staging
+buffer, and each gets its full mip chain by successive linear blits on the GPU.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from vkpbr.gpu.buffer import Buffer
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.vk import translate_errors
+
+__all__ = ["Image", "ImageView", "Sampler", "SamplerSpec", "mip_levels", "TextureUploader"]
+
+
+def mip_levels(width: int, height: int) -> int:
+    return int(max(width, height)).bit_length()
+
+
+class Image:
+    """A 2D VkImage with dedicated memory."""
+
+    def __init__(
+        self,
+        device: Device,
+        width: int,
+        height: int,
+        format: int,
+        usage: int,
+        mip_levels: int = 1,
+        samples: int = 1,
+        name: str = "",
+    ) -> None:
+        vk = device.vk
+        self.device = device
+        self.width, self.height, self.format = width, height, format
+        self.mip_levels, self.samples, self.name = mip_levels, samples, name
+        self.memory = None
+        with translate_errors("vkCreateImage"):
+            self.handle = vk.vkCreateImage(
+                device.handle,
+                vk.VkImageCreateInfo(
+                    imageType=vk.VK_IMAGE_TYPE_2D,
+                    format=format,
+                    extent=vk.VkExtent3D(width=width, height=height, depth=1),
+                    mipLevels=mip_levels,
+                    arrayLayers=1,
+                    samples=samples,
+                    tiling=vk.VK_IMAGE_TILING_OPTIMAL,
+                    usage=usage,
+                    sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
+                    initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                ),
+                None,
+            )
+        device.track(self)
+        req = vk.vkGetImageMemoryRequirements(device.handle, self.handle)
+        mtype = device.memory_type(req.memoryTypeBits, vk.VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)
+        self.bytes = int(req.size)
+        with translate_errors("vkAllocateMemory"):
+            self.memory = vk.vkAllocateMemory(
+                device.handle,
+                vk.VkMemoryAllocateInfo(allocationSize=req.size, memoryTypeIndex=mtype),
+                None,
+            )
+        vk.vkBindImageMemory(device.handle, self.handle, self.memory, 0)
+
+    def destroy(self) -> None:
+        if self.handle is None:
+            return
+        vk, dev = self.device.vk, self.device.handle
+        handle, self.handle = self.handle, None
+        vk.vkDestroyImage(dev, handle, None)
+        vk.vkFreeMemory(dev, self.memory, None)
+        self.device.untrack(self)
+
+
+class ImageView:
+    """A view of an image; `swizzle` maps (r, g, b, a) to source channels, e.g. "bbbb" makes
+    a scalar map out of the blue channel (glTF metalness) without copying the image."""
+
+    _SWZ = {"r": "R", "g": "G", "b": "B", "a": "A", "1": "ONE", "0": "ZERO", "i": "IDENTITY"}
+
+    def __init__(
+        self,
+        image: Image,
+        aspect: str = "color",
+        swizzle: str = "iiii",
+        format: int | None = None,
+    ) -> None:
+        device = image.device
+        vk = device.vk
+        self.device = device
+        self.image = image
+        comps = [getattr(vk, f"VK_COMPONENT_SWIZZLE_{self._SWZ[c]}") for c in swizzle]
+        aspect_bit = (
+            vk.VK_IMAGE_ASPECT_DEPTH_BIT if aspect == "depth" else vk.VK_IMAGE_ASPECT_COLOR_BIT
+        )
+        with translate_errors("vkCreateImageView"):
+            self.handle = vk.vkCreateImageView(
+                device.handle,
+                vk.VkImageViewCreateInfo(
+                    image=image.handle,
+                    viewType=vk.VK_IMAGE_VIEW_TYPE_2D,
+                    format=image.format if format is None else format,
+                    components=vk.VkComponentMapping(*comps),
+                    subresourceRange=vk.VkImageSubresourceRange(
+                        aspectMask=aspect_bit,
+                        baseMipLevel=0,
+                        levelCount=image.mip_levels,
+                        baseArrayLayer=0,
+                        layerCount=1,
+                    ),
+                ),
+                None,
+            )
+        device.track(self)
+
+    def destroy(self) -> None:
+        if self.handle is None:
+            return
+        handle, self.handle = self.handle, None
+        self.device.vk.vkDestroyImageView(self.device.handle, handle, None)
+        self.device.untrack(self)
+
+
+@dataclass(frozen=True)
+class SamplerSpec:
+    """Sampler state in plain words (the scene layer's Sampler maps onto this)."""
+
+    wrap_u: str = "repeat"  # repeat | clamp | mirror
+    wrap_v: str = "repeat"
+    mag: str = "linear"  # linear | nearest
+    min: str = "linear"
+    mipmaps: bool = True
+    anisotropy: float = 16.0  # clamped to the device limit; 1 disables
+
+
+class Sampler:
+    _WRAP = {"repeat": "REPEAT", "clamp": "CLAMP_TO_EDGE", "mirror": "MIRRORED_REPEAT"}
+
+    def __init__(self, device: Device, spec: SamplerSpec = SamplerSpec()) -> None:
+        vk = device.vk
+        self.device = device
+        aniso = min(spec.anisotropy, float(device.limits.maxSamplerAnisotropy))
+        use_aniso = device.anisotropy and aniso > 1.0 and spec.mipmaps
+        filt = {"linear": vk.VK_FILTER_LINEAR, "nearest": vk.VK_FILTER_NEAREST}
+        with translate_errors("vkCreateSampler"):
+            self.handle = vk.vkCreateSampler(
+                device.handle,
+                vk.VkSamplerCreateInfo(
+                    magFilter=filt[spec.mag],
+                    minFilter=filt[spec.min],
+                    mipmapMode=vk.VK_SAMPLER_MIPMAP_MODE_LINEAR,
+                    addressModeU=getattr(vk, f"VK_SAMPLER_ADDRESS_MODE_{self._WRAP[spec.wrap_u]}"),
+                    addressModeV=getattr(vk, f"VK_SAMPLER_ADDRESS_MODE_{self._WRAP[spec.wrap_v]}"),
+                    addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_REPEAT,
+                    anisotropyEnable=vk.VK_TRUE if use_aniso else vk.VK_FALSE,
+                    maxAnisotropy=aniso if use_aniso else 1.0,
+                    minLod=0.0,
+                    maxLod=1000.0 if spec.mipmaps else 0.0,
+                    borderColor=vk.VK_BORDER_COLOR_FLOAT_OPAQUE_BLACK,
+                ),
+                None,
+            )
+        device.track(self)
+
+    def destroy(self) -> None:
+        if self.handle is None:
+            return
+        handle, self.handle = self.handle, None
+        self.device.vk.vkDestroySampler(self.device.handle, handle, None)
+        self.device.untrack(self)
+
+
+def _barrier(vk: Any, image: Image, old: int, new: int, src: tuple, dst: tuple,
+             base_mip: int = 0, mips: int = 1) -> Any:
+    return vk.VkImageMemoryBarrier2(
+        srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=dst[0], dstAccessMask=dst[1],
+        oldLayout=old, newLayout=new,
+        srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+        dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+        image=image.handle,
+        subresourceRange=vk.VkImageSubresourceRange(
+            aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=base_mip, levelCount=mips,
+            baseArrayLayer=0, layerCount=1,
+        ),
+    )
+
+
+def pipeline_barrier(vk: Any, cmd: Any, image_barriers: list, buffer_barriers: list = ()) -> None:
+    vk.vkCmdPipelineBarrier2(
+        cmd,
+        vk.VkDependencyInfo(
+            pImageMemoryBarriers=list(image_barriers) or None,
+            imageMemoryBarrierCount=len(image_barriers),
+            pBufferMemoryBarriers=list(buffer_barriers) or None,
+            bufferMemoryBarrierCount=len(buffer_barriers),
+        ),
+    )
+
+
+class TextureUploader:
+    """Uploads RGBA8 images with full mip chains, batching many into one submission.
+
+    Staging memory is bounded by `batch_bytes`: when a batch would exceed it, the batch is
+    submitted and the staging buffer reused.
+    """
+
+    def __init__(self, device: Device, batch_bytes: int = 64 << 20) -> None:
+        self.device = device
+        self.batch_bytes = batch_bytes
+        self._pending: list[tuple[Image, np.ndarray]] = []
+        self._pending_bytes = 0
+
+    def add(self, pixels: np.ndarray, format: int, mipmaps: bool = True, name: str = "") -> Image:
+        vk = self.device.vk
+        pixels = np.ascontiguousarray(pixels, dtype=np.uint8)
+        h, w = pixels.shape[:2]
+        levels = mip_levels(w, h) if mipmaps else 1
+        usage = (
+            vk.VK_IMAGE_USAGE_SAMPLED_BIT
+            | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT
+            | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT
+        )
+        image = Image(self.device, w, h, format, usage, mip_levels=levels, name=name)
+        if self._pending_bytes + pixels.nbytes > self.batch_bytes:
+            self.flush()
+        self._pending.append((image, pixels))
+        self._pending_bytes += pixels.nbytes
+        return image
+
+    def flush(self) -> None:
+        if not self._pending:
+            return
+        device, vk = self.device, self.device.vk
+        total = sum(p.nbytes for _, p in self._pending)
+        staging = Buffer(device, total, vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT, host_visible=True)
+        try:
+            dst = staging.array(np.uint8, total)
+            offset = 0
+            with device.one_time_commands() as cmd:
+                for image, pixels in self._pending:
+                    dst[offset : offset + pixels.nbytes] = pixels.reshape(-1)
+                    self._record_upload(cmd, image, staging, offset)
+                    offset += pixels.nbytes
+        finally:
+            staging.destroy()
+            self._pending.clear()
+            self._pending_bytes = 0
+
+    def _record_upload(self, cmd: Any, image: Image, staging: Buffer, offset: int) -> None:
+        vk = self.device.vk
+        S = vk  # short alias for stage/access constants
+        top = (S.VK_PIPELINE_STAGE_2_NONE, S.VK_ACCESS_2_NONE)
+        xfer_w = (S.VK_PIPELINE_STAGE_2_TRANSFER_BIT, S.VK_ACCESS_2_TRANSFER_WRITE_BIT)
+        xfer_r = (S.VK_PIPELINE_STAGE_2_TRANSFER_BIT, S.VK_ACCESS_2_TRANSFER_READ_BIT)
+        frag = (S.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, S.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT)
+        undef, dst_l = S.VK_IMAGE_LAYOUT_UNDEFINED, S.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
+        src_l, ro = S.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, S.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
+        n = image.mip_levels
+        pipeline_barrier(vk, cmd, [_barrier(vk, image, undef, dst_l, top, xfer_w, 0, n)])
+        vk.vkCmdCopyBufferToImage(
+            cmd, staging.handle, image.handle, dst_l, 1,
+            [vk.VkBufferImageCopy(
+                bufferOffset=offset,
+                imageSubresource=vk.VkImageSubresourceLayers(
+                    aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0, baseArrayLayer=0,
+                    layerCount=1),
+                imageExtent=vk.VkExtent3D(width=image.width, height=image.height, depth=1),
+            )],
+        )
+        w, h = image.width, image.height
+        for level in range(1, n):
+            # level-1 becomes a blit source; level stays a transfer destination.
+            pipeline_barrier(vk, cmd, [_barrier(vk, image, dst_l, src_l, xfer_w, xfer_r, level - 1)])
+            nw, nh = max(w // 2, 1), max(h // 2, 1)
+            vk.vkCmdBlitImage(
+                cmd, image.handle, src_l, image.handle, dst_l, 1,
+                [vk.VkImageBlit(
+                    srcSubresource=vk.VkImageSubresourceLayers(
+                        aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=level - 1,
+                        baseArrayLayer=0, layerCount=1),
+                    srcOffsets=[vk.VkOffset3D(0, 0, 0), vk.VkOffset3D(w, h, 1)],
+                    dstSubresource=vk.VkImageSubresourceLayers(
+                        aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=level,
+                        baseArrayLayer=0, layerCount=1),
+                    dstOffsets=[vk.VkOffset3D(0, 0, 0), vk.VkOffset3D(nw, nh, 1)],
+                )],
+                vk.VK_FILTER_LINEAR,
+            )
+            w, h = nw, nh
+        barriers = [_barrier(vk, image, dst_l, ro, xfer_w, frag, n - 1)]
+        if n > 1:
+            barriers.append(_barrier(vk, image, src_l, ro, xfer_r, frag, 0, n - 1))
+        pipeline_barrier(vk, cmd, barriers)

@@ -1,0 +1,216 @@
+"""Graphics pipelines from a frozen `PipelineSpec`, shader modules from committed SPIR-V.
+
+`build_pipeline` is the only place that turns a spec into Vulkan create-info structs. Variants
+are derived with `dataclasses.replace(opaque, cull="none", ...)`, as vkguide builds its
+transparent pipeline from its opaque one. Pipelines use dynamic rendering (no render pass
+objects) and dynamic viewport/scissor, so one pipeline serves every image size.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from vkpbr.errors import ShaderError
+from vkpbr.gpu.descriptors import DescriptorSetLayout
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.vk import translate_errors
+
+__all__ = ["VertexStream", "PipelineSpec", "PipelineLayout", "Pipeline", "ShaderModule"]
+
+
+@dataclass(frozen=True)
+class VertexStream:
+    """One non-interleaved vertex attribute: its own buffer binding."""
+
+    location: int
+    binding: int
+    format: str  # "vec2" | "vec3" | "vec4" | "uint"
+
+
+_FORMATS = {
+    "vec2": ("VK_FORMAT_R32G32_SFLOAT", 8),
+    "vec3": ("VK_FORMAT_R32G32B32_SFLOAT", 12),
+    "vec4": ("VK_FORMAT_R32G32B32A32_SFLOAT", 16),
+    "uint": ("VK_FORMAT_R32_UINT", 4),
+}
+
+
+@dataclass(frozen=True)
+class PipelineSpec:
+    vertex_shader: str  # SPIR-V file name under the shader folder
+    fragment_shader: str
+    streams: tuple[VertexStream, ...]
+    color_format: int
+    depth_format: int
+    samples: int = 1
+    cull: str = "back"  # back | none
+    depth_test: bool = True
+    depth_write: bool = True
+    blend: bool = False  # premultiplied-free "over" blending of the colour attachment
+
+
+class ShaderModule:
+    def __init__(self, device: Device, path: Path) -> None:
+        vk = device.vk
+        self.device = device
+        try:
+            code = path.read_bytes()
+        except OSError as exc:
+            raise ShaderError(f"{path}: cannot read SPIR-V ({exc.strerror})") from None
+        if len(code) % 4 or code[:4] != b"\x03\x02\x23\x07":
+            raise ShaderError(f"{path}: not a SPIR-V module")
+        with translate_errors("vkCreateShaderModule"):
+            # codeSize is not inferred by the binding: leaving it out crashes the driver.
+            self.handle = vk.vkCreateShaderModule(
+                device.handle, vk.VkShaderModuleCreateInfo(codeSize=len(code), pCode=code), None
+            )
+        device.track(self)
+
+    def destroy(self) -> None:
+        if self.handle is None:
+            return
+        handle, self.handle = self.handle, None
+        self.device.vk.vkDestroyShaderModule(self.device.handle, handle, None)
+        self.device.untrack(self)
+
+
+class PipelineLayout:
+    def __init__(
+        self,
+        device: Device,
+        set_layouts: list[DescriptorSetLayout],
+        push_constant_bytes: int = 0,
+    ) -> None:
+        vk = device.vk
+        self.device = device
+        ranges = []
+        if push_constant_bytes:
+            ranges.append(
+                vk.VkPushConstantRange(
+                    stageFlags=vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_FRAGMENT_BIT,
+                    offset=0,
+                    size=push_constant_bytes,
+                )
+            )
+        with translate_errors("vkCreatePipelineLayout"):
+            self.handle = vk.vkCreatePipelineLayout(
+                device.handle,
+                vk.VkPipelineLayoutCreateInfo(
+                    pSetLayouts=[s.handle for s in set_layouts],
+                    pPushConstantRanges=ranges or None,
+                    pushConstantRangeCount=len(ranges),
+                ),
+                None,
+            )
+        device.track(self)
+
+    def destroy(self) -> None:
+        if self.handle is None:
+            return
+        handle, self.handle = self.handle, None
+        self.device.vk.vkDestroyPipelineLayout(self.device.handle, handle, None)
+        self.device.untrack(self)
+
+
+class Pipeline:
+    def __init__(
+        self, device: Device, spec: PipelineSpec, layout: PipelineLayout, shader_dir: Path
+    ) -> None:
+        self.device = device
+        self.spec = spec
+        self.layout = layout
+        vert = ShaderModule(device, shader_dir / spec.vertex_shader)
+        frag = ShaderModule(device, shader_dir / spec.fragment_shader)
+        try:
+            self.handle = self._create(spec, layout, vert, frag)
+        finally:
+            # Modules are only needed while the pipeline is created.
+            vert.destroy()
+            frag.destroy()
+        device.track(self)
+
+    def _create(self, spec: PipelineSpec, layout: PipelineLayout, vert: Any, frag: Any) -> Any:
+        vk = self.device.vk
+        stages = [
+            vk.VkPipelineShaderStageCreateInfo(
+                stage=vk.VK_SHADER_STAGE_VERTEX_BIT, module=vert.handle, pName="main"
+            ),
+            vk.VkPipelineShaderStageCreateInfo(
+                stage=vk.VK_SHADER_STAGE_FRAGMENT_BIT, module=frag.handle, pName="main"
+            ),
+        ]
+        bindings = [
+            vk.VkVertexInputBindingDescription(
+                binding=s.binding, stride=_FORMATS[s.format][1],
+                inputRate=vk.VK_VERTEX_INPUT_RATE_VERTEX,
+            )
+            for s in spec.streams
+        ]
+        attributes = [
+            vk.VkVertexInputAttributeDescription(
+                location=s.location, binding=s.binding,
+                format=getattr(vk, _FORMATS[s.format][0]), offset=0,
+            )
+            for s in spec.streams
+        ]
+        cull = {"back": vk.VK_CULL_MODE_BACK_BIT, "none": vk.VK_CULL_MODE_NONE}[spec.cull]
+        all_rgba = (
+            vk.VK_COLOR_COMPONENT_R_BIT | vk.VK_COLOR_COMPONENT_G_BIT
+            | vk.VK_COLOR_COMPONENT_B_BIT | vk.VK_COLOR_COMPONENT_A_BIT
+        )
+        blend = vk.VkPipelineColorBlendAttachmentState(
+            blendEnable=vk.VK_TRUE if spec.blend else vk.VK_FALSE,
+            srcColorBlendFactor=vk.VK_BLEND_FACTOR_SRC_ALPHA,
+            dstColorBlendFactor=vk.VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
+            colorBlendOp=vk.VK_BLEND_OP_ADD,
+            srcAlphaBlendFactor=vk.VK_BLEND_FACTOR_ONE,
+            dstAlphaBlendFactor=vk.VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
+            alphaBlendOp=vk.VK_BLEND_OP_ADD,
+            colorWriteMask=all_rgba,  # defaults to 0 in the binding: nothing would be written
+        )
+        rendering = vk.VkPipelineRenderingCreateInfo(
+            colorAttachmentCount=1,
+            pColorAttachmentFormats=[spec.color_format],
+            depthAttachmentFormat=spec.depth_format,
+        )
+        info = vk.VkGraphicsPipelineCreateInfo(
+            pNext=rendering,
+            pStages=stages,
+            pVertexInputState=vk.VkPipelineVertexInputStateCreateInfo(
+                pVertexBindingDescriptions=bindings, pVertexAttributeDescriptions=attributes
+            ),
+            pInputAssemblyState=vk.VkPipelineInputAssemblyStateCreateInfo(
+                topology=vk.VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST
+            ),
+            pViewportState=vk.VkPipelineViewportStateCreateInfo(viewportCount=1, scissorCount=1),
+            pRasterizationState=vk.VkPipelineRasterizationStateCreateInfo(
+                polygonMode=vk.VK_POLYGON_MODE_FILL,
+                cullMode=cull,
+                frontFace=vk.VK_FRONT_FACE_COUNTER_CLOCKWISE,
+                lineWidth=1.0,
+            ),
+            pMultisampleState=vk.VkPipelineMultisampleStateCreateInfo(
+                rasterizationSamples=spec.samples
+            ),
+            pDepthStencilState=vk.VkPipelineDepthStencilStateCreateInfo(
+                depthTestEnable=vk.VK_TRUE if spec.depth_test else vk.VK_FALSE,
+                depthWriteEnable=vk.VK_TRUE if spec.depth_write else vk.VK_FALSE,
+                depthCompareOp=vk.VK_COMPARE_OP_LESS_OR_EQUAL,
+            ),
+            pColorBlendState=vk.VkPipelineColorBlendStateCreateInfo(pAttachments=[blend]),
+            pDynamicState=vk.VkPipelineDynamicStateCreateInfo(
+                pDynamicStates=[vk.VK_DYNAMIC_STATE_VIEWPORT, vk.VK_DYNAMIC_STATE_SCISSOR]
+            ),
+            layout=layout.handle,
+        )
+        with translate_errors("vkCreateGraphicsPipelines"):
+            return vk.vkCreateGraphicsPipelines(self.device.handle, None, 1, [info], None)[0]
+
+    def destroy(self) -> None:
+        if self.handle is None:
+            return
+        handle, self.handle = self.handle, None
+        self.device.vk.vkDestroyPipeline(self.device.handle, handle, None)
+        self.device.untrack(self)

@@ -1,0 +1,310 @@
+"""A Scene uploaded to the GPU: vertex streams, indices, textures, material descriptor sets.
+
+Geometry: every mesh's streams are concatenated into one buffer per attribute (position,
+texcoord, normal, tangent, QTangent, packed frame) plus one index buffer, so a frame binds
+vertex buffers once per pipeline and each draw is one vkCmdDrawIndexed with offsets. All three
+tangent-frame streams are uploaded, so switching --tbn at run time rebuilds nothing.
+
+Textures: one GPU image per (source image, colour space), full mip chain; the scalar maps
+(metallic, roughness, occlusion) are views with a component swizzle that moves the wanted
+channel into R, so glTF's packed metallic-roughness texture is stored once and read twice.
+"""
+
+from __future__ import annotations
+
+import time
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from vkpbr.gpu.buffer import Buffer, upload_buffer
+from vkpbr.gpu.descriptors import DescriptorPool, DescriptorSetLayout, DescriptorWriter
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, TextureUploader
+from vkpbr.render import layouts as L
+from vkpbr.scene.types import Material, Mesh, Scene, TextureRef
+
+__all__ = ["GpuScene", "Draw", "prepare_mesh"]
+
+_SWIZZLE = {0: "rrrr", 1: "gggg", 2: "bbbb", 3: "aaaa"}
+STREAMS = ("positions", "texcoords", "normals", "tangents", "qtangents", "packed_frames")
+
+
+@dataclass
+class Draw:
+    """One indexed draw: a mesh instance with its material and pipeline class."""
+
+    mesh: int
+    material: int
+    first_index: int
+    index_count: int
+    vertex_offset: int
+    push: np.ndarray  # PUSH block bytes: model and normal matrix
+    kind: str  # "opaque" | "opaque_double" | "mask" | "blend"
+    center: np.ndarray = field(default_factory=lambda: np.zeros(3))  # world, for blend sorting
+
+
+def prepare_mesh(mesh: Mesh) -> dict[str, np.ndarray]:
+    """All vertex streams of a mesh, computing what the file did not supply.
+
+    Returns positions (N,3) f32, texcoords (N,2) f32, normals (N,3) f32, tangents (N,4) f32,
+    qtangents (N,4) f32 and packed_frames (N,) u32.
+    """
+    from vkpbr.bake.frames import pack_qtangent, tbn_to_qtangent
+    from vkpbr.bake.tangents import generate_tangents
+
+    n = mesh.vertex_count
+    pos = np.ascontiguousarray(mesh.positions, dtype=np.float32)
+    uv = (
+        np.ascontiguousarray(mesh.texcoords, dtype=np.float32)
+        if mesh.texcoords is not None
+        else np.zeros((n, 2), np.float32)
+    )
+    if mesh.normals is None:
+        raise ValueError(f"mesh {mesh.name!r} has no normals (loaders must supply them)")
+    nrm = np.ascontiguousarray(mesh.normals, dtype=np.float32)
+    idx = np.ascontiguousarray(mesh.indices, dtype=np.uint32)
+    tan = mesh.tangents
+    if tan is None:
+        tan = generate_tangents(pos, nrm, uv, idx)
+    tan = np.ascontiguousarray(tan, dtype=np.float32)
+    q = getattr(mesh, "qtangents", None)
+    if q is None:
+        q = tbn_to_qtangent(nrm, tan)
+    packed = getattr(mesh, "packed_frames", None)
+    if packed is None:
+        packed = pack_qtangent(q)
+    return {
+        "positions": pos,
+        "texcoords": uv,
+        "normals": nrm,
+        "tangents": tan,
+        "qtangents": np.ascontiguousarray(q, dtype=np.float32),
+        "packed_frames": np.ascontiguousarray(packed, dtype=np.uint32),
+    }
+
+
+def _normal_matrix(m: np.ndarray) -> np.ndarray:
+    out = np.eye(4)
+    a = m[:3, :3].astype(np.float64)
+    det = np.linalg.det(a)
+    out[:3, :3] = np.linalg.inv(a).T if abs(det) > 1e-30 else a
+    return out
+
+
+class GpuScene:
+    """Owns the GPU copies of one Scene. Built by `Renderer`; destroy with `destroy()`."""
+
+    def __init__(
+        self, device: Device, scene: Scene, material_layout: DescriptorSetLayout
+    ) -> None:
+        self.device = device
+        self.scene = scene
+        self._owned: list = []
+        self.timings: dict[str, float] = {}
+        t0 = time.perf_counter()
+        self._upload_geometry()
+        t1 = time.perf_counter()
+        self._upload_textures()
+        t2 = time.perf_counter()
+        self._create_materials(material_layout)
+        self.draws = self._build_draws()
+        self.timings.update(geometry=t1 - t0, textures=t2 - t1, materials=time.perf_counter() - t2)
+
+    def _own(self, obj):  # noqa: ANN001, ANN202 - any gpu object
+        self._owned.append(obj)
+        return obj
+
+    # --- geometry ---------------------------------------------------------------------------
+    def _upload_geometry(self) -> None:
+        vk = self.device.vk
+        per_mesh = [prepare_mesh(m) for m in self.scene.meshes]
+        self.vertex_offsets = np.cumsum([0] + [m.vertex_count for m in self.scene.meshes])
+        self.index_offsets = np.cumsum([0] + [len(m.indices) for m in self.scene.meshes])
+        usage = vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT
+        self.streams: dict[str, Buffer] = {}
+        self.stream_bytes: dict[str, int] = {}
+        for name in STREAMS:
+            arrays = [p[name] for p in per_mesh]
+            data = np.concatenate(arrays) if arrays else np.zeros(4, np.uint8)
+            self.streams[name] = self._own(upload_buffer(self.device, data, usage, name=name))
+            self.stream_bytes[name] = int(data.nbytes)
+        indices = [np.asarray(m.indices, dtype=np.uint32) for m in self.scene.meshes]
+        idx = np.concatenate(indices) if indices else np.zeros(3, np.uint32)
+        self.index_buffer = self._own(
+            upload_buffer(self.device, idx, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT, name="indices")
+        )
+        self.vertex_count = int(self.vertex_offsets[-1])
+
+    def bytes_per_vertex(self) -> dict[str, int]:
+        """Vertex bytes of each TBN path (position + texcoord + frame)."""
+        base = 12 + 8
+        return {"vectors": base + 12 + 16, "quat": base + 16, "packed": base + 4}
+
+    # --- textures ---------------------------------------------------------------------------
+    def _decoded_pixels(self) -> list[np.ndarray | None]:
+        images = self.scene.images
+        if all(img.pixels is not None for img in images):
+            return [img.pixels for img in images]
+        from vkpbr.scene.textures import decode_images
+
+        max_size = int(self.device.limits.maxImageDimension2D)
+        return decode_images(images, max_size=max_size)
+
+    def _upload_textures(self) -> None:
+        vk = self.device.vk
+        pixels = self._decoded_pixels()
+        # Which colour space each image is used in (base colour and emissive are sRGB).
+        usage: dict[tuple[int, bool], None] = {}
+        for mat in self.scene.materials:
+            for slot in L.MATERIAL_TEXTURES:
+                ref = getattr(mat, f"{slot}_texture")
+                if ref is not None and 0 <= ref.image < len(pixels) and pixels[ref.image] is not None:
+                    usage[(ref.image, slot in ("base_color", "emissive"))] = None
+        uploader = TextureUploader(self.device)
+        self.images: dict[tuple[int, bool], Image] = {}
+        for image_index, srgb in usage:
+            fmt = vk.VK_FORMAT_R8G8B8A8_SRGB if srgb else vk.VK_FORMAT_R8G8B8A8_UNORM
+            name = self.scene.images[image_index].name
+            self.images[(image_index, srgb)] = self._own(
+                uploader.add(pixels[image_index], fmt, name=name)
+            )
+        # 1x1 defaults for missing maps: white base colour and scalar maps (the factors then
+        # act alone), a flat tangent-space normal, black emission.
+        defaults = {
+            "white_srgb": (np.full((1, 1, 4), 255, np.uint8), vk.VK_FORMAT_R8G8B8A8_SRGB),
+            "white": (np.full((1, 1, 4), 255, np.uint8), vk.VK_FORMAT_R8G8B8A8_UNORM),
+            "normal": (np.array([[[128, 128, 255, 255]]], np.uint8), vk.VK_FORMAT_R8G8B8A8_UNORM),
+        }
+        self.default_images = {
+            k: self._own(uploader.add(px, fmt, mipmaps=False, name=k))
+            for k, (px, fmt) in defaults.items()
+        }
+        uploader.flush()
+        self.texture_bytes = sum(img.bytes for img in self.images.values())
+        self._views: dict[tuple[int, str], ImageView] = {}
+        self._samplers: dict[SamplerSpec, Sampler] = {}
+
+    def _view(self, image: Image, swizzle: str) -> ImageView:
+        key = (id(image), swizzle)
+        if key not in self._views:
+            self._views[key] = self._own(ImageView(image, swizzle=swizzle))
+        return self._views[key]
+
+    def _sampler(self, spec: SamplerSpec) -> Sampler:
+        if spec not in self._samplers:
+            self._samplers[spec] = self._own(Sampler(self.device, spec))
+        return self._samplers[spec]
+
+    def _texture(self, ref: TextureRef | None, slot: str) -> tuple[ImageView, Sampler, bool]:
+        srgb = slot in ("base_color", "emissive")
+        scalar = slot in ("metallic", "roughness", "occlusion")
+        image = self.images.get((ref.image, srgb)) if ref is not None else None
+        if image is None:
+            default = {"base_color": "white_srgb", "normal": "normal"}.get(slot, "white")
+            if slot == "emissive":
+                default = "white_srgb"  # emissive factor alone (0 by default) decides
+            return self._view(self.default_images[default], "iiii"), self._sampler(SamplerSpec()), False
+        s = ref.sampler
+        spec = SamplerSpec(s.wrap_s, s.wrap_t, s.mag_filter, s.min_filter, s.mipmaps)
+        swizzle = _SWIZZLE[ref.channel] if scalar else "iiii"
+        return self._view(image, swizzle), self._sampler(spec), True
+
+    # --- materials --------------------------------------------------------------------------
+    def _create_materials(self, layout: DescriptorSetLayout) -> None:
+        vk = self.device.vk
+        materials = list(self.scene.materials) or []
+        self.materials: list[Material] = materials + [Material(name="vkpbr-default")]
+        self.default_material = len(self.materials) - 1
+        align = int(self.device.limits.minUniformBufferOffsetAlignment)
+        stride = (L.MATERIAL.size + align - 1) // align * align
+        self.material_ubo = self._own(
+            Buffer(self.device, stride * len(self.materials), vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                   host_visible=True, name="materials")
+        )
+        self.pool = self._own(DescriptorPool(self.device, [(layout, len(self.materials))]))
+        writer = DescriptorWriter(self.device)
+        self.material_sets = []
+        for i, mat in enumerate(self.materials):
+            dset = self.pool.allocate(layout)
+            self.material_sets.append(dset)
+            has = {}
+            for binding, slot in enumerate(L.MATERIAL_TEXTURES):
+                view, sampler, present = self._texture(getattr(mat, f"{slot}_texture"), slot)
+                has[slot] = present
+                writer.sampler(dset, binding, view, sampler)
+            block = self._material_block(mat, has)
+            self.material_ubo.write(block.tobytes(), offset=i * stride)
+            writer.uniform(dset, 6, self.material_ubo, L.MATERIAL.size, offset=i * stride)
+        writer.update()
+
+    @staticmethod
+    def _material_block(mat: Material, has: dict[str, bool]) -> np.ndarray:
+        b = L.MATERIAL.zeros()
+        b["base_color_factor"] = mat.base_color_factor
+        b["emissive_factor"] = mat.emissive_factor
+        b["metallic_factor"] = mat.metallic_factor
+        b["roughness_factor"] = mat.roughness_factor
+        b["normal_scale"] = mat.normal_scale
+        b["occlusion_strength"] = mat.occlusion_strength
+        b["alpha_cutoff"] = mat.alpha_cutoff
+        ref = mat.base_color_texture
+        # KHR_texture_transform: uv' = T * R * S * uv, as two rows of a 2x3 matrix.
+        off, rot, scale = (ref.offset, ref.rotation, ref.scale) if ref else ((0, 0), 0.0, (1, 1))
+        c, s = np.cos(rot), np.sin(rot)
+        b["uv_transform_row0"] = (c * scale[0], s * scale[1], off[0], 0.0)
+        b["uv_transform_row1"] = (-s * scale[0], c * scale[1], off[1], 0.0)
+        flags = 0
+        if has["normal"]:
+            flags |= L.MATERIAL_HAS_NORMAL_MAP
+        if has["occlusion"]:
+            flags |= L.MATERIAL_HAS_OCCLUSION_MAP
+        if mat.double_sided:
+            flags |= L.MATERIAL_DOUBLE_SIDED
+        if mat.alpha_mode == "blend":
+            flags |= L.MATERIAL_BLEND
+        b["flags"] = flags
+        return b
+
+    # --- draws ------------------------------------------------------------------------------
+    def _build_draws(self) -> list[Draw]:
+        draws = []
+        for node in self.scene.nodes:
+            if not 0 <= node.mesh < len(self.scene.meshes):
+                continue
+            mesh = self.scene.meshes[node.mesh]
+            if len(mesh.indices) == 0:
+                continue
+            mat_index = mesh.material if 0 <= mesh.material < len(self.scene.materials) else self.default_material
+            mat = self.materials[mat_index]
+            m = np.asarray(node.matrix, dtype=np.float64)
+            push = np.concatenate([L.mat4_to_std140(m).ravel(), L.mat4_to_std140(_normal_matrix(m)).ravel()])
+            if mat.alpha_mode == "mask":
+                kind = "mask"
+            elif mat.alpha_mode == "blend":
+                kind = "blend"
+            else:
+                kind = "opaque_double" if mat.double_sided else "opaque"
+            p = mesh.positions
+            center_local = (p.min(axis=0) + p.max(axis=0)) / 2 if len(p) else np.zeros(3)
+            draws.append(Draw(
+                mesh=node.mesh, material=mat_index,
+                first_index=int(self.index_offsets[node.mesh]), index_count=len(mesh.indices),
+                vertex_offset=int(self.vertex_offsets[node.mesh]),
+                push=np.ascontiguousarray(push, dtype=np.float32), kind=kind,
+                center=m[:3, :3] @ center_local + m[:3, 3],
+            ))
+        order = {"opaque": 0, "opaque_double": 1, "mask": 2, "blend": 3}
+        draws.sort(key=lambda d: (order[d.kind], d.material))
+        return draws
+
+    @property
+    def gpu_bytes(self) -> int:
+        return sum(self.stream_bytes.values()) + int(self.index_buffer.size) + self.texture_bytes
+
+    def destroy(self) -> None:
+        while self._owned:
+            self._owned.pop().destroy()
+
+

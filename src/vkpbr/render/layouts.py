@@ -1,0 +1,286 @@
+"""Uniform block layouts, descriptor bindings, debug views and modes: defined once, here.
+
+Each uniform block is a list of (name, GLSL type) pairs. From it we derive a NumPy structured
+dtype with explicit std140 offsets (vec3 aligned to 16, mat4 column-major) and the GLSL block
+text; `vkpbr.render.codegen` writes the GLSL into shaders/generated.glsl, which every shader
+includes. A test reads the member offsets back out of the compiled SPIR-V and compares.
+
+Descriptor sets follow the report (renderer-spec section 1):
+  set 0: binding 0 camera {mat4 VP}; binding 1 frame settings (view, BRDF, tonemap, ...)
+  set 1: bindings 0-4 base colour, metallic, roughness, normal, occlusion; 5 emissive;
+         6 material factors
+  set 2: binding 0 light {vec4 lightPos; vec3 color; float (intensity); vec4 viewPos; ...}
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "Std140Block",
+    "CAMERA",
+    "SETTINGS",
+    "MATERIAL",
+    "LIGHT",
+    "PUSH",
+    "BLOCKS",
+    "View",
+    "VIEW_HELP",
+    "ViewKind",
+    "VIEW_KIND",
+    "Brdf",
+    "Tonemap",
+    "TbnMode",
+    "SETS",
+    "MATERIAL_TEXTURES",
+    "MIN_ROUGHNESS",
+    "AMBIENT",
+]
+
+# Shading constants shared with the NumPy reference (reference/brdf.py imports these).
+MIN_ROUGHNESS = 0.03  # roughness is clamped here so that D stays finite as r -> 0
+AMBIENT = 0.02  # the course's ambient constant: L_ambient = 0.02 * c
+
+_BASE = {  # GLSL type -> (base alignment, size, numpy dtype, shape)
+    "float": (4, 4, np.float32, ()),
+    "int": (4, 4, np.int32, ()),
+    "uint": (4, 4, np.uint32, ()),
+    "vec2": (8, 8, np.float32, (2,)),
+    "vec3": (16, 12, np.float32, (3,)),
+    "vec4": (16, 16, np.float32, (4,)),
+    "uvec4": (16, 16, np.uint32, (4,)),
+    "mat4": (16, 64, np.float32, (4, 4)),
+}
+
+
+@dataclass(frozen=True)
+class Std140Block:
+    """A uniform (or push-constant) block laid out by the std140 rules."""
+
+    name: str  # GLSL block name
+    instance: str  # GLSL instance name
+    fields: tuple[tuple[str, str], ...]
+
+    @property
+    def offsets(self) -> dict[str, int]:
+        out, offset = {}, 0
+        for name, glsl in self.fields:
+            align, size, _, _ = _BASE[glsl]
+            offset = (offset + align - 1) // align * align
+            out[name] = offset
+            offset += size
+        return out
+
+    @property
+    def size(self) -> int:
+        name, glsl = self.fields[-1]
+        end = self.offsets[name] + _BASE[glsl][1]
+        return (end + 15) // 16 * 16
+
+    @property
+    def dtype(self) -> np.dtype:
+        offs = self.offsets
+        return np.dtype(
+            {
+                "names": [n for n, _ in self.fields],
+                "formats": [(_BASE[t][2], _BASE[t][3]) for _, t in self.fields],
+                "offsets": [offs[n] for n, _ in self.fields],
+                "itemsize": self.size,
+            }
+        )
+
+    def zeros(self) -> np.ndarray:
+        return np.zeros((), dtype=self.dtype)
+
+    def glsl(self, qualifier: str) -> str:
+        lines = [f"{qualifier} {self.name} {{"]
+        lines += [f"    {t} {n};" for n, t in self.fields]
+        lines.append(f"}} {self.instance};")
+        return "\n".join(lines)
+
+
+def mat4_to_std140(m: np.ndarray) -> np.ndarray:
+    """GLSL mat4 is column-major: the one place a row-major NumPy matrix is transposed."""
+    return np.ascontiguousarray(np.asarray(m, dtype=np.float32).T)
+
+
+CAMERA = Std140Block("Camera", "camera", (("VP", "mat4"),))
+
+SETTINGS = Std140Block(
+    "Settings",
+    "settings",
+    (
+        ("camera_forward", "vec4"),  # xyz: unit view direction (linear depth view)
+        ("view", "int"),  # View
+        ("brdf", "int"),  # Brdf
+        ("tonemap", "int"),  # Tonemap
+        ("flags", "uint"),  # SETTINGS_* bits below
+        ("exposure", "float"),  # linear multiplier (2 ** EV)
+        ("znear", "float"),
+        ("zfar", "float"),
+        ("pad0", "float"),
+    ),
+)
+SETTINGS_NORMAL_MAPPING = 1  # use normal maps
+SETTINGS_OCCLUSION = 2  # use occlusion maps
+SETTINGS_SRGB_TARGET = 4  # the colour target encodes sRGB in hardware
+
+MATERIAL = Std140Block(
+    "Material",
+    "material",
+    (
+        ("base_color_factor", "vec4"),
+        ("emissive_factor", "vec3"),
+        ("metallic_factor", "float"),
+        ("roughness_factor", "float"),
+        ("normal_scale", "float"),
+        ("occlusion_strength", "float"),
+        ("alpha_cutoff", "float"),
+        ("uv_transform_row0", "vec4"),  # KHR_texture_transform as a 2x3 matrix: rows 0 and 1
+        ("uv_transform_row1", "vec4"),
+        ("flags", "uint"),  # MATERIAL_* bits below
+    ),
+)
+MATERIAL_HAS_NORMAL_MAP = 1
+MATERIAL_DOUBLE_SIDED = 2
+MATERIAL_HAS_OCCLUSION_MAP = 4
+MATERIAL_BLEND = 8  # alphaMode BLEND: output alpha for the blended pass
+
+LIGHT = Std140Block(
+    "Light",
+    "light",
+    (
+        ("lightPos", "vec4"),
+        ("color", "vec3"),
+        ("intensity", "float"),  # the report's padding slot carries the intensity
+        ("viewPos", "vec4"),
+        ("falloff", "uint"),  # 0: none (the course), 1: inverse square
+        ("range", "float"),  # glTF KHR_lights_punctual range; 0 = infinite
+    ),
+)
+
+PUSH = Std140Block("Draw", "draw", (("model", "mat4"), ("normal_matrix", "mat4")))
+
+BLOCKS = (CAMERA, SETTINGS, MATERIAL, LIGHT, PUSH)
+
+# (set, binding, kind, stages, name): the one table of descriptor bindings.
+SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
+    0: (
+        (0, "uniform", ("vertex",), "Camera"),
+        (1, "uniform", ("vertex", "fragment"), "Settings"),
+    ),
+    1: (
+        (0, "sampler", ("fragment",), "base_color_map"),
+        (1, "sampler", ("fragment",), "metallic_map"),
+        (2, "sampler", ("fragment",), "roughness_map"),
+        (3, "sampler", ("fragment",), "normal_map"),
+        (4, "sampler", ("fragment",), "occlusion_map"),
+        (5, "sampler", ("fragment",), "emissive_map"),
+        (6, "uniform", ("fragment",), "Material"),
+    ),
+    2: ((0, "uniform", ("fragment",), "Light"),),
+}
+MATERIAL_TEXTURES = ("base_color", "metallic", "roughness", "normal", "occlusion", "emissive")
+
+
+class View(enum.IntEnum):
+    """Debug views, selected at run time through Settings.view (no pipeline rebuild)."""
+
+    FINAL = 0
+    D = 1
+    F = 2
+    G = 3
+    SPECULAR = 4
+    DIFFUSE = 5
+    AMBIENT = 6
+    GEOMETRIC_NORMAL = 7
+    NORMAL = 8
+    VIEW_DIR = 9
+    LIGHT_DIR = 10
+    BASE_COLOR = 11
+    METALLIC = 12
+    ROUGHNESS = 13
+    OCCLUSION = 14
+    ALPHA = 15
+    TEXCOORDS = 16
+    DEPTH = 17
+    EMISSIVE = 18
+    TANGENT = 19
+    BITANGENT = 20
+
+
+VIEW_HELP = {
+    View.FINAL: "the shaded image: emissive + ambient + (diffuse + specular) * light * n.l",
+    View.D: "normal distribution D (GGX or Blinn-Phong, per --brdf), grey, clipped at 1",
+    View.F: "Schlick Fresnel F as RGB",
+    View.G: "Cook-Torrance geometric masking G, grey",
+    View.SPECULAR: "specular radiance: D F G / (4 n.v n.l) * light * n.l",
+    View.DIFFUSE: "diffuse radiance: c/pi (1-F)(1-M) * light * n.l",
+    View.AMBIENT: "ambient radiance: 0.02 * c * occlusion",
+    View.GEOMETRIC_NORMAL: "interpolated vertex normal (world), xyz*0.5+0.5",
+    View.NORMAL: "shading normal after normal mapping (world), xyz*0.5+0.5",
+    View.VIEW_DIR: "direction to the camera v (world), xyz*0.5+0.5",
+    View.LIGHT_DIR: "direction to the light l (world), xyz*0.5+0.5",
+    View.BASE_COLOR: "base colour c (texture x factor), as a colour",
+    View.METALLIC: "metalness M, grey",
+    View.ROUGHNESS: "roughness r, grey",
+    View.OCCLUSION: "ambient occlusion, grey",
+    View.ALPHA: "base-colour alpha, grey",
+    View.TEXCOORDS: "texture coordinates: R = u, G = v (fractional part)",
+    View.DEPTH: "linear depth: distance along the view axis / far plane, grey",
+    View.EMISSIVE: "emitted radiance Le",
+    View.TANGENT: "tangent (world, from the vertex TBN), xyz*0.5+0.5",
+    View.BITANGENT: "bitangent (world, handedness applied), xyz*0.5+0.5",
+}
+
+
+class ViewKind(enum.IntEnum):
+    RADIANCE = 0  # exposure and tone mapping apply, then sRGB encoding
+    COLOR = 1  # a linear colour shown as a colour (sRGB-encoded)
+    DATA = 2  # raw values: stored byte = round(255 * clamp(value, 0, 1))
+
+
+VIEW_KIND = {
+    v: (
+        ViewKind.RADIANCE
+        if v in (View.FINAL, View.SPECULAR, View.DIFFUSE, View.AMBIENT, View.EMISSIVE)
+        else ViewKind.COLOR
+        if v == View.BASE_COLOR
+        else ViewKind.DATA
+    )
+    for v in View
+}
+
+
+class Brdf(enum.IntEnum):
+    GGX = 0
+    BLINN_PHONG = 1
+
+
+class Tonemap(enum.IntEnum):
+    NONE = 0
+    REINHARD = 1
+    ACES = 2
+
+
+class TbnMode(enum.IntEnum):
+    """How the vertex stream carries the tangent frame (one vertex shader each)."""
+
+    VECTORS = 0  # normal vec3 + tangent vec4
+    QUAT = 1  # one float quaternion (QTangent, handedness in the sign)
+    PACKED = 2  # the quaternion packed in one uint32
+
+
+def enum_by_name(enum_type: type[enum.IntEnum], name: str) -> enum.IntEnum:
+    """Parse a user-facing name ("blinn-phong", "mapped_normal") into an enum member."""
+    from vkpbr.errors import UsageError
+
+    key = name.strip().upper().replace("-", "_")
+    try:
+        return enum_type[key]
+    except KeyError:
+        names = ", ".join(m.name.lower().replace("_", "-") for m in enum_type)
+        raise UsageError(f"unknown {enum_type.__name__.lower()} {name!r}; choose one of: {names}") from None

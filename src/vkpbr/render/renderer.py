@@ -1,0 +1,395 @@
+"""The headless PBR renderer: Scene in, NumPy image out.
+
+Per frame, Python does a handful of things: write three small uniform blocks into
+persistently mapped memory, submit a command buffer recorded once for this target and mode
+set, wait on its fence, and copy the mapped readback into NumPy. Debug view, BRDF, exposure,
+tone mapping, light and camera are uniforms: changing them re-records nothing. The TBN path,
+alpha masking and the image size select among pre-recorded command buffers.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from vkpbr.errors import UsageError
+from vkpbr.gpu.buffer import Buffer
+from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec, VertexStream
+from vkpbr.gpu.target import RenderTarget
+from vkpbr.gpu.vk import translate_errors
+from vkpbr.render import layouts as L
+from vkpbr.render.camera import look_at, validate_camera, view_projection
+from vkpbr.render.codegen import SPV_DIR
+from vkpbr.render.gpu_scene import GpuScene
+from vkpbr.scene.types import Camera, Light, Scene
+
+__all__ = ["Renderer", "RenderOptions", "FrameStats"]
+
+_TBN_STREAMS = {
+    L.TbnMode.VECTORS: (("normals", "vec3"), ("tangents", "vec4")),
+    L.TbnMode.QUAT: (("qtangents", "vec4"),),
+    L.TbnMode.PACKED: (("packed_frames", "uint"),),
+}
+_PASS_ORDER = ("opaque", "opaque_double", "mask", "blend")
+
+
+@dataclass(frozen=True)
+class RenderOptions:
+    """Everything that selects what a frame shows, in user-facing words."""
+
+    view: str = "final"
+    brdf: str = "ggx"
+    tbn: str = "vectors"
+    tonemap: str = "none"
+    exposure: float = 0.0  # EV stops: radiance is multiplied by 2 ** exposure
+    alpha_mask: bool = True
+    normal_mapping: bool = True
+    occlusion: bool = True
+
+    def resolved(self) -> tuple[L.View, L.Brdf, L.TbnMode, L.Tonemap]:
+        view = L.enum_by_name(L.View, self.view)
+        brdf = L.enum_by_name(L.Brdf, self.brdf)
+        tbn = L.enum_by_name(L.TbnMode, self.tbn)
+        tonemap = L.enum_by_name(L.Tonemap, self.tonemap)
+        if not np.isfinite(self.exposure) or abs(self.exposure) > 64:
+            raise UsageError(f"exposure {self.exposure} must be a finite number of stops in [-64, 64]")
+        return view, brdf, tbn, tonemap  # type: ignore[return-value]
+
+
+@dataclass
+class FrameStats:
+    cpu_ms: float = 0.0  # Python-side: uniforms + submit (excludes the wait)
+    wait_ms: float = 0.0  # waiting for the GPU
+    gpu_ms: float = float("nan")  # timestamp queries around the frame's commands
+    readback_ms: float = 0.0  # copying the mapped image into NumPy
+
+
+class _Recorded:
+    """A command buffer recorded once for (target, TBN path, alpha masking)."""
+
+    def __init__(self, cmd: Any, fence: Any, submit: Any) -> None:
+        self.cmd, self.fence, self.submit = cmd, fence, submit
+
+
+class Renderer:
+    """Renders a Scene (the built-in default scene when None) into NumPy arrays.
+
+    Parameters
+    ----------
+    scene : the scene to draw; None renders the built-in PBR chart.
+    device : device name substring or index (`vkpbr info` lists them); None picks the best.
+    validation : enable the Khronos validation layer; any error raises ValidationError.
+    msaa : 1 or 4 samples per pixel.
+    """
+
+    def __init__(
+        self,
+        scene: Scene | None = None,
+        device: str | int | None = None,
+        validation: bool = False,
+        sync_validation: bool = False,
+        msaa: int = 1,
+        background: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    ) -> None:
+        t0 = time.perf_counter()
+        if msaa not in (1, 4):
+            raise UsageError(f"msaa {msaa}: choose 1 or 4")
+        if scene is None:
+            from vkpbr.scene.default import default_scene
+
+            scene = default_scene()
+        self.scene = scene
+        self.msaa = msaa
+        self.background = background
+        self.device = Device(device, validation=validation, sync_validation=sync_validation)
+        self._targets: dict[tuple, RenderTarget] = {}
+        self._recorded: dict[tuple, _Recorded] = {}
+        self._pipelines: dict[tuple, Pipeline] = {}
+        try:
+            self._create_layouts()
+            self._create_frame_uniforms()
+            self.gpu_scene = GpuScene(self.device, scene, self.set_layouts[1])
+            self.last_stats = FrameStats()
+            self.timings = {"setup": time.perf_counter() - t0, **self.gpu_scene.timings}
+        except BaseException:
+            self.close()
+            raise
+
+    # --- descriptors and uniforms -----------------------------------------------------------
+    def _create_layouts(self) -> None:
+        self.set_layouts = [
+            DescriptorSetLayout(self.device, [BindingSpec(b, k, s, n) for b, k, s, n in rows])
+            for _, rows in sorted(L.SETS.items())
+        ]
+        self.pipeline_layout = PipelineLayout(self.device, self.set_layouts, L.PUSH.size)
+
+    def _create_frame_uniforms(self) -> None:
+        vk = self.device.vk
+        align = int(self.device.limits.minUniformBufferOffsetAlignment)
+        blocks = (L.CAMERA, L.SETTINGS, L.LIGHT)
+        self._offsets = []
+        offset = 0
+        for block in blocks:
+            self._offsets.append(offset)
+            offset += (block.size + align - 1) // align * align
+        self.frame_ubo = Buffer(
+            self.device, offset, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, host_visible=True,
+            name="frame uniforms")
+        self._frame_pool = DescriptorPool(self.device, [(self.set_layouts[0], 1), (self.set_layouts[2], 1)])
+        self.set0 = self._frame_pool.allocate(self.set_layouts[0])
+        self.set2 = self._frame_pool.allocate(self.set_layouts[2])
+        w = DescriptorWriter(self.device)
+        w.uniform(self.set0, 0, self.frame_ubo, L.CAMERA.size, self._offsets[0])
+        w.uniform(self.set0, 1, self.frame_ubo, L.SETTINGS.size, self._offsets[1])
+        w.uniform(self.set2, 0, self.frame_ubo, L.LIGHT.size, self._offsets[2])
+        w.update()
+        # Zero-copy structured views into the mapped buffer: a frame's update is three copies.
+        self.u_camera = self.frame_ubo.array(L.CAMERA.dtype, 1, self._offsets[0])
+        self.u_settings = self.frame_ubo.array(L.SETTINGS.dtype, 1, self._offsets[1])
+        self.u_light = self.frame_ubo.array(L.LIGHT.dtype, 1, self._offsets[2])
+        if self.device.timestamps:
+            self.query_pool = vk.vkCreateQueryPool(
+                self.device.handle,
+                vk.VkQueryPoolCreateInfo(queryType=vk.VK_QUERY_TYPE_TIMESTAMP, queryCount=2),
+                None)
+        else:
+            self.query_pool = None
+
+    # --- pipelines --------------------------------------------------------------------------
+    def _pipeline(self, target: RenderTarget, tbn: L.TbnMode, kind: str) -> Pipeline:
+        key = (target.color_format, target.samples, tbn, kind)
+        if key not in self._pipelines:
+            streams = [VertexStream(0, 0, "vec3"), VertexStream(1, 1, "vec2")]
+            streams += [VertexStream(2 + i, 2 + i, fmt) for i, (_, fmt) in enumerate(_TBN_STREAMS[tbn])]
+            base = PipelineSpec(
+                vertex_shader=f"pbr_{tbn.name.lower()}.vert.spv",
+                fragment_shader="pbr_opaque.frag.spv",
+                streams=tuple(streams),
+                color_format=target.color_format,
+                depth_format=target.depth_format,
+                samples=target.samples,
+            )
+            spec = {
+                "opaque": base,
+                "opaque_double": dataclasses.replace(base, cull="none"),
+                "mask": dataclasses.replace(base, cull="none", fragment_shader="pbr_mask.frag.spv"),
+                "blend": dataclasses.replace(base, cull="none", blend=True, depth_write=False),
+            }[kind]
+            self._pipelines[key] = Pipeline(self.device, spec, self.pipeline_layout, SPV_DIR)
+        return self._pipelines[key]
+
+    def prepare(self, size: tuple[int, int], tbn_modes: tuple[str, ...] = ("vectors", "quat", "packed"),
+                linear: bool = False) -> None:
+        """Build every pipeline and command buffer for `size` up front (the viewer does this
+        so that no key press waits for a pipeline)."""
+        target = self._target(size, linear)
+        for name in tbn_modes:
+            tbn = L.enum_by_name(L.TbnMode, name)
+            for alpha_mask in (True, False):
+                self._record(target, tbn, alpha_mask)  # type: ignore[arg-type]
+
+    # --- targets and recording --------------------------------------------------------------
+    def _target(self, size: tuple[int, int], linear: bool) -> RenderTarget:
+        w, h = size
+        limit = int(self.device.limits.maxImageDimension2D)
+        if not (isinstance(w, int | np.integer) and isinstance(h, int | np.integer)) or w <= 0 or h <= 0:
+            raise UsageError(f"image size {w}x{h}: width and height must be positive integers")
+        if w > limit or h > limit:
+            raise UsageError(f"image size {w}x{h} exceeds this device's limit of {limit}x{limit}")
+        key = (int(w), int(h), linear)
+        if key not in self._targets:
+            bg = (*self.background, 1.0)
+            if not linear:  # the clear colour of an sRGB target is linear
+                bg = tuple(float(c) for c in bg)
+            self._targets[key] = RenderTarget(
+                self.device, int(w), int(h), "float" if linear else "srgb", self.msaa, bg)
+        return self._targets[key]
+
+    def _record(self, target: RenderTarget, tbn: L.TbnMode, alpha_mask: bool) -> _Recorded:
+        key = (id(target), tbn, alpha_mask)
+        if key in self._recorded:
+            return self._recorded[key]
+        vk = self.device.vk
+        cmd = self.device.allocate_command_buffer()
+        vk.vkBeginCommandBuffer(cmd, vk.VkCommandBufferBeginInfo())
+        if self.query_pool is not None:
+            vk.vkCmdResetQueryPool(cmd, self.query_pool, 0, 2)
+            vk.vkCmdWriteTimestamp2(cmd, vk.VK_PIPELINE_STAGE_2_NONE, self.query_pool, 0)
+        target.record_begin(cmd)
+        self._record_draws(cmd, target, tbn, alpha_mask)
+        target.record_end(cmd)
+        if self.query_pool is not None:
+            vk.vkCmdWriteTimestamp2(cmd, vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, self.query_pool, 1)
+        vk.vkEndCommandBuffer(cmd)
+        fence = vk.vkCreateFence(self.device.handle, vk.VkFenceCreateInfo(), None)
+        rec = _Recorded(cmd, fence, vk.VkSubmitInfo(pCommandBuffers=[cmd]))
+        self._recorded[key] = rec
+        return rec
+
+    def _record_draws(self, cmd: Any, target: RenderTarget, tbn: L.TbnMode, alpha_mask: bool) -> None:
+        vk = self.device.vk
+        gs = self.gpu_scene
+        layout = self.pipeline_layout.handle
+        names = ["positions", "texcoords"] + [n for n, _ in _TBN_STREAMS[tbn]]
+        buffers = [gs.streams[n].handle for n in names]
+        vk.vkCmdBindIndexBuffer(cmd, gs.index_buffer.handle, 0, vk.VK_INDEX_TYPE_UINT32)
+        for kind in _PASS_ORDER:
+            draws = [d for d in gs.draws if self._pass_of(d.kind, alpha_mask) == kind]
+            if not draws:
+                continue
+            pipeline = self._pipeline(target, tbn, kind)
+            vk.vkCmdBindPipeline(cmd, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline.handle)
+            vk.vkCmdBindDescriptorSets(cmd, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1,
+                                       [self.set0], 0, None)
+            vk.vkCmdBindDescriptorSets(cmd, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 2, 1,
+                                       [self.set2], 0, None)
+            vk.vkCmdBindVertexBuffers(cmd, 0, len(buffers), buffers, [0] * len(buffers))
+            bound = None
+            for d in draws:
+                if d.material != bound:
+                    vk.vkCmdBindDescriptorSets(cmd, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 1, 1,
+                                               [gs.material_sets[d.material]], 0, None)
+                    bound = d.material
+                vk.vkCmdPushConstants(
+                    cmd, layout, vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_FRAGMENT_BIT,
+                    0, L.PUSH.size, vk.ffi.from_buffer(d.push))
+                vk.vkCmdDrawIndexed(cmd, d.index_count, 1, d.first_index, d.vertex_offset, 0)
+
+    @staticmethod
+    def _pass_of(kind: str, alpha_mask: bool) -> str:
+        if kind == "mask" and not alpha_mask:
+            return "opaque_double"  # --no-alpha-mask: masked materials drawn as opaque
+        return kind
+
+    # --- per frame --------------------------------------------------------------------------
+    def default_camera(self) -> Camera:
+        if self.scene.cameras:
+            return self.scene.cameras[0]
+        from vkpbr.scene.geometry import auto_camera
+
+        return auto_camera(self.scene)
+
+    def default_light(self) -> Light:
+        return self.scene.lights[0] if self.scene.lights else Light()
+
+    def _write_uniforms(self, camera: Camera, light: Light, size: tuple[int, int],
+                        opts: RenderOptions, linear: bool) -> None:
+        view, brdf, _tbn, tonemap = opts.resolved()
+        w, h = size
+        vp = view_projection(camera, w / h)
+        self.u_camera["VP"][0] = L.mat4_to_std140(vp)
+        s = self.u_settings[0]
+        forward = -look_at(camera.eye, camera.target, camera.up)[2, :3]
+        s["camera_forward"] = (*forward, 0.0)
+        s["view"], s["brdf"], s["tonemap"] = int(view), int(brdf), int(tonemap)
+        flags = 0
+        if opts.normal_mapping:
+            flags |= L.SETTINGS_NORMAL_MAPPING
+        if opts.occlusion:
+            flags |= L.SETTINGS_OCCLUSION
+        if not linear:
+            flags |= L.SETTINGS_SRGB_TARGET
+        s["flags"] = flags
+        s["exposure"] = 2.0 ** opts.exposure
+        s["znear"], s["zfar"] = camera.znear, camera.zfar
+        li = self.u_light[0]
+        li["lightPos"] = (*light.position, 1.0)
+        li["color"] = light.color
+        li["intensity"] = light.intensity
+        li["viewPos"] = (*camera.eye, 1.0)
+        li["falloff"] = 0 if light.falloff == "none" else 1
+        li["range"] = light.range
+
+    def render(
+        self,
+        camera: Camera | None = None,
+        light: Light | None = None,
+        size: tuple[int, int] = (640, 480),
+        options: RenderOptions | None = None,
+        linear: bool = False,
+        depth: bool = False,
+        **option_overrides: Any,
+    ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+        """Render one frame.
+
+        Returns (H, W, 4) uint8 sRGB-encoded colour, or (H, W, 4) float32 linear colour when
+        `linear`; with `depth`, a tuple (colour, depth) where depth is (H, W) float32 linear
+        view-space distance along the camera axis (inf where nothing was drawn).
+        Keyword overrides (view="d", brdf="blinn-phong", ...) update `options`.
+        """
+        opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
+        _view, _brdf, tbn, _tm = opts.resolved()
+        camera = camera or self.default_camera()
+        validate_camera(camera)
+        light = light or self.default_light()
+        target = self._target(size, linear)
+        rec = self._record(target, tbn, opts.alpha_mask)
+        self._submit(rec, camera, light, size, opts, linear)
+        t0 = time.perf_counter()
+        color = target.read_color()
+        out_depth = self._linear_depth(target.read_depth(), camera) if depth else None
+        self.last_stats.readback_ms = (time.perf_counter() - t0) * 1e3
+        self.device.check_validation()
+        return (color, out_depth) if depth else color
+
+    def _submit(self, rec: _Recorded, camera: Camera, light: Light, size: tuple[int, int],
+                opts: RenderOptions, linear: bool) -> None:
+        vk = self.device.vk
+        t0 = time.perf_counter()
+        self._write_uniforms(camera, light, size, opts, linear)
+        with translate_errors("vkQueueSubmit"):
+            vk.vkQueueSubmit(self.device.queue, 1, [rec.submit], rec.fence)
+            t1 = time.perf_counter()
+            vk.vkWaitForFences(self.device.handle, 1, [rec.fence], vk.VK_TRUE, 2**63 - 1)
+            vk.vkResetFences(self.device.handle, 1, [rec.fence])
+        t2 = time.perf_counter()
+        self.last_stats.cpu_ms = (t1 - t0) * 1e3
+        self.last_stats.wait_ms = (t2 - t1) * 1e3
+        self.last_stats.gpu_ms = self._gpu_ms()
+
+    def _gpu_ms(self) -> float:
+        if self.query_pool is None:
+            return float("nan")
+        vk = self.device.vk
+        data = vk.ffi.new("uint64_t[2]")
+        vk.vkGetQueryPoolResults(self.device.handle, self.query_pool, 0, 2, 16, data, 8,
+                                 vk.VK_QUERY_RESULT_64_BIT | vk.VK_QUERY_RESULT_WAIT_BIT)
+        return (data[1] - data[0]) * float(self.device.limits.timestampPeriod) * 1e-6
+
+    @staticmethod
+    def _linear_depth(d: np.ndarray, camera: Camera) -> np.ndarray:
+        """Window depth in [0, 1] -> view-space distance along the axis (inf = background)."""
+        n, f = camera.znear, camera.zfar
+        with np.errstate(divide="ignore"):
+            z = (n * f) / (f - d.astype(np.float64) * (f - n))
+        z[d >= 1.0] = np.inf
+        return z.astype(np.float32)
+
+    # --- lifetime ---------------------------------------------------------------------------
+    def close(self) -> None:
+        """Destroy everything (idempotent). The Renderer is unusable afterwards."""
+        dev = getattr(self, "device", None)
+        if dev is None or dev.handle is None:
+            return
+        vk = dev.vk
+        dev.wait_idle()
+        for rec in self._recorded.values():
+            vk.vkDestroyFence(dev.handle, rec.fence, None)
+            dev.free_command_buffer(rec.cmd)
+        self._recorded.clear()
+        if getattr(self, "query_pool", None) is not None:
+            vk.vkDestroyQueryPool(dev.handle, self.query_pool, None)
+            self.query_pool = None
+        dev.close()
+
+    def __enter__(self) -> Renderer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,208 @@
+"""Scene data: plain dataclasses holding NumPy arrays. No Vulkan here.
+
+Every loader (glTF, OBJ/MTL, .comp5822mesh, baked .vkpbr, the built-in default scene) produces
+a `Scene`; the renderer consumes one. Conventions:
+
+- Right-handed world space, +Y up (glTF). Lengths in scene units (metres for glTF).
+- Arrays are C-contiguous: positions/normals (N, 3) float32, texcoords (N, 2) float32 with
+  glTF's convention (origin at the image's top-left, v down), tangents (N, 4) float32 with
+  w = +-1 handedness (bitangent = w * cross(n, t)), indices (M,) uint32, M a multiple of 3.
+- Textures hold encoded bytes or decoded pixels; decoding is deferred so that a loader can
+  decode many images in parallel (see `vkpbr.scene.textures`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+__all__ = [
+    "AlphaMode",
+    "Camera",
+    "Image",
+    "Light",
+    "Material",
+    "Mesh",
+    "Node",
+    "Sampler",
+    "Scene",
+    "TextureRef",
+]
+
+AlphaMode = Literal["opaque", "mask", "blend"]
+Wrap = Literal["repeat", "clamp", "mirror"]
+Filter = Literal["linear", "nearest"]
+
+
+@dataclass
+class Image:
+    """One source image. Exactly one of `pixels`, `data` or `path` is the source.
+
+    pixels: (H, W, 4) uint8 RGBA, already decoded (generated textures, decoded files).
+    data:   encoded bytes (PNG/JPEG...) embedded in the scene file.
+    path:   a file on disk.
+    `name` is what warnings and errors print (usually the file name).
+    """
+
+    name: str
+    pixels: np.ndarray | None = None
+    data: bytes | None = None
+    path: Path | None = None
+    mime_type: str | None = None
+
+
+@dataclass(frozen=True)
+class Sampler:
+    """Texture addressing and filtering (glTF sampler semantics)."""
+
+    wrap_s: Wrap = "repeat"
+    wrap_t: Wrap = "repeat"
+    mag_filter: Filter = "linear"
+    min_filter: Filter = "linear"
+    mipmaps: bool = True
+
+
+@dataclass
+class TextureRef:
+    """A material's use of an image.
+
+    channel: which channel of the image holds a scalar map (0=R, 1=G, 2=B, 3=A); glTF's packed
+        metallic-roughness texture is referenced twice, metallic with channel 2 and roughness
+        with channel 1, and the renderer serves both from one GPU image through swizzled views.
+    texcoord: which UV set (0 or 1).
+    offset/rotation/scale: KHR_texture_transform (uv' = T * R * S * uv).
+    """
+
+    image: int
+    sampler: Sampler = field(default_factory=Sampler)
+    channel: int = 0
+    texcoord: int = 0
+    offset: tuple[float, float] = (0.0, 0.0)
+    rotation: float = 0.0
+    scale: tuple[float, float] = (1.0, 1.0)
+
+
+@dataclass
+class Material:
+    """Metallic-roughness material (glTF 2.0 core). Factors multiply the textures."""
+
+    name: str = "default"
+    base_color_factor: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
+    metallic_factor: float = 1.0
+    roughness_factor: float = 1.0
+    emissive_factor: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    normal_scale: float = 1.0
+    occlusion_strength: float = 1.0
+    alpha_mode: AlphaMode = "opaque"
+    alpha_cutoff: float = 0.5
+    double_sided: bool = False
+    base_color_texture: TextureRef | None = None  # sRGB; alpha in A
+    metallic_texture: TextureRef | None = None  # linear; `channel` picks the component
+    roughness_texture: TextureRef | None = None  # linear; `channel` picks the component
+    normal_texture: TextureRef | None = None  # linear, tangent space, xyz*2-1
+    occlusion_texture: TextureRef | None = None  # linear, R
+    emissive_texture: TextureRef | None = None  # sRGB
+    # Separate alpha mask (OBJ map_d, .comp5822mesh): `channel` holds coverage. When None the
+    # alpha comes from base_color_texture's A, as in glTF.
+    alpha_texture: TextureRef | None = None  # linear
+
+
+@dataclass
+class Mesh:
+    """One triangle list with one material (a glTF primitive, an OBJ group)."""
+
+    name: str
+    positions: np.ndarray  # (N, 3) float32
+    indices: np.ndarray  # (M,) uint32, M % 3 == 0
+    normals: np.ndarray | None = None  # (N, 3) float32; None -> flat normals are generated
+    texcoords: np.ndarray | None = None  # (N, 2) float32, TEXCOORD_0
+    texcoords1: np.ndarray | None = None  # (N, 2) float32, TEXCOORD_1
+    tangents: np.ndarray | None = None  # (N, 4) float32; None -> generated when normal-mapped
+    colors: np.ndarray | None = None  # (N, 4) float32 COLOR_0, multiplies base colour
+    material: int = -1  # index into Scene.materials; -1 = the default material
+    qtangents: np.ndarray | None = None  # (N, 4) float32 QTangent frames (baked scenes)
+    packed_frames: np.ndarray | None = None  # (N,) uint32 packed frames (baked scenes)
+
+    @property
+    def vertex_count(self) -> int:
+        return int(self.positions.shape[0])
+
+    @property
+    def triangle_count(self) -> int:
+        return int(self.indices.shape[0] // 3)
+
+
+@dataclass
+class Node:
+    """An instance of a mesh in the world: `matrix` is the full model-to-world transform."""
+
+    mesh: int
+    matrix: np.ndarray = field(default_factory=lambda: np.eye(4, dtype=np.float32))  # (4, 4)
+    name: str = ""
+
+
+@dataclass
+class Light:
+    """A point light. falloff "none" is the course's (no attenuation); "inverse_square" is
+    physical (glTF KHR_lights_punctual, intensity in candela)."""
+
+    position: tuple[float, float, float] = (0.0, 2.0, 0.0)
+    color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    intensity: float = 1.0
+    falloff: Literal["none", "inverse_square"] = "none"
+    range: float = 0.0  # 0 = infinite (glTF)
+
+
+@dataclass
+class Camera:
+    """A perspective camera by eye/target/up; yfov in degrees."""
+
+    eye: tuple[float, float, float] = (0.0, 0.0, 3.0)
+    target: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    up: tuple[float, float, float] = (0.0, 1.0, 0.0)
+    yfov_deg: float = 60.0
+    znear: float = 0.1
+    zfar: float = 100.0
+    name: str = ""
+
+
+@dataclass
+class Scene:
+    """Everything a renderer needs, as plain arrays."""
+
+    name: str
+    meshes: list[Mesh] = field(default_factory=list)
+    materials: list[Material] = field(default_factory=list)
+    images: list[Image] = field(default_factory=list)
+    nodes: list[Node] = field(default_factory=list)
+    lights: list[Light] = field(default_factory=list)
+    cameras: list[Camera] = field(default_factory=list)
+    source: Path | None = None  # the file it was loaded from, if any
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World-space axis-aligned bounds (min, max) over all node instances."""
+        lo = np.full(3, np.inf)
+        hi = np.full(3, -np.inf)
+        for node in self.nodes:
+            p = self.meshes[node.mesh].positions
+            if len(p) == 0:
+                continue
+            m = np.asarray(node.matrix, dtype=np.float64)
+            corners = np.array(
+                [[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=np.float64
+            )
+            pmin, pmax = p.min(axis=0), p.max(axis=0)
+            box = pmin + corners * (pmax - pmin)
+            world = box @ m[:3, :3].T + m[:3, 3]
+            lo = np.minimum(lo, world.min(axis=0))
+            hi = np.maximum(hi, world.max(axis=0))
+        if not np.all(np.isfinite(lo)):
+            return np.zeros(3), np.zeros(3)
+        return lo, hi
+
+    @property
+    def triangle_count(self) -> int:
+        return sum(self.meshes[n.mesh].triangle_count for n in self.nodes)

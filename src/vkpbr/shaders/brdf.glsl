@@ -1,0 +1,96 @@
+// brdf.glsl: the shading equations of renderer-spec section 2 (the course's Cook-Torrance),
+// as pure functions of scalars and colours. Mirrored function for function, with the same
+// names, in src/vkpbr/reference/brdf.py; the GPU tests compare the two.
+// Notation: x+ = max(0, x); n, l, v, h unit vectors; c base colour, M metalness, r roughness.
+#ifndef BRDF_GLSL
+#define BRDF_GLSL
+
+const float PI = 3.14159265358979;
+const float EPS = 1e-6;
+
+// GGX / Trowbridge-Reitz (Disney GTR, gamma = 2), alpha = r^2 (Burley 2012, eq. 8).
+float d_ggx(float n_dot_h, float alpha) {
+    float a2 = alpha * alpha;
+    float k = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
+    return a2 / (PI * k * k);
+}
+
+// The course's Blinn-Phong distribution: (ap + 2) / (2 pi) (n.h)+^ap, ap = 2 / alpha^2 - 2.
+float d_blinn_phong(float n_dot_h, float alpha) {
+    float ap = 2.0 / (alpha * alpha) - 2.0;
+    return (ap + 2.0) / (2.0 * PI) * pow(n_dot_h, ap);
+}
+
+// Schlick's Fresnel approximation (Schlick 1994): F0 + (1 - F0)(1 - h.v)^5.
+vec3 f_schlick(vec3 f0, float v_dot_h) {
+    return f0 + (1.0 - f0) * pow(1.0 - v_dot_h, 5.0);
+}
+
+// Cook-Torrance masking (Cook & Torrance 1982): min(1, 2(n.h)(n.v)/(v.h), 2(n.h)(n.l)/(v.h)).
+float g_cook_torrance(float n_dot_h, float n_dot_v, float n_dot_l, float v_dot_h) {
+    float k = 2.0 * n_dot_h / max(v_dot_h, EPS);
+    return min(1.0, min(k * n_dot_v, k * n_dot_l));
+}
+
+// Lambert diffuse weighted by what neither the specular lobe nor the metal takes:
+// (c / pi)(1 - F)(1 - M).
+vec3 diffuse_lambert(vec3 c, vec3 f, float metallic) {
+    return c / PI * (1.0 - f) * (1.0 - metallic);
+}
+
+// F0 = (1 - M) 0.04 + M c.
+vec3 f0_from_metallic(vec3 c, float metallic) {
+    return mix(vec3(0.04), c, metallic);
+}
+
+struct BrdfTerms {
+    float D;
+    vec3 F;
+    float G;
+    vec3 specular;  // D F G / (4 (n.v)+ (n.l)+), the specular BRDF value
+    vec3 diffuse;   // the diffuse BRDF value
+};
+
+// Every term at one shading point. brdf selects D: BRDF_GGX or BRDF_BLINN_PHONG.
+BrdfTerms evaluate_brdf(vec3 n, vec3 v, vec3 l, vec3 c, float metallic, float roughness, int brdf) {
+    vec3 h = normalize(l + v);
+    float n_dot_l = max(dot(n, l), 0.0);
+    float n_dot_v = max(dot(n, v), 0.0);
+    float n_dot_h = max(dot(n, h), 0.0);
+    float v_dot_h = max(dot(v, h), 0.0);
+    float alpha = roughness * roughness;
+    BrdfTerms t;
+    t.D = brdf == BRDF_BLINN_PHONG ? d_blinn_phong(n_dot_h, alpha) : d_ggx(n_dot_h, alpha);
+    t.F = f_schlick(f0_from_metallic(c, metallic), v_dot_h);
+    t.G = g_cook_torrance(n_dot_h, n_dot_v, n_dot_l, v_dot_h);
+    t.specular = t.D * t.F * t.G / max(4.0 * n_dot_v * n_dot_l, EPS);
+    t.diffuse = diffuse_lambert(c, t.F, metallic);
+    return t;
+}
+
+// Point-light attenuation: none (the course) or inverse square with glTF's range window.
+float light_attenuation(float dist2, uint falloff, float range) {
+    if (falloff == 0u) return 1.0;
+    float att = 1.0 / max(dist2, 1e-4);
+    if (range > 0.0) {
+        float r = dist2 / (range * range);
+        att *= clamp(1.0 - r * r, 0.0, 1.0);
+    }
+    return att;
+}
+
+// Tone mapping: Reinhard x / (1 + x); ACES filmic fit (Narkowicz 2015).
+vec3 tonemap(vec3 x, int mode) {
+    if (mode == TONEMAP_REINHARD) return x / (1.0 + x);
+    if (mode == TONEMAP_ACES) {
+        return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
+    }
+    return x;
+}
+
+// sRGB EOTF (IEC 61966-2-1): encoded value -> linear.
+vec3 srgb_to_linear(vec3 e) {
+    return mix(e / 12.92, pow((e + 0.055) / 1.055, vec3(2.4)), greaterThan(e, vec3(0.04045)));
+}
+
+#endif

@@ -1,0 +1,106 @@
+#version 450
+// pbr.frag: gathers the material inputs, builds the shading normal from the TBN and the
+// normal map, evaluates brdf.glsl for one point light in world space (report 1.1-1.2), then
+// writes the selected debug view (Settings.view; no pipeline rebuild to switch).
+// ALPHA_MASK = 1 builds the masked-material variant that discards below the cutoff (report 1.3).
+#extension GL_GOOGLE_include_directive : require
+#include "generated.glsl"
+#include "brdf.glsl"
+
+layout(location = 0) in vec3 v_world_pos;
+layout(location = 1) in vec2 v_texcoord;
+layout(location = 2) in vec3 v_normal;
+layout(location = 3) in vec3 v_tangent;
+layout(location = 4) in vec3 v_bitangent;
+
+layout(location = 0) out vec4 out_color;
+
+vec3 safe_normalize(vec3 x, vec3 fallback) {
+    float len2 = dot(x, x);
+    return len2 > 1e-16 ? x * inversesqrt(len2) : fallback;
+}
+
+vec3 encode_dir(vec3 d) { return d * 0.5 + 0.5; }
+
+void main() {
+    // KHR_texture_transform as a 2x3 matrix (identity for most materials).
+    vec3 uv_h = vec3(v_texcoord, 1.0);
+    vec2 uv = vec2(dot(material.uv_transform_row0.xyz, uv_h), dot(material.uv_transform_row1.xyz, uv_h));
+
+    vec4 base = texture(base_color_map, uv) * material.base_color_factor;
+#if ALPHA_MASK
+    if (base.a < material.alpha_cutoff) discard;
+#endif
+    vec3 c = base.rgb;
+    float metallic = clamp(texture(metallic_map, uv).r * material.metallic_factor, 0.0, 1.0);
+    float roughness = clamp(texture(roughness_map, uv).r * material.roughness_factor, MIN_ROUGHNESS, 1.0);
+    float occlusion = 1.0;
+    if ((settings.flags & SETTINGS_OCCLUSION) != 0u && (material.flags & MATERIAL_HAS_OCCLUSION_MAP) != 0u)
+        occlusion = 1.0 + material.occlusion_strength * (texture(occlusion_map, uv).r - 1.0);
+    vec3 emissive = texture(emissive_map, uv).rgb * material.emissive_factor;
+
+    // Tangent frame: back faces of double-sided materials see the whole frame flipped.
+    vec3 ng = safe_normalize(v_normal, vec3(0.0, 0.0, 1.0));
+    vec3 t = safe_normalize(v_tangent, vec3(1.0, 0.0, 0.0));
+    vec3 b = safe_normalize(v_bitangent, cross(ng, t));
+    if ((material.flags & MATERIAL_DOUBLE_SIDED) != 0u && !gl_FrontFacing) {
+        ng = -ng; t = -t; b = -b;
+    }
+    vec3 n = ng;
+    if ((settings.flags & SETTINGS_NORMAL_MAPPING) != 0u && (material.flags & MATERIAL_HAS_NORMAL_MAP) != 0u) {
+        vec3 tn = texture(normal_map, uv).xyz * 2.0 - 1.0;  // linear (UNORM) texture
+        tn.xy *= material.normal_scale;
+        n = safe_normalize(mat3(t, b, ng) * tn, ng);
+    }
+
+    vec3 v = safe_normalize(light.viewPos.xyz - v_world_pos, ng);
+    vec3 to_light = light.lightPos.xyz - v_world_pos;
+    float dist2 = dot(to_light, to_light);
+    vec3 l = safe_normalize(to_light, ng);
+    vec3 light_in = light.color * light.intensity * light_attenuation(dist2, light.falloff, light.range);
+
+    BrdfTerms terms = evaluate_brdf(n, v, l, c, metallic, roughness, settings.brdf);
+    float n_dot_l = max(dot(n, l), 0.0);
+    vec3 specular = terms.specular * light_in * n_dot_l;
+    vec3 diffuse = terms.diffuse * light_in * n_dot_l;
+    vec3 ambient = AMBIENT * c * occlusion;
+
+    vec3 value;
+    switch (settings.view) {
+        case VIEW_D: value = vec3(terms.D); break;
+        case VIEW_F: value = terms.F; break;
+        case VIEW_G: value = vec3(terms.G); break;
+        case VIEW_SPECULAR: value = specular; break;
+        case VIEW_DIFFUSE: value = diffuse; break;
+        case VIEW_AMBIENT: value = ambient; break;
+        case VIEW_GEOMETRIC_NORMAL: value = encode_dir(ng); break;
+        case VIEW_NORMAL: value = encode_dir(n); break;
+        case VIEW_VIEW_DIR: value = encode_dir(v); break;
+        case VIEW_LIGHT_DIR: value = encode_dir(l); break;
+        case VIEW_BASE_COLOR: value = c; break;
+        case VIEW_METALLIC: value = vec3(metallic); break;
+        case VIEW_ROUGHNESS: value = vec3(roughness); break;
+        case VIEW_OCCLUSION: value = vec3(occlusion); break;
+        case VIEW_ALPHA: value = vec3(base.a); break;
+        case VIEW_TEXCOORDS: value = vec3(fract(uv), 0.0); break;
+        case VIEW_DEPTH:
+            value = vec3(dot(v_world_pos - light.viewPos.xyz, settings.camera_forward.xyz) / settings.zfar);
+            break;
+        case VIEW_EMISSIVE: value = emissive; break;
+        case VIEW_TANGENT: value = encode_dir(t); break;
+        case VIEW_BITANGENT: value = encode_dir(b); break;
+        default: value = emissive + ambient + diffuse + specular; break;
+    }
+
+    int kind = VIEW_KINDS[clamp(settings.view, 0, VIEW_KINDS.length() - 1)];
+    bool srgb_target = (settings.flags & SETTINGS_SRGB_TARGET) != 0u;
+    if (kind == VIEW_KIND_RADIANCE) {
+        value = tonemap(value * settings.exposure, settings.tonemap);
+    } else if (kind == VIEW_KIND_DATA) {
+        // Raw data: on an sRGB target, pre-linearise so that the stored byte is the value.
+        value = clamp(value, 0.0, 1.0);
+        if (srgb_target) value = srgb_to_linear(value);
+    }
+    float alpha = (material.flags & MATERIAL_BLEND) != 0u ? base.a : 1.0;
+    out_color = vec4(value, alpha);
+}

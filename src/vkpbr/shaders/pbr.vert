@@ -1,0 +1,52 @@
+#version 450
+// pbr.vert: world-space position and TBN for pbr.frag (report 1.1). TBN_MODE picks how the
+// tangent frame arrives: 0 normal + tangent vectors, 1 a float QTangent, 2 a packed uint32.
+#extension GL_GOOGLE_include_directive : require
+#include "generated.glsl"
+#if TBN_MODE != 0
+#include "tbn_decode.glsl"
+#endif
+
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec2 in_texcoord;
+#if TBN_MODE == 0
+layout(location = 2) in vec3 in_normal;
+layout(location = 3) in vec4 in_tangent;
+#elif TBN_MODE == 1
+layout(location = 2) in vec4 in_qtangent;
+#else
+layout(location = 2) in uint in_packed_frame;
+#endif
+
+layout(location = 0) out vec3 v_world_pos;
+layout(location = 1) out vec2 v_texcoord;
+layout(location = 2) out vec3 v_normal;
+layout(location = 3) out vec3 v_tangent;
+layout(location = 4) out vec3 v_bitangent;
+
+void main() {
+#if TBN_MODE == 0
+    vec3 n = in_normal;
+    vec3 t = in_tangent.xyz;
+    // glTF: bitangent = w * cross(n, t), w = +-1 the handedness.
+    vec3 b = (in_tangent.w < 0.0 ? -1.0 : 1.0) * cross(n, t);
+#else
+#if TBN_MODE == 1
+    mat3 tbn = tbn_from_qtangent(in_qtangent);
+#else
+    mat3 tbn = tbn_from_qtangent(qtangent_unpack(in_packed_frame));
+#endif
+    vec3 t = tbn[0];
+    vec3 b = tbn[1];
+    vec3 n = tbn[2];
+#endif
+    vec4 world = draw.model * vec4(in_position, 1.0);
+    v_world_pos = world.xyz;
+    v_texcoord = in_texcoord;
+    // Normals take the inverse transpose; tangent and bitangent are surface directions and
+    // take the model matrix itself, which keeps the handedness right under mirroring.
+    v_normal = mat3(draw.normal_matrix) * n;
+    v_tangent = mat3(draw.model) * t;
+    v_bitangent = mat3(draw.model) * b;
+    gl_Position = camera.VP * world;
+}
