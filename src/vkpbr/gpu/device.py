@@ -92,13 +92,14 @@ class Device:
         for ext in getattr(self, "wanted_extensions", ()):
             if ext in available:
                 self.extensions.append(ext)
+        # Keep the queue info alive until vkCreateDevice returns: the binding copies structs
+        # into arrays, and the copy's pQueuePriorities points into the original's memory.
+        queue_info = vk.VkDeviceQueueCreateInfo(
+            queueFamilyIndex=self.queue_family, pQueuePriorities=[1.0]
+        )
         info = vk.VkDeviceCreateInfo(
             pNext=features,
-            pQueueCreateInfos=[
-                vk.VkDeviceQueueCreateInfo(
-                    queueFamilyIndex=self.queue_family, pQueuePriorities=[1.0]
-                )
-            ],
+            pQueueCreateInfos=[queue_info],
             ppEnabledExtensionNames=self.extensions,
         )
         with translate_errors("vkCreateDevice"):

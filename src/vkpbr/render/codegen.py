@@ -74,14 +74,17 @@ def glslc() -> str:
 
 
 def compile_all(out_dir: Path = SPV_DIR, write_generated: bool = True) -> list[Path]:
-    """Compile every variant into out_dir; returns the written files."""
+    """Compile every variant into out_dir; returns the written files.
+
+    No -O: drivers optimise anyway, and unstripped names let tests read block layouts back.
+    """
     if write_generated:
         GENERATED.write_text(generated_glsl())
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []
     for v in VARIANTS:
         dst = out_dir / v.output
-        cmd = [glslc(), "--target-env=vulkan1.3", "-O", "-I", str(SHADER_DIR)]
+        cmd = [glslc(), "--target-env=vulkan1.3", "-I", str(SHADER_DIR)]
         cmd += [f"-D{k}={val}" for k, val in v.defines]
         cmd += [str(SHADER_DIR / v.source), "-o", str(dst)]
         proc = subprocess.run(cmd, capture_output=True, text=True)

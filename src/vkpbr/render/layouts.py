@@ -197,7 +197,7 @@ class View(enum.IntEnum):
     DIFFUSE = 5
     AMBIENT = 6
     GEOMETRIC_NORMAL = 7
-    NORMAL = 8
+    MAPPED_NORMAL = 8
     VIEW_DIR = 9
     LIGHT_DIR = 10
     BASE_COLOR = 11
@@ -221,7 +221,7 @@ VIEW_HELP = {
     View.DIFFUSE: "diffuse radiance: c/pi (1-F)(1-M) * light * n.l",
     View.AMBIENT: "ambient radiance: 0.02 * c * occlusion",
     View.GEOMETRIC_NORMAL: "interpolated vertex normal (world), xyz*0.5+0.5",
-    View.NORMAL: "shading normal after normal mapping (world), xyz*0.5+0.5",
+    View.MAPPED_NORMAL: "shading normal after normal mapping (world), xyz*0.5+0.5",
     View.VIEW_DIR: "direction to the camera v (world), xyz*0.5+0.5",
     View.LIGHT_DIR: "direction to the light l (world), xyz*0.5+0.5",
     View.BASE_COLOR: "base colour c (texture x factor), as a colour",

@@ -77,8 +77,9 @@ def _rgba(rgb: np.ndarray, alpha: np.ndarray | None = None) -> np.ndarray:
     return np.clip(np.round(out * 255.0), 0, 255).astype(np.uint8)
 
 
-def _floor_textures(size: int = 256) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Checker base colour (sRGB bytes), a bump normal map and a roughness map (linear)."""
+def _floor_textures(size: int = 256) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Checker base colour (sRGB bytes), a bump normal map, a roughness map and an ambient
+    occlusion map darkening the grooves between the bumps (all linear)."""
     v, u = (np.mgrid[0:size, 0:size] + 0.5) / size
     tiles = 8
     checker = ((np.floor(u * tiles) + np.floor(v * tiles)) % 2).astype(np.float64)
@@ -92,7 +93,9 @@ def _floor_textures(size: int = 256) -> tuple[np.ndarray, np.ndarray, np.ndarray
     n = np.stack([-dh_du, dh_dv, np.ones_like(u)], axis=-1)
     n /= np.linalg.norm(n, axis=-1, keepdims=True)
     rough = 0.35 + 0.4 * checker
-    return _rgba(base), _rgba(n * 0.5 + 0.5), _rgba(np.repeat(rough[..., None], 3, axis=-1))
+    occlusion = 0.35 + 0.65 * np.sqrt(r2)
+    grey = lambda x: _rgba(np.repeat(x[..., None], 3, axis=-1))  # noqa: E731
+    return _rgba(base), _rgba(n * 0.5 + 0.5), grey(rough), grey(occlusion)
 
 
 def _card_texture(size: int = 128) -> np.ndarray:
@@ -108,17 +111,23 @@ def _card_texture(size: int = 128) -> np.ndarray:
 def default_scene() -> Scene:
     """The PBR chart: GRID x GRID spheres (metalness grows left to right, roughness bottom
     to top), a normal-mapped floor, a masked card, the light and a framing camera."""
-    floor_base, floor_normal, floor_rough = _floor_textures()
+    floor_base, floor_normal, floor_rough, floor_occlusion = _floor_textures()
     images = [
         Image(name="floor-base-color", pixels=floor_base),
         Image(name="floor-normal", pixels=floor_normal),
         Image(name="floor-roughness", pixels=floor_rough),
         Image(name="card-base-color", pixels=_card_texture()),
+        Image(name="floor-occlusion", pixels=floor_occlusion),
     ]
     repeat = Sampler()
     materials: list[Material] = []
     nodes: list[Node] = []
-    meshes = [uv_sphere(RADIUS), plane(8.0, 8.0, uv_repeat=2.0), _card(1.6, 1.6)]
+    meshes = [
+        uv_sphere(RADIUS),
+        plane(8.0, 8.0, uv_repeat=2.0),
+        _card(1.6, 1.6),
+        uv_sphere(0.12, 12, 24),
+    ]
     span = (GRID - 1) * SPACING
     for row in range(GRID):  # roughness
         for col in range(GRID):  # metalness
@@ -140,6 +149,7 @@ def default_scene() -> Scene:
             base_color_texture=TextureRef(0, repeat),
             normal_texture=TextureRef(1, repeat),
             roughness_texture=TextureRef(2, repeat, channel=0),
+            occlusion_texture=TextureRef(4, repeat),
         )
     )
     floor = np.eye(4, dtype=np.float32)
@@ -159,20 +169,44 @@ def default_scene() -> Scene:
     card = np.eye(4, dtype=np.float32)
     card[:3, 3] = (span / 2 + 1.4, -0.05, 1.2)
     angle = np.radians(-35.0)
-    card[:3, :3] = [[np.cos(angle), 0, np.sin(angle)], [0, 1, 0], [-np.sin(angle), 0, np.cos(angle)]]
+    card[:3, :3] = [
+        [np.cos(angle), 0, np.sin(angle)],
+        [0, 1, 0],
+        [-np.sin(angle), 0, np.cos(angle)],
+    ]
     nodes.append(Node(mesh=2, matrix=card, name="card"))
     # A Mesh carries its material, so each sphere is a Mesh sharing the same arrays.
     sphere_meshes = []
     for i in range(GRID * GRID):
         mesh = meshes[0]
         sphere_meshes.append(
-            Mesh(name=f"sphere{i}", positions=mesh.positions, indices=mesh.indices,
-                 normals=mesh.normals, texcoords=mesh.texcoords, tangents=mesh.tangents,
-                 material=i)
+            Mesh(
+                name=f"sphere{i}",
+                positions=mesh.positions,
+                indices=mesh.indices,
+                normals=mesh.normals,
+                texcoords=mesh.texcoords,
+                tangents=mesh.tangents,
+                material=i,
+            )
         )
-    floor_mesh, card_mesh = meshes[1], meshes[2]
+    # A small emissive bulb marks the light (the light sits inside it, so only Le shows).
+    light = Light(position=(-2.6, 4.3, 2.5), color=(1.0, 1.0, 1.0), intensity=3.0)
+    materials.append(
+        Material(
+            name="bulb",
+            base_color_factor=(0, 0, 0, 1),
+            metallic_factor=0.0,
+            emissive_factor=(1.0, 0.95, 0.8),
+        )
+    )
+    bulb = np.eye(4, dtype=np.float32)
+    bulb[:3, 3] = light.position
+    nodes.append(Node(mesh=3, matrix=bulb, name="bulb"))
+    floor_mesh, card_mesh, bulb_mesh = meshes[1], meshes[2], meshes[3]
     floor_mesh.material, card_mesh.material = GRID * GRID, GRID * GRID + 1
-    all_meshes = sphere_meshes + [floor_mesh, card_mesh]
+    bulb_mesh.material = GRID * GRID + 2
+    all_meshes = sphere_meshes + [floor_mesh, card_mesh, bulb_mesh]
     for i, node in enumerate(nodes):
         node.mesh = i
     return Scene(
@@ -181,8 +215,10 @@ def default_scene() -> Scene:
         materials=materials,
         images=images,
         nodes=nodes,
-        lights=[Light(position=(-1.5, 5.0, 4.0), color=(1.0, 1.0, 1.0), intensity=3.0)],
+        lights=[light],
         cameras=[
-            Camera(eye=(0.6, 3.2, 9.0), target=(0.4, 2.2, 0.0), yfov_deg=45.0, znear=0.1, zfar=100.0)
+            Camera(
+                eye=(0.6, 3.2, 9.0), target=(0.4, 2.2, 0.0), yfov_deg=45.0, znear=0.1, zfar=100.0
+            )
         ],
     )

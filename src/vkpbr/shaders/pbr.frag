@@ -74,7 +74,7 @@ void main() {
         case VIEW_DIFFUSE: value = diffuse; break;
         case VIEW_AMBIENT: value = ambient; break;
         case VIEW_GEOMETRIC_NORMAL: value = encode_dir(ng); break;
-        case VIEW_NORMAL: value = encode_dir(n); break;
+        case VIEW_MAPPED_NORMAL: value = encode_dir(n); break;
         case VIEW_VIEW_DIR: value = encode_dir(v); break;
         case VIEW_LIGHT_DIR: value = encode_dir(l); break;
         case VIEW_BASE_COLOR: value = c; break;

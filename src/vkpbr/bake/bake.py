@@ -1,0 +1,392 @@
+# The bake stage: Scene -> GPU-ready BakedScene (clean, deduplicate, optimise, frames).
+#
+# References: renderer-spec.md sections 4-5 (tangent frames; the course bake merged vertices
+# within 1e-5, this one merges exact duplicates only, so baking never moves a vertex);
+# A. Kapoulkine, meshoptimizer (vertex cache optimisation, Forsyth-style; fetch order = first
+# use); Khronos glTF 2.0 spec (use the file's TANGENT when present).
+"""Bake scenes into `BakedScene`s, report on them, and bake files with a content-keyed cache.
+
+Per mesh: non-finite or out-of-range data is repaired or dropped, exact duplicate vertices
+are merged, degenerate triangles (a repeated index) are removed, triangles are reordered for
+the post-transform vertex cache (meshoptimizer when installed; otherwise the source order is
+kept), vertices are renumbered in first-use order (fetch locality, and unreferenced vertices
+disappear), tangents come from the file or from `generate_tangents`, and each frame is also
+stored as a QTangent quaternion and a packed uint32. Output is deterministic: the same scene
+gives the same bytes.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+from ..scene.types import Mesh, Scene
+from .baked_file import (
+    HAS_COLORS,
+    HAS_TEXCOORDS,
+    HAS_TEXCOORDS1,
+    MESH_DTYPE,
+    TANGENTS_FROM_FILE,
+    BakedImage,
+    BakedScene,
+    read_baked,
+    write_baked,
+)
+from .frames import (
+    frame_angular_error_deg,
+    pack_qtangent,
+    qtangent_to_tbn,
+    tbn_to_qtangent,
+    unpack_qtangent,
+)
+from .tangents import generate_tangents, normalize_safe, orthonormal_tangent
+
+try:  # optional: a C++ vertex cache optimiser; the bake works (less optimally) without it
+    import meshoptimizer as _meshopt
+except ImportError:  # pragma: no cover - depends on the environment
+    _meshopt = None
+
+__all__ = ["bake_file", "bake_report", "bake_scene", "cached_bake", "source_key"]
+
+_Z = np.array([0.0, 0.0, 1.0], dtype=np.float32)
+
+
+def _finite(a: np.ndarray | None, fill: float = 0.0) -> np.ndarray | None:
+    if a is None:
+        return None
+    a = np.asarray(a, dtype=np.float32)
+    return np.where(np.isfinite(a), a, np.float32(fill))
+
+
+def _vertex_normals(p: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Area-weighted smooth normals (the cross product's length is twice the area)."""
+    fn = np.cross(p[tri[:, 1]] - p[tri[:, 0]], p[tri[:, 2]] - p[tri[:, 0]]).astype(np.float64)
+    corners = tri.reshape(-1)
+    acc = np.stack([np.bincount(corners, np.repeat(fn[:, k], 3), len(p)) for k in range(3)], 1)
+    return normalize_safe(acc, _Z)[0].astype(np.float32)
+
+
+def _clean(mesh: Mesh) -> tuple[dict[str, np.ndarray], np.ndarray, int]:
+    """Repair one mesh: returns (attributes, (T, 3) int64 triangles, flags)."""
+    p = np.asarray(mesh.positions, dtype=np.float32).reshape(-1, 3)
+    tri = np.asarray(mesh.indices, dtype=np.int64).reshape(-1, 3)
+    n_vert = len(p)
+    ok_vertex = np.isfinite(p).all(axis=1)
+    # A triangle with an index out of range or a non-finite corner cannot be drawn: drop it.
+    in_range = ((tri >= 0) & (tri < n_vert)).all(axis=1)
+    tri = tri[in_range]
+    tri = tri[ok_vertex[tri].all(axis=1)]
+    flags = 0
+    attrs = {"positions": np.where(ok_vertex[:, None], p, 0.0).astype(np.float32)}
+    for name, src, flag, fill in (("texcoords", mesh.texcoords, HAS_TEXCOORDS, 0.0),
+                                  ("texcoords1", mesh.texcoords1, HAS_TEXCOORDS1, 0.0),
+                                  ("colors", mesh.colors, HAS_COLORS, 1.0)):
+        if src is not None and len(src) == n_vert:
+            attrs[name] = _finite(src, fill)
+            flags |= flag
+    if mesh.tangents is not None and len(mesh.tangents) == n_vert:
+        attrs["tangents"] = _finite(mesh.tangents)
+        flags |= TANGENTS_FROM_FILE
+    if mesh.normals is None or len(mesh.normals) != n_vert:
+        # No normals: flat shading (types.Mesh). Give every corner its own vertex and the
+        # face normal; deduplication then re-merges corners of coplanar neighbours.
+        corners = tri.reshape(-1)
+        attrs = {k: v[corners] for k, v in attrs.items()}
+        fp = attrs["positions"].reshape(-1, 3, 3)
+        fn = normalize_safe(np.cross(fp[:, 1] - fp[:, 0], fp[:, 2] - fp[:, 0]), _Z)[0]
+        attrs["normals"] = np.repeat(fn, 3, axis=0).astype(np.float32)
+        tri = np.arange(len(corners), dtype=np.int64).reshape(-1, 3)
+    else:
+        nrm, ok = normalize_safe(_finite(mesh.normals))
+        if not ok.all():  # zero or non-finite normals: use the smooth normal of the faces
+            nrm[~ok] = _vertex_normals(attrs["positions"], tri)[~ok]
+        attrs["normals"] = nrm
+    return attrs, tri, flags
+
+
+def _dedup(attrs: dict[str, np.ndarray], tri: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Merge vertices whose attributes are all bitwise equal (after -0.0 -> +0.0)."""
+    key = np.concatenate([attrs[k] for k in sorted(attrs)], axis=1)  # all (N, width)
+    key = np.ascontiguousarray(key + np.float32(0.0))  # x + 0.0 turns -0.0 into +0.0
+    rows = key.view(np.dtype((np.void, key.shape[1] * key.itemsize))).ravel()
+    _, first, inverse = np.unique(rows, return_index=True, return_inverse=True)
+    attrs = {k: v[first] for k, v in attrs.items()}
+    tri = inverse.reshape(-1)[tri]
+    # Triangles that now repeat a vertex have no area and can never produce a fragment.
+    keep = (tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 0] != tri[:, 2])
+    return attrs, tri[keep]
+
+
+def _optimise(attrs: dict[str, np.ndarray], tri: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Vertex-cache triangle order, then first-use vertex order (drops unused vertices)."""
+    idx = np.ascontiguousarray(tri.reshape(-1), dtype=np.uint32)
+    if _meshopt is not None and len(idx):
+        out = np.empty_like(idx)
+        _meshopt.optimize_vertex_cache(out, idx, len(idx), len(attrs["positions"]))
+        idx = out
+    used, first = np.unique(idx, return_index=True)
+    order = used[np.argsort(first, kind="stable")]  # old vertex ids in first-use order
+    remap = np.empty(len(attrs["positions"]), dtype=np.uint32)
+    remap[order] = np.arange(len(order), dtype=np.uint32)
+    return {k: v[order] for k, v in attrs.items()}, remap[idx]
+
+
+def _bake_mesh(mesh: Mesh) -> tuple[dict[str, np.ndarray], int]:
+    attrs, tri, flags = _clean(mesh)
+    attrs, tri = _dedup(attrs, tri)
+    attrs, idx = _optimise(attrs, tri)
+    n = attrs["normals"]
+    if flags & TANGENTS_FROM_FILE:
+        t4 = attrs["tangents"]
+        t = orthonormal_tangent(n.astype(np.float64), t4[:, :3].astype(np.float64))
+        w = np.where(t4[:, 3] < 0.0, -1.0, 1.0)
+        attrs["tangents"] = np.concatenate([t, w[:, None]], axis=1).astype(np.float32)
+    else:
+        uv = attrs.get("texcoords")
+        attrs["tangents"] = generate_tangents(attrs["positions"], n, uv, idx)
+    attrs["qtangents"] = tbn_to_qtangent(n, attrs["tangents"])
+    attrs["packed_frames"] = pack_qtangent(attrs["qtangents"])
+    attrs["indices"] = idx
+    return attrs, flags
+
+
+def _images(scene: Scene) -> list[BakedImage]:
+    """Image references as they are (no decoding): path, encoded bytes or raw pixels."""
+    out = []
+    for img in scene.images:
+        levels = [np.asarray(img.pixels, dtype=np.uint8)] if img.pixels is not None else []
+        out.append(BakedImage(img.name, path=None if (img.data or levels) else img.path,
+                              data=img.data, mime_type=img.mime_type, levels=levels))
+    return out
+
+
+@np.errstate(under="ignore")  # subnormal input data underflows harmlessly
+def bake_scene(scene: Scene, progress: bool = False) -> BakedScene:
+    """Bake every mesh of `scene` into one set of GPU-ready streams.
+
+    Parameters
+    ----------
+    scene : the source scene (not modified)
+    progress : show a tqdm bar over meshes
+
+    Returns
+    -------
+    BakedScene with streams positions (V, 3), normals (V, 3), texcoords (V, 2), tangents
+    (V, 4), qtangents (V, 4) float32, packed_frames (V,) uint32, indices (I,) uint32 local to
+    each mesh, plus texcoords1 / colors when any mesh has them. Images are referenced, not
+    embedded (see `embed_images` in `bake_file`).
+    """
+    start = time.perf_counter()
+    parts: list[dict[str, np.ndarray]] = []
+    table = np.zeros(len(scene.meshes), dtype=MESH_DTYPE)
+    first_v = first_i = 0
+    meshes = tqdm(scene.meshes, desc="bake", unit="mesh", disable=not progress, leave=False)
+    for i, mesh in enumerate(meshes):
+        attrs, flags = _bake_mesh(mesh)
+        parts.append(attrs)
+        nv, ni = len(attrs["positions"]), len(attrs["indices"])
+        p = attrs["positions"]
+        lo, hi = (p.min(axis=0), p.max(axis=0)) if nv else (np.zeros(3), np.zeros(3))
+        table[i] = (first_v, nv, first_i, ni, mesh.material, flags, lo, hi)
+        first_v, first_i = first_v + nv, first_i + ni
+    if first_v >= 2**32 or first_i >= 2**32:
+        raise ValueError("scene too large for 32-bit stream offsets")
+
+    def cat(name: str, width: int, dtype: type, fill: float = 0.0) -> np.ndarray:
+        chunks = [a[name] if name in a else np.full((len(a["positions"]), width), fill, dtype)
+                  for a in parts]
+        shape = (0, width) if width > 1 else (0,)
+        return np.concatenate(chunks).astype(dtype, copy=False) if chunks else np.zeros(shape, dtype)
+
+    streams = {"positions": cat("positions", 3, np.float32), "normals": cat("normals", 3, np.float32),
+               "texcoords": cat("texcoords", 2, np.float32), "tangents": cat("tangents", 4, np.float32),
+               "qtangents": cat("qtangents", 4, np.float32),
+               "packed_frames": cat("packed_frames", 1, np.uint32).reshape(-1),
+               "indices": cat("indices", 1, np.uint32).reshape(-1)}
+    if any("texcoords1" in a for a in parts):
+        streams["texcoords1"] = cat("texcoords1", 2, np.float32)
+    if any("colors" in a for a in parts):
+        streams["colors"] = cat("colors", 4, np.float32, 1.0)
+    return BakedScene(
+        name=scene.name, mesh_table=table, mesh_names=[m.name for m in scene.meshes],
+        streams=streams, materials=list(scene.materials), images=_images(scene),
+        nodes=list(scene.nodes), lights=list(scene.lights), cameras=list(scene.cameras),
+        bake_seconds=time.perf_counter() - start,
+    )
+
+
+@np.errstate(under="ignore")
+def bake_report(scene: Scene, baked: BakedScene) -> dict[str, Any]:
+    """Numbers about a bake: memory per vertex, frame precision, sizes, time.
+
+    Returns
+    -------
+    dict with ``bytes_per_vertex`` {"vectors", "quat", "packed"} (position + uv + frame, from
+    the stream dtypes), ``tbn_error_deg`` {"mean", "p99", "max"} (packed vs float frame, N/T/B
+    worst angle per vertex), ``quat_error_deg`` (same for the float quaternion), ``vertices``,
+    ``triangles``, ``source_vertices``, ``source_triangles``, ``meshes``, ``seconds``.
+    """
+    s = baked.streams
+
+    def size(name: str) -> int:
+        a = s[name]
+        return int(a.itemsize * (a.shape[1] if a.ndim > 1 else 1))
+
+    base = size("positions") + size("texcoords")
+    n, t = s["normals"], s["tangents"]
+
+    def stats(err: np.ndarray) -> dict[str, float]:
+        if not len(err):
+            return {"mean": 0.0, "p99": 0.0, "max": 0.0}
+        return {"mean": float(err.mean()), "p99": float(np.percentile(err, 99)),
+                "max": float(err.max())}
+
+    packed = frame_angular_error_deg(n, t, *qtangent_to_tbn(unpack_qtangent(s["packed_frames"])))
+    quat = frame_angular_error_deg(n, t, *qtangent_to_tbn(s["qtangents"]))
+    return {
+        "bytes_per_vertex": {"vectors": base + size("normals") + size("tangents"),
+                             "quat": base + size("qtangents"),
+                             "packed": base + size("packed_frames")},
+        "tbn_error_deg": stats(packed),
+        "quat_error_deg": stats(quat),
+        "vertices": int(len(s["positions"])),
+        "triangles": int(len(s["indices"]) // 3),
+        "source_vertices": int(sum(m.vertex_count for m in scene.meshes)),
+        "source_triangles": int(sum(m.triangle_count for m in scene.meshes)),
+        "meshes": len(scene.meshes),
+        "seconds": float(baked.bake_seconds),
+    }
+
+
+def _dependencies(path: Path) -> list[Path]:
+    """Files a source depends on: a .gltf's external buffers and images, an .obj's mtllibs."""
+    deps: list[Path] = []
+    try:
+        if path.suffix.lower() == ".gltf":
+            doc = json.loads(path.read_text(encoding="utf-8"))
+            uris = [x.get("uri") for x in doc.get("buffers", []) + doc.get("images", [])]
+            deps = [path.parent / u for u in uris if u and not u.startswith("data:")]
+        elif path.suffix.lower() == ".obj":
+            with open(path, encoding="utf-8", errors="replace") as f:
+                deps = [path.parent / line.split(None, 1)[1].strip()
+                        for line in f if line.startswith("mtllib ")]
+    except (OSError, ValueError, AttributeError):
+        return []  # the loader reports a broken source; the key then covers the main file
+    from urllib.parse import unquote
+
+    return sorted({Path(unquote(str(d))) for d in deps if Path(unquote(str(d))).is_file()})
+
+
+def source_key(path: str | Path) -> tuple[str, list[str]]:
+    """sha256 over a source file and its dependencies (names, sizes and contents).
+
+    Returns
+    -------
+    (hex digest, file names relative to the source's folder)
+    """
+    path = Path(path)
+    files = [path, *_dependencies(path)]
+    h = hashlib.sha256()
+    names = []
+    for f in files:
+        name = f.name if f == path else Path(f).relative_to(path.parent).as_posix()
+        data = f.read_bytes()
+        h.update(f"{name}\0{len(data)}\0".encode())
+        h.update(data)
+        names.append(name)
+    return h.hexdigest(), names
+
+
+def _mips(rgba: np.ndarray, srgb: bool) -> list[np.ndarray]:
+    """Full 2x2 box-filtered mip chain (averaged in linear light for sRGB colour; odd edges
+    drop their last row/column)."""
+    x = rgba.astype(np.float32) / 255.0
+    if srgb:
+        c = x[..., :3]
+        x[..., :3] = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    levels = [x]
+    while max(x.shape[:2]) > 1:
+        h, w = x.shape[:2]
+        if h > 1:
+            x = 0.5 * (x[0:h // 2 * 2:2] + x[1:h // 2 * 2:2])
+        if w > 1:
+            x = 0.5 * (x[:, 0:w // 2 * 2:2] + x[:, 1:w // 2 * 2:2])
+        levels.append(x)
+    out = []
+    for lv in levels:
+        lv = lv.copy()
+        if srgb:
+            c = lv[..., :3]
+            lv[..., :3] = np.where(c <= 0.0031308, c * 12.92, 1.055 * np.maximum(c, 0) ** (1 / 2.4) - 0.055)
+        out.append(np.clip(np.rint(lv * 255.0), 0, 255).astype(np.uint8))
+    out[0] = np.ascontiguousarray(rgba, dtype=np.uint8)  # level 0 exactly as decoded
+    return out
+
+
+def embed_images(scene: Scene, baked: BakedScene) -> None:
+    """Replace `baked.images` by decoded RGBA8 mip chains (loading then skips decoding)."""
+    import io
+
+    from PIL import Image as PILImage
+
+    srgb = {t.image for m in scene.materials
+            for t in (m.base_color_texture, m.emissive_texture) if t is not None}
+    images = []
+    for i, img in enumerate(scene.images):
+        if img.pixels is not None:
+            rgba = np.asarray(img.pixels, dtype=np.uint8)
+        else:
+            with PILImage.open(io.BytesIO(img.data) if img.data else img.path) as pil:
+                rgba = np.asarray(pil.convert("RGBA"))
+        images.append(BakedImage(img.name, mime_type=None, levels=_mips(rgba, i in srgb)))
+    baked.images = images
+
+
+def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: bool = False,
+              progress: bool = True) -> dict[str, Any]:
+    """Load a scene file, bake it, write `out_path`; returns `bake_report` plus ``out``,
+    ``file_bytes``, ``load_seconds``, ``write_seconds`` and ``source_sha256``."""
+    from ..scene.loader import load_scene  # lazily: the importer is optional for the bake
+
+    source_path = Path(source_path)
+    t0 = time.perf_counter()
+    scene = load_scene(source_path)
+    t1 = time.perf_counter()
+    baked = bake_scene(scene, progress=progress)
+    baked.source_key, baked.source_files = source_key(source_path)
+    if embed_textures:
+        embed_images(scene, baked)
+    t2 = time.perf_counter()
+    size = write_baked(out_path, baked)
+    report = bake_report(scene, baked)
+    report.update(out=str(out_path), file_bytes=size, load_seconds=t1 - t0,
+                  write_seconds=time.perf_counter() - t2, source_sha256=baked.source_key)
+    return report
+
+
+def cached_bake(source_path: str | Path, cache_dir: str | Path) -> Path:
+    """Path of an up-to-date bake of `source_path` in `cache_dir`, baking only when needed.
+
+    The file name carries the source's content hash, so an edited source misses the cache;
+    an existing file that fails validation is baked again.
+    """
+    source_path, cache_dir = Path(source_path), Path(cache_dir)
+    key, _ = source_key(source_path)
+    out = cache_dir / f"{source_path.stem}-{key[:16]}.vkpbr"
+    if out.is_file():
+        from ..errors import BakeFormatError
+
+        try:
+            if read_baked(out).source_key == key:
+                return out
+        except BakeFormatError:
+            pass
+    cache_dir.mkdir(parents=True, exist_ok=True)
+    bake_file(source_path, out, progress=False)
+    return out

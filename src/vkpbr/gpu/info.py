@@ -1,0 +1,62 @@
+"""What `vkpbr info` reports: every Vulkan device and the features vkpbr relies on."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from vkpbr.gpu.instance import Instance
+
+__all__ = ["device_report"]
+
+
+def _features(vk: Any, handle: Any) -> dict[str, Any]:
+    f13 = vk.VkPhysicalDeviceVulkan13Features()
+    f11 = vk.VkPhysicalDeviceVulkan11Features(pNext=f13)
+    f2 = vk.VkPhysicalDeviceFeatures2(sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, pNext=f11)
+    vk.vkGetPhysicalDeviceFeatures2(handle, f2)
+    props = vk.vkGetPhysicalDeviceProperties(handle)
+    limits = props.limits
+    heaps = vk.vkGetPhysicalDeviceMemoryProperties(handle)
+    device_local = sum(
+        heaps.memoryHeaps[i].size
+        for i in range(heaps.memoryHeapCount)
+        if heaps.memoryHeaps[i].flags & vk.VK_MEMORY_HEAP_DEVICE_LOCAL_BIT
+    )
+    return {
+        "dynamicRendering": bool(f13.dynamicRendering),
+        "synchronization2": bool(f13.synchronization2),
+        "samplerAnisotropy": bool(f2.features.samplerAnisotropy),
+        "maxSamplerAnisotropy": float(limits.maxSamplerAnisotropy),
+        "multiDrawIndirect": bool(f2.features.multiDrawIndirect),
+        "shaderDrawParameters": bool(f11.shaderDrawParameters),
+        "timestamps": bool(limits.timestampComputeAndGraphics),
+        "timestampPeriod_ns": float(limits.timestampPeriod),
+        "maxImageDimension2D": int(limits.maxImageDimension2D),
+        "msaa4x": bool(limits.framebufferColorSampleCounts & vk.VK_SAMPLE_COUNT_4_BIT),
+        "maxPushConstantsSize": int(limits.maxPushConstantsSize),
+        "deviceLocalMemory_MiB": int(device_local >> 20),
+    }
+
+
+def device_report() -> dict[str, Any]:
+    instance = Instance(validation=False)
+    try:
+        devices = instance.physical_devices()
+        chosen = instance.choose_device(None).index if devices else -1
+        return {
+            "devices": [
+                {
+                    "index": d.index,
+                    "name": d.name,
+                    "kind": d.kind,
+                    "api_version": d.api_version,
+                    "vendor_id": d.vendor_id,
+                    "device_id": d.device_id,
+                    "chosen": d.index == chosen,
+                    "features": _features(instance.vk, d.handle),
+                }
+                for d in devices
+            ]
+        }
+    finally:
+        instance.destroy()

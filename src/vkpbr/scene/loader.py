@@ -1,0 +1,72 @@
+# One entry point for every scene format: picks the loader by file suffix and guarantees the
+# renderer's invariants on the result (normals present, float32/uint32 C-contiguous arrays),
+# whichever loader produced it.
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+from vkpbr.errors import SceneError
+from vkpbr.scene.geometry import ensure_normals, normalize_mesh_arrays
+from vkpbr.scene.types import Scene
+
+__all__ = ["SUFFIXES", "load_scene"]
+
+SUFFIXES = (".gltf", ".glb", ".obj", ".comp5822mesh", ".vkpbr")
+
+
+def _loader(suffix: str) -> Callable[[Path], Scene] | None:
+    # Imports are local so that loading one format never imports the others' dependencies
+    # (and vkpbr.bake, written separately, is only needed for .vkpbr files).
+    if suffix in (".gltf", ".glb"):
+        from vkpbr.scene.gltf import load_gltf
+
+        return load_gltf
+    if suffix == ".obj":
+        from vkpbr.scene.obj import load_obj
+
+        return load_obj
+    if suffix == ".comp5822mesh":
+        from vkpbr.scene.comp5822 import read_comp5822mesh
+
+        return read_comp5822mesh
+    if suffix == ".vkpbr":
+        from vkpbr.bake.baked_file import load_baked_scene
+
+        return load_baked_scene
+    return None
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Load a scene file of any supported format.
+
+    Parameters
+    ----------
+    path : a .gltf, .glb, .obj, .comp5822mesh or .vkpbr file (suffix case-insensitive).
+
+    Returns
+    -------
+    Scene in which every Mesh has normals (N, 3) (flat ones generated where the file had
+    none) and C-contiguous float32 attributes and uint32 indices.
+
+    Raises
+    ------
+    SceneError : missing file, a directory, an unknown suffix, a file with no triangles, or
+        anything the format loader rejects.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise SceneError(path, "no such file")
+    if path.is_dir():
+        raise SceneError(path, "is a directory, not a scene file")
+    load = _loader(path.suffix.lower())
+    if load is None:
+        raise SceneError(
+            path, f"unknown scene format {path.suffix!r} (known: {', '.join(SUFFIXES)})"
+        )
+    scene = load(path)
+    scene.meshes = [normalize_mesh_arrays(ensure_normals(m)) for m in scene.meshes]
+    if scene.triangle_count == 0:
+        raise SceneError(path, "contains no triangles to render")
+    return scene

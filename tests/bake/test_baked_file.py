@@ -1,0 +1,196 @@
+# Tests of the .vkpbr container: exact round trip, and rejection of truncated, corrupt,
+# foreign, other-version and inconsistent files with BakeFormatError.
+from __future__ import annotations
+
+import dataclasses
+import struct
+import zlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vkpbr.bake.bake import bake_scene
+from vkpbr.bake.baked_file import (
+    ALIGN,
+    BakedImage,
+    BakedScene,
+    load_baked_scene,
+    read_baked,
+    write_baked,
+)
+from vkpbr.errors import BakeFormatError
+from vkpbr.scene.types import (
+    Camera,
+    Image,
+    Light,
+    Material,
+    Mesh,
+    Node,
+    Sampler,
+    Scene,
+    TextureRef,
+)
+
+
+def small_scene(tmp_path: Path) -> Scene:
+    p = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], np.float32)
+    n = np.tile(np.float32([0, 0, 1]), (4, 1))
+    uv = np.array([[0, 1], [1, 1], [0, 0], [1, 0]], np.float32)
+    quad = Mesh("quad", p, np.array([0, 1, 2, 2, 1, 3], np.uint32), n, uv, material=0,
+                colors=np.ones((4, 4), np.float32))
+    tri = Mesh("tri", p[:3] + 2, np.array([0, 1, 2], np.uint32), n[:3], None)
+    tex = (tmp_path / "tex" / "albedo.png")
+    mat = Material("m", base_color_factor=(1.0, 0.5, 0.25, 1.0), roughness_factor=0.3,
+                   base_color_texture=TextureRef(0, Sampler(wrap_s="clamp"), offset=(0.5, 0.0)),
+                   normal_texture=TextureRef(1, texcoord=0, rotation=0.25, scale=(2.0, 2.0)),
+                   alpha_mode="mask")
+    return Scene("small", meshes=[quad, tri], materials=[mat],
+                 images=[Image("albedo.png", path=tex), Image("n.png", data=b"\x89PNG...")],
+                 nodes=[Node(0, np.eye(4, dtype=np.float32), "a"),
+                        Node(1, np.diag([2, 2, 2, 1]).astype(np.float32), "b")],
+                 lights=[Light((1.0, 2.0, 3.0), intensity=5.0, falloff="inverse_square")],
+                 cameras=[Camera(eye=(0.0, 1.0, 5.0), yfov_deg=45.0, name="cam")])
+
+
+@pytest.fixture
+def baked_path(tmp_path: Path) -> tuple[Path, BakedScene]:
+    baked = bake_scene(small_scene(tmp_path))
+    baked.source_key = "ab" * 32
+    baked.images.append(BakedImage("raw", levels=[np.full((2, 2, 4), 7, np.uint8),
+                                                  np.full((1, 1, 4), 9, np.uint8)]))
+    path = tmp_path / "small.vkpbr"
+    write_baked(path, baked)
+    return path, baked
+
+
+def test_round_trip_is_exact(baked_path: tuple[Path, BakedScene], tmp_path: Path) -> None:
+    path, baked = baked_path
+    back = read_baked(path)
+    assert back.streams.keys() == baked.streams.keys()
+    for name, arr in baked.streams.items():
+        np.testing.assert_array_equal(back.streams[name], arr, err_msg=name)
+    np.testing.assert_array_equal(back.mesh_table, baked.mesh_table)
+    assert back.mesh_names == baked.mesh_names and back.name == baked.name
+    assert back.materials == baked.materials
+    assert back.lights == baked.lights and back.cameras == baked.cameras
+    assert [(n.mesh, n.name) for n in back.nodes] == [(n.mesh, n.name) for n in baked.nodes]
+    for a, b in zip(back.nodes, baked.nodes, strict=True):
+        np.testing.assert_array_equal(a.matrix, b.matrix)
+    assert back.source_key == baked.source_key
+    assert back.images[0].path == (tmp_path / "tex" / "albedo.png").resolve()
+    assert back.images[1].data == b"\x89PNG..."
+    assert [lv.tolist() for lv in back.images[2].levels] == \
+        [lv.tolist() for lv in baked.images[2].levels]
+    mapped = read_baked(path, mmap=True)
+    np.testing.assert_array_equal(mapped.streams["positions"], baked.streams["positions"])
+
+
+def test_sections_are_aligned(baked_path: tuple[Path, BakedScene]) -> None:
+    data = baked_path[0].read_bytes()
+    count = struct.unpack_from("<I", data, 16)[0]
+    table = np.frombuffer(data, np.dtype([("name", "S16"), ("offset", "<u8"), ("size", "<u8"),
+                                          ("crc32", "<u4"), ("reserved", "<u4")]), count, 64)
+    assert (table["offset"] % ALIGN == 0).all()
+    assert len(data) % ALIGN == 0
+
+
+def test_load_baked_scene(baked_path: tuple[Path, BakedScene]) -> None:
+    path, baked = baked_path
+    scene = load_baked_scene(path)
+    assert [m.name for m in scene.meshes] == ["quad", "tri"]
+    quad = scene.meshes[0]
+    assert quad.qtangents.shape == (4, 4) and quad.packed_frames.shape == (4,)
+    assert quad.tangents.shape == (4, 4) and quad.texcoords.shape == (4, 2)
+    assert quad.colors is not None and scene.meshes[1].colors is None
+    assert scene.meshes[1].indices.max() < scene.meshes[1].vertex_count
+    assert scene.images[2].pixels.shape == (2, 2, 4)
+    with pytest.raises(BakeFormatError, match="stale"):
+        load_baked_scene(path, expected_source_key="cd" * 32)
+    load_baked_scene(path, expected_source_key="ab" * 32)
+
+
+def test_every_truncation_is_rejected(baked_path: tuple[Path, BakedScene], tmp_path: Path) -> None:
+    data = baked_path[0].read_bytes()
+    cut = tmp_path / "cut.vkpbr"
+    for size in range(len(data)):
+        cut.write_bytes(data[:size])
+        with pytest.raises(BakeFormatError):
+            read_baked(cut)
+    cut.write_bytes(data + b"\0")
+    with pytest.raises(BakeFormatError, match="unexpected bytes"):
+        read_baked(cut)
+
+
+def test_flipped_bytes_are_rejected(baked_path: tuple[Path, BakedScene], tmp_path: Path) -> None:
+    data = baked_path[0].read_bytes()
+    bad = tmp_path / "bad.vkpbr"
+    # Every byte of header and table, and a byte every 7 in the sections (padding excluded:
+    # it is not covered by a checksum and carries no data).
+    count = struct.unpack_from("<I", data, 16)[0]
+    table = np.frombuffer(data, np.dtype([("name", "S16"), ("offset", "<u8"), ("size", "<u8"),
+                                          ("crc32", "<u4"), ("reserved", "<u4")]), count, 64)
+    spots = list(range(40)) + list(range(64, 64 + 40 * count))
+    for off, size in zip(table["offset"], table["size"], strict=True):
+        spots += list(range(int(off), int(off + size), 7))
+    for pos in spots:
+        corrupt = bytearray(data)
+        corrupt[pos] ^= 0x10
+        bad.write_bytes(bytes(corrupt))
+        with pytest.raises(BakeFormatError):
+            read_baked(bad)
+
+
+def _rewrite_header(data: bytes, **fields: int) -> bytes:
+    out = bytearray(data)
+    offsets = {"version": 8, "header_size": 12, "sections": 16}
+    for key, value in fields.items():
+        struct.pack_into("<I", out, offsets[key], value)
+    struct.pack_into("<I", out, 36, zlib.crc32(bytes(out[:36])))
+    return bytes(out)
+
+
+def test_wrong_magic_and_version(baked_path: tuple[Path, BakedScene], tmp_path: Path) -> None:
+    data = baked_path[0].read_bytes()
+    bad = tmp_path / "bad.vkpbr"
+    bad.write_bytes(b"glTF" + data[4:])
+    with pytest.raises(BakeFormatError, match="magic"):
+        read_baked(bad)
+    bad.write_bytes(_rewrite_header(data, version=2))
+    with pytest.raises(BakeFormatError, match="version 2"):
+        read_baked(bad)
+    bad.write_bytes(_rewrite_header(data, sections=10**6))
+    with pytest.raises(BakeFormatError, match="section count"):
+        read_baked(bad)
+
+
+def test_inconsistent_counts_are_rejected(tmp_path: Path) -> None:
+    good = bake_scene(small_scene(tmp_path))
+    bad = tmp_path / "bad.vkpbr"
+    for case in ("index", "range", "material", "node", "image"):
+        baked = dataclasses.replace(good, streams={k: v.copy() for k, v in good.streams.items()},
+                                    mesh_table=good.mesh_table.copy())
+        if case == "index":  # the triangle mesh has 3 vertices: index 3 is out of range
+            baked.streams["indices"][int(baked.mesh_table[1]["first_index"])] = 3
+        elif case == "range":
+            baked.mesh_table["vertex_count"][1] = 99
+        elif case == "material":
+            baked.mesh_table["material"][0] = 5
+        elif case == "node":
+            baked.nodes = [Node(7)]
+        else:
+            baked.images = []
+        write_baked(bad, baked)
+        with pytest.raises(BakeFormatError):
+            read_baked(bad)
+
+
+def test_write_is_atomic_and_leaves_no_temp_files(tmp_path: Path) -> None:
+    baked = bake_scene(small_scene(tmp_path))
+    path = tmp_path / "out.vkpbr"
+    write_baked(path, baked)
+    del baked.streams["positions"]
+    with pytest.raises(KeyError):
+        write_baked(path, baked)
+    assert sorted(p.name for p in tmp_path.iterdir() if p.is_file()) == ["out.vkpbr"]
+    read_baked(path)

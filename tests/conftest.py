@@ -1,0 +1,49 @@
+"""Shared fixtures. Every renderer made in tests runs with the Khronos validation layer
+(synchronization validation too where VKPBR_SYNC_VALIDATION=1): a validation error raises
+inside `Renderer.render`, and the factory below re-checks at teardown, so no error can pass.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+ASSETS = (REPO.parent / "shared" / "assets").resolve()
+
+
+@pytest.fixture(scope="session")
+def assets() -> Path:
+    if not ASSETS.is_dir():
+        pytest.skip(f"sample assets not found at {ASSETS}")
+    return ASSETS
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    return np.random.default_rng(1234)
+
+
+@pytest.fixture
+def make_renderer() -> Iterator[Callable[..., object]]:
+    """Factory for validated renderers; closes them and checks validation at teardown."""
+    from vkpbr.render.renderer import Renderer
+
+    made: list[Renderer] = []
+
+    def factory(scene=None, **kwargs):  # noqa: ANN001, ANN202
+        kwargs.setdefault("validation", True)
+        kwargs.setdefault("sync_validation", os.environ.get("VKPBR_SYNC_VALIDATION") == "1")
+        r = Renderer(scene, **kwargs)
+        made.append(r)
+        return r
+
+    yield factory
+    for r in made:
+        instance = r.device.instance
+        r.close()
+        assert instance.errors == [], instance.errors[:3]

@@ -1,0 +1,161 @@
+# Tests of the OBJ/MTL loader: a small OBJ + MTL written here with the course's PBR extensions,
+# face forms (v, v/vt, v//vn, v/vt/vn), negative indices, polygon fans, texcoord flipping,
+# material runs, and malformed files that must raise SceneError naming the file.
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vkpbr.errors import SceneError
+from vkpbr.scene.loader import load_scene
+from vkpbr.scene.obj import load_obj
+
+OBJ = """# test file
+mtllib test.mtl
+o thing
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0 1.0
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+vn 0 0 1
+usemtl stone
+f 1/1/1 2/2/1 3/3/1 4/4/1
+usemtl leaf
+f -4/-4 -2/-2 -1/-1
+g loose
+f 1//1 2//1 3//1
+usemtl undefined_one
+f 1 2 3
+"""
+
+MTL = """newmtl stone
+Kd 0.5 0.25 1
+Pm 0.25
+Pr 0.75
+Ke 1 2 3
+map_Kd -s 2 3 -o 0.5 0.5 stone.png
+map_Pm stone_metal.png
+map_Pr -clamp on stone_rough.png
+norm -bm 0.5 stone_normal.png
+
+newmtl leaf   # the course's masked foliage
+Kd 1 1 1
+map_Kd leaf.png
+map_d leaf_mask.png
+bump leaf_normal.png
+d 1.0
+"""
+
+
+def write(tmp_path: Path, obj: str = OBJ, mtl: str = MTL) -> Path:
+    (tmp_path / "test.mtl").write_text(mtl)
+    for name in ("stone", "stone_metal", "stone_rough", "stone_normal", "leaf", "leaf_mask",
+                 "leaf_normal"):  # fmt: skip
+        (tmp_path / f"{name}.png").write_bytes(b"not decoded here")
+    path = tmp_path / "test.obj"
+    path.write_text(obj)
+    return path
+
+
+def test_geometry_and_runs(tmp_path: Path) -> None:
+    with pytest.warns(UserWarning, match="undefined_one"):
+        scene = load_obj(write(tmp_path))
+    quad, leaf, loose, undefined = scene.meshes
+    np.testing.assert_array_equal(quad.positions, [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    np.testing.assert_array_equal(quad.indices, [0, 1, 2, 0, 2, 3])  # fan of the quad
+    np.testing.assert_array_equal(quad.texcoords, [[0, 1], [1, 1], [1, 0], [0, 0]])  # v' = 1 - v
+    np.testing.assert_array_equal(quad.normals, np.tile([0, 0, 1], (4, 1)))
+    # -4/-2/-1 relative to 4 vertices defined so far = 1, 3, 4; no vn -> flat normals
+    np.testing.assert_array_equal(leaf.positions, [[0, 0, 0], [1, 1, 0], [0, 1, 0]])
+    np.testing.assert_array_equal(leaf.texcoords, [[0, 1], [1, 0], [0, 0]])
+    np.testing.assert_allclose(leaf.normals, np.tile([0, 0, 1], (3, 1)))
+    assert loose.texcoords is None and loose.normals is not None
+    assert [m.material for m in scene.meshes] == [0, 1, 1, -1]
+    assert [n.mesh for n in scene.nodes] == [0, 1, 2, 3]
+    for m in scene.meshes:
+        assert m.positions.dtype == np.float32 and m.indices.dtype == np.uint32
+        assert m.positions.flags.c_contiguous
+
+
+def test_materials(tmp_path: Path) -> None:
+    with pytest.warns(UserWarning):
+        scene = load_obj(write(tmp_path))
+    stone, leaf = scene.materials
+    names = [img.name for img in scene.images]
+    assert stone.base_color_factor == (0.5, 0.25, 1, 1) and stone.emissive_factor == (1, 2, 3)
+    assert (stone.metallic_factor, stone.roughness_factor) == (0.25, 0.75)
+    bc = stone.base_color_texture
+    assert names[bc.image] == "stone.png" and bc.scale == (2, 3) and bc.offset == (0.5, 0.5)
+    assert names[stone.metallic_texture.image] == "stone_metal.png"
+    assert stone.metallic_texture.channel == 0 and stone.roughness_texture.channel == 0
+    assert stone.roughness_texture.sampler.wrap_s == "clamp"
+    assert names[stone.normal_texture.image] == "stone_normal.png" and stone.normal_scale == 0.5
+    assert stone.alpha_mode == "opaque" and stone.alpha_texture is None
+    assert leaf.alpha_mode == "mask" and leaf.alpha_cutoff == 0.5 and leaf.double_sided
+    assert names[leaf.alpha_texture.image] == "leaf_mask.png" and leaf.alpha_texture.channel == 0
+    assert names[leaf.normal_texture.image] == "leaf_normal.png"
+    assert leaf.metallic_factor == 0.0  # OBJ materials without Pm are dielectrics
+    assert scene.images[0].path == tmp_path / "stone.png"
+
+
+def test_missing_mtl_and_textures_warn(tmp_path: Path) -> None:
+    path = tmp_path / "a.obj"
+    path.write_text("mtllib nowhere.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    with pytest.warns(UserWarning, match="nowhere.mtl"):
+        scene = load_scene(path)
+    assert scene.triangle_count == 1 and scene.materials == []
+    (tmp_path / "b.mtl").write_text("newmtl m\nmap_Kd gone.png\n")
+    path.write_text("mtllib b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n")
+    with pytest.warns(UserWarning, match="gone.png"):
+        scene = load_scene(path)
+    assert scene.images[0].path == tmp_path / "gone.png"
+
+
+def test_large_obj_is_vectorised(tmp_path: Path) -> None:
+    n = 200
+    g = np.stack(np.meshgrid(np.arange(n), np.arange(n), indexing="ij"), -1).reshape(-1, 2)
+    verts = "".join(f"v {x} {y} 0\n" for x, y in g)
+    i = (np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]).reshape(-1) + 1
+    faces = "".join(f"f {a} {a + n} {a + n + 1} {a + 1}\n" for a in i)
+    path = tmp_path / "grid.obj"
+    path.write_text(verts + faces)
+    scene = load_obj(path)
+    assert scene.triangle_count == 2 * (n - 1) ** 2
+    assert scene.meshes[0].vertex_count == 6 * (n - 1) ** 2  # no vn: unwelded flat normals
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("v 0 0 0\nv 1 0 0\nf 1 2 3\n", "vertex 3"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n", "vertex -4"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/5 2 3\n", "texcoord 5"),
+        ("v 0 0 zero\nf 1 1 1\n", "bad number"),
+        ("v 0 0\nf 1 1 1\n", "too few"),
+        ("v 0 0 0\nv 1 0 0\nf 1 2\n", "fewer than 3"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/2/3/4 2 3\n", "'/'"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", "bad face index"),
+        ("v 0 0 0\n", "no faces"),
+    ],
+)
+def test_bad_obj(tmp_path: Path, text: str, match: str) -> None:
+    path = tmp_path / "bad.obj"
+    path.write_text(text)
+    with pytest.raises(SceneError, match=match) as info:
+        load_obj(path)
+    assert "bad.obj" in str(info.value)
+
+
+def test_bad_mtl(tmp_path: Path) -> None:
+    (tmp_path / "m.mtl").write_text("newmtl x\nKd red green blue\n")
+    path = tmp_path / "o.obj"
+    path.write_text("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    with pytest.raises(SceneError, match="m.mtl"):
+        load_obj(path)

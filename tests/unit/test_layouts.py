@@ -1,0 +1,78 @@
+"""Uniform layouts: Python's std140 offsets against the compiled shaders' own offsets, and the
+committed SPIR-V and generated GLSL against a fresh compile (stale files fail)."""
+
+from __future__ import annotations
+
+import shutil
+import struct
+from pathlib import Path
+
+import pytest
+
+from vkpbr.render import codegen
+from vkpbr.render import layouts as L
+
+
+def spirv_member_offsets(path: Path) -> dict[str, dict[str, int]]:
+    """{struct name: {member name: offset}} read from a SPIR-V module's decorations."""
+    data = path.read_bytes()
+    words = struct.unpack(f"<{len(data) // 4}I", data)
+    names: dict[int, str] = {}
+    member_names: dict[tuple[int, int], str] = {}
+    offsets: dict[tuple[int, int], int] = {}
+    i = 5  # skip the header
+    while i < len(words):
+        count, opcode = words[i] >> 16, words[i] & 0xFFFF
+        ops = words[i + 1 : i + count]
+        def text(ws: tuple[int, ...]) -> str:
+            return b"".join(struct.pack("<I", w) for w in ws).split(b"\0")[0].decode()
+        if opcode == 5:  # OpName
+            names[ops[0]] = text(ops[1:])
+        elif opcode == 6:  # OpMemberName
+            member_names[(ops[0], ops[1])] = text(ops[2:])
+        elif opcode == 72 and ops[2] == 35:  # OpMemberDecorate ... Offset
+            offsets[(ops[0], ops[1])] = ops[3]
+        i += count
+    out: dict[str, dict[str, int]] = {}
+    for (type_id, member), offset in offsets.items():
+        if (type_id, member) in member_names:  # unnamed structs (e.g. arrays) are skipped
+            out.setdefault(names.get(type_id, str(type_id)), {})[member_names[(type_id, member)]] = offset
+    return out
+
+
+def test_std140_offsets_match_compiled_shaders() -> None:
+    found: dict[str, dict[str, int]] = {}
+    for spv in codegen.SPV_DIR.glob("*.spv"):
+        found.update(spirv_member_offsets(spv))
+    for block in L.BLOCKS:
+        assert block.name in found, f"{block.name} is used by no shader"
+        assert found[block.name] == {k: v for k, v in block.offsets.items() if k in found[block.name]}
+        # Every member the shader declares is one Python knows, at the same offset.
+        assert set(found[block.name]) == set(block.offsets)
+
+
+def test_std140_rules() -> None:
+    assert L.LIGHT.offsets == {"lightPos": 0, "color": 16, "intensity": 28, "viewPos": 32, "falloff": 48, "range": 52}
+    assert L.LIGHT.size == 64
+    assert L.CAMERA.size == 64
+    assert L.PUSH.size == 128  # the guaranteed minimum maxPushConstantsSize
+    assert L.MATERIAL.dtype.itemsize == L.MATERIAL.size
+
+
+def test_generated_glsl_is_current() -> None:
+    assert codegen.GENERATED.read_text() == codegen.generated_glsl(), (
+        "shaders/generated.glsl is stale: run `python -m vkpbr.render.codegen`")
+
+
+@pytest.mark.skipif(shutil.which("glslc") is None, reason="glslc not installed (scripts/setup.sh installs it)")
+def test_committed_spirv_is_current(tmp_path: Path) -> None:
+    fresh = codegen.compile_all(tmp_path, write_generated=False)
+    stale = []
+    for f in fresh:
+        committed = codegen.SPV_DIR / f.name
+        a, b = f.read_bytes(), committed.read_bytes() if committed.exists() else b""
+        # Word 2 of the header names the generator version; everything else must match.
+        if a[:8] + a[12:] != b[:8] + b[12:]:
+            stale.append(f.name)
+    assert not stale, f"stale SPIR-V {stale}: run `python -m vkpbr.render.codegen` and commit"
+    assert {p.name for p in codegen.SPV_DIR.glob('*.spv')} == {f.name for f in fresh}
