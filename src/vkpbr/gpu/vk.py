@@ -66,3 +66,16 @@ def translate_errors(function: str) -> Iterator[None]:
         raise NoVulkanError(function, _result_name(exc), INSTALL_HINT) from None
     except (vk.VkError, vk.VkException) as exc:
         raise VulkanError(function, _result_name(exc)) from None
+
+
+def check_result(result: int, function: str) -> None:
+    """Raise the vkpbr error for a VkResult returned by a raw `vulkan.lib` call (hot paths
+    call the C entry points directly: the binding's wrappers cost 10-100 us per call)."""
+    if result == 0:
+        return
+    vk = load()
+    exc_type = vk.exception_codes.get(result)
+    if exc_type is None:
+        raise VulkanError(function, f"VkResult {result}")
+    with translate_errors(function):
+        raise exc_type()

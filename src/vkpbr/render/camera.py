@@ -15,33 +15,52 @@ import numpy as np
 from vkpbr.errors import UsageError
 from vkpbr.scene.types import Camera
 
-__all__ = ["look_at", "perspective", "view_projection", "parse_camera", "format_camera"]
+__all__ = ["look_at", "perspective", "forward", "view_projection", "parse_camera", "format_camera"]
 
 
+def _sub(a: Sequence[float], b: Sequence[float]) -> tuple[float, float, float]:
+    return (float(a[0]) - float(b[0]), float(a[1]) - float(b[1]), float(a[2]) - float(b[2]))
+
+
+def _cross(a: Sequence[float], b: Sequence[float]) -> tuple[float, float, float]:
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def _unit(a: Sequence[float]) -> tuple[float, float, float]:
+    n = math.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
+    return (a[0] / n, a[1] / n, a[2] / n)
+
+
+def _dot3(a: Sequence[float], b: Sequence[float]) -> float:
+    return float(a[0]) * b[0] + float(a[1]) * b[1] + float(a[2]) * b[2]
+
+
+# Plain float arithmetic: these run once per frame when the camera moves, and NumPy's
+# per-call overhead on 3-vectors would cost ~20x more than the maths.
 def look_at(eye: Sequence[float], target: Sequence[float], up: Sequence[float]) -> np.ndarray:
     """World-to-view matrix (4, 4) float64; the camera looks down its -Z axis."""
-    eye_v = np.asarray(eye, dtype=np.float64)
-    f = np.asarray(target, dtype=np.float64) - eye_v
-    f /= np.linalg.norm(f)
-    s = np.cross(f, np.asarray(up, dtype=np.float64))
-    s /= np.linalg.norm(s)
-    u = np.cross(s, f)
-    m = np.eye(4)
-    m[0, :3], m[1, :3], m[2, :3] = s, u, -f
-    m[:3, 3] = -m[:3, :3] @ eye_v
-    return m
+    f = _unit(_sub(target, eye))
+    s = _unit(_cross(f, (float(up[0]), float(up[1]), float(up[2]))))
+    u = _cross(s, f)
+    return np.array([
+        [s[0], s[1], s[2], -_dot3(s, eye)],
+        [u[0], u[1], u[2], -_dot3(u, eye)],
+        [-f[0], -f[1], -f[2], _dot3(f, eye)],
+        [0.0, 0.0, 0.0, 1.0],
+    ])
 
 
 def perspective(yfov_deg: float, aspect: float, znear: float, zfar: float) -> np.ndarray:
     """View-to-clip matrix (4, 4) float64 for Vulkan: z in [0, 1], Y down in clip space."""
     f = 1.0 / math.tan(math.radians(yfov_deg) / 2.0)
-    m = np.zeros((4, 4))
-    m[0, 0] = f / aspect
-    m[1, 1] = -f  # Vulkan's clip-space Y points down
-    m[2, 2] = zfar / (znear - zfar)
-    m[2, 3] = znear * zfar / (znear - zfar)
-    m[3, 2] = -1.0
-    return m
+    a, b = zfar / (znear - zfar), znear * zfar / (znear - zfar)
+    # m[1, 1] is negative: Vulkan's clip-space Y points down.
+    return np.array([[f / aspect, 0, 0, 0], [0, -f, 0, 0], [0, 0, a, b], [0, 0, -1.0, 0]])
+
+
+def forward(camera: Camera) -> tuple[float, float, float]:
+    """Unit viewing direction."""
+    return _unit(_sub(camera.target, camera.eye))
 
 
 def view_projection(camera: Camera, aspect: float) -> np.ndarray:

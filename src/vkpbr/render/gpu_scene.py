@@ -13,7 +13,6 @@ channel into R, so glTF's packed metallic-roughness texture is stored once and r
 from __future__ import annotations
 
 import time
-
 from dataclasses import dataclass, field
 
 import numpy as np

@@ -18,7 +18,7 @@ SPACING = 1.1
 RADIUS = 0.45
 
 
-def uv_sphere(radius: float = 1.0, rings: int = 32, segments: int = 64) -> Mesh:
+def uv_sphere(radius: float = 1.0, rings: int = 24, segments: int = 48) -> Mesh:
     """A UV sphere: u around the equator (+X towards -Z), v from the north pole down."""
     theta = np.linspace(0.0, np.pi, rings + 1)  # polar angle
     phi = np.linspace(0.0, 2.0 * np.pi, segments + 1)

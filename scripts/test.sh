@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# Set up (scripts/setup.sh) and run the whole test suite on lavapipe with the Khronos
+# validation layer on. Extra arguments go to pytest.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+.venv/bin/ruff check --quiet src tests benchmarks
+exec .venv/bin/python -m pytest -q "$@"
