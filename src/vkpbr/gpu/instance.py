@@ -8,6 +8,7 @@ live instances through a module-level registry.
 
 from __future__ import annotations
 
+import atexit
 import os
 import weakref
 from dataclasses import dataclass
@@ -26,6 +27,40 @@ _live: weakref.WeakSet[Instance] = weakref.WeakSet()
 # Messages the validation layer prints that are not errors in our usage; kept empty unless a
 # known layer bug forces an entry (with the VUID and a reason).
 _IGNORED_MESSAGE_IDS: frozenset[str] = frozenset()
+
+
+_anchor: Any = None
+
+
+def _keep_drivers_loaded(vk: Any) -> None:
+    """Hold one bare VkInstance for the life of the process (destroyed at exit).
+
+    The loader unloads the driver (ICD) when the last instance goes away. NVIDIA's driver
+    (580, measured on an H100) fails vkCreateInstance with VK_ERROR_INCOMPATIBLE_DRIVER after
+    about 30 unload/reload cycles in one process, so a program that creates renderers in a
+    loop would break. The anchor keeps the driver mapped; set VKPBR_KEEP_DRIVERS_LOADED=0 to
+    opt out.
+    """
+    global _anchor
+    if _anchor is not None or os.environ.get("VKPBR_KEEP_DRIVERS_LOADED") == "0":
+        return
+    try:
+        _anchor = vk.vkCreateInstance(
+            vk.VkInstanceCreateInfo(
+                pApplicationInfo=vk.VkApplicationInfo(apiVersion=vk.VK_MAKE_VERSION(*API_VERSION))
+            ),
+            None,
+        )
+    except Exception:  # no driver: the real instance below reports it properly
+        return
+    atexit.register(_release_anchor)
+
+
+def _release_anchor() -> None:
+    global _anchor
+    if _anchor is not None:
+        handle, _anchor = _anchor, None
+        load().vkDestroyInstance(handle, None)
 
 
 def _debug_callback(severity: int, types: int, data: Any, user_data: Any) -> int:
@@ -65,6 +100,7 @@ class Instance:
 
     def __init__(self, validation: bool = False, sync_validation: bool = False) -> None:
         vk = load()
+        _keep_drivers_loaded(vk)
         self.vk = vk
         self.validation = validation
         self.errors: list[str] = []
