@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from vkpbr.gpu.device import Device
+from vkpbr.gpu.device import Device, DeviceObject
 from vkpbr.gpu.vk import translate_errors
 
 __all__ = ["BindingSpec", "DescriptorSetLayout", "DescriptorPool", "DescriptorWriter"]
@@ -39,7 +39,9 @@ def _stage_flags(vk: Any, stages: Sequence[str]) -> int:
     return flags
 
 
-class DescriptorSetLayout:
+class DescriptorSetLayout(DeviceObject):
+    _destroy_fn = "vkDestroyDescriptorSetLayout"
+
     def __init__(self, device: Device, bindings: Sequence[BindingSpec]) -> None:
         vk = device.vk
         self.device = device
@@ -62,16 +64,12 @@ class DescriptorSetLayout:
             )
         device.track(self)
 
-    def destroy(self) -> None:
-        if self.handle is None:
-            return
-        handle, self.handle = self.handle, None
-        self.device.vk.vkDestroyDescriptorSetLayout(self.device.handle, handle, None)
-        self.device.untrack(self)
 
 
-class DescriptorPool:
+class DescriptorPool(DeviceObject):
     """A pool sized for `max_sets` sets of the given layouts' mix of descriptors."""
+
+    _destroy_fn = "vkDestroyDescriptorPool"
 
     def __init__(
         self, device: Device, layouts_and_counts: Sequence[tuple[DescriptorSetLayout, int]]
@@ -110,12 +108,6 @@ class DescriptorPool:
                 ),
             )[0]
 
-    def destroy(self) -> None:
-        if self.handle is None:
-            return
-        handle, self.handle = self.handle, None
-        self.device.vk.vkDestroyDescriptorPool(self.device.handle, handle, None)
-        self.device.untrack(self)
 
 
 class DescriptorWriter:

@@ -16,11 +16,29 @@ from vkpbr.errors import VkpbrError
 from vkpbr.gpu.instance import Instance, PhysicalDeviceInfo
 from vkpbr.gpu.vk import translate_errors
 
-__all__ = ["Device", "Destroyable"]
+__all__ = ["Device", "Destroyable", "DeviceObject"]
 
 
 class Destroyable(Protocol):
     def destroy(self) -> None: ...
+
+
+class DeviceObject:
+    """Base of the wrappers that own one handle of a Device, released by `_destroy_fn`.
+
+    `destroy()` is idempotent: it clears the handle before releasing it.
+    """
+
+    _destroy_fn = ""  # the vkDestroy* function name
+    device: Device
+    handle: Any = None
+
+    def destroy(self) -> None:
+        if self.handle is None:
+            return
+        handle, self.handle = self.handle, None
+        getattr(self.device.vk, self._destroy_fn)(self.device.handle, handle, None)
+        self.device.untrack(self)
 
 
 class Device:

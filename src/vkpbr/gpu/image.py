@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from vkpbr.gpu.buffer import Buffer
-from vkpbr.gpu.device import Device
+from vkpbr.gpu.device import Device, DeviceObject
 from vkpbr.gpu.vk import translate_errors
 
 __all__ = ["Image", "ImageView", "Sampler", "SamplerSpec", "mip_levels", "TextureUploader"]
@@ -80,9 +80,11 @@ class Image:
         self.device.untrack(self)
 
 
-class ImageView:
+class ImageView(DeviceObject):
     """A view of an image; `swizzle` maps (r, g, b, a) to source channels, e.g. "bbbb" makes
     a scalar map out of the blue channel (glTF metalness) without copying the image."""
+
+    _destroy_fn = "vkDestroyImageView"
 
     _SWZ = {"r": "R", "g": "G", "b": "B", "a": "A", "1": "ONE", "0": "ZERO", "i": "IDENTITY"}
 
@@ -121,12 +123,6 @@ class ImageView:
             )
         device.track(self)
 
-    def destroy(self) -> None:
-        if self.handle is None:
-            return
-        handle, self.handle = self.handle, None
-        self.device.vk.vkDestroyImageView(self.device.handle, handle, None)
-        self.device.untrack(self)
 
 
 @dataclass(frozen=True)
@@ -141,7 +137,9 @@ class SamplerSpec:
     anisotropy: float = 16.0  # clamped to the device limit; 1 disables
 
 
-class Sampler:
+class Sampler(DeviceObject):
+    _destroy_fn = "vkDestroySampler"
+
     _WRAP = {"repeat": "REPEAT", "clamp": "CLAMP_TO_EDGE", "mirror": "MIRRORED_REPEAT"}
 
     def __init__(self, device: Device, spec: SamplerSpec = SamplerSpec()) -> None:
@@ -170,12 +168,6 @@ class Sampler:
             )
         device.track(self)
 
-    def destroy(self) -> None:
-        if self.handle is None:
-            return
-        handle, self.handle = self.handle, None
-        self.device.vk.vkDestroySampler(self.device.handle, handle, None)
-        self.device.untrack(self)
 
 
 def _barrier(vk: Any, image: Image, old: int, new: int, src: tuple, dst: tuple,

@@ -14,7 +14,7 @@ from typing import Any
 
 from vkpbr.errors import ShaderError
 from vkpbr.gpu.descriptors import DescriptorSetLayout
-from vkpbr.gpu.device import Device
+from vkpbr.gpu.device import Device, DeviceObject
 from vkpbr.gpu.vk import translate_errors
 
 __all__ = ["VertexStream", "PipelineSpec", "PipelineLayout", "Pipeline", "ShaderModule"]
@@ -51,7 +51,9 @@ class PipelineSpec:
     blend: bool = False  # premultiplied-free "over" blending of the colour attachment
 
 
-class ShaderModule:
+class ShaderModule(DeviceObject):
+    _destroy_fn = "vkDestroyShaderModule"
+
     def __init__(self, device: Device, path: Path) -> None:
         vk = device.vk
         self.device = device
@@ -68,15 +70,11 @@ class ShaderModule:
             )
         device.track(self)
 
-    def destroy(self) -> None:
-        if self.handle is None:
-            return
-        handle, self.handle = self.handle, None
-        self.device.vk.vkDestroyShaderModule(self.device.handle, handle, None)
-        self.device.untrack(self)
 
 
-class PipelineLayout:
+class PipelineLayout(DeviceObject):
+    _destroy_fn = "vkDestroyPipelineLayout"
+
     def __init__(
         self,
         device: Device,
@@ -106,15 +104,11 @@ class PipelineLayout:
             )
         device.track(self)
 
-    def destroy(self) -> None:
-        if self.handle is None:
-            return
-        handle, self.handle = self.handle, None
-        self.device.vk.vkDestroyPipelineLayout(self.device.handle, handle, None)
-        self.device.untrack(self)
 
 
-class Pipeline:
+class Pipeline(DeviceObject):
+    _destroy_fn = "vkDestroyPipeline"
+
     def __init__(
         self, device: Device, spec: PipelineSpec, layout: PipelineLayout, shader_dir: Path
     ) -> None:
@@ -208,9 +202,3 @@ class Pipeline:
         with translate_errors("vkCreateGraphicsPipelines"):
             return vk.vkCreateGraphicsPipelines(self.device.handle, None, 1, [info], None)[0]
 
-    def destroy(self) -> None:
-        if self.handle is None:
-            return
-        handle, self.handle = self.handle, None
-        self.device.vk.vkDestroyPipeline(self.device.handle, handle, None)
-        self.device.untrack(self)
