@@ -178,8 +178,8 @@ class Renderer:
             self.query_pool = None
 
     # --- pipelines --------------------------------------------------------------------------
-    def _pipeline(self, target: RenderTarget, tbn: L.TbnMode, kind: str) -> Pipeline:
-        key = (target.color_format, target.samples, tbn, kind)
+    def _pipeline(self, target: Any, tbn: L.TbnMode, kind: str) -> Pipeline:
+        key = (target.color_format, target.depth_format, target.samples, tbn, kind)
         if key not in self._pipelines:
             streams = [VertexStream(0, 0, "vec3"), VertexStream(1, 1, "vec2")]
             streams += [VertexStream(2 + i, 2 + i, fmt) for i, (_, fmt) in enumerate(_TBN_STREAMS[tbn])]
@@ -199,6 +199,13 @@ class Renderer:
             }[kind]
             self._pipelines[key] = Pipeline(self.device, spec, self.pipeline_layout, SPV_DIR)
         return self._pipelines[key]
+
+    def build_pipelines(self, target: Any) -> None:
+        """Create every pipeline (all TBN paths and passes) for `target`'s formats now, so
+        that no later mode switch waits for one."""
+        for tbn in L.TbnMode:
+            for kind in _PASS_ORDER:
+                self._pipeline(target, tbn, kind)
 
     def prepare(self, size: tuple[int, int], tbn_modes: tuple[str, ...] = ("vectors", "quat", "packed"),
                 linear: bool = False) -> None:
@@ -238,7 +245,7 @@ class Renderer:
             vk.vkCmdResetQueryPool(cmd, self.query_pool, 0, 2)
             vk.vkCmdWriteTimestamp2(cmd, vk.VK_PIPELINE_STAGE_2_NONE, self.query_pool, 0)
         target.record_begin(cmd)
-        self._record_draws(cmd, target, tbn, alpha_mask)
+        self.record_draws(cmd, target, tbn, alpha_mask)
         target.record_end(cmd)
         if self.query_pool is not None:
             vk.vkCmdWriteTimestamp2(cmd, vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, self.query_pool, 1)
@@ -248,7 +255,10 @@ class Renderer:
         self._recorded[key] = rec
         return rec
 
-    def _record_draws(self, cmd: Any, target: RenderTarget, tbn: L.TbnMode, alpha_mask: bool) -> None:
+    def record_draws(self, cmd: Any, target: Any, tbn: L.TbnMode, alpha_mask: bool) -> None:
+        """Record every draw of the scene into `cmd`, inside dynamic rendering already begun on
+        an attachment set described by `target` (anything with color_format, depth_format and
+        samples: a RenderTarget, or the viewer's swapchain)."""
         vk = self.device.vk
         gs = self.gpu_scene
         layout = self.pipeline_layout.handle
@@ -294,7 +304,7 @@ class Renderer:
     def default_light(self) -> Light:
         return self.scene.lights[0] if self.scene.lights else Light()
 
-    def _write_uniforms(self, camera: Camera, light: Light, size: tuple[int, int],
+    def write_uniforms(self, camera: Camera, light: Light, size: tuple[int, int],
                         opts: RenderOptions, linear: bool) -> None:
         # Frames that repeat the last frame's inputs (a static scene re-rendered) skip the
         # uniform math entirely; the key is cheap next to computing the matrices.
@@ -350,7 +360,7 @@ class Renderer:
                 opts: RenderOptions, linear: bool) -> None:
         lib = self.device.vk.lib
         t0 = time.perf_counter()
-        self._write_uniforms(camera, light, size, opts, linear)
+        self.write_uniforms(camera, light, size, opts, linear)
         check_result(lib.vkQueueSubmit(self.device.queue, 1, rec.submit, rec.fence), "vkQueueSubmit")
         t1 = time.perf_counter()
         check_result(lib.vkWaitForFences(self.device.handle, 1, rec.fences, 1, 2**63 - 1),
