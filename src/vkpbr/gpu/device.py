@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Iterator
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 from vkpbr.errors import VkpbrError
 from vkpbr.gpu.instance import Instance, PhysicalDeviceInfo
 from vkpbr.gpu.vk import translate_errors
 
-__all__ = ["Device", "Destroyable", "DeviceObject"]
+__all__ = ["Device", "DeviceRequest", "Destroyable", "DeviceObject"]
 
 
 class Destroyable(Protocol):
@@ -41,16 +42,39 @@ class DeviceObject:
         self.device.untrack(self)
 
 
+@dataclass(frozen=True)
+class DeviceRequest:
+    """A device selector plus the extensions a caller needs (a window: the surface
+    extensions on the instance, VK_KHR_swapchain on the device). Anything that takes a
+    device selector and hands it to `Device` (e.g. `Renderer(device=...)`) accepts one."""
+
+    selector: str | int | None = None
+    instance_extensions: tuple[str, ...] = ()
+    extensions: tuple[str, ...] = ()
+
+
 class Device:
-    """A VkDevice with one graphics queue. Use as a context manager or call `close()`."""
+    """A VkDevice with one graphics queue. Use as a context manager or call `close()`.
+
+    `device` is a name substring, an index, None (the best device) or a `DeviceRequest`;
+    `instance_extensions` and `extensions` are required extensions (missing ones raise).
+    """
 
     def __init__(
         self,
-        device: str | int | None = None,
+        device: str | int | DeviceRequest | None = None,
         validation: bool = False,
         sync_validation: bool = False,
+        instance_extensions: tuple[str, ...] = (),
+        extensions: tuple[str, ...] = (),
     ) -> None:
-        self.instance = Instance(validation=validation, sync_validation=sync_validation)
+        if isinstance(device, DeviceRequest):
+            instance_extensions = (*instance_extensions, *device.instance_extensions)
+            extensions = (*extensions, *device.extensions)
+            device = device.selector
+        self._required_extensions = tuple(dict.fromkeys(extensions))
+        self.instance = Instance(validation=validation, sync_validation=sync_validation,
+                                 extensions=tuple(dict.fromkeys(instance_extensions)))
         self.vk = vk = self.instance.vk
         self._children: list[Destroyable] = []
         self.handle = None
@@ -110,6 +134,10 @@ class Device:
         for ext in getattr(self, "wanted_extensions", ()):
             if ext in available:
                 self.extensions.append(ext)
+        missing = [e for e in self._required_extensions if e not in available]
+        if missing:
+            raise VkpbrError(f"{self.info.name}: device extension(s) {', '.join(missing)} missing")
+        self.extensions += [e for e in self._required_extensions if e not in self.extensions]
         # Keep the queue info alive until vkCreateDevice returns: the binding copies structs
         # into arrays, and the copy's pQueuePriorities points into the original's memory.
         queue_info = vk.VkDeviceQueueCreateInfo(

@@ -98,7 +98,14 @@ _KIND_RANK = {"discrete": 0, "integrated": 1, "virtual": 2, "cpu": 3, "other": 4
 class Instance:
     """A VkInstance with optional validation (and synchronization validation)."""
 
-    def __init__(self, validation: bool = False, sync_validation: bool = False) -> None:
+    def __init__(
+        self,
+        validation: bool = False,
+        sync_validation: bool = False,
+        extensions: tuple[str, ...] = (),
+    ) -> None:
+        """`extensions`: extra instance extensions that must be present (a window's surface
+        extensions, for example); missing ones raise NoVulkanError."""
         vk = load()
         _keep_drivers_loaded(vk)
         self.vk = vk
@@ -107,7 +114,12 @@ class Instance:
         self.warnings: list[str] = []
         self._messenger = None
         layers: list[str] = []
-        extensions: list[str] = []
+        enabled: list[str] = list(extensions)
+        if enabled:
+            available = {p.extensionName for p in vk.vkEnumerateInstanceExtensionProperties(None)}
+            missing = [e for e in enabled if e not in available]
+            if missing:
+                raise NoVulkanError("vkCreateInstance", f"missing {', '.join(missing)}", INSTALL_HINT)
         if validation:
             available = {p.layerName for p in vk.vkEnumerateInstanceLayerProperties()}
             if VALIDATION_LAYER not in available:
@@ -117,7 +129,7 @@ class Instance:
                     "install vulkan-validationlayers (scripts/setup.sh does)",
                 )
             layers.append(VALIDATION_LAYER)
-            extensions.append(vk.VK_EXT_DEBUG_UTILS_EXTENSION_NAME)
+            enabled.append(vk.VK_EXT_DEBUG_UTILS_EXTENSION_NAME)
         app = vk.VkApplicationInfo(
             pApplicationName="vkpbr",
             applicationVersion=vk.VK_MAKE_VERSION(0, 1, 0),
@@ -137,7 +149,7 @@ class Instance:
             pNext=p_next,
             pApplicationInfo=app,
             ppEnabledLayerNames=layers,
-            ppEnabledExtensionNames=extensions,
+            ppEnabledExtensionNames=enabled,
         )
         try:
             with translate_errors("vkCreateInstance"):

@@ -12,6 +12,7 @@ channel into R, so glTF's packed metallic-roughness texture is stored once and r
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -151,12 +152,46 @@ class GpuScene:
         max_size = int(self.device.limits.maxImageDimension2D)
         return decode_images(images, max_size=max_size)
 
+    def _merge_alpha_masks(self, pixels: list[np.ndarray | None]) -> list[Material]:
+        """Materials with a separate alpha mask (OBJ map_d, .comp5822mesh) get one image whose
+        RGB is the base colour and whose A is the mask: the shader reads alpha from base colour.
+        Returns the materials to use (the scene's own objects are not modified)."""
+        out = list(self.scene.materials)
+        merged: dict[tuple[int, int, int], int] = {}
+        for i, mat in enumerate(out):
+            aref = mat.alpha_texture
+            if aref is None or not 0 <= aref.image < len(pixels) or pixels[aref.image] is None:
+                continue
+            bref = mat.base_color_texture
+            base_ok = bref is not None and 0 <= bref.image < len(pixels) and pixels[bref.image] is not None
+            key = (bref.image if base_ok else -1, aref.image, aref.channel)
+            if key not in merged:
+                alpha = pixels[aref.image][..., aref.channel]
+                if base_ok:
+                    rgba = pixels[bref.image].copy()
+                    if alpha.shape != rgba.shape[:2]:
+                        from PIL import Image as PilImage
+
+                        alpha = np.asarray(PilImage.fromarray(alpha).resize(
+                            (rgba.shape[1], rgba.shape[0]), PilImage.BILINEAR))
+                else:
+                    rgba = np.full(alpha.shape + (4,), 255, np.uint8)
+                rgba[..., 3] = alpha
+                merged[key] = len(pixels)
+                pixels.append(rgba)
+            ref = bref if base_ok else aref
+            out[i] = dataclasses.replace(
+                mat, base_color_texture=dataclasses.replace(ref, image=merged[key], channel=0),
+                alpha_texture=None)
+        return out
+
     def _upload_textures(self) -> None:
         vk = self.device.vk
-        pixels = self._decoded_pixels()
+        pixels = list(self._decoded_pixels())
+        self.scene_materials = self._merge_alpha_masks(pixels)
         # Which colour space each image is used in (base colour and emissive are sRGB).
         usage: dict[tuple[int, bool], None] = {}
-        for mat in self.scene.materials:
+        for mat in self.scene_materials:
             for slot in L.MATERIAL_TEXTURES:
                 ref = getattr(mat, f"{slot}_texture")
                 if ref is not None and 0 <= ref.image < len(pixels) and pixels[ref.image] is not None:
@@ -165,7 +200,7 @@ class GpuScene:
         self.images: dict[tuple[int, bool], Image] = {}
         for image_index, srgb in usage:
             fmt = vk.VK_FORMAT_R8G8B8A8_SRGB if srgb else vk.VK_FORMAT_R8G8B8A8_UNORM
-            name = self.scene.images[image_index].name
+            name = self.scene.images[image_index].name if image_index < len(self.scene.images) else "alpha-merged"
             self.images[(image_index, srgb)] = self._own(
                 uploader.add(pixels[image_index], fmt, name=name)
             )
@@ -213,7 +248,7 @@ class GpuScene:
     # --- materials --------------------------------------------------------------------------
     def _create_materials(self, layout: DescriptorSetLayout) -> None:
         vk = self.device.vk
-        materials = list(self.scene.materials) or []
+        materials = list(self.scene_materials)
         self.materials: list[Material] = materials + [Material(name="vkpbr-default")]
         self.default_material = len(self.materials) - 1
         align = int(self.device.limits.minUniformBufferOffsetAlignment)

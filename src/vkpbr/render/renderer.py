@@ -90,6 +90,7 @@ class _Recorded:
             "sType": vk.VK_STRUCTURE_TYPE_SUBMIT_INFO, "commandBufferCount": 1,
             "pCommandBuffers": self._cmds})
         self.fences = ffi.new("VkFence[1]", [fence])
+        self.blend_order: tuple[int, ...] = ()
 
 
 class Renderer:
@@ -131,6 +132,9 @@ class Renderer:
             self._create_layouts()
             self._create_frame_uniforms()
             self.gpu_scene = GpuScene(self.device, scene, self.set_layouts[1])
+            blend = [d.center for d in self.gpu_scene.draws if d.kind == "blend"]
+            self._blend_centers = np.array(blend, dtype=np.float64).reshape(-1, 3)
+            self._blend_sequence: tuple[int, ...] = ()
             self.last_stats = FrameStats()
             self.timings = {"setup": time.perf_counter() - t0, **self.gpu_scene.timings}
         except BaseException:
@@ -234,10 +238,23 @@ class Renderer:
                 self.device, int(w), int(h), "float" if linear else "srgb", self.msaa, bg)
         return self._targets[key]
 
-    def _record(self, target: RenderTarget, tbn: L.TbnMode, alpha_mask: bool) -> _Recorded:
+    def blend_order(self, eye: Any) -> tuple[int, ...]:
+        """Indices into the blended draws, farthest first from `eye` (painter's order)."""
+        centers = self._blend_centers
+        if len(centers) < 2:
+            return tuple(range(len(centers)))
+        d = np.sum((centers - np.asarray(eye, dtype=np.float64)) ** 2, axis=1)
+        return tuple(np.argsort(-d, kind="stable").tolist())
+
+    def _record(self, target: RenderTarget, tbn: L.TbnMode, alpha_mask: bool,
+                blend_order: tuple[int, ...] = ()) -> _Recorded:
         key = (id(target), tbn, alpha_mask)
-        if key in self._recorded:
-            return self._recorded[key]
+        rec = self._recorded.get(key)
+        if rec is not None and rec.blend_order == blend_order:
+            return rec
+        if rec is not None:  # the camera moved enough to reorder blended draws: re-record
+            self._free_recorded(self._recorded.pop(key))
+        self._blend_sequence = blend_order
         vk = self.device.vk
         cmd = self.device.allocate_command_buffer()
         vk.vkBeginCommandBuffer(cmd, vk.VkCommandBufferBeginInfo())
@@ -252,6 +269,7 @@ class Renderer:
         vk.vkEndCommandBuffer(cmd)
         fence = vk.vkCreateFence(self.device.handle, vk.VkFenceCreateInfo(), None)
         rec = _Recorded(vk, cmd, fence)
+        rec.blend_order = blend_order
         self._recorded[key] = rec
         return rec
 
@@ -267,6 +285,8 @@ class Renderer:
         vk.vkCmdBindIndexBuffer(cmd, gs.index_buffer.handle, 0, vk.VK_INDEX_TYPE_UINT32)
         for kind in _PASS_ORDER:
             draws = [d for d in gs.draws if self._pass_of(d.kind, alpha_mask) == kind]
+            if kind == "blend" and len(self._blend_sequence) == len(draws):
+                draws = [draws[i] for i in self._blend_sequence]
             if not draws:
                 continue
             pipeline = self._pipeline(target, tbn, kind)
@@ -347,7 +367,7 @@ class Renderer:
         validate_camera(camera)
         light = light or self.default_light()
         target = self._target(size, linear)
-        rec = self._record(target, tbn, opts.alpha_mask)
+        rec = self._record(target, tbn, opts.alpha_mask, self.blend_order(camera.eye))
         self._submit(rec, camera, light, size, opts, linear)
         t0 = time.perf_counter()
         color = target.read_color()
@@ -390,6 +410,10 @@ class Renderer:
         return z.astype(np.float32)
 
     # --- lifetime ---------------------------------------------------------------------------
+    def _free_recorded(self, rec: _Recorded) -> None:
+        self.device.vk.vkDestroyFence(self.device.handle, rec.fence, None)
+        self.device.free_command_buffer(rec.cmd)
+
     def close(self) -> None:
         """Destroy everything (idempotent). The Renderer is unusable afterwards."""
         dev = getattr(self, "device", None)
@@ -398,8 +422,7 @@ class Renderer:
         vk = dev.vk
         dev.wait_idle()
         for rec in self._recorded.values():
-            vk.vkDestroyFence(dev.handle, rec.fence, None)
-            dev.free_command_buffer(rec.cmd)
+            self._free_recorded(rec)
         self._recorded.clear()
         if getattr(self, "query_pool", None) is not None:
             vk.vkDestroyQueryPool(dev.handle, self.query_pool, None)

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.geometry import ensure_normals, normalize_mesh_arrays
+from vkpbr.scene.presets import apply_presets
 from vkpbr.scene.types import Scene
 
 __all__ = ["SUFFIXES", "load_scene"]
@@ -69,4 +70,4 @@ def load_scene(path: str | Path) -> Scene:
     scene.meshes = [normalize_mesh_arrays(ensure_normals(m)) for m in scene.meshes]
     if scene.triangle_count == 0:
         raise SceneError(path, "contains no triangles to render")
-    return scene
+    return apply_presets(scene)
