@@ -13,7 +13,8 @@ from PIL import Image
 
 from vkpbr.scene.default import plane
 from vkpbr.scene.loader import load_scene
-from vkpbr.scene.types import Camera, Image as SceneImage, Material, Node, Scene, TextureRef
+from vkpbr.scene.types import Camera, Material, Node, Scene, TextureRef
+from vkpbr.scene.types import Image as SceneImage
 
 GOLDEN = Path(__file__).parent / "golden"
 MODELS = ["AlphaBlendModeTest", "DamagedHelmet", "MetalRoughSpheresNoTextures", "NormalTangentMirrorTest",
