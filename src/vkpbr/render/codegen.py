@@ -32,6 +32,8 @@ VARIANTS: tuple[Variant, ...] = (
     *(Variant(f"pbr_{m.name.lower()}.vert.spv", "pbr.vert", (("TBN_MODE", int(m)),)) for m in L.TbnMode),
     Variant("pbr_opaque.frag.spv", "pbr.frag", (("ALPHA_MASK", 0),)),
     Variant("pbr_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1),)),
+    Variant("hud.vert.spv", "hud.vert"),  # the viewer's text overlay (app/hud.py)
+    Variant("hud.frag.spv", "hud.frag"),
 )
 
 

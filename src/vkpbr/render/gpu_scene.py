@@ -12,6 +12,7 @@ channel into R, so glTF's packed metallic-roughness texture is stored once and r
 
 from __future__ import annotations
 
+import concurrent.futures
 import dataclasses
 import time
 from dataclasses import dataclass, field
@@ -104,9 +105,13 @@ class GpuScene:
         self._owned: list = []
         self.timings: dict[str, float] = {}
         t0 = time.perf_counter()
-        self._upload_geometry()
-        t1 = time.perf_counter()
-        self._upload_textures()
+        # Decode images (Pillow, threads, GIL released) while the geometry streams are built.
+        with concurrent.futures.ThreadPoolExecutor(1) as pool:
+            decoding = pool.submit(self._decoded_pixels)
+            self._upload_geometry()
+            t1 = time.perf_counter()
+            pixels = decoding.result()
+        self._upload_textures(pixels)
         t2 = time.perf_counter()
         self._create_materials(material_layout)
         self.draws = self._build_draws()
@@ -185,9 +190,9 @@ class GpuScene:
                 alpha_texture=None)
         return out
 
-    def _upload_textures(self) -> None:
+    def _upload_textures(self, decoded: list[np.ndarray | None]) -> None:
         vk = self.device.vk
-        pixels = list(self._decoded_pixels())
+        pixels = list(decoded)
         self.scene_materials = self._merge_alpha_masks(pixels)
         # Which colour space each image is used in (base colour and emissive are sRGB).
         usage: dict[tuple[int, bool], None] = {}
