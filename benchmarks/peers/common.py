@@ -30,6 +30,7 @@ YFOV_DEG = 45.0
 ZNEAR, ZFAR = 0.1, 100.0
 LIGHT_POS = (0.0, 4.0, 0.0)
 LIGHT_COLOR = (1.0, 1.0, 1.0)
+LIGHT_CANDELA = 40.0  # for peers whose point light has inverse-square falloff (pyrender)
 SIZES = ("1920x1080", "640x480")
 WARMUP = 20
 
@@ -82,12 +83,13 @@ def median_ms(frame: Callable[[], object], frames: int, warmup: int = WARMUP) ->
 
 
 def report(args: argparse.Namespace, peer: str, version: str, ms_readback: float,
-           ms_render_only: float, load_s: float, gpu: str | None, image: np.ndarray | None = None) -> dict:
+           ms_render_only: float, load_s: float, gpu: str | None, settings: str = "",
+           image: np.ndarray | None = None) -> dict:
     """Print one Markdown table row, append the JSON line to --json, save --png."""
     row = {"peer": peer, "version": version, "size": f"{args.width}x{args.height}",
            "fps_readback": round(1e3 / ms_readback, 2), "ms_readback": round(ms_readback, 3),
            "ms_render_only": round(ms_render_only, 3), "load_s": round(load_s, 3), "gpu": gpu,
-           "frames": args.frames}
+           "frames": args.frames, "settings": settings}
     print(f"| {peer} {version} | {row['size']} | {ms_readback:.1f} ms ({row['fps_readback']:.0f} fps)"
           f" | {ms_render_only:.1f} ms | {load_s:.1f} s | {gpu} |", flush=True)
     if args.json:

@@ -27,12 +27,15 @@ for p in "${PKGS[@]}"; do
     --platform manylinux2014_x86_64 --platform any -d "$WHL" "$p"
 done
 
-# libGLU for pyglet's import (pulled in by `import pyrender`), glvnd EGL/GL for PyOpenGL on EGL.
+# libGLU for pyglet's import (pulled in by `import pyrender`), glvnd EGL/GL for PyOpenGL on EGL,
+# the Vulkan loader for wgpu, and libbsd0/libmd0 that libglx0's X11 chain needs (the same set
+# as .gl/, so run_peers.sh does not depend on it).
 o='-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64-lists -oAPT::Sandbox::User=root'
 mkdir -p /tmp/amd64-lists/partial
 # shellcheck disable=SC2086
 apt-get $o update -qq
 # shellcheck disable=SC2086
-(cd "$GL" && apt-get $o download -qq libglu1-mesa libegl1 libglvnd0 libgl1 libopengl0 libglx0 libgles2)
+(cd "$GL" && apt-get $o download -qq libglu1-mesa libegl1 libglvnd0 libgl1 libopengl0 libglx0 libgles2 \
+  libvulkan1 libbsd0 libmd0)
 
 du -sh "$WHL" "$GL"

@@ -59,13 +59,22 @@ class RenderTarget:
                 vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | transient, samples=samples))
             self.msaa_color_view = self._own(ImageView(self.msaa_color))
             self.msaa_depth_view = self._own(ImageView(self.msaa_depth, aspect="depth"))
-        n = width * height
-        self.color_readback = self._own(Buffer(
-            device, n * self.pixel_bytes, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, host_visible=True,
-            name="color readback"))
-        self.depth_readback = self._own(Buffer(
-            device, n * 4, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, host_visible=True,
-            name="depth readback"))
+        self._readbacks: dict[int, tuple[Buffer, Buffer]] = {}
+
+    def readback(self, slot: int = 0) -> tuple[Buffer, Buffer]:
+        """The (colour, depth) readback buffers of frame slot `slot`, made on first use: each
+        frame in flight copies into its own pair, so reading one never races another."""
+        if slot not in self._readbacks:
+            vk = self.device.vk
+            n = self.width * self.height
+            usage = vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
+            self._readbacks[slot] = (
+                self._own(Buffer(self.device, n * self.pixel_bytes, usage, host_visible=True,
+                                 name=f"color readback {slot}")),
+                self._own(Buffer(self.device, n * 4, usage, host_visible=True,
+                                 name=f"depth readback {slot}")),
+            )
+        return self._readbacks[slot]
 
     def _own(self, obj: Any) -> Any:
         self._objects.append(obj)
@@ -151,15 +160,16 @@ class RenderTarget:
             x=0, y=0, width=self.width, height=self.height, minDepth=0.0, maxDepth=1.0)])
         vk.vkCmdSetScissor(cmd, 0, 1, [area])
 
-    def record_end(self, cmd: Any) -> None:
-        """End rendering and copy colour and depth into the mapped readback buffers."""
+    def record_end(self, cmd: Any, slot: int = 0) -> None:
+        """End rendering and copy colour and depth into slot `slot`'s mapped readback buffers."""
         vk = self.device.vk
+        color_buf, depth_buf = self.readback(slot)
         vk.vkCmdEndRendering(cmd)
         pipeline_barrier(vk, cmd, self._image_barriers(to_attachment=False))
         extent = vk.VkExtent3D(width=self.width, height=self.height, depth=1)
         for img, buf, aspect in (
-            (self.color, self.color_readback, vk.VK_IMAGE_ASPECT_COLOR_BIT),
-            (self.depth, self.depth_readback, vk.VK_IMAGE_ASPECT_DEPTH_BIT),
+            (self.color, color_buf, vk.VK_IMAGE_ASPECT_COLOR_BIT),
+            (self.depth, depth_buf, vk.VK_IMAGE_ASPECT_DEPTH_BIT),
         ):
             vk.vkCmdCopyImageToBuffer(
                 cmd, img.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buf.handle, 1,
@@ -177,21 +187,21 @@ class RenderTarget:
                 srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
                 dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
                 buffer=buf.handle, offset=0, size=buf.size)
-            for buf in (self.color_readback, self.depth_readback)
+            for buf in (color_buf, depth_buf)
         ]
         pipeline_barrier(vk, cmd, [], host)
 
     # --- readback ---------------------------------------------------------------------------
-    def read_color(self) -> np.ndarray:
-        """A copy of the last frame's colour: (H, W, 4) uint8, or float32 for "float"."""
+    def read_color(self, slot: int = 0) -> np.ndarray:
+        """A copy of slot `slot`'s last colour: (H, W, 4) uint8, or float32 for "float"."""
         dtype = np.uint8 if self.color_kind == "srgb" else np.float32
         n = self.width * self.height * 4
-        return self.color_readback.array(dtype, n).reshape(self.height, self.width, 4).copy()
+        return self.readback(slot)[0].array(dtype, n).reshape(self.height, self.width, 4).copy()
 
-    def read_depth(self) -> np.ndarray:
-        """A copy of the last frame's depth buffer: (H, W) float32 in [0, 1]."""
+    def read_depth(self, slot: int = 0) -> np.ndarray:
+        """A copy of slot `slot`'s last depth buffer: (H, W) float32 in [0, 1]."""
         n = self.width * self.height
-        return self.depth_readback.array(np.float32, n).reshape(self.height, self.width).copy()
+        return self.readback(slot)[1].array(np.float32, n).reshape(self.height, self.width).copy()
 
     def destroy(self) -> None:
         while self._objects:

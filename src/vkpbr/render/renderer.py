@@ -9,16 +9,17 @@ alpha masking and the image size select among pre-recorded command buffers.
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import time
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from vkpbr.errors import UsageError
-from vkpbr.gpu.buffer import Buffer
-from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
+from vkpbr.gpu.descriptors import BindingSpec, DescriptorSetLayout
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec, VertexStream
 from vkpbr.gpu.target import RenderTarget
@@ -26,6 +27,7 @@ from vkpbr.gpu.vk import check_result
 from vkpbr.render import layouts as L
 from vkpbr.render.camera import forward, validate_camera, view_projection
 from vkpbr.render.codegen import SPV_DIR
+from vkpbr.render.frames import FrameSlot, FrameStats, create_slots
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.scene.types import Camera, Light, Scene
 
@@ -37,6 +39,7 @@ _TBN_STREAMS = {
     L.TbnMode.PACKED: (("packed_frames", "uint"),),
 }
 _PASS_ORDER = ("opaque", "opaque_double", "mask", "blend")
+FRAMES_IN_FLIGHT = 3
 
 
 @dataclass(frozen=True)
@@ -68,14 +71,6 @@ def _camera_key(c: Camera) -> tuple:
 
 def _light_key(li: Light) -> tuple:
     return (*li.position, *li.color, li.intensity, li.falloff, li.range)
-
-
-@dataclass
-class FrameStats:
-    cpu_ms: float = 0.0  # Python-side: uniforms + submit (excludes the wait)
-    wait_ms: float = 0.0  # waiting for the GPU
-    gpu_ms: float = float("nan")  # timestamp queries around the frame's commands
-    readback_ms: float = 0.0  # copying the mapped image into NumPy
 
 
 class _Recorded:
@@ -127,7 +122,6 @@ class Renderer:
         self._targets: dict[tuple, RenderTarget] = {}
         self._recorded: dict[tuple, _Recorded] = {}
         self._pipelines: dict[tuple, Pipeline] = {}
-        self._uniform_key: tuple | None = None
         try:
             self._create_layouts()
             self._create_frame_uniforms()
@@ -151,35 +145,26 @@ class Renderer:
 
     def _create_frame_uniforms(self) -> None:
         vk = self.device.vk
-        align = int(self.device.limits.minUniformBufferOffsetAlignment)
-        blocks = (L.CAMERA, L.SETTINGS, L.LIGHT)
-        self._offsets = []
-        offset = 0
-        for block in blocks:
-            self._offsets.append(offset)
-            offset += (block.size + align - 1) // align * align
-        self.frame_ubo = Buffer(
-            self.device, offset, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, host_visible=True,
-            name="frame uniforms")
-        self._frame_pool = DescriptorPool(self.device, [(self.set_layouts[0], 1), (self.set_layouts[2], 1)])
-        self.set0 = self._frame_pool.allocate(self.set_layouts[0])
-        self.set2 = self._frame_pool.allocate(self.set_layouts[2])
-        w = DescriptorWriter(self.device)
-        w.uniform(self.set0, 0, self.frame_ubo, L.CAMERA.size, self._offsets[0])
-        w.uniform(self.set0, 1, self.frame_ubo, L.SETTINGS.size, self._offsets[1])
-        w.uniform(self.set2, 0, self.frame_ubo, L.LIGHT.size, self._offsets[2])
-        w.update()
-        # Zero-copy structured views into the mapped buffer: a frame's update is three copies.
-        self.u_camera = self.frame_ubo.array(L.CAMERA.dtype, 1, self._offsets[0])
-        self.u_settings = self.frame_ubo.array(L.SETTINGS.dtype, 1, self._offsets[1])
-        self.u_light = self.frame_ubo.array(L.LIGHT.dtype, 1, self._offsets[2])
+        self.frame_ubo, self._frame_pool, self.slots = create_slots(
+            self.device, self.set_layouts[0], self.set_layouts[2], FRAMES_IN_FLIGHT)
         if self.device.timestamps:
             self.query_pool = vk.vkCreateQueryPool(
                 self.device.handle,
-                vk.VkQueryPoolCreateInfo(queryType=vk.VK_QUERY_TYPE_TIMESTAMP, queryCount=2),
+                vk.VkQueryPoolCreateInfo(queryType=vk.VK_QUERY_TYPE_TIMESTAMP,
+                                         queryCount=2 * FRAMES_IN_FLIGHT),
                 None)
         else:
             self.query_pool = None
+        self._query_data = vk.ffi.new("uint64_t[2]")
+
+    # Slot 0 serves single frames (render) and other frame loops (the viewer).
+    @property
+    def set0(self) -> Any:
+        return self.slots[0].set0
+
+    @property
+    def set2(self) -> Any:
+        return self.slots[0].set2
 
     # --- pipelines --------------------------------------------------------------------------
     def _pipeline(self, target: Any, tbn: L.TbnMode, kind: str) -> Pipeline:
@@ -247,8 +232,9 @@ class Renderer:
         return tuple(np.argsort(-d, kind="stable").tolist())
 
     def _record(self, target: RenderTarget, tbn: L.TbnMode, alpha_mask: bool,
-                blend_order: tuple[int, ...] = ()) -> _Recorded:
-        key = (id(target), tbn, alpha_mask)
+                blend_order: tuple[int, ...] = (), slot: FrameSlot | None = None) -> _Recorded:
+        slot = slot or self.slots[0]
+        key = (id(target), tbn, alpha_mask, slot.index)
         rec = self._recorded.get(key)
         if rec is not None and rec.blend_order == blend_order:
             return rec
@@ -258,14 +244,15 @@ class Renderer:
         vk = self.device.vk
         cmd = self.device.allocate_command_buffer()
         vk.vkBeginCommandBuffer(cmd, vk.VkCommandBufferBeginInfo())
+        q = slot.query_base
         if self.query_pool is not None:
-            vk.vkCmdResetQueryPool(cmd, self.query_pool, 0, 2)
-            vk.vkCmdWriteTimestamp2(cmd, vk.VK_PIPELINE_STAGE_2_NONE, self.query_pool, 0)
+            vk.vkCmdResetQueryPool(cmd, self.query_pool, q, 2)
+            vk.vkCmdWriteTimestamp2(cmd, vk.VK_PIPELINE_STAGE_2_NONE, self.query_pool, q)
         target.record_begin(cmd)
-        self.record_draws(cmd, target, tbn, alpha_mask)
-        target.record_end(cmd)
+        self.record_draws(cmd, target, tbn, alpha_mask, slot)
+        target.record_end(cmd, slot.index)
         if self.query_pool is not None:
-            vk.vkCmdWriteTimestamp2(cmd, vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, self.query_pool, 1)
+            vk.vkCmdWriteTimestamp2(cmd, vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, self.query_pool, q + 1)
         vk.vkEndCommandBuffer(cmd)
         fence = vk.vkCreateFence(self.device.handle, vk.VkFenceCreateInfo(), None)
         rec = _Recorded(vk, cmd, fence)
@@ -273,12 +260,14 @@ class Renderer:
         self._recorded[key] = rec
         return rec
 
-    def record_draws(self, cmd: Any, target: Any, tbn: L.TbnMode, alpha_mask: bool) -> None:
+    def record_draws(self, cmd: Any, target: Any, tbn: L.TbnMode, alpha_mask: bool,
+                     slot: FrameSlot | None = None) -> None:
         """Record every draw of the scene into `cmd`, inside dynamic rendering already begun on
         an attachment set described by `target` (anything with color_format, depth_format and
         samples: a RenderTarget, or the viewer's swapchain)."""
         vk = self.device.vk
         gs = self.gpu_scene
+        slot = slot or self.slots[0]
         layout = self.pipeline_layout.handle
         names = ["positions", "texcoords"] + [n for n, _ in _TBN_STREAMS[tbn]]
         buffers = [gs.streams[n].handle for n in names]
@@ -292,9 +281,9 @@ class Renderer:
             pipeline = self._pipeline(target, tbn, kind)
             vk.vkCmdBindPipeline(cmd, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline.handle)
             vk.vkCmdBindDescriptorSets(cmd, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 0, 1,
-                                       [self.set0], 0, None)
+                                       [slot.set0], 0, None)
             vk.vkCmdBindDescriptorSets(cmd, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, layout, 2, 1,
-                                       [self.set2], 0, None)
+                                       [slot.set2], 0, None)
             vk.vkCmdBindVertexBuffers(cmd, 0, len(buffers), buffers, [0] * len(buffers))
             bound = None
             for d in draws:
@@ -325,23 +314,25 @@ class Renderer:
         return self.scene.lights[0] if self.scene.lights else Light()
 
     def write_uniforms(self, camera: Camera, light: Light, size: tuple[int, int],
-                        opts: RenderOptions, linear: bool) -> None:
-        # Frames that repeat the last frame's inputs (a static scene re-rendered) skip the
-        # uniform math entirely; the key is cheap next to computing the matrices.
+                       opts: RenderOptions, linear: bool, slot: FrameSlot | None = None) -> None:
+        """Write the camera, settings and light blocks of `slot` (default: slot 0)."""
+        slot = slot or self.slots[0]
+        # Frames that repeat the slot's last inputs (a static scene re-rendered) skip the
+        # uniform maths entirely; the key is cheap next to computing the matrices.
         key = (_camera_key(camera), _light_key(light), size, opts, linear)
-        if key == self._uniform_key:
+        if key == slot.uniform_key:
             return
-        self._uniform_key = key
+        slot.uniform_key = key
         view, brdf, _tbn, tonemap = opts.resolved()
         w, h = size
-        self.u_camera["VP"][0] = L.mat4_to_std140(view_projection(camera, w / h))
+        slot.u_camera["VP"][0] = L.mat4_to_std140(view_projection(camera, w / h))
         flags = L.SETTINGS_NORMAL_MAPPING if opts.normal_mapping else 0
         flags |= L.SETTINGS_OCCLUSION if opts.occlusion else 0
         flags |= 0 if linear else L.SETTINGS_SRGB_TARGET
         # One tuple assignment per block: field-by-field writes cost ~2 us each.
-        self.u_settings[0] = ((*forward(camera), 0.0), int(view), int(brdf), int(tonemap), flags,
+        slot.u_settings[0] = ((*forward(camera), 0.0), int(view), int(brdf), int(tonemap), flags,
                               2.0 ** opts.exposure, camera.znear, camera.zfar, 0.0)
-        self.u_light[0] = ((*light.position, 1.0), light.color, light.intensity, (*camera.eye, 1.0),
+        slot.u_light[0] = ((*light.position, 1.0), light.color, light.intensity, (*camera.eye, 1.0),
                            0 if light.falloff == "none" else 1, light.range)
 
     def render(
@@ -361,43 +352,82 @@ class Renderer:
         view-space distance along the camera axis (inf where nothing was drawn).
         Keyword overrides (view="d", brdf="blinn-phong", ...) update `options`.
         """
+        camera = camera or self.default_camera()
+        frames = self.render_many([camera], light, size, options, linear, depth, **option_overrides)
+        return next(iter(frames))
+
+    def render_many(
+        self,
+        cameras: Iterable[Camera],
+        light: Light | None = None,
+        size: tuple[int, int] = (640, 480),
+        options: RenderOptions | None = None,
+        linear: bool = False,
+        depth: bool = False,
+        **option_overrides: Any,
+    ) -> Iterator[np.ndarray | tuple[np.ndarray, np.ndarray]]:
+        """Render one frame per camera, yielding what `render` returns, in order.
+
+        Up to FRAMES_IN_FLIGHT frames are queued on the GPU: while frame i renders, Python
+        writes frame i+1's uniforms and submits it, and copies frame i-1 out of its own
+        persistently mapped readback buffer. Nothing is allocated per frame but the returned
+        arrays. Each frame is bit-for-bit what `render` gives for its camera.
+        """
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
         _view, _brdf, tbn, _tm = opts.resolved()
-        camera = camera or self.default_camera()
-        validate_camera(camera)
         light = light or self.default_light()
         target = self._target(size, linear)
-        rec = self._record(target, tbn, opts.alpha_mask, self.blend_order(camera.eye))
-        self._submit(rec, camera, light, size, opts, linear)
-        t0 = time.perf_counter()
-        color = target.read_color()
-        out_depth = self._linear_depth(target.read_depth(), camera) if depth else None
-        self.last_stats.readback_ms = (time.perf_counter() - t0) * 1e3
-        self.device.check_validation()
-        return (color, out_depth) if depth else color
-
-    def _submit(self, rec: _Recorded, camera: Camera, light: Light, size: tuple[int, int],
-                opts: RenderOptions, linear: bool) -> None:
         lib = self.device.vk.lib
-        t0 = time.perf_counter()
-        self.write_uniforms(camera, light, size, opts, linear)
-        check_result(lib.vkQueueSubmit(self.device.queue, 1, rec.submit, rec.fence), "vkQueueSubmit")
-        t1 = time.perf_counter()
+        pending: collections.deque[tuple[FrameSlot, _Recorded, Camera]] = collections.deque()
+        try:
+            for i, camera in enumerate(cameras):
+                validate_camera(camera)
+                if len(pending) == len(self.slots):
+                    yield self._collect(*pending.popleft(), target, depth)
+                slot = self.slots[i % len(self.slots)]
+                rec = self._record(target, tbn, opts.alpha_mask, self.blend_order(camera.eye), slot)
+                t0 = time.perf_counter()
+                self.write_uniforms(camera, light, size, opts, linear, slot)
+                check_result(lib.vkQueueSubmit(self.device.queue, 1, rec.submit, rec.fence),
+                             "vkQueueSubmit")
+                slot.stats.cpu_ms = (time.perf_counter() - t0) * 1e3
+                pending.append((slot, rec, camera))
+            while pending:
+                yield self._collect(*pending.popleft(), target, depth)
+        finally:
+            # An abandoned generator leaves frames queued: finish them so fences are reusable.
+            for _slot, rec, _cam in pending:
+                self._wait(rec)
+
+    def _wait(self, rec: _Recorded) -> None:
+        lib = self.device.vk.lib
         check_result(lib.vkWaitForFences(self.device.handle, 1, rec.fences, 1, 2**63 - 1),
                      "vkWaitForFences")
         check_result(lib.vkResetFences(self.device.handle, 1, rec.fences), "vkResetFences")
-        t2 = time.perf_counter()
-        self.last_stats.cpu_ms = (t1 - t0) * 1e3
-        self.last_stats.wait_ms = (t2 - t1) * 1e3
-        self.last_stats.gpu_ms = self._gpu_ms()
 
-    def _gpu_ms(self) -> float:
+    def _collect(self, slot: FrameSlot, rec: _Recorded, camera: Camera, target: RenderTarget,
+                 depth: bool) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+        stats = slot.stats
+        t0 = time.perf_counter()
+        self._wait(rec)
+        t1 = time.perf_counter()
+        stats.wait_ms = (t1 - t0) * 1e3
+        stats.gpu_ms = self._gpu_ms(slot)
+        color = target.read_color(slot.index)
+        out_depth = self._linear_depth(target.read_depth(slot.index), camera) if depth else None
+        stats.readback_ms = (time.perf_counter() - t1) * 1e3
+        self.last_stats = dataclasses.replace(stats)
+        self.device.check_validation()
+        return (color, out_depth) if depth else color
+
+    def _gpu_ms(self, slot: FrameSlot) -> float:
         if self.query_pool is None:
             return float("nan")
         vk = self.device.vk
-        data = vk.ffi.new("uint64_t[2]")
-        vk.vkGetQueryPoolResults(self.device.handle, self.query_pool, 0, 2, 16, data, 8,
-                                 vk.VK_QUERY_RESULT_64_BIT | vk.VK_QUERY_RESULT_WAIT_BIT)
+        data = self._query_data
+        check_result(vk.lib.vkGetQueryPoolResults(
+            self.device.handle, self.query_pool, slot.query_base, 2, 16, data, 8,
+            vk.VK_QUERY_RESULT_64_BIT | vk.VK_QUERY_RESULT_WAIT_BIT), "vkGetQueryPoolResults")
         return (data[1] - data[0]) * float(self.device.limits.timestampPeriod) * 1e-6
 
     @staticmethod

@@ -1,0 +1,471 @@
+"""`vkpbr view`: the interactive viewer. GLFW window and input, the frame loop, the HUD text.
+
+The scene is drawn by the headless Renderer's own pipelines and `record_draws` into sRGB
+swapchain images (render/window.py), so a screenshot equals `Renderer.render` for the same
+camera, light, size and modes. Per frame, Python polls events, moves the camera, writes the
+uniforms, picks a pre-recorded command buffer and submits; everything else (pipelines,
+command buffers, HUD geometry) is built ahead or only when something changes.
+Keys: app/keys.py (HELP). Scripts: app/script.py. Docs: docs/viewer.md.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import statistics
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import glfw
+import numpy as np
+
+from vkpbr.app import keys as K
+from vkpbr.app.controls import FAST, SLOW, FlyCamera
+from vkpbr.app.hud import FontAtlas, TextBlock, layout_blocks
+from vkpbr.app.script import Script, key_code, mods_bits
+from vkpbr.errors import VkpbrError
+from vkpbr.gpu.device import DeviceRequest
+from vkpbr.gpu.swapchain import Surface, Swapchain
+from vkpbr.gpu.text_overlay import QuadOverlay
+from vkpbr.render import layouts as L
+from vkpbr.render.camera import format_camera
+from vkpbr.render.codegen import SPV_DIR
+from vkpbr.render.renderer import Renderer, RenderOptions
+from vkpbr.render.window import WindowRenderer
+from vkpbr.scene.types import Camera, Light, Scene
+
+__all__ = ["Viewer", "ViewerConfig"]
+
+LIGHT_ORBIT_RAD_PER_S = 0.6
+
+
+@dataclass
+class ViewerConfig:
+    """What `vkpbr view` was asked for (see viewer_cmd.py for the options)."""
+
+    size: tuple[int, int] = (1280, 720)
+    camera: Camera | None = None  # None: the scene's camera (or the automatic one)
+    light: Light | None = None
+    options: RenderOptions = field(default_factory=RenderOptions)
+    vsync: bool = True
+    frames: int | None = None  # stop after N frames
+    screenshot: Path | None = None  # with frames: write the last frame here
+    script: Script | None = None
+    validation: bool = False
+    device: str | int | None = None
+    title: str = "vkpbr"
+    scene_label: str = ""  # how `C` names the scene in the printed command
+
+
+class Viewer:
+    """Owns the window, the Renderer, the swapchain and the input state. `run()` loops until
+    Esc / close / the script's quit / `frames`; `close()` releases everything."""
+
+    def __init__(self, scene: Scene | None, config: ViewerConfig) -> None:
+        self.config = config
+        if not glfw.init():
+            raise VkpbrError("cannot open a window: GLFW failed to initialise (no display?)")
+        self.window: Any = None
+        self.renderer: Renderer | None = None
+        try:
+            self._open(scene)
+        except BaseException:
+            self.close()
+            raise
+
+    # --- set-up -----------------------------------------------------------------------------
+    def _open(self, scene: Scene | None) -> None:
+        cfg = self.config
+        glfw.window_hint(glfw.CLIENT_API, glfw.NO_API)
+        self.window = glfw.create_window(cfg.size[0], cfg.size[1], cfg.title, None, None)
+        if not self.window:
+            raise VkpbrError("cannot open a window (is a display available? try xvfb-run)")
+        request = DeviceRequest(cfg.device, tuple(glfw.get_required_instance_extensions()),
+                                ("VK_KHR_swapchain",))
+        self.renderer = r = Renderer(scene, device=request, validation=cfg.validation)
+        device = r.device
+        self.surface = Surface(device, self._create_surface)
+        self.swapchain = Swapchain(device, self.surface, glfw.get_framebuffer_size(self.window),
+                                   vsync=cfg.vsync)
+        self.font = FontAtlas()
+        self.overlay = QuadOverlay(device, self.font.pixels, self.swapchain.color_format,
+                                   self.swapchain.depth_format, SPV_DIR)
+        self.frames = WindowRenderer(r, self.swapchain, self.overlay)
+        lo, hi = r.scene.bounds()
+        ok = np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))
+        self.centre = tuple(float(x) for x in (lo + hi) / 2) if ok else (0.0, 0.0, 0.0)
+        radius = float(np.linalg.norm(hi - lo)) / 2 if ok else 1.0
+        start = cfg.camera or r.default_camera()
+        if cfg.camera is None and start.name == "auto":
+            # The automatic camera's near/far hug the scene from outside; flying inside needs
+            # a near plane close to the eye.
+            start = dataclasses.replace(start, znear=radius * 2e-3, zfar=radius * 8)
+        self.fly = FlyCamera(start, radius)
+        self.start_light = cfg.light or r.default_light()
+        self.light = self.start_light
+        self.options = cfg.options
+        self.options.resolved()
+        self.animate_light = False
+        self.show_help, self.show_hud = True, True
+        self.held: set[int] = set()
+        self.buttons: set[int] = set()
+        self.cursor: tuple[float, float] | None = None
+        self.captured = False
+        self.quit = False
+        self.script_minimized = False
+        self.pending_shots: list[Path] = []
+        self.shots_written: list[Path] = []
+        self.python_ms: list[float] = []
+        self.frame_count = 0
+        self._hud_version = 0
+        self._hud_written: dict[int, int] = {}
+        self._hud_dirty = True
+        self._hud_size = (0, 0)
+        self._hud_vertices = np.zeros((0, 8), dtype=np.float32)
+        self._stats = {"fps": 0.0, "cpu": 0.0, "gpu": float("nan")}
+        w = self.window
+        glfw.set_key_callback(w, self._on_key)
+        glfw.set_cursor_pos_callback(w, self._on_cursor)
+        glfw.set_mouse_button_callback(w, self._on_button)
+        glfw.set_scroll_callback(w, self._on_scroll)
+
+    def _create_surface(self, instance: Any) -> Any:
+        vk = self.renderer.device.vk  # type: ignore[union-attr]
+        out = vk.ffi.new("VkSurfaceKHR*")
+        if glfw.create_window_surface(instance, self.window, None, out) != 0:
+            raise VkpbrError("glfwCreateWindowSurface failed")
+        return out[0]
+
+    # --- input ------------------------------------------------------------------------------
+    def _on_key(self, _w: Any, key: int, _scancode: int, action: int, mods: int) -> None:
+        if action == glfw.RELEASE:
+            self.held.discard(key)
+            return
+        if action == glfw.PRESS:
+            self.held.add(key)
+        shift, ctrl = bool(mods & glfw.MOD_SHIFT), bool(mods & glfw.MOD_CONTROL)
+        o = self.options
+        if key == glfw.KEY_ESCAPE:
+            self.quit = True
+        elif glfw.KEY_0 <= key <= glfw.KEY_9:
+            view = K.view_for_digit(key - glfw.KEY_0, shift, ctrl)
+            if view is not None:
+                o = K.with_view(o, view)
+        elif key == glfw.KEY_V:
+            o = K.cycle(o, "view", -1 if shift else 1)
+        elif key == glfw.KEY_B:
+            o = K.cycle(o, "brdf")
+        elif key == glfw.KEY_T:
+            o = K.cycle(o, "tbn")
+        elif key == glfw.KEY_X:
+            o = K.cycle(o, "tonemap")
+        elif key in (glfw.KEY_M, glfw.KEY_N, glfw.KEY_O):
+            o = K.toggle(o, {glfw.KEY_M: "alpha_mask", glfw.KEY_N: "normal_mapping",
+                             glfw.KEY_O: "occlusion"}[key])
+        elif key in (glfw.KEY_EQUAL, glfw.KEY_KP_ADD, glfw.KEY_MINUS, glfw.KEY_KP_SUBTRACT):
+            step = 0.5 if key in (glfw.KEY_EQUAL, glfw.KEY_KP_ADD) else -0.5
+            o = dataclasses.replace(o, exposure=max(-16.0, min(16.0, o.exposure + step)))
+        elif action != glfw.PRESS:
+            return  # auto-repeat only for the keys above
+        elif key == glfw.KEY_SPACE:
+            self.animate_light = not self.animate_light
+        elif key == glfw.KEY_L:
+            self.light = dataclasses.replace(self.light, position=self.fly.eye)
+        elif key == glfw.KEY_R:
+            self.fly.reset()
+            self.light = self.start_light
+        elif key == glfw.KEY_C:
+            self.print_camera()
+        elif key in (glfw.KEY_P, glfw.KEY_F12):
+            self.pending_shots.append(Path(time.strftime("vkpbr-%Y%m%d-%H%M%S")
+                                           + f"-{self.frame_count}.png"))
+        elif key in (glfw.KEY_H, glfw.KEY_F1):
+            self.show_help = not self.show_help
+        elif key == glfw.KEY_F2:
+            self.show_hud = not self.show_hud
+        self._hud_dirty = True
+        self.options = o
+
+    def _on_cursor(self, _w: Any, x: float, y: float) -> None:
+        if self.cursor is not None:
+            dx, dy = x - self.cursor[0], y - self.cursor[1]
+            if self.captured or glfw.MOUSE_BUTTON_LEFT in self.buttons:
+                self.fly.look(dx, dy)
+            if glfw.MOUSE_BUTTON_RIGHT in self.buttons:
+                self.fly.pan(dx, dy, self.swapchain.extent[1] or 1)
+        self.cursor = (x, y)
+
+    def _on_button(self, _w: Any, button: int, action: int, _mods: int) -> None:
+        if action == glfw.PRESS:
+            self.buttons.add(button)
+            if button == glfw.MOUSE_BUTTON_MIDDLE:
+                self.captured = not self.captured
+                glfw.set_input_mode(self.window, glfw.CURSOR,
+                                    glfw.CURSOR_DISABLED if self.captured else glfw.CURSOR_NORMAL)
+        else:
+            self.buttons.discard(button)
+
+    def _on_scroll(self, _w: Any, _dx: float, dy: float) -> None:
+        self.fly.dolly(dy, self._speed_multiplier())
+
+    def _speed_multiplier(self) -> float:
+        h = self.held
+        m = FAST if (glfw.KEY_LEFT_SHIFT in h or glfw.KEY_RIGHT_SHIFT in h) else 1.0
+        return m * (SLOW if (glfw.KEY_LEFT_CONTROL in h or glfw.KEY_RIGHT_CONTROL in h) else 1.0)
+
+    def _replay(self, event: Any) -> None:
+        """Feed one script event through the same handlers as real input."""
+        d, kind = event.data, event.type
+        if kind == "key":
+            code, mods = key_code(d["key"]), mods_bits(d["mods"])
+            if d["action"] in ("press", "tap"):
+                self._on_key(self.window, code, 0, glfw.PRESS, mods)
+            if d["action"] in ("release", "tap"):
+                self._on_key(self.window, code, 0, glfw.RELEASE, mods)
+        elif kind == "mouse_move":
+            self._on_cursor(self.window, float(d["x"]), float(d["y"]))
+        elif kind == "mouse_button":
+            button = getattr(glfw, f"MOUSE_BUTTON_{d['button'].upper()}")
+            self._on_button(self.window, button,
+                            glfw.PRESS if d["action"] == "press" else glfw.RELEASE, 0)
+        elif kind == "scroll":
+            self._on_scroll(self.window, 0.0, float(d["dy"]))
+        elif kind == "resize":
+            glfw.set_window_size(self.window, d["width"], d["height"])
+        elif kind == "minimize":
+            # With no window manager (Xvfb) iconify does nothing; the flag makes the loop
+            # behave as for a real zero-sized framebuffer.
+            glfw.iconify_window(self.window)
+            self.script_minimized = True
+        elif kind == "restore":
+            glfw.restore_window(self.window)
+            self.script_minimized = False
+        elif kind == "screenshot":
+            self.pending_shots.append(Path(d["path"]))
+        elif kind == "print_camera":
+            self.print_camera()
+        elif kind == "quit":
+            self.quit = True
+
+    # --- per-frame state --------------------------------------------------------------------
+    def _update(self, dt: float) -> None:
+        h, key = self.held, glfw
+        axis = lambda pos, neg: float(pos in h) - float(neg in h)  # noqa: E731
+        f, r, u = axis(key.KEY_W, key.KEY_S), axis(key.KEY_D, key.KEY_A), axis(key.KEY_E, key.KEY_Q)
+        if f or r or u:
+            self.fly.move(dt, f, r, u, self._speed_multiplier())
+        lf, lr = axis(key.KEY_UP, key.KEY_DOWN), axis(key.KEY_RIGHT, key.KEY_LEFT)
+        lu = axis(key.KEY_PAGE_UP, key.KEY_PAGE_DOWN)
+        p = self.light.position
+        if lf or lr or lu:
+            step = self.fly.speed * self._speed_multiplier() * dt
+            fw, rt, up = self.fly.forward(), self.fly.right(), self.fly.up
+            flat = _normalize(tuple(fw[i] - up[i] * sum(fw[j] * up[j] for j in range(3))
+                                    for i in range(3)))
+            p = tuple(p[i] + step * (lf * flat[i] + lr * rt[i] + lu * up[i]) for i in range(3))
+        if self.animate_light:
+            p = _rotate_about(p, self.centre, self.fly.up, LIGHT_ORBIT_RAD_PER_S * dt)
+        if p is not self.light.position:
+            self.light = dataclasses.replace(self.light, position=tuple(float(x) for x in p))
+
+    def camera(self) -> Camera:
+        return self.fly.camera()
+
+    def print_camera(self) -> None:
+        cam, o, (w, h) = self.camera(), self.options, self.swapchain.extent
+        parts = ["vkpbr render", self.config.scene_label, f"--size {w}x{h}",
+                 f"--camera {format_camera(cam)}", f"--fov {cam.yfov_deg:g}",
+                 "--light " + ",".join(f"{x:.6g}" for x in self.light.position),
+                 f"--view {o.view} --brdf {o.brdf} --tbn {o.tbn} --tonemap {o.tonemap}",
+                 f"--exposure {o.exposure:g}"]
+        parts += [flag for flag, on in (("--no-alpha-mask", not o.alpha_mask),
+                                        ("--no-normal-maps", not o.normal_mapping),
+                                        ("--no-occlusion", not o.occlusion)) if on]
+        print(" ".join(p for p in parts if p), f"  # near {cam.znear:g}, far {cam.zfar:g}",
+              flush=True)
+
+    def _hud_blocks(self) -> list[TextBlock]:
+        if not self.show_hud:
+            return []
+        s, o, (w, h) = self._stats, self.options, self.swapchain.extent
+        onoff = lambda b: "on" if b else "off"  # noqa: E731
+        view = L.enum_by_name(L.View, o.view)
+        lines = (
+            f"{s['fps']:.1f} fps   CPU {s['cpu']:.2f} ms   GPU {s['gpu']:.2f} ms",
+            f"view {o.view} [{int(view)}]   D {o.brdf}   TBN {o.tbn}",
+            f"tonemap {o.tonemap}   exposure {o.exposure:+.1f} EV",
+            f"alpha mask {onoff(o.alpha_mask)}   normal maps {onoff(o.normal_mapping)}   "
+            f"occlusion {onoff(o.occlusion)}",
+            f"light anim {onoff(self.animate_light)}   {w}x{h} {self.swapchain.present_mode_name}",
+        )
+        blocks = [TextBlock(lines, "top-left")]
+        if self.show_help:
+            width = max(len(k) for k, _ in K.HELP)
+            help_lines = tuple(f"{k:<{width}}  {v}" for k, v in K.HELP)
+            blocks.append(TextBlock(help_lines, "bottom-left", (0.85, 0.9, 1.0, 1.0)))
+        return blocks
+
+    # --- the frame loop ---------------------------------------------------------------------
+    def _minimized(self) -> bool:
+        w, h = glfw.get_framebuffer_size(self.window)
+        return self.script_minimized or w == 0 or h == 0 or bool(
+            glfw.get_window_attrib(self.window, glfw.ICONIFIED))
+
+    def run(self) -> int:
+        """Loop until quit; returns the exit status (0)."""
+        cfg, sc, frames = self.config, self.swapchain, self.frames
+        script = list(cfg.script.events) if cfg.script else []
+        fixed_dt = cfg.script.fixed_dt if cfg.script else None
+        clock = 0.0
+        start = last = t_hud = time.perf_counter()
+        hud_frames, hud_cpu = 0, 0.0
+        while not (self.quit or glfw.window_should_close(self.window)):
+            t0 = time.perf_counter()
+            glfw.poll_events()
+            dt = fixed_dt if fixed_dt is not None else t0 - last
+            last = t0
+            clock = clock + fixed_dt if fixed_dt is not None else t0 - start
+            while script and script[0].t <= clock + 1e-9:
+                self._replay(script.pop(0))
+            if self.quit:
+                break
+            if self._minimized():
+                glfw.wait_events_timeout(0.02 if script else 0.1)
+                continue
+            fb = glfw.get_framebuffer_size(self.window)
+            if (sc.handle is None or fb != sc.extent) and not sc.recreate(fb):
+                continue
+            frames.sync()
+            self._update(dt)
+            tb = time.perf_counter()
+            index = sc.acquire()
+            blocked = time.perf_counter() - tb
+            if index is None:
+                sc.recreate(glfw.get_framebuffer_size(self.window))
+                continue
+            gpu = frames.gpu_ms(index)
+            if gpu == gpu:
+                self._stats["gpu"] = gpu
+            camera, o = self.camera(), self.options
+            r = self.renderer
+            r.write_uniforms(camera, self.light, sc.extent, o, False)  # type: ignore[union-attr]
+            frames.upload_uniforms(index)
+            self._write_hud(index)
+            tbn = L.enum_by_name(L.TbnMode, o.tbn)
+            order = r.blend_order(camera.eye) if hasattr(r, "blend_order") else ()  # type: ignore[union-attr]
+            last_frame = cfg.frames is not None and self.frame_count + 1 >= cfg.frames
+            if last_frame and cfg.screenshot is not None:
+                self.pending_shots.append(cfg.screenshot)
+            shot = self.pending_shots.pop(0) if self.pending_shots else None
+            if shot is not None and not sc.can_copy:  # no TRANSFER_SRC swapchain: headless
+                self._save(shot, r.render(camera, self.light, sc.extent, o), camera)  # type: ignore[union-attr]
+                shot = None
+            if shot is None:
+                cmd, buffer = frames.command_buffer(index, tbn, o.alpha_mask, order), None
+            else:
+                buffer = frames.screenshot_buffer()
+                cmd = frames.record(index, tbn, o.alpha_mask, order, buffer)
+            slot = sc.slot
+            tb = time.perf_counter()
+            ok = sc.submit_and_present(cmd, index)
+            t_end = time.perf_counter()
+            blocked += t_end - tb
+            if shot is not None:
+                self._finish_screenshot(slot, cmd, buffer, shot, camera)
+                t_end = time.perf_counter()
+            elif not ok:
+                sc.recreate(glfw.get_framebuffer_size(self.window))
+            self.frame_count += 1
+            cpu_ms = (t_end - t0 - blocked) * 1e3
+            self.python_ms.append(cpu_ms)
+            hud_frames, hud_cpu = hud_frames + 1, hud_cpu + cpu_ms
+            if t_end - t_hud >= 0.25:
+                self._stats["fps"] = hud_frames / (t_end - t_hud)
+                self._stats["cpu"] = hud_cpu / hud_frames
+                t_hud, hud_frames, hud_cpu = t_end, 0, 0.0
+                self._hud_dirty = True
+            if last_frame:
+                break
+        self.renderer.device.wait_idle()  # type: ignore[union-attr]
+        self.renderer.device.check_validation()  # type: ignore[union-attr]
+        return 0
+
+    def _write_hud(self, index: int) -> None:
+        """Lay the HUD out again when it changed (4 times a second for the timings), and
+        copy it into image `index`'s overlay slot when that slot is out of date."""
+        size = self.swapchain.extent
+        if self._hud_dirty or size != self._hud_size:
+            self._hud_vertices = layout_blocks(self.font, self._hud_blocks(), size)
+            self._hud_version += 1
+            self._hud_dirty, self._hud_size = False, size
+            self._hud_written.clear()
+        if self._hud_written.get(index) != self._hud_version:
+            self.overlay.write(index, self._hud_vertices)
+            self._hud_written[index] = self._hud_version
+
+    def _finish_screenshot(self, slot: int, cmd: Any, buffer: Any, path: Path,
+                           camera: Camera) -> None:
+        self.swapchain.wait_frame(slot)
+        image = self.frames.read_screenshot(buffer)
+        self.renderer.device.free_command_buffer(cmd)  # type: ignore[union-attr]
+        buffer.destroy()
+        self._save(path, image, camera)
+
+    def _save(self, path: Path, image: np.ndarray, camera: Camera) -> None:
+        from vkpbr.app.cli import write_image_atomic
+
+        # What the shot shows, for tests: compare with Renderer.render of the same inputs.
+        self.last_screenshot = (image, camera, self.light, self.options, self.swapchain.extent)
+        write_image_atomic(path, image)
+        self.shots_written.append(path)
+        print(f"wrote {path} ({image.shape[1]}x{image.shape[0]})", flush=True)
+
+    def summary(self) -> str:
+        ms = self.python_ms[1:] or self.python_ms
+        med = statistics.median(ms) if ms else float("nan")
+        return (f"{self.frame_count} frames, Python per frame {med:.3f} ms (median), "
+                f"GPU {self._stats['gpu']:.2f} ms, {self._stats['fps']:.1f} fps")
+
+    # --- lifetime ---------------------------------------------------------------------------
+    def close(self) -> None:
+        """Release the GPU objects, the device and the window (idempotent)."""
+        r, self.renderer = self.renderer, None
+        if r is not None:
+            for name in ("frames", "overlay", "swapchain", "surface"):
+                obj = getattr(self, name, None)
+                if obj is not None:
+                    obj.destroy()
+                    setattr(self, name, None)
+            r.close()
+        if self.window is not None:
+            glfw.destroy_window(self.window)
+            self.window = None
+        glfw.terminate()
+
+    def __enter__(self) -> Viewer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _normalize(v: tuple[float, ...]) -> tuple[float, ...]:
+    n = math.sqrt(sum(x * x for x in v)) or 1.0
+    return tuple(x / n for x in v)
+
+
+def _rotate_about(p: tuple, centre: tuple, axis: tuple, angle: float) -> tuple:
+    """Rodrigues' rotation of point p about the line through `centre` along unit `axis`."""
+    v = [p[i] - centre[i] for i in range(3)]
+    c, s = math.cos(angle), math.sin(angle)
+    k = axis
+    kxv = (k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2], k[0] * v[1] - k[1] * v[0])
+    kdv = sum(k[i] * v[i] for i in range(3))
+    return tuple(centre[i] + v[i] * c + kxv[i] * s + k[i] * kdv * (1 - c) for i in range(3))
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit("use `vkpbr view`")
