@@ -94,6 +94,10 @@ def _add_render(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--size", default="1280x720", help="WIDTHxHEIGHT (default 1280x720)")
     p.add_argument("--camera", help="ex,ey,ez,tx,ty,tz[,ux,uy,uz]: eye, target and up")
     p.add_argument("--camera-index", type=int, help="use the scene file's camera N")
+    p.add_argument("--cameras", metavar="FILE.json",
+                   help="render one image per camera pose in FILE (a JSON list of "
+                        '"ex,ey,ez,tx,ty,tz[,ux,uy,uz]" strings or {"eye","target","up","fov"} '
+                        "objects) into the folder --out")
     p.add_argument("--fov", type=float, help="vertical field of view in degrees")
     p.add_argument("--light", help="x,y,z: point light position")
     p.add_argument("--light-color", help="r,g,b: light colour (linear)")
@@ -161,23 +165,108 @@ def _light_from_args(args: argparse.Namespace, renderer) -> object:  # noqa: ANN
     return light
 
 
-def _run_render(args: argparse.Namespace) -> int:
-    if args.list_views:
-        return _list_views()
-    size = parse_size(args.size)
-    out = Path(args.out)
-    check_writable(out)
-    if args.linear and out.suffix.lower() != ".npy":
-        raise UsageError("--linear writes float32 colour: give an --out path ending in .npy")
-    if args.frames < 1:
-        raise UsageError("--frames must be at least 1")
-    from vkpbr.render.renderer import Renderer, RenderOptions
+def load_cameras(path: str, base) -> list:  # noqa: ANN001 - Camera
+    """Camera poses from a JSON file (see --cameras)."""
+    import dataclasses
+
+    from vkpbr.render.camera import parse_camera, validate_camera
+
+    try:
+        entries = json.loads(Path(path).read_text())
+    except OSError as exc:
+        raise UsageError(f"--cameras {path}: {exc.strerror}") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise UsageError(f"--cameras {path}: not valid JSON ({exc})") from None
+    if not isinstance(entries, list) or not entries:
+        raise UsageError(f"--cameras {path}: expected a non-empty JSON list of camera poses")
+    cameras = []
+    for i, e in enumerate(entries):
+        try:
+            if isinstance(e, str):
+                cam = parse_camera(e, base)
+            elif isinstance(e, dict):
+                cam = dataclasses.replace(
+                    base, eye=tuple(map(float, e["eye"])), target=tuple(map(float, e["target"])),
+                    up=tuple(map(float, e.get("up", base.up))), yfov_deg=float(e.get("fov", base.yfov_deg)))
+                if len(cam.eye) != 3 or len(cam.target) != 3 or len(cam.up) != 3:
+                    raise ValueError("eye, target and up need three numbers each")
+                validate_camera(cam)
+            else:
+                raise ValueError("expected a string or an object")
+        except KeyError as exc:
+            raise UsageError(f"--cameras {path}: entry {i}: missing {exc}") from None
+        except (TypeError, ValueError, UsageError) as exc:
+            raise UsageError(f"--cameras {path}: entry {i}: {exc}") from None
+        cameras.append(cam)
+    return cameras
+
+
+def _render_batch(args: argparse.Namespace, size: tuple[int, int], options) -> int:  # noqa: ANN001
+    """--cameras: frames in flight on the GPU, PNG encoding on worker threads."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from tqdm import tqdm
+
+    from vkpbr.render.renderer import Renderer
+
+    out_dir = Path(args.out)
+    if out_dir.suffix.lower() in _IMAGE_SUFFIXES | {".npy"}:
+        raise UsageError(f"--out {out_dir}: with --cameras, --out is a folder")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    check_writable(out_dir / "x.png")
+    suffix = ".npy" if args.linear else ".png"
+    scene = None
+    t0 = time.perf_counter()
+    if args.scene:
+        from vkpbr.scene.loader import load_scene
+
+        scene = load_scene(args.scene)
+    with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa) as renderer:
+        cameras = load_cameras(args.cameras, _camera_from_args(args, renderer))
+        light = _light_from_args(args, renderer)
+        t1 = time.perf_counter()
+        with ThreadPoolExecutor(max(2, (os.cpu_count() or 2) - 1)) as pool:
+            jobs = []
+            frames = renderer.render_many(cameras, light, size, options, linear=args.linear)
+            for i, image in enumerate(tqdm(frames, total=len(cameras), unit="frame", disable=None)):
+                jobs.append(pool.submit(write_image_atomic, out_dir / f"frame_{i:05d}{suffix}", image))
+            t2 = time.perf_counter()
+            for job in jobs:
+                job.result()
+    t3 = time.perf_counter()
+    n = len(cameras)
+    print(f"wrote {n} images to {out_dir}/ ({size[0]}x{size[1]}, view {args.view})")
+    print(f"load + set-up {t1 - t0:.2f} s, rendering {1e3 * (t2 - t1) / n:.2f} ms per frame "
+          f"({n / (t2 - t1):.1f} frames/s), all written after {t3 - t1:.2f} s")
+    return 0
+
+
+def _options_from_args(args: argparse.Namespace):  # noqa: ANN202
+    from vkpbr.render.renderer import RenderOptions
 
     options = RenderOptions(
         view=args.view, brdf=args.brdf, tbn=args.tbn, tonemap=args.tonemap, exposure=args.exposure,
         alpha_mask=not args.no_alpha_mask, normal_mapping=not args.no_normal_maps,
         occlusion=not args.no_occlusion)
     options.resolved()  # reject unknown names before any expensive work
+    return options
+
+
+def _run_render(args: argparse.Namespace) -> int:
+    if args.list_views:
+        return _list_views()
+    size = parse_size(args.size)
+    if args.cameras:
+        return _render_batch(args, size, _options_from_args(args))
+    out = Path(args.out)
+    check_writable(out)
+    if args.linear and out.suffix.lower() != ".npy":
+        raise UsageError("--linear writes float32 colour: give an --out path ending in .npy")
+    if args.frames < 1:
+        raise UsageError("--frames must be at least 1")
+    from vkpbr.render.renderer import Renderer
+
+    options = _options_from_args(args)
     t0 = time.perf_counter()
     scene = None
     if args.scene:

@@ -15,6 +15,7 @@ import math
 import statistics
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -49,6 +50,9 @@ class ViewerConfig:
     size: tuple[int, int] = (1280, 720)
     camera: Camera | None = None  # None: the scene's camera (or the automatic one)
     light: Light | None = None
+    # Called with the Renderer once the scene is loaded: the start camera and light (the
+    # command line's --camera / --light resolve against the scene this way).
+    pose: Callable[[Renderer], tuple[Camera, Light]] | None = None
     options: RenderOptions = field(default_factory=RenderOptions)
     vsync: bool = True
     frames: int | None = None  # stop after N frames
@@ -98,13 +102,14 @@ class Viewer:
         ok = np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))
         self.centre = tuple(float(x) for x in (lo + hi) / 2) if ok else (0.0, 0.0, 0.0)
         radius = float(np.linalg.norm(hi - lo)) / 2 if ok else 1.0
-        start = cfg.camera or r.default_camera()
-        if cfg.camera is None and start.name == "auto":
+        start, light = cfg.pose(r) if cfg.pose else (cfg.camera, cfg.light)
+        start = start or r.default_camera()
+        if not r.scene.cameras:
             # The automatic camera's near/far hug the scene from outside; flying inside needs
             # a near plane close to the eye.
             start = dataclasses.replace(start, znear=radius * 2e-3, zfar=radius * 8)
         self.fly = FlyCamera(start, radius)
-        self.start_light = cfg.light or r.default_light()
+        self.start_light = light or r.default_light()
         self.light = self.start_light
         self.options = cfg.options
         self.options.resolved()
@@ -351,11 +356,10 @@ class Viewer:
                 self._stats["gpu"] = gpu
             camera, o = self.camera(), self.options
             r = self.renderer
-            r.write_uniforms(camera, self.light, sc.extent, o, False)  # type: ignore[union-attr]
-            frames.upload_uniforms(index)
+            frames.write_uniforms(index, camera, self.light, o)
             self._write_hud(index)
             tbn = L.enum_by_name(L.TbnMode, o.tbn)
-            order = r.blend_order(camera.eye) if hasattr(r, "blend_order") else ()  # type: ignore[union-attr]
+            order = r.blend_order(camera.eye)  # type: ignore[union-attr]
             last_frame = cfg.frames is not None and self.frame_count + 1 >= cfg.frames
             if last_frame and cfg.screenshot is not None:
                 self.pending_shots.append(cfg.screenshot)

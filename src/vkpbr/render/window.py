@@ -1,16 +1,15 @@
 """Draw a Renderer's scene (plus an overlay) into swapchain images, for the interactive viewer.
 
-Per swapchain image this keeps a copy of the renderer's frame uniforms with its own
-descriptor sets, a pair of timestamp queries, and command buffers recorded once per mode set
-(TBN path, alpha masking, blended-draw order) with the renderer's own `record_draws` and
-pipelines, so a window frame shows exactly the bytes `Renderer.render` returns. A frame's
-Python work is: `write_uniforms` into the renderer's (CPU-side) uniform block, one small
-memcpy into the image's copy, and a dictionary lookup for the command buffer.
+Per swapchain image this keeps a frame slot of its own (render/frames.py: uniform blocks,
+the descriptor sets pointing at them), a pair of timestamp queries, and command buffers
+recorded once per mode set (TBN path, alpha masking, blended-draw order) with the renderer's
+own `record_draws` and pipelines, so a window frame shows exactly the bytes
+`Renderer.render` returns. A frame's Python work is `write_uniforms` into the image's slot
+and a dictionary lookup for the command buffer.
 
-Why copies: with two frames in flight the GPU may still read frame N's uniforms while the CPU
-writes frame N+1's; each image's block is rewritten only after that image's last frame has
-finished (`Swapchain.acquire` waits for it). The renderer's own block is then never read by
-the GPU during viewing (only by synchronous `Renderer.render` calls).
+Why a slot per image: with two frames in flight the GPU may still read frame N's uniforms
+while the CPU writes frame N+1's; an image's slot is rewritten only after that image's last
+frame has finished (`Swapchain.acquire` waits for it).
 """
 
 from __future__ import annotations
@@ -20,11 +19,12 @@ from typing import Any
 import numpy as np
 
 from vkpbr.gpu.buffer import Buffer
-from vkpbr.gpu.descriptors import DescriptorPool, DescriptorWriter
 from vkpbr.gpu.swapchain import Swapchain
 from vkpbr.gpu.text_overlay import QuadOverlay
 from vkpbr.render import layouts as L
-from vkpbr.render.renderer import Renderer
+from vkpbr.render.frames import FrameSlot, create_slots
+from vkpbr.render.renderer import Renderer, RenderOptions
+from vkpbr.scene.types import Camera, Light
 
 __all__ = ["WindowRenderer"]
 
@@ -44,8 +44,6 @@ class WindowRenderer:
         ffi = self.device.vk.ffi
         self._stamps = ffi.new("uint64_t[2]")
         self._period_ms = float(self.device.limits.timestampPeriod) * 1e-6
-        src = renderer.frame_ubo
-        self._src = src.array(np.uint8, src.size)
 
     # --- per swapchain generation -----------------------------------------------------------
     def sync(self) -> None:
@@ -56,21 +54,8 @@ class WindowRenderer:
         dev, vk, r = self.device, self.device.vk, self.renderer
         n = len(self.swapchain.images)
         self.overlay.ensure_slots(n)
-        pool = self._own(DescriptorPool(dev, [(r.set_layouts[0], n), (r.set_layouts[2], n)]))
-        self._sets: list[tuple[Any, Any]] = []
-        self._ubo_views: list[np.ndarray] = []
-        offsets = r._offsets  # the renderer's block offsets inside its frame_ubo
-        w = DescriptorWriter(dev)
-        for _ in range(n):
-            ubo = self._own(Buffer(dev, r.frame_ubo.size, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
-                                   host_visible=True, name="window frame uniforms"))
-            s0, s2 = pool.allocate(r.set_layouts[0]), pool.allocate(r.set_layouts[2])
-            w.uniform(s0, 0, ubo, L.CAMERA.size, offsets[0])
-            w.uniform(s0, 1, ubo, L.SETTINGS.size, offsets[1])
-            w.uniform(s2, 0, ubo, L.LIGHT.size, offsets[2])
-            self._sets.append((s0, s2))
-            self._ubo_views.append(ubo.array(np.uint8, ubo.size))
-        w.update()
+        ubo, pool, self._slots = create_slots(dev, r.set_layouts[0], r.set_layouts[2], n)
+        self._objects += [ubo, pool]
         if dev.timestamps:
             self._query_pool = vk.vkCreateQueryPool(dev.handle, vk.VkQueryPoolCreateInfo(
                 queryType=vk.VK_QUERY_TYPE_TIMESTAMP, queryCount=2 * n), None)
@@ -95,10 +80,15 @@ class WindowRenderer:
         self._queried.clear()
 
     # --- per frame --------------------------------------------------------------------------
-    def upload_uniforms(self, index: int) -> None:
-        """Copy the uniforms last written by `Renderer.write_uniforms` into image `index`'s
-        block (call after `Swapchain.acquire` returned `index`)."""
-        np.copyto(self._ubo_views[index], self._src)
+    def write_uniforms(self, index: int, camera: Camera, light: Light,
+                       options: RenderOptions) -> None:
+        """`Renderer.write_uniforms` into image `index`'s slot (call after
+        `Swapchain.acquire` returned `index`: its previous frame has finished)."""
+        self.renderer.write_uniforms(camera, light, self.swapchain.extent, options, False,
+                                     self._slots[index])
+
+    def slot(self, index: int) -> FrameSlot:
+        return self._slots[index]
 
     def gpu_ms(self, index: int) -> float:
         """GPU time of the last finished frame drawn into image `index` (NaN if unknown)."""
@@ -137,14 +127,9 @@ class WindowRenderer:
             vk.vkCmdResetQueryPool(cmd, self._query_pool, 2 * index, 2)
             vk.vkCmdWriteTimestamp2(cmd, vk.VK_PIPELINE_STAGE_2_NONE, self._query_pool, 2 * index)
         sc.record_begin(cmd, index, (*r.background, 1.0))
-        saved = r.set0, r.set2
-        r.set0, r.set2 = self._sets[index]
-        if hasattr(r, "_blend_sequence"):  # painter's order of blended draws (renderer.py)
-            r._blend_sequence = blend_order
-        try:
-            r.record_draws(cmd, sc, tbn, alpha_mask)
-        finally:
-            r.set0, r.set2 = saved
+        # The painter's order of blended draws: record_draws reads it from the renderer.
+        r._blend_sequence = blend_order
+        r.record_draws(cmd, sc, tbn, alpha_mask, self._slots[index])
         if screenshot is not None:
             vk.vkCmdEndRendering(cmd)
             sc.record_copy(cmd, index, screenshot)

@@ -1,0 +1,89 @@
+"""`vkpbr view [SCENE]`: the command-line face of the interactive viewer (app/viewer.py).
+
+The mode options are those of `vkpbr render`, so a view can be opened in the state a headless
+render was made in, and `C` in the window prints the render command back.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from vkpbr.errors import UsageError
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("view", help="open SCENE in an interactive window",
+                       description="Fly through SCENE (default: the built-in PBR chart); "
+                                   "keys and scripts: docs/viewer.md.")
+    p.add_argument("scene", nargs="?", help="glTF/GLB/OBJ/.comp5822mesh/.vkpbr file")
+    p.add_argument("--size", default="1280x720", help="window WIDTHxHEIGHT (default 1280x720)")
+    p.add_argument("--camera", help="start pose ex,ey,ez,tx,ty,tz[,ux,uy,uz] (as `render`)")
+    p.add_argument("--camera-index", type=int, help="start at the scene file's camera N")
+    p.add_argument("--fov", type=float, help="vertical field of view in degrees")
+    p.add_argument("--light", help="x,y,z: point light position")
+    p.add_argument("--light-color", help="r,g,b: light colour (linear)")
+    p.add_argument("--light-intensity", type=float, help="light intensity multiplier")
+    p.add_argument("--falloff", choices=["none", "inverse-square"], help="light distance falloff")
+    p.add_argument("--brdf", default="ggx", help="normal distribution D: ggx | blinn-phong")
+    p.add_argument("--view", default="final", help="debug view (`vkpbr render --list-views`)")
+    p.add_argument("--tbn", default="vectors", help="tangent frame path: vectors | quat | packed")
+    p.add_argument("--tonemap", default="none", help="none | reinhard | aces")
+    p.add_argument("--exposure", type=float, default=0.0, help="exposure in EV stops")
+    p.add_argument("--no-alpha-mask", action="store_true", help="draw masked materials as opaque")
+    p.add_argument("--no-normal-maps", action="store_true", help="ignore normal maps")
+    p.add_argument("--no-occlusion", action="store_true", help="ignore occlusion maps")
+    p.add_argument("--no-vsync", action="store_true",
+                   help="present without waiting for vertical sync (mailbox, else immediate)")
+    p.add_argument("--frames", type=int, help="render N frames, then exit")
+    p.add_argument("--screenshot", help="with --frames: write the last frame to this PNG")
+    p.add_argument("--script", help="JSON file of timed input events (docs/viewer.md)")
+    p.add_argument("--device", help="device name substring or index (see `vkpbr info`)")
+    p.add_argument("--validation", action="store_true", help="enable the Vulkan validation layer")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from vkpbr.app.cli import _camera_from_args, _light_from_args, check_writable, parse_size
+    from vkpbr.render.renderer import RenderOptions
+
+    size = parse_size(args.size)
+    if args.frames is not None and args.frames < 1:
+        raise UsageError("--frames must be at least 1")
+    shot = None
+    if args.screenshot:
+        if args.frames is None:
+            raise UsageError("--screenshot needs --frames N (press P in the window instead)")
+        shot = Path(args.screenshot)
+        check_writable(shot)
+        if shot.suffix.lower() != ".png":
+            raise UsageError(f"--screenshot {shot}: give a .png file name")
+    options = RenderOptions(
+        view=args.view, brdf=args.brdf, tbn=args.tbn, tonemap=args.tonemap, exposure=args.exposure,
+        alpha_mask=not args.no_alpha_mask, normal_mapping=not args.no_normal_maps,
+        occlusion=not args.no_occlusion)
+    options.resolved()  # unknown names fail before the window opens
+    script = None
+    if args.script:
+        from vkpbr.app.script import load_script
+
+        script = load_script(args.script)
+    scene = None
+    if args.scene:
+        from vkpbr.scene.loader import load_scene
+
+        scene = load_scene(args.scene)
+    from vkpbr.app.viewer import Viewer, ViewerConfig
+
+    config = ViewerConfig(
+        size=size, options=options, vsync=not args.no_vsync, frames=args.frames,
+        screenshot=shot, script=script, validation=args.validation, device=args.device,
+        title=f"vkpbr - {Path(args.scene).name if args.scene else 'default scene'}",
+        scene_label=args.scene or "",
+        pose=lambda r: (_camera_from_args(args, r), _light_from_args(args, r)))
+    with Viewer(scene, config) as viewer:
+        status = viewer.run()
+        print(viewer.summary())
+    return status

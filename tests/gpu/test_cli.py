@@ -1,0 +1,88 @@
+"""The command line: outputs, batch mode, and one-line errors with non-zero exits."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from vkpbr.app.cli import main
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:  # noqa: ANN001
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_render_default_scene_writes_png(capsys, tmp_path: Path) -> None:
+    out = tmp_path / "a.png"
+    code, stdout, _ = run(capsys, "render", "--out", str(out), "--size", "64x48", "--validation")
+    assert code == 0 and out.exists() and f"wrote {out}" in stdout
+    assert np.asarray(Image.open(out)).shape == (48, 64, 4)
+    assert not list(tmp_path.glob(".*.tmp"))  # atomic write leaves no temporary behind
+
+
+def test_render_linear_npy(capsys, tmp_path: Path) -> None:
+    out = tmp_path / "hdr.npy"
+    code, _, _ = run(capsys, "render", "--out", str(out), "--size", "32x24", "--linear", "--validation")
+    assert code == 0 and np.load(out).dtype == np.float32
+
+
+def test_batch_cameras(capsys, tmp_path: Path) -> None:
+    cams = tmp_path / "cams.json"
+    cams.write_text(json.dumps(["0.6,3.2,9,0.4,2.2,0", {"eye": [3, 3, 8], "target": [0, 2, 0], "fov": 50}]))
+    code, stdout, _ = run(capsys, "render", "--cameras", str(cams), "--out", str(tmp_path / "frames"),
+                          "--size", "40x30", "--validation")
+    assert code == 0 and "wrote 2 images" in stdout
+    assert sorted(p.name for p in (tmp_path / "frames").iterdir()) == ["frame_00000.png", "frame_00001.png"]
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["render", "--view", "nope"], "unknown view 'nope'"),
+    (["render", "--brdf", "phong"], "unknown brdf 'phong'"),
+    (["render", "--tbn", "x"], "unknown tbnmode 'x'"),
+    (["render", "--size", "0x10"], "must be positive"),
+    (["render", "--size=-3x10"], "must be positive"),
+    (["render", "--size", "abc"], "expected WIDTHxHEIGHT"),
+    (["render", "--size", "100000x10"], "exceeds this device's limit"),
+    (["render", "--out", "/nonexistent-dir/x.png"], "does not exist"),
+    (["render", "--out", "x.gif"], "unknown image type"),
+    (["render", "--camera", "1,2,3"], "expected 6 or 9 numbers"),
+    (["render", "--camera", "0,0,0,0,0,0"], "eye and target coincide"),
+    (["render", "--light", "1,2"], "three comma-separated"),
+    (["render", "--exposure", "nan"], "exposure"),
+    (["render", "no-such-file.gltf"], "no such file"),
+    (["render", "--cameras", "missing.json", "--out", "d"], "No such file"),
+])
+def test_bad_input_is_one_line_and_nonzero(capsys, tmp_path: Path, monkeypatch, argv, message) -> None:  # noqa: ANN001
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run(capsys, *argv)
+    assert code != 0
+    assert message in err and err.count("\n") == 1 and err.startswith("vkpbr: error:"), err
+
+
+def test_no_vulkan_driver_says_what_to_install(tmp_path: Path) -> None:
+    env = {"VK_DRIVER_FILES": str(tmp_path / "none.json"), "VK_ICD_FILENAMES": str(tmp_path / "none.json"),
+           "PATH": "/usr/bin:/bin"}
+    proc = subprocess.run([sys.executable, "-m", "vkpbr", "render", "--out", str(tmp_path / "x.png")],
+                          capture_output=True, text=True, env=env)
+    assert proc.returncode == 1
+    assert "install a Vulkan loader and driver" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_info_json(capsys) -> None:
+    code, stdout, _ = run(capsys, "info", "--json")
+    report = json.loads(stdout)
+    assert code == 0 and report["devices"] and any(d["chosen"] for d in report["devices"])
+
+
+def test_list_views(capsys) -> None:
+    code, stdout, _ = run(capsys, "render", "--list-views")
+    lines = stdout.strip().splitlines()
+    assert code == 0 and len(lines) == 21 and lines[0].startswith("final")
