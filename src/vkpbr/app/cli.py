@@ -332,6 +332,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     _add_render(sub)
     _add_info(sub)
+    from vkpbr.app import bench_cmd
+
+    bench_cmd.add_parser(sub)
     try:
         from vkpbr.app import bake_cmd
     except ImportError:

@@ -364,14 +364,16 @@ class Renderer:
         options: RenderOptions | None = None,
         linear: bool = False,
         depth: bool = False,
+        readback: bool = True,
         **option_overrides: Any,
-    ) -> Iterator[np.ndarray | tuple[np.ndarray, np.ndarray]]:
+    ) -> Iterator[np.ndarray | tuple[np.ndarray, np.ndarray] | None]:
         """Render one frame per camera, yielding what `render` returns, in order.
 
         Up to FRAMES_IN_FLIGHT frames are queued on the GPU: while frame i renders, Python
         writes frame i+1's uniforms and submits it, and copies frame i-1 out of its own
         persistently mapped readback buffer. Nothing is allocated per frame but the returned
         arrays. Each frame is bit-for-bit what `render` gives for its camera.
+        `readback=False` yields None per finished frame instead (benchmarks: render only).
         """
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
         _view, _brdf, tbn, _tm = opts.resolved()
@@ -383,7 +385,7 @@ class Renderer:
             for i, camera in enumerate(cameras):
                 validate_camera(camera)
                 if len(pending) == len(self.slots):
-                    yield self._collect(*pending.popleft(), target, depth)
+                    yield self._collect(*pending.popleft(), target, depth, readback)
                 slot = self.slots[i % len(self.slots)]
                 rec = self._record(target, tbn, opts.alpha_mask, self.blend_order(camera.eye), slot)
                 t0 = time.perf_counter()
@@ -393,7 +395,7 @@ class Renderer:
                 slot.stats.cpu_ms = (time.perf_counter() - t0) * 1e3
                 pending.append((slot, rec, camera))
             while pending:
-                yield self._collect(*pending.popleft(), target, depth)
+                yield self._collect(*pending.popleft(), target, depth, readback)
         finally:
             # An abandoned generator leaves frames queued: finish them so fences are reusable.
             for _slot, rec, _cam in pending:
@@ -406,13 +408,16 @@ class Renderer:
         check_result(lib.vkResetFences(self.device.handle, 1, rec.fences), "vkResetFences")
 
     def _collect(self, slot: FrameSlot, rec: _Recorded, camera: Camera, target: RenderTarget,
-                 depth: bool) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+                 depth: bool, readback: bool = True) -> np.ndarray | tuple[np.ndarray, np.ndarray] | None:
         stats = slot.stats
         t0 = time.perf_counter()
         self._wait(rec)
         t1 = time.perf_counter()
         stats.wait_ms = (t1 - t0) * 1e3
         stats.gpu_ms = self._gpu_ms(slot)
+        if not readback:
+            self.last_stats = dataclasses.replace(stats, readback_ms=0.0)
+            return None
         color = target.read_color(slot.index)
         out_depth = self._linear_depth(target.read_depth(slot.index), camera) if depth else None
         stats.readback_ms = (time.perf_counter() - t1) * 1e3
