@@ -16,5 +16,5 @@ python3 -m pytest -q -p no:cacheprovider tests/gpu tests/unit > "$OUT/gpu-tests.
 echo "== bench_core"
 python3 benchmarks/bench_core.py --frames 100 --json "$OUT/core.json"
 echo "== Sponza 1920x1080"
-python3 -m vkpbr render .assets/Sponza/Sponza.gltf --camera 9,1.8,-0.4,-9,3.5,-0.4 --light 0,4,0 --size 1920x1080 --frames 100 --out "$OUT/sponza.png"
-python3 -m vkpbr render .assets/Sponza/Sponza.gltf --camera 9,1.8,-0.4,-9,3.5,-0.4 --light 0,4,0 --size 1920x1080 --frames 100 --tbn packed --out "$OUT/sponza_packed.png"
+python3 -m vkpbr render .assets/Sponza/Sponza.gltf --camera 9,1.8,-0.4,-9,3.5,-0.4 --fov 45 --light 0,4,0 --size 1920x1080 --frames 100 --out "$OUT/sponza.png"
+python3 -m vkpbr render .assets/Sponza/Sponza.gltf --camera 9,1.8,-0.4,-9,3.5,-0.4 --fov 45 --light 0,4,0 --size 1920x1080 --frames 100 --tbn packed --out "$OUT/sponza_packed.png"

@@ -127,23 +127,40 @@ def print_table(rows: list[dict]) -> None:
 
 
 def run_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
-    """Run benchmarks/peers/run_peers.py (pyrender, pygfx) on Sponza and print ratios."""
-    script = REPO / "benchmarks" / "peers" / "run_peers.py"
-    if not script.exists():
-        raise UsageError(f"--peers needs {script} (a source checkout with benchmarks/)")
-    proc = subprocess.run([sys.executable, str(script), "--frames", str(args.frames), "--json"],
-                          capture_output=True, text=True)
-    if proc.returncode:
-        raise UsageError(f"peer benchmark failed: {proc.stderr.strip().splitlines()[-1:]}")
-    peers = [json.loads(line) for line in proc.stdout.splitlines() if line.startswith("{")]
+    """Run benchmarks/peers/{pyrender,pygfx}_bench.py on the same Sponza scenario, in this
+    environment (the peers are optional benchmark dependencies), and print the ratios."""
+    import tempfile
+
+    folder = REPO / "benchmarks" / "peers"
+    if not folder.is_dir():
+        raise UsageError(f"--peers needs {folder} (a source checkout with benchmarks/)")
     ours = {r["size"]: r for r in rows if r["scenario"].startswith("sponza")}
-    print("\n| peer | size | frames/s (render + readback) | vkpbr frames/s | vkpbr / peer |")
-    print("|---|---|---|---|---|")
+    if not ours:
+        raise UsageError("--peers compares on Sponza: include a sponza-* scenario")
+    peers = []
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "peers.json"
+        for peer in ("pyrender", "pygfx"):
+            for size in ours:
+                cmd = [sys.executable, str(folder / f"{peer}_bench.py"), "--size", size,
+                       "--frames", str(args.frames), "--json", str(out)]
+                if args.sponza:
+                    cmd += ["--scene", str(args.sponza)]
+                proc = subprocess.run(cmd, capture_output=True, text=True)
+                if proc.returncode:
+                    tail = (proc.stderr.strip().splitlines() or ["?"])[-1]
+                    print(f"{peer} {size}: failed ({tail})", file=sys.stderr)
+        if out.exists():
+            peers = [json.loads(line) for line in out.read_text().splitlines() if line.strip()]
+    print("\n| peer | size | frames/s (render + readback) | vkpbr frames/s | vkpbr / peer "
+          "| render only: peer | vkpbr |")
+    print("|---|---|---|---|---|---|---|")
     for p in peers:
         mine = ours.get(p["size"])
         if mine:
             print(f"| {p['peer']} {p.get('version', '')} | {p['size']} | {p['fps_readback']:.1f} "
-                  f"| {mine['fps_readback']:.1f} | {mine['fps_readback'] / p['fps_readback']:.1f}x |")
+                  f"| {mine['fps_readback']:.1f} | {mine['fps_readback'] / p['fps_readback']:.1f}x "
+                  f"| {1e3 / p['ms_render_only']:.1f} | {mine['fps_render_only']:.1f} |")
     return peers
 
 

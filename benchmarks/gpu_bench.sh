@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Device-tool run for the speed issues: `vkpbr bench --peers` (vkpbr beside pyrender and pygfx
+# in one run) and the Sponza breakdown. Carry .gl-peers, .whl, .whl-peers, .assets.
+# .assets/Sponza is Sponza/glTF with its JPEGs re-encoded at quality 85 (same resolution) to
+# fit the transfer limit; every renderer loads the same files.
+set -uo pipefail
+FRAMES=${FRAMES:-200}
+for f in .gl-peers/*.deb; do dpkg -x "$f" /; done; ldconfig
+python3 -m pip install -q --no-index --no-deps --no-compile --upgrade --target /tmp/site .whl/*.whl 2>/dev/null || exit 1
+wheels=()
+for w in .whl-peers/*.whl; do
+  mod=$(basename "$w"); mod=${mod%%-*}
+  case $mod in six | jinja2 | markupsafe | packaging | typing_extensions | typing_inspect | mypy_extensions | cffi | pycparser | marshmallow | dataclasses_json)
+    python3 -c "import $mod" 2>/dev/null && continue ;; esac
+  [ -e "/tmp/site/$mod" ] && continue
+  wheels+=("$w")
+done
+python3 -m pip install -q --no-index --no-deps --no-compile --target /tmp/peers "${wheels[@]}" 2>/dev/null || exit 1
+export PYTHONPATH=/tmp/site:/tmp/peers:$PWD/src PYTHONUNBUFFERED=1 PYOPENGL_PLATFORM=egl
+nv=/usr/local/nvidia/share
+ls /usr/share/glvnd/egl_vendor.d/*nvidia* >/dev/null 2>&1 || export __EGL_VENDOR_LIBRARY_FILENAMES=$nv/glvnd/egl_vendor.d/10_nvidia.json
+nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
+python3 -m vkpbr bench --frames "$FRAMES" --sponza .assets/Sponza/Sponza.gltf --peers --json > "$OUT/bench.json" 2> "$OUT/bench.err"
+python3 - "$OUT/bench.json" <<'PY'
+import json, sys
+text = open(sys.argv[1]).read()
+rows = json.loads(text[: text.index("]") + 1]) if text.strip().startswith("[") else []
+from vkpbr.app.bench_cmd import print_table
+print_table(rows)
+print(text[text.index("]") + 1:])
+PY
+tail -3 "$OUT/bench.err"
+python3 benchmarks/bench_sponza.py --frames 50 --json "$OUT/sponza.json" 2>&1 | tail -20
