@@ -122,6 +122,7 @@ class Renderer:
         self._targets: dict[tuple, RenderTarget] = {}
         self._recorded: dict[tuple, _Recorded] = {}
         self._pipelines: dict[tuple, Pipeline] = {}
+        self._resolved: dict[RenderOptions, tuple] = {}
         try:
             self._create_layouts()
             self._create_frame_uniforms()
@@ -323,9 +324,9 @@ class Renderer:
         if key == slot.uniform_key:
             return
         slot.uniform_key = key
-        view, brdf, _tbn, tonemap = opts.resolved()
+        view, brdf, _tbn, tonemap = self._resolve(opts)
         w, h = size
-        slot.u_camera["VP"][0] = L.mat4_to_std140(view_projection(camera, w / h))
+        slot.u_camera[0] = (L.mat4_to_std140(view_projection(camera, w / h)),)
         flags = L.SETTINGS_NORMAL_MAPPING if opts.normal_mapping else 0
         flags |= L.SETTINGS_OCCLUSION if opts.occlusion else 0
         flags |= 0 if linear else L.SETTINGS_SRGB_TARGET
@@ -334,6 +335,13 @@ class Renderer:
                               2.0 ** opts.exposure, camera.znear, camera.zfar, 0.0)
         slot.u_light[0] = ((*light.position, 1.0), light.color, light.intensity, (*camera.eye, 1.0),
                            0 if light.falloff == "none" else 1, light.range)
+
+    def _resolve(self, opts: RenderOptions) -> tuple[L.View, L.Brdf, L.TbnMode, L.Tonemap]:
+        """opts.resolved(), memoised: parsing four names costs ~8 us, a dict hit ~0.2 us."""
+        resolved = self._resolved.get(opts)
+        if resolved is None:
+            resolved = self._resolved[opts] = opts.resolved()
+        return resolved
 
     def render(
         self,
@@ -376,7 +384,7 @@ class Renderer:
         `readback=False` yields None per finished frame instead (benchmarks: render only).
         """
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
-        _view, _brdf, tbn, _tm = opts.resolved()
+        _view, _brdf, tbn, _tm = self._resolve(opts)
         light = light or self.default_light()
         target = self._target(size, linear)
         lib = self.device.vk.lib
