@@ -35,7 +35,8 @@ SIZES = ("1920x1080", "640x480")
 WARMUP = 20
 
 
-def parse_args(peer: str) -> argparse.Namespace:
+def parse_args(peer: str, extra: Callable[[argparse.ArgumentParser], object] | None = None
+               ) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=f"Sponza with {peer}: render + readback vs render only")
     ap.add_argument("--scene", default=None, help="glTF path (default: Sponza in .assets/ or shared/)")
     ap.add_argument("--size", default=SIZES[0], help="WIDTHxHEIGHT (default 1920x1080)")
@@ -43,6 +44,8 @@ def parse_args(peer: str) -> argparse.Namespace:
     ap.add_argument("--warmup", type=int, default=WARMUP)
     ap.add_argument("--json", default=None, help="append the result as one JSON line to this file")
     ap.add_argument("--png", default=None, help="save the last read-back frame (needs Pillow)")
+    if extra:
+        extra(ap)
     args = ap.parse_args()
     args.width, args.height = (int(v) for v in args.size.lower().split("x"))
     args.scene = scene_path(args.scene)

@@ -1,6 +1,7 @@
 """Sponza with pygfx (wgpu-py, Vulkan), as a user would: gfx.load_gltf, a PointLight, a
 PerspectiveCamera placed at the pose, and a rendercanvas offscreen canvas whose draw() returns
-the frame as an (H, W, 4) uint8 array. Renderer defaults kept (its supersampling and filter).
+the frame as an (H, W, 4) uint8 array. Renderer defaults kept (2x2 supersampling, then its
+Mitchell filter down to the canvas size) unless --pixel-scale is given.
 
     python benchmarks/peers/pygfx_bench.py --size 1920x1080 --frames 200 --json out.json
 
@@ -17,7 +18,7 @@ import time
 import common as c
 
 
-def wait_gpu(device) -> None:  # noqa: ANN001
+def wait_gpu(device) -> None:
     try:
         device.queue.on_submitted_work_done_sync()
     except TypeError:
@@ -25,7 +26,9 @@ def wait_gpu(device) -> None:  # noqa: ANN001
 
 
 def main() -> None:
-    args = c.parse_args("pygfx")
+    args = c.parse_args("pygfx", lambda ap: ap.add_argument(
+        "--pixel-scale", type=float, default=None,
+        help="WgpuRenderer pixel_scale (default: pygfx's, 2 = 2x2 supersampling)"))
     t0 = time.perf_counter()
     import numpy as np
     import pygfx as gfx
@@ -45,7 +48,7 @@ def main() -> None:
     camera.local.position = c.EYE
     camera.look_at(c.TARGET)  # up: the camera's reference up, +Y
     canvas = RenderCanvas(size=(args.width, args.height), pixel_ratio=1)
-    renderer = gfx.WgpuRenderer(canvas)
+    renderer = gfx.WgpuRenderer(canvas, pixel_scale=args.pixel_scale)
     canvas.request_draw(lambda: renderer.render(scene, camera))
     image = np.asarray(canvas.draw())
     load_s = time.perf_counter() - t0
@@ -62,7 +65,7 @@ def main() -> None:
         wait_gpu(device)
 
     ms_render_only = c.median_ms(render_only, args.frames, args.warmup)
-    settings = (f"WgpuRenderer defaults: pixel_scale {renderer.pixel_scale}, pixel_filter "
+    settings = (f"WgpuRenderer: pixel_scale {renderer.pixel_scale}, pixel_filter "
                 f"{renderer.pixel_filter}; wgpu {wgpu.__version__}, {device.adapter.info.get('backend_type')}")
     c.report(args, "pygfx", gfx.__version__, ms_readback, ms_render_only, load_s, gpu, settings, image)
 

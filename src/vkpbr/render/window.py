@@ -117,9 +117,10 @@ class WindowRenderer:
         return cmd
 
     def record(self, index: int, tbn: L.TbnMode, alpha_mask: bool,
-               blend_order: tuple[int, ...] = (), screenshot: Buffer | None = None) -> Any:
+               blend_order: tuple[int, ...] = (), screenshot: Buffer | None = None,
+               with_overlay: bool = False) -> Any:
         """Record a frame for image `index`; with `screenshot`, the scene (without the
-        overlay) is also copied into that host-visible buffer."""
+        overlay, unless `with_overlay`) is also copied into that host-visible buffer."""
         dev, vk, r, sc = self.device, self.device.vk, self.renderer, self.swapchain
         cmd = dev.allocate_command_buffer()
         vk.vkBeginCommandBuffer(cmd, vk.VkCommandBufferBeginInfo())
@@ -130,11 +131,15 @@ class WindowRenderer:
         # The painter's order of blended draws: record_draws reads it from the renderer.
         r._blend_sequence = blend_order
         r.record_draws(cmd, sc, tbn, alpha_mask, self._slots[index])
-        if screenshot is not None:
+        if screenshot is not None and not with_overlay:
             vk.vkCmdEndRendering(cmd)
             sc.record_copy(cmd, index, screenshot)
             sc.record_begin(cmd, index, None, transition=False)
         self.overlay.record(cmd, index, sc.extent)
+        if screenshot is not None and with_overlay:
+            vk.vkCmdEndRendering(cmd)
+            sc.record_copy(cmd, index, screenshot)
+            sc.record_begin(cmd, index, None, transition=False)
         sc.record_end(cmd, index)
         if self._query_pool is not None:
             vk.vkCmdWriteTimestamp2(cmd, vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,

@@ -1,0 +1,161 @@
+# The interactive viewer under Xvfb on lavapipe, validation on: a replayed script drives the
+# camera (both schemes) and every switch, resizes and minimises the window, takes a
+# screenshot; the screenshot must equal Renderer.render of the same camera, light, size and
+# modes exactly (tolerance 0: the same pipelines write the same sRGB bytes).
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vkpbr.app.script import parse_script
+
+SIZE = (160, 120)
+
+
+def _key(t: float, key: str, action: str = "tap", mods: tuple[str, ...] = ()) -> dict:
+    return {"t": t, "type": "key", "key": key, "action": action, "mods": list(mods)}
+
+
+def _every_switch(t0: float) -> list[dict]:
+    """Every mode key once (views by digit, Shift+digit, Ctrl+digit and cycling)."""
+    events = [_key(t0, str(d)) for d in "1234567890"]
+    events += [_key(t0, str(d), mods=("shift",)) for d in "1234567890"]
+    events += [_key(t0, "1", mods=("ctrl",)), _key(t0, "v"), _key(t0, "v", mods=("shift",))]
+    events += [_key(t0, k) for k in ("b", "t", "m", "n", "o", "x", "equal", "minus", "h", "f2", "f2")]
+    return events
+
+
+def _script(shot: Path) -> dict:
+    ev = [
+        _key(0.0, "w", "press"), _key(0.15, "w", "release"),  # course scheme: fly
+        _key(0.15, "left_shift", "press"), _key(0.15, "d", "press"),
+        _key(0.25, "d", "release"), _key(0.25, "left_shift", "release"),
+        _key(0.25, "e", "press"), _key(0.3, "e", "release"),
+        {"t": 0.3, "type": "mouse_move", "x": 80, "y": 60},  # report scheme: left drag looks
+        {"t": 0.3, "type": "mouse_button", "button": "left", "action": "press"},
+        {"t": 0.35, "type": "mouse_move", "x": 90, "y": 58},
+        {"t": 0.35, "type": "mouse_button", "button": "left", "action": "release"},
+        {"t": 0.4, "type": "mouse_button", "button": "right", "action": "press"},  # pan
+        {"t": 0.45, "type": "mouse_move", "x": 84, "y": 62},
+        {"t": 0.45, "type": "mouse_button", "button": "right", "action": "release"},
+        {"t": 0.5, "type": "scroll", "dy": -1.0},
+        {"t": 0.5, "type": "mouse_button", "button": "middle", "action": "press"},
+        {"t": 0.5, "type": "mouse_button", "button": "middle", "action": "release"},
+        {"t": 0.55, "type": "mouse_move", "x": 86, "y": 62},  # cursor hidden: mouse looks
+        {"t": 0.55, "type": "mouse_button", "button": "middle", "action": "press"},
+        {"t": 0.55, "type": "mouse_button", "button": "middle", "action": "release"},
+        *_every_switch(0.6),
+        _key(0.65, "space"), _key(0.65, "up", "press"), _key(0.75, "up", "release"),
+        _key(0.75, "page_up", "press"), _key(0.8, "page_up", "release"),
+        {"t": 0.8, "type": "resize", "width": 176, "height": 132},
+        {"t": 1.0, "type": "minimize"},
+        {"t": 1.2, "type": "restore"},
+        {"t": 1.2, "type": "print_camera"},
+        _key(1.25, "2"),  # end in a non-default state: view D (with Blinn-Phong from above)
+        {"t": 1.35, "type": "screenshot", "path": str(shot)},
+        {"t": 1.45, "type": "quit"},
+    ]
+    return {"fixed_dt": 0.05, "events": ev}
+
+
+def test_scripted_session_matches_headless(display: str, tmp_path: Path, capsys) -> None:
+    from vkpbr.app.viewer import Viewer, ViewerConfig
+
+    shot = tmp_path / "shot.png"
+    config = ViewerConfig(size=SIZE, validation=True, vsync=True,
+                          script=parse_script(_script(shot)))
+    viewer = Viewer(None, config)
+    instance = viewer.renderer.device.instance
+    try:
+        start = viewer.camera()
+        generation0 = viewer.swapchain.generation
+        assert viewer.run() == 0
+        assert shot.is_file() and viewer.shots_written == [shot]
+        assert viewer.swapchain.generation > generation0  # the resize recreated it
+        assert viewer.swapchain.extent == (176, 132)
+        assert viewer.minimized_waits >= 3  # no frames while minimised
+        assert viewer.camera().eye != start.eye
+        assert viewer.animate_light
+        o = viewer.options
+        assert (o.view, o.brdf, o.tbn, o.tonemap) == ("d", "blinn-phong", "quat", "reinhard")
+        assert (o.alpha_mask, o.normal_mapping, o.occlusion, o.exposure) == (False, False, False, 0.0)
+        assert "vkpbr render" in capsys.readouterr().out  # the print-camera event
+        image, camera, light, options, size = viewer.last_screenshot
+        headless = viewer.renderer.render(camera, light, size, options)
+        assert image.shape == headless.shape == (132, 176, 4)
+        diff = np.abs(image.astype(int) - headless.astype(int))
+        assert diff.max() == 0, f"max diff {diff.max()}, {np.count_nonzero(diff)} values"
+        from PIL import Image
+
+        assert np.array_equal(np.asarray(Image.open(shot)), image)
+    finally:
+        viewer.close()
+    assert instance.errors == [], instance.errors[:3]
+
+
+def test_cli_frames_screenshot_matches_render(display: str, tmp_path: Path) -> None:
+    from PIL import Image
+
+    from vkpbr.app.cli import main
+
+    cam = "0.8,2.9,7.5,0.3,2.0,0.0"
+    modes = ["--view", "mapped-normal", "--tbn", "packed", "--no-occlusion"]
+    assert main(["view", "--size", "96x72", "--camera", cam, "--frames", "3", "--no-vsync",
+                 "--screenshot", str(tmp_path / "v.png"), "--validation", *modes]) == 0
+    assert main(["render", "--size", "96x72", "--camera", cam, "--out", str(tmp_path / "r.png"),
+                 "--validation", *modes]) == 0
+    v = np.asarray(Image.open(tmp_path / "v.png"))
+    r = np.asarray(Image.open(tmp_path / "r.png"))
+    assert np.array_equal(v, r)
+
+
+def test_hud_is_drawn_and_fits(display: str, tmp_path: Path) -> None:
+    from vkpbr.app.viewer import Viewer, ViewerConfig
+
+    config = ViewerConfig(size=(320, 200), validation=True, frames=2, vsync=False,
+                          screenshot=tmp_path / "hud.png")
+    with Viewer(None, config) as viewer:
+        viewer.shot_hud = True
+        viewer.run()
+        with_hud = viewer.last_screenshot[0]
+        _, camera, light, options, size = viewer.last_screenshot
+        plain = viewer.renderer.render(camera, light, size, options)
+        assert viewer.renderer.device.instance.errors == []
+    changed = np.any(with_hud != plain, axis=2)
+    ys, xs = np.nonzero(changed)
+    assert changed.mean() > 0.02  # text and its panel
+    assert ys.min() < 20 and xs.min() < 20  # the stats block sits top-left
+
+
+def test_script_file_and_errors(display: str, tmp_path: Path) -> None:
+    from vkpbr.app.cli import main
+
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps([{"t": 0, "type": "key", "key": "no-such-key"}]))
+    assert main(["view", "--script", str(bad)]) == 2
+    good = tmp_path / "s.json"
+    good.write_text(json.dumps({"fixed_dt": 0.1, "events": [
+        _key(0.0, "t"), {"t": 0.1, "type": "quit"}]}))
+    assert main(["view", "--size", "64x48", "--script", str(good), "--validation"]) == 0
+
+
+def test_speed_scales_with_scene() -> None:
+    from vkpbr.app.controls import BASE_SPEED, SPONZA_RADIUS, FlyCamera
+    from vkpbr.scene.types import Camera
+
+    cam = Camera(eye=(0.0, 1.0, 5.0), target=(0.0, 1.0, 0.0))
+    fly = FlyCamera(cam, SPONZA_RADIUS)
+    assert fly.speed == pytest.approx(BASE_SPEED)
+    assert fly.camera().target == pytest.approx(cam.target)
+    fly.move(1.0, 1.0, 0.0, 0.0, 5.0)  # Shift: five times faster, along the view
+    assert fly.eye == pytest.approx((0.0, 1.0, 5.0 - 5 * BASE_SPEED))
+    fly.reset()
+    fly.look(10, 0)  # 10 px right: turn right by 0.1 rad
+    f = fly.forward()
+    assert f[0] == pytest.approx(np.sin(0.1)) and f[2] == pytest.approx(-np.cos(0.1))
+    small = FlyCamera(dataclasses.replace(cam), SPONZA_RADIUS / 10)
+    assert small.speed == pytest.approx(BASE_SPEED / 10)
