@@ -129,7 +129,6 @@ class Renderer:
             self.gpu_scene = GpuScene(self.device, scene, self.set_layouts[1])
             blend = [d.center for d in self.gpu_scene.draws if d.kind == "blend"]
             self._blend_centers = np.array(blend, dtype=np.float64).reshape(-1, 3)
-            self._blend_sequence: tuple[int, ...] = ()
             self.last_stats = FrameStats()
             self.timings = {"setup": time.perf_counter() - t0, **self.gpu_scene.timings}
         except BaseException:
@@ -241,7 +240,6 @@ class Renderer:
             return rec
         if rec is not None:  # the camera moved enough to reorder blended draws: re-record
             self._free_recorded(self._recorded.pop(key))
-        self._blend_sequence = blend_order
         vk = self.device.vk
         cmd = self.device.allocate_command_buffer()
         vk.vkBeginCommandBuffer(cmd, vk.VkCommandBufferBeginInfo())
@@ -250,7 +248,7 @@ class Renderer:
             vk.vkCmdResetQueryPool(cmd, self.query_pool, q, 2)
             vk.vkCmdWriteTimestamp2(cmd, vk.VK_PIPELINE_STAGE_2_NONE, self.query_pool, q)
         target.record_begin(cmd)
-        self.record_draws(cmd, target, tbn, alpha_mask, slot)
+        self.record_draws(cmd, target, tbn, alpha_mask, slot, blend_order)
         target.record_end(cmd, slot.index)
         if self.query_pool is not None:
             vk.vkCmdWriteTimestamp2(cmd, vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, self.query_pool, q + 1)
@@ -262,10 +260,11 @@ class Renderer:
         return rec
 
     def record_draws(self, cmd: Any, target: Any, tbn: L.TbnMode, alpha_mask: bool,
-                     slot: FrameSlot | None = None) -> None:
+                     slot: FrameSlot | None = None, blend_order: tuple[int, ...] = ()) -> None:
         """Record every draw of the scene into `cmd`, inside dynamic rendering already begun on
         an attachment set described by `target` (anything with color_format, depth_format and
-        samples: a RenderTarget, or the viewer's swapchain)."""
+        samples: a RenderTarget, or the viewer's swapchain). `blend_order` (from
+        `blend_order(eye)`) sorts the blended draws back to front."""
         vk = self.device.vk
         gs = self.gpu_scene
         slot = slot or self.slots[0]
@@ -275,8 +274,8 @@ class Renderer:
         vk.vkCmdBindIndexBuffer(cmd, gs.index_buffer.handle, 0, vk.VK_INDEX_TYPE_UINT32)
         for kind in _PASS_ORDER:
             draws = [d for d in gs.draws if self._pass_of(d.kind, alpha_mask) == kind]
-            if kind == "blend" and len(self._blend_sequence) == len(draws):
-                draws = [draws[i] for i in self._blend_sequence]
+            if kind == "blend" and len(blend_order) == len(draws):
+                draws = [draws[i] for i in blend_order]
             if not draws:
                 continue
             pipeline = self._pipeline(target, tbn, kind)

@@ -128,9 +128,7 @@ class WindowRenderer:
             vk.vkCmdResetQueryPool(cmd, self._query_pool, 2 * index, 2)
             vk.vkCmdWriteTimestamp2(cmd, vk.VK_PIPELINE_STAGE_2_NONE, self._query_pool, 2 * index)
         sc.record_begin(cmd, index, (*r.background, 1.0))
-        # The painter's order of blended draws: record_draws reads it from the renderer.
-        r._blend_sequence = blend_order
-        r.record_draws(cmd, sc, tbn, alpha_mask, self._slots[index])
+        r.record_draws(cmd, sc, tbn, alpha_mask, self._slots[index], blend_order)
         if screenshot is not None and not with_overlay:
             vk.vkCmdEndRendering(cmd)
             sc.record_copy(cmd, index, screenshot)
