@@ -1,5 +1,5 @@
 """Shared fixtures. Every renderer made in tests runs with the Khronos validation layer
-(synchronization validation too where VKPBR_SYNC_VALIDATION=1): a validation error raises
+(and synchronization validation unless VKPBR_SYNC_VALIDATION=0): a validation error raises
 inside `Renderer.render`, and the factory below re-checks at teardown, so no error can pass.
 """
 
@@ -37,7 +37,7 @@ def make_renderer() -> Iterator[Callable[..., object]]:
 
     def factory(scene=None, **kwargs):  # noqa: ANN001, ANN202
         kwargs.setdefault("validation", True)
-        kwargs.setdefault("sync_validation", os.environ.get("VKPBR_SYNC_VALIDATION") == "1")
+        kwargs.setdefault("sync_validation", os.environ.get("VKPBR_SYNC_VALIDATION", "1") != "0")
         r = Renderer(scene, **kwargs)
         made.append(r)
         return r
