@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import resource
 import time
 from pathlib import Path
 from typing import Any
@@ -50,6 +51,9 @@ def format_report(report: dict[str, Any]) -> str:
          f"mean {err['mean']:.3f}  p99 {err['p99']:.3f}  max {err['max']:.3f}"),
         ("quaternion frame error (deg)", f"max {qerr['max']:.5f}"),
         ("file size", f"{report['file_bytes'] / 2**20:.2f} MiB"),
+        ("vertex memory saved (packed)",
+         f"{report.get('vertex_bytes_saved_packed_vs_vectors', 0) / 2**20:.2f} MiB"),
+        ("peak memory", f"{report.get('peak_memory_mib', float('nan')):.0f} MiB"),
         ("load / bake / write (s)",
          f"{report['load_seconds']:.2f} / {report['seconds']:.2f} / "
          f"{report['write_seconds']:.2f}"),
@@ -69,6 +73,11 @@ def run(args: argparse.Namespace) -> int:
     report = bake_file(args.scene, args.out, embed_textures=args.embed_textures,
                        progress=not (args.no_progress or args.json))
     seconds = time.perf_counter() - start
+    # Peak resident memory of this process (Linux reports ru_maxrss in KiB).
+    report["peak_memory_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    n = report["vertices"]
+    report["vertex_bytes_saved_packed_vs_vectors"] = n * (
+        report["bytes_per_vertex"]["vectors"] - report["bytes_per_vertex"]["packed"])
     if args.json:
         print(json.dumps({**report, "total_seconds": seconds}, indent=2, sort_keys=True))
         return 0
