@@ -97,3 +97,26 @@ def test_create_destroy_loop_leaks_nothing() -> None:
         r.close()
         assert device.live_children == 0
         assert instance.errors == [], instance.errors[:2]
+
+
+# A camera at which, at 160x120, one sub-pixel triangle on a sphere's silhouette sent
+# llvmpipe's anisotropic sampling (Mesa 22.3.6) into an endless loop: the viewer hung in
+# vkQueuePresentKHR while flying forward. gpu/device.py's anisotropy_usable keeps it off there.
+HANG_CAMERA = ("0.5962890256597512,3.18144512829876,8.8330061546888,"
+               "0.396289025659752,2.18144512829876,-0.16699384531120032")
+
+
+def test_llvmpipe_tiny_triangle_does_not_hang(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    out = tmp_path / "hang.png"
+    cmd = [sys.executable, "-m", "vkpbr", "render", "--size", "160x120", "--fov", "45",
+           "--camera", HANG_CAMERA, "--out", str(out)]
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    except subprocess.TimeoutExpired:
+        pytest.fail("render hung (llvmpipe anisotropic filtering loop?)")
+    assert proc.returncode == 0, proc.stderr
+    img = np.asarray(Image.open(out))
+    assert img.shape == (120, 160, 4) and img[..., :3].std() > 1.0
