@@ -62,11 +62,17 @@ def _script(shot: Path) -> dict:
     return {"fixed_dt": 0.05, "events": ev}
 
 
-def test_scripted_session_matches_headless(display: str, tmp_path: Path, capsys) -> None:
+@pytest.mark.parametrize("offscreen", [False, True], ids=["window", "offscreen"])
+def test_scripted_session_matches_headless(offscreen: bool, request, tmp_path: Path,
+                                           capsys) -> None:
+    """The whole script in a window under Xvfb, and again with --offscreen (no window: the
+    loop that measures the viewer on a GPU server must behave the same)."""
     from vkpbr.app.viewer import Viewer, ViewerConfig
 
+    if not offscreen:
+        request.getfixturevalue("display")
     shot = tmp_path / "shot.png"
-    config = ViewerConfig(size=SIZE, validation=True, vsync=True,
+    config = ViewerConfig(size=SIZE, validation=True, vsync=True, offscreen=offscreen,
                           script=parse_script(_script(shot)))
     viewer = Viewer(None, config)
     instance = viewer.renderer.device.instance
@@ -92,6 +98,7 @@ def test_scripted_session_matches_headless(display: str, tmp_path: Path, capsys)
         from PIL import Image
 
         assert np.array_equal(np.asarray(Image.open(shot)), image)
+        assert (viewer.swapchain.present_mode_name == "offscreen") == offscreen
     finally:
         viewer.close()
     assert instance.errors == [], instance.errors[:3]
@@ -141,6 +148,20 @@ def test_script_file_and_errors(display: str, tmp_path: Path) -> None:
     good.write_text(json.dumps({"fixed_dt": 0.1, "events": [
         _key(0.0, "t"), {"t": 0.1, "type": "quit"}]}))
     assert main(["view", "--size", "64x48", "--script", str(good), "--validation"]) == 0
+
+
+def test_offscreen_cli(tmp_path: Path, capsys) -> None:
+    """`vkpbr view --offscreen` needs no display: it runs N frames, writes the screenshot and
+    reports the frame rate; without --frames or --script it refuses to start."""
+    from vkpbr.app.cli import main
+
+    shot = tmp_path / "off.png"
+    assert main(["view", "--offscreen", "--frames", "4", "--size", "64x48",
+                 "--screenshot", str(shot), "--validation"]) == 0
+    out = capsys.readouterr().out
+    assert shot.is_file() and "4 frames" in out and "fps (64x48, offscreen)" in out
+    assert main(["view", "--offscreen"]) == 2
+    assert "--offscreen needs --frames" in capsys.readouterr().err
 
 
 def test_speed_scales_with_scene() -> None:

@@ -29,6 +29,7 @@ from vkpbr.app.script import Script
 from vkpbr.app.viewer_input import InputHandlers
 from vkpbr.errors import VkpbrError
 from vkpbr.gpu.device import DeviceRequest
+from vkpbr.gpu.offscreen_swapchain import OffscreenSwapchain
 from vkpbr.gpu.swapchain import Surface, Swapchain
 from vkpbr.gpu.text_overlay import QuadOverlay
 from vkpbr.render import layouts as L
@@ -59,6 +60,7 @@ class ViewerConfig:
     validation: bool = False
     device: str | int | None = None
     title: str = "vkpbr"
+    offscreen: bool = False  # no window: draw into offscreen images (gpu/offscreen_swapchain.py)
     scene_label: str = ""  # how `C` names the scene in the printed command
 
 
@@ -68,9 +70,13 @@ class Viewer(InputHandlers):
 
     def __init__(self, scene: Scene | None, config: ViewerConfig) -> None:
         self.config = config
-        if not glfw.init():
-            raise VkpbrError("cannot open a window: GLFW failed to initialise (no display?)")
         self.window: Any = None
+        self._glfw = False
+        if not config.offscreen:
+            if not glfw.init():
+                raise VkpbrError("cannot open a window: GLFW failed to initialise (no display?); "
+                                 "use xvfb-run, or --offscreen to run without one")
+            self._glfw = True
         self.renderer: Renderer | None = None
         try:
             self._open(scene)
@@ -81,19 +87,14 @@ class Viewer(InputHandlers):
     # --- set-up -----------------------------------------------------------------------------
     def _open(self, scene: Scene | None) -> None:
         cfg = self.config
-        glfw.window_hint(glfw.CLIENT_API, glfw.NO_API)
-        self.window = glfw.create_window(cfg.size[0], cfg.size[1], cfg.title, None, None)
-        if not self.window:
-            raise VkpbrError("cannot open a window (is a display available? try xvfb-run)")
-        request = DeviceRequest(cfg.device, tuple(glfw.get_required_instance_extensions()),
-                                ("VK_KHR_swapchain",))
-        self.renderer = r = Renderer(scene, device=request, validation=cfg.validation)
-        device = r.device
-        self.surface = Surface(device, self._create_surface)
-        self.swapchain = Swapchain(device, self.surface, glfw.get_framebuffer_size(self.window),
-                                   vsync=cfg.vsync)
+        self.surface: Surface | None = None
+        if cfg.offscreen:
+            self.renderer = r = Renderer(scene, device=cfg.device, validation=cfg.validation)
+            self.swapchain: Swapchain = OffscreenSwapchain(r.device, cfg.size)
+        else:
+            r = self._open_window(scene, cfg)
         self.font = FontAtlas()
-        self.overlay = QuadOverlay(device, self.font.pixels, self.swapchain.color_format,
+        self.overlay = QuadOverlay(r.device, self.font.pixels, self.swapchain.color_format,
                                    self.swapchain.depth_format, SPV_DIR)
         self.frames = WindowRenderer(r, self.swapchain, self.overlay)
         lo, hi = r.scene.bounds()
@@ -133,6 +134,28 @@ class Viewer(InputHandlers):
         self._hud_size = (0, 0)
         self._hud_vertices = np.zeros((0, 8), dtype=np.float32)
         self._stats = {"fps": 0.0, "cpu": 0.0, "gpu": float("nan")}
+        self.fb_size = tuple(cfg.size)
+        self.iconified = False
+        self.loop_fps = float("nan")  # frames per second over the run, after the first frame
+        self._want_gpu = True
+        if self.window is not None:
+            self._connect_callbacks()
+
+    def _open_window(self, scene: Scene | None, cfg: ViewerConfig) -> Renderer:
+        glfw.window_hint(glfw.CLIENT_API, glfw.NO_API)
+        self.window = glfw.create_window(cfg.size[0], cfg.size[1], cfg.title, None, None)
+        if not self.window:
+            raise VkpbrError("cannot open a window (is a display available? try xvfb-run, "
+                             "or --offscreen)")
+        request = DeviceRequest(cfg.device, tuple(glfw.get_required_instance_extensions()),
+                                ("VK_KHR_swapchain",))
+        self.renderer = r = Renderer(scene, device=request, validation=cfg.validation)
+        self.surface = Surface(r.device, self._create_surface)
+        self.swapchain = Swapchain(r.device, self.surface, glfw.get_framebuffer_size(self.window),
+                                   vsync=cfg.vsync)
+        return r
+
+    def _connect_callbacks(self) -> None:
         w = self.window
         glfw.set_key_callback(w, self._on_key)
         glfw.set_cursor_pos_callback(w, self._on_cursor)
@@ -202,9 +225,11 @@ class Viewer(InputHandlers):
         clock = 0.0
         start = last = t_hud = time.perf_counter()
         hud_frames, hud_cpu = 0, 0.0
+        t_first = start
         while not self.quit:
             t0, c0 = time.perf_counter(), time.thread_time()
-            glfw.poll_events()
+            if self.window is not None:
+                glfw.poll_events()
             dt = fixed_dt if fixed_dt is not None else t0 - last
             last = t0
             clock = clock + fixed_dt if fixed_dt is not None else t0 - start
@@ -214,7 +239,8 @@ class Viewer(InputHandlers):
                 break
             if self._minimized():
                 self.minimized_waits += 1
-                glfw.wait_events_timeout(0.02 if script else 0.1)
+                if self.window is not None:
+                    glfw.wait_events_timeout(0.02 if script else 0.1)
                 continue
             fb = self.fb_size
             if (sc.handle is None or fb != sc.extent) and not sc.recreate(fb):
@@ -227,9 +253,11 @@ class Viewer(InputHandlers):
             if index is None:
                 sc.recreate(self.fb_size)
                 continue
-            gpu = frames.gpu_ms(index)
-            if gpu == gpu:
-                self._stats["gpu"] = gpu
+            if self._want_gpu:  # read back only when the HUD's numbers are refreshed
+                gpu = frames.gpu_ms(index)
+                if gpu == gpu:
+                    self._stats["gpu"] = gpu
+                    self._want_gpu = False
             camera, o = self.camera(), self.options
             r = self.renderer
             frames.write_uniforms(index, camera, self.light, o)
@@ -272,10 +300,14 @@ class Viewer(InputHandlers):
                 self._stats["fps"] = hud_frames / (t_end - t_hud)
                 self._stats["cpu"] = hud_cpu / hud_frames
                 t_hud, hud_frames, hud_cpu = t_end, 0, 0.0
-                self._hud_dirty = True
+                self._hud_dirty = self._want_gpu = True
+            if self.frame_count == 1:
+                t_first = t_end
             if last_frame:
                 break
         self.renderer.device.wait_idle()  # type: ignore[union-attr]
+        if self.frame_count > 1:  # frames after the first (which records command buffers)
+            self.loop_fps = (self.frame_count - 1) / max(time.perf_counter() - t_first, 1e-9)
         self.renderer.device.check_validation()  # type: ignore[union-attr]
         return 0
 
@@ -313,7 +345,9 @@ class Viewer(InputHandlers):
         ms = self.python_ms[1:] or self.python_ms
         med = statistics.median(ms) if ms else float("nan")
         return (f"{self.frame_count} frames, Python per frame {med:.3f} ms (median), "
-                f"GPU {self._stats['gpu']:.2f} ms, {self._stats['fps']:.1f} fps")
+                f"GPU {self._stats['gpu']:.2f} ms, {self.loop_fps:.1f} fps "
+                f"({self.swapchain.extent[0]}x{self.swapchain.extent[1]}, "
+                f"{self.swapchain.present_mode_name})")
 
     # --- lifetime ---------------------------------------------------------------------------
     def close(self) -> None:
@@ -329,7 +363,9 @@ class Viewer(InputHandlers):
         if self.window is not None:
             glfw.destroy_window(self.window)
             self.window = None
-        glfw.terminate()
+        if self._glfw:
+            glfw.terminate()
+            self._glfw = False
 
     def __enter__(self) -> Viewer:
         return self

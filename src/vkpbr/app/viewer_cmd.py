@@ -37,6 +37,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-occlusion", action="store_true", help="ignore occlusion maps")
     p.add_argument("--no-vsync", action="store_true",
                    help="present without waiting for vertical sync (mailbox, else immediate)")
+    p.add_argument("--offscreen", action="store_true",
+                   help="no window: run the frame loop on offscreen images of --size (a GPU "
+                        "server without a display); needs --frames or --script; prints fps")
     p.add_argument("--frames", type=int, help="render N frames, then exit")
     p.add_argument("--screenshot", help="with --frames: write the last frame to this PNG")
     p.add_argument("--script", help="JSON file of timed input events (docs/viewer.md)")
@@ -52,6 +55,8 @@ def run(args: argparse.Namespace) -> int:
     size = parse_size(args.size)
     if args.frames is not None and args.frames < 1:
         raise UsageError("--frames must be at least 1")
+    if args.offscreen and args.frames is None and not args.script:
+        raise UsageError("--offscreen needs --frames N or --script FILE (nothing could stop it)")
     shot = None
     if args.screenshot:
         if args.frames is None:
@@ -80,6 +85,7 @@ def run(args: argparse.Namespace) -> int:
     config = ViewerConfig(
         size=size, options=options, vsync=not args.no_vsync, frames=args.frames,
         screenshot=shot, script=script, validation=args.validation, device=args.device,
+        offscreen=args.offscreen,
         title=f"vkpbr - {Path(args.scene).name if args.scene else 'default scene'}",
         scene_label=args.scene or "",
         pose=lambda r: (_camera_from_args(args, r), _light_from_args(args, r)))

@@ -102,8 +102,10 @@ class InputHandlers:
             self.buttons.add(button)
             if button == glfw.MOUSE_BUTTON_MIDDLE:
                 self.captured = not self.captured
-                glfw.set_input_mode(self.window, glfw.CURSOR,
-                                    glfw.CURSOR_DISABLED if self.captured else glfw.CURSOR_NORMAL)
+                if self.window is not None:
+                    glfw.set_input_mode(self.window, glfw.CURSOR,
+                                        glfw.CURSOR_DISABLED if self.captured
+                                        else glfw.CURSOR_NORMAL)
         else:
             self.buttons.discard(button)
 
@@ -133,14 +135,19 @@ class InputHandlers:
         elif kind == "scroll":
             self._on_scroll(self.window, 0.0, float(d["dy"]))
         elif kind == "resize":
-            glfw.set_window_size(self.window, d["width"], d["height"])
+            if self.window is None:  # offscreen: the "framebuffer" is what the script says
+                self.fb_size = (int(d["width"]), int(d["height"]))
+            else:
+                glfw.set_window_size(self.window, d["width"], d["height"])
         elif kind == "minimize":
             # With no window manager (Xvfb) iconify does nothing; the flag makes the loop
             # behave as for a real zero-sized framebuffer.
-            glfw.iconify_window(self.window)
+            if self.window is not None:
+                glfw.iconify_window(self.window)
             self.script_minimized = True
         elif kind == "restore":
-            glfw.restore_window(self.window)
+            if self.window is not None:
+                glfw.restore_window(self.window)
             self.script_minimized = False
         elif kind == "screenshot":
             self.pending_shots.append(Path(d["path"]))

@@ -69,19 +69,7 @@ class Swapchain:
     def __init__(self, device: Device, surface: Surface, size: tuple[int, int],
                  vsync: bool = True) -> None:
         vk = device.vk
-        self.device, self.surface, self.vsync = device, surface, vsync
-        self.handle: Any = None
-        self.samples = 1
-        self.depth_format = vk.VK_FORMAT_D32_SFLOAT
-        self.generation = 0
-        self.needs_recreate = False
-        self.can_copy = False
-        self.frame = 0  # frames submitted so far; the slot is frame % FRAMES_IN_FLIGHT
-        self.extent = (0, 0)
-        self.images: list[Any] = []
-        self._owned: list[Any] = []  # views, depth images: per swapchain generation
-        self._render_done: list[Any] = []
-        self._image_fence: list[Any] = []
+        self._init_state(device, surface, vsync)
         inst, dev = device.instance.handle, device.handle
         get_i = vk.vkGetInstanceProcAddr
         self._caps_fn = get_i(inst, "vkGetPhysicalDeviceSurfaceCapabilitiesKHR")
@@ -100,6 +88,21 @@ class Swapchain:
         self.recreate(size)
 
     # --- creation ---------------------------------------------------------------------------
+    def _init_state(self, device: Device, surface: Surface | None, vsync: bool) -> None:
+        self.device, self.surface, self.vsync = device, surface, vsync
+        self.handle: Any = None
+        self.samples = 1
+        self.depth_format = device.vk.VK_FORMAT_D32_SFLOAT
+        self.generation = 0
+        self.needs_recreate = False
+        self.can_copy = False
+        self.frame = 0  # frames submitted so far; the slot is frame % FRAMES_IN_FLIGHT
+        self.extent = (0, 0)
+        self.images: list[Any] = []
+        self._owned: list[Any] = []  # views, depth images: per swapchain generation
+        self._render_done: list[Any] = []
+        self._image_fence: list[Any] = []
+
     def _choose_format_and_mode(self) -> None:
         vk = self.device.vk
         formats = {(f.format, f.colorSpace) for f in self._formats_fn(self.device.physical,
