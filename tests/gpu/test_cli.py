@@ -26,6 +26,34 @@ def test_render_default_scene_writes_png(capsys, tmp_path: Path) -> None:
     assert code == 0 and out.exists() and f"wrote {out}" in stdout
     assert np.asarray(Image.open(out)).shape == (48, 64, 4)
     assert not list(tmp_path.glob(".*.tmp"))  # atomic write leaves no temporary behind
+    assert out.stat().st_mode & 0o777 == 0o666 & ~_umask()  # as open() would, not 0600
+
+
+def _umask() -> int:
+    import os
+
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def test_render_through_bake_cache(capsys, tmp_path: Path, assets: Path) -> None:
+    """--cache DIR bakes the source on first use and loads the baked copy after; the image
+    is the same either way (within one 8-bit step: the bake re-orders vertices)."""
+    src = assets / "NormalTangentMirrorTest" / "glTF" / "NormalTangentMirrorTest.gltf"
+    cache = tmp_path / "cache"
+    direct, first, second = (tmp_path / f"{n}.png" for n in ("direct", "first", "second"))
+    common = ("--size", "64x48", "--validation")
+    assert run(capsys, "render", str(src), "--out", str(direct), *common)[0] == 0
+    code, _, err = run(capsys, "render", str(src), "--cache", str(cache), "--out", str(first), *common)
+    assert code == 0 and "scene cache:" in err
+    baked = list(cache.glob("NormalTangentMirrorTest-*.vkpbr"))
+    assert len(baked) == 1
+    mtime = baked[0].stat().st_mtime_ns
+    assert run(capsys, "render", str(src), "--cache", str(cache), "--out", str(second), *common)[0] == 0
+    assert baked[0].stat().st_mtime_ns == mtime  # a hit: not baked again
+    a, b, c = (np.asarray(Image.open(p)).astype(int) for p in (direct, first, second))
+    assert np.array_equal(b, c) and np.abs(a - b).max() <= 1
 
 
 def test_render_linear_npy(capsys, tmp_path: Path) -> None:

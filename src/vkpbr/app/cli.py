@@ -11,11 +11,11 @@ import argparse
 import json
 import os
 import sys
-import tempfile
 import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from vkpbr.atomic import atomic_writer
 from vkpbr.errors import UsageError, VkpbrError
 
 __all__ = ["main", "write_image_atomic", "parse_size", "parse_vec3"]
@@ -69,20 +69,15 @@ def write_image_atomic(path: Path, image) -> None:  # noqa: ANN001 - ndarray
     suffix = path.suffix.lower()
     if suffix not in _IMAGE_SUFFIXES | {".npy"}:
         raise UsageError(f"--out {path}: unknown image type {suffix!r} (use .png, .jpg or .npy)")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            if suffix == ".npy":
-                np.save(f, image)
-            else:
-                if image.dtype != np.uint8:
-                    raise UsageError(f"--out {path}: linear float output needs a .npy file")
-                mode_image = image[..., :3] if suffix in {".jpg", ".jpeg"} else image
-                Image.fromarray(np.ascontiguousarray(mode_image)).save(f, format=Image.registered_extensions()[suffix])
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_writer(path) as f:
+        if suffix == ".npy":
+            np.save(f, image)
+        else:
+            if image.dtype != np.uint8:
+                raise UsageError(f"--out {path}: linear float output needs a .npy file")
+            mode_image = image[..., :3] if suffix in {".jpg", ".jpeg"} else image
+            Image.fromarray(np.ascontiguousarray(mode_image)).save(
+                f, format=Image.registered_extensions()[suffix])
 
 
 # --- render ---------------------------------------------------------------------------------
@@ -117,6 +112,7 @@ def _add_render(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=int, default=1, help="render N frames and report per-frame time")
     p.add_argument("--device", help="device name substring or index (see `vkpbr info`)")
     p.add_argument("--validation", action="store_true", help="enable the Vulkan validation layer")
+    add_scene_cache_option(p)
     p.set_defaults(run=_run_render)
 
 
@@ -163,6 +159,37 @@ def _light_from_args(args: argparse.Namespace, renderer) -> object:  # noqa: ANN
     if args.falloff:
         light = dataclasses.replace(light, falloff=args.falloff.replace("-", "_"))
     return light
+
+
+def add_scene_cache_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--cache", nargs="?", const="", metavar="DIR",
+                   help="load SCENE through a baked copy in DIR (default $VKPBR_CACHE_DIR, else "
+                        "~/.cache/vkpbr), baked on first use and again when the source changes")
+
+
+def default_cache_dir() -> Path:
+    env = os.environ.get("VKPBR_CACHE_DIR")
+    if env:
+        return Path(env)
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "vkpbr"
+
+
+def load_scene_arg(args: argparse.Namespace):  # noqa: ANN201 - Scene | None
+    """The scene named on the command line (None: the built-in one), through the bake cache
+    when --cache was given: a cache hit skips parsing and tangent generation."""
+    if not args.scene:
+        return None
+    from vkpbr.scene.loader import load_scene
+
+    path = Path(args.scene)
+    if getattr(args, "cache", None) is not None and path.suffix.lower() != ".vkpbr":
+        from vkpbr.bake.bake import cached_bake
+
+        cache_dir = Path(args.cache) if args.cache else default_cache_dir()
+        t0 = time.perf_counter()
+        path = cached_bake(path, cache_dir)
+        print(f"scene cache: {path} ({time.perf_counter() - t0:.2f} s)", file=sys.stderr)
+    return load_scene(path)
 
 
 def load_cameras(path: str, base) -> list:  # noqa: ANN001 - Camera
@@ -215,12 +242,8 @@ def _render_batch(args: argparse.Namespace, size: tuple[int, int], options) -> i
     out_dir.mkdir(parents=True, exist_ok=True)
     check_writable(out_dir / "x.png")
     suffix = ".npy" if args.linear else ".png"
-    scene = None
     t0 = time.perf_counter()
-    if args.scene:
-        from vkpbr.scene.loader import load_scene
-
-        scene = load_scene(args.scene)
+    scene = load_scene_arg(args)
     with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa) as renderer:
         cameras = load_cameras(args.cameras, _camera_from_args(args, renderer))
         light = _light_from_args(args, renderer)
@@ -268,11 +291,7 @@ def _run_render(args: argparse.Namespace) -> int:
 
     options = _options_from_args(args)
     t0 = time.perf_counter()
-    scene = None
-    if args.scene:
-        from vkpbr.scene.loader import load_scene
-
-        scene = load_scene(args.scene)
+    scene = load_scene_arg(args)
     t_load = time.perf_counter()
     with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa) as renderer:
         t_setup = time.perf_counter()

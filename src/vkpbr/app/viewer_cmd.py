@@ -15,6 +15,8 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
+    from vkpbr.app.cli import add_scene_cache_option
+
     p = sub.add_parser("view", help="open SCENE in an interactive window",
                        description="Fly through SCENE (default: the built-in PBR chart); "
                                    "keys and scripts: docs/viewer.md.")
@@ -45,11 +47,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--script", help="JSON file of timed input events (docs/viewer.md)")
     p.add_argument("--device", help="device name substring or index (see `vkpbr info`)")
     p.add_argument("--validation", action="store_true", help="enable the Vulkan validation layer")
+    add_scene_cache_option(p)
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from vkpbr.app.cli import _camera_from_args, _light_from_args, check_writable, parse_size
+    from vkpbr.app.cli import (
+        _camera_from_args,
+        _light_from_args,
+        check_writable,
+        load_scene_arg,
+        parse_size,
+    )
     from vkpbr.render.renderer import RenderOptions
 
     size = parse_size(args.size)
@@ -75,11 +84,7 @@ def run(args: argparse.Namespace) -> int:
         from vkpbr.app.script import load_script
 
         script = load_script(args.script)
-    scene = None
-    if args.scene:
-        from vkpbr.scene.loader import load_scene
-
-        scene = load_scene(args.scene)
+    scene = load_scene_arg(args)
     from vkpbr.app.viewer import Viewer, ViewerConfig
 
     config = ViewerConfig(

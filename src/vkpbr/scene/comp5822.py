@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import os
 import struct
-import tempfile
 import warnings
 from pathlib import Path
 
 import numpy as np
 
+from vkpbr.atomic import atomic_writer
 from vkpbr.errors import SceneError
 from vkpbr.scene.geometry import ensure_normals
 from vkpbr.scene.types import Image, Material, Mesh, Node, Scene, TextureRef
@@ -220,11 +220,5 @@ def write_comp5822mesh(scene: Scene, path: str | Path) -> None:
             *(np.ascontiguousarray(a, dt).tobytes() for a, dt in
               ((positions, "<f4"), (normals, "<f4"), (tex, "<f4"), (mesh.indices, "<u4"))),
         ]  # fmt: skip
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.writelines(out)
-        os.replace(tmp, path)  # readers never see a half-written file
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_writer(path) as f:  # readers never see a half-written file
+        f.writelines(out)
