@@ -7,6 +7,7 @@ import shutil
 import struct
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from vkpbr.render import codegen
@@ -76,3 +77,21 @@ def test_committed_spirv_is_current(tmp_path: Path) -> None:
             stale.append(f.name)
     assert not stale, f"stale SPIR-V {stale}: run `python -m vkpbr.render.codegen` and commit"
     assert {p.name for p in codegen.SPV_DIR.glob('*.spv')} == {f.name for f in fresh}
+
+
+@pytest.mark.parametrize("block", [L.CAMERA, L.SETTINGS, L.LIGHT], ids=lambda b: b.name)
+def test_struct_packer_writes_the_numpy_layout(block) -> None:  # noqa: ANN001
+    """The per-frame struct packer and the structured dtype put every member at the same
+    bytes (random values; mat4 flattened column by column)."""
+    rng = np.random.default_rng(7)
+    arr = block.zeros()
+    flat: list = []
+    for name, glsl in block.fields:
+        value = rng.integers(0, 1000, arr[name].shape) if glsl in ("int", "uint", "uvec4") else \
+            rng.random(arr[name].shape).astype(np.float32)
+        arr[name] = value
+        flat += np.asarray(value).reshape(-1).tolist()
+    assert block.packer.size == block.size
+    buf = bytearray(block.size)
+    block.packer.pack_into(buf, 0, *flat)
+    assert bytes(buf) == arr.tobytes()

@@ -38,6 +38,14 @@ class FrameSlot:
     query_base: int  # first of this slot's two timestamp queries
     uniform_key: tuple | None = None  # inputs of the uniforms last written here
     stats: FrameStats = field(default_factory=FrameStats)
+    # The same bytes as memoryviews, for the blocks' struct packers (layouts.Std140Block.packer)
+    m_camera: memoryview = field(init=False)
+    m_settings: memoryview = field(init=False)
+    m_light: memoryview = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.m_camera, self.m_settings, self.m_light = (
+            memoryview(a.view(np.uint8)) for a in (self.u_camera, self.u_settings, self.u_light))
 
 
 def create_slots(

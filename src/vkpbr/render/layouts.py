@@ -15,7 +15,9 @@ Descriptor sets follow the report (renderer-spec section 1):
 from __future__ import annotations
 
 import enum
+import struct
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -43,6 +45,8 @@ __all__ = [
 # Shading constants shared with the NumPy reference (reference/brdf.py imports these).
 MIN_ROUGHNESS = 0.03  # roughness is clamped here so that D stays finite as r -> 0
 AMBIENT = 0.02  # the course's ambient constant: L_ambient = 0.02 * c
+
+_STRUCT_CODE = {np.float32: "f", np.int32: "i", np.uint32: "I"}
 
 _BASE = {  # GLSL type -> (base alignment, size, numpy dtype, shape)
     "float": (4, 4, np.float32, ()),
@@ -91,6 +95,20 @@ class Std140Block:
                 "itemsize": self.size,
             }
         )
+
+    @cached_property
+    def packer(self) -> struct.Struct:
+        """The block as a little-endian `struct.Struct` over its members' scalars in order
+        (a mat4 as its 16 floats column by column; padding skipped): the per-frame writer,
+        one `pack_into` instead of NumPy structured-field writes (~4x cheaper)."""
+        fmt, at = ["<"], 0
+        for name, glsl in self.fields:
+            _, size, dtype, shape = _BASE[glsl]
+            offset = self.offsets[name]
+            fmt.append("x" * (offset - at) + _STRUCT_CODE[dtype] * int(np.prod(shape, dtype=int)))
+            at = offset + size
+        fmt.append("x" * (self.size - at))
+        return struct.Struct("".join(fmt))
 
     def zeros(self) -> np.ndarray:
         return np.zeros((), dtype=self.dtype)
