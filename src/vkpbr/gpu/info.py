@@ -4,12 +4,14 @@ from __future__ import annotations
 
 from typing import Any
 
-from vkpbr.gpu.instance import Instance
+from vkpbr.gpu.device import anisotropy_usable
+from vkpbr.gpu.instance import Instance, PhysicalDeviceInfo
 
 __all__ = ["device_report"]
 
 
-def _features(vk: Any, handle: Any) -> dict[str, Any]:
+def _features(vk: Any, info: PhysicalDeviceInfo) -> dict[str, Any]:
+    handle = info.handle
     f13 = vk.VkPhysicalDeviceVulkan13Features()
     f11 = vk.VkPhysicalDeviceVulkan11Features(pNext=f13)
     f2 = vk.VkPhysicalDeviceFeatures2(sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, pNext=f11)
@@ -26,6 +28,8 @@ def _features(vk: Any, handle: Any) -> dict[str, Any]:
         "dynamicRendering": bool(f13.dynamicRendering),
         "synchronization2": bool(f13.synchronization2),
         "samplerAnisotropy": bool(f2.features.samplerAnisotropy),
+        # What vkpbr's samplers use (off on llvmpipe: gpu/device.py anisotropy_usable).
+        "anisotropyUsed": anisotropy_usable(info, bool(f2.features.samplerAnisotropy)),
         "maxSamplerAnisotropy": float(limits.maxSamplerAnisotropy),
         "multiDrawIndirect": bool(f2.features.multiDrawIndirect),
         "shaderDrawParameters": bool(f11.shaderDrawParameters),
@@ -53,7 +57,7 @@ def device_report() -> dict[str, Any]:
                     "vendor_id": d.vendor_id,
                     "device_id": d.device_id,
                     "chosen": d.index == chosen,
-                    "features": _features(instance.vk, d.handle),
+                    "features": _features(instance.vk, d),
                 }
                 for d in devices
             ]
