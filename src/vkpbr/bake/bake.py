@@ -45,7 +45,7 @@ from .frames import (
     tbn_to_qtangent,
     unpack_qtangent,
 )
-from .tangents import generate_tangents, normalize_safe, orthonormal_tangent
+from .tangents import generate_tangents, normalize_safe, orthonormal_tangent, tangent_uv_set
 
 try:  # optional: a C++ vertex cache optimiser; the bake works (less optimally) without it
     import meshoptimizer as _meshopt
@@ -137,7 +137,9 @@ def _optimise(attrs: dict[str, np.ndarray], tri: np.ndarray) -> tuple[dict[str, 
     return {k: v[order] for k, v in attrs.items()}, remap[idx]
 
 
-def _bake_mesh(mesh: Mesh) -> tuple[dict[str, np.ndarray], int]:
+def _bake_mesh(mesh: Mesh, uv_set: int = 0) -> tuple[dict[str, np.ndarray], int]:
+    """One mesh's streams and flags; generated tangents follow UV set `uv_set` (falling back
+    to TEXCOORD_0 when the mesh has no TEXCOORD_1, as the renderer's fill does)."""
     attrs, tri, flags = _clean(mesh)
     attrs, tri = _dedup(attrs, tri)
     attrs, idx = _optimise(attrs, tri)
@@ -148,7 +150,7 @@ def _bake_mesh(mesh: Mesh) -> tuple[dict[str, np.ndarray], int]:
         w = np.where(t4[:, 3] < 0.0, -1.0, 1.0)
         attrs["tangents"] = np.concatenate([t, w[:, None]], axis=1).astype(np.float32)
     else:
-        uv = attrs.get("texcoords")
+        uv = attrs.get("texcoords1") if uv_set == 1 and "texcoords1" in attrs else attrs.get("texcoords")
         attrs["tangents"] = generate_tangents(attrs["positions"], n, uv, idx)
     attrs["qtangents"] = tbn_to_qtangent(n, attrs["tangents"])
     attrs["packed_frames"] = pack_qtangent(attrs["qtangents"])
@@ -188,7 +190,8 @@ def bake_scene(scene: Scene, progress: bool = False) -> BakedScene:
     first_v = first_i = 0
     meshes = tqdm(scene.meshes, desc="bake", unit="mesh", disable=not progress, leave=False)
     for i, mesh in enumerate(meshes):
-        attrs, flags = _bake_mesh(mesh)
+        material = scene.materials[mesh.material] if 0 <= mesh.material < len(scene.materials) else None
+        attrs, flags = _bake_mesh(mesh, tangent_uv_set(material))
         parts.append(attrs)
         nv, ni = len(attrs["positions"]), len(attrs["indices"])
         p = attrs["positions"]
@@ -227,10 +230,11 @@ def bake_report(scene: Scene, baked: BakedScene) -> dict[str, Any]:
 
     Returns
     -------
-    dict with ``bytes_per_vertex`` {"vectors", "quat", "packed"} (position + uv + frame, from
-    the stream dtypes), ``tbn_error_deg`` {"mean", "p99", "max"} (packed vs float frame, N/T/B
-    worst angle per vertex), ``quat_error_deg`` (same for the float quaternion), ``vertices``,
-    ``triangles``, ``source_vertices``, ``source_triangles``, ``meshes``, ``seconds``.
+    dict with ``bytes_per_vertex`` {"vectors", "quat", "packed"} (position + uv(s) + frame,
+    from the stream dtypes; TEXCOORD_1 counts only when baked), ``tbn_error_deg`` {"mean",
+    "p99", "max"} (packed vs float frame, N/T/B worst angle per vertex), ``quat_error_deg``
+    (same for the float quaternion), ``vertices``, ``triangles``, ``source_vertices``,
+    ``source_triangles``, ``meshes``, ``seconds``.
     """
     s = baked.streams
 
@@ -238,7 +242,8 @@ def bake_report(scene: Scene, baked: BakedScene) -> dict[str, Any]:
         a = s[name]
         return int(a.itemsize * (a.shape[1] if a.ndim > 1 else 1))
 
-    base = size("positions") + size("texcoords")
+    # A second UV set is a stream of its own only when some mesh has one (texcoords1).
+    base = size("positions") + size("texcoords") + (size("texcoords1") if "texcoords1" in s else 0)
     n, t = s["normals"], s["tangents"]
 
     def stats(err: np.ndarray) -> dict[str, float]:

@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..scene.types import Material
+
 __all__ = [
     "EPS_DET",
     "EPS_LEN",
@@ -26,6 +28,7 @@ __all__ = [
     "generate_tangents",
     "normalize_safe",
     "orthonormal_tangent",
+    "tangent_uv_set",
 ]
 
 EPS_DET = 1e-10  # tgen: UV determinants at or below this give a zero corner frame
@@ -162,3 +165,14 @@ def generate_tangents(
     # would always be +1 and mirrored UVs would shade inside out (renderer-spec.md 4).
     w = np.where(np.einsum("ij,ij->i", np.cross(n, t), b_sum) < 0.0, -1.0, 1.0)
     return np.concatenate([t, w[:, None]], axis=1).astype(np.float32)
+
+
+def tangent_uv_set(material: Material | None) -> int:
+    """The UV set (0 or 1) to generate a mesh's tangents from: the one its normal texture reads.
+
+    glTF 2.0 (3.7.2.1): without TANGENT, tangents are computed from "the texture coordinates
+    associated with the normal texture"; a normal map on TEXCOORD_1 whose tangents came from
+    TEXCOORD_0 would bend its normals the wrong way wherever the two layouts differ.
+    """
+    ref = material.normal_texture if material is not None else None
+    return 1 if ref is not None and ref.texcoord == 1 else 0

@@ -3,7 +3,12 @@
 Geometry: every mesh's streams are concatenated into one buffer per attribute (position,
 texcoord, normal, tangent, QTangent, packed frame) plus one index buffer, so a frame binds
 vertex buffers once per pipeline and each draw is one vkCmdDrawIndexed with offsets. All three
-tangent-frame streams are uploaded, so switching --tbn at run time rebuilds nothing.
+tangent-frame streams are uploaded, so switching --tbn at run time rebuilds nothing. A
+TEXCOORD_1 stream exists only when some mesh has TEXCOORD_1; otherwise the TEXCOORD_0 buffer
+is bound for the shader's second UV input, so such scenes (Sponza) cost no extra memory.
+
+Materials: each texture carries its own UV set and KHR_texture_transform into the MATERIAL
+block (`uv_transform_rows`).
 
 Textures: one GPU image per (source image, colour space), full mip chain; the scalar maps
 (metallic, roughness, occlusion) are views with a component swizzle that moves the wanted
@@ -26,7 +31,7 @@ from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, TextureUploa
 from vkpbr.render import layouts as L
 from vkpbr.scene.types import Material, Mesh, Scene, TextureRef
 
-__all__ = ["GpuScene", "Draw", "prepare_mesh"]
+__all__ = ["GpuScene", "Draw", "prepare_mesh", "uv_transform_rows"]
 
 _SWIZZLE = {0: "rrrr", 1: "gggg", 2: "bbbb", 3: "aaaa"}
 STREAMS = ("positions", "texcoords", "normals", "tangents", "qtangents", "packed_frames")
@@ -46,29 +51,40 @@ class Draw:
     center: np.ndarray = field(default_factory=lambda: np.zeros(3))  # world, for blend sorting
 
 
-def prepare_mesh(mesh: Mesh) -> dict[str, np.ndarray]:
+def _uv_stream(mesh: Mesh, uv: np.ndarray | None, fallback: np.ndarray) -> np.ndarray:
+    """(N, 2) float32 UVs, `fallback` when the mesh has none; a wrong length is an error
+    (it would make the GPU read past the stream)."""
+    if uv is None:
+        return fallback
+    if np.shape(uv) != (mesh.vertex_count, 2):
+        raise ValueError(f"mesh {mesh.name!r}: texcoords of shape {np.shape(uv)}, need ({mesh.vertex_count}, 2)")
+    return np.ascontiguousarray(uv, dtype=np.float32)
+
+
+def prepare_mesh(mesh: Mesh, tangent_uv_set: int = 0) -> dict[str, np.ndarray]:
     """All vertex streams of a mesh, computing what the file did not supply.
 
-    Returns positions (N,3) f32, texcoords (N,2) f32, normals (N,3) f32, tangents (N,4) f32,
-    qtangents (N,4) f32 and packed_frames (N,) u32.
+    Returns positions (N,3) f32, texcoords (N,2) f32, texcoords1 (N,2) f32, normals (N,3) f32,
+    tangents (N,4) f32, qtangents (N,4) f32 and packed_frames (N,) u32. A mesh without
+    TEXCOORD_1 gets its TEXCOORD_0 as texcoords1: then it renders the same whether or not some
+    other mesh of the scene brings a TEXCOORD_1 stream (scenes with none bind TEXCOORD_0 for
+    set 1 too), and a texture asking for a set the mesh lacks still gets real coordinates.
+    Generated tangents follow `tangent_uv_set`, the set the normal texture reads.
     """
     from vkpbr.bake.frames import pack_qtangent, tbn_to_qtangent
     from vkpbr.bake.tangents import generate_tangents
 
     n = mesh.vertex_count
     pos = np.ascontiguousarray(mesh.positions, dtype=np.float32)
-    uv = (
-        np.ascontiguousarray(mesh.texcoords, dtype=np.float32)
-        if mesh.texcoords is not None
-        else np.zeros((n, 2), np.float32)
-    )
+    uv = _uv_stream(mesh, mesh.texcoords, np.zeros((n, 2), np.float32))
+    uv1 = _uv_stream(mesh, mesh.texcoords1, uv)
     if mesh.normals is None:
         raise ValueError(f"mesh {mesh.name!r} has no normals (loaders must supply them)")
     nrm = np.ascontiguousarray(mesh.normals, dtype=np.float32)
     idx = np.ascontiguousarray(mesh.indices, dtype=np.uint32)
     tan = mesh.tangents
     if tan is None:
-        tan = generate_tangents(pos, nrm, uv, idx)
+        tan = generate_tangents(pos, nrm, uv1 if tangent_uv_set == 1 else uv, idx)
     tan = np.ascontiguousarray(tan, dtype=np.float32)
     q = getattr(mesh, "qtangents", None)
     if q is None:
@@ -79,11 +95,24 @@ def prepare_mesh(mesh: Mesh) -> dict[str, np.ndarray]:
     return {
         "positions": pos,
         "texcoords": uv,
+        "texcoords1": uv1,
         "normals": nrm,
         "tangents": tan,
         "qtangents": np.ascontiguousarray(q, dtype=np.float32),
         "packed_frames": np.ascontiguousarray(packed, dtype=np.uint32),
     }
+
+
+def uv_transform_rows(ref: TextureRef | None) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A texture's MATERIAL rows (layouts._uv_fields): KHR_texture_transform's
+    uv' = T(offset) R(rotation) S(scale) uv as the two rows of a 2x3 matrix, with the UV set in
+    row 0's fourth component. glTF: R = [[cos, sin], [-sin, cos]] (counter-clockwise in UV
+    space, whose v points down). No texture: identity on set 0."""
+    if ref is None:
+        return (1.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0)
+    c, s = float(np.cos(ref.rotation)), float(np.sin(ref.rotation))
+    (ox, oy), (sx, sy) = ref.offset, ref.scale
+    return (c * sx, s * sy, ox, float(ref.texcoord)), (-s * sx, c * sy, oy, 0.0)
 
 
 def _normal_matrix(m: np.ndarray) -> np.ndarray:
@@ -124,17 +153,22 @@ class GpuScene:
     # --- geometry ---------------------------------------------------------------------------
     def _upload_geometry(self) -> None:
         vk = self.device.vk
-        per_mesh = [prepare_mesh(m) for m in self.scene.meshes]
+        per_mesh = [prepare_mesh(m, self._tangent_uv_set(m)) for m in self.scene.meshes]
         self.vertex_offsets = np.cumsum([0] + [m.vertex_count for m in self.scene.meshes])
         self.index_offsets = np.cumsum([0] + [len(m.indices) for m in self.scene.meshes])
         usage = vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT
         self.streams: dict[str, Buffer] = {}
         self.stream_bytes: dict[str, int] = {}
-        for name in STREAMS:
+        self.has_texcoords1 = any(m.texcoords1 is not None for m in self.scene.meshes)
+        for name in STREAMS + (("texcoords1",) if self.has_texcoords1 else ()):
             arrays = [p[name] for p in per_mesh]
             data = np.concatenate(arrays) if arrays else np.zeros(4, np.uint8)
             self.streams[name] = self._own(upload_buffer(self.device, data, usage, name=name))
             self.stream_bytes[name] = int(data.nbytes)
+        if not self.has_texcoords1:
+            # The shader's TEXCOORD_1 input reads the TEXCOORD_0 buffer: an alias, not a copy
+            # (not in stream_bytes, owned once).
+            self.streams["texcoords1"] = self.streams["texcoords"]
         indices = [np.asarray(m.indices, dtype=np.uint32) for m in self.scene.meshes]
         idx = np.concatenate(indices) if indices else np.zeros(3, np.uint32)
         self.index_buffer = self._own(
@@ -142,9 +176,15 @@ class GpuScene:
         )
         self.vertex_count = int(self.vertex_offsets[-1])
 
+    def _tangent_uv_set(self, mesh: Mesh) -> int:
+        from vkpbr.bake.tangents import tangent_uv_set
+
+        materials = self.scene.materials
+        return tangent_uv_set(materials[mesh.material] if 0 <= mesh.material < len(materials) else None)
+
     def bytes_per_vertex(self) -> dict[str, int]:
-        """Vertex bytes of each TBN path (position + texcoord + frame)."""
-        base = 12 + 8
+        """Vertex bytes of each TBN path (position + texcoord(s) + frame)."""
+        base = 12 + 8 + (8 if self.has_texcoords1 else 0)
         return {"vectors": base + 12 + 16, "quat": base + 16, "packed": base + 4}
 
     # --- textures ---------------------------------------------------------------------------
@@ -288,12 +328,9 @@ class GpuScene:
         b["normal_scale"] = mat.normal_scale
         b["occlusion_strength"] = mat.occlusion_strength
         b["alpha_cutoff"] = mat.alpha_cutoff
-        ref = mat.base_color_texture
-        # KHR_texture_transform: uv' = T * R * S * uv, as two rows of a 2x3 matrix.
-        off, rot, scale = (ref.offset, ref.rotation, ref.scale) if ref else ((0, 0), 0.0, (1, 1))
-        c, s = np.cos(rot), np.sin(rot)
-        b["uv_transform_row0"] = (c * scale[0], s * scale[1], off[0], 0.0)
-        b["uv_transform_row1"] = (-s * scale[0], c * scale[1], off[1], 0.0)
+        for slot in L.MATERIAL_TEXTURES:
+            rows = uv_transform_rows(getattr(mat, f"{slot}_texture"))
+            b[f"{slot}_uv_row0"], b[f"{slot}_uv_row1"] = rows
         flags = 0
         if has["normal"]:
             flags |= L.MATERIAL_HAS_NORMAL_MAP

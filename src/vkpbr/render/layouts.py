@@ -146,6 +146,21 @@ SETTINGS_NORMAL_MAPPING = 1  # use normal maps
 SETTINGS_OCCLUSION = 2  # use occlusion maps
 SETTINGS_SRGB_TARGET = 4  # the colour target encodes sRGB in hardware
 
+# The material's textures, in binding order (set 1, bindings 0-5).
+MATERIAL_TEXTURES = ("base_color", "metallic", "roughness", "normal", "occlusion", "emissive")
+
+
+def _uv_fields() -> tuple[tuple[str, str], ...]:
+    """Per texture, its KHR_texture_transform as the two rows of a 2x3 matrix (uv' = M (u, v, 1)).
+
+    Row 0's fourth component holds the texture's UV set (0.0 = TEXCOORD_0, 1.0 = TEXCOORD_1):
+    std140 pads each 3-float row to a vec4 anyway, so the set index costs no bytes there, where
+    a separate uint per texture would need 16 bytes each (std140 array stride) or bit packing.
+    Row 1's fourth component is unused.
+    """
+    return tuple((f"{slot}_uv_row{r}", "vec4") for slot in MATERIAL_TEXTURES for r in (0, 1))
+
+
 MATERIAL = Std140Block(
     "Material",
     "material",
@@ -157,8 +172,7 @@ MATERIAL = Std140Block(
         ("normal_scale", "float"),
         ("occlusion_strength", "float"),
         ("alpha_cutoff", "float"),
-        ("uv_transform_row0", "vec4"),  # KHR_texture_transform as a 2x3 matrix: rows 0 and 1
-        ("uv_transform_row1", "vec4"),
+        *_uv_fields(),  # 6 textures x 2 vec4 = 192 bytes; the block is 256 bytes in all
         ("flags", "uint"),  # MATERIAL_* bits below
     ),
 )
@@ -201,7 +215,6 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
     ),
     2: ((0, "uniform", ("fragment",), "Light"),),
 }
-MATERIAL_TEXTURES = ("base_color", "metallic", "roughness", "normal", "occlusion", "emissive")
 
 
 class View(enum.IntEnum):
@@ -247,7 +260,7 @@ VIEW_HELP = {
     View.ROUGHNESS: "roughness r, grey",
     View.OCCLUSION: "ambient occlusion, grey",
     View.ALPHA: "base-colour alpha, grey",
-    View.TEXCOORDS: "texture coordinates: R = u, G = v (fractional part)",
+    View.TEXCOORDS: "base-colour texture coordinates (its UV set, transformed): R = u, G = v (fract)",
     View.DEPTH: "linear depth: distance along the view axis / far plane, grey",
     View.EMISSIVE: "emitted radiance Le",
     View.TANGENT: "tangent (world, from the vertex TBN), xyz*0.5+0.5",

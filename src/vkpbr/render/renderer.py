@@ -38,6 +38,9 @@ _TBN_STREAMS = {
     L.TbnMode.QUAT: (("qtangents", "vec4"),),
     L.TbnMode.PACKED: (("packed_frames", "uint"),),
 }
+# Vertex inputs before the tangent frame: location = binding, one stream each (pbr.vert).
+# "texcoords1" is the TEXCOORD_0 buffer again in scenes without TEXCOORD_1 (GpuScene).
+_UV_STREAMS = (("positions", "vec3"), ("texcoords", "vec2"), ("texcoords1", "vec2"))
 _PASS_ORDER = ("opaque", "opaque_double", "mask", "blend")
 FRAMES_IN_FLIGHT = 3
 
@@ -170,8 +173,8 @@ class Renderer:
     def _pipeline(self, target: Any, tbn: L.TbnMode, kind: str) -> Pipeline:
         key = (target.color_format, target.depth_format, target.samples, tbn, kind)
         if key not in self._pipelines:
-            streams = [VertexStream(0, 0, "vec3"), VertexStream(1, 1, "vec2")]
-            streams += [VertexStream(2 + i, 2 + i, fmt) for i, (_, fmt) in enumerate(_TBN_STREAMS[tbn])]
+            inputs = _UV_STREAMS + _TBN_STREAMS[tbn]
+            streams = [VertexStream(i, i, fmt) for i, (_, fmt) in enumerate(inputs)]
             base = PipelineSpec(
                 vertex_shader=f"pbr_{tbn.name.lower()}.vert.spv",
                 fragment_shader="pbr_opaque.frag.spv",
@@ -269,7 +272,7 @@ class Renderer:
         gs = self.gpu_scene
         slot = slot or self.slots[0]
         layout = self.pipeline_layout.handle
-        names = ["positions", "texcoords"] + [n for n, _ in _TBN_STREAMS[tbn]]
+        names = [n for n, _ in _UV_STREAMS + _TBN_STREAMS[tbn]]
         buffers = [gs.streams[n].handle for n in names]
         vk.vkCmdBindIndexBuffer(cmd, gs.index_buffer.handle, 0, vk.VK_INDEX_TYPE_UINT32)
         for kind in _PASS_ORDER:

@@ -73,8 +73,18 @@ layout(set = 1, binding = 6, std140) uniform Material {
     float normal_scale;
     float occlusion_strength;
     float alpha_cutoff;
-    vec4 uv_transform_row0;
-    vec4 uv_transform_row1;
+    vec4 base_color_uv_row0;
+    vec4 base_color_uv_row1;
+    vec4 metallic_uv_row0;
+    vec4 metallic_uv_row1;
+    vec4 roughness_uv_row0;
+    vec4 roughness_uv_row1;
+    vec4 normal_uv_row0;
+    vec4 normal_uv_row1;
+    vec4 occlusion_uv_row0;
+    vec4 occlusion_uv_row1;
+    vec4 emissive_uv_row0;
+    vec4 emissive_uv_row1;
     uint flags;
 } material;
 layout(set = 2, binding = 0, std140) uniform Light {

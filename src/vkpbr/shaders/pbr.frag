@@ -8,7 +8,7 @@
 #include "brdf.glsl"
 
 layout(location = 0) in vec3 v_world_pos;
-layout(location = 1) in vec2 v_texcoord;
+layout(location = 1) in vec4 v_texcoords;  // xy: TEXCOORD_0, zw: TEXCOORD_1
 layout(location = 2) in vec3 v_normal;
 layout(location = 3) in vec3 v_tangent;
 layout(location = 4) in vec3 v_bitangent;
@@ -22,22 +22,31 @@ vec3 safe_normalize(vec3 x, vec3 fallback) {
 
 vec3 encode_dir(vec3 d) { return d * 0.5 + 0.5; }
 
-void main() {
-    // KHR_texture_transform as a 2x3 matrix (identity for most materials).
-    vec3 uv_h = vec3(v_texcoord, 1.0);
-    vec2 uv = vec2(dot(material.uv_transform_row0.xyz, uv_h), dot(material.uv_transform_row1.xyz, uv_h));
+// One texture's coordinates: its own UV set (row0.w, 0 or 1) through its own
+// KHR_texture_transform, a 2x3 matrix given as two rows (render/layouts.py, MATERIAL).
+vec2 texture_uv(vec4 row0, vec4 row1) {
+    vec3 uv_h = vec3(row0.w > 0.5 ? v_texcoords.zw : v_texcoords.xy, 1.0);
+    return vec2(dot(row0.xyz, uv_h), dot(row1.xyz, uv_h));
+}
 
+void main() {
+    vec2 uv = texture_uv(material.base_color_uv_row0, material.base_color_uv_row1);
     vec4 base = texture(base_color_map, uv) * material.base_color_factor;
 #if ALPHA_MASK
     if (base.a < material.alpha_cutoff) discard;
 #endif
     vec3 c = base.rgb;
-    float metallic = clamp(texture(metallic_map, uv).r * material.metallic_factor, 0.0, 1.0);
-    float roughness = clamp(texture(roughness_map, uv).r * material.roughness_factor, MIN_ROUGHNESS, 1.0);
+    vec2 metallic_uv = texture_uv(material.metallic_uv_row0, material.metallic_uv_row1);
+    float metallic = clamp(texture(metallic_map, metallic_uv).r * material.metallic_factor, 0.0, 1.0);
+    vec2 roughness_uv = texture_uv(material.roughness_uv_row0, material.roughness_uv_row1);
+    float roughness = clamp(texture(roughness_map, roughness_uv).r * material.roughness_factor, MIN_ROUGHNESS, 1.0);
     float occlusion = 1.0;
-    if ((settings.flags & SETTINGS_OCCLUSION) != 0u && (material.flags & MATERIAL_HAS_OCCLUSION_MAP) != 0u)
-        occlusion = 1.0 + material.occlusion_strength * (texture(occlusion_map, uv).r - 1.0);
-    vec3 emissive = texture(emissive_map, uv).rgb * material.emissive_factor;
+    if ((settings.flags & SETTINGS_OCCLUSION) != 0u && (material.flags & MATERIAL_HAS_OCCLUSION_MAP) != 0u) {
+        vec2 occlusion_uv = texture_uv(material.occlusion_uv_row0, material.occlusion_uv_row1);
+        occlusion = 1.0 + material.occlusion_strength * (texture(occlusion_map, occlusion_uv).r - 1.0);
+    }
+    vec2 emissive_uv = texture_uv(material.emissive_uv_row0, material.emissive_uv_row1);
+    vec3 emissive = texture(emissive_map, emissive_uv).rgb * material.emissive_factor;
 
     // Tangent frame: back faces of double-sided materials see the whole frame flipped.
     vec3 ng = safe_normalize(v_normal, vec3(0.0, 0.0, 1.0));
@@ -48,7 +57,8 @@ void main() {
     }
     vec3 n = ng;
     if ((settings.flags & SETTINGS_NORMAL_MAPPING) != 0u && (material.flags & MATERIAL_HAS_NORMAL_MAP) != 0u) {
-        vec3 tn = texture(normal_map, uv).xyz * 2.0 - 1.0;  // linear (UNORM) texture
+        vec2 normal_uv = texture_uv(material.normal_uv_row0, material.normal_uv_row1);
+        vec3 tn = texture(normal_map, normal_uv).xyz * 2.0 - 1.0;  // linear (UNORM) texture
         tn.xy *= material.normal_scale;
         n = safe_normalize(mat3(t, b, ng) * tn, ng);
     }

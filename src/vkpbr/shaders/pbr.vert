@@ -8,18 +8,21 @@
 #endif
 
 layout(location = 0) in vec3 in_position;
-layout(location = 1) in vec2 in_texcoord;
+layout(location = 1) in vec2 in_texcoord0;
+// TEXCOORD_1. Scenes without it bind the TEXCOORD_0 buffer here (render/gpu_scene.py), so
+// one shader serves both and such scenes spend no vertex memory on a second set.
+layout(location = 2) in vec2 in_texcoord1;
 #if TBN_MODE == 0
-layout(location = 2) in vec3 in_normal;
-layout(location = 3) in vec4 in_tangent;
+layout(location = 3) in vec3 in_normal;
+layout(location = 4) in vec4 in_tangent;
 #elif TBN_MODE == 1
-layout(location = 2) in vec4 in_qtangent;
+layout(location = 3) in vec4 in_qtangent;
 #else
-layout(location = 2) in uint in_packed_frame;
+layout(location = 3) in uint in_packed_frame;
 #endif
 
 layout(location = 0) out vec3 v_world_pos;
-layout(location = 1) out vec2 v_texcoord;
+layout(location = 1) out vec4 v_texcoords;  // xy: TEXCOORD_0, zw: TEXCOORD_1 (one varying slot)
 layout(location = 2) out vec3 v_normal;
 layout(location = 3) out vec3 v_tangent;
 layout(location = 4) out vec3 v_bitangent;
@@ -42,7 +45,7 @@ void main() {
 #endif
     vec4 world = draw.model * vec4(in_position, 1.0);
     v_world_pos = world.xyz;
-    v_texcoord = in_texcoord;
+    v_texcoords = vec4(in_texcoord0, in_texcoord1);
     // Normals take the inverse transpose; tangent and bitangent are surface directions and
     // take the model matrix itself, which keeps the handedness right under mirroring.
     v_normal = mat3(draw.normal_matrix) * n;
