@@ -13,6 +13,10 @@ nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
 python3 -m vkpbr info | head -3
 echo "== GPU test pass (validation on)"
 python3 -m pytest -q -p no:cacheprovider tests/gpu tests/unit > "$OUT/gpu-tests.log" 2>&1; tail -3 "$OUT/gpu-tests.log"
+echo "== viewer loop, offscreen, Sponza 1920x1080, flying with the light animated (600 frames)"
+python3 -m vkpbr view .assets/Sponza/Sponza.gltf --offscreen --size 1920x1080 --script benchmarks/viewer_fly.json
+echo "== vkpbr bench (no peers)"
+python3 -m vkpbr bench --frames 200 --sponza .assets/Sponza/Sponza.gltf 2>/dev/null
 echo "== bench_core"
 python3 benchmarks/bench_core.py --frames 100 --json "$OUT/core.json"
 echo "== Sponza 1920x1080"
