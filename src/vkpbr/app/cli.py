@@ -93,27 +93,37 @@ def _add_render(sub: argparse._SubParsersAction) -> None:
                    help="render one image per camera pose in FILE (a JSON list of "
                         '"ex,ey,ez,tx,ty,tz[,ux,uy,uz]" strings or {"eye","target","up","fov"} '
                         "objects) into the folder --out")
+    p.add_argument("--list-views", action="store_true", help="list the debug views and exit")
+    add_shading_options(p)
+    p.add_argument("--msaa", type=int, default=1, choices=[1, 4], help="samples per pixel")
+    p.add_argument("--linear", action="store_true", help="linear float32 colour (write a .npy)")
+    p.add_argument("--frames", type=int, default=1, help="render N frames and report per-frame time")
+    add_device_options(p)
+    p.set_defaults(run=_run_render)
+
+
+def add_shading_options(p: argparse.ArgumentParser) -> None:
+    """Field of view, light and modes: shared by `render` and `view` (same names, same
+    meaning, so the viewer's printed command reproduces a view headless)."""
     p.add_argument("--fov", type=float, help="vertical field of view in degrees")
     p.add_argument("--light", help="x,y,z: point light position")
     p.add_argument("--light-color", help="r,g,b: light colour (linear)")
     p.add_argument("--light-intensity", type=float, help="light intensity multiplier")
     p.add_argument("--falloff", choices=["none", "inverse-square"], help="light distance falloff")
     p.add_argument("--brdf", default="ggx", help="normal distribution D: ggx | blinn-phong")
-    p.add_argument("--view", default="final", help="debug view (see --list-views)")
-    p.add_argument("--list-views", action="store_true", help="list the debug views and exit")
+    p.add_argument("--view", default="final", help="debug view (`vkpbr render --list-views`)")
     p.add_argument("--tbn", default="vectors", help="tangent frame path: vectors | quat | packed")
     p.add_argument("--tonemap", default="none", help="none | reinhard | aces")
     p.add_argument("--exposure", type=float, default=0.0, help="exposure in EV stops (default 0)")
-    p.add_argument("--msaa", type=int, default=1, choices=[1, 4], help="samples per pixel")
     p.add_argument("--no-alpha-mask", action="store_true", help="draw masked materials as opaque")
     p.add_argument("--no-normal-maps", action="store_true", help="ignore normal maps")
     p.add_argument("--no-occlusion", action="store_true", help="ignore occlusion maps")
-    p.add_argument("--linear", action="store_true", help="linear float32 colour (write a .npy)")
-    p.add_argument("--frames", type=int, default=1, help="render N frames and report per-frame time")
+
+
+def add_device_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--device", help="device name substring or index (see `vkpbr info`)")
     p.add_argument("--validation", action="store_true", help="enable the Vulkan validation layer")
     add_scene_cache_option(p)
-    p.set_defaults(run=_run_render)
 
 
 def _list_views() -> int:
@@ -264,7 +274,7 @@ def _render_batch(args: argparse.Namespace, size: tuple[int, int], options) -> i
     return 0
 
 
-def _options_from_args(args: argparse.Namespace):  # noqa: ANN202
+def options_from_args(args: argparse.Namespace):  # noqa: ANN201
     from vkpbr.render.renderer import RenderOptions
 
     options = RenderOptions(
@@ -280,7 +290,7 @@ def _run_render(args: argparse.Namespace) -> int:
         return _list_views()
     size = parse_size(args.size)
     if args.cameras:
-        return _render_batch(args, size, _options_from_args(args))
+        return _render_batch(args, size, options_from_args(args))
     out = Path(args.out)
     check_writable(out)
     if args.linear and out.suffix.lower() != ".npy":
@@ -289,7 +299,7 @@ def _run_render(args: argparse.Namespace) -> int:
         raise UsageError("--frames must be at least 1")
     from vkpbr.render.renderer import Renderer
 
-    options = _options_from_args(args)
+    options = options_from_args(args)
     t0 = time.perf_counter()
     scene = load_scene_arg(args)
     t_load = time.perf_counter()

@@ -15,7 +15,7 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from vkpbr.app.cli import add_scene_cache_option
+    from vkpbr.app.cli import add_device_options, add_shading_options
 
     p = sub.add_parser("view", help="open SCENE in an interactive window",
                        description="Fly through SCENE (default: the built-in PBR chart); "
@@ -24,19 +24,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--size", default="1280x720", help="window WIDTHxHEIGHT (default 1280x720)")
     p.add_argument("--camera", help="start pose ex,ey,ez,tx,ty,tz[,ux,uy,uz] (as `render`)")
     p.add_argument("--camera-index", type=int, help="start at the scene file's camera N")
-    p.add_argument("--fov", type=float, help="vertical field of view in degrees")
-    p.add_argument("--light", help="x,y,z: point light position")
-    p.add_argument("--light-color", help="r,g,b: light colour (linear)")
-    p.add_argument("--light-intensity", type=float, help="light intensity multiplier")
-    p.add_argument("--falloff", choices=["none", "inverse-square"], help="light distance falloff")
-    p.add_argument("--brdf", default="ggx", help="normal distribution D: ggx | blinn-phong")
-    p.add_argument("--view", default="final", help="debug view (`vkpbr render --list-views`)")
-    p.add_argument("--tbn", default="vectors", help="tangent frame path: vectors | quat | packed")
-    p.add_argument("--tonemap", default="none", help="none | reinhard | aces")
-    p.add_argument("--exposure", type=float, default=0.0, help="exposure in EV stops")
-    p.add_argument("--no-alpha-mask", action="store_true", help="draw masked materials as opaque")
-    p.add_argument("--no-normal-maps", action="store_true", help="ignore normal maps")
-    p.add_argument("--no-occlusion", action="store_true", help="ignore occlusion maps")
+    add_shading_options(p)
     p.add_argument("--no-vsync", action="store_true",
                    help="present without waiting for vertical sync (mailbox, else immediate)")
     p.add_argument("--offscreen", action="store_true",
@@ -45,9 +33,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frames", type=int, help="render N frames, then exit")
     p.add_argument("--screenshot", help="with --frames: write the last frame to this PNG")
     p.add_argument("--script", help="JSON file of timed input events (docs/viewer.md)")
-    p.add_argument("--device", help="device name substring or index (see `vkpbr info`)")
-    p.add_argument("--validation", action="store_true", help="enable the Vulkan validation layer")
-    add_scene_cache_option(p)
+    add_device_options(p)
     p.set_defaults(run=run)
 
 
@@ -57,9 +43,9 @@ def run(args: argparse.Namespace) -> int:
         _light_from_args,
         check_writable,
         load_scene_arg,
+        options_from_args,
         parse_size,
     )
-    from vkpbr.render.renderer import RenderOptions
 
     size = parse_size(args.size)
     if args.frames is not None and args.frames < 1:
@@ -74,11 +60,7 @@ def run(args: argparse.Namespace) -> int:
         check_writable(shot)
         if shot.suffix.lower() != ".png":
             raise UsageError(f"--screenshot {shot}: give a .png file name")
-    options = RenderOptions(
-        view=args.view, brdf=args.brdf, tbn=args.tbn, tonemap=args.tonemap, exposure=args.exposure,
-        alpha_mask=not args.no_alpha_mask, normal_mapping=not args.no_normal_maps,
-        occlusion=not args.no_occlusion)
-    options.resolved()  # unknown names fail before the window opens
+    options = options_from_args(args)  # unknown names fail before the window opens
     script = None
     if args.script:
         from vkpbr.app.script import load_script

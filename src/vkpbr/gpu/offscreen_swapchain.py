@@ -13,7 +13,7 @@ from typing import Any
 
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image
-from vkpbr.gpu.swapchain import _NO_TIMEOUT, Swapchain
+from vkpbr.gpu.swapchain import Swapchain
 from vkpbr.gpu.vk import check_result
 
 __all__ = ["OffscreenSwapchain"]
@@ -61,15 +61,8 @@ class OffscreenSwapchain(Swapchain):
 
     def acquire(self) -> int | None:
         """The next image in turn, once the frames that last used its slot and it are done."""
-        lib, dev, slot = self.device.vk.lib, self.device.handle, self.slot
-        check_result(lib.vkWaitForFences(dev, 1, self._fence_ptrs[slot], 1, _NO_TIMEOUT),
-                     "vkWaitForFences")
-        index = self.frame % len(self.images)
-        prev = self._image_fence[index]
-        if prev is not None and prev is not self._fence_ptrs[slot]:
-            check_result(lib.vkWaitForFences(dev, 1, prev, 1, _NO_TIMEOUT), "vkWaitForFences")
-        self._image_fence[index] = self._fence_ptrs[slot]
-        return index
+        self.wait_frame(self.slot)
+        return self._claim(self.frame % len(self.images))
 
     def submit_and_present(self, cmd: Any, index: int) -> bool:
         lib, slot = self.device.vk.lib, self.slot

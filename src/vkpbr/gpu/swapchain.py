@@ -242,23 +242,25 @@ class Swapchain:
         """Wait for this slot's previous frame, then acquire an image: its index, or None when
         the swapchain is out of date (recreate, then try again). Suboptimal images are used
         and `needs_recreate` is set, so the caller recreates after presenting."""
-        vk, lib = self.device.vk, self.device.vk.lib
-        dev, slot = self.device.handle, self.slot
-        check_result(lib.vkWaitForFences(dev, 1, self._fence_ptrs[slot], 1, _NO_TIMEOUT),
-                     "vkWaitForFences")
-        result = self._acquire(dev, self.handle, _NO_TIMEOUT, self._acquired[slot],
-                               vk.ffi.NULL, self._index)
+        vk = self.device.vk
+        self.wait_frame(self.slot)
+        result = self._acquire(self.device.handle, self.handle, _NO_TIMEOUT,
+                               self._acquired[self.slot], vk.ffi.NULL, self._index)
         if result == vk.VK_ERROR_OUT_OF_DATE_KHR:
             return None
         self.needs_recreate = result == vk.VK_SUBOPTIMAL_KHR
         if result not in (vk.VK_SUCCESS, vk.VK_SUBOPTIMAL_KHR):
             check_result(result, "vkAcquireNextImageKHR")
-        index = int(self._index[0])
-        # The image may still be drawn by a frame of the other slot: wait for that one.
-        prev = self._image_fence[index]
-        if prev is not None and prev is not self._fence_ptrs[slot]:
-            check_result(lib.vkWaitForFences(dev, 1, prev, 1, _NO_TIMEOUT), "vkWaitForFences")
-        self._image_fence[index] = self._fence_ptrs[slot]
+        return self._claim(int(self._index[0]))
+
+    def _claim(self, index: int) -> int:
+        """Make image `index` this slot's: first wait for a frame of the other slot that may
+        still be drawing into it."""
+        prev, mine = self._image_fence[index], self._fence_ptrs[self.slot]
+        if prev is not None and prev is not mine:
+            check_result(self.device.vk.lib.vkWaitForFences(
+                self.device.handle, 1, prev, 1, _NO_TIMEOUT), "vkWaitForFences")
+        self._image_fence[index] = mine
         return index
 
     def submit_and_present(self, cmd: Any, index: int) -> bool:
