@@ -20,7 +20,6 @@ import json
 import mmap as _mmap
 import os
 import struct
-import tempfile
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from ..atomic import atomic_writer
 from ..errors import BakeFormatError
 from ..scene.types import Camera, Image, Light, Material, Mesh, Node, Sampler, Scene, TextureRef
 
@@ -218,21 +218,13 @@ def write_baked(path: str | os.PathLike[str], baked: BakedScene) -> int:
     head = head[:36] + struct.pack("<I", zlib.crc32(head[:36]))
     head += b"\0" * (_HEADER_SIZE - len(head))
 
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(head)
-            f.write(entries.tobytes())
-            f.write(b"\0" * _pad(_HEADER_SIZE + entries.nbytes))
-            for _, data in sections:
-                f.write(data)
-                f.write(b"\0" * _pad(len(data)))
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_writer(path, fsync=True) as f:
+        f.write(head)
+        f.write(entries.tobytes())
+        f.write(b"\0" * _pad(_HEADER_SIZE + entries.nbytes))
+        for _, data in sections:
+            f.write(data)
+            f.write(b"\0" * _pad(len(data)))
     return file_size
 
 
