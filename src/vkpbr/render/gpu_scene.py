@@ -2,8 +2,10 @@
 
 Geometry: every mesh's streams are concatenated into one buffer per attribute (position,
 texcoord, normal, tangent, QTangent, packed frame) plus one index buffer, so a frame binds
-vertex buffers once per pipeline and each draw is one vkCmdDrawIndexed with offsets. All three
-tangent-frame streams are uploaded, so switching --tbn at run time rebuilds nothing. A
+vertex buffers once per pipeline and each draw is one vkCmdDrawIndexed with offsets.
+The QTangent and packed streams are built on first use of their path (`ensure_streams`):
+the default vectors path never pays for them (~0.4 s of Sponza's load on 2 CPU cores); the
+viewer asks for all three up front. A
 TEXCOORD_1 stream exists only when some mesh has TEXCOORD_1; otherwise the TEXCOORD_0 buffer
 is bound for the shader's second UV input, so such scenes (Sponza) cost no extra memory.
 
@@ -34,7 +36,8 @@ from vkpbr.scene.types import Material, Mesh, Scene, TextureRef
 __all__ = ["GpuScene", "Draw", "prepare_mesh", "uv_transform_rows"]
 
 _SWIZZLE = {0: "rrrr", 1: "gggg", 2: "bbbb", 3: "aaaa"}
-STREAMS = ("positions", "texcoords", "normals", "tangents", "qtangents", "packed_frames")
+STREAMS = ("positions", "texcoords", "normals", "tangents")  # built at load
+LAZY_STREAMS = ("qtangents", "packed_frames")  # built by ensure_streams on first use
 
 
 @dataclass
@@ -61,7 +64,7 @@ def _uv_stream(mesh: Mesh, uv: np.ndarray | None, fallback: np.ndarray) -> np.nd
     return np.ascontiguousarray(uv, dtype=np.float32)
 
 
-def prepare_mesh(mesh: Mesh, tangent_uv_set: int = 0) -> dict[str, np.ndarray]:
+def prepare_mesh(mesh: Mesh, tangent_uv_set: int = 0, frames: bool = True) -> dict[str, np.ndarray]:
     """All vertex streams of a mesh, computing what the file did not supply.
 
     Returns positions (N,3) f32, texcoords (N,2) f32, texcoords1 (N,2) f32, normals (N,3) f32,
@@ -69,7 +72,8 @@ def prepare_mesh(mesh: Mesh, tangent_uv_set: int = 0) -> dict[str, np.ndarray]:
     TEXCOORD_1 gets its TEXCOORD_0 as texcoords1: then it renders the same whether or not some
     other mesh of the scene brings a TEXCOORD_1 stream (scenes with none bind TEXCOORD_0 for
     set 1 too), and a texture asking for a set the mesh lacks still gets real coordinates.
-    Generated tangents follow `tangent_uv_set`, the set the normal texture reads.
+    Generated tangents follow `tangent_uv_set`, the set the normal texture reads. With
+    `frames=False`, qtangents / packed_frames are only those the mesh brings (else None).
     """
     from vkpbr.bake.frames import pack_qtangent, tbn_to_qtangent
     from vkpbr.bake.tangents import generate_tangents
@@ -87,19 +91,18 @@ def prepare_mesh(mesh: Mesh, tangent_uv_set: int = 0) -> dict[str, np.ndarray]:
         tan = generate_tangents(pos, nrm, uv1 if tangent_uv_set == 1 else uv, idx)
     tan = np.ascontiguousarray(tan, dtype=np.float32)
     q = getattr(mesh, "qtangents", None)
-    if q is None:
-        q = tbn_to_qtangent(nrm, tan)
     packed = getattr(mesh, "packed_frames", None)
-    if packed is None:
-        packed = pack_qtangent(q)
+    if frames:
+        q = tbn_to_qtangent(nrm, tan) if q is None else q
+        packed = pack_qtangent(q) if packed is None else packed
     return {
         "positions": pos,
         "texcoords": uv,
         "texcoords1": uv1,
         "normals": nrm,
         "tangents": tan,
-        "qtangents": np.ascontiguousarray(q, dtype=np.float32),
-        "packed_frames": np.ascontiguousarray(packed, dtype=np.uint32),
+        "qtangents": None if q is None else np.ascontiguousarray(q, dtype=np.float32),
+        "packed_frames": None if packed is None else np.ascontiguousarray(packed, dtype=np.uint32),
     }
 
 
@@ -113,6 +116,12 @@ def uv_transform_rows(ref: TextureRef | None) -> tuple[tuple[float, ...], tuple[
     c, s = float(np.cos(ref.rotation)), float(np.sin(ref.rotation))
     (ox, oy), (sx, sy) = ref.offset, ref.scale
     return (c * sx, s * sy, ox, float(ref.texcoord)), (-s * sx, c * sy, oy, 0.0)
+
+
+def _concat(arrays: list[np.ndarray], dtype: type, width: int) -> np.ndarray:
+    if not arrays:
+        return np.zeros((1, width), dtype)
+    return np.ascontiguousarray(np.concatenate(arrays), dtype=dtype)
 
 
 def _normal_matrix(m: np.ndarray) -> np.ndarray:
@@ -153,18 +162,20 @@ class GpuScene:
     # --- geometry ---------------------------------------------------------------------------
     def _upload_geometry(self) -> None:
         vk = self.device.vk
-        per_mesh = [prepare_mesh(m, self._tangent_uv_set(m)) for m in self.scene.meshes]
+        per_mesh = [prepare_mesh(m, self._tangent_uv_set(m), frames=False)
+                    for m in self.scene.meshes]
         self.vertex_offsets = np.cumsum([0] + [m.vertex_count for m in self.scene.meshes])
         self.index_offsets = np.cumsum([0] + [len(m.indices) for m in self.scene.meshes])
-        usage = vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT
         self.streams: dict[str, Buffer] = {}
         self.stream_bytes: dict[str, int] = {}
         self.has_texcoords1 = any(m.texcoords1 is not None for m in self.scene.meshes)
         for name in STREAMS + (("texcoords1",) if self.has_texcoords1 else ()):
             arrays = [p[name] for p in per_mesh]
             data = np.concatenate(arrays) if arrays else np.zeros(4, np.uint8)
-            self.streams[name] = self._own(upload_buffer(self.device, data, usage, name=name))
-            self.stream_bytes[name] = int(data.nbytes)
+            self._add_stream(name, data)
+        # Per mesh (normal, tangent, QTangent or None, packed or None) for ensure_streams.
+        self._frame_sources: list[tuple] | None = [
+            (p["normals"], p["tangents"], p["qtangents"], p["packed_frames"]) for p in per_mesh]
         if not self.has_texcoords1:
             # The shader's TEXCOORD_1 input reads the TEXCOORD_0 buffer: an alias, not a copy
             # (not in stream_bytes, owned once).
@@ -175,6 +186,31 @@ class GpuScene:
             upload_buffer(self.device, idx, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT, name="indices")
         )
         self.vertex_count = int(self.vertex_offsets[-1])
+
+    def _add_stream(self, name: str, data: np.ndarray) -> None:
+        usage = self.device.vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT
+        self.streams[name] = self._own(upload_buffer(self.device, data, usage, name=name))
+        self.stream_bytes[name] = int(data.nbytes)
+
+    def ensure_streams(self, names: tuple[str, ...] = LAZY_STREAMS) -> None:
+        """Build the QTangent / packed-frame streams among `names` not built yet (a mesh's own
+        baked ones are used as they are). Safe at any time: a new buffer is bound only by
+        command buffers recorded after it exists."""
+        from vkpbr.bake.frames import pack_qtangent, tbn_to_qtangent
+
+        missing = [n for n in LAZY_STREAMS if n in names and n not in self.streams]
+        if not missing or self._frame_sources is None:
+            return
+        qs = [tbn_to_qtangent(nrm, tan) if q is None else q
+              for nrm, tan, q, _ in self._frame_sources]
+        if "qtangents" in missing:
+            self._add_stream("qtangents", _concat(qs, np.float32, 4))
+        if "packed_frames" in missing:
+            packed = [pack_qtangent(q) if pk is None else pk
+                      for q, (_, _, _, pk) in zip(qs, self._frame_sources, strict=True)]
+            self._add_stream("packed_frames", _concat(packed, np.uint32, 1))
+        if all(n in self.streams for n in LAZY_STREAMS):
+            self._frame_sources = None  # nothing left to build from
 
     def _tangent_uv_set(self, mesh: Mesh) -> int:
         from vkpbr.bake.tangents import tangent_uv_set

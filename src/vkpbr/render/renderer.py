@@ -273,6 +273,7 @@ class Renderer:
         slot = slot or self.slots[0]
         layout = self.pipeline_layout.handle
         names = [n for n, _ in _UV_STREAMS + _TBN_STREAMS[tbn]]
+        gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
         buffers = [gs.streams[n].handle for n in names]
         vk.vkCmdBindIndexBuffer(cmd, gs.index_buffer.handle, 0, vk.VK_INDEX_TYPE_UINT32)
         for kind in _PASS_ORDER:

@@ -36,6 +36,7 @@ class WindowRenderer:
         self.renderer, self.swapchain, self.overlay = renderer, swapchain, overlay
         self.device = renderer.device
         renderer.build_pipelines(swapchain)  # every TBN path and pass, before any key press
+        renderer.gpu_scene.ensure_streams()  # and every path's vertex stream
         self._generation = -1
         self._objects: list[Any] = []
         self._cmds: dict[tuple, tuple[Any, tuple]] = {}
