@@ -1,42 +1,55 @@
 """Re-make the golden images under tests/gpu/golden on lavapipe (the CI device).
 
 Run after a deliberate change to what the renderer draws, then look at the images before
-committing them:  .venv/bin/python scripts/make_goldens.py
-The tests that read them state their tolerances (tests/gpu/test_views.py, test_scenes.py).
+committing them:  .venv/bin/python scripts/make_goldens.py [NAME ...]
+NAME is a key of GOLDENS (e.g. damagedhelmet_160x120); none means all. What each golden is
+rendered from, and the tolerances the tests apply, are defined once in tests/gpu/goldens.py
+(checked by tests/gpu/test_goldens.py). Before overwriting, the script prints how far the
+new render is from the old golden.
 """
 
 from __future__ import annotations
 
 import sys
+import time
 from pathlib import Path
 
+import numpy as np
 from PIL import Image
 
 from vkpbr.render.renderer import Renderer
-from vkpbr.scene.loader import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
-GOLDEN = ROOT / "tests" / "gpu" / "golden"
+sys.path.insert(0, str(ROOT / "tests" / "gpu"))
+import goldens  # noqa: E402  (tests/gpu/goldens.py: the one table of goldens)
+
 ASSETS = ROOT.parent / "shared" / "assets"
 
-# name -> (scene file under ../shared/assets or None for the default scene, (width, height))
-GOLDENS = {
-    "default_160x120.png": (None, (160, 120)),
-    "sponza_320x180.png": ("Sponza/glTF/Sponza.gltf", (320, 180)),
-}
 
-
-def main() -> int:
-    for name, (rel, size) in GOLDENS.items():
-        scene = load_scene(ASSETS / rel) if rel else None
+def main(names: list[str]) -> int:
+    unknown = sorted(set(names) - set(goldens.GOLDENS))
+    if unknown:
+        sys.exit(f"unknown golden(s) {unknown}; known: {sorted(goldens.GOLDENS)}")
+    for key, golden in goldens.GOLDENS.items():
+        if names and key not in names:
+            continue
+        scene = goldens.load(golden, ASSETS)
         with Renderer(scene, validation=True) as r:
             if "llvmpipe" not in r.device.info.name:
                 sys.exit(f"goldens are made on lavapipe, not {r.device.info.name}")
-            img = r.render(size=size)
-        Image.fromarray(img[..., :3]).save(GOLDEN / name)
-        print(f"wrote {GOLDEN / name}")
+            t0 = time.perf_counter()
+            img = goldens.render(r, golden)
+            ms = (time.perf_counter() - t0) * 1e3
+        was = ""
+        if golden.path.exists():
+            old = np.asarray(Image.open(golden.path).convert("RGB"))
+            if old.shape == img.shape:
+                mean, diff = goldens.difference(img, old)
+                was = f"; vs the old golden: mean {mean:.3f}, {(diff > 8).mean():.3%} > 8"
+        Image.fromarray(img).save(golden.path)
+        print(f"wrote {golden.path} ({ms:.0f} ms render{was})")
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main(sys.argv[1:]))

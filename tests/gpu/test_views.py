@@ -1,4 +1,5 @@
-"""Debug views, default scene golden image, resource lifetime."""
+"""Debug views, switches, depth, MSAA, resource lifetime (the default scene's golden image is
+checked in test_goldens.py)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,6 @@ from PIL import Image
 
 from vkpbr.render.layouts import View
 
-GOLDEN = Path(__file__).parent / "golden"
 SIZE = (160, 120)
 
 
@@ -26,7 +26,6 @@ def default_renders():
         color, depth = r.render(size=SIZE, depth=True)
         renders["depth-array"] = depth
         renders["msaa-off"] = color
-        renders["device"] = r.device.info.name
         assert r.device.instance.errors == []
     return renders
 
@@ -55,24 +54,6 @@ def test_depth_output(default_renders) -> None:
     finite = np.isfinite(depth)
     assert finite.mean() > 0.3 and (~finite).any()  # spheres and floor, and background
     assert depth[finite].min() > 0.1 and depth[finite].max() < 100.0
-
-
-def test_default_scene_golden(default_renders, tmp_path: Path) -> None:
-    """Golden image of the default scene, made on lavapipe (the CI device). There the
-    tolerance is mean |diff| <= 0.5 with at most 0.5% of channel values off by more than 8
-    (rasterisation edges may move). Other drivers filter textures and place mip levels
-    differently (measured on an H100: mean 0.89, 3.0% > 8), so elsewhere the bound is
-    mean <= 2 with at most 6% off by more than 8: still fails on any real shading change."""
-    got = default_renders[View.FINAL][..., :3].astype(np.int16)
-    golden_path = GOLDEN / "default_160x120.png"
-    want = np.asarray(Image.open(golden_path).convert("RGB")).astype(np.int16)
-    diff = np.abs(got - want)
-    pinned = "llvmpipe" in default_renders["device"]
-    mean_bound, outlier_bound = (0.5, 0.005) if pinned else (2.0, 0.06)
-    if diff.mean() > mean_bound or (diff > 8).mean() > outlier_bound:
-        Image.fromarray(got.astype(np.uint8)).save(tmp_path / "got.png")
-        pytest.fail(f"differs from {golden_path}: mean {diff.mean():.3f}, "
-                    f"{(diff > 8).mean():.4%} > 8; got written to {tmp_path / 'got.png'}")
 
 
 def test_msaa_renders_and_smooths_edges(make_renderer, default_renders) -> None:
