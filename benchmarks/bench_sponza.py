@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-CANDIDATES = [REPO / ".assets" / "Sponza" / "Sponza.gltf", REPO.parent / "shared" / "assets" / "Sponza" / "glTF" / "Sponza.gltf"]
+CANDIDATES = [REPO / ".assets" / "models" / "Sponza" / "glTF" / "Sponza.gltf", REPO.parent / "shared" / "assets" / "Sponza" / "glTF" / "Sponza.gltf"]
 
 
 def psnr(a: np.ndarray, b: np.ndarray) -> float:

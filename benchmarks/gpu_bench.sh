@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Device-tool run for the speed issues: `vkpbr bench --peers` (vkpbr beside pyrender and pygfx
 # in one run) and the Sponza breakdown. Carry .gl-peers, .whl, .whl-peers, .assets.
-# .assets/Sponza is Sponza/glTF with its JPEGs re-encoded at quality 85 (same resolution) to
+# .assets/models/Sponza/glTF is Sponza/glTF with its JPEGs re-encoded at quality 85 (same resolution) to
 # fit the transfer limit; every renderer loads the same files.
 set -uo pipefail
 FRAMES=${FRAMES:-200}
@@ -20,7 +20,7 @@ export PYTHONPATH=/tmp/site:/tmp/peers:$PWD/src PYTHONUNBUFFERED=1 PYOPENGL_PLAT
 nv=/usr/local/nvidia/share
 ls /usr/share/glvnd/egl_vendor.d/*nvidia* >/dev/null 2>&1 || export __EGL_VENDOR_LIBRARY_FILENAMES=$nv/glvnd/egl_vendor.d/10_nvidia.json
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
-python3 -m vkpbr bench --frames "$FRAMES" --sponza .assets/Sponza/Sponza.gltf --peers --json > "$OUT/bench.json" 2> "$OUT/bench.err"
+python3 -m vkpbr bench --frames "$FRAMES" --sponza .assets/models/Sponza/glTF/Sponza.gltf --peers --json > "$OUT/bench.json" 2> "$OUT/bench.err"
 python3 - "$OUT/bench.json" <<'PY'
 import json, sys
 text = open(sys.argv[1]).read()

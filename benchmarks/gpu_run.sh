@@ -12,13 +12,17 @@ fi
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
 python3 -m vkpbr info | head -3
 echo "== GPU test pass (validation on)"
-python3 -m pytest -q -p no:cacheprovider tests/gpu tests/unit > "$OUT/gpu-tests.log" 2>&1; tail -3 "$OUT/gpu-tests.log"
+# .assets/models: the sample models in ../shared/assets' layout (Sponza's JPEGs re-encoded at
+# quality 85, BoomBox without its unused spec-gloss maps) to fit the transfer limit.
+VKPBR_ASSETS=$PWD/.assets/models python3 -m pytest -q -p no:cacheprovider -rs tests/gpu tests/unit > "$OUT/gpu-tests.log" 2>&1; tail -5 "$OUT/gpu-tests.log"
 echo "== viewer loop, offscreen, Sponza 1920x1080, flying with the light animated (600 frames)"
-python3 -m vkpbr view .assets/Sponza/Sponza.gltf --offscreen --size 1920x1080 --script benchmarks/viewer_fly.json
+python3 -m vkpbr view .assets/models/Sponza/glTF/Sponza.gltf --offscreen --size 1920x1080 --script benchmarks/viewer_fly.json
 echo "== vkpbr bench (no peers)"
-python3 -m vkpbr bench --frames 200 --sponza .assets/Sponza/Sponza.gltf 2>/dev/null
+python3 -m vkpbr bench --frames 200 --sponza .assets/models/Sponza/glTF/Sponza.gltf 2>/dev/null
 echo "== bench_core"
 python3 benchmarks/bench_core.py --frames 100 --json "$OUT/core.json"
 echo "== Sponza 1920x1080"
-python3 -m vkpbr render .assets/Sponza/Sponza.gltf --camera 9,1.8,-0.4,-9,3.5,-0.4 --fov 45 --light 0,4,0 --size 1920x1080 --frames 100 --out "$OUT/sponza.png"
-python3 -m vkpbr render .assets/Sponza/Sponza.gltf --camera 9,1.8,-0.4,-9,3.5,-0.4 --fov 45 --light 0,4,0 --size 1920x1080 --frames 100 --tbn packed --out "$OUT/sponza_packed.png"
+python3 -m vkpbr render .assets/models/Sponza/glTF/Sponza.gltf --camera 9,1.8,-0.4,-9,3.5,-0.4 --fov 45 --light 0,4,0 --size 1920x1080 --frames 100 --out "$OUT/sponza.png"
+python3 -m vkpbr render .assets/models/Sponza/glTF/Sponza.gltf --camera 9,1.8,-0.4,-9,3.5,-0.4 --fov 45 --light 0,4,0 --size 1920x1080 --frames 100 --tbn packed --out "$OUT/sponza_packed.png"
+echo "== bench_sponza"
+python3 benchmarks/bench_sponza.py --frames 50 2>&1 | tail -18

@@ -13,7 +13,9 @@ import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-ASSETS = (REPO.parent / "shared" / "assets").resolve()
+# The sample models: ../shared/assets, or $VKPBR_ASSETS (a copy with the same layout, e.g.
+# on a GPU machine that ../shared does not reach).
+ASSETS = Path(os.environ.get("VKPBR_ASSETS") or REPO.parent / "shared" / "assets").resolve()
 
 
 @pytest.fixture(scope="session")

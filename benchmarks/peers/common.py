@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[2]
-SCENES = (REPO / ".assets/Sponza/Sponza.gltf", REPO.parent / "shared/assets/Sponza/glTF/Sponza.gltf")
+SCENES = (REPO / ".assets/models/Sponza/glTF/Sponza.gltf", REPO.parent / "shared/assets/Sponza/glTF/Sponza.gltf")
 EYE = (9.0, 1.8, -0.4)
 TARGET = (-9.0, 3.5, -0.4)
 UP = (0.0, 1.0, 0.0)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -30,8 +31,6 @@ def test_render_default_scene_writes_png(capsys, tmp_path: Path) -> None:
 
 
 def _umask() -> int:
-    import os
-
     mask = os.umask(0)
     os.umask(mask)
     return mask
@@ -97,7 +96,7 @@ def test_bad_input_is_one_line_and_nonzero(capsys, tmp_path: Path, monkeypatch, 
 
 def test_no_vulkan_driver_says_what_to_install(tmp_path: Path) -> None:
     env = {"VK_DRIVER_FILES": str(tmp_path / "none.json"), "VK_ICD_FILENAMES": str(tmp_path / "none.json"),
-           "PATH": "/usr/bin:/bin"}
+           "PATH": "/usr/bin:/bin", "PYTHONPATH": os.environ.get("PYTHONPATH", "")}
     proc = subprocess.run([sys.executable, "-m", "vkpbr", "render", "--out", str(tmp_path / "x.png")],
                           capture_output=True, text=True, env=env)
     assert proc.returncode == 1
