@@ -25,7 +25,8 @@ def _every_switch(t0: float) -> list[dict]:
     events = [_key(t0, str(d)) for d in "1234567890"]
     events += [_key(t0, str(d), mods=("shift",)) for d in "1234567890"]
     events += [_key(t0, "1", mods=("ctrl",)), _key(t0, "v"), _key(t0, "v", mods=("shift",))]
-    events += [_key(t0, k) for k in ("b", "t", "m", "n", "o", "x", "equal", "minus", "h", "f2", "f2")]
+    events += [_key(t0, k) for k in ("b", "t", "m", "n", "o", "x", "equal", "minus", "h", "f2", "f2",
+                                     "right_bracket", "right_bracket", "left_bracket")]
     return events
 
 
@@ -85,6 +86,7 @@ def test_scripted_session_matches_headless(offscreen: bool, request, tmp_path: P
         assert viewer.swapchain.extent == (176, 132)
         assert viewer.minimized_waits >= 3  # no frames while minimised
         assert viewer.camera().eye != start.eye
+        assert viewer.camera().yfov_deg == start.yfov_deg + 5.0  # ] ] [
         assert viewer.animate_light
         o = viewer.options
         assert (o.view, o.brdf, o.tbn, o.tonemap) == ("d", "blinn-phong", "quat", "reinhard")

@@ -17,13 +17,15 @@ import math
 
 from vkpbr.scene.types import Camera
 
-__all__ = ["FlyCamera", "BASE_SPEED", "LOOK_RAD_PER_PIXEL", "SPONZA_RADIUS"]
+__all__ = ["FlyCamera", "BASE_SPEED", "FOV_RANGE", "FOV_STEP", "LOOK_RAD_PER_PIXEL", "SPONZA_RADIUS"]
 
 BASE_SPEED = 1.7  # units per second, the course skeleton's value (for Sponza)
 LOOK_RAD_PER_PIXEL = 0.01
 FAST, SLOW = 5.0, 0.05  # Shift and Ctrl multipliers
 SPONZA_RADIUS = 18.5  # bounding-sphere radius of Khronos Sponza, where BASE_SPEED applies
 _MAX_PITCH = math.radians(89.0)
+FOV_RANGE = (10.0, 120.0)  # degrees: the [ and ] keys zoom within it
+FOV_STEP = 5.0
 
 Vec = tuple[float, float, float]
 
@@ -67,6 +69,7 @@ class FlyCamera:
     def reset(self) -> None:
         """Back to the start pose."""
         c = self.start
+        self.yfov_deg = float(c.yfov_deg)
         d = (c.target[0] - c.eye[0], c.target[1] - c.eye[1], c.target[2] - c.eye[2])
         self.focus = math.sqrt(_dot(d, d)) or 1.0
         f = _norm(d)
@@ -102,10 +105,14 @@ class FlyCamera:
         e = _axpy(step * right, r, e)
         self.eye = _axpy(step * up, self.up, e)
 
+    def zoom(self, step_deg: float) -> None:
+        """Change the vertical field of view by `step_deg`, kept within [10, 120] degrees."""
+        self.yfov_deg = max(FOV_RANGE[0], min(FOV_RANGE[1], self.yfov_deg + step_deg))
+
     def pan(self, dx: float, dy: float, window_height: int) -> None:
         """Right drag: translate in the view plane so the point at the focus distance follows
         the cursor."""
-        per_pixel = 2.0 * self.focus * math.tan(math.radians(self.start.yfov_deg) / 2.0)
+        per_pixel = 2.0 * self.focus * math.tan(math.radians(self.yfov_deg) / 2.0)
         per_pixel /= max(window_height, 1)
         r = self.right()
         u = _cross(r, self.forward())
@@ -119,4 +126,4 @@ class FlyCamera:
     def camera(self) -> Camera:
         target = _axpy(self.focus, self.forward(), self.eye)
         c = self.start  # positional construction: dataclasses.replace costs ~10x more per frame
-        return Camera(self.eye, target, self.up, c.yfov_deg, c.znear, c.zfar, "viewer")
+        return Camera(self.eye, target, self.up, self.yfov_deg, c.znear, c.zfar, "viewer")

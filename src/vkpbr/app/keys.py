@@ -27,6 +27,7 @@ HELP: tuple[tuple[str, str], ...] = (
     ("T", "TBN path: vectors -> quat -> packed"),
     ("M  N  O", "alpha masking, normal maps, occlusion on/off"),
     ("X  = / -", "tone map cycle, exposure +/- 0.5 EV"),
+    ("[ / ]", "field of view -/+ 5 degrees (10..120)"),
     ("Space", "light animation on/off"),
     ("arrows PgUp/PgDn", "move the light (camera-relative), up/down"),
     ("L", "light to the camera position"),

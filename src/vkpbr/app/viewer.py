@@ -200,7 +200,7 @@ class Viewer(InputHandlers):
         view = L.enum_by_name(L.View, o.view)
         lines = (
             f"{s['fps']:.1f} fps   CPU {s['cpu']:.2f} ms   GPU {s['gpu']:.2f} ms",
-            f"view {o.view} [{int(view)}]   D {o.brdf}   TBN {o.tbn}",
+            f"view {o.view} [{int(view)}]   D {o.brdf}   TBN {o.tbn}   fov {self.fly.yfov_deg:g}",
             f"tonemap {o.tonemap}   exposure {o.exposure:+.1f} EV",
             f"alpha mask {onoff(o.alpha_mask)}   normal maps {onoff(o.normal_mapping)}   "
             f"occlusion {onoff(o.occlusion)}",

@@ -14,7 +14,7 @@ from typing import Any
 import glfw
 
 from vkpbr.app import keys as K
-from vkpbr.app.controls import FAST, SLOW
+from vkpbr.app.controls import FAST, FOV_STEP, SLOW
 from vkpbr.app.script import Event, key_code, mods_bits
 from vkpbr.scene.types import Light
 
@@ -62,6 +62,9 @@ class InputHandlers:
         elif key in (glfw.KEY_EQUAL, glfw.KEY_KP_ADD, glfw.KEY_MINUS, glfw.KEY_KP_SUBTRACT):
             step = 0.5 if key in (glfw.KEY_EQUAL, glfw.KEY_KP_ADD) else -0.5
             o = dataclasses.replace(o, exposure=max(-16.0, min(16.0, o.exposure + step)))
+        elif key in (glfw.KEY_LEFT_BRACKET, glfw.KEY_RIGHT_BRACKET):
+            self.fly.zoom(FOV_STEP if key == glfw.KEY_RIGHT_BRACKET else -FOV_STEP)
+            self._hud_dirty = True
         elif action != glfw.PRESS:
             return  # auto-repeat only for the keys above
         elif key == glfw.KEY_SPACE:
