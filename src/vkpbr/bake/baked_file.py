@@ -204,7 +204,8 @@ def write_baked(path: str | os.PathLike[str], baked: BakedScene) -> int:
         "lights": [_json_value(dataclasses.asdict(x)) for x in baked.lights],
         "cameras": [_json_value(dataclasses.asdict(c)) for c in baked.cameras],
     }
-    sections.insert(0, ("scene", json.dumps(doc, sort_keys=True, separators=(",", ":")).encode()))
+    text = json.dumps(doc, sort_keys=True, separators=(",", ":"), default=_json_default)
+    sections.insert(0, ("scene", text.encode()))
 
     entries = np.zeros(len(sections), dtype=_ENTRY)
     offset = _HEADER_SIZE + entries.nbytes
@@ -226,6 +227,13 @@ def write_baked(path: str | os.PathLike[str], baked: BakedScene) -> int:
             f.write(data)
             f.write(b"\0" * _pad(len(data)))
     return file_size
+
+
+def _json_default(obj: Any) -> Any:
+    """NumPy scalars and arrays in scene fields (a Python caller's material factors, say)."""
+    if isinstance(obj, np.generic | np.ndarray):
+        return obj.tolist()
+    raise TypeError(f"{type(obj).__name__} cannot be stored in a baked scene")
 
 
 def _check(cond: bool, path: Path, problem: str) -> None:

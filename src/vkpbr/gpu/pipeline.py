@@ -26,7 +26,8 @@ class VertexStream:
 
     location: int
     binding: int
-    format: str  # "vec2" | "vec3" | "vec4" | "uint"
+    format: str  # "vec2" | "vec3" | "vec4" | "uint" | "unorm16x4"
+    stride: int | None = None  # bytes between vertices; None: the format's size, 0: one value for all
 
 
 _FORMATS = {
@@ -34,6 +35,7 @@ _FORMATS = {
     "vec3": ("VK_FORMAT_R32G32B32_SFLOAT", 12),
     "vec4": ("VK_FORMAT_R32G32B32A32_SFLOAT", 16),
     "uint": ("VK_FORMAT_R32_UINT", 4),
+    "unorm16x4": ("VK_FORMAT_R16G16B16A16_UNORM", 8),  # read as vec4 in [0, 1]
 }
 
 
@@ -137,7 +139,7 @@ class Pipeline(DeviceObject):
         ]
         bindings = [
             vk.VkVertexInputBindingDescription(
-                binding=s.binding, stride=_FORMATS[s.format][1],
+                binding=s.binding, stride=_FORMATS[s.format][1] if s.stride is None else s.stride,
                 inputRate=vk.VK_VERTEX_INPUT_RATE_VERTEX,
             )
             for s in spec.streams

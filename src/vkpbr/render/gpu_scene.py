@@ -9,6 +9,9 @@ viewer asks for all three up front. A
 TEXCOORD_1 stream exists only when some mesh has TEXCOORD_1; otherwise the TEXCOORD_0 buffer
 is bound for the shader's second UV input, so such scenes (Sponza) cost no extra memory.
 
+COLOR_0 (glTF vertex colours, multiplying the base colour) is an RGBA16 UNORM stream when some
+mesh has it (meshes without get white); otherwise one white value is bound with stride 0.
+
 Materials: each texture carries its own UV set and KHR_texture_transform into the MATERIAL
 block (`uv_transform_rows`).
 
@@ -64,11 +67,24 @@ def _uv_stream(mesh: Mesh, uv: np.ndarray | None, fallback: np.ndarray) -> np.nd
     return np.ascontiguousarray(uv, dtype=np.float32)
 
 
+def _color_stream(mesh: Mesh) -> np.ndarray:
+    """COLOR_0 as (N, 4) RGBA16 UNORM (linear, as glTF; white where the mesh has none):
+    8 bytes a vertex, with no visible loss next to float32."""
+    if mesh.colors is None:
+        return np.full((mesh.vertex_count, 4), 65535, np.uint16)
+    c = np.asarray(mesh.colors, dtype=np.float32)
+    if c.shape != (mesh.vertex_count, 4):
+        raise ValueError(f"mesh {mesh.name!r}: colors of shape {c.shape}, need ({mesh.vertex_count}, 4)")
+    c = np.nan_to_num(c, nan=1.0, posinf=1.0, neginf=0.0)
+    return np.round(np.clip(c, 0.0, 1.0) * 65535.0).astype(np.uint16)
+
+
 def prepare_mesh(mesh: Mesh, tangent_uv_set: int = 0, frames: bool = True) -> dict[str, np.ndarray]:
     """All vertex streams of a mesh, computing what the file did not supply.
 
     Returns positions (N,3) f32, texcoords (N,2) f32, texcoords1 (N,2) f32, normals (N,3) f32,
-    tangents (N,4) f32, qtangents (N,4) f32 and packed_frames (N,) u32. A mesh without
+    tangents (N,4) f32, colors (N,4) u16 (COLOR_0, white if absent), qtangents (N,4) f32 and
+    packed_frames (N,) u32. A mesh without
     TEXCOORD_1 gets its TEXCOORD_0 as texcoords1: then it renders the same whether or not some
     other mesh of the scene brings a TEXCOORD_1 stream (scenes with none bind TEXCOORD_0 for
     set 1 too), and a texture asking for a set the mesh lacks still gets real coordinates.
@@ -85,6 +101,7 @@ def prepare_mesh(mesh: Mesh, tangent_uv_set: int = 0, frames: bool = True) -> di
     if mesh.normals is None:
         raise ValueError(f"mesh {mesh.name!r} has no normals (loaders must supply them)")
     nrm = np.ascontiguousarray(mesh.normals, dtype=np.float32)
+    colors = _color_stream(mesh)
     idx = np.ascontiguousarray(mesh.indices, dtype=np.uint32)
     tan = mesh.tangents
     if tan is None:
@@ -99,6 +116,7 @@ def prepare_mesh(mesh: Mesh, tangent_uv_set: int = 0, frames: bool = True) -> di
         "positions": pos,
         "texcoords": uv,
         "texcoords1": uv1,
+        "colors": colors,
         "normals": nrm,
         "tangents": tan,
         "qtangents": None if q is None else np.ascontiguousarray(q, dtype=np.float32),
@@ -169,7 +187,10 @@ class GpuScene:
         self.streams: dict[str, Buffer] = {}
         self.stream_bytes: dict[str, int] = {}
         self.has_texcoords1 = any(m.texcoords1 is not None for m in self.scene.meshes)
-        for name in STREAMS + (("texcoords1",) if self.has_texcoords1 else ()):
+        self.has_colors = any(m.colors is not None for m in self.scene.meshes)
+        optional = (("texcoords1",) if self.has_texcoords1 else ()) + (
+            ("colors",) if self.has_colors else ())
+        for name in STREAMS + optional:
             arrays = [p[name] for p in per_mesh]
             data = np.concatenate(arrays) if arrays else np.zeros(4, np.uint8)
             self._add_stream(name, data)
@@ -180,6 +201,9 @@ class GpuScene:
             # The shader's TEXCOORD_1 input reads the TEXCOORD_0 buffer: an alias, not a copy
             # (not in stream_bytes, owned once).
             self.streams["texcoords1"] = self.streams["texcoords"]
+        if not self.has_colors:
+            # COLOR_0 absent everywhere: one white RGBA16 value, read with stride 0.
+            self._add_stream("colors", np.full(4, 65535, np.uint16))
         indices = [np.asarray(m.indices, dtype=np.uint32) for m in self.scene.meshes]
         idx = np.concatenate(indices) if indices else np.zeros(3, np.uint32)
         self.index_buffer = self._own(

@@ -40,7 +40,9 @@ _TBN_STREAMS = {
 }
 # Vertex inputs before the tangent frame: location = binding, one stream each (pbr.vert).
 # "texcoords1" is the TEXCOORD_0 buffer again in scenes without TEXCOORD_1 (GpuScene).
-_UV_STREAMS = (("positions", "vec3"), ("texcoords", "vec2"), ("texcoords1", "vec2"))
+# "colors" (COLOR_0) is one white value read with stride 0 in scenes without vertex colours.
+_UV_STREAMS = (("positions", "vec3"), ("texcoords", "vec2"), ("texcoords1", "vec2"),
+               ("colors", "unorm16x4"))
 _PASS_ORDER = ("opaque", "opaque_double", "mask", "blend")
 FRAMES_IN_FLIGHT = 3
 
@@ -174,7 +176,9 @@ class Renderer:
         key = (target.color_format, target.depth_format, target.samples, tbn, kind)
         if key not in self._pipelines:
             inputs = _UV_STREAMS + _TBN_STREAMS[tbn]
-            streams = [VertexStream(i, i, fmt) for i, (_, fmt) in enumerate(inputs)]
+            gs = self.gpu_scene
+            streams = [VertexStream(i, i, fmt, 0 if name == "colors" and not gs.has_colors else None)
+                       for i, (name, fmt) in enumerate(inputs)]
             base = PipelineSpec(
                 vertex_shader=f"pbr_{tbn.name.lower()}.vert.spv",
                 fragment_shader="pbr_opaque.frag.spv",

@@ -12,6 +12,7 @@ layout(location = 1) in vec4 v_texcoords;  // xy: TEXCOORD_0, zw: TEXCOORD_1
 layout(location = 2) in vec3 v_normal;
 layout(location = 3) in vec3 v_tangent;
 layout(location = 4) in vec3 v_bitangent;
+layout(location = 5) in vec4 v_color;  // COLOR_0 (white when the mesh has none)
 
 layout(location = 0) out vec4 out_color;
 
@@ -31,7 +32,7 @@ vec2 texture_uv(vec4 row0, vec4 row1) {
 
 void main() {
     vec2 uv = texture_uv(material.base_color_uv_row0, material.base_color_uv_row1);
-    vec4 base = texture(base_color_map, uv) * material.base_color_factor;
+    vec4 base = texture(base_color_map, uv) * material.base_color_factor * v_color;
 #if ALPHA_MASK
     if (base.a < material.alpha_cutoff) discard;
 #endif

@@ -12,13 +12,16 @@ layout(location = 1) in vec2 in_texcoord0;
 // TEXCOORD_1. Scenes without it bind the TEXCOORD_0 buffer here (render/gpu_scene.py), so
 // one shader serves both and such scenes spend no vertex memory on a second set.
 layout(location = 2) in vec2 in_texcoord1;
+// glTF COLOR_0 (linear RGBA, multiplies the base colour). Scenes without vertex colours bind a
+// single white value with stride 0 (render/gpu_scene.py), so they spend no memory on it.
+layout(location = 3) in vec4 in_color;
 #if TBN_MODE == 0
-layout(location = 3) in vec3 in_normal;
-layout(location = 4) in vec4 in_tangent;
+layout(location = 4) in vec3 in_normal;
+layout(location = 5) in vec4 in_tangent;
 #elif TBN_MODE == 1
-layout(location = 3) in vec4 in_qtangent;
+layout(location = 4) in vec4 in_qtangent;
 #else
-layout(location = 3) in uint in_packed_frame;
+layout(location = 4) in uint in_packed_frame;
 #endif
 
 layout(location = 0) out vec3 v_world_pos;
@@ -26,6 +29,7 @@ layout(location = 1) out vec4 v_texcoords;  // xy: TEXCOORD_0, zw: TEXCOORD_1 (o
 layout(location = 2) out vec3 v_normal;
 layout(location = 3) out vec3 v_tangent;
 layout(location = 4) out vec3 v_bitangent;
+layout(location = 5) out vec4 v_color;
 
 void main() {
 #if TBN_MODE == 0
@@ -46,6 +50,7 @@ void main() {
     vec4 world = draw.model * vec4(in_position, 1.0);
     v_world_pos = world.xyz;
     v_texcoords = vec4(in_texcoord0, in_texcoord1);
+    v_color = in_color;
     // Normals take the inverse transpose; tangent and bitangent are surface directions and
     // take the model matrix itself, which keeps the handedness right under mirroring.
     v_normal = mat3(draw.normal_matrix) * n;
