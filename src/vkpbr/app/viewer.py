@@ -241,6 +241,8 @@ class Viewer(InputHandlers):
                 self.minimized_waits += 1
                 if self.window is not None:
                     glfw.wait_events_timeout(0.02 if script else 0.1)
+                elif fixed_dt is None:
+                    time.sleep(0.005)  # offscreen "minimised" until the script restores it
                 continue
             fb = self.fb_size
             if (sc.handle is None or fb != sc.extent) and not sc.recreate(fb):
