@@ -50,5 +50,9 @@ if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
   echo "setup: installing vkpbr[$extras] into .venv"
   .venv/bin/python -m pip install -q --upgrade pip >/dev/null
   .venv/bin/python -m pip install -q -e ".[$extras]"
+  # Optional: meshoptimizer (vertex-cache order for `vkpbr bake`) builds from source.
+  if ! .venv/bin/python -m pip install -q -e ".[$extras,bake]" >/dev/null 2>&1; then
+    echo "setup: meshoptimizer could not be built (needs g++); vkpbr bake keeps the source triangle order"
+  fi
   echo "$want" > "$stamp"
 fi

@@ -44,6 +44,7 @@ def format_report(report: dict[str, Any]) -> str:
         ("vertices (source -> baked)", f"{report['source_vertices']:,} -> {report['vertices']:,}"),
         ("triangles (source -> baked)",
          f"{report['source_triangles']:,} -> {report['triangles']:,}"),
+        ("triangle order", report.get("vertex_cache_order", "?")),
         ("bytes/vertex: normal+tangent", f"{bpv['vectors']}"),
         ("bytes/vertex: quaternion", f"{bpv['quat']}"),
         ("bytes/vertex: packed u32", f"{bpv['packed']}"),

@@ -266,6 +266,7 @@ def bake_report(scene: Scene, baked: BakedScene) -> dict[str, Any]:
         "source_triangles": int(sum(m.triangle_count for m in scene.meshes)),
         "meshes": len(scene.meshes),
         "seconds": float(baked.bake_seconds),
+        "vertex_cache_order": "meshoptimizer" if _meshopt is not None else "source order",
     }
 
 
