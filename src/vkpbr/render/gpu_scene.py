@@ -227,6 +227,9 @@ class GpuScene:
             return
         qs = [tbn_to_qtangent(nrm, tan) if q is None else q
               for nrm, tan, q, _ in self._frame_sources]
+        # Keep the quaternions: the other path's stream, built later, starts from them.
+        self._frame_sources = [(n, t, q, pk) for q, (n, t, _, pk) in
+                               zip(qs, self._frame_sources, strict=True)]
         if "qtangents" in missing:
             self._add_stream("qtangents", _concat(qs, np.float32, 4))
         if "packed_frames" in missing:
