@@ -32,20 +32,14 @@ class FrameSlot:
     index: int
     set0: Any  # camera + settings
     set2: Any  # light
-    u_camera: np.ndarray  # zero-copy structured views into the mapped uniform buffer
-    u_settings: np.ndarray
-    u_light: np.ndarray
+    # Zero-copy byte views of the blocks in the mapped uniform buffer, written by the
+    # blocks' struct packers (layouts.Std140Block.packer).
+    m_camera: memoryview
+    m_settings: memoryview
+    m_light: memoryview
     query_base: int  # first of this slot's two timestamp queries
     uniform_key: tuple | None = None  # inputs of the uniforms last written here
     stats: FrameStats = field(default_factory=FrameStats)
-    # The same bytes as memoryviews, for the blocks' struct packers (layouts.Std140Block.packer)
-    m_camera: memoryview = field(init=False)
-    m_settings: memoryview = field(init=False)
-    m_light: memoryview = field(init=False)
-
-    def __post_init__(self) -> None:
-        self.m_camera, self.m_settings, self.m_light = (
-            memoryview(a.view(np.uint8)) for a in (self.u_camera, self.u_settings, self.u_light))
 
 
 def create_slots(
@@ -74,9 +68,9 @@ def create_slots(
         writer.uniform(set2, 0, buffer, L.LIGHT.size, light)
         slots.append(FrameSlot(
             index=i, set0=set0, set2=set2,
-            u_camera=buffer.array(L.CAMERA.dtype, 1, cam),
-            u_settings=buffer.array(L.SETTINGS.dtype, 1, settings),
-            u_light=buffer.array(L.LIGHT.dtype, 1, light),
+            m_camera=memoryview(buffer.array(np.uint8, L.CAMERA.size, cam)),
+            m_settings=memoryview(buffer.array(np.uint8, L.SETTINGS.size, settings)),
+            m_light=memoryview(buffer.array(np.uint8, L.LIGHT.size, light)),
             query_base=2 * i,
         ))
     writer.update()

@@ -41,7 +41,7 @@ _TBN_STREAMS = {
 # Vertex inputs before the tangent frame: location = binding, one stream each (pbr.vert).
 # "texcoords1" is the TEXCOORD_0 buffer again in scenes without TEXCOORD_1 (GpuScene).
 # "colors" (COLOR_0) is one white value read with stride 0 in scenes without vertex colours.
-_UV_STREAMS = (("positions", "vec3"), ("texcoords", "vec2"), ("texcoords1", "vec2"),
+_BASE_STREAMS = (("positions", "vec3"), ("texcoords", "vec2"), ("texcoords1", "vec2"),
                ("colors", "unorm16x4"))
 _PASS_ORDER = ("opaque", "opaque_double", "mask", "blend")
 FRAMES_IN_FLIGHT = 3
@@ -175,7 +175,7 @@ class Renderer:
     def _pipeline(self, target: Any, tbn: L.TbnMode, kind: str) -> Pipeline:
         key = (target.color_format, target.depth_format, target.samples, tbn, kind)
         if key not in self._pipelines:
-            inputs = _UV_STREAMS + _TBN_STREAMS[tbn]
+            inputs = _BASE_STREAMS + _TBN_STREAMS[tbn]
             gs = self.gpu_scene
             streams = [VertexStream(i, i, fmt, 0 if name == "colors" and not gs.has_colors else None)
                        for i, (name, fmt) in enumerate(inputs)]
@@ -276,7 +276,7 @@ class Renderer:
         gs = self.gpu_scene
         slot = slot or self.slots[0]
         layout = self.pipeline_layout.handle
-        names = [n for n, _ in _UV_STREAMS + _TBN_STREAMS[tbn]]
+        names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
         gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
         buffers = [gs.streams[n].handle for n in names]
         vk.vkCmdBindIndexBuffer(cmd, gs.index_buffer.handle, 0, vk.VK_INDEX_TYPE_UINT32)
