@@ -278,14 +278,12 @@ def _render_batch(args: argparse.Namespace, size: tuple[int, int], options) -> i
 
 
 def options_from_args(args: argparse.Namespace):  # noqa: ANN201
-    from vkpbr.render.renderer import RenderOptions
+    from vkpbr.render.options import RenderOptions
 
-    options = RenderOptions(
+    return RenderOptions(  # unknown names fail here, before any expensive work
         view=args.view, brdf=args.brdf, tbn=args.tbn, tonemap=args.tonemap, exposure=args.exposure,
         alpha_mask=not args.no_alpha_mask, normal_mapping=not args.no_normal_maps,
         occlusion=not args.no_occlusion)
-    options.resolved()  # reject unknown names before any expensive work
-    return options
 
 
 def _run_render(args: argparse.Namespace) -> int:

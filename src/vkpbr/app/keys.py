@@ -7,7 +7,7 @@ from __future__ import annotations
 import dataclasses
 
 from vkpbr.render import layouts as L
-from vkpbr.render.renderer import RenderOptions
+from vkpbr.render.options import ENUM_FIELDS, RenderOptions
 
 __all__ = ["HELP", "cycle", "view_for_digit", "with_view", "toggle"]
 
@@ -47,21 +47,16 @@ def view_for_digit(digit: int, shift: bool, ctrl: bool) -> L.View | None:
     return _VIEWS[index] if index < len(_VIEWS) else None
 
 
-def _name(member: L.View | L.Brdf | L.TbnMode | L.Tonemap) -> str:
-    return member.name.lower().replace("_", "-")
-
-
 def with_view(options: RenderOptions, view: L.View) -> RenderOptions:
-    return dataclasses.replace(options, view=_name(view))
+    return dataclasses.replace(options, view=view)
 
 
 def cycle(options: RenderOptions, field: str, step: int = 1) -> RenderOptions:
     """Next (or previous) value of an enum option: view, brdf, tbn or tonemap."""
-    enum_type = {"view": L.View, "brdf": L.Brdf, "tbn": L.TbnMode, "tonemap": L.Tonemap}[field]
-    members = list(enum_type)
-    current = L.enum_by_name(enum_type, getattr(options, field))
+    members = list(ENUM_FIELDS[field])
+    current = getattr(options, field)
     nxt = members[(members.index(current) + step) % len(members)]
-    return dataclasses.replace(options, **{field: _name(nxt)})
+    return dataclasses.replace(options, **{field: nxt})
 
 
 def toggle(options: RenderOptions, field: str) -> RenderOptions:

@@ -35,7 +35,8 @@ from vkpbr.gpu.text_overlay import QuadOverlay
 from vkpbr.render import layouts as L
 from vkpbr.render.camera import format_camera
 from vkpbr.render.codegen import SPV_DIR
-from vkpbr.render.renderer import Renderer, RenderOptions
+from vkpbr.render.options import RenderOptions
+from vkpbr.render.renderer import Renderer
 from vkpbr.render.window import WindowRenderer
 from vkpbr.scene.types import Camera, Light, Scene
 
@@ -111,7 +112,6 @@ class Viewer(InputHandlers):
         self.start_light = light or r.default_light()
         self.light = self.start_light
         self.options = cfg.options
-        self.options.resolved()
         self.animate_light = False
         # The help panel starts open where it leaves room for the picture.
         self.show_help, self.show_hud = cfg.size[0] >= 1200 and cfg.size[1] >= 600, True
@@ -126,7 +126,6 @@ class Viewer(InputHandlers):
         self.shots_written: list[Path] = []
         self.python_ms: list[float] = []
         self.frame_count = 0
-        self._tbn_for: tuple[Any, Any] = (None, None)
         self.minimized_waits = 0  # loop iterations spent waiting while minimised
         self._hud_version = 0
         self._hud_written: dict[int, int] = {}
@@ -197,10 +196,9 @@ class Viewer(InputHandlers):
             return []
         s, o, (w, h) = self._stats, self.options, self.swapchain.extent
         onoff = lambda b: "on" if b else "off"  # noqa: E731
-        view = L.enum_by_name(L.View, o.view)
         lines = (
             f"{s['fps']:.1f} fps   CPU {s['cpu']:.2f} ms   GPU {s['gpu']:.2f} ms",
-            f"view {o.view} [{int(view)}]   D {o.brdf}   TBN {o.tbn}   fov {self.fly.yfov_deg:g}",
+            f"view {o.view} [{o.view:d}]   D {o.brdf}   TBN {o.tbn}   fov {self.fly.yfov_deg:g}",
             f"tonemap {o.tonemap}   exposure {o.exposure:+.1f} EV",
             f"alpha mask {onoff(o.alpha_mask)}   normal maps {onoff(o.normal_mapping)}   "
             f"occlusion {onoff(o.occlusion)}",
@@ -264,9 +262,7 @@ class Viewer(InputHandlers):
             r = self.renderer
             frames.write_uniforms(index, camera, self.light, o)
             self._write_hud(index)
-            if o is not self._tbn_for[0]:  # parse the TBN name once per mode change
-                self._tbn_for = (o, L.enum_by_name(L.TbnMode, o.tbn))
-            tbn = self._tbn_for[1]
+            tbn = o.tbn
             order = r.blend_order(camera.eye)  # type: ignore[union-attr]
             last_frame = cfg.frames is not None and self.frame_count + 1 >= cfg.frames
             if last_frame and cfg.screenshot is not None:

@@ -29,6 +29,7 @@ __all__ = [
     "LIGHT",
     "PUSH",
     "BLOCKS",
+    "Named",
     "View",
     "VIEW_HELP",
     "ViewKind",
@@ -217,7 +218,26 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
 }
 
 
-class View(enum.IntEnum):
+class Named(enum.IntEnum):
+    """An IntEnum whose str() and plain format are the user-facing name ("blinn-phong"): the
+    value goes to the shader, the name to the command line, the HUD and messages."""
+
+    @property
+    def label(self) -> str:
+        return self.name.lower().replace("_", "-")
+
+    def __str__(self) -> str:
+        return self.label
+
+    def __format__(self, spec: str) -> str:
+        return self.label if not spec else int.__format__(int(self), spec)
+
+    @classmethod
+    def labels(cls) -> tuple[str, ...]:
+        return tuple(m.label for m in cls)
+
+
+class View(Named):
     """Debug views, selected at run time through Settings.view (no pipeline rebuild)."""
 
     FINAL = 0
@@ -286,18 +306,18 @@ VIEW_KIND = {
 }
 
 
-class Brdf(enum.IntEnum):
+class Brdf(Named):
     GGX = 0
     BLINN_PHONG = 1
 
 
-class Tonemap(enum.IntEnum):
+class Tonemap(Named):
     NONE = 0
     REINHARD = 1
     ACES = 2
 
 
-class TbnMode(enum.IntEnum):
+class TbnMode(Named):
     """How the vertex stream carries the tangent frame (one vertex shader each)."""
 
     VECTORS = 0  # normal vec3 + tangent vec4
@@ -305,10 +325,16 @@ class TbnMode(enum.IntEnum):
     PACKED = 2  # the quaternion packed in one uint32
 
 
-def enum_by_name(enum_type: type[enum.IntEnum], name: str) -> enum.IntEnum:
-    """Parse a user-facing name ("blinn-phong", "mapped_normal") into an enum member."""
+def enum_by_name(enum_type: type[enum.IntEnum], name: str | enum.IntEnum) -> enum.IntEnum:
+    """Parse a user-facing name ("blinn-phong", "mapped_normal") into an enum member (a
+    member is returned as it is)."""
     from vkpbr.errors import UsageError
 
+    if isinstance(name, enum_type):
+        return name
+    if not isinstance(name, str):
+        raise UsageError(f"{enum_type.__name__.lower()} {name!r}: expected a name such as "
+                         f"{next(iter(enum_type)).name.lower()!r}")
     key = name.strip().upper().replace("-", "_")
     try:
         return enum_type[key]

@@ -23,7 +23,8 @@ from vkpbr.gpu.swapchain import Swapchain
 from vkpbr.gpu.text_overlay import QuadOverlay
 from vkpbr.render import layouts as L
 from vkpbr.render.frames import FrameSlot, create_slots
-from vkpbr.render.renderer import Renderer, RenderOptions
+from vkpbr.render.options import RenderOptions
+from vkpbr.render.renderer import Renderer
 from vkpbr.scene.types import Camera, Light
 
 __all__ = ["WindowRenderer"]

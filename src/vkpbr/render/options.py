@@ -1,0 +1,70 @@
+"""RenderOptions: what a frame shows, as typed values parsed once at the edge.
+
+Enum fields accept their user-facing names ("blinn-phong", "mapped-normal") or the members
+themselves; construction (and `dataclasses.replace`) turns names into members and rejects
+unknown ones with a UsageError that lists the choices. After that the renderer reads ints
+straight out of the members, with no parsing per frame.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+from vkpbr.errors import UsageError
+from vkpbr.render.layouts import Brdf, TbnMode, Tonemap, View, enum_by_name
+
+__all__ = ["RenderOptions", "ENUM_FIELDS"]
+
+# RenderOptions field -> the enum its values come from (the CLI's choices, the viewer's cycles).
+ENUM_FIELDS: dict[str, type] = {"view": View, "brdf": Brdf, "tbn": TbnMode, "tonemap": Tonemap}
+
+
+@dataclass(frozen=True)
+class RenderOptions:
+    """Everything that selects what a frame shows.
+
+    Parameters
+    ----------
+    view : View or str
+        Debug view (`vkpbr render --list-views`); "final" is the shaded image.
+    brdf : Brdf or str
+        Normal distribution D: "ggx" or "blinn-phong" (the course's).
+    tbn : TbnMode or str
+        Tangent-frame vertex stream: "vectors", "quat" or "packed".
+    tonemap : Tonemap or str
+        "none", "reinhard" or "aces".
+    exposure : float
+        EV stops in [-64, 64]: radiance is multiplied by 2 ** exposure.
+    alpha_mask, normal_mapping, occlusion : bool
+        Alpha masking (off: masked materials are drawn opaque), normal maps, occlusion maps.
+    """
+
+    view: View = View.FINAL
+    brdf: Brdf = Brdf.GGX
+    tbn: TbnMode = TbnMode.VECTORS
+    tonemap: Tonemap = Tonemap.NONE
+    exposure: float = 0.0
+    alpha_mask: bool = True
+    normal_mapping: bool = True
+    occlusion: bool = True
+
+    def __post_init__(self) -> None:
+        for name, enum_type in ENUM_FIELDS.items():
+            object.__setattr__(self, name, enum_by_name(enum_type, getattr(self, name)))
+        try:
+            exposure = float(self.exposure)
+        except (TypeError, ValueError):
+            raise UsageError(f"exposure {self.exposure!r}: expected a number of EV stops") from None
+        if not math.isfinite(exposure) or abs(exposure) > 64:
+            raise UsageError(f"exposure {self.exposure} must be a finite number of stops in [-64, 64]")
+        object.__setattr__(self, "exposure", exposure)
+        for f in fields(self):
+            if f.type == "bool" and not isinstance(getattr(self, f.name), bool):
+                raise UsageError(f"{f.name} {getattr(self, f.name)!r}: expected True or False")
+
+    def with_names(self) -> dict[str, Any]:
+        """The options as plain values (enum members as their names), e.g. for JSON."""
+        return {f.name: (str(v) if f.name in ENUM_FIELDS else v)
+                for f in fields(self) for v in (getattr(self, f.name),)}
