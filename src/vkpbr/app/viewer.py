@@ -32,7 +32,6 @@ from vkpbr.gpu.device import DeviceRequest
 from vkpbr.gpu.offscreen_swapchain import OffscreenSwapchain
 from vkpbr.gpu.swapchain import Surface, Swapchain
 from vkpbr.gpu.text_overlay import QuadOverlay
-from vkpbr.render import layouts as L
 from vkpbr.render.camera import format_camera
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.options import RenderOptions
