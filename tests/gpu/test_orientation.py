@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from pinhole import project as pinhole_project
 
-from vkpbr.render.camera import view_projection
 from vkpbr.scene.loader import load_scene
 from vkpbr.scene.types import Camera
 
@@ -98,11 +98,9 @@ def octant_camera(sign: float) -> Camera:
 
 
 def project(camera: Camera, point: np.ndarray) -> tuple[int, int]:
-    """(row, column) of the pixel that `point` (world) falls in: the renderer's view-projection,
-    then Vulkan's viewport transform (x, y in [-1, 1] to [0, SIZE])."""
-    clip = view_projection(camera, 1.0) @ np.append(point, 1.0)
-    x, y = clip[:2] / clip[3]
-    return int((y + 1) / 2 * SIZE), int((x + 1) / 2 * SIZE)
+    """(row, column) of the pixel that `point` (world) falls in (tests/pinhole.py)."""
+    row, col, _ = pinhole_project(camera, point, SIZE, SIZE)
+    return int(row), int(col)
 
 
 def probes(arrow: Arrow, cube: tuple[int, int, int]) -> list[tuple[str, np.ndarray, tuple[int, int, int]]]:

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from pinhole import pixel_rays
 
 from vkpbr.reference import brdf as ref
-from vkpbr.render.camera import view_projection
 from vkpbr.render.layouts import Brdf, Tonemap
 from vkpbr.scene.default import plane
 from vkpbr.scene.types import Camera, Light, Material, Node, Scene
@@ -36,19 +36,14 @@ def plane_scene(material: Material) -> Scene:
 
 
 def pixel_geometry() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """World position, n, v, l per pixel: (H, W, 3) each."""
-    inv = np.linalg.inv(view_projection(CAMERA, W / H))
-    x = (np.arange(W) + 0.5) / W * 2 - 1
-    y = (np.arange(H) + 0.5) / H * 2 - 1
-    xx, yy = np.meshgrid(x, y)
-    def unproject(z: float) -> np.ndarray:
-        p = np.stack([xx, yy, np.full_like(xx, z), np.ones_like(xx)], -1) @ inv.T
-        return p[..., :3] / p[..., 3:]
-    a, b = unproject(0.0), unproject(1.0)
-    t = a[..., 1] / (a[..., 1] - b[..., 1])
-    p = a + t[..., None] * (b - a)
+    """World position, n, v, l per pixel: (H, W, 3) each, by casting each pixel centre's ray
+    onto the plane y = 0 (an independent pinhole model, not the renderer's matrices)."""
+    d = pixel_rays(CAMERA, W, H)
+    eye = np.asarray(CAMERA.eye, dtype=np.float64)
+    t = -eye[1] / d[..., 1]
+    p = eye + t[..., None] * d
     n = np.broadcast_to([0.0, 1.0, 0.0], p.shape)
-    v = np.asarray(CAMERA.eye) - p
+    v = eye - p
     v /= np.linalg.norm(v, axis=-1, keepdims=True)
     l = np.asarray(LIGHT.position) - p
     l /= np.linalg.norm(l, axis=-1, keepdims=True)

@@ -102,6 +102,6 @@ def test_auto_camera_frames_bounds() -> None:
     radius = math.sqrt(3)
     assert distance * math.sin(math.radians(30)) >= radius - 1e-9  # sphere fits the fov
     assert eye[2] > abs(eye[0]) and eye[2] > abs(eye[1])  # mostly +Z
-    assert 0 < cam.znear < distance - radius and cam.zfar > distance + radius
+    assert cam.znear is None and cam.zfar is None  # chosen per render from the bounds
     empty = auto_camera(Scene("e"))
-    assert np.isfinite(empty.eye).all() and empty.znear > 0
+    assert np.isfinite(empty.eye).all()

@@ -42,7 +42,7 @@ _FORMATS = {
 @dataclass(frozen=True)
 class PipelineSpec:
     vertex_shader: str  # SPIR-V file name under the shader folder
-    fragment_shader: str
+    fragment_shader: str | None  # None: depth only (a depth pre-pass)
     streams: tuple[VertexStream, ...]
     color_format: int
     depth_format: int
@@ -50,7 +50,10 @@ class PipelineSpec:
     cull: str = "back"  # back | none
     depth_test: bool = True
     depth_write: bool = True
+    # Reversed-Z by default (depth 1 at the near plane, 0 infinitely far): nearer is greater.
+    depth_compare: str = "greater_or_equal"  # | "less_or_equal" | "equal" | "always"
     blend: bool = False  # premultiplied-free "over" blending of the colour attachment
+    color_write: bool = True  # False: the colour attachment is left untouched
 
 
 class ShaderModule(DeviceObject):
@@ -118,25 +121,28 @@ class Pipeline(DeviceObject):
         self.spec = spec
         self.layout = layout
         vert = ShaderModule(device, shader_dir / spec.vertex_shader)
-        frag = ShaderModule(device, shader_dir / spec.fragment_shader)
+        frag = None
         try:
+            if spec.fragment_shader is not None:
+                frag = ShaderModule(device, shader_dir / spec.fragment_shader)
             self.handle = self._create(spec, layout, vert, frag)
         finally:
             # Modules are only needed while the pipeline is created.
             vert.destroy()
-            frag.destroy()
+            if frag is not None:
+                frag.destroy()
         device.track(self)
 
-    def _create(self, spec: PipelineSpec, layout: PipelineLayout, vert: Any, frag: Any) -> Any:
+    def _create(self, spec: PipelineSpec, layout: PipelineLayout, vert: Any, frag: Any | None) -> Any:
         vk = self.device.vk
         stages = [
             vk.VkPipelineShaderStageCreateInfo(
                 stage=vk.VK_SHADER_STAGE_VERTEX_BIT, module=vert.handle, pName="main"
             ),
-            vk.VkPipelineShaderStageCreateInfo(
-                stage=vk.VK_SHADER_STAGE_FRAGMENT_BIT, module=frag.handle, pName="main"
-            ),
         ]
+        if frag is not None:
+            stages.append(vk.VkPipelineShaderStageCreateInfo(
+                stage=vk.VK_SHADER_STAGE_FRAGMENT_BIT, module=frag.handle, pName="main"))
         bindings = [
             vk.VkVertexInputBindingDescription(
                 binding=s.binding, stride=_FORMATS[s.format][1] if s.stride is None else s.stride,
@@ -164,7 +170,8 @@ class Pipeline(DeviceObject):
             srcAlphaBlendFactor=vk.VK_BLEND_FACTOR_ONE,
             dstAlphaBlendFactor=vk.VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
             alphaBlendOp=vk.VK_BLEND_OP_ADD,
-            colorWriteMask=all_rgba,  # defaults to 0 in the binding: nothing would be written
+            # colorWriteMask defaults to 0 in the binding: nothing would be written.
+            colorWriteMask=all_rgba if spec.color_write else 0,
         )
         rendering = vk.VkPipelineRenderingCreateInfo(
             colorAttachmentCount=1,
@@ -193,7 +200,7 @@ class Pipeline(DeviceObject):
             pDepthStencilState=vk.VkPipelineDepthStencilStateCreateInfo(
                 depthTestEnable=vk.VK_TRUE if spec.depth_test else vk.VK_FALSE,
                 depthWriteEnable=vk.VK_TRUE if spec.depth_write else vk.VK_FALSE,
-                depthCompareOp=vk.VK_COMPARE_OP_LESS_OR_EQUAL,
+                depthCompareOp=getattr(vk, f"VK_COMPARE_OP_{spec.depth_compare.upper()}"),
             ),
             pColorBlendState=vk.VkPipelineColorBlendStateCreateInfo(pAttachments=[blend]),
             pDynamicState=vk.VkPipelineDynamicStateCreateInfo(
@@ -201,6 +208,5 @@ class Pipeline(DeviceObject):
             ),
             layout=layout.handle,
         )
-        with translate_errors("vkCreateGraphicsPipelines"):
-            return vk.vkCreateGraphicsPipelines(self.device.handle, None, 1, [info], None)[0]
+        return vk.vkCreateGraphicsPipelines(self.device.handle, None, 1, [info], None)[0]
 

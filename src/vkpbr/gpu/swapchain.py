@@ -1,17 +1,17 @@
-"""Window surface, swapchain with per-image depth, and the per-frame synchronisation.
+"""Window surface and swapchain: a frame target (gpu/target.py) that presents.
 
-Two frames in flight, in the shape of vulkan-tutorial's "Frames in flight" chapter and
-vkguide's FrameData: each frame slot owns an image-available semaphore and a fence; each
-swapchain image owns a render-finished semaphore (a present may still wait on it after the
-slot comes round again) and remembers the fence of the frame that last drew into it, which
-is waited before the image's per-image resources (uniforms, command buffers) are reused.
+Frames in flight come from the frame ring (gpu/frames.py), as for offscreen targets: each
+frame brings a fence and an image-available semaphore. Each swapchain image owns a depth
+image and a render-finished semaphore (a present may still wait on it after the frame slot
+comes round again), and remembers the frame that last drew into it, which `acquire` waits
+for before the image is drawn into again (vulkan-tutorial's "images in flight").
 
-The hot path (acquire, submit, present, fences) calls the C entry points through
-`vulkan.lib` / raw function pointers with pre-built structs: the binding's wrappers cost
-10-100 us per call, and they raise on VK_SUBOPTIMAL_KHR, which is a success code that still
-hands out an image (vulkan-python.md, trap 10). Out-of-date and suboptimal swapchains are
-reported to the caller, which calls `recreate`; a zero-sized (minimised) window has no
-swapchain at all until it has a size again.
+The hot path (acquire, submit, present) calls the C entry points through `vulkan.lib` / raw
+function pointers with pre-built structs: the binding's wrappers cost 10-100 us per call, and
+they raise on VK_SUBOPTIMAL_KHR, which is a success code that still hands out an image
+(vulkan-python.md, trap 10). Out-of-date and suboptimal swapchains are reported to the
+caller, which calls `recreate`; a zero-sized (minimised) window has no swapchain at all until
+it has a size again.
 """
 
 from __future__ import annotations
@@ -19,28 +19,46 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
+
 from vkpbr.errors import VkpbrError
 from vkpbr.gpu.buffer import Buffer
+from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.device import Device
-from vkpbr.gpu.image import Image, ImageView, pipeline_barrier
-from vkpbr.gpu.vk import check_result, translate_errors
+from vkpbr.gpu.frames import Frame
+from vkpbr.gpu.image import Image, ImageView
+from vkpbr.gpu.rendering import (
+    Attachments,
+    attachment_stage,
+    barriers,
+    begin_rendering,
+    copy_image_to_buffer,
+    end_rendering,
+    host_read_barrier,
+    image_barrier,
+)
+from vkpbr.gpu.target import COPY_COLOR
+from vkpbr.gpu.vk import check_result
 
-__all__ = ["Surface", "Swapchain", "FRAMES_IN_FLIGHT"]
+__all__ = ["Surface", "Swapchain"]
 
-FRAMES_IN_FLIGHT = 2
 _NO_TIMEOUT = 2**64 - 1
 _SRGB_FORMATS = ("VK_FORMAT_B8G8R8A8_SRGB", "VK_FORMAT_R8G8B8A8_SRGB")
 
 
 class Surface:
-    """A VkSurfaceKHR made by `create(instance_handle)` (e.g. a GLFW call), owned by `device`
-    so it is destroyed before the instance."""
+    """A VkSurfaceKHR made by `create(instance_handle, out)`, a window system's call that
+    writes the surface into the VkSurfaceKHR* `out` and returns a VkResult (GLFW's
+    `glfw.create_window_surface(instance, window, None, out)`). Owned by `device`, so it is
+    destroyed before the instance."""
 
-    def __init__(self, device: Device, create: Callable[[Any], Any]) -> None:
-        self.device = device
-        self.handle = create(device.instance.handle)
-        device.track(self)
+    def __init__(self, device: Device, create: Callable[[Any, Any], int]) -> None:
         vk = device.vk
+        self.device = device
+        out = vk.ffi.new("VkSurfaceKHR*")
+        check_result(create(device.instance.handle, out), "glfwCreateWindowSurface")
+        self.handle = out[0]
+        device.track(self)
         supported = vk.vkGetInstanceProcAddr(
             device.instance.handle, "vkGetPhysicalDeviceSurfaceSupportKHR")(
                 device.physical, device.queue_family, self.handle)
@@ -58,18 +76,27 @@ class Surface:
 
 
 class Swapchain:
-    """Swapchain images (sRGB, for the same bytes as the headless renderer) with a D32 depth
-    image each, and the frame-slot synchronisation objects.
+    """Swapchain images (sRGB, for the same bytes as the offscreen target) with a D32 depth
+    image each. A FrameTarget: `generation` increases on each recreation."""
 
-    Attributes `color_format`, `depth_format` and `samples` let `Renderer.build_pipelines`
-    and `Renderer.record_draws` treat it like a render target. `generation` increases on each
-    recreation so that callers know their per-image command buffers are stale.
-    """
+    samples = 1
 
     def __init__(self, device: Device, surface: Surface, size: tuple[int, int],
-                 vsync: bool = True) -> None:
+                 vsync: bool = True, clear_color: tuple[float, float, float, float] = (0, 0, 0, 1)
+                 ) -> None:
         vk = device.vk
-        self._init_state(device, surface, vsync)
+        self.device, self.surface, self.vsync = device, surface, vsync
+        self.clear_color = clear_color
+        self.handle: Any = None
+        self.depth_format = vk.VK_FORMAT_D32_SFLOAT
+        self.generation = 0
+        self.needs_recreate = False
+        self.extent = (0, 0)
+        self.images: list[Any] = []
+        self._owned: list[Any] = []  # views, depth images: per swapchain generation
+        self._render_done: list[Any] = []
+        self._image_frame: list[Frame | None] = []
+        self._screenshots: dict[int, Buffer] = {}
         inst, dev = device.instance.handle, device.handle
         get_i = vk.vkGetInstanceProcAddr
         self._caps_fn = get_i(inst, "vkGetPhysicalDeviceSurfaceCapabilitiesKHR")
@@ -83,26 +110,18 @@ class Swapchain:
                                  lib.vkGetDeviceProcAddr(dev, b"vkAcquireNextImageKHR"))
         self._present = ffi.cast("PFN_vkQueuePresentKHR",
                                  lib.vkGetDeviceProcAddr(dev, b"vkQueuePresentKHR"))
+        self._index = ffi.new("uint32_t*")
+        self._swapchains = ffi.new("VkSwapchainKHR[1]")
+        self._present_wait = ffi.new("VkSemaphore[1]")
+        self._present_info = ffi.new("VkPresentInfoKHR*", {
+            "sType": vk.VK_STRUCTURE_TYPE_PRESENT_INFO_KHR, "waitSemaphoreCount": 1,
+            "pWaitSemaphores": self._present_wait, "swapchainCount": 1,
+            "pSwapchains": self._swapchains, "pImageIndices": self._index})
         self._choose_format_and_mode()
-        self._create_sync()
+        device.track(self)
         self.recreate(size)
 
     # --- creation ---------------------------------------------------------------------------
-    def _init_state(self, device: Device, surface: Surface | None, vsync: bool) -> None:
-        self.device, self.surface, self.vsync = device, surface, vsync
-        self.handle: Any = None
-        self.samples = 1
-        self.depth_format = device.vk.VK_FORMAT_D32_SFLOAT
-        self.generation = 0
-        self.needs_recreate = False
-        self.can_copy = False
-        self.frame = 0  # frames submitted so far; the slot is frame % FRAMES_IN_FLIGHT
-        self.extent = (0, 0)
-        self.images: list[Any] = []
-        self._owned: list[Any] = []  # views, depth images: per swapchain generation
-        self._render_done: list[Any] = []
-        self._image_fence: list[Any] = []
-
     def _choose_format_and_mode(self) -> None:
         vk = self.device.vk
         formats = {(f.format, f.colorSpace) for f in self._formats_fn(self.device.physical,
@@ -121,32 +140,6 @@ class Swapchain:
                 self.present_mode, self.present_mode_name = (
                     getattr(vk, f"VK_PRESENT_MODE_{name}_KHR"), name.lower())
                 break
-
-    def _create_sync(self) -> None:
-        vk, dev = self.device.vk, self.device.handle
-        ffi = vk.ffi
-        signalled = vk.VkFenceCreateInfo(flags=vk.VK_FENCE_CREATE_SIGNALED_BIT)
-        self._acquired = [vk.vkCreateSemaphore(dev, vk.VkSemaphoreCreateInfo(), None)
-                          for _ in range(FRAMES_IN_FLIGHT)]
-        self._fences = [vk.vkCreateFence(dev, signalled, None) for _ in range(FRAMES_IN_FLIGHT)]
-        self._fence_ptrs = [ffi.new("VkFence[1]", [f]) for f in self._fences]
-        self._index = ffi.new("uint32_t*")
-        # Submit and present infos are built once; a frame only updates their arrays.
-        self._wait_sem = ffi.new("VkSemaphore[1]")
-        self._wait_stage = ffi.new("VkPipelineStageFlags[1]",
-                                   [vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT])
-        self._signal_sem = ffi.new("VkSemaphore[1]")
-        self._cmds = ffi.new("VkCommandBuffer[1]")
-        self._submit = ffi.new("VkSubmitInfo*", {
-            "sType": vk.VK_STRUCTURE_TYPE_SUBMIT_INFO, "waitSemaphoreCount": 1,
-            "pWaitSemaphores": self._wait_sem, "pWaitDstStageMask": self._wait_stage,
-            "commandBufferCount": 1, "pCommandBuffers": self._cmds,
-            "signalSemaphoreCount": 1, "pSignalSemaphores": self._signal_sem})
-        self._swapchains = ffi.new("VkSwapchainKHR[1]")
-        self._present_info = ffi.new("VkPresentInfoKHR*", {
-            "sType": vk.VK_STRUCTURE_TYPE_PRESENT_INFO_KHR, "waitSemaphoreCount": 1,
-            "pWaitSemaphores": self._signal_sem, "swapchainCount": 1,
-            "pSwapchains": self._swapchains, "pImageIndices": self._index})
 
     def surface_size(self, window_size: tuple[int, int]) -> tuple[int, int]:
         """The extent a swapchain would have now: (0, 0) while the window is minimised."""
@@ -213,7 +206,7 @@ class Swapchain:
             self.depth_images.append(depth)
             self.depth_views.append(self._own(ImageView(depth, aspect="depth")))
             self._render_done.append(vk.vkCreateSemaphore(dev, vk.VkSemaphoreCreateInfo(), None))
-            self._image_fence.append(None)
+            self._image_frame.append(None)
 
     def _own(self, obj: Any) -> Any:
         self._owned.append(obj)
@@ -228,156 +221,115 @@ class Swapchain:
             self._owned.pop().destroy()
         for sem in self._render_done:
             vk.vkDestroySemaphore(dev, sem, None)
-        self._render_done, self._image_fence, self.images = [], [], []
+        self._render_done, self._image_frame, self.images = [], [], []
+        self._screenshots.clear()
         if self.handle is not None:
             handle, self.handle = self.handle, None
             self._destroy_fn(dev, handle, None)
 
-    # --- per frame --------------------------------------------------------------------------
-    @property
-    def slot(self) -> int:
-        return self.frame % FRAMES_IN_FLIGHT
-
-    def acquire(self) -> int | None:
-        """Wait for this slot's previous frame, then acquire an image: its index, or None when
-        the swapchain is out of date (recreate, then try again). Suboptimal images are used
-        and `needs_recreate` is set, so the caller recreates after presenting."""
+    # --- the frame-target protocol -----------------------------------------------------------
+    def acquire(self, frame: Frame) -> int | None:
+        """Acquire an image for `frame` (signalling its `acquired` semaphore): its index, or
+        None when the swapchain is out of date (recreate, then try again). Suboptimal images
+        are used and `needs_recreate` is set, so `submit` asks for a recreation."""
         vk = self.device.vk
-        self.wait_frame(self.slot)
-        result = self._acquire(self.device.handle, self.handle, _NO_TIMEOUT,
-                               self._acquired[self.slot], vk.ffi.NULL, self._index)
+        result = self._acquire(self.device.handle, self.handle, _NO_TIMEOUT, frame.acquired,
+                               vk.ffi.NULL, self._index)
         if result == vk.VK_ERROR_OUT_OF_DATE_KHR:
             return None
         self.needs_recreate = result == vk.VK_SUBOPTIMAL_KHR
         if result not in (vk.VK_SUCCESS, vk.VK_SUBOPTIMAL_KHR):
             check_result(result, "vkAcquireNextImageKHR")
-        return self._claim(int(self._index[0]))
-
-    def _claim(self, index: int) -> int:
-        """Make image `index` this slot's: first wait for a frame of the other slot that may
-        still be drawing into it."""
-        prev, mine = self._image_fence[index], self._fence_ptrs[self.slot]
-        if prev is not None and prev is not mine:
-            check_result(self.device.vk.lib.vkWaitForFences(
-                self.device.handle, 1, prev, 1, _NO_TIMEOUT), "vkWaitForFences")
-        self._image_fence[index] = mine
+        index = int(self._index[0])
+        # Another frame may still be drawing into this image: wait for it.
+        previous = self._image_frame[index]
+        if previous is not None and previous is not frame:
+            previous.wait()
+        self._image_frame[index] = frame
         return index
 
-    def submit_and_present(self, cmd: Any, index: int) -> bool:
-        """Submit `cmd` for image `index` (waiting for the acquire, signalling the slot's
-        fence) and present it; False when the swapchain must be recreated."""
-        vk, lib = self.device.vk, self.device.vk.lib
-        slot = self.slot
-        check_result(lib.vkResetFences(self.device.handle, 1, self._fence_ptrs[slot]),
-                     "vkResetFences")
-        self._wait_sem[0] = self._acquired[slot]
-        self._signal_sem[0] = self._render_done[index]
-        self._cmds[0] = cmd
-        check_result(lib.vkQueueSubmit(self.device.queue, 1, self._submit, self._fences[slot]),
-                     "vkQueueSubmit")
-        self._index[0] = index
+    def attachments(self, image: int) -> Attachments:
+        return Attachments(self.views[image], self.depth_views[image].handle, self.extent)
+
+    def record_begin(self, cmd: Commands, image: int) -> None:
+        """Move image `image` and its depth out of UNDEFINED, begin rendering (clear)."""
+        vk = self.device.vk
+        # The acquire semaphore is waited at COLOR_ATTACHMENT_OUTPUT: chain on that stage.
+        out = vk.VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT
+        c_stage, c_access, c_layout = attachment_stage(vk, False)
+        d_stage, d_access, d_layout = attachment_stage(vk, True)
+        dw = vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT
+        barriers(cmd, [
+            image_barrier(vk, self.images[image], False, vk.VK_IMAGE_LAYOUT_UNDEFINED, c_layout,
+                          (out, 0), (out, vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT)),
+            image_barrier(vk, self.depth_images[image].handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                          d_layout, (d_stage, dw), (d_stage, d_access)),
+        ])
+        begin_rendering(cmd, self.attachments(image), self.clear_color, 0.0, store_depth=False)
+
+    def record_end(self, cmd: Commands, image: int, frame: Frame, copy: tuple[str, ...]) -> None:
+        """End rendering; copy the image into `frame`'s screenshot buffer when `copy` names
+        colour; hand the image to the presentation engine."""
+        vk = self.device.vk
+        end_rendering(cmd)
+        c_stage, c_access, c_layout = attachment_stage(vk, False)
+        att = (c_stage, c_access)
+        img = self.images[image]
+        present = vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR
+        nothing = (vk.VK_PIPELINE_STAGE_2_NONE, vk.VK_ACCESS_2_NONE)
+        if COPY_COLOR in copy:
+            if not self.can_copy:
+                raise VkpbrError("this window's swapchain images cannot be copied (no TRANSFER_SRC)")
+            xfer = (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT)
+            src_l = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
+            buffer = self.screenshot_buffer(frame.index)
+            barriers(cmd, [image_barrier(vk, img, False, c_layout, src_l, att, xfer)])
+            copy_image_to_buffer(cmd, img, False, buffer, self.extent)
+            barriers(cmd, [image_barrier(vk, img, False, src_l, present, xfer, nothing)],
+                     [host_read_barrier(vk, buffer)])
+        else:
+            barriers(cmd, [image_barrier(vk, img, False, c_layout, present, att, nothing)])
+
+    def submit(self, frame: Frame, cmd: Commands, image: int) -> bool:
+        """Submit `cmd` (waiting for the acquire, signalling the image's render-finished
+        semaphore and the frame's fence) and present; False when it must be recreated."""
+        vk = self.device.vk
+        done = self._render_done[image]
+        frame.submit(cmd, wait=frame.acquired, signal=done)
+        self._index[0] = image
+        self._present_wait[0] = done
         result = self._present(self.device.queue, self._present_info)
-        self.frame += 1
         if result in (vk.VK_ERROR_OUT_OF_DATE_KHR, vk.VK_SUBOPTIMAL_KHR):
             return False
         check_result(result, "vkQueuePresentKHR")
         return not self.needs_recreate
 
-    def wait_frame(self, slot: int) -> None:
-        """Block until the frame last submitted in `slot` has finished on the GPU."""
-        check_result(self.device.vk.lib.vkWaitForFences(
-            self.device.handle, 1, self._fence_ptrs[slot], 1, _NO_TIMEOUT), "vkWaitForFences")
+    # --- screenshots ------------------------------------------------------------------------
+    def screenshot_buffer(self, frame_index: int) -> Buffer:
+        """Frame `frame_index`'s host-visible copy of a presented image (made on first use,
+        for this swapchain generation)."""
+        buf = self._screenshots.get(frame_index)
+        if buf is None:
+            w, h = self.extent
+            buf = self._screenshots[frame_index] = self._own(Buffer(
+                self.device, w * h * 4, self.device.vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                host_visible=True, name="screenshot"))
+        return buf
 
-    # --- recording --------------------------------------------------------------------------
-    def _barrier(self, image: Any, aspect: int, old: int, new: int, src: tuple, dst: tuple) -> Any:
-        vk = self.device.vk
-        return vk.VkImageMemoryBarrier2(
-            srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=dst[0], dstAccessMask=dst[1],
-            oldLayout=old, newLayout=new, srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, image=image,
-            subresourceRange=vk.VkImageSubresourceRange(
-                aspectMask=aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1))
-
-    def record_begin(self, cmd: Any, index: int, clear: tuple[float, float, float, float] | None,
-                     transition: bool = True) -> None:
-        """Begin dynamic rendering on image `index` and its depth (cleared to `clear`, or
-        loaded when None); with `transition`, first move both out of UNDEFINED."""
-        vk = self.device.vk
-        color_att_l = vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL
-        depth_l = vk.VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL
-        if transition:
-            # The acquire semaphore is waited at COLOR_ATTACHMENT_OUTPUT: chain on that stage.
-            out = vk.VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT
-            tests = (vk.VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT
-                     | vk.VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT)
-            dw = vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT
-            pipeline_barrier(vk, cmd, [
-                self._barrier(self.images[index], vk.VK_IMAGE_ASPECT_COLOR_BIT,
-                              vk.VK_IMAGE_LAYOUT_UNDEFINED, color_att_l, (out, 0),
-                              (out, vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT)),
-                self._barrier(self.depth_images[index].handle, vk.VK_IMAGE_ASPECT_DEPTH_BIT,
-                              vk.VK_IMAGE_LAYOUT_UNDEFINED, depth_l, (tests, dw),
-                              (tests, dw | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)),
-            ])
-        load = vk.VK_ATTACHMENT_LOAD_OP_LOAD if clear is None else vk.VK_ATTACHMENT_LOAD_OP_CLEAR
-        color = vk.VkRenderingAttachmentInfo(
-            imageView=self.views[index], imageLayout=color_att_l, loadOp=load,
-            storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE,
-            clearValue=vk.VkClearValue(color=vk.VkClearColorValue(float32=list(clear or (0,) * 4))))
-        depth = vk.VkRenderingAttachmentInfo(
-            imageView=self.depth_views[index].handle, imageLayout=depth_l, loadOp=load,
-            storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE,
-            clearValue=vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(depth=1.0)))
-        area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(*self.extent))
-        vk.vkCmdBeginRendering(cmd, vk.VkRenderingInfo(
-            renderArea=area, layerCount=1, pColorAttachments=[color], pDepthAttachment=depth))
-        vk.vkCmdSetViewport(cmd, 0, 1, [vk.VkViewport(
-            x=0, y=0, width=self.extent[0], height=self.extent[1], minDepth=0.0, maxDepth=1.0)])
-        vk.vkCmdSetScissor(cmd, 0, 1, [area])
-
-    def record_copy(self, cmd: Any, index: int, buffer: Buffer) -> None:
-        """Between two renderings: copy image `index` into a host-visible `buffer` (tightly
-        packed texels in the swapchain's format) and make it an attachment again."""
-        vk = self.device.vk
-        att = (vk.VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-               vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT | vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT)
-        xfer = (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT)
-        img, aspect = self.images[index], vk.VK_IMAGE_ASPECT_COLOR_BIT
-        att_l, src_l = vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
-        pipeline_barrier(vk, cmd, [self._barrier(img, aspect, att_l, src_l, att, xfer)])
+    def read_color(self, frame_index: int) -> np.ndarray:
+        """(H, W, 4) uint8 RGBA of the frame's screenshot copy (after its fence was waited)."""
         w, h = self.extent
-        vk.vkCmdCopyImageToBuffer(cmd, img, src_l, buffer.handle, 1, [vk.VkBufferImageCopy(
-            bufferOffset=0, imageSubresource=vk.VkImageSubresourceLayers(
-                aspectMask=aspect, mipLevel=0, baseArrayLayer=0, layerCount=1),
-            imageExtent=vk.VkExtent3D(width=w, height=h, depth=1))])
-        host = vk.VkBufferMemoryBarrier2(
-            srcStageMask=vk.VK_PIPELINE_STAGE_2_COPY_BIT, srcAccessMask=vk.VK_ACCESS_2_TRANSFER_WRITE_BIT,
-            dstStageMask=vk.VK_PIPELINE_STAGE_2_HOST_BIT, dstAccessMask=vk.VK_ACCESS_2_HOST_READ_BIT,
-            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            buffer=buffer.handle, offset=0, size=buffer.size)
-        pipeline_barrier(vk, cmd, [self._barrier(img, aspect, src_l, att_l, xfer, att)], [host])
-
-    def record_end(self, cmd: Any, index: int) -> None:
-        """End rendering and hand image `index` to the presentation engine."""
-        vk = self.device.vk
-        vk.vkCmdEndRendering(cmd)
-        pipeline_barrier(vk, cmd, [self._barrier(
-            self.images[index], vk.VK_IMAGE_ASPECT_COLOR_BIT,
-            vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
-            (vk.VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-             vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT),
-            (vk.VK_PIPELINE_STAGE_2_NONE, vk.VK_ACCESS_2_NONE))])
+        px = self.screenshot_buffer(frame_index).array(np.uint8, w * h * 4).reshape(h, w, 4)
+        if self.color_format_name.startswith("B8G8R8A8"):
+            return px[:, :, [2, 1, 0, 3]].copy()
+        return px.copy()
 
     # --- lifetime ---------------------------------------------------------------------------
     def destroy(self) -> None:
-        """Wait for the GPU, then destroy the swapchain and the sync objects (idempotent)."""
-        if getattr(self, "_fences", None) is None:
+        """Wait for the GPU, then destroy the swapchain and its per-image objects (idempotent)."""
+        if self.device is None:
             return
-        vk, dev = self.device.vk, self.device.handle
         self.device.wait_idle()
         self._destroy_swapchain()
-        for sem in self._acquired:
-            vk.vkDestroySemaphore(dev, sem, None)
-        for fence in self._fences:
-            vk.vkDestroyFence(dev, fence, None)
-        self._fences = None
+        self.device.untrack(self)
+        self.device = None  # type: ignore[assignment]

@@ -1,7 +1,7 @@
 """Textured, coloured quads drawn over a frame: the GPU half of the viewer's HUD.
 
 One alpha-blended pipeline (shaders/hud.vert, hud.frag), one atlas texture, and per slot (one
-per swapchain image) a host-visible vertex buffer plus a VkDrawIndirectCommand. The vertex
+per frame in flight) a host-visible vertex buffer plus a VkDrawIndirectCommand. The vertex
 count lives in the indirect buffer, so a command buffer recorded once keeps drawing whatever
 text the CPU last wrote into the slot: changing the text re-records nothing.
 """
@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from vkpbr.gpu.buffer import Buffer
+from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import ImageView, Sampler, SamplerSpec, TextureUploader
@@ -90,20 +91,15 @@ class QuadOverlay:
         col[:n] = vertices[:n, 4:]
         draw[0] = n
 
-    def record(self, cmd: Any, slot: int, size: tuple[int, int]) -> None:
+    def record(self, cmd: Commands, slot: int, size: tuple[int, int]) -> None:
         """Draw `slot`'s quads inside a dynamic rendering over an attachment of `size`."""
-        vk = self.device.vk
         vbuf, ibuf = self._slots[slot][:2]
-        vk.vkCmdBindPipeline(cmd, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.pipeline.handle)
-        vk.vkCmdBindDescriptorSets(cmd, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self.layout.handle,
-                                   0, 1, [self.set], 0, None)
-        push = np.array([2.0 / size[0], 2.0 / size[1], -1.0, -1.0], dtype=np.float32)
-        vk.vkCmdPushConstants(cmd, self.layout.handle,
-                              vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_FRAGMENT_BIT,
-                              0, 16, vk.ffi.from_buffer(push))
-        vk.vkCmdBindVertexBuffers(cmd, 0, 2, [vbuf.handle, vbuf.handle],
-                                  [0, 16 * self.max_vertices])
-        vk.vkCmdDrawIndirect(cmd, ibuf.handle, 0, 1, 16)
+        cmd.bind_pipeline(self.pipeline)
+        cmd.bind_set(0, self.set)
+        cmd.push(np.array([2.0 / size[0], 2.0 / size[1], -1.0, -1.0], dtype=np.float32))
+        handles = [vbuf.handle, vbuf.handle]
+        cmd.vk.vkCmdBindVertexBuffers(cmd.handle, 0, 2, handles, [0, 16 * self.max_vertices])
+        cmd.draw_indirect(ibuf)
 
     def destroy(self) -> None:
         while self._objects:

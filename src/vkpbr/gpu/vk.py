@@ -3,6 +3,12 @@
 Everything in vkpbr reaches Vulkan through `vkpbr.gpu`; this module loads the binding lazily so
 that `import vkpbr` stays fast and works on machines without a Vulkan loader, and turns the
 binding's exceptions into vkpbr's own (VulkanError and subclasses) at this boundary.
+
+`load()` returns the binding wrapped once, in the manner of wgpu-py's SafeLibCalls: every
+`vk*` function (and every extension function fetched through vkGet*ProcAddr) raises vkpbr's
+error carrying the call's name, so no binding exception (VkErrorDeviceLost, VkNotReady, ...)
+reaches a caller. Constants, struct factories, `ffi` and `lib` pass through untouched; the
+hot paths call `lib` entry points directly and check their VkResult with `check_result`.
 """
 
 from __future__ import annotations
@@ -18,7 +24,7 @@ from vkpbr.errors import (
     VulkanError,
 )
 
-__all__ = ["load", "translate_errors", "INSTALL_HINT"]
+__all__ = ["load", "translate_errors", "check_result", "SafeVulkan", "INSTALL_HINT"]
 
 INSTALL_HINT = (
     "install a Vulkan loader and driver: on Debian/Ubuntu `apt-get install libvulkan1 "
@@ -26,17 +32,59 @@ INSTALL_HINT = (
 )
 
 _vk: Any = None
+_raw: Any = None
 
 
-def load() -> Any:
-    """Import the `vulkan` module once; raise NoVulkanError when no loader is installed."""
-    global _vk
-    if _vk is None:
+def _raw_binding() -> Any:
+    global _raw
+    if _raw is None:
         try:
             import vulkan
         except OSError as exc:  # cffi raises OSError when libvulkan.so.1 cannot be opened
             raise NoVulkanError("dlopen(libvulkan.so.1)", "not found", INSTALL_HINT) from exc
-        _vk = vulkan
+        _raw = vulkan
+    return _raw
+
+
+class SafeVulkan:
+    """The `vulkan` module with its functions wrapped to raise vkpbr errors (see the module
+    docstring). Attributes are looked up once and cached on the instance."""
+
+    def __init__(self, module: Any) -> None:
+        self.raw = module
+
+    def __getattr__(self, name: str) -> Any:
+        value = getattr(self.raw, name)
+        if name.startswith("vk") and callable(value):
+            value = _safe_call(value, name)
+            if name in ("vkGetInstanceProcAddr", "vkGetDeviceProcAddr"):
+                value = _safe_proc_addr(value)
+        setattr(self, name, value)  # later lookups skip __getattr__
+        return value
+
+
+def _safe_call(fn: Any, name: str) -> Any:
+    def call(*args: Any, **kwargs: Any) -> Any:
+        with translate_errors(name):
+            return fn(*args, **kwargs)
+
+    call.__name__ = call.__qualname__ = name
+    call.__doc__ = getattr(fn, "__doc__", None)
+    return call
+
+
+def _safe_proc_addr(get: Any) -> Any:
+    def get_proc(handle: Any, name: str) -> Any:
+        return _safe_call(get(handle, name), name)
+
+    return get_proc
+
+
+def load() -> Any:
+    """The wrapped binding, imported once; NoVulkanError when no loader is installed."""
+    global _vk
+    if _vk is None:
+        _vk = SafeVulkan(_raw_binding())
     return _vk
 
 
@@ -53,7 +101,7 @@ def _result_name(exc: BaseException) -> str:
 @contextlib.contextmanager
 def translate_errors(function: str) -> Iterator[None]:
     """Run a block of binding calls; re-raise the binding's exceptions as vkpbr errors."""
-    vk = load()
+    vk = _raw_binding()
     try:
         yield
     except vk.VkErrorOutOfDeviceMemory as exc:
@@ -73,8 +121,7 @@ def check_result(result: int, function: str) -> None:
     call the C entry points directly: the binding's wrappers cost 10-100 us per call)."""
     if result == 0:
         return
-    vk = load()
-    exc_type = vk.exception_codes.get(result)
+    exc_type = _raw_binding().exception_codes.get(result)
     if exc_type is None:
         raise VulkanError(function, f"VkResult {result}")
     with translate_errors(function):

@@ -1,5 +1,6 @@
-"""Camera matrices for Vulkan: right-handed view, depth in [0, 1], Y flipped (the course's
-"reversed-Y" projection), so that +Y world-up appears at the top of the image.
+"""Camera matrices for Vulkan: right-handed view, reversed-Z depth with an infinite far plane,
+Y flipped (the course's "reversed-Y" projection), so that +Y world-up appears at the top of
+the image. The near plane is chosen per render from the scene's bounds (`near_plane`).
 
 Matrices are row-major NumPy (column vectors: clip = P @ V @ p); `layouts.mat4_to_std140`
 transposes them for GLSL.
@@ -9,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -16,6 +18,7 @@ from vkpbr.errors import UsageError
 from vkpbr.scene.types import Camera
 
 __all__ = ["look_at", "perspective", "forward", "view_projection", "view_projection_columns",
+           "projection_terms", "camera_k", "near_plane", "far_extent",
            "parse_camera", "format_camera"]
 
 
@@ -51,12 +54,40 @@ def look_at(eye: Sequence[float], target: Sequence[float], up: Sequence[float]) 
     ])
 
 
-def perspective(yfov_deg: float, aspect: float, znear: float, zfar: float) -> np.ndarray:
-    """View-to-clip matrix (4, 4) float64 for Vulkan: z in [0, 1], Y down in clip space."""
-    f = 1.0 / math.tan(math.radians(yfov_deg) / 2.0)
-    a, b = zfar / (znear - zfar), znear * zfar / (znear - zfar)
-    # m[1, 1] is negative: Vulkan's clip-space Y points down.
-    return np.array([[f / aspect, 0, 0, 0], [0, -f, 0, 0], [0, 0, a, b], [0, 0, -1.0, 0]])
+def projection_terms(camera: Camera, size: tuple[int, int]) -> tuple[float, float, float, float]:
+    """(sx, sy, ox, oy): normalised device x = sx * x / -z + ox and y = -sy * y / -z + oy for
+    a view-space point (x, y, z) (OpenGL view axes: x right, y up, looking down -z), with
+    Vulkan's NDC y pointing down. From the camera's pinhole intrinsics K at `size` (OpenCV's
+    pixel convention: pixel centres at integers), so a K from a calibration lands each point
+    on the pixel OpenCV would project it to."""
+    w, h = size
+    k = camera_k(camera, size)
+    fx, fy, cx, cy = float(k[0][0]), float(k[1][1]), float(k[0][2]), float(k[1][2])
+    return 2.0 * fx / w, 2.0 * fy / h, 2.0 * (cx + 0.5) / w - 1.0, 2.0 * (cy + 0.5) / h - 1.0
+
+
+def camera_k(camera: Camera, size: tuple[int, int]) -> Any:
+    """The camera's 3x3 K at `size`: its own intrinsics where it has them, else square pixels
+    from the vertical field of view with the principal point at the image centre."""
+    own = getattr(camera, "intrinsics", None)
+    if callable(own):
+        return own(size)
+    w, h = size
+    f = h / 2.0 / math.tan(math.radians(camera.yfov_deg) / 2.0)
+    return ((f, 0.0, (w - 1) / 2.0), (0.0, f, (h - 1) / 2.0), (0.0, 0.0, 1.0))
+
+
+def perspective(camera: Camera, size: tuple[int, int], znear: float) -> np.ndarray:
+    """View-to-clip matrix (4, 4) float64: reversed-Z with an infinite far plane.
+
+    Window depth is znear / distance along the view axis: 1 at the near plane, falling
+    towards 0 at infinity, so nothing beyond the near plane is ever clipped, and a float32
+    depth buffer keeps ~7 significant digits of relative precision at every distance.
+    Depth tests use GREATER_OR_EQUAL and clear to 0.
+    """
+    sx, sy, ox, oy = projection_terms(camera, size)
+    # clip w = -z; x_ndc = sx x/(-z) + ox; y_ndc (down) = -sy y/(-z) + oy; depth = znear/(-z).
+    return np.array([[sx, 0, -ox, 0], [0, -sy, -oy, 0], [0, 0, 0, znear], [0, 0, -1.0, 0]])
 
 
 def forward(camera: Camera) -> tuple[float, float, float]:
@@ -64,34 +95,50 @@ def forward(camera: Camera) -> tuple[float, float, float]:
     return _unit(_sub(camera.target, camera.eye))
 
 
-def view_projection(camera: Camera, aspect: float) -> np.ndarray:
-    return perspective(camera.yfov_deg, aspect, camera.znear, camera.zfar) @ look_at(
-        camera.eye, camera.target, camera.up
-    )
+def view_projection(camera: Camera, size: tuple[int, int], znear: float) -> np.ndarray:
+    return perspective(camera, size, znear) @ look_at(camera.eye, camera.target, camera.up)
 
 
-def view_projection_columns(camera: Camera, aspect: float) -> tuple[tuple[float, ...], ...]:
+def view_projection_columns(camera: Camera, size: tuple[int, int],
+                            znear: float) -> tuple[tuple[float, ...], ...]:
     """`view_projection` as GLSL's column-major mat4 (four columns), in plain floats.
 
-    The per-frame path when the camera moves: P is sparse, so P @ V is four scaled rows of V,
-    ~5x cheaper than NumPy's array creation and matmul (which is kept for everything else).
+    The per-frame path when the camera moves: P is sparse, so P @ V is a few scaled rows of
+    V, ~5x cheaper than NumPy's array creation and matmul (which is kept for everything else).
     """
     eye = camera.eye
     f = _unit(_sub(camera.target, eye))
     s = _unit(_cross(f, (float(camera.up[0]), float(camera.up[1]), float(camera.up[2]))))
     u = _cross(s, f)
-    g = 1.0 / math.tan(math.radians(camera.yfov_deg) / 2.0)
-    zn, zf = camera.znear, camera.zfar
-    a, b = zf / (zn - zf), zn * zf / (zn - zf)
-    gx = g / aspect
+    sx, sy, ox, oy = projection_terms(camera, size)
     se, ue, fe = _dot3(s, eye), _dot3(u, eye), _dot3(f, eye)
-    # Rows of P @ V: gx*s_row, -g*u_row, a*w_row + b*e3, -w_row, with w_row = (-f, f.eye).
-    return (
-        (gx * s[0], -g * u[0], -a * f[0], f[0]),
-        (gx * s[1], -g * u[1], -a * f[1], f[1]),
-        (gx * s[2], -g * u[2], -a * f[2], f[2]),
-        (-gx * se, g * ue, a * fe + b, -fe),
-    )
+    # V's rows: s (x), u (y), -f (z), with translations -s.e, -u.e, f.e. Rows of P @ V:
+    # sx*x - ox*z, -sy*y - oy*z, znear * e3, -z, where -z = f.p - f.e.
+    return tuple(
+        (sx * s[i] + ox * f[i], -sy * u[i] + oy * f[i], 0.0, f[i]) for i in range(3)
+    ) + ((-sx * se - ox * fe, sy * ue - oy * fe, znear, -fe),)
+
+
+def near_plane(camera: Camera, corners: Sequence[Sequence[float]], scale: float) -> float:
+    """The near plane for a render: the camera's own znear, else just in front of the nearest
+    corner of the scene's bounds along the view axis, and never more than 1e-5 * `scale` (the
+    scene's radius) when the camera is inside or beside the bounds. With reversed-Z float
+    depth the near plane costs no precision, so erring small is free."""
+    if camera.znear is not None:
+        return float(camera.znear)
+    floor = 1e-5 * scale
+    f, e = forward(camera), camera.eye
+    zmin = min(_dot3(f, _sub(c, e)) for c in corners)
+    return max(0.5 * zmin, floor)
+
+
+def far_extent(camera: Camera, corners: Sequence[Sequence[float]], znear: float) -> float:
+    """The depth view's normalisation: the camera's zfar, else the farthest corner of the
+    scene's bounds along the view axis (never clipping: only the debug view uses it)."""
+    if camera.zfar is not None:
+        return float(camera.zfar)
+    f, e = forward(camera), camera.eye
+    return max(max(_dot3(f, _sub(c, e)) for c in corners), 2.0 * znear)
 
 
 def validate_camera(camera: Camera) -> None:
@@ -105,8 +152,11 @@ def validate_camera(camera: Camera) -> None:
         raise UsageError("camera: up is parallel to the viewing direction (or zero)")
     if not 0.0 < camera.yfov_deg < 180.0:
         raise UsageError(f"camera: field of view {camera.yfov_deg} must be in (0, 180) degrees")
-    if not 0.0 < camera.znear < camera.zfar:
-        raise UsageError(f"camera: need 0 < near ({camera.znear}) < far ({camera.zfar})")
+    near, far = camera.znear, camera.zfar
+    if near is not None and not (math.isfinite(near) and near > 0):
+        raise UsageError(f"camera: near plane {near} must be a finite number > 0 (or None: automatic)")
+    if far is not None and not (far > (near or 0.0)):
+        raise UsageError(f"camera: far {far} must be beyond near {near} (or None: automatic)")
 
 
 def parse_camera(text: str, base: Camera | None = None) -> Camera:
@@ -133,3 +183,13 @@ def parse_camera(text: str, base: Camera | None = None) -> Camera:
 def format_camera(camera: Camera) -> str:
     vals = [*camera.eye, *camera.target, *camera.up]
     return ",".join(f"{v:.6g}" for v in vals)
+
+
+def as_camera(value: Any, base: Camera) -> Camera:
+    """A Camera from what a user passed as one (see vkpbr.scene.camera once merged)."""
+    if isinstance(value, Camera):
+        return value
+    if isinstance(value, str):
+        return parse_camera(value, base)
+    raise UsageError(f"camera: expected a Camera or an 'ex,ey,ez,tx,ty,tz' string, got "
+                     f"{type(value).__name__}")

@@ -53,7 +53,8 @@ class Draw:
     index_count: int
     vertex_offset: int
     push: np.ndarray  # PUSH block bytes: model and normal matrix
-    kind: str  # "opaque" | "opaque_double" | "mask" | "blend"
+    alpha_mode: str  # the material's: "opaque" | "mask" | "blend" (render/passes.py classifies)
+    double_sided: bool
     center: np.ndarray = field(default_factory=lambda: np.zeros(3))  # world, for blend sorting
 
 
@@ -419,23 +420,17 @@ class GpuScene:
             mat = self.materials[mat_index]
             m = np.asarray(node.matrix, dtype=np.float64)
             push = np.concatenate([L.mat4_to_std140(m).ravel(), L.mat4_to_std140(_normal_matrix(m)).ravel()])
-            if mat.alpha_mode == "mask":
-                kind = "mask"
-            elif mat.alpha_mode == "blend":
-                kind = "blend"
-            else:
-                kind = "opaque_double" if mat.double_sided else "opaque"
             p = mesh.positions
             center_local = (p.min(axis=0) + p.max(axis=0)) / 2 if len(p) else np.zeros(3)
             draws.append(Draw(
                 mesh=node.mesh, material=mat_index,
                 first_index=int(self.index_offsets[node.mesh]), index_count=len(mesh.indices),
                 vertex_offset=int(self.vertex_offsets[node.mesh]),
-                push=np.ascontiguousarray(push, dtype=np.float32), kind=kind,
+                push=np.ascontiguousarray(push, dtype=np.float32), alpha_mode=mat.alpha_mode,
+                double_sided=bool(mat.double_sided),
                 center=m[:3, :3] @ center_local + m[:3, 3],
             ))
-        order = {"opaque": 0, "opaque_double": 1, "mask": 2, "blend": 3}
-        draws.sort(key=lambda d: (order[d.kind], d.material))
+        draws.sort(key=lambda d: d.material)  # fewer material binds within each pass
         return draws
 
     @property

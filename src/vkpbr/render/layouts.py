@@ -111,6 +111,26 @@ class Std140Block:
         fmt.append("x" * (self.size - at))
         return struct.Struct("".join(fmt))
 
+    @cached_property
+    def pack_into(self):  # noqa: ANN201 - a generated function
+        """`pack_into(buffer, **fields)`: write the block into a writable buffer by field
+        name, every field required (keyword-only: a missing or misspelt name is a TypeError).
+        Vectors are sequences of their length, a mat4 its 16 floats column by column.
+
+        Generated once per block from `fields`, so it costs one `struct.pack_into` call
+        (~1 us) and cannot disagree with the layout's order, which positional packing could.
+        """
+        args, parts = [], []
+        for name, glsl in self.fields:
+            _, _, _, shape = _BASE[glsl]
+            args.append(name)
+            parts.append(f"*{name}" if shape else name)
+        src = (f"def pack_into(buffer, *, {', '.join(args)}):\n"
+               f"    _pack(buffer, 0, {', '.join(parts)})\n")
+        scope: dict = {"_pack": self.packer.pack_into}
+        exec(compile(src, f"<std140 {self.name}>", "exec"), scope)  # noqa: S102 - our own text
+        return scope["pack_into"]
+
     def zeros(self) -> np.ndarray:
         return np.zeros((), dtype=self.dtype)
 
@@ -281,7 +301,7 @@ VIEW_HELP = {
     View.OCCLUSION: "ambient occlusion, grey",
     View.ALPHA: "base-colour alpha, grey",
     View.TEXCOORDS: "base-colour texture coordinates (its UV set, transformed): R = u, G = v (fract)",
-    View.DEPTH: "linear depth: distance along the view axis / far plane, grey",
+    View.DEPTH: "linear depth: distance along the view axis / the far side of the scene's bounds (or the camera's zfar), grey",
     View.EMISSIVE: "emitted radiance Le",
     View.TANGENT: "tangent (world, from the vertex TBN), xyz*0.5+0.5",
     View.BITANGENT: "bitangent (world, handedness applied), xyz*0.5+0.5",

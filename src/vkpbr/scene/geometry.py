@@ -184,8 +184,8 @@ def auto_camera(scene: Scene, yfov_deg: float = 60.0) -> Camera:
 
     The eye looks at the centre of the world bounds from a +Z-leaning diagonal (slightly from
     above and the right, so that flat test models are not seen edge-on), far enough that the
-    bounding sphere fits the vertical field of view; znear/zfar hug that sphere so depth
-    precision is not wasted.
+    bounding sphere fits the vertical field of view. Near and far are left to each render
+    (reversed-Z: see render/camera.py near_plane).
     """
     lo, hi = scene.bounds()
     centre = (lo + hi) / 2.0
@@ -195,14 +195,10 @@ def auto_camera(scene: Scene, yfov_deg: float = 60.0) -> Camera:
     distance = radius / math.sin(math.radians(yfov_deg) / 2.0)
     direction = np.array([0.35, 0.3, 1.0]) / np.linalg.norm([0.35, 0.3, 1.0])
     eye = centre + direction * distance
-    znear = max(distance - radius, radius * 1e-3) * 0.5
-    zfar = (distance + radius) * 1.5
     return Camera(
         eye=tuple(float(x) for x in eye),
         target=tuple(float(x) for x in centre),
         up=(0.0, 1.0, 0.0),
         yfov_deg=yfov_deg,
-        znear=znear,
-        zfar=zfar,
         name="auto",
     )

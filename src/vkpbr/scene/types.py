@@ -158,14 +158,19 @@ class Light:
 
 @dataclass
 class Camera:
-    """A perspective camera by eye/target/up; yfov in degrees."""
+    """A perspective camera by eye/target/up; yfov in degrees.
+
+    Nothing is clipped beyond the near plane (reversed-Z, infinite far plane). `znear` None:
+    chosen per render in front of the scene's bounds; `zfar` only normalises the depth debug
+    view (None: the far side of the scene's bounds).
+    """
 
     eye: tuple[float, float, float] = (0.0, 0.0, 3.0)
     target: tuple[float, float, float] = (0.0, 0.0, 0.0)
     up: tuple[float, float, float] = (0.0, 1.0, 0.0)
     yfov_deg: float = 60.0
-    znear: float = 0.1
-    zfar: float = 100.0
+    znear: float | None = None
+    zfar: float | None = None
     name: str = ""
 
 

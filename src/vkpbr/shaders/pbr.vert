@@ -24,6 +24,9 @@ layout(location = 4) in vec4 in_qtangent;
 layout(location = 4) in uint in_packed_frame;
 #endif
 
+// The depth pre-pass (render/passes.py) runs this shader too: its depths must be bit-equal.
+invariant gl_Position;
+
 layout(location = 0) out vec3 v_world_pos;
 layout(location = 1) out vec4 v_texcoords;  // xy: TEXCOORD_0, zw: TEXCOORD_1 (one varying slot)
 layout(location = 2) out vec3 v_normal;

@@ -1,0 +1,125 @@
+"""Dynamic rendering and the barriers around it, shared by every frame target.
+
+Offscreen targets and swapchains differ only in where their images come from and where a
+finished frame goes (a readback buffer, the presentation engine); beginning a rendering over
+a colour + depth pair, and the layout transitions in and out of it, are written once here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from vkpbr.gpu.commands import Commands
+
+__all__ = ["Attachments", "begin_rendering", "end_rendering", "image_barrier", "barriers",
+           "copy_image_to_buffer", "host_read_barrier"]
+
+
+@dataclass
+class Attachments:
+    """Views rendered into: colour and depth, plus their MSAA images when `samples` > 1
+    (rendered into, then resolved into colour/depth)."""
+
+    color: Any
+    depth: Any
+    extent: tuple[int, int]
+    msaa_color: Any = None
+    msaa_depth: Any = None
+
+
+def image_barrier(vk: Any, image: Any, depth: bool, old: int, new: int, src: tuple[int, int],
+                  dst: tuple[int, int]) -> Any:
+    """A VkImageMemoryBarrier2 over mip 0 / layer 0 of `image` (a VkImage handle)."""
+    aspect = vk.VK_IMAGE_ASPECT_DEPTH_BIT if depth else vk.VK_IMAGE_ASPECT_COLOR_BIT
+    return vk.VkImageMemoryBarrier2(
+        srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=dst[0], dstAccessMask=dst[1],
+        oldLayout=old, newLayout=new, srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+        dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, image=image,
+        subresourceRange=vk.VkImageSubresourceRange(
+            aspectMask=aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1))
+
+
+def barriers(cmd: Commands, images: list[Any], buffers: list[Any] = ()) -> None:
+    vk = cmd.vk
+    vk.vkCmdPipelineBarrier2(cmd.handle, vk.VkDependencyInfo(
+        pImageMemoryBarriers=list(images) or None, imageMemoryBarrierCount=len(images),
+        pBufferMemoryBarriers=list(buffers) or None, bufferMemoryBarrierCount=len(buffers)))
+
+
+def attachment_stage(vk: Any, depth: bool) -> tuple[int, int, int]:
+    """(stages, accesses, layout) of a colour or depth attachment being drawn."""
+    if depth:
+        return (vk.VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT
+                | vk.VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+                vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT
+                | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT,
+                vk.VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL)
+    return (vk.VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+            vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT | vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT,
+            vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL)
+
+
+def begin_rendering(cmd: Commands, att: Attachments, clear_color: tuple[float, ...] | None,
+                    clear_depth: float | None, store_depth: bool = True) -> None:
+    """Begin dynamic rendering over `att` (cleared, or loaded where a clear value is None),
+    and set the viewport and scissor to the whole extent."""
+    vk = cmd.vk
+    store, dont = vk.VK_ATTACHMENT_STORE_OP_STORE, vk.VK_ATTACHMENT_STORE_OP_DONT_CARE
+    clear, load = vk.VK_ATTACHMENT_LOAD_OP_CLEAR, vk.VK_ATTACHMENT_LOAD_OP_LOAD
+    color_l = vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL
+    depth_l = vk.VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL
+    cc = vk.VkClearValue(color=vk.VkClearColorValue(float32=list(clear_color or (0.0,) * 4)))
+    cd = vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(
+        depth=0.0 if clear_depth is None else clear_depth, stencil=0))
+    c_load = load if clear_color is None else clear
+    d_load = load if clear_depth is None else clear
+    if att.msaa_color is not None:
+        color = vk.VkRenderingAttachmentInfo(
+            imageView=att.msaa_color, imageLayout=color_l,
+            resolveMode=vk.VK_RESOLVE_MODE_AVERAGE_BIT, resolveImageView=att.color,
+            resolveImageLayout=color_l, loadOp=c_load, storeOp=dont, clearValue=cc)
+        depth = vk.VkRenderingAttachmentInfo(
+            imageView=att.msaa_depth, imageLayout=depth_l,
+            resolveMode=vk.VK_RESOLVE_MODE_SAMPLE_ZERO_BIT, resolveImageView=att.depth,
+            resolveImageLayout=depth_l, loadOp=d_load, storeOp=dont, clearValue=cd)
+    else:
+        color = vk.VkRenderingAttachmentInfo(imageView=att.color, imageLayout=color_l,
+                                             loadOp=c_load, storeOp=store, clearValue=cc)
+        depth = vk.VkRenderingAttachmentInfo(imageView=att.depth, imageLayout=depth_l,
+                                             loadOp=d_load, storeOp=store if store_depth else dont,
+                                             clearValue=cd)
+    w, h = att.extent
+    area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(w, h))
+    vk.vkCmdBeginRendering(cmd.handle, vk.VkRenderingInfo(
+        renderArea=area, layerCount=1, pColorAttachments=[color], pDepthAttachment=depth))
+    vk.vkCmdSetViewport(cmd.handle, 0, 1, [vk.VkViewport(
+        x=0, y=0, width=w, height=h, minDepth=0.0, maxDepth=1.0)])
+    vk.vkCmdSetScissor(cmd.handle, 0, 1, [area])
+
+
+def end_rendering(cmd: Commands) -> None:
+    cmd.vk.vkCmdEndRendering(cmd.handle)
+
+
+def copy_image_to_buffer(cmd: Commands, image: Any, depth: bool, buffer: Any,
+                         extent: tuple[int, int]) -> None:
+    """Copy mip 0 of `image` (in TRANSFER_SRC layout) tightly packed into `buffer`."""
+    vk = cmd.vk
+    aspect = vk.VK_IMAGE_ASPECT_DEPTH_BIT if depth else vk.VK_IMAGE_ASPECT_COLOR_BIT
+    vk.vkCmdCopyImageToBuffer(
+        cmd.handle, image, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer.handle, 1,
+        [vk.VkBufferImageCopy(
+            bufferOffset=0, imageSubresource=vk.VkImageSubresourceLayers(
+                aspectMask=aspect, mipLevel=0, baseArrayLayer=0, layerCount=1),
+            imageExtent=vk.VkExtent3D(width=extent[0], height=extent[1], depth=1))])
+
+
+def host_read_barrier(vk: Any, buffer: Any) -> Any:
+    """Make a copy into `buffer` visible to the host once the frame's fence is waited."""
+    return vk.VkBufferMemoryBarrier2(
+        srcStageMask=vk.VK_PIPELINE_STAGE_2_COPY_BIT, srcAccessMask=vk.VK_ACCESS_2_TRANSFER_WRITE_BIT,
+        dstStageMask=vk.VK_PIPELINE_STAGE_2_HOST_BIT, dstAccessMask=vk.VK_ACCESS_2_HOST_READ_BIT,
+        srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+        dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+        buffer=buffer.handle, offset=0, size=buffer.size)

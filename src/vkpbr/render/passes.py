@@ -1,0 +1,128 @@
+"""The pass table: every pass of a frame, declared once, in drawing order.
+
+A pass names the class of draws it takes (`classify` below is the one place a material is
+put in a class), how its pipeline differs from the base PBR pipeline (vkguide derives its
+transparent pipeline from its opaque one the same way), whether it sorts its draws back to
+front, and whether it belongs to the optional depth pre-pass. `record_passes` records them
+all; a new pass (shadow maps, a post pass) is a new row here plus its shaders.
+
+The depth pre-pass draws the opaque classes depth-only (no fragment shader) with the same
+vertex shader (`invariant gl_Position`), after which the opaque passes test
+GREATER_OR_EQUAL without writing depth, so each pixel is shaded once (reversed-Z: nearer
+is greater). Masked draws need their texture to decide coverage and are not pre-passed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from vkpbr.gpu.commands import Commands
+from vkpbr.gpu.pipeline import PipelineSpec
+
+__all__ = ["PassSpec", "PASSES", "classify", "record_passes", "PassContext"]
+
+_Derive = Callable[[PipelineSpec], PipelineSpec]
+
+
+def classify(alpha_mode: str, double_sided: bool, alpha_mask: bool) -> str:
+    """The draw class (= the main pass) of a material: "opaque", "opaque_double", "mask" or
+    "blend". With alpha masking off, masked materials are drawn opaque, without culling
+    (they are mostly foliage and fences, modelled as single sheets)."""
+    if alpha_mode == "blend":
+        return "blend"
+    if alpha_mode == "mask":
+        return "mask" if alpha_mask else "opaque_double"
+    return "opaque_double" if double_sided else "opaque"
+
+
+@dataclass(frozen=True)
+class PassSpec:
+    name: str
+    draw_class: str  # the draws it takes (classify)
+    derive: _Derive  # base pipeline spec -> this pass's
+    back_to_front: bool = False  # sort draws far to near (blending)
+    prepass: bool = False  # part of the optional depth pre-pass
+    after_prepass: bool = False  # with the pre-pass on: test its depth, write none
+
+
+def _same(spec: PipelineSpec) -> PipelineSpec:
+    return spec
+
+
+def _two_sided(spec: PipelineSpec) -> PipelineSpec:
+    return dataclasses.replace(spec, cull="none")
+
+
+def _depth_only(spec: PipelineSpec) -> PipelineSpec:
+    return dataclasses.replace(spec, fragment_shader=None, color_write=False)
+
+
+PASSES: tuple[PassSpec, ...] = (
+    PassSpec("prepass_opaque", "opaque", _depth_only, prepass=True),
+    PassSpec("prepass_opaque_double", "opaque_double",
+             lambda s: _depth_only(_two_sided(s)), prepass=True),
+    PassSpec("opaque", "opaque", _same, after_prepass=True),
+    PassSpec("opaque_double", "opaque_double", _two_sided, after_prepass=True),
+    PassSpec("mask", "mask",
+             lambda s: dataclasses.replace(s, cull="none", fragment_shader="pbr_mask.frag.spv")),
+    PassSpec("blend", "blend",
+             lambda s: dataclasses.replace(s, cull="none", blend=True, depth_write=False),
+             back_to_front=True),
+)
+
+
+def pipeline_spec(p: PassSpec, base: PipelineSpec, prepass: bool) -> PipelineSpec:
+    """The pipeline a pass draws with, given whether the depth pre-pass runs this frame."""
+    spec = p.derive(base)
+    if prepass and p.after_prepass:
+        spec = dataclasses.replace(spec, depth_write=False)
+    return spec
+
+
+@dataclass
+class PassContext:
+    """What recording needs beyond the command buffer: the draws and their classes, the
+    frame's descriptor sets, and a pipeline lookup."""
+
+    draws: list[Any]  # render.gpu_scene.Draw
+    classes: list[str]  # classify() of each draw, for this frame's options
+    pipeline: Callable[[PassSpec], Any]  # pass -> gpu.pipeline.Pipeline
+    frame_sets: tuple[Any, Any]  # set 0 (camera, settings), set 2 (light)
+    material_sets: list[Any]
+    vertex_buffers: list[Any]
+    index_buffer: Any
+    blend_order: tuple[int, ...] = ()  # indices into the blend-class draws, far to near
+    prepass: bool = False
+    stamp: Callable[[int], None] = lambda slot: None  # timestamp after pass `slot`
+
+
+def record_passes(cmd: Commands, ctx: PassContext) -> None:
+    """Record every enabled pass of PASSES, with a timestamp after each (slots 1..)."""
+    cmd.bind_index_buffer(ctx.index_buffer)
+    for slot, p in enumerate(PASSES, start=1):
+        if p.prepass and not ctx.prepass:
+            ctx.stamp(slot)
+            continue
+        draws = [d for d, c in zip(ctx.draws, ctx.classes, strict=True) if c == p.draw_class]
+        if p.back_to_front and len(ctx.blend_order) == len(draws):
+            draws = [draws[i] for i in ctx.blend_order]
+        if draws:
+            _record_draws(cmd, ctx, p, draws)
+        ctx.stamp(slot)
+
+
+def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[Any]) -> None:
+    cmd.bind_pipeline(ctx.pipeline(p))
+    cmd.bind_set(0, ctx.frame_sets[0])
+    cmd.bind_set(2, ctx.frame_sets[1])
+    cmd.bind_vertex_buffers(ctx.vertex_buffers)
+    bound = None
+    for d in draws:
+        if d.material != bound:
+            cmd.bind_set(1, ctx.material_sets[d.material])
+            bound = d.material
+        cmd.push(d.push)
+        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset)
