@@ -178,8 +178,7 @@ class Swapchain:
             imageSharingMode=vk.VK_SHARING_MODE_EXCLUSIVE, preTransform=caps.currentTransform,
             compositeAlpha=alpha, presentMode=self.present_mode, clipped=vk.VK_TRUE,
             oldSwapchain=self.handle)
-        with translate_errors("vkCreateSwapchainKHR"):
-            new = self._create_fn(device.handle, info, None)
+        new = self._create_fn(device.handle, info, None)
         self._destroy_swapchain()
         self.handle, self.extent = new, extent
         self._swapchains[0] = new

@@ -35,6 +35,7 @@ class FrameStats:
     gpu_ms: float = float("nan")  # timestamp queries around the frame's commands
     readback_ms: float = 0.0  # copying the mapped image into NumPy
     pass_ms: dict[str, float] = field(default_factory=dict)  # GPU ms per pass (timestamps)
+    driver_ms: float = 0.0  # thread CPU time inside the target's acquire and submit/present
 
 
 @dataclass

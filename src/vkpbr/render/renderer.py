@@ -39,10 +39,17 @@ from vkpbr.render.frames import Bounds, FrameSlot, FrameStats, create_slots, wri
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.overlay import TextOverlay
-from vkpbr.render.passes import PASSES, PassContext, PassSpec, classify, pipeline_spec, record_passes
+from vkpbr.render.passes import (
+    PASSES,
+    PassContext,
+    PassSpec,
+    classify,
+    pipeline_spec,
+    record_passes,
+)
 from vkpbr.scene.types import Camera, Light, Scene
 
-__all__ = ["Renderer", "RenderOptions", "FrameStats", "Submitted"]
+__all__ = ["Renderer", "RenderOptions", "FrameStats", "Submitted", "COPY_COLOR", "COPY_DEPTH"]
 
 _TBN_STREAMS = {
     L.TbnMode.VECTORS: (("normals", "vec3"), ("tangents", "vec4")),
@@ -276,7 +283,9 @@ class Renderer:
         slot = self.slots[frame.index]
         if timings:
             self._read_timings(frame, slot)
+        c0 = time.thread_time()
         image = target.acquire(frame)
+        driver = time.thread_time() - c0
         if image is None:
             return Submitted(None, -1, False)
         write_frame_uniforms(slot, camera, light, target.extent, options, linear, self.bounds)
@@ -284,7 +293,9 @@ class Renderer:
             overlay.prepare(frame.index)
         cmd = self._command_buffer(target, frame, image, options.tbn, options.alpha_mask,
                                    self.blend_order(camera.eye), overlay, copy)
+        c0 = time.thread_time()
         ok = target.submit(frame, cmd, image)
+        slot.stats.driver_ms = (driver + time.thread_time() - c0) * 1e3
         frame.stamped = self.ring.query_pool is not None
         slot.stats.cpu_ms = (time.perf_counter() - t0) * 1e3
         return Submitted(frame, image, ok)
