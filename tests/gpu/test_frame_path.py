@@ -1,0 +1,40 @@
+"""The frame path's own promises: the depth pre-pass changes no pixel, per-pass GPU timings
+are reported, and every failing Vulkan call raises vkpbr's error with the call's name."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vkpbr.errors import VulkanError
+
+
+def test_depth_prepass_changes_no_pixel(make_renderer) -> None:
+    from vkpbr.scene.synthetic import sphere_field
+
+    scene = sphere_field(draws=40, rings=8, segments=16, materials=4)
+    plain = make_renderer(scene).render(size=(96, 64), depth=True)
+    pre = make_renderer(scene, depth_prepass=True)
+    image = pre.render(size=(96, 64), depth=True)
+    assert np.array_equal(plain[0], image[0]) and np.array_equal(plain[1], image[1])
+    passes = pre.last_stats.pass_ms
+    assert {"prepass_opaque", "opaque", "mask", "blend", "copy"} <= set(passes)
+    if pre.device.timestamps:
+        assert passes["prepass_opaque"] >= 0 and pre.last_stats.gpu_ms > 0
+
+
+def test_failing_calls_raise_vkpbr_errors_named(make_renderer) -> None:
+    """A query read before anything wrote it: VK_NOT_READY, through the wrapped binding."""
+    r = make_renderer()
+    vk, dev = r.device.vk, r.device.handle
+    pool = vk.vkCreateQueryPool(dev, vk.VkQueryPoolCreateInfo(
+        queryType=vk.VK_QUERY_TYPE_OCCLUSION, queryCount=1), None)
+    try:
+        with r.device.one_time_commands() as cmd:
+            vk.vkCmdResetQueryPool(cmd, pool, 0, 1)
+        data = vk.ffi.new("uint64_t[1]")
+        with pytest.raises(VulkanError, match="vkGetQueryPoolResults failed with VK_NOT_READY"):
+            vk.vkGetQueryPoolResults(dev, pool, 0, 1, 8, data, 8, vk.VK_QUERY_RESULT_64_BIT)
+    finally:
+        vk.vkDestroyQueryPool(dev, pool, None)
+    assert vk.vkCreateFence.__name__ == "vkCreateFence"

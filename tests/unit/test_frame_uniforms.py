@@ -1,0 +1,108 @@
+"""The per-frame uniform blocks are written by field name (no GPU needed): each block's
+generated `pack_into` lands every named value where the NumPy std140 layout says, and the
+renderer's `write_frame_uniforms` puts each input in the field of that name."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from vkpbr.render import layouts as L
+from vkpbr.render.camera import view_projection
+from vkpbr.render.frames import Bounds, FrameSlot, write_frame_uniforms
+from vkpbr.render.options import RenderOptions
+from vkpbr.scene.types import Camera, Light
+
+
+def _random_values(block: L.Std140Block, rng: np.random.Generator) -> dict:
+    arr = block.zeros()
+    values = {}
+    for name, glsl in block.fields:
+        shape = arr[name].shape
+        v = rng.integers(0, 1000, shape) if glsl in ("int", "uint", "uvec4") else \
+            rng.random(shape).astype(np.float32)
+        values[name] = v
+    return values
+
+
+@pytest.mark.parametrize("block", L.BLOCKS, ids=lambda b: b.name)
+def test_pack_by_name_matches_the_numpy_layout(block: L.Std140Block) -> None:
+    values = _random_values(block, np.random.default_rng(3))
+    want = block.zeros()
+    for name, v in values.items():
+        want[name] = v
+    buf = bytearray(block.size)
+    # Vectors as sequences; a mat4 as its 16 floats in memory order (the dtype's (4, 4) field
+    # holds the GLSL column-major matrix, as layouts.mat4_to_std140 writes it).
+    block.pack_into(buf, **{n: (np.asarray(v).ravel().tolist() if np.ndim(v) else v.item())
+                            for n, v in values.items()})
+    got = np.frombuffer(bytes(buf), dtype=block.dtype)[0]
+    for name, v in values.items():
+        np.testing.assert_array_equal(got[name], want[name], err_msg=name)
+
+
+def test_packing_needs_every_field_by_name() -> None:
+    buf = bytearray(L.LIGHT.size)
+    with pytest.raises(TypeError):
+        L.LIGHT.pack_into(buf, lightPos=(0, 0, 0, 1))  # the other fields are missing
+    with pytest.raises(TypeError):
+        L.LIGHT.pack_into(buf, (0, 0, 0, 1))  # positional values are refused
+
+
+def test_swapped_fields_are_caught() -> None:
+    """A layout whose packer order disagreed with its offsets would fail the check above:
+    build one with two fields swapped and show that the by-name bytes differ."""
+    fields = list(L.LIGHT.fields)
+    fields[3], fields[4] = fields[4], fields[3]  # intensity <-> viewPos
+    swapped = dataclasses.replace(L.LIGHT, fields=tuple(fields))
+    values = dict(lightPos=(1, 2, 3, 1), color=(0.1, 0.2, 0.3), intensity=7.0,
+                  viewPos=(4, 5, 6, 1), falloff=1, range=2.0)
+    a, b = bytearray(L.LIGHT.size), bytearray(swapped.size)
+    L.LIGHT.pack_into(a, **values)
+    swapped.pack_into(b, **values)
+    assert a != b
+    assert np.frombuffer(bytes(a), L.LIGHT.dtype)[0]["intensity"] == 7.0
+
+
+def _slot() -> FrameSlot:
+    mv = [memoryview(bytearray(b.size)) for b in (L.CAMERA, L.SETTINGS, L.LIGHT)]
+    return FrameSlot(0, None, None, *mv)
+
+
+def test_frame_uniforms_land_in_their_fields() -> None:
+    camera = Camera(eye=(1.0, 2.0, 3.0), target=(0.0, 0.5, 0.0), yfov_deg=50.0)
+    light = Light(position=(4.0, 5.0, 6.0), color=(0.2, 0.4, 0.6), intensity=3.5,
+                  falloff="inverse_square", range=9.0)
+    opts = RenderOptions(view="roughness", brdf="blinn-phong", tonemap="aces", exposure=1.5,
+                         occlusion=False)
+    bounds = Bounds.of(np.array([-1.0, -1, -1]), np.array([1.0, 1, 1]))
+    slot = _slot()
+    write_frame_uniforms(slot, camera, light, (64, 32), opts, False, bounds)
+    cam = np.frombuffer(slot.m_camera, L.CAMERA.dtype)[0]
+    st = np.frombuffer(slot.m_settings, L.SETTINGS.dtype)[0]
+    li = np.frombuffer(slot.m_light, L.LIGHT.dtype)[0]
+    vp = view_projection(camera, (64, 32), slot.znear)
+    np.testing.assert_allclose(cam["VP"], L.mat4_to_std140(vp), rtol=1e-6, atol=1e-6)
+    assert (st["view"], st["brdf"], st["tonemap"]) == (L.View.ROUGHNESS, L.Brdf.BLINN_PHONG, L.Tonemap.ACES)
+    assert st["flags"] == L.SETTINGS_NORMAL_MAPPING | L.SETTINGS_SRGB_TARGET
+    assert st["exposure"] == pytest.approx(2 ** 1.5)
+    assert st["znear"] == pytest.approx(slot.znear) and 0 < slot.znear < np.linalg.norm(camera.eye) - 1.8
+    np.testing.assert_allclose(li["lightPos"], (4, 5, 6, 1))
+    np.testing.assert_allclose(li["color"], (0.2, 0.4, 0.6), rtol=1e-6)
+    np.testing.assert_allclose(li["viewPos"], (1, 2, 3, 1))
+    assert (li["intensity"], li["falloff"], li["range"]) == (pytest.approx(3.5), 1, pytest.approx(9.0))
+
+
+def test_near_plane_follows_the_bounds() -> None:
+    """Outside the bounds: just in front of the nearest corner; inside: tiny but positive."""
+    from vkpbr.render.camera import near_plane
+
+    b = Bounds.of(np.array([-1.0, -1, -1]), np.array([1.0, 1, 1]))
+    far = Camera(eye=(0.0, 0.0, 100.0), target=(0.0, 0.0, 0.0))
+    assert 0.5 * 99 * 0.99 < near_plane(far, b.corners, b.radius) <= 99
+    inside = Camera(eye=(0.0, 0.0, 0.5), target=(0.0, 0.0, 0.0))
+    assert 0 < near_plane(inside, b.corners, b.radius) <= 1e-4
+    own = Camera(eye=(0.0, 0.0, 100.0), target=(0.0, 0.0, 0.0), znear=3.0)
+    assert near_plane(own, b.corners, b.radius) == 3.0
