@@ -315,7 +315,8 @@ class Viewer(InputHandlers):
         self._refresh_hud()
         with_hud = shot is not None and self.shot_hud
         sub = r.draw(self.target, camera, self.light, self.options, overlay=self.hud,  # type: ignore[union-attr]
-                     copy=(COPY_COLOR,) if with_hud else (), timings=self._want_gpu)
+                     copy=(COPY_COLOR,) if with_hud else (), timings=self._want_gpu,
+                     driver_time=True)
         stats = r.frame_stats(sub.frame) if sub.frame is not None else None  # type: ignore[union-attr]
         if self._want_gpu and stats is not None and stats.gpu_ms == stats.gpu_ms:
             self.meter.gpu, self._want_gpu = stats.gpu_ms, False

@@ -40,6 +40,7 @@ class Frame:
         self.acquired = vk.vkCreateSemaphore(device.handle, vk.VkSemaphoreCreateInfo(), None)
         self.fences = ffi.new("VkFence[1]", [self.fence])
         self.number = -1  # the ring's frame number of the last submission from this slot
+        self.finished = True  # its last submission is known to have finished (waited)
         self.stamped = False  # the last submission wrote this frame's timestamps
         # Submit info built once; `submit` fills in the command buffer and semaphores.
         self._cmds = ffi.new("VkCommandBuffer[1]")
@@ -54,9 +55,12 @@ class Frame:
 
     def wait(self) -> None:
         """Block until this frame's last submission has finished on the GPU."""
+        if self.finished:
+            return  # waited already: no driver call (they cost microseconds each)
         lib = self.device.vk.lib
         check_result(lib.vkWaitForFences(self.device.handle, 1, self.fences, 1, _NO_TIMEOUT),
                      "vkWaitForFences")
+        self.finished = True
 
     def submit(self, cmd: Commands, wait: Any = None, signal: Any = None) -> None:
         """Submit `cmd`, signalling this frame's fence; optionally waiting on `wait` (at the
@@ -71,6 +75,7 @@ class Frame:
             self._wait[0] = wait
         if signal is not None:
             self._signal[0] = signal
+        self.finished = False
         check_result(lib.vkQueueSubmit(self.device.queue, 1, info, self.fence), "vkQueueSubmit")
 
     def destroy(self) -> None:

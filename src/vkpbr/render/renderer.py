@@ -270,12 +270,15 @@ class Renderer:
 
     def draw(self, target: FrameTarget, camera: Camera, light: Light, options: RenderOptions,
              *, overlay: TextOverlay | None = None, copy: tuple[str, ...] = (),
-             linear: bool = False, timings: bool = True) -> Submitted:
+             linear: bool = False, timings: bool = True, driver_time: bool = False) -> Submitted:
         """Draw one frame into `target` and submit it (the one frame path).
 
         `copy` names what the target copies out for reading (COPY_COLOR, COPY_DEPTH) into the
         frame's buffers; `timings` first reads the GPU timestamps of the frame slot's previous
         submission into its stats (a few microseconds; the viewer asks 4 times a second).
+        `driver_time` measures the thread CPU time spent in the target's acquire and submit
+        (stats.driver_ms; the viewer subtracts it from Python's own cost). Off by default:
+        each clock read is a system call.
         Returns a Submitted; `ok` False: recreate the target (a resized window).
         """
         t0 = time.perf_counter()
@@ -283,9 +286,10 @@ class Renderer:
         slot = self.slots[frame.index]
         if timings:
             self._read_timings(frame, slot)
-        c0 = time.thread_time()
+        clock = time.thread_time if driver_time else _no_clock
+        c0 = clock()
         image = target.acquire(frame)
-        driver = time.thread_time() - c0
+        driver = clock() - c0
         if image is None:
             return Submitted(None, -1, False)
         write_frame_uniforms(slot, camera, light, target.extent, options, linear, self.bounds)
@@ -293,9 +297,9 @@ class Renderer:
             overlay.prepare(frame.index)
         cmd = self._command_buffer(target, frame, image, options.tbn, options.alpha_mask,
                                    self.blend_order(camera.eye), overlay, copy)
-        c0 = time.thread_time()
+        c0 = clock()
         ok = target.submit(frame, cmd, image)
-        slot.stats.driver_ms = (driver + time.thread_time() - c0) * 1e3
+        slot.stats.driver_ms = (driver + clock() - c0) * 1e3
         frame.stamped = self.ring.query_pool is not None
         slot.stats.cpu_ms = (time.perf_counter() - t0) * 1e3
         return Submitted(frame, image, ok)
@@ -427,6 +431,10 @@ class Renderer:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _no_clock() -> float:
+    return 0.0
 
 
 def _linear_depth(d: np.ndarray, znear: float) -> np.ndarray:
