@@ -17,7 +17,7 @@ import numpy as np
 from vkpbr.errors import UsageError
 
 __all__ = ["Vec3", "context", "convention_arg", "describe", "matrix", "real", "rigid_pose",
-           "size_arg", "vec3"]
+           "shown", "size_arg", "vec3"]
 
 Vec3 = tuple[float, float, float]
 
@@ -43,6 +43,15 @@ def describe(value: object) -> str:
     if value is None:
         return "None"
     return type(value).__name__
+
+
+def shown(value: object) -> str:
+    """`value` for a one-line message: the repr of a short scalar, else `describe`."""
+    if value is None or isinstance(value, (bool, int, float, str, np.generic)):
+        text = repr(value.item() if isinstance(value, np.generic) else value)
+        if len(text) <= 40:
+            return text
+    return describe(value)
 
 
 def real(value: object, what: str) -> float:
@@ -103,7 +112,7 @@ def size_arg(value: object, what: str) -> tuple[int, int]:
     out = []
     for label, v in zip(("width", "height"), value, strict=True):
         if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Integral) or v <= 0:
-            raise UsageError(f"{what}: {label} must be a positive integer, got {v!r}")
+            raise UsageError(f"{what}: {label} must be a positive integer, got {shown(v)}")
         out.append(int(v))
     return out[0], out[1]
 
@@ -111,7 +120,7 @@ def size_arg(value: object, what: str) -> tuple[int, int]:
 def convention_arg(value: object, what: str) -> str:
     if not isinstance(value, str) or value not in ("opencv", "opengl"):
         raise UsageError(f'{what}: expected "opengl" (x right, y up, z backward: NeRF, Blender) '
-                         f'or "opencv" (x right, y down, z forward), got {value!r}')
+                         f'or "opencv" (x right, y down, z forward), got {shown(value)}')
     return value
 
 

@@ -31,6 +31,7 @@ from vkpbr.scene._checks import (
     matrix,
     real,
     rigid_pose,
+    shown,
     size_arg,
     vec3,
 )
@@ -81,11 +82,11 @@ def _camera_problem(camera: Camera) -> str | None:
         return "up is parallel to the viewing direction (or zero)"
     yfov = camera.yfov_deg
     if isinstance(yfov, bool) or not isinstance(yfov, (int, float)) or not 0.0 < yfov < 180.0:
-        return f"field of view {yfov!r} must be in (0, 180) degrees"
+        return f"field of view {shown(yfov)} must be in (0, 180) degrees"
     near, far = camera.znear, camera.zfar
     for label, z in (("near", near), ("far", far)):
         if z is not None and (isinstance(z, bool) or not isinstance(z, (int, float)) or z != z):
-            return f"{label} plane {z!r} must be a number or None"
+            return f"{label} plane {shown(z)} must be a number or None"
     if near is not None and not 0.0 < near < math.inf:
         return f"near plane {near} must be a finite number > 0 (or None: automatic)"
     if far is not None and not far > (near if near is not None else 0.0):

@@ -25,7 +25,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from vkpbr.errors import UsageError
-from vkpbr.scene._checks import context, real, rigid_pose, size_arg
+from vkpbr.scene._checks import context, real, rigid_pose, shown, size_arg
 from vkpbr.scene.camera import Pose, as_pose
 
 __all__ = ["Pose", "load_poses"]
@@ -113,7 +113,7 @@ def _nerf_camera(keys: Mapping[str, object]) -> dict[str, object]:
     {"fov"} (then the images are taken to be square, as in NeRF's synthetic scenes)."""
     model = keys.get("camera_model", "OPENCV")
     if model not in ("OPENCV", "PINHOLE", "SIMPLE_PINHOLE"):
-        raise UsageError(f'"camera_model" {model!r} is not supported (only pinhole cameras)')
+        raise UsageError(f'"camera_model" {shown(model)} is not supported (only pinhole cameras)')
     for k in _DISTORTION:
         if k in keys and real(keys[k], f'"{k}"') != 0.0:
             raise UsageError(f'lens distortion ("{k}": {keys[k]}) is not supported; '
