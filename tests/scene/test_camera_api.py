@@ -351,11 +351,11 @@ def test_validate_camera_planes_and_intrinsics() -> None:
     validate_camera(Camera(znear=0.01, zfar=None))
     validate_camera(Camera(znear=None, zfar=10.0))
     validate_camera(Camera(znear=0.1, zfar=math.inf))
-    for kwargs, match in (({"znear": 0.0}, "near plane 0.0 must be > 0"),
+    for kwargs, match in (({"znear": 0.0}, "near plane 0.0 must be a finite number > 0"),
                           ({"znear": -1.0}, "near plane"),
                           ({"znear": math.nan}, "near plane nan must be a number"),
-                          ({"znear": 1.0, "zfar": 1.0}, "far plane 1.0 must be > near (1.0)"),
-                          ({"zfar": -5.0}, "far plane -5.0 must be > near (None)"),
+                          ({"znear": 1.0, "zfar": 1.0}, "far plane 1.0 must be beyond the near plane 1.0"),
+                          ({"zfar": -5.0}, "far plane -5.0 must be beyond the near plane None"),
                           ({"znear": "0.1"}, "near plane '0.1' must be a number"),
                           ({"yfov_deg": 180.0}, "field of view 180.0 must be in (0, 180)"),
                           ({"eye": (0, 0)}, "three numbers"),

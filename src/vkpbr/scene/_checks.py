@@ -105,6 +105,10 @@ def vec3(value: object, what: str) -> Vec3:
 
 def size_arg(value: object, what: str) -> tuple[int, int]:
     """(width, height): two positive integers."""
+    # The renderer's per-frame case first, without the slow numbers.Integral checks.
+    if (type(value) is tuple and len(value) == 2 and type(value[0]) is type(value[1]) is int
+            and value[0] > 0 and value[1] > 0):
+        return value  # type: ignore[return-value]
     if isinstance(value, np.ndarray):
         value = value.tolist() if value.ndim == 1 else value
     if not isinstance(value, (list, tuple)) or len(value) != 2:
