@@ -14,7 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from vkpbr.errors import UsageError
+# Moved to the scene layer (NumPy only); re-exported so that existing imports keep working.
+from vkpbr.scene.camera import as_camera, format_camera, parse_camera, validate_camera  # noqa: F401
 from vkpbr.scene.types import Camera
 
 __all__ = ["look_at", "perspective", "forward", "view_projection", "view_projection_columns",
@@ -139,57 +140,3 @@ def far_extent(camera: Camera, corners: Sequence[Sequence[float]], znear: float)
         return float(camera.zfar)
     f, e = forward(camera), camera.eye
     return max(max(_dot3(f, _sub(c, e)) for c in corners), 2.0 * znear)
-
-
-def validate_camera(camera: Camera) -> None:
-    eye, target, up = (np.asarray(x, dtype=np.float64) for x in (camera.eye, camera.target, camera.up))
-    if not all(np.all(np.isfinite(x)) for x in (eye, target, up)):
-        raise UsageError("camera: eye, target and up must be finite numbers")
-    forward = target - eye
-    if np.linalg.norm(forward) < 1e-9:
-        raise UsageError("camera: eye and target coincide")
-    if np.linalg.norm(np.cross(forward, up)) < 1e-9 * np.linalg.norm(forward) * max(np.linalg.norm(up), 1e-30):
-        raise UsageError("camera: up is parallel to the viewing direction (or zero)")
-    if not 0.0 < camera.yfov_deg < 180.0:
-        raise UsageError(f"camera: field of view {camera.yfov_deg} must be in (0, 180) degrees")
-    near, far = camera.znear, camera.zfar
-    if near is not None and not (math.isfinite(near) and near > 0):
-        raise UsageError(f"camera: near plane {near} must be a finite number > 0 (or None: automatic)")
-    if far is not None and not (far > (near or 0.0)):
-        raise UsageError(f"camera: far {far} must be beyond near {near} (or None: automatic)")
-
-
-def parse_camera(text: str, base: Camera | None = None) -> Camera:
-    """Parse "ex,ey,ez,tx,ty,tz[,ux,uy,uz]" (the format `format_camera` prints)."""
-    try:
-        values = [float(x) for x in text.replace(" ", "").split(",")]
-    except ValueError:
-        raise UsageError(f"--camera {text!r}: expected 6 or 9 comma-separated numbers") from None
-    if len(values) not in (6, 9):
-        raise UsageError(f"--camera {text!r}: expected 6 or 9 numbers, got {len(values)}")
-    base = base or Camera()
-    cam = Camera(
-        eye=tuple(values[0:3]),
-        target=tuple(values[3:6]),
-        up=tuple(values[6:9]) if len(values) == 9 else base.up,
-        yfov_deg=base.yfov_deg,
-        znear=base.znear,
-        zfar=base.zfar,
-    )
-    validate_camera(cam)
-    return cam
-
-
-def format_camera(camera: Camera) -> str:
-    vals = [*camera.eye, *camera.target, *camera.up]
-    return ",".join(f"{v:.6g}" for v in vals)
-
-
-def as_camera(value: Any, base: Camera) -> Camera:
-    """A Camera from what a user passed as one (see vkpbr.scene.camera once merged)."""
-    if isinstance(value, Camera):
-        return value
-    if isinstance(value, str):
-        return parse_camera(value, base)
-    raise UsageError(f"camera: expected a Camera or an 'ex,ey,ez,tx,ty,tz' string, got "
-                     f"{type(value).__name__}")

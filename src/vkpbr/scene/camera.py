@@ -1,0 +1,425 @@
+"""Cameras as users bring them: OpenCV's K and world-from-camera, OpenGL/NeRF/Blender 4x4
+poses, "ex,ey,ez,tx,ty,tz" strings and pose dicts. NumPy only (no Vulkan).
+
+Conventions (see docs/poses.md):
+
+- "opencv" camera axes: x right, y down, z forward (OpenCV, COLMAP).
+- "opengl" camera axes: x right, y up, z backward (OpenGL, NeRF's transforms.json, Blender).
+- Pixel coordinates follow OpenCV: the centre of the top-left pixel is (0, 0), so an image of
+  width W spans x in [-0.5, W - 0.5] and its centre is at (W - 1) / 2.
+- A pose is world-from-camera (camera-to-world): its columns are the camera's axes in world
+  space and its translation is the camera's position.
+
+Everything a user can get wrong raises a one-line `UsageError`, never a NumPy error.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import Literal
+
+import numpy as np
+
+from vkpbr.errors import UsageError
+from vkpbr.scene._checks import (
+    Vec3,
+    context,
+    convention_arg,
+    describe,
+    matrix,
+    real,
+    rigid_pose,
+    shown,
+    size_arg,
+    vec3,
+)
+from vkpbr.scene.types import Camera
+
+__all__ = [
+    "Convention",
+    "Intrinsics",
+    "Pose",
+    "as_camera",
+    "as_pose",
+    "format_camera",
+    "from_opencv",
+    "from_pose",
+    "intrinsics",
+    "parse_camera",
+    "validate_camera",
+    "world_from_camera",
+]
+
+Convention = Literal["opencv", "opengl"]
+Intrinsics = tuple[float, float, float, float, int, int]  # (fx, fy, cx, cy, width, height)
+
+# OpenCV camera axes -> OpenGL camera axes (and back): y and z flip.
+_FLIP = np.diag([1.0, -1.0, -1.0, 1.0])
+
+
+# -- validation, parsing and printing ---------------------------------------------------------
+
+
+def _camera_problem(camera: Camera) -> str | None:
+    """What is wrong with `camera`, or None. Plain floats: the renderer calls this per frame."""
+    try:
+        ex, ey, ez = (float(v) for v in camera.eye)
+        tx, ty, tz = (float(v) for v in camera.target)
+        ux, uy, uz = (float(v) for v in camera.up)
+    except (TypeError, ValueError):
+        return "eye, target and up must be three numbers each"
+    if not all(map(math.isfinite, (ex, ey, ez, tx, ty, tz, ux, uy, uz))):
+        return "eye, target and up must be finite numbers"
+    fx, fy, fz = tx - ex, ty - ey, tz - ez
+    f_len = math.sqrt(fx * fx + fy * fy + fz * fz)
+    if f_len < 1e-9:
+        return "eye and target coincide"
+    cx, cy, cz = fy * uz - fz * uy, fz * ux - fx * uz, fx * uy - fy * ux
+    u_len = math.sqrt(ux * ux + uy * uy + uz * uz)
+    if math.sqrt(cx * cx + cy * cy + cz * cz) < 1e-9 * f_len * max(u_len, 1e-30):
+        return "up is parallel to the viewing direction (or zero)"
+    yfov = camera.yfov_deg
+    if isinstance(yfov, bool) or not isinstance(yfov, (int, float)) or not 0.0 < yfov < 180.0:
+        return f"field of view {shown(yfov)} must be in (0, 180) degrees"
+    near, far = camera.znear, camera.zfar
+    for label, z in (("near", near), ("far", far)):
+        if z is not None and (isinstance(z, bool) or not isinstance(z, (int, float)) or z != z):
+            return f"{label} plane {shown(z)} must be a number or None"
+    if near is not None and not 0.0 < near < math.inf:
+        return f"near plane {near} must be a finite number > 0 (or None: automatic)"
+    if far is not None and not far > (near if near is not None else 0.0):
+        return f"far plane {far} must be beyond the near plane {near} (or None: automatic)"
+    if camera.pixel_intrinsics is not None:
+        return _intrinsics_problem(camera.pixel_intrinsics, yfov)
+    return None
+
+
+def _intrinsics_problem(k: object, yfov_deg: float) -> str | None:
+    try:
+        fx, fy, cx, cy, w, h = k  # type: ignore[misc]
+    except (TypeError, ValueError):
+        return f"pixel_intrinsics must be (fx, fy, cx, cy, width, height), got {describe(k)}"
+    try:
+        with context("pixel_intrinsics"):
+            fx, fy = real(fx, "fx"), real(fy, "fy")
+            real(cx, "cx")
+            real(cy, "cy")
+            size_arg((w, h), "(width, height)")
+    except UsageError as exc:
+        return str(exc)
+    if not (fx > 0.0 and fy > 0.0):
+        return f"pixel_intrinsics: fx ({fx}) and fy ({fy}) must be > 0"
+    implied = math.degrees(2.0 * math.atan(h / (2.0 * fy)))
+    if abs(implied - yfov_deg) > 1e-6:
+        return (f"field of view {yfov_deg:g} disagrees with pixel_intrinsics (fy {fy:g} for "
+                f"height {h} gives {implied:.6g} degrees); set pixel_intrinsics=None to use yfov_deg")
+    return None
+
+
+def validate_camera(camera: Camera) -> None:
+    """Raise a one-line UsageError when `camera` cannot be rendered.
+
+    znear None (derived per render) and zfar None (infinite) are valid; a given znear must be
+    > 0 and a given zfar > znear. With pixel_intrinsics set, yfov_deg must be their vertical
+    field of view.
+    """
+    problem = _camera_problem(camera)
+    if problem is not None:
+        raise UsageError(f"camera: {problem}")
+
+
+def _numbers(text: str, label: str) -> list[float]:
+    try:
+        values = [float(x) for x in text.replace(" ", "").split(",")]
+    except ValueError:
+        raise UsageError(f"{label}: expected 6 or 9 comma-separated numbers") from None
+    if len(values) not in (6, 9):
+        raise UsageError(f"{label}: expected 6 or 9 numbers, got {len(values)}")
+    if not all(map(math.isfinite, values)):
+        raise UsageError(f"{label}: the numbers must be finite")
+    return values
+
+
+def parse_camera(text: str, base: Camera | None = None) -> Camera:
+    """Parse "ex,ey,ez,tx,ty,tz[,ux,uy,uz]" (the format `format_camera` prints).
+
+    Everything not in the string (up when only 6 numbers are given, the field of view, the
+    planes, the intrinsics) comes from `base` (default: `Camera()`).
+    """
+    values = _numbers(text, f"--camera {text!r}")
+    cam = dataclasses.replace(
+        base or Camera(),
+        eye=tuple(values[0:3]),
+        target=tuple(values[3:6]),
+        up=tuple(values[6:9]) if len(values) == 9 else (base or Camera()).up,
+    )
+    validate_camera(cam)
+    return cam
+
+
+def format_camera(camera: Camera) -> str:
+    """"ex,ey,ez,tx,ty,tz,ux,uy,uz", what `parse_camera` and `--camera` read."""
+    vals = [*camera.eye, *camera.target, *camera.up]
+    return ",".join(f"{v:.6g}" for v in vals)
+
+
+# -- OpenCV / OpenGL conversions --------------------------------------------------------------
+
+
+def intrinsics(camera: Camera, size: tuple[int, int]) -> np.ndarray:
+    """The pinhole matrix K, (3, 3) float64, for an image of `size` (width W, height H).
+
+    Pixel coordinates follow OpenCV: u = K @ x_cam (x right, y down, z forward) divided by
+    its z, with the centre of the top-left pixel at (0, 0). With `camera.pixel_intrinsics`
+    (fx, fy, cx, cy, w0, h0), K is scaled to `size`: fx W/w0, fy H/h0, and the principal point
+    as a position on the image, (cx + 0.5) W/w0 - 0.5 (a different aspect ratio stretches).
+    Without, fx = fy = (H/2) / tan(yfov/2) (square pixels) and the principal point is the
+    image centre ((W-1)/2, (H-1)/2).
+    """
+    validate_camera(camera)
+    W, H = size_arg(size, "intrinsics: size")
+    if camera.pixel_intrinsics is not None:
+        fx, fy, cx, cy, w0, h0 = (float(v) for v in camera.pixel_intrinsics)
+        sx, sy = W / w0, H / h0
+        fx, fy, cx, cy = fx * sx, fy * sy, (cx + 0.5) * sx - 0.5, (cy + 0.5) * sy - 0.5
+    else:
+        fx = fy = (H / 2.0) / math.tan(math.radians(camera.yfov_deg) / 2.0)
+        cx, cy = (W - 1) / 2.0, (H - 1) / 2.0
+    return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
+
+
+def world_from_camera(camera: Camera, convention: Convention = "opencv") -> np.ndarray:
+    """The camera-to-world pose, (4, 4) float64.
+
+    "opencv": columns are the camera's right, down and forward axes in world space (x right,
+    y down, z forward); "opengl": right, up and backward (x right, y up, z backward, as in
+    NeRF's transforms.json and Blender). The last column is the eye. The up column is `up`
+    made orthogonal to the viewing direction, so a camera made by `from_opencv` or
+    `from_pose` gives its matrix back.
+    """
+    convention = convention_arg(convention, "world_from_camera: convention")
+    validate_camera(camera)
+    eye = np.array(camera.eye, dtype=np.float64)
+    f = np.array(camera.target, dtype=np.float64) - eye
+    f /= np.linalg.norm(f)
+    s = np.cross(f, np.array(camera.up, dtype=np.float64))
+    s /= np.linalg.norm(s)
+    u = np.cross(s, f)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = s, -u, f, eye
+    return m @ _FLIP if convention == "opengl" else m
+
+
+def _opencv_pose(m: np.ndarray) -> tuple[Vec3, Vec3, Vec3]:
+    """eye, target (eye + forward) and up (-y) of an OpenCV world-from-camera matrix."""
+    eye = m[:3, 3]
+    return (tuple(map(float, eye)), tuple(map(float, eye + m[:3, 2])),  # type: ignore[return-value]
+            tuple(map(float, -m[:3, 1])))
+
+
+def _opencv_fields(K: object, pose: object, size: object) -> dict[str, object]:
+    """Camera fields from OpenCV's K, world-from-camera and image size (raises UsageError)."""
+    k = matrix(K, (3, 3), "K")
+    m = rigid_pose(pose, "world_from_camera")
+    w, h = size_arg(size, "size")
+    fx, fy = float(k[0, 0]), float(k[1, 1])
+    if abs(k[0, 1]) > 1e-12 * max(abs(fx), 1.0):
+        raise UsageError(f"K: skewed intrinsics are not supported (K[0, 1] = {k[0, 1]:g})")
+    if k[1, 0] != 0.0 or k[2, 0] != 0.0 or k[2, 1] != 0.0 or k[2, 2] != 1.0:
+        raise UsageError(f"K: expected [[fx, 0, cx], [0, fy, cy], [0, 0, 1]], got {k.tolist()}")
+    if not (fx > 0.0 and fy > 0.0):
+        raise UsageError(f"K: fx ({fx:g}) and fy ({fy:g}) must be > 0")
+    eye, target, up = _opencv_pose(m)
+    return {"eye": eye, "target": target, "up": up,
+            "yfov_deg": math.degrees(2.0 * math.atan(h / (2.0 * fy))),
+            "pixel_intrinsics": (fx, fy, float(k[0, 2]), float(k[1, 2]), w, h)}
+
+
+def _pose_fields(pose: object, convention: object, what: str = "world_from_camera") -> dict[str, Vec3]:
+    convention = convention_arg(convention, "convention")
+    m = rigid_pose(pose, what)
+    eye, target, up = _opencv_pose(m @ _FLIP if convention == "opengl" else m)
+    return {"eye": eye, "target": target, "up": up}
+
+
+def from_opencv(K: object, world_from_camera: object, size: object, name: str = "") -> Camera:
+    """A camera from OpenCV's calibration and pose.
+
+    K: (3, 3) intrinsics [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] in pixels, centre of the
+        top-left pixel at (0, 0); no skew.
+    world_from_camera: (4, 4) camera-to-world, OpenCV axes (x right, y down, z forward); the
+        rotation must be orthonormal to 1e-4 with determinant +1. (OpenCV's solvePnP gives
+        camera-from-world: invert it.)
+    size: (W, H) of the image K belongs to.
+
+    Returns a Camera with eye = the translation, target = eye + forward (z), up = -y,
+    yfov_deg = 2 atan(H / (2 fy)) and pixel_intrinsics = (fx, fy, cx, cy, W, H); znear and
+    zfar None (derived per render, infinite).
+    """
+    with context("from_opencv"):
+        return Camera(**_opencv_fields(K, world_from_camera, size), name=name)  # type: ignore[arg-type]
+
+
+def from_pose(matrix: object, convention: Convention = "opengl", yfov_deg: float | None = None,
+              base: Camera | None = None, name: str = "") -> Camera:
+    """A camera from a (4, 4) world-from-camera pose (NumPy array or nested lists).
+
+    convention: "opengl" (default: x right, y up, z backward, as NeRF's transforms.json and
+        Blender write them) or "opencv" (x right, y down, z forward).
+    yfov_deg: the vertical field of view; None keeps `base`'s (and its pixel_intrinsics).
+    base: where everything but the pose comes from (default `Camera()`).
+    """
+    with context("from_pose"):
+        fields: dict[str, object] = dict(_pose_fields(matrix, convention, "matrix"))
+        if yfov_deg is not None:
+            fields["yfov_deg"] = real(yfov_deg, "yfov_deg")
+            fields["pixel_intrinsics"] = None
+        cam = dataclasses.replace(base or Camera(), name=name, **fields)  # type: ignore[arg-type]
+        validate_camera(cam)
+        return cam
+
+
+# -- poses: a camera without the scene's defaults ---------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True)
+class Pose:
+    """A validated camera pose waiting for the scene's default camera (`camera(base)`).
+
+    up None: the base camera's up; yfov_deg None: the base's field of view (and intrinsics);
+    pixel_intrinsics: the pose's own calibration (then yfov_deg is its field of view).
+    `where` prefixes the errors `camera` raises ("poses.json: entry 3").
+    """
+
+    eye: Vec3
+    target: Vec3
+    up: Vec3 | None = None
+    yfov_deg: float | None = None
+    pixel_intrinsics: Intrinsics | None = None
+    name: str = ""
+    where: str = "camera"
+
+    def camera(self, base: Camera) -> Camera:
+        """`base` with this pose applied. Only a pose without `up` can fail here (the base's up
+        may be parallel to its viewing direction): the error names `where`."""
+        fields: dict[str, object] = {"eye": self.eye, "target": self.target, "name": self.name,
+                                     "up": self.up if self.up is not None else base.up}
+        if self.pixel_intrinsics is not None or self.yfov_deg is not None:
+            fields["yfov_deg"] = self.yfov_deg
+            fields["pixel_intrinsics"] = self.pixel_intrinsics
+        cam = dataclasses.replace(base, **fields)  # type: ignore[arg-type]
+        problem = _camera_problem(cam)
+        if problem is not None:
+            raise UsageError(f"{self.where}: {problem}")
+        return cam
+
+
+_EYE_KEYS = ("eye", "target", "up", "fov", "name")
+_MATRIX_KEYS = ("world_from_camera", "convention", "fov", "name")
+_K_KEYS = ("K", "world_from_camera", "size", "convention", "name")
+
+
+def _pose_from_dict(d: Mapping[str, object]) -> dict[str, object]:
+    keys = [k for k in d if not isinstance(k, str)]
+    if keys:
+        raise UsageError(f"keys must be strings, got {describe(keys[0])}")
+    if "K" in d:
+        form, allowed, required = "a K pose", _K_KEYS, ("world_from_camera", "size")
+    elif "world_from_camera" in d:
+        form, allowed, required = "a world_from_camera pose", _MATRIX_KEYS, ("convention",)
+    elif "eye" in d or "target" in d:
+        form, allowed, required = "an eye/target pose", _EYE_KEYS, ("eye", "target")
+    else:
+        raise UsageError('expected "eye" and "target", or "world_from_camera" (with "convention"'
+                         f' or "K" and "size"), got keys {sorted(d)}')
+    for key in d:
+        if key not in allowed:
+            raise UsageError(f"unknown key {key!r} in {form} (expected: {', '.join(allowed)})")
+    for key in required:
+        if key not in d:
+            raise UsageError(f"missing {key!r} in {form}")
+    name = d.get("name", "")
+    if not isinstance(name, str):
+        raise UsageError(f'"name": expected a string, got {describe(name)}')
+    fields: dict[str, object] = {"name": name}
+    if "K" in d:
+        fields.update(_opencv_fields(d["K"], _pose_from_convention(d), d["size"]))
+        return fields
+    if "world_from_camera" in d:
+        fields.update(_pose_fields(d["world_from_camera"], d["convention"]))
+    else:
+        fields["eye"], fields["target"] = vec3(d["eye"], '"eye"'), vec3(d["target"], '"target"')
+        if "up" in d:
+            fields["up"] = vec3(d["up"], '"up"')
+    if "fov" in d:
+        fov = real(d["fov"], '"fov"')
+        if not 0.0 < fov < 180.0:
+            raise UsageError(f'"fov": {fov:g} must be in (0, 180) degrees')
+        fields["yfov_deg"] = fov
+    return fields
+
+
+def _pose_from_convention(d: Mapping[str, object]) -> np.ndarray:
+    """The K form's world_from_camera as OpenCV axes (its convention defaults to "opencv")."""
+    m = rigid_pose(d["world_from_camera"], "world_from_camera")
+    return m @ _FLIP if convention_arg(d.get("convention", "opencv"), "convention") == "opengl" else m
+
+
+def as_pose(value: object, where: str = "camera", convention: Convention = "opengl") -> Pose:
+    """Validate a pose given as an "ex,ey,ez,tx,ty,tz[,ux,uy,uz]" string, a dict or a (4, 4)
+    world-from-camera array-like (in `convention`, OpenGL axes by default).
+
+    Dicts (the entries of a poses file, see docs/poses.md):
+    {"eye", "target", "up"?, "fov"?}, {"world_from_camera", "convention", "fov"?} or
+    {"K", "world_from_camera", "size", "convention"? (default "opencv")}, each with "name"?.
+    Errors are one UsageError line starting with `where`.
+    """
+    with context(where):
+        if isinstance(value, str):
+            v = _numbers(value, repr(value))
+            fields: dict[str, object] = {"eye": tuple(v[0:3]), "target": tuple(v[3:6])}
+            if len(v) == 9:
+                fields["up"] = tuple(v[6:9])
+        elif isinstance(value, Mapping):
+            fields = _pose_from_dict(value)
+        elif _is_4x4(value):
+            fields = dict(_pose_fields(value, convention, "pose"))
+        else:
+            raise UsageError("expected a Camera, a 4x4 pose, a pose dict or an "
+                             f"'ex,ey,ez,tx,ty,tz' string, got {describe(value)}")
+    pose = Pose(where=where, **fields)  # type: ignore[arg-type]
+    # Check all that does not depend on the base camera now: any up that is not parallel to
+    # the viewing direction stands in for the base's.
+    pose.camera(Camera(up=pose.up or _perpendicular(pose.eye, pose.target)))
+    return pose
+
+
+def _perpendicular(eye: Vec3, target: Vec3) -> Vec3:
+    f = [t - e for t, e in zip(target, eye, strict=True)]
+    i = min(range(3), key=lambda j: abs(f[j]))  # the axis least aligned with f
+    return tuple(1.0 if j == i else 0.0 for j in range(3))  # type: ignore[return-value]
+
+
+def _is_4x4(value: object) -> bool:
+    """Whether `value` looks like a 4x4 matrix (its contents are checked later)."""
+    if isinstance(value, (list, tuple)):
+        return len(value) == 4 and all(isinstance(r, (list, tuple)) and len(r) == 4 for r in value)
+    return getattr(value, "shape", None) == (4, 4) and hasattr(value, "__array__")
+
+
+def as_camera(value: object, base: Camera, convention: Convention = "opengl") -> Camera:
+    """Whatever a user passed as a camera, as a Camera.
+
+    value: a Camera (returned as is); a (4, 4) world-from-camera array-like, in OpenGL axes
+        (x right, y up, z backward, as NeRF and Blender) unless `convention="opencv"`; an
+        "ex,ey,ez,tx,ty,tz[,ux,uy,uz]" string (as `--camera`); or a pose dict (the entries
+        of a poses file, see `as_pose`).
+    base: what the pose does not give (up, field of view, planes) comes from it.
+
+    Anything else raises a UsageError naming the type received.
+    """
+    if isinstance(value, Camera):
+        return value
+    return as_pose(value, "camera", convention).camera(base)

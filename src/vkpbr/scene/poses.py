@@ -1,0 +1,158 @@
+"""Poses files: many cameras in one JSON file (`vkpbr render --cameras FILE`). NumPy only.
+
+`load_poses` reads and validates the whole file before any scene loads, so a typo in entry 900
+fails at once, not after the scene loaded and 899 frames rendered; `Pose.camera(base)` later
+applies each pose to the scene's default camera. Accepted forms (docs/poses.md):
+
+- a JSON list whose entries are "ex,ey,ez,tx,ty,tz[,ux,uy,uz]" strings (as `--camera`) or
+  objects {"eye", "target", "up"?, "fov"?}, {"world_from_camera", "convention", "fov"?} or
+  {"K", "world_from_camera", "size", "convention"? (default "opencv")}, each with "name"?;
+- a NeRF transforms.json object {"camera_angle_x", "frames": [{"transform_matrix"}, ...]}
+  (OpenGL axes), with fl_x/fl_y/cx/cy/w/h honoured, per frame or for all.
+
+The checks are plain Python: neither pydantic nor jsonschema is installed, and a schema would
+not check what matters here (a 4x4 rotation is orthonormal, a focal length positive) nor word
+its errors as "FILE: entry 3: ..." lines. Every error is one UsageError line naming the file,
+the entry and the problem; no other exception escapes.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Mapping
+from pathlib import Path
+
+from vkpbr.errors import UsageError
+from vkpbr.scene._checks import context, real, rigid_pose, shown, size_arg
+from vkpbr.scene.camera import Pose, as_pose
+
+__all__ = ["Pose", "load_poses"]
+
+# Intrinsics keys of NeRF-style transforms.json (instant-ngp, nerfstudio), per frame or global.
+_NERF_KEYS = ("camera_angle_x", "camera_angle_y", "fl_x", "fl_y", "cx", "cy", "w", "h",
+              "camera_model", "k1", "k2", "k3", "k4", "p1", "p2")
+_DISTORTION = ("k1", "k2", "k3", "k4", "p1", "p2")
+
+
+def _json_type(value: object) -> str:
+    names = {dict: "an object", list: "a list", str: "a string", bool: "true/false",
+             type(None): "null", int: "a number", float: "a number"}
+    return names.get(type(value), type(value).__name__)
+
+
+def load_poses(path: str | os.PathLike[str]) -> list[Pose]:
+    """Read and validate a poses file: a JSON list of poses or a NeRF transforms.json.
+
+    Returns one `Pose` per entry (per frame), in order; `pose.camera(base)` gives the Camera.
+    Raises a one-line UsageError naming the file, the entry and the problem.
+    """
+    if not isinstance(path, (str, os.PathLike)):
+        raise UsageError(f"poses file: expected a path, got {type(path).__name__}")
+    p = Path(path)
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise UsageError(f"{p}: cannot read the poses file: {exc.strerror or exc}") from None
+    try:
+        doc = json.loads(data)
+    except RecursionError:
+        raise UsageError(f"{p}: not valid JSON (nested too deeply)") from None
+    except ValueError as exc:  # JSONDecodeError, UnicodeDecodeError, a 5000-digit integer
+        problem = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise UsageError(f"{p}: not valid JSON ({problem})") from None
+    if isinstance(doc, list):
+        if not doc:
+            raise UsageError(f"{p}: the list of poses is empty")
+        poses = []
+        for i, entry in enumerate(doc):
+            where = f"{p}: entry {i}"
+            if not isinstance(entry, (str, dict)):
+                raise UsageError(f'{where}: expected a "ex,ey,ez,tx,ty,tz" string or an object, '
+                                 f"got {_json_type(entry)}")
+            poses.append(as_pose(entry, where))
+        return poses
+    if isinstance(doc, dict) and "frames" in doc:
+        return _nerf_poses(doc, p)
+    got = f"an object with keys {sorted(doc)[:8]}" if isinstance(doc, dict) else _json_type(doc)
+    raise UsageError(f'{p}: expected a JSON list of poses or a NeRF transforms.json object with '
+                     f'"frames", got {got}')
+
+
+def _nerf_poses(doc: Mapping[str, object], p: Path) -> list[Pose]:
+    frames = doc["frames"]
+    if not isinstance(frames, list) or not frames:
+        what = "an empty list" if frames == [] else _json_type(frames)
+        raise UsageError(f'{p}: "frames" must be a non-empty list of frames, got {what}')
+    shared = {k: doc[k] for k in _NERF_KEYS if k in doc}
+    try:  # the file's own intrinsics, checked once (frames may override them)
+        if not any(k in f for f in frames if isinstance(f, dict) for k in _NERF_KEYS):
+            _nerf_camera(shared)
+    except UsageError as exc:
+        raise UsageError(f"{p}: {exc}") from None
+    poses = []
+    for i, frame in enumerate(frames):
+        where = f"{p}: frame {i}"
+        if not isinstance(frame, dict):
+            raise UsageError(f"{where}: expected an object, got {_json_type(frame)}")
+        if "transform_matrix" not in frame:
+            raise UsageError(f'{where}: missing "transform_matrix"')
+        with context(where):
+            pose = rigid_pose(frame["transform_matrix"], '"transform_matrix"').tolist()
+            camera = _nerf_camera({**shared, **{k: frame[k] for k in _NERF_KEYS if k in frame}})
+        name = frame.get("file_path")
+        entry = {"world_from_camera": pose, "convention": "opengl", **camera,
+                 "name": name if isinstance(name, str) else f"frame {i}"}
+        poses.append(as_pose(entry, where))
+    return poses
+
+
+def _nerf_camera(keys: Mapping[str, object]) -> dict[str, object]:
+    """NeRF intrinsics as the keys of a pose entry: {"K", "size"} with "w" and "h", else
+    {"fov"} (then the images are taken to be square, as in NeRF's synthetic scenes)."""
+    model = keys.get("camera_model", "OPENCV")
+    if model not in ("OPENCV", "PINHOLE", "SIMPLE_PINHOLE"):
+        raise UsageError(f'"camera_model" {shown(model)} is not supported (only pinhole cameras)')
+    for k in _DISTORTION:
+        if k in keys and real(keys[k], f'"{k}"') != 0.0:
+            raise UsageError(f'lens distortion ("{k}": {keys[k]}) is not supported; '
+                             "undistort the images and set the coefficients to 0")
+    angles = {}
+    for k in ("camera_angle_x", "camera_angle_y"):
+        if k in keys:
+            angles[k] = real(keys[k], f'"{k}"')
+            if not 0.0 < angles[k] < math.pi:
+                raise UsageError(f'"{k}": {angles[k]:g} must be in (0, pi) radians')
+    if "w" not in keys and "h" not in keys:
+        for k in ("fl_x", "fl_y", "cx", "cy"):
+            if k in keys:
+                raise UsageError(f'"{k}" needs the image size "w" and "h"')
+        if "camera_angle_x" not in angles:
+            raise UsageError('missing "camera_angle_x" (or "fl_x" with "w" and "h")')
+        return {"fov": math.degrees(angles.get("camera_angle_y", angles["camera_angle_x"]))}
+    for k in ("w", "h"):
+        if k not in keys:
+            raise UsageError(f'"w" and "h" go together: missing "{k}"')
+    # colmap2nerf writes the size as floats (1920.0): take whole numbers of either type.
+    wh = [keys["w"], keys["h"]]
+    wh = [int(v) if isinstance(v, float) and v.is_integer() and v > 0 else v for v in wh]
+    w, h = size_arg(wh, '"w", "h"')
+    if "fl_x" in keys:
+        fx = real(keys["fl_x"], '"fl_x"')
+    elif "camera_angle_x" in angles:
+        fx = 0.5 * w / math.tan(0.5 * angles["camera_angle_x"])
+    else:
+        raise UsageError('missing "fl_x" or "camera_angle_x"')
+    if "fl_y" in keys:
+        fy = real(keys["fl_y"], '"fl_y"')
+    elif "camera_angle_y" in angles:
+        fy = 0.5 * h / math.tan(0.5 * angles["camera_angle_y"])
+    else:
+        fy = fx
+    if not (fx > 0.0 and fy > 0.0):
+        raise UsageError(f"the focal lengths ({fx:g}, {fy:g}) must be > 0")
+    # NeRF and COLMAP put the centre of the top-left pixel at (0.5, 0.5); OpenCV at (0, 0).
+    cx = real(keys["cx"], '"cx"') - 0.5 if "cx" in keys else (w - 1) / 2.0
+    cy = real(keys["cy"], '"cy"') - 0.5 if "cy" in keys else (h - 1) / 2.0
+    return {"K": [[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]], "size": [w, h]}
