@@ -114,3 +114,26 @@ def test_user_near_plane_is_honoured(spheres) -> None:  # noqa: ANN001
     camera = Camera(eye=eye, target=(0.0, 0.0, 0.0), yfov_deg=60.0, znear=0.5 * R)
     color, depth = spheres[0].render(camera, size=(W, H), depth=True)
     assert np.isinf(depth[H // 2, W // 2])  # the front cap is cut away, the back is culled
+
+
+@pytest.mark.parametrize("k", [((140.0, 0, 20.0), (0, 110.0, 50.0), (0, 0, 1)),
+                               ((90.0, 0, 47.5), (0, 90.0, 35.5), (0, 0, 1))],
+                         ids=["off-centre-anisotropic", "centred"])
+@pytest.mark.parametrize("scale", [1, 2])
+def test_opencv_camera_lands_on_opencv_pixels(spheres, k, scale: int) -> None:  # noqa: ANN001
+    """Camera.from_opencv(K, pose, size) rendered at size (and at twice it): the drawn pixels
+    are those whose K^-1 ray (OpenCV: pixel centres at integers) hits the sphere."""
+    base = Camera(eye=(0.5, 0.8, 7.0), target=(0.0, 0.0, 0.0))
+    pose = base.world_from_camera("opencv")
+    cam = Camera.from_opencv(np.array(k), pose, (W, H))
+    size = (W * scale, H * scale)
+    drawn = spheres[0].render(cam, size=size, view="base_color")[..., :3].max(-1) > 0
+    jj, ii = np.meshgrid(np.arange(size[0]), np.arange(size[1]))
+    pix = np.stack([jj, ii, np.ones_like(ii)], -1).astype(float)
+    d = pix @ np.linalg.inv(cam.intrinsics(size)).T @ pose[:3, :3].T
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    eye = pose[:3, 3]
+    must = np.isfinite(ray_sphere(eye, d, INNER)[0])
+    must_not = ~np.isfinite(ray_sphere(eye, d, OUTER)[0])
+    assert must.sum() > 100
+    assert drawn[must].all() and not drawn[must_not].any()

@@ -68,11 +68,10 @@ def projection_terms(camera: Camera, size: tuple[int, int]) -> tuple[float, floa
 
 
 def camera_k(camera: Camera, size: tuple[int, int]) -> Any:
-    """The camera's 3x3 K at `size`: its own intrinsics where it has them, else square pixels
-    from the vertical field of view with the principal point at the image centre."""
-    own = getattr(camera, "intrinsics", None)
-    if callable(own):
-        return own(size)
+    """The camera's 3x3 K at `size` (Camera.intrinsics), as plain floats for a camera without
+    calibrated intrinsics: this runs per frame while the viewer's camera moves."""
+    if camera.pixel_intrinsics is not None:
+        return camera.intrinsics(size)
     w, h = size
     f = h / 2.0 / math.tan(math.radians(camera.yfov_deg) / 2.0)
     return ((f, 0.0, (w - 1) / 2.0), (0.0, f, (h - 1) / 2.0), (0.0, 0.0, 1.0))

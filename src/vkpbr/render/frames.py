@@ -105,7 +105,7 @@ def create_slots(
 
 
 def _camera_key(c: Camera) -> tuple:
-    return (*c.eye, *c.target, *c.up, c.yfov_deg, c.znear, c.zfar, getattr(c, "intrinsics", None))
+    return (*c.eye, *c.target, *c.up, c.yfov_deg, c.znear, c.zfar, c.pixel_intrinsics)
 
 
 def _light_key(li: Light) -> tuple:
