@@ -13,7 +13,7 @@ def test_depth_prepass_changes_no_pixel(make_renderer) -> None:
     from vkpbr.scene.synthetic import sphere_field
 
     scene = sphere_field(draws=40, rings=8, segments=16, materials=4)
-    plain = make_renderer(scene).render(size=(96, 64), depth=True)
+    plain = make_renderer(scene, depth_prepass=False).render(size=(96, 64), depth=True)
     pre = make_renderer(scene, depth_prepass=True)
     image = pre.render(size=(96, 64), depth=True)
     assert np.array_equal(plain[0], image[0]) and np.array_equal(plain[1], image[1])

@@ -39,7 +39,7 @@ def test_pack_by_name_matches_the_numpy_layout(block: L.Std140Block) -> None:
     block.pack_into(buf, **{n: (np.asarray(v).ravel().tolist() if np.ndim(v) else v.item())
                             for n, v in values.items()})
     got = np.frombuffer(bytes(buf), dtype=block.dtype)[0]
-    for name, v in values.items():
+    for name in values:
         np.testing.assert_array_equal(got[name], want[name], err_msg=name)
 
 

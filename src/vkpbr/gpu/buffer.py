@@ -16,18 +16,40 @@ from vkpbr.gpu.vk import translate_errors
 __all__ = ["Buffer", "upload_buffer"]
 
 
+_USAGES = {
+    "vertex": "VK_BUFFER_USAGE_VERTEX_BUFFER_BIT", "index": "VK_BUFFER_USAGE_INDEX_BUFFER_BIT",
+    "uniform": "VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT", "storage": "VK_BUFFER_USAGE_STORAGE_BUFFER_BIT",
+    "indirect": "VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT",
+    "transfer_src": "VK_BUFFER_USAGE_TRANSFER_SRC_BIT", "transfer_dst": "VK_BUFFER_USAGE_TRANSFER_DST_BIT",
+}
+
+
+def buffer_usage(vk: Any, usage: int | str) -> int:
+    """VkBufferUsageFlags from flags or from names ("vertex", "index", "uniform", "storage",
+    "indirect", "transfer_src", "transfer_dst"; several joined by "|"), so that layers above
+    gpu/ say what a buffer is for without Vulkan's vocabulary."""
+    if isinstance(usage, int):
+        return usage
+    flags = 0
+    for name in usage.split("|"):
+        flags |= getattr(vk, _USAGES[name.strip()])
+    return flags
+
+
 class Buffer:
-    """One VkBuffer with its own VkDeviceMemory (allocations are few and large here)."""
+    """One VkBuffer with its own VkDeviceMemory (allocations are few and large here).
+    `usage`: VkBufferUsageFlags or names (see `buffer_usage`)."""
 
     def __init__(
         self,
         device: Device,
         size: int,
-        usage: int,
+        usage: int | str,
         host_visible: bool = False,
         name: str = "",
     ) -> None:
         vk = device.vk
+        usage = buffer_usage(vk, usage)
         self.device = device
         self.size = max(int(size), 4)
         self.name = name
@@ -94,9 +116,10 @@ class Buffer:
         self.device.untrack(self)
 
 
-def upload_buffer(device: Device, data: np.ndarray, usage: int, name: str = "") -> Buffer:
+def upload_buffer(device: Device, data: np.ndarray, usage: int | str, name: str = "") -> Buffer:
     """A device-local buffer filled with `data` through a temporary staging buffer."""
     vk = device.vk
+    usage = buffer_usage(vk, usage)
     data = np.ascontiguousarray(data)
     dst = Buffer(device, data.nbytes, usage | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, name=name)
     if data.nbytes == 0:

@@ -75,14 +75,13 @@ def create_slots(
 ) -> tuple[Buffer, DescriptorPool, list[FrameSlot]]:
     """One host-visible uniform buffer holding `count` copies of the frame blocks, a pool,
     and the slots. The caller owns (and destroys) the buffer and the pool."""
-    vk = device.vk
     align = int(device.limits.minUniformBufferOffsetAlignment)
     offsets, offset = [], 0
     for block in FRAME_BLOCKS:
         offsets.append(offset)
         offset += (block.size + align - 1) // align * align
     stride = offset
-    buffer = Buffer(device, stride * count, vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+    buffer = Buffer(device, stride * count, "uniform",
                     host_visible=True, name="frame uniforms")
     pool = DescriptorPool(device, [(set0_layout, count), (set2_layout, count)])
     writer = DescriptorWriter(device)

@@ -180,7 +180,6 @@ class GpuScene:
 
     # --- geometry ---------------------------------------------------------------------------
     def _upload_geometry(self) -> None:
-        vk = self.device.vk
         per_mesh = [prepare_mesh(m, self._tangent_uv_set(m), frames=False)
                     for m in self.scene.meshes]
         self.vertex_offsets = np.cumsum([0] + [m.vertex_count for m in self.scene.meshes])
@@ -208,13 +207,12 @@ class GpuScene:
         indices = [np.asarray(m.indices, dtype=np.uint32) for m in self.scene.meshes]
         idx = np.concatenate(indices) if indices else np.zeros(3, np.uint32)
         self.index_buffer = self._own(
-            upload_buffer(self.device, idx, vk.VK_BUFFER_USAGE_INDEX_BUFFER_BIT, name="indices")
+            upload_buffer(self.device, idx, "index", name="indices")
         )
         self.vertex_count = int(self.vertex_offsets[-1])
 
     def _add_stream(self, name: str, data: np.ndarray) -> None:
-        usage = self.device.vk.VK_BUFFER_USAGE_VERTEX_BUFFER_BIT
-        self.streams[name] = self._own(upload_buffer(self.device, data, usage, name=name))
+        self.streams[name] = self._own(upload_buffer(self.device, data, "vertex", name=name))
         self.stream_bytes[name] = int(data.nbytes)
 
     def ensure_streams(self, names: tuple[str, ...] = LAZY_STREAMS) -> None:
@@ -356,14 +354,13 @@ class GpuScene:
 
     # --- materials --------------------------------------------------------------------------
     def _create_materials(self, layout: DescriptorSetLayout) -> None:
-        vk = self.device.vk
         materials = list(self.scene_materials)
         self.materials: list[Material] = materials + [Material(name="vkpbr-default")]
         self.default_material = len(self.materials) - 1
         align = int(self.device.limits.minUniformBufferOffsetAlignment)
         stride = (L.MATERIAL.size + align - 1) // align * align
         self.material_ubo = self._own(
-            Buffer(self.device, stride * len(self.materials), vk.VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+            Buffer(self.device, stride * len(self.materials), "uniform",
                    host_visible=True, name="materials")
         )
         self.pool = self._own(DescriptorPool(self.device, [(layout, len(self.materials))]))
