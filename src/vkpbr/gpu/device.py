@@ -134,27 +134,18 @@ class Device:
         f13 = vk.VkPhysicalDeviceVulkan13Features(
             dynamicRendering=vk.VK_TRUE, synchronization2=vk.VK_TRUE
         )
-        f11 = vk.VkPhysicalDeviceVulkan11Features(
-            pNext=f13, shaderDrawParameters=supported["shaderDrawParameters"]
-        )
+        # Only what vkpbr uses: dynamic rendering, synchronization2, anisotropic filtering.
         core = vk.VkPhysicalDeviceFeatures(
-            samplerAnisotropy=vk.VK_TRUE if self.anisotropy else vk.VK_FALSE,
-            multiDrawIndirect=supported["multiDrawIndirect"],
-            drawIndirectFirstInstance=supported["drawIndirectFirstInstance"],
-        )
-        features = vk.VkPhysicalDeviceFeatures2(pNext=f11, features=core)
-        self.extensions: list[str] = []
+            samplerAnisotropy=vk.VK_TRUE if self.anisotropy else vk.VK_FALSE)
+        features = vk.VkPhysicalDeviceFeatures2(pNext=f13, features=core)
         available = {
             e.extensionName
             for e in vk.vkEnumerateDeviceExtensionProperties(self.physical, None)
         }
-        for ext in getattr(self, "wanted_extensions", ()):
-            if ext in available:
-                self.extensions.append(ext)
         missing = [e for e in self._required_extensions if e not in available]
         if missing:
             raise VkpbrError(f"{self.info.name}: device extension(s) {', '.join(missing)} missing")
-        self.extensions += [e for e in self._required_extensions if e not in self.extensions]
+        self.extensions: list[str] = list(self._required_extensions)
         # Keep the queue info alive until vkCreateDevice returns: the binding copies structs
         # into arrays, and the copy's pQueuePriorities points into the original's memory.
         queue_info = vk.VkDeviceQueueCreateInfo(
@@ -181,13 +172,7 @@ class Device:
                 f"{self.info.name}: Vulkan 1.3 dynamic rendering and synchronization2 are "
                 "required (update the driver; Mesa >= 22 lavapipe has them)"
             )
-        c = f2.features
-        return {
-            "samplerAnisotropy": c.samplerAnisotropy,
-            "multiDrawIndirect": c.multiDrawIndirect,
-            "drawIndirectFirstInstance": c.drawIndirectFirstInstance,
-            "shaderDrawParameters": f11.shaderDrawParameters,
-        }
+        return {"samplerAnisotropy": f2.features.samplerAnisotropy}
 
     # --- helpers ----------------------------------------------------------------------------
     def memory_type(self, type_bits: int, required: int, preferred: int = 0) -> int:

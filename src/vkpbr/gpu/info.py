@@ -13,8 +13,7 @@ __all__ = ["device_report"]
 def _features(vk: Any, info: PhysicalDeviceInfo) -> dict[str, Any]:
     handle = info.handle
     f13 = vk.VkPhysicalDeviceVulkan13Features()
-    f11 = vk.VkPhysicalDeviceVulkan11Features(pNext=f13)
-    f2 = vk.VkPhysicalDeviceFeatures2(sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, pNext=f11)
+    f2 = vk.VkPhysicalDeviceFeatures2(sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, pNext=f13)
     vk.vkGetPhysicalDeviceFeatures2(handle, f2)
     props = vk.vkGetPhysicalDeviceProperties(handle)
     limits = props.limits
@@ -31,8 +30,6 @@ def _features(vk: Any, info: PhysicalDeviceInfo) -> dict[str, Any]:
         # What vkpbr's samplers use (off on llvmpipe: gpu/device.py anisotropy_usable).
         "anisotropyUsed": anisotropy_usable(info, bool(f2.features.samplerAnisotropy)),
         "maxSamplerAnisotropy": float(limits.maxSamplerAnisotropy),
-        "multiDrawIndirect": bool(f2.features.multiDrawIndirect),
-        "shaderDrawParameters": bool(f11.shaderDrawParameters),
         "timestamps": bool(limits.timestampComputeAndGraphics),
         "timestampPeriod_ns": float(limits.timestampPeriod),
         "maxImageDimension2D": int(limits.maxImageDimension2D),
