@@ -137,3 +137,19 @@ def test_opencv_camera_lands_on_opencv_pixels(spheres, k, scale: int) -> None:  
     must_not = ~np.isfinite(ray_sphere(eye, d, OUTER)[0])
     assert must.sum() > 100
     assert drawn[must].all() and not drawn[must_not].any()
+
+
+def test_render_takes_a_pose_matrix_and_names_a_wrong_type(spheres) -> None:  # noqa: ANN001
+    """A 4x4 world-from-camera pose (OpenGL axes, as NeRF and Blender write them) renders
+    what the Camera it came from renders; a wrong type is a one-line UsageError."""
+    from vkpbr.errors import UsageError
+
+    r = spheres[0]
+    cam = Camera(eye=(0.5, 0.8, 7.0), target=(0.0, 0.0, 0.0), yfov_deg=60.0)
+    a = r.render(cam, size=(W, H)).astype(int)
+    b = r.render(cam.world_from_camera("opengl"), size=(W, H)).astype(int)
+    assert np.abs(a - b).max() <= 1 and np.mean(a != b) < 1e-3
+    with pytest.raises(UsageError, match=r"camera: expected .* got ndarray of shape \(3, 3\)"):
+        r.render(np.eye(3), size=(W, H))
+    with pytest.raises(UsageError):
+        list(r.render_many([cam, "not a camera"], size=(W, H)))
