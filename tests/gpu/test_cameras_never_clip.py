@@ -1,5 +1,5 @@
 """Cameras anywhere around and inside a scene see all of it: reversed-Z with an infinite far
-plane and a near plane chosen per render (render/camera.py near_plane).
+plane and a near plane chosen per render (render/camera.py depth_range).
 
 The scene is a finely tessellated sphere of radius R; the expected image is an independent
 ray cast (tests/pinhole.py) against two analytic spheres that bracket the polygon mesh: a

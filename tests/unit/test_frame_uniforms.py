@@ -97,7 +97,10 @@ def test_frame_uniforms_land_in_their_fields() -> None:
 
 def test_near_plane_follows_the_bounds() -> None:
     """Outside the bounds: just in front of the nearest corner; inside: tiny but positive."""
-    from vkpbr.render.camera import near_plane
+    from vkpbr.render.camera import depth_range
+
+    def near_plane(c, corners, scale):  # noqa: ANN001, ANN202
+        return depth_range(c, corners, scale)[0]
 
     b = Bounds.of(np.array([-1.0, -1, -1]), np.array([1.0, 1, 1]))
     far = Camera(eye=(0.0, 0.0, 100.0), target=(0.0, 0.0, 0.0))
@@ -106,3 +109,4 @@ def test_near_plane_follows_the_bounds() -> None:
     assert 0 < near_plane(inside, b.corners, b.radius) <= 1e-4
     own = Camera(eye=(0.0, 0.0, 100.0), target=(0.0, 0.0, 0.0), znear=3.0)
     assert near_plane(own, b.corners, b.radius) == 3.0
+    assert depth_range(far, b.corners, b.radius)[1] == pytest.approx(101.0)  # farthest corner

@@ -1,6 +1,6 @@
 """Camera matrices for Vulkan: right-handed view, reversed-Z depth with an infinite far plane,
 Y flipped (the course's "reversed-Y" projection), so that +Y world-up appears at the top of
-the image. The near plane is chosen per render from the scene's bounds (`near_plane`).
+the image. The near plane is chosen per render from the scene's bounds (`depth_range`).
 
 Matrices are row-major NumPy (column vectors: clip = P @ V @ p); `layouts.mat4_to_std140`
 transposes them for GLSL.
@@ -19,7 +19,7 @@ from vkpbr.scene.camera import as_camera, format_camera, parse_camera, validate_
 from vkpbr.scene.types import Camera
 
 __all__ = ["look_at", "perspective", "forward", "view_projection", "view_projection_columns",
-           "projection_terms", "camera_k", "near_plane", "far_extent",
+           "projection_terms", "camera_k", "depth_range",
            "parse_camera", "format_camera"]
 
 
@@ -119,23 +119,19 @@ def view_projection_columns(camera: Camera, size: tuple[int, int],
     ) + ((-sx * se - ox * fe, sy * ue - oy * fe, znear, -fe),)
 
 
-def near_plane(camera: Camera, corners: Sequence[Sequence[float]], scale: float) -> float:
-    """The near plane for a render: the camera's own znear, else just in front of the nearest
-    corner of the scene's bounds along the view axis, and never more than 1e-5 * `scale` (the
-    scene's radius) when the camera is inside or beside the bounds. With reversed-Z float
-    depth the near plane costs no precision, so erring small is free."""
-    if camera.znear is not None:
-        return float(camera.znear)
-    floor = 1e-5 * scale
-    f, e = forward(camera), camera.eye
-    zmin = min(_dot3(f, _sub(c, e)) for c in corners)
-    return max(0.5 * zmin, floor)
+def depth_range(camera: Camera, corners: Sequence[Sequence[float]],
+                scale: float) -> tuple[float, float]:
+    """(znear, zfar) for a render, from the 8 corners of the scene's bounds.
 
-
-def far_extent(camera: Camera, corners: Sequence[Sequence[float]], znear: float) -> float:
-    """The depth view's normalisation: the camera's zfar, else the farthest corner of the
-    scene's bounds along the view axis (never clipping: only the debug view uses it)."""
-    if camera.zfar is not None:
-        return float(camera.zfar)
+    znear: the camera's own, else just in front of the nearest corner along the view axis,
+    and never less than 1e-5 * `scale` (the scene's radius) when the camera is inside or
+    beside the bounds. With reversed-Z float depth the near plane costs no precision, so
+    erring small is free. zfar never clips (the far plane is at infinity): it only scales
+    the depth debug view: the camera's own, or the farthest corner along the view axis.
+    """
     f, e = forward(camera), camera.eye
-    return max(max(_dot3(f, _sub(c, e)) for c in corners), 2.0 * znear)
+    ex, ey, ez = float(e[0]), float(e[1]), float(e[2])
+    depths = [f[0] * (c[0] - ex) + f[1] * (c[1] - ey) + f[2] * (c[2] - ez) for c in corners]
+    znear = float(camera.znear) if camera.znear is not None else max(0.5 * min(depths), 1e-5 * scale)
+    zfar = float(camera.zfar) if camera.zfar is not None else max(max(depths), 2.0 * znear)
+    return znear, zfar

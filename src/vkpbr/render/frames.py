@@ -19,7 +19,7 @@ from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.descriptors import DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
 from vkpbr.render import layouts as L
-from vkpbr.render.camera import far_extent, forward, near_plane, view_projection_columns
+from vkpbr.render.camera import depth_range, forward, view_projection_columns
 from vkpbr.render.options import RenderOptions
 from vkpbr.scene.types import Camera, Light
 
@@ -119,8 +119,7 @@ def write_frame_uniforms(slot: FrameSlot, camera: Camera, light: Light, size: Se
     if key == slot.uniform_key:
         return
     slot.uniform_key = key
-    znear = near_plane(camera, bounds.corners, bounds.radius)
-    zfar = far_extent(camera, bounds.corners, znear)
+    znear, zfar = depth_range(camera, bounds.corners, bounds.radius)
     slot.znear = znear
     c0, c1, c2, c3 = view_projection_columns(camera, size, znear)
     L.CAMERA.pack_into(slot.m_camera, VP=(*c0, *c1, *c2, *c3))

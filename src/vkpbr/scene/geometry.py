@@ -185,7 +185,7 @@ def auto_camera(scene: Scene, yfov_deg: float = 60.0) -> Camera:
     The eye looks at the centre of the world bounds from a +Z-leaning diagonal (slightly from
     above and the right, so that flat test models are not seen edge-on), far enough that the
     bounding sphere fits the vertical field of view. Near and far are left to each render
-    (reversed-Z: see render/camera.py near_plane).
+    (reversed-Z: see render/camera.py depth_range).
     """
     lo, hi = scene.bounds()
     centre = (lo + hi) / 2.0
