@@ -44,8 +44,8 @@ def test_render_through_bake_cache(capsys, tmp_path: Path, assets: Path) -> None
     direct, first, second = (tmp_path / f"{n}.png" for n in ("direct", "first", "second"))
     common = ("--size", "64x48", "--validation")
     assert run(capsys, "render", str(src), "--out", str(direct), *common)[0] == 0
-    code, _, err = run(capsys, "render", str(src), "--cache", str(cache), "--out", str(first), *common)
-    assert code == 0 and "scene cache:" in err
+    code, _, err = run(capsys, "-v", "render", str(src), "--cache", str(cache), "--out", str(first), *common)
+    assert code == 0 and "vkpbr: info: scene cache:" in err  # a diagnostic: shown with -v
     baked = list(cache.glob("NormalTangentMirrorTest-*.vkpbr"))
     assert len(baked) == 1
     mtime = baked[0].stat().st_mtime_ns
@@ -71,9 +71,12 @@ def test_batch_cameras(capsys, tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["render", "--view", "nope"], "unknown view 'nope'"),
-    (["render", "--brdf", "phong"], "unknown brdf 'phong'"),
-    (["render", "--tbn", "x"], "unknown tbnmode 'x'"),
+    (["render", "--view", "nope"], "argument --view: invalid choice: 'nope'"),
+    (["render", "--brdf", "phong"], "argument --brdf: invalid choice: 'phong'"),
+    (["render", "--tbn", "x"], "argument --tbn: invalid choice: 'x'"),
+    (["view", "--tonemap", "filmic"], "argument --tonemap: invalid choice: 'filmic'"),
+    (["render", "--light", "-5,0.6"], "argument --light: '-5,0.6': expected three"),
+    (["render", "--no-such-option"], "unrecognized arguments: --no-such-option"),
     (["render", "--size", "0x10"], "must be positive"),
     (["render", "--size=-3x10"], "must be positive"),
     (["render", "--size", "abc"], "expected WIDTHxHEIGHT"),
@@ -113,3 +116,45 @@ def test_list_views(capsys) -> None:
     code, stdout, _ = run(capsys, "render", "--list-views")
     lines = stdout.strip().splitlines()
     assert code == 0 and len(lines) == 21 and lines[0].startswith("final")
+
+
+def _obj_with_missing_textures(folder: Path) -> Path:
+    (folder / "m.mtl").write_text("newmtl m\nKd 0.8 0.8 0.8\nmap_Kd missing.png\nmap_Bump missing_n.png\n")
+    obj = folder / "tri.obj"
+    obj.write_text("mtllib m.mtl\nusemtl m\nv -1 -1 0\nv 1 -1 0\nv 0 1 0\n"
+                   "vt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n")
+    return obj
+
+
+def test_quiet_verbose_and_one_line_warnings(capsys, tmp_path: Path) -> None:
+    """Missing textures warn in lines of their own ("vkpbr: ..."), no Python source echoed;
+    -q keeps stdout and stderr empty; -v adds info lines; the light accepts negatives."""
+    obj, out = _obj_with_missing_textures(tmp_path), tmp_path / "t.png"
+    argv = ("render", str(obj), "--size", "32x24", "--out", str(out), "--light", "-5,0.6,-0.9")
+    code, stdout, err = run(capsys, *argv)
+    assert code == 0 and stdout.startswith(f"wrote {out}") and len(stdout.splitlines()) == 2
+    lines = err.splitlines()
+    assert lines and all(line.startswith("vkpbr: ") for line in lines), err
+    assert "missing.png" in err and "not found" in err
+    assert "warn(" not in err and "UserWarning" not in err and "info:" not in err
+    out.unlink()
+    code, stdout, err = run(capsys, "-q", *argv)
+    assert code == 0 and out.exists() and stdout == "" and err == ""
+    code, stdout, err = run(capsys, *argv, "-v")
+    assert code == 0 and "vkpbr: info: scene " in err and "1 meshes, 1 triangles" in err
+
+
+def test_strict_turns_missing_textures_into_an_error(capsys, tmp_path: Path) -> None:
+    import inspect
+
+    from vkpbr.scene.loader import load_scene
+
+    obj = _obj_with_missing_textures(tmp_path)
+    code, _, err = run(capsys, "render", str(obj), "--strict", "--size", "32x24",
+                       "--out", str(tmp_path / "t.png"))
+    assert err.startswith("vkpbr: error: ") and err.count("\n") == 1, err
+    assert not (tmp_path / "t.png").exists()
+    if "strict" in inspect.signature(load_scene).parameters:
+        assert code == 1 and "missing" in err
+    else:  # the loader's strict mode has not landed: --strict says so, it does not pass silently
+        assert code == 2 and "no strict mode" in err

@@ -1,6 +1,8 @@
 """Input for the viewer: GLFW callbacks and script replay share these handlers, so a
 replayed script drives exactly the code a person does. A mixin of `Viewer` (app/viewer.py),
-split out to keep each file short; the key map itself is app/keys.py.
+split out to keep each file short. The key bindings are the table in app/keys.py: `_on_key`
+dispatches press actions from it to the `_act_<action>` methods below, `_update` and
+`_speed_multiplier` read its held actions (fly, move_light, speed).
 """
 
 from __future__ import annotations
@@ -14,13 +16,48 @@ from typing import Any
 import glfw
 
 from vkpbr.app import keys as K
-from vkpbr.app.controls import FAST, FOV_STEP, SLOW
 from vkpbr.app.script import Event, key_code, mods_bits
 from vkpbr.scene.types import Light
 
-__all__ = ["InputHandlers", "LIGHT_ORBIT_RAD_PER_S"]
+__all__ = ["InputHandlers", "LIGHT_ORBIT_RAD_PER_S", "key_map"]
 
 LIGHT_ORBIT_RAD_PER_S = 0.6
+
+# key code -> {(shift, ctrl): (action, arg, repeat)}; built on first use (GLFW codes)
+_KEY_MAP: dict[int, dict[tuple[bool, bool], tuple[str, Any, bool]]] = {}
+_HELD: dict[str, tuple[tuple[int, Any], ...]] = {}
+
+
+def key_map() -> dict[int, dict[tuple[bool, bool], tuple[str, Any, bool]]]:
+    """The press actions of app/keys.py by GLFW key code and (shift, ctrl); a chord bound
+    twice is an error in the table."""
+    if not _KEY_MAP:
+        table: dict[int, dict[tuple[bool, bool], tuple[str, Any, bool]]] = {}
+        for c in K.chords(K.PRESS_ACTIONS):
+            entry = table.setdefault(key_code(c.name, f"keys.py: {c.key}"), {})
+            if (c.shift, c.ctrl) in entry:
+                raise ValueError(f"keys.py: {c.key} is bound twice")
+            entry[(c.shift, c.ctrl)] = (c.action, c.arg, c.repeat)
+        for action in K.HELD_ACTIONS:
+            _HELD[action] = tuple((key_code(c.name), c.arg) for c in K.chords((action,)))
+        _KEY_MAP.update(table)
+    return _KEY_MAP
+
+
+def _held() -> dict[str, tuple[tuple[int, Any], ...]]:
+    """Held actions: action -> ((key code, arg), ...)."""
+    if not _HELD:
+        key_map()
+    return _HELD
+
+
+def _lookup(key: int, mods: int) -> tuple[str, Any, bool] | None:
+    entry = key_map().get(key)
+    if entry is None:
+        return None
+    if len(entry) == 1 and (False, False) in entry:  # a plain key: modifiers do not matter
+        return entry[(False, False)]
+    return entry.get((bool(mods & glfw.MOD_SHIFT), bool(mods & glfw.MOD_CONTROL)))
 
 
 class InputHandlers:
@@ -40,51 +77,60 @@ class InputHandlers:
             return
         if action == glfw.PRESS:
             self.held.add(key)
-        shift, ctrl = bool(mods & glfw.MOD_SHIFT), bool(mods & glfw.MOD_CONTROL)
-        o = self.options
-        if key == glfw.KEY_ESCAPE:
-            self.quit = True
-        elif glfw.KEY_0 <= key <= glfw.KEY_9:
-            view = K.view_for_digit(key - glfw.KEY_0, shift, ctrl)
-            if view is not None:
-                o = K.with_view(o, view)
-        elif key == glfw.KEY_V:
-            o = K.cycle(o, "view", -1 if shift else 1)
-        elif key == glfw.KEY_B:
-            o = K.cycle(o, "brdf")
-        elif key == glfw.KEY_T:
-            o = K.cycle(o, "tbn")
-        elif key == glfw.KEY_X:
-            o = K.cycle(o, "tonemap")
-        elif key in (glfw.KEY_M, glfw.KEY_N, glfw.KEY_O):
-            o = K.toggle(o, {glfw.KEY_M: "alpha_mask", glfw.KEY_N: "normal_mapping",
-                             glfw.KEY_O: "occlusion"}[key])
-        elif key in (glfw.KEY_EQUAL, glfw.KEY_KP_ADD, glfw.KEY_MINUS, glfw.KEY_KP_SUBTRACT):
-            step = 0.5 if key in (glfw.KEY_EQUAL, glfw.KEY_KP_ADD) else -0.5
-            o = dataclasses.replace(o, exposure=max(-16.0, min(16.0, o.exposure + step)))
-        elif key in (glfw.KEY_LEFT_BRACKET, glfw.KEY_RIGHT_BRACKET):
-            self.fly.zoom(FOV_STEP if key == glfw.KEY_RIGHT_BRACKET else -FOV_STEP)
-            self._hud_dirty = True
-        elif action != glfw.PRESS:
-            return  # auto-repeat only for the keys above
-        elif key == glfw.KEY_SPACE:
-            self.animate_light = not self.animate_light
-        elif key == glfw.KEY_L:
-            self.light = dataclasses.replace(self.light, position=self.fly.eye)
-        elif key == glfw.KEY_R:
-            self.fly.reset()
-            self.light = self.start_light
-        elif key == glfw.KEY_C:
-            self.print_camera()
-        elif key in (glfw.KEY_P, glfw.KEY_F12):
-            self.pending_shots.append(Path(time.strftime("vkpbr-%Y%m%d-%H%M%S")
-                                           + f"-{self.frame_count}.png"))
-        elif key in (glfw.KEY_H, glfw.KEY_F1):
-            self.show_help = not self.show_help
-        elif key == glfw.KEY_F2:
-            self.show_hud = not self.show_hud
+        hit = _lookup(key, mods)
+        if hit is None:
+            return
+        name, arg, repeat = hit
+        if action != glfw.PRESS and not repeat:
+            return  # auto-repeat only for the mode switches
+        getattr(self, f"_act_{name}")(arg)
         self._hud_dirty = True
-        self.options = o
+
+    # --- press actions (app/keys.py PRESS_ACTIONS) ------------------------------------------
+    def _act_quit(self, _arg: None) -> None:
+        self.quit = True
+
+    def _act_view(self, index: int) -> None:
+        view = K.view_at(index)
+        if view is not None:
+            self.options = K.with_view(self.options, view)
+
+    def _act_cycle(self, arg: tuple[str, int]) -> None:
+        self.options = K.cycle(self.options, *arg)
+
+    def _act_toggle(self, field: str) -> None:
+        self.options = K.toggle(self.options, field)
+
+    def _act_exposure(self, step: float) -> None:
+        lo, hi = K.EXPOSURE_RANGE
+        o = self.options
+        self.options = dataclasses.replace(o, exposure=max(lo, min(hi, o.exposure + step)))
+
+    def _act_fov(self, step: float) -> None:
+        self.fly.zoom(step)
+
+    def _act_animate_light(self, _arg: None) -> None:
+        self.animate_light = not self.animate_light
+
+    def _act_light_to_camera(self, _arg: None) -> None:
+        self.light = dataclasses.replace(self.light, position=self.fly.eye)
+
+    def _act_reset(self, _arg: None) -> None:
+        self.fly.reset()
+        self.light = self.start_light
+
+    def _act_print_camera(self, _arg: None) -> None:
+        self.print_camera()
+
+    def _act_screenshot(self, _arg: None) -> None:
+        self.pending_shots.append(Path(time.strftime("vkpbr-%Y%m%d-%H%M%S")
+                                       + f"-{self.frame_count}.png"))
+
+    def _act_toggle_help(self, _arg: None) -> None:
+        self.show_help = not self.show_help
+
+    def _act_toggle_hud(self, _arg: None) -> None:
+        self.show_hud = not self.show_hud
 
     def _on_fb_size(self, _w: Any, width: int, height: int) -> None:
         self.fb_size = (width, height)
@@ -117,9 +163,13 @@ class InputHandlers:
         self.fly.dolly(dy, self._speed_multiplier())
 
     def _speed_multiplier(self) -> float:
-        h = self.held
-        m = FAST if (glfw.KEY_LEFT_SHIFT in h or glfw.KEY_RIGHT_SHIFT in h) else 1.0
-        return m * (SLOW if (glfw.KEY_LEFT_CONTROL in h or glfw.KEY_RIGHT_CONTROL in h) else 1.0)
+        h, m = self.held, 1.0
+        seen: set[float] = set()
+        for code, factor in _held()["speed"]:  # left and right Shift held: still x5 once
+            if code in h and factor not in seen:
+                seen.add(factor)
+                m *= factor
+        return m
 
     def _replay(self, event: Event) -> None:
         """Feed one script event through the same handlers as real input."""
@@ -161,13 +211,20 @@ class InputHandlers:
             self.quit = True
 
     def _update(self, dt: float) -> None:
-        h, key = self.held, glfw
-        axis = lambda pos, neg: float(pos in h) - float(neg in h)  # noqa: E731
-        f, r, u = axis(key.KEY_W, key.KEY_S), axis(key.KEY_D, key.KEY_A), axis(key.KEY_E, key.KEY_Q)
+        h = self.held
+        fly, lm = [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]  # (forward, right, up) from held keys
+        if h:
+            held = _held()
+            for code, (axis, sign) in held["fly"]:
+                if code in h:
+                    fly[axis] += sign
+            for code, (axis, sign) in held["move_light"]:
+                if code in h:
+                    lm[axis] += sign
+        f, r, u = fly
         if f or r or u:
             self.fly.move(dt, f, r, u, self._speed_multiplier())
-        lf, lr = axis(key.KEY_UP, key.KEY_DOWN), axis(key.KEY_RIGHT, key.KEY_LEFT)
-        lu = axis(key.KEY_PAGE_UP, key.KEY_PAGE_DOWN)
+        lf, lr, lu = lm
         p = self.light.position
         if lf or lr or lu:
             step = self.fly.speed * self._speed_multiplier() * dt

@@ -1,0 +1,100 @@
+"""What `render` and `view` do alike with their parsed arguments: load the scene (through the
+bake cache with --cache, strictly with --strict), and resolve --camera / --camera-index /
+--fov and --light / --light-color / --light-intensity / --falloff against the scene.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import inspect
+import logging
+import os
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from vkpbr.errors import UsageError
+
+if TYPE_CHECKING:
+    from vkpbr.scene.types import Camera, Light, Scene
+
+__all__ = ["default_cache_dir", "load_scene_arg", "camera_from_args", "light_from_args"]
+
+log = logging.getLogger(__name__)
+
+
+def default_cache_dir() -> Path:
+    """$VKPBR_CACHE_DIR, else $XDG_CACHE_HOME/vkpbr, else ~/.cache/vkpbr."""
+    env = os.environ.get("VKPBR_CACHE_DIR")
+    if env:
+        return Path(env)
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "vkpbr"
+
+
+def load_scene_arg(args: argparse.Namespace) -> Scene | None:
+    """The scene named on the command line (None: the built-in one), through the bake cache
+    when --cache was given (a hit skips parsing and tangent generation)."""
+    if not args.scene:
+        log.info("scene: the built-in PBR chart")
+        return None
+    from vkpbr.scene.loader import load_scene
+
+    t0 = time.perf_counter()
+    path = Path(args.scene)
+    if getattr(args, "cache", None) is not None and path.suffix.lower() != ".vkpbr":
+        from vkpbr.bake.bake import cached_bake
+
+        cache_dir = Path(args.cache) if args.cache else default_cache_dir()
+        path = cached_bake(path, cache_dir)
+        log.info("scene cache: %s (%.2f s)", path, time.perf_counter() - t0)
+    if getattr(args, "strict", False):
+        # `strict` is new in load_scene: fail clearly where this loader predates it.
+        if "strict" not in inspect.signature(load_scene).parameters:
+            raise UsageError("--strict: this version's scene loader has no strict mode")
+        scene = load_scene(path, strict=True)
+    else:
+        scene = load_scene(path)
+    log.info("scene %s: %d meshes, %d triangles, %d images, loaded in %.2f s", path,
+             len(scene.meshes), scene.triangle_count, len(scene.images), time.perf_counter() - t0)
+    return scene
+
+
+def camera_from_args(args: argparse.Namespace, renderer: Any) -> Camera:
+    """The start camera: --camera-index N (else the renderer's default camera for the
+    scene), then --camera and --fov over it."""
+    from vkpbr.render.camera import parse_camera, validate_camera
+
+    scene = renderer.scene
+    if args.camera_index is not None:
+        if not 0 <= args.camera_index < len(scene.cameras):
+            raise UsageError(f"--camera-index {args.camera_index}: the scene has "
+                             f"{len(scene.cameras)} camera(s)")
+        camera = scene.cameras[args.camera_index]
+    else:
+        camera = renderer.default_camera()
+    if args.camera:
+        camera = parse_camera(args.camera, base=camera)
+    if args.fov is not None:
+        camera = dataclasses.replace(camera, yfov_deg=args.fov)
+    validate_camera(camera)
+    return camera
+
+
+def light_from_args(args: argparse.Namespace, renderer: Any) -> Light:
+    """The renderer's default light for the scene with the --light* options over it
+    (--light and --light-color are already (x, y, z) tuples: `vec3_arg` parsed them)."""
+    import math
+
+    light = renderer.default_light()
+    if args.light is not None:
+        light = dataclasses.replace(light, position=args.light)
+    if args.light_color is not None:
+        light = dataclasses.replace(light, color=args.light_color)
+    if args.light_intensity is not None:
+        if not math.isfinite(args.light_intensity) or args.light_intensity < 0:
+            raise UsageError("--light-intensity must be a finite number >= 0")
+        light = dataclasses.replace(light, intensity=args.light_intensity)
+    if args.falloff:
+        light = dataclasses.replace(light, falloff=args.falloff.replace("-", "_"))
+    return light

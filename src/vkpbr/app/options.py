@@ -1,0 +1,163 @@
+"""The options `render` and `view` share, defined once: flag, kind, choices, default, help.
+
+`SHARED_OPTIONS` is the table. `add_options(parser, table)` turns it into argparse arguments
+(enum options get `choices=` from the enum, so `--help` lists them and a typo is argparse's
+one-line error, exit 2; defaults are RenderOptions' defaults), `render_options_from_args`
+turns parsed arguments into a RenderOptions, and `option_flags` turns a RenderOptions back
+into the flags that reproduce it (the viewer's `C` key prints them).
+
+Nothing here imports the render layer at import time: the enums and RenderOptions are looked
+up when the table is applied, which `vkpbr --help` never does.
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Literal
+
+from vkpbr.app.parsing import vec3_arg
+
+if TYPE_CHECKING:
+    from vkpbr.render.options import RenderOptions
+
+__all__ = ["OptionSpec", "SHARED_OPTIONS", "add_options", "render_options_from_args", "option_flags"]
+
+Kind = Literal["enum", "float", "vec3", "off", "on", "text", "dir?", "choice"]
+
+
+@dataclass(frozen=True)
+class OptionSpec:
+    """One command-line option.
+
+    Parameters
+    ----------
+    flag : the option string, e.g. "--light-color"; `dest` is derived from it as argparse does.
+    kind : "enum" (a RenderOptions enum field: choices are its labels), "float", "vec3"
+        ("x,y,z"), "off" (`--no-x` sets field False), "on" (a plain switch), "text",
+        "dir?" (an optional folder: `--cache` alone means the default folder), "choice"
+        (fixed `choices`).
+    help : help text; "%(default)s" and "%(choices)s" are expanded by argparse.
+    field : the RenderOptions field the option sets, if any.
+    group : the --help section it is listed under.
+    """
+
+    flag: str
+    kind: Kind
+    help: str
+    field: str | None = None
+    group: str = "shading"
+    metavar: str | None = None
+    choices: tuple[str, ...] = ()
+
+    @property
+    def dest(self) -> str:
+        return self.flag.lstrip("-").replace("-", "_")
+
+
+SHARED_OPTIONS: tuple[OptionSpec, ...] = (
+    OptionSpec("--fov", "float", "vertical field of view in degrees (default: the camera's)",
+               group="camera and light", metavar="DEG"),
+    OptionSpec("--light", "vec3", "point light position (default: the scene's light, else one "
+               "over the camera's shoulder)", group="camera and light", metavar="X,Y,Z"),
+    OptionSpec("--light-color", "vec3", "light colour, linear (default 1,1,1)",
+               group="camera and light", metavar="R,G,B"),
+    OptionSpec("--light-intensity", "float", "light intensity multiplier (default 1)",
+               group="camera and light", metavar="F"),
+    OptionSpec("--falloff", "choice", "light distance falloff (default: the light's own)",
+               group="camera and light", choices=("none", "inverse-square")),
+    OptionSpec("--view", "enum", "debug view, one of: %(choices)s (default %(default)s; "
+               "`vkpbr render --list-views` says what each shows)", field="view", metavar="NAME"),
+    OptionSpec("--brdf", "enum", "normal distribution D (default %(default)s)", field="brdf"),
+    OptionSpec("--tbn", "enum", "tangent-frame vertex stream (default %(default)s)", field="tbn"),
+    OptionSpec("--tonemap", "enum", "tone map (default %(default)s)", field="tonemap"),
+    OptionSpec("--exposure", "float", "exposure in EV stops, -64..64 (default %(default)g)",
+               field="exposure", metavar="EV"),
+    OptionSpec("--no-alpha-mask", "off", "draw masked materials as opaque", field="alpha_mask"),
+    OptionSpec("--no-normal-maps", "off", "ignore normal maps", field="normal_mapping"),
+    OptionSpec("--no-occlusion", "off", "ignore occlusion maps", field="occlusion"),
+    OptionSpec("--device", "text", "device name substring or index (see `vkpbr info`)",
+               group="device and scene loading", metavar="NAME|INDEX"),
+    OptionSpec("--validation", "on", "enable the Vulkan validation layer",
+               group="device and scene loading"),
+    OptionSpec("--cache", "dir?", "load SCENE through a baked copy in DIR (default "
+               "$VKPBR_CACHE_DIR, else ~/.cache/vkpbr), baked on first use and again when the "
+               "source changes", group="device and scene loading", metavar="DIR"),
+    OptionSpec("--strict", "on", "a missing texture (or another defect the loader would "
+               "work around) is an error, exit status 1", group="device and scene loading"),
+)
+
+
+def _enum_types() -> dict[str, type]:
+    from vkpbr.render.options import ENUM_FIELDS
+
+    return ENUM_FIELDS
+
+
+def _label(text: str) -> str:
+    """How enum names are typed: "MAPPED_NORMAL" and "mapped_normal" mean "mapped-normal"."""
+    return text.strip().lower().replace("_", "-")
+
+
+def add_options(parser: argparse.ArgumentParser, table: tuple[OptionSpec, ...] = SHARED_OPTIONS) -> None:
+    """Add every option of `table` to `parser`, in argument groups named by `spec.group`."""
+    from vkpbr.render.options import RenderOptions
+
+    defaults = RenderOptions()
+    enums = _enum_types()
+    groups: dict[str, Any] = {}
+    for spec in table:
+        group = groups.get(spec.group)
+        if group is None:
+            group = groups[spec.group] = parser.add_argument_group(f"{spec.group} options")
+        kw: dict[str, Any] = {"help": spec.help, "dest": spec.dest}
+        if spec.metavar:
+            kw["metavar"] = spec.metavar
+        if spec.kind == "enum":
+            assert spec.field is not None
+            kw.update(type=_label, choices=enums[spec.field].labels(),
+                      default=str(getattr(defaults, spec.field)))
+        elif spec.kind == "choice":
+            kw.update(type=_label, choices=spec.choices)
+        elif spec.kind == "float":
+            kw["type"] = float
+            if spec.field:
+                kw["default"] = getattr(defaults, spec.field)
+        elif spec.kind == "vec3":
+            kw["type"] = vec3_arg(spec.flag)
+        elif spec.kind in ("on", "off"):
+            kw["action"] = "store_true"
+        elif spec.kind == "dir?":
+            kw.update(nargs="?", const="")
+        group.add_argument(spec.flag, **kw)
+
+
+def render_options_from_args(args: argparse.Namespace,
+                             table: tuple[OptionSpec, ...] = SHARED_OPTIONS) -> RenderOptions:
+    """The RenderOptions that the parsed `args` ask for (invalid values raise UsageError)."""
+    from vkpbr.render.options import RenderOptions
+
+    values = {}
+    for spec in table:
+        if spec.field is None:
+            continue
+        value = getattr(args, spec.dest)
+        values[spec.field] = not value if spec.kind == "off" else value
+    return RenderOptions(**values)
+
+
+def option_flags(options: RenderOptions, table: tuple[OptionSpec, ...] = SHARED_OPTIONS) -> list[str]:
+    """Command-line flags that reproduce `options` (every enum and the exposure, and the
+    `--no-*` switches that are on), e.g. ["--view", "d", "--brdf", "ggx", ...]."""
+    out: list[str] = []
+    for spec in table:
+        if spec.field is None:
+            continue
+        value = getattr(options, spec.field)
+        if spec.kind == "enum":
+            out += [spec.flag, str(value)]
+        elif spec.kind == "float":
+            out += [spec.flag, f"{value:g}"]
+        elif spec.kind == "off" and not value:
+            out.append(spec.flag)
+    return out

@@ -1,0 +1,186 @@
+"""`vkpbr render [SCENE]`: render headless to an image file, or one image per camera pose
+(--cameras) with frames in flight."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import time
+from pathlib import Path
+from typing import Any
+
+from vkpbr.app.common import camera_from_args, light_from_args, load_scene_arg
+from vkpbr.app.log import is_quiet, say
+from vkpbr.app.options import add_options, render_options_from_args
+from vkpbr.app.output import OUTPUT_SUFFIXES, check_writable, write_image_atomic
+from vkpbr.app.parsing import EPILOG_FORMATTER, size_arg
+from vkpbr.errors import UsageError
+
+__all__ = ["add_parser", "run", "load_cameras"]
+
+log = logging.getLogger(__name__)
+
+EPILOG = """\
+examples:
+  vkpbr render --out chart.png                       the built-in PBR chart
+  vkpbr render scene.gltf --size 1920x1080 --camera 9,1.8,-0.4,-9,3.5,-0.4 --light -5,0.6,-0.9
+  vkpbr render scene.gltf --view d --brdf blinn-phong --out d.png
+  vkpbr render scene.gltf --cameras poses.json --out frames/
+"""
+
+
+def add_parser(sub: Any) -> None:
+    p = sub.add_parser("render", help="render a scene (or the built-in default scene) to an image",
+                       description="Render SCENE headless to an image file (or, with --cameras, "
+                                   "one image per camera pose into a folder).",
+                       epilog=EPILOG, formatter_class=EPILOG_FORMATTER)
+    p.add_argument("scene", nargs="?",
+                   help="glTF/GLB/OBJ/.comp5822mesh/.vkpbr file; default: the built-in PBR chart")
+    p.add_argument("--out", "-o", default="render.png",
+                   help="output image (.png, .jpg, .npy; a folder with --cameras); default render.png")
+    p.add_argument("--size", type=size_arg, default="1280x720", metavar="WxH",
+                   help="image size (default 1280x720)")
+    p.add_argument("--camera", metavar="EX,EY,EZ,TX,TY,TZ[,UX,UY,UZ]",
+                   help="eye, target and up (default: the scene's camera, else one framing it)")
+    p.add_argument("--camera-index", type=int, metavar="N", help="use the scene file's camera N")
+    p.add_argument("--cameras", metavar="FILE.json",
+                   help="render one image per camera pose in FILE (a JSON list of "
+                        '"ex,ey,ez,tx,ty,tz[,ux,uy,uz]" strings or {"eye","target","up","fov"} '
+                        "objects) into the folder --out")
+    p.add_argument("--list-views", action="store_true", help="list the debug views and exit")
+    p.add_argument("--msaa", type=int, default=1, choices=[1, 4], help="samples per pixel")
+    p.add_argument("--linear", action="store_true", help="linear float32 colour (write a .npy)")
+    p.add_argument("--frames", type=int, default=1, metavar="N",
+                   help="render N frames and report the median time per frame")
+    p.defer(add_options)
+    p.set_defaults(run=run)
+
+
+def list_views() -> int:
+    from vkpbr.render.layouts import VIEW_HELP
+
+    for view, text in VIEW_HELP.items():
+        print(f"{view.label:18s} {text}")
+    return 0
+
+
+def load_cameras(path: str, base: Any) -> list:
+    """Camera poses from a JSON file (see --cameras), resolved against the camera `base`."""
+    import dataclasses
+
+    from vkpbr.render.camera import parse_camera, validate_camera
+
+    try:
+        entries = json.loads(Path(path).read_text())
+    except OSError as exc:
+        raise UsageError(f"--cameras {path}: {exc.strerror}") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise UsageError(f"--cameras {path}: not valid JSON ({exc})") from None
+    if not isinstance(entries, list) or not entries:
+        raise UsageError(f"--cameras {path}: expected a non-empty JSON list of camera poses")
+    cameras = []
+    for i, e in enumerate(entries):
+        try:
+            if isinstance(e, str):
+                cam = parse_camera(e, base)
+            elif isinstance(e, dict):
+                cam = dataclasses.replace(
+                    base, eye=tuple(map(float, e["eye"])), target=tuple(map(float, e["target"])),
+                    up=tuple(map(float, e.get("up", base.up))), yfov_deg=float(e.get("fov", base.yfov_deg)))
+                if len(cam.eye) != 3 or len(cam.target) != 3 or len(cam.up) != 3:
+                    raise ValueError("eye, target and up need three numbers each")
+                validate_camera(cam)
+            else:
+                raise ValueError("expected a string or an object")
+        except KeyError as exc:
+            raise UsageError(f"--cameras {path}: entry {i}: missing {exc}") from None
+        except (TypeError, ValueError, UsageError) as exc:
+            raise UsageError(f"--cameras {path}: entry {i}: {exc}") from None
+        cameras.append(cam)
+    return cameras
+
+
+def _render_batch(args: argparse.Namespace, options: Any) -> int:
+    """--cameras: frames in flight on the GPU, PNG encoding on worker threads."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from tqdm import tqdm
+
+    from vkpbr.render.renderer import Renderer
+
+    size = args.size
+    out_dir = Path(args.out)
+    if out_dir.suffix.lower() in OUTPUT_SUFFIXES:
+        raise UsageError(f"--out {out_dir}: with --cameras, --out is a folder")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    check_writable(out_dir / "x.png")
+    suffix = ".npy" if args.linear else ".png"
+    t0 = time.perf_counter()
+    scene = load_scene_arg(args)
+    with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa) as renderer:
+        cameras = load_cameras(args.cameras, camera_from_args(args, renderer))
+        light = light_from_args(args, renderer)
+        t1 = time.perf_counter()
+        log.info("load + set-up %.2f s", t1 - t0)
+        with ThreadPoolExecutor(max(2, (os.cpu_count() or 2) - 1)) as pool:
+            jobs = []
+            frames = renderer.render_many(cameras, light, size, options, linear=args.linear)
+            bar = tqdm(frames, total=len(cameras), unit="frame", disable=True if is_quiet() else None)
+            for i, image in enumerate(bar):
+                jobs.append(pool.submit(write_image_atomic, out_dir / f"frame_{i:05d}{suffix}", image))
+            t2 = time.perf_counter()
+            for job in jobs:
+                job.result()
+    t3 = time.perf_counter()
+    n = len(cameras)
+    say(f"wrote {n} images to {out_dir}/ ({size[0]}x{size[1]}, view {options.view})")
+    say(f"load + set-up {t1 - t0:.2f} s, rendering {1e3 * (t2 - t1) / n:.2f} ms per frame "
+        f"({n / (t2 - t1):.1f} frames/s), all written after {t3 - t1:.2f} s")
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.list_views:
+        return list_views()
+    options = render_options_from_args(args)  # bad values fail here, before any expensive work
+    if args.cameras:
+        return _render_batch(args, options)
+    size = args.size
+    out = Path(args.out)
+    check_writable(out)
+    if args.linear and out.suffix.lower() != ".npy":
+        raise UsageError("--linear writes float32 colour: give an --out path ending in .npy")
+    if args.frames < 1:
+        raise UsageError("--frames must be at least 1")
+    from vkpbr.render.renderer import Renderer
+
+    t0 = time.perf_counter()
+    scene = load_scene_arg(args)
+    t_load = time.perf_counter()
+    with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa) as renderer:
+        t_setup = time.perf_counter()
+        camera = camera_from_args(args, renderer)
+        light = light_from_args(args, renderer)
+        log.debug("camera %s, light %s", camera, light)
+        image = renderer.render(camera, light, size, options, linear=args.linear)
+        t_first = time.perf_counter()
+        per_frame = []
+        for _ in range(args.frames - 1):
+            t = time.perf_counter()
+            image = renderer.render(camera, light, size, options, linear=args.linear)
+            per_frame.append(time.perf_counter() - t)
+        stats = renderer.last_stats
+        device_name = renderer.device.info.name
+    write_image_atomic(out, image)
+    t_write = time.perf_counter()
+    say(f"wrote {out} ({size[0]}x{size[1]}, view {options.view}, {device_name})")
+    timing = (f"load {t_load - t0:.2f} s, set-up {t_setup - t_load:.2f} s, "
+              f"first frame {1e3 * (t_first - t_setup):.1f} ms")
+    if per_frame:
+        per_frame.sort()
+        timing += f", per frame {1e3 * per_frame[len(per_frame) // 2]:.2f} ms (median of {len(per_frame)})"
+    timing += f", GPU {stats.gpu_ms:.2f} ms, write {1e3 * (t_write - t_first):.0f} ms"
+    say(timing)
+    return 0
