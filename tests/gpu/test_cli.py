@@ -70,6 +70,27 @@ def test_batch_cameras(capsys, tmp_path: Path) -> None:
     assert sorted(p.name for p in (tmp_path / "frames").iterdir()) == ["frame_00000.png", "frame_00001.png"]
 
 
+def test_poses_file_is_checked_before_the_scene_loads(capsys, tmp_path: Path) -> None:
+    """A bad entry is reported (file, entry, problem) before anything else: here the scene
+    file does not even exist, and the poses file's error is the one the user sees."""
+    bad = tmp_path / "poses.json"
+    bad.write_text(json.dumps(["0,0,5,0,0,0", {"eye": [0, 0, 5]}]))
+    code, _, err = run(capsys, "render", str(tmp_path / "missing.gltf"), "--cameras", str(bad),
+                       "--out", str(tmp_path / "frames"))
+    assert code == 2 and "poses.json" in err and "entry 1" in err and "target" in err, err
+
+
+def test_docs_example_poses_render(capsys, tmp_path: Path) -> None:
+    """docs/examples/poses.json (every accepted form) renders the built-in scene."""
+    example = Path(__file__).resolve().parents[2] / "docs" / "examples" / "poses.json"
+    n = len(json.loads(example.read_text()))
+    code, stdout, _ = run(capsys, "render", "--cameras", str(example), "--out",
+                          str(tmp_path / "frames"), "--size", "32x24", "--validation")
+    assert code == 0 and f"wrote {n} images" in stdout
+    images = sorted((tmp_path / "frames").iterdir())
+    assert len(images) == n
+
+
 @pytest.mark.parametrize("argv, message", [
     (["render", "--view", "nope"], "argument --view: invalid choice: 'nope'"),
     (["render", "--brdf", "phong"], "argument --brdf: invalid choice: 'phong'"),

@@ -18,11 +18,10 @@ import sys
 from collections.abc import Sequence
 
 from vkpbr.app.log import cli_logging
-from vkpbr.app.output import write_image_atomic  # re-export: app/viewer.py imports it from here
 from vkpbr.app.parsing import EPILOG_FORMATTER, Parser
 from vkpbr.errors import UsageError, VkpbrError
 
-__all__ = ["main", "build_parser", "write_image_atomic"]
+__all__ = ["main", "build_parser"]
 
 log = logging.getLogger("vkpbr")
 

@@ -75,8 +75,8 @@ def camera_from_args(args: argparse.Namespace, renderer: Any) -> Camera:
         camera = renderer.default_camera()
     if args.camera:
         camera = parse_camera(args.camera, base=camera)
-    if args.fov is not None:
-        camera = dataclasses.replace(camera, yfov_deg=args.fov)
+    if args.fov is not None:  # a calibrated camera's K gives way to the new field of view
+        camera = dataclasses.replace(camera, yfov_deg=args.fov, pixel_intrinsics=None)
     validate_camera(camera)
     return camera
 

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import os
 import time
@@ -18,7 +17,7 @@ from vkpbr.app.output import OUTPUT_SUFFIXES, check_writable, write_image_atomic
 from vkpbr.app.parsing import EPILOG_FORMATTER, size_arg
 from vkpbr.errors import UsageError
 
-__all__ = ["add_parser", "run", "load_cameras"]
+__all__ = ["add_parser", "run"]
 
 log = logging.getLogger(__name__)
 
@@ -66,42 +65,6 @@ def list_views() -> int:
     return 0
 
 
-def load_cameras(path: str, base: Any) -> list:
-    """Camera poses from a JSON file (see --cameras), resolved against the camera `base`."""
-    import dataclasses
-
-    from vkpbr.render.camera import parse_camera, validate_camera
-
-    try:
-        entries = json.loads(Path(path).read_text())
-    except OSError as exc:
-        raise UsageError(f"--cameras {path}: {exc.strerror}") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise UsageError(f"--cameras {path}: not valid JSON ({exc})") from None
-    if not isinstance(entries, list) or not entries:
-        raise UsageError(f"--cameras {path}: expected a non-empty JSON list of camera poses")
-    cameras = []
-    for i, e in enumerate(entries):
-        try:
-            if isinstance(e, str):
-                cam = parse_camera(e, base)
-            elif isinstance(e, dict):
-                cam = dataclasses.replace(
-                    base, eye=tuple(map(float, e["eye"])), target=tuple(map(float, e["target"])),
-                    up=tuple(map(float, e.get("up", base.up))), yfov_deg=float(e.get("fov", base.yfov_deg)))
-                if len(cam.eye) != 3 or len(cam.target) != 3 or len(cam.up) != 3:
-                    raise ValueError("eye, target and up need three numbers each")
-                validate_camera(cam)
-            else:
-                raise ValueError("expected a string or an object")
-        except KeyError as exc:
-            raise UsageError(f"--cameras {path}: entry {i}: missing {exc}") from None
-        except (TypeError, ValueError, UsageError) as exc:
-            raise UsageError(f"--cameras {path}: entry {i}: {exc}") from None
-        cameras.append(cam)
-    return cameras
-
-
 def _render_batch(args: argparse.Namespace, options: Any) -> int:
     """--cameras: frames in flight on the GPU, PNG encoding on worker threads."""
     from concurrent.futures import ThreadPoolExecutor
@@ -117,10 +80,14 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
     out_dir.mkdir(parents=True, exist_ok=True)
     check_writable(out_dir / "x.png")
     suffix = ".npy" if args.linear else ".png"
+    from vkpbr.scene.poses import load_poses
+
     t0 = time.perf_counter()
+    poses = load_poses(args.cameras)  # the whole file is checked before the scene loads
     scene = load_scene_arg(args)
     with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa) as renderer:
-        cameras = load_cameras(args.cameras, camera_from_args(args, renderer))
+        base = camera_from_args(args, renderer)
+        cameras = [pose.camera(base) for pose in poses]
         light = light_from_args(args, renderer)
         t1 = time.perf_counter()
         log.info("load + set-up %.2f s", t1 - t0)

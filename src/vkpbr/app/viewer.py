@@ -5,7 +5,8 @@ The scene goes through the renderer's one frame path (render/renderer.py) into a
 swapchain, or into an offscreen target of the same formats for `--offscreen` (GPU servers
 without a display), with the HUD as an overlay pass; a screenshot without the HUD is
 `Renderer.render` of the same camera, light, size and modes, so it equals a headless render
-by construction. Keys: app/keys.py (HELP). Scripts: app/script.py. Docs: docs/viewer.md.
+by construction. Keys: app/keys.py (BINDINGS). Scripts: app/script.py. Options: app/view_cmd.py.
+Docs: docs/viewer.md.
 """
 
 from __future__ import annotations
@@ -24,6 +25,9 @@ import numpy as np
 from vkpbr.app import keys as K
 from vkpbr.app.controls import FlyCamera
 from vkpbr.app.hud import FontAtlas, TextBlock, layout_blocks
+from vkpbr.app.log import say
+from vkpbr.app.options import option_flags
+from vkpbr.app.output import write_image_atomic
 from vkpbr.app.script import Script
 from vkpbr.app.viewer_input import InputHandlers
 from vkpbr.errors import VkpbrError
@@ -39,7 +43,7 @@ _HUD_REFRESH_S = 0.25  # how often the HUD's fps / CPU / GPU numbers change
 
 @dataclass
 class ViewerConfig:
-    """What `vkpbr view` was asked for (see viewer_cmd.py for the options)."""
+    """What `vkpbr view` was asked for (see view_cmd.py for the options)."""
 
     size: tuple[int, int] = (1280, 720)
     camera: Camera | None = None  # None: the scene's camera (or the automatic one)
@@ -218,13 +222,9 @@ class Viewer(InputHandlers):
         cam, o, (w, h) = self.camera(), self.options, self.target.extent
         parts = ["vkpbr render", self.config.scene_label, f"--size {w}x{h}",
                  f"--camera {format_camera(cam)}", f"--fov {cam.yfov_deg:g}",
-                 "--light=" + ",".join(f"{x:.6g}" for x in self.light.position),
-                 f"--view {o.view} --brdf {o.brdf} --tbn {o.tbn} --tonemap {o.tonemap}",
-                 f"--exposure={o.exposure:g}"]
-        parts += [flag for flag, on in (("--no-alpha-mask", not o.alpha_mask),
-                                        ("--no-normal-maps", not o.normal_mapping),
-                                        ("--no-occlusion", not o.occlusion)) if on]
-        print(" ".join(p for p in parts if p), flush=True)
+                 "--light " + ",".join(f"{x:.6g}" for x in self.light.position),
+                 *option_flags(o)]
+        say(" ".join(p for p in parts if p))
 
     def _hud_blocks(self) -> list[TextBlock]:
         if not self.show_hud:
@@ -336,13 +336,11 @@ class Viewer(InputHandlers):
         return blocked
 
     def _save(self, path: Path, image: np.ndarray, camera: Camera) -> None:
-        from vkpbr.app.cli import write_image_atomic
-
         # What the shot shows, for tests: compare with Renderer.render of the same inputs.
         self.last_screenshot = (image, camera, self.light, self.options, self.target.extent)
         write_image_atomic(path, image)
         self.shots_written.append(path)
-        print(f"wrote {path} ({image.shape[1]}x{image.shape[0]})", flush=True)
+        say(f"wrote {path} ({image.shape[1]}x{image.shape[0]})")
 
     def summary(self) -> str:
         w, h = self.target.extent
