@@ -343,9 +343,14 @@ def test_camera_and_lights(tmp_path: Path) -> None:
     b = GltfBuilder()
     b.node(mesh=b.triangle())
     b.doc["cameras"] = [
-        {"type": "perspective", "perspective": {"yfov": math.radians(50), "znear": 0.05}}
+        {"type": "perspective", "perspective": {"yfov": math.radians(50), "znear": 0.05}},
+        {"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.2, "zfar": 80}},
+        {"type": "perspective", "perspective": {"yfov": 0.5, "znear": 2, "zfar": 1}},  # invalid
+        {"type": "perspective", "perspective": {"yfov": 0.5}},  # znear missing (required)
     ]
     b.node(camera=0, translation=[0, 1, 5])
+    for k in (1, 2, 3):
+        b.node(camera=k)
     b.doc["extensionsUsed"] = ["KHR_lights_punctual"]
     b.doc["extensions"] = {"KHR_lights_punctual": {"lights": [
         {"type": "point", "color": [1, 0.5, 0.5], "intensity": 20, "range": 9},
@@ -354,9 +359,13 @@ def test_camera_and_lights(tmp_path: Path) -> None:
     b.node(extensions={"KHR_lights_punctual": {"light": 1}})
     with pytest.warns(UserWarning, match="directional"):
         scene = load_gltf(b.save(tmp_path / "c.glb"))
-    (cam,) = scene.cameras
+    cam, finite, invalid, no_near = scene.cameras
     assert cam.eye == (0, 1, 5) and cam.target == (0, 1, 4) and cam.up == (0, 1, 0)
-    assert cam.yfov_deg == pytest.approx(50) and cam.znear == 0.05 and cam.zfar >= 50
+    # The file's znear is kept; no zfar means glTF's infinite projection: None, not a marker.
+    assert cam.yfov_deg == pytest.approx(50) and cam.znear == 0.05 and cam.zfar is None
+    assert (finite.znear, finite.zfar) == (0.2, 80.0)
+    assert (invalid.znear, invalid.zfar) == (2.0, None)  # zfar <= znear: dropped, not fatal
+    assert (no_near.znear, no_near.zfar) == (None, None)  # the renderer derives it
     point, sun = scene.lights
     assert point.position == (1, 2, 3) and point.falloff == "inverse_square" and point.range == 9
     assert point.color == (1, 0.5, 0.5) and point.intensity == 20
