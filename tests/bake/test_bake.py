@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
-import types
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +11,7 @@ import pytest
 
 from vkpbr.app import bake_cmd
 from vkpbr.bake.bake import bake_file, bake_report, bake_scene, cached_bake
-from vkpbr.bake.baked_file import TANGENTS_FROM_FILE, read_baked, write_baked
+from vkpbr.scene.baked_file import TANGENTS_FROM_FILE, read_baked, write_baked
 from vkpbr.scene.types import Material, Mesh, Node, Scene
 
 
@@ -100,10 +98,8 @@ def test_report_numbers() -> None:
 
 @pytest.fixture
 def fake_loader(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A stand-in vkpbr.scene.loader so these tests do not depend on the importer."""
-    module = types.ModuleType("vkpbr.scene.loader")
-    module.load_scene = lambda path: scene_of(grid(8))  # type: ignore[attr-defined]
-    monkeypatch.setitem(sys.modules, "vkpbr.scene.loader", module)
+    """A stand-in for load_scene so these tests do not depend on the importer."""
+    monkeypatch.setattr("vkpbr.bake.bake.load_scene", lambda path, strict=False: scene_of(grid(8)))
 
 
 def test_bake_file_and_cache(tmp_path: Path, fake_loader: None) -> None:

@@ -39,12 +39,9 @@ def load_images(ld: GltfDocument) -> list[Image]:
                 images.append(Image(name=f"image {i}", data=ld.read_uri(uri, f"image {i}"),
                                     mime_type=mime))  # fmt: skip
                 continue
-            file = ld.resolve_uri(uri)
-            if not file.is_file():
-                # Not fatal: textures.decode_images warns again and the renderer substitutes
-                # a default texture, so a model with one missing texture still renders.
-                warnings.warn(f"{ld.path}: image file {file.name} not found", stacklevel=4)
-            images.append(Image(name=uri, path=file, mime_type=mime))
+            # A missing file is not an error here: load_scene reports every missing texture
+            # in one line (or raises with strict), and the renderer binds a default.
+            images.append(Image(name=uri, path=ld.resolve_uri(uri), mime_type=mime))
         elif get(img, "bufferView") is not None:
             data, _ = ld.buffer_view(get(img, "bufferView"))
             images.append(Image(name=f"image {i}", data=bytes(data), mime_type=mime))
