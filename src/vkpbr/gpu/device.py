@@ -143,18 +143,14 @@ class Device:
             drawIndirectFirstInstance=supported["drawIndirectFirstInstance"],
         )
         features = vk.VkPhysicalDeviceFeatures2(pNext=f11, features=core)
-        self.extensions: list[str] = []
         available = {
             e.extensionName
             for e in vk.vkEnumerateDeviceExtensionProperties(self.physical, None)
         }
-        for ext in getattr(self, "wanted_extensions", ()):
-            if ext in available:
-                self.extensions.append(ext)
         missing = [e for e in self._required_extensions if e not in available]
         if missing:
             raise VkpbrError(f"{self.info.name}: device extension(s) {', '.join(missing)} missing")
-        self.extensions += [e for e in self._required_extensions if e not in self.extensions]
+        self.extensions: list[str] = list(self._required_extensions)
         # Keep the queue info alive until vkCreateDevice returns: the binding copies structs
         # into arrays, and the copy's pQueuePriorities points into the original's memory.
         queue_info = vk.VkDeviceQueueCreateInfo(
