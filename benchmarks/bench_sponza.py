@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
+import sys
 import time
 import warnings
 from pathlib import Path
@@ -18,7 +19,10 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-CANDIDATES = [REPO / ".assets" / "models" / "Sponza" / "glTF" / "Sponza.gltf", REPO.parent / "shared" / "assets" / "Sponza" / "glTF" / "Sponza.gltf"]
+sys.path.insert(0, str(REPO / "tests"))
+from assets_path import ASSETS  # noqa: E402  ($VKPBR_ASSETS, .assets/models or ../shared/assets)
+
+CANDIDATES = [ASSETS / "Sponza" / "glTF" / "Sponza.gltf"]
 
 
 def psnr(a: np.ndarray, b: np.ndarray) -> float:

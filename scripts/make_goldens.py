@@ -20,10 +20,9 @@ from PIL import Image
 from vkpbr.render.renderer import Renderer
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests" / "gpu"))
+sys.path[:0] = [str(ROOT / "tests" / "gpu"), str(ROOT / "tests")]
 import goldens  # noqa: E402  (tests/gpu/goldens.py: the one table of goldens)
-
-ASSETS = ROOT.parent / "shared" / "assets"
+from assets_path import ASSETS  # noqa: E402  (the sample models, as the tests find them)
 
 
 def main(names: list[str]) -> int:

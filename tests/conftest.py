@@ -11,17 +11,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from assets_path import ASSETS
 
-REPO = Path(__file__).resolve().parents[1]
-# The sample models: ../shared/assets, or $VKPBR_ASSETS (a copy with the same layout, e.g.
-# on a GPU machine that ../shared does not reach).
-ASSETS = Path(os.environ.get("VKPBR_ASSETS") or REPO.parent / "shared" / "assets").resolve()
+# The sample models: $VKPBR_ASSETS, else .assets/models, else ../shared/assets (assets_path.py).
+# Tests that need them take the `assets` fixture, which skips with the folder's name when absent.
 
 
 @pytest.fixture(scope="session")
 def assets() -> Path:
     if not ASSETS.is_dir():
-        pytest.skip(f"sample assets not found at {ASSETS}")
+        pytest.skip(f"sample assets not found at {ASSETS} (set VKPBR_ASSETS)")
     return ASSETS
 
 

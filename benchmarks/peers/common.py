@@ -15,6 +15,7 @@ import argparse
 import json
 import math
 import statistics
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -22,7 +23,10 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[2]
-SCENES = (REPO / ".assets/models/Sponza/glTF/Sponza.gltf", REPO.parent / "shared/assets/Sponza/glTF/Sponza.gltf")
+sys.path.insert(0, str(REPO / "tests"))
+from assets_path import ASSETS  # noqa: E402  ($VKPBR_ASSETS, .assets/models or ../shared/assets)
+
+SCENES = (ASSETS / "Sponza/glTF/Sponza.gltf",)
 EYE = (9.0, 1.8, -0.4)
 TARGET = (-9.0, 3.5, -0.4)
 UP = (0.0, 1.0, 0.0)
@@ -38,7 +42,8 @@ WARMUP = 20
 def parse_args(peer: str, extra: Callable[[argparse.ArgumentParser], object] | None = None
                ) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=f"Sponza with {peer}: render + readback vs render only")
-    ap.add_argument("--scene", default=None, help="glTF path (default: Sponza in .assets/ or shared/)")
+    ap.add_argument("--scene", default=None, help="glTF path (default: Sponza in the sample-models folder, "
+                    "tests/assets_path.py)")
     ap.add_argument("--size", default=SIZES[0], help="WIDTHxHEIGHT (default 1920x1080)")
     ap.add_argument("--frames", type=int, default=200, help="timed frames per measurement")
     ap.add_argument("--warmup", type=int, default=WARMUP)

@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
-import types
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +11,7 @@ import pytest
 
 from vkpbr.app import bake_cmd
 from vkpbr.bake.bake import bake_file, bake_report, bake_scene, cached_bake
-from vkpbr.bake.baked_file import TANGENTS_FROM_FILE, read_baked, write_baked
+from vkpbr.scene.baked_file import TANGENTS_FROM_FILE, read_baked, write_baked
 from vkpbr.scene.types import Material, Mesh, Node, Scene
 
 
@@ -100,10 +98,8 @@ def test_report_numbers() -> None:
 
 @pytest.fixture
 def fake_loader(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A stand-in vkpbr.scene.loader so these tests do not depend on the importer."""
-    module = types.ModuleType("vkpbr.scene.loader")
-    module.load_scene = lambda path: scene_of(grid(8))  # type: ignore[attr-defined]
-    monkeypatch.setitem(sys.modules, "vkpbr.scene.loader", module)
+    """A stand-in for load_scene so these tests do not depend on the importer."""
+    monkeypatch.setattr("vkpbr.bake.bake.load_scene", lambda path, strict=False: scene_of(grid(8)))
 
 
 def test_bake_file_and_cache(tmp_path: Path, fake_loader: None) -> None:
@@ -149,3 +145,37 @@ def test_embedded_textures_have_full_mip_chains(tmp_path: Path) -> None:
     assert (baked.images[0].levels[-1] == 200).all()  # sRGB round trip of a constant
     write_baked(tmp_path / "e.vkpbr", baked)
     assert len(read_baked(tmp_path / "e.vkpbr").images[0].levels) == 3
+
+
+def test_bake_out_is_checked_before_baking(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from vkpbr.errors import UsageError
+
+    def no_bake(*args: object, **kwargs: object) -> None:
+        raise AssertionError("bake_file ran before --out was checked")
+
+    monkeypatch.setattr("vkpbr.bake.bake.bake_file", no_bake)
+    parser = argparse.ArgumentParser()
+    bake_cmd.add_parser(parser.add_subparsers())
+    src = tmp_path / "s.obj"  # never read: every case fails first
+    (tmp_path / "dir.vkpbr").mkdir()
+    cases = {
+        "nowhere/s.vkpbr": "folder .*nowhere does not exist",
+        "s.glb": "must be a .vkpbr file \\(got '.glb'\\)",
+        "s": "must be a .vkpbr file \\(got 'no extension'\\)",
+        "dir.vkpbr": "is a folder",
+    }
+    for out, message in cases.items():
+        args = parser.parse_args(["bake", str(src), "--out", str(tmp_path / out)])
+        with pytest.raises(UsageError, match=message) as info:
+            bake_cmd.run(args)
+        assert "\n" not in str(info.value) and str(info.value).startswith(f"--out {tmp_path / out}")
+    assert bake_cmd.check_out(tmp_path / "ok.VKPBR") == tmp_path / "ok.VKPBR"  # case-insensitive
+
+
+def test_bake_help_has_description_and_examples() -> None:
+    parser = argparse.ArgumentParser(prog="vkpbr")
+    bake_cmd.add_parser(parser.add_subparsers())
+    (sub,) = parser._subparsers._group_actions[0].choices.values()  # noqa: SLF001
+    text = sub.format_help()
+    assert "examples:\n  vkpbr bake " in text and text.count("\n  vkpbr bake ") == 3
+    assert "--embed-textures" in text and "--strict" in text and "docs/baked-format.md" in text

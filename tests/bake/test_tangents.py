@@ -9,7 +9,7 @@ import pytest
 
 from vkpbr.bake.tangents import any_perpendicular, generate_tangents, orthonormal_tangent
 
-MIRROR = Path("/work/shared/assets/NormalTangentMirrorTest/glTF/NormalTangentMirrorTest.gltf")
+MIRROR = "NormalTangentMirrorTest/glTF/NormalTangentMirrorTest.gltf"  # under the `assets` folder
 
 
 def _read_primitive(path: Path) -> dict[str, np.ndarray]:
@@ -35,9 +35,8 @@ def _read_primitive(path: Path) -> dict[str, np.ndarray]:
             "indices": accessor(prim.indices).astype(np.uint32)}
 
 
-@pytest.mark.skipif(not MIRROR.is_file(), reason="NormalTangentMirrorTest asset not present")
-def test_matches_supplied_tangents_including_mirrored_half() -> None:
-    m = _read_primitive(MIRROR)
+def test_matches_supplied_tangents_including_mirrored_half(assets: Path) -> None:
+    m = _read_primitive(assets / MIRROR)
     t = generate_tangents(m["positions"], m["normals"], m["texcoords"], m["indices"])
     ref = m["tangents"]
     cos = np.einsum("ij,ij->i", t[:, :3], ref[:, :3]) / np.linalg.norm(ref[:, :3], axis=1)

@@ -53,9 +53,9 @@ class Arrow:
 
 
 def srgb8(linear: list[float]) -> tuple[int, int, int]:
-    c = np.clip(np.asarray(linear[:3], np.float64), 0.0, 1.0)
-    s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1 / 2.4) - 0.055)
-    return tuple(int(round(v * 255)) for v in s)
+    from vkpbr.scene.color import linear_to_srgb  # the project's one sRGB curve
+
+    return tuple(int(round(v * 255)) for v in linear_to_srgb(linear[:3]))
 
 
 def read_model(path: Path) -> tuple[dict[str, Arrow], tuple[int, int, int]]:

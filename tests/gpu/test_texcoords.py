@@ -22,8 +22,8 @@ import numpy as np
 import pytest
 
 from vkpbr.bake.bake import bake_scene
-from vkpbr.bake.baked_file import load_baked_scene, write_baked
 from vkpbr.render.gpu_scene import uv_transform_rows
+from vkpbr.scene.baked_file import load_baked_scene, write_baked
 from vkpbr.scene.types import Camera, Image, Material, Mesh, Node, Sampler, Scene, TextureRef
 
 SIZE = 64  # pixels per side

@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from vkpbr.bake.bake import bake_scene
-from vkpbr.bake.baked_file import load_baked_scene, write_baked
 from vkpbr.reference.brdf import linear_to_srgb
+from vkpbr.scene.baked_file import load_baked_scene, write_baked
 from vkpbr.scene.types import Camera, Material, Mesh, Node, Scene
 
 SIZE = 64

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from assets_path import ASSETS  # the sample models, if present (optional here)
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.comp5822 import write_comp5822mesh
@@ -24,7 +25,6 @@ from vkpbr.scene.loader import load_scene
 from vkpbr.scene.types import Image, Material, Mesh, Node, Scene, TextureRef
 
 HERE = Path(__file__).resolve().parent
-ASSETS = HERE.parents[1] / ".." / "shared" / "assets"
 SEED = 5822
 _EVIL = [1e30, -1, 2**31, 2**64, -(2**40), 0, 7, float("nan"), float("inf"), "x", None, [], {},
          True, 3.5, [1, 2], {"a": 1}]  # fmt: skip

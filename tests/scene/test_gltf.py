@@ -18,14 +18,7 @@ from vkpbr.scene.geometry import auto_camera
 from vkpbr.scene.gltf import load_gltf
 from vkpbr.scene.loader import load_scene
 
-ASSETS = Path(__file__).resolve().parents[2] / ".." / "shared" / "assets"
 TRI = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
-
-
-def assets() -> Path:
-    if not ASSETS.is_dir():
-        pytest.skip("shared assets folder absent")
-    return ASSETS
 
 
 class GltfBuilder:
@@ -95,8 +88,8 @@ class GltfBuilder:
 # -- sample assets ----------------------------------------------------------------------------
 
 
-def test_every_sample_model_loads() -> None:
-    files = sorted(assets().glob("*/glTF*/*.gltf"))
+def test_every_sample_model_loads(assets: Path) -> None:
+    files = sorted(assets.glob("*/glTF*/*.gltf"))
     assert len(files) >= 9
     for f in files:
         scene = load_scene(f)
@@ -106,17 +99,17 @@ def test_every_sample_model_loads() -> None:
             assert m.indices.dtype == np.uint32 and int(m.indices.max()) < m.vertex_count
 
 
-def test_boombox_specgloss_folder_uses_core_material() -> None:
-    scene = load_gltf(assets() / "BoomBox/glTF-pbrSpecularGlossiness/BoomBox.gltf")
+def test_boombox_specgloss_folder_uses_core_material(assets: Path) -> None:
+    scene = load_gltf(assets / "BoomBox/glTF-pbrSpecularGlossiness/BoomBox.gltf")
     mat = scene.materials[0]
     assert mat.metallic_texture.image == mat.roughness_texture.image
     assert (mat.metallic_texture.channel, mat.roughness_texture.channel) == (2, 1)
     assert mat.occlusion_texture is not None and mat.emissive_texture is not None
 
 
-def test_orientation_test_transforms() -> None:
-    scene = load_gltf(assets() / "OrientationTest/glTF/OrientationTest.gltf")
-    doc = json.loads((assets() / "OrientationTest/glTF/OrientationTest.gltf").read_text())
+def test_orientation_test_transforms(assets: Path) -> None:
+    scene = load_gltf(assets / "OrientationTest/glTF/OrientationTest.gltf")
+    doc = json.loads((assets / "OrientationTest/glTF/OrientationTest.gltf").read_text())
     by_name = {n.name: n.matrix for n in scene.nodes}
     for node in doc["nodes"]:
         m = by_name[node["name"]]
@@ -129,28 +122,28 @@ def test_orientation_test_transforms() -> None:
             np.testing.assert_allclose(r @ r.T, np.eye(3), atol=1e-5)
 
 
-def test_alpha_blend_mode_test_modes_and_cutoffs() -> None:
-    scene = load_gltf(assets() / "AlphaBlendModeTest/glTF/AlphaBlendModeTest.gltf")
+def test_alpha_blend_mode_test_modes_and_cutoffs(assets: Path) -> None:
+    scene = load_gltf(assets / "AlphaBlendModeTest/glTF/AlphaBlendModeTest.gltf")
     modes = sorted((m.alpha_mode, round(m.alpha_cutoff, 3)) for m in scene.materials)
     assert modes == [("blend", 0.5), ("mask", 0.25), ("mask", 0.5), ("mask", 0.75),
                      ("opaque", 0.5), ("opaque", 0.5)]  # fmt: skip
     assert sum(m.double_sided for m in scene.materials) == 5
 
 
-def test_normal_tangent_mirror_tangents_are_read() -> None:
-    scene = load_gltf(assets() / "NormalTangentMirrorTest/glTF/NormalTangentMirrorTest.gltf")
+def test_normal_tangent_mirror_tangents_are_read(assets: Path) -> None:
+    scene = load_gltf(assets / "NormalTangentMirrorTest/glTF/NormalTangentMirrorTest.gltf")
     t = scene.meshes[0].tangents
     assert t is not None and t.shape == (scene.meshes[0].vertex_count, 4)
     assert set(np.unique(t[:, 3]).tolist()) == {-1.0, 1.0}  # mirrored UVs present
 
 
-def test_normal_tangent_test_has_no_tangents() -> None:
-    scene = load_gltf(assets() / "NormalTangentTest/glTF/NormalTangentTest.gltf")
+def test_normal_tangent_test_has_no_tangents(assets: Path) -> None:
+    scene = load_gltf(assets / "NormalTangentTest/glTF/NormalTangentTest.gltf")
     assert all(m.tangents is None for m in scene.meshes)
 
 
-def test_sponza() -> None:
-    scene = load_scene(assets() / "Sponza/glTF/Sponza.gltf")
+def test_sponza(assets: Path) -> None:
+    scene = load_scene(assets / "Sponza/glTF/Sponza.gltf")
     assert scene.triangle_count == 262_267
     masked = [m for m in scene.materials if m.alpha_mode == "mask"]
     assert len(masked) == 3 and all(m.double_sided and m.alpha_cutoff == 0.5 for m in masked)
@@ -301,8 +294,7 @@ def test_materials_samplers_texture_transform(tmp_path: Path) -> None:
         "emissiveTexture": {"index": 1}, "emissiveFactor": [1, 0.5, 0],
         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4}},
         "alphaMode": "MASK", "alphaCutoff": 0.3, "doubleSided": True}]  # fmt: skip
-    with pytest.warns(UserWarning, match="missing.png"):
-        scene = load_gltf(b.save(tmp_path / "m.gltf", "bin"))
+    scene = load_gltf(b.save(tmp_path / "m.gltf", "bin"))  # missing.png: see test_missing_textures
     m = scene.materials[0]
     assert (
         scene.images[0].path == tmp_path / "missing.png" and scene.images[1].data == b"\x89PNG fake"
@@ -343,9 +335,14 @@ def test_camera_and_lights(tmp_path: Path) -> None:
     b = GltfBuilder()
     b.node(mesh=b.triangle())
     b.doc["cameras"] = [
-        {"type": "perspective", "perspective": {"yfov": math.radians(50), "znear": 0.05}}
+        {"type": "perspective", "perspective": {"yfov": math.radians(50), "znear": 0.05}},
+        {"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.2, "zfar": 80}},
+        {"type": "perspective", "perspective": {"yfov": 0.5, "znear": 2, "zfar": 1}},  # invalid
+        {"type": "perspective", "perspective": {"yfov": 0.5}},  # znear missing (required)
     ]
     b.node(camera=0, translation=[0, 1, 5])
+    for k in (1, 2, 3):
+        b.node(camera=k)
     b.doc["extensionsUsed"] = ["KHR_lights_punctual"]
     b.doc["extensions"] = {"KHR_lights_punctual": {"lights": [
         {"type": "point", "color": [1, 0.5, 0.5], "intensity": 20, "range": 9},
@@ -354,9 +351,13 @@ def test_camera_and_lights(tmp_path: Path) -> None:
     b.node(extensions={"KHR_lights_punctual": {"light": 1}})
     with pytest.warns(UserWarning, match="directional"):
         scene = load_gltf(b.save(tmp_path / "c.glb"))
-    (cam,) = scene.cameras
+    cam, finite, invalid, no_near = scene.cameras
     assert cam.eye == (0, 1, 5) and cam.target == (0, 1, 4) and cam.up == (0, 1, 0)
-    assert cam.yfov_deg == pytest.approx(50) and cam.znear == 0.05 and cam.zfar >= 50
+    # The file's znear is kept; no zfar means glTF's infinite projection: None, not a marker.
+    assert cam.yfov_deg == pytest.approx(50) and cam.znear == 0.05 and cam.zfar is None
+    assert (finite.znear, finite.zfar) == (0.2, 80.0)
+    assert (invalid.znear, invalid.zfar) == (2.0, None)  # zfar <= znear: dropped, not fatal
+    assert (no_near.znear, no_near.zfar) == (None, None)  # the renderer derives it
     point, sun = scene.lights
     assert point.position == (1, 2, 3) and point.falloff == "inverse_square" and point.range == 9
     assert point.color == (1, 0.5, 0.5) and point.intensity == 20

@@ -105,7 +105,7 @@ def test_materials(tmp_path: Path) -> None:
     assert scene.images[0].path == tmp_path / "stone.png"
 
 
-def test_missing_mtl_and_textures_warn(tmp_path: Path) -> None:
+def test_missing_mtl_and_textures_warn(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
     path = tmp_path / "a.obj"
     path.write_text("mtllib nowhere.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
     with pytest.warns(UserWarning, match="nowhere.mtl"):
@@ -113,9 +113,12 @@ def test_missing_mtl_and_textures_warn(tmp_path: Path) -> None:
     assert scene.triangle_count == 1 and scene.materials == []
     (tmp_path / "b.mtl").write_text("newmtl m\nmap_Kd gone.png\n")
     path.write_text("mtllib b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n")
-    with pytest.warns(UserWarning, match="gone.png"):
-        scene = load_scene(path)
+    scene = load_scene(path)
     assert scene.images[0].path == tmp_path / "gone.png"
+    # One line for all missing textures, whichever format (tests/scene/test_missing_textures.py)
+    assert [r.getMessage() for r in caplog.records] == [
+        f"1 of 1 textures not found next to {path} (first: gone.png); rendering with default "
+        "values (pass strict=True / --strict to make this an error)"]
 
 
 def test_large_obj_is_vectorised(tmp_path: Path) -> None:

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from vkpbr.bake.bake import bake_report, bake_scene
-from vkpbr.bake.baked_file import load_baked_scene, write_baked
 from vkpbr.bake.tangents import tangent_uv_set
 from vkpbr.errors import SceneError
+from vkpbr.scene.baked_file import load_baked_scene, write_baked
 from vkpbr.scene.gltf import load_gltf
 from vkpbr.scene.types import Image, Material, Mesh, Node, Scene, TextureRef
 

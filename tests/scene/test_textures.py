@@ -1,9 +1,11 @@
 # Tests of texture decoding (every Pillow mode to RGBA8, 16-bit scaled not clipped, embedded
-# bytes, downscaling, failures -> None + one warning) and of geometry.auto_camera.
+# bytes, downscaling, failures -> None + one summary log line per kind) and of
+# geometry.auto_camera.
 
 from __future__ import annotations
 
 import io
+import logging
 import math
 import time
 import warnings
@@ -16,8 +18,6 @@ from PIL import Image as PILImage
 from vkpbr.scene.geometry import auto_camera
 from vkpbr.scene.textures import decode_images
 from vkpbr.scene.types import Image, Mesh, Node, Scene
-
-ASSETS = Path(__file__).resolve().parents[2] / ".." / "shared" / "assets"
 
 
 def png(img: PILImage.Image) -> bytes:
@@ -51,38 +51,48 @@ def test_modes_convert_to_rgba8(tmp_path: Path) -> None:
     assert out[5].shape == (1, 3, 4)
 
 
-def test_failures_give_none_and_one_warning_each(tmp_path: Path) -> None:
+def test_failures_give_none_and_one_log_line_per_kind(
+        tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
     (tmp_path / "bad.png").write_bytes(b"\x89PNG\r\n\x1a\n garbage")
     images = [Image("gone.png", path=tmp_path / "gone.png"), Image("bad.png", path=tmp_path / "bad.png"),
-              Image("junk", data=b"12345"), Image("ok", data=png(PILImage.new("L", (1, 1))))]  # fmt: skip
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+              Image("junk", data=b"12345"), Image("ok", data=png(PILImage.new("L", (1, 1)))),
+              Image("gone2.png", path=tmp_path / "gone2.png")]  # fmt: skip
+    caplog.set_level(logging.INFO, logger="vkpbr.scene")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # diagnostics go through logging, never warnings
         out = decode_images(images)
-    assert out[:3] == [None, None, None] and out[3].shape == (1, 1, 4)
-    messages = [str(w.message) for w in caught]
-    assert len(messages) == 3
-    assert "gone.png" in messages[0] and "bad.png" in messages[1] and "junk" in messages[2]
-    assert all("\n" not in m for m in messages)
+    assert out[:3] == [None, None, None] and out[3].shape == (1, 1, 4) and out[4] is None
+    records = [(r.name, r.levelno, r.getMessage()) for r in caplog.records]
+    assert len(records) == 2, records
+    (name, level, bad), (_, info_level, gone) = records
+    assert name == "vkpbr.scene.textures" and level == logging.WARNING
+    assert bad.startswith("2 of 5 textures cannot be decoded (first: bad.png (")
+    # Missing files were already reported by load_scene (check_texture_files): INFO only.
+    assert info_level == logging.INFO
+    assert gone == "2 of 5 texture files not found (first: gone.png); using default values"
+    assert all("\n" not in m for _, _, m in records)
 
 
-def test_downscale_warns(tmp_path: Path) -> None:
+def test_downscale_logs_one_line(caplog: pytest.LogCaptureFixture) -> None:
     big = PILImage.new("RGB", (64, 32), (200, 100, 50))
-    with pytest.warns(UserWarning, match="64x32 downscaled to 16x8"):
-        (out,) = decode_images(Scene("s", images=[Image("big", data=png(big))]), max_size=16)
+    (out,) = decode_images(Scene("s", images=[Image("big", data=png(big))]), max_size=16)
+    assert [r.getMessage() for r in caplog.records] == [
+        "1 of 1 textures downscaled to at most 16 px (first: big: 64x32 downscaled to 16x8)"]
     assert out.shape == (8, 16, 4)
     np.testing.assert_allclose(out[4, 8], [200, 100, 50, 255], atol=1)
-    with pytest.warns(UserWarning, match="downscaled"):
-        (out,) = decode_images([Image("p", pixels=np.zeros((40, 10, 4), np.uint8))], max_size=20)
-    assert out.shape == (20, 5, 4)
+    caplog.clear()
+    images = [Image("p", pixels=np.zeros((40, 10, 4), np.uint8)), Image("q", data=png(big))]
+    out = decode_images(images, max_size=20)
+    assert [o.shape for o in out] == [(20, 5, 4), (10, 20, 4)]
+    assert [r.getMessage() for r in caplog.records] == [
+        "2 of 2 textures downscaled to at most 20 px (first: p: 10x40 downscaled to 5x20)"]
     assert decode_images([]) == []
 
 
-def test_sponza_textures_decode_in_parallel() -> None:
-    if not ASSETS.is_dir():
-        pytest.skip("shared assets folder absent")
+def test_sponza_textures_decode_in_parallel(assets: Path) -> None:
     from vkpbr.scene.gltf import load_gltf
 
-    scene = load_gltf(ASSETS / "Sponza/glTF/Sponza.gltf")
+    scene = load_gltf(assets / "Sponza/glTF/Sponza.gltf")
     t = time.perf_counter()
     out = decode_images(scene, workers=2)
     elapsed = time.perf_counter() - t

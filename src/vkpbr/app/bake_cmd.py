@@ -8,12 +8,30 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import resource
 import time
 from pathlib import Path
 from typing import Any
 
-__all__ = ["add_parser", "format_report", "run"]
+from vkpbr.errors import UsageError
+
+__all__ = ["EPILOG", "add_parser", "check_out", "format_report", "run"]
+
+DESCRIPTION = """\
+Bake a scene into one GPU-ready .vkpbr file: every mesh cleaned (non-finite
+data repaired, exact duplicate vertices merged, degenerate triangles dropped)
+and reordered for the vertex cache, tangent frames computed (float vectors, a
+quaternion and a packed 32-bit form), and all of it written as checksummed,
+aligned sections that load without parsing. Textures stay references to their
+files (the log says where they must stay) unless --embed-textures stores them
+inside, decoded, with their mip chains. The file format: docs/baked-format.md."""
+
+EPILOG = """\
+examples:
+  vkpbr bake Sponza/glTF/Sponza.gltf --out sponza.vkpbr
+  vkpbr bake model.glb -o model.vkpbr --embed-textures --report
+  vkpbr bake scene.obj -o scene.vkpbr --strict --json > bake-report.json"""
 
 
 def add_parser(subparsers: Any) -> None:
@@ -21,19 +39,45 @@ def add_parser(subparsers: Any) -> None:
     p = subparsers.add_parser(
         "bake",
         help="bake a scene into a GPU-ready .vkpbr file",
-        description="Clean, deduplicate and cache-optimise every mesh, compute tangent frames "
-        "(float, quaternion and packed 32-bit), and write one checksummed .vkpbr file that "
-        "loads without parsing.",
+        description=DESCRIPTION,
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("scene", type=Path, help="source scene (.gltf, .glb, .obj, .comp5822mesh)")
-    p.add_argument("--out", "-o", type=Path, required=True, help="output file (.vkpbr)")
+    p.add_argument("scene", type=Path,
+                   help="source scene (.gltf, .glb, .obj, .comp5822mesh, or a .vkpbr to re-bake)")
+    p.add_argument("--out", "-o", type=Path, required=True,
+                   help="output file, ending in .vkpbr, in an existing folder")
     p.add_argument("--report", action="store_true",
                    help="print memory per vertex, frame precision and sizes")
     p.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     p.add_argument("--embed-textures", action="store_true",
                    help="store decoded RGBA8 mip chains in the file (larger, loads faster)")
+    p.add_argument("--strict", action="store_true",
+                   help="a missing texture file is an error (default: bake with a warning)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
+
+
+def check_out(out: Path) -> Path:
+    """Check an output path before any work is done: the .vkpbr suffix, an existing and
+    writable folder, not a folder itself.
+
+    Raises
+    ------
+    UsageError : one line naming the path and the problem.
+    """
+    out = Path(out)
+    if out.suffix.lower() != ".vkpbr":
+        raise UsageError(f"--out {out}: the output must be a .vkpbr file "
+                         f"(got {out.suffix or 'no extension'!r})")
+    if out.is_dir():
+        raise UsageError(f"--out {out}: is a folder; name the .vkpbr file to write")
+    folder = out.parent
+    if not folder.is_dir():
+        raise UsageError(f"--out {out}: folder {folder} does not exist")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise UsageError(f"--out {out}: folder {folder} is not writable")
+    return out
 
 
 def format_report(report: dict[str, Any]) -> str:
@@ -55,9 +99,9 @@ def format_report(report: dict[str, Any]) -> str:
         ("vertex memory saved (packed)",
          f"{report.get('vertex_bytes_saved_packed_vs_vectors', 0) / 2**20:.2f} MiB"),
         ("peak memory", f"{report.get('peak_memory_mib', float('nan')):.0f} MiB"),
-        ("load / bake / write (s)",
+        ("load / bake / textures / write (s)",
          f"{report['load_seconds']:.2f} / {report['seconds']:.2f} / "
-         f"{report['write_seconds']:.2f}"),
+         f"{report.get('embed_seconds', 0.0):.2f} / {report['write_seconds']:.2f}"),
     ]
     width = max(len(k) for k, _ in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
@@ -66,13 +110,16 @@ def format_report(report: dict[str, Any]) -> str:
 def run(args: argparse.Namespace) -> int:
     """Bake ``args.scene`` to ``args.out``; returns the exit status (0).
 
-    Raises VkpbrError subclasses (SceneError for a bad source); the CLI reports them.
+    Raises VkpbrError subclasses (UsageError for a bad --out, found before any work; SceneError
+    for a bad source); the CLI reports them.
     """
+    check_out(args.out)
     from vkpbr.bake.bake import bake_file  # lazily: keeps `vkpbr --help` fast
 
     start = time.perf_counter()
     report = bake_file(args.scene, args.out, embed_textures=args.embed_textures,
-                       progress=not (args.no_progress or args.json))
+                       progress=not (args.no_progress or args.json),
+                       strict=getattr(args, "strict", False))
     seconds = time.perf_counter() - start
     # Peak resident memory of this process (Linux reports ru_maxrss in KiB).
     report["peak_memory_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
@@ -82,9 +129,14 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({**report, "total_seconds": seconds}, indent=2, sort_keys=True))
         return 0
+    textures = ""
+    if report.get("embedded_textures"):
+        textures += f", {report['embedded_textures']} textures embedded"
+    if report.get("external_textures"):
+        textures += f", {report['external_textures']} textures external"
     print(f"wrote {args.out} ({report['file_bytes'] / 2**20:.2f} MiB, "
           f"{report['meshes']} meshes, {report['vertices']:,} vertices, "
-          f"{report['triangles']:,} triangles) in {seconds:.2f} s")
+          f"{report['triangles']:,} triangles{textures}) in {seconds:.2f} s")
     if args.report:
         print(format_report(report))
     return 0

@@ -17,17 +17,22 @@ gives the same bytes.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
+import logging
+import os
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
+from urllib.parse import unquote
 
 import numpy as np
 from tqdm import tqdm
 
-from ..scene.types import Mesh, Scene
-from .baked_file import (
+from ..errors import BakeFormatError
+from ..scene.baked_file import (
     HAS_COLORS,
     HAS_TEXCOORDS,
     HAS_TEXCOORDS1,
@@ -38,6 +43,10 @@ from .baked_file import (
     read_baked,
     write_baked,
 )
+from ..scene.loader import load_scene
+from ..scene.mips import mip_chain
+from ..scene.textures import decode_images
+from ..scene.types import Mesh, Scene
 from .frames import (
     frame_angular_error_deg,
     pack_qtangent,
@@ -52,7 +61,9 @@ try:  # optional: a C++ vertex cache optimiser; the bake works (less optimally) 
 except ImportError:  # pragma: no cover - depends on the environment
     _meshopt = None
 
-__all__ = ["bake_file", "bake_report", "bake_scene", "cached_bake", "source_key"]
+__all__ = ["bake_file", "bake_report", "bake_scene", "cached_bake", "embed_images", "source_key"]
+
+log = logging.getLogger(__name__)
 
 _Z = np.array([0.0, 0.0, 1.0], dtype=np.float32)
 
@@ -158,13 +169,22 @@ def _bake_mesh(mesh: Mesh, uv_set: int = 0) -> tuple[dict[str, np.ndarray], int]
     return attrs, flags
 
 
+def _srgb_images(scene: Scene) -> set[int]:
+    """Indices of the images some material reads as sRGB colour (base colour, emissive)."""
+    return {t.image for m in scene.materials
+            for t in (m.base_color_texture, m.emissive_texture) if t is not None}
+
+
 def _images(scene: Scene) -> list[BakedImage]:
-    """Image references as they are (no decoding): path, encoded bytes or raw pixels."""
+    """Image references as they are (no decoding): path or encoded bytes; decoded pixels (a
+    generated texture) are stored with their full mip chain."""
+    srgb = _srgb_images(scene)
     out = []
-    for img in scene.images:
-        levels = [np.asarray(img.pixels, dtype=np.uint8)] if img.pixels is not None else []
+    for i, img in enumerate(scene.images):
+        levels = mip_chain(np.asarray(img.pixels), i in srgb) if img.pixels is not None else []
         out.append(BakedImage(img.name, path=None if (img.data or levels) else img.path,
-                              data=img.data, mime_type=img.mime_type, levels=levels))
+                              data=img.data, mime_type=img.mime_type, levels=levels,
+                              srgb=bool(levels) and i in srgb))
     return out
 
 
@@ -181,8 +201,9 @@ def bake_scene(scene: Scene, progress: bool = False) -> BakedScene:
     -------
     BakedScene with streams positions (V, 3), normals (V, 3), texcoords (V, 2), tangents
     (V, 4), qtangents (V, 4) float32, packed_frames (V,) uint32, indices (I,) uint32 local to
-    each mesh, plus texcoords1 / colors when any mesh has them. Images are referenced, not
-    embedded (see `embed_images` in `bake_file`).
+    each mesh, plus texcoords1 / colors when any mesh has them. Images are referenced (a file
+    path, or the encoded bytes a .glb embeds), not decoded; decoded pixels are stored with
+    their mip chain; `embed_images` replaces references by mip chains.
     """
     start = time.perf_counter()
     parts: list[dict[str, np.ndarray]] = []
@@ -284,8 +305,6 @@ def _dependencies(path: Path) -> list[Path]:
                         for line in f if line.startswith("mtllib ")]
     except (OSError, ValueError, AttributeError):
         return []  # the loader reports a broken source; the key then covers the main file
-    from urllib.parse import unquote
-
     return sorted({Path(unquote(str(d))) for d in deps if Path(unquote(str(d))).is_file()})
 
 
@@ -309,70 +328,85 @@ def source_key(path: str | Path) -> tuple[str, list[str]]:
     return h.hexdigest(), names
 
 
-def _mips(rgba: np.ndarray, srgb: bool) -> list[np.ndarray]:
-    """Full 2x2 box-filtered mip chain (averaged in linear light for sRGB colour; odd edges
-    drop their last row/column)."""
-    x = rgba.astype(np.float32) / 255.0
-    if srgb:
-        c = x[..., :3]
-        x[..., :3] = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-    levels = [x]
-    while max(x.shape[:2]) > 1:
-        h, w = x.shape[:2]
-        if h > 1:
-            x = 0.5 * (x[0:h // 2 * 2:2] + x[1:h // 2 * 2:2])
-        if w > 1:
-            x = 0.5 * (x[:, 0:w // 2 * 2:2] + x[:, 1:w // 2 * 2:2])
-        levels.append(x)
-    out = []
-    for lv in levels:
-        lv = lv.copy()
-        if srgb:
-            c = lv[..., :3]
-            lv[..., :3] = np.where(c <= 0.0031308, c * 12.92, 1.055 * np.maximum(c, 0) ** (1 / 2.4) - 0.055)
-        out.append(np.clip(np.rint(lv * 255.0), 0, 255).astype(np.uint8))
-    out[0] = np.ascontiguousarray(rgba, dtype=np.uint8)  # level 0 exactly as decoded
-    return out
+def embed_images(scene: Scene, baked: BakedScene, workers: int | None = None) -> int:
+    """Store every image of `scene` in `baked` as decoded RGBA8 with its full mip chain
+    (`vkpbr.scene.mips.mip_chain`, filtered in linear light for sRGB colour maps), so that
+    loading neither decodes nor filters. Images that cannot be decoded (a missing file, corrupt
+    data) keep their reference. Decoding and filtering run on `workers` threads (default
+    min(8, CPU count)); NumPy and Pillow release the GIL for the heavy parts.
 
-
-def embed_images(scene: Scene, baked: BakedScene) -> None:
-    """Replace `baked.images` by decoded RGBA8 mip chains (loading then skips decoding)."""
-    import io
-
-    from PIL import Image as PILImage
-
-    srgb = {t.image for m in scene.materials
-            for t in (m.base_color_texture, m.emissive_texture) if t is not None}
-    images = []
-    for i, img in enumerate(scene.images):
-        if img.pixels is not None:
-            rgba = np.asarray(img.pixels, dtype=np.uint8)
-        else:
-            with PILImage.open(io.BytesIO(img.data) if img.data else img.path) as pil:
-                rgba = np.asarray(pil.convert("RGBA"))
-        images.append(BakedImage(img.name, mime_type=None, levels=_mips(rgba, i in srgb)))
+    Returns
+    -------
+    The number of images embedded.
+    """
+    srgb = _srgb_images(scene)
+    workers = max(1, workers or min(8, os.cpu_count() or 1))
+    pixels = decode_images(scene.images, workers=workers)
+    with ThreadPoolExecutor(workers) as pool:
+        chains = list(pool.map(lambda ip: None if ip[1] is None else mip_chain(ip[1], ip[0] in srgb),
+                               enumerate(pixels)))
+    images = list(baked.images)
+    for i, (img, levels) in enumerate(zip(scene.images, chains, strict=True)):
+        if levels is not None:
+            images[i] = BakedImage(img.name, mime_type=None, levels=levels, srgb=i in srgb)
     baked.images = images
+    return sum(levels is not None for levels in chains)
+
+
+def _external_textures_note(out_path: Path, images: list[BakedImage]) -> str | None:
+    """One line about the textures a baked file refers to on disk, or None if there are none."""
+    external = [Path(img.path).resolve() for img in images if img.path is not None]
+    if not external:
+        return None
+    folders = sorted({f.parent for f in external})
+    where = (str(folders[0]) if len(folders) == 1
+             else f"{len(folders)} folders under {os.path.commonpath(folders)}")
+    rel = None
+    if len(folders) == 1:
+        with contextlib.suppress(ValueError):  # another drive (Windows): stored absolute
+            rel = os.path.relpath(folders[0], out_path.resolve().parent)
+    return (f"{out_path.name}: {len(external)} of {len(images)} textures stay external files; they "
+            f"must stay in {where}" + (f" ({Path(rel).as_posix()} from the baked file)" if rel else "")
+            + ", or bake with --embed-textures to store them inside")
 
 
 def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: bool = False,
-              progress: bool = True) -> dict[str, Any]:
-    """Load a scene file, bake it, write `out_path`; returns `bake_report` plus ``out``,
-    ``file_bytes``, ``load_seconds``, ``write_seconds`` and ``source_sha256``."""
-    from ..scene.loader import load_scene  # lazily: the importer is optional for the bake
+              progress: bool = True, strict: bool = False) -> dict[str, Any]:
+    """Load a scene file, bake it, write `out_path`.
 
-    source_path = Path(source_path)
+    Parameters
+    ----------
+    source_path : any format `load_scene` reads.
+    out_path : the .vkpbr file to write (atomically).
+    embed_textures : store decoded mip chains instead of references (`embed_images`).
+    progress : a tqdm bar over meshes.
+    strict : a missing texture file is an error (see `load_scene`).
+
+    Returns
+    -------
+    `bake_report` plus ``out``, ``file_bytes``, ``load_seconds``, ``embed_seconds``,
+    ``write_seconds``, ``source_sha256``, ``embedded_textures`` and ``external_textures``.
+    Textures left as files are logged (INFO, "vkpbr.bake.bake"): how many, and where they must
+    stay for the baked file to find them.
+    """
+    source_path, out_path = Path(source_path), Path(out_path)
     t0 = time.perf_counter()
-    scene = load_scene(source_path)
+    scene = load_scene(source_path, strict=strict)
     t1 = time.perf_counter()
     baked = bake_scene(scene, progress=progress)
     baked.source_key, baked.source_files = source_key(source_path)
-    if embed_textures:
-        embed_images(scene, baked)
+    te = time.perf_counter()
+    embedded = embed_images(scene, baked) if embed_textures else 0
     t2 = time.perf_counter()
     size = write_baked(out_path, baked)
+    note = _external_textures_note(out_path, baked.images)
+    if note:
+        log.info("%s", note)
     report = bake_report(scene, baked)
     report.update(out=str(out_path), file_bytes=size, load_seconds=t1 - t0,
-                  write_seconds=time.perf_counter() - t2, source_sha256=baked.source_key)
+                  embed_seconds=t2 - te, write_seconds=time.perf_counter() - t2,
+                  source_sha256=baked.source_key, embedded_textures=embedded,
+                  external_textures=sum(img.path is not None for img in baked.images))
     return report
 
 
@@ -386,8 +420,6 @@ def cached_bake(source_path: str | Path, cache_dir: str | Path) -> Path:
     key, _ = source_key(source_path)
     out = cache_dir / f"{source_path.stem}-{key[:16]}.vkpbr"
     if out.is_file():
-        from ..errors import BakeFormatError
-
         try:
             if read_baked(out).source_key == key:
                 return out

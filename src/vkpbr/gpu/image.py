@@ -1,11 +1,13 @@
 """Images, image views (with component swizzles), samplers, and texture upload with mips.
 
 Textures are uploaded in batches: many images share one command buffer and a bounded staging
-buffer, and each gets its full mip chain by successive linear blits on the GPU.
+buffer. An image whose mip chain was made beforehand (a baked file's, vkpbr.scene.mips) is
+copied level by level; otherwise its chain is made by successive linear blits on the GPU.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -207,46 +209,95 @@ class TextureUploader:
     def __init__(self, device: Device, batch_bytes: int = 64 << 20) -> None:
         self.device = device
         self.batch_bytes = batch_bytes
-        self._pending: list[tuple[Image, np.ndarray]] = []
+        self._pending: list[tuple[Image, list[np.ndarray]]] = []
         self._pending_bytes = 0
 
-    def add(self, pixels: np.ndarray, format: int, mipmaps: bool = True, name: str = "") -> Image:
+    def add(self, pixels: np.ndarray, format: int, mipmaps: bool = True, name: str = "",
+            mips: Sequence[np.ndarray] = ()) -> Image:
+        """Queue one image for upload (sent by `flush`, or earlier when the batch is full).
+
+        Parameters
+        ----------
+        pixels : (H, W, 4) uint8, level 0.
+        format : the VkFormat (R8G8B8A8 UNORM or SRGB).
+        mipmaps : give the image a full mip chain; ignored when `mips` are given.
+        mips : levels 1.. of a full chain made beforehand (vkpbr.scene.mips), each
+            (max(H >> k, 1), max(W >> k, 1), 4) uint8: copied as they are, no blits.
+        """
         vk = self.device.vk
-        pixels = np.ascontiguousarray(pixels, dtype=np.uint8)
-        h, w = pixels.shape[:2]
-        levels = mip_levels(w, h) if mipmaps else 1
-        usage = (
-            vk.VK_IMAGE_USAGE_SAMPLED_BIT
-            | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT
-            | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT
-        )
+        levels_data = [np.ascontiguousarray(a, dtype=np.uint8) for a in (pixels, *mips)]
+        h, w = levels_data[0].shape[:2]
+        if mips:
+            levels = mip_levels(w, h)
+            shapes = [(max(h >> k, 1), max(w >> k, 1), 4) for k in range(levels)]
+            if [a.shape for a in levels_data] != shapes:
+                raise ValueError(f"texture {name!r}: mips are not the full chain below {w}x{h}")
+        else:
+            levels = mip_levels(w, h) if mipmaps else 1
+        usage = vk.VK_IMAGE_USAGE_SAMPLED_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT
+        if levels > len(levels_data):  # the blits read the level above
+            usage |= vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT
         image = Image(self.device, w, h, format, usage, mip_levels=levels, name=name)
-        if self._pending_bytes + pixels.nbytes > self.batch_bytes:
+        nbytes = sum(a.nbytes for a in levels_data)
+        if self._pending_bytes + nbytes > self.batch_bytes:
             self.flush()
-        self._pending.append((image, pixels))
-        self._pending_bytes += pixels.nbytes
+        self._pending.append((image, levels_data))
+        self._pending_bytes += nbytes
         return image
 
     def flush(self) -> None:
         if not self._pending:
             return
         device, vk = self.device, self.device.vk
-        total = sum(p.nbytes for _, p in self._pending)
+        total = sum(a.nbytes for _, levels in self._pending for a in levels)
         staging = Buffer(device, total, vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT, host_visible=True)
         try:
             dst = staging.array(np.uint8, total)
             offset = 0
             with device.one_time_commands() as cmd:
-                for image, pixels in self._pending:
-                    dst[offset : offset + pixels.nbytes] = pixels.reshape(-1)
-                    self._record_upload(cmd, image, staging, offset)
-                    offset += pixels.nbytes
+                for image, levels in self._pending:
+                    offsets = []
+                    for a in levels:  # every size is a multiple of 4, as RGBA8 copies need
+                        dst[offset : offset + a.nbytes] = a.reshape(-1)
+                        offsets.append(offset)
+                        offset += a.nbytes
+                    if len(levels) > 1:
+                        self._record_levels(cmd, image, staging, offsets)
+                    else:
+                        self._record_upload(cmd, image, staging, offsets[0])
         finally:
             staging.destroy()
             self._pending.clear()
             self._pending_bytes = 0
 
+    def _record_levels(self, cmd: Any, image: Image, staging: Buffer, offsets: list[int]) -> None:
+        """Copy a whole mip chain from the staging buffer: one copy region per level."""
+        vk = self.device.vk
+        top = (vk.VK_PIPELINE_STAGE_2_NONE, vk.VK_ACCESS_2_NONE)
+        xfer_w = (vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT)
+        frag = (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT)
+        dst_l = vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
+        n = image.mip_levels
+        pipeline_barrier(vk, cmd, [_barrier(vk, image, vk.VK_IMAGE_LAYOUT_UNDEFINED, dst_l, top,
+                                            xfer_w, 0, n)])
+        regions = [
+            vk.VkBufferImageCopy(
+                bufferOffset=off,
+                imageSubresource=vk.VkImageSubresourceLayers(
+                    aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=k, baseArrayLayer=0,
+                    layerCount=1),
+                imageExtent=vk.VkExtent3D(width=max(image.width >> k, 1),
+                                          height=max(image.height >> k, 1), depth=1),
+            )
+            for k, off in enumerate(offsets)
+        ]
+        vk.vkCmdCopyBufferToImage(cmd, staging.handle, image.handle, dst_l, len(regions), regions)
+        pipeline_barrier(vk, cmd, [_barrier(vk, image, dst_l,
+                                            vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                                            xfer_w, frag, 0, n)])
+
     def _record_upload(self, cmd: Any, image: Image, staging: Buffer, offset: int) -> None:
+        """Copy level 0, then make every further level by a linear blit from the one above."""
         vk = self.device.vk
         S = vk  # short alias for stage/access constants
         top = (S.VK_PIPELINE_STAGE_2_NONE, S.VK_ACCESS_2_NONE)

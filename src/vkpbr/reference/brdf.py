@@ -3,7 +3,8 @@
 The GPU tests evaluate these at the same n, l, v as the shader and compare pixels. A change to
 one file is a change to both. Inputs broadcast: directions are (..., 3) arrays of unit vectors,
 scalars (...) arrays, colours (..., 3). Computation is in float64 (the shader's float32
-differs by rounding only).
+differs by rounding only). The sRGB curve (`srgb_to_linear`, `linear_to_srgb`) is
+vkpbr.scene.color's, re-exported here beside the functions it mirrors.
 """
 
 from __future__ import annotations
@@ -12,7 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vkpbr.render.layouts import AMBIENT, MIN_ROUGHNESS, Brdf, Tonemap
+from vkpbr.scene.color import linear_to_srgb, srgb_to_linear
+from vkpbr.shading import AMBIENT, MIN_ROUGHNESS, Brdf, Tonemap
 
 __all__ = [
     "d_ggx",
@@ -124,17 +126,6 @@ def tonemap(x: np.ndarray, mode: int) -> np.ndarray:
     if mode == Tonemap.ACES:
         return np.clip((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0)
     return x
-
-
-def srgb_to_linear(e: np.ndarray) -> np.ndarray:
-    e = np.asarray(e, dtype=np.float64)
-    return np.where(e > 0.04045, ((e + 0.055) / 1.055) ** 2.4, e / 12.92)
-
-
-def linear_to_srgb(x: np.ndarray) -> np.ndarray:
-    """The sRGB encoding an R8G8B8A8_SRGB attachment applies on store (before rounding)."""
-    x = np.clip(np.asarray(x, dtype=np.float64), 0.0, 1.0)
-    return np.where(x > 0.0031308, 1.055 * np.power(x, 1 / 2.4) - 0.055, 12.92 * x)
 
 
 def shade(n, v, l, c, metallic, roughness, light_in, occlusion=1.0, emissive=0.0,  # noqa: ANN001, E741

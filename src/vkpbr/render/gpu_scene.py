@@ -15,7 +15,10 @@ mesh has it (meshes without get white); otherwise one white value is bound with 
 Materials: each texture carries its own UV set and KHR_texture_transform into the MATERIAL
 block (`uv_transform_rows`).
 
-Textures: one GPU image per (source image, colour space), full mip chain; the scalar maps
+Textures: one GPU image per (source image, colour space), full mip chain (the image's own
+when it brings one for that colour space, as baked files do: uploaded as it is; otherwise made
+by GPU blits, which cost nothing next to the ~1.5 s that NumPy takes for Sponza's 71 Mpixels
+on 2 cores, so decoded scenes keep them); the scalar maps
 (metallic, roughness, occlusion) are views with a component swizzle that moves the wanted
 channel into R, so glTF's packed metallic-roughness texture is stored once and read twice.
 """
@@ -307,10 +310,14 @@ class GpuScene:
         self.images: dict[tuple[int, bool], Image] = {}
         for image_index, srgb in usage:
             fmt = vk.VK_FORMAT_R8G8B8A8_SRGB if srgb else vk.VK_FORMAT_R8G8B8A8_UNORM
-            name = self.scene.images[image_index].name if image_index < len(self.scene.images) else "alpha-merged"
-            self.images[(image_index, srgb)] = self._own(
-                uploader.add(pixels[image_index], fmt, name=name)
-            )
+            source = self.scene.images[image_index] if image_index < len(self.scene.images) else None
+            mips = ()
+            if (source is not None and source.mips and source.mips_srgb == srgb
+                    and pixels[image_index] is source.pixels):  # not downscaled on decode
+                mips = source.mips
+            self.images[(image_index, srgb)] = self._own(uploader.add(
+                pixels[image_index], fmt, name=source.name if source else "alpha-merged",
+                mips=mips))
         # 1x1 defaults for missing maps: white base colour and scalar maps (the factors then
         # act alone), a flat tangent-space normal, black emission.
         defaults = {

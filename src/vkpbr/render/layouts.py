@@ -21,6 +21,8 @@ from functools import cached_property
 
 import numpy as np
 
+from vkpbr.shading import AMBIENT, MIN_ROUGHNESS, Brdf, Named, Tonemap
+
 __all__ = [
     "Std140Block",
     "CAMERA",
@@ -43,9 +45,8 @@ __all__ = [
     "AMBIENT",
 ]
 
-# Shading constants shared with the NumPy reference (reference/brdf.py imports these).
-MIN_ROUGHNESS = 0.03  # roughness is clamped here so that D stays finite as r -> 0
-AMBIENT = 0.02  # the course's ambient constant: L_ambient = 0.02 * c
+# Shading constants and choices are defined in vkpbr.shading (the NumPy reference shares them)
+# and re-exported here with the blocks that carry them to the shaders.
 
 _STRUCT_CODE = {np.float32: "f", np.int32: "i", np.uint32: "I"}
 
@@ -238,25 +239,6 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
 }
 
 
-class Named(enum.IntEnum):
-    """An IntEnum whose str() and plain format are the user-facing name ("blinn-phong"): the
-    value goes to the shader, the name to the command line, the HUD and messages."""
-
-    @property
-    def label(self) -> str:
-        return self.name.lower().replace("_", "-")
-
-    def __str__(self) -> str:
-        return self.label
-
-    def __format__(self, spec: str) -> str:
-        return self.label if not spec else int.__format__(int(self), spec)
-
-    @classmethod
-    def labels(cls) -> tuple[str, ...]:
-        return tuple(m.label for m in cls)
-
-
 class View(Named):
     """Debug views, selected at run time through Settings.view (no pipeline rebuild)."""
 
@@ -324,17 +306,6 @@ VIEW_KIND = {
     )
     for v in View
 }
-
-
-class Brdf(Named):
-    GGX = 0
-    BLINN_PHONG = 1
-
-
-class Tonemap(Named):
-    NONE = 0
-    REINHARD = 1
-    ACES = 2
 
 
 class TbnMode(Named):

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import os
 import struct
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -91,10 +90,8 @@ def read_comp5822mesh(path: str | Path) -> Scene:
             rel = raw[:-1].decode("utf-8")
         except UnicodeDecodeError as exc:
             raise SceneError(path, f"texture {t}: path is not UTF-8") from exc
-        file = path.parent / rel
-        if not file.is_file():
-            warnings.warn(f"{path}: texture file {rel} not found", stacklevel=2)
-        scene.images.append(Image(name=rel, path=file))
+        # A missing file: load_scene reports all of them in one line.
+        scene.images.append(Image(name=rel, path=path.parent / rel))
 
     n_mat = r.u32("material count")
     if n_mat * 20 > len(r.data) - r.pos:

@@ -1,6 +1,8 @@
-# One entry point for every scene format: picks the loader by file suffix and guarantees the
+# One entry point for every scene format: picks the loader by file suffix, guarantees the
 # renderer's invariants on the result (normals present, float32/uint32 C-contiguous arrays),
-# whichever loader produced it.
+# whichever loader produced it, and reports missing texture files once for all formats
+# (check_texture_files: one log line, or SceneError with strict). Every format's reader lives
+# in scene/, the baked .vkpbr one included (scene/baked_file.py), so scene/ never imports bake/.
 
 from __future__ import annotations
 
@@ -10,6 +12,7 @@ from pathlib import Path
 from vkpbr.errors import SceneError
 from vkpbr.scene.geometry import ensure_normals, normalize_mesh_arrays
 from vkpbr.scene.presets import apply_presets
+from vkpbr.scene.textures import check_texture_files
 from vkpbr.scene.types import Scene
 
 __all__ = ["SUFFIXES", "load_scene"]
@@ -19,7 +22,7 @@ SUFFIXES = (".gltf", ".glb", ".obj", ".comp5822mesh", ".vkpbr")
 
 def _loader(suffix: str) -> Callable[[Path], Scene] | None:
     # Imports are local so that loading one format never imports the others' dependencies
-    # (and vkpbr.bake, written separately, is only needed for .vkpbr files).
+    # (pygltflib for glTF, say).
     if suffix in (".gltf", ".glb"):
         from vkpbr.scene.gltf import load_gltf
 
@@ -33,18 +36,21 @@ def _loader(suffix: str) -> Callable[[Path], Scene] | None:
 
         return read_comp5822mesh
     if suffix == ".vkpbr":
-        from vkpbr.bake.baked_file import load_baked_scene
+        from vkpbr.scene.baked_file import load_baked_scene
 
         return load_baked_scene
     return None
 
 
-def load_scene(path: str | Path) -> Scene:
+def load_scene(path: str | Path, strict: bool = False) -> Scene:
     """Load a scene file of any supported format.
 
     Parameters
     ----------
     path : a .gltf, .glb, .obj, .comp5822mesh or .vkpbr file (suffix case-insensitive).
+    strict : a missing texture file is an error. Otherwise the scene renders with default
+        values in place of the missing textures, and one WARNING line on the
+        "vkpbr.scene.textures" logger says how many are missing (never one per texture).
 
     Returns
     -------
@@ -53,8 +59,9 @@ def load_scene(path: str | Path) -> Scene:
 
     Raises
     ------
-    SceneError : missing file, a directory, an unknown suffix, a file with no triangles, or
-        anything the format loader rejects.
+    SceneError : missing file, a directory, an unknown suffix, a file with no triangles,
+        missing texture files with `strict` (one line: the file, how many, the first one), or
+        anything the format loader rejects (BakeFormatError for a bad .vkpbr).
     """
     path = Path(path)
     if not path.exists():
@@ -67,6 +74,7 @@ def load_scene(path: str | Path) -> Scene:
             path, f"unknown scene format {path.suffix!r} (known: {', '.join(SUFFIXES)})"
         )
     scene = load(path)
+    check_texture_files(scene, path, strict=strict)
     scene.meshes = [normalize_mesh_arrays(ensure_normals(m)) for m in scene.meshes]
     if scene.triangle_count == 0:
         raise SceneError(path, "contains no triangles to render")

@@ -223,9 +223,7 @@ def _map(line: list[bytes], folder: Path, images: list[Image], cache: dict[Path,
     if not file_name:
         raise ValueError("map statement without a file name")
     file = folder / file_name
-    if file not in cache:
-        if not file.is_file():
-            warnings.warn(f"{folder}: texture file {file_name} not found", stacklevel=4)
+    if file not in cache:  # a missing file: load_scene reports all of them in one line
         cache[file] = len(images)
         images.append(Image(name=file_name, path=file))
     clamp = opts.get(b"-clamp", [b"off"])[:1] == [b"on"]

@@ -1,22 +1,80 @@
 # Decode a scene's images to RGBA8 NumPy arrays in parallel. Pillow releases the GIL while it
 # decodes PNG/JPEG, so a thread pool scales with cores without pickling pixels between processes.
-# Failures never raise: a missing or corrupt texture is warned about (one line naming the file)
-# and returned as None, and the renderer binds its own 1x1 default in its place.
+# Failures never raise: a missing or corrupt texture is returned as None and the renderer binds
+# its own 1x1 default in its place. Diagnostics go through `logging` (logger vkpbr.scene.*),
+# one summary line per kind of problem, never one line per texture: a scene whose 70 textures
+# are missing says so once (check_texture_files, from load_scene), not 140 times.
 
 from __future__ import annotations
 
 import io
+import logging
 import os
-import warnings
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import numpy as np
 from PIL import Image as PILImage
 
+from vkpbr.errors import SceneError
 from vkpbr.scene.types import Image, Scene
 
-__all__ = ["decode_image", "decode_images"]
+__all__ = ["check_texture_files", "decode_image", "decode_images", "missing_texture_files"]
+
+log = logging.getLogger(__name__)
+
+
+def missing_texture_files(images: Sequence[Image]) -> list[Image]:
+    """The images whose only source is a file that does not exist (pixels and embedded bytes
+    need no file), in order."""
+    return [img for img in images if img.pixels is None and img.data is None
+            and img.path is not None and not Path(img.path).is_file()]
+
+
+def _shown(file: Path, folder: Path) -> str:
+    """`file` relative to `folder` when it lies below it, else absolute (for messages)."""
+    for f, d in ((Path(file), Path(folder)), (Path(file).resolve(), Path(folder).resolve())):
+        try:
+            return f.relative_to(d).as_posix()
+        except ValueError:
+            pass
+    return str(Path(file).resolve())
+
+
+def check_texture_files(scene: Scene, source: str | os.PathLike[str], strict: bool = False) -> int:
+    """Report the scene's texture files that do not exist, in one line.
+
+    Parameters
+    ----------
+    scene : a loaded scene (its `images`).
+    source : the file it came from; messages name it, and texture paths are shown relative
+        to its folder.
+    strict : raise instead of logging.
+
+    Returns
+    -------
+    The number of missing texture files (0: nothing logged). Otherwise one WARNING on the
+    "vkpbr.scene.textures" logger: "N of M textures not found next to SOURCE (first: F);
+    rendering with default values (...)"; the renderer binds its defaults in their place.
+
+    Raises
+    ------
+    SceneError : with `strict`, when any texture file is missing (one line: the file, the
+        count and the first missing texture).
+    """
+    missing = missing_texture_files(scene.images)
+    if not missing:
+        return 0
+    source = Path(source)
+    first = _shown(Path(missing[0].path), source.parent)
+    if strict:
+        raise SceneError(source, f"{len(missing)} of {len(scene.images)} textures not found "
+                                 f"(first: {first})")
+    log.warning("%d of %d textures not found next to %s (first: %s); rendering with default "
+                "values (pass strict=True / --strict to make this an error)",
+                len(missing), len(scene.images), source, first)
+    return len(missing)
 
 
 def _to_rgba8(img: PILImage.Image) -> np.ndarray:
@@ -50,22 +108,22 @@ def decode_image(image: Image, max_size: int | None = None) -> tuple[np.ndarray 
     Returns
     -------
     pixels : (H, W, 4) uint8 RGBA, or None when the image cannot be had.
-    messages : warnings to emit (collected so the caller can emit them from the main thread
-        in image order; `warnings` state is process-global and not thread-safe).
+    messages : (kind, text) notes, kind "missing", "undecodable" or "downscaled"; collected
+        so that `decode_images` can summarise them in image order after the threads finish.
     """
-    messages: list[str] = []
+    messages: list[tuple[str, str]] = []
     try:
         with np.errstate(all="ignore"):
             return _decode(image, max_size, messages), messages
     except FileNotFoundError:
-        messages.append(f"{image.name}: texture file not found; using a default")
+        messages.append(("missing", image.name))
     except (OSError, ValueError, SyntaxError, PILImage.DecompressionBombError) as exc:
         # Pillow reports corrupt data as OSError/ValueError/SyntaxError depending on the codec.
-        messages.append(f"{image.name}: cannot decode ({exc}); using a default")
+        messages.append(("undecodable", f"{image.name} ({exc})"))
     return None, messages
 
 
-def _decode(image: Image, max_size: int | None, messages: list[str]) -> np.ndarray:
+def _decode(image: Image, max_size: int | None, messages: list[tuple[str, str]]) -> np.ndarray:
     """decode_image's body; raises on failure, appends notes (downscaling) to `messages`."""
     if image.pixels is not None:
         px = np.asarray(image.pixels)
@@ -87,7 +145,8 @@ def _decode(image: Image, max_size: int | None, messages: list[str]) -> np.ndarr
         assert max_size is not None
         scale = max_size / max(pil.width, pil.height)
         size = (max(1, round(pil.width * scale)), max(1, round(pil.height * scale)))
-        messages.append(f"{image.name}: {pil.width}x{pil.height} downscaled to {size[0]}x{size[1]}")
+        messages.append(("downscaled",
+                         f"{image.name}: {pil.width}x{pil.height} downscaled to {size[0]}x{size[1]}"))
         if pil.mode not in ("RGB", "RGBA", "L", "LA"):
             pil = PILImage.fromarray(_to_rgba8(pil), "RGBA")  # resize wide/palette modes as RGBA8
         pil = pil.resize(size, PILImage.Resampling.LANCZOS)
@@ -108,15 +167,21 @@ def decode_images(
     Parameters
     ----------
     scene_or_images : a Scene (its `images`) or a sequence of Image.
-    max_size : images wider or taller than this are downscaled (aspect kept), with a warning.
+    max_size : images wider or taller than this are downscaled (aspect kept).
     workers : decoding threads; default min(8, CPU count).
 
     Returns
     -------
     One entry per image, in order: (H, W, 4) uint8 C-contiguous RGBA, or None for an image
-    that is missing or undecodable (a one-line warning names it). The caller supplies the
-    default for None (the renderer binds a 1x1 white, or flat-normal, texture), because only
-    it knows which default suits the slot the image is used in.
+    that is missing or undecodable. The caller supplies the default for None (the renderer
+    binds a 1x1 white, or flat-normal, texture), because only it knows which default suits
+    the slot the image is used in.
+
+    Notes
+    -----
+    Logged on "vkpbr.scene.textures", at most one line per kind: undecodable images and
+    downscaled images as WARNING (count and first), missing files as INFO only, because
+    `load_scene` has already said so in its own summary line (check_texture_files).
     """
     images = scene_or_images.images if isinstance(scene_or_images, Scene) else scene_or_images
     if not images:
@@ -126,7 +191,21 @@ def decode_images(
         raise ValueError(f"max_size must be >= 1, got {max_size}")
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
         results = list(pool.map(lambda img: decode_image(img, max_size), images))
+    notes: dict[str, list[str]] = {}
     for _, messages in results:
-        for message in messages:
-            warnings.warn(message, stacklevel=2)
+        for kind, text in messages:
+            notes.setdefault(kind, []).append(text)
+    n = len(images)
+    if "undecodable" in notes:
+        bad = notes["undecodable"]
+        log.warning("%d of %d textures cannot be decoded (first: %s); using default values",
+                    len(bad), n, bad[0])
+    if "downscaled" in notes:
+        small = notes["downscaled"]
+        log.warning("%d of %d textures downscaled to at most %d px (first: %s)",
+                    len(small), n, max_size, small[0])
+    if "missing" in notes:
+        gone = notes["missing"]
+        log.info("%d of %d texture files not found (first: %s); using default values",
+                 len(gone), n, gone[0])
     return [pixels for pixels, _ in results]

@@ -45,6 +45,8 @@ class Image:
     data:   encoded bytes (PNG/JPEG...) embedded in the scene file.
     path:   a file on disk.
     `name` is what warnings and errors print (usually the file name).
+    mips:   levels 1.. of the mip chain below `pixels` (baked files; see vkpbr.scene.mips),
+        each (h, w, 4) uint8, filtered as sRGB colour when `mips_srgb`; () = made on upload.
     """
 
     name: str
@@ -52,6 +54,8 @@ class Image:
     data: bytes | None = None
     path: Path | None = None
     mime_type: str | None = None
+    mips: tuple[np.ndarray, ...] = ()
+    mips_srgb: bool = False
 
 
 @dataclass(frozen=True)

@@ -1,11 +1,13 @@
 # The GPU-ready baked scene file (.vkpbr): versioned, checksummed, 64-byte aligned sections
-# that load with np.frombuffer and no parsing of vertex data.
+# that load with np.frombuffer and no parsing of vertex data. The format (reader and writer)
+# lives in scene/ beside the other file formats, so that load_scene reads .vkpbr files without
+# importing bake/; bake/ computes what goes in and writes it through this module.
 #
 # References: docs/baked-format.md (the layout, byte by byte); renderer-spec.md section 5 (the
 # course's .comp5822mesh this replaces); PNG's signature (a non-ASCII first magic byte catches
 # text-mode transfers). Every check here exists so that a bad file raises BakeFormatError
 # with the reason instead of crashing the renderer or reading out of bounds.
-"""Read and write `.vkpbr` baked scenes (format version 1).
+"""Read and write `.vkpbr` baked scenes (format version 2: images carry full mip chains).
 
 The container is a 64-byte header, a table of named sections (offset, size, CRC-32) and the
 sections themselves, each starting on a 64-byte boundary so that vertex streams can be
@@ -27,9 +29,10 @@ from typing import Any
 
 import numpy as np
 
-from ..atomic import atomic_writer
-from ..errors import BakeFormatError
-from ..scene.types import Camera, Image, Light, Material, Mesh, Node, Sampler, Scene, TextureRef
+from vkpbr.atomic import atomic_writer
+from vkpbr.errors import BakeFormatError
+from vkpbr.scene.mips import is_mip_chain
+from vkpbr.scene.types import Camera, Image, Light, Material, Mesh, Node, Sampler, Scene, TextureRef
 
 __all__ = [
     "ALIGN",
@@ -45,7 +48,7 @@ __all__ = [
 ]
 
 MAGIC = b"\x89VKPBAKE"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: an image's "levels" are its full mip chain, with their colour space
 ALIGN = 64
 _HEADER = struct.Struct("<8sIIIIQII")  # magic, version, header size, sections, flags,
 _HEADER_SIZE = 64  # file size, table crc, header crc (of the 36 bytes before it); zero padded
@@ -75,7 +78,9 @@ class BakedImage:
 
     path:   a file on disk (absolute in memory; stored relative to the baked file).
     data:   encoded bytes (PNG/JPEG) copied from a source that embedded them.
-    levels: raw RGBA8 mip chain, (H, W, 4) uint8 arrays, level 0 first (nothing to decode).
+    levels: the full raw RGBA8 mip chain (vkpbr.scene.mips.mip_chain), (h, w, 4) uint8 arrays,
+        level 0 first, down to 1x1: nothing to decode and nothing to filter at load.
+    srgb:   the levels were filtered as sRGB colour (the image is a base colour or emissive map).
     """
 
     name: str
@@ -83,6 +88,7 @@ class BakedImage:
     data: bytes | None = None
     mime_type: str | None = None
     levels: list[np.ndarray] = field(default_factory=list)
+    srgb: bool = False
 
 
 @dataclass
@@ -134,7 +140,7 @@ def _json_value(value: Any) -> Any:
 def _image_record(img: BakedImage, blobs: list[bytes], base: int, folder: Path) -> dict:
     """JSON record of one image; appends its bytes to `blobs` (offsets from `base`)."""
     rec: dict[str, Any] = {"name": img.name, "mime_type": img.mime_type, "path": None,
-                           "data": None, "levels": []}
+                           "data": None, "levels": [], "srgb": bool(img.srgb)}
     offset = base + sum(len(b) for b in blobs)
 
     def put(raw: bytes) -> int:
@@ -151,10 +157,11 @@ def _image_record(img: BakedImage, blobs: list[bytes], base: int, folder: Path) 
             rec["path"] = Path(img.path).resolve().as_posix()
     if img.data is not None:
         rec["data"] = [put(bytes(img.data)), len(img.data)]
-    for level in img.levels:
-        lv = np.ascontiguousarray(level, dtype=np.uint8)
-        if lv.ndim != 3 or lv.shape[2] != 4:
-            raise ValueError(f"image {img.name!r}: mip levels must be (H, W, 4) uint8")
+    levels = [np.ascontiguousarray(level, dtype=np.uint8) for level in img.levels]
+    if levels and not is_mip_chain(levels):
+        raise ValueError(f"image {img.name!r}: levels must be a full mip chain of (h, w, 4) "
+                         "uint8 arrays down to 1x1 (vkpbr.scene.mips.mip_chain)")
+    for lv in levels:
         rec["levels"].append([put(lv.tobytes()), int(lv.shape[1]), int(lv.shape[0])])
     return rec
 
@@ -249,8 +256,8 @@ def _parse_sections(buf: memoryview, path: Path) -> dict[str, memoryview]:
         _HEADER.unpack_from(buf, 0)
     _check(magic == MAGIC, path, "not a vkpbr baked file (bad magic)")
     _check(version == FORMAT_VERSION, path,
-           f"baked format version {version}, this vkpbr reads version {FORMAT_VERSION}; "
-           "bake the scene again")
+           f"baked format version {version}, this vkpbr reads version {FORMAT_VERSION} only; "
+           "bake the scene again (vkpbr bake SOURCE --out FILE.vkpbr)")
     _check(zlib.crc32(buf[:36]) == head_crc, path, "corrupt header (checksum mismatch)")
     _check(head_size == _HEADER_SIZE, path, f"bad header size {head_size}")
     _check(file_size == size, path,
@@ -372,7 +379,7 @@ def read_baked(path: str | os.PathLike[str], *, mmap: bool = False) -> BakedScen
         blob = sections.get("image_data", memoryview(b""))
         images = []
         for rec in doc["images"]:
-            img = BakedImage(rec["name"], mime_type=rec["mime_type"])
+            img = BakedImage(rec["name"], mime_type=rec["mime_type"], srgb=bool(rec["srgb"]))
             if rec["path"] is not None:
                 img.path = path.resolve().parent / rec["path"]
             if rec["data"] is not None:
@@ -384,6 +391,8 @@ def read_baked(path: str | os.PathLike[str], *, mmap: bool = False) -> BakedScen
                 _check(off >= 0 and off + n <= len(blob) and w > 0 and h > 0, path,
                        f"image {img.name!r}: mip level out of bounds")
                 img.levels.append(np.frombuffer(blob, np.uint8, n, off).reshape(h, w, 4))
+            _check(not img.levels or is_mip_chain(img.levels), path,
+                   f"image {img.name!r}: its levels are not a full mip chain")
             images.append(img)
         baked = BakedScene(
             name=doc["name"], mesh_table=table, mesh_names=[m["name"] for m in doc["meshes"]],
@@ -406,7 +415,9 @@ def load_baked_scene(path: str | os.PathLike[str], *, expected_source_key: str |
 
     Mesh arrays are views into the file's buffer; each mesh also carries `qtangents` (N, 4)
     float32 and `packed_frames` (N,) uint32. Texcoords are always present (zeros where the
-    source had none). Embedded images come back decoded (`Image.pixels` = mip level 0).
+    source had none). Embedded images come back decoded with their mip chain (`Image.pixels`
+    level 0, `Image.mips` the rest, `Image.mips_srgb` their colour space): the renderer
+    uploads them as they are. External textures stay paths (load_scene reports missing ones).
 
     Parameters
     ----------
@@ -439,7 +450,8 @@ def load_baked_scene(path: str | os.PathLike[str], *, expected_source_key: str |
     images = []
     for img in baked.images:
         if img.levels:
-            images.append(Image(img.name, pixels=img.levels[0], mime_type=img.mime_type))
+            images.append(Image(img.name, pixels=img.levels[0], mime_type=img.mime_type,
+                                mips=tuple(img.levels[1:]), mips_srgb=img.srgb))
         else:
             images.append(Image(img.name, data=img.data, path=None if img.data else img.path,
                                 mime_type=img.mime_type))

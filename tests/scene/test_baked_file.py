@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from vkpbr.bake.bake import bake_scene
-from vkpbr.bake.baked_file import (
+from vkpbr.errors import BakeFormatError
+from vkpbr.scene.baked_file import (
     ALIGN,
     BakedImage,
     BakedScene,
@@ -19,7 +20,6 @@ from vkpbr.bake.baked_file import (
     read_baked,
     write_baked,
 )
-from vkpbr.errors import BakeFormatError
 from vkpbr.scene.types import (
     Camera,
     Image,
@@ -58,7 +58,7 @@ def baked_path(tmp_path: Path) -> tuple[Path, BakedScene]:
     baked = bake_scene(small_scene(tmp_path))
     baked.source_key = "ab" * 32
     baked.images.append(BakedImage("raw", levels=[np.full((2, 2, 4), 7, np.uint8),
-                                                  np.full((1, 1, 4), 9, np.uint8)]))
+                                                  np.full((1, 1, 4), 9, np.uint8)], srgb=True))
     path = tmp_path / "small.vkpbr"
     write_baked(path, baked)
     return path, baked
@@ -82,6 +82,7 @@ def test_round_trip_is_exact(baked_path: tuple[Path, BakedScene], tmp_path: Path
     assert back.images[1].data == b"\x89PNG..."
     assert [lv.tolist() for lv in back.images[2].levels] == \
         [lv.tolist() for lv in baked.images[2].levels]
+    assert back.images[2].srgb and not back.images[0].srgb
     mapped = read_baked(path, mmap=True)
     np.testing.assert_array_equal(mapped.streams["positions"], baked.streams["positions"])
 
@@ -104,7 +105,10 @@ def test_load_baked_scene(baked_path: tuple[Path, BakedScene]) -> None:
     assert quad.tangents.shape == (4, 4) and quad.texcoords.shape == (4, 2)
     assert quad.colors is not None and scene.meshes[1].colors is None
     assert scene.meshes[1].indices.max() < scene.meshes[1].vertex_count
-    assert scene.images[2].pixels.shape == (2, 2, 4)
+    raw = scene.images[2]  # level 0 as pixels, the rest of the chain as mips, colour space kept
+    assert raw.pixels.shape == (2, 2, 4) and (raw.pixels == 7).all() and raw.mips_srgb
+    assert [m.tolist() for m in raw.mips] == [[[[9, 9, 9, 9]]]]
+    assert scene.images[0].mips == () and scene.images[0].pixels is None
     with pytest.raises(BakeFormatError, match="stale"):
         load_baked_scene(path, expected_source_key="cd" * 32)
     load_baked_scene(path, expected_source_key="ab" * 32)
@@ -156,9 +160,11 @@ def test_wrong_magic_and_version(baked_path: tuple[Path, BakedScene], tmp_path: 
     bad.write_bytes(b"glTF" + data[4:])
     with pytest.raises(BakeFormatError, match="magic"):
         read_baked(bad)
-    bad.write_bytes(_rewrite_header(data, version=2))
-    with pytest.raises(BakeFormatError, match="version 2"):
-        read_baked(bad)
+    for version in (1, 3):  # 1: made before mip chains were stored; 3: by a newer vkpbr
+        bad.write_bytes(_rewrite_header(data, version=version))
+        with pytest.raises(BakeFormatError, match=f"version {version}, .* reads version 2 only; "
+                                                  "bake the scene again"):
+            read_baked(bad)
     bad.write_bytes(_rewrite_header(data, sections=10**6))
     with pytest.raises(BakeFormatError, match="section count"):
         read_baked(bad)
@@ -194,3 +200,25 @@ def test_write_is_atomic_and_leaves_no_temp_files(tmp_path: Path) -> None:
         write_baked(path, baked)
     assert sorted(p.name for p in tmp_path.iterdir() if p.is_file()) == ["out.vkpbr"]
     read_baked(path)
+
+
+def test_levels_must_be_a_full_mip_chain(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    baked = bake_scene(small_scene(tmp_path))
+    path = tmp_path / "m.vkpbr"
+    for levels in ([np.zeros((4, 4, 4), np.uint8)],  # level 0 alone: not a chain
+                   [np.zeros((4, 4, 4), np.uint8), np.zeros((2, 2, 4), np.uint8)],  # no 1x1
+                   [np.zeros((4, 2, 4), np.uint8), np.zeros((2, 2, 4), np.uint8),
+                    np.zeros((1, 1, 4), np.uint8)]):  # 4x2 halves to 2x1, not 2x2
+        baked.images = [BakedImage("x", levels=levels)] * 2
+        with pytest.raises(ValueError, match="full mip chain"):
+            write_baked(path, baked)
+        # A writer without the check (an older or foreign one): the reader rejects the file.
+        monkeypatch.setattr("vkpbr.scene.baked_file.is_mip_chain", lambda levels: True)
+        write_baked(path, baked)
+        monkeypatch.undo()
+        with pytest.raises(BakeFormatError, match="not a full mip chain|out of bounds"):
+            read_baked(path)
+    baked.images = [BakedImage("x", levels=[np.zeros((2, 2, 3), np.uint8),
+                                            np.zeros((1, 1, 3), np.uint8)])] * 2  # RGB, no A
+    with pytest.raises(ValueError, match="full mip chain"):
+        write_baked(path, baked)

@@ -1,0 +1,137 @@
+# glTF images, samplers, textures and materials -> Image, Sampler, TextureRef, Material:
+# the metallic-roughness core, KHR_texture_transform and KHR_materials_emissive_strength.
+# Images stay encoded (decoding is textures.py's job, in parallel); a missing image file is
+# not an error here (load_scene reports all of them in one line). Reference: glTF 2.0 spec
+# 3.8 (textures, images, samplers), 3.9 (materials).
+
+from __future__ import annotations
+
+import warnings
+
+from vkpbr.errors import SceneError
+from vkpbr.scene.gltf_document import GltfDocument, check_index, ext, floats, get, scalar
+from vkpbr.scene.types import Image, Material, Sampler, TextureRef
+
+__all__ = ["build_materials", "load_images"]
+
+_WRAP = {10497: "repeat", 33071: "clamp", 33648: "mirror"}
+_FILTER = {9728: "nearest", 9729: "linear"}
+# minFilter -> (filter within a level, uses mipmaps)
+_MIN_FILTER = {
+    9728: ("nearest", False),
+    9729: ("linear", False),
+    9984: ("nearest", True),
+    9985: ("linear", True),
+    9986: ("nearest", True),
+    9987: ("linear", True),
+}
+_ALPHA = {"OPAQUE": "opaque", "MASK": "mask", "BLEND": "blend"}
+
+
+def load_images(ld: GltfDocument) -> list[Image]:
+    """glTF images -> Image list (same indices); encoded bytes or paths, never decoded here."""
+    images = []
+    for i, img in enumerate(ld.gltf.images or []):
+        uri, mime = get(img, "uri"), get(img, "mimeType")
+        if uri is not None:
+            uri = str(uri)
+            if uri.startswith("data:"):
+                images.append(Image(name=f"image {i}", data=ld.read_uri(uri, f"image {i}"),
+                                    mime_type=mime))  # fmt: skip
+                continue
+            # A missing file is not an error here: load_scene reports every missing texture
+            # in one line (or raises with strict), and the renderer binds a default.
+            images.append(Image(name=uri, path=ld.resolve_uri(uri), mime_type=mime))
+        elif get(img, "bufferView") is not None:
+            data, _ = ld.buffer_view(get(img, "bufferView"))
+            images.append(Image(name=f"image {i}", data=bytes(data), mime_type=mime))
+        else:
+            raise SceneError(ld.path, f"image {i} has neither uri nor bufferView")
+    return images
+
+
+def _sampler(ld: GltfDocument, index: object) -> Sampler:
+    if index is None:
+        return Sampler()
+    samplers = ld.gltf.samplers or []
+    s = samplers[check_index(ld.path, index, len(samplers), "sampler")]
+    min_filter, mipmaps = _MIN_FILTER.get(get(s, "minFilter"), ("linear", True))
+    return Sampler(
+        wrap_s=_WRAP.get(get(s, "wrapS"), "repeat"),
+        wrap_t=_WRAP.get(get(s, "wrapT"), "repeat"),
+        mag_filter=_FILTER.get(get(s, "magFilter"), "linear"),
+        min_filter=min_filter,
+        mipmaps=mipmaps,
+    )
+
+
+def _texture_ref(ld: GltfDocument, info: object, n_images: int, channel: int = 0) -> TextureRef | None:
+    """A textureInfo -> TextureRef (with KHR_texture_transform), None if absent or unusable."""
+    if info is None:
+        return None
+    textures = ld.gltf.textures or []
+    tex = textures[check_index(ld.path, get(info, "index"), len(textures), "texture")]
+    source = get(tex, "source")
+    if source is None:
+        # e.g. only KHR_texture_basisu / EXT_texture_webp sources: render without the map.
+        warnings.warn(f"{ld.path}: texture without a core image source ignored", stacklevel=5)
+        return None
+    image = check_index(ld.path, source, n_images, "image")
+    texcoord = get(info, "texCoord", 0)
+    xf = ext(info, "KHR_texture_transform")
+    texcoord = get(xf, "texCoord", texcoord)
+    if texcoord not in (0, 1):
+        raise SceneError(ld.path, f"texCoord {texcoord!r} not supported (only 0 and 1)")
+    return TextureRef(
+        image=image,
+        sampler=_sampler(ld, get(tex, "sampler")),
+        channel=channel,
+        texcoord=texcoord,
+        offset=floats(get(xf, "offset"), 2, (0.0, 0.0), "texture offset", ld.path),
+        rotation=scalar(get(xf, "rotation"), 0.0, "texture rotation", ld.path),
+        scale=floats(get(xf, "scale"), 2, (1.0, 1.0), "texture scale", ld.path),
+    )
+
+
+def build_materials(ld: GltfDocument, n_images: int) -> list[Material]:
+    """glTF materials -> Material list (same indices)."""
+    out = []
+    p = ld.path
+    for i, m in enumerate(ld.gltf.materials or []):
+        if m is None:
+            raise SceneError(p, f"material {i} is null")
+        pbr = get(m, "pbrMetallicRoughness", {})
+        emissive = floats(get(m, "emissiveFactor"), 3, (0.0, 0.0, 0.0), "emissiveFactor", p)
+        strength = scalar(get(ext(m, "KHR_materials_emissive_strength"),
+                               "emissiveStrength"), 1.0, "emissiveStrength", p)  # fmt: skip
+        mr = get(pbr, "metallicRoughnessTexture")
+        normal, occlusion = get(m, "normalTexture"), get(m, "occlusionTexture")
+        alpha_mode = get(m, "alphaMode", "OPAQUE")
+        if alpha_mode not in _ALPHA:
+            raise SceneError(p, f"material {i}: unknown alphaMode {alpha_mode!r}")
+        out.append(
+            Material(
+                name=str(get(m, "name", f"material {i}")),
+                base_color_factor=floats(
+                    get(pbr, "baseColorFactor"), 4, (1.0,) * 4, "baseColorFactor", p
+                ),  # fmt: skip
+                metallic_factor=scalar(get(pbr, "metallicFactor"), 1.0, "metallicFactor", p),
+                roughness_factor=scalar(get(pbr, "roughnessFactor"), 1.0, "roughnessFactor", p),
+                emissive_factor=tuple(e * strength for e in emissive),
+                normal_scale=scalar(get(normal, "scale") if normal else None, 1.0, "scale", p),
+                occlusion_strength=scalar(
+                    get(occlusion, "strength") if occlusion else None, 1.0, "strength", p
+                ),  # fmt: skip
+                alpha_mode=_ALPHA[alpha_mode],
+                alpha_cutoff=scalar(get(m, "alphaCutoff"), 0.5, "alphaCutoff", p),
+                double_sided=bool(get(m, "doubleSided", False)),
+                base_color_texture=_texture_ref(ld, get(pbr, "baseColorTexture"), n_images),
+                # The packed texture: B = metalness, G = roughness (glTF spec 3.9.2).
+                metallic_texture=_texture_ref(ld, mr, n_images, channel=2),
+                roughness_texture=_texture_ref(ld, mr, n_images, channel=1),
+                normal_texture=_texture_ref(ld, normal, n_images),
+                occlusion_texture=_texture_ref(ld, occlusion, n_images),
+                emissive_texture=_texture_ref(ld, get(m, "emissiveTexture"), n_images),
+            )
+        )
+    return out

@@ -1,0 +1,167 @@
+# The glTF node hierarchy flattened into world matrices, and what hangs off nodes: mesh
+# instances (primitives decoded on first use, gltf_meshes), perspective cameras and
+# KHR_lights_punctual lights. Reference: glTF 2.0 spec 3.5 (nodes and hierarchy), 3.10
+# (cameras); KHR_lights_punctual.
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+
+from vkpbr.errors import SceneError
+from vkpbr.scene.gltf_document import GltfDocument, check_index, ext, floats, get, scalar
+from vkpbr.scene.gltf_meshes import primitive
+from vkpbr.scene.types import Camera, Light, Node, Scene
+
+__all__ = ["build_nodes_cameras_lights", "trs_matrix"]
+
+
+def trs_matrix(t: tuple, r: tuple, s: tuple) -> np.ndarray:
+    """T * R * S as a (4, 4) float64 matrix; r is a quaternion (x, y, z, w), renormalised."""
+    x, y, z, w = r
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    x, y, z, w = (x / norm, y / norm, z / norm, w / norm) if norm > 1e-12 else (0, 0, 0, 1)
+    rot = np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+    m = np.eye(4)
+    m[:3, :3] = rot * np.asarray(s)  # scales columns: R @ diag(s)
+    m[:3, 3] = t
+    return m
+
+
+def _local_matrix(ld: GltfDocument, i: int, node: object) -> np.ndarray:
+    matrix = get(node, "matrix")
+    if matrix is not None and len(matrix) and list(matrix) != [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]:  # fmt: skip
+        # glTF stores matrices column-major; numpy reshape is row-major, hence .T
+        return np.asarray(floats(matrix, 16, (), f"node {i} matrix", ld.path)).reshape(4, 4).T
+    return trs_matrix(
+        floats(get(node, "translation"), 3, (0.0, 0.0, 0.0), f"node {i} translation", ld.path),
+        floats(get(node, "rotation"), 4, (0.0, 0.0, 0.0, 1.0), f"node {i} rotation", ld.path),
+        floats(get(node, "scale"), 3, (1.0, 1.0, 1.0), f"node {i} scale", ld.path),
+    )
+
+
+def _root_nodes(ld: GltfDocument, n_nodes: int) -> list[object]:
+    scenes = ld.gltf.scenes or []
+    if scenes:
+        chosen = get(ld.doc, "scene", 0)
+        return list(get(scenes[check_index(ld.path, chosen, len(scenes), "scene")], "nodes", []))
+    children = {c for n in ld.gltf.nodes or [] for c in (get(n, "children", []) or [])}
+    return [i for i in range(n_nodes) if i not in children]
+
+
+def build_nodes_cameras_lights(ld: GltfDocument, scene: Scene) -> None:
+    """Walk the displayed scene's node tree: fill scene.meshes/nodes/cameras/lights."""
+    nodes = ld.gltf.nodes or []
+    meshes = ld.gltf.meshes or []
+    cameras = ld.gltf.cameras or []
+    light_defs = ext(ld.doc, "KHR_lights_punctual").get("lights") or []
+    mesh_prims: dict[int, list[int]] = {}  # glTF mesh -> indices of its primitives in scene.meshes
+    pending_lights: list[tuple[dict, np.ndarray]] = []
+    stack = [
+        (check_index(ld.path, r, len(nodes), "root node"), np.eye(4))
+        for r in _root_nodes(ld, len(nodes))
+    ][::-1]  # reversed: the stack pops them in document order (nodes, lights keep file order)
+    seen: set[int] = set()
+    while stack:
+        i, parent = stack.pop()
+        if i in seen:
+            raise SceneError(ld.path, f"node {i} is reached twice (cycle or shared child)")
+        seen.add(i)
+        node = nodes[i]
+        world = parent @ _local_matrix(ld, i, node)
+        name = str(get(node, "name", f"node {i}"))
+        for c in list(get(node, "children", []) or [])[::-1]:
+            stack.append((check_index(ld.path, c, len(nodes), f"node {i} child"), world))
+        if get(node, "mesh") is not None:
+            m = check_index(ld.path, get(node, "mesh"), len(meshes), f"node {i} mesh")
+            if m not in mesh_prims:
+                mesh_prims[m] = []
+                for k, prim in enumerate(get(meshes[m], "primitives", [])):
+                    mesh_prims[m].append(len(scene.meshes))
+                    scene.meshes.append(primitive(ld, m, k, prim))
+            w32 = world.astype(np.float32)
+            scene.nodes += [Node(mesh=j, matrix=w32.copy(), name=name) for j in mesh_prims[m]]
+        if get(node, "camera") is not None:
+            cam = cameras[check_index(ld.path, get(node, "camera"), len(cameras), "camera")]
+            _add_camera(ld, scene, cam, world, name)
+        ext_light = ext(node, "KHR_lights_punctual").get("light")
+        if ext_light is not None:
+            light = light_defs[check_index(ld.path, ext_light, len(light_defs), "light")]
+            pending_lights.append((light, world))
+    for light, world in pending_lights:  # after all meshes: directional lights need the bounds
+        scene.lights.append(_light(ld, scene, light, world))
+
+
+def _add_camera(ld: GltfDocument, scene: Scene, cam: object, world: np.ndarray, name: str) -> None:
+    """A perspective camera node -> Camera. The file's znear is kept; a camera without zfar
+    (glTF's infinite projection) gets zfar None, as the renderer's far plane is infinite."""
+    if get(cam, "type") != "perspective" or get(cam, "perspective") is None:
+        warnings.warn(f"{ld.path}: {get(cam, 'type')} camera {name!r} ignored", stacklevel=5)
+        return
+    persp = get(cam, "perspective")
+    yfov = scalar(get(persp, "yfov"), 0.8, "camera yfov", ld.path)
+    znear = None if get(persp, "znear") is None else scalar(get(persp, "znear"), 0.0, "camera znear", ld.path)
+    zfar = None if get(persp, "zfar") is None else scalar(get(persp, "zfar"), 0.0, "camera zfar", ld.path)
+    if not 0 < yfov < math.pi:
+        raise SceneError(ld.path, f"camera {name!r}: yfov {yfov} is not in (0, pi)")
+    if znear is not None and znear <= 0:
+        raise SceneError(ld.path, f"camera {name!r}: znear {znear} must be > 0")
+    if zfar is not None and not zfar > (znear or 0.0):
+        # The spec requires zfar > znear. Nothing is clipped at zfar any more (it only scales
+        # the depth view), so an invalid one is dropped rather than failing the whole scene.
+        zfar = None
+    eye = world[:3, 3]
+    forward = -world[:3, 2] / max(np.linalg.norm(world[:3, 2]), 1e-12)  # cameras look down -Z
+    up = world[:3, 1] / max(np.linalg.norm(world[:3, 1]), 1e-12)
+    scene.cameras.append(
+        Camera(
+            eye=tuple(map(float, eye)),
+            target=tuple(map(float, eye + forward)),
+            up=tuple(map(float, up)),
+            yfov_deg=math.degrees(yfov),
+            znear=znear,
+            zfar=zfar,
+            name=name,
+        )
+    )
+
+
+def _light(ld: GltfDocument, scene: Scene, light: dict, world: np.ndarray) -> Light:
+    """KHR_lights_punctual -> point Light; spot and directional are approximated (warned)."""
+    kind = get(light, "type", "point")
+    color = floats(get(light, "color"), 3, (1.0, 1.0, 1.0), "light color", ld.path)
+    intensity = scalar(get(light, "intensity"), 1.0, "light intensity", ld.path)
+    light_range = scalar(get(light, "range"), 0.0, "light range", ld.path)
+    position = world[:3, 3]
+    if kind == "spot":
+        warnings.warn(f"{ld.path}: spot light approximated by a point light", stacklevel=4)
+    elif kind == "directional":
+        # Sun -> a far point light along -direction: at distance d an inverse-square light of
+        # intensity lux * d^2 (cd) gives the same illuminance lux at the scene's centre.
+        lo, hi = scene.bounds()
+        centre = (lo + hi) / 2
+        d = 10.0 * max(float(np.linalg.norm(hi - lo)), 1.0)
+        direction = -world[:3, 2] / max(np.linalg.norm(world[:3, 2]), 1e-12)
+        position = centre - direction * d
+        intensity *= d * d
+        light_range = 0.0
+        warnings.warn(
+            f"{ld.path}: directional light approximated by a far point light", stacklevel=4
+        )
+    elif kind != "point":
+        raise SceneError(ld.path, f"unknown light type {kind!r}")
+    return Light(
+        position=tuple(map(float, position)),
+        color=color,
+        intensity=intensity,
+        falloff="inverse_square",
+        range=light_range,
+    )
