@@ -16,9 +16,7 @@ PACKAGE = SRC / "vkpbr"
 
 # Cycles inside vkpbr.app that are known and being untied (issue 10, item 8); each entry is one
 # strongly connected component, exempt only while it is exactly this set. Empty it when fixed.
-KNOWN_APP_CYCLES: frozenset[frozenset[str]] = frozenset({
-    frozenset({"vkpbr.app.cli", "vkpbr.app.viewer_cmd", "vkpbr.app.viewer"}),
-})
+KNOWN_APP_CYCLES: frozenset[frozenset[str]] = frozenset()  # none left: keep it empty
 
 NO_GPU_LAYERS = ("vkpbr.scene", "vkpbr.bake", "vkpbr.reference")
 FORBIDDEN_IN_NO_GPU_LAYERS = ("vulkan", "glfw", "vkpbr.gpu", "vkpbr.render", "vkpbr.app")
@@ -147,6 +145,19 @@ def test_no_import_cycles() -> None:
 def test_known_app_cycles_are_still_app_internal() -> None:
     """The exemption list names only vkpbr.app modules (every other cycle fails above)."""
     assert all(m.startswith("vkpbr.app.") for c in KNOWN_APP_CYCLES for m in c)
+
+
+def test_vulkan_is_imported_by_gpu_only() -> None:
+    """Every Vulkan call lives in gpu/ (the binding is imported by gpu/vk.py alone), and the
+    applications reach the GPU only through render/: app/ imports nothing from gpu/."""
+    bad = []
+    for name, path in MODULES.items():
+        for imported in sorted(imported_names(name, path)):
+            if (imported == "vulkan" or imported.startswith("vulkan.")) and name != "vkpbr.gpu.vk":
+                bad.append(f"{name} imports {imported}")
+            if name.startswith("vkpbr.app") and imported.startswith("vkpbr.gpu"):
+                bad.append(f"{name} imports {imported}")
+    assert bad == []
 
 
 @pytest.mark.parametrize("layer", NO_GPU_LAYERS)

@@ -18,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
@@ -35,7 +36,64 @@ from vkpbr.scene._checks import (
     size_arg,
     vec3,
 )
-from vkpbr.scene.types import Camera
+
+
+@dataclass
+class Camera:
+    """A perspective camera by eye/target/up; yfov in degrees.
+
+    Nothing is clipped beyond the near plane (reversed-Z, infinite far plane). `znear` None:
+    chosen per render in front of the scene's bounds; `zfar` only normalises the depth debug
+    view (None: the far side of the scene's bounds).
+    pixel_intrinsics: (fx, fy, cx, cy, width, height) in pixels, OpenCV's convention (the
+        centre of the top-left pixel is (0, 0); x right, y down). When set, it defines the
+        projection (`intrinsics(size)` scales it to the image size) and `yfov_deg` must be
+        its vertical field of view, 2 atan(height / (2 fy)); `validate_camera` checks the two
+        agree. To change the field of view, set pixel_intrinsics to None.
+
+    Conversions from and to the poses other tools use (OpenCV's K and world-from-camera,
+    OpenGL/NeRF/Blender 4x4 poses) live in `vkpbr.scene.camera`; the methods below delegate.
+    """
+
+    eye: tuple[float, float, float] = (0.0, 0.0, 3.0)
+    target: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    up: tuple[float, float, float] = (0.0, 1.0, 0.0)
+    yfov_deg: float = 60.0
+    znear: float | None = None
+    zfar: float | None = None
+    name: str = ""
+    pixel_intrinsics: tuple[float, float, float, float, int, int] | None = None
+
+    # The imports are deferred: vkpbr.scene.camera builds Cameras, so it imports this module.
+    def intrinsics(self, size: tuple[int, int]) -> np.ndarray:
+        """The (3, 3) float64 pinhole matrix K for an image of `size` (width, height), in
+        OpenCV's pixel convention. See `vkpbr.scene.camera.intrinsics`."""
+
+        return intrinsics(self, size)
+
+    def world_from_camera(self, convention: Literal["opencv", "opengl"] = "opencv") -> np.ndarray:
+        """The (4, 4) float64 camera-to-world pose with "opencv" axes (x right, y down,
+        z forward) or "opengl" axes (x right, y up, z backward: NeRF, Blender). See
+        `vkpbr.scene.camera.world_from_camera`."""
+
+        return world_from_camera(self, convention)
+
+    @classmethod
+    def from_opencv(cls, K: object, world_from_camera: object, size: object,
+                    name: str = "") -> Camera:
+        """A camera from OpenCV's K (3, 3), world-from-camera (4, 4) and image size (W, H).
+        See `vkpbr.scene.camera.from_opencv`."""
+
+        return from_opencv(K, world_from_camera, size, name=name)
+
+    @classmethod
+    def from_pose(cls, matrix: object, convention: Literal["opengl", "opencv"] = "opengl",
+                  yfov_deg: float | None = None, base: Camera | None = None,
+                  name: str = "") -> Camera:
+        """A camera from a (4, 4) world-from-camera pose, OpenGL axes by default (NeRF's
+        transforms.json, Blender). See `vkpbr.scene.camera.from_pose`."""
+
+        return from_pose(matrix, convention, yfov_deg=yfov_deg, base=base, name=name)
 
 __all__ = [
     "Convention",
