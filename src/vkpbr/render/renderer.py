@@ -92,9 +92,11 @@ class Renderer:
     msaa : 1 or 4 samples per pixel (offscreen renders).
     background : linear RGB of pixels where nothing was drawn.
     depth_prepass : draw opaque geometry depth-only first, so each pixel is shaded once.
-        None (default): on for GPUs, off for CPU devices (lavapipe). Measured on Sponza at
-        1920x1080: an H200 takes 4.17 ms with it and 6.08 without; lavapipe is ~1.7x slower
-        with it (its vertex work doubles and it shades cheaply per pixel). BENCHMARKS.md.
+        None (default): on where it was measured to win (BENCHMARKS.md), i.e. on a GPU when
+        the scene has no more triangles than the target has pixels. It halves the shading of
+        a fragment-bound frame (Sponza at 1920x1080 on an H200: 6.02 -> 4.13 ms) but doubles
+        the vertex work, which loses on geometry-bound frames (5.1 M triangles at 1080p:
+        10.3 -> 18.1 ms) and on lavapipe, whose vertex work runs on the same cores.
     window_extensions : instance extensions a window system needs (the viewer's GLFW list);
         the device then also enables swapchains.
     """
@@ -121,8 +123,7 @@ class Renderer:
         if window_extensions is not None:
             device = DeviceRequest(device, tuple(window_extensions), ("VK_KHR_swapchain",))
         self.device = Device(device, validation=validation, sync_validation=sync_validation)
-        self.depth_prepass = (self.device.info.kind != "cpu" if depth_prepass is None
-                              else bool(depth_prepass))
+        self.depth_prepass = depth_prepass
         self._targets: dict[tuple, OffscreenTarget] = {}
         self._recorded: dict[tuple, _Recorded] = {}
         self._generations: dict[int, int] = {}
@@ -178,6 +179,13 @@ class Renderer:
         """A textured-quad overlay (the viewer's HUD) drawn over frames of `target`'s formats."""
         return TextOverlay(self.device, atlas, target, self.ring.count)
 
+    def prepass_for(self, target: FrameTarget) -> bool:
+        """Whether frames of `target` run the depth pre-pass (see `depth_prepass`)."""
+        if self.depth_prepass is not None:
+            return bool(self.depth_prepass)
+        w, h = target.extent
+        return self.device.info.kind != "cpu" and self.scene.triangle_count <= w * h
+
     # --- pipelines --------------------------------------------------------------------------
     def _pipeline(self, target: FrameTarget, tbn: L.TbnMode, p: PassSpec, prepass: bool) -> Pipeline:
         key = (target.color_format, target.depth_format, target.samples, tbn, p.name,
@@ -201,7 +209,8 @@ class Renderer:
         self.gpu_scene.ensure_streams()
         for tbn in L.TbnMode:
             for p in PASSES:
-                self._pipeline(target, tbn, p, self.depth_prepass)
+                for prepass in (False, True):  # the window may be resized across the bound
+                    self._pipeline(target, tbn, p, prepass)
 
     # --- recording --------------------------------------------------------------------------
     def blend_order(self, eye: Any) -> tuple[int, ...]:
@@ -219,16 +228,17 @@ class Renderer:
         names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
         gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
         slot = self.slots[frame.index]
+        prepass = self.prepass_for(target)
         cmd = Commands(self.device).begin()
         ring.stamp(cmd, frame, 0)
         target.record_begin(cmd, image)
         record_passes(cmd, PassContext(
             draws=gs.draws,
             classes=[classify(d.alpha_mode, d.double_sided, alpha_mask) for d in gs.draws],
-            pipeline=lambda p: self._pipeline(target, tbn, p, self.depth_prepass),
+            pipeline=lambda p: self._pipeline(target, tbn, p, prepass),
             frame_sets=(slot.set0, slot.set2), material_sets=gs.material_sets,
             vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
-            blend_order=order, prepass=self.depth_prepass,
+            blend_order=order, prepass=prepass,
             stamp=lambda s: ring.stamp(cmd, frame, s)))
         if overlay is not None:
             overlay.record(cmd, frame.index, target.extent)
