@@ -62,7 +62,10 @@ def projection_terms(camera: Camera, size: tuple[int, int]) -> tuple[float, floa
     pixel convention: pixel centres at integers), so a K from a calibration lands each point
     on the pixel OpenCV would project it to."""
     w, h = size
-    k = camera_k(camera, size)
+    if camera.pixel_intrinsics is None:  # square pixels, centred: the per-frame fast path
+        g = 1.0 / math.tan(math.radians(camera.yfov_deg) / 2.0)
+        return g * h / w, g, 0.0, 0.0
+    k = camera.intrinsics(size)
     fx, fy, cx, cy = float(k[0][0]), float(k[1][1]), float(k[0][2]), float(k[1][2])
     return 2.0 * fx / w, 2.0 * fy / h, 2.0 * (cx + 0.5) / w - 1.0, 2.0 * (cy + 0.5) / h - 1.0
 
@@ -99,28 +102,30 @@ def view_projection(camera: Camera, size: tuple[int, int], znear: float) -> np.n
     return perspective(camera, size, znear) @ look_at(camera.eye, camera.target, camera.up)
 
 
-def view_projection_columns(camera: Camera, size: tuple[int, int],
-                            znear: float) -> tuple[tuple[float, ...], ...]:
-    """`view_projection` as GLSL's column-major mat4 (four columns), in plain floats.
+def view_projection_columns(camera: Camera, size: tuple[int, int], znear: float,
+                            f: tuple[float, float, float] | None = None) -> tuple[float, ...]:
+    """`view_projection` as GLSL's column-major mat4: 16 plain floats, column by column.
 
     The per-frame path when the camera moves: P is sparse, so P @ V is a few scaled rows of
     V, ~5x cheaper than NumPy's array creation and matmul (which is kept for everything else).
+    `f`: forward(camera), when the caller has it already.
     """
     eye = camera.eye
-    f = _unit(_sub(camera.target, eye))
+    f = f or forward(camera)
     s = _unit(_cross(f, (float(camera.up[0]), float(camera.up[1]), float(camera.up[2]))))
     u = _cross(s, f)
     sx, sy, ox, oy = projection_terms(camera, size)
     se, ue, fe = _dot3(s, eye), _dot3(u, eye), _dot3(f, eye)
     # V's rows: s (x), u (y), -f (z), with translations -s.e, -u.e, f.e. Rows of P @ V:
     # sx*x - ox*z, -sy*y - oy*z, znear * e3, -z, where -z = f.p - f.e.
-    return tuple(
-        (sx * s[i] + ox * f[i], -sy * u[i] + oy * f[i], 0.0, f[i]) for i in range(3)
-    ) + ((-sx * se - ox * fe, sy * ue - oy * fe, znear, -fe),)
+    return (sx * s[0] + ox * f[0], -sy * u[0] + oy * f[0], 0.0, f[0],
+            sx * s[1] + ox * f[1], -sy * u[1] + oy * f[1], 0.0, f[1],
+            sx * s[2] + ox * f[2], -sy * u[2] + oy * f[2], 0.0, f[2],
+            -sx * se - ox * fe, sy * ue - oy * fe, znear, -fe)
 
 
-def depth_range(camera: Camera, corners: Sequence[Sequence[float]],
-                scale: float) -> tuple[float, float]:
+def depth_range(camera: Camera, corners: Sequence[Sequence[float]], scale: float,
+                f: tuple[float, float, float] | None = None) -> tuple[float, float]:
     """(znear, zfar) for a render, from the 8 corners of the scene's bounds.
 
     znear: the camera's own, else just in front of the nearest corner along the view axis,
@@ -129,7 +134,7 @@ def depth_range(camera: Camera, corners: Sequence[Sequence[float]],
     erring small is free. zfar never clips (the far plane is at infinity): it only scales
     the depth debug view: the camera's own, or the farthest corner along the view axis.
     """
-    f, e = forward(camera), camera.eye
+    f, e = f or forward(camera), camera.eye
     ex, ey, ez = float(e[0]), float(e[1]), float(e[2])
     depths = [f[0] * (c[0] - ex) + f[1] * (c[1] - ey) + f[2] * (c[2] - ez) for c in corners]
     znear = float(camera.znear) if camera.znear is not None else max(0.5 * min(depths), 1e-5 * scale)

@@ -119,15 +119,15 @@ def write_frame_uniforms(slot: FrameSlot, camera: Camera, light: Light, size: Se
     if key == slot.uniform_key:
         return
     slot.uniform_key = key
-    znear, zfar = depth_range(camera, bounds.corners, bounds.radius)
+    f = forward(camera)
+    znear, zfar = depth_range(camera, bounds.corners, bounds.radius, f)
     slot.znear = znear
-    c0, c1, c2, c3 = view_projection_columns(camera, size, znear)
-    L.CAMERA.pack_into(slot.m_camera, VP=(*c0, *c1, *c2, *c3))
+    L.CAMERA.pack_into(slot.m_camera, VP=view_projection_columns(camera, size, znear, f))
     flags = L.SETTINGS_NORMAL_MAPPING if opts.normal_mapping else 0
     flags |= L.SETTINGS_OCCLUSION if opts.occlusion else 0
     flags |= 0 if linear else L.SETTINGS_SRGB_TARGET
     L.SETTINGS.pack_into(
-        slot.m_settings, camera_forward=(*forward(camera), 0.0), view=opts.view, brdf=opts.brdf,
+        slot.m_settings, camera_forward=(*f, 0.0), view=opts.view, brdf=opts.brdf,
         tonemap=opts.tonemap, flags=flags, exposure=2.0 ** opts.exposure, znear=znear,
         zfar=zfar, pad0=0.0)
     L.LIGHT.pack_into(

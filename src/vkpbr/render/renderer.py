@@ -290,18 +290,19 @@ class Renderer:
         `copy` names what the target copies out for reading (COPY_COLOR, COPY_DEPTH) into the
         frame's buffers; `timings` first reads the GPU timestamps of the frame slot's previous
         submission into its stats (a few microseconds; the viewer asks 4 times a second).
-        `driver_time` measures the thread CPU time spent in the target's acquire and submit
-        (stats.driver_ms; the viewer subtracts it from Python's own cost). Off by default:
-        each clock read is a system call.
+        `driver_time` measures the thread CPU time spent in the driver: the fence wait, the
+        timestamp read, the target's acquire and submit (stats.driver_ms; the viewer subtracts
+        it from Python's own cost, as lavapipe may spin in them). Off by default: each clock
+        read is a system call.
         Returns a Submitted; `ok` False: recreate the target (a resized window).
         """
         t0 = time.perf_counter()
-        frame = self.ring.begin()
+        clock = time.thread_time if driver_time else _no_clock
+        c0 = clock()
+        frame = self.ring.begin()  # waits for the frame's previous submission
         slot = self.slots[frame.index]
         if timings:
             self._read_timings(frame, slot)
-        clock = time.thread_time if driver_time else _no_clock
-        c0 = clock()
         image = target.acquire(frame)
         driver = clock() - c0
         if image is None:
