@@ -310,12 +310,15 @@ class Viewer(InputHandlers):
 
     def _frame(self, shot: Path | None) -> float:
         """Draw one frame (and write `shot`); returns the CPU seconds spent outside Python's
-        own per-frame work (the driver's acquire/submit, screenshots)."""
+        own per-frame work (the driver's waits, acquire and submit; screenshots)."""
         r, camera = self.renderer, self.camera()
         self._refresh_hud()
-        with_hud = shot is not None and self.shot_hud
-        sub = r.draw(self.target, camera, self.light, self.options, overlay=self.hud,  # type: ignore[union-attr]
-                     copy=(COPY_COLOR,) if with_hud else (), timings=self._want_gpu,
+        # A screenshot frame is copied out of the target after drawing: without the HUD
+        # (that one frame is shown without it) unless the HUD was asked for.
+        copy = shot is not None and getattr(self.target, "can_copy", True)
+        sub = r.draw(self.target, camera, self.light, self.options,  # type: ignore[union-attr]
+                     overlay=self.hud if shot is None or self.shot_hud else None,
+                     copy=(COPY_COLOR,) if copy else (), timings=self._want_gpu,
                      driver_time=True)
         stats = r.frame_stats(sub.frame) if sub.frame is not None else None  # type: ignore[union-attr]
         if self._want_gpu and stats is not None and stats.gpu_ms == stats.gpu_ms:
@@ -327,9 +330,9 @@ class Viewer(InputHandlers):
                 self.target.recreate(self.fb_size)
         if shot is not None:
             c = time.thread_time()
-            if with_hud and sub.frame is not None:
+            if copy and sub.frame is not None:
                 image = r.read_color(self.target, sub)  # type: ignore[union-attr]
-            else:  # the scene alone: exactly what a headless render of this view gives
+            else:  # no copyable image: the same pixels from a headless render of this view
                 image = r.render(camera, self.light, self.target.extent, self.options)  # type: ignore[union-attr]
             self._save(shot, image, camera)
             blocked += time.thread_time() - c  # screenshots are not per-frame work
