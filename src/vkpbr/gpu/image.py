@@ -212,19 +212,21 @@ class TextureUploader:
         self._pending: list[tuple[Image, list[np.ndarray]]] = []
         self._pending_bytes = 0
 
-    def add(self, pixels: np.ndarray, format: int, mipmaps: bool = True, name: str = "",
+    def add(self, pixels: np.ndarray, format: int | str, mipmaps: bool = True, name: str = "",
             mips: Sequence[np.ndarray] = ()) -> Image:
         """Queue one image for upload (sent by `flush`, or earlier when the batch is full).
 
         Parameters
         ----------
         pixels : (H, W, 4) uint8, level 0.
-        format : the VkFormat (R8G8B8A8 UNORM or SRGB).
+        format : "srgb" or "unorm" (8-bit RGBA), or a VkFormat.
         mipmaps : give the image a full mip chain; ignored when `mips` are given.
         mips : levels 1.. of a full chain made beforehand (vkpbr.scene.mips), each
             (max(H >> k, 1), max(W >> k, 1), 4) uint8: copied as they are, no blits.
         """
         vk = self.device.vk
+        if isinstance(format, str):
+            format = {"srgb": vk.VK_FORMAT_R8G8B8A8_SRGB, "unorm": vk.VK_FORMAT_R8G8B8A8_UNORM}[format]
         levels_data = [np.ascontiguousarray(a, dtype=np.uint8) for a in (pixels, *mips)]
         h, w = levels_data[0].shape[:2]
         if mips:

@@ -296,7 +296,6 @@ class GpuScene:
         return out
 
     def _upload_textures(self, decoded: list[np.ndarray | None]) -> None:
-        vk = self.device.vk
         pixels = list(decoded)
         self.scene_materials = self._merge_alpha_masks(pixels)
         # Which colour space each image is used in (base colour and emissive are sRGB).
@@ -309,7 +308,7 @@ class GpuScene:
         uploader = TextureUploader(self.device)
         self.images: dict[tuple[int, bool], Image] = {}
         for image_index, srgb in usage:
-            fmt = vk.VK_FORMAT_R8G8B8A8_SRGB if srgb else vk.VK_FORMAT_R8G8B8A8_UNORM
+            fmt = "srgb" if srgb else "unorm"
             source = self.scene.images[image_index] if image_index < len(self.scene.images) else None
             mips = ()
             if (source is not None and source.mips and source.mips_srgb == srgb
@@ -321,9 +320,9 @@ class GpuScene:
         # 1x1 defaults for missing maps: white base colour and scalar maps (the factors then
         # act alone), a flat tangent-space normal, black emission.
         defaults = {
-            "white_srgb": (np.full((1, 1, 4), 255, np.uint8), vk.VK_FORMAT_R8G8B8A8_SRGB),
-            "white": (np.full((1, 1, 4), 255, np.uint8), vk.VK_FORMAT_R8G8B8A8_UNORM),
-            "normal": (np.array([[[128, 128, 255, 255]]], np.uint8), vk.VK_FORMAT_R8G8B8A8_UNORM),
+            "white_srgb": (np.full((1, 1, 4), 255, np.uint8), "srgb"),
+            "white": (np.full((1, 1, 4), 255, np.uint8), "unorm"),
+            "normal": (np.array([[[128, 128, 255, 255]]], np.uint8), "unorm"),
         }
         self.default_images = {
             k: self._own(uploader.add(px, fmt, mipmaps=False, name=k))
