@@ -130,10 +130,12 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps({**report, "total_seconds": seconds}, indent=2, sort_keys=True))
         return 0
     textures = ""
-    if report.get("embedded_textures"):
-        textures += f", {report['embedded_textures']} textures embedded"
+    for kind in ("embedded", "external"):
+        n = report.get(f"{kind}_textures")
+        if n:
+            textures += f", {n} texture{'s' if n != 1 else ''} {kind}"
     if report.get("external_textures"):
-        textures += f", {report['external_textures']} textures external"
+        textures += " (they must stay where they are, relative to the .vkpbr)"
     print(f"wrote {args.out} ({report['file_bytes'] / 2**20:.2f} MiB, "
           f"{report['meshes']} meshes, {report['vertices']:,} vertices, "
           f"{report['triangles']:,} triangles{textures}) in {seconds:.2f} s")
