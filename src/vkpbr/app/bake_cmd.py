@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from vkpbr.app.log import say
 from vkpbr.errors import UsageError
 
 __all__ = ["EPILOG", "add_parser", "check_out", "format_report", "run"]
@@ -136,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
             textures += f", {n} texture{'s' if n != 1 else ''} {kind}"
     if report.get("external_textures"):
         textures += " (they must stay where they are, relative to the .vkpbr)"
-    print(f"wrote {args.out} ({report['file_bytes'] / 2**20:.2f} MiB, "
+    say(f"wrote {args.out} ({report['file_bytes'] / 2**20:.2f} MiB, "
           f"{report['meshes']} meshes, {report['vertices']:,} vertices, "
           f"{report['triangles']:,} triangles{textures}) in {seconds:.2f} s")
     if args.report:
