@@ -25,44 +25,23 @@ from typing import Any
 import numpy as np
 
 from vkpbr.errors import UsageError
-from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorSetLayout
 from vkpbr.gpu.device import Device, DeviceRequest
 from vkpbr.gpu.frames import Frame, FrameRing
-from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec, VertexStream
+from vkpbr.gpu.pipeline import PipelineLayout
 from vkpbr.gpu.swapchain import Surface, Swapchain
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
 from vkpbr.render.camera import as_camera, validate_camera
-from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.frames import Bounds, FrameSlot, FrameStats, create_slots, write_frame_uniforms
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.overlay import TextOverlay
-from vkpbr.render.passes import (
-    PASSES,
-    PassContext,
-    PassSpec,
-    classify,
-    pipeline_spec,
-    record_passes,
-)
+from vkpbr.render.passes import PASSES
+from vkpbr.render.recorder import STAMPS, FrameRecorder
 from vkpbr.scene.types import Camera, Light, Scene
 
 __all__ = ["Renderer", "RenderOptions", "FrameStats", "Submitted", "COPY_COLOR", "COPY_DEPTH"]
-
-_TBN_STREAMS = {
-    L.TbnMode.VECTORS: (("normals", "vec3"), ("tangents", "vec4")),
-    L.TbnMode.QUAT: (("qtangents", "vec4"),),
-    L.TbnMode.PACKED: (("packed_frames", "uint"),),
-}
-# Vertex inputs before the tangent frame: location = binding, one stream each (pbr.vert).
-# "texcoords1" is the TEXCOORD_0 buffer again in scenes without TEXCOORD_1 (GpuScene).
-# "colors" (COLOR_0) is one white value read with stride 0 in scenes without vertex colours.
-_BASE_STREAMS = (("positions", "vec3"), ("texcoords", "vec2"), ("texcoords1", "vec2"),
-                 ("colors", "unorm16x4"))
-_STAMPS = len(PASSES) + 2  # timestamps per frame: start, after each pass, end (after copies)
-
 
 @dataclass
 class Submitted:
@@ -72,12 +51,6 @@ class Submitted:
     frame: Frame | None
     image: int
     ok: bool
-
-
-@dataclass
-class _Recorded:
-    cmd: Commands
-    blend_order: tuple[int, ...]
 
 
 class Renderer:
@@ -125,15 +98,14 @@ class Renderer:
         self.device = Device(device, validation=validation, sync_validation=sync_validation)
         self.depth_prepass = depth_prepass
         self._targets: dict[tuple, OffscreenTarget] = {}
-        self._recorded: dict[tuple, _Recorded] = {}
-        self._generations: dict[int, int] = {}
-        self._pipelines: dict[tuple, Pipeline] = {}
         try:
             self._create_layouts()
-            self.ring = FrameRing(self.device, queries_per_frame=_STAMPS)
+            self.ring = FrameRing(self.device, queries_per_frame=STAMPS)
             self.frame_ubo, self._frame_pool, self.slots = create_slots(
                 self.device, self.set_layouts[0], self.set_layouts[2], self.ring.count)
             self.gpu_scene = GpuScene(self.device, scene, self.set_layouts[1])
+            self.recorder = FrameRecorder(self.device, self.gpu_scene, self.pipeline_layout,
+                                          self.ring, self.slots, self.prepass_for)
             self.bounds = Bounds.of(*scene.bounds())
             blend = [d.center for d in self.gpu_scene.draws if d.alpha_mode == "blend"]
             self._blend_centers = np.array(blend, dtype=np.float64).reshape(-1, 3)
@@ -186,33 +158,11 @@ class Renderer:
         w, h = target.extent
         return self.device.info.kind != "cpu" and self.scene.triangle_count <= w * h
 
-    # --- pipelines --------------------------------------------------------------------------
-    def _pipeline(self, target: FrameTarget, tbn: L.TbnMode, p: PassSpec, prepass: bool) -> Pipeline:
-        key = (target.color_format, target.depth_format, target.samples, tbn, p.name,
-               prepass and p.after_prepass)
-        if key not in self._pipelines:
-            gs = self.gpu_scene
-            streams = [VertexStream(i, i, fmt, 0 if name == "colors" and not gs.has_colors else None)
-                       for i, (name, fmt) in enumerate(_BASE_STREAMS + _TBN_STREAMS[tbn])]
-            base = PipelineSpec(
-                vertex_shader=f"pbr_{tbn.name.lower()}.vert.spv",
-                fragment_shader="pbr_opaque.frag.spv", streams=tuple(streams),
-                color_format=target.color_format, depth_format=target.depth_format,
-                samples=target.samples)
-            self._pipelines[key] = Pipeline(self.device, pipeline_spec(p, base, prepass),
-                                            self.pipeline_layout, SPV_DIR)
-        return self._pipelines[key]
-
     def build_pipelines(self, target: FrameTarget) -> None:
         """Create every pipeline and vertex stream (all TBN paths and passes) for `target`
         now, so that no later mode switch waits for one (the viewer calls this)."""
-        self.gpu_scene.ensure_streams()
-        for tbn in L.TbnMode:
-            for p in PASSES:
-                for prepass in (False, True):  # the window may be resized across the bound
-                    self._pipeline(target, tbn, p, prepass)
+        self.recorder.build_pipelines(target)
 
-    # --- recording --------------------------------------------------------------------------
     def blend_order(self, eye: Any) -> tuple[int, ...]:
         """Indices into the blended draws, farthest first from `eye` (painter's order)."""
         centers = self._blend_centers
@@ -220,56 +170,6 @@ class Renderer:
             return tuple(range(len(centers)))
         d = np.sum((centers - np.asarray(eye, dtype=np.float64)) ** 2, axis=1)
         return tuple(np.argsort(-d, kind="stable").tolist())
-
-    def _record(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
-                alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
-                copy: tuple[str, ...]) -> Commands:
-        gs, ring = self.gpu_scene, self.ring
-        names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
-        gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
-        slot = self.slots[frame.index]
-        prepass = self.prepass_for(target)
-        cmd = Commands(self.device).begin()
-        ring.stamp(cmd, frame, 0)
-        target.record_begin(cmd, image)
-        record_passes(cmd, PassContext(
-            draws=gs.draws,
-            classes=[classify(d.alpha_mode, d.double_sided, alpha_mask) for d in gs.draws],
-            pipeline=lambda p: self._pipeline(target, tbn, p, prepass),
-            frame_sets=(slot.set0, slot.set2), material_sets=gs.material_sets,
-            vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
-            blend_order=order, prepass=prepass,
-            stamp=lambda s: ring.stamp(cmd, frame, s)))
-        if overlay is not None:
-            overlay.record(cmd, frame.index, target.extent)
-        target.record_end(cmd, image, frame, copy)
-        ring.stamp(cmd, frame, _STAMPS - 1)
-        cmd.end()
-        return cmd
-
-    def _command_buffer(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
-                        alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
-                        copy: tuple[str, ...]) -> Commands:
-        """The command buffer recorded for these inputs, recorded on first use. A buffer is
-        used by one frame of the ring only, whose previous submission has finished: it can be
-        re-recorded (new blend order) or freed at once."""
-        tid = id(target)
-        if self._generations.get(tid, target.generation) != target.generation:
-            self._free_recorded(tid)  # recreated swapchain: its images and buffers are new
-        self._generations[tid] = target.generation
-        key = (tid, image, frame.index, tbn, alpha_mask, id(overlay), copy)
-        rec = self._recorded.get(key)
-        if rec is not None and rec.blend_order == order:
-            return rec.cmd
-        if rec is not None:  # the camera moved enough to reorder blended draws
-            rec.cmd.free()
-        cmd = self._record(target, frame, image, tbn, alpha_mask, order, overlay, copy)
-        self._recorded[key] = _Recorded(cmd, order)
-        return cmd
-
-    def _free_recorded(self, target_id: int | None = None) -> None:
-        for key in [k for k in self._recorded if target_id is None or k[0] == target_id]:
-            self._recorded.pop(key).cmd.free()
 
     # --- the frame path ---------------------------------------------------------------------
     def default_camera(self) -> Camera:
@@ -310,7 +210,7 @@ class Renderer:
         write_frame_uniforms(slot, camera, light, target.extent, options, linear, self.bounds)
         if overlay is not None:
             overlay.prepare(frame.index)
-        cmd = self._command_buffer(target, frame, image, options.tbn, options.alpha_mask,
+        cmd = self.recorder.command_buffer(target, frame, image, options.tbn, options.alpha_mask,
                                    self.blend_order(camera.eye), overlay, copy)
         c0 = clock()
         ok = target.submit(frame, cmd, image)
@@ -320,7 +220,7 @@ class Renderer:
         return Submitted(frame, image, ok)
 
     def _read_timings(self, frame: Frame, slot: FrameSlot) -> None:
-        t = self.ring.timings_ms(frame, _STAMPS)
+        t = self.ring.timings_ms(frame, STAMPS)
         slot.stats.gpu_ms = t[-1]
         bounds = [0.0, *t]
         slot.stats.pass_ms = {p.name: bounds[i + 1] - bounds[i] for i, p in enumerate(PASSES)}
@@ -438,7 +338,8 @@ class Renderer:
         if dev is None or dev.handle is None:
             return
         dev.wait_idle()
-        self._free_recorded()
+        if getattr(self, "recorder", None) is not None:
+            self.recorder.free()
         dev.close()
 
     def __enter__(self) -> Renderer:

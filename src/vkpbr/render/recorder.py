@@ -1,0 +1,146 @@
+"""Pipelines and recorded command buffers: how a frame's commands come to exist.
+
+A `FrameRecorder` builds the PBR pipelines each pass of the pass table (render/passes.py)
+needs, for a target's formats, and records one command buffer per (target image, frame of
+the ring, TBN path, alpha masking, overlay, copies), reused frame after frame: the frame's
+start timestamp, the target's begin, every pass with a timestamp after each, the overlay,
+the target's end (copies), the end timestamp. A buffer is used by one frame of the ring
+only, whose previous submission has finished when it is looked up: it can be re-recorded
+(a new blended-draw order) or freed at once.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from vkpbr.gpu.commands import Commands
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.frames import Frame, FrameRing
+from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec, VertexStream
+from vkpbr.gpu.target import FrameTarget
+from vkpbr.render import layouts as L
+from vkpbr.render.codegen import SPV_DIR
+from vkpbr.render.frames import FrameSlot
+from vkpbr.render.gpu_scene import GpuScene
+from vkpbr.render.overlay import TextOverlay
+from vkpbr.render.passes import (
+    PASSES,
+    PassContext,
+    PassSpec,
+    classify,
+    pipeline_spec,
+    record_passes,
+)
+
+__all__ = ["FrameRecorder", "STAMPS"]
+
+_TBN_STREAMS = {
+    L.TbnMode.VECTORS: (("normals", "vec3"), ("tangents", "vec4")),
+    L.TbnMode.QUAT: (("qtangents", "vec4"),),
+    L.TbnMode.PACKED: (("packed_frames", "uint"),),
+}
+# Vertex inputs before the tangent frame: location = binding, one stream each (pbr.vert).
+# "texcoords1" is the TEXCOORD_0 buffer again in scenes without TEXCOORD_1 (GpuScene).
+# "colors" (COLOR_0) is one white value read with stride 0 in scenes without vertex colours.
+_BASE_STREAMS = (("positions", "vec3"), ("texcoords", "vec2"), ("texcoords1", "vec2"),
+                 ("colors", "unorm16x4"))
+STAMPS = len(PASSES) + 2  # timestamps per frame: start, after each pass, end (after copies)
+
+
+
+@dataclass
+class _Recorded:
+    cmd: Commands
+    blend_order: tuple[int, ...]
+
+
+
+class FrameRecorder:
+    """Pipelines and command buffers for drawing `gpu_scene` with the frame ring `ring`."""
+
+    def __init__(self, device: Device, gpu_scene: GpuScene, layout: PipelineLayout,
+                 ring: FrameRing, slots: list[FrameSlot],
+                 prepass_for: Callable[[FrameTarget], bool]) -> None:
+        self.device, self.gpu_scene, self.pipeline_layout = device, gpu_scene, layout
+        self.ring, self.slots, self.prepass_for = ring, slots, prepass_for
+        self._recorded: dict[tuple, _Recorded] = {}
+        self._generations: dict[int, int] = {}
+        self._pipelines: dict[tuple, Pipeline] = {}
+
+    # --- pipelines --------------------------------------------------------------------------
+    def pipeline(self, target: FrameTarget, tbn: L.TbnMode, p: PassSpec, prepass: bool) -> Pipeline:
+        key = (target.color_format, target.depth_format, target.samples, tbn, p.name,
+               prepass and p.after_prepass)
+        if key not in self._pipelines:
+            gs = self.gpu_scene
+            streams = [VertexStream(i, i, fmt, 0 if name == "colors" and not gs.has_colors else None)
+                       for i, (name, fmt) in enumerate(_BASE_STREAMS + _TBN_STREAMS[tbn])]
+            base = PipelineSpec(
+                vertex_shader=f"pbr_{tbn.name.lower()}.vert.spv",
+                fragment_shader="pbr_opaque.frag.spv", streams=tuple(streams),
+                color_format=target.color_format, depth_format=target.depth_format,
+                samples=target.samples)
+            self._pipelines[key] = Pipeline(self.device, pipeline_spec(p, base, prepass),
+                                            self.pipeline_layout, SPV_DIR)
+        return self._pipelines[key]
+
+    def build_pipelines(self, target: FrameTarget) -> None:
+        """Create every pipeline and vertex stream (all TBN paths and passes) for `target`
+        now, so that no later mode switch waits for one (the viewer calls this)."""
+        self.gpu_scene.ensure_streams()
+        for tbn in L.TbnMode:
+            for p in PASSES:
+                for prepass in (False, True):  # the window may be resized across the bound
+                    self.pipeline(target, tbn, p, prepass)
+
+    # --- command buffers --------------------------------------------------------------------
+    def _record(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
+                alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
+                copy: tuple[str, ...]) -> Commands:
+        gs, ring = self.gpu_scene, self.ring
+        names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
+        gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
+        slot = self.slots[frame.index]
+        prepass = self.prepass_for(target)
+        cmd = Commands(self.device).begin()
+        ring.stamp(cmd, frame, 0)
+        target.record_begin(cmd, image)
+        record_passes(cmd, PassContext(
+            draws=gs.draws,
+            classes=[classify(d.alpha_mode, d.double_sided, alpha_mask) for d in gs.draws],
+            pipeline=lambda p: self.pipeline(target, tbn, p, prepass),
+            frame_sets=(slot.set0, slot.set2), material_sets=gs.material_sets,
+            vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
+            blend_order=order, prepass=prepass,
+            stamp=lambda s: ring.stamp(cmd, frame, s)))
+        if overlay is not None:
+            overlay.record(cmd, frame.index, target.extent)
+        target.record_end(cmd, image, frame, copy)
+        ring.stamp(cmd, frame, STAMPS - 1)
+        cmd.end()
+        return cmd
+
+    def command_buffer(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
+                        alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
+                        copy: tuple[str, ...]) -> Commands:
+        """The command buffer recorded for these inputs, recorded on first use. A buffer is
+        used by one frame of the ring only, whose previous submission has finished: it can be
+        re-recorded (new blend order) or freed at once."""
+        tid = id(target)
+        if self._generations.get(tid, target.generation) != target.generation:
+            self.free(tid)  # recreated swapchain: its images and buffers are new
+        self._generations[tid] = target.generation
+        key = (tid, image, frame.index, tbn, alpha_mask, id(overlay), copy)
+        rec = self._recorded.get(key)
+        if rec is not None and rec.blend_order == order:
+            return rec.cmd
+        if rec is not None:  # the camera moved enough to reorder blended draws
+            rec.cmd.free()
+        cmd = self._record(target, frame, image, tbn, alpha_mask, order, overlay, copy)
+        self._recorded[key] = _Recorded(cmd, order)
+        return cmd
+
+    def free(self, target_id: int | None = None) -> None:
+        for key in [k for k in self._recorded if target_id is None or k[0] == target_id]:
+            self._recorded.pop(key).cmd.free()
