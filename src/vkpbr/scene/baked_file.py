@@ -331,13 +331,21 @@ def _validate_counts(baked: BakedScene, path: Path) -> None:
         else:  # unusual layout: one vectorised max per mesh
             mx = np.array([idx[a:b].max() for a, b in zip(starts, ends, strict=True)])
         _check(bool(np.all(mx < vc[nz])), path, "an index points past its mesh's vertices")
+    # Indices from the JSON may be of any type: compare only integers (scene/validate.py
+    # names the field of anything else).
     for node in baked.nodes:
-        _check(0 <= node.mesh < len(t), path, f"node {node.name!r} refers to a missing mesh")
+        _check(not _is_int(node.mesh) or 0 <= node.mesh < len(t), path,
+               f"node {node.name!r} refers to a missing mesh")
     for m in baked.materials:
         for tex in (m.base_color_texture, m.metallic_texture, m.roughness_texture,
                     m.normal_texture, m.occlusion_texture, m.emissive_texture):
-            _check(tex is None or 0 <= tex.image < len(baked.images), path,
+            _check(tex is None or not _is_int(getattr(tex, "image", None))
+                   or 0 <= tex.image < len(baked.images), path,
                    f"material {m.name!r} refers to a missing image")
+
+
+def _is_int(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
 
 
 def read_baked(path: str | os.PathLike[str], *, mmap: bool = False) -> BakedScene:

@@ -14,6 +14,7 @@ from vkpbr.scene.geometry import ensure_normals, normalize_mesh_arrays
 from vkpbr.scene.presets import apply_presets
 from vkpbr.scene.textures import check_texture_files
 from vkpbr.scene.types import Scene
+from vkpbr.scene.validate import validate_scene
 
 __all__ = ["SUFFIXES", "load_scene"]
 
@@ -73,9 +74,19 @@ def load_scene(path: str | Path, strict: bool = False) -> Scene:
         raise SceneError(
             path, f"unknown scene format {path.suffix!r} (known: {', '.join(SUFFIXES)})"
         )
-    scene = load(path)
+    try:
+        scene = load(path)
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError) as exc:
+        # A reader met a structure it does not expect (hostile or broken input): one line
+        # naming the file, never a traceback. Readers raise SceneError for what they check.
+        what = f"missing {exc}" if isinstance(exc, KeyError) else str(exc) or type(exc).__name__
+        raise SceneError(path, f"malformed file: {what}") from None
+    try:
+        scene.meshes = [normalize_mesh_arrays(ensure_normals(m)) for m in scene.meshes]
+    except (TypeError, ValueError, IndexError, AttributeError) as exc:
+        raise SceneError(path, f"malformed mesh arrays ({exc})") from None
+    validate_scene(scene, path)  # every field of the Scene, whatever the format
     check_texture_files(scene, path, strict=strict)
-    scene.meshes = [normalize_mesh_arrays(ensure_normals(m)) for m in scene.meshes]
     if scene.triangle_count == 0:
         raise SceneError(path, "contains no triangles to render")
     return apply_presets(scene)
