@@ -10,6 +10,7 @@ from __future__ import annotations
 import io
 import logging
 import os
+import warnings
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -18,6 +19,7 @@ import numpy as np
 from PIL import Image as PILImage
 
 from vkpbr.errors import SceneError
+from vkpbr.scene.limits import limits
 from vkpbr.scene.types import Image, Scene
 
 __all__ = ["check_texture_files", "decode_image", "decode_images", "missing_texture_files"]
@@ -137,7 +139,13 @@ def _decode(image: Image, max_size: int | None, messages: list[tuple[str, str]])
         if source is None:
             raise ValueError("no pixels, data or path")
         # Pillow's own decompression-bomb limit (DecompressionBombError) still applies.
-        pil = PILImage.open(source)
+        with warnings.catch_warnings():  # over Pillow's bomb warning is over our limit too
+            warnings.simplefilter("ignore", PILImage.DecompressionBombWarning)
+            pil = PILImage.open(source)  # reads the header only
+        cap = limits().max_texture_pixels
+        if pil.width * pil.height > cap:  # refused before a byte is decoded
+            raise ValueError(f"{pil.width}x{pil.height} is over the {cap:,}-pixel texture limit "
+                             "(VKPBR_MAX_TEXTURE_PIXELS)")
         if max_size and pil.format == "JPEG":
             pil.draft("RGB", (max_size, max_size))  # JPEG can decode at 1/2..1/8 scale: faster
         pil.load()

@@ -20,6 +20,7 @@ import numpy as np
 
 from vkpbr.errors import SceneError, UsageError
 from vkpbr.scene.camera import Camera, validate_camera
+from vkpbr.scene.limits import limits
 from vkpbr.scene.types import Image, Light, Material, Mesh, Node, Sampler, Scene, TextureRef
 
 __all__ = ["validate_scene", "MAX_COORDINATE"]
@@ -201,6 +202,17 @@ def _check_bounds(scene: Scene) -> None:
         _fail("bounds", f"the geometry reaches beyond +-{MAX_COORDINATE:g} in world space")
 
 
+def _check_limits(scene: Scene) -> None:
+    cap = limits()
+    vertices = sum(m.vertex_count for m in scene.meshes)
+    if vertices > cap.max_vertices:
+        _fail("meshes", f"{vertices:,} vertices are over the limit of {cap.max_vertices:,} "
+                        "(VKPBR_MAX_VERTICES)")
+    if scene.triangle_count > cap.max_triangles:
+        _fail("nodes", f"{scene.triangle_count:,} triangles are over the limit of "
+                       f"{cap.max_triangles:,} (VKPBR_MAX_TRIANGLES)")
+
+
 # --- the scene -----------------------------------------------------------------------------
 def validate_scene(scene: Scene, path: str | Path) -> None:
     """Raise SceneError(path, "field: problem") unless `scene` is a well-formed Scene."""
@@ -223,5 +235,6 @@ def validate_scene(scene: Scene, path: str | Path) -> None:
         for i, cam in enumerate(scene.cameras):
             _check_camera(cam, f"cameras[{i}]")
         _check_bounds(scene)
+        _check_limits(scene)
     except _Bad as exc:
         raise SceneError(path, str(exc)) from None
