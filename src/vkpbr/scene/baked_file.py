@@ -213,7 +213,15 @@ def write_baked(path: str | os.PathLike[str], baked: BakedScene) -> int:
     }
     text = json.dumps(doc, sort_keys=True, separators=(",", ":"), default=_json_default)
     sections.insert(0, ("scene", text.encode()))
+    return write_sections(path, sections)
 
+
+def write_sections(path: str | os.PathLike[str],
+                   sections: list[tuple[str, bytes | memoryview]]) -> int:
+    """Write named sections as a .vkpbr container (header, table, 64-byte aligned data, every
+    checksum computed), atomically; returns the file size. `write_baked` builds the sections;
+    the fuzz suite re-packs mutated ones through here, so that its files are intact and only
+    their contents are wrong."""
     entries = np.zeros(len(sections), dtype=_ENTRY)
     offset = _HEADER_SIZE + entries.nbytes
     offset += _pad(offset)
@@ -226,7 +234,7 @@ def write_baked(path: str | os.PathLike[str], baked: BakedScene) -> int:
     head = head[:36] + struct.pack("<I", zlib.crc32(head[:36]))
     head += b"\0" * (_HEADER_SIZE - len(head))
 
-    with atomic_writer(path, fsync=True) as f:
+    with atomic_writer(Path(path), fsync=True) as f:
         f.write(head)
         f.write(entries.tobytes())
         f.write(b"\0" * _pad(_HEADER_SIZE + entries.nbytes))
@@ -234,6 +242,13 @@ def write_baked(path: str | os.PathLike[str], baked: BakedScene) -> int:
             f.write(data)
             f.write(b"\0" * _pad(len(data)))
     return file_size
+
+
+def read_sections(path: str | os.PathLike[str]) -> list[tuple[str, bytes]]:
+    """The named sections of a .vkpbr file, checksums verified (BakeFormatError if not)."""
+    path = Path(path)
+    buf = memoryview(path.read_bytes())
+    return [(name, bytes(data)) for name, data in _parse_sections(buf, path).items()]
 
 
 def _json_default(obj: Any) -> Any:

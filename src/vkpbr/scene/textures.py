@@ -31,17 +31,31 @@ def missing_texture_files(images: Sequence[Image]) -> list[Image]:
     """The images whose only source is a file that does not exist (pixels and embedded bytes
     need no file), in order."""
     return [img for img in images if img.pixels is None and img.data is None
-            and img.path is not None and not Path(img.path).is_file()]
+            and img.path is not None and not _is_file(Path(img.path))]
+
+
+def _is_file(path: Path) -> bool:
+    """A regular file at `path`; False for names the OS cannot even look up (a NUL byte,
+    a name too long), which count as missing textures rather than errors."""
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
 
 
 def _shown(file: Path, folder: Path) -> str:
-    """`file` relative to `folder` when it lies below it, else absolute (for messages)."""
-    for f, d in ((Path(file), Path(folder)), (Path(file).resolve(), Path(folder).resolve())):
+    """`file` relative to `folder` when it lies below it, else absolute (for messages); a
+    name the OS cannot resolve (a NUL byte in it) is shown as written."""
+    try:
+        pairs = ((Path(file), Path(folder)), (Path(file).resolve(), Path(folder).resolve()))
+    except (OSError, ValueError):
+        return repr(str(file))[1:-1]
+    for f, d in pairs:
         try:
             return f.relative_to(d).as_posix()
         except ValueError:
             pass
-    return str(Path(file).resolve())
+    return str(pairs[1][0])
 
 
 def check_texture_files(scene: Scene, source: str | os.PathLike[str], strict: bool = False) -> int:

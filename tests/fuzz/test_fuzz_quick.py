@@ -1,0 +1,20 @@
+"""The fuzz suite's quick tier (issue 11): 60 seeded inputs of each of 10 formats through
+`load_scene`; every one must load or fail with vkpbr's one-line error naming the file
+(tests/fuzzing.py). The long tier is `scripts/fuzz.sh N`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from fuzzing import fuzz, table
+
+
+def test_quick_fuzz_tier(tmp_path: Path) -> None:
+    counts, failures = fuzz(tmp_path, per_format=60)
+    assert not failures, "\n".join(failures[:20]) + "\n" + table(counts)
+    for name, c in counts.items():
+        assert c["tried"] == 60, name
+        # Each format's mutations must reach both outcomes somewhere: a suite whose inputs
+        # all fail at the first byte would test nothing.
+    assert sum(c["clean"] for c in counts.values()) > 300
+    assert sum(c["loaded"] for c in counts.values()) > 50

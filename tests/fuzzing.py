@@ -1,0 +1,325 @@
+"""vkpbr's fuzz suite (issue 11): seeded mutations of every input format, run through
+`load_scene` as a user's file would be. Each input ends in one of:
+
+  loaded   the scene loaded (a mutation can leave a file valid);
+  clean    vkpbr's own error (VkpbrError) in one line naming the user's file;
+  unclean  anything else: another exception, a multi-line message, a message that does not
+           name the file, or more than SLOW_S seconds for one input.
+
+The quick tier (tests/fuzz/test_fuzz_quick.py) runs a few hundred inputs in CI; the long tier
+is `scripts/fuzz.sh N` (this file as a script), which prints one table per format.
+
+Formats and mutations: glTF JSON (types, missing keys, out-of-range indices, counts, offsets,
+node cycles), glTF and GLB bytes, OBJ and MTL bytes, .comp5822mesh bytes, .vkpbr bytes (the
+checksums catch them) and .vkpbr scene JSON re-packed with fresh checksums (intact files with
+invalid contents), texture bytes, and bombs (textures declaring 12000x12000 pixels, accessors
+declaring 2^31 elements).
+"""
+
+from __future__ import annotations
+
+import base64
+import collections
+import json
+import random
+import struct
+import sys
+import time
+import warnings
+import zlib
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import numpy as np
+
+SLOW_S = 5.0
+SEED = 1111
+
+_EVIL = [1e30, 1e308, -1, 2**31, 2**32, 2**64, -(2**40), 0, 7, float("nan"), float("inf"), "x",
+         "../../etc/passwd", None, [], {}, True, 3.5, [1, 2], [1e30] * 3, {"a": 1}]  # fmt: skip
+
+
+# --- mutators -------------------------------------------------------------------------------
+def _paths(value: object, prefix: tuple = ()) -> Iterator[tuple]:
+    yield prefix
+    if isinstance(value, dict):
+        for k, v in value.items():
+            yield from _paths(v, (*prefix, k))
+    elif isinstance(value, list):
+        for i, v in enumerate(value):
+            yield from _paths(v, (*prefix, i))
+
+
+def mutate_json(doc: dict, rng: random.Random) -> dict:
+    """1-3 structural edits: a value replaced by an evil one, a key deleted, an index pushed
+    out of range, a list emptied or repeated, a node made its own ancestor."""
+    doc = json.loads(json.dumps(doc))
+    for _ in range(rng.randint(1, 3)):
+        paths = [p for p in _paths(doc) if p]
+        path = rng.choice(paths)
+        parent = doc
+        for key in path[:-1]:
+            parent = parent[key]
+        key, r = path[-1], rng.random()
+        value = parent[key]
+        if isinstance(parent, dict) and r < 0.2:
+            del parent[key]
+        elif isinstance(value, int) and not isinstance(value, bool) and r < 0.45:
+            parent[key] = value + rng.choice([1, 2, 100, 2**31, -value - 1])  # indices, counts
+        elif isinstance(value, list) and value and r < 0.55:
+            parent[key] = [] if rng.random() < 0.5 else value * rng.randint(2, 5)
+        elif key == "children" and r < 0.65 and isinstance(value, list):
+            parent[key] = [0]  # a cycle through the root node
+        else:
+            parent[key] = rng.choice(_EVIL)
+    return doc
+
+
+def mutate_bytes(data: bytes, rng: random.Random) -> bytes:
+    data = bytearray(data)
+    kind = rng.random()
+    if kind < 0.2:
+        return bytes(data[: rng.randrange(max(len(data), 1))])
+    if kind < 0.3:
+        at = rng.randrange(max(len(data), 1))
+        return bytes(data[:at] + bytes(rng.randrange(256) for _ in range(rng.randint(1, 8))) + data[at:])
+    for _ in range(rng.randint(1, 6)):
+        at = rng.randrange(len(data))
+        data[at] = rng.choice([0, 0xFF, 0x7F, 0x80, rng.randrange(256), data[at] ^ (1 << rng.randrange(8))])
+    return bytes(data)
+
+
+def png_header_only(width: int, height: int) -> bytes:
+    """A PNG that declares width x height RGBA pixels and holds almost nothing (a bomb)."""
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+    ihdr = struct.pack(">IIBBBBB", width, height, 8, 6, 0, 0, 0)
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(b"\0" * 64))
+            + chunk(b"IEND", b""))
+
+
+# --- seed inputs ----------------------------------------------------------------------------
+def _png(rgba: tuple[int, int, int, int] = (200, 120, 60, 255)) -> bytes:
+    import io
+
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.new("RGBA", (8, 8), rgba).save(buf, format="PNG")
+    return buf.getvalue()
+
+
+def _gltf_doc(buffer_uri: str, image_uri: str) -> dict:
+    """A two-node glTF: one textured triangle pair with normals and UVs, a camera, a light."""
+    return {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "children": [1], "translation": [0, 0, 0]},
+                  {"mesh": 0, "camera": 0, "scale": [1, 2, 1]}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}],
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 3}]}},
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2},
+                                    "indices": 3, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
+                                                "metallicFactor": 0.2}, "doubleSided": True}],
+        "textures": [{"source": 0, "sampler": 0}], "samplers": [{"magFilter": 9729, "wrapS": 33071}],
+        "images": [{"uri": image_uri}],
+        "buffers": [{"uri": buffer_uri, "byteLength": 140}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                        {"buffer": 0, "byteOffset": 48, "byteLength": 48},
+                        {"buffer": 0, "byteOffset": 96, "byteLength": 32},
+                        {"buffer": 0, "byteOffset": 128, "byteLength": 12}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"}],
+    }
+
+
+def _gltf_buffer() -> bytes:
+    pos = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], np.float32)
+    nrm = np.tile(np.array([0, 0, 1], np.float32), (4, 1))
+    uv = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32)
+    idx = np.array([0, 1, 2, 0, 2, 3], np.uint16)
+    return pos.tobytes() + nrm.tobytes() + uv.tobytes() + idx.tobytes()
+
+
+def _glb(doc: dict, binary: bytes) -> bytes:
+    doc = json.loads(json.dumps(doc))
+    doc["buffers"] = [{"byteLength": len(binary)}]
+    doc["images"] = [{"bufferView": 4, "mimeType": "image/png"}]
+    png = _png()
+    doc["bufferViews"].append({"buffer": 0, "byteOffset": len(binary), "byteLength": len(png)})
+    binary = binary + png
+    binary += b"\0" * (-len(binary) % 4)
+    doc["buffers"][0]["byteLength"] = len(binary)
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    body = (struct.pack("<I4s", len(text), b"JSON") + text
+            + struct.pack("<I4s", len(binary), b"BIN\0") + binary)
+    return struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body
+
+
+_OBJ = (b"mtllib f.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n"
+        b"usemtl m\nf 1/1/1 2/2/1 3/3/1\ng two\nusemtl n\nf 1 3 4\nf -1 -2 -3 -4\n")
+_MTL = b"newmtl m\nKd 1 0 0\nPm 0.5\nmap_Kd -s 2 2 t.png\nmap_d t.png\nnewmtl n\nPr 0.2\nnorm t.png\n"
+
+
+class Corpus:
+    """Seed files in `folder` and, per format, a function that writes one mutated input and
+    returns the path to load (and the file an error should name)."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        f = folder
+        (f / "t.png").write_bytes(_png())
+        (f / "b.bin").write_bytes(_gltf_buffer())
+        self.gltf_doc = _gltf_doc("b.bin", "t.png")
+        (f / "s.gltf").write_text(json.dumps(self.gltf_doc))
+        self.gltf_bytes = (f / "s.gltf").read_bytes()
+        self.glb = _glb(self.gltf_doc, _gltf_buffer())
+        inline = dict(self.gltf_doc, buffers=[{
+            "uri": "data:application/octet-stream;base64," + base64.b64encode(_gltf_buffer()).decode(),
+            "byteLength": 140}])
+        self.inline_doc = inline
+        (f / "f.obj").write_bytes(_OBJ)
+        (f / "f.mtl").write_bytes(_MTL)
+        from vkpbr.bake.bake import bake_file
+        from vkpbr.scene.baked_file import read_sections
+        from vkpbr.scene.comp5822 import write_comp5822mesh
+        from vkpbr.scene.loader import load_scene
+
+        write_comp5822mesh(load_scene(f / "s.gltf"), f / "s.comp5822mesh")
+        self.comp = (f / "s.comp5822mesh").read_bytes()
+        bake_file(f / "s.gltf", f / "s.vkpbr", progress=False)
+        self.vkpbr = (f / "s.vkpbr").read_bytes()
+        self.sections = read_sections(f / "s.vkpbr")
+
+    def formats(self) -> dict[str, Callable[[random.Random], tuple[Path, str]]]:
+        f = self.folder
+
+        def bytes_of(name: str, data: bytes) -> Callable[[random.Random], tuple[Path, str]]:
+            def make(rng: random.Random) -> tuple[Path, str]:
+                (f / f"m_{name}").write_bytes(mutate_bytes(data, rng))
+                return f / f"m_{name}", f"m_{name}"
+            return make
+
+        def gltf_json(rng: random.Random) -> tuple[Path, str]:
+            doc = mutate_json(self.inline_doc if rng.random() < 0.3 else self.gltf_doc, rng)
+            (f / "m.gltf").write_text(json.dumps(doc))
+            return f / "m.gltf", "m.gltf"
+
+        def mtl(rng: random.Random) -> tuple[Path, str]:
+            (f / "mm.mtl").write_bytes(mutate_bytes(_MTL, rng))
+            (f / "mm.obj").write_bytes(_OBJ.replace(b"f.mtl", b"mm.mtl"))
+            return f / "mm.obj", "mm."  # an error may name the .obj or the .mtl
+
+        def texture(rng: random.Random) -> tuple[Path, str]:
+            png = png_header_only(12000, 12000) if rng.random() < 0.2 else mutate_bytes(_png(), rng)
+            (f / "mt.png").write_bytes(png)
+            (f / "mt.gltf").write_text(json.dumps(dict(self.gltf_doc, images=[{"uri": "mt.png"}])))
+            return f / "mt.gltf", "mt."
+
+        def vkpbr_json(rng: random.Random) -> tuple[Path, str]:
+            from vkpbr.scene.baked_file import write_sections
+
+            out = []
+            for name, data in self.sections:
+                if name == "scene":
+                    data = json.dumps(mutate_json(json.loads(data), rng)).encode()
+                elif rng.random() < 0.05:
+                    data = mutate_bytes(data, rng)
+                out.append((name, data))
+            write_sections(f / "mj.vkpbr", out)
+            return f / "mj.vkpbr", "mj.vkpbr"
+
+        def bomb(rng: random.Random) -> tuple[Path, str]:
+            doc = json.loads(json.dumps(self.gltf_doc))
+            acc = rng.choice(doc["accessors"])
+            acc["count"] = rng.choice([2**31 - 1, 2**30, 10**9, 2**24])
+            (f / "mb.gltf").write_text(json.dumps(doc))
+            return f / "mb.gltf", "mb.gltf"
+
+        return {
+            "gltf json": gltf_json,
+            "gltf bytes": bytes_of("s.gltf", self.gltf_bytes),
+            "glb bytes": bytes_of("s.glb", self.glb),
+            "obj bytes": bytes_of("f.obj", _OBJ),
+            "mtl bytes": mtl,
+            "comp5822mesh bytes": bytes_of("s.comp5822mesh", self.comp),
+            "vkpbr bytes": bytes_of("s.vkpbr", self.vkpbr),
+            "vkpbr json (checksums fixed)": vkpbr_json,
+            "texture bytes and bombs": texture,
+            "count bombs": bomb,
+        }
+
+
+# --- running --------------------------------------------------------------------------------
+def run_one(path: Path, names: str) -> tuple[str, str]:
+    """(outcome, detail) of loading `path`: loaded / clean / unclean."""
+    from vkpbr.errors import VkpbrError
+    from vkpbr.scene.loader import load_scene
+
+    t = time.perf_counter()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            load_scene(path)
+        outcome, detail = "loaded", ""
+    except VkpbrError as exc:
+        text = str(exc)
+        ok = "\n" not in text and names in text
+        outcome, detail = ("clean", "") if ok else ("unclean", f"message: {text[:200]!r}")
+    except Exception as exc:  # noqa: BLE001 - the point of the suite
+        outcome, detail = "unclean", f"{type(exc).__name__}: {str(exc)[:200]}"
+    if time.perf_counter() - t > SLOW_S:
+        outcome, detail = "unclean", f"slow: {time.perf_counter() - t:.1f} s"
+    return outcome, detail
+
+
+def fuzz(folder: Path, per_format: int, seed: int = SEED) -> tuple[dict, list[str]]:
+    """Run `per_format` inputs of every format; returns (counts, unclean details)."""
+    corpus = Corpus(folder)
+    rng = random.Random(seed)
+    counts: dict[str, collections.Counter] = {}
+    failures: list[str] = []
+    import logging
+
+    logging.getLogger("vkpbr").setLevel(logging.CRITICAL)  # the loaders' one-line warnings
+    for name, make in corpus.formats().items():
+        c = counts[name] = collections.Counter()
+        for i in range(per_format):
+            path, names = make(rng)
+            outcome, detail = run_one(path, names)
+            c["tried"] += 1
+            c[outcome] += 1
+            if outcome == "unclean":
+                failures.append(f"{name} #{i}: {detail}")
+    return counts, failures
+
+
+def table(counts: dict) -> str:
+    lines = ["| format | tried | clean errors | loaded | unclean |", "|---|---:|---:|---:|---:|"]
+    total = collections.Counter()
+    for name, c in counts.items():
+        lines.append(f"| {name} | {c['tried']} | {c['clean']} | {c['loaded']} | {c['unclean']} |")
+        total.update(c)
+    lines.append(f"| all | {total['tried']} | {total['clean']} | {total['loaded']} | {total['unclean']} |")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    import tempfile
+
+    n = int(sys.argv[1]) if len(sys.argv) > 1 else 2000
+    formats = 10
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        counts, failures = fuzz(Path(tmp), max(1, n // formats), int(sys.argv[2]) if len(sys.argv) > 2 else SEED)
+        print(table(counts))
+        print(f"\n{sum(c['tried'] for c in counts.values())} inputs in {time.perf_counter() - t0:.0f} s")
+        for line in failures[:40]:
+            print("UNCLEAN", line)
+    sys.exit(1 if failures else 0)
