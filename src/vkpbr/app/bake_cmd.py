@@ -54,6 +54,10 @@ def add_parser(subparsers: Any) -> None:
                    help="store decoded RGBA8 mip chains in the file (larger, loads faster)")
     p.add_argument("--strict", action="store_true",
                    help="a missing texture file is an error (default: bake with a warning)")
+    p.add_argument("--allow-outside-paths", action="store_true",
+                   help="read files the scene names outside its folder (../x.bin, absolute "
+                   "paths, symlinks out); by default such a buffer or mesh is an error and "
+                   "such a texture is left out like a missing one (docs/security.md)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -119,7 +123,8 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     report = bake_file(args.scene, args.out, embed_textures=args.embed_textures,
                        progress=not (args.no_progress or args.json),
-                       strict=getattr(args, "strict", False))
+                       strict=getattr(args, "strict", False),
+                       allow_outside_paths=getattr(args, "allow_outside_paths", False))
     seconds = time.perf_counter() - start
     # Peak resident memory of this process (Linux reports ru_maxrss in KiB).
     report["peak_memory_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
