@@ -402,6 +402,12 @@ def test_cli_refusal_is_one_line_and_flag_is_documented(tree: tuple[Path, Path],
     assert main(["bake", str(path), "--out", str(tree[0] / "o.vkpbr"), "--allow-outside-paths",
                  "--no-progress"]) == 0
     capsys.readouterr()
+    # A bake whose textures stay outside its folder says, in its result line, what loading
+    # it will need.
+    src = write_gltf(tree[1] / "s.gltf", "tri.bin", ("t.png",))
+    assert main(["bake", str(src), "--out", str(tree[0] / "s.vkpbr"), "--no-progress"]) == 0
+    assert ("1 texture external (1 outside the .vkpbr's folder: loading it needs "
+            "--allow-outside-paths, or bake with --embed-textures)") in capsys.readouterr().out
     for command in ("render", "view", "bake"):
         assert main([command, "--help"]) == 0
         assert "--allow-outside-paths" in capsys.readouterr().out

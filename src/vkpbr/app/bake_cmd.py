@@ -139,7 +139,10 @@ def run(args: argparse.Namespace) -> int:
         n = report.get(f"{kind}_textures")
         if n:
             textures += f", {n} texture{'s' if n != 1 else ''} {kind}"
-    if report.get("external_textures"):
+    if report.get("outside_textures"):
+        textures += (f" ({report['outside_textures']} outside the .vkpbr's folder: loading it "
+                     "needs --allow-outside-paths, or bake with --embed-textures)")
+    elif report.get("external_textures"):
         textures += " (they must stay where they are, relative to the .vkpbr)"
     print(f"wrote {args.out} ({report['file_bytes'] / 2**20:.2f} MiB, "
           f"{report['meshes']} meshes, {report['vertices']:,} vertices, "

@@ -403,7 +403,9 @@ def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: boo
     Returns
     -------
     `bake_report` plus ``out``, ``file_bytes``, ``load_seconds``, ``embed_seconds``,
-    ``write_seconds``, ``source_sha256``, ``embedded_textures`` and ``external_textures``.
+    ``write_seconds``, ``source_sha256``, ``embedded_textures``, ``external_textures`` and
+    ``outside_textures`` (external ones outside the baked file's folder: loading it then needs
+    ``allow_outside_paths``).
     Textures left as files are logged (INFO, "vkpbr.bake.bake"): how many, and where they must
     stay for the baked file to find them.
     """
@@ -424,7 +426,10 @@ def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: boo
     report.update(out=str(out_path), file_bytes=size, load_seconds=t1 - t0,
                   embed_seconds=t2 - te, write_seconds=time.perf_counter() - t2,
                   source_sha256=baked.source_key, embedded_textures=embedded,
-                  external_textures=sum(img.path is not None for img in baked.images))
+                  external_textures=sum(img.path is not None for img in baked.images),
+                  outside_textures=sum(img.path is not None and not Path(img.path).resolve()
+                                       .is_relative_to(out_path.resolve().parent)
+                                       for img in baked.images))
     return report
 
 
