@@ -165,10 +165,15 @@ def _channels(image: Image) -> int:
     """Channel count of an image for the texture table (read from the header, not decoded)."""
     if image.pixels is not None:
         return int(image.pixels.shape[2]) if image.pixels.ndim == 3 else 1
+    if image.refused or image.path is None:
+        return 4  # the path policy refused it: never opened
     try:
+        import io
+
         from PIL import Image as PILImage
 
-        with PILImage.open(image.path) as img:
+        # read_resource: regular files only (a FIFO named as a texture must not block).
+        with PILImage.open(io.BytesIO(read_resource(image.path))) as img:
             return max(1, min(4, len(img.getbands())))
     except (OSError, ValueError):
         return 4
