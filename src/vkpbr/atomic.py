@@ -30,7 +30,10 @@ def atomic_writer(path: str | Path, fsync: bool = False) -> Iterator[BinaryIO]:
     OSError from writing (or from creating or renaming the temporary file) is re-raised with
     `path` as its filename, so messages name the user's file."""
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:  # name the user's path, not the temporary one mkstemp tried
+        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
     try:
         with os.fdopen(fd, "wb") as f:
             yield f

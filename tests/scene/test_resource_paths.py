@@ -446,3 +446,44 @@ def test_failed_bake_names_the_output_not_its_temporary(tree: tuple[Path, Path])
     assert proc.stderr == (f"vkpbr: error: {out}: File too large (the file size limit "
                            "(ulimit -f) is too low)\n")
     assert not out.exists() and not list(scene.glob(".*.tmp"))
+
+
+def test_atomic_writer_errors_name_the_target(tmp_path: Path) -> None:
+    from vkpbr.atomic import atomic_writer
+
+    target = tmp_path / "out.bin"
+    with pytest.raises(OSError) as exc, atomic_writer(target) as f:
+        f.write(b"x")
+        raise OSError(errno.ENOSPC, "No space left on device")  # a write error: no filename
+    assert exc.value.errno == errno.ENOSPC and exc.value.filename == str(target)
+    assert not list(tmp_path.iterdir())
+    missing = tmp_path / "no" / "out.bin"  # mkstemp fails: named as the target, not a .tmp
+    with pytest.raises(FileNotFoundError) as exc, atomic_writer(missing):
+        pass
+    assert exc.value.filename == str(missing)
+    other = OSError(errno.EIO, "I/O error", "/some/source")  # another file's error stays its own
+    with pytest.raises(OSError) as exc, atomic_writer(target):
+        raise other
+    assert exc.value is other
+
+
+def test_unreadable_material_library_names_the_obj(tree: tuple[Path, Path],
+                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    """An OSError reading an MTL (EACCES here, faked: tests may run as root) names the OBJ
+    the user asked for, the library, the OS's reason and what to do."""
+    import vkpbr.scene.obj as obj
+
+    (tree[0] / "m.mtl").write_text("newmtl red\nKd 1 0 0\n")
+    path = write_obj(tree[0], "m.mtl")
+
+    def denied(file: object, *args: object) -> bytes:
+        if str(file).endswith(".mtl"):
+            raise PermissionError(errno.EACCES, "Permission denied", str(file))
+        return read_resource(file, *args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(obj, "read_resource", denied)
+    with pytest.raises(SceneError) as exc:
+        load_scene(path)
+    assert str(exc.value) == (f"{path}: material library m.mtl: cannot read (Permission "
+                              "denied); check that the file exists next to the scene and is "
+                              "readable")

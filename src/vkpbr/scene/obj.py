@@ -17,7 +17,13 @@ import numpy as np
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.geometry import drop_nonfinite, ensure_normals, normalize_mesh_arrays, polygon_fan
-from vkpbr.scene.resources import ResourcePolicy, ResourceRefused, is_regular_file, read_resource
+from vkpbr.scene.resources import (
+    ResourcePolicy,
+    ResourceRefused,
+    is_regular_file,
+    read_error,
+    read_resource,
+)
 from vkpbr.scene.types import Image, Material, Mesh, Node, Sampler, Scene, TextureRef
 
 __all__ = ["load_obj", "parse_mtl"]
@@ -254,8 +260,10 @@ def parse_mtl(path: Path, images: list[Image],
     """
     try:
         lines = read_resource(path).splitlines()
-    except OSError as exc:
-        raise SceneError(path, f"cannot read: {exc.strerror}") from exc
+    except OSError as exc:  # named as the user's scene file, then the library
+        if policy is None:
+            raise SceneError(path, f"cannot read: {exc.strerror or exc}") from exc
+        raise read_error(policy.scene, "material library", path.name, exc) from exc
     cache = {img.path: i for i, img in enumerate(images) if img.path is not None}
     out: dict[str, Material] = {}
     name: str | None = None
