@@ -487,3 +487,15 @@ def test_unreadable_material_library_names_the_obj(tree: tuple[Path, Path],
     assert str(exc.value) == (f"{path}: material library m.mtl: cannot read (Permission "
                               "denied); check that the file exists next to the scene and is "
                               "readable")
+
+
+def test_nul_in_an_image_name_is_a_refused_texture(tree: tuple[Path, Path],
+                                                   caplog: pytest.LogCaptureFixture) -> None:
+    path = write_gltf(tree[0] / "t.gltf", "tri.bin", ("a%00b.png", "/x%00y.png"))
+    loaded = load_scene(path)
+    assert [img.refused for img in loaded.images] == ["not valid file names"] * 2
+    assert warnings_of(caplog) == [
+        f"2 of 2 textures of {path} not valid file names (first: a\\0b.png); {TAIL}"]
+    assert decode_images(loaded) == [None, None]
+    with pytest.raises(SceneError, match="not a valid file name"):
+        load_scene(write_gltf(tree[0] / "t.gltf", "tri%00.bin"))

@@ -237,7 +237,7 @@ def _map(line: list[bytes], folder: Path, images: list[Image], cache: dict[Path,
     try:
         file = (policy or ResourcePolicy(folder / "_.mtl")).resolve(file_name, "texture", folder)
     except ResourceRefused as exc:  # reported and replaced like a missing file
-        file, refused = exc.file or folder / file_name.replace("\0", ""), exc.reason
+        file, refused = exc.file or folder / file_name, exc.reason
     if file not in cache:  # a missing file: load_scene reports all of them in one line
         cache[file] = len(images)
         images.append(Image(name=file_name, path=file, refused=refused))

@@ -42,7 +42,7 @@ class ResourceRefused(SceneError):
                  path: Path | None = None) -> None:
         self.reference = reference
         self.reason = reason
-        self.file = path  # the path it would have read (None: no valid name)
+        self.file = path  # the path it would have read
         super().__init__(scene, problem)
 
 
@@ -107,10 +107,10 @@ def resolve_resource(scene_path: str | os.PathLike[str], reference: str,
     """
     scene_path = Path(scene_path)
     folder = scene_path.parent
+    path = (Path(base) if base is not None else folder) / reference
     if "\0" in reference:
         raise ResourceRefused(scene_path, reference, "not valid file names",
-                              f"{what} {reference!r} is not a valid file name (NUL byte)")
-    path = (Path(base) if base is not None else folder) / reference
+                              f"{what} {reference!r} is not a valid file name (NUL byte)", path)
     if not allow_outside:
         tree = _real(Path(root) if root is not None else folder)
         if not _real(path).is_relative_to(tree):
@@ -212,4 +212,4 @@ def policy_image(policy: ResourcePolicy, reference: str, name: str | None = None
                      mime_type=mime_type)
     except ResourceRefused as exc:
         return Image(name=name or reference, mime_type=mime_type, refused=exc.reason,
-                     path=exc.file or (Path(base) if base else policy.scene.parent) / "refused")
+                     path=exc.file)

@@ -36,13 +36,21 @@ def missing_texture_files(images: Sequence[Image]) -> list[Image]:
 
 
 def _shown(file: Path, folder: Path) -> str:
-    """`file` relative to `folder` when it lies below it, else absolute (for messages)."""
-    for f, d in ((Path(file), Path(folder)), (Path(file).resolve(), Path(folder).resolve())):
+    """`file` relative to `folder` when it lies below it, else absolute (for messages; a NUL
+    byte shown as \\0, so that the line stays one printable line)."""
+    def rel(f: Path, d: Path) -> str | None:
         try:
             return f.relative_to(d).as_posix()
         except ValueError:
-            pass
-    return str(Path(file).resolve())
+            return None
+
+    shown = rel(Path(file), Path(folder))
+    if shown is None:
+        try:
+            shown = rel(Path(file).resolve(), Path(folder).resolve()) or str(Path(file).resolve())
+        except (OSError, ValueError):  # a name the OS rejects (a NUL byte): as written
+            shown = str(file)
+    return shown.replace("\0", "\\0")
 
 
 def check_texture_files(scene: Scene, source: str | os.PathLike[str], strict: bool = False) -> int:
