@@ -26,9 +26,14 @@ def _umask() -> int:
 @contextlib.contextmanager
 def atomic_writer(path: str | Path, fsync: bool = False) -> Iterator[BinaryIO]:
     """`with atomic_writer(path) as f: f.write(...)`: `path` appears only when the block
-    succeeds; on an exception the temporary file is removed and `path` is untouched."""
+    succeeds; on an exception the temporary file is removed and `path` is untouched. An
+    OSError from writing (or from creating or renaming the temporary file) is re-raised with
+    `path` as its filename, so messages name the user's file."""
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:  # name the user's path, not the temporary one mkstemp tried
+        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
     try:
         with os.fdopen(fd, "wb") as f:
             yield f
@@ -37,6 +42,13 @@ def atomic_writer(path: str | Path, fsync: bool = False) -> Iterator[BinaryIO]:
                 os.fsync(f.fileno())
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
+    except OSError as exc:
+        Path(tmp).unlink(missing_ok=True)
+        if exc.filename is None or exc.filename == tmp:
+            # A failed write names the user's path, never the temporary file (which is gone)
+            # and never nothing ("File too large" from a write has no filename).
+            raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
+        raise
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

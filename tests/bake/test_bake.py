@@ -99,7 +99,7 @@ def test_report_numbers() -> None:
 @pytest.fixture
 def fake_loader(monkeypatch: pytest.MonkeyPatch) -> None:
     """A stand-in for load_scene so these tests do not depend on the importer."""
-    monkeypatch.setattr("vkpbr.bake.bake.load_scene", lambda path, strict=False: scene_of(grid(8)))
+    monkeypatch.setattr("vkpbr.bake.bake.load_scene", lambda path, strict=False, **_: scene_of(grid(8)))
 
 
 def test_bake_file_and_cache(tmp_path: Path, fake_loader: None) -> None:

@@ -106,17 +106,26 @@ def test_baked_file_with_external_textures(tmp_path: Path, caplog: pytest.LogCap
     assert messages(caplog) == [
         f"t.vkpbr: 2 of 2 textures stay external files; they must stay in "
         f"{(src_dir / 'maps').resolve()} (../src/maps from the baked file), or bake with "
-        "--embed-textures to store them inside"]
+        "--embed-textures to store them inside; they lie outside the baked file's folder, so "
+        "loading it needs --allow-outside-paths"]
     caplog.clear()
+    # They lie outside the baked file's folder: the path policy refuses them by default
+    # (one line, like missing ones) and reads them with allow_outside_paths.
     load_scene(out)
+    assert messages(caplog) == [
+        f"2 of 2 textures of {out} outside the scene's folder (first: "
+        "../src/maps/a.png; pass --allow-outside-paths "
+        f"(allow_outside_paths=True) to read them); {TAIL}"]
+    caplog.clear()
+    load_scene(out, allow_outside_paths=True)
     assert messages(caplog) == []  # found next to the baked file's recorded paths
     (src_dir / "maps" / "b.png").unlink()
-    load_scene(out)  # the same one line when they are gone, strict honoured
+    load_scene(out, allow_outside_paths=True)  # the same one line when they are gone
     # Named as the baked file records it: relative to the baked file's folder.
     assert messages(caplog) == [
         f"1 of 2 textures not found next to {out} (first: ../src/maps/b.png); {TAIL}"]
     with pytest.raises(SceneError, match=r"t.vkpbr: 1 of 2 textures not found \(first: \.\./src/maps/b.png\)$"):
-        load_scene(out, strict=True)
+        load_scene(out, strict=True, allow_outside_paths=True)
     # An embedded bake says nothing about external files and needs none at load.
     caplog.clear()
     embedded = out_dir / "e.vkpbr"
@@ -141,12 +150,15 @@ def test_textureless_sponza_prints_one_line(assets: Path, tmp_path: Path,
     path = tmp_path / "Sponza.gltf"
     shutil.copy(sponza / "Sponza.gltf", path)
     (tmp_path / "Sponza.bin").symlink_to(sponza / "Sponza.bin")
+    # The .bin is a symlink out of tmp_path, which the path policy refuses by default.
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        scene = load_scene(path)
+        scene = load_scene(path, allow_outside_paths=True)
         decode_images(scene)  # what the renderer does next: INFO only, below the default level
     assert len(scene.images) == 69
     (line,) = [r for r in caplog.records if r.levelno >= logging.WARNING]
     assert line.getMessage().startswith(f"69 of 69 textures not found next to {path} (first: ")
     with pytest.raises(SceneError, match=r"Sponza.gltf: 69 of 69 textures not found \(first: "):
-        load_scene(path, strict=True)
+        load_scene(path, strict=True, allow_outside_paths=True)
+    with pytest.raises(SceneError, match=r"Sponza.gltf: buffer 0 refers to Sponza.bin, which resolves outside "):
+        load_scene(path)

@@ -55,6 +55,10 @@ def add_parser(subparsers: Any) -> None:
                    help="store decoded RGBA8 mip chains in the file (larger, loads faster)")
     p.add_argument("--strict", action="store_true",
                    help="a missing texture file is an error (default: bake with a warning)")
+    p.add_argument("--allow-outside-paths", action="store_true",
+                   help="read files the scene names outside its folder (../x.bin, absolute "
+                   "paths, symlinks out); by default such a buffer or mesh is an error and "
+                   "such a texture is left out like a missing one (docs/security.md)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -120,7 +124,8 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     report = bake_file(args.scene, args.out, embed_textures=args.embed_textures,
                        progress=not (args.no_progress or args.json),
-                       strict=getattr(args, "strict", False))
+                       strict=getattr(args, "strict", False),
+                       allow_outside_paths=getattr(args, "allow_outside_paths", False))
     seconds = time.perf_counter() - start
     # Peak resident memory of this process (Linux reports ru_maxrss in KiB).
     report["peak_memory_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
@@ -135,7 +140,10 @@ def run(args: argparse.Namespace) -> int:
         n = report.get(f"{kind}_textures")
         if n:
             textures += f", {n} texture{'s' if n != 1 else ''} {kind}"
-    if report.get("external_textures"):
+    if report.get("outside_textures"):
+        textures += (f" ({report['outside_textures']} outside the .vkpbr's folder: loading it "
+                     "needs --allow-outside-paths, or bake with --embed-textures)")
+    elif report.get("external_textures"):
         textures += " (they must stay where they are, relative to the .vkpbr)"
     say(f"wrote {args.out} ({report['file_bytes'] / 2**20:.2f} MiB, "
           f"{report['meshes']} meshes, {report['vertices']:,} vertices, "

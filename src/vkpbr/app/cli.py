@@ -13,6 +13,7 @@ Commands, one module each: render_cmd, view_cmd, info_cmd, bench_cmd, bake_cmd.
 from __future__ import annotations
 
 import argparse
+import errno
 import logging
 import sys
 from collections.abc import Sequence
@@ -105,7 +106,19 @@ def _run(args: argparse.Namespace) -> int:
         log.error("error: out of memory (try a smaller --size)")
         return 1
     except OSError as exc:
-        log.error("error: %s: %s", exc.filename or "", exc.strerror or exc)
+        # Name the file involved: the OS's filename(s), else the command's output or scene
+        # (an OSError from a bare write has none: "File too large" under `ulimit -f`).
+        files = [str(f) for f in (exc.filename, exc.filename2) if f is not None]
+        if not files:
+            files = [f"while {verb} {v}" for verb, key in (("writing", "out"), ("reading", "scene"))
+                     if (v := getattr(args, key, None)) is not None][:1]
+        hints = {errno.EFBIG: "the file size limit (ulimit -f) is too low",
+                 errno.ENOSPC: "the disk is full", errno.EDQUOT: "the disk quota is full",
+                 errno.EACCES: "check the permissions", errno.EPERM: "check the permissions",
+                 errno.ENAMETOOLONG: "use a shorter path", errno.EROFS: "write elsewhere"}
+        hint = hints.get(exc.errno)  # type: ignore[arg-type]
+        log.error("error: %s%s%s", " -> ".join(files) + ": " if files else "",
+                  exc.strerror or exc, f" ({hint})" if hint else "")
         return 1
 
 

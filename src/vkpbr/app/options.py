@@ -85,6 +85,10 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
                "source changes", group="device and scene loading", metavar="DIR"),
     OptionSpec("--strict", "on", "a missing texture (or another defect the loader would "
                "work around) is an error, exit status 1", group="device and scene loading"),
+    OptionSpec("--allow-outside-paths", "on", "read files the scene names outside its folder "
+               "(../x.bin, absolute paths, symlinks out); by default such a buffer or mesh "
+               "is an error and such a texture is replaced like a missing one "
+               "(docs/security.md)", group="device and scene loading"),
 )
 
 

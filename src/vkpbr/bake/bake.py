@@ -31,7 +31,7 @@ from urllib.parse import unquote
 import numpy as np
 from tqdm import tqdm
 
-from ..errors import BakeFormatError
+from ..errors import BakeFormatError, SceneError
 from ..scene.baked_file import (
     HAS_COLORS,
     HAS_TEXCOORDS,
@@ -45,6 +45,7 @@ from ..scene.baked_file import (
 )
 from ..scene.loader import load_scene
 from ..scene.mips import mip_chain
+from ..scene.resources import ResourcePolicy, is_regular_file, read_resource
 from ..scene.textures import decode_images
 from ..scene.types import Mesh, Scene
 from .frames import (
@@ -291,8 +292,10 @@ def bake_report(scene: Scene, baked: BakedScene) -> dict[str, Any]:
     }
 
 
-def _dependencies(path: Path) -> list[Path]:
-    """Files a source depends on: a .gltf's external buffers and images, an .obj's mtllibs."""
+def _dependencies(path: Path, allow_outside_paths: bool = False) -> list[Path]:
+    """Files a source depends on: a .gltf's external buffers and images, an .obj's mtllibs
+    (those the path policy lets the loader read: regular files, inside the source's folder
+    tree unless `allow_outside_paths`)."""
     deps: list[Path] = []
     try:
         if path.suffix.lower() == ".gltf":
@@ -305,10 +308,19 @@ def _dependencies(path: Path) -> list[Path]:
                         for line in f if line.startswith("mtllib ")]
     except (OSError, ValueError, AttributeError):
         return []  # the loader reports a broken source; the key then covers the main file
-    return sorted({Path(unquote(str(d))) for d in deps if Path(unquote(str(d))).is_file()})
+    policy = ResourcePolicy(path, allow_outside=allow_outside_paths)
+    out = set()
+    for d in deps:
+        try:
+            file = policy.resolve(os.path.relpath(unquote(str(d)), path.parent))
+        except (SceneError, ValueError):
+            continue  # refused: the loader says so (or never reads it)
+        if is_regular_file(file):
+            out.add(file)
+    return sorted(out)
 
 
-def source_key(path: str | Path) -> tuple[str, list[str]]:
+def source_key(path: str | Path, allow_outside_paths: bool = False) -> tuple[str, list[str]]:
     """sha256 over a source file and its dependencies (names, sizes and contents).
 
     Returns
@@ -316,12 +328,12 @@ def source_key(path: str | Path) -> tuple[str, list[str]]:
     (hex digest, file names relative to the source's folder)
     """
     path = Path(path)
-    files = [path, *_dependencies(path)]
+    files = [path, *_dependencies(path, allow_outside_paths)]
     h = hashlib.sha256()
     names = []
     for f in files:
-        name = f.name if f == path else Path(f).relative_to(path.parent).as_posix()
-        data = f.read_bytes()
+        name = f.name if f == path else Path(os.path.relpath(f, path.parent)).as_posix()
+        data = read_resource(f)
         h.update(f"{name}\0{len(data)}\0".encode())
         h.update(data)
         names.append(name)
@@ -365,13 +377,17 @@ def _external_textures_note(out_path: Path, images: list[BakedImage]) -> str | N
     if len(folders) == 1:
         with contextlib.suppress(ValueError):  # another drive (Windows): stored absolute
             rel = os.path.relpath(folders[0], out_path.resolve().parent)
+    tree = out_path.resolve().parent
+    outside = "" if all(f.is_relative_to(tree) for f in external) else (
+        "; they lie outside the baked file's folder, so loading it needs --allow-outside-paths")
     return (f"{out_path.name}: {len(external)} of {len(images)} textures stay external files; they "
             f"must stay in {where}" + (f" ({Path(rel).as_posix()} from the baked file)" if rel else "")
-            + ", or bake with --embed-textures to store them inside")
+            + ", or bake with --embed-textures to store them inside" + outside)
 
 
 def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: bool = False,
-              progress: bool = True, strict: bool = False) -> dict[str, Any]:
+              progress: bool = True, strict: bool = False,
+              allow_outside_paths: bool = False) -> dict[str, Any]:
     """Load a scene file, bake it, write `out_path`.
 
     Parameters
@@ -381,20 +397,24 @@ def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: boo
     embed_textures : store decoded mip chains instead of references (`embed_images`).
     progress : a tqdm bar over meshes.
     strict : a missing texture file is an error (see `load_scene`).
+    allow_outside_paths : read files the source names outside its folder tree (see
+        `load_scene`).
 
     Returns
     -------
     `bake_report` plus ``out``, ``file_bytes``, ``load_seconds``, ``embed_seconds``,
-    ``write_seconds``, ``source_sha256``, ``embedded_textures`` and ``external_textures``.
+    ``write_seconds``, ``source_sha256``, ``embedded_textures``, ``external_textures`` and
+    ``outside_textures`` (external ones outside the baked file's folder: loading it then needs
+    ``allow_outside_paths``).
     Textures left as files are logged (INFO, "vkpbr.bake.bake"): how many, and where they must
     stay for the baked file to find them.
     """
     source_path, out_path = Path(source_path), Path(out_path)
     t0 = time.perf_counter()
-    scene = load_scene(source_path, strict=strict)
+    scene = load_scene(source_path, strict=strict, allow_outside_paths=allow_outside_paths)
     t1 = time.perf_counter()
     baked = bake_scene(scene, progress=progress)
-    baked.source_key, baked.source_files = source_key(source_path)
+    baked.source_key, baked.source_files = source_key(source_path, allow_outside_paths)
     te = time.perf_counter()
     embedded = embed_images(scene, baked) if embed_textures else 0
     t2 = time.perf_counter()
@@ -406,18 +426,24 @@ def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: boo
     report.update(out=str(out_path), file_bytes=size, load_seconds=t1 - t0,
                   embed_seconds=t2 - te, write_seconds=time.perf_counter() - t2,
                   source_sha256=baked.source_key, embedded_textures=embedded,
-                  external_textures=sum(img.path is not None for img in baked.images))
+                  external_textures=sum(img.path is not None for img in baked.images),
+                  outside_textures=sum(img.path is not None and not Path(img.path).resolve()
+                                       .is_relative_to(out_path.resolve().parent)
+                                       for img in baked.images))
     return report
 
 
-def cached_bake(source_path: str | Path, cache_dir: str | Path) -> Path:
+def cached_bake(source_path: str | Path, cache_dir: str | Path,
+                allow_outside_paths: bool = False) -> Path:
     """Path of an up-to-date bake of `source_path` in `cache_dir`, baking only when needed.
 
     The file name carries the source's content hash, so an edited source misses the cache;
-    an existing file that fails validation is baked again.
+    an existing file that fails validation is baked again. Load the result with
+    ``load_scene(out, root=source_path.parent)``: its external textures lie beside the source,
+    not in the cache.
     """
     source_path, cache_dir = Path(source_path), Path(cache_dir)
-    key, _ = source_key(source_path)
+    key, _ = source_key(source_path, allow_outside_paths)
     out = cache_dir / f"{source_path.stem}-{key[:16]}.vkpbr"
     if out.is_file():
         try:
@@ -426,5 +452,5 @@ def cached_bake(source_path: str | Path, cache_dir: str | Path) -> Path:
         except BakeFormatError:
             pass
     cache_dir.mkdir(parents=True, exist_ok=True)
-    bake_file(source_path, out, progress=False)
+    bake_file(source_path, out, progress=False, allow_outside_paths=allow_outside_paths)
     return out

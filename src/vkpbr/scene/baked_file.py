@@ -32,6 +32,7 @@ import numpy as np
 from vkpbr.atomic import atomic_writer
 from vkpbr.errors import BakeFormatError
 from vkpbr.scene.mips import is_mip_chain
+from vkpbr.scene.resources import ResourcePolicy, policy_image
 from vkpbr.scene.types import Camera, Image, Light, Material, Mesh, Node, Sampler, Scene, TextureRef
 
 __all__ = [
@@ -433,7 +434,7 @@ def read_baked(path: str | os.PathLike[str], *, mmap: bool = False) -> BakedScen
 
 
 def load_baked_scene(path: str | os.PathLike[str], *, expected_source_key: str | None = None,
-                     mmap: bool = False) -> Scene:
+                     mmap: bool = False, policy: ResourcePolicy | None = None) -> Scene:
     """Load a `.vkpbr` file as a `Scene` (what the scene importer calls for .vkpbr files).
 
     Mesh arrays are views into the file's buffer; each mesh also carries `qtangents` (N, 4)
@@ -447,6 +448,8 @@ def load_baked_scene(path: str | os.PathLike[str], *, expected_source_key: str |
     path : the baked file
     expected_source_key : when given, a file baked from other source content is rejected
     mmap : see `read_baked`
+    policy : where external textures may lie (default: the baked file's folder tree; one
+        outside it is reported and replaced like a missing texture).
 
     Raises
     ------
@@ -476,8 +479,11 @@ def load_baked_scene(path: str | os.PathLike[str], *, expected_source_key: str |
             images.append(Image(img.name, pixels=img.levels[0], mime_type=img.mime_type,
                                 mips=tuple(img.levels[1:]), mips_srgb=img.srgb))
         else:
-            images.append(Image(img.name, data=img.data, path=None if img.data else img.path,
-                                mime_type=img.mime_type))
+            if img.data is None and img.path is not None:
+                images.append(policy_image(policy or ResourcePolicy(Path(path)), str(img.path),
+                                           name=img.name, mime_type=img.mime_type))
+            else:
+                images.append(Image(img.name, data=img.data, mime_type=img.mime_type))
     return Scene(name=baked.name, meshes=meshes, materials=baked.materials, images=images,
                  nodes=baked.nodes, lights=baked.lights, cameras=baked.cameras,
                  source=Path(path))

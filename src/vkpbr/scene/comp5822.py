@@ -17,6 +17,7 @@ import numpy as np
 from vkpbr.atomic import atomic_writer
 from vkpbr.errors import SceneError
 from vkpbr.scene.geometry import ensure_normals
+from vkpbr.scene.resources import ResourcePolicy, policy_image, read_resource
 from vkpbr.scene.types import Image, Material, Mesh, Node, Scene, TextureRef
 
 __all__ = ["MAGIC", "VARIANT", "read_comp5822mesh", "write_comp5822mesh"]
@@ -50,8 +51,9 @@ class _Reader:
         return np.frombuffer(raw, dtype).reshape(shape).astype(dtype[1:])  # native, writable copy
 
 
-def read_comp5822mesh(path: str | Path) -> Scene:
-    """Read a .comp5822mesh file.
+def read_comp5822mesh(path: str | Path, policy: ResourcePolicy | None = None) -> Scene:
+    """Read a .comp5822mesh file. `policy`: where its texture files may lie (default: the
+    file's folder tree; a texture outside it is reported and replaced like a missing one).
 
     Returns
     -------
@@ -65,7 +67,7 @@ def read_comp5822mesh(path: str | Path) -> Scene:
     """
     path = Path(path)
     try:
-        r = _Reader(path, path.read_bytes())
+        r = _Reader(path, read_resource(path))
     except OSError as exc:
         raise SceneError(path, f"cannot read: {exc.strerror or exc}") from exc
     if r.take(16, "magic") != MAGIC:
@@ -75,6 +77,7 @@ def read_comp5822mesh(path: str | Path) -> Scene:
         shown = variant.split(b"\0", 1)[0].decode("ascii", "replace")
         raise SceneError(path, f"unsupported variant {shown!r} (expected 'default')")
     scene = Scene(name=path.stem, source=path)
+    policy = policy or ResourcePolicy(path)
     n_tex = r.u32("texture count")
     if n_tex * 6 > len(r.data) - r.pos:  # each texture needs >= 6 bytes: fail before looping
         raise SceneError(path, f"truncated file: texture count {n_tex} is too large")
@@ -91,7 +94,7 @@ def read_comp5822mesh(path: str | Path) -> Scene:
         except UnicodeDecodeError as exc:
             raise SceneError(path, f"texture {t}: path is not UTF-8") from exc
         # A missing file: load_scene reports all of them in one line.
-        scene.images.append(Image(name=rel, path=path.parent / rel))
+        scene.images.append(policy_image(policy, rel))
 
     n_mat = r.u32("material count")
     if n_mat * 20 > len(r.data) - r.pos:
@@ -162,10 +165,15 @@ def _channels(image: Image) -> int:
     """Channel count of an image for the texture table (read from the header, not decoded)."""
     if image.pixels is not None:
         return int(image.pixels.shape[2]) if image.pixels.ndim == 3 else 1
+    if image.refused or image.path is None:
+        return 4  # the path policy refused it: never opened
     try:
+        import io
+
         from PIL import Image as PILImage
 
-        with PILImage.open(image.path) as img:
+        # read_resource: regular files only (a FIFO named as a texture must not block).
+        with PILImage.open(io.BytesIO(read_resource(image.path))) as img:
             return max(1, min(4, len(img.getbands())))
     except (OSError, ValueError):
         return 4

@@ -14,17 +14,19 @@ from vkpbr.errors import SceneError
 from vkpbr.scene.gltf_document import SUPPORTED_EXTENSIONS, GltfDocument
 from vkpbr.scene.gltf_materials import build_materials, load_images
 from vkpbr.scene.gltf_nodes import build_nodes_cameras_lights
+from vkpbr.scene.resources import ResourcePolicy, read_resource
 from vkpbr.scene.types import Scene
 
 __all__ = ["load_gltf", "SUPPORTED_EXTENSIONS"]
 
 
-def load_gltf(path: str | Path) -> Scene:
+def load_gltf(path: str | Path, policy: ResourcePolicy | None = None) -> Scene:
     """Load a .gltf or .glb file.
 
     Parameters
     ----------
     path : the file; external buffers and images resolve relative to its folder.
+    policy : where those files may lie (default: the file's folder tree only).
 
     Returns
     -------
@@ -37,14 +39,14 @@ def load_gltf(path: str | Path) -> Scene:
     """
     path = Path(path)
     try:
-        raw = path.read_bytes()
+        raw = read_resource(path)
     except OSError as exc:
         raise SceneError(path, f"cannot read: {exc.strerror or exc}") from exc
     try:
         # Overflow/NaN from hostile values is handled explicitly (drop_nonfinite, range
         # checks), so numpy must not turn it into FloatingPointError under np.seterr(raise).
         with np.errstate(all="ignore"):
-            return _build(GltfDocument(path, raw))
+            return _build(GltfDocument(path, raw, policy or ResourcePolicy(path)))
     except SceneError:
         raise
     except (TypeError, ValueError, KeyError, IndexError, AttributeError, OverflowError,

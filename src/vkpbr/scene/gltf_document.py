@@ -23,6 +23,7 @@ import numpy as np
 import pygltflib
 
 from vkpbr.errors import SceneError
+from vkpbr.scene.resources import ResourcePolicy, read_error, read_resource
 
 __all__ = ["SUPPORTED_EXTENSIONS", "GltfDocument", "check_index", "ext", "floats", "get", "scalar"]
 
@@ -107,9 +108,10 @@ class GltfDocument:
     """One parsed glTF file: its JSON (`doc`, and pygltflib's `gltf` view of it), its buffers
     resolved and bounds-checked, and a cache of decoded accessors."""
 
-    def __init__(self, path: Path, raw: bytes) -> None:
+    def __init__(self, path: Path, raw: bytes, policy: ResourcePolicy | None = None) -> None:
         self.path = path
         self.folder = path.parent
+        self.policy = policy or ResourcePolicy(path)
         self.file_size = len(raw)
         bin_chunk = None
         text = raw
@@ -154,15 +156,22 @@ class GltfDocument:
             return self.buffers[i]
         buf = buffers[i]
         uri = get(buf, "uri")
+        length = get(buf, "byteLength", 0)
+        if isinstance(length, bool) or not isinstance(length, int) or length < 0:
+            raise SceneError(self.path, f"buffer {i}: bad byteLength {length!r}")
         if uri is None:
             if self.bin_chunk is None or i != 0:
                 raise SceneError(self.path, f"buffer {i} has no uri and there is no GLB BIN chunk")
             data = self.bin_chunk
-        else:
+        elif str(uri).startswith("data:"):
             data = memoryview(self.read_uri(str(uri), f"buffer {i}"))
-        length = get(buf, "byteLength", 0)
-        if not isinstance(length, int) or length < 0:
-            raise SceneError(self.path, f"buffer {i}: bad byteLength {length!r}")
+        else:
+            # Only byteLength bytes: /dev/zero or a huge file named as a buffer costs nothing.
+            file = self.resolve_uri(str(uri), f"buffer {i}")
+            try:
+                data = memoryview(read_resource(file, length))
+            except OSError as exc:
+                raise read_error(self.path, f"buffer {i}", str(uri), exc) from exc
         if len(data) < length:
             raise SceneError(
                 self.path, f"buffer {i} truncated: {len(data)} bytes, byteLength says {length}"
@@ -171,7 +180,8 @@ class GltfDocument:
         return self.buffers[i]
 
     def read_uri(self, uri: str, what: str) -> bytes:
-        """Bytes of a data: URI or of a file relative to the glTF's folder."""
+        """Bytes of a data: URI or of a file relative to the glTF's folder (path policy:
+        vkpbr.scene.resources)."""
         if uri.startswith("data:"):
             try:
                 header, payload = uri[5:].split(",", 1)
@@ -183,18 +193,18 @@ class GltfDocument:
                 return unquote(payload).encode("latin-1")
             except (binascii.Error, UnicodeEncodeError) as exc:
                 raise SceneError(self.path, f"{what}: bad data URI ({exc})") from exc
-        file = self.resolve_uri(uri)
+        file = self.resolve_uri(uri, what)
         try:
-            return file.read_bytes()
+            return read_resource(file)
         except OSError as exc:
-            raise SceneError(
-                self.path, f"{what}: cannot read {file.name} ({exc.strerror})"
-            ) from exc
+            raise read_error(self.path, what, uri, exc) from exc
 
-    def resolve_uri(self, uri: str) -> Path:
-        if "://" in uri:
+    def resolve_uri(self, uri: str, what: str = "file") -> Path:
+        """A relative URI -> the file it names, through the path policy (percent-decoded
+        first, so %2e%2e/ is `..`). Raises ResourceRefused (a SceneError) when refused."""
+        if "://" in uri or uri.lower().startswith("file:"):
             raise SceneError(self.path, f"remote URI {uri!r} is not supported")
-        return self.folder / unquote(uri)
+        return self.policy.resolve(unquote(uri), what)
 
     def buffer_view(self, index: object) -> tuple[memoryview, int]:
         """(bytes, byteStride or 0) of bufferView `index`, bounds-checked against its buffer."""

@@ -10,6 +10,7 @@ import warnings
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.gltf_document import GltfDocument, check_index, ext, floats, get, scalar
+from vkpbr.scene.resources import ResourceRefused
 from vkpbr.scene.types import Image, Material, Sampler, TextureRef
 
 __all__ = ["build_materials", "load_images"]
@@ -41,13 +42,22 @@ def load_images(ld: GltfDocument) -> list[Image]:
                 continue
             # A missing file is not an error here: load_scene reports every missing texture
             # in one line (or raises with strict), and the renderer binds a default.
-            images.append(Image(name=uri, path=ld.resolve_uri(uri), mime_type=mime))
+            images.append(policy_image(ld, uri, mime))
         elif get(img, "bufferView") is not None:
             data, _ = ld.buffer_view(get(img, "bufferView"))
             images.append(Image(name=f"image {i}", data=bytes(data), mime_type=mime))
         else:
             raise SceneError(ld.path, f"image {i} has neither uri nor bufferView")
     return images
+
+
+def policy_image(ld: GltfDocument, uri: str, mime: object) -> Image:
+    """The Image of a file URI; one the path policy refuses keeps its name and the reason
+    (`Image.refused`), and is then reported and replaced like a missing file."""
+    try:
+        return Image(name=uri, path=ld.resolve_uri(uri, "image"), mime_type=mime)
+    except ResourceRefused as exc:
+        return Image(name=uri, path=exc.file, mime_type=mime, refused=exc.reason)
 
 
 def _sampler(ld: GltfDocument, index: object) -> Sampler:

@@ -8,6 +8,7 @@ textures, 0.26 M triangles); raise them through the environment:
     VKPBR_MAX_TEXTURE_PIXELS  pixels in one texture (default 2**26 = 8192 x 8192)
     VKPBR_MAX_TRIANGLES       triangles in one scene (default 2**26, 67 M)
     VKPBR_MAX_VERTICES        vertices in one scene (default 2**26)
+    VKPBR_MAX_TEXTURE_FILE_BYTES  bytes read of one texture file (default 2**30)
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ class Limits:
     max_texture_pixels: int = 1 << 26
     max_triangles: int = 1 << 26
     max_vertices: int = 1 << 26
+    max_texture_file_bytes: int = 1 << 30
 
 
 def _env_int(name: str, default: int) -> int:
@@ -41,4 +43,5 @@ def limits() -> Limits:
     d = Limits()
     return Limits(_env_int("VKPBR_MAX_TEXTURE_PIXELS", d.max_texture_pixels),
                   _env_int("VKPBR_MAX_TRIANGLES", d.max_triangles),
-                  _env_int("VKPBR_MAX_VERTICES", d.max_vertices))
+                  _env_int("VKPBR_MAX_VERTICES", d.max_vertices),
+                  _env_int("VKPBR_MAX_TEXTURE_FILE_BYTES", d.max_texture_file_bytes))

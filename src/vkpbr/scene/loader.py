@@ -6,12 +6,15 @@
 
 from __future__ import annotations
 
+import os
+import stat
 from collections.abc import Callable
 from pathlib import Path
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.geometry import ensure_normals, normalize_mesh_arrays
 from vkpbr.scene.presets import apply_presets
+from vkpbr.scene.resources import ResourcePolicy
 from vkpbr.scene.textures import check_texture_files
 from vkpbr.scene.types import Scene
 from vkpbr.scene.validate import validate_scene
@@ -21,7 +24,7 @@ __all__ = ["SUFFIXES", "load_scene"]
 SUFFIXES = (".gltf", ".glb", ".obj", ".comp5822mesh", ".vkpbr")
 
 
-def _loader(suffix: str) -> Callable[[Path], Scene] | None:
+def _loader(suffix: str) -> Callable[..., Scene] | None:
     # Imports are local so that loading one format never imports the others' dependencies
     # (pygltflib for glTF, say).
     if suffix in (".gltf", ".glb"):
@@ -43,7 +46,8 @@ def _loader(suffix: str) -> Callable[[Path], Scene] | None:
     return None
 
 
-def load_scene(path: str | Path, strict: bool = False) -> Scene:
+def load_scene(path: str | Path, strict: bool = False, allow_outside_paths: bool = False, *,
+               root: str | Path | None = None) -> Scene:
     """Load a scene file of any supported format.
 
     Parameters
@@ -52,6 +56,12 @@ def load_scene(path: str | Path, strict: bool = False) -> Scene:
     strict : a missing texture file is an error. Otherwise the scene renders with default
         values in place of the missing textures, and one WARNING line on the
         "vkpbr.scene.textures" logger says how many are missing (never one per texture).
+    allow_outside_paths : read files the scene names outside its folder tree too (the folder
+        of `path` and its subfolders, symlinks and `..` resolved). Off by default: an outside
+        buffer or mesh file is a SceneError, an outside texture is reported and replaced like
+        a missing one. Only regular files are read either way (docs/security.md).
+    root : the folder tree referenced files must lie in, default the folder of `path` (the
+        bake cache passes the source scene's folder for its cached .vkpbr files).
 
     Returns
     -------
@@ -62,20 +72,37 @@ def load_scene(path: str | Path, strict: bool = False) -> Scene:
     ------
     SceneError : missing file, a directory, an unknown suffix, a file with no triangles,
         missing texture files with `strict` (one line: the file, how many, the first one), or
-        anything the format loader rejects (BakeFormatError for a bad .vkpbr).
+        anything the format loader rejects (BakeFormatError for a bad .vkpbr), a buffer or
+        material library outside the scene's folder tree (ResourceRefused), or an OSError
+        while reading (the message names `path` and the file involved).
     """
     path = Path(path)
-    if not path.exists():
-        raise SceneError(path, "no such file")
-    if path.is_dir():
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        raise SceneError(path, "no such file") from None
+    except (OSError, ValueError) as exc:
+        raise SceneError(path, f"cannot read: {getattr(exc, 'strerror', None) or exc}") from None
+    if stat.S_ISDIR(mode):
         raise SceneError(path, "is a directory, not a scene file")
+    if not stat.S_ISREG(mode):
+        raise SceneError(path, "is not a regular file (a FIFO or device?); vkpbr reads only "
+                               "regular files")
     load = _loader(path.suffix.lower())
     if load is None:
         raise SceneError(
             path, f"unknown scene format {path.suffix!r} (known: {', '.join(SUFFIXES)})"
         )
+    policy = ResourcePolicy(path, allow_outside=allow_outside_paths,
+                            root=Path(root) if root is not None else None)
     try:
-        scene = load(path)
+        scene = load(path, policy=policy)
+    except OSError as exc:
+        # Anything an OS call reports while reading the scene or the files it names: the
+        # user's scene file first, then the file involved and the OS's reason.
+        what = exc.filename if exc.filename not in (None, os.fspath(path)) else None
+        raise SceneError(path, f"cannot read{f' {what}' if what else ''}: "
+                               f"{exc.strerror or exc}; check the file and its permissions") from exc
     except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError) as exc:
         # A reader met a structure it does not expect (hostile or broken input): one line
         # naming the file, never a traceback. Readers raise SceneError for what they check.

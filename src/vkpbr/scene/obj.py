@@ -17,6 +17,13 @@ import numpy as np
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.geometry import drop_nonfinite, ensure_normals, normalize_mesh_arrays, polygon_fan
+from vkpbr.scene.resources import (
+    ResourcePolicy,
+    ResourceRefused,
+    is_regular_file,
+    read_error,
+    read_resource,
+)
 from vkpbr.scene.types import Image, Material, Mesh, Node, Sampler, Scene, TextureRef
 
 __all__ = ["load_obj", "parse_mtl"]
@@ -94,8 +101,11 @@ def _resolve(path: Path, idx: np.ndarray, defined: np.ndarray, total: int, what:
     return out
 
 
-def load_obj(path: str | Path) -> Scene:
+def load_obj(path: str | Path, policy: ResourcePolicy | None = None) -> Scene:
     """Load a Wavefront OBJ file and the MTL libraries it names.
+
+    `policy` says where the MTL and texture files may lie (default: the OBJ's folder tree;
+    an MTL library outside it is a SceneError, a texture outside it a missing texture).
 
     Returns
     -------
@@ -109,14 +119,14 @@ def load_obj(path: str | Path) -> Scene:
     """
     path = Path(path)
     try:
-        data = path.read_bytes()
+        data = read_resource(path)
     except OSError as exc:
         raise SceneError(path, f"cannot read: {exc.strerror or exc}") from exc
     with np.errstate(all="ignore"):  # overflowing numbers become inf, then drop_nonfinite
-        return _parse(path, data)
+        return _parse(path, data, policy or ResourcePolicy(path))
 
 
-def _parse(path: Path, data: bytes) -> Scene:
+def _parse(path: Path, data: bytes, policy: ResourcePolicy) -> Scene:
     """load_obj's body: `data` is the whole file."""
     data = re.sub(rb"\\\r?\n", b" ", data)  # line continuations
     order = np.array(_STATEMENT.findall(data) or [b""])
@@ -151,11 +161,12 @@ def _parse(path: Path, data: bytes) -> Scene:
     scene = Scene(name=path.stem, source=path)
     mat_index: dict[str, int] = {}
     for lib in _rows(data, b"mtllib"):
-        lib_path = path.parent / lib.strip().decode("utf-8", "replace")
-        if not lib_path.is_file():
-            warnings.warn(f"{path}: material library {lib_path.name} not found", stacklevel=2)
+        lib_name = lib.strip().decode("utf-8", "replace")
+        lib_path = policy.resolve(lib_name, "material library")  # outside: SceneError
+        if not is_regular_file(lib_path):
+            warnings.warn(f"{path}: material library {lib_name} not found", stacklevel=2)
             continue
-        for name, mat in parse_mtl(lib_path, scene.images).items():
+        for name, mat in parse_mtl(lib_path, scene.images, policy).items():
             mat_index[name] = len(scene.materials)
             scene.materials.append(mat)
 
@@ -207,7 +218,7 @@ _OPT_ARGS = {b"-blendu": 1, b"-blendv": 1, b"-boost": 1, b"-mm": 2, b"-texres": 
 
 
 def _map(line: list[bytes], folder: Path, images: list[Image], cache: dict[Path, int],
-         channel: int = 0) -> tuple[TextureRef, float]:  # fmt: skip
+         channel: int = 0, policy: ResourcePolicy | None = None) -> tuple[TextureRef, float]:  # fmt: skip
     """An MTL map statement's options and file -> (TextureRef, -bm bump multiplier)."""
     i, opts = 0, {}
     while i < len(line) and line[i].startswith(b"-"):
@@ -222,10 +233,14 @@ def _map(line: list[bytes], folder: Path, images: list[Image], cache: dict[Path,
     file_name = b" ".join(line[i:]).decode("utf-8", "replace").replace("\\", "/")
     if not file_name:
         raise ValueError("map statement without a file name")
-    file = folder / file_name
+    refused = None
+    try:
+        file = (policy or ResourcePolicy(folder / "_.mtl")).resolve(file_name, "texture", folder)
+    except ResourceRefused as exc:  # reported and replaced like a missing file
+        file, refused = exc.file or folder / file_name, exc.reason
     if file not in cache:  # a missing file: load_scene reports all of them in one line
         cache[file] = len(images)
-        images.append(Image(name=file_name, path=file))
+        images.append(Image(name=file_name, path=file, refused=refused))
     clamp = opts.get(b"-clamp", [b"off"])[:1] == [b"on"]
     wrap = "clamp" if clamp else "repeat"
     o = [float(x) for x in opts.get(b"-o", [])] + [0.0, 0.0]
@@ -235,7 +250,8 @@ def _map(line: list[bytes], folder: Path, images: list[Image], cache: dict[Path,
     return ref, float(opts.get(b"-bm", [1.0])[0])
 
 
-def parse_mtl(path: Path, images: list[Image]) -> dict[str, Material]:
+def parse_mtl(path: Path, images: list[Image],
+              policy: ResourcePolicy | None = None) -> dict[str, Material]:
     """Parse an MTL file; new images are appended to `images` (deduplicated by path).
 
     Factors without their map default as glTF does, except metalness: an OBJ material with no
@@ -243,9 +259,11 @@ def parse_mtl(path: Path, images: list[Image]) -> dict[str, Material]:
     Ns by the usual r = sqrt(2 / (Ns + 2)) (Walter et al. 2007, eq. 33 inverted for r = alpha^.5).
     """
     try:
-        lines = path.read_bytes().splitlines()
-    except OSError as exc:
-        raise SceneError(path, f"cannot read: {exc.strerror}") from exc
+        lines = read_resource(path).splitlines()
+    except OSError as exc:  # named as the user's scene file, then the library
+        if policy is None:
+            raise SceneError(path, f"cannot read: {exc.strerror or exc}") from exc
+        raise read_error(policy.scene, "material library", path.name, exc) from exc
     cache = {img.path: i for i, img in enumerate(images) if img.path is not None}
     out: dict[str, Material] = {}
     name: str | None = None
@@ -257,7 +275,7 @@ def parse_mtl(path: Path, images: list[Image]) -> dict[str, Material]:
                 continue
             if parts[0] == b"newmtl":
                 if name is not None:
-                    out[name] = _material(name, props, path.parent, images, cache)
+                    out[name] = _material(name, props, path.parent, images, cache, policy)
                 name, props = b" ".join(parts[1:]).decode("utf-8", "replace"), {}
             elif name is not None:
                 props[parts[0].lower()] = parts[1:]  # MTL keywords are case-insensitive
@@ -267,8 +285,11 @@ def parse_mtl(path: Path, images: list[Image]) -> dict[str, Material]:
 
 
 def _material(name: str, p: dict[bytes, list[bytes]], folder: Path, images: list[Image],
-              cache: dict[Path, int]) -> Material:  # fmt: skip
+              cache: dict[Path, int], policy: ResourcePolicy | None = None) -> Material:  # fmt: skip
     """One MTL material's statements (keywords lower-cased) -> Material."""
+
+    def tex(line: list[bytes]) -> tuple[TextureRef, float]:
+        return _map(line, folder, images, cache, policy=policy)
 
     def num(key: bytes, n: int, default: tuple[float, ...]) -> tuple[float, ...]:
         if key not in p:
@@ -290,19 +311,19 @@ def _material(name: str, p: dict[bytes, list[bytes]], folder: Path, images: list
     )
     mat.roughness_factor = num(b"pr", 1, (rough_default,))[0]
     if b"map_kd" in p:
-        mat.base_color_texture = _map(p[b"map_kd"], folder, images, cache)[0]
+        mat.base_color_texture = tex(p[b"map_kd"])[0]
     if b"map_pm" in p:
-        mat.metallic_texture = _map(p[b"map_pm"], folder, images, cache)[0]
+        mat.metallic_texture = tex(p[b"map_pm"])[0]
     if b"map_pr" in p:
-        mat.roughness_texture = _map(p[b"map_pr"], folder, images, cache)[0]
+        mat.roughness_texture = tex(p[b"map_pr"])[0]
     if b"map_ke" in p:
-        mat.emissive_texture = _map(p[b"map_ke"], folder, images, cache)[0]
+        mat.emissive_texture = tex(p[b"map_ke"])[0]
     bump = next((p[k] for k in (b"norm", b"map_bump", b"bump") if k in p), None)
     if bump is not None:
-        mat.normal_texture, mat.normal_scale = _map(bump, folder, images, cache)
+        mat.normal_texture, mat.normal_scale = tex(bump)
     if b"map_d" in p:
         # The course's masked foliage: cut-out, no back-face culling (renderer-spec section 3).
-        mat.alpha_texture = _map(p[b"map_d"], folder, images, cache)[0]
+        mat.alpha_texture = tex(p[b"map_d"])[0]
         mat.alpha_mode, mat.alpha_cutoff, mat.double_sided = "mask", 0.5, True
     elif alpha < 1.0:
         mat.alpha_mode = "blend"

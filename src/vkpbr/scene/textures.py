@@ -7,6 +7,7 @@
 
 from __future__ import annotations
 
+import errno
 import io
 import logging
 import os
@@ -20,6 +21,7 @@ from PIL import Image as PILImage
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.limits import limits
+from vkpbr.scene.resources import is_regular_file, read_resource
 from vkpbr.scene.types import Image, Scene
 
 __all__ = ["check_texture_files", "decode_image", "decode_images", "missing_texture_files"]
@@ -28,38 +30,34 @@ log = logging.getLogger(__name__)
 
 
 def missing_texture_files(images: Sequence[Image]) -> list[Image]:
-    """The images whose only source is a file that does not exist (pixels and embedded bytes
-    need no file), in order."""
+    """The images whose only source is a file that is not there (pixels and embedded bytes
+    need no file), or one the path policy refused (`Image.refused`), in order. "Not there"
+    includes a name the OS rejects (ENAMETOOLONG): never an exception."""
     return [img for img in images if img.pixels is None and img.data is None
-            and img.path is not None and not _is_file(Path(img.path))]
-
-
-def _is_file(path: Path) -> bool:
-    """A regular file at `path`; False for names the OS cannot even look up (a NUL byte,
-    a name too long), which count as missing textures rather than errors."""
-    try:
-        return path.is_file()
-    except (OSError, ValueError):
-        return False
+            and img.path is not None and (img.refused or not is_regular_file(img.path))]
 
 
 def _shown(file: Path, folder: Path) -> str:
-    """`file` relative to `folder` when it lies below it, else absolute (for messages); a
-    name the OS cannot resolve (a NUL byte in it) is shown as written."""
-    try:
-        pairs = ((Path(file), Path(folder)), (Path(file).resolve(), Path(folder).resolve()))
-    except (OSError, ValueError):
-        return repr(str(file))[1:-1]
-    for f, d in pairs:
+    """`file` relative to `folder` when it lies below it, else absolute (for messages; a NUL
+    byte shown as \\0, so that the line stays one printable line)."""
+    def rel(f: Path, d: Path) -> str | None:
         try:
             return f.relative_to(d).as_posix()
         except ValueError:
-            pass
-    return str(pairs[1][0])
+            return None
+
+    shown = rel(Path(file), Path(folder))
+    if shown is None:
+        try:
+            shown = rel(Path(file).resolve(), Path(folder).resolve()) or str(Path(file).resolve())
+        except (OSError, ValueError):  # a name the OS rejects (a NUL byte): as written
+            shown = str(file)
+    return shown.replace("\0", "\\0")
 
 
 def check_texture_files(scene: Scene, source: str | os.PathLike[str], strict: bool = False) -> int:
-    """Report the scene's texture files that do not exist, in one line.
+    """Report the scene's texture files that do not exist or that the path policy refused
+    (vkpbr.scene.resources), in one line.
 
     Parameters
     ----------
@@ -70,26 +68,39 @@ def check_texture_files(scene: Scene, source: str | os.PathLike[str], strict: bo
 
     Returns
     -------
-    The number of missing texture files (0: nothing logged). Otherwise one WARNING on the
-    "vkpbr.scene.textures" logger: "N of M textures not found next to SOURCE (first: F);
+    The number of textures not loaded (0: nothing logged). Otherwise one WARNING on the
+    "vkpbr.scene.textures" logger: "N of M textures not found next to SOURCE (first: F), K of
+    M textures of SOURCE outside the scene's folder (first: G; pass --allow-outside-paths ...);
     rendering with default values (...)"; the renderer binds its defaults in their place.
 
     Raises
     ------
-    SceneError : with `strict`, when any texture file is missing (one line: the file, the
-        count and the first missing texture).
+    SceneError : with `strict`, when any texture is missing or refused (one line: the file,
+        the counts and the first texture of each kind).
     """
     missing = missing_texture_files(scene.images)
     if not missing:
         return 0
     source = Path(source)
-    first = _shown(Path(missing[0].path), source.parent)
+    groups: dict[str, list[Image]] = {}
+    for img in missing:
+        groups.setdefault(img.refused or "", []).append(img)
+    n = len(scene.images)
+    parts = []
+    for reason, imgs in groups.items():
+        first = _shown(Path(imgs[0].path), source.parent)  # type: ignore[arg-type]
+        if not reason:
+            where = "not found" if strict else f"not found next to {source}"
+            parts.append(f"{len(imgs)} of {n} textures {where} (first: {first})")
+        else:
+            of = "" if strict else f" of {source}"
+            hint = ("; pass --allow-outside-paths (allow_outside_paths=True) to read them"
+                    if reason == "outside the scene's folder" else "")
+            parts.append(f"{len(imgs)} of {n} textures{of} {reason} (first: {first}{hint})")
     if strict:
-        raise SceneError(source, f"{len(missing)} of {len(scene.images)} textures not found "
-                                 f"(first: {first})")
-    log.warning("%d of %d textures not found next to %s (first: %s); rendering with default "
-                "values (pass strict=True / --strict to make this an error)",
-                len(missing), len(scene.images), source, first)
+        raise SceneError(source, ", ".join(parts))
+    log.warning("%s; rendering with default values (pass strict=True / --strict to make this "
+                "an error)", ", ".join(parts))
     return len(missing)
 
 
@@ -128,13 +139,25 @@ def decode_image(image: Image, max_size: int | None = None) -> tuple[np.ndarray 
         so that `decode_images` can summarise them in image order after the threads finish.
     """
     messages: list[tuple[str, str]] = []
+    if image.refused and image.pixels is None and image.data is None:
+        # Refused by the path policy when the scene was loaded: never opened (load_scene has
+        # said why in its summary line).
+        messages.append(("missing", f"{image.name} ({image.refused})"))
+        return None, messages
     try:
         with np.errstate(all="ignore"):
             return _decode(image, max_size, messages), messages
-    except FileNotFoundError:
+    except (FileNotFoundError, NotADirectoryError):
         messages.append(("missing", image.name))
-    except (OSError, ValueError, SyntaxError, PILImage.DecompressionBombError) as exc:
-        # Pillow reports corrupt data as OSError/ValueError/SyntaxError depending on the codec.
+    except OSError as exc:
+        # Pillow reports some corrupt data as OSError (no errno); a name too long for the OS
+        # is a texture that is not there, as load_scene's summary already counted it.
+        if exc.errno == errno.ENAMETOOLONG:
+            messages.append(("missing", f"{image.name} (name too long)"))
+        else:
+            messages.append(("undecodable", f"{image.name} ({exc.strerror or exc})"))
+    except (ValueError, SyntaxError, PILImage.DecompressionBombError) as exc:
+        # ...and others as ValueError/SyntaxError, depending on the codec.
         messages.append(("undecodable", f"{image.name} ({exc})"))
     return None, messages
 
@@ -149,8 +172,18 @@ def _decode(image: Image, max_size: int | None, messages: list[tuple[str, str]])
             return np.ascontiguousarray(px)
         pil = PILImage.fromarray(px, "RGBA")
     else:
-        source = io.BytesIO(image.data) if image.data is not None else image.path
-        if source is None:
+        if image.data is not None:
+            source = io.BytesIO(image.data)
+        elif image.path is not None:
+            # Regular files only, opened non-blocking: a FIFO or device named as a texture
+            # is refused instead of blocking or being read forever.
+            cap = limits().max_texture_file_bytes
+            data = read_resource(image.path, max_bytes=cap + 1)
+            if len(data) > cap:
+                raise ValueError(f"file is over the {cap:,}-byte texture file limit "
+                                 "(VKPBR_MAX_TEXTURE_FILE_BYTES)")
+            source = io.BytesIO(data)
+        else:
             raise ValueError("no pixels, data or path")
         # Pillow's own decompression-bomb limit (DecompressionBombError) still applies.
         with warnings.catch_warnings():  # over Pillow's bomb warning is over our limit too

@@ -47,6 +47,9 @@ class Image:
     data:   encoded bytes (PNG/JPEG...) embedded in the scene file.
     path:   a file on disk.
     `name` is what warnings and errors print (usually the file name).
+    refused: why the path policy (vkpbr.scene.resources) will not read `path` ("outside the
+        scene's folder", "not regular files"); such an image is never opened and is reported
+        and replaced like a missing file.
     mips:   levels 1.. of the mip chain below `pixels` (baked files; see vkpbr.scene.mips),
         each (h, w, 4) uint8, filtered as sRGB colour when `mips_srgb`; () = made on upload.
     """
@@ -58,6 +61,7 @@ class Image:
     mime_type: str | None = None
     mips: tuple[np.ndarray, ...] = ()
     mips_srgb: bool = False
+    refused: str | None = None
 
 
 @dataclass(frozen=True)
