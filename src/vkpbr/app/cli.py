@@ -7,22 +7,30 @@ else a VkpbrError or the OS reports. Diagnostics go through `logging` (app/log.p
 keeps only errors (and silences the result lines on stdout), `-v` adds info lines, `-vv`
 debug lines. Heavy modules are imported inside the commands, so `vkpbr --help` is instant.
 
+SIGTERM is handled like SIGINT: it raises `Terminated` in the main thread, so every `with`
+block unwinds (atomic writes remove their temporary files, the GPU objects are destroyed)
+and the CLI exits 143 (128 + SIGTERM) after one line, "vkpbr: terminated".
+
 Commands, one module each: render_cmd, view_cmd, info_cmd, bench_cmd, bake_cmd.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import errno
 import logging
+import signal
 import sys
-from collections.abc import Sequence
+import threading
+from collections.abc import Iterator, Sequence
+from typing import Any
 
 from vkpbr.app.log import cli_logging
 from vkpbr.app.parsing import EPILOG_FORMATTER, Parser
 from vkpbr.errors import UsageError, VkpbrError
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "Terminated", "sigterm_raises"]
 
 log = logging.getLogger("vkpbr")
 
@@ -71,6 +79,30 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(BaseException):
+    """SIGTERM arrived (see `sigterm_raises`). A BaseException, as KeyboardInterrupt is, so
+    that `except Exception` blocks let it through and only cleanup code runs."""
+
+
+def _raise_terminated(signum: int, frame: Any) -> None:
+    raise Terminated()
+
+
+@contextlib.contextmanager
+def sigterm_raises() -> Iterator[None]:
+    """Within the block, SIGTERM raises `Terminated` in the main thread (as SIGINT raises
+    KeyboardInterrupt); the previous handler comes back afterwards. Off the main thread,
+    where Python cannot install handlers, it does nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def _verbosity(args: argparse.Namespace) -> int:
     if args.quiet or getattr(args, "quiet_after", False):
         return -1
@@ -79,14 +111,19 @@ def _verbosity(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status (0 success, 1 failure, 2 bad usage,
-    130 interrupted)."""
-    parser = build_parser()
-    try:
-        args = parser.parse_args(argv)
-    except SystemExit as exc:  # --help, --version, or argparse's one-line error
-        return exc.code if isinstance(exc.code, int) else int(exc.code is not None)
-    with cli_logging(_verbosity(args)):
-        return _run(args)
+    130 interrupted, 143 terminated by SIGTERM)."""
+    with sigterm_raises():
+        try:
+            parser = build_parser()
+            try:
+                args = parser.parse_args(argv)
+            except SystemExit as exc:  # --help, --version, or argparse's one-line error
+                return exc.code if isinstance(exc.code, int) else int(exc.code is not None)
+            with cli_logging(_verbosity(args)):
+                return _run(args)
+        except Terminated:  # before the logging was set up (or after it was torn down)
+            print("vkpbr: terminated", file=sys.stderr)
+            return 143
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -102,6 +139,9 @@ def _run(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         log.error("interrupted")
         return 130
+    except Terminated:
+        log.error("terminated")
+        return 143
     except MemoryError:
         log.error("error: out of memory (try a smaller --size)")
         return 1

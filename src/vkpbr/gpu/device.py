@@ -16,9 +16,11 @@ from typing import Any, Protocol
 
 from vkpbr.errors import VkpbrError
 from vkpbr.gpu.instance import Instance, PhysicalDeviceInfo
-from vkpbr.gpu.vk import translate_errors
+from vkpbr.gpu.vk import live_objects, live_objects_by_kind, translate_errors
 
-__all__ = ["Device", "DeviceRequest", "Destroyable", "DeviceObject", "anisotropy_usable"]
+# live_objects / live_objects_by_kind (counted in gpu/vk.py) are re-exported for leak tests.
+__all__ = ["Device", "DeviceRequest", "Destroyable", "DeviceObject", "anisotropy_usable",
+           "live_objects", "live_objects_by_kind"]
 
 
 def anisotropy_usable(info: PhysicalDeviceInfo, supported: bool) -> bool:

@@ -39,13 +39,13 @@ def _keep_drivers_loaded(vk: Any) -> None:
     (580, measured on an H100) fails vkCreateInstance with VK_ERROR_INCOMPATIBLE_DRIVER after
     about 30 unload/reload cycles in one process, so a program that creates renderers in a
     loop would break. The anchor keeps the driver mapped; set VKPBR_KEEP_DRIVERS_LOADED=0 to
-    opt out.
+    opt out. Made through the raw binding, so `live_objects()` (gpu/vk.py) leaves it out.
     """
     global _anchor
     if _anchor is not None or os.environ.get("VKPBR_KEEP_DRIVERS_LOADED") == "0":
         return
     try:
-        _anchor = vk.vkCreateInstance(
+        _anchor = vk.raw.vkCreateInstance(
             vk.VkInstanceCreateInfo(
                 pApplicationInfo=vk.VkApplicationInfo(apiVersion=vk.VK_MAKE_VERSION(*API_VERSION))
             ),
@@ -60,7 +60,7 @@ def _release_anchor() -> None:
     global _anchor
     if _anchor is not None:
         handle, _anchor = _anchor, None
-        load().vkDestroyInstance(handle, None)
+        load().raw.vkDestroyInstance(handle, None)
 
 
 def _debug_callback(severity: int, types: int, data: Any, user_data: Any) -> int:

@@ -9,11 +9,20 @@ binding's exceptions into vkpbr's own (VulkanError and subclasses) at this bound
 error carrying the call's name, so no binding exception (VkErrorDeviceLost, VkNotReady, ...)
 reaches a caller. Constants, struct factories, `ffi` and `lib` pass through untouched; the
 hot paths call `lib` entry points directly and check their VkResult with `check_result`.
+
+The same wrapper counts the Vulkan objects alive in the process (`live_objects()`): every
+handle a wrapped vkCreate* / vkAllocate* returns is recorded by kind, and the matching
+vkDestroy* / vkFree* removes it; destroying (or resetting) a command or descriptor pool
+removes the buffers or sets allocated from it. A leak test compares the count before a
+Renderer with the count after its `close()`. Handles created outside the wrapper (a GLFW
+surface, `lib` calls) are not counted, and destroying them is ignored.
 """
 
 from __future__ import annotations
 
 import contextlib
+import threading
+from collections import Counter
 from collections.abc import Iterator
 from typing import Any
 
@@ -24,7 +33,8 @@ from vkpbr.errors import (
     VulkanError,
 )
 
-__all__ = ["load", "translate_errors", "check_result", "SafeVulkan", "INSTALL_HINT"]
+__all__ = ["load", "translate_errors", "check_result", "SafeVulkan", "INSTALL_HINT",
+           "live_objects", "live_objects_by_kind"]
 
 INSTALL_HINT = (
     "install a Vulkan loader and driver: on Debian/Ubuntu `apt-get install libvulkan1 "
@@ -56,7 +66,7 @@ class SafeVulkan:
     def __getattr__(self, name: str) -> Any:
         value = getattr(self.raw, name)
         if name.startswith("vk") and callable(value):
-            value = _safe_call(value, name)
+            value = _counted(_safe_call(value, name), name)
             if name in ("vkGetInstanceProcAddr", "vkGetDeviceProcAddr"):
                 value = _safe_proc_addr(value)
         setattr(self, name, value)  # later lookups skip __getattr__
@@ -75,9 +85,108 @@ def _safe_call(fn: Any, name: str) -> Any:
 
 def _safe_proc_addr(get: Any) -> Any:
     def get_proc(handle: Any, name: str) -> Any:
-        return _safe_call(get(handle, name), name)
+        return _counted(_safe_call(get(handle, name), name), name)
 
     return get_proc
+
+
+# --- live object count -----------------------------------------------------------------------
+# kind -> {handle address: parent pool address or 0}
+_live: dict[str, dict[int, int]] = {}
+_live_lock = threading.Lock()
+# vkAllocate* / vkFree* names that are not "vkAllocate" + kind + "s".
+_ALLOC_KIND = {"vkAllocateMemory": "Memory", "vkFreeMemory": "Memory",
+               "vkCreateGraphicsPipelines": "Pipeline", "vkCreateComputePipelines": "Pipeline"}
+_POOL_CHILD = {"CommandPool": "CommandBuffer", "DescriptorPool": "DescriptorSet"}
+
+
+def live_objects() -> int:
+    """Vulkan objects created through the wrapped binding and not yet destroyed, in the whole
+    process (instances, devices, buffers, memory, command buffers, descriptor sets, ...)."""
+    with _live_lock:
+        return sum(len(handles) for handles in _live.values())
+
+
+def live_objects_by_kind() -> dict[str, int]:
+    """`live_objects()` split by object kind ("Buffer", "Memory", "Pipeline", ...); kinds
+    with none alive are left out."""
+    with _live_lock:
+        return dict(Counter({k: len(v) for k, v in _live.items() if v}))
+
+
+def _address(handle: Any) -> int:
+    if handle is None:
+        return 0
+    if isinstance(handle, int):
+        return handle
+    return int(_raw_binding().ffi.cast("uintptr_t", handle))
+
+
+def _kind(name: str) -> tuple[str, str] | None:
+    """("create" | "destroy" | "reset", kind) for a function that makes or ends objects."""
+    if name in _ALLOC_KIND:
+        return ("destroy" if name.startswith("vkFree") else "create"), _ALLOC_KIND[name]
+    for prefix, op in (("vkCreate", "create"), ("vkDestroy", "destroy"),
+                       ("vkAllocate", "create"), ("vkFree", "destroy")):
+        if name.startswith(prefix):
+            kind = name[len(prefix):]
+            if prefix in ("vkAllocate", "vkFree"):
+                kind = kind.removesuffix("s")  # vkAllocateCommandBuffers -> CommandBuffer
+            return op, kind
+    if name in ("vkResetDescriptorPool",):
+        return "reset", "DescriptorPool"
+    return None
+
+
+def _counted(fn: Any, name: str) -> Any:
+    """`fn` recording the objects it creates or destroys in the live count (see above)."""
+    what = _kind(name)
+    if what is None:
+        return fn
+    op, kind = what
+
+    if op == "create":
+        def create(*args: Any, **kwargs: Any) -> Any:
+            result = fn(*args, **kwargs)
+            handles = result if kind in ("CommandBuffer", "DescriptorSet", "Pipeline") else [result]
+            parent = 0
+            if kind in ("CommandBuffer", "DescriptorSet"):  # parent pool from the allocate info
+                info = args[1] if len(args) > 1 else next(iter(kwargs.values()))
+                parent = _address(getattr(info, "commandPool", None)
+                                  or getattr(info, "descriptorPool", None))
+            with _live_lock:
+                table = _live.setdefault(kind, {})
+                for h in handles:
+                    table[_address(h)] = parent
+            return result
+
+        create.__name__ = create.__qualname__ = name
+        return create
+
+    def destroy(*args: Any, **kwargs: Any) -> Any:
+        result = fn(*args, **kwargs)
+        if kind in ("Instance", "Device"):
+            ended = [args[0]]
+        elif kind in ("CommandBuffer", "DescriptorSet"):  # (device, pool, count, handles)
+            ended = list(args[3])[: int(args[2])]
+        elif op == "reset":
+            ended = []
+        else:
+            ended = [args[1]]
+        with _live_lock:
+            table = _live.get(kind, {})
+            for h in ended:
+                table.pop(_address(h), None)
+            child = _POOL_CHILD.get(kind)
+            if child is not None:
+                pool = _address(args[1])
+                children = _live.get(child, {})
+                for h in [h for h, p in children.items() if p == pool]:
+                    del children[h]
+        return result
+
+    destroy.__name__ = destroy.__qualname__ = name
+    return destroy
 
 
 def load() -> Any:

@@ -23,14 +23,29 @@ vec3 safe_normalize(vec3 x, vec3 fallback) {
 
 vec3 encode_dir(vec3 d) { return d * 0.5 + 0.5; }
 
+// Mesa 22.3's lavapipe (Debian 12) inlines the uniforms a branch depends on: whenever a draw
+// binds other values (a material, a frame's settings) it compiles the shader again and never
+// frees the old compile, about 1 MB a draw that no vkDestroy* returns (issue 11, class 7; Mesa
+// 23.1 caches the variants). A uniform combined with a value the compiler cannot know is not
+// inlined: `opaque_zero` is 0 for every fragment (pixel centres have x >= 0.5), so each
+// `u(x)` below equals x exactly and costs one OR or add; GPUs see the same values as before.
+uint opaque_zero;
+uint u(uint x) { return x | opaque_zero; }
+int u(int x) { return x + int(opaque_zero); }
+float u(float x) { return x + float(opaque_zero); }  // x + 0.0: exact (the sign of a 0 aside)
+
 // One texture's coordinates: its own UV set (row0.w, 0 or 1) through its own
 // KHR_texture_transform, a 2x3 matrix given as two rows (render/layouts.py, MATERIAL).
 vec2 texture_uv(vec4 row0, vec4 row1) {
-    vec3 uv_h = vec3(row0.w > 0.5 ? v_texcoords.zw : v_texcoords.xy, 1.0);
+    vec3 uv_h = vec3(u(row0.w) > 0.5 ? v_texcoords.zw : v_texcoords.xy, 1.0);
     return vec2(dot(row0.xyz, uv_h), dot(row1.xyz, uv_h));
 }
 
 void main() {
+    opaque_zero = uint(gl_FragCoord.x < 0.0);
+    uint settings_flags = u(settings.flags);
+    uint material_flags = u(material.flags);
+    int view = u(settings.view);
     vec2 uv = texture_uv(material.base_color_uv_row0, material.base_color_uv_row1);
     vec4 base = texture(base_color_map, uv) * material.base_color_factor * v_color;
 #if ALPHA_MASK
@@ -42,7 +57,7 @@ void main() {
     vec2 roughness_uv = texture_uv(material.roughness_uv_row0, material.roughness_uv_row1);
     float roughness = clamp(texture(roughness_map, roughness_uv).r * material.roughness_factor, MIN_ROUGHNESS, 1.0);
     float occlusion = 1.0;
-    if ((settings.flags & SETTINGS_OCCLUSION) != 0u && (material.flags & MATERIAL_HAS_OCCLUSION_MAP) != 0u) {
+    if ((settings_flags & SETTINGS_OCCLUSION) != 0u && (material_flags & MATERIAL_HAS_OCCLUSION_MAP) != 0u) {
         vec2 occlusion_uv = texture_uv(material.occlusion_uv_row0, material.occlusion_uv_row1);
         occlusion = 1.0 + material.occlusion_strength * (texture(occlusion_map, occlusion_uv).r - 1.0);
     }
@@ -53,11 +68,11 @@ void main() {
     vec3 ng = safe_normalize(v_normal, vec3(0.0, 0.0, 1.0));
     vec3 t = safe_normalize(v_tangent, vec3(1.0, 0.0, 0.0));
     vec3 b = safe_normalize(v_bitangent, cross(ng, t));
-    if ((material.flags & MATERIAL_DOUBLE_SIDED) != 0u && !gl_FrontFacing) {
+    if ((material_flags & MATERIAL_DOUBLE_SIDED) != 0u && !gl_FrontFacing) {
         ng = -ng; t = -t; b = -b;
     }
     vec3 n = ng;
-    if ((settings.flags & SETTINGS_NORMAL_MAPPING) != 0u && (material.flags & MATERIAL_HAS_NORMAL_MAP) != 0u) {
+    if ((settings_flags & SETTINGS_NORMAL_MAPPING) != 0u && (material_flags & MATERIAL_HAS_NORMAL_MAP) != 0u) {
         vec2 normal_uv = texture_uv(material.normal_uv_row0, material.normal_uv_row1);
         vec3 tn = texture(normal_map, normal_uv).xyz * 2.0 - 1.0;  // linear (UNORM) texture
         tn.xy *= material.normal_scale;
@@ -68,16 +83,16 @@ void main() {
     vec3 to_light = light.lightPos.xyz - v_world_pos;
     float dist2 = dot(to_light, to_light);
     vec3 l = safe_normalize(to_light, ng);
-    vec3 light_in = light.color * light.intensity * light_attenuation(dist2, light.falloff, light.range);
+    vec3 light_in = light.color * light.intensity * light_attenuation(dist2, u(light.falloff), u(light.range));
 
-    BrdfTerms terms = evaluate_brdf(n, v, l, c, metallic, roughness, settings.brdf);
+    BrdfTerms terms = evaluate_brdf(n, v, l, c, metallic, roughness, u(settings.brdf));
     float n_dot_l = max(dot(n, l), 0.0);
     vec3 specular = terms.specular * light_in * n_dot_l;
     vec3 diffuse = terms.diffuse * light_in * n_dot_l;
     vec3 ambient = AMBIENT * c * occlusion;
 
     vec3 value;
-    switch (settings.view) {
+    switch (view) {
         case VIEW_D: value = vec3(terms.D); break;
         case VIEW_F: value = terms.F; break;
         case VIEW_G: value = vec3(terms.G); break;
@@ -103,15 +118,15 @@ void main() {
         default: value = emissive + ambient + diffuse + specular; break;
     }
 
-    int kind = VIEW_KINDS[clamp(settings.view, 0, VIEW_KINDS.length() - 1)];
-    bool srgb_target = (settings.flags & SETTINGS_SRGB_TARGET) != 0u;
+    int kind = VIEW_KINDS[clamp(view, 0, VIEW_KINDS.length() - 1)];
+    bool srgb_target = (settings_flags & SETTINGS_SRGB_TARGET) != 0u;
     if (kind == VIEW_KIND_RADIANCE) {
-        value = tonemap(value * settings.exposure, settings.tonemap);
+        value = tonemap(value * settings.exposure, u(settings.tonemap));
     } else if (kind == VIEW_KIND_DATA) {
         // Raw data: on an sRGB target, pre-linearise so that the stored byte is the value.
         value = clamp(value, 0.0, 1.0);
         if (srgb_target) value = srgb_to_linear(value);
     }
-    float alpha = (material.flags & MATERIAL_BLEND) != 0u ? base.a : 1.0;
+    float alpha = (material_flags & MATERIAL_BLEND) != 0u ? base.a : 1.0;
     out_color = vec4(value, alpha);
 }
