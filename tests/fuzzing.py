@@ -287,16 +287,21 @@ def fuzz(folder: Path, per_format: int, seed: int = SEED) -> tuple[dict, list[st
     failures: list[str] = []
     import logging
 
-    logging.getLogger("vkpbr").setLevel(logging.CRITICAL)  # the loaders' one-line warnings
-    for name, make in corpus.formats().items():
-        c = counts[name] = collections.Counter()
-        for i in range(per_format):
-            path, names = make(rng)
-            outcome, detail = run_one(path, names)
-            c["tried"] += 1
-            c[outcome] += 1
-            if outcome == "unclean":
-                failures.append(f"{name} #{i}: {detail}")
+    logger = logging.getLogger("vkpbr")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL)  # the loaders' one-line warnings, restored after
+    try:
+        for name, make in corpus.formats().items():
+            c = counts[name] = collections.Counter()
+            for i in range(per_format):
+                path, names = make(rng)
+                outcome, detail = run_one(path, names)
+                c["tried"] += 1
+                c[outcome] += 1
+                if outcome == "unclean":
+                    failures.append(f"{name} #{i}: {detail}")
+    finally:
+        logger.setLevel(level)
     return counts, failures
 
 
