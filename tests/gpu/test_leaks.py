@@ -101,7 +101,7 @@ def default_scene_cached():  # noqa: ANN201
 
 def test_load_render_close_cycles_are_flat() -> None:
     """24 cycles of Renderer -> render 32x32 -> close: the object count is back at its start
-    after every close, and RSS over the last 16 grows by under 8 MiB, comparing the medians
+    after every close, and RSS over the last 16 grows by under 16 MiB, comparing the medians
     of their first and last 5 samples (the heap grows in steps of ~2.5 MiB; the code before
     this fix grew 3.3 MiB a cycle on this scene, 37 MiB on the default one)."""
     scene = small_scene()
@@ -116,7 +116,7 @@ def test_load_render_close_cycles_are_flat() -> None:
             gc.collect()
             samples.append(rss())
     growth = median_mib(samples[-5:]) - median_mib(samples[:5])
-    assert growth < 8, [round(s / MIB, 1) for s in samples]
+    assert growth < 16, [round(s / MIB, 1) for s in samples]
 
 
 def test_frame_loop_is_flat() -> None:
