@@ -12,12 +12,14 @@ import random
 import shutil
 import time
 import warnings
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 from assets_path import ASSETS  # the sample models, if present (optional here)
+from fuzzing import _paths
+from fuzzing import mutate_bytes as _mutate_bytes
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.comp5822 import write_comp5822mesh
@@ -95,16 +97,6 @@ f 1 2 4
 _MTL = b"newmtl m\nKd 1 0 0\nPm 0.5\nmap_Kd -s 2 2 t.png\nmap_d mask.png\nnewmtl n\nPr 0.2\nnorm n.png\n"
 
 
-def _paths(value: object, prefix: tuple = ()) -> Iterator[tuple]:
-    yield prefix
-    if isinstance(value, dict):
-        for k, v in value.items():
-            yield from _paths(v, (*prefix, k))
-    elif isinstance(value, list):
-        for i, v in enumerate(value):
-            yield from _paths(v, (*prefix, i))
-
-
 def _mutate_json(doc: dict, rng: random.Random) -> dict:
     doc = json.loads(json.dumps(doc))
     for _ in range(rng.randint(1, 3)):
@@ -118,24 +110,6 @@ def _mutate_json(doc: dict, rng: random.Random) -> dict:
         else:
             parent[path[-1]] = rng.choice(_EVIL)
     return doc
-
-
-def _mutate_bytes(data: bytes, rng: random.Random) -> bytes:
-    data = bytearray(data)
-    kind = rng.random()
-    if kind < 0.2:
-        return bytes(data[: rng.randrange(len(data))])
-    if kind < 0.3:
-        at = rng.randrange(len(data))
-        return bytes(
-            data[:at] + bytes(rng.randrange(256) for _ in range(rng.randint(1, 8))) + data[at:]
-        )
-    for _ in range(rng.randint(1, 6)):
-        at = rng.randrange(len(data))
-        data[at] = rng.choice(
-            [0, 0xFF, 0x7F, 0x80, rng.randrange(256), data[at] ^ (1 << rng.randrange(8))]
-        )
-    return bytes(data)
 
 
 def _corpus(tmp: Path) -> list[tuple[str, Callable[[random.Random], None], Path]]:
