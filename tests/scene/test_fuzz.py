@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from assets_path import ASSETS  # the sample models, if present (optional here)
-from fuzzing import _paths
 from fuzzing import mutate_bytes as _mutate_bytes
+from fuzzing import mutate_json as _mutate_json
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.comp5822 import write_comp5822mesh
@@ -95,21 +95,6 @@ usemtl n
 f 1 2 4
 """
 _MTL = b"newmtl m\nKd 1 0 0\nPm 0.5\nmap_Kd -s 2 2 t.png\nmap_d mask.png\nnewmtl n\nPr 0.2\nnorm n.png\n"
-
-
-def _mutate_json(doc: dict, rng: random.Random) -> dict:
-    doc = json.loads(json.dumps(doc))
-    for _ in range(rng.randint(1, 3)):
-        paths = [p for p in _paths(doc) if p]
-        path = rng.choice(paths)
-        parent = doc
-        for key in path[:-1]:
-            parent = parent[key]
-        if isinstance(parent, dict) and rng.random() < 0.3:
-            del parent[path[-1]]
-        else:
-            parent[path[-1]] = rng.choice(_EVIL)
-    return doc
 
 
 def _corpus(tmp: Path) -> list[tuple[str, Callable[[random.Random], None], Path]]:

@@ -210,10 +210,6 @@ class Viewer(InputHandlers):
         glfw.set_window_iconify_callback(w, self._on_iconify)
         glfw.set_window_close_callback(w, lambda _w: setattr(self, "quit", True))
 
-    @property
-    def swapchain(self) -> Any:  # the name InputHandlers and older tests use for the target
-        return self.target
-
     # --- state ------------------------------------------------------------------------------
     def camera(self) -> Camera:
         return self.fly.camera()

@@ -62,12 +62,12 @@ def _lookup(key: int, mods: int) -> tuple[str, Any, bool] | None:
 
 class InputHandlers:
     """Key, mouse and script handlers; expects the Viewer's state attributes (fly, light,
-    options, held, buttons, cursor, swapchain, ...)."""
+    options, held, buttons, cursor, target, ...)."""
 
     fly: Any
     light: Any
     options: Any
-    swapchain: Any
+    target: Any  # the frame target drawn into (its extent)
     window: Any
 
     # --- input ------------------------------------------------------------------------------
@@ -144,7 +144,7 @@ class InputHandlers:
             if self.captured or glfw.MOUSE_BUTTON_LEFT in self.buttons:
                 self.fly.look(dx, dy)
             if glfw.MOUSE_BUTTON_RIGHT in self.buttons:
-                self.fly.pan(dx, dy, self.swapchain.extent[1] or 1)
+                self.fly.pan(dx, dy, self.target.extent[1] or 1)
         self.cursor = (x, y)
 
     def _on_button(self, _w: Any, button: int, action: int, _mods: int) -> None:

@@ -11,7 +11,6 @@ from typing import Any
 import numpy as np
 
 from vkpbr.gpu.device import Device
-from vkpbr.gpu.vk import translate_errors
 
 __all__ = ["Buffer", "upload_buffer"]
 
@@ -56,14 +55,13 @@ class Buffer:
         self.host_visible = host_visible
         self._mapped: Any = None
         self.memory = None
-        with translate_errors("vkCreateBuffer"):
-            self.handle = vk.vkCreateBuffer(
-                device.handle,
-                vk.VkBufferCreateInfo(
-                    size=self.size, usage=usage, sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE
-                ),
-                None,
-            )
+        self.handle = vk.vkCreateBuffer(
+            device.handle,
+            vk.VkBufferCreateInfo(
+                size=self.size, usage=usage, sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE
+            ),
+            None,
+        )
         device.track(self)
         req = vk.vkGetBufferMemoryRequirements(device.handle, self.handle)
         if host_visible:
@@ -75,16 +73,14 @@ class Buffer:
         else:
             required = preferred = vk.VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT
         mtype = device.memory_type(req.memoryTypeBits, required, preferred)
-        with translate_errors("vkAllocateMemory"):
-            self.memory = vk.vkAllocateMemory(
-                device.handle,
-                vk.VkMemoryAllocateInfo(allocationSize=req.size, memoryTypeIndex=mtype),
-                None,
-            )
+        self.memory = vk.vkAllocateMemory(
+            device.handle,
+            vk.VkMemoryAllocateInfo(allocationSize=req.size, memoryTypeIndex=mtype),
+            None,
+        )
         vk.vkBindBufferMemory(device.handle, self.handle, self.memory, 0)
         if host_visible:
-            with translate_errors("vkMapMemory"):
-                self._mapped = vk.vkMapMemory(device.handle, self.memory, 0, self.size, 0)
+            self._mapped = vk.vkMapMemory(device.handle, self.memory, 0, self.size, 0)
 
     def array(self, dtype: Any = np.uint8, count: int = -1, offset: int = 0) -> np.ndarray:
         """A zero-copy NumPy view of the mapped memory (host-visible buffers only).

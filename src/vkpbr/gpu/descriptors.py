@@ -11,7 +11,6 @@ from dataclasses import dataclass
 from typing import Any
 
 from vkpbr.gpu.device import Device, DeviceObject
-from vkpbr.gpu.vk import translate_errors
 
 __all__ = ["BindingSpec", "DescriptorSetLayout", "DescriptorPool", "DescriptorWriter"]
 
@@ -46,22 +45,21 @@ class DescriptorSetLayout(DeviceObject):
         vk = device.vk
         self.device = device
         self.bindings = tuple(bindings)
-        with translate_errors("vkCreateDescriptorSetLayout"):
-            self.handle = vk.vkCreateDescriptorSetLayout(
-                device.handle,
-                vk.VkDescriptorSetLayoutCreateInfo(
-                    pBindings=[
-                        vk.VkDescriptorSetLayoutBinding(
-                            binding=b.binding,
-                            descriptorType=_descriptor_type(vk, b.kind),
-                            descriptorCount=1,
-                            stageFlags=_stage_flags(vk, b.stages),
-                        )
-                        for b in self.bindings
-                    ]
-                ),
-                None,
-            )
+        self.handle = vk.vkCreateDescriptorSetLayout(
+            device.handle,
+            vk.VkDescriptorSetLayoutCreateInfo(
+                pBindings=[
+                    vk.VkDescriptorSetLayoutBinding(
+                        binding=b.binding,
+                        descriptorType=_descriptor_type(vk, b.kind),
+                        descriptorCount=1,
+                        stageFlags=_stage_flags(vk, b.stages),
+                    )
+                    for b in self.bindings
+                ]
+            ),
+            None,
+        )
         device.track(self)
 
 
@@ -82,31 +80,29 @@ class DescriptorPool(DeviceObject):
             max_sets += count
             for b in layout.bindings:
                 totals[b.kind] = totals.get(b.kind, 0) + count
-        with translate_errors("vkCreateDescriptorPool"):
-            self.handle = vk.vkCreateDescriptorPool(
-                device.handle,
-                vk.VkDescriptorPoolCreateInfo(
-                    maxSets=max(max_sets, 1),
-                    pPoolSizes=[
-                        vk.VkDescriptorPoolSize(
-                            type=_descriptor_type(vk, kind), descriptorCount=n
-                        )
-                        for kind, n in totals.items()
-                    ],
-                ),
-                None,
-            )
+        self.handle = vk.vkCreateDescriptorPool(
+            device.handle,
+            vk.VkDescriptorPoolCreateInfo(
+                maxSets=max(max_sets, 1),
+                pPoolSizes=[
+                    vk.VkDescriptorPoolSize(
+                        type=_descriptor_type(vk, kind), descriptorCount=n
+                    )
+                    for kind, n in totals.items()
+                ],
+            ),
+            None,
+        )
         device.track(self)
 
     def allocate(self, layout: DescriptorSetLayout) -> Any:
         vk = self.device.vk
-        with translate_errors("vkAllocateDescriptorSets"):
-            return vk.vkAllocateDescriptorSets(
-                self.device.handle,
-                vk.VkDescriptorSetAllocateInfo(
-                    descriptorPool=self.handle, pSetLayouts=[layout.handle]
-                ),
-            )[0]
+        return vk.vkAllocateDescriptorSets(
+            self.device.handle,
+            vk.VkDescriptorSetAllocateInfo(
+                descriptorPool=self.handle, pSetLayouts=[layout.handle]
+            ),
+        )[0]
 
 
 

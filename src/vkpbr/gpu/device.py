@@ -16,7 +16,7 @@ from typing import Any, Protocol
 
 from vkpbr.errors import VkpbrError
 from vkpbr.gpu.instance import Instance, PhysicalDeviceInfo
-from vkpbr.gpu.vk import live_objects, live_objects_by_kind, translate_errors
+from vkpbr.gpu.vk import live_objects, live_objects_by_kind
 
 # live_objects / live_objects_by_kind (counted in gpu/vk.py) are re-exported for leak tests.
 __all__ = ["Device", "DeviceRequest", "Destroyable", "DeviceObject", "anisotropy_usable",
@@ -106,15 +106,14 @@ class Device:
             self.queue_family = self._graphics_queue_family()
             self._create_device()
             self.queue = vk.vkGetDeviceQueue(self.handle, self.queue_family, 0)
-            with translate_errors("vkCreateCommandPool"):
-                self.command_pool = vk.vkCreateCommandPool(
-                    self.handle,
-                    vk.VkCommandPoolCreateInfo(
-                        flags=vk.VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT,
-                        queueFamilyIndex=self.queue_family,
-                    ),
-                    None,
-                )
+            self.command_pool = vk.vkCreateCommandPool(
+                self.handle,
+                vk.VkCommandPoolCreateInfo(
+                    flags=vk.VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT,
+                    queueFamilyIndex=self.queue_family,
+                ),
+                None,
+            )
         except BaseException:
             self.close()
             raise
@@ -158,8 +157,7 @@ class Device:
             pQueueCreateInfos=[queue_info],
             ppEnabledExtensionNames=self.extensions,
         )
-        with translate_errors("vkCreateDevice"):
-            self.handle = vk.vkCreateDevice(self.physical, info, None)
+        self.handle = vk.vkCreateDevice(self.physical, info, None)
 
     def _query_features(self) -> dict[str, int]:
         vk = self.vk
@@ -196,15 +194,14 @@ class Device:
 
     def allocate_command_buffer(self) -> Any:
         vk = self.vk
-        with translate_errors("vkAllocateCommandBuffers"):
-            return vk.vkAllocateCommandBuffers(
-                self.handle,
-                vk.VkCommandBufferAllocateInfo(
-                    commandPool=self.command_pool,
-                    level=vk.VK_COMMAND_BUFFER_LEVEL_PRIMARY,
-                    commandBufferCount=1,
-                ),
-            )[0]
+        return vk.vkAllocateCommandBuffers(
+            self.handle,
+            vk.VkCommandBufferAllocateInfo(
+                commandPool=self.command_pool,
+                level=vk.VK_COMMAND_BUFFER_LEVEL_PRIMARY,
+                commandBufferCount=1,
+            ),
+        )[0]
 
     def free_command_buffer(self, cmd: Any) -> None:
         if self.handle is not None:
@@ -226,11 +223,10 @@ class Device:
             vk.vkEndCommandBuffer(cmd)
             fence = vk.vkCreateFence(self.handle, vk.VkFenceCreateInfo(), None)
             try:
-                with translate_errors("vkQueueSubmit"):
-                    vk.vkQueueSubmit(
-                        self.queue, 1, [vk.VkSubmitInfo(pCommandBuffers=[cmd])], fence
-                    )
-                    vk.vkWaitForFences(self.handle, 1, [fence], vk.VK_TRUE, 2**63 - 1)
+                vk.vkQueueSubmit(
+                    self.queue, 1, [vk.VkSubmitInfo(pCommandBuffers=[cmd])], fence
+                )
+                vk.vkWaitForFences(self.handle, 1, [fence], vk.VK_TRUE, 2**63 - 1)
             finally:
                 vk.vkDestroyFence(self.handle, fence, None)
         finally:
@@ -238,8 +234,7 @@ class Device:
 
     def wait_idle(self) -> None:
         if self.handle is not None:
-            with translate_errors("vkDeviceWaitIdle"):
-                self.vk.vkDeviceWaitIdle(self.handle)
+            self.vk.vkDeviceWaitIdle(self.handle)
 
     # --- lifetime ---------------------------------------------------------------------------
     def track(self, child: Destroyable) -> None:

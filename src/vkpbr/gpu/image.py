@@ -15,7 +15,6 @@ import numpy as np
 
 from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.device import Device, DeviceObject
-from vkpbr.gpu.vk import translate_errors
 
 __all__ = ["Image", "ImageView", "Sampler", "SamplerSpec", "mip_levels", "TextureUploader"]
 
@@ -43,33 +42,31 @@ class Image:
         self.width, self.height, self.format = width, height, format
         self.mip_levels, self.samples, self.name = mip_levels, samples, name
         self.memory = None
-        with translate_errors("vkCreateImage"):
-            self.handle = vk.vkCreateImage(
-                device.handle,
-                vk.VkImageCreateInfo(
-                    imageType=vk.VK_IMAGE_TYPE_2D,
-                    format=format,
-                    extent=vk.VkExtent3D(width=width, height=height, depth=1),
-                    mipLevels=mip_levels,
-                    arrayLayers=1,
-                    samples=samples,
-                    tiling=vk.VK_IMAGE_TILING_OPTIMAL,
-                    usage=usage,
-                    sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
-                    initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                ),
-                None,
-            )
+        self.handle = vk.vkCreateImage(
+            device.handle,
+            vk.VkImageCreateInfo(
+                imageType=vk.VK_IMAGE_TYPE_2D,
+                format=format,
+                extent=vk.VkExtent3D(width=width, height=height, depth=1),
+                mipLevels=mip_levels,
+                arrayLayers=1,
+                samples=samples,
+                tiling=vk.VK_IMAGE_TILING_OPTIMAL,
+                usage=usage,
+                sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE,
+                initialLayout=vk.VK_IMAGE_LAYOUT_UNDEFINED,
+            ),
+            None,
+        )
         device.track(self)
         req = vk.vkGetImageMemoryRequirements(device.handle, self.handle)
         mtype = device.memory_type(req.memoryTypeBits, vk.VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)
         self.bytes = int(req.size)
-        with translate_errors("vkAllocateMemory"):
-            self.memory = vk.vkAllocateMemory(
-                device.handle,
-                vk.VkMemoryAllocateInfo(allocationSize=req.size, memoryTypeIndex=mtype),
-                None,
-            )
+        self.memory = vk.vkAllocateMemory(
+            device.handle,
+            vk.VkMemoryAllocateInfo(allocationSize=req.size, memoryTypeIndex=mtype),
+            None,
+        )
         vk.vkBindImageMemory(device.handle, self.handle, self.memory, 0)
 
     def destroy(self) -> None:
@@ -105,24 +102,23 @@ class ImageView(DeviceObject):
         aspect_bit = (
             vk.VK_IMAGE_ASPECT_DEPTH_BIT if aspect == "depth" else vk.VK_IMAGE_ASPECT_COLOR_BIT
         )
-        with translate_errors("vkCreateImageView"):
-            self.handle = vk.vkCreateImageView(
-                device.handle,
-                vk.VkImageViewCreateInfo(
-                    image=image.handle,
-                    viewType=vk.VK_IMAGE_VIEW_TYPE_2D,
-                    format=image.format if format is None else format,
-                    components=vk.VkComponentMapping(*comps),
-                    subresourceRange=vk.VkImageSubresourceRange(
-                        aspectMask=aspect_bit,
-                        baseMipLevel=0,
-                        levelCount=image.mip_levels,
-                        baseArrayLayer=0,
-                        layerCount=1,
-                    ),
+        self.handle = vk.vkCreateImageView(
+            device.handle,
+            vk.VkImageViewCreateInfo(
+                image=image.handle,
+                viewType=vk.VK_IMAGE_VIEW_TYPE_2D,
+                format=image.format if format is None else format,
+                components=vk.VkComponentMapping(*comps),
+                subresourceRange=vk.VkImageSubresourceRange(
+                    aspectMask=aspect_bit,
+                    baseMipLevel=0,
+                    levelCount=image.mip_levels,
+                    baseArrayLayer=0,
+                    layerCount=1,
                 ),
-                None,
-            )
+            ),
+            None,
+        )
         device.track(self)
 
 
@@ -150,24 +146,23 @@ class Sampler(DeviceObject):
         aniso = min(spec.anisotropy, float(device.limits.maxSamplerAnisotropy))
         use_aniso = device.anisotropy and aniso > 1.0 and spec.mipmaps
         filt = {"linear": vk.VK_FILTER_LINEAR, "nearest": vk.VK_FILTER_NEAREST}
-        with translate_errors("vkCreateSampler"):
-            self.handle = vk.vkCreateSampler(
-                device.handle,
-                vk.VkSamplerCreateInfo(
-                    magFilter=filt[spec.mag],
-                    minFilter=filt[spec.min],
-                    mipmapMode=vk.VK_SAMPLER_MIPMAP_MODE_LINEAR,
-                    addressModeU=getattr(vk, f"VK_SAMPLER_ADDRESS_MODE_{self._WRAP[spec.wrap_u]}"),
-                    addressModeV=getattr(vk, f"VK_SAMPLER_ADDRESS_MODE_{self._WRAP[spec.wrap_v]}"),
-                    addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_REPEAT,
-                    anisotropyEnable=vk.VK_TRUE if use_aniso else vk.VK_FALSE,
-                    maxAnisotropy=aniso if use_aniso else 1.0,
-                    minLod=0.0,
-                    maxLod=1000.0 if spec.mipmaps else 0.0,
-                    borderColor=vk.VK_BORDER_COLOR_FLOAT_OPAQUE_BLACK,
-                ),
-                None,
-            )
+        self.handle = vk.vkCreateSampler(
+            device.handle,
+            vk.VkSamplerCreateInfo(
+                magFilter=filt[spec.mag],
+                minFilter=filt[spec.min],
+                mipmapMode=vk.VK_SAMPLER_MIPMAP_MODE_LINEAR,
+                addressModeU=getattr(vk, f"VK_SAMPLER_ADDRESS_MODE_{self._WRAP[spec.wrap_u]}"),
+                addressModeV=getattr(vk, f"VK_SAMPLER_ADDRESS_MODE_{self._WRAP[spec.wrap_v]}"),
+                addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_REPEAT,
+                anisotropyEnable=vk.VK_TRUE if use_aniso else vk.VK_FALSE,
+                maxAnisotropy=aniso if use_aniso else 1.0,
+                minLod=0.0,
+                maxLod=1000.0 if spec.mipmaps else 0.0,
+                borderColor=vk.VK_BORDER_COLOR_FLOAT_OPAQUE_BLACK,
+            ),
+            None,
+        )
         device.track(self)
 
 

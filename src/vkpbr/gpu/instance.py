@@ -152,8 +152,7 @@ class Instance:
             ppEnabledExtensionNames=enabled,
         )
         try:
-            with translate_errors("vkCreateInstance"):
-                self.handle = vk.vkCreateInstance(info, None)
+            self.handle = vk.vkCreateInstance(info, None)
         except NoVulkanError:
             raise
         except Exception as exc:  # the loader found no driver at all

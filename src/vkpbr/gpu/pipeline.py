@@ -15,7 +15,6 @@ from typing import Any
 from vkpbr.errors import ShaderError
 from vkpbr.gpu.descriptors import DescriptorSetLayout
 from vkpbr.gpu.device import Device, DeviceObject
-from vkpbr.gpu.vk import translate_errors
 
 __all__ = ["VertexStream", "PipelineSpec", "PipelineLayout", "Pipeline", "ShaderModule"]
 
@@ -68,11 +67,10 @@ class ShaderModule(DeviceObject):
             raise ShaderError(f"{path}: cannot read SPIR-V ({exc.strerror})") from None
         if len(code) % 4 or code[:4] != b"\x03\x02\x23\x07":
             raise ShaderError(f"{path}: not a SPIR-V module")
-        with translate_errors("vkCreateShaderModule"):
-            # codeSize is not inferred by the binding: leaving it out crashes the driver.
-            self.handle = vk.vkCreateShaderModule(
-                device.handle, vk.VkShaderModuleCreateInfo(codeSize=len(code), pCode=code), None
-            )
+        # codeSize is not inferred by the binding: leaving it out crashes the driver.
+        self.handle = vk.vkCreateShaderModule(
+            device.handle, vk.VkShaderModuleCreateInfo(codeSize=len(code), pCode=code), None
+        )
         device.track(self)
 
 
@@ -97,16 +95,15 @@ class PipelineLayout(DeviceObject):
                     size=push_constant_bytes,
                 )
             )
-        with translate_errors("vkCreatePipelineLayout"):
-            self.handle = vk.vkCreatePipelineLayout(
-                device.handle,
-                vk.VkPipelineLayoutCreateInfo(
-                    pSetLayouts=[s.handle for s in set_layouts],
-                    pPushConstantRanges=ranges or None,
-                    pushConstantRangeCount=len(ranges),
-                ),
-                None,
-            )
+        self.handle = vk.vkCreatePipelineLayout(
+            device.handle,
+            vk.VkPipelineLayoutCreateInfo(
+                pSetLayouts=[s.handle for s in set_layouts],
+                pPushConstantRanges=ranges or None,
+                pushConstantRangeCount=len(ranges),
+            ),
+            None,
+        )
         device.track(self)
 
 

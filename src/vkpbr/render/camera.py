@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 
@@ -19,7 +18,7 @@ from vkpbr.scene.camera import as_camera, format_camera, parse_camera, validate_
 from vkpbr.scene.types import Camera
 
 __all__ = ["look_at", "perspective", "forward", "view_projection", "view_projection_columns",
-           "projection_terms", "camera_k", "depth_range",
+           "projection_terms", "depth_range",
            "parse_camera", "format_camera"]
 
 
@@ -68,16 +67,6 @@ def projection_terms(camera: Camera, size: tuple[int, int]) -> tuple[float, floa
     k = camera.intrinsics(size)
     fx, fy, cx, cy = float(k[0][0]), float(k[1][1]), float(k[0][2]), float(k[1][2])
     return 2.0 * fx / w, 2.0 * fy / h, 2.0 * (cx + 0.5) / w - 1.0, 2.0 * (cy + 0.5) / h - 1.0
-
-
-def camera_k(camera: Camera, size: tuple[int, int]) -> Any:
-    """The camera's 3x3 K at `size` (Camera.intrinsics), as plain floats for a camera without
-    calibrated intrinsics: this runs per frame while the viewer's camera moves."""
-    if camera.pixel_intrinsics is not None:
-        return camera.intrinsics(size)
-    w, h = size
-    f = h / 2.0 / math.tan(math.radians(camera.yfov_deg) / 2.0)
-    return ((f, 0.0, (w - 1) / 2.0), (0.0, f, (h - 1) / 2.0), (0.0, 0.0, 1.0))
 
 
 def perspective(camera: Camera, size: tuple[int, int], znear: float) -> np.ndarray:
