@@ -18,7 +18,9 @@ EXAMPLES = REPO / "examples"
 
 
 def _run(argv: list[str], cwd: Path) -> subprocess.CompletedProcess:
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+    # VKPBR_VALIDATION=1: every Renderer the script makes runs under the validation layer,
+    # and an error raises (a non-zero exit fails the test).
+    env = dict(os.environ, VKPBR_VALIDATION="1", PYTHONPATH=os.pathsep.join(
         p for p in (str(REPO / "src"), os.environ.get("PYTHONPATH", "")) if p))
     proc = subprocess.run([sys.executable, *argv], cwd=cwd, env=env, capture_output=True,
                           text=True, timeout=240)

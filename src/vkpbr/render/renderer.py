@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import collections
 import dataclasses
+import os
 import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
@@ -61,6 +62,8 @@ class Renderer:
     scene : the scene to draw; None renders the built-in PBR chart.
     device : device name substring or index (`vkpbr info` lists them); None picks the best.
     validation : enable the Khronos validation layer; any error raises ValidationError.
+        None (default): on when the environment has VKPBR_VALIDATION=1 (how the test suite
+        runs scripts, such as examples/, under the layer without changing them).
     sync_validation : with `validation`, also synchronization validation.
     msaa : 1 or 4 samples per pixel (offscreen renders).
     background : linear RGB of pixels where nothing was drawn.
@@ -78,7 +81,7 @@ class Renderer:
         self,
         scene: Scene | None = None,
         device: str | int | None = None,
-        validation: bool = False,
+        validation: bool | None = None,
         sync_validation: bool = False,
         msaa: int = 1,
         background: tuple[float, float, float] = (0.0, 0.0, 0.0),
@@ -95,6 +98,8 @@ class Renderer:
         self.scene, self.msaa, self.background = scene, msaa, background
         if window_extensions is not None:
             device = DeviceRequest(device, tuple(window_extensions), ("VK_KHR_swapchain",))
+        if validation is None:
+            validation = os.environ.get("VKPBR_VALIDATION") == "1"
         self.device = Device(device, validation=validation, sync_validation=sync_validation)
         self.depth_prepass = depth_prepass
         self._targets: dict[tuple, OffscreenTarget] = {}
