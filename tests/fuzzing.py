@@ -3,8 +3,8 @@
 
   loaded   the scene loaded (a mutation can leave a file valid);
   clean    vkpbr's own error (VkpbrError) in one line naming the user's file;
-  unclean  anything else: another exception, a multi-line message, a message that does not
-           name the file, or more than SLOW_S seconds for one input.
+  unclean  anything else: another exception, a multi-line message, or a message that does
+           not name the file. (A hang is caught by the quick tier's test timeout.)
 
 The quick tier (tests/fuzz/test_fuzz_quick.py) runs a few hundred inputs in CI; the long tier
 is `scripts/fuzz.sh N` (this file as a script), which prints one table per format.
@@ -32,7 +32,6 @@ from pathlib import Path
 
 import numpy as np
 
-SLOW_S = 5.0
 SEED = 1111
 
 _EVIL = [1e30, 1e308, -1, 2**31, 2**32, 2**64, -(2**40), 0, 7, float("nan"), float("inf"), "x",
@@ -262,7 +261,6 @@ def run_one(path: Path, names: str) -> tuple[str, str]:
     from vkpbr.errors import VkpbrError
     from vkpbr.scene.loader import load_scene
 
-    t = time.perf_counter()
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -274,8 +272,6 @@ def run_one(path: Path, names: str) -> tuple[str, str]:
         outcome, detail = ("clean", "") if ok else ("unclean", f"message: {text[:200]!r}")
     except Exception as exc:  # noqa: BLE001 - the point of the suite
         outcome, detail = "unclean", f"{type(exc).__name__}: {str(exc)[:200]}"
-    if time.perf_counter() - t > SLOW_S:
-        outcome, detail = "unclean", f"slow: {time.perf_counter() - t:.1f} s"
     return outcome, detail
 
 
