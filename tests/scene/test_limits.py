@@ -121,3 +121,79 @@ def test_obj_corner_and_statement_counts_are_checked_early(tmp_path: Path, monke
                                          "are over the limit of 999 vertices; raise it with "
                                          "VKPBR_MAX_VERTICES"):
         load_scene(obj)
+
+
+# --- the total decoded texture bytes of one scene (VKPBR_MAX_TEXTURE_BYTES) -------------------
+def _png20(value: int) -> bytes:
+    import io
+
+    from PIL import Image as PILImage
+
+    buf = io.BytesIO()
+    PILImage.new("RGBA", (20, 20), (value, 0, 0, 255)).save(buf, format="PNG")
+    return buf.getvalue()  # decodes to 20 * 20 * 4 = 1,600 bytes
+
+
+def _scene_of_three(tmp_path: Path):  # noqa: ANN202
+    from vkpbr.scene.types import Scene
+
+    return Scene("three", source=tmp_path / "three.gltf",
+                 images=[Image(f"t{i}.png", data=_png20(10 * i)) for i in range(3)])
+
+
+def test_total_texture_bytes_limit_names_the_scene_texture_and_option(tmp_path: Path,
+                                                                      monkeypatch) -> None:  # noqa: ANN001
+    from vkpbr.scene.textures import decode_images
+
+    scene = _scene_of_three(tmp_path)
+    monkeypatch.setenv("VKPBR_MAX_TEXTURE_BYTES", "4799")  # 3 x 1,600 = 4,800 needed
+    with pytest.raises(SceneError) as info:
+        decode_images(scene, workers=1)
+    assert str(info.value) == (
+        f"{tmp_path / 'three.gltf'}: its textures decode to more than 4,799 bytes of RGBA8 (at "
+        "t2.png (20x20, 1,600 bytes) after 3,200 bytes of earlier textures); raise the limit "
+        "with VKPBR_MAX_TEXTURE_BYTES")
+    monkeypatch.setenv("VKPBR_MAX_TEXTURE_BYTES", "4800")
+    out = decode_images(scene, workers=3)
+    assert [int(p[0, 0, 0]) for p in out] == [0, 10, 20]
+    # Threads: which texture goes over depends on timing, the error does not.
+    monkeypatch.setenv("VKPBR_MAX_TEXTURE_BYTES", "3000")
+    with pytest.raises(SceneError, match=r"three\.gltf: its textures decode to more than 3,000 "
+                                         r"bytes of RGBA8 \(at t\d\.png .*VKPBR_MAX_TEXTURE_BYTES"):
+        decode_images(scene, workers=3)
+
+
+def test_total_texture_bytes_are_charged_before_decoding(tmp_path: Path, monkeypatch) -> None:  # noqa: ANN001
+    """Over the budget at the first header: no texture's pixels are decoded at all, and a
+    downscaled texture is charged its downscaled size."""
+    from PIL import ImageFile
+
+    from vkpbr.scene.textures import decode_images
+
+    loads = []
+    real_load = ImageFile.ImageFile.load
+    monkeypatch.setattr(ImageFile.ImageFile, "load",
+                        lambda self: loads.append(self.size) or real_load(self))
+    scene = _scene_of_three(tmp_path)
+    monkeypatch.setenv("VKPBR_MAX_TEXTURE_BYTES", "1599")
+    with pytest.raises(SceneError, match=r"at t0\.png \(20x20, 1,600 bytes\) after 0 bytes"):
+        decode_images(scene, workers=1)
+    assert loads == []
+    monkeypatch.setenv("VKPBR_MAX_TEXTURE_BYTES", str(3 * 10 * 10 * 4))  # 10x10 each
+    out = decode_images(scene, max_size=10, workers=1)
+    assert [p.shape for p in out] == [(10, 10, 4)] * 3 and loads  # decoded this time
+
+
+def test_bake_embedding_textures_honours_the_total_texture_bytes_limit(tmp_path: Path,
+                                                                       monkeypatch) -> None:  # noqa: ANN001
+    """`vkpbr bake --embed-textures` decodes every texture: the same limit, naming the source."""
+    from fuzzing import Corpus
+
+    from vkpbr.bake.bake import bake_file
+
+    Corpus(tmp_path)  # s.gltf: one 8x8 texture (256 bytes decoded)
+    monkeypatch.setenv("VKPBR_MAX_TEXTURE_BYTES", "255")
+    with pytest.raises(SceneError, match=r"s\.gltf: its textures decode to more than 255 bytes"):
+        bake_file(tmp_path / "s.gltf", tmp_path / "e.vkpbr", embed_textures=True, progress=False)
+    monkeypatch.setenv("VKPBR_MAX_TEXTURE_BYTES", "256")
+    bake_file(tmp_path / "s.gltf", tmp_path / "e.vkpbr", embed_textures=True, progress=False)
