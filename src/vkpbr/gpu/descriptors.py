@@ -1,7 +1,9 @@
 """Descriptor set layouts from a binding table, a pool, and a batched writer.
 
-A layout is described as rows of (binding, kind, stages) in plain words: kind is "uniform" or
-"sampler" (combined image sampler); stages is a subset of "vertex", "fragment".
+A layout is described as rows of (binding, kind, stages) in plain words: kind is "uniform",
+"storage" (a storage buffer), or "sampler" (combined image sampler; also spelt as its GLSL
+type, "sampler2DArrayShadow", "samplerCubeArray", ...); stages is a subset of "vertex",
+"fragment", "compute".
 """
 
 from __future__ import annotations
@@ -24,14 +26,17 @@ class BindingSpec:
 
 
 def _descriptor_type(vk: Any, kind: str) -> int:
+    if kind.startswith("sampler"):  # "sampler" or a GLSL sampler type: combined image sampler
+        return vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
     return {
         "uniform": vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
-        "sampler": vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+        "storage": vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
     }[kind]
 
 
 def _stage_flags(vk: Any, stages: Sequence[str]) -> int:
-    bits = {"vertex": vk.VK_SHADER_STAGE_VERTEX_BIT, "fragment": vk.VK_SHADER_STAGE_FRAGMENT_BIT}
+    bits = {"vertex": vk.VK_SHADER_STAGE_VERTEX_BIT, "fragment": vk.VK_SHADER_STAGE_FRAGMENT_BIT,
+            "compute": vk.VK_SHADER_STAGE_COMPUTE_BIT}
     flags = 0
     for s in stages:
         flags |= bits[s]
@@ -79,7 +84,8 @@ class DescriptorPool(DeviceObject):
         for layout, count in layouts_and_counts:
             max_sets += count
             for b in layout.bindings:
-                totals[b.kind] = totals.get(b.kind, 0) + count
+                kind = "sampler" if b.kind.startswith("sampler") else b.kind
+                totals[kind] = totals.get(kind, 0) + count
         self.handle = vk.vkCreateDescriptorPool(
             device.handle,
             vk.VkDescriptorPoolCreateInfo(
@@ -125,6 +131,17 @@ class DescriptorWriter:
             vk.VkWriteDescriptorSet(
                 dstSet=dst_set, dstBinding=binding, descriptorCount=1,
                 descriptorType=vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, pBufferInfo=[info],
+            )
+        )
+
+    def storage(self, dst_set: Any, binding: int, buffer: Any, size: int, offset: int = 0) -> None:
+        vk = self.device.vk
+        info = vk.VkDescriptorBufferInfo(buffer=buffer.handle, offset=offset, range=size)
+        self._keep.append(info)
+        self._writes.append(
+            vk.VkWriteDescriptorSet(
+                dstSet=dst_set, dstBinding=binding, descriptorCount=1,
+                descriptorType=vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, pBufferInfo=[info],
             )
         )
 

@@ -32,6 +32,10 @@ VARIANTS: tuple[Variant, ...] = (
     *(Variant(f"pbr_{m.name.lower()}.vert.spv", "pbr.vert", (("TBN_MODE", int(m)),)) for m in L.TbnMode),
     Variant("pbr_opaque.frag.spv", "pbr.frag", (("ALPHA_MASK", 0),)),
     Variant("pbr_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1),)),
+    # Shadow-map passes (render/shadows.py): depth only, or cut out by the base colour's alpha.
+    Variant("shadow_opaque.vert.spv", "shadow.vert", (("ALPHA_MASK", 0),)),
+    Variant("shadow_mask.vert.spv", "shadow.vert", (("ALPHA_MASK", 1),)),
+    Variant("shadow_mask.frag.spv", "shadow_mask.frag"),
     Variant("hud.vert.spv", "hud.vert"),  # the viewer's text overlay (app/hud.py)
     Variant("hud.frag.spv", "hud.frag"),
 )
