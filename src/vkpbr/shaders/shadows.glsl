@@ -65,7 +65,6 @@ float shadow_factor(LightRecord light, vec3 world_pos, vec3 ng, vec3 l, float vi
     float ma0 = max(max(abs(q0.x), abs(q0.y)), abs(q0.z));
     vec3 q = shadow_offset_position(world_pos, ng, l, light.shadow.w * ma0) - light.position_range.xyz;
     float ma = max(max(abs(q.x), abs(q.y)), abs(q.z));
-    float ref = light.shadow.z / ma;
     // PCF across the direction: a texel of the face is 2 |ma| / size wide.
     vec3 a = abs(q.x) < 0.9 * length(q) ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
     vec3 t1 = normalize(cross(q, a));
@@ -74,7 +73,13 @@ float shadow_factor(LightRecord light, vec3 world_pos, vec3 ng, vec3 l, float vi
     float sum = 0.0;
     for (int j = -SHADOW_PCF_HALF; j <= SHADOW_PCF_HALF; ++j)
         for (int i = -SHADOW_PCF_HALF; i <= SHADOW_PCF_HALF; ++i)
-            sum += texture(shadow_cubes, vec4(q + (float(i) * t1 + float(j) * t2) * step_w, first), ref);
+        {
+            // Each tap compares at its own major axis: a tap across a cube edge reads a face
+            // whose depth is near / (another component), where the centre's ref would be off.
+            vec3 qt = q + (float(i) * t1 + float(j) * t2) * step_w;
+            float mt = max(max(abs(qt.x), abs(qt.y)), abs(qt.z));
+            sum += texture(shadow_cubes, vec4(qt, first), light.shadow.z / mt);
+        }
     float n = float(2 * SHADOW_PCF_HALF + 1);
     return sum / (n * n);
 }
