@@ -198,3 +198,22 @@ def test_point_light_faces_match_a_ray_cast_and_the_hole_shows_the_ground(maps) 
     assert hole.sum() >= 9
     stored = cubes[6 * e.first + 3][hole]
     assert np.all(np.abs(stored - want[hole]) < 0.25 * np.abs(solid[hole] - want[hole]))
+
+
+def test_resolution_change_and_growth_remake_the_images() -> None:
+    with Renderer(_scene(), validation=True) as r:
+        sm = ShadowMaps(r.device, r.set_layouts[1], r.ring.count, resolution=64)
+        assert sm.maps.size == 1 and sm.cubes.size == 1  # nothing shadowed yet: 1x1 stand-ins
+        plan = plan_shadows(LIGHTS)
+        assert sm.ensure(plan) and (sm.maps.size, sm.cubes.size) == (64, 32)
+        assert not sm.ensure(plan)  # same plan: nothing to do
+        assert not sm.ensure(plan_shadows(LIGHTS[:1]))  # fewer layers fit
+        sm.set_resolution(128)
+        assert sm.ensure(plan) and (sm.maps.size, sm.cubes.size) == (128, 64)
+        assert plan_shadows(LIGHTS, enabled=False).entries == ()
+        many = plan_shadows([_Light("directional")] * 5 + [_Light("point")] * 5)
+        assert many.layers == 16 and many.cubes == 4 and many.dropped == 2
+        with pytest.warns(UserWarning, match="without shadows"):
+            sm.ensure(many)
+        r.check_validation()
+        sm.destroy()

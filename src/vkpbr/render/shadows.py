@@ -184,6 +184,11 @@ class ShadowMaps:
         return obj
 
     # --- resources --------------------------------------------------------------------------
+    def set_resolution(self, resolution: int) -> None:
+        """A new map size (RenderOptions.shadow_resolution): the next `ensure` remakes the
+        images (and returns True)."""
+        self.resolution, self.cube_resolution = int(resolution), max(int(resolution) // 2, 16)
+
     def ensure(self, plan: ShadowPlan) -> bool:
         """Make the images hold `plan`'s layers; True when they were (re)made, after which
         command buffers recorded before are stale. Waits for the device when it remakes."""
