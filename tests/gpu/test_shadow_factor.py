@@ -1,18 +1,17 @@
-"""shaders/shadows.glsl's shadow_factor on the GPU against a NumPy ray cast: an occluder over a
+"""shaders/shadow_sampling.glsl's shadow_factor on the GPU against a NumPy ray cast: an occluder over a
 plane, lit by each light type (directional cascades, spot map, point cube); each pixel's
 factor (> 0.5 lit) agrees with "does the segment to the light hit the occluder" outside a
 penumbra band of a few shadow-map texels (<= 0.5% of the rest wrong); a plane with nothing
 over it is lit everywhere (no acne); an alpha-masked card casts a shadow with its hole.
 
 The factor is drawn by a small test shader (pbr.vert + shadow_factor, compiled here), so this
-checks the shadow code without the rest of the shading; tests/gpu/test_shadows.py renders
-the SHADOW debug view of the full renderer."""
+checks the shadow code without the rest of the shading (the full renderer
+binds set 3 once integrated; then its SHADOW debug view shows the same factor)."""
 
 from __future__ import annotations
 
 import shutil
 import subprocess
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -46,10 +45,8 @@ CAMERA = Camera(eye=(0.0, 5.0, 6.0), target=(0.3, 0.0, 0.0), yfov_deg=55.0)
 FRAG = """#version 450
 #extension GL_GOOGLE_include_directive : require
 #include "generated.glsl"
-struct LightRecord { vec4 position_range; vec4 direction_kind; vec4 color_falloff; vec4 cone;
-                     vec4 shadow; };
-layout(set = 2, binding = 1, std140) uniform TestLight { LightRecord test_light; vec4 eye; };
-#include "shadows.glsl"
+layout(set = 2, binding = 7, std140) uniform TestLight { LightRecord test_light; vec4 eye; };
+#include "shadow_sampling.glsl"
 layout(location = 0) in vec3 v_world_pos;
 layout(location = 2) in vec3 v_normal;
 layout(location = 0) out vec4 out_color;
@@ -65,12 +62,7 @@ void main() {
 """
 
 
-@dataclass
-class _Light(Light):  # the fields the lead's Light adds, for the shadow code
-    kind: str = "point"
-    direction: tuple = (0.0, -1.0, 0.0)
-    outer_cone: float = 0.785
-    shadows: bool = True
+_Light = Light
 
 
 def _d(*v):
@@ -126,7 +118,7 @@ def _render(rects, light: _Light, tmp: Path) -> tuple[np.ndarray, ShadowMaps]:
         sm = ShadowMaps(dev, r.set_layouts[1], r.ring.count, resolution=RES)
         plan = plan_shadows([light])
         sm.ensure(plan)
-        test_layout = DescriptorSetLayout(dev, [BindingSpec(1, "uniform", ("fragment",))])
+        test_layout = DescriptorSetLayout(dev, [BindingSpec(7, "uniform", ("fragment",))])
         layout = PipelineLayout(dev, [r.set_layouts[0], r.set_layouts[1], test_layout,
                                       sm.set_layout], L.PUSH.size)
         target = r.offscreen_target(SIZE, linear=True)
@@ -140,7 +132,7 @@ def _render(rects, light: _Light, tmp: Path) -> tuple[np.ndarray, ShadowMaps]:
                                           cull="none"), layout, tmp)
         frame = r.ring.begin()
         slot = r.slots[frame.index]
-        write_frame_uniforms(slot, CAMERA, light, SIZE, RenderOptions(), True, r.bounds)
+        write_frame_uniforms(slot, CAMERA, (light,), SIZE, RenderOptions(), True, r.bounds)
         f = forward(CAMERA)
         znear, zfar = depth_range(CAMERA, r.bounds.corners, r.bounds.radius, f)
         lo, hi = scene.bounds()
@@ -152,7 +144,7 @@ def _render(rects, light: _Light, tmp: Path) -> tuple[np.ndarray, ShadowMaps]:
         pool = DescriptorPool(dev, [(test_layout, 1)])
         s2 = pool.allocate(test_layout)
         w = DescriptorWriter(dev)
-        w.uniform(s2, 1, ubo, 96)
+        w.uniform(s2, 7, ubo, 96)
         w.update()
         classes = [classify(d.alpha_mode, d.double_sided, True) for d in gs.draws]
         cmd = Commands(dev).begin()

@@ -1,9 +1,8 @@
 """Descriptor set layouts from a binding table, a pool, and a batched writer.
 
 A layout is described as rows of (binding, kind, stages) in plain words: kind is "uniform",
-"storage" (a storage buffer), or "sampler" (combined image sampler; also spelt as its GLSL
-type, "sampler2DArrayShadow", "samplerCubeArray", ...); stages is a subset of "vertex",
-"fragment", "compute".
+"storage" (a storage buffer) or "sampler" / any GLSL sampler type such as "samplerCube" (a
+combined image sampler); stages is a subset of "vertex", "fragment", "compute".
 """
 
 from __future__ import annotations
@@ -26,7 +25,7 @@ class BindingSpec:
 
 
 def _descriptor_type(vk: Any, kind: str) -> int:
-    if kind.startswith("sampler"):  # "sampler" or a GLSL sampler type: combined image sampler
+    if kind.startswith("sampler"):
         return vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
     return {
         "uniform": vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
@@ -79,21 +78,19 @@ class DescriptorPool(DeviceObject):
     ) -> None:
         vk = device.vk
         self.device = device
-        totals: dict[str, int] = {}
+        totals: dict[int, int] = {}
         max_sets = 0
         for layout, count in layouts_and_counts:
             max_sets += count
             for b in layout.bindings:
-                kind = "sampler" if b.kind.startswith("sampler") else b.kind
+                kind = _descriptor_type(vk, b.kind)
                 totals[kind] = totals.get(kind, 0) + count
         self.handle = vk.vkCreateDescriptorPool(
             device.handle,
             vk.VkDescriptorPoolCreateInfo(
                 maxSets=max(max_sets, 1),
                 pPoolSizes=[
-                    vk.VkDescriptorPoolSize(
-                        type=_descriptor_type(vk, kind), descriptorCount=n
-                    )
+                    vk.VkDescriptorPoolSize(type=kind, descriptorCount=n)
                     for kind, n in totals.items()
                 ],
             ),
@@ -123,27 +120,22 @@ class DescriptorWriter:
         self._writes: list[Any] = []
         self._keep: list[Any] = []
 
-    def uniform(self, dst_set: Any, binding: int, buffer: Any, size: int, offset: int = 0) -> None:
+    def uniform(self, dst_set: Any, binding: int, buffer: Any, size: int, offset: int = 0,
+                kind: str = "uniform") -> None:
+        """Point a uniform (or, with kind="storage", a storage) buffer binding at
+        `size` bytes of `buffer` from `offset`."""
         vk = self.device.vk
         info = vk.VkDescriptorBufferInfo(buffer=buffer.handle, offset=offset, range=size)
         self._keep.append(info)
         self._writes.append(
             vk.VkWriteDescriptorSet(
                 dstSet=dst_set, dstBinding=binding, descriptorCount=1,
-                descriptorType=vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, pBufferInfo=[info],
+                descriptorType=_descriptor_type(vk, kind), pBufferInfo=[info],
             )
         )
 
     def storage(self, dst_set: Any, binding: int, buffer: Any, size: int, offset: int = 0) -> None:
-        vk = self.device.vk
-        info = vk.VkDescriptorBufferInfo(buffer=buffer.handle, offset=offset, range=size)
-        self._keep.append(info)
-        self._writes.append(
-            vk.VkWriteDescriptorSet(
-                dstSet=dst_set, dstBinding=binding, descriptorCount=1,
-                descriptorType=vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, pBufferInfo=[info],
-            )
-        )
+        self.uniform(dst_set, binding, buffer, size, offset, kind="storage")
 
     def sampler(self, dst_set: Any, binding: int, view: Any, sampler: Any) -> None:
         vk = self.device.vk

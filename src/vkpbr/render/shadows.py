@@ -18,7 +18,7 @@ frame's command buffer before the main target begins. Command buffers are record
 Casters: opaque draws depth-only (no fragment shader); masked and blended draws through
 shadow_mask.frag, which discards below the alpha cutoff (foliage casts leaf shadows). No
 face culling (single-sided sheets cast too; the lit side's acne is handled by the bias).
-Depth bias: slope-scaled in the pipelines (`DEPTH_BIAS`), normal offset in shaders/shadows.glsl.
+Depth bias: slope-scaled in the pipelines (`DEPTH_BIAS`), normal offset in shaders/shadow_sampling.glsl.
 """
 
 from __future__ import annotations
@@ -61,7 +61,7 @@ DEFAULT_RESOLUTION = 2048
 # under reversed-Z. Per projection: orthographic depth is linear in distance, perspective
 # depth (near / d) has slopes that grow towards the light.
 DEPTH_BIAS = {"directional": (-2.0, -2.0), "spot": (-2.0, -2.0), "point": (-2.0, -2.0)}
-NORMAL_OFFSET = 1.0  # texels the receiver moves along its normal (shaders/shadows.glsl)
+NORMAL_OFFSET = 1.0  # texels the receiver moves along its normal (shaders/shadow_sampling.glsl)
 PCF_RADIUS = 1.0  # texels between PCF taps
 
 # Set 3 ("shadows") as layouts.SETS rows: (binding, kind, stages, name).
