@@ -66,6 +66,8 @@ def generated_glsl() -> str:
     for array in L.STORAGE.values():
         out.append(array.element.glsl("struct").replace(f"}} {array.element.instance};", "};"))
     for set_index, rows in L.SETS.items():
+        if set_index in L.HAND_DECLARED_SETS:
+            continue  # set 3: shaders/shadow_data.glsl + shadow_sampling.glsl
         for binding, kind, _stages, name in rows:
             layout = f"layout(set = {set_index}, binding = {binding}"
             if kind == "uniform":

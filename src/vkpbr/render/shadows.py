@@ -18,6 +18,7 @@ frame's command buffer before the main target begins. Command buffers are record
 Casters: opaque draws depth-only (no fragment shader); masked and blended draws through
 shadow_mask.frag, which discards below the alpha cutoff (foliage casts leaf shadows). No
 face culling (single-sided sheets cast too; the lit side's acne is handled by the bias).
+Materials with casts_shadows False are left out (the default scene's bulb around its light).
 Depth bias: slope-scaled in the pipelines (`DEPTH_BIAS`), normal offset in shaders/shadow_sampling.glsl.
 """
 
@@ -64,12 +65,8 @@ DEPTH_BIAS = {"directional": (-2.0, -2.0), "spot": (-2.0, -2.0), "point": (-2.0,
 NORMAL_OFFSET = 1.0  # texels the receiver moves along its normal (shaders/shadow_sampling.glsl)
 PCF_RADIUS = 1.0  # texels between PCF taps
 
-# Set 3 ("shadows") as layouts.SETS rows: (binding, kind, stages, name).
-SET3_ROWS = (
-    (0, "storage", ("fragment",), "ShadowData"),
-    (1, "sampler2DArrayShadow", ("fragment",), "shadow_maps"),
-    (2, "samplerCubeArrayShadow", ("fragment",), "shadow_cubes"),
-)
+# Set 3 ("shadows"): its rows live in layouts.SETS (binding, kind, stages, name).
+SET3_ROWS = L.SETS[3]
 _KIND_CODE = {"point": 0, "spot": 1, "directional": 2}
 
 
@@ -303,8 +300,10 @@ class ShadowMaps:
         scene's vertex buffers by name (positions, texcoords, texcoords1, colors)."""
         if not plan.entries:
             return
-        opaque = [d for d, c in zip(draws, classes, strict=True) if c in ("opaque", "opaque_double")]
-        masked = [d for d, c in zip(draws, classes, strict=True) if c in ("mask", "blend")]
+        casters = [(d, c) for d, c in zip(draws, classes, strict=True)
+                   if getattr(d, "casts_shadows", True)]
+        opaque = [d for d, c in casters if c in ("opaque", "opaque_double")]
+        masked = [d for d, c in casters if c in ("mask", "blend")]
         self.maps.record_begin_writes(cmd)
         self.cubes.record_begin_writes(cmd)
         cmd.bind_index_buffer(index_buffer)
