@@ -115,3 +115,16 @@ def test_unshadowed_lights_before_a_shadowed_one(renderers) -> None:
                             for lights in ([a, b], a, b))
     np.testing.assert_allclose(both, only_a + only_b, rtol=1e-5, atol=1e-6)
     assert (only_b.sum(-1) == 0).sum() > 100  # B's shadow is in the sum
+
+
+def test_frames_in_flight_keep_their_own_cascades(renderers) -> None:
+    """render_many with a moving camera (cascades refitted per frame slot, skipped when a
+    slot's inputs repeat) gives each frame what render gives for its camera alone."""
+    r = renderers["occluded"]
+    light = LIGHTS["directional"]
+    cameras = [dataclasses.replace(CAMERA, eye=(x, 5.0, 6.0)) for x in (-1.0, 0.0, 1.0, 0.0)]
+    batch = list(r.render_many(cameras, light, size=SIZE, view="shadow", linear=True, **OPTS))
+    for camera, image in zip(cameras, batch, strict=True):
+        alone = r.render(camera, light, size=SIZE, view="shadow", linear=True, **OPTS)
+        assert np.array_equal(image, alone)
+    assert not np.array_equal(batch[0], batch[2])
