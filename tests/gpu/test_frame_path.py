@@ -18,7 +18,7 @@ def test_depth_prepass_changes_no_pixel(make_renderer) -> None:
     image = pre.render(size=(96, 64), depth=True)
     assert np.array_equal(plain[0], image[0]) and np.array_equal(plain[1], image[1])
     passes = pre.last_stats.pass_ms
-    assert {"prepass_opaque", "opaque", "mask", "blend", "copy"} <= set(passes)
+    assert {"shadows", "prepass_opaque", "opaque", "mask", "blend", "copy"} <= set(passes)
     if pre.device.timestamps:
         assert passes["prepass_opaque"] >= 0 and pre.last_stats.gpu_ms > 0
 

@@ -102,6 +102,8 @@ def test_modes_and_modifiers() -> None:
     s.press(glfw.KEY_M)
     s.press(glfw.KEY_O)
     assert (s.options.alpha_mask, s.options.normal_mapping, s.options.occlusion) == (False, True, False)
+    s.press(glfw.KEY_K)
+    assert s.options.shadows is False
     fov = s.fly.yfov_deg
     s.press(glfw.KEY_RIGHT_BRACKET)
     assert s.fly.yfov_deg == fov + 5.0

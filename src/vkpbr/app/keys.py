@@ -144,6 +144,8 @@ BINDINGS: tuple[Binding, ...] = (
     Binding("M  N  O", "alpha masking, normal maps, occlusion on/off", (
         _press("m", "toggle", "alpha_mask"), _press("n", "toggle", "normal_mapping"),
         _press("o", "toggle", "occlusion"))),
+    Binding("K", "shadows on/off", (_press("k", "toggle", "shadows"),),
+            doc="shadow maps on/off (the physically based lighting mode's; the HUD shows it)"),
     Binding("X  = / -", f"tone map cycle, exposure +/- {EXPOSURE_STEP:g} EV", (
         _press("x", "cycle", ("tonemap", 1)),
         _press("equal", "exposure", EXPOSURE_STEP), _press("kp_add", "exposure", EXPOSURE_STEP),
@@ -206,7 +208,7 @@ def cycle(options: RenderOptions, field: str, step: int = 1) -> RenderOptions:
 
 
 def toggle(options: RenderOptions, field: str) -> RenderOptions:
-    """Flip a boolean option: alpha_mask, normal_mapping or occlusion."""
+    """Flip a boolean option: alpha_mask, normal_mapping, occlusion or shadows."""
     return dataclasses.replace(options, **{field: not getattr(options, field)})
 
 

@@ -24,7 +24,8 @@ if TYPE_CHECKING:
 __all__ = ["OptionSpec", "SHARED_OPTIONS", "SCENE_LOADING_FLAGS", "add_options",
            "add_scene_loading_options", "render_options_from_args", "option_flags"]
 
-Kind = Literal["enum", "float", "vec3", "off", "on", "text", "dir?", "choice", "append"]
+Kind = Literal["enum", "float", "int", "vec3", "off", "on", "onoff", "text", "dir?", "choice",
+               "append"]
 
 
 @dataclass(frozen=True)
@@ -34,8 +35,9 @@ class OptionSpec:
     Parameters
     ----------
     flag : the option string, e.g. "--light-color"; `dest` is derived from it as argparse does.
-    kind : "enum" (a RenderOptions enum field: choices are its labels), "float", "vec3"
-        ("x,y,z"), "off" (`--no-x` sets field False), "on" (a plain switch), "text",
+    kind : "enum" (a RenderOptions enum field: choices are its labels), "float", "int",
+        "vec3" ("x,y,z"), "off" (`--no-x` sets field False), "on" (a plain switch), "onoff"
+        (`--x on|off` sets a bool field), "text",
         "dir?" (an optional folder: `--cache` alone means the default folder), "choice"
         (fixed `choices`), "append" (repeatable text: a list of every value given).
     help : help text; "%(default)s" and "%(choices)s" are expanded by argparse.
@@ -89,6 +91,11 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
     OptionSpec("--no-alpha-mask", "off", "draw masked materials as opaque", field="alpha_mask"),
     OptionSpec("--no-normal-maps", "off", "ignore normal maps", field="normal_mapping"),
     OptionSpec("--no-occlusion", "off", "ignore occlusion maps", field="occlusion"),
+    OptionSpec("--shadows", "onoff", "shadow maps for the lights that cast shadows "
+               "(default %(default)s)", field="shadows"),
+    OptionSpec("--shadow-resolution", "int", "texels per side of a shadow map, 16..16384 "
+               "(cube faces get half; default %(default)s)", field="shadow_resolution",
+               metavar="N"),
     OptionSpec("--device", "text", "device name substring or index (see `vkpbr info`)",
                group="device and scene loading", metavar="NAME|INDEX"),
     OptionSpec("--validation", "on", "enable the Vulkan validation layer",
@@ -144,10 +151,14 @@ def add_options(parser: argparse.ArgumentParser, table: tuple[OptionSpec, ...] =
                       default=None if default is None else str(default))
         elif spec.kind == "choice":
             kw.update(type=_label, choices=spec.choices)
-        elif spec.kind == "float":
-            kw["type"] = float
+        elif spec.kind in ("float", "int"):
+            kw["type"] = float if spec.kind == "float" else int
             if spec.field:
                 kw["default"] = getattr(defaults, spec.field)
+        elif spec.kind == "onoff":
+            assert spec.field is not None
+            kw.update(type=_label, choices=("on", "off"),
+                      default="on" if getattr(defaults, spec.field) else "off")
         elif spec.kind == "vec3":
             kw["type"] = vec3_arg(spec.flag)
         elif spec.kind in ("on", "off"):
@@ -179,7 +190,11 @@ def render_options_from_args(args: argparse.Namespace,
         if spec.field is None:
             continue
         value = getattr(args, spec.dest)
-        values[spec.field] = not value if spec.kind == "off" else value
+        if spec.kind == "off":
+            value = not value
+        elif spec.kind == "onoff":
+            value = value == "on"
+        values[spec.field] = value
     return RenderOptions(**values)
 
 
@@ -195,6 +210,10 @@ def option_flags(options: RenderOptions, table: tuple[OptionSpec, ...] = SHARED_
             out += [spec.flag, str(value)]
         elif spec.kind == "float":
             out += [spec.flag, f"{value:g}"]
+        elif spec.kind == "int":
+            out += [spec.flag, str(value)]
+        elif spec.kind == "onoff":
+            out += [spec.flag, "on" if value else "off"]
         elif spec.kind == "off" and not value:
             out.append(spec.flag)
     return out

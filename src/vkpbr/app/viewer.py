@@ -235,7 +235,7 @@ class Viewer(InputHandlers):
             f"tonemap {o.shading_tonemap}   exposure {o.exposure:+.1f} EV   "
             f"{len(self.lights)} light{'s' if len(self.lights) != 1 else ''}",
             f"alpha mask {onoff(o.alpha_mask)}   normal maps {onoff(o.normal_mapping)}   "
-            f"occlusion {onoff(o.occlusion)}",
+            f"occlusion {onoff(o.occlusion)}   shadows {onoff(o.shadows)}",
             f"light anim {onoff(self.animate_light)}   {w}x{h} {self.present_mode}",
             "H: key help" if not self.show_help else "",
         )

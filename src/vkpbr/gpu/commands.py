@@ -69,8 +69,12 @@ class Commands:
                               0, data.nbytes, vk.ffi.from_buffer(data))
 
     # --- draws ------------------------------------------------------------------------------
-    def draw_indexed(self, index_count: int, first_index: int, vertex_offset: int) -> None:
-        self.vk.vkCmdDrawIndexed(self.handle, index_count, 1, first_index, vertex_offset, 0)
+    def draw_indexed(self, index_count: int, first_index: int, vertex_offset: int,
+                     first_instance: int = 0, instances: int = 1) -> None:
+        """`instances` instances from `first_instance` (the shader's gl_InstanceIndex: a small
+        per-draw index without a push constant, e.g. the shadow passes' matrix and layer)."""
+        self.vk.vkCmdDrawIndexed(self.handle, index_count, instances, first_index, vertex_offset,
+                                 first_instance)
 
     def draw_indirect(self, buffer: Buffer) -> None:
         """One VkDrawIndirectCommand at the start of `buffer`."""

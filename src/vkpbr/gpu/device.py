@@ -132,13 +132,26 @@ class Device:
         supported = self._query_features()
         self.anisotropy = anisotropy_usable(self.info, bool(supported["samplerAnisotropy"]))
         self.timestamps = bool(self.limits.timestampComputeAndGraphics)
+        # Shadow maps: one layered draw fills a point light's six cube faces (or a light's
+        # cascades): the vertex shader writes gl_Layer (shaderOutputLayer) from its instance
+        # and base instance (shaderDrawParameters); cube-array images hold point lights' maps.
+        self.layered_shadows = bool(supported["shaderOutputLayer"]
+                                    and supported["shaderDrawParameters"])
+        self.image_cube_array = bool(supported["imageCubeArray"])
+        on = {True: vk.VK_TRUE, False: vk.VK_FALSE}
         f13 = vk.VkPhysicalDeviceVulkan13Features(
             dynamicRendering=vk.VK_TRUE, synchronization2=vk.VK_TRUE
         )
-        # Only what vkpbr uses: dynamic rendering, synchronization2, anisotropic filtering.
+        f12 = vk.VkPhysicalDeviceVulkan12Features(
+            pNext=f13, shaderOutputLayer=on[self.layered_shadows])
+        f11 = vk.VkPhysicalDeviceVulkan11Features(
+            pNext=f12, shaderDrawParameters=on[self.layered_shadows])
+        # Only what vkpbr uses: dynamic rendering, synchronization2, anisotropic filtering,
+        # layered rendering and cube-map arrays (shadows).
         core = vk.VkPhysicalDeviceFeatures(
-            samplerAnisotropy=vk.VK_TRUE if self.anisotropy else vk.VK_FALSE)
-        features = vk.VkPhysicalDeviceFeatures2(pNext=f13, features=core)
+            samplerAnisotropy=vk.VK_TRUE if self.anisotropy else vk.VK_FALSE,
+            imageCubeArray=on[self.image_cube_array])
+        features = vk.VkPhysicalDeviceFeatures2(pNext=f11, features=core)
         available = {
             e.extensionName
             for e in vk.vkEnumerateDeviceExtensionProperties(self.physical, None)
@@ -162,7 +175,8 @@ class Device:
     def _query_features(self) -> dict[str, int]:
         vk = self.vk
         f13 = vk.VkPhysicalDeviceVulkan13Features()
-        f11 = vk.VkPhysicalDeviceVulkan11Features(pNext=f13)
+        f12 = vk.VkPhysicalDeviceVulkan12Features(pNext=f13)
+        f11 = vk.VkPhysicalDeviceVulkan11Features(pNext=f12)
         f2 = vk.VkPhysicalDeviceFeatures2(
             sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, pNext=f11
         )
@@ -172,9 +186,20 @@ class Device:
                 f"{self.info.name}: Vulkan 1.3 dynamic rendering and synchronization2 are "
                 "required (update the driver; Mesa >= 22 lavapipe has them)"
             )
-        return {"samplerAnisotropy": f2.features.samplerAnisotropy}
+        return {"samplerAnisotropy": f2.features.samplerAnisotropy,
+                "imageCubeArray": f2.features.imageCubeArray,
+                "shaderOutputLayer": f12.shaderOutputLayer,
+                "shaderDrawParameters": f11.shaderDrawParameters}
 
     # --- helpers ----------------------------------------------------------------------------
+    def format_supports(self, format: int, feature: str) -> bool:
+        """Whether optimal-tiling images of `format` support `feature`, a
+        VkFormatFeatureFlagBits name without its prefix and suffix ("SAMPLED_IMAGE_FILTER_LINEAR")."""
+        vk = self.vk
+        props = vk.vkGetPhysicalDeviceFormatProperties(self.physical, format)
+        bit = getattr(vk, f"VK_FORMAT_FEATURE_{feature}_BIT")
+        return bool(props.optimalTilingFeatures & bit)
+
     def memory_type(self, type_bits: int, required: int, preferred: int = 0) -> int:
         """Index of a memory type allowed by `type_bits` with `required` (and ideally
         `preferred`) property flags."""

@@ -24,7 +24,8 @@ def mip_levels(width: int, height: int) -> int:
 
 
 class Image:
-    """A 2D VkImage with dedicated memory."""
+    """A 2D VkImage with dedicated memory; `layers` > 1 makes a 2D array (`cube`: cube
+    compatible, `layers` a multiple of 6)."""
 
     def __init__(
         self,
@@ -36,20 +37,24 @@ class Image:
         mip_levels: int = 1,
         samples: int = 1,
         name: str = "",
+        layers: int = 1,
+        cube: bool = False,
     ) -> None:
         vk = device.vk
         self.device = device
         self.width, self.height, self.format = width, height, format
         self.mip_levels, self.samples, self.name = mip_levels, samples, name
+        self.layers = layers
         self.memory = None
         self.handle = vk.vkCreateImage(
             device.handle,
             vk.VkImageCreateInfo(
+                flags=vk.VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT if cube else 0,
                 imageType=vk.VK_IMAGE_TYPE_2D,
                 format=format,
                 extent=vk.VkExtent3D(width=width, height=height, depth=1),
                 mipLevels=mip_levels,
-                arrayLayers=1,
+                arrayLayers=layers,
                 samples=samples,
                 tiling=vk.VK_IMAGE_TILING_OPTIMAL,
                 usage=usage,
@@ -81,7 +86,9 @@ class Image:
 
 class ImageView(DeviceObject):
     """A view of an image; `swizzle` maps (r, g, b, a) to source channels, e.g. "bbbb" makes
-    a scalar map out of the blue channel (glTF metalness) without copying the image."""
+    a scalar map out of the blue channel (glTF metalness) without copying the image.
+    `view_type` "2d", "2d_array", "cube" or "cube_array" over `layer_count` layers from
+    `base_layer` (None: all the image's layers from there)."""
 
     _destroy_fn = "vkDestroyImageView"
 
@@ -93,6 +100,9 @@ class ImageView(DeviceObject):
         aspect: str = "color",
         swizzle: str = "iiii",
         format: int | None = None,
+        view_type: str = "2d",
+        base_layer: int = 0,
+        layer_count: int | None = None,
     ) -> None:
         device = image.device
         vk = device.vk
@@ -106,15 +116,16 @@ class ImageView(DeviceObject):
             device.handle,
             vk.VkImageViewCreateInfo(
                 image=image.handle,
-                viewType=vk.VK_IMAGE_VIEW_TYPE_2D,
+                viewType=getattr(vk, f"VK_IMAGE_VIEW_TYPE_{view_type.upper()}"),
                 format=image.format if format is None else format,
                 components=vk.VkComponentMapping(*comps),
                 subresourceRange=vk.VkImageSubresourceRange(
                     aspectMask=aspect_bit,
                     baseMipLevel=0,
                     levelCount=image.mip_levels,
-                    baseArrayLayer=0,
-                    layerCount=1,
+                    baseArrayLayer=base_layer,
+                    layerCount=getattr(image, "layers", 1) - base_layer
+                    if layer_count is None else layer_count,
                 ),
             ),
             None,
@@ -127,18 +138,22 @@ class ImageView(DeviceObject):
 class SamplerSpec:
     """Sampler state in plain words (the scene layer's Sampler maps onto this)."""
 
-    wrap_u: str = "repeat"  # repeat | clamp | mirror
+    wrap_u: str = "repeat"  # repeat | clamp | mirror | border (transparent black: 0)
     wrap_v: str = "repeat"
     mag: str = "linear"  # linear | nearest
     min: str = "linear"
     mipmaps: bool = True
     anisotropy: float = 16.0  # clamped to the device limit; 1 disables
+    # Depth comparison (shadow maps): None, or the op as in "greater_or_equal"; a sample is
+    # then 1 where `ref OP stored` holds, filtered (2x2 PCF) when linear.
+    compare: str | None = None
 
 
 class Sampler(DeviceObject):
     _destroy_fn = "vkDestroySampler"
 
-    _WRAP = {"repeat": "REPEAT", "clamp": "CLAMP_TO_EDGE", "mirror": "MIRRORED_REPEAT"}
+    _WRAP = {"repeat": "REPEAT", "clamp": "CLAMP_TO_EDGE", "mirror": "MIRRORED_REPEAT",
+             "border": "CLAMP_TO_BORDER"}
 
     def __init__(self, device: Device, spec: SamplerSpec = SamplerSpec()) -> None:
         vk = device.vk
@@ -157,9 +172,13 @@ class Sampler(DeviceObject):
                 addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_REPEAT,
                 anisotropyEnable=vk.VK_TRUE if use_aniso else vk.VK_FALSE,
                 maxAnisotropy=aniso if use_aniso else 1.0,
+                compareEnable=vk.VK_TRUE if spec.compare else vk.VK_FALSE,
+                compareOp=getattr(vk, f"VK_COMPARE_OP_{(spec.compare or 'never').upper()}"),
                 minLod=0.0,
                 maxLod=1000.0 if spec.mipmaps else 0.0,
-                borderColor=vk.VK_BORDER_COLOR_FLOAT_OPAQUE_BLACK,
+                # A compare sampler's border is depth 0: the farthest depth under reversed-Z.
+                borderColor=vk.VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK if spec.compare
+                else vk.VK_BORDER_COLOR_FLOAT_OPAQUE_BLACK,
             ),
             None,
         )

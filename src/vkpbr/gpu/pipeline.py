@@ -43,7 +43,7 @@ class PipelineSpec:
     vertex_shader: str  # SPIR-V file name under the shader folder
     fragment_shader: str | None  # None: depth only (a depth pre-pass)
     streams: tuple[VertexStream, ...]
-    color_format: int
+    color_format: int | None  # None: no colour attachment (depth-only passes: shadow maps)
     depth_format: int
     samples: int = 1
     cull: str = "back"  # back | none
@@ -53,6 +53,9 @@ class PipelineSpec:
     depth_compare: str = "greater_or_equal"  # | "less_or_equal" | "equal" | "always"
     blend: bool = False  # premultiplied-free "over" blending of the colour attachment
     color_write: bool = True  # False: the colour attachment is left untouched
+    # (constant, slope) depth bias factors (Vulkan's; negative pushes depth away under
+    # reversed-Z); None: no bias.
+    depth_bias: tuple[float, float] | None = None
 
 
 class ShaderModule(DeviceObject):
@@ -170,11 +173,13 @@ class Pipeline(DeviceObject):
             # colorWriteMask defaults to 0 in the binding: nothing would be written.
             colorWriteMask=all_rgba if spec.color_write else 0,
         )
+        has_color = spec.color_format is not None
         rendering = vk.VkPipelineRenderingCreateInfo(
-            colorAttachmentCount=1,
-            pColorAttachmentFormats=[spec.color_format],
+            colorAttachmentCount=1 if has_color else 0,
+            pColorAttachmentFormats=[spec.color_format] if has_color else None,
             depthAttachmentFormat=spec.depth_format,
         )
+        bias = spec.depth_bias
         info = vk.VkGraphicsPipelineCreateInfo(
             pNext=rendering,
             pStages=stages,
@@ -190,6 +195,9 @@ class Pipeline(DeviceObject):
                 cullMode=cull,
                 frontFace=vk.VK_FRONT_FACE_COUNTER_CLOCKWISE,
                 lineWidth=1.0,
+                depthBiasEnable=vk.VK_FALSE if bias is None else vk.VK_TRUE,
+                depthBiasConstantFactor=0.0 if bias is None else bias[0],
+                depthBiasSlopeFactor=0.0 if bias is None else bias[1],
             ),
             pMultisampleState=vk.VkPipelineMultisampleStateCreateInfo(
                 rasterizationSamples=spec.samples
@@ -199,7 +207,8 @@ class Pipeline(DeviceObject):
                 depthWriteEnable=vk.VK_TRUE if spec.depth_write else vk.VK_FALSE,
                 depthCompareOp=getattr(vk, f"VK_COMPARE_OP_{spec.depth_compare.upper()}"),
             ),
-            pColorBlendState=vk.VkPipelineColorBlendStateCreateInfo(pAttachments=[blend]),
+            pColorBlendState=vk.VkPipelineColorBlendStateCreateInfo(
+                pAttachments=[blend] if has_color else None),
             pDynamicState=vk.VkPipelineDynamicStateCreateInfo(
                 pDynamicStates=[vk.VK_DYNAMIC_STATE_VIEWPORT, vk.VK_DYNAMIC_STATE_SCISSOR]
             ),

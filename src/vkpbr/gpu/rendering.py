@@ -12,7 +12,7 @@ from typing import Any
 
 from vkpbr.gpu.commands import Commands
 
-__all__ = ["Attachments", "begin_rendering", "end_rendering", "image_barrier", "barriers",
+__all__ = ["Attachments", "begin_rendering", "begin_depth_rendering", "end_rendering", "image_barrier", "barriers",
            "copy_image_to_buffer", "host_read_barrier"]
 
 
@@ -29,15 +29,15 @@ class Attachments:
 
 
 def image_barrier(vk: Any, image: Any, depth: bool, old: int, new: int, src: tuple[int, int],
-                  dst: tuple[int, int]) -> Any:
-    """A VkImageMemoryBarrier2 over mip 0 / layer 0 of `image` (a VkImage handle)."""
+                  dst: tuple[int, int], layers: int = 1) -> Any:
+    """A VkImageMemoryBarrier2 over mip 0, layers 0..`layers`-1 of `image` (a VkImage handle)."""
     aspect = vk.VK_IMAGE_ASPECT_DEPTH_BIT if depth else vk.VK_IMAGE_ASPECT_COLOR_BIT
     return vk.VkImageMemoryBarrier2(
         srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=dst[0], dstAccessMask=dst[1],
         oldLayout=old, newLayout=new, srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
         dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, image=image,
         subresourceRange=vk.VkImageSubresourceRange(
-            aspectMask=aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=1))
+            aspectMask=aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=layers))
 
 
 def barriers(cmd: Commands, images: list[Any], buffers: list[Any] = ()) -> None:
@@ -93,6 +93,27 @@ def begin_rendering(cmd: Commands, att: Attachments, clear_color: tuple[float, .
     area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(w, h))
     vk.vkCmdBeginRendering(cmd.handle, vk.VkRenderingInfo(
         renderArea=area, layerCount=1, pColorAttachments=[color], pDepthAttachment=depth))
+    vk.vkCmdSetViewport(cmd.handle, 0, 1, [vk.VkViewport(
+        x=0, y=0, width=w, height=h, minDepth=0.0, maxDepth=1.0)])
+    vk.vkCmdSetScissor(cmd.handle, 0, 1, [area])
+
+
+def begin_depth_rendering(cmd: Commands, depth_view: Any, extent: tuple[int, int],
+                          layers: int = 1, clear_depth: float = 0.0) -> None:
+    """Begin a depth-only rendering (no colour attachment) into the `layers` layers of
+    `depth_view`, cleared to `clear_depth` and stored (layered rendering: the vertex shader
+    picks the layer, gl_Layer). Sets the viewport and scissor."""
+    vk = cmd.vk
+    depth = vk.VkRenderingAttachmentInfo(
+        imageView=depth_view, imageLayout=vk.VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+        loadOp=vk.VK_ATTACHMENT_LOAD_OP_CLEAR, storeOp=vk.VK_ATTACHMENT_STORE_OP_STORE,
+        clearValue=vk.VkClearValue(depthStencil=vk.VkClearDepthStencilValue(
+            depth=clear_depth, stencil=0)))
+    w, h = extent
+    area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(w, h))
+    vk.vkCmdBeginRendering(cmd.handle, vk.VkRenderingInfo(
+        renderArea=area, layerCount=layers, colorAttachmentCount=0,
+        pDepthAttachment=depth))
     vk.vkCmdSetViewport(cmd.handle, 0, 1, [vk.VkViewport(
         x=0, y=0, width=w, height=h, minDepth=0.0, maxDepth=1.0)])
     vk.vkCmdSetScissor(cmd.handle, 0, 1, [area])

@@ -32,6 +32,10 @@ VARIANTS: tuple[Variant, ...] = (
     *(Variant(f"pbr_{m.name.lower()}.vert.spv", "pbr.vert", (("TBN_MODE", int(m)),)) for m in L.TbnMode),
     Variant("pbr_opaque.frag.spv", "pbr.frag", (("ALPHA_MASK", 0),)),
     Variant("pbr_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1),)),
+    # Shadow-map passes (render/shadows.py): depth only, or cut out by the base colour's alpha.
+    Variant("shadow_opaque.vert.spv", "shadow.vert", (("ALPHA_MASK", 0),)),
+    Variant("shadow_mask.vert.spv", "shadow.vert", (("ALPHA_MASK", 1),)),
+    Variant("shadow_mask.frag.spv", "shadow_mask.frag"),
     Variant("hud.vert.spv", "hud.vert"),  # the viewer's text overlay (app/hud.py)
     Variant("hud.frag.spv", "hud.frag"),
 )
@@ -62,6 +66,8 @@ def generated_glsl() -> str:
     for array in L.STORAGE.values():
         out.append(array.element.glsl("struct").replace(f"}} {array.element.instance};", "};"))
     for set_index, rows in L.SETS.items():
+        if set_index in L.HAND_DECLARED_SETS:
+            continue  # set 3: shaders/shadow_data.glsl + shadow_sampling.glsl
         for binding, kind, _stages, name in rows:
             layout = f"layout(set = {set_index}, binding = {binding}"
             if kind == "uniform":

@@ -55,7 +55,7 @@ class FrameSlot:
     lights: np.ndarray  # (MAX_LIGHTS, 20) float32 view of the slot's mapped light records
     uniform_key: tuple | None = None  # inputs of the camera and settings last written here
     lighting_key: tuple | None = None  # inputs of the Lighting block last written here
-    lights_written: tuple = ()  # the lights whose records the slot holds
+    lights_written: tuple = ()  # (lights, shadow rows' bytes) of the records the slot holds
     znear: float = 0.0  # the near plane last written (depth readback is znear / depth)
     stats: FrameStats = field(default_factory=FrameStats)
 
@@ -153,9 +153,11 @@ class FrameLighting:
 
 def write_frame_uniforms(slot: FrameSlot, camera: Camera, lights: tuple[Light, ...],
                          size: Sequence[int], opts: RenderOptions, linear: bool, bounds: Bounds,
-                         lighting: FrameLighting = FrameLighting()) -> None:
+                         lighting: FrameLighting = FrameLighting(),
+                         shadow: np.ndarray | None = None) -> None:
     """Write `slot`'s camera, settings and lighting blocks and its light records for one
-    frame of `size` (W, H)."""
+    frame of `size` (W, H). `shadow`: (len(lights), 4) float32, each record's `shadow` vec4
+    (render/shadows.py ShadowMaps.write); None: no light has a shadow map."""
     # Frames that repeat the slot's last inputs skip the maths: the key is cheap next to it.
     key = (_camera_key(camera), tuple(size), opts, linear)
     if key != slot.uniform_key:
@@ -171,12 +173,17 @@ def write_frame_uniforms(slot: FrameSlot, camera: Camera, lights: tuple[Light, .
             slot.m_settings, camera_forward=(*f, 0.0), view=opts.view, brdf=opts.shading_brdf,
             tonemap=opts.tonemap_for(linear), flags=flags, exposure=2.0 ** opts.exposure, znear=znear,
             zfar=zfar, pad0=0.0)
-    lighting_key = (camera.eye, lights, lighting)
+    # The shadow rows change with the shadow plan and the map sizes only (not the camera).
+    records = (lights, None if shadow is None else shadow.tobytes())
+    lighting_key = (camera.eye, records, lighting)
     if lighting_key != slot.lighting_key:
         slot.lighting_key = lighting_key
-        if lights != slot.lights_written:
-            slot.lights[:len(lights)] = light_records(lights)
-            slot.lights_written = lights
+        if records != slot.lights_written:
+            rows = light_records(lights)
+            if shadow is not None:
+                rows[:, 16:20] = shadow
+            slot.lights[:len(lights)] = rows
+            slot.lights_written = records
         a, rot = lighting.ambient, lighting.env_rotation
         L.LIGHTING.pack_into(
             slot.m_lighting, view_pos=(*camera.eye, 1.0), light_count=len(lights),

@@ -58,6 +58,7 @@ class Draw:
     push: np.ndarray  # PUSH block bytes: model and normal matrix
     alpha_mode: str  # the material's: "opaque" | "mask" | "blend" (render/passes.py classifies)
     double_sided: bool
+    casts_shadows: bool = True  # drawn into shadow maps (Material.casts_shadows)
     center: np.ndarray = field(default_factory=lambda: np.zeros(3))  # world, for blend sorting
 
 
@@ -430,7 +431,7 @@ class GpuScene:
                 first_index=int(self.index_offsets[node.mesh]), index_count=len(mesh.indices),
                 vertex_offset=int(self.vertex_offsets[node.mesh]),
                 push=np.ascontiguousarray(push, dtype=np.float32), alpha_mode=mat.alpha_mode,
-                double_sided=bool(mat.double_sided),
+                double_sided=bool(mat.double_sided), casts_shadows=bool(mat.casts_shadows),
                 center=m[:3, :3] @ center_local + m[:3, 3],
             ))
         draws.sort(key=lambda d: d.material)  # fewer material binds within each pass

@@ -51,6 +51,7 @@ __all__ = [
     "Tonemap",
     "TbnMode",
     "SETS",
+    "HAND_DECLARED_SETS",
     "MATERIAL_TEXTURES",
     "MIN_ROUGHNESS",
     "AMBIENT",
@@ -292,7 +293,16 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
         # added with the resources that fill them (lavapipe crashes drawing with a combined
         # image sampler descriptor left unwritten, even one no shader reads).
     ),
+    # Shadows (render/shadows.py ShadowMaps owns the resources; declared in GLSL by hand in
+    # shaders/shadow_data.glsl and shadow_sampling.glsl: ShadowData is a header then matrices).
+    3: (
+        (0, "storage", ("fragment",), "ShadowData"),
+        (1, "sampler2DArrayShadow", ("fragment",), "shadow_maps"),
+        (2, "samplerCubeArrayShadow", ("fragment",), "shadow_cubes"),
+    ),
 }
+# Sets whose GLSL declarations are not generated (codegen skips them).
+HAND_DECLARED_SETS = frozenset({3})
 
 
 class View(Named):

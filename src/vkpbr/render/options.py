@@ -52,6 +52,10 @@ class RenderOptions:
         EV stops in [-64, 64]: radiance is multiplied by 2 ** exposure.
     alpha_mask, normal_mapping, occlusion : bool
         Alpha masking (off: masked materials are drawn opaque), normal maps, occlusion maps.
+    shadows : bool
+        Shadow maps for the lights that cast shadows (Light.shadows); False: none at all.
+    shadow_resolution : int
+        Texels per side of a shadow map (cascade or spot map; cube faces get half), 16..16384.
     """
 
     view: View = View.FINAL
@@ -63,6 +67,8 @@ class RenderOptions:
     alpha_mask: bool = True
     normal_mapping: bool = True
     occlusion: bool = True
+    shadows: bool = True
+    shadow_resolution: int = 2048
 
     def __post_init__(self) -> None:
         for name, enum_type in ENUM_FIELDS.items():
@@ -77,6 +83,9 @@ class RenderOptions:
         if not math.isfinite(exposure) or abs(exposure) > 64:
             raise UsageError(f"exposure {self.exposure} must be a finite number of stops in [-64, 64]")
         object.__setattr__(self, "exposure", exposure)
+        res = self.shadow_resolution
+        if isinstance(res, bool) or not isinstance(res, int) or not 16 <= res <= 16384:
+            raise UsageError(f"shadow resolution {res!r}: expected an integer from 16 to 16384")
         for f in fields(self):
             if f.type == "bool" and not isinstance(getattr(self, f.name), bool):
                 raise UsageError(f"{f.name} {getattr(self, f.name)!r}: expected True or False")

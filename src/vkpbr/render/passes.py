@@ -97,6 +97,7 @@ class PassContext:
     blend_order: tuple[int, ...] = ()  # indices into the blend-class draws, far to near
     prepass: bool = False
     stamp: Callable[[int], None] = lambda slot: None  # timestamp after pass `slot`
+    shadow_set: Any = None  # set 3 (render/shadows.py ShadowMaps.sets), bound when given
 
 
 def record_passes(cmd: Commands, ctx: PassContext) -> None:
@@ -118,6 +119,8 @@ def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[Any]
     cmd.bind_pipeline(ctx.pipeline(p))
     cmd.bind_set(0, ctx.frame_sets[0])
     cmd.bind_set(2, ctx.frame_sets[1])
+    if ctx.shadow_set is not None:
+        cmd.bind_set(3, ctx.shadow_set)
     cmd.bind_vertex_buffers(ctx.vertex_buffers)
     bound = None
     for d in draws:

@@ -2,9 +2,10 @@
 
 A `FrameRecorder` builds the PBR pipelines each pass of the pass table (render/passes.py)
 needs, for a target's formats, and records one command buffer per (target image, frame of
-the ring, TBN path, alpha masking, overlay, copies), reused frame after frame: the frame's
-start timestamp, the target's begin, every pass with a timestamp after each, the overlay,
-the target's end (copies), the end timestamp. A buffer is used by one frame of the ring
+the ring, TBN path, alpha masking, overlay, copies, shadow plan), reused frame after frame:
+the frame's start timestamp, the shadow-map passes (render/shadows.py) and a timestamp, the
+target's begin, every pass with a timestamp after each, the overlay, the target's end
+(copies), the end timestamp. A buffer is used by one frame of the ring
 only, whose previous submission has finished when it is looked up: it can be re-recorded
 (a new blended-draw order) or freed at once.
 """
@@ -32,8 +33,9 @@ from vkpbr.render.passes import (
     pipeline_spec,
     record_passes,
 )
+from vkpbr.render.shadows import ShadowMaps, ShadowPlan
 
-__all__ = ["FrameRecorder", "STAMPS"]
+__all__ = ["FrameRecorder", "STAMPS", "STAMP_NAMES"]
 
 _TBN_STREAMS = {
     L.TbnMode.VECTORS: (("normals", "vec3"), ("tangents", "vec4")),
@@ -45,7 +47,11 @@ _TBN_STREAMS = {
 # "colors" (COLOR_0) is one white value read with stride 0 in scenes without vertex colours.
 _BASE_STREAMS = (("positions", "vec3"), ("texcoords", "vec2"), ("texcoords1", "vec2"),
                  ("colors", "unorm16x4"))
-STAMPS = len(PASSES) + 2  # timestamps per frame: start, after each pass, end (after copies)
+# Timestamps per frame: start, after the shadow passes, after each pass, end (after copies);
+# STAMP_NAMES names the intervals between them up to the last pass.
+STAMP_NAMES = ("shadows", *(p.name for p in PASSES))
+STAMPS = len(STAMP_NAMES) + 2
+_NO_SHADOWS = ShadowPlan()
 
 
 
@@ -61,8 +67,10 @@ class FrameRecorder:
 
     def __init__(self, device: Device, gpu_scene: GpuScene, layout: PipelineLayout,
                  ring: FrameRing, slots: list[FrameSlot],
-                 prepass_for: Callable[[FrameTarget], bool]) -> None:
+                 prepass_for: Callable[[FrameTarget], bool],
+                 shadows: ShadowMaps | None = None) -> None:
         self.device, self.gpu_scene, self.pipeline_layout = device, gpu_scene, layout
+        self.shadows = shadows  # records its passes first; binds its set 3 in the main passes
         self.ring, self.slots, self.prepass_for = ring, slots, prepass_for
         self._recorded: dict[tuple, _Recorded] = {}
         self._generations: dict[int, int] = {}
@@ -97,23 +105,29 @@ class FrameRecorder:
     # --- command buffers --------------------------------------------------------------------
     def _record(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
                 alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
-                copy: tuple[str, ...]) -> Commands:
+                copy: tuple[str, ...], plan: ShadowPlan) -> Commands:
         gs, ring = self.gpu_scene, self.ring
         names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
         gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
         slot = self.slots[frame.index]
         prepass = self.prepass_for(target)
+        classes = [classify(d.alpha_mode, d.double_sided, alpha_mask) for d in gs.draws]
         cmd = Commands(self.device).begin()
         ring.stamp(cmd, frame, 0)
+        if self.shadows is not None:
+            self.shadows.record(cmd, frame.index, plan, gs.draws, classes, gs.material_sets,
+                                gs.streams, gs.index_buffer, gs.has_colors)
+        ring.stamp(cmd, frame, 1)
         target.record_begin(cmd, image)
         record_passes(cmd, PassContext(
             draws=gs.draws,
-            classes=[classify(d.alpha_mode, d.double_sided, alpha_mask) for d in gs.draws],
+            classes=classes,
             pipeline=lambda p: self.pipeline(target, tbn, p, prepass),
             frame_sets=(slot.set0, slot.set2), material_sets=gs.material_sets,
             vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
             blend_order=order, prepass=prepass,
-            stamp=lambda s: ring.stamp(cmd, frame, s)))
+            stamp=lambda s: ring.stamp(cmd, frame, s + 1),
+            shadow_set=None if self.shadows is None else self.shadows.sets[frame.index]))
         if overlay is not None:
             overlay.record(cmd, frame.index, target.extent)
         target.record_end(cmd, image, frame, copy)
@@ -123,21 +137,22 @@ class FrameRecorder:
 
     def command_buffer(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
                         alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
-                        copy: tuple[str, ...]) -> Commands:
+                        copy: tuple[str, ...], plan: ShadowPlan = _NO_SHADOWS) -> Commands:
         """The command buffer recorded for these inputs, recorded on first use. A buffer is
         used by one frame of the ring only, whose previous submission has finished: it can be
-        re-recorded (new blend order) or freed at once."""
+        re-recorded (new blend order) or freed at once. `plan`: the shadow maps' (a new plan
+        records new buffers; lights that only move keep theirs)."""
         tid = id(target)
         if self._generations.get(tid, target.generation) != target.generation:
             self.free(tid)  # recreated swapchain: its images and buffers are new
         self._generations[tid] = target.generation
-        key = (tid, image, frame.index, tbn, alpha_mask, id(overlay), copy)
+        key = (tid, image, frame.index, tbn, alpha_mask, id(overlay), copy, plan)
         rec = self._recorded.get(key)
         if rec is not None and rec.blend_order == order:
             return rec.cmd
         if rec is not None:  # the camera moved enough to reorder blended draws
             rec.cmd.free()
-        cmd = self._record(target, frame, image, tbn, alpha_mask, order, overlay, copy)
+        cmd = self._record(target, frame, image, tbn, alpha_mask, order, overlay, copy, plan)
         self._recorded[key] = _Recorded(cmd, order)
         return cmd
 

@@ -33,7 +33,7 @@ from vkpbr.gpu.pipeline import PipelineLayout
 from vkpbr.gpu.swapchain import Surface, Swapchain
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
-from vkpbr.render.camera import as_camera, validate_camera
+from vkpbr.render.camera import as_camera, depth_range, forward, validate_camera
 from vkpbr.render.frames import (
     Bounds,
     FrameLighting,
@@ -45,8 +45,8 @@ from vkpbr.render.frames import (
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.overlay import TextOverlay
-from vkpbr.render.passes import PASSES
-from vkpbr.render.recorder import STAMPS, FrameRecorder
+from vkpbr.render.recorder import STAMP_NAMES, STAMPS, FrameRecorder
+from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
 from vkpbr.scene.lights import course_point_light
 from vkpbr.scene.types import Camera, Light, Scene
 from vkpbr.scene.validate import validate_lights
@@ -118,13 +118,15 @@ class Renderer:
         self.depth_prepass = depth_prepass
         self._targets: dict[tuple, OffscreenTarget] = {}
         try:
-            self._create_layouts()
             self.ring = FrameRing(self.device, queries_per_frame=STAMPS)
+            self._create_layouts()
             self.frame_buffers, self._frame_pool, self.slots = create_slots(
                 self.device, self.set_layouts[0], self.set_layouts[2], self.ring.count)
             self.gpu_scene = GpuScene(self.device, scene, self.set_layouts[1])
             self.recorder = FrameRecorder(self.device, self.gpu_scene, self.pipeline_layout,
-                                          self.ring, self.slots, self.prepass_for)
+                                          self.ring, self.slots, self.prepass_for, self.shadows)
+            self._shadow_plan: tuple[tuple, ShadowPlan] = ((), ShadowPlan())
+            self._shadow_rows: dict[int, tuple[tuple, np.ndarray | None]] = {}
             self.bounds = Bounds.of(*scene.bounds())
             blend = [d.center for d in self.gpu_scene.draws if d.alpha_mode == "blend"]
             self._blend_centers = np.array(blend, dtype=np.float64).reshape(-1, 3)
@@ -137,8 +139,11 @@ class Renderer:
     def _create_layouts(self) -> None:
         self.set_layouts = [
             DescriptorSetLayout(self.device, [BindingSpec(b, k, s, n) for b, k, s, n in rows])
-            for _, rows in sorted(L.SETS.items())
+            for i, rows in sorted(L.SETS.items()) if i != 3
         ]
+        # Set 3 is the shadow maps' own layout (L.SETS[3]'s rows); their sets are per slot.
+        self.shadows = ShadowMaps(self.device, self.set_layouts[1], self.ring.count)
+        self.set_layouts.append(self.shadows.set_layout)
         self.pipeline_layout = PipelineLayout(self.device, self.set_layouts, L.PUSH.size)
 
     # --- targets ----------------------------------------------------------------------------
@@ -233,7 +238,37 @@ class Renderer:
         """What lights a frame besides its punctual lights, for `options`' lighting mode."""
         if options.lighting == L.Lighting.COURSE:
             return FrameLighting(mode=int(L.Lighting.COURSE), ambient=AMBIENT)
-        return FrameLighting(mode=int(L.Lighting.PBR))
+        return FrameLighting(mode=int(L.Lighting.PBR),
+                             flags=L.LIGHTING_SHADOWS if options.shadows else 0)
+
+    def shadow_plan(self, lights: tuple[Light, ...], options: RenderOptions) -> ShadowPlan:
+        """Which of the frame's lights get shadow maps (none in course mode or with shadows
+        off); remade only when the lights or the option change."""
+        enabled = options.shadows and options.lighting == L.Lighting.PBR
+        key = (lights, enabled)
+        if key != self._shadow_plan[0]:
+            self._shadow_plan = (key, plan_shadows(lights, enabled, self.shadows.cubes_supported))
+        return self._shadow_plan[1]
+
+    def _write_shadows(self, slot: FrameSlot, plan: ShadowPlan, lights: tuple[Light, ...],
+                       camera: Camera, size: tuple[int, int]) -> np.ndarray | None:
+        """The slot's shadow matrices for this frame (skipped when its inputs repeat) and the
+        lights' LightRecord.shadow rows; None without shadow maps."""
+        if not plan.entries:
+            return None
+        sm = self.shadows
+        c = camera  # mutable: its values are the key
+        key = (c.eye, c.target, c.up, c.yfov_deg, c.znear, c.zfar, c.pixel_intrinsics,
+               tuple(size), plan, lights, sm.resolution)
+        last = self._shadow_rows.get(slot.index)
+        if last is not None and last[0] == key:
+            return last[1]
+        f = forward(camera)
+        znear, zfar = depth_range(camera, self.bounds.corners, self.bounds.radius, f)
+        rows = sm.write(slot.index, plan, lights, camera, size, znear, zfar,
+                        self.bounds.corners[0], self.bounds.corners[-1])
+        self._shadow_rows[slot.index] = (key, rows)
+        return rows
 
     def draw(self, target: FrameTarget, camera: Camera, lights: tuple[Light, ...],
              options: RenderOptions, *, overlay: TextOverlay | None = None,
@@ -263,12 +298,19 @@ class Renderer:
         driver = clock() - c0
         if image is None:
             return Submitted(None, -1, False)
+        plan = self.shadow_plan(lights, options)
+        if options.shadow_resolution != self.shadows.resolution:
+            self.shadows.set_resolution(options.shadow_resolution)
+        if self.shadows.ensure(plan):  # new images: the recorded buffers name the old ones
+            self.recorder.free()
+            self._shadow_rows.clear()
         write_frame_uniforms(slot, camera, lights, target.extent, options, linear, self.bounds,
-                             self.frame_lighting(options))
+                             self.frame_lighting(options),
+                             self._write_shadows(slot, plan, lights, camera, target.extent))
         if overlay is not None:
             overlay.prepare(frame.index)
         cmd = self.recorder.command_buffer(target, frame, image, options.tbn, options.alpha_mask,
-                                   self.blend_order(camera.eye), overlay, copy)
+                                   self.blend_order(camera.eye), overlay, copy, plan)
         c0 = clock()
         ok = target.submit(frame, cmd, image)
         slot.stats.driver_ms = (driver + clock() - c0) * 1e3
@@ -280,7 +322,7 @@ class Renderer:
         t = self.ring.timings_ms(frame, STAMPS)
         slot.stats.gpu_ms = t[-1]
         bounds = [0.0, *t]
-        slot.stats.pass_ms = {p.name: bounds[i + 1] - bounds[i] for i, p in enumerate(PASSES)}
+        slot.stats.pass_ms = {n: bounds[i + 1] - bounds[i] for i, n in enumerate(STAMP_NAMES)}
         slot.stats.pass_ms["copy"] = bounds[-1] - bounds[-2]
 
     def frame_stats(self, frame: Frame) -> FrameStats:
@@ -399,6 +441,8 @@ class Renderer:
         dev.wait_idle()
         if getattr(self, "recorder", None) is not None:
             self.recorder.free()
+        if getattr(self, "shadows", None) is not None:
+            self.shadows.destroy()
         dev.close()
 
     def __enter__(self) -> Renderer:

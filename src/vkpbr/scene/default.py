@@ -198,6 +198,7 @@ def default_scene() -> Scene:
             base_color_factor=(0, 0, 0, 1),
             metallic_factor=0.0,
             emissive_factor=(1.0, 0.95, 0.8),
+            casts_shadows=False,  # the light inside it would be in its shadow
         )
     )
     bulb = np.eye(4, dtype=np.float32)

@@ -110,6 +110,8 @@ class Material:
     alpha_mode: AlphaMode = "opaque"
     alpha_cutoff: float = 0.5
     double_sided: bool = False
+    # False: invisible to shadow maps (a bulb around its own light; Blender's shadow mode none).
+    casts_shadows: bool = True
     base_color_texture: TextureRef | None = None  # sRGB; alpha in A
     metallic_texture: TextureRef | None = None  # linear; `channel` picks the component
     roughness_texture: TextureRef | None = None  # linear; `channel` picks the component

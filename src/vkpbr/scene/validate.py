@@ -142,6 +142,7 @@ def _check_material(m: Material, where: str, n_images: int) -> None:
         _number(getattr(m, name), f"{where}.{name}", -1e6, 1e6)
     _choice(m.alpha_mode, ("opaque", "mask", "blend"), f"{where}.alpha_mode")
     _choice(m.double_sided, (True, False), f"{where}.double_sided")
+    _choice(m.casts_shadows, (True, False), f"{where}.casts_shadows")
     for slot in _TEXTURE_SLOTS:
         _check_texture(getattr(m, f"{slot}_texture"), f"{where}.{slot}_texture", n_images)
 

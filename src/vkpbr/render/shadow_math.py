@@ -1,0 +1,271 @@
+"""Shadow-map projections, in NumPy: cascades for directional lights, spot and cube maps.
+
+No Vulkan here (it is tested on any machine). Matrices are row-major (4, 4) float64 world ->
+clip with column vectors, as render/camera.py's; `layouts.mat4_to_std140` transposes them.
+
+Conventions: Vulkan clip space (x right, y down, depth 0..1) and REVERSED depth, as the
+camera's: 1 nearest the light, falling towards 0 away from it; maps are cleared to 0 and
+drawn GREATER_OR_EQUAL; the shader's compare is "lit when ref >= stored". Why reversed for
+the shadow maps too: the spot and point maps are perspective with an infinite far plane,
+where window depth = near / distance keeps float32's relative precision at every distance
+(the same reason as the camera's, and no far plane to choose per light); the cascades are
+orthographic, where the direction makes no difference, and one convention (one compare op,
+one bias sign, one clear value) for every map is worth more than none.
+
+Cascades: the view range is split by the practical scheme (Zhang et al. 2006: a blend of
+logarithmic and uniform splits); each slice of the view frustum gets a bounding sphere
+computed in VIEW space (so its radius depends only on the projection and the splits, never
+on where the camera looks), the light's orthographic box is the sphere's square, its centre
+snapped to whole shadow-map texels in light space (so a moving camera moves the box by whole
+texels: no shimmering edges), and its depth range is extended towards the light to the
+scene's bounds, so that casters outside the view still cast into it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from vkpbr.render.camera import look_at, projection_terms
+from vkpbr.scene.types import Camera
+
+__all__ = [
+    "CASCADES",
+    "SPLIT_BLEND",
+    "MAX_SPOT_HALF_ANGLE",
+    "CascadeFit",
+    "cascade_splits",
+    "slice_corners",
+    "slice_sphere",
+    "light_basis",
+    "fit_cascade",
+    "cascade_texel",
+    "directional_cascades",
+    "perspective_near",
+    "spot_matrix",
+    "spot_half_angle",
+    "point_matrices",
+    "project",
+]
+
+CASCADES = 4  # cascades per directional light
+SPLIT_BLEND = 0.75  # practical split scheme: weight of the logarithmic splits
+MAX_SPOT_HALF_ANGLE = math.radians(80.0)  # a wider cone cannot be one perspective map
+_PCF_MARGIN = 1.0 / 64.0  # spot maps: widen the frustum a little so PCF taps stay inside
+
+
+def _unit(v: Sequence[float]) -> np.ndarray:
+    a = np.asarray(v, dtype=np.float64)
+    n = float(np.linalg.norm(a))
+    if not (n > 0.0 and math.isfinite(n)):
+        raise ValueError(f"direction {tuple(v)} is not a non-zero finite vector")
+    return a / n
+
+
+def _bounds_corners(lo: Sequence[float], hi: Sequence[float]) -> np.ndarray:
+    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                     for z in (lo[2], hi[2])])
+
+
+def project(m: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(N, 3) world points through the (4, 4) matrix `m` -> (N, 4) clip coordinates."""
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    return np.c_[p, np.ones(len(p))] @ np.asarray(m, dtype=np.float64).T
+
+
+def cascade_splits(znear: float, zfar: float, count: int = CASCADES,
+                   blend: float = SPLIT_BLEND) -> np.ndarray:
+    """View depths bounding the cascades: (count + 1,) float64, [znear, ..., zfar].
+
+    The practical split scheme: split_i = blend * log_i + (1 - blend) * uniform_i. The
+    logarithmic part starts at max(znear, zfar / 1000): the automatic near plane can be tiny
+    (1e-5 of the scene's radius, render/camera.py) and would give a useless first cascade.
+    """
+    if not (0 < znear < zfar) or count < 1:
+        raise ValueError(f"cascade range {znear}..{zfar} ({count} cascades) is not increasing")
+    i = np.arange(count + 1) / count
+    log_near = max(znear, zfar * 1e-3)
+    log = log_near * (zfar / log_near) ** i
+    uniform = znear + (zfar - znear) * i
+    splits = blend * log + (1.0 - blend) * uniform
+    splits[0], splits[-1] = znear, zfar
+    return splits
+
+
+def _tangent_rect(camera: Camera, size: tuple[int, int]) -> np.ndarray:
+    """The view frustum's four corners per unit of view depth: (4, 2) (x, y) in view space
+    (OpenGL view axes: x right, y up, looking down -z)."""
+    sx, sy, ox, oy = projection_terms(camera, size)
+    return np.array([[(xn - ox) / sx, (oy - yn) / sy] for xn in (-1.0, 1.0) for yn in (-1.0, 1.0)])
+
+
+def _view_rows(camera: Camera) -> np.ndarray:
+    return look_at(camera.eye, camera.target, camera.up)
+
+
+def slice_corners(camera: Camera, size: tuple[int, int], d0: float, d1: float) -> np.ndarray:
+    """The 8 world-space corners (8, 3) of the view frustum between view depths d0 and d1."""
+    t = _tangent_rect(camera, size)
+    view = np.array([[x * d, y * d, -d] for d in (d0, d1) for x, y in t])
+    inv = np.linalg.inv(_view_rows(camera))
+    return (np.c_[view, np.ones(8)] @ inv.T)[:, :3]
+
+
+def slice_sphere(camera: Camera, size: tuple[int, int], d0: float,
+                 d1: float) -> tuple[np.ndarray, float]:
+    """A sphere (world centre (3,), radius) holding the frustum slice [d0, d1].
+
+    Computed in view space, so the radius depends on the projection and the depths only
+    (a rotating camera keeps its cascades' texel size). The centre lies on the line through
+    the slice's rectangle centres, where the symmetric frustum's minimal sphere lies
+    (t = (d0 + d1) / 2 * (1 + k^2), k the half-diagonal per unit depth, at most d1); the
+    radius is the largest distance to a corner, so containment is exact for any intrinsics.
+    """
+    t = _tangent_rect(camera, size)
+    mid = t.mean(axis=0)
+    k2 = float(np.max(np.sum((t - mid) ** 2, axis=1)))
+    depth = min(0.5 * (d0 + d1) * (1.0 + k2), d1)
+    centre_v = np.array([mid[0] * depth, mid[1] * depth, -depth])
+    corners_v = np.array([[x * d, y * d, -d] for d in (d0, d1) for x, y in t])
+    radius = float(np.max(np.linalg.norm(corners_v - centre_v, axis=1)))
+    inv = np.linalg.inv(_view_rows(camera))
+    centre = inv[:3, :3] @ centre_v + inv[:3, 3]
+    return centre, radius
+
+
+def light_basis(direction: Sequence[float]) -> np.ndarray:
+    """(3, 3) rows: right, up, and the unit direction the light travels. Right-handed as the
+    camera's (right, up, -forward) so that front faces keep their winding."""
+    f = _unit(direction)
+    ref = np.array([0.0, 1.0, 0.0]) if abs(f[1]) < 0.99 else np.array([0.0, 0.0, 1.0])
+    s = np.cross(f, ref)
+    s /= np.linalg.norm(s)
+    return np.array([s, np.cross(s, f), f])
+
+
+def fit_cascade(centre: Sequence[float], radius: float, direction: Sequence[float],
+                scene_lo: Sequence[float], scene_hi: Sequence[float],
+                resolution: int) -> np.ndarray:
+    """The (4, 4) world -> clip matrix of one cascade: an orthographic square of side
+    2 * radius (plus a texel each side) around `centre` across the light, its centre snapped to whole texels of a
+    `resolution`-texel map, deep enough to hold the sphere and, towards the light, the
+    scene's bounds. Depth is reversed: 1 at the side facing the light, 0 at the far side."""
+    basis = light_basis(direction)
+    # The square is padded by a texel on each side: snapping moves its centre by up to half
+    # a texel, and the sphere must stay inside.
+    texel = cascade_texel(radius, resolution)
+    half = 0.5 * resolution * texel
+    c = basis @ np.asarray(centre, dtype=np.float64)
+    cx, cy = np.round(c[0] / texel) * texel, np.round(c[1] / texel) * texel
+    scene_depths = _bounds_corners(scene_lo, scene_hi) @ basis[2]
+    z_near = min(c[2] - radius, float(scene_depths.min()))
+    z_far = max(c[2] + radius, z_near + 1e-6 * max(radius, 1.0))
+    span = z_far - z_near
+    r, u, f = basis
+    return np.array([
+        [*(r / half), -cx / half],
+        [*(-u / half), cy / half],
+        [*(-f / span), z_far / span],
+        [0.0, 0.0, 0.0, 1.0],
+    ])
+
+
+def cascade_texel(radius: float, resolution: int) -> float:
+    """World size of one texel of a cascade of sphere `radius`: the map spans the sphere's
+    diameter plus one texel of padding on each side."""
+    return 2.0 * radius / (resolution - 2)
+
+
+@dataclass(frozen=True)
+class CascadeFit:
+    """A directional light's cascades for one camera.
+
+    matrices : (n, 4, 4) float64 world -> clip, one per cascade.
+    far : (n,) float64 view depth where each cascade ends (the shader picks the first
+        cascade whose `far` is beyond the fragment's view depth).
+    texel : (n,) float64 world size of one shadow-map texel in each cascade (normal offset).
+    """
+
+    matrices: np.ndarray
+    far: np.ndarray
+    texel: np.ndarray
+
+
+def directional_cascades(camera: Camera, size: tuple[int, int], direction: Sequence[float],
+                         scene_lo: Sequence[float], scene_hi: Sequence[float], resolution: int,
+                         znear: float, zfar: float, count: int = CASCADES) -> CascadeFit:
+    """Fit `count` cascades of a directional light travelling along `direction` to the view
+    range [znear, zfar] of `camera` rendering `size` (W, H) pixels."""
+    splits = cascade_splits(znear, zfar, count)
+    mats, texel = [], []
+    for d0, d1 in zip(splits[:-1], splits[1:], strict=True):
+        centre, radius = slice_sphere(camera, size, d0, d1)
+        mats.append(fit_cascade(centre, radius, direction, scene_lo, scene_hi, resolution))
+        texel.append(cascade_texel(radius, resolution))
+    return CascadeFit(np.array(mats), splits[1:].copy(), np.array(texel))
+
+
+def perspective_near(position: Sequence[float], light_range: float, scene_lo: Sequence[float],
+                     scene_hi: Sequence[float]) -> float:
+    """The near plane of a spot or point light's maps: 1/1000 of its reach (the range, else
+    the distance to the farthest corner of the scene's bounds). Casters nearer than that to
+    the light are clipped; with reversed float depth a small near plane costs no precision."""
+    reach = float(light_range) if light_range > 0 else float(np.max(np.linalg.norm(
+        _bounds_corners(scene_lo, scene_hi) - np.asarray(position, np.float64), axis=1)))
+    return max(reach, 1e-3) * 1e-3
+
+
+def spot_half_angle(outer_cone: float) -> float:
+    """Half the field of view of a spot light's map: the outer cone, widened a little for
+    PCF, at most MAX_SPOT_HALF_ANGLE (a wider cone is shadowed out to that angle only)."""
+    return min(float(outer_cone) * (1.0 + _PCF_MARGIN) + 1e-3, MAX_SPOT_HALF_ANGLE)
+
+
+def spot_matrix(position: Sequence[float], direction: Sequence[float], outer_cone: float,
+                near: float) -> np.ndarray:
+    """(4, 4) world -> clip of a spot light's perspective map: square, reversed-Z with an
+    infinite far plane (depth = near / distance along the light's axis)."""
+    r, u, f = light_basis(direction)
+    g = 1.0 / math.tan(spot_half_angle(outer_cone))
+    p = np.asarray(position, dtype=np.float64)
+    return np.array([
+        [*(g * r), -g * float(r @ p)],
+        [*(-g * u), g * float(u @ p)],
+        [0.0, 0.0, 0.0, near],
+        [*f, -float(f @ p)],
+    ])
+
+
+# Vulkan's cube-map face selection (spec, "Cube Map Face Selection"): per face, the major
+# axis and the rows giving sc and tc from the direction (rx, ry, rz); s = (sc/|ma| + 1)/2,
+# t = (tc/|ma| + 1)/2 with t down the image, i.e. exactly NDC x and y (down) of a face render.
+_CUBE_FACES = (
+    ((1, 0, 0), (0, 0, -1), (0, -1, 0)),  # +X: sc = -rz, tc = -ry
+    ((-1, 0, 0), (0, 0, 1), (0, -1, 0)),  # -X: sc = +rz, tc = -ry
+    ((0, 1, 0), (1, 0, 0), (0, 0, 1)),  # +Y: sc = +rx, tc = +rz
+    ((0, -1, 0), (1, 0, 0), (0, 0, -1)),  # -Y: sc = +rx, tc = -rz
+    ((0, 0, 1), (1, 0, 0), (0, -1, 0)),  # +Z: sc = +rx, tc = -ry
+    ((0, 0, -1), (-1, 0, 0), (0, -1, 0)),  # -Z: sc = -rx, tc = -ry
+)
+
+
+def point_matrices(position: Sequence[float], near: float) -> np.ndarray:
+    """(6, 4, 4) world -> clip of a point light's cube faces, in Vulkan's face order (+X, -X,
+    +Y, -Y, +Z, -Z) and orientation, so that sampling the cube with the direction from the
+    light finds the texel each face rendered. Reversed-Z, infinite far: depth = near / |ma|,
+    |ma| the largest absolute component of (p - position), which the shader recomputes."""
+    p = np.asarray(position, dtype=np.float64)
+    out = []
+    for major, sc, tc in _CUBE_FACES:
+        major, sc, tc = (np.asarray(v, np.float64) for v in (major, sc, tc))
+        out.append(np.array([
+            [*sc, -float(sc @ p)],
+            [*tc, -float(tc @ p)],
+            [0.0, 0.0, 0.0, near],
+            [*major, -float(major @ p)],
+        ]))
+    return np.array(out)

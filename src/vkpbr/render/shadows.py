@@ -1,0 +1,346 @@
+"""Shadow maps: their images, per-frame matrices, pipelines and depth-only passes.
+
+Every shadowed light of a frame gets layers (`plan_shadows`): a directional light CASCADES
+layers of the 2D-array image, a spot light one, a point light one cube of the cube-array
+image. Each light's layers are drawn in ONE layered pass: every draw is instanced once per
+layer and the vertex shader writes gl_Layer (instance - base instance) and takes the
+layer's matrix (the instance), so a point light's six faces are one pass, not six
+submissions. Both lavapipe and NVIDIA have the two features it needs (Vulkan 1.2
+shaderOutputLayer, 1.1 shaderDrawParameters). Multiview (view mask 0x3F) was the first
+choice and is what NVIDIA prefers, but Mesa 22.3's lavapipe draws a perspective pass's views
+into the wrong layers (the cube faces came out mixed; orthographic cascades were right).
+
+Frame path: `write` fills the frame slot's matrices (host-visible storage buffer, per slot)
+and returns each light's `LightRecord.shadow` vec4; `record` draws the passes into the
+frame's command buffer before the main target begins. Command buffers are recorded once per
+`ShadowPlan` (which light has which layers), so lights that only move re-record nothing.
+
+Casters: opaque draws depth-only (no fragment shader); masked and blended draws through
+shadow_mask.frag, which discards below the alpha cutoff (foliage casts leaf shadows). No
+face culling (single-sided sheets cast too; the lit side's acne is handled by the bias).
+Materials with casts_shadows False are left out (the default scene's bulb around its light).
+Depth bias: slope-scaled in the pipelines (`DEPTH_BIAS`), normal offset in shaders/shadow_sampling.glsl.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from vkpbr.gpu.buffer import Buffer
+from vkpbr.gpu.commands import Commands
+from vkpbr.gpu.descriptors import (
+    BindingSpec,
+    DescriptorPool,
+    DescriptorSetLayout,
+    DescriptorWriter,
+)
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.image import Sampler, SamplerSpec
+from vkpbr.gpu.layered import LayeredDepth
+from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec, VertexStream
+from vkpbr.render import layouts as L
+from vkpbr.render import shadow_math as SM
+from vkpbr.render.codegen import SPV_DIR
+from vkpbr.scene.types import Camera, Light
+
+__all__ = ["ShadowMaps", "ShadowPlan", "ShadowEntry", "plan_shadows", "MAX_LAYERS", "MAX_CUBES",
+           "HEADER_BYTES", "MATRICES", "DEPTH_BIAS", "NORMAL_OFFSET", "PCF_RADIUS",
+           "DEFAULT_RESOLUTION", "SET3_ROWS"]
+
+MAX_LAYERS = 16  # 2D layers: 4 directional lights' cascades, or spot lights
+MAX_CUBES = 4  # point lights with shadows
+MATRICES = MAX_LAYERS + 6 * MAX_CUBES  # the 2D layers' matrices, then 6 per cube
+HEADER_BYTES = 48  # shaders/shadow_data.glsl: cascade_far, cascade_texel, params
+DEFAULT_RESOLUTION = 2048
+# (constant, slope) depth bias of the passes, in Vulkan's units; negative: away from the light
+# under reversed-Z. Per projection: orthographic depth is linear in distance, perspective
+# depth (near / d) has slopes that grow towards the light.
+DEPTH_BIAS = {"directional": (-2.0, -2.0), "spot": (-2.0, -2.0), "point": (-2.0, -2.0)}
+NORMAL_OFFSET = 1.0  # texels the receiver moves along its normal (shaders/shadow_sampling.glsl)
+PCF_RADIUS = 1.0  # texels between PCF taps
+
+# Set 3 ("shadows"): its rows live in layouts.SETS (binding, kind, stages, name).
+SET3_ROWS = L.SETS[3]
+_KIND_CODE = {"point": 0, "spot": 1, "directional": 2}
+
+
+@dataclass(frozen=True)
+class ShadowEntry:
+    """One shadowed light: `first` 2D layer (directional, spot) or cube index (point) and
+    its `count` layers (CASCADES, 1 or 6)."""
+
+    light: int  # index into the frame's lights
+    kind: str
+    first: int
+    count: int
+
+    @property
+    def matrix_base(self) -> int:
+        """Index of its first matrix in ShadowData.layer_vp."""
+        return self.first if self.kind != "point" else MAX_LAYERS + 6 * self.first
+
+
+@dataclass(frozen=True)
+class ShadowPlan:
+    entries: tuple[ShadowEntry, ...] = ()
+    layers: int = 0  # 2D layers used
+    cubes: int = 0  # cubes used
+    dropped: int = 0  # shadowed lights beyond MAX_LAYERS / MAX_CUBES (drawn unshadowed)
+
+
+def _kind(light: Light) -> str:
+    return getattr(light, "kind", "point")
+
+
+def plan_shadows(lights: Sequence[Light], enabled: bool = True, cubes_supported: bool = True
+                 ) -> ShadowPlan:
+    """Which light draws into which layers: in order, while layers last (a light beyond
+    the limits is drawn unshadowed and counted in `dropped`). `enabled` False: no shadows."""
+    if not enabled:
+        return ShadowPlan()
+    entries, layers, cubes, dropped = [], 0, 0, 0
+    for i, light in enumerate(lights):
+        if not getattr(light, "shadows", True):
+            continue
+        kind = _kind(light)
+        if kind == "point":
+            if cubes < MAX_CUBES and cubes_supported:
+                entries.append(ShadowEntry(i, kind, cubes, 6))
+                cubes += 1
+            else:
+                dropped += 1
+            continue
+        n = SM.CASCADES if kind == "directional" else 1
+        if layers + n <= MAX_LAYERS:
+            entries.append(ShadowEntry(i, kind, layers, n))
+            layers += n
+        else:
+            dropped += 1
+    return ShadowPlan(tuple(entries), layers, cubes, dropped)
+
+
+class ShadowMaps:
+    """The shadow resources of a renderer and the passes that fill them.
+
+    Parameters
+    ----------
+    device : the device.
+    material_layout : set 1's layout (the masked casters bind their material set).
+    slots : frames in flight (one matrix block and two descriptor sets each).
+    resolution : texels per side of a 2D layer; cube faces get half (a point light's six
+        faces cost 1.5 2D layers then).
+    readable : the images can be read back (`read_maps`, tests).
+    """
+
+    def __init__(self, device: Device, material_layout: DescriptorSetLayout, slots: int,
+                 resolution: int = DEFAULT_RESOLUTION, readable: bool = False) -> None:
+        if not (isinstance(resolution, int) and 16 <= resolution
+                <= int(device.limits.maxImageDimension2D)):
+            from vkpbr.errors import UsageError
+
+            raise UsageError(f"shadow resolution {resolution!r}: choose an integer from 16 "
+                             f"to {int(device.limits.maxImageDimension2D)}")
+        self.device, self.resolution, self.readable = device, resolution, readable
+        self.cube_resolution = max(resolution // 2, 16)
+        self.cubes_supported = bool(getattr(device, "image_cube_array", True))
+        self._objects: list[Any] = []
+        self.set_layout = self._own(DescriptorSetLayout(device, [
+            BindingSpec(b, k, s, n) for b, k, s, n in SET3_ROWS]))
+        # The passes' own set 3: the matrices only, for the vertex stage (the main set names
+        # the maps, which are attachments while the passes draw).
+        self.pass_layout = self._own(DescriptorSetLayout(device, [
+            BindingSpec(0, "storage", ("vertex",), "ShadowData")]))
+        empty = self._own(DescriptorSetLayout(device, []))
+        self.pipeline_layout = self._own(PipelineLayout(
+            device, [empty, material_layout, empty, self.pass_layout], L.PUSH.size))
+        align = int(device.limits.minStorageBufferOffsetAlignment)
+        size = HEADER_BYTES + 64 * MATRICES
+        self.stride = (size + align - 1) // align * align
+        self.buffer = self._own(Buffer(device, self.stride * slots, "storage", host_visible=True,
+                                       name="shadow matrices"))
+        self.pool = self._own(DescriptorPool(device, [(self.set_layout, slots),
+                                                      (self.pass_layout, slots)]))
+        self.sets = [self.pool.allocate(self.set_layout) for _ in range(slots)]
+        self.pass_sets = [self.pool.allocate(self.pass_layout) for _ in range(slots)]
+        self._views = [self.buffer.array(np.float32, size // 4, i * self.stride)
+                       for i in range(slots)]
+        self.maps: LayeredDepth | None = None
+        self.cubes: LayeredDepth | None = None
+        self._pipelines: dict[tuple, Pipeline] = {}
+        self._warned = False
+        self.ensure(ShadowPlan())
+
+    def _own(self, obj: Any) -> Any:
+        self._objects.append(obj)
+        return obj
+
+    # --- resources --------------------------------------------------------------------------
+    def set_resolution(self, resolution: int) -> None:
+        """A new map size (RenderOptions.shadow_resolution): the next `ensure` remakes the
+        images (and returns True)."""
+        self.resolution, self.cube_resolution = int(resolution), max(int(resolution) // 2, 16)
+
+    def ensure(self, plan: ShadowPlan) -> bool:
+        """Make the images hold `plan`'s layers; True when they were (re)made, after which
+        command buffers recorded before are stale. Waits for the device when it remakes."""
+        if plan.dropped and not self._warned:
+            self._warned = True
+            warnings.warn(f"{plan.dropped} light(s) drawn without shadows: at most "
+                          f"{MAX_LAYERS} shadow layers (a directional light takes "
+                          f"{SM.CASCADES}, a spot light 1) and {MAX_CUBES} point lights"
+                          + ("" if self.cubes_supported else
+                             "; this device has no cube-map arrays: no point-light shadows"),
+                          stacklevel=2)
+        need_maps, need_cubes = max(plan.layers, 1), max(plan.cubes, 1)
+        size_maps = self.resolution if plan.layers else 1
+        size_cubes = self.cube_resolution if plan.cubes else 1
+        ok_maps = self.maps is not None and self.maps.layers >= need_maps and (
+            self.maps.size == size_maps or (plan.layers == 0))
+        ok_cubes = self.cubes is not None and self.cubes.layers >= 6 * need_cubes and (
+            self.cubes.size == size_cubes or plan.cubes == 0)
+        if ok_maps and ok_cubes:
+            return False
+        self.device.wait_idle()
+        if not ok_maps:
+            if self.maps is not None:
+                self.maps.destroy()
+            self.maps = LayeredDepth(self.device, size_maps, need_maps,
+                                     readable=self.readable, name="shadow maps")
+        if not ok_cubes:
+            if self.cubes is not None:
+                self.cubes.destroy()
+            self.cubes = LayeredDepth(self.device, size_cubes, 6 * need_cubes,
+                                      cube=self.cubes_supported, readable=self.readable,
+                                      name="shadow cubes")
+        if not hasattr(self, "sampler"):
+            linear = self.maps.filterable
+            self.sampler = self._own(Sampler(self.device, SamplerSpec(
+                wrap_u="border", wrap_v="border", mag="linear" if linear else "nearest",
+                min="linear" if linear else "nearest", mipmaps=False, anisotropy=1.0,
+                compare="greater_or_equal")))
+        w = DescriptorWriter(self.device)
+        size = HEADER_BYTES + 64 * MATRICES
+        for i, (s, ps) in enumerate(zip(self.sets, self.pass_sets, strict=True)):
+            w.storage(s, 0, self.buffer, size, i * self.stride)
+            w.sampler(s, 1, self.maps.view, self.sampler)
+            w.sampler(s, 2, self.cubes.view, self.sampler)
+            w.storage(ps, 0, self.buffer, size, i * self.stride)
+        w.update()
+        return True
+
+    # --- per frame --------------------------------------------------------------------------
+    def write(self, slot: int, plan: ShadowPlan, lights: Sequence[Light], camera: Camera,
+              size: tuple[int, int], znear: float, zfar: float, scene_lo: Sequence[float],
+              scene_hi: Sequence[float]) -> np.ndarray:
+        """Fill frame `slot`'s ShadowData for `plan` and return every light's
+        LightRecord.shadow: (len(lights), 4) float32, x = -1 for unshadowed lights."""
+        out = np.zeros((len(lights), 4), np.float32)
+        out[:, 0] = -1.0
+        data = self._views[slot]
+        mats = np.zeros((MATRICES, 4, 4))
+        far = np.full(4, np.inf)
+        texel = np.zeros(4)
+        for e in plan.entries:
+            light = lights[e.light]
+            pos = tuple(getattr(light, "position", (0.0, 0.0, 0.0)))
+            if e.kind == "directional":
+                fit = SM.directional_cascades(camera, size, light.direction, scene_lo, scene_hi,
+                                              self.resolution, znear, zfar, e.count)
+                mats[e.matrix_base:e.matrix_base + e.count] = fit.matrices
+                far[:e.count], texel[:e.count] = fit.far, fit.texel
+                out[e.light] = (e.first, e.count, 0.0, 0.0)
+                continue
+            near = SM.perspective_near(pos, getattr(light, "range", 0.0), scene_lo, scene_hi)
+            if e.kind == "spot":
+                outer = getattr(light, "outer_cone", math.pi / 4)
+                mats[e.matrix_base] = SM.spot_matrix(pos, light.direction, outer, near)
+                unit = 2.0 * math.tan(SM.spot_half_angle(outer)) / self.resolution
+                out[e.light] = (e.first, 1, near, unit)
+            else:
+                mats[e.matrix_base:e.matrix_base + 6] = SM.point_matrices(pos, near)
+                out[e.light] = (e.first, 6, near, 2.0 / self.cube_resolution)
+        data[0:4] = np.where(np.isfinite(far), far, 3.0e38)
+        data[4:8] = texel
+        data[8:12] = (self.resolution, self.cube_resolution, NORMAL_OFFSET, PCF_RADIUS)
+        # mat4 is column-major in GLSL: each row-major matrix transposed.
+        data[12:].reshape(MATRICES, 4, 4)[:] = mats.transpose(0, 2, 1)
+        return out
+
+    # --- pipelines and passes ---------------------------------------------------------------
+    def pipeline(self, kind: str, masked: bool, colors_stride0: bool) -> Pipeline:
+        key = (kind, masked, colors_stride0)
+        if key not in self._pipelines:
+            if masked:
+                streams = (VertexStream(0, 0, "vec3"), VertexStream(1, 1, "vec2"),
+                           VertexStream(2, 2, "vec2"),
+                           VertexStream(3, 3, "unorm16x4", 0 if colors_stride0 else None))
+            else:
+                streams = (VertexStream(0, 0, "vec3"),)
+            spec = PipelineSpec(
+                vertex_shader="shadow_mask.vert.spv" if masked else "shadow_opaque.vert.spv",
+                fragment_shader="shadow_mask.frag.spv" if masked else None,
+                streams=streams, color_format=None, depth_format=self.maps.format,
+                cull="none", depth_compare="greater_or_equal", color_write=False,
+                depth_bias=DEPTH_BIAS[kind])
+            self._pipelines[key] = Pipeline(self.device, spec, self.pipeline_layout, SPV_DIR)
+        return self._pipelines[key]
+
+    def record(self, cmd: Commands, slot: int, plan: ShadowPlan, draws: Sequence[Any],
+               classes: Sequence[str], material_sets: Sequence[Any], streams: dict[str, Any],
+               index_buffer: Any, has_colors: bool) -> None:
+        """Record `plan`'s passes for frame `slot` (before the main target begins).
+
+        draws / classes: render.gpu_scene.Draw and passes.classify of each; streams: the
+        scene's vertex buffers by name (positions, texcoords, texcoords1, colors)."""
+        if not plan.entries:
+            return
+        casters = [(d, c) for d, c in zip(draws, classes, strict=True)
+                   if getattr(d, "casts_shadows", True)]
+        opaque = [d for d, c in casters if c in ("opaque", "opaque_double")]
+        masked = [d for d, c in casters if c in ("mask", "blend")]
+        self.maps.record_begin_writes(cmd)
+        self.cubes.record_begin_writes(cmd)
+        cmd.bind_index_buffer(index_buffer)
+        for e in plan.entries:
+            image = self.cubes if e.kind == "point" else self.maps
+            image.begin(cmd, e.first * (6 if e.kind == "point" else 1), e.count)
+            for group, is_masked in ((opaque, False), (masked, True)):
+                if not group:
+                    continue
+                cmd.bind_pipeline(self.pipeline(e.kind, is_masked, not has_colors))
+                cmd.bind_set(3, self.pass_sets[slot])
+                names = ("positions", "texcoords", "texcoords1", "colors") if is_masked \
+                    else ("positions",)
+                cmd.bind_vertex_buffers([streams[n] for n in names])
+                bound = None
+                for d in group:
+                    if is_masked and d.material != bound:
+                        cmd.bind_set(1, material_sets[d.material])
+                        bound = d.material
+                    cmd.push(d.push)
+                    cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset,
+                                     first_instance=e.matrix_base, instances=e.count)
+            image.end(cmd)
+        self.maps.record_end_writes(cmd)
+        self.cubes.record_end_writes(cmd)
+
+    def read_maps(self) -> tuple[np.ndarray, np.ndarray]:
+        """(2D layers, cube layers) as float32 arrays (tests; needs `readable`)."""
+        return self.maps.read(), self.cubes.read()
+
+    def destroy(self) -> None:
+        for p in self._pipelines.values():
+            p.destroy()
+        self._pipelines.clear()
+        for img in (self.maps, self.cubes):
+            if img is not None:
+                img.destroy()
+        self.maps = self.cubes = None
+        while self._objects:
+            self._objects.pop().destroy()

@@ -1,0 +1,87 @@
+// shadow_sampling.glsl: shadow_factor, the fraction of a light that reaches a surface point past the
+// shadow casters (1 = lit, 0 = shadowed), from the maps render/shadows.py draws each frame.
+// Needs struct LightRecord (lights.glsl) before it. LightRecord.shadow (ShadowMaps.write):
+//   x: first 2D layer (directional, spot) or cube index (point); -1: no shadow
+//   y: layers (directional: its cascades)   z: near plane (spot, point)
+//   w: world size of a texel at unit distance along the light's axis (spot, point)
+// Depth is reversed (render/shadow_math.py): 1 nearest the light; a comparison sample is 1
+// where the receiver's depth >= the stored one (GREATER_OR_EQUAL), filtered 2x2 by hardware,
+// and PCF_TAPS x PCF_TAPS such samples a texel apart are averaged.
+// Bias, three parts: the passes' slope-scaled depth bias (render/shadows.py), the normal
+// offset here (the receiver moves along its geometric normal by params.z texels, more at
+// grazing light), and reversed-Z float depth's relative precision.
+#ifndef SHADOW_SAMPLING_GLSL
+#define SHADOW_SAMPLING_GLSL
+#include "shadow_data.glsl"
+
+layout(set = 3, binding = 1) uniform sampler2DArrayShadow shadow_maps;
+layout(set = 3, binding = 2) uniform samplerCubeArrayShadow shadow_cubes;
+
+const int SHADOW_PCF_HALF = 1;  // (2 * 1 + 1)^2 = 9 taps
+
+// The receiver moved towards the light's side along its geometric normal, by `texel` world
+// units times params.z, scaled by the sine of the angle to the light (no move when facing it,
+// whose depth slope is zero; the full amount at grazing angles, where acne comes from).
+vec3 shadow_offset_position(vec3 p, vec3 ng, vec3 l, float texel) {
+    float cos_t = clamp(dot(ng, l), 0.0, 1.0);
+    float sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
+    return p + ng * (texel * shadow_data.params.z * (0.5 + sin_t));
+}
+
+float shadow_pcf_2d(float layer, vec3 ndc) {
+    vec2 uv = ndc.xy * 0.5 + 0.5;
+    float step_uv = shadow_data.params.w / shadow_data.params.x;
+    float sum = 0.0;
+    for (int j = -SHADOW_PCF_HALF; j <= SHADOW_PCF_HALF; ++j)
+        for (int i = -SHADOW_PCF_HALF; i <= SHADOW_PCF_HALF; ++i)
+            sum += texture(shadow_maps, vec4(uv + vec2(i, j) * step_uv, layer, ndc.z));
+    float n = float(2 * SHADOW_PCF_HALF + 1);
+    return sum / (n * n);
+}
+
+float shadow_factor(LightRecord light, vec3 world_pos, vec3 ng, vec3 l, float view_depth) {
+    float first = light.shadow.x;
+    if (first < 0.0) return 1.0;
+    int kind = int(light.direction_kind.w + 0.5);
+    if (kind == 2) {  // directional: the first cascade reaching past the fragment
+        int count = int(light.shadow.y + 0.5);
+        int c = 0;
+        while (c < count && view_depth > shadow_data.cascade_far[c]) ++c;
+        if (c >= count) return 1.0;  // beyond the last cascade: unshadowed
+        vec3 p = shadow_offset_position(world_pos, ng, l, shadow_data.cascade_texel[c]);
+        vec4 s = shadow_data.layer_vp[int(first) + c] * vec4(p, 1.0);  // orthographic: w = 1
+        return shadow_pcf_2d(first + float(c), s.xyz);
+    }
+    if (kind == 1) {  // spot: one perspective map
+        mat4 m = shadow_data.layer_vp[int(first)];
+        float axial = (m * vec4(world_pos, 1.0)).w;
+        if (axial <= 0.0) return 1.0;  // behind the light: outside its cone anyway
+        vec3 p = shadow_offset_position(world_pos, ng, l, light.shadow.w * axial);
+        vec4 s = m * vec4(p, 1.0);
+        return shadow_pcf_2d(first, s.xyz / s.w);
+    }
+    // point: the cube, sampled with the direction from the light; depth = near / |major axis|
+    vec3 q0 = world_pos - light.position_range.xyz;
+    float ma0 = max(max(abs(q0.x), abs(q0.y)), abs(q0.z));
+    vec3 q = shadow_offset_position(world_pos, ng, l, light.shadow.w * ma0) - light.position_range.xyz;
+    float ma = max(max(abs(q.x), abs(q.y)), abs(q.z));
+    // PCF across the direction: a texel of the face is 2 |ma| / size wide.
+    vec3 a = abs(q.x) < 0.9 * length(q) ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
+    vec3 t1 = normalize(cross(q, a));
+    vec3 t2 = normalize(cross(q, t1));
+    float step_w = shadow_data.params.w * 2.0 * ma / shadow_data.params.y;
+    float sum = 0.0;
+    for (int j = -SHADOW_PCF_HALF; j <= SHADOW_PCF_HALF; ++j)
+        for (int i = -SHADOW_PCF_HALF; i <= SHADOW_PCF_HALF; ++i)
+        {
+            // Each tap compares at its own major axis: a tap across a cube edge reads a face
+            // whose depth is near / (another component), where the centre's ref would be off.
+            vec3 qt = q + (float(i) * t1 + float(j) * t2) * step_w;
+            float mt = max(max(abs(qt.x), abs(qt.y)), abs(qt.z));
+            sum += texture(shadow_cubes, vec4(qt, first), light.shadow.z / mt);
+        }
+    float n = float(2 * SHADOW_PCF_HALF + 1);
+    return sum / (n * n);
+}
+
+#endif

@@ -1,0 +1,160 @@
+"""Shadow-map projections (render/shadow_math.py), checked geometrically with hypothesis:
+cascades hold their frustum slices and the scene's casters, snap to whole texels as the camera
+moves, spot and cube maps put points where Vulkan's sampling will look for them."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+from vkpbr.render import shadow_math as S
+from vkpbr.scene.types import Camera
+
+coord = st.floats(-20.0, 20.0, allow_nan=False)
+vec3 = st.tuples(coord, coord, coord)
+unit_ish = st.tuples(*(st.floats(-1.0, 1.0, allow_nan=False),) * 3).filter(
+    lambda v: math.hypot(*v) > 0.2)
+sizes = st.tuples(st.integers(16, 4096), st.integers(16, 4096))
+resolutions = st.sampled_from([256, 512, 1024, 2048, 4096])
+LO, HI = np.array([-12.0, -3.0, -7.0]), np.array([14.0, 9.0, 6.0])
+
+
+def _camera(eye, target, fov) -> Camera:
+    assume(np.linalg.norm(np.subtract(target, eye)) > 1e-2)
+    d = np.subtract(target, eye) / np.linalg.norm(np.subtract(target, eye))
+    assume(abs(d[1]) < 0.999)  # look_at with up = +Y
+    return Camera(eye=tuple(eye), target=tuple(target), yfov_deg=fov)
+
+
+@given(st.floats(1e-5, 10.0), st.floats(1.1, 1e4), st.integers(1, 6))
+def test_splits_increase_from_near_to_far(znear, ratio, count) -> None:
+    s = S.cascade_splits(znear, znear * ratio, count)
+    assert s.shape == (count + 1,) and s[0] == znear and s[-1] == znear * ratio
+    assert np.all(np.diff(s) > 0)
+
+
+@settings(max_examples=150, deadline=None)
+@given(vec3, vec3, st.floats(10.0, 120.0), sizes, unit_ish, resolutions,
+       st.floats(0.01, 1.0), st.floats(2.0, 200.0))
+def test_cascades_hold_their_slices_and_the_scene_towards_the_light(
+        eye, target, fov, size, direction, res, znear, ratio) -> None:
+    cam = _camera(eye, target, fov)
+    fit = S.directional_cascades(cam, size, direction, LO, HI, res, znear, znear * ratio)
+    splits = S.cascade_splits(znear, znear * ratio)
+    assert np.allclose(fit.far, splits[1:])
+    scene = np.array([[x, y, z] for x in (LO[0], HI[0]) for y in (LO[1], HI[1])
+                      for z in (LO[2], HI[2])])
+    f = np.asarray(direction) / np.linalg.norm(direction)
+    for i, m in enumerate(fit.matrices):
+        clip = S.project(m, S.slice_corners(cam, size, splits[i], splits[i + 1]))
+        assert np.allclose(clip[:, 3], 1.0)  # orthographic
+        assert np.all(np.abs(clip[:, :2]) <= 1.0 + 1e-9), "a slice corner is outside the box"
+        assert np.all((clip[:, 2] >= -1e-9) & (clip[:, 2] <= 1.0 + 1e-9))
+        # Every scene point is no nearer the light than depth 1: nothing is clipped on
+        # the light's side, so casters outside the view still cast.
+        assert np.all(S.project(m, scene)[:, 2] <= 1.0 + 1e-9)
+        # Depth falls along the light's travel (reversed: 1 nearest the light).
+        p = S.slice_sphere(cam, size, splits[i], splits[i + 1])[0]
+        a, b = S.project(m, np.array([p, p + 0.1 * f]))[:, 2]
+        assert b < a
+        assert fit.texel[i] == pytest.approx(2.0 / res / np.linalg.norm(m[0, :3]))
+
+
+@settings(max_examples=150, deadline=None)
+@given(vec3, vec3, st.floats(20.0, 100.0), unit_ish, resolutions, vec3,
+       st.tuples(*(st.floats(-1.0, 1.0),) * 3), st.floats(0.0, 1.0))
+def test_a_moving_camera_moves_cascades_by_whole_texels(
+        eye, target, fov, direction, res, point, step, texels) -> None:
+    """The radius is the same for every pose (view-space fit) and the centre is snapped:
+    a fixed world point's position in texels changes by an integer only."""
+    cam = _camera(eye, target, fov)
+    size = (320, 240)
+    fit0 = S.directional_cascades(cam, size, direction, LO, HI, res, 0.1, 60.0)
+    # Move the camera by up to one texel of the first cascade, keeping its orientation.
+    delta = np.asarray(step) * texels * fit0.texel[0]
+    moved = Camera(eye=tuple(np.add(eye, delta)), target=tuple(np.add(target, delta)),
+                   yfov_deg=fov)
+    fit1 = S.directional_cascades(moved, size, direction, LO, HI, res, 0.1, 60.0)
+    assert np.array_equal(fit0.texel, fit1.texel)
+    for m0, m1 in zip(fit0.matrices, fit1.matrices, strict=True):
+        t0 = (S.project(m0, np.array([point]))[0, :2] * 0.5 + 0.5) * res
+        t1 = (S.project(m1, np.array([point]))[0, :2] * 0.5 + 0.5) * res
+        shift = t1 - t0
+        assert np.allclose(shift, np.round(shift), atol=1e-6 * res), shift
+
+
+@given(vec3, vec3, st.floats(20.0, 100.0), unit_ish)
+def test_cascade_radius_ignores_camera_rotation(eye, target, fov, direction) -> None:
+    cam = _camera(eye, target, fov)
+    other = _camera(eye, tuple(np.add(eye, [0.3, -0.2, 1.0])), fov)
+    for d0, d1 in ((0.1, 2.0), (2.0, 9.0), (9.0, 40.0)):
+        r0 = S.slice_sphere(cam, (640, 480), d0, d1)[1]
+        r1 = S.slice_sphere(other, (640, 480), d0, d1)[1]
+        assert r0 == pytest.approx(r1, rel=1e-12)
+
+
+def test_sphere_fits_off_centre_intrinsics() -> None:
+    cam = Camera(eye=(0.0, 1.0, 5.0), target=(0.0, 1.0, 0.0), yfov_deg=2 * math.degrees(
+        math.atan(480 / (2 * 300.0))), pixel_intrinsics=(300.0, 300.0, 100.0, 60.0, 640, 480))
+    c, r = S.slice_sphere(cam, (640, 480), 1.0, 8.0)
+    corners = S.slice_corners(cam, (640, 480), 1.0, 8.0)
+    assert np.all(np.linalg.norm(corners - c, axis=1) <= r + 1e-9)
+
+
+@settings(max_examples=100, deadline=None)
+@given(vec3, unit_ish, st.floats(0.05, 1.3), st.floats(0.01, 50.0),
+       st.floats(0.0, 0.999), st.floats(0.0, 2 * math.pi))
+def test_spot_map_holds_the_cone_with_reversed_depth(pos, direction, outer, dist, frac,
+                                                     phi) -> None:
+    near = 1e-3
+    m = S.spot_matrix(pos, direction, outer, near)
+    r, u, f = S.light_basis(direction)
+    # A point inside the cone (angle frac * min(outer, limit) off the axis).
+    a = frac * min(outer, S.MAX_SPOT_HALF_ANGLE)
+    d = math.cos(a) * f + math.sin(a) * (math.cos(phi) * r + math.sin(phi) * u)
+    p = np.asarray(pos) + dist * d
+    clip = S.project(m, np.array([p]))[0]
+    ndc = clip[:3] / clip[3]
+    assert clip[3] == pytest.approx(dist * math.cos(a), rel=1e-9, abs=1e-12)
+    assert np.all(np.abs(ndc[:2]) <= 1.0)
+    assert ndc[2] == pytest.approx(near / (dist * math.cos(a)), rel=1e-9)
+    # The axis lands in the middle of the map.
+    on_axis = S.project(m, np.array([np.asarray(pos) + dist * f]))[0]
+    assert np.allclose(on_axis[:2] / on_axis[3], 0.0, atol=1e-9)
+
+
+@settings(max_examples=200, deadline=None)
+@given(vec3, st.tuples(*(st.floats(-5.0, 5.0),) * 3).filter(lambda v: max(map(abs, v)) > 1e-3))
+def test_cube_faces_follow_vulkan_face_selection(pos, q) -> None:
+    """The face of the largest component renders the point inside its square at depth
+    near / |ma|, at the (s, t) the spec's face-selection table samples."""
+    near = 0.01
+    m = S.point_matrices(pos, near)
+    q = np.asarray(q)
+    axis = int(np.argmax(np.abs(q)))
+    face = 2 * axis + (0 if q[axis] > 0 else 1)
+    clip = S.project(m[face], np.array([np.asarray(pos) + q]))[0]
+    ma = abs(q[axis])
+    assert clip[3] == pytest.approx(ma)
+    assert clip[2] / clip[3] == pytest.approx(near / ma)
+    rx, ry, rz = q
+    sc, tc = {0: (-rz, -ry), 1: (rz, -ry), 2: (rx, rz), 3: (rx, -rz), 4: (rx, -ry),
+              5: (-rx, -ry)}[face]
+    assert clip[0] / clip[3] == pytest.approx(sc / ma, abs=1e-12)
+    assert clip[1] / clip[3] == pytest.approx(tc / ma, abs=1e-12)
+    # The other faces either put it behind (w <= 0) or outside their square (or on an edge).
+    for other in range(6):
+        if other != face:
+            c = S.project(m[other], np.array([np.asarray(pos) + q]))[0]
+            assert c[3] <= 0 or np.max(np.abs(c[:2])) >= c[3] * (1 - 1e-12)
+
+
+def test_perspective_near_scales_with_reach() -> None:
+    assert S.perspective_near((0, 0, 0), 10.0, LO, HI) == pytest.approx(0.01)
+    far = max(np.linalg.norm([x, y, z]) for x in (LO[0], HI[0]) for y in (LO[1], HI[1])
+              for z in (LO[2], HI[2]))
+    assert S.perspective_near((0, 0, 0), 0.0, LO, HI) == pytest.approx(far * 1e-3)
