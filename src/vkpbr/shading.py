@@ -8,10 +8,14 @@ from __future__ import annotations
 
 import enum
 
-__all__ = ["AMBIENT", "MIN_ROUGHNESS", "Brdf", "Named", "Tonemap"]
+__all__ = ["AMBIENT", "MIN_ROUGHNESS", "SUN_DIRECTION", "Brdf", "Named", "Tonemap"]
 
 MIN_ROUGHNESS = 0.03  # roughness is clamped here so that D stays finite as r -> 0
 AMBIENT = 0.02  # the course's ambient constant: L_ambient = 0.02 * c
+# The built-in sky's sun and the automatic key light: the unit vector its light TRAVELS (glTF's
+# -Z of a light node), from 50 degrees of elevation, behind and right of a camera looking
+# along -Z (to the sun: (cos 50 sin 30, sin 50, cos 50 cos 30)).
+SUN_DIRECTION = (-0.32139380484326974, -0.766044443118978, -0.5566703992264194)
 
 
 class Named(enum.IntEnum):

@@ -132,10 +132,12 @@ class Device:
         supported = self._query_features()
         self.anisotropy = anisotropy_usable(self.info, bool(supported["samplerAnisotropy"]))
         self.timestamps = bool(self.limits.timestampComputeAndGraphics)
+        # maintenance4 (required of Vulkan 1.3): glslc's vulkan1.3 compute shaders declare
+        # their work-group size with LocalSizeId, which needs it.
         f13 = vk.VkPhysicalDeviceVulkan13Features(
-            dynamicRendering=vk.VK_TRUE, synchronization2=vk.VK_TRUE
+            dynamicRendering=vk.VK_TRUE, synchronization2=vk.VK_TRUE, maintenance4=vk.VK_TRUE
         )
-        # Only what vkpbr uses: dynamic rendering, synchronization2, anisotropic filtering.
+        # Only what vkpbr uses: dynamic rendering, synchronization2, maintenance4, anisotropy.
         core = vk.VkPhysicalDeviceFeatures(
             samplerAnisotropy=vk.VK_TRUE if self.anisotropy else vk.VK_FALSE)
         features = vk.VkPhysicalDeviceFeatures2(pNext=f13, features=core)

@@ -24,7 +24,8 @@ def mip_levels(width: int, height: int) -> int:
 
 
 class Image:
-    """A 2D VkImage with dedicated memory."""
+    """A 2D VkImage with dedicated memory; `layers` > 1 makes an array, `cube` (layers a
+    multiple of 6) lets cube views see it."""
 
     def __init__(
         self,
@@ -36,20 +37,24 @@ class Image:
         mip_levels: int = 1,
         samples: int = 1,
         name: str = "",
+        layers: int = 1,
+        cube: bool = False,
     ) -> None:
         vk = device.vk
         self.device = device
         self.width, self.height, self.format = width, height, format
         self.mip_levels, self.samples, self.name = mip_levels, samples, name
+        self.layers, self.cube = layers, cube
         self.memory = None
         self.handle = vk.vkCreateImage(
             device.handle,
             vk.VkImageCreateInfo(
+                flags=vk.VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT if cube else 0,
                 imageType=vk.VK_IMAGE_TYPE_2D,
                 format=format,
                 extent=vk.VkExtent3D(width=width, height=height, depth=1),
                 mipLevels=mip_levels,
-                arrayLayers=1,
+                arrayLayers=layers,
                 samples=samples,
                 tiling=vk.VK_IMAGE_TILING_OPTIMAL,
                 usage=usage,
@@ -81,7 +86,10 @@ class Image:
 
 class ImageView(DeviceObject):
     """A view of an image; `swizzle` maps (r, g, b, a) to source channels, e.g. "bbbb" makes
-    a scalar map out of the blue channel (glTF metalness) without copying the image."""
+    a scalar map out of the blue channel (glTF metalness) without copying the image.
+
+    `kind` is "2d" (layer 0), "2d_array", "cube" or "cube_array" (every layer); `base_mip`
+    and `mips` (None: the rest of the chain) pick levels, e.g. one level for a storage view."""
 
     _destroy_fn = "vkDestroyImageView"
 
@@ -93,6 +101,9 @@ class ImageView(DeviceObject):
         aspect: str = "color",
         swizzle: str = "iiii",
         format: int | None = None,
+        kind: str = "2d",
+        base_mip: int = 0,
+        mips: int | None = None,
     ) -> None:
         device = image.device
         vk = device.vk
@@ -102,19 +113,24 @@ class ImageView(DeviceObject):
         aspect_bit = (
             vk.VK_IMAGE_ASPECT_DEPTH_BIT if aspect == "depth" else vk.VK_IMAGE_ASPECT_COLOR_BIT
         )
+        view_type = {"2d": vk.VK_IMAGE_VIEW_TYPE_2D, "2d_array": vk.VK_IMAGE_VIEW_TYPE_2D_ARRAY,
+                     "cube": vk.VK_IMAGE_VIEW_TYPE_CUBE,
+                     "cube_array": vk.VK_IMAGE_VIEW_TYPE_CUBE_ARRAY}[kind]
+        layers = 1 if kind == "2d" else getattr(image, "layers", 1)
+        self.kind = kind
         self.handle = vk.vkCreateImageView(
             device.handle,
             vk.VkImageViewCreateInfo(
                 image=image.handle,
-                viewType=vk.VK_IMAGE_VIEW_TYPE_2D,
+                viewType=view_type,
                 format=image.format if format is None else format,
                 components=vk.VkComponentMapping(*comps),
                 subresourceRange=vk.VkImageSubresourceRange(
                     aspectMask=aspect_bit,
-                    baseMipLevel=0,
-                    levelCount=image.mip_levels,
+                    baseMipLevel=base_mip,
+                    levelCount=image.mip_levels - base_mip if mips is None else mips,
                     baseArrayLayer=0,
-                    layerCount=1,
+                    layerCount=layers,
                 ),
             ),
             None,
@@ -168,7 +184,7 @@ class Sampler(DeviceObject):
 
 
 def _barrier(vk: Any, image: Image, old: int, new: int, src: tuple, dst: tuple,
-             base_mip: int = 0, mips: int = 1) -> Any:
+             base_mip: int = 0, mips: int = 1, layers: int = 1) -> Any:
     return vk.VkImageMemoryBarrier2(
         srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=dst[0], dstAccessMask=dst[1],
         oldLayout=old, newLayout=new,
@@ -177,7 +193,7 @@ def _barrier(vk: Any, image: Image, old: int, new: int, src: tuple, dst: tuple,
         image=image.handle,
         subresourceRange=vk.VkImageSubresourceRange(
             aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=base_mip, levelCount=mips,
-            baseArrayLayer=0, layerCount=1,
+            baseArrayLayer=0, layerCount=layers,
         ),
     )
 

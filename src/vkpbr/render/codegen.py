@@ -34,6 +34,11 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("pbr_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1),)),
     Variant("hud.vert.spv", "hud.vert"),  # the viewer's text overlay (app/hud.py)
     Variant("hud.frag.spv", "hud.frag"),
+    # The environment (render/environment.py): source cube, pre-filter, BRDF table, sky.
+    *(Variant(f"{n}.comp.spv", f"{n}.comp") for n in (
+        "env_equirect", "env_sky", "env_specular", "env_irradiance", "env_brdf_lut")),
+    Variant("background.vert.spv", "background.vert"),
+    Variant("background.frag.spv", "background.frag"),
 )
 
 
