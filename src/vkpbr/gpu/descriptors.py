@@ -157,7 +157,7 @@ class DescriptorWriter:
         """A storage buffer (`size` None: the whole buffer from `offset`)."""
         vk = self.device.vk
         info = vk.VkDescriptorBufferInfo(buffer=buffer.handle, offset=offset,
-                                         range=vk.VK_WHOLE_SIZE if size is None else size)
+                                         range=buffer.size - offset if size is None else size)
         self._keep.append(info)
         self._writes.append(
             vk.VkWriteDescriptorSet(
