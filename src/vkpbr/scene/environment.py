@@ -24,9 +24,12 @@ by 0) with one warning on the "vkpbr.scene.environment" logger.
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import io
 import logging
 import os
 import re
+import sys
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -102,20 +105,27 @@ def _native_output_captured() -> Iterator[list[str]]:
     diagnostics there): the caller's one error line replaces them. Yields a list that holds
     the captured text's last non-empty line once the block exits."""
     out: list[str] = []
+    libc = ctypes.CDLL(None)  # fflush(NULL): native stdio buffers go to the captured file
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    py_text = io.StringIO()  # the bindings also print through sys.stdout (PySys_WriteStdout)
     with tempfile.TemporaryFile() as tmp:
         saved = [os.dup(1), os.dup(2)]
         try:
             os.dup2(tmp.fileno(), 1)
             os.dup2(tmp.fileno(), 2)
-            yield out
+            with contextlib.redirect_stdout(py_text), contextlib.redirect_stderr(py_text):
+                yield out
         finally:
+            libc.fflush(None)
             os.dup2(saved[0], 1)
             os.dup2(saved[1], 2)
             for fd in saved:
                 os.close(fd)
             tmp.seek(0)
-            lines = [x for x in tmp.read().decode("utf-8", "replace").splitlines() if x.strip()]
-            out.extend(lines[-1:])
+            text = tmp.read().decode("utf-8", "replace") + "\n" + py_text.getvalue()
+            out.extend([x for x in text.splitlines() if x.strip()][-1:])
 
 
 def _decode_exr(path: Path) -> np.ndarray:
