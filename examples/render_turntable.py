@@ -11,7 +11,7 @@ import math
 import numpy as np
 from PIL import Image
 
-from vkpbr import Camera, Light, Renderer, load_scene
+from vkpbr import Camera, Renderer, load_scene
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("scene", nargs="?", help="default: the built-in chart")
@@ -26,9 +26,8 @@ with Renderer(load_scene(args.scene) if args.scene else None) as renderer:
     radius, angle0 = math.hypot(ex - tx, ez - tz), math.atan2(ex - tx, ez - tz)
     cameras = [dataclasses.replace(start, eye=(tx + radius * math.sin(a), ey, tz + radius * math.cos(a)))
                for a in (angle0 + i * math.pi / 4 for i in range(8))]
-    # The scene's light, moved above the target so that every side is lit alike.
-    light: Light = dataclasses.replace(renderer.default_light(), position=(tx, ey + radius, tz))
-    frames = list(renderer.render_many(cameras, light, size))  # 8 x (H, W, 4) uint8
+    # The scene's own lights (none: the automatic sun and the sky), the same for every view.
+    frames = list(renderer.render_many(cameras, size=size))  # 8 x (H, W, 4) uint8
 sheet = np.vstack([np.hstack(frames[:4]), np.hstack(frames[4:])])
 Image.fromarray(sheet).save(args.out)
 print(f"wrote {args.out}: 8 views, 45 degrees apart")

@@ -105,8 +105,9 @@ def load(golden: Golden, assets: Path) -> Scene | None:
 
 
 def render(renderer: Renderer, golden: Golden) -> np.ndarray:
-    """(H, W, 3) uint8 sRGB: the scene's default camera and light, default options."""
-    return np.ascontiguousarray(renderer.render(size=golden.size)[..., :3])
+    """(H, W, 3) uint8 sRGB: the scene's default camera and light, default options of the
+    course's lighting mode (these goldens are the seed's images)."""
+    return np.ascontiguousarray(renderer.render(size=golden.size, lighting="course")[..., :3])
 
 
 def tolerance_for(golden: Golden, device_name: str) -> Tolerance:

@@ -13,6 +13,7 @@ import pytest
 from PIL import Image
 
 from vkpbr.app.cli import main
+from vkpbr.render.layouts import View
 
 
 def run(capsys, *argv: str) -> tuple[int, str, str]:  # noqa: ANN001
@@ -136,7 +137,7 @@ def test_info_json(capsys) -> None:
 def test_list_views(capsys) -> None:
     code, stdout, _ = run(capsys, "render", "--list-views")
     lines = stdout.strip().splitlines()
-    assert code == 0 and len(lines) == 21 and lines[0].startswith("final")
+    assert code == 0 and len(lines) == len(View) and lines[0].startswith("final")
 
 
 def _obj_with_missing_textures(folder: Path) -> Path:

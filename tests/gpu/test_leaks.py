@@ -83,7 +83,7 @@ def test_close_destroys_every_vulkan_object(make_renderer, default_scene_cached)
     target = r.offscreen_target((40, 30))
     r.build_pipelines(target)
     overlay = r.text_overlay(np.full((8, 8, 4), 255, np.uint8), target)
-    sub = r.draw(target, r.default_camera(), r.default_light(), RenderOptions(),
+    sub = r.draw(target, r.default_camera(), (r.default_light(),), RenderOptions(),
                  overlay=overlay, copy=(COPY_COLOR,))
     r.read_color(target, sub)
     made = live_objects_by_kind()

@@ -86,7 +86,7 @@ def test_terms_match_reference(make_renderer, material: str, brdf: str) -> None:
              "mapped_normal", "base_color", "metallic", "roughness"]
     failures = []
     for view in views:
-        got = r.render(size=(W, H), view=view, brdf=brdf)[..., :3].astype(np.int32)
+        got = r.render(size=(W, H), view=view, brdf=brdf, lighting="course")[..., :3].astype(np.int32)
         want, _ = expected(view, mat, Brdf.BLINN_PHONG if brdf == "blinn-phong" else Brdf.GGX)
         diff = np.abs(got - want)
         if diff.max() > 1:
@@ -101,7 +101,7 @@ def test_tonemap_and_exposure_match_reference(make_renderer) -> None:
     c = np.broadcast_to(np.asarray(mat.base_color_factor[:3]), n.shape)
     s = ref.shade(n, v, l, c, mat.metallic_factor, mat.roughness_factor, np.asarray(LIGHT.color) * LIGHT.intensity)
     for name, mode in (("reinhard", Tonemap.REINHARD), ("aces", Tonemap.ACES)):
-        got = r.render(size=(W, H), tonemap=name, exposure=1.5)[..., :3].astype(np.int32)
+        got = r.render(size=(W, H), tonemap=name, exposure=1.5, lighting="course")[..., :3].astype(np.int32)
         want = to_bytes(ref.tonemap(s["final"] * 2**1.5, mode), "radiance")
         assert np.abs(got - want).max() <= 1, name
 
@@ -112,8 +112,30 @@ def test_linear_float_output_matches_reference(make_renderer) -> None:
     _, n, v, l = pixel_geometry()
     c = np.broadcast_to(np.asarray(mat.base_color_factor[:3]), n.shape)
     s = ref.shade(n, v, l, c, mat.metallic_factor, mat.roughness_factor, np.asarray(LIGHT.color) * LIGHT.intensity)
-    got = r.render(size=(W, H), linear=True)
+    got = r.render(size=(W, H), linear=True, lighting="course")
     assert got.dtype == np.float32
     np.testing.assert_allclose(got[..., :3], s["final"], rtol=2e-3, atol=2e-5)
-    d_got = r.render(size=(W, H), linear=True, view="d")[..., 0]
+    d_got = r.render(size=(W, H), linear=True, view="d", lighting="course")[..., 0]
     np.testing.assert_allclose(d_got, np.clip(s["terms"].D, 0, 1), rtol=2e-3, atol=2e-5)
+
+
+@pytest.mark.parametrize("material", list(MATERIALS))
+def test_gltf_brdf_terms_match_reference(make_renderer, material: str) -> None:
+    """The physically based mode's glTF BRDF (spec Appendix B) against the NumPy mirror:
+    the point light alone (no ambient; image-based light and shadows are not part of these
+    terms), linear float32 output, every term view."""
+    mat = MATERIALS[material]
+    r = make_renderer(plane_scene(mat))
+    _, n, v, l = pixel_geometry()
+    c = np.broadcast_to(np.asarray(mat.base_color_factor[:3]), n.shape)
+    m = np.full(n.shape[:2], mat.metallic_factor)
+    rough = np.full(n.shape[:2], mat.roughness_factor)
+    s = ref.shade(n, v, l, c, m, rough, np.asarray(LIGHT.color) * LIGHT.intensity, brdf=Brdf.GLTF,
+                  ambient=0.0)
+    t = s["terms"]
+    want = {"specular": s["specular"], "diffuse": s["diffuse"], "d": np.clip(t.D, 0, 1)[..., None],
+            "f": t.F, "g": np.clip(t.G, 0, 1)[..., None]}
+    for view, value in want.items():
+        got = r.render(size=(W, H), view=view, linear=True, lighting="pbr", brdf="gltf")
+        np.testing.assert_allclose(got[..., :3], np.broadcast_to(value, n.shape), rtol=2e-3,
+                                   atol=2e-5, err_msg=view)

@@ -12,6 +12,9 @@ from PIL import Image
 from vkpbr.render.layouts import View
 
 SIZE = (160, 120)
+# The course's views, rendered in its lighting mode. The shadow and image-based views are
+# checked where those are (test_shadows.py, test_ibl.py): the course mode has neither.
+COURSE_VIEWS = [v for v in View if v not in (View.SHADOW, View.IBL_DIFFUSE, View.IBL_SPECULAR)]
 
 
 @pytest.fixture(scope="module")
@@ -19,11 +22,12 @@ def default_renders():
     from vkpbr.render.renderer import Renderer
 
     with Renderer(validation=True) as r:
-        renders = {v: r.render(size=SIZE, view=v.name.lower()) for v in View}
-        renders["blinn"] = r.render(size=SIZE, view="d", brdf="blinn-phong")
-        renders["no-mask"] = r.render(size=SIZE, alpha_mask=False)
+        renders = {v: r.render(size=SIZE, view=v.name.lower(), lighting="course")
+                   for v in COURSE_VIEWS}
+        renders["blinn"] = r.render(size=SIZE, view="d", brdf="blinn-phong", lighting="course")
+        renders["no-mask"] = r.render(size=SIZE, alpha_mask=False, lighting="course")
         renders["no-normal-maps"] = r.render(size=SIZE, view="mapped_normal", normal_mapping=False)
-        color, depth = r.render(size=SIZE, depth=True)
+        color, depth = r.render(size=SIZE, depth=True, lighting="course")
         renders["depth-array"] = depth
         renders["msaa-off"] = color
         assert r.device.instance.errors == []
@@ -31,7 +35,7 @@ def default_renders():
 
 
 def test_every_view_is_distinct_and_in_range(default_renders) -> None:
-    images = {v: default_renders[v] for v in View}
+    images = {v: default_renders[v] for v in COURSE_VIEWS}
     for v, img in images.items():
         assert img.shape == (SIZE[1], SIZE[0], 4) and img.dtype == np.uint8
         assert img[..., :3].std() > 1.0, f"{v.name} is flat"
@@ -58,7 +62,7 @@ def test_depth_output(default_renders) -> None:
 
 def test_msaa_renders_and_smooths_edges(make_renderer, default_renders) -> None:
     r = make_renderer(msaa=4)
-    img = r.render(size=SIZE)
+    img = r.render(size=SIZE, lighting="course")
     single = default_renders["msaa-off"]
     assert np.abs(img.astype(int) - single.astype(int)).mean() < 4.0  # the same picture
     # Anti-aliasing creates intermediate values: more distinct colours than without.

@@ -346,11 +346,15 @@ def test_camera_and_lights(tmp_path: Path) -> None:
     b.doc["extensionsUsed"] = ["KHR_lights_punctual"]
     b.doc["extensions"] = {"KHR_lights_punctual": {"lights": [
         {"type": "point", "color": [1, 0.5, 0.5], "intensity": 20, "range": 9},
-        {"type": "directional", "intensity": 3}]}}  # fmt: skip
+        {"type": "directional", "intensity": 3},
+        {"type": "spot", "spot": {"innerConeAngle": 0.1, "outerConeAngle": 0.4}}]}}  # fmt: skip
     b.node(translation=[1, 2, 3], extensions={"KHR_lights_punctual": {"light": 0}})
     b.node(extensions={"KHR_lights_punctual": {"light": 1}})
-    with pytest.warns(UserWarning, match="directional"):
-        scene = load_gltf(b.save(tmp_path / "c.glb"))
+    # A spot at (0, 4, 0) turned to look down: rotation -90 degrees about +X maps -Z to -Y.
+    half = math.sqrt(0.5)
+    b.node(translation=[0, 4, 0], rotation=[-half, 0, 0, half],
+           extensions={"KHR_lights_punctual": {"light": 2}})
+    scene = load_gltf(b.save(tmp_path / "c.glb"))
     cam, finite, invalid, no_near = scene.cameras
     assert cam.eye == (0, 1, 5) and cam.target == (0, 1, 4) and cam.up == (0, 1, 0)
     # The file's znear is kept; no zfar means glTF's infinite projection: None, not a marker.
@@ -358,10 +362,14 @@ def test_camera_and_lights(tmp_path: Path) -> None:
     assert (finite.znear, finite.zfar) == (0.2, 80.0)
     assert (invalid.znear, invalid.zfar) == (2.0, None)  # zfar <= znear: dropped, not fatal
     assert (no_near.znear, no_near.zfar) == (None, None)  # the renderer derives it
-    point, sun = scene.lights
+    point, sun, spot = scene.lights
     assert point.position == (1, 2, 3) and point.falloff == "inverse_square" and point.range == 9
-    assert point.color == (1, 0.5, 0.5) and point.intensity == 20
-    assert sun.position[2] > 10 and sun.intensity > 3  # far along +Z (light shines down -Z)
+    assert point.color == (1, 0.5, 0.5) and point.intensity == 20 and point.kind == "point"
+    # KHR_lights_punctual: the light shines along its node's -Z; lux for directional lights.
+    assert sun.kind == "directional" and sun.direction == (0, 0, -1) and sun.intensity == 3
+    assert spot.kind == "spot" and spot.position == (0, 4, 0)
+    assert spot.direction == pytest.approx((0, -1, 0), abs=1e-6)
+    assert (spot.inner_cone, spot.outer_cone) == (0.1, 0.4)
 
 
 def test_nan_positions_dropped_with_warning(tmp_path: Path) -> None:

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from vkpbr.app import log as app_log
 from vkpbr.app.cli import _verbosity, build_parser, main
 from vkpbr.app.options import SHARED_OPTIONS, option_flags, render_options_from_args
-from vkpbr.render.layouts import Brdf, TbnMode, Tonemap, View
+from vkpbr.render.layouts import Brdf, Lighting, TbnMode, Tonemap, View
 from vkpbr.render.options import RenderOptions
 
 COMMANDS = ("render", "view")
@@ -29,7 +29,7 @@ def parse(*argv: str):  # noqa: ANN201
 def test_negative_vectors_and_numbers_are_values(command: str) -> None:
     args = parse(command, "--light", "-5,0.6,-0.9", "--camera", "-1,2,-3,0,-0.5,0",
                  "--exposure", "-2", "--light-color", "-.5,0,1", "--fov", "45")
-    assert args.light == (-5.0, 0.6, -0.9)
+    assert args.light == [(-5.0, 0.6, -0.9)]
     assert args.light_color == (-0.5, 0.0, 1.0)
     assert args.camera == "-1,2,-3,0,-0.5,0"
     assert args.exposure == -2.0 and args.fov == 45.0
@@ -47,7 +47,7 @@ def test_negative_number_forms(command: str, text: str, value: float) -> None:
 def test_negative_value_then_scene_and_options(command: str) -> None:
     """A negative value does not swallow what follows it, nor get taken for the scene."""
     args = parse(command, "--light", "-1,-2,-3", "scene.gltf", "--exposure", "-1", "--view", "d")
-    assert args.light == (-1.0, -2.0, -3.0) and args.scene == "scene.gltf"
+    assert args.light == [(-1.0, -2.0, -3.0)] and args.scene == "scene.gltf"
     assert args.exposure == -1.0 and args.view == "d"
 
 
@@ -55,8 +55,8 @@ def test_negative_value_then_scene_and_options(command: str) -> None:
 @settings(max_examples=50, deadline=None)
 def test_any_vector_round_trips(v: tuple[float, float, float]) -> None:
     text = ",".join(repr(x) for x in v)
-    assert parse("render", "--light", text).light == v
-    assert parse("view", f"--light={text}").light == v
+    assert parse("render", "--light", text).light == [v]
+    assert parse("view", f"--light={text}").light == [v]
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -85,11 +85,12 @@ def test_enum_choices_come_from_the_enums(capsys) -> None:  # noqa: ANN001
     render = parser._subparsers._group_actions[0].choices["render"]  # noqa: SLF001
     render.format_help()  # deferred arguments are added on first use
     by_dest = {a.dest: a for a in render._actions}  # noqa: SLF001
-    for dest, enum in (("view", View), ("brdf", Brdf), ("tbn", TbnMode), ("tonemap", Tonemap)):
+    for dest, enum in (("view", View), ("lighting", Lighting), ("brdf", Brdf), ("tbn", TbnMode),
+                       ("tonemap", Tonemap)):
         assert tuple(by_dest[dest].choices) == enum.labels()
     assert main(["render", "--help"]) == 0
     text = capsys.readouterr().out
-    assert "geometric-normal" in text and "{ggx,blinn-phong}" in text and "examples:" in text
+    assert "geometric-normal" in text and "{ggx,blinn-phong,gltf}" in text and "examples:" in text
 
 
 @pytest.mark.parametrize("command", COMMANDS)

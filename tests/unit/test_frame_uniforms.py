@@ -11,7 +11,7 @@ import pytest
 
 from vkpbr.render import layouts as L
 from vkpbr.render.camera import view_projection
-from vkpbr.render.frames import Bounds, FrameSlot, write_frame_uniforms
+from vkpbr.render.frames import Bounds, FrameLighting, FrameSlot, write_frame_uniforms
 from vkpbr.render.options import RenderOptions
 from vkpbr.scene.types import Camera, Light
 
@@ -44,55 +44,68 @@ def test_pack_by_name_matches_the_numpy_layout(block: L.Std140Block) -> None:
 
 
 def test_packing_needs_every_field_by_name() -> None:
-    buf = bytearray(L.LIGHT.size)
+    buf = bytearray(L.LIGHTING.size)
     with pytest.raises(TypeError):
-        L.LIGHT.pack_into(buf, lightPos=(0, 0, 0, 1))  # the other fields are missing
+        L.LIGHTING.pack_into(buf, view_pos=(0, 0, 0, 1))  # the other fields are missing
     with pytest.raises(TypeError):
-        L.LIGHT.pack_into(buf, (0, 0, 0, 1))  # positional values are refused
+        L.LIGHTING.pack_into(buf, (0, 0, 0, 1))  # positional values are refused
 
 
 def test_swapped_fields_are_caught() -> None:
     """A layout whose packer order disagreed with its offsets would fail the check above:
     build one with two fields swapped and show that the by-name bytes differ."""
-    fields = list(L.LIGHT.fields)
-    fields[3], fields[4] = fields[4], fields[3]  # intensity <-> viewPos
-    swapped = dataclasses.replace(L.LIGHT, fields=tuple(fields))
-    values = dict(lightPos=(1, 2, 3, 1), color=(0.1, 0.2, 0.3), intensity=7.0,
-                  viewPos=(4, 5, 6, 1), falloff=1, range=2.0)
-    a, b = bytearray(L.LIGHT.size), bytearray(swapped.size)
-    L.LIGHT.pack_into(a, **values)
+    fields = list(L.LIGHTING.fields)
+    fields[1], fields[2] = fields[2], fields[1]  # light_count <-> mode
+    swapped = dataclasses.replace(L.LIGHTING, fields=tuple(fields))
+    values = dict(view_pos=(1, 2, 3, 1), light_count=7, mode=1, flags=2, env_intensity=0.5,
+                  env_rotation=(1, 0, 4, 0), ambient_color=(0.02, 0.02, 0.02, 0))
+    a, b = bytearray(L.LIGHTING.size), bytearray(swapped.size)
+    L.LIGHTING.pack_into(a, **values)
     swapped.pack_into(b, **values)
     assert a != b
-    assert np.frombuffer(bytes(a), L.LIGHT.dtype)[0]["intensity"] == 7.0
+    assert np.frombuffer(bytes(a), L.LIGHTING.dtype)[0]["light_count"] == 7
 
 
 def _slot() -> FrameSlot:
-    mv = [memoryview(bytearray(b.size)) for b in (L.CAMERA, L.SETTINGS, L.LIGHT)]
-    return FrameSlot(0, None, None, *mv)
+    mv = [memoryview(bytearray(b.size)) for b in (L.CAMERA, L.SETTINGS, L.LIGHTING)]
+    return FrameSlot(0, None, None, *mv, lights=np.zeros((L.MAX_LIGHTS, 20), np.float32))
 
 
 def test_frame_uniforms_land_in_their_fields() -> None:
     camera = Camera(eye=(1.0, 2.0, 3.0), target=(0.0, 0.5, 0.0), yfov_deg=50.0)
     light = Light(position=(4.0, 5.0, 6.0), color=(0.2, 0.4, 0.6), intensity=3.5,
                   falloff="inverse_square", range=9.0)
+    spot = Light(kind="spot", position=(1.0, 2.0, 3.0), direction=(0.0, -1.0, 0.0),
+                 inner_cone=0.25, outer_cone=0.5)
     opts = RenderOptions(view="roughness", brdf="blinn-phong", tonemap="aces", exposure=1.5,
                          occlusion=False)
     bounds = Bounds.of(np.array([-1.0, -1, -1]), np.array([1.0, 1, 1]))
     slot = _slot()
-    write_frame_uniforms(slot, camera, light, (64, 32), opts, False, bounds)
+    lighting = FrameLighting(mode=1, flags=L.LIGHTING_IBL, ambient=0.02, env_intensity=0.5,
+                             env_rotation=np.pi / 2, env_max_lod=6.0)
+    write_frame_uniforms(slot, camera, (light, spot), (64, 32), opts, False, bounds, lighting)
     cam = np.frombuffer(slot.m_camera, L.CAMERA.dtype)[0]
     st = np.frombuffer(slot.m_settings, L.SETTINGS.dtype)[0]
-    li = np.frombuffer(slot.m_light, L.LIGHT.dtype)[0]
+    lg = np.frombuffer(slot.m_lighting, L.LIGHTING.dtype)[0]
+    rec = slot.lights[:2].copy().view(L.LIGHT_RECORD.dtype)[:, 0]
     vp = view_projection(camera, (64, 32), slot.znear)
     np.testing.assert_allclose(cam["VP"], L.mat4_to_std140(vp), rtol=1e-6, atol=1e-6)
     assert (st["view"], st["brdf"], st["tonemap"]) == (L.View.ROUGHNESS, L.Brdf.BLINN_PHONG, L.Tonemap.ACES)
     assert st["flags"] == L.SETTINGS_NORMAL_MAPPING | L.SETTINGS_SRGB_TARGET
     assert st["exposure"] == pytest.approx(2 ** 1.5)
     assert st["znear"] == pytest.approx(slot.znear) and 0 < slot.znear < np.linalg.norm(camera.eye) - 1.8
-    np.testing.assert_allclose(li["lightPos"], (4, 5, 6, 1))
-    np.testing.assert_allclose(li["color"], (0.2, 0.4, 0.6), rtol=1e-6)
-    np.testing.assert_allclose(li["viewPos"], (1, 2, 3, 1))
-    assert (li["intensity"], li["falloff"], li["range"]) == (pytest.approx(3.5), 1, pytest.approx(9.0))
+    np.testing.assert_allclose(lg["view_pos"], (1, 2, 3, 1))
+    assert (lg["light_count"], lg["mode"], lg["flags"]) == (2, 1, L.LIGHTING_IBL)
+    np.testing.assert_allclose(lg["env_rotation"], (0, 1, 6, 0), atol=1e-7)
+    np.testing.assert_allclose(lg["ambient_color"], (0.02, 0.02, 0.02, 0), rtol=1e-6)
+    assert lg["env_intensity"] == 0.5
+    np.testing.assert_allclose(rec[0]["position_range"], (4, 5, 6, 9))
+    np.testing.assert_allclose(rec[0]["color_falloff"], (0.7, 1.4, 2.1, 1), rtol=1e-6)
+    np.testing.assert_allclose(rec[0]["direction_kind"][3], L.LightKind.POINT)
+    np.testing.assert_allclose(rec[1]["direction_kind"], (0, -1, 0, L.LightKind.SPOT))
+    scale = 1 / (np.cos(0.25) - np.cos(0.5))
+    np.testing.assert_allclose(rec[1]["cone"][:2], (scale, -np.cos(0.5) * scale), rtol=1e-6)
+    np.testing.assert_allclose(rec[1]["shadow"][0], -1.0)
 
 
 def test_near_plane_follows_the_bounds() -> None:

@@ -53,8 +53,10 @@ def test_std140_offsets_match_compiled_shaders() -> None:
 
 
 def test_std140_rules() -> None:
-    assert L.LIGHT.offsets == {"lightPos": 0, "color": 16, "intensity": 28, "viewPos": 32, "falloff": 48, "range": 52}
-    assert L.LIGHT.size == 64
+    assert L.LIGHTING.offsets == {"view_pos": 0, "light_count": 16, "mode": 20, "flags": 24,
+                                  "env_intensity": 28, "env_rotation": 32, "ambient_color": 48}
+    assert L.LIGHTING.size == 64
+    assert L.LIGHT_RECORD.size == 80 and L.LIGHT_RECORD.dtype.itemsize == 80
     assert L.CAMERA.size == 64
     assert L.PUSH.size == 128  # the guaranteed minimum maxPushConstantsSize
     assert L.MATERIAL.dtype.itemsize == L.MATERIAL.size
@@ -79,7 +81,7 @@ def test_committed_spirv_is_current(tmp_path: Path) -> None:
     assert {p.name for p in codegen.SPV_DIR.glob('*.spv')} == {f.name for f in fresh}
 
 
-@pytest.mark.parametrize("block", [L.CAMERA, L.SETTINGS, L.LIGHT], ids=lambda b: b.name)
+@pytest.mark.parametrize("block", [L.CAMERA, L.SETTINGS, L.LIGHTING, L.LIGHT_RECORD], ids=lambda b: b.name)
 def test_struct_packer_writes_the_numpy_layout(block) -> None:  # noqa: ANN001
     """The per-frame struct packer and the structured dtype put every member at the same
     bytes (random values; mat4 flattened column by column)."""

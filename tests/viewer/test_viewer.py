@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from vkpbr.app.script import parse_script
+from vkpbr.render.options import RenderOptions
 
 SIZE = (160, 120)
 
@@ -73,8 +74,10 @@ def test_scripted_session_matches_headless(offscreen: bool, request, tmp_path: P
     if not offscreen:
         request.getfixturevalue("display")
     shot = tmp_path / "shot.png"
+    # The course's lighting: its BRDF and tone-map cycles start from ggx and none.
     config = ViewerConfig(size=SIZE, validation=True, vsync=True, offscreen=offscreen,
-                          script=parse_script(_script(shot)))
+                          script=parse_script(_script(shot)),
+                          options=RenderOptions(lighting="course"))
     viewer = Viewer(None, config)
     instance = viewer.renderer.device.instance
     try:

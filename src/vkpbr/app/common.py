@@ -1,6 +1,6 @@
 """What `render` and `view` do alike with their parsed arguments: load the scene (through the
 bake cache with --cache, strictly with --strict), and resolve --camera / --camera-index /
---fov and --light / --light-color / --light-intensity / --falloff against the scene.
+--fov and --light (repeatable) / --light-color / --light-intensity / --falloff against the scene.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from vkpbr.errors import UsageError
 if TYPE_CHECKING:
     from vkpbr.scene.types import Camera, Light, Scene
 
-__all__ = ["default_cache_dir", "load_scene_arg", "camera_from_args", "light_from_args"]
+__all__ = ["default_cache_dir", "load_scene_arg", "camera_from_args", "lights_from_args"]
 
 log = logging.getLogger(__name__)
 
@@ -85,20 +85,28 @@ def camera_from_args(args: argparse.Namespace, renderer: Any) -> Camera:
     return camera
 
 
-def light_from_args(args: argparse.Namespace, renderer: Any) -> Light:
-    """The renderer's default light for the scene with the --light* options over it
-    (--light and --light-color are already (x, y, z) tuples: `vec3_arg` parsed them)."""
+def lights_from_args(args: argparse.Namespace, renderer: Any, options: Any) -> tuple[Light, ...]:
+    """The frame's lights: every --light (none given: the renderer's default for the scene
+    and the lighting mode), then --light-color / --light-intensity / --falloff over each,
+    resolved for `options`' lighting mode by `renderer.frame_lights`.
+    (--light-color is already an (r, g, b) tuple: `vec3_arg` parsed it.)"""
     import math
 
-    light = renderer.default_light()
-    if args.light is not None:
-        light = dataclasses.replace(light, position=args.light)
+    lights: list[Light] | None = None
+    for parsed in args.light or ():  # each parsed by parsing.light_arg
+        if isinstance(parsed, tuple):  # the course's bare X,Y,Z: move the default light there
+            parsed = [dataclasses.replace(renderer.default_light(), position=parsed)]
+        lights = (lights or []) + list(parsed)
+    overrides: dict[str, Any] = {}
     if args.light_color is not None:
-        light = dataclasses.replace(light, color=args.light_color)
+        overrides["color"] = args.light_color
     if args.light_intensity is not None:
         if not math.isfinite(args.light_intensity) or args.light_intensity < 0:
             raise UsageError("--light-intensity must be a finite number >= 0")
-        light = dataclasses.replace(light, intensity=args.light_intensity)
+        overrides["intensity"] = args.light_intensity
     if args.falloff:
-        light = dataclasses.replace(light, falloff=args.falloff.replace("-", "_"))
-    return light
+        overrides["falloff"] = args.falloff.replace("-", "_")
+    if overrides:
+        base = lights if lights is not None else renderer.frame_lights(options)
+        lights = [dataclasses.replace(li, **overrides) for li in base]
+    return renderer.frame_lights(options, lights)

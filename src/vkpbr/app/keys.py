@@ -134,11 +134,12 @@ BINDINGS: tuple[Binding, ...] = (
             doc="view: " + _view_doc(0)),
     Binding("Shift+1..0", "view: " + _view_names(10), _view_chords("shift+", 10),
             doc="view: " + _view_doc(10)),
-    Binding("Ctrl+1", "view: " + _view_names(20), _view_chords("ctrl+", 20),
+    Binding("Ctrl+1..4", "view: " + _view_names(20), _view_chords("ctrl+", 20),
             doc="view: " + _view_doc(20)),
     Binding("V / Shift+V", "next / previous debug view",
             (_press("v", "cycle", ("view", 1)), _press("shift+v", "cycle", ("view", -1)))),
-    Binding("B", "D model: GGX <-> Blinn-Phong", (_press("b", "cycle", ("brdf", 1)),)),
+    Binding("G", "lighting: pbr <-> course", (_press("g", "cycle", ("lighting", 1)),)),
+    Binding("B", "BRDF: GGX -> Blinn-Phong -> glTF", (_press("b", "cycle", ("brdf", 1)),)),
     Binding("T", "TBN path: vectors -> quat -> packed", (_press("t", "cycle", ("tbn", 1)),)),
     Binding("M  N  O", "alpha masking, normal maps, occlusion on/off", (
         _press("m", "toggle", "alpha_mask"), _press("n", "toggle", "normal_mapping"),
@@ -194,9 +195,12 @@ def with_view(options: RenderOptions, view: L.View) -> RenderOptions:
 
 
 def cycle(options: RenderOptions, field: str, step: int = 1) -> RenderOptions:
-    """Next (or previous) value of an enum option: view, brdf, tbn or tonemap."""
+    """Next (or previous) value of an enum option: view, lighting, brdf, tbn or tonemap (from
+    the lighting mode's choice where the option leaves it to the mode)."""
     members = list(ENUM_FIELDS[field])
     current = getattr(options, field)
+    if current is None:
+        current = getattr(options, f"shading_{field}")
     nxt = members[(members.index(current) + step) % len(members)]
     return dataclasses.replace(options, **{field: nxt})
 

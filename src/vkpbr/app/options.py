@@ -16,14 +16,14 @@ import argparse
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
-from vkpbr.app.parsing import vec3_arg
+from vkpbr.app.parsing import light_arg, vec3_arg
 
 if TYPE_CHECKING:
     from vkpbr.render.options import RenderOptions
 
 __all__ = ["OptionSpec", "SHARED_OPTIONS", "add_options", "render_options_from_args", "option_flags"]
 
-Kind = Literal["enum", "float", "vec3", "off", "on", "text", "dir?", "choice"]
+Kind = Literal["enum", "float", "vec3", "off", "on", "text", "dir?", "choice", "append"]
 
 
 @dataclass(frozen=True)
@@ -36,7 +36,7 @@ class OptionSpec:
     kind : "enum" (a RenderOptions enum field: choices are its labels), "float", "vec3"
         ("x,y,z"), "off" (`--no-x` sets field False), "on" (a plain switch), "text",
         "dir?" (an optional folder: `--cache` alone means the default folder), "choice"
-        (fixed `choices`).
+        (fixed `choices`), "append" (repeatable text: a list of every value given).
     help : help text; "%(default)s" and "%(choices)s" are expanded by argparse.
     field : the RenderOptions field the option sets, if any.
     group : the --help section it is listed under.
@@ -58,19 +58,31 @@ class OptionSpec:
 SHARED_OPTIONS: tuple[OptionSpec, ...] = (
     OptionSpec("--fov", "float", "vertical field of view in degrees (default: the camera's)",
                group="camera and light", metavar="DEG"),
-    OptionSpec("--light", "vec3", "point light position (default: the scene's light, else one "
-               "over the camera's shoulder)", group="camera and light", metavar="X,Y,Z"),
-    OptionSpec("--light-color", "vec3", "light colour, linear (default 1,1,1)",
+    OptionSpec("--lighting", "enum", "lighting mode (default %(default)s): pbr = the scene's "
+               "lights (else an automatic sun) with shadows and image-based lighting; course = "
+               "the seed's one point light and 0.02 ambient", field="lighting",
+               group="camera and light"),
+    OptionSpec("--light", "append", "a punctual light, repeatable: point:X,Y,Z | "
+               "spot:X,Y,Z:DX,DY,DZ | dir:DX,DY,DZ (the direction it travels), each optionally "
+               "followed by :color=R,G,B :intensity=F :range=F :inner=DEG :outer=DEG "
+               ":falloff=none|inverse-square :shadows=on|off; or LIGHTS.json; or none (no "
+               "punctual light); a bare X,Y,Z moves the default light. Default: the scene's "
+               "lights, else the automatic sun (pbr) or a light at 0,2,0 (course)",
+               group="camera and light", metavar="SPEC"),
+    OptionSpec("--light-color", "vec3", "colour of every light, linear (default: each light's)",
                group="camera and light", metavar="R,G,B"),
-    OptionSpec("--light-intensity", "float", "light intensity multiplier (default 1)",
+    OptionSpec("--light-intensity", "float", "intensity of every light (default: each light's)",
                group="camera and light", metavar="F"),
-    OptionSpec("--falloff", "choice", "light distance falloff (default: the light's own)",
+    OptionSpec("--falloff", "choice", "distance falloff of every light (default: each light's)",
                group="camera and light", choices=("none", "inverse-square")),
     OptionSpec("--view", "enum", "debug view, one of: %(choices)s (default %(default)s; "
                "`vkpbr render --list-views` says what each shows)", field="view", metavar="NAME"),
-    OptionSpec("--brdf", "enum", "normal distribution D (default %(default)s)", field="brdf"),
+    OptionSpec("--brdf", "enum", "BRDF: gltf (the glTF spec's), or the course's Cook-Torrance "
+               "with D = ggx or blinn-phong (default: pbr lighting gltf, course ggx)", field="brdf"),
     OptionSpec("--tbn", "enum", "tangent-frame vertex stream (default %(default)s)", field="tbn"),
-    OptionSpec("--tonemap", "enum", "tone map (default %(default)s)", field="tonemap"),
+    OptionSpec("--tonemap", "enum", "tone map: none, reinhard, aces (Narkowicz), aces-hill, "
+               "pbr-neutral (Khronos) (default: pbr lighting pbr-neutral, course none)",
+               field="tonemap"),
     OptionSpec("--exposure", "float", "exposure in EV stops, -64..64 (default %(default)g)",
                field="exposure", metavar="EV"),
     OptionSpec("--no-alpha-mask", "off", "draw masked materials as opaque", field="alpha_mask"),
@@ -119,8 +131,9 @@ def add_options(parser: argparse.ArgumentParser, table: tuple[OptionSpec, ...] =
             kw["metavar"] = spec.metavar
         if spec.kind == "enum":
             assert spec.field is not None
+            default = getattr(defaults, spec.field)  # None: the lighting mode's choice
             kw.update(type=_label, choices=enums[spec.field].labels(),
-                      default=str(getattr(defaults, spec.field)))
+                      default=None if default is None else str(default))
         elif spec.kind == "choice":
             kw.update(type=_label, choices=spec.choices)
         elif spec.kind == "float":
@@ -133,6 +146,8 @@ def add_options(parser: argparse.ArgumentParser, table: tuple[OptionSpec, ...] =
             kw["action"] = "store_true"
         elif spec.kind == "dir?":
             kw.update(nargs="?", const="")
+        elif spec.kind == "append":
+            kw.update(action="append", type=light_arg(spec.flag))
         group.add_argument(spec.flag, **kw)
 
 
@@ -158,7 +173,7 @@ def option_flags(options: RenderOptions, table: tuple[OptionSpec, ...] = SHARED_
         if spec.field is None:
             continue
         value = getattr(options, spec.field)
-        if spec.kind == "enum":
+        if spec.kind == "enum" and value is not None:
             out += [spec.flag, str(value)]
         elif spec.kind == "float":
             out += [spec.flag, f"{value:g}"]

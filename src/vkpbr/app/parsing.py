@@ -27,7 +27,7 @@ from typing import NoReturn
 
 from vkpbr.errors import UsageError
 
-__all__ = ["Parser", "parse_size", "parse_vec3", "size_arg", "vec3_arg", "finite", "EpilogFormatter",
+__all__ = ["Parser", "parse_size", "parse_vec3", "size_arg", "vec3_arg", "light_arg", "finite", "EpilogFormatter",
            "EPILOG_FORMATTER"]
 
 # '-' then a digit, or '-.' then a digit: a negative number or a vector that starts with one.
@@ -132,3 +132,17 @@ size_arg = _as_type(parse_size, "--size", "size")
 def vec3_arg(option: str) -> Callable[[str], object]:
     """`type=` for an "x,y,z" option named `option`."""
     return _as_type(lambda text: parse_vec3(text, option), option, "vector")
+
+
+def _parse_light(text: str, option: str) -> object:
+    from vkpbr.scene.lights import parse_light_spec
+
+    if ":" not in text and not text.strip().lower().endswith(".json") and text.strip().lower() != "none":
+        return parse_vec3(text, option)  # the course's form: a position for the default light
+    return parse_light_spec(text)
+
+
+def light_arg(option: str) -> Callable[[str], object]:
+    """`type=` for a `--light` value (vkpbr.scene.lights.parse_light_spec): the course's bare
+    "x,y,z" as a position tuple, anything else as the list of Lights it names."""
+    return _as_type(lambda text: _parse_light(text, option), option, "light")

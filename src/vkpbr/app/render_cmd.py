@@ -10,7 +10,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from vkpbr.app.common import camera_from_args, light_from_args, load_scene_arg
+from vkpbr.app.common import camera_from_args, lights_from_args, load_scene_arg
 from vkpbr.app.log import is_quiet, say
 from vkpbr.app.options import add_options, render_options_from_args
 from vkpbr.app.output import OUTPUT_SUFFIXES, check_writable, write_image_atomic
@@ -88,12 +88,12 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
     with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa) as renderer:
         base = camera_from_args(args, renderer)
         cameras = [pose.camera(base) for pose in poses]
-        light = light_from_args(args, renderer)
+        lights = lights_from_args(args, renderer, options)
         t1 = time.perf_counter()
         log.info("load + set-up %.2f s", t1 - t0)
         with ThreadPoolExecutor(max(2, (os.cpu_count() or 2) - 1)) as pool:
             jobs = []
-            frames = renderer.render_many(cameras, light, size, options, linear=args.linear)
+            frames = renderer.render_many(cameras, lights, size, options, linear=args.linear)
             bar = tqdm(frames, total=len(cameras), unit="frame", disable=True if is_quiet() else None)
             for i, image in enumerate(bar):
                 jobs.append(pool.submit(write_image_atomic, out_dir / f"frame_{i:05d}{suffix}", image))
@@ -129,14 +129,14 @@ def run(args: argparse.Namespace) -> int:
     with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa) as renderer:
         t_setup = time.perf_counter()
         camera = camera_from_args(args, renderer)
-        light = light_from_args(args, renderer)
-        log.debug("camera %s, light %s", camera, light)
-        image = renderer.render(camera, light, size, options, linear=args.linear)
+        lights = lights_from_args(args, renderer, options)
+        log.debug("camera %s, lights %s", camera, lights)
+        image = renderer.render(camera, lights, size, options, linear=args.linear)
         t_first = time.perf_counter()
         per_frame = []
         for _ in range(args.frames - 1):
             t = time.perf_counter()
-            image = renderer.render(camera, light, size, options, linear=args.linear)
+            image = renderer.render(camera, lights, size, options, linear=args.linear)
             per_frame.append(time.perf_counter() - t)
         stats = renderer.last_stats
         device_name = renderer.device.info.name

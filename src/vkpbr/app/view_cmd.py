@@ -11,7 +11,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from vkpbr.app.common import camera_from_args, light_from_args, load_scene_arg
+from vkpbr.app.common import camera_from_args, lights_from_args, load_scene_arg
 from vkpbr.app.log import say
 from vkpbr.app.options import add_options, render_options_from_args
 from vkpbr.app.output import check_writable
@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
         offscreen=args.offscreen,
         title=f"vkpbr - {Path(args.scene).name if args.scene else 'default scene'}",
         scene_label=args.scene or "",
-        pose=lambda r: (camera_from_args(args, r), light_from_args(args, r)))
+        pose=lambda r: (camera_from_args(args, r), lights_from_args(args, r, options)))
     with Viewer(scene, config) as viewer:
         status = viewer.run()
         say(viewer.summary())

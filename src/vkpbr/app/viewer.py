@@ -34,6 +34,7 @@ from vkpbr.errors import VkpbrError
 from vkpbr.render.camera import format_camera
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.renderer import COPY_COLOR, Renderer
+from vkpbr.scene.lights import light_spec
 from vkpbr.scene.types import Camera, Light, Scene
 
 __all__ = ["Viewer", "ViewerConfig"]
@@ -47,10 +48,10 @@ class ViewerConfig:
 
     size: tuple[int, int] = (1280, 720)
     camera: Camera | None = None  # None: the scene's camera (or the automatic one)
-    light: Light | None = None
-    # Called with the Renderer once the scene is loaded: the start camera and light (the
+    lights: tuple[Light, ...] | None = None  # None: the renderer's default for the scene
+    # Called with the Renderer once the scene is loaded: the start camera and lights (the
     # command line's --camera / --light resolve against the scene this way).
-    pose: Callable[[Renderer], tuple[Camera, Light]] | None = None
+    pose: Callable[[Renderer], tuple[Camera, tuple[Light, ...]]] | None = None
     options: RenderOptions = field(default_factory=RenderOptions)
     vsync: bool = True
     frames: int | None = None  # stop after N frames
@@ -158,11 +159,11 @@ class Viewer(InputHandlers):
         ok = np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))
         self.centre = tuple(float(x) for x in (lo + hi) / 2) if ok else (0.0, 0.0, 0.0)
         radius = float(np.linalg.norm(hi - lo)) / 2 if ok else 1.0
-        start, light = cfg.pose(r) if cfg.pose else (cfg.camera, cfg.light)
+        start, lights = cfg.pose(r) if cfg.pose else (cfg.camera, cfg.lights)
         self.fly = FlyCamera(start or r.default_camera(), radius)
-        self.start_light = light or r.default_light()
-        self.light = self.start_light
         self.options = cfg.options
+        # The frame's lights; the keys move the first (`light`).
+        self.start_lights = self.lights = r.frame_lights(self.options, lights)
         self.animate_light = False
         # The help panel starts open where it leaves room for the picture.
         self.show_help, self.show_hud = cfg.size[0] >= 1200 and cfg.size[1] >= 600, True
@@ -218,7 +219,7 @@ class Viewer(InputHandlers):
         cam, o, (w, h) = self.camera(), self.options, self.target.extent
         parts = ["vkpbr render", self.config.scene_label, f"--size {w}x{h}",
                  f"--camera {format_camera(cam)}", f"--fov {cam.yfov_deg:g}",
-                 "--light " + ",".join(f"{x:.6g}" for x in self.light.position),
+                 *(f"--light {light_spec(li)}" for li in self.lights),
                  *option_flags(o)]
         say(" ".join(p for p in parts if p))
 
@@ -229,8 +230,10 @@ class Viewer(InputHandlers):
         onoff = lambda b: "on" if b else "off"  # noqa: E731
         lines = (
             f"{m.fps:.1f} fps   CPU {m.cpu:.2f} ms   GPU {m.gpu:.2f} ms",
-            f"view {o.view} [{o.view:d}]   D {o.brdf}   TBN {o.tbn}   fov {self.fly.yfov_deg:g}",
-            f"tonemap {o.tonemap}   exposure {o.exposure:+.1f} EV",
+            f"view {o.view} [{o.view:d}]   lighting {o.lighting}   BRDF {o.shading_brdf}   "
+            f"TBN {o.tbn}   fov {self.fly.yfov_deg:g}",
+            f"tonemap {o.shading_tonemap}   exposure {o.exposure:+.1f} EV   "
+            f"{len(self.lights)} light{'s' if len(self.lights) != 1 else ''}",
             f"alpha mask {onoff(o.alpha_mask)}   normal maps {onoff(o.normal_mapping)}   "
             f"occlusion {onoff(o.occlusion)}",
             f"light anim {onoff(self.animate_light)}   {w}x{h} {self.present_mode}",
@@ -312,7 +315,7 @@ class Viewer(InputHandlers):
         # A screenshot frame is copied out of the target after drawing: without the HUD
         # (that one frame is shown without it) unless the HUD was asked for.
         copy = shot is not None and getattr(self.target, "can_copy", True)
-        sub = r.draw(self.target, camera, self.light, self.options,  # type: ignore[union-attr]
+        sub = r.draw(self.target, camera, self.lights, self.options,  # type: ignore[union-attr]
                      overlay=self.hud if shot is None or self.shot_hud else None,
                      copy=(COPY_COLOR,) if copy else (), timings=self._want_gpu,
                      driver_time=True)
@@ -329,14 +332,14 @@ class Viewer(InputHandlers):
             if copy and sub.frame is not None:
                 image = r.read_color(self.target, sub)  # type: ignore[union-attr]
             else:  # no copyable image: the same pixels from a headless render of this view
-                image = r.render(camera, self.light, self.target.extent, self.options)  # type: ignore[union-attr]
+                image = r.render(camera, self.lights, self.target.extent, self.options)  # type: ignore[union-attr]
             self._save(shot, image, camera)
             blocked += time.thread_time() - c  # screenshots are not per-frame work
         return blocked
 
     def _save(self, path: Path, image: np.ndarray, camera: Camera) -> None:
         # What the shot shows, for tests: compare with Renderer.render of the same inputs.
-        self.last_screenshot = (image, camera, self.light, self.options, self.target.extent)
+        self.last_screenshot = (image, camera, self.lights, self.options, self.target.extent)
         write_image_atomic(path, image)
         self.shots_written.append(path)
         say(f"wrote {path} ({image.shape[1]}x{image.shape[0]})")

@@ -112,12 +112,22 @@ class InputHandlers:
     def _act_animate_light(self, _arg: None) -> None:
         self.animate_light = not self.animate_light
 
+    @property
+    def light(self) -> Light | None:
+        """The light the keys move: the first of the frame's lights (None without any)."""
+        return self.lights[0] if self.lights else None
+
+    @light.setter
+    def light(self, value: Light) -> None:
+        self.lights = (value, *self.lights[1:]) if self.lights else ()
+
     def _act_light_to_camera(self, _arg: None) -> None:
-        self.light = dataclasses.replace(self.light, position=self.fly.eye)
+        if self.light is not None:
+            self.light = dataclasses.replace(self.light, position=self.fly.eye)
 
     def _act_reset(self, _arg: None) -> None:
         self.fly.reset()
-        self.light = self.start_light
+        self.lights = self.start_lights
 
     def _act_print_camera(self, _arg: None) -> None:
         self.print_camera()
@@ -225,6 +235,8 @@ class InputHandlers:
         if f or r or u:
             self.fly.move(dt, f, r, u, self._speed_multiplier())
         lf, lr, lu = lm
+        if self.light is None:
+            return
         p = self.light.position
         if lf or lr or lu:
             step = self.fly.speed * self._speed_multiplier() * dt
@@ -235,9 +247,7 @@ class InputHandlers:
         if self.animate_light:
             p = _rotate_about(p, self.centre, self.fly.up, LIGHT_ORBIT_RAD_PER_S * dt)
         if p is not self.light.position:
-            li = self.light  # positional construction: dataclasses.replace costs ~10x more
-            self.light = Light((float(p[0]), float(p[1]), float(p[2])), li.color, li.intensity,
-                               li.falloff, li.range)
+            self.light = dataclasses.replace(self.light, position=(float(p[0]), float(p[1]), float(p[2])))
 
 
 def _normalize(v: tuple[float, ...]) -> tuple[float, ...]:

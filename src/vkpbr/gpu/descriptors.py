@@ -26,12 +26,8 @@ class BindingSpec:
     name: str = ""
 
 
-SAMPLER_KINDS = ("sampler", "sampler2D", "samplerCube", "sampler2DArray", "sampler2DArrayShadow",
-                 "samplerCubeArray", "samplerCubeArrayShadow")
-
-
 def _descriptor_type(vk: Any, kind: str) -> int:
-    if kind in SAMPLER_KINDS:
+    if kind.startswith("sampler"):
         return vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
     return {
         "uniform": vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
@@ -127,14 +123,17 @@ class DescriptorWriter:
         self._writes: list[Any] = []
         self._keep: list[Any] = []
 
-    def uniform(self, dst_set: Any, binding: int, buffer: Any, size: int, offset: int = 0) -> None:
+    def uniform(self, dst_set: Any, binding: int, buffer: Any, size: int, offset: int = 0,
+                kind: str = "uniform") -> None:
+        """Point a uniform (or, with kind="storage", a storage) buffer binding at
+        `size` bytes of `buffer` from `offset`."""
         vk = self.device.vk
         info = vk.VkDescriptorBufferInfo(buffer=buffer.handle, offset=offset, range=size)
         self._keep.append(info)
         self._writes.append(
             vk.VkWriteDescriptorSet(
                 dstSet=dst_set, dstBinding=binding, descriptorCount=1,
-                descriptorType=vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, pBufferInfo=[info],
+                descriptorType=_descriptor_type(vk, kind), pBufferInfo=[info],
             )
         )
 

@@ -51,23 +51,33 @@ def generated_glsl() -> str:
         f"const float MIN_ROUGHNESS = {L.MIN_ROUGHNESS!r};",
         f"const float AMBIENT = {L.AMBIENT!r};",
     ]
-    for enum_type, prefix in ((L.View, "VIEW_"), (L.Brdf, "BRDF_"), (L.Tonemap, "TONEMAP_"), (L.TbnMode, "TBN_")):
+    out.append(f"const uint MAX_LIGHTS = {L.MAX_LIGHTS}u;")
+    enums = ((L.View, "VIEW_"), (L.Brdf, "BRDF_"), (L.Tonemap, "TONEMAP_"), (L.TbnMode, "TBN_"),
+             (L.Lighting, "LIGHTING_MODE_"), (L.LightKind, "LIGHT_"))
+    for enum_type, prefix in enums:
         out += [f"const int {prefix}{m.name} = {int(m)};" for m in enum_type]
     out += [f"const int VIEW_KIND_{k.name} = {int(k)};" for k in L.ViewKind]
     kinds = ", ".join(str(int(L.VIEW_KIND[v])) for v in L.View)
     out.append(f"const int VIEW_KINDS[{len(L.View)}] = int[]({kinds});")
     for name in dir(L):
-        if name.startswith(("SETTINGS_", "MATERIAL_")) and isinstance(getattr(L, name), int):
+        if name.startswith(("SETTINGS_", "MATERIAL_", "LIGHTING_")) and isinstance(getattr(L, name), int):
             out.append(f"const uint {name} = {getattr(L, name)}u;")
     out.append("")
     blocks = {b.name: b for b in L.BLOCKS}
+    for array in L.STORAGE.values():
+        out.append(array.element.glsl("struct").replace(f"}} {array.element.instance};", "};"))
     for set_index, rows in L.SETS.items():
         for binding, kind, _stages, name in rows:
             layout = f"layout(set = {set_index}, binding = {binding}"
             if kind == "uniform":
                 out.append(blocks[name].glsl(f"{layout}, std140) uniform"))
+            elif kind == "storage":
+                array = L.STORAGE[name]
+                out.append(f"{layout}, std430) readonly buffer {name} {{\n"
+                           f"    {array.element.name} {array.member}[];\n}};")
             else:
-                out.append(f"{layout}) uniform sampler2D {name};")
+                sampler = "sampler2D" if kind == "sampler" else kind
+                out.append(f"{layout}) uniform {sampler} {name};")
     out.append(L.PUSH.glsl("layout(push_constant, std430) uniform"))
     out += ["", "#endif", ""]
     return "\n".join(out)

@@ -2,13 +2,16 @@
 into one mapped buffer) and the descriptor sets that point at them, so several frames can be
 queued on the GPU while Python writes the next one's camera.
 
-`write_frame_uniforms` writes the camera, settings and light blocks by field name through
-the std140 layouts' struct packers (layouts.Std140Block.pack_into), skipping the maths when
-the frame's inputs repeat (a static scene re-rendered).
+`write_frame_uniforms` writes the camera, settings and lighting blocks by field name through
+the std140 layouts' struct packers (layouts.Std140Block.pack_into) and the punctual lights
+as one NumPy array into the slot's storage buffer, skipping the work when the frame's inputs
+repeat (a static scene re-rendered; the lights are a tuple of frozen Lights, so an unchanged
+tuple compares equal at once).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -23,9 +26,11 @@ from vkpbr.render.camera import depth_range, forward, view_projection_columns
 from vkpbr.render.options import RenderOptions
 from vkpbr.scene.types import Camera, Light
 
-__all__ = ["FrameSlot", "FrameStats", "create_slots", "write_frame_uniforms", "Bounds"]
+__all__ = ["FrameSlot", "FrameStats", "FrameLighting", "create_slots", "write_frame_uniforms",
+           "light_records", "Bounds"]
 
-FRAME_BLOCKS = (L.CAMERA, L.SETTINGS, L.LIGHT)
+FRAME_BLOCKS = (L.CAMERA, L.SETTINGS, L.LIGHTING)
+LIGHTS_BYTES = L.LIGHT_RECORD.size * L.MAX_LIGHTS  # one slot's storage buffer of lights
 
 
 @dataclass
@@ -42,12 +47,15 @@ class FrameStats:
 class FrameSlot:
     index: int
     set0: Any  # camera + settings
-    set2: Any  # light
+    set2: Any  # lighting: the Lighting block, the lights, the environment's maps
     # Zero-copy byte views of the blocks in the mapped uniform buffer.
     m_camera: memoryview
     m_settings: memoryview
-    m_light: memoryview
-    uniform_key: tuple | None = None  # inputs of the uniforms last written here
+    m_lighting: memoryview
+    lights: np.ndarray  # (MAX_LIGHTS, 20) float32 view of the slot's mapped light records
+    uniform_key: tuple | None = None  # inputs of the camera and settings last written here
+    lighting_key: tuple | None = None  # inputs of the Lighting block last written here
+    lights_written: tuple = ()  # the lights whose records the slot holds
     znear: float = 0.0  # the near plane last written (depth readback is znear / depth)
     stats: FrameStats = field(default_factory=FrameStats)
 
@@ -72,9 +80,10 @@ class Bounds:
 
 def create_slots(
     device: Device, set0_layout: DescriptorSetLayout, set2_layout: DescriptorSetLayout, count: int
-) -> tuple[Buffer, DescriptorPool, list[FrameSlot]]:
-    """One host-visible uniform buffer holding `count` copies of the frame blocks, a pool,
-    and the slots. The caller owns (and destroys) the buffer and the pool."""
+) -> tuple[list[Buffer], DescriptorPool, list[FrameSlot]]:
+    """Host-visible buffers holding `count` copies of the frame blocks (uniform) and of the
+    light records (storage), a pool, and the slots. The caller owns (and destroys) the
+    buffers and the pool; the environment's bindings of set 2 are written by its owner."""
     align = int(device.limits.minUniformBufferOffsetAlignment)
     offsets, offset = [], 0
     for block in FRAME_BLOCKS:
@@ -83,54 +92,94 @@ def create_slots(
     stride = offset
     buffer = Buffer(device, stride * count, "uniform",
                     host_visible=True, name="frame uniforms")
+    s_align = int(device.limits.minStorageBufferOffsetAlignment)
+    s_stride = (LIGHTS_BYTES + s_align - 1) // s_align * s_align
+    lights = Buffer(device, s_stride * count, "storage", host_visible=True, name="frame lights")
     pool = DescriptorPool(device, [(set0_layout, count), (set2_layout, count)])
     writer = DescriptorWriter(device)
     slots = []
     for i in range(count):
         base = i * stride
-        cam, settings, light = (base + o for o in offsets)
+        cam, settings, lighting = (base + o for o in offsets)
         set0, set2 = pool.allocate(set0_layout), pool.allocate(set2_layout)
         writer.uniform(set0, 0, buffer, L.CAMERA.size, cam)
         writer.uniform(set0, 1, buffer, L.SETTINGS.size, settings)
-        writer.uniform(set2, 0, buffer, L.LIGHT.size, light)
+        writer.uniform(set2, 0, buffer, L.LIGHTING.size, lighting)
+        writer.storage(set2, 1, lights, LIGHTS_BYTES, i * s_stride)
         slots.append(FrameSlot(
             index=i, set0=set0, set2=set2,
             m_camera=memoryview(buffer.array(np.uint8, L.CAMERA.size, cam)),
             m_settings=memoryview(buffer.array(np.uint8, L.SETTINGS.size, settings)),
-            m_light=memoryview(buffer.array(np.uint8, L.LIGHT.size, light)),
+            m_lighting=memoryview(buffer.array(np.uint8, L.LIGHTING.size, lighting)),
+            lights=lights.array(np.float32, LIGHTS_BYTES // 4, i * s_stride).reshape(L.MAX_LIGHTS, 20),
         ))
     writer.update()
-    return buffer, pool, slots
+    return [buffer, lights], pool, slots
 
 
 def _camera_key(c: Camera) -> tuple:
     return (*c.eye, *c.target, *c.up, c.yfov_deg, c.znear, c.zfar, c.pixel_intrinsics)
 
 
-def _light_key(li: Light) -> tuple:
-    return (*li.position, *li.color, li.intensity, li.falloff, li.range)
+_KIND = {"point": L.LightKind.POINT, "spot": L.LightKind.SPOT,
+         "directional": L.LightKind.DIRECTIONAL}
 
 
-def write_frame_uniforms(slot: FrameSlot, camera: Camera, light: Light, size: Sequence[int],
-                         opts: RenderOptions, linear: bool, bounds: Bounds) -> None:
-    """Write `slot`'s camera, settings and light blocks for one frame of `size` (W, H)."""
+def light_records(lights: Sequence[Light]) -> np.ndarray:
+    """(n, 20) float32: each light as shaders/lights.glsl reads it (layouts.LIGHT_RECORD),
+    the spot cone as KHR_lights_punctual's angle scale and offset."""
+    out = np.zeros((len(lights), 20), dtype=np.float32)
+    for i, li in enumerate(lights):
+        cos_outer, cos_inner = math.cos(li.outer_cone), math.cos(li.inner_cone)
+        scale = 1.0 / max(1e-3, cos_inner - cos_outer)
+        out[i] = (*li.position, li.range, *li.direction, _KIND[li.kind],
+                  *(c * li.intensity for c in li.color), 0.0 if li.falloff == "none" else 1.0,
+                  scale, -cos_outer * scale, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0)
+    return out
+
+
+@dataclass(frozen=True)
+class FrameLighting:
+    """What lights a frame besides the punctual lights: resolved once per render call from
+    the options (render/renderer.py), a plain value so that frames compare it cheaply."""
+
+    mode: int = 0  # Lighting
+    flags: int = 0  # LIGHTING_* bits
+    ambient: float = 0.0  # the course's ambient weight
+    env_intensity: float = 1.0
+    env_rotation: float = 0.0  # radians about +Y
+    env_max_lod: float = 0.0
+
+
+def write_frame_uniforms(slot: FrameSlot, camera: Camera, lights: tuple[Light, ...],
+                         size: Sequence[int], opts: RenderOptions, linear: bool, bounds: Bounds,
+                         lighting: FrameLighting = FrameLighting()) -> None:
+    """Write `slot`'s camera, settings and lighting blocks and its light records for one
+    frame of `size` (W, H)."""
     # Frames that repeat the slot's last inputs skip the maths: the key is cheap next to it.
-    key = (_camera_key(camera), _light_key(light), tuple(size), opts, linear)
-    if key == slot.uniform_key:
-        return
-    slot.uniform_key = key
-    f = forward(camera)
-    znear, zfar = depth_range(camera, bounds.corners, bounds.radius, f)
-    slot.znear = znear
-    L.CAMERA.pack_into(slot.m_camera, VP=view_projection_columns(camera, size, znear, f))
-    flags = L.SETTINGS_NORMAL_MAPPING if opts.normal_mapping else 0
-    flags |= L.SETTINGS_OCCLUSION if opts.occlusion else 0
-    flags |= 0 if linear else L.SETTINGS_SRGB_TARGET
-    L.SETTINGS.pack_into(
-        slot.m_settings, camera_forward=(*f, 0.0), view=opts.view, brdf=opts.brdf,
-        tonemap=opts.tonemap, flags=flags, exposure=2.0 ** opts.exposure, znear=znear,
-        zfar=zfar, pad0=0.0)
-    L.LIGHT.pack_into(
-        slot.m_light, lightPos=(*light.position, 1.0), color=light.color,
-        intensity=light.intensity, viewPos=(*camera.eye, 1.0),
-        falloff=0 if light.falloff == "none" else 1, range=light.range)
+    key = (_camera_key(camera), tuple(size), opts, linear)
+    if key != slot.uniform_key:
+        slot.uniform_key = key
+        f = forward(camera)
+        znear, zfar = depth_range(camera, bounds.corners, bounds.radius, f)
+        slot.znear = znear
+        L.CAMERA.pack_into(slot.m_camera, VP=view_projection_columns(camera, size, znear, f))
+        flags = L.SETTINGS_NORMAL_MAPPING if opts.normal_mapping else 0
+        flags |= L.SETTINGS_OCCLUSION if opts.occlusion else 0
+        flags |= 0 if linear else L.SETTINGS_SRGB_TARGET
+        L.SETTINGS.pack_into(
+            slot.m_settings, camera_forward=(*f, 0.0), view=opts.view, brdf=opts.shading_brdf,
+            tonemap=opts.tonemap_for(linear), flags=flags, exposure=2.0 ** opts.exposure, znear=znear,
+            zfar=zfar, pad0=0.0)
+    lighting_key = (camera.eye, lights, lighting)
+    if lighting_key != slot.lighting_key:
+        slot.lighting_key = lighting_key
+        if lights != slot.lights_written:
+            slot.lights[:len(lights)] = light_records(lights)
+            slot.lights_written = lights
+        a, rot = lighting.ambient, lighting.env_rotation
+        L.LIGHTING.pack_into(
+            slot.m_lighting, view_pos=(*camera.eye, 1.0), light_count=len(lights),
+            mode=lighting.mode, flags=lighting.flags, env_intensity=lighting.env_intensity,
+            env_rotation=(math.cos(rot), math.sin(rot), lighting.env_max_lod, 0.0),
+            ambient_color=(a, a, a, 0.0))

@@ -9,7 +9,12 @@ Descriptor sets follow the report (renderer-spec section 1):
   set 0: binding 0 camera {mat4 VP}; binding 1 frame settings (view, BRDF, tonemap, ...)
   set 1: bindings 0-4 base colour, metallic, roughness, normal, occlusion; 5 emissive;
          6 material factors
-  set 2: binding 0 light {vec4 lightPos; vec3 color; float (intensity); vec4 viewPos; ...}
+  set 2: lighting, one per frame: binding 0 Lighting {view position, light count, mode,
+         flags, environment}; 1 the punctual lights (a storage buffer of LightRecord, the
+         course's one light being lights[0]); 2-4 the environment's pre-filtered maps
+  set 3: shadows (render/shadows.py)
+The course's set 2 was one Light block {vec4 lightPos; vec3 color; float intensity; vec4
+viewPos}; its contents now live in Lighting.view_pos and lights[0].
 """
 
 from __future__ import annotations
@@ -21,14 +26,20 @@ from functools import cached_property
 
 import numpy as np
 
-from vkpbr.shading import AMBIENT, MIN_ROUGHNESS, Brdf, Named, Tonemap
+from vkpbr.shading import AMBIENT, MAX_LIGHTS, MIN_ROUGHNESS, Brdf, Lighting, Named, Tonemap
 
 __all__ = [
     "Std140Block",
     "CAMERA",
     "SETTINGS",
     "MATERIAL",
-    "LIGHT",
+    "LIGHTING",
+    "LIGHT_RECORD",
+    "STORAGE",
+    "StorageArray",
+    "LightKind",
+    "Lighting",
+    "MAX_LIGHTS",
     "PUSH",
     "BLOCKS",
     "Named",
@@ -203,24 +214,63 @@ MATERIAL_DOUBLE_SIDED = 2
 MATERIAL_HAS_OCCLUSION_MAP = 4
 MATERIAL_BLEND = 8  # alphaMode BLEND: output alpha for the blended pass
 
-LIGHT = Std140Block(
-    "Light",
+LIGHTING = Std140Block(
+    "Lighting",
+    "lighting",
+    (
+        ("view_pos", "vec4"),  # xyz: the camera position (v = normalize(view_pos - p))
+        ("light_count", "uint"),  # records in `lights` this frame
+        ("mode", "int"),  # Lighting
+        ("flags", "uint"),  # LIGHTING_* bits below
+        ("env_intensity", "float"),  # scale of the environment's radiance
+        ("env_rotation", "vec4"),  # x, y: cos, sin of the rotation about +Y; z: max lod
+        ("ambient_color", "vec4"),  # rgb: the course's ambient weight (0.02), 0 otherwise
+    ),
+)
+LIGHTING_SHADOWS = 1  # shadow maps are sampled
+LIGHTING_IBL = 2  # image-based lighting from the environment
+LIGHTING_BACKGROUND = 4  # the environment is drawn where nothing else is
+
+# One punctual light, as the shaders read it (shaders/lights.glsl). Only vec4 members, so the
+# std140 layout here is also the std430 layout of the storage buffer's array elements.
+LIGHT_RECORD = Std140Block(
+    "LightRecord",
     "light",
     (
-        ("lightPos", "vec4"),
-        ("color", "vec3"),
-        ("intensity", "float"),  # the report's padding slot carries the intensity
-        ("viewPos", "vec4"),
-        ("falloff", "uint"),  # 0: none (the course), 1: inverse square
-        ("range", "float"),  # glTF KHR_lights_punctual range; 0 = infinite
+        ("position_range", "vec4"),  # xyz world position; w range (0 = infinite)
+        ("direction_kind", "vec4"),  # xyz unit direction the light travels; w LightKind
+        ("color_falloff", "vec4"),  # rgb colour * intensity; w 0 none, 1 inverse square
+        ("cone", "vec4"),  # x spot angle scale, y spot offset (KHR_lights_punctual)
+        ("shadow", "vec4"),  # x first shadow layer / cube (-1: none); y-w render/shadows.py
     ),
 )
 
+
+@dataclass(frozen=True)
+class StorageArray:
+    """A storage buffer holding an unsized array of one record layout."""
+
+    name: str  # GLSL block name
+    element: Std140Block  # the record (vec4 members only: std140 == std430)
+    member: str  # the array's GLSL name
+
+
+STORAGE = {"Lights": StorageArray("Lights", LIGHT_RECORD, "lights")}
+
+
+class LightKind(Named):
+    POINT = 0
+    SPOT = 1
+    DIRECTIONAL = 2
+
+
 PUSH = Std140Block("Draw", "draw", (("model", "mat4"), ("normal_matrix", "mat4")))
 
-BLOCKS = (CAMERA, SETTINGS, MATERIAL, LIGHT, PUSH)
+BLOCKS = (CAMERA, SETTINGS, MATERIAL, LIGHTING, PUSH)
 
-# (set, binding, kind, stages, name): the one table of descriptor bindings.
+# set -> (binding, kind, stages, name): the one table of descriptor bindings. kind: "uniform"
+# (a block of BLOCKS), "storage" (an array of STORAGE), "sampler" (sampler2D) or another GLSL
+# sampler type ("samplerCube", "sampler2DArrayShadow", ...).
 SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
     0: (
         (0, "uniform", ("vertex",), "Camera"),
@@ -235,7 +285,16 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
         (5, "sampler", ("fragment",), "emissive_map"),
         (6, "uniform", ("fragment",), "Material"),
     ),
-    2: ((0, "uniform", ("fragment",), "Light"),),
+    2: (
+        (0, "uniform", ("fragment",), "Lighting"),
+        (1, "storage", ("fragment",), "Lights"),
+        # 2-4: the environment's maps (render/environment.py), always written: with no
+        # environment a tiny black one is bound (lavapipe crashes drawing with a combined
+        # image sampler descriptor left unwritten, even one no shader reads).
+        (2, "samplerCube", ("fragment",), "env_specular"),
+        (3, "samplerCube", ("fragment",), "env_irradiance"),
+        (4, "sampler", ("fragment",), "brdf_lut"),
+    ),
 }
 
 
@@ -263,20 +322,24 @@ class View(Named):
     EMISSIVE = 18
     TANGENT = 19
     BITANGENT = 20
+    SHADOW = 21
+    IBL_DIFFUSE = 22
+    IBL_SPECULAR = 23
 
 
 VIEW_HELP = {
-    View.FINAL: "the shaded image: emissive + ambient + (diffuse + specular) * light * n.l",
-    View.D: "normal distribution D (GGX or Blinn-Phong, per --brdf), grey, clipped at 1",
+    View.FINAL: "the shaded image: emissive + ambient or IBL + sum over lights of "
+                "(diffuse + specular) * light * n.l * shadow",
+    View.D: "normal distribution D (GGX or Blinn-Phong, per --brdf) for the first light, grey, clipped at 1",
     View.F: "Schlick Fresnel F as RGB",
-    View.G: "Cook-Torrance geometric masking G, grey",
-    View.SPECULAR: "specular radiance: D F G / (4 n.v n.l) * light * n.l",
-    View.DIFFUSE: "diffuse radiance: c/pi (1-F)(1-M) * light * n.l",
-    View.AMBIENT: "ambient radiance: 0.02 * c * occlusion",
+    View.G: "geometric masking G (Cook-Torrance; glTF: Smith, 4 n.l n.v V), first light, grey",
+    View.SPECULAR: "specular radiance of the punctual lights: D F G / (4 n.v n.l) * light * n.l",
+    View.DIFFUSE: "diffuse radiance of the punctual lights: c/pi (1-F)(1-M) * light * n.l",
+    View.AMBIENT: "ambient radiance: 0.02 * c * occlusion (course lighting; 0 otherwise)",
     View.GEOMETRIC_NORMAL: "interpolated vertex normal (world), xyz*0.5+0.5",
     View.MAPPED_NORMAL: "shading normal after normal mapping (world), xyz*0.5+0.5",
     View.VIEW_DIR: "direction to the camera v (world), xyz*0.5+0.5",
-    View.LIGHT_DIR: "direction to the light l (world), xyz*0.5+0.5",
+    View.LIGHT_DIR: "direction to the first light l (world), xyz*0.5+0.5",
     View.BASE_COLOR: "base colour c (texture x factor), as a colour",
     View.METALLIC: "metalness M, grey",
     View.ROUGHNESS: "roughness r, grey",
@@ -287,6 +350,9 @@ VIEW_HELP = {
     View.EMISSIVE: "emitted radiance Le",
     View.TANGENT: "tangent (world, from the vertex TBN), xyz*0.5+0.5",
     View.BITANGENT: "bitangent (world, handedness applied), xyz*0.5+0.5",
+    View.SHADOW: "shadow factor of the first shadow-casting light (1 lit, 0 shadowed), grey",
+    View.IBL_DIFFUSE: "image-based diffuse radiance (irradiance * diffuse colour, occluded)",
+    View.IBL_SPECULAR: "image-based specular radiance (pre-filtered environment * split sum)",
 }
 
 
@@ -299,7 +365,8 @@ class ViewKind(enum.IntEnum):
 VIEW_KIND = {
     v: (
         ViewKind.RADIANCE
-        if v in (View.FINAL, View.SPECULAR, View.DIFFUSE, View.AMBIENT, View.EMISSIVE)
+        if v in (View.FINAL, View.SPECULAR, View.DIFFUSE, View.AMBIENT, View.EMISSIVE,
+                 View.IBL_DIFFUSE, View.IBL_SPECULAR)
         else ViewKind.COLOR
         if v == View.BASE_COLOR
         else ViewKind.DATA

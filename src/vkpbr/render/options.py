@@ -13,12 +13,19 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from vkpbr.errors import UsageError
-from vkpbr.render.layouts import Brdf, TbnMode, Tonemap, View, enum_by_name
+from vkpbr.render.layouts import Brdf, Lighting, TbnMode, Tonemap, View, enum_by_name
 
 __all__ = ["RenderOptions", "ENUM_FIELDS"]
 
 # RenderOptions field -> the enum its values come from (the CLI's choices, the viewer's cycles).
-ENUM_FIELDS: dict[str, type] = {"view": View, "brdf": Brdf, "tbn": TbnMode, "tonemap": Tonemap}
+ENUM_FIELDS: dict[str, type] = {"view": View, "lighting": Lighting, "brdf": Brdf, "tbn": TbnMode,
+                                "tonemap": Tonemap}
+# Fields whose None means "the lighting mode's choice" (MODE_DEFAULTS).
+MODE_DEFAULT_FIELDS = ("brdf", "tonemap")
+MODE_DEFAULTS: dict[Lighting, dict[str, Any]] = {
+    Lighting.COURSE: {"brdf": Brdf.GGX, "tonemap": Tonemap.NONE},  # the seed's images
+    Lighting.PBR: {"brdf": Brdf.GLTF, "tonemap": Tonemap.PBR_NEUTRAL},  # the Sample Viewer's
+}
 
 
 @dataclass(frozen=True)
@@ -29,12 +36,18 @@ class RenderOptions:
     ----------
     view : View or str
         Debug view (`vkpbr render --list-views`); "final" is the shaded image.
-    brdf : Brdf or str
-        Normal distribution D: "ggx" or "blinn-phong" (the course's).
+    lighting : Lighting or str
+        "pbr" (every light of the scene or the automatic sun, shadows, image-based lighting)
+        or "course" (the seed's one point light and 0.02 ambient; see vkpbr.shading.Lighting).
+    brdf : Brdf or str or None
+        "gltf" (the glTF 2.0 specification's BRDF), or the course's Cook-Torrance with the
+        D "ggx" or "blinn-phong". None: the lighting mode's (pbr: gltf, course: ggx).
     tbn : TbnMode or str
         Tangent-frame vertex stream: "vectors", "quat" or "packed".
-    tonemap : Tonemap or str
-        "none", "reinhard" or "aces".
+    tonemap : Tonemap or str or None
+        "none", "reinhard", "aces" (Narkowicz), "aces-hill" or "pbr-neutral" (Khronos); see
+        vkpbr.shading.Tonemap. None: the lighting mode's (pbr: pbr-neutral, course: none) for
+        8-bit frames, none for linear float32 frames (scene-referred radiance).
     exposure : float
         EV stops in [-64, 64]: radiance is multiplied by 2 ** exposure.
     alpha_mask, normal_mapping, occlusion : bool
@@ -42,9 +55,10 @@ class RenderOptions:
     """
 
     view: View = View.FINAL
-    brdf: Brdf = Brdf.GGX
+    lighting: Lighting = Lighting.PBR
+    brdf: Brdf | None = None
     tbn: TbnMode = TbnMode.VECTORS
-    tonemap: Tonemap = Tonemap.NONE
+    tonemap: Tonemap | None = None
     exposure: float = 0.0
     alpha_mask: bool = True
     normal_mapping: bool = True
@@ -52,7 +66,10 @@ class RenderOptions:
 
     def __post_init__(self) -> None:
         for name, enum_type in ENUM_FIELDS.items():
-            object.__setattr__(self, name, enum_by_name(enum_type, getattr(self, name)))
+            value = getattr(self, name)
+            if value is None and name in MODE_DEFAULT_FIELDS:
+                continue
+            object.__setattr__(self, name, enum_by_name(enum_type, value))
         try:
             exposure = float(self.exposure)
         except (TypeError, ValueError):
@@ -64,7 +81,25 @@ class RenderOptions:
             if f.type == "bool" and not isinstance(getattr(self, f.name), bool):
                 raise UsageError(f"{f.name} {getattr(self, f.name)!r}: expected True or False")
 
+    @property
+    def shading_brdf(self) -> Brdf:
+        """The BRDF frames are shaded with: `brdf`, or the lighting mode's."""
+        return self.brdf if self.brdf is not None else MODE_DEFAULTS[self.lighting]["brdf"]
+
+    @property
+    def shading_tonemap(self) -> Tonemap:
+        """The tone map of 8-bit frames: `tonemap`, or the lighting mode's."""
+        return self.tonemap if self.tonemap is not None else MODE_DEFAULTS[self.lighting]["tonemap"]
+
+    def tonemap_for(self, linear: bool) -> Tonemap:
+        """The tone map of a frame: linear float32 frames are scene-referred radiance, so the
+        mode's default tone map applies only to 8-bit frames (an explicit `tonemap` to both)."""
+        if linear and self.tonemap is None:
+            return Tonemap.NONE
+        return self.shading_tonemap
+
     def with_names(self) -> dict[str, Any]:
-        """The options as plain values (enum members as their names), e.g. for JSON."""
-        return {f.name: (str(v) if f.name in ENUM_FIELDS else v)
+        """The options as plain values (enum members as their names; None where the lighting
+        mode chooses), e.g. for JSON."""
+        return {f.name: (str(v) if f.name in ENUM_FIELDS and v is not None else v)
                 for f in fields(self) for v in (getattr(self, f.name),)}

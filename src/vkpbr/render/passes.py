@@ -90,7 +90,7 @@ class PassContext:
     draws: list[Any]  # render.gpu_scene.Draw
     classes: list[str]  # classify() of each draw, for this frame's options
     pipeline: Callable[[PassSpec], Any]  # pass -> gpu.pipeline.Pipeline
-    frame_sets: tuple[Any, Any]  # set 0 (camera, settings), set 2 (light)
+    frame_sets: tuple[Any, Any]  # set 0 (camera, settings), set 2 (lighting)
     material_sets: list[Any]
     vertex_buffers: list[Any]
     index_buffer: Any

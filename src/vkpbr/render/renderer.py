@@ -8,8 +8,8 @@ blocks, pick the command buffer recorded for this (target image, frame, modes) o
 `render` / `render_many` are that path on offscreen targets plus the readback; the viewer
 (app/viewer.py) is that path on a swapchain or on an offscreen target, with a HUD overlay.
 
-Per frame, Python does a handful of things: debug view, BRDF, exposure, tone mapping, light
-and camera are uniforms, so changing them re-records nothing; the TBN path, alpha masking,
+Per frame, Python does a handful of things: debug view, BRDF, exposure, tone mapping, lights
+and camera are uniforms (the lights a storage buffer), so changing them re-records nothing; the TBN path, alpha masking,
 the blended draws' order, the overlay and the readback select among recorded buffers.
 """
 
@@ -34,13 +34,27 @@ from vkpbr.gpu.swapchain import Surface, Swapchain
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
 from vkpbr.render.camera import as_camera, validate_camera
-from vkpbr.render.frames import Bounds, FrameSlot, FrameStats, create_slots, write_frame_uniforms
+from vkpbr.render.frames import (
+    Bounds,
+    FrameLighting,
+    FrameSlot,
+    FrameStats,
+    create_slots,
+    write_frame_uniforms,
+)
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.passes import PASSES
 from vkpbr.render.recorder import STAMPS, FrameRecorder
+from vkpbr.scene.lights import course_point_light
 from vkpbr.scene.types import Camera, Light, Scene
+from vkpbr.scene.validate import validate_lights
+from vkpbr.shading import AMBIENT, SUN_DIRECTION
+
+# What a caller may give as the lights of a frame: None (the scene's, or the lighting mode's
+# default), one Light, or a sequence of them (empty: no punctual light at all).
+LightsArg = Light | Iterable[Light] | None
 
 __all__ = ["Renderer", "RenderOptions", "FrameStats", "Submitted", "COPY_COLOR", "COPY_DEPTH"]
 
@@ -106,7 +120,7 @@ class Renderer:
         try:
             self._create_layouts()
             self.ring = FrameRing(self.device, queries_per_frame=STAMPS)
-            self.frame_ubo, self._frame_pool, self.slots = create_slots(
+            self.frame_buffers, self._frame_pool, self.slots = create_slots(
                 self.device, self.set_layouts[0], self.set_layouts[2], self.ring.count)
             self.gpu_scene = GpuScene(self.device, scene, self.set_layouts[1])
             self.recorder = FrameRecorder(self.device, self.gpu_scene, self.pipeline_layout,
@@ -185,13 +199,50 @@ class Renderer:
         return auto_camera(self.scene)
 
     def default_light(self) -> Light:
+        """The course's light: the scene's first, else a white point light at (0, 2, 0)."""
         return self.scene.lights[0] if self.scene.lights else Light()
 
-    def draw(self, target: FrameTarget, camera: Camera, light: Light, options: RenderOptions,
-             *, overlay: TextOverlay | None = None, copy: tuple[str, ...] = (),
-             linear: bool = False, timings: bool = True, driver_time: bool = False) -> Submitted:
+    def automatic_sun(self) -> Light:
+        """The physically based mode's key light when the scene has none: a directional sun
+        along vkpbr.shading.SUN_DIRECTION (the built-in sky's sun)."""
+        return Light(kind="directional", direction=SUN_DIRECTION, color=(1.0, 0.96, 0.9),
+                     intensity=3.0, falloff="inverse_square")
+
+    def frame_lights(self, options: RenderOptions, lights: LightsArg = None) -> tuple[Light, ...]:
+        """The lights frames are drawn with, resolved once per call (not per frame).
+
+        None: the scene's lights; with none in the scene, the physically based mode's
+        automatic sun, the course's default point light. Course lighting draws one point
+        light: the first light, as `scene.lights.course_point_light` sees it.
+        """
+        if lights is None:
+            if self.scene.lights:
+                chosen: tuple[Light, ...] = tuple(self.scene.lights)
+            elif options.lighting == L.Lighting.COURSE:
+                chosen = (Light(),)
+            else:
+                chosen = (self.automatic_sun(),)
+        else:
+            chosen = (lights,) if isinstance(lights, Light) else tuple(lights)
+            validate_lights(chosen)
+        if options.lighting == L.Lighting.COURSE:
+            return (course_point_light(chosen[0], self.scene.bounds()),) if chosen else ()
+        return chosen
+
+    def frame_lighting(self, options: RenderOptions) -> FrameLighting:
+        """What lights a frame besides its punctual lights, for `options`' lighting mode."""
+        if options.lighting == L.Lighting.COURSE:
+            return FrameLighting(mode=int(L.Lighting.COURSE), ambient=AMBIENT)
+        return FrameLighting(mode=int(L.Lighting.PBR))
+
+    def draw(self, target: FrameTarget, camera: Camera, lights: tuple[Light, ...],
+             options: RenderOptions, *, overlay: TextOverlay | None = None,
+             copy: tuple[str, ...] = (), linear: bool = False, timings: bool = True,
+             driver_time: bool = False) -> Submitted:
         """Draw one frame into `target` and submit it (the one frame path).
 
+        `lights` are the frame's punctual lights as `frame_lights` resolves them (a tuple of
+        at most MAX_LIGHTS frozen Lights: an unchanged tuple costs nothing to compare).
         `copy` names what the target copies out for reading (COPY_COLOR, COPY_DEPTH) into the
         frame's buffers; `timings` first reads the GPU timestamps of the frame slot's previous
         submission into its stats (a few microseconds; the viewer asks 4 times a second).
@@ -212,7 +263,8 @@ class Renderer:
         driver = clock() - c0
         if image is None:
             return Submitted(None, -1, False)
-        write_frame_uniforms(slot, camera, light, target.extent, options, linear, self.bounds)
+        write_frame_uniforms(slot, camera, lights, target.extent, options, linear, self.bounds,
+                             self.frame_lighting(options))
         if overlay is not None:
             overlay.prepare(frame.index)
         cmd = self.recorder.command_buffer(target, frame, image, options.tbn, options.alpha_mask,
@@ -238,7 +290,7 @@ class Renderer:
     def render(
         self,
         camera: Camera | Any = None,
-        light: Light | None = None,
+        lights: LightsArg = None,
         size: tuple[int, int] = (640, 480),
         options: RenderOptions | None = None,
         linear: bool = False,
@@ -251,7 +303,9 @@ class Renderer:
         ----------
         camera : a Camera, a 4x4 world-from-camera pose (OpenGL axes) or an
             "ex,ey,ez,tx,ty,tz" string; None: the scene's camera (or the automatic one).
-        light : None: the scene's first light (or the course's default point light).
+        lights : None: the scene's lights (none in the scene: the automatic sun, or the
+            course's default point light); a Light or a list of them; [] for no punctual
+            light. Course lighting draws only the first, as a point light.
         size : (width, height) in pixels.
         options : RenderOptions; keyword overrides (view="d", brdf="blinn-phong", ...)
             update it.
@@ -262,13 +316,13 @@ class Renderer:
         `linear`; with `depth`, a tuple (colour, depth) where depth is (H, W) float32
         view-space distance along the camera axis (inf where nothing was drawn).
         """
-        frames = self.render_many([camera], light, size, options, linear, depth, **option_overrides)
+        frames = self.render_many([camera], lights, size, options, linear, depth, **option_overrides)
         return next(iter(frames))
 
     def render_many(
         self,
         cameras: Iterable[Camera | Any],
-        light: Light | None = None,
+        lights: LightsArg = None,
         size: tuple[int, int] = (640, 480),
         options: RenderOptions | None = None,
         linear: bool = False,
@@ -285,7 +339,7 @@ class Renderer:
         `readback=False` yields None per finished frame instead (benchmarks: render only).
         """
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
-        light = light or self.default_light()
+        frame_lights = self.frame_lights(opts, lights)
         target = self.offscreen_target(size, linear)
         copy = ((COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)) if readback else ()
         base = self.default_camera()
@@ -296,7 +350,7 @@ class Renderer:
                 validate_camera(camera)
                 if len(pending) == self.ring.count:
                     yield self._collect(pending.popleft(), target, depth, readback)
-                sub = self.draw(target, camera, light, opts, copy=copy, linear=linear,
+                sub = self.draw(target, camera, frame_lights, opts, copy=copy, linear=linear,
                                 timings=False)
                 pending.append(sub.frame)  # type: ignore[arg-type] - offscreen: always a frame
             while pending:

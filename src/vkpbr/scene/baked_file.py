@@ -423,7 +423,7 @@ def read_baked(path: str | os.PathLike[str], *, mmap: bool = False) -> BakedScen
             streams=streams, materials=[_material(dict(m)) for m in doc["materials"]],
             images=images,
             nodes=[Node(int(n["mesh"]), mats[i], n["name"]) for i, n in enumerate(doc["nodes"])],
-            lights=[_build(Light, dict(x), ("position", "color")) for x in doc["lights"]],
+            lights=[_build(Light, dict(x), ("position", "color", "direction")) for x in doc["lights"]],
             cameras=[_build(Camera, dict(c), ("eye", "target", "up")) for c in doc["cameras"]],
             source_key=doc["source"]["sha256"], source_files=list(doc["source"]["files"]),
         )

@@ -96,7 +96,7 @@ def build_nodes_cameras_lights(ld: GltfDocument, scene: Scene) -> None:
         if ext_light is not None:
             light = light_defs[check_index(ld.path, ext_light, len(light_defs), "light")]
             pending_lights.append((light, world))
-    for light, world in pending_lights:  # after all meshes: directional lights need the bounds
+    for light, world in pending_lights:  # after the meshes, in file order
         scene.lights.append(_light(ld, scene, light, world))
 
 
@@ -135,33 +135,35 @@ def _add_camera(ld: GltfDocument, scene: Scene, cam: object, world: np.ndarray, 
 
 
 def _light(ld: GltfDocument, scene: Scene, light: dict, world: np.ndarray) -> Light:
-    """KHR_lights_punctual -> point Light; spot and directional are approximated (warned)."""
+    """KHR_lights_punctual light at a node's world transform: the light shines along the
+    node's -Z; spot cones and range as the extension defines them."""
     kind = get(light, "type", "point")
+    if kind not in ("point", "spot", "directional"):
+        raise SceneError(ld.path, f"unknown light type {kind!r}")
     color = floats(get(light, "color"), 3, (1.0, 1.0, 1.0), "light color", ld.path)
     intensity = scalar(get(light, "intensity"), 1.0, "light intensity", ld.path)
     light_range = scalar(get(light, "range"), 0.0, "light range", ld.path)
-    position = world[:3, 3]
+    axis = -world[:3, 2]
+    norm = float(np.linalg.norm(axis))
+    direction = tuple(map(float, axis / norm)) if norm > 1e-12 else (0.0, 0.0, -1.0)
+    inner, outer = 0.0, math.pi / 4
     if kind == "spot":
-        warnings.warn(f"{ld.path}: spot light approximated by a point light", stacklevel=4)
-    elif kind == "directional":
-        # Sun -> a far point light along -direction: at distance d an inverse-square light of
-        # intensity lux * d^2 (cd) gives the same illuminance lux at the scene's centre.
-        lo, hi = scene.bounds()
-        centre = (lo + hi) / 2
-        d = 10.0 * max(float(np.linalg.norm(hi - lo)), 1.0)
-        direction = -world[:3, 2] / max(np.linalg.norm(world[:3, 2]), 1e-12)
-        position = centre - direction * d
-        intensity *= d * d
-        light_range = 0.0
-        warnings.warn(
-            f"{ld.path}: directional light approximated by a far point light", stacklevel=4
-        )
-    elif kind != "point":
-        raise SceneError(ld.path, f"unknown light type {kind!r}")
+        spot = get(light, "spot", {})
+        if not isinstance(spot, dict):
+            raise SceneError(ld.path, f"light 'spot' must be an object, got {spot!r}")
+        inner = scalar(get(spot, "innerConeAngle"), 0.0, "spot innerConeAngle", ld.path)
+        outer = scalar(get(spot, "outerConeAngle"), math.pi / 4, "spot outerConeAngle", ld.path)
+        if not 0.0 <= inner < outer <= math.pi / 2:
+            raise SceneError(ld.path, f"spot light cone: need 0 <= innerConeAngle ({inner:g}) < "
+                             f"outerConeAngle ({outer:g}) <= pi/2")
     return Light(
-        position=tuple(map(float, position)),
+        position=tuple(map(float, world[:3, 3])),
         color=color,
         intensity=intensity,
         falloff="inverse_square",
-        range=light_range,
+        range=0.0 if kind == "directional" else light_range,
+        kind=kind,
+        direction=direction,
+        inner_cone=inner,
+        outer_cone=outer,
     )

@@ -13,6 +13,7 @@ a `Scene`; the renderer consumes one. Conventions:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -154,16 +155,34 @@ class Node:
     name: str = ""
 
 
-@dataclass
+@dataclass(frozen=True)
 class Light:
-    """A point light. falloff "none" is the course's (no attenuation); "inverse_square" is
-    physical (glTF KHR_lights_punctual, intensity in candela)."""
+    """A punctual light (glTF KHR_lights_punctual).
+
+    kind : "point", "spot" or "directional".
+    position : world position (point and spot lights).
+    direction : unit world direction the light travels (spot and directional; glTF's -Z of
+        the light's node).
+    color, intensity : linear RGB and a scale: candela for point and spot lights, lux for
+        directional ones (glTF's units).
+    falloff : "inverse_square" (physical; glTF) or "none" (the course's: no attenuation).
+    range : distance where a point or spot light's influence ends (glTF's smooth window);
+        0 = infinite.
+    inner_cone, outer_cone : spot cone half-angles in radians, 0 <= inner < outer <= pi/2
+        (glTF's defaults 0 and pi/4).
+    shadows : whether the light casts shadows (the physically based mode).
+    """
 
     position: tuple[float, float, float] = (0.0, 2.0, 0.0)
     color: tuple[float, float, float] = (1.0, 1.0, 1.0)
     intensity: float = 1.0
     falloff: Literal["none", "inverse_square"] = "none"
     range: float = 0.0  # 0 = infinite (glTF)
+    kind: Literal["point", "spot", "directional"] = "point"
+    direction: tuple[float, float, float] = (0.0, -1.0, 0.0)
+    inner_cone: float = 0.0
+    outer_cone: float = math.pi / 4
+    shadows: bool = True
 
 
 @dataclass

@@ -22,8 +22,9 @@ from vkpbr.errors import SceneError, UsageError
 from vkpbr.scene.camera import Camera, validate_camera
 from vkpbr.scene.limits import limits
 from vkpbr.scene.types import Image, Light, Material, Mesh, Node, Sampler, Scene, TextureRef
+from vkpbr.shading import MAX_LIGHTS
 
-__all__ = ["validate_scene", "MAX_COORDINATE"]
+__all__ = ["validate_scene", "validate_lights", "MAX_COORDINATE"]
 
 # Largest coordinate accepted anywhere (positions after transforms, cameras, lights): far
 # beyond any real scene, far below float32's 3.4e38, so squared distances and the projection
@@ -180,6 +181,33 @@ def _check_light(li: Light, where: str) -> None:
     _number(li.intensity, f"{where}.intensity", 0.0, 1e15)
     _choice(li.falloff, ("none", "inverse_square"), f"{where}.falloff")
     _number(li.range, f"{where}.range", 0.0, MAX_COORDINATE)
+    _choice(li.kind, ("point", "spot", "directional"), f"{where}.kind")
+    _vector(li.direction, 3, f"{where}.direction")
+    if li.kind != "point" and not math.hypot(*li.direction) > 1e-12:
+        _fail(f"{where}.direction", "must not be zero for a spot or directional light")
+    _number(li.inner_cone, f"{where}.inner_cone", 0.0, math.pi / 2)
+    _number(li.outer_cone, f"{where}.outer_cone", 0.0, math.pi / 2)
+    if li.kind == "spot" and not li.inner_cone < li.outer_cone:
+        _fail(f"{where}.outer_cone", f"must be greater than inner_cone ({li.inner_cone:g}) "
+              "and above 0: a spot light needs a cone")
+    if not isinstance(li.shadows, bool):
+        _fail(f"{where}.shadows", "expected true or false", li.shadows)
+
+
+def _check_lights(lights: Sequence[Light], where: str) -> None:
+    if len(lights) > MAX_LIGHTS:
+        _fail(where, f"{len(lights)} punctual lights; vkpbr renders at most {MAX_LIGHTS} at once")
+    for i, li in enumerate(lights):
+        _check_light(li, f"{where}[{i}]")
+
+
+def validate_lights(lights: Sequence[Light], where: str = "lights") -> None:
+    """Raise UsageError("lights[1].outer_cone: ...") unless every light given through the API
+    or the command line is a well-formed Light (scene files' lights: validate_scene)."""
+    try:
+        _check_lights(list(lights), where)
+    except _Bad as exc:
+        raise UsageError(str(exc)) from None
 
 
 def _check_camera(c: Camera, where: str) -> None:
@@ -230,8 +258,7 @@ def validate_scene(scene: Scene, path: str | Path) -> None:
             _check_mesh(mesh, f"meshes[{i}]", len(scene.materials))
         for i, node in enumerate(scene.nodes):
             _check_node(node, f"nodes[{i}]", len(scene.meshes))
-        for i, li in enumerate(scene.lights):
-            _check_light(li, f"lights[{i}]")
+        _check_lights(scene.lights, "lights")
         for i, cam in enumerate(scene.cameras):
             _check_camera(cam, f"cameras[{i}]")
         _check_bounds(scene)

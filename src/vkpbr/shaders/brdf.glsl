@@ -1,5 +1,5 @@
-// brdf.glsl: the shading equations of renderer-spec section 2 (the course's Cook-Torrance),
-// as pure functions of scalars and colours. Mirrored function for function, with the same
+// brdf.glsl: the shading equations of renderer-spec section 2 (the course's Cook-Torrance) and
+// of the glTF 2.0 specification's Appendix B, as pure functions of scalars and colours. Mirrored function for function, with the same
 // names, in src/vkpbr/reference/brdf.py; the GPU tests compare the two.
 // Notation: x+ = max(0, x); n, l, v, h unit vectors; c base colour, M metalness, r roughness.
 #ifndef BRDF_GLSL
@@ -32,6 +32,16 @@ float g_cook_torrance(float n_dot_h, float n_dot_v, float n_dot_l, float v_dot_h
     return min(1.0, min(k * n_dot_v, k * n_dot_l));
 }
 
+// Height-correlated Smith visibility V = G / (4 (n.l)(n.v)) for GGX (Heitz 2014, eq. 99; the
+// glTF specification's Appendix B.3.2 and the Khronos Sample Viewer's V_GGX).
+float v_smith_ggx_correlated(float n_dot_l, float n_dot_v, float alpha) {
+    float a2 = alpha * alpha;
+    float gv = n_dot_l * sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2);
+    float gl = n_dot_v * sqrt(n_dot_l * n_dot_l * (1.0 - a2) + a2);
+    float s = gv + gl;
+    return s > 0.0 ? 0.5 / s : 0.0;
+}
+
 // Lambert diffuse weighted by what neither the specular lobe nor the metal takes:
 // (c / pi)(1 - F)(1 - M).
 vec3 diffuse_lambert(vec3 c, vec3 f, float metallic) {
@@ -51,7 +61,24 @@ struct BrdfTerms {
     vec3 diffuse;   // the diffuse BRDF value
 };
 
-// Every term at one shading point. brdf selects D: BRDF_GGX or BRDF_BLINN_PHONG.
+// The glTF 2.0 BRDF (Appendix B.3): mix(dielectric, metal, M), where the dielectric is
+// fresnel_mix(ior 1.5: F0 = 0.04) of Lambert c/pi under GGX D V, the metal the same specular
+// lobe with F0 = c. Schlick's F is linear in F0, so the mixed specular is F(mix(0.04, c, M)) D V;
+// the diffuse keeps the dielectric's own Fresnel: (1 - M)(1 - F(0.04)) c / pi.
+BrdfTerms evaluate_gltf_brdf(float n_dot_l, float n_dot_v, float n_dot_h, float v_dot_h, vec3 c,
+                             float metallic, float alpha) {
+    BrdfTerms t;
+    t.D = d_ggx(n_dot_h, alpha);
+    t.F = f_schlick(f0_from_metallic(c, metallic), v_dot_h);
+    float vis = v_smith_ggx_correlated(n_dot_l, n_dot_v, alpha);
+    t.G = vis * 4.0 * n_dot_l * n_dot_v;
+    t.specular = t.F * (t.D * vis);
+    t.diffuse = (1.0 - metallic) * (1.0 - f_schlick(vec3(0.04), v_dot_h)) * c / PI;
+    return t;
+}
+
+// Every term at one shading point. brdf: BRDF_GLTF, or the course's with D = BRDF_GGX or
+// BRDF_BLINN_PHONG.
 BrdfTerms evaluate_brdf(vec3 n, vec3 v, vec3 l, vec3 c, float metallic, float roughness, int brdf) {
     vec3 h = normalize(l + v);
     float n_dot_l = max(dot(n, l), 0.0);
@@ -59,6 +86,7 @@ BrdfTerms evaluate_brdf(vec3 n, vec3 v, vec3 l, vec3 c, float metallic, float ro
     float n_dot_h = max(dot(n, h), 0.0);
     float v_dot_h = max(dot(v, h), 0.0);
     float alpha = roughness * roughness;
+    if (brdf == BRDF_GLTF) return evaluate_gltf_brdf(n_dot_l, n_dot_v, n_dot_h, v_dot_h, c, metallic, alpha);
     BrdfTerms t;
     t.D = brdf == BRDF_BLINN_PHONG ? d_blinn_phong(n_dot_h, alpha) : d_ggx(n_dot_h, alpha);
     t.F = f_schlick(f0_from_metallic(c, metallic), v_dot_h);
@@ -79,12 +107,45 @@ float light_attenuation(float dist2, uint falloff, float range) {
     return att;
 }
 
-// Tone mapping: Reinhard x / (1 + x); ACES filmic fit (Narkowicz 2015).
+// Khronos PBR Neutral (Khronos 3D Commerce, 2024): base colours under normal light pass
+// unchanged, highlights compress towards white. The reference GLSL of the specification.
+vec3 tonemap_pbr_neutral(vec3 color) {
+    const float start_compression = 0.8 - 0.04;
+    const float desaturation = 0.15;
+    float x = min(color.r, min(color.g, color.b));
+    float offset = x < 0.08 ? x - 6.25 * x * x : 0.04;
+    color -= offset;
+    float peak = max(color.r, max(color.g, color.b));
+    if (peak < start_compression) return color;
+    const float d = 1.0 - start_compression;
+    float new_peak = 1.0 - d * d / (peak + d - start_compression);
+    color *= new_peak / peak;
+    float g = 1.0 - 1.0 / (desaturation * (peak - new_peak) + 1.0);
+    return mix(color, vec3(new_peak), g);
+}
+
+// Stephen Hill's ACES fit (BakingLab): sRGB -> ACES AP1-ish input matrix, the RRT+ODT rational
+// fit, the output matrix back (matrices column-major, as the Sample Viewer writes them).
+vec3 tonemap_aces_hill(vec3 color) {
+    const mat3 input_mat = mat3(0.59719, 0.07600, 0.02840, 0.35458, 0.90834, 0.13383,
+                                0.04823, 0.01566, 0.83777);
+    const mat3 output_mat = mat3(1.60475, -0.10208, -0.00327, -0.53108, 1.10813, -0.07276,
+                                 -0.07367, -0.00605, 1.07602);
+    color = input_mat * color;
+    vec3 a = color * (color + 0.0245786) - 0.000090537;
+    vec3 b = color * (0.983729 * color + 0.4329510) + 0.238081;
+    return clamp(output_mat * (a / b), 0.0, 1.0);
+}
+
+// Tone mapping (vkpbr.shading.Tonemap documents each curve): Reinhard x / (1 + x); ACES
+// (Narkowicz 2015, no pre-scale); ACES (Hill); Khronos PBR Neutral.
 vec3 tonemap(vec3 x, int mode) {
     if (mode == TONEMAP_REINHARD) return x / (1.0 + x);
     if (mode == TONEMAP_ACES) {
         return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
     }
+    if (mode == TONEMAP_ACES_HILL) return tonemap_aces_hill(x);
+    if (mode == TONEMAP_PBR_NEUTRAL) return tonemap_pbr_neutral(x);
     return x;
 }
 

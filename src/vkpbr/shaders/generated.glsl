@@ -4,6 +4,7 @@
 
 const float MIN_ROUGHNESS = 0.03;
 const float AMBIENT = 0.02;
+const uint MAX_LIGHTS = 256u;
 const int VIEW_FINAL = 0;
 const int VIEW_D = 1;
 const int VIEW_F = 2;
@@ -25,18 +26,32 @@ const int VIEW_DEPTH = 17;
 const int VIEW_EMISSIVE = 18;
 const int VIEW_TANGENT = 19;
 const int VIEW_BITANGENT = 20;
+const int VIEW_SHADOW = 21;
+const int VIEW_IBL_DIFFUSE = 22;
+const int VIEW_IBL_SPECULAR = 23;
 const int BRDF_GGX = 0;
 const int BRDF_BLINN_PHONG = 1;
+const int BRDF_GLTF = 2;
 const int TONEMAP_NONE = 0;
 const int TONEMAP_REINHARD = 1;
 const int TONEMAP_ACES = 2;
+const int TONEMAP_ACES_HILL = 3;
+const int TONEMAP_PBR_NEUTRAL = 4;
 const int TBN_VECTORS = 0;
 const int TBN_QUAT = 1;
 const int TBN_PACKED = 2;
+const int LIGHTING_MODE_PBR = 0;
+const int LIGHTING_MODE_COURSE = 1;
+const int LIGHT_POINT = 0;
+const int LIGHT_SPOT = 1;
+const int LIGHT_DIRECTIONAL = 2;
 const int VIEW_KIND_RADIANCE = 0;
 const int VIEW_KIND_COLOR = 1;
 const int VIEW_KIND_DATA = 2;
-const int VIEW_KINDS[21] = int[](0, 2, 2, 2, 0, 0, 0, 2, 2, 2, 2, 1, 2, 2, 2, 2, 2, 2, 0, 2, 2);
+const int VIEW_KINDS[24] = int[](0, 2, 2, 2, 0, 0, 0, 2, 2, 2, 2, 1, 2, 2, 2, 2, 2, 2, 0, 2, 2, 2, 0, 0);
+const uint LIGHTING_BACKGROUND = 4u;
+const uint LIGHTING_IBL = 2u;
+const uint LIGHTING_SHADOWS = 1u;
 const uint MATERIAL_BLEND = 8u;
 const uint MATERIAL_DOUBLE_SIDED = 2u;
 const uint MATERIAL_HAS_NORMAL_MAP = 1u;
@@ -45,6 +60,13 @@ const uint SETTINGS_NORMAL_MAPPING = 1u;
 const uint SETTINGS_OCCLUSION = 2u;
 const uint SETTINGS_SRGB_TARGET = 4u;
 
+struct LightRecord {
+    vec4 position_range;
+    vec4 direction_kind;
+    vec4 color_falloff;
+    vec4 cone;
+    vec4 shadow;
+};
 layout(set = 0, binding = 0, std140) uniform Camera {
     mat4 VP;
 } camera;
@@ -87,14 +109,21 @@ layout(set = 1, binding = 6, std140) uniform Material {
     vec4 emissive_uv_row1;
     uint flags;
 } material;
-layout(set = 2, binding = 0, std140) uniform Light {
-    vec4 lightPos;
-    vec3 color;
-    float intensity;
-    vec4 viewPos;
-    uint falloff;
-    float range;
-} light;
+layout(set = 2, binding = 0, std140) uniform Lighting {
+    vec4 view_pos;
+    uint light_count;
+    int mode;
+    uint flags;
+    float env_intensity;
+    vec4 env_rotation;
+    vec4 ambient_color;
+} lighting;
+layout(set = 2, binding = 1, std430) readonly buffer Lights {
+    LightRecord lights[];
+};
+layout(set = 2, binding = 2) uniform samplerCube env_specular;
+layout(set = 2, binding = 3) uniform samplerCube env_irradiance;
+layout(set = 2, binding = 4) uniform sampler2D brdf_lut;
 layout(push_constant, std430) uniform Draw {
     mat4 model;
     mat4 normal_matrix;

@@ -1,11 +1,16 @@
 #version 450
 // pbr.frag: gathers the material inputs, builds the shading normal from the TBN and the
-// normal map, evaluates brdf.glsl for one point light in world space (report 1.1-1.2), then
-// writes the selected debug view (Settings.view; no pipeline rebuild to switch).
+// normal map, sums brdf.glsl over the frame's punctual lights (lights.glsl; the course's mode
+// has one, report 1.1-1.2) with their shadows (shadows.glsl), adds the image-based light
+// (ibl.glsl) or the course's ambient, then writes the selected debug view (Settings.view; no
+// pipeline rebuild to switch).
 // ALPHA_MASK = 1 builds the masked-material variant that discards below the cutoff (report 1.3).
 #extension GL_GOOGLE_include_directive : require
 #include "generated.glsl"
 #include "brdf.glsl"
+#include "lights.glsl"
+#include "shadows.glsl"
+#include "ibl.glsl"
 
 layout(location = 0) in vec3 v_world_pos;
 layout(location = 1) in vec4 v_texcoords;  // xy: TEXCOORD_0, zw: TEXCOORD_1
@@ -79,43 +84,65 @@ void main() {
         n = safe_normalize(mat3(t, b, ng) * tn, ng);
     }
 
-    vec3 v = safe_normalize(light.viewPos.xyz - v_world_pos, ng);
-    vec3 to_light = light.lightPos.xyz - v_world_pos;
-    float dist2 = dot(to_light, to_light);
-    vec3 l = safe_normalize(to_light, ng);
-    vec3 light_in = light.color * light.intensity * light_attenuation(dist2, u(light.falloff), u(light.range));
-
-    BrdfTerms terms = evaluate_brdf(n, v, l, c, metallic, roughness, u(settings.brdf));
-    float n_dot_l = max(dot(n, l), 0.0);
-    vec3 specular = terms.specular * light_in * n_dot_l;
-    vec3 diffuse = terms.diffuse * light_in * n_dot_l;
-    vec3 ambient = AMBIENT * c * occlusion;
+    vec3 v = safe_normalize(lighting.view_pos.xyz - v_world_pos, ng);
+    float view_depth = dot(v_world_pos - lighting.view_pos.xyz, settings.camera_forward.xyz);
+    uint lighting_flags = u(lighting.flags);
+    int brdf = u(settings.brdf);
+    uint light_count = min(u(lighting.light_count), MAX_LIGHTS);
+    vec3 specular = vec3(0.0), diffuse = vec3(0.0);
+    BrdfTerms first_terms = BrdfTerms(0.0, vec3(0.0), 0.0, vec3(0.0), vec3(0.0));
+    vec3 first_l = ng;
+    float first_shadow = 1.0;
+    bool shadow_seen = false;
+    for (uint i = 0u; i < light_count; ++i) {
+        LightRecord light = lights[i];
+        vec3 l;
+        vec3 light_in = light_incident(light, v_world_pos, ng, l);
+        float shadow = 1.0;
+        if ((lighting_flags & LIGHTING_SHADOWS) != 0u && light.shadow.x >= 0.0) {
+            shadow = shadow_factor(light, v_world_pos, ng, l, view_depth);
+            if (!shadow_seen) { first_shadow = shadow; shadow_seen = true; }
+        }
+        BrdfTerms terms = evaluate_brdf(n, v, l, c, metallic, roughness, brdf);
+        if (i == 0u) { first_terms = terms; first_l = l; }
+        vec3 incident = light_in * (max(dot(n, l), 0.0) * shadow);
+        specular += terms.specular * incident;
+        diffuse += terms.diffuse * incident;
+    }
+    vec3 ambient = lighting.ambient_color.rgb * c * occlusion;
+    IblTerms ibl = IblTerms(vec3(0.0), vec3(0.0));
+    if ((lighting_flags & LIGHTING_IBL) != 0u) {
+        ibl = ibl_evaluate(n, v, c, metallic, roughness);
+        ibl.diffuse *= occlusion;
+        ibl.specular *= occlusion;
+    }
 
     vec3 value;
     switch (view) {
-        case VIEW_D: value = vec3(terms.D); break;
-        case VIEW_F: value = terms.F; break;
-        case VIEW_G: value = vec3(terms.G); break;
+        case VIEW_D: value = vec3(first_terms.D); break;
+        case VIEW_F: value = first_terms.F; break;
+        case VIEW_G: value = vec3(first_terms.G); break;
         case VIEW_SPECULAR: value = specular; break;
         case VIEW_DIFFUSE: value = diffuse; break;
         case VIEW_AMBIENT: value = ambient; break;
         case VIEW_GEOMETRIC_NORMAL: value = encode_dir(ng); break;
         case VIEW_MAPPED_NORMAL: value = encode_dir(n); break;
         case VIEW_VIEW_DIR: value = encode_dir(v); break;
-        case VIEW_LIGHT_DIR: value = encode_dir(l); break;
+        case VIEW_LIGHT_DIR: value = encode_dir(first_l); break;
         case VIEW_BASE_COLOR: value = c; break;
         case VIEW_METALLIC: value = vec3(metallic); break;
         case VIEW_ROUGHNESS: value = vec3(roughness); break;
         case VIEW_OCCLUSION: value = vec3(occlusion); break;
         case VIEW_ALPHA: value = vec3(base.a); break;
         case VIEW_TEXCOORDS: value = vec3(fract(uv), 0.0); break;
-        case VIEW_DEPTH:
-            value = vec3(dot(v_world_pos - light.viewPos.xyz, settings.camera_forward.xyz) / settings.zfar);
-            break;
+        case VIEW_DEPTH: value = vec3(view_depth / settings.zfar); break;
         case VIEW_EMISSIVE: value = emissive; break;
         case VIEW_TANGENT: value = encode_dir(t); break;
         case VIEW_BITANGENT: value = encode_dir(b); break;
-        default: value = emissive + ambient + diffuse + specular; break;
+        case VIEW_SHADOW: value = vec3(first_shadow); break;
+        case VIEW_IBL_DIFFUSE: value = ibl.diffuse; break;
+        case VIEW_IBL_SPECULAR: value = ibl.specular; break;
+        default: value = emissive + ambient + diffuse + specular + ibl.diffuse + ibl.specular; break;
     }
 
     int kind = VIEW_KINDS[clamp(view, 0, VIEW_KINDS.length() - 1)];
