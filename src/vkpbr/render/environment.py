@@ -72,6 +72,13 @@ class EnvironmentSpec:
         return EnvironmentSpec(source_size=None, specular_size=32, specular_samples=64,
                                irradiance_size=8, irradiance_samples=128, sky_size=32)
 
+    @staticmethod
+    def cpu() -> EnvironmentSpec:
+        """The renderer's sizes on a CPU device (lavapipe): a 128^2 sky and pre-filter, which
+        bake in well under a second there (the GPU sizes take seconds)."""
+        return EnvironmentSpec(source_size=None, specular_size=128, specular_samples=32,
+                               irradiance_size=16, irradiance_samples=128, sky_size=128)
+
 
 @dataclass
 class SampledImage:
@@ -152,11 +159,14 @@ class EnvironmentBaker:
             obj.destroy()
 
     # --- entry points -----------------------------------------------------------------------
-    def from_panorama(self, pixels: np.ndarray, source: object = "<array>") -> Environment:
-        """Pre-filter an (H, W, 3) equirectangular panorama (checked by check_panorama)."""
+    def from_panorama(self, pixels: np.ndarray, source: object = "<array>", *,
+                      size: int | None = None,
+                      irradiance_size: int | None = None) -> Environment:
+        """Pre-filter an (H, W, 3) equirectangular panorama (checked by check_panorama);
+        `size`, `irradiance_size` override the spec's cube sizes."""
         rgb = check_panorama(pixels, source)
         h, w = rgb.shape[:2]
-        size = self.spec.source_size or int(np.clip(_pow2_at_least(w / 4), 16, 1024))
+        size = size or self.spec.source_size or int(np.clip(_pow2_at_least(w / 4), 16, 1024))
         vk = self.device.vk
         pano = upload_rgba16f(self.device, rgb, name="panorama")
         pano_view = ImageView(pano)
@@ -173,7 +183,7 @@ class EnvironmentBaker:
                 cmd.bind_set(0, ds)
                 cmd.push(np.array([size, 0, 0, 0], np.uint32))
                 cmd.dispatch(*groups((size, size, 6), (8, 8, 1)))
-            return self._bake(size, draw)
+            return self._bake(size, draw, irradiance_size)
         finally:
             pano_sampler.destroy()
             pano_view.destroy()
@@ -200,6 +210,13 @@ class EnvironmentBaker:
             cmd.dispatch(*groups((size, size, 6), (8, 8, 1)))
         return self._bake(size, draw)
 
+    def from_constant(self, rgb: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> Environment:
+        """A uniform environment of radiance `rgb` on 4 x 4 faces: black stands in where no
+        environment lights the frame (set 2's samplers must always be written)."""
+        pixels = np.broadcast_to(np.asarray(rgb, np.float32), (2, 4, 3))
+        return self.from_panorama(np.ascontiguousarray(pixels), f"constant {tuple(rgb)}",
+                                  size=4, irradiance_size=4)
+
     # --- the pre-filter ---------------------------------------------------------------------
     def _cube(self, size: int, mips: int, name: str) -> Image:
         vk = self.device.vk
@@ -208,8 +225,9 @@ class EnvironmentBaker:
         return Image(self.device, size, size, rgba16f_format(self.device), usage,
                      mip_levels=mips, name=name, layers=6, cube=True)
 
-    def _bake(self, size: int, draw_source: Any) -> Environment:
+    def _bake(self, size: int, draw_source: Any, irradiance_size: int | None = None) -> Environment:
         device, spec = self.device, self.spec
+        irr_size = irradiance_size or spec.irradiance_size
         lut = self.brdf_lut()
         t0 = time.perf_counter()
         spec_size = min(spec.specular_size, size)
@@ -220,7 +238,7 @@ class EnvironmentBaker:
         owned.append(src)
         spc = self._cube(spec_size, spec_mips, "env specular")
         owned.append(spc)
-        irr = self._cube(spec.irradiance_size, 1, "env irradiance")
+        irr = self._cube(irr_size, 1, "env irradiance")
         owned.append(irr)
         temp: list[Any] = []
         pool = DescriptorPool(device, [(self.layout, spec_mips + 1), (self.layout_2d, 1),
@@ -249,8 +267,7 @@ class EnvironmentBaker:
                 irr_store = ImageView(irr, kind="2d_array")
                 temp.append(irr_store)
                 self._dispatch(cmd, pool, self.irradiance, src_view, irr_store,
-                               _push(spec.irradiance_samples, size, spec.irradiance_size),
-                               spec.irradiance_size)
+                               _push(spec.irradiance_samples, size, irr_size), irr_size)
                 cmd.image_barrier(spc, "general", "shader_read", "compute", "fragment")
                 cmd.image_barrier(irr, "general", "shader_read", "compute", "fragment")
             bake_ms = (time.perf_counter() - t0) * 1e3

@@ -1,18 +1,25 @@
 #version 450
-// The environment as background: env_specular at `lod` (0: the sharp sky), rotated, times
-// env_intensity; linear radiance (the frame's tone map and exposure follow in the same pass
-// as for surfaces when the includer wires it so; this standalone shader writes radiance).
+// The environment behind the scene: env_specular's sharpest level (the GGX pre-filter at
+// roughness 0) in the direction of the pixel, rotated and scaled as image-based lighting sees
+// it (Lighting.env_rotation, env_intensity), then the frame's exposure and tone map exactly as
+// pbr.frag applies them (frame_output.glsl). Pixels are left to the clear colour when the
+// frame has no background (Lighting.flags without LIGHTING_BACKGROUND: the course mode, env
+// none, --env-background off) and in debug views other than final.
+#extension GL_GOOGLE_include_directive : require
+#include "generated.glsl"
+#include "brdf.glsl"
 #include "env_common.glsl"
-layout(push_constant) uniform Background {
-    mat4 inv_view_proj;
-    vec4 rotation;
-    vec4 scale;
-} bg;
-layout(set = 0, binding = 0) uniform samplerCube environment;
+#include "frame_output.glsl"
+
 layout(location = 0) in vec3 ray;
-layout(location = 0) out vec4 color;
+layout(location = 0) out vec4 out_color;
 
 void main() {
-    vec3 d = env_rotate(normalize(ray), bg.rotation.xy);
-    color = vec4(textureLod(environment, d, bg.rotation.z).rgb * bg.scale.rgb, 1.0);
+    opaque_zero = uint(gl_FragCoord.x < 0.0);
+    if ((u(lighting.flags) & LIGHTING_BACKGROUND) == 0u || u(settings.view) != VIEW_FINAL) {
+        discard;
+    }
+    vec3 d = env_rotate(normalize(ray), lighting.env_rotation.xy);
+    vec3 radiance = textureLod(env_specular, d, 0.0).rgb * lighting.env_intensity;
+    out_color = vec4(radiance_output(radiance), 1.0);
 }
