@@ -10,6 +10,10 @@ The depth pre-pass draws the opaque classes depth-only (no fragment shader) with
 vertex shader (`invariant gl_Position`), after which the opaque passes test
 GREATER_OR_EQUAL without writing depth, so each pixel is shaded once (reversed-Z: nearer
 is greater). Masked draws need their texture to decide coverage and are not pre-passed.
+
+The background pass (`fullscreen`: one triangle, no draws) comes after the opaque and masked
+passes, where only pixels no surface covered still hold the cleared depth 0, and before the
+blended draws, which composite over it.
 """
 
 from __future__ import annotations
