@@ -109,6 +109,10 @@ def test_docs_example_poses_render(capsys, tmp_path: Path) -> None:
     (["render", "--camera", "0,0,0,0,0,0"], "eye and target coincide"),
     (["render", "--light", "1,2"], "three comma-separated"),
     (["render", "--exposure", "nan"], "exposure"),
+    (["render", "--env", "missing.hdr", "--size", "16x16"], "missing.hdr: not found"),
+    (["render", "--env", "sky.png"], "env 'sky.png': expected sky, none or a panorama"),
+    (["render", "--env-intensity", "-1"], "env-intensity -1.0: expected a finite number >= 0"),
+    (["render", "--env-background", "maybe"], "argument --env-background: invalid choice"),
     (["render", "no-such-file.gltf"], "no such file"),
     (["render", "--cameras", "missing.json", "--out", "d"], "No such file"),
 ])

@@ -92,7 +92,8 @@ def expected(lights: list[Light]) -> np.ndarray:
 
 
 def render(r, lights: list[Light], **options: object) -> np.ndarray:  # noqa: ANN001
-    return r.render(lights=lights, size=(W, H), linear=True, lighting="pbr", **options)[..., :3]
+    return r.render(lights=lights, size=(W, H), linear=True, lighting="pbr", env="none",
+                    **options)[..., :3]
 
 
 @pytest.mark.parametrize("lights", [[POINT], [SPOT], [SUN], [POINT, SPOT, SUN]],

@@ -184,3 +184,36 @@ def test_speed_scales_with_scene() -> None:
     assert f[0] == pytest.approx(np.sin(0.1)) and f[2] == pytest.approx(-np.cos(0.1))
     small = FlyCamera(dataclasses.replace(cam), SPONZA_RADIUS / 10)
     assert small.speed == pytest.approx(BASE_SPEED / 10)
+
+
+def test_environment_keys(tmp_path: Path) -> None:
+    """K cycles sky -> none -> sky, `.` turns the environment and the automatic sun with it;
+    the HUD names the environment; the screenshot equals Renderer.render of the same state."""
+    from vkpbr.app.viewer import Viewer, ViewerConfig
+
+    shot = tmp_path / "env.png"
+    events = [_key(0.0, "k"), _key(0.05, "k"), _key(0.1, "k", mods=("shift",)),
+              _key(0.15, "k"), _key(0.2, "period"), _key(0.2, "period"), _key(0.25, "comma"),
+              _key(0.25, "period"), {"t": 0.3, "type": "screenshot", "path": str(shot)},
+              {"t": 0.35, "type": "quit"}]
+    config = ViewerConfig(size=(64, 48), validation=True, offscreen=True,
+                          script=parse_script({"fixed_dt": 0.05, "events": events}))
+    from vkpbr.scene.default import default_scene
+
+    scene = default_scene()
+    scene.lights = []  # the automatic sun lights it
+    viewer = Viewer(scene, config)
+    instance = viewer.renderer.device.instance
+    try:
+        assert viewer.run() == 0
+        o = viewer.options
+        assert (o.env, o.env_rotation) == ("sky", 30.0)
+        assert viewer.lights == (viewer.renderer.automatic_sun(30.0),)
+        hud = "\n".join(line for b in viewer._hud_blocks() for line in b.lines)
+        assert "env sky +30 deg" in hud
+        image, camera, lights, options, size = viewer.last_screenshot
+        headless = viewer.renderer.render(camera, lights, size, options)
+        assert np.array_equal(image, headless)
+    finally:
+        viewer.close()
+    assert instance.errors == [], instance.errors[:3]

@@ -32,15 +32,17 @@ from vkpbr.render import layouts as L
 from vkpbr.render.options import ENUM_FIELDS, RenderOptions
 
 __all__ = ["Chord", "Binding", "BINDINGS", "HELP", "PRESS_ACTIONS", "HELD_ACTIONS",
-           "EXPOSURE_STEP", "EXPOSURE_RANGE", "chords", "markdown_table", "update_markdown",
+           "EXPOSURE_STEP", "EXPOSURE_RANGE", "ENV_ROTATION_STEP", "env_choices", "next_env",
+           "turn_env", "chords", "markdown_table", "update_markdown",
            "cycle", "toggle", "with_view", "view_at"]
 
 EXPOSURE_STEP = 0.5  # EV per = / - press
 EXPOSURE_RANGE = (-16.0, 16.0)
+ENV_ROTATION_STEP = 15.0  # degrees per , / . press
 
 PRESS_ACTIONS = ("quit", "view", "cycle", "toggle", "exposure", "fov", "animate_light",
                  "light_to_camera", "reset", "print_camera", "screenshot", "toggle_help",
-                 "toggle_hud")
+                 "toggle_hud", "environment", "env_rotation")
 HELD_ACTIONS = ("fly", "move_light", "speed")
 
 
@@ -139,6 +141,15 @@ BINDINGS: tuple[Binding, ...] = (
     Binding("V / Shift+V", "next / previous debug view",
             (_press("v", "cycle", ("view", 1)), _press("shift+v", "cycle", ("view", -1)))),
     Binding("G", "lighting: pbr <-> course", (_press("g", "cycle", ("lighting", 1)),)),
+    Binding("K / Shift+K", "environment: sky -> none -> --env file", (
+        _press("k", "environment", 1), _press("shift+k", "environment", -1)),
+        doc="next / previous environment of the pbr lighting: sky, none and the `--env` file "
+            "if one was given (each pre-filtered on first use, then kept)"),
+    Binding(", / .", f"turn the environment -/+ {ENV_ROTATION_STEP:g} degrees", (
+        _press("comma", "env_rotation", -ENV_ROTATION_STEP),
+        _press("period", "env_rotation", ENV_ROTATION_STEP)),
+        doc=f"turn the environment about +Y by -/+ {ENV_ROTATION_STEP:g} degrees "
+            "(`--env-rotation`); the automatic sun turns with it"),
     Binding("B", "BRDF: GGX -> Blinn-Phong -> glTF", (_press("b", "cycle", ("brdf", 1)),)),
     Binding("T", "TBN path: vectors -> quat -> packed", (_press("t", "cycle", ("tbn", 1)),)),
     Binding("M  N  O", "alpha masking, normal maps, occlusion on/off", (
@@ -256,3 +267,20 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 if __name__ == "__main__":
     sys.exit(main())
+
+
+def env_choices(options: RenderOptions) -> tuple[str, ...]:
+    """The environments the K key cycles through: sky, none, and the start's file if any."""
+    return ("sky", "none") + ((options.env,) if options.env not in ("sky", "none") else ())
+
+
+def next_env(options: RenderOptions, choices: Sequence[str], step: int = 1) -> RenderOptions:
+    """The next (or previous) environment of `choices` after `options.env`."""
+    i = choices.index(options.env) if options.env in choices else -1
+    return dataclasses.replace(options, env=choices[(i + step) % len(choices)])
+
+
+def turn_env(options: RenderOptions, degrees: float) -> RenderOptions:
+    """The environment turned by `degrees` more, kept in [-180, 180)."""
+    angle = (options.env_rotation + degrees + 180.0) % 360.0 - 180.0
+    return dataclasses.replace(options, env_rotation=angle)

@@ -78,6 +78,17 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
                group="camera and light", metavar="F"),
     OptionSpec("--falloff", "choice", "distance falloff of every light (default: each light's)",
                group="camera and light", choices=("none", "inverse-square")),
+    OptionSpec("--env", "text", "environment of the pbr lighting: sky (the built-in sky, "
+               "matched to the automatic sun), none, or an equirectangular FILE.hdr / FILE.exr "
+               "(default %(default)s)", field="env", group="environment", metavar="ENV"),
+    OptionSpec("--env-intensity", "float", "scale of the environment's radiance (default "
+               "%(default)g)", field="env_intensity", group="environment", metavar="F"),
+    OptionSpec("--env-rotation", "float", "turn the environment (and the automatic sun) by "
+               "DEG about +Y (default %(default)g)", field="env_rotation", group="environment",
+               metavar="DEG"),
+    OptionSpec("--env-background", "choice", "draw the environment behind the scene (default: "
+               "on with pbr lighting and an environment; course: black)",
+               field="env_background", group="environment", choices=("on", "off")),
     OptionSpec("--view", "enum", "debug view, one of: %(choices)s (default %(default)s; "
                "`vkpbr render --list-views` says what each shows)", field="view", metavar="NAME"),
     OptionSpec("--brdf", "enum", "BRDF: gltf (the glTF spec's), or the course's Cook-Torrance "
@@ -151,6 +162,8 @@ def add_options(parser: argparse.ArgumentParser, table: tuple[OptionSpec, ...] =
                       default=None if default is None else str(default))
         elif spec.kind == "choice":
             kw.update(type=_label, choices=spec.choices)
+        elif spec.kind == "text" and spec.field:
+            kw["default"] = getattr(defaults, spec.field)
         elif spec.kind in ("float", "int"):
             kw["type"] = float if spec.kind == "float" else int
             if spec.field:
@@ -216,4 +229,8 @@ def option_flags(options: RenderOptions, table: tuple[OptionSpec, ...] = SHARED_
             out += [spec.flag, "on" if value else "off"]
         elif spec.kind == "off" and not value:
             out.append(spec.flag)
+        elif spec.kind == "text" and value is not None:
+            out += [spec.flag, str(value)]
+        elif spec.kind == "choice" and isinstance(value, bool):
+            out += [spec.flag, "on" if value else "off"]
     return out

@@ -10,7 +10,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from vkpbr.app.common import camera_from_args, lights_from_args, load_scene_arg
+from vkpbr.app.common import camera_from_args, default_cache_dir, lights_from_args, load_scene_arg
 from vkpbr.app.log import is_quiet, say
 from vkpbr.app.options import add_options, render_options_from_args
 from vkpbr.app.output import OUTPUT_SUFFIXES, check_writable, write_image_atomic
@@ -85,7 +85,8 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
     t0 = time.perf_counter()
     poses = load_poses(args.cameras)  # the whole file is checked before the scene loads
     scene = load_scene_arg(args)
-    with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa) as renderer:
+    with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa,
+                  cache_dir=default_cache_dir()) as renderer:
         base = camera_from_args(args, renderer)
         cameras = [pose.camera(base) for pose in poses]
         lights = lights_from_args(args, renderer, options)
@@ -126,7 +127,8 @@ def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     scene = load_scene_arg(args)
     t_load = time.perf_counter()
-    with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa) as renderer:
+    with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa,
+                  cache_dir=default_cache_dir()) as renderer:
         t_setup = time.perf_counter()
         camera = camera_from_args(args, renderer)
         lights = lights_from_args(args, renderer, options)

@@ -164,6 +164,7 @@ class Viewer(InputHandlers):
         self.options = cfg.options
         # The frame's lights; the keys move the first (`light`).
         self.start_lights = self.lights = r.frame_lights(self.options, lights)
+        self.env_choices = K.env_choices(self.options)  # what K cycles through
         self.animate_light = False
         # The help panel starts open where it leaves room for the picture.
         self.show_help, self.show_hud = cfg.size[0] >= 1200 and cfg.size[1] >= 600, True
@@ -233,7 +234,9 @@ class Viewer(InputHandlers):
             f"view {o.view} [{o.view:d}]   lighting {o.lighting}   BRDF {o.shading_brdf}   "
             f"TBN {o.tbn}   fov {self.fly.yfov_deg:g}",
             f"tonemap {o.shading_tonemap}   exposure {o.exposure:+.1f} EV   "
-            f"{len(self.lights)} light{'s' if len(self.lights) != 1 else ''}",
+            f"{len(self.lights)} light{'s' if len(self.lights) != 1 else ''}   "
+            f"env {Path(o.env).name if o.has_environment else 'none'}"
+            + (f" {o.env_rotation:+g} deg" if o.has_environment else ""),
             f"alpha mask {onoff(o.alpha_mask)}   normal maps {onoff(o.normal_mapping)}   "
             f"occlusion {onoff(o.occlusion)}   shadows {onoff(o.shadows)}",
             f"light anim {onoff(self.animate_light)}   {w}x{h} {self.present_mode}",

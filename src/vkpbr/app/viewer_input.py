@@ -69,6 +69,8 @@ class InputHandlers:
     options: Any
     target: Any  # the frame target drawn into (its extent)
     window: Any
+    renderer: Any  # the Viewer's Renderer (automatic_sun)
+    env_choices: tuple[str, ...]  # what K cycles through
 
     # --- input ------------------------------------------------------------------------------
     def _on_key(self, _w: Any, key: int, _scancode: int, action: int, mods: int) -> None:
@@ -105,6 +107,16 @@ class InputHandlers:
         lo, hi = K.EXPOSURE_RANGE
         o = self.options
         self.options = dataclasses.replace(o, exposure=max(lo, min(hi, o.exposure + step)))
+
+    def _act_environment(self, step: int) -> None:
+        self.options = K.next_env(self.options, self.env_choices, step)
+
+    def _act_env_rotation(self, degrees: float) -> None:
+        old = self.options
+        self.options = K.turn_env(old, degrees)
+        sun = self.renderer.automatic_sun  # the automatic sun turns with the sky
+        if self.lights == (sun(old.env_rotation),):
+            self.lights = (sun(self.options.env_rotation),)
 
     def _act_fov(self, step: float) -> None:
         self.fly.zoom(step)

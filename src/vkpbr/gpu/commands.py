@@ -14,7 +14,9 @@ from typing import Any
 import numpy as np
 
 from vkpbr.gpu.buffer import Buffer
+from vkpbr.gpu.compute import LAYOUTS, stage_access
 from vkpbr.gpu.device import Device
+from vkpbr.gpu.image import _barrier, pipeline_barrier
 
 __all__ = ["Commands"]
 
@@ -22,11 +24,16 @@ __all__ = ["Commands"]
 class Commands:
     """One primary command buffer being recorded (or recorded, ready to submit)."""
 
-    def __init__(self, device: Device) -> None:
+    def __init__(self, device: Device, handle: Any = None) -> None:
+        """`handle`: record into a command buffer someone else owns (e.g. one of
+        `device.one_time_commands()`); `free()` then leaves it alone."""
         self.device = device
         self.vk = device.vk
-        self.handle = device.allocate_command_buffer()
+        self._owned = handle is None
+        self.handle = device.allocate_command_buffer() if handle is None else handle
         self._layout: Any = None  # the pipeline layout of the last bound pipeline
+        self._bind_point = device.vk.VK_PIPELINE_BIND_POINT_GRAPHICS
+        self._push_stages = device.vk.VK_SHADER_STAGE_VERTEX_BIT | device.vk.VK_SHADER_STAGE_FRAGMENT_BIT
 
     # --- lifetime ---------------------------------------------------------------------------
     def begin(self) -> Commands:
@@ -40,18 +47,24 @@ class Commands:
         """Release the command buffer (the caller knows the GPU is done with it)."""
         if self.handle is not None:
             handle, self.handle = self.handle, None
-            self.device.free_command_buffer(handle)
+            if self._owned:
+                self.device.free_command_buffer(handle)
 
     # --- state ------------------------------------------------------------------------------
     def bind_pipeline(self, pipeline: Any) -> None:
-        """Bind a gpu.pipeline.Pipeline; later `bind_sets`/`push` use its layout."""
+        """Bind a gpu.pipeline.Pipeline or a gpu.compute.ComputePipeline (its `bind_point`);
+        later `bind_set`/`push` use its layout and bind point."""
         vk = self.vk
-        vk.vkCmdBindPipeline(self.handle, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline.handle)
+        compute = getattr(pipeline, "bind_point", "graphics") == "compute"
+        self._bind_point = (vk.VK_PIPELINE_BIND_POINT_COMPUTE if compute
+                            else vk.VK_PIPELINE_BIND_POINT_GRAPHICS)
+        vk.vkCmdBindPipeline(self.handle, self._bind_point, pipeline.handle)
         self._layout = pipeline.layout.handle
+        self._push_stages = getattr(pipeline.layout, "push_stages", self._push_stages)
 
     def bind_set(self, index: int, descriptor_set: Any) -> None:
         vk = self.vk
-        vk.vkCmdBindDescriptorSets(self.handle, vk.VK_PIPELINE_BIND_POINT_GRAPHICS, self._layout,
+        vk.vkCmdBindDescriptorSets(self.handle, self._bind_point, self._layout,
                                    index, 1, [descriptor_set], 0, None)
 
     def bind_vertex_buffers(self, buffers: list[Buffer]) -> None:
@@ -62,10 +75,9 @@ class Commands:
         self.vk.vkCmdBindIndexBuffer(self.handle, buffer.handle, 0, self.vk.VK_INDEX_TYPE_UINT32)
 
     def push(self, data: np.ndarray) -> None:
-        """Push constants for the vertex and fragment stages, from offset 0."""
+        """Push constants for the bound pipeline layout's stages, from offset 0."""
         vk = self.vk
-        vk.vkCmdPushConstants(self.handle, self._layout,
-                              vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_FRAGMENT_BIT,
+        vk.vkCmdPushConstants(self.handle, self._layout, self._push_stages,
                               0, data.nbytes, vk.ffi.from_buffer(data))
 
     # --- draws ------------------------------------------------------------------------------
@@ -79,6 +91,57 @@ class Commands:
     def draw_indirect(self, buffer: Buffer) -> None:
         """One VkDrawIndirectCommand at the start of `buffer`."""
         self.vk.vkCmdDrawIndirect(self.handle, buffer.handle, 0, 1, 16)
+
+    def draw(self, vertex_count: int, first_vertex: int = 0) -> None:
+        """Non-indexed draw without vertex buffers (a fullscreen triangle: 3)."""
+        self.vk.vkCmdDraw(self.handle, vertex_count, 1, first_vertex, 0)
+
+    # --- compute ----------------------------------------------------------------------------
+    def dispatch(self, x: int, y: int = 1, z: int = 1) -> None:
+        self.vk.vkCmdDispatch(self.handle, x, y, z)
+
+    def image_barrier(self, image: Any, old: str, new: str, src: str, dst: str,
+                      base_mip: int = 0, mips: int | None = None) -> None:
+        """A layout transition and memory dependency on mips [base_mip, base_mip + mips) of
+        every layer. Layouts: "undefined", "general", "shader_read", "transfer_src",
+        "transfer_dst"; stages: "none", "compute", "fragment", "transfer" (gpu.compute)."""
+        vk = self.vk
+        n = image.mip_levels - base_mip if mips is None else mips
+        pipeline_barrier(vk, self.handle, [_barrier(
+            vk, image, getattr(vk, LAYOUTS[old]), getattr(vk, LAYOUTS[new]),
+            stage_access(vk, src), stage_access(vk, dst), base_mip, n,
+            getattr(image, "layers", 1))])
+
+    def blit_mips(self, image: Any, final: str = "shader_read", dst_stage: str = "fragment") -> None:
+        """Make levels 1.. of every layer by linear blits from level 0, which must be in the
+        GENERAL layout after compute writes; leaves the whole chain in `final`."""
+        vk = self.vk
+        layers = getattr(image, "layers", 1)
+        self.image_barrier(image, "general", "transfer_src", "compute", "transfer", 0, 1)
+        if image.mip_levels > 1:
+            self.image_barrier(image, "undefined", "transfer_dst", "none", "transfer", 1)
+        w, h = image.width, image.height
+        for level in range(1, image.mip_levels):
+            nw, nh = max(w // 2, 1), max(h // 2, 1)
+            vk.vkCmdBlitImage(
+                self.handle, image.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                image.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
+                [vk.VkImageBlit(
+                    srcSubresource=vk.VkImageSubresourceLayers(
+                        aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=level - 1,
+                        baseArrayLayer=0, layerCount=layers),
+                    srcOffsets=[vk.VkOffset3D(0, 0, 0), vk.VkOffset3D(w, h, 1)],
+                    dstSubresource=vk.VkImageSubresourceLayers(
+                        aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=level,
+                        baseArrayLayer=0, layerCount=layers),
+                    dstOffsets=[vk.VkOffset3D(0, 0, 0), vk.VkOffset3D(nw, nh, 1)],
+                )],
+                vk.VK_FILTER_LINEAR,
+            )
+            self.image_barrier(image, "transfer_dst", "transfer_src", "transfer", "transfer",
+                               level, 1)
+            w, h = nw, nh
+        self.image_barrier(image, "transfer_src", final, "transfer", dst_stage)
 
     # --- queries ----------------------------------------------------------------------------
     def reset_queries(self, pool: Any, first: int, count: int) -> None:

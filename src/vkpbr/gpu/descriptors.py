@@ -1,8 +1,10 @@
 """Descriptor set layouts from a binding table, a pool, and a batched writer.
 
 A layout is described as rows of (binding, kind, stages) in plain words: kind is "uniform",
-"storage" (a storage buffer) or "sampler" / any GLSL sampler type such as "samplerCube" (a
-combined image sampler); stages is a subset of "vertex", "fragment", "compute".
+"storage" (a storage buffer), "storage_image", or a combined image sampler: "sampler" or the
+GLSL type it is declared as ("sampler2D", "samplerCube", "sampler2DArray", "sampler2DArrayShadow",
+"samplerCubeArray", "samplerCubeArrayShadow": one Vulkan descriptor type, the view decides);
+stages is a subset of "vertex", "fragment", "compute".
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ __all__ = ["BindingSpec", "DescriptorSetLayout", "DescriptorPool", "DescriptorWr
 @dataclass(frozen=True)
 class BindingSpec:
     binding: int
-    kind: str  # "uniform" | "sampler"
+    kind: str  # "uniform" | "storage" | "storage_image" | "sampler" (or a GLSL sampler type)
     stages: tuple[str, ...]
     name: str = ""
 
@@ -30,6 +32,7 @@ def _descriptor_type(vk: Any, kind: str) -> int:
     return {
         "uniform": vk.VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
         "storage": vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+        "storage_image": vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
     }[kind]
 
 
@@ -78,13 +81,13 @@ class DescriptorPool(DeviceObject):
     ) -> None:
         vk = device.vk
         self.device = device
-        totals: dict[int, int] = {}
+        totals: dict[int, int] = {}  # by descriptor type: the sampler kinds share one
         max_sets = 0
         for layout, count in layouts_and_counts:
             max_sets += count
             for b in layout.bindings:
-                kind = _descriptor_type(vk, b.kind)
-                totals[kind] = totals.get(kind, 0) + count
+                t = _descriptor_type(vk, b.kind)
+                totals[t] = totals.get(t, 0) + count
         self.handle = vk.vkCreateDescriptorPool(
             device.handle,
             vk.VkDescriptorPoolCreateInfo(
@@ -134,9 +137,6 @@ class DescriptorWriter:
             )
         )
 
-    def storage(self, dst_set: Any, binding: int, buffer: Any, size: int, offset: int = 0) -> None:
-        self.uniform(dst_set, binding, buffer, size, offset, kind="storage")
-
     def sampler(self, dst_set: Any, binding: int, view: Any, sampler: Any) -> None:
         vk = self.device.vk
         info = vk.VkDescriptorImageInfo(
@@ -148,6 +148,33 @@ class DescriptorWriter:
             vk.VkWriteDescriptorSet(
                 dstSet=dst_set, dstBinding=binding, descriptorCount=1,
                 descriptorType=vk.VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, pImageInfo=[info],
+            )
+        )
+
+    def storage(self, dst_set: Any, binding: int, buffer: Any, size: int | None = None,
+                offset: int = 0) -> None:
+        """A storage buffer (`size` None: the whole buffer from `offset`)."""
+        vk = self.device.vk
+        info = vk.VkDescriptorBufferInfo(buffer=buffer.handle, offset=offset,
+                                         range=buffer.size - offset if size is None else size)
+        self._keep.append(info)
+        self._writes.append(
+            vk.VkWriteDescriptorSet(
+                dstSet=dst_set, dstBinding=binding, descriptorCount=1,
+                descriptorType=vk.VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, pBufferInfo=[info],
+            )
+        )
+
+    def storage_image(self, dst_set: Any, binding: int, view: Any) -> None:
+        """A storage image, accessed in the GENERAL layout."""
+        vk = self.device.vk
+        info = vk.VkDescriptorImageInfo(imageView=view.handle,
+                                        imageLayout=vk.VK_IMAGE_LAYOUT_GENERAL)
+        self._keep.append(info)
+        self._writes.append(
+            vk.VkWriteDescriptorSet(
+                dstSet=dst_set, dstBinding=binding, descriptorCount=1,
+                descriptorType=vk.VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, pImageInfo=[info],
             )
         )
 

@@ -139,15 +139,17 @@ class Device:
                                     and supported["shaderDrawParameters"])
         self.image_cube_array = bool(supported["imageCubeArray"])
         on = {True: vk.VK_TRUE, False: vk.VK_FALSE}
+        # maintenance4 (required of Vulkan 1.3): glslc's vulkan1.3 compute shaders declare
+        # their work-group size with LocalSizeId, which needs it.
         f13 = vk.VkPhysicalDeviceVulkan13Features(
-            dynamicRendering=vk.VK_TRUE, synchronization2=vk.VK_TRUE
+            dynamicRendering=vk.VK_TRUE, synchronization2=vk.VK_TRUE, maintenance4=vk.VK_TRUE
         )
         f12 = vk.VkPhysicalDeviceVulkan12Features(
             pNext=f13, shaderOutputLayer=on[self.layered_shadows])
         f11 = vk.VkPhysicalDeviceVulkan11Features(
             pNext=f12, shaderDrawParameters=on[self.layered_shadows])
-        # Only what vkpbr uses: dynamic rendering, synchronization2, anisotropic filtering,
-        # layered rendering and cube-map arrays (shadows).
+        # Only what vkpbr uses: dynamic rendering, synchronization2, maintenance4, anisotropic
+        # filtering, layered rendering and cube-map arrays (shadows).
         core = vk.VkPhysicalDeviceFeatures(
             samplerAnisotropy=vk.VK_TRUE if self.anisotropy else vk.VK_FALSE,
             imageCubeArray=on[self.image_cube_array])

@@ -24,8 +24,8 @@ def mip_levels(width: int, height: int) -> int:
 
 
 class Image:
-    """A 2D VkImage with dedicated memory; `layers` > 1 makes a 2D array (`cube`: cube
-    compatible, `layers` a multiple of 6)."""
+    """A 2D VkImage with dedicated memory; `layers` > 1 makes an array, `cube` (layers a
+    multiple of 6) lets cube views see it."""
 
     def __init__(
         self,
@@ -44,7 +44,7 @@ class Image:
         self.device = device
         self.width, self.height, self.format = width, height, format
         self.mip_levels, self.samples, self.name = mip_levels, samples, name
-        self.layers = layers
+        self.layers, self.cube = layers, cube
         self.memory = None
         self.handle = vk.vkCreateImage(
             device.handle,
@@ -87,8 +87,10 @@ class Image:
 class ImageView(DeviceObject):
     """A view of an image; `swizzle` maps (r, g, b, a) to source channels, e.g. "bbbb" makes
     a scalar map out of the blue channel (glTF metalness) without copying the image.
-    `view_type` "2d", "2d_array", "cube" or "cube_array" over `layer_count` layers from
-    `base_layer` (None: all the image's layers from there)."""
+
+    `kind` is "2d" (layer `base_layer`), "2d_array", "cube" or "cube_array" over `layer_count`
+    layers from `base_layer` (None: all the image's layers from there); `base_mip` and `mips`
+    (None: the rest of the chain) pick levels, e.g. one level for a storage view."""
 
     _destroy_fn = "vkDestroyImageView"
 
@@ -100,7 +102,9 @@ class ImageView(DeviceObject):
         aspect: str = "color",
         swizzle: str = "iiii",
         format: int | None = None,
-        view_type: str = "2d",
+        kind: str = "2d",
+        base_mip: int = 0,
+        mips: int | None = None,
         base_layer: int = 0,
         layer_count: int | None = None,
     ) -> None:
@@ -112,20 +116,27 @@ class ImageView(DeviceObject):
         aspect_bit = (
             vk.VK_IMAGE_ASPECT_DEPTH_BIT if aspect == "depth" else vk.VK_IMAGE_ASPECT_COLOR_BIT
         )
+        view_type = {"2d": vk.VK_IMAGE_VIEW_TYPE_2D, "2d_array": vk.VK_IMAGE_VIEW_TYPE_2D_ARRAY,
+                     "cube": vk.VK_IMAGE_VIEW_TYPE_CUBE,
+                     "cube_array": vk.VK_IMAGE_VIEW_TYPE_CUBE_ARRAY}[kind]
+        if layer_count is not None:
+            layers = layer_count
+        else:
+            layers = 1 if kind == "2d" else getattr(image, "layers", 1) - base_layer
+        self.kind = kind
         self.handle = vk.vkCreateImageView(
             device.handle,
             vk.VkImageViewCreateInfo(
                 image=image.handle,
-                viewType=getattr(vk, f"VK_IMAGE_VIEW_TYPE_{view_type.upper()}"),
+                viewType=view_type,
                 format=image.format if format is None else format,
                 components=vk.VkComponentMapping(*comps),
                 subresourceRange=vk.VkImageSubresourceRange(
                     aspectMask=aspect_bit,
-                    baseMipLevel=0,
-                    levelCount=image.mip_levels,
+                    baseMipLevel=base_mip,
+                    levelCount=image.mip_levels - base_mip if mips is None else mips,
                     baseArrayLayer=base_layer,
-                    layerCount=getattr(image, "layers", 1) - base_layer
-                    if layer_count is None else layer_count,
+                    layerCount=layers,
                 ),
             ),
             None,
@@ -187,7 +198,7 @@ class Sampler(DeviceObject):
 
 
 def _barrier(vk: Any, image: Image, old: int, new: int, src: tuple, dst: tuple,
-             base_mip: int = 0, mips: int = 1) -> Any:
+             base_mip: int = 0, mips: int = 1, layers: int = 1) -> Any:
     return vk.VkImageMemoryBarrier2(
         srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=dst[0], dstAccessMask=dst[1],
         oldLayout=old, newLayout=new,
@@ -196,7 +207,7 @@ def _barrier(vk: Any, image: Image, old: int, new: int, src: tuple, dst: tuple,
         image=image.handle,
         subresourceRange=vk.VkImageSubresourceRange(
             aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=base_mip, levelCount=mips,
-            baseArrayLayer=0, layerCount=1,
+            baseArrayLayer=0, layerCount=layers,
         ),
     )
 

@@ -55,7 +55,7 @@ class LayeredDepth:
         self.image = Image(device, self.size, self.size, self.format, usage, name=name,
                            layers=self.layers, cube=cube)
         self.view = ImageView(self.image, aspect="depth",
-                              view_type="cube_array" if cube else "2d_array")
+                              kind="cube_array" if cube else "2d_array")
         self._attachments: dict[tuple[int, int], ImageView] = {}
         # Hardware 2x2 PCF needs linear filtering of the depth format (NVIDIA, lavapipe: yes).
         self.filterable = device.format_supports(self.format, "SAMPLED_IMAGE_FILTER_LINEAR")
@@ -77,7 +77,7 @@ class LayeredDepth:
         if key not in self._attachments:
             if base < 0 or count < 1 or base + count > self.layers:
                 raise ValueError(f"layers {base}..{base + count - 1} outside 0..{self.layers - 1}")
-            self._attachments[key] = ImageView(self.image, aspect="depth", view_type="2d_array",
+            self._attachments[key] = ImageView(self.image, aspect="depth", kind="2d_array",
                                                base_layer=base, layer_count=count)
         return self._attachments[key]
 

@@ -86,14 +86,21 @@ class PipelineLayout(DeviceObject):
         device: Device,
         set_layouts: list[DescriptorSetLayout],
         push_constant_bytes: int = 0,
+        stages: tuple[str, ...] = ("vertex", "fragment"),
     ) -> None:
         vk = device.vk
         self.device = device
+        bits = {"vertex": vk.VK_SHADER_STAGE_VERTEX_BIT, "fragment": vk.VK_SHADER_STAGE_FRAGMENT_BIT,
+                "compute": vk.VK_SHADER_STAGE_COMPUTE_BIT}
+        # The stages that see the push constants (Commands.push pushes to these).
+        self.push_stages = 0
+        for st in stages:
+            self.push_stages |= bits[st]
         ranges = []
         if push_constant_bytes:
             ranges.append(
                 vk.VkPushConstantRange(
-                    stageFlags=vk.VK_SHADER_STAGE_VERTEX_BIT | vk.VK_SHADER_STAGE_FRAGMENT_BIT,
+                    stageFlags=self.push_stages,
                     offset=0,
                     size=push_constant_bytes,
                 )

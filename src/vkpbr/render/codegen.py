@@ -38,6 +38,11 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("shadow_mask.frag.spv", "shadow_mask.frag"),
     Variant("hud.vert.spv", "hud.vert"),  # the viewer's text overlay (app/hud.py)
     Variant("hud.frag.spv", "hud.frag"),
+    # The environment (render/environment.py): source cube, pre-filter, BRDF table, sky.
+    *(Variant(f"{n}.comp.spv", f"{n}.comp") for n in (
+        "env_equirect", "env_sky", "env_specular", "env_irradiance", "env_brdf_lut")),
+    Variant("background.vert.spv", "background.vert"),
+    Variant("background.frag.spv", "background.frag"),
 )
 
 

@@ -289,9 +289,12 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
     2: (
         (0, "uniform", ("fragment",), "Lighting"),
         (1, "storage", ("fragment",), "Lights"),
-        # 2-4: the environment's env_specular, env_irradiance (samplerCube), brdf_lut: rows
-        # added with the resources that fill them (lavapipe crashes drawing with a combined
+        # 2-4: the environment's maps (render/environment.py), always written: with no
+        # environment a tiny black one is bound (lavapipe crashes drawing with a combined
         # image sampler descriptor left unwritten, even one no shader reads).
+        (2, "samplerCube", ("fragment",), "env_specular"),
+        (3, "samplerCube", ("fragment",), "env_irradiance"),
+        (4, "sampler", ("fragment",), "brdf_lut"),
     ),
     # Shadows (render/shadows.py ShadowMaps owns the resources; declared in GLSL by hand in
     # shaders/shadow_data.glsl and shadow_sampling.glsl: ShadowData is a header then matrices).

@@ -9,11 +9,13 @@ straight out of the members, with no parsing per frame.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, fields
 from typing import Any
 
 from vkpbr.errors import UsageError
 from vkpbr.render.layouts import Brdf, Lighting, TbnMode, Tonemap, View, enum_by_name
+from vkpbr.scene.environment import ENV_SUFFIXES
 
 __all__ = ["RenderOptions", "ENUM_FIELDS"]
 
@@ -56,6 +58,18 @@ class RenderOptions:
         Shadow maps for the lights that cast shadows (Light.shadows); False: none at all.
     shadow_resolution : int
         Texels per side of a shadow map (cascade or spot map; cube faces get half), 16..16384.
+    env : str
+        The environment of the physically based mode: "sky" (the built-in Preetham sky
+        matched to the automatic sun), "none" (no image-based light, black background) or
+        the path of an equirectangular .hdr / .exr panorama. The course mode has none.
+    env_intensity : float
+        Scale of the environment's radiance (>= 0; image-based light and background alike).
+    env_rotation : float
+        Degrees about +Y (counter-clockwise seen from above) the environment is turned by;
+        the automatic sun turns with it.
+    env_background : bool or None
+        Draw the environment where no surface is (None: yes in the physically based mode,
+        with an environment; the course mode's background is black).
     """
 
     view: View = View.FINAL
@@ -69,6 +83,10 @@ class RenderOptions:
     occlusion: bool = True
     shadows: bool = True
     shadow_resolution: int = 2048
+    env: str = "sky"
+    env_intensity: float = 1.0
+    env_rotation: float = 0.0
+    env_background: bool | None = None
 
     def __post_init__(self) -> None:
         for name, enum_type in ENUM_FIELDS.items():
@@ -86,9 +104,48 @@ class RenderOptions:
         res = self.shadow_resolution
         if isinstance(res, bool) or not isinstance(res, int) or not 16 <= res <= 16384:
             raise UsageError(f"shadow resolution {res!r}: expected an integer from 16 to 16384")
+        self._check_environment()
         for f in fields(self):
             if f.type == "bool" and not isinstance(getattr(self, f.name), bool):
                 raise UsageError(f"{f.name} {getattr(self, f.name)!r}: expected True or False")
+
+    def _check_environment(self) -> None:
+        env = os.fspath(self.env) if isinstance(self.env, os.PathLike) else self.env
+        if not isinstance(env, str) or not env.strip():
+            raise UsageError(f"env {self.env!r}: expected sky, none or a .hdr / .exr file")
+        if env.strip().lower() in ("sky", "none"):
+            env = env.strip().lower()
+        elif os.path.splitext(env)[1].lower() not in ENV_SUFFIXES:
+            raise UsageError(f"env {env!r}: expected sky, none or a panorama file "
+                             f"({', '.join(ENV_SUFFIXES)})")
+        object.__setattr__(self, "env", env)
+        for name, low in (("env_intensity", 0.0), ("env_rotation", -1e6)):
+            try:
+                value = float(getattr(self, name))
+            except (TypeError, ValueError):
+                raise UsageError(f"{name.replace('_', '-')} {getattr(self, name)!r}: "
+                                 "expected a number") from None
+            if not math.isfinite(value) or value < low or value > 1e6:
+                raise UsageError(f"{name.replace('_', '-')} {value}: expected a finite number"
+                                 + (" >= 0" if low == 0.0 else ""))
+            object.__setattr__(self, name, value)
+        bg = self.env_background
+        if isinstance(bg, str) and bg.strip().lower() in ("on", "off"):
+            bg = bg.strip().lower() == "on"
+        if bg is not None and not isinstance(bg, bool):
+            raise UsageError(f"env-background {self.env_background!r}: expected on or off")
+        object.__setattr__(self, "env_background", bg)
+
+    @property
+    def has_environment(self) -> bool:
+        """Whether frames are lit by an environment (the physically based mode, env not
+        "none")."""
+        return self.lighting == Lighting.PBR and self.env != "none"
+
+    @property
+    def draws_background(self) -> bool:
+        """Whether the environment is drawn where no surface is."""
+        return self.has_environment and self.env_background is not False
 
     @property
     def shading_brdf(self) -> Brdf:

@@ -10,6 +10,10 @@ The depth pre-pass draws the opaque classes depth-only (no fragment shader) with
 vertex shader (`invariant gl_Position`), after which the opaque passes test
 GREATER_OR_EQUAL without writing depth, so each pixel is shaded once (reversed-Z: nearer
 is greater). Masked draws need their texture to decide coverage and are not pre-passed.
+
+The background pass (`fullscreen`: one triangle, no draws) comes after the opaque and masked
+passes, where only pixels no surface covered still hold the cleared depth 0, and before the
+blended draws, which composite over it.
 """
 
 from __future__ import annotations
@@ -46,6 +50,7 @@ class PassSpec:
     back_to_front: bool = False  # sort draws far to near (blending)
     prepass: bool = False  # part of the optional depth pre-pass
     after_prepass: bool = False  # with the pre-pass on: test its depth, write none
+    fullscreen: bool = False  # one screen-covering triangle (no draws, no vertex streams)
 
 
 def _same(spec: PipelineSpec) -> PipelineSpec:
@@ -60,6 +65,14 @@ def _depth_only(spec: PipelineSpec) -> PipelineSpec:
     return dataclasses.replace(spec, fragment_shader=None, color_write=False)
 
 
+def _background(spec: PipelineSpec) -> PipelineSpec:
+    """The environment behind the scene (background.vert/.frag): at the far plane, where the
+    depth is still the clear value 0 (reversed-Z), before the blended draws cover it."""
+    return dataclasses.replace(spec, vertex_shader="background.vert.spv",
+                               fragment_shader="background.frag.spv", streams=(), cull="none",
+                               depth_write=False)
+
+
 PASSES: tuple[PassSpec, ...] = (
     PassSpec("prepass_opaque", "opaque", _depth_only, prepass=True),
     PassSpec("prepass_opaque_double", "opaque_double",
@@ -68,6 +81,7 @@ PASSES: tuple[PassSpec, ...] = (
     PassSpec("opaque_double", "opaque_double", _two_sided, after_prepass=True),
     PassSpec("mask", "mask",
              lambda s: dataclasses.replace(s, cull="none", fragment_shader="pbr_mask.frag.spv")),
+    PassSpec("background", "", _background, fullscreen=True),
     PassSpec("blend", "blend",
              lambda s: dataclasses.replace(s, cull="none", blend=True, depth_write=False),
              back_to_front=True),
@@ -105,6 +119,13 @@ def record_passes(cmd: Commands, ctx: PassContext) -> None:
     cmd.bind_index_buffer(ctx.index_buffer)
     for slot, p in enumerate(PASSES, start=1):
         if p.prepass and not ctx.prepass:
+            ctx.stamp(slot)
+            continue
+        if p.fullscreen:
+            cmd.bind_pipeline(ctx.pipeline(p))
+            cmd.bind_set(0, ctx.frame_sets[0])
+            cmd.bind_set(2, ctx.frame_sets[1])
+            cmd.draw(3)
             ctx.stamp(slot)
             continue
         draws = [d for d, c in zip(ctx.draws, ctx.classes, strict=True) if c == p.draw_class]

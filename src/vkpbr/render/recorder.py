@@ -78,8 +78,8 @@ class FrameRecorder:
 
     # --- pipelines --------------------------------------------------------------------------
     def pipeline(self, target: FrameTarget, tbn: L.TbnMode, p: PassSpec, prepass: bool) -> Pipeline:
-        key = (target.color_format, target.depth_format, target.samples, tbn, p.name,
-               prepass and p.after_prepass)
+        key = (target.color_format, target.depth_format, target.samples,
+               None if p.fullscreen else tbn, p.name, prepass and p.after_prepass)
         if key not in self._pipelines:
             gs = self.gpu_scene
             streams = [VertexStream(i, i, fmt, 0 if name == "colors" and not gs.has_colors else None)

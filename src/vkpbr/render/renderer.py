@@ -17,16 +17,19 @@ from __future__ import annotations
 
 import collections
 import dataclasses
+import functools
+import math
 import os
 import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from vkpbr.errors import UsageError
-from vkpbr.gpu.descriptors import BindingSpec, DescriptorSetLayout
+from vkpbr.gpu.descriptors import BindingSpec, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device, DeviceRequest
 from vkpbr.gpu.frames import Frame, FrameRing
 from vkpbr.gpu.pipeline import PipelineLayout
@@ -34,6 +37,7 @@ from vkpbr.gpu.swapchain import Surface, Swapchain
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
 from vkpbr.render.camera import as_camera, depth_range, forward, validate_camera
+from vkpbr.render.environment import Environment, EnvironmentBaker, EnvironmentSpec
 from vkpbr.render.frames import (
     Bounds,
     FrameLighting,
@@ -47,7 +51,9 @@ from vkpbr.render.options import RenderOptions
 from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.recorder import STAMP_NAMES, STAMPS, FrameRecorder
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
+from vkpbr.scene.environment import load_panorama
 from vkpbr.scene.lights import course_point_light
+from vkpbr.scene.sky import sun_radiometry
 from vkpbr.scene.types import Camera, Light, Scene
 from vkpbr.scene.validate import validate_lights
 from vkpbr.shading import AMBIENT, SUN_DIRECTION
@@ -89,6 +95,10 @@ class Renderer:
         10.3 -> 18.1 ms) and on lavapipe, whose vertex work runs on the same cores.
     window_extensions : instance extensions a window system needs (the viewer's GLFW list);
         the device then also enables swapchains.
+    env_spec : cube sizes and sample counts of the environments' pre-filter (None: the GPU
+        sizes, or EnvironmentSpec.cpu() on a CPU device).
+    cache_dir : where the split-sum BRDF table is kept between processes (None: made once
+        per process).
     """
 
     def __init__(
@@ -101,6 +111,8 @@ class Renderer:
         background: tuple[float, float, float] = (0.0, 0.0, 0.0),
         depth_prepass: bool | None = None,
         window_extensions: tuple[str, ...] | None = None,
+        env_spec: EnvironmentSpec | None = None,
+        cache_dir: str | os.PathLike[str] | None = None,
     ) -> None:
         t0 = time.perf_counter()
         if msaa not in (1, 4):
@@ -117,6 +129,10 @@ class Renderer:
         self.device = Device(device, validation=validation, sync_validation=sync_validation)
         self.depth_prepass = depth_prepass
         self._targets: dict[tuple, OffscreenTarget] = {}
+        self._env_spec, self._cache_dir = env_spec, cache_dir
+        self._baker: EnvironmentBaker | None = None
+        self._environments: dict[tuple, Environment] = {}  # by _env_key
+        self._bound_env: Environment | None = None  # what every slot's set 2 samples
         try:
             self.ring = FrameRing(self.device, queries_per_frame=STAMPS)
             self._create_layouts()
@@ -207,11 +223,11 @@ class Renderer:
         """The course's light: the scene's first, else a white point light at (0, 2, 0)."""
         return self.scene.lights[0] if self.scene.lights else Light()
 
-    def automatic_sun(self) -> Light:
-        """The physically based mode's key light when the scene has none: a directional sun
-        along vkpbr.shading.SUN_DIRECTION (the built-in sky's sun)."""
-        return Light(kind="directional", direction=SUN_DIRECTION, color=(1.0, 0.96, 0.9),
-                     intensity=3.0, falloff="inverse_square")
+    def automatic_sun(self, env_rotation: float = 0.0) -> Light:
+        """The physically based mode's key light when the scene has none: the built-in sky's
+        sun (vkpbr.shading.SUN_DIRECTION, colour and illuminance from scene.sky's
+        sun_radiometry), turned with the environment by `env_rotation` degrees about +Y."""
+        return _automatic_sun(float(env_rotation))
 
     def frame_lights(self, options: RenderOptions, lights: LightsArg = None) -> tuple[Light, ...]:
         """The lights frames are drawn with, resolved once per call (not per frame).
@@ -226,7 +242,7 @@ class Renderer:
             elif options.lighting == L.Lighting.COURSE:
                 chosen = (Light(),)
             else:
-                chosen = (self.automatic_sun(),)
+                chosen = (self.automatic_sun(options.env_rotation),)
         else:
             chosen = (lights,) if isinstance(lights, Light) else tuple(lights)
             validate_lights(chosen)
@@ -238,8 +254,14 @@ class Renderer:
         """What lights a frame besides its punctual lights, for `options`' lighting mode."""
         if options.lighting == L.Lighting.COURSE:
             return FrameLighting(mode=int(L.Lighting.COURSE), ambient=AMBIENT)
-        return FrameLighting(mode=int(L.Lighting.PBR),
-                             flags=L.LIGHTING_SHADOWS if options.shadows else 0)
+        shadows = L.LIGHTING_SHADOWS if options.shadows else 0
+        if not options.has_environment:
+            return FrameLighting(mode=int(L.Lighting.PBR), flags=shadows)
+        flags = shadows | L.LIGHTING_IBL | (L.LIGHTING_BACKGROUND if options.draws_background else 0)
+        return FrameLighting(mode=int(L.Lighting.PBR), flags=flags,
+                             env_intensity=options.env_intensity,
+                             env_rotation=math.radians(options.env_rotation),
+                             env_max_lod=float(self.environment(options).max_lod))
 
     def shadow_plan(self, lights: tuple[Light, ...], options: RenderOptions) -> ShadowPlan:
         """Which of the frame's lights get shadow maps (none in course mode or with shadows
@@ -270,6 +292,49 @@ class Renderer:
         self._shadow_rows[slot.index] = (key, rows)
         return rows
 
+    # --- the environment --------------------------------------------------------------------
+    @property
+    def environment_baker(self) -> EnvironmentBaker:
+        """The environment compute pipelines (made on first use)."""
+        if self._baker is None:
+            spec = self._env_spec
+            if spec is None:
+                spec = EnvironmentSpec.cpu() if self.device.info.kind == "cpu" else EnvironmentSpec()
+            cache = Path(self._cache_dir) if self._cache_dir is not None else None
+            self._baker = EnvironmentBaker(self.device, spec, cache)
+        return self._baker
+
+    def environment(self, options: RenderOptions) -> Environment:
+        """The environment frames with `options` sample (pre-filtered on first use, then
+        kept): the sky, a panorama file's, or a black one where none lights the frame.
+
+        Raises SceneError (one line naming the file) for an unreadable panorama."""
+        key = _env_key(options)
+        env = self._environments.get(key)
+        if env is None:
+            baker = self.environment_baker
+            if key[0] == "black":
+                env = baker.from_constant((0.0, 0.0, 0.0))
+            elif key[0] == "sky":
+                env = baker.from_sky(SUN_DIRECTION)
+            else:
+                env = baker.from_panorama(load_panorama(key[1]), key[1])
+            self._environments[key] = env
+        return env
+
+    def _bind_environment(self, env: Environment) -> None:
+        """Point every slot's set 2 samplers at `env`. Rare (a new environment): the sets
+        may be in use by queued frames and their recorded command buffers, so wait for the
+        device and drop the recordings (an updated set invalidates them)."""
+        self.device.wait_idle()
+        self.recorder.free()
+        writer = DescriptorWriter(self.device)
+        for slot in self.slots:
+            for binding, image in ((2, env.specular), (3, env.irradiance), (4, env.brdf_lut)):
+                writer.sampler(slot.set2, binding, image.view, image.sampler)
+        writer.update()
+        self._bound_env = env
+
     def draw(self, target: FrameTarget, camera: Camera, lights: tuple[Light, ...],
              options: RenderOptions, *, overlay: TextOverlay | None = None,
              copy: tuple[str, ...] = (), linear: bool = False, timings: bool = True,
@@ -288,6 +353,9 @@ class Renderer:
         Returns a Submitted; `ok` False: recreate the target (a resized window).
         """
         t0 = time.perf_counter()
+        env = self.environment(options)
+        if env is not self._bound_env:
+            self._bind_environment(env)
         clock = time.thread_time if driver_time else _no_clock
         c0 = clock()
         frame = self.ring.begin()  # waits for the frame's previous submission
@@ -443,6 +511,12 @@ class Renderer:
             self.recorder.free()
         if getattr(self, "shadows", None) is not None:
             self.shadows.destroy()
+        for env in getattr(self, "_environments", {}).values():
+            env.destroy()
+        self._environments = {}
+        if getattr(self, "_baker", None) is not None:
+            self._baker.destroy()
+            self._baker = None
         dev.close()
 
     def __enter__(self) -> Renderer:
@@ -454,6 +528,27 @@ class Renderer:
 
 def _no_clock() -> float:
     return 0.0
+
+
+def _env_key(options: RenderOptions) -> tuple:
+    """Which environment `options` sample: ("black",), ("sky",) or ("file", absolute path)."""
+    if not options.has_environment:
+        return ("black",)
+    if options.env == "sky":
+        return ("sky",)
+    return ("file", os.path.abspath(options.env))
+
+
+@functools.lru_cache(maxsize=64)
+def _automatic_sun(env_rotation_deg: float) -> Light:
+    """The sky's sun as a directional Light, turned by R_y(+theta) like the environment
+    (whose lookups turn by R_y(-theta), shaders/env_common.glsl env_rotate)."""
+    color, illuminance = sun_radiometry(SUN_DIRECTION)
+    t = math.radians(env_rotation_deg)
+    x, y, z = SUN_DIRECTION
+    direction = (math.cos(t) * x + math.sin(t) * z, y, -math.sin(t) * x + math.cos(t) * z)
+    return Light(kind="directional", direction=direction, color=color, intensity=illuminance,
+                 falloff="inverse_square")
 
 
 def _linear_depth(d: np.ndarray, znear: float) -> np.ndarray:

@@ -121,6 +121,9 @@ layout(set = 2, binding = 0, std140) uniform Lighting {
 layout(set = 2, binding = 1, std430) readonly buffer Lights {
     LightRecord lights[];
 };
+layout(set = 2, binding = 2) uniform samplerCube env_specular;
+layout(set = 2, binding = 3) uniform samplerCube env_irradiance;
+layout(set = 2, binding = 4) uniform sampler2D brdf_lut;
 layout(push_constant, std430) uniform Draw {
     mat4 model;
     mat4 normal_matrix;

@@ -11,6 +11,7 @@
 #include "lights.glsl"
 #include "shadows.glsl"
 #include "ibl.glsl"
+#include "frame_output.glsl"  // opaque_zero / u() (the lavapipe leak guard), radiance_output
 
 layout(location = 0) in vec3 v_world_pos;
 layout(location = 1) in vec4 v_texcoords;  // xy: TEXCOORD_0, zw: TEXCOORD_1
@@ -27,17 +28,6 @@ vec3 safe_normalize(vec3 x, vec3 fallback) {
 }
 
 vec3 encode_dir(vec3 d) { return d * 0.5 + 0.5; }
-
-// Mesa 22.3's lavapipe (Debian 12) inlines the uniforms a branch depends on: whenever a draw
-// binds other values (a material, a frame's settings) it compiles the shader again and never
-// frees the old compile, about 1 MB a draw that no vkDestroy* returns (issue 11, class 7; Mesa
-// 23.1 caches the variants). A uniform combined with a value the compiler cannot know is not
-// inlined: `opaque_zero` is 0 for every fragment (pixel centres have x >= 0.5), so each
-// `u(x)` below equals x exactly and costs one OR or add; GPUs see the same values as before.
-uint opaque_zero;
-uint u(uint x) { return x | opaque_zero; }
-int u(int x) { return x + int(opaque_zero); }
-float u(float x) { return x + float(opaque_zero); }  // x + 0.0: exact (the sign of a 0 aside)
 
 // One texture's coordinates: its own UV set (row0.w, 0 or 1) through its own
 // KHR_texture_transform, a 2x3 matrix given as two rows (render/layouts.py, MATERIAL).
@@ -148,7 +138,7 @@ void main() {
     int kind = VIEW_KINDS[clamp(view, 0, VIEW_KINDS.length() - 1)];
     bool srgb_target = (settings_flags & SETTINGS_SRGB_TARGET) != 0u;
     if (kind == VIEW_KIND_RADIANCE) {
-        value = tonemap(value * settings.exposure, u(settings.tonemap));
+        value = radiance_output(value);
     } else if (kind == VIEW_KIND_DATA) {
         // Raw data: on an sRGB target, pre-linearise so that the stored byte is the value.
         value = clamp(value, 0.0, 1.0);

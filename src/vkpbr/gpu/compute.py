@@ -1,0 +1,86 @@
+"""Compute pipelines: a SPIR-V compute shader, its own descriptor set layout(s) and push
+constants, and the barriers between dispatches (style.md: Vulkan vocabulary stays in gpu/).
+
+    layout = DescriptorSetLayout(device, [BindingSpec(0, "samplerCube", ("compute",)),
+                                          BindingSpec(1, "storage_image", ("compute",))])
+    pipe = ComputePipeline(device, SPV_DIR / "prefilter.comp.spv", [layout], push_bytes=16)
+    cmd.bind_pipeline(pipe); cmd.bind_set(0, ds); cmd.push(consts)
+    cmd.dispatch(*groups((w, h, 6), (8, 8, 1)))
+    cmd.image_barrier(image, "general", "shader_read", "compute", "compute")
+
+`Commands.bind_pipeline` binds either kind of pipeline at its own bind point (`bind_point`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from vkpbr.gpu.descriptors import DescriptorSetLayout
+from vkpbr.gpu.device import Device, DeviceObject
+from vkpbr.gpu.pipeline import PipelineLayout, ShaderModule
+
+__all__ = ["ComputePipeline", "groups", "LAYOUTS", "STAGES"]
+
+# Image layouts and pipeline stages in words, for Commands.image_barrier.
+LAYOUTS = {
+    "undefined": "VK_IMAGE_LAYOUT_UNDEFINED",
+    "general": "VK_IMAGE_LAYOUT_GENERAL",
+    "shader_read": "VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL",
+    "transfer_src": "VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL",
+    "transfer_dst": "VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL",
+}
+# stage -> (stage flag, the accesses a barrier waits for / makes visible there)
+STAGES = {
+    "none": ("VK_PIPELINE_STAGE_2_NONE", ("VK_ACCESS_2_NONE",)),
+    "compute": ("VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT",
+                ("VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT", "VK_ACCESS_2_SHADER_STORAGE_READ_BIT",
+                 "VK_ACCESS_2_SHADER_SAMPLED_READ_BIT")),
+    "fragment": ("VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT",
+                 ("VK_ACCESS_2_SHADER_SAMPLED_READ_BIT", "VK_ACCESS_2_SHADER_STORAGE_READ_BIT")),
+    "transfer": ("VK_PIPELINE_STAGE_2_TRANSFER_BIT",
+                 ("VK_ACCESS_2_TRANSFER_READ_BIT", "VK_ACCESS_2_TRANSFER_WRITE_BIT")),
+}
+
+
+def groups(size: Sequence[int], local: Sequence[int]) -> tuple[int, int, int]:
+    """Work groups covering `size` (x, y, z) with `local`-sized groups (rounded up)."""
+    g = [-(-int(s) // int(t)) for s, t in zip(size, local, strict=True)]
+    return g[0], g[1], g[2]
+
+
+class ComputePipeline(DeviceObject):
+    """One compute shader with its layout; `layout` (a PipelineLayout) is owned here."""
+
+    _destroy_fn = "vkDestroyPipeline"
+    bind_point = "compute"
+
+    def __init__(self, device: Device, spirv: Path, set_layouts: Sequence[DescriptorSetLayout],
+                 push_bytes: int = 0) -> None:
+        vk = device.vk
+        self.device = device
+        self.layout = PipelineLayout(device, list(set_layouts), push_bytes, stages=("compute",))
+        module = ShaderModule(device, Path(spirv))
+        try:
+            # Keep the stage struct referenced until the call returns: the binding copies it
+            # into the create info, and the copy's pName points into the original's memory.
+            stage = vk.VkPipelineShaderStageCreateInfo(
+                stage=vk.VK_SHADER_STAGE_COMPUTE_BIT, module=module.handle, pName="main")
+            info = vk.VkComputePipelineCreateInfo(stage=stage, layout=self.layout.handle)
+            self.handle = vk.vkCreateComputePipelines(device.handle, None, 1, [info], None)[0]
+        finally:
+            module.destroy()
+        device.track(self)
+
+    def destroy(self) -> None:
+        super().destroy()
+        self.layout.destroy()
+
+
+def stage_access(vk: Any, stage: str) -> tuple[int, int]:
+    flag_name, accesses = STAGES[stage]
+    flags = 0
+    for a in accesses:
+        flags |= getattr(vk, a)
+    return getattr(vk, flag_name), flags

@@ -1,0 +1,215 @@
+"""Image-based lighting by Monte Carlo integration of the glTF 2.0 BRDF, in NumPy: the
+independent reference for shaders/ibl.glsl (which uses the split-sum approximation).
+
+    L_o(v) = integral over the hemisphere of f(v, l) L_env(l) (n.l) dl
+           + multiple-scattering compensation (Fdez-Aguera 2019) of the specular lobe,
+
+with f the glTF 2.0 specification's BRDF (Appendix B: GGX D, height-correlated Smith V,
+Schlick F, `fresnel_mix` of the dielectric with ior 1.5, `conductor_fresnel` of the metal,
+mixed by metallic). The integral is estimated by one-sample multiple importance sampling: each
+direction comes from the GGX lobe or the cosine lobe with probability 1/2, weighted by the
+mixture's pdf (the balance heuristic), so that neither smooth nor rough lobes are noisy.
+
+The compensation term needs the lobe's single-scattering albedo E_ss(n.v) and F-weighted
+albedo; both are integrated here by Monte Carlo too (not read from the GPU's table). In a
+uniform white environment a white metal then returns exactly 1 and a white dielectric 1 up to
+the spec's `fresnel_mix` (which is not exactly energy conserving: within 2%).
+
+`d_ggx` and `f_schlick` are reference/brdf.py's; the height-correlated Smith V is a private
+copy (`_v_smith_ggx_correlated`) until brdf.py has `v_smith_ggx_correlated`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from vkpbr.reference.brdf import d_ggx
+
+__all__ = ["gltf_brdf", "mc_ibl", "Environment", "uniform_environment", "two_tone_environment",
+           "ggx_albedo"]
+
+PI = np.pi
+Environment = Callable[[np.ndarray], np.ndarray]  # unit directions (..., 3) -> RGB (..., 3)
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.sum(a * b, axis=-1)
+
+
+def _v_smith_ggx_correlated(n_dot_l: np.ndarray, n_dot_v: np.ndarray,
+                            alpha: np.ndarray) -> np.ndarray:
+    """glTF 2.0 B.3.2: V = 0.5 / (n.l sqrt(n.v^2 (1 - a^2) + a^2) + n.v sqrt(n.l^2 (1 - a^2) + a^2))."""
+    a2 = alpha * alpha
+    gv = n_dot_l * np.sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2)
+    gl = n_dot_v * np.sqrt(n_dot_l * n_dot_l * (1.0 - a2) + a2)
+    s = gv + gl
+    return np.where(s > 0.0, 0.5 / np.maximum(s, 1e-12), 0.0)
+
+
+def gltf_brdf(n: np.ndarray, v: np.ndarray, l: np.ndarray, c: np.ndarray,
+              metallic: np.ndarray, roughness: np.ndarray) -> np.ndarray:
+    """The glTF 2.0 BRDF f(v, l) (Appendix B.3), (..., 3); zero below the horizon."""
+    n_dot_l = _dot(n, l)
+    n_dot_v = _dot(n, v)
+    h = l + v
+    h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-12)
+    v_dot_h = np.abs(_dot(v, h))
+    n_dot_h = np.clip(_dot(n, h), 0.0, 1.0)
+    alpha = np.asarray(roughness, dtype=np.float64) ** 2
+    spec = (_v_smith_ggx_correlated(np.maximum(n_dot_l, 0.0), np.maximum(n_dot_v, 0.0), alpha)
+            * d_ggx(n_dot_h, alpha))[..., None]
+    fc = ((1.0 - v_dot_h) ** 5)[..., None]
+    c = np.asarray(c, dtype=np.float64)
+    dielectric_f = 0.04 + 0.96 * fc
+    dielectric = (1.0 - dielectric_f) * c / PI + dielectric_f * spec  # fresnel_mix(1.5, ...)
+    metal = spec * (c + (1.0 - c) * fc)  # conductor_fresnel(c, ...)
+    m = np.asarray(metallic, dtype=np.float64)[..., None]
+    f = (1.0 - m) * dielectric + m * metal
+    ok = ((n_dot_l > 0.0) & (n_dot_v > 0.0))[..., None]
+    return np.where(ok, f, 0.0)
+
+
+def _frame(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Tangent and bitangent (..., 3) around unit n (Duff et al. 2017)."""
+    s = np.where(n[..., 2] >= 0.0, 1.0, -1.0)
+    a = -1.0 / (s + n[..., 2])
+    b = n[..., 0] * n[..., 1] * a
+    t = np.stack([1.0 + s * n[..., 0] ** 2 * a, s * b, -s * n[..., 0]], axis=-1)
+    bt = np.stack([b, s + n[..., 1] ** 2 * a, -n[..., 1]], axis=-1)
+    return t, bt
+
+
+def _sample(n: np.ndarray, v: np.ndarray, alpha: np.ndarray, count: int,
+            rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """`count` directions per point (..., count, 3) from the GGX/cosine mixture, and their
+    mixture pdf (..., count)."""
+    shape = n.shape[:-1] + (count,)
+    u1, u2, pick = rng.random(shape), rng.random(shape), rng.random(shape) < 0.5
+    t, bt = _frame(n)
+    t, bt, nn, vv = t[..., None, :], bt[..., None, :], n[..., None, :], v[..., None, :]
+    a = np.asarray(alpha, dtype=np.float64)[..., None]
+    a = np.broadcast_to(a, shape)
+    phi = 2.0 * PI * u1
+    # GGX half vector (Walter et al. 2007), reflected about it.
+    cos_h = np.sqrt((1.0 - u2) / (1.0 + (a * a - 1.0) * u2))
+    sin_h = np.sqrt(np.maximum(1.0 - cos_h * cos_h, 0.0))
+    h = (t * (sin_h * np.cos(phi))[..., None] + bt * (sin_h * np.sin(phi))[..., None]
+         + nn * cos_h[..., None])
+    l_ggx = 2.0 * _dot(vv, h)[..., None] * h - vv
+    # Cosine lobe.
+    r = np.sqrt(u2)
+    l_cos = (t * (r * np.cos(phi))[..., None] + bt * (r * np.sin(phi))[..., None]
+             + nn * np.sqrt(np.maximum(1.0 - u2, 0.0))[..., None])
+    l = np.where(pick[..., None], l_ggx, l_cos)
+    # The mixture's pdf at l.
+    hh = l + vv
+    hh = hh / np.maximum(np.linalg.norm(hh, axis=-1, keepdims=True), 1e-12)
+    n_dot_h = np.clip(_dot(nn, hh), 0.0, 1.0)
+    v_dot_h = np.maximum(np.abs(_dot(vv, hh)), 1e-12)
+    pdf_ggx = d_ggx(n_dot_h, a) * n_dot_h / (4.0 * v_dot_h)
+    pdf_cos = np.maximum(_dot(nn, l), 0.0) / PI
+    return l, 0.5 * pdf_ggx + 0.5 * pdf_cos
+
+
+def ggx_albedo(n_dot_v: np.ndarray, roughness: np.ndarray, f0: np.ndarray | float = 1.0,
+               samples: int = 4096, seed: int = 1) -> np.ndarray:
+    """Directional albedo of the glTF specular lobe with Schlick F of `f0` (..., 3 when f0
+    is a colour, else ...): integral of V D F (n.l) dl by Monte Carlo (E_ss for f0 = 1)."""
+    rng = np.random.default_rng(seed)
+    n_dot_v = np.asarray(n_dot_v, dtype=np.float64)
+    nrm = np.zeros(n_dot_v.shape + (3,))
+    nrm[..., 2] = 1.0
+    v = np.stack([np.sqrt(1.0 - n_dot_v**2), np.zeros_like(n_dot_v), n_dot_v], axis=-1)
+    alpha = np.asarray(roughness, dtype=np.float64) ** 2
+    l, pdf = _sample(nrm, v, alpha, samples, rng)
+    nl = l[..., 2]
+    h = l + v[..., None, :]
+    h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-12)
+    vh = np.abs(_dot(v[..., None, :], h))
+    a = np.broadcast_to(alpha[..., None], nl.shape)
+    spec = _v_smith_ggx_correlated(np.maximum(nl, 0.0), n_dot_v[..., None], a) * d_ggx(
+        np.clip(h[..., 2], 0.0, 1.0), a)
+    w = np.where(nl > 0.0, spec * nl / np.maximum(pdf, 1e-12), 0.0)
+    f0 = np.asarray(f0, dtype=np.float64)
+    fc = (1.0 - vh) ** 5
+    if f0.ndim == 0:
+        return np.mean(w * (f0 + (1.0 - f0) * fc), axis=-1)
+    f = f0[..., None, :] + (1.0 - f0[..., None, :]) * fc[..., None]
+    return np.mean(w[..., None] * f, axis=-2)
+
+
+def mc_ibl(n: np.ndarray, v: np.ndarray, c: np.ndarray, metallic: np.ndarray,
+           roughness: np.ndarray, environment: Environment, samples: int = 2048,
+           seed: int = 0, multiple_scattering: bool = True,
+           coupling: str = "fdez-aguera") -> np.ndarray:
+    """Radiance (..., 3) reflected towards v by the glTF BRDF lit by `environment`.
+
+    Parameters
+    ----------
+    n, v : (..., 3) unit normal and direction towards the viewer.
+    c : (..., 3) base colour; metallic, roughness : (...).
+    environment : radiance of unit directions, (..., 3) -> (..., 3).
+    samples : Monte Carlo samples per point (standard error ~ 1 / sqrt(samples)).
+    multiple_scattering : add Fdez-Aguera's compensation of the specular lobe's lost energy,
+        with E_ss and the F-weighted albedo integrated here (`ggx_albedo`) and the irradiance
+        (cosine-weighted mean radiance) integrated over the same samples.
+    coupling : how the dielectric's diffuse lobe is weighted. "gltf": the specification's
+        `fresnel_mix`, (1 - F(v.h)) per direction, which is not energy conserving at grazing
+        angles (a white smooth dielectric in a white furnace returns 1.3 at n.v = 0.2);
+        "fdez-aguera": the energy-conserving weight 1 - (FssEss + FmsEms) of Fdez-Aguera's
+        listing 3, which ibl.glsl (and the glTF-Sample-Viewer's IBL) uses; its albedo terms
+        integrated here by Monte Carlo.
+    """
+    rng = np.random.default_rng(seed)
+    n, v, c = (np.asarray(x, dtype=np.float64) for x in (n, v, c))
+    metallic = np.broadcast_to(np.asarray(metallic, dtype=np.float64), n.shape[:-1])
+    roughness = np.broadcast_to(np.asarray(roughness, dtype=np.float64), n.shape[:-1])
+    l, pdf = _sample(n, v, roughness**2, samples, rng)
+    env = environment(l)
+    nl = _dot(n[..., None, :], l)
+    w = np.where(nl > 0.0, np.maximum(nl, 0.0) / np.maximum(pdf, 1e-12), 0.0)[..., None]
+    n_dot_v = np.clip(_dot(n, v), 1e-4, 1.0)
+    f0 = (1.0 - metallic)[..., None] * 0.04 + metallic[..., None] * c
+    ess = ggx_albedo(n_dot_v, roughness, 1.0)
+    fss_ess = ggx_albedo(n_dot_v, roughness, f0)
+    ems = (1.0 - ess)[..., None]
+    f_avg = f0 + (1.0 - f0) / 21.0
+    fms_ems = ems * fss_ess * f_avg / (1.0 - ems * f_avg)
+    if not multiple_scattering:
+        fms_ems = np.zeros_like(fms_ems)
+    if coupling == "gltf":
+        f = gltf_brdf(n[..., None, :], v[..., None, :], l, c[..., None, :],
+                      metallic[..., None], roughness[..., None])
+    elif coupling == "fdez-aguera":
+        # The specular lobe with Schlick F of the mixed F0 (the spec's dielectric and
+        # conductor Fresnel terms combined), plus the diffuse lobe weighted by what the
+        # specular lobe (single and multiple scattering) leaves.
+        f_spec = gltf_brdf(n[..., None, :], v[..., None, :], l, np.ones_like(c)[..., None, :],
+                           np.ones_like(metallic)[..., None], roughness[..., None])
+        vv = v[..., None, :]
+        hh = l + vv
+        hh = hh / np.maximum(np.linalg.norm(hh, axis=-1, keepdims=True), 1e-12)
+        fc = ((1.0 - np.abs(_dot(vv, hh))) ** 5)[..., None]
+        f = f_spec * (f0[..., None, :] + (1.0 - f0[..., None, :]) * fc)
+        k_d = c * (1.0 - metallic)[..., None] * (1.0 - fss_ess - fms_ems)
+        f = f + np.where((nl > 0.0)[..., None], k_d[..., None, :] / PI, 0.0)
+    else:
+        raise ValueError(f"coupling {coupling!r}: expected 'gltf' or 'fdez-aguera'")
+    single = np.mean(f * env * w, axis=-2)
+    # Irradiance (cosine-weighted mean radiance) over the same directions: E / pi.
+    irr = np.mean(env * (w / PI), axis=-2)
+    return single + fms_ems * irr
+
+
+def uniform_environment(radiance: float | tuple = 1.0) -> Environment:
+    rgb = np.broadcast_to(np.asarray(radiance, dtype=np.float64), (3,))
+    return lambda d: np.broadcast_to(rgb, d.shape).copy()
+
+
+def two_tone_environment(up: tuple = (1.0, 1.0, 1.0), down: tuple = (0.1, 0.1, 0.1),
+                         axis: tuple = (0.0, 1.0, 0.0)) -> Environment:
+    """`up` radiance where d.axis > 0, `down` elsewhere (a sky over a dark ground)."""
+    up_, down_, ax = (np.asarray(x, dtype=np.float64) for x in (up, down, axis))
+    return lambda d: np.where((d @ ax)[..., None] > 0.0, up_, down_)
