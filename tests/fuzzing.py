@@ -12,8 +12,12 @@ is `scripts/fuzz.sh N` (this file as a script), which prints one table per forma
 Formats and mutations: glTF JSON (types, missing keys, out-of-range indices, counts, offsets,
 node cycles), glTF and GLB bytes, OBJ and MTL bytes, .comp5822mesh bytes, .vkpbr bytes (the
 checksums catch them) and .vkpbr scene JSON re-packed with fresh checksums (intact files with
-invalid contents), texture bytes, and bombs (textures declaring 12000x12000 pixels, accessors
-declaring 2^31 elements).
+invalid contents), texture bytes, bombs (textures declaring 12000x12000 pixels, accessors
+declaring 2^31 elements), and path tricks: a glTF buffer or image, an OBJ mtllib, an MTL map,
+a .comp5822mesh texture or a .vkpbr external image named as `../` chains, absolute paths,
+percent-encoded `%2e%2e/`, `file:` URIs, symlinks leading out, a FIFO, /dev/zero, a folder,
+over-long names. An audit hook (PathGuard) makes any open of a file outside the scene's folder
+(without --allow-outside-paths) or of a non-regular file an unclean outcome, and stops it.
 """
 
 from __future__ import annotations
@@ -21,7 +25,9 @@ from __future__ import annotations
 import base64
 import collections
 import json
+import os
 import random
+import stat
 import struct
 import sys
 import time
@@ -33,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 SEED = 1111
+N_FORMATS = 11  # the rows of the table (Corpus.formats)
 
 _EVIL = [1e30, 1e308, -1, 2**31, 2**32, 2**64, -(2**40), 0, 7, float("nan"), float("inf"), "x",
          "../../etc/passwd", None, [], {}, True, 3.5, [1, 2], [1e30] * 3, {"a": 1}]  # fmt: skip
@@ -234,6 +241,19 @@ class Corpus:
             write_sections(f / "mj.vkpbr", out)
             return f / "mj.vkpbr", "mj.vkpbr"
 
+        tricks = PathTrickCorpus(f / "pt", self)
+        cases = tricks.cases()
+        rng_cases = random.Random(SEED)
+        rng_cases.shuffle(cases)
+        state = {"i": 0}
+
+        def path_trick(rng: random.Random) -> tuple[PathTrickCorpus, str, dict]:
+            # Round-robin over the shuffled (target, trick) cases; one in four with
+            # --allow-outside-paths (the regular-file rule must still hold).
+            target, _, ref = cases[state["i"] % len(cases)]
+            state["i"] += 1
+            return tricks, target, {"ref": ref, "allow_outside": rng.random() < 0.25}
+
         def bomb(rng: random.Random) -> tuple[Path, str]:
             doc = json.loads(json.dumps(self.gltf_doc))
             acc = rng.choice(doc["accessors"])
@@ -252,20 +272,224 @@ class Corpus:
             "vkpbr json (checksums fixed)": vkpbr_json,
             "texture bytes and bombs": texture,
             "count bombs": bomb,
+            "path tricks": path_trick,
         }
 
 
+# --- path tricks ----------------------------------------------------------------------------
+class Forbidden(BaseException):
+    """Raised by PathGuard inside an open() it forbids: a BaseException, so that no loader's
+    `except Exception` can swallow it and carry on."""
+
+
+class PathGuard:
+    """An audit hook (sys.addaudithook; installed once per process, idle until armed) that
+    forbids, while armed, every open of
+
+    - a file under `guard_root` but outside `scene_dir` (unless `allow_outside`),
+    - a system file a scene might name (/etc/passwd, /proc/..., /dev/...) (unless
+      `allow_outside`; devices are not regular files, so they are forbidden always),
+    - anything that exists and is not a regular file (a FIFO, a device, a folder), always.
+
+    The open is stopped (Forbidden) and recorded in `violations`."""
+
+    _installed: PathGuard | None = None
+    SYSTEM = ("/etc/", "/proc/", "/dev/", "/sys/")
+
+    def __init__(self) -> None:
+        self.armed = False
+        self.guard_root = self.scene_dir = ""
+        self.allow_outside = False
+        self.violations: list[str] = []
+
+    @classmethod
+    def get(cls) -> PathGuard:
+        if cls._installed is None:
+            cls._installed = PathGuard()
+            sys.addaudithook(cls._installed._hook)
+        return cls._installed
+
+    def arm(self, guard_root: Path, scene_dir: Path, allow_outside: bool) -> None:
+        self.guard_root = os.path.realpath(guard_root)
+        self.scene_dir = os.path.realpath(scene_dir)
+        self.allow_outside, self.violations, self.armed = allow_outside, [], True
+
+    def disarm(self) -> list[str]:
+        self.armed = False
+        return self.violations
+
+    @staticmethod
+    def _under(path: str, folder: str) -> bool:
+        return path == folder or path.startswith(folder.rstrip(os.sep) + os.sep)
+
+    def _hook(self, event: str, args: tuple) -> None:
+        if event != "open" or not self.armed or isinstance(args[0], int):
+            return
+        try:
+            real = os.path.realpath(os.fsdecode(args[0]))
+            mode = os.stat(real).st_mode
+        except (OSError, ValueError, TypeError):
+            return  # the open fails by itself: nothing is read
+        why = None
+        if not stat.S_ISREG(mode):
+            why = "a file that is not regular"
+        elif not self.allow_outside and (
+                (self._under(real, self.guard_root) and not self._under(real, self.scene_dir))
+                or real.startswith(self.SYSTEM)):
+            why = "a file outside the scene's folder"
+        if why:
+            self.violations.append(f"opened {why}: {real}")
+            raise Forbidden(real)
+
+
+# (name, reference): {e} is the extension of the file the reference is for, {out} the absolute
+# outside folder (holding a valid secret.{e}: read, it would load).
+PATH_TRICKS = (
+    ("dotdot", "../outside/secret.{e}"),
+    ("dotdot chain", "../" * 12 + "etc/passwd"),
+    ("dotdot through a subfolder", "sub/../../outside/secret.{e}"),
+    ("absolute", "{out}/secret.{e}"),
+    ("absolute system file", "/etc/passwd"),
+    ("proc", "/proc/self/environ"),
+    ("percent-encoded dotdot", "%2e%2e/outside/secret.{e}"),
+    ("percent-encoded, upper case", "%2E%2E%2Foutside%2Fsecret.{e}"),
+    ("percent-encoded absolute", "%2Fetc%2Fpasswd"),
+    ("file URI", "file://{out}/secret.{e}"),
+    ("file URI, system file", "file:///etc/passwd"),
+    ("file: relative", "file:../outside/secret.{e}"),
+    ("backslashes", "..\\outside\\secret.{e}"),
+    ("symlink to a file outside", "link.{e}"),
+    ("symlink to a folder outside", "linkdir/secret.{e}"),
+    ("FIFO", "fifo.{e}"),
+    ("/dev/zero", "/dev/zero"),
+    ("symlink to /dev/zero", "zero.{e}"),
+    ("folder", "dir.{e}"),
+    ("dot", "."),
+    ("empty", ""),
+    ("name of 300 characters", "a" * 300 + ".{e}"),
+    ("path of 5,000 characters", "/".join(["b" * 200] * 25) + ".{e}"),
+    ("NUL byte", "ok\0.{e}"),
+    ("inside (control: loads)", "sub/../ok.{e}"),
+)
+# (name, extension of the named file): what names the file.
+PATH_TARGETS = (("glTF buffer", "bin"), ("glTF image", "png"), ("OBJ mtllib", "mtl"),
+                ("MTL map", "png"), (".comp5822mesh texture", "png"), (".vkpbr image", "png"))
+
+
+class PathTrickCorpus:
+    """A scene folder `root/scene` (ok.bin, ok.png, ok.mtl, sub/, dir.*/, fifo.*, link.* and
+    zero.* symlinks, linkdir/) beside `root/outside` (valid secret.bin, secret.png, secret.mtl),
+    and one scene file per (target, trick) naming the trick's reference."""
+
+    def __init__(self, root: Path, corpus: Corpus) -> None:
+        self.root, self.scene_dir, self.outside = root, root / "scene", root / "outside"
+        self.scene_dir.mkdir(parents=True)
+        (self.scene_dir / "sub").mkdir()
+        self.outside.mkdir()
+        mtl = b"newmtl m\nKd 0 1 0\n"
+        for folder, stem in ((self.scene_dir, "ok"), (self.outside, "secret")):
+            (folder / f"{stem}.bin").write_bytes(_gltf_buffer())
+            (folder / f"{stem}.png").write_bytes(_png((255, 0, 255, 255)))
+            (folder / f"{stem}.mtl").write_bytes(mtl)
+        for ext in ("bin", "png", "mtl"):
+            os.symlink(self.outside / f"secret.{ext}", self.scene_dir / f"link.{ext}")
+            os.symlink("/dev/zero", self.scene_dir / f"zero.{ext}")
+            os.mkfifo(self.scene_dir / f"fifo.{ext}")
+            (self.scene_dir / f"dir.{ext}").mkdir()
+        os.symlink(self.outside, self.scene_dir / "linkdir")
+        self.gltf_doc = _gltf_doc("ok.bin", "ok.png")
+        self.comp = corpus.comp  # its one texture is "t.png" (6 bytes with the NUL)
+        from vkpbr.bake.bake import bake_file
+        from vkpbr.scene.baked_file import read_sections
+
+        base = self.scene_dir / "base.gltf"
+        base.write_text(json.dumps(self.gltf_doc))
+        bake_file(base, self.scene_dir / "base.vkpbr", progress=False)
+        self.sections = read_sections(self.scene_dir / "base.vkpbr")
+        base.unlink()
+        (self.scene_dir / "base.vkpbr").unlink()
+
+    def reference(self, trick: str, ext: str) -> str:
+        return trick.replace("{e}", ext).replace("{out}", self.outside.as_posix())
+
+    def write(self, target: str, ref: str) -> Path:
+        """The scene file of `target` naming `ref`; every one is called pt.* (errors must
+        name it: "pt." is in no other name)."""
+        f = self.scene_dir
+        if target in ("glTF buffer", "glTF image"):
+            doc = json.loads(json.dumps(self.gltf_doc))
+            if target == "glTF buffer":
+                doc["buffers"][0]["uri"] = ref
+            else:
+                doc["images"][0]["uri"] = ref
+            (f / "pt.gltf").write_text(json.dumps(doc))
+            return f / "pt.gltf"
+        if target in ("OBJ mtllib", "MTL map"):
+            lib = ref if target == "OBJ mtllib" else "pt.mtl"
+            (f / "pt.mtl").write_bytes(b"newmtl m\nKd 1 1 1\nmap_Kd " + os.fsencode(ref) + b"\n")
+            (f / "pt.obj").write_bytes(b"mtllib " + os.fsencode(lib) + b"\nusemtl m\nv 0 0 0\n"
+                                       b"v 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n")
+            return f / "pt.obj"
+        if target == ".comp5822mesh texture":
+            raw = os.fsencode(ref) + b"\0"
+            old = struct.pack("<I", 6) + b"t.png\0"
+            assert self.comp.count(old) == 1
+            (f / "pt.comp5822mesh").write_bytes(
+                self.comp.replace(old, struct.pack("<I", len(raw)) + raw))
+            return f / "pt.comp5822mesh"
+        from vkpbr.scene.baked_file import write_sections
+
+        out = []
+        for name, data in self.sections:
+            if name == "scene":
+                scene = json.loads(data)
+                scene["images"][0]["path"] = ref
+                data = json.dumps(scene).encode()
+            out.append((name, data))
+        write_sections(f / "pt.vkpbr", out)
+        return f / "pt.vkpbr"
+
+    def cases(self) -> list[tuple[str, str, str]]:
+        """Every (target, trick name, reference)."""
+        return [(target, name, self.reference(trick, ext))
+                for target, ext in PATH_TARGETS for name, trick in PATH_TRICKS]
+
+
+def run_path_trick(tricks: PathTrickCorpus, target: str, ref: str,
+                   allow_outside: bool = False) -> tuple[str, str]:
+    """Load the scene of (target, ref) under the PathGuard, decoding its textures too when
+    it loads (the image path is read then); (outcome, detail) as `run_one`."""
+    path = tricks.write(target, ref)
+    guard = PathGuard.get()
+    guard.arm(tricks.root, tricks.scene_dir, allow_outside)
+    try:
+        outcome, detail = run_one(path, "pt.", allow_outside_paths=allow_outside, decode=True)
+    finally:
+        violations = guard.disarm()
+    if violations:
+        return "unclean", f"{target} {ref[:80]!r}: {violations[0]}"
+    return outcome, detail and f"{target} {ref[:80]!r}: {detail}"
+
+
 # --- running --------------------------------------------------------------------------------
-def run_one(path: Path, names: str) -> tuple[str, str]:
-    """(outcome, detail) of loading `path`: loaded / clean / unclean."""
+def run_one(path: Path, names: str, allow_outside_paths: bool = False,
+            decode: bool = False) -> tuple[str, str]:
+    """(outcome, detail) of loading `path`: loaded / clean / unclean. `decode`: decode the
+    loaded scene's textures too (as the renderer would)."""
     from vkpbr.errors import VkpbrError
     from vkpbr.scene.loader import load_scene
 
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            load_scene(path)
+            scene = load_scene(path, allow_outside_paths=allow_outside_paths)
+            if decode:
+                from vkpbr.scene.textures import decode_images
+
+                decode_images(scene, workers=1)
         outcome, detail = "loaded", ""
+    except Forbidden as exc:
+        outcome, detail = "unclean", f"forbidden open: {exc}"
     except VkpbrError as exc:
         text = str(exc)
         ok = "\n" not in text and names in text
@@ -290,8 +514,11 @@ def fuzz(folder: Path, per_format: int, seed: int = SEED) -> tuple[dict, list[st
         for name, make in corpus.formats().items():
             c = counts[name] = collections.Counter()
             for i in range(per_format):
-                path, names = make(rng)
-                outcome, detail = run_one(path, names)
+                made = make(rng)
+                if isinstance(made[0], PathTrickCorpus):
+                    outcome, detail = run_path_trick(made[0], made[1], **made[2])
+                else:
+                    outcome, detail = run_one(*made)
                 c["tried"] += 1
                 c[outcome] += 1
                 if outcome == "unclean":
@@ -315,7 +542,7 @@ if __name__ == "__main__":
     import tempfile
 
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 2000
-    formats = 10
+    formats = N_FORMATS
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
         counts, failures = fuzz(Path(tmp), max(1, n // formats), int(sys.argv[2]) if len(sys.argv) > 2 else SEED)

@@ -1,4 +1,4 @@
-"""The fuzz suite's quick tier (issue 11): 60 seeded inputs of each of 10 formats through
+"""The fuzz suite's quick tier (issue 11): 60 seeded inputs of each of 11 formats (path tricks included) through
 `load_scene`; every one must load or fail with vkpbr's one-line error naming the file
 (tests/fuzzing.py). The long tier is `scripts/fuzz.sh N`."""
 

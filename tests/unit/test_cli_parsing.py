@@ -123,6 +123,45 @@ def test_every_render_option_field_has_one_flag() -> None:
     assert len(set(flags)) == len(flags)
 
 
+# Every command that loads a user's scene file (issue 11): the same scene-loading options,
+# each defined once in SHARED_OPTIONS (the same help text wherever it appears).
+SCENE_COMMANDS = {"render": ["scene.gltf"], "view": ["scene.gltf"],
+                  "bake": ["scene.gltf", "-o", "x.vkpbr"], "bench": ["--sponza", "scene.gltf"]}
+
+
+@pytest.mark.parametrize("command", sorted(SCENE_COMMANDS))
+def test_every_scene_loading_command_takes_the_loading_options(command: str) -> None:
+    from vkpbr.app.options import SCENE_LOADING_FLAGS
+
+    rest = SCENE_COMMANDS[command]
+    plain = parse(command, *rest)
+    assert plain.allow_outside_paths is False and plain.strict is False
+    flagged = parse(command, *rest, "--allow-outside-paths", "--strict")
+    assert flagged.allow_outside_paths is True and flagged.strict is True
+    sub = build_parser()._subparsers._group_actions[0].choices[command]
+    sub.format_help()  # runs deferred additions
+    by_flag = {a.option_strings[0]: a.help for a in sub._actions if a.option_strings}
+    for spec in SHARED_OPTIONS:
+        if spec.flag in SCENE_LOADING_FLAGS:
+            assert by_flag[spec.flag] == spec.help, (command, spec.flag)
+
+
+def test_bench_passes_allow_outside_paths_to_the_loader(tmp_path) -> None:  # noqa: ANN001
+    """`vkpbr bench --sponza` loads a user's file: the path policy applies, the flag lifts it."""
+    from vkpbr.app import bench_cmd
+    from vkpbr.scene.resources import ResourceRefused
+
+    (tmp_path / "x.mtl").write_text("newmtl m\nKd 1 0 0\n")
+    (tmp_path / "in").mkdir()
+    obj = tmp_path / "in" / "s.obj"
+    obj.write_text("mtllib ../x.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    with pytest.raises(ResourceRefused, match=r"s\.obj: material library refers to \.\./x\.mtl "
+                                              "outside the scene's folder; pass --allow-outside"):
+        bench_cmd._sponza(parse("bench", "--sponza", str(obj)))
+    scene = bench_cmd._sponza(parse("bench", "--sponza", str(obj), "--allow-outside-paths"))
+    assert [m.base_color_factor for m in scene.materials] == [(1.0, 0.0, 0.0, 1.0)]
+
+
 def test_help_does_not_import_numpy() -> None:
     """The shared options are added when a command is used, so `vkpbr --help` stays fast."""
     import subprocess

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from vkpbr.app.log import say
+from vkpbr.app.options import add_scene_loading_options
 from vkpbr.errors import UsageError
 
 __all__ = ["EPILOG", "add_parser", "check_out", "format_report", "run"]
@@ -53,12 +54,7 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     p.add_argument("--embed-textures", action="store_true",
                    help="store decoded RGBA8 mip chains in the file (larger, loads faster)")
-    p.add_argument("--strict", action="store_true",
-                   help="a missing texture file is an error (default: bake with a warning)")
-    p.add_argument("--allow-outside-paths", action="store_true",
-                   help="read files the scene names outside its folder (../x.bin, absolute "
-                   "paths, symlinks out); by default such a buffer or mesh is an error and "
-                   "such a texture is left out like a missing one (docs/security.md)")
+    add_scene_loading_options(p)  # --strict, --allow-outside-paths: app/options.py
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -124,8 +120,7 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     report = bake_file(args.scene, args.out, embed_textures=args.embed_textures,
                        progress=not (args.no_progress or args.json),
-                       strict=getattr(args, "strict", False),
-                       allow_outside_paths=getattr(args, "allow_outside_paths", False))
+                       strict=args.strict, allow_outside_paths=args.allow_outside_paths)
     seconds = time.perf_counter() - start
     # Peak resident memory of this process (Linux reports ru_maxrss in KiB).
     report["peak_memory_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024

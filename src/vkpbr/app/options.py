@@ -21,7 +21,8 @@ from vkpbr.app.parsing import light_arg, vec3_arg
 if TYPE_CHECKING:
     from vkpbr.render.options import RenderOptions
 
-__all__ = ["OptionSpec", "SHARED_OPTIONS", "add_options", "render_options_from_args", "option_flags"]
+__all__ = ["OptionSpec", "SHARED_OPTIONS", "SCENE_LOADING_FLAGS", "add_options",
+           "add_scene_loading_options", "render_options_from_args", "option_flags"]
 
 Kind = Literal["enum", "float", "vec3", "off", "on", "text", "dir?", "choice", "append"]
 
@@ -104,6 +105,11 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
 )
 
 
+# The options every command that loads a user's scene file takes (render, view, bake, bench):
+# one definition each, in SHARED_OPTIONS; `add_scene_loading_options` adds them elsewhere.
+SCENE_LOADING_FLAGS: tuple[str, ...] = ("--strict", "--allow-outside-paths")
+
+
 def _enum_types() -> dict[str, type]:
     from vkpbr.render.options import ENUM_FIELDS
 
@@ -117,10 +123,12 @@ def _label(text: str) -> str:
 
 def add_options(parser: argparse.ArgumentParser, table: tuple[OptionSpec, ...] = SHARED_OPTIONS) -> None:
     """Add every option of `table` to `parser`, in argument groups named by `spec.group`."""
-    from vkpbr.render.options import RenderOptions
+    defaults: Any = None
+    enums: dict[str, type] = {}
+    if any(spec.field for spec in table):  # only then the render layer (NumPy) is needed
+        from vkpbr.render.options import RenderOptions
 
-    defaults = RenderOptions()
-    enums = _enum_types()
+        defaults, enums = RenderOptions(), _enum_types()
     groups: dict[str, Any] = {}
     for spec in table:
         group = groups.get(spec.group)
@@ -149,6 +157,16 @@ def add_options(parser: argparse.ArgumentParser, table: tuple[OptionSpec, ...] =
         elif spec.kind == "append":
             kw.update(action="append", type=light_arg(spec.flag))
         group.add_argument(spec.flag, **kw)
+
+
+def add_scene_loading_options(parser: argparse.ArgumentParser,
+                              flags: tuple[str, ...] = SCENE_LOADING_FLAGS) -> None:
+    """Add the scene-loading options (`--strict`, `--allow-outside-paths`) of SHARED_OPTIONS
+    to a command that loads a scene but takes no render options (`bake`, `bench`); imports
+    nothing of the render layer."""
+    table = tuple(spec for spec in SHARED_OPTIONS if spec.flag in flags)
+    assert len(table) == len(flags), flags
+    add_options(parser, table)
 
 
 def render_options_from_args(args: argparse.Namespace,

@@ -353,7 +353,7 @@ def embed_images(scene: Scene, baked: BakedScene, workers: int | None = None) ->
     """
     srgb = _srgb_images(scene)
     workers = max(1, workers or min(8, os.cpu_count() or 1))
-    pixels = decode_images(scene.images, workers=workers)
+    pixels = decode_images(scene, workers=workers)  # a Scene: errors name its file
     with ThreadPoolExecutor(workers) as pool:
         chains = list(pool.map(lambda ip: None if ip[1] is None else mip_chain(ip[1], ip[0] in srgb),
                                enumerate(pixels)))

@@ -260,7 +260,7 @@ class GpuScene:
         from vkpbr.scene.textures import decode_images
 
         max_size = int(self.device.limits.maxImageDimension2D)
-        return decode_images(images, max_size=max_size)
+        return decode_images(self.scene, max_size=max_size)  # a Scene: errors name its file
 
     def _merge_alpha_masks(self, pixels: list[np.ndarray | None]) -> list[Material]:
         """Materials with a separate alpha mask (OBJ map_d, .comp5822mesh) get one image whose

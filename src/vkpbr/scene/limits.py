@@ -9,6 +9,11 @@ textures, 0.26 M triangles); raise them through the environment:
     VKPBR_MAX_TRIANGLES       triangles in one scene (default 2**26, 67 M)
     VKPBR_MAX_VERTICES        vertices in one scene (default 2**26)
     VKPBR_MAX_TEXTURE_FILE_BYTES  bytes read of one texture file (default 2**30)
+    VKPBR_MAX_TEXTURE_BYTES   decoded RGBA8 bytes of all of one scene's textures (default
+                              2**32, 4 GiB: 256 textures of 2048 x 2048)
+
+The OBJ reader checks its statement counts against the vertex and triangle limits before it
+builds any array; every format's loaded scene is checked again (scene/validate.py).
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ class Limits:
     max_triangles: int = 1 << 26
     max_vertices: int = 1 << 26
     max_texture_file_bytes: int = 1 << 30
+    max_texture_bytes: int = 1 << 32
 
 
 def _env_int(name: str, default: int) -> int:
@@ -44,4 +50,5 @@ def limits() -> Limits:
     return Limits(_env_int("VKPBR_MAX_TEXTURE_PIXELS", d.max_texture_pixels),
                   _env_int("VKPBR_MAX_TRIANGLES", d.max_triangles),
                   _env_int("VKPBR_MAX_VERTICES", d.max_vertices),
-                  _env_int("VKPBR_MAX_TEXTURE_FILE_BYTES", d.max_texture_file_bytes))
+                  _env_int("VKPBR_MAX_TEXTURE_FILE_BYTES", d.max_texture_file_bytes),
+                  _env_int("VKPBR_MAX_TEXTURE_BYTES", d.max_texture_bytes))

@@ -17,6 +17,7 @@ import numpy as np
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.geometry import drop_nonfinite, ensure_normals, normalize_mesh_arrays, polygon_fan
+from vkpbr.scene.limits import limits
 from vkpbr.scene.resources import (
     ResourcePolicy,
     ResourceRefused,
@@ -101,6 +102,41 @@ def _resolve(path: Path, idx: np.ndarray, defined: np.ndarray, total: int, what:
     return out
 
 
+def _check_counts(path: Path, order: np.ndarray) -> None:
+    """Refuse a file with more v/vt/vn statements than the vertex limit, or more faces than
+    the triangle limit (each face is at least one triangle), from the statement list alone:
+    a 1,000,000-face file fails here in a few MiB, not after building ~0.7 GiB of arrays."""
+    cap = limits()
+    for kw, what in ((b"v", "vertex positions"), (b"vt", "texture coordinates"),
+                     (b"vn", "normals")):
+        n = int(np.count_nonzero(order == kw))
+        if n > cap.max_vertices:
+            raise SceneError(path, f"{n:,} {what} ({kw.decode()} statements) are over the "
+                                   f"limit of {cap.max_vertices:,} vertices; raise it with "
+                                   "VKPBR_MAX_VERTICES")
+    faces = int(np.count_nonzero(order == b"f"))
+    if faces > cap.max_triangles:
+        raise SceneError(path, f"{faces:,} faces are over the limit of {cap.max_triangles:,} "
+                               "triangles; raise it with VKPBR_MAX_TRIANGLES")
+
+
+def _check_corners(path: Path, rows: list[bytes]) -> None:
+    """Refuse faces whose fan triangulation (corners - 2 per face) exceeds the triangle
+    limit, counting corners as word starts in the rows' bytes (one byte of work space per
+    byte of face text) before they are split into Python objects."""
+    if not rows:
+        return
+    text = np.frombuffer(b" ".join(rows), np.uint8)
+    blank = (text == 0x20) | (text == 0x09) | (text == 0x0B) | (text == 0x0C)
+    corners = int(np.count_nonzero(~blank[1:] & blank[:-1])) + int(not blank[0])
+    triangles = corners - 2 * len(rows)
+    cap = limits().max_triangles
+    if triangles > cap:
+        raise SceneError(path, f"{len(rows):,} faces of {corners:,} corners make "
+                               f"{triangles:,} triangles, over the limit of {cap:,}; raise it "
+                               "with VKPBR_MAX_TRIANGLES")
+
+
 def load_obj(path: str | Path, policy: ResourcePolicy | None = None) -> Scene:
     """Load a Wavefront OBJ file and the MTL libraries it names.
 
@@ -129,12 +165,17 @@ def load_obj(path: str | Path, policy: ResourcePolicy | None = None) -> Scene:
 def _parse(path: Path, data: bytes, policy: ResourcePolicy) -> Scene:
     """load_obj's body: `data` is the whole file."""
     data = re.sub(rb"\\\r?\n", b" ", data)  # line continuations
+    # One byte string per statement (CPython shares the 1-byte ones): ~9 bytes a statement.
     order = np.array(_STATEMENT.findall(data) or [b""])
+    _check_counts(path, order)  # before any per-vertex or per-face array is built
+    face_rows = _rows(data, b"f")
+    _check_corners(path, face_rows)
     v = _floats(path, _rows(data, b"v"), 3, 3, "v")
     vt = _floats(path, _rows(data, b"vt"), 2, 1, "vt")
     vn = _floats(path, _rows(data, b"vn"), 3, 3, "vn")
     vt[:, 1] = 1.0 - vt[:, 1]  # OBJ's origin is bottom-left, glTF's (ours) top-left
-    toks, _, counts = _tokens(path, _rows(data, b"f"), "f")
+    toks, _, counts = _tokens(path, face_rows, "f")
+    del face_rows
     if not len(counts):
         raise SceneError(path, "no faces")
     if counts.min() < 3:

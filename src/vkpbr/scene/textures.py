@@ -11,6 +11,7 @@ import errno
 import io
 import logging
 import os
+import threading
 import warnings
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -24,7 +25,8 @@ from vkpbr.scene.limits import limits
 from vkpbr.scene.resources import is_regular_file, read_resource
 from vkpbr.scene.types import Image, Scene
 
-__all__ = ["check_texture_files", "decode_image", "decode_images", "missing_texture_files"]
+__all__ = ["TextureBudget", "check_texture_files", "decode_image", "decode_images",
+           "missing_texture_files"]
 
 log = logging.getLogger(__name__)
 
@@ -129,8 +131,49 @@ def _grey_to_rgba(grey: np.ndarray) -> np.ndarray:
     return out
 
 
-def decode_image(image: Image, max_size: int | None = None) -> tuple[np.ndarray | None, list[str]]:
+class TextureBudget:
+    """The decoded RGBA8 bytes one scene's textures may take together (VKPBR_MAX_TEXTURE_BYTES),
+    shared by the decoding threads. Each texture takes its share from its header, before its
+    pixels are decoded; the first that does not fit makes every later one stop at once.
+
+    Parameters
+    ----------
+    cap : bytes allowed (default: `limits().max_texture_bytes`).
+    """
+
+    def __init__(self, cap: int | None = None) -> None:
+        self.cap = limits().max_texture_bytes if cap is None else cap
+        self.used = 0
+        self.over: str | None = None  # the first texture that did not fit, and its size
+        self._lock = threading.Lock()
+
+    def take(self, nbytes: int, name: str, size: tuple[int, int]) -> None:
+        """Reserve `nbytes` for texture `name` of `size` (W, H); raises _OverBudget."""
+        with self._lock:
+            if self.over is None and self.used + nbytes > self.cap:
+                self.over = (f"{name} ({size[0]}x{size[1]}, {nbytes:,} bytes) after "
+                             f"{self.used:,} bytes of earlier textures")
+            if self.over is not None:
+                raise _OverBudget
+            self.used += nbytes
+
+    def error(self, source: object) -> SceneError:
+        """The one-line error naming the scene file, the texture and the option."""
+        return SceneError(source, f"its textures decode to more than {self.cap:,} bytes of "
+                                  f"RGBA8 (at {self.over}); raise the limit with "
+                                  "VKPBR_MAX_TEXTURE_BYTES")
+
+
+class _OverBudget(Exception):  # noqa: N818 - internal signal, never leaves decode_images
+    """A texture did not fit in the TextureBudget (never caught as "undecodable")."""
+
+
+def decode_image(image: Image, max_size: int | None = None,
+                 budget: TextureBudget | None = None) -> tuple[np.ndarray | None, list[str]]:
     """Decode one image.
+
+    `budget`, if given, is charged the decoded bytes before decoding; a texture that does not
+    fit raises (decode_images turns that into the scene's SceneError).
 
     Returns
     -------
@@ -145,8 +188,10 @@ def decode_image(image: Image, max_size: int | None = None) -> tuple[np.ndarray 
         messages.append(("missing", f"{image.name} ({image.refused})"))
         return None, messages
     try:
+        if budget is not None and budget.over is not None:
+            raise _OverBudget  # another thread went over: decode nothing more
         with np.errstate(all="ignore"):
-            return _decode(image, max_size, messages), messages
+            return _decode(image, max_size, messages, budget), messages
     except (FileNotFoundError, NotADirectoryError):
         messages.append(("missing", image.name))
     except OSError as exc:
@@ -162,13 +207,16 @@ def decode_image(image: Image, max_size: int | None = None) -> tuple[np.ndarray 
     return None, messages
 
 
-def _decode(image: Image, max_size: int | None, messages: list[tuple[str, str]]) -> np.ndarray:
+def _decode(image: Image, max_size: int | None, messages: list[tuple[str, str]],
+            budget: TextureBudget | None = None) -> np.ndarray:
     """decode_image's body; raises on failure, appends notes (downscaling) to `messages`."""
     if image.pixels is not None:
         px = np.asarray(image.pixels)
         if px.ndim != 3 or px.shape[2] != 4 or px.dtype != np.uint8:
             raise ValueError(f"pixels must be (H, W, 4) uint8, not {px.shape} {px.dtype}")
         if not _too_big(px.shape[1], px.shape[0], max_size):
+            if budget is not None:
+                budget.take(px.nbytes, image.name, (px.shape[1], px.shape[0]))
             return np.ascontiguousarray(px)
         pil = PILImage.fromarray(px, "RGBA")
     else:
@@ -193,13 +241,17 @@ def _decode(image: Image, max_size: int | None, messages: list[tuple[str, str]])
         if pil.width * pil.height > cap:  # refused before a byte is decoded
             raise ValueError(f"{pil.width}x{pil.height} is over the {cap:,}-pixel texture limit "
                              "(VKPBR_MAX_TEXTURE_PIXELS)")
+        if budget is not None:  # the bytes this texture will take, before decoding it
+            w, h = _out_size(pil.width, pil.height, max_size)
+            budget.take(4 * w * h, image.name, (w, h))
         if max_size and pil.format == "JPEG":
             pil.draft("RGB", (max_size, max_size))  # JPEG can decode at 1/2..1/8 scale: faster
         pil.load()
     if _too_big(pil.width, pil.height, max_size):
-        assert max_size is not None
-        scale = max_size / max(pil.width, pil.height)
-        size = (max(1, round(pil.width * scale)), max(1, round(pil.height * scale)))
+        if budget is not None and image.pixels is not None:
+            w, h = _out_size(pil.width, pil.height, max_size)
+            budget.take(4 * w * h, image.name, (w, h))
+        size = _out_size(pil.width, pil.height, max_size)
         messages.append(("downscaled",
                          f"{image.name}: {pil.width}x{pil.height} downscaled to {size[0]}x{size[1]}"))
         if pil.mode not in ("RGB", "RGBA", "L", "LA"):
@@ -212,10 +264,20 @@ def _too_big(width: int, height: int, max_size: int | None) -> bool:
     return max_size is not None and max(width, height) > max_size
 
 
+def _out_size(width: int, height: int, max_size: int | None) -> tuple[int, int]:
+    """(W, H) after downscaling to at most `max_size` (aspect kept), as decoded."""
+    if not _too_big(width, height, max_size):
+        return width, height
+    assert max_size is not None
+    scale = max_size / max(width, height)
+    return max(1, round(width * scale)), max(1, round(height * scale))
+
+
 def decode_images(
     scene_or_images: Scene | Sequence[Image],
     max_size: int | None = None,
     workers: int | None = None,
+    source: str | os.PathLike[str] | None = None,
 ) -> list[np.ndarray | None]:
     """Decode every image of a scene (or a list of images) to RGBA8, in parallel.
 
@@ -224,6 +286,8 @@ def decode_images(
     scene_or_images : a Scene (its `images`) or a sequence of Image.
     max_size : images wider or taller than this are downscaled (aspect kept).
     workers : decoding threads; default min(8, CPU count).
+    source : the scene file, for the total-bytes error (default: the Scene's `source`, else
+        its name).
 
     Returns
     -------
@@ -232,20 +296,34 @@ def decode_images(
     binds a 1x1 white, or flat-normal, texture), because only it knows which default suits
     the slot the image is used in.
 
+    Raises
+    ------
+    SceneError : naming the scene, when the decoded RGBA8 bytes of all its textures would pass
+        VKPBR_MAX_TEXTURE_BYTES (`limits().max_texture_bytes`, default 4 GiB). Checked from
+        each header before that texture is decoded; nothing more is decoded after.
+
     Notes
     -----
     Logged on "vkpbr.scene.textures", at most one line per kind: undecodable images and
     downscaled images as WARNING (count and first), missing files as INFO only, because
     `load_scene` has already said so in its own summary line (check_texture_files).
     """
-    images = scene_or_images.images if isinstance(scene_or_images, Scene) else scene_or_images
+    if isinstance(scene_or_images, Scene):
+        images = scene_or_images.images
+        source = source or scene_or_images.source or scene_or_images.name
+    else:
+        images = scene_or_images
     if not images:
         return []
     workers = workers or min(8, os.cpu_count() or 1)
     if max_size is not None and max_size < 1:
         raise ValueError(f"max_size must be >= 1, got {max_size}")
+    budget = TextureBudget()
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        results = list(pool.map(lambda img: decode_image(img, max_size), images))
+        futures = [pool.submit(decode_image, img, max_size, budget) for img in images]
+    if budget.over is not None:  # every future is done (the pool is shut down)
+        raise budget.error(source or "the scene's textures")
+    results = [f.result() for f in futures]
     notes: dict[str, list[str]] = {}
     for _, messages in results:
         for kind, text in messages:
