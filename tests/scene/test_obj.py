@@ -235,3 +235,25 @@ def test_without_tinyobjloader_the_error_says_what_to_install(tmp_path: Path, mo
     with pytest.raises(SceneError, match=r"a\.obj: reading OBJ files needs tinyobjloader: pip "
                                          r"install tinyobjloader==2\.0\.0rc13$"):
         load_obj(path)
+
+
+def test_tinyobjloader_numbers_match_the_exact_parse(tmp_path: Path, monkeypatch) -> None:  # noqa: ANN001
+    """tinyobjloader's float parse against NumPy's on numbers as tools write them (fixed,
+    exponent, signs, many digits): positions and texcoords equal after the float32 cast."""
+    import vkpbr.scene.obj as obj
+
+    rng = np.random.default_rng(7)
+    values = np.concatenate([rng.normal(0, 1e3, 300), rng.normal(0, 1e-3, 300), rng.random(300)])
+    forms = ["{:.8f}", "{:.6e}", "{:+.3f}", "{!r}", "{:.17g}", "{:.0f}."]
+    text = "".join(f"v {forms[i % 6].format(a)} {forms[(i + 1) % 6].format(b)} "
+                   f"{forms[(i + 2) % 6].format(c)}\nvt {values[i]:.7f} {values[-i]:.5e}\n"
+                   for i, (a, b, c) in enumerate(values.reshape(-1, 3).tolist()))
+    n = len(values) // 3
+    text += "".join(f"f {i}/{i} {i + 1}/{i + 1} {i + 2}/{i + 2}\n" for i in range(1, n - 1))
+    path = tmp_path / "numbers.obj"
+    path.write_text(text)
+    assert obj._plain_vertex_lines(path.read_bytes())  # the fast path reads this file
+    fast = load_obj(path)
+    monkeypatch.setattr(obj, "_plain_vertex_lines", lambda data: False)
+    exact = load_obj(path)
+    assert _arrays(fast) == _arrays(exact)
