@@ -2,11 +2,11 @@
 
 The public API, importable from the package itself::
 
-    from vkpbr import Renderer, load_scene, Scene, Camera, Light, RenderOptions
+    from vkpbr import Renderer, load_scene, Scene, Camera, Light, RenderOptions, show
 
     with Renderer(load_scene("scene.gltf")) as r:   # Renderer() renders the built-in scene
         rgba = r.render(size=(640, 480))            # (480, 640, 4) uint8, sRGB
-    vkpbr.show(rgba)                                # inline in a notebook (Jupyter)
+    show(rgba)                                      # inline in a notebook (Jupyter)
 
 The names are imported on first use (module `__getattr__`), so `import vkpbr` stays fast
 and works on a machine without a Vulkan loader; only `Renderer` needs one.
