@@ -269,3 +269,17 @@ def test_ply_texture_goes_through_the_path_policy(trimesh, tmp_path: Path, rng) 
                                                  r"\(outside the scene's folder\)"):
                 scene = load_scene(tmp_path / "sub" / "box.ply")
             assert not any(np.array_equal(img.pixels[..., :3], texel) for img in scene.images)
+
+
+def test_nested_nodes_get_world_transforms(trimesh) -> None:  # noqa: ANN001
+    tscene = trimesh.Scene()
+    parent = trimesh.transformations.rotation_matrix(0.5, [0.0, 0.0, 1.0])
+    parent[:3, 3] = (3.0, 0.0, 0.0)
+    child = trimesh.transformations.scale_and_translate(2.0, (0.0, 1.0, 0.0))
+    tscene.graph.update(frame_from=tscene.graph.base_frame, frame_to="parent", matrix=parent)
+    tscene.add_geometry(trimesh.creation.box(), node_name="child", geom_name="box",
+                        parent_node_name="parent", transform=child)
+    scene = vkpbr.Scene.from_trimesh(tscene)
+    (node,) = scene.nodes
+    np.testing.assert_allclose(node.matrix, parent @ child, atol=1e-6)
+    np.testing.assert_allclose(world_triangles(scene), canonical(tscene.triangles), atol=1e-5)
