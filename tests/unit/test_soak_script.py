@@ -52,12 +52,13 @@ def test_trimming_returns_freed_heap_and_keeps_live_memory(soak) -> None:  # noq
 
 
 @pytest.mark.timeout(240)
-@pytest.mark.parametrize("leak_kib", [0, 1024])
+@pytest.mark.parametrize("leak_kib", [0, 4096])
 def test_a_short_soak_passes_and_a_leak_fails(soak, monkeypatch, capsys, leak_kib: int) -> None:  # noqa: ANN001
     """500 frames of the built-in scene at 16x16 on one renderer, in batches of 20, with the
-    short run's bounds (8 MiB, 10 MiB per 1,000 frames: lavapipe's heap moves by a MiB or two
-    in 400 frames, so the long tier's 20 KiB slope is for 100,000-frame runs): no leak passes;
-    1 MiB kept per batch (51 KiB a frame, 20 MiB in all) fails both bounds."""
+    short run's bounds (40 MiB, 100 MiB per 1,000 frames: a 13 MiB block of lavapipe's is alive
+    at some samples and not others, and inside the whole suite's process the heap moves by
+    more, so the long tier's 8 MiB and 20 KiB per 1,000 frames are for 100,000-frame runs): no
+    leak passes; 4 MiB kept per batch (80 MiB in all, 200 MiB per 1,000 frames) fails both."""
     import vkpbr
 
     kept: list[bytes] = []
@@ -73,12 +74,12 @@ def test_a_short_soak_passes_and_a_leak_fails(soak, monkeypatch, capsys, leak_ki
     # long tier (scripts/soak.py's default) soaks those.
     status = soak.main(["0", "500", "--size", "16x16", "--batch", "20", "--samples", "25",
                         "--frame-warmup", "100", "--lighting", "course",
-                        "--max-frame-slope", "10000"])
+                        "--max-frame-mib", "40", "--max-frame-slope", "100000"])
     out = capsys.readouterr().out
     summary = out.strip().splitlines()[-1]
     assert summary.startswith("frames: 500, after the first 100: trimmed RSS"), out
     if leak_kib:
-        assert status == 1 and "bound 8.0 MiB: FAIL" in summary, summary
-        assert summary.endswith("bound 10000.0: FAIL"), summary
+        assert status == 1 and "bound 40.0 MiB: FAIL" in summary, summary
+        assert summary.endswith("bound 100000.0: FAIL"), summary
     else:
-        assert status == 0 and summary.endswith("bound 10000.0: ok"), out
+        assert status == 0 and summary.endswith("bound 100000.0: ok"), out
