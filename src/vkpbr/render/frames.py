@@ -165,7 +165,10 @@ def write_frame_uniforms(slot: FrameSlot, camera: Camera, lights: tuple[Light, .
         f = forward(camera)
         znear, zfar = depth_range(camera, bounds.corners, bounds.radius, f)
         slot.znear = znear
-        L.CAMERA.pack_into(slot.m_camera, VP=view_projection_columns(camera, size, znear, f))
+        vp = view_projection_columns(camera, size, znear, f)
+        # The compute path's pixel rays: world from clip (column-major, as VP).
+        inv = np.linalg.inv(np.array(vp, dtype=np.float64).reshape(4, 4).T).T.ravel()
+        L.CAMERA.pack_into(slot.m_camera, VP=vp, inv_VP=inv.tolist())
         flags = L.SETTINGS_NORMAL_MAPPING if opts.normal_mapping else 0
         flags |= L.SETTINGS_OCCLUSION if opts.occlusion else 0
         flags |= 0 if linear else L.SETTINGS_SRGB_TARGET

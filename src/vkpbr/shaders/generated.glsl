@@ -67,8 +67,14 @@ struct LightRecord {
     vec4 cone;
     vec4 shadow;
 };
+struct DrawRecord {
+    mat4 model;
+    mat4 normal_matrix;
+    uvec4 info;
+};
 layout(set = 0, binding = 0, std140) uniform Camera {
     mat4 VP;
+    mat4 inv_VP;
 } camera;
 layout(set = 0, binding = 1, std140) uniform Settings {
     vec4 camera_forward;
@@ -118,15 +124,60 @@ layout(set = 2, binding = 0, std140) uniform Lighting {
     vec4 env_rotation;
     vec4 ambient_color;
 } lighting;
-layout(set = 2, binding = 1, std430) readonly buffer Lights {
+layout(set = 2, binding = 1, std140) readonly buffer Lights {
     LightRecord lights[];
 };
 layout(set = 2, binding = 2) uniform samplerCube env_specular;
 layout(set = 2, binding = 3) uniform samplerCube env_irradiance;
 layout(set = 2, binding = 4) uniform sampler2D brdf_lut;
+#if COMPUTE_SHADING  // the compute path's own set (render/compute_path.py)
+const uint COMPUTE_SET = 4u;
+layout(set = 4, binding = 0) writeonly uniform image2D out_image;
+layout(set = 4, binding = 1, rg32ui) readonly uniform uimage2D visibility;
+layout(set = 4, binding = 2, std140) readonly buffer Draws {
+    DrawRecord draws[];
+};
+layout(set = 4, binding = 3, std430) readonly buffer Indices {
+    uint indices[];
+};
+layout(set = 4, binding = 4, std430) readonly buffer Positions {
+    float positions[];
+};
+layout(set = 4, binding = 5, std430) readonly buffer Texcoords0 {
+    vec2 texcoords0[];
+};
+layout(set = 4, binding = 6, std430) readonly buffer Texcoords1 {
+    vec2 texcoords1[];
+};
+layout(set = 4, binding = 7, std430) readonly buffer Colors {
+    uint colors[];
+};
+layout(set = 4, binding = 8, std430) readonly buffer Normals {
+    float normals[];
+};
+layout(set = 4, binding = 9, std430) readonly buffer Tangents {
+    vec4 tangents[];
+};
+layout(set = 4, binding = 10, std430) readonly buffer QTangents {
+    vec4 qtangents[];
+};
+layout(set = 4, binding = 11, std430) readonly buffer PackedFrames {
+    uint packed_frames[];
+};
+layout(set = 4, binding = 12, std430) buffer Bins {
+    uvec4 bins[];
+};
+layout(set = 4, binding = 13, std430) buffer BinArgs {
+    uint bin_args[];
+};
+layout(set = 4, binding = 14, std430) buffer PixelList {
+    uint pixel_list[];
+};
+#else  // the compute path has its own push constants
 layout(push_constant, std430) uniform Draw {
     mat4 model;
     mat4 normal_matrix;
 } draw;
+#endif
 
 #endif
