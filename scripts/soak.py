@@ -119,6 +119,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--scene", type=Path, help="scene file (default: the built-in scene)")
     p.add_argument("--size", type=parse_size, default=(64, 64), help="WxH (default 64x64)")
     p.add_argument("--batch", type=int, default=100, help="cameras per render_many call")
+    p.add_argument("--lighting", choices=("pbr", "course"), default="pbr",
+                   help="lighting mode of the frames (default pbr: shadows, sky light)")
     p.add_argument("--warmup", type=int, default=20, help="cycles before the RSS baseline")
     p.add_argument("--frame-warmup", type=int, default=1000,
                    help="frames before the frame baseline (default 1000)")
@@ -183,7 +185,7 @@ def main(argv: list[str] | None = None) -> int:
             t0 = time.perf_counter()
             for b in range(batches):
                 n = min(args.batch, args.frames - done)
-                for _ in r.render_many([None] * n, size=args.size):
+                for _ in r.render_many([None] * n, size=args.size, lighting=args.lighting):
                     pass
                 done += n
                 if objects is None:

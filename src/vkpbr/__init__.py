@@ -2,10 +2,11 @@
 
 The public API, importable from the package itself::
 
-    from vkpbr import Renderer, load_scene, Scene, Camera, Light, RenderOptions
+    from vkpbr import Renderer, load_scene, Scene, Camera, Light, RenderOptions, show
 
     with Renderer(load_scene("scene.gltf")) as r:   # Renderer() renders the built-in scene
         rgba = r.render(size=(640, 480))            # (480, 640, 4) uint8, sRGB
+    show(rgba)                                      # inline in a notebook (Jupyter)
 
 The names are imported on first use (module `__getattr__`), so `import vkpbr` stays fast
 and works on a machine without a Vulkan loader; only `Renderer` needs one.
@@ -21,7 +22,8 @@ TYPE_CHECKING = False
 
 __version__ = "0.1.0"
 
-__all__ = ["Renderer", "load_scene", "Scene", "Camera", "Light", "RenderOptions", "__version__"]
+__all__ = ["Renderer", "load_scene", "Scene", "Camera", "Light", "RenderOptions", "show",
+           "__version__"]
 
 # public name -> module that defines it
 _EXPORTS = {
@@ -31,9 +33,11 @@ _EXPORTS = {
     "Camera": "vkpbr.scene.types",
     "Light": "vkpbr.scene.types",
     "RenderOptions": "vkpbr.render.options",
+    "show": "vkpbr.display",
 }
 
 if TYPE_CHECKING:  # static checkers and IDEs see the real objects
+    from vkpbr.display import show
     from vkpbr.render.options import RenderOptions
     from vkpbr.render.renderer import Renderer
     from vkpbr.scene.loader import load_scene

@@ -162,3 +162,98 @@ def test_bad_mtl(tmp_path: Path) -> None:
     path.write_text("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
     with pytest.raises(SceneError, match="m.mtl"):
         load_obj(path)
+
+
+# --- the reader on tinyobjloader: its fast path and the exact parse give the same scene -------
+
+PLAIN = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n" \
+        "o a\nf 1/1/1 2/2/1 3/3/1 4/3/1\no b\nf -4 -2 -1\n"
+
+
+def _arrays(scene: object) -> list[tuple]:
+    return [(m.name, m.material, m.positions.tolist(), m.indices.tolist(), m.normals.tolist(),
+             None if m.texcoords is None else m.texcoords.tolist()) for m in scene.meshes]
+
+
+@pytest.mark.parametrize("variant", [
+    lambda t: t.replace("v 1 0 0\n", "v 1 0 0 # a comment\n"),  # '#' on a v line
+    lambda t: t.replace("vt 1 0\n", "  vt 1 0\n"),  # leading blanks
+    lambda t: t.replace("\n", "\r\n"),  # CRLF
+    lambda t: t.replace("v 1 1 0\n", "v 1.0e0 +1 -0.0\n"),
+])
+def test_exact_parse_and_fast_path_agree(tmp_path: Path, variant) -> None:  # noqa: ANN001
+    (tmp_path / "a.obj").write_text(PLAIN)
+    (tmp_path / "b.obj").write_text(variant(PLAIN))
+    a, b = load_obj(tmp_path / "a.obj"), load_obj(tmp_path / "b.obj")
+    assert _arrays(a) == _arrays(b)
+    assert [n.name for n in a.nodes] == [n.name for n in b.nodes] == ["a", "b"]
+
+
+def test_nonfinite_vertices_drop_their_faces(tmp_path: Path) -> None:
+    path = tmp_path / "n.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv nan 0 0\nv 1e999 0 0\nf 1 2 3\nf 1 2 4\nf 1 5 3\n")
+    with pytest.warns(UserWarning, match="2 non-finite positions; dropped 2 triangles"):
+        (mesh,) = load_obj(path).meshes
+    assert mesh.triangle_count == 1
+    np.testing.assert_array_equal(mesh.positions[mesh.indices], [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+
+
+@pytest.mark.parametrize(("text", "match"), [
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n", "line 4: face index 0"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1/1/1/1 2 3\n", "line 5: face corner with more"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nvn 0 0 1\nf 1//1 2//1 3//-2\n", "normal -2, only 1"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//2\n", "normal 2, only 1 defined"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0\nf 1 2 3\n", "vn line 1 has too few numbers"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt u v\nf 1 2 3\n", "bad number in vt data"),
+])
+def test_more_bad_obj(tmp_path: Path, text: str, match: str) -> None:
+    path = tmp_path / "bad.obj"
+    path.write_text(text)
+    with pytest.raises(SceneError, match=match) as info:
+        load_obj(path)
+    assert str(info.value).startswith(str(path)) and "\n" not in str(info.value)
+
+
+def test_materials_from_two_libraries_map_by_name(tmp_path: Path) -> None:
+    (tmp_path / "a.mtl").write_text("newmtl red\nKd 1 0 0\nnewmtl green\nKd 0 1 0\n")
+    (tmp_path / "b.mtl").write_text("newmtl blue\nKd 0 0 1\n")
+    path = tmp_path / "m.obj"
+    path.write_text("mtllib a.mtl\n  mtllib b.mtl # two\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                    "usemtl blue\nf 1 2 3\nusemtl red\nf 1 2 3\nusemtl green\nf 1 2 3\n"
+                    "# mtllib not-a-statement.mtl\n")
+    scene = load_obj(path)
+    kd = [scene.materials[m.material].base_color_factor[:3] for m in scene.meshes]
+    assert kd == [(0, 0, 1), (1, 0, 0), (0, 1, 0)]
+
+
+def test_without_tinyobjloader_the_error_says_what_to_install(tmp_path: Path, monkeypatch) -> None:  # noqa: ANN001
+    import sys
+
+    monkeypatch.setitem(sys.modules, "tinyobjloader", None)
+    path = tmp_path / "a.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    with pytest.raises(SceneError, match=r"a\.obj: reading OBJ files needs tinyobjloader: pip "
+                                         r"install tinyobjloader==2\.0\.0rc13$"):
+        load_obj(path)
+
+
+def test_tinyobjloader_numbers_match_the_exact_parse(tmp_path: Path, monkeypatch) -> None:  # noqa: ANN001
+    """tinyobjloader's float parse against NumPy's on numbers as tools write them (fixed,
+    exponent, signs, many digits): positions and texcoords equal after the float32 cast."""
+    import vkpbr.scene.obj as obj
+
+    rng = np.random.default_rng(7)
+    values = np.concatenate([rng.normal(0, 1e3, 300), rng.normal(0, 1e-3, 300), rng.random(300)])
+    forms = ["{:.8f}", "{:.6e}", "{:+.3f}", "{!r}", "{:.17g}", "{:.0f}."]
+    text = "".join(f"v {forms[i % 6].format(a)} {forms[(i + 1) % 6].format(b)} "
+                   f"{forms[(i + 2) % 6].format(c)}\nvt {values[i]:.7f} {values[-i]:.5e}\n"
+                   for i, (a, b, c) in enumerate(values.reshape(-1, 3).tolist()))
+    n = len(values) // 3
+    text += "".join(f"f {i}/{i} {i + 1}/{i + 1} {i + 2}/{i + 2}\n" for i in range(1, n - 1))
+    path = tmp_path / "numbers.obj"
+    path.write_text(text)
+    assert obj._plain_vertex_lines(path.read_bytes())  # the fast path reads this file
+    fast = load_obj(path)
+    monkeypatch.setattr(obj, "_plain_vertex_lines", lambda data: False)
+    exact = load_obj(path)
+    assert _arrays(fast) == _arrays(exact)

@@ -187,13 +187,13 @@ def test_speed_scales_with_scene() -> None:
 
 
 def test_environment_keys(tmp_path: Path) -> None:
-    """K cycles sky -> none -> sky, `.` turns the environment and the automatic sun with it;
+    """I cycles sky -> none -> sky, `.` turns the environment and the automatic sun with it;
     the HUD names the environment; the screenshot equals Renderer.render of the same state."""
     from vkpbr.app.viewer import Viewer, ViewerConfig
 
     shot = tmp_path / "env.png"
-    events = [_key(0.0, "k"), _key(0.05, "k"), _key(0.1, "k", mods=("shift",)),
-              _key(0.15, "k"), _key(0.2, "period"), _key(0.2, "period"), _key(0.25, "comma"),
+    events = [_key(0.0, "i"), _key(0.05, "i"), _key(0.1, "i", mods=("shift",)),
+              _key(0.15, "i"), _key(0.2, "period"), _key(0.2, "period"), _key(0.25, "comma"),
               _key(0.25, "period"), {"t": 0.3, "type": "screenshot", "path": str(shot)},
               {"t": 0.35, "type": "quit"}]
     config = ViewerConfig(size=(64, 48), validation=True, offscreen=True,

@@ -141,8 +141,8 @@ BINDINGS: tuple[Binding, ...] = (
     Binding("V / Shift+V", "next / previous debug view",
             (_press("v", "cycle", ("view", 1)), _press("shift+v", "cycle", ("view", -1)))),
     Binding("G", "lighting: pbr <-> course", (_press("g", "cycle", ("lighting", 1)),)),
-    Binding("K / Shift+K", "environment: sky -> none -> --env file", (
-        _press("k", "environment", 1), _press("shift+k", "environment", -1)),
+    Binding("I / Shift+I", "environment: sky -> none -> --env file", (
+        _press("i", "environment", 1), _press("shift+i", "environment", -1)),
         doc="next / previous environment of the pbr lighting: sky, none and the `--env` file "
             "if one was given (each pre-filtered on first use, then kept)"),
     Binding(", / .", f"turn the environment -/+ {ENV_ROTATION_STEP:g} degrees", (

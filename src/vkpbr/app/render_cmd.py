@@ -13,7 +13,12 @@ from typing import Any
 from vkpbr.app.common import camera_from_args, default_cache_dir, lights_from_args, load_scene_arg
 from vkpbr.app.log import is_quiet, say
 from vkpbr.app.options import add_options, render_options_from_args
-from vkpbr.app.output import OUTPUT_SUFFIXES, check_writable, write_image_atomic
+from vkpbr.app.output import (
+    OUTPUT_SUFFIXES,
+    check_output_path,
+    check_writable,
+    write_image_atomic,
+)
 from vkpbr.app.parsing import EPILOG_FORMATTER, size_arg
 from vkpbr.errors import UsageError
 
@@ -38,7 +43,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument("scene", nargs="?",
                    help="glTF/GLB/OBJ/.comp5822mesh/.vkpbr file; default: the built-in PBR chart")
     p.add_argument("--out", "-o", default="render.png",
-                   help="output image (.png, .jpg, .npy; a folder with --cameras); default render.png")
+                   help="output image (.png, .jpg, .exr, .npy; a folder with --cameras); default render.png")
     p.add_argument("--size", type=size_arg, default="1280x720", metavar="WxH",
                    help="image size (default 1280x720)")
     p.add_argument("--camera", metavar="EX,EY,EZ,TX,TY,TZ[,UX,UY,UZ]",
@@ -50,7 +55,7 @@ def add_parser(sub: Any) -> None:
                         "objects) into the folder --out")
     p.add_argument("--list-views", action="store_true", help="list the debug views and exit")
     p.add_argument("--msaa", type=int, default=1, choices=[1, 4], help="samples per pixel")
-    p.add_argument("--linear", action="store_true", help="linear float32 colour (write a .npy)")
+    p.add_argument("--linear", action="store_true", help="linear float32 colour (write a .exr or .npy)")
     p.add_argument("--frames", type=int, default=1, metavar="N",
                    help="render N frames and report the median time per frame")
     p.defer(add_options)
@@ -117,9 +122,11 @@ def run(args: argparse.Namespace) -> int:
         return _render_batch(args, options)
     size = args.size
     out = Path(args.out)
-    check_writable(out)
-    if args.linear and out.suffix.lower() != ".npy":
-        raise UsageError("--linear writes float32 colour: give an --out path ending in .npy")
+    check_output_path(out)  # the folder, the image type, OpenEXR for .exr: before any work
+    if args.linear and out.suffix.lower() not in (".npy", ".exr"):
+        raise UsageError("--linear writes float32 colour: give an --out path ending in .exr or .npy")
+    if not args.linear and out.suffix.lower() == ".exr":
+        raise UsageError(f"--out {out}: EXR holds linear float colour: add --linear")
     if args.frames < 1:
         raise UsageError("--frames must be at least 1")
     from vkpbr.render.renderer import Renderer

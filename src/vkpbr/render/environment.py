@@ -325,13 +325,13 @@ class EnvironmentBaker:
                 log.debug("%s: unreadable BRDF table, remade (%s)", path, exc)
         if table is None:
             table = self._make_lut()
-            if path is not None:
-                try:
-                    path.parent.mkdir(parents=True, exist_ok=True)
-                    with atomic_writer(path) as f:
-                        np.save(f, table, allow_pickle=False)
-                except OSError as exc:  # a cache that cannot be written is no error
-                    log.debug("%s: BRDF table not cached (%s)", path, exc)
+        if path is not None and not path.is_file():  # made here or earlier in this process
+            try:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                with atomic_writer(path) as f:
+                    np.save(f, table, allow_pickle=False)
+            except OSError as exc:  # a cache that cannot be written is no error
+                log.debug("%s: BRDF table not cached (%s)", path, exc)
         _LUT_MEMORY[(LUT_SIZE, LUT_SAMPLES)] = table
         rgba = np.zeros((LUT_SIZE, LUT_SIZE, 4), np.float32)
         rgba[..., :2] = table

@@ -98,13 +98,16 @@ class Camera:
 __all__ = [
     "Convention",
     "Intrinsics",
+    "PIXEL_CENTRE",
     "Pose",
     "as_camera",
     "as_pose",
+    "corner_from_opencv",
     "format_camera",
     "from_opencv",
     "from_pose",
     "intrinsics",
+    "opencv_from_corner",
     "parse_camera",
     "validate_camera",
     "world_from_camera",
@@ -115,6 +118,29 @@ Intrinsics = tuple[float, float, float, float, int, int]  # (fx, fy, cx, cy, wid
 
 # OpenCV camera axes -> OpenGL camera axes (and back): y and z flip.
 _FLIP = np.diag([1.0, -1.0, -1.0, 1.0])
+
+# The one pixel-convention shift, each way: NeRF's and COLMAP's K put the centre of the top-left
+# pixel at (0.5, 0.5), OpenCV's (and vkpbr's) at (0, 0).
+PIXEL_CENTRE = 0.5
+
+
+def corner_from_opencv(K: np.ndarray) -> np.ndarray:
+    """OpenCV's K (top-left pixel centre at (0, 0)) as NeRF's and COLMAP's ((0.5, 0.5)).
+
+    K : (3, 3) float64. Returns a new (3, 3) float64 with cx, cy + 0.5.
+    """
+    out = np.array(K, dtype=np.float64)
+    out[0, 2] += PIXEL_CENTRE
+    out[1, 2] += PIXEL_CENTRE
+    return out
+
+
+def opencv_from_corner(K: np.ndarray) -> np.ndarray:
+    """The inverse of `corner_from_opencv`: cx, cy - 0.5. (3, 3) float64."""
+    out = np.array(K, dtype=np.float64)
+    out[0, 2] -= PIXEL_CENTRE
+    out[1, 2] -= PIXEL_CENTRE
+    return out
 
 
 # -- validation, parsing and printing ---------------------------------------------------------

@@ -46,13 +46,37 @@ def _loader(suffix: str) -> Callable[..., Scene] | None:
     return None
 
 
+def _fallback(path: Path) -> Callable[..., Scene]:
+    """trimesh for the formats vkpbr does not read itself (PLY, STL, OFF, ...), if installed;
+    else a SceneError saying what is known, or how to read this format."""
+    from vkpbr.scene.trimesh_import import (
+        INSTALL_HINT,
+        TRIMESH_SUFFIXES,
+        load_trimesh,
+        trimesh_formats,
+    )
+
+    suffix = path.suffix.lower()
+    formats = trimesh_formats()
+    if formats is not None and suffix in formats:
+        return load_trimesh
+    if formats is None and suffix in TRIMESH_SUFFIXES:
+        raise SceneError(path, f"{suffix} files load through trimesh, which is not installed: "
+                               f"{INSTALL_HINT}")
+    more = f", and through trimesh {', '.join(sorted(formats - set(SUFFIXES)))}" if formats else ""
+    raise SceneError(path, f"unknown scene format {path.suffix!r} (known: {', '.join(SUFFIXES)}"
+                           f"{more})")
+
+
 def load_scene(path: str | Path, strict: bool = False, allow_outside_paths: bool = False, *,
                root: str | Path | None = None) -> Scene:
     """Load a scene file of any supported format.
 
     Parameters
     ----------
-    path : a .gltf, .glb, .obj, .comp5822mesh or .vkpbr file (suffix case-insensitive).
+    path : a .gltf, .glb, .obj, .comp5822mesh or .vkpbr file (suffix case-insensitive), or
+        any other format trimesh reads (PLY, STL, OFF, ...) when trimesh is installed
+        (`pip install 'vkpbr[trimesh]'`; vkpbr.scene.trimesh_import).
     strict : a missing texture file is an error. Otherwise the scene renders with default
         values in place of the missing textures, and one WARNING line on the
         "vkpbr.scene.textures" logger says how many are missing (never one per texture).
@@ -70,7 +94,8 @@ def load_scene(path: str | Path, strict: bool = False, allow_outside_paths: bool
 
     Raises
     ------
-    SceneError : missing file, a directory, an unknown suffix, a file with no triangles,
+    SceneError : missing file, a directory, an unknown suffix (or one that needs trimesh when
+        it is not installed: the message gives the install line), a file with no triangles,
         missing texture files with `strict` (one line: the file, how many, the first one), or
         anything the format loader rejects (BakeFormatError for a bad .vkpbr), a buffer or
         material library outside the scene's folder tree (ResourceRefused), or an OSError
@@ -88,11 +113,7 @@ def load_scene(path: str | Path, strict: bool = False, allow_outside_paths: bool
     if not stat.S_ISREG(mode):
         raise SceneError(path, "is not a regular file (a FIFO or device?); vkpbr reads only "
                                "regular files")
-    load = _loader(path.suffix.lower())
-    if load is None:
-        raise SceneError(
-            path, f"unknown scene format {path.suffix!r} (known: {', '.join(SUFFIXES)})"
-        )
+    load = _loader(path.suffix.lower()) or _fallback(path)
     policy = ResourcePolicy(path, allow_outside=allow_outside_paths,
                             root=Path(root) if root is not None else None)
     try:

@@ -1,10 +1,17 @@
 # Wavefront OBJ/MTL -> vkpbr Scene, with the COMP5822M PBR extensions to MTL: map_Pm
 # (metalness), map_Pr (roughness), Pm/Pr factors, norm (normal map) and map_d (alpha mask).
 #
-# Speed: the file is scanned by a handful of C-level regex passes (one per statement kind),
-# numbers are converted by NumPy in bulk, polygons are fan-triangulated and (v, vt, vn) corners
-# welded with np.unique; Python only loops over MTL lines and over meshes. Texture coordinates
-# are flipped (v' = 1 - v) to glTF's top-left origin. One Mesh per group/usemtl run.
+# The OBJ is parsed by tinyobjloader (C++, pinned: TINYOBJLOADER_VERSION); the MTL files by
+# parse_mtl below, which knows the course's keys and reads every file through the path policy
+# (tinyobjloader gets a stand-in library of the material names only, so it never opens a
+# file). Around it, vkpbr keeps what the reader always promised: the limits checked before
+# anything is built, every face index checked, a word or a short line in v/vt/vn data an error
+# (tinyobjloader reads them as 0: such files take the exact NumPy parse of those statements),
+# nan/inf vertices dropped with their faces. Polygons are fan-triangulated and (v, vt, vn)
+# corners welded with np.unique; texture coordinates are flipped (v' = 1 - v) to glTF's
+# top-left origin. One Mesh per run of faces with one group (g/o) and one material.
+# Speed (a 22.6 MB, 262k-triangle Sponza OBJ, 2 shared cores): 0.8-1.1 s, was 2.8-3.4 s
+# with the regex parser alone (BENCHMARKS.md, benchmarks/bench_obj.py).
 # Reference: Wavefront "Object Files (.obj)" and "MTL" specifications (Appendix B1/B2).
 
 from __future__ import annotations
@@ -27,7 +34,9 @@ from vkpbr.scene.resources import (
 )
 from vkpbr.scene.types import Image, Material, Mesh, Node, Sampler, Scene, TextureRef
 
-__all__ = ["load_obj", "parse_mtl"]
+__all__ = ["TINYOBJLOADER_VERSION", "load_obj", "parse_mtl"]
+
+TINYOBJLOADER_VERSION = "2.0.0rc13"  # pinned in pyproject.toml: wheels for CPython 3.11/3.12
 
 _STATEMENT = re.compile(rb"^[ \t]*(vt|vn|v|f|usemtl|g|o)(?=[ \t])", re.M)
 _MAX_TOKEN = 256  # longer "numbers" are garbage; also bounds the NumPy bytes-array width
@@ -72,33 +81,6 @@ def _floats(path: Path, rows: list[bytes], take: int, need: int, what: str) -> n
         out[row[sel], col[sel]] = toks[sel].astype(np.float64)
     except ValueError as exc:
         raise SceneError(path, f"bad number in {what} data ({exc})") from exc
-    return out
-
-
-def _corners(path: Path, toks: np.ndarray) -> np.ndarray:
-    """Face corners 'v', 'v/vt', 'v//vn', 'v/vt/vn' -> (K, 3) int64, 0 where absent."""
-    if not len(toks):
-        return np.zeros((0, 3), np.int64)
-    slashes = np.char.count(toks, b"/")
-    if slashes.max() > 2:
-        raise SceneError(path, "face corner with more than two '/'")
-    # Rewrite every form to v/vt/vn with 0 for "absent" (OBJ indices start at 1).
-    full = np.char.add(
-        np.char.replace(toks, b"//", b"/0/"), np.array([b"/0/0", b"/0", b""])[slashes]
-    )
-    try:
-        return np.array(b"/".join(full.tolist()).split(b"/")).astype(np.int64).reshape(-1, 3)
-    except (ValueError, OverflowError) as exc:
-        raise SceneError(path, f"bad face index ({exc})") from exc
-
-
-def _resolve(path: Path, idx: np.ndarray, defined: np.ndarray, total: int, what: str) -> np.ndarray:
-    """OBJ 1-based / negative (relative to the elements defined so far) -> 0-based, -1 absent."""
-    out = np.where(idx > 0, idx - 1, defined + idx)
-    out[idx == 0] = -1
-    bad = (idx != 0) & ((out < 0) | (out >= total))
-    if bad.any():
-        raise SceneError(path, f"face refers to {what} {int(idx[bad][0])}, only {total} defined")
     return out
 
 
@@ -162,47 +144,143 @@ def load_obj(path: str | Path, policy: ResourcePolicy | None = None) -> Scene:
         return _parse(path, data, policy or ResourcePolicy(path))
 
 
+def _early_limits(path: Path, data: bytes) -> None:
+    """The limits, before tinyobjloader builds anything: a file of L lines has at most L
+    v/vt/vn/f statements and at most len/2 corners, so a file under both bounds passes at the
+    cost of one byte count; only a larger one is counted statement by statement."""
+    cap = limits()
+    lines = data.count(b"\n") + 1
+    if lines <= min(cap.max_vertices, cap.max_triangles) and len(data) // 2 <= cap.max_triangles:
+        return
+    # One byte string per statement (CPython shares the 1-byte ones): ~9 bytes a statement.
+    _check_counts(path, np.array(_STATEMENT.findall(data) or [b""]))
+    _check_corners(path, _rows(data, b"f"))
+
+
+_BLANK = np.zeros(256, bool)
+_BLANK[list(b" \t\r\n\v\f")] = True
+_NUMBER = _BLANK.copy()
+_NUMBER[list(b"0123456789+-.eE")] = True
+
+
+def _plain_vertex_lines(data: bytes) -> bool:
+    """Whether every v/vt/vn statement is plain numbers, enough of them, at the start of its
+    line: then tinyobjloader's values are the file's. Anything else (a comment, nan or inf, a
+    word, too few numbers, leading blanks) goes to the exact parse, which reads and reports
+    it as the reader always has (tinyobjloader reads a word or a missing number as 0).
+
+    Vectorised over the blocks of consecutive vertex lines (the bytes of other lines are
+    never looked at): a block is plain when its only bytes outside numbers and blanks are the
+    keywords' letters, and every line has enough tokens. (A "number" of only + - . e E
+    characters passes: tinyobjloader reads it as 0.)"""
+    b = np.frombuffer(data, np.uint8)
+    if not len(b):
+        return True
+    newlines = np.flatnonzero(b == 0x0A)
+    starts = np.concatenate(([0], newlines + 1))
+    ends = np.concatenate((newlines, [len(b)]))
+    keep = starts < len(b)
+    starts, ends = starts[keep], ends[keep]
+    padded = np.concatenate((b, np.zeros(2, np.uint8)))
+    first, second, third = padded[starts], padded[starts + 1], padded[starts + 2]
+    if (_BLANK[first] & (first != 0x0A) & (first != 0x0D)).any():
+        return False  # a statement may follow the blanks (rare): the exact parse decides
+    is_v = first == ord("v")
+    kind = np.full(len(starts), -1)
+    kind[is_v & _BLANK[second]] = 0
+    kind[is_v & (second == ord("t")) & _BLANK[third]] = 1
+    kind[is_v & (second == ord("n")) & _BLANK[third]] = 2
+    lines = np.flatnonzero(kind >= 0)
+    if not len(lines):
+        return True
+    letters = np.where(kind == 0, 1, 2)  # "v", "vt", "vn": the keyword's letters
+    need = np.array([4, 2, 4])[kind]  # tokens: v x y z, vt u, vn x y z
+    cut = np.flatnonzero(np.diff(lines) != 1) + 1
+    for block in np.split(lines, cut):
+        lo, hi = starts[block[0]], ends[block[-1]]
+        chunk = b[lo:hi]
+        if np.count_nonzero(~_NUMBER[chunk]) != letters[block].sum():
+            return False
+        solid = ~_BLANK[chunk]
+        token = solid.copy()
+        token[1:] &= ~solid[:-1]
+        per_line = np.add.reduceat(token, starts[block] - lo, dtype=np.int64)
+        if (per_line < need[block]).any():
+            return False
+    return True
+
+
+def _tinyobj() -> object:
+    try:
+        import tinyobjloader
+    except ImportError:
+        return None
+    return tinyobjloader
+
+
+def _mtllib_names(data: bytes) -> list[str]:
+    """The libraries of every `mtllib` statement: found with bytes.find (a few per file),
+    not a regex pass over the whole file."""
+    names, at = [], data.find(b"mtllib")
+    while at >= 0:
+        line_start = data.rfind(b"\n", 0, at) + 1
+        line_end = data.find(b"\n", at)
+        line = data[line_start: len(data) if line_end < 0 else line_end]
+        m = re.match(rb"[ \t]*mtllib[ \t]+([^\r\n#]*)", line)
+        if m and data[line_start:at].strip(b" \t") == b"":
+            names.append(m.group(1).strip().decode("utf-8", "replace"))
+        at = data.find(b"mtllib", at + 6)
+    return names
+
+
+def _face_error(path: Path, data: bytes, message: str) -> SceneError:
+    """The SceneError for a face line tinyobjloader refused ("... Line 7)."): that line's
+    corners checked here, to say what is wrong as the reader always has."""
+    m = re.search(r"Line (\d+)", message)
+    first_line = message.strip().splitlines()[0] if message.strip() else "parse error"
+    if m is None:
+        return SceneError(path, f"malformed OBJ ({first_line})")
+    number = int(m.group(1))
+    lines = data.split(b"\n")
+    if not 0 < number <= len(lines):
+        return SceneError(path, f"malformed OBJ ({first_line})")
+    line = lines[number - 1]
+    names = ((b"v", "vertex"), (b"vt", "texcoord"), (b"vn", "normal"))
+    for corner in line.split(b"#", 1)[0].split()[1:]:
+        parts = corner.split(b"/")
+        if len(parts) > 3:
+            return SceneError(path, f"line {number}: face corner with more than two '/'")
+        for k, part in enumerate(parts):
+            if not part and k:
+                continue  # v//vn, v/vt/
+            try:
+                index = int(part)
+            except ValueError:
+                return SceneError(path, f"line {number}: bad face index ({part[:40]!r})")
+            if index == 0:
+                return SceneError(path, f"line {number}: face index 0 (OBJ counts from 1)")
+            if index < 0:
+                kw, name = names[k]
+                before = b"\n".join(lines[: number - 1])
+                defined = len(re.findall(rb"^[ \t]*" + kw + rb"[ \t]", before, re.M))
+                if defined + index < 0:
+                    return SceneError(path, f"line {number}: face refers to {name} {index}, "
+                                            f"only {defined} defined")
+    return SceneError(path, f"line {number}: malformed face ({first_line})")
+
+
 def _parse(path: Path, data: bytes, policy: ResourcePolicy) -> Scene:
     """load_obj's body: `data` is the whole file."""
-    data = re.sub(rb"\\\r?\n", b" ", data)  # line continuations
-    # One byte string per statement (CPython shares the 1-byte ones): ~9 bytes a statement.
-    order = np.array(_STATEMENT.findall(data) or [b""])
-    _check_counts(path, order)  # before any per-vertex or per-face array is built
-    face_rows = _rows(data, b"f")
-    _check_corners(path, face_rows)
-    v = _floats(path, _rows(data, b"v"), 3, 3, "v")
-    vt = _floats(path, _rows(data, b"vt"), 2, 1, "vt")
-    vn = _floats(path, _rows(data, b"vn"), 3, 3, "vn")
-    vt[:, 1] = 1.0 - vt[:, 1]  # OBJ's origin is bottom-left, glTF's (ours) top-left
-    toks, _, counts = _tokens(path, face_rows, "f")
-    del face_rows
-    if not len(counts):
-        raise SceneError(path, "no faces")
-    if counts.min() < 3:
-        raise SceneError(path, "face with fewer than 3 corners")
-    face_at = np.flatnonzero(order == b"f")  # statement number of each face
-    if len(face_at) != len(counts):
-        raise SceneError(path, "inconsistent face statements")
-    corner_at = np.repeat(face_at, counts)
-    raw = _corners(path, toks)
-    cols = []
-    for k, (kw, arr, name) in enumerate(((b"v", v, "vertex"), (b"vt", vt, "texcoord"), (b"vn", vn, "normal"))):  # fmt: skip
-        defined = np.cumsum(order == kw)[corner_at]  # elements defined before each corner
-        cols.append(_resolve(path, raw[:, k], defined, len(arr), name))
-    corners = np.stack(cols, axis=1)
-
-    # Runs: a new one starts at every usemtl/g/o statement; each face remembers its material.
-    mtl_names = [r.strip().decode("utf-8", "replace") for r in _rows(data, b"usemtl")]
-    grp_names = [r.strip().decode("utf-8", "replace") for r in _rows(data, rb"[go]")]
-    boundary = np.isin(order, [b"usemtl", b"g", b"o"])
-    run_of_face = np.cumsum(boundary)[face_at]
-    mat_of_face = np.searchsorted(np.flatnonzero(order == b"usemtl"), face_at) - 1
-    grp_of_face = np.searchsorted(np.flatnonzero(np.isin(order, [b"g", b"o"])), face_at) - 1
+    tinyobj = _tinyobj()
+    if tinyobj is None:
+        raise SceneError(path, f"reading OBJ files needs tinyobjloader: pip install "
+                               f"tinyobjloader=={TINYOBJLOADER_VERSION}")
+    data = re.sub(rb"\\\r?\n", b" ", data)  # line continuations (tinyobjloader has none)
+    _early_limits(path, data)
 
     scene = Scene(name=path.stem, source=path)
     mat_index: dict[str, int] = {}
-    for lib in _rows(data, b"mtllib"):
-        lib_name = lib.strip().decode("utf-8", "replace")
+    for lib_name in _mtllib_names(data):
         lib_path = policy.resolve(lib_name, "material library")  # outside: SceneError
         if not is_regular_file(lib_path):
             warnings.warn(f"{path}: material library {lib_name} not found", stacklevel=2)
@@ -211,6 +289,56 @@ def _parse(path: Path, data: bytes, policy: ResourcePolicy) -> Scene:
             mat_index[name] = len(scene.materials)
             scene.materials.append(mat)
 
+    # tinyobjloader reads the OBJ; vkpbr reads the MTL files (the course's PBR keys, the path
+    # policy). It gets a stand-in library of the material names alone, so its material ids
+    # index `names`. Text goes in as Latin-1, one character per byte, whatever the encoding.
+    names = list(mat_index)
+    stand_in = "".join(f"newmtl {n.encode('utf-8').decode('latin-1')}\n" for n in names)
+    reader = tinyobj.ObjReader()
+    config = tinyobj.ObjReaderConfig()
+    config.triangulate = False  # fans made below, as before (polygon_fan)
+    if not reader.ParseFromString(data.decode("latin-1"), stand_in, config):
+        raise _face_error(path, data, reader.Error())
+    notes = reader.Warning()
+    if "Degenerated face" in notes:
+        raise SceneError(path, "face with fewer than 3 corners")
+    attrib = reader.GetAttrib()
+    # The list accessors, not numpy_*(): rc13's arrays have stride 0 under NumPy 2.
+    if _plain_vertex_lines(data):
+        v = np.array(attrib.vertices, np.float64).reshape(-1, 3)
+        vt = np.array(attrib.texcoords, np.float64).reshape(-1, 2)
+        vn = np.array(attrib.normals, np.float64).reshape(-1, 3)
+    else:  # the exact parse: nan/inf kept (then dropped below), words and short lines refused
+        v = _floats(path, _rows(data, b"v"), 3, 3, "v")
+        vt = _floats(path, _rows(data, b"vt"), 2, 1, "vt")
+        vn = _floats(path, _rows(data, b"vn"), 3, 3, "vn")
+        if (len(v), len(vt), len(vn)) != (len(attrib.vertices) // 3,
+                                           len(attrib.texcoords) // 2, len(attrib.normals) // 3):
+            raise SceneError(path, "malformed v/vt/vn statements (counts disagree)")
+    vt[:, 1] = 1.0 - vt[:, 1]  # OBJ's origin is bottom-left, glTF's (ours) top-left
+
+    shapes = [s for s in reader.GetShapes() if s.mesh.num_face_vertices]
+    if not shapes:
+        raise SceneError(path, "no faces")
+    cols = [np.concatenate([np.array(getattr(s.mesh, f)(), np.int64) for s in shapes])
+            for f in ("vertex_indices", "texcoord_indices", "normal_indices")]
+    corners = np.stack(cols, axis=1)  # (K, 3): v, vt, vn; -1 absent
+    counts = np.concatenate([np.array(s.mesh.num_face_vertices, np.int64) for s in shapes])
+    material_of_face = np.concatenate([np.array(s.mesh.material_ids, np.int64) for s in shapes])
+    shape_of_face = np.repeat(np.arange(len(shapes)), [len(s.mesh.num_face_vertices) for s in shapes])
+    for k, (arr, name) in enumerate(((v, "vertex"), (vt, "texcoord"), (vn, "normal"))):
+        bad = corners[:, k] >= len(arr)
+        if bad.any():
+            raise SceneError(path, f"face refers to {name} {int(corners[bad, k][0]) + 1}, only "
+                                   f"{len(arr)} defined")
+    for undefined in dict.fromkeys(re.findall(r"material \[ '(.*?)' \] not found", notes)):
+        name = undefined.encode("latin-1", "replace").decode("utf-8", "replace")
+        warnings.warn(f"{path}: material {name!r} not defined in any MTL", stacklevel=3)
+
+    # Runs: a new one wherever the group (g/o) or the material changes.
+    change = np.ones(len(counts), bool)
+    change[1:] = (shape_of_face[1:] != shape_of_face[:-1]) | (material_of_face[1:] != material_of_face[:-1])
+    run_of_face = np.cumsum(change) - 1
     tris = polygon_fan(counts)  # (T, 3) into the corner list
     tri_face = np.repeat(np.arange(len(counts)), counts - 2)
     tri_run = run_of_face[tri_face]
@@ -218,13 +346,11 @@ def _parse(path: Path, data: bytes, policy: ResourcePolicy) -> Scene:
     run_ids, run_starts = np.unique(tri_run[sort], return_index=True)
     for r, chunk in zip(run_ids, np.split(sort, run_starts[1:]), strict=True):
         face = int(tri_face[chunk[0]])
-        mname = mtl_names[mat_of_face[face]] if mat_of_face[face] >= 0 else None
-        if mname is not None and mname not in mat_index:
-            warnings.warn(f"{path}: material {mname!r} not defined in any MTL", stacklevel=2)
-            mat_index[mname] = -1
-        gname = grp_names[grp_of_face[face]] if grp_of_face[face] >= 0 else path.stem
+        shape_name = shapes[shape_of_face[face]].name
+        gname = shape_name.encode("latin-1", "replace").decode("utf-8", "replace") or path.stem
         mesh = _run_mesh(corners[tris[chunk].reshape(-1)], v, vt, vn, f"{gname}/{r}")
-        mesh.material = mat_index.get(mname, -1) if mname else -1
+        mid = int(material_of_face[face])
+        mesh.material = mat_index[names[mid]] if 0 <= mid < len(names) else -1
         mesh = normalize_mesh_arrays(ensure_normals(drop_nonfinite(mesh, path)))
         scene.nodes.append(Node(mesh=len(scene.meshes), name=gname))
         scene.meshes.append(mesh)

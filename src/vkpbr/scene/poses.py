@@ -24,9 +24,11 @@ import os
 from collections.abc import Mapping
 from pathlib import Path
 
+import numpy as np
+
 from vkpbr.errors import UsageError
 from vkpbr.scene._checks import context, real, rigid_pose, shown, size_arg
-from vkpbr.scene.camera import Pose, as_pose
+from vkpbr.scene.camera import Pose, as_pose, opencv_from_corner
 
 __all__ = ["Pose", "load_poses"]
 
@@ -153,6 +155,7 @@ def _nerf_camera(keys: Mapping[str, object]) -> dict[str, object]:
     if not (fx > 0.0 and fy > 0.0):
         raise UsageError(f"the focal lengths ({fx:g}, {fy:g}) must be > 0")
     # NeRF and COLMAP put the centre of the top-left pixel at (0.5, 0.5); OpenCV at (0, 0).
-    cx = real(keys["cx"], '"cx"') - 0.5 if "cx" in keys else (w - 1) / 2.0
-    cy = real(keys["cy"], '"cy"') - 0.5 if "cy" in keys else (h - 1) / 2.0
-    return {"K": [[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]], "size": [w, h]}
+    cx = real(keys["cx"], '"cx"') if "cx" in keys else w / 2.0
+    cy = real(keys["cy"], '"cy"') if "cy" in keys else h / 2.0
+    K = opencv_from_corner(np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]]))
+    return {"K": K.tolist(), "size": [w, h]}

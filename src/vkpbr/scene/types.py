@@ -13,6 +13,7 @@ a `Scene`; the renderer consumes one. Conventions:
 
 from __future__ import annotations
 
+import importlib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -224,3 +225,13 @@ class Scene:
     @property
     def triangle_count(self) -> int:
         return sum(self.meshes[n.mesh].triangle_count for n in self.nodes)
+
+    @classmethod
+    def from_trimesh(cls, scene_or_mesh: object, name: str | None = None) -> Scene:
+        """A Scene from a `trimesh.Trimesh` or `trimesh.Scene`: materials (PBR and simple),
+        UVs, vertex colours, node transforms. Needs trimesh (`pip install 'vkpbr[trimesh]'`).
+        See `vkpbr.scene.trimesh_import.from_trimesh`."""
+        # Imported by name at call time: trimesh_import builds Scenes from this module's
+        # types, and a plain import here would tie the two modules into an import cycle.
+        module = importlib.import_module("vkpbr.scene.trimesh_import")
+        return module.from_trimesh(scene_or_mesh, name=name)
