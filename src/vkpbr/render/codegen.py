@@ -37,8 +37,10 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("pbr_vis_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1), ("VISIBILITY", 1))),
     *(Variant(f"shade_{m.name.lower()}.comp.spv", "shade.comp",
               (("TBN_MODE", int(m)), ("COMPUTE_SHADING", 1))) for m in L.TbnMode),
-    *(Variant(f"classify_{name}.comp.spv", "classify.comp", (("COMPUTE_SHADING", 1), ("KERNEL", k)))
-      for k, name in ((1, "count"), (2, "offsets"), (3, "scatter"))),
+    *(Variant(f"classify_{name}{'' if agg else '_plain'}.comp.spv", "classify.comp",
+              (("COMPUTE_SHADING", 1), ("KERNEL", k), ("AGGREGATE", agg)))
+      for k, name in ((1, "count"), (2, "offsets"), (3, "scatter")) for agg in (1, 0)
+      if agg or k != 2),
     # Shadow-map passes (render/shadows.py): depth only, or cut out by the base colour's alpha.
     Variant("shadow_opaque.vert.spv", "shadow.vert", (("ALPHA_MASK", 0),)),
     Variant("shadow_mask.vert.spv", "shadow.vert", (("ALPHA_MASK", 1),)),
@@ -77,12 +79,15 @@ def generated_glsl() -> str:
     blocks = {b.name: b for b in L.BLOCKS}
     for element in {a.element.name: a.element for a in L.STORAGE.values()
                     if isinstance(a.element, L.Std140Block)}.values():
-        out.append(element.glsl("struct").replace(f"}} {element.instance};", "};"))
+        struct = element.name + ("Record" if element.name in blocks else "")
+        out.append(element.glsl("struct").replace(f"struct {element.name} {{", f"struct {struct} {{")
+                   .replace(f"}} {element.instance};", "};"))
 
     def storage(layout: str, name: str) -> str:
         array = L.STORAGE[name]
         element = array.element
-        glsl_type = element if isinstance(element, str) else element.name
+        glsl_type = element if isinstance(element, str) else (
+            element.name + ("Record" if element.name in blocks else ""))
         access = "" if name in L.WRITABLE_STORAGE else "readonly "
         return (f"{layout}, {array.layout}) {access}buffer {name} {{\n"
                 f"    {glsl_type} {array.member}[];\n}};")
@@ -93,7 +98,13 @@ def generated_glsl() -> str:
         for binding, kind, _stages, name in rows:
             layout = f"layout(set = {set_index}, binding = {binding}"
             if kind == "uniform":
+                # The compute path declares the frame's blocks in its own set (COMPUTE_SET).
+                compute_block = any(k == "block" and n == name for _, k, n in L.COMPUTE_SET)
+                if compute_block:
+                    out.append("#if !COMPUTE_SHADING")
                 out.append(blocks[name].glsl(f"{layout}, std140) uniform"))
+                if compute_block:
+                    out.append("#endif")
             elif kind == "storage":
                 out.append(storage(layout, name))
             else:
@@ -106,6 +117,8 @@ def generated_glsl() -> str:
         layout = f"layout(set = {compute_set}, binding = {binding}"
         if kind == "storage":
             out.append(storage(layout, name))
+        elif kind == "block":
+            out.append(blocks[name].glsl(f"{layout}, std140) readonly buffer"))
         else:  # storage_image
             decl = L.STORAGE_IMAGES[name]
             if decl.startswith("layout("):

@@ -55,22 +55,30 @@ class _TargetResources:
         self.bins = self._own(Buffer(dev, 16 * m, "storage|transfer_dst", name="material bins"))
         self.args = self._own(Buffer(dev, 12 * m, "storage|indirect", name="bin dispatches"))
         self.pixels = self._own(Buffer(dev, 4 * w * h, "storage", name="pixel list"))
-        pool = self._own(DescriptorPool(dev, [(scene.set_layout, 1)]))
-        self.set = pool.allocate(scene.set_layout)
+        slots = scene.slots
+        pool = self._own(DescriptorPool(dev, [(scene.set_layout, len(slots))]))
+        # One set per frame of the ring: the frame's blocks are that frame's.
+        self.sets = [pool.allocate(scene.set_layout) for _ in slots]
         buffers = {"Draws": scene.draw_table, "Indices": gs.index_buffer,
                    "Positions": gs.streams["positions"], "Texcoords0": gs.streams["texcoords"],
                    "Texcoords1": gs.streams["texcoords1"], "Colors": gs.streams["colors"],
                    "Normals": gs.streams["normals"], "Tangents": gs.streams["tangents"],
                    "QTangents": gs.streams["qtangents"],
                    "PackedFrames": gs.streams["packed_frames"], "Bins": self.bins,
-                   "BinArgs": self.args, "PixelList": self.pixels}
+                   "BinArgs": self.args, "PixelList": self.pixels,
+                   "Materials": scene.material_table}
         images = {"out_image": target.storage_view, "visibility": target.visibility_view}
+        sizes = {b.name: b.size for b in L.BLOCKS}
         writer = DescriptorWriter(dev)
-        for binding, kind, name in L.COMPUTE_SET:
-            if kind == "storage":
-                writer.storage(self.set, binding, buffers[name])
-            else:
-                writer.storage_image(self.set, binding, images[name])
+        for dset, slot in zip(self.sets, slots, strict=True):
+            for binding, kind, name in L.COMPUTE_SET:
+                if kind == "storage":
+                    writer.storage(dset, binding, buffers[name])
+                elif kind == "block":
+                    buf, offset = slot.block_ranges[name]
+                    writer.storage(dset, binding, buf, sizes[name], offset)
+                else:
+                    writer.storage_image(dset, binding, images[name])
         writer.update()
 
     def _own(self, obj: Any) -> Any:
@@ -85,9 +93,9 @@ class ComputeScene:
     1 material, 2 lighting, ...); the compute set comes after the last of them.
     """
 
-    def __init__(self, device: Device, gs: GpuScene, frame_layouts: dict[int, DescriptorSetLayout]
-                 ) -> None:
-        self.device, self.gs = device, gs
+    def __init__(self, device: Device, gs: GpuScene, frame_layouts: dict[int, DescriptorSetLayout],
+                 slots: list[Any]) -> None:
+        self.device, self.gs, self.slots = device, gs, slots
         self._owned: list[Any] = []
         gs.ensure_streams()  # every TBN path's stream exists: the sets bind them all
         draws = np.zeros(max(len(gs.draws), 1), L.DRAW_RECORD.dtype)
@@ -96,9 +104,12 @@ class ComputeScene:
             draws[i]["model"], draws[i]["normal_matrix"] = m[0], m[1]
             draws[i]["info"] = (d.first_index, d.vertex_offset, d.material, int(gs.has_colors))
         self.draw_table = self._own(upload_buffer(device, draws, "storage", name="draw records"))
+        self.material_table = self._own(upload_buffer(
+            device, np.stack(gs.material_blocks), "storage", name="material records"))
         self.set_index = max(frame_layouts) + 1
         self.set_layout = self._own(DescriptorSetLayout(device, [
-            BindingSpec(b, kind, ("compute",), name) for b, kind, name in L.COMPUTE_SET]))
+            BindingSpec(b, "storage" if kind == "block" else kind, ("compute",), name)
+            for b, kind, name in L.COMPUTE_SET]))
         self.layouts = [frame_layouts[i] for i in range(self.set_index)] + [self.set_layout]
         self.material_count = len(gs.materials)
         # Which materials any opaque or masked draw uses: only those get a shading dispatch.
@@ -124,27 +135,30 @@ class ComputeScene:
         return self._targets[key]
 
     # --- recording --------------------------------------------------------------------------
-    def record_shading(self, cmd: Any, target: Any, tbn: L.TbnMode, frame_sets: dict[int, Any],
-                       material_sets: list[Any], materials: list[int],
+    def record_shading(self, cmd: Any, target: Any, frame_index: int, tbn: L.TbnMode,
+                       frame_sets: dict[int, Any], material_sets: list[Any], materials: list[int],
                        clear_color: tuple[float, ...]) -> None:
         """Classify the visibility image's pixels by material, then shade each material of
         `materials` (those the visibility pass drew) with its own set 1 bound."""
         res = self._resources(target)
+        compute_set = res.sets[frame_index]
         cmd.fill(res.bins, 0)
         cmd.memory_barrier("transfer", "compute")
         push = np.zeros(8, np.float32)
         push[:4] = clear_color
         push.view(np.uint32)[4:6] = (self.material_count, SHADE_GROUP)
         pixel_groups = groups((*target.extent, 1), CLASSIFY_GROUP)
-        for name, size in (("classify_count", pixel_groups), ("classify_offsets", (1, 1, 1)),
-                           ("classify_scatter", pixel_groups)):
+        # Subgroup-aggregated atomics on GPUs; one atomic a pixel on CPUs (classify.comp).
+        plain = "_plain" if self.device.info.kind == "cpu" else ""
+        for name, size in ((f"classify_count{plain}", pixel_groups), ("classify_offsets", (1, 1, 1)),
+                           (f"classify_scatter{plain}", pixel_groups)):
             cmd.bind_pipeline(self._pipeline(name, 32))
-            self._bind_frame_sets(cmd, frame_sets, material_sets[0], res.set)
+            self._bind_frame_sets(cmd, frame_sets, material_sets[0], compute_set)
             cmd.push(push)
             cmd.dispatch(*size)
             cmd.memory_barrier("compute", "compute|indirect")
         cmd.bind_pipeline(self._pipeline(f"shade_{tbn.name.lower()}", 16))
-        self._bind_frame_sets(cmd, frame_sets, None, res.set)
+        self._bind_frame_sets(cmd, frame_sets, None, compute_set)
         material = np.zeros(4, np.uint32)
         for m in materials:
             cmd.bind_set(1, material_sets[m])

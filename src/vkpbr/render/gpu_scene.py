@@ -374,6 +374,7 @@ class GpuScene:
         self.pool = self._own(DescriptorPool(self.device, [(layout, len(self.materials))]))
         writer = DescriptorWriter(self.device)
         self.material_sets = []
+        self.material_blocks: list[np.ndarray] = []  # the compute path's table (compute_path.py)
         for i, mat in enumerate(self.materials):
             dset = self.pool.allocate(layout)
             self.material_sets.append(dset)
@@ -383,6 +384,7 @@ class GpuScene:
                 has[slot] = present
                 writer.sampler(dset, binding, view, sampler)
             block = self._material_block(mat, has)
+            self.material_blocks.append(block)
             self.material_ubo.write(block.tobytes(), offset=i * stride)
             writer.uniform(dset, 6, self.material_ubo, L.MATERIAL.size, offset=i * stride)
         writer.update()

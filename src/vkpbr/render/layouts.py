@@ -293,6 +293,7 @@ STORAGE = {
     "Bins": StorageArray("Bins", "uvec4", "bins"),
     "BinArgs": StorageArray("BinArgs", "uint", "bin_args"),  # 3 per material: dispatch sizes
     "PixelList": StorageArray("PixelList", "uint", "pixel_list"),  # pixel indices by material
+    "Materials": StorageArray("Materials", MATERIAL, "materials"),  # GpuScene's blocks
 }
 # Storage buffers the compute path writes (declared without `readonly`).
 WRITABLE_STORAGE = ("Bins", "BinArgs", "PixelList")
@@ -316,6 +317,13 @@ COMPUTE_SET: tuple[tuple[int, str, str], ...] = (
     (12, "storage", "Bins"),
     (13, "storage", "BinArgs"),
     (14, "storage", "PixelList"),
+    # The frame's blocks and the materials as storage buffers: the compute path reads no
+    # uniform block, which lavapipe 22.3 would compile a variant of the shader for per new set
+    # of values (never freed) and, once a loop depends on one, crash compiling.
+    (15, "block", "Camera"),
+    (16, "block", "Settings"),
+    (17, "block", "Lighting"),
+    (18, "storage", "Materials"),
 )
 # GLSL declarations of the storage images (their formats and access).
 STORAGE_IMAGES = {

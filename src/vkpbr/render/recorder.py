@@ -152,18 +152,19 @@ class FrameRecorder:
 
         ctx = context(False)
         if compute:  # render/compute_path.py: visibility, classification + shading, the rest
-            target.record_visibility_begin(cmd, image)  # type: ignore[attr-defined]
-            record_passes(cmd, context(True), VISIBILITY_PASSES)
             for p in PASSES:
                 if p.prepass:  # no pre-pass here: its slots take no time
                     ctx.stamp(p.name)
+            target.record_visibility_begin(cmd, image)  # type: ignore[attr-defined]
+            record_passes(cmd, context(True), VISIBILITY_PASSES)
             target.record_shading_begin(cmd)  # type: ignore[attr-defined]
             drawn = sorted({d.material for d, c in zip(gs.draws, classes, strict=True)
                             if c != "blend"})
             frame_sets = {0: slot.set0, 2: slot.set2}
             if shadow_set is not None:
                 frame_sets[3] = shadow_set
-            self.compute_scene().record_shading(cmd, target, tbn, frame_sets, gs.material_sets,
+            self.compute_scene().record_shading(cmd, target, frame.index, tbn, frame_sets,
+                                                gs.material_sets,
                                                 drawn, target.clear_color)  # type: ignore[attr-defined]
             ctx.stamp("shading")
             target.record_resume(cmd)  # type: ignore[attr-defined]

@@ -205,7 +205,7 @@ class Renderer:
         """The compute path's resources (render/compute_path.py), made on its first frame."""
         if self._compute_scene is None:
             self._compute_scene = ComputeScene(
-                self.device, self.gpu_scene, dict(enumerate(self.set_layouts)))
+                self.device, self.gpu_scene, dict(enumerate(self.set_layouts)), self.slots)
         return self._compute_scene
 
     def uses_compute(self, target: FrameTarget, options: RenderOptions) -> bool:

@@ -6,8 +6,9 @@
 //   clear colour here. KERNEL 2 (offsets): one invocation turns counts into list offsets and
 //   one indirect dispatch size per material. KERNEL 3 (scatter): per pixel, its index into its
 //   material's part of the pixel list.
-// Atomics are aggregated per subgroup (one per material present in the subgroup), which keeps
-// a frame's ~2 M pixels from queueing on a few dozen counters.
+// AGGREGATE = 1: atomics are aggregated per subgroup (one per material present in the
+// subgroup), which keeps a frame's ~2 M pixels from queueing on a few dozen counters on a GPU;
+// AGGREGATE = 0: one atomic per pixel (lavapipe, where the subgroup loop costs ~10x more).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_KHR_shader_subgroup_vote : require
@@ -54,6 +55,15 @@ void main() {
 #endif
     bool covered = inside && vis.x != 0u;
     uint material = covered ? draws[vis.x - 1u].info.z : 0xFFFFFFFFu;
+#if !AGGREGATE
+    if (!covered) return;
+#if KERNEL == 1
+    atomicAdd(bins[material].x, 1u);
+#else
+    uint slot = atomicAdd(bins[material].z, 1u);
+    pixel_list[bins[material].y + slot] = pixel.y * uint(size.x) + pixel.x;
+#endif
+#else
     // Waterfall over the materials present in this subgroup: one atomic each.
     bool pending = covered;
     while (subgroupAny(pending)) {
@@ -75,5 +85,6 @@ void main() {
             pending = false;
         }
     }
+#endif
 }
 #endif

@@ -72,10 +72,35 @@ struct DrawRecord {
     mat4 normal_matrix;
     uvec4 info;
 };
+struct MaterialRecord {
+    vec4 base_color_factor;
+    vec3 emissive_factor;
+    float metallic_factor;
+    float roughness_factor;
+    float normal_scale;
+    float occlusion_strength;
+    float alpha_cutoff;
+    vec4 base_color_uv_row0;
+    vec4 base_color_uv_row1;
+    vec4 metallic_uv_row0;
+    vec4 metallic_uv_row1;
+    vec4 roughness_uv_row0;
+    vec4 roughness_uv_row1;
+    vec4 normal_uv_row0;
+    vec4 normal_uv_row1;
+    vec4 occlusion_uv_row0;
+    vec4 occlusion_uv_row1;
+    vec4 emissive_uv_row0;
+    vec4 emissive_uv_row1;
+    uint flags;
+};
+#if !COMPUTE_SHADING
 layout(set = 0, binding = 0, std140) uniform Camera {
     mat4 VP;
     mat4 inv_VP;
 } camera;
+#endif
+#if !COMPUTE_SHADING
 layout(set = 0, binding = 1, std140) uniform Settings {
     vec4 camera_forward;
     int view;
@@ -87,6 +112,7 @@ layout(set = 0, binding = 1, std140) uniform Settings {
     float zfar;
     float pad0;
 } settings;
+#endif
 layout(set = 1, binding = 0) uniform sampler2D base_color_map;
 layout(set = 1, binding = 1) uniform sampler2D metallic_map;
 layout(set = 1, binding = 2) uniform sampler2D roughness_map;
@@ -115,6 +141,7 @@ layout(set = 1, binding = 6, std140) uniform Material {
     vec4 emissive_uv_row1;
     uint flags;
 } material;
+#if !COMPUTE_SHADING
 layout(set = 2, binding = 0, std140) uniform Lighting {
     vec4 view_pos;
     uint light_count;
@@ -124,6 +151,7 @@ layout(set = 2, binding = 0, std140) uniform Lighting {
     vec4 env_rotation;
     vec4 ambient_color;
 } lighting;
+#endif
 layout(set = 2, binding = 1, std140) readonly buffer Lights {
     LightRecord lights[];
 };
@@ -172,6 +200,33 @@ layout(set = 4, binding = 13, std430) buffer BinArgs {
 };
 layout(set = 4, binding = 14, std430) buffer PixelList {
     uint pixel_list[];
+};
+layout(set = 4, binding = 15, std140) readonly buffer Camera {
+    mat4 VP;
+    mat4 inv_VP;
+} camera;
+layout(set = 4, binding = 16, std140) readonly buffer Settings {
+    vec4 camera_forward;
+    int view;
+    int brdf;
+    int tonemap;
+    uint flags;
+    float exposure;
+    float znear;
+    float zfar;
+    float pad0;
+} settings;
+layout(set = 4, binding = 17, std140) readonly buffer Lighting {
+    vec4 view_pos;
+    uint light_count;
+    int mode;
+    uint flags;
+    float env_intensity;
+    vec4 env_rotation;
+    vec4 ambient_color;
+} lighting;
+layout(set = 4, binding = 18, std140) readonly buffer Materials {
+    MaterialRecord materials[];
 };
 #else  // the compute path has its own push constants
 layout(push_constant, std430) uniform Draw {

@@ -27,7 +27,9 @@ vec2 texture_grad(vec4 row0, vec4 row1, vec4 d) {
     return vec2(dot(row0.xy, duv), dot(row1.xy, duv));  // ...through its transform's 2x2 part
 }
 
-#define MAT material
+// The material from the compute path's table (the frame's blocks, too, are storage buffers
+// here: generated.glsl, COMPUTE_SET); its textures from its own set 1.
+#define MAT materials[pc.material]
 #define SAMPLE(name) textureGrad(name##_map, texture_uv(MAT.name##_uv_row0, MAT.name##_uv_row1), \
     texture_grad(MAT.name##_uv_row0, MAT.name##_uv_row1, g_dtex_dx), \
     texture_grad(MAT.name##_uv_row0, MAT.name##_uv_row1, g_dtex_dy))
@@ -69,11 +71,8 @@ void main() {
     ivec2 size = imageSize(out_image);
     uint index = pixel_list[bin.y + gl_GlobalInvocationID.x];
     uvec2 pixel = uvec2(index % uint(size.x), index / uint(size.x));
-    // The leak guard's zero (frame_output.glsl) is a plain 0 here: a zero the compiler cannot
-    // see makes the light loop's trip count dynamic, and lavapipe 22.3 crashes executing that
-    // loop in a compute shader (fragment shaders are fine). Lavapipe then compiles a variant
-    // per new set of frame values, which only the compute path on lavapipe pays for (its
-    // default there is the fragment path); GPUs compile once either way.
+    // The leak guard's zero (frame_output.glsl) may be a plain 0 here: this shader reads no
+    // uniform block for lavapipe to inline (COMPUTE_SET).
     opaque_zero = 0u;
     uvec2 vis = imageLoad(visibility, ivec2(pixel)).xy;
     bool srgb_target = (u(settings.flags) & SETTINGS_SRGB_TARGET) != 0u;
