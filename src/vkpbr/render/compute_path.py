@@ -104,8 +104,11 @@ class ComputeScene:
             draws[i]["model"], draws[i]["normal_matrix"] = m[0], m[1]
             draws[i]["info"] = (d.first_index, d.vertex_offset, d.material, int(gs.has_colors))
         self.draw_table = self._own(upload_buffer(device, draws, "storage", name="draw records"))
-        self.material_table = self._own(upload_buffer(
-            device, np.stack(gs.material_blocks), "storage", name="material records"))
+        table = np.zeros(len(gs.material_blocks), L.MATERIAL.dtype)  # np.stack drops padding
+        for i, block in enumerate(gs.material_blocks):
+            table[i] = block
+        self.material_table = self._own(upload_buffer(device, table, "storage",
+                                                      name="material records"))
         self.set_index = max(frame_layouts) + 1
         self.set_layout = self._own(DescriptorSetLayout(device, [
             BindingSpec(b, "storage" if kind == "block" else kind, ("compute",), name)

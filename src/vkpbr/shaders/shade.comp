@@ -3,8 +3,8 @@
 // material with that material's set 1 bound (classify.comp binned the pixels); one invocation
 // per pixel of the bin reads the visibility buffer (draw index + 1, primitive index) that the
 // raster pass wrote, fetches the triangle's three vertices from the scene's storage buffers, intersects the pixel-centre
-// ray with it for perspective-correct barycentrics (and the neighbouring pixels' rays for the
-// texture derivatives the fragment path's quads would take), and shades the point with
+// ray with it for perspective-correct barycentrics (and the rays of its 2x2 quad's pixels for
+// the texture derivatives the fragment path's quads take), and shades the point with
 // shade.glsl -- the fragment path's own function -- on all SMs of the GPU, not only those that
 // run fragment shaders. Pixels nothing covers were cleared by classify.comp.
 // TBN_MODE: the tangent-frame stream, as in pbr.vert.
@@ -87,8 +87,13 @@ void main() {
     vec2 extent = vec2(size);
     vec2 centre = vec2(pixel) + 0.5;
     vec2 b = barycentrics(eye, ray_dir(centre, extent), w0, w1, w2);
-    vec2 bx = barycentrics(eye, ray_dir(centre + vec2(1.0, 0.0), extent), w0, w1, w2) - b;
-    vec2 by = barycentrics(eye, ray_dir(centre + vec2(0.0, 1.0), extent), w0, w1, w2) - b;
+    // Texture derivatives as a rasteriser's 2x2 quads take them (fine: across the quad's
+    // pixel pair in this row and in this column), so mip levels agree at their boundaries.
+    vec2 quad = vec2(pixel & ~1u) + 0.5;
+    vec2 qx = barycentrics(eye, ray_dir(vec2(quad.x, centre.y), extent), w0, w1, w2);
+    vec2 qy = barycentrics(eye, ray_dir(vec2(centre.x, quad.y), extent), w0, w1, w2);
+    vec2 bx = barycentrics(eye, ray_dir(vec2(quad.x + 1.0, centre.y), extent), w0, w1, w2) - qx;
+    vec2 by = barycentrics(eye, ray_dir(vec2(centre.x, quad.y + 1.0), extent), w0, w1, w2) - qy;
     vec3 bary = vec3(1.0 - b.x - b.y, b.x, b.y);
     vec3 dbx = vec3(-bx.x - bx.y, bx.x, bx.y), dby = vec3(-by.x - by.y, by.x, by.y);
 
