@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # One device-tool run on the NVIDIA machine: unpack the carried loader/validation layer and
-# wheels, then the GPU test pass and the benchmarks. Output files land in $OUT.
+# wheels, then the benchmarks and the GPU test pass. Output files land in $OUT.
 # Carry: .gl (debs), .whl (wheels), .assets (models in ../shared/assets' layout, Sponza's
 # JPEGs re-encoded at quality 85), and optionally .before (`git archive <commit> src` of an
 # earlier commit, benchmarked in the same run for before/after numbers).
+# STEPS (default "paths env tests"): any of paths, env, bench, viewer, tests.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl 2>/dev/null || exit 1
@@ -13,17 +14,31 @@ if [ -z "$(python3 -m vkpbr info --json 2>/dev/null | grep -i nvidia)" ]; then
   export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 fi
 SPONZA=.assets/models/Sponza/glTF/Sponza.gltf
+STEPS=${STEPS:-paths env tests}
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
 python3 -m vkpbr info | head -3
-echo "== frame path: Sponza, depth pre-pass off/on, GPU ms per pass"
-python3 benchmarks/bench_frame_path.py --scene $SPONZA --frames ${FRAMES:-200} --json "$OUT/frame_path.json"
-echo "== vkpbr bench (this commit)"
-python3 -m vkpbr bench --frames ${FRAMES:-200} --sponza $SPONZA 2>/dev/null
-if [ -d .before/src ]; then
-  echo "== vkpbr bench (before: .before)"
-  PYTHONPATH=/tmp/site:$PWD/.before/src python3 -m vkpbr bench --frames ${FRAMES:-200} --sponza $SPONZA 2>/dev/null
+has() { [[ " $STEPS " == *" $1 "* ]]; }
+if has paths; then
+  echo "== frame paths x lighting: Sponza, GPU ms per step; cost per light"
+  python3 benchmarks/bench_paths.py --scene $SPONZA --frames ${FRAMES:-200} --json "$OUT/paths.json"
 fi
-echo "== viewer loop, offscreen, Sponza 1920x1080, flying with the light animated"
-python3 -m vkpbr view $SPONZA --offscreen --size 1920x1080 --script benchmarks/viewer_fly.json
-echo "== GPU test pass (validation on)"
-VKPBR_ASSETS=$PWD/.assets/models timeout 400 python3 -m pytest -q -p no:cacheprovider -rs tests/gpu tests/unit tests/test_import_graph.py > "$OUT/gpu-tests.log" 2>&1; tail -8 "$OUT/gpu-tests.log"
+if has env; then
+  echo "== environment pre-filter (2048x1024 panorama, the sky)"
+  python3 benchmarks/bench_environment.py
+fi
+if has bench; then
+  echo "== vkpbr bench (this commit)"
+  python3 -m vkpbr bench --frames ${FRAMES:-200} --sponza $SPONZA 2>/dev/null
+  if [ -d .before/src ]; then
+    echo "== vkpbr bench (before: .before)"
+    PYTHONPATH=/tmp/site:$PWD/.before/src python3 -m vkpbr bench --frames ${FRAMES:-200} --sponza $SPONZA 2>/dev/null
+  fi
+fi
+if has viewer; then
+  echo "== viewer loop, offscreen, Sponza 1920x1080, flying with the light animated"
+  python3 -m vkpbr view $SPONZA --offscreen --size 1920x1080 --script benchmarks/viewer_fly.json
+fi
+if has tests; then
+  echo "== GPU test pass (validation on)"
+  VKPBR_ASSETS=$PWD/.assets/models timeout ${TEST_TIMEOUT:-400} python3 -m pytest -q -p no:cacheprovider -rs tests/gpu tests/unit tests/test_import_graph.py > "$OUT/gpu-tests.log" 2>&1; tail -12 "$OUT/gpu-tests.log"
+fi

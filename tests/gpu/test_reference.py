@@ -77,16 +77,21 @@ def expected(view: str, mat: Material, brdf: int) -> tuple[np.ndarray, str]:
     return to_bytes(value, kind), kind
 
 
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
 @pytest.mark.parametrize("material", list(MATERIALS))
 @pytest.mark.parametrize("brdf", ["ggx", "blinn-phong"])
-def test_terms_match_reference(make_renderer, material: str, brdf: str) -> None:
+def test_terms_match_reference(make_renderer, material: str, brdf: str, pipeline: str) -> None:
+    """Both frame paths (the fragment path and the compute path, render/compute_path.py)."""
     mat = MATERIALS[material]
     r = make_renderer(plane_scene(mat))
+    if pipeline == "compute" and not r.device.compute_path:
+        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
     views = ["final", "specular", "diffuse", "ambient", "d", "f", "g", "view_dir", "light_dir",
              "mapped_normal", "base_color", "metallic", "roughness"]
     failures = []
     for view in views:
-        got = r.render(size=(W, H), view=view, brdf=brdf, lighting="course")[..., :3].astype(np.int32)
+        got = r.render(size=(W, H), view=view, brdf=brdf, lighting="course",
+                       pipeline=pipeline)[..., :3].astype(np.int32)
         want, _ = expected(view, mat, Brdf.BLINN_PHONG if brdf == "blinn-phong" else Brdf.GGX)
         diff = np.abs(got - want)
         if diff.max() > 1:
@@ -119,13 +124,16 @@ def test_linear_float_output_matches_reference(make_renderer) -> None:
     np.testing.assert_allclose(d_got, np.clip(s["terms"].D, 0, 1), rtol=2e-3, atol=2e-5)
 
 
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
 @pytest.mark.parametrize("material", list(MATERIALS))
-def test_gltf_brdf_terms_match_reference(make_renderer, material: str) -> None:
+def test_gltf_brdf_terms_match_reference(make_renderer, material: str, pipeline: str) -> None:
     """The physically based mode's glTF BRDF (spec Appendix B) against the NumPy mirror:
     the point light alone (no ambient; image-based light and shadows are not part of these
-    terms), linear float32 output, every term view."""
+    terms), linear float32 output, every term view, on both frame paths."""
     mat = MATERIALS[material]
     r = make_renderer(plane_scene(mat))
+    if pipeline == "compute" and not r.device.compute_path:
+        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
     _, n, v, l = pixel_geometry()
     c = np.broadcast_to(np.asarray(mat.base_color_factor[:3]), n.shape)
     m = np.full(n.shape[:2], mat.metallic_factor)
@@ -137,6 +145,6 @@ def test_gltf_brdf_terms_match_reference(make_renderer, material: str) -> None:
             "f": t.F, "g": np.clip(t.G, 0, 1)[..., None]}
     for view, value in want.items():
         got = r.render(size=(W, H), view=view, linear=True, lighting="pbr", brdf="gltf",
-                       env="none")
+                       env="none", pipeline=pipeline)
         np.testing.assert_allclose(got[..., :3], np.broadcast_to(value, n.shape), rtol=2e-3,
                                    atol=2e-5, err_msg=view)

@@ -57,7 +57,7 @@ def test_std140_rules() -> None:
                                   "env_intensity": 28, "env_rotation": 32, "ambient_color": 48}
     assert L.LIGHTING.size == 64
     assert L.LIGHT_RECORD.size == 80 and L.LIGHT_RECORD.dtype.itemsize == 80
-    assert L.CAMERA.size == 64
+    assert L.CAMERA.size == 128  # VP and its inverse (the compute path's pixel rays)
     assert L.PUSH.size == 128  # the guaranteed minimum maxPushConstantsSize
     assert L.MATERIAL.dtype.itemsize == L.MATERIAL.size
 

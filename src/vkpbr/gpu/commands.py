@@ -100,6 +100,37 @@ class Commands:
     def dispatch(self, x: int, y: int = 1, z: int = 1) -> None:
         self.vk.vkCmdDispatch(self.handle, x, y, z)
 
+    def dispatch_indirect(self, buffer: Buffer, offset: int = 0) -> None:
+        """A dispatch whose group counts are 3 uint32 at `offset` of `buffer` (GPU-written)."""
+        self.vk.vkCmdDispatchIndirect(self.handle, buffer.handle, offset)
+
+    def fill(self, buffer: Buffer, value: int = 0) -> None:
+        """Set every uint32 of `buffer` to `value` (a transfer write)."""
+        self.vk.vkCmdFillBuffer(self.handle, buffer.handle, 0, buffer.size, value)
+
+    def memory_barrier(self, src: str, dst: str) -> None:
+        """A global memory dependency from stages `src` to `dst`, each "|"-joined words of
+        "transfer", "compute" (storage reads and writes), "indirect" (dispatch sizes)."""
+        vk = self.vk
+        stages = {
+            "transfer": (vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT),
+            "compute": (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                        vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT),
+            "indirect": (vk.VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
+                         vk.VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT),
+        }
+
+        def mask(words: str) -> tuple[int, int]:
+            st = ac = 0
+            for w in words.split("|"):
+                st, ac = st | stages[w][0], ac | stages[w][1]
+            return st, ac
+
+        (ss, sa), (ds, da) = mask(src), mask(dst)
+        vk.vkCmdPipelineBarrier2(self.handle, vk.VkDependencyInfo(
+            memoryBarrierCount=1, pMemoryBarriers=[vk.VkMemoryBarrier2(
+                srcStageMask=ss, srcAccessMask=sa, dstStageMask=ds, dstAccessMask=da)]))
+
     def image_barrier(self, image: Any, old: str, new: str, src: str, dst: str,
                       base_mip: int = 0, mips: int | None = None) -> None:
         """A layout transition and memory dependency on mips [base_mip, base_mip + mips) of

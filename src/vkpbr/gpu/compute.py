@@ -37,7 +37,8 @@ STAGES = {
     "compute": ("VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT",
                 ("VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT", "VK_ACCESS_2_SHADER_STORAGE_READ_BIT",
                  "VK_ACCESS_2_SHADER_SAMPLED_READ_BIT")),
-    "fragment": ("VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT",
+    # Sampled by the frame's shaders: fragment and the compute path's (render/compute_path.py).
+    "fragment": ("VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT|VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT",
                  ("VK_ACCESS_2_SHADER_SAMPLED_READ_BIT", "VK_ACCESS_2_SHADER_STORAGE_READ_BIT")),
     "transfer": ("VK_PIPELINE_STAGE_2_TRANSFER_BIT",
                  ("VK_ACCESS_2_TRANSFER_READ_BIT", "VK_ACCESS_2_TRANSFER_WRITE_BIT")),
@@ -79,8 +80,11 @@ class ComputePipeline(DeviceObject):
 
 
 def stage_access(vk: Any, stage: str) -> tuple[int, int]:
-    flag_name, accesses = STAGES[stage]
+    flag_names, accesses = STAGES[stage]
     flags = 0
     for a in accesses:
         flags |= getattr(vk, a)
-    return getattr(vk, flag_name), flags
+    stages = 0
+    for name in flag_names.split("|"):
+        stages |= getattr(vk, name)
+    return stages, flags

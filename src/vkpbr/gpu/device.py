@@ -39,6 +39,11 @@ def anisotropy_usable(info: PhysicalDeviceInfo, supported: bool) -> bool:
     return True
 
 
+
+# Device features the compute path needs (Device.compute_path: all present, then enabled).
+COMPUTE_PATH_FEATURES = ("geometryShader", "shaderStorageImageWriteWithoutFormat",
+                         "subgroupOperations")
+
 class Destroyable(Protocol):
     def destroy(self) -> None: ...
 
@@ -148,11 +153,16 @@ class Device:
             pNext=f13, shaderOutputLayer=on[self.layered_shadows])
         f11 = vk.VkPhysicalDeviceVulkan11Features(
             pNext=f12, shaderDrawParameters=on[self.layered_shadows])
+        # The compute path (render/compute_path.py) needs the primitive index in fragment
+        # shaders (geometryShader), storage writes without a declared format, and subgroup
+        # ballot, vote and shuffle in compute shaders.
+        self.compute_path = all(supported[k] for k in COMPUTE_PATH_FEATURES)
         # Only what vkpbr uses: dynamic rendering, synchronization2, maintenance4, anisotropic
-        # filtering, layered rendering and cube-map arrays (shadows).
+        # filtering, layered rendering and cube-map arrays (shadows), the compute path's.
         core = vk.VkPhysicalDeviceFeatures(
             samplerAnisotropy=vk.VK_TRUE if self.anisotropy else vk.VK_FALSE,
-            imageCubeArray=on[self.image_cube_array])
+            imageCubeArray=on[self.image_cube_array], geometryShader=on[self.compute_path],
+            shaderStorageImageWriteWithoutFormat=on[self.compute_path])
         features = vk.VkPhysicalDeviceFeatures2(pNext=f11, features=core)
         available = {
             e.extensionName
@@ -188,10 +198,21 @@ class Device:
                 f"{self.info.name}: Vulkan 1.3 dynamic rendering and synchronization2 are "
                 "required (update the driver; Mesa >= 22 lavapipe has them)"
             )
-        return {"samplerAnisotropy": f2.features.samplerAnisotropy,
-                "imageCubeArray": f2.features.imageCubeArray,
+        sub = vk.VkPhysicalDeviceSubgroupProperties(
+            sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES)
+        vk.vkGetPhysicalDeviceProperties2(self.physical, vk.VkPhysicalDeviceProperties2(
+            sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, pNext=sub))
+        ops = (vk.VK_SUBGROUP_FEATURE_BASIC_BIT | vk.VK_SUBGROUP_FEATURE_VOTE_BIT
+               | vk.VK_SUBGROUP_FEATURE_BALLOT_BIT | vk.VK_SUBGROUP_FEATURE_SHUFFLE_BIT)
+        core = f2.features
+        return {"samplerAnisotropy": core.samplerAnisotropy,
+                "imageCubeArray": core.imageCubeArray,
                 "shaderOutputLayer": f12.shaderOutputLayer,
-                "shaderDrawParameters": f11.shaderDrawParameters}
+                "shaderDrawParameters": f11.shaderDrawParameters,
+                "geometryShader": core.geometryShader,
+                "shaderStorageImageWriteWithoutFormat": core.shaderStorageImageWriteWithoutFormat,
+                "subgroupOperations": int((sub.supportedOperations & ops) == ops and bool(
+                    sub.supportedStages & vk.VK_SHADER_STAGE_COMPUTE_BIT))}
 
     # --- helpers ----------------------------------------------------------------------------
     def format_supports(self, format: int, feature: str) -> bool:

@@ -23,6 +23,11 @@ def mip_levels(width: int, height: int) -> int:
     return int(max(width, height)).bit_length()
 
 
+# VK_IMAGE_CREATE_EXTENDED_USAGE_BIT (core in Vulkan 1.1): the binding has only the KHR alias,
+# whose value it leaves as None.
+_EXTENDED_USAGE = 0x00000100
+
+
 class Image:
     """A 2D VkImage with dedicated memory; `layers` > 1 makes an array, `cube` (layers a
     multiple of 6) lets cube views see it."""
@@ -39,6 +44,7 @@ class Image:
         name: str = "",
         layers: int = 1,
         cube: bool = False,
+        mutable: bool = False,
     ) -> None:
         vk = device.vk
         self.device = device
@@ -49,7 +55,10 @@ class Image:
         self.handle = vk.vkCreateImage(
             device.handle,
             vk.VkImageCreateInfo(
-                flags=vk.VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT if cube else 0,
+                # mutable: views of another format of the same size (a UNORM storage view of
+                # an sRGB image), with usages only such views support.
+                flags=vk.VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT if cube else 0
+                | (vk.VK_IMAGE_CREATE_MUTABLE_FORMAT_BIT | _EXTENDED_USAGE if mutable else 0),
                 imageType=vk.VK_IMAGE_TYPE_2D,
                 format=format,
                 extent=vk.VkExtent3D(width=width, height=height, depth=1),
@@ -107,6 +116,7 @@ class ImageView(DeviceObject):
         mips: int | None = None,
         base_layer: int = 0,
         layer_count: int | None = None,
+        usage: int | None = None,
     ) -> None:
         device = image.device
         vk = device.vk
@@ -127,6 +137,9 @@ class ImageView(DeviceObject):
         self.handle = vk.vkCreateImageView(
             device.handle,
             vk.VkImageViewCreateInfo(
+                # `usage`: what this view is used for, a subset of the image's (a mutable
+                # image's sRGB view must not claim the storage usage of its UNORM view).
+                pNext=None if usage is None else vk.VkImageViewUsageCreateInfo(usage=usage),
                 image=image.handle,
                 viewType=view_type,
                 format=image.format if format is None else format,
@@ -302,7 +315,8 @@ class TextureUploader:
         vk = self.device.vk
         top = (vk.VK_PIPELINE_STAGE_2_NONE, vk.VK_ACCESS_2_NONE)
         xfer_w = (vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT)
-        frag = (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT)
+        frag = (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+ vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT)
         dst_l = vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
         n = image.mip_levels
         pipeline_barrier(vk, cmd, [_barrier(vk, image, vk.VK_IMAGE_LAYOUT_UNDEFINED, dst_l, top,
@@ -330,7 +344,8 @@ class TextureUploader:
         top = (S.VK_PIPELINE_STAGE_2_NONE, S.VK_ACCESS_2_NONE)
         xfer_w = (S.VK_PIPELINE_STAGE_2_TRANSFER_BIT, S.VK_ACCESS_2_TRANSFER_WRITE_BIT)
         xfer_r = (S.VK_PIPELINE_STAGE_2_TRANSFER_BIT, S.VK_ACCESS_2_TRANSFER_READ_BIT)
-        frag = (S.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, S.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT)
+        frag = (S.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | S.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+ S.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT)
         undef, dst_l = S.VK_IMAGE_LAYOUT_UNDEFINED, S.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
         src_l, ro = S.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, S.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
         n = image.mip_levels

@@ -64,7 +64,8 @@ class LayeredDepth:
                 imageMemoryBarrierCount=1, pImageMemoryBarriers=[self._barrier(
                     vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                     (vk.VK_PIPELINE_STAGE_2_NONE, vk.VK_ACCESS_2_NONE),
-                    (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                    (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT
+                     | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                      vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT))]))
 
     def _barrier(self, old: int, new: int, src: tuple[int, int], dst: tuple[int, int]) -> Any:
@@ -92,7 +93,8 @@ class LayeredDepth:
                   | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
         barriers(cmd, [self._barrier(
             vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-            (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | stages, vk.VK_ACCESS_2_NONE),
+            (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT
+             | stages, vk.VK_ACCESS_2_NONE),
             (stages, access))])
 
     def begin(self, cmd: Commands, base: int, count: int) -> None:
@@ -113,7 +115,8 @@ class LayeredDepth:
             (vk.VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT
              | vk.VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT,
              vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT),
-            (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT))])
+            (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+ vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT))])
 
     # --- readback (tests, debugging) -----------------------------------------------------------
     def read(self) -> np.ndarray:
@@ -126,7 +129,8 @@ class LayeredDepth:
                      host_visible=True, name="layered depth readback")
         ro, src = (vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                    vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL)
-        frag = (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT)
+        frag = (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+ vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT)
         xfer = (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT)
         try:
             with device.one_time_commands() as handle:

@@ -56,6 +56,52 @@ class FrameTarget(Protocol):
 
     def record_begin(self, cmd: Commands, image: int) -> None: ...
 
+    # --- the compute path's steps, instead of record_begin -------------------------------------
+    def record_visibility_begin(self, cmd: Commands, image: int) -> None:
+        """Begin rendering the visibility image (cleared to 0: nothing) over the cleared
+        depth buffer; the colour image goes to GENERAL for the compute shader's writes."""
+        vk = self.device.vk
+        color_stage, color_access, color_layout = attachment_stage(vk, False)
+        depth_stage, depth_access, depth_layout = attachment_stage(vk, True)
+        copy = vk.VK_PIPELINE_STAGE_2_COPY_BIT
+        compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT)
+        no_reads = ~(vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT
+                     | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
+        barriers(cmd, [
+            # The previous frame's passes and copies of these images come first.
+            image_barrier(vk, self.visibility.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                          color_layout, (compute[0], 0), (color_stage, color_access)),
+            image_barrier(vk, self.depth.handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED, depth_layout,
+                          (depth_stage | copy, depth_access & no_reads), (depth_stage, depth_access)),
+            image_barrier(vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                          vk.VK_IMAGE_LAYOUT_GENERAL,
+                          (color_stage | copy, color_access & no_reads), compute),
+        ])
+        begin_rendering(cmd, Attachments(self.visibility_view.handle, self.attachments.depth,
+                                         self.extent), (0.0, 0.0, 0.0, 0.0), 0.0)
+
+    def record_shading_begin(self, cmd: Commands) -> None:
+        """End the visibility pass: its image becomes readable by the compute shader."""
+        vk = self.device.vk
+        end_rendering(cmd)
+        stage, access, layout = attachment_stage(vk, False)
+        barriers(cmd, [image_barrier(
+            vk, self.visibility.handle, False, layout, vk.VK_IMAGE_LAYOUT_GENERAL,
+            (stage, vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT),
+            (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT))])
+
+    def record_resume(self, cmd: Commands) -> None:
+        """After the compute shading: render on into the shaded colour image and the
+        visibility pass's depth (blended draws, overlays), as record_begin would have."""
+        vk = self.device.vk
+        stage, access, layout = attachment_stage(vk, False)
+        barriers(cmd, [image_barrier(
+            vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_GENERAL, layout,
+            (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT),
+            (stage, access))])
+        begin_rendering(cmd, self.attachments, None, None)
+
     def record_end(self, cmd: Commands, image: int, frame: Frame, copy: tuple[str, ...]) -> None: ...
 
     def submit(self, frame: Frame, cmd: Commands, image: int) -> bool: ...
@@ -67,8 +113,8 @@ class OffscreenTarget:
     generation = 0  # never recreated
 
     def __init__(self, device: Device, size: tuple[int, int], color: str = "srgb",
-                 samples: int = 1, clear_color: tuple[float, float, float, float] = (0, 0, 0, 1)
-                 ) -> None:
+                 samples: int = 1, clear_color: tuple[float, float, float, float] = (0, 0, 0, 1),
+                 compute: bool = False) -> None:
         vk = device.vk
         self.device = device
         self.extent = (int(size[0]), int(size[1]))
@@ -79,11 +125,28 @@ class OffscreenTarget:
         self.depth_format = vk.VK_FORMAT_D32_SFLOAT
         self._objects: list[Any] = []
         src = vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT
-        self.color = self._own(Image(device, w, h, self.color_format,
-                                     vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | src))
+        attach = vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | src
+        # The compute path (render/compute_path.py) also writes the colour image from a
+        # compute shader, through a storage view: UNORM for the sRGB image (a mutable image),
+        # and renders a visibility image with the same depth buffer.
+        self.compute = bool(compute and samples == 1)
+        storage = vk.VK_IMAGE_USAGE_STORAGE_BIT if self.compute else 0
+        mutable = self.compute and color == "srgb"
+        self.color = self._own(Image(device, w, h, self.color_format, attach | storage,
+                                     mutable=mutable))
         self.depth = self._own(Image(device, w, h, self.depth_format,
                                      vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | src))
-        views = [self._own(ImageView(self.color)), self._own(ImageView(self.depth, aspect="depth"))]
+        views = [self._own(ImageView(self.color, usage=attach if mutable else None)),
+                 self._own(ImageView(self.depth, aspect="depth"))]
+        if self.compute:
+            unorm = vk.VK_FORMAT_R8G8B8A8_UNORM if color == "srgb" else None
+            self.storage_view = self._own(ImageView(
+                self.color, format=unorm, usage=vk.VK_IMAGE_USAGE_STORAGE_BIT if mutable else None))
+            self.visibility = self._own(Image(
+                device, w, h, vk.VK_FORMAT_R32G32_UINT,
+                vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_STORAGE_BIT,
+                name="visibility"))
+            self.visibility_view = self._own(ImageView(self.visibility))
         self._images = [(self.color, False), (self.depth, True)]
         self.attachments = Attachments(views[0].handle, views[1].handle, self.extent)
         if samples > 1:
@@ -134,6 +197,52 @@ class OffscreenTarget:
                                      src, (stage, access)))
         barriers(cmd, out)
         begin_rendering(cmd, self.attachments, self.clear_color, 0.0)
+
+    # --- the compute path's steps, instead of record_begin -------------------------------------
+    def record_visibility_begin(self, cmd: Commands, image: int) -> None:
+        """Begin rendering the visibility image (cleared to 0: nothing) over the cleared
+        depth buffer; the colour image goes to GENERAL for the compute shader's writes."""
+        vk = self.device.vk
+        color_stage, color_access, color_layout = attachment_stage(vk, False)
+        depth_stage, depth_access, depth_layout = attachment_stage(vk, True)
+        copy = vk.VK_PIPELINE_STAGE_2_COPY_BIT
+        compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT)
+        no_reads = ~(vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT
+                     | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
+        barriers(cmd, [
+            # The previous frame's passes and copies of these images come first.
+            image_barrier(vk, self.visibility.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                          color_layout, (compute[0], 0), (color_stage, color_access)),
+            image_barrier(vk, self.depth.handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED, depth_layout,
+                          (depth_stage | copy, depth_access & no_reads), (depth_stage, depth_access)),
+            image_barrier(vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                          vk.VK_IMAGE_LAYOUT_GENERAL,
+                          (color_stage | copy, color_access & no_reads), compute),
+        ])
+        begin_rendering(cmd, Attachments(self.visibility_view.handle, self.attachments.depth,
+                                         self.extent), (0.0, 0.0, 0.0, 0.0), 0.0)
+
+    def record_shading_begin(self, cmd: Commands) -> None:
+        """End the visibility pass: its image becomes readable by the compute shader."""
+        vk = self.device.vk
+        end_rendering(cmd)
+        stage, access, layout = attachment_stage(vk, False)
+        barriers(cmd, [image_barrier(
+            vk, self.visibility.handle, False, layout, vk.VK_IMAGE_LAYOUT_GENERAL,
+            (stage, vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT),
+            (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT))])
+
+    def record_resume(self, cmd: Commands) -> None:
+        """After the compute shading: render on into the shaded colour image and the
+        visibility pass's depth (blended draws, overlays), as record_begin would have."""
+        vk = self.device.vk
+        stage, access, layout = attachment_stage(vk, False)
+        barriers(cmd, [image_barrier(
+            vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_GENERAL, layout,
+            (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT),
+            (stage, access))])
+        begin_rendering(cmd, self.attachments, None, None)
 
     def record_end(self, cmd: Commands, image: int, frame: Frame, copy: tuple[str, ...]) -> None:
         end_rendering(cmd)

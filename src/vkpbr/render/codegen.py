@@ -32,6 +32,15 @@ VARIANTS: tuple[Variant, ...] = (
     *(Variant(f"pbr_{m.name.lower()}.vert.spv", "pbr.vert", (("TBN_MODE", int(m)),)) for m in L.TbnMode),
     Variant("pbr_opaque.frag.spv", "pbr.frag", (("ALPHA_MASK", 0),)),
     Variant("pbr_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1),)),
+    # The compute path: its visibility pass (pbr.frag's coverage), classification, shading.
+    Variant("pbr_vis_opaque.frag.spv", "pbr.frag", (("ALPHA_MASK", 0), ("VISIBILITY", 1))),
+    Variant("pbr_vis_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1), ("VISIBILITY", 1))),
+    *(Variant(f"shade_{m.name.lower()}.comp.spv", "shade.comp",
+              (("TBN_MODE", int(m)), ("COMPUTE_SHADING", 1))) for m in L.TbnMode),
+    *(Variant(f"classify_{name}{'' if agg else '_plain'}.comp.spv", "classify.comp",
+              (("COMPUTE_SHADING", 1), ("KERNEL", k), ("AGGREGATE", agg)))
+      for k, name in ((1, "count"), (2, "offsets"), (3, "scatter")) for agg in (1, 0)
+      if agg or k != 2),
     # Shadow-map passes (render/shadows.py): depth only, or cut out by the base colour's alpha.
     Variant("shadow_opaque.vert.spv", "shadow.vert", (("ALPHA_MASK", 0),)),
     Variant("shadow_mask.vert.spv", "shadow.vert", (("ALPHA_MASK", 1),)),
@@ -68,23 +77,58 @@ def generated_glsl() -> str:
             out.append(f"const uint {name} = {getattr(L, name)}u;")
     out.append("")
     blocks = {b.name: b for b in L.BLOCKS}
-    for array in L.STORAGE.values():
-        out.append(array.element.glsl("struct").replace(f"}} {array.element.instance};", "};"))
+    for element in {a.element.name: a.element for a in L.STORAGE.values()
+                    if isinstance(a.element, L.Std140Block)}.values():
+        struct = element.name + ("Record" if element.name in blocks else "")
+        out.append(element.glsl("struct").replace(f"struct {element.name} {{", f"struct {struct} {{")
+                   .replace(f"}} {element.instance};", "};"))
+
+    def storage(layout: str, name: str) -> str:
+        array = L.STORAGE[name]
+        element = array.element
+        glsl_type = element if isinstance(element, str) else (
+            element.name + ("Record" if element.name in blocks else ""))
+        access = "" if name in L.WRITABLE_STORAGE else "readonly "
+        return (f"{layout}, {array.layout}) {access}buffer {name} {{\n"
+                f"    {glsl_type} {array.member}[];\n}};")
+
     for set_index, rows in L.SETS.items():
         if set_index in L.HAND_DECLARED_SETS:
             continue  # set 3: shaders/shadow_data.glsl + shadow_sampling.glsl
         for binding, kind, _stages, name in rows:
             layout = f"layout(set = {set_index}, binding = {binding}"
             if kind == "uniform":
+                # The compute path declares the frame's blocks in its own set (COMPUTE_SET).
+                compute_block = any(k == "block" and n == name for _, k, n in L.COMPUTE_SET)
+                if compute_block:
+                    out.append("#if !COMPUTE_SHADING")
                 out.append(blocks[name].glsl(f"{layout}, std140) uniform"))
+                if compute_block:
+                    out.append("#endif")
             elif kind == "storage":
-                array = L.STORAGE[name]
-                out.append(f"{layout}, std430) readonly buffer {name} {{\n"
-                           f"    {array.element.name} {array.member}[];\n}};")
+                out.append(storage(layout, name))
             else:
                 sampler = "sampler2D" if kind == "sampler" else kind
                 out.append(f"{layout}) uniform {sampler} {name};")
+    compute_set = max(L.SETS) + 1
+    out.append("#if COMPUTE_SHADING  // the compute path's own set (render/compute_path.py)")
+    out.append(f"const uint COMPUTE_SET = {compute_set}u;")
+    for binding, kind, name in L.COMPUTE_SET:
+        layout = f"layout(set = {compute_set}, binding = {binding}"
+        if kind == "storage":
+            out.append(storage(layout, name))
+        elif kind == "block":
+            out.append(blocks[name].glsl(f"{layout}, std140) readonly buffer"))
+        else:  # storage_image
+            decl = L.STORAGE_IMAGES[name]
+            if decl.startswith("layout("):
+                fmt, rest = decl[len("layout("):].split(")", 1)
+                out.append(f"{layout}, {fmt}){rest} {name};")
+            else:
+                out.append(f"{layout}) {decl} {name};")
+    out.append("#else  // the compute path has its own push constants")
     out.append(L.PUSH.glsl("layout(push_constant, std430) uniform"))
+    out.append("#endif")
     out += ["", "#endif", ""]
     return "\n".join(out)
 

@@ -53,6 +53,9 @@ class FrameSlot:
     m_settings: memoryview
     m_lighting: memoryview
     lights: np.ndarray  # (MAX_LIGHTS, 20) float32 view of the slot's mapped light records
+    # (buffer, offset) of each frame block by GLSL name: the compute path binds them as
+    # storage buffers (render/compute_path.py).
+    block_ranges: dict[str, tuple[Buffer, int]] = field(default_factory=dict)
     uniform_key: tuple | None = None  # inputs of the camera and settings last written here
     lighting_key: tuple | None = None  # inputs of the Lighting block last written here
     lights_written: tuple = ()  # (lights, shadow rows' bytes) of the records the slot holds
@@ -84,13 +87,16 @@ def create_slots(
     """Host-visible buffers holding `count` copies of the frame blocks (uniform) and of the
     light records (storage), a pool, and the slots. The caller owns (and destroys) the
     buffers and the pool; the environment's bindings of set 2 are written by its owner."""
-    align = int(device.limits.minUniformBufferOffsetAlignment)
+    # Aligned for uniform and storage views alike (the compute path reads the blocks as
+    # storage buffers).
+    align = max(int(device.limits.minUniformBufferOffsetAlignment),
+                int(device.limits.minStorageBufferOffsetAlignment))
     offsets, offset = [], 0
     for block in FRAME_BLOCKS:
         offsets.append(offset)
         offset += (block.size + align - 1) // align * align
     stride = offset
-    buffer = Buffer(device, stride * count, "uniform",
+    buffer = Buffer(device, stride * count, "uniform|storage",
                     host_visible=True, name="frame uniforms")
     s_align = int(device.limits.minStorageBufferOffsetAlignment)
     s_stride = (LIGHTS_BYTES + s_align - 1) // s_align * s_align
@@ -112,6 +118,8 @@ def create_slots(
             m_settings=memoryview(buffer.array(np.uint8, L.SETTINGS.size, settings)),
             m_lighting=memoryview(buffer.array(np.uint8, L.LIGHTING.size, lighting)),
             lights=lights.array(np.float32, LIGHTS_BYTES // 4, i * s_stride).reshape(L.MAX_LIGHTS, 20),
+            block_ranges={"Camera": (buffer, cam), "Settings": (buffer, settings),
+                          "Lighting": (buffer, lighting), "Lights": (lights, i * s_stride)},
         ))
     writer.update()
     return [buffer, lights], pool, slots
@@ -165,7 +173,10 @@ def write_frame_uniforms(slot: FrameSlot, camera: Camera, lights: tuple[Light, .
         f = forward(camera)
         znear, zfar = depth_range(camera, bounds.corners, bounds.radius, f)
         slot.znear = znear
-        L.CAMERA.pack_into(slot.m_camera, VP=view_projection_columns(camera, size, znear, f))
+        vp = view_projection_columns(camera, size, znear, f)
+        # The compute path's pixel rays: world from clip (column-major, as VP).
+        inv = np.linalg.inv(np.array(vp, dtype=np.float64).reshape(4, 4).T).T.ravel()
+        L.CAMERA.pack_into(slot.m_camera, VP=vp, inv_VP=inv.tolist())
         flags = L.SETTINGS_NORMAL_MAPPING if opts.normal_mapping else 0
         flags |= L.SETTINGS_OCCLUSION if opts.occlusion else 0
         flags |= 0 if linear else L.SETTINGS_SRGB_TARGET

@@ -211,12 +211,13 @@ class GpuScene:
         indices = [np.asarray(m.indices, dtype=np.uint32) for m in self.scene.meshes]
         idx = np.concatenate(indices) if indices else np.zeros(3, np.uint32)
         self.index_buffer = self._own(
-            upload_buffer(self.device, idx, "index", name="indices")
+            upload_buffer(self.device, idx, "index|storage", name="indices")
         )
         self.vertex_count = int(self.vertex_offsets[-1])
 
     def _add_stream(self, name: str, data: np.ndarray) -> None:
-        self.streams[name] = self._own(upload_buffer(self.device, data, "vertex", name=name))
+        # Storage too: the compute path reads vertices in its shader (render/compute_path.py).
+        self.streams[name] = self._own(upload_buffer(self.device, data, "vertex|storage", name=name))
         self.stream_bytes[name] = int(data.nbytes)
 
     def ensure_streams(self, names: tuple[str, ...] = LAZY_STREAMS) -> None:
@@ -373,6 +374,7 @@ class GpuScene:
         self.pool = self._own(DescriptorPool(self.device, [(layout, len(self.materials))]))
         writer = DescriptorWriter(self.device)
         self.material_sets = []
+        self.material_blocks: list[np.ndarray] = []  # the compute path's table (compute_path.py)
         for i, mat in enumerate(self.materials):
             dset = self.pool.allocate(layout)
             self.material_sets.append(dset)
@@ -382,6 +384,7 @@ class GpuScene:
                 has[slot] = present
                 writer.sampler(dset, binding, view, sampler)
             block = self._material_block(mat, has)
+            self.material_blocks.append(block)
             self.material_ubo.write(block.tobytes(), offset=i * stride)
             writer.uniform(dset, 6, self.material_ubo, L.MATERIAL.size, offset=i * stride)
         writer.update()

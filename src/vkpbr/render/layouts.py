@@ -38,6 +38,12 @@ __all__ = [
     "STORAGE",
     "StorageArray",
     "LightKind",
+    "PipelinePath",
+    "COMPUTE_SET",
+    "STORAGE_IMAGES",
+    "DRAW_RECORD",
+    "WRITABLE_STORAGE",
+    "VISIBILITY_FORMAT",
     "Lighting",
     "MAX_LIGHTS",
     "PUSH",
@@ -159,7 +165,10 @@ def mat4_to_std140(m: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(np.asarray(m, dtype=np.float32).T)
 
 
-CAMERA = Std140Block("Camera", "camera", (("VP", "mat4"),))
+CAMERA = Std140Block("Camera", "camera", (
+    ("VP", "mat4"),
+    ("inv_VP", "mat4"),  # world from clip: the compute path's pixel rays
+))
 
 SETTINGS = Std140Block(
     "Settings",
@@ -249,14 +258,79 @@ LIGHT_RECORD = Std140Block(
 
 @dataclass(frozen=True)
 class StorageArray:
-    """A storage buffer holding an unsized array of one record layout."""
+    """A storage buffer holding an unsized array of one record layout (a Std140Block, laid
+    out std140 in the buffer too) or of one GLSL scalar/vector type (std430)."""
 
     name: str  # GLSL block name
-    element: Std140Block  # the record (vec4 members only: std140 == std430)
+    element: Std140Block | str  # the record, or a GLSL type such as "float" or "vec2"
     member: str  # the array's GLSL name
 
+    @property
+    def layout(self) -> str:
+        return "std140" if isinstance(self.element, Std140Block) else "std430"
 
-STORAGE = {"Lights": StorageArray("Lights", LIGHT_RECORD, "lights")}
+
+# One mesh instance as the compute path reads it (render/compute_path.py writes them).
+DRAW_RECORD = Std140Block("DrawRecord", "draw_record", (
+    ("model", "mat4"),
+    ("normal_matrix", "mat4"),
+    ("info", "uvec4"),  # first index, vertex offset, material, 1 if the scene has COLOR_0
+))
+
+STORAGE = {
+    "Lights": StorageArray("Lights", LIGHT_RECORD, "lights"),
+    "Draws": StorageArray("Draws", DRAW_RECORD, "draws"),
+    "Indices": StorageArray("Indices", "uint", "indices"),
+    "Positions": StorageArray("Positions", "float", "positions"),  # 3 floats a vertex
+    "Texcoords0": StorageArray("Texcoords0", "vec2", "texcoords0"),
+    "Texcoords1": StorageArray("Texcoords1", "vec2", "texcoords1"),
+    "Colors": StorageArray("Colors", "uint", "colors"),  # RGBA16 UNORM: 2 uints a vertex
+    "Normals": StorageArray("Normals", "float", "normals"),  # 3 floats a vertex
+    "Tangents": StorageArray("Tangents", "vec4", "tangents"),
+    "QTangents": StorageArray("QTangents", "vec4", "qtangents"),
+    "PackedFrames": StorageArray("PackedFrames", "uint", "packed_frames"),
+    # Per material, per frame: (pixel count, list offset, scatter cursor, 0) (classify.comp).
+    "Bins": StorageArray("Bins", "uvec4", "bins"),
+    "BinArgs": StorageArray("BinArgs", "uint", "bin_args"),  # 3 per material: dispatch sizes
+    "PixelList": StorageArray("PixelList", "uint", "pixel_list"),  # pixel indices by material
+    "Materials": StorageArray("Materials", MATERIAL, "materials"),  # GpuScene's blocks
+}
+# Storage buffers the compute path writes (declared without `readonly`).
+WRITABLE_STORAGE = ("Bins", "BinArgs", "PixelList")
+
+# The compute path's own set (render/compute_path.py), numbered after SETS: the target's
+# images, the scene's geometry as storage buffers, the per-material pixel bins. Its other sets
+# are the frame's and, for shading, each material's own set 1. (binding, kind, name).
+COMPUTE_SET: tuple[tuple[int, str, str], ...] = (
+    (0, "storage_image", "out_image"),  # the target's colour (UNORM view of an sRGB image)
+    (1, "storage_image", "visibility"),  # (draw index + 1, primitive index); 0: nothing
+    (2, "storage", "Draws"),
+    (3, "storage", "Indices"),
+    (4, "storage", "Positions"),
+    (5, "storage", "Texcoords0"),
+    (6, "storage", "Texcoords1"),
+    (7, "storage", "Colors"),
+    (8, "storage", "Normals"),
+    (9, "storage", "Tangents"),
+    (10, "storage", "QTangents"),
+    (11, "storage", "PackedFrames"),
+    (12, "storage", "Bins"),
+    (13, "storage", "BinArgs"),
+    (14, "storage", "PixelList"),
+    # The frame's blocks and the materials as storage buffers: the compute path reads no
+    # uniform block, which lavapipe 22.3 would compile a variant of the shader for per new set
+    # of values (never freed) and, once a loop depends on one, crash compiling.
+    (15, "block", "Camera"),
+    (16, "block", "Settings"),
+    (17, "block", "Lighting"),
+    (18, "storage", "Materials"),
+)
+# GLSL declarations of the storage images (their formats and access).
+STORAGE_IMAGES = {
+    "out_image": "writeonly uniform image2D",  # format from the view (WriteWithoutFormat)
+    "visibility": "layout(rg32ui) readonly uniform uimage2D",
+}
+VISIBILITY_FORMAT = "VK_FORMAT_R32G32_UINT"
 
 
 class LightKind(Named):
@@ -274,34 +348,34 @@ BLOCKS = (CAMERA, SETTINGS, MATERIAL, LIGHTING, PUSH)
 # sampler type ("samplerCube", "sampler2DArrayShadow", ...).
 SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
     0: (
-        (0, "uniform", ("vertex",), "Camera"),
-        (1, "uniform", ("vertex", "fragment"), "Settings"),
+        (0, "uniform", ("vertex", "compute"), "Camera"),
+        (1, "uniform", ("vertex", "fragment", "compute"), "Settings"),
     ),
     1: (
-        (0, "sampler", ("fragment",), "base_color_map"),
-        (1, "sampler", ("fragment",), "metallic_map"),
-        (2, "sampler", ("fragment",), "roughness_map"),
-        (3, "sampler", ("fragment",), "normal_map"),
-        (4, "sampler", ("fragment",), "occlusion_map"),
-        (5, "sampler", ("fragment",), "emissive_map"),
-        (6, "uniform", ("fragment",), "Material"),
+        (0, "sampler", ("fragment", "compute"), "base_color_map"),
+        (1, "sampler", ("fragment", "compute"), "metallic_map"),
+        (2, "sampler", ("fragment", "compute"), "roughness_map"),
+        (3, "sampler", ("fragment", "compute"), "normal_map"),
+        (4, "sampler", ("fragment", "compute"), "occlusion_map"),
+        (5, "sampler", ("fragment", "compute"), "emissive_map"),
+        (6, "uniform", ("fragment", "compute"), "Material"),
     ),
     2: (
-        (0, "uniform", ("fragment",), "Lighting"),
-        (1, "storage", ("fragment",), "Lights"),
+        (0, "uniform", ("fragment", "compute"), "Lighting"),
+        (1, "storage", ("fragment", "compute"), "Lights"),
         # 2-4: the environment's maps (render/environment.py), always written: with no
         # environment a tiny black one is bound (lavapipe crashes drawing with a combined
         # image sampler descriptor left unwritten, even one no shader reads).
-        (2, "samplerCube", ("fragment",), "env_specular"),
-        (3, "samplerCube", ("fragment",), "env_irradiance"),
-        (4, "sampler", ("fragment",), "brdf_lut"),
+        (2, "samplerCube", ("fragment", "compute"), "env_specular"),
+        (3, "samplerCube", ("fragment", "compute"), "env_irradiance"),
+        (4, "sampler", ("fragment", "compute"), "brdf_lut"),
     ),
     # Shadows (render/shadows.py ShadowMaps owns the resources; declared in GLSL by hand in
     # shaders/shadow_data.glsl and shadow_sampling.glsl: ShadowData is a header then matrices).
     3: (
-        (0, "storage", ("fragment",), "ShadowData"),
-        (1, "sampler2DArrayShadow", ("fragment",), "shadow_maps"),
-        (2, "samplerCubeArrayShadow", ("fragment",), "shadow_cubes"),
+        (0, "storage", ("fragment", "compute"), "ShadowData"),
+        (1, "sampler2DArrayShadow", ("fragment", "compute"), "shadow_maps"),
+        (2, "samplerCubeArrayShadow", ("fragment", "compute"), "shadow_cubes"),
     ),
 }
 # Sets whose GLSL declarations are not generated (codegen skips them).
@@ -383,6 +457,17 @@ VIEW_KIND = {
     )
     for v in View
 }
+
+
+class PipelinePath(Named):
+    """How frames are drawn: FORWARD shades in fragment shaders; COMPUTE rasterises a
+    visibility buffer and shades it in compute shaders (render/compute_path.py: all SMs of an
+    H100/H200, where only a few run fragment shaders); AUTO: compute on GPUs that support it
+    for single-sample offscreen targets, forward elsewhere (lavapipe, MSAA, windows)."""
+
+    AUTO = 0
+    FORWARD = 1
+    COMPUTE = 2
 
 
 class TbnMode(Named):

@@ -14,14 +14,14 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from vkpbr.errors import UsageError
-from vkpbr.render.layouts import Brdf, Lighting, TbnMode, Tonemap, View, enum_by_name
+from vkpbr.render.layouts import Brdf, Lighting, PipelinePath, TbnMode, Tonemap, View, enum_by_name
 from vkpbr.scene.environment import ENV_SUFFIXES
 
 __all__ = ["RenderOptions", "ENUM_FIELDS"]
 
 # RenderOptions field -> the enum its values come from (the CLI's choices, the viewer's cycles).
 ENUM_FIELDS: dict[str, type] = {"view": View, "lighting": Lighting, "brdf": Brdf, "tbn": TbnMode,
-                                "tonemap": Tonemap}
+                                "tonemap": Tonemap, "pipeline": PipelinePath}
 # Fields whose None means "the lighting mode's choice" (MODE_DEFAULTS).
 MODE_DEFAULT_FIELDS = ("brdf", "tonemap")
 MODE_DEFAULTS: dict[Lighting, dict[str, Any]] = {
@@ -52,6 +52,9 @@ class RenderOptions:
         8-bit frames, none for linear float32 frames (scene-referred radiance).
     exposure : float
         EV stops in [-64, 64]: radiance is multiplied by 2 ** exposure.
+    pipeline : PipelinePath or str
+        "auto", "forward" (fragment shading) or "compute" (a visibility buffer shaded in
+        compute shaders: the same pixels, on all of a datacenter GPU's SMs).
     alpha_mask, normal_mapping, occlusion : bool
         Alpha masking (off: masked materials are drawn opaque), normal maps, occlusion maps.
     shadows : bool
@@ -78,6 +81,7 @@ class RenderOptions:
     tbn: TbnMode = TbnMode.VECTORS
     tonemap: Tonemap | None = None
     exposure: float = 0.0
+    pipeline: PipelinePath = PipelinePath.AUTO
     alpha_mask: bool = True
     normal_mapping: bool = True
     occlusion: bool = True

@@ -110,33 +110,38 @@ class PassContext:
     index_buffer: Any
     blend_order: tuple[int, ...] = ()  # indices into the blend-class draws, far to near
     prepass: bool = False
-    stamp: Callable[[int], None] = lambda slot: None  # timestamp after pass `slot`
+    stamp: Callable[[str], None] = lambda name: None  # timestamp after the step `name`
     shadow_set: Any = None  # set 3 (render/shadows.py ShadowMaps.sets), bound when given
 
 
-def record_passes(cmd: Commands, ctx: PassContext) -> None:
-    """Record every enabled pass of PASSES, with a timestamp after each (slots 1..)."""
+def record_passes(cmd: Commands, ctx: PassContext, names: tuple[str, ...] | None = None) -> None:
+    """Record the enabled passes of PASSES (those in `names`, default all), each followed by
+    its timestamp (ctx.stamp(name)). Each draw is instanced from its own index in ctx.draws
+    (gl_InstanceIndex: the compute path's visibility pass writes it per pixel)."""
     cmd.bind_index_buffer(ctx.index_buffer)
-    for slot, p in enumerate(PASSES, start=1):
+    for p in PASSES:
+        if names is not None and p.name not in names:
+            continue
         if p.prepass and not ctx.prepass:
-            ctx.stamp(slot)
+            ctx.stamp(p.name)
             continue
         if p.fullscreen:
             cmd.bind_pipeline(ctx.pipeline(p))
             cmd.bind_set(0, ctx.frame_sets[0])
             cmd.bind_set(2, ctx.frame_sets[1])
             cmd.draw(3)
-            ctx.stamp(slot)
+            ctx.stamp(p.name)
             continue
-        draws = [d for d, c in zip(ctx.draws, ctx.classes, strict=True) if c == p.draw_class]
+        draws = [(i, d) for i, (d, c) in enumerate(zip(ctx.draws, ctx.classes, strict=True))
+                 if c == p.draw_class]
         if p.back_to_front and len(ctx.blend_order) == len(draws):
             draws = [draws[i] for i in ctx.blend_order]
         if draws:
             _record_draws(cmd, ctx, p, draws)
-        ctx.stamp(slot)
+        ctx.stamp(p.name)
 
 
-def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[Any]) -> None:
+def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[tuple[int, Any]]) -> None:
     cmd.bind_pipeline(ctx.pipeline(p))
     cmd.bind_set(0, ctx.frame_sets[0])
     cmd.bind_set(2, ctx.frame_sets[1])
@@ -144,9 +149,9 @@ def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[Any]
         cmd.bind_set(3, ctx.shadow_set)
     cmd.bind_vertex_buffers(ctx.vertex_buffers)
     bound = None
-    for d in draws:
+    for index, d in draws:
         if d.material != bound:
             cmd.bind_set(1, ctx.material_sets[d.material])
             bound = d.material
         cmd.push(d.push)
-        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset)
+        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset, first_instance=index)

@@ -12,6 +12,7 @@ only, whose previous submission has finished when it is looked up: it can be re-
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -22,6 +23,7 @@ from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec, VertexStr
 from vkpbr.gpu.target import FrameTarget
 from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
+from vkpbr.render.compute_path import ComputeScene
 from vkpbr.render.frames import FrameSlot
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.overlay import TextOverlay
@@ -49,7 +51,15 @@ _BASE_STREAMS = (("positions", "vec3"), ("texcoords", "vec2"), ("texcoords1", "v
                  ("colors", "unorm16x4"))
 # Timestamps per frame: start, after the shadow passes, after each pass, end (after copies);
 # STAMP_NAMES names the intervals between them up to the last pass.
-STAMP_NAMES = ("shadows", *(p.name for p in PASSES))
+# The compute path's shading step (render/compute_path.py) comes after the passes that draw
+# coverage, before the background; the forward path stamps it at once (it takes no time).
+_BEFORE_SHADING = tuple(p.name for p in PASSES[:[q.name for q in PASSES].index("mask") + 1])
+STAMP_NAMES = ("shadows", *_BEFORE_SHADING, "shading",
+               *(p.name for p in PASSES if p.name not in _BEFORE_SHADING))
+# The compute path's visibility pass draws these passes' draws (the coverage: not blending);
+# after its shading step the frame goes on with the rest.
+VISIBILITY_PASSES = tuple(p.name for p in PASSES if p.name in _BEFORE_SHADING and not p.prepass)
+AFTER_SHADING = tuple(p.name for p in PASSES if p.name not in _BEFORE_SHADING)
 STAMPS = len(STAMP_NAMES) + 2
 _NO_SHADOWS = ShadowPlan()
 
@@ -68,18 +78,23 @@ class FrameRecorder:
     def __init__(self, device: Device, gpu_scene: GpuScene, layout: PipelineLayout,
                  ring: FrameRing, slots: list[FrameSlot],
                  prepass_for: Callable[[FrameTarget], bool],
-                 shadows: ShadowMaps | None = None) -> None:
+                 shadows: ShadowMaps | None = None,
+                 compute_scene: Callable[[], ComputeScene] | None = None) -> None:
         self.device, self.gpu_scene, self.pipeline_layout = device, gpu_scene, layout
         self.shadows = shadows  # records its passes first; binds its set 3 in the main passes
         self.ring, self.slots, self.prepass_for = ring, slots, prepass_for
+        self.compute_scene = compute_scene  # the compute path's resources, made on first use
         self._recorded: dict[tuple, _Recorded] = {}
         self._generations: dict[int, int] = {}
         self._pipelines: dict[tuple, Pipeline] = {}
 
     # --- pipelines --------------------------------------------------------------------------
-    def pipeline(self, target: FrameTarget, tbn: L.TbnMode, p: PassSpec, prepass: bool) -> Pipeline:
+    def pipeline(self, target: FrameTarget, tbn: L.TbnMode, p: PassSpec, prepass: bool,
+                 visibility: bool = False) -> Pipeline:
+        """The pipeline of pass `p` for `target`; `visibility`: its compute-path variant,
+        writing (draw + 1, primitive) with pbr.frag's own coverage instead of a colour."""
         key = (target.color_format, target.depth_format, target.samples,
-               None if p.fullscreen else tbn, p.name, prepass and p.after_prepass)
+               None if p.fullscreen else tbn, p.name, prepass and p.after_prepass, visibility)
         if key not in self._pipelines:
             gs = self.gpu_scene
             streams = [VertexStream(i, i, fmt, 0 if name == "colors" and not gs.has_colors else None)
@@ -89,8 +104,12 @@ class FrameRecorder:
                 fragment_shader="pbr_opaque.frag.spv", streams=tuple(streams),
                 color_format=target.color_format, depth_format=target.depth_format,
                 samples=target.samples)
-            self._pipelines[key] = Pipeline(self.device, pipeline_spec(p, base, prepass),
-                                            self.pipeline_layout, SPV_DIR)
+            spec = pipeline_spec(p, base, prepass)
+            if visibility:
+                vis = spec.fragment_shader.replace("pbr_", "pbr_vis_")  # type: ignore[union-attr]
+                spec = dataclasses.replace(spec, fragment_shader=vis, blend=False,
+                                           color_format=getattr(self.device.vk, L.VISIBILITY_FORMAT))
+            self._pipelines[key] = Pipeline(self.device, spec, self.pipeline_layout, SPV_DIR)
         return self._pipelines[key]
 
     def build_pipelines(self, target: FrameTarget) -> None:
@@ -105,29 +124,55 @@ class FrameRecorder:
     # --- command buffers --------------------------------------------------------------------
     def _record(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
                 alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
-                copy: tuple[str, ...], plan: ShadowPlan) -> Commands:
+                copy: tuple[str, ...], plan: ShadowPlan, compute: bool = False) -> Commands:
         gs, ring = self.gpu_scene, self.ring
         names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
         gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
         slot = self.slots[frame.index]
         prepass = self.prepass_for(target)
         classes = [classify(d.alpha_mode, d.double_sided, alpha_mask) for d in gs.draws]
+        prepass = prepass and not compute  # the visibility pass is its own pre-pass
         cmd = Commands(self.device).begin()
         ring.stamp(cmd, frame, 0)
         if self.shadows is not None:
             self.shadows.record(cmd, frame.index, plan, gs.draws, classes, gs.material_sets,
                                 gs.streams, gs.index_buffer, gs.has_colors)
         ring.stamp(cmd, frame, 1)
-        target.record_begin(cmd, image)
-        record_passes(cmd, PassContext(
-            draws=gs.draws,
-            classes=classes,
-            pipeline=lambda p: self.pipeline(target, tbn, p, prepass),
-            frame_sets=(slot.set0, slot.set2), material_sets=gs.material_sets,
-            vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
-            blend_order=order, prepass=prepass,
-            stamp=lambda s: ring.stamp(cmd, frame, s + 1),
-            shadow_set=None if self.shadows is None else self.shadows.sets[frame.index]))
+        shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
+
+        def context(visibility: bool) -> PassContext:
+            return PassContext(
+                draws=gs.draws, classes=classes,
+                pipeline=lambda p: self.pipeline(target, tbn, p, prepass, visibility),
+                frame_sets=(slot.set0, slot.set2), material_sets=gs.material_sets,
+                vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
+                blend_order=order, prepass=prepass,
+                stamp=lambda name: ring.stamp(cmd, frame, 1 + STAMP_NAMES.index(name)),
+                shadow_set=shadow_set)
+
+        ctx = context(False)
+        if compute:  # render/compute_path.py: visibility, classification + shading, the rest
+            for p in PASSES:
+                if p.prepass:  # no pre-pass here: its slots take no time
+                    ctx.stamp(p.name)
+            target.record_visibility_begin(cmd, image)  # type: ignore[attr-defined]
+            record_passes(cmd, context(True), VISIBILITY_PASSES)
+            target.record_shading_begin(cmd)  # type: ignore[attr-defined]
+            drawn = sorted({d.material for d, c in zip(gs.draws, classes, strict=True)
+                            if c != "blend"})
+            frame_sets = {0: slot.set0, 2: slot.set2}
+            if shadow_set is not None:
+                frame_sets[3] = shadow_set
+            self.compute_scene().record_shading(cmd, target, frame.index, tbn, frame_sets,
+                                                gs.material_sets,
+                                                drawn, target.clear_color)  # type: ignore[attr-defined]
+            ctx.stamp("shading")
+            target.record_resume(cmd)  # type: ignore[attr-defined]
+        else:
+            target.record_begin(cmd, image)
+            record_passes(cmd, ctx, _BEFORE_SHADING)
+            ctx.stamp("shading")
+        record_passes(cmd, ctx, AFTER_SHADING)
         if overlay is not None:
             overlay.record(cmd, frame.index, target.extent)
         target.record_end(cmd, image, frame, copy)
@@ -137,7 +182,8 @@ class FrameRecorder:
 
     def command_buffer(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
                         alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
-                        copy: tuple[str, ...], plan: ShadowPlan = _NO_SHADOWS) -> Commands:
+                        copy: tuple[str, ...], plan: ShadowPlan = _NO_SHADOWS,
+                        compute: bool = False) -> Commands:
         """The command buffer recorded for these inputs, recorded on first use. A buffer is
         used by one frame of the ring only, whose previous submission has finished: it can be
         re-recorded (new blend order) or freed at once. `plan`: the shadow maps' (a new plan
@@ -146,13 +192,14 @@ class FrameRecorder:
         if self._generations.get(tid, target.generation) != target.generation:
             self.free(tid)  # recreated swapchain: its images and buffers are new
         self._generations[tid] = target.generation
-        key = (tid, image, frame.index, tbn, alpha_mask, id(overlay), copy, plan)
+        key = (tid, image, frame.index, tbn, alpha_mask, id(overlay), copy, plan, compute)
         rec = self._recorded.get(key)
         if rec is not None and rec.blend_order == order:
             return rec.cmd
         if rec is not None:  # the camera moved enough to reorder blended draws
             rec.cmd.free()
-        cmd = self._record(target, frame, image, tbn, alpha_mask, order, overlay, copy, plan)
+        cmd = self._record(target, frame, image, tbn, alpha_mask, order, overlay, copy, plan,
+                           compute)
         self._recorded[key] = _Recorded(cmd, order)
         return cmd
 

@@ -30,13 +30,14 @@ import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorSetLayout, DescriptorWriter
-from vkpbr.gpu.device import Device, DeviceRequest
+from vkpbr.gpu.device import COMPUTE_PATH_FEATURES, Device, DeviceRequest
 from vkpbr.gpu.frames import Frame, FrameRing
 from vkpbr.gpu.pipeline import PipelineLayout
 from vkpbr.gpu.swapchain import Surface, Swapchain
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
 from vkpbr.render.camera import as_camera, depth_range, forward, validate_camera
+from vkpbr.render.compute_path import ComputeScene
 from vkpbr.render.environment import Environment, EnvironmentBaker, EnvironmentSpec
 from vkpbr.render.frames import (
     Bounds,
@@ -139,8 +140,10 @@ class Renderer:
             self.frame_buffers, self._frame_pool, self.slots = create_slots(
                 self.device, self.set_layouts[0], self.set_layouts[2], self.ring.count)
             self.gpu_scene = GpuScene(self.device, scene, self.set_layouts[1])
+            self._compute_scene: ComputeScene | None = None
             self.recorder = FrameRecorder(self.device, self.gpu_scene, self.pipeline_layout,
-                                          self.ring, self.slots, self.prepass_for, self.shadows)
+                                          self.ring, self.slots, self.prepass_for, self.shadows,
+                                          self.compute_scene)
             self._shadow_plan: tuple[tuple, ShadowPlan] = ((), ShadowPlan())
             self._shadow_rows: dict[int, tuple[tuple, np.ndarray | None]] = {}
             self.bounds = Bounds.of(*scene.bounds())
@@ -175,7 +178,7 @@ class Renderer:
         if key not in self._targets:
             self._targets[key] = OffscreenTarget(
                 self.device, (int(w), int(h)), "float" if linear else "srgb", self.msaa,
-                (*self.background, 1.0))
+                (*self.background, 1.0), compute=self.device.compute_path)
         return self._targets[key]
 
     def window_target(self, create_surface: Callable[[Any, Any], int], size: tuple[int, int],
@@ -197,6 +200,28 @@ class Renderer:
             return bool(self.depth_prepass)
         w, h = target.extent
         return self.device.info.kind != "cpu" and self.scene.triangle_count <= w * h
+
+    def compute_scene(self) -> ComputeScene:
+        """The compute path's resources (render/compute_path.py), made on its first frame."""
+        if self._compute_scene is None:
+            self._compute_scene = ComputeScene(
+                self.device, self.gpu_scene, dict(enumerate(self.set_layouts)), self.slots)
+        return self._compute_scene
+
+    def uses_compute(self, target: FrameTarget, options: RenderOptions) -> bool:
+        """Whether frames of `target` with `options` take the compute path (UsageError when
+        it is asked for and cannot: say why and what to use)."""
+        able = self.device.compute_path and bool(getattr(target, "compute", False))
+        if options.pipeline == L.PipelinePath.COMPUTE:
+            if not able:
+                why = ("the device lacks " + ", ".join(COMPUTE_PATH_FEATURES)
+                       if not self.device.compute_path else
+                       "it renders single-sample offscreen targets (not MSAA or a window)")
+                raise UsageError(f"--pipeline compute is not available here: {why}; use "
+                                 "--pipeline forward or auto")
+            return True
+        return (options.pipeline == L.PipelinePath.AUTO and able
+                and self.device.info.kind != "cpu")
 
     def build_pipelines(self, target: FrameTarget) -> None:
         """Create every pipeline and vertex stream (all TBN paths and passes) for `target`
@@ -378,7 +403,8 @@ class Renderer:
         if overlay is not None:
             overlay.prepare(frame.index)
         cmd = self.recorder.command_buffer(target, frame, image, options.tbn, options.alpha_mask,
-                                   self.blend_order(camera.eye), overlay, copy, plan)
+                                   self.blend_order(camera.eye), overlay, copy, plan,
+                                   self.uses_compute(target, options))
         c0 = clock()
         ok = target.submit(frame, cmd, image)
         slot.stats.driver_ms = (driver + clock() - c0) * 1e3

@@ -154,4 +154,11 @@ vec3 srgb_to_linear(vec3 e) {
     return mix(e / 12.92, pow((e + 0.055) / 1.055, vec3(2.4)), greaterThan(e, vec3(0.04045)));
 }
 
+// sRGB inverse EOTF (IEC 61966-2-1): linear -> encoded (the compute path writes UNORM views of
+// sRGB images, so it encodes here what the attachment's hardware encoding does).
+vec3 linear_to_srgb(vec3 x) {
+    x = clamp(x, 0.0, 1.0);
+    return mix(x * 12.92, 1.055 * pow(x, vec3(1.0 / 2.4)) - 0.055, greaterThan(x, vec3(0.0031308)));
+}
+
 #endif

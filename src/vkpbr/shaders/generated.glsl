@@ -67,9 +67,40 @@ struct LightRecord {
     vec4 cone;
     vec4 shadow;
 };
+struct DrawRecord {
+    mat4 model;
+    mat4 normal_matrix;
+    uvec4 info;
+};
+struct MaterialRecord {
+    vec4 base_color_factor;
+    vec3 emissive_factor;
+    float metallic_factor;
+    float roughness_factor;
+    float normal_scale;
+    float occlusion_strength;
+    float alpha_cutoff;
+    vec4 base_color_uv_row0;
+    vec4 base_color_uv_row1;
+    vec4 metallic_uv_row0;
+    vec4 metallic_uv_row1;
+    vec4 roughness_uv_row0;
+    vec4 roughness_uv_row1;
+    vec4 normal_uv_row0;
+    vec4 normal_uv_row1;
+    vec4 occlusion_uv_row0;
+    vec4 occlusion_uv_row1;
+    vec4 emissive_uv_row0;
+    vec4 emissive_uv_row1;
+    uint flags;
+};
+#if !COMPUTE_SHADING
 layout(set = 0, binding = 0, std140) uniform Camera {
     mat4 VP;
+    mat4 inv_VP;
 } camera;
+#endif
+#if !COMPUTE_SHADING
 layout(set = 0, binding = 1, std140) uniform Settings {
     vec4 camera_forward;
     int view;
@@ -81,6 +112,7 @@ layout(set = 0, binding = 1, std140) uniform Settings {
     float zfar;
     float pad0;
 } settings;
+#endif
 layout(set = 1, binding = 0) uniform sampler2D base_color_map;
 layout(set = 1, binding = 1) uniform sampler2D metallic_map;
 layout(set = 1, binding = 2) uniform sampler2D roughness_map;
@@ -109,6 +141,7 @@ layout(set = 1, binding = 6, std140) uniform Material {
     vec4 emissive_uv_row1;
     uint flags;
 } material;
+#if !COMPUTE_SHADING
 layout(set = 2, binding = 0, std140) uniform Lighting {
     vec4 view_pos;
     uint light_count;
@@ -118,15 +151,88 @@ layout(set = 2, binding = 0, std140) uniform Lighting {
     vec4 env_rotation;
     vec4 ambient_color;
 } lighting;
-layout(set = 2, binding = 1, std430) readonly buffer Lights {
+#endif
+layout(set = 2, binding = 1, std140) readonly buffer Lights {
     LightRecord lights[];
 };
 layout(set = 2, binding = 2) uniform samplerCube env_specular;
 layout(set = 2, binding = 3) uniform samplerCube env_irradiance;
 layout(set = 2, binding = 4) uniform sampler2D brdf_lut;
+#if COMPUTE_SHADING  // the compute path's own set (render/compute_path.py)
+const uint COMPUTE_SET = 4u;
+layout(set = 4, binding = 0) writeonly uniform image2D out_image;
+layout(set = 4, binding = 1, rg32ui) readonly uniform uimage2D visibility;
+layout(set = 4, binding = 2, std140) readonly buffer Draws {
+    DrawRecord draws[];
+};
+layout(set = 4, binding = 3, std430) readonly buffer Indices {
+    uint indices[];
+};
+layout(set = 4, binding = 4, std430) readonly buffer Positions {
+    float positions[];
+};
+layout(set = 4, binding = 5, std430) readonly buffer Texcoords0 {
+    vec2 texcoords0[];
+};
+layout(set = 4, binding = 6, std430) readonly buffer Texcoords1 {
+    vec2 texcoords1[];
+};
+layout(set = 4, binding = 7, std430) readonly buffer Colors {
+    uint colors[];
+};
+layout(set = 4, binding = 8, std430) readonly buffer Normals {
+    float normals[];
+};
+layout(set = 4, binding = 9, std430) readonly buffer Tangents {
+    vec4 tangents[];
+};
+layout(set = 4, binding = 10, std430) readonly buffer QTangents {
+    vec4 qtangents[];
+};
+layout(set = 4, binding = 11, std430) readonly buffer PackedFrames {
+    uint packed_frames[];
+};
+layout(set = 4, binding = 12, std430) buffer Bins {
+    uvec4 bins[];
+};
+layout(set = 4, binding = 13, std430) buffer BinArgs {
+    uint bin_args[];
+};
+layout(set = 4, binding = 14, std430) buffer PixelList {
+    uint pixel_list[];
+};
+layout(set = 4, binding = 15, std140) readonly buffer Camera {
+    mat4 VP;
+    mat4 inv_VP;
+} camera;
+layout(set = 4, binding = 16, std140) readonly buffer Settings {
+    vec4 camera_forward;
+    int view;
+    int brdf;
+    int tonemap;
+    uint flags;
+    float exposure;
+    float znear;
+    float zfar;
+    float pad0;
+} settings;
+layout(set = 4, binding = 17, std140) readonly buffer Lighting {
+    vec4 view_pos;
+    uint light_count;
+    int mode;
+    uint flags;
+    float env_intensity;
+    vec4 env_rotation;
+    vec4 ambient_color;
+} lighting;
+layout(set = 4, binding = 18, std140) readonly buffer Materials {
+    MaterialRecord materials[];
+};
+#else  // the compute path has its own push constants
 layout(push_constant, std430) uniform Draw {
     mat4 model;
     mat4 normal_matrix;
 } draw;
+#endif
 
 #endif

@@ -33,6 +33,7 @@ layout(location = 2) out vec3 v_normal;
 layout(location = 3) out vec3 v_tangent;
 layout(location = 4) out vec3 v_bitangent;
 layout(location = 5) out vec4 v_color;
+layout(location = 6) flat out uint v_draw;  // firstInstance of the draw: its index (the visibility pass)
 
 void main() {
 #if TBN_MODE == 0
@@ -54,6 +55,7 @@ void main() {
     v_world_pos = world.xyz;
     v_texcoords = vec4(in_texcoord0, in_texcoord1);
     v_color = in_color;
+    v_draw = uint(gl_InstanceIndex);
     // Normals take the inverse transpose; tangent and bitangent are surface directions and
     // take the model matrix itself, which keeps the handedness right under mirroring.
     v_normal = mat3(draw.normal_matrix) * n;

@@ -1,0 +1,123 @@
+"""Frame paths and lighting on one scene (issues 12 and 13): GPU time per step, frames/s.
+
+    python benchmarks/bench_paths.py [--scene Sponza.gltf] [--frames 200]
+                                     [--sizes 1920x1080,640x480,128x128] [--lights 1,16,64,256]
+                                     [--json OUT.json]
+
+Rows: the course's lighting and the physically based one (the automatic sun's cascaded
+shadows and the sky's image-based light), each on the fragment path and on the compute path
+(render/compute_path.py); then the cost per punctual light (N point lights spread over the
+scene's floor, shadows off so the lights alone are measured). GPU times are timestamp
+queries, median over the frames after 10 warm-up frames; frames/s is wall time over
+`render_many` with readback into NumPy and without. Prints Markdown tables. Not a test.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+from vkpbr.errors import UsageError
+from vkpbr.render.renderer import Renderer
+from vkpbr.scene.loader import load_scene
+from vkpbr.scene.types import Camera, Light
+
+CAMERA = Camera(eye=(9.0, 1.8, -0.4), target=(-9.0, 3.5, -0.4), yfov_deg=45.0)  # the preset
+STEPS = ("shadows", "prepass_opaque", "opaque", "opaque_double", "mask", "shading",
+         "background", "blend", "copy")
+
+
+def measure(r: Renderer, size: tuple[int, int], frames: int, lights=None, **options) -> dict:  # noqa: ANN001
+    cams = [CAMERA] * frames
+    gpu, passes, cpu = [], [], []
+    for i, _ in enumerate(r.render_many([CAMERA] * 10 + cams, lights, size=size,
+                                        readback=False, **options)):
+        if i >= 10:
+            gpu.append(r.last_stats.gpu_ms)
+            passes.append(r.last_stats.pass_ms)
+            cpu.append(r.last_stats.cpu_ms)
+    t = time.perf_counter()
+    for _ in r.render_many(cams, lights, size=size, **options):
+        pass
+    fps = frames / (time.perf_counter() - t)
+    t = time.perf_counter()
+    for _ in r.render_many(cams, lights, size=size, readback=False, **options):
+        pass
+    fps_render = frames / (time.perf_counter() - t)
+    per_pass = {k: statistics.median(p.get(k, 0.0) for p in passes) for k in passes[0]}
+    return {"size": f"{size[0]}x{size[1]}", "gpu_ms": statistics.median(gpu),
+            "cpu_ms": statistics.median(cpu), "fps_readback": fps, "fps_render_only": fps_render,
+            "pass_ms": per_pass, **{k: str(v) for k, v in options.items()}}
+
+
+def floor_lights(scene, n: int) -> list[Light]:  # noqa: ANN001
+    lo, hi = scene.bounds()
+    rng = np.random.default_rng(7)
+    xz = rng.uniform(lo[[0, 2]], hi[[0, 2]], (n, 2))
+    y = lo[1] + 0.1 * (hi[1] - lo[1])
+    return [Light(kind="point", position=(float(x), float(y), float(z)), intensity=2.0,
+                  color=tuple(float(c) for c in rng.uniform(0.3, 1.0, 3)),
+                  falloff="inverse_square", range=float(0.25 * (hi[0] - lo[0])))
+            for x, z in xz]
+
+
+def table(rows: list[dict], keys: tuple[str, ...]) -> None:
+    head = ["size", *keys, "GPU ms", *STEPS, "fps (NumPy)", "fps (GPU only)", "Python ms"]
+    print("| " + " | ".join(head) + " |")
+    print("|" + "---|" * len(head))
+    for row in rows:
+        steps = [f"{row['pass_ms'].get(s, 0.0):.3f}" for s in STEPS]
+        print("| " + " | ".join([row["size"], *(row.get(k, "") for k in keys),
+                                 f"{row['gpu_ms']:.3f}", *steps, f"{row['fps_readback']:.0f}",
+                                 f"{row['fps_render_only']:.0f}", f"{row['cpu_ms']:.3f}"]) + " |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--scene", default=str(Path(__file__).resolve().parents[1]
+                                           / ".assets/models/Sponza/glTF/Sponza.gltf"))
+    ap.add_argument("--frames", type=int, default=200)
+    ap.add_argument("--sizes", default="1920x1080,640x480,128x128")
+    ap.add_argument("--lights", default="1,16,64,256")
+    ap.add_argument("--json")
+    args = ap.parse_args()
+    scene = load_scene(args.scene)
+    sizes = [tuple(int(x) for x in s.split("x")) for s in args.sizes.split(",")]
+    rows, light_rows = [], []
+    with Renderer(scene) as r:
+        print(f"device: {r.device.info.name}; scene {Path(args.scene).name}, "
+              f"{scene.triangle_count} triangles; {args.frames} frames a row")
+        for size in sizes:
+            for lighting in ("course", "pbr"):
+                for pipeline in ("forward", "compute"):
+                    try:
+                        rows.append(measure(r, size, args.frames, lighting=lighting,
+                                            pipeline=pipeline))
+                    except UsageError as exc:
+                        print(f"skipped {pipeline}: {exc}")
+        table(rows, ("lighting", "pipeline"))
+        size = sizes[0]
+        for n in (int(x) for x in args.lights.split(",")):
+            lights = floor_lights(scene, n)
+            for pipeline in ("forward", "compute"):
+                try:
+                    row = measure(r, size, max(args.frames // 2, 20), lights, lighting="pbr",
+                                  pipeline=pipeline, shadows=False, env="none")
+                except UsageError as exc:
+                    print(f"skipped {pipeline}: {exc}")
+                    continue
+                row["lights"] = str(n)
+                light_rows.append(row)
+        print()
+        table(light_rows, ("lights", "pipeline"))
+    if args.json:
+        Path(args.json).write_text(json.dumps({"paths": rows, "lights": light_rows}, indent=1))
+
+
+if __name__ == "__main__":
+    main()

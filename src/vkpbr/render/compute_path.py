@@ -1,0 +1,186 @@
+"""The compute rendering path: a visibility buffer rasterised, then shaded in compute shaders.
+
+On H100/H200 only 4 of 132 SMs run fragment shaders; compute shaders run on all of them. The
+compute path keeps the rasteriser for what it does well -- coverage and depth -- and moves the
+shading off the fragment units:
+
+1. Visibility pass: the opaque and masked draws through pbr.vert and pbr.frag's VISIBILITY
+   variant (the same coverage, the same alpha test) write (draw index + 1, primitive index)
+   into an R32G32_UINT image, with the target's depth buffer.
+2. Classification (shaders/classify.comp): pixels are binned by material -- counted, given list
+   offsets and one indirect dispatch size per material, scattered into a pixel list; pixels
+   nothing covers get the clear colour.
+3. Shading (shaders/shade.comp): one indirect dispatch per material, with that material's own
+   descriptor set bound (the fragment path's, so no texture arrays or non-uniform indexing,
+   which lavapipe lacks), one invocation per pixel of its bin: the triangle is fetched from the
+   scene's storage buffers, the pixel's ray intersected with it (perspective-correct
+   barycentrics, ray-differential texture gradients), and shade.glsl -- the fragment path's
+   own shading function -- writes the target's colour through a storage view.
+4. The rest as in the fragment path: blended draws back to front over the result, the
+   overlay, the copies.
+
+`ComputeScene` owns what these read besides the frame's and the materials' sets: the draw
+table, the bins, the pixel list (per target) and one descriptor set per target. The
+recorder (render/recorder.py) records the steps; Renderer.uses_compute picks the path.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from vkpbr.gpu.buffer import Buffer, upload_buffer
+from vkpbr.gpu.compute import ComputePipeline, groups
+from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
+from vkpbr.gpu.device import Device
+from vkpbr.render import layouts as L
+from vkpbr.render.codegen import SPV_DIR
+from vkpbr.render.gpu_scene import GpuScene
+
+__all__ = ["ComputeScene", "SHADE_GROUP"]
+
+SHADE_GROUP = 64  # shade.comp's work group: pixels of one bin
+CLASSIFY_GROUP = (8, 8, 1)  # classify.comp's count and scatter kernels
+
+
+class _TargetResources:
+    """Per target: the bins, their dispatch sizes, the pixel list and the descriptor set."""
+
+    def __init__(self, scene: ComputeScene, target: Any) -> None:
+        dev, gs = scene.device, scene.gs
+        w, h = target.extent
+        m = len(gs.materials)
+        self.owned: list[Any] = []
+        self.bins = self._own(Buffer(dev, 16 * m, "storage|transfer_dst", name="material bins"))
+        self.args = self._own(Buffer(dev, 12 * m, "storage|indirect", name="bin dispatches"))
+        self.pixels = self._own(Buffer(dev, 4 * w * h, "storage", name="pixel list"))
+        slots = scene.slots
+        pool = self._own(DescriptorPool(dev, [(scene.set_layout, len(slots))]))
+        # One set per frame of the ring: the frame's blocks are that frame's.
+        self.sets = [pool.allocate(scene.set_layout) for _ in slots]
+        buffers = {"Draws": scene.draw_table, "Indices": gs.index_buffer,
+                   "Positions": gs.streams["positions"], "Texcoords0": gs.streams["texcoords"],
+                   "Texcoords1": gs.streams["texcoords1"], "Colors": gs.streams["colors"],
+                   "Normals": gs.streams["normals"], "Tangents": gs.streams["tangents"],
+                   "QTangents": gs.streams["qtangents"],
+                   "PackedFrames": gs.streams["packed_frames"], "Bins": self.bins,
+                   "BinArgs": self.args, "PixelList": self.pixels,
+                   "Materials": scene.material_table}
+        images = {"out_image": target.storage_view, "visibility": target.visibility_view}
+        sizes = {b.name: b.size for b in L.BLOCKS}
+        writer = DescriptorWriter(dev)
+        for dset, slot in zip(self.sets, slots, strict=True):
+            for binding, kind, name in L.COMPUTE_SET:
+                if kind == "storage":
+                    writer.storage(dset, binding, buffers[name])
+                elif kind == "block":
+                    buf, offset = slot.block_ranges[name]
+                    writer.storage(dset, binding, buf, sizes[name], offset)
+                else:
+                    writer.storage_image(dset, binding, images[name])
+        writer.update()
+
+    def _own(self, obj: Any) -> Any:
+        self.owned.append(obj)
+        return obj
+
+
+class ComputeScene:
+    """The compute path's view of a GpuScene (built on the path's first frame).
+
+    `frame_layouts`: the graphics pipeline layout's set layouts by set number (0 frame,
+    1 material, 2 lighting, ...); the compute set comes after the last of them.
+    """
+
+    def __init__(self, device: Device, gs: GpuScene, frame_layouts: dict[int, DescriptorSetLayout],
+                 slots: list[Any]) -> None:
+        self.device, self.gs, self.slots = device, gs, slots
+        self._owned: list[Any] = []
+        gs.ensure_streams()  # every TBN path's stream exists: the sets bind them all
+        draws = np.zeros(max(len(gs.draws), 1), L.DRAW_RECORD.dtype)
+        for i, d in enumerate(gs.draws):
+            m = d.push.reshape(2, 4, 4)
+            draws[i]["model"], draws[i]["normal_matrix"] = m[0], m[1]
+            draws[i]["info"] = (d.first_index, d.vertex_offset, d.material, int(gs.has_colors))
+        self.draw_table = self._own(upload_buffer(device, draws, "storage", name="draw records"))
+        table = np.zeros(len(gs.material_blocks), L.MATERIAL.dtype)  # np.stack drops padding
+        for i, block in enumerate(gs.material_blocks):
+            table[i] = block
+        self.material_table = self._own(upload_buffer(device, table, "storage",
+                                                      name="material records"))
+        self.set_index = max(frame_layouts) + 1
+        self.set_layout = self._own(DescriptorSetLayout(device, [
+            BindingSpec(b, "storage" if kind == "block" else kind, ("compute",), name)
+            for b, kind, name in L.COMPUTE_SET]))
+        self.layouts = [frame_layouts[i] for i in range(self.set_index)] + [self.set_layout]
+        self.material_count = len(gs.materials)
+        # Which materials any opaque or masked draw uses: only those get a shading dispatch.
+        self._pipelines: dict[str, ComputePipeline] = {}
+        self._targets: dict[int, _TargetResources] = {}
+
+    def _own(self, obj: Any) -> Any:
+        self._owned.append(obj)
+        return obj
+
+    def _pipeline(self, name: str, push_bytes: int) -> ComputePipeline:
+        if name not in self._pipelines:
+            self._pipelines[name] = self._own(ComputePipeline(
+                self.device, SPV_DIR / f"{name}.comp.spv", self.layouts, push_bytes=push_bytes))
+        return self._pipelines[name]
+
+    def _resources(self, target: Any) -> _TargetResources:
+        key = id(target)
+        if key not in self._targets:
+            res = _TargetResources(self, target)
+            self._owned.extend(res.owned)
+            self._targets[key] = res
+        return self._targets[key]
+
+    # --- recording --------------------------------------------------------------------------
+    def record_shading(self, cmd: Any, target: Any, frame_index: int, tbn: L.TbnMode,
+                       frame_sets: dict[int, Any], material_sets: list[Any], materials: list[int],
+                       clear_color: tuple[float, ...]) -> None:
+        """Classify the visibility image's pixels by material, then shade each material of
+        `materials` (those the visibility pass drew) with its own set 1 bound."""
+        res = self._resources(target)
+        compute_set = res.sets[frame_index]
+        cmd.fill(res.bins, 0)
+        cmd.memory_barrier("transfer", "compute")
+        push = np.zeros(8, np.float32)
+        push[:4] = clear_color
+        push.view(np.uint32)[4:6] = (self.material_count, SHADE_GROUP)
+        pixel_groups = groups((*target.extent, 1), CLASSIFY_GROUP)
+        # Subgroup-aggregated atomics on GPUs; one atomic a pixel on CPUs (classify.comp).
+        plain = "_plain" if self.device.info.kind == "cpu" else ""
+        for name, size in ((f"classify_count{plain}", pixel_groups), ("classify_offsets", (1, 1, 1)),
+                           (f"classify_scatter{plain}", pixel_groups)):
+            cmd.bind_pipeline(self._pipeline(name, 32))
+            self._bind_frame_sets(cmd, frame_sets, material_sets[0], compute_set)
+            cmd.push(push)
+            cmd.dispatch(*size)
+            cmd.memory_barrier("compute", "compute|indirect")
+        cmd.bind_pipeline(self._pipeline(f"shade_{tbn.name.lower()}", 16))
+        self._bind_frame_sets(cmd, frame_sets, None, compute_set)
+        material = np.zeros(4, np.uint32)
+        for m in materials:
+            cmd.bind_set(1, material_sets[m])
+            material[0] = m
+            cmd.push(material)
+            cmd.dispatch_indirect(res.args, 12 * m)
+
+    def _bind_frame_sets(self, cmd: Any, frame_sets: dict[int, Any], material_set: Any,
+                         compute_set: Any) -> None:
+        for index, dset in frame_sets.items():
+            cmd.bind_set(index, dset)
+        if material_set is not None:  # classify.comp reads no material: any valid set
+            cmd.bind_set(1, material_set)
+        cmd.bind_set(self.set_index, compute_set)
+
+    def forget_target(self, target: Any) -> None:
+        self._targets.pop(id(target), None)
+
+    def destroy(self) -> None:
+        while self._owned:
+            self._owned.pop().destroy()
+

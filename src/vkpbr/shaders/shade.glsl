@@ -1,0 +1,159 @@
+// shade.glsl: a surface point shaded as every frame path shades it -- the material inputs,
+// the shading normal from the TBN and the normal map, brdf.glsl summed over the frame's
+// punctual lights (lights.glsl; the course's mode has one, report 1.1-1.2) with their shadows
+// (shadows.glsl), the image-based light (ibl.glsl) or the course's ambient, then the selected
+// debug view (Settings.view) as the target stores it. One function for the fragment path
+// (pbr.frag) and the compute path (shade.comp), which differ only in where the inputs come from.
+//
+// The including shader defines, before including this file:
+//   MAT            the material block (the draw's set 1, in both paths)
+//   SAMPLE(name)   the texel of material texture `name` (base_color, metallic, roughness,
+//                  normal, occlusion, emissive) at that texture's UV (texture_uv below): with
+//                  hardware derivatives in pbr.frag, ray-differential gradients in shade.comp
+// and sets opaque_zero and the surface globals s_* before calling shade_surface().
+// ALPHA_MASK (fragment path) discards below the material's cutoff.
+#ifndef SHADE_GLSL
+#define SHADE_GLSL
+#include "brdf.glsl"
+#include "lights.glsl"
+#include "shadows.glsl"
+#include "ibl.glsl"
+#include "frame_output.glsl"  // opaque_zero / u() (the lavapipe leak guard), radiance_output
+
+// The surface point: world position, TEXCOORD_0 (xy) and _1 (zw), interpolated (unnormalised)
+// normal, tangent and bitangent, COLOR_0, and which side of the triangle faces the camera.
+vec3 s_world_pos;
+vec4 s_texcoords;
+vec3 s_normal;
+vec3 s_tangent;
+vec3 s_bitangent;
+vec4 s_color;
+bool s_front_facing;
+
+vec3 safe_normalize(vec3 x, vec3 fallback) {
+    float len2 = dot(x, x);
+    return len2 > 1e-16 ? x * inversesqrt(len2) : fallback;
+}
+
+vec3 encode_dir(vec3 d) { return d * 0.5 + 0.5; }
+
+// One texture's coordinates: its own UV set (row0.w, 0 or 1) through its own
+// KHR_texture_transform, a 2x3 matrix given as two rows (render/layouts.py, MATERIAL).
+vec2 texture_uv(vec4 row0, vec4 row1) {
+    vec3 uv_h = vec3(u(row0.w) > 0.5 ? s_texcoords.zw : s_texcoords.xy, 1.0);
+    return vec2(dot(row0.xyz, uv_h), dot(row1.xyz, uv_h));
+}
+
+// The base colour and its alpha (texture x factor x COLOR_0): alpha masking and the
+// visibility pass decide coverage from this one function.
+vec4 surface_base_color() {
+    return SAMPLE(base_color) * MAT.base_color_factor * s_color;
+}
+
+vec4 shade_surface() {
+    uint settings_flags = u(settings.flags);
+    uint material_flags = u(MAT.flags);
+    int view = u(settings.view);
+    vec2 uv = texture_uv(MAT.base_color_uv_row0, MAT.base_color_uv_row1);
+    vec4 base = surface_base_color();
+#if ALPHA_MASK && !COMPUTE_SHADING
+    if (base.a < MAT.alpha_cutoff) discard;
+#endif
+    vec3 c = base.rgb;
+    float metallic = clamp(SAMPLE(metallic).r * MAT.metallic_factor, 0.0, 1.0);
+    float roughness = clamp(SAMPLE(roughness).r * MAT.roughness_factor, MIN_ROUGHNESS, 1.0);
+    float occlusion = 1.0;
+    if ((settings_flags & SETTINGS_OCCLUSION) != 0u && (material_flags & MATERIAL_HAS_OCCLUSION_MAP) != 0u) {
+        occlusion = 1.0 + MAT.occlusion_strength * (SAMPLE(occlusion).r - 1.0);
+    }
+    vec3 emissive = SAMPLE(emissive).rgb * MAT.emissive_factor;
+
+    // Tangent frame: back faces of double-sided materials see the whole frame flipped.
+    vec3 ng = safe_normalize(s_normal, vec3(0.0, 0.0, 1.0));
+    vec3 t = safe_normalize(s_tangent, vec3(1.0, 0.0, 0.0));
+    vec3 b = safe_normalize(s_bitangent, cross(ng, t));
+    if ((material_flags & MATERIAL_DOUBLE_SIDED) != 0u && !s_front_facing) {
+        ng = -ng; t = -t; b = -b;
+    }
+    vec3 n = ng;
+    if ((settings_flags & SETTINGS_NORMAL_MAPPING) != 0u && (material_flags & MATERIAL_HAS_NORMAL_MAP) != 0u) {
+        vec3 tn = SAMPLE(normal).xyz * 2.0 - 1.0;  // linear (UNORM) texture
+        tn.xy *= MAT.normal_scale;
+        n = safe_normalize(mat3(t, b, ng) * tn, ng);
+    }
+
+    vec3 v = safe_normalize(lighting.view_pos.xyz - s_world_pos, ng);
+    float view_depth = dot(s_world_pos - lighting.view_pos.xyz, settings.camera_forward.xyz);
+    uint lighting_flags = u(lighting.flags);
+    int brdf = u(settings.brdf);
+    uint light_count = min(u(lighting.light_count), MAX_LIGHTS);
+    vec3 specular = vec3(0.0), diffuse = vec3(0.0);
+    BrdfTerms first_terms = BrdfTerms(0.0, vec3(0.0), 0.0, vec3(0.0), vec3(0.0));
+    vec3 first_l = ng;
+    float first_shadow = 1.0;
+    bool shadow_seen = false;
+    for (uint i = 0u; i < light_count; ++i) {
+        LightRecord light = lights[i];
+        vec3 l;
+        vec3 light_in = light_incident(light, s_world_pos, ng, l);
+        float shadow = 1.0;
+        if ((lighting_flags & LIGHTING_SHADOWS) != 0u && light.shadow.x >= 0.0) {
+            shadow = shadow_factor(light, s_world_pos, ng, l, view_depth);
+            if (!shadow_seen) { first_shadow = shadow; shadow_seen = true; }
+        }
+        BrdfTerms terms = evaluate_brdf(n, v, l, c, metallic, roughness, brdf);
+        if (i == 0u) { first_terms = terms; first_l = l; }
+        vec3 incident = light_in * (max(dot(n, l), 0.0) * shadow);
+        specular += terms.specular * incident;
+        diffuse += terms.diffuse * incident;
+    }
+    vec3 ambient = lighting.ambient_color.rgb * c * occlusion;
+    IblTerms ibl = IblTerms(vec3(0.0), vec3(0.0));
+    if ((lighting_flags & LIGHTING_IBL) != 0u) {
+        ibl = ibl_evaluate(n, v, c, metallic, roughness);
+        ibl.diffuse *= occlusion;
+        ibl.specular *= occlusion;
+    }
+
+    vec3 value;
+    switch (view) {
+        case VIEW_D: value = vec3(first_terms.D); break;
+        case VIEW_F: value = first_terms.F; break;
+        case VIEW_G: value = vec3(first_terms.G); break;
+        case VIEW_SPECULAR: value = specular; break;
+        case VIEW_DIFFUSE: value = diffuse; break;
+        case VIEW_AMBIENT: value = ambient; break;
+        case VIEW_GEOMETRIC_NORMAL: value = encode_dir(ng); break;
+        case VIEW_MAPPED_NORMAL: value = encode_dir(n); break;
+        case VIEW_VIEW_DIR: value = encode_dir(v); break;
+        case VIEW_LIGHT_DIR: value = encode_dir(first_l); break;
+        case VIEW_BASE_COLOR: value = c; break;
+        case VIEW_METALLIC: value = vec3(metallic); break;
+        case VIEW_ROUGHNESS: value = vec3(roughness); break;
+        case VIEW_OCCLUSION: value = vec3(occlusion); break;
+        case VIEW_ALPHA: value = vec3(base.a); break;
+        case VIEW_TEXCOORDS: value = vec3(fract(uv), 0.0); break;
+        case VIEW_DEPTH: value = vec3(view_depth / settings.zfar); break;
+        case VIEW_EMISSIVE: value = emissive; break;
+        case VIEW_TANGENT: value = encode_dir(t); break;
+        case VIEW_BITANGENT: value = encode_dir(b); break;
+        case VIEW_SHADOW: value = vec3(first_shadow); break;
+        case VIEW_IBL_DIFFUSE: value = ibl.diffuse; break;
+        case VIEW_IBL_SPECULAR: value = ibl.specular; break;
+        default: value = emissive + ambient + diffuse + specular + ibl.diffuse + ibl.specular; break;
+    }
+
+    int kind = VIEW_KINDS[clamp(view, 0, VIEW_KINDS.length() - 1)];
+    bool srgb_target = (settings_flags & SETTINGS_SRGB_TARGET) != 0u;
+    if (kind == VIEW_KIND_RADIANCE) {
+        value = radiance_output(value);
+    } else if (kind == VIEW_KIND_DATA) {
+        // Raw data: on an sRGB target, pre-linearise so that the stored byte is the value.
+        value = clamp(value, 0.0, 1.0);
+        if (srgb_target) value = srgb_to_linear(value);
+    }
+    float alpha = (material_flags & MATERIAL_BLEND) != 0u ? base.a : 1.0;
+    return vec4(value, alpha);
+}
+
+#endif
