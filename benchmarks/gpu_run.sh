@@ -20,11 +20,11 @@ python3 -m vkpbr info | head -3
 has() { [[ " $STEPS " == *" $1 "* ]]; }
 if has paths; then
   echo "== frame paths x lighting: Sponza, GPU ms per step; cost per light"
-  python3 benchmarks/bench_paths.py --scene $SPONZA --frames ${FRAMES:-200} --json "$OUT/paths.json"
+  timeout ${PATHS_TIMEOUT:-300} python3 benchmarks/bench_paths.py --scene $SPONZA --frames ${FRAMES:-200} --json "$OUT/paths.json" 2>&1 | tee "$OUT/paths.txt"
 fi
 if has env; then
   echo "== environment pre-filter (2048x1024 panorama, the sky)"
-  python3 benchmarks/bench_environment.py
+  timeout 120 python3 benchmarks/bench_environment.py 2>&1 | tee "$OUT/env.txt"
 fi
 if has bench; then
   echo "== vkpbr bench (this commit)"

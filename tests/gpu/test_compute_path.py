@@ -102,3 +102,20 @@ def test_compute_timings_have_the_shading_step(chart) -> None:  # noqa: ANN001
     list(chart.render_many([None] * 4, size=SIZE, pipeline="compute"))
     ms = chart.last_stats.pass_ms
     assert ms["shading"] >= 0.0 and all(v >= 0.0 for v in ms.values())
+
+
+def test_both_classification_kernels_agree(chart) -> None:  # noqa: ANN001
+    """The GPUs' subgroup-aggregated binning and the CPUs' one-atomic-a-pixel binning
+    (classify.comp) give the same image (lavapipe runs both here)."""
+    scene = chart.compute_scene()
+    default = scene.aggregate
+    try:
+        images = []
+        for aggregate in (True, False):
+            scene.aggregate = aggregate
+            chart.recorder.free()  # recorded buffers name the kernels
+            images.append(chart.render(size=SIZE, pipeline="compute"))
+    finally:
+        scene.aggregate = default
+        chart.recorder.free()
+    assert np.array_equal(images[0], images[1])

@@ -115,6 +115,9 @@ class ComputeScene:
             for b, kind, name in L.COMPUTE_SET]))
         self.layouts = [frame_layouts[i] for i in range(self.set_index)] + [self.set_layout]
         self.material_count = len(gs.materials)
+        # Subgroup-aggregated atomics on GPUs; one atomic a pixel on CPUs, where the subgroup
+        # loop costs ~10x more (classify.comp). Tests set it to run both kernels on lavapipe.
+        self.aggregate = device.info.kind != "cpu"
         # Which materials any opaque or masked draw uses: only those get a shading dispatch.
         self._pipelines: dict[str, ComputePipeline] = {}
         self._targets: dict[int, _TargetResources] = {}
@@ -151,8 +154,7 @@ class ComputeScene:
         push[:4] = clear_color
         push.view(np.uint32)[4:6] = (self.material_count, SHADE_GROUP)
         pixel_groups = groups((*target.extent, 1), CLASSIFY_GROUP)
-        # Subgroup-aggregated atomics on GPUs; one atomic a pixel on CPUs (classify.comp).
-        plain = "_plain" if self.device.info.kind == "cpu" else ""
+        plain = "" if self.aggregate else "_plain"
         for name, size in ((f"classify_count{plain}", pixel_groups), ("classify_offsets", (1, 1, 1)),
                            (f"classify_scatter{plain}", pixel_groups)):
             cmd.bind_pipeline(self._pipeline(name, 32))

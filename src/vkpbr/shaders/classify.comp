@@ -67,7 +67,9 @@ void main() {
     // Waterfall over the materials present in this subgroup: one atomic each.
     bool pending = covered;
     while (subgroupAny(pending)) {
-        uint m = subgroupBroadcastFirst(pending ? material : 0xFFFFFFFFu);
+        // The material of the first lane still pending (not of the first active lane: that
+        // one may be done, and then no lane would match).
+        uint m = subgroupShuffle(material, subgroupBallotFindLSB(subgroupBallot(pending)));
         bool mine = pending && material == m;
         uvec4 ballot = subgroupBallot(mine);
         if (mine) {
