@@ -57,7 +57,7 @@ class Image:
             vk.VkImageCreateInfo(
                 # mutable: views of another format of the same size (a UNORM storage view of
                 # an sRGB image), with usages only such views support.
-                flags=vk.VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT if cube else 0
+                flags=(vk.VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT if cube else 0)
                 | (vk.VK_IMAGE_CREATE_MUTABLE_FORMAT_BIT | _EXTENDED_USAGE if mutable else 0),
                 imageType=vk.VK_IMAGE_TYPE_2D,
                 format=format,
