@@ -8,7 +8,7 @@ export PYTHONPATH=/tmp/site:$PWD/src PYTHONUNBUFFERED=1
 if [ -z "$(python3 -m vkpbr info --json 2>/dev/null | grep -i nvidia)" ]; then
   export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 fi
-for step in copy blit blit_nocompute blit_nofeatures; do
+for step in blit_nomaint4 blit_nochain blit_neither; do
 STEP=$step timeout 30 python3 - <<'PY' 2>&1 | tee -a "$OUT/diag.txt"
 import os, threading, time
 import numpy as np
@@ -18,9 +18,14 @@ def say(m): print(f"[{step}] {time.perf_counter() - t:6.2f} s  {m}", flush=True)
 def watchdog():
     time.sleep(12); say("HUNG"); os._exit(3)
 threading.Thread(target=watchdog, daemon=True).start()
-if step == "blit_nocompute":
-    import vulkan
-    vulkan.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT = 0
+import vulkan
+o13, o12, o11 = (vulkan.VkPhysicalDeviceVulkan13Features, vulkan.VkPhysicalDeviceVulkan12Features,
+                 vulkan.VkPhysicalDeviceVulkan11Features)
+if step in ("blit_nomaint4", "blit_neither"):
+    vulkan.VkPhysicalDeviceVulkan13Features = lambda **kw: o13(**{k: v for k, v in kw.items() if k != "maintenance4"})
+if step in ("blit_nochain", "blit_neither"):
+    vulkan.VkPhysicalDeviceVulkan12Features = lambda pNext=None, **kw: pNext if "shaderOutputLayer" in kw else o12(pNext=pNext, **kw)
+    vulkan.VkPhysicalDeviceVulkan11Features = lambda pNext=None, **kw: pNext if "shaderDrawParameters" in kw else o11(pNext=pNext, **kw)
 from vkpbr.gpu import device as D
 if step == "blit_nofeatures":
     q = D.Device._query_features
