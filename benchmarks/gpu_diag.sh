@@ -8,7 +8,7 @@ export PYTHONPATH=/tmp/site:$PWD/src PYTHONUNBUFFERED=1
 if [ -z "$(python3 -m vkpbr info --json 2>/dev/null | grep -i nvidia)" ]; then
   export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 fi
-for step in blit_nomaint4 blit_nochain blit_neither; do
+for step in ${DIAG_STEPS:-blit}; do
 STEP=$step timeout 30 python3 - <<'PY' 2>&1 | tee -a "$OUT/diag.txt"
 import os, threading, time
 import numpy as np
