@@ -66,7 +66,9 @@ void main() {
 #else
     // Waterfall over the materials present in this subgroup: one atomic each.
     bool pending = covered;
-    while (subgroupAny(pending)) {
+    // At most one round per lane: each round retires the first pending lane's material, and
+    // the bound keeps a mistake here from ever hanging a GPU.
+    for (uint round = 0u; round < gl_SubgroupSize && subgroupAny(pending); ++round) {
         // The material of the first lane still pending (not of the first active lane: that
         // one may be done, and then no lane would match).
         uint m = subgroupShuffle(material, subgroupBallotFindLSB(subgroupBallot(pending)));
