@@ -101,8 +101,8 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
                field="exposure", metavar="EV"),
     OptionSpec("--pipeline", "enum", "frame path (default %(default)s): forward shades in "
                "fragment shaders; compute shades a visibility buffer in compute shaders (all "
-               "SMs of a datacenter GPU); auto: compute on GPUs that have it, forward on CPUs, "
-               "with MSAA and in windows", field="pipeline"),
+               "SMs of a datacenter GPU); auto: forward until compute has been measured faster "
+               "on the device", field="pipeline"),
     OptionSpec("--no-alpha-mask", "off", "draw masked materials as opaque", field="alpha_mask"),
     OptionSpec("--no-normal-maps", "off", "ignore normal maps", field="normal_mapping"),
     OptionSpec("--no-occlusion", "off", "ignore occlusion maps", field="occlusion"),

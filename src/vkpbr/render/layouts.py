@@ -462,8 +462,8 @@ VIEW_KIND = {
 class PipelinePath(Named):
     """How frames are drawn: FORWARD shades in fragment shaders; COMPUTE rasterises a
     visibility buffer and shades it in compute shaders (render/compute_path.py: all SMs of an
-    H100/H200, where only a few run fragment shaders); AUTO: compute on GPUs that support it
-    for single-sample offscreen targets, forward elsewhere (lavapipe, MSAA, windows)."""
+    H100/H200, where only a few run fragment shaders); AUTO: the forward path until the
+    compute path has been measured faster on the device (docs/compute-path.md)."""
 
     AUTO = 0
     FORWARD = 1

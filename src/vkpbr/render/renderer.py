@@ -220,8 +220,10 @@ class Renderer:
                 raise UsageError(f"--pipeline compute is not available here: {why}; use "
                                  "--pipeline forward or auto")
             return True
-        return (options.pipeline == L.PipelinePath.AUTO and able
-                and self.device.info.kind != "cpu")
+        # auto: the fragment path until the compute path has been measured faster on the
+        # device (issue 13: recorded per device once it has run on a GPU; on CPUs it is the
+        # slower of the two).
+        return False
 
     def build_pipelines(self, target: FrameTarget) -> None:
         """Create every pipeline and vertex stream (all TBN paths and passes) for `target`
