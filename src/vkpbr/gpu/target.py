@@ -56,52 +56,6 @@ class FrameTarget(Protocol):
 
     def record_begin(self, cmd: Commands, image: int) -> None: ...
 
-    # --- the compute path's steps, instead of record_begin -------------------------------------
-    def record_visibility_begin(self, cmd: Commands, image: int) -> None:
-        """Begin rendering the visibility image (cleared to 0: nothing) over the cleared
-        depth buffer; the colour image goes to GENERAL for the compute shader's writes."""
-        vk = self.device.vk
-        color_stage, color_access, color_layout = attachment_stage(vk, False)
-        depth_stage, depth_access, depth_layout = attachment_stage(vk, True)
-        copy = vk.VK_PIPELINE_STAGE_2_COPY_BIT
-        compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                   vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT)
-        no_reads = ~(vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT
-                     | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
-        barriers(cmd, [
-            # The previous frame's passes and copies of these images come first.
-            image_barrier(vk, self.visibility.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                          color_layout, (compute[0], 0), (color_stage, color_access)),
-            image_barrier(vk, self.depth.handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED, depth_layout,
-                          (depth_stage | copy, depth_access & no_reads), (depth_stage, depth_access)),
-            image_barrier(vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                          vk.VK_IMAGE_LAYOUT_GENERAL,
-                          (color_stage | copy, color_access & no_reads), compute),
-        ])
-        begin_rendering(cmd, Attachments(self.visibility_view.handle, self.attachments.depth,
-                                         self.extent), (0.0, 0.0, 0.0, 0.0), 0.0)
-
-    def record_shading_begin(self, cmd: Commands) -> None:
-        """End the visibility pass: its image becomes readable by the compute shader."""
-        vk = self.device.vk
-        end_rendering(cmd)
-        stage, access, layout = attachment_stage(vk, False)
-        barriers(cmd, [image_barrier(
-            vk, self.visibility.handle, False, layout, vk.VK_IMAGE_LAYOUT_GENERAL,
-            (stage, vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT),
-            (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT))])
-
-    def record_resume(self, cmd: Commands) -> None:
-        """After the compute shading: render on into the shaded colour image and the
-        visibility pass's depth (blended draws, overlays), as record_begin would have."""
-        vk = self.device.vk
-        stage, access, layout = attachment_stage(vk, False)
-        barriers(cmd, [image_barrier(
-            vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_GENERAL, layout,
-            (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT),
-            (stage, access))])
-        begin_rendering(cmd, self.attachments, None, None)
-
     def record_end(self, cmd: Commands, image: int, frame: Frame, copy: tuple[str, ...]) -> None: ...
 
     def submit(self, frame: Frame, cmd: Commands, image: int) -> bool: ...

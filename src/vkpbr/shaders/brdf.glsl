@@ -1,19 +1,13 @@
 // brdf.glsl: the shading equations of renderer-spec section 2 (the course's Cook-Torrance) and
-// of the glTF 2.0 specification's Appendix B, as pure functions of scalars and colours. Mirrored function for function, with the same
-// names, in src/vkpbr/reference/brdf.py; the GPU tests compare the two.
+// of the glTF 2.0 specification's Appendix B, as pure functions of scalars and colours.
+// Mirrored function for function, with the same names, in src/vkpbr/reference/brdf.py; the
+// GPU tests compare the two.
 // Notation: x+ = max(0, x); n, l, v, h unit vectors; c base colour, M metalness, r roughness.
 #ifndef BRDF_GLSL
 #define BRDF_GLSL
+#include "brdf_lobes.glsl"  // PI, EPS, d_ggx, v_smith_ggx_correlated
 
-const float PI = 3.14159265358979;
-const float EPS = 1e-6;
 
-// GGX / Trowbridge-Reitz (Disney GTR, gamma = 2), alpha = r^2 (Burley 2012, eq. 8).
-float d_ggx(float n_dot_h, float alpha) {
-    float a2 = alpha * alpha;
-    float k = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
-    return a2 / (PI * k * k);
-}
 
 // The course's Blinn-Phong distribution: (ap + 2) / (2 pi) (n.h)+^ap, ap = 2 / alpha^2 - 2.
 float d_blinn_phong(float n_dot_h, float alpha) {
@@ -32,15 +26,6 @@ float g_cook_torrance(float n_dot_h, float n_dot_v, float n_dot_l, float v_dot_h
     return min(1.0, min(k * n_dot_v, k * n_dot_l));
 }
 
-// Height-correlated Smith visibility V = G / (4 (n.l)(n.v)) for GGX (Heitz 2014, eq. 99; the
-// glTF specification's Appendix B.3.2 and the Khronos Sample Viewer's V_GGX).
-float v_smith_ggx_correlated(float n_dot_l, float n_dot_v, float alpha) {
-    float a2 = alpha * alpha;
-    float gv = n_dot_l * sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2);
-    float gl = n_dot_v * sqrt(n_dot_l * n_dot_l * (1.0 - a2) + a2);
-    float s = gv + gl;
-    return s > 0.0 ? 0.5 / s : 0.0;
-}
 
 // Lambert diffuse weighted by what neither the specular lobe nor the metal takes:
 // (c / pi)(1 - F)(1 - M).

@@ -23,7 +23,7 @@ void main() {
         float n_dot_l = l.z;
         if (n_dot_l <= 0.0 || v_dot_h <= 0.0) continue;
         // f cos / pdf_l with pdf_l = D (n.h) / (4 v.h): V (n.l) 4 (v.h) / (n.h).
-        float w = env_v_smith(n_dot_l, n_dot_v, alpha) * n_dot_l * 4.0 * v_dot_h / h.z;
+        float w = v_smith_ggx_correlated(n_dot_l, n_dot_v, alpha) * n_dot_l * 4.0 * v_dot_h / h.z;
         float fc = pow(1.0 - v_dot_h, 5.0);
         a += (1.0 - fc) * w;
         b += fc * w;

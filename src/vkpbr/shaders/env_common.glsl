@@ -3,6 +3,7 @@
 // +Y, and GGX importance sampling. Pure functions, no bindings.
 #ifndef ENV_COMMON_GLSL
 #define ENV_COMMON_GLSL
+#include "brdf_lobes.glsl"
 
 const float ENV_PI = 3.14159265358979;
 
@@ -59,20 +60,6 @@ vec3 ggx_half_vector(vec2 xi, float alpha) {
     return vec3(sin_t * cos(phi), sin_t * sin(phi), cos_t);
 }
 
-// GGX D (glTF 2.0 Appendix B.3.2): alpha^2 / (pi ((n.h)^2 (alpha^2 - 1) + 1)^2).
-float env_d_ggx(float n_dot_h, float alpha) {
-    float a2 = alpha * alpha;
-    float k = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
-    return a2 / (ENV_PI * k * k);
-}
-
-// Height-correlated Smith V (glTF 2.0 Appendix B.3.2; Heitz 2014): G / (4 |n.l| |n.v|).
-float env_v_smith(float n_dot_l, float n_dot_v, float alpha) {
-    float a2 = alpha * alpha;
-    float gv = n_dot_l * sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2);
-    float gl = n_dot_v * sqrt(n_dot_l * n_dot_l * (1.0 - a2) + a2);
-    float s = gv + gl;
-    return s > 0.0 ? 0.5 / s : 0.0;
-}
+// GGX D and Smith V: brdf_lobes.glsl's, the shading's own.
 
 #endif

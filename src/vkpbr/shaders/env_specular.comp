@@ -35,7 +35,7 @@ void main() {
         if (n_dot_l <= 0.0) continue;
         float n_dot_h = clamp(dot(n, h), 0.0, 1.0);
         // pdf of l with v = n: D (n.h) / (4 (v.h)) = D / 4.
-        float pdf = env_d_ggx(n_dot_h, alpha) * 0.25;
+        float pdf = d_ggx(n_dot_h, alpha) * 0.25;
         float omega_s = 1.0 / (float(pc.samples) * pdf + 1e-6);
         float lod = max(0.5 * log2(omega_s / omega_p) + 1.0, texel_lod);
         sum += textureLod(source, l, lod).rgb * n_dot_l;  // Karis' n.l weighting
