@@ -1,13 +1,7 @@
 #!/usr/bin/env bash
 # A short diagnostic on the NVIDIA machine: which part of a texture upload stops? Each step is
 # a time-boxed process; a watchdog prints the stack and exits.
-set -uo pipefail
-for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
-python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl 2>/dev/null || exit 1
-export PYTHONPATH=/tmp/site:$PWD/src PYTHONUNBUFFERED=1
-if [ -z "$(python3 -m vkpbr info --json 2>/dev/null | grep -i nvidia)" ]; then
-  export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-fi
+source benchmarks/gpu_env.sh
 for step in ${DIAG_STEPS:-blit}; do
 STEP=$step timeout 30 python3 - <<'PY' 2>&1 | tee -a "$OUT/diag.txt"
 import os, threading, time

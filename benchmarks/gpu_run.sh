@@ -5,14 +5,7 @@
 # JPEGs re-encoded at quality 85), and optionally .before (`git archive <commit> src` of an
 # earlier commit, benchmarked in the same run for before/after numbers).
 # STEPS (default "paths env tests"): any of paths, env, bench, viewer, tests.
-set -uo pipefail
-for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
-python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl 2>/dev/null || exit 1
-export PYTHONPATH=/tmp/site:$PWD/src PYTHONUNBUFFERED=1
-# The NVIDIA ICD (libGLX_nvidia) needs the glvnd libraries carried in .gl/.
-if [ -z "$(python3 -m vkpbr info --json 2>/dev/null | grep -i nvidia)" ]; then
-  export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-fi
+source benchmarks/gpu_env.sh
 SPONZA=.assets/models/Sponza/glTF/Sponza.gltf
 STEPS=${STEPS:-paths env tests}
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
