@@ -68,7 +68,37 @@ def test_batch_cameras(capsys, tmp_path: Path) -> None:
     code, stdout, _ = run(capsys, "render", "--cameras", str(cams), "--out", str(tmp_path / "frames"),
                           "--size", "40x30", "--validation")
     assert code == 0 and "wrote 2 images" in stdout
-    assert sorted(p.name for p in (tmp_path / "frames").iterdir()) == ["frame_00000.png", "frame_00001.png"]
+    assert sorted(p.name for p in (tmp_path / "frames").iterdir()) == [
+        "frame_00000.png", "frame_00001.png", "transforms.json"]
+
+
+def test_batch_writes_camera_files_that_reproduce_the_images(capsys, tmp_path: Path) -> None:
+    """--cameras writes transforms.json (and, with --colmap, COLMAP text) beside the frames;
+    a NeRF-style loader (a few lines of json and numpy here) reads the intrinsics and poses,
+    and rendering its cameras again gives the same images."""
+    cams = tmp_path / "cams.json"
+    cams.write_text(json.dumps(["0.6,3.2,9,0.4,2.2,0", {"eye": [3, 3, 8], "target": [0, 2, 0], "fov": 50},
+                                "-4,2,6,0,1,0"]))
+    out = tmp_path / "frames"
+    code, stdout, _ = run(capsys, "render", "--cameras", str(cams), "--out", str(out),
+                          "--size", "48x32", "--colmap", "--validation")
+    assert code == 0 and "transforms.json" in stdout and "images.txt" in stdout
+    doc = json.loads((out / "transforms.json").read_text())
+    frames = doc["frames"]
+    assert [f["file_path"] for f in frames] == [f"frame_{i:05d}.png" for i in range(3)]
+    assert all(doc.get("w", f.get("w")) == 48 and doc.get("h", f.get("h")) == 32 for f in frames)
+    for f in frames:  # world-from-camera, OpenGL axes: a rigid transform with unit rows
+        m = np.asarray(f["transform_matrix"], dtype=np.float64)
+        assert m.shape == (4, 4) and np.allclose(m[:3, :3] @ m[:3, :3].T, np.eye(3), atol=1e-6)
+    assert (out / "cameras.txt").is_file() and (out / "points3D.txt").is_file()
+    again = tmp_path / "again"
+    code, _, _ = run(capsys, "render", "--cameras", str(out / "transforms.json"), "--out",
+                     str(again), "--size", "48x32", "--validation")
+    assert code == 0
+    for i in range(3):
+        a = np.asarray(Image.open(out / f"frame_{i:05d}.png")).astype(int)
+        b = np.asarray(Image.open(again / f"frame_{i:05d}.png")).astype(int)
+        assert np.abs(a - b).max() <= 1, i
 
 
 def test_poses_file_is_checked_before_the_scene_loads(capsys, tmp_path: Path) -> None:
@@ -88,7 +118,7 @@ def test_docs_example_poses_render(capsys, tmp_path: Path) -> None:
     code, stdout, _ = run(capsys, "render", "--cameras", str(example), "--out",
                           str(tmp_path / "frames"), "--size", "32x24", "--validation")
     assert code == 0 and f"wrote {n} images" in stdout
-    images = sorted((tmp_path / "frames").iterdir())
+    images = sorted((tmp_path / "frames").glob("frame_*.png"))
     assert len(images) == n
 
 

@@ -52,7 +52,11 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--cameras", metavar="FILE.json",
                    help="render one image per camera pose in FILE (a JSON list of "
                         '"ex,ey,ez,tx,ty,tz[,ux,uy,uz]" strings or {"eye","target","up","fov"} '
-                        "objects) into the folder --out")
+                        "objects, pose matrices, K + pose, a NeRF transforms.json) into the folder "
+                        "--out, with the cameras as written as a NeRF transforms.json there")
+    p.add_argument("--colmap", action="store_true",
+                   help="with --cameras, also write the cameras as COLMAP text files "
+                        "(cameras.txt, images.txt, points3D.txt) in --out")
     p.add_argument("--list-views", action="store_true", help="list the debug views and exit")
     p.add_argument("--msaa", type=int, default=1, choices=[1, 4], help="samples per pixel")
     p.add_argument("--linear", action="store_true", help="linear float32 colour (write a .exr or .npy)")
@@ -108,7 +112,16 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
                 job.result()
     t3 = time.perf_counter()
     n = len(cameras)
-    say(f"wrote {n} images to {out_dir}/ ({size[0]}x{size[1]}, view {options.view})")
+    # The cameras as rendered, for NeRF / 3D-reconstruction tools (docs/camera-files.md).
+    from vkpbr.scene.camera_files import write_colmap, write_transforms
+
+    names = [f"frame_{i:05d}{suffix}" for i in range(n)]
+    write_transforms(out_dir / "transforms.json", cameras, size, names)
+    wrote = ["transforms.json"]
+    if args.colmap:
+        wrote += [p.name for p in write_colmap(out_dir, cameras, size, names)]
+    say(f"wrote {n} images and {', '.join(wrote)} to {out_dir}/ ({size[0]}x{size[1]}, "
+        f"view {options.view})")
     say(f"load + set-up {t1 - t0:.2f} s, rendering {1e3 * (t2 - t1) / n:.2f} ms per frame "
         f"({n / (t2 - t1):.1f} frames/s), all written after {t3 - t1:.2f} s")
     return 0
