@@ -62,6 +62,11 @@ class DeviceLostError(VulkanError):
     """The device was lost (driver crash, GPU reset)."""
 
 
+class GpuTimeoutError(VulkanError):
+    """The GPU did not finish a submission in time: a hung device (or a frame far larger than
+    $VKPBR_GPU_TIMEOUT_S allows)."""
+
+
 class ValidationError(VkpbrError):
     """The Khronos validation layer reported one or more errors."""
 

@@ -14,7 +14,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from vkpbr.errors import VkpbrError
+from vkpbr.errors import GpuTimeoutError, VkpbrError
 from vkpbr.gpu.instance import Instance, PhysicalDeviceInfo
 from vkpbr.gpu.vk import live_objects, live_objects_by_kind
 
@@ -38,6 +38,25 @@ def anisotropy_usable(info: PhysicalDeviceInfo, supported: bool) -> bool:
         return os.environ.get("VKPBR_LLVMPIPE_ANISOTROPY", "0") == "1"
     return True
 
+
+
+# How long one submission may take before vkpbr reports a hung GPU instead of waiting forever.
+GPU_TIMEOUT_ENV = "VKPBR_GPU_TIMEOUT_S"
+GPU_TIMEOUT_DEFAULT_S = 120.0
+VK_TIMEOUT = 2  # VkResult: the wait timed out
+
+
+def gpu_timeout_ns() -> int:
+    """$VKPBR_GPU_TIMEOUT_S (seconds, default 120) in nanoseconds: the longest wait for one
+    submission (a frame, an upload). A GPU that never finishes is an error, not a hang."""
+    text = os.environ.get(GPU_TIMEOUT_ENV, "")
+    try:
+        seconds = float(text) if text else GPU_TIMEOUT_DEFAULT_S
+    except ValueError:
+        seconds = GPU_TIMEOUT_DEFAULT_S
+    if not 0 < seconds < 1e9:
+        seconds = GPU_TIMEOUT_DEFAULT_S
+    return int(seconds * 1e9)
 
 
 # Device features the compute path needs (Device.compute_path: all present, then enabled).
@@ -274,11 +293,23 @@ class Device:
                 vk.vkQueueSubmit(
                     self.queue, 1, [vk.VkSubmitInfo(pCommandBuffers=[cmd])], fence
                 )
-                vk.vkWaitForFences(self.handle, 1, [fence], vk.VK_TRUE, 2**63 - 1)
+                self.wait_fences(vk.ffi.new("VkFence[1]", [fence]), "an upload")
             finally:
                 vk.vkDestroyFence(self.handle, fence, None)
         finally:
             self.free_command_buffer(cmd)
+
+    def wait_fences(self, fences: Any, what: str) -> None:
+        """Wait for a cffi `VkFence[1]` array; GpuTimeoutError after gpu_timeout_ns()."""
+        from vkpbr.gpu.vk import check_result
+
+        timeout = gpu_timeout_ns()
+        result = self.vk.lib.vkWaitForFences(self.handle, 1, fences, 1, timeout)
+        if result == VK_TIMEOUT:
+            raise GpuTimeoutError("vkWaitForFences", "VK_TIMEOUT", (
+                f"{self.info.name} did not finish {what} in {timeout / 1e9:g} s: the device "
+                f"looks hung (set {GPU_TIMEOUT_ENV} to wait longer for very large frames)"))
+        check_result(result, "vkWaitForFences")
 
     def wait_idle(self) -> None:
         if self.handle is not None:

@@ -24,7 +24,6 @@ from vkpbr.gpu.vk import check_result
 __all__ = ["FRAMES_IN_FLIGHT", "Frame", "FrameRing"]
 
 FRAMES_IN_FLIGHT = 3  # the one definition: offscreen batches, the viewer, swapchains
-_NO_TIMEOUT = 2**64 - 1
 
 
 class Frame:
@@ -57,9 +56,7 @@ class Frame:
         """Block until this frame's last submission has finished on the GPU."""
         if self.finished:
             return  # waited already: no driver call (they cost microseconds each)
-        lib = self.device.vk.lib
-        check_result(lib.vkWaitForFences(self.device.handle, 1, self.fences, 1, _NO_TIMEOUT),
-                     "vkWaitForFences")
+        self.device.wait_fences(self.fences, "a frame")
         self.finished = True
 
     def submit(self, cmd: Commands, wait: Any = None, signal: Any = None) -> None:
