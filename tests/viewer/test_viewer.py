@@ -217,3 +217,29 @@ def test_environment_keys(tmp_path: Path) -> None:
     finally:
         viewer.close()
     assert instance.errors == [], instance.errors[:3]
+
+
+def test_pipeline_key_takes_the_compute_path_offscreen(tmp_path: Path) -> None:
+    """U cycles auto -> forward -> compute; the offscreen viewer then draws through the compute
+    path (the HUD says so) and its screenshot equals Renderer.render with that path."""
+    from vkpbr.app.viewer import Viewer, ViewerConfig
+
+    shot = tmp_path / "compute.png"
+    events = [_key(0.0, "u"), _key(0.05, "u"), {"t": 0.1, "type": "screenshot", "path": str(shot)},
+              {"t": 0.15, "type": "quit"}]
+    config = ViewerConfig(size=(64, 48), validation=True, offscreen=True,
+                          script=parse_script({"fixed_dt": 0.05, "events": events}))
+    viewer = Viewer(None, config)
+    instance = viewer.renderer.device.instance
+    try:
+        if not viewer.renderer.device.compute_path:
+            pytest.skip(f"{viewer.renderer.device.info.name} lacks the compute path's features")
+        assert viewer.run() == 0
+        assert str(viewer.options.pipeline) == "compute"
+        hud = "\n".join(line for b in viewer._hud_blocks() for line in b.lines)
+        assert "path compute" in hud
+        image, camera, lights, options, size = viewer.last_screenshot
+        assert np.array_equal(image, viewer.renderer.render(camera, lights, size, options))
+    finally:
+        viewer.close()
+    assert instance.errors == [], instance.errors[:3]

@@ -152,6 +152,9 @@ BINDINGS: tuple[Binding, ...] = (
             "(`--env-rotation`); the automatic sun turns with it"),
     Binding("B", "BRDF: GGX -> Blinn-Phong -> glTF", (_press("b", "cycle", ("brdf", 1)),)),
     Binding("T", "TBN path: vectors -> quat -> packed", (_press("t", "cycle", ("tbn", 1)),)),
+    Binding("U", "frame path: auto -> forward -> compute", (_press("u", "cycle", ("pipeline", 1)),),
+            doc="frame path (`--pipeline`): auto -> forward -> compute; compute needs an "
+                "offscreen viewer (`--offscreen`) and skips back to auto in a window"),
     Binding("M  N  O", "alpha masking, normal maps, occlusion on/off", (
         _press("m", "toggle", "alpha_mask"), _press("n", "toggle", "normal_mapping"),
         _press("o", "toggle", "occlusion"))),

@@ -11,6 +11,7 @@ Docs: docs/viewer.md.
 
 from __future__ import annotations
 
+import dataclasses
 import statistics
 import sys
 import time
@@ -32,6 +33,7 @@ from vkpbr.app.script import Script
 from vkpbr.app.viewer_input import InputHandlers
 from vkpbr.errors import VkpbrError
 from vkpbr.render.camera import format_camera
+from vkpbr.render.layouts import PipelinePath
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.renderer import COPY_COLOR, Renderer
 from vkpbr.scene.lights import light_spec
@@ -239,7 +241,10 @@ class Viewer(InputHandlers):
             + (f" {o.env_rotation:+g} deg" if o.has_environment else ""),
             f"alpha mask {onoff(o.alpha_mask)}   normal maps {onoff(o.normal_mapping)}   "
             f"occlusion {onoff(o.occlusion)}   shadows {onoff(o.shadows)}",
-            f"light anim {onoff(self.animate_light)}   {w}x{h} {self.present_mode}",
+            f"light anim {onoff(self.animate_light)}   {w}x{h} {self.present_mode}   "
+            f"path {o.pipeline}"
+            + (f" ({'compute' if self.renderer.uses_compute(self.target, o) else 'forward'})"
+               if o.pipeline == PipelinePath.AUTO else ""),
             "H: key help" if not self.show_help else "",
         )
         blocks = [TextBlock(lines, "top-left")]
@@ -318,6 +323,11 @@ class Viewer(InputHandlers):
         # A screenshot frame is copied out of the target after drawing: without the HUD
         # (that one frame is shown without it) unless the HUD was asked for.
         copy = shot is not None and getattr(self.target, "can_copy", True)
+        if (self.options.pipeline == PipelinePath.COMPUTE
+                and r.compute_unavailable(self.target) is not None):  # type: ignore[union-attr]
+            # A window presents through the fragment path: the cycle goes on to auto.
+            self.options = dataclasses.replace(self.options, pipeline=PipelinePath.AUTO)
+            self._hud_dirty = True
         sub = r.draw(self.target, camera, self.lights, self.options,  # type: ignore[union-attr]
                      overlay=self.hud if shot is None or self.shot_hud else None,
                      copy=(COPY_COLOR,) if copy else (), timings=self._want_gpu,

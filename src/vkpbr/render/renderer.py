@@ -208,15 +208,20 @@ class Renderer:
                 self.device, self.gpu_scene, dict(enumerate(self.set_layouts)), self.slots)
         return self._compute_scene
 
+    def compute_unavailable(self, target: FrameTarget) -> str | None:
+        """Why frames of `target` cannot take the compute path, or None when they can."""
+        if not self.device.compute_path:
+            return "the device lacks " + ", ".join(COMPUTE_PATH_FEATURES)
+        if not getattr(target, "compute", False):
+            return "it renders single-sample offscreen targets (not MSAA or a window)"
+        return None
+
     def uses_compute(self, target: FrameTarget, options: RenderOptions) -> bool:
         """Whether frames of `target` with `options` take the compute path (UsageError when
         it is asked for and cannot: say why and what to use)."""
-        able = self.device.compute_path and bool(getattr(target, "compute", False))
         if options.pipeline == L.PipelinePath.COMPUTE:
-            if not able:
-                why = ("the device lacks " + ", ".join(COMPUTE_PATH_FEATURES)
-                       if not self.device.compute_path else
-                       "it renders single-sample offscreen targets (not MSAA or a window)")
+            why = self.compute_unavailable(target)
+            if why is not None:
                 raise UsageError(f"--pipeline compute is not available here: {why}; use "
                                  "--pipeline forward or auto")
             return True
