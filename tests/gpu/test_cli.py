@@ -214,3 +214,22 @@ def test_strict_turns_missing_textures_into_an_error(capsys, tmp_path: Path) -> 
         assert code == 1 and "missing" in err
     else:  # the loader's strict mode has not landed: --strict says so, it does not pass silently
         assert code == 2 and "no strict mode" in err
+
+
+def test_outputs_beside_the_frame(capsys, tmp_path: Path) -> None:
+    """--outputs writes each dataset output beside --out (ids as 16-bit PNG, the rest as
+    float EXR) from the same frame; the PNG holds the ids render(outputs=...) gives."""
+    out = tmp_path / "frame.png"
+    code, stdout, _ = run(capsys, "render", "--size", "48x36", "--out", str(out), "--outputs",
+                          "depth,instance,normal", "--validation")
+    assert code == 0 and "frame.instance.png" in stdout
+    assert {p.name for p in tmp_path.iterdir()} == {
+        "frame.png", "frame.depth.exr", "frame.instance.png", "frame.normal.exr"}
+    ids = np.asarray(Image.open(tmp_path / "frame.instance.png"))
+    from vkpbr.render.renderer import Renderer
+
+    with Renderer() as r:
+        want = r.render(size=(48, 36), outputs=("instance",))["instance"]
+    assert np.array_equal(ids.astype(np.uint32), want)
+    code, _, err = run(capsys, "render", "--outputs", "albedo")
+    assert code == 2 and "unknown output 'albedo'" in err

@@ -19,7 +19,7 @@ from vkpbr.app.output import (
     check_writable,
     write_image_atomic,
 )
-from vkpbr.app.parsing import EPILOG_FORMATTER, size_arg
+from vkpbr.app.parsing import EPILOG_FORMATTER, _as_type, size_arg
 from vkpbr.errors import UsageError
 
 __all__ = ["add_parser", "run"]
@@ -57,6 +57,12 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--colmap", action="store_true",
                    help="with --cameras, also write the cameras as COLMAP text files "
                         "(cameras.txt, images.txt, points3D.txt) in --out")
+    p.add_argument("--outputs", metavar="NAME,...",
+                   type=_as_type(_output_names, "--outputs", "output list"),
+                   help="dataset outputs of the same frame, written beside --out as "
+                        "STEM.NAME.exr (depth, range, normal, normal_camera, normal_geometric: "
+                        "float) or STEM.NAME.png (instance, semantic: 16-bit ids); see "
+                        "docs/outputs.md")
     p.add_argument("--list-views", action="store_true", help="list the debug views and exit")
     p.add_argument("--msaa", type=int, default=1, choices=[1, 4], help="samples per pixel")
     p.add_argument("--linear", action="store_true", help="linear float32 colour (write a .exr or .npy)")
@@ -64,6 +70,41 @@ def add_parser(sub: Any) -> None:
                    help="render N frames and report the median time per frame")
     p.defer(add_options)
     p.set_defaults(run=run)
+
+
+def _output_names(text: str) -> tuple[str, ...]:
+    """`--outputs depth,instance`: the names, each checked (argparse's one-line error)."""
+    from vkpbr.app.output import OUTPUT_KINDS
+
+    names = tuple(n.strip() for n in text.split(",") if n.strip())
+    for name in names:
+        if name not in OUTPUT_KINDS:
+            raise UsageError(f"unknown output {name!r} (known: {', '.join(OUTPUT_KINDS)})")
+    return tuple(n for n in names if n != "color")
+
+
+def _output_path(out: Path, name: str) -> Path:
+    """Where output `name` of the frame written to `out` goes: beside it, by kind."""
+    from vkpbr.app.output import output_kind
+
+    return out.with_name(f"{out.stem}.{name}{'.png' if output_kind(name) == 'ids' else '.exr'}")
+
+
+def _check_outputs(out: Path, names: tuple[str, ...], ids: int) -> None:
+    from vkpbr.app.output import check_id_count, check_output_path, output_kind
+
+    for name in names:
+        path = _output_path(out, name)
+        check_output_path(path, output_kind(name), "--outputs")
+        if output_kind(name) == "ids":
+            check_id_count(ids, path, "--outputs")
+
+
+def _write_outputs(out: Path, frame: dict, names: tuple[str, ...]) -> None:
+    from vkpbr.app.output import output_kind, write_output
+
+    for name in names:
+        write_output(_output_path(out, name), frame[name], output_kind(name), "--outputs")
 
 
 def list_views() -> int:
@@ -99,14 +140,22 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
         base = camera_from_args(args, renderer)
         cameras = [pose.camera(base) for pose in poses]
         lights = lights_from_args(args, renderer, options)
+        names = args.outputs or ()
+        if names:
+            _check_outputs(out_dir / f"frame_00000{suffix}", names, len(renderer.instances))
         t1 = time.perf_counter()
         log.info("load + set-up %.2f s", t1 - t0)
         with ThreadPoolExecutor(max(2, (os.cpu_count() or 2) - 1)) as pool:
             jobs = []
-            frames = renderer.render_many(cameras, lights, size, options, linear=args.linear)
+            frames = renderer.render_many(cameras, lights, size, options, linear=args.linear,
+                                          outputs=("color", *names) if names else None)
             bar = tqdm(frames, total=len(cameras), unit="frame", disable=True if is_quiet() else None)
             for i, image in enumerate(bar):
-                jobs.append(pool.submit(write_image_atomic, out_dir / f"frame_{i:05d}{suffix}", image))
+                path = out_dir / f"frame_{i:05d}{suffix}"
+                if names:
+                    jobs.append(pool.submit(_write_outputs, path, image, names))
+                    image = image["color"]
+                jobs.append(pool.submit(write_image_atomic, path, image))
             t2 = time.perf_counter()
             for job in jobs:
                 job.result()
@@ -153,6 +202,12 @@ def run(args: argparse.Namespace) -> int:
         camera = camera_from_args(args, renderer)
         lights = lights_from_args(args, renderer, options)
         log.debug("camera %s, lights %s", camera, lights)
+        names = args.outputs or ()
+        if names:
+            _check_outputs(out, names, len(renderer.instances))
+            frame = renderer.render(camera, lights, size, options, linear=args.linear,
+                                    outputs=("color", *names))
+            _write_outputs(out, frame, names)
         image = renderer.render(camera, lights, size, options, linear=args.linear)
         t_first = time.perf_counter()
         per_frame = []
@@ -164,7 +219,8 @@ def run(args: argparse.Namespace) -> int:
         device_name = renderer.device.info.name
     write_image_atomic(out, image)
     t_write = time.perf_counter()
-    say(f"wrote {out} ({size[0]}x{size[1]}, view {options.view}, {device_name})")
+    extra = "".join(f", {_output_path(out, n).name}" for n in (args.outputs or ()))
+    say(f"wrote {out}{extra} ({size[0]}x{size[1]}, view {options.view}, {device_name})")
     timing = (f"load {t_load - t0:.2f} s, set-up {t_setup - t_load:.2f} s, "
               f"first frame {1e3 * (t_first - t_setup):.1f} ms")
     if per_frame:

@@ -124,12 +124,13 @@ def end_rendering(cmd: Commands) -> None:
 
 
 def copy_image_to_buffer(cmd: Commands, image: Any, depth: bool, buffer: Any,
-                         extent: tuple[int, int]) -> None:
-    """Copy mip 0 of `image` (in TRANSFER_SRC layout) tightly packed into `buffer`."""
+                         extent: tuple[int, int], general: bool = False) -> None:
+    """Copy mip 0 of `image` (in TRANSFER_SRC layout, or GENERAL) tightly packed into `buffer`."""
     vk = cmd.vk
     aspect = vk.VK_IMAGE_ASPECT_DEPTH_BIT if depth else vk.VK_IMAGE_ASPECT_COLOR_BIT
+    layout = vk.VK_IMAGE_LAYOUT_GENERAL if general else vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
     vk.vkCmdCopyImageToBuffer(
-        cmd.handle, image, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer.handle, 1,
+        cmd.handle, image, layout, buffer.handle, 1,
         [vk.VkBufferImageCopy(
             bufferOffset=0, imageSubresource=vk.VkImageSubresourceLayers(
                 aspectMask=aspect, mipLevel=0, baseArrayLayer=0, layerCount=1),

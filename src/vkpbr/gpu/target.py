@@ -38,11 +38,14 @@ from vkpbr.gpu.rendering import (
     image_barrier,
 )
 
-__all__ = ["FrameTarget", "OffscreenTarget", "COLOR_FORMATS", "COPY_COLOR", "COPY_DEPTH"]
+__all__ = ["FrameTarget", "OffscreenTarget", "COLOR_FORMATS", "COPY_COLOR", "COPY_DEPTH", "COPY_OUTPUTS"]
 
 # Colour formats by name: "srgb" for display images, "float" for linear HDR values.
 COLOR_FORMATS = {"srgb": ("VK_FORMAT_R8G8B8A8_SRGB", 4), "float": ("VK_FORMAT_R32G32B32A32_SFLOAT", 16)}
-COPY_COLOR, COPY_DEPTH = "color", "depth"
+COPY_COLOR, COPY_DEPTH, COPY_OUTPUTS = "color", "depth", "outputs"
+# The dataset outputs' images (render/layouts.py OUTPUT_IMAGES): Vulkan format names and
+# bytes a pixel, by GLSL name; their clear values: ids 0, normals 0, distances +inf.
+_INF = float("inf")
 
 
 class FrameTarget(Protocol):
@@ -187,19 +190,96 @@ class OffscreenTarget:
             (stage, vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT),
             (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT))])
 
-    def record_resume(self, cmd: Commands) -> None:
-        """After the compute shading: render on into the shaded colour image and the
-        visibility pass's depth (blended draws, overlays), as record_begin would have."""
+    def record_resume(self, cmd: Commands, clear: bool = False) -> None:
+        """After the compute steps: render on into the colour image (the shaded one, or
+        `clear`ed for the fragment path's passes) over the visibility pass's depth."""
         vk = self.device.vk
         stage, access, layout = attachment_stage(vk, False)
         barriers(cmd, [image_barrier(
             vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_GENERAL, layout,
             (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT),
             (stage, access))])
-        begin_rendering(cmd, self.attachments, None, None)
+        begin_rendering(cmd, self.attachments, self.clear_color if clear else None, None)
+
+    # --- dataset outputs (render/compute_path.py writes them) ---------------------------------
+    outputs: dict[str, tuple[Image, ImageView]] | None = None
+
+    def ensure_outputs(self, formats: dict[str, tuple[str, int]]) -> bool:
+        """Make the outputs' images (`formats`: GLSL name -> (Vulkan format name, bytes a
+        pixel)) on first use; True when they were made now."""
+        if self.outputs is not None:
+            return False
+        vk = self.device.vk
+        w, h = self.extent
+        usage = (vk.VK_IMAGE_USAGE_STORAGE_BIT | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT
+                 | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT)
+        self.outputs = {}
+        self._output_bytes = {}
+        for name, (fmt, nbytes) in formats.items():
+            image = self._own(Image(self.device, w, h, getattr(vk, fmt), usage, name=name))
+            self.outputs[name] = (image, self._own(ImageView(image)))
+            self._output_bytes[name] = nbytes
+        self._output_readbacks: dict[int, dict[str, Buffer]] = {}
+        return True
+
+    def record_outputs_clear(self, cmd: Commands) -> None:
+        """Clear the outputs (ids and normals 0, distances +inf) for this frame's writes, after
+        the previous frame's copies of them."""
+        vk = self.device.vk
+        transfer = vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT
+        general = vk.VK_IMAGE_LAYOUT_GENERAL
+        images = [img for img, _ in self.outputs.values()]  # type: ignore[union-attr]
+        barriers(cmd, [image_barrier(vk, img.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED, general,
+                                     (transfer, 0), (transfer, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT))
+                       for img in images])
+        full = vk.VkImageSubresourceRange(aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0,
+                                          levelCount=1, baseArrayLayer=0, layerCount=1)
+        for name, (img, _) in self.outputs.items():  # type: ignore[union-attr]
+            value = (vk.VkClearColorValue(uint32=[0, 0, 0, 0]) if name == "out_ids" else
+                     vk.VkClearColorValue(float32=[_INF, _INF, 0.0, 0.0]) if name == "out_depth_range"
+                     else vk.VkClearColorValue(float32=[0.0, 0.0, 0.0, 0.0]))
+            vk.vkCmdClearColorImage(cmd.handle, img.handle, general, value, 1, [full])
+        compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT)
+        barriers(cmd, [image_barrier(vk, img.handle, False, general, general,
+                                     (transfer, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT), compute)
+                       for img in images])
+
+    def _record_outputs_copy(self, cmd: Commands, frame: Frame) -> None:
+        vk = self.device.vk
+        general = vk.VK_IMAGE_LAYOUT_GENERAL
+        xfer = (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT)
+        compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT)
+        outputs = self.outputs or {}
+        barriers(cmd, [image_barrier(vk, img.handle, False, general, general, compute, xfer)
+                       for img, _ in outputs.values()])
+        buffers = self._outputs_readback(frame.index)
+        for name, (img, _) in outputs.items():
+            copy_image_to_buffer(cmd, img.handle, False, buffers[name], self.extent, general=True)
+        barriers(cmd, [], [host_read_barrier(vk, b) for b in buffers.values()])
+
+    def _outputs_readback(self, frame_index: int) -> dict[str, Buffer]:
+        if frame_index not in self._output_readbacks:
+            n = self.extent[0] * self.extent[1]
+            usage = self.device.vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
+            self._output_readbacks[frame_index] = {
+                name: self._own(Buffer(self.device, n * nbytes, usage, host_visible=True,
+                                       name=f"{name} readback {frame_index}"))
+                for name, nbytes in self._output_bytes.items()}
+        return self._output_readbacks[frame_index]
+
+    def read_outputs(self, frame_index: int, dtypes: dict[str, tuple[str, int]]) -> dict[str, np.ndarray]:
+        """Copies of the frame's outputs: GLSL name -> (H, W, channels) array of `dtypes`'
+        (NumPy dtype name, channels)."""
+        w, h = self.extent
+        buffers = self._outputs_readback(frame_index)
+        return {name: buffers[name].array(np.dtype(dt), w * h * ch).reshape(h, w, ch).copy()
+                for name, (dt, ch) in dtypes.items()}
 
     def record_end(self, cmd: Commands, image: int, frame: Frame, copy: tuple[str, ...]) -> None:
         end_rendering(cmd)
+        if COPY_OUTPUTS in copy:
+            self._record_outputs_copy(cmd, frame)
+            copy = tuple(c for c in copy if c != COPY_OUTPUTS)
         if not copy:
             return
         vk = self.device.vk

@@ -37,6 +37,8 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("pbr_vis_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1), ("VISIBILITY", 1))),
     *(Variant(f"shade_{m.name.lower()}.comp.spv", "shade.comp",
               (("TBN_MODE", int(m)), ("COMPUTE_SHADING", 1))) for m in L.TbnMode),
+    *(Variant(f"shade_outputs_{m.name.lower()}.comp.spv", "shade.comp",
+              (("TBN_MODE", int(m)), ("COMPUTE_SHADING", 1), ("OUTPUTS", 1))) for m in L.TbnMode),
     *(Variant(f"classify_{name}{'' if agg else '_plain'}.comp.spv", "classify.comp",
               (("COMPUTE_SHADING", 1), ("KERNEL", k), ("AGGREGATE", agg)))
       for k, name in ((1, "count"), (2, "offsets"), (3, "scatter")) for agg in (1, 0)

@@ -68,6 +68,10 @@ class _TargetResources:
                    "BinArgs": self.args, "PixelList": self.pixels,
                    "Materials": scene.material_table}
         images = {"out_image": target.storage_view, "visibility": target.visibility_view}
+        # The dataset outputs' images once the target has them, else 1x1 stand-ins (no kernel
+        # but the outputs one touches them; every binding is written all the same).
+        outputs = getattr(target, "outputs", None) or scene.output_stand_ins()
+        images.update({name: view for name, (_, view) in outputs.items()})
         sizes = {b.name: b.size for b in L.BLOCKS}
         writer = DescriptorWriter(dev)
         for dset, slot in zip(self.sets, slots, strict=True):
@@ -103,6 +107,10 @@ class ComputeScene:
             m = d.push.reshape(2, 4, 4)
             draws[i]["model"], draws[i]["normal_matrix"] = m[0], m[1]
             draws[i]["info"] = (d.first_index, d.vertex_offset, d.material, int(gs.has_colors))
+        # Dataset ids: instance = the draw's index + 1 (one node's mesh: Renderer.instances),
+        # semantic = its mesh's index + 1 (0 is the background for both).
+        for i, d in enumerate(gs.draws):
+            draws[i]["ids"] = (i + 1, d.mesh + 1, 0, 0)
         self.draw_table = self._own(upload_buffer(device, draws, "storage", name="draw records"))
         table = np.zeros(len(gs.material_blocks), L.MATERIAL.dtype)  # np.stack drops padding
         for i, block in enumerate(gs.material_blocks):
@@ -120,6 +128,7 @@ class ComputeScene:
         self.aggregate = device.info.kind != "cpu"
         # Which materials any opaque or masked draw uses: only those get a shading dispatch.
         self._pipelines: dict[str, ComputePipeline] = {}
+        self._stand_ins: dict[str, tuple[Any, Any]] | None = None
         self._targets: dict[int, _TargetResources] = {}
 
     def _own(self, obj: Any) -> Any:
@@ -141,11 +150,25 @@ class ComputeScene:
         return self._targets[key]
 
     # --- recording --------------------------------------------------------------------------
+    def output_stand_ins(self) -> dict[str, tuple[Any, Any]]:
+        """1x1 images of the outputs' formats, bound where a target has no outputs yet."""
+        if self._stand_ins is None:
+            from vkpbr.gpu.image import Image, ImageView
+
+            vk = self.device.vk
+            self._stand_ins = {}
+            for name, (fmt, _, _, _) in L.OUTPUT_IMAGES.items():
+                image = self._own(Image(self.device, 1, 1, getattr(vk, fmt),
+                                        vk.VK_IMAGE_USAGE_STORAGE_BIT, name=f"{name} stand-in"))
+                self._stand_ins[name] = (image, self._own(ImageView(image)))
+        return self._stand_ins
+
     def record_shading(self, cmd: Any, target: Any, frame_index: int, tbn: L.TbnMode,
                        frame_sets: dict[int, Any], material_sets: list[Any], materials: list[int],
-                       clear_color: tuple[float, ...]) -> None:
+                       clear_color: tuple[float, ...], shade: bool = True) -> None:
         """Classify the visibility image's pixels by material, then shade each material of
-        `materials` (those the visibility pass drew) with its own set 1 bound."""
+        `materials` (those the visibility pass drew) with its own set 1 bound (`shade`
+        False: classify only, for the outputs of a fragment-path frame)."""
         res = self._resources(target)
         compute_set = res.sets[frame_index]
         cmd.fill(res.bins, 0)
@@ -162,8 +185,25 @@ class ComputeScene:
             cmd.push(push)
             cmd.dispatch(*size)
             cmd.memory_barrier("compute", "compute|indirect")
-        cmd.bind_pipeline(self._pipeline(f"shade_{tbn.name.lower()}", 16))
-        self._bind_frame_sets(cmd, frame_sets, None, compute_set)
+        if shade:
+            self._dispatch_bins(cmd, res, frame_index, f"shade_{tbn.name.lower()}", frame_sets,
+                                material_sets, materials)
+
+    def record_outputs(self, cmd: Any, target: Any, frame_index: int, tbn: L.TbnMode,
+                       frame_sets: dict[int, Any], material_sets: list[Any],
+                       materials: list[int]) -> None:
+        """Write the dataset outputs (ids, normals, distances) of the classified pixels:
+        shade.comp's OUTPUTS variant, per material (the shading normal reads its normal map)."""
+        cmd.memory_barrier("compute", "compute")  # after the shading kernels' image writes
+        self._dispatch_bins(cmd, self._resources(target), frame_index,
+                            f"shade_outputs_{tbn.name.lower()}", frame_sets, material_sets,
+                            materials)
+
+    def _dispatch_bins(self, cmd: Any, res: _TargetResources, frame_index: int, kernel: str,
+                       frame_sets: dict[int, Any], material_sets: list[Any],
+                       materials: list[int]) -> None:
+        cmd.bind_pipeline(self._pipeline(kernel, 16))
+        self._bind_frame_sets(cmd, frame_sets, None, res.sets[frame_index])
         material = np.zeros(4, np.uint32)
         for m in materials:
             cmd.bind_set(1, material_sets[m])

@@ -60,6 +60,9 @@ class FrameSlot:
     lighting_key: tuple | None = None  # inputs of the Lighting block last written here
     lights_written: tuple = ()  # (lights, shadow rows' bytes) of the records the slot holds
     znear: float = 0.0  # the near plane last written (depth readback is znear / depth)
+    # World-from-camera rotation of the frame's camera (OpenGL axes as columns: right, up,
+    # backward): the dataset outputs' camera-space normals.
+    camera_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
     stats: FrameStats = field(default_factory=FrameStats)
 
 
@@ -174,6 +177,9 @@ def write_frame_uniforms(slot: FrameSlot, camera: Camera, lights: tuple[Light, .
         znear, zfar = depth_range(camera, bounds.corners, bounds.radius, f)
         slot.znear = znear
         vp = view_projection_columns(camera, size, znear, f)
+        right = np.cross(f, camera.up)
+        right /= np.linalg.norm(right)
+        slot.camera_rotation = np.stack([right, np.cross(right, f), -np.asarray(f)], axis=1)
         # The compute path's pixel rays: world from clip (column-major, as VP).
         inv = np.linalg.inv(np.array(vp, dtype=np.float64).reshape(4, 4).T).T.ravel()
         L.CAMERA.pack_into(slot.m_camera, VP=vp, inv_VP=inv.tolist())

@@ -59,6 +59,7 @@ class Draw:
     alpha_mode: str  # the material's: "opaque" | "mask" | "blend" (render/passes.py classifies)
     double_sided: bool
     casts_shadows: bool = True  # drawn into shadow maps (Material.casts_shadows)
+    node: int = -1  # the scene node it draws (the dataset outputs' instance table)
     center: np.ndarray = field(default_factory=lambda: np.zeros(3))  # world, for blend sorting
 
 
@@ -417,7 +418,7 @@ class GpuScene:
     # --- draws ------------------------------------------------------------------------------
     def _build_draws(self) -> list[Draw]:
         draws = []
-        for node in self.scene.nodes:
+        for node_index, node in enumerate(self.scene.nodes):
             if not 0 <= node.mesh < len(self.scene.meshes):
                 continue
             mesh = self.scene.meshes[node.mesh]
@@ -435,7 +436,7 @@ class GpuScene:
                 vertex_offset=int(self.vertex_offsets[node.mesh]),
                 push=np.ascontiguousarray(push, dtype=np.float32), alpha_mode=mat.alpha_mode,
                 double_sided=bool(mat.double_sided), casts_shadows=bool(mat.casts_shadows),
-                center=m[:3, :3] @ center_local + m[:3, 3],
+                center=m[:3, :3] @ center_local + m[:3, 3], node=node_index,
             ))
         draws.sort(key=lambda d: d.material)  # fewer material binds within each pass
         return draws

@@ -44,6 +44,7 @@ __all__ = [
     "DRAW_RECORD",
     "WRITABLE_STORAGE",
     "VISIBILITY_FORMAT",
+    "OUTPUT_IMAGES",
     "Lighting",
     "MAX_LIGHTS",
     "PUSH",
@@ -275,6 +276,7 @@ DRAW_RECORD = Std140Block("DrawRecord", "draw_record", (
     ("model", "mat4"),
     ("normal_matrix", "mat4"),
     ("info", "uvec4"),  # first index, vertex offset, material, 1 if the scene has COLOR_0
+    ("ids", "uvec4"),  # instance id, semantic id (dataset outputs; 0 = background), 0, 0
 ))
 
 STORAGE = {
@@ -324,11 +326,27 @@ COMPUTE_SET: tuple[tuple[int, str, str], ...] = (
     (16, "block", "Settings"),
     (17, "block", "Lighting"),
     (18, "storage", "Materials"),
+    # Dataset outputs (Renderer.render(outputs=...)), written by shade.comp's OUTPUTS variant.
+    (19, "storage_image", "out_ids"),  # instance, semantic
+    (20, "storage_image", "out_normal"),  # world shading normal (normal-mapped)
+    (21, "storage_image", "out_normal_geometric"),  # world interpolated vertex normal
+    (22, "storage_image", "out_depth_range"),  # distance along the view axis, to the eye
 )
 # GLSL declarations of the storage images (their formats and access).
 STORAGE_IMAGES = {
     "out_image": "writeonly uniform image2D",  # format from the view (WriteWithoutFormat)
     "visibility": "layout(rg32ui) readonly uniform uimage2D",
+    "out_ids": "layout(rg32ui) writeonly uniform uimage2D",
+    "out_normal": "writeonly uniform image2D",
+    "out_normal_geometric": "writeonly uniform image2D",
+    "out_depth_range": "writeonly uniform image2D",
+}
+# The dataset outputs' images: name -> (Vulkan format, bytes a pixel, NumPy dtype, channels).
+OUTPUT_IMAGES = {
+    "out_ids": ("VK_FORMAT_R32G32_UINT", 8, "uint32", 2),
+    "out_normal": ("VK_FORMAT_R32G32B32A32_SFLOAT", 16, "float32", 4),
+    "out_normal_geometric": ("VK_FORMAT_R32G32B32A32_SFLOAT", 16, "float32", 4),
+    "out_depth_range": ("VK_FORMAT_R32G32_SFLOAT", 8, "float32", 2),
 }
 VISIBILITY_FORMAT = "VK_FORMAT_R32G32_UINT"
 

@@ -124,7 +124,8 @@ class FrameRecorder:
     # --- command buffers --------------------------------------------------------------------
     def _record(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
                 alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
-                copy: tuple[str, ...], plan: ShadowPlan, compute: bool = False) -> Commands:
+                copy: tuple[str, ...], plan: ShadowPlan, compute: bool = False,
+                outputs: bool = False) -> Commands:
         gs, ring = self.gpu_scene, self.ring
         names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
         gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
@@ -140,34 +141,54 @@ class FrameRecorder:
         ring.stamp(cmd, frame, 1)
         shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
 
-        def context(visibility: bool) -> PassContext:
+        def context(visibility: bool, after_visibility: bool = False,
+                    stamps: bool = True) -> PassContext:
+            # after_visibility: the fragment path's passes over a visibility pass's depth,
+            # which is a depth pre-pass for them (test it, write none).
+            pre = prepass or after_visibility
             return PassContext(
                 draws=gs.draws, classes=classes,
-                pipeline=lambda p: self.pipeline(target, tbn, p, prepass, visibility),
+                pipeline=lambda p: self.pipeline(target, tbn, p, pre, visibility),
                 frame_sets=(slot.set0, slot.set2), material_sets=gs.material_sets,
                 vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
-                blend_order=order, prepass=prepass,
-                stamp=lambda name: ring.stamp(cmd, frame, 1 + STAMP_NAMES.index(name)),
+                blend_order=order, prepass=pre,
+                stamp=(lambda name: ring.stamp(cmd, frame, 1 + STAMP_NAMES.index(name)))
+                if stamps else (lambda name: None),
                 shadow_set=shadow_set)
 
         ctx = context(False)
-        if compute:  # render/compute_path.py: visibility, classification + shading, the rest
+        if compute or outputs:
+            # render/compute_path.py: the visibility pass, the pixels binned by material, then
+            # the compute path's shading (or the fragment path's passes over that depth) and
+            # the dataset outputs' kernel.
             for p in PASSES:
                 if p.prepass:  # no pre-pass here: its slots take no time
                     ctx.stamp(p.name)
+            if outputs:
+                target.record_outputs_clear(cmd)  # type: ignore[attr-defined]
             target.record_visibility_begin(cmd, image)  # type: ignore[attr-defined]
-            record_passes(cmd, context(True), VISIBILITY_PASSES)
+            # The fragment path's own passes follow and take the timestamps.
+            record_passes(cmd, context(True, stamps=compute), VISIBILITY_PASSES)
             target.record_shading_begin(cmd)  # type: ignore[attr-defined]
             drawn = sorted({d.material for d, c in zip(gs.draws, classes, strict=True)
                             if c != "blend"})
             frame_sets = {0: slot.set0, 2: slot.set2}
             if shadow_set is not None:
                 frame_sets[3] = shadow_set
-            self.compute_scene().record_shading(cmd, target, frame.index, tbn, frame_sets,
-                                                gs.material_sets,
-                                                drawn, target.clear_color)  # type: ignore[attr-defined]
-            ctx.stamp("shading")
-            target.record_resume(cmd)  # type: ignore[attr-defined]
+            cs = self.compute_scene()
+            cs.record_shading(cmd, target, frame.index, tbn, frame_sets, gs.material_sets,
+                              drawn, target.clear_color, shade=compute)  # type: ignore[attr-defined]
+            if outputs:
+                cs.record_outputs(cmd, target, frame.index, tbn, frame_sets, gs.material_sets,
+                                  drawn)
+            if compute:
+                ctx.stamp("shading")
+                target.record_resume(cmd)  # type: ignore[attr-defined]
+            else:
+                target.record_resume(cmd, clear=True)  # type: ignore[attr-defined]
+                ctx = context(False, after_visibility=True)
+                record_passes(cmd, ctx, VISIBILITY_PASSES)
+                ctx.stamp("shading")
         else:
             target.record_begin(cmd, image)
             record_passes(cmd, ctx, _BEFORE_SHADING)
@@ -183,7 +204,7 @@ class FrameRecorder:
     def command_buffer(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
                         alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
                         copy: tuple[str, ...], plan: ShadowPlan = _NO_SHADOWS,
-                        compute: bool = False) -> Commands:
+                        compute: bool = False, outputs: bool = False) -> Commands:
         """The command buffer recorded for these inputs, recorded on first use. A buffer is
         used by one frame of the ring only, whose previous submission has finished: it can be
         re-recorded (new blend order) or freed at once. `plan`: the shadow maps' (a new plan
@@ -192,14 +213,14 @@ class FrameRecorder:
         if self._generations.get(tid, target.generation) != target.generation:
             self.free(tid)  # recreated swapchain: its images and buffers are new
         self._generations[tid] = target.generation
-        key = (tid, image, frame.index, tbn, alpha_mask, id(overlay), copy, plan, compute)
+        key = (tid, image, frame.index, tbn, alpha_mask, id(overlay), copy, plan, compute, outputs)
         rec = self._recorded.get(key)
         if rec is not None and rec.blend_order == order:
             return rec.cmd
         if rec is not None:  # the camera moved enough to reorder blended draws
             rec.cmd.free()
         cmd = self._record(target, frame, image, tbn, alpha_mask, order, overlay, copy, plan,
-                           compute)
+                           compute, outputs)
         self._recorded[key] = _Recorded(cmd, order)
         return cmd
 

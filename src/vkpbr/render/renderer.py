@@ -34,7 +34,7 @@ from vkpbr.gpu.device import COMPUTE_PATH_FEATURES, Device, DeviceRequest
 from vkpbr.gpu.frames import Frame, FrameRing
 from vkpbr.gpu.pipeline import PipelineLayout
 from vkpbr.gpu.swapchain import Surface, Swapchain
-from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, FrameTarget, OffscreenTarget
+from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, COPY_OUTPUTS, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
 from vkpbr.render.camera import as_camera, depth_range, forward, validate_camera
 from vkpbr.render.compute_path import ComputeScene
@@ -411,7 +411,7 @@ class Renderer:
             overlay.prepare(frame.index)
         cmd = self.recorder.command_buffer(target, frame, image, options.tbn, options.alpha_mask,
                                    self.blend_order(camera.eye), overlay, copy, plan,
-                                   self.uses_compute(target, options))
+                                   self.uses_compute(target, options), COPY_OUTPUTS in copy)
         c0 = clock()
         ok = target.submit(frame, cmd, image)
         slot.stats.driver_ms = (driver + clock() - c0) * 1e3
@@ -438,8 +438,9 @@ class Renderer:
         options: RenderOptions | None = None,
         linear: bool = False,
         depth: bool = False,
+        outputs: Iterable[str] | None = None,
         **option_overrides: Any,
-    ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    ) -> np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray]:
         """Render one frame.
 
         Parameters
@@ -452,14 +453,19 @@ class Renderer:
         size : (width, height) in pixels.
         options : RenderOptions; keyword overrides (view="d", brdf="blinn-phong", ...)
             update it.
+        outputs : names from OUTPUTS (dataset outputs, from the same frame: "color", "depth",
+            "range", "instance", "semantic", "normal", "normal_camera", "normal_geometric");
+            a dict of arrays is returned instead (see `frame_outputs`).
 
         Returns
         -------
         (H, W, 4) uint8 sRGB-encoded colour, or (H, W, 4) float32 linear colour when
         `linear`; with `depth`, a tuple (colour, depth) where depth is (H, W) float32
-        view-space distance along the camera axis (inf where nothing was drawn).
+        view-space distance along the camera axis (inf where nothing was drawn); with
+        `outputs`, {name: array}.
         """
-        frames = self.render_many([camera], lights, size, options, linear, depth, **option_overrides)
+        frames = self.render_many([camera], lights, size, options, linear, depth,
+                                  outputs=outputs, **option_overrides)
         return next(iter(frames))
 
     def render_many(
@@ -471,8 +477,9 @@ class Renderer:
         linear: bool = False,
         depth: bool = False,
         readback: bool = True,
+        outputs: Iterable[str] | None = None,
         **option_overrides: Any,
-    ) -> Iterator[np.ndarray | tuple[np.ndarray, np.ndarray] | None]:
+    ) -> Iterator[np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray] | None]:
         """Render one frame per camera, yielding what `render` returns, in order.
 
         Up to `ring.count` frames are queued on the GPU: while frame i renders, Python
@@ -484,7 +491,10 @@ class Renderer:
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
         frame_lights = self.frame_lights(opts, lights)
         target = self.offscreen_target(size, linear)
+        wanted = self._check_outputs(outputs, target)
         copy = ((COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)) if readback else ()
+        if wanted and readback:
+            copy = (*copy, COPY_OUTPUTS)
         base = self.default_camera()
         pending: collections.deque[Frame] = collections.deque()
         try:
@@ -492,19 +502,52 @@ class Renderer:
                 camera = base if camera is None else as_camera(camera, base)
                 validate_camera(camera)
                 if len(pending) == self.ring.count:
-                    yield self._collect(pending.popleft(), target, depth, readback)
+                    yield self._collect(pending.popleft(), target, depth, readback, wanted)
                 sub = self.draw(target, camera, frame_lights, opts, copy=copy, linear=linear,
                                 timings=False)
                 pending.append(sub.frame)  # type: ignore[arg-type] - offscreen: always a frame
             while pending:
-                yield self._collect(pending.popleft(), target, depth, readback)
+                yield self._collect(pending.popleft(), target, depth, readback, wanted)
         finally:
             # An abandoned generator leaves frames queued: finish them before anything reuses them.
             for frame in pending:
                 frame.wait()
 
-    def _collect(self, frame: Frame, target: OffscreenTarget, depth: bool,
-                 readback: bool) -> np.ndarray | tuple[np.ndarray, np.ndarray] | None:
+    def _check_outputs(self, outputs: Iterable[str] | None, target: OffscreenTarget) -> tuple[str, ...]:
+        """The dataset outputs asked for, checked; their images made on first use."""
+        if outputs is None:
+            return ()
+        wanted = tuple(outputs) if not isinstance(outputs, str) else (outputs,)
+        unknown = [n for n in wanted if n not in OUTPUTS]
+        if unknown:
+            raise UsageError(f"unknown output {unknown[0]!r}; choose from {', '.join(OUTPUTS)}")
+        why = self.compute_unavailable(target)
+        if why is not None:
+            raise UsageError(f"dataset outputs are not available here: {why}")
+        formats = {name: (fmt, nbytes) for name, (fmt, nbytes, _, _) in L.OUTPUT_IMAGES.items()}
+        if target.ensure_outputs(formats) and self._compute_scene is not None:
+            # The target's compute set bound stand-ins: rebuild it (and what recorded it).
+            self.device.wait_idle()
+            self.recorder.free()
+            self._compute_scene.forget_target(target)
+        return wanted
+
+    @property
+    def instances(self) -> list[dict[str, Any]]:
+        """What each instance id of the outputs is: [{"id", "node", "mesh", "material",
+        "semantic"}], id = index + 1 (0 is the background). The semantic id is the mesh's
+        index + 1 (each glTF mesh primitive its own)."""
+        gs, scene = self.gpu_scene, self.scene
+        out = []
+        for i, d in enumerate(gs.draws):
+            mesh = scene.meshes[d.mesh]
+            out.append({"id": i + 1, "mesh": mesh.name, "semantic": d.mesh + 1,
+                        "material": gs.materials[d.material].name,
+                        "node": scene.nodes[d.node].name if 0 <= d.node < len(scene.nodes) else ""})
+        return out
+
+    def _collect(self, frame: Frame, target: OffscreenTarget, depth: bool, readback: bool,
+                 outputs: tuple[str, ...] = ()) -> Any:
         slot = self.slots[frame.index]
         stats = slot.stats
         t0 = time.perf_counter()
@@ -517,10 +560,15 @@ class Renderer:
             return None
         color = target.read_color(frame.index)
         out_depth = _linear_depth(target.read_depth(frame.index), slot.znear) if depth else None
+        result: Any = (color, out_depth) if depth else color
+        if outputs:
+            dtypes = {name: (dt, ch) for name, (_, _, dt, ch) in L.OUTPUT_IMAGES.items()}
+            result = frame_outputs(target.read_outputs(frame.index, dtypes), color, outputs,
+                                   slot.camera_rotation)
         stats.readback_ms = (time.perf_counter() - t1) * 1e3
         self.last_stats = dataclasses.replace(stats)
         self.device.check_validation()
-        return (color, out_depth) if depth else color
+        return result
 
     def read_color(self, target: FrameTarget, sub: Submitted) -> np.ndarray:
         """Wait for a frame drawn with copy=(COPY_COLOR,) and return its (H, W, 4) pixels."""
@@ -590,3 +638,38 @@ def _linear_depth(d: np.ndarray, znear: float) -> np.ndarray:
         z = znear / d.astype(np.float64)
     z[d <= 0.0] = np.inf
     return z.astype(np.float32)
+
+
+# Dataset outputs of render(outputs=...): name -> what it is (docs/outputs.md).
+OUTPUTS = {
+    "color": "the frame's colour, as render returns it",
+    "depth": "(H, W) float32 distance along the view axis; inf where nothing was drawn",
+    "range": "(H, W) float32 distance to the camera centre; inf where nothing was drawn",
+    "instance": "(H, W) uint32 instance id: Renderer.instances[id - 1]; 0 = background",
+    "semantic": "(H, W) uint32 semantic id (the mesh's index + 1); 0 = background",
+    "normal": "(H, W, 3) float32 world shading normal (normal-mapped); 0 = background",
+    "normal_camera": "(H, W, 3) float32 the shading normal in camera axes (OpenGL: x right, "
+                     "y up, z towards the viewer); 0 = background",
+    "normal_geometric": "(H, W, 3) float32 world interpolated vertex normal (before normal "
+                        "mapping); 0 = background",
+}
+
+
+def frame_outputs(images: dict[str, np.ndarray], color: np.ndarray, wanted: tuple[str, ...],
+                  camera_rotation: np.ndarray) -> dict[str, np.ndarray]:
+    """The outputs' arrays from the target's output images (render/layouts.py OUTPUT_IMAGES).
+    Blended and background pixels are not in the ids (only what the visibility pass draws:
+    opaque and alpha-masked surfaces, alpha-masked texels cut out as from the colour)."""
+    ids, dr = images["out_ids"], images["out_depth_range"]
+    normal = images["out_normal"][..., :3]
+    available = {
+        "color": lambda: color,
+        "depth": lambda: dr[..., 0].copy(),
+        "range": lambda: dr[..., 1].copy(),
+        "instance": lambda: ids[..., 0].copy(),
+        "semantic": lambda: ids[..., 1].copy(),
+        "normal": lambda: normal.copy(),
+        "normal_camera": lambda: (normal @ camera_rotation).astype(np.float32),
+        "normal_geometric": lambda: images["out_normal_geometric"][..., :3].copy(),
+    }
+    return {name: available[name]() for name in wanted}

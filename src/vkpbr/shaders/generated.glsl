@@ -71,6 +71,7 @@ struct DrawRecord {
     mat4 model;
     mat4 normal_matrix;
     uvec4 info;
+    uvec4 ids;
 };
 struct MaterialRecord {
     vec4 base_color_factor;
@@ -228,6 +229,10 @@ layout(set = 4, binding = 17, std140) readonly buffer Lighting {
 layout(set = 4, binding = 18, std140) readonly buffer Materials {
     MaterialRecord materials[];
 };
+layout(set = 4, binding = 19, rg32ui) writeonly uniform uimage2D out_ids;
+layout(set = 4, binding = 20) writeonly uniform image2D out_normal;
+layout(set = 4, binding = 21) writeonly uniform image2D out_normal_geometric;
+layout(set = 4, binding = 22) writeonly uniform image2D out_depth_range;
 #else  // the compute path has its own push constants
 layout(push_constant, std430) uniform Draw {
     mat4 model;

@@ -134,8 +134,21 @@ void main() {
     // positions themselves.
     s_front_facing = dot(cross(w1 - w0, w2 - w0), eye - w0) > 0.0;
 
+#if OUTPUTS
+    // Dataset outputs (Renderer.render(outputs=...)): ids, normals, distances of this point.
+    vec3 frame_ng, frame_t, frame_b, frame_n;
+    surface_frame(u(settings.flags), u(MAT.flags), frame_ng, frame_t, frame_b, frame_n);
+    ivec2 at = ivec2(pixel);
+    imageStore(out_ids, at, uvec4(dr.ids.xy, 0u, 0u));
+    imageStore(out_normal, at, vec4(frame_n, 0.0));
+    imageStore(out_normal_geometric, at, vec4(frame_ng, 0.0));
+    vec3 to_point = s_world_pos - eye;
+    imageStore(out_depth_range, at, vec4(dot(to_point, settings.camera_forward.xyz),
+                                         length(to_point), 0.0, 0.0));
+#else
     vec4 value = shade_surface();
     // The storage view is UNORM: encode sRGB here, as the attachment would (shade_surface
     // pre-linearised data views for an sRGB target, exactly as for the fragment path).
     imageStore(out_image, ivec2(pixel), srgb_target ? vec4(linear_to_srgb(value.rgb), value.a) : value);
+#endif
 }

@@ -50,6 +50,25 @@ vec4 surface_base_color() {
     return SAMPLE(base_color) * MAT.base_color_factor * s_color;
 }
 
+// The surface's frame: ng the interpolated vertex normal, t and b the tangent and bitangent
+// (back faces of double-sided materials see the whole frame flipped), n the shading normal
+// (normal-mapped when the material and the settings say so). The outputs kernel writes them.
+void surface_frame(uint settings_flags, uint material_flags, out vec3 ng, out vec3 t,
+                   out vec3 b, out vec3 n) {
+    ng = safe_normalize(s_normal, vec3(0.0, 0.0, 1.0));
+    t = safe_normalize(s_tangent, vec3(1.0, 0.0, 0.0));
+    b = safe_normalize(s_bitangent, cross(ng, t));
+    if ((material_flags & MATERIAL_DOUBLE_SIDED) != 0u && !s_front_facing) {
+        ng = -ng; t = -t; b = -b;
+    }
+    n = ng;
+    if ((settings_flags & SETTINGS_NORMAL_MAPPING) != 0u && (material_flags & MATERIAL_HAS_NORMAL_MAP) != 0u) {
+        vec3 tn = SAMPLE(normal).xyz * 2.0 - 1.0;  // linear (UNORM) texture
+        tn.xy *= MAT.normal_scale;
+        n = safe_normalize(mat3(t, b, ng) * tn, ng);
+    }
+}
+
 vec4 shade_surface() {
     uint settings_flags = u(settings.flags);
     uint material_flags = u(MAT.flags);
@@ -68,19 +87,8 @@ vec4 shade_surface() {
     }
     vec3 emissive = SAMPLE(emissive).rgb * MAT.emissive_factor;
 
-    // Tangent frame: back faces of double-sided materials see the whole frame flipped.
-    vec3 ng = safe_normalize(s_normal, vec3(0.0, 0.0, 1.0));
-    vec3 t = safe_normalize(s_tangent, vec3(1.0, 0.0, 0.0));
-    vec3 b = safe_normalize(s_bitangent, cross(ng, t));
-    if ((material_flags & MATERIAL_DOUBLE_SIDED) != 0u && !s_front_facing) {
-        ng = -ng; t = -t; b = -b;
-    }
-    vec3 n = ng;
-    if ((settings_flags & SETTINGS_NORMAL_MAPPING) != 0u && (material_flags & MATERIAL_HAS_NORMAL_MAP) != 0u) {
-        vec3 tn = SAMPLE(normal).xyz * 2.0 - 1.0;  // linear (UNORM) texture
-        tn.xy *= MAT.normal_scale;
-        n = safe_normalize(mat3(t, b, ng) * tn, ng);
-    }
+    vec3 ng, t, b, n;
+    surface_frame(settings_flags, material_flags, ng, t, b, n);
 
     vec3 v = safe_normalize(lighting.view_pos.xyz - s_world_pos, ng);
     float view_depth = dot(s_world_pos - lighting.view_pos.xyz, settings.camera_forward.xyz);
