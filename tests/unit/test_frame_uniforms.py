@@ -123,3 +123,28 @@ def test_near_plane_follows_the_bounds() -> None:
     own = Camera(eye=(0.0, 0.0, 100.0), target=(0.0, 0.0, 0.0), znear=3.0)
     assert near_plane(own, b.corners, b.radius) == 3.0
     assert depth_range(far, b.corners, b.radius)[1] == pytest.approx(101.0)  # farthest corner
+
+
+def test_inverse_view_projection_is_the_inverse() -> None:
+    """camera_frame_columns' closed-form inverse (the compute path's pixel rays) equals
+    NumPy's inverse of VP, for cameras anywhere, with and without pixel intrinsics; the
+    rotation is orthonormal with columns right, up, backward."""
+    from vkpbr.render.camera import camera_frame_columns, forward
+
+    rng = np.random.default_rng(11)
+    for i in range(200):
+        eye = tuple(rng.uniform(-50, 50, 3))
+        target = tuple(np.add(eye, rng.normal(size=3)))
+        cam = Camera(eye=eye, target=target, yfov_deg=float(rng.uniform(5, 150)))
+        if i % 2:
+            fy = float(rng.uniform(50, 900))
+            cam = dataclasses.replace(cam, yfov_deg=float(np.degrees(2 * np.arctan(240 / fy))),
+                                      pixel_intrinsics=(float(rng.uniform(50, 900)), fy,
+                                                        float(rng.uniform(0, 640)),
+                                                        float(rng.uniform(0, 480)), 640, 480))
+        vp, inv, rot = camera_frame_columns(cam, (640, 480), float(rng.uniform(1e-4, 1.0)))
+        m = np.array(vp).reshape(4, 4).T
+        np.testing.assert_allclose(np.array(inv).reshape(4, 4).T @ m, np.eye(4), atol=1e-9)
+        r = np.array(rot).reshape(3, 3).T
+        np.testing.assert_allclose(r.T @ r, np.eye(3), atol=1e-12)
+        np.testing.assert_allclose(-r[:, 2], forward(cam), atol=1e-12)

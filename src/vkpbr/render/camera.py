@@ -18,6 +18,7 @@ from vkpbr.scene.camera import as_camera, format_camera, parse_camera, validate_
 from vkpbr.scene.types import Camera
 
 __all__ = ["look_at", "perspective", "forward", "view_projection", "view_projection_columns",
+           "camera_frame_columns",
            "projection_terms", "depth_range",
            "parse_camera", "format_camera"]
 
@@ -99,6 +100,20 @@ def view_projection_columns(camera: Camera, size: tuple[int, int], znear: float,
     V, ~5x cheaper than NumPy's array creation and matmul (which is kept for everything else).
     `f`: forward(camera), when the caller has it already.
     """
+    return camera_frame_columns(camera, size, znear, f)[0]
+
+
+def camera_frame_columns(camera: Camera, size: tuple[int, int], znear: float,
+                         f: tuple[float, float, float] | None = None
+                         ) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
+    """(VP, VP's inverse, the camera's rotation), column-major plain floats: what a frame
+    writes when its camera moves, in plain float maths (no NumPy per frame).
+
+    VP: as `view_projection_columns`. Its inverse (world from clip: the compute path's pixel
+    rays), solved from VP's rows below: with q = p - e h and h = Z / znear, s.q = (X - ox W) /
+    sx, u.q = (oy W - Y) / sy, f.q = W. The rotation: world-from-camera in OpenGL axes, the
+    columns right s, up u, backward -f (3 x 3, the outputs' camera-space normals).
+    """
     eye = camera.eye
     f = f or forward(camera)
     s = _unit(_cross(f, (float(camera.up[0]), float(camera.up[1]), float(camera.up[2]))))
@@ -107,10 +122,17 @@ def view_projection_columns(camera: Camera, size: tuple[int, int], znear: float,
     se, ue, fe = _dot3(s, eye), _dot3(u, eye), _dot3(f, eye)
     # V's rows: s (x), u (y), -f (z), with translations -s.e, -u.e, f.e. Rows of P @ V:
     # sx*x - ox*z, -sy*y - oy*z, znear * e3, -z, where -z = f.p - f.e.
-    return (sx * s[0] + ox * f[0], -sy * u[0] + oy * f[0], 0.0, f[0],
-            sx * s[1] + ox * f[1], -sy * u[1] + oy * f[1], 0.0, f[1],
-            sx * s[2] + ox * f[2], -sy * u[2] + oy * f[2], 0.0, f[2],
-            -sx * se - ox * fe, sy * ue - oy * fe, znear, -fe)
+    vp = (sx * s[0] + ox * f[0], -sy * u[0] + oy * f[0], 0.0, f[0],
+          sx * s[1] + ox * f[1], -sy * u[1] + oy * f[1], 0.0, f[1],
+          sx * s[2] + ox * f[2], -sy * u[2] + oy * f[2], 0.0, f[2],
+          -sx * se - ox * fe, sy * ue - oy * fe, znear, -fe)
+    w = tuple(f[i] - s[i] * ox / sx + u[i] * oy / sy for i in range(3))
+    inv = (s[0] / sx, s[1] / sx, s[2] / sx, 0.0,
+           -u[0] / sy, -u[1] / sy, -u[2] / sy, 0.0,
+           eye[0] / znear, eye[1] / znear, eye[2] / znear, 1.0 / znear,
+           w[0], w[1], w[2], 0.0)
+    rotation = (*s, *u, -f[0], -f[1], -f[2])
+    return vp, inv, rotation
 
 
 def depth_range(camera: Camera, corners: Sequence[Sequence[float]], scale: float,

@@ -22,7 +22,7 @@ from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.descriptors import DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
 from vkpbr.render import layouts as L
-from vkpbr.render.camera import depth_range, forward, view_projection_columns
+from vkpbr.render.camera import camera_frame_columns, depth_range, forward
 from vkpbr.render.options import RenderOptions
 from vkpbr.scene.types import Camera, Light
 
@@ -60,9 +60,9 @@ class FrameSlot:
     lighting_key: tuple | None = None  # inputs of the Lighting block last written here
     lights_written: tuple = ()  # (lights, shadow rows' bytes) of the records the slot holds
     znear: float = 0.0  # the near plane last written (depth readback is znear / depth)
-    # World-from-camera rotation of the frame's camera (OpenGL axes as columns: right, up,
-    # backward): the dataset outputs' camera-space normals.
-    camera_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+    # World-from-camera rotation of the frame's camera, column-major (OpenGL axes as columns:
+    # right, up, backward): the dataset outputs' camera-space normals.
+    camera_rotation: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
     stats: FrameStats = field(default_factory=FrameStats)
 
 
@@ -176,13 +176,8 @@ def write_frame_uniforms(slot: FrameSlot, camera: Camera, lights: tuple[Light, .
         f = forward(camera)
         znear, zfar = depth_range(camera, bounds.corners, bounds.radius, f)
         slot.znear = znear
-        vp = view_projection_columns(camera, size, znear, f)
-        right = np.cross(f, camera.up)
-        right /= np.linalg.norm(right)
-        slot.camera_rotation = np.stack([right, np.cross(right, f), -np.asarray(f)], axis=1)
-        # The compute path's pixel rays: world from clip (column-major, as VP).
-        inv = np.linalg.inv(np.array(vp, dtype=np.float64).reshape(4, 4).T).T.ravel()
-        L.CAMERA.pack_into(slot.m_camera, VP=vp, inv_VP=inv.tolist())
+        vp, inv_vp, slot.camera_rotation = camera_frame_columns(camera, size, znear, f)
+        L.CAMERA.pack_into(slot.m_camera, VP=vp, inv_VP=inv_vp)
         flags = L.SETTINGS_NORMAL_MAPPING if opts.normal_mapping else 0
         flags |= L.SETTINGS_OCCLUSION if opts.occlusion else 0
         flags |= 0 if linear else L.SETTINGS_SRGB_TARGET

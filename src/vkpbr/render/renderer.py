@@ -564,7 +564,7 @@ class Renderer:
         if outputs:
             dtypes = {name: (dt, ch) for name, (_, _, dt, ch) in L.OUTPUT_IMAGES.items()}
             result = frame_outputs(target.read_outputs(frame.index, dtypes), color, outputs,
-                                   slot.camera_rotation)
+                                   np.asarray(slot.camera_rotation).reshape(3, 3).T)
         stats.readback_ms = (time.perf_counter() - t1) * 1e3
         self.last_stats = dataclasses.replace(stats)
         self.device.check_validation()
