@@ -135,7 +135,7 @@ class Commands:
                       base_mip: int = 0, mips: int | None = None) -> None:
         """A layout transition and memory dependency on mips [base_mip, base_mip + mips) of
         every layer. Layouts: "undefined", "general", "shader_read", "transfer_src",
-        "transfer_dst"; stages: "none", "compute", "fragment", "transfer" (gpu.compute)."""
+        "transfer_dst"; stages: "none", "compute", "fragment", "sampled" (fragment + compute shaders), "transfer" (gpu.compute)."""
         vk = self.vk
         n = image.mip_levels - base_mip if mips is None else mips
         pipeline_barrier(vk, self.handle, [_barrier(
@@ -143,7 +143,7 @@ class Commands:
             stage_access(vk, src), stage_access(vk, dst), base_mip, n,
             getattr(image, "layers", 1))])
 
-    def blit_mips(self, image: Any, final: str = "shader_read", dst_stage: str = "fragment") -> None:
+    def blit_mips(self, image: Any, final: str = "shader_read", dst_stage: str = "sampled") -> None:
         """Make levels 1.. of every layer by linear blits from level 0, which must be in the
         GENERAL layout after compute writes; leaves the whole chain in `final`."""
         vk = self.vk

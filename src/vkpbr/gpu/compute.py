@@ -37,8 +37,10 @@ STAGES = {
     "compute": ("VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT",
                 ("VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT", "VK_ACCESS_2_SHADER_STORAGE_READ_BIT",
                  "VK_ACCESS_2_SHADER_SAMPLED_READ_BIT")),
-    # Sampled by the frame's shaders: fragment and the compute path's (render/compute_path.py).
-    "fragment": ("VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT|VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT",
+    "fragment": ("VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT",
+                 ("VK_ACCESS_2_SHADER_SAMPLED_READ_BIT", "VK_ACCESS_2_SHADER_STORAGE_READ_BIT")),
+    # Sampled by a frame's shaders: the fragment path's and the compute path's.
+    "sampled": ("VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT|VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT",
                  ("VK_ACCESS_2_SHADER_SAMPLED_READ_BIT", "VK_ACCESS_2_SHADER_STORAGE_READ_BIT")),
     "transfer": ("VK_PIPELINE_STAGE_2_TRANSFER_BIT",
                  ("VK_ACCESS_2_TRANSFER_READ_BIT", "VK_ACCESS_2_TRANSFER_WRITE_BIT")),

@@ -55,7 +55,7 @@ def upload_rgba16f(device: Device, pixels: np.ndarray, usage: int = 0, name: str
             vk.vkCmdCopyBufferToImage(raw, staging.handle, image.handle,
                                       vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
                                       [_region(vk, 0, n, w, h)])
-            cmd.image_barrier(image, "transfer_dst", "shader_read", "transfer", "fragment")
+            cmd.image_barrier(image, "transfer_dst", "shader_read", "transfer", "sampled")
     finally:
         staging.destroy()
     return image

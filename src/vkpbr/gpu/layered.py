@@ -115,8 +115,8 @@ class LayeredDepth:
             (vk.VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT
              | vk.VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT,
              vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT),
-            (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
- vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT))])
+            (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT
+                | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT))])
 
     # --- readback (tests, debugging) -----------------------------------------------------------
     def read(self) -> np.ndarray:
@@ -129,8 +129,8 @@ class LayeredDepth:
                      host_visible=True, name="layered depth readback")
         ro, src = (vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                    vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL)
-        frag = (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
- vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT)
+        frag = (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT
+                | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT)
         xfer = (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT)
         try:
             with device.one_time_commands() as handle:

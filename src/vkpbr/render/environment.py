@@ -268,8 +268,8 @@ class EnvironmentBaker:
                 temp.append(irr_store)
                 self._dispatch(cmd, pool, self.irradiance, src_view, irr_store,
                                _push(spec.irradiance_samples, size, irr_size), irr_size)
-                cmd.image_barrier(spc, "general", "shader_read", "compute", "fragment")
-                cmd.image_barrier(irr, "general", "shader_read", "compute", "fragment")
+                cmd.image_barrier(spc, "general", "shader_read", "compute", "sampled")
+                cmd.image_barrier(irr, "general", "shader_read", "compute", "sampled")
             bake_ms = (time.perf_counter() - t0) * 1e3
             spc_view = ImageView(spc, kind="cube")
             owned.append(spc_view)
