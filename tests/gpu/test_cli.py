@@ -228,8 +228,9 @@ def test_outputs_beside_the_frame(capsys, tmp_path: Path) -> None:
     ids = np.asarray(Image.open(tmp_path / "frame.instance.png"))
     from vkpbr.render.renderer import Renderer
 
-    with Renderer() as r:
+    with Renderer(validation=True) as r:
         want = r.render(size=(48, 36), outputs=("instance",))["instance"]
+        assert r.device.instance.errors == []
     assert np.array_equal(ids.astype(np.uint32), want)
     code, _, err = run(capsys, "render", "--outputs", "albedo")
     assert code == 2 and "unknown output 'albedo'" in err
