@@ -234,3 +234,5 @@ def test_outputs_beside_the_frame(capsys, tmp_path: Path) -> None:
     assert np.array_equal(ids.astype(np.uint32), want)
     code, _, err = run(capsys, "render", "--outputs", "albedo")
     assert code == 2 and "unknown output 'albedo'" in err
+    code, _, err = run(capsys, "render", "--colmap", "--out", str(tmp_path / "c.png"))
+    assert code == 2 and "give --cameras too" in err and err.count("\n") == 1

@@ -76,6 +76,7 @@ def test_spec_forms() -> None:
     ("point:0,1,0:brightness=2", "unknown property"),
     ("point:0,1,0:shadows=maybe", "on or off"),
     ("point:0,1,0:nan", "KEY=VALUE"),
+    ("spot:0,1,0:0,-1,0:outer=200", "200 degrees; a cone half-angle is 0 to 90"),
 ])
 def test_bad_specs_are_one_line(spec: str, message: str) -> None:
     with pytest.raises(UsageError, match=message) as info:

@@ -180,6 +180,8 @@ def run(args: argparse.Namespace) -> int:
     if args.list_views:
         return list_views()
     options = render_options_from_args(args)  # bad values fail here, before any expensive work
+    if args.colmap and not args.cameras:
+        raise UsageError("--colmap writes the cameras of a --cameras batch: give --cameras too")
     if args.cameras:
         return _render_batch(args, options)
     size = args.size

@@ -213,7 +213,7 @@ class Renderer:
         if not self.device.compute_path:
             return "the device lacks " + ", ".join(COMPUTE_PATH_FEATURES)
         if not getattr(target, "compute", False):
-            return "it renders single-sample offscreen targets (not MSAA or a window)"
+            return "it needs a single-sample offscreen target (not MSAA, not a window)"
         return None
 
     def uses_compute(self, target: FrameTarget, options: RenderOptions) -> bool:
@@ -523,7 +523,8 @@ class Renderer:
             raise UsageError(f"unknown output {unknown[0]!r}; choose from {', '.join(OUTPUTS)}")
         why = self.compute_unavailable(target)
         if why is not None:
-            raise UsageError(f"dataset outputs are not available here: {why}")
+            raise UsageError(f"dataset outputs are not available here: the compute path's "
+                             f"visibility pass makes them and {why}")
         formats = {name: (fmt, nbytes) for name, (fmt, nbytes, _, _) in L.OUTPUT_IMAGES.items()}
         if target.ensure_outputs(formats) and self._compute_scene is not None:
             # The target's compute set bound stand-ins: rebuild it (and what recorded it).

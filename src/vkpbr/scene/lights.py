@@ -74,7 +74,10 @@ def _option(light: dict[str, Any], item: str, spec: str) -> None:
     elif key in ("intensity", "range"):
         light[key] = _floats(value, 1, where)[0]
     elif key in ("inner", "outer"):
-        light[f"{key}_cone"] = math.radians(_floats(value, 1, where)[0])
+        degrees = _floats(value, 1, where)[0]
+        if not 0.0 <= degrees <= 90.0:
+            raise UsageError(f"{where}: {degrees:g} degrees; a cone half-angle is 0 to 90")
+        light[f"{key}_cone"] = math.radians(degrees)
     elif key == "falloff":
         if value not in ("none", "inverse-square", "inverse_square"):
             raise UsageError(f"{where}: choose none or inverse-square, not {value!r}")
