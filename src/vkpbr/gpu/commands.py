@@ -92,9 +92,14 @@ class Commands:
         """One VkDrawIndirectCommand at the start of `buffer`."""
         self.vk.vkCmdDrawIndirect(self.handle, buffer.handle, 0, 1, 16)
 
-    def draw(self, vertex_count: int, first_vertex: int = 0) -> None:
+    def draw_indexed_indirect(self, buffer: Buffer, offset: int) -> None:
+        """One VkDrawIndexedIndirectCommand (20 bytes) at `offset` of `buffer` (GPU-written)."""
+        self.vk.vkCmdDrawIndexedIndirect(self.handle, buffer.handle, offset, 1, 20)
+
+    def draw(self, vertex_count: int, first_vertex: int = 0, instances: int = 1,
+             first_instance: int = 0) -> None:
         """Non-indexed draw without vertex buffers (a fullscreen triangle: 3)."""
-        self.vk.vkCmdDraw(self.handle, vertex_count, 1, first_vertex, 0)
+        self.vk.vkCmdDraw(self.handle, vertex_count, instances, first_vertex, first_instance)
 
     # --- compute ----------------------------------------------------------------------------
     def dispatch(self, x: int, y: int = 1, z: int = 1) -> None:
@@ -110,7 +115,8 @@ class Commands:
 
     def memory_barrier(self, src: str, dst: str) -> None:
         """A global memory dependency from stages `src` to `dst`, each "|"-joined words of
-        "transfer", "compute" (storage reads and writes), "indirect" (dispatch sizes)."""
+        "transfer", "compute" (storage reads and writes), "indirect" (dispatch sizes, draws),
+        "vertex" (storage reads in vertex shaders)."""
         vk = self.vk
         stages = {
             "transfer": (vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT),
@@ -118,6 +124,9 @@ class Commands:
                         vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT),
             "indirect": (vk.VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
                          vk.VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT),
+            # Storage buffers read by vertex shaders (a batch's lists of visible views).
+            "vertex": (vk.VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
+                       vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT),
         }
 
         def mask(words: str) -> tuple[int, int]:

@@ -162,6 +162,9 @@ class Device:
         self.layered_shadows = bool(supported["shaderOutputLayer"]
                                     and supported["shaderDrawParameters"])
         self.image_cube_array = bool(supported["imageCubeArray"])
+        # Batched views (render/batch.py): layered rendering as the shadows', and indirect
+        # draws whose firstInstance starts each draw's list of visible views.
+        self.batch_views = bool(self.layered_shadows and supported["drawIndirectFirstInstance"])
         on = {True: vk.VK_TRUE, False: vk.VK_FALSE}
         # maintenance4 (required of Vulkan 1.3): glslc's vulkan1.3 compute shaders declare
         # their work-group size with LocalSizeId, which needs it.
@@ -181,6 +184,7 @@ class Device:
         core = vk.VkPhysicalDeviceFeatures(
             samplerAnisotropy=vk.VK_TRUE if self.anisotropy else vk.VK_FALSE,
             imageCubeArray=on[self.image_cube_array], geometryShader=on[self.compute_path],
+            drawIndirectFirstInstance=on[self.batch_views],
             shaderStorageImageWriteWithoutFormat=on[self.compute_path])
         features = vk.VkPhysicalDeviceFeatures2(pNext=f11, features=core)
         available = {
@@ -226,6 +230,7 @@ class Device:
         core = f2.features
         return {"samplerAnisotropy": core.samplerAnisotropy,
                 "imageCubeArray": core.imageCubeArray,
+                "drawIndirectFirstInstance": core.drawIndirectFirstInstance,
                 "shaderOutputLayer": f12.shaderOutputLayer,
                 "shaderDrawParameters": f11.shaderDrawParameters,
                 "geometryShader": core.geometryShader,
@@ -234,6 +239,14 @@ class Device:
                     sub.supportedStages & vk.VK_SHADER_STAGE_COMPUTE_BIT))}
 
     # --- helpers ----------------------------------------------------------------------------
+    def local_memory_bytes(self) -> int:
+        """The size of the largest device-local memory heap (a CPU device's is host memory)."""
+        mp = self.memory_properties
+        vk = self.vk
+        sizes = [mp.memoryHeaps[i].size for i in range(mp.memoryHeapCount)
+                 if mp.memoryHeaps[i].flags & vk.VK_MEMORY_HEAP_DEVICE_LOCAL_BIT]
+        return int(max(sizes, default=1 << 30))
+
     def format_supports(self, format: int, feature: str) -> bool:
         """Whether optimal-tiling images of `format` support `feature`, a
         VkFormatFeatureFlagBits name without its prefix and suffix ("SAMPLED_IMAGE_FILTER_LINEAR")."""

@@ -61,9 +61,10 @@ def attachment_stage(vk: Any, depth: bool) -> tuple[int, int, int]:
 
 
 def begin_rendering(cmd: Commands, att: Attachments, clear_color: tuple[float, ...] | None,
-                    clear_depth: float | None, store_depth: bool = True) -> None:
+                    clear_depth: float | None, store_depth: bool = True, layers: int = 1) -> None:
     """Begin dynamic rendering over `att` (cleared, or loaded where a clear value is None),
-    and set the viewport and scissor to the whole extent."""
+    and set the viewport and scissor to the whole extent. `layers` > 1: layered rendering
+    into 2D-array views (the vertex shader picks the layer, gl_Layer)."""
     vk = cmd.vk
     store, dont = vk.VK_ATTACHMENT_STORE_OP_STORE, vk.VK_ATTACHMENT_STORE_OP_DONT_CARE
     clear, load = vk.VK_ATTACHMENT_LOAD_OP_CLEAR, vk.VK_ATTACHMENT_LOAD_OP_LOAD
@@ -92,7 +93,7 @@ def begin_rendering(cmd: Commands, att: Attachments, clear_color: tuple[float, .
     w, h = att.extent
     area = vk.VkRect2D(offset=vk.VkOffset2D(0, 0), extent=vk.VkExtent2D(w, h))
     vk.vkCmdBeginRendering(cmd.handle, vk.VkRenderingInfo(
-        renderArea=area, layerCount=1, pColorAttachments=[color], pDepthAttachment=depth))
+        renderArea=area, layerCount=layers, pColorAttachments=[color], pDepthAttachment=depth))
     vk.vkCmdSetViewport(cmd.handle, 0, 1, [vk.VkViewport(
         x=0, y=0, width=w, height=h, minDepth=0.0, maxDepth=1.0)])
     vk.vkCmdSetScissor(cmd.handle, 0, 1, [area])
@@ -124,16 +125,18 @@ def end_rendering(cmd: Commands) -> None:
 
 
 def copy_image_to_buffer(cmd: Commands, image: Any, depth: bool, buffer: Any,
-                         extent: tuple[int, int], general: bool = False) -> None:
-    """Copy mip 0 of `image` (in TRANSFER_SRC layout, or GENERAL) tightly packed into `buffer`."""
+                         extent: tuple[int, int], general: bool = False, layers: int = 1,
+                         offset: int = 0) -> None:
+    """Copy mip 0 of `image` (in TRANSFER_SRC layout, or GENERAL), layers 0..`layers`-1,
+    tightly packed into `buffer` from byte `offset` on."""
     vk = cmd.vk
     aspect = vk.VK_IMAGE_ASPECT_DEPTH_BIT if depth else vk.VK_IMAGE_ASPECT_COLOR_BIT
     layout = vk.VK_IMAGE_LAYOUT_GENERAL if general else vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
     vk.vkCmdCopyImageToBuffer(
         cmd.handle, image, layout, buffer.handle, 1,
         [vk.VkBufferImageCopy(
-            bufferOffset=0, imageSubresource=vk.VkImageSubresourceLayers(
-                aspectMask=aspect, mipLevel=0, baseArrayLayer=0, layerCount=1),
+            bufferOffset=offset, imageSubresource=vk.VkImageSubresourceLayers(
+                aspectMask=aspect, mipLevel=0, baseArrayLayer=0, layerCount=layers),
             imageExtent=vk.VkExtent3D(width=extent[0], height=extent[1], depth=1))])
 
 

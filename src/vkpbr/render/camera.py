@@ -151,3 +151,62 @@ def depth_range(camera: Camera, corners: Sequence[Sequence[float]], scale: float
     znear = float(camera.znear) if camera.znear is not None else max(0.5 * min(depths), 1e-5 * scale)
     zfar = float(camera.zfar) if camera.zfar is not None else max(max(depths), 2.0 * znear)
     return znear, zfar
+
+
+def _unique_tan_terms(yfov_deg: np.ndarray) -> np.ndarray:
+    """1 / tan(yfov / 2) per view, with math.tan (as `projection_terms`): NumPy's tan may
+    differ from it in the last bit, and a batch's views must be bit-equal to single frames.
+    Evaluated once per distinct field of view."""
+    values, inverse = np.unique(yfov_deg, return_inverse=True)
+    g = np.array([1.0 / math.tan(math.radians(float(v)) / 2.0) for v in values])
+    return g[inverse.reshape(-1)]
+
+
+def batch_frame_terms(eye: np.ndarray, target: np.ndarray, up: np.ndarray, yfov_deg: np.ndarray,
+                      intrinsics: np.ndarray | None, znear: np.ndarray | None,
+                      zfar: np.ndarray | None, size: tuple[int, int],
+                      corners: Sequence[Sequence[float]], scale: float) -> dict[str, np.ndarray]:
+    """`camera_frame_columns` and `depth_range` for B cameras at once, in the same float
+    operations in the same order (so each view's values equal a single frame's, bit for
+    bit): {"vp": (B, 16) column-major VP, "forward": (B, 3), "znear", "zfar": (B,)}.
+    Arrays as vkpbr.scene.camera_batch.CameraBatch holds them (NaN planes: derived)."""
+    w, h = size
+    d = target - eye
+    f = d / np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])[:, None]
+    c = np.stack([f[:, 1] * up[:, 2] - f[:, 2] * up[:, 1], f[:, 2] * up[:, 0] - f[:, 0] * up[:, 2],
+                  f[:, 0] * up[:, 1] - f[:, 1] * up[:, 0]], 1)
+    s = c / np.sqrt(c[:, 0] * c[:, 0] + c[:, 1] * c[:, 1] + c[:, 2] * c[:, 2])[:, None]
+    u = np.stack([s[:, 1] * f[:, 2] - s[:, 2] * f[:, 1], s[:, 2] * f[:, 0] - s[:, 0] * f[:, 2],
+                  s[:, 0] * f[:, 1] - s[:, 1] * f[:, 0]], 1)
+    g = _unique_tan_terms(yfov_deg)
+    sx, sy = g * h / w, g
+    ox = oy = np.zeros(len(eye))
+    if intrinsics is not None:  # OpenCV K where given (as scene.camera.intrinsics scales it)
+        has = ~np.isnan(intrinsics[:, 0])
+        fx, fy, cx, cy, w0, h0 = (intrinsics[:, i] for i in range(6))
+        kx, ky = w / w0, h / h0
+        fx, fy = fx * kx, fy * ky
+        cx, cy = (cx + 0.5) * kx - 0.5, (cy + 0.5) * ky - 0.5
+        sx = np.where(has, 2.0 * fx / w, sx)
+        sy = np.where(has, 2.0 * fy / h, sy)
+        ox = np.where(has, 2.0 * (cx + 0.5) / w - 1.0, 0.0)
+        oy = np.where(has, 2.0 * (cy + 0.5) / h - 1.0, 0.0)
+
+    def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+    depths = np.stack([f[:, 0] * (cc[0] - eye[:, 0]) + f[:, 1] * (cc[1] - eye[:, 1])
+                       + f[:, 2] * (cc[2] - eye[:, 2]) for cc in corners], 1)
+    near = np.maximum(0.5 * depths.min(axis=1), 1e-5 * scale)
+    if znear is not None:
+        near = np.where(np.isnan(znear), near, znear)
+    far = np.maximum(depths.max(axis=1), 2.0 * near)
+    if zfar is not None:
+        far = np.where(np.isnan(zfar), far, zfar)
+    se, ue, fe = dot(s, eye), dot(u, eye), dot(f, eye)
+    zero = np.zeros(len(eye))
+    vp = np.stack([sx * s[:, 0] + ox * f[:, 0], -sy * u[:, 0] + oy * f[:, 0], zero, f[:, 0],
+                   sx * s[:, 1] + ox * f[:, 1], -sy * u[:, 1] + oy * f[:, 1], zero, f[:, 1],
+                   sx * s[:, 2] + ox * f[:, 2], -sy * u[:, 2] + oy * f[:, 2], zero, f[:, 2],
+                   -sx * se - ox * fe, sy * ue - oy * fe, near, -fe], 1)
+    return {"vp": vp, "forward": f, "znear": near, "zfar": far}

@@ -53,6 +53,14 @@ VARIANTS: tuple[Variant, ...] = (
     *(Variant(f"{n}.comp.spv", f"{n}.comp") for n in (
         "env_equirect", "env_sky", "env_specular", "env_irradiance", "env_brdf_lut")),
     Variant("background.vert.spv", "background.vert"),
+    # Batched views (render/batch.py): the frame's shaders reading each view's ViewRecord,
+    # and the per-view culling kernel writing the instanced indirect draws.
+    *(Variant(f"pbr_batch_{m.name.lower()}.vert.spv", "pbr.vert", (("TBN_MODE", int(m)), ("BATCH", 1)))
+      for m in L.TbnMode),
+    Variant("pbr_batch_opaque.frag.spv", "pbr.frag", (("ALPHA_MASK", 0), ("BATCH", 1))),
+    Variant("pbr_batch_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1), ("BATCH", 1))),
+    Variant("background_batch.vert.spv", "background.vert", (("BATCH", 1),)),
+    Variant("batch_cull.comp.spv", "batch_cull.comp", (("STRUCTS_ONLY", 1),)),
     Variant("background.frag.spv", "background.frag"),
 )
 
@@ -94,6 +102,9 @@ def generated_glsl() -> str:
         return (f"{layout}, {array.layout}) {access}buffer {name} {{\n"
                 f"    {glsl_type} {array.member}[];\n}};")
 
+    # STRUCTS_ONLY: the records without the frame's sets (a kernel with its own bindings,
+    # shaders/batch_cull.comp).
+    out.append("#if !STRUCTS_ONLY")
     for set_index, rows in L.SETS.items():
         if set_index in L.HAND_DECLARED_SETS:
             continue  # set 3: shaders/shadow_data.glsl + shadow_sampling.glsl
@@ -131,6 +142,7 @@ def generated_glsl() -> str:
     out.append("#else  // the compute path has its own push constants")
     out.append(L.PUSH.glsl("layout(push_constant, std430) uniform"))
     out.append("#endif")
+    out.append("#endif  // !STRUCTS_ONLY")
     out += ["", "#endif", ""]
     return "\n".join(out)
 

@@ -115,6 +115,10 @@ def create_slots(
         writer.uniform(set0, 1, buffer, L.SETTINGS.size, settings)
         writer.uniform(set2, 0, buffer, L.LIGHTING.size, lighting)
         writer.storage(set2, 1, lights, LIGHTS_BYTES, i * s_stride)
+        # Stand-ins for the batch's views (render/batch.py binds its own set 0): every
+        # binding written, none read by the frame shaders.
+        writer.storage(set0, 2, lights, LIGHTS_BYTES, i * s_stride)
+        writer.storage(set0, 3, lights, LIGHTS_BYTES, i * s_stride)
         slots.append(FrameSlot(
             index=i, set0=set0, set2=set2,
             m_camera=memoryview(buffer.array(np.uint8, L.CAMERA.size, cam)),

@@ -279,8 +279,21 @@ DRAW_RECORD = Std140Block("DrawRecord", "draw_record", (
     ("ids", "uvec4"),  # instance id, semantic id (dataset outputs; 0 = background), 0, 0
 ))
 
+# One view of a batch (Renderer.render_batch, render/batch.py): what the batch shaders read
+# per view instead of the frame's Camera block and Settings/Lighting camera fields. Only mat4
+# and vec4 members: std140 here is also the std430 layout of the storage array.
+VIEW_RECORD = Std140Block("ViewRecord", "view_record", (
+    ("VP", "mat4"),  # as Camera.VP
+    ("eye_near", "vec4"),  # xyz: the eye (Lighting.view_pos); w: znear (Settings.znear)
+    ("forward_far", "vec4"),  # xyz: unit view direction; w: zfar (Settings.zfar)
+    ("info", "uvec4"),  # x: the layer of the batch target it is drawn into
+))
+
 STORAGE = {
     "Lights": StorageArray("Lights", LIGHT_RECORD, "lights"),
+    # The batch's views and, per (chunk, draw), the views that see the draw (render/batch.py).
+    "Views": StorageArray("Views", VIEW_RECORD, "views"),
+    "VisibleViews": StorageArray("VisibleViews", "uint", "visible_views"),
     "Draws": StorageArray("Draws", DRAW_RECORD, "draws"),
     "Indices": StorageArray("Indices", "uint", "indices"),
     "Positions": StorageArray("Positions", "float", "positions"),  # 3 floats a vertex
@@ -368,6 +381,9 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
     0: (
         (0, "uniform", ("vertex", "compute"), "Camera"),
         (1, "uniform", ("vertex", "fragment", "compute"), "Settings"),
+        # Batched views (render/batch.py): frames bind stand-ins the frame shaders never read.
+        (2, "storage", ("vertex", "fragment"), "Views"),
+        (3, "storage", ("vertex",), "VisibleViews"),
     ),
     1: (
         (0, "sampler", ("fragment", "compute"), "base_color_map"),

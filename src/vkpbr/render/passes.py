@@ -112,6 +112,12 @@ class PassContext:
     prepass: bool = False
     stamp: Callable[[str], None] = lambda name: None  # timestamp after the step `name`
     shadow_set: Any = None  # set 3 (render/shadows.py ShadowMaps.sets), bound when given
+    # A batch (render/batch.py): each draw is the indirect command at (indirect_base + its
+    # index) of `indirect` (instanced over the views that see it), and the fullscreen passes
+    # draw one instance per view of `views` = (first view, count).
+    indirect: Any = None
+    indirect_base: int = 0
+    views: tuple[int, int] | None = None
 
 
 def record_passes(cmd: Commands, ctx: PassContext, names: tuple[str, ...] | None = None) -> None:
@@ -129,7 +135,10 @@ def record_passes(cmd: Commands, ctx: PassContext, names: tuple[str, ...] | None
             cmd.bind_pipeline(ctx.pipeline(p))
             cmd.bind_set(0, ctx.frame_sets[0])
             cmd.bind_set(2, ctx.frame_sets[1])
-            cmd.draw(3)
+            if ctx.views is None:
+                cmd.draw(3)
+            else:
+                cmd.draw(3, instances=ctx.views[1], first_instance=ctx.views[0])
             ctx.stamp(p.name)
             continue
         draws = [(i, d) for i, (d, c) in enumerate(zip(ctx.draws, ctx.classes, strict=True))
@@ -154,4 +163,7 @@ def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[tupl
             cmd.bind_set(1, ctx.material_sets[d.material])
             bound = d.material
         cmd.push(d.push)
-        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset, first_instance=index)
+        if ctx.indirect is not None:
+            cmd.draw_indexed_indirect(ctx.indirect, (ctx.indirect_base + index) * 20)
+        else:
+            cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset, first_instance=index)

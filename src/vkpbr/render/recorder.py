@@ -90,11 +90,13 @@ class FrameRecorder:
 
     # --- pipelines --------------------------------------------------------------------------
     def pipeline(self, target: FrameTarget, tbn: L.TbnMode, p: PassSpec, prepass: bool,
-                 visibility: bool = False) -> Pipeline:
+                 visibility: bool = False, batch: bool = False) -> Pipeline:
         """The pipeline of pass `p` for `target`; `visibility`: its compute-path variant,
-        writing (draw + 1, primitive) with pbr.frag's own coverage instead of a colour."""
+        writing (draw + 1, primitive) with pbr.frag's own coverage instead of a colour;
+        `batch`: its batched-views variant (render/batch.py: the shaders' BATCH builds)."""
         key = (target.color_format, target.depth_format, target.samples,
-               None if p.fullscreen else tbn, p.name, prepass and p.after_prepass, visibility)
+               None if p.fullscreen else tbn, p.name, prepass and p.after_prepass, visibility,
+               batch)
         if key not in self._pipelines:
             gs = self.gpu_scene
             streams = [VertexStream(i, i, fmt, 0 if name == "colors" and not gs.has_colors else None)
@@ -109,6 +111,12 @@ class FrameRecorder:
                 vis = spec.fragment_shader.replace("pbr_", "pbr_vis_")  # type: ignore[union-attr]
                 spec = dataclasses.replace(spec, fragment_shader=vis, blend=False,
                                            color_format=getattr(self.device.vk, L.VISIBILITY_FORMAT))
+            if batch:
+                frag = spec.fragment_shader
+                spec = dataclasses.replace(
+                    spec, vertex_shader=spec.vertex_shader.replace("pbr_", "pbr_batch_").replace(
+                        "background.vert", "background_batch.vert"),
+                    fragment_shader=frag if frag is None else frag.replace("pbr_", "pbr_batch_"))
             self._pipelines[key] = Pipeline(self.device, spec, self.pipeline_layout, SPV_DIR)
         return self._pipelines[key]
 

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from vkpbr.errors import UsageError
+from vkpbr.gpu.batch_target import BatchTarget
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import COMPUTE_PATH_FEATURES, Device, DeviceRequest
 from vkpbr.gpu.frames import Frame, FrameRing
@@ -36,7 +37,8 @@ from vkpbr.gpu.pipeline import PipelineLayout
 from vkpbr.gpu.swapchain import Surface, Swapchain
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, COPY_OUTPUTS, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
-from vkpbr.render.camera import as_camera, depth_range, forward, validate_camera
+from vkpbr.render.batch import MAX_LAYERS, BatchViews
+from vkpbr.render.camera import as_camera, batch_frame_terms, depth_range, forward, validate_camera
 from vkpbr.render.compute_path import ComputeScene
 from vkpbr.render.environment import Environment, EnvironmentBaker, EnvironmentSpec
 from vkpbr.render.frames import (
@@ -52,6 +54,7 @@ from vkpbr.render.options import RenderOptions
 from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.recorder import STAMP_NAMES, STAMPS, FrameRecorder
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
+from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 from vkpbr.scene.environment import load_panorama
 from vkpbr.scene.lights import course_point_light
 from vkpbr.scene.sky import sun_radiometry
@@ -141,6 +144,8 @@ class Renderer:
                 self.device, self.set_layouts[0], self.set_layouts[2], self.ring.count)
             self.gpu_scene = GpuScene(self.device, scene, self.set_layouts[1])
             self._compute_scene: ComputeScene | None = None
+            self._batch: BatchViews | None = None
+            self._batch_targets: dict[tuple, BatchTarget] = {}
             self.recorder = FrameRecorder(self.device, self.gpu_scene, self.pipeline_layout,
                                           self.ring, self.slots, self.prepass_for, self.shadows,
                                           self.compute_scene)
@@ -359,7 +364,7 @@ class Renderer:
         may be in use by queued frames and their recorded command buffers, so wait for the
         device and drop the recordings (an updated set invalidates them)."""
         self.device.wait_idle()
-        self.recorder.free()
+        self._free_recordings()
         writer = DescriptorWriter(self.device)
         for slot in self.slots:
             for binding, image in ((2, env.specular), (3, env.irradiance), (4, env.brdf_lut)):
@@ -401,9 +406,7 @@ class Renderer:
         plan = self.shadow_plan(lights, options)
         if options.shadow_resolution != self.shadows.resolution:
             self.shadows.set_resolution(options.shadow_resolution)
-        if self.shadows.ensure(plan):  # new images: the recorded buffers name the old ones
-            self.recorder.free()
-            self._shadow_rows.clear()
+        self._ensure_shadow_maps(plan)
         write_frame_uniforms(slot, camera, lights, target.extent, options, linear, self.bounds,
                              self.frame_lighting(options),
                              self._write_shadows(slot, plan, lights, camera, target.extent))
@@ -418,6 +421,18 @@ class Renderer:
         frame.stamped = self.ring.query_pool is not None
         slot.stats.cpu_ms = (time.perf_counter() - t0) * 1e3
         return Submitted(frame, image, ok)
+
+    def _ensure_shadow_maps(self, plan: ShadowPlan, options: RenderOptions | None = None) -> None:
+        if options is not None and options.shadow_resolution != self.shadows.resolution:
+            self.shadows.set_resolution(options.shadow_resolution)
+        if self.shadows.ensure(plan):  # new images: the recorded buffers name the old ones
+            self._free_recordings()
+            self._shadow_rows.clear()
+
+    def _free_recordings(self) -> None:
+        self.recorder.free()
+        if self._batch is not None:
+            self._batch.free_recordings()
 
     def _read_timings(self, frame: Frame, slot: FrameSlot) -> None:
         t = self.ring.timings_ms(frame, STAMPS)
@@ -513,6 +528,150 @@ class Renderer:
             for frame in pending:
                 frame.wait()
 
+    def render_batch(
+        self,
+        cameras: CameraBatch | np.ndarray | Iterable[Camera | Any],
+        size: tuple[int, int] = (128, 128),
+        lights: LightsArg = None,
+        options: RenderOptions | None = None,
+        linear: bool = False,
+        depth: bool = False,
+        outputs: Iterable[str] | None = None,
+        batch: int | str = "auto",
+        **option_overrides: Any,
+    ) -> np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray]:
+        """Render B views of the scene in one submission and return them stacked.
+
+        Parameters
+        ----------
+        cameras : a CameraBatch (vkpbr.scene.camera_batch: from eye/target arrays, (B, 4, 4)
+            poses or OpenCV K + poses, no Python object per view), a (B, 4, 4) array of
+            OpenGL world-from-camera poses, or a list of Cameras (anything `render` takes).
+        size : (width, height) of every view.
+        lights, options, linear, option_overrides : as `render`.
+        depth : also return (B, H, W) float32 distances along each view's axis.
+        outputs : as `render`'s, stacked per view; "color" and "depth" come from the batch,
+            the others (ids, normals, range) from the dataset outputs' pass, view by view.
+        batch : views per submission: "auto" (as many as fit in a quarter of the device's
+            memory, at most 2048 layers a chunk) or a positive integer; larger batches are
+            split into several submissions.
+
+        Returns
+        -------
+        (B, H, W, 4) uint8 sRGB (float32 linear with `linear`); with `depth` a tuple (colour,
+        depth); with `outputs` {name: (B, ...) array}. View i equals `render` of view i
+        (`CameraBatch.camera(i)`) bit for bit, except that directional lights' shadow maps
+        are one map over the whole scene (docs/batch.md) and blended draws are sorted for the
+        first view.
+        """
+        base = self.default_camera()
+        views = as_camera_batch(cameras, base)
+        opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
+        wanted = self._check_outputs(outputs, self.offscreen_target(size, linear)) if outputs else ()
+        extra = tuple(n for n in wanted if n not in ("color", "depth"))
+        if not self.device.batch_views or self.uses_compute(self.offscreen_target(size, linear), opts):
+            # No layered rendering here (or the compute path asked for): view by view.
+            frames = list(self.render_many((views.camera(i) for i in range(len(views))), lights,
+                                           size, opts, linear, depth or "depth" in wanted,
+                                           outputs=wanted or None))
+            return _stack_frames(frames, depth, wanted)
+        per = self._batch_views_per_submission(size, linear, depth or "depth" in wanted, batch)
+        colors, depths = [], []
+        for start in range(0, len(views), per):
+            part = _slice_batch(views, start, min(start + per, len(views)))
+            color, dist = self._render_batch_part(part, size, lights, opts, linear,
+                                                  depth or "depth" in wanted)
+            colors.append(color)
+            depths.append(dist)
+        color = colors[0] if len(colors) == 1 else np.concatenate(colors)
+        dist = None if depths[0] is None else (depths[0] if len(depths) == 1 else np.concatenate(depths))
+        if not wanted:
+            return (color, dist) if depth else color
+        result: dict[str, np.ndarray] = {}
+        if "color" in wanted:
+            result["color"] = color
+        if "depth" in wanted:
+            result["depth"] = dist  # type: ignore[assignment]
+        if extra:
+            frames = list(self.render_many((views.camera(i) for i in range(len(views))), lights,
+                                           size, opts, linear, outputs=extra))
+            for name in extra:
+                result[name] = np.stack([f[name] for f in frames])
+        return {n: result[n] for n in wanted}
+
+    def _batch_views_per_submission(self, size: tuple[int, int], linear: bool, depth: bool,
+                                    batch: int | str) -> int:
+        w, h = int(size[0]), int(size[1])
+        pixel = 16 if linear else 4
+        view_bytes = w * h * (2 * pixel + 4 + (4 if depth else 0)) + L.VIEW_RECORD.size
+        if batch == "auto":
+            budget = self.device.local_memory_bytes() // 4
+            return max(1, min(budget // view_bytes, 1 << 16))
+        if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
+            raise UsageError(f"batch {batch!r}: expected a positive number of views or 'auto'")
+        return batch
+
+    def _render_batch_part(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
+                           opts: RenderOptions, linear: bool, depth: bool
+                           ) -> tuple[np.ndarray, np.ndarray | None]:
+        n = len(views)
+        limits = self.device.limits
+        layers = max(1, min(n, MAX_LAYERS, int(limits.maxFramebufferLayers),
+                            int(limits.maxImageArrayLayers)))
+        target = self._batch_target(size, layers, n, linear, depth)
+        if self._batch is None:
+            self._batch = BatchViews(self.device, self.scene, self.gpu_scene, self.ring,
+                                     self.slots, self.set_layouts[0], self.recorder, self.shadows)
+        bv = self._batch
+        bv.ensure(n, layers)
+        frame_lights = self.frame_lights(opts, lights)
+        env = self.environment(opts)
+        if env is not self._bound_env:
+            self._bind_environment(env)
+        terms = batch_frame_terms(views.eye, views.target, views.up, views.yfov_deg,
+                                  views.intrinsics, views.znear, views.zfar, tuple(size),
+                                  self.bounds.corners, self.bounds.radius)
+        frame = self.ring.begin()
+        slot = self.slots[frame.index]
+        plan = self.shadow_plan(frame_lights, opts)
+        self._ensure_shadow_maps(plan, opts)
+        rows = None
+        if plan.entries:  # camera-independent maps, shared by every view
+            rows = self.shadows.write(slot.index, plan, frame_lights, None, tuple(size), 0.0, 0.0,
+                                      self.bounds.corners[0], self.bounds.corners[-1])
+            self._shadow_rows.pop(slot.index, None)
+        first = views.camera(0)
+        write_frame_uniforms(slot, first, frame_lights, size, opts, linear, self.bounds,
+                             self.frame_lighting(opts), rows)
+        bv.write_views(terms, views.eye)
+        cmd = bv.command_buffer(target, frame, n, opts.tbn, opts.alpha_mask, plan,
+                                self.blend_order(first.eye), self.prepass_for(target))
+        frame.submit(cmd)
+        frame.stamped = self.ring.query_pool is not None
+        frame.wait()
+        self._read_timings(frame, slot)
+        self.last_stats = dataclasses.replace(slot.stats)
+        color = target.read_color(n)
+        dist = _linear_depth(target.read_depth(n), terms["znear"][:, None, None]) if depth else None
+        self.device.check_validation()
+        return color, dist
+
+    def _batch_target(self, size: tuple[int, int], layers: int, views: int, linear: bool,
+                      depth: bool) -> BatchTarget:
+        key = (tuple(size), layers, linear, depth)
+        target = self._batch_targets.get(key)
+        if target is not None and target.capacity >= views:
+            return target
+        if target is not None:
+            self.device.wait_idle()
+            if self._batch is not None:
+                self._batch.free_recordings()
+            target.destroy()
+        target = BatchTarget(self.device, size, layers, views, "float" if linear else "srgb",
+                             depth, clear_color=(*self.background, 1.0))
+        self._batch_targets[key] = target
+        return target
+
     def _check_outputs(self, outputs: Iterable[str] | None, target: OffscreenTarget) -> tuple[str, ...]:
         """The dataset outputs asked for, checked; their images made on first use."""
         if outputs is None:
@@ -591,6 +750,12 @@ class Renderer:
         dev.wait_idle()
         if getattr(self, "recorder", None) is not None:
             self.recorder.free()
+        if getattr(self, "_batch", None) is not None:
+            self._batch.destroy()
+            self._batch = None
+        for target in getattr(self, "_batch_targets", {}).values():
+            target.destroy()
+        self._batch_targets = {}
         if getattr(self, "shadows", None) is not None:
             self.shadows.destroy()
         for env in getattr(self, "_environments", {}).values():
@@ -606,6 +771,24 @@ class Renderer:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _slice_batch(views: CameraBatch, start: int, stop: int) -> CameraBatch:
+    def part(a: np.ndarray | None) -> np.ndarray | None:
+        return None if a is None else a[start:stop]
+
+    return CameraBatch(views.eye[start:stop], views.target[start:stop], views.up[start:stop],
+                       views.yfov_deg[start:stop], part(views.intrinsics), part(views.znear),
+                       part(views.zfar))
+
+
+def _stack_frames(frames: list[Any], depth: bool, wanted: tuple[str, ...]) -> Any:
+    """render_many's frames stacked as render_batch returns them."""
+    if wanted:
+        return {n: np.stack([f[n] for f in frames]) for n in wanted}
+    if depth:
+        return np.stack([f[0] for f in frames]), np.stack([f[1] for f in frames])
+    return np.stack(frames)
 
 
 def _no_clock() -> float:
@@ -633,8 +816,9 @@ def _automatic_sun(env_rotation_deg: float) -> Light:
                  falloff="inverse_square")
 
 
-def _linear_depth(d: np.ndarray, znear: float) -> np.ndarray:
-    """Reversed-Z window depth -> view-space distance along the axis (inf = background)."""
+def _linear_depth(d: np.ndarray, znear: float | np.ndarray) -> np.ndarray:
+    """Reversed-Z window depth -> view-space distance along the axis (inf = background);
+    `znear` broadcasts against `d` (a batch: one per view)."""
     with np.errstate(divide="ignore"):
         z = znear / d.astype(np.float64)
     z[d <= 0.0] = np.inf

@@ -209,6 +209,16 @@ def directional_cascades(camera: Camera, size: tuple[int, int], direction: Seque
     return CascadeFit(np.array(mats), splits[1:].copy(), np.array(texel))
 
 
+def scene_cascade(direction: Sequence[float], scene_lo: Sequence[float],
+                  scene_hi: Sequence[float], resolution: int) -> CascadeFit:
+    """One cascade of a directional light covering the scene's whole bounds, the same for
+    every camera (a batch's views share it: render/batch.py); it reaches every view depth."""
+    lo, hi = np.asarray(scene_lo, dtype=np.float64), np.asarray(scene_hi, dtype=np.float64)
+    centre, radius = (lo + hi) / 2, max(float(np.linalg.norm(hi - lo)) / 2, 1e-6)
+    return CascadeFit(np.array([fit_cascade(centre, radius, direction, lo, hi, resolution)]),
+                      np.array([np.inf]), np.array([cascade_texel(radius, resolution)]))
+
+
 def perspective_near(position: Sequence[float], light_range: float, scene_lo: Sequence[float],
                      scene_hi: Sequence[float]) -> float:
     """The near plane of a spot or point light's maps: 1/1000 of its reach (the range, else

@@ -235,11 +235,13 @@ class ShadowMaps:
         return True
 
     # --- per frame --------------------------------------------------------------------------
-    def write(self, slot: int, plan: ShadowPlan, lights: Sequence[Light], camera: Camera,
+    def write(self, slot: int, plan: ShadowPlan, lights: Sequence[Light], camera: Camera | None,
               size: tuple[int, int], znear: float, zfar: float, scene_lo: Sequence[float],
               scene_hi: Sequence[float]) -> np.ndarray:
         """Fill frame `slot`'s ShadowData for `plan` and return every light's
-        LightRecord.shadow: (len(lights), 4) float32, x = -1 for unshadowed lights."""
+        LightRecord.shadow: (len(lights), 4) float32, x = -1 for unshadowed lights.
+        `camera` None: directional lights get one cascade over the whole scene (a batch's
+        views share the maps; `znear`, `zfar` and `size` are then unused)."""
         out = np.zeros((len(lights), 4), np.float32)
         out[:, 0] = -1.0
         data = self._views[slot]
@@ -250,11 +252,15 @@ class ShadowMaps:
             light = lights[e.light]
             pos = tuple(getattr(light, "position", (0.0, 0.0, 0.0)))
             if e.kind == "directional":
-                fit = SM.directional_cascades(camera, size, light.direction, scene_lo, scene_hi,
-                                              self.resolution, znear, zfar, e.count)
-                mats[e.matrix_base:e.matrix_base + e.count] = fit.matrices
-                far[:e.count], texel[:e.count] = fit.far, fit.texel
-                out[e.light] = (e.first, e.count, 0.0, 0.0)
+                if camera is None:
+                    fit = SM.scene_cascade(light.direction, scene_lo, scene_hi, self.resolution)
+                else:
+                    fit = SM.directional_cascades(camera, size, light.direction, scene_lo,
+                                                  scene_hi, self.resolution, znear, zfar, e.count)
+                n = len(fit.matrices)
+                mats[e.matrix_base:e.matrix_base + n] = fit.matrices
+                far[:n], texel[:n] = fit.far, fit.texel
+                out[e.light] = (e.first, n, 0.0, 0.0)
                 continue
             near = SM.perspective_near(pos, getattr(light, "range", 0.0), scene_lo, scene_hi)
             if e.kind == "spot":

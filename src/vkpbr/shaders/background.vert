@@ -6,7 +6,11 @@
 // difference of two points the inverse view-projection unprojects at NDC depths 1 (the near
 // plane) and 0.5. Points of one NDC depth lie on a plane of the camera, affine in NDC xy, so
 // the difference interpolates exactly across the triangle (every vertex has w = 1).
+// BATCH = 1: instance i is view i of the batch (render/batch.py), drawn into its layer.
 #extension GL_GOOGLE_include_directive : require
+#if BATCH
+#extension GL_ARB_shader_viewport_layer_array : require
+#endif
 #include "generated.glsl"
 
 layout(location = 0) out vec3 ray;
@@ -14,7 +18,12 @@ layout(location = 0) out vec3 ray;
 void main() {
     vec2 p = vec2(float((gl_VertexIndex << 1) & 2), float(gl_VertexIndex & 2)) * 2.0 - 1.0;
     gl_Position = vec4(p, 0.0, 1.0);
+#if BATCH
+    gl_Layer = int(views[gl_InstanceIndex].info.x);
+    mat4 inv = inverse(views[gl_InstanceIndex].VP);
+#else
     mat4 inv = inverse(camera.VP);
+#endif
     vec4 near = inv * vec4(p, 1.0, 1.0);
     vec4 mid = inv * vec4(p, 0.5, 1.0);
     ray = mid.xyz / mid.w - near.xyz / near.w;

@@ -67,6 +67,12 @@ struct LightRecord {
     vec4 cone;
     vec4 shadow;
 };
+struct ViewRecord {
+    mat4 VP;
+    vec4 eye_near;
+    vec4 forward_far;
+    uvec4 info;
+};
 struct DrawRecord {
     mat4 model;
     mat4 normal_matrix;
@@ -95,6 +101,7 @@ struct MaterialRecord {
     vec4 emissive_uv_row1;
     uint flags;
 };
+#if !STRUCTS_ONLY
 #if !COMPUTE_SHADING
 layout(set = 0, binding = 0, std140) uniform Camera {
     mat4 VP;
@@ -114,6 +121,12 @@ layout(set = 0, binding = 1, std140) uniform Settings {
     float pad0;
 } settings;
 #endif
+layout(set = 0, binding = 2, std140) readonly buffer Views {
+    ViewRecord views[];
+};
+layout(set = 0, binding = 3, std430) readonly buffer VisibleViews {
+    uint visible_views[];
+};
 layout(set = 1, binding = 0) uniform sampler2D base_color_map;
 layout(set = 1, binding = 1) uniform sampler2D metallic_map;
 layout(set = 1, binding = 2) uniform sampler2D roughness_map;
@@ -239,5 +252,6 @@ layout(push_constant, std430) uniform Draw {
     mat4 normal_matrix;
 } draw;
 #endif
+#endif  // !STRUCTS_ONLY
 
 #endif

@@ -15,6 +15,12 @@ layout(location = 3) in vec3 v_tangent;
 layout(location = 4) in vec3 v_bitangent;
 layout(location = 5) in vec4 v_color;  // COLOR_0 (white when the mesh has none)
 layout(location = 6) flat in uint v_draw;  // the draw's index (its firstInstance)
+#if BATCH  // a view of a batch: the camera's values from its ViewRecord (render/batch.py)
+layout(location = 7) flat in uint v_view;
+#define FRAME_EYE (views[v_view].eye_near.xyz)
+#define FRAME_FORWARD (views[v_view].forward_far.xyz)
+#define FRAME_ZFAR (views[v_view].forward_far.w)
+#endif
 
 #if VISIBILITY
 layout(location = 0) out uvec2 out_visibility;

@@ -1,7 +1,13 @@
 #version 450
 // pbr.vert: world-space position and TBN for pbr.frag (report 1.1). TBN_MODE picks how the
 // tangent frame arrives: 0 normal + tangent vectors, 1 a float QTangent, 2 a packed uint32.
+// BATCH = 1: a view of a batch (render/batch.py): instance i of a draw is the view
+// visible_views[i] (the culling kernel lists the views that see the draw from its
+// firstInstance on), drawn with that view's VP into its layer of the batch target.
 #extension GL_GOOGLE_include_directive : require
+#if BATCH
+#extension GL_ARB_shader_viewport_layer_array : require
+#endif
 #include "generated.glsl"
 #if TBN_MODE != 0
 #include "tbn_decode.glsl"
@@ -34,6 +40,9 @@ layout(location = 3) out vec3 v_tangent;
 layout(location = 4) out vec3 v_bitangent;
 layout(location = 5) out vec4 v_color;
 layout(location = 6) flat out uint v_draw;  // firstInstance of the draw: its index (the visibility pass)
+#if BATCH
+layout(location = 7) flat out uint v_view;  // the view of the batch (Views)
+#endif
 
 void main() {
 #if TBN_MODE == 0
@@ -61,5 +70,12 @@ void main() {
     v_normal = mat3(draw.normal_matrix) * n;
     v_tangent = mat3(draw.model) * t;
     v_bitangent = mat3(draw.model) * b;
+#if BATCH
+    uint view_index = visible_views[gl_InstanceIndex];
+    v_view = view_index;
+    gl_Layer = int(views[view_index].info.x);
+    gl_Position = views[view_index].VP * world;
+#else
     gl_Position = camera.VP * world;
+#endif
 }

@@ -12,8 +12,15 @@
 //                  hardware derivatives in pbr.frag, ray-differential gradients in shade.comp
 // and sets opaque_zero and the surface globals s_* before calling shade_surface().
 // ALPHA_MASK (fragment path) discards below the material's cutoff.
+// FRAME_EYE, FRAME_FORWARD, FRAME_ZFAR: the camera's eye, unit view direction and far depth;
+// the frame's blocks unless the includer defines them (a batch's ViewRecord, pbr.frag BATCH).
 #ifndef SHADE_GLSL
 #define SHADE_GLSL
+#ifndef FRAME_EYE
+#define FRAME_EYE (lighting.view_pos.xyz)
+#define FRAME_FORWARD (settings.camera_forward.xyz)
+#define FRAME_ZFAR (settings.zfar)
+#endif
 #include "brdf.glsl"
 #include "lights.glsl"
 #include "shadows.glsl"
@@ -90,8 +97,8 @@ vec4 shade_surface() {
     vec3 ng, t, b, n;
     surface_frame(settings_flags, material_flags, ng, t, b, n);
 
-    vec3 v = safe_normalize(lighting.view_pos.xyz - s_world_pos, ng);
-    float view_depth = dot(s_world_pos - lighting.view_pos.xyz, settings.camera_forward.xyz);
+    vec3 v = safe_normalize(FRAME_EYE - s_world_pos, ng);
+    float view_depth = dot(s_world_pos - FRAME_EYE, FRAME_FORWARD);
     uint lighting_flags = u(lighting.flags);
     int brdf = u(settings.brdf);
     uint light_count = min(u(lighting.light_count), MAX_LIGHTS);
@@ -141,7 +148,7 @@ vec4 shade_surface() {
         case VIEW_OCCLUSION: value = vec3(occlusion); break;
         case VIEW_ALPHA: value = vec3(base.a); break;
         case VIEW_TEXCOORDS: value = vec3(fract(uv), 0.0); break;
-        case VIEW_DEPTH: value = vec3(view_depth / settings.zfar); break;
+        case VIEW_DEPTH: value = vec3(view_depth / FRAME_ZFAR); break;
         case VIEW_EMISSIVE: value = emissive; break;
         case VIEW_TANGENT: value = encode_dir(t); break;
         case VIEW_BITANGENT: value = encode_dir(b); break;

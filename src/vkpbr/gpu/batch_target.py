@@ -1,0 +1,146 @@
+"""The batch target: many views of one size drawn in one submission (render/batch.py).
+
+A `BatchTarget` is a colour + D32 depth pair of 2D-array images, `layers` deep: one layer a
+view, drawn by layered rendering (the vertex shader writes gl_Layer). A batch larger than
+`layers` is drawn a chunk of `layers` views at a time into the same images, each chunk
+copied out into its place in one persistently mapped readback buffer of `capacity` views,
+so a whole batch comes back with one fence wait and one host copy. Depth is cleared to 0
+(reversed-Z), as in OffscreenTarget, whose formats it shares: pipelines built for one serve
+the other.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from vkpbr.gpu.buffer import Buffer
+from vkpbr.gpu.commands import Commands
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.image import Image, ImageView
+from vkpbr.gpu.rendering import (
+    Attachments,
+    attachment_stage,
+    barriers,
+    begin_rendering,
+    copy_image_to_buffer,
+    end_rendering,
+    host_read_barrier,
+    image_barrier,
+)
+from vkpbr.gpu.target import COLOR_FORMATS
+
+__all__ = ["BatchTarget"]
+
+
+class BatchTarget:
+    """`layers` views of `size` = (width, height) per chunk, read back `capacity` at a time.
+
+    color : "srgb" (8-bit sRGB-encoded) or "float" (linear float32), as OffscreenTarget.
+    depth : also copy the depth of every view out (Renderer.render_batch(depth=True)).
+    """
+
+    generation = 0  # never recreated
+    samples = 1
+
+    def __init__(self, device: Device, size: tuple[int, int], layers: int, capacity: int,
+                 color: str = "srgb", depth: bool = False,
+                 clear_color: tuple[float, float, float, float] = (0, 0, 0, 1)) -> None:
+        vk = device.vk
+        self.device, self.clear_color = device, clear_color
+        self.extent = (int(size[0]), int(size[1]))
+        self.layers, self.capacity, self.color_kind = int(layers), int(capacity), color
+        self.copies_depth = depth
+        w, h = self.extent
+        fmt_name, self.pixel_bytes = COLOR_FORMATS[color]
+        self.color_format = getattr(vk, fmt_name)
+        self.depth_format = vk.VK_FORMAT_D32_SFLOAT
+        self._objects: list[Any] = []
+        src = vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT
+        self.color = self._own(Image(device, w, h, self.color_format,
+                                     vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | src,
+                                     layers=self.layers, name="batch color"))
+        self.depth = self._own(Image(device, w, h, self.depth_format,
+                                     vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | src,
+                                     layers=self.layers, name="batch depth"))
+        color_view = self._own(ImageView(self.color, kind="2d_array"))
+        depth_view = self._own(ImageView(self.depth, aspect="depth", kind="2d_array"))
+        self.attachments = Attachments(color_view.handle, depth_view.handle, self.extent)
+        usage = vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
+        self.color_readback = self._own(Buffer(device, self.capacity * w * h * self.pixel_bytes,
+                                               usage, host_visible=True, name="batch color readback"))
+        self.depth_readback = self._own(Buffer(device, self.capacity * w * h * 4, usage,
+                                               host_visible=True, name="batch depth readback")
+                                        ) if depth else None
+
+    def _own(self, obj: Any) -> Any:
+        self._objects.append(obj)
+        return obj
+
+    @property
+    def view_bytes(self) -> int:
+        """Device memory a view of the batch holds: its layer of both images and readbacks."""
+        w, h = self.extent
+        return w * h * (2 * self.pixel_bytes + 4 + (4 if self.copies_depth else 0))
+
+    def _images(self) -> list[tuple[Image, bool]]:
+        return [(self.color, False), (self.depth, True)]
+
+    def record_begin(self, cmd: Commands, image: int = 0) -> None:
+        """Transition every layer for drawing (after the previous chunk's or batch's copy)
+        and begin a layered rendering over all of them, cleared."""
+        vk = self.device.vk
+        out = []
+        for img, depth in self._images():
+            stage, access, layout = attachment_stage(vk, depth)
+            src = (stage | vk.VK_PIPELINE_STAGE_2_COPY_BIT,
+                   access & ~(vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT
+                              | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT))
+            out.append(image_barrier(vk, img.handle, depth, vk.VK_IMAGE_LAYOUT_UNDEFINED, layout,
+                                     src, (stage, access), layers=self.layers))
+        barriers(cmd, out)
+        begin_rendering(cmd, self.attachments, self.clear_color, 0.0, layers=self.layers)
+
+    def record_chunk_end(self, cmd: Commands, chunk: int, views: int) -> None:
+        """End the rendering and copy the chunk's first `views` layers into their place in
+        the readback buffers (views chunk * layers on)."""
+        vk = self.device.vk
+        end_rendering(cmd)
+        xfer = (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT)
+        wanted = [(self.color, False, self.color_readback, self.pixel_bytes)]
+        if self.depth_readback is not None:
+            wanted.append((self.depth, True, self.depth_readback, 4))
+        to_src = []
+        for img, depth, _, _ in wanted:
+            stage, access, layout = attachment_stage(vk, depth)
+            to_src.append(image_barrier(vk, img.handle, depth, layout,
+                                        vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, (stage, access),
+                                        xfer, layers=self.layers))
+        barriers(cmd, to_src)
+        w, h = self.extent
+        for img, depth, buf, nbytes in wanted:
+            copy_image_to_buffer(cmd, img.handle, depth, buf, self.extent, layers=views,
+                                 offset=chunk * self.layers * w * h * nbytes)
+
+    def record_host_barrier(self, cmd: Commands) -> None:
+        """Make every chunk's copy visible to the host once the fence is waited."""
+        vk = self.device.vk
+        bufs = [b for b in (self.color_readback, self.depth_readback) if b is not None]
+        barriers(cmd, [], [host_read_barrier(vk, b) for b in bufs])
+
+    def read_color(self, views: int) -> np.ndarray:
+        """A copy of the first `views` views: (views, H, W, 4) uint8 or float32."""
+        dtype = np.uint8 if self.color_kind == "srgb" else np.float32
+        w, h = self.extent
+        return self.color_readback.array(dtype, views * w * h * 4).reshape(views, h, w, 4).copy()
+
+    def read_depth(self, views: int) -> np.ndarray:
+        """A copy of the first `views` views' window depth: (views, H, W) float32."""
+        w, h = self.extent
+        assert self.depth_readback is not None, "made without depth"
+        return self.depth_readback.array(np.float32, views * w * h).reshape(views, h, w).copy()
+
+    def destroy(self) -> None:
+        while self._objects:
+            self._objects.pop().destroy()

@@ -1,0 +1,224 @@
+"""Batched views: B cameras of one scene drawn in one submission (Renderer.render_batch).
+
+The frame path's passes (render/passes.py) drawn once for many views, GPU-driven:
+
+1. Python writes one ViewRecord per view (layouts.VIEW_RECORD: VP, eye, forward, planes,
+   layer) with vectorised NumPy (render/camera.py batch_frame_terms): no Python per view.
+2. batch_cull.comp tests every (view, draw) pair, the draw's world bounding sphere against
+   the view's frustum, and writes per (chunk, draw) an indirect command instanced over the
+   views that see the draw, with their list (VisibleViews).
+3. Each chunk of up to `layers` views is one layered rendering into a BatchTarget
+   (gpu/batch_target.py): every pass records its draws once as indirect draws; the BATCH
+   builds of pbr.vert / pbr.frag / background.vert read the view of each instance, draw
+   into its layer and shade with its eye. The chunk is copied into its place in the
+   readback buffer; the next chunk reuses the images.
+
+Commands are recorded once per (target, views, options, shadow plan, blended order) and
+reused, so a batch costs Python a few NumPy calls and one submission however many views it
+has. What differs from rendering each view alone (docs/batch.md): directional lights' shadow
+maps are one map over the whole scene shared by the views (cascades follow one camera), and
+blended draws are sorted for the batch's first view.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from vkpbr.gpu.batch_target import BatchTarget
+from vkpbr.gpu.buffer import Buffer, upload_buffer
+from vkpbr.gpu.commands import Commands
+from vkpbr.gpu.compute import ComputePipeline, groups
+from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.frames import Frame, FrameRing
+from vkpbr.render import layouts as L
+from vkpbr.render.codegen import SPV_DIR
+from vkpbr.render.frames import FrameSlot
+from vkpbr.render.gpu_scene import Draw, GpuScene
+from vkpbr.render.passes import PassContext, classify, record_passes
+from vkpbr.render.recorder import _BASE_STREAMS, _TBN_STREAMS, STAMPS, FrameRecorder
+from vkpbr.render.shadows import ShadowPlan
+from vkpbr.scene.types import Scene
+
+__all__ = ["BatchViews", "draw_spheres", "MAX_LAYERS"]
+
+MAX_LAYERS = 2048  # views per chunk at most (every device's array-layer limits allow 256+)
+_COMMAND_BYTES = 20  # VkDrawIndexedIndirectCommand
+
+
+def draw_spheres(scene: Scene, draws: list[Draw]) -> np.ndarray:
+    """(D, 8) float32 per draw: its world bounding sphere (centre, radius) around the
+    transformed corners of its mesh's box, then (index count, first index, vertex offset, 0)
+    as uint32 bits (what batch_cull.comp reads)."""
+    out = np.zeros((len(draws), 8), np.float32)
+    ranges = out.view(np.uint32)
+    for i, d in enumerate(draws):
+        p = scene.meshes[d.mesh].positions
+        lo, hi = p.min(axis=0).astype(np.float64), p.max(axis=0).astype(np.float64)
+        corners = np.array([(x, y, z) for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                            for z in (lo[2], hi[2])])
+        model = d.push[:16].reshape(4, 4).T.astype(np.float64)  # std140 columns -> rows
+        world = corners @ model[:3, :3].T + model[:3, 3]
+        centre = (world.min(axis=0) + world.max(axis=0)) / 2
+        out[i, :3] = centre
+        out[i, 3] = np.linalg.norm(world - centre, axis=1).max() * (1 + 1e-5) + 1e-6
+        ranges[i, 4:7] = (d.index_count, d.first_index, d.vertex_offset & 0xFFFFFFFF)
+    return out
+
+
+@dataclass
+class _Recorded:
+    key: tuple
+    cmd: Commands
+
+
+class BatchViews:
+    """The batch's GPU resources for one Renderer: the culling kernel, the views, the
+    indirect commands and lists, a set 0 per frame slot naming them, and recordings."""
+
+    def __init__(self, device: Device, scene: Scene, gpu_scene: GpuScene, ring: FrameRing,
+                 slots: list[FrameSlot], set0_layout: DescriptorSetLayout,
+                 recorder: FrameRecorder, shadows: Any) -> None:
+        self.device, self.gpu_scene, self.ring, self.slots = device, gpu_scene, ring, slots
+        self.set0_layout, self.recorder, self.shadows = set0_layout, recorder, shadows
+        self._objects: list[Any] = []
+        self.draw_count = len(gpu_scene.draws)
+        self.bounds = self._own(upload_buffer(
+            device, draw_spheres(scene, gpu_scene.draws) if gpu_scene.draws
+            else np.zeros(8, np.float32), "storage", name="batch draw bounds"))
+        stages = ("compute",)
+        self.cull_layout = self._own(DescriptorSetLayout(device, [
+            BindingSpec(i, "storage", stages, n)
+            for i, n in enumerate(("CullViews", "DrawBounds", "Commands", "CullVisible"))]))
+        self.cull = self._own(ComputePipeline(device, SPV_DIR / "batch_cull.comp.spv",
+                                              [self.cull_layout], push_bytes=12))
+        self.pool = self._own(DescriptorPool(device, [(self.cull_layout, 1),
+                                                      (set0_layout, len(slots))]))
+        self.cull_set = self.pool.allocate(self.cull_layout)
+        self.sets0 = [self.pool.allocate(set0_layout) for _ in slots]
+        self.capacity = 0  # views the buffers hold
+        self.chunk_views = 0
+        self.views: Buffer | None = None
+        self._buffers: list[Buffer] = []
+        self._recorded: dict[int, _Recorded] = {}
+
+    def _own(self, obj: Any) -> Any:
+        self._objects.append(obj)
+        return obj
+
+    # --- buffers ----------------------------------------------------------------------------
+    def ensure(self, views: int, chunk_views: int) -> None:
+        """Buffers for `views` views drawn `chunk_views` at a time (grown, never shrunk)."""
+        if views <= self.capacity and chunk_views == self.chunk_views:
+            return
+        self.device.wait_idle()
+        self.free_recordings()
+        for b in self._buffers:
+            b.destroy()
+        dev, d = self.device, max(self.draw_count, 1)
+        chunks = -(-views // chunk_views)
+        self.capacity, self.chunk_views = max(views, self.capacity), chunk_views
+        self.views = Buffer(dev, self.capacity * L.VIEW_RECORD.size, "storage", host_visible=True,
+                            name="batch views")
+        self.commands = Buffer(dev, chunks * d * _COMMAND_BYTES, "storage|indirect|transfer_dst",
+                               name="batch indirect draws")
+        self.visible = Buffer(dev, chunks * d * chunk_views * 4, "storage", name="batch visible views")
+        self._buffers = [self.views, self.commands, self.visible]
+        self.records = self.views.array(np.uint8, self.capacity * L.VIEW_RECORD.size).view(
+            L.VIEW_RECORD.dtype)
+        writer = DescriptorWriter(dev)
+        for binding, buf in enumerate((self.views, self.bounds, self.commands, self.visible)):
+            writer.storage(self.cull_set, binding, buf)
+        for slot, set0 in zip(self.slots, self.sets0, strict=True):
+            camera_buf, camera_at = slot.block_ranges["Camera"]
+            settings_buf, settings_at = slot.block_ranges["Settings"]
+            writer.uniform(set0, 0, camera_buf, L.CAMERA.size, camera_at)
+            writer.uniform(set0, 1, settings_buf, L.SETTINGS.size, settings_at)
+            writer.storage(set0, 2, self.views)
+            writer.storage(set0, 3, self.visible)
+        writer.update()
+
+    def write_views(self, terms: dict[str, np.ndarray], eye: np.ndarray) -> None:
+        """The ViewRecords of the batch (`terms`: camera.batch_frame_terms)."""
+        n = len(eye)
+        rec = self.records[:n]
+        rec["VP"] = terms["vp"].reshape(n, 4, 4)
+        rec["eye_near"] = np.concatenate([eye, terms["znear"][:, None]], 1)
+        rec["forward_far"] = np.concatenate([terms["forward"], terms["zfar"][:, None]], 1)
+        info = np.zeros((n, 4), np.uint32)
+        info[:, 0] = np.arange(n, dtype=np.uint32) % self.chunk_views
+        rec["info"] = info
+
+    # --- commands ---------------------------------------------------------------------------
+    def command_buffer(self, target: BatchTarget, frame: Frame, views: int, tbn: L.TbnMode,
+                       alpha_mask: bool, plan: ShadowPlan, order: tuple[int, ...],
+                       prepass: bool) -> Commands:
+        key = (id(target), views, tbn, alpha_mask, plan, order, prepass, self.capacity)
+        rec = self._recorded.get(frame.index)
+        if rec is not None and rec.key == key:
+            return rec.cmd
+        if rec is not None:
+            rec.cmd.free()
+        cmd = self._record(target, frame, views, tbn, alpha_mask, plan, order, prepass)
+        self._recorded[frame.index] = _Recorded(key, cmd)
+        return cmd
+
+    def _record(self, target: BatchTarget, frame: Frame, views: int, tbn: L.TbnMode,
+                alpha_mask: bool, plan: ShadowPlan, order: tuple[int, ...],
+                prepass: bool) -> Commands:
+        gs, ring, slot = self.gpu_scene, self.ring, self.slots[frame.index]
+        names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
+        gs.ensure_streams(tuple(names))
+        classes = [classify(d.alpha_mode, d.double_sided, alpha_mask) for d in gs.draws]
+        cmd = Commands(self.device).begin()
+        ring.stamp(cmd, frame, 0)
+        if self.shadows is not None:
+            self.shadows.record(cmd, frame.index, plan, gs.draws, classes, gs.material_sets,
+                                gs.streams, gs.index_buffer, gs.has_colors)
+        ring.stamp(cmd, frame, 1)
+        # The previous batch's draws read the commands and lists: order this one's writes.
+        cmd.memory_barrier("indirect|vertex", "transfer")
+        cmd.fill(self.commands)
+        cmd.memory_barrier("transfer", "compute")
+        cmd.bind_pipeline(self.cull)
+        cmd.bind_set(0, self.cull_set)
+        cmd.push(np.array([views, self.draw_count, self.chunk_views], np.uint32))
+        cmd.dispatch(*groups((views * self.draw_count, 1, 1), (64, 1, 1)))
+        cmd.memory_barrier("compute", "indirect|vertex")
+        ring.stamp(cmd, frame, 2)
+        shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
+        c = self.chunk_views
+        for chunk in range(-(-views // c)):
+            n = min(c, views - chunk * c)
+            target.record_begin(cmd)
+            ctx = PassContext(
+                draws=gs.draws, classes=classes,
+                pipeline=lambda p: self.recorder.pipeline(target, tbn, p, prepass, batch=True),
+                frame_sets=(self.sets0[frame.index], slot.set2), material_sets=gs.material_sets,
+                vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
+                blend_order=order, prepass=prepass, shadow_set=shadow_set,
+                indirect=self.commands, indirect_base=chunk * self.draw_count,
+                views=(chunk * c, n))
+            record_passes(cmd, ctx)
+            target.record_chunk_end(cmd, chunk, n)
+        target.record_host_barrier(cmd)
+        for i in range(3, STAMPS):  # every query of the frame is written (none is waited on unset)
+            ring.stamp(cmd, frame, i)
+        cmd.end()
+        return cmd
+
+    def free_recordings(self) -> None:
+        for rec in self._recorded.values():
+            rec.cmd.free()
+        self._recorded.clear()
+
+    def destroy(self) -> None:
+        self.free_recordings()
+        for b in self._buffers:
+            b.destroy()
+        self._buffers = []
+        while self._objects:
+            self._objects.pop().destroy()

@@ -1,0 +1,192 @@
+"""Many cameras as arrays (Renderer.render_batch): no Python object per view.
+
+A `CameraBatch` holds B cameras as NumPy arrays with the fields of `Camera`: eye, target and
+up (B, 3) float64, the vertical field of view (B,), optional OpenCV pinhole intrinsics
+(B, 6: fx, fy, cx, cy and the W, H they belong to) and near/far planes (NaN: derived per
+render, as Camera's None). Build one from arrays of eyes and targets, from (B, 4, 4)
+world-from-camera poses (OpenGL or OpenCV axes), from OpenCV K and poses, or from a list of
+Cameras; `camera(i)` gives view i back as a Camera, which renders the same pixels alone.
+Checked as `validate_camera` checks one camera, vectorised: the first bad view is named.
+NumPy only (no Vulkan).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from vkpbr.errors import UsageError
+from vkpbr.scene.camera import as_camera, validate_camera
+from vkpbr.scene.types import Camera
+
+__all__ = ["CameraBatch", "as_camera_batch"]
+
+# OpenGL camera axes (x right, y up, z backward) from OpenCV's (x right, y down, z forward).
+_FLIP = np.diag([1.0, -1.0, -1.0, 1.0])
+
+
+def _vectors(value: Any, count: int | None, name: str) -> np.ndarray:
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise UsageError(f"cameras: {name} must be numbers") from None
+    if a.ndim == 1 and a.shape == (3,) and count is not None:
+        a = np.broadcast_to(a, (count, 3))
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise UsageError(f"cameras: {name} must have shape (B, 3), got {a.shape}")
+    return np.ascontiguousarray(a)
+
+
+def _per_view(value: Any, count: int, name: str) -> np.ndarray:
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise UsageError(f"cameras: {name} must be numbers") from None
+    if a.ndim == 0:
+        a = np.full(count, float(a))
+    if a.shape != (count,):
+        raise UsageError(f"cameras: {name} must be one number or {count} numbers, got shape {a.shape}")
+    return a
+
+
+@dataclass(frozen=True)
+class CameraBatch:
+    """B cameras as arrays (see the module docstring). Make one with the class methods."""
+
+    eye: np.ndarray  # (B, 3) float64
+    target: np.ndarray  # (B, 3) float64
+    up: np.ndarray  # (B, 3) float64
+    yfov_deg: np.ndarray  # (B,) float64
+    intrinsics: np.ndarray | None = None  # (B, 6) float64: fx, fy, cx, cy, W, H
+    znear: np.ndarray | None = None  # (B,) float64, NaN: derived per render
+    zfar: np.ndarray | None = None  # (B,) float64, NaN: from the scene's bounds
+
+    def __len__(self) -> int:
+        return len(self.eye)
+
+    @classmethod
+    def from_look_at(cls, eye: Any, target: Any, up: Any = (0.0, 1.0, 0.0),
+                     yfov_deg: Any = 45.0, znear: Any = None, zfar: Any = None) -> CameraBatch:
+        """Cameras at `eye` (B, 3) looking at `target` (B, 3 or 3), `up` (B, 3 or 3)."""
+        e = _vectors(eye, None, "eye")
+        b = len(e)
+        batch = cls(e, _vectors(target, b, "target"), _vectors(up, b, "up"),
+                    _per_view(yfov_deg, b, "yfov_deg"),
+                    znear=None if znear is None else _per_view(znear, b, "znear"),
+                    zfar=None if zfar is None else _per_view(zfar, b, "zfar"))
+        batch.validate()
+        return batch
+
+    @classmethod
+    def from_poses(cls, poses: Any, yfov_deg: Any = 45.0, convention: str = "opengl") -> CameraBatch:
+        """Cameras from (B, 4, 4) world-from-camera poses: OpenGL axes (x right, y up, z
+        backward: NeRF, Blender) or "opencv" (x right, y down, z forward). The same cameras
+        as `Camera.from_pose` makes one at a time (eye, eye + forward, up)."""
+        if convention not in ("opengl", "opencv"):
+            raise UsageError(f"cameras: convention {convention!r}: expected 'opengl' or 'opencv'")
+        m = np.asarray(poses, dtype=np.float64)
+        if m.ndim != 3 or m.shape[1:] != (4, 4):
+            raise UsageError(f"cameras: poses must have shape (B, 4, 4), got {m.shape}")
+        if convention == "opengl":
+            m = m @ _FLIP
+        eye = np.ascontiguousarray(m[:, :3, 3])
+        batch = cls(eye, eye + m[:, :3, 2], np.ascontiguousarray(-m[:, :3, 1]),
+                    _per_view(yfov_deg, len(m), "yfov_deg"))
+        batch.validate()
+        return batch
+
+    @classmethod
+    def from_opencv(cls, K: Any, poses: Any, size: tuple[int, int]) -> CameraBatch:
+        """Cameras from OpenCV intrinsics K ((3, 3) or (B, 3, 3), pixels of an image of
+        `size` (W, H)) and (B, 4, 4) world-from-camera poses in OpenCV axes."""
+        batch = cls.from_poses(poses, 45.0, "opencv")
+        k = np.asarray(K, dtype=np.float64)
+        k = np.broadcast_to(k, (len(batch), 3, 3)) if k.shape == (3, 3) else k
+        if k.shape != (len(batch), 3, 3):
+            raise UsageError(f"cameras: K must have shape (3, 3) or ({len(batch)}, 3, 3), got {k.shape}")
+        fx, fy = k[:, 0, 0], k[:, 1, 1]
+        if not (np.all(fx > 0) and np.all(fy > 0)):
+            raise UsageError("cameras: K's fx and fy must be > 0")
+        w, h = (float(v) for v in size)
+        intr = np.stack([fx, fy, k[:, 0, 2], k[:, 1, 2], np.full(len(k), w), np.full(len(k), h)], 1)
+        yfov = np.degrees(2.0 * np.arctan(h / (2.0 * fy)))
+        return cls(batch.eye, batch.target, batch.up, yfov, intrinsics=intr)
+
+    @classmethod
+    def from_cameras(cls, cameras: Iterable[Any], base: Camera) -> CameraBatch:
+        """A list of Cameras (or anything `as_camera` takes: 4x4 poses, strings, pose dicts)."""
+        cams = [base if c is None else as_camera(c, base) for c in cameras]
+        for c in cams:
+            validate_camera(c)
+        if not cams:
+            raise UsageError("cameras: the batch is empty")
+        has_k = any(c.pixel_intrinsics is not None for c in cams)
+
+        def planes(name: str) -> np.ndarray | None:
+            values = [getattr(c, name) for c in cams]
+            if all(v is None for v in values):
+                return None
+            return np.array([math.nan if v is None else float(v) for v in values])
+
+        intr = None
+        if has_k:
+            intr = np.array([c.pixel_intrinsics if c.pixel_intrinsics is not None
+                             else (math.nan,) * 6 for c in cams], dtype=np.float64)
+        return cls(np.array([c.eye for c in cams], dtype=np.float64),
+                   np.array([c.target for c in cams], dtype=np.float64),
+                   np.array([c.up for c in cams], dtype=np.float64),
+                   np.array([c.yfov_deg for c in cams], dtype=np.float64),
+                   intr, planes("znear"), planes("zfar"))
+
+    def camera(self, i: int) -> Camera:
+        """View `i` as a Camera (rendered alone, it gives view i's pixels)."""
+        def opt(a: np.ndarray | None) -> float | None:
+            return None if a is None or math.isnan(a[i]) else float(a[i])
+
+        k = None
+        if self.intrinsics is not None and not math.isnan(self.intrinsics[i, 0]):
+            fx, fy, cx, cy, w, h = (float(v) for v in self.intrinsics[i])
+            k = (fx, fy, cx, cy, int(w), int(h))
+        return Camera(eye=tuple(map(float, self.eye[i])), target=tuple(map(float, self.target[i])),
+                      up=tuple(map(float, self.up[i])), yfov_deg=float(self.yfov_deg[i]),
+                      znear=opt(self.znear), zfar=opt(self.zfar), pixel_intrinsics=k)
+
+    def validate(self) -> None:
+        """Raise a one-line UsageError naming the first view `validate_camera` would refuse."""
+        f = self.target - self.eye
+        bad = ~np.all(np.isfinite(np.concatenate([self.eye, self.target, self.up], 1)), axis=1)
+        f_len = np.sqrt(np.einsum("ij,ij->i", f, f))
+        cross = np.cross(f, self.up)
+        u_len = np.sqrt(np.einsum("ij,ij->i", self.up, self.up))
+        bad |= f_len < 1e-9
+        bad |= np.sqrt(np.einsum("ij,ij->i", cross, cross)) < 1e-9 * f_len * np.maximum(u_len, 1e-30)
+        bad |= ~((self.yfov_deg > 0.0) & (self.yfov_deg < 180.0))
+        for planes in (self.znear, self.zfar):
+            if planes is not None:
+                bad |= ~(np.isnan(planes) | ((planes > 0) & (planes < math.inf)))
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            try:
+                validate_camera(self.camera(i))
+            except UsageError as e:
+                raise UsageError(f"cameras[{i}]: {str(e).removeprefix('camera: ')}") from None
+            raise UsageError(f"cameras[{i}]: not a valid camera")
+
+
+def as_camera_batch(cameras: Any, base: Camera) -> CameraBatch:
+    """What a user passed as a batch's cameras, as a CameraBatch: a CameraBatch, a (B, 4, 4)
+    array of OpenGL world-from-camera poses (the field of view from `base`), or an iterable
+    of Cameras / anything `as_camera` takes."""
+    if isinstance(cameras, CameraBatch):
+        cameras.validate()
+        return cameras
+    if isinstance(cameras, np.ndarray) and cameras.ndim == 3:
+        return CameraBatch.from_poses(cameras, base.yfov_deg)
+    if isinstance(cameras, (str, bytes, Camera)) or not isinstance(cameras, Iterable):
+        raise UsageError(f"cameras: expected a list of cameras, (B, 4, 4) poses or a "
+                         f"CameraBatch, got {type(cameras).__name__}")
+    return CameraBatch.from_cameras(cameras, base)

@@ -1,0 +1,73 @@
+#version 450
+// batch_cull.comp: per-view frustum culling of a batch (render/batch.py). One invocation per
+// (view, draw): when the draw's world bounding sphere touches the view's frustum, the view is
+// appended to the draw's list of its chunk and the draw's indirect command counts one more
+// instance. The batch's passes then draw each draw once per chunk, instanced over exactly
+// the views that see it (pbr.vert BATCH reads visible_views[gl_InstanceIndex]).
+//
+// Commands: per (chunk k, draw d), a VkDrawIndexedIndirectCommand at k * draw_count + d,
+// zeroed before this kernel; the first view of each chunk writes its constant fields, and
+// its firstInstance is the start of its list, (k * draw_count + d) * chunk_views.
+// The frustum: the planes of clip space from VP's rows (Gribb & Hartmann): left, right,
+// top, bottom and the near plane (reversed-Z: depth <= w); the far plane is at infinity.
+#extension GL_GOOGLE_include_directive : require
+#include "generated.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(set = 0, binding = 0, std140) readonly buffer CullViews {
+    ViewRecord cull_views[];
+};
+// Per draw: xyz centre, w radius (world), then (index count, first index, vertex offset, 0).
+layout(set = 0, binding = 1, std430) readonly buffer DrawBounds {
+    vec4 spheres_and_ranges[];  // 2 vec4 a draw: the sphere, then the range as uint bits
+};
+layout(set = 0, binding = 2, std430) buffer Commands {
+    uint commands[];
+};
+layout(set = 0, binding = 3, std430) writeonly buffer CullVisible {
+    uint cull_visible[];
+};
+
+layout(push_constant, std430) uniform CullPush {
+    uint view_count;
+    uint draw_count;
+    uint chunk_views;  // views per chunk (layers of the batch target)
+} pc;
+
+vec4 vp_row(mat4 m, int j) {
+    return vec4(m[0][j], m[1][j], m[2][j], m[3][j]);
+}
+
+bool sphere_visible(mat4 vp, vec4 sphere) {
+    vec4 r0 = vp_row(vp, 0), r1 = vp_row(vp, 1), r2 = vp_row(vp, 2), r3 = vp_row(vp, 3);
+    vec4 planes[5] = vec4[](r3 + r0, r3 - r0, r3 + r1, r3 - r1, r3 - r2);
+    vec4 c = vec4(sphere.xyz, 1.0);
+    for (int i = 0; i < 5; ++i) {
+        // Conservative: a little slack for float rounding of the plane and the sphere.
+        float reach = sphere.w * length(planes[i].xyz) * 1.0001 + 1e-6 * abs(planes[i].w);
+        if (dot(planes[i], c) < -reach) return false;
+    }
+    return true;
+}
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.view_count * pc.draw_count) return;
+    uint view = i / pc.draw_count;
+    uint d = i - view * pc.draw_count;
+    uint chunk = view / pc.chunk_views;
+    uint command = chunk * pc.draw_count + d;
+    uint base = command * 5u;
+    vec4 range = spheres_and_ranges[2u * d + 1u];
+    if (view == chunk * pc.chunk_views) {  // the chunk's first view: the constant fields
+        commands[base + 0u] = floatBitsToUint(range.x);
+        commands[base + 2u] = floatBitsToUint(range.y);
+        commands[base + 3u] = floatBitsToUint(range.z);
+        commands[base + 4u] = command * pc.chunk_views;
+    }
+    if (sphere_visible(cull_views[view].VP, spheres_and_ranges[2u * d])) {
+        uint k = atomicAdd(commands[base + 1u], 1u);
+        cull_visible[command * pc.chunk_views + k] = view;
+    }
+}
