@@ -15,9 +15,11 @@ The frame path's passes (render/passes.py) drawn once for many views, GPU-driven
 
 Commands are recorded once per (target, views, options, shadow plan, blended order) and
 reused, so a batch costs Python a few NumPy calls and one submission however many views it
-has. What differs from rendering each view alone (docs/batch.md): directional lights' shadow
-maps are one map over the whole scene shared by the views (cascades follow one camera), and
-blended draws are sorted for the batch's first view.
+has. Blended draws need each view's own back-to-front order: the views of a chunk are grouped
+by that order (usually one group) and each group draws them in its order, instanced over its
+views. What differs from rendering each view alone (docs/batch.md): directional lights'
+shadow maps are one map over the whole scene shared by the views (cascades follow one
+camera's depth range; thousands of cameras cannot each have theirs).
 """
 
 from __future__ import annotations
@@ -30,7 +32,8 @@ import numpy as np
 from vkpbr.gpu.batch_target import BatchTarget
 from vkpbr.gpu.buffer import Buffer, upload_buffer
 from vkpbr.gpu.commands import Commands
-from vkpbr.gpu.compute import ComputePipeline, groups
+from vkpbr.gpu.compute import ComputePipeline
+from vkpbr.gpu.compute import groups as work_groups
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.frames import Frame, FrameRing
@@ -119,13 +122,18 @@ class BatchViews:
         for b in self._buffers:
             b.destroy()
         dev, d = self.device, max(self.draw_count, 1)
-        chunks = -(-views // chunk_views)
         self.capacity, self.chunk_views = max(views, self.capacity), chunk_views
+        chunks = -(-self.capacity // chunk_views)  # any batch up to the capacity fits
         self.views = Buffer(dev, self.capacity * L.VIEW_RECORD.size, "storage", host_visible=True,
                             name="batch views")
         self.commands = Buffer(dev, chunks * d * _COMMAND_BYTES, "storage|indirect|transfer_dst",
                                name="batch indirect draws")
-        self.visible = Buffer(dev, chunks * d * chunk_views * 4, "storage", name="batch visible views")
+        # The culling kernel's lists, then the blended draws' groups of views (written here:
+        # host-visible, a uint a view).
+        self.tail = chunks * d * chunk_views
+        self.visible = Buffer(dev, (self.tail + self.capacity) * 4, "storage", host_visible=True,
+                              name="batch visible views")
+        self.group_lists = self.visible.array(np.uint32, self.capacity, self.tail * 4)
         self._buffers = [self.views, self.commands, self.visible]
         self.records = self.views.array(np.uint8, self.capacity * L.VIEW_RECORD.size).view(
             L.VIEW_RECORD.dtype)
@@ -152,23 +160,41 @@ class BatchViews:
         info[:, 0] = np.arange(n, dtype=np.uint32) % self.chunk_views
         rec["info"] = info
 
+    def write_blend_groups(self, orders: np.ndarray) -> tuple[tuple[tuple[tuple[int, ...], int, int], ...], ...]:
+        """Group each chunk's views by their blended draws' back-to-front order (`orders`:
+        (B, blended draws) indices, farthest first) and list the groups' views; per chunk,
+        ((order, first instance, instances), ...) for PassContext.blend_groups."""
+        n = len(orders)
+        unique, inverse = np.unique(orders, axis=0, return_inverse=True)
+        inverse = inverse.reshape(-1)
+        chunks = []
+        c = self.chunk_views
+        for start in range(0, n, c):
+            ids = inverse[start:start + c]
+            perm = np.argsort(ids, kind="stable")
+            self.group_lists[start:start + len(ids)] = perm + start
+            groups, counts = np.unique(ids, return_counts=True)
+            offsets = np.concatenate([[0], np.cumsum(counts)[:-1]])
+            chunks.append(tuple((tuple(unique[g].tolist()), int(self.tail + start + o), int(k))
+                                for g, o, k in zip(groups, offsets, counts, strict=True)))
+        return tuple(chunks)
+
     # --- commands ---------------------------------------------------------------------------
     def command_buffer(self, target: BatchTarget, frame: Frame, views: int, tbn: L.TbnMode,
-                       alpha_mask: bool, plan: ShadowPlan, order: tuple[int, ...],
-                       prepass: bool) -> Commands:
-        key = (id(target), views, tbn, alpha_mask, plan, order, prepass, self.capacity)
+                       alpha_mask: bool, plan: ShadowPlan, groups: tuple, prepass: bool) -> Commands:
+        """The batch's commands (recorded on first use): `groups` from write_blend_groups."""
+        key = (id(target), views, tbn, alpha_mask, plan, groups, prepass, self.capacity)
         rec = self._recorded.get(frame.index)
         if rec is not None and rec.key == key:
             return rec.cmd
         if rec is not None:
             rec.cmd.free()
-        cmd = self._record(target, frame, views, tbn, alpha_mask, plan, order, prepass)
+        cmd = self._record(target, frame, views, tbn, alpha_mask, plan, groups, prepass)
         self._recorded[frame.index] = _Recorded(key, cmd)
         return cmd
 
     def _record(self, target: BatchTarget, frame: Frame, views: int, tbn: L.TbnMode,
-                alpha_mask: bool, plan: ShadowPlan, order: tuple[int, ...],
-                prepass: bool) -> Commands:
+                alpha_mask: bool, plan: ShadowPlan, groups: tuple, prepass: bool) -> Commands:
         gs, ring, slot = self.gpu_scene, self.ring, self.slots[frame.index]
         names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
         gs.ensure_streams(tuple(names))
@@ -186,7 +212,7 @@ class BatchViews:
         cmd.bind_pipeline(self.cull)
         cmd.bind_set(0, self.cull_set)
         cmd.push(np.array([views, self.draw_count, self.chunk_views], np.uint32))
-        cmd.dispatch(*groups((views * self.draw_count, 1, 1), (64, 1, 1)))
+        cmd.dispatch(*work_groups((views * self.draw_count, 1, 1), (64, 1, 1)))
         cmd.memory_barrier("compute", "indirect|vertex")
         ring.stamp(cmd, frame, 2)
         shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
@@ -199,9 +225,9 @@ class BatchViews:
                 pipeline=lambda p: self.recorder.pipeline(target, tbn, p, prepass, batch=True),
                 frame_sets=(self.sets0[frame.index], slot.set2), material_sets=gs.material_sets,
                 vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
-                blend_order=order, prepass=prepass, shadow_set=shadow_set,
+                prepass=prepass, shadow_set=shadow_set,
                 indirect=self.commands, indirect_base=chunk * self.draw_count,
-                views=(chunk * c, n))
+                views=(chunk * c, n), blend_groups=groups[chunk])
             record_passes(cmd, ctx)
             target.record_chunk_end(cmd, chunk, n)
         target.record_host_barrier(cmd)

@@ -118,6 +118,9 @@ class PassContext:
     indirect: Any = None
     indirect_base: int = 0
     views: tuple[int, int] | None = None
+    # A batch's blended draws: per group of views sharing one back-to-front order, (order,
+    # first instance, instances): the group's views are listed from that first instance on.
+    blend_groups: tuple[tuple[tuple[int, ...], int, int], ...] | None = None
 
 
 def record_passes(cmd: Commands, ctx: PassContext, names: tuple[str, ...] | None = None) -> None:
@@ -143,14 +146,21 @@ def record_passes(cmd: Commands, ctx: PassContext, names: tuple[str, ...] | None
             continue
         draws = [(i, d) for i, (d, c) in enumerate(zip(ctx.draws, ctx.classes, strict=True))
                  if c == p.draw_class]
-        if p.back_to_front and len(ctx.blend_order) == len(draws):
-            draws = [draws[i] for i in ctx.blend_order]
-        if draws:
-            _record_draws(cmd, ctx, p, draws)
+        if p.back_to_front and ctx.blend_groups is not None:
+            for order, first, count in ctx.blend_groups:
+                if draws:
+                    _record_draws(cmd, ctx, p, [draws[i] for i in order], (first, count))
+        else:
+            if p.back_to_front and len(ctx.blend_order) == len(draws):
+                draws = [draws[i] for i in ctx.blend_order]
+            if draws:
+                _record_draws(cmd, ctx, p, draws)
         ctx.stamp(p.name)
 
 
-def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[tuple[int, Any]]) -> None:
+def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[tuple[int, Any]],
+                  instanced: tuple[int, int] | None = None) -> None:
+    """`instanced`: (first instance, instances) of every draw (a batch's group of views)."""
     cmd.bind_pipeline(ctx.pipeline(p))
     cmd.bind_set(0, ctx.frame_sets[0])
     cmd.bind_set(2, ctx.frame_sets[1])
@@ -163,7 +173,10 @@ def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[tupl
             cmd.bind_set(1, ctx.material_sets[d.material])
             bound = d.material
         cmd.push(d.push)
-        if ctx.indirect is not None:
+        if instanced is not None:
+            cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset,
+                             first_instance=instanced[0], instances=instanced[1])
+        elif ctx.indirect is not None:
             cmd.draw_indexed_indirect(ctx.indirect, (ctx.indirect_base + index) * 20)
         else:
             cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset, first_instance=index)

@@ -248,6 +248,14 @@ class Renderer:
         d = np.sum((centers - np.asarray(eye, dtype=np.float64)) ** 2, axis=1)
         return tuple(np.argsort(-d, kind="stable").tolist())
 
+    def _blend_orders(self, eyes: np.ndarray) -> np.ndarray:
+        """`blend_order` of each of (B, 3) eyes: (B, blended draws) int, the same orders."""
+        centers = self._blend_centers
+        if len(centers) < 2:
+            return np.broadcast_to(np.arange(len(centers)), (len(eyes), len(centers)))
+        d = np.sum((centers[None, :, :] - eyes[:, None, :]) ** 2, axis=2)
+        return np.argsort(-d, axis=1, kind="stable")
+
     # --- the frame path ---------------------------------------------------------------------
     def default_camera(self) -> Camera:
         if self.scene.cameras:
@@ -550,8 +558,9 @@ class Renderer:
         size : (width, height) of every view.
         lights, options, linear, option_overrides : as `render`.
         depth : also return (B, H, W) float32 distances along each view's axis.
-        outputs : as `render`'s, stacked per view; "color" and "depth" come from the batch,
-            the others (ids, normals, range) from the dataset outputs' pass, view by view.
+        outputs : as `render`'s, stacked per view; "color" comes from the batch, the others
+            (depth, range, ids, normals) from the dataset outputs' pass, view by view (as
+            `render` makes them).
         batch : views per submission: "auto" (as many as fit in a quarter of the device's
             memory, at most 2048 layers a chunk) or a positive integer; larger batches are
             split into several submissions.
@@ -561,26 +570,24 @@ class Renderer:
         (B, H, W, 4) uint8 sRGB (float32 linear with `linear`); with `depth` a tuple (colour,
         depth); with `outputs` {name: (B, ...) array}. View i equals `render` of view i
         (`CameraBatch.camera(i)`) bit for bit, except that directional lights' shadow maps
-        are one map over the whole scene (docs/batch.md) and blended draws are sorted for the
-        first view.
+        are one map over the whole scene, shared by the views (docs/batch.md).
         """
         base = self.default_camera()
         views = as_camera_batch(cameras, base)
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
         wanted = self._check_outputs(outputs, self.offscreen_target(size, linear)) if outputs else ()
-        extra = tuple(n for n in wanted if n not in ("color", "depth"))
+        # The dataset outputs but colour come from their own pass (as `render` makes them).
+        extra = tuple(n for n in wanted if n != "color")
         if not self.device.batch_views or self.uses_compute(self.offscreen_target(size, linear), opts):
             # No layered rendering here (or the compute path asked for): view by view.
             frames = list(self.render_many((views.camera(i) for i in range(len(views))), lights,
-                                           size, opts, linear, depth or "depth" in wanted,
-                                           outputs=wanted or None))
+                                           size, opts, linear, depth, outputs=wanted or None))
             return _stack_frames(frames, depth, wanted)
-        per = self._batch_views_per_submission(size, linear, depth or "depth" in wanted, batch)
+        per = self._batch_views_per_submission(size, linear, depth, batch)
         colors, depths = [], []
         for start in range(0, len(views), per):
             part = _slice_batch(views, start, min(start + per, len(views)))
-            color, dist = self._render_batch_part(part, size, lights, opts, linear,
-                                                  depth or "depth" in wanted)
+            color, dist = self._render_batch_part(part, size, lights, opts, linear, depth)
             colors.append(color)
             depths.append(dist)
         color = colors[0] if len(colors) == 1 else np.concatenate(colors)
@@ -590,8 +597,6 @@ class Renderer:
         result: dict[str, np.ndarray] = {}
         if "color" in wanted:
             result["color"] = color
-        if "depth" in wanted:
-            result["depth"] = dist  # type: ignore[assignment]
         if extra:
             frames = list(self.render_many((views.camera(i) for i in range(len(views))), lights,
                                            size, opts, linear, outputs=extra))
@@ -644,8 +649,9 @@ class Renderer:
         write_frame_uniforms(slot, first, frame_lights, size, opts, linear, self.bounds,
                              self.frame_lighting(opts), rows)
         bv.write_views(terms, views.eye)
-        cmd = bv.command_buffer(target, frame, n, opts.tbn, opts.alpha_mask, plan,
-                                self.blend_order(first.eye), self.prepass_for(target))
+        groups = bv.write_blend_groups(self._blend_orders(views.eye))
+        cmd = bv.command_buffer(target, frame, n, opts.tbn, opts.alpha_mask, plan, groups,
+                                self.prepass_for(target))
         frame.submit(cmd)
         frame.stamped = self.ring.query_pool is not None
         frame.wait()
