@@ -1,0 +1,176 @@
+# The glTF compression codecs, each behind an optional package: EXT_meshopt_compression
+# (bufferView-level, through the meshoptimizer package's decoder and filters) and
+# KHR_draco_mesh_compression (primitive-level, through DracoPy). The packages are imported on
+# first use, so that a scene without compressed data never pays for them and a machine without
+# them still loads everything else. Every size is checked before a decoder allocates: a corrupt
+# or hostile payload is a SceneError naming the file, never a crash or a gigabyte allocation.
+# References: EXT_meshopt_compression (Khronos glTF extension registry, modes and Appendix B
+# filters); KHR_draco_mesh_compression (ibid.).
+
+from __future__ import annotations
+
+import importlib
+from types import ModuleType
+
+import numpy as np
+
+from vkpbr.errors import SceneError
+
+__all__ = ["CODEC_PACKAGES", "codec", "decode_draco", "decode_meshopt", "missing_codec"]
+
+# Extension -> (module to import, the pip requirement that provides it).
+CODEC_PACKAGES: dict[str, tuple[str, str]] = {
+    "EXT_meshopt_compression": ("meshoptimizer", "meshoptimizer (pip install 'vkpbr[bake]')"),
+    "KHR_draco_mesh_compression": ("DracoPy", "DracoPy (pip install 'vkpbr[codecs]')"),
+}
+_MODULES: dict[str, ModuleType | None] = {}
+
+# A decoded bufferView may be larger than the file by this much plus _MAX_RATIO times its
+# compressed bytes: meshopt's attribute codec reaches ~60:1 on constant data, never more.
+_SLACK = 64 << 20
+_MAX_RATIO = 128
+
+
+def codec(extension: str) -> ModuleType | None:
+    """The decoder module of a codec extension, None when its package is not installed."""
+    name = CODEC_PACKAGES[extension][0]
+    if name not in _MODULES:
+        try:
+            _MODULES[name] = importlib.import_module(name)
+        except ImportError:  # absent, or a broken build of it: the same to the user
+            _MODULES[name] = None
+    return _MODULES[name]
+
+
+def missing_codec(extension: str) -> str | None:
+    """The requirement to install for `extension`, None when it is there (or not a codec)."""
+    if extension not in CODEC_PACKAGES or codec(extension) is not None:
+        return None
+    return CODEC_PACKAGES[extension][1]
+
+
+def decode_meshopt(path: object, what: str, data: memoryview, info: dict,
+                   view_length: int) -> memoryview:
+    """Decompress one EXT_meshopt_compression bufferView.
+
+    Parameters
+    ----------
+    path : the glTF file (for errors).
+    what : "bufferView N" (for errors).
+    data : the compressed bytes (the extension's byteOffset/byteLength range of its buffer).
+    info : the extension object (count, byteStride, mode, filter).
+    view_length : the parent bufferView's byteLength, which must be count * byteStride.
+
+    Returns
+    -------
+    The decoded bytes, view_length long, filters applied.
+
+    Raises
+    ------
+    SceneError : bad parameters, a size mismatch or a payload the decoder rejects.
+    """
+    count, stride = info.get("count"), info.get("byteStride")
+    mode, filt = info.get("mode"), info.get("filter", "NONE")
+    for name, v in (("count", count), ("byteStride", stride)):
+        if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+            raise SceneError(path, f"{what}: EXT_meshopt_compression {name} {v!r} is invalid")
+    if count * stride != view_length:
+        raise SceneError(path, f"{what}: EXT_meshopt_compression count {count} x byteStride "
+                               f"{stride} != the bufferView's byteLength {view_length}")
+    if view_length > _SLACK + _MAX_RATIO * len(data):
+        raise SceneError(path, f"{what}: EXT_meshopt_compression claims {view_length} bytes "
+                               f"from {len(data)} compressed ones")
+    mo = codec("EXT_meshopt_compression")
+    assert mo is not None  # the caller checked
+    try:
+        if mode == "ATTRIBUTES":
+            if stride % 4 or not 0 < stride <= 256:
+                raise SceneError(path, f"{what}: ATTRIBUTES byteStride {stride} is not a "
+                                       "multiple of 4 in 4..256")
+            out = _as_bytes(mo.decode_vertex_buffer(count, stride, data), view_length)
+            return memoryview(_filter(path, what, mo, out, count, stride, filt))
+        if mode in ("TRIANGLES", "INDICES"):
+            if stride not in (2, 4):
+                raise SceneError(path, f"{what}: {mode} byteStride {stride} is not 2 or 4")
+            if filt != "NONE":
+                raise SceneError(path, f"{what}: {mode} with filter {filt!r}")
+            if mode == "TRIANGLES":
+                if count % 3:
+                    raise SceneError(path, f"{what}: TRIANGLES count {count} is not a "
+                                           "multiple of 3")
+                idx = mo.decode_index_buffer(count, stride, data)
+            else:
+                idx = mo.decode_index_sequence(count, stride, data)
+            return memoryview(np.asarray(idx).astype("<u2" if stride == 2 else "<u4").tobytes())
+    except (RuntimeError, ValueError) as exc:
+        # The C decoder returns a non-zero code for a truncated or corrupt stream.
+        raise SceneError(path, f"{what}: corrupt EXT_meshopt_compression data ({exc})") from exc
+    raise SceneError(path, f"{what}: unknown EXT_meshopt_compression mode {mode!r}")
+
+
+def _as_bytes(arr: np.ndarray, n: int) -> np.ndarray:
+    """A decoder's output array as n uint8."""
+    out = np.ascontiguousarray(arr).view(np.uint8).reshape(-1)
+    if out.size != n:
+        raise ValueError(f"decoded {out.size} bytes, expected {n}")
+    return out
+
+
+def _filter(path: object, what: str, mo: ModuleType, raw: np.ndarray, count: int, stride: int,
+            filt: object) -> bytes:
+    """Apply an ATTRIBUTES filter (Appendix B) to the decoded bytes."""
+    if filt == "NONE":
+        return raw.tobytes()
+    if filt == "OCTAHEDRAL":
+        if stride not in (4, 8):
+            raise SceneError(path, f"{what}: OCTAHEDRAL filter needs byteStride 4 or 8")
+        typed = raw.view("<i1" if stride == 4 else "<i2")
+        return np.asarray(mo.decode_filter_oct(typed, count, stride)).tobytes()
+    if filt == "QUATERNION":
+        if stride != 8:
+            raise SceneError(path, f"{what}: QUATERNION filter needs byteStride 8")
+        return np.asarray(mo.decode_filter_quat(raw.view("<i2"), count, stride)).tobytes()
+    if filt == "EXPONENTIAL":
+        return np.asarray(mo.decode_filter_exp(raw.view("<u4"), count, stride)).tobytes()
+    raise SceneError(path, f"{what}: unknown EXT_meshopt_compression filter {filt!r}")
+
+
+def decode_draco(path: object, what: str, data: bytes) -> tuple[np.ndarray, dict[int, np.ndarray]]:
+    """Decode one KHR_draco_mesh_compression payload.
+
+    Returns
+    -------
+    faces : (M,) uint32 triangle-list indices.
+    attributes : Draco unique id -> (N, K) decoded values (float32 for quantised floats, the
+        stored integer type otherwise), every one with the same N.
+
+    Raises
+    ------
+    SceneError : a payload DracoPy rejects, a point cloud, or attributes of unequal lengths.
+    """
+    draco = codec("KHR_draco_mesh_compression")
+    assert draco is not None  # the caller checked
+    try:
+        mesh = draco.decode(bytes(data))
+    except Exception as exc:  # noqa: BLE001 - DracoPy raises bare Exception subclasses and
+        # ValueError/RuntimeError from its C++ layer; every one means "not a valid payload"
+        raise SceneError(path, f"{what}: corrupt KHR_draco_mesh_compression data "
+                               f"({type(exc).__name__}: {exc})") from exc
+    faces = getattr(mesh, "faces", None)
+    if faces is None:
+        raise SceneError(path, f"{what}: the Draco payload is a point cloud, not a mesh")
+    faces = np.asarray(faces, dtype=np.int64).reshape(-1)
+    attrs: dict[int, np.ndarray] = {}
+    n = None
+    for a in mesh.attributes:
+        arr = np.asarray(a["data"])
+        arr = arr.reshape(len(arr), -1) if arr.ndim else arr.reshape(1, -1)
+        n = len(arr) if n is None else n
+        if len(arr) != n:
+            raise SceneError(path, f"{what}: Draco attributes of {n} and {len(arr)} points")
+        attrs[int(a["unique_id"])] = arr
+    if n is None:
+        raise SceneError(path, f"{what}: the Draco payload holds no attributes")
+    if len(faces) and (faces.min() < 0 or faces.max() >= n):
+        raise SceneError(path, f"{what}: Draco face index {int(faces.max())} >= {n} points")
+    return faces.astype(np.uint32), attrs
