@@ -98,10 +98,18 @@ def decode_meshopt(path: object, what: str, data: memoryview, info: dict,
                 if count % 3:
                     raise SceneError(path, f"{what}: TRIANGLES count {count} is not a "
                                            "multiple of 3")
-                idx = mo.decode_index_buffer(count, stride, data)
+                idx = mo.decode_index_buffer(count, 4, data)
             else:
-                idx = mo.decode_index_sequence(count, stride, data)
-            return memoryview(np.asarray(idx).astype("<u2" if stride == 2 else "<u4").tobytes())
+                idx = mo.decode_index_sequence(count, 4, data)
+            # Decoded as 32-bit whatever the stride: the bitstream does not depend on it, and
+            # the binding returns a uint32 array (a 2-byte decode would be packed into it).
+            idx = np.asarray(idx, dtype=np.uint32).reshape(-1)
+            if len(idx) != count:
+                raise ValueError(f"decoded {len(idx)} indices, expected {count}")
+            if stride == 2 and len(idx) and int(idx.max()) > 0xFFFF:
+                raise SceneError(path, f"{what}: decoded index {int(idx.max())} does not fit "
+                                       "its 2-byte stride")
+            return memoryview(idx.astype("<u2" if stride == 2 else "<u4").tobytes())
     except (RuntimeError, ValueError) as exc:
         # The C decoder returns a non-zero code for a truncated or corrupt stream.
         raise SceneError(path, f"{what}: corrupt EXT_meshopt_compression data ({exc})") from exc
