@@ -571,3 +571,52 @@ def test_unhonourable_required_extension_is_named(tmp_path: Path) -> None:
                      required=("KHR_animation_pointer",))
     with pytest.raises(SceneError, match=r"tex\.glb.*unsupported extension.*KHR_animation_pointer"):
         load_scene(path)
+
+
+def ktx2_bytes(pixels: np.ndarray, uastc: bool = True) -> bytes:
+    """RGBA8 pixels -> a Basis Universal KTX2 (UASTC, or ETC1S) through pyktx."""
+    ktx = _need("pyktx")
+    h, w = pixels.shape[:2]
+    info = ktx.KtxTextureCreateInfo(gl_internal_format=None, base_width=w, base_height=h,
+                                    base_depth=1, vk_format=ktx.VkFormat.VK_FORMAT_R8G8B8A8_SRGB)
+    tex = ktx.KtxTexture2.create(info, ktx.KtxTextureCreateStorage.ALLOC)
+    tex.set_image_from_memory(0, 0, 0, np.ascontiguousarray(pixels).tobytes())
+    codec = ktx.KtxBasisCodec.UASTC_LDR_4x4 if uastc else ktx.KtxBasisCodec.ETC1S
+    tex.compress_basis(ktx.KtxBasisParams(codec=codec, quality_level=255,
+                                          uastc_flags=ktx.KtxPackUastcFlagBits.SLOWER))
+    return tex.write_to_memory()
+
+
+def smooth_pixels(w: int = 32, h: int = 16) -> np.ndarray:
+    y, x = np.mgrid[0:h, 0:w]
+    px = np.stack([x * 255 / (w - 1), y * 255 / (h - 1), 128 + 60 * np.sin(x / 3.0),
+                   np.full_like(x, 255)], -1)
+    return np.rint(px).astype(np.uint8)
+
+
+def test_basisu_source_transcoded(tmp_path: Path) -> None:
+    """KHR_texture_basisu picks the KTX2 image over the PNG fallback; UASTC transcodes to
+    RGBA8 within its precision (smooth content: mean error under 2, max under 16 levels)."""
+    px = smooth_pixels()
+    images = [(_png((255, 0, 0, 255)), "image/png"), (ktx2_bytes(px), "image/ktx2")]
+    scene = load_gltf(_textured(tmp_path, {"KHR_texture_basisu": {"source": 1}}, images))
+    assert scene.materials[0].base_color_texture.image == 1
+    got = decode_images(scene)[1].astype(np.int64)
+    assert got.shape == px.shape
+    err = np.abs(got - px)
+    assert err.mean() < 2.0
+    assert err.max() < 16
+    assert decode_images(scene.images, max_size=8)[1].shape == (4, 8, 4)
+
+
+def test_corrupt_ktx2_is_the_missing_texture_fallback(tmp_path: Path,
+                                                      caplog: pytest.LogCaptureFixture) -> None:
+    _need("pyktx")
+    good = ktx2_bytes(smooth_pixels(8, 8))
+    for bad in (good[:70], good[:12] + bytes(68), good[:-20], good[:100] + bytes(len(good) - 100)):
+        images = [(_png((1, 2, 3, 255)), "image/png"), (bad, "image/ktx2")]
+        scene = load_gltf(_textured(tmp_path, {"KHR_texture_basisu": {"source": 1}}, images))
+        with caplog.at_level("WARNING"):
+            out = decode_images(scene)
+        assert out[1] is None  # the renderer binds its default in its place
+        assert "cannot be decoded" in caplog.text

@@ -5,24 +5,30 @@
 # them still loads everything else. Every size is checked before a decoder allocates: a corrupt
 # or hostile payload is a SceneError naming the file, never a crash or a gigabyte allocation.
 # References: EXT_meshopt_compression (Khronos glTF extension registry, modes and Appendix B
-# filters); KHR_draco_mesh_compression (ibid.).
+# filters); KHR_draco_mesh_compression (ibid.). KHR_texture_basisu's KTX2 images are
+# transcoded to RGBA8 through pyktx (the KTX-Software binding; needs libktx) in decode_ktx2.
 
 from __future__ import annotations
 
 import importlib
+import os
+import tempfile
 from types import ModuleType
 
 import numpy as np
 
 from vkpbr.errors import SceneError
 
-__all__ = ["CODEC_PACKAGES", "codec", "decode_draco", "decode_meshopt", "missing_codec"]
+__all__ = ["CODEC_PACKAGES", "KTX2_MAGIC", "codec", "decode_draco", "decode_ktx2", "decode_meshopt",
+           "missing_codec"]
 
 # Extension -> (module to import, the pip requirement that provides it).
 CODEC_PACKAGES: dict[str, tuple[str, str]] = {
     "EXT_meshopt_compression": ("meshoptimizer", "meshoptimizer (pip install 'vkpbr[bake]')"),
     "KHR_draco_mesh_compression": ("DracoPy", "DracoPy (pip install 'vkpbr[codecs]')"),
+    "KHR_texture_basisu": ("pyktx", "pyktx (pip install 'vkpbr[ktx]'; needs libktx)"),
 }
+KTX2_MAGIC = b"\xabKTX 20\xbb\r\n\x1a\n"
 _MODULES: dict[str, ModuleType | None] = {}
 
 # A decoded bufferView may be larger than the file by this much plus _MAX_RATIO times its
@@ -37,7 +43,7 @@ def codec(extension: str) -> ModuleType | None:
     if name not in _MODULES:
         try:
             _MODULES[name] = importlib.import_module(name)
-        except ImportError:  # absent, or a broken build of it: the same to the user
+        except (ImportError, OSError):  # absent, or a broken build (pyktx without libktx)
             _MODULES[name] = None
     return _MODULES[name]
 
@@ -182,3 +188,49 @@ def decode_draco(path: object, what: str, data: bytes) -> tuple[np.ndarray, dict
     if len(faces) and (faces.min() < 0 or faces.max() >= n):
         raise SceneError(path, f"{what}: Draco face index {int(faces.max())} >= {n} points")
     return faces.astype(np.uint32), attrs
+
+
+def ktx2_size(data: bytes) -> tuple[int, int]:
+    """(width, height) from a KTX2 header (KTX 2.0 spec 3.1), read before any transcoding so
+    that the texture limits apply first; ValueError for a header that is not KTX2."""
+    if len(data) < 80 or data[:12] != KTX2_MAGIC:
+        raise ValueError("not a KTX2 file (bad identifier or truncated header)")
+    width, height = np.frombuffer(data, "<u4", count=2, offset=20)
+    return int(width), max(1, int(height))
+
+
+def decode_ktx2(data: bytes) -> np.ndarray:
+    """A KTX2 image (KHR_texture_basisu: Basis Universal ETC1S or UASTC, or plain RGBA8) ->
+    (H, W, 4) uint8 RGBA of its base level (mips are rebuilt on upload, as for PNG).
+
+    Raises
+    ------
+    ValueError : a payload libktx rejects, or a format it cannot turn into RGBA8 (the caller
+        reports it as an undecodable texture and binds the default).
+    """
+    ktx = codec("KHR_texture_basisu")
+    if ktx is None:
+        raise ValueError("KTX2 needs " + CODEC_PACKAGES["KHR_texture_basisu"][1])
+    width, height = ktx2_size(data)
+    # The binding reads only named files (no create-from-memory): a private temporary file.
+    fd, name = tempfile.mkstemp(suffix=".ktx2")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        try:
+            tex = ktx.KtxTexture2.create_from_named_file(name)
+            if tex.needs_transcoding:
+                tex.transcode_basis(ktx.KtxTranscodeFmt.RGBA32, 0)
+            elif tex.vk_format not in (ktx.VkFormat.VK_FORMAT_R8G8B8A8_UNORM,
+                                       ktx.VkFormat.VK_FORMAT_R8G8B8A8_SRGB):
+                raise ValueError(f"KTX2 format {tex.vk_format.name} is not supported")
+            offset = tex.image_offset(0, 0, 0)
+            raw = tex.data()
+        except ktx.KtxError as exc:
+            raise ValueError(f"corrupt KTX2 ({exc})") from exc
+    finally:
+        os.unlink(name)
+    n = width * height * 4
+    if offset + n > len(raw):
+        raise ValueError("KTX2 level 0 is shorter than its header says")
+    return np.frombuffer(raw, np.uint8, count=n, offset=offset).reshape(height, width, 4).copy()
