@@ -26,7 +26,8 @@ from vkpbr.scene.types import expand_instances
 
 
 def _need(module: str):  # noqa: ANN202
-    return pytest.importorskip(module, reason=f"{module} is not installed (extra: codecs/bake)")
+    extra = {"DracoPy": "codecs", "meshoptimizer": "bake", "pyktx": "ktx"}[module]
+    return pytest.importorskip(module, reason=f"{module} is not installed (extra: {extra})")
 
 
 def _without(monkeypatch: pytest.MonkeyPatch, extension: str) -> None:
