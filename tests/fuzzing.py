@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 SEED = 1111
-N_FORMATS = 11  # the rows of the table (Corpus.formats)
+N_FORMATS = 12  # the rows of the table (Corpus.formats)
 
 _EVIL = [1e30, 1e308, -1, 2**31, 2**32, 2**64, -(2**40), 0, 7, float("nan"), float("inf"), "x",
          "../../etc/passwd", None, [], {}, True, 3.5, [1, 2], [1e30] * 3, {"a": 1}]  # fmt: skip
@@ -261,6 +261,21 @@ class Corpus:
             (f / "mb.gltf").write_text(json.dumps(doc))
             return f / "mb.gltf", "mb.gltf"
 
+        codec_seeds = _codec_seeds()
+
+        def codec_payload(rng: random.Random) -> tuple[Path, str, bool, bool]:
+            # issue 18: a Draco / meshopt / KTX2 / WebP payload with its bytes mutated, or its
+            # glTF's JSON (counts, strides, modes, ids) mutated; textures decoded too.
+            name = rng.choice(sorted(codec_seeds))
+            build, payload = codec_seeds[name]
+            if rng.random() < 0.6:
+                doc, binary = build(mutate_bytes(payload, rng))
+            else:
+                doc, binary = build(payload)
+                doc = mutate_json(doc, rng)
+            (f / "mc.glb").write_bytes(_plain_glb(doc, binary))
+            return f / "mc.glb", "mc.glb", False, True
+
         return {
             "gltf json": gltf_json,
             "gltf bytes": bytes_of("s.gltf", self.gltf_bytes),
@@ -273,7 +288,117 @@ class Corpus:
             "texture bytes and bombs": texture,
             "count bombs": bomb,
             "path tricks": path_trick,
+            "codec payloads (Draco, meshopt, KTX2, WebP)": codec_payload,
         }
+
+
+def _plain_glb(doc: dict, binary: bytes) -> bytes:
+    """A GLB of `doc` with `binary` as its BIN chunk, as given (unlike _glb: no image added)."""
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    binary = binary + b"\0" * (-len(binary) % 4)
+    body = (struct.pack("<I4s", len(text), b"JSON") + text
+            + struct.pack("<I4s", len(binary), b"BIN\0") + binary)
+    return struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body
+
+
+def _codec_seeds() -> dict[str, tuple[Callable[[bytes], tuple[dict, bytes]], bytes]]:
+    """name -> (payload -> (glTF JSON, GLB binary), seed payload) for each compressed form
+    whose encoder is installed (WebP always: Pillow)."""
+    import io
+
+    import numpy as np
+    from gltf_files import GltfFile, grid_mesh
+    from PIL import Image as PILImage
+
+    g = grid_mesh(4)
+    seeds: dict = {}
+
+    def finish(f: GltfFile) -> tuple[dict, bytes]:
+        doc = json.loads(json.dumps(f.doc))
+        doc["buffers"] = [{"byteLength": len(f.buffers[0])}]
+        return doc, bytes(f.buffers[0])
+
+    def textured(mime: str, ext: str) -> Callable[[bytes], tuple[dict, bytes]]:
+        def build(payload: bytes) -> tuple[dict, bytes]:
+            f = GltfFile()
+            f.used(ext, required=True)
+            f.doc["images"] = [{"bufferView": f.view(payload), "mimeType": mime}]
+            f.doc["textures"] = [{"extensions": {ext: {"source": 0}}}]
+            f.doc["materials"] = [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]
+            f.node(mesh=f.mesh({"POSITION": f.accessor(g["POSITION"]),
+                                "TEXCOORD_0": f.accessor(g["TEXCOORD_0"])},
+                               f.accessor(g["indices"]), material=0))
+            return finish(f)
+        return build
+
+    px = np.random.default_rng(0).integers(0, 256, (8, 8, 4), np.uint8)
+    buf = io.BytesIO()
+    PILImage.fromarray(px, "RGBA").save(buf, "WEBP")
+    seeds["webp"] = (textured("image/webp", "EXT_texture_webp"), buf.getvalue())
+    try:
+        import pyktx as ktx
+
+        info = ktx.KtxTextureCreateInfo(gl_internal_format=None, base_width=8, base_height=8,
+                                        base_depth=1, vk_format=ktx.VkFormat.VK_FORMAT_R8G8B8A8_SRGB)
+        tex = ktx.KtxTexture2.create(info, ktx.KtxTextureCreateStorage.ALLOC)
+        tex.set_image_from_memory(0, 0, 0, px.tobytes())
+        tex.compress_basis(ktx.KtxBasisParams(codec=ktx.KtxBasisCodec.UASTC_LDR_4x4))
+        seeds["ktx2"] = (textured("image/ktx2", "KHR_texture_basisu"), tex.write_to_memory())
+    except (ImportError, OSError):
+        pass
+    try:
+        import DracoPy
+
+        draco = DracoPy.encode(g["POSITION"], g["indices"].reshape(-1, 3), preserve_order=True)
+        n = len(g["POSITION"])
+
+        def build_draco(payload: bytes) -> tuple[dict, bytes]:
+            f = GltfFile()
+            f.used("KHR_draco_mesh_compression", required=True)
+            view = f.view(payload)
+            pos = f.accessor(None, ctype=5126, ncomp=3, count=n)
+            ind = f.accessor(None, ctype=5125, ncomp=1, count=len(g["indices"]))
+            f.node(mesh=f.mesh({"POSITION": pos}, ind, extensions={
+                "KHR_draco_mesh_compression": {"bufferView": view, "attributes": {"POSITION": 0}}}))
+            return finish(f)
+
+        seeds["draco"] = (build_draco, draco)
+    except ImportError:
+        pass
+    try:
+        import meshoptimizer as mo
+
+        pos = np.ascontiguousarray(g["POSITION"])
+        vert = mo.encode_vertex_buffer(pos.view(np.uint8).reshape(len(pos), 12), len(pos), 12)
+        idx = mo.encode_index_buffer(g["indices"], len(g["indices"]))
+
+        def build_meshopt(payload: bytes) -> tuple[dict, bytes]:
+            f = GltfFile()
+            f.used("EXT_meshopt_compression", required=True)
+            fallback = f.add_buffer(None, fallback=True)
+            cut = min(len(vert), len(payload))  # the mutated bytes: vertex stream, then index
+            parts = [(payload[:cut], len(pos), 12, "ATTRIBUTES"),
+                     (payload[cut:], len(g["indices"]), 4, "TRIANGLES")]
+            views = []
+            for data, count, stride, mode in parts:
+                offset = f.append(0, data)
+                views.append(f.view(bytes(count * stride), stride if mode == "ATTRIBUTES" else None,
+                                    buffer=fallback, EXT_meshopt_compression={
+                                        "buffer": 0, "byteOffset": offset, "byteLength": len(data),
+                                        "byteStride": stride, "count": count, "mode": mode}))
+            a = f.accessor(None, views[0], ctype=5126, ncomp=3, count=len(pos))
+            i = f.accessor(None, views[1], ctype=5125, ncomp=1, count=len(g["indices"]))
+            f.node(mesh=f.mesh({"POSITION": a}, i))
+            doc, binary = finish(f)
+            doc["buffers"].append({"byteLength": f.placeholder_lengths[fallback],
+                                   "extensions": {"EXT_meshopt_compression": {"fallback": True}}})
+            return doc, binary
+
+        seeds["meshopt"] = (build_meshopt, vert + idx)
+    except ImportError:
+        pass
+    return seeds
 
 
 # --- path tricks ----------------------------------------------------------------------------

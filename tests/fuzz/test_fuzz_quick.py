@@ -1,4 +1,4 @@
-"""The fuzz suite's quick tier (issue 11): 60 seeded inputs of each of 11 formats (path tricks included) through
+"""The fuzz suite's quick tier (issue 11): 60 seeded inputs of each of 12 formats (path tricks and codec payloads included) through
 `load_scene`; every one must load or fail with vkpbr's one-line error naming the file
 (tests/fuzzing.py). The long tier is `scripts/fuzz.sh N`."""
 

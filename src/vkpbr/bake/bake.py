@@ -47,7 +47,7 @@ from ..scene.loader import load_scene
 from ..scene.mips import mip_chain
 from ..scene.resources import ResourcePolicy, is_regular_file, read_resource
 from ..scene.textures import decode_images
-from ..scene.types import Mesh, Scene
+from ..scene.types import Mesh, Scene, expand_instances
 from .frames import (
     frame_angular_error_deg,
     pack_qtangent,
@@ -241,7 +241,7 @@ def bake_scene(scene: Scene, progress: bool = False) -> BakedScene:
     return BakedScene(
         name=scene.name, mesh_table=table, mesh_names=[m.name for m in scene.meshes],
         streams=streams, materials=list(scene.materials), images=_images(scene),
-        nodes=list(scene.nodes), lights=list(scene.lights), cameras=list(scene.cameras),
+        nodes=expand_instances(scene.nodes), lights=list(scene.lights), cameras=list(scene.cameras),
         bake_seconds=time.perf_counter() - start,
     )
 

@@ -37,7 +37,7 @@ from vkpbr.gpu.descriptors import DescriptorPool, DescriptorSetLayout, Descripto
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, TextureUploader
 from vkpbr.render import layouts as L
-from vkpbr.scene.types import Material, Mesh, Scene, TextureRef
+from vkpbr.scene.types import Material, Mesh, Node, Scene, TextureRef, expand_instances
 
 __all__ = ["GpuScene", "Draw", "prepare_mesh", "uv_transform_rows"]
 
@@ -418,7 +418,7 @@ class GpuScene:
     # --- draws ------------------------------------------------------------------------------
     def _build_draws(self) -> list[Draw]:
         draws = []
-        for node_index, node in enumerate(self.scene.nodes):
+        for node_index, node in _draw_nodes(self.scene.nodes):
             if not 0 <= node.mesh < len(self.scene.meshes):
                 continue
             mesh = self.scene.meshes[node.mesh]
@@ -450,3 +450,12 @@ class GpuScene:
             self._owned.pop().destroy()
 
 
+# --- EXT_mesh_gpu_instancing, until the renderer draws instanced ------------------------------
+def _draw_nodes(nodes: list[Node]) -> list[tuple[int, Node]]:
+    """(index in scene.nodes, node) per draw: a node with `instances` (EXT_mesh_gpu_instancing)
+    becomes one draw per instance, each with its world matrix. TEMPORARY: this is the one place
+    instances are expanded; drawing them instanced (one draw, K matrices) replaces it."""
+    out: list[tuple[int, Node]] = []
+    for i, node in enumerate(nodes):
+        out += [(i, n) for n in expand_instances([node])]
+    return out

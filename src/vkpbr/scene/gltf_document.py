@@ -23,9 +23,11 @@ import numpy as np
 import pygltflib
 
 from vkpbr.errors import SceneError
+from vkpbr.scene.gltf_codecs import decode_meshopt, missing_codec
 from vkpbr.scene.resources import ResourcePolicy, read_error, read_resource
 
-__all__ = ["SUPPORTED_EXTENSIONS", "GltfDocument", "check_index", "ext", "floats", "get", "scalar"]
+__all__ = ["SUPPORTED_EXTENSIONS", "GltfDocument", "check_index", "ext", "floats", "get", "scalar",
+           "to_float"]
 
 SUPPORTED_EXTENSIONS = frozenset(
     {
@@ -33,6 +35,16 @@ SUPPORTED_EXTENSIONS = frozenset(
         "KHR_lights_punctual",
         "KHR_materials_emissive_strength",
         "KHR_mesh_quantization",  # integer attributes: handled by the generic accessor decoder
+    }
+) | frozenset(
+    {
+        # The loading blockers (issue 18); the codecs need their optional packages
+        # (gltf_codecs.CODEC_PACKAGES), which extensionsRequired checks for.
+        "EXT_meshopt_compression",  # bufferViews, decoded in buffer_view()
+        "KHR_draco_mesh_compression",  # primitives, decoded in gltf_meshes
+        "KHR_texture_basisu",  # texture sources (_pick_texture_sources), KTX2 in textures.py
+        "EXT_texture_webp",  # texture sources, decoded by Pillow
+        "EXT_mesh_gpu_instancing",  # Node.instances (gltf_nodes)
     }
 )
 _DTYPES = {5120: "<i1", 5121: "<u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126: "<f4"}
@@ -80,6 +92,19 @@ def scalar(value: object, default: float, what: str, path: object) -> float:
     return floats(None if value is None else [value], 1, (default,), what, path)[0]
 
 
+def to_float(arr: np.ndarray, normalized: bool) -> np.ndarray:
+    """Integer or float values -> float32, `normalized` integers scaled to [0, 1] / [-1, 1].
+
+    Non-normalized integers keep their values (KHR_mesh_quantization: the node transform or
+    KHR_texture_transform dequantises them)."""
+    out = arr.astype(np.float32)
+    if normalized and arr.dtype.kind in "iu":
+        info = np.iinfo(arr.dtype)
+        # Signed: c / max, clamped at -1 (glTF spec 3.11 "normalized" table).
+        out = np.maximum(out / np.float32(info.max), np.float32(-1.0))
+    return out
+
+
 def _parse_glb(path: Path, raw: bytes) -> tuple[bytes, memoryview | None]:
     """Split a GLB container into its JSON text and optional BIN chunk (glTF spec 4.4)."""
     if len(raw) < 20:
@@ -102,6 +127,28 @@ def _parse_glb(path: Path, raw: bytes) -> tuple[bytes, memoryview | None]:
         raise SceneError(path, "GLB does not start with a JSON chunk")
     bin_chunk = next((c for k, c in chunks[1:] if k == 0x004E4942), None)
     return bytes(chunks[0][1]), bin_chunk
+
+
+def _pick_texture_sources(doc: dict, basisu: bool) -> None:
+    """Point each texture's `source` at its KHR_texture_basisu or EXT_texture_webp image
+    when the file gives one (in place, before pygltflib sees the JSON): the extension image is
+    the one the exporter meant, `source` (PNG/JPEG, or absent) only its fallback. The rest of
+    the importer then reads `source` alone. KTX2 is decoded in textures.py (only when `basisu`:
+    its decoder is installed; otherwise the fallback stays), WebP by Pillow."""
+    textures = doc.get("textures")
+    if not isinstance(textures, list):
+        return
+    for tex in textures:
+        exts = tex.get("extensions") if isinstance(tex, dict) else None
+        if not isinstance(exts, dict):
+            continue
+        for name in ("KHR_texture_basisu", "EXT_texture_webp"):
+            if name == "KHR_texture_basisu" and not basisu:
+                continue
+            info = exts.get(name)
+            if isinstance(info, dict) and info.get("source") is not None:
+                tex["source"] = info["source"]  # range-checked where it is used
+                break
 
 
 class GltfDocument:
@@ -133,6 +180,10 @@ class GltfDocument:
         unsupported = [str(e) for e in required if e not in SUPPORTED_EXTENSIONS]
         if unsupported:
             raise SceneError(path, f"requires unsupported extension(s): {', '.join(unsupported)}")
+        for name in required:
+            if (package := missing_codec(name)) is not None:
+                raise SceneError(path, f"requires {name}, which needs the {package} package")
+        _pick_texture_sources(doc, basisu=missing_codec("KHR_texture_basisu") is None)
         with warnings.catch_warnings():
             # dataclasses_json warns about every optional field given as null: noise, not news.
             warnings.simplefilter("ignore")
@@ -144,6 +195,7 @@ class GltfDocument:
                 raise SceneError(path, f"invalid glTF structure ({exc})") from exc
         self.doc = doc
         self.buffers: dict[int, memoryview] = {}
+        self.decoded_views: dict[int, memoryview] = {}  # EXT_meshopt_compression
         self.accessors: dict[int, np.ndarray] = {}
 
     # -- buffers ------------------------------------------------------------------------------
@@ -160,6 +212,12 @@ class GltfDocument:
         if isinstance(length, bool) or not isinstance(length, int) or length < 0:
             raise SceneError(self.path, f"buffer {i}: bad byteLength {length!r}")
         if uri is None:
+            if ext(buf, "EXT_meshopt_compression").get("fallback") and (
+                    self.bin_chunk is None or i != 0):
+                # A placeholder: only compressed bufferViews may point at it (their data comes
+                # from the extension's buffer), so reaching here is the file's fault.
+                raise SceneError(self.path, f"buffer {i} is an EXT_meshopt_compression fallback "
+                                            "without data, read by an uncompressed bufferView")
             if self.bin_chunk is None or i != 0:
                 raise SceneError(self.path, f"buffer {i} has no uri and there is no GLB BIN chunk")
             data = self.bin_chunk
@@ -211,12 +269,22 @@ class GltfDocument:
         views = self.gltf.bufferViews or []
         i = check_index(self.path, index, len(views), "bufferView")
         view = views[i]
-        data = self.buffer(get(view, "buffer"))
         offset, length = get(view, "byteOffset", 0), get(view, "byteLength", 0)
         stride = get(view, "byteStride", 0)
         for name, v in (("byteOffset", offset), ("byteLength", length), ("byteStride", stride)):
             if not isinstance(v, int) or v < 0:
                 raise SceneError(self.path, f"bufferView {i}: bad {name} {v!r}")
+        meshopt = ext(view, "EXT_meshopt_compression")
+        if meshopt:
+            package = missing_codec("EXT_meshopt_compression")
+            if package is None:
+                return self._meshopt_view(i, meshopt, length), stride
+            buf = (self.gltf.buffers or [None])[check_index(
+                self.path, get(view, "buffer"), len(self.gltf.buffers or []), "buffer")]
+            if get(buf, "uri") is None and (self.bin_chunk is None or get(view, "buffer") != 0):
+                raise SceneError(self.path, f"bufferView {i} is EXT_meshopt_compression data "
+                                            f"without a fallback; it needs the {package} package")
+        data = self.buffer(get(view, "buffer"))
         if offset + length > len(data):
             raise SceneError(
                 self.path,
@@ -224,6 +292,22 @@ class GltfDocument:
                 f"({len(data)} bytes)",
             )
         return data[offset : offset + length], stride
+
+    def _meshopt_view(self, i: int, info: dict, length: int) -> memoryview:
+        """bufferView `i` decompressed from its EXT_meshopt_compression source (cached)."""
+        if i not in self.decoded_views:
+            what = f"bufferView {i}"
+            offset, n = info.get("byteOffset", 0), info.get("byteLength")
+            for name, v in (("byteOffset", offset), ("byteLength", n)):
+                if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+                    raise SceneError(self.path, f"{what}: EXT_meshopt_compression {name} {v!r}")
+            source = self.buffer(info.get("buffer"))
+            if offset + n > len(source):
+                raise SceneError(self.path, f"{what}: EXT_meshopt_compression bytes {offset}.."
+                                            f"{offset + n} exceed their buffer ({len(source)})")
+            self.decoded_views[i] = decode_meshopt(self.path, what, source[offset:offset + n],
+                                                   info, length)
+        return self.decoded_views[i]
 
     # -- accessors ----------------------------------------------------------------------------
 
@@ -304,13 +388,6 @@ class GltfDocument:
         arr, normalized = self.accessor(index)
         if arr.shape[1] not in ncomps:
             raise SceneError(self.path, f"{what}: {arr.shape[1]} components, expected {ncomps}")
-        if arr.dtype.kind == "f":
-            return arr.astype(np.float32)
-        out = arr.astype(np.float32)
-        if normalized:
-            info = np.iinfo(arr.dtype)
-            # Signed: c / max, clamped at -1 (glTF spec 3.11 "normalized" table).
-            out = np.maximum(out / np.float32(info.max), np.float32(-1.0))
-        return out
+        return to_float(arr, normalized)
 
     # -- meshes -------------------------------------------------------------------------------

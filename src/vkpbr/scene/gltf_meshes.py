@@ -1,7 +1,9 @@
 # glTF primitives -> Mesh: attributes through the document's accessor decoder, indices
 # resolved (strips and fans turned into lists), flat normals where NORMAL is absent, triangles
 # touching non-finite positions dropped with a warning (geometry.drop_nonfinite).
-# Reference: glTF 2.0 spec 3.7.2 (meshes), 3.7.2.1 (attributes).
+# KHR_draco_mesh_compression primitives are decoded through gltf_codecs (DracoPy); without it a
+# primitive whose accessors keep uncompressed fallback data loads from those.
+# Reference: glTF 2.0 spec 3.7.2 (meshes), 3.7.2.1 (attributes); KHR_draco_mesh_compression.
 
 from __future__ import annotations
 
@@ -15,7 +17,8 @@ from vkpbr.scene.geometry import (
     normalize_mesh_arrays,
     strip_triangles,
 )
-from vkpbr.scene.gltf_document import GltfDocument, check_index, get
+from vkpbr.scene.gltf_codecs import decode_draco, missing_codec
+from vkpbr.scene.gltf_document import GltfDocument, check_index, ext, get, to_float
 from vkpbr.scene.types import Mesh
 
 __all__ = ["primitive"]
@@ -39,13 +42,24 @@ def primitive(ld: GltfDocument, mesh_index: int, prim_index: int, prim: object) 
         raise SceneError(ld.path, f"mesh {name}: attributes is not an object")
     if attrs.get("POSITION") is None:
         raise SceneError(ld.path, f"mesh {name}: primitive has no POSITION")
-    positions = ld.attribute(attrs["POSITION"], (3,), f"mesh {name} POSITION")
+    draco = _draco(ld, name, prim, attrs, mode)
+
+    def attribute(key: str, ncomps: tuple[int, ...]) -> np.ndarray:
+        if draco is not None and key in draco[1]:
+            arr = draco[1][key]
+            if arr.shape[1] not in ncomps:
+                raise SceneError(ld.path, f"mesh {name} {key}: Draco gives {arr.shape[1]} "
+                                          f"components, expected {ncomps}")
+            return arr
+        return ld.attribute(attrs[key], ncomps, f"mesh {name} {key}")
+
+    positions = attribute("POSITION", (3,))
     n = len(positions)
 
     def optional(key: str, ncomps: tuple[int, ...]) -> np.ndarray | None:
         if attrs.get(key) is None:
             return None
-        arr = ld.attribute(attrs[key], ncomps, f"mesh {name} {key}")
+        arr = attribute(key, ncomps)
         if len(arr) != n:
             raise SceneError(ld.path, f"mesh {name}: {key} has {len(arr)} items, not {n}")
         return arr
@@ -54,7 +68,9 @@ def primitive(ld: GltfDocument, mesh_index: int, prim_index: int, prim: object) 
     if colors is not None and colors.shape[1] == 3:
         colors = np.concatenate([colors, np.ones((n, 1), np.float32)], axis=1)
     index_acc = get(prim, "indices")
-    if index_acc is None:
+    if draco is not None:
+        indices = draco[0]
+    elif index_acc is None:
         indices = np.arange(n, dtype=np.uint32)
     else:
         arr, _ = ld.accessor(index_acc)
@@ -88,3 +104,58 @@ def primitive(ld: GltfDocument, mesh_index: int, prim_index: int, prim: object) 
         material=material,
     )
     return normalize_mesh_arrays(ensure_normals(drop_nonfinite(mesh, ld.path)))
+
+
+def _draco(ld: GltfDocument, name: str, prim: object, attrs: dict,
+           mode: object) -> tuple[np.ndarray, dict[str, np.ndarray]] | None:
+    """The decoded KHR_draco_mesh_compression of a primitive: (indices, attribute name ->
+    float32 array) for the attributes the extension lists; None when the primitive has none,
+    or when DracoPy is absent and the accessors keep uncompressed fallback data.
+
+    Each decoded attribute must match its accessor's count and component count (the
+    extension's rule); integer attributes are dequantised as the accessor says (normalized)."""
+    info = ext(prim, "KHR_draco_mesh_compression")
+    if not info:
+        return None
+    what = f"mesh {name}"
+    package = missing_codec("KHR_draco_mesh_compression")
+    if package is not None:
+        accessors = ld.gltf.accessors or []
+        used = [a for a in [*attrs.values(), get(prim, "indices")] if a is not None]
+        if all(isinstance(a, int) and 0 <= a < len(accessors)
+               and get(accessors[a], "bufferView") is not None for a in used):
+            return None  # the uncompressed fallback
+        raise SceneError(ld.path, f"{what} is KHR_draco_mesh_compression data without a "
+                                  f"fallback; it needs the {package} package")
+    if mode != 4:
+        raise SceneError(ld.path, f"{what}: KHR_draco_mesh_compression with primitive mode "
+                                  f"{mode!r} (only triangles are supported)")
+    data, _ = ld.buffer_view(get(info, "bufferView"))
+    faces, decoded = decode_draco(ld.path, what, data)
+    ids = get(info, "attributes", {})
+    if not isinstance(ids, dict):
+        raise SceneError(ld.path, f"{what}: KHR_draco_mesh_compression attributes is not an object")
+    out: dict[str, np.ndarray] = {}
+    accessors = ld.gltf.accessors or []
+    for key, uid in ids.items():
+        if key not in attrs or attrs[key] is None:
+            continue  # a Draco attribute the primitive does not use
+        if isinstance(uid, bool) or not isinstance(uid, int) or uid not in decoded:
+            raise SceneError(ld.path, f"{what}: Draco attribute id {uid!r} for {key} is not in "
+                                      "the payload")
+        arr = decoded[uid]
+        acc = accessors[check_index(ld.path, attrs[key], len(accessors), f"{what} {key} accessor")]
+        count = get(acc, "count")
+        if count != len(arr):
+            raise SceneError(ld.path, f"{what}: {key} accessor count {count!r} != {len(arr)} "
+                                      "decoded Draco points")
+        out[key] = to_float(arr, bool(get(acc, "normalized", False)))
+    if "POSITION" not in out:
+        raise SceneError(ld.path, f"{what}: KHR_draco_mesh_compression lacks POSITION")
+    index_acc = get(prim, "indices")
+    if index_acc is not None:
+        acc = accessors[check_index(ld.path, index_acc, len(accessors), f"{what} indices")]
+        if get(acc, "count") != len(faces):
+            raise SceneError(ld.path, f"{what}: indices accessor count {get(acc, 'count')!r} != "
+                                      f"{len(faces)} decoded Draco indices")
+    return faces, out

@@ -1,7 +1,8 @@
 # The glTF node hierarchy flattened into world matrices, and what hangs off nodes: mesh
 # instances (primitives decoded on first use, gltf_meshes), perspective cameras and
-# KHR_lights_punctual lights. Reference: glTF 2.0 spec 3.5 (nodes and hierarchy), 3.10
-# (cameras); KHR_lights_punctual.
+# KHR_lights_punctual lights; EXT_mesh_gpu_instancing's per-instance transforms (Node.instances,
+# the mesh kept once). Reference: glTF 2.0 spec 3.5 (nodes and hierarchy), 3.10 (cameras);
+# KHR_lights_punctual; EXT_mesh_gpu_instancing.
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from vkpbr.scene.gltf_document import GltfDocument, check_index, ext, floats, ge
 from vkpbr.scene.gltf_meshes import primitive
 from vkpbr.scene.types import Camera, Light, Node, Scene
 
-__all__ = ["build_nodes_cameras_lights", "trs_matrix"]
+__all__ = ["build_nodes_cameras_lights", "instance_matrices", "trs_matrix"]
 
 
 def trs_matrix(t: tuple, r: tuple, s: tuple) -> np.ndarray:
@@ -34,6 +35,51 @@ def trs_matrix(t: tuple, r: tuple, s: tuple) -> np.ndarray:
     m[:3, :3] = rot * np.asarray(s)  # scales columns: R @ diag(s)
     m[:3, 3] = t
     return m
+
+
+def instance_matrices(ld: GltfDocument, i: int, node: object) -> np.ndarray | None:
+    """A node's EXT_mesh_gpu_instancing transforms as (K, 4, 4) float32 T * R * S matrices
+    (relative to the node's world matrix), None without the extension.
+
+    TRANSLATION, ROTATION (a quaternion x, y, z, w; renormalised) and SCALE are each optional
+    accessors of one common count; integer ones are dequantised as their `normalized` flag says
+    (KHR_mesh_quantization).
+    """
+    info = ext(node, "EXT_mesh_gpu_instancing")
+    attrs = get(info, "attributes")
+    if not info:
+        return None
+    if not isinstance(attrs, dict):
+        raise SceneError(ld.path, f"node {i}: EXT_mesh_gpu_instancing has no attributes object")
+    what = f"node {i} EXT_mesh_gpu_instancing"
+    parts = {key: ld.attribute(attrs[key], (n,), f"{what} {key}") for key, n in
+             (("TRANSLATION", 3), ("ROTATION", 4), ("SCALE", 3)) if attrs.get(key) is not None}
+    if not parts:
+        return None  # only custom (_ID...) attributes: nothing that moves an instance
+    counts = {key: len(a) for key, a in parts.items()}
+    if len(set(counts.values())) != 1:
+        raise SceneError(ld.path, f"{what}: attribute counts differ ({counts})")
+    k = next(iter(counts.values()))
+    t = parts.get("TRANSLATION", np.zeros((k, 3), np.float32)).astype(np.float64)
+    q = parts.get("ROTATION", np.tile(np.float32([0, 0, 0, 1]), (k, 1))).astype(np.float64)
+    sc = parts.get("SCALE", np.ones((k, 3), np.float32)).astype(np.float64)
+    norm = np.linalg.norm(q, axis=1, keepdims=True)
+    q = np.where(norm > 1e-12, q / np.maximum(norm, 1e-300), np.float64([0, 0, 0, 1]))
+    x, y, z, w = q.T
+    rot = np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+    ], axis=1)  # (k, 3 rows, 3 columns), the same matrix as trs_matrix
+    out = np.zeros((k, 4, 4))
+    out[:, :3, :3] = rot * sc[:, None, :]  # R @ diag(s): scales columns
+    out[:, :3, 3] = t
+    out[:, 3, 3] = 1.0
+    out = out.astype(np.float32)
+    if not np.isfinite(out).all():
+        raise SceneError(ld.path, f"{what}: non-finite instance transform")
+    out.setflags(write=False)
+    return out
 
 
 def _local_matrix(ld: GltfDocument, i: int, node: object) -> np.ndarray:
@@ -88,7 +134,9 @@ def build_nodes_cameras_lights(ld: GltfDocument, scene: Scene) -> None:
                     mesh_prims[m].append(len(scene.meshes))
                     scene.meshes.append(primitive(ld, m, k, prim))
             w32 = world.astype(np.float32)
-            scene.nodes += [Node(mesh=j, matrix=w32.copy(), name=name) for j in mesh_prims[m]]
+            inst = instance_matrices(ld, i, node)
+            scene.nodes += [Node(mesh=j, matrix=w32.copy(), name=name, instances=inst)
+                            for j in mesh_prims[m]]  # primitives share the read-only array
         if get(node, "camera") is not None:
             cam = cameras[check_index(ld.path, get(node, "camera"), len(cameras), "camera")]
             _add_camera(ld, scene, cam, world, name)

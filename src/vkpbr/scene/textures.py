@@ -21,6 +21,7 @@ import numpy as np
 from PIL import Image as PILImage
 
 from vkpbr.errors import SceneError
+from vkpbr.scene.gltf_codecs import KTX2_MAGIC, decode_ktx2, ktx2_size
 from vkpbr.scene.limits import limits
 from vkpbr.scene.resources import is_regular_file, read_resource
 from vkpbr.scene.types import Image, Scene
@@ -233,6 +234,8 @@ def _decode(image: Image, max_size: int | None, messages: list[tuple[str, str]],
             source = io.BytesIO(data)
         else:
             raise ValueError("no pixels, data or path")
+        if source.getbuffer()[:12] == KTX2_MAGIC:  # KHR_texture_basisu: not a Pillow format
+            return _decode_ktx2(image, source.getvalue(), max_size, messages, budget)
         # Pillow's own decompression-bomb limit (DecompressionBombError) still applies.
         with warnings.catch_warnings():  # over Pillow's bomb warning is over our limit too
             warnings.simplefilter("ignore", PILImage.DecompressionBombWarning)
@@ -258,6 +261,25 @@ def _decode(image: Image, max_size: int | None, messages: list[tuple[str, str]],
             pil = PILImage.fromarray(_to_rgba8(pil), "RGBA")  # resize wide/palette modes as RGBA8
         pil = pil.resize(size, PILImage.Resampling.LANCZOS)
     return _to_rgba8(pil)
+
+
+def _decode_ktx2(image: Image, data: bytes, max_size: int | None, messages: list[tuple[str, str]],
+                 budget: TextureBudget | None) -> np.ndarray:
+    """A KTX2 texture -> RGBA8 under the same limits as Pillow's formats (pixel cap and
+    budget from the header, before transcoding)."""
+    width, height = ktx2_size(data)
+    cap = limits().max_texture_pixels
+    if width * height > cap:
+        raise ValueError(f"{width}x{height} is over the {cap:,}-pixel texture limit "
+                         "(VKPBR_MAX_TEXTURE_PIXELS)")
+    w, h = _out_size(width, height, max_size)
+    if budget is not None:
+        budget.take(4 * w * h, image.name, (w, h))
+    px = decode_ktx2(data)
+    if (w, h) == (width, height):
+        return px
+    messages.append(("downscaled", f"{image.name}: {width}x{height} downscaled to {w}x{h}"))
+    return _to_rgba8(PILImage.fromarray(px, "RGBA").resize((w, h), PILImage.Resampling.LANCZOS))
 
 
 def _too_big(width: int, height: int, max_size: int | None) -> bool:

@@ -34,6 +34,7 @@ __all__ = [
     "Sampler",
     "Scene",
     "TextureRef",
+    "expand_instances",
 ]
 
 AlphaMode = Literal["opaque", "mask", "blend"]
@@ -151,11 +152,44 @@ class Mesh:
 
 @dataclass
 class Node:
-    """An instance of a mesh in the world: `matrix` is the full model-to-world transform."""
+    """An instance of a mesh in the world: `matrix` is the full model-to-world transform.
+
+    instances: (K, 4, 4) float32 per-instance transforms (glTF EXT_mesh_gpu_instancing), each
+        relative to `matrix`: instance k's model-to-world transform is matrix @ instances[k].
+        None = one instance, `matrix` alone. The mesh is stored once, never copied per
+        instance; `instance_matrices` gives the K world matrices.
+    """
 
     mesh: int
     matrix: np.ndarray = field(default_factory=lambda: np.eye(4, dtype=np.float32))  # (4, 4)
     name: str = ""
+    instances: np.ndarray | None = None  # (K, 4, 4) float32
+
+    @property
+    def instance_count(self) -> int:
+        return 1 if self.instances is None else int(len(self.instances))
+
+    def instance_matrices(self) -> np.ndarray:
+        """(K, 4, 4) float64 model-to-world matrices, one per instance (K = 1 without)."""
+        m = np.asarray(self.matrix, dtype=np.float64)
+        if self.instances is None:
+            return m[None]
+        return m @ np.asarray(self.instances, dtype=np.float64)
+
+
+def expand_instances(nodes: list[Node]) -> list[Node]:
+    """Nodes with one Node per instance (matrix = world matrix, instances None), in order; a
+    node without instances is returned as is. For consumers that draw or store one matrix
+    per node (the renderer until it draws instanced, the baked format)."""
+    out: list[Node] = []
+    for node in nodes:
+        if node.instances is None:
+            out.append(node)
+            continue
+        for k, world in enumerate(node.instance_matrices()):
+            out.append(Node(mesh=node.mesh, matrix=world.astype(np.float32),
+                            name=f"{node.name}[{k}]"))
+    return out
 
 
 @dataclass(frozen=True)
@@ -205,26 +239,26 @@ class Scene:
         """World-space axis-aligned bounds (min, max) over all node instances."""
         lo = np.full(3, np.inf)
         hi = np.full(3, -np.inf)
+        corners = np.array(
+            [[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=np.float64
+        )
         for node in self.nodes:
             p = self.meshes[node.mesh].positions
             if len(p) == 0:
                 continue
-            m = np.asarray(node.matrix, dtype=np.float64)
-            corners = np.array(
-                [[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=np.float64
-            )
             pmin, pmax = p.min(axis=0), p.max(axis=0)
             box = pmin + corners * (pmax - pmin)
-            world = box @ m[:3, :3].T + m[:3, 3]
-            lo = np.minimum(lo, world.min(axis=0))
-            hi = np.maximum(hi, world.max(axis=0))
+            for m in node.instance_matrices():  # every instance of EXT_mesh_gpu_instancing
+                world = box @ m[:3, :3].T + m[:3, 3]
+                lo = np.minimum(lo, world.min(axis=0))
+                hi = np.maximum(hi, world.max(axis=0))
         if not np.all(np.isfinite(lo)):
             return np.zeros(3), np.zeros(3)
         return lo, hi
 
     @property
     def triangle_count(self) -> int:
-        return sum(self.meshes[n.mesh].triangle_count for n in self.nodes)
+        return sum(self.meshes[n.mesh].triangle_count * n.instance_count for n in self.nodes)
 
     @classmethod
     def from_trimesh(cls, scene_or_mesh: object, name: str | None = None) -> Scene:

@@ -172,6 +172,13 @@ def _check_node(node: Node, where: str, n_meshes: int) -> None:
         _fail(f"{where}.matrix", "expected a (4x4) float array", m)
     if not np.isfinite(m).all() or np.abs(m).max() > MAX_COORDINATE:
         _fail(f"{where}.matrix", f"holds non-finite values or values beyond +-{MAX_COORDINATE:g}")
+    inst = node.instances
+    if inst is not None:
+        if not isinstance(inst, np.ndarray) or inst.ndim != 3 or inst.shape[1:] != (4, 4):
+            _fail(f"{where}.instances", "expected a (K, 4, 4) float array", inst)
+        if inst.size and (not np.isfinite(inst).all() or np.abs(inst).max() > MAX_COORDINATE):
+            _fail(f"{where}.instances",
+                  f"holds non-finite values or values beyond +-{MAX_COORDINATE:g}")
 
 
 def _check_light(li: Light, where: str) -> None:
