@@ -199,3 +199,29 @@ def test_bad_view_is_named(chart) -> None:  # noqa: ANN001
     same = np.tile([0.0, 1.0, 5.0], (4, 1))
     with pytest.raises(UsageError, match=r"cameras\[0\]: eye and target coincide"):
         chart.render_batch(CameraBatch.from_look_at(same, same), size=SIZE)
+
+
+def test_cli_cameras_batched_equal_frame_by_frame(capsys, tmp_path) -> None:  # noqa: ANN001
+    """`render --cameras` renders 64 views a submission by default; `--batch 0` frame by
+    frame: the same images with a point light (its shadow map is the same for every view)."""
+    import json
+
+    from PIL import Image
+
+    from vkpbr.app.cli import main
+
+    cams = tmp_path / "cams.json"
+    cams.write_text(json.dumps(["0.6,3.2,9,0.4,2.2,0", {"eye": [3, 3, 8], "target": [0, 2, 0], "fov": 50},
+                                "-4,2,6,0,1,0", "2,-1,-7,0,1,0"]))
+    common = ["render", "--cameras", str(cams), "--size", "40x30", "--light", "point:0,4,3",
+              "--validation"]
+    assert main([*common, "--out", str(tmp_path / "a")]) == 0
+    assert main([*common, "--out", str(tmp_path / "b"), "--batch", "0"]) == 0
+    assert main([*common, "--out", str(tmp_path / "c"), "--batch", "3"]) == 0
+    for i in range(4):
+        a = np.asarray(Image.open(tmp_path / "a" / f"frame_{i:05d}.png"))
+        for other in ("b", "c"):
+            assert (a == np.asarray(Image.open(tmp_path / other / f"frame_{i:05d}.png"))).all()
+    capsys.readouterr()
+    assert main([*common, "--out", str(tmp_path / "d"), "--batch", "-2"]) != 0
+    assert "--batch -2" in capsys.readouterr().err

@@ -54,6 +54,10 @@ def add_parser(sub: Any) -> None:
                         '"ex,ey,ez,tx,ty,tz[,ux,uy,uz]" strings or {"eye","target","up","fov"} '
                         "objects, pose matrices, K + pose, a NeRF transforms.json) into the folder "
                         "--out, with the cameras as written as a NeRF transforms.json there")
+    p.add_argument("--batch", type=int, default=64, metavar="N",
+                   help="with --cameras, render N views per GPU submission (Renderer.render_batch; "
+                        "directional lights' shadows then use one map over the whole scene); "
+                        "0: frame by frame, each with its own shadow cascades (default 64)")
     p.add_argument("--colmap", action="store_true",
                    help="with --cameras, also write the cameras as COLMAP text files "
                         "(cameras.txt, images.txt, points3D.txt) in --out")
@@ -148,7 +152,8 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
         with ThreadPoolExecutor(max(2, (os.cpu_count() or 2) - 1)) as pool:
             jobs = []
             frames = renderer.render_many(cameras, lights, size, options, linear=args.linear,
-                                          outputs=("color", *names) if names else None)
+                                          outputs=("color", *names) if names else None,
+                                          batch=args.batch or None)
             bar = tqdm(frames, total=len(cameras), unit="frame", disable=True if is_quiet() else None)
             for i, image in enumerate(bar):
                 path = out_dir / f"frame_{i:05d}{suffix}"
@@ -182,6 +187,8 @@ def run(args: argparse.Namespace) -> int:
     options = render_options_from_args(args)  # bad values fail here, before any expensive work
     if args.colmap and not args.cameras:
         raise UsageError("--colmap writes the cameras of a --cameras batch: give --cameras too")
+    if args.batch < 0:
+        raise UsageError(f"--batch {args.batch}: give a number of views per submission, or 0")
     if args.cameras:
         return _render_batch(args, options)
     size = args.size

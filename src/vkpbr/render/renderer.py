@@ -501,6 +501,7 @@ class Renderer:
         depth: bool = False,
         readback: bool = True,
         outputs: Iterable[str] | None = None,
+        batch: int | None = None,
         **option_overrides: Any,
     ) -> Iterator[np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray] | None]:
         """Render one frame per camera, yielding what `render` returns, in order.
@@ -510,8 +511,15 @@ class Renderer:
         persistently mapped readback buffer. Nothing is allocated per frame but the returned
         arrays. Each frame is bit-for-bit what `render` gives for its camera.
         `readback=False` yields None per finished frame instead (benchmarks: render only).
+        `batch` N: the cameras N at a time through `render_batch` (one submission each; its
+        shadow maps of directional lights are one map over the scene), where the device has
+        layered rendering; None: frame by frame.
         """
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
+        if batch is not None and readback and self.device.batch_views:
+            yield from self._render_many_batched(cameras, batch, lights, size, opts, linear,
+                                                 depth, outputs)
+            return
         frame_lights = self.frame_lights(opts, lights)
         target = self.offscreen_target(size, linear)
         wanted = self._check_outputs(outputs, target)
@@ -603,6 +611,35 @@ class Renderer:
             for name in extra:
                 result[name] = np.stack([f[name] for f in frames])
         return {n: result[n] for n in wanted}
+
+    def _render_many_batched(self, cameras: Iterable[Camera | Any], batch: int, lights: LightsArg,
+                             size: tuple[int, int], opts: RenderOptions, linear: bool,
+                             depth: bool, outputs: Iterable[str] | None) -> Iterator[Any]:
+        """render_many through render_batch, `batch` cameras at a time, yielding per view."""
+        if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
+            raise UsageError(f"batch {batch!r}: expected a positive number of views")
+        base = self.default_camera()
+        wanted = tuple(outputs) if outputs is not None and not isinstance(outputs, str) else (
+            () if outputs is None else (outputs,))
+        pending: list[Camera] = []
+
+        def flush() -> Iterator[Any]:
+            got = self.render_batch(pending, size, lights, opts, linear, depth, wanted or None)
+            for i in range(len(pending)):
+                if wanted:
+                    yield {k: v[i] for k, v in got.items()}
+                elif depth:
+                    yield got[0][i], got[1][i]
+                else:
+                    yield got[i]
+            pending.clear()
+
+        for camera in cameras:
+            pending.append(base if camera is None else as_camera(camera, base))
+            if len(pending) == batch:
+                yield from flush()
+        if pending:
+            yield from flush()
 
     def _batch_views_per_submission(self, size: tuple[int, int], linear: bool, depth: bool,
                                     batch: int | str) -> int:
