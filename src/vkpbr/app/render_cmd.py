@@ -16,8 +16,11 @@ from vkpbr.app.options import add_options, render_options_from_args
 from vkpbr.app.output import (
     OUTPUT_SUFFIXES,
     check_output_path,
+    check_outputs,
     check_writable,
+    output_path,
     write_image_atomic,
+    write_outputs,
 )
 from vkpbr.app.parsing import EPILOG_FORMATTER, _as_type, size_arg
 from vkpbr.errors import UsageError
@@ -83,28 +86,8 @@ def _output_names(text: str) -> tuple[str, ...]:
     return tuple(n for n in names if n != "color")
 
 
-def _output_path(out: Path, name: str) -> Path:
-    """Where output `name` of the frame written to `out` goes: beside it, by kind."""
-    from vkpbr.app.output import output_kind
-
-    return out.with_name(f"{out.stem}.{name}{'.png' if output_kind(name) == 'ids' else '.exr'}")
-
-
-def _check_outputs(out: Path, names: tuple[str, ...], ids: int) -> None:
-    from vkpbr.app.output import check_id_count, check_output_path, output_kind
-
-    for name in names:
-        path = _output_path(out, name)
-        check_output_path(path, output_kind(name), "--outputs")
-        if output_kind(name) == "ids":
-            check_id_count(ids, path, "--outputs")
-
-
-def _write_outputs(out: Path, frame: dict, names: tuple[str, ...]) -> None:
-    from vkpbr.app.output import output_kind, write_output
-
-    for name in names:
-        write_output(_output_path(out, name), frame[name], output_kind(name), "--outputs")
+# The outputs beside a frame: shared with vkpbr.distributed (app/output.py).
+_output_path, _check_outputs, _write_outputs = output_path, check_outputs, write_outputs
 
 
 def list_views() -> int:
