@@ -35,6 +35,7 @@ examples:
   vkpbr render scene.gltf --size 1920x1080 --camera 9,1.8,-0.4,-9,3.5,-0.4 --light -5,0.6,-0.9
   vkpbr render scene.gltf --view d --brdf blinn-phong --out d.png
   vkpbr render scene.gltf --cameras poses.json --out frames/
+  vkpbr render scene.gltf --cameras poses.json --out frames/ --ray    the same, on Ray
 """
 
 
@@ -67,6 +68,9 @@ def add_parser(sub: Any) -> None:
                         "float) or STEM.NAME.png (instance, semantic: 16-bit ids); see "
                         "docs/outputs.md")
     p.add_argument("--list-views", action="store_true", help="list the debug views and exit")
+    from vkpbr.app.batch_cmd import add_ray_arguments
+
+    add_ray_arguments(p)  # --ray [ADDRESS], --actors, --num-gpus: the batch on Ray
     p.add_argument("--msaa", type=int, default=1, choices=[1, 4], help="samples per pixel")
     p.add_argument("--linear", action="store_true", help="linear float32 colour (write a .exr or .npy)")
     p.add_argument("--frames", type=int, default=1, metavar="N",
@@ -165,6 +169,10 @@ def run(args: argparse.Namespace) -> int:
     options = render_options_from_args(args)  # bad values fail here, before any expensive work
     if args.colmap and not args.cameras:
         raise UsageError("--colmap writes the cameras of a --cameras batch: give --cameras too")
+    if args.ray is not None:
+        from vkpbr.app.batch_cmd import render_on_ray
+
+        return render_on_ray(args, options)
     if args.cameras:
         return _render_batch(args, options)
     size = args.size

@@ -60,7 +60,7 @@ def load_renderer(settings: RenderSettings, device: str | int | None = None) -> 
             from vkpbr.bake.bake import cached_bake
 
             root = path.parent  # the bake's external textures lie beside the source
-            path = cached_bake(path, default_cache_dir(),
+            path = cached_bake(path, settings.cache_dir or default_cache_dir(),
                                allow_outside_paths=settings.allow_outside_paths)
         kwargs: dict[str, Any] = {"strict": True} if settings.strict else {}
         scene = load_scene(path, allow_outside_paths=settings.allow_outside_paths, root=root,

@@ -81,6 +81,8 @@ class JobResult:
         return sum(len(f.views) for f in self.failures)
 
     def summary(self, limit: int = 20) -> list[str]:
+        if not self.actors:
+            return [f"{self.views} views: all {self.skipped} done before, nothing to render"]
         rate = self.rendered / self.render_seconds if self.render_seconds > 0 else 0.0
         lines = [f"{self.views} views: {self.rendered} rendered, {self.skipped} done before, "
                  f"{self.failed_views} failed; {self.seconds:.1f} s ({rate:.1f} views/s on "
@@ -278,6 +280,8 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
     job = _as_job(job)
     manifests = check_job(job)
     ray = import_ray()
+    if address not in (None, "local"):
+        _preflight(address)  # unreachable: one line now, even when nothing is left to render
     result = JobResult(views=job.views)
     try:
         done = [m.done_views() for m in manifests]

@@ -52,7 +52,8 @@ class RenderSettings:
 
     scene : the scene file (None: the built-in chart). size : (width, height).
     outputs : dataset output names besides colour, in order. options : a RenderOptions.
-    cache : load the scene through the bake cache (vkpbr.bake.bake.cached_bake).
+    cache : load the scene through the bake cache (vkpbr.bake.bake.cached_bake), in
+        `cache_dir` (None: $VKPBR_CACHE_DIR, else ~/.cache/vkpbr, on the actor's machine).
     """
 
     scene: Path | None
@@ -62,6 +63,7 @@ class RenderSettings:
     linear: bool = False
     msaa: int = 1
     cache: bool = True
+    cache_dir: str | None = None
     options: Any = None  # RenderOptions; None: RenderOptions()
     strict: bool = False
     allow_outside_paths: bool = False
@@ -221,7 +223,10 @@ def _poses(value: object, where: str, base: Path) -> tuple[Any, ...]:
     from vkpbr.scene.poses import load_poses, parse_poses
 
     if isinstance(value, str):
-        return tuple(load_poses(_path(value, "cameras", where, base)))
+        from vkpbr.scene._checks import context
+
+        with context(f"{where}: cameras"):  # the poses file's own messages, after the entry
+            return tuple(load_poses(_path(value, "cameras", where, base)))
     if isinstance(value, (list, dict)):
         return tuple(parse_poses(value, f"{where}: cameras"))
     raise UsageError(f"{where}: cameras: expected a poses file or a list of poses, got "
