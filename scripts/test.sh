@@ -3,6 +3,8 @@
 # validation layer on. Extra arguments go to pytest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+# The tests install the ray extra as well (tests/distributed start a real local Ray cluster);
+# a plain `scripts/setup.sh` stays lean.
+VKPBR_EXTRAS=${VKPBR_EXTRAS:-test,ray} bash scripts/setup.sh
 .venv/bin/ruff check --quiet src tests benchmarks
 exec .venv/bin/python -m pytest -q "$@"
