@@ -160,8 +160,10 @@ def main() -> None:
     for r in rows:
         steady = r["steady_views_s"]
         over = (floor / steady - 1) * 100 if r["actors"] == 1 and steady == steady else None
+        shown = (f"{steady:.1f} | {1e3 / steady:.2f}" if steady == steady  # not NaN
+                 else "- (too few items) | -")
         print(f"| {r['path']} | {r['actors']} | {r['views']} | {r['seconds']:.2f} | "
-              f"{r['views_s']:.1f} | {steady:.1f} | {1e3 / steady:.2f} | "
+              f"{r['views_s']:.1f} | {shown} | "
               + (f"{over:+.1f}% |" if over is not None else "- |"))
     if args.json:
         args.json.write_text(json.dumps(rows, indent=2))

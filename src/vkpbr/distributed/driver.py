@@ -187,8 +187,9 @@ class _RayRenderer(RendererActor):
     def __init__(self) -> None:
         import ray
 
-        ids = ray.get_gpu_ids()
-        super().__init__(int(ids[0]) if ids else None)
+        ids = [str(i) for i in ray.get_gpu_ids()]
+        # A GPU id that is not an index (a UUID in CUDA_VISIBLE_DEVICES): the default device.
+        super().__init__(int(ids[0]) if ids and ids[0].isdigit() else None)
 
 
 @dataclass
@@ -376,7 +377,8 @@ def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], r
                     replacements -= 1
                     start_actor()
                     idle.append(made - 1)
-                fail(task, f"its renderer actor died ({type(exc).__name__})", True, actor)
+                why = (str(exc).strip().splitlines() or [""])[0][:160]
+                fail(task, f"its renderer actor died ({type(exc).__name__}: {why})", True, actor)
                 if not pool:  # nothing left to render on
                     while pending:
                         fail(pending.popleft(), "no renderer actor left", False, actor)
