@@ -10,6 +10,8 @@ import sys
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from vkpbr.app.cli import main
 from vkpbr.distributed import MANIFEST_NAME, Manifest, job_from_doc, load_job
@@ -164,3 +166,19 @@ def test_manifest_records_resume_and_refuses_another_job(tmp_path: Path) -> None
     other = job_from_doc([{"cameras": POSES, "out": str(tmp_path), "size": "16x9"}]).scenes[0]
     with pytest.raises(UsageError, match=r"written by a job with another size \(\[16, 8\], now \[16, 9\]\)"):
         Manifest.open(tmp_path, other.fingerprint(), "e")
+
+
+@settings(max_examples=60, deadline=None)
+@given(views=st.integers(1, 40), per_item=st.integers(1, 9), data=st.data())
+def test_items_cover_every_view_not_done_exactly_once(views: int, per_item: int, data) -> None:  # noqa: ANN001
+    done = data.draw(st.sets(st.integers(0, views - 1)))
+    poses = [f"3,1,{1 + i / 10},0,0,0" for i in range(views)]
+    job = job_from_doc({"scenes": [{"cameras": poses, "out": "/nonexistent/a"},
+                                   {"cameras": POSES[:2], "out": "/nonexistent/b"}],
+                        "views_per_item": per_item})
+    items = job.items([done, set()])
+    first = [v for i in items if i.entry == 0 for v in i.frames]
+    assert first == [v for v in range(views) if v not in done]  # in order, each once
+    assert [v for i in items if i.entry == 1 for v in i.frames] == [0, 1]
+    assert all(1 <= len(i.frames) <= per_item for i in items)
+    assert all(i.poses == tuple(job.scenes[i.entry].poses[v] for v in i.frames) for i in items)

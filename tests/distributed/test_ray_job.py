@@ -102,6 +102,11 @@ def assert_same_files(a: Path, b: Path) -> None:
         assert (a / name).read_bytes() == (b / name).read_bytes(), name
 
 
+def done_lines(manifest: Path) -> int:
+    """Complete "done" lines (a killed driver may have cut the last line short)."""
+    return sum('"type": "done"' in line for line in manifest.read_text().split("\n")[:-1])
+
+
 def write_job(folder: Path, entries: list[dict], **settings: object) -> Path:
     (folder / "poses.json").write_text(json.dumps(POSES))
     path = folder / "job.json"
@@ -123,16 +128,18 @@ def test_ray_job_equals_single_process_byte_for_byte(cluster: dict, reference: d
         assert_same_files(tmp_path / name, reference[name])
     frames = [(tmp_path / "box" / f"frame_{i:05d}.png").read_bytes() for i in (0, 6)]
     assert frames[0] != frames[1]  # the views really differ
-    # Both actors rendered (the pids of the done records).
     records = [json.loads(x) for x in (tmp_path / "chart" / MANIFEST_NAME).read_text().splitlines()]
+    pids = {json.loads(x).get("pid") for name in ("chart", "box", "box-cached")
+            for x in (tmp_path / name / MANIFEST_NAME).read_text().splitlines()[1:]}
+    assert len(pids) == 2 and os.getpid() not in pids  # both actors rendered, none in-process
     again = render(job)  # a re-run renders nothing
     assert again.ok and again.rendered == 0 and again.skipped == 3 * len(POSES)
     assert records == [json.loads(x) for x in
                        (tmp_path / "chart" / MANIFEST_NAME).read_text().splitlines()]
 
 
-def test_actor_killed_midway_loses_and_duplicates_nothing(cluster: dict, reference: dict,
-                                                          tmp_path: Path) -> None:
+def test_actor_killed_midway_loses_and_duplicates_nothing(cluster: dict, reference: dict, capsys,
+                                                          tmp_path: Path) -> None:  # noqa: ANN001
     job = write_job(tmp_path, [{"cameras": "poses.json", "out": "chart", "size": SIZE,
                                 "outputs": ["depth", "instance"]}], views_per_item=1)
     killed = []
@@ -144,8 +151,10 @@ def test_actor_killed_midway_loses_and_duplicates_nothing(cluster: dict, referen
             ray.kill(ray.get_actor(names[0]))
             killed.append(names[0])
 
-    result = render(job, on_result=kill_one)
+    result = render(job, on_result=kill_one, progress=True)
     assert killed and result.ok, result.summary()
+    bar = capsys.readouterr().err.split("\r")[-1]  # the progress bar's last state
+    assert f"{len(POSES)}/{len(POSES)}" in bar and "view" in bar, bar
     assert result.actors_lost == 1 and result.retries >= 1  # the kill hit work it had
     records = check_exactly_once(tmp_path / "chart", len(POSES), 3)
     assert_same_files(tmp_path / "chart", reference["chart"])
@@ -164,14 +173,14 @@ def test_killed_driver_resumes(cluster: dict, reference: dict, tmp_path: Path) -
     deadline = time.monotonic() + 90
     try:
         while time.monotonic() < deadline and proc.poll() is None:
-            if manifest.exists() and manifest.read_text().count('"done"') >= 3:
+            if manifest.exists() and done_lines(manifest) >= 3:
                 break
             time.sleep(0.02)
         assert proc.poll() is None, proc.stderr.read().decode() if proc.stderr else ""
     finally:
         proc.send_signal(signal.SIGKILL)
         proc.wait()
-    before = manifest.read_text().count('"done"')
+    before = done_lines(manifest)
     assert 3 <= before < len(POSES)
     result = render(job)
     assert result.ok and result.skipped == before and result.rendered == len(POSES) - before
