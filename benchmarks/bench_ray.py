@@ -11,9 +11,9 @@ Every row renders the same orbit of `--views` poses around the scene into a fres
 (PNG colour plus `--outputs`). "in-process" runs the actor's own code (RendererActor.render)
 in this process after a warm-up, so it is the floor the Ray path is measured against. A Ray
 row's "views/s" is the whole `vkpbr.distributed.render` call (actor start-up and scene load
-included); "steady views/s" counts only the results that arrive after every actor has
-returned its first item (loaded its scene), over the time they took: the throughput of a long
-job. Actors share the machine's one device: num_gpus = 1/N where Ray sees a GPU, else
+included); "steady views/s" leaves out each actor's first item (its start-up and scene
+load): per actor, the views of its later items over the time from its first result to its
+last, summed over the actors: the throughput of a long job. Actors share the machine's one device: num_gpus = 1/N where Ray sees a GPU, else
 num_cpus = CPUs/N (lavapipe). Prints a Markdown table. Not a test.
 """
 
@@ -96,12 +96,15 @@ def on_ray(job: Job, actors: int, address: str | None) -> dict:
     result = render(job, address, actors=actors, progress=False, on_result=note, **share)
     total = time.perf_counter() - t
     assert result.ok, result.summary()
-    firsts: dict[int, float] = {}
-    for when, pid, _ in results:
-        firsts.setdefault(pid, when)
-    t_steady = max(firsts.values())
-    after = [(w, v) for w, _, v in results if w > t_steady]
-    steady = (sum(v for _, v in after) / (after[-1][0] - t_steady)) if after else float("nan")
+    # Each actor has one item at a time, so the items an actor returns after its first were
+    # all rendered after it: its steady rate is their views over that span; the actors run
+    # side by side, so the job's is the sum.
+    per_actor: dict[int, list[tuple[float, int]]] = {}
+    for when, pid, views in results:
+        per_actor.setdefault(pid, []).append((when, views))
+    rates = [sum(v for _, v in r[1:]) / (r[-1][0] - r[0][0]) for r in per_actor.values()
+             if len(r) > 1]
+    steady = sum(rates) if len(rates) == len(per_actor) else float("nan")
     return {"actors": actors, "views": result.rendered, "seconds": total,
             "views_s": result.rendered / total, "steady_views_s": steady, **share}
 
