@@ -18,7 +18,8 @@ from pathlib import Path
 
 import pytest
 
-ray = pytest.importorskip("ray", reason="the ray extra is not installed (pip install 'vkpbr[ray]')")
+ray = pytest.importorskip("ray", reason="the ray extra is not installed (pip install 'vkpbr[ray]')",
+                          exc_type=ImportError)
 
 from vkpbr.app.cli import main  # noqa: E402
 from vkpbr.distributed import MANIFEST_NAME, render  # noqa: E402
