@@ -16,8 +16,11 @@ from vkpbr.app.options import add_options, render_options_from_args
 from vkpbr.app.output import (
     OUTPUT_SUFFIXES,
     check_output_path,
+    check_outputs,
     check_writable,
+    output_path,
     write_image_atomic,
+    write_outputs,
 )
 from vkpbr.app.parsing import EPILOG_FORMATTER, _as_type, size_arg
 from vkpbr.errors import UsageError
@@ -32,6 +35,7 @@ examples:
   vkpbr render scene.gltf --size 1920x1080 --camera 9,1.8,-0.4,-9,3.5,-0.4 --light -5,0.6,-0.9
   vkpbr render scene.gltf --view d --brdf blinn-phong --out d.png
   vkpbr render scene.gltf --cameras poses.json --out frames/
+  vkpbr render scene.gltf --cameras poses.json --out frames/ --ray    the same, on Ray
 """
 
 
@@ -68,6 +72,9 @@ def add_parser(sub: Any) -> None:
                         "float) or STEM.NAME.png (instance, semantic: 16-bit ids); see "
                         "docs/outputs.md")
     p.add_argument("--list-views", action="store_true", help="list the debug views and exit")
+    from vkpbr.app.batch_cmd import add_ray_arguments
+
+    add_ray_arguments(p)  # --ray [ADDRESS], --actors, --num-gpus: the batch on Ray
     p.add_argument("--msaa", type=int, default=1, choices=[1, 4], help="samples per pixel")
     p.add_argument("--linear", action="store_true", help="linear float32 colour (write a .exr or .npy)")
     p.add_argument("--frames", type=int, default=1, metavar="N",
@@ -87,28 +94,8 @@ def _output_names(text: str) -> tuple[str, ...]:
     return tuple(n for n in names if n != "color")
 
 
-def _output_path(out: Path, name: str) -> Path:
-    """Where output `name` of the frame written to `out` goes: beside it, by kind."""
-    from vkpbr.app.output import output_kind
-
-    return out.with_name(f"{out.stem}.{name}{'.png' if output_kind(name) == 'ids' else '.exr'}")
-
-
-def _check_outputs(out: Path, names: tuple[str, ...], ids: int) -> None:
-    from vkpbr.app.output import check_id_count, check_output_path, output_kind
-
-    for name in names:
-        path = _output_path(out, name)
-        check_output_path(path, output_kind(name), "--outputs")
-        if output_kind(name) == "ids":
-            check_id_count(ids, path, "--outputs")
-
-
-def _write_outputs(out: Path, frame: dict, names: tuple[str, ...]) -> None:
-    from vkpbr.app.output import output_kind, write_output
-
-    for name in names:
-        write_output(_output_path(out, name), frame[name], output_kind(name), "--outputs")
+# The outputs beside a frame: shared with vkpbr.distributed (app/output.py).
+_output_path, _check_outputs, _write_outputs = output_path, check_outputs, write_outputs
 
 
 def list_views() -> int:
@@ -189,6 +176,10 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--colmap writes the cameras of a --cameras batch: give --cameras too")
     if args.batch < 0:
         raise UsageError(f"--batch {args.batch}: give a number of views per submission, or 0")
+    if args.ray is not None:
+        from vkpbr.app.batch_cmd import render_on_ray
+
+        return render_on_ray(args, options)
     if args.cameras:
         return _render_batch(args, options)
     size = args.size
