@@ -24,6 +24,7 @@ from vkpbr.app.output import (
 )
 from vkpbr.app.parsing import EPILOG_FORMATTER, _as_type, size_arg
 from vkpbr.errors import UsageError
+from vkpbr.render.options import BATCH_VIEWS
 
 __all__ = ["add_parser", "run"]
 
@@ -58,10 +59,10 @@ def add_parser(sub: Any) -> None:
                         '"ex,ey,ez,tx,ty,tz[,ux,uy,uz]" strings or {"eye","target","up","fov"} '
                         "objects, pose matrices, K + pose, a NeRF transforms.json) into the folder "
                         "--out, with the cameras as written as a NeRF transforms.json there")
-    p.add_argument("--batch", type=int, default=64, metavar="N",
+    p.add_argument("--batch", type=int, default=BATCH_VIEWS, metavar="N",
                    help="with --cameras, render N views per GPU submission (Renderer.render_batch; "
                         "directional lights' shadows then use one map over the whole scene); "
-                        "0: frame by frame, each with its own shadow cascades (default 64)")
+                        "0: frame by frame, each with its own shadow cascades (default %(default)s)")
     p.add_argument("--colmap", action="store_true",
                    help="with --cameras, also write the cameras as COLMAP text files "
                         "(cameras.txt, images.txt, points3D.txt) in --out")

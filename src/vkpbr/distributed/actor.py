@@ -32,16 +32,20 @@ log = logging.getLogger(__name__)
 def render_views(renderer: Any, cameras: list[Any], lights: Any,
                  settings: RenderSettings) -> Iterator[dict[str, np.ndarray]]:
     """The one render call of a work item: its views in order, each a dict of arrays
-    ("color" and the dataset outputs). The batch path (`Renderer.render_batch`) replaces the
-    body here and nowhere else.
+    ("color" and the dataset outputs), through the batch path (`Renderer.render_batch`).
 
     Yields per view: "color" (H, W, 4) uint8 sRGB, or float32 linear with `settings.linear`;
     each dataset output as `Renderer.render(outputs=...)` returns it.
     """
+    from vkpbr.render.options import BATCH_VIEWS
+
     names = settings.outputs
+    # The batch path, as `vkpbr render --cameras` takes it (a view renders the same in any
+    # batch, so items of any size give the single-process frames).
     frames = renderer.render_many(cameras, lights, settings.size, settings.render_options(),
                                   linear=settings.linear,
-                                  outputs=("color", *names) if names else None)
+                                  outputs=("color", *names) if names else None,
+                                  batch=BATCH_VIEWS)
     for frame in frames:
         yield frame if names else {"color": frame}
 
