@@ -258,3 +258,75 @@ def test_blended_draws_in_each_views_order(make_renderer) -> None:  # noqa: ANN0
     assert len(orders) >= 4, "the cameras should disagree on the blended order"
     assert_views_equal(r.render_batch(cams, size=SIZE), [r.render(c, size=SIZE) for c in cams],
                        "blended spheres")
+
+
+def test_frames_for_cuda_reach_the_exported_memory(chart, monkeypatch) -> None:  # noqa: ANN001
+    """device="cuda" copies the frames into device memory exported as a file descriptor
+    (what CUDA imports). Here, on lavapipe, whose opaque descriptors are memfds, the CUDA
+    import is replaced by a mapping of that descriptor: the Vulkan half (exportable memory,
+    the queue-family hand-over, validation) is the real one, and the exported bytes are the
+    NumPy frames."""
+    import mmap
+    import os
+
+    from vkpbr.render.renderer import Renderer
+
+    if "llvmpipe" not in chart.device.info.name.lower() or not chart.device.external_memory_fd:
+        pytest.skip("maps an opaque fd as memory: lavapipe only")
+
+    def mapped_view(self, target, views, linear):  # noqa: ANN001, ANN202
+        fd = target.color_readback.export_fd()
+        try:
+            # Mesa 22.3's lavapipe puts one page of its own before the memory in the memfd.
+            with mmap.mmap(fd, os.fstat(fd).st_size, prot=mmap.PROT_READ) as m:
+                w, h = target.extent
+                return np.frombuffer(m, np.uint8, views * h * w * 4, mmap.PAGESIZE).reshape(
+                    views, h, w, 4).copy()
+        finally:
+            os.close(fd)
+
+    monkeypatch.setattr(Renderer, "_cuda_view", mapped_view)
+    monkeypatch.setattr("vkpbr.gpu.cuda.cuda_unavailable", lambda: None)
+    monkeypatch.setitem(__import__("sys").modules, "torch", type("torch", (), {"cat": np.concatenate}))
+    for seed in (31, 32):  # consecutive batches: no stale frames
+        cams = cameras_of(chart, 5, seed=seed)
+        got = chart.render_batch(cams, size=SIZE, device="cuda")
+        assert_views_equal(got, list(chart.render_batch(cams, size=SIZE)), f"exported, seed {seed}")
+
+
+def test_torch_tensor_on_the_gpu(make_renderer) -> None:  # noqa: ANN001
+    """The real thing where CUDA is: a torch tensor on the renderer's GPU equal to the NumPy
+    frames, batch after batch."""
+    from vkpbr.gpu.cuda import cuda_unavailable
+
+    why = cuda_unavailable()
+    if why is not None:
+        pytest.skip(f"device='cuda' needs CUDA: {why}")
+    import torch
+
+    r = make_renderer()
+    cams1 = cameras_of(r, 16, seed=41)
+    cams2 = cameras_of(r, 16, seed=42)
+    a = r.render_batch(cams1, size=SIZE, device="cuda")
+    b = r.render_batch(cams2, size=SIZE, device="cuda")
+    assert isinstance(a, torch.Tensor) and a.is_cuda and a.dtype == torch.uint8
+    assert a.shape == (16, SIZE[1], SIZE[0], 4)
+    assert (a.cpu().numpy() == r.render_batch(cams1, size=SIZE)).all()
+    assert (b.cpu().numpy() == r.render_batch(cams2, size=SIZE)).all()
+    lin = r.render_batch(cams1, size=SIZE, device="cuda", linear=True)
+    assert lin.dtype == torch.float32
+
+
+def test_cuda_asked_where_it_cannot_run(chart) -> None:  # noqa: ANN001
+    from vkpbr.gpu.cuda import cuda_unavailable
+
+    cams = cameras_of(chart, 2, seed=1)
+    with pytest.raises(UsageError, match="device='cuda' returns the colour only"):
+        chart.render_batch(cams, size=SIZE, device="cuda", depth=True)
+    with pytest.raises(UsageError, match="device 'gpu'"):
+        chart.render_batch(cams, size=SIZE, device="gpu")
+    why = cuda_unavailable()
+    if why is None:
+        pytest.skip("CUDA is available here: test_torch_tensor_on_the_gpu runs instead")
+    with pytest.raises(UsageError, match="device='cuda' is not available here: " + why.split("(")[0]):
+        chart.render_batch(cams, size=SIZE, device="cuda")

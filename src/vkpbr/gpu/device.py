@@ -195,6 +195,11 @@ class Device:
         if missing:
             raise VkpbrError(f"{self.info.name}: device extension(s) {', '.join(missing)} missing")
         self.extensions: list[str] = list(self._required_extensions)
+        # Frames handed to CUDA without a host copy (Renderer.render_batch(device="cuda")):
+        # memory exported as a file descriptor, where the driver has it.
+        self.external_memory_fd = "VK_KHR_external_memory_fd" in available
+        if self.external_memory_fd and "VK_KHR_external_memory_fd" not in self.extensions:
+            self.extensions.append("VK_KHR_external_memory_fd")
         # Keep the queue info alive until vkCreateDevice returns: the binding copies structs
         # into arrays, and the copy's pQueuePriorities points into the original's memory.
         queue_info = vk.VkDeviceQueueCreateInfo(
@@ -239,6 +244,15 @@ class Device:
                     sub.supportedStages & vk.VK_SHADER_STAGE_COMPUTE_BIT))}
 
     # --- helpers ----------------------------------------------------------------------------
+    def uuid(self) -> bytes:
+        """The physical device's UUID (VkPhysicalDeviceIDProperties.deviceUUID): CUDA names
+        the same GPU by the same 16 bytes."""
+        vk = self.vk
+        ids = vk.VkPhysicalDeviceIDProperties(sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ID_PROPERTIES)
+        vk.vkGetPhysicalDeviceProperties2(self.physical, vk.VkPhysicalDeviceProperties2(
+            sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, pNext=ids))
+        return bytes(ids.deviceUUID)
+
     def local_memory_bytes(self) -> int:
         """The size of the largest device-local memory heap (a CPU device's is host memory)."""
         mp = self.memory_properties

@@ -207,6 +207,7 @@ class BatchViews:
         ring.stamp(cmd, frame, 1)
         # The previous batch's draws read the commands and lists: order this one's writes.
         cmd.memory_barrier("indirect|vertex", "transfer")
+        target.record_external_acquire(cmd)
         cmd.fill(self.commands)
         cmd.memory_barrier("transfer", "compute")
         cmd.bind_pipeline(self.cull)

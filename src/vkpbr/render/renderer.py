@@ -146,6 +146,8 @@ class Renderer:
             self._compute_scene: ComputeScene | None = None
             self._batch: BatchViews | None = None
             self._batch_targets: dict[tuple, BatchTarget] = {}
+            self._cuda_imports: dict[int, Any] = {}  # gpu/cuda.py CudaImport by target
+            self._cuda_events: dict[int, Any] = {}  # torch.cuda.Event of the last clone
             self.recorder = FrameRecorder(self.device, self.gpu_scene, self.pipeline_layout,
                                           self.ring, self.slots, self.prepass_for, self.shadows,
                                           self.compute_scene)
@@ -554,8 +556,9 @@ class Renderer:
         depth: bool = False,
         outputs: Iterable[str] | None = None,
         batch: int | str = "auto",
+        device: str = "cpu",
         **option_overrides: Any,
-    ) -> np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray]:
+    ) -> np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray] | Any:
         """Render B views of the scene in one submission and return them stacked.
 
         Parameters
@@ -572,6 +575,11 @@ class Renderer:
         batch : views per submission: "auto" (as many as fit in a quarter of the device's
             memory, at most 2048 layers a chunk) or a positive integer; larger batches are
             split into several submissions.
+        device : "cpu": NumPy arrays; "cuda": a torch.uint8 (or float32 with `linear`)
+            tensor (B, H, W, 4) on the same GPU, never through host memory: the frames are
+            copied into Vulkan memory that CUDA imports (gpu/cuda.py), then into a tensor of
+            torch's own on its current stream. Colour only; needs torch with CUDA and
+            cuda-python (the `cuda` extra) and the renderer on that NVIDIA GPU.
 
         Returns
         -------
@@ -583,6 +591,10 @@ class Renderer:
         base = self.default_camera()
         views = as_camera_batch(cameras, base)
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
+        if device not in ("cpu", "cuda"):
+            raise UsageError(f"device {device!r}: choose 'cpu' (NumPy) or 'cuda' (a torch tensor)")
+        if device == "cuda":
+            return self._render_batch_cuda(views, size, lights, opts, linear, depth, outputs, batch)
         wanted = self._check_outputs(outputs, self.offscreen_target(size, linear)) if outputs else ()
         # The dataset outputs but colour come from their own pass (as `render` makes them).
         extra = tuple(n for n in wanted if n != "color")
@@ -641,6 +653,59 @@ class Renderer:
         if pending:
             yield from flush()
 
+    def _render_batch_cuda(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
+                           opts: RenderOptions, linear: bool, depth: bool,
+                           outputs: Iterable[str] | None, batch: int | str) -> Any:
+        """render_batch(device="cuda"): the frames as a torch tensor on the renderer's GPU."""
+        from vkpbr.gpu.cuda import cuda_unavailable
+
+        if depth or outputs:
+            raise UsageError("device='cuda' returns the colour only: ask depth and dataset "
+                             "outputs with device='cpu'")
+        why = cuda_unavailable()
+        if why is None and not self.device.external_memory_fd:
+            why = f"{self.device.info.name} cannot export memory (VK_KHR_external_memory_fd)"
+        if why is None and not self.device.batch_views:
+            why = f"{self.device.info.name} lacks layered rendering for batches"
+        if why is not None:
+            raise UsageError(f"device='cuda' is not available here: {why}")
+        import torch
+
+        per = self._batch_views_per_submission(size, linear, False, batch)
+        parts = []
+        for start in range(0, len(views), per):
+            part = _slice_batch(views, start, min(start + per, len(views)))
+            parts.append(self._render_batch_part(part, size, lights, opts, linear, False, cuda=True)[0])
+        return parts[0] if len(parts) == 1 else torch.cat(parts)
+
+    def _cuda_view(self, target: BatchTarget, views: int, linear: bool) -> Any:
+        """A torch tensor of the first `views` views of an external target's colour: a clone
+        (on torch's current stream) of the imported Vulkan memory; the next batch into the
+        target waits for the clone (`_cuda_wait`)."""
+        import torch
+
+        from vkpbr.gpu.cuda import CudaImport, cuda_device_for
+
+        imported = self._cuda_imports.get(id(target))
+        if imported is None:
+            index = cuda_device_for(self.device.uuid(), self.device.info.name)
+            buf = target.color_readback
+            imported = CudaImport(buf.export_fd(), buf.allocation_size, index)
+            self._cuda_imports[id(target)] = imported
+        w, h = target.extent
+        view = imported.tensor((views, h, w, 4), "<f4" if linear else "|u1")
+        out = view.clone()
+        event = torch.cuda.Event()
+        event.record()
+        self._cuda_events[id(target)] = event
+        return out
+
+    def _cuda_wait(self, target: BatchTarget) -> None:
+        """Before a batch writes an external target: CUDA has finished copying the last one."""
+        event = self._cuda_events.pop(id(target), None)
+        if event is not None:
+            event.synchronize()
+
     def _batch_views_per_submission(self, size: tuple[int, int], linear: bool, depth: bool,
                                     batch: int | str) -> int:
         w, h = int(size[0]), int(size[1])
@@ -654,13 +719,13 @@ class Renderer:
         return batch
 
     def _render_batch_part(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
-                           opts: RenderOptions, linear: bool, depth: bool
-                           ) -> tuple[np.ndarray, np.ndarray | None]:
+                           opts: RenderOptions, linear: bool, depth: bool, cuda: bool = False
+                           ) -> tuple[Any, np.ndarray | None]:
         n = len(views)
         limits = self.device.limits
         layers = max(1, min(n, MAX_LAYERS, int(limits.maxFramebufferLayers),
                             int(limits.maxImageArrayLayers)))
-        target = self._batch_target(size, layers, n, linear, depth)
+        target = self._batch_target(size, layers, n, linear, depth, cuda)
         if self._batch is None:
             self._batch = BatchViews(self.device, self.scene, self.gpu_scene, self.ring,
                                      self.slots, self.set_layouts[0], self.recorder, self.shadows)
@@ -689,19 +754,21 @@ class Renderer:
         groups = bv.write_blend_groups(self._blend_orders(views.eye))
         cmd = bv.command_buffer(target, frame, n, opts.tbn, opts.alpha_mask, plan, groups,
                                 self.prepass_for(target))
+        if cuda:
+            self._cuda_wait(target)
         frame.submit(cmd)
         frame.stamped = self.ring.query_pool is not None
         frame.wait()
         self._read_timings(frame, slot)
         self.last_stats = dataclasses.replace(slot.stats)
-        color = target.read_color(n)
+        color = self._cuda_view(target, n, linear) if cuda else target.read_color(n)
         dist = _linear_depth(target.read_depth(n), terms["znear"][:, None, None]) if depth else None
         self.device.check_validation()
         return color, dist
 
     def _batch_target(self, size: tuple[int, int], layers: int, views: int, linear: bool,
-                      depth: bool) -> BatchTarget:
-        key = (tuple(size), layers, linear, depth)
+                      depth: bool, cuda: bool = False) -> BatchTarget:
+        key = (tuple(size), layers, linear, depth, cuda)
         target = self._batch_targets.get(key)
         if target is not None and target.capacity >= views:
             return target
@@ -709,11 +776,18 @@ class Renderer:
             self.device.wait_idle()
             if self._batch is not None:
                 self._batch.free_recordings()
+            self._forget_cuda(target)
             target.destroy()
         target = BatchTarget(self.device, size, layers, views, "float" if linear else "srgb",
-                             depth, clear_color=(*self.background, 1.0))
+                             depth, clear_color=(*self.background, 1.0), external=cuda)
         self._batch_targets[key] = target
         return target
+
+    def _forget_cuda(self, target: BatchTarget) -> None:
+        self._cuda_wait(target)
+        imported = self._cuda_imports.pop(id(target), None)
+        if imported is not None:
+            imported.close()
 
     def _check_outputs(self, outputs: Iterable[str] | None, target: OffscreenTarget) -> tuple[str, ...]:
         """The dataset outputs asked for, checked; their images made on first use."""
@@ -797,6 +871,7 @@ class Renderer:
             self._batch.destroy()
             self._batch = None
         for target in getattr(self, "_batch_targets", {}).values():
+            self._forget_cuda(target)
             target.destroy()
         self._batch_targets = {}
         if getattr(self, "shadows", None) is not None:
