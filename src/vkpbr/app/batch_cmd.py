@@ -98,6 +98,9 @@ def render_on_ray(args: argparse.Namespace, options: Any) -> int:
                              "scene's camera and lights); drop it or render without --ray")
     if args.frames != 1:
         raise UsageError("--frames is a timing option: not available with --ray")
+    if getattr(args, "semantics", "mesh") != "mesh":
+        raise UsageError("--semantics is not available with --ray yet (the actors use each "
+                         "mesh as its class); drop it or render without --ray")
     out = Path(args.out)
     if out.suffix.lower() in OUTPUT_SUFFIXES:
         raise UsageError(f"--out {out}: with --cameras, --out is a folder")

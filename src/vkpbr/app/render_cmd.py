@@ -72,6 +72,11 @@ def add_parser(sub: Any) -> None:
                         "STEM.NAME.exr (depth, range, normal, normal_camera, normal_geometric: "
                         "float) or STEM.NAME.png (instance, semantic: 16-bit ids); see "
                         "docs/outputs.md")
+    p.add_argument("--semantics", default="mesh", metavar="mesh|material|extras|FILE.json",
+                   help="where the semantic ids of --outputs semantic come from: each mesh "
+                        "primitive its own class (default), each material, the glTF nodes' "
+                        'extras {"semantic": id or label}, or a JSON {node, mesh or material '
+                        "name: id or label} (docs/outputs.md)")
     p.add_argument("--list-views", action="store_true", help="list the debug views and exit")
     from vkpbr.app.batch_cmd import add_ray_arguments
 
@@ -128,13 +133,14 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
     poses = load_poses(args.cameras)  # the whole file is checked before the scene loads
     scene = load_scene_arg(args)
     with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa,
+                  semantics=args.semantics,
                   cache_dir=default_cache_dir()) as renderer:
         base = camera_from_args(args, renderer)
         cameras = [pose.camera(base) for pose in poses]
         lights = lights_from_args(args, renderer, options)
         names = args.outputs or ()
         if names:
-            _check_outputs(out_dir / f"frame_00000{suffix}", names, len(renderer.instances))
+            _check_outputs(out_dir / f"frame_00000{suffix}", names, renderer.max_id)
         t1 = time.perf_counter()
         log.info("load + set-up %.2f s", t1 - t0)
         with ThreadPoolExecutor(max(2, (os.cpu_count() or 2) - 1)) as pool:
@@ -198,6 +204,7 @@ def run(args: argparse.Namespace) -> int:
     scene = load_scene_arg(args)
     t_load = time.perf_counter()
     with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa,
+                  semantics=args.semantics,
                   cache_dir=default_cache_dir()) as renderer:
         t_setup = time.perf_counter()
         camera = camera_from_args(args, renderer)
@@ -205,7 +212,7 @@ def run(args: argparse.Namespace) -> int:
         log.debug("camera %s, lights %s", camera, lights)
         names = args.outputs or ()
         if names:
-            _check_outputs(out, names, len(renderer.instances))
+            _check_outputs(out, names, renderer.max_id)
             frame = renderer.render(camera, lights, size, options, linear=args.linear,
                                     outputs=("color", *names))
             _write_outputs(out, frame, names)

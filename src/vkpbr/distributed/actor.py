@@ -135,7 +135,7 @@ class RendererActor:
         out = Path(settings.out)
         for name in settings.outputs:
             if output_kind(name) == "ids":
-                check_id_count(len(renderer.instances), output_path(out / "frame.png", name),
+                check_id_count(renderer.max_id, output_path(out / "frame.png", name),
                                f"{item.label()}: outputs")
         files: list[str] = []
         writes = []

@@ -21,7 +21,7 @@ import functools
 import math
 import os
 import time
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -57,6 +57,7 @@ from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 from vkpbr.scene.environment import load_panorama
 from vkpbr.scene.lights import course_point_light
+from vkpbr.scene.semantics import semantic_ids
 from vkpbr.scene.sky import sun_radiometry
 from vkpbr.scene.types import Camera, Light, Scene
 from vkpbr.scene.validate import validate_lights
@@ -103,6 +104,10 @@ class Renderer:
         sizes, or EnvironmentSpec.cpu() on a CPU device).
     cache_dir : where the split-sum BRDF table is kept between processes (None: made once
         per process).
+    semantics : where the dataset outputs' semantic ids come from (vkpbr.scene.semantics):
+        "mesh" (each mesh primitive its own class), "material", "extras" (glTF `extras:
+        {"semantic": ...}` of nodes or meshes), a {node/mesh/material name: id or label}
+        mapping or the path of a JSON file of one; `semantic_labels` is {id: label}.
     """
 
     def __init__(
@@ -117,6 +122,7 @@ class Renderer:
         window_extensions: tuple[str, ...] | None = None,
         env_spec: EnvironmentSpec | None = None,
         cache_dir: str | os.PathLike[str] | None = None,
+        semantics: str | os.PathLike[str] | Mapping[str, int | str] = "mesh",
     ) -> None:
         t0 = time.perf_counter()
         if msaa not in (1, 4):
@@ -143,6 +149,9 @@ class Renderer:
             self.frame_buffers, self._frame_pool, self.slots = create_slots(
                 self.device, self.set_layouts[0], self.set_layouts[2], self.ring.count)
             self.gpu_scene = GpuScene(self.device, scene, self.set_layouts[1])
+            self.semantic_ids, self.semantic_labels = semantic_ids(
+                scene, self.gpu_scene.draws, Path(semantics) if isinstance(semantics, os.PathLike)
+                else semantics)
             self._compute_scene: ComputeScene | None = None
             self._batch: BatchViews | None = None
             self._batch_targets: dict[tuple, BatchTarget] = {}
@@ -212,7 +221,8 @@ class Renderer:
         """The compute path's resources (render/compute_path.py), made on its first frame."""
         if self._compute_scene is None:
             self._compute_scene = ComputeScene(
-                self.device, self.gpu_scene, dict(enumerate(self.set_layouts)), self.slots)
+                self.device, self.gpu_scene, dict(enumerate(self.set_layouts)), self.slots,
+                self.semantic_ids)
         return self._compute_scene
 
     def compute_unavailable(self, target: FrameTarget) -> str | None:
@@ -810,15 +820,23 @@ class Renderer:
         return wanted
 
     @property
+    def max_id(self) -> int:
+        """The largest instance or semantic id the outputs can hold (id images must fit it)."""
+        return max(len(self.gpu_scene.draws), int(self.semantic_ids.max(initial=0)))
+
+    @property
     def instances(self) -> list[dict[str, Any]]:
         """What each instance id of the outputs is: [{"id", "node", "mesh", "material",
-        "semantic"}], id = index + 1 (0 is the background). The semantic id is the mesh's
-        index + 1 (each glTF mesh primitive its own)."""
+        "semantic", "label"}], id = index + 1 (0 is the background). The semantic id comes
+        from the Renderer's `semantics` (vkpbr.scene.semantics; by default the mesh's index
+        + 1, each glTF mesh primitive its own), `label` its name ("" for 0)."""
         gs, scene = self.gpu_scene, self.scene
         out = []
         for i, d in enumerate(gs.draws):
             mesh = scene.meshes[d.mesh]
-            out.append({"id": i + 1, "mesh": mesh.name, "semantic": d.mesh + 1,
+            sem = int(self.semantic_ids[i])
+            out.append({"id": i + 1, "mesh": mesh.name, "semantic": sem,
+                        "label": self.semantic_labels.get(sem, ""),
                         "material": gs.materials[d.material].name,
                         "node": scene.nodes[d.node].name if 0 <= d.node < len(scene.nodes) else ""})
         return out
@@ -949,7 +967,8 @@ OUTPUTS = {
     "depth": "(H, W) float32 distance along the view axis; inf where nothing was drawn",
     "range": "(H, W) float32 distance to the camera centre; inf where nothing was drawn",
     "instance": "(H, W) uint32 instance id: Renderer.instances[id - 1]; 0 = background",
-    "semantic": "(H, W) uint32 semantic id (the mesh's index + 1); 0 = background",
+    "semantic": "(H, W) uint32 semantic id (Renderer(semantics=...): by default the mesh's index + 1; "
+                "Renderer.semantic_labels names them); 0 = background or no class",
     "normal": "(H, W, 3) float32 world shading normal (normal-mapped); 0 = background",
     "normal_camera": "(H, W, 3) float32 the shading normal in camera axes (OpenGL: x right, "
                      "y up, z towards the viewer); 0 = background",
