@@ -37,7 +37,8 @@ def render_views(renderer: Any, cameras: list[Any], lights: Any,
     Yields per view: "color" (H, W, 4) uint8 sRGB, or float32 linear with `settings.linear`;
     each dataset output as `Renderer.render(outputs=...)` returns it.
     """
-    from vkpbr.render.options import BATCH_VIEWS
+
+    from vkpbr.app.common import BATCH_VIEWS
 
     names = settings.outputs
     # The batch path, as `vkpbr render --cameras` takes it (a view renders the same in any

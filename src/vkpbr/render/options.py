@@ -19,10 +19,6 @@ from vkpbr.scene.environment import ENV_SUFFIXES
 
 __all__ = ["RenderOptions", "ENUM_FIELDS"]
 
-# Views per submission of `vkpbr render --cameras` (its --batch) and of Ray's actors
-# (Renderer.render_many(batch=...), render/batch.py).
-BATCH_VIEWS = 64
-
 # RenderOptions field -> the enum its values come from (the CLI's choices, the viewer's cycles).
 ENUM_FIELDS: dict[str, type] = {"view": View, "lighting": Lighting, "brdf": Brdf, "tbn": TbnMode,
                                 "tonemap": Tonemap, "pipeline": PipelinePath}
