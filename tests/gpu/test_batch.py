@@ -330,3 +330,14 @@ def test_cuda_asked_where_it_cannot_run(chart) -> None:  # noqa: ANN001
         pytest.skip("CUDA is available here: test_torch_tensor_on_the_gpu runs instead")
     with pytest.raises(UsageError, match="device='cuda' is not available here: " + why.split("(")[0]):
         chart.render_batch(cams, size=SIZE, device="cuda")
+
+
+def test_msaa_and_compute_path_render_view_by_view(make_renderer) -> None:  # noqa: ANN001
+    r = make_renderer(msaa=4)
+    cams = cameras_of(r, 3, seed=51)
+    assert_views_equal(r.render_batch(cams, size=SIZE), [r.render(c, size=SIZE) for c in cams],
+                       "msaa 4")
+    if r.device.compute_path:
+        r1 = make_renderer()
+        assert_views_equal(r1.render_batch(cams, size=SIZE, pipeline="compute"),
+                           [r1.render(c, size=SIZE, pipeline="compute") for c in cams], "compute")

@@ -608,8 +608,10 @@ class Renderer:
         wanted = self._check_outputs(outputs, self.offscreen_target(size, linear)) if outputs else ()
         # The dataset outputs but colour come from their own pass (as `render` makes them).
         extra = tuple(n for n in wanted if n != "color")
-        if not self.device.batch_views or self.uses_compute(self.offscreen_target(size, linear), opts):
-            # No layered rendering here (or the compute path asked for): view by view.
+        if (not self.device.batch_views or self.msaa > 1
+                or self.uses_compute(self.offscreen_target(size, linear), opts)):
+            # No layered rendering here, MSAA (the batch target is single-sample) or the
+            # compute path asked for: view by view, each exactly as `render` draws it.
             frames = list(self.render_many((views.camera(i) for i in range(len(views))), lights,
                                            size, opts, linear, depth, outputs=wanted or None))
             return _stack_frames(frames, depth, wanted)
