@@ -183,6 +183,7 @@ def test_sample_model(assets, make_renderer) -> None:  # noqa: ANN001
     ("0,0,5,0,0,0", "auto", "expected a list of cameras"),
     (None, 0, "batch 0: expected a positive number"),
     (None, True, "batch True"),
+    (None, 10**9, "need more memory than is free"),
 ])
 def test_bad_input_is_one_line(chart, cameras, batch, message: str) -> None:  # noqa: ANN001
     if cameras is None:

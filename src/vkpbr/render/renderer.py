@@ -582,9 +582,9 @@ class Renderer:
         outputs : as `render`'s, stacked per view; "color" comes from the batch, the others
             (depth, range, ids, normals) from the dataset outputs' pass, view by view (as
             `render` makes them).
-        batch : views per submission: "auto" (as many as fit in a quarter of the device's
-            memory, at most 2048 layers a chunk) or a positive integer; larger batches are
-            split into several submissions.
+        batch : views per submission: "auto" (as many as fit in a quarter of the free device
+            memory and of the free host-visible memory for the readback, at most 65,536) or a
+            positive integer; larger batches are split into several submissions.
         device : "cpu": NumPy arrays; "cuda": a torch.uint8 (or float32 with `linear`)
             tensor (B, H, W, 4) on the same GPU, never through host memory: the frames are
             copied into Vulkan memory that CUDA imports (gpu/cuda.py), then into a tensor of
@@ -722,12 +722,17 @@ class Renderer:
                                     batch: int | str) -> int:
         w, h = int(size[0]), int(size[1])
         pixel = 16 if linear else 4
-        view_bytes = w * h * (2 * pixel + 4 + (4 if depth else 0)) + L.VIEW_RECORD.size
-        if batch == "auto":
-            budget = self.device.local_memory_bytes() // 4
-            return max(1, min(budget // view_bytes, 1 << 16))
+        local, host = self.device.memory_available()
+        device_view = w * h * (pixel + 4) + L.VIEW_RECORD.size + 4 * len(self.gpu_scene.draws)
+        host_view = w * h * (pixel + (4 if depth else 0))
+        fits = max(1, min(local // device_view, host // host_view))  # all of the free memory
+        if batch == "auto":  # a quarter of what is free, on the device and for the readback
+            return max(1, min(fits // 4, 1 << 16))
         if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
             raise UsageError(f"batch {batch!r}: expected a positive number of views or 'auto'")
+        if batch > fits:
+            raise UsageError(f"batch {batch}: {batch:,} views of {w}x{h} need more memory than "
+                             f"is free ({fits:,} fit); give batch='auto' or at most {fits // 2:,}")
         return batch
 
     def _render_batch_part(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
