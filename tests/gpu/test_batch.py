@@ -104,7 +104,7 @@ def test_chunks_and_splits(chart, monkeypatch) -> None:  # noqa: ANN001
     """Chunks of 3 layers and submissions of 5 views give what one chunk gives."""
     cams = cameras_of(chart, 8, seed=5)
     whole = chart.render_batch(cams, size=SIZE)
-    monkeypatch.setattr("vkpbr.render.renderer.MAX_LAYERS", 3)
+    monkeypatch.setattr("vkpbr.render.batch_path.MAX_LAYERS", 3)
     assert_views_equal(chart.render_batch(cams, size=SIZE), list(whole), "chunks of 3")
     assert_views_equal(chart.render_batch(cams, size=SIZE, batch=5), list(whole), "submissions of 5")
 
@@ -270,7 +270,7 @@ def test_frames_for_cuda_reach_the_exported_memory(chart, monkeypatch) -> None: 
     import mmap
     import os
 
-    from vkpbr.render.renderer import Renderer
+    from vkpbr.render.batch_path import BatchPath
 
     if "llvmpipe" not in chart.device.info.name.lower() or not chart.device.external_memory_fd:
         pytest.skip("maps an opaque fd as memory: lavapipe only")
@@ -286,7 +286,7 @@ def test_frames_for_cuda_reach_the_exported_memory(chart, monkeypatch) -> None: 
         finally:
             os.close(fd)
 
-    monkeypatch.setattr(Renderer, "_cuda_view", mapped_view)
+    monkeypatch.setattr(BatchPath, "_cuda_view", mapped_view)
     monkeypatch.setattr("vkpbr.gpu.cuda.cuda_unavailable", lambda: None)
     monkeypatch.setitem(__import__("sys").modules, "torch", type("torch", (), {"cat": np.concatenate}))
     for seed in (31, 32):  # consecutive batches: no stale frames

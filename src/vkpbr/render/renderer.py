@@ -29,7 +29,6 @@ from typing import Any
 import numpy as np
 
 from vkpbr.errors import UsageError
-from vkpbr.gpu.batch_target import BatchTarget
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import COMPUTE_PATH_FEATURES, Device, DeviceRequest
 from vkpbr.gpu.frames import Frame, FrameRing
@@ -37,8 +36,8 @@ from vkpbr.gpu.pipeline import PipelineLayout
 from vkpbr.gpu.swapchain import Surface, Swapchain
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, COPY_OUTPUTS, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
-from vkpbr.render.batch import MAX_LAYERS, BatchViews
-from vkpbr.render.camera import as_camera, batch_frame_terms, depth_range, forward, validate_camera
+from vkpbr.render.batch_path import BatchPath
+from vkpbr.render.camera import as_camera, depth_range, forward, linear_depth, validate_camera
 from vkpbr.render.compute_path import ComputeScene
 from vkpbr.render.environment import Environment, EnvironmentBaker, EnvironmentSpec
 from vkpbr.render.frames import (
@@ -153,10 +152,7 @@ class Renderer:
                 scene, self.gpu_scene.draws, Path(semantics) if isinstance(semantics, os.PathLike)
                 else semantics)
             self._compute_scene: ComputeScene | None = None
-            self._batch: BatchViews | None = None
-            self._batch_targets: dict[tuple, BatchTarget] = {}
-            self._cuda_imports: dict[int, Any] = {}  # gpu/cuda.py CudaImport by target
-            self._cuda_events: dict[int, Any] = {}  # torch.cuda.Event of the last clone
+            self._batch_path: BatchPath | None = None
             self.recorder = FrameRecorder(self.device, self.gpu_scene, self.pipeline_layout,
                                           self.ring, self.slots, self.prepass_for, self.shadows,
                                           self.compute_scene)
@@ -260,7 +256,7 @@ class Renderer:
         d = np.sum((centers - np.asarray(eye, dtype=np.float64)) ** 2, axis=1)
         return tuple(np.argsort(-d, kind="stable").tolist())
 
-    def _blend_orders(self, eyes: np.ndarray) -> np.ndarray:
+    def blend_orders(self, eyes: np.ndarray) -> np.ndarray:
         """`blend_order` of each of (B, 3) eyes: (B, blended draws) int, the same orders."""
         centers = self._blend_centers
         if len(centers) < 2:
@@ -410,9 +406,7 @@ class Renderer:
         Returns a Submitted; `ok` False: recreate the target (a resized window).
         """
         t0 = time.perf_counter()
-        env = self.environment(options)
-        if env is not self._bound_env:
-            self._bind_environment(env)
+        self.bind_environment_for(options)
         clock = time.thread_time if driver_time else _no_clock
         c0 = clock()
         frame = self.ring.begin()  # waits for the frame's previous submission
@@ -451,8 +445,38 @@ class Renderer:
 
     def _free_recordings(self) -> None:
         self.recorder.free()
-        if self._batch is not None:
-            self._batch.free_recordings()
+        if self._batch_path is not None:
+            self._batch_path.free_recordings()
+
+    @property
+    def batch_path(self) -> BatchPath:
+        """The batched-views path (render/batch_path.py), made on the first batch."""
+        if self._batch_path is None:
+            self._batch_path = BatchPath(self)
+        return self._batch_path
+
+    def bind_environment_for(self, options: RenderOptions) -> None:
+        """Make every frame slot sample the environment `options` ask for."""
+        env = self.environment(options)
+        if env is not self._bound_env:
+            self._bind_environment(env)
+
+    def write_scene_shadows(self, slot: FrameSlot, plan: ShadowPlan, lights: tuple[Light, ...],
+                            options: RenderOptions) -> np.ndarray | None:
+        """A batch's shadow maps in `slot`: the camera-independent fits (directional lights
+        over the whole scene) and the lights' LightRecord.shadow rows; None without maps."""
+        self._ensure_shadow_maps(plan, options)
+        if not plan.entries:
+            return None
+        self._shadow_rows.pop(slot.index, None)  # the slot's cascades are overwritten
+        return self.shadows.write(slot.index, plan, lights, None, (1, 1), 0.0, 0.0,
+                                  self.bounds.corners[0], self.bounds.corners[-1])
+
+    def read_frame_timings(self, frame: Frame) -> FrameStats:
+        """The GPU timestamps of `frame` (waited for) into its slot's stats, returned."""
+        slot = self.slots[frame.index]
+        self._read_timings(frame, slot)
+        return slot.stats
 
     def _read_timings(self, frame: Frame, slot: FrameSlot) -> None:
         t = self.ring.timings_ms(frame, STAMPS)
@@ -604,7 +628,10 @@ class Renderer:
         if device not in ("cpu", "cuda"):
             raise UsageError(f"device {device!r}: choose 'cpu' (NumPy) or 'cuda' (a torch tensor)")
         if device == "cuda":
-            return self._render_batch_cuda(views, size, lights, opts, linear, depth, outputs, batch)
+            if depth or outputs:
+                raise UsageError("device='cuda' returns the colour only: ask depth and dataset "
+                                 "outputs with device='cpu'")
+            return self.batch_path.render_cuda(views, size, lights, opts, linear, batch)
         wanted = self._check_outputs(outputs, self.offscreen_target(size, linear)) if outputs else ()
         # The dataset outputs but colour come from their own pass (as `render` makes them).
         extra = tuple(n for n in wanted if n != "color")
@@ -615,15 +642,7 @@ class Renderer:
             frames = list(self.render_many((views.camera(i) for i in range(len(views))), lights,
                                            size, opts, linear, depth, outputs=wanted or None))
             return _stack_frames(frames, depth, wanted)
-        per = self._batch_views_per_submission(size, linear, depth, batch)
-        colors, depths = [], []
-        for start in range(0, len(views), per):
-            part = _slice_batch(views, start, min(start + per, len(views)))
-            color, dist = self._render_batch_part(part, size, lights, opts, linear, depth)
-            colors.append(color)
-            depths.append(dist)
-        color = colors[0] if len(colors) == 1 else np.concatenate(colors)
-        dist = None if depths[0] is None else (depths[0] if len(depths) == 1 else np.concatenate(depths))
+        color, dist = self.batch_path.render(views, size, lights, opts, linear, depth, batch)
         if not wanted:
             return (color, dist) if depth else color
         result: dict[str, np.ndarray] = {}
@@ -664,147 +683,6 @@ class Renderer:
                 yield from flush()
         if pending:
             yield from flush()
-
-    def _render_batch_cuda(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
-                           opts: RenderOptions, linear: bool, depth: bool,
-                           outputs: Iterable[str] | None, batch: int | str) -> Any:
-        """render_batch(device="cuda"): the frames as a torch tensor on the renderer's GPU."""
-        from vkpbr.gpu.cuda import cuda_unavailable
-
-        if depth or outputs:
-            raise UsageError("device='cuda' returns the colour only: ask depth and dataset "
-                             "outputs with device='cpu'")
-        why = cuda_unavailable()
-        if why is None and not self.device.external_memory_fd:
-            why = f"{self.device.info.name} cannot export memory (VK_KHR_external_memory_fd)"
-        if why is None and not self.device.batch_views:
-            why = f"{self.device.info.name} lacks layered rendering for batches"
-        if why is not None:
-            raise UsageError(f"device='cuda' is not available here: {why}")
-        import torch
-
-        per = self._batch_views_per_submission(size, linear, False, batch)
-        parts = []
-        for start in range(0, len(views), per):
-            part = _slice_batch(views, start, min(start + per, len(views)))
-            parts.append(self._render_batch_part(part, size, lights, opts, linear, False, cuda=True)[0])
-        return parts[0] if len(parts) == 1 else torch.cat(parts)
-
-    def _cuda_view(self, target: BatchTarget, views: int, linear: bool) -> Any:
-        """A torch tensor of the first `views` views of an external target's colour: a clone
-        (on torch's current stream) of the imported Vulkan memory; the next batch into the
-        target waits for the clone (`_cuda_wait`)."""
-        import torch
-
-        from vkpbr.gpu.cuda import CudaImport, cuda_device_for
-
-        imported = self._cuda_imports.get(id(target))
-        if imported is None:
-            index = cuda_device_for(self.device.uuid(), self.device.info.name)
-            buf = target.color_readback
-            imported = CudaImport(buf.export_fd(), buf.allocation_size, index)
-            self._cuda_imports[id(target)] = imported
-        w, h = target.extent
-        view = imported.tensor((views, h, w, 4), "<f4" if linear else "|u1")
-        out = view.clone()
-        event = torch.cuda.Event()
-        event.record()
-        self._cuda_events[id(target)] = event
-        return out
-
-    def _cuda_wait(self, target: BatchTarget) -> None:
-        """Before a batch writes an external target: CUDA has finished copying the last one."""
-        event = self._cuda_events.pop(id(target), None)
-        if event is not None:
-            event.synchronize()
-
-    def _batch_views_per_submission(self, size: tuple[int, int], linear: bool, depth: bool,
-                                    batch: int | str) -> int:
-        w, h = int(size[0]), int(size[1])
-        pixel = 16 if linear else 4
-        local, host = self.device.memory_available()
-        device_view = w * h * (pixel + 4) + L.VIEW_RECORD.size + 4 * len(self.gpu_scene.draws)
-        host_view = w * h * (pixel + (4 if depth else 0))
-        fits = max(1, min(local // device_view, host // host_view))  # all of the free memory
-        if batch == "auto":  # a quarter of what is free, on the device and for the readback
-            return max(1, min(fits // 4, 1 << 16))
-        if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
-            raise UsageError(f"batch {batch!r}: expected a positive number of views or 'auto'")
-        if batch > fits:
-            raise UsageError(f"batch {batch}: {batch:,} views of {w}x{h} need more memory than "
-                             f"is free ({fits:,} fit); give batch='auto' or at most {fits // 2:,}")
-        return batch
-
-    def _render_batch_part(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
-                           opts: RenderOptions, linear: bool, depth: bool, cuda: bool = False
-                           ) -> tuple[Any, np.ndarray | None]:
-        n = len(views)
-        limits = self.device.limits
-        layers = max(1, min(n, MAX_LAYERS, int(limits.maxFramebufferLayers),
-                            int(limits.maxImageArrayLayers)))
-        target = self._batch_target(size, layers, n, linear, depth, cuda)
-        if self._batch is None:
-            self._batch = BatchViews(self.device, self.scene, self.gpu_scene, self.ring,
-                                     self.slots, self.set_layouts[0], self.recorder, self.shadows)
-        bv = self._batch
-        bv.ensure(n, layers)
-        frame_lights = self.frame_lights(opts, lights)
-        env = self.environment(opts)
-        if env is not self._bound_env:
-            self._bind_environment(env)
-        terms = batch_frame_terms(views.eye, views.target, views.up, views.yfov_deg,
-                                  views.intrinsics, views.znear, views.zfar, tuple(size),
-                                  self.bounds.corners, self.bounds.radius)
-        frame = self.ring.begin()
-        slot = self.slots[frame.index]
-        plan = self.shadow_plan(frame_lights, opts)
-        self._ensure_shadow_maps(plan, opts)
-        rows = None
-        if plan.entries:  # camera-independent maps, shared by every view
-            rows = self.shadows.write(slot.index, plan, frame_lights, None, tuple(size), 0.0, 0.0,
-                                      self.bounds.corners[0], self.bounds.corners[-1])
-            self._shadow_rows.pop(slot.index, None)
-        first = views.camera(0)
-        write_frame_uniforms(slot, first, frame_lights, size, opts, linear, self.bounds,
-                             self.frame_lighting(opts), rows)
-        bv.write_views(terms, views.eye)
-        groups = bv.write_blend_groups(self._blend_orders(views.eye))
-        cmd = bv.command_buffer(target, frame, n, opts.tbn, opts.alpha_mask, plan, groups,
-                                self.prepass_for(target))
-        if cuda:
-            self._cuda_wait(target)
-        frame.submit(cmd)
-        frame.stamped = self.ring.query_pool is not None
-        frame.wait()
-        self._read_timings(frame, slot)
-        self.last_stats = dataclasses.replace(slot.stats)
-        color = self._cuda_view(target, n, linear) if cuda else target.read_color(n)
-        dist = _linear_depth(target.read_depth(n), terms["znear"][:, None, None]) if depth else None
-        self.device.check_validation()
-        return color, dist
-
-    def _batch_target(self, size: tuple[int, int], layers: int, views: int, linear: bool,
-                      depth: bool, cuda: bool = False) -> BatchTarget:
-        key = (tuple(size), layers, linear, depth, cuda)
-        target = self._batch_targets.get(key)
-        if target is not None and target.capacity >= views:
-            return target
-        if target is not None:
-            self.device.wait_idle()
-            if self._batch is not None:
-                self._batch.free_recordings()
-            self._forget_cuda(target)
-            target.destroy()
-        target = BatchTarget(self.device, size, layers, views, "float" if linear else "srgb",
-                             depth, clear_color=(*self.background, 1.0), external=cuda)
-        self._batch_targets[key] = target
-        return target
-
-    def _forget_cuda(self, target: BatchTarget) -> None:
-        self._cuda_wait(target)
-        imported = self._cuda_imports.pop(id(target), None)
-        if imported is not None:
-            imported.close()
 
     def _check_outputs(self, outputs: Iterable[str] | None, target: OffscreenTarget) -> tuple[str, ...]:
         """The dataset outputs asked for, checked; their images made on first use."""
@@ -861,7 +739,7 @@ class Renderer:
             self.last_stats = dataclasses.replace(stats, readback_ms=0.0)
             return None
         color = target.read_color(frame.index)
-        out_depth = _linear_depth(target.read_depth(frame.index), slot.znear) if depth else None
+        out_depth = linear_depth(target.read_depth(frame.index), slot.znear) if depth else None
         result: Any = (color, out_depth) if depth else color
         if outputs:
             dtypes = {name: (dt, ch) for name, (_, _, dt, ch) in L.OUTPUT_IMAGES.items()}
@@ -892,13 +770,9 @@ class Renderer:
         dev.wait_idle()
         if getattr(self, "recorder", None) is not None:
             self.recorder.free()
-        if getattr(self, "_batch", None) is not None:
-            self._batch.destroy()
-            self._batch = None
-        for target in getattr(self, "_batch_targets", {}).values():
-            self._forget_cuda(target)
-            target.destroy()
-        self._batch_targets = {}
+        if getattr(self, "_batch_path", None) is not None:
+            self._batch_path.close()
+            self._batch_path = None
         if getattr(self, "shadows", None) is not None:
             self.shadows.destroy()
         for env in getattr(self, "_environments", {}).values():
@@ -914,15 +788,6 @@ class Renderer:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-
-
-def _slice_batch(views: CameraBatch, start: int, stop: int) -> CameraBatch:
-    def part(a: np.ndarray | None) -> np.ndarray | None:
-        return None if a is None else a[start:stop]
-
-    return CameraBatch(views.eye[start:stop], views.target[start:stop], views.up[start:stop],
-                       views.yfov_deg[start:stop], part(views.intrinsics), part(views.znear),
-                       part(views.zfar))
 
 
 def _stack_frames(frames: list[Any], depth: bool, wanted: tuple[str, ...]) -> Any:
@@ -957,15 +822,6 @@ def _automatic_sun(env_rotation_deg: float) -> Light:
     direction = (math.cos(t) * x + math.sin(t) * z, y, -math.sin(t) * x + math.cos(t) * z)
     return Light(kind="directional", direction=direction, color=color, intensity=illuminance,
                  falloff="inverse_square")
-
-
-def _linear_depth(d: np.ndarray, znear: float | np.ndarray) -> np.ndarray:
-    """Reversed-Z window depth -> view-space distance along the axis (inf = background);
-    `znear` broadcasts against `d` (a batch: one per view)."""
-    with np.errstate(divide="ignore"):
-        z = znear / d.astype(np.float64)
-    z[d <= 0.0] = np.inf
-    return z.astype(np.float32)
 
 
 # Dataset outputs of render(outputs=...): name -> what it is (docs/outputs.md).
