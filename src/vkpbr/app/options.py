@@ -111,6 +111,9 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
     OptionSpec("--shadow-resolution", "int", "texels per side of a shadow map, 16..16384 "
                "(cube faces get half; default %(default)s)", field="shadow_resolution",
                metavar="N"),
+    OptionSpec("--variant", "text", "the glTF material variant to load (KHR_materials_variants; "
+               "default: the file's default materials)", group="device and scene loading",
+               metavar="NAME"),
     OptionSpec("--device", "text", "device name substring or index (see `vkpbr info`)",
                group="device and scene loading", metavar="NAME|INDEX"),
     OptionSpec("--validation", "on", "enable the Vulkan validation layer",

@@ -403,7 +403,20 @@ class GpuScene:
         for slot in L.MATERIAL_TEXTURES:
             rows = uv_transform_rows(getattr(mat, f"{slot}_texture"))
             b[f"{slot}_uv_row0"], b[f"{slot}_uv_row1"] = rows
+        b["ior"] = mat.ior
+        b["specular_factor"] = mat.specular_factor
+        b["specular_color_factor"] = mat.specular_color_factor
+        b["clearcoat_factor"] = mat.clearcoat_factor
+        b["clearcoat_roughness"] = mat.clearcoat_roughness_factor
+        b["sheen_color_factor"] = mat.sheen_color_factor
+        b["sheen_roughness"] = mat.sheen_roughness_factor
+        b["transmission_factor"] = mat.transmission_factor
+        b["thickness"] = mat.thickness_factor
+        b["attenuation_color"] = mat.attenuation_color
+        b["attenuation_distance"] = mat.attenuation_distance
         flags = 0
+        if mat.unlit:
+            flags |= L.MATERIAL_UNLIT
         if has["normal"]:
             flags |= L.MATERIAL_HAS_NORMAL_MAP
         if has["occlusion"]:

@@ -26,7 +26,18 @@ from functools import cached_property
 
 import numpy as np
 
-from vkpbr.shading import AMBIENT, MAX_LIGHTS, MIN_ROUGHNESS, Brdf, Lighting, Named, Tonemap
+from vkpbr.shading import (
+    AMBIENT,
+    MAX_LIGHTS,
+    MIN_ROUGHNESS,
+    MIN_SHEEN_ROUGHNESS,
+    SHEEN_ALBEDO_FIT,
+    SHEEN_FIT_MIN_N_DOT_V,
+    Brdf,
+    Lighting,
+    Named,
+    Tonemap,
+)
 
 __all__ = [
     "Std140Block",
@@ -61,6 +72,9 @@ __all__ = [
     "HAND_DECLARED_SETS",
     "MATERIAL_TEXTURES",
     "MIN_ROUGHNESS",
+    "MIN_SHEEN_ROUGHNESS",
+    "SHEEN_ALBEDO_FIT",
+    "SHEEN_FIT_MIN_N_DOT_V",
     "AMBIENT",
 ]
 
@@ -216,14 +230,27 @@ MATERIAL = Std140Block(
         ("normal_scale", "float"),
         ("occlusion_strength", "float"),
         ("alpha_cutoff", "float"),
-        *_uv_fields(),  # 6 textures x 2 vec4 = 192 bytes; the block is 256 bytes in all
+        *_uv_fields(),  # 6 textures x 2 vec4 = 192 bytes
         ("flags", "uint"),  # MATERIAL_* bits below
+        # The KHR_materials_* layers (scene.types.Material documents each); 320 bytes in all.
+        ("ior", "float"),
+        ("clearcoat_factor", "float"),
+        ("clearcoat_roughness", "float"),
+        ("specular_color_factor", "vec3"),
+        ("specular_factor", "float"),
+        ("sheen_color_factor", "vec3"),
+        ("sheen_roughness", "float"),
+        ("attenuation_color", "vec3"),
+        ("attenuation_distance", "float"),  # 0: infinite (no absorption)
+        ("transmission_factor", "float"),
+        ("thickness", "float"),  # thicknessFactor (the node's scale not applied); 0: thin
     ),
 )
 MATERIAL_HAS_NORMAL_MAP = 1
 MATERIAL_DOUBLE_SIDED = 2
 MATERIAL_HAS_OCCLUSION_MAP = 4
 MATERIAL_BLEND = 8  # alphaMode BLEND: output alpha for the blended pass
+MATERIAL_UNLIT = 16  # KHR_materials_unlit: the final view is the base colour
 
 LIGHTING = Std140Block(
     "Lighting",
@@ -427,6 +454,13 @@ class View(Named):
     SHADOW = 21
     IBL_DIFFUSE = 22
     IBL_SPECULAR = 23
+    # The KHR_materials_* layers (shade.glsl; each mirrored in reference/brdf.py).
+    IOR = 24
+    DIELECTRIC_F0 = 25
+    CLEARCOAT = 26
+    SHEEN = 27
+    TRANSMISSION = 28
+    VOLUME = 29
 
 
 VIEW_HELP = {
@@ -455,6 +489,17 @@ VIEW_HELP = {
     View.SHADOW: "shadow factor of the first shadow-casting light (1 lit, 0 shadowed), grey",
     View.IBL_DIFFUSE: "image-based diffuse radiance (irradiance * diffuse colour, occluded)",
     View.IBL_SPECULAR: "image-based specular radiance (pre-filtered environment * split sum)",
+    View.IOR: "index of refraction (KHR_materials_ior) as ior - 1, grey (1.5: 0.5; clipped at 1)",
+    View.DIELECTRIC_F0: "the dielectric's F0 times its specular weight (KHR_materials_ior and "
+                        "_specular): min(((ior-1)/(ior+1))^2 * specular colour, 1) * specular",
+    View.CLEARCOAT: "clearcoat radiance (KHR_materials_clearcoat): the coat's GGX lobe of the "
+                    "lights and the environment, times clearcoat * F_coat(n.v)",
+    View.SHEEN: "sheen radiance (KHR_materials_sheen): the Charlie lobe of the lights and the "
+                "environment",
+    View.TRANSMISSION: "transmitted radiance (KHR_materials_transmission): the lights through "
+                       "the surface and the refracted environment, after volume attenuation",
+    View.VOLUME: "volume transmittance (KHR_materials_volume): attenuation colour ^ (thickness "
+                 "/ attenuation distance), as a colour",
 }
 
 
@@ -468,9 +513,10 @@ VIEW_KIND = {
     v: (
         ViewKind.RADIANCE
         if v in (View.FINAL, View.SPECULAR, View.DIFFUSE, View.AMBIENT, View.EMISSIVE,
-                 View.IBL_DIFFUSE, View.IBL_SPECULAR)
+                 View.IBL_DIFFUSE, View.IBL_SPECULAR, View.CLEARCOAT, View.SHEEN,
+                 View.TRANSMISSION)
         else ViewKind.COLOR
-        if v == View.BASE_COLOR
+        if v in (View.BASE_COLOR, View.VOLUME)
         else ViewKind.DATA
     )
     for v in View

@@ -319,7 +319,10 @@ def _material(rec: dict) -> Material:
             tex = dict(value)
             tex["sampler"] = Sampler(**tex["sampler"])
             rec[key] = _build(TextureRef, tex, ("offset", "scale"))
-    return _build(Material, rec, ("base_color_factor", "emissive_factor"))
+    # Files baked before the KHR_materials_* fields existed lack them: the defaults apply.
+    return _build(Material, rec, ("base_color_factor", "emissive_factor",
+                                  "specular_color_factor", "sheen_color_factor",
+                                  "attenuation_color"))
 
 
 def _validate_counts(baked: BakedScene, path: Path) -> None:

@@ -99,7 +99,8 @@ class TextureRef:
 
 @dataclass
 class Material:
-    """Metallic-roughness material (glTF 2.0 core). Factors multiply the textures."""
+    """Metallic-roughness material (glTF 2.0 core) with the KHR_materials_* layers. Factors
+    multiply the textures. KHR_materials_emissive_strength is folded into emissive_factor."""
 
     name: str = "default"
     base_color_factor: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
@@ -122,6 +123,20 @@ class Material:
     # Separate alpha mask (OBJ map_d, .comp5822mesh): `channel` holds coverage. When None the
     # alpha comes from base_color_texture's A, as in glTF.
     alpha_texture: TextureRef | None = None  # linear
+    # The KHR_materials_* extensions (factors; their textures are not read yet). Defaults are
+    # the core material's: every layer off, ior 1.5 (F0 0.04), white specular.
+    unlit: bool = False  # KHR_materials_unlit: the base colour is the radiance
+    ior: float = 1.5  # KHR_materials_ior: dielectric F0 = ((ior - 1) / (ior + 1))^2
+    specular_factor: float = 1.0  # KHR_materials_specular: weight of the dielectric lobe
+    specular_color_factor: tuple[float, float, float] = (1.0, 1.0, 1.0)  # scales F0
+    clearcoat_factor: float = 0.0  # KHR_materials_clearcoat
+    clearcoat_roughness_factor: float = 0.0
+    sheen_color_factor: tuple[float, float, float] = (0.0, 0.0, 0.0)  # KHR_materials_sheen
+    sheen_roughness_factor: float = 0.0
+    transmission_factor: float = 0.0  # KHR_materials_transmission
+    thickness_factor: float = 0.0  # KHR_materials_volume: 0 = thin-walled (no volume)
+    attenuation_distance: float = 0.0  # 0 = infinite (no absorption), as Light.range
+    attenuation_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
 
 
 @dataclass
@@ -199,6 +214,8 @@ class Scene:
     nodes: list[Node] = field(default_factory=list)
     lights: list[Light] = field(default_factory=list)
     cameras: list[Camera] = field(default_factory=list)
+    # KHR_materials_variants: the file's variant names (the one loaded is chosen at load time).
+    variants: list[str] = field(default_factory=list)
     source: Path | None = None  # the file it was loaded from, if any
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:

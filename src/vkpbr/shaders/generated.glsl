@@ -5,6 +5,11 @@
 const float MIN_ROUGHNESS = 0.03;
 const float AMBIENT = 0.02;
 const uint MAX_LIGHTS = 256u;
+const float MIN_SHEEN_ROUGHNESS = 0.07;
+const float SHEEN_FIT_MIN_N_DOT_V = 0.02;
+float sheen_albedo_fit(float x, float y) {
+    return (1.09927 + y * (-0.4456763 + y * (-2.387564 + y * (6.252952 + y * (-3.489524))))) + x * ((12.52236 + y * (-70.76933 + y * (154.0586 + y * (-146.4862 + y * (50.86578))))) + x * ((-54.14374 + y * (288.7846 + y * (-608.6334 + y * (560.6368 + y * (-189.5136))))) + x * ((66.47369 + y * (-367.9202 + y * (784.6235 + y * (-728.6155 + y * (247.9961))))) + x * ((-25.8705 + y * (149.7473 + y * (-326.3621 + y * (307.6033 + y * (-105.8631)))))))));
+}
 const int VIEW_FINAL = 0;
 const int VIEW_D = 1;
 const int VIEW_F = 2;
@@ -29,6 +34,12 @@ const int VIEW_BITANGENT = 20;
 const int VIEW_SHADOW = 21;
 const int VIEW_IBL_DIFFUSE = 22;
 const int VIEW_IBL_SPECULAR = 23;
+const int VIEW_IOR = 24;
+const int VIEW_DIELECTRIC_F0 = 25;
+const int VIEW_CLEARCOAT = 26;
+const int VIEW_SHEEN = 27;
+const int VIEW_TRANSMISSION = 28;
+const int VIEW_VOLUME = 29;
 const int BRDF_GGX = 0;
 const int BRDF_BLINN_PHONG = 1;
 const int BRDF_GLTF = 2;
@@ -48,7 +59,7 @@ const int LIGHT_DIRECTIONAL = 2;
 const int VIEW_KIND_RADIANCE = 0;
 const int VIEW_KIND_COLOR = 1;
 const int VIEW_KIND_DATA = 2;
-const int VIEW_KINDS[24] = int[](0, 2, 2, 2, 0, 0, 0, 2, 2, 2, 2, 1, 2, 2, 2, 2, 2, 2, 0, 2, 2, 2, 0, 0);
+const int VIEW_KINDS[30] = int[](0, 2, 2, 2, 0, 0, 0, 2, 2, 2, 2, 1, 2, 2, 2, 2, 2, 2, 0, 2, 2, 2, 0, 0, 2, 2, 0, 0, 0, 1);
 const uint LIGHTING_BACKGROUND = 4u;
 const uint LIGHTING_IBL = 2u;
 const uint LIGHTING_SHADOWS = 1u;
@@ -56,6 +67,7 @@ const uint MATERIAL_BLEND = 8u;
 const uint MATERIAL_DOUBLE_SIDED = 2u;
 const uint MATERIAL_HAS_NORMAL_MAP = 1u;
 const uint MATERIAL_HAS_OCCLUSION_MAP = 4u;
+const uint MATERIAL_UNLIT = 16u;
 const uint SETTINGS_NORMAL_MAPPING = 1u;
 const uint SETTINGS_OCCLUSION = 2u;
 const uint SETTINGS_SRGB_TARGET = 4u;
@@ -94,6 +106,17 @@ struct MaterialRecord {
     vec4 emissive_uv_row0;
     vec4 emissive_uv_row1;
     uint flags;
+    float ior;
+    float clearcoat_factor;
+    float clearcoat_roughness;
+    vec3 specular_color_factor;
+    float specular_factor;
+    vec3 sheen_color_factor;
+    float sheen_roughness;
+    vec3 attenuation_color;
+    float attenuation_distance;
+    float transmission_factor;
+    float thickness;
 };
 #if !COMPUTE_SHADING
 layout(set = 0, binding = 0, std140) uniform Camera {
@@ -141,6 +164,17 @@ layout(set = 1, binding = 6, std140) uniform Material {
     vec4 emissive_uv_row0;
     vec4 emissive_uv_row1;
     uint flags;
+    float ior;
+    float clearcoat_factor;
+    float clearcoat_roughness;
+    vec3 specular_color_factor;
+    float specular_factor;
+    vec3 sheen_color_factor;
+    float sheen_roughness;
+    vec3 attenuation_color;
+    float attenuation_distance;
+    float transmission_factor;
+    float thickness;
 } material;
 #if !COMPUTE_SHADING
 layout(set = 2, binding = 0, std140) uniform Lighting {
