@@ -55,6 +55,7 @@ __all__ = [
     "shade_layered",
     "AMBIENT",
     "MIN_ROUGHNESS",
+    "MIN_SHEEN_ROUGHNESS",
 ]
 
 PI = np.pi
