@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import OpenEXR
 import pytest
-from test_reference import CAMERA, H, LIGHT, W, pixel_geometry
+from test_reference import CAMERA, LIGHT, H, W, pixel_geometry
 
 from vkpbr.reference import brdf as ref
 from vkpbr.render.environment import EnvironmentSpec
