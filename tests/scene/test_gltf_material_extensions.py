@@ -165,3 +165,23 @@ def test_validation_rejects_bad_layers(field: str, value: object) -> None:
         warnings.simplefilter("ignore")
         with pytest.raises(SceneError, match=rf"materials\[0\]\.{field}"):
             validate_scene(scene, Path("s.vkpbr"))
+
+
+@pytest.mark.parametrize("command", ["render", "view"])
+def test_variant_option_reaches_the_loader(tmp_path: Path, command: str) -> None:
+    """`--variant NAME` (one definition in app/options.py, on render and view) loads that
+    variant through load_scene_arg, also through the bake cache (a file per variant)."""
+    from vkpbr.app.cli import build_parser
+    from vkpbr.app.common import load_scene_arg
+
+    mats = [{"name": "default"}, {"name": "red"}]
+    path = write(tmp_path, mats, ["red"], [{"material": 1, "variants": [0]}])
+    args = build_parser().parse_args([command, str(path), "--variant", "red"])
+    assert args.variant == "red"
+    assert load_scene_arg(args).meshes[0].material == 1
+    cached = build_parser().parse_args([command, str(path), "--variant", "red", "--cache",
+                                        str(tmp_path / "cache")])
+    assert load_scene_arg(cached).meshes[0].material == 1
+    plain = build_parser().parse_args([command, str(path), "--cache", str(tmp_path / "cache")])
+    assert load_scene_arg(plain).meshes[0].material == 0
+    assert len(list((tmp_path / "cache").glob("*.vkpbr"))) == 2
