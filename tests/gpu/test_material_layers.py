@@ -197,3 +197,68 @@ def test_golden_layer_spheres(make_renderer, tmp_path: Path) -> None:
     other = variant.render(CAMERA, size=golden.size, lighting="pbr")[..., :3].astype(int)
     changed = np.abs(other - got).max(-1) > 8
     assert changed[:, :65].mean() > 0.05 and not changed[:, 70:].any()
+
+
+def constant_image(name: str, rgba: tuple[int, int, int, int]):  # noqa: ANN201
+    from vkpbr.scene.types import Image
+
+    return Image(name=name, pixels=np.broadcast_to(np.asarray(rgba, np.uint8), (4, 4, 4)).copy())
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
+def test_layer_textures_multiply_their_factors(make_renderer, pipeline: str) -> None:
+    """Every extension texture (constant texels, so that filtering cannot matter) scales its
+    factor: scalar maps from the channel the extension names (R, G or A of a linear image),
+    sheen and specular colour decoded from sRGB, the coat's normal map tilting the coat's
+    normal in the surface's tangent frame (read from the tangent and bitangent views)."""
+    from vkpbr.scene.types import TextureRef
+
+    data, color, normal = (16, 64, 200, 191), (200, 120, 60, 255), (166, 102, 242, 255)
+    images = [constant_image("data", data), constant_image("color", color),
+              constant_image("normal", normal)]
+    mat = Material(base_color_factor=(0.6, 0.5, 0.4, 1), metallic_factor=0.1,
+                   roughness_factor=0.5, ior=1.45, specular_factor=0.9,
+                   specular_color_factor=(1.2, 1.0, 0.8), clearcoat_factor=0.9,
+                   clearcoat_roughness_factor=0.8, clearcoat_normal_scale=0.7,
+                   sheen_color_factor=(1.0, 0.8, 0.6), sheen_roughness_factor=0.9,
+                   transmission_factor=0.8, thickness_factor=2.0, attenuation_distance=1.5,
+                   attenuation_color=(0.8, 0.6, 0.3),
+                   clearcoat_texture=TextureRef(0, channel=0),
+                   clearcoat_roughness_texture=TextureRef(0, channel=1),
+                   clearcoat_normal_texture=TextureRef(2),
+                   sheen_color_texture=TextureRef(1), sheen_roughness_texture=TextureRef(0, channel=3),
+                   specular_texture=TextureRef(0, channel=3), specular_color_texture=TextureRef(1),
+                   transmission_texture=TextureRef(0, channel=0),
+                   thickness_texture=TextureRef(0, channel=1))
+    scene = plane_scene(mat)
+    scene.images = images
+    r = make_renderer(scene)
+    if pipeline == "compute" and not r.device.compute_path:
+        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+    unorm = np.asarray(data) / 255.0
+    srgb = ref.srgb_to_linear(np.asarray(color[:3]) / 255.0)
+    layers = ref.Layers(
+        ior=1.45, specular_color=tuple(np.asarray(mat.specular_color_factor) * srgb),
+        specular=0.9 * unorm[3], clearcoat=0.9 * unorm[0],
+        clearcoat_roughness=0.8 * unorm[1],
+        sheen_color=tuple(np.asarray(mat.sheen_color_factor) * srgb),
+        sheen_roughness=0.9 * unorm[3], transmission=0.8 * unorm[0], thickness=2.0 * unorm[1],
+        attenuation_color=mat.attenuation_color, attenuation_distance=1.5)
+    p, n, v, _ = pixel_geometry()
+    to_light = np.asarray(LIGHT.position) - p
+    l = to_light / np.linalg.norm(to_light, axis=-1, keepdims=True)
+    t = render(r, "tangent", pipeline, env="none") * 2.0 - 1.0
+    b = render(r, "bitangent", pipeline, env="none") * 2.0 - 1.0
+    tn = np.asarray(normal[:3]) / 255.0 * 2.0 - 1.0
+    tn[:2] *= 0.7
+    nc = t * tn[0] + b * tn[1] + n * tn[2]
+    nc /= np.linalg.norm(nc, axis=-1, keepdims=True)
+    assert np.degrees(np.arccos(np.clip(nc[..., 1], -1, 1))).min() > 5.0  # the coat tilts
+    c = np.broadcast_to(np.asarray(mat.base_color_factor[:3]), n.shape)
+    shape = n.shape[:2]
+    want = ref.shade_layered(n, v, l, c, np.full(shape, 0.1), np.full(shape, 0.5),
+                             np.asarray(LIGHT.color) * LIGHT.intensity, layers, nc=nc)
+    for view in VIEWS:
+        got = render(r, view, pipeline, env="none")
+        np.testing.assert_allclose(got, np.broadcast_to(want[view.replace("-", "_")], got.shape),
+                                   rtol=3e-3, atol=5e-5, err_msg=view)

@@ -88,12 +88,44 @@ def test_bad_factor_is_one_line_error(tmp_path: Path, name: str, body: dict, wor
     assert "\n" not in str(info.value)
 
 
-def test_extension_textures_warn_once(tmp_path: Path) -> None:
-    mat = {"extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1,
-                                                      "clearcoatTexture": {"index": 0}}}}
-    with pytest.warns(UserWarning, match="KHR_materials_clearcoat.clearcoatTexture"):
-        m = load_scene(write(tmp_path, [mat])).materials[0]
-    assert m.clearcoat_factor == 1.0
+def test_extension_textures_are_read(tmp_path: Path) -> None:
+    """Each extension texture lands in its Material slot with the channel the extension reads
+    (scalar maps), its UV set and KHR_texture_transform; the coat normal keeps its scale."""
+    info = lambda k, **kw: {"index": k, **kw}  # noqa: E731
+    mat = {"extensions": {
+        "KHR_materials_clearcoat": {"clearcoatFactor": 1, "clearcoatTexture": info(0),
+                                    "clearcoatRoughnessTexture": info(1, texCoord=1),
+                                    "clearcoatNormalTexture": info(2, scale=0.5)},
+        "KHR_materials_sheen": {"sheenColorFactor": [1, 1, 1], "sheenColorTexture": info(1),
+                                "sheenRoughnessTexture": info(1)},
+        "KHR_materials_specular": {"specularTexture": info(0), "specularColorTexture": info(2)},
+        "KHR_materials_transmission": {"transmissionTexture": info(0, extensions={
+            "KHR_texture_transform": {"scale": [2, 3]}})},
+        "KHR_materials_volume": {"thicknessTexture": info(0)},
+    }}
+    b = GltfBuilder()
+    b.node(mesh=b.triangle())
+    b.doc["meshes"][0]["primitives"][0]["material"] = 0
+    b.doc["materials"] = [mat]
+    b.doc["images"] = [{"uri": f"data:image/png;base64,{k}AAA="} for k in "ABC"]
+    b.doc["textures"] = [{"source": k} for k in range(3)]
+    m = load_scene(b.save(tmp_path / "t.gltf", "datauri")).materials[0]
+    got = {slot: (ref.image, ref.channel, ref.texcoord) for slot in (
+        "clearcoat", "clearcoat_roughness", "clearcoat_normal", "sheen_color", "sheen_roughness",
+        "specular", "specular_color", "transmission", "thickness")
+        for ref in (getattr(m, f"{slot}_texture"),)}
+    assert got == {"clearcoat": (0, 0, 0), "clearcoat_roughness": (1, 1, 1),
+                   "clearcoat_normal": (2, 0, 0), "sheen_color": (1, 0, 0),
+                   "sheen_roughness": (1, 3, 0), "specular": (0, 3, 0),
+                   "specular_color": (2, 0, 0), "transmission": (0, 0, 0),
+                   "thickness": (0, 1, 0)}
+    assert m.clearcoat_normal_scale == 0.5 and m.transmission_texture.scale == (2, 3)
+    out = tmp_path / "t.vkpbr"  # and through the baked format
+    from vkpbr.bake.bake import bake_scene
+    from vkpbr.scene.baked_file import write_baked
+
+    write_baked(out, bake_scene(load_scene(tmp_path / "t.gltf"), progress=False))
+    assert dataclasses.asdict(load_scene(out).materials[0]) == dataclasses.asdict(m)
 
 
 def test_variants_select_the_mapped_material(tmp_path: Path) -> None:

@@ -47,7 +47,7 @@ from ..scene.loader import load_scene
 from ..scene.mips import mip_chain
 from ..scene.resources import ResourcePolicy, is_regular_file, read_resource
 from ..scene.textures import decode_images
-from ..scene.types import Mesh, Scene
+from ..scene.types import SRGB_TEXTURE_SLOTS, Mesh, Scene
 from .frames import (
     frame_angular_error_deg,
     pack_qtangent,
@@ -171,9 +171,10 @@ def _bake_mesh(mesh: Mesh, uv_set: int = 0) -> tuple[dict[str, np.ndarray], int]
 
 
 def _srgb_images(scene: Scene) -> set[int]:
-    """Indices of the images some material reads as sRGB colour (base colour, emissive)."""
-    return {t.image for m in scene.materials
-            for t in (m.base_color_texture, m.emissive_texture) if t is not None}
+    """Indices of the images some material reads as sRGB colour (base colour, emissive,
+    sheen and specular colour: SRGB_TEXTURE_SLOTS)."""
+    return {t.image for m in scene.materials for slot in SRGB_TEXTURE_SLOTS
+            for t in (getattr(m, f"{slot}_texture"),) if t is not None}
 
 
 def _images(scene: Scene) -> list[BakedImage]:

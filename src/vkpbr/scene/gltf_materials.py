@@ -1,7 +1,6 @@
 # glTF images, samplers, textures and materials -> Image, Sampler, TextureRef, Material:
 # the metallic-roughness core, KHR_texture_transform, KHR_materials_emissive_strength, _unlit,
-# _ior, _specular, _clearcoat, _sheen, _transmission and _volume (their factors: the
-# extensions' own textures are not read yet, and a warning says so), and
+# _ior, _specular, _clearcoat, _sheen, _transmission and _volume (factors and textures), and
 # KHR_materials_variants (`apply_variant`: the chosen variant's materials replace the
 # primitives' before the meshes are built).
 # Images stay encoded (decoding is textures.py's job, in parallel); a missing image file is
@@ -37,15 +36,18 @@ MATERIAL_EXTENSIONS = (
     "KHR_materials_ior", "KHR_materials_specular", "KHR_materials_clearcoat",
     "KHR_materials_sheen", "KHR_materials_transmission", "KHR_materials_volume",
 )
-# Each extension's textures, which vkpbr does not sample yet (the factors alone apply).
-_EXTENSION_TEXTURES = {
-    "KHR_materials_specular": ("specularTexture", "specularColorTexture"),
-    "KHR_materials_clearcoat": ("clearcoatTexture", "clearcoatRoughnessTexture",
-                                "clearcoatNormalTexture"),
-    "KHR_materials_sheen": ("sheenColorTexture", "sheenRoughnessTexture"),
-    "KHR_materials_transmission": ("transmissionTexture",),
-    "KHR_materials_volume": ("thicknessTexture",),
-}
+# Each extension's textures: (extension, glTF key, Material slot, channel of a scalar map).
+_EXTENSION_TEXTURES = (
+    ("KHR_materials_clearcoat", "clearcoatTexture", "clearcoat", 0),
+    ("KHR_materials_clearcoat", "clearcoatRoughnessTexture", "clearcoat_roughness", 1),
+    ("KHR_materials_clearcoat", "clearcoatNormalTexture", "clearcoat_normal", 0),
+    ("KHR_materials_sheen", "sheenColorTexture", "sheen_color", 0),
+    ("KHR_materials_sheen", "sheenRoughnessTexture", "sheen_roughness", 3),
+    ("KHR_materials_specular", "specularTexture", "specular", 3),
+    ("KHR_materials_specular", "specularColorTexture", "specular_color", 0),
+    ("KHR_materials_transmission", "transmissionTexture", "transmission", 0),
+    ("KHR_materials_volume", "thicknessTexture", "thickness", 1),
+)
 
 
 def load_images(ld: GltfDocument) -> list[Image]:
@@ -188,11 +190,10 @@ def _extension_factors(ld: GltfDocument, i: int, m: object) -> dict[str, object]
     """The Material fields of material `i`'s KHR_materials_* extensions (defaults when absent)."""
     p = ld.path
     where = f"material {i}"
-    ignored = [f"{name}.{key}" for name, keys in _EXTENSION_TEXTURES.items()
-               for key in keys if get(ext(m, name), key) is not None]
-    if ignored:
-        warnings.warn(f"{p}: {where}: textures not supported yet, their factors alone apply: "
-                      f"{', '.join(ignored)}", stacklevel=4)
+    n_images = len(ld.gltf.images or [])
+    textures = {f"{slot}_texture": _texture_ref(ld, get(ext(m, name), key), n_images, channel)
+                for name, key, slot, channel in _EXTENSION_TEXTURES}
+    coat_normal = get(ext(m, "KHR_materials_clearcoat"), "clearcoatNormalTexture")
     spec = ext(m, "KHR_materials_specular")
     coat = ext(m, "KHR_materials_clearcoat")
     sheen = ext(m, "KHR_materials_sheen")
@@ -207,6 +208,9 @@ def _extension_factors(ld: GltfDocument, i: int, m: object) -> dict[str, object]
         raise SceneError(p, f"{where}: attenuationDistance {distance!r} must be > 0")
     unlit = isinstance(get(get(m, "extensions", {}), "KHR_materials_unlit"), dict)
     return {
+        **textures,
+        "clearcoat_normal_scale": scalar(get(coat_normal, "scale") if coat_normal else None,
+                                         1.0, "clearcoatNormalTexture scale", p),
         "unlit": unlit,
         "ior": ior,
         "specular_factor": _unit(get(spec, "specularFactor"), 1.0, "specularFactor", p),

@@ -21,7 +21,17 @@ import numpy as np
 from vkpbr.errors import SceneError, UsageError
 from vkpbr.scene.camera import Camera, validate_camera
 from vkpbr.scene.limits import limits
-from vkpbr.scene.types import Image, Light, Material, Mesh, Node, Sampler, Scene, TextureRef
+from vkpbr.scene.types import (
+    TEXTURE_SLOTS,
+    Image,
+    Light,
+    Material,
+    Mesh,
+    Node,
+    Sampler,
+    Scene,
+    TextureRef,
+)
 from vkpbr.shading import MAX_LIGHTS
 
 __all__ = ["validate_scene", "validate_lights", "MAX_COORDINATE"]
@@ -30,7 +40,7 @@ __all__ = ["validate_scene", "validate_lights", "MAX_COORDINATE"]
 # beyond any real scene, far below float32's 3.4e38, so squared distances and the projection
 # stay finite.
 MAX_COORDINATE = 1e15
-_TEXTURE_SLOTS = ("base_color", "metallic", "roughness", "normal", "occlusion", "emissive", "alpha")
+_TEXTURE_SLOTS = TEXTURE_SLOTS
 
 
 class _Bad(Exception):
@@ -151,6 +161,7 @@ def _check_material(m: Material, where: str, n_images: int) -> None:
         _number(getattr(m, name), f"{where}.{name}", 0.0, 1.0)
     _number(m.thickness_factor, f"{where}.thickness_factor", 0.0, 1e6)
     _number(m.attenuation_distance, f"{where}.attenuation_distance", 0.0, 1e9)
+    _number(m.clearcoat_normal_scale, f"{where}.clearcoat_normal_scale", -1e6, 1e6)
     _choice(m.alpha_mode, ("opaque", "mask", "blend"), f"{where}.alpha_mode")
     _choice(m.double_sided, (True, False), f"{where}.double_sided")
     _choice(m.casts_shadows, (True, False), f"{where}.casts_shadows")

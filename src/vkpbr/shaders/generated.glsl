@@ -63,8 +63,10 @@ const int VIEW_KINDS[30] = int[](0, 2, 2, 2, 0, 0, 0, 2, 2, 2, 2, 1, 2, 2, 2, 2,
 const uint LIGHTING_BACKGROUND = 4u;
 const uint LIGHTING_IBL = 2u;
 const uint LIGHTING_SHADOWS = 1u;
+const uint MATERIAL_BINDING = 15u;
 const uint MATERIAL_BLEND = 8u;
 const uint MATERIAL_DOUBLE_SIDED = 2u;
+const uint MATERIAL_HAS_CLEARCOAT_NORMAL_MAP = 32u;
 const uint MATERIAL_HAS_NORMAL_MAP = 1u;
 const uint MATERIAL_HAS_OCCLUSION_MAP = 4u;
 const uint MATERIAL_UNLIT = 16u;
@@ -105,6 +107,24 @@ struct MaterialRecord {
     vec4 occlusion_uv_row1;
     vec4 emissive_uv_row0;
     vec4 emissive_uv_row1;
+    vec4 clearcoat_uv_row0;
+    vec4 clearcoat_uv_row1;
+    vec4 clearcoat_roughness_uv_row0;
+    vec4 clearcoat_roughness_uv_row1;
+    vec4 clearcoat_normal_uv_row0;
+    vec4 clearcoat_normal_uv_row1;
+    vec4 sheen_color_uv_row0;
+    vec4 sheen_color_uv_row1;
+    vec4 sheen_roughness_uv_row0;
+    vec4 sheen_roughness_uv_row1;
+    vec4 specular_uv_row0;
+    vec4 specular_uv_row1;
+    vec4 specular_color_uv_row0;
+    vec4 specular_color_uv_row1;
+    vec4 transmission_uv_row0;
+    vec4 transmission_uv_row1;
+    vec4 thickness_uv_row0;
+    vec4 thickness_uv_row1;
     uint flags;
     float ior;
     float clearcoat_factor;
@@ -117,6 +137,7 @@ struct MaterialRecord {
     float attenuation_distance;
     float transmission_factor;
     float thickness;
+    float clearcoat_normal_scale;
 };
 #if !COMPUTE_SHADING
 layout(set = 0, binding = 0, std140) uniform Camera {
@@ -143,7 +164,16 @@ layout(set = 1, binding = 2) uniform sampler2D roughness_map;
 layout(set = 1, binding = 3) uniform sampler2D normal_map;
 layout(set = 1, binding = 4) uniform sampler2D occlusion_map;
 layout(set = 1, binding = 5) uniform sampler2D emissive_map;
-layout(set = 1, binding = 6, std140) uniform Material {
+layout(set = 1, binding = 6) uniform sampler2D clearcoat_map;
+layout(set = 1, binding = 7) uniform sampler2D clearcoat_roughness_map;
+layout(set = 1, binding = 8) uniform sampler2D clearcoat_normal_map;
+layout(set = 1, binding = 9) uniform sampler2D sheen_color_map;
+layout(set = 1, binding = 10) uniform sampler2D sheen_roughness_map;
+layout(set = 1, binding = 11) uniform sampler2D specular_map;
+layout(set = 1, binding = 12) uniform sampler2D specular_color_map;
+layout(set = 1, binding = 13) uniform sampler2D transmission_map;
+layout(set = 1, binding = 14) uniform sampler2D thickness_map;
+layout(set = 1, binding = 15, std140) uniform Material {
     vec4 base_color_factor;
     vec3 emissive_factor;
     float metallic_factor;
@@ -163,6 +193,24 @@ layout(set = 1, binding = 6, std140) uniform Material {
     vec4 occlusion_uv_row1;
     vec4 emissive_uv_row0;
     vec4 emissive_uv_row1;
+    vec4 clearcoat_uv_row0;
+    vec4 clearcoat_uv_row1;
+    vec4 clearcoat_roughness_uv_row0;
+    vec4 clearcoat_roughness_uv_row1;
+    vec4 clearcoat_normal_uv_row0;
+    vec4 clearcoat_normal_uv_row1;
+    vec4 sheen_color_uv_row0;
+    vec4 sheen_color_uv_row1;
+    vec4 sheen_roughness_uv_row0;
+    vec4 sheen_roughness_uv_row1;
+    vec4 specular_uv_row0;
+    vec4 specular_uv_row1;
+    vec4 specular_color_uv_row0;
+    vec4 specular_color_uv_row1;
+    vec4 transmission_uv_row0;
+    vec4 transmission_uv_row1;
+    vec4 thickness_uv_row0;
+    vec4 thickness_uv_row1;
     uint flags;
     float ior;
     float clearcoat_factor;
@@ -175,6 +223,7 @@ layout(set = 1, binding = 6, std140) uniform Material {
     float attenuation_distance;
     float transmission_factor;
     float thickness;
+    float clearcoat_normal_scale;
 } material;
 #if !COMPUTE_SHADING
 layout(set = 2, binding = 0, std140) uniform Lighting {

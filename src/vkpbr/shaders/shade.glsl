@@ -69,23 +69,36 @@ void surface_frame(uint settings_flags, uint material_flags, out vec3 ng, out ve
     }
 }
 
-// The material's KHR_materials_* layers (factors: the extensions' textures are not read).
+// The material's KHR_materials_* layers: factors times their textures (white when absent;
+// scalar maps arrive in R, swizzled by the view: gpu_scene.py).
 Layers material_layers() {
     // Through u() (frame_output.glsl): branches depend on these, which lavapipe would inline.
     vec3 zero = vec3(float(opaque_zero));
     Layers m;
     m.ior = max(u(MAT.ior), 1.0);
-    m.specular_color = MAT.specular_color_factor + zero;
-    m.specular = clamp(u(MAT.specular_factor), 0.0, 1.0);
-    m.clearcoat = clamp(u(MAT.clearcoat_factor), 0.0, 1.0);
-    m.clearcoat_roughness = clamp(u(MAT.clearcoat_roughness), MIN_ROUGHNESS, 1.0);
-    m.sheen_color = MAT.sheen_color_factor + zero;
-    m.sheen_roughness = clamp(u(MAT.sheen_roughness), MIN_SHEEN_ROUGHNESS, 1.0);
-    m.transmission = clamp(u(MAT.transmission_factor), 0.0, 1.0);
-    m.thickness = max(u(MAT.thickness), 0.0);
+    m.specular_color = MAT.specular_color_factor * SAMPLE(specular_color).rgb + zero;
+    m.specular = clamp(u(MAT.specular_factor) * SAMPLE(specular).r, 0.0, 1.0);
+    m.clearcoat = clamp(u(MAT.clearcoat_factor) * SAMPLE(clearcoat).r, 0.0, 1.0);
+    m.clearcoat_roughness = clamp(u(MAT.clearcoat_roughness) * SAMPLE(clearcoat_roughness).r,
+                                  MIN_ROUGHNESS, 1.0);
+    m.sheen_color = MAT.sheen_color_factor * SAMPLE(sheen_color).rgb + zero;
+    m.sheen_roughness = clamp(u(MAT.sheen_roughness) * SAMPLE(sheen_roughness).r,
+                              MIN_SHEEN_ROUGHNESS, 1.0);
+    m.transmission = clamp(u(MAT.transmission_factor) * SAMPLE(transmission).r, 0.0, 1.0);
+    m.thickness = max(u(MAT.thickness) * SAMPLE(thickness).r, 0.0);
     m.attenuation_color = MAT.attenuation_color + zero;
     m.attenuation_distance = u(MAT.attenuation_distance);
     return m;
+}
+
+// The coat's normal: the interpolated one, or its own normal map (clearcoatNormalTexture)
+// in the surface's tangent frame.
+vec3 clearcoat_normal(uint settings_flags, uint material_flags, vec3 ng, vec3 t, vec3 b) {
+    if ((settings_flags & SETTINGS_NORMAL_MAPPING) == 0u
+        || (material_flags & MATERIAL_HAS_CLEARCOAT_NORMAL_MAP) == 0u) return ng;
+    vec3 tn = SAMPLE(clearcoat_normal).xyz * 2.0 - 1.0;
+    tn.xy *= MAT.clearcoat_normal_scale;
+    return safe_normalize(mat3(t, b, ng) * tn, ng);
 }
 
 vec4 shade_surface() {
@@ -115,10 +128,9 @@ vec4 shade_surface() {
     int brdf = u(settings.brdf);
     uint light_count = min(u(lighting.light_count), MAX_LIGHTS);
     Layers layers = material_layers();
-    // The layers shade the glTF BRDF only (the course's BRDFs are the seed's); the coat's
-    // normal is the interpolated one (no clearcoat normal map).
+    // The layers shade the glTF BRDF only (the course's BRDFs are the seed's).
     bool layered = brdf == BRDF_GLTF;
-    vec3 nc = ng;
+    vec3 nc = clearcoat_normal(settings_flags, material_flags, ng, t, b);
     vec3 specular = vec3(0.0), diffuse = vec3(0.0), transmission = vec3(0.0), sheen = vec3(0.0);
     vec3 clearcoat = vec3(0.0);
     BrdfTerms first_terms = BrdfTerms(0.0, vec3(0.0), 0.0, vec3(0.0), vec3(0.0));
