@@ -11,6 +11,8 @@ import warnings
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.loader import load_scene
@@ -217,3 +219,33 @@ def test_variant_option_reaches_the_loader(tmp_path: Path, command: str) -> None
     plain = build_parser().parse_args([command, str(path), "--cache", str(tmp_path / "cache")])
     assert load_scene_arg(plain).meshes[0].material == 0
     assert len(list((tmp_path / "cache").glob("*.vkpbr"))) == 2
+
+
+_JSON = st.recursive(st.none() | st.booleans() | st.integers(-5, 5)
+                     | st.floats(allow_nan=True, allow_infinity=True) | st.text(max_size=3),
+                     lambda inner: st.lists(inner, max_size=4)
+                     | st.dictionaries(st.text(max_size=3), inner, max_size=3), max_leaves=8)
+_KEYS = {"KHR_materials_ior": ["ior"], "KHR_materials_specular": ["specularFactor",
+         "specularColorFactor", "specularTexture"], "KHR_materials_clearcoat": [
+         "clearcoatFactor", "clearcoatRoughnessFactor", "clearcoatNormalTexture"],
+         "KHR_materials_sheen": ["sheenColorFactor", "sheenRoughnessFactor"],
+         "KHR_materials_transmission": ["transmissionFactor", "transmissionTexture"],
+         "KHR_materials_volume": ["thicknessFactor", "attenuationDistance", "attenuationColor"],
+         "KHR_materials_unlit": ["x"], "KHR_materials_emissive_strength": ["emissiveStrength"]}
+
+
+@settings(max_examples=150, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.sampled_from(sorted(_KEYS)), st.data(), _JSON, _JSON)
+def test_hostile_extension_values_are_scene_errors(tmp_path: Path, name: str, data, value,  # noqa: ANN001
+                                                   mapping) -> None:  # noqa: ANN001
+    """Any JSON value in an extension's field (or as the variant mappings) loads or is a
+    SceneError naming the file: never another exception."""
+    key = data.draw(st.sampled_from(_KEYS[name]))
+    path = write(tmp_path, [{"extensions": {name: {key: value}}}, {}], ["a"],
+                 mapping if isinstance(mapping, list) else [mapping])
+    for variant in (None, "a"):
+        try:
+            load_scene(path, variant=variant)
+        except SceneError as exc:
+            assert "m.gltf" in str(exc) and "\n" not in str(exc)
