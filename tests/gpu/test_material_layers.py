@@ -123,8 +123,9 @@ def test_default_layers_leave_the_core_brdf(make_renderer) -> None:
     c = np.broadcast_to(np.asarray(mat.base_color_factor[:3]), n.shape)
     s = ref.shade(n, v, l, c, np.full(n.shape[:2], 0.4), np.full(n.shape[:2], 0.3),
                   np.asarray(LIGHT.color) * LIGHT.intensity, brdf=ref.Brdf.GLTF, ambient=0.0)
-    got = render(r, "final", "forward", env="none")
-    np.testing.assert_allclose(got, s["final"], rtol=2e-3, atol=2e-5)
+    for pipeline in ("forward", "compute") if r.device.compute_path else ("forward",):
+        got = render(r, "final", pipeline, env="none")
+        np.testing.assert_allclose(got, s["final"], rtol=2e-3, atol=2e-5, err_msg=pipeline)
 
 
 ENV_RADIANCE = 0.7

@@ -202,7 +202,8 @@ vec4 shade_surface() {
     float sheen_scaling = 1.0;
     float coat_blend = 0.0;
     if (layered) {
-        sheen_scaling = 1.0 - max3(layers.sheen_color) * sheen_albedo(n_dot_v, layers.sheen_roughness);
+        float sheen_max = max3(layers.sheen_color);
+        if (sheen_max > 0.0) sheen_scaling = 1.0 - sheen_max * sheen_albedo(n_dot_v, layers.sheen_roughness);
         float nc_dot_v = clamp(dot(nc, v), 0.0, 1.0);
         coat_blend = layers.clearcoat * f_schlick(vec3(0.04), nc_dot_v).r;
         clearcoat *= coat_blend;
