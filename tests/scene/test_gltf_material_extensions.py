@@ -249,3 +249,13 @@ def test_hostile_extension_values_are_scene_errors(tmp_path: Path, name: str, da
             load_scene(path, variant=variant)
         except SceneError as exc:
             assert "m.gltf" in str(exc) and "\n" not in str(exc)
+
+
+def test_bake_command_bakes_the_variant(tmp_path: Path) -> None:
+    from vkpbr.app.cli import main
+
+    mats = [{"name": "default"}, {"name": "red"}]
+    path = write(tmp_path, mats, ["red"], [{"material": 1, "variants": [0]}])
+    out = tmp_path / "red.vkpbr"
+    assert main(["bake", str(path), "-o", str(out), "--variant", "red", "--no-progress"]) == 0
+    assert load_scene(out).meshes[0].material == 1
