@@ -11,11 +11,14 @@ import enum
 import math
 
 __all__ = ["AMBIENT", "MIN_ROUGHNESS", "MAX_LIGHTS", "SUN_DIRECTION", "Brdf", "Lighting", "Named",
-           "Tonemap"]
+           "Tonemap", "MIN_SHEEN_ROUGHNESS", "SHEEN_ALBEDO_FIT", "SHEEN_FIT_MIN_N_DOT_V"]
 
 MIN_ROUGHNESS = 0.03  # roughness is clamped here so that D stays finite as r -> 0
 AMBIENT = 0.02  # the course's ambient constant: L_ambient = 0.02 * c
 MAX_LIGHTS = 256  # punctual lights per frame (a storage buffer of this many records)
+# KHR_materials_sheen: the Charlie distribution's sheen roughness (alpha_g) is clamped here,
+# where its D stays finite in float32 (three.js clamps at the same value).
+MIN_SHEEN_ROUGHNESS = 0.07
 
 
 def _sun_direction(elevation_deg: float, azimuth_deg: float) -> tuple[float, float, float]:
@@ -90,3 +93,21 @@ class Tonemap(Named):
     ACES = 2
     ACES_HILL = 3
     PBR_NEUTRAL = 4
+
+
+# KHR_materials_sheen's albedo scaling needs the Charlie lobe's directional albedo E(n.v, a)
+# (a = sheen roughness). It is this polynomial in x = (n.v)^(1/3) and y = sqrt(a),
+# E = sum_ij SHEEN_ALBEDO_FIT[i][j] x^i y^j, least-squares fitted to the integral of the
+# extension's distribution and visibility over n.v in [0.02, 1], a in [0.07, 1] (max error
+# 0.004; tests/unit/test_material_layers.py integrates it again). A polynomial, not a table:
+# lavapipe compiles a dynamically indexed constant array into a tree of branches per lookup,
+# minutes per pipeline. Generated into shaders/generated.glsl (sheen_albedo_fit) and evaluated
+# by reference/brdf.py, from these numbers alone.
+SHEEN_ALBEDO_FIT: tuple[tuple[float, ...], ...] = (
+    (1.09927, -0.4456763, -2.387564, 6.252952, -3.489524),
+    (12.52236, -70.76933, 154.0586, -146.4862, 50.86578),
+    (-54.14374, 288.7846, -608.6334, 560.6368, -189.5136),
+    (66.47369, -367.9202, 784.6235, -728.6155, 247.9961),
+    (-25.8705, 149.7473, -326.3621, 307.6033, -105.8631),
+)
+SHEEN_FIT_MIN_N_DOT_V = 0.02  # the fit's range of n.v starts here (n.v is clamped to it)

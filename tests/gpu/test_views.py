@@ -14,7 +14,12 @@ from vkpbr.render.layouts import View
 SIZE = (160, 120)
 # The course's views, rendered in its lighting mode. The shadow and image-based views are
 # checked where those are (test_shadows.py, test_ibl.py): the course mode has neither.
-COURSE_VIEWS = [v for v in View if v not in (View.SHADOW, View.IBL_DIFFUSE, View.IBL_SPECULAR)]
+# The KHR_materials_* layer views are flat on the chart (no layered material) and checked in
+# test_material_layers.py.
+LAYER_VIEWS = (View.IOR, View.DIELECTRIC_F0, View.CLEARCOAT, View.SHEEN, View.TRANSMISSION,
+               View.VOLUME)
+COURSE_VIEWS = [v for v in View
+                if v not in (View.SHADOW, View.IBL_DIFFUSE, View.IBL_SPECULAR, *LAYER_VIEWS)]
 
 
 @pytest.fixture(scope="module")

@@ -54,7 +54,7 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     p.add_argument("--embed-textures", action="store_true",
                    help="store decoded RGBA8 mip chains in the file (larger, loads faster)")
-    add_scene_loading_options(p)  # --strict, --allow-outside-paths: app/options.py
+    add_scene_loading_options(p)  # --strict, --allow-outside-paths, --variant: app/options.py
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -120,7 +120,8 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     report = bake_file(args.scene, args.out, embed_textures=args.embed_textures,
                        progress=not (args.no_progress or args.json),
-                       strict=args.strict, allow_outside_paths=args.allow_outside_paths)
+                       strict=args.strict, allow_outside_paths=args.allow_outside_paths,
+                       variant=getattr(args, "variant", None))
     seconds = time.perf_counter() - start
     # Peak resident memory of this process (Linux reports ru_maxrss in KiB).
     report["peak_memory_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024

@@ -47,7 +47,8 @@ def _sponza(args: argparse.Namespace):  # noqa: ANN202
     path = args.sponza or next((p for p in SPONZA_CANDIDATES if p.exists()), None)
     if path is None:
         raise UsageError("Sponza not found: pass --sponza PATH/Sponza.gltf")
-    scene = load_scene(path, strict=args.strict, allow_outside_paths=args.allow_outside_paths)
+    scene = load_scene(path, strict=args.strict, allow_outside_paths=args.allow_outside_paths,
+                       variant=getattr(args, "variant", None))
     scene.cameras = [dataclasses.replace(scene.cameras[0], **SPONZA_CAMERA)]
     scene.lights = [Light(position=(0.0, 4.0, 0.0))]
     return scene
@@ -196,7 +197,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--device", metavar="NAME|INDEX", help="device name substring or index")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.add_argument("--peers", action="store_true", help="also run pyrender and pygfx and print ratios")
-    add_scene_loading_options(p)  # for --sponza: --strict, --allow-outside-paths (app/options.py)
+    add_scene_loading_options(p)  # for --sponza: --strict, --allow-outside-paths, --variant
     p.set_defaults(run=run)
 
 

@@ -39,7 +39,8 @@ def default_cache_dir() -> Path:
 def load_scene_arg(args: argparse.Namespace) -> Scene | None:
     """The scene named on the command line (None: the built-in one), through the bake cache
     when --cache was given (a hit skips parsing and tangent generation), reading files
-    outside the scene's folder only with --allow-outside-paths."""
+    outside the scene's folder only with --allow-outside-paths, with the glTF material
+    variant of --variant."""
     if not args.scene:
         log.info("scene: the built-in PBR chart")
         return None
@@ -48,21 +49,24 @@ def load_scene_arg(args: argparse.Namespace) -> Scene | None:
     t0 = time.perf_counter()
     path = Path(args.scene)
     allow = bool(getattr(args, "allow_outside_paths", False))
+    variant = getattr(args, "variant", None)
     root = None  # the folder tree files named by the scene must lie in: the scene's own
     if getattr(args, "cache", None) is not None and path.suffix.lower() != ".vkpbr":
         from vkpbr.bake.bake import cached_bake
 
         cache_dir = Path(args.cache) if args.cache else default_cache_dir()
         root = path.parent  # the cached bake's textures lie beside the source, not the cache
-        path = cached_bake(path, cache_dir, allow_outside_paths=allow)
+        path = cached_bake(path, cache_dir, allow_outside_paths=allow, variant=variant)
+        variant = None  # baked in
         log.info("scene cache: %s (%.2f s)", path, time.perf_counter() - t0)
     if getattr(args, "strict", False):
         # `strict` is new in load_scene: fail clearly where this loader predates it.
         if "strict" not in inspect.signature(load_scene).parameters:
             raise UsageError("--strict: this version's scene loader has no strict mode")
-        scene = load_scene(path, strict=True, allow_outside_paths=allow, root=root)
+        scene = load_scene(path, strict=True, allow_outside_paths=allow, root=root,
+                           variant=variant)
     else:
-        scene = load_scene(path, allow_outside_paths=allow, root=root)
+        scene = load_scene(path, allow_outside_paths=allow, root=root, variant=variant)
     log.info("scene %s: %d meshes, %d triangles, %d images, loaded in %.2f s", path,
              len(scene.meshes), scene.triangle_count, len(scene.images), time.perf_counter() - t0)
     return scene

@@ -136,7 +136,7 @@ BINDINGS: tuple[Binding, ...] = (
             doc="view: " + _view_doc(0)),
     Binding("Shift+1..0", "view: " + _view_names(10), _view_chords("shift+", 10),
             doc="view: " + _view_doc(10)),
-    Binding("Ctrl+1..4", "view: " + _view_names(20), _view_chords("ctrl+", 20),
+    Binding("Ctrl+1..0", "view: " + _view_names(20), _view_chords("ctrl+", 20),
             doc="view: " + _view_doc(20)),
     Binding("V / Shift+V", "next / previous debug view",
             (_press("v", "cycle", ("view", 1)), _press("shift+v", "cycle", ("view", -1)))),

@@ -111,6 +111,9 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
     OptionSpec("--shadow-resolution", "int", "texels per side of a shadow map, 16..16384 "
                "(cube faces get half; default %(default)s)", field="shadow_resolution",
                metavar="N"),
+    OptionSpec("--variant", "text", "the glTF material variant to load (KHR_materials_variants; "
+               "default: the file's default materials)", group="device and scene loading",
+               metavar="NAME"),
     OptionSpec("--device", "text", "device name substring or index (see `vkpbr info`)",
                group="device and scene loading", metavar="NAME|INDEX"),
     OptionSpec("--validation", "on", "enable the Vulkan validation layer",
@@ -129,7 +132,7 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
 
 # The options every command that loads a user's scene file takes (render, view, bake, bench):
 # one definition each, in SHARED_OPTIONS; `add_scene_loading_options` adds them elsewhere.
-SCENE_LOADING_FLAGS: tuple[str, ...] = ("--strict", "--allow-outside-paths")
+SCENE_LOADING_FLAGS: tuple[str, ...] = ("--strict", "--allow-outside-paths", "--variant")
 
 
 def _enum_types() -> dict[str, type]:
@@ -189,7 +192,7 @@ def add_options(parser: argparse.ArgumentParser, table: tuple[OptionSpec, ...] =
 
 def add_scene_loading_options(parser: argparse.ArgumentParser,
                               flags: tuple[str, ...] = SCENE_LOADING_FLAGS) -> None:
-    """Add the scene-loading options (`--strict`, `--allow-outside-paths`) of SHARED_OPTIONS
+    """Add the scene-loading options (`--strict`, `--allow-outside-paths`, `--variant`) of SHARED_OPTIONS
     to a command that loads a scene but takes no render options (`bake`, `bench`); imports
     nothing of the render layer."""
     table = tuple(spec for spec in SHARED_OPTIONS if spec.flag in flags)

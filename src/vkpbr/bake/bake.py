@@ -47,7 +47,7 @@ from ..scene.loader import load_scene
 from ..scene.mips import mip_chain
 from ..scene.resources import ResourcePolicy, is_regular_file, read_resource
 from ..scene.textures import decode_images
-from ..scene.types import Mesh, Scene, expand_instances
+from ..scene.types import SRGB_TEXTURE_SLOTS, Mesh, Scene, expand_instances
 from .frames import (
     frame_angular_error_deg,
     pack_qtangent,
@@ -171,9 +171,10 @@ def _bake_mesh(mesh: Mesh, uv_set: int = 0) -> tuple[dict[str, np.ndarray], int]
 
 
 def _srgb_images(scene: Scene) -> set[int]:
-    """Indices of the images some material reads as sRGB colour (base colour, emissive)."""
-    return {t.image for m in scene.materials
-            for t in (m.base_color_texture, m.emissive_texture) if t is not None}
+    """Indices of the images some material reads as sRGB colour (base colour, emissive,
+    sheen and specular colour: SRGB_TEXTURE_SLOTS)."""
+    return {t.image for m in scene.materials for slot in SRGB_TEXTURE_SLOTS
+            for t in (getattr(m, f"{slot}_texture"),) if t is not None}
 
 
 def _images(scene: Scene) -> list[BakedImage]:
@@ -387,7 +388,7 @@ def _external_textures_note(out_path: Path, images: list[BakedImage]) -> str | N
 
 def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: bool = False,
               progress: bool = True, strict: bool = False,
-              allow_outside_paths: bool = False) -> dict[str, Any]:
+              allow_outside_paths: bool = False, variant: str | None = None) -> dict[str, Any]:
     """Load a scene file, bake it, write `out_path`.
 
     Parameters
@@ -399,6 +400,7 @@ def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: boo
     strict : a missing texture file is an error (see `load_scene`).
     allow_outside_paths : read files the source names outside its folder tree (see
         `load_scene`).
+    variant : the glTF material variant baked (KHR_materials_variants; see `load_scene`).
 
     Returns
     -------
@@ -411,7 +413,8 @@ def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: boo
     """
     source_path, out_path = Path(source_path), Path(out_path)
     t0 = time.perf_counter()
-    scene = load_scene(source_path, strict=strict, allow_outside_paths=allow_outside_paths)
+    scene = load_scene(source_path, strict=strict, allow_outside_paths=allow_outside_paths,
+                       variant=variant)
     t1 = time.perf_counter()
     baked = bake_scene(scene, progress=progress)
     baked.source_key, baked.source_files = source_key(source_path, allow_outside_paths)
@@ -434,17 +437,18 @@ def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: boo
 
 
 def cached_bake(source_path: str | Path, cache_dir: str | Path,
-                allow_outside_paths: bool = False) -> Path:
+                allow_outside_paths: bool = False, variant: str | None = None) -> Path:
     """Path of an up-to-date bake of `source_path` in `cache_dir`, baking only when needed.
 
     The file name carries the source's content hash, so an edited source misses the cache;
     an existing file that fails validation is baked again. Load the result with
     ``load_scene(out, root=source_path.parent)``: its external textures lie beside the source,
-    not in the cache.
+    not in the cache. A material `variant` is baked in: each variant has its own file.
     """
     source_path, cache_dir = Path(source_path), Path(cache_dir)
     key, _ = source_key(source_path, allow_outside_paths)
-    out = cache_dir / f"{source_path.stem}-{key[:16]}.vkpbr"
+    tag = "" if variant is None else "-variant-" + hashlib.sha256(variant.encode()).hexdigest()[:8]
+    out = cache_dir / f"{source_path.stem}-{key[:16]}{tag}.vkpbr"
     if out.is_file():
         try:
             if read_baked(out).source_key == key:
@@ -452,5 +456,6 @@ def cached_bake(source_path: str | Path, cache_dir: str | Path,
         except BakeFormatError:
             pass
     cache_dir.mkdir(parents=True, exist_ok=True)
-    bake_file(source_path, out, progress=False, allow_outside_paths=allow_outside_paths)
+    bake_file(source_path, out, progress=False, allow_outside_paths=allow_outside_paths,
+              variant=variant)
     return out

@@ -14,7 +14,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from vkpbr.scene.color import linear_to_srgb, srgb_to_linear
-from vkpbr.shading import AMBIENT, MIN_ROUGHNESS, Brdf, Tonemap
+from vkpbr.shading import (
+    AMBIENT,
+    MIN_ROUGHNESS,
+    MIN_SHEEN_ROUGHNESS,
+    SHEEN_ALBEDO_FIT,
+    SHEEN_FIT_MIN_N_DOT_V,
+    Brdf,
+    Tonemap,
+)
 
 __all__ = [
     "d_ggx",
@@ -33,8 +41,21 @@ __all__ = [
     "srgb_to_linear",
     "linear_to_srgb",
     "shade",
+    "max3",
+    "dielectric_f0",
+    "d_charlie",
+    "sheen_lambda",
+    "v_charlie",
+    "sheen_albedo",
+    "sheen_albedo_integral",
+    "volume_transmittance",
+    "Layers",
+    "LayeredTerms",
+    "evaluate_layered_brdf",
+    "shade_layered",
     "AMBIENT",
     "MIN_ROUGHNESS",
+    "MIN_SHEEN_ROUGHNESS",
 ]
 
 PI = np.pi
@@ -198,3 +219,219 @@ def shade(n, v, l, c, metallic, roughness, light_in, occlusion=1.0, emissive=0.0
     amb = ambient * np.asarray(c, float) * np.asarray(occlusion, float)[..., None]
     final = emissive + amb + diff + spec
     return {"specular": spec, "diffuse": diff, "ambient": amb, "final": final, "terms": t}
+
+
+# --- The KHR_materials_* layers (brdf.glsl's second half; shade.glsl's composition) ---------
+
+
+def max3(x: np.ndarray) -> np.ndarray:
+    """Largest component of (..., 3) -> (...)."""
+    return np.max(np.asarray(x, dtype=np.float64), axis=-1)
+
+
+def dielectric_f0(ior: np.ndarray, specular_color: np.ndarray) -> np.ndarray:
+    """min(((ior - 1) / (ior + 1))^2 * specular colour, 1), (..., 3)."""
+    r = (np.asarray(ior, dtype=np.float64) - 1.0) / (np.asarray(ior, dtype=np.float64) + 1.0)
+    return np.minimum((r * r)[..., None] * np.asarray(specular_color, dtype=np.float64), 1.0)
+
+
+def d_charlie(n_dot_h: np.ndarray, alpha_g: np.ndarray) -> np.ndarray:
+    """Charlie sheen distribution: (2 + 1/a) sin(theta_h)^(1/a) / (2 pi)."""
+    inv_r = 1.0 / np.asarray(alpha_g, dtype=np.float64)
+    sin2h = np.maximum(1.0 - n_dot_h * n_dot_h, 0.0)
+    return (2.0 + inv_r) * np.power(sin2h, inv_r * 0.5) / (2.0 * PI)
+
+
+def _sheen_l(x: np.ndarray, alpha_g: np.ndarray) -> np.ndarray:
+    w = (1.0 - alpha_g) ** 2
+    a = 21.5473 + (25.3245 - 21.5473) * w
+    b = 3.82987 + (3.32435 - 3.82987) * w
+    c = 0.19823 + (0.16801 - 0.19823) * w
+    d = -1.97760 + (-1.27393 + 1.97760) * w
+    e = -4.32054 + (-4.85967 + 4.32054) * w
+    return a / (1.0 + b * np.power(x, c)) + d * x + e
+
+
+def sheen_lambda(cos_theta: np.ndarray, alpha_g: np.ndarray) -> np.ndarray:
+    """The Charlie visibility's lambda (KHR_materials_sheen README)."""
+    cos_theta = np.asarray(cos_theta, dtype=np.float64)
+    low = np.exp(_sheen_l(np.minimum(cos_theta, 0.5), alpha_g))
+    high = np.exp(2.0 * _sheen_l(0.5, alpha_g) - _sheen_l(np.maximum(1.0 - cos_theta, 0.0), alpha_g))
+    return np.where(cos_theta < 0.5, low, high)
+
+
+def v_charlie(n_dot_l: np.ndarray, n_dot_v: np.ndarray, alpha_g: np.ndarray) -> np.ndarray:
+    """1 / ((1 + lambda(n.v) + lambda(n.l)) 4 n.v n.l); 0 below the horizon."""
+    ok = (n_dot_l > 0.0) & (n_dot_v > 0.0)
+    nl, nv = np.where(ok, n_dot_l, 1.0), np.where(ok, n_dot_v, 1.0)
+    val = 1.0 / ((1.0 + sheen_lambda(nv, alpha_g) + sheen_lambda(nl, alpha_g)) * (4.0 * nv * nl))
+    return np.where(ok, val, 0.0)
+
+
+def sheen_albedo(n_dot_v: np.ndarray, alpha_g: np.ndarray) -> np.ndarray:
+    """E(n.v, alpha_g), the fitted polynomial vkpbr.shading.SHEEN_ALBEDO_FIT (as brdf.glsl)."""
+    x = np.cbrt(np.clip(np.asarray(n_dot_v, dtype=np.float64), SHEEN_FIT_MIN_N_DOT_V, 1.0))
+    y = np.sqrt(np.clip(np.asarray(alpha_g, dtype=np.float64), MIN_SHEEN_ROUGHNESS, 1.0))
+    c = np.asarray(SHEEN_ALBEDO_FIT)
+    e = sum(c[i, j] * x**i * y**j for i in range(c.shape[0]) for j in range(c.shape[1]))
+    return np.clip(e, 0.0, 1.0)
+
+
+def sheen_albedo_integral(n_dot_v: float, alpha_g: float, n_theta: int = 256,
+                          n_phi: int = 128) -> float:
+    """E(n.v, alpha_g) by quadrature: the integral over the hemisphere of the Charlie lobe
+    D V (n.l) (white sheen), a midpoint rule in (theta, phi) of l; the fit's reference."""
+    theta = (np.arange(n_theta) + 0.5) * (PI / 2) / n_theta
+    phi = (np.arange(n_phi) + 0.5) * PI / n_phi  # half the circle: symmetric about v's plane
+    th, ph = np.meshgrid(theta, phi, indexing="ij")
+    l = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], axis=-1)
+    d_omega = np.sin(th) * (PI / 2 / n_theta) * (PI / n_phi) * 2.0
+    v = np.array([np.sqrt(1.0 - n_dot_v**2), 0.0, n_dot_v])
+    h = _normalize(l + v)
+    f = d_charlie(h[..., 2], alpha_g) * v_charlie(l[..., 2], np.full(th.shape, n_dot_v), alpha_g)
+    return float(np.sum(f * l[..., 2] * d_omega))
+
+
+def volume_transmittance(dist: np.ndarray, attenuation_color: np.ndarray,
+                         attenuation_distance: float) -> np.ndarray:
+    """attenuation colour ^ (dist / attenuation distance), (..., 3); distance 0: infinite."""
+    dist = np.asarray(dist, dtype=np.float64)
+    color = np.asarray(attenuation_color, dtype=np.float64)
+    if attenuation_distance <= 0.0:
+        return np.ones(dist.shape + (3,))
+    return np.where((dist > 0.0)[..., None], np.power(color, (dist / attenuation_distance)[..., None]),
+                    1.0)
+
+
+@dataclass(frozen=True)
+class Layers:
+    """A material's KHR_materials_* parameters (brdf.glsl `Layers`; shade.glsl clamps them
+    the same way in `material_layers`, and so does `Layers.of`)."""
+
+    ior: float = 1.5
+    specular_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    specular: float = 1.0
+    clearcoat: float = 0.0
+    clearcoat_roughness: float = MIN_ROUGHNESS
+    sheen_color: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    sheen_roughness: float = MIN_SHEEN_ROUGHNESS
+    transmission: float = 0.0
+    thickness: float = 0.0
+    attenuation_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    attenuation_distance: float = 0.0
+
+    @classmethod
+    def of(cls, material: object) -> Layers:
+        """The layers of a vkpbr.scene.types.Material, clamped as the shader clamps them."""
+        m = material
+        return cls(
+            ior=max(float(m.ior), 1.0), specular_color=tuple(m.specular_color_factor),
+            specular=float(np.clip(m.specular_factor, 0.0, 1.0)),
+            clearcoat=float(np.clip(m.clearcoat_factor, 0.0, 1.0)),
+            clearcoat_roughness=float(np.clip(m.clearcoat_roughness_factor, MIN_ROUGHNESS, 1.0)),
+            sheen_color=tuple(m.sheen_color_factor),
+            sheen_roughness=float(np.clip(m.sheen_roughness_factor, MIN_SHEEN_ROUGHNESS, 1.0)),
+            transmission=float(np.clip(m.transmission_factor, 0.0, 1.0)),
+            thickness=max(float(m.thickness_factor), 0.0),
+            attenuation_color=tuple(m.attenuation_color),
+            attenuation_distance=float(m.attenuation_distance))
+
+
+@dataclass
+class LayeredTerms:
+    base: BrdfTerms  # specular and diffuse include n.l here (brdf.glsl LayeredTerms)
+    transmission: np.ndarray  # (..., 3)
+    sheen: np.ndarray  # (..., 3)
+    clearcoat: np.ndarray  # (...)
+
+
+def evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m: Layers) -> LayeredTerms:  # noqa: ANN001, E741
+    """Mirror of brdf.glsl evaluate_layered_brdf: the glTF BRDF with the KHR_materials_*
+    layers for one light (before its radiance and shadow)."""
+    n, nc, v, l, c = (np.asarray(x, dtype=np.float64) for x in (n, nc, v, l, c))
+    metallic = np.asarray(metallic, dtype=np.float64)
+    alpha = np.asarray(roughness, dtype=np.float64) ** 2
+    h = _normalize(l + v)
+    n_dot_l = np.maximum(_dot(n, l), 0.0)
+    n_dot_v = np.maximum(_dot(n, v), 0.0)
+    n_dot_h = np.maximum(_dot(n, h), 0.0)
+    v_dot_h = np.maximum(_dot(v, h), 0.0)
+    d = d_ggx(n_dot_h, alpha)
+    vis = v_smith_ggx_correlated(n_dot_l, n_dot_v, alpha)
+    f_dielectric = m.specular * f_schlick(dielectric_f0(m.ior, m.specular_color), v_dot_h)
+    f = (1.0 - metallic)[..., None] * f_dielectric + metallic[..., None] * f_schlick(c, v_dot_h)
+    specular = f * (d * vis * n_dot_l)[..., None]
+    diffuse_weight = (1.0 - metallic) * (1.0 - max3(f_dielectric))
+    diffuse = (diffuse_weight * (1.0 - m.transmission) / PI * n_dot_l)[..., None] * c
+    base = BrdfTerms(D=d, F=f, G=vis * 4.0 * n_dot_l * n_dot_v, specular=specular, diffuse=diffuse)
+    transmission = np.zeros_like(specular)
+    if m.transmission > 0.0:
+        l_mirror = _normalize(l - 2.0 * n * _dot(l, n)[..., None])
+        ht = _normalize(l_mirror + v)
+        alpha_t = alpha * np.clip(m.ior * 2.0 - 2.0, 0.0, 1.0)
+        d_t = d_ggx(np.maximum(_dot(n, ht), 0.0), alpha_t)
+        v_t = v_smith_ggx_correlated(np.maximum(_dot(n, l_mirror), 0.0), n_dot_v, alpha_t)
+        transmission = ((diffuse_weight * m.transmission * d_t * v_t)[..., None] * c
+                        * volume_transmittance(np.asarray(m.thickness), m.attenuation_color,
+                                               m.attenuation_distance))
+    sheen = np.zeros_like(specular)
+    if max(m.sheen_color) > 0.0:
+        sheen = np.asarray(m.sheen_color) * (d_charlie(n_dot_h, m.sheen_roughness)
+                                             * v_charlie(n_dot_l, n_dot_v, m.sheen_roughness)
+                                             * n_dot_l)[..., None]
+    clearcoat = np.zeros_like(n_dot_l)
+    if m.clearcoat > 0.0:
+        a_c = m.clearcoat_roughness**2
+        nc_dot_l = np.maximum(_dot(nc, l), 0.0)
+        clearcoat = (d_ggx(np.maximum(_dot(nc, h), 0.0), a_c)
+                     * v_smith_ggx_correlated(nc_dot_l, np.maximum(_dot(nc, v), 0.0), a_c) * nc_dot_l)
+    return LayeredTerms(base=base, transmission=transmission, sheen=sheen, clearcoat=clearcoat)
+
+
+def shade_layered(n, v, l, c, metallic, roughness, light_in, m: Layers, emissive=0.0,  # noqa: ANN001, E741
+                  nc=None, env_radiance: float | None = None,  # noqa: ANN001
+                  ibl_diffuse_weight=None) -> dict[str, np.ndarray]:  # noqa: ANN001
+    """The views shade.glsl writes for a layered glTF material lit by one light (`l`,
+    `light_in`; light_in 0 for none) and optionally a uniform environment of radiance
+    `env_radiance` (already scaled by its intensity), for the layers' environment terms:
+    the coat's reflection, sheen and refraction (each sees `env_radiance` in every
+    direction). `ibl_diffuse_weight`: the split sum's k_d (..., 3), needed for refraction.
+    Returns the radiance views "specular", "diffuse", "transmission", "sheen", "clearcoat",
+    the scalars "sheen_scaling" and "coat_blend", the data views "ior", "dielectric_f0" and
+    "volume", and "final" (the point light's and these environment terms only: the split
+    sum's own diffuse and specular are not mirrored here), each (..., 3)."""
+    roughness = np.clip(roughness, MIN_ROUGHNESS, 1.0)
+    n = np.asarray(n, dtype=np.float64)
+    v = np.asarray(v, dtype=np.float64)
+    nc = n if nc is None else np.asarray(nc, dtype=np.float64)
+    light_in = np.asarray(light_in, dtype=np.float64)
+    t = evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m)
+    out = {"specular": t.base.specular * light_in, "diffuse": t.base.diffuse * light_in,
+           "transmission": t.transmission * light_in, "sheen": t.sheen * light_in,
+           "clearcoat": t.clearcoat[..., None] * light_in, "terms": t}
+    n_dot_v = np.clip(_dot(n, v), 1e-4, 1.0)
+    if env_radiance is not None:
+        if m.transmission > 0.0:
+            out["transmission"] = out["transmission"] + (
+                m.transmission * np.asarray(ibl_diffuse_weight) * env_radiance
+                * volume_transmittance(np.asarray(m.thickness), m.attenuation_color,
+                                       m.attenuation_distance))
+        if max(m.sheen_color) > 0.0:
+            out["sheen"] = out["sheen"] + (np.asarray(m.sheen_color) * env_radiance
+                                           * sheen_albedo(n_dot_v, m.sheen_roughness)[..., None])
+        if m.clearcoat > 0.0:
+            out["clearcoat"] = out["clearcoat"] + env_radiance
+    scaling = 1.0 - max(m.sheen_color) * sheen_albedo(n_dot_v, m.sheen_roughness)
+    nc_dot_v = np.clip(_dot(nc, v), 0.0, 1.0)
+    blend = m.clearcoat * (0.04 + 0.96 * (1.0 - nc_dot_v) ** 5)
+    out["clearcoat"] = out["clearcoat"] * blend[..., None]
+    base = out["diffuse"] + out["specular"] + out["transmission"]
+    out["final"] = ((emissive + out["sheen"] + base * scaling[..., None]) * (1.0 - blend)[..., None]
+                    + out["clearcoat"])
+    shape = n.shape
+    out["sheen_scaling"], out["coat_blend"] = scaling, blend
+    out["ior"] = np.full(shape, min(m.ior - 1.0, 1.0))
+    out["dielectric_f0"] = np.broadcast_to(dielectric_f0(m.ior, m.specular_color) * m.specular, shape)
+    out["volume"] = np.broadcast_to(volume_transmittance(np.asarray(m.thickness), m.attenuation_color,
+                                                         m.attenuation_distance), shape)
+    return out

@@ -75,6 +75,15 @@ def generated_glsl() -> str:
         f"const float AMBIENT = {L.AMBIENT!r};",
     ]
     out.append(f"const uint MAX_LIGHTS = {L.MAX_LIGHTS}u;")
+    out.append(f"const float MIN_SHEEN_ROUGHNESS = {L.MIN_SHEEN_ROUGHNESS!r};")
+    out.append(f"const float SHEEN_FIT_MIN_N_DOT_V = {L.SHEEN_FIT_MIN_N_DOT_V!r};")
+    # KHR_materials_sheen's directional albedo, the polynomial of vkpbr.shading in Horner form
+    # (x = cbrt(n.v), y = sqrt(sheen roughness)); literals, no array (lavapipe, see there).
+    rows = [" + y * (".join(f"{c!r}" for c in row) + ")" * (len(row) - 1)
+            for row in L.SHEEN_ALBEDO_FIT]
+    out.append("float sheen_albedo_fit(float x, float y) {")
+    out.append("    return " + " + x * (".join(f"({r})" for r in rows) + ")" * (len(rows) - 1) + ";")
+    out.append("}")
     enums = ((L.View, "VIEW_"), (L.Brdf, "BRDF_"), (L.Tonemap, "TONEMAP_"), (L.TbnMode, "TBN_"),
              (L.Lighting, "LIGHTING_MODE_"), (L.LightKind, "LIGHT_"))
     for enum_type, prefix in enums:

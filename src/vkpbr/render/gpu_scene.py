@@ -37,11 +37,12 @@ from vkpbr.gpu.descriptors import DescriptorPool, DescriptorSetLayout, Descripto
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, TextureUploader
 from vkpbr.render import layouts as L
-from vkpbr.scene.types import Material, Mesh, Node, Scene, TextureRef, expand_instances
+from vkpbr.scene.types import SRGB_TEXTURE_SLOTS, Material, Mesh, Node, Scene, TextureRef, expand_instances
 
 __all__ = ["GpuScene", "Draw", "prepare_mesh", "uv_transform_rows"]
 
 _SWIZZLE = {0: "rrrr", 1: "gggg", 2: "bbbb", 3: "aaaa"}
+_NORMAL_SLOTS = ("normal", "clearcoat_normal")  # tangent-space normal maps (RGB, linear)
 STREAMS = ("positions", "texcoords", "normals", "tangents")  # built at load
 LAZY_STREAMS = ("qtangents", "packed_frames")  # built by ensure_streams on first use
 
@@ -307,7 +308,7 @@ class GpuScene:
             for slot in L.MATERIAL_TEXTURES:
                 ref = getattr(mat, f"{slot}_texture")
                 if ref is not None and 0 <= ref.image < len(pixels) and pixels[ref.image] is not None:
-                    usage[(ref.image, slot in ("base_color", "emissive"))] = None
+                    usage[(ref.image, slot in SRGB_TEXTURE_SLOTS)] = None
         uploader = TextureUploader(self.device)
         self.images: dict[tuple[int, bool], Image] = {}
         for image_index, srgb in usage:
@@ -348,13 +349,12 @@ class GpuScene:
         return self._samplers[spec]
 
     def _texture(self, ref: TextureRef | None, slot: str) -> tuple[ImageView, Sampler, bool]:
-        srgb = slot in ("base_color", "emissive")
-        scalar = slot in ("metallic", "roughness", "occlusion")
+        srgb = slot in SRGB_TEXTURE_SLOTS
+        scalar = slot not in SRGB_TEXTURE_SLOTS and slot not in _NORMAL_SLOTS
         image = self.images.get((ref.image, srgb)) if ref is not None else None
         if image is None:
-            default = {"base_color": "white_srgb", "normal": "normal"}.get(slot, "white")
-            if slot == "emissive":
-                default = "white_srgb"  # emissive factor alone (0 by default) decides
+            # White: the factor alone decides (emissive's is 0 by default); a flat normal.
+            default = "normal" if slot in _NORMAL_SLOTS else "white_srgb" if srgb else "white"
             return self._view(self.default_images[default], "iiii"), self._sampler(SamplerSpec()), False
         s = ref.sampler
         spec = SamplerSpec(s.wrap_s, s.wrap_t, s.mag_filter, s.min_filter, s.mipmaps)
@@ -387,7 +387,8 @@ class GpuScene:
             block = self._material_block(mat, has)
             self.material_blocks.append(block)
             self.material_ubo.write(block.tobytes(), offset=i * stride)
-            writer.uniform(dset, 6, self.material_ubo, L.MATERIAL.size, offset=i * stride)
+            writer.uniform(dset, L.MATERIAL_BINDING, self.material_ubo, L.MATERIAL.size,
+                           offset=i * stride)
         writer.update()
 
     @staticmethod
@@ -403,7 +404,23 @@ class GpuScene:
         for slot in L.MATERIAL_TEXTURES:
             rows = uv_transform_rows(getattr(mat, f"{slot}_texture"))
             b[f"{slot}_uv_row0"], b[f"{slot}_uv_row1"] = rows
+        b["ior"] = mat.ior
+        b["specular_factor"] = mat.specular_factor
+        b["specular_color_factor"] = mat.specular_color_factor
+        b["clearcoat_factor"] = mat.clearcoat_factor
+        b["clearcoat_roughness"] = mat.clearcoat_roughness_factor
+        b["sheen_color_factor"] = mat.sheen_color_factor
+        b["sheen_roughness"] = mat.sheen_roughness_factor
+        b["transmission_factor"] = mat.transmission_factor
+        b["thickness"] = mat.thickness_factor
+        b["attenuation_color"] = mat.attenuation_color
+        b["attenuation_distance"] = mat.attenuation_distance
+        b["clearcoat_normal_scale"] = mat.clearcoat_normal_scale
         flags = 0
+        if has["clearcoat_normal"]:
+            flags |= L.MATERIAL_HAS_CLEARCOAT_NORMAL_MAP
+        if mat.unlit:
+            flags |= L.MATERIAL_UNLIT
         if has["normal"]:
             flags |= L.MATERIAL_HAS_NORMAL_MAP
         if has["occlusion"]:

@@ -8,7 +8,7 @@ includes. A test reads the member offsets back out of the compiled SPIR-V and co
 Descriptor sets follow the report (renderer-spec section 1):
   set 0: binding 0 camera {mat4 VP}; binding 1 frame settings (view, BRDF, tonemap, ...)
   set 1: bindings 0-4 base colour, metallic, roughness, normal, occlusion; 5 emissive;
-         6 material factors
+         6-14 the KHR_materials_* layers' textures (MATERIAL_TEXTURES); 15 material factors
   set 2: lighting, one per frame: binding 0 Lighting {view position, light count, mode,
          flags, environment}; 1 the punctual lights (a storage buffer of LightRecord, the
          course's one light being lights[0]); 2-4 the environment's pre-filtered maps
@@ -26,7 +26,18 @@ from functools import cached_property
 
 import numpy as np
 
-from vkpbr.shading import AMBIENT, MAX_LIGHTS, MIN_ROUGHNESS, Brdf, Lighting, Named, Tonemap
+from vkpbr.shading import (
+    AMBIENT,
+    MAX_LIGHTS,
+    MIN_ROUGHNESS,
+    MIN_SHEEN_ROUGHNESS,
+    SHEEN_ALBEDO_FIT,
+    SHEEN_FIT_MIN_N_DOT_V,
+    Brdf,
+    Lighting,
+    Named,
+    Tonemap,
+)
 
 __all__ = [
     "Std140Block",
@@ -60,7 +71,11 @@ __all__ = [
     "SETS",
     "HAND_DECLARED_SETS",
     "MATERIAL_TEXTURES",
+    "MATERIAL_BINDING",
     "MIN_ROUGHNESS",
+    "MIN_SHEEN_ROUGHNESS",
+    "SHEEN_ALBEDO_FIT",
+    "SHEEN_FIT_MIN_N_DOT_V",
     "AMBIENT",
 ]
 
@@ -190,8 +205,15 @@ SETTINGS_NORMAL_MAPPING = 1  # use normal maps
 SETTINGS_OCCLUSION = 2  # use occlusion maps
 SETTINGS_SRGB_TARGET = 4  # the colour target encodes sRGB in hardware
 
-# The material's textures, in binding order (set 1, bindings 0-5).
-MATERIAL_TEXTURES = ("base_color", "metallic", "roughness", "normal", "occlusion", "emissive")
+# The material's textures, in binding order (set 1, bindings 0-14; the Material block is
+# binding 15): the core's six, then the KHR_materials_* layers' (scene.types.Material). 15
+# samplers of set 1 + 3 of set 2 + 2 of set 3 = 20 a stage (lavapipe allows 32, NVIDIA far
+# more; Vulkan's guaranteed minimum, 16, is below that).
+MATERIAL_TEXTURES = ("base_color", "metallic", "roughness", "normal", "occlusion", "emissive",
+                     "clearcoat", "clearcoat_roughness", "clearcoat_normal", "sheen_color",
+                     "sheen_roughness", "specular", "specular_color", "transmission",
+                     "thickness")
+MATERIAL_BINDING = len(MATERIAL_TEXTURES)  # set 1's Material block
 
 
 def _uv_fields() -> tuple[tuple[str, str], ...]:
@@ -216,14 +238,29 @@ MATERIAL = Std140Block(
         ("normal_scale", "float"),
         ("occlusion_strength", "float"),
         ("alpha_cutoff", "float"),
-        *_uv_fields(),  # 6 textures x 2 vec4 = 192 bytes; the block is 256 bytes in all
+        *_uv_fields(),  # 15 textures x 2 vec4 = 480 bytes
         ("flags", "uint"),  # MATERIAL_* bits below
+        # The KHR_materials_* layers (scene.types.Material documents each); 624 bytes in all.
+        ("ior", "float"),
+        ("clearcoat_factor", "float"),
+        ("clearcoat_roughness", "float"),
+        ("specular_color_factor", "vec3"),
+        ("specular_factor", "float"),
+        ("sheen_color_factor", "vec3"),
+        ("sheen_roughness", "float"),
+        ("attenuation_color", "vec3"),
+        ("attenuation_distance", "float"),  # 0: infinite (no absorption)
+        ("transmission_factor", "float"),
+        ("thickness", "float"),  # thicknessFactor (the node's scale not applied); 0: thin
+        ("clearcoat_normal_scale", "float"),
     ),
 )
 MATERIAL_HAS_NORMAL_MAP = 1
 MATERIAL_DOUBLE_SIDED = 2
 MATERIAL_HAS_OCCLUSION_MAP = 4
 MATERIAL_BLEND = 8  # alphaMode BLEND: output alpha for the blended pass
+MATERIAL_UNLIT = 16  # KHR_materials_unlit: the final view is the base colour
+MATERIAL_HAS_CLEARCOAT_NORMAL_MAP = 32
 
 LIGHTING = Std140Block(
     "Lighting",
@@ -386,13 +423,9 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
         (3, "storage", ("vertex",), "VisibleViews"),
     ),
     1: (
-        (0, "sampler", ("fragment", "compute"), "base_color_map"),
-        (1, "sampler", ("fragment", "compute"), "metallic_map"),
-        (2, "sampler", ("fragment", "compute"), "roughness_map"),
-        (3, "sampler", ("fragment", "compute"), "normal_map"),
-        (4, "sampler", ("fragment", "compute"), "occlusion_map"),
-        (5, "sampler", ("fragment", "compute"), "emissive_map"),
-        (6, "uniform", ("fragment", "compute"), "Material"),
+        *((i, "sampler", ("fragment", "compute"), f"{slot}_map")
+          for i, slot in enumerate(MATERIAL_TEXTURES)),
+        (MATERIAL_BINDING, "uniform", ("fragment", "compute"), "Material"),
     ),
     2: (
         (0, "uniform", ("fragment", "compute"), "Lighting"),
@@ -443,6 +476,13 @@ class View(Named):
     SHADOW = 21
     IBL_DIFFUSE = 22
     IBL_SPECULAR = 23
+    # The KHR_materials_* layers (shade.glsl; each mirrored in reference/brdf.py).
+    IOR = 24
+    DIELECTRIC_F0 = 25
+    CLEARCOAT = 26
+    SHEEN = 27
+    TRANSMISSION = 28
+    VOLUME = 29
 
 
 VIEW_HELP = {
@@ -471,6 +511,17 @@ VIEW_HELP = {
     View.SHADOW: "shadow factor of the first shadow-casting light (1 lit, 0 shadowed), grey",
     View.IBL_DIFFUSE: "image-based diffuse radiance (irradiance * diffuse colour, occluded)",
     View.IBL_SPECULAR: "image-based specular radiance (pre-filtered environment * split sum)",
+    View.IOR: "index of refraction (KHR_materials_ior) as ior - 1, grey (1.5: 0.5; clipped at 1)",
+    View.DIELECTRIC_F0: "the dielectric's F0 times its specular weight (KHR_materials_ior and "
+                        "_specular): min(((ior-1)/(ior+1))^2 * specular colour, 1) * specular",
+    View.CLEARCOAT: "clearcoat radiance (KHR_materials_clearcoat): the coat's GGX lobe of the "
+                    "lights and the environment, times clearcoat * F_coat(n.v)",
+    View.SHEEN: "sheen radiance (KHR_materials_sheen): the Charlie lobe of the lights and the "
+                "environment",
+    View.TRANSMISSION: "transmitted radiance (KHR_materials_transmission): the lights through "
+                       "the surface and the refracted environment, after volume attenuation",
+    View.VOLUME: "volume transmittance (KHR_materials_volume): attenuation colour ^ (thickness "
+                 "/ attenuation distance), as a colour",
 }
 
 
@@ -484,9 +535,10 @@ VIEW_KIND = {
     v: (
         ViewKind.RADIANCE
         if v in (View.FINAL, View.SPECULAR, View.DIFFUSE, View.AMBIENT, View.EMISSIVE,
-                 View.IBL_DIFFUSE, View.IBL_SPECULAR)
+                 View.IBL_DIFFUSE, View.IBL_SPECULAR, View.CLEARCOAT, View.SHEEN,
+                 View.TRANSMISSION)
         else ViewKind.COLOR
-        if v == View.BASE_COLOR
+        if v in (View.BASE_COLOR, View.VOLUME)
         else ViewKind.DATA
     )
     for v in View

@@ -33,7 +33,18 @@ from vkpbr.atomic import atomic_writer
 from vkpbr.errors import BakeFormatError
 from vkpbr.scene.mips import is_mip_chain
 from vkpbr.scene.resources import ResourcePolicy, policy_image
-from vkpbr.scene.types import Camera, Image, Light, Material, Mesh, Node, Sampler, Scene, TextureRef
+from vkpbr.scene.types import (
+    TEXTURE_SLOTS,
+    Camera,
+    Image,
+    Light,
+    Material,
+    Mesh,
+    Node,
+    Sampler,
+    Scene,
+    TextureRef,
+)
 
 __all__ = [
     "ALIGN",
@@ -319,7 +330,10 @@ def _material(rec: dict) -> Material:
             tex = dict(value)
             tex["sampler"] = Sampler(**tex["sampler"])
             rec[key] = _build(TextureRef, tex, ("offset", "scale"))
-    return _build(Material, rec, ("base_color_factor", "emissive_factor"))
+    # Files baked before the KHR_materials_* fields existed lack them: the defaults apply.
+    return _build(Material, rec, ("base_color_factor", "emissive_factor",
+                                  "specular_color_factor", "sheen_color_factor",
+                                  "attenuation_color"))
 
 
 def _validate_counts(baked: BakedScene, path: Path) -> None:
@@ -353,8 +367,7 @@ def _validate_counts(baked: BakedScene, path: Path) -> None:
         _check(not _is_int(node.mesh) or 0 <= node.mesh < len(t), path,
                f"node {node.name!r} refers to a missing mesh")
     for m in baked.materials:
-        for tex in (m.base_color_texture, m.metallic_texture, m.roughness_texture,
-                    m.normal_texture, m.occlusion_texture, m.emissive_texture):
+        for tex in (getattr(m, f"{slot}_texture", None) for slot in TEXTURE_SLOTS):
             _check(tex is None or not _is_int(getattr(tex, "image", None))
                    or 0 <= tex.image < len(baked.images), path,
                    f"material {m.name!r} refers to a missing image")

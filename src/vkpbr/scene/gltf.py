@@ -12,7 +12,7 @@ import numpy as np
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.gltf_document import SUPPORTED_EXTENSIONS, GltfDocument
-from vkpbr.scene.gltf_materials import build_materials, load_images
+from vkpbr.scene.gltf_materials import apply_variant, build_materials, load_images
 from vkpbr.scene.gltf_nodes import build_nodes_cameras_lights
 from vkpbr.scene.resources import ResourcePolicy, read_resource
 from vkpbr.scene.types import Scene
@@ -20,13 +20,16 @@ from vkpbr.scene.types import Scene
 __all__ = ["load_gltf", "SUPPORTED_EXTENSIONS"]
 
 
-def load_gltf(path: str | Path, policy: ResourcePolicy | None = None) -> Scene:
+def load_gltf(path: str | Path, policy: ResourcePolicy | None = None,
+              variant: str | None = None) -> Scene:
     """Load a .gltf or .glb file.
 
     Parameters
     ----------
     path : the file; external buffers and images resolve relative to its folder.
     policy : where those files may lie (default: the file's folder tree only).
+    variant : a KHR_materials_variants variant name: its materials replace the primitives'
+        (None: the file's default materials). `Scene.variants` lists the file's names.
 
     Returns
     -------
@@ -46,7 +49,7 @@ def load_gltf(path: str | Path, policy: ResourcePolicy | None = None) -> Scene:
         # Overflow/NaN from hostile values is handled explicitly (drop_nonfinite, range
         # checks), so numpy must not turn it into FloatingPointError under np.seterr(raise).
         with np.errstate(all="ignore"):
-            return _build(GltfDocument(path, raw, policy or ResourcePolicy(path)))
+            return _build(GltfDocument(path, raw, policy or ResourcePolicy(path)), variant)
     except SceneError:
         raise
     except (TypeError, ValueError, KeyError, IndexError, AttributeError, OverflowError,
@@ -56,9 +59,10 @@ def load_gltf(path: str | Path, policy: ResourcePolicy | None = None) -> Scene:
         raise SceneError(path, f"malformed glTF ({type(exc).__name__}: {exc})") from exc
 
 
-def _build(ld: GltfDocument) -> Scene:
+def _build(ld: GltfDocument, variant: str | None = None) -> Scene:
     """The Scene of a parsed document (meshes on demand, only for nodes of the displayed scene)."""
     scene = Scene(name=ld.path.stem, source=ld.path)
+    scene.variants = apply_variant(ld, variant)
     scene.images = load_images(ld)
     scene.materials = build_materials(ld, len(scene.images))
     build_nodes_cameras_lights(ld, scene)

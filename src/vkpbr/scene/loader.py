@@ -69,7 +69,7 @@ def _fallback(path: Path) -> Callable[..., Scene]:
 
 
 def load_scene(path: str | Path, strict: bool = False, allow_outside_paths: bool = False, *,
-               root: str | Path | None = None) -> Scene:
+               root: str | Path | None = None, variant: str | None = None) -> Scene:
     """Load a scene file of any supported format.
 
     Parameters
@@ -86,6 +86,9 @@ def load_scene(path: str | Path, strict: bool = False, allow_outside_paths: bool
         a missing one. Only regular files are read either way (docs/security.md).
     root : the folder tree referenced files must lie in, default the folder of `path` (the
         bake cache passes the source scene's folder for its cached .vkpbr files).
+    variant : a glTF KHR_materials_variants variant name, whose materials replace the
+        primitives' (None: the file's defaults). Only glTF files have variants: another
+        format with a variant is a SceneError, as is a name the file does not define.
 
     Returns
     -------
@@ -116,8 +119,11 @@ def load_scene(path: str | Path, strict: bool = False, allow_outside_paths: bool
     load = _loader(path.suffix.lower()) or _fallback(path)
     policy = ResourcePolicy(path, allow_outside=allow_outside_paths,
                             root=Path(root) if root is not None else None)
+    if variant is not None and load.__name__ != "load_gltf":
+        raise SceneError(path, f"material variant {variant!r}: only glTF files have variants "
+                               "(KHR_materials_variants)")
     try:
-        scene = load(path, policy=policy)
+        scene = load(path, policy=policy, **({} if variant is None else {"variant": variant}))
     except OSError as exc:
         # Anything an OS call reports while reading the scene or the files it names: the
         # user's scene file first, then the file involved and the OS's reason.

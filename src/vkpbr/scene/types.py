@@ -35,6 +35,8 @@ __all__ = [
     "Scene",
     "TextureRef",
     "expand_instances",
+    "TEXTURE_SLOTS",
+    "SRGB_TEXTURE_SLOTS",
 ]
 
 AlphaMode = Literal["opaque", "mask", "blend"]
@@ -100,7 +102,8 @@ class TextureRef:
 
 @dataclass
 class Material:
-    """Metallic-roughness material (glTF 2.0 core). Factors multiply the textures."""
+    """Metallic-roughness material (glTF 2.0 core) with the KHR_materials_* layers. Factors
+    multiply the textures. KHR_materials_emissive_strength is folded into emissive_factor."""
 
     name: str = "default"
     base_color_factor: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
@@ -123,6 +126,39 @@ class Material:
     # Separate alpha mask (OBJ map_d, .comp5822mesh): `channel` holds coverage. When None the
     # alpha comes from base_color_texture's A, as in glTF.
     alpha_texture: TextureRef | None = None  # linear
+    # The KHR_materials_* extensions. Defaults are the core material's: every layer off, ior
+    # 1.5 (F0 0.04), white specular. Their textures (below) multiply the factors.
+    unlit: bool = False  # KHR_materials_unlit: the base colour is the radiance
+    ior: float = 1.5  # KHR_materials_ior: dielectric F0 = ((ior - 1) / (ior + 1))^2
+    specular_factor: float = 1.0  # KHR_materials_specular: weight of the dielectric lobe
+    specular_color_factor: tuple[float, float, float] = (1.0, 1.0, 1.0)  # scales F0
+    clearcoat_factor: float = 0.0  # KHR_materials_clearcoat
+    clearcoat_roughness_factor: float = 0.0
+    sheen_color_factor: tuple[float, float, float] = (0.0, 0.0, 0.0)  # KHR_materials_sheen
+    sheen_roughness_factor: float = 0.0
+    transmission_factor: float = 0.0  # KHR_materials_transmission
+    thickness_factor: float = 0.0  # KHR_materials_volume: 0 = thin-walled (no volume)
+    attenuation_distance: float = 0.0  # 0 = infinite (no absorption), as Light.range
+    attenuation_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    clearcoat_normal_scale: float = 1.0
+    # The extensions' textures; `channel` picks a scalar map's component, as for metallic.
+    clearcoat_texture: TextureRef | None = None  # linear; glTF: R
+    clearcoat_roughness_texture: TextureRef | None = None  # linear; glTF: G
+    clearcoat_normal_texture: TextureRef | None = None  # linear, tangent space, xyz*2-1
+    sheen_color_texture: TextureRef | None = None  # sRGB; RGB
+    sheen_roughness_texture: TextureRef | None = None  # linear; glTF: A
+    specular_texture: TextureRef | None = None  # linear; glTF: A
+    specular_color_texture: TextureRef | None = None  # sRGB; RGB
+    transmission_texture: TextureRef | None = None  # linear; glTF: R
+    thickness_texture: TextureRef | None = None  # linear; glTF: G
+
+
+# Every Material texture slot (the field is f"{slot}_texture"), and those holding colour
+# (sRGB-encoded: decoded by the GPU's sRGB formats); the others are linear data.
+TEXTURE_SLOTS = ("base_color", "metallic", "roughness", "normal", "occlusion", "emissive",
+                 "alpha", "clearcoat", "clearcoat_roughness", "clearcoat_normal", "sheen_color",
+                 "sheen_roughness", "specular", "specular_color", "transmission", "thickness")
+SRGB_TEXTURE_SLOTS = frozenset({"base_color", "emissive", "sheen_color", "specular_color"})
 
 
 @dataclass
@@ -236,6 +272,8 @@ class Scene:
     nodes: list[Node] = field(default_factory=list)
     lights: list[Light] = field(default_factory=list)
     cameras: list[Camera] = field(default_factory=list)
+    # KHR_materials_variants: the file's variant names (the one loaded is chosen at load time).
+    variants: list[str] = field(default_factory=list)
     source: Path | None = None  # the file it was loaded from, if any
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:

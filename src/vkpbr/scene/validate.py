@@ -21,7 +21,17 @@ import numpy as np
 from vkpbr.errors import SceneError, UsageError
 from vkpbr.scene.camera import Camera, validate_camera
 from vkpbr.scene.limits import limits
-from vkpbr.scene.types import Image, Light, Material, Mesh, Node, Sampler, Scene, TextureRef
+from vkpbr.scene.types import (
+    TEXTURE_SLOTS,
+    Image,
+    Light,
+    Material,
+    Mesh,
+    Node,
+    Sampler,
+    Scene,
+    TextureRef,
+)
 from vkpbr.shading import MAX_LIGHTS
 
 __all__ = ["validate_scene", "validate_lights", "MAX_COORDINATE"]
@@ -30,7 +40,7 @@ __all__ = ["validate_scene", "validate_lights", "MAX_COORDINATE"]
 # beyond any real scene, far below float32's 3.4e38, so squared distances and the projection
 # stay finite.
 MAX_COORDINATE = 1e15
-_TEXTURE_SLOTS = ("base_color", "metallic", "roughness", "normal", "occlusion", "emissive", "alpha")
+_TEXTURE_SLOTS = TEXTURE_SLOTS
 
 
 class _Bad(Exception):
@@ -140,6 +150,18 @@ def _check_material(m: Material, where: str, n_images: int) -> None:
     for name in ("metallic_factor", "roughness_factor", "normal_scale", "occlusion_strength",
                  "alpha_cutoff"):
         _number(getattr(m, name), f"{where}.{name}", -1e6, 1e6)
+    # The KHR_materials_* layers, within their extensions' ranges (gltf_materials.py).
+    _choice(m.unlit, (True, False), f"{where}.unlit")
+    _number(m.ior, f"{where}.ior", 1.0, 1e6)
+    _vector(m.specular_color_factor, 3, f"{where}.specular_color_factor", 0.0, 1e6)
+    _vector(m.sheen_color_factor, 3, f"{where}.sheen_color_factor", 0.0, 1.0)
+    _vector(m.attenuation_color, 3, f"{where}.attenuation_color", 0.0, 1.0)
+    for name in ("specular_factor", "clearcoat_factor", "clearcoat_roughness_factor",
+                 "sheen_roughness_factor", "transmission_factor"):
+        _number(getattr(m, name), f"{where}.{name}", 0.0, 1.0)
+    _number(m.thickness_factor, f"{where}.thickness_factor", 0.0, 1e6)
+    _number(m.attenuation_distance, f"{where}.attenuation_distance", 0.0, 1e9)
+    _number(m.clearcoat_normal_scale, f"{where}.clearcoat_normal_scale", -1e6, 1e6)
     _choice(m.alpha_mode, ("opaque", "mask", "blend"), f"{where}.alpha_mode")
     _choice(m.double_sided, (True, False), f"{where}.double_sided")
     _choice(m.casts_shadows, (True, False), f"{where}.casts_shadows")

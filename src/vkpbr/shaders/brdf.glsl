@@ -81,6 +81,136 @@ BrdfTerms evaluate_brdf(vec3 n, vec3 v, vec3 l, vec3 c, float metallic, float ro
     return t;
 }
 
+// --- The KHR_materials_* layers (the glTF BRDF only; the course's BRDFs are the seed's) -----
+
+float max3(vec3 x) { return max(x.r, max(x.g, x.b)); }
+
+// KHR_materials_ior and _specular: the dielectric's F0 = min(((ior - 1)/(ior + 1))^2 * specular
+// colour, 1) (ior 1.5: 0.04).
+vec3 dielectric_f0(float ior, vec3 specular_color) {
+    float r = (ior - 1.0) / (ior + 1.0);
+    return min(vec3(r * r) * specular_color, vec3(1.0));
+}
+
+// KHR_materials_sheen's "Charlie" distribution (Conty & Kulla 2017), alpha_g = sheen roughness:
+// (2 + 1/alpha_g) sin(theta_h)^(1/alpha_g) / (2 pi).
+float d_charlie(float n_dot_h, float alpha_g) {
+    float inv_r = 1.0 / alpha_g;
+    float sin2h = max(1.0 - n_dot_h * n_dot_h, 0.0);
+    return (2.0 + inv_r) * pow(sin2h, inv_r * 0.5) / (2.0 * PI);
+}
+
+// The fit l(x) of the Charlie visibility (the extension's README).
+float sheen_l(float x, float alpha_g) {
+    float w = (1.0 - alpha_g) * (1.0 - alpha_g);
+    float a = mix(21.5473, 25.3245, w);
+    float b = mix(3.82987, 3.32435, w);
+    float c = mix(0.19823, 0.16801, w);
+    float d = mix(-1.97760, -1.27393, w);
+    float e = mix(-4.32054, -4.85967, w);
+    return a / (1.0 + b * pow(x, c)) + d * x + e;
+}
+
+float sheen_lambda(float cos_theta, float alpha_g) {
+    return cos_theta < 0.5 ? exp(sheen_l(cos_theta, alpha_g))
+                           : exp(2.0 * sheen_l(0.5, alpha_g) - sheen_l(1.0 - cos_theta, alpha_g));
+}
+
+// The Charlie visibility 1 / ((1 + lambda(n.v) + lambda(n.l)) 4 n.v n.l); 0 below the horizon.
+float v_charlie(float n_dot_l, float n_dot_v, float alpha_g) {
+    if (n_dot_l <= 0.0 || n_dot_v <= 0.0) return 0.0;
+    return 1.0 / ((1.0 + sheen_lambda(n_dot_v, alpha_g) + sheen_lambda(n_dot_l, alpha_g))
+                  * (4.0 * n_dot_v * n_dot_l));
+}
+
+// The sheen lobe's directional albedo E(n.v, alpha_g): the fitted polynomial of
+// vkpbr.shading (generated.glsl sheen_albedo_fit), in x = cbrt(n.v), y = sqrt(alpha_g).
+float sheen_albedo(float n_dot_v, float alpha_g) {
+    float x = pow(clamp(n_dot_v, SHEEN_FIT_MIN_N_DOT_V, 1.0), 1.0 / 3.0);
+    float y = sqrt(clamp(alpha_g, MIN_SHEEN_ROUGHNESS, 1.0));
+    return clamp(sheen_albedo_fit(x, y), 0.0, 1.0);
+}
+
+// KHR_materials_volume: Beer-Lambert transmittance over `dist`, attenuation colour ^
+// (dist / attenuation distance); attenuation distance 0 = infinite (no absorption).
+vec3 volume_transmittance(float dist, vec3 attenuation_color, float attenuation_distance) {
+    if (attenuation_distance <= 0.0 || dist <= 0.0) return vec3(1.0);
+    return pow(attenuation_color, vec3(dist / attenuation_distance));
+}
+
+// The layers' parameters at a shading point (scene.types.Material documents each).
+struct Layers {
+    float ior;
+    vec3 specular_color;
+    float specular;        // weight of the dielectric lobe
+    float clearcoat;
+    float clearcoat_roughness;
+    vec3 sheen_color;
+    float sheen_roughness;  // alpha_g, clamped to MIN_SHEEN_ROUGHNESS
+    float transmission;
+    float thickness;
+    vec3 attenuation_color;
+    float attenuation_distance;
+};
+
+// One punctual light's layered glTF BRDF (values before the light's radiance and shadow).
+struct LayeredTerms {
+    BrdfTerms base;    // D, F (the mixed specular Fresnel), G; specular and diffuse * n.l
+    vec3 transmission; // the transmitted lobe (no n.l), weighted like the diffuse
+    vec3 sheen;        // sheen colour D_charlie V_charlie n.l
+    float clearcoat;   // the coat's D V (n_c.l): its Fresnel is in the blend (shade.glsl)
+};
+
+// The glTF BRDF with KHR_materials_ior / _specular / _transmission / _volume / _sheen /
+// _clearcoat, as the specification's layering composes it: base = mix(dielectric, metal, M)
+// with the dielectric fresnel_mix(ior, specular colour, specular) of (Lambert mixed with the
+// transmitted lobe by transmission) and GGX; then sheen + base * albedo scaling, then the
+// coat's fresnel_coat (shade.glsl, the blend is per view direction). `nc`: the coat's normal.
+// The transmitted lobe is the Sample Viewer's getPunctualRadianceTransmission: GGX of the
+// light mirrored through the surface, alpha scaled by clamp(2 ior - 2, 0, 1); the volume's
+// transmittance over `thickness` applies to it.
+LayeredTerms evaluate_layered_brdf(vec3 n, vec3 nc, vec3 v, vec3 l, vec3 c, float metallic,
+                                   float roughness, Layers m) {
+    vec3 h = normalize(l + v);
+    float n_dot_l = max(dot(n, l), 0.0);
+    float n_dot_v = max(dot(n, v), 0.0);
+    float n_dot_h = max(dot(n, h), 0.0);
+    float v_dot_h = max(dot(v, h), 0.0);
+    float alpha = roughness * roughness;
+    LayeredTerms t;
+    t.base.D = d_ggx(n_dot_h, alpha);
+    float vis = v_smith_ggx_correlated(n_dot_l, n_dot_v, alpha);
+    t.base.G = vis * 4.0 * n_dot_l * n_dot_v;
+    vec3 f_dielectric = m.specular * f_schlick(dielectric_f0(m.ior, m.specular_color), v_dot_h);
+    t.base.F = (1.0 - metallic) * f_dielectric + metallic * f_schlick(c, v_dot_h);
+    t.base.specular = t.base.F * (t.base.D * vis) * n_dot_l;
+    float diffuse_weight = (1.0 - metallic) * (1.0 - max3(f_dielectric));
+    t.base.diffuse = diffuse_weight * (1.0 - m.transmission) * c / PI * n_dot_l;
+    t.transmission = vec3(0.0);
+    if (m.transmission > 0.0) {
+        vec3 l_mirror = normalize(l - 2.0 * n * dot(l, n));
+        vec3 ht = normalize(l_mirror + v);
+        float alpha_t = alpha * clamp(m.ior * 2.0 - 2.0, 0.0, 1.0);
+        float d_t = d_ggx(max(dot(n, ht), 0.0), alpha_t);
+        float v_t = v_smith_ggx_correlated(max(dot(n, l_mirror), 0.0), n_dot_v, alpha_t);
+        t.transmission = diffuse_weight * m.transmission * c * (d_t * v_t)
+            * volume_transmittance(m.thickness, m.attenuation_color, m.attenuation_distance);
+    }
+    t.sheen = vec3(0.0);
+    if (max3(m.sheen_color) > 0.0) {
+        t.sheen = m.sheen_color * (d_charlie(n_dot_h, m.sheen_roughness)
+                                   * v_charlie(n_dot_l, n_dot_v, m.sheen_roughness) * n_dot_l);
+    }
+    t.clearcoat = 0.0;
+    if (m.clearcoat > 0.0) {
+        float a_c = m.clearcoat_roughness * m.clearcoat_roughness;
+        float nc_dot_l = max(dot(nc, l), 0.0);
+        t.clearcoat = d_ggx(max(dot(nc, h), 0.0), a_c)
+            * v_smith_ggx_correlated(nc_dot_l, max(dot(nc, v), 0.0), a_c) * nc_dot_l;
+    }
+    return t;
+}
+
 // Point-light attenuation: none (the course) or inverse square with glTF's range window.
 float light_attenuation(float dist2, uint falloff, float range) {
     if (falloff == 0u) return 1.0;

@@ -76,6 +76,38 @@ void surface_frame(uint settings_flags, uint material_flags, out vec3 ng, out ve
     }
 }
 
+// The material's KHR_materials_* layers: factors times their textures (white when absent;
+// scalar maps arrive in R, swizzled by the view: gpu_scene.py).
+Layers material_layers() {
+    // Through u() (frame_output.glsl): branches depend on these, which lavapipe would inline.
+    vec3 zero = vec3(float(opaque_zero));
+    Layers m;
+    m.ior = max(u(MAT.ior), 1.0);
+    m.specular_color = MAT.specular_color_factor * SAMPLE(specular_color).rgb + zero;
+    m.specular = clamp(u(MAT.specular_factor) * SAMPLE(specular).r, 0.0, 1.0);
+    m.clearcoat = clamp(u(MAT.clearcoat_factor) * SAMPLE(clearcoat).r, 0.0, 1.0);
+    m.clearcoat_roughness = clamp(u(MAT.clearcoat_roughness) * SAMPLE(clearcoat_roughness).r,
+                                  MIN_ROUGHNESS, 1.0);
+    m.sheen_color = MAT.sheen_color_factor * SAMPLE(sheen_color).rgb + zero;
+    m.sheen_roughness = clamp(u(MAT.sheen_roughness) * SAMPLE(sheen_roughness).r,
+                              MIN_SHEEN_ROUGHNESS, 1.0);
+    m.transmission = clamp(u(MAT.transmission_factor) * SAMPLE(transmission).r, 0.0, 1.0);
+    m.thickness = max(u(MAT.thickness) * SAMPLE(thickness).r, 0.0);
+    m.attenuation_color = MAT.attenuation_color + zero;
+    m.attenuation_distance = u(MAT.attenuation_distance);
+    return m;
+}
+
+// The coat's normal: the interpolated one, or its own normal map (clearcoatNormalTexture)
+// in the surface's tangent frame.
+vec3 clearcoat_normal(uint settings_flags, uint material_flags, vec3 ng, vec3 t, vec3 b) {
+    if ((settings_flags & SETTINGS_NORMAL_MAPPING) == 0u
+        || (material_flags & MATERIAL_HAS_CLEARCOAT_NORMAL_MAP) == 0u) return ng;
+    vec3 tn = SAMPLE(clearcoat_normal).xyz * 2.0 - 1.0;
+    tn.xy *= MAT.clearcoat_normal_scale;
+    return safe_normalize(mat3(t, b, ng) * tn, ng);
+}
+
 vec4 shade_surface() {
     uint settings_flags = u(settings.flags);
     uint material_flags = u(MAT.flags);
@@ -102,7 +134,12 @@ vec4 shade_surface() {
     uint lighting_flags = u(lighting.flags);
     int brdf = u(settings.brdf);
     uint light_count = min(u(lighting.light_count), MAX_LIGHTS);
-    vec3 specular = vec3(0.0), diffuse = vec3(0.0);
+    Layers layers = material_layers();
+    // The layers shade the glTF BRDF only (the course's BRDFs are the seed's).
+    bool layered = brdf == BRDF_GLTF;
+    vec3 nc = clearcoat_normal(settings_flags, material_flags, ng, t, b);
+    vec3 specular = vec3(0.0), diffuse = vec3(0.0), transmission = vec3(0.0), sheen = vec3(0.0);
+    vec3 clearcoat = vec3(0.0);
     BrdfTerms first_terms = BrdfTerms(0.0, vec3(0.0), 0.0, vec3(0.0), vec3(0.0));
     vec3 first_l = ng;
     float first_shadow = 1.0;
@@ -116,19 +153,72 @@ vec4 shade_surface() {
             shadow = shadow_factor(light, s_world_pos, ng, l, view_depth);
             if (!shadow_seen) { first_shadow = shadow; shadow_seen = true; }
         }
-        BrdfTerms terms = evaluate_brdf(n, v, l, c, metallic, roughness, brdf);
-        if (i == 0u) { first_terms = terms; first_l = l; }
-        vec3 incident = light_in * (max(dot(n, l), 0.0) * shadow);
-        specular += terms.specular * incident;
-        diffuse += terms.diffuse * incident;
+        vec3 incident = light_in * shadow;
+        if (layered) {
+            LayeredTerms lt = evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, layers);
+            if (i == 0u) { first_terms = lt.base; first_l = l; }
+            specular += lt.base.specular * incident;
+            diffuse += lt.base.diffuse * incident;
+            transmission += lt.transmission * incident;
+            sheen += lt.sheen * incident;
+            clearcoat += vec3(lt.clearcoat) * incident;
+        } else {
+            BrdfTerms terms = evaluate_brdf(n, v, l, c, metallic, roughness, brdf);
+            if (i == 0u) { first_terms = terms; first_l = l; }
+            float n_dot_l = max(dot(n, l), 0.0);
+            specular += terms.specular * incident * n_dot_l;
+            diffuse += terms.diffuse * incident * n_dot_l;
+        }
     }
     vec3 ambient = lighting.ambient_color.rgb * c * occlusion;
-    IblTerms ibl = IblTerms(vec3(0.0), vec3(0.0));
+    IblTerms ibl = IblTerms(vec3(0.0), vec3(0.0), vec3(0.0));
+    vec3 f0_dielectric = dielectric_f0(layers.ior, layers.specular_color);
+    float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
     if ((lighting_flags & LIGHTING_IBL) != 0u) {
-        ibl = ibl_evaluate(n, v, c, metallic, roughness);
+        ibl = ibl_evaluate(n, v, c, metallic, roughness, f0_dielectric, layers.specular);
         ibl.diffuse *= occlusion;
         ibl.specular *= occlusion;
+        if (layered) {
+            if (layers.transmission > 0.0) {
+                // The environment refracted through the surface (KHR_materials_transmission
+                // through the pre-filtered environment, not a screen-space copy of the opaque
+                // image): straight through a thin wall, refracted into a volume; rougher by
+                // clamp(2 ior - 2, 0, 1) (the Sample Viewer's applyIorToRoughness).
+                vec3 d = layers.thickness > 0.0 ? refract(-v, n, 1.0 / layers.ior) : -v;
+                if (dot(d, d) < 1e-8) d = -v;  // no total internal reflection entering
+                float r_t = roughness * clamp(layers.ior * 2.0 - 2.0, 0.0, 1.0);
+                transmission += layers.transmission * ibl.diffuse_weight * occlusion
+                    * ibl_radiance(normalize(d), r_t)
+                    * volume_transmittance(layers.thickness, layers.attenuation_color,
+                                           layers.attenuation_distance);
+                ibl.diffuse *= 1.0 - layers.transmission;
+            }
+            if (max3(layers.sheen_color) > 0.0) {
+                // The GGX pre-filtered environment stands in for a Charlie pre-filtered one.
+                sheen += occlusion * layers.sheen_color
+                    * sheen_albedo(n_dot_v, layers.sheen_roughness)
+                    * ibl_radiance(reflect(-v, n), layers.sheen_roughness);
+            }
+            if (layers.clearcoat > 0.0) {
+                clearcoat += occlusion * ibl_radiance(reflect(-v, nc), layers.clearcoat_roughness);
+            }
+        }
     }
+    // Sheen's albedo scaling of the base (the README's simplified form, by n.v) and the coat's
+    // blend clearcoat * F_coat(n_c.v) with F0 0.04 (ior 1.5), emission included.
+    float sheen_scaling = 1.0;
+    float coat_blend = 0.0;
+    if (layered) {
+        float sheen_max = max3(layers.sheen_color);
+        if (sheen_max > 0.0) sheen_scaling = 1.0 - sheen_max * sheen_albedo(n_dot_v, layers.sheen_roughness);
+        float nc_dot_v = clamp(dot(nc, v), 0.0, 1.0);
+        coat_blend = layers.clearcoat * f_schlick(vec3(0.04), nc_dot_v).r;
+        clearcoat *= coat_blend;
+    }
+    vec3 base_radiance = diffuse + specular + transmission + ibl.diffuse + ibl.specular;
+    vec3 final_value = (emissive + ambient + sheen + base_radiance * sheen_scaling)
+        * (1.0 - coat_blend) + clearcoat;
+    if ((material_flags & MATERIAL_UNLIT) != 0u) final_value = c;  // KHR_materials_unlit
 
     vec3 value;
     switch (view) {
@@ -155,7 +245,16 @@ vec4 shade_surface() {
         case VIEW_SHADOW: value = vec3(first_shadow); break;
         case VIEW_IBL_DIFFUSE: value = ibl.diffuse; break;
         case VIEW_IBL_SPECULAR: value = ibl.specular; break;
-        default: value = emissive + ambient + diffuse + specular + ibl.diffuse + ibl.specular; break;
+        case VIEW_IOR: value = vec3(layers.ior - 1.0); break;
+        case VIEW_DIELECTRIC_F0: value = f0_dielectric * layers.specular; break;
+        case VIEW_CLEARCOAT: value = clearcoat; break;
+        case VIEW_SHEEN: value = sheen; break;
+        case VIEW_TRANSMISSION: value = transmission; break;
+        case VIEW_VOLUME:
+            value = volume_transmittance(layers.thickness, layers.attenuation_color,
+                                         layers.attenuation_distance);
+            break;
+        default: value = final_value; break;
     }
 
     int kind = VIEW_KINDS[clamp(view, 0, VIEW_KINDS.length() - 1)];

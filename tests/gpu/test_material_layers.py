@@ -1,0 +1,265 @@
+"""The KHR_materials_* layers on lavapipe (validation on) against their NumPy mirror
+(reference/brdf.py `shade_layered`), pixel by pixel, on both frame paths.
+
+Set-up as test_reference.py: the plane y = 0 seen obliquely, n, v and l known exactly per
+pixel from an independent pinhole model. The glTF BRDF, linear float32 output.
+
+- Punctual light: every layer view and the final image against the mirror, a light above the
+  plane and, for transmission, one below it (light through the surface). Tolerance as the core
+  BRDF's (test_reference.py): rtol 2e-3, atol 2e-5 (float32 against float64).
+- A uniform environment (a constant panorama, EnvironmentSpec.small()): the layers'
+  environment terms are then analytic: the coat reflects L, the sheen returns
+  sheen colour * E(n.v) * L, refraction brings k_d * L * transmittance with k_d the split
+  sum's diffuse weight (read from the IBL diffuse view of the same material without
+  transmission). Tolerance rtol 1e-2 (half-float cubes; the pre-filter of a constant is
+  constant up to rounding).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import OpenEXR
+import pytest
+from test_reference import CAMERA, LIGHT, H, W, pixel_geometry
+
+from vkpbr.reference import brdf as ref
+from vkpbr.render.environment import EnvironmentSpec
+from vkpbr.scene.default import plane
+from vkpbr.scene.types import Light, Material, Node, Scene
+
+pytestmark = pytest.mark.timeout(300)
+
+LAYERED = {
+    "clearcoat": Material(base_color_factor=(0.8, 0.2, 0.1, 1), metallic_factor=0.0,
+                          roughness_factor=0.6, clearcoat_factor=0.8,
+                          clearcoat_roughness_factor=0.2),
+    "sheen": Material(base_color_factor=(0.1, 0.2, 0.7, 1), metallic_factor=0.0,
+                      roughness_factor=0.7, sheen_color_factor=(0.9, 0.6, 0.3),
+                      sheen_roughness_factor=0.5),
+    "ior-specular": Material(base_color_factor=(0.5, 0.6, 0.4, 1), metallic_factor=0.3,
+                             roughness_factor=0.35, ior=1.8, specular_factor=0.6,
+                             specular_color_factor=(1.0, 0.5, 0.25)),
+    "transmission-volume": Material(base_color_factor=(0.9, 0.9, 0.8, 1), metallic_factor=0.0,
+                                    roughness_factor=0.5, ior=1.3, transmission_factor=0.9,
+                                    thickness_factor=0.6, attenuation_distance=0.5,
+                                    attenuation_color=(0.9, 0.4, 0.2)),
+    "everything": Material(base_color_factor=(0.6, 0.5, 0.4, 1), metallic_factor=0.2,
+                           roughness_factor=0.45, ior=1.6, specular_factor=0.8,
+                           specular_color_factor=(0.9, 1.0, 1.2), clearcoat_factor=0.5,
+                           clearcoat_roughness_factor=0.35, sheen_color_factor=(0.3, 0.5, 0.2),
+                           sheen_roughness_factor=0.8, transmission_factor=0.4,
+                           thickness_factor=0.3, attenuation_distance=2.0,
+                           attenuation_color=(0.7, 0.8, 0.9)),
+}
+VIEWS = ("final", "specular", "diffuse", "transmission", "sheen", "clearcoat", "ior",
+         "dielectric-f0", "volume")
+BELOW = Light(position=(-0.3, -1.2, 0.4), color=(0.9, 1.0, 0.7), intensity=1.1, shadows=False)
+
+
+def plane_scene(material: Material, light: Light = LIGHT) -> Scene:
+    mesh = plane(60.0, 60.0)
+    mesh.material = 0
+    return Scene("plane", meshes=[mesh], materials=[material], nodes=[Node(mesh=0)],
+                 lights=[light], cameras=[CAMERA])
+
+
+def mirror(mat: Material, light: Light, **env: object) -> dict[str, np.ndarray]:
+    p, n, v, _ = pixel_geometry()
+    to_light = np.asarray(light.position) - p
+    l = to_light / np.linalg.norm(to_light, axis=-1, keepdims=True)
+    c = np.broadcast_to(np.asarray(mat.base_color_factor[:3]), n.shape)
+    shape = n.shape[:2]
+    light_in = np.asarray(light.color) * light.intensity if env.get("env_radiance") is None \
+        else np.zeros(3)
+    return ref.shade_layered(n, v, l, c, np.full(shape, mat.metallic_factor),
+                             np.full(shape, mat.roughness_factor), light_in, ref.Layers.of(mat),
+                             **env)
+
+
+def render(r, view: str, pipeline: str, **options: object) -> np.ndarray:  # noqa: ANN001
+    return r.render(size=(W, H), view=view, linear=True, lighting="pbr", brdf="gltf",
+                    pipeline=pipeline, **options)[..., :3]
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
+@pytest.mark.parametrize("material", list(LAYERED))
+def test_layers_match_mirror(make_renderer, material: str, pipeline: str) -> None:
+    mat = LAYERED[material]
+    lights = [LIGHT] + ([BELOW] if mat.transmission_factor > 0 else [])
+    for light in lights:
+        r = make_renderer(plane_scene(mat, light))
+        if pipeline == "compute" and not r.device.compute_path:
+            pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+        want = mirror(mat, light)
+        for view in VIEWS:
+            got = render(r, view, pipeline, env="none")
+            key = view.replace("-", "_")
+            np.testing.assert_allclose(got, np.broadcast_to(want[key], got.shape), rtol=2e-3,
+                                       atol=2e-5, err_msg=f"{view}, light {light.position}")
+        if light is BELOW:
+            # Light from behind reaches the viewer only through the transmitted lobe.
+            assert want["diffuse"].max() == 0.0 and want["transmission"].max() > 1e-3
+
+
+def test_unlit_is_the_base_colour(make_renderer) -> None:
+    mat = dataclasses.replace(LAYERED["everything"], unlit=True)
+    r = make_renderer(plane_scene(mat))
+    for pipeline in ("forward", "compute") if r.device.compute_path else ("forward",):
+        got = render(r, "final", pipeline, env="sky")
+        np.testing.assert_allclose(got, np.broadcast_to(mat.base_color_factor[:3], got.shape),
+                                   rtol=1e-6, atol=1e-7)
+
+
+def test_default_layers_leave_the_core_brdf(make_renderer) -> None:
+    """A material with every layer at its default renders the core glTF BRDF's mirror
+    (ref.shade), independent of the layered code."""
+    mat = Material(base_color_factor=(0.7, 0.4, 0.2, 1), metallic_factor=0.4,
+                   roughness_factor=0.3)
+    r = make_renderer(plane_scene(mat))
+    _, n, v, l = pixel_geometry()
+    c = np.broadcast_to(np.asarray(mat.base_color_factor[:3]), n.shape)
+    s = ref.shade(n, v, l, c, np.full(n.shape[:2], 0.4), np.full(n.shape[:2], 0.3),
+                  np.asarray(LIGHT.color) * LIGHT.intensity, brdf=ref.Brdf.GLTF, ambient=0.0)
+    for pipeline in ("forward", "compute") if r.device.compute_path else ("forward",):
+        got = render(r, "final", pipeline, env="none")
+        np.testing.assert_allclose(got, s["final"], rtol=2e-3, atol=2e-5, err_msg=pipeline)
+
+
+ENV_RADIANCE = 0.7
+
+
+@pytest.fixture(scope="module")
+def uniform_env(tmp_path_factory) -> Path:  # noqa: ANN001
+    folder = tmp_path_factory.mktemp("uniform-env")
+    path = folder / "uniform.exr"
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    rgb = np.full((16, 32, 3), ENV_RADIANCE, np.float32)
+    with OpenEXR.File(header, {"RGB": rgb}) as f:
+        f.write(str(path))
+    return path
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
+@pytest.mark.parametrize("material", ["clearcoat", "sheen", "transmission-volume", "everything"])
+def test_environment_layers_in_a_uniform_environment(make_renderer, uniform_env: Path,
+                                                     tmp_path: Path, material: str,
+                                                     pipeline: str) -> None:
+    mat = LAYERED[material]
+    opaque = dataclasses.replace(mat, transmission_factor=0.0)
+    kw = {"env_spec": EnvironmentSpec.small(), "cache_dir": tmp_path / "cache"}
+    r = make_renderer(plane_scene(mat), **kw)
+    if pipeline == "compute" and not r.device.compute_path:
+        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+    r0 = make_renderer(plane_scene(opaque), **kw)
+    opts = {"env": str(uniform_env), "lights": [], "env_background": False}
+    k_d = render(r0, "ibl-diffuse", pipeline, **opts) / ENV_RADIANCE
+    want = mirror(mat, LIGHT, env_radiance=ENV_RADIANCE, ibl_diffuse_weight=k_d)
+    got = {view: render(r, view, pipeline, **opts)
+           for view in ("clearcoat", "sheen", "transmission", "ibl-diffuse", "ibl-specular",
+                        "final")}
+    for view in ("clearcoat", "sheen", "transmission"):
+        np.testing.assert_allclose(got[view], np.broadcast_to(want[view], got[view].shape),
+                                   rtol=1e-2, atol=1e-4, err_msg=view)
+    # The composition: the coat's blend over sheen + the base scaled by sheen's albedo.
+    blend = want["coat_blend"][..., None]
+    base = got["ibl-diffuse"] + got["ibl-specular"] + got["transmission"]
+    composed = (got["sheen"] + base * want["sheen_scaling"][..., None]) * (1.0 - blend) \
+        + got["clearcoat"]
+    np.testing.assert_allclose(got["final"], composed, rtol=2e-3, atol=1e-4)
+    if mat.transmission_factor > 0:  # the refracted light replaces that much irradiance
+        np.testing.assert_allclose(got["ibl-diffuse"], k_d * ENV_RADIANCE
+                                   * (1.0 - mat.transmission_factor), rtol=1e-3, atol=1e-5)
+
+
+def test_golden_layer_spheres(make_renderer, tmp_path: Path) -> None:
+    """tests/gpu/layer_scene.py's six spheres (a generated glTF file, every layer through the
+    loader) in the default physically based mode, against a golden checked by eye when made
+    (clearcoat, sheen, ior 2.4 with a gold specular colour; a thick orange volume, a thin
+    transmissive sphere, unlit green). Tolerances: goldens.py's (tight on llvmpipe)."""
+    from goldens import PBR_OTHER, TIGHT, Golden, mismatch
+    from layer_scene import CAMERA, write_layer_spheres
+    from PIL import Image
+
+    from vkpbr.scene.loader import load_scene
+
+    golden = Golden("pbr_material_layers_160x120.png", None, (160, 120), TIGHT, PBR_OTHER, "pbr")
+    scene = load_scene(write_layer_spheres(tmp_path / "layers.gltf"))
+    r = make_renderer(scene)
+    got = np.ascontiguousarray(r.render(CAMERA, size=golden.size, lighting="pbr")[..., :3])
+    why = mismatch(got, golden, r.device.info.name)
+    if why:
+        Image.fromarray(got).save(tmp_path / golden.file)
+        pytest.fail(f"{why}; the render is in {tmp_path / golden.file}")
+    # The variant swaps the first sphere's material only (red -> blue coat).
+    variant = make_renderer(load_scene(tmp_path / "layers.gltf", variant="blue-coat"))
+    other = variant.render(CAMERA, size=golden.size, lighting="pbr")[..., :3].astype(int)
+    changed = np.abs(other - got).max(-1) > 8
+    assert changed[:, :65].mean() > 0.05 and not changed[:, 70:].any()
+
+
+def constant_image(name: str, rgba: tuple[int, int, int, int]):  # noqa: ANN201
+    from vkpbr.scene.types import Image
+
+    return Image(name=name, pixels=np.broadcast_to(np.asarray(rgba, np.uint8), (4, 4, 4)).copy())
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
+def test_layer_textures_multiply_their_factors(make_renderer, pipeline: str) -> None:
+    """Every extension texture (constant texels, so that filtering cannot matter) scales its
+    factor: scalar maps from the channel the extension names (R, G or A of a linear image),
+    sheen and specular colour decoded from sRGB, the coat's normal map tilting the coat's
+    normal in the surface's tangent frame (read from the tangent and bitangent views)."""
+    from vkpbr.scene.types import TextureRef
+
+    data, color, normal = (16, 64, 200, 191), (200, 120, 60, 255), (166, 102, 242, 255)
+    images = [constant_image("data", data), constant_image("color", color),
+              constant_image("normal", normal)]
+    mat = Material(base_color_factor=(0.6, 0.5, 0.4, 1), metallic_factor=0.1,
+                   roughness_factor=0.5, ior=1.45, specular_factor=0.9,
+                   specular_color_factor=(1.2, 1.0, 0.8), clearcoat_factor=0.9,
+                   clearcoat_roughness_factor=0.8, clearcoat_normal_scale=0.7,
+                   sheen_color_factor=(1.0, 0.8, 0.6), sheen_roughness_factor=0.9,
+                   transmission_factor=0.8, thickness_factor=2.0, attenuation_distance=1.5,
+                   attenuation_color=(0.8, 0.6, 0.3),
+                   clearcoat_texture=TextureRef(0, channel=0),
+                   clearcoat_roughness_texture=TextureRef(0, channel=1),
+                   clearcoat_normal_texture=TextureRef(2),
+                   sheen_color_texture=TextureRef(1), sheen_roughness_texture=TextureRef(0, channel=3),
+                   specular_texture=TextureRef(0, channel=3), specular_color_texture=TextureRef(1),
+                   transmission_texture=TextureRef(0, channel=0),
+                   thickness_texture=TextureRef(0, channel=1))
+    scene = plane_scene(mat)
+    scene.images = images
+    r = make_renderer(scene)
+    if pipeline == "compute" and not r.device.compute_path:
+        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+    unorm = np.asarray(data) / 255.0
+    srgb = ref.srgb_to_linear(np.asarray(color[:3]) / 255.0)
+    layers = ref.Layers(
+        ior=1.45, specular_color=tuple(np.asarray(mat.specular_color_factor) * srgb),
+        specular=0.9 * unorm[3], clearcoat=0.9 * unorm[0],
+        clearcoat_roughness=0.8 * unorm[1],
+        sheen_color=tuple(np.asarray(mat.sheen_color_factor) * srgb),
+        sheen_roughness=0.9 * unorm[3], transmission=0.8 * unorm[0], thickness=2.0 * unorm[1],
+        attenuation_color=mat.attenuation_color, attenuation_distance=1.5)
+    p, n, v, _ = pixel_geometry()
+    to_light = np.asarray(LIGHT.position) - p
+    l = to_light / np.linalg.norm(to_light, axis=-1, keepdims=True)
+    t = render(r, "tangent", pipeline, env="none") * 2.0 - 1.0
+    b = render(r, "bitangent", pipeline, env="none") * 2.0 - 1.0
+    tn = np.asarray(normal[:3]) / 255.0 * 2.0 - 1.0
+    tn[:2] *= 0.7
+    nc = t * tn[0] + b * tn[1] + n * tn[2]
+    nc /= np.linalg.norm(nc, axis=-1, keepdims=True)
+    assert np.degrees(np.arccos(np.clip(nc[..., 1], -1, 1))).min() > 5.0  # the coat tilts
+    c = np.broadcast_to(np.asarray(mat.base_color_factor[:3]), n.shape)
+    shape = n.shape[:2]
+    want = ref.shade_layered(n, v, l, c, np.full(shape, 0.1), np.full(shape, 0.5),
+                             np.asarray(LIGHT.color) * LIGHT.intensity, layers, nc=nc)
+    for view in VIEWS:
+        got = render(r, view, pipeline, env="none")
+        np.testing.assert_allclose(got, np.broadcast_to(want[view.replace("-", "_")], got.shape),
+                                   rtol=3e-3, atol=5e-5, err_msg=view)
