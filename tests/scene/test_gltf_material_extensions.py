@@ -259,3 +259,11 @@ def test_bake_command_bakes_the_variant(tmp_path: Path) -> None:
     out = tmp_path / "red.vkpbr"
     assert main(["bake", str(path), "-o", str(out), "--variant", "red", "--no-progress"]) == 0
     assert load_scene(out).meshes[0].material == 1
+
+
+def test_material_extensions_are_in_the_supported_list() -> None:
+    """A file may require every material extension the loader reads."""
+    from vkpbr.scene.gltf_document import SUPPORTED_EXTENSIONS
+    from vkpbr.scene.gltf_materials import MATERIAL_EXTENSIONS
+
+    assert set(MATERIAL_EXTENSIONS) <= SUPPORTED_EXTENSIONS

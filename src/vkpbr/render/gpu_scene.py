@@ -37,7 +37,15 @@ from vkpbr.gpu.descriptors import DescriptorPool, DescriptorSetLayout, Descripto
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, TextureUploader
 from vkpbr.render import layouts as L
-from vkpbr.scene.types import SRGB_TEXTURE_SLOTS, Material, Mesh, Node, Scene, TextureRef, expand_instances
+from vkpbr.scene.types import (
+    SRGB_TEXTURE_SLOTS,
+    Material,
+    Mesh,
+    Node,
+    Scene,
+    TextureRef,
+    expand_instances,
+)
 
 __all__ = ["GpuScene", "Draw", "prepare_mesh", "uv_transform_rows"]
 

@@ -46,6 +46,12 @@ SUPPORTED_EXTENSIONS = frozenset(
         "EXT_texture_webp",  # texture sources, decoded by Pillow
         "EXT_mesh_gpu_instancing",  # Node.instances (gltf_nodes)
     }
+) | frozenset(
+    {  # the material layers (gltf_materials.MATERIAL_EXTENSIONS: a test keeps them equal)
+        "KHR_materials_unlit", "KHR_materials_variants", "KHR_materials_ior",
+        "KHR_materials_specular", "KHR_materials_clearcoat", "KHR_materials_sheen",
+        "KHR_materials_transmission", "KHR_materials_volume",
+    }
 )
 _DTYPES = {5120: "<i1", 5121: "<u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126: "<f4"}
 _NCOMP = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
