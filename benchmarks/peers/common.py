@@ -128,6 +128,14 @@ def load_poses(path: str | Path | None, key: str, count: int = BATCH_VIEWS) -> n
     return poses
 
 
+def poses_digest(poses: np.ndarray) -> str:
+    """SHA-1 of the poses as little-endian float64: rows measured apart (another run, another
+    machine) are compared only when they rendered the same views."""
+    import hashlib
+
+    return hashlib.sha1(np.ascontiguousarray(poses, dtype="<f8").tobytes()).hexdigest()
+
+
 def parse_batch_args(peer: str, extra: Callable[[argparse.ArgumentParser], object] | None = None
                      ) -> argparse.Namespace:
     """Arguments of a peer's batch scenario (--batch): scene key, size, poses, passes."""
@@ -167,6 +175,7 @@ def report_batch(args: argparse.Namespace, peer: str, version: str, vps_readback
     """One Markdown row and JSON line of the batch scenario; --png saves view 0."""
     row = {"scenario": "batch", "peer": peer, "version": version, "scene": args.scene_key,
            "size": f"{args.width}x{args.height}", "views": len(args.pose_array), "reps": args.reps,
+           "poses_sha1": poses_digest(args.pose_array),
            "views_per_s_readback": round(vps_readback, 2),
            "views_per_s_render_only": round(vps_render_only, 2), "mode": mode,
            "pixel_scale": pixel_scale, "load_s": round(load_s, 3), "gpu": gpu, "settings": settings}

@@ -159,7 +159,7 @@ def run_batch_scenario(name: str, args: argparse.Namespace) -> dict:
                 "views_per_s_readback": b * reps / sum(wall),
                 "views_per_s_render_only": b / gpu_ms * 1e3 if gpu_ms > 0 else float("nan"),
                 "ms_per_batch": 1e3 * statistics.median(wall), "gpu_ms": gpu_ms,
-                "poses_file": str(poses_path)}
+                "poses_file": str(poses_path), "poses_sha1": common.poses_digest(poses)}
 
 
 def print_batch_table(rows: list[dict]) -> None:
@@ -246,6 +246,23 @@ BATCH_PEERS = (
 )
 
 
+def read_peer_rows(args: argparse.Namespace) -> list[dict]:
+    """Peer results measured before (--peers-json: run_peers.sh's peers.json, e.g. SAPIEN from
+    another device call when the carried files do not fit in one)."""
+    rows = []
+    for name in args.peers_json or ():
+        path = Path(name)
+        if not path.exists():
+            raise UsageError(f"--peers-json {path}: no such file")
+        for i, line in enumerate(path.read_text().splitlines(), 1):
+            if line.strip():
+                try:
+                    rows.append(json.loads(line))
+                except json.JSONDecodeError as e:
+                    raise UsageError(f"--peers-json {path}:{i}: not JSON ({e.msg})") from None
+    return rows
+
+
 def run_batch_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
     """The batch scenario's peers on the same poses files, scenes and sizes; prints the
     ratios vkpbr / peer (views/s into NumPy, and render only)."""
@@ -266,6 +283,7 @@ def run_batch_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
                 _run_peer(cmd, f"{label} {key} {size}")
         if out.exists():
             peers = [json.loads(line) for line in out.read_text().splitlines() if line.strip()]
+    peers += [p for p in read_peer_rows(args) if p.get("scenario") == "batch"]
     print("\n| peer | scene | size | pixels rendered per view | peer views/s (into NumPy) "
           "| vkpbr views/s | vkpbr / peer | render only: peer | vkpbr (GPU) | vkpbr / peer |")
     print("|---|---|---|---|---|---|---|---|---|---|")
@@ -273,6 +291,10 @@ def run_batch_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
         key = p["scene"]  # the peers name a glTF path by its stem: Sponza.gltf -> "sponza"
         mine = ours.get((key, p["size"]))
         if not mine:
+            continue
+        if p.get("poses_sha1") and p["poses_sha1"] != mine["poses_sha1"]:
+            log.warning("%s %s %s: other poses than vkpbr's (regenerate with the same --views); "
+                        "not compared", p["peer"], key, p["size"])
             continue
         w, h = (int(v) for v in p["size"].split("x"))
         scale = float(p.get("pixel_scale", 1.0))
@@ -312,6 +334,7 @@ def run_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
                 _run_peer(cmd, f"{peer} {size}")
         if out.exists():
             peers += [json.loads(line) for line in out.read_text().splitlines() if line.strip()]
+    peers += [p for p in read_peer_rows(args) if p.get("scenario") != "batch" and "fps_readback" in p]
     print("\n| peer | size | frames/s (render + readback) | vkpbr frames/s | vkpbr / peer "
           "| render only: peer | vkpbr |")
     print("|---|---|---|---|---|---|---|")
@@ -353,6 +376,9 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.add_argument("--peers", action="store_true",
                    help="also run pyrender and pygfx (and SAPIEN in the batch scenarios) and print ratios")
+    p.add_argument("--peers-json", action="append", metavar="FILE",
+                   help="with --peers: also compare against peer rows measured before "
+                        "(run_peers.sh's peers.json; repeatable)")
     p.add_argument("--views", type=int, default=256, metavar="B",
                    help="batch scenarios: camera poses generated (default 256)")
     p.add_argument("--batch-views", type=int, default=1024, metavar="N",
