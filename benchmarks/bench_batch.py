@@ -19,7 +19,10 @@ and B: one warm-up call, then the median of `--reps` timed calls of
 - GPU MiB: the memory the batch holds: its target's colour and depth array images and readback
   buffer (gpu/batch_target.py) and the views' records, indirect draws and lists
   (render/batch.py BatchViews), read from their allocation sizes;
-- render_many views/s (B <= `--many-max`, default 256): the same B cameras frame by frame.
+- render_many views/s (B <= `--many-max`, default 256): the same B cameras frame by frame;
+- torch views/s (where torch sees CUDA and render_batch takes device="cuda"): B / wall clock
+  of `render_batch(..., device="cuda")` + `torch.cuda.synchronize()`, the views a (B, H, W, 4)
+  tensor on the GPU (no host copy).
 
 A B whose target would exceed `--max-mib` (default: a quarter of the device's local memory,
 as `batch="auto"` budgets a submission) is skipped. Not a test. Prints one Markdown table;
@@ -85,21 +88,33 @@ def poses_for(key: str, r: Renderer, count: int) -> np.ndarray:
 
 
 def batch_gpu_bytes(r: Renderer, size: tuple[int, int], views: int) -> int:
-    """Device memory of the batch target the last render_batch of `views` views used, plus
-    the BatchViews buffers (allocation sizes as Vulkan reported or requested them)."""
+    """Device memory of the batch targets of `size` that a render_batch of `views` views used
+    (host readback and, where torch was asked for, CUDA-exported ones), plus the BatchViews
+    buffers: allocation sizes as Vulkan reported (images) or as requested (buffers)."""
     limits = r.device.limits
     layers = max(1, min(views, MAX_LAYERS, int(limits.maxFramebufferLayers),
                         int(limits.maxImageArrayLayers)))
+    path = getattr(r, "_batch_path", None)  # render/batch_path.py BatchPath, once made
+    targets = path.targets if path is not None else getattr(r, "_batch_targets", {})
+    bv = path.views if path is not None else getattr(r, "_batch", None)
     total = 0
-    target = r._batch_targets.get((tuple(size), layers, False, False))
-    if target is not None:
-        total += target.color.bytes + target.depth.bytes + target.color_readback.size
-        if target.depth_readback is not None:
-            total += target.depth_readback.size
-    bv = r._batch
+    for key, target in targets.items():
+        if key[0] == tuple(size) and key[1] == layers:
+            total += target.color.bytes + target.depth.bytes
+            total += sum(b.size for b in (getattr(target, "color_readback", None),
+                                          getattr(target, "depth_readback", None)) if b is not None)
     if bv is not None:
         total += sum(b.size for b in (*bv._buffers, bv.bounds))
     return total
+
+
+def torch_cuda():  # noqa: ANN201
+    """torch when it sees a CUDA device (render_batch(device="cuda")), else None."""
+    try:
+        import torch
+    except ImportError:
+        return None
+    return torch if torch.cuda.is_available() else None
 
 
 def copy_ms(shape: tuple[int, ...], reps: int = 3) -> float:
@@ -119,6 +134,7 @@ def run_scene(key: str, sizes: list[tuple[int, int]], batches: list[int], reps: 
         print(f"skipped {key}: {peers.ASSETS / peers.BATCH_SCENES[key]} not found", file=sys.stderr)
         return []
     rows = []
+    torch = torch_cuda()
     with Renderer(scene) as r:
         budget = (max_mib * 2**20) if max_mib else r.device.local_memory_bytes() / 4
         for size in sizes:
@@ -147,6 +163,16 @@ def run_scene(key: str, sizes: list[tuple[int, int]], batches: list[int], reps: 
                        * 1e3 / b,
                        "copy_ms": cp, "gpu_mib": batch_gpu_bytes(r, size, b) / 2**20,
                        "device": r.device.info.name, "draws": len(r.gpu_scene.draws)}
+                if torch is not None:
+                    r.render_batch(views, size=size, device="cuda")
+                    times = []
+                    for _ in range(reps):
+                        t = time.perf_counter()
+                        r.render_batch(views, size=size, device="cuda")
+                        torch.cuda.synchronize()
+                        times.append(time.perf_counter() - t)
+                    row["torch_views_per_s"] = b / statistics.median(times)
+                    row["gpu_mib_with_torch_target"] = batch_gpu_bytes(r, size, b) / 2**20
                 if b <= many_max:
                     cams = [views.camera(i) for i in range(b)]
                     list(r.render_many(cams[: min(b, 8)], size=size))
@@ -159,9 +185,9 @@ def run_scene(key: str, sizes: list[tuple[int, int]], batches: list[int], reps: 
     return rows
 
 
-HEADER = ("| scene | size | B | views/s into NumPy | GPU views/s (render only) | ms per batch "
-          "| host us/view | GPU MiB | render_many views/s | batch / many |\n"
-          "|---|---|---|---|---|---|---|---|---|---|")
+HEADER = ("| scene | size | B | views/s into NumPy | views/s into torch | GPU views/s (render only) "
+          "| ms per batch | host us/view | GPU MiB | render_many views/s | batch / many |\n"
+          "|---|---|---|---|---|---|---|---|---|---|---|")
 
 
 def print_row(r: dict) -> None:
@@ -169,7 +195,8 @@ def print_row(r: dict) -> None:
     many_s = f"{many:,.0f}" if many else "-"
     ratio = f"{r['views_per_s'] / many:.1f}x" if many else "-"
     gvps = f"{r['gpu_views_per_s']:,.0f}" if math.isfinite(r["gpu_views_per_s"]) else "n/a"
-    print(f"| {r['scene']} | {r['size']} | {r['B']} | {r['views_per_s']:,.0f} | {gvps} "
+    tvps = f"{r['torch_views_per_s']:,.0f}" if "torch_views_per_s" in r else "-"
+    print(f"| {r['scene']} | {r['size']} | {r['B']} | {r['views_per_s']:,.0f} | {tvps} | {gvps} "
           f"| {r['ms_per_batch']:.2f} | {r['host_us_per_view']:.1f} | {r['gpu_mib']:.2f} "
           f"| {many_s} | {ratio} |", flush=True)
 

@@ -35,8 +35,8 @@ nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
 extra=()
 [ -f out/sapien-peers.json ] && extra=(--peers-json out/sapien-peers.json)
 echo "== vkpbr bench: batch scenarios, $VIEWS poses, ${BATCH_VIEWS:-1024} views a call, --peers"
-timeout ${BENCH_TIMEOUT:-300} python3 -m vkpbr bench --scenario batch-sponza-128 --scenario batch-sponza-512 \
-  --scenario batch-helmet-128 --scenario batch-helmet-512 --sponza "$SPONZA" --views "$VIEWS" \
+timeout ${BENCH_TIMEOUT:-300} python3 -m vkpbr bench --batch \
+  --sponza "$SPONZA" --views "$VIEWS" \
   --batch-views "${BATCH_VIEWS:-1024}" --frames "${FRAMES:-4096}" --poses-dir /tmp/bench-poses \
   --peers "${extra[@]}" 2> "$OUT/bench.err" | tee "$OUT/bench.txt"
 tail -5 "$OUT/bench.err"

@@ -11,7 +11,8 @@ Batch scenarios (issue 14): batch-{sponza,helmet}-{128,512}: the peers' batch vi
 (benchmarks/peers/common.py: a seeded orbit of `--views` poses, written once as a .npy that
 every peer reads) rendered through `Renderer.render_batch`, `--batch-views` views a call (the
 poses repeated), views/s into NumPy and on the GPU alone (timestamps). They need a source
-checkout (the poses come from benchmarks/peers/common.py).
+checkout (the poses come from benchmarks/peers/common.py); `--batch` runs them all, and
+only they run when no --scenario is given with it.
 
 `--peers` then runs benchmarks/peers/ (pyrender, pygfx; SAPIEN in the batch scenarios) on the
 same scenes and poses and prints the ratios vkpbr / peer at equal pixels (pygfx also at its
@@ -354,6 +355,7 @@ examples:
   vkpbr bench --scenario spheres-5k --json           JSON rows for scripts
   vkpbr bench --scenario sponza-1080p --peers        and pyrender / pygfx on the same scene
   vkpbr bench --scenario batch-sponza-128 --peers    B views per call, beside SAPIEN, pygfx, pyrender
+  vkpbr bench --batch --peers                        every batch scenario (Sponza, DamagedHelmet; 128, 512)
 """
 
 
@@ -367,8 +369,10 @@ def add_parser(sub: Any) -> None:
                     "sphere fields show how cost grows with draws and triangles).",
         epilog=EPILOG, formatter_class=EPILOG_FORMATTER)
     p.add_argument("--scenario", action="append", choices=[*SCENARIOS, *BATCH_SCENARIOS],
-                   help="scenario to run (repeatable); default: all (the batch ones in a "
-                        "source checkout)")
+                   help="scenario to run (repeatable); default: every frame scenario (not the "
+                        "batch-* ones: --batch)")
+    p.add_argument("--batch", action="store_true",
+                   help="run every batch-* scenario (besides any --scenario)")
     p.add_argument("--frames", type=int, default=200, metavar="N",
                    help="timed frames per scenario (default 200)")
     p.add_argument("--sponza", metavar="PATH", help="path to Sponza.gltf")
@@ -395,7 +399,9 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--frames must be at least 1")
     if args.views < 1:
         raise UsageError("--views must be at least 1")
-    names = args.scenario or [*SCENARIOS, *(BATCH_SCENARIOS if peers_common() else ())]
+    names = list(args.scenario or ([] if args.batch else SCENARIOS))
+    if args.batch:
+        names += [n for n in BATCH_SCENARIOS if n not in names]
     rows = [run_batch_scenario(n, args) if n in BATCH_SCENARIOS else run_scenario(n, args)
             for n in names]
     frame_rows = [r for r in rows if "batch" not in r]
