@@ -4,7 +4,8 @@
 # Carry: .gl (debs), .whl (wheels), .assets (models in ../shared/assets' layout, Sponza's
 # JPEGs re-encoded at quality 85), and optionally .before (`git archive <commit> src` of an
 # earlier commit, benchmarked in the same run for before/after numbers).
-# STEPS (default "paths env tests"): any of paths, env, bench, viewer, tests.
+# STEPS (default "paths env tests"): any of paths, env, bench, viewer, outputs, batch, ray,
+# tests.
 source benchmarks/gpu_env.sh
 SPONZA=.assets/models/Sponza/glTF/Sponza.gltf
 STEPS=${STEPS:-paths env tests}
@@ -30,6 +31,18 @@ fi
 if has viewer; then
   echo "== viewer loop, offscreen, Sponza 1920x1080, flying with the light animated"
   python3 -m vkpbr view $SPONZA --offscreen --size 1920x1080 --script benchmarks/viewer_fly.json
+fi
+if has outputs; then
+  echo "== dataset outputs: the cost of each (Sponza 1920x1080)"
+  timeout ${OUTPUTS_TIMEOUT:-200} python3 benchmarks/bench_outputs.py --scene $SPONZA --frames ${FRAMES:-50} --json "$OUT/outputs.json" 2>&1 | tee "$OUT/outputs.txt"
+fi
+if has batch; then
+  echo "== batched views: render_batch into NumPy and torch (Sponza, DamagedHelmet; 128, 512)"
+  timeout ${BATCH_TIMEOUT:-300} python3 benchmarks/bench_batch.py --json "$OUT/batch.json" 2>&1 | tee "$OUT/batch.txt"
+fi
+if has ray; then
+  echo "== Ray: 1, 2, 4 actors sharing the GPU; overhead against in-process rendering"
+  timeout ${RAY_TIMEOUT:-300} python3 benchmarks/bench_ray.py 2>&1 | tee "$OUT/ray.txt"
 fi
 if has tests; then
   echo "== GPU test pass (validation on)"

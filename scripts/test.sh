@@ -3,7 +3,9 @@
 # validation layer on. Extra arguments go to pytest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-export VKPBR_EXTRAS=${VKPBR_EXTRAS:-test,codecs}
+# The tests install the codecs and ray extras as well (tests/distributed start a real
+# local Ray cluster); a plain `scripts/setup.sh` stays lean.
+export VKPBR_EXTRAS=${VKPBR_EXTRAS:-test,codecs,ray}
 bash scripts/setup.sh
 .venv/bin/ruff check --quiet src tests benchmarks
 exec .venv/bin/python -m pytest -q "$@"

@@ -104,7 +104,7 @@ def test_chunks_and_splits(chart, monkeypatch) -> None:  # noqa: ANN001
     """Chunks of 3 layers and submissions of 5 views give what one chunk gives."""
     cams = cameras_of(chart, 8, seed=5)
     whole = chart.render_batch(cams, size=SIZE)
-    monkeypatch.setattr("vkpbr.render.renderer.MAX_LAYERS", 3)
+    monkeypatch.setattr("vkpbr.render.batch_path.MAX_LAYERS", 3)
     assert_views_equal(chart.render_batch(cams, size=SIZE), list(whole), "chunks of 3")
     assert_views_equal(chart.render_batch(cams, size=SIZE, batch=5), list(whole), "submissions of 5")
 
@@ -183,6 +183,7 @@ def test_sample_model(assets, make_renderer) -> None:  # noqa: ANN001
     ("0,0,5,0,0,0", "auto", "expected a list of cameras"),
     (None, 0, "batch 0: expected a positive number"),
     (None, True, "batch True"),
+    (None, 10**9, "need more memory than is free"),
 ])
 def test_bad_input_is_one_line(chart, cameras, batch, message: str) -> None:  # noqa: ANN001
     if cameras is None:
@@ -199,3 +200,145 @@ def test_bad_view_is_named(chart) -> None:  # noqa: ANN001
     same = np.tile([0.0, 1.0, 5.0], (4, 1))
     with pytest.raises(UsageError, match=r"cameras\[0\]: eye and target coincide"):
         chart.render_batch(CameraBatch.from_look_at(same, same), size=SIZE)
+
+
+def test_cli_cameras_batched_equal_frame_by_frame(capsys, tmp_path) -> None:  # noqa: ANN001
+    """`render --cameras` renders 64 views a submission by default; `--batch 0` frame by
+    frame: the same images with a point light (its shadow map is the same for every view)."""
+    import json
+
+    from PIL import Image
+
+    from vkpbr.app.cli import main
+
+    cams = tmp_path / "cams.json"
+    cams.write_text(json.dumps(["0.6,3.2,9,0.4,2.2,0", {"eye": [3, 3, 8], "target": [0, 2, 0], "fov": 50},
+                                "-4,2,6,0,1,0", "2,-1,-7,0,1,0"]))
+    common = ["render", "--cameras", str(cams), "--size", "40x30", "--light", "point:0,4,3",
+              "--validation"]
+    assert main([*common, "--out", str(tmp_path / "a")]) == 0
+    assert main([*common, "--out", str(tmp_path / "b"), "--batch", "0"]) == 0
+    assert main([*common, "--out", str(tmp_path / "c"), "--batch", "3"]) == 0
+    for i in range(4):
+        a = np.asarray(Image.open(tmp_path / "a" / f"frame_{i:05d}.png"))
+        for other in ("b", "c"):
+            assert (a == np.asarray(Image.open(tmp_path / other / f"frame_{i:05d}.png"))).all()
+    capsys.readouterr()
+    assert main([*common, "--out", str(tmp_path / "d"), "--batch", "-2"]) != 0
+    assert "--batch -2" in capsys.readouterr().err
+
+
+def blended_spheres():  # noqa: ANN201
+    """Five overlapping translucent spheres around an opaque one: from cameras all around,
+    the views disagree on the back-to-front order of the blended draws."""
+    from vkpbr.scene.default import uv_sphere
+    from vkpbr.scene.types import Material, Mesh, Node, Scene
+
+    mats = [Material(base_color_factor=(0.8, 0.8, 0.8, 1.0))]
+    meshes: list[Mesh] = []
+    nodes = []
+    for i, (x, z) in enumerate([(0.0, 0.0), (1.2, 0.3), (-1.1, 0.5), (0.3, 1.3), (-0.4, -1.2), (0.9, -1.0)]):
+        mesh = uv_sphere(0.9 if i else 0.6, 12, 24)
+        mesh.material = i
+        meshes.append(mesh)
+        if i:
+            mats.append(Material(base_color_factor=(0.2 * i, 1.0 - 0.15 * i, 0.5, 0.45),
+                                 alpha_mode="blend"))
+        nodes.append(Node(mesh=i, matrix=np.array([[1, 0, 0, x], [0, 1, 0, 0.1 * i], [0, 0, 1, z],
+                                                   [0, 0, 0, 1]], dtype=np.float64)))
+    return Scene("blended", meshes=meshes, materials=mats, nodes=nodes,
+                 lights=[Light(position=(0.0, 4.0, 2.0), intensity=30.0)])
+
+
+def test_blended_draws_in_each_views_order(make_renderer) -> None:  # noqa: ANN001
+    r = make_renderer(blended_spheres())
+    if not r.device.batch_views:
+        pytest.skip("no layered rendering on this device")
+    cams = cameras_of(r, 12, seed=21)
+    orders = {r.blend_order(c.eye) for c in cams}
+    assert len(orders) >= 4, "the cameras should disagree on the blended order"
+    assert_views_equal(r.render_batch(cams, size=SIZE), [r.render(c, size=SIZE) for c in cams],
+                       "blended spheres")
+
+
+def test_frames_for_cuda_reach_the_exported_memory(chart, monkeypatch) -> None:  # noqa: ANN001
+    """device="cuda" copies the frames into device memory exported as a file descriptor
+    (what CUDA imports). Here, on lavapipe, whose opaque descriptors are memfds, the CUDA
+    import is replaced by a mapping of that descriptor: the Vulkan half (exportable memory,
+    the queue-family hand-over, validation) is the real one, and the exported bytes are the
+    NumPy frames."""
+    import mmap
+    import os
+
+    from vkpbr.render.batch_path import BatchPath
+
+    if "llvmpipe" not in chart.device.info.name.lower() or not chart.device.external_memory_fd:
+        pytest.skip("maps an opaque fd as memory: lavapipe only")
+
+    def mapped_view(self, target, views, linear):  # noqa: ANN001, ANN202
+        fd = target.color_readback.export_fd()
+        try:
+            # Mesa 22.3's lavapipe puts one page of its own before the memory in the memfd.
+            with mmap.mmap(fd, os.fstat(fd).st_size, prot=mmap.PROT_READ) as m:
+                w, h = target.extent
+                return np.frombuffer(m, np.uint8, views * h * w * 4, mmap.PAGESIZE).reshape(
+                    views, h, w, 4).copy()
+        finally:
+            os.close(fd)
+
+    monkeypatch.setattr(BatchPath, "_cuda_view", mapped_view)
+    monkeypatch.setattr("vkpbr.gpu.cuda.cuda_unavailable", lambda: None)
+    monkeypatch.setitem(__import__("sys").modules, "torch", type("torch", (), {"cat": np.concatenate}))
+    for seed in (31, 32):  # consecutive batches: no stale frames
+        cams = cameras_of(chart, 5, seed=seed)
+        got = chart.render_batch(cams, size=SIZE, device="cuda")
+        assert_views_equal(got, list(chart.render_batch(cams, size=SIZE)), f"exported, seed {seed}")
+
+
+def test_torch_tensor_on_the_gpu(make_renderer) -> None:  # noqa: ANN001
+    """The real thing where CUDA is: a torch tensor on the renderer's GPU equal to the NumPy
+    frames, batch after batch."""
+    from vkpbr.gpu.cuda import cuda_unavailable
+
+    why = cuda_unavailable()
+    if why is not None:
+        pytest.skip(f"device='cuda' needs CUDA: {why}")
+    import torch
+
+    r = make_renderer()
+    cams1 = cameras_of(r, 16, seed=41)
+    cams2 = cameras_of(r, 16, seed=42)
+    a = r.render_batch(cams1, size=SIZE, device="cuda")
+    b = r.render_batch(cams2, size=SIZE, device="cuda")
+    assert isinstance(a, torch.Tensor) and a.is_cuda and a.dtype == torch.uint8
+    assert a.shape == (16, SIZE[1], SIZE[0], 4)
+    assert (a.cpu().numpy() == r.render_batch(cams1, size=SIZE)).all()
+    assert (b.cpu().numpy() == r.render_batch(cams2, size=SIZE)).all()
+    lin = r.render_batch(cams1, size=SIZE, device="cuda", linear=True)
+    assert lin.dtype == torch.float32
+
+
+def test_cuda_asked_where_it_cannot_run(chart) -> None:  # noqa: ANN001
+    from vkpbr.gpu.cuda import cuda_unavailable
+
+    cams = cameras_of(chart, 2, seed=1)
+    with pytest.raises(UsageError, match="device='cuda' returns the colour only"):
+        chart.render_batch(cams, size=SIZE, device="cuda", depth=True)
+    with pytest.raises(UsageError, match="device 'gpu'"):
+        chart.render_batch(cams, size=SIZE, device="gpu")
+    why = cuda_unavailable()
+    if why is None:
+        pytest.skip("CUDA is available here: test_torch_tensor_on_the_gpu runs instead")
+    with pytest.raises(UsageError, match="device='cuda' is not available here: " + why.split("(")[0]):
+        chart.render_batch(cams, size=SIZE, device="cuda")
+
+
+def test_msaa_and_compute_path_render_view_by_view(make_renderer) -> None:  # noqa: ANN001
+    r = make_renderer(msaa=4)
+    cams = cameras_of(r, 3, seed=51)
+    assert_views_equal(r.render_batch(cams, size=SIZE), [r.render(c, size=SIZE) for c in cams],
+                       "msaa 4")
+    if r.device.compute_path:
+        r1 = make_renderer()
+        assert_views_equal(r1.render_batch(cams, size=SIZE, pipeline="compute"),
+                           [r1.render(c, size=SIZE, pipeline="compute") for c in cams], "compute")

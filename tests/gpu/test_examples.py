@@ -64,11 +64,12 @@ def test_depth_example(tmp_path: Path) -> None:
     assert depth.shape == (48, 64) and 0.05 < hit.mean() < 1 and np.ptp(depth[hit]) > 0
 
 
-def readme_python(readme: str, scene: Path, size: tuple[int, int]) -> str:
-    """The README's ```python block with only the scene path and the image size replaced."""
+def readme_python(readme: str, scene: Path, size: tuple[int, int], index: int = 0) -> str:
+    """The README's ```python block `index` with only the scene path and the image size
+    replaced (```py blocks are shown, not run: the PyTorch one needs CUDA)."""
     blocks = re.findall(r"^```python\n(.*?)^```", readme, flags=re.S | re.M)
-    assert len(blocks) == 1, f"expected one ```python block in README.md, found {len(blocks)}"
-    code, n_scene = re.subn(r'"[^"\n]*\.(?:gltf|glb|obj|vkpbr)"', repr(str(scene)), blocks[0])
+    assert len(blocks) == 2, f"expected two ```python blocks in README.md, found {len(blocks)}"
+    code, n_scene = re.subn(r'"[^"\n]*\.(?:gltf|glb|obj|vkpbr)"', repr(str(scene)), blocks[index])
     code, n_size = re.subn(r"size=\(\d+, \d+\)", f"size={size}", code)
     assert n_scene >= 1 and n_size >= 1, "the README example names no scene file or size"
     return code
@@ -81,3 +82,12 @@ def test_readme_python_example_runs_as_written(tmp_path: Path, assets: Path) -> 
     script.write_text(code + "\nprint('README example ran', rgba.shape, rgba.dtype)\n")
     proc = _run([str(script)], tmp_path)
     assert "README example ran (48, 64, 4) uint8" in proc.stdout
+
+
+def test_readme_batch_example_runs_as_written(tmp_path: Path, assets: Path) -> None:
+    scene = assets / "TextureCoordinateTest" / "glTF" / "TextureCoordinateTest.gltf"
+    code = readme_python((REPO / "README.md").read_text(), scene, (32, 24), index=1)
+    script = tmp_path / "readme_batch.py"
+    script.write_text(code + "\nprint('README batch ran', views.shape, views.dtype)\n")
+    proc = _run([str(script)], tmp_path)
+    assert "README batch ran (256, 24, 32, 4) uint8" in proc.stdout

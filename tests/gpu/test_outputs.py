@@ -174,3 +174,49 @@ def test_bad_output_names_and_devices(make_renderer) -> None:  # noqa: ANN001
     msaa = make_renderer(analytic_scene(), msaa=4)
     with pytest.raises(UsageError, match="single-sample"):
         msaa.render(size=(W, H), outputs=("instance",))
+
+
+def test_semantic_ids_from_a_mapping_match_the_ray_cast(make_renderer, scene_and_cast) -> None:  # noqa: ANN001
+    """Renderer(semantics={name: label}): every pixel the ray cast gives to a node carries that
+    node's class away from silhouettes; the nodes the mapping leaves out are 0."""
+    scene, cast = scene_and_cast
+    mapping = {"big sphere": "ball", "small sphere": "ball", "m2": 9}  # m2: the box's material
+    r = make_renderer(scene, semantics=mapping)
+    out = r.render(size=(W, H), outputs=("semantic",), env="none")
+    labels = r.semantic_labels
+    want_of_node = {0: "ball", 1: "ball", 2: "9", 3: None}
+    band = silhouette_band(cast["node"])
+    for node, want in want_of_node.items():
+        px = (cast["node"] == node) & ~band
+        assert px.sum() > 10  # every node is seen (the small sphere covers the fewest pixels)
+        got = {labels.get(int(i)) for i in np.unique(out["semantic"][px])}
+        assert got == {want}, (scene.nodes[node].name, got)
+    assert out["semantic"][cast["node"] < 0].max() == 0
+    assert {i["node"]: i["label"] for i in r.instances}["box"] == "9"
+    with pytest.raises(UsageError, match="no node, mesh or material is named 'boxx'"):
+        make_renderer(scene, semantics={"boxx": 1})
+
+
+def test_cli_semantics_file(tmp_path, capsys) -> None:  # noqa: ANN001
+    """`render --outputs semantic --semantics classes.json`: the floor's class where the
+    floor is, 0 elsewhere; a mapping naming nothing in the scene is one line, nothing written."""
+    import json
+
+    from PIL import Image
+
+    from vkpbr.app.cli import main
+
+    classes = tmp_path / "classes.json"
+    classes.write_text(json.dumps({"floor": 4}))
+    out = tmp_path / "f.png"
+    args = ["render", "--outputs", "semantic,instance", "--size", "48x36", "--validation",
+            "--out", str(out)]
+    assert main([*args, "--semantics", str(classes)]) == 0
+    sem = np.asarray(Image.open(tmp_path / "f.semantic.png"))
+    assert set(np.unique(sem).tolist()) == {0, 4} and (sem == 4).mean() > 0.1
+    classes.write_text(json.dumps({"flor": 4}))
+    capsys.readouterr()
+    assert main([*args, "--out", str(tmp_path / "g.png"), "--semantics", str(classes)]) != 0
+    err = capsys.readouterr().err.strip()
+    assert "no node, mesh or material is named 'flor'" in err and "\n" not in err
+    assert not list(tmp_path.glob("g*"))

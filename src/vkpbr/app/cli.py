@@ -11,7 +11,7 @@ SIGTERM is handled like SIGINT: it raises `Terminated` in the main thread, so ev
 block unwinds (atomic writes remove their temporary files, the GPU objects are destroyed)
 and the CLI exits 143 (128 + SIGTERM) after one line, "vkpbr: terminated".
 
-Commands, one module each: render_cmd, view_cmd, info_cmd, bench_cmd, bake_cmd.
+Commands, one module each: render_cmd, view_cmd, info_cmd, bench_cmd, bake_cmd, batch_cmd.
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ def _add_verbosity(p: argparse.ArgumentParser, suffix: str = "") -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     from vkpbr import __version__
-    from vkpbr.app import bench_cmd, info_cmd, render_cmd, view_cmd
+    from vkpbr.app import batch_cmd, bench_cmd, info_cmd, render_cmd, view_cmd
 
     parser = Parser(prog="vkpbr", description="Physically based rendering on Vulkan.",
                     epilog=EPILOG, formatter_class=EPILOG_FORMATTER)
@@ -68,6 +68,7 @@ def build_parser() -> argparse.ArgumentParser:
     view_cmd.add_parser(sub)
     info_cmd.add_parser(sub)
     bench_cmd.add_parser(sub)
+    batch_cmd.add_parser(sub)
     try:
         from vkpbr.app import bake_cmd
     except ImportError:  # pragma: no cover - a build without the bake layer

@@ -21,6 +21,10 @@ if TYPE_CHECKING:
 
 __all__ = ["default_cache_dir", "load_scene_arg", "camera_from_args", "lights_from_args"]
 
+# Views per GPU submission of `vkpbr render --cameras` (its --batch) and of Ray's actors
+# (Renderer.render_many(batch=...): render/batch.py).
+BATCH_VIEWS = 64
+
 log = logging.getLogger(__name__)
 
 

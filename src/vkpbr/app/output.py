@@ -40,11 +40,14 @@ __all__ = [
     "Kind",
     "check_id_count",
     "check_output_path",
+    "check_outputs",
     "check_writable",
     "encode_png",
     "output_kind",
+    "output_path",
     "write_image_atomic",
     "write_output",
+    "write_outputs",
 ]
 
 Kind = Literal["color", "ids", "data"]
@@ -255,3 +258,27 @@ def write_image_atomic(path: Path, image: np.ndarray) -> None:
         any array for .npy (e.g. (H, W) float32 depth).
     """
     write_output(Path(path), image, "color")
+
+
+def output_path(out: Path, name: str) -> Path:
+    """Where dataset output `name` of the frame written to `out` goes: beside it, by kind
+    (frame.png -> frame.depth.exr, frame.instance.png)."""
+    out = Path(out)
+    return out.with_name(f"{out.stem}.{name}{'.png' if output_kind(name) == 'ids' else '.exr'}")
+
+
+def check_outputs(out: Path, names: tuple[str, ...], ids: int, option: str = "--outputs") -> None:
+    """Before rendering: each output of the frame `out` can be written (`check_output_path`),
+    and `ids` instance ids fit the id images."""
+    for name in names:
+        path = output_path(out, name)
+        check_output_path(path, output_kind(name), option)
+        if output_kind(name) == "ids":
+            check_id_count(ids, path, option)
+
+
+def write_outputs(out: Path, frame: dict, names: tuple[str, ...], option: str = "--outputs") -> None:
+    """Write outputs `names` of `frame` (a dict of arrays, `Renderer.render(outputs=...)`)
+    beside the frame `out`, each atomically."""
+    for name in names:
+        write_output(output_path(out, name), frame[name], output_kind(name), option)

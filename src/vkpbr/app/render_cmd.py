@@ -10,14 +10,23 @@ import time
 from pathlib import Path
 from typing import Any
 
-from vkpbr.app.common import camera_from_args, default_cache_dir, lights_from_args, load_scene_arg
+from vkpbr.app.common import (
+    BATCH_VIEWS,
+    camera_from_args,
+    default_cache_dir,
+    lights_from_args,
+    load_scene_arg,
+)
 from vkpbr.app.log import is_quiet, say
 from vkpbr.app.options import add_options, render_options_from_args
 from vkpbr.app.output import (
     OUTPUT_SUFFIXES,
     check_output_path,
+    check_outputs,
     check_writable,
+    output_path,
     write_image_atomic,
+    write_outputs,
 )
 from vkpbr.app.parsing import EPILOG_FORMATTER, _as_type, size_arg
 from vkpbr.errors import UsageError
@@ -32,6 +41,7 @@ examples:
   vkpbr render scene.gltf --size 1920x1080 --camera 9,1.8,-0.4,-9,3.5,-0.4 --light -5,0.6,-0.9
   vkpbr render scene.gltf --view d --brdf blinn-phong --out d.png
   vkpbr render scene.gltf --cameras poses.json --out frames/
+  vkpbr render scene.gltf --cameras poses.json --out frames/ --ray    the same, on Ray
 """
 
 
@@ -54,6 +64,10 @@ def add_parser(sub: Any) -> None:
                         '"ex,ey,ez,tx,ty,tz[,ux,uy,uz]" strings or {"eye","target","up","fov"} '
                         "objects, pose matrices, K + pose, a NeRF transforms.json) into the folder "
                         "--out, with the cameras as written as a NeRF transforms.json there")
+    p.add_argument("--batch", type=int, default=BATCH_VIEWS, metavar="N",
+                   help="with --cameras, render N views per GPU submission (Renderer.render_batch; "
+                        "directional lights' shadows then use one map over the whole scene); "
+                        "0: frame by frame, each with its own shadow cascades (default %(default)s)")
     p.add_argument("--colmap", action="store_true",
                    help="with --cameras, also write the cameras as COLMAP text files "
                         "(cameras.txt, images.txt, points3D.txt) in --out")
@@ -63,7 +77,15 @@ def add_parser(sub: Any) -> None:
                         "STEM.NAME.exr (depth, range, normal, normal_camera, normal_geometric: "
                         "float) or STEM.NAME.png (instance, semantic: 16-bit ids); see "
                         "docs/outputs.md")
+    p.add_argument("--semantics", default="mesh", metavar="mesh|material|extras|FILE.json",
+                   help="where the semantic ids of --outputs semantic come from: each mesh "
+                        "primitive its own class (default), each material, the glTF nodes' "
+                        'extras {"semantic": id or label}, or a JSON {node, mesh or material '
+                        "name: id or label} (docs/outputs.md)")
     p.add_argument("--list-views", action="store_true", help="list the debug views and exit")
+    from vkpbr.app.batch_cmd import add_ray_arguments
+
+    add_ray_arguments(p)  # --ray [ADDRESS], --actors, --num-gpus: the batch on Ray
     p.add_argument("--msaa", type=int, default=1, choices=[1, 4], help="samples per pixel")
     p.add_argument("--linear", action="store_true", help="linear float32 colour (write a .exr or .npy)")
     p.add_argument("--frames", type=int, default=1, metavar="N",
@@ -83,28 +105,8 @@ def _output_names(text: str) -> tuple[str, ...]:
     return tuple(n for n in names if n != "color")
 
 
-def _output_path(out: Path, name: str) -> Path:
-    """Where output `name` of the frame written to `out` goes: beside it, by kind."""
-    from vkpbr.app.output import output_kind
-
-    return out.with_name(f"{out.stem}.{name}{'.png' if output_kind(name) == 'ids' else '.exr'}")
-
-
-def _check_outputs(out: Path, names: tuple[str, ...], ids: int) -> None:
-    from vkpbr.app.output import check_id_count, check_output_path, output_kind
-
-    for name in names:
-        path = _output_path(out, name)
-        check_output_path(path, output_kind(name), "--outputs")
-        if output_kind(name) == "ids":
-            check_id_count(ids, path, "--outputs")
-
-
-def _write_outputs(out: Path, frame: dict, names: tuple[str, ...]) -> None:
-    from vkpbr.app.output import output_kind, write_output
-
-    for name in names:
-        write_output(_output_path(out, name), frame[name], output_kind(name), "--outputs")
+# The outputs beside a frame: shared with vkpbr.distributed (app/output.py).
+_output_path, _check_outputs, _write_outputs = output_path, check_outputs, write_outputs
 
 
 def list_views() -> int:
@@ -136,19 +138,21 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
     poses = load_poses(args.cameras)  # the whole file is checked before the scene loads
     scene = load_scene_arg(args)
     with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa,
+                  semantics=args.semantics,
                   cache_dir=default_cache_dir()) as renderer:
         base = camera_from_args(args, renderer)
         cameras = [pose.camera(base) for pose in poses]
         lights = lights_from_args(args, renderer, options)
         names = args.outputs or ()
         if names:
-            _check_outputs(out_dir / f"frame_00000{suffix}", names, len(renderer.instances))
+            _check_outputs(out_dir / f"frame_00000{suffix}", names, renderer.max_id)
         t1 = time.perf_counter()
         log.info("load + set-up %.2f s", t1 - t0)
         with ThreadPoolExecutor(max(2, (os.cpu_count() or 2) - 1)) as pool:
             jobs = []
             frames = renderer.render_many(cameras, lights, size, options, linear=args.linear,
-                                          outputs=("color", *names) if names else None)
+                                          outputs=("color", *names) if names else None,
+                                          batch=args.batch or None)
             bar = tqdm(frames, total=len(cameras), unit="frame", disable=True if is_quiet() else None)
             for i, image in enumerate(bar):
                 path = out_dir / f"frame_{i:05d}{suffix}"
@@ -182,6 +186,12 @@ def run(args: argparse.Namespace) -> int:
     options = render_options_from_args(args)  # bad values fail here, before any expensive work
     if args.colmap and not args.cameras:
         raise UsageError("--colmap writes the cameras of a --cameras batch: give --cameras too")
+    if args.batch < 0:
+        raise UsageError(f"--batch {args.batch}: give a number of views per submission, or 0")
+    if args.ray is not None:
+        from vkpbr.app.batch_cmd import render_on_ray
+
+        return render_on_ray(args, options)
     if args.cameras:
         return _render_batch(args, options)
     size = args.size
@@ -199,6 +209,7 @@ def run(args: argparse.Namespace) -> int:
     scene = load_scene_arg(args)
     t_load = time.perf_counter()
     with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa,
+                  semantics=args.semantics,
                   cache_dir=default_cache_dir()) as renderer:
         t_setup = time.perf_counter()
         camera = camera_from_args(args, renderer)
@@ -206,7 +217,7 @@ def run(args: argparse.Namespace) -> int:
         log.debug("camera %s, lights %s", camera, lights)
         names = args.outputs or ()
         if names:
-            _check_outputs(out, names, len(renderer.instances))
+            _check_outputs(out, names, renderer.max_id)
             frame = renderer.render(camera, lights, size, options, linear=args.linear,
                                     outputs=("color", *names))
             _write_outputs(out, frame, names)

@@ -39,6 +39,10 @@ class BatchTarget:
 
     color : "srgb" (8-bit sRGB-encoded) or "float" (linear float32), as OffscreenTarget.
     depth : also copy the depth of every view out (Renderer.render_batch(depth=True)).
+    external : the colour goes into device-local memory exported as a file descriptor
+        (`color_readback.export_fd()`, for CUDA: gpu/cuda.py) instead of host memory; the
+        batch hands it to the external queue family at its end and takes it back at its
+        start.
     """
 
     generation = 0  # never recreated
@@ -46,7 +50,8 @@ class BatchTarget:
 
     def __init__(self, device: Device, size: tuple[int, int], layers: int, capacity: int,
                  color: str = "srgb", depth: bool = False,
-                 clear_color: tuple[float, float, float, float] = (0, 0, 0, 1)) -> None:
+                 clear_color: tuple[float, float, float, float] = (0, 0, 0, 1),
+                 external: bool = False) -> None:
         vk = device.vk
         self.device, self.clear_color = device, clear_color
         self.extent = (int(size[0]), int(size[1]))
@@ -68,8 +73,10 @@ class BatchTarget:
         depth_view = self._own(ImageView(self.depth, aspect="depth", kind="2d_array"))
         self.attachments = Attachments(color_view.handle, depth_view.handle, self.extent)
         usage = vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
+        self.external = external
         self.color_readback = self._own(Buffer(device, self.capacity * w * h * self.pixel_bytes,
-                                               usage, host_visible=True, name="batch color readback"))
+                                               usage, host_visible=not external,
+                                               name="batch color readback", exportable=external))
         self.depth_readback = self._own(Buffer(device, self.capacity * w * h * 4, usage,
                                                host_visible=True, name="batch depth readback")
                                         ) if depth else None
@@ -123,11 +130,34 @@ class BatchTarget:
             copy_image_to_buffer(cmd, img.handle, depth, buf, self.extent, layers=views,
                                  offset=chunk * self.layers * w * h * nbytes)
 
+    def record_external_acquire(self, cmd: Commands) -> None:
+        """An external target: take the colour buffer back from the external queue family
+        (CUDA read the last batch) before this batch's copies write it."""
+        if self.external:
+            barriers(cmd, [], [self._ownership(external_to_ours=True)])
+
     def record_host_barrier(self, cmd: Commands) -> None:
-        """Make every chunk's copy visible to the host once the fence is waited."""
+        """Make every chunk's copy visible to the host once the fence is waited (an external
+        target: release the colour to the external queue family, for CUDA)."""
         vk = self.device.vk
-        bufs = [b for b in (self.color_readback, self.depth_readback) if b is not None]
-        barriers(cmd, [], [host_read_barrier(vk, b) for b in bufs])
+        bufs = [b for b in (self.color_readback, self.depth_readback)
+                if b is not None and not (self.external and b is self.color_readback)]
+        out = [host_read_barrier(vk, b) for b in bufs]
+        if self.external:
+            out.append(self._ownership(external_to_ours=False))
+        barriers(cmd, [], out)
+
+    def _ownership(self, external_to_ours: bool) -> Any:
+        vk = self.device.vk
+        ours, ext = self.device.queue_family, vk.VK_QUEUE_FAMILY_EXTERNAL
+        copy, write = vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT
+        none = (vk.VK_PIPELINE_STAGE_2_NONE, vk.VK_ACCESS_2_NONE)
+        src, dst = (none, (copy, write)) if external_to_ours else ((copy, write), none)
+        return vk.VkBufferMemoryBarrier2(
+            srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=dst[0], dstAccessMask=dst[1],
+            srcQueueFamilyIndex=ext if external_to_ours else ours,
+            dstQueueFamilyIndex=ours if external_to_ours else ext,
+            buffer=self.color_readback.handle, offset=0, size=self.color_readback.size)
 
     def read_color(self, views: int) -> np.ndarray:
         """A copy of the first `views` views: (views, H, W, 4) uint8 or float32."""

@@ -23,6 +23,10 @@ _USAGES = {
 }
 
 
+def _OPAQUE_FD(vk: Any) -> int:  # noqa: N802 - a Vulkan constant's name
+    return vk.VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT
+
+
 def buffer_usage(vk: Any, usage: int | str) -> int:
     """VkBufferUsageFlags from flags or from names ("vertex", "index", "uniform", "storage",
     "indirect", "transfer_src", "transfer_dst"; several joined by "|"), so that layers above
@@ -46,7 +50,10 @@ class Buffer:
         usage: int | str,
         host_visible: bool = False,
         name: str = "",
+        exportable: bool = False,
     ) -> None:
+        """`exportable`: its memory can be handed to another API as a POSIX file descriptor
+        (`export_fd`; VK_KHR_external_memory_fd: CUDA imports it, gpu/cuda.py)."""
         vk = device.vk
         usage = buffer_usage(vk, usage)
         self.device = device
@@ -58,6 +65,8 @@ class Buffer:
         self.handle = vk.vkCreateBuffer(
             device.handle,
             vk.VkBufferCreateInfo(
+                pNext=vk.VkExternalMemoryBufferCreateInfo(handleTypes=_OPAQUE_FD(vk))
+                if exportable else None,
                 size=self.size, usage=usage, sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE
             ),
             None,
@@ -75,12 +84,23 @@ class Buffer:
         mtype = device.memory_type(req.memoryTypeBits, required, preferred)
         self.memory = vk.vkAllocateMemory(
             device.handle,
-            vk.VkMemoryAllocateInfo(allocationSize=req.size, memoryTypeIndex=mtype),
+            vk.VkMemoryAllocateInfo(
+                pNext=vk.VkExportMemoryAllocateInfo(handleTypes=_OPAQUE_FD(vk)) if exportable else None,
+                allocationSize=req.size, memoryTypeIndex=mtype),
             None,
         )
+        self.allocation_size = int(req.size)
         vk.vkBindBufferMemory(device.handle, self.handle, self.memory, 0)
         if host_visible:
             self._mapped = vk.vkMapMemory(device.handle, self.memory, 0, self.size, 0)
+
+    def export_fd(self) -> int:
+        """A new file descriptor of the buffer's memory (an `exportable` buffer); the caller
+        owns it (CUDA's import takes ownership)."""
+        vk = self.device.vk
+        get_fd = vk.vkGetDeviceProcAddr(self.device.handle, "vkGetMemoryFdKHR")
+        return int(get_fd(self.device.handle, vk.VkMemoryGetFdInfoKHR(
+            memory=self.memory, handleType=_OPAQUE_FD(vk))))
 
     def array(self, dtype: Any = np.uint8, count: int = -1, offset: int = 0) -> np.ndarray:
         """A zero-copy NumPy view of the mapped memory (host-visible buffers only).

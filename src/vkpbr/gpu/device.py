@@ -195,6 +195,12 @@ class Device:
         if missing:
             raise VkpbrError(f"{self.info.name}: device extension(s) {', '.join(missing)} missing")
         self.extensions: list[str] = list(self._required_extensions)
+        # Frames handed to CUDA without a host copy (Renderer.render_batch(device="cuda")):
+        # memory exported as a file descriptor, where the driver has it.
+        self._has_memory_budget = "VK_EXT_memory_budget" in available
+        self.external_memory_fd = "VK_KHR_external_memory_fd" in available
+        if self.external_memory_fd and "VK_KHR_external_memory_fd" not in self.extensions:
+            self.extensions.append("VK_KHR_external_memory_fd")
         # Keep the queue info alive until vkCreateDevice returns: the binding copies structs
         # into arrays, and the copy's pQueuePriorities points into the original's memory.
         queue_info = vk.VkDeviceQueueCreateInfo(
@@ -239,13 +245,34 @@ class Device:
                     sub.supportedStages & vk.VK_SHADER_STAGE_COMPUTE_BIT))}
 
     # --- helpers ----------------------------------------------------------------------------
-    def local_memory_bytes(self) -> int:
-        """The size of the largest device-local memory heap (a CPU device's is host memory)."""
-        mp = self.memory_properties
+    def uuid(self) -> bytes:
+        """The physical device's UUID (VkPhysicalDeviceIDProperties.deviceUUID): CUDA names
+        the same GPU by the same 16 bytes."""
         vk = self.vk
-        sizes = [mp.memoryHeaps[i].size for i in range(mp.memoryHeapCount)
+        ids = vk.VkPhysicalDeviceIDProperties(sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ID_PROPERTIES)
+        vk.vkGetPhysicalDeviceProperties2(self.physical, vk.VkPhysicalDeviceProperties2(
+            sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, pNext=ids))
+        return bytes(ids.deviceUUID)
+
+    def memory_available(self) -> tuple[int, int]:
+        """(device-local, host-visible) bytes free to allocate: the heaps' budgets less their
+        use where the driver reports them (VK_EXT_memory_budget: NVIDIA does), else the
+        heaps' sizes (lavapipe). Each is the largest heap of its kind."""
+        vk = self.vk
+        mp = self.memory_properties
+        free = [int(mp.memoryHeaps[i].size) for i in range(mp.memoryHeapCount)]
+        if self._has_memory_budget:
+            budget = vk.VkPhysicalDeviceMemoryBudgetPropertiesEXT(
+                sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MEMORY_BUDGET_PROPERTIES_EXT)
+            vk.vkGetPhysicalDeviceMemoryProperties2(self.physical, vk.VkPhysicalDeviceMemoryProperties2(
+                sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MEMORY_PROPERTIES_2, pNext=budget))
+            free = [max(0, int(budget.heapBudget[i]) - int(budget.heapUsage[i]))
+                    for i in range(mp.memoryHeapCount)]
+        local = [free[i] for i in range(mp.memoryHeapCount)
                  if mp.memoryHeaps[i].flags & vk.VK_MEMORY_HEAP_DEVICE_LOCAL_BIT]
-        return int(max(sizes, default=1 << 30))
+        host = [free[mp.memoryTypes[t].heapIndex] for t in range(mp.memoryTypeCount)
+                if mp.memoryTypes[t].propertyFlags & vk.VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT]
+        return max(local, default=1 << 30), max(host, default=1 << 30)
 
     def format_supports(self, format: int, feature: str) -> bool:
         """Whether optimal-tiling images of `format` support `feature`, a

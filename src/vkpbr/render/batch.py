@@ -41,8 +41,8 @@ from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.frames import FrameSlot
 from vkpbr.render.gpu_scene import Draw, GpuScene
-from vkpbr.render.passes import PassContext, classify, record_passes
-from vkpbr.render.recorder import _BASE_STREAMS, _TBN_STREAMS, STAMPS, FrameRecorder
+from vkpbr.render.passes import PassContext, record_passes
+from vkpbr.render.recorder import STAMPS, FrameRecorder
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.scene.types import Scene
 
@@ -196,17 +196,10 @@ class BatchViews:
     def _record(self, target: BatchTarget, frame: Frame, views: int, tbn: L.TbnMode,
                 alpha_mask: bool, plan: ShadowPlan, groups: tuple, prepass: bool) -> Commands:
         gs, ring, slot = self.gpu_scene, self.ring, self.slots[frame.index]
-        names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
-        gs.ensure_streams(tuple(names))
-        classes = [classify(d.alpha_mode, d.double_sided, alpha_mask) for d in gs.draws]
-        cmd = Commands(self.device).begin()
-        ring.stamp(cmd, frame, 0)
-        if self.shadows is not None:
-            self.shadows.record(cmd, frame.index, plan, gs.draws, classes, gs.material_sets,
-                                gs.streams, gs.index_buffer, gs.has_colors)
-        ring.stamp(cmd, frame, 1)
+        cmd, names, classes = self.recorder.begin_frame(frame, tbn, alpha_mask, plan)
         # The previous batch's draws read the commands and lists: order this one's writes.
         cmd.memory_barrier("indirect|vertex", "transfer")
+        target.record_external_acquire(cmd)
         cmd.fill(self.commands)
         cmd.memory_barrier("transfer", "compute")
         cmd.bind_pipeline(self.cull)

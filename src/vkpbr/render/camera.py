@@ -18,6 +18,7 @@ from vkpbr.scene.camera import as_camera, format_camera, parse_camera, validate_
 from vkpbr.scene.types import Camera
 
 __all__ = ["look_at", "perspective", "forward", "view_projection", "view_projection_columns",
+           "batch_frame_terms", "linear_depth",
            "camera_frame_columns",
            "projection_terms", "depth_range",
            "parse_camera", "format_camera"]
@@ -210,3 +211,12 @@ def batch_frame_terms(eye: np.ndarray, target: np.ndarray, up: np.ndarray, yfov_
                    sx * s[:, 2] + ox * f[:, 2], -sy * u[:, 2] + oy * f[:, 2], zero, f[:, 2],
                    -sx * se - ox * fe, sy * ue - oy * fe, near, -fe], 1)
     return {"vp": vp, "forward": f, "znear": near, "zfar": far}
+
+
+def linear_depth(d: np.ndarray, znear: float | np.ndarray) -> np.ndarray:
+    """Reversed-Z window depth -> view-space distance along the axis (inf = background);
+    `znear` broadcasts against `d` (a batch: one per view)."""
+    with np.errstate(divide="ignore"):
+        z = znear / d.astype(np.float64)
+    z[d <= 0.0] = np.inf
+    return z.astype(np.float32)

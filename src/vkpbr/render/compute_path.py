@@ -98,7 +98,7 @@ class ComputeScene:
     """
 
     def __init__(self, device: Device, gs: GpuScene, frame_layouts: dict[int, DescriptorSetLayout],
-                 slots: list[Any]) -> None:
+                 slots: list[Any], semantic: np.ndarray | None = None) -> None:
         self.device, self.gs, self.slots = device, gs, slots
         self._owned: list[Any] = []
         gs.ensure_streams()  # every TBN path's stream exists: the sets bind them all
@@ -108,9 +108,10 @@ class ComputeScene:
             draws[i]["model"], draws[i]["normal_matrix"] = m[0], m[1]
             draws[i]["info"] = (d.first_index, d.vertex_offset, d.material, int(gs.has_colors))
         # Dataset ids: instance = the draw's index + 1 (one node's mesh: Renderer.instances),
-        # semantic = its mesh's index + 1 (0 is the background for both).
+        # semantic = `semantic[i]` (vkpbr.scene.semantics; default its mesh's index + 1);
+        # 0 is the background for both.
         for i, d in enumerate(gs.draws):
-            draws[i]["ids"] = (i + 1, d.mesh + 1, 0, 0)
+            draws[i]["ids"] = (i + 1, d.mesh + 1 if semantic is None else int(semantic[i]), 0, 0)
         self.draw_table = self._own(upload_buffer(device, draws, "storage", name="draw records"))
         table = np.zeros(len(gs.material_blocks), L.MATERIAL.dtype)  # np.stack drops padding
         for i, block in enumerate(gs.material_blocks):

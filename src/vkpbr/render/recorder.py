@@ -130,23 +130,31 @@ class FrameRecorder:
                     self.pipeline(target, tbn, p, prepass)
 
     # --- command buffers --------------------------------------------------------------------
-    def _record(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
-                alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
-                copy: tuple[str, ...], plan: ShadowPlan, compute: bool = False,
-                outputs: bool = False) -> Commands:
+    def begin_frame(self, frame: Frame, tbn: L.TbnMode, alpha_mask: bool, plan: ShadowPlan
+                    ) -> tuple[Commands, list[str], list[str]]:
+        """Begin a frame's command buffer (a single frame's or a batch's, render/batch.py):
+        its start timestamp, the shadow-map passes, the timestamp after them. Returns the
+        buffer, the vertex streams' names for `tbn` and every draw's class."""
         gs, ring = self.gpu_scene, self.ring
         names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
         gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
-        slot = self.slots[frame.index]
-        prepass = self.prepass_for(target)
         classes = [classify(d.alpha_mode, d.double_sided, alpha_mask) for d in gs.draws]
-        prepass = prepass and not compute  # the visibility pass is its own pre-pass
         cmd = Commands(self.device).begin()
         ring.stamp(cmd, frame, 0)
         if self.shadows is not None:
             self.shadows.record(cmd, frame.index, plan, gs.draws, classes, gs.material_sets,
                                 gs.streams, gs.index_buffer, gs.has_colors)
         ring.stamp(cmd, frame, 1)
+        return cmd, names, classes
+
+    def _record(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
+                alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
+                copy: tuple[str, ...], plan: ShadowPlan, compute: bool = False,
+                outputs: bool = False) -> Commands:
+        gs, ring = self.gpu_scene, self.ring
+        slot = self.slots[frame.index]
+        prepass = self.prepass_for(target) and not compute  # visibility: its own pre-pass
+        cmd, names, classes = self.begin_frame(frame, tbn, alpha_mask, plan)
         shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
 
         def context(visibility: bool, after_visibility: bool = False,

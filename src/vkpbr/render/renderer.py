@@ -21,7 +21,7 @@ import functools
 import math
 import os
 import time
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -29,7 +29,6 @@ from typing import Any
 import numpy as np
 
 from vkpbr.errors import UsageError
-from vkpbr.gpu.batch_target import BatchTarget
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import COMPUTE_PATH_FEATURES, Device, DeviceRequest
 from vkpbr.gpu.frames import Frame, FrameRing
@@ -37,8 +36,8 @@ from vkpbr.gpu.pipeline import PipelineLayout
 from vkpbr.gpu.swapchain import Surface, Swapchain
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, COPY_OUTPUTS, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
-from vkpbr.render.batch import MAX_LAYERS, BatchViews
-from vkpbr.render.camera import as_camera, batch_frame_terms, depth_range, forward, validate_camera
+from vkpbr.render.batch_path import BatchPath
+from vkpbr.render.camera import as_camera, depth_range, forward, linear_depth, validate_camera
 from vkpbr.render.compute_path import ComputeScene
 from vkpbr.render.environment import Environment, EnvironmentBaker, EnvironmentSpec
 from vkpbr.render.frames import (
@@ -57,6 +56,7 @@ from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 from vkpbr.scene.environment import load_panorama
 from vkpbr.scene.lights import course_point_light
+from vkpbr.scene.semantics import semantic_ids
 from vkpbr.scene.sky import sun_radiometry
 from vkpbr.scene.types import Camera, Light, Scene
 from vkpbr.scene.validate import validate_lights
@@ -103,6 +103,10 @@ class Renderer:
         sizes, or EnvironmentSpec.cpu() on a CPU device).
     cache_dir : where the split-sum BRDF table is kept between processes (None: made once
         per process).
+    semantics : where the dataset outputs' semantic ids come from (vkpbr.scene.semantics):
+        "mesh" (each mesh primitive its own class), "material", "extras" (glTF `extras:
+        {"semantic": ...}` of nodes or meshes), a {node/mesh/material name: id or label}
+        mapping or the path of a JSON file of one; `semantic_labels` is {id: label}.
     """
 
     def __init__(
@@ -117,6 +121,7 @@ class Renderer:
         window_extensions: tuple[str, ...] | None = None,
         env_spec: EnvironmentSpec | None = None,
         cache_dir: str | os.PathLike[str] | None = None,
+        semantics: str | os.PathLike[str] | Mapping[str, int | str] = "mesh",
     ) -> None:
         t0 = time.perf_counter()
         if msaa not in (1, 4):
@@ -143,9 +148,11 @@ class Renderer:
             self.frame_buffers, self._frame_pool, self.slots = create_slots(
                 self.device, self.set_layouts[0], self.set_layouts[2], self.ring.count)
             self.gpu_scene = GpuScene(self.device, scene, self.set_layouts[1])
+            self.semantic_ids, self.semantic_labels = semantic_ids(
+                scene, self.gpu_scene.draws, Path(semantics) if isinstance(semantics, os.PathLike)
+                else semantics)
             self._compute_scene: ComputeScene | None = None
-            self._batch: BatchViews | None = None
-            self._batch_targets: dict[tuple, BatchTarget] = {}
+            self._batch_path: BatchPath | None = None
             self.recorder = FrameRecorder(self.device, self.gpu_scene, self.pipeline_layout,
                                           self.ring, self.slots, self.prepass_for, self.shadows,
                                           self.compute_scene)
@@ -210,7 +217,8 @@ class Renderer:
         """The compute path's resources (render/compute_path.py), made on its first frame."""
         if self._compute_scene is None:
             self._compute_scene = ComputeScene(
-                self.device, self.gpu_scene, dict(enumerate(self.set_layouts)), self.slots)
+                self.device, self.gpu_scene, dict(enumerate(self.set_layouts)), self.slots,
+                self.semantic_ids)
         return self._compute_scene
 
     def compute_unavailable(self, target: FrameTarget) -> str | None:
@@ -248,7 +256,7 @@ class Renderer:
         d = np.sum((centers - np.asarray(eye, dtype=np.float64)) ** 2, axis=1)
         return tuple(np.argsort(-d, kind="stable").tolist())
 
-    def _blend_orders(self, eyes: np.ndarray) -> np.ndarray:
+    def blend_orders(self, eyes: np.ndarray) -> np.ndarray:
         """`blend_order` of each of (B, 3) eyes: (B, blended draws) int, the same orders."""
         centers = self._blend_centers
         if len(centers) < 2:
@@ -398,9 +406,7 @@ class Renderer:
         Returns a Submitted; `ok` False: recreate the target (a resized window).
         """
         t0 = time.perf_counter()
-        env = self.environment(options)
-        if env is not self._bound_env:
-            self._bind_environment(env)
+        self.bind_environment_for(options)
         clock = time.thread_time if driver_time else _no_clock
         c0 = clock()
         frame = self.ring.begin()  # waits for the frame's previous submission
@@ -439,8 +445,38 @@ class Renderer:
 
     def _free_recordings(self) -> None:
         self.recorder.free()
-        if self._batch is not None:
-            self._batch.free_recordings()
+        if self._batch_path is not None:
+            self._batch_path.free_recordings()
+
+    @property
+    def batch_path(self) -> BatchPath:
+        """The batched-views path (render/batch_path.py), made on the first batch."""
+        if self._batch_path is None:
+            self._batch_path = BatchPath(self)
+        return self._batch_path
+
+    def bind_environment_for(self, options: RenderOptions) -> None:
+        """Make every frame slot sample the environment `options` ask for."""
+        env = self.environment(options)
+        if env is not self._bound_env:
+            self._bind_environment(env)
+
+    def write_scene_shadows(self, slot: FrameSlot, plan: ShadowPlan, lights: tuple[Light, ...],
+                            options: RenderOptions) -> np.ndarray | None:
+        """A batch's shadow maps in `slot`: the camera-independent fits (directional lights
+        over the whole scene) and the lights' LightRecord.shadow rows; None without maps."""
+        self._ensure_shadow_maps(plan, options)
+        if not plan.entries:
+            return None
+        self._shadow_rows.pop(slot.index, None)  # the slot's cascades are overwritten
+        return self.shadows.write(slot.index, plan, lights, None, (1, 1), 0.0, 0.0,
+                                  self.bounds.corners[0], self.bounds.corners[-1])
+
+    def read_frame_timings(self, frame: Frame) -> FrameStats:
+        """The GPU timestamps of `frame` (waited for) into its slot's stats, returned."""
+        slot = self.slots[frame.index]
+        self._read_timings(frame, slot)
+        return slot.stats
 
     def _read_timings(self, frame: Frame, slot: FrameSlot) -> None:
         t = self.ring.timings_ms(frame, STAMPS)
@@ -501,6 +537,7 @@ class Renderer:
         depth: bool = False,
         readback: bool = True,
         outputs: Iterable[str] | None = None,
+        batch: int | None = None,
         **option_overrides: Any,
     ) -> Iterator[np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray] | None]:
         """Render one frame per camera, yielding what `render` returns, in order.
@@ -510,8 +547,15 @@ class Renderer:
         persistently mapped readback buffer. Nothing is allocated per frame but the returned
         arrays. Each frame is bit-for-bit what `render` gives for its camera.
         `readback=False` yields None per finished frame instead (benchmarks: render only).
+        `batch` N: the cameras N at a time through `render_batch` (one submission each; its
+        shadow maps of directional lights are one map over the scene), where the device has
+        layered rendering; None: frame by frame.
         """
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
+        if batch is not None and readback and self.device.batch_views:
+            yield from self._render_many_batched(cameras, batch, lights, size, opts, linear,
+                                                 depth, outputs)
+            return
         frame_lights = self.frame_lights(opts, lights)
         target = self.offscreen_target(size, linear)
         wanted = self._check_outputs(outputs, target)
@@ -546,8 +590,9 @@ class Renderer:
         depth: bool = False,
         outputs: Iterable[str] | None = None,
         batch: int | str = "auto",
+        device: str = "cpu",
         **option_overrides: Any,
-    ) -> np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray]:
+    ) -> np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray] | Any:
         """Render B views of the scene in one submission and return them stacked.
 
         Parameters
@@ -561,9 +606,14 @@ class Renderer:
         outputs : as `render`'s, stacked per view; "color" comes from the batch, the others
             (depth, range, ids, normals) from the dataset outputs' pass, view by view (as
             `render` makes them).
-        batch : views per submission: "auto" (as many as fit in a quarter of the device's
-            memory, at most 2048 layers a chunk) or a positive integer; larger batches are
-            split into several submissions.
+        batch : views per submission: "auto" (as many as fit in a quarter of the free device
+            memory and of the free host-visible memory for the readback, at most 65,536) or a
+            positive integer; larger batches are split into several submissions.
+        device : "cpu": NumPy arrays; "cuda": a torch.uint8 (or float32 with `linear`)
+            tensor (B, H, W, 4) on the same GPU, never through host memory: the frames are
+            copied into Vulkan memory that CUDA imports (gpu/cuda.py), then into a tensor of
+            torch's own on its current stream. Colour only; needs torch with CUDA and
+            cuda-python (the `cuda` extra) and the renderer on that NVIDIA GPU.
 
         Returns
         -------
@@ -575,23 +625,24 @@ class Renderer:
         base = self.default_camera()
         views = as_camera_batch(cameras, base)
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
+        if device not in ("cpu", "cuda"):
+            raise UsageError(f"device {device!r}: choose 'cpu' (NumPy) or 'cuda' (a torch tensor)")
+        if device == "cuda":
+            if depth or outputs:
+                raise UsageError("device='cuda' returns the colour only: ask depth and dataset "
+                                 "outputs with device='cpu'")
+            return self.batch_path.render_cuda(views, size, lights, opts, linear, batch)
         wanted = self._check_outputs(outputs, self.offscreen_target(size, linear)) if outputs else ()
         # The dataset outputs but colour come from their own pass (as `render` makes them).
         extra = tuple(n for n in wanted if n != "color")
-        if not self.device.batch_views or self.uses_compute(self.offscreen_target(size, linear), opts):
-            # No layered rendering here (or the compute path asked for): view by view.
+        if (not self.device.batch_views or self.msaa > 1
+                or self.uses_compute(self.offscreen_target(size, linear), opts)):
+            # No layered rendering here, MSAA (the batch target is single-sample) or the
+            # compute path asked for: view by view, each exactly as `render` draws it.
             frames = list(self.render_many((views.camera(i) for i in range(len(views))), lights,
                                            size, opts, linear, depth, outputs=wanted or None))
             return _stack_frames(frames, depth, wanted)
-        per = self._batch_views_per_submission(size, linear, depth, batch)
-        colors, depths = [], []
-        for start in range(0, len(views), per):
-            part = _slice_batch(views, start, min(start + per, len(views)))
-            color, dist = self._render_batch_part(part, size, lights, opts, linear, depth)
-            colors.append(color)
-            depths.append(dist)
-        color = colors[0] if len(colors) == 1 else np.concatenate(colors)
-        dist = None if depths[0] is None else (depths[0] if len(depths) == 1 else np.concatenate(depths))
+        color, dist = self.batch_path.render(views, size, lights, opts, linear, depth, batch)
         if not wanted:
             return (color, dist) if depth else color
         result: dict[str, np.ndarray] = {}
@@ -604,79 +655,34 @@ class Renderer:
                 result[name] = np.stack([f[name] for f in frames])
         return {n: result[n] for n in wanted}
 
-    def _batch_views_per_submission(self, size: tuple[int, int], linear: bool, depth: bool,
-                                    batch: int | str) -> int:
-        w, h = int(size[0]), int(size[1])
-        pixel = 16 if linear else 4
-        view_bytes = w * h * (2 * pixel + 4 + (4 if depth else 0)) + L.VIEW_RECORD.size
-        if batch == "auto":
-            budget = self.device.local_memory_bytes() // 4
-            return max(1, min(budget // view_bytes, 1 << 16))
+    def _render_many_batched(self, cameras: Iterable[Camera | Any], batch: int, lights: LightsArg,
+                             size: tuple[int, int], opts: RenderOptions, linear: bool,
+                             depth: bool, outputs: Iterable[str] | None) -> Iterator[Any]:
+        """render_many through render_batch, `batch` cameras at a time, yielding per view."""
         if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
-            raise UsageError(f"batch {batch!r}: expected a positive number of views or 'auto'")
-        return batch
+            raise UsageError(f"batch {batch!r}: expected a positive number of views")
+        base = self.default_camera()
+        wanted = tuple(outputs) if outputs is not None and not isinstance(outputs, str) else (
+            () if outputs is None else (outputs,))
+        pending: list[Camera] = []
 
-    def _render_batch_part(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
-                           opts: RenderOptions, linear: bool, depth: bool
-                           ) -> tuple[np.ndarray, np.ndarray | None]:
-        n = len(views)
-        limits = self.device.limits
-        layers = max(1, min(n, MAX_LAYERS, int(limits.maxFramebufferLayers),
-                            int(limits.maxImageArrayLayers)))
-        target = self._batch_target(size, layers, n, linear, depth)
-        if self._batch is None:
-            self._batch = BatchViews(self.device, self.scene, self.gpu_scene, self.ring,
-                                     self.slots, self.set_layouts[0], self.recorder, self.shadows)
-        bv = self._batch
-        bv.ensure(n, layers)
-        frame_lights = self.frame_lights(opts, lights)
-        env = self.environment(opts)
-        if env is not self._bound_env:
-            self._bind_environment(env)
-        terms = batch_frame_terms(views.eye, views.target, views.up, views.yfov_deg,
-                                  views.intrinsics, views.znear, views.zfar, tuple(size),
-                                  self.bounds.corners, self.bounds.radius)
-        frame = self.ring.begin()
-        slot = self.slots[frame.index]
-        plan = self.shadow_plan(frame_lights, opts)
-        self._ensure_shadow_maps(plan, opts)
-        rows = None
-        if plan.entries:  # camera-independent maps, shared by every view
-            rows = self.shadows.write(slot.index, plan, frame_lights, None, tuple(size), 0.0, 0.0,
-                                      self.bounds.corners[0], self.bounds.corners[-1])
-            self._shadow_rows.pop(slot.index, None)
-        first = views.camera(0)
-        write_frame_uniforms(slot, first, frame_lights, size, opts, linear, self.bounds,
-                             self.frame_lighting(opts), rows)
-        bv.write_views(terms, views.eye)
-        groups = bv.write_blend_groups(self._blend_orders(views.eye))
-        cmd = bv.command_buffer(target, frame, n, opts.tbn, opts.alpha_mask, plan, groups,
-                                self.prepass_for(target))
-        frame.submit(cmd)
-        frame.stamped = self.ring.query_pool is not None
-        frame.wait()
-        self._read_timings(frame, slot)
-        self.last_stats = dataclasses.replace(slot.stats)
-        color = target.read_color(n)
-        dist = _linear_depth(target.read_depth(n), terms["znear"][:, None, None]) if depth else None
-        self.device.check_validation()
-        return color, dist
+        def flush() -> Iterator[Any]:
+            got = self.render_batch(pending, size, lights, opts, linear, depth, wanted or None)
+            for i in range(len(pending)):
+                if wanted:
+                    yield {k: v[i] for k, v in got.items()}
+                elif depth:
+                    yield got[0][i], got[1][i]
+                else:
+                    yield got[i]
+            pending.clear()
 
-    def _batch_target(self, size: tuple[int, int], layers: int, views: int, linear: bool,
-                      depth: bool) -> BatchTarget:
-        key = (tuple(size), layers, linear, depth)
-        target = self._batch_targets.get(key)
-        if target is not None and target.capacity >= views:
-            return target
-        if target is not None:
-            self.device.wait_idle()
-            if self._batch is not None:
-                self._batch.free_recordings()
-            target.destroy()
-        target = BatchTarget(self.device, size, layers, views, "float" if linear else "srgb",
-                             depth, clear_color=(*self.background, 1.0))
-        self._batch_targets[key] = target
-        return target
+        for camera in cameras:
+            pending.append(base if camera is None else as_camera(camera, base))
+            if len(pending) == batch:
+                yield from flush()
+        if pending:
+            yield from flush()
 
     def _check_outputs(self, outputs: Iterable[str] | None, target: OffscreenTarget) -> tuple[str, ...]:
         """The dataset outputs asked for, checked; their images made on first use."""
@@ -699,15 +705,23 @@ class Renderer:
         return wanted
 
     @property
+    def max_id(self) -> int:
+        """The largest instance or semantic id the outputs can hold (id images must fit it)."""
+        return max(len(self.gpu_scene.draws), int(self.semantic_ids.max(initial=0)))
+
+    @property
     def instances(self) -> list[dict[str, Any]]:
         """What each instance id of the outputs is: [{"id", "node", "mesh", "material",
-        "semantic"}], id = index + 1 (0 is the background). The semantic id is the mesh's
-        index + 1 (each glTF mesh primitive its own)."""
+        "semantic", "label"}], id = index + 1 (0 is the background). The semantic id comes
+        from the Renderer's `semantics` (vkpbr.scene.semantics; by default the mesh's index
+        + 1, each glTF mesh primitive its own), `label` its name ("" for 0)."""
         gs, scene = self.gpu_scene, self.scene
         out = []
         for i, d in enumerate(gs.draws):
             mesh = scene.meshes[d.mesh]
-            out.append({"id": i + 1, "mesh": mesh.name, "semantic": d.mesh + 1,
+            sem = int(self.semantic_ids[i])
+            out.append({"id": i + 1, "mesh": mesh.name, "semantic": sem,
+                        "label": self.semantic_labels.get(sem, ""),
                         "material": gs.materials[d.material].name,
                         "node": scene.nodes[d.node].name if 0 <= d.node < len(scene.nodes) else ""})
         return out
@@ -725,7 +739,7 @@ class Renderer:
             self.last_stats = dataclasses.replace(stats, readback_ms=0.0)
             return None
         color = target.read_color(frame.index)
-        out_depth = _linear_depth(target.read_depth(frame.index), slot.znear) if depth else None
+        out_depth = linear_depth(target.read_depth(frame.index), slot.znear) if depth else None
         result: Any = (color, out_depth) if depth else color
         if outputs:
             dtypes = {name: (dt, ch) for name, (_, _, dt, ch) in L.OUTPUT_IMAGES.items()}
@@ -756,12 +770,9 @@ class Renderer:
         dev.wait_idle()
         if getattr(self, "recorder", None) is not None:
             self.recorder.free()
-        if getattr(self, "_batch", None) is not None:
-            self._batch.destroy()
-            self._batch = None
-        for target in getattr(self, "_batch_targets", {}).values():
-            target.destroy()
-        self._batch_targets = {}
+        if getattr(self, "_batch_path", None) is not None:
+            self._batch_path.close()
+            self._batch_path = None
         if getattr(self, "shadows", None) is not None:
             self.shadows.destroy()
         for env in getattr(self, "_environments", {}).values():
@@ -777,15 +788,6 @@ class Renderer:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-
-
-def _slice_batch(views: CameraBatch, start: int, stop: int) -> CameraBatch:
-    def part(a: np.ndarray | None) -> np.ndarray | None:
-        return None if a is None else a[start:stop]
-
-    return CameraBatch(views.eye[start:stop], views.target[start:stop], views.up[start:stop],
-                       views.yfov_deg[start:stop], part(views.intrinsics), part(views.znear),
-                       part(views.zfar))
 
 
 def _stack_frames(frames: list[Any], depth: bool, wanted: tuple[str, ...]) -> Any:
@@ -822,22 +824,14 @@ def _automatic_sun(env_rotation_deg: float) -> Light:
                  falloff="inverse_square")
 
 
-def _linear_depth(d: np.ndarray, znear: float | np.ndarray) -> np.ndarray:
-    """Reversed-Z window depth -> view-space distance along the axis (inf = background);
-    `znear` broadcasts against `d` (a batch: one per view)."""
-    with np.errstate(divide="ignore"):
-        z = znear / d.astype(np.float64)
-    z[d <= 0.0] = np.inf
-    return z.astype(np.float32)
-
-
 # Dataset outputs of render(outputs=...): name -> what it is (docs/outputs.md).
 OUTPUTS = {
     "color": "the frame's colour, as render returns it",
     "depth": "(H, W) float32 distance along the view axis; inf where nothing was drawn",
     "range": "(H, W) float32 distance to the camera centre; inf where nothing was drawn",
     "instance": "(H, W) uint32 instance id: Renderer.instances[id - 1]; 0 = background",
-    "semantic": "(H, W) uint32 semantic id (the mesh's index + 1); 0 = background",
+    "semantic": "(H, W) uint32 semantic id (Renderer(semantics=...): by default the mesh's index + 1; "
+                "Renderer.semantic_labels names them); 0 = background or no class",
     "normal": "(H, W, 3) float32 world shading normal (normal-mapped); 0 = background",
     "normal_camera": "(H, W, 3) float32 the shading normal in camera axes (OpenGL: x right, "
                      "y up, z towards the viewer); 0 = background",

@@ -135,7 +135,10 @@ def build_nodes_cameras_lights(ld: GltfDocument, scene: Scene) -> None:
                     scene.meshes.append(primitive(ld, m, k, prim))
             w32 = world.astype(np.float32)
             inst = instance_matrices(ld, i, node)
-            scene.nodes += [Node(mesh=j, matrix=w32.copy(), name=name, instances=inst)
+            label = _semantic_extra(node)
+            label = _semantic_extra(meshes[m]) if label is None else label
+            scene.nodes += [Node(mesh=j, matrix=w32.copy(), name=name, instances=inst,
+                                 semantic=label)
                             for j in mesh_prims[m]]  # primitives share the read-only array
         if get(node, "camera") is not None:
             cam = cameras[check_index(ld.path, get(node, "camera"), len(cameras), "camera")]
@@ -215,3 +218,17 @@ def _light(ld: GltfDocument, scene: Scene, light: dict, world: np.ndarray) -> Li
         inner_cone=inner,
         outer_cone=outer,
     )
+
+
+def _semantic_extra(obj: object) -> int | str | None:
+    """`extras: {"semantic": ...}` of a glTF node or mesh: a non-negative integer or a
+    non-empty label; anything else is ignored (extras are free-form application data)."""
+    extras = get(obj, "extras")
+    value = extras.get("semantic") if isinstance(extras, dict) else None
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, int) and 0 <= value < 2**32:
+        return value
+    if isinstance(value, str) and value.strip():
+        return value.strip()
+    return None

@@ -30,7 +30,7 @@ from vkpbr.errors import UsageError
 from vkpbr.scene._checks import context, real, rigid_pose, shown, size_arg
 from vkpbr.scene.camera import Pose, as_pose, opencv_from_corner
 
-__all__ = ["Pose", "load_poses"]
+__all__ = ["Pose", "load_poses", "parse_poses"]
 
 # Intrinsics keys of NeRF-style transforms.json (instant-ngp, nerfstudio), per frame or global.
 _NERF_KEYS = ("camera_angle_x", "camera_angle_y", "fl_x", "fl_y", "cx", "cy", "w", "h",
@@ -64,6 +64,12 @@ def load_poses(path: str | os.PathLike[str]) -> list[Pose]:
     except ValueError as exc:  # JSONDecodeError, UnicodeDecodeError, a 5000-digit integer
         problem = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise UsageError(f"{p}: not valid JSON ({problem})") from None
+    return parse_poses(doc, p)
+
+
+def parse_poses(doc: object, p: str | os.PathLike[str]) -> list[Pose]:
+    """`load_poses` for a document already decoded from JSON (a job file's inline poses);
+    `p` is what the messages start with ("job.json: entry 2: cameras")."""
     if isinstance(doc, list):
         if not doc:
             raise UsageError(f"{p}: the list of poses is empty")

@@ -164,6 +164,9 @@ class Node:
     matrix: np.ndarray = field(default_factory=lambda: np.eye(4, dtype=np.float32))  # (4, 4)
     name: str = ""
     instances: np.ndarray | None = None  # (K, 4, 4) float32
+    # The class the file gives it: glTF `extras: {"semantic": 3}` or `{"semantic": "chair"}`
+    # on the node (else on its mesh); None: none given (vkpbr.scene.semantics).
+    semantic: int | str | None = None
 
     @property
     def instance_count(self) -> int:

@@ -1,0 +1,116 @@
+"""`vkpbr batch JOB.json [--ray ADDRESS]`: render a job of many scenes on Ray, and the
+`vkpbr render SCENE --cameras POSES --out DIR --ray [ADDRESS]` path (one scene's job).
+Both end with the job's summary; exit status 1 when items failed. See docs/distributed.md."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+from pathlib import Path
+from typing import Any
+
+from vkpbr.app.log import say
+from vkpbr.app.parsing import EPILOG_FORMATTER
+from vkpbr.errors import UsageError
+
+__all__ = ["add_parser", "run", "add_ray_arguments", "render_on_ray"]
+
+log = logging.getLogger(__name__)
+
+EPILOG = """\
+examples:
+  vkpbr batch job.json                      a local Ray instance, one actor per CPU or GPU
+  vkpbr batch job.json --ray head:6379      an existing Ray cluster
+  vkpbr batch job.json --ray auto --num-gpus 0.5   two actors on each GPU
+"""
+
+# `vkpbr render` options a --ray job does not carry (each actor uses the scene's camera and
+# lights, as `vkpbr render --cameras` does without them).
+_NOT_WITH_RAY = (("camera", "--camera"), ("camera_index", "--camera-index"), ("fov", "--fov"),
+                 ("light", "--light"), ("light_color", "--light-color"),
+                 ("light_intensity", "--light-intensity"), ("falloff", "--falloff"),
+                 ("device", "--device"))
+
+
+def add_ray_arguments(p: argparse.ArgumentParser, with_flag: bool = True) -> None:
+    """--ray [ADDRESS] (with `with_flag`), --actors, --num-gpus."""
+    if with_flag:
+        p.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
+                       help="render on Ray: a cluster's HOST:PORT, ray://HOST:PORT or auto; "
+                            "alone: a local Ray instance (needs vkpbr[ray])")
+    p.add_argument("--actors", type=int, metavar="N",
+                   help="renderer actors (default: one per GPU, else one per CPU)")
+    p.add_argument("--num-gpus", type=float, metavar="F",
+                   help="GPUs per actor (0.5: two actors share each GPU)")
+
+
+def add_parser(sub: Any) -> None:
+    p = sub.add_parser("batch", help="render a job of many scenes and poses on Ray",
+                       description="Render every entry of JOB (a JSON list of {scene, cameras, "
+                                   "out, size, outputs}) on Ray: resumable (a manifest in each "
+                                   "out folder records finished views) and exactly once.",
+                       epilog=EPILOG, formatter_class=EPILOG_FORMATTER)
+    p.add_argument("job", metavar="JOB.json", help="the job file (docs/distributed.md)")
+    p.add_argument("--ray", default="local", metavar="ADDRESS",
+                   help="a Ray cluster's HOST:PORT, ray://HOST:PORT or auto (default: start a "
+                        "local Ray instance)")
+    add_ray_arguments(p, with_flag=False)
+    p.set_defaults(run=run)
+
+
+def _report(result: Any) -> int:
+    lines = result.summary()
+    if result.ok:
+        say(lines[0])
+        return 0
+    for line in lines:
+        log.error("%s", line)
+    return 1
+
+
+def _render(job: Any, args: argparse.Namespace) -> int:
+    from vkpbr.app.log import is_quiet
+    from vkpbr.distributed import render
+
+    result = render(job, None if args.ray == "local" else args.ray, actors=args.actors,
+                    num_gpus=args.num_gpus, progress=False if is_quiet() else None)
+    return _report(result)
+
+
+def run(args: argparse.Namespace) -> int:
+    from vkpbr.distributed import load_job
+
+    return _render(load_job(args.job), args)
+
+
+def render_on_ray(args: argparse.Namespace, options: Any) -> int:
+    """`vkpbr render SCENE --cameras POSES --out DIR --ray [ADDRESS]`: the same files as
+    without --ray, rendered by the actors of a one-entry job."""
+    from vkpbr.app.output import OUTPUT_SUFFIXES
+    from vkpbr.distributed import Job, RenderSettings, SceneJob
+    from vkpbr.scene.poses import load_poses
+
+    if not args.cameras:
+        raise UsageError("--ray renders a --cameras batch: give --cameras too")
+    for dest, flag in _NOT_WITH_RAY:
+        if getattr(args, dest, None) not in (None, [], ()):
+            raise UsageError(f"{flag} is not available with --ray (the actors render with the "
+                             "scene's camera and lights); drop it or render without --ray")
+    if args.frames != 1:
+        raise UsageError("--frames is a timing option: not available with --ray")
+    if getattr(args, "semantics", "mesh") != "mesh":
+        raise UsageError("--semantics is not available with --ray yet (the actors use each "
+                         "mesh as its class); drop it or render without --ray")
+    out = Path(args.out)
+    if out.suffix.lower() in OUTPUT_SUFFIXES:
+        raise UsageError(f"--out {out}: with --cameras, --out is a folder")
+    settings = RenderSettings(
+        scene=Path(args.scene) if args.scene else None, out=out, size=args.size,
+        outputs=tuple(args.outputs or ()), linear=args.linear, msaa=args.msaa,
+        cache=args.cache is not None, cache_dir=args.cache or None, options=options,
+        strict=bool(getattr(args, "strict", False)),
+        allow_outside_paths=bool(getattr(args, "allow_outside_paths", False)))
+    if settings.scene is not None and not settings.scene.is_file():
+        raise UsageError(f"{settings.scene}: no such scene file")
+    scene = SceneJob(settings, tuple(load_poses(args.cameras)), colmap=args.colmap, where="--out")
+    return _render(Job((scene,), source="--cameras"), args)

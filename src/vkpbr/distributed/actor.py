@@ -1,0 +1,160 @@
+"""The renderer actor: one per GPU (or per CPU worker on lavapipe). It keeps one Renderer for
+the scene it last rendered (loaded through the bake cache), renders a work item's views and
+writes their files atomically. It never writes the manifest: it returns what it wrote, and
+the driver records it.
+
+`RendererActor` is a plain class; the driver makes it a Ray actor (`ray.remote(...)`), so this
+module imports without Ray, and tests and benchmarks can run it in-process.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import socket
+import time
+from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vkpbr.distributed.job import RenderSettings, WorkItem, frame_files
+from vkpbr.distributed.manifest import camera_record
+from vkpbr.errors import SceneError, UsageError
+
+__all__ = ["RendererActor", "render_views", "load_renderer"]
+
+log = logging.getLogger(__name__)
+
+
+def render_views(renderer: Any, cameras: list[Any], lights: Any,
+                 settings: RenderSettings) -> Iterator[dict[str, np.ndarray]]:
+    """The one render call of a work item: its views in order, each a dict of arrays
+    ("color" and the dataset outputs), through the batch path (`Renderer.render_batch`).
+
+    Yields per view: "color" (H, W, 4) uint8 sRGB, or float32 linear with `settings.linear`;
+    each dataset output as `Renderer.render(outputs=...)` returns it.
+    """
+
+    from vkpbr.app.common import BATCH_VIEWS
+
+    names = settings.outputs
+    # The batch path, as `vkpbr render --cameras` takes it (a view renders the same in any
+    # batch, so items of any size give the single-process frames).
+    frames = renderer.render_many(cameras, lights, settings.size, settings.render_options(),
+                                  linear=settings.linear,
+                                  outputs=("color", *names) if names else None,
+                                  batch=BATCH_VIEWS)
+    for frame in frames:
+        yield frame if names else {"color": frame}
+
+
+def load_renderer(settings: RenderSettings, device: str | int | None = None) -> Any:
+    """A Renderer for `settings.scene`, loaded as `vkpbr render [--cache]` loads it."""
+    from vkpbr.app.common import default_cache_dir
+    from vkpbr.render.renderer import Renderer
+
+    scene = None
+    if settings.scene is not None:
+        from vkpbr.scene.loader import load_scene
+
+        path, root = Path(settings.scene), None
+        if settings.cache and path.suffix.lower() != ".vkpbr":
+            from vkpbr.bake.bake import cached_bake
+
+            root = path.parent  # the bake's external textures lie beside the source
+            path = cached_bake(path, settings.cache_dir or default_cache_dir(),
+                               allow_outside_paths=settings.allow_outside_paths)
+        kwargs: dict[str, Any] = {"strict": True} if settings.strict else {}
+        scene = load_scene(path, allow_outside_paths=settings.allow_outside_paths, root=root,
+                           **kwargs)
+    return Renderer(scene, device=device, msaa=settings.msaa, cache_dir=default_cache_dir())
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
+
+
+class RendererActor:
+    """Renders work items; one Renderer kept per scene key (the last one used).
+
+    device : the Vulkan device (name substring or index) the Renderer opens; None: the default.
+    """
+
+    def __init__(self, device: str | int | None = None) -> None:
+        self.device = device
+        self._key: tuple | None = None
+        self._renderer: Any = None
+        self._bad_scenes: dict[tuple, str] = {}  # scene key -> why it cannot load
+        self._pool = ThreadPoolExecutor(2)  # encoding overlaps the next views' rendering
+
+    def info(self) -> dict[str, object]:
+        return {"pid": os.getpid(), "host": socket.gethostname(), "device": self.device}
+
+    def _renderer_for(self, settings: RenderSettings) -> Any:
+        key = settings.scene_key()
+        if key in self._bad_scenes:
+            raise SceneError(settings.scene, self._bad_scenes[key])
+        if key != self._key:
+            self.close()
+            try:
+                self._renderer = load_renderer(settings, self.device)
+            except (SceneError, UsageError) as exc:
+                self._bad_scenes[key] = str(exc)
+                raise
+            self._key = key
+        return self._renderer
+
+    def render(self, item: WorkItem) -> dict[str, object]:
+        """Render and write `item`'s views. Returns {"ok": True, "views", "files",
+        "cameras", "seconds", "pid"}, or {"ok": False, "error": one line, "retry": bool}:
+        an error in the input (a scene that does not load, a bad option) fails the same
+        way everywhere and is not retried."""
+        t0 = time.perf_counter()
+        try:
+            return self._render(item, t0)
+        except (SceneError, UsageError) as exc:
+            return {"ok": False, "error": _one_line(exc), "retry": False, "pid": os.getpid()}
+        except Exception as exc:  # noqa: BLE001 - reported to the driver, which retries elsewhere
+            log.exception("work item %s failed", item.label())
+            self.close()  # a device error may leave the Renderer unusable: start afresh
+            return {"ok": False, "error": _one_line(exc), "retry": True, "pid": os.getpid()}
+
+    def _render(self, item: WorkItem, t0: float) -> dict[str, object]:
+        from vkpbr.app.output import check_id_count, output_kind, output_path, write_output
+
+        settings = item.settings
+        renderer = self._renderer_for(settings)
+        t_load = time.perf_counter()
+        base = renderer.default_camera()
+        cameras = [pose.camera(base) for pose in item.poses]
+        options = settings.render_options()
+        lights = renderer.frame_lights(options)
+        out = Path(settings.out)
+        for name in settings.outputs:
+            if output_kind(name) == "ids":
+                check_id_count(renderer.max_id, output_path(out / "frame.png", name),
+                               f"{item.label()}: outputs")
+        files: list[str] = []
+        writes = []
+        for view, frame in zip(item.frames, render_views(renderer, cameras, lights, settings),
+                               strict=True):
+            names = frame_files(settings, view)
+            writes.append(self._pool.submit(write_output, out / names[0], frame["color"], "color"))
+            for name, file in zip(settings.outputs, names[1:], strict=True):
+                writes.append(self._pool.submit(write_output, out / file, frame[name],
+                                                output_kind(name), "outputs"))
+            files += names
+        for w in writes:
+            w.result()
+        return {"ok": True, "views": list(item.frames), "files": files,
+                "cameras": [camera_record(c) for c in cameras], "pid": os.getpid(),
+                "load_s": t_load - t0, "seconds": time.perf_counter() - t0}
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+        self._renderer, self._key = None, None

@@ -1,0 +1,325 @@
+"""The driver: checks a job, connects to Ray, starts the renderer actors, hands them work items
+and records each result in the manifests. Ray does the scheduling and the processes; the driver
+only keeps every actor busy with one item and decides what a failure means.
+
+- An item whose actor died (killed, out of memory, node lost) or that failed with an error of
+  the machine (a device error) is given again, to another actor where one is free, up to
+  `job.retries` more times; a dead actor is replaced (at most as many times as actors were
+  started). An item whose input is bad (its scene does not load) fails the same way
+  everywhere: it is recorded as failed at once.
+- Every result is appended to the entry's manifest as it arrives, so a driver killed at any
+  moment loses only the items in flight; a re-run skips what the manifests list as done.
+- The files are written by the actors, atomically and under their final names, so a view
+  rendered twice (its actor died after writing) is still one file.
+- transforms.json (and COLMAP text) is written by the driver once an entry is complete.
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import logging
+import os
+import re
+import time
+import uuid
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from vkpbr.distributed.cluster import (
+    ClusterError,
+    RayRenderer,
+    actor_plan,
+    connect,
+    import_ray,
+    preflight,
+)
+from vkpbr.distributed.job import Job, SceneJob, WorkItem, frame_files, job_from_doc, load_job
+from vkpbr.distributed.manifest import Manifest
+from vkpbr.errors import UsageError
+
+__all__ = ["render", "JobResult", "Failure", "ClusterError", "check_job", "import_ray"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Failure:
+    """An item that failed for good: its entry, views, a label for messages and the error."""
+
+    entry: int
+    views: tuple[int, ...]
+    label: str
+    error: str
+    attempts: int
+
+
+@dataclass
+class JobResult:
+    """What a run did. `ok`: nothing failed. `summary()`: the lines the CLI prints."""
+
+    views: int = 0  # in the whole job
+    rendered: int = 0  # by this run
+    skipped: int = 0  # done by an earlier run
+    failures: list[Failure] = field(default_factory=list)
+    actors: int = 0
+    actors_lost: int = 0
+    retries: int = 0  # items given again after a failure or a lost actor
+    seconds: float = 0.0
+    render_seconds: float = 0.0  # from the first item handed out to the last result
+    incomplete: list[str] = field(default_factory=list)  # out folders without transforms.json
+
+    @property
+    def ok(self) -> bool:
+        return not self.failures
+
+    @property
+    def failed_views(self) -> int:
+        return sum(len(f.views) for f in self.failures)
+
+    def summary(self, limit: int = 20) -> list[str]:
+        if not self.actors:
+            return [f"{self.views} views: all {self.skipped} done before, nothing to render"]
+        rate = self.rendered / self.render_seconds if self.render_seconds > 0 else 0.0
+        lines = [f"{self.views} views: {self.rendered} rendered, {self.skipped} done before, "
+                 f"{self.failed_views} failed; {self.seconds:.1f} s ({rate:.1f} views/s on "
+                 f"{self.actors} actor{'s' if self.actors != 1 else ''})"
+                 + (f"; {self.actors_lost} actor(s) lost" if self.actors_lost else "")
+                 + (f", {self.retries} item(s) retried" if self.retries else "")]
+        for f in self.failures[:limit]:
+            lines.append(f"failed: {f.label}: {f.error}")
+        if len(self.failures) > limit:
+            lines.append(f"... and {len(self.failures) - limit} more failed items (see the manifests)")
+        return lines
+
+
+def _as_job(job: Job | dict | list | str | os.PathLike[str]) -> Job:
+    if isinstance(job, Job):
+        return job
+    if isinstance(job, (dict, list)):
+        return job_from_doc(job)
+    return load_job(job)
+
+
+def _writable(folder: Path, where: str) -> None:
+    """Create `folder` and write a file there: os.access says yes to root on a read-only
+    mount and to anyone on a full disk."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        probe = folder / f".vkpbr-probe.{os.getpid()}"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        raise UsageError(f"{where}: out {folder}: not writable ({exc.strerror or exc})") from None
+
+
+def check_job(job: Job) -> list[Manifest]:
+    """Everything that can fail before an actor starts: each out folder is writable, each
+    output format can be written (OpenEXR for .exr), and each manifest is this job's.
+    Returns the manifests, one per entry."""
+    from vkpbr.app.output import check_output_path, output_kind
+
+    manifests = []
+    for scene in job.scenes:
+        s = scene.settings
+        _writable(Path(s.out), scene.where)
+        names = frame_files(s, 0)
+        check_output_path(Path(s.out) / names[0], "color", f"{scene.where}: out")
+        for name, file in zip(s.outputs, names[1:], strict=True):
+            check_output_path(Path(s.out) / file, output_kind(name), f"{scene.where}: outputs")
+        manifests.append(Manifest.open(Path(s.out), scene.fingerprint(), scene.where))
+    return manifests
+
+
+@dataclass
+class _Task:
+    item: WorkItem
+    attempts: int = 0
+    avoid: set[int] = field(default_factory=set)  # actor numbers it failed on
+    last_error: str = ""
+
+
+def _finish_entry(scene: SceneJob, manifest: Manifest) -> bool:
+    """Write transforms.json (and COLMAP text) of a complete entry; False when incomplete."""
+    from vkpbr.scene.camera_files import write_colmap, write_transforms
+
+    s = scene.settings
+    cameras = manifest.cameras(len(scene.poses))
+    if cameras is None:
+        return False
+    names = [frame_files(s, i)[0] for i in range(len(cameras))]
+    write_transforms(Path(s.out) / "transforms.json", cameras, s.size, names)
+    if scene.colmap:
+        write_colmap(Path(s.out), cameras, s.size, names)
+    return True
+
+
+def _remove_leftovers(scene: SceneJob) -> None:
+    """Remove the temporary files of writes that a killed actor left (atomic.py names them
+    .NAME.PID.RANDOM.tmp). At the end of a job no actor writes here any more."""
+    pattern = re.compile(r"\.(frame_\d{5}[^/]*)\.\d+\.[a-z0-9_]{8}\.tmp")
+    folder = Path(scene.settings.out)
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return
+    for entry in entries:
+        if pattern.fullmatch(entry.name):
+            Path(entry.path).unlink(missing_ok=True)
+
+
+def render(job: Job | dict | list | str | os.PathLike[str], address: str | None = None, *,
+           actors: int | None = None, num_cpus: float | None = None,
+           num_gpus: float | None = None, progress: bool | None = None,
+           local_cpus: int | None = None,
+           on_result: Callable[[WorkItem, dict], None] | None = None) -> JobResult:
+    """Render a job on Ray; returns a JobResult (`.ok` False when items failed).
+
+    Parameters
+    ----------
+    job : a Job, a job document (dict or list, as in a job file) or a job file's path.
+    address : a Ray cluster ("HOST:PORT", "ray://HOST:PORT", "auto"); None starts a local
+        Ray instance (with `local_cpus` CPUs; None: all). An initialised Ray is used as is.
+    actors : how many renderer actors (None: one per GPU, else one per CPU of the cluster).
+    num_cpus, num_gpus : Ray resources of each actor (None: 1 GPU and 1 CPU where the cluster
+        has GPUs, else 1 CPU); num_gpus=0.5 puts two actors on each GPU.
+    progress : a tqdm bar on stderr (views/s, ETA, failures); None: when stderr is a terminal.
+    on_result : called in the driver with each item and its actor's result (tests, logging).
+
+    Raises
+    ------
+    UsageError : a bad job (before Ray is touched), no ray installed, an out folder that is not
+        writable, a manifest of another job.
+    ClusterError : the cluster cannot be reached or has no room for one actor.
+    """
+    t0 = time.perf_counter()
+    job = _as_job(job)
+    manifests = check_job(job)
+    ray = import_ray()
+    if address not in (None, "local"):
+        preflight(address)  # unreachable: one line now, even when nothing is left to render
+    result = JobResult(views=job.views)
+    try:
+        done = [m.done_views() for m in manifests]
+        result.skipped = sum(len(d) for d in done)
+        items = job.items(done)
+        if items:
+            started = connect(ray, address, local_cpus)
+            try:
+                _run(ray, job, items, manifests, result, actors, num_cpus, num_gpus, progress,
+                     on_result)
+            finally:
+                if started:
+                    ray.shutdown()
+        for scene, manifest in zip(job.scenes, manifests, strict=True):
+            _remove_leftovers(scene)
+            if not _finish_entry(scene, manifest):
+                result.incomplete.append(str(scene.settings.out))
+    finally:
+        for m in manifests:
+            m.close()
+    result.seconds = time.perf_counter() - t0
+    return result
+
+
+def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], result: JobResult,
+         actors: int | None, num_cpus: float | None, num_gpus: float | None,
+         progress: bool | None, on_result: Callable[[WorkItem, dict], None] | None) -> None:
+    from ray.exceptions import RayActorError, RayError
+    from tqdm import tqdm
+
+    n, resources = actor_plan(ray, actors, num_cpus, num_gpus)
+    remote_cls = ray.remote(max_restarts=0, max_task_retries=0, **resources)(RayRenderer)
+    run_id = uuid.uuid4().hex[:8]
+    pool: dict[int, Any] = {}  # actor number -> handle
+    made = 0
+
+    def start_actor() -> None:
+        nonlocal made
+        pool[made] = remote_cls.options(name=f"vkpbr-renderer-{run_id}-{made}").remote()
+        made += 1
+
+    for _ in range(n):
+        start_actor()
+    result.actors = n
+    replacements = n
+    idle = collections.deque(pool)
+    pending = collections.deque(_Task(item) for item in items)
+    in_flight: dict[Any, tuple[int, _Task]] = {}
+    bar = tqdm(total=sum(len(i.frames) for i in items), unit="view", dynamic_ncols=True,
+               disable=None if progress is None else not progress, desc="vkpbr")
+    t_first: float | None = None
+
+    def give_out() -> None:
+        nonlocal t_first
+        while idle and pending:
+            actor = idle.popleft()
+            # The first waiting task this actor has not failed; else the first one.
+            k = next((k for k, t in enumerate(pending) if actor not in t.avoid), 0)
+            task = pending[k]
+            del pending[k]
+            task.attempts += 1
+            in_flight[pool[actor].render.remote(task.item)] = (actor, task)
+            t_first = time.perf_counter() if t_first is None else t_first
+
+    def fail(task: _Task, error: str, retry: bool, actor: int) -> None:
+        task.avoid.add(actor)
+        task.last_error = error
+        if retry and task.attempts <= job.retries:
+            result.retries += 1
+            pending.appendleft(task)
+            log.info("%s: %s; trying again (attempt %d)", task.item.label(), error,
+                     task.attempts + 1)
+            return
+        item = task.item
+        manifests[item.entry].failed(item.frames, error, task.attempts)
+        result.failures.append(Failure(item.entry, item.frames, item.label(), error, task.attempts))
+        bar.update(len(item.frames))
+        bar.set_postfix(failed=result.failed_views, refresh=False)
+
+    try:
+        give_out()
+        while in_flight:
+            ready, _ = ray.wait(list(in_flight), num_returns=1)
+            actor, task = in_flight.pop(ready[0])
+            try:
+                res = ray.get(ready[0])
+            except RayActorError as exc:
+                # The actor is gone (killed, crashed, its node lost): replace it, retry the item.
+                result.actors_lost += 1
+                pool.pop(actor, None)
+                if replacements > 0:
+                    replacements -= 1
+                    start_actor()
+                    idle.append(made - 1)
+                why = (str(exc).strip().splitlines() or [""])[0][:160]
+                fail(task, f"its renderer actor died ({type(exc).__name__}: {why})", True, actor)
+                if not pool:  # nothing left to render on
+                    while pending:
+                        fail(pending.popleft(), "no renderer actor left", False, actor)
+                give_out()
+                continue
+            except RayError as exc:  # the call itself failed (an object lost, ...)
+                res = {"ok": False, "error": str(exc).strip().splitlines()[0], "retry": True}
+            if on_result is not None:
+                on_result(task.item, res)
+            if res.get("ok"):
+                item = task.item
+                manifests[item.entry].done(item.frames, res["files"], res["cameras"],
+                                           attempts=task.attempts, pid=res.get("pid"),
+                                           seconds=round(float(res.get("seconds", 0.0)), 4))
+                result.rendered += len(item.frames)
+                bar.update(len(item.frames))
+            else:
+                fail(task, str(res.get("error")), bool(res.get("retry")), actor)
+            idle.append(actor)
+            give_out()
+    finally:
+        bar.close()
+        result.render_seconds = time.perf_counter() - (t_first or time.perf_counter())
+        for handle in pool.values():
+            with contextlib.suppress(Exception):  # already gone
+                ray.kill(handle)
+

@@ -1,0 +1,316 @@
+"""The job model of `vkpbr.distributed`: scenes, their poses and outputs, split into work items.
+No Ray here: a job is read and checked in full before any actor starts.
+
+A job is a list of scene entries; each renders one scene from many poses into its own `out`
+folder, with the file names `vkpbr render SCENE --cameras POSES --out DIR` uses there
+(frame_00000.png, frame_00000.depth.exr, ..., transforms.json). An entry's views are split
+into work items of `views_per_item` poses: the unit Ray hands to an actor, the manifest
+records and a retry repeats.
+
+Job file (JSON), a list of entries or {"scenes": [entries], "views_per_item"?, "retries"?}:
+
+    {"scene": "model.glb",           # null or absent: the built-in PBR chart
+     "cameras": "poses.json",        # a poses file (docs/poses.md), or the poses inline
+     "out": "frames/model",          # a folder, one per entry
+     "size": "256x256",              # or [256, 256]; default 1280x720
+     "outputs": ["depth", "normal"], # dataset outputs besides colour (docs/outputs.md)
+     "linear": false, "msaa": 1, "colmap": false, "cache": true,
+     "options": {"view": "final"}}   # RenderOptions fields (vkpbr.render.options)
+
+Relative paths are relative to the job file's folder. The checks are plain Python, as in
+vkpbr.scene.poses (no schema library is a dependency): each error is one UsageError line
+"JOB.json: entry 2: size: ...".
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from vkpbr.errors import UsageError
+
+__all__ = ["Job", "SceneJob", "RenderSettings", "WorkItem", "load_job", "job_from_doc",
+           "frame_files", "DEFAULT_VIEWS_PER_ITEM", "DEFAULT_RETRIES"]
+
+DEFAULT_VIEWS_PER_ITEM = 16
+DEFAULT_RETRIES = 2  # further attempts of a failed item, each on another actor where one is free
+MAX_SIDE = 16384
+_ENTRY_KEYS = frozenset({"scene", "cameras", "out", "size", "outputs", "linear", "msaa",
+                         "colmap", "cache", "options", "strict", "allow_outside_paths"})
+_JOB_KEYS = frozenset({"scenes", "views_per_item", "retries"})
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    """How an entry's views are rendered and written: everything but the poses.
+
+    scene : the scene file (None: the built-in chart). size : (width, height).
+    outputs : dataset output names besides colour, in order. options : a RenderOptions.
+    cache : load the scene through the bake cache (vkpbr.bake.bake.cached_bake), in
+        `cache_dir` (None: $VKPBR_CACHE_DIR, else ~/.cache/vkpbr, on the actor's machine).
+    """
+
+    scene: Path | None
+    out: Path
+    size: tuple[int, int]
+    outputs: tuple[str, ...] = ()
+    linear: bool = False
+    msaa: int = 1
+    cache: bool = True
+    cache_dir: str | None = None
+    options: Any = None  # RenderOptions; None: RenderOptions()
+    strict: bool = False
+    allow_outside_paths: bool = False
+
+    @property
+    def suffix(self) -> str:
+        return ".npy" if self.linear else ".png"
+
+    def render_options(self) -> Any:
+        from vkpbr.render.options import RenderOptions
+
+        return self.options if self.options is not None else RenderOptions()
+
+    def scene_key(self) -> tuple:
+        """What an actor loads once and keeps: one Renderer per distinct key."""
+        return (str(self.scene) if self.scene else None, self.cache, self.strict,
+                self.allow_outside_paths, self.msaa)
+
+
+def frame_files(settings: RenderSettings, frame: int) -> list[str]:
+    """The files view `frame` writes into `settings.out`: the colour image first, then each
+    dataset output beside it (the names `vkpbr render --cameras` gives)."""
+    from vkpbr.app.output import output_path
+
+    color = f"frame_{frame:05d}{settings.suffix}"
+    return [color, *(output_path(Path(color), n).name for n in settings.outputs)]
+
+
+@dataclass(frozen=True)
+class SceneJob:
+    """One entry: a scene, its poses and where they go. `poses` are vkpbr.scene.camera.Pose."""
+
+    settings: RenderSettings
+    poses: tuple[Any, ...]
+    colmap: bool = False
+    where: str = "entry 0"  # how messages name the entry ("job.json: entry 2")
+
+    def fingerprint(self) -> dict[str, object]:
+        """What the files depend on; a manifest written for another fingerprint is refused."""
+        s = self.settings
+        poses = hashlib.sha256(repr(self.poses).encode()).hexdigest()
+        return {"scene": str(s.scene.resolve()) if s.scene else None, "views": len(self.poses),
+                "poses_sha256": poses, "size": list(s.size), "outputs": list(s.outputs),
+                "linear": s.linear, "msaa": s.msaa, "options": repr(s.render_options())}
+
+
+@dataclass(frozen=True)
+class WorkItem:
+    """What one actor call renders: views `frames` of entry `entry`, from `poses`."""
+
+    entry: int
+    frames: tuple[int, ...]
+    poses: tuple[Any, ...]
+    settings: RenderSettings
+
+    def label(self) -> str:
+        scene = self.settings.scene.name if self.settings.scene else "<built-in chart>"
+        lo, hi = self.frames[0], self.frames[-1]
+        return f"{scene} view{'s' if len(self.frames) > 1 else ''} {lo}" + (f"-{hi}" if hi != lo else "")
+
+
+@dataclass(frozen=True)
+class Job:
+    """A checked job: its scene entries and how items are cut and retried."""
+
+    scenes: tuple[SceneJob, ...]
+    views_per_item: int = DEFAULT_VIEWS_PER_ITEM
+    retries: int = DEFAULT_RETRIES
+    source: str = "job"
+
+    @property
+    def views(self) -> int:
+        return sum(len(s.poses) for s in self.scenes)
+
+    def items(self, skip: Sequence[set[int]] | None = None) -> list[WorkItem]:
+        """The work items, entry by entry (so an actor keeps its scene loaded), leaving out
+        the views in `skip[entry]` (done in an earlier run)."""
+        out = []
+        for e, scene in enumerate(self.scenes):
+            done = skip[e] if skip is not None else set()
+            todo = [i for i in range(len(scene.poses)) if i not in done]
+            for k in range(0, len(todo), self.views_per_item):
+                frames = tuple(todo[k:k + self.views_per_item])
+                out.append(WorkItem(e, frames, tuple(scene.poses[i] for i in frames), scene.settings))
+        return out
+
+
+def _type(value: object) -> str:
+    from vkpbr.scene.poses import _json_type
+
+    return _json_type(value)
+
+
+def _bool(entry: Mapping[str, object], key: str, where: str, default: bool) -> bool:
+    value = entry.get(key, default)
+    if not isinstance(value, bool):
+        raise UsageError(f"{where}: {key}: expected true or false, got {_type(value)}")
+    return value
+
+
+def _path(value: object, key: str, where: str, base: Path) -> Path:
+    if not isinstance(value, str) or not value.strip():
+        raise UsageError(f"{where}: {key}: expected a path, got {_type(value)}")
+    p = Path(os.path.expanduser(value))
+    return p if p.is_absolute() else base / p
+
+
+def _size(value: object, where: str) -> tuple[int, int]:
+    from vkpbr.scene._checks import size_arg
+
+    if isinstance(value, str):
+        parts = value.lower().split("x")
+        try:
+            value = [int(p) for p in parts]
+        except ValueError:
+            raise UsageError(f'{where}: size: expected "WIDTHxHEIGHT" or [width, height], '
+                             f"got {value!r}") from None
+    size = size_arg(value, f"{where}: size")
+    if max(size) > MAX_SIDE:
+        raise UsageError(f"{where}: size: {size[0]}x{size[1]} is larger than {MAX_SIDE} a side")
+    return size
+
+
+def _outputs(value: object, where: str) -> tuple[str, ...]:
+    from vkpbr.app.output import OUTPUT_KINDS
+
+    if isinstance(value, str):
+        value = [v.strip() for v in value.split(",") if v.strip()]
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise UsageError(f"{where}: outputs: expected a list of output names, got {_type(value)}")
+    for name in value:
+        if name not in OUTPUT_KINDS:
+            raise UsageError(f"{where}: outputs: unknown output {name!r} (known: "
+                             f"{', '.join(OUTPUT_KINDS)})")
+    if len(set(value)) != len(value):
+        raise UsageError(f"{where}: outputs: {value} names an output twice")
+    return tuple(n for n in value if n != "color")
+
+
+def _options(value: object, where: str) -> Any:
+    from vkpbr.render.options import RenderOptions
+
+    if not isinstance(value, dict):
+        raise UsageError(f"{where}: options: expected an object of render options, got {_type(value)}")
+    known = {f.name for f in dataclasses.fields(RenderOptions)}
+    unknown = sorted(set(value) - known)
+    if unknown:
+        raise UsageError(f"{where}: options: unknown option {unknown[0]!r} (known: "
+                         f"{', '.join(sorted(known))})")
+    try:
+        return RenderOptions(**value)
+    except UsageError as exc:
+        raise UsageError(f"{where}: options: {exc}") from None
+
+
+def _poses(value: object, where: str, base: Path) -> tuple[Any, ...]:
+    from vkpbr.scene.poses import load_poses, parse_poses
+
+    if isinstance(value, str):
+        from vkpbr.scene._checks import context
+
+        with context(f"{where}: cameras"):  # the poses file's own messages, after the entry
+            return tuple(load_poses(_path(value, "cameras", where, base)))
+    if isinstance(value, (list, dict)):
+        return tuple(parse_poses(value, f"{where}: cameras"))
+    raise UsageError(f"{where}: cameras: expected a poses file or a list of poses, got "
+                     f"{_type(value)}")
+
+
+def scene_entry(entry: object, where: str, base: Path) -> SceneJob:
+    """One checked entry of a job file (see the module docstring)."""
+    if not isinstance(entry, dict):
+        raise UsageError(f"{where}: expected an object with scene, cameras and out, got {_type(entry)}")
+    unknown = sorted(set(entry) - _ENTRY_KEYS)
+    if unknown:
+        raise UsageError(f"{where}: unknown key {unknown[0]!r} (known: {', '.join(sorted(_ENTRY_KEYS))})")
+    for key in ("cameras", "out"):
+        if key not in entry:
+            raise UsageError(f'{where}: missing "{key}"')
+    scene = entry.get("scene")
+    scene_path = None if scene is None else _path(scene, "scene", where, base)
+    if scene_path is not None and not scene_path.is_file():
+        raise UsageError(f"{where}: scene {scene_path}: no such file")
+    msaa = entry.get("msaa", 1)
+    if msaa not in (1, 4) or isinstance(msaa, bool):
+        raise UsageError(f"{where}: msaa: expected 1 or 4, got {msaa!r}")
+    settings = RenderSettings(
+        scene=scene_path, out=_path(entry["out"], "out", where, base),
+        size=_size(entry.get("size", "1280x720"), where),
+        outputs=_outputs(entry.get("outputs", []), where),
+        linear=_bool(entry, "linear", where, False), msaa=int(msaa),
+        cache=_bool(entry, "cache", where, True),
+        options=_options(entry["options"], where) if "options" in entry else None,
+        strict=_bool(entry, "strict", where, False),
+        allow_outside_paths=_bool(entry, "allow_outside_paths", where, False))
+    return SceneJob(settings, _poses(entry["cameras"], where, base),
+                    colmap=_bool(entry, "colmap", where, False), where=where)
+
+
+def _count(doc: Mapping[str, object], key: str, where: str, default: int, lo: int) -> int:
+    value = doc.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, int) or value < lo:
+        raise UsageError(f"{where}: {key}: expected an integer >= {lo}, got {value!r}")
+    return value
+
+
+def job_from_doc(doc: object, source: str = "job", base: str | os.PathLike[str] = ".") -> Job:
+    """A checked Job from a decoded job document (a list of entries, or {"scenes": [...]});
+    `source` starts every message, `base` resolves relative paths."""
+    base = Path(base)
+    settings: Mapping[str, object] = {}
+    if isinstance(doc, dict):
+        unknown = sorted(set(doc) - _JOB_KEYS)
+        if unknown:
+            raise UsageError(f"{source}: unknown key {unknown[0]!r} (known: {', '.join(sorted(_JOB_KEYS))})")
+        if "scenes" not in doc:
+            raise UsageError(f'{source}: missing "scenes" (the list of scene entries)')
+        settings, doc = doc, doc["scenes"]
+    if not isinstance(doc, list):
+        raise UsageError(f"{source}: expected a list of scene entries, got {_type(doc)}")
+    if not doc:
+        raise UsageError(f"{source}: the list of scene entries is empty")
+    scenes = tuple(scene_entry(e, f"{source}: entry {i}", base) for i, e in enumerate(doc))
+    seen: dict[Path, str] = {}
+    for s in scenes:  # two entries in one folder would write the same frame names
+        key = Path(os.path.abspath(s.settings.out))
+        if key in seen:
+            raise UsageError(f"{s.where}: out {s.settings.out}: the same folder as {seen[key]}; "
+                             "give each scene its own")
+        seen[key] = s.where.removeprefix(f"{source}: ")
+    return Job(scenes, views_per_item=_count(settings, "views_per_item", source,
+                                             DEFAULT_VIEWS_PER_ITEM, 1),
+               retries=_count(settings, "retries", source, DEFAULT_RETRIES, 0), source=source)
+
+
+def load_job(path: str | os.PathLike[str]) -> Job:
+    """Read and check a job file; relative paths in it are relative to its folder."""
+    p = Path(path)
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise UsageError(f"{p}: cannot read the job file: {exc.strerror or exc}") from None
+    try:
+        doc = json.loads(data)
+    except RecursionError:
+        raise UsageError(f"{p}: not valid JSON (nested too deeply)") from None
+    except ValueError as exc:
+        problem = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise UsageError(f"{p}: not valid JSON ({problem})") from None
+    return job_from_doc(doc, str(p), p.parent)

@@ -1,0 +1,110 @@
+"""Vulkan memory seen by CUDA: frames handed to PyTorch on the same GPU without a host copy.
+
+A buffer allocated exportable (gpu/buffer.py, VK_KHR_external_memory_fd) is exported as a
+file descriptor and imported into CUDA as external memory, mapped as one device pointer
+(`CudaImport`); `CudaImport.tensor` wraps it as a torch tensor through the CUDA Array
+Interface (torch.as_tensor reads `__cuda_array_interface__` without copying).
+
+The CUDA calls go through cuda-python (`cuda.bindings.runtime`, NVIDIA's own binding of the
+CUDA runtime, the `cuda` extra): torch has no call that imports external memory, cupy would
+be a second array library for one call, and hand-written ctypes structs of the runtime's
+handle descriptors would be the renderer guessing CUDA's ABI. Everything here is optional:
+`cuda_unavailable()` says in one line why it cannot run.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from vkpbr.errors import UsageError, VkpbrError
+
+__all__ = ["CudaImport", "cuda_unavailable", "cuda_device_for"]
+
+
+def _runtime() -> Any:
+    try:
+        from cuda.bindings import runtime  # cuda-python >= 12.6
+    except ImportError:
+        from cuda import cudart as runtime  # older cuda-python
+    return runtime
+
+
+def cuda_unavailable() -> str | None:
+    """Why frames cannot be handed to torch on CUDA here, or None."""
+    try:
+        import torch
+    except ImportError:
+        return "PyTorch is not installed (pip install torch)"
+    if not torch.cuda.is_available():
+        return "torch.cuda.is_available() is False (no CUDA device or driver)"
+    try:
+        _runtime()
+    except ImportError:
+        return "cuda-python is not installed (pip install 'vkpbr[cuda]')"
+    return None
+
+
+def _check(result: Any, call: str) -> Any:
+    """cuda-python returns (error, *values): raise on an error, return the values."""
+    rt = _runtime()
+    err, *values = result if isinstance(result, tuple) else (result,)
+    if err != rt.cudaError_t.cudaSuccess:
+        raise VkpbrError(f"CUDA {call} failed: {getattr(err, 'name', err)}")
+    return values[0] if len(values) == 1 else values
+
+
+def cuda_device_for(uuid: bytes, name: str) -> int:
+    """The CUDA device index of the GPU whose UUID is `uuid` (the Vulkan device's)."""
+    rt = _runtime()
+    count = _check(rt.cudaGetDeviceCount(), "cudaGetDeviceCount")
+    for i in range(count):
+        props = _check(rt.cudaGetDeviceProperties(i), "cudaGetDeviceProperties")
+        if bytes(props.uuid.bytes)[:16] == uuid[:16]:
+            return i
+    raise UsageError(f"device='cuda': the Vulkan device ({name}) is none of the {count} CUDA "
+                     "devices; pick the NVIDIA GPU with Renderer(device=...)")
+
+
+class _CudaArray:
+    """A CUDA Array Interface (version 3) over `ptr`: what torch.as_tensor wraps."""
+
+    def __init__(self, ptr: int, shape: tuple[int, ...], typestr: str, owner: Any) -> None:
+        self.owner = owner  # keeps the import alive while a tensor views it
+        self.__cuda_array_interface__ = {"shape": shape, "typestr": typestr,
+                                         "data": (int(ptr), False), "version": 3,
+                                         "strides": None, "stream": None}
+
+
+class CudaImport:
+    """`size` bytes of Vulkan memory exported as the file descriptor `fd` (ownership passes
+    to CUDA), mapped into CUDA device `device` as one buffer."""
+
+    def __init__(self, fd: int, size: int, device: int) -> None:
+        rt = _runtime()
+        self.device, self.size = device, int(size)
+        _check(rt.cudaSetDevice(device), "cudaSetDevice")
+        desc = rt.cudaExternalMemoryHandleDesc()
+        desc.type = rt.cudaExternalMemoryHandleType.cudaExternalMemoryHandleTypeOpaqueFd
+        desc.handle.fd = int(fd)
+        desc.size = self.size
+        self._ext = _check(rt.cudaImportExternalMemory(desc), "cudaImportExternalMemory")
+        buf = rt.cudaExternalMemoryBufferDesc()
+        buf.offset, buf.size, buf.flags = 0, self.size, 0
+        self.ptr = int(_check(rt.cudaExternalMemoryGetMappedBuffer(self._ext, buf),
+                              "cudaExternalMemoryGetMappedBuffer"))
+
+    def tensor(self, shape: tuple[int, ...], dtype: str = "|u1") -> Any:
+        """A torch tensor viewing the start of the buffer (no copy): valid until the memory
+        is written again; callers clone it before handing it out."""
+        import torch
+
+        return torch.as_tensor(_CudaArray(self.ptr, shape, dtype, self),
+                               device=f"cuda:{self.device}")
+
+    def close(self) -> None:
+        if self._ext is None:
+            return
+        rt = _runtime()
+        _check(rt.cudaFree(self.ptr), "cudaFree")
+        _check(rt.cudaDestroyExternalMemory(self._ext), "cudaDestroyExternalMemory")
+        self._ext = None

@@ -1,0 +1,215 @@
+"""The batch path of a Renderer: what `Renderer.render_batch` runs per submission.
+
+`BatchPath` owns the batch's targets (gpu/batch_target.py, by size, chunk, colour kind and
+copies), its GPU resources (render/batch.py BatchViews) and, for `device="cuda"`, the CUDA
+imports of the targets' exported memory (gpu/cuda.py). Per submission it does what
+`Renderer.draw` does for one frame, for many views: the frame's lights, environment and
+shadow maps (directional ones over the whole scene), the uniforms of the first view (what the
+views share), every view's ViewRecord and blended order, the recorded commands, one submit,
+one wait, one readback (or one device-to-device clone into torch).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+
+from vkpbr.errors import UsageError
+from vkpbr.gpu.batch_target import BatchTarget
+from vkpbr.render import layouts as L
+from vkpbr.render.batch import MAX_LAYERS, BatchViews
+from vkpbr.render.camera import batch_frame_terms, linear_depth
+from vkpbr.render.frames import write_frame_uniforms
+from vkpbr.render.options import RenderOptions
+from vkpbr.scene.camera_batch import CameraBatch
+
+# The Renderer (render/renderer.py) that owns the path: not imported here (it imports this
+# module), typed by what it is.
+Renderer = Any
+LightsArg = Any  # renderer.LightsArg: None, a Light or an iterable of Lights
+
+__all__ = ["BatchPath"]
+
+
+class BatchPath:
+    """The batch path of `renderer` (made on its first batch, closed with it)."""
+
+    def __init__(self, renderer: Renderer) -> None:
+        self.r = renderer
+        self.views: BatchViews | None = None
+        self.targets: dict[tuple, BatchTarget] = {}
+        self._cuda_imports: dict[int, Any] = {}  # gpu/cuda.py CudaImport by target
+        self._cuda_events: dict[int, Any] = {}  # torch.cuda.Event of a target's last clone
+
+    # --- whole batches ----------------------------------------------------------------------
+    def render(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
+               opts: RenderOptions, linear: bool, depth: bool, batch: int | str
+               ) -> tuple[np.ndarray, np.ndarray | None]:
+        """Colour (and depth) of every view, in submissions of `per_submission` views."""
+        per = self.per_submission(size, linear, depth, batch)
+        colors, depths = [], []
+        for start in range(0, len(views), per):
+            part = _slice(views, start, min(start + per, len(views)))
+            color, dist = self._submit(part, size, lights, opts, linear, depth)
+            colors.append(color)
+            depths.append(dist)
+        color = colors[0] if len(colors) == 1 else np.concatenate(colors)
+        if depths[0] is None:
+            return color, None
+        return color, depths[0] if len(depths) == 1 else np.concatenate(depths)
+
+    def render_cuda(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
+                    opts: RenderOptions, linear: bool, batch: int | str) -> Any:
+        """The colour of every view as one torch tensor on the renderer's GPU."""
+        from vkpbr.gpu.cuda import cuda_unavailable
+
+        dev = self.r.device
+        why = cuda_unavailable()
+        if why is None and not dev.external_memory_fd:
+            why = f"{dev.info.name} cannot export memory (VK_KHR_external_memory_fd)"
+        if why is None and not dev.batch_views:
+            why = f"{dev.info.name} lacks layered rendering for batches"
+        if why is not None:
+            raise UsageError(f"device='cuda' is not available here: {why}")
+        import torch
+
+        per = self.per_submission(size, linear, False, batch)
+        parts = [self._submit(_slice(views, s, min(s + per, len(views))), size, lights, opts,
+                              linear, False, cuda=True)[0] for s in range(0, len(views), per)]
+        return parts[0] if len(parts) == 1 else torch.cat(parts)
+
+    def per_submission(self, size: tuple[int, int], linear: bool, depth: bool,
+                       batch: int | str) -> int:
+        """Views per submission: `batch`, checked against the free memory, or for "auto" as
+        many as fit in a quarter of it (device and host-visible readback), at most 65,536."""
+        w, h = int(size[0]), int(size[1])
+        pixel = 16 if linear else 4
+        local, host = self.r.device.memory_available()
+        device_view = w * h * (pixel + 4) + L.VIEW_RECORD.size + 4 * len(self.r.gpu_scene.draws)
+        host_view = w * h * (pixel + (4 if depth else 0))
+        fits = max(1, min(local // device_view, host // host_view))  # all of the free memory
+        if batch == "auto":
+            return max(1, min(fits // 4, 1 << 16))
+        if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
+            raise UsageError(f"batch {batch!r}: expected a positive number of views or 'auto'")
+        if batch > fits:
+            raise UsageError(f"batch {batch}: {batch:,} views of {w}x{h} need more memory than "
+                             f"is free ({fits:,} fit); give batch='auto' or at most {fits // 2:,}")
+        return batch
+
+    # --- one submission ---------------------------------------------------------------------
+    def _submit(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
+                opts: RenderOptions, linear: bool, depth: bool, cuda: bool = False
+                ) -> tuple[Any, np.ndarray | None]:
+        r, n = self.r, len(views)
+        limits = r.device.limits
+        layers = max(1, min(n, MAX_LAYERS, int(limits.maxFramebufferLayers),
+                            int(limits.maxImageArrayLayers)))
+        target = self._target(size, layers, n, linear, depth, cuda)
+        if self.views is None:
+            self.views = BatchViews(r.device, r.scene, r.gpu_scene, r.ring, r.slots,
+                                    r.set_layouts[0], r.recorder, r.shadows)
+        bv = self.views
+        bv.ensure(n, layers)
+        frame_lights = r.frame_lights(opts, lights)
+        r.bind_environment_for(opts)
+        terms = batch_frame_terms(views.eye, views.target, views.up, views.yfov_deg,
+                                  views.intrinsics, views.znear, views.zfar, tuple(size),
+                                  r.bounds.corners, r.bounds.radius)
+        frame = r.ring.begin()
+        slot = r.slots[frame.index]
+        plan = r.shadow_plan(frame_lights, opts)
+        rows = r.write_scene_shadows(slot, plan, frame_lights, opts)
+        first = views.camera(0)
+        write_frame_uniforms(slot, first, frame_lights, size, opts, linear, r.bounds,
+                             r.frame_lighting(opts), rows)
+        bv.write_views(terms, views.eye)
+        groups = bv.write_blend_groups(r.blend_orders(views.eye))
+        cmd = bv.command_buffer(target, frame, n, opts.tbn, opts.alpha_mask, plan, groups,
+                                r.prepass_for(target))
+        if cuda:
+            self._cuda_wait(target)
+        frame.submit(cmd)
+        frame.stamped = r.ring.query_pool is not None
+        frame.wait()
+        r.last_stats = dataclasses.replace(r.read_frame_timings(frame))
+        color = self._cuda_view(target, n, linear) if cuda else target.read_color(n)
+        dist = linear_depth(target.read_depth(n), terms["znear"][:, None, None]) if depth else None
+        r.device.check_validation()
+        return color, dist
+
+    def _target(self, size: tuple[int, int], layers: int, views: int, linear: bool,
+                depth: bool, cuda: bool) -> BatchTarget:
+        key = (tuple(size), layers, linear, depth, cuda)
+        target = self.targets.get(key)
+        if target is not None and target.capacity >= views:
+            return target
+        if target is not None:
+            self.r.device.wait_idle()
+            self.free_recordings()
+            self._forget_cuda(target)
+            target.destroy()
+        target = BatchTarget(self.r.device, size, layers, views, "float" if linear else "srgb",
+                             depth, clear_color=(*self.r.background, 1.0), external=cuda)
+        self.targets[key] = target
+        return target
+
+    # --- CUDA -------------------------------------------------------------------------------
+    def _cuda_view(self, target: BatchTarget, views: int, linear: bool) -> Any:
+        """A torch tensor of the first `views` views of an external target's colour: a clone
+        (on torch's current stream) of the imported Vulkan memory; the next batch into the
+        target waits for the clone (`_cuda_wait`)."""
+        import torch
+
+        from vkpbr.gpu.cuda import CudaImport, cuda_device_for
+
+        imported = self._cuda_imports.get(id(target))
+        if imported is None:
+            dev = self.r.device
+            index = cuda_device_for(dev.uuid(), dev.info.name)
+            buf = target.color_readback
+            imported = CudaImport(buf.export_fd(), buf.allocation_size, index)
+            self._cuda_imports[id(target)] = imported
+        w, h = target.extent
+        out = imported.tensor((views, h, w, 4), "<f4" if linear else "|u1").clone()
+        event = torch.cuda.Event()
+        event.record()
+        self._cuda_events[id(target)] = event
+        return out
+
+    def _cuda_wait(self, target: BatchTarget) -> None:
+        """Before a batch writes an external target: CUDA has finished copying the last one."""
+        event = self._cuda_events.pop(id(target), None)
+        if event is not None:
+            event.synchronize()
+
+    def _forget_cuda(self, target: BatchTarget) -> None:
+        self._cuda_wait(target)
+        imported = self._cuda_imports.pop(id(target), None)
+        if imported is not None:
+            imported.close()
+
+    # --- lifetime ---------------------------------------------------------------------------
+    def free_recordings(self) -> None:
+        if self.views is not None:
+            self.views.free_recordings()
+
+    def close(self) -> None:
+        if self.views is not None:
+            self.views.destroy()
+            self.views = None
+        for target in self.targets.values():
+            self._forget_cuda(target)
+            target.destroy()
+        self.targets = {}
+
+
+def _slice(views: CameraBatch, start: int, stop: int) -> CameraBatch:
+    def part(a: np.ndarray | None) -> np.ndarray | None:
+        return None if a is None else a[start:stop]
+
+    return CameraBatch(views.eye[start:stop], views.target[start:stop], views.up[start:stop],
+                       views.yfov_deg[start:stop], part(views.intrinsics), part(views.znear),
+                       part(views.zfar))

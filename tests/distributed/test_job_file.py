@@ -1,0 +1,184 @@
+"""vkpbr.distributed without a cluster: the job file's checks (one line each, before any actor
+starts), the manifest's records, and a missing ray extra."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from vkpbr.app.cli import main
+from vkpbr.distributed import MANIFEST_NAME, Manifest, job_from_doc, load_job
+from vkpbr.errors import UsageError
+
+SRC = Path(__file__).resolve().parents[2] / "src"
+POSES = ["3,1,3,0,0,0", "3,1.2,2.8,0,0,0", "2.8,1,3.2,0,0,0"]
+
+
+def write_job(tmp_path: Path, doc: object) -> Path:
+    (tmp_path / "poses.json").write_text(json.dumps(POSES))
+    path = tmp_path / "job.json"
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def test_job_file_entries_and_items(tmp_path: Path) -> None:
+    (tmp_path / "m.glb").write_bytes(b"")  # only its existence is checked here
+    job = load_job(write_job(tmp_path, {"views_per_item": 2, "retries": 1, "scenes": [
+        {"scene": "m.glb", "cameras": "poses.json", "out": "a", "size": "64x48",
+         "outputs": ["depth", "color", "instance"]},
+        {"cameras": [{"eye": [0, 1, 3], "target": [0, 0, 0]}], "out": "b", "size": [32, 16],
+         "linear": True, "options": {"view": "d"}}]}))
+    a, b = job.scenes
+    assert a.settings.scene == tmp_path / "m.glb" and a.settings.out == tmp_path / "a"
+    assert a.settings.size == (64, 48) and a.settings.outputs == ("depth", "instance")
+    assert b.settings.scene is None and b.settings.size == (32, 16) and len(b.poses) == 1
+    assert b.settings.render_options().view.label == "d"
+    assert job.views == 4 and job.retries == 1
+    items = job.items()
+    assert [(i.entry, i.frames) for i in items] == [(0, (0, 1)), (0, (2,)), (1, (0,))]
+    # Views done before are left out; the rest is cut into items again.
+    assert [(i.entry, i.frames) for i in job.items([{1}, set()])] == [(0, (0, 2)), (1, (0,))]
+
+
+@pytest.mark.parametrize(("doc", "message"), [
+    ({}, 'missing "scenes"'),
+    ([], "the list of scene entries is empty"),
+    ("x", "expected a list of scene entries, got a string"),
+    ([{"out": "a"}], 'entry 0: missing "cameras"'),
+    ([{"cameras": "poses.json"}], 'entry 0: missing "out"'),
+    ([{"cameras": "poses.json", "out": "a", "colour": 1}], "entry 0: unknown key 'colour'"),
+    ([{"cameras": "poses.json", "out": "a", "size": "64by48"}], "entry 0: size: expected"),
+    ([{"cameras": "poses.json", "out": "a", "size": [0, 4]}], "width must be a positive"),
+    ([{"cameras": "poses.json", "out": "a", "size": [99999, 4]}], "larger than 16384"),
+    ([{"cameras": "poses.json", "out": "a", "outputs": ["dpeth"]}], "unknown output 'dpeth'"),
+    ([{"cameras": "poses.json", "out": "a", "msaa": 2}], "msaa: expected 1 or 4"),
+    ([{"cameras": "poses.json", "out": "a", "linear": "yes"}], "linear: expected true or false"),
+    ([{"cameras": "poses.json", "out": "a", "options": {"veiw": "d"}}], "unknown option 'veiw'"),
+    ([{"cameras": "poses.json", "out": "a", "options": {"exposure": 99}}], "options: exposure"),
+    ([{"cameras": "missing.json", "out": "a"}], "cannot read the poses file"),
+    ([{"cameras": ["1,2"], "out": "a"}], "entry 0: cameras: entry 0"),
+    ([{"scene": "nope.glb", "cameras": "poses.json", "out": "a"}], "nope.glb: no such file"),
+    ([{"cameras": "poses.json", "out": "a"}, {"cameras": "poses.json", "out": "a/"}],
+     "entry 1: out"),
+    ({"scenes": [{"cameras": "poses.json", "out": "a"}], "views_per_item": 0}, "views_per_item"),
+])
+def test_bad_job_file_is_one_line_before_any_work(capsys, tmp_path: Path, doc: object,
+                                                  message: str) -> None:
+    path = write_job(tmp_path, doc)
+    code = main(["batch", str(path)])
+    _, err = capsys.readouterr()
+    assert code == 2 and err.startswith("vkpbr: error: ") and err.count("\n") == 1, err
+    assert message in err and str(path) in err, err
+    assert not (tmp_path / "a").exists()  # nothing was created: checked before any work
+
+
+def test_job_file_not_json(capsys, tmp_path: Path) -> None:
+    path = tmp_path / "job.json"
+    path.write_text("[{")
+    assert main(["batch", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "not valid JSON" in err and err.count("\n") == 1
+
+
+def _job(tmp_path: Path, out: Path) -> Path:
+    return write_job(tmp_path, [{"cameras": "poses.json", "out": str(out), "size": "16x16"}])
+
+
+@pytest.mark.parametrize("how", ["beneath-a-file", "read-only"])
+def test_unwritable_out_folder_is_one_line(capsys, tmp_path: Path, how: str) -> None:
+    if how == "beneath-a-file":
+        (tmp_path / "file").write_text("x")
+        out = tmp_path / "file" / "frames"
+    else:
+        if os.geteuid() == 0:
+            pytest.skip("root writes into a read-only folder")
+        out = tmp_path / "ro"
+        out.mkdir(mode=0o555)
+    code = main(["batch", str(_job(tmp_path, out))])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and f"out {out}: not writable" in err, err
+
+
+def test_missing_ray_extra_is_one_line(tmp_path: Path) -> None:
+    """With ray unimportable (a package of that name that raises ImportError ahead of the
+    real one), `vkpbr batch` and `render --ray` say how to install it, in one line."""
+    shadow = tmp_path / "shadow" / "ray"
+    shadow.mkdir(parents=True)
+    (shadow / "__init__.py").write_text('raise ImportError("No module named \'ray\'")\n')
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(shadow.parent), str(SRC)])}
+    job = _job(tmp_path, tmp_path / "frames")
+    for argv in (["batch", str(job)],
+                 ["render", "--cameras", str(tmp_path / "poses.json"), "--out",
+                  str(tmp_path / "f2"), "--ray"]):
+        proc = subprocess.run([sys.executable, "-m", "vkpbr", *argv], capture_output=True,
+                              text=True, env=env, timeout=120)
+        assert proc.returncode == 2, proc.stderr
+        assert proc.stderr.count("\n") == 1 and "pip install 'vkpbr[ray]'" in proc.stderr, proc.stderr
+
+
+def test_render_ray_needs_cameras_and_no_camera_flags(capsys, tmp_path: Path) -> None:
+    assert main(["render", "--out", str(tmp_path / "x"), "--ray"]) == 2
+    assert "--ray renders a --cameras batch" in capsys.readouterr().err
+    (tmp_path / "p.json").write_text(json.dumps(POSES))
+    assert main(["render", "--cameras", str(tmp_path / "p.json"), "--out", str(tmp_path / "x"),
+                 "--ray", "--light", "1,2,3"]) == 2
+    assert "--light is not available with --ray" in capsys.readouterr().err
+
+
+def _entry(tmp_path: Path) -> object:
+    return job_from_doc([{"cameras": POSES, "out": str(tmp_path), "size": "16x8"}]).scenes[0]
+
+
+def test_manifest_records_resume_and_refuses_another_job(tmp_path: Path) -> None:
+    scene = _entry(tmp_path)
+    m = Manifest.open(tmp_path, scene.fingerprint(), "entry 0")
+    assert m.done_views() == set()
+    cams = [{"eye": [0.0, 1.0, 3.0], "target": [0.0, 0.0, 0.0], "up": [0.0, 1.0, 0.0],
+             "yfov_deg": 60.0, "znear": None, "zfar": None, "name": "a", "pixel_intrinsics": None}]
+    (tmp_path / "frame_00000.png").write_bytes(b"x")
+    m.done([0], ["frame_00000.png"], cams)
+    m.failed([1], "SceneError: bad", 3)
+    m.close()
+    # A driver killed mid-line: the cut-short line is dropped, the next append is whole.
+    with open(tmp_path / MANIFEST_NAME, "ab") as f:
+        f.write(b'{"type": "done", "views": [2], "fi')
+    again = Manifest.open(tmp_path, scene.fingerprint(), "entry 0")
+    assert again.done_views() == {0} and again.failures == {1: "SceneError: bad"}
+    assert again.cameras(1)[0].eye == (0.0, 1.0, 3.0)
+    assert again.cameras(2) is None
+    (tmp_path / "frame_00002.png").write_bytes(b"x")
+    again.done([2], ["frame_00002.png"], cams)
+    again.close()
+    lines = (tmp_path / MANIFEST_NAME).read_text().splitlines()
+    assert [json.loads(line)["type"] for line in lines] == ["job", "done", "failed", "done"]
+    assert Manifest.open(tmp_path, scene.fingerprint(), "e").done_views() == {0, 2}
+    # A done view whose file was deleted is rendered again.
+    (tmp_path / "frame_00000.png").unlink()
+    assert Manifest.open(tmp_path, scene.fingerprint(), "e").done_views() == {2}
+    # Another size: the files would be stale; refused in one line.
+    other = job_from_doc([{"cameras": POSES, "out": str(tmp_path), "size": "16x9"}]).scenes[0]
+    with pytest.raises(UsageError, match=r"written by a job with another size \(\[16, 8\], now \[16, 9\]\)"):
+        Manifest.open(tmp_path, other.fingerprint(), "e")
+
+
+@settings(max_examples=60, deadline=None)
+@given(views=st.integers(1, 40), per_item=st.integers(1, 9), data=st.data())
+def test_items_cover_every_view_not_done_exactly_once(views: int, per_item: int, data) -> None:  # noqa: ANN001
+    done = data.draw(st.sets(st.integers(0, views - 1)))
+    poses = [f"3,1,{1 + i / 10},0,0,0" for i in range(views)]
+    job = job_from_doc({"scenes": [{"cameras": poses, "out": "/nonexistent/a"},
+                                   {"cameras": POSES[:2], "out": "/nonexistent/b"}],
+                        "views_per_item": per_item})
+    items = job.items([done, set()])
+    first = [v for i in items if i.entry == 0 for v in i.frames]
+    assert first == [v for v in range(views) if v not in done]  # in order, each once
+    assert [v for i in items if i.entry == 1 for v in i.frames] == [0, 1]
+    assert all(1 <= len(i.frames) <= per_item for i in items)
+    assert all(i.poses == tuple(job.scenes[i.entry].poses[v] for v in i.frames) for i in items)
