@@ -24,8 +24,8 @@ and B: one warm-up call, then the median of `--reps` timed calls of
   of `render_batch(..., device="cuda")` + `torch.cuda.synchronize()`, the views a (B, H, W, 4)
   tensor on the GPU (no host copy).
 
-A B whose target would exceed `--max-mib` (default: a quarter of the device's local memory,
-as `batch="auto"` budgets a submission) is skipped. Not a test. Prints one Markdown table;
+A B whose views would need more than `--max-mib` (default: a quarter of the free device or
+host memory, whichever is less, as `batch="auto"` budgets a submission) is skipped. Not a test. Prints one Markdown table;
 `--json FILE` appends one JSON line per row.
 """
 
@@ -136,7 +136,11 @@ def run_scene(key: str, sizes: list[tuple[int, int]], batches: list[int], reps: 
     rows = []
     torch = torch_cuda()
     with Renderer(scene) as r:
-        budget = (max_mib * 2**20) if max_mib else r.device.local_memory_bytes() / 4
+        if max_mib:
+            budget = max_mib * 2**20
+        else:  # free device and host memory (VK_EXT_memory_budget where the driver has it)
+            local, host = r.device.memory_available()
+            budget = min(local, host) / 4
         for size in sizes:
             w, h = size
             for b in batches:

@@ -91,7 +91,7 @@ def test_bench_reads_earlier_peer_rows(tmp_path: Path) -> None:
     good = tmp_path / "peers.json"
     good.write_text(json.dumps({"scenario": "batch", "peer": "sapien"}) + "\n\n")
     args = argparse.Namespace(peers_json=[str(good)])
-    assert bench_cmd.read_peer_rows(args) == [{"scenario": "batch", "peer": "sapien"}]
+    assert bench_cmd.read_peer_rows(args) == [{"scenario": "batch", "peer": "sapien", "source": "peers.json"}]
     bad = tmp_path / "bad.json"
     bad.write_text("{nope\n")
     with pytest.raises(UsageError, match=r"bad.json:1: not JSON"):

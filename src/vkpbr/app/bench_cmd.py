@@ -258,7 +258,7 @@ def read_peer_rows(args: argparse.Namespace) -> list[dict]:
         for i, line in enumerate(path.read_text().splitlines(), 1):
             if line.strip():
                 try:
-                    rows.append(json.loads(line))
+                    rows.append({**json.loads(line), "source": path.name})
                 except json.JSONDecodeError as e:
                     raise UsageError(f"--peers-json {path}:{i}: not JSON ({e.msg})") from None
     return rows
@@ -293,8 +293,8 @@ def run_batch_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
         mine = ours.get((key, p["size"]))
         if not mine:
             continue
-        if p.get("poses_sha1") and p["poses_sha1"] != mine["poses_sha1"]:
-            log.warning("%s %s %s: other poses than vkpbr's (regenerate with the same --views); "
+        if p.get("poses_sha1") != mine["poses_sha1"]:
+            log.warning("%s %s %s: not the poses vkpbr rendered (same --views and seed needed); "
                         "not compared", p["peer"], key, p["size"])
             continue
         w, h = (int(v) for v in p["size"].split("x"))
@@ -302,9 +302,10 @@ def run_batch_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
         label = p["peer"] + (f" (pixel_scale {scale:g})" if scale != 1 else "")
         if p["peer"] == "sapien" and "group" in p.get("settings", ""):
             label = "sapien (RenderCameraGroup)"
+        label += f" {p.get('version', '')}" + (f" (from {p['source']})" if "source" in p else "")
         mr, pr = mine["views_per_s_readback"], p["views_per_s_readback"]
         mo, po = mine["views_per_s_render_only"], p["views_per_s_render_only"]
-        print(f"| {label} {p.get('version', '')} | {key} | {p['size']} | {int(w * h * scale * scale):,} "
+        print(f"| {label} | {key} | {p['size']} | {int(w * h * scale * scale):,} "
               f"| {pr:,.0f} | {mr:,.0f} | {mr / pr:.1f}x | {po:,.0f} | {mo:,.0f} | {mo / po:.1f}x |")
     return peers
 
