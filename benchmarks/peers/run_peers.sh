@@ -15,6 +15,7 @@ OUT=${OUT:-out/peers}
 FRAMES=${FRAMES:-100}
 VIEWS=${VIEWS:-256}
 REPS=${REPS:-3}
+RUN_TIMEOUT=${RUN_TIMEOUT:-240}  # seconds a batch run may take
 SCENARIOS=${SCENARIOS:-frames batch}
 PEERS=${PEERS:-pyrender pygfx sapien}
 mkdir -p "$OUT"
@@ -105,7 +106,7 @@ if has batch "$SCENARIOS"; then
         [ "$size" = 128x128 ] && [ "$scene" = helmet ] && [[ "$run" != *" 2" && "$run" != *group ]] \
           && png=(--png "$OUT/${peer}_helmet_batch.png")
         # shellcheck disable=SC2086
-        timeout 240 python3 "benchmarks/peers/${peer}_bench.py" --batch --scene "$scene" \
+        timeout "$RUN_TIMEOUT" python3 "benchmarks/peers/${peer}_bench.py" --batch --scene "$scene" \
           --size "$size" --poses "$poses" --reps "$REPS" --json "$OUT/peers.json" $extra \
           "${png[@]}" 2>> "$OUT/peers.log" \
           || echo "| $run | $scene | $size | failed (rc $?): $(tail -1 "$OUT/peers.log") |"

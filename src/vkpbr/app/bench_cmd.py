@@ -229,8 +229,12 @@ def print_table(rows: list[dict]) -> None:
               f"| {r['load_s']:.2f} |")
 
 
-def _run_peer(cmd: list[str], what: str) -> None:
-    proc = subprocess.run(cmd, capture_output=True, text=True)
+def _run_peer(cmd: list[str], what: str, timeout: float = 300.0) -> None:
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        log.warning("%s: stopped after %.0f s", what, timeout)
+        return
     if proc.returncode:
         tail = (proc.stderr.strip().splitlines() or ["?"])[-1]
         log.warning("%s: failed (rc %s: %s)", what, proc.returncode, tail)
@@ -281,7 +285,7 @@ def run_batch_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
                        "--scene", key if not (key == "sponza" and args.sponza) else str(args.sponza),
                        "--size", size, "--poses", mine["poses_file"], "--reps", "2",
                        "--json", str(out), *extra]
-                _run_peer(cmd, f"{label} {key} {size}")
+                _run_peer(cmd, f"{label} {key} {size}", args.peer_timeout)
         if out.exists():
             peers = [json.loads(line) for line in out.read_text().splitlines() if line.strip()]
     peers += [p for p in read_peer_rows(args) if p.get("scenario") == "batch"]
@@ -333,7 +337,7 @@ def run_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
                        "--frames", str(args.frames), "--json", str(out)]
                 if args.sponza:
                     cmd += ["--scene", str(args.sponza)]
-                _run_peer(cmd, f"{peer} {size}")
+                _run_peer(cmd, f"{peer} {size}", args.peer_timeout)
         if out.exists():
             peers += [json.loads(line) for line in out.read_text().splitlines() if line.strip()]
     peers += [p for p in read_peer_rows(args) if p.get("scenario") != "batch" and "fps_readback" in p]
@@ -384,6 +388,8 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--peers-json", action="append", metavar="FILE",
                    help="with --peers: also compare against peer rows measured before "
                         "(run_peers.sh's peers.json; repeatable)")
+    p.add_argument("--peer-timeout", type=float, default=300.0, metavar="S",
+                   help="with --peers: stop a peer's run after S seconds (default 300)")
     p.add_argument("--views", type=int, default=256, metavar="B",
                    help="batch scenarios: camera poses generated (default 256)")
     p.add_argument("--batch-views", type=int, default=1024, metavar="N",
