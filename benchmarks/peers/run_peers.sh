@@ -4,7 +4,7 @@
 # (.whl-sapien/: a slimmed tree, tar.xz, and its two pure-Python wheels), then
 #  - "frames" (issue 6): pyrender and pygfx on Sponza at 1920x1080 and 640x480;
 #  - "batch" (issue 14): the batch scenario of common.py, Sponza and DamagedHelmet at 128x128
-#    and 512x512 on the same $VIEWS poses (written once to $OUT/poses_<scene>.npy): pyrender,
+#    and 512x512 on the same $VIEWS poses (written once to /tmp/peers-poses/): pyrender,
 #    pygfx at pixel_scale 1 and 2, SAPIEN with B cameras in one scene and with a
 #    RenderCameraGroup (one submission; needs CUDA, i.e. torch).
 # SCENARIOS (default "frames batch") and PEERS (default "pyrender pygfx sapien") choose; peers

@@ -12,11 +12,14 @@ Two ways to render the B views (`--mode`):
   renders one camera per submission and waits for it) and, into NumPy,
   `get_picture("Color")` per camera ((H, W, 4) float32, SAPIEN's own format, not converted).
   Render only: `take_picture()` per camera.
-- `group` (ManiSkill3's batched rendering, CUDA only): B sub-scenes each holding the glTF and
-  one camera at its pose, a `sapien.render.RenderSystemGroup` over their render systems and one
-  `RenderCameraGroup` over the B cameras: per pass one `take_picture()` renders every view in
-  one submission; into NumPy, `get_picture_cuda("Color").torch().cpu().numpy()` ((B, H, W, 4)
-  float32). Render only: `take_picture()` then `torch.cuda.synchronize()`.
+- `group` (SAPIEN's batched cameras, as ManiSkill3 renders; CUDA only): the same scene and B
+  cameras, a `sapien.render.RenderSystemGroup` over its render system and one
+  `RenderCameraGroup` over the B cameras: per pass one `take_picture()` renders every camera
+  with no wait between them and copies all B pictures into one CUDA buffer, which CUDA waits
+  for through an exported semaphore; into NumPy,
+  `get_picture_cuda("Color").torch().cpu().numpy()` ((B, H, W, 4) float32). Render only:
+  `take_picture()` then `torch.cuda.synchronize()`. (SAPIEN's camera group takes cameras of
+  any scenes of one size; ManiSkill3 uses one scene per environment, one camera each.)
 
 SAPIEN's camera looks along its +x with +z up (+y left); the poses (OpenGL: -z forward, +y up)
 are turned into its axes by `sapien_pose`. Needs sapien 3 (with transforms3d, lxml, networkx,
@@ -60,7 +63,7 @@ def main() -> None:
     args = c.parse_batch_args("sapien", lambda ap: ap.add_argument(
         "--mode", choices=("cameras", "group"), default="cameras",
         help="cameras: B cameras in one scene, one picture each; group: a RenderCameraGroup "
-             "over B sub-scenes, one submission (CUDA)"))
+             "over the B cameras, one wait (CUDA)"))
     t0 = time.perf_counter()
     import numpy as np
     import sapien
@@ -70,16 +73,23 @@ def main() -> None:
     except RuntimeError as e:
         raise SystemExit(f"sapien {sapien.__version__}: no device SAPIEN can render on ({e})") from None
     del probe
+    if args.mode == "group":  # SAPIEN's camera group hands its pictures to CUDA
+        try:
+            import torch
+        except ImportError:
+            raise SystemExit("sapien --mode group needs torch with CUDA: torch is not installed") from None
+        if not torch.cuda.is_available():
+            raise SystemExit("sapien --mode group needs CUDA: torch.cuda.is_available() is False")
     poses = args.pose_array
     w, h, fovy = args.width, args.height, math.radians(c.YFOV_DEG)
     path = str(args.scene_path)
+    scene = make_scene(sapien, path)
+    cams = []  # one camera a view, all in the one scene
+    for i, pose in enumerate(poses):
+        cam = scene.add_camera(f"view{i}", w, h, fovy, c.ZNEAR, c.ZFAR)
+        cam.entity.set_pose(sapien_pose(pose))
+        cams.append(cam)
     if args.mode == "cameras":
-        scene = make_scene(sapien, path)
-        cams = []
-        for i, pose in enumerate(poses):
-            cam = scene.add_camera(f"view{i}", w, h, fovy, c.ZNEAR, c.ZFAR)
-            cam.entity.set_pose(sapien_pose(pose))
-            cams.append(cam)
         scene.update_render()
         cams[0].take_picture()
         image = cams[0].get_picture("Color")
@@ -97,19 +107,8 @@ def main() -> None:
 
         mode = "per-view loop (B cameras in one scene)"
     else:
-        import torch
-
-        if not torch.cuda.is_available():
-            raise SystemExit("sapien --mode group needs CUDA (torch.cuda.is_available() is False)")
-        scenes, cams = [], []
-        for i, pose in enumerate(poses):
-            s = make_scene(sapien, path)
-            cam = s.add_camera(f"view{i}", w, h, fovy, c.ZNEAR, c.ZFAR)
-            cam.entity.set_pose(sapien_pose(pose))
-            s.update_render()
-            scenes.append(s)
-            cams.append(cam)
-        group = sapien.render.RenderSystemGroup([s.render_system for s in scenes])
+        scene.update_render()  # the cameras' poses, before the group snapshots the scene
+        group = sapien.render.RenderSystemGroup([scene.render_system])
         cam_group = group.create_camera_group(cams, ["Color"])
         cam_group.take_picture()
         image = cam_group.get_picture_cuda("Color").torch().cpu().numpy()[0]
@@ -122,7 +121,7 @@ def main() -> None:
             cam_group.take_picture()
             torch.cuda.synchronize()
 
-        mode = "one submission (RenderCameraGroup over B sub-scenes)"
+        mode = "batched (RenderCameraGroup: B cameras, one wait, one CUDA buffer)"
     load_s = time.perf_counter() - t0
     assert image.shape == (h, w, 4), image.shape
     vps_readback = c.views_per_s(readback, len(poses), args.reps)
