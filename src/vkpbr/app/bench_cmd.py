@@ -355,7 +355,7 @@ def run_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
 
 EPILOG = """\
 examples:
-  vkpbr bench                                        every scenario, 200 frames each
+  vkpbr bench                                        every frame scenario, 200 frames each
   vkpbr bench --scenario sponza-480p --frames 50     one scenario, shorter
   vkpbr bench --scenario spheres-5k --json           JSON rows for scripts
   vkpbr bench --scenario sponza-1080p --peers        and pyrender / pygfx on the same scene
