@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Download everything the peer benchmarks need on the offline GPU machine (Python 3.12,
-# manylinux x86_64) into .whl-peers/ (wheels) and .gl-peers/ (Debian debs), both git-ignored.
+# manylinux x86_64) into .whl-peers/ (wheels), .whl-sapien/ (SAPIEN, slimmed) and .gl-peers/
+# (Debian debs), all git-ignored.
 # Run from the repo root on a machine with network access. The GPU machine already has numpy,
 # pillow, scipy, imageio, requests, networkx, pyyaml, tqdm and rich, so those are not fetched.
 set -euo pipefail
@@ -27,6 +28,29 @@ for p in "${PKGS[@]}"; do
     --platform manylinux2014_x86_64 --platform any -d "$WHL" "$p"
 done
 
+# SAPIEN 3 (a 51 MB wheel: more than the device tool's 64 MiB carry beside the assets) is
+# unpacked and slimmed to what rendering needs, then packed as one tar.xz (~27 MiB): dropped are
+# its C++ headers (include/), the depth-sensor patterns (sensor/assets/), OIDN's CUDA denoiser
+# device, its bundled Vulkan loader (the one from .gl-peers is used) and the macOS loader. Its
+# pure-Python needs the GPU image lacks (transforms3d, pyperclip) are carried as wheels beside
+# it; lxml, networkx, opencv-python-headless and requests are in the image.
+SAP=${SAP:-.whl-sapien}
+mkdir -p "$SAP"
+tmp=$(mktemp -d)
+python3 -m pip download -q --no-deps --only-binary=:all: --python-version "$PY" --implementation cp \
+  --platform manylinux_2_28_x86_64 -d "$tmp" sapien==3.0.3
+for p in transforms3d==0.4.2 pyperclip==1.11.0; do
+  python3 -m pip download -q --no-deps --only-binary=:all: --python-version "$PY" \
+    --implementation cp --platform any -d "$SAP" "$p"
+done
+mkdir -p "$tmp/tree"
+python3 -m zipfile -e "$tmp"/sapien-3.0.3-*.whl "$tmp/tree"
+(cd "$tmp/tree" && rm -rf sapien-3.0.3.data sapien/include sapien/sensor/assets \
+  sapien/oidn_library/libOpenImageDenoise_device_cuda.so.* sapien/vulkan_library/libvulkan.* \
+  && tar -cf - sapien sapien.libs sapien-3.0.3.dist-info | xz -9 -T0 > "../sapien-3.0.3-slim.tar.xz")
+mv "$tmp/sapien-3.0.3-slim.tar.xz" "$SAP/"
+rm -rf "$tmp"
+
 # libGLU for pyglet's import (pulled in by `import pyrender`), glvnd EGL/GL for PyOpenGL on EGL,
 # the Vulkan loader for wgpu, and libbsd0/libmd0 that libglx0's X11 chain needs (the same set
 # as .gl/, so run_peers.sh does not depend on it).
@@ -38,4 +62,4 @@ apt-get $o update -qq
 (cd "$GL" && apt-get $o download -qq libglu1-mesa libegl1 libglvnd0 libgl1 libopengl0 libglx0 libgles2 \
   libvulkan1 libbsd0 libmd0)
 
-du -sh "$WHL" "$GL"
+du -sh "$WHL" "$SAP" "$GL"

@@ -5,8 +5,18 @@
 Scenarios: sponza-1080p, sponza-480p, default-1080p, spheres-5k (5,000 draws, 5.1 M triangles)
 and spheres-100 (100 draws), the last two showing how cost grows with draws and triangles.
 Each scenario renders an orbit of camera poses through `Renderer.render_many` (frames in
-flight), then the same without copying into NumPy. `--peers` then runs
-benchmarks/peers/ (pyrender, pygfx) on the same scene and prints the ratios.
+flight), then the same without copying into NumPy.
+
+Batch scenarios (issue 14): batch-{sponza,helmet}-{128,512}: the peers' batch views
+(benchmarks/peers/common.py: a seeded orbit of `--views` poses, written once as a .npy that
+every peer reads) rendered through `Renderer.render_batch`, `--batch-views` views a call (the
+poses repeated), views/s into NumPy and on the GPU alone (timestamps). They need a source
+checkout (the poses come from benchmarks/peers/common.py); `--batch` runs them all, and
+only they run when no --scenario is given with it.
+
+`--peers` then runs benchmarks/peers/ (pyrender, pygfx; SAPIEN in the batch scenarios) on the
+same scenes and poses and prints the ratios vkpbr / peer at equal pixels (pygfx also at its
+default pixel_scale 2, which renders 4x the pixels).
 """
 
 from __future__ import annotations
@@ -77,6 +87,93 @@ SCENARIOS: dict[str, tuple[Callable, tuple[int, int]]] = {
 }
 
 
+# name -> (scene key of benchmarks/peers/common.py BATCH_SCENES, (width, height))
+BATCH_SCENARIOS: dict[str, tuple[str, tuple[int, int]]] = {
+    f"batch-{key}-{n}": (key, (n, n)) for key in ("sponza", "helmet") for n in (128, 512)
+}
+PEERS_DIR = REPO / "benchmarks" / "peers"
+
+
+def peers_common():  # noqa: ANN201
+    """benchmarks/peers/common.py as a module (the batch scenario's poses and scenes), or None
+    outside a source checkout."""
+    import importlib.util
+
+    path = PEERS_DIR / "common.py"
+    if not path.exists():
+        return None
+    spec = importlib.util.spec_from_file_location("vkpbr_peers_common", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def batch_poses_file(args: argparse.Namespace, key: str) -> Path:
+    """The .npy of the batch poses of `key` in --poses-dir (written on first use)."""
+    common = peers_common()
+    if common is None:
+        raise UsageError(f"batch scenarios need {PEERS_DIR / 'common.py'} (a source checkout)")
+    folder = Path(args.poses_dir)
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"poses_{key}_{args.views}.npy"
+    common.load_poses(path, key, args.views)
+    return path
+
+
+def run_batch_scenario(name: str, args: argparse.Namespace) -> dict:
+    import numpy as np
+
+    from vkpbr.render.renderer import Renderer
+    from vkpbr.scene.camera_batch import CameraBatch
+    from vkpbr.scene.loader import load_scene
+    from vkpbr.scene.types import Light
+
+    key, size = BATCH_SCENARIOS[name]
+    common = peers_common()
+    poses_path = batch_poses_file(args, key)
+    poses = np.load(poses_path)
+    path = (Path(args.sponza) if key == "sponza" and args.sponza
+            else common.ASSETS / common.BATCH_SCENES[key])
+    if not path.exists():
+        raise UsageError(f"{name}: {path} not found" + (" (pass --sponza PATH)" if key == "sponza" else ""))
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = load_scene(path, strict=args.strict, allow_outside_paths=args.allow_outside_paths)
+    scene.lights = [Light(position=tuple(common.LIGHT_POS))]
+    b = max(1, args.batch_views)
+    views = CameraBatch.from_poses(np.resize(poses, (b, 4, 4)), common.YFOV_DEG)  # poses repeated
+    reps = max(1, math.ceil(args.frames / b))
+    with Renderer(scene, device=args.device) as r:
+        load_s = time.perf_counter() - t0
+        r.render_batch(views, size=size)  # warm-up: targets, recordings, pipelines
+        wall, gpu = [], []
+        for _ in range(reps):
+            t = time.perf_counter()
+            r.render_batch(views, size=size)
+            wall.append(time.perf_counter() - t)
+            gpu.append(r.last_stats.gpu_ms)
+        gpu_ms = statistics.median(gpu)
+        return {"scenario": name, "scene": key, "size": f"{size[0]}x{size[1]}", "batch": b,
+                "poses": len(poses), "reps": reps, "draws": len(r.gpu_scene.draws),
+                "triangles": scene.triangle_count, "load_s": load_s, "device": r.device.info.name,
+                "views_per_s_readback": b * reps / sum(wall),
+                "views_per_s_render_only": b / gpu_ms * 1e3 if gpu_ms > 0 else float("nan"),
+                "ms_per_batch": 1e3 * statistics.median(wall), "gpu_ms": gpu_ms,
+                "poses_file": str(poses_path), "poses_sha1": common.poses_digest(poses)}
+
+
+def print_batch_table(rows: list[dict]) -> None:
+    print("| scenario | size | views a call | views/s (render + readback into NumPy) "
+          "| views/s (GPU time only) | ms per call | GPU ms per call | draws | load s |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r['scenario']} | {r['size']} | {r['batch']:,} | {r['views_per_s_readback']:,.0f} "
+              f"| {r['views_per_s_render_only']:,.0f} | {r['ms_per_batch']:.2f} | {r['gpu_ms']:.2f} "
+              f"| {r['draws']:,} | {r['load_s']:.2f} |")
+
+
 def orbit(camera, n: int, degrees: float = 0.2) -> list:  # noqa: ANN001
     """n poses turning the eye slightly about the target (distinct frames, same content)."""
     ex, ey, ez = camera.eye
@@ -133,18 +230,106 @@ def print_table(rows: list[dict]) -> None:
               f"| {r['load_s']:.2f} |")
 
 
-def run_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
-    """Run benchmarks/peers/{pyrender,pygfx}_bench.py on the same Sponza scenario, in this
-    environment (the peers are optional benchmark dependencies), and print the ratios."""
+def _run_peer(cmd: list[str], what: str, timeout: float = 300.0) -> None:
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        log.warning("%s: stopped after %.0f s", what, timeout)
+        return
+    if proc.returncode:
+        tail = (proc.stderr.strip().splitlines() or ["?"])[-1]
+        log.warning("%s: failed (rc %s: %s)", what, proc.returncode, tail)
+
+
+# The peers of the batch scenario: (script, label, extra arguments). pygfx twice: at
+# pixel_scale 1 (the others' pixels) and at its default 2 (2x2 supersampling: 4x the pixels).
+BATCH_PEERS = (
+    ("pyrender", "pyrender", ()),
+    ("pygfx", "pygfx", ("--pixel-scale", "1")),
+    ("pygfx", "pygfx (pixel_scale 2)", ("--pixel-scale", "2")),
+    ("sapien", "sapien", ("--mode", "cameras")),
+    ("sapien", "sapien (group)", ("--mode", "group")),
+)
+
+
+def read_peer_rows(args: argparse.Namespace) -> list[dict]:
+    """Peer results measured before (--peers-json: run_peers.sh's peers.json, e.g. SAPIEN from
+    another device call when the carried files do not fit in one)."""
+    rows = []
+    for name in args.peers_json or ():
+        path = Path(name)
+        if not path.exists():
+            raise UsageError(f"--peers-json {path}: no such file")
+        for i, line in enumerate(path.read_text().splitlines(), 1):
+            if line.strip():
+                try:
+                    rows.append({**json.loads(line), "source": path.name})
+                except json.JSONDecodeError as e:
+                    raise UsageError(f"--peers-json {path}:{i}: not JSON ({e.msg})") from None
+    return rows
+
+
+def run_batch_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
+    """The batch scenario's peers on the same poses files, scenes and sizes; prints the
+    ratios vkpbr / peer (views/s into NumPy, and render only)."""
     import tempfile
 
-    folder = REPO / "benchmarks" / "peers"
+    ours = {(r["scene"], r["size"]): r for r in rows if "batch" in r}
+    if not ours:
+        return []
+    peers = []
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "peers.json"
+        for (key, size), mine in ours.items():
+            for script, label, extra in BATCH_PEERS:
+                cmd = [sys.executable, str(PEERS_DIR / f"{script}_bench.py"), "--batch",
+                       "--scene", key if not (key == "sponza" and args.sponza) else str(args.sponza),
+                       "--size", size, "--poses", mine["poses_file"], "--reps", "2",
+                       "--json", str(out), *extra]
+                _run_peer(cmd, f"{label} {key} {size}", args.peer_timeout)
+        if out.exists():
+            peers = [json.loads(line) for line in out.read_text().splitlines() if line.strip()]
+    peers += [p for p in read_peer_rows(args) if p.get("scenario") == "batch"]
+    print("\n| peer | scene | size | pixels rendered per view | peer views/s (into NumPy) "
+          "| vkpbr views/s | vkpbr / peer | render only: peer | vkpbr (GPU) | vkpbr / peer |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for p in peers:
+        key = p["scene"]  # the peers name a glTF path by its stem: Sponza.gltf -> "sponza"
+        mine = ours.get((key, p["size"]))
+        if not mine:
+            continue
+        if p.get("poses_sha1") != mine["poses_sha1"]:
+            log.warning("%s %s %s: not the poses vkpbr rendered (same --views and seed needed); "
+                        "not compared", p["peer"], key, p["size"])
+            continue
+        w, h = (int(v) for v in p["size"].split("x"))
+        scale = float(p.get("pixel_scale", 1.0))
+        label = p["peer"] + (f" (pixel_scale {scale:g})" if scale != 1 else "")
+        if p["peer"] == "sapien" and "group" in p.get("settings", ""):
+            label = "sapien (RenderCameraGroup)"
+        label += f" {p.get('version', '')}" + (f" (from {p['source']})" if "source" in p else "")
+        mr, pr = mine["views_per_s_readback"], p["views_per_s_readback"]
+        mo, po = mine["views_per_s_render_only"], p["views_per_s_render_only"]
+        print(f"| {label} | {key} | {p['size']} | {int(w * h * scale * scale):,} "
+              f"| {pr:,.0f} | {mr:,.0f} | {mr / pr:.1f}x | {po:,.0f} | {mo:,.0f} | {mo / po:.1f}x |")
+    return peers
+
+
+def run_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
+    """Run benchmarks/peers/{pyrender,pygfx}_bench.py on the same Sponza scenario, in this
+    environment (the peers are optional benchmark dependencies), and print the ratios; the
+    batch scenarios' peers (with SAPIEN) through `run_batch_peers`."""
+    import tempfile
+
+    folder = PEERS_DIR
     if not folder.is_dir():
         raise UsageError(f"--peers needs {folder} (a source checkout with benchmarks/)")
     ours = {r["size"]: r for r in rows if r["scenario"].startswith("sponza")}
+    if not ours and not any("batch" in r for r in rows):
+        raise UsageError("--peers compares on Sponza: include a sponza-* or batch-* scenario")
+    peers = run_batch_peers(args, rows)
     if not ours:
-        raise UsageError("--peers compares on Sponza: include a sponza-* scenario")
-    peers = []
+        return peers
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "peers.json"
         for peer in ("pyrender", "pygfx"):
@@ -153,17 +338,15 @@ def run_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
                        "--frames", str(args.frames), "--json", str(out)]
                 if args.sponza:
                     cmd += ["--scene", str(args.sponza)]
-                proc = subprocess.run(cmd, capture_output=True, text=True)
-                if proc.returncode:
-                    tail = (proc.stderr.strip().splitlines() or ["?"])[-1]
-                    log.warning("%s %s: failed (%s)", peer, size, tail)
+                _run_peer(cmd, f"{peer} {size}", args.peer_timeout)
         if out.exists():
-            peers = [json.loads(line) for line in out.read_text().splitlines() if line.strip()]
+            peers += [json.loads(line) for line in out.read_text().splitlines() if line.strip()]
+    peers += [p for p in read_peer_rows(args) if p.get("scenario") != "batch" and "fps_readback" in p]
     print("\n| peer | size | frames/s (render + readback) | vkpbr frames/s | vkpbr / peer "
           "| render only: peer | vkpbr |")
     print("|---|---|---|---|---|---|---|")
     for p in peers:
-        mine = ours.get(p["size"])
+        mine = ours.get(p["size"]) if p.get("scenario") != "batch" else None
         if mine:
             print(f"| {p['peer']} {p.get('version', '')} | {p['size']} | {p['fps_readback']:.1f} "
                   f"| {mine['fps_readback']:.1f} | {mine['fps_readback'] / p['fps_readback']:.1f}x "
@@ -173,10 +356,12 @@ def run_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
 
 EPILOG = """\
 examples:
-  vkpbr bench                                        every scenario, 200 frames each
+  vkpbr bench                                        every frame scenario, 200 frames each
   vkpbr bench --scenario sponza-480p --frames 50     one scenario, shorter
   vkpbr bench --scenario spheres-5k --json           JSON rows for scripts
   vkpbr bench --scenario sponza-1080p --peers        and pyrender / pygfx on the same scene
+  vkpbr bench --scenario batch-sponza-128 --peers    B views per call, beside SAPIEN, pygfx, pyrender
+  vkpbr bench --batch --peers                        every batch scenario (Sponza, DamagedHelmet; 128, 512)
 """
 
 
@@ -189,14 +374,30 @@ def add_parser(sub: Any) -> None:
                     "time and the load time. Scenarios: " + ", ".join(SCENARIOS) + " (the "
                     "sphere fields show how cost grows with draws and triangles).",
         epilog=EPILOG, formatter_class=EPILOG_FORMATTER)
-    p.add_argument("--scenario", action="append", choices=list(SCENARIOS),
-                   help="scenario to run (repeatable); default: all")
+    p.add_argument("--scenario", action="append", choices=[*SCENARIOS, *BATCH_SCENARIOS],
+                   help="scenario to run (repeatable); default: every frame scenario (not the "
+                        "batch-* ones: --batch)")
+    p.add_argument("--batch", action="store_true",
+                   help="run every batch-* scenario (besides any --scenario)")
     p.add_argument("--frames", type=int, default=200, metavar="N",
                    help="timed frames per scenario (default 200)")
     p.add_argument("--sponza", metavar="PATH", help="path to Sponza.gltf")
     p.add_argument("--device", metavar="NAME|INDEX", help="device name substring or index")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    p.add_argument("--peers", action="store_true", help="also run pyrender and pygfx and print ratios")
+    p.add_argument("--peers", action="store_true",
+                   help="also run pyrender and pygfx (and SAPIEN in the batch scenarios) and print ratios")
+    p.add_argument("--peers-json", action="append", metavar="FILE",
+                   help="with --peers: also compare against peer rows measured before "
+                        "(run_peers.sh's peers.json; repeatable)")
+    p.add_argument("--peer-timeout", type=float, default=300.0, metavar="S",
+                   help="with --peers: stop a peer's run after S seconds (default 300)")
+    p.add_argument("--views", type=int, default=256, metavar="B",
+                   help="batch scenarios: camera poses generated (default 256)")
+    p.add_argument("--batch-views", type=int, default=1024, metavar="N",
+                   help="batch scenarios: views per render_batch call, the poses repeated (default 1024)")
+    p.add_argument("--poses-dir", default="out/bench-poses", metavar="DIR",
+                   help="batch scenarios: where the poses .npy files are read or written "
+                        "(default out/bench-poses)")
     add_scene_loading_options(p)  # for --sponza: --strict, --allow-outside-paths, --variant
     p.set_defaults(run=run)
 
@@ -204,12 +405,25 @@ def add_parser(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.frames < 1:
         raise UsageError("--frames must be at least 1")
-    rows = [run_scenario(name, args) for name in (args.scenario or list(SCENARIOS))]
+    if args.views < 1:
+        raise UsageError("--views must be at least 1")
+    names = list(args.scenario or ([] if args.batch else SCENARIOS))
+    if args.batch:
+        names += [n for n in BATCH_SCENARIOS if n not in names]
+    rows = [run_batch_scenario(n, args) if n in BATCH_SCENARIOS else run_scenario(n, args)
+            for n in names]
+    frame_rows = [r for r in rows if "batch" not in r]
+    batch_rows = [r for r in rows if "batch" in r]
     if args.json:
         print(json.dumps(rows, indent=2))
     else:
-        print(f"device: {rows[0]['device']}; {args.frames} frames per scenario, 3 frames in flight")
-        print_table(rows)
+        if frame_rows:
+            print(f"device: {rows[0]['device']}; {args.frames} frames per scenario, 3 frames in flight")
+            print_table(frame_rows)
+        if batch_rows:
+            print(f"\ndevice: {rows[0]['device']}; batch scenarios: {args.views} poses, "
+                  f"--batch-views per render_batch call, at least --frames views timed")
+            print_batch_table(batch_rows)
     if args.peers:
         run_peers(args, rows)
     return 0
