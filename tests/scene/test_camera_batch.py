@@ -1,0 +1,88 @@
+"""CameraBatch and the batch's camera maths (issue 14): the same numbers as one camera at a
+time, bit for bit, for cameras anywhere (so a batch's views can equal single frames)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from vkpbr.errors import UsageError
+from vkpbr.render.camera import batch_frame_terms, camera_frame_columns, depth_range, forward
+from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
+from vkpbr.scene.types import Camera
+
+CORNERS = tuple((x, y, z) for x in (-3.0, 4.5) for y in (-0.5, 6.0) for z in (-2.0, 2.5))
+SCALE = 5.3
+
+coord = st.floats(-50, 50, allow_nan=False)
+vec = st.tuples(coord, coord, coord)
+
+
+@st.composite
+def cameras(draw) -> Camera:  # noqa: ANN001
+    eye, target = draw(vec), draw(vec)
+    up = draw(st.sampled_from([(0.0, 1.0, 0.0), (0.0, 0.0, 1.0), (0.3, 0.9, -0.1)]))
+    f = np.subtract(target, eye)
+    if np.linalg.norm(f) < 1e-3 or np.linalg.norm(np.cross(f, up)) < 1e-6 * np.linalg.norm(f):
+        target = (eye[0] + 1.0, eye[1] + 0.25, eye[2] - 0.5)
+    cam = Camera(eye=eye, target=target, up=up, yfov_deg=draw(st.floats(1.0, 170.0)))
+    if draw(st.booleans()):
+        cam = dataclasses.replace(cam, znear=draw(st.floats(1e-3, 10.0)))
+    if draw(st.booleans()):
+        w, h = draw(st.integers(16, 4000)), draw(st.integers(16, 4000))
+        fx, fy = draw(st.floats(10.0, 5000.0)), draw(st.floats(10.0, 5000.0))
+        cx, cy = draw(st.floats(0.0, w)), draw(st.floats(0.0, h))
+        cam = dataclasses.replace(cam, pixel_intrinsics=(fx, fy, cx, cy, w, h),
+                                  yfov_deg=float(np.degrees(2 * np.arctan(h / (2 * fy)))))
+    return cam
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(cameras(), min_size=1, max_size=6), st.sampled_from([(64, 48), (128, 128), (1920, 1080)]))
+def test_batch_terms_equal_single_camera_maths(cams: list[Camera], size: tuple[int, int]) -> None:
+    b = CameraBatch.from_cameras(cams, cams[0])
+    terms = batch_frame_terms(b.eye, b.target, b.up, b.yfov_deg, b.intrinsics, b.znear, b.zfar,
+                              size, CORNERS, SCALE)
+    for i, cam in enumerate(cams):
+        f = forward(cam)
+        znear, zfar = depth_range(cam, CORNERS, SCALE, f)
+        vp, _, _ = camera_frame_columns(cam, size, znear, f)
+        assert terms["znear"][i] == znear and terms["zfar"][i] == zfar
+        assert tuple(terms["vp"][i]) == vp  # float64, every bit
+        assert tuple(terms["forward"][i]) == f
+        assert b.camera(i) == cam
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.lists(cameras(), min_size=1, max_size=4))
+def test_poses_round_trip(cams: list[Camera]) -> None:
+    """from_poses of Camera.world_from_camera gives Camera.from_pose's cameras exactly."""
+    cams = [dataclasses.replace(c, pixel_intrinsics=None, znear=None) for c in cams]
+    for conv in ("opengl", "opencv"):
+        poses = np.stack([c.world_from_camera(conv) for c in cams])
+        b = CameraBatch.from_poses(poses, 50.0, conv)
+        for i, m in enumerate(poses):
+            assert b.camera(i) == Camera.from_pose(m, conv, yfov_deg=50.0)
+
+
+def test_bad_batches_name_the_view() -> None:
+    eye = np.zeros((4, 3))
+    eye[2] = (0.0, 0.0, 1.0)
+    with pytest.raises(UsageError, match=r"cameras\[0\]: eye and target coincide"):
+        CameraBatch.from_look_at(eye, np.zeros(3))
+    with pytest.raises(UsageError, match=r"field of view"):
+        CameraBatch.from_look_at(np.ones((2, 3)), np.zeros(3), yfov_deg=[45.0, 180.0])
+    with pytest.raises(UsageError, match=r"yfov_deg must be one number or 2 numbers"):
+        CameraBatch.from_look_at(np.ones((2, 3)), np.zeros(3), yfov_deg=[45.0, 50.0, 55.0])
+    with pytest.raises(UsageError, match=r"eye must have shape \(B, 3\)"):
+        CameraBatch.from_look_at(np.ones((2, 2)), np.zeros(3))
+    with pytest.raises(UsageError, match="K's fx and fy must be > 0"):
+        CameraBatch.from_opencv(np.zeros((3, 3)), np.tile(np.eye(4), (2, 1, 1)), (64, 48))
+    with pytest.raises(UsageError, match="convention 'blender'"):
+        CameraBatch.from_poses(np.tile(np.eye(4), (2, 1, 1)), convention="blender")
+    with pytest.raises(UsageError, match="expected a list of cameras"):
+        as_camera_batch(42, Camera())
