@@ -147,6 +147,7 @@ class BatchViews:
             writer.uniform(set0, 1, settings_buf, L.SETTINGS.size, settings_at)
             writer.storage(set0, 2, self.views)
             writer.storage(set0, 3, self.visible)
+            writer.storage(set0, 4, self.gpu_scene.instance_buffer)
         writer.update()
 
     def write_views(self, terms: dict[str, np.ndarray], eye: np.ndarray) -> None:

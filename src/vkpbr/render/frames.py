@@ -27,6 +27,7 @@ from vkpbr.render.options import RenderOptions
 from vkpbr.scene.types import Camera, Light
 
 __all__ = ["FrameSlot", "FrameStats", "FrameLighting", "create_slots", "write_frame_uniforms",
+           "bind_instances",
            "light_records", "Bounds"]
 
 FRAME_BLOCKS = (L.CAMERA, L.SETTINGS, L.LIGHTING)
@@ -119,6 +120,7 @@ def create_slots(
         # binding written, none read by the frame shaders.
         writer.storage(set0, 2, lights, LIGHTS_BYTES, i * s_stride)
         writer.storage(set0, 3, lights, LIGHTS_BYTES, i * s_stride)
+        writer.storage(set0, 4, lights, LIGHTS_BYTES, i * s_stride)  # the scene's: bind_instances
         slots.append(FrameSlot(
             index=i, set0=set0, set2=set2,
             m_camera=memoryview(buffer.array(np.uint8, L.CAMERA.size, cam)),
@@ -130,6 +132,14 @@ def create_slots(
         ))
     writer.update()
     return [buffer, lights], pool, slots
+
+
+def bind_instances(device: Device, sets0: list[Any], instances: Buffer) -> None:
+    """Point binding 4 of frame sets `sets0` at the scene's instance matrices."""
+    writer = DescriptorWriter(device)
+    for set0 in sets0:
+        writer.storage(set0, 4, instances)
+    writer.update()
 
 
 def _camera_key(c: Camera) -> tuple:

@@ -186,6 +186,10 @@ class GpuScene:
         t2 = time.perf_counter()
         self._create_materials(material_layout)
         self.draws = self._build_draws()
+        # Each draw record's model and normal matrix, as pbr.vert reads them (Instances).
+        matrices = np.concatenate([d.push for d in self.draws]) if self.draws else np.zeros(32, np.float32)
+        self.instance_buffer = self._own(upload_buffer(device, matrices, "storage",
+                                                       name="instance matrices"))
         self.timings.update(geometry=t1 - t0, textures=t2 - t1, materials=time.perf_counter() - t2)
 
     def _own(self, obj):  # noqa: ANN001, ANN202 - any gpu object
@@ -475,11 +479,13 @@ class GpuScene:
             self._owned.pop().destroy()
 
 
-# --- EXT_mesh_gpu_instancing, until the renderer draws instanced ------------------------------
+# --- EXT_mesh_gpu_instancing -------------------------------------------------------------------
 def _draw_nodes(nodes: list[Node]) -> list[tuple[int, Node]]:
-    """(index in scene.nodes, node) per draw: a node with `instances` (EXT_mesh_gpu_instancing)
-    becomes one draw per instance, each with its world matrix. TEMPORARY: this is the one place
-    instances are expanded; drawing them instanced (one draw, K matrices) replaces it."""
+    """(index in scene.nodes, node) per draw record: a node with `instances`
+    (EXT_mesh_gpu_instancing) gets one record per instance (its world matrix, its instance id
+    in the dataset outputs), kept adjacent; the frame's passes draw a node's records as one
+    instanced draw call (passes._instance_runs; pbr.vert reads each record's matrices). The
+    mesh is never copied."""
     out: list[tuple[int, Node]] = []
     for i, node in enumerate(nodes):
         out += [(i, n) for n in expand_instances([node])]

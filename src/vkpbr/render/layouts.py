@@ -331,6 +331,9 @@ STORAGE = {
     # The batch's views and, per (chunk, draw), the views that see the draw (render/batch.py).
     "Views": StorageArray("Views", VIEW_RECORD, "views"),
     "VisibleViews": StorageArray("VisibleViews", "uint", "visible_views"),
+    # Every draw record's matrices (render/gpu_scene.py): the frame's vertex shader reads its
+    # instance's, so that a node's K instances (EXT_mesh_gpu_instancing) are one draw call.
+    "Instances": StorageArray("Instances", "mat4", "instance_matrices"),  # model, normal: 2 a record
     "Draws": StorageArray("Draws", DRAW_RECORD, "draws"),
     "Indices": StorageArray("Indices", "uint", "indices"),
     "Positions": StorageArray("Positions", "float", "positions"),  # 3 floats a vertex
@@ -421,6 +424,8 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
         # Batched views (render/batch.py): frames bind stand-ins the frame shaders never read.
         (2, "storage", ("vertex", "fragment"), "Views"),
         (3, "storage", ("vertex",), "VisibleViews"),
+        # The scene's instance matrices (GpuScene.instance_buffer), written by the Renderer.
+        (4, "storage", ("vertex",), "Instances"),
     ),
     1: (
         *((i, "sampler", ("fragment", "compute"), f"{slot}_map")

@@ -126,7 +126,8 @@ class PassContext:
 def record_passes(cmd: Commands, ctx: PassContext, names: tuple[str, ...] | None = None) -> None:
     """Record the enabled passes of PASSES (those in `names`, default all), each followed by
     its timestamp (ctx.stamp(name)). Each draw is instanced from its own index in ctx.draws
-    (gl_InstanceIndex: the compute path's visibility pass writes it per pixel)."""
+    (gl_InstanceIndex: the compute path's visibility pass writes it per pixel); the records of
+    one node's instances (EXT_mesh_gpu_instancing) are one draw call of K instances."""
     cmd.bind_index_buffer(ctx.index_buffer)
     for p in PASSES:
         if names is not None and p.name not in names:
@@ -168,7 +169,9 @@ def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[tupl
         cmd.bind_set(3, ctx.shadow_set)
     cmd.bind_vertex_buffers(ctx.vertex_buffers)
     bound = None
-    for index, d in draws:
+    runs = [(i, d, 1) for i, d in draws] if (instanced is not None or ctx.indirect is not None
+                                             or p.back_to_front) else _instance_runs(draws)
+    for index, d, count in runs:
         if d.material != bound:
             cmd.bind_set(1, ctx.material_sets[d.material])
             bound = d.material
@@ -178,5 +181,20 @@ def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[tupl
                              first_instance=instanced[0], instances=instanced[1])
         elif ctx.indirect is not None:
             cmd.draw_indexed_indirect(ctx.indirect, (ctx.indirect_base + index) * 20)
-        else:
-            cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset, first_instance=index)
+        else:  # `count` instances of one node: records index.. (pbr.vert reads their matrices)
+            cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset, first_instance=index,
+                             instances=count)
+
+
+def _instance_runs(draws: list[tuple[int, Any]]) -> list[tuple[int, Any, int]]:
+    """(first record, draw, instances): consecutive records of one node's one mesh (its
+    EXT_mesh_gpu_instancing instances, GpuScene keeps them adjacent) become one draw call."""
+    runs: list[tuple[int, Any, int]] = []
+    for index, d in draws:
+        if runs:
+            first, head, count = runs[-1]
+            if index == first + count and d.node == head.node and d.mesh == head.mesh:
+                runs[-1] = (first, head, count + 1)
+                continue
+        runs.append((index, d, 1))
+    return runs

@@ -45,6 +45,7 @@ from vkpbr.render.frames import (
     FrameLighting,
     FrameSlot,
     FrameStats,
+    bind_instances,
     create_slots,
     write_frame_uniforms,
 )
@@ -148,6 +149,7 @@ class Renderer:
             self.frame_buffers, self._frame_pool, self.slots = create_slots(
                 self.device, self.set_layouts[0], self.set_layouts[2], self.ring.count)
             self.gpu_scene = GpuScene(self.device, scene, self.set_layouts[1])
+            bind_instances(self.device, [s.set0 for s in self.slots], self.gpu_scene.instance_buffer)
             self.semantic_ids, self.semantic_labels = semantic_ids(
                 scene, self.gpu_scene.draws, Path(semantics) if isinstance(semantics, os.PathLike)
                 else semantics)

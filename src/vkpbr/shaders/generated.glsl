@@ -171,6 +171,9 @@ layout(set = 0, binding = 2, std140) readonly buffer Views {
 layout(set = 0, binding = 3, std430) readonly buffer VisibleViews {
     uint visible_views[];
 };
+layout(set = 0, binding = 4, std430) readonly buffer Instances {
+    mat4 instance_matrices[];
+};
 layout(set = 1, binding = 0) uniform sampler2D base_color_map;
 layout(set = 1, binding = 1) uniform sampler2D metallic_map;
 layout(set = 1, binding = 2) uniform sampler2D roughness_map;

@@ -60,16 +60,23 @@ void main() {
     vec3 b = tbn[1];
     vec3 n = tbn[2];
 #endif
-    vec4 world = draw.model * vec4(in_position, 1.0);
+#if BATCH  // one record a draw: its matrices pushed
+    mat4 model = draw.model;
+    mat3 normal_matrix = mat3(draw.normal_matrix);
+#else  // a draw's instances are consecutive records (EXT_mesh_gpu_instancing: one draw call)
+    mat4 model = instance_matrices[2u * uint(gl_InstanceIndex)];
+    mat3 normal_matrix = mat3(instance_matrices[2u * uint(gl_InstanceIndex) + 1u]);
+#endif
+    vec4 world = model * vec4(in_position, 1.0);
     v_world_pos = world.xyz;
     v_texcoords = vec4(in_texcoord0, in_texcoord1);
     v_color = in_color;
     v_draw = uint(gl_InstanceIndex);
     // Normals take the inverse transpose; tangent and bitangent are surface directions and
     // take the model matrix itself, which keeps the handedness right under mirroring.
-    v_normal = mat3(draw.normal_matrix) * n;
-    v_tangent = mat3(draw.model) * t;
-    v_bitangent = mat3(draw.model) * b;
+    v_normal = normal_matrix * n;
+    v_tangent = mat3(model) * t;
+    v_bitangent = mat3(model) * b;
 #if BATCH
     uint view_index = visible_views[gl_InstanceIndex];
     v_view = view_index;
