@@ -86,3 +86,12 @@ def test_bad_batches_name_the_view() -> None:
         CameraBatch.from_poses(np.tile(np.eye(4), (2, 1, 1)), convention="blender")
     with pytest.raises(UsageError, match="expected a list of cameras"):
         as_camera_batch(42, Camera())
+
+
+def test_absurd_magnitudes_are_refused_for_one_camera_too() -> None:
+    """A camera at 1e300 (finite, far beyond float32) was a ZeroDivisionError in render()."""
+    from vkpbr.scene.camera import validate_camera
+
+    with pytest.raises(UsageError, match=r"within \+-1e\+15"):
+        validate_camera(Camera(eye=(1e300, 0.0, 0.0), target=(0.0, 0.0, 0.0)))
+    validate_camera(Camera(eye=(1e14, 0.0, 0.0), target=(0.0, 0.0, 0.0)))  # large, still fine

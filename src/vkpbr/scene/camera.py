@@ -146,6 +146,12 @@ def opencv_from_corner(K: np.ndarray) -> np.ndarray:
 # -- validation, parsing and printing ---------------------------------------------------------
 
 
+# Largest coordinate accepted anywhere (positions after transforms, cameras, lights): far
+# beyond any real scene, far below float32's 3.4e38, so squared distances and the projection
+# stay finite. (scene/validate.py checks scenes against it.)
+MAX_COORDINATE = 1e15
+
+
 def _camera_problem(camera: Camera) -> str | None:
     """What is wrong with `camera`, or None. Plain floats: the renderer calls this per frame."""
     try:
@@ -156,6 +162,8 @@ def _camera_problem(camera: Camera) -> str | None:
         return "eye, target and up must be three numbers each"
     if not all(map(math.isfinite, (ex, ey, ez, tx, ty, tz, ux, uy, uz))):
         return "eye, target and up must be finite numbers"
+    if max(map(abs, (ex, ey, ez, tx, ty, tz, ux, uy, uz))) > MAX_COORDINATE:
+        return f"eye, target and up must lie within +-{MAX_COORDINATE:g}"
     fx, fy, fz = tx - ex, ty - ey, tz - ez
     f_len = math.sqrt(fx * fx + fy * fy + fz * fz)
     if f_len < 1e-9:

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from vkpbr.errors import UsageError
-from vkpbr.scene.camera import as_camera, validate_camera
+from vkpbr.scene.camera import MAX_COORDINATE, as_camera, validate_camera
 from vkpbr.scene.types import Camera
 
 __all__ = ["CameraBatch", "as_camera_batch"]
@@ -157,8 +157,22 @@ class CameraBatch:
 
     def validate(self) -> None:
         """Raise a one-line UsageError naming the first view `validate_camera` would refuse."""
+        with np.errstate(all="ignore"):  # NaN and inf are what is being looked for
+            bad = self._bad_views()
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            try:
+                validate_camera(self.camera(i))
+            except UsageError as e:
+                raise UsageError(f"cameras[{i}]: {str(e).removeprefix('camera: ')}") from None
+            raise UsageError(f"cameras[{i}]: not a valid camera")
+
+    def _bad_views(self) -> np.ndarray:
+        """(B,) bool: the views `validate_camera` refuses (its checks, vectorised)."""
         f = self.target - self.eye
-        bad = ~np.all(np.isfinite(np.concatenate([self.eye, self.target, self.up], 1)), axis=1)
+        coords = np.concatenate([self.eye, self.target, self.up], 1)
+        bad = ~np.all(np.isfinite(coords), axis=1)
+        bad |= np.abs(np.nan_to_num(coords)).max(axis=1) > MAX_COORDINATE
         f_len = np.sqrt(np.einsum("ij,ij->i", f, f))
         cross = np.cross(f, self.up)
         u_len = np.sqrt(np.einsum("ij,ij->i", self.up, self.up))
@@ -168,13 +182,9 @@ class CameraBatch:
         for planes in (self.znear, self.zfar):
             if planes is not None:
                 bad |= ~(np.isnan(planes) | ((planes > 0) & (planes < math.inf)))
-        if bad.any():
-            i = int(np.flatnonzero(bad)[0])
-            try:
-                validate_camera(self.camera(i))
-            except UsageError as e:
-                raise UsageError(f"cameras[{i}]: {str(e).removeprefix('camera: ')}") from None
-            raise UsageError(f"cameras[{i}]: not a valid camera")
+        if self.znear is not None and self.zfar is not None:
+            bad |= ~(np.isnan(self.zfar) | (self.zfar > np.nan_to_num(self.znear)))
+        return bad
 
 
 def as_camera_batch(cameras: Any, base: Camera) -> CameraBatch:

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from vkpbr.errors import SceneError, UsageError
-from vkpbr.scene.camera import Camera, validate_camera
+from vkpbr.scene.camera import MAX_COORDINATE, Camera, validate_camera
 from vkpbr.scene.limits import limits
 from vkpbr.scene.types import (
     TEXTURE_SLOTS,
@@ -36,10 +36,6 @@ from vkpbr.shading import MAX_LIGHTS
 
 __all__ = ["validate_scene", "validate_lights", "MAX_COORDINATE"]
 
-# Largest coordinate accepted anywhere (positions after transforms, cameras, lights): far
-# beyond any real scene, far below float32's 3.4e38, so squared distances and the projection
-# stay finite.
-MAX_COORDINATE = 1e15
 _TEXTURE_SLOTS = TEXTURE_SLOTS
 
 
