@@ -68,6 +68,9 @@ def test_job_file_entries_and_items(tmp_path: Path) -> None:
     ([{"cameras": "poses.json", "out": "a"}, {"cameras": "poses.json", "out": "a/"}],
      "entry 1: out"),
     ({"scenes": [{"cameras": "poses.json", "out": "a"}], "views_per_item": 0}, "views_per_item"),
+    ([{"cameras": "poses.json", "out": "a", "semantics": "node"}], "semantics: expected mesh"),
+    ([{"cameras": "poses.json", "out": "a", "semantics": "classes.json"}], "classes.json: No such file"),
+    ([{"cameras": "poses.json", "out": "a", "semantics": {"floor": -3}}], "the value must be an id"),
 ])
 def test_bad_job_file_is_one_line_before_any_work(capsys, tmp_path: Path, doc: object,
                                                   message: str) -> None:
@@ -182,3 +185,21 @@ def test_items_cover_every_view_not_done_exactly_once(views: int, per_item: int,
     assert [v for i in items if i.entry == 1 for v in i.frames] == [0, 1]
     assert all(1 <= len(i.frames) <= per_item for i in items)
     assert all(i.poses == tuple(job.scenes[i.entry].poses[v] for v in i.frames) for i in items)
+
+
+def test_semantics_of_an_entry(tmp_path: Path) -> None:
+    """An entry's semantics: a source, an inline mapping (part of the scene key and the
+    fingerprint) or a mapping file resolved against the job's folder."""
+    from vkpbr.distributed import job_from_doc
+
+    (tmp_path / "poses.json").write_text(json.dumps(["0,1,5,0,0,0"]))
+    (tmp_path / "classes.json").write_text(json.dumps({"floor": 2}))
+    doc = [{"cameras": "poses.json", "out": "a", "semantics": {"floor": 2, "card": "card"}},
+           {"cameras": "poses.json", "out": "b", "semantics": "classes.json"},
+           {"cameras": "poses.json", "out": "c"}]
+    job = job_from_doc(doc, "job", tmp_path)
+    s = [e.settings for e in job.scenes]
+    assert s[0].semantic_source() == {"card": "card", "floor": 2}
+    assert s[1].semantic_source() == str(tmp_path / "classes.json") and s[2].semantics == "mesh"
+    assert len({x.scene_key() for x in s}) == 3
+    assert "semantics" in job.scenes[0].fingerprint() and "semantics" not in job.scenes[2].fingerprint()

@@ -83,6 +83,16 @@ def run(args: argparse.Namespace) -> int:
     return _render(load_job(args.job), args)
 
 
+def _semantics_arg(value: str) -> str:
+    """--semantics for the actors: a source name, or the mapping file checked and absolute."""
+    from vkpbr.scene.semantics import SEMANTIC_SOURCES, load_semantic_mapping
+
+    if value in SEMANTIC_SOURCES:
+        return value
+    load_semantic_mapping(value)  # a bad file fails here, before any actor starts
+    return str(Path(value).resolve())
+
+
 def render_on_ray(args: argparse.Namespace, options: Any) -> int:
     """`vkpbr render SCENE --cameras POSES --out DIR --ray [ADDRESS]`: the same files as
     without --ray, rendered by the actors of a one-entry job."""
@@ -98,9 +108,6 @@ def render_on_ray(args: argparse.Namespace, options: Any) -> int:
                              "scene's camera and lights); drop it or render without --ray")
     if args.frames != 1:
         raise UsageError("--frames is a timing option: not available with --ray")
-    if getattr(args, "semantics", "mesh") != "mesh":
-        raise UsageError("--semantics is not available with --ray yet (the actors use each "
-                         "mesh as its class); drop it or render without --ray")
     out = Path(args.out)
     if out.suffix.lower() in OUTPUT_SUFFIXES:
         raise UsageError(f"--out {out}: with --cameras, --out is a folder")
@@ -109,7 +116,8 @@ def render_on_ray(args: argparse.Namespace, options: Any) -> int:
         outputs=tuple(args.outputs or ()), linear=args.linear, msaa=args.msaa,
         cache=args.cache is not None, cache_dir=args.cache or None, options=options,
         strict=bool(getattr(args, "strict", False)),
-        allow_outside_paths=bool(getattr(args, "allow_outside_paths", False)))
+        allow_outside_paths=bool(getattr(args, "allow_outside_paths", False)),
+        semantics=_semantics_arg(getattr(args, "semantics", "mesh")))
     if settings.scene is not None and not settings.scene.is_file():
         raise UsageError(f"{settings.scene}: no such scene file")
     scene = SceneJob(settings, tuple(load_poses(args.cameras)), colmap=args.colmap, where="--out")

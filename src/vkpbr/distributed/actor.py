@@ -70,7 +70,8 @@ def load_renderer(settings: RenderSettings, device: str | int | None = None) -> 
         kwargs: dict[str, Any] = {"strict": True} if settings.strict else {}
         scene = load_scene(path, allow_outside_paths=settings.allow_outside_paths, root=root,
                            **kwargs)
-    return Renderer(scene, device=device, msaa=settings.msaa, cache_dir=default_cache_dir())
+    return Renderer(scene, device=device, msaa=settings.msaa, cache_dir=default_cache_dir(),
+                    semantics=settings.semantic_source())
 
 
 def _one_line(exc: BaseException) -> str:

@@ -15,6 +15,7 @@ Job file (JSON), a list of entries or {"scenes": [entries], "views_per_item"?, "
      "size": "256x256",              # or [256, 256]; default 1280x720
      "outputs": ["depth", "normal"], # dataset outputs besides colour (docs/outputs.md)
      "linear": false, "msaa": 1, "colmap": false, "cache": true,
+     "semantics": "mesh",            # or "material", "extras", a mapping file or {name: id}
      "options": {"view": "final"}}   # RenderOptions fields (vkpbr.render.options)
 
 Relative paths are relative to the job file's folder. The checks are plain Python, as in
@@ -42,7 +43,8 @@ DEFAULT_VIEWS_PER_ITEM = 16
 DEFAULT_RETRIES = 2  # further attempts of a failed item, each on another actor where one is free
 MAX_SIDE = 16384
 _ENTRY_KEYS = frozenset({"scene", "cameras", "out", "size", "outputs", "linear", "msaa",
-                         "colmap", "cache", "options", "strict", "allow_outside_paths"})
+                         "colmap", "cache", "options", "strict", "allow_outside_paths",
+                         "semantics"})
 _JOB_KEYS = frozenset({"scenes", "views_per_item", "retries"})
 
 
@@ -67,6 +69,13 @@ class RenderSettings:
     options: Any = None  # RenderOptions; None: RenderOptions()
     strict: bool = False
     allow_outside_paths: bool = False
+    # Renderer(semantics=...): "mesh", "material", "extras", a mapping file's path or the
+    # mapping as sorted (name, id or label) pairs (hashable: it is part of the scene key).
+    semantics: str | tuple[tuple[str, int | str], ...] = "mesh"
+
+    def semantic_source(self) -> Any:
+        """What Renderer(semantics=...) takes."""
+        return dict(self.semantics) if isinstance(self.semantics, tuple) else self.semantics
 
     @property
     def suffix(self) -> str:
@@ -80,7 +89,7 @@ class RenderSettings:
     def scene_key(self) -> tuple:
         """What an actor loads once and keeps: one Renderer per distinct key."""
         return (str(self.scene) if self.scene else None, self.cache, self.strict,
-                self.allow_outside_paths, self.msaa)
+                self.allow_outside_paths, self.msaa, self.semantics)
 
 
 def frame_files(settings: RenderSettings, frame: int) -> list[str]:
@@ -107,7 +116,8 @@ class SceneJob:
         poses = hashlib.sha256(repr(self.poses).encode()).hexdigest()
         return {"scene": str(s.scene.resolve()) if s.scene else None, "views": len(self.poses),
                 "poses_sha256": poses, "size": list(s.size), "outputs": list(s.outputs),
-                "linear": s.linear, "msaa": s.msaa, "options": repr(s.render_options())}
+                "linear": s.linear, "msaa": s.msaa, "options": repr(s.render_options()),
+                **({} if s.semantics == "mesh" else {"semantics": repr(s.semantics)})}
 
 
 @dataclass(frozen=True)
@@ -258,9 +268,32 @@ def scene_entry(entry: object, where: str, base: Path) -> SceneJob:
         cache=_bool(entry, "cache", where, True),
         options=_options(entry["options"], where) if "options" in entry else None,
         strict=_bool(entry, "strict", where, False),
-        allow_outside_paths=_bool(entry, "allow_outside_paths", where, False))
+        allow_outside_paths=_bool(entry, "allow_outside_paths", where, False),
+        semantics=_semantics(entry.get("semantics", "mesh"), where, base))
     return SceneJob(settings, _poses(entry["cameras"], where, base),
                     colmap=_bool(entry, "colmap", where, False), where=where)
+
+
+def _semantics(value: object, where: str, base: Path) -> str | tuple[tuple[str, int | str], ...]:
+    """An entry's "semantics": a source name, a mapping file (checked now) or a mapping."""
+    from vkpbr.scene.semantics import SEMANTIC_SOURCES, load_semantic_mapping
+
+    with_where = f"{where}: semantics"
+    try:
+        if isinstance(value, Mapping):
+            from vkpbr.scene.semantics import checked_mapping
+
+            return tuple(sorted(checked_mapping(value, "(inline)").items()))
+        if isinstance(value, str) and value in SEMANTIC_SOURCES:
+            return value
+        if isinstance(value, str) and value.lower().endswith(".json"):
+            path = _path(value, "semantics", where, base)
+            load_semantic_mapping(path)  # readable, a valid mapping: before any actor starts
+            return str(path)
+    except UsageError as e:
+        raise UsageError(f"{with_where}: {str(e).removeprefix('semantic mapping ')}") from None
+    raise UsageError(f"{with_where}: expected {', '.join(SEMANTIC_SOURCES)}, a .json mapping "
+                     f"file or a {{name: id or label}} object, got {value!r}")
 
 
 def _count(doc: Mapping[str, object], key: str, where: str, default: int, lo: int) -> int:

@@ -27,7 +27,7 @@ import numpy as np
 
 from vkpbr.errors import UsageError
 
-__all__ = ["SEMANTIC_SOURCES", "semantic_ids", "load_semantic_mapping"]
+__all__ = ["SEMANTIC_SOURCES", "semantic_ids", "load_semantic_mapping", "checked_mapping"]
 
 SEMANTIC_SOURCES = ("mesh", "material", "extras")
 Label = int | str
@@ -42,10 +42,11 @@ def load_semantic_mapping(path: str | Path) -> dict[str, Label]:
         raise UsageError(f"semantic mapping {p}: {e.strerror or e}") from None
     except (UnicodeDecodeError, json.JSONDecodeError) as e:
         raise UsageError(f"semantic mapping {p}: not JSON ({e})") from None
-    return _checked_mapping(doc, str(p))
+    return checked_mapping(doc, str(p))
 
 
-def _checked_mapping(doc: object, where: str) -> dict[str, Label]:
+def checked_mapping(doc: object, where: str) -> dict[str, Label]:
+    """`doc` as a {name: id or label} mapping (one-line UsageError naming `where`)."""
     if not isinstance(doc, Mapping) or not doc:
         raise UsageError(f"semantic mapping {where}: expected a JSON object "
                          '{"node, mesh or material name": id or label}')
@@ -85,7 +86,7 @@ def semantic_ids(scene: Any, draws: Sequence[Any], source: str | Mapping[str, La
                              "JSON file of {name: id or label}")
         mapping, where = load_semantic_mapping(source), str(source)
     elif isinstance(source, Mapping):
-        mapping, where = _checked_mapping(source, "(given)"), "(given)"
+        mapping, where = checked_mapping(source, "(given)"), "(given)"
     else:
         mapping, where = None, ""
     nodes, meshes, materials = scene.nodes, scene.meshes, scene.materials
