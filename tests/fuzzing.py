@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import base64
 import collections
+import copy
 import json
 import os
 import random
@@ -73,11 +74,13 @@ def mutate_json(doc: dict, rng: random.Random) -> dict:
         elif isinstance(value, int) and not isinstance(value, bool) and r < 0.45:
             parent[key] = value + rng.choice([1, 2, 100, 2**31, -value - 1])  # indices, counts
         elif isinstance(value, list) and value and r < 0.55:
-            parent[key] = [] if rng.random() < 0.5 else value * rng.randint(2, 5)
+            # Copies, not the same objects again: a later edit inside one must not reach the
+            # others (or, through a shared evil value, make a Python cycle json cannot write).
+            parent[key] = [] if rng.random() < 0.5 else [copy.deepcopy(v) for v in value * rng.randint(2, 5)]
         elif key == "children" and r < 0.65 and isinstance(value, list):
             parent[key] = [0]  # a cycle through the root node
         else:
-            parent[key] = rng.choice(_EVIL)
+            parent[key] = copy.deepcopy(rng.choice(_EVIL))
     return doc
 
 
