@@ -99,7 +99,7 @@ class Tonemap(Named):
 # (a = sheen roughness). It is this polynomial in x = (n.v)^(1/3) and y = sqrt(a),
 # E = sum_ij SHEEN_ALBEDO_FIT[i][j] x^i y^j, least-squares fitted to the integral of the
 # extension's distribution and visibility over n.v in [0.02, 1], a in [0.07, 1] (max error
-# 0.004; tests/unit/test_material_layers.py integrates it again). A polynomial, not a table:
+# 0.004; tests/unit/test_layer_mirror.py integrates it again). A polynomial, not a table:
 # lavapipe compiles a dynamically indexed constant array into a tree of branches per lookup,
 # minutes per pipeline. Generated into shaders/generated.glsl (sheen_albedo_fit) and evaluated
 # by reference/brdf.py, from these numbers alone.
