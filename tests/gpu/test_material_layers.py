@@ -66,7 +66,7 @@ def plane_scene(material: Material, light: Light = LIGHT) -> Scene:
                  lights=[light], cameras=[CAMERA])
 
 
-def mirror(mat: Material, light: Light, **env: object) -> dict[str, np.ndarray]:
+def mirror(mat: Material, light: Light, model_scale: float = 1.0, **env: object) -> dict[str, np.ndarray]:
     p, n, v, _ = pixel_geometry()
     to_light = np.asarray(light.position) - p
     l = to_light / np.linalg.norm(to_light, axis=-1, keepdims=True)
@@ -75,8 +75,8 @@ def mirror(mat: Material, light: Light, **env: object) -> dict[str, np.ndarray]:
     light_in = np.asarray(light.color) * light.intensity if env.get("env_radiance") is None \
         else np.zeros(3)
     return ref.shade_layered(n, v, l, c, np.full(shape, mat.metallic_factor),
-                             np.full(shape, mat.roughness_factor), light_in, ref.Layers.of(mat),
-                             **env)
+                             np.full(shape, mat.roughness_factor), light_in,
+                             ref.Layers.of(mat, model_scale), **env)
 
 
 def render(r, view: str, pipeline: str, **options: object) -> np.ndarray:  # noqa: ANN001
@@ -102,6 +102,24 @@ def test_layers_match_mirror(make_renderer, material: str, pipeline: str) -> Non
         if light is BELOW:
             # Light from behind reaches the viewer only through the transmitted lobe.
             assert want["diffuse"].max() == 0.0 and want["transmission"].max() > 1e-3
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
+def test_volume_thickness_scales_with_the_node(make_renderer, pipeline: str) -> None:
+    """KHR_materials_volume's thickness is in the mesh's space: the plane's node scaled by
+    2.5 (the surface stays y = 0) attenuates as the mirror with 2.5 times the thickness."""
+    mat = LAYERED["transmission-volume"]
+    scene = plane_scene(mat, BELOW)
+    scene.nodes = [Node(mesh=0, matrix=np.diag([2.5, 2.5, 2.5, 1.0]).astype(np.float32))]
+    r = make_renderer(scene)
+    if pipeline == "compute" and not r.device.compute_path:
+        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+    scaled, plain = mirror(mat, BELOW, model_scale=2.5), mirror(mat, BELOW)
+    assert not np.allclose(scaled["volume"], plain["volume"])  # the scale matters here
+    for view in ("volume", "transmission", "final"):
+        got = render(r, view, pipeline, env="none")
+        np.testing.assert_allclose(got, np.broadcast_to(scaled[view], got.shape), rtol=2e-3,
+                                   atol=2e-5, err_msg=view)
 
 
 def test_unlit_is_the_base_colour(make_renderer) -> None:

@@ -321,8 +321,10 @@ class Layers:
     attenuation_distance: float = 0.0
 
     @classmethod
-    def of(cls, material: object) -> Layers:
-        """The layers of a vkpbr.scene.types.Material, clamped as the shader clamps them."""
+    def of(cls, material: object, model_scale: float = 1.0) -> Layers:
+        """The layers of a vkpbr.scene.types.Material, clamped as the shader clamps them;
+        `model_scale`: the node's scale (the length of its model matrix's first column), by
+        which KHR_materials_volume's thickness, given in the mesh's space, is scaled."""
         m = material
         return cls(
             ior=max(float(m.ior), 1.0), specular_color=tuple(m.specular_color_factor),
@@ -332,7 +334,7 @@ class Layers:
             sheen_color=tuple(m.sheen_color_factor),
             sheen_roughness=float(np.clip(m.sheen_roughness_factor, MIN_SHEEN_ROUGHNESS, 1.0)),
             transmission=float(np.clip(m.transmission_factor, 0.0, 1.0)),
-            thickness=max(float(m.thickness_factor), 0.0),
+            thickness=max(float(m.thickness_factor), 0.0) * float(model_scale),
             attenuation_color=tuple(m.attenuation_color),
             attenuation_distance=float(m.attenuation_distance))
 

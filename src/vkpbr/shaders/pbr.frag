@@ -15,6 +15,7 @@ layout(location = 3) in vec3 v_tangent;
 layout(location = 4) in vec3 v_bitangent;
 layout(location = 5) in vec4 v_color;  // COLOR_0 (white when the mesh has none)
 layout(location = 6) flat in uint v_draw;  // the draw's index (its firstInstance)
+layout(location = 8) flat in float v_model_scale;  // the node's scale (shade.glsl s_model_scale)
 #if BATCH  // a view of a batch: the camera's values from its ViewRecord (render/batch.py)
 layout(location = 7) flat in uint v_view;
 #define FRAME_EYE (views[v_view].eye_near.xyz)
@@ -41,6 +42,7 @@ void main() {
     s_bitangent = v_bitangent;
     s_color = v_color;
     s_front_facing = gl_FrontFacing;
+    s_model_scale = v_model_scale;
 #if VISIBILITY
 #if ALPHA_MASK
     if (surface_base_color().a < MAT.alpha_cutoff) discard;

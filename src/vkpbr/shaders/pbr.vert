@@ -43,6 +43,7 @@ layout(location = 6) flat out uint v_draw;  // firstInstance of the draw: its in
 #if BATCH
 layout(location = 7) flat out uint v_view;  // the view of the batch (Views)
 #endif
+layout(location = 8) flat out float v_model_scale;  // |model x axis| (the volume's thickness)
 
 void main() {
 #if TBN_MODE == 0
@@ -68,6 +69,7 @@ void main() {
     mat3 normal_matrix = mat3(instance_matrices[2u * uint(gl_InstanceIndex) + 1u]);
 #endif
     vec4 world = model * vec4(in_position, 1.0);
+    v_model_scale = length(model[0].xyz);
     v_world_pos = world.xyz;
     v_texcoords = vec4(in_texcoord0, in_texcoord1);
     v_color = in_color;

@@ -133,6 +133,7 @@ void main() {
     // triangle's world normal facing the camera; mirrored transforms are handled by the world
     // positions themselves.
     s_front_facing = dot(cross(w1 - w0, w2 - w0), eye - w0) > 0.0;
+    s_model_scale = length(dr.model[0].xyz);
 
 #if OUTPUTS
     // Dataset outputs (Renderer.render(outputs=...)): ids, normals, distances of this point.

@@ -36,6 +36,9 @@ vec3 s_tangent;
 vec3 s_bitangent;
 vec4 s_color;
 bool s_front_facing;
+// The node's scale along its model's x axis: KHR_materials_volume's thickness is given in
+// the mesh's space and scales with the node (as the glTF-Sample-Viewer does).
+float s_model_scale = 1.0;
 
 vec3 safe_normalize(vec3 x, vec3 fallback) {
     float len2 = dot(x, x);
@@ -92,7 +95,7 @@ Layers material_layers() {
     m.sheen_roughness = clamp(u(MAT.sheen_roughness) * SAMPLE(sheen_roughness).r,
                               MIN_SHEEN_ROUGHNESS, 1.0);
     m.transmission = clamp(u(MAT.transmission_factor) * SAMPLE(transmission).r, 0.0, 1.0);
-    m.thickness = max(u(MAT.thickness) * SAMPLE(thickness).r, 0.0);
+    m.thickness = max(u(MAT.thickness) * SAMPLE(thickness).r, 0.0) * s_model_scale;
     m.attenuation_color = MAT.attenuation_color + zero;
     m.attenuation_distance = u(MAT.attenuation_distance);
     return m;
