@@ -13,11 +13,14 @@ __all__ = ["device_report"]
 def _features(vk: Any, info: PhysicalDeviceInfo) -> dict[str, Any]:
     handle = info.handle
     f13 = vk.VkPhysicalDeviceVulkan13Features()
-    f2 = vk.VkPhysicalDeviceFeatures2(sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, pNext=f13)
+    f12 = vk.VkPhysicalDeviceVulkan12Features(pNext=f13)
+    f11 = vk.VkPhysicalDeviceVulkan11Features(pNext=f12)
+    f2 = vk.VkPhysicalDeviceFeatures2(sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, pNext=f11)
     vk.vkGetPhysicalDeviceFeatures2(handle, f2)
     props = vk.vkGetPhysicalDeviceProperties(handle)
     limits = props.limits
     heaps = vk.vkGetPhysicalDeviceMemoryProperties(handle)
+    extensions = {e.extensionName for e in vk.vkEnumerateDeviceExtensionProperties(handle, None)}
     device_local = sum(
         heaps.memoryHeaps[i].size
         for i in range(heaps.memoryHeapCount)
@@ -36,6 +39,14 @@ def _features(vk: Any, info: PhysicalDeviceInfo) -> dict[str, Any]:
         "msaa4x": bool(limits.framebufferColorSampleCounts & vk.VK_SAMPLE_COUNT_4_BIT),
         "maxPushConstantsSize": int(limits.maxPushConstantsSize),
         "deviceLocalMemory_MiB": int(device_local >> 20),
+        # Renderer.render_batch: layered rendering and instanced indirect draws (else it
+        # renders view by view), up to maxFramebufferLayers views a chunk; device="cuda"
+        # needs the memory export.
+        "batchedViews": bool(f12.shaderOutputLayer and f11.shaderDrawParameters
+                             and f2.features.drawIndirectFirstInstance),
+        "maxFramebufferLayers": int(limits.maxFramebufferLayers),
+        "externalMemoryFd": "VK_KHR_external_memory_fd" in extensions,
+        "memoryBudget": "VK_EXT_memory_budget" in extensions,
     }
 
 
