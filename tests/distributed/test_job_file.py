@@ -203,3 +203,19 @@ def test_semantics_of_an_entry(tmp_path: Path) -> None:
     assert s[1].semantic_source() == str(tmp_path / "classes.json") and s[2].semantics == "mesh"
     assert len({x.scene_key() for x in s}) == 3
     assert "semantics" in job.scenes[0].fingerprint() and "semantics" not in job.scenes[2].fingerprint()
+
+
+def test_batch_of_an_entry(tmp_path: Path) -> None:
+    """An entry's "batch" (views per GPU submission, as render --batch): 64 by default, 0
+    frame by frame (which changes directional shadows: part of the fingerprint)."""
+    from vkpbr.distributed import job_from_doc
+
+    (tmp_path / "poses.json").write_text(json.dumps(["0,1,5,0,0,0"]))
+    doc = [{"cameras": "poses.json", "out": "a"}, {"cameras": "poses.json", "out": "b", "batch": 0},
+           {"cameras": "poses.json", "out": "c", "batch": 8}]
+    job = job_from_doc(doc, "job", tmp_path)
+    assert [e.settings.batch for e in job.scenes] == [64, 0, 8]
+    prints = [e.fingerprint() for e in job.scenes]
+    assert "batch" not in prints[0] and prints[1]["batch"] == 0 and "batch" not in prints[2]
+    with pytest.raises(UsageError, match="batch: expected an integer >= 0"):
+        job_from_doc([{"cameras": "poses.json", "out": "d", "batch": -1}], "job", tmp_path)

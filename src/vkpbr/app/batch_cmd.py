@@ -9,6 +9,7 @@ import logging
 from pathlib import Path
 from typing import Any
 
+from vkpbr.app.common import BATCH_VIEWS
 from vkpbr.app.log import say
 from vkpbr.app.parsing import EPILOG_FORMATTER
 from vkpbr.errors import UsageError
@@ -117,7 +118,8 @@ def render_on_ray(args: argparse.Namespace, options: Any) -> int:
         cache=args.cache is not None, cache_dir=args.cache or None, options=options,
         strict=bool(getattr(args, "strict", False)),
         allow_outside_paths=bool(getattr(args, "allow_outside_paths", False)),
-        semantics=_semantics_arg(getattr(args, "semantics", "mesh")))
+        semantics=_semantics_arg(getattr(args, "semantics", "mesh")),
+        batch=int(getattr(args, "batch", BATCH_VIEWS)))
     if settings.scene is not None and not settings.scene.is_file():
         raise UsageError(f"{settings.scene}: no such scene file")
     scene = SceneJob(settings, tuple(load_poses(args.cameras)), colmap=args.colmap, where="--out")

@@ -38,15 +38,13 @@ def render_views(renderer: Any, cameras: list[Any], lights: Any,
     each dataset output as `Renderer.render(outputs=...)` returns it.
     """
 
-    from vkpbr.app.common import BATCH_VIEWS
-
     names = settings.outputs
     # The batch path, as `vkpbr render --cameras` takes it (a view renders the same in any
     # batch, so items of any size give the single-process frames).
     frames = renderer.render_many(cameras, lights, settings.size, settings.render_options(),
                                   linear=settings.linear,
                                   outputs=("color", *names) if names else None,
-                                  batch=BATCH_VIEWS)
+                                  batch=settings.batch or None)
     for frame in frames:
         yield frame if names else {"color": frame}
 

@@ -16,6 +16,7 @@ Job file (JSON), a list of entries or {"scenes": [entries], "views_per_item"?, "
      "outputs": ["depth", "normal"], # dataset outputs besides colour (docs/outputs.md)
      "linear": false, "msaa": 1, "colmap": false, "cache": true,
      "semantics": "mesh",            # or "material", "extras", a mapping file or {name: id}
+     "batch": 64,                    # views per GPU submission (0: frame by frame; default 64)
      "options": {"view": "final"}}   # RenderOptions fields (vkpbr.render.options)
 
 Relative paths are relative to the job file's folder. The checks are plain Python, as in
@@ -34,6 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from vkpbr.app.common import BATCH_VIEWS
 from vkpbr.errors import UsageError
 
 __all__ = ["Job", "SceneJob", "RenderSettings", "WorkItem", "load_job", "job_from_doc",
@@ -44,7 +46,7 @@ DEFAULT_RETRIES = 2  # further attempts of a failed item, each on another actor 
 MAX_SIDE = 16384
 _ENTRY_KEYS = frozenset({"scene", "cameras", "out", "size", "outputs", "linear", "msaa",
                          "colmap", "cache", "options", "strict", "allow_outside_paths",
-                         "semantics"})
+                         "semantics", "batch"})
 _JOB_KEYS = frozenset({"scenes", "views_per_item", "retries"})
 
 
@@ -72,6 +74,9 @@ class RenderSettings:
     # Renderer(semantics=...): "mesh", "material", "extras", a mapping file's path or the
     # mapping as sorted (name, id or label) pairs (hashable: it is part of the scene key).
     semantics: str | tuple[tuple[str, int | str], ...] = "mesh"
+    # Views per GPU submission (render --cameras --batch): 0 renders frame by frame, each
+    # view with its own shadow cascades; any other number gives the same pixels.
+    batch: int = BATCH_VIEWS
 
     def semantic_source(self) -> Any:
         """What Renderer(semantics=...) takes."""
@@ -117,7 +122,8 @@ class SceneJob:
         return {"scene": str(s.scene.resolve()) if s.scene else None, "views": len(self.poses),
                 "poses_sha256": poses, "size": list(s.size), "outputs": list(s.outputs),
                 "linear": s.linear, "msaa": s.msaa, "options": repr(s.render_options()),
-                **({} if s.semantics == "mesh" else {"semantics": repr(s.semantics)})}
+                **({} if s.semantics == "mesh" else {"semantics": repr(s.semantics)}),
+                **({} if s.batch else {"batch": 0})}
 
 
 @dataclass(frozen=True)
@@ -269,7 +275,8 @@ def scene_entry(entry: object, where: str, base: Path) -> SceneJob:
         options=_options(entry["options"], where) if "options" in entry else None,
         strict=_bool(entry, "strict", where, False),
         allow_outside_paths=_bool(entry, "allow_outside_paths", where, False),
-        semantics=_semantics(entry.get("semantics", "mesh"), where, base))
+        semantics=_semantics(entry.get("semantics", "mesh"), where, base),
+        batch=_count(entry, "batch", where, BATCH_VIEWS, 0))
     return SceneJob(settings, _poses(entry["cameras"], where, base),
                     colmap=_bool(entry, "colmap", where, False), where=where)
 
