@@ -26,19 +26,7 @@ if [ "$STEP" = table ]; then
   timeout ${BATCH_TIMEOUT:-540} python3 benchmarks/bench_batch.py --json "$OUT/batch.json" 2>&1 | tee "$OUT/batch.txt"
   exit
 fi
-for f in .gl-peers/*.deb; do dpkg -x "$f" /; done; ldconfig
-wheels=()
-for w in .whl-peers/*.whl; do
-  mod=$(basename "$w"); mod=${mod%%-*}
-  case $mod in six | jinja2 | markupsafe | packaging | typing_extensions | typing_inspect | mypy_extensions | cffi | pycparser | marshmallow | dataclasses_json)
-    python3 -c "import $mod" 2>/dev/null && continue ;; esac
-  [ -e "/tmp/site/$mod" ] && continue
-  wheels+=("$w")
-done
-python3 -m pip install -q --no-index --no-deps --no-compile --target /tmp/peers "${wheels[@]}" 2>/dev/null || exit 1
-export PYTHONPATH=/tmp/site:/tmp/peers:$PWD/src PYOPENGL_PLATFORM=egl
-nv=/usr/local/nvidia/share
-ls /usr/share/glvnd/egl_vendor.d/*nvidia* >/dev/null 2>&1 || export __EGL_VENDOR_LIBRARY_FILENAMES=$nv/glvnd/egl_vendor.d/10_nvidia.json
+source benchmarks/peers_env.sh  # .gl-peers, .whl-peers -> /tmp/peers; PYTHONPATH, EGL
 extra=()
 [ -f out/sapien-peers.json ] && extra=(--peers-json out/sapien-peers.json)
 echo "== vkpbr bench --batch --peers: $VIEWS poses, ${BATCH_VIEWS:-1024} views a call"

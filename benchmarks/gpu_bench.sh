@@ -5,20 +5,8 @@
 # fit the transfer limit; every renderer loads the same files.
 set -uo pipefail
 FRAMES=${FRAMES:-200}
-for f in .gl-peers/*.deb; do dpkg -x "$f" /; done; ldconfig
 python3 -m pip install -q --no-index --no-deps --no-compile --upgrade --target /tmp/site .whl/*.whl 2>/dev/null || exit 1
-wheels=()
-for w in .whl-peers/*.whl; do
-  mod=$(basename "$w"); mod=${mod%%-*}
-  case $mod in six | jinja2 | markupsafe | packaging | typing_extensions | typing_inspect | mypy_extensions | cffi | pycparser | marshmallow | dataclasses_json)
-    python3 -c "import $mod" 2>/dev/null && continue ;; esac
-  [ -e "/tmp/site/$mod" ] && continue
-  wheels+=("$w")
-done
-python3 -m pip install -q --no-index --no-deps --no-compile --target /tmp/peers "${wheels[@]}" 2>/dev/null || exit 1
-export PYTHONPATH=/tmp/site:/tmp/peers:$PWD/src PYTHONUNBUFFERED=1 PYOPENGL_PLATFORM=egl
-nv=/usr/local/nvidia/share
-ls /usr/share/glvnd/egl_vendor.d/*nvidia* >/dev/null 2>&1 || export __EGL_VENDOR_LIBRARY_FILENAMES=$nv/glvnd/egl_vendor.d/10_nvidia.json
+source benchmarks/peers_env.sh  # .gl-peers, .whl-peers -> /tmp/peers; PYTHONPATH, EGL
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
 python3 -m vkpbr bench --frames "$FRAMES" --sponza .assets/models/Sponza/glTF/Sponza.gltf --peers --json > "$OUT/bench.json" 2> "$OUT/bench.err"
 python3 - "$OUT/bench.json" <<'PY'

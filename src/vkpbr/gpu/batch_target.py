@@ -21,13 +21,13 @@ from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image, ImageView
 from vkpbr.gpu.rendering import (
     Attachments,
-    attachment_stage,
     barriers,
     begin_rendering,
     copy_image_to_buffer,
+    copy_out_barriers,
     end_rendering,
     host_read_barrier,
-    image_barrier,
+    redraw_barriers,
 )
 from vkpbr.gpu.target import COLOR_FORMATS
 
@@ -56,7 +56,6 @@ class BatchTarget:
         self.device, self.clear_color = device, clear_color
         self.extent = (int(size[0]), int(size[1]))
         self.layers, self.capacity, self.color_kind = int(layers), int(capacity), color
-        self.copies_depth = depth
         w, h = self.extent
         fmt_name, self.pixel_bytes = COLOR_FORMATS[color]
         self.color_format = getattr(vk, fmt_name)
@@ -85,28 +84,11 @@ class BatchTarget:
         self._objects.append(obj)
         return obj
 
-    @property
-    def view_bytes(self) -> int:
-        """Device memory a view of the batch holds: its layer of both images and readbacks."""
-        w, h = self.extent
-        return w * h * (2 * self.pixel_bytes + 4 + (4 if self.copies_depth else 0))
-
-    def _images(self) -> list[tuple[Image, bool]]:
-        return [(self.color, False), (self.depth, True)]
-
     def record_begin(self, cmd: Commands, image: int = 0) -> None:
         """Transition every layer for drawing (after the previous chunk's or batch's copy)
         and begin a layered rendering over all of them, cleared."""
-        vk = self.device.vk
-        out = []
-        for img, depth in self._images():
-            stage, access, layout = attachment_stage(vk, depth)
-            src = (stage | vk.VK_PIPELINE_STAGE_2_COPY_BIT,
-                   access & ~(vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT
-                              | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT))
-            out.append(image_barrier(vk, img.handle, depth, vk.VK_IMAGE_LAYOUT_UNDEFINED, layout,
-                                     src, (stage, access), layers=self.layers))
-        barriers(cmd, out)
+        images = [(self.color.handle, False), (self.depth.handle, True)]
+        barriers(cmd, redraw_barriers(self.device.vk, images, self.layers))
         begin_rendering(cmd, self.attachments, self.clear_color, 0.0, layers=self.layers)
 
     def record_chunk_end(self, cmd: Commands, chunk: int, views: int) -> None:
@@ -114,17 +96,11 @@ class BatchTarget:
         the readback buffers (views chunk * layers on)."""
         vk = self.device.vk
         end_rendering(cmd)
-        xfer = (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT)
         wanted = [(self.color, False, self.color_readback, self.pixel_bytes)]
         if self.depth_readback is not None:
             wanted.append((self.depth, True, self.depth_readback, 4))
-        to_src = []
-        for img, depth, _, _ in wanted:
-            stage, access, layout = attachment_stage(vk, depth)
-            to_src.append(image_barrier(vk, img.handle, depth, layout,
-                                        vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, (stage, access),
-                                        xfer, layers=self.layers))
-        barriers(cmd, to_src)
+        barriers(cmd, copy_out_barriers(vk, [(img.handle, d) for img, d, _, _ in wanted],
+                                        self.layers))
         w, h = self.extent
         for img, depth, buf, nbytes in wanted:
             copy_image_to_buffer(cmd, img.handle, depth, buf, self.extent, layers=views,

@@ -13,7 +13,7 @@ from typing import Any
 from vkpbr.gpu.commands import Commands
 
 __all__ = ["Attachments", "begin_rendering", "begin_depth_rendering", "end_rendering", "image_barrier", "barriers",
-           "copy_image_to_buffer", "host_read_barrier"]
+           "copy_image_to_buffer", "host_read_barrier", "redraw_barriers", "copy_out_barriers"]
 
 
 @dataclass
@@ -38,6 +38,33 @@ def image_barrier(vk: Any, image: Any, depth: bool, old: int, new: int, src: tup
         dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, image=image,
         subresourceRange=vk.VkImageSubresourceRange(
             aspectMask=aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=layers))
+
+
+def redraw_barriers(vk: Any, images: list[tuple[Any, bool]], layers: int = 1) -> list[Any]:
+    """Barriers taking (VkImage, is_depth) attachments from whatever they held to drawing:
+    the previous frame drew into them and may have copied them out, so both are ordered
+    before this frame's writes (write-after-write, write-after-read); the old contents are
+    discarded (UNDEFINED: every frame clears)."""
+    out = []
+    for image, depth in images:
+        stage, access, layout = attachment_stage(vk, depth)
+        src = (stage | vk.VK_PIPELINE_STAGE_2_COPY_BIT,
+               access & ~(vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT
+                          | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT))
+        out.append(image_barrier(vk, image, depth, vk.VK_IMAGE_LAYOUT_UNDEFINED, layout, src,
+                                 (stage, access), layers=layers))
+    return out
+
+
+def copy_out_barriers(vk: Any, images: list[tuple[Any, bool]], layers: int = 1) -> list[Any]:
+    """Barriers taking drawn (VkImage, is_depth) attachments to TRANSFER_SRC for a copy."""
+    xfer = (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT)
+    out = []
+    for image, depth in images:
+        stage, access, layout = attachment_stage(vk, depth)
+        out.append(image_barrier(vk, image, depth, layout, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                                 (stage, access), xfer, layers=layers))
+    return out
 
 
 def barriers(cmd: Commands, images: list[Any], buffers: list[Any] = ()) -> None:

@@ -33,9 +33,11 @@ from vkpbr.gpu.rendering import (
     barriers,
     begin_rendering,
     copy_image_to_buffer,
+    copy_out_barriers,
     end_rendering,
     host_read_barrier,
     image_barrier,
+    redraw_barriers,
 )
 
 __all__ = ["FrameTarget", "OffscreenTarget", "COLOR_FORMATS", "COPY_COLOR", "COPY_DEPTH", "COPY_OUTPUTS"]
@@ -141,18 +143,7 @@ class OffscreenTarget:
         return 0  # one image; frames in flight are ordered by the barriers below
 
     def record_begin(self, cmd: Commands, image: int) -> None:
-        vk = self.device.vk
-        out = []
-        for img, depth in self._images:
-            stage, access, layout = attachment_stage(vk, depth)
-            # The previous frame drew into this image and may have copied it out: order both
-            # before this frame's writes (a write-after-write and a write-after-read hazard).
-            src = (stage | vk.VK_PIPELINE_STAGE_2_COPY_BIT,
-                   access & ~(vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT
-                              | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT))
-            out.append(image_barrier(vk, img.handle, depth, vk.VK_IMAGE_LAYOUT_UNDEFINED, layout,
-                                     src, (stage, access)))
-        barriers(cmd, out)
+        barriers(cmd, redraw_barriers(self.device.vk, [(i.handle, d) for i, d in self._images]))
         begin_rendering(cmd, self.attachments, self.clear_color, 0.0)
 
     # --- the compute path's steps, instead of record_begin -------------------------------------
@@ -286,13 +277,7 @@ class OffscreenTarget:
         color_buf, depth_buf = self.readback(frame.index)
         wanted = [(self.color, False, color_buf, COPY_COLOR), (self.depth, True, depth_buf, COPY_DEPTH)]
         wanted = [w for w in wanted if w[3] in copy]
-        xfer = (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT)
-        to_src = []
-        for img, depth, _, _ in wanted:
-            stage, access, layout = attachment_stage(vk, depth)
-            to_src.append(image_barrier(vk, img.handle, depth, layout,
-                                        vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, (stage, access), xfer))
-        barriers(cmd, to_src)
+        barriers(cmd, copy_out_barriers(vk, [(img.handle, depth) for img, depth, _, _ in wanted]))
         for img, depth, buf, _ in wanted:
             copy_image_to_buffer(cmd, img.handle, depth, buf, self.extent)
         barriers(cmd, [], [host_read_barrier(vk, w[2]) for w in wanted])

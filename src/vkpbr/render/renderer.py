@@ -252,14 +252,11 @@ class Renderer:
 
     def blend_order(self, eye: Any) -> tuple[int, ...]:
         """Indices into the blended draws, farthest first from `eye` (painter's order)."""
-        centers = self._blend_centers
-        if len(centers) < 2:
-            return tuple(range(len(centers)))
-        d = np.sum((centers - np.asarray(eye, dtype=np.float64)) ** 2, axis=1)
-        return tuple(np.argsort(-d, kind="stable").tolist())
+        return tuple(self.blend_orders(np.asarray(eye, dtype=np.float64)[None])[0].tolist())
 
     def blend_orders(self, eyes: np.ndarray) -> np.ndarray:
-        """`blend_order` of each of (B, 3) eyes: (B, blended draws) int, the same orders."""
+        """For each of (B, 3) eyes, indices into the blended draws farthest first (painter's
+        order): (B, blended draws) int. `blend_order` is one row of it."""
         centers = self._blend_centers
         if len(centers) < 2:
             return np.broadcast_to(np.arange(len(centers)), (len(eyes), len(centers)))
@@ -664,19 +661,18 @@ class Renderer:
         if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
             raise UsageError(f"batch {batch!r}: expected a positive number of views")
         base = self.default_camera()
-        wanted = tuple(outputs) if outputs is not None and not isinstance(outputs, str) else (
-            () if outputs is None else (outputs,))
+        # Once, as a tuple: `outputs` may be an iterator, and every batch asks it again.
+        wanted = None if outputs is None else (
+            (outputs,) if isinstance(outputs, str) else tuple(outputs))
         pending: list[Camera] = []
 
         def flush() -> Iterator[Any]:
-            got = self.render_batch(pending, size, lights, opts, linear, depth, wanted or None)
+            got = self.render_batch(pending, size, lights, opts, linear, depth, wanted)
             for i in range(len(pending)):
-                if wanted:
+                if isinstance(got, dict):
                     yield {k: v[i] for k, v in got.items()}
-                elif depth:
-                    yield got[0][i], got[1][i]
                 else:
-                    yield got[i]
+                    yield (got[0][i], got[1][i]) if depth else got[i]
             pending.clear()
 
         for camera in cameras:
