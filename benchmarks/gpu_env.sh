@@ -3,7 +3,8 @@
 # checkout, and find the NVIDIA driver (its ICD needs the glvnd libraries carried in .gl/).
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
-python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl 2>/dev/null || exit 1
+# .whl-extra (optional): wheels only some runs carry (imagecodecs for the test pass, 26 MiB).
+python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl $(ls .whl-extra/*.whl 2>/dev/null) 2>/dev/null || exit 1
 export PYTHONPATH=/tmp/site:$PWD/src PYTHONUNBUFFERED=1
 if [ -z "$(python3 -m vkpbr info --json 2>/dev/null | grep -i nvidia)" ]; then
   export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json

@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 from vkpbr.errors import UsageError
-from vkpbr.render.layouts import TbnMode, View
+from vkpbr.render.layouts import PipelinePath, TbnMode, View
+from vkpbr.render.options import RenderOptions
 
 SIZE = (96, 72)
 
@@ -96,6 +97,20 @@ def test_asking_for_compute_where_it_cannot_run_is_one_line(make_renderer) -> No
         r.render(size=(32, 24), pipeline="compute")
     assert "\n" not in str(info.value)
     assert r.render(size=(32, 24), pipeline="auto").shape == (24, 32, 4)  # auto: forward
+
+
+def test_auto_takes_the_compute_path_on_gpus_only(make_renderer) -> None:  # noqa: ANN001
+    """auto: compute on a GPU's single-sample offscreen target, forward on CPUs and with MSAA
+    (docs/compute-path.md); the explicit choices are obeyed."""
+    r = make_renderer()
+    target = r.offscreen_target((32, 24))
+    on_gpu = r.device.info.kind != "cpu" and r.device.compute_path
+    assert r.uses_compute(target, RenderOptions(pipeline=PipelinePath.AUTO)) == on_gpu
+    assert not r.uses_compute(target, RenderOptions(pipeline=PipelinePath.FORWARD))
+    if r.device.compute_path:
+        assert r.uses_compute(target, RenderOptions(pipeline=PipelinePath.COMPUTE))
+    m = make_renderer(msaa=4)
+    assert not m.uses_compute(m.offscreen_target((32, 24)), RenderOptions(pipeline=PipelinePath.AUTO))
 
 
 def test_compute_timings_have_the_shading_step(chart) -> None:  # noqa: ANN001

@@ -133,10 +133,15 @@ def silhouette_band(node: np.ndarray) -> np.ndarray:
     return band
 
 
-@pytest.mark.parametrize("pipeline", ["forward", "compute"])
-def test_outputs_match_the_ray_cast(make_renderer, scene_and_cast, pipeline: str) -> None:
+# The depth pre-pass both ways: GPUs take it by default (Renderer.prepass_for), lavapipe does
+# not, and the visibility pass the outputs come from must write depth either way.
+@pytest.mark.parametrize(("pipeline", "prepass"),
+                         [("forward", False), ("forward", True), ("compute", False)],
+                         ids=["forward", "forward-prepass", "compute"])
+def test_outputs_match_the_ray_cast(make_renderer, scene_and_cast, pipeline: str,
+                                    prepass: bool) -> None:
     scene, cast = scene_and_cast
-    r = make_renderer(scene)
+    r = make_renderer(scene, depth_prepass=prepass)
     out = r.render(size=(W, H), outputs=ALL, pipeline=pipeline, env="none")
     names = {inst["id"]: inst["node"] for inst in r.instances}
     node_of = {n.name: k for k, n in enumerate(scene.nodes)}

@@ -553,8 +553,9 @@ VIEW_KIND = {
 class PipelinePath(Named):
     """How frames are drawn: FORWARD shades in fragment shaders; COMPUTE rasterises a
     visibility buffer and shades it in compute shaders (render/compute_path.py: all SMs of an
-    H100/H200, where only a few run fragment shaders); AUTO: the forward path until the
-    compute path has been measured faster on the device (docs/compute-path.md)."""
+    H100/H200, where only a few run fragment shaders); AUTO: the compute path on GPUs where
+    the target allows it (measured faster on the H200 at every size), the forward path on
+    CPUs and windows (docs/compute-path.md)."""
 
     AUTO = 0
     FORWARD = 1

@@ -160,8 +160,9 @@ class FrameRecorder:
         def context(visibility: bool, after_visibility: bool = False,
                     stamps: bool = True) -> PassContext:
             # after_visibility: the fragment path's passes over a visibility pass's depth,
-            # which is a depth pre-pass for them (test it, write none).
-            pre = prepass or after_visibility
+            # which is a depth pre-pass for them (test it, write none). The visibility pass
+            # itself writes depth whatever the target's pre-pass choice: none ran before it.
+            pre = after_visibility or (prepass and not visibility)
             return PassContext(
                 draws=gs.draws, classes=classes,
                 pipeline=lambda p: self.pipeline(target, tbn, p, pre, visibility),

@@ -240,10 +240,12 @@ class Renderer:
                 raise UsageError(f"--pipeline compute is not available here: {why}; use "
                                  "--pipeline forward or auto")
             return True
-        # auto: the fragment path until the compute path has been measured faster on the
-        # device (issue 13: recorded per device once it has run on a GPU; on CPUs it is the
-        # slower of the two).
-        return False
+        if options.pipeline == L.PipelinePath.FORWARD:
+            return False
+        # auto: the compute path on GPUs where the target allows it (the H200 measured it
+        # 1.5-2.9x faster at 128x128 to 1920x1080, either lighting, 1 to 256 lights:
+        # BENCHMARKS.md), the fragment path on CPUs (lavapipe: the slower of the two).
+        return self.device.info.kind != "cpu" and self.compute_unavailable(target) is None
 
     def build_pipelines(self, target: FrameTarget) -> None:
         """Create every pipeline and vertex stream (all TBN paths and passes) for `target`
@@ -618,7 +620,8 @@ class Renderer:
         -------
         (B, H, W, 4) uint8 sRGB (float32 linear with `linear`); with `depth` a tuple (colour,
         depth); with `outputs` {name: (B, ...) array}. View i equals `render` of view i
-        (`CameraBatch.camera(i)`) bit for bit, except that directional lights' shadow maps
+        (`CameraBatch.camera(i)`) with pipeline="forward" bit for bit (auto batches on the
+        fragment path; `render`'s auto takes the compute path on GPUs: within 1/255), except that directional lights' shadow maps
         are one map over the whole scene, shared by the views (docs/batch.md).
         """
         base = self.default_camera()
@@ -634,8 +637,11 @@ class Renderer:
         wanted = self._check_outputs(outputs, self.offscreen_target(size, linear)) if outputs else ()
         # The dataset outputs but colour come from their own pass (as `render` makes them).
         extra = tuple(n for n in wanted if n != "color")
-        if (not self.device.batch_views or self.msaa > 1
-                or self.uses_compute(self.offscreen_target(size, linear), opts)):
+        # auto batches on the fragment path (render/batch.py), bit for bit what `render` draws
+        # with pipeline="forward"; only an explicit "compute" goes view by view.
+        explicit_compute = (opts.pipeline == L.PipelinePath.COMPUTE
+                            and self.uses_compute(self.offscreen_target(size, linear), opts))
+        if not self.device.batch_views or self.msaa > 1 or explicit_compute:
             # No layered rendering here, MSAA (the batch target is single-sample) or the
             # compute path asked for: view by view, each exactly as `render` draws it.
             frames = list(self.render_many((views.camera(i) for i in range(len(views))), lights,
