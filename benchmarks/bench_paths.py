@@ -5,7 +5,8 @@
                                      [--json OUT.json]
 
 Rows: the course's lighting and the physically based one (the automatic sun's cascaded
-shadows and the sky's image-based light), each on the fragment path and on the compute path
+shadows and the sky's image-based light; with the camera still, whose maps are drawn once,
+and walking, whose cascades are redrawn every frame), each on the fragment path and on the compute path
 (render/compute_path.py); then the cost per punctual light (N point lights spread over the
 scene's floor, shadows off so the lights alone are measured). GPU times are timestamp
 queries, median over the frames after 10 warm-up frames; frames/s is wall time over
@@ -15,6 +16,7 @@ queries, median over the frames after 10 warm-up frames; frames/s is wall time o
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import statistics
 import time
@@ -32,10 +34,19 @@ STEPS = ("shadows", "prepass_opaque", "opaque", "opaque_double", "mask", "shadin
          "background", "blend", "copy")
 
 
-def measure(r: Renderer, size: tuple[int, int], frames: int, lights=None, **options) -> dict:  # noqa: ANN001
-    cams = [CAMERA] * frames
+def walk(frames: int) -> list[Camera]:
+    """The preset camera walking 1 cm a frame along the nave: the sun's cascades refit (and
+    are redrawn) every frame, as in a fly-through; a still camera's maps are drawn once."""
+    return [dataclasses.replace(CAMERA, eye=(CAMERA.eye[0] - 0.01 * i, *CAMERA.eye[1:]),
+                                target=(CAMERA.target[0] - 0.01 * i, *CAMERA.target[1:]))
+            for i in range(frames)]
+
+
+def measure(r: Renderer, size: tuple[int, int], frames: int, lights=None,  # noqa: ANN001
+            camera: str = "still", **options) -> dict:
+    cams = walk(frames) if camera == "moving" else [CAMERA] * frames
     gpu, passes, cpu = [], [], []
-    for i, _ in enumerate(r.render_many([CAMERA] * 10 + cams, lights, size=size,
+    for i, _ in enumerate(r.render_many(cams[:10] + cams, lights, size=size,
                                         readback=False, **options)):
         if i >= 10:
             gpu.append(r.last_stats.gpu_ms)
@@ -52,7 +63,7 @@ def measure(r: Renderer, size: tuple[int, int], frames: int, lights=None, **opti
     per_pass = {k: statistics.median(p.get(k, 0.0) for p in passes) for k in passes[0]}
     return {"size": f"{size[0]}x{size[1]}", "gpu_ms": statistics.median(gpu),
             "cpu_ms": statistics.median(cpu), "fps_readback": fps, "fps_render_only": fps_render,
-            "pass_ms": per_pass, **{k: str(v) for k, v in options.items()}}
+            "pass_ms": per_pass, "camera": camera, **{k: str(v) for k, v in options.items()}}
 
 
 def floor_lights(scene, n: int) -> list[Light]:  # noqa: ANN001
@@ -93,14 +104,14 @@ def main() -> None:
         print(f"device: {r.device.info.name}; scene {Path(args.scene).name}, "
               f"{scene.triangle_count} triangles; {args.frames} frames a row")
         for size in sizes:
-            for lighting in ("course", "pbr"):
+            for lighting, camera in (("course", "still"), ("pbr", "still"), ("pbr", "moving")):
                 for pipeline in ("forward", "compute"):
                     try:
                         rows.append(measure(r, size, args.frames, lighting=lighting,
-                                            pipeline=pipeline))
+                                            pipeline=pipeline, camera=camera))
                     except UsageError as exc:
                         print(f"skipped {pipeline}: {exc}")
-        table(rows, ("lighting", "pipeline"))
+        table(rows, ("lighting", "camera", "pipeline"))
         size = sizes[0]
         for n in (int(x) for x in args.lights.split(",")):
             lights = floor_lights(scene, n)

@@ -35,9 +35,12 @@ def front_camera(scene: Scene, distance: float = 2.2) -> Camera:
 
 @pytest.mark.parametrize("name", MODELS + ["BoomBox"])
 def test_sample_model_renders(make_renderer, assets: Path, name: str) -> None:
+    path = model_path(assets, name)
+    if not path.exists():  # a partial copy of the assets (the GPU machine's carry limit)
+        pytest.skip(f"{name} is not in {assets}")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # e.g. BoomBox's unused spec-gloss extension
-        scene = load_scene(model_path(assets, name))
+        scene = load_scene(path)
     r = make_renderer(scene)
     img = r.render(size=(96, 72))
     covered = (img[..., :3].max(axis=-1) > 8).mean()

@@ -83,16 +83,18 @@ class LayeredDepth:
         return self._attachments[key]
 
     # --- recording ---------------------------------------------------------------------------
-    def record_begin_writes(self, cmd: Commands) -> None:
-        """Before this frame's passes: every layer becomes a depth attachment (contents
-        discarded), after earlier submissions' fragment-shader reads."""
+    def record_begin_writes(self, cmd: Commands, keep: bool = False) -> None:
+        """Before this frame's passes: every layer becomes a depth attachment, after earlier
+        submissions' shader reads; `keep`: the layers this frame does not draw keep their
+        contents (otherwise every layer's are discarded)."""
         vk = cmd.vk
+        old = vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL if keep else vk.VK_IMAGE_LAYOUT_UNDEFINED
         stages = (vk.VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT
                   | vk.VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT)
         access = (vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT
                   | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
         barriers(cmd, [self._barrier(
-            vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+            old, vk.VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
             (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT
              | stages, vk.VK_ACCESS_2_NONE),
             (stages, access))])

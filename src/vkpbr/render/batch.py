@@ -182,22 +182,25 @@ class BatchViews:
 
     # --- commands ---------------------------------------------------------------------------
     def command_buffer(self, target: BatchTarget, frame: Frame, views: int, tbn: L.TbnMode,
-                       alpha_mask: bool, plan: ShadowPlan, groups: tuple, prepass: bool) -> Commands:
-        """The batch's commands (recorded on first use): `groups` from write_blend_groups."""
-        key = (id(target), views, tbn, alpha_mask, plan, groups, prepass, self.capacity)
+                       alpha_mask: bool, plan: ShadowPlan, groups: tuple, prepass: bool,
+                       redraw: tuple[bool, ...] | None = None) -> Commands:
+        """The batch's commands (recorded on first use): `groups` from write_blend_groups;
+        `redraw`: which shadow entries are drawn (ShadowMaps.stale)."""
+        key = (id(target), views, tbn, alpha_mask, plan, groups, prepass, self.capacity, redraw)
         rec = self._recorded.get(frame.index)
         if rec is not None and rec.key == key:
             return rec.cmd
         if rec is not None:
             rec.cmd.free()
-        cmd = self._record(target, frame, views, tbn, alpha_mask, plan, groups, prepass)
+        cmd = self._record(target, frame, views, tbn, alpha_mask, plan, groups, prepass, redraw)
         self._recorded[frame.index] = _Recorded(key, cmd)
         return cmd
 
     def _record(self, target: BatchTarget, frame: Frame, views: int, tbn: L.TbnMode,
-                alpha_mask: bool, plan: ShadowPlan, groups: tuple, prepass: bool) -> Commands:
+                alpha_mask: bool, plan: ShadowPlan, groups: tuple, prepass: bool,
+                redraw: tuple[bool, ...] | None) -> Commands:
         gs, ring, slot = self.gpu_scene, self.ring, self.slots[frame.index]
-        cmd, names, classes = self.recorder.begin_frame(frame, tbn, alpha_mask, plan)
+        cmd, names, classes = self.recorder.begin_frame(frame, tbn, alpha_mask, plan, redraw)
         # The previous batch's draws read the commands and lists: order this one's writes.
         cmd.memory_barrier("indirect|vertex", "transfer")
         target.record_external_acquire(cmd)

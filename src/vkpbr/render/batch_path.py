@@ -127,11 +127,16 @@ class BatchPath:
                              r.frame_lighting(opts), rows)
         bv.write_views(terms, views.eye)
         groups = bv.write_blend_groups(r.blend_orders(views.eye))
-        cmd = bv.command_buffer(target, frame, n, opts.tbn, opts.alpha_mask, plan, groups,
-                                r.prepass_for(target))
-        if cuda:
-            self._cuda_wait(target)
-        frame.submit(cmd)
+        redraw = r.shadows.stale(slot.index, plan, opts.alpha_mask)
+        try:
+            cmd = bv.command_buffer(target, frame, n, opts.tbn, opts.alpha_mask, plan, groups,
+                                    r.prepass_for(target), redraw)
+            if cuda:
+                self._cuda_wait(target)
+            frame.submit(cmd)
+        except BaseException:
+            r.shadows.forget()
+            raise
         frame.stamped = r.ring.query_pool is not None
         frame.wait()
         r.last_stats = dataclasses.replace(r.read_frame_timings(frame))

@@ -130,11 +130,13 @@ class FrameRecorder:
                     self.pipeline(target, tbn, p, prepass)
 
     # --- command buffers --------------------------------------------------------------------
-    def begin_frame(self, frame: Frame, tbn: L.TbnMode, alpha_mask: bool, plan: ShadowPlan
+    def begin_frame(self, frame: Frame, tbn: L.TbnMode, alpha_mask: bool, plan: ShadowPlan,
+                    redraw: tuple[bool, ...] | None = None
                     ) -> tuple[Commands, list[str], list[str]]:
         """Begin a frame's command buffer (a single frame's or a batch's, render/batch.py):
-        its start timestamp, the shadow-map passes, the timestamp after them. Returns the
-        buffer, the vertex streams' names for `tbn` and every draw's class."""
+        its start timestamp, the shadow-map passes (`redraw`: per plan entry, whether its
+        maps are drawn; ShadowMaps.stale), the timestamp after them. Returns the buffer, the
+        vertex streams' names for `tbn` and every draw's class."""
         gs, ring = self.gpu_scene, self.ring
         names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
         gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
@@ -143,18 +145,18 @@ class FrameRecorder:
         ring.stamp(cmd, frame, 0)
         if self.shadows is not None:
             self.shadows.record(cmd, frame.index, plan, gs.draws, classes, gs.material_sets,
-                                gs.streams, gs.index_buffer, gs.has_colors)
+                                gs.streams, gs.index_buffer, gs.has_colors, redraw)
         ring.stamp(cmd, frame, 1)
         return cmd, names, classes
 
     def _record(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
                 alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
                 copy: tuple[str, ...], plan: ShadowPlan, compute: bool = False,
-                outputs: bool = False) -> Commands:
+                outputs: bool = False, redraw: tuple[bool, ...] | None = None) -> Commands:
         gs, ring = self.gpu_scene, self.ring
         slot = self.slots[frame.index]
         prepass = self.prepass_for(target) and not compute  # visibility: its own pre-pass
-        cmd, names, classes = self.begin_frame(frame, tbn, alpha_mask, plan)
+        cmd, names, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw)
         shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
 
         def context(visibility: bool, after_visibility: bool = False,
@@ -221,7 +223,8 @@ class FrameRecorder:
     def command_buffer(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
                         alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
                         copy: tuple[str, ...], plan: ShadowPlan = _NO_SHADOWS,
-                        compute: bool = False, outputs: bool = False) -> Commands:
+                        compute: bool = False, outputs: bool = False,
+                        redraw: tuple[bool, ...] | None = None) -> Commands:
         """The command buffer recorded for these inputs, recorded on first use. A buffer is
         used by one frame of the ring only, whose previous submission has finished: it can be
         re-recorded (new blend order) or freed at once. `plan`: the shadow maps' (a new plan
@@ -230,14 +233,15 @@ class FrameRecorder:
         if self._generations.get(tid, target.generation) != target.generation:
             self.free(tid)  # recreated swapchain: its images and buffers are new
         self._generations[tid] = target.generation
-        key = (tid, image, frame.index, tbn, alpha_mask, id(overlay), copy, plan, compute, outputs)
+        key = (tid, image, frame.index, tbn, alpha_mask, id(overlay), copy, plan, compute, outputs,
+               redraw)
         rec = self._recorded.get(key)
         if rec is not None and rec.blend_order == order:
             return rec.cmd
         if rec is not None:  # the camera moved enough to reorder blended draws
             rec.cmd.free()
         cmd = self._record(target, frame, image, tbn, alpha_mask, order, overlay, copy, plan,
-                           compute, outputs)
+                           compute, outputs, redraw)
         self._recorded[key] = _Recorded(cmd, order)
         return cmd
 

@@ -427,11 +427,19 @@ class Renderer:
                              self._write_shadows(slot, plan, lights, camera, target.extent))
         if overlay is not None:
             overlay.prepare(frame.index)
-        cmd = self.recorder.command_buffer(target, frame, image, options.tbn, options.alpha_mask,
-                                   self.blend_order(camera.eye), overlay, copy, plan,
-                                   self.uses_compute(target, options), COPY_OUTPUTS in copy)
-        c0 = clock()
-        ok = target.submit(frame, cmd, image)
+        redraw = self.shadows.stale(slot.index, plan, options.alpha_mask)
+        try:
+            cmd = self.recorder.command_buffer(
+                target, frame, image, options.tbn, options.alpha_mask,
+                self.blend_order(camera.eye), overlay, copy, plan,
+                self.uses_compute(target, options), COPY_OUTPUTS in copy, redraw)
+            c0 = clock()
+            ok = target.submit(frame, cmd, image)
+        except BaseException:
+            self.shadows.forget()
+            raise
+        if not ok:
+            self.shadows.forget()
         slot.stats.driver_ms = (driver + clock() - c0) * 1e3
         frame.stamped = self.ring.query_pool is not None
         slot.stats.cpu_ms = (time.perf_counter() - t0) * 1e3

@@ -173,6 +173,12 @@ class ShadowMaps:
         self.maps: LayeredDepth | None = None
         self.cubes: LayeredDepth | None = None
         self._pipelines: dict[tuple, Pipeline] = {}
+        # What each entry's layers hold: (image, first layer) -> (its matrices, alpha mask).
+        # The scene is static, so equal matrices draw equal maps: a frame redraws only the
+        # entries whose matrices changed (a camera-fitted sun's cascades when the camera
+        # moves; spot and point lights, and a batch's scene-wide sun, when the light does).
+        self._drawn: dict[tuple[str, int], tuple[bytes, bool]] = {}
+        self.last_redraw: tuple[tuple[str, bool], ...] = ()  # the latest frame's (kind, drawn)
         self._warned = False
         self.ensure(ShadowPlan())
 
@@ -207,6 +213,7 @@ class ShadowMaps:
         if ok_maps and ok_cubes:
             return False
         self.device.wait_idle()
+        self._drawn.clear()
         if not ok_maps:
             if self.maps is not None:
                 self.maps.destroy()
@@ -278,6 +285,25 @@ class ShadowMaps:
         data[12:].reshape(MATRICES, 4, 4)[:] = mats.transpose(0, 2, 1)
         return out
 
+    def stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool) -> tuple[bool, ...]:
+        """Which of `plan`'s entries frame `slot` must draw: those whose layers hold other
+        matrices (as `write` left them for the slot) or other casters. Marks them drawn: the
+        frame's commands draw them and submissions run in order (`forget` if it is not
+        submitted)."""
+        mats = self._views[slot][12:].reshape(MATRICES, 16)
+        out = []
+        for e in plan.entries:
+            where = ("cubes" if e.kind == "point" else "maps", e.first)
+            held = (mats[e.matrix_base:e.matrix_base + e.count].tobytes(), alpha_mask)
+            out.append(self._drawn.get(where) != held)
+            self._drawn[where] = held
+        self.last_redraw = tuple((e.kind, fresh) for e, fresh in zip(plan.entries, out, strict=True))
+        return tuple(out)
+
+    def forget(self) -> None:
+        """The maps' contents are unknown (a frame marked drawn was not submitted)."""
+        self._drawn.clear()
+
     # --- pipelines and passes ---------------------------------------------------------------
     def pipeline(self, kind: str, masked: bool, colors_stride0: bool) -> Pipeline:
         key = (kind, masked, colors_stride0)
@@ -299,21 +325,26 @@ class ShadowMaps:
 
     def record(self, cmd: Commands, slot: int, plan: ShadowPlan, draws: Sequence[Any],
                classes: Sequence[str], material_sets: Sequence[Any], streams: dict[str, Any],
-               index_buffer: Any, has_colors: bool) -> None:
+               index_buffer: Any, has_colors: bool, redraw: tuple[bool, ...] | None = None) -> None:
         """Record `plan`'s passes for frame `slot` (before the main target begins).
 
         draws / classes: render.gpu_scene.Draw and passes.classify of each; streams: the
-        scene's vertex buffers by name (positions, texcoords, texcoords1, colors)."""
-        if not plan.entries:
+        scene's vertex buffers by name (positions, texcoords, texcoords1, colors); redraw:
+        per entry, whether to draw it (`stale`; None: all); the others keep their layers."""
+        redraw = (True,) * len(plan.entries) if redraw is None else redraw
+        if not any(redraw):
             return
         casters = [(d, c) for d, c in zip(draws, classes, strict=True)
                    if getattr(d, "casts_shadows", True)]
         opaque = [d for d, c in casters if c in ("opaque", "opaque_double")]
         masked = [d for d, c in casters if c in ("mask", "blend")]
-        self.maps.record_begin_writes(cmd)
-        self.cubes.record_begin_writes(cmd)
+        keep = not all(redraw)
+        self.maps.record_begin_writes(cmd, keep)
+        self.cubes.record_begin_writes(cmd, keep)
         cmd.bind_index_buffer(index_buffer)
-        for e in plan.entries:
+        for e, fresh in zip(plan.entries, redraw, strict=True):
+            if not fresh:
+                continue
             image = self.cubes if e.kind == "point" else self.maps
             image.begin(cmd, e.first * (6 if e.kind == "point" else 1), e.count)
             for group, is_masked in ((opaque, False), (masked, True)):

@@ -1,0 +1,79 @@
+"""Shadow maps are redrawn only when what they hold changes (ShadowMaps.stale): a frame whose
+lights' matrices equal the ones its maps were drawn with skips their passes. Every frame of a
+sequence that changes one input at a time (the camera, a light, the alpha mask, the map
+size, a batch in between) must equal the same frame drawn with every map redrawn
+(ShadowMaps.forget before it), bit for bit; and the maps that do not depend on the camera
+(spot, point) are not redrawn when only the camera moves."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from shadow_scenes import BLOCK, CAMERA, CARD, GROUND, LIGHTS, rect_scene
+
+SIZE = (96, 72)
+OPTS = {"shadow_resolution": 256, "env": "none"}
+ALL = [LIGHTS["directional"], LIGHTS["spot"], LIGHTS["point"]]
+MOVED = dataclasses.replace(CAMERA, eye=(1.5, 4.0, 5.0))
+POINT_MOVED = dataclasses.replace(LIGHTS["point"], position=(-0.4, 2.2, 0.6))
+
+
+@pytest.fixture(scope="module")
+def pair():
+    """A renderer that caches its maps and one that redraws them every frame."""
+    from vkpbr import Renderer
+
+    made = [Renderer(rect_scene((GROUND, BLOCK, CARD)), validation=True, sync_validation=True)
+            for _ in range(2)]
+    yield made
+    for r in made:
+        instance = r.device.instance
+        r.close()
+        assert instance.errors == [], instance.errors[:3]
+
+
+STEPS = [  # (camera, lights, options): each changes one thing from the step before
+    (CAMERA, ALL, {}),
+    (CAMERA, ALL, {}),                    # nothing changed: no map redrawn
+    (MOVED, ALL, {}),                     # the sun's cascades refit; spot and point kept
+    (CAMERA, ALL, {}),
+    (CAMERA, [ALL[0], ALL[1], POINT_MOVED], {}),  # the point light moved: its cube redrawn
+    (CAMERA, [ALL[0], ALL[1], POINT_MOVED], {"alpha_mask": False}),  # the card drawn whole
+    (CAMERA, [ALL[0], ALL[1], POINT_MOVED], {"shadow_resolution": 128}),
+    (MOVED, ALL, {}),
+]
+
+
+def test_cached_maps_draw_what_redrawn_maps_draw(pair) -> None:  # noqa: ANN001
+    cached, fresh = pair
+    images = []
+    for i, (camera, lights, opts) in enumerate(STEPS):
+        o = {**OPTS, **opts}
+        got = cached.render(camera, lights, size=SIZE, linear=True, **o)
+        if i == 3:  # a batch in between: one scene-wide sun map, spot and point kept
+            cached.render_batch([camera, MOVED], SIZE, lights, linear=True, **o)
+        fresh.shadows.forget()
+        want = fresh.render(camera, lights, size=SIZE, linear=True, **o)
+        assert np.array_equal(got, want), (i, float(np.abs(got - want).max()))
+        images.append(got)
+    # The inputs matter: the sequence is not one image over and over.
+    assert not np.array_equal(images[0], images[2])
+    assert not np.array_equal(images[3], images[4])
+    assert not np.array_equal(images[4], images[5])
+
+
+def test_only_the_maps_that_changed_are_redrawn(pair) -> None:  # noqa: ANN001
+    r, _ = pair
+    def redrawn(camera, lights) -> dict[str, bool]:  # noqa: ANN001
+        r.render(camera, lights, size=SIZE, **OPTS)
+        return dict(r.shadows.last_redraw)
+
+    redrawn(CAMERA, ALL)
+    assert redrawn(CAMERA, ALL) == {"directional": False, "spot": False, "point": False}
+    assert redrawn(MOVED, ALL) == {"directional": True, "spot": False, "point": False}
+    moved_point = [ALL[0], ALL[1], POINT_MOVED]
+    assert redrawn(MOVED, moved_point) == {"directional": False, "spot": False, "point": True}
+    r.shadows.forget()
+    assert redrawn(MOVED, moved_point) == {"directional": True, "spot": True, "point": True}
