@@ -30,6 +30,9 @@ from vkpbr.scene.loader import load_scene
 from vkpbr.scene.types import Camera, Light
 
 CAMERA = Camera(eye=(9.0, 1.8, -0.4), target=(-9.0, 3.5, -0.4), yfov_deg=45.0)  # the preset
+# (frame path, what makes the compute path's visibility buffer): render/compute_raster's
+# compute rasteriser beside the raster units.
+PATHS = (("forward", "hardware"), ("compute", "hardware"), ("compute", "compute"))
 STEPS = ("shadows", "prepass_opaque", "opaque", "opaque_double", "mask", "shading",
          "background", "blend", "copy")
 
@@ -46,7 +49,7 @@ def measure(r: Renderer, size: tuple[int, int], frames: int, lights=None,  # noq
             camera: str = "still", **options) -> dict:
     cams = walk(frames) if camera == "moving" else [CAMERA] * frames
     gpu, passes, cpu = [], [], []
-    for i, _ in enumerate(r.render_many(cams[:10] + cams, lights, size=size,
+    for i, _ in enumerate(r.render_many((cams * 10)[:10] + cams, lights, size=size,
                                         readback=False, **options)):
         if i >= 10:
             gpu.append(r.last_stats.gpu_ms)
@@ -105,27 +108,27 @@ def main() -> None:
               f"{scene.triangle_count} triangles; {args.frames} frames a row")
         for size in sizes:
             for lighting, camera in (("course", "still"), ("pbr", "still"), ("pbr", "moving")):
-                for pipeline in ("forward", "compute"):
+                for pipeline, raster in PATHS:
                     try:
                         rows.append(measure(r, size, args.frames, lighting=lighting,
-                                            pipeline=pipeline, camera=camera))
+                                            pipeline=pipeline, raster=raster, camera=camera))
                     except UsageError as exc:
-                        print(f"skipped {pipeline}: {exc}")
-        table(rows, ("lighting", "camera", "pipeline"))
+                        print(f"skipped {pipeline} ({raster} raster): {exc}")
+        table(rows, ("lighting", "camera", "pipeline", "raster"))
         size = sizes[0]
         for n in (int(x) for x in args.lights.split(",")):
             lights = floor_lights(scene, n)
-            for pipeline in ("forward", "compute"):
+            for pipeline, raster in PATHS:
                 try:
                     row = measure(r, size, max(args.frames // 2, 20), lights, lighting="pbr",
-                                  pipeline=pipeline, shadows=False, env="none")
+                                  pipeline=pipeline, raster=raster, shadows=False, env="none")
                 except UsageError as exc:
                     print(f"skipped {pipeline}: {exc}")
                     continue
                 row["lights"] = str(n)
                 light_rows.append(row)
         print()
-        table(light_rows, ("lights", "pipeline"))
+        table(light_rows, ("lights", "pipeline", "raster"))
     if args.json:
         Path(args.json).write_text(json.dumps({"paths": rows, "lights": light_rows}, indent=1))
 

@@ -135,14 +135,18 @@ def silhouette_band(node: np.ndarray) -> np.ndarray:
 
 # The depth pre-pass both ways: GPUs take it by default (Renderer.prepass_for), lavapipe does
 # not, and the visibility pass the outputs come from must write depth either way.
-@pytest.mark.parametrize(("pipeline", "prepass"),
-                         [("forward", False), ("forward", True), ("compute", False)],
-                         ids=["forward", "forward-prepass", "compute"])
+# And the compute rasteriser (raster.comp) making the compute path's visibility buffer.
+@pytest.mark.parametrize(("pipeline", "prepass", "raster"),
+                         [("forward", False, "hardware"), ("forward", True, "hardware"),
+                          ("compute", False, "hardware"), ("compute", False, "compute")],
+                         ids=["forward", "forward-prepass", "compute", "compute-raster"])
 def test_outputs_match_the_ray_cast(make_renderer, scene_and_cast, pipeline: str,
-                                    prepass: bool) -> None:
+                                    prepass: bool, raster: str) -> None:
     scene, cast = scene_and_cast
     r = make_renderer(scene, depth_prepass=prepass)
-    out = r.render(size=(W, H), outputs=ALL, pipeline=pipeline, env="none")
+    if raster == "compute" and not r.device.compute_raster:
+        pytest.skip("no 64-bit storage atomics on this device")
+    out = r.render(size=(W, H), outputs=ALL, pipeline=pipeline, env="none", raster=raster)
     names = {inst["id"]: inst["node"] for inst in r.instances}
     node_of = {n.name: k for k, n in enumerate(scene.nodes)}
     got_node = np.vectorize(lambda i: node_of[names[i]] if i else -1)(out["instance"])
@@ -167,7 +171,8 @@ def test_outputs_match_the_ray_cast(make_renderer, scene_and_cast, pipeline: str
     rot = np.stack([right, up, -forward], axis=1)  # OpenGL camera axes as columns
     np.testing.assert_allclose(out["normal_camera"][inside], cast["normal"][inside] @ rot,
                                atol=1e-3)
-    assert np.array_equal(out["color"], r.render(size=(W, H), pipeline=pipeline, env="none"))
+    assert np.array_equal(out["color"], r.render(size=(W, H), pipeline=pipeline, env="none",
+                                                 raster=raster))
     assert out["instance"][background].max() == 0 and out["instance"].dtype == np.uint32
 
 

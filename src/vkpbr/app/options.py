@@ -101,8 +101,11 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
                field="exposure", metavar="EV"),
     OptionSpec("--pipeline", "enum", "frame path (default %(default)s): forward shades in "
                "fragment shaders; compute shades a visibility buffer in compute shaders (all "
-               "SMs of a datacenter GPU); auto: forward until compute has been measured faster "
-               "on the device", field="pipeline"),
+               "SMs of a datacenter GPU); auto: compute on GPUs (offscreen, no MSAA), forward "
+               "on CPUs", field="pipeline"),
+    OptionSpec("--raster", "enum", "what makes the visibility buffer of the compute path and "
+               "the dataset outputs (default %(default)s): hardware (the raster units) or "
+               "compute (a compute rasteriser on all SMs)", field="raster"),
     OptionSpec("--no-alpha-mask", "off", "draw masked materials as opaque", field="alpha_mask"),
     OptionSpec("--no-normal-maps", "off", "ignore normal maps", field="normal_mapping"),
     OptionSpec("--no-occlusion", "off", "ignore occlusion maps", field="occlusion"),

@@ -171,8 +171,14 @@ class Device:
         f13 = vk.VkPhysicalDeviceVulkan13Features(
             dynamicRendering=vk.VK_TRUE, synchronization2=vk.VK_TRUE, maintenance4=vk.VK_TRUE
         )
+        # The compute rasteriser (render/compute_raster.py): 64-bit integers and their atomics
+        # on storage buffers, besides the compute path's features.
+        self.compute_raster = bool(all(supported[k] for k in COMPUTE_PATH_FEATURES)
+                                   and supported["shaderInt64"]
+                                   and supported["shaderBufferInt64Atomics"])
         f12 = vk.VkPhysicalDeviceVulkan12Features(
-            pNext=f13, shaderOutputLayer=on[self.layered_shadows])
+            pNext=f13, shaderOutputLayer=on[self.layered_shadows],
+            shaderBufferInt64Atomics=on[self.compute_raster])
         f11 = vk.VkPhysicalDeviceVulkan11Features(
             pNext=f12, shaderDrawParameters=on[self.layered_shadows])
         # The compute path (render/compute_path.py) needs the primitive index in fragment
@@ -185,7 +191,8 @@ class Device:
             samplerAnisotropy=vk.VK_TRUE if self.anisotropy else vk.VK_FALSE,
             imageCubeArray=on[self.image_cube_array], geometryShader=on[self.compute_path],
             drawIndirectFirstInstance=on[self.batch_views],
-            shaderStorageImageWriteWithoutFormat=on[self.compute_path])
+            shaderStorageImageWriteWithoutFormat=on[self.compute_path],
+            shaderInt64=on[self.compute_raster])
         features = vk.VkPhysicalDeviceFeatures2(pNext=f11, features=core)
         available = {
             e.extensionName
@@ -240,6 +247,8 @@ class Device:
                 "shaderOutputLayer": f12.shaderOutputLayer,
                 "shaderDrawParameters": f11.shaderDrawParameters,
                 "geometryShader": core.geometryShader,
+                "shaderInt64": core.shaderInt64,
+                "shaderBufferInt64Atomics": f12.shaderBufferInt64Atomics,
                 "shaderStorageImageWriteWithoutFormat": core.shaderStorageImageWriteWithoutFormat,
                 "subgroupOperations": int((sub.supportedOperations & ops) == ops and bool(
                     sub.supportedStages & vk.VK_SHADER_STAGE_COMPUTE_BIT))}

@@ -147,9 +147,21 @@ class OffscreenTarget:
         begin_rendering(cmd, self.attachments, self.clear_color, 0.0)
 
     # --- the compute path's steps, instead of record_begin -------------------------------------
-    def record_visibility_begin(self, cmd: Commands, image: int) -> None:
+    def record_raster_begin(self, cmd: Commands) -> None:
+        """Before the compute rasteriser resolves into the visibility image: GENERAL for its
+        storage writes, after the previous frame's reads (contents discarded)."""
+        vk = self.device.vk
+        compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT)
+        barriers(cmd, [image_barrier(vk, self.visibility.handle, False,
+                                     vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_GENERAL,
+                                     (compute[0], 0), compute)])
+
+    def record_visibility_begin(self, cmd: Commands, image: int, rasterised: bool = False) -> None:
         """Begin rendering the visibility image (cleared to 0: nothing) over the cleared
-        depth buffer; the colour image goes to GENERAL for the compute shader's writes."""
+        depth buffer; the colour image goes to GENERAL for the compute shader's writes.
+        `rasterised`: the compute rasteriser has filled the visibility image (kept, from
+        GENERAL) and writes the depth buffer next (record_raster_depth)."""
         vk = self.device.vk
         color_stage, color_access, color_layout = attachment_stage(vk, False)
         depth_stage, depth_access, depth_layout = attachment_stage(vk, True)
@@ -158,10 +170,14 @@ class OffscreenTarget:
                    vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT)
         no_reads = ~(vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT
                      | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
+        visibility = (image_barrier(vk, self.visibility.handle, False, vk.VK_IMAGE_LAYOUT_GENERAL,
+                                    color_layout, compute, (color_stage, color_access))
+                      if rasterised else
+                      image_barrier(vk, self.visibility.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                                    color_layout, (compute[0], 0), (color_stage, color_access)))
         barriers(cmd, [
             # The previous frame's passes and copies of these images come first.
-            image_barrier(vk, self.visibility.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                          color_layout, (compute[0], 0), (color_stage, color_access)),
+            visibility,
             image_barrier(vk, self.depth.handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED, depth_layout,
                           (depth_stage | copy, depth_access & no_reads), (depth_stage, depth_access)),
             image_barrier(vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
@@ -169,7 +185,8 @@ class OffscreenTarget:
                           (color_stage | copy, color_access & no_reads), compute),
         ])
         begin_rendering(cmd, Attachments(self.visibility_view.handle, self.attachments.depth,
-                                         self.extent), (0.0, 0.0, 0.0, 0.0), 0.0)
+                                         self.extent), None if rasterised else (0.0, 0.0, 0.0, 0.0),
+                        0.0)
 
     def record_shading_begin(self, cmd: Commands) -> None:
         """End the visibility pass: its image becomes readable by the compute shader."""

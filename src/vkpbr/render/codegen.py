@@ -62,6 +62,11 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("background_batch.vert.spv", "background.vert", (("BATCH", 1),)),
     Variant("batch_cull.comp.spv", "batch_cull.comp", (("STRUCTS_ONLY", 1),)),
     Variant("background.frag.spv", "background.frag"),
+    # The compute rasteriser (render/compute_raster.py).
+    *(Variant(f"raster_{name}.comp.spv", "raster.comp", (("COMPUTE_SHADING", 1), ("KERNEL", k)))
+      for k, name in ((1, "small"), (4, "args"), (2, "big"), (3, "resolve"))),
+    Variant("raster_depth.vert.spv", "raster_depth.vert"),
+    Variant("raster_depth.frag.spv", "raster_depth.frag", (("COMPUTE_SHADING", 1),)),
 )
 
 
@@ -108,8 +113,11 @@ def generated_glsl() -> str:
         glsl_type = element if isinstance(element, str) else (
             element.name + ("Record" if element.name in blocks else ""))
         access = "" if name in L.WRITABLE_STORAGE else "readonly "
-        return (f"{layout}, {array.layout}) {access}buffer {name} {{\n"
+        decl = (f"{layout}, {array.layout}) {access}buffer {name} {{\n"
                 f"    {glsl_type} {array.member}[];\n}};")
+        if "64" in glsl_type:  # only the shaders that enable 64-bit integers see it
+            decl = f"#if RASTER_INT64  // GL_EXT_shader_explicit_arithmetic_types_int64\n{decl}\n#endif"
+        return decl
 
     # STRUCTS_ONLY: the records without the frame's sets (a kernel with its own bindings,
     # shaders/batch_cull.comp).

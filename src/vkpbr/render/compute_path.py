@@ -41,6 +41,10 @@ from vkpbr.render.gpu_scene import GpuScene
 __all__ = ["ComputeScene", "SHADE_GROUP"]
 
 SHADE_GROUP = 64  # shade.comp's work group: pixels of one bin
+# The compute rasteriser (shaders/raster.comp): its work groups and draw-table flags.
+RASTER_SMALL_GROUP = 64  # raster_small: one triangle an invocation
+RASTER_DOUBLE_SIDED, RASTER_MASKED, RASTER_BLENDED = 1, 2, 4
+MAX_GROUPS_X = 65535  # maxComputeWorkGroupCount[0] every Vulkan device has
 CLASSIFY_GROUP = (8, 8, 1)  # classify.comp's count and scatter kernels
 
 
@@ -55,6 +59,14 @@ class _TargetResources:
         self.bins = self._own(Buffer(dev, 16 * m, "storage|transfer_dst", name="material bins"))
         self.args = self._own(Buffer(dev, 12 * m, "storage|indirect", name="bin dispatches"))
         self.pixels = self._own(Buffer(dev, 4 * w * h, "storage", name="pixel list"))
+        # The compute rasteriser's (raster.comp): depth|triangle per pixel and the big
+        # triangles' list, one entry a triangle at most (16-byte stand-ins without it).
+        raster = dev.compute_raster
+        self.raster = self._own(Buffer(dev, 8 * w * h if raster else 16, "storage|transfer_dst",
+                                       name="raster depth|ids"))
+        self.raster_big = self._own(Buffer(dev, 4 * (scene.triangles + 4) if raster else 16,
+                                           "storage|transfer_dst|indirect",
+                                           name="raster big triangles"))
         slots = scene.slots
         pool = self._own(DescriptorPool(dev, [(scene.set_layout, len(slots))]))
         # One set per frame of the ring: the frame's blocks are that frame's.
@@ -66,7 +78,8 @@ class _TargetResources:
                    "QTangents": gs.streams["qtangents"],
                    "PackedFrames": gs.streams["packed_frames"], "Bins": self.bins,
                    "BinArgs": self.args, "PixelList": self.pixels,
-                   "Materials": scene.material_table}
+                   "Materials": scene.material_table, "RasterDraws": scene.raster_draws,
+                   "RasterDepthIds": self.raster, "RasterBig": self.raster_big}
         images = {"out_image": target.storage_view, "visibility": target.visibility_view}
         # The dataset outputs' images once the target has them, else 1x1 stand-ins (no kernel
         # but the outputs one touches them; every binding is written all the same).
@@ -118,9 +131,23 @@ class ComputeScene:
             table[i] = block
         self.material_table = self._own(upload_buffer(device, table, "storage",
                                                       name="material records"))
+        # The compute rasteriser's draw table: per draw its first triangle (in draw order)
+        # and flags; masked draws are two-sided when rasterised (alpha masking off).
+        raster = np.zeros((max(len(gs.draws), 1), 4), np.uint32)
+        first = 0
+        for i, d in enumerate(gs.draws):
+            flags = ((RASTER_DOUBLE_SIDED if d.double_sided or d.alpha_mode == "mask" else 0)
+                     | (RASTER_MASKED if d.alpha_mode == "mask" else 0)
+                     | (RASTER_BLENDED if d.alpha_mode == "blend" else 0))
+            raster[i, :2] = first, flags
+            first += d.index_count // 3
+        self.triangles = first
+        self.raster_draws = self._own(upload_buffer(device, raster, "storage",
+                                                    name="raster draw table"))
         self.set_index = max(frame_layouts) + 1
+        # Fragment too: raster_depth.frag reads the rasteriser's depths through this set.
         self.set_layout = self._own(DescriptorSetLayout(device, [
-            BindingSpec(b, "storage" if kind == "block" else kind, ("compute",), name)
+            BindingSpec(b, "storage" if kind == "block" else kind, ("compute", "fragment"), name)
             for b, kind, name in L.COMPUTE_SET]))
         self.layouts = [frame_layouts[i] for i in range(self.set_index)] + [self.set_layout]
         self.material_count = len(gs.materials)
@@ -129,6 +156,7 @@ class ComputeScene:
         self.aggregate = device.info.kind != "cpu"
         # Which materials any opaque or masked draw uses: only those get a shading dispatch.
         self._pipelines: dict[str, ComputePipeline] = {}
+        self._graphics: dict[tuple, Any] = {}  # raster_depth's pipeline per depth format
         self._stand_ins: dict[str, tuple[Any, Any]] | None = None
         self._targets: dict[int, _TargetResources] = {}
 
@@ -189,6 +217,52 @@ class ComputeScene:
         if shade:
             self._dispatch_bins(cmd, res, frame_index, f"shade_{tbn.name.lower()}", frame_sets,
                                 material_sets, materials)
+
+    def record_raster(self, cmd: Any, target: Any, frame_index: int, alpha_mask: bool) -> None:
+        """The compute rasteriser (raster.comp): every opaque draw's triangles (and the masked
+        ones' without alpha masking) into the target's depth|triangle buffer, then the
+        visibility image resolved from it (the target has it in GENERAL: record_raster_begin).
+        The depths reach the depth buffer with `record_raster_depth`."""
+        res = self._resources(target)
+        w, h = target.extent
+        cmd.fill(res.raster, 0)
+        cmd.fill(res.raster_big, 0)
+        cmd.memory_barrier("transfer", "compute")
+        push = np.array([self.triangles, len(self.gs.draws), int(alpha_mask), self.triangles,
+                         w, h, 0, 0], np.uint32)
+        dset = res.sets[frame_index]
+        n = -(-self.triangles // RASTER_SMALL_GROUP)
+        # raster_args sizes raster_big's dispatch from the count raster_small listed.
+        for kernel, size in (("raster_small", (min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), 1)),
+                             ("raster_args", (1, 1, 1)), ("raster_big", None),
+                             ("raster_resolve", groups((w, h, 1), (8, 8, 1)))):
+            cmd.bind_pipeline(self._pipeline(kernel, 32))
+            cmd.bind_set(self.set_index, dset)
+            cmd.push(push)
+            if size is None:
+                cmd.dispatch_indirect(res.raster_big, 4)
+            elif size[0] and size[1]:
+                cmd.dispatch(*size)
+            cmd.memory_barrier("compute", "compute|fragment|indirect")
+
+    def record_raster_depth(self, cmd: Any, target: Any, frame_index: int) -> None:
+        """Inside the visibility rendering: the rasteriser's depths written into the target's
+        depth buffer by one screen-covering triangle (raster_depth.frag)."""
+        key = ("raster_depth", target.depth_format)
+        if key not in self._graphics:
+            from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec
+
+            layout = self._own(PipelineLayout(self.device, self.layouts, 16, stages=("fragment",)))
+            spec = PipelineSpec(vertex_shader="raster_depth.vert.spv",
+                                fragment_shader="raster_depth.frag.spv", streams=(),
+                                color_format=getattr(self.device.vk, L.VISIBILITY_FORMAT),
+                                depth_format=target.depth_format, cull="none",
+                                depth_compare="always", color_write=False)
+            self._graphics[key] = self._own(Pipeline(self.device, spec, layout, SPV_DIR))
+        cmd.bind_pipeline(self._graphics[key])
+        cmd.bind_set(self.set_index, self._resources(target).sets[frame_index])
+        cmd.push(np.array([target.extent[0], 0, 0, 0], np.uint32))
+        cmd.draw(3)
 
     def record_outputs(self, cmd: Any, target: Any, frame_index: int, tbn: L.TbnMode,
                        frame_sets: dict[int, Any], material_sets: list[Any],

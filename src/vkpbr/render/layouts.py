@@ -50,6 +50,7 @@ __all__ = [
     "StorageArray",
     "LightKind",
     "PipelinePath",
+    "RasterPath",
     "COMPUTE_SET",
     "STORAGE_IMAGES",
     "DRAW_RECORD",
@@ -349,9 +350,15 @@ STORAGE = {
     "BinArgs": StorageArray("BinArgs", "uint", "bin_args"),  # 3 per material: dispatch sizes
     "PixelList": StorageArray("PixelList", "uint", "pixel_list"),  # pixel indices by material
     "Materials": StorageArray("Materials", MATERIAL, "materials"),  # GpuScene's blocks
+    # The compute rasteriser (render/compute_raster.py, shaders/raster.comp): per draw (first
+    # triangle, flags: 1 double-sided, 2 masked, 4 blended, 0, 0), the 64-bit depth|triangle
+    # per pixel, and the big triangles' list (a count, then triangle indices).
+    "RasterDraws": StorageArray("RasterDraws", "uvec4", "raster_draws"),
+    "RasterDepthIds": StorageArray("RasterDepthIds", "uint64_t", "raster"),
+    "RasterBig": StorageArray("RasterBig", "uint", "raster_big"),
 }
 # Storage buffers the compute path writes (declared without `readonly`).
-WRITABLE_STORAGE = ("Bins", "BinArgs", "PixelList")
+WRITABLE_STORAGE = ("Bins", "BinArgs", "PixelList", "RasterDepthIds", "RasterBig")
 
 # The compute path's own set (render/compute_path.py), numbered after SETS: the target's
 # images, the scene's geometry as storage buffers, the per-material pixel bins. Its other sets
@@ -384,11 +391,15 @@ COMPUTE_SET: tuple[tuple[int, str, str], ...] = (
     (20, "storage_image", "out_normal"),  # world shading normal (normal-mapped)
     (21, "storage_image", "out_normal_geometric"),  # world interpolated vertex normal
     (22, "storage_image", "out_depth_range"),  # distance along the view axis, to the eye
+    # The compute rasteriser (raster.comp; raster_depth.frag reads 24 in a fragment shader).
+    (23, "storage", "RasterDraws"),
+    (24, "storage", "RasterDepthIds"),
+    (25, "storage", "RasterBig"),
 )
 # GLSL declarations of the storage images (their formats and access).
 STORAGE_IMAGES = {
     "out_image": "writeonly uniform image2D",  # format from the view (WriteWithoutFormat)
-    "visibility": "layout(rg32ui) readonly uniform uimage2D",
+    "visibility": "layout(rg32ui) uniform uimage2D",  # written by raster.comp's resolve
     "out_ids": "layout(rg32ui) writeonly uniform uimage2D",
     "out_normal": "writeonly uniform image2D",
     "out_normal_geometric": "writeonly uniform image2D",
@@ -560,6 +571,15 @@ class PipelinePath(Named):
     AUTO = 0
     FORWARD = 1
     COMPUTE = 2
+
+
+class RasterPath(Named):
+    """What makes the compute path's visibility buffer: HARDWARE, the raster units (pbr.vert and
+    pbr.frag's VISIBILITY build); COMPUTE, compute shaders (render/compute_raster.py: a 64-bit
+    atomic per covered pixel, on all SMs; masked draws still through the raster units)."""
+
+    HARDWARE = 0
+    COMPUTE = 1
 
 
 class TbnMode(Named):

@@ -14,14 +14,23 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from vkpbr.errors import UsageError
-from vkpbr.render.layouts import Brdf, Lighting, PipelinePath, TbnMode, Tonemap, View, enum_by_name
+from vkpbr.render.layouts import (
+    Brdf,
+    Lighting,
+    PipelinePath,
+    RasterPath,
+    TbnMode,
+    Tonemap,
+    View,
+    enum_by_name,
+)
 from vkpbr.scene.environment import ENV_SUFFIXES
 
 __all__ = ["RenderOptions", "ENUM_FIELDS"]
 
 # RenderOptions field -> the enum its values come from (the CLI's choices, the viewer's cycles).
 ENUM_FIELDS: dict[str, type] = {"view": View, "lighting": Lighting, "brdf": Brdf, "tbn": TbnMode,
-                                "tonemap": Tonemap, "pipeline": PipelinePath}
+                                "tonemap": Tonemap, "pipeline": PipelinePath, "raster": RasterPath}
 # Fields whose None means "the lighting mode's choice" (MODE_DEFAULTS).
 MODE_DEFAULT_FIELDS = ("brdf", "tonemap")
 MODE_DEFAULTS: dict[Lighting, dict[str, Any]] = {
@@ -55,6 +64,11 @@ class RenderOptions:
     pipeline : PipelinePath or str
         "auto", "forward" (fragment shading) or "compute" (a visibility buffer shaded in
         compute shaders: the same pixels, on all of a datacenter GPU's SMs).
+    raster : RasterPath or str
+        What makes the compute path's visibility buffer (and its dataset outputs'): "hardware"
+        (the raster units) or "compute" (a compute rasteriser on all SMs; masked draws still on
+        the raster units; needs 64-bit storage atomics). Frames on the forward path ignore it:
+        their passes test the depths their own rasterisation makes.
     alpha_mask, normal_mapping, occlusion : bool
         Alpha masking (off: masked materials are drawn opaque), normal maps, occlusion maps.
     shadows : bool
@@ -82,6 +96,7 @@ class RenderOptions:
     tonemap: Tonemap | None = None
     exposure: float = 0.0
     pipeline: PipelinePath = PipelinePath.AUTO
+    raster: RasterPath = RasterPath.HARDWARE
     alpha_mask: bool = True
     normal_mapping: bool = True
     occlusion: bool = True

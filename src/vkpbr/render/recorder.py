@@ -152,7 +152,8 @@ class FrameRecorder:
     def _record(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
                 alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
                 copy: tuple[str, ...], plan: ShadowPlan, compute: bool = False,
-                outputs: bool = False, redraw: tuple[bool, ...] | None = None) -> Commands:
+                outputs: bool = False, redraw: tuple[bool, ...] | None = None,
+                raster: bool = False) -> Commands:
         gs, ring = self.gpu_scene, self.ring
         slot = self.slots[frame.index]
         prepass = self.prepass_for(target) and not compute  # visibility: its own pre-pass
@@ -185,9 +186,23 @@ class FrameRecorder:
                     ctx.stamp(p.name)
             if outputs:
                 target.record_outputs_clear(cmd)  # type: ignore[attr-defined]
-            target.record_visibility_begin(cmd, image)  # type: ignore[attr-defined]
-            # The fragment path's own passes follow and take the timestamps.
-            record_passes(cmd, context(True, stamps=compute), VISIBILITY_PASSES)
+            vis_ctx = context(True, stamps=compute)
+            if raster:
+                # The compute rasteriser (render/compute_path.py): the opaque draws on all SMs,
+                # their depths into the depth buffer, then the masked draws on the raster units.
+                cs = self.compute_scene()
+                target.record_raster_begin(cmd)  # type: ignore[attr-defined]
+                cs.record_raster(cmd, target, frame.index, alpha_mask)
+                target.record_visibility_begin(cmd, image, rasterised=True)  # type: ignore[attr-defined]
+                cs.record_raster_depth(cmd, target, frame.index)
+                for name in VISIBILITY_PASSES:
+                    if name != "mask":
+                        vis_ctx.stamp(name)
+                record_passes(cmd, vis_ctx, ("mask",))
+            else:
+                target.record_visibility_begin(cmd, image)  # type: ignore[attr-defined]
+                # The fragment path's own passes follow and take the timestamps.
+                record_passes(cmd, vis_ctx, VISIBILITY_PASSES)
             target.record_shading_begin(cmd)  # type: ignore[attr-defined]
             drawn = sorted({d.material for d, c in zip(gs.draws, classes, strict=True)
                             if c != "blend"})
@@ -224,7 +239,7 @@ class FrameRecorder:
                         alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
                         copy: tuple[str, ...], plan: ShadowPlan = _NO_SHADOWS,
                         compute: bool = False, outputs: bool = False,
-                        redraw: tuple[bool, ...] | None = None) -> Commands:
+                        redraw: tuple[bool, ...] | None = None, raster: bool = False) -> Commands:
         """The command buffer recorded for these inputs, recorded on first use. A buffer is
         used by one frame of the ring only, whose previous submission has finished: it can be
         re-recorded (new blend order) or freed at once. `plan`: the shadow maps' (a new plan
@@ -234,14 +249,14 @@ class FrameRecorder:
             self.free(tid)  # recreated swapchain: its images and buffers are new
         self._generations[tid] = target.generation
         key = (tid, image, frame.index, tbn, alpha_mask, id(overlay), copy, plan, compute, outputs,
-               redraw)
+               redraw, raster)
         rec = self._recorded.get(key)
         if rec is not None and rec.blend_order == order:
             return rec.cmd
         if rec is not None:  # the camera moved enough to reorder blended draws
             rec.cmd.free()
         cmd = self._record(target, frame, image, tbn, alpha_mask, order, overlay, copy, plan,
-                           compute, outputs, redraw)
+                           compute, outputs, redraw, raster)
         self._recorded[key] = _Recorded(cmd, order)
         return cmd
 

@@ -247,6 +247,17 @@ class Renderer:
         # BENCHMARKS.md), the fragment path on CPUs (lavapipe: the slower of the two).
         return self.device.info.kind != "cpu" and self.compute_unavailable(target) is None
 
+    def uses_compute_raster(self, options: RenderOptions) -> bool:
+        """Whether the visibility buffer (compute path, dataset outputs) comes from the compute
+        rasteriser (UsageError when it is asked for and the device cannot)."""
+        if options.raster != L.RasterPath.COMPUTE:
+            return False
+        if not self.device.compute_raster:
+            raise UsageError("--raster compute is not available here: the device lacks 64-bit "
+                             "storage-buffer atomics (shaderInt64, shaderBufferInt64Atomics); "
+                             "use --raster hardware")
+        return True
+
     def build_pipelines(self, target: FrameTarget) -> None:
         """Create every pipeline and vertex stream (all TBN paths and passes) for `target`
         now, so that no later mode switch waits for one (the viewer calls this)."""
@@ -428,11 +439,12 @@ class Renderer:
         if overlay is not None:
             overlay.prepare(frame.index)
         redraw = self.shadows.stale(slot.index, plan, options.alpha_mask)
+        compute, outputs = self.uses_compute(target, options), COPY_OUTPUTS in copy
         try:
             cmd = self.recorder.command_buffer(
                 target, frame, image, options.tbn, options.alpha_mask,
-                self.blend_order(camera.eye), overlay, copy, plan,
-                self.uses_compute(target, options), COPY_OUTPUTS in copy, redraw)
+                self.blend_order(camera.eye), overlay, copy, plan, compute, outputs, redraw,
+                compute and self.uses_compute_raster(options))
             c0 = clock()
             ok = target.submit(frame, cmd, image)
         except BaseException:

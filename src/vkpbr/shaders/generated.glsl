@@ -261,7 +261,7 @@ layout(set = 2, binding = 4) uniform sampler2D brdf_lut;
 #if COMPUTE_SHADING  // the compute path's own set (render/compute_path.py)
 const uint COMPUTE_SET = 4u;
 layout(set = 4, binding = 0) writeonly uniform image2D out_image;
-layout(set = 4, binding = 1, rg32ui) readonly uniform uimage2D visibility;
+layout(set = 4, binding = 1, rg32ui) uniform uimage2D visibility;
 layout(set = 4, binding = 2, std140) readonly buffer Draws {
     DrawRecord draws[];
 };
@@ -332,6 +332,17 @@ layout(set = 4, binding = 19, rg32ui) writeonly uniform uimage2D out_ids;
 layout(set = 4, binding = 20) writeonly uniform image2D out_normal;
 layout(set = 4, binding = 21) writeonly uniform image2D out_normal_geometric;
 layout(set = 4, binding = 22) writeonly uniform image2D out_depth_range;
+layout(set = 4, binding = 23, std430) readonly buffer RasterDraws {
+    uvec4 raster_draws[];
+};
+#if RASTER_INT64  // GL_EXT_shader_explicit_arithmetic_types_int64
+layout(set = 4, binding = 24, std430) buffer RasterDepthIds {
+    uint64_t raster[];
+};
+#endif
+layout(set = 4, binding = 25, std430) buffer RasterBig {
+    uint raster_big[];
+};
 #else  // the compute path has its own push constants
 layout(push_constant, std430) uniform Draw {
     mat4 model;

@@ -1,0 +1,181 @@
+#version 450
+// raster.comp: the compute rasteriser (render/compute_raster.py, `raster="compute"`): the
+// compute path's visibility buffer made on all SMs instead of the few that rasterise. Every
+// covered pixel centre takes one 64-bit atomicMax of (reversed depth bits << 32 | triangle +
+// 1) in `raster` (depth >= 0, so its float bits order as the depths: the nearest wins, and on
+// a tie the later triangle, as GREATER_OR_EQUAL does for later draws). Triangles are clipped
+// to the near and far planes (z <= w, z >= 0: the shading re-intersects the pixel's ray with
+// the whole triangle, so only coverage and depth come from here).
+// KERNEL 1 (raster_small): one invocation a triangle of the opaque draws; triangles whose
+//   screen box exceeds BIG_AREA pixels are listed in raster_big instead.
+// KERNEL 4 (raster_args): one invocation: raster_big's dispatch size for KERNEL 2.
+// KERNEL 2 (raster_big): one work group a listed triangle, its pixels spread over the group.
+// KERNEL 3 (raster_resolve): per pixel, the visibility image's (draw + 1, primitive) from the
+//   winning triangle (0: nothing) -- what shade.comp and classify.comp read.
+#extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_shader_atomic_int64 : require
+#define RASTER_INT64 1  // generated.glsl declares the 64-bit buffer
+#include "generated.glsl"
+
+#if KERNEL == 2
+layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;  // compute_raster.BIG_GROUP
+#elif KERNEL == 3
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+#elif KERNEL == 4
+layout(local_size_x = 1, local_size_y = 1, local_size_z = 1) in;
+#else
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;  // compute_raster.SMALL_GROUP
+#endif
+
+layout(push_constant) uniform Raster {
+    uint triangles;  // over every draw, in draw order (raster_draws[k].x: draw k's first)
+    uint draws;
+    uint alpha_mask;  // 1: masked materials are left to the visibility pass's mask draws
+    uint big_capacity;  // entries raster_big's list holds (from BIG_LIST on)
+    uint width;
+    uint height;
+} pc;
+
+const float BIG_AREA = 256.0;  // screen-box pixels above which a work group takes a triangle
+// raster_big: [0] the count, [1..3] KERNEL 2's dispatch size (indirect), the list from 4.
+const uint BIG_LIST = 4u;
+const uint MAX_GROUPS = 65535u;  // maxComputeWorkGroupCount[0] of every device
+const uint DOUBLE_SIDED = 1u, MASKED = 2u, BLENDED = 4u;  // raster_draws[k].y (compute_raster.py)
+
+// The draw holding triangle g: the last k whose first triangle is <= g (draws in order).
+uint draw_of(uint g) {
+    uint lo = 0u, hi = pc.draws;
+    for (uint step = 0u; step < 32u && hi - lo > 1u; ++step) {
+        uint mid = (lo + hi) >> 1u;
+        if (raster_draws[mid].x <= g) lo = mid; else hi = mid;
+    }
+    return lo;
+}
+
+#if KERNEL != 3
+vec3 position(uint i) { uint k = 3u * i; return vec3(positions[k], positions[k + 1u], positions[k + 2u]); }
+
+// Triangle g's clip-space corners; false when its draw is not rasterised here.
+bool fetch(uint g, out vec4 c[3], out bool double_sided) {
+    uint k = draw_of(g);
+    uvec4 rd = raster_draws[k];
+    double_sided = (rd.y & DOUBLE_SIDED) != 0u;
+    if ((rd.y & BLENDED) != 0u || ((rd.y & MASKED) != 0u && pc.alpha_mask != 0u)) return false;
+    DrawRecord dr = draws[k];
+    uint base = dr.info.x + 3u * (g - rd.x);
+    for (int j = 0; j < 3; ++j) {
+        uint v = indices[base + uint(j)] + dr.info.y;
+        c[j] = camera.VP * (dr.model * vec4(position(v), 1.0));  // as pbr.vert's gl_Position
+    }
+    return true;
+}
+
+// The polygon left of the triangle inside z <= w (the near plane, reversed-Z) and z >= 0
+// (the far plane): at most 5 corners.
+int clip(vec4 c[3], out vec4 poly[5]) {
+    vec4 a[5], b[5];
+    int n = 3;
+    for (int j = 0; j < 3; ++j) a[j] = c[j];
+    for (int plane = 0; plane < 2; ++plane) {
+        int m = 0;
+        for (int j = 0; j < n; ++j) {
+            vec4 p = a[j], q = a[(j + 1) % n];
+            float dp = plane == 0 ? p.w - p.z : p.z, dq = plane == 0 ? q.w - q.z : q.z;
+            if (dp >= 0.0 && m < 5) b[m++] = p;
+            if ((dp >= 0.0) != (dq >= 0.0) && m < 5) b[m++] = mix(p, q, dp / (dp - dq));
+        }
+        n = m;
+        for (int j = 0; j < n; ++j) a[j] = b[j];
+    }
+    for (int j = 0; j < n; ++j) poly[j] = a[j];
+    return n;
+}
+
+// Framebuffer position (pixels, y down as the viewport maps it) and depth of a clip corner.
+vec3 screen(vec4 c) {
+    vec3 ndc = c.xyz / c.w;
+    return vec3((ndc.xy * 0.5 + 0.5) * vec2(pc.width, pc.height), ndc.z);
+}
+
+float edge(vec2 a, vec2 b, vec2 p) { return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x); }
+
+// Cover pixels [lo, hi) of the screen triangle (s0, s1, s2), positive area, with the pixel
+// indices `first`, `first + stride`, ... of its box.
+void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, uint first, uint stride) {
+    float area = edge(s0.xy, s1.xy, s2.xy);
+    uint wbox = uint(hi.x - lo.x);
+    uint count = wbox * uint(hi.y - lo.y);
+    for (uint i = first; i < count; i += stride) {
+        ivec2 px = lo + ivec2(i % wbox, i / wbox);
+        vec2 p = vec2(px) + 0.5;
+        float e0 = edge(s1.xy, s2.xy, p), e1 = edge(s2.xy, s0.xy, p), e2 = edge(s0.xy, s1.xy, p);
+        if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) continue;
+        float depth = clamp((e0 * s0.z + e1 * s1.z + e2 * s2.z) / area, 0.0, 1.0);
+        uint64_t packed = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(id + 1u);
+        atomicMax(raster[uint(px.y) * pc.width + uint(px.x)], packed);
+    }
+}
+
+// The screen triangles of triangle g (its clipped polygon as a fan), each turned to positive
+// `edge` area for `cover`. Vulkan's front faces (counter-clockwise: positive area by its
+// formula, which is minus this `edge` in these y-down coordinates) have negative `edge`
+// area here; a single-sided triangle with positive area is a back face, culled as the
+// pipelines' cull="back" does. Calls `cover` for each; with `small_only`, lists
+// the triangle in raster_big instead when any of them is big.
+void raster_triangle(uint g, bool small_only, uint first, uint stride) {
+    vec4 c[3];
+    bool double_sided;
+    if (!fetch(g, c, double_sided)) return;
+    vec4 poly[5];
+    int n = clip(c, poly);
+    if (n < 3) return;
+    vec3 s[5];
+    for (int j = 0; j < n; ++j) s[j] = screen(poly[j]);
+    float area = 0.0;
+    for (int j = 1; j + 1 < n; ++j) area += edge(s[0].xy, s[j].xy, s[j + 1].xy);
+    if (area == 0.0 || (area > 0.0 && !double_sided)) return;
+    vec2 lo2 = s[0].xy, hi2 = s[0].xy;
+    for (int j = 1; j < n; ++j) { lo2 = min(lo2, s[j].xy); hi2 = max(hi2, s[j].xy); }
+    // Pixel centres inside the box: from ceil(lo - 0.5) to floor(hi - 0.5), within the target.
+    ivec2 lo = max(ivec2(ceil(lo2 - 0.5)), ivec2(0));
+    ivec2 hi = min(ivec2(floor(hi2 - 0.5)) + 1, ivec2(pc.width, pc.height));
+    if (any(greaterThanEqual(lo, hi))) return;
+    if (small_only && float(hi.x - lo.x) * float(hi.y - lo.y) > BIG_AREA) {
+        uint slot = atomicAdd(raster_big[0], 1u);
+        if (slot < pc.big_capacity) raster_big[BIG_LIST + slot] = g;
+        return;
+    }
+    for (int j = 1; j + 1 < n; ++j) {
+        vec3 a = s[0], b = s[j], d = s[j + 1];
+        if (area < 0.0) { vec3 t = b; b = d; d = t; }  // a front face: `cover` wants area > 0
+        cover(a, b, d, g, lo, hi, first, stride);
+    }
+}
+#endif
+
+void main() {
+#if KERNEL == 1
+    uint g = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
+    if (g < pc.triangles) raster_triangle(g, true, 0u, 1u);
+#elif KERNEL == 4
+    raster_big[1] = max(min(raster_big[0], MAX_GROUPS), 1u);
+    raster_big[2] = 1u;
+    raster_big[3] = 1u;
+#elif KERNEL == 2
+    uint listed = min(raster_big[0], pc.big_capacity);
+    for (uint k = gl_WorkGroupID.x; k < listed; k += gl_NumWorkGroups.x)
+        raster_triangle(raster_big[BIG_LIST + k], false, gl_LocalInvocationID.x, 256u);
+#else
+    uvec2 p = gl_GlobalInvocationID.xy;
+    if (p.x >= pc.width || p.y >= pc.height) return;
+    uint64_t v = raster[p.y * pc.width + p.x];
+    uvec2 vis = uvec2(0u);
+    if (v != 0ul) {
+        uint g = uint(v & 0xffffffffUL) - 1u;
+        uint k = draw_of(g);
+        vis = uvec2(k + 1u, g - raster_draws[k].x);
+    }
+    imageStore(visibility, ivec2(p), uvec4(vis, 0u, 0u));
+#endif
+}
