@@ -64,7 +64,7 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("background.frag.spv", "background.frag"),
     # The compute rasteriser (render/compute_raster.py).
     *(Variant(f"raster_{name}.comp.spv", "raster.comp", (("COMPUTE_SHADING", 1), ("KERNEL", k)))
-      for k, name in ((1, "small"), (4, "args"), (2, "big"), (3, "resolve"))),
+      for k, name in ((1, "small"), (4, "args"), (2, "big"), (3, "resolve"), (5, "masked"))),
     Variant("raster_depth.vert.spv", "raster_depth.vert"),
     Variant("raster_depth.frag.spv", "raster_depth.frag", (("COMPUTE_SHADING", 1),)),
 )

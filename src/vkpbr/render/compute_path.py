@@ -142,6 +142,9 @@ class ComputeScene:
             raster[i, :2] = first, flags
             first += d.index_count // 3
         self.triangles = first
+        # (draw, material, triangles) of the masked draws: raster_masked's dispatches.
+        self._masked = [(i, d.material, d.index_count // 3) for i, d in enumerate(gs.draws)
+                        if d.alpha_mode == "mask" and d.index_count >= 3]
         self.raster_draws = self._own(upload_buffer(device, raster, "storage",
                                                     name="raster draw table"))
         self.set_index = max(frame_layouts) + 1
@@ -218,11 +221,13 @@ class ComputeScene:
             self._dispatch_bins(cmd, res, frame_index, f"shade_{tbn.name.lower()}", frame_sets,
                                 material_sets, materials)
 
-    def record_raster(self, cmd: Any, target: Any, frame_index: int, alpha_mask: bool) -> None:
-        """The compute rasteriser (raster.comp): every opaque draw's triangles (and the masked
-        ones' without alpha masking) into the target's depth|triangle buffer, then the
-        visibility image resolved from it (the target has it in GENERAL: record_raster_begin).
-        The depths reach the depth buffer with `record_raster_depth`."""
+    def record_raster(self, cmd: Any, target: Any, frame_index: int, alpha_mask: bool,
+                      material_sets: list[Any]) -> None:
+        """The compute rasteriser (raster.comp): every opaque and masked draw's triangles into
+        the target's depth|triangle buffer (masked ones alpha-tested per pixel with their
+        material's set 1, one dispatch a masked draw), then the visibility image resolved
+        from it (the target has it in GENERAL: record_raster_begin). The depths reach the
+        depth buffer with `record_raster_depth`."""
         res = self._resources(target)
         w, h = target.extent
         cmd.fill(res.raster, 0)
@@ -235,15 +240,29 @@ class ComputeScene:
         # raster_args sizes raster_big's dispatch from the count raster_small listed.
         for kernel, size in (("raster_small", (min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), 1)),
                              ("raster_args", (1, 1, 1)), ("raster_big", None),
+                             ("raster_masked", ()),
                              ("raster_resolve", groups((w, h, 1), (8, 8, 1)))):
+            if size == () and not (alpha_mask and self._masked):
+                continue
             cmd.bind_pipeline(self._pipeline(kernel, 32))
             cmd.bind_set(self.set_index, dset)
             cmd.push(push)
             if size is None:
                 cmd.dispatch_indirect(res.raster_big, 4)
+            elif size == ():
+                self._dispatch_masked(cmd, push, material_sets)
             elif size[0] and size[1]:
                 cmd.dispatch(*size)
             cmd.memory_barrier("compute", "compute|fragment|indirect")
+
+    def _dispatch_masked(self, cmd: Any, push: np.ndarray, material_sets: list[Any]) -> None:
+        """raster_masked: one invocation a triangle of each masked draw, its material bound."""
+        for k, material, count in self._masked:
+            cmd.bind_set(1, material_sets[material])
+            push[6:8] = k, material
+            cmd.push(push)
+            n = -(-count // RASTER_SMALL_GROUP)
+            cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), 1)
 
     def record_raster_depth(self, cmd: Any, target: Any, frame_index: int) -> None:
         """Inside the visibility rendering: the rasteriser's depths written into the target's

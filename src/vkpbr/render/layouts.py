@@ -576,7 +576,7 @@ class PipelinePath(Named):
 class RasterPath(Named):
     """What makes the compute path's visibility buffer: HARDWARE, the raster units (pbr.vert and
     pbr.frag's VISIBILITY build); COMPUTE, compute shaders (render/compute_raster.py: a 64-bit
-    atomic per covered pixel, on all SMs; masked draws still through the raster units)."""
+    atomic per covered pixel, on all SMs; masked draws alpha-tested there too)."""
 
     HARDWARE = 0
     COMPUTE = 1

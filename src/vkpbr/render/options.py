@@ -66,8 +66,8 @@ class RenderOptions:
         compute shaders: the same pixels, on all of a datacenter GPU's SMs).
     raster : RasterPath or str
         What makes the compute path's visibility buffer (and its dataset outputs'): "hardware"
-        (the raster units) or "compute" (a compute rasteriser on all SMs; masked draws still on
-        the raster units; needs 64-bit storage atomics). Frames on the forward path ignore it:
+        (the raster units) or "compute" (a compute rasteriser on all SMs, masked draws
+        alpha-tested there as the shading samples them; needs 64-bit storage atomics). Frames on the forward path ignore it:
         their passes test the depths their own rasterisation makes.
     alpha_mask, normal_mapping, occlusion : bool
         Alpha masking (off: masked materials are drawn opaque), normal maps, occlusion maps.

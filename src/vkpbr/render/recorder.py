@@ -188,17 +188,15 @@ class FrameRecorder:
                 target.record_outputs_clear(cmd)  # type: ignore[attr-defined]
             vis_ctx = context(True, stamps=compute)
             if raster:
-                # The compute rasteriser (render/compute_path.py): the opaque draws on all SMs,
-                # their depths into the depth buffer, then the masked draws on the raster units.
+                # The compute rasteriser (render/compute_path.py): the opaque and masked draws
+                # on all SMs, then their depths into the depth buffer.
                 cs = self.compute_scene()
                 target.record_raster_begin(cmd)  # type: ignore[attr-defined]
-                cs.record_raster(cmd, target, frame.index, alpha_mask)
+                cs.record_raster(cmd, target, frame.index, alpha_mask, gs.material_sets)
                 target.record_visibility_begin(cmd, image, rasterised=True)  # type: ignore[attr-defined]
                 cs.record_raster_depth(cmd, target, frame.index)
                 for name in VISIBILITY_PASSES:
-                    if name != "mask":
-                        vis_ctx.stamp(name)
-                record_passes(cmd, vis_ctx, ("mask",))
+                    vis_ctx.stamp(name)
             else:
                 target.record_visibility_begin(cmd, image)  # type: ignore[attr-defined]
                 # The fragment path's own passes follow and take the timestamps.

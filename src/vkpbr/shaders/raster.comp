@@ -10,6 +10,10 @@
 //   screen box exceeds BIG_AREA pixels are listed in raster_big instead.
 // KERNEL 4 (raster_args): one invocation: raster_big's dispatch size for KERNEL 2.
 // KERNEL 2 (raster_big): one work group a listed triangle, its pixels spread over the group.
+// KERNEL 5 (raster_masked): one invocation a triangle of one masked draw (alpha masking on),
+//   with its material's set 1 bound; the group's big triangles afterwards by the whole group.
+//   A pixel is covered where the surface's base-colour alpha (surface_fetch.glsl + shade.glsl,
+//   exactly as the shading samples it) reaches the cutoff.
 // KERNEL 3 (raster_resolve): per pixel, the visibility image's (draw + 1, primitive) from the
 //   winning triangle (0: nothing) -- what shade.comp and classify.comp read.
 #extension GL_GOOGLE_include_directive : require
@@ -24,6 +28,8 @@ layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;  // compute_r
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #elif KERNEL == 4
 layout(local_size_x = 1, local_size_y = 1, local_size_z = 1) in;
+#elif KERNEL == 5
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;  // compute_raster.MASKED_GROUP
 #else
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;  // compute_raster.SMALL_GROUP
 #endif
@@ -35,7 +41,13 @@ layout(push_constant) uniform Raster {
     uint big_capacity;  // entries raster_big's list holds (from BIG_LIST on)
     uint width;
     uint height;
+    uint draw;  // raster_masked: the masked draw dispatched
+    uint material;  // raster_masked: its material (set 1 bound)
 } pc;
+#if KERNEL == 5
+#define MATERIAL_INDEX pc.material
+#include "surface_fetch.glsl"
+#endif
 
 const float BIG_AREA = 256.0;  // screen-box pixels above which a work group takes a triangle
 // raster_big: [0] the count, [1..3] KERNEL 2's dispatch size (indirect), the list from 4.
@@ -53,15 +65,26 @@ uint draw_of(uint g) {
     return lo;
 }
 
+#if KERNEL == 5
+shared uint group_big[64];  // this group's big triangles (raster_masked)
+shared uint group_big_count;
+#endif
+
 #if KERNEL != 3
 vec3 position(uint i) { uint k = 3u * i; return vec3(positions[k], positions[k + 1u], positions[k + 2u]); }
 
 // Triangle g's clip-space corners; false when its draw is not rasterised here.
 bool fetch(uint g, out vec4 c[3], out bool double_sided) {
+#if KERNEL == 5
+    uint k = pc.draw;  // this dispatch's masked draw: always drawn
+#else
     uint k = draw_of(g);
+#endif
     uvec4 rd = raster_draws[k];
     double_sided = (rd.y & DOUBLE_SIDED) != 0u;
+#if KERNEL != 5
     if ((rd.y & BLENDED) != 0u || ((rd.y & MASKED) != 0u && pc.alpha_mask != 0u)) return false;
+#endif
     DrawRecord dr = draws[k];
     uint base = dr.info.x + 3u * (g - rd.x);
     for (int j = 0; j < 3; ++j) {
@@ -103,6 +126,9 @@ float edge(vec2 a, vec2 b, vec2 p) { return (b.x - a.x) * (p.y - a.y) - (b.y - a
 // Cover pixels [lo, hi) of the screen triangle (s0, s1, s2), positive area, with the pixel
 // indices `first`, `first + stride`, ... of its box.
 void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, uint first, uint stride) {
+#if KERNEL == 5
+    uint prim = id - raster_draws[pc.draw].x;
+#endif
     float area = edge(s0.xy, s1.xy, s2.xy);
     uint wbox = uint(hi.x - lo.x);
     uint count = wbox * uint(hi.y - lo.y);
@@ -112,6 +138,12 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, uint first, u
         float e0 = edge(s1.xy, s2.xy, p), e1 = edge(s2.xy, s0.xy, p), e2 = edge(s0.xy, s1.xy, p);
         if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) continue;
         float depth = clamp((e0 * s0.z + e1 * s1.z + e2 * s2.z) / area, 0.0, 1.0);
+#if KERNEL == 5
+        uvec3 vi;
+        vec3 w0, w1, w2, bary;
+        surface_at(pc.draw, prim, uvec2(px), vec2(pc.width, pc.height), vi, w0, w1, w2, bary);
+        if (surface_base_color().a < MAT.alpha_cutoff) continue;  // as pbr.frag's ALPHA_MASK
+#endif
         uint64_t packed = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(id + 1u);
         atomicMax(raster[uint(px.y) * pc.width + uint(px.x)], packed);
     }
@@ -142,8 +174,12 @@ void raster_triangle(uint g, bool small_only, uint first, uint stride) {
     ivec2 hi = min(ivec2(floor(hi2 - 0.5)) + 1, ivec2(pc.width, pc.height));
     if (any(greaterThanEqual(lo, hi))) return;
     if (small_only && float(hi.x - lo.x) * float(hi.y - lo.y) > BIG_AREA) {
+#if KERNEL == 5
+        group_big[atomicAdd(group_big_count, 1u)] = g;  // at most one an invocation
+#else
         uint slot = atomicAdd(raster_big[0], 1u);
         if (slot < pc.big_capacity) raster_big[BIG_LIST + slot] = g;
+#endif
         return;
     }
     for (int j = 1; j + 1 < n; ++j) {
@@ -158,6 +194,17 @@ void main() {
 #if KERNEL == 1
     uint g = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
     if (g < pc.triangles) raster_triangle(g, true, 0u, 1u);
+#elif KERNEL == 5
+    uint first = raster_draws[pc.draw].x;
+    uint count = (pc.draw + 1u < pc.draws ? raster_draws[pc.draw + 1u].x : pc.triangles) - first;
+    uint t = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
+    opaque_zero = 0u;  // shade.glsl's leak guard: a plain 0 here (no uniform block is read)
+    if (gl_LocalInvocationIndex == 0u) group_big_count = 0u;
+    barrier();
+    if (t < count) raster_triangle(first + t, true, 0u, 1u);
+    barrier();
+    for (uint k = 0u; k < group_big_count; ++k)
+        raster_triangle(group_big[k], false, gl_LocalInvocationID.x, 64u);
 #elif KERNEL == 4
     raster_big[1] = max(min(raster_big[0], MAX_GROUPS), 1u);
     raster_big[2] = 1u;
