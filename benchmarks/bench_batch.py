@@ -24,6 +24,9 @@ and B: one warm-up call, then the median of `--reps` timed calls of
   of `render_batch(..., device="cuda")` + `torch.cuda.synchronize()`, the views a (B, H, W, 4)
   tensor on the GPU (no host copy).
 
+`--pipeline compute`: the compute batch (render_batch(pipeline="compute"): one atlas,
+rasterised and shaded in compute shaders; NumPy only), rows "scene (compute)".
+
 A B whose views would need more than `--max-mib` (default: a quarter of the free device or
 host memory, whichever is less, as `batch="auto"` budgets a submission) is skipped. Not a test. Prints one Markdown table;
 `--json FILE` appends one JSON line per row.
@@ -128,13 +131,14 @@ def copy_ms(shape: tuple[int, ...], reps: int = 3) -> float:
 
 
 def run_scene(key: str, sizes: list[tuple[int, int]], batches: list[int], reps: int,
-              many_max: int, max_mib: float | None) -> list[dict]:
+              many_max: int, max_mib: float | None, pipeline: str = "auto") -> list[dict]:
     scene = load(key)
     if scene is None:
         print(f"skipped {key}: {peers.ASSETS / peers.BATCH_SCENES[key]} not found", file=sys.stderr)
         return []
     rows = []
-    torch = torch_cuda()
+    torch = torch_cuda() if pipeline != "compute" else None  # the compute batch: NumPy only
+    opts = {"pipeline": pipeline}
     with Renderer(scene) as r:
         if max_mib:
             budget = max_mib * 2**20
@@ -144,23 +148,23 @@ def run_scene(key: str, sizes: list[tuple[int, int]], batches: list[int], reps: 
         for size in sizes:
             w, h = size
             for b in batches:
-                view_bytes = w * h * (2 * 4 + 4)
+                view_bytes = w * h * (2 * 4 + 4 + (25 if pipeline == "compute" else 0))
                 if b * view_bytes > budget:
                     print(f"skipped {key} {w}x{h} B={b}: {b * view_bytes / 2**20:.0f} MiB > "
                           f"{budget / 2**20:.0f} MiB", file=sys.stderr)
                     continue
                 views = CameraBatch.from_poses(poses_for(key, r, b), peers.YFOV_DEG)
-                out = r.render_batch(views, size=size)  # warm-up: targets, recordings
+                out = r.render_batch(views, size=size, **opts)  # warm-up: targets, recordings
                 assert out.shape == (b, h, w, 4) and out.dtype == np.uint8, out.shape
                 wall, gpu = [], []
                 for _ in range(reps):
                     t = time.perf_counter()
-                    r.render_batch(views, size=size)
+                    r.render_batch(views, size=size, **opts)
                     wall.append((time.perf_counter() - t) * 1e3)
                     gpu.append(r.last_stats.gpu_ms)
                 wall_ms, gpu_ms = statistics.median(wall), statistics.median(gpu)
                 cp = copy_ms(out.shape)
-                row = {"scene": key, "size": f"{w}x{h}", "B": b, "views_per_s": b / wall_ms * 1e3,
+                row = {"scene": key if pipeline != "compute" else f"{key} (compute)", "size": f"{w}x{h}", "B": b, "views_per_s": b / wall_ms * 1e3,
                        "ms_per_batch": wall_ms, "gpu_ms": gpu_ms,
                        "gpu_views_per_s": b / gpu_ms * 1e3 if gpu_ms > 0 else float("nan"),
                        "host_us_per_view": (wall_ms - (gpu_ms if math.isfinite(gpu_ms) else 0) - cp)
@@ -179,9 +183,9 @@ def run_scene(key: str, sizes: list[tuple[int, int]], batches: list[int], reps: 
                     row["gpu_mib_with_torch_target"] = batch_gpu_bytes(r, size, b) / 2**20
                 if b <= many_max:
                     cams = [views.camera(i) for i in range(b)]
-                    list(r.render_many(cams[: min(b, 8)], size=size))
+                    list(r.render_many(cams[: min(b, 8)], size=size, **opts))
                     t = time.perf_counter()
-                    for _ in r.render_many(cams, size=size):
+                    for _ in r.render_many(cams, size=size, **opts):
                         pass
                     row["many_views_per_s"] = b / (time.perf_counter() - t)
                 rows.append(row)
@@ -215,13 +219,16 @@ def main() -> None:
     ap.add_argument("--max-mib", type=float, default=None,
                     help="skip a B whose views need more (default: a quarter of device memory)")
     ap.add_argument("--json", default=None, help="append one JSON line per row to this file")
+    ap.add_argument("--pipeline", default="auto", choices=("auto", "forward", "compute"),
+                    help="compute: the compute batch (one atlas, raster.comp and shade.comp)")
     args = ap.parse_args()
     sizes = [tuple(int(v) for v in s.lower().split("x")) for s in args.sizes.split(",")]
     batches = [int(b) for b in args.batches.split(",")]
     print(HEADER, flush=True)
     rows = []
     for key in args.scenes.split(","):
-        rows += run_scene(key, sizes, batches, args.reps, args.many_max, args.max_mib)
+        rows += run_scene(key, sizes, batches, args.reps, args.many_max, args.max_mib,
+                          args.pipeline)
     if rows:
         print(f"\ndevice: {rows[0]['device']}; {args.reps} timed calls per row (median)")
     if args.json:

@@ -7,7 +7,8 @@
 #                modes), rows in $OUT/peers.json: copy it back here as out/sapien-peers.json.
 #   STEP=peers   carry .gl .whl .whl-peers .gl-peers .assets-peers out/sapien-peers.json:
 #                `vkpbr bench --batch --peers` (pyrender and pygfx live, SAPIEN's rows read back).
-#   STEP=table   carry .gl .whl .assets-peers: benchmarks/bench_batch.py (B = 1..4096, into
+#   STEP=table   carry .gl .whl .assets-peers: benchmarks/bench_batch.py (PIPELINE=compute: the
+#                compute batch; B = 1..4096, into
 #                NumPy and torch, render_many, host us/view, GPU MiB).
 # .assets-peers/models holds Sponza (JPEGs at quality 85, as .assets) and DamagedHelmet only.
 # VIEWS (poses per scene, default 128) must be the same in the sapien and peers steps.
@@ -23,7 +24,7 @@ fi
 source benchmarks/gpu_env.sh  # .gl, .whl -> /tmp/site; PYTHONPATH; the NVIDIA ICD
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader
 if [ "$STEP" = table ]; then
-  timeout ${BATCH_TIMEOUT:-540} python3 benchmarks/bench_batch.py --json "$OUT/batch.json" 2>&1 | tee "$OUT/batch.txt"
+  timeout ${BATCH_TIMEOUT:-540} python3 benchmarks/bench_batch.py --pipeline "${PIPELINE:-auto}" --json "$OUT/batch.json" 2>&1 | tee "$OUT/batch.txt"
   exit
 fi
 source benchmarks/peers_env.sh  # .gl-peers, .whl-peers -> /tmp/peers; PYTHONPATH, EGL

@@ -38,7 +38,7 @@ if has outputs; then
 fi
 if has batch; then
   echo "== batched views: render_batch into NumPy and torch (Sponza, DamagedHelmet; 128, 512)"
-  timeout ${BATCH_TIMEOUT:-300} python3 benchmarks/bench_batch.py --json "$OUT/batch.json" 2>&1 | tee "$OUT/batch.txt"
+  timeout ${BATCH_TIMEOUT:-300} python3 benchmarks/bench_batch.py --pipeline "${PIPELINE:-auto}" --json "$OUT/batch.json" 2>&1 | tee "$OUT/batch.txt"
 fi
 if has ray; then
   echo "== Ray: 1, 2, 4 actors sharing the GPU; overhead against in-process rendering"

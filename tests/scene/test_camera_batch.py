@@ -50,9 +50,11 @@ def test_batch_terms_equal_single_camera_maths(cams: list[Camera], size: tuple[i
     for i, cam in enumerate(cams):
         f = forward(cam)
         znear, zfar = depth_range(cam, CORNERS, SCALE, f)
-        vp, _, _ = camera_frame_columns(cam, size, znear, f)
+        vp, inv, _ = camera_frame_columns(cam, size, znear, f)
         assert terms["znear"][i] == znear and terms["zfar"][i] == zfar
         assert tuple(terms["vp"][i]) == vp  # float64, every bit
+        # The inverse in the same operations but one: (ox / sx) * s here, s * ox / sx there.
+        np.testing.assert_allclose(terms["inv_vp"][i], inv, rtol=1e-12, atol=1e-12 * max(map(abs, inv)))
         assert tuple(terms["forward"][i]) == f
         assert b.camera(i) == cam
 

@@ -155,6 +155,7 @@ class BatchViews:
         n = len(eye)
         rec = self.records[:n]
         rec["VP"] = terms["vp"].reshape(n, 4, 4)
+        rec["inv_VP"] = terms["inv_vp"].reshape(n, 4, 4)
         rec["eye_near"] = np.concatenate([eye, terms["znear"][:, None]], 1)
         rec["forward_far"] = np.concatenate([terms["forward"], terms["zfar"][:, None]], 1)
         info = np.zeros((n, 4), np.uint32)

@@ -12,12 +12,14 @@ one wait, one readback (or one device-to-device clone into torch).
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any
 
 import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.gpu.batch_target import BatchTarget
+from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH
 from vkpbr.render import layouts as L
 from vkpbr.render.batch import MAX_LAYERS, BatchViews
 from vkpbr.render.camera import batch_frame_terms, linear_depth
@@ -30,7 +32,11 @@ from vkpbr.scene.camera_batch import CameraBatch
 Renderer = Any
 LightsArg = Any  # renderer.LightsArg: None, a Light or an iterable of Lights
 
-__all__ = ["BatchPath"]
+__all__ = ["BatchPath", "COMPUTE_BYTES"]
+
+# Device bytes a pixel of a compute batch's atlas needs besides its colour: depth 4, the
+# visibility image 8, the rasteriser's depth|triangle 8, the pixel list 4, the big list ~1.
+COMPUTE_BYTES = 25
 
 
 class BatchPath:
@@ -60,6 +66,79 @@ class BatchPath:
             return color, None
         return color, depths[0] if len(depths) == 1 else np.concatenate(depths)
 
+    def render_compute(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
+                       opts: RenderOptions, linear: bool, depth: bool, batch: int | str
+                       ) -> tuple[np.ndarray, np.ndarray | None]:
+        """The compute batch: each submission's views tiled in one atlas target, rasterised
+        and shaded in compute shaders (render/compute_path.py's kernels, BATCH builds)."""
+        w, h = int(size[0]), int(size[1])
+        limits = self.r.device.limits
+        most = int(limits.maxImageDimension2D)
+        # The atlas fits the image size limit, and its rasteriser buffer (8 bytes a pixel) one
+        # storage-buffer binding; sized for this call's views, not more.
+        per = min(self.per_submission(size, linear, depth, batch, COMPUTE_BYTES),
+                  (most // w) * (most // h), int(limits.maxStorageBufferRange) // (8 * w * h),
+                  len(views))
+        if per < 1:
+            raise UsageError(f"views of {w}x{h} are too large for the compute batch here; "
+                             "use pipeline='forward'")
+        cols = max(1, min(per, most // w, math.ceil(math.sqrt(per))))
+        rows = -(-per // cols)
+        colors, depths = [], []
+        for start in range(0, len(views), per):
+            part = _slice(views, start, min(start + per, len(views)))
+            color, dist = self._submit_compute(part, (w, h), (cols, rows), lights, opts, linear,
+                                               depth)
+            colors.append(color)
+            depths.append(dist)
+        color = colors[0] if len(colors) == 1 else np.concatenate(colors)
+        if not depth:
+            return color, None
+        return color, depths[0] if len(depths) == 1 else np.concatenate(depths)
+
+    def _submit_compute(self, views: CameraBatch, size: tuple[int, int], grid: tuple[int, int],
+                        lights: LightsArg, opts: RenderOptions, linear: bool, depth: bool
+                        ) -> tuple[np.ndarray, np.ndarray | None]:
+        r, n = self.r, len(views)
+        (w, h), (cols, rows) = size, grid
+        target = r.offscreen_target((cols * w, rows * h), linear)
+        if self.views is None:
+            self.views = BatchViews(r.device, r.scene, r.gpu_scene, r.ring, r.slots,
+                                    r.set_layouts[0], r.recorder, r.shadows)
+        bv = self.views
+        bv.ensure(n, max(1, min(n, MAX_LAYERS)))
+        frame_lights = r.frame_lights(opts, lights)
+        r.bind_environment_for(opts)
+        terms = batch_frame_terms(views.eye, views.target, views.up, views.yfov_deg,
+                                  views.intrinsics, views.znear, views.zfar, size,
+                                  r.bounds.corners, r.bounds.radius)
+        frame = r.ring.begin()
+        slot = r.slots[frame.index]
+        plan = r.shadow_plan(frame_lights, opts)
+        rows_ = r.write_scene_shadows(slot, plan, frame_lights, opts)
+        write_frame_uniforms(slot, views.camera(0), frame_lights, size, opts, linear, r.bounds,
+                             r.frame_lighting(opts), rows_)
+        bv.write_views(terms, views.eye)
+        redraw = r.shadows.stale(slot.index, plan, opts.alpha_mask)
+        copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
+        try:
+            cmd = r.recorder.compute_batch(target, frame, opts.tbn, opts.alpha_mask, plan, redraw,
+                                           (n, w, h, cols), bv.sets0[frame.index], copy)
+            frame.submit(cmd)
+        except BaseException:
+            r.shadows.forget()
+            raise
+        frame.stamped = r.ring.query_pool is not None
+        frame.wait()
+        r.last_stats = dataclasses.replace(r.read_frame_timings(frame))
+        color = _tiles(target.read_color(frame.index), n, w, h, cols)
+        dist = None
+        if depth:
+            dist = linear_depth(_tiles(target.read_depth(frame.index), n, w, h, cols),
+                                terms["znear"][:, None, None])
+        r.device.check_validation()
+        return color, dist
+
     def render_cuda(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
                     opts: RenderOptions, linear: bool, batch: int | str) -> Any:
         """The colour of every view as one torch tensor on the renderer's GPU."""
@@ -81,13 +160,16 @@ class BatchPath:
         return parts[0] if len(parts) == 1 else torch.cat(parts)
 
     def per_submission(self, size: tuple[int, int], linear: bool, depth: bool,
-                       batch: int | str) -> int:
+                       batch: int | str, pixel_extra: int = 4) -> int:
         """Views per submission: `batch`, checked against the free memory, or for "auto" as
-        many as fit in a quarter of it (device and host-visible readback), at most 65,536."""
+        many as fit in a quarter of it (device and host-visible readback), at most 65,536.
+        `pixel_extra`: device bytes a pixel besides its colour (the layered batch's depth, or
+        COMPUTE_BYTES)."""
         w, h = int(size[0]), int(size[1])
         pixel = 16 if linear else 4
         local, host = self.r.device.memory_available()
-        device_view = w * h * (pixel + 4) + L.VIEW_RECORD.size + 4 * len(self.r.gpu_scene.draws)
+        device_view = (w * h * (pixel + pixel_extra) + L.VIEW_RECORD.size
+                       + 4 * len(self.r.gpu_scene.draws))
         host_view = w * h * (pixel + (4 if depth else 0))
         fits = max(1, min(local // device_view, host // host_view))  # all of the free memory
         if batch == "auto":
@@ -209,6 +291,14 @@ class BatchPath:
             self._forget_cuda(target)
             target.destroy()
         self.targets = {}
+
+
+def _tiles(atlas: np.ndarray, n: int, w: int, h: int, cols: int) -> np.ndarray:
+    """(n, h, w, ...) views from an atlas of `cols` tiles a row (one host copy)."""
+    rows = atlas.shape[0] // h
+    tail = atlas.shape[2:]
+    grid = atlas.reshape(rows, h, cols, w, *tail).swapaxes(1, 2).reshape(rows * cols, h, w, *tail)
+    return np.ascontiguousarray(grid[:n])
 
 
 def _slice(views: CameraBatch, start: int, stop: int) -> CameraBatch:

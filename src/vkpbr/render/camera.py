@@ -169,7 +169,8 @@ def batch_frame_terms(eye: np.ndarray, target: np.ndarray, up: np.ndarray, yfov_
                       corners: Sequence[Sequence[float]], scale: float) -> dict[str, np.ndarray]:
     """`camera_frame_columns` and `depth_range` for B cameras at once, in the same float
     operations in the same order (so each view's values equal a single frame's, bit for
-    bit): {"vp": (B, 16) column-major VP, "forward": (B, 3), "znear", "zfar": (B,)}.
+    bit): {"vp": (B, 16) column-major VP, "inv_vp": its inverse (as camera_frame_columns
+    solves it), "forward": (B, 3), "znear", "zfar": (B,)}.
     Arrays as vkpbr.scene.camera_batch.CameraBatch holds them (NaN planes: derived)."""
     w, h = size
     d = target - eye
@@ -210,7 +211,13 @@ def batch_frame_terms(eye: np.ndarray, target: np.ndarray, up: np.ndarray, yfov_
                    sx * s[:, 1] + ox * f[:, 1], -sy * u[:, 1] + oy * f[:, 1], zero, f[:, 1],
                    sx * s[:, 2] + ox * f[:, 2], -sy * u[:, 2] + oy * f[:, 2], zero, f[:, 2],
                    -sx * se - ox * fe, sy * ue - oy * fe, near, -fe], 1)
-    return {"vp": vp, "forward": f, "znear": near, "zfar": far}
+    # VP's inverse as camera_frame_columns solves it (the compute batch's pixel rays).
+    wv = f - s * (ox / sx)[:, None] + u * (oy / sy)[:, None]
+    inv = np.stack([s[:, 0] / sx, s[:, 1] / sx, s[:, 2] / sx, zero,
+                    -u[:, 0] / sy, -u[:, 1] / sy, -u[:, 2] / sy, zero,
+                    eye[:, 0] / near, eye[:, 1] / near, eye[:, 2] / near, 1.0 / near,
+                    wv[:, 0], wv[:, 1], wv[:, 2], zero], 1)
+    return {"vp": vp, "inv_vp": inv, "forward": f, "znear": near, "zfar": far}
 
 
 def linear_depth(d: np.ndarray, znear: float | np.ndarray) -> np.ndarray:

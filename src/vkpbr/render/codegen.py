@@ -37,6 +37,9 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("pbr_vis_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1), ("VISIBILITY", 1))),
     *(Variant(f"shade_{m.name.lower()}.comp.spv", "shade.comp",
               (("TBN_MODE", int(m)), ("COMPUTE_SHADING", 1))) for m in L.TbnMode),
+    *(Variant(f"shade_batch_{m.name.lower()}.comp.spv", "shade.comp",
+              (("TBN_MODE", int(m)), ("COMPUTE_SHADING", 1), ("BATCH", 1))) for m in L.TbnMode),
+    Variant("background_batch.comp.spv", "background_batch.comp", (("COMPUTE_SHADING", 1),)),
     *(Variant(f"shade_outputs_{m.name.lower()}.comp.spv", "shade.comp",
               (("TBN_MODE", int(m)), ("COMPUTE_SHADING", 1), ("OUTPUTS", 1))) for m in L.TbnMode),
     *(Variant(f"classify_{name}{'' if agg else '_plain'}.comp.spv", "classify.comp",
@@ -63,8 +66,10 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("batch_cull.comp.spv", "batch_cull.comp", (("STRUCTS_ONLY", 1),)),
     Variant("background.frag.spv", "background.frag"),
     # The compute rasteriser (render/compute_raster.py).
-    *(Variant(f"raster_{name}.comp.spv", "raster.comp", (("COMPUTE_SHADING", 1), ("KERNEL", k)))
-      for k, name in ((1, "small"), (4, "args"), (2, "big"), (3, "resolve"), (5, "masked"))),
+    *(Variant(f"raster_{name}{'_batch' if batch else ''}.comp.spv", "raster.comp",
+              (("COMPUTE_SHADING", 1), ("KERNEL", k), ("BATCH", batch)))
+      for k, name in ((1, "small"), (4, "args"), (2, "big"), (3, "resolve"), (5, "masked"))
+      for batch in (0, 1) if not batch or k in (1, 2, 5)),
     Variant("raster_depth.vert.spv", "raster_depth.vert"),
     Variant("raster_depth.frag.spv", "raster_depth.frag", (("COMPUTE_SHADING", 1),)),
 )

@@ -64,7 +64,10 @@ class _TargetResources:
         raster = dev.compute_raster
         self.raster = self._own(Buffer(dev, 8 * w * h if raster else 16, "storage|transfer_dst",
                                        name="raster depth|ids"))
-        self.raster_big = self._own(Buffer(dev, 4 * (scene.triangles + 4) if raster else 16,
+        # (triangle, view) pairs: every triangle once for one view; a batch's atlas lists up
+        # to a sixteenth of its pixels (more are drawn by the invocation that found them).
+        self.big_capacity = max(scene.triangles, w * h // 16)
+        self.raster_big = self._own(Buffer(dev, 4 * (4 + 2 * self.big_capacity) if raster else 16,
                                            "storage|transfer_dst|indirect",
                                            name="raster big triangles"))
         slots = scene.slots
@@ -197,10 +200,12 @@ class ComputeScene:
 
     def record_shading(self, cmd: Any, target: Any, frame_index: int, tbn: L.TbnMode,
                        frame_sets: dict[int, Any], material_sets: list[Any], materials: list[int],
-                       clear_color: tuple[float, ...], shade: bool = True) -> None:
+                       clear_color: tuple[float, ...], shade: bool = True,
+                       tiles: tuple[int, int, int, int] | None = None) -> None:
         """Classify the visibility image's pixels by material, then shade each material of
         `materials` (those the visibility pass drew) with its own set 1 bound (`shade`
-        False: classify only, for the outputs of a fragment-path frame)."""
+        False: classify only, for the outputs of a fragment-path frame; `tiles`: a compute
+        batch's atlas, as record_raster's)."""
         res = self._resources(target)
         compute_set = res.sets[frame_index]
         cmd.fill(res.bins, 0)
@@ -218,51 +223,69 @@ class ComputeScene:
             cmd.dispatch(*size)
             cmd.memory_barrier("compute", "compute|indirect")
         if shade:
-            self._dispatch_bins(cmd, res, frame_index, f"shade_{tbn.name.lower()}", frame_sets,
-                                material_sets, materials)
+            kernel = f"shade_{'batch_' if tiles else ''}{tbn.name.lower()}"
+            self._dispatch_bins(cmd, res, frame_index, kernel, frame_sets, material_sets,
+                                materials, tiles)
+
+    def record_background_batch(self, cmd: Any, target: Any, frame_index: int,
+                                frame_sets: dict[int, Any], tiles: tuple[int, int, int, int]) -> None:
+        """A compute batch's environment behind its views (background_batch.comp), after the
+        shading: every pixel nothing covers, in its view's direction."""
+        cmd.memory_barrier("compute", "compute")
+        cmd.bind_pipeline(self._pipeline("background_batch", 16))
+        self._bind_frame_sets(cmd, frame_sets, None, self._resources(target).sets[frame_index])
+        cmd.push(np.array(tiles, np.uint32))
+        cmd.dispatch(*groups((*target.extent, 1), (8, 8, 1)))
 
     def record_raster(self, cmd: Any, target: Any, frame_index: int, alpha_mask: bool,
-                      material_sets: list[Any]) -> None:
+                      material_sets: list[Any], tiles: tuple[int, int, int, int] | None = None,
+                      set0: Any = None) -> None:
         """The compute rasteriser (raster.comp): every opaque and masked draw's triangles into
         the target's depth|triangle buffer (masked ones alpha-tested per pixel with their
         material's set 1, one dispatch a masked draw), then the visibility image resolved
         from it (the target has it in GENERAL: record_raster_begin). The depths reach the
-        depth buffer with `record_raster_depth`."""
+        depth buffer with `record_raster_depth`. `tiles` (views, tile width, tile height, tiles
+        a row): a compute batch's atlas, the views' records in `set0` (render/batch_path.py)."""
         res = self._resources(target)
         w, h = target.extent
+        views, tile_w, tile_h, cols = tiles or (1, w, h, 1)
+        suffix = "_batch" if tiles else ""
         cmd.fill(res.raster, 0)
         cmd.fill(res.raster_big, 0)
         cmd.memory_barrier("transfer", "compute")
-        push = np.array([self.triangles, len(self.gs.draws), int(alpha_mask), self.triangles,
-                         w, h, 0, 0], np.uint32)
+        push = np.array([self.triangles, len(self.gs.draws), int(alpha_mask), res.big_capacity,
+                         w, h, 0, 0, views, tile_w, tile_h, cols], np.uint32)
         dset = res.sets[frame_index]
         n = -(-self.triangles // RASTER_SMALL_GROUP)
         # raster_args sizes raster_big's dispatch from the count raster_small listed.
-        for kernel, size in (("raster_small", (min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), 1)),
-                             ("raster_args", (1, 1, 1)), ("raster_big", None),
-                             ("raster_masked", ()),
+        small = (min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), views)
+        for kernel, size in ((f"raster_small{suffix}", small), ("raster_args", (1, 1, 1)),
+                             (f"raster_big{suffix}", None), (f"raster_masked{suffix}", ()),
                              ("raster_resolve", groups((w, h, 1), (8, 8, 1)))):
             if size == () and not (alpha_mask and self._masked):
                 continue
-            cmd.bind_pipeline(self._pipeline(kernel, 32))
+            cmd.bind_pipeline(self._pipeline(kernel, 48))
+            if set0 is not None:
+                cmd.bind_set(0, set0)
             cmd.bind_set(self.set_index, dset)
             cmd.push(push)
             if size is None:
                 cmd.dispatch_indirect(res.raster_big, 4)
             elif size == ():
-                self._dispatch_masked(cmd, push, material_sets)
+                self._dispatch_masked(cmd, push, material_sets, views)
             elif size[0] and size[1]:
                 cmd.dispatch(*size)
             cmd.memory_barrier("compute", "compute|fragment|indirect")
 
-    def _dispatch_masked(self, cmd: Any, push: np.ndarray, material_sets: list[Any]) -> None:
+    def _dispatch_masked(self, cmd: Any, push: np.ndarray, material_sets: list[Any],
+                         views: int) -> None:
         """raster_masked: one invocation a triangle of each masked draw, its material bound."""
         for k, material, count in self._masked:
             cmd.bind_set(1, material_sets[material])
             push[6:8] = k, material
             cmd.push(push)
             n = -(-count // RASTER_SMALL_GROUP)
-            cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), 1)
+            cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), views)
 
     def record_raster_depth(self, cmd: Any, target: Any, frame_index: int) -> None:
         """Inside the visibility rendering: the rasteriser's depths written into the target's
@@ -295,10 +318,12 @@ class ComputeScene:
 
     def _dispatch_bins(self, cmd: Any, res: _TargetResources, frame_index: int, kernel: str,
                        frame_sets: dict[int, Any], material_sets: list[Any],
-                       materials: list[int]) -> None:
-        cmd.bind_pipeline(self._pipeline(kernel, 16))
+                       materials: list[int], tiles: tuple[int, int, int, int] | None = None) -> None:
+        cmd.bind_pipeline(self._pipeline(kernel, 32 if tiles else 16))
         self._bind_frame_sets(cmd, frame_sets, None, res.sets[frame_index])
-        material = np.zeros(4, np.uint32)
+        material = np.zeros(8 if tiles else 4, np.uint32)
+        if tiles:
+            material[1:5] = tiles
         for m in materials:
             cmd.bind_set(1, material_sets[m])
             material[0] = m

@@ -322,6 +322,7 @@ DRAW_RECORD = Std140Block("DrawRecord", "draw_record", (
 # and vec4 members: std140 here is also the std430 layout of the storage array.
 VIEW_RECORD = Std140Block("ViewRecord", "view_record", (
     ("VP", "mat4"),  # as Camera.VP
+    ("inv_VP", "mat4"),  # as Camera.inv_VP (the compute batch's pixel rays)
     ("eye_near", "vec4"),  # xyz: the eye (Lighting.view_pos); w: znear (Settings.znear)
     ("forward_far", "vec4"),  # xyz: unit view direction; w: zfar (Settings.zfar)
     ("info", "uvec4"),  # x: the layer of the batch target it is drawn into
@@ -433,7 +434,7 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
         (0, "uniform", ("vertex", "compute"), "Camera"),
         (1, "uniform", ("vertex", "fragment", "compute"), "Settings"),
         # Batched views (render/batch.py): frames bind stand-ins the frame shaders never read.
-        (2, "storage", ("vertex", "fragment"), "Views"),
+        (2, "storage", ("vertex", "fragment", "compute"), "Views"),
         (3, "storage", ("vertex",), "VisibleViews"),
         # The scene's instance matrices (GpuScene.instance_buffer), written by the Renderer.
         (4, "storage", ("vertex",), "Instances"),

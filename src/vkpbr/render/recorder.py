@@ -258,6 +258,49 @@ class FrameRecorder:
         self._recorded[key] = _Recorded(cmd, order)
         return cmd
 
+    def compute_batch(self, target: FrameTarget, frame: Frame, tbn: L.TbnMode, alpha_mask: bool,
+                      plan: ShadowPlan, redraw: tuple[bool, ...], tiles: tuple[int, int, int, int],
+                      set0: object, copy: tuple[str, ...]) -> Commands:
+        """A compute batch's commands (render/batch_path.py), recorded on first use: `tiles`
+        (views, tile width, tile height, tiles a row) of an atlas `target`, every view
+        rasterised and shaded in compute shaders (its ViewRecord in `set0`, BatchViews'), the
+        environment behind them, the copies. No blended draws (the layered batch takes
+        those)."""
+        key = ("compute batch", id(target), frame.index, tbn, alpha_mask, plan, redraw, tiles,
+               id(set0), copy)
+        rec = self._recorded.get(key)
+        if rec is not None:
+            return rec.cmd
+        gs, ring, slot = self.gpu_scene, self.ring, self.slots[frame.index]
+        cmd, _, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw)
+
+        def stamp(*names: str) -> None:
+            for name in names:
+                ring.stamp(cmd, frame, 1 + STAMP_NAMES.index(name))
+
+        cs = self.compute_scene()
+        target.record_raster_begin(cmd)  # type: ignore[attr-defined]
+        cs.record_raster(cmd, target, frame.index, alpha_mask, gs.material_sets, tiles, set0)
+        target.record_visibility_begin(cmd, 0, rasterised=True)  # type: ignore[attr-defined]
+        cs.record_raster_depth(cmd, target, frame.index)
+        target.record_shading_begin(cmd)  # type: ignore[attr-defined]
+        stamp(*_BEFORE_SHADING)
+        frame_sets = {0: set0, 2: slot.set2}
+        if self.shadows is not None:
+            frame_sets[3] = self.shadows.sets[frame.index]
+        drawn = sorted({d.material for d, c in zip(gs.draws, classes, strict=True) if c != "blend"})
+        cs.record_shading(cmd, target, frame.index, tbn, frame_sets, gs.material_sets, drawn,
+                          target.clear_color, tiles=tiles)  # type: ignore[attr-defined]
+        stamp("shading")
+        cs.record_background_batch(cmd, target, frame.index, frame_sets, tiles)
+        target.record_resume(cmd)  # type: ignore[attr-defined]
+        stamp(*AFTER_SHADING)
+        target.record_end(cmd, 0, frame, copy)
+        ring.stamp(cmd, frame, STAMPS - 1)
+        cmd.end()
+        self._recorded[key] = _Recorded(cmd, ())
+        return cmd
+
     def free(self, target_id: int | None = None) -> None:
         for key in [k for k in self._recorded if target_id is None or k[0] == target_id]:
             self._recorded.pop(key).cmd.free()

@@ -247,6 +247,17 @@ class Renderer:
         # BENCHMARKS.md), the fragment path on CPUs (lavapipe: the slower of the two).
         return self.device.info.kind != "cpu" and self.compute_unavailable(target) is None
 
+    def compute_batch_unavailable(self) -> str | None:
+        """Why `render_batch(pipeline="compute")` cannot take the compute batch (its views
+        are then rendered one by one on the compute path), or None."""
+        if not self.device.compute_raster:
+            return "the device lacks 64-bit storage-buffer atomics"
+        if self.msaa > 1:
+            return "MSAA"
+        if any(d.alpha_mode == "blend" for d in self.gpu_scene.draws):
+            return "the scene has blended materials (drawn by the fragment path)"
+        return None
+
     def uses_compute_raster(self, options: RenderOptions) -> bool:
         """Whether the visibility buffer (compute path, dataset outputs) comes from the compute
         rasteriser (UsageError when it is asked for and the device cannot)."""
@@ -641,7 +652,10 @@ class Renderer:
         (B, H, W, 4) uint8 sRGB (float32 linear with `linear`); with `depth` a tuple (colour,
         depth); with `outputs` {name: (B, ...) array}. View i equals `render` of view i
         (`CameraBatch.camera(i)`) with pipeline="forward" bit for bit (auto batches on the
-        fragment path; `render`'s auto takes the compute path on GPUs: within 1/255), except that directional lights' shadow maps
+        fragment path; `render`'s auto takes the compute path on GPUs: within 1/255);
+        pipeline="compute" is the compute batch (one atlas, rasterised and shaded in compute
+        shaders: each view within 1/255 of `render(pipeline="compute", raster="compute")`,
+        docs/batch.md) where the device and scene allow it; except that directional lights' shadow maps
         are one map over the whole scene, shared by the views (docs/batch.md).
         """
         base = self.default_camera()
@@ -658,9 +672,17 @@ class Renderer:
         # The dataset outputs but colour come from their own pass (as `render` makes them).
         extra = tuple(n for n in wanted if n != "color")
         # auto batches on the fragment path (render/batch.py), bit for bit what `render` draws
-        # with pipeline="forward"; only an explicit "compute" goes view by view.
+        # with pipeline="forward"; an explicit "compute" is the compute batch (all views in
+        # one atlas, rasterised and shaded in compute shaders) where the device has the
+        # compute rasteriser and no draw blends, else view by view.
         explicit_compute = (opts.pipeline == L.PipelinePath.COMPUTE
                             and self.uses_compute(self.offscreen_target(size, linear), opts))
+        if explicit_compute and self.compute_batch_unavailable() is None and not extra:
+            color, dist = self.batch_path.render_compute(views, size, lights, opts, linear,
+                                                         depth, batch)
+            if not wanted:
+                return (color, dist) if depth else color
+            return {"color": color}
         if not self.device.batch_views or self.msaa > 1 or explicit_compute:
             # No layered rendering here, MSAA (the batch target is single-sample) or the
             # compute path asked for: view by view, each exactly as `render` draws it.

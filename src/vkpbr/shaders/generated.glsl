@@ -83,6 +83,7 @@ struct LightRecord {
 };
 struct ViewRecord {
     mat4 VP;
+    mat4 inv_VP;
     vec4 eye_near;
     vec4 forward_far;
     uvec4 info;

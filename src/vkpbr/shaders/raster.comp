@@ -16,6 +16,9 @@
 //   exactly as the shading samples it) reaches the cutoff.
 // KERNEL 3 (raster_resolve): per pixel, the visibility image's (draw + 1, primitive) from the
 //   winning triangle (0: nothing) -- what shade.comp and classify.comp read.
+// BATCH = 1 (render/batch_path.py's compute batch): `views` views tiled `cols` to a row in one
+// atlas, each `tile` pixels, each with its ViewRecord's VP; the work's z index is the view.
+// One view (BATCH 0) is the same with the frame's camera and the whole target as the tile.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
@@ -43,14 +46,30 @@ layout(push_constant) uniform Raster {
     uint height;
     uint draw;  // raster_masked: the masked draw dispatched
     uint material;  // raster_masked: its material (set 1 bound)
+    uint views;  // the tiles: views, their width and height, tiles a row of the atlas
+    uint tile_w;
+    uint tile_h;
+    uint cols;
 } pc;
+
+#if BATCH
+uint g_view;  // this invocation's view (surface_fetch.glsl reads its ray from it)
+#define FETCH_INV_VP (views[g_view].inv_VP)
+#define FETCH_EYE (views[g_view].eye_near.xyz)
+#define VIEW_VP (views[g_view].VP)
+#define VIEW_INDEX g_view
+#else
+#define VIEW_VP (camera.VP)
+#define VIEW_INDEX 0u
+#endif
 #if KERNEL == 5
 #define MATERIAL_INDEX pc.material
 #include "surface_fetch.glsl"
 #endif
 
 const float BIG_AREA = 256.0;  // screen-box pixels above which a work group takes a triangle
-// raster_big: [0] the count, [1..3] KERNEL 2's dispatch size (indirect), the list from 4.
+// raster_big: [0] the count, [1..3] KERNEL 2's dispatch size (indirect), from 4 the list of
+// (triangle, view) pairs.
 const uint BIG_LIST = 4u;
 const uint MAX_GROUPS = 65535u;  // maxComputeWorkGroupCount[0] of every device
 const uint DOUBLE_SIDED = 1u, MASKED = 2u, BLENDED = 4u;  // raster_draws[k].y (compute_raster.py)
@@ -89,7 +108,7 @@ bool fetch(uint g, out vec4 c[3], out bool double_sided) {
     uint base = dr.info.x + 3u * (g - rd.x);
     for (int j = 0; j < 3; ++j) {
         uint v = indices[base + uint(j)] + dr.info.y;
-        c[j] = camera.VP * (dr.model * vec4(position(v), 1.0));  // as pbr.vert's gl_Position
+        c[j] = VIEW_VP * (dr.model * vec4(position(v), 1.0));  // as pbr.vert's gl_Position
     }
     return true;
 }
@@ -115,10 +134,19 @@ int clip(vec4 c[3], out vec4 poly[5]) {
     return n;
 }
 
+// The view's tile: its first pixel in the target and its size.
+ivec2 tile_origin() {
+#if BATCH
+    return ivec2(g_view % pc.cols, g_view / pc.cols) * ivec2(pc.tile_w, pc.tile_h);
+#else
+    return ivec2(0);
+#endif
+}
+
 // Framebuffer position (pixels, y down as the viewport maps it) and depth of a clip corner.
 vec3 screen(vec4 c) {
     vec3 ndc = c.xyz / c.w;
-    return vec3((ndc.xy * 0.5 + 0.5) * vec2(pc.width, pc.height), ndc.z);
+    return vec3((ndc.xy * 0.5 + 0.5) * vec2(pc.tile_w, pc.tile_h) + vec2(tile_origin()), ndc.z);
 }
 
 float edge(vec2 a, vec2 b, vec2 p) { return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x); }
@@ -141,7 +169,8 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, uint first, u
 #if KERNEL == 5
         uvec3 vi;
         vec3 w0, w1, w2, bary;
-        surface_at(pc.draw, prim, uvec2(px), vec2(pc.width, pc.height), vi, w0, w1, w2, bary);
+        surface_at(pc.draw, prim, uvec2(px - tile_origin()), vec2(pc.tile_w, pc.tile_h), vi, w0,
+                   w1, w2, bary);
         if (surface_base_color().a < MAT.alpha_cutoff) continue;  // as pbr.frag's ALPHA_MASK
 #endif
         uint64_t packed = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(id + 1u);
@@ -169,18 +198,24 @@ void raster_triangle(uint g, bool small_only, uint first, uint stride) {
     if (area == 0.0 || (area > 0.0 && !double_sided)) return;
     vec2 lo2 = s[0].xy, hi2 = s[0].xy;
     for (int j = 1; j < n; ++j) { lo2 = min(lo2, s[j].xy); hi2 = max(hi2, s[j].xy); }
-    // Pixel centres inside the box: from ceil(lo - 0.5) to floor(hi - 0.5), within the target.
-    ivec2 lo = max(ivec2(ceil(lo2 - 0.5)), ivec2(0));
-    ivec2 hi = min(ivec2(floor(hi2 - 0.5)) + 1, ivec2(pc.width, pc.height));
+    // Pixel centres inside the box: from ceil(lo - 0.5) to floor(hi - 0.5), within the tile.
+    ivec2 origin = tile_origin();
+    ivec2 lo = max(ivec2(ceil(lo2 - 0.5)), origin);
+    ivec2 hi = min(ivec2(floor(hi2 - 0.5)) + 1, origin + ivec2(pc.tile_w, pc.tile_h));
     if (any(greaterThanEqual(lo, hi))) return;
     if (small_only && float(hi.x - lo.x) * float(hi.y - lo.y) > BIG_AREA) {
 #if KERNEL == 5
         group_big[atomicAdd(group_big_count, 1u)] = g;  // at most one an invocation
-#else
-        uint slot = atomicAdd(raster_big[0], 1u);
-        if (slot < pc.big_capacity) raster_big[BIG_LIST + slot] = g;
-#endif
         return;
+#else
+        // Listed with its view; past the list's end (a batch's worst case) drawn here.
+        uint slot = atomicAdd(raster_big[0], 1u);
+        if (slot < pc.big_capacity) {
+            raster_big[BIG_LIST + 2u * slot] = g;
+            raster_big[BIG_LIST + 2u * slot + 1u] = VIEW_INDEX;
+            return;
+        }
+#endif
     }
     for (int j = 1; j + 1 < n; ++j) {
         vec3 a = s[0], b = s[j], d = s[j + 1];
@@ -191,6 +226,9 @@ void raster_triangle(uint g, bool small_only, uint first, uint stride) {
 #endif
 
 void main() {
+#if BATCH
+    g_view = KERNEL == 2 ? 0u : gl_GlobalInvocationID.z;
+#endif
 #if KERNEL == 1
     uint g = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
     if (g < pc.triangles) raster_triangle(g, true, 0u, 1u);
@@ -211,8 +249,12 @@ void main() {
     raster_big[3] = 1u;
 #elif KERNEL == 2
     uint listed = min(raster_big[0], pc.big_capacity);
-    for (uint k = gl_WorkGroupID.x; k < listed; k += gl_NumWorkGroups.x)
-        raster_triangle(raster_big[BIG_LIST + k], false, gl_LocalInvocationID.x, 256u);
+    for (uint k = gl_WorkGroupID.x; k < listed; k += gl_NumWorkGroups.x) {
+#if BATCH
+        g_view = raster_big[BIG_LIST + 2u * k + 1u];
+#endif
+        raster_triangle(raster_big[BIG_LIST + 2u * k], false, gl_LocalInvocationID.x, 256u);
+    }
 #else
     uvec2 p = gl_GlobalInvocationID.xy;
     if (p.x >= pc.width || p.y >= pc.height) return;

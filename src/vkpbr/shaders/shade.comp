@@ -18,7 +18,20 @@ layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;  // compute_pa
 
 layout(push_constant) uniform Shade {
     uint material;  // the bin this dispatch shades (its set 1 is bound)
+    uint views;  // BATCH: the atlas's tiles (raster.comp's): views, tile size, tiles a row
+    uint tile_w;
+    uint tile_h;
+    uint cols;
 } pc;
+
+#if BATCH  // a compute batch (render/batch_path.py): the pixel's view is its tile's
+uint g_view;
+#define FETCH_INV_VP (views[g_view].inv_VP)
+#define FETCH_EYE (views[g_view].eye_near.xyz)
+#define FRAME_EYE (views[g_view].eye_near.xyz)
+#define FRAME_FORWARD (views[g_view].forward_far.xyz)
+#define FRAME_ZFAR (views[g_view].forward_far.w)
+#endif
 
 #define MATERIAL_INDEX pc.material
 #include "surface_fetch.glsl"
@@ -36,9 +49,15 @@ void main() {
     bool srgb_target = (u(settings.flags) & SETTINGS_SRGB_TARGET) != 0u;
     uvec3 vi;
     vec3 w0, w1, w2, bary;
+#if BATCH
+    uvec2 tile = uvec2(pc.tile_w, pc.tile_h);
+    g_view = (pixel.y / tile.y) * pc.cols + pixel.x / tile.x;
+    DrawRecord dr = surface_at(vis.x - 1u, vis.y, pixel % tile, vec2(tile), vi, w0, w1, w2, bary);
+#else
     DrawRecord dr = surface_at(vis.x - 1u, vis.y, pixel, vec2(size), vi, w0, w1, w2, bary);
+#endif
     surface_frame_at(dr, vi, w0, w1, w2, bary);
-    vec3 eye = lighting.view_pos.xyz;
+    vec3 eye = FETCH_EYE;
 
 #if OUTPUTS
     // Dataset outputs (Renderer.render(outputs=...)): ids, normals, distances of this point.
@@ -49,7 +68,7 @@ void main() {
     imageStore(out_normal, at, vec4(frame_n, 0.0));
     imageStore(out_normal_geometric, at, vec4(frame_ng, 0.0));
     vec3 to_point = s_world_pos - eye;
-    imageStore(out_depth_range, at, vec4(dot(to_point, settings.camera_forward.xyz),
+    imageStore(out_depth_range, at, vec4(dot(to_point, FRAME_FORWARD),
                                          length(to_point), 0.0, 0.0));
 #else
     vec4 value = shade_surface();

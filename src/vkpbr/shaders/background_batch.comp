@@ -1,0 +1,39 @@
+#version 450
+// background_batch.comp: a compute batch's environment behind the scene (render/batch_path.py),
+// background.frag's in compute: for every atlas pixel nothing covers (the visibility image's
+// 0), env_specular's sharpest level in the direction of the pixel's ray through its view,
+// rotated and scaled as image-based lighting sees it, then the exposure and tone map. Left to
+// classify.comp's clear colour when the frame has no background or the view is not final.
+#extension GL_GOOGLE_include_directive : require
+#include "generated.glsl"
+#include "brdf.glsl"
+#include "env_common.glsl"
+#include "frame_output.glsl"
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+layout(push_constant) uniform Background {
+    uint views;  // the atlas's tiles, as raster.comp's
+    uint tile_w;
+    uint tile_h;
+    uint cols;
+} pc;
+
+void main() {
+    opaque_zero = 0u;  // no uniform block is read here (COMPUTE_SET): a plain 0
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    ivec2 size = imageSize(out_image);
+    if (pixel.x >= uint(size.x) || pixel.y >= uint(size.y)) return;
+    if ((lighting.flags & LIGHTING_BACKGROUND) == 0u || settings.view != VIEW_FINAL) return;
+    if (imageLoad(visibility, ivec2(pixel)).x != 0u) return;
+    uvec2 tile = uvec2(pc.tile_w, pc.tile_h);
+    uint v = (pixel.y / tile.y) * pc.cols + pixel.x / tile.x;
+    if (v >= pc.views) return;
+    vec2 ndc = (vec2(pixel % tile) + 0.5) / vec2(tile) * 2.0 - 1.0;
+    vec4 near = views[v].inv_VP * vec4(ndc, 1.0, 1.0);
+    vec3 d = env_rotate(normalize(near.xyz / near.w - views[v].eye_near.xyz), lighting.env_rotation.xy);
+    vec3 radiance = textureLod(env_specular, d, 0.0).rgb * lighting.env_intensity;
+    vec3 value = radiance_output(radiance);
+    bool srgb_target = (settings.flags & SETTINGS_SRGB_TARGET) != 0u;
+    imageStore(out_image, ivec2(pixel), vec4(srgb_target ? linear_to_srgb(value) : value, 1.0));
+}

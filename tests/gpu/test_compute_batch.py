@@ -1,0 +1,85 @@
+"""The compute batch (`render_batch(pipeline="compute")`, render/batch_path.py): all views
+tiled in one atlas, rasterised (shaders/raster.comp BATCH) and shaded (shade.comp BATCH) in
+compute shaders, the environment behind them in background_batch.comp. Against each view
+rendered alone on the compute path with the compute rasteriser: the same kernels with one
+camera, so within 1/255 mean and 3/255 p99 (the rays come from the ViewRecord's inverse, a
+few float roundings away from the frame's); measured on the chart: max 1/255.
+
+Lights are point lights (the batch's directional shadows are one scene-wide map, unlike a
+single frame's cascades: docs/batch.md). Validation and synchronization validation on.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_batch import SIZE, cameras_of
+from test_compute_path import assert_same
+
+from vkpbr.scene.types import Light
+
+POINT = [Light(kind="point", position=(0.5, 4.0, 2.0), intensity=30.0)]
+
+
+@pytest.fixture(scope="module")
+def chart():
+    from vkpbr.render.renderer import Renderer
+
+    with Renderer(validation=True, sync_validation=True) as r:
+        if r.compute_batch_unavailable() is not None:
+            pytest.skip(f"no compute batch here: {r.compute_batch_unavailable()}")
+        yield r
+        assert r.device.instance.errors == []
+
+
+def alone(r, cams, **options) -> list[np.ndarray]:  # noqa: ANN001
+    return [r.render(c, size=SIZE, lights=POINT, pipeline="compute", raster="compute", **options)
+            for c in cams]
+
+
+@pytest.mark.parametrize("count", [1, 7, 30])
+def test_views_match_views_rendered_alone(chart, count: int) -> None:  # noqa: ANN001
+    cams = cameras_of(chart, count, seed=count)
+    batch = chart.render_batch(cams, SIZE, POINT, pipeline="compute")
+    assert batch.shape == (count, SIZE[1], SIZE[0], 4)
+    for i, one in enumerate(alone(chart, cams)):
+        assert_same(one, batch[i], f"view {i} of {count}")
+    assert not np.array_equal(batch[0], batch[-1]) or count == 1
+
+
+def test_submissions_depth_linear_and_options(chart) -> None:  # noqa: ANN001
+    """Several submissions (batch=4 of 9 views: the last atlas part-filled), depth, linear
+    output, the course's lighting, a debug view and no alpha mask."""
+    cams = cameras_of(chart, 9, seed=5)
+    color, depth = chart.render_batch(cams, SIZE, POINT, pipeline="compute", depth=True, batch=4)
+    for i, c in enumerate(cams):
+        one, one_depth = chart.render(c, size=SIZE, lights=POINT, pipeline="compute",
+                                      raster="compute", depth=True)
+        assert_same(one, color[i], f"view {i}")
+        both = np.isfinite(one_depth) & np.isfinite(depth[i])
+        assert (np.isfinite(one_depth) != np.isfinite(depth[i])).mean() <= 0.01
+        np.testing.assert_allclose(depth[i][both], one_depth[both], rtol=1e-4)
+    lin = chart.render_batch(cams[:3], SIZE, POINT, pipeline="compute", linear=True)
+    for i, one in enumerate(alone(chart, cams[:3], linear=True)):
+        covered = np.isfinite(one).all(-1)
+        assert np.median(np.abs(lin[i] - one)[covered]) <= 1e-3
+    for options in ({"lighting": "course"}, {"view": "mapped-normal"}, {"alpha_mask": False}):
+        got = chart.render_batch(cams[:3], SIZE, POINT, pipeline="compute", **options)
+        for i, one in enumerate(alone(chart, cams[:3], **options)):
+            assert_same(one, got[i], f"{options} view {i}")
+
+
+def test_blended_scenes_render_view_by_view(make_renderer, assets) -> None:  # noqa: ANN001
+    """A scene with blended materials: the compute batch declines (the fragment path draws
+    them) and each view is exactly the compute path's render of it."""
+    from vkpbr.scene.loader import load_scene
+
+    path = assets / "AlphaBlendModeTest" / "glTF" / "AlphaBlendModeTest.gltf"
+    if not path.exists():
+        pytest.skip(f"{path} not in the assets")
+    r = make_renderer(load_scene(path))
+    assert "blended" in (r.compute_batch_unavailable() or "")
+    cams = cameras_of(r, 3, seed=2)
+    batch = r.render_batch(cams, SIZE, POINT, pipeline="compute")
+    for i, c in enumerate(cams):
+        assert np.array_equal(batch[i], r.render(c, size=SIZE, lights=POINT, pipeline="compute"))
