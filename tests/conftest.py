@@ -25,6 +25,22 @@ def assets() -> Path:
 
 
 @pytest.fixture
+def sample_scene(assets: Path) -> Callable[[str], object]:
+    """Loads sample model NAME (NAME/glTF/NAME.gltf of the assets), skipping when it is not
+    in this copy of the assets."""
+
+    def load(name: str) -> object:
+        from vkpbr.scene.loader import load_scene
+
+        path = assets / name / "glTF" / f"{name}.gltf"
+        if not path.is_file():
+            pytest.skip(f"{path} not in the assets")
+        return load_scene(path)
+
+    return load
+
+
+@pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(1234)
 

@@ -69,15 +69,10 @@ def test_submissions_depth_linear_and_options(chart) -> None:  # noqa: ANN001
             assert_same(one, got[i], f"{options} view {i}")
 
 
-def test_blended_scenes_render_view_by_view(make_renderer, assets) -> None:  # noqa: ANN001
+def test_blended_scenes_render_view_by_view(make_renderer, sample_scene) -> None:  # noqa: ANN001
     """A scene with blended materials: the compute batch declines (the fragment path draws
     them) and each view is exactly the compute path's render of it."""
-    from vkpbr.scene.loader import load_scene
-
-    path = assets / "AlphaBlendModeTest" / "glTF" / "AlphaBlendModeTest.gltf"
-    if not path.exists():
-        pytest.skip(f"{path} not in the assets")
-    r = make_renderer(load_scene(path))
+    r = make_renderer(sample_scene("AlphaBlendModeTest"))
     assert "blended" in (r.compute_batch_unavailable() or "")
     cams = cameras_of(r, 3, seed=2)
     batch = r.render_batch(cams, SIZE, POINT, pipeline="compute")

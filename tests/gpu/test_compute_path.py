@@ -78,13 +78,8 @@ def test_cameras_anywhere(chart) -> None:  # noqa: ANN001
 
 @pytest.mark.parametrize("model", ["DamagedHelmet", "NormalTangentMirrorTest",
                                    "TextureCoordinateTest", "AlphaBlendModeTest"])
-def test_sample_models_match(make_renderer, assets, model: str) -> None:  # noqa: ANN001
-    from vkpbr.scene.loader import load_scene
-
-    path = assets / model / "glTF" / f"{model}.gltf"
-    if not path.is_file():
-        pytest.skip(f"{path} not in the assets")
-    r = make_renderer(load_scene(path))
+def test_sample_models_match(make_renderer, sample_scene, model: str) -> None:  # noqa: ANN001
+    r = make_renderer(sample_scene(model))
     if not r.device.compute_path:
         pytest.skip("no compute path on this device")
     for lighting in ("pbr", "course"):

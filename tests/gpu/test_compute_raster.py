@@ -76,13 +76,8 @@ def test_cameras_around_and_inside(chart) -> None:  # noqa: ANN001
 
 
 @pytest.mark.parametrize("model", ["DamagedHelmet", "AlphaBlendModeTest", "TextureCoordinateTest"])
-def test_sample_models_match(make_renderer, assets, model: str) -> None:  # noqa: ANN001
-    from vkpbr.scene.loader import load_scene
-
-    path = assets / model / "glTF" / f"{model}.gltf"
-    if not path.exists():
-        pytest.skip(f"{path} not in the assets")
-    r = make_renderer(load_scene(path))
+def test_sample_models_match(make_renderer, sample_scene, model: str) -> None:  # noqa: ANN001
+    r = make_renderer(sample_scene(model))
     if not r.device.compute_raster:
         pytest.skip("no 64-bit storage atomics on this device")
     assert_rasters_agree(*pair(r), model)

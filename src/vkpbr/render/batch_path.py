@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -102,35 +103,12 @@ class BatchPath:
         r, n = self.r, len(views)
         (w, h), (cols, rows) = size, grid
         target = r.offscreen_target((cols * w, rows * h), linear)
-        if self.views is None:
-            self.views = BatchViews(r.device, r.scene, r.gpu_scene, r.ring, r.slots,
-                                    r.set_layouts[0], r.recorder, r.shadows)
-        bv = self.views
-        bv.ensure(n, max(1, min(n, MAX_LAYERS)))
-        frame_lights = r.frame_lights(opts, lights)
-        r.bind_environment_for(opts)
-        terms = batch_frame_terms(views.eye, views.target, views.up, views.yfov_deg,
-                                  views.intrinsics, views.znear, views.zfar, size,
-                                  r.bounds.corners, r.bounds.radius)
-        frame = r.ring.begin()
-        slot = r.slots[frame.index]
-        plan = r.shadow_plan(frame_lights, opts)
-        rows_ = r.write_scene_shadows(slot, plan, frame_lights, opts)
-        write_frame_uniforms(slot, views.camera(0), frame_lights, size, opts, linear, r.bounds,
-                             r.frame_lighting(opts), rows_)
-        bv.write_views(terms, views.eye)
-        redraw = r.shadows.stale(slot.index, plan, opts.alpha_mask)
+        bv = self._views(n, max(1, min(n, MAX_LAYERS)))
+        frame, plan, terms = self._begin(views, size, lights, opts, linear)
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
-        try:
-            cmd = r.recorder.compute_batch(target, frame, opts.tbn, opts.alpha_mask, plan, redraw,
-                                           (n, w, h, cols), bv.sets0[frame.index], copy)
-            frame.submit(cmd)
-        except BaseException:
-            r.shadows.forget()
-            raise
-        frame.stamped = r.ring.query_pool is not None
-        frame.wait()
-        r.last_stats = dataclasses.replace(r.read_frame_timings(frame))
+        self._run(frame, plan, opts, lambda redraw: r.recorder.compute_batch(
+            target, frame, opts.tbn, opts.alpha_mask, plan, redraw, (n, w, h, cols),
+            bv.sets0[frame.index], copy))
         color = _tiles(target.read_color(frame.index), n, w, h, cols)
         dist = None
         if depth:
@@ -190,11 +168,33 @@ class BatchPath:
         layers = max(1, min(n, MAX_LAYERS, int(limits.maxFramebufferLayers),
                             int(limits.maxImageArrayLayers)))
         target = self._target(size, layers, n, linear, depth, cuda)
+        bv = self._views(n, layers)
+        frame, plan, terms = self._begin(views, size, lights, opts, linear)
+        groups = bv.write_blend_groups(r.blend_orders(views.eye))
+        self._run(frame, plan, opts, lambda redraw: bv.command_buffer(
+            target, frame, n, opts.tbn, opts.alpha_mask, plan, groups, r.prepass_for(target),
+            redraw), (lambda: self._cuda_wait(target)) if cuda else None)
+        color = self._cuda_view(target, n, linear) if cuda else target.read_color(n)
+        dist = linear_depth(target.read_depth(n), terms["znear"][:, None, None]) if depth else None
+        r.device.check_validation()
+        return color, dist
+
+    def _views(self, n: int, chunk_views: int) -> BatchViews:
+        """The batch's ViewRecords and draw lists, made on first use, holding `n` views."""
+        r = self.r
         if self.views is None:
             self.views = BatchViews(r.device, r.scene, r.gpu_scene, r.ring, r.slots,
                                     r.set_layouts[0], r.recorder, r.shadows)
-        bv = self.views
-        bv.ensure(n, layers)
+        self.views.ensure(n, chunk_views)
+        return self.views
+
+    def _begin(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
+               opts: RenderOptions, linear: bool) -> tuple[Any, Any, dict[str, np.ndarray]]:
+        """A submission's frame of the ring with what every batch writes: the frame's lights,
+        environment and shadow matrices (directional ones over the whole scene), the first
+        view's uniforms (what the views share) and every view's ViewRecord. Returns the
+        frame, the shadow plan and the views' batch_frame_terms."""
+        r = self.r
         frame_lights = r.frame_lights(opts, lights)
         r.bind_environment_for(opts)
         terms = batch_frame_terms(views.eye, views.target, views.up, views.yfov_deg,
@@ -204,17 +204,22 @@ class BatchPath:
         slot = r.slots[frame.index]
         plan = r.shadow_plan(frame_lights, opts)
         rows = r.write_scene_shadows(slot, plan, frame_lights, opts)
-        first = views.camera(0)
-        write_frame_uniforms(slot, first, frame_lights, size, opts, linear, r.bounds,
+        write_frame_uniforms(slot, views.camera(0), frame_lights, size, opts, linear, r.bounds,
                              r.frame_lighting(opts), rows)
-        bv.write_views(terms, views.eye)
-        groups = bv.write_blend_groups(r.blend_orders(views.eye))
-        redraw = r.shadows.stale(slot.index, plan, opts.alpha_mask)
+        self.views.write_views(terms, views.eye)  # type: ignore[union-attr]
+        return frame, plan, terms
+
+    def _run(self, frame: Any, plan: Any, opts: RenderOptions,
+             record: Callable[[tuple[bool, ...]], Any], before_submit: Callable[[], None] | None = None
+             ) -> None:
+        """Record (given which shadow maps to redraw), submit and wait for a submission; its
+        timings into `last_stats`. The shadow maps' record is forgotten if it fails."""
+        r = self.r
+        redraw = r.shadows.stale(frame.index, plan, opts.alpha_mask)
         try:
-            cmd = bv.command_buffer(target, frame, n, opts.tbn, opts.alpha_mask, plan, groups,
-                                    r.prepass_for(target), redraw)
-            if cuda:
-                self._cuda_wait(target)
+            cmd = record(redraw)
+            if before_submit is not None:
+                before_submit()
             frame.submit(cmd)
         except BaseException:
             r.shadows.forget()
@@ -222,10 +227,6 @@ class BatchPath:
         frame.stamped = r.ring.query_pool is not None
         frame.wait()
         r.last_stats = dataclasses.replace(r.read_frame_timings(frame))
-        color = self._cuda_view(target, n, linear) if cuda else target.read_color(n)
-        dist = linear_depth(target.read_depth(n), terms["znear"][:, None, None]) if depth else None
-        r.device.check_validation()
-        return color, dist
 
     def _target(self, size: tuple[int, int], layers: int, views: int, linear: bool,
                 depth: bool, cuda: bool) -> BatchTarget:
