@@ -153,18 +153,27 @@ def end_rendering(cmd: Commands) -> None:
 
 def copy_image_to_buffer(cmd: Commands, image: Any, depth: bool, buffer: Any,
                          extent: tuple[int, int], general: bool = False, layers: int = 1,
-                         offset: int = 0) -> None:
+                         offset: int = 0, tiles: tuple[int, int, int, int] | None = None,
+                         pixel_bytes: int = 4) -> None:
     """Copy mip 0 of `image` (in TRANSFER_SRC layout, or GENERAL), layers 0..`layers`-1,
-    tightly packed into `buffer` from byte `offset` on."""
+    tightly packed into `buffer` from byte `offset` on. `tiles` (views, width, height, tiles a
+    row): an atlas's tiles one after another instead, view-major (`pixel_bytes` a pixel)."""
     vk = cmd.vk
     aspect = vk.VK_IMAGE_ASPECT_DEPTH_BIT if depth else vk.VK_IMAGE_ASPECT_COLOR_BIT
     layout = vk.VK_IMAGE_LAYOUT_GENERAL if general else vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
-    vk.vkCmdCopyImageToBuffer(
-        cmd.handle, image, layout, buffer.handle, 1,
-        [vk.VkBufferImageCopy(
-            bufferOffset=offset, imageSubresource=vk.VkImageSubresourceLayers(
-                aspectMask=aspect, mipLevel=0, baseArrayLayer=0, layerCount=layers),
-            imageExtent=vk.VkExtent3D(width=extent[0], height=extent[1], depth=1))])
+    sub = vk.VkImageSubresourceLayers(aspectMask=aspect, mipLevel=0, baseArrayLayer=0,
+                                      layerCount=layers)
+    if tiles is None:
+        regions = [vk.VkBufferImageCopy(
+            bufferOffset=offset, imageSubresource=sub,
+            imageExtent=vk.VkExtent3D(width=extent[0], height=extent[1], depth=1))]
+    else:
+        n, w, h, cols = tiles
+        regions = [vk.VkBufferImageCopy(
+            bufferOffset=offset + v * w * h * pixel_bytes, imageSubresource=sub,
+            imageOffset=vk.VkOffset3D(x=(v % cols) * w, y=(v // cols) * h, z=0),
+            imageExtent=vk.VkExtent3D(width=w, height=h, depth=1)) for v in range(n)]
+    vk.vkCmdCopyImageToBuffer(cmd.handle, image, layout, buffer.handle, len(regions), regions)
 
 
 def host_read_barrier(vk: Any, buffer: Any) -> Any:

@@ -283,7 +283,11 @@ class OffscreenTarget:
         return {name: buffers[name].array(np.dtype(dt), w * h * ch).reshape(h, w, ch).copy()
                 for name, (dt, ch) in dtypes.items()}
 
-    def record_end(self, cmd: Commands, image: int, frame: Frame, copy: tuple[str, ...]) -> None:
+    def record_end(self, cmd: Commands, image: int, frame: Frame, copy: tuple[str, ...],
+                   tiles: tuple[int, int, int, int] | None = None) -> None:
+        """End the frame's rendering and copy out what `copy` names; `tiles` (an atlas of a
+        compute batch: views, tile width, height, tiles a row): colour and depth view by view
+        (read_tiles)."""
         end_rendering(cmd)
         if COPY_OUTPUTS in copy:
             self._record_outputs_copy(cmd, frame)
@@ -296,7 +300,8 @@ class OffscreenTarget:
         wanted = [w for w in wanted if w[3] in copy]
         barriers(cmd, copy_out_barriers(vk, [(img.handle, depth) for img, depth, _, _ in wanted]))
         for img, depth, buf, _ in wanted:
-            copy_image_to_buffer(cmd, img.handle, depth, buf, self.extent)
+            copy_image_to_buffer(cmd, img.handle, depth, buf, self.extent, tiles=tiles,
+                                 pixel_bytes=4 if depth else self.pixel_bytes)
         barriers(cmd, [], [host_read_barrier(vk, w[2]) for w in wanted])
 
     def submit(self, frame: Frame, cmd: Commands, image: int) -> bool:
@@ -309,6 +314,18 @@ class OffscreenTarget:
         dtype = np.uint8 if self.color_kind == "srgb" else np.float32
         w, h = self.extent
         return self.readback(frame_index)[0].array(dtype, w * h * 4).reshape(h, w, 4).copy()
+
+    def read_tiles(self, frame_index: int, views: int, size: tuple[int, int],
+                   depth: bool = False) -> np.ndarray:
+        """A copy of an atlas frame's colour (views, H, W, 4), or its depth (views, H, W),
+        copied out tile by tile (record_end's `tiles`)."""
+        w, h = size
+        if depth:
+            return self.readback(frame_index)[1].array(np.float32, views * w * h).reshape(
+                views, h, w).copy()
+        dtype = np.uint8 if self.color_kind == "srgb" else np.float32
+        return self.readback(frame_index)[0].array(dtype, views * w * h * 4).reshape(
+            views, h, w, 4).copy()
 
     def read_depth(self, frame_index: int) -> np.ndarray:
         """A copy of the frame's depth buffer: (H, W) float32 window depth in [0, 1]."""

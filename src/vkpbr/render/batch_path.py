@@ -109,10 +109,10 @@ class BatchPath:
         self._run(frame, plan, opts, lambda redraw: r.recorder.compute_batch(
             target, frame, opts.tbn, opts.alpha_mask, plan, redraw, (n, w, h, cols),
             bv.sets0[frame.index], copy))
-        color = _tiles(target.read_color(frame.index), n, w, h, cols)
+        color = target.read_tiles(frame.index, n, size)
         dist = None
         if depth:
-            dist = linear_depth(_tiles(target.read_depth(frame.index), n, w, h, cols),
+            dist = linear_depth(target.read_tiles(frame.index, n, size, depth=True),
                                 terms["znear"][:, None, None])
         r.device.check_validation()
         return color, dist
@@ -292,14 +292,6 @@ class BatchPath:
             self._forget_cuda(target)
             target.destroy()
         self.targets = {}
-
-
-def _tiles(atlas: np.ndarray, n: int, w: int, h: int, cols: int) -> np.ndarray:
-    """(n, h, w, ...) views from an atlas of `cols` tiles a row (one host copy)."""
-    rows = atlas.shape[0] // h
-    tail = atlas.shape[2:]
-    grid = atlas.reshape(rows, h, cols, w, *tail).swapaxes(1, 2).reshape(rows * cols, h, w, *tail)
-    return np.ascontiguousarray(grid[:n])
 
 
 def _slice(views: CameraBatch, start: int, stop: int) -> CameraBatch:

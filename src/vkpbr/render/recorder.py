@@ -295,7 +295,7 @@ class FrameRecorder:
         cs.record_background_batch(cmd, target, frame.index, frame_sets, tiles)
         target.record_resume(cmd)  # type: ignore[attr-defined]
         stamp(*AFTER_SHADING)
-        target.record_end(cmd, 0, frame, copy)
+        target.record_end(cmd, 0, frame, copy, tiles)  # type: ignore[call-arg]
         ring.stamp(cmd, frame, STAMPS - 1)
         cmd.end()
         self._recorded[key] = _Recorded(cmd, ())
