@@ -78,18 +78,26 @@ def _spheres(draws: int) -> Callable:
     return make
 
 
-SCENARIOS: dict[str, tuple[Callable, tuple[int, int]]] = {
+# name -> (scene, (width, height)[, render options]): the default frame path (auto), and
+# Sponza through the compute path with the raster units and with the compute rasteriser.
+SCENARIOS: dict[str, tuple] = {
     "sponza-1080p": (_sponza, (1920, 1080)),
     "sponza-480p": (_sponza, (640, 480)),
     "default-1080p": (_default, (1920, 1080)),
     "spheres-100": (_spheres(100), (1920, 1080)),
     "spheres-5k": (_spheres(5000), (1920, 1080)),
+    **{f"sponza-{label}-{path}": (_sponza, size, options)
+       for label, size in (("1080p", (1920, 1080)), ("480p", (640, 480)))
+       for path, options in (("compute", {"pipeline": "compute"}),
+                             ("compute-raster", {"pipeline": "compute", "raster": "compute"}))},
 }
 
 
-# name -> (scene key of benchmarks/peers/common.py BATCH_SCENES, (width, height))
-BATCH_SCENARIOS: dict[str, tuple[str, tuple[int, int]]] = {
-    f"batch-{key}-{n}": (key, (n, n)) for key in ("sponza", "helmet") for n in (128, 512)
+# name -> (scene key of benchmarks/peers/common.py BATCH_SCENES, (width, height), frame path):
+# the layered batch (auto) and the compute batch (pipeline="compute", docs/batch.md).
+BATCH_SCENARIOS: dict[str, tuple[str, tuple[int, int], str]] = {
+    f"batch-{key}-{n}{suffix}": (key, (n, n), pipeline) for key in ("sponza", "helmet")
+    for n in (128, 512) for suffix, pipeline in (("", "auto"), ("-compute", "compute"))
 }
 PEERS_DIR = REPO / "benchmarks" / "peers"
 
@@ -129,7 +137,7 @@ def run_batch_scenario(name: str, args: argparse.Namespace) -> dict:
     from vkpbr.scene.loader import load_scene
     from vkpbr.scene.types import Light
 
-    key, size = BATCH_SCENARIOS[name]
+    key, size, pipeline = BATCH_SCENARIOS[name]
     common = peers_common()
     poses_path = batch_poses_file(args, key)
     poses = np.load(poses_path)
@@ -147,11 +155,11 @@ def run_batch_scenario(name: str, args: argparse.Namespace) -> dict:
     reps = max(1, math.ceil(args.frames / b))
     with Renderer(scene, device=args.device) as r:
         load_s = time.perf_counter() - t0
-        r.render_batch(views, size=size)  # warm-up: targets, recordings, pipelines
+        r.render_batch(views, size=size, pipeline=pipeline)  # warm-up: targets, recordings
         wall, gpu = [], []
         for _ in range(reps):
             t = time.perf_counter()
-            r.render_batch(views, size=size)
+            r.render_batch(views, size=size, pipeline=pipeline)
             wall.append(time.perf_counter() - t)
             gpu.append(r.last_stats.gpu_ms)
         gpu_ms = statistics.median(gpu)
@@ -190,7 +198,8 @@ def orbit(camera, n: int, degrees: float = 0.2) -> list:  # noqa: ANN001
 def run_scenario(name: str, args: argparse.Namespace) -> dict:
     from vkpbr.render.renderer import Renderer
 
-    make, size = SCENARIOS[name]
+    make, size, *rest = SCENARIOS[name]
+    options = rest[0] if rest else {}
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -198,13 +207,13 @@ def run_scenario(name: str, args: argparse.Namespace) -> dict:
     with Renderer(scene, device=args.device) as r:
         load_s = time.perf_counter() - t0  # parse, decode, upload, mips
         cams = orbit(r.default_camera(), args.frames)
-        list(r.render_many(cams[:10], size=size))  # warm-up: record, compile, caches
+        list(r.render_many(cams[:10], size=size, **options))  # warm-up: record, compile, caches
         result = {"scenario": name, "size": f"{size[0]}x{size[1]}", "draws": len(r.gpu_scene.draws),
                   "triangles": scene.triangle_count, "load_s": load_s, "device": r.device.info.name}
         for readback in (True, False):
             cpu, gpu, rb = [], [], []
             t = time.perf_counter()
-            for _ in r.render_many(cams, size=size, readback=readback):
+            for _ in r.render_many(cams, size=size, readback=readback, **options):
                 s = r.last_stats
                 cpu.append(s.cpu_ms)
                 gpu.append(s.gpu_ms)

@@ -279,12 +279,14 @@ class FrameRecorder:
                 ring.stamp(cmd, frame, 1 + STAMP_NAMES.index(name))
 
         cs = self.compute_scene()
+        prepass = tuple(p.name for p in PASSES if p.prepass)
+        stamp(*prepass)  # no pre-pass: the rasteriser's time is "opaque"'s, as a single frame's
         target.record_raster_begin(cmd)  # type: ignore[attr-defined]
         cs.record_raster(cmd, target, frame.index, alpha_mask, gs.material_sets, tiles, set0)
         target.record_visibility_begin(cmd, 0, rasterised=True)  # type: ignore[attr-defined]
         cs.record_raster_depth(cmd, target, frame.index)
         target.record_shading_begin(cmd)  # type: ignore[attr-defined]
-        stamp(*_BEFORE_SHADING)
+        stamp(*(name for name in _BEFORE_SHADING if name not in prepass))
         frame_sets = {0: set0, 2: slot.set2}
         if self.shadows is not None:
             frame_sets[3] = self.shadows.sets[frame.index]
