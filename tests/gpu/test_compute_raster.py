@@ -83,7 +83,14 @@ def test_sample_models_match(make_renderer, sample_scene, model: str) -> None:  
     assert_rasters_agree(*pair(r), model)
 
 
-def test_bad_raster_value_is_one_line(chart) -> None:  # noqa: ANN001
+def test_bad_raster_value_and_too_large_images_are_one_line(chart) -> None:  # noqa: ANN001
     with pytest.raises(UsageError) as info:
         chart.render(size=SIZE, raster="software")
     assert "\n" not in str(info.value) and "hardware" in str(info.value)
+    # One storage binding holds the rasteriser's 8 bytes a pixel: larger images say so.
+    limit = int(chart.device.limits.maxStorageBufferRange) // 8
+    side = int(limit**0.5) + 1
+    if side <= int(chart.device.limits.maxImageDimension2D):
+        with pytest.raises(UsageError, match="--raster hardware") as info:
+            chart.render(size=(side, side), pipeline="compute", raster="compute")
+        assert "\n" not in str(info.value)

@@ -229,6 +229,10 @@ class Renderer:
             return "the device lacks " + ", ".join(COMPUTE_PATH_FEATURES)
         if not getattr(target, "compute", False):
             return "it needs a single-sample offscreen target (not MSAA, not a window)"
+        w, h = target.extent
+        limit = int(self.device.limits.maxStorageBufferRange)
+        if 4 * w * h > limit:  # the pixel list: 4 bytes a pixel in one storage binding
+            return f"{w}x{h} exceeds its pixel list's limit here ({limit // 4:,} pixels)"
         return None
 
     def uses_compute(self, target: FrameTarget, options: RenderOptions) -> bool:
@@ -258,15 +262,20 @@ class Renderer:
             return "the scene has blended materials (drawn by the fragment path)"
         return None
 
-    def uses_compute_raster(self, options: RenderOptions) -> bool:
-        """Whether the visibility buffer (compute path, dataset outputs) comes from the compute
-        rasteriser (UsageError when it is asked for and the device cannot)."""
+    def uses_compute_raster(self, options: RenderOptions, target: FrameTarget) -> bool:
+        """Whether the compute path's visibility buffer comes from the compute rasteriser
+        (UsageError when it is asked for and the device or the target's size cannot)."""
         if options.raster != L.RasterPath.COMPUTE:
             return False
         if not self.device.compute_raster:
             raise UsageError("--raster compute is not available here: the device lacks 64-bit "
                              "storage-buffer atomics (shaderInt64, shaderBufferInt64Atomics); "
                              "use --raster hardware")
+        w, h = target.extent
+        limit = int(self.device.limits.maxStorageBufferRange)
+        if 8 * w * h > limit:  # 8 bytes a pixel in one storage binding
+            raise UsageError(f"--raster compute is not available for {w}x{h} here: at most "
+                             f"{limit // 8:,} pixels; use --raster hardware")
         return True
 
     def build_pipelines(self, target: FrameTarget) -> None:
@@ -455,7 +464,7 @@ class Renderer:
             cmd = self.recorder.command_buffer(
                 target, frame, image, options.tbn, options.alpha_mask,
                 self.blend_order(camera.eye), overlay, copy, plan, compute, outputs, redraw,
-                compute and self.uses_compute_raster(options))
+                compute and self.uses_compute_raster(options, target))
             c0 = clock()
             ok = target.submit(frame, cmd, image)
         except BaseException:
