@@ -266,12 +266,13 @@ def test_blended_draws_in_each_views_order(make_renderer) -> None:  # noqa: ANN0
                        "blended spheres")
 
 
-def test_frames_for_cuda_reach_the_exported_memory(chart, monkeypatch) -> None:  # noqa: ANN001
+@pytest.mark.parametrize("pipeline", ["auto", "compute"])
+def test_frames_for_cuda_reach_the_exported_memory(chart, monkeypatch, pipeline: str) -> None:  # noqa: ANN001
     """device="cuda" copies the frames into device memory exported as a file descriptor
-    (what CUDA imports). Here, on lavapipe, whose opaque descriptors are memfds, the CUDA
-    import is replaced by a mapping of that descriptor: the Vulkan half (exportable memory,
-    the queue-family hand-over, validation) is the real one, and the exported bytes are the
-    NumPy frames."""
+    (what CUDA imports): the layered batch's readback, or the compute batch's tiles. Here, on
+    lavapipe, whose opaque descriptors are memfds, the CUDA import is replaced by a mapping of
+    that descriptor: the Vulkan half (exportable memory, the queue-family hand-over,
+    validation) is the real one, and the exported bytes are the NumPy frames."""
     import mmap
     import os
 
@@ -279,30 +280,33 @@ def test_frames_for_cuda_reach_the_exported_memory(chart, monkeypatch) -> None: 
 
     if "llvmpipe" not in chart.device.info.name.lower() or not chart.device.external_memory_fd:
         pytest.skip("maps an opaque fd as memory: lavapipe only")
+    if pipeline == "compute" and chart.compute_batch_unavailable() is not None:
+        pytest.skip(f"no compute batch here: {chart.compute_batch_unavailable()}")
 
-    def mapped_view(self, target, views, linear):  # noqa: ANN001, ANN202
-        fd = target.color_readback.export_fd()
+    def mapped(self, buf, shape, linear):  # noqa: ANN001, ANN202
+        fd = buf.export_fd()
         try:
             # Mesa 22.3's lavapipe puts one page of its own before the memory in the memfd.
             with mmap.mmap(fd, os.fstat(fd).st_size, prot=mmap.PROT_READ) as m:
-                w, h = target.extent
-                return np.frombuffer(m, np.uint8, views * h * w * 4, mmap.PAGESIZE).reshape(
-                    views, h, w, 4).copy()
+                return np.frombuffer(m, np.uint8, int(np.prod(shape)), mmap.PAGESIZE).reshape(
+                    shape).copy()
         finally:
             os.close(fd)
 
-    monkeypatch.setattr(BatchPath, "_cuda_view", mapped_view)
+    monkeypatch.setattr(BatchPath, "_cuda_tensor", mapped)
     monkeypatch.setattr("vkpbr.gpu.cuda.cuda_unavailable", lambda: None)
     monkeypatch.setitem(__import__("sys").modules, "torch", type("torch", (), {"cat": np.concatenate}))
     for seed in (31, 32):  # consecutive batches: no stale frames
         cams = cameras_of(chart, 5, seed=seed)
-        got = chart.render_batch(cams, size=SIZE, device="cuda")
-        assert_views_equal(got, list(chart.render_batch(cams, size=SIZE)), f"exported, seed {seed}")
+        got = chart.render_batch(cams, size=SIZE, device="cuda", pipeline=pipeline)
+        assert_views_equal(got, list(chart.render_batch(cams, size=SIZE, pipeline=pipeline)),
+                           f"exported ({pipeline}), seed {seed}")
 
 
-def test_torch_tensor_on_the_gpu(make_renderer) -> None:  # noqa: ANN001
+@pytest.mark.parametrize("pipeline", ["auto", "compute"])
+def test_torch_tensor_on_the_gpu(make_renderer, pipeline: str) -> None:  # noqa: ANN001
     """The real thing where CUDA is: a torch tensor on the renderer's GPU equal to the NumPy
-    frames, batch after batch."""
+    frames, batch after batch (the layered batch, and the compute batch)."""
     from vkpbr.gpu.cuda import cuda_unavailable
 
     why = cuda_unavailable()
@@ -313,13 +317,13 @@ def test_torch_tensor_on_the_gpu(make_renderer) -> None:  # noqa: ANN001
     r = make_renderer()
     cams1 = cameras_of(r, 16, seed=41)
     cams2 = cameras_of(r, 16, seed=42)
-    a = r.render_batch(cams1, size=SIZE, device="cuda")
-    b = r.render_batch(cams2, size=SIZE, device="cuda")
+    a = r.render_batch(cams1, size=SIZE, device="cuda", pipeline=pipeline)
+    b = r.render_batch(cams2, size=SIZE, device="cuda", pipeline=pipeline)
     assert isinstance(a, torch.Tensor) and a.is_cuda and a.dtype == torch.uint8
     assert a.shape == (16, SIZE[1], SIZE[0], 4)
-    assert (a.cpu().numpy() == r.render_batch(cams1, size=SIZE)).all()
-    assert (b.cpu().numpy() == r.render_batch(cams2, size=SIZE)).all()
-    lin = r.render_batch(cams1, size=SIZE, device="cuda", linear=True)
+    assert (a.cpu().numpy() == r.render_batch(cams1, size=SIZE, pipeline=pipeline)).all()
+    assert (b.cpu().numpy() == r.render_batch(cams2, size=SIZE, pipeline=pipeline)).all()
+    lin = r.render_batch(cams1, size=SIZE, device="cuda", linear=True, pipeline=pipeline)
     assert lin.dtype == torch.float32
 
 

@@ -26,6 +26,7 @@ from vkpbr.gpu.rendering import (
     copy_image_to_buffer,
     copy_out_barriers,
     end_rendering,
+    external_ownership,
     host_read_barrier,
     redraw_barriers,
 )
@@ -124,16 +125,8 @@ class BatchTarget:
         barriers(cmd, [], out)
 
     def _ownership(self, external_to_ours: bool) -> Any:
-        vk = self.device.vk
-        ours, ext = self.device.queue_family, vk.VK_QUEUE_FAMILY_EXTERNAL
-        copy, write = vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT
-        none = (vk.VK_PIPELINE_STAGE_2_NONE, vk.VK_ACCESS_2_NONE)
-        src, dst = (none, (copy, write)) if external_to_ours else ((copy, write), none)
-        return vk.VkBufferMemoryBarrier2(
-            srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=dst[0], dstAccessMask=dst[1],
-            srcQueueFamilyIndex=ext if external_to_ours else ours,
-            dstQueueFamilyIndex=ours if external_to_ours else ext,
-            buffer=self.color_readback.handle, offset=0, size=self.color_readback.size)
+        return external_ownership(self.device.vk, self.device.queue_family, self.color_readback,
+                                  external_to_ours)
 
     def read_color(self, views: int) -> np.ndarray:
         """A copy of the first `views` views: (views, H, W, 4) uint8 or float32."""

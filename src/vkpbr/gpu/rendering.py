@@ -176,6 +176,20 @@ def copy_image_to_buffer(cmd: Commands, image: Any, depth: bool, buffer: Any,
     vk.vkCmdCopyImageToBuffer(cmd.handle, image, layout, buffer.handle, len(regions), regions)
 
 
+def external_ownership(vk: Any, queue_family: int, buffer: Any, external_to_ours: bool) -> Any:
+    """A buffer's hand-over between this queue family and the external one (CUDA reads it):
+    taken back before this submission's copies write it, or released after them."""
+    ext = vk.VK_QUEUE_FAMILY_EXTERNAL
+    copy, write = vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT
+    none = (vk.VK_PIPELINE_STAGE_2_NONE, vk.VK_ACCESS_2_NONE)
+    src, dst = (none, (copy, write)) if external_to_ours else ((copy, write), none)
+    return vk.VkBufferMemoryBarrier2(
+        srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=dst[0], dstAccessMask=dst[1],
+        srcQueueFamilyIndex=ext if external_to_ours else queue_family,
+        dstQueueFamilyIndex=queue_family if external_to_ours else ext,
+        buffer=buffer.handle, offset=0, size=buffer.size)
+
+
 def host_read_barrier(vk: Any, buffer: Any) -> Any:
     """Make a copy into `buffer` visible to the host once the frame's fence is waited."""
     return vk.VkBufferMemoryBarrier2(

@@ -35,6 +35,7 @@ from vkpbr.gpu.rendering import (
     copy_image_to_buffer,
     copy_out_barriers,
     end_rendering,
+    external_ownership,
     host_read_barrier,
     image_barrier,
     redraw_barriers,
@@ -284,10 +285,11 @@ class OffscreenTarget:
                 for name, (dt, ch) in dtypes.items()}
 
     def record_end(self, cmd: Commands, image: int, frame: Frame, copy: tuple[str, ...],
-                   tiles: tuple[int, int, int, int] | None = None) -> None:
+                   tiles: tuple[int, int, int, int] | None = None, external: Any = None) -> None:
         """End the frame's rendering and copy out what `copy` names; `tiles` (an atlas of a
         compute batch: views, tile width, height, tiles a row): colour and depth view by view
-        (read_tiles)."""
+        (read_tiles); `external`: the colour into that exported buffer instead (for CUDA:
+        taken back from the external queue family before the copy, released after it)."""
         end_rendering(cmd)
         if COPY_OUTPUTS in copy:
             self._record_outputs_copy(cmd, frame)
@@ -296,13 +298,17 @@ class OffscreenTarget:
             return
         vk = self.device.vk
         color_buf, depth_buf = self.readback(frame.index)
-        wanted = [(self.color, False, color_buf, COPY_COLOR), (self.depth, True, depth_buf, COPY_DEPTH)]
+        wanted = [(self.color, False, external or color_buf, COPY_COLOR),
+                  (self.depth, True, depth_buf, COPY_DEPTH)]
         wanted = [w for w in wanted if w[3] in copy]
-        barriers(cmd, copy_out_barriers(vk, [(img.handle, depth) for img, depth, _, _ in wanted]))
+        family = self.device.queue_family
+        barriers(cmd, copy_out_barriers(vk, [(img.handle, depth) for img, depth, _, _ in wanted]),
+                 [external_ownership(vk, family, external, True)] if external is not None else [])
         for img, depth, buf, _ in wanted:
             copy_image_to_buffer(cmd, img.handle, depth, buf, self.extent, tiles=tiles,
                                  pixel_bytes=4 if depth else self.pixel_bytes)
-        barriers(cmd, [], [host_read_barrier(vk, w[2]) for w in wanted])
+        barriers(cmd, [], [external_ownership(vk, family, w[2], False) if w[2] is external
+                           else host_read_barrier(vk, w[2]) for w in wanted])
 
     def submit(self, frame: Frame, cmd: Commands, image: int) -> bool:
         frame.submit(cmd)

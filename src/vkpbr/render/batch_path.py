@@ -48,7 +48,8 @@ class BatchPath:
         self.views: BatchViews | None = None
         self.targets: dict[tuple, BatchTarget] = {}
         self._cuda_imports: dict[int, Any] = {}  # gpu/cuda.py CudaImport by target
-        self._cuda_events: dict[int, Any] = {}  # torch.cuda.Event of a target's last clone
+        self._cuda_events: dict[int, Any] = {}  # torch.cuda.Event of a buffer's last clone
+        self._exports: dict[int, Any] = {}  # the compute batch's exported colour, by atlas
 
     # --- whole batches ----------------------------------------------------------------------
     def render(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
@@ -68,10 +69,12 @@ class BatchPath:
         return color, depths[0] if len(depths) == 1 else np.concatenate(depths)
 
     def render_compute(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
-                       opts: RenderOptions, linear: bool, depth: bool, batch: int | str
-                       ) -> tuple[np.ndarray, np.ndarray | None]:
+                       opts: RenderOptions, linear: bool, depth: bool, batch: int | str,
+                       cuda: bool = False) -> tuple[Any, np.ndarray | None]:
         """The compute batch: each submission's views tiled in one atlas target, rasterised
-        and shaded in compute shaders (render/compute_path.py's kernels, BATCH builds)."""
+        and shaded in compute shaders (render/compute_path.py's kernels, BATCH builds).
+        `cuda`: the colour as one torch tensor (the atlas's tiles copied into exported memory
+        that CUDA imports, as the layered batch's)."""
         w, h = int(size[0]), int(size[1])
         limits = self.r.device.limits
         most = int(limits.maxImageDimension2D)
@@ -89,26 +92,35 @@ class BatchPath:
         for start in range(0, len(views), per):
             part = _slice(views, start, min(start + per, len(views)))
             color, dist = self._submit_compute(part, (w, h), (cols, rows), lights, opts, linear,
-                                               depth)
+                                               depth, cuda)
             colors.append(color)
             depths.append(dist)
+        if cuda:
+            import torch
+
+            return (colors[0] if len(colors) == 1 else torch.cat(colors)), None
         color = colors[0] if len(colors) == 1 else np.concatenate(colors)
         if not depth:
             return color, None
         return color, depths[0] if len(depths) == 1 else np.concatenate(depths)
 
     def _submit_compute(self, views: CameraBatch, size: tuple[int, int], grid: tuple[int, int],
-                        lights: LightsArg, opts: RenderOptions, linear: bool, depth: bool
-                        ) -> tuple[np.ndarray, np.ndarray | None]:
+                        lights: LightsArg, opts: RenderOptions, linear: bool, depth: bool,
+                        cuda: bool = False) -> tuple[Any, np.ndarray | None]:
         r, n = self.r, len(views)
         (w, h), (cols, rows) = size, grid
         target = r.offscreen_target((cols * w, rows * h), linear)
+        external = self._exported(target, cols * rows * w * h) if cuda else None
         bv = self._views(n, max(1, min(n, MAX_LAYERS)))
         frame, plan, terms = self._begin(views, size, lights, opts, linear)
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
         self._run(frame, plan, opts, lambda redraw: r.recorder.compute_batch(
             target, frame, opts.tbn, opts.alpha_mask, plan, redraw, (n, w, h, cols),
-            bv.sets0[frame.index], copy))
+            bv.sets0[frame.index], copy, external),
+            (lambda: self._cuda_wait(external)) if cuda else None)
+        if cuda:
+            r.device.check_validation()
+            return self._cuda_tensor(external, (n, h, w, 4), linear), None
         color = target.read_tiles(frame.index, n, size)
         dist = None
         if depth:
@@ -126,10 +138,15 @@ class BatchPath:
         why = cuda_unavailable()
         if why is None and not dev.external_memory_fd:
             why = f"{dev.info.name} cannot export memory (VK_KHR_external_memory_fd)"
-        if why is None and not dev.batch_views:
+        compute = (opts.pipeline == L.PipelinePath.COMPUTE
+                   and self.r.compute_batch_unavailable() is None)
+        if why is None and not compute and not dev.batch_views:
             why = f"{dev.info.name} lacks layered rendering for batches"
         if why is not None:
             raise UsageError(f"device='cuda' is not available here: {why}")
+        if compute:  # the compute batch, its atlas's tiles into exported memory
+            return self.render_compute(views, size, lights, opts, linear, False, batch,
+                                       cuda=True)[0]
         import torch
 
         per = self.per_submission(size, linear, False, batch)
@@ -173,7 +190,7 @@ class BatchPath:
         groups = bv.write_blend_groups(r.blend_orders(views.eye))
         self._run(frame, plan, opts, lambda redraw: bv.command_buffer(
             target, frame, n, opts.tbn, opts.alpha_mask, plan, groups, r.prepass_for(target),
-            redraw), (lambda: self._cuda_wait(target)) if cuda else None)
+            redraw), (lambda: self._cuda_wait(target.color_readback)) if cuda else None)
         color = self._cuda_view(target, n, linear) if cuda else target.read_color(n)
         dist = linear_depth(target.read_depth(n), terms["znear"][:, None, None]) if depth else None
         r.device.check_validation()
@@ -246,36 +263,52 @@ class BatchPath:
 
     # --- CUDA -------------------------------------------------------------------------------
     def _cuda_view(self, target: BatchTarget, views: int, linear: bool) -> Any:
-        """A torch tensor of the first `views` views of an external target's colour: a clone
-        (on torch's current stream) of the imported Vulkan memory; the next batch into the
-        target waits for the clone (`_cuda_wait`)."""
+        """A torch tensor of the first `views` views of an external target's colour."""
+        w, h = target.extent
+        return self._cuda_tensor(target.color_readback, (views, h, w, 4), linear)
+
+    def _cuda_tensor(self, buf: Any, shape: tuple[int, ...], linear: bool) -> Any:
+        """A torch tensor of `shape` from exported buffer `buf`: a clone (on torch's current
+        stream) of the imported Vulkan memory; the next batch into the buffer waits for the
+        clone (`_cuda_wait`)."""
         import torch
 
         from vkpbr.gpu.cuda import CudaImport, cuda_device_for
 
-        imported = self._cuda_imports.get(id(target))
+        imported = self._cuda_imports.get(id(buf))
         if imported is None:
             dev = self.r.device
             index = cuda_device_for(dev.uuid(), dev.info.name)
-            buf = target.color_readback
             imported = CudaImport(buf.export_fd(), buf.allocation_size, index)
-            self._cuda_imports[id(target)] = imported
-        w, h = target.extent
-        out = imported.tensor((views, h, w, 4), "<f4" if linear else "|u1").clone()
+            self._cuda_imports[id(buf)] = imported
+        out = imported.tensor(shape, "<f4" if linear else "|u1").clone()
         event = torch.cuda.Event()
         event.record()
-        self._cuda_events[id(target)] = event
+        self._cuda_events[id(buf)] = event
         return out
 
-    def _cuda_wait(self, target: BatchTarget) -> None:
-        """Before a batch writes an external target: CUDA has finished copying the last one."""
-        event = self._cuda_events.pop(id(target), None)
+    def _exported(self, target: Any, pixels: int) -> Any:
+        """The compute batch's exported colour buffer for atlas `target` (`pixels` of it),
+        made on first use: device-local memory CUDA imports (VK_KHR_external_memory_fd)."""
+        from vkpbr.gpu.buffer import Buffer
+
+        buf = self._exports.get(id(target))
+        if buf is None:
+            buf = Buffer(self.r.device, pixels * target.pixel_bytes, "transfer_dst",
+                         name="compute batch colour for CUDA", exportable=True)
+            self._exports[id(target)] = buf
+        return buf
+
+    def _cuda_wait(self, owner: Any) -> None:
+        """Before a batch writes an external target (or exported buffer): CUDA has finished
+        copying the last one."""
+        event = self._cuda_events.pop(id(owner), None)
         if event is not None:
             event.synchronize()
 
     def _forget_cuda(self, target: BatchTarget) -> None:
-        self._cuda_wait(target)
-        imported = self._cuda_imports.pop(id(target), None)
+        self._cuda_wait(target.color_readback)
+        imported = self._cuda_imports.pop(id(target.color_readback), None)
         if imported is not None:
             imported.close()
 
@@ -292,6 +325,13 @@ class BatchPath:
             self._forget_cuda(target)
             target.destroy()
         self.targets = {}
+        for buf in self._exports.values():  # the compute batch's exported colour
+            self._cuda_wait(buf)
+            imported = self._cuda_imports.pop(id(buf), None)
+            if imported is not None:
+                imported.close()
+            buf.destroy()
+        self._exports = {}
 
 
 def _slice(views: CameraBatch, start: int, stop: int) -> CameraBatch:

@@ -260,14 +260,14 @@ class FrameRecorder:
 
     def compute_batch(self, target: FrameTarget, frame: Frame, tbn: L.TbnMode, alpha_mask: bool,
                       plan: ShadowPlan, redraw: tuple[bool, ...], tiles: tuple[int, int, int, int],
-                      set0: object, copy: tuple[str, ...]) -> Commands:
+                      set0: object, copy: tuple[str, ...], external: object = None) -> Commands:
         """A compute batch's commands (render/batch_path.py), recorded on first use: `tiles`
         (views, tile width, tile height, tiles a row) of an atlas `target`, every view
         rasterised and shaded in compute shaders (its ViewRecord in `set0`, BatchViews'), the
-        environment behind them, the copies. No blended draws (the layered batch takes
-        those)."""
+        environment behind them, the copies (the colour into the exported buffer `external`,
+        for CUDA, where given). No blended draws (the layered batch takes those)."""
         key = ("compute batch", id(target), frame.index, tbn, alpha_mask, plan, redraw, tiles,
-               id(set0), copy)
+               id(set0), copy, id(external))
         rec = self._recorded.get(key)
         if rec is not None:
             return rec.cmd
@@ -297,7 +297,7 @@ class FrameRecorder:
         cs.record_background_batch(cmd, target, frame.index, frame_sets, tiles)
         target.record_resume(cmd)  # type: ignore[attr-defined]
         stamp(*AFTER_SHADING)
-        target.record_end(cmd, 0, frame, copy, tiles)  # type: ignore[call-arg]
+        target.record_end(cmd, 0, frame, copy, tiles, external)  # type: ignore[call-arg]
         ring.stamp(cmd, frame, STAMPS - 1)
         cmd.end()
         self._recorded[key] = _Recorded(cmd, ())
