@@ -25,7 +25,7 @@ and B: one warm-up call, then the median of `--reps` timed calls of
   tensor on the GPU (no host copy).
 
 `--pipeline compute`: the compute batch (render_batch(pipeline="compute"): one atlas,
-rasterised and shaded in compute shaders; NumPy only), rows "scene (compute)".
+rasterised and shaded in compute shaders; into torch too), rows "scene (compute)".
 
 A B whose views would need more than `--max-mib` (default: a quarter of the free device or
 host memory, whichever is less, as `batch="auto"` budgets a submission) is skipped. Not a test. Prints one Markdown table;
@@ -137,7 +137,7 @@ def run_scene(key: str, sizes: list[tuple[int, int]], batches: list[int], reps: 
         print(f"skipped {key}: {peers.ASSETS / peers.BATCH_SCENES[key]} not found", file=sys.stderr)
         return []
     rows = []
-    torch = torch_cuda() if pipeline != "compute" else None  # the compute batch: NumPy only
+    torch = torch_cuda()
     opts = {"pipeline": pipeline}
     with Renderer(scene) as r:
         if max_mib:
@@ -172,11 +172,11 @@ def run_scene(key: str, sizes: list[tuple[int, int]], batches: list[int], reps: 
                        "copy_ms": cp, "gpu_mib": batch_gpu_bytes(r, size, b) / 2**20,
                        "device": r.device.info.name, "draws": len(r.gpu_scene.draws)}
                 if torch is not None:
-                    r.render_batch(views, size=size, device="cuda")
+                    r.render_batch(views, size=size, device="cuda", **opts)
                     times = []
                     for _ in range(reps):
                         t = time.perf_counter()
-                        r.render_batch(views, size=size, device="cuda")
+                        r.render_batch(views, size=size, device="cuda", **opts)
                         torch.cuda.synchronize()
                         times.append(time.perf_counter() - t)
                     row["torch_views_per_s"] = b / statistics.median(times)
