@@ -78,3 +78,30 @@ def test_blended_scenes_render_view_by_view(make_renderer, sample_scene) -> None
     batch = r.render_batch(cams, SIZE, POINT, pipeline="compute")
     for i, c in enumerate(cams):
         assert np.array_equal(batch[i], r.render(c, size=SIZE, lights=POINT, pipeline="compute"))
+
+
+def test_cli_cameras_through_the_compute_batch(tmp_path, capsys) -> None:  # noqa: ANN001
+    """`vkpbr render --cameras ... --pipeline compute` renders the poses as one compute batch:
+    each frame within the bounds of the same pose rendered frame by frame (`--batch 0`) on
+    the compute path with the compute rasteriser."""
+    import json
+
+    from PIL import Image
+
+    from vkpbr.app.cli import main
+    from vkpbr.render.renderer import Renderer
+
+    with Renderer() as r:
+        if r.compute_batch_unavailable() is not None:
+            pytest.skip(f"no compute batch here: {r.compute_batch_unavailable()}")
+    cams = tmp_path / "cams.json"
+    cams.write_text(json.dumps(["0.6,3.2,9,0.4,2.2,0", "-4,2,6,0,1,0", "2,1.5,-7,0,1,0"]))
+    common = ["render", "--cameras", str(cams), "--size", "40x30", "--light", "point:0.5,4,2",
+              "--validation", "--pipeline", "compute"]
+    assert main([*common, "--out", str(tmp_path / "a")]) == 0
+    assert main([*common, "--out", str(tmp_path / "b"), "--batch", "0", "--raster", "compute"]) == 0
+    capsys.readouterr()
+    for i in range(3):
+        got, want = (np.asarray(Image.open(tmp_path / d / f"frame_{i:05d}.png").convert("RGBA"))
+                     for d in ("a", "b"))
+        assert_same(want, got, f"frame {i}")
