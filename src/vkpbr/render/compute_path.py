@@ -82,7 +82,8 @@ class _TargetResources:
                    "PackedFrames": gs.streams["packed_frames"], "Bins": self.bins,
                    "BinArgs": self.args, "PixelList": self.pixels,
                    "Materials": scene.material_table, "RasterDraws": scene.raster_draws,
-                   "RasterDepthIds": self.raster, "RasterBig": self.raster_big}
+                   "RasterDepthIds": self.raster, "RasterBig": self.raster_big,
+                   "RasterSpheres": scene.raster_spheres}
         images = {"out_image": target.storage_view, "visibility": target.visibility_view}
         # The dataset outputs' images once the target has them, else 1x1 stand-ins (no kernel
         # but the outputs one touches them; every binding is written all the same).
@@ -114,7 +115,8 @@ class ComputeScene:
     """
 
     def __init__(self, device: Device, gs: GpuScene, frame_layouts: dict[int, DescriptorSetLayout],
-                 slots: list[Any], semantic: np.ndarray | None = None) -> None:
+                 slots: list[Any], semantic: np.ndarray | None = None,
+                 draw_spheres: np.ndarray | None = None) -> None:
         self.device, self.gs, self.slots = device, gs, slots
         self._owned: list[Any] = []
         gs.ensure_streams()  # every TBN path's stream exists: the sets bind them all
@@ -150,6 +152,13 @@ class ComputeScene:
                         if d.alpha_mode == "mask" and d.index_count >= 3]
         self.raster_draws = self._own(upload_buffer(device, raster, "storage",
                                                     name="raster draw table"))
+        # Per draw its world bounding sphere (raster.comp skips a draw outside the view).
+        spheres = (np.ascontiguousarray(draw_spheres[:, :4]) if draw_spheres is not None
+                   and len(draw_spheres) else np.zeros((1, 4), np.float32))
+        if draw_spheres is None or not len(draw_spheres):
+            spheres[:, 3] = np.inf  # unknown: never culled
+        self.raster_spheres = self._own(upload_buffer(device, spheres, "storage",
+                                                      name="raster draw spheres"))
         self.set_index = max(frame_layouts) + 1
         # Fragment too: raster_depth.frag reads the rasteriser's depths through this set.
         self.set_layout = self._own(DescriptorSetLayout(device, [

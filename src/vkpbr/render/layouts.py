@@ -357,6 +357,7 @@ STORAGE = {
     "RasterDraws": StorageArray("RasterDraws", "uvec4", "raster_draws"),
     "RasterDepthIds": StorageArray("RasterDepthIds", "uint64_t", "raster"),
     "RasterBig": StorageArray("RasterBig", "uint", "raster_big"),
+    "RasterSpheres": StorageArray("RasterSpheres", "vec4", "raster_spheres"),  # per draw, world
 }
 # Storage buffers the compute path writes (declared without `readonly`).
 WRITABLE_STORAGE = ("Bins", "BinArgs", "PixelList", "RasterDepthIds", "RasterBig")
@@ -396,6 +397,7 @@ COMPUTE_SET: tuple[tuple[int, str, str], ...] = (
     (23, "storage", "RasterDraws"),
     (24, "storage", "RasterDepthIds"),
     (25, "storage", "RasterBig"),
+    (26, "storage", "RasterSpheres"),  # per draw its world bounding sphere (culling)
 )
 # GLSL declarations of the storage images (their formats and access).
 STORAGE_IMAGES = {

@@ -36,6 +36,7 @@ from vkpbr.gpu.pipeline import PipelineLayout
 from vkpbr.gpu.swapchain import Surface, Swapchain
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, COPY_OUTPUTS, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
+from vkpbr.render.batch import draw_spheres
 from vkpbr.render.batch_path import BatchPath
 from vkpbr.render.camera import as_camera, depth_range, forward, linear_depth, validate_camera
 from vkpbr.render.compute_path import ComputeScene
@@ -220,7 +221,8 @@ class Renderer:
         if self._compute_scene is None:
             self._compute_scene = ComputeScene(
                 self.device, self.gpu_scene, dict(enumerate(self.set_layouts)), self.slots,
-                self.semantic_ids)
+                self.semantic_ids, draw_spheres(self.scene, self.gpu_scene.draws)
+                if self.gpu_scene.draws else None)
         return self._compute_scene
 
     def compute_unavailable(self, target: FrameTarget) -> str | None:

@@ -8,10 +8,10 @@
 // Commands: per (chunk k, draw d), a VkDrawIndexedIndirectCommand at k * draw_count + d,
 // zeroed before this kernel; the first view of each chunk writes its constant fields, and
 // its firstInstance is the start of its list, (k * draw_count + d) * chunk_views.
-// The frustum: the planes of clip space from VP's rows (Gribb & Hartmann): left, right,
-// top, bottom and the near plane (reversed-Z: depth <= w); the far plane is at infinity.
+// The frustum test: frustum.glsl.
 #extension GL_GOOGLE_include_directive : require
 #include "generated.glsl"
+#include "frustum.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -34,22 +34,6 @@ layout(push_constant, std430) uniform CullPush {
     uint draw_count;
     uint chunk_views;  // views per chunk (layers of the batch target)
 } pc;
-
-vec4 vp_row(mat4 m, int j) {
-    return vec4(m[0][j], m[1][j], m[2][j], m[3][j]);
-}
-
-bool sphere_visible(mat4 vp, vec4 sphere) {
-    vec4 r0 = vp_row(vp, 0), r1 = vp_row(vp, 1), r2 = vp_row(vp, 2), r3 = vp_row(vp, 3);
-    vec4 planes[5] = vec4[](r3 + r0, r3 - r0, r3 + r1, r3 - r1, r3 - r2);
-    vec4 c = vec4(sphere.xyz, 1.0);
-    for (int i = 0; i < 5; ++i) {
-        // Conservative: a little slack for float rounding of the plane and the sphere.
-        float reach = sphere.w * length(planes[i].xyz) * 1.0001 + 1e-6 * abs(planes[i].w);
-        if (dot(planes[i], c) < -reach) return false;
-    }
-    return true;
-}
 
 void main() {
     uint i = gl_GlobalInvocationID.x;

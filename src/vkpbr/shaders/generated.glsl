@@ -344,6 +344,9 @@ layout(set = 4, binding = 24, std430) buffer RasterDepthIds {
 layout(set = 4, binding = 25, std430) buffer RasterBig {
     uint raster_big[];
 };
+layout(set = 4, binding = 26, std430) readonly buffer RasterSpheres {
+    vec4 raster_spheres[];
+};
 #else  // the compute path has its own push constants
 layout(push_constant, std430) uniform Draw {
     mat4 model;

@@ -24,6 +24,7 @@
 #extension GL_EXT_shader_atomic_int64 : require
 #define RASTER_INT64 1  // generated.glsl declares the 64-bit buffer
 #include "generated.glsl"
+#include "frustum.glsl"
 
 #if KERNEL == 2
 layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;  // compute_raster.BIG_GROUP
@@ -104,6 +105,9 @@ bool fetch(uint g, out vec4 c[3], out bool double_sided) {
 #if KERNEL != 5
     if ((rd.y & BLENDED) != 0u || ((rd.y & MASKED) != 0u && pc.alpha_mask != 0u)) return false;
 #endif
+    // The draw's bounding sphere outside the view: none of its triangles is seen (one test
+    // instead of three vertices; most of a scene's draws, for most of a batch's views).
+    if (!sphere_visible(VIEW_VP, raster_spheres[k])) return false;
     DrawRecord dr = draws[k];
     uint base = dr.info.x + 3u * (g - rd.x);
     for (int j = 0; j < 3; ++j) {
