@@ -130,7 +130,8 @@ def test_random_triangles_and_cameras_agree_with_the_raster_units() -> None:
 
     coords = st.floats(-4.0, 4.0, allow_nan=False, width=32)
 
-    @settings(max_examples=8, deadline=None, suppress_health_check=list(HealthCheck))
+    @settings(max_examples=8, deadline=None, derandomize=True,
+              suppress_health_check=list(HealthCheck))
     @given(st.lists(st.lists(st.tuples(coords, coords, coords), min_size=3, max_size=3),
                     min_size=1, max_size=12),
            st.tuples(coords, coords, coords), st.lists(st.booleans(), min_size=2, max_size=2))
@@ -138,8 +139,9 @@ def test_random_triangles_and_cameras_agree_with_the_raster_units() -> None:
         t = np.asarray(tris, np.float64)
         area = np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
         t = t[area > 1e-3]  # degenerate slivers: either rasteriser may drop them
-        if len(t) == 0 or np.linalg.norm(np.asarray(eye)) < 1e-3:
-            return
+        e = np.asarray(eye, np.float64)
+        if len(t) == 0 or np.hypot(e[0], e[2]) < 1e-2 * max(np.linalg.norm(e), 1e-3):
+            return  # nothing left, or the eye above the target (the up axis is undefined)
         with Renderer(_soup(t, double_sided), validation=True) as r:
             if not r.device.compute_raster:
                 pytest.skip("no 64-bit storage atomics on this device")
@@ -148,7 +150,8 @@ def test_random_triangles_and_cameras_agree_with_the_raster_units() -> None:
             band = silhouette_band(hw)
             wrong = hw != cr
             assert not wrong[~band].any(), f"{int(wrong[~band].sum())} ids differ off the edges"
-            assert wrong[band].mean() <= 0.05 + 2.0 / max(band.sum(), 1), wrong[band].mean()
+            if band.any():
+                assert wrong[band].mean() <= 0.05 + 2.0 / band.sum(), wrong[band].mean()
             assert r.device.instance.errors == []
 
     check()

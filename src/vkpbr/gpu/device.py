@@ -171,7 +171,7 @@ class Device:
         f13 = vk.VkPhysicalDeviceVulkan13Features(
             dynamicRendering=vk.VK_TRUE, synchronization2=vk.VK_TRUE, maintenance4=vk.VK_TRUE
         )
-        # The compute rasteriser (render/compute_raster.py): 64-bit integers and their atomics
+        # The compute rasteriser (render/compute_path.py): 64-bit integers and their atomics
         # on storage buffers, besides the compute path's features.
         self.compute_raster = bool(all(supported[k] for k in COMPUTE_PATH_FEATURES)
                                    and supported["shaderInt64"]

@@ -65,7 +65,7 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("background_batch.vert.spv", "background.vert", (("BATCH", 1),)),
     Variant("batch_cull.comp.spv", "batch_cull.comp", (("STRUCTS_ONLY", 1),)),
     Variant("background.frag.spv", "background.frag"),
-    # The compute rasteriser (render/compute_raster.py).
+    # The compute rasteriser (render/compute_path.py).
     *(Variant(f"raster_{name}{'_batch' if batch else ''}.comp.spv", "raster.comp",
               (("COMPUTE_SHADING", 1), ("KERNEL", k), ("BATCH", batch)))
       for k, name in ((1, "small"), (4, "args"), (2, "big"), (3, "resolve"), (5, "masked"))

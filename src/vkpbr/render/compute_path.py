@@ -136,20 +136,29 @@ class ComputeScene:
             table[i] = block
         self.material_table = self._own(upload_buffer(device, table, "storage",
                                                       name="material records"))
-        # The compute rasteriser's draw table: per draw its first triangle (in draw order)
-        # and flags; masked draws are two-sided when rasterised (alpha masking off).
+        # The compute rasteriser's draw table, a row a draw in the raster units' submission
+        # order (opaque, two-sided, masked, blended; each in draw order: raster.comp breaks
+        # depth ties as they do): its first triangle, flags, the draw. Masked draws are
+        # two-sided when rasterised (alpha masking off).
+        def rank(d: Any) -> int:
+            return {"blend": 3, "mask": 2}.get(d.alpha_mode, 1 if d.double_sided else 0)
+
+        order = sorted(range(len(gs.draws)), key=lambda i: (rank(gs.draws[i]), i))
         raster = np.zeros((max(len(gs.draws), 1), 4), np.uint32)
         first = 0
-        for i, d in enumerate(gs.draws):
+        masked = []
+        for row, i in enumerate(order):
+            d = gs.draws[i]
             flags = ((RASTER_DOUBLE_SIDED if d.double_sided or d.alpha_mode == "mask" else 0)
                      | (RASTER_MASKED if d.alpha_mode == "mask" else 0)
                      | (RASTER_BLENDED if d.alpha_mode == "blend" else 0))
-            raster[i, :2] = first, flags
+            raster[row, :3] = first, flags, i
+            if d.alpha_mode == "mask" and d.index_count >= 3:
+                masked.append((row, d.material, d.index_count // 3))
             first += d.index_count // 3
         self.triangles = first
-        # (draw, material, triangles) of the masked draws: raster_masked's dispatches.
-        self._masked = [(i, d.material, d.index_count // 3) for i, d in enumerate(gs.draws)
-                        if d.alpha_mode == "mask" and d.index_count >= 3]
+        # (row, material, triangles) of the masked draws: raster_masked's dispatches.
+        self._masked = masked
         self.raster_draws = self._own(upload_buffer(device, raster, "storage",
                                                     name="raster draw table"))
         # Per draw its world bounding sphere (raster.comp skips a draw outside the view).

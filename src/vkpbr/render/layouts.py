@@ -351,9 +351,10 @@ STORAGE = {
     "BinArgs": StorageArray("BinArgs", "uint", "bin_args"),  # 3 per material: dispatch sizes
     "PixelList": StorageArray("PixelList", "uint", "pixel_list"),  # pixel indices by material
     "Materials": StorageArray("Materials", MATERIAL, "materials"),  # GpuScene's blocks
-    # The compute rasteriser (render/compute_raster.py, shaders/raster.comp): per draw (first
-    # triangle, flags: 1 double-sided, 2 masked, 4 blended, 0, 0), the 64-bit depth|triangle
-    # per pixel, and the big triangles' list (a count, then triangle indices).
+    # The compute rasteriser (render/compute_path.py, shaders/raster.comp): a row a draw in
+    # the raster units' submission order (first triangle, flags: 1 double-sided, 2 masked,
+    # 4 blended, the draw's index, 0), the 64-bit depth|triangle per pixel, the big
+    # triangles' list (a count, the dispatch size, then (triangle, view) pairs).
     "RasterDraws": StorageArray("RasterDraws", "uvec4", "raster_draws"),
     "RasterDepthIds": StorageArray("RasterDepthIds", "uint64_t", "raster"),
     "RasterBig": StorageArray("RasterBig", "uint", "raster_big"),
@@ -578,7 +579,7 @@ class PipelinePath(Named):
 
 class RasterPath(Named):
     """What makes the compute path's visibility buffer: HARDWARE, the raster units (pbr.vert and
-    pbr.frag's VISIBILITY build); COMPUTE, compute shaders (render/compute_raster.py: a 64-bit
+    pbr.frag's VISIBILITY build); COMPUTE, compute shaders (render/compute_path.py: a 64-bit
     atomic per covered pixel, on all SMs; masked draws alpha-tested there too)."""
 
     HARDWARE = 0

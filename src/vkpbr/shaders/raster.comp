@@ -1,5 +1,5 @@
 #version 450
-// raster.comp: the compute rasteriser (render/compute_raster.py, `raster="compute"`): the
+// raster.comp: the compute rasteriser (render/compute_path.py, `raster="compute"`): the
 // compute path's visibility buffer made on all SMs instead of the few that rasterise. Every
 // covered pixel centre takes one 64-bit atomicMax of (reversed depth bits << 32 | triangle +
 // 1) in `raster` (depth >= 0, so its float bits order as the depths: the nearest wins, and on
@@ -27,25 +27,25 @@
 #include "frustum.glsl"
 
 #if KERNEL == 2
-layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;  // compute_raster.BIG_GROUP
+layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;  // 256 invocations
 #elif KERNEL == 3
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #elif KERNEL == 4
 layout(local_size_x = 1, local_size_y = 1, local_size_z = 1) in;
 #elif KERNEL == 5
-layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;  // compute_raster.MASKED_GROUP
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;  // compute_path.RASTER_SMALL_GROUP
 #else
-layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;  // compute_raster.SMALL_GROUP
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;  // compute_path.RASTER_SMALL_GROUP
 #endif
 
 layout(push_constant) uniform Raster {
-    uint triangles;  // over every draw, in draw order (raster_draws[k].x: draw k's first)
+    uint triangles;  // over every draw, in the order below (raster_draws[k].x: row k's first)
     uint draws;
     uint alpha_mask;  // 1: masked materials are left to the visibility pass's mask draws
     uint big_capacity;  // entries raster_big's list holds (from BIG_LIST on)
     uint width;
     uint height;
-    uint draw;  // raster_masked: the masked draw dispatched
+    uint draw;  // raster_masked: the masked draw's row of raster_draws
     uint material;  // raster_masked: its material (set 1 bound)
     uint views;  // the tiles: views, their width and height, tiles a row of the atlas
     uint tile_w;
@@ -73,7 +73,11 @@ const float BIG_AREA = 256.0;  // screen-box pixels above which a work group tak
 // (triangle, view) pairs.
 const uint BIG_LIST = 4u;
 const uint MAX_GROUPS = 65535u;  // maxComputeWorkGroupCount[0] of every device
-const uint DOUBLE_SIDED = 1u, MASKED = 2u, BLENDED = 4u;  // raster_draws[k].y (compute_raster.py)
+const uint DOUBLE_SIDED = 1u, MASKED = 2u, BLENDED = 4u;  // raster_draws[k].y (compute_path.py)
+// raster_draws' rows follow the raster units' submission order (the opaque pass's draws, the
+// two-sided pass's, the masked ones; each in draw order), .z the row's draw: so that a tie in
+// depth goes to the later triangle in that order, as GREATER_OR_EQUAL gives it to the later
+// draw (coincident surfaces pick what the fragment path picks).
 
 // The draw holding triangle g: the last k whose first triangle is <= g (draws in order).
 uint draw_of(uint g) {
@@ -96,7 +100,7 @@ vec3 position(uint i) { uint k = 3u * i; return vec3(positions[k], positions[k +
 // Triangle g's clip-space corners; false when its draw is not rasterised here.
 bool fetch(uint g, out vec4 c[3], out bool double_sided) {
 #if KERNEL == 5
-    uint k = pc.draw;  // this dispatch's masked draw: always drawn
+    uint k = pc.draw;  // this dispatch's masked draw's row: always drawn
 #else
     uint k = draw_of(g);
 #endif
@@ -107,8 +111,8 @@ bool fetch(uint g, out vec4 c[3], out bool double_sided) {
 #endif
     // The draw's bounding sphere outside the view: none of its triangles is seen (one test
     // instead of three vertices; most of a scene's draws, for most of a batch's views).
-    if (!sphere_visible(VIEW_VP, raster_spheres[k])) return false;
-    DrawRecord dr = draws[k];
+    if (!sphere_visible(VIEW_VP, raster_spheres[rd.z])) return false;
+    DrawRecord dr = draws[rd.z];
     uint base = dr.info.x + 3u * (g - rd.x);
     for (int j = 0; j < 3; ++j) {
         uint v = indices[base + uint(j)] + dr.info.y;
@@ -173,7 +177,7 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, uint first, u
 #if KERNEL == 5
         uvec3 vi;
         vec3 w0, w1, w2, bary;
-        surface_at(pc.draw, prim, uvec2(px - tile_origin()), vec2(pc.tile_w, pc.tile_h), vi, w0,
+        surface_at(raster_draws[pc.draw].z, prim, uvec2(px - tile_origin()), vec2(pc.tile_w, pc.tile_h), vi, w0,
                    w1, w2, bary);
         if (surface_base_color().a < MAT.alpha_cutoff) continue;  // as pbr.frag's ALPHA_MASK
 #endif
@@ -267,7 +271,7 @@ void main() {
     if (v != 0ul) {
         uint g = uint(v & 0xffffffffUL) - 1u;
         uint k = draw_of(g);
-        vis = uvec2(k + 1u, g - raster_draws[k].x);
+        vis = uvec2(raster_draws[k].z + 1u, g - raster_draws[k].x);
     }
     imageStore(visibility, ivec2(p), uvec4(vis, 0u, 0u));
 #endif
