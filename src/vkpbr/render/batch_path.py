@@ -111,7 +111,10 @@ class BatchPath:
         (w, h), (cols, rows) = size, grid
         target = r.offscreen_target((cols * w, rows * h), linear)
         external = self._exported(target, cols * rows * w * h) if cuda else None
-        bv = self._views(n, max(1, min(n, MAX_LAYERS)))
+        # The compute batch reads only the ViewRecords: keep whatever chunking the buffers
+        # have (a new one reallocates them).
+        chunk = self.views.chunk_views if self.views is not None else 0
+        bv = self._views(n, chunk or max(1, min(n, MAX_LAYERS)))
         frame, plan, terms = self._begin(views, size, lights, opts, linear)
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
         self._run(frame, plan, opts, lambda redraw: r.recorder.compute_batch(

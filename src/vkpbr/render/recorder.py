@@ -190,11 +190,7 @@ class FrameRecorder:
             if raster:
                 # The compute rasteriser (render/compute_path.py): the opaque and masked draws
                 # on all SMs, then their depths into the depth buffer.
-                cs = self.compute_scene()
-                target.record_raster_begin(cmd)  # type: ignore[attr-defined]
-                cs.record_raster(cmd, target, frame.index, alpha_mask, gs.material_sets)
-                target.record_visibility_begin(cmd, image, rasterised=True)  # type: ignore[attr-defined]
-                cs.record_raster_depth(cmd, target, frame.index)
+                self._record_compute_raster(cmd, target, frame, image, alpha_mask)
                 for name in VISIBILITY_PASSES:
                     vis_ctx.stamp(name)
             else:
@@ -202,8 +198,7 @@ class FrameRecorder:
                 # The fragment path's own passes follow and take the timestamps.
                 record_passes(cmd, vis_ctx, VISIBILITY_PASSES)
             target.record_shading_begin(cmd)  # type: ignore[attr-defined]
-            drawn = sorted({d.material for d, c in zip(gs.draws, classes, strict=True)
-                            if c != "blend"})
+            drawn = _shaded_materials(gs.draws, classes)
             frame_sets = {0: slot.set0, 2: slot.set2}
             if shadow_set is not None:
                 frame_sets[3] = shadow_set
@@ -281,16 +276,13 @@ class FrameRecorder:
         cs = self.compute_scene()
         prepass = tuple(p.name for p in PASSES if p.prepass)
         stamp(*prepass)  # no pre-pass: the rasteriser's time is "opaque"'s, as a single frame's
-        target.record_raster_begin(cmd)  # type: ignore[attr-defined]
-        cs.record_raster(cmd, target, frame.index, alpha_mask, gs.material_sets, tiles, set0)
-        target.record_visibility_begin(cmd, 0, rasterised=True)  # type: ignore[attr-defined]
-        cs.record_raster_depth(cmd, target, frame.index)
+        self._record_compute_raster(cmd, target, frame, 0, alpha_mask, tiles, set0)
         target.record_shading_begin(cmd)  # type: ignore[attr-defined]
         stamp(*(name for name in _BEFORE_SHADING if name not in prepass))
         frame_sets = {0: set0, 2: slot.set2}
         if self.shadows is not None:
             frame_sets[3] = self.shadows.sets[frame.index]
-        drawn = sorted({d.material for d, c in zip(gs.draws, classes, strict=True) if c != "blend"})
+        drawn = _shaded_materials(gs.draws, classes)
         cs.record_shading(cmd, target, frame.index, tbn, frame_sets, gs.material_sets, drawn,
                           target.clear_color, tiles=tiles)  # type: ignore[attr-defined]
         stamp("shading")
@@ -303,6 +295,24 @@ class FrameRecorder:
         self._recorded[key] = _Recorded(cmd, ())
         return cmd
 
+    def _record_compute_raster(self, cmd: Commands, target: FrameTarget, frame: Frame, image: int,
+                               alpha_mask: bool, tiles: tuple[int, int, int, int] | None = None,
+                               set0: object = None) -> None:
+        """The compute rasteriser (render/compute_path.py): the opaque and masked draws into the
+        visibility image on all SMs, then their depths into the depth buffer, inside the
+        visibility rendering (left open for what follows)."""
+        cs = self.compute_scene()
+        target.record_raster_begin(cmd)  # type: ignore[attr-defined]
+        cs.record_raster(cmd, target, frame.index, alpha_mask, self.gpu_scene.material_sets,
+                         tiles, set0)
+        target.record_visibility_begin(cmd, image, rasterised=True)  # type: ignore[attr-defined]
+        cs.record_raster_depth(cmd, target, frame.index)
+
     def free(self, target_id: int | None = None) -> None:
         for key in [k for k in self._recorded if target_id is None or k[0] == target_id]:
             self._recorded.pop(key).cmd.free()
+
+
+def _shaded_materials(draws: list, classes: list[str]) -> list[int]:
+    """The materials the compute path shades: those of every draw but the blended ones."""
+    return sorted({d.material for d, c in zip(draws, classes, strict=True) if c != "blend"})

@@ -260,7 +260,7 @@ class Renderer:
             return "the device lacks 64-bit storage-buffer atomics"
         if self.msaa > 1:
             return "MSAA"
-        if any(d.alpha_mode == "blend" for d in self.gpu_scene.draws):
+        if self._blend_centers.size:  # the blended draws' centres (blend_orders' input)
             return "the scene has blended materials (drawn by the fragment path)"
         return None
 
