@@ -33,6 +33,11 @@ CAMERA = Camera(eye=(9.0, 1.8, -0.4), target=(-9.0, 3.5, -0.4), yfov_deg=45.0)  
 # (frame path, what makes the compute path's visibility buffer): render/compute_raster's
 # compute rasteriser beside the raster units.
 PATHS = (("forward", "hardware"), ("compute", "hardware"), ("compute", "compute"))
+# (lighting, light, camera): the scene's light (Sponza's preset point light: one cube map,
+# drawn once while it stands still) or the automatic sun (four cascades fitted to the view:
+# drawn once for a still camera, every frame for a walking one).
+ROWS = (("course", "scene", "still"), ("pbr", "scene", "still"), ("pbr", "sun", "still"),
+        ("pbr", "sun", "moving"))
 STEPS = ("shadows", "prepass_opaque", "opaque", "opaque_double", "mask", "shading",
          "background", "blend", "copy")
 
@@ -107,14 +112,15 @@ def main() -> None:
         print(f"device: {r.device.info.name}; scene {Path(args.scene).name}, "
               f"{scene.triangle_count} triangles; {args.frames} frames a row")
         for size in sizes:
-            for lighting, camera in (("course", "still"), ("pbr", "still"), ("pbr", "moving")):
+            for lighting, light, camera in ROWS:
                 for pipeline, raster in PATHS:
                     try:
-                        rows.append(measure(r, size, args.frames, lighting=lighting,
-                                            pipeline=pipeline, raster=raster, camera=camera))
+                        row = measure(r, size, args.frames, [r.automatic_sun()] if light == "sun" else None,
+                                      lighting=lighting, pipeline=pipeline, raster=raster, camera=camera)
+                        rows.append({**row, "light": light})
                     except UsageError as exc:
                         print(f"skipped {pipeline} ({raster} raster): {exc}")
-        table(rows, ("lighting", "camera", "pipeline", "raster"))
+        table(rows, ("lighting", "light", "camera", "pipeline", "raster"))
         size = sizes[0]
         for n in (int(x) for x in args.lights.split(",")):
             lights = floor_lights(scene, n)

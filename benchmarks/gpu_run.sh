@@ -43,6 +43,18 @@ fi
 if has ray; then
   echo "== Ray: 1, 2, 4 actors sharing the GPU; overhead against in-process rendering"
   timeout ${RAY_TIMEOUT:-300} python3 benchmarks/bench_ray.py 2>&1 | tee "$OUT/ray.txt"
+  if [ -n "${RAY_MODELS:-}" ]; then  # the many-scenes job through `vkpbr batch`, 1, 2, 4 actors
+    echo "== vkpbr batch: every model under $RAY_MODELS x ${RAY_VIEWS:-64} poses"
+    mkdir -p /tmp/rayjob && (cd benchmarks && python3 ray_job.py "$PWD/../$RAY_MODELS" /tmp/rayjob/job.json --views ${RAY_VIEWS:-64})
+    for cache in cold warm; do  # cold: each run bakes the scenes into a fresh bake cache
+      for n in 1 2 4; do
+        rm -rf /tmp/rayjob/out; [ $cache = cold ] && rm -rf /tmp/rayjob/cache
+        echo "-- $n actor(s), num_gpus $(python3 -c "print(1 / $n)") each, $cache bake cache"
+        VKPBR_CACHE_DIR=/tmp/rayjob/cache timeout ${RAY_TIMEOUT:-300} python3 -m vkpbr batch /tmp/rayjob/job.json \
+          --actors $n --num-gpus $(python3 -c "print(1 / $n)") 2>&1 | grep -v WARNING | tail -2
+      done
+    done | tee "$OUT/ray-batch.txt"
+  fi
 fi
 if has tests; then
   echo "== GPU test pass (validation on)"

@@ -4,8 +4,9 @@
 They differ only in coverage exactly on triangle edges (the raster units snap vertices to a
 sub-pixel grid; raster.comp tests pixel centres in float), so the bounds are the compute
 path's own (test_compute_path.py: mean <= 1/255, p99 <= 3/255 per 8-bit channel), and where
-both saw the same instance the depth buffers agree to 1e-5 relative (99% of the pixels;
-1e-3 on edges two triangles share). Cameras around and
+both saw the same instance the depths agree to 1e-5 relative plus their change over 1/64
+pixel (the raster units' vertex snapping; 99% of the pixels; 1e-3 on edges two triangles
+share). Cameras around and
 inside the scenes exercise the near-plane clipping, the floor the big-triangle kernel.
 The dataset outputs through the compute rasteriser are checked against the NumPy ray cast in
 test_outputs.py.
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from pinhole import raster_slack
 from test_compute_path import SIZE, assert_same
 
 from vkpbr.errors import UsageError
@@ -46,10 +48,15 @@ def assert_rasters_agree(hw: dict, cr: dict, what: str) -> None:
     assert_same(hw["color"], cr["color"], what)
     same = (hw["instance"] == cr["instance"]) & (hw["instance"] > 0)
     assert (hw["instance"] != cr["instance"]).mean() <= 0.01, what
-    # A pixel on the edge two triangles of one mesh share may take either: their planes
-    # differ there by the facets' curvature (under 1e-3 of the distance here).
+    # The raster units interpolate depth from vertices snapped to their sub-pixel grid (1/256
+    # pixel on NVIDIA), raster.comp from the exact ones: allow the depth's change over 1/64
+    # pixel (pinhole.raster_slack) beside 1e-5 relative. A pixel on the edge two triangles of
+    # one mesh share may take either: their planes differ there by the facets' curvature
+    # (under 1e-3 of the distance here).
+    bound = 1e-5 * hw["depth"] + np.nan_to_num(raster_slack(hw["depth"]), nan=0.0, posinf=np.inf)
+    off = (np.abs(cr["depth"] - hw["depth"]) > bound)[same]
     rel = np.abs(cr["depth"][same] - hw["depth"][same]) / hw["depth"][same]
-    assert (rel > 1e-5).mean() <= 0.01 and rel.max() <= 1e-3, (what, (rel > 1e-5).mean(), rel.max())
+    assert off.mean() <= 0.01 and rel.max() <= 1e-3, (what, off.mean(), rel.max())
 
 
 @pytest.mark.parametrize("lighting", ["pbr", "course"])
