@@ -17,6 +17,9 @@ SIZE = (96, 72)
 OPTS = {"shadow_resolution": 256, "env": "none"}
 ALL = [LIGHTS["directional"], LIGHTS["spot"], LIGHTS["point"]]
 MOVED = dataclasses.replace(CAMERA, eye=(1.5, 4.0, 5.0))
+# A step of 3 cm: the nearer cascades cross their snapping grid (shadow_math.snap_texels),
+# the farther ones do not, so only some of the sun's layers are redrawn.
+NUDGED = dataclasses.replace(CAMERA, eye=(0.03, 5.0, 6.0), target=(0.33, 0.0, 0.0))
 POINT_MOVED = dataclasses.replace(LIGHTS["point"], position=(-0.4, 2.2, 0.6))
 
 
@@ -39,6 +42,7 @@ STEPS = [  # (camera, lights, options): each changes one thing from the step bef
     (CAMERA, ALL, {}),                    # nothing changed: no map redrawn
     (MOVED, ALL, {}),                     # the sun's cascades refit; spot and point kept
     (CAMERA, ALL, {}),
+    (NUDGED, ALL, {}),                    # some of the sun's cascades redrawn
     (CAMERA, [ALL[0], ALL[1], POINT_MOVED], {}),  # the point light moved: its cube redrawn
     (CAMERA, [ALL[0], ALL[1], POINT_MOVED], {"alpha_mask": False}),  # the card drawn whole
     (CAMERA, [ALL[0], ALL[1], POINT_MOVED], {"shadow_resolution": 128}),
@@ -52,7 +56,7 @@ def test_cached_maps_draw_what_redrawn_maps_draw(pair) -> None:  # noqa: ANN001
     for i, (camera, lights, opts) in enumerate(STEPS):
         o = {**OPTS, **opts}
         got = cached.render(camera, lights, size=SIZE, linear=True, **o)
-        if i == 3:  # a batch in between: one scene-wide sun map, spot and point kept
+        if i == 4:  # a batch in between: one scene-wide sun map, spot and point kept
             cached.render_batch([camera, MOVED], SIZE, lights, linear=True, **o)
         fresh.shadows.forget()
         want = fresh.render(camera, lights, size=SIZE, linear=True, **o)
@@ -60,8 +64,8 @@ def test_cached_maps_draw_what_redrawn_maps_draw(pair) -> None:  # noqa: ANN001
         images.append(got)
     # The inputs matter: the sequence is not one image over and over.
     assert not np.array_equal(images[0], images[2])
-    assert not np.array_equal(images[3], images[4])
-    assert not np.array_equal(images[4], images[5])
+    assert not np.array_equal(images[3], images[5])  # the point light moved
+    assert not np.array_equal(images[5], images[6])  # the card drawn whole
 
 
 def test_only_the_maps_that_changed_are_redrawn(pair) -> None:  # noqa: ANN001
@@ -72,6 +76,9 @@ def test_only_the_maps_that_changed_are_redrawn(pair) -> None:  # noqa: ANN001
 
     redrawn(CAMERA, ALL)
     assert redrawn(CAMERA, ALL) == {"directional": False, "spot": False, "point": False}
+    redrawn(NUDGED, ALL)
+    layers = dict(r.shadows.last_redrawn_layers)
+    assert 0 < layers["directional"] < 4 and layers["spot"] == layers["point"] == 0, layers
     assert redrawn(MOVED, ALL) == {"directional": True, "spot": False, "point": False}
     moved_point = [ALL[0], ALL[1], POINT_MOVED]
     assert redrawn(MOVED, moved_point) == {"directional": False, "spot": False, "point": True}

@@ -44,7 +44,9 @@ def test_cascades_hold_their_slices_and_the_scene_towards_the_light(
         eye, target, fov, size, direction, res, znear, ratio) -> None:
     cam = _camera(eye, target, fov)
     fit = S.directional_cascades(cam, size, direction, LO, HI, res, znear, znear * ratio)
-    splits = S.cascade_splits(znear, znear * ratio)
+    lo, hi = S.cascade_range(znear, znear * ratio)
+    assert lo <= znear and hi >= znear * ratio  # the cascades reach the whole view range
+    splits = S.cascade_splits(lo, hi)
     assert np.allclose(fit.far, splits[1:])
     scene = np.array([[x, y, z] for x in (LO[0], HI[0]) for y in (LO[1], HI[1])
                       for z in (LO[2], HI[2])])
@@ -70,7 +72,7 @@ def test_cascades_hold_their_slices_and_the_scene_towards_the_light(
 def test_a_moving_camera_moves_cascades_by_whole_texels(
         eye, target, fov, direction, res, point, step, texels) -> None:
     """The radius is the same for every pose (view-space fit) and the centre is snapped:
-    a fixed world point's position in texels changes by an integer only."""
+    a fixed world point's position in texels changes by whole snapping steps only."""
     cam = _camera(eye, target, fov)
     size = (320, 240)
     fit0 = S.directional_cascades(cam, size, direction, LO, HI, res, 0.1, 60.0)
@@ -83,8 +85,39 @@ def test_a_moving_camera_moves_cascades_by_whole_texels(
     for m0, m1 in zip(fit0.matrices, fit1.matrices, strict=True):
         t0 = (S.project(m0, np.array([point]))[0, :2] * 0.5 + 0.5) * res
         t1 = (S.project(m1, np.array([point]))[0, :2] * 0.5 + 0.5) * res
-        shift = t1 - t0
+        shift = (t1 - t0) / S.snap_texels(res)
         assert np.allclose(shift, np.round(shift), atol=1e-6 * res), shift
+
+
+@settings(max_examples=60, deadline=None)
+@given(vec3, vec3, st.floats(20.0, 100.0), unit_ish, resolutions,
+       st.tuples(*(st.floats(-1.0, 1.0),) * 3).filter(lambda v: math.hypot(*v) > 0.1))
+def test_a_walking_camera_keeps_its_cascades_within_a_step(
+        eye, target, fov, direction, res, heading) -> None:
+    """A camera walking one snapping step of the first cascade in 50 small steps, with an
+    automatic far plane that drifts with it, changes each cascade's matrix at most once per
+    light-space axis (a redraw), so the renderer redraws a cascade every few dozen frames."""
+    cam = _camera(eye, target, fov)
+    size = (320, 240)
+    fit0 = S.directional_cascades(cam, size, direction, LO, HI, res, 0.1, 60.0)
+    walk = np.asarray(heading) / np.linalg.norm(heading) * fit0.texel[0] * S.snap_texels(res)
+    seen: list[set[bytes]] = [set() for _ in fit0.matrices]
+    for i in range(51):
+        d = walk * i / 50
+        moved = Camera(eye=tuple(np.add(eye, d)), target=tuple(np.add(target, d)), yfov_deg=fov)
+        fit = S.directional_cascades(moved, size, direction, LO, HI, res, 0.1, 60.0 + 0.01 * i)
+        for held, m in zip(seen, fit.matrices, strict=True):
+            held.add(m.tobytes())
+    assert all(len(held) <= 4 for held in seen), [len(h) for h in seen]
+
+
+@given(st.floats(1e-6, 1e3), st.floats(1.01, 1e5))
+def test_cascade_range_rounds_outwards_to_quarter_octaves(znear, ratio) -> None:
+    lo, hi = S.cascade_range(znear, znear * ratio)
+    assert lo <= znear and hi >= znear * ratio and hi > lo
+    for v, given_v in ((lo, znear), (hi, znear * ratio)):
+        k = 4.0 * math.log2(v)
+        assert v == given_v or abs(k - round(k)) < 1e-9
 
 
 @given(vec3, vec3, st.floats(20.0, 100.0), unit_ish)

@@ -184,7 +184,7 @@ class BatchViews:
     # --- commands ---------------------------------------------------------------------------
     def command_buffer(self, target: BatchTarget, frame: Frame, views: int, tbn: L.TbnMode,
                        alpha_mask: bool, plan: ShadowPlan, groups: tuple, prepass: bool,
-                       redraw: tuple[bool, ...] | None = None) -> Commands:
+                       redraw: tuple[range, ...] | None = None) -> Commands:
         """The batch's commands (recorded on first use): `groups` from write_blend_groups;
         `redraw`: which shadow entries are drawn (ShadowMaps.stale)."""
         key = (id(target), views, tbn, alpha_mask, plan, groups, prepass, self.capacity, redraw)
@@ -199,7 +199,7 @@ class BatchViews:
 
     def _record(self, target: BatchTarget, frame: Frame, views: int, tbn: L.TbnMode,
                 alpha_mask: bool, plan: ShadowPlan, groups: tuple, prepass: bool,
-                redraw: tuple[bool, ...] | None) -> Commands:
+                redraw: tuple[range, ...] | None) -> Commands:
         gs, ring, slot = self.gpu_scene, self.ring, self.slots[frame.index]
         cmd, names, classes = self.recorder.begin_frame(frame, tbn, alpha_mask, plan, redraw)
         # The previous batch's draws read the commands and lists: order this one's writes.

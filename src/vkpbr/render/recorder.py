@@ -131,10 +131,10 @@ class FrameRecorder:
 
     # --- command buffers --------------------------------------------------------------------
     def begin_frame(self, frame: Frame, tbn: L.TbnMode, alpha_mask: bool, plan: ShadowPlan,
-                    redraw: tuple[bool, ...] | None = None
+                    redraw: tuple[range, ...] | None = None
                     ) -> tuple[Commands, list[str], list[str]]:
         """Begin a frame's command buffer (a single frame's or a batch's, render/batch.py):
-        its start timestamp, the shadow-map passes (`redraw`: per plan entry, whether its
+        its start timestamp, the shadow-map passes (`redraw`: per plan entry, the range of its layers to draw;
         maps are drawn; ShadowMaps.stale), the timestamp after them. Returns the buffer, the
         vertex streams' names for `tbn` and every draw's class."""
         gs, ring = self.gpu_scene, self.ring
@@ -152,7 +152,7 @@ class FrameRecorder:
     def _record(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
                 alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
                 copy: tuple[str, ...], plan: ShadowPlan, compute: bool = False,
-                outputs: bool = False, redraw: tuple[bool, ...] | None = None,
+                outputs: bool = False, redraw: tuple[range, ...] | None = None,
                 raster: bool = False) -> Commands:
         gs, ring = self.gpu_scene, self.ring
         slot = self.slots[frame.index]
@@ -232,7 +232,7 @@ class FrameRecorder:
                         alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
                         copy: tuple[str, ...], plan: ShadowPlan = _NO_SHADOWS,
                         compute: bool = False, outputs: bool = False,
-                        redraw: tuple[bool, ...] | None = None, raster: bool = False) -> Commands:
+                        redraw: tuple[range, ...] | None = None, raster: bool = False) -> Commands:
         """The command buffer recorded for these inputs, recorded on first use. A buffer is
         used by one frame of the ring only, whose previous submission has finished: it can be
         re-recorded (new blend order) or freed at once. `plan`: the shadow maps' (a new plan
@@ -254,7 +254,7 @@ class FrameRecorder:
         return cmd
 
     def compute_batch(self, target: FrameTarget, frame: Frame, tbn: L.TbnMode, alpha_mask: bool,
-                      plan: ShadowPlan, redraw: tuple[bool, ...], tiles: tuple[int, int, int, int],
+                      plan: ShadowPlan, redraw: tuple[range, ...], tiles: tuple[int, int, int, int],
                       set0: object, copy: tuple[str, ...], external: object = None) -> Commands:
         """A compute batch's commands (render/batch_path.py), recorded on first use: `tiles`
         (views, tile width, tile height, tiles a row) of an atlas `target`, every view

@@ -16,9 +16,16 @@ Cascades: the view range is split by the practical scheme (Zhang et al. 2006: a 
 logarithmic and uniform splits); each slice of the view frustum gets a bounding sphere
 computed in VIEW space (so its radius depends only on the projection and the splits, never
 on where the camera looks), the light's orthographic box is the sphere's square, its centre
-snapped to whole shadow-map texels in light space (so a moving camera moves the box by whole
-texels: no shimmering edges), and its depth range is extended towards the light to the
-scene's bounds, so that casters outside the view still cast into it.
+snapped to a grid of SNAP_TEXELS(resolution) whole shadow-map texels in light space (so a
+moving camera moves the box by whole texels: no shimmering edges), and its depth range is
+extended towards the light to the scene's bounds, so that casters outside the view still cast
+into it. The coarse grid (1/16 of the map; the box is padded by half a step so the sphere
+stays inside) makes a cascade's matrix constant while the camera moves within a step: the
+renderer redraws only the cascades whose matrix changed (render/shadows.py ShadowMaps.stale),
+so a walking camera redraws its nearest cascade every few dozen frames instead of all four
+every frame, for 1/16 of the map's resolution. For the same reason the split range is
+rounded outwards to quarter octaves (`cascade_range`): an automatic far plane moves with the
+camera, and the splits, radii and matrices would move with it.
 """
 
 from __future__ import annotations
@@ -37,7 +44,9 @@ __all__ = [
     "SPLIT_BLEND",
     "MAX_SPOT_HALF_ANGLE",
     "CascadeFit",
+    "cascade_range",
     "cascade_splits",
+    "snap_texels",
     "slice_corners",
     "slice_sphere",
     "light_basis",
@@ -75,6 +84,19 @@ def project(m: np.ndarray, points: np.ndarray) -> np.ndarray:
     """(N, 3) world points through the (4, 4) matrix `m` -> (N, 4) clip coordinates."""
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     return np.c_[p, np.ones(len(p))] @ np.asarray(m, dtype=np.float64).T
+
+
+def snap_texels(resolution: int) -> int:
+    """The grid a cascade's centre is snapped to, in texels of a `resolution`-texel map."""
+    return max(resolution // 16, 1)
+
+
+def cascade_range(znear: float, zfar: float) -> tuple[float, float]:
+    """The view range the cascades split: [znear, zfar] rounded outwards to quarter octaves
+    (2^(k/4)), so that a range that drifts with the camera gives the same cascades."""
+    lo = 2.0 ** (math.floor(4.0 * math.log2(znear)) / 4.0)
+    hi = 2.0 ** (math.ceil(4.0 * math.log2(zfar)) / 4.0)
+    return min(lo, znear), max(hi, zfar, 2.0 * lo)
 
 
 def cascade_splits(znear: float, zfar: float, count: int = CASCADES,
@@ -151,19 +173,22 @@ def fit_cascade(centre: Sequence[float], radius: float, direction: Sequence[floa
                 scene_lo: Sequence[float], scene_hi: Sequence[float],
                 resolution: int) -> np.ndarray:
     """The (4, 4) world -> clip matrix of one cascade: an orthographic square of side
-    2 * radius (plus a texel each side) around `centre` across the light, its centre snapped to whole texels of a
-    `resolution`-texel map, deep enough to hold the sphere and, towards the light, the
-    scene's bounds. Depth is reversed: 1 at the side facing the light, 0 at the far side."""
+    2 * radius (plus padding) around `centre` across the light, its centre snapped to a grid
+    of `snap_texels` texels of a `resolution`-texel map (along the light too), deep enough to
+    hold the sphere and, towards the light, the scene's bounds. Depth is reversed: 1 at the
+    side facing the light, 0 at the far side."""
     basis = light_basis(direction)
-    # The square is padded by a texel on each side: snapping moves its centre by up to half
-    # a texel, and the sphere must stay inside.
+    # The square is padded by half a grid step and a texel on each side: snapping moves its
+    # centre by up to half a step, and the sphere must stay inside.
     texel = cascade_texel(radius, resolution)
     half = 0.5 * resolution * texel
-    c = basis @ np.asarray(centre, dtype=np.float64)
-    cx, cy = np.round(c[0] / texel) * texel, np.round(c[1] / texel) * texel
+    grid = snap_texels(resolution) * texel
+    c = np.round((basis @ np.asarray(centre, dtype=np.float64)) / grid) * grid
+    cx, cy = c[0], c[1]
     scene_depths = _bounds_corners(scene_lo, scene_hi) @ basis[2]
-    z_near = min(c[2] - radius, float(scene_depths.min()))
-    z_far = max(c[2] + radius, z_near + 1e-6 * max(radius, 1.0))
+    reach = radius + 0.5 * grid
+    z_near = min(c[2] - reach, float(scene_depths.min()))
+    z_far = max(c[2] + reach, z_near + 1e-6 * max(radius, 1.0))
     span = z_far - z_near
     r, u, f = basis
     return np.array([
@@ -176,8 +201,8 @@ def fit_cascade(centre: Sequence[float], radius: float, direction: Sequence[floa
 
 def cascade_texel(radius: float, resolution: int) -> float:
     """World size of one texel of a cascade of sphere `radius`: the map spans the sphere's
-    diameter plus one texel of padding on each side."""
-    return 2.0 * radius / (resolution - 2)
+    diameter plus half a snapping step and one texel of padding on each side."""
+    return 2.0 * radius / (resolution - snap_texels(resolution) - 2)
 
 
 @dataclass(frozen=True)
@@ -199,8 +224,8 @@ def directional_cascades(camera: Camera, size: tuple[int, int], direction: Seque
                          scene_lo: Sequence[float], scene_hi: Sequence[float], resolution: int,
                          znear: float, zfar: float, count: int = CASCADES) -> CascadeFit:
     """Fit `count` cascades of a directional light travelling along `direction` to the view
-    range [znear, zfar] of `camera` rendering `size` (W, H) pixels."""
-    splits = cascade_splits(znear, zfar, count)
+    range [znear, zfar] (`cascade_range` of it) of `camera` rendering `size` (W, H) pixels."""
+    splits = cascade_splits(*cascade_range(znear, zfar), count)
     mats, texel = [], []
     for d0, d1 in zip(splits[:-1], splits[1:], strict=True):
         centre, radius = slice_sphere(camera, size, d0, d1)

@@ -179,6 +179,7 @@ class ShadowMaps:
         # moves; spot and point lights, and a batch's scene-wide sun, when the light does).
         self._drawn: dict[tuple[str, int], tuple[bytes, bool]] = {}
         self.last_redraw: tuple[tuple[str, bool], ...] = ()  # the latest frame's (kind, drawn)
+        self.last_redrawn_layers: tuple[tuple[str, int], ...] = ()  # (kind, layers drawn)
         self._warned = False
         self.ensure(ShadowPlan())
 
@@ -285,19 +286,31 @@ class ShadowMaps:
         data[12:].reshape(MATRICES, 4, 4)[:] = mats.transpose(0, 2, 1)
         return out
 
-    def stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool) -> tuple[bool, ...]:
-        """Which of `plan`'s entries frame `slot` must draw: those whose layers hold other
-        matrices (as `write` left them for the slot) or other casters. Marks them drawn: the
-        frame's commands draw them and submissions run in order (`forget` if it is not
-        submitted)."""
+    def stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool) -> tuple[range, ...]:
+        """Which layers of each of `plan`'s entries frame `slot` must draw (a range of the
+        entry's layers, empty for none): the span of those that hold other matrices (as
+        `write` left them for the slot) or other casters. A walking camera usually changes
+        only its nearest cascade (shadow_math's snapping grid). Marks them drawn: the frame's
+        commands draw them and submissions run in order (`forget` if it is not submitted)."""
         mats = self._views[slot][12:].reshape(MATRICES, 16)
         out = []
         for e in plan.entries:
-            where = ("cubes" if e.kind == "point" else "maps", e.first)
-            held = (mats[e.matrix_base:e.matrix_base + e.count].tobytes(), alpha_mask)
-            out.append(self._drawn.get(where) != held)
-            self._drawn[where] = held
-        self.last_redraw = tuple((e.kind, fresh) for e, fresh in zip(plan.entries, out, strict=True))
+            image = "cubes" if e.kind == "point" else "maps"
+            # A cube's six faces change together (one position): one key for the six.
+            layers = (range(1) if e.kind == "point" else range(e.count))
+            changed = []
+            for i in layers:
+                where = (image, e.first, i)
+                rows = mats[e.matrix_base:e.matrix_base + 6] if e.kind == "point" \
+                    else mats[e.matrix_base + i]
+                held = (rows.tobytes(), alpha_mask)
+                if self._drawn.get(where) != held:
+                    changed.append(i)
+                self._drawn[where] = held
+            out.append(range(0) if not changed else
+                       range(0, 6) if e.kind == "point" else range(changed[0], changed[-1] + 1))
+        self.last_redraw = tuple((e.kind, bool(r)) for e, r in zip(plan.entries, out, strict=True))
+        self.last_redrawn_layers = tuple((e.kind, len(r)) for e, r in zip(plan.entries, out, strict=True))
         return tuple(out)
 
     def forget(self) -> None:
@@ -325,28 +338,30 @@ class ShadowMaps:
 
     def record(self, cmd: Commands, slot: int, plan: ShadowPlan, draws: Sequence[Any],
                classes: Sequence[str], material_sets: Sequence[Any], streams: dict[str, Any],
-               index_buffer: Any, has_colors: bool, redraw: tuple[bool, ...] | None = None) -> None:
+               index_buffer: Any, has_colors: bool, redraw: tuple[range, ...] | None = None) -> None:
         """Record `plan`'s passes for frame `slot` (before the main target begins).
 
         draws / classes: render.gpu_scene.Draw and passes.classify of each; streams: the
         scene's vertex buffers by name (positions, texcoords, texcoords1, colors); redraw:
-        per entry, whether to draw it (`stale`; None: all); the others keep their layers."""
-        redraw = (True,) * len(plan.entries) if redraw is None else redraw
+        per entry, the range of its layers to draw (`stale`; None: all); the others keep
+        their contents."""
+        if redraw is None:
+            redraw = tuple(range(e.count) for e in plan.entries)
         if not any(redraw):
             return
         casters = [(d, c) for d, c in zip(draws, classes, strict=True)
                    if getattr(d, "casts_shadows", True)]
         opaque = [d for d, c in casters if c in ("opaque", "opaque_double")]
         masked = [d for d, c in casters if c in ("mask", "blend")]
-        keep = not all(redraw)
+        keep = not all(len(r) == e.count for e, r in zip(plan.entries, redraw, strict=True))
         self.maps.record_begin_writes(cmd, keep)
         self.cubes.record_begin_writes(cmd, keep)
         cmd.bind_index_buffer(index_buffer)
-        for e, fresh in zip(plan.entries, redraw, strict=True):
-            if not fresh:
+        for e, layers in zip(plan.entries, redraw, strict=True):
+            if not layers:
                 continue
             image = self.cubes if e.kind == "point" else self.maps
-            image.begin(cmd, e.first * (6 if e.kind == "point" else 1), e.count)
+            image.begin(cmd, e.first * (6 if e.kind == "point" else 1) + layers.start, len(layers))
             for group, is_masked in ((opaque, False), (masked, True)):
                 if not group:
                     continue
@@ -362,7 +377,8 @@ class ShadowMaps:
                         bound = d.material
                     cmd.push(d.push)
                     cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset,
-                                     first_instance=e.matrix_base, instances=e.count)
+                                     first_instance=e.matrix_base + layers.start,
+                                     instances=len(layers))
             image.end(cmd)
         self.maps.record_end_writes(cmd)
         self.cubes.record_end_writes(cmd)
