@@ -8,24 +8,27 @@ Scenes: "default" (the built-in chart scene, an orbit about its default camera's
 "helmet" (DamagedHelmet: one textured object) and "sponza", both with the poses of the peers'
 batch scenario (benchmarks/peers/common.py `batch_poses`: a seeded orbit) and one point light
 at (0, 4, 0); a scene whose glTF is not in the sample-models folder is skipped. Per scene, size
-and B: one warm-up call, then the median of `--reps` timed calls of
-`render_batch(CameraBatch.from_poses(poses), size)`:
+and B: four warm-up calls (every slot of the frame ring recorded, the shadow maps drawn), then
+the median of `--reps` timed calls of `render_batch(CameraBatch.from_poses(poses), size)`:
 
-- views/s: B / wall clock of the call (render + one readback into a (B, H, W, 4) uint8 array);
+- views/s: B / wall clock of the call (render + one readback into a new (B, H, W, 4) uint8
+  array); "out=": the same into one array reused across calls (no fresh pages to fault in);
 - GPU views/s: B / the batch's GPU time (`last_stats.gpu_ms`, timestamp queries; the last
   submission's when the batch was split) = render only;
 - host us/view: (wall - GPU time - the host copy of the result) / B: the Python and driver
   cost per view (the copy is timed separately on an array of the same size);
-- GPU MiB: the memory the batch holds: its target's colour and depth array images and readback
-  buffer (gpu/batch_target.py) and the views' records, indirect draws and lists
-  (render/batch.py BatchViews), read from their allocation sizes;
+- GPU MiB: device memory vkpbr holds beyond the scene's own after the row (Device.bytes_allocated:
+  every live buffer and image, as allocated): the batch targets or atlases kept (two per path:
+  the row's and the previous size's), their readback and CUDA-exported buffers, the views'
+  records;
 - render_many views/s (B <= `--many-max`, default 256): the same B cameras frame by frame;
 - torch views/s (where torch sees CUDA and render_batch takes device="cuda"): B / wall clock
   of `render_batch(..., device="cuda")` + `torch.cuda.synchronize()`, the views a (B, H, W, 4)
   tensor on the GPU (no host copy).
 
-`--pipeline compute`: the compute batch (render_batch(pipeline="compute"): one atlas,
-rasterised and shaded in compute shaders; into torch too), rows "scene (compute)".
+`--pipeline` auto (the default: the compute batch on GPUs, the layered batch on CPUs),
+forward (the layered batch: pbr.frag BATCH) or compute (render_batch(pipeline="compute"): one
+atlas, rasterised and shaded in compute shaders; into torch too), rows "scene (PIPELINE)".
 
 A B whose views would need more than `--max-mib` (default: a quarter of the free device or
 host memory, whichever is less, as `batch="auto"` budgets a submission) is skipped. Not a test. Prints one Markdown table;
@@ -45,7 +48,6 @@ from pathlib import Path
 
 import numpy as np
 
-from vkpbr.render.batch import MAX_LAYERS
 from vkpbr.render.renderer import Renderer
 from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.types import Light
@@ -90,25 +92,11 @@ def poses_for(key: str, r: Renderer, count: int) -> np.ndarray:
     return np.stack([peers.look_at(e, target) for e in eyes])
 
 
-def batch_gpu_bytes(r: Renderer, size: tuple[int, int], views: int) -> int:
-    """Device memory of the batch targets of `size` that a render_batch of `views` views used
-    (host readback and, where torch was asked for, CUDA-exported ones), plus the BatchViews
-    buffers: allocation sizes as Vulkan reported (images) or as requested (buffers)."""
-    limits = r.device.limits
-    layers = max(1, min(views, MAX_LAYERS, int(limits.maxFramebufferLayers),
-                        int(limits.maxImageArrayLayers)))
-    path = getattr(r, "_batch_path", None)  # render/batch_path.py BatchPath, once made
-    targets = path.targets if path is not None else getattr(r, "_batch_targets", {})
-    bv = path.views if path is not None else getattr(r, "_batch", None)
-    total = 0
-    for key, target in targets.items():
-        if key[0] == tuple(size) and key[1] == layers:
-            total += target.color.bytes + target.depth.bytes
-            total += sum(b.size for b in (getattr(target, "color_readback", None),
-                                          getattr(target, "depth_readback", None)) if b is not None)
-    if bv is not None:
-        total += sum(b.size for b in (*bv._buffers, bv.bounds))
-    return total
+def batch_gpu_bytes(r: Renderer, baseline: int) -> int:
+    """Device memory vkpbr holds beyond `baseline` (the scene's, before any batch): every live
+    buffer and image, as their memory requirements asked (Device.bytes_allocated), so the
+    batch targets, atlases, view buffers and CUDA-exported buffers of the sizes rendered so far."""
+    return r.device.bytes_allocated()[0] - baseline
 
 
 def torch_cuda():  # noqa: ANN201
@@ -118,6 +106,9 @@ def torch_cuda():  # noqa: ANN201
     except ImportError:
         return None
     return torch if torch.cuda.is_available() else None
+
+
+WARM_UP = 4  # calls before timing: more than the frame ring's slots, so each has its recording
 
 
 def copy_ms(shape: tuple[int, ...], reps: int = 3) -> float:
@@ -140,6 +131,8 @@ def run_scene(key: str, sizes: list[tuple[int, int]], batches: list[int], reps: 
     torch = torch_cuda()
     opts = {"pipeline": pipeline}
     with Renderer(scene) as r:
+        r.render(size=(64, 64))  # the scene's own buffers, pipelines and environment
+        baseline = r.device.bytes_allocated()[0]
         if max_mib:
             budget = max_mib * 2**20
         else:  # free device and host memory (VK_EXT_memory_budget where the driver has it)
@@ -154,25 +147,32 @@ def run_scene(key: str, sizes: list[tuple[int, int]], batches: list[int], reps: 
                           f"{budget / 2**20:.0f} MiB", file=sys.stderr)
                     continue
                 views = CameraBatch.from_poses(poses_for(key, r, b), peers.YFOV_DEG)
-                out = r.render_batch(views, size=size, **opts)  # warm-up: targets, recordings
+                for _ in range(WARM_UP):  # targets, every ring slot's recordings, shadow maps
+                    out = r.render_batch(views, size=size, **opts)
                 assert out.shape == (b, h, w, 4) and out.dtype == np.uint8, out.shape
-                wall, gpu = [], []
+                wall, gpu, reused = [], [], []
                 for _ in range(reps):
                     t = time.perf_counter()
                     r.render_batch(views, size=size, **opts)
                     wall.append((time.perf_counter() - t) * 1e3)
                     gpu.append(r.last_stats.gpu_ms)
+                    t = time.perf_counter()
+                    r.render_batch(views, size=size, out=out, **opts)
+                    reused.append((time.perf_counter() - t) * 1e3)
                 wall_ms, gpu_ms = statistics.median(wall), statistics.median(gpu)
                 cp = copy_ms(out.shape)
-                row = {"scene": key if pipeline != "compute" else f"{key} (compute)", "size": f"{w}x{h}", "B": b, "views_per_s": b / wall_ms * 1e3,
+                row = {"scene": key if pipeline == "auto" else f"{key} ({pipeline})",
+                       "size": f"{w}x{h}", "B": b, "views_per_s": b / wall_ms * 1e3,
+                       "reused_views_per_s": b / statistics.median(reused) * 1e3,
                        "ms_per_batch": wall_ms, "gpu_ms": gpu_ms,
                        "gpu_views_per_s": b / gpu_ms * 1e3 if gpu_ms > 0 else float("nan"),
                        "host_us_per_view": (wall_ms - (gpu_ms if math.isfinite(gpu_ms) else 0) - cp)
                        * 1e3 / b,
-                       "copy_ms": cp, "gpu_mib": batch_gpu_bytes(r, size, b) / 2**20,
+                       "copy_ms": cp, "gpu_mib": batch_gpu_bytes(r, baseline) / 2**20,
                        "device": r.device.info.name, "draws": len(r.gpu_scene.draws)}
                 if torch is not None:
-                    r.render_batch(views, size=size, device="cuda", **opts)
+                    for _ in range(WARM_UP):
+                        r.render_batch(views, size=size, device="cuda", **opts)
                     times = []
                     for _ in range(reps):
                         t = time.perf_counter()
@@ -180,7 +180,7 @@ def run_scene(key: str, sizes: list[tuple[int, int]], batches: list[int], reps: 
                         torch.cuda.synchronize()
                         times.append(time.perf_counter() - t)
                     row["torch_views_per_s"] = b / statistics.median(times)
-                    row["gpu_mib_with_torch_target"] = batch_gpu_bytes(r, size, b) / 2**20
+                    row["gpu_mib_with_torch_target"] = batch_gpu_bytes(r, baseline) / 2**20
                 if b <= many_max:
                     cams = [views.camera(i) for i in range(b)]
                     list(r.render_many(cams[: min(b, 8)], size=size, **opts))
@@ -193,9 +193,10 @@ def run_scene(key: str, sizes: list[tuple[int, int]], batches: list[int], reps: 
     return rows
 
 
-HEADER = ("| scene | size | B | views/s into NumPy | views/s into torch | GPU views/s (render only) "
-          "| ms per batch | host us/view | GPU MiB | render_many views/s | batch / many |\n"
-          "|---|---|---|---|---|---|---|---|---|---|---|")
+HEADER = ("| scene | size | B | views/s into NumPy | into NumPy (out=) | views/s into torch "
+          "| GPU views/s (render only) | ms per batch | host us/view | GPU MiB "
+          "| render_many views/s | batch / many |\n"
+          "|---|---|---|---|---|---|---|---|---|---|---|---|")
 
 
 def print_row(r: dict) -> None:
@@ -204,7 +205,8 @@ def print_row(r: dict) -> None:
     ratio = f"{r['views_per_s'] / many:.1f}x" if many else "-"
     gvps = f"{r['gpu_views_per_s']:,.0f}" if math.isfinite(r["gpu_views_per_s"]) else "n/a"
     tvps = f"{r['torch_views_per_s']:,.0f}" if "torch_views_per_s" in r else "-"
-    print(f"| {r['scene']} | {r['size']} | {r['B']} | {r['views_per_s']:,.0f} | {tvps} | {gvps} "
+    print(f"| {r['scene']} | {r['size']} | {r['B']} | {r['views_per_s']:,.0f} "
+          f"| {r['reused_views_per_s']:,.0f} | {tvps} | {gvps} "
           f"| {r['ms_per_batch']:.2f} | {r['host_us_per_view']:.1f} | {r['gpu_mib']:.2f} "
           f"| {many_s} | {ratio} |", flush=True)
 

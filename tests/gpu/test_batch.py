@@ -132,6 +132,40 @@ def test_depth_linear_and_options(chart) -> None:  # noqa: ANN001
                            [chart.render(c, size=SIZE, pipeline="forward", **opts) for c in cams], str(opts))
 
 
+@pytest.mark.parametrize("options", [{}, {"batch": 3}, {"pipeline": "compute"},
+                                     {"depth": True}, {"outputs": ("color", "depth")}])
+def test_out_receives_the_views(chart, options: dict) -> None:  # noqa: ANN001
+    """out=: the colour written into the caller's array (returned as it), the same as a new
+    array, for the layered batch in one or several submissions, the compute batch, with depth
+    and with the dataset outputs (view by view)."""
+    if options.get("pipeline") == "compute" and chart.compute_batch_unavailable():
+        pytest.skip(chart.compute_batch_unavailable())
+    cams = cameras_of(chart, 7, seed=9)
+    want = chart.render_batch(cams, size=SIZE, **options)
+    out = np.full((7, SIZE[1], SIZE[0], 4), 7, np.uint8)
+    got = chart.render_batch(cams, size=SIZE, out=out, **options)
+    color = got["color"] if isinstance(got, dict) else got[0] if isinstance(got, tuple) else got
+    assert color is out
+    assert np.array_equal(out, want["color"] if isinstance(want, dict) else
+                          want[0] if isinstance(want, tuple) else want)
+
+
+@pytest.mark.parametrize("out, message", [
+    (np.zeros((6, 36, 48, 4), np.uint8), r"shape \(7, 36, 48, 4\); got uint8 \(6, 36, 48, 4\)"),
+    (np.zeros((7, 36, 48, 4), np.float32), "got float32"),
+    (np.zeros((7, 36, 48, 8), np.uint8)[..., ::2], "not contiguous"),
+    (np.zeros((7, 36, 48, 4), np.uint8).copy(order="F"), "not contiguous"),
+    ([[0]], "got list"),
+])
+def test_bad_out_is_one_line(chart, out, message: str) -> None:  # noqa: ANN001
+    with pytest.raises(UsageError, match=message):
+        chart.render_batch(cameras_of(chart, 7, seed=1), size=SIZE, out=out)
+    frozen = np.zeros((7, SIZE[1], SIZE[0], 4), np.uint8)
+    frozen.flags.writeable = False
+    with pytest.raises(UsageError, match="read-only"):
+        chart.render_batch(cameras_of(chart, 7, seed=1), size=SIZE, out=frozen)
+
+
 def test_shadowed_spot_and_point_lights(chart) -> None:  # noqa: ANN001
     """Spot and point shadow maps do not depend on the camera: shared by the views exactly."""
     lo, hi = (np.asarray(b) for b in chart.scene.bounds())

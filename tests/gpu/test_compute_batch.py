@@ -105,3 +105,21 @@ def test_cli_cameras_through_the_compute_batch(tmp_path, capsys) -> None:  # noq
         got, want = (np.asarray(Image.open(tmp_path / d / f"frame_{i:05d}.png").convert("RGBA"))
                      for d in ("a", "b"))
         assert_same(want, got, f"frame {i}")
+
+
+def test_batches_of_changing_sizes_keep_two_atlases(chart) -> None:  # noqa: ANN001
+    """A job's batches change size (its last one is shorter; a user tries several): each
+    size has its own atlas, and only the two most recently used are kept, so the device
+    memory a run of sizes holds stays that of two, and a size met again renders the same."""
+    cams = cameras_of(chart, 12, seed=3)
+    first = chart.render_batch(cams[:5], SIZE, POINT, pipeline="compute")
+    held = []
+    for n in (7, 3, 12, 5, 7):
+        out = chart.render_batch(cams[:n], SIZE, POINT, pipeline="compute")
+        assert out.shape[0] == n
+        held.append(chart.device.bytes_allocated()[0])
+        assert len(chart.batch_path._atlases) <= 2
+    assert np.array_equal(out[:5], first)
+    # The last two calls hold atlases for 5 and 7 views, as the 2nd and 3rd calls held
+    # (3 and 7): no more than the most any pair of sizes held before.
+    assert held[-1] <= max(held[:-1])

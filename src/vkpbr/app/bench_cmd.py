@@ -78,8 +78,9 @@ def _spheres(draws: int) -> Callable:
     return make
 
 
-# name -> (scene, (width, height)[, render options]): the default frame path (auto), and
-# Sponza through the compute path with the raster units and with the compute rasteriser.
+# name -> (scene, (width, height)[, render options]): the default frame path (auto: on GPUs
+# the compute path with the compute rasteriser), Sponza on the fragment path, and through the
+# compute path with the raster units and with the compute rasteriser.
 SCENARIOS: dict[str, tuple] = {
     "sponza-1080p": (_sponza, (1920, 1080)),
     "sponza-480p": (_sponza, (640, 480)),
@@ -88,16 +89,19 @@ SCENARIOS: dict[str, tuple] = {
     "spheres-5k": (_spheres(5000), (1920, 1080)),
     **{f"sponza-{label}-{path}": (_sponza, size, options)
        for label, size in (("1080p", (1920, 1080)), ("480p", (640, 480)))
-       for path, options in (("compute", {"pipeline": "compute"}),
+       for path, options in (("forward", {"pipeline": "forward"}),
+                             ("compute", {"pipeline": "compute", "raster": "hardware"}),
                              ("compute-raster", {"pipeline": "compute", "raster": "compute"}))},
 }
 
 
 # name -> (scene key of benchmarks/peers/common.py BATCH_SCENES, (width, height), frame path):
-# the layered batch (auto) and the compute batch (pipeline="compute", docs/batch.md).
+# the default (auto: the compute batch on GPUs), the layered batch (pipeline="forward") and
+# the compute batch (pipeline="compute", docs/batch.md).
 BATCH_SCENARIOS: dict[str, tuple[str, tuple[int, int], str]] = {
     f"batch-{key}-{n}{suffix}": (key, (n, n), pipeline) for key in ("sponza", "helmet")
-    for n in (128, 512) for suffix, pipeline in (("", "auto"), ("-compute", "compute"))
+    for n in (128, 512) for suffix, pipeline in (("", "auto"), ("-forward", "forward"),
+                                                 ("-compute", "compute"))
 }
 PEERS_DIR = REPO / "benchmarks" / "peers"
 

@@ -104,8 +104,9 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
                "SMs of a datacenter GPU); auto: compute on GPUs (offscreen, no MSAA), forward "
                "on CPUs", field="pipeline"),
     OptionSpec("--raster", "enum", "what makes the visibility buffer of the compute path and "
-               "the dataset outputs (default %(default)s): hardware (the raster units) or "
-               "compute (a compute rasteriser on all SMs)", field="raster"),
+               "the dataset outputs (default %(default)s): hardware (the raster units), "
+               "compute (a compute rasteriser on all SMs) or auto (compute on GPUs that have "
+               "64-bit atomics, hardware on CPUs)", field="raster"),
     OptionSpec("--no-alpha-mask", "off", "draw masked materials as opaque", field="alpha_mask"),
     OptionSpec("--no-normal-maps", "off", "ignore normal maps", field="normal_mapping"),
     OptionSpec("--no-occlusion", "off", "ignore occlusion maps", field="occlusion"),

@@ -30,7 +30,7 @@ from vkpbr.gpu.rendering import (
     host_read_barrier,
     redraw_barriers,
 )
-from vkpbr.gpu.target import COLOR_FORMATS
+from vkpbr.gpu.target import COLOR_FORMATS, copy_out
 
 __all__ = ["BatchTarget"]
 
@@ -128,11 +128,13 @@ class BatchTarget:
         return external_ownership(self.device.vk, self.device.queue_family, self.color_readback,
                                   external_to_ours)
 
-    def read_color(self, views: int) -> np.ndarray:
-        """A copy of the first `views` views: (views, H, W, 4) uint8 or float32."""
+    def read_color(self, views: int, into: np.ndarray | None = None) -> np.ndarray:
+        """A copy of the first `views` views: (views, H, W, 4) uint8 or float32, written into
+        `into` where given (an array of that shape and type: no new pages to fault in)."""
         dtype = np.uint8 if self.color_kind == "srgb" else np.float32
         w, h = self.extent
-        return self.color_readback.array(dtype, views * w * h * 4).reshape(views, h, w, 4).copy()
+        return copy_out(self.color_readback.array(dtype, views * w * h * 4).reshape(views, h, w, 4),
+                        into)
 
     def read_depth(self, views: int) -> np.ndarray:
         """A copy of the first `views` views' window depth: (views, H, W) float32."""
@@ -143,3 +145,4 @@ class BatchTarget:
     def destroy(self) -> None:
         while self._objects:
             self._objects.pop().destroy()
+

@@ -376,6 +376,18 @@ class Device:
     def live_children(self) -> int:
         return len(self._children)
 
+    def bytes_allocated(self) -> tuple[int, int]:
+        """(device-local, host-visible) bytes of the live buffers and images this device made,
+        as their memory requirements asked (benchmarks report a batch's footprint with it)."""
+        local = host = 0
+        for child in self._children:
+            size = getattr(child, "allocation_size", None) or getattr(child, "bytes", 0)
+            if getattr(child, "host_visible", False):
+                host += int(size)
+            else:
+                local += int(size)
+        return local, host
+
     def check_validation(self) -> None:
         self.instance.check()
 

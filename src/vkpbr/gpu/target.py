@@ -322,16 +322,17 @@ class OffscreenTarget:
         return self.readback(frame_index)[0].array(dtype, w * h * 4).reshape(h, w, 4).copy()
 
     def read_tiles(self, frame_index: int, views: int, size: tuple[int, int],
-                   depth: bool = False) -> np.ndarray:
+                   depth: bool = False, into: np.ndarray | None = None) -> np.ndarray:
         """A copy of an atlas frame's colour (views, H, W, 4), or its depth (views, H, W),
-        copied out tile by tile (record_end's `tiles`)."""
+        copied out tile by tile (record_end's `tiles`); the colour written into `into` where
+        given (an array of that shape and type)."""
         w, h = size
         if depth:
             return self.readback(frame_index)[1].array(np.float32, views * w * h).reshape(
                 views, h, w).copy()
         dtype = np.uint8 if self.color_kind == "srgb" else np.float32
-        return self.readback(frame_index)[0].array(dtype, views * w * h * 4).reshape(
-            views, h, w, 4).copy()
+        return copy_out(self.readback(frame_index)[0].array(dtype, views * w * h * 4).reshape(
+            views, h, w, 4), into)
 
     def read_depth(self, frame_index: int) -> np.ndarray:
         """A copy of the frame's depth buffer: (H, W) float32 window depth in [0, 1]."""
@@ -341,3 +342,11 @@ class OffscreenTarget:
     def destroy(self) -> None:
         while self._objects:
             self._objects.pop().destroy()
+
+
+def copy_out(mapped: np.ndarray, into: np.ndarray | None) -> np.ndarray:
+    """`mapped` (a view of readback memory) copied into `into`, or into a new array."""
+    if into is None:
+        return mapped.copy()
+    np.copyto(into, mapped)
+    return into

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections import OrderedDict
 from collections.abc import Callable
 from typing import Any
 
@@ -38,6 +39,7 @@ __all__ = ["BatchPath", "COMPUTE_BYTES"]
 # Device bytes a pixel of a compute batch's atlas needs besides its colour: depth 4, the
 # visibility image 8, the rasteriser's depth|triangle 8, the pixel list 4, the big list ~1.
 COMPUTE_BYTES = 25
+ATLASES_KEPT = 2  # compute-batch atlases kept between calls (BatchPath._atlas)
 
 
 class BatchPath:
@@ -50,27 +52,30 @@ class BatchPath:
         self._cuda_imports: dict[int, Any] = {}  # gpu/cuda.py CudaImport by target
         self._cuda_events: dict[int, Any] = {}  # torch.cuda.Event of a buffer's last clone
         self._exports: dict[int, Any] = {}  # the compute batch's exported colour, by atlas
+        # The compute batch's atlases, by (extent, linear), least recently used first: two
+        # are kept (a job's full batches and its last, shorter one), older ones destroyed.
+        self._atlases: OrderedDict[tuple, Any] = OrderedDict()
 
     # --- whole batches ----------------------------------------------------------------------
     def render(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
-               opts: RenderOptions, linear: bool, depth: bool, batch: int | str
-               ) -> tuple[np.ndarray, np.ndarray | None]:
-        """Colour (and depth) of every view, in submissions of `per_submission` views."""
+               opts: RenderOptions, linear: bool, depth: bool, batch: int | str,
+               out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+        """Colour (and depth) of every view, in submissions of `per_submission` views; the
+        colour into `out` where given."""
         per = self.per_submission(size, linear, depth, batch)
         colors, depths = [], []
         for start in range(0, len(views), per):
-            part = _slice(views, start, min(start + per, len(views)))
-            color, dist = self._submit(part, size, lights, opts, linear, depth)
+            stop = min(start + per, len(views))
+            color, dist = self._submit(_slice(views, start, stop), size, lights, opts, linear,
+                                       depth, into=None if out is None else out[start:stop])
             colors.append(color)
             depths.append(dist)
-        color = colors[0] if len(colors) == 1 else np.concatenate(colors)
-        if depths[0] is None:
-            return color, None
-        return color, depths[0] if len(depths) == 1 else np.concatenate(depths)
+        return _joined(colors, out), (None if depths[0] is None else _joined(depths))
 
     def render_compute(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
                        opts: RenderOptions, linear: bool, depth: bool, batch: int | str,
-                       cuda: bool = False) -> tuple[Any, np.ndarray | None]:
+                       cuda: bool = False, out: np.ndarray | None = None
+                       ) -> tuple[Any, np.ndarray | None]:
         """The compute batch: each submission's views tiled in one atlas target, rasterised
         and shaded in compute shaders (render/compute_path.py's kernels, BATCH builds).
         `cuda`: the colour as one torch tensor (the atlas's tiles copied into exported memory
@@ -90,26 +95,25 @@ class BatchPath:
         rows = -(-per // cols)
         colors, depths = [], []
         for start in range(0, len(views), per):
-            part = _slice(views, start, min(start + per, len(views)))
-            color, dist = self._submit_compute(part, (w, h), (cols, rows), lights, opts, linear,
-                                               depth, cuda)
+            stop = min(start + per, len(views))
+            color, dist = self._submit_compute(_slice(views, start, stop), (w, h), (cols, rows),
+                                               lights, opts, linear, depth, cuda,
+                                               None if out is None else out[start:stop])
             colors.append(color)
             depths.append(dist)
         if cuda:
             import torch
 
             return (colors[0] if len(colors) == 1 else torch.cat(colors)), None
-        color = colors[0] if len(colors) == 1 else np.concatenate(colors)
-        if not depth:
-            return color, None
-        return color, depths[0] if len(depths) == 1 else np.concatenate(depths)
+        return _joined(colors, out), (_joined(depths) if depth else None)
 
     def _submit_compute(self, views: CameraBatch, size: tuple[int, int], grid: tuple[int, int],
                         lights: LightsArg, opts: RenderOptions, linear: bool, depth: bool,
-                        cuda: bool = False) -> tuple[Any, np.ndarray | None]:
+                        cuda: bool = False, into: np.ndarray | None = None
+                        ) -> tuple[Any, np.ndarray | None]:
         r, n = self.r, len(views)
         (w, h), (cols, rows) = size, grid
-        target = r.offscreen_target((cols * w, rows * h), linear)
+        target = self._atlas((cols * w, rows * h), linear)
         external = self._exported(target, cols * rows * w * h) if cuda else None
         # The compute batch reads only the ViewRecords: keep whatever chunking the buffers
         # have (a new one reallocates them).
@@ -124,7 +128,7 @@ class BatchPath:
         if cuda:
             r.device.check_validation()
             return self._cuda_tensor(external, (n, h, w, 4), linear), None
-        color = target.read_tiles(frame.index, n, size)
+        color = target.read_tiles(frame.index, n, size, into=into)
         dist = None
         if depth:
             dist = linear_depth(target.read_tiles(frame.index, n, size, depth=True),
@@ -141,7 +145,7 @@ class BatchPath:
         why = cuda_unavailable()
         if why is None and not dev.external_memory_fd:
             why = f"{dev.info.name} cannot export memory (VK_KHR_external_memory_fd)"
-        compute = (opts.pipeline == L.PipelinePath.COMPUTE
+        compute = ((opts.pipeline == L.PipelinePath.COMPUTE or self.r.batch_auto_compute(opts))
                    and self.r.compute_batch_unavailable() is None)
         if why is None and not compute and not dev.batch_views:
             why = f"{dev.info.name} lacks layered rendering for batches"
@@ -181,8 +185,8 @@ class BatchPath:
 
     # --- one submission ---------------------------------------------------------------------
     def _submit(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
-                opts: RenderOptions, linear: bool, depth: bool, cuda: bool = False
-                ) -> tuple[Any, np.ndarray | None]:
+                opts: RenderOptions, linear: bool, depth: bool, cuda: bool = False,
+                into: np.ndarray | None = None) -> tuple[Any, np.ndarray | None]:
         r, n = self.r, len(views)
         limits = r.device.limits
         layers = max(1, min(n, MAX_LAYERS, int(limits.maxFramebufferLayers),
@@ -194,7 +198,7 @@ class BatchPath:
         self._run(frame, plan, opts, lambda redraw: bv.command_buffer(
             target, frame, n, opts.tbn, opts.alpha_mask, plan, groups, r.prepass_for(target),
             redraw), (lambda: self._cuda_wait(target.color_readback)) if cuda else None)
-        color = self._cuda_view(target, n, linear) if cuda else target.read_color(n)
+        color = self._cuda_view(target, n, linear) if cuda else target.read_color(n, into)
         dist = linear_depth(target.read_depth(n), terms["znear"][:, None, None]) if depth else None
         r.device.check_validation()
         return color, dist
@@ -290,6 +294,29 @@ class BatchPath:
         self._cuda_events[id(buf)] = event
         return out
 
+    def _atlas(self, extent: tuple[int, int], linear: bool) -> Any:
+        """The compute batch's atlas target of `extent`, made on first use; the least
+        recently used beyond ATLASES_KEPT is destroyed with what was made for it."""
+        key = (extent, linear)
+        target = self._atlases.pop(key, None)
+        if target is None:
+            while len(self._atlases) >= ATLASES_KEPT:
+                self._drop_atlas(self._atlases.popitem(last=False)[1])
+            target = self.r.new_offscreen_target(extent, linear)
+        self._atlases[key] = target
+        return target
+
+    def _drop_atlas(self, target: Any) -> None:
+        buf = self._exports.pop(id(target), None)
+        if buf is not None:
+            self._cuda_wait(buf)
+            imported = self._cuda_imports.pop(id(buf), None)
+            if imported is not None:
+                imported.close()
+        self.r.drop_target(target)  # waits for the device
+        if buf is not None:
+            buf.destroy()
+
     def _exported(self, target: Any, pixels: int) -> Any:
         """The compute batch's exported colour buffer for atlas `target` (`pixels` of it),
         made on first use: device-local memory CUDA imports (VK_KHR_external_memory_fd)."""
@@ -328,13 +355,15 @@ class BatchPath:
             self._forget_cuda(target)
             target.destroy()
         self.targets = {}
-        for buf in self._exports.values():  # the compute batch's exported colour
-            self._cuda_wait(buf)
-            imported = self._cuda_imports.pop(id(buf), None)
-            if imported is not None:
-                imported.close()
-            buf.destroy()
-        self._exports = {}
+        while self._atlases:  # with the compute batch's exported colour
+            self._drop_atlas(self._atlases.popitem(last=False)[1])
+
+
+def _joined(parts: list[np.ndarray], out: np.ndarray | None = None) -> np.ndarray:
+    """The submissions' arrays as one (`out` itself when they were written into it)."""
+    if out is not None:
+        return out
+    return parts[0] if len(parts) == 1 else np.concatenate(parts)
 
 
 def _slice(views: CameraBatch, start: int, stop: int) -> CameraBatch:

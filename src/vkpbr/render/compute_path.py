@@ -356,8 +356,15 @@ class ComputeScene:
             cmd.bind_set(1, material_set)
         cmd.bind_set(self.set_index, compute_set)
 
-    def forget_target(self, target: Any) -> None:
-        self._targets.pop(id(target), None)
+    def forget_target(self, target: Any, destroy: bool = False) -> None:
+        """Make `target`'s buffers and sets again on its next use (its images changed);
+        `destroy`: free the old ones now (the target itself is going)."""
+        res = self._targets.pop(id(target), None)
+        if res is not None and destroy:
+            gone = {id(obj) for obj in res.owned}
+            self._owned = [obj for obj in self._owned if id(obj) not in gone]
+            for obj in reversed(res.owned):
+                obj.destroy()
 
     def destroy(self) -> None:
         while self._owned:

@@ -580,10 +580,14 @@ class PipelinePath(Named):
 class RasterPath(Named):
     """What makes the compute path's visibility buffer: HARDWARE, the raster units (pbr.vert and
     pbr.frag's VISIBILITY build); COMPUTE, compute shaders (render/compute_path.py: a 64-bit
-    atomic per covered pixel, on all SMs; masked draws alpha-tested there too)."""
+    atomic per covered pixel, on all SMs; masked draws alpha-tested there too); AUTO, the
+    compute rasteriser on GPUs that have 64-bit storage atomics where the image fits one
+    storage binding (the H200 measured it faster than the raster units at 128x128 to
+    1920x1080: BENCHMARKS.md), the raster units on CPUs."""
 
     HARDWARE = 0
     COMPUTE = 1
+    AUTO = 2
 
 
 class TbnMode(Named):

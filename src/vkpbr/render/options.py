@@ -65,9 +65,10 @@ class RenderOptions:
         "auto", "forward" (fragment shading) or "compute" (a visibility buffer shaded in
         compute shaders: the same pixels, on all of a datacenter GPU's SMs).
     raster : RasterPath or str
-        What makes the compute path's visibility buffer (and its dataset outputs'): "hardware"
-        (the raster units) or "compute" (a compute rasteriser on all SMs, masked draws
-        alpha-tested there as the shading samples them; needs 64-bit storage atomics). Frames on the forward path ignore it:
+        What makes the compute path's visibility buffer (and its dataset outputs'): "auto"
+        (compute on GPUs with 64-bit storage atomics, hardware on CPUs), "hardware" (the
+        raster units) or "compute" (a compute rasteriser on all SMs, masked draws alpha-tested
+        there as the shading samples them; needs 64-bit storage atomics). Frames on the forward path ignore it:
         their passes test the depths their own rasterisation makes.
     alpha_mask, normal_mapping, occlusion : bool
         Alpha masking (off: masked materials are drawn opaque), normal maps, occlusion maps.
@@ -96,7 +97,7 @@ class RenderOptions:
     tonemap: Tonemap | None = None
     exposure: float = 0.0
     pipeline: PipelinePath = PipelinePath.AUTO
-    raster: RasterPath = RasterPath.HARDWARE
+    raster: RasterPath = RasterPath.AUTO
     alpha_mask: bool = True
     normal_mapping: bool = True
     occlusion: bool = True

@@ -309,7 +309,12 @@ class FrameRecorder:
         cs.record_raster_depth(cmd, target, frame.index)
 
     def free(self, target_id: int | None = None) -> None:
-        for key in [k for k in self._recorded if target_id is None or k[0] == target_id]:
+        """Free the recorded command buffers (of one target: its id; None: all)."""
+        def of_target(key: tuple) -> bool:
+            # A frame's key starts with its target's id, a compute batch's with its name.
+            return key[0] == target_id or (key[0] == "compute batch" and key[1] == target_id)
+
+        for key in [k for k in self._recorded if target_id is None or of_target(k)]:
             self._recorded.pop(key).cmd.free()
 
 

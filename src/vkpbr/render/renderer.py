@@ -191,10 +191,23 @@ class Renderer:
             raise UsageError(f"image size {w}x{h} exceeds this device's limit of {limit}x{limit}")
         key = (int(w), int(h), linear)
         if key not in self._targets:
-            self._targets[key] = OffscreenTarget(
-                self.device, (int(w), int(h)), "float" if linear else "srgb", self.msaa,
-                (*self.background, 1.0), compute=self.device.compute_path)
+            self._targets[key] = self.new_offscreen_target((int(w), int(h)), linear)
         return self._targets[key]
+
+    def new_offscreen_target(self, size: tuple[int, int], linear: bool) -> OffscreenTarget:
+        """A new offscreen target of `size` the caller owns (the compute batch's atlases:
+        render/batch_path.py; give it back with `drop_target`)."""
+        return OffscreenTarget(self.device, size, "float" if linear else "srgb", self.msaa,
+                               (*self.background, 1.0), compute=self.device.compute_path)
+
+    def drop_target(self, target: OffscreenTarget) -> None:
+        """Destroy a target from `new_offscreen_target` and everything recorded or made for
+        it (command buffers, the compute path's per-target buffers). Waits for the device."""
+        self.device.wait_idle()
+        self.recorder.free(id(target))
+        if self._compute_scene is not None:
+            self._compute_scene.forget_target(target, destroy=True)
+        target.destroy()
 
     def window_target(self, create_surface: Callable[[Any, Any], int], size: tuple[int, int],
                       vsync: bool = True) -> Swapchain:
@@ -264,17 +277,27 @@ class Renderer:
             return "the scene has blended materials (drawn by the fragment path)"
         return None
 
+    def batch_auto_compute(self, options: RenderOptions) -> bool:
+        """Whether render_batch's pipeline "auto" takes the compute batch: on GPUs where
+        `compute_batch_unavailable` is None (and the fragment path's layered batch on CPUs)."""
+        return (options.pipeline == L.PipelinePath.AUTO and self.device.info.kind != "cpu"
+                and self.compute_batch_unavailable() is None)
+
     def uses_compute_raster(self, options: RenderOptions, target: FrameTarget) -> bool:
         """Whether the compute path's visibility buffer comes from the compute rasteriser
-        (UsageError when it is asked for and the device or the target's size cannot)."""
-        if options.raster != L.RasterPath.COMPUTE:
+        (UsageError when it is asked for and the device or the target's size cannot; auto
+        takes it on GPUs where it can, the raster units otherwise)."""
+        if options.raster == L.RasterPath.HARDWARE:
             return False
+        w, h = target.extent
+        limit = int(self.device.limits.maxStorageBufferRange)
+        if options.raster == L.RasterPath.AUTO:
+            return (self.device.info.kind != "cpu" and bool(self.device.compute_raster)
+                    and 8 * w * h <= limit)
         if not self.device.compute_raster:
             raise UsageError("--raster compute is not available here: the device lacks 64-bit "
                              "storage-buffer atomics (shaderInt64, shaderBufferInt64Atomics); "
                              "use --raster hardware")
-        w, h = target.extent
-        limit = int(self.device.limits.maxStorageBufferRange)
         if 8 * w * h > limit:  # 8 bytes a pixel in one storage binding
             raise UsageError(f"--raster compute is not available for {w}x{h} here: at most "
                              f"{limit // 8:,} pixels; use --raster hardware")
@@ -634,6 +657,7 @@ class Renderer:
         outputs: Iterable[str] | None = None,
         batch: int | str = "auto",
         device: str = "cpu",
+        out: np.ndarray | None = None,
         **option_overrides: Any,
     ) -> np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray] | Any:
         """Render B views of the scene in one submission and return them stacked.
@@ -657,23 +681,31 @@ class Renderer:
             copied into Vulkan memory that CUDA imports (gpu/cuda.py), then into a tensor of
             torch's own on its current stream. Colour only; needs torch with CUDA and
             cuda-python (the `cuda` extra) and the renderer on that NVIDIA GPU.
+        out : a C-contiguous writeable (B, H, W, 4) uint8 array (float32 with `linear`) the
+            colour is written into and returned as, instead of a new array: a loop reusing
+            one array skips the page faults of fresh memory (at 4,096 views of 128x128, 0.27 GB:
+            90-350 ms a call, against 30 ms into a reused array, on the 2-core CI machine).
 
         Returns
         -------
         (B, H, W, 4) uint8 sRGB (float32 linear with `linear`); with `depth` a tuple (colour,
-        depth); with `outputs` {name: (B, ...) array}. View i equals `render` of view i
-        (`CameraBatch.camera(i)`) with pipeline="forward" bit for bit (auto batches on the
-        fragment path; `render`'s auto takes the compute path on GPUs: within 1/255);
-        pipeline="compute" is the compute batch (one atlas, rasterised and shaded in compute
-        shaders: each view within 1/255 of `render(pipeline="compute", raster="compute")`,
-        docs/batch.md) where the device and scene allow it; except that directional lights' shadow maps
-        are one map over the whole scene, shared by the views (docs/batch.md).
+        depth); with `outputs` {name: (B, ...) array}. pipeline="forward" (and "auto" on
+        CPUs): view i equals `render` of view i (`CameraBatch.camera(i)`) with
+        pipeline="forward" bit for bit. pipeline="compute" (and "auto" on GPUs that have
+        64-bit atomics, for scenes without blended materials) is the compute batch (one
+        atlas, rasterised and shaded in compute shaders: each view within 1/255 of
+        `render(pipeline="compute", raster="compute")`, docs/batch.md). Either way
+        directional lights' shadow maps are one map over the whole scene, shared by the
+        views (docs/batch.md).
         """
         base = self.default_camera()
         views = as_camera_batch(cameras, base)
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
         if device not in ("cpu", "cuda"):
             raise UsageError(f"device {device!r}: choose 'cpu' (NumPy) or 'cuda' (a torch tensor)")
+        if out is not None:
+            _check_out(out, (len(views), size[1], size[0], 4), np.float32 if linear else np.uint8,
+                       device)
         if device == "cuda":
             if depth or outputs:
                 raise UsageError("device='cuda' returns the colour only: ask depth and dataset "
@@ -682,15 +714,17 @@ class Renderer:
         wanted = self._check_outputs(outputs, self.offscreen_target(size, linear)) if outputs else ()
         # The dataset outputs but colour come from their own pass (as `render` makes them).
         extra = tuple(n for n in wanted if n != "color")
-        # auto batches on the fragment path (render/batch.py), bit for bit what `render` draws
-        # with pipeline="forward"; an explicit "compute" is the compute batch (all views in
-        # one atlas, rasterised and shaded in compute shaders) where the device has the
-        # compute rasteriser and no draw blends, else view by view.
+        # "compute" is the compute batch (all views in one atlas, rasterised and shaded in
+        # compute shaders) where the device has the compute rasteriser and no draw blends,
+        # else view by view; "auto" takes the compute batch on GPUs where it can (the H200
+        # measured it 4-5x the layered batch: BENCHMARKS.md), else batches on the fragment
+        # path (render/batch.py), bit for bit what `render` draws with pipeline="forward".
         explicit_compute = (opts.pipeline == L.PipelinePath.COMPUTE
                             and self.uses_compute(self.offscreen_target(size, linear), opts))
-        if explicit_compute and self.compute_batch_unavailable() is None and not extra:
+        if (explicit_compute or self.batch_auto_compute(opts)) and not extra \
+                and self.compute_batch_unavailable() is None:
             color, dist = self.batch_path.render_compute(views, size, lights, opts, linear,
-                                                         depth, batch)
+                                                         depth, batch, out=out)
             if not wanted:
                 return (color, dist) if depth else color
             return {"color": color}
@@ -699,8 +733,8 @@ class Renderer:
             # compute path asked for: view by view, each exactly as `render` draws it.
             frames = list(self.render_many((views.camera(i) for i in range(len(views))), lights,
                                            size, opts, linear, depth, outputs=wanted or None))
-            return _stack_frames(frames, depth, wanted)
-        color, dist = self.batch_path.render(views, size, lights, opts, linear, depth, batch)
+            return _stack_frames(frames, depth, wanted, out)
+        color, dist = self.batch_path.render(views, size, lights, opts, linear, depth, batch, out)
         if not wanted:
             return (color, dist) if depth else color
         result: dict[str, np.ndarray] = {}
@@ -847,13 +881,28 @@ class Renderer:
         self.close()
 
 
-def _stack_frames(frames: list[Any], depth: bool, wanted: tuple[str, ...]) -> Any:
-    """render_many's frames stacked as render_batch returns them."""
+def _check_out(out: Any, shape: tuple[int, ...], dtype: type, device: str) -> None:
+    """render_batch's `out`: a NumPy array render_batch can write the colour into."""
+    if device != "cpu":
+        raise UsageError("out= takes a NumPy array: it is for device='cpu'")
+    if not isinstance(out, np.ndarray) or out.shape != shape or out.dtype != dtype \
+            or not out.flags.c_contiguous or not out.flags.writeable:
+        got = (f"{type(out).__name__}" if not isinstance(out, np.ndarray) else
+               f"{out.dtype} {out.shape}{'' if out.flags.c_contiguous else ' not contiguous'}"
+               f"{'' if out.flags.writeable else ' read-only'}")
+        raise UsageError(f"out= must be a C-contiguous writeable {np.dtype(dtype)} array of "
+                         f"shape {shape}; got {got}")
+
+
+def _stack_frames(frames: list[Any], depth: bool, wanted: tuple[str, ...],
+                  out: np.ndarray | None = None) -> Any:
+    """render_many's frames stacked as render_batch returns them (the colour into `out`)."""
     if wanted:
-        return {n: np.stack([f[n] for f in frames]) for n in wanted}
+        return {n: np.stack([f[n] for f in frames], out=out if n == "color" else None)
+                for n in wanted}
     if depth:
-        return np.stack([f[0] for f in frames]), np.stack([f[1] for f in frames])
-    return np.stack(frames)
+        return np.stack([f[0] for f in frames], out=out), np.stack([f[1] for f in frames])
+    return np.stack(frames, out=out)
 
 
 def _no_clock() -> float:

@@ -147,16 +147,30 @@ def slice_sphere(camera: Camera, size: tuple[int, int], d0: float,
     (t = (d0 + d1) / 2 * (1 + k^2), k the half-diagonal per unit depth, at most d1); the
     radius is the largest distance to a corner, so containment is exact for any intrinsics.
     """
+    centres, radii = _slice_spheres(camera, size, np.array([d0]), np.array([d1]))
+    return centres[0], float(radii[0])
+
+
+def _slice_spheres(camera: Camera, size: tuple[int, int], d0: np.ndarray,
+                   d1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`slice_sphere` for n slices at once: centres (n, 3), radii (n,) (a frame fits its
+    cascades in a few array operations: this runs per frame while the camera moves)."""
     t = _tangent_rect(camera, size)
     mid = t.mean(axis=0)
     k2 = float(np.max(np.sum((t - mid) ** 2, axis=1)))
-    depth = min(0.5 * (d0 + d1) * (1.0 + k2), d1)
-    centre_v = np.array([mid[0] * depth, mid[1] * depth, -depth])
-    corners_v = np.array([[x * d, y * d, -d] for d in (d0, d1) for x, y in t])
-    radius = float(np.max(np.linalg.norm(corners_v - centre_v, axis=1)))
+    depth = np.minimum(0.5 * (d0 + d1) * (1.0 + k2), d1)
+    centre_v = np.stack([mid[0] * depth, mid[1] * depth, -depth], axis=-1)  # (n, 3)
+    d = np.stack([d0, d1], axis=-1)[:, :, None, None]  # (n, 2, 1, 1)
+    rect = np.concatenate([t, -np.ones((4, 1))], axis=1)  # (4, 3) per unit depth
+    corners_v = (d * rect).reshape(len(d0), 8, 3)
+    radii = np.max(np.sqrt(np.sum((corners_v - centre_v[:, None]) ** 2, axis=-1)), axis=1)
     inv = np.linalg.inv(_view_rows(camera))
-    centre = inv[:3, :3] @ centre_v + inv[:3, 3]
-    return centre, radius
+    return centre_v @ inv[:3, :3].T + inv[:3, 3], radii
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
 
 
 def light_basis(direction: Sequence[float]) -> np.ndarray:
@@ -164,9 +178,9 @@ def light_basis(direction: Sequence[float]) -> np.ndarray:
     camera's (right, up, -forward) so that front faces keep their winding."""
     f = _unit(direction)
     ref = np.array([0.0, 1.0, 0.0]) if abs(f[1]) < 0.99 else np.array([0.0, 0.0, 1.0])
-    s = np.cross(f, ref)
-    s /= np.linalg.norm(s)
-    return np.array([s, np.cross(s, f), f])
+    s = _cross(f, ref)
+    s /= math.sqrt(float(s @ s))
+    return np.array([s, _cross(s, f), f])
 
 
 def fit_cascade(centre: Sequence[float], radius: float, direction: Sequence[float],
@@ -177,29 +191,38 @@ def fit_cascade(centre: Sequence[float], radius: float, direction: Sequence[floa
     of `snap_texels` texels of a `resolution`-texel map (along the light too), deep enough to
     hold the sphere and, towards the light, the scene's bounds. Depth is reversed: 1 at the
     side facing the light, 0 at the far side."""
-    basis = light_basis(direction)
+    return _fit_cascades(np.asarray(centre, np.float64)[None], np.array([float(radius)]),
+                         light_basis(direction), scene_lo, scene_hi, resolution)[0]
+
+
+def _fit_cascades(centres: np.ndarray, radii: np.ndarray, basis: np.ndarray,
+                  scene_lo: Sequence[float], scene_hi: Sequence[float],
+                  resolution: int) -> np.ndarray:
+    """`fit_cascade` for n spheres (centres (n, 3), radii (n,)) of one light: (n, 4, 4)."""
     # The square is padded by half a grid step and a texel on each side: snapping moves its
     # centre by up to half a step, and the sphere must stay inside.
-    texel = cascade_texel(radius, resolution)
+    texel = cascade_texel(radii, resolution)
     half = 0.5 * resolution * texel
-    grid = snap_texels(resolution) * texel
-    c = np.round((basis @ np.asarray(centre, dtype=np.float64)) / grid) * grid
-    cx, cy = c[0], c[1]
-    scene_depths = _bounds_corners(scene_lo, scene_hi) @ basis[2]
-    reach = radius + 0.5 * grid
-    z_near = min(c[2] - reach, float(scene_depths.min()))
-    z_far = max(c[2] + reach, z_near + 1e-6 * max(radius, 1.0))
+    grid = (snap_texels(resolution) * texel)[:, None]
+    c = np.round((centres @ basis.T) / grid) * grid  # (n, 3) in the light's basis
+    nearest = float((_bounds_corners(scene_lo, scene_hi) @ basis[2]).min())
+    reach = radii + 0.5 * grid[:, 0]
+    z_near = np.minimum(c[:, 2] - reach, nearest)
+    z_far = np.maximum(c[:, 2] + reach, z_near + 1e-6 * np.maximum(radii, 1.0))
     span = z_far - z_near
     r, u, f = basis
-    return np.array([
-        [*(r / half), -cx / half],
-        [*(-u / half), cy / half],
-        [*(-f / span), z_far / span],
-        [0.0, 0.0, 0.0, 1.0],
-    ])
+    out = np.zeros((len(radii), 4, 4))
+    out[:, 0, :3] = r[None] / half[:, None]
+    out[:, 0, 3] = -c[:, 0] / half
+    out[:, 1, :3] = -u[None] / half[:, None]
+    out[:, 1, 3] = c[:, 1] / half
+    out[:, 2, :3] = -f[None] / span[:, None]
+    out[:, 2, 3] = z_far / span
+    out[:, 3, 3] = 1.0
+    return out
 
 
-def cascade_texel(radius: float, resolution: int) -> float:
+def cascade_texel(radius: float | np.ndarray, resolution: int) -> float | np.ndarray:
     """World size of one texel of a cascade of sphere `radius`: the map spans the sphere's
     diameter plus half a snapping step and one texel of padding on each side."""
     return 2.0 * radius / (resolution - snap_texels(resolution) - 2)
@@ -226,12 +249,9 @@ def directional_cascades(camera: Camera, size: tuple[int, int], direction: Seque
     """Fit `count` cascades of a directional light travelling along `direction` to the view
     range [znear, zfar] (`cascade_range` of it) of `camera` rendering `size` (W, H) pixels."""
     splits = cascade_splits(*cascade_range(znear, zfar), count)
-    mats, texel = [], []
-    for d0, d1 in zip(splits[:-1], splits[1:], strict=True):
-        centre, radius = slice_sphere(camera, size, d0, d1)
-        mats.append(fit_cascade(centre, radius, direction, scene_lo, scene_hi, resolution))
-        texel.append(cascade_texel(radius, resolution))
-    return CascadeFit(np.array(mats), splits[1:].copy(), np.array(texel))
+    centres, radii = _slice_spheres(camera, size, splits[:-1], splits[1:])
+    mats = _fit_cascades(centres, radii, light_basis(direction), scene_lo, scene_hi, resolution)
+    return CascadeFit(mats, splits[1:].copy(), cascade_texel(radii, resolution))
 
 
 def scene_cascade(direction: Sequence[float], scene_lo: Sequence[float],
