@@ -1,6 +1,7 @@
-"""Renderer.render_batch: every view of a batch equals the same view rendered alone, bit for
-bit (issue 14; float32 frames to 8 ulp), whatever form the cameras come in, however the
-batch is chunked and split.
+"""Renderer.render_batch on the fragment path's layered batch (pipeline="forward", what
+"auto" takes on CPUs): every view of a batch equals the same view rendered alone, bit for bit
+(issue 14; float32 frames to 8 ulp), whatever form the cameras come in, however the batch is
+chunked and split. (The compute batch, auto's choice on GPUs, is test_compute_batch.py's.)
 
 The scenes are the built-in chart (blended and masked materials, vertex colours: blended
 draws need each view's own back-to-front order) and a glTF sample model; the cameras are
@@ -23,6 +24,11 @@ from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.types import Camera, Light
 
 SIZE = (48, 36)
+
+
+def layered(r, *args, **kwargs):  # noqa: ANN001, ANN201
+    """render_batch on the layered batch (pipeline "forward") unless a test names another."""
+    return r.render_batch(*args, **{"pipeline": "forward", **kwargs})
 
 
 def random_cameras(base: Camera, count: int, seed: int, lo: np.ndarray, hi: np.ndarray) -> list[Camera]:
@@ -68,7 +74,7 @@ def assert_views_equal(batch: np.ndarray, singles: list[np.ndarray], what: str) 
 @pytest.mark.parametrize("count", [1, 7, 64])
 def test_views_equal_single_renders(chart, count: int) -> None:  # noqa: ANN001
     cams = cameras_of(chart, count, seed=count)
-    batch = chart.render_batch(cams, size=SIZE)
+    batch = layered(chart, cams, size=SIZE)
     assert batch.dtype == np.uint8
     assert_views_equal(batch, [chart.render(c, size=SIZE, pipeline="forward") for c in cams], f"B={count}")
     assert (batch[..., :3] > 0).any(axis=(1, 2, 3)).sum() > 0.5 * count  # the scene is seen
@@ -78,27 +84,27 @@ def test_camera_forms_give_the_same_views(chart) -> None:  # noqa: ANN001
     """A list of Cameras, (B, 4, 4) OpenGL poses, eye/target arrays, OpenCV K + poses."""
     cams = cameras_of(chart, 5, seed=11)
     cams = [dataclasses.replace(c, yfov_deg=50.0) for c in cams]
-    want = chart.render_batch(cams, size=SIZE)
+    want = layered(chart, cams, size=SIZE)
     # A pose's camera is eye, eye + forward, up (Camera.from_pose), rounded differently from
     # the look-at camera it came from: compare it with that camera rendered alone.
     poses = np.stack([c.world_from_camera("opengl") for c in cams])
     from_poses = [Camera.from_pose(m, yfov_deg=50.0) for m in poses]
-    assert_views_equal(chart.render_batch(CameraBatch.from_poses(poses, 50.0), size=SIZE),
+    assert_views_equal(layered(chart, CameraBatch.from_poses(poses, 50.0), size=SIZE),
                        [chart.render(c, size=SIZE, pipeline="forward") for c in from_poses], "poses")
-    assert_views_equal(chart.render_batch(poses, size=SIZE),
+    assert_views_equal(layered(chart, poses, size=SIZE),
                        [chart.render(dataclasses.replace(c, yfov_deg=chart.default_camera().yfov_deg),
                                      size=SIZE, pipeline="forward") for c in from_poses],
                        "a (B, 4, 4) array")
     eye, target = np.array([c.eye for c in cams]), np.array([c.target for c in cams])
     planes = {k: [getattr(c, k) for c in cams] for k in ("znear", "zfar")}  # the chart's camera's
-    assert_views_equal(chart.render_batch(CameraBatch.from_look_at(eye, target, yfov_deg=50.0,
+    assert_views_equal(layered(chart, CameraBatch.from_look_at(eye, target, yfov_deg=50.0,
                                                                    **planes),
                                           size=SIZE), list(want), "look-at arrays")
     # OpenCV: an off-centre principal point and non-square pixels, at twice the K's size.
     k = np.array([[60.0, 0.0, 20.0], [0.0, 50.0, 14.0], [0.0, 0.0, 1.0]])
     cv = np.stack([c.world_from_camera("opencv") for c in cams])
     size2 = (SIZE[0] * 2, SIZE[1] * 2)
-    batch = chart.render_batch(CameraBatch.from_opencv(k, cv, SIZE), size=size2)
+    batch = layered(chart, CameraBatch.from_opencv(k, cv, SIZE), size=size2)
     singles = [chart.render(Camera.from_opencv(k, m, SIZE), size=size2, pipeline="forward") for m in cv]
     assert_views_equal(batch, singles, "OpenCV K")
 
@@ -106,15 +112,15 @@ def test_camera_forms_give_the_same_views(chart) -> None:  # noqa: ANN001
 def test_chunks_and_splits(chart, monkeypatch) -> None:  # noqa: ANN001
     """Chunks of 3 layers and submissions of 5 views give what one chunk gives."""
     cams = cameras_of(chart, 8, seed=5)
-    whole = chart.render_batch(cams, size=SIZE)
+    whole = layered(chart, cams, size=SIZE)
     monkeypatch.setattr("vkpbr.render.batch_path.MAX_LAYERS", 3)
-    assert_views_equal(chart.render_batch(cams, size=SIZE), list(whole), "chunks of 3")
-    assert_views_equal(chart.render_batch(cams, size=SIZE, batch=5), list(whole), "submissions of 5")
+    assert_views_equal(layered(chart, cams, size=SIZE), list(whole), "chunks of 3")
+    assert_views_equal(layered(chart, cams, size=SIZE, batch=5), list(whole), "submissions of 5")
 
 
 def test_depth_linear_and_options(chart) -> None:  # noqa: ANN001
     cams = cameras_of(chart, 6, seed=3)
-    color, depth = chart.render_batch(cams, size=SIZE, depth=True)
+    color, depth = layered(chart, cams, size=SIZE, depth=True)
     singles = [chart.render(c, size=SIZE, pipeline="forward", depth=True) for c in cams]
     assert_views_equal(color, [s[0] for s in singles], "colour with depth")
     assert_views_equal(depth, [s[1] for s in singles], "depth")
@@ -122,13 +128,13 @@ def test_depth_linear_and_options(chart) -> None:  # noqa: ANN001
     # Float frames: the BATCH build of pbr.frag is compiled on its own, and the driver may
     # round a few values differently (lavapipe: ~1 in 1,000 values, by 1-2 ulp). 8-bit
     # frames stay bit-equal (above); float ones are equal to 8 ulp.
-    linear = chart.render_batch(cams, size=SIZE, linear=True)
+    linear = layered(chart, cams, size=SIZE, linear=True)
     assert linear.dtype == np.float32
     for i, c in enumerate(cams):
         np.testing.assert_array_max_ulp(linear[i], chart.render(c, size=SIZE, pipeline="forward", linear=True), 8)
     for opts in ({"view": "f"}, {"lighting": "course"}, {"tbn": "packed", "alpha_mask": False},
                  {"env": "none", "exposure": 1.5}):
-        assert_views_equal(chart.render_batch(cams, size=SIZE, **opts),
+        assert_views_equal(layered(chart, cams, size=SIZE, **opts),
                            [chart.render(c, size=SIZE, pipeline="forward", **opts) for c in cams], str(opts))
 
 
@@ -141,9 +147,9 @@ def test_out_receives_the_views(chart, options: dict) -> None:  # noqa: ANN001
     if options.get("pipeline") == "compute" and chart.compute_batch_unavailable():
         pytest.skip(chart.compute_batch_unavailable())
     cams = cameras_of(chart, 7, seed=9)
-    want = chart.render_batch(cams, size=SIZE, **options)
+    want = layered(chart, cams, size=SIZE, **options)
     out = np.full((7, SIZE[1], SIZE[0], 4), 7, np.uint8)
-    got = chart.render_batch(cams, size=SIZE, out=out, **options)
+    got = layered(chart, cams, size=SIZE, out=out, **options)
     color = got["color"] if isinstance(got, dict) else got[0] if isinstance(got, tuple) else got
     assert color is out
     assert np.array_equal(out, want["color"] if isinstance(want, dict) else
@@ -159,11 +165,11 @@ def test_out_receives_the_views(chart, options: dict) -> None:  # noqa: ANN001
 ])
 def test_bad_out_is_one_line(chart, out, message: str) -> None:  # noqa: ANN001
     with pytest.raises(UsageError, match=message):
-        chart.render_batch(cameras_of(chart, 7, seed=1), size=SIZE, out=out)
+        layered(chart, cameras_of(chart, 7, seed=1), size=SIZE, out=out)
     frozen = np.zeros((7, SIZE[1], SIZE[0], 4), np.uint8)
     frozen.flags.writeable = False
     with pytest.raises(UsageError, match="read-only"):
-        chart.render_batch(cameras_of(chart, 7, seed=1), size=SIZE, out=frozen)
+        layered(chart, cameras_of(chart, 7, seed=1), size=SIZE, out=frozen)
 
 
 def test_shadowed_spot_and_point_lights(chart) -> None:  # noqa: ANN001
@@ -174,7 +180,7 @@ def test_shadowed_spot_and_point_lights(chart) -> None:  # noqa: ANN001
                     outer_cone=0.9, intensity=40.0),
               Light(kind="point", position=tuple(top + (hi - lo) * 0.3), intensity=20.0)]
     cams = cameras_of(chart, 6, seed=8)
-    assert_views_equal(chart.render_batch(cams, size=SIZE, lights=lights),
+    assert_views_equal(layered(chart, cams, size=SIZE, lights=lights),
                        [chart.render(c, size=SIZE, pipeline="forward", lights=lights) for c in cams], "spot + point")
 
 
@@ -183,9 +189,9 @@ def test_directional_shadows_share_one_scene_map(chart) -> None:  # noqa: ANN001
     any batch (alone or among others), and lit pixels agree with the cascaded single frame
     except near shadow edges."""
     cams = cameras_of(chart, 6, seed=9)
-    batch = chart.render_batch(cams, size=SIZE)
+    batch = layered(chart, cams, size=SIZE)
     for i in (0, 3):
-        assert (chart.render_batch([cams[i]], size=SIZE)[0] == batch[i]).all()
+        assert (layered(chart, [cams[i]], size=SIZE)[0] == batch[i]).all()
     single = np.stack([chart.render(c, size=SIZE, pipeline="forward") for c in cams])
     differ = np.abs(batch.astype(int) - single.astype(int)).max(axis=-1) > 8
     assert differ.mean() < 0.05, f"{differ.mean():.3%} of pixels differ by more than 8/255"
@@ -196,7 +202,7 @@ def test_outputs_are_stacked_per_view(chart) -> None:  # noqa: ANN001
         pytest.skip("the dataset outputs need the compute path's features")
     cams = cameras_of(chart, 4, seed=2)
     names = ("color", "depth", "instance", "normal")
-    out = chart.render_batch(cams, size=SIZE, outputs=names)
+    out = layered(chart, cams, size=SIZE, outputs=names)
     assert tuple(out) == names
     singles = [chart.render(c, size=SIZE, pipeline="forward", outputs=names) for c in cams]
     for name in names:
@@ -210,7 +216,7 @@ def test_sample_model(assets, make_renderer) -> None:  # noqa: ANN001
     if not r.device.batch_views:
         pytest.skip("no layered rendering on this device")
     cams = cameras_of(r, 7, seed=4)
-    assert_views_equal(r.render_batch(cams, size=SIZE), [r.render(c, size=SIZE, pipeline="forward") for c in cams],
+    assert_views_equal(layered(r, cams, size=SIZE), [r.render(c, size=SIZE, pipeline="forward") for c in cams],
                        "DamagedHelmet")
 
 
@@ -226,17 +232,17 @@ def test_bad_input_is_one_line(chart, cameras, batch, message: str) -> None:  # 
     if cameras is None:
         cameras = cameras_of(chart, 2, seed=1)
     with pytest.raises(UsageError, match=message.replace("(", r"\(").replace(")", r"\)")):
-        chart.render_batch(cameras, size=SIZE, batch=batch)
+        layered(chart, cameras, size=SIZE, batch=batch)
 
 
 def test_bad_view_is_named(chart) -> None:  # noqa: ANN001
     eye = np.tile([0.0, 1.0, 5.0], (5, 1))
     eye[3] = np.nan
     with pytest.raises(UsageError, match=r"cameras\[3\]: eye, target and up must be finite"):
-        chart.render_batch(CameraBatch.from_look_at(eye, np.zeros(3)), size=SIZE)
+        layered(chart, CameraBatch.from_look_at(eye, np.zeros(3)), size=SIZE)
     same = np.tile([0.0, 1.0, 5.0], (4, 1))
     with pytest.raises(UsageError, match=r"cameras\[0\]: eye and target coincide"):
-        chart.render_batch(CameraBatch.from_look_at(same, same), size=SIZE)
+        layered(chart, CameraBatch.from_look_at(same, same), size=SIZE)
 
 
 def test_cli_cameras_batched_equal_frame_by_frame(capsys, tmp_path) -> None:  # noqa: ANN001
@@ -254,7 +260,7 @@ def test_cli_cameras_batched_equal_frame_by_frame(capsys, tmp_path) -> None:  # 
     cams.write_text(json.dumps(["0.6,3.2,9,0.4,2.2,0", {"eye": [3, 3, 8], "target": [0, 2, 0], "fov": 50},
                                 "-4,2,6,0,1,0", "2,-1,-7,0,1,0"]))
     common = ["render", "--cameras", str(cams), "--size", "40x30", "--light", "point:0,4,3",
-              "--validation"]
+              "--validation", "--pipeline", "forward"]
     assert main([*common, "--out", str(tmp_path / "a")]) == 0
     assert main([*common, "--out", str(tmp_path / "b"), "--batch", "0", "--pipeline", "forward"]) == 0
     assert main([*common, "--out", str(tmp_path / "c"), "--batch", "3"]) == 0
@@ -296,7 +302,7 @@ def test_blended_draws_in_each_views_order(make_renderer) -> None:  # noqa: ANN0
     cams = cameras_of(r, 12, seed=21)
     orders = {r.blend_order(c.eye) for c in cams}
     assert len(orders) >= 4, "the cameras should disagree on the blended order"
-    assert_views_equal(r.render_batch(cams, size=SIZE), [r.render(c, size=SIZE, pipeline="forward") for c in cams],
+    assert_views_equal(layered(r, cams, size=SIZE), [r.render(c, size=SIZE, pipeline="forward") for c in cams],
                        "blended spheres")
 
 
@@ -332,8 +338,8 @@ def test_frames_for_cuda_reach_the_exported_memory(chart, monkeypatch, pipeline:
     monkeypatch.setitem(__import__("sys").modules, "torch", type("torch", (), {"cat": np.concatenate}))
     for seed in (31, 32):  # consecutive batches: no stale frames
         cams = cameras_of(chart, 5, seed=seed)
-        got = chart.render_batch(cams, size=SIZE, device="cuda", pipeline=pipeline)
-        assert_views_equal(got, list(chart.render_batch(cams, size=SIZE, pipeline=pipeline)),
+        got = layered(chart, cams, size=SIZE, device="cuda", pipeline=pipeline)
+        assert_views_equal(got, list(layered(chart, cams, size=SIZE, pipeline=pipeline)),
                            f"exported ({pipeline}), seed {seed}")
 
 
@@ -351,13 +357,13 @@ def test_torch_tensor_on_the_gpu(make_renderer, pipeline: str) -> None:  # noqa:
     r = make_renderer()
     cams1 = cameras_of(r, 16, seed=41)
     cams2 = cameras_of(r, 16, seed=42)
-    a = r.render_batch(cams1, size=SIZE, device="cuda", pipeline=pipeline)
-    b = r.render_batch(cams2, size=SIZE, device="cuda", pipeline=pipeline)
+    a = layered(r, cams1, size=SIZE, device="cuda", pipeline=pipeline)
+    b = layered(r, cams2, size=SIZE, device="cuda", pipeline=pipeline)
     assert isinstance(a, torch.Tensor) and a.is_cuda and a.dtype == torch.uint8
     assert a.shape == (16, SIZE[1], SIZE[0], 4)
-    assert (a.cpu().numpy() == r.render_batch(cams1, size=SIZE, pipeline=pipeline)).all()
-    assert (b.cpu().numpy() == r.render_batch(cams2, size=SIZE, pipeline=pipeline)).all()
-    lin = r.render_batch(cams1, size=SIZE, device="cuda", linear=True, pipeline=pipeline)
+    assert (a.cpu().numpy() == layered(r, cams1, size=SIZE, pipeline=pipeline)).all()
+    assert (b.cpu().numpy() == layered(r, cams2, size=SIZE, pipeline=pipeline)).all()
+    lin = layered(r, cams1, size=SIZE, device="cuda", linear=True, pipeline=pipeline)
     assert lin.dtype == torch.float32
 
 
@@ -366,14 +372,14 @@ def test_cuda_asked_where_it_cannot_run(chart) -> None:  # noqa: ANN001
 
     cams = cameras_of(chart, 2, seed=1)
     with pytest.raises(UsageError, match="device='cuda' returns the colour only"):
-        chart.render_batch(cams, size=SIZE, device="cuda", depth=True)
+        layered(chart, cams, size=SIZE, device="cuda", depth=True)
     with pytest.raises(UsageError, match="device 'gpu'"):
-        chart.render_batch(cams, size=SIZE, device="gpu")
+        layered(chart, cams, size=SIZE, device="gpu")
     why = cuda_unavailable()
     if why is None:
         pytest.skip("CUDA is available here: test_torch_tensor_on_the_gpu runs instead")
     with pytest.raises(UsageError, match="device='cuda' is not available here: " + why.split("(")[0]):
-        chart.render_batch(cams, size=SIZE, device="cuda")
+        layered(chart, cams, size=SIZE, device="cuda")
 
 
 def test_msaa_renders_view_by_view(make_renderer) -> None:  # noqa: ANN001
@@ -381,7 +387,7 @@ def test_msaa_renders_view_by_view(make_renderer) -> None:  # noqa: ANN001
     batch, and its view-by-view fallback for blended scenes: test_compute_batch.py.)"""
     r = make_renderer(msaa=4)
     cams = cameras_of(r, 3, seed=51)
-    assert_views_equal(r.render_batch(cams, size=SIZE), [r.render(c, size=SIZE, pipeline="forward") for c in cams],
+    assert_views_equal(layered(r, cams, size=SIZE), [r.render(c, size=SIZE, pipeline="forward") for c in cams],
                        "msaa 4")
 
 
@@ -396,12 +402,14 @@ _values = st.one_of(st.floats(-20, 20), st.sampled_from([np.nan, np.inf, -np.inf
        batch=st.one_of(st.just("auto"), st.integers(-1, 5)))
 @example(eye=[(0.0, 1.0, 5.0), (1e300, 0.0, 0.0)], target=(0.0, 0.0, 0.0), fov=45.0, size=(8, 8),
          batch="auto")  # a camera far beyond float32 (was a ZeroDivisionError, render() too)
+@example(eye=[(0.0, 0.0, 0.0)], target=(0.0, 0.0, 1.0), fov=3.353910545039852e-262, size=(1, 1),
+         batch="auto")  # a field of view whose projection overflows float32 (an OverflowError)
 def test_any_arrays_render_or_fail_in_one_line(chart, eye, target, fov, size, batch) -> None:  # noqa: ANN001
     """Whatever arrays come in, render_batch returns (B, H, W, 4) or raises a one-line
     UsageError (never a NumPy or Vulkan error, a NaN image or a hang)."""
     try:
         views = CameraBatch.from_look_at(np.array(eye), target, yfov_deg=fov)
-        out = chart.render_batch(views, size=size, batch=batch)
+        out = layered(chart, views, size=size, batch=batch)
     except UsageError as e:
         assert "\n" not in str(e) and str(e)
         return

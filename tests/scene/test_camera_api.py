@@ -358,6 +358,7 @@ def test_validate_camera_planes_and_intrinsics() -> None:
                           ({"zfar": -5.0}, "far plane -5.0 must be beyond the near plane None"),
                           ({"znear": "0.1"}, "near plane '0.1' must be a number"),
                           ({"yfov_deg": 180.0}, "field of view 180.0 must be in (0, 180)"),
+                          ({"yfov_deg": 3e-262}, "narrower than 0.0001 degrees"),
                           ({"eye": (0, 0)}, "three numbers"),
                           ({"pixel_intrinsics": (1.0, 1.0, 0.0, 0.0, 4)}, "pixel_intrinsics must be")):
         message = _raises_usage_error(validate_camera, Camera(**kwargs), match=match)

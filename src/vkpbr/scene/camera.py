@@ -37,6 +37,9 @@ from vkpbr.scene._checks import (
     vec3,
 )
 
+# The narrowest field of view: 1 / tan(fov / 2) stays far inside float32 (~1e6 here).
+MIN_YFOV_DEG = 1e-4
+
 
 @dataclass
 class Camera:
@@ -175,6 +178,9 @@ def _camera_problem(camera: Camera) -> str | None:
     yfov = camera.yfov_deg
     if isinstance(yfov, bool) or not isinstance(yfov, (int, float)) or not 0.0 < yfov < 180.0:
         return f"field of view {shown(yfov)} must be in (0, 180) degrees"
+    if yfov < MIN_YFOV_DEG:
+        return (f"field of view {shown(yfov)} is narrower than {MIN_YFOV_DEG:g} degrees: its "
+                "projection overflows 32-bit floats")
     near, far = camera.znear, camera.zfar
     for label, z in (("near", near), ("far", far)):
         if z is not None and (isinstance(z, bool) or not isinstance(z, (int, float)) or z != z):

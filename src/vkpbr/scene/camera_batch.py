@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from vkpbr.errors import UsageError
-from vkpbr.scene.camera import MAX_COORDINATE, as_camera, validate_camera
+from vkpbr.scene.camera import MAX_COORDINATE, MIN_YFOV_DEG, as_camera, validate_camera
 from vkpbr.scene.types import Camera
 
 __all__ = ["CameraBatch", "as_camera_batch"]
@@ -178,7 +178,7 @@ class CameraBatch:
         u_len = np.sqrt(np.einsum("ij,ij->i", self.up, self.up))
         bad |= f_len < 1e-9
         bad |= np.sqrt(np.einsum("ij,ij->i", cross, cross)) < 1e-9 * f_len * np.maximum(u_len, 1e-30)
-        bad |= ~((self.yfov_deg > 0.0) & (self.yfov_deg < 180.0))
+        bad |= ~((self.yfov_deg >= MIN_YFOV_DEG) & (self.yfov_deg < 180.0))
         for planes in (self.znear, self.zfar):
             if planes is not None:
                 bad |= ~(np.isnan(planes) | ((planes > 0) & (planes < math.inf)))
