@@ -42,7 +42,7 @@ if has batch; then
 fi
 if has ray; then
   echo "== Ray: 1, 2, 4 actors sharing the GPU; overhead against in-process rendering"
-  timeout ${RAY_TIMEOUT:-300} python3 benchmarks/bench_ray.py 2>&1 | tee "$OUT/ray.txt"
+  [ "${RAY_ACTORS_TABLE:-1}" = 1 ] && timeout ${RAY_TIMEOUT:-300} python3 benchmarks/bench_ray.py 2>&1 | tee "$OUT/ray.txt"
   if [ -n "${RAY_MODELS:-}" ]; then  # the many-scenes job through `vkpbr batch`, 1, 2, 4 actors
     echo "== vkpbr batch: every model under $RAY_MODELS x ${RAY_VIEWS:-64} poses"
     mkdir -p /tmp/rayjob && (cd benchmarks && python3 ray_job.py "$PWD/../$RAY_MODELS" /tmp/rayjob/job.json --views ${RAY_VIEWS:-64})
