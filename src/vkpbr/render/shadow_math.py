@@ -219,7 +219,9 @@ def _fit_cascades(centres: np.ndarray, radii: np.ndarray, basis: np.ndarray,
     out[:, 2, :3] = -f[None] / span[:, None]
     out[:, 2, 3] = z_far / span
     out[:, 3, 3] = 1.0
-    return out
+    # + 0.0 turns -0.0 into 0.0: a centre rounded to 0 from either side must give the same
+    # bytes (ShadowMaps.stale compares the matrices' bytes to skip redraws).
+    return out + 0.0
 
 
 def cascade_texel(radius: float | np.ndarray, resolution: int) -> float | np.ndarray:
