@@ -38,3 +38,21 @@ def test_failing_calls_raise_vkpbr_errors_named(make_renderer) -> None:
     finally:
         vk.vkDestroyQueryPool(dev, pool, None)
     assert vk.vkCreateFence.__name__ == "vkCreateFence"
+
+
+@pytest.mark.parametrize("options", [{"pipeline": "forward"},
+                                     {"pipeline": "compute", "raster": "hardware"},
+                                     {"pipeline": "compute", "raster": "compute"}])
+def test_instanced_sphere_field_draws_the_separate_one(make_renderer, options: dict) -> None:
+    """The scale benchmark's two forms (vkpbr bench spheres-5k-20m[-instanced]): one node a
+    sphere, or one node a mesh holding its spheres as instances, render the same pixels."""
+    from vkpbr.scene.synthetic import sphere_field
+
+    size = (96, 64)
+    nodes = make_renderer(sphere_field(draws=40, rings=8, segments=16, materials=4))
+    if options.get("raster") == "compute" and not nodes.device.compute_raster:
+        pytest.skip("no 64-bit storage atomics on this device")
+    inst = make_renderer(sphere_field(draws=40, rings=8, segments=16, materials=4, instanced=True))
+    a, b = nodes.render(size=size, **options), inst.render(size=size, **options)
+    assert a[..., :3].std() > 10  # spheres over the sky, not a flat image
+    assert np.array_equal(a, b)

@@ -70,11 +70,11 @@ def _default(args: argparse.Namespace):  # noqa: ANN202
     return default_scene()
 
 
-def _spheres(draws: int) -> Callable:
+def _spheres(draws: int, rings: int = 16, segments: int = 32, instanced: bool = False) -> Callable:
     def make(args: argparse.Namespace):  # noqa: ANN202
         from vkpbr.scene.synthetic import sphere_field
 
-        return sphere_field(draws)
+        return sphere_field(draws, rings, segments, instanced=instanced)
     return make
 
 
@@ -87,6 +87,11 @@ SCENARIOS: dict[str, tuple] = {
     "default-1080p": (_default, (1920, 1080)),
     "spheres-100": (_spheres(100), (1920, 1080)),
     "spheres-5k": (_spheres(5000), (1920, 1080)),
+    # Issue 13's scale: 5,000 draws, 20.5 M triangles, as separate nodes and instanced, on
+    # the default path (compute on GPUs) and the fragment path.
+    **{f"spheres-5k-20m{kind}{path}": (_spheres(5000, 32, 64, bool(kind)), (1920, 1080),
+                                       *([{"pipeline": "forward"}] if path else []))
+       for kind in ("", "-instanced") for path in ("", "-forward")},
     **{f"sponza-{label}-{path}": (_sponza, size, options)
        for label, size in (("1080p", (1920, 1080)), ("480p", (640, 480)))
        for path, options in (("forward", {"pipeline": "forward"}),
