@@ -287,7 +287,7 @@ class OffscreenTarget:
     def record_end(self, cmd: Commands, image: int, frame: Frame, copy: tuple[str, ...],
                    tiles: tuple[int, int, int, int] | None = None, external: Any = None) -> None:
         """End the frame's rendering and copy out what `copy` names; `tiles` (an atlas of a
-        compute batch: views, tile width, height, tiles a row): colour and depth view by view
+        compute batch: views, tile width, height, tiles a column): colour and depth view by view
         (read_tiles); `external`: the colour into that exported buffer instead (for CUDA:
         taken back from the external queue family before the copy, released after it)."""
         end_rendering(cmd)

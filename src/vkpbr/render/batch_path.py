@@ -91,8 +91,10 @@ class BatchPath:
         if per < 1:
             raise UsageError(f"views of {w}x{h} are too large for the compute batch here; "
                              "use pipeline='forward'")
-        cols = max(1, min(per, most // w, math.ceil(math.sqrt(per))))
-        rows = -(-per // cols)
+        # Tiles column-major, `rows` to a column (a column is one copy into view-major
+        # memory: gpu/rendering.py tile_regions), about square, within the size limit.
+        rows = max(1, min(per, most // h, max(math.ceil(math.sqrt(per)), -(-per // (most // w)))))
+        cols = -(-per // rows)
         colors, depths = [], []
         for start in range(0, len(views), per):
             stop = min(start + per, len(views))
@@ -122,7 +124,7 @@ class BatchPath:
         frame, plan, terms = self._begin(views, size, lights, opts, linear)
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
         self._run(frame, plan, opts, lambda redraw: r.recorder.compute_batch(
-            target, frame, opts.tbn, opts.alpha_mask, plan, redraw, (n, w, h, cols),
+            target, frame, opts.tbn, opts.alpha_mask, plan, redraw, (n, w, h, rows),
             bv.sets0[frame.index], copy, external),
             (lambda: self._cuda_wait(external)) if cuda else None)
         if cuda:

@@ -263,16 +263,16 @@ class ComputeScene:
         material's set 1, one dispatch a masked draw), then the visibility image resolved
         from it (the target has it in GENERAL: record_raster_begin). The depths reach the
         depth buffer with `record_raster_depth`. `tiles` (views, tile width, tile height, tiles
-        a row): a compute batch's atlas, the views' records in `set0` (render/batch_path.py)."""
+        a column: the atlas is column-major): a compute batch's atlas, the views' records in `set0` (render/batch_path.py)."""
         res = self._resources(target)
         w, h = target.extent
-        views, tile_w, tile_h, cols = tiles or (1, w, h, 1)
+        views, tile_w, tile_h, rows = tiles or (1, w, h, 1)
         suffix = "_batch" if tiles else ""
         cmd.fill(res.raster, 0)
         cmd.fill(res.raster_big, 0)
         cmd.memory_barrier("transfer", "compute")
         push = np.array([self.triangles, len(self.gs.draws), int(alpha_mask), res.big_capacity,
-                         w, h, 0, 0, views, tile_w, tile_h, cols], np.uint32)
+                         w, h, 0, 0, views, tile_w, tile_h, rows], np.uint32)
         dset = res.sets[frame_index]
         n = -(-self.triangles // RASTER_SMALL_GROUP)
         # raster_args sizes raster_big's dispatch from the count raster_small listed.

@@ -257,7 +257,7 @@ class FrameRecorder:
                       plan: ShadowPlan, redraw: tuple[range, ...], tiles: tuple[int, int, int, int],
                       set0: object, copy: tuple[str, ...], external: object = None) -> Commands:
         """A compute batch's commands (render/batch_path.py), recorded on first use: `tiles`
-        (views, tile width, tile height, tiles a row) of an atlas `target`, every view
+        (views, tile width, tile height, tiles a column, column-major) of an atlas `target`, every view
         rasterised and shaded in compute shaders (its ViewRecord in `set0`, BatchViews'), the
         environment behind them, the copies (the colour into the exported buffer `external`,
         for CUDA, where given). No blended draws (the layered batch takes those)."""

@@ -16,7 +16,7 @@ layout(push_constant) uniform Background {
     uint views;  // the atlas's tiles, as raster.comp's
     uint tile_w;
     uint tile_h;
-    uint cols;
+    uint rows;
 } pc;
 
 void main() {
@@ -27,7 +27,7 @@ void main() {
     if ((lighting.flags & LIGHTING_BACKGROUND) == 0u || settings.view != VIEW_FINAL) return;
     if (imageLoad(visibility, ivec2(pixel)).x != 0u) return;
     uvec2 tile = uvec2(pc.tile_w, pc.tile_h);
-    uint v = (pixel.y / tile.y) * pc.cols + pixel.x / tile.x;
+    uint v = (pixel.x / tile.x) * pc.rows + pixel.y / tile.y;  // column-major tiles
     if (v >= pc.views) return;
     vec2 ndc = (vec2(pixel % tile) + 0.5) / vec2(tile) * 2.0 - 1.0;
     vec4 near = views[v].inv_VP * vec4(ndc, 1.0, 1.0);

@@ -16,8 +16,8 @@
 //   exactly as the shading samples it) reaches the cutoff.
 // KERNEL 3 (raster_resolve): per pixel, the visibility image's (draw + 1, primitive) from the
 //   winning triangle (0: nothing) -- what shade.comp and classify.comp read.
-// BATCH = 1 (render/batch_path.py's compute batch): `views` views tiled `cols` to a row in one
-// atlas, each `tile` pixels, each with its ViewRecord's VP; the work's z index is the view.
+// BATCH = 1 (render/batch_path.py's compute batch): `views` views tiled `rows` to a column in
+// one atlas (column-major, so a column of tiles is one copy into view-major memory), each `tile` pixels, each with its ViewRecord's VP; the work's z index is the view.
 // One view (BATCH 0) is the same with the frame's camera and the whole target as the tile.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -47,10 +47,10 @@ layout(push_constant) uniform Raster {
     uint height;
     uint draw;  // raster_masked: the masked draw's row of raster_draws
     uint material;  // raster_masked: its material (set 1 bound)
-    uint views;  // the tiles: views, their width and height, tiles a row of the atlas
+    uint views;  // the tiles: views, their width and height, tiles a column of the atlas
     uint tile_w;
     uint tile_h;
-    uint cols;
+    uint rows;
 } pc;
 
 #if BATCH
@@ -145,7 +145,7 @@ int clip(vec4 c[3], out vec4 poly[5]) {
 // The view's tile: its first pixel in the target and its size.
 ivec2 tile_origin() {
 #if BATCH
-    return ivec2(g_view % pc.cols, g_view / pc.cols) * ivec2(pc.tile_w, pc.tile_h);
+    return ivec2(g_view / pc.rows, g_view % pc.rows) * ivec2(pc.tile_w, pc.tile_h);
 #else
     return ivec2(0);
 #endif

@@ -18,10 +18,10 @@ layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;  // compute_pa
 
 layout(push_constant) uniform Shade {
     uint material;  // the bin this dispatch shades (its set 1 is bound)
-    uint views;  // BATCH: the atlas's tiles (raster.comp's): views, tile size, tiles a row
+    uint views;  // BATCH: the atlas's tiles (raster.comp's): views, tile size, tiles a column
     uint tile_w;
     uint tile_h;
-    uint cols;
+    uint rows;
 } pc;
 
 #if BATCH  // a compute batch (render/batch_path.py): the pixel's view is its tile's
@@ -51,7 +51,7 @@ void main() {
     vec3 w0, w1, w2, bary;
 #if BATCH
     uvec2 tile = uvec2(pc.tile_w, pc.tile_h);
-    g_view = (pixel.y / tile.y) * pc.cols + pixel.x / tile.x;
+    g_view = (pixel.x / tile.x) * pc.rows + pixel.y / tile.y;  // column-major tiles
     DrawRecord dr = surface_at(vis.x - 1u, vis.y, pixel % tile, vec2(tile), vi, w0, w1, w2, bary);
 #else
     DrawRecord dr = surface_at(vis.x - 1u, vis.y, pixel, vec2(size), vi, w0, w1, w2, bary);
