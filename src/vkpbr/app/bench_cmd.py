@@ -3,7 +3,10 @@
     vkpbr bench [--scenario NAME ...] [--frames N] [--json] [--sponza PATH] [--peers]
 
 Scenarios: sponza-1080p, sponza-480p, default-1080p, spheres-5k (5,000 draws, 5.1 M triangles)
-and spheres-100 (100 draws), the last two showing how cost grows with draws and triangles.
+and spheres-100 (100 draws), the last two showing how cost grows with draws and triangles;
+Sponza on each frame path (sponza-*-forward, -compute, -compute-raster); and, only when named,
+spheres-5k-20m[-instanced][-forward] (5,000 draws, 20.5 M triangles, as nodes or instanced:
+issue 13's scale rows, minutes a frame on a CPU).
 Each scenario renders an orbit of camera poses through `Renderer.render_many` (frames in
 flight), then the same without copying into NumPy.
 
@@ -98,6 +101,10 @@ SCENARIOS: dict[str, tuple] = {
                              ("compute", {"pipeline": "compute", "raster": "hardware"}),
                              ("compute-raster", {"pipeline": "compute", "raster": "compute"}))},
 }
+
+
+# What a plain `vkpbr bench` runs: all but the 20 M-triangle fields (named to run them).
+DEFAULT_SCENARIOS = [name for name in SCENARIOS if "-20m" not in name]
 
 
 # name -> (scene key of benchmarks/peers/common.py BATCH_SCENES, (width, height), frame path):
@@ -393,8 +400,8 @@ def add_parser(sub: Any) -> None:
                     "sphere fields show how cost grows with draws and triangles).",
         epilog=EPILOG, formatter_class=EPILOG_FORMATTER)
     p.add_argument("--scenario", action="append", choices=[*SCENARIOS, *BATCH_SCENARIOS],
-                   help="scenario to run (repeatable); default: every frame scenario (not the "
-                        "batch-* ones: --batch)")
+                   help="scenario to run (repeatable); default: every frame scenario but the "
+                        "spheres-5k-20m* ones (not the batch-* ones: --batch)")
     p.add_argument("--batch", action="store_true",
                    help="run every batch-* scenario (besides any --scenario)")
     p.add_argument("--frames", type=int, default=200, metavar="N",
@@ -425,7 +432,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--frames must be at least 1")
     if args.views < 1:
         raise UsageError("--views must be at least 1")
-    names = list(args.scenario or ([] if args.batch else SCENARIOS))
+    names = list(args.scenario or ([] if args.batch else DEFAULT_SCENARIOS))
     if args.batch:
         names += [n for n in BATCH_SCENARIOS if n not in names]
     rows = [run_batch_scenario(n, args) if n in BATCH_SCENARIOS else run_scenario(n, args)
