@@ -152,3 +152,14 @@ def grid_mesh(n: int = 6, seed: int = 0) -> dict[str, np.ndarray]:
     idx = np.array([[a, b, c, a, c, d] for a, b, c, d in quads], np.uint32).reshape(-1)
     return {"POSITION": pos, "NORMAL": nrm, "TANGENT": tangents, "TEXCOORD_0": uv,
             "indices": idx}
+
+
+def ktx2_bytes(pixels: np.ndarray, uastc: bool = True) -> bytes:
+    """RGBA8 pixels -> a Basis Universal KTX2 (UASTC at its best quality, or ETC1S), sRGB,
+    through alktx2 (basis_universal's encoder; the `test` extra). ImportError without it."""
+    import alktx2
+
+    h, w = pixels.shape[:2]
+    return alktx2.encode_raw_rgba_to_ktx2(np.ascontiguousarray(pixels, np.uint8).tobytes(), w, h,
+                                          True, codec="uastc" if uastc else "etc1s",
+                                          quality=255, srgb=True)

@@ -6,13 +6,13 @@
 # or hostile payload is a SceneError naming the file, never a crash or a gigabyte allocation.
 # References: EXT_meshopt_compression (Khronos glTF extension registry, modes and Appendix B
 # filters); KHR_draco_mesh_compression (ibid.). KHR_texture_basisu's KTX2 images are
-# transcoded to RGBA8 through pyktx (the KTX-Software binding; needs libktx) in decode_ktx2.
+# transcoded to RGBA8 through opengl_basisu (Binomial's basis_universal transcoder compiled
+# into a wheel, arrays out; the KTX-Software binding pyktx needs a libktx install that neither
+# pip nor the Debian archive provides) in decode_ktx2.
 
 from __future__ import annotations
 
 import importlib
-import os
-import tempfile
 from types import ModuleType
 
 import numpy as np
@@ -26,7 +26,7 @@ __all__ = ["CODEC_PACKAGES", "KTX2_MAGIC", "codec", "decode_draco", "decode_ktx2
 CODEC_PACKAGES: dict[str, tuple[str, str]] = {
     "EXT_meshopt_compression": ("meshoptimizer", "meshoptimizer (pip install 'vkpbr[bake]')"),
     "KHR_draco_mesh_compression": ("DracoPy", "DracoPy (pip install 'vkpbr[codecs]')"),
-    "KHR_texture_basisu": ("pyktx", "pyktx (pip install 'vkpbr[ktx]'; needs libktx)"),
+    "KHR_texture_basisu": ("opengl_basisu", "opengl-basisu (pip install 'vkpbr[codecs]')"),
 }
 KTX2_MAGIC = b"\xabKTX 20\xbb\r\n\x1a\n"
 _MODULES: dict[str, ModuleType | None] = {}
@@ -43,7 +43,7 @@ def codec(extension: str) -> ModuleType | None:
     if name not in _MODULES:
         try:
             _MODULES[name] = importlib.import_module(name)
-        except (ImportError, OSError):  # absent, or a broken build (pyktx without libktx)
+        except (ImportError, OSError):  # absent, or a broken build (a missing shared library)
             _MODULES[name] = None
     return _MODULES[name]
 
@@ -200,37 +200,52 @@ def ktx2_size(data: bytes) -> tuple[int, int]:
 
 
 def decode_ktx2(data: bytes) -> np.ndarray:
-    """A KTX2 image (KHR_texture_basisu: Basis Universal ETC1S or UASTC, or plain RGBA8) ->
+    """A KTX2 image (KHR_texture_basisu: Basis Universal ETC1S or UASTC; or plain RGBA8) ->
     (H, W, 4) uint8 RGBA of its base level (mips are rebuilt on upload, as for PNG).
 
     Raises
     ------
-    ValueError : a payload libktx rejects, or a format it cannot turn into RGBA8 (the caller
-        reports it as an undecodable texture and binds the default).
+    ValueError : a payload the transcoder rejects, or a format it cannot turn into RGBA8 (the
+        caller reports it as an undecodable texture and binds the default).
     """
-    ktx = codec("KHR_texture_basisu")
-    if ktx is None:
+    basisu = codec("KHR_texture_basisu")
+    if basisu is None:
         raise ValueError("KTX2 needs " + CODEC_PACKAGES["KHR_texture_basisu"][1])
     width, height = ktx2_size(data)
-    # The binding reads only named files (no create-from-memory): a private temporary file.
-    fd, name = tempfile.mkstemp(suffix=".ktx2")
+    if _vk_format(data) != 0:  # not Basis Universal (vkFormat UNDEFINED): raw texels
+        return _plain_rgba8(data, width, height)
     try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        try:
-            tex = ktx.KtxTexture2.create_from_named_file(name)
-            if tex.needs_transcoding:
-                tex.transcode_basis(ktx.KtxTranscodeFmt.RGBA32, 0)
-            elif tex.vk_format not in (ktx.VkFormat.VK_FORMAT_R8G8B8A8_UNORM,
-                                       ktx.VkFormat.VK_FORMAT_R8G8B8A8_SRGB):
-                raise ValueError(f"KTX2 format {tex.vk_format.name} is not supported")
-            offset = tex.image_offset(0, 0, 0)
-            raw = tex.data()
-        except ktx.KtxError as exc:
-            raise ValueError(f"corrupt KTX2 ({exc})") from exc
-    finally:
-        os.unlink(name)
+        texture = basisu.open(data)
+        if (texture.width, texture.height) != (width, height):
+            raise ValueError("KTX2 header and payload sizes differ")
+        image = texture.transcode(basisu.Target.RGBA8)
+    except basisu.BasisuError as exc:  # UnsupportedError is one
+        raise ValueError(f"corrupt or unsupported KTX2 ({exc})") from exc
+    px = np.asarray(image.data, np.uint8)
+    if px.shape != (height, width, 4):
+        raise ValueError(f"KTX2 level 0 transcoded to {px.shape}, not {(height, width, 4)}")
+    return px
+
+
+# KTX 2.0 (spec 3.1): vkFormat at byte 12, supercompressionScheme at 44, level 0's byteOffset
+# and byteLength at 80 and 88 (the level index follows the 80-byte header).
+_RGBA8_FORMATS = (37, 43)  # VK_FORMAT_R8G8B8A8_UNORM, _SRGB
+
+
+def _vk_format(data: bytes) -> int:
+    return int(np.frombuffer(data, "<u4", count=1, offset=12)[0])
+
+
+def _plain_rgba8(data: bytes, width: int, height: int) -> np.ndarray:
+    """Level 0 of an uncompressed RGBA8 KTX2 (no supercompression)."""
+    fmt, scheme = _vk_format(data), int(np.frombuffer(data, "<u4", count=1, offset=44)[0])
+    if fmt not in _RGBA8_FORMATS or scheme != 0:
+        raise ValueError(f"KTX2 vkFormat {fmt} (supercompression {scheme}) is not supported: "
+                         "Basis Universal or plain RGBA8 only")
+    if len(data) < 96:
+        raise ValueError("KTX2 level index is truncated")
+    offset, length = (int(v) for v in np.frombuffer(data, "<u8", count=2, offset=80))
     n = width * height * 4
-    if offset + n > len(raw):
+    if length < n or offset + n > len(data):
         raise ValueError("KTX2 level 0 is shorter than its header says")
-    return np.frombuffer(raw, np.uint8, count=n, offset=offset).reshape(height, width, 4).copy()
+    return np.frombuffer(data, np.uint8, count=n, offset=offset).reshape(height, width, 4).copy()
