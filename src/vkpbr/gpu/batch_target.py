@@ -145,4 +145,3 @@ class BatchTarget:
     def destroy(self) -> None:
         while self._objects:
             self._objects.pop().destroy()
-

@@ -147,8 +147,7 @@ class BatchPath:
         why = cuda_unavailable()
         if why is None and not dev.external_memory_fd:
             why = f"{dev.info.name} cannot export memory (VK_KHR_external_memory_fd)"
-        compute = ((opts.pipeline == L.PipelinePath.COMPUTE or self.r.batch_auto_compute(opts))
-                   and self.r.compute_batch_unavailable() is None)
+        compute = self.r.takes_compute_batch(opts)
         if why is None and not compute and not dev.batch_views:
             why = f"{dev.info.name} lacks layered rendering for batches"
         if why is not None:

@@ -277,11 +277,12 @@ class Renderer:
             return "the scene has blended materials (drawn by the fragment path)"
         return None
 
-    def batch_auto_compute(self, options: RenderOptions) -> bool:
-        """Whether render_batch's pipeline "auto" takes the compute batch: on GPUs where
-        `compute_batch_unavailable` is None (and the fragment path's layered batch on CPUs)."""
-        return (options.pipeline == L.PipelinePath.AUTO and self.device.info.kind != "cpu"
-                and self.compute_batch_unavailable() is None)
+    def takes_compute_batch(self, options: RenderOptions) -> bool:
+        """Whether render_batch takes the compute batch: pipeline "compute", or "auto" on a GPU
+        (the fragment path's layered batch on CPUs), where `compute_batch_unavailable` is None."""
+        if options.pipeline == L.PipelinePath.FORWARD or self.compute_batch_unavailable():
+            return False
+        return options.pipeline == L.PipelinePath.COMPUTE or self.device.info.kind != "cpu"
 
     def uses_compute_raster(self, options: RenderOptions, target: FrameTarget) -> bool:
         """Whether the compute path's visibility buffer comes from the compute rasteriser
@@ -721,8 +722,7 @@ class Renderer:
         # path (render/batch.py), bit for bit what `render` draws with pipeline="forward".
         explicit_compute = (opts.pipeline == L.PipelinePath.COMPUTE
                             and self.uses_compute(self.offscreen_target(size, linear), opts))
-        if (explicit_compute or self.batch_auto_compute(opts)) and not extra \
-                and self.compute_batch_unavailable() is None:
+        if self.takes_compute_batch(opts) and not extra:
             color, dist = self.batch_path.render_compute(views, size, lights, opts, linear,
                                                          depth, batch, out=out)
             if not wanted:

@@ -177,9 +177,8 @@ class ShadowMaps:
         # The scene is static, so equal matrices draw equal maps: a frame redraws only the
         # entries whose matrices changed (a camera-fitted sun's cascades when the camera
         # moves; spot and point lights, and a batch's scene-wide sun, when the light does).
-        self._drawn: dict[tuple[str, int], tuple[bytes, bool]] = {}
-        self.last_redraw: tuple[tuple[str, bool], ...] = ()  # the latest frame's (kind, drawn)
-        self.last_redrawn_layers: tuple[tuple[str, int], ...] = ()  # (kind, layers drawn)
+        self._drawn: dict[tuple[str, int, int], tuple[bytes, bool]] = {}  # (image, first, layer)
+        self.last_redrawn_layers: tuple[tuple[str, int], ...] = ()  # latest frame: (kind, layers drawn)
         self._warned = False
         self.ensure(ShadowPlan())
 
@@ -309,9 +308,13 @@ class ShadowMaps:
                 self._drawn[where] = held
             out.append(range(0) if not changed else
                        range(0, 6) if e.kind == "point" else range(changed[0], changed[-1] + 1))
-        self.last_redraw = tuple((e.kind, bool(r)) for e, r in zip(plan.entries, out, strict=True))
         self.last_redrawn_layers = tuple((e.kind, len(r)) for e, r in zip(plan.entries, out, strict=True))
         return tuple(out)
+
+    @property
+    def last_redraw(self) -> tuple[tuple[str, bool], ...]:
+        """The latest frame's (kind, whether any of its layers were drawn) per plan entry."""
+        return tuple((kind, n > 0) for kind, n in self.last_redrawn_layers)
 
     def forget(self) -> None:
         """The maps' contents are unknown (a frame marked drawn was not submitted)."""

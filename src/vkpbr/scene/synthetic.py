@@ -29,7 +29,7 @@ def sphere_field(draws: int = 5000, rings: int = 16, segments: int = 32, materia
     k = np.arange(draws)
     places = np.tile(np.eye(4, dtype=np.float32), (draws, 1, 1))
     places[:, 0, 3] = (k % side) - side / 2
-    places[:, 1, 3] = np.array([rng.uniform(0, 0.5) for _ in range(draws)], np.float32)
+    places[:, 1, 3] = rng.uniform(0, 0.5, draws)  # the same draws as one call a sphere
     places[:, 2, 3] = (k // side) - side / 2
     if instanced:
         nodes = [Node(mesh=i, instances=places[k % materials == i]) for i in range(materials)
