@@ -48,6 +48,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vkpbr.app.bench_cmd import BATCH_WARM_UPS
 from vkpbr.render.renderer import Renderer
 from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.types import Light
@@ -108,7 +109,7 @@ def torch_cuda():  # noqa: ANN201
     return torch if torch.cuda.is_available() else None
 
 
-WARM_UP = 4  # calls before timing: more than the frame ring's slots, so each has its recording
+WARM_UP = BATCH_WARM_UPS
 
 
 def copy_ms(shape: tuple[int, ...], reps: int = 3) -> float:

@@ -148,3 +148,15 @@ def test_inverse_view_projection_is_the_inverse() -> None:
         r = np.array(rot).reshape(3, 3).T
         np.testing.assert_allclose(r.T @ r, np.eye(3), atol=1e-12)
         np.testing.assert_allclose(-r[:, 2], forward(cam), atol=1e-12)
+
+
+def test_a_split_batch_reports_every_submission() -> None:
+    """render_batch's last_stats over several submissions: each time summed, each pass too."""
+    from vkpbr.render.frames import FrameStats, summed_stats
+
+    a = FrameStats(1.0, 2.0, 3.0, 4.0, {"shading": 1.5, "raster": 0.5}, 0.25)
+    b = FrameStats(0.5, 1.0, 2.0, 0.5, {"shading": 1.0, "shadows": 2.0}, 0.25)
+    got = summed_stats(a, b)
+    assert (got.cpu_ms, got.wait_ms, got.gpu_ms, got.readback_ms, got.driver_ms) == (1.5, 3.0, 5.0, 4.5, 0.5)
+    assert got.pass_ms == {"shading": 2.5, "raster": 0.5, "shadows": 2.0}
+    assert a.pass_ms == {"shading": 1.5, "raster": 0.5}  # the inputs are left alone

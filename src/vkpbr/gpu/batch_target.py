@@ -140,7 +140,7 @@ class BatchTarget:
         """A copy of the first `views` views' window depth: (views, H, W) float32."""
         w, h = self.extent
         assert self.depth_readback is not None, "made without depth"
-        return self.depth_readback.array(np.float32, views * w * h).reshape(views, h, w).copy()
+        return copy_out(self.depth_readback.array(np.float32, views * w * h).reshape(views, h, w))
 
     def destroy(self) -> None:
         while self._objects:

@@ -25,7 +25,7 @@ from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH
 from vkpbr.render import layouts as L
 from vkpbr.render.batch import MAX_LAYERS, BatchViews
 from vkpbr.render.camera import batch_frame_terms, linear_depth
-from vkpbr.render.frames import write_frame_uniforms
+from vkpbr.render.frames import summed_stats, write_frame_uniforms
 from vkpbr.render.options import RenderOptions
 from vkpbr.scene.camera_batch import CameraBatch
 
@@ -55,6 +55,7 @@ class BatchPath:
         # The compute batch's atlases, by (extent, linear), least recently used first: two
         # are kept (a job's full batches and its last, shorter one), older ones destroyed.
         self._atlases: OrderedDict[tuple, Any] = OrderedDict()
+        self._submissions = 0  # of the render_batch call under way (its last_stats summed)
 
     # --- whole batches ----------------------------------------------------------------------
     def render(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
@@ -63,6 +64,7 @@ class BatchPath:
         """Colour (and depth) of every view, in submissions of `per_submission` views; the
         colour into `out` where given."""
         per = self.per_submission(size, linear, depth, batch)
+        self._submissions = 0
         colors, depths = [], []
         for start in range(0, len(views), per):
             stop = min(start + per, len(views))
@@ -95,6 +97,7 @@ class BatchPath:
         # memory: gpu/rendering.py tile_regions), about square, within the size limit.
         rows = max(1, min(per, most // h, max(math.ceil(math.sqrt(per)), -(-per // (most // w)))))
         cols = -(-per // rows)
+        self._submissions = 0
         colors, depths = [], []
         for start in range(0, len(views), per):
             stop = min(start + per, len(views))
@@ -158,6 +161,7 @@ class BatchPath:
         import torch
 
         per = self.per_submission(size, linear, False, batch)
+        self._submissions = 0
         parts = [self._submit(_slice(views, s, min(s + per, len(views))), size, lights, opts,
                               linear, False, cuda=True)[0] for s in range(0, len(views), per)]
         return parts[0] if len(parts) == 1 else torch.cat(parts)
@@ -251,7 +255,10 @@ class BatchPath:
             raise
         frame.stamped = r.ring.query_pool is not None
         frame.wait()
-        r.last_stats = dataclasses.replace(r.read_frame_timings(frame))
+        stats = dataclasses.replace(r.read_frame_timings(frame))
+        # One call's timings: every submission's summed (a batch split by memory).
+        r.last_stats = summed_stats(r.last_stats, stats) if self._submissions else stats
+        self._submissions += 1
 
     def _target(self, size: tuple[int, int], layers: int, views: int, linear: bool,
                 depth: bool, cuda: bool) -> BatchTarget:

@@ -44,6 +44,15 @@ class FrameStats:
     driver_ms: float = 0.0  # thread CPU time inside the target's acquire and submit/present
 
 
+def summed_stats(a: FrameStats, b: FrameStats) -> FrameStats:
+    """Two submissions' timings as one call's (a batch split into several submissions)."""
+    passes = dict(a.pass_ms)
+    for name, ms in b.pass_ms.items():
+        passes[name] = passes.get(name, 0.0) + ms
+    return FrameStats(a.cpu_ms + b.cpu_ms, a.wait_ms + b.wait_ms, a.gpu_ms + b.gpu_ms,
+                      a.readback_ms + b.readback_ms, passes, a.driver_ms + b.driver_ms)
+
+
 @dataclass
 class FrameSlot:
     index: int
