@@ -13,10 +13,11 @@ the median of `--reps` timed calls of `render_batch(CameraBatch.from_poses(poses
 
 - views/s: B / wall clock of the call (render + one readback into a new (B, H, W, 4) uint8
   array); "out=": the same into one array reused across calls (no fresh pages to fault in);
-- GPU views/s: B / the batch's GPU time (`last_stats.gpu_ms`, timestamp queries; the last
-  submission's when the batch was split) = render only;
+- GPU views/s: B / the batch's GPU time (`last_stats.gpu_ms`, timestamp queries, every
+  submission's summed when the batch was split) = render only;
 - host us/view: (wall - GPU time - the host copy of the result) / B: the Python and driver
-  cost per view (the copy is timed separately on an array of the same size);
+  cost per view (the copy, copy_out as the readback makes it, timed separately on an
+  array of the same size; the readback's source is mapped memory, so this is approximate);
 - GPU MiB: device memory vkpbr holds beyond the scene's own after the row (Device.bytes_allocated:
   every live buffer and image, as allocated): the batch targets or atlases kept (two per path:
   the row's and the previous size's), their readback and CUDA-exported buffers, the views'
@@ -49,6 +50,7 @@ from pathlib import Path
 import numpy as np
 
 from vkpbr.app.bench_cmd import BATCH_WARM_UPS
+from vkpbr.gpu.target import copy_out
 from vkpbr.render.renderer import Renderer
 from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.types import Light
@@ -113,11 +115,13 @@ WARM_UP = BATCH_WARM_UPS
 
 
 def copy_ms(shape: tuple[int, ...], reps: int = 3) -> float:
+    """The readback's host copy of a result of `shape` into a fresh array, as render_batch
+    makes it (gpu/target.py copy_out: threads for big ones), from ordinary memory."""
     a = np.ones(shape, np.uint8)
     out = []
     for _ in range(reps):
         t = time.perf_counter()
-        a.copy()
+        copy_out(a)
         out.append((time.perf_counter() - t) * 1e3)
     return statistics.median(out)
 

@@ -309,10 +309,14 @@ def run_batch_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
     if not ours:
         return []
     peers = []
+    given = [p for p in read_peer_rows(args) if p.get("scenario") == "batch"]
+    measured = {p.get("peer") for p in given}  # peers read back are not run again
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "peers.json"
         for (key, size), mine in ours.items():
             for script, label, extra in BATCH_PEERS:
+                if script in measured:
+                    continue
                 cmd = [sys.executable, str(PEERS_DIR / f"{script}_bench.py"), "--batch",
                        "--scene", key if not (key == "sponza" and args.sponza) else str(args.sponza),
                        "--size", size, "--poses", mine["poses_file"], "--reps", "2",
@@ -320,7 +324,7 @@ def run_batch_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
                 _run_peer(cmd, f"{label} {key} {size}", args.peer_timeout)
         if out.exists():
             peers = [json.loads(line) for line in out.read_text().splitlines() if line.strip()]
-    peers += [p for p in read_peer_rows(args) if p.get("scenario") == "batch"]
+    peers += given
     print("\n| peer | scene | size | pixels rendered per view | peer views/s (into NumPy) "
           "| vkpbr views/s | vkpbr / peer | render only: peer | vkpbr (GPU) | vkpbr / peer |")
     print("|---|---|---|---|---|---|---|---|---|---|")
