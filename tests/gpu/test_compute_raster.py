@@ -164,3 +164,37 @@ def test_random_triangles_and_cameras_agree_with_the_raster_units() -> None:
             assert r.device.instance.errors == []
 
     check()
+
+
+@pytest.mark.parametrize("count", [3, 400])
+def test_screen_filling_triangles_split_into_chunks(count: int) -> None:
+    """Triangles far bigger than raster.comp's BIG_CHUNK (4,096 box pixels: 200x150 is ~8
+    chunks a triangle) are drawn by several work groups; 400 of them overflow the big list
+    (a sixteenth of the pixels, 1,875 entries), whose rest the listing invocation draws.
+    Either way each pixel shows the nearest triangle, as the raster units find it."""
+    from test_outputs import silhouette_band
+
+    from vkpbr.render.renderer import Renderer
+
+    rng = np.random.default_rng(count)
+    z = rng.permutation(np.linspace(-3.0, 3.0, count))  # drawn in a random depth order
+    jitter = rng.uniform(-0.5, 0.5, (count, 3, 2))
+    base = np.array([[-90.0, -90.0], [90.0, -90.0], [0.0, 120.0]])
+    tris = np.zeros((count, 3, 3))
+    tris[:, :, :2] = base + jitter
+    tris[:, :, 2] = z[:, None] + rng.uniform(-20.0, 20.0, (count, 3))  # tilted: they cross
+    with Renderer(_soup(tris, [True, True]), validation=True) as r:
+        if not r.device.compute_raster:
+            pytest.skip("no 64-bit storage atomics on this device")
+        cam = "0.3,0.2,40,0,0,0"
+        got = {raster: r.render(cam, size=(200, 150), pipeline="compute", raster=raster,
+                                env="none", outputs=("instance",))["instance"]
+               for raster in ("hardware", "compute")}
+        hw, cr = got["hardware"], got["compute"]
+        assert (hw > 0).mean() >= 0.9, "the triangles are meant to fill the view"
+        assert len(np.unique(hw)) >= 2, "crossing triangles are meant to be seen"
+        wrong = hw != cr
+        band = silhouette_band(hw)
+        assert not wrong[~band].any(), f"{int(wrong[~band].sum())} pixels differ off the edges"
+        assert wrong.mean() <= 0.01, wrong.mean()
+        assert r.device.instance.errors == []

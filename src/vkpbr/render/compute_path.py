@@ -64,10 +64,11 @@ class _TargetResources:
         raster = dev.compute_raster
         self.raster = self._own(Buffer(dev, 8 * w * h if raster else 16, "storage|transfer_dst",
                                        name="raster depth|ids"))
-        # (triangle, view) pairs: every triangle once for one view; a batch's atlas lists up
-        # to a sixteenth of its pixels (more are drawn by the invocation that found them).
+        # (triangle, view, chunk) entries (raster.comp BIG_ENTRY): every triangle once for
+        # one view, or a sixteenth of the target's pixels (what does not fit is drawn by the
+        # invocation that found it, slowly but right).
         self.big_capacity = max(scene.triangles, w * h // 16)
-        self.raster_big = self._own(Buffer(dev, 4 * (4 + 2 * self.big_capacity) if raster else 16,
+        self.raster_big = self._own(Buffer(dev, 4 * (4 + 3 * self.big_capacity) if raster else 16,
                                            "storage|transfer_dst|indirect",
                                            name="raster big triangles"))
         slots = scene.slots

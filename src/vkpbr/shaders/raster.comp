@@ -5,11 +5,14 @@
 // 1) in `raster` (depth >= 0, so its float bits order as the depths: the nearest wins, and on
 // a tie the later triangle, as GREATER_OR_EQUAL does for later draws). Triangles are clipped
 // to the near and far planes (z <= w, z >= 0: the shading re-intersects the pixel's ray with
-// the whole triangle, so only coverage and depth come from here).
+// the whole triangle, so only coverage and depth come from here). The atomic is skipped
+// where a plain load already holds as near a value: the buffer only grows, so a stale load
+// errs toward doing the atomic, never toward losing a nearer surface.
 // KERNEL 1 (raster_small): one invocation a triangle of the opaque draws; triangles whose
-//   screen box exceeds BIG_AREA pixels are listed in raster_big instead.
+//   screen box exceeds BIG_AREA pixels are listed in raster_big instead, one entry for each
+//   BIG_CHUNK pixels of the box (a wall filling the screen is ~500 work groups' work, not one).
 // KERNEL 4 (raster_args): one invocation: raster_big's dispatch size for KERNEL 2.
-// KERNEL 2 (raster_big): one work group a listed triangle, its pixels spread over the group.
+// KERNEL 2 (raster_big): one work group a listed entry, its chunk's pixels spread over the group.
 // KERNEL 5 (raster_masked): one invocation a triangle of one masked draw (alpha masking on),
 //   with its material's set 1 bound; the group's big triangles afterwards by the whole group.
 //   A pixel is covered where the surface's base-colour alpha (surface_fetch.glsl + shade.glsl,
@@ -68,10 +71,11 @@ uint g_view;  // this invocation's view (surface_fetch.glsl reads its ray from i
 #include "surface_fetch.glsl"
 #endif
 
-const float BIG_AREA = 256.0;  // screen-box pixels above which a work group takes a triangle
+const float BIG_AREA = 256.0;  // screen-box pixels above which work groups take a triangle
+const uint BIG_CHUNK = 4096u;  // box pixels of one raster_big entry (16 per invocation)
 // raster_big: [0] the count, [1..3] KERNEL 2's dispatch size (indirect), from 4 the list of
-// (triangle, view) pairs.
-const uint BIG_LIST = 4u;
+// (triangle, view, chunk) entries.
+const uint BIG_LIST = 4u, BIG_ENTRY = 3u;
 const uint MAX_GROUPS = 65535u;  // maxComputeWorkGroupCount[0] of every device
 const uint DOUBLE_SIDED = 1u, MASKED = 2u, BLENDED = 4u;  // raster_draws[k].y (compute_path.py)
 // raster_draws' rows follow the raster units' submission order (the opaque pass's draws, the
@@ -160,14 +164,15 @@ vec3 screen(vec4 c) {
 float edge(vec2 a, vec2 b, vec2 p) { return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x); }
 
 // Cover pixels [lo, hi) of the screen triangle (s0, s1, s2), positive area, with the pixel
-// indices `first`, `first + stride`, ... of its box.
-void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, uint first, uint stride) {
+// indices `first`, `first + stride`, ... below `end` of its box.
+void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, uint first, uint stride,
+           uint end) {
 #if KERNEL == 5
     uint prim = id - raster_draws[pc.draw].x;
 #endif
     float area = edge(s0.xy, s1.xy, s2.xy);
     uint wbox = uint(hi.x - lo.x);
-    uint count = wbox * uint(hi.y - lo.y);
+    uint count = min(wbox * uint(hi.y - lo.y), end);
     for (uint i = first; i < count; i += stride) {
         ivec2 px = lo + ivec2(i % wbox, i / wbox);
         vec2 p = vec2(px) + 0.5;
@@ -182,7 +187,8 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, uint first, u
         if (surface_base_color().a < MAT.alpha_cutoff) continue;  // as pbr.frag's ALPHA_MASK
 #endif
         uint64_t packed = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(id + 1u);
-        atomicMax(raster[uint(px.y) * pc.width + uint(px.x)], packed);
+        uint at = uint(px.y) * pc.width + uint(px.x);
+        if (raster[at] < packed) atomicMax(raster[at], packed);  // hidden ones skip the atomic
     }
 }
 
@@ -190,9 +196,10 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, uint first, u
 // `edge` area for `cover`. Vulkan's front faces (counter-clockwise: positive area by its
 // formula, which is minus this `edge` in these y-down coordinates) have negative `edge`
 // area here; a single-sided triangle with positive area is a back face, culled as the
-// pipelines' cull="back" does. Calls `cover` for each; with `small_only`, lists
-// the triangle in raster_big instead when any of them is big.
-void raster_triangle(uint g, bool small_only, uint first, uint stride) {
+// pipelines' cull="back" does. Calls `cover` for each (box pixels `first`, `first + stride`,
+// ... below `end`); with `small_only`, lists the triangle in raster_big instead when its box
+// is big.
+void raster_triangle(uint g, bool small_only, uint first, uint stride, uint end) {
     vec4 c[3];
     bool double_sided;
     if (!fetch(g, c, double_sided)) return;
@@ -216,19 +223,26 @@ void raster_triangle(uint g, bool small_only, uint first, uint stride) {
         group_big[atomicAdd(group_big_count, 1u)] = g;  // at most one an invocation
         return;
 #else
-        // Listed with its view; past the list's end (a batch's worst case) drawn here.
-        uint slot = atomicAdd(raster_big[0], 1u);
-        if (slot < pc.big_capacity) {
-            raster_big[BIG_LIST + 2u * slot] = g;
-            raster_big[BIG_LIST + 2u * slot + 1u] = VIEW_INDEX;
-            return;
+        // Listed with its view, a chunk an entry; chunks past the list's end (a batch's
+        // worst case) are drawn here.
+        uint box = uint(hi.x - lo.x) * uint(hi.y - lo.y);
+        uint chunks = (box + BIG_CHUNK - 1u) / BIG_CHUNK;
+        uint slot = atomicAdd(raster_big[0], chunks);
+        uint listed = slot < pc.big_capacity ? min(chunks, pc.big_capacity - slot) : 0u;
+        for (uint c = 0u; c < listed; ++c) {
+            uint e = BIG_LIST + BIG_ENTRY * (slot + c);
+            raster_big[e] = g;
+            raster_big[e + 1u] = VIEW_INDEX;
+            raster_big[e + 2u] = c;
         }
+        if (listed == chunks) return;
+        first = listed * BIG_CHUNK;
 #endif
     }
     for (int j = 1; j + 1 < n; ++j) {
         vec3 a = s[0], b = s[j], d = s[j + 1];
         if (area < 0.0) { vec3 t = b; b = d; d = t; }  // a front face: `cover` wants area > 0
-        cover(a, b, d, g, lo, hi, first, stride);
+        cover(a, b, d, g, lo, hi, first, stride, end);
     }
 }
 #endif
@@ -239,7 +253,7 @@ void main() {
 #endif
 #if KERNEL == 1
     uint g = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
-    if (g < pc.triangles) raster_triangle(g, true, 0u, 1u);
+    if (g < pc.triangles) raster_triangle(g, true, 0u, 1u, ~0u);
 #elif KERNEL == 5
     uint first = raster_draws[pc.draw].x;
     uint count = (pc.draw + 1u < pc.draws ? raster_draws[pc.draw + 1u].x : pc.triangles) - first;
@@ -247,10 +261,10 @@ void main() {
     opaque_zero = 0u;  // shade.glsl's leak guard: a plain 0 here (no uniform block is read)
     if (gl_LocalInvocationIndex == 0u) group_big_count = 0u;
     barrier();
-    if (t < count) raster_triangle(first + t, true, 0u, 1u);
+    if (t < count) raster_triangle(first + t, true, 0u, 1u, ~0u);
     barrier();
     for (uint k = 0u; k < group_big_count; ++k)
-        raster_triangle(group_big[k], false, gl_LocalInvocationID.x, 64u);
+        raster_triangle(group_big[k], false, gl_LocalInvocationID.x, 64u, ~0u);
 #elif KERNEL == 4
     raster_big[1] = max(min(raster_big[0], MAX_GROUPS), 1u);
     raster_big[2] = 1u;
@@ -258,10 +272,12 @@ void main() {
 #elif KERNEL == 2
     uint listed = min(raster_big[0], pc.big_capacity);
     for (uint k = gl_WorkGroupID.x; k < listed; k += gl_NumWorkGroups.x) {
+        uint e = BIG_LIST + BIG_ENTRY * k;
 #if BATCH
-        g_view = raster_big[BIG_LIST + 2u * k + 1u];
+        g_view = raster_big[e + 1u];
 #endif
-        raster_triangle(raster_big[BIG_LIST + 2u * k], false, gl_LocalInvocationID.x, 256u);
+        uint chunk = raster_big[e + 2u] * BIG_CHUNK;
+        raster_triangle(raster_big[e], false, chunk + gl_LocalInvocationID.x, 256u, chunk + BIG_CHUNK);
     }
 #else
     uvec2 p = gl_GlobalInvocationID.xy;
