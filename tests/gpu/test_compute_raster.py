@@ -166,18 +166,19 @@ def test_random_triangles_and_cameras_agree_with_the_raster_units() -> None:
     check()
 
 
-@pytest.mark.parametrize("count", [3, 400])
+@pytest.mark.parametrize("count", [3, 1000])
 def test_screen_filling_triangles_split_into_chunks(count: int) -> None:
-    """Triangles far bigger than raster.comp's BIG_CHUNK (4,096 box pixels: 200x150 is ~8
-    chunks a triangle) are drawn by several work groups; 400 of them overflow the big list
-    (a sixteenth of the pixels, 1,875 entries), whose rest the listing invocation draws.
+    """Triangles bigger than raster.comp's BIG_CHUNK (16,384 box pixels: 200x150 is 2 chunks
+    a triangle) are drawn by several work groups; 1,000 of them overflow the big list (a
+    sixteenth of the pixels, 1,875 entries), whose rest the listing invocation draws.
     Either way each pixel shows the nearest triangle, as the raster units find it."""
     from test_outputs import silhouette_band
 
     from vkpbr.render.renderer import Renderer
 
     rng = np.random.default_rng(count)
-    z = rng.permutation(np.linspace(-3.0, 3.0, count))  # drawn in a random depth order
+    # Drawn far to near: the nearest are listed last, past the big list's end when it overflows.
+    z = np.linspace(-3.0, 3.0, count)
     jitter = rng.uniform(-0.5, 0.5, (count, 3, 2))
     base = np.array([[-90.0, -90.0], [90.0, -90.0], [0.0, 120.0]])
     tris = np.zeros((count, 3, 3))
@@ -192,7 +193,6 @@ def test_screen_filling_triangles_split_into_chunks(count: int) -> None:
                for raster in ("hardware", "compute")}
         hw, cr = got["hardware"], got["compute"]
         assert (hw > 0).mean() >= 0.9, "the triangles are meant to fill the view"
-        assert len(np.unique(hw)) >= 2, "crossing triangles are meant to be seen"
         wrong = hw != cr
         band = silhouette_band(hw)
         assert not wrong[~band].any(), f"{int(wrong[~band].sum())} pixels differ off the edges"

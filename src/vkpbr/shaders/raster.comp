@@ -5,12 +5,12 @@
 // 1) in `raster` (depth >= 0, so its float bits order as the depths: the nearest wins, and on
 // a tie the later triangle, as GREATER_OR_EQUAL does for later draws). Triangles are clipped
 // to the near and far planes (z <= w, z >= 0: the shading re-intersects the pixel's ray with
-// the whole triangle, so only coverage and depth come from here). The atomic is skipped
-// where a plain load already holds as near a value: the buffer only grows, so a stale load
-// errs toward doing the atomic, never toward losing a nearer surface.
+// the whole triangle, so only coverage and depth come from here). No plain load guards the
+// atomic: on the H200 that "skip when nearer is stored" test cost more (1.57 -> 2.13 ms at
+// 1080p) than the atomics it saved.
 // KERNEL 1 (raster_small): one invocation a triangle of the opaque draws; triangles whose
 //   screen box exceeds BIG_AREA pixels are listed in raster_big instead, one entry for each
-//   BIG_CHUNK pixels of the box (a wall filling the screen is ~500 work groups' work, not one).
+//   BIG_CHUNK pixels of the box (a wall filling the screen is ~130 work groups' work, not one).
 // KERNEL 4 (raster_args): one invocation: raster_big's dispatch size for KERNEL 2.
 // KERNEL 2 (raster_big): one work group a listed entry, its chunk's pixels spread over the group.
 // KERNEL 5 (raster_masked): one invocation a triangle of one masked draw (alpha masking on),
@@ -72,7 +72,10 @@ uint g_view;  // this invocation's view (surface_fetch.glsl reads its ray from i
 #endif
 
 const float BIG_AREA = 256.0;  // screen-box pixels above which work groups take a triangle
-const uint BIG_CHUNK = 4096u;  // box pixels of one raster_big entry (16 per invocation)
+// Box pixels of one raster_big entry (64 per invocation). Measured on the H200 (Sponza 1080p,
+// BENCHMARKS.md): 16,384 1.24 ms, 4,096 1.36, unsplit 1.57; 1,024 with BIG_AREA 64 2.19: each
+// entry repeats the triangle's fetch, clip and setup, so fewer, bigger entries win.
+const uint BIG_CHUNK = 16384u;
 // raster_big: [0] the count, [1..3] KERNEL 2's dispatch size (indirect), from 4 the list of
 // (triangle, view, chunk) entries.
 const uint BIG_LIST = 4u, BIG_ENTRY = 3u;
@@ -188,7 +191,7 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, uint first, u
 #endif
         uint64_t packed = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(id + 1u);
         uint at = uint(px.y) * pc.width + uint(px.x);
-        if (raster[at] < packed) atomicMax(raster[at], packed);  // hidden ones skip the atomic
+        atomicMax(raster[at], packed);
     }
 }
 
