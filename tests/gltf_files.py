@@ -154,12 +154,13 @@ def grid_mesh(n: int = 6, seed: int = 0) -> dict[str, np.ndarray]:
             "indices": idx}
 
 
-def ktx2_bytes(pixels: np.ndarray, uastc: bool = True) -> bytes:
+def ktx2_bytes(pixels: np.ndarray, uastc: bool = True, mipmaps: bool = False) -> bytes:
     """RGBA8 pixels -> a Basis Universal KTX2 (UASTC at its best quality, or ETC1S), sRGB,
-    through alktx2 (basis_universal's encoder; the `test` extra). ImportError without it."""
+    with its full mip chain when `mipmaps` (as gltf-transform and toktx write them), through
+    alktx2 (basis_universal's encoder; the `test` extra). ImportError without it."""
     import alktx2
 
     h, w = pixels.shape[:2]
     return alktx2.encode_raw_rgba_to_ktx2(np.ascontiguousarray(pixels, np.uint8).tobytes(), w, h,
                                           True, codec="uastc" if uastc else "etc1s",
-                                          quality=255, srgb=True)
+                                          quality=255, srgb=True, mipmaps=mipmaps)

@@ -128,6 +128,33 @@ def test_ktx2_and_webp_textures_render_as_png(make_renderer, tmp_path: Path) -> 
     _close(_render(make_renderer, ktx, "base_color"), png)
 
 
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
+def test_ktx2_with_mips_is_sampled_as_bc7(make_renderer, tmp_path: Path, pipeline: str) -> None:  # noqa: ANN001
+    """A KTX2 texture with its mip chain is uploaded as BC7 where the device samples it
+    (lavapipe and NVIDIA do): a quarter of RGBA8's bytes, the file's own levels, and it
+    renders as the PNG within the codec's precision (the same bound as RGBA8 from UASTC);
+    without mips it stays RGBA8 (blitted mips)."""
+    g = grid_mesh(8, seed=1)
+    px = smooth_pixels(64, 32)
+    png = _plain_textured(g, tmp_path / "png.glb", _png(px))
+    r = make_renderer(_camera(load_gltf(png)))
+    if not r.device.bc7_textures:
+        pytest.skip(f"{r.device.info.name} does not sample BC7")
+    want = np.asarray(r.render(size=SIZE, view="base_color", pipeline=pipeline)).astype(np.int64)
+    rgba8_bytes = r.gpu_scene.texture_bytes
+    for mipmaps, fmt in ((True, "VK_FORMAT_BC7_SRGB_BLOCK"), (False, "VK_FORMAT_R8G8B8A8_SRGB")):
+        path = _plain_textured(g, tmp_path / f"ktx{mipmaps}.glb", ktx2_bytes(px, mipmaps=mipmaps),
+                               "image/ktx2", "KHR_texture_basisu")
+        r = make_renderer(_camera(load_gltf(path)))
+        [image] = r.gpu_scene.images.values()
+        assert image.format == getattr(r.device.vk, fmt), (mipmaps, image.format)
+        if mipmaps:
+            assert r.gpu_scene.texture_bytes <= rgba8_bytes / 3, (r.gpu_scene.texture_bytes, rgba8_bytes)
+        got = np.asarray(r.render(size=SIZE, view="base_color", pipeline=pipeline)).astype(np.int64)
+        _close(got, want)
+        assert r.device.instance.errors == []
+
+
 def test_instancing_renders_as_nodes(make_renderer, tmp_path: Path) -> None:  # noqa: ANN001
     f, want = _instanced_file(3, 8)
     scene = _camera(load_gltf(f.save(tmp_path / "inst.glb")))

@@ -24,7 +24,7 @@ from vkpbr.scene import gltf_codecs
 from vkpbr.scene.gltf import load_gltf
 from vkpbr.scene.loader import load_scene
 from vkpbr.scene.textures import decode_images
-from vkpbr.scene.types import expand_instances
+from vkpbr.scene.types import Image, expand_instances
 
 
 def _need(module: str):  # noqa: ANN202
@@ -576,12 +576,12 @@ def test_unhonourable_required_extension_is_named(tmp_path: Path) -> None:
         load_scene(path)
 
 
-def ktx2_bytes(pixels: np.ndarray, uastc: bool = True) -> bytes:
+def ktx2_bytes(pixels: np.ndarray, uastc: bool = True, mipmaps: bool = False) -> bytes:
     """RGBA8 pixels -> a Basis Universal KTX2 (gltf_files.ktx2_bytes), the decoder and the
     encoder both needed (skipped, naming the extra, without either)."""
     _need("opengl_basisu")
     pytest.importorskip("alktx2", reason="alktx2 is not installed (extra: test)")
-    return gltf_files.ktx2_bytes(pixels, uastc)
+    return gltf_files.ktx2_bytes(pixels, uastc, mipmaps)
 
 
 def smooth_pixels(w: int = 32, h: int = 16) -> np.ndarray:
@@ -616,6 +616,26 @@ def test_corrupt_ktx2_is_the_missing_texture_fallback(tmp_path: Path,
             out = decode_images(scene)
         assert out[1] is None  # the renderer binds its default in its place
         assert "cannot be decoded" in caplog.text
+
+
+def test_ktx2_with_mips_is_also_bc7_blocks() -> None:
+    """decode_images(blocks="bc7"): a KTX2 holding its mip chain gets every level as BC7 blocks
+    (16 bytes a 4x4 block, odd sizes rounded up); one without mips, or downscaled, gets none
+    (the GPU cannot make mips of blocks). What the blocks look like is the GPU test's
+    (tests/gpu/test_gltf_codec_renders.py: sampled, they render as the PNG)."""
+    px = smooth_pixels(40, 20)  # not multiples of 4 below level 0
+    images = [Image("mips", data=ktx2_bytes(px, mipmaps=True)), Image("one", data=ktx2_bytes(px))]
+    levels: dict[int, list[np.ndarray]] = {}
+    out = decode_images(images, blocks="bc7", block_levels=levels)
+    assert [o.shape for o in out] == [(20, 40, 4)] * 2
+    assert list(levels) == [0]
+    w, h = 40, 20
+    shapes = [(-(-max(h >> k, 1) // 4), -(-max(w >> k, 1) // 4), 16) for k in range(6)]
+    assert [lv.shape for lv in levels[0]] == shapes
+    assert all(lv.dtype == np.uint8 and lv.any() for lv in levels[0])
+    small: dict[int, list[np.ndarray]] = {}
+    assert decode_images(images, max_size=16, blocks="bc7", block_levels=small)[0].shape == (8, 16, 4)
+    assert small == {}
 
 
 def plain_ktx2(pixels: np.ndarray, vk_format: int = 43, scheme: int = 0) -> bytes:

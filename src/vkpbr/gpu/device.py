@@ -185,14 +185,19 @@ class Device:
         # shaders (geometryShader), storage writes without a declared format, and subgroup
         # ballot, vote and shuffle in compute shaders.
         self.compute_path = all(supported[k] for k in COMPUTE_PATH_FEATURES)
+        # BC7 textures (KHR_texture_basisu's KTX2 transcoded to blocks: a quarter of RGBA8's
+        # memory): the feature and linear filtering of both colour spaces.
+        self.bc7_textures = bool(supported["textureCompressionBC"]) and all(
+            self.format_supports(getattr(vk, f"VK_FORMAT_BC7_{space}_BLOCK"),
+                                 "SAMPLED_IMAGE_FILTER_LINEAR") for space in ("SRGB", "UNORM"))
         # Only what vkpbr uses: dynamic rendering, synchronization2, maintenance4, anisotropic
-        # filtering, layered rendering and cube-map arrays (shadows), the compute path's.
+        # filtering, layered rendering and cube-map arrays (shadows), the compute path's, BC7.
         core = vk.VkPhysicalDeviceFeatures(
             samplerAnisotropy=vk.VK_TRUE if self.anisotropy else vk.VK_FALSE,
             imageCubeArray=on[self.image_cube_array], geometryShader=on[self.compute_path],
             drawIndirectFirstInstance=on[self.batch_views],
             shaderStorageImageWriteWithoutFormat=on[self.compute_path],
-            shaderInt64=on[self.compute_raster])
+            shaderInt64=on[self.compute_raster], textureCompressionBC=on[self.bc7_textures])
         features = vk.VkPhysicalDeviceFeatures2(pNext=f11, features=core)
         available = {
             e.extensionName
@@ -248,6 +253,7 @@ class Device:
                 "shaderDrawParameters": f11.shaderDrawParameters,
                 "geometryShader": core.geometryShader,
                 "shaderInt64": core.shaderInt64,
+                "textureCompressionBC": core.textureCompressionBC,
                 "shaderBufferInt64Atomics": f12.shaderBufferInt64Atomics,
                 "shaderStorageImageWriteWithoutFormat": core.shaderStorageImageWriteWithoutFormat,
                 "subgroupOperations": int((sub.supportedOperations & ops) == ops and bool(

@@ -210,6 +210,11 @@ class Sampler(DeviceObject):
 
 
 
+def _aligned(nbytes: int) -> int:
+    """A staging slot's size: copies from a buffer start at multiples of the texel block."""
+    return -(-nbytes // 16) * 16
+
+
 def _barrier(vk: Any, image: Image, old: int, new: int, src: tuple, dst: tuple,
              base_mip: int = 0, mips: int = 1, layers: int = 1) -> Any:
     return vk.VkImageMemoryBarrier2(
@@ -238,7 +243,8 @@ def pipeline_barrier(vk: Any, cmd: Any, image_barriers: list, buffer_barriers: l
 
 
 class TextureUploader:
-    """Uploads RGBA8 images with full mip chains, batching many into one submission.
+    """Uploads RGBA8 images with full mip chains (and BC7 ones with theirs: `add_blocks`),
+    batching many into one submission.
 
     Staging memory is bounded by `batch_bytes`: when a batch would exceed it, the batch is
     submitted and the staging buffer reused.
@@ -285,11 +291,31 @@ class TextureUploader:
         self._pending_bytes += nbytes
         return image
 
+    def add_blocks(self, levels: Sequence[np.ndarray], size: tuple[int, int], format: str,
+                   name: str = "") -> Image:
+        """Queue a BC7 image with its whole mip chain (vkpbr.scene.gltf_codecs.ktx2_blocks):
+        `levels` (blocks high, blocks wide, 16) uint8 each, largest first, of a `size` (W, H)
+        image; `format` "srgb" or "unorm". Only where `Device.bc7_textures`."""
+        vk = self.device.vk
+        w, h = size
+        if len(levels) != mip_levels(w, h):
+            raise ValueError(f"texture {name!r}: {len(levels)} block levels, not the full chain below {w}x{h}")
+        fmt = {"srgb": vk.VK_FORMAT_BC7_SRGB_BLOCK, "unorm": vk.VK_FORMAT_BC7_UNORM_BLOCK}[format]
+        image = Image(self.device, w, h, fmt, vk.VK_IMAGE_USAGE_SAMPLED_BIT
+                      | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT, mip_levels=len(levels), name=name)
+        data = [np.ascontiguousarray(a, dtype=np.uint8) for a in levels]
+        nbytes = sum(_aligned(a.nbytes) for a in data)
+        if self._pending_bytes + nbytes > self.batch_bytes:
+            self.flush()
+        self._pending.append((image, data))
+        self._pending_bytes += nbytes
+        return image
+
     def flush(self) -> None:
         if not self._pending:
             return
         device, vk = self.device, self.device.vk
-        total = sum(a.nbytes for _, levels in self._pending for a in levels)
+        total = sum(_aligned(a.nbytes) for _, levels in self._pending for a in levels)
         staging = Buffer(device, total, vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT, host_visible=True)
         try:
             dst = staging.array(np.uint8, total)
@@ -297,10 +323,10 @@ class TextureUploader:
             with device.one_time_commands() as cmd:
                 for image, levels in self._pending:
                     offsets = []
-                    for a in levels:  # every size is a multiple of 4, as RGBA8 copies need
+                    for a in levels:  # offsets multiples of 16: a BC7 block (RGBA8 needs 4)
                         dst[offset : offset + a.nbytes] = a.reshape(-1)
                         offsets.append(offset)
-                        offset += a.nbytes
+                        offset += _aligned(a.nbytes)
                     if len(levels) > 1:
                         self._record_levels(cmd, image, staging, offsets)
                     else:

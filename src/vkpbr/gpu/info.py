@@ -47,6 +47,9 @@ def _features(vk: Any, info: PhysicalDeviceInfo) -> dict[str, Any]:
         "maxFramebufferLayers": int(limits.maxFramebufferLayers),
         "externalMemoryFd": "VK_KHR_external_memory_fd" in extensions,
         "memoryBudget": "VK_EXT_memory_budget" in extensions,
+        # KTX2 (KHR_texture_basisu) with its mips is uploaded as BC7 where this holds (and
+        # both BC7 formats filter linearly: gpu/device.py bc7_textures), else as RGBA8.
+        "textureCompressionBC": bool(f2.features.textureCompressionBC),
     }
 
 

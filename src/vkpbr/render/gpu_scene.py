@@ -270,13 +270,18 @@ class GpuScene:
 
     # --- textures ---------------------------------------------------------------------------
     def _decoded_pixels(self) -> list[np.ndarray | None]:
+        """Every image's RGBA8; KTX2 ones with their mips also as BC7 blocks (into
+        `self.block_levels`) where the device samples BC7."""
         images = self.scene.images
+        self.block_levels: dict[int, list[np.ndarray]] = {}
         if all(img.pixels is not None for img in images):
             return [img.pixels for img in images]
         from vkpbr.scene.textures import decode_images
 
         max_size = int(self.device.limits.maxImageDimension2D)
-        return decode_images(self.scene, max_size=max_size)  # a Scene: errors name its file
+        return decode_images(self.scene, max_size=max_size,  # a Scene: errors name its file
+                             blocks="bc7" if self.device.bc7_textures else None,
+                             block_levels=self.block_levels)
 
     def _merge_alpha_masks(self, pixels: list[np.ndarray | None]) -> list[Material]:
         """Materials with a separate alpha mask (OBJ map_d, .comp5822mesh) get one image whose
@@ -326,13 +331,19 @@ class GpuScene:
         for image_index, srgb in usage:
             fmt = "srgb" if srgb else "unorm"
             source = self.scene.images[image_index] if image_index < len(self.scene.images) else None
+            name = source.name if source else "alpha-merged"
+            blocks = self.block_levels.get(image_index)
+            if blocks is not None:  # KTX2 with its mips, as BC7 (the file's own levels)
+                h, w = pixels[image_index].shape[:2]
+                self.images[(image_index, srgb)] = self._own(uploader.add_blocks(
+                    blocks, (w, h), fmt, name=name))
+                continue
             mips = ()
             if (source is not None and source.mips and source.mips_srgb == srgb
                     and pixels[image_index] is source.pixels):  # not downscaled on decode
                 mips = source.mips
             self.images[(image_index, srgb)] = self._own(uploader.add(
-                pixels[image_index], fmt, name=source.name if source else "alpha-merged",
-                mips=mips))
+                pixels[image_index], fmt, name=name, mips=mips))
         # 1x1 defaults for missing maps: white base colour and scalar maps (the factors then
         # act alone), a flat tangent-space normal, black emission.
         defaults = {

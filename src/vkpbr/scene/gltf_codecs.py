@@ -19,7 +19,7 @@ import numpy as np
 
 from vkpbr.errors import SceneError
 
-__all__ = ["CODEC_PACKAGES", "KTX2_MAGIC", "codec", "decode_draco", "decode_ktx2", "decode_meshopt",
+__all__ = ["CODEC_PACKAGES", "KTX2_MAGIC", "codec", "decode_draco", "decode_ktx2", "decode_meshopt", "ktx2_blocks",
            "missing_codec"]
 
 # Extension -> (module to import, the pip requirement that provides it).
@@ -225,6 +225,34 @@ def decode_ktx2(data: bytes) -> np.ndarray:
     if px.shape != (height, width, 4):
         raise ValueError(f"KTX2 level 0 transcoded to {px.shape}, not {(height, width, 4)}")
     return px
+
+
+def ktx2_blocks(data: bytes, target: str = "bc7") -> list[np.ndarray] | None:
+    """Every mip level of a Basis Universal KTX2 transcoded to GPU blocks (`target` "bc7":
+    BC7 RGBA, 16 bytes a 4x4 block), largest first, each (blocks high, blocks wide, 16) uint8;
+    None when the file is not Basis Universal or does not hold the full mip chain (the GPU
+    cannot make mips of block formats, so such a texture stays RGBA8 with blitted mips).
+
+    Raises ValueError as decode_ktx2 does (the caller has decoded it already, so it is rare).
+    """
+    basisu = codec("KHR_texture_basisu")
+    if basisu is None or _vk_format(data) != 0:
+        return None
+    width, height = ktx2_size(data)
+    try:
+        levels = basisu.open(data).transcode_levels({"bc7": basisu.Target.BC7}[target])
+    except basisu.BasisuError as exc:
+        raise ValueError(f"corrupt or unsupported KTX2 ({exc})") from exc
+    if len(levels) != int(np.log2(max(width, height))) + 1:
+        return None
+    out = []
+    for k, level in enumerate(levels):
+        w, h = max(width >> k, 1), max(height >> k, 1)
+        blocks = np.asarray(level.data, np.uint8)
+        if blocks.shape != (-(-h // 4), -(-w // 4), 16):
+            raise ValueError(f"KTX2 level {k} transcoded to {blocks.shape} blocks for {w}x{h}")
+        out.append(np.ascontiguousarray(blocks))
+    return out
 
 
 # KTX 2.0 (spec 3.1): vkFormat at byte 12, supercompressionScheme at 44, level 0's byteOffset

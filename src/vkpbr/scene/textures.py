@@ -21,7 +21,7 @@ import numpy as np
 from PIL import Image as PILImage
 
 from vkpbr.errors import SceneError
-from vkpbr.scene.gltf_codecs import KTX2_MAGIC, decode_ktx2, ktx2_size
+from vkpbr.scene.gltf_codecs import KTX2_MAGIC, decode_ktx2, ktx2_blocks, ktx2_size
 from vkpbr.scene.limits import limits
 from vkpbr.scene.resources import is_regular_file, read_resource
 from vkpbr.scene.types import Image, Scene
@@ -170,8 +170,13 @@ class _OverBudget(Exception):  # noqa: N818 - internal signal, never leaves deco
 
 
 def decode_image(image: Image, max_size: int | None = None,
-                 budget: TextureBudget | None = None) -> tuple[np.ndarray | None, list[str]]:
+                 budget: TextureBudget | None = None, blocks: str | None = None,
+                 block_levels: list[np.ndarray] | None = None
+                 ) -> tuple[np.ndarray | None, list[str]]:
     """Decode one image.
+
+    `blocks` ("bc7"): a KTX2 (Basis Universal) image with its full mip chain, not downscaled,
+    is also transcoded to those GPU blocks, its levels appended to `block_levels`.
 
     `budget`, if given, is charged the decoded bytes before decoding; a texture that does not
     fit raises (decode_images turns that into the scene's SceneError).
@@ -192,7 +197,7 @@ def decode_image(image: Image, max_size: int | None = None,
         if budget is not None and budget.over is not None:
             raise _OverBudget  # another thread went over: decode nothing more
         with np.errstate(all="ignore"):
-            return _decode(image, max_size, messages, budget), messages
+            return _decode(image, max_size, messages, budget, blocks, block_levels), messages
     except (FileNotFoundError, NotADirectoryError):
         messages.append(("missing", image.name))
     except OSError as exc:
@@ -209,7 +214,8 @@ def decode_image(image: Image, max_size: int | None = None,
 
 
 def _decode(image: Image, max_size: int | None, messages: list[tuple[str, str]],
-            budget: TextureBudget | None = None) -> np.ndarray:
+            budget: TextureBudget | None = None, blocks: str | None = None,
+            block_levels: list[np.ndarray] | None = None) -> np.ndarray:
     """decode_image's body; raises on failure, appends notes (downscaling) to `messages`."""
     if image.pixels is not None:
         px = np.asarray(image.pixels)
@@ -235,7 +241,10 @@ def _decode(image: Image, max_size: int | None, messages: list[tuple[str, str]],
         else:
             raise ValueError("no pixels, data or path")
         if source.getbuffer()[:12] == KTX2_MAGIC:  # KHR_texture_basisu: not a Pillow format
-            return _decode_ktx2(image, source.getvalue(), max_size, messages, budget)
+            px = _decode_ktx2(image, source.getvalue(), max_size, messages, budget)
+            if blocks and block_levels is not None and px.shape[:2] == ktx2_size(source.getvalue())[::-1]:
+                block_levels.extend(ktx2_blocks(source.getvalue(), blocks) or ())
+            return px
         # Pillow's own decompression-bomb limit (DecompressionBombError) still applies.
         with warnings.catch_warnings():  # over Pillow's bomb warning is over our limit too
             warnings.simplefilter("ignore", PILImage.DecompressionBombWarning)
@@ -300,6 +309,8 @@ def decode_images(
     max_size: int | None = None,
     workers: int | None = None,
     source: str | os.PathLike[str] | None = None,
+    blocks: str | None = None,
+    block_levels: dict[int, list[np.ndarray]] | None = None,
 ) -> list[np.ndarray | None]:
     """Decode every image of a scene (or a list of images) to RGBA8, in parallel.
 
@@ -310,6 +321,10 @@ def decode_images(
     workers : decoding threads; default min(8, CPU count).
     source : the scene file, for the total-bytes error (default: the Scene's `source`, else
         its name).
+    blocks, block_levels : "bc7" and a dict: the KTX2 (Basis Universal) images that hold
+        their full mip chain and are not downscaled are also transcoded to BC7, every level
+        into `block_levels[image index]` ((blocks high, blocks wide, 16) uint8 each), for a
+        GPU that samples BC7 (a quarter of RGBA8's memory, the file's own mips).
 
     Returns
     -------
@@ -341,11 +356,15 @@ def decode_images(
     if max_size is not None and max_size < 1:
         raise ValueError(f"max_size must be >= 1, got {max_size}")
     budget = TextureBudget()
+    levels: list[list[np.ndarray]] = [[] for _ in images]
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        futures = [pool.submit(decode_image, img, max_size, budget) for img in images]
+        futures = [pool.submit(decode_image, img, max_size, budget, blocks, levels[i])
+                   for i, img in enumerate(images)]
     if budget.over is not None:  # every future is done (the pool is shut down)
         raise budget.error(source or "the scene's textures")
     results = [f.result() for f in futures]
+    if block_levels is not None:
+        block_levels.update({i: lv for i, lv in enumerate(levels) if lv and results[i][0] is not None})
     notes: dict[str, list[str]] = {}
     for _, messages in results:
         for kind, text in messages:
