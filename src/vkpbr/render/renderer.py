@@ -164,6 +164,7 @@ class Renderer:
             self.bounds = Bounds.of(*scene.bounds())
             blend = [d.center for d in self.gpu_scene.draws if d.alpha_mode == "blend"]
             self._blend_centers = np.array(blend, dtype=np.float64).reshape(-1, 3)
+            self._last_lighting: tuple[RenderOptions, FrameLighting] | None = None
             self.last_stats = FrameStats()
             self.timings = {"setup": time.perf_counter() - t0, **self.gpu_scene.timings}
         except BaseException:
@@ -311,6 +312,8 @@ class Renderer:
 
     def blend_order(self, eye: Any) -> tuple[int, ...]:
         """Indices into the blended draws, farthest first from `eye` (painter's order)."""
+        if len(self._blend_centers) < 2:  # no order to find: the frame path's usual case
+            return tuple(range(len(self._blend_centers)))
         return tuple(self.blend_orders(np.asarray(eye, dtype=np.float64)[None])[0].tolist())
 
     def blend_orders(self, eyes: np.ndarray) -> np.ndarray:
@@ -362,7 +365,16 @@ class Renderer:
         return chosen
 
     def frame_lighting(self, options: RenderOptions) -> FrameLighting:
-        """What lights a frame besides its punctual lights, for `options`' lighting mode."""
+        """What lights a frame besides its punctual lights, for `options`' lighting mode
+        (the last answer kept: a run of frames has one options object)."""
+        last = self._last_lighting
+        if last is not None and last[0] is options:
+            return last[1]
+        lighting = self._frame_lighting(options)
+        self._last_lighting = (options, lighting)
+        return lighting
+
+    def _frame_lighting(self, options: RenderOptions) -> FrameLighting:
         if options.lighting == L.Lighting.COURSE:
             return FrameLighting(mode=int(L.Lighting.COURSE), ambient=AMBIENT)
         shadows = L.LIGHTING_SHADOWS if options.shadows else 0
