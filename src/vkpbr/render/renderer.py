@@ -18,6 +18,7 @@ from __future__ import annotations
 import collections
 import dataclasses
 import functools
+import logging
 import math
 import os
 import time
@@ -28,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from vkpbr.errors import UsageError
+from vkpbr.errors import OutOfDeviceMemoryError, UsageError
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import COMPUTE_PATH_FEATURES, Device, DeviceRequest
 from vkpbr.gpu.frames import Frame, FrameRing
@@ -53,6 +54,8 @@ from vkpbr.render.frames import (
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.overlay import TextOverlay
+from vkpbr.render.path_choice import RULE_GPU, PathChoice, frame_paths_mode, is_auto
+from vkpbr.render.path_choice import resolve as resolve_paths
 from vkpbr.render.recorder import STAMP_NAMES, STAMPS, FrameRecorder
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
@@ -69,6 +72,8 @@ from vkpbr.shading import AMBIENT, SUN_DIRECTION
 LightsArg = Light | Iterable[Light] | None
 
 __all__ = ["Renderer", "RenderOptions", "FrameStats", "Submitted", "COPY_COLOR", "COPY_DEPTH"]
+
+log = logging.getLogger(__name__)
 
 @dataclass
 class Submitted:
@@ -165,6 +170,7 @@ class Renderer:
             blend = [d.center for d in self.gpu_scene.draws if d.alpha_mode == "blend"]
             self._blend_centers = np.array(blend, dtype=np.float64).reshape(-1, 3)
             self._last_lighting: tuple[RenderOptions, FrameLighting] | None = None
+            self._auto_choice: PathChoice | None = None  # what auto measured (path_choice.py)
             self.last_stats = FrameStats()
             self.timings = {"setup": time.perf_counter() - t0, **self.gpu_scene.timings}
         except BaseException:
@@ -262,9 +268,12 @@ class Renderer:
             return True
         if options.pipeline == L.PipelinePath.FORWARD:
             return False
-        # auto: the compute path on GPUs where the target allows it (the H200 measured it
-        # 1.5-2.9x faster at 128x128 to 1920x1080, either lighting, 1 to 256 lights:
-        # BENCHMARKS.md), the fragment path on CPUs (lavapipe: the slower of the two).
+        # auto: on GPUs, what measured fastest on the device (render/path_choice.py; until it
+        # is measured, the compute path where the target allows it: the H200 measured it
+        # 1.5-3.9x faster at 128x128 to 1920x1080); the fragment path on CPUs (lavapipe: the
+        # slower of the two).
+        if self._auto_choice is not None:  # measured (or read back) for this device
+            return self._auto_choice.compute and self.compute_unavailable(target) is None
         return self.device.info.kind != "cpu" and self.compute_unavailable(target) is None
 
     def compute_batch_unavailable(self) -> str | None:
@@ -294,8 +303,9 @@ class Renderer:
         w, h = target.extent
         limit = int(self.device.limits.maxStorageBufferRange)
         if options.raster == L.RasterPath.AUTO:
-            return (self.device.info.kind != "cpu" and bool(self.device.compute_raster)
-                    and 8 * w * h <= limit)
+            wanted = (self._auto_choice.compute_raster if self._auto_choice is not None
+                      else self.device.info.kind != "cpu")
+            return wanted and bool(self.device.compute_raster) and 8 * w * h <= limit
         if not self.device.compute_raster:
             raise UsageError("--raster compute is not available here: the device lacks 64-bit "
                              "storage-buffer atomics (shaderInt64, shaderBufferInt64Atomics); "
@@ -475,6 +485,8 @@ class Renderer:
         read is a system call.
         Returns a Submitted; `ok` False: recreate the target (a resized window).
         """
+        if self._auto_choice is None and is_auto(options):
+            self._choose_auto_paths(target)
         t0 = time.perf_counter()
         self.bind_environment_for(options)
         clock = time.thread_time if driver_time else _no_clock
@@ -514,6 +526,21 @@ class Renderer:
         frame.stamped = self.ring.query_pool is not None
         slot.stats.cpu_ms = (time.perf_counter() - t0) * 1e3
         return Submitted(frame, image, ok)
+
+    def _choose_auto_paths(self, target: FrameTarget) -> None:
+        """Before the first auto frame on a GPU that `target` lets take the compute path:
+        the recorded choice for the device, or the candidates measured now (path_choice.py;
+        explicit options, so their frames do not come back here)."""
+        mode = frame_paths_mode()  # VKPBR_FRAME_PATHS: auto, measure (CPUs too) or rule
+        if mode == "rule" or (self.device.info.kind == "cpu" and mode != "measure"):
+            return
+        if self.compute_unavailable(target) is not None:
+            return
+        self._auto_choice = RULE_GPU  # while measuring, and if measuring fails
+        try:
+            self._auto_choice = resolve_paths(self, target.extent, self._cache_dir)
+        except (OutOfDeviceMemoryError, UsageError) as exc:  # a candidate cannot run here
+            log.warning("frame paths not measured (%s); auto takes %s", exc, RULE_GPU.label)
 
     def _ensure_shadow_maps(self, plan: ShadowPlan, options: RenderOptions | None = None) -> None:
         if options is not None and options.shadow_resolution != self.shadows.resolution:

@@ -1,0 +1,121 @@
+"""`--pipeline auto` on GPUs: the frame path measured fastest on the device, recorded once
+per device (render/path_choice.py). The measuring and the record run here on lavapipe
+through `resolve` (auto itself never measures on a CPU: checked too)."""
+
+from __future__ import annotations
+
+import json
+import logging
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vkpbr.errors import UsageError
+from vkpbr.render import path_choice as pc
+from vkpbr.render.renderer import Renderer, RenderOptions
+
+SIZE = (48, 36)
+
+
+@pytest.fixture(scope="module")
+def chart():
+    with Renderer(validation=True) as r:
+        yield r
+        assert r.device.instance.errors == []
+
+
+def test_every_candidate_is_timed_and_the_fastest_chosen(chart) -> None:  # noqa: ANN001
+    record = pc.measure(chart, SIZE)
+    labels = ["forward", "compute/hardware"] + (["compute/compute"] if chart.device.compute_raster else [])
+    assert list(record["gpu_ms"]) == labels
+    times = record["gpu_ms"]
+    assert all(np.isfinite(v) and v > 0 for v in times.values()), times
+    assert record["choice"] == min(times, key=times.get)
+    assert record["size"] == list(SIZE) and record["frames"] == pc.TIMED
+
+
+def test_the_choice_is_recorded_once_per_device(chart, tmp_path: Path) -> None:  # noqa: ANN001
+    first = pc.resolve(chart, SIZE, tmp_path)
+    path = tmp_path / pc.CACHE_FILE
+    records = json.loads(path.read_text())
+    key = pc.device_key(chart)
+    assert list(records) == [key] and records[key]["choice"] == first.label and first.measured
+    # Read back, not measured again: a choice put in the file by hand is what comes back.
+    other = "forward" if first.label != "forward" else "compute/hardware"
+    records[key]["choice"] = other
+    path.write_text(json.dumps(records))
+    again = pc.resolve(chart, SIZE, tmp_path)
+    assert again.label == other
+    assert json.loads(path.read_text())[key]["choice"] == other  # untouched
+
+
+def test_a_broken_cache_file_is_measured_again(chart, tmp_path: Path,  # noqa: ANN001
+                                               caplog: pytest.LogCaptureFixture) -> None:
+    path = tmp_path / pc.CACHE_FILE
+    for junk in ("{not json", "[1, 2]", json.dumps({pc.device_key(chart): {"choice": "warp"}})):
+        path.write_text(junk)
+        with caplog.at_level(logging.WARNING):
+            got = pc.resolve(chart, SIZE, tmp_path)
+        assert got.measured
+        assert json.loads(path.read_text())[pc.device_key(chart)]["choice"] == got.label
+    assert "measuring the frame paths again" in caplog.text  # the unreadable one said so
+
+
+def test_a_read_only_cache_is_no_error(chart, tmp_path: Path) -> None:  # noqa: ANN001
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        assert pc.resolve(chart, SIZE, ro).measured
+    finally:
+        ro.chmod(0o700)
+
+
+def test_auto_on_a_cpu_takes_the_forward_path_without_measuring(tmp_path: Path) -> None:
+    with Renderer(validation=True, cache_dir=tmp_path) as r:
+        assert r.device.info.kind == "cpu"
+        r.render(size=SIZE)
+        assert not (tmp_path / pc.CACHE_FILE).exists()
+        target = r.new_offscreen_target(SIZE, linear=False)
+        try:
+            assert not r.uses_compute(target, RenderOptions())
+        finally:
+            r.drop_target(target)
+        assert r.device.instance.errors == []
+
+
+def test_auto_takes_what_was_measured(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """VKPBR_FRAME_PATHS=measure on lavapipe: the first auto frame measures and records,
+    frames then take the recorded path (one put in the file by hand in a new renderer), and
+    they are the pixels of that path asked for by name; =rule never measures; a bad value
+    is one line."""
+    monkeypatch.setenv("VKPBR_FRAME_PATHS", "measure")
+    with Renderer(validation=True, cache_dir=tmp_path) as r:
+        r.render(size=SIZE)
+        path = tmp_path / pc.CACHE_FILE
+        records = json.loads(path.read_text())
+        key = pc.device_key(r)
+        measured = records[key]["choice"]
+    for label, pipeline, raster in (("compute/hardware", "compute", "hardware"),
+                                    ("forward", "forward", "hardware")):
+        records[key]["choice"] = label
+        path.write_text(json.dumps(records))
+        with Renderer(validation=True, cache_dir=tmp_path) as r:
+            auto = r.render(size=SIZE)
+            assert json.loads(path.read_text())[key]["choice"] == label  # read, not measured
+            target = r.new_offscreen_target(SIZE, linear=False)
+            try:
+                assert r.uses_compute(target, RenderOptions()) == (pipeline == "compute")
+            finally:
+                r.drop_target(target)
+            np.testing.assert_array_equal(auto, r.render(size=SIZE, pipeline=pipeline, raster=raster))
+            assert r.device.instance.errors == []
+    assert measured in ("forward", "compute/hardware", "compute/compute")
+    monkeypatch.setenv("VKPBR_FRAME_PATHS", "rule")
+    with Renderer(validation=True, cache_dir=tmp_path / "rule") as r:
+        r.render(size=SIZE)
+        assert not (tmp_path / "rule" / pc.CACHE_FILE).exists()
+    monkeypatch.setenv("VKPBR_FRAME_PATHS", "sometimes")
+    with pytest.raises(UsageError, match="VKPBR_FRAME_PATHS='sometimes': use one of auto, measure, rule"):
+        pc.frame_paths_mode()
