@@ -119,3 +119,20 @@ def test_auto_takes_what_was_measured(tmp_path: Path, monkeypatch: pytest.Monkey
     monkeypatch.setenv("VKPBR_FRAME_PATHS", "sometimes")
     with pytest.raises(UsageError, match="VKPBR_FRAME_PATHS='sometimes': use one of auto, measure, rule"):
         pc.frame_paths_mode()
+
+
+def test_info_shows_the_recorded_choice(chart, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,  # noqa: ANN001
+                                        capsys: pytest.CaptureFixture[str]) -> None:
+    from vkpbr.app.cli import main
+
+    monkeypatch.setenv("VKPBR_CACHE_DIR", str(tmp_path))
+    assert main(["info"]) == 0
+    assert "autoFramePath                forward (CPUs are not measured)" in capsys.readouterr().out
+    choice = pc.resolve(chart, SIZE, tmp_path)
+    assert main(["info", "--json"]) == 0
+    [device] = [d for d in json.loads(capsys.readouterr().out)["devices"]
+                if d["name"] == chart.device.info.name]
+    assert device["frame_paths"]["choice"] == choice.label
+    assert main(["info"]) == 0
+    out = capsys.readouterr().out
+    assert f"autoFramePath                {choice.label} (" in out and " ms at 48x36)" in out

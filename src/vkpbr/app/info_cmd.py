@@ -30,10 +30,23 @@ def add_parser(sub: Any) -> None:
     p.set_defaults(run=run)
 
 
+def _frame_paths(device: dict) -> str:
+    record = device["frame_paths"]
+    if record is None:
+        return ("forward (CPUs are not measured)" if device["kind"] == "cpu" else
+                "not measured yet (the first auto frame measures it)")
+    times = ", ".join(f"{k} {v:.3f} ms" for k, v in record.get("gpu_ms", {}).items())
+    return f"{record.get('choice')} ({times} at {'x'.join(map(str, record.get('size', [])))})"
+
+
 def run(args: argparse.Namespace) -> int:
+    from vkpbr.app.common import default_cache_dir
     from vkpbr.render.info import device_report
+    from vkpbr.render.path_choice import recorded
 
     report = device_report()
+    for d in report["devices"]:  # what --pipeline auto measured here (render/path_choice.py)
+        d["frame_paths"] = recorded(default_cache_dir(), d)
     if args.json:
         print(json.dumps(report, indent=2))
         return 0
@@ -42,5 +55,6 @@ def run(args: argparse.Namespace) -> int:
         print(f"{mark} [{d['index']}] {d['name']} ({d['kind']}, Vulkan {d['api_version']})")
         for key, value in d["features"].items():
             print(f"      {key:28s} {value}")
+        print(f"      {'autoFramePath':28s} {_frame_paths(d)}")
     print("* = chosen by default (discrete > integrated > CPU); pick another with --device")
     return 0

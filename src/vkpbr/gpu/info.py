@@ -67,6 +67,7 @@ def device_report() -> dict[str, Any]:
                     "api_version": d.api_version,
                     "vendor_id": d.vendor_id,
                     "device_id": d.device_id,
+                    "driver_version": d.driver_version,
                     "chosen": d.index == chosen,
                     "features": _features(instance.vk, d),
                 }

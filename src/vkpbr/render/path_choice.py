@@ -34,7 +34,7 @@ from vkpbr.render import layouts as L
 Renderer = Any
 
 __all__ = ["CACHE_FILE", "RULE_GPU", "PathChoice", "device_key", "frame_paths_mode", "is_auto", "measure",
-           "resolve"]
+           "recorded", "resolve"]
 
 log = logging.getLogger(__name__)
 
@@ -63,8 +63,18 @@ RULE_GPU = PathChoice(compute=True, compute_raster=True)
 def device_key(renderer: Renderer) -> str:
     """The device, its driver and vkpbr's shaders: a new driver or new shaders measure again."""
     info = renderer.device.info
-    return (f"{info.name} [{info.vendor_id:04x}:{info.device_id:04x}] driver {info.driver_version}"
-            f" shaders {_shaders_digest()}")
+    return _key(info.name, info.vendor_id, info.device_id, info.driver_version)
+
+
+def _key(name: str, vendor_id: int, device_id: int, driver_version: int) -> str:
+    return f"{name} [{vendor_id:04x}:{device_id:04x}] driver {driver_version} shaders {_shaders_digest()}"
+
+
+def recorded(cache_dir: str | Path, device: dict) -> dict | None:
+    """The record for one of `vkpbr info`'s devices (its report's dict) in `cache_dir`."""
+    key = _key(device["name"], device["vendor_id"], device["device_id"], device["driver_version"])
+    record = _read(Path(cache_dir) / CACHE_FILE).get(key)
+    return record if isinstance(record, dict) else None
 
 
 @functools.cache
