@@ -153,6 +153,16 @@ def test_ktx2_with_mips_is_sampled_as_bc7(make_renderer, tmp_path: Path, pipelin
         got = np.asarray(r.render(size=SIZE, view="base_color", pipeline=pipeline)).astype(np.int64)
         _close(got, want)
         assert r.device.instance.errors == []
+    # A plain bake keeps the KTX2 bytes: its scene is BC7 too; --embed-textures stores RGBA8.
+    from vkpbr.bake.bake import bake_file
+    from vkpbr.scene.loader import load_scene
+
+    for embed, fmt in ((False, "VK_FORMAT_BC7_SRGB_BLOCK"), (True, "VK_FORMAT_R8G8B8A8_SRGB")):
+        baked = tmp_path / f"ktx-{embed}.vkpbr"
+        bake_file(tmp_path / "ktxTrue.glb", baked, embed_textures=embed, progress=False)
+        r = make_renderer(_camera(load_scene(baked)))
+        [image] = r.gpu_scene.images.values()
+        assert image.format == getattr(r.device.vk, fmt), (embed, image.format)
 
 
 def test_instancing_renders_as_nodes(make_renderer, tmp_path: Path) -> None:  # noqa: ANN001
