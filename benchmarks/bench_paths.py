@@ -12,7 +12,10 @@ on the fragment path and on the compute path
 scene's floor, shadows off so the lights alone are measured). GPU times are timestamp
 queries, median (and mean, max) over the frames after 10 warm-up frames, with the shadow-map
 layers drawn per frame; frames/s is wall time over
-`render_many` with readback into NumPy and without. Prints Markdown tables. Not a test.
+`render_many` with readback into NumPy and without. "draw() ms" is the frame's Python call
+(stats.cpu_ms, wall time), "of which driver" the thread CPU time inside the driver (fence
+wait, timestamp read, submit: stats.driver_ms), "Python alone" their difference (an upper
+bound: a driver wait that sleeps counts as Python). Prints Markdown tables. Not a test.
 """
 
 from __future__ import annotations
@@ -56,13 +59,14 @@ def walk(frames: int) -> list[Camera]:
 def measure(r: Renderer, size: tuple[int, int], frames: int, lights=None,  # noqa: ANN001
             camera: str = "still", **options) -> dict:
     cams = walk(frames) if camera == "moving" else [CAMERA] * frames
-    gpu, passes, cpu, layers = [], [], [], []
+    gpu, passes, cpu, driver, layers = [], [], [], [], []
     for i, _ in enumerate(r.render_many((cams * 10)[:10] + cams, lights, size=size,
-                                        readback=False, **options)):
+                                        readback=False, driver_time=True, **options)):
         if i >= 10:
             gpu.append(r.last_stats.gpu_ms)
             passes.append(r.last_stats.pass_ms)
             cpu.append(r.last_stats.cpu_ms)
+            driver.append(r.last_stats.driver_ms)
             layers.append(sum(n for _, n in r.shadows.last_redrawn_layers))
     t = time.perf_counter()
     for _ in r.render_many(cams, lights, size=size, **options):
@@ -76,7 +80,9 @@ def measure(r: Renderer, size: tuple[int, int], frames: int, lights=None,  # noq
     return {"size": f"{size[0]}x{size[1]}", "gpu_ms": statistics.median(gpu),
             "gpu_ms_mean": statistics.fmean(gpu), "gpu_ms_max": max(gpu),
             "shadow_layers": statistics.fmean(layers),
-            "cpu_ms": statistics.median(cpu), "fps_readback": fps, "fps_render_only": fps_render,
+            "cpu_ms": statistics.median(cpu), "driver_ms": statistics.median(driver),
+            "python_ms": statistics.median(c - d for c, d in zip(cpu, driver, strict=True)),
+            "fps_readback": fps, "fps_render_only": fps_render,
             "pass_ms": per_pass, "camera": camera, **{k: str(v) for k, v in options.items()}}
 
 
@@ -93,7 +99,7 @@ def floor_lights(scene, n: int) -> list[Light]:  # noqa: ANN001
 
 def table(rows: list[dict], keys: tuple[str, ...]) -> None:
     head = ["size", *keys, "GPU ms", "mean", "max", "shadow layers drawn", *STEPS,
-            "fps (NumPy)", "fps (GPU only)", "Python ms"]
+            "fps (NumPy)", "fps (GPU only)", "draw() ms", "of which driver", "Python alone"]
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
     for row in rows:
@@ -102,7 +108,8 @@ def table(rows: list[dict], keys: tuple[str, ...]) -> None:
                                  f"{row['gpu_ms']:.3f}", f"{row['gpu_ms_mean']:.3f}",
                                  f"{row['gpu_ms_max']:.3f}", f"{row['shadow_layers']:.2f}",
                                  *steps, f"{row['fps_readback']:.0f}",
-                                 f"{row['fps_render_only']:.0f}", f"{row['cpu_ms']:.3f}"]) + " |")
+                                 f"{row['fps_render_only']:.0f}", f"{row['cpu_ms']:.3f}",
+                                 f"{row['driver_ms']:.3f}", f"{row['python_ms']:.3f}"]) + " |")
 
 
 def main() -> None:

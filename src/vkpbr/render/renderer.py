@@ -644,6 +644,7 @@ class Renderer:
         readback: bool = True,
         outputs: Iterable[str] | None = None,
         batch: int | None = None,
+        driver_time: bool = False,
         **option_overrides: Any,
     ) -> Iterator[np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray] | None]:
         """Render one frame per camera, yielding what `render` returns, in order.
@@ -656,6 +657,8 @@ class Renderer:
         `batch` N: the cameras N at a time through `render_batch` (one submission each; its
         shadow maps of directional lights are one map over the scene), where the device has
         layered rendering; None: frame by frame.
+        `driver_time`: each frame's `last_stats.driver_ms` (the part of `cpu_ms` spent in the
+        driver: `draw`'s), for benchmarks that split Python from the driver.
         """
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
         if batch is not None and readback and self.device.batch_views:
@@ -677,7 +680,7 @@ class Renderer:
                 if len(pending) == self.ring.count:
                     yield self._collect(pending.popleft(), target, depth, readback, wanted)
                 sub = self.draw(target, camera, frame_lights, opts, copy=copy, linear=linear,
-                                timings=False)
+                                timings=False, driver_time=driver_time)
                 pending.append(sub.frame)  # type: ignore[arg-type] - offscreen: always a frame
             while pending:
                 yield self._collect(pending.popleft(), target, depth, readback, wanted)
