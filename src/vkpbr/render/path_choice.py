@@ -33,7 +33,7 @@ from vkpbr.render import layouts as L
 # object with its device, scene, render, last_stats and default_camera.
 Renderer = Any
 
-__all__ = ["CACHE_FILE", "RULE_GPU", "PathChoice", "device_key", "frame_paths_mode", "is_auto", "measure",
+__all__ = ["CACHE_FILE", "RULE_CPU", "RULE_GPU", "PathChoice", "device_key", "frame_paths_mode", "is_auto", "measure",
            "recorded", "resolve"]
 
 log = logging.getLogger(__name__)
@@ -58,6 +58,7 @@ class PathChoice:
 
 
 RULE_GPU = PathChoice(compute=True, compute_raster=True)
+RULE_CPU = PathChoice(compute=False, compute_raster=False)
 
 
 def device_key(renderer: Renderer) -> str:

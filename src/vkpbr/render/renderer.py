@@ -54,7 +54,7 @@ from vkpbr.render.frames import (
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.overlay import TextOverlay
-from vkpbr.render.path_choice import RULE_GPU, PathChoice, frame_paths_mode, is_auto
+from vkpbr.render.path_choice import RULE_CPU, RULE_GPU, PathChoice, frame_paths_mode, is_auto
 from vkpbr.render.path_choice import resolve as resolve_paths
 from vkpbr.render.recorder import STAMP_NAMES, STAMPS, FrameRecorder
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
@@ -532,9 +532,11 @@ class Renderer:
         the recorded choice for the device, or the candidates measured now (path_choice.py;
         explicit options, so their frames do not come back here)."""
         mode = frame_paths_mode()  # VKPBR_FRAME_PATHS: auto, measure (CPUs too) or rule
-        if mode == "rule" or (self.device.info.kind == "cpu" and mode != "measure"):
+        cpu = self.device.info.kind == "cpu"
+        if mode == "rule" or (cpu and mode != "measure"):  # decided once, not per frame
+            self._auto_choice = RULE_CPU if cpu else RULE_GPU
             return
-        if self.compute_unavailable(target) is not None:
+        if self.compute_unavailable(target) is not None:  # a window: decided by a later target
             return
         self._auto_choice = RULE_GPU  # while measuring, and if measuring fails
         try:
