@@ -342,7 +342,8 @@ def _codec_seeds() -> dict[str, tuple[Callable[[bytes], tuple[dict, bytes]], byt
     try:
         from gltf_files import ktx2_bytes
 
-        seeds["ktx2"] = (textured("image/ktx2", "KHR_texture_basisu"), ktx2_bytes(px))
+        # With its mips: the BC7 transcode (a GPU with BC7) reads the mutated levels too.
+        seeds["ktx2"] = (textured("image/ktx2", "KHR_texture_basisu"), ktx2_bytes(px, mipmaps=True))
     except ImportError:  # alktx2 (the test extra) absent
         pass
     try:
@@ -609,7 +610,7 @@ def run_one(path: Path, names: str, allow_outside_paths: bool = False,
             if decode:
                 from vkpbr.scene.textures import decode_images
 
-                decode_images(scene, workers=1)
+                decode_images(scene, workers=1, blocks="bc7", block_levels={})  # BC7 too
         outcome, detail = "loaded", ""
     except Forbidden as exc:
         outcome, detail = "unclean", f"forbidden open: {exc}"

@@ -181,8 +181,8 @@ class GpuScene:
             decoding = pool.submit(self._decoded_pixels)
             self._upload_geometry()
             t1 = time.perf_counter()
-            pixels = decoding.result()
-        self._upload_textures(pixels)
+            pixels, blocks = decoding.result()
+        self._upload_textures(pixels, blocks)
         t2 = time.perf_counter()
         self._create_materials(material_layout)
         self.draws = self._build_draws()
@@ -269,19 +269,20 @@ class GpuScene:
         return {"vectors": base + 12 + 16, "quat": base + 16, "packed": base + 4}
 
     # --- textures ---------------------------------------------------------------------------
-    def _decoded_pixels(self) -> list[np.ndarray | None]:
-        """Every image's RGBA8; KTX2 ones with their mips also as BC7 blocks (into
-        `self.block_levels`) where the device samples BC7."""
+    def _decoded_pixels(self) -> tuple[list[np.ndarray | None], dict[int, list[np.ndarray]]]:
+        """Every image's RGBA8, and the BC7 levels of the KTX2 ones that hold their mips
+        (by image index) where the device samples BC7."""
         images = self.scene.images
-        self.block_levels: dict[int, list[np.ndarray]] = {}
+        blocks: dict[int, list[np.ndarray]] = {}
         if all(img.pixels is not None for img in images):
-            return [img.pixels for img in images]
+            return [img.pixels for img in images], blocks
         from vkpbr.scene.textures import decode_images
 
         max_size = int(self.device.limits.maxImageDimension2D)
-        return decode_images(self.scene, max_size=max_size,  # a Scene: errors name its file
-                             blocks="bc7" if self.device.bc7_textures else None,
-                             block_levels=self.block_levels)
+        pixels = decode_images(self.scene, max_size=max_size,  # a Scene: errors name its file
+                               blocks="bc7" if self.device.bc7_textures else None,
+                               block_levels=blocks)
+        return pixels, blocks
 
     def _merge_alpha_masks(self, pixels: list[np.ndarray | None]) -> list[Material]:
         """Materials with a separate alpha mask (OBJ map_d, .comp5822mesh) get one image whose
@@ -316,7 +317,8 @@ class GpuScene:
                 alpha_texture=None)
         return out
 
-    def _upload_textures(self, decoded: list[np.ndarray | None]) -> None:
+    def _upload_textures(self, decoded: list[np.ndarray | None],
+                         block_levels: dict[int, list[np.ndarray]]) -> None:
         pixels = list(decoded)
         self.scene_materials = self._merge_alpha_masks(pixels)
         # Which colour space each image is used in (base colour and emissive are sRGB).
@@ -332,7 +334,7 @@ class GpuScene:
             fmt = "srgb" if srgb else "unorm"
             source = self.scene.images[image_index] if image_index < len(self.scene.images) else None
             name = source.name if source else "alpha-merged"
-            blocks = self.block_levels.get(image_index)
+            blocks = block_levels.get(image_index)
             if blocks is not None:  # KTX2 with its mips, as BC7 (the file's own levels)
                 h, w = pixels[image_index].shape[:2]
                 self.images[(image_index, srgb)] = self._own(uploader.add_blocks(

@@ -18,6 +18,7 @@ from types import ModuleType
 import numpy as np
 
 from vkpbr.errors import SceneError
+from vkpbr.scene.mips import mip_level_count
 
 __all__ = ["CODEC_PACKAGES", "KTX2_MAGIC", "codec", "decode_draco", "decode_ktx2", "decode_meshopt", "ktx2_blocks",
            "missing_codec"]
@@ -243,7 +244,7 @@ def ktx2_blocks(data: bytes, target: str = "bc7") -> list[np.ndarray] | None:
         levels = basisu.open(data).transcode_levels({"bc7": basisu.Target.BC7}[target])
     except basisu.BasisuError as exc:
         raise ValueError(f"corrupt or unsupported KTX2 ({exc})") from exc
-    if len(levels) != int(np.log2(max(width, height))) + 1:
+    if len(levels) != mip_level_count(width, height):
         return None
     out = []
     for k, level in enumerate(levels):

@@ -241,10 +241,8 @@ def _decode(image: Image, max_size: int | None, messages: list[tuple[str, str]],
         else:
             raise ValueError("no pixels, data or path")
         if source.getbuffer()[:12] == KTX2_MAGIC:  # KHR_texture_basisu: not a Pillow format
-            px = _decode_ktx2(image, source.getvalue(), max_size, messages, budget)
-            if blocks and block_levels is not None and px.shape[:2] == ktx2_size(source.getvalue())[::-1]:
-                block_levels.extend(ktx2_blocks(source.getvalue(), blocks) or ())
-            return px
+            return _decode_ktx2(image, source.getvalue(), max_size, messages, budget, blocks,
+                                block_levels)
         # Pillow's own decompression-bomb limit (DecompressionBombError) still applies.
         with warnings.catch_warnings():  # over Pillow's bomb warning is over our limit too
             warnings.simplefilter("ignore", PILImage.DecompressionBombWarning)
@@ -273,9 +271,11 @@ def _decode(image: Image, max_size: int | None, messages: list[tuple[str, str]],
 
 
 def _decode_ktx2(image: Image, data: bytes, max_size: int | None, messages: list[tuple[str, str]],
-                 budget: TextureBudget | None) -> np.ndarray:
+                 budget: TextureBudget | None, blocks: str | None = None,
+                 block_levels: list[np.ndarray] | None = None) -> np.ndarray:
     """A KTX2 texture -> RGBA8 under the same limits as Pillow's formats (pixel cap and
-    budget from the header, before transcoding)."""
+    budget from the header, before transcoding); with `blocks`, its levels as those GPU
+    blocks too, into `block_levels`, when it is not downscaled (decode_image)."""
     width, height = ktx2_size(data)
     cap = limits().max_texture_pixels
     if width * height > cap:
@@ -286,9 +286,25 @@ def _decode_ktx2(image: Image, data: bytes, max_size: int | None, messages: list
         budget.take(4 * w * h, image.name, (w, h))
     px = decode_ktx2(data)
     if (w, h) == (width, height):
+        if blocks and block_levels is not None:
+            _add_blocks(image, data, blocks, block_levels, budget)
         return px
     messages.append(("downscaled", f"{image.name}: {width}x{height} downscaled to {w}x{h}"))
     return _to_rgba8(PILImage.fromarray(px, "RGBA").resize((w, h), PILImage.Resampling.LANCZOS))
+
+
+def _add_blocks(image: Image, data: bytes, blocks: str, block_levels: list[np.ndarray],
+                budget: TextureBudget | None) -> None:
+    """`data`'s levels as GPU blocks into `block_levels` (none for a file without its mip
+    chain). The RGBA8 decode worked, so a transcoder refusal here leaves the texture RGBA8
+    rather than undecodable."""
+    try:
+        levels = ktx2_blocks(data, blocks) or []
+    except ValueError:
+        return
+    if levels and budget is not None:
+        budget.take(sum(a.nbytes for a in levels), image.name, ktx2_size(data))
+    block_levels.extend(levels)
 
 
 def _too_big(width: int, height: int, max_size: int | None) -> bool:
