@@ -53,13 +53,16 @@ def test_the_choice_is_recorded_once_per_device(chart, tmp_path: Path) -> None: 
 def test_a_broken_cache_file_is_measured_again(chart, tmp_path: Path,  # noqa: ANN001
                                                caplog: pytest.LogCaptureFixture) -> None:
     path = tmp_path / pc.CACHE_FILE
-    for junk in ("{not json", "[1, 2]", json.dumps({pc.device_key(chart): {"choice": "warp"}})):
+    key = pc.device_key(chart)
+    for junk in ("{not json", "[1, 2]", json.dumps({key: {"choice": "warp"}}),
+                 json.dumps({key: {"choice": "forward", "gpu_ms": [1], "size": [4, 4]}}),
+                 json.dumps({key: {"choice": "forward", "gpu_ms": {"forward": 1.0}, "size": "4x4"}})):
         path.write_text(junk)
         with caplog.at_level(logging.WARNING):
             got = pc.resolve(chart, SIZE, tmp_path)
         assert got.measured
         assert json.loads(path.read_text())[pc.device_key(chart)]["choice"] == got.label
-    assert "measuring the frame paths again" in caplog.text  # the unreadable one said so
+    assert "ignored (the next auto frame measures again)" in caplog.text  # the unreadable one said so
 
 
 def test_a_read_only_cache_is_no_error(chart, tmp_path: Path) -> None:  # noqa: ANN001
@@ -136,3 +139,14 @@ def test_info_shows_the_recorded_choice(chart, tmp_path: Path, monkeypatch: pyte
     assert main(["info"]) == 0
     out = capsys.readouterr().out
     assert f"autoFramePath                {choice.label} (" in out and " ms at 48x36)" in out
+
+
+def test_info_ignores_a_hand_edited_record(chart, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,  # noqa: ANN001
+                                           capsys: pytest.CaptureFixture[str]) -> None:
+    from vkpbr.app.cli import main
+
+    monkeypatch.setenv("VKPBR_CACHE_DIR", str(tmp_path))
+    (tmp_path / pc.CACHE_FILE).write_text(json.dumps(
+        {pc.device_key(chart): {"choice": "compute/compute", "gpu_ms": "fast", "size": [1, 1]}}))
+    assert main(["info"]) == 0
+    assert "autoFramePath                forward (CPUs are not measured)" in capsys.readouterr().out

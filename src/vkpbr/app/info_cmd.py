@@ -31,12 +31,13 @@ def add_parser(sub: Any) -> None:
 
 
 def _frame_paths(device: dict) -> str:
+    """What auto takes on `device`: its record (path_choice.recorded: checked), or why none."""
     record = device["frame_paths"]
     if record is None:
         return ("forward (CPUs are not measured)" if device["kind"] == "cpu" else
                 "not measured yet (the first auto frame measures it)")
-    times = ", ".join(f"{k} {v:.3f} ms" for k, v in record.get("gpu_ms", {}).items())
-    return f"{record.get('choice')} ({times} at {'x'.join(map(str, record.get('size', [])))})"
+    times = ", ".join(f"{k} {v:.3f} ms" for k, v in record["gpu_ms"].items())
+    return f"{record['choice']} ({times} at {record['size'][0]}x{record['size'][1]})"
 
 
 def run(args: argparse.Namespace) -> int:

@@ -74,8 +74,7 @@ def _key(name: str, vendor_id: int, device_id: int, driver_version: int) -> str:
 def recorded(cache_dir: str | Path, device: dict) -> dict | None:
     """The record for one of `vkpbr info`'s devices (its report's dict) in `cache_dir`."""
     key = _key(device["name"], device["vendor_id"], device["device_id"], device["driver_version"])
-    record = _read(Path(cache_dir) / CACHE_FILE).get(key)
-    return record if isinstance(record, dict) else None
+    return _valid(_read(Path(cache_dir) / CACHE_FILE).get(key))
 
 
 @functools.cache
@@ -116,11 +115,22 @@ def measure(renderer: Renderer, size: tuple[int, int]) -> dict[str, Any]:
             "frames": TIMED}
 
 
-def _from_label(label: str, measured: bool) -> PathChoice | None:
+def _from_label(label: Any, measured: bool) -> PathChoice | None:
     for c in (PathChoice(False, False), PathChoice(True, False), PathChoice(True, True)):
         if c.label == label:
             return PathChoice(c.compute, c.compute_raster, measured)
     return None
+
+
+def _valid(record: Any) -> dict | None:
+    """`record` when it is one `measure` wrote (a hand-edited or foreign one may not be)."""
+    if not isinstance(record, dict) or _from_label(record.get("choice"), True) is None:
+        return None
+    times, size = record.get("gpu_ms"), record.get("size")
+    if not (isinstance(times, dict) and all(isinstance(v, (int, float)) for v in times.values())
+            and isinstance(size, list) and len(size) == 2 and all(isinstance(n, int) for n in size)):
+        return None
+    return record
 
 
 def _read(path: Path) -> dict[str, dict]:
@@ -129,7 +139,7 @@ def _read(path: Path) -> dict[str, dict]:
     except FileNotFoundError:
         return {}
     except (OSError, ValueError) as exc:
-        log.warning("%s: unreadable (%s); measuring the frame paths again", path, exc)
+        log.warning("%s: unreadable (%s); ignored (the next auto frame measures again)", path, exc)
         return {}
     return data if isinstance(data, dict) else {}
 
@@ -139,8 +149,8 @@ def resolve(renderer: Renderer, size: tuple[int, int], cache_dir: str | Path | N
     key = device_key(renderer)
     path = Path(cache_dir) / CACHE_FILE if cache_dir is not None else None
     records = _read(path) if path is not None else _in_process
-    record = records.get(key)
-    choice = _from_label(record.get("choice", ""), True) if isinstance(record, dict) else None
+    record = _valid(records.get(key))
+    choice = _from_label(record["choice"], True) if record is not None else None
     if choice is not None and (not choice.compute_raster or renderer.device.compute_raster):
         return choice
     record = measure(renderer, size)
