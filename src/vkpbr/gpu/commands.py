@@ -147,7 +147,8 @@ class Commands:
                       base_mip: int = 0, mips: int | None = None) -> None:
         """A layout transition and memory dependency on mips [base_mip, base_mip + mips) of
         every layer. Layouts: "undefined", "general", "shader_read", "transfer_src",
-        "transfer_dst"; stages: "none", "compute", "fragment", "sampled" (fragment + compute shaders), "transfer" (gpu.compute)."""
+        "transfer_dst", "color_attachment"; stages: "none", "compute", "fragment", "sampled" (fragment +
+        compute shaders), "transfer", "color" (gpu.compute)."""
         vk = self.vk
         n = image.mip_levels - base_mip if mips is None else mips
         pipeline_barrier(vk, self.handle, [_barrier(
@@ -155,14 +156,18 @@ class Commands:
             stage_access(vk, src), stage_access(vk, dst), base_mip, n,
             getattr(image, "layers", 1))])
 
-    def blit_mips(self, image: Any, final: str = "shader_read", dst_stage: str = "sampled") -> None:
-        """Make levels 1.. of every layer by linear blits from level 0, which must be in the
-        GENERAL layout after compute writes; leaves the whole chain in `final`."""
+    def blit_mips(self, image: Any, final: str = "shader_read", dst_stage: str = "sampled",
+                  level0: tuple[str, str] = ("general", "compute"),
+                  last_read: str = "none") -> None:
+        """Make levels 1.. of every layer by linear blits from level 0, which is in layout
+        level0[0] after writes in stage level0[1] (GENERAL after compute writes, by default);
+        leaves the whole chain in `final`. `last_read`: the stage that last read levels 1..
+        (an image remade every frame: its previous frame's sampling), ordered before the blits."""
         vk = self.vk
         layers = getattr(image, "layers", 1)
-        self.image_barrier(image, "general", "transfer_src", "compute", "transfer", 0, 1)
+        self.image_barrier(image, level0[0], "transfer_src", level0[1], "transfer", 0, 1)
         if image.mip_levels > 1:
-            self.image_barrier(image, "undefined", "transfer_dst", "none", "transfer", 1)
+            self.image_barrier(image, "undefined", "transfer_dst", last_read, "transfer", 1)
         w, h = image.width, image.height
         for level in range(1, image.mip_levels):
             nw, nh = max(w // 2, 1), max(h // 2, 1)

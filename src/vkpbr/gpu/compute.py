@@ -30,6 +30,7 @@ LAYOUTS = {
     "shader_read": "VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL",
     "transfer_src": "VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL",
     "transfer_dst": "VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL",
+    "color_attachment": "VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL",
 }
 # stage -> (stage flag, the accesses a barrier waits for / makes visible there)
 STAGES = {
@@ -44,6 +45,9 @@ STAGES = {
                  ("VK_ACCESS_2_SHADER_SAMPLED_READ_BIT", "VK_ACCESS_2_SHADER_STORAGE_READ_BIT")),
     "transfer": ("VK_PIPELINE_STAGE_2_TRANSFER_BIT",
                  ("VK_ACCESS_2_TRANSFER_READ_BIT", "VK_ACCESS_2_TRANSFER_WRITE_BIT")),
+    # Drawn into as a colour attachment.
+    "color": ("VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT",
+              ("VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT", "VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT")),
 }
 
 

@@ -390,14 +390,32 @@ def evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m: Layers) -> Lay
     return LayeredTerms(base=base, transmission=transmission, sheen=sheen, clearcoat=clearcoat)
 
 
+def transmission_exit(p, n, v, m: Layers) -> np.ndarray:  # noqa: ANN001
+    """Mirror of shade.glsl's refracted ray: where the light a transmissive surface at `p`
+    lets through leaves it (..., 3): `p` itself for a thin wall, `thickness` along
+    refract(-v, n, 1 / ior) into a volume; the opaque copy is sampled where it projects
+    (render/transmission.py)."""
+    p, n, v = (np.asarray(x, dtype=np.float64) for x in (p, n, v))
+    if m.thickness <= 0.0:
+        return p
+    eta = 1.0 / m.ior
+    cos_i = _dot(n, v)
+    k = 1.0 - eta * eta * (1.0 - cos_i * cos_i)
+    d = np.where((k >= 0.0)[..., None],
+                 -eta * v + (eta * cos_i - np.sqrt(np.maximum(k, 0.0)))[..., None] * n, -v)
+    return p + _normalize(d) * m.thickness
+
+
 def shade_layered(n, v, l, c, metallic, roughness, light_in, m: Layers, emissive=0.0,  # noqa: ANN001, E741
                   nc=None, env_radiance: float | None = None,  # noqa: ANN001
-                  ibl_diffuse_weight=None) -> dict[str, np.ndarray]:  # noqa: ANN001
+                  ibl_diffuse_weight=None, behind=None) -> dict[str, np.ndarray]:  # noqa: ANN001
     """The views shade.glsl writes for a layered glTF material lit by one light (`l`,
     `light_in`; light_in 0 for none) and optionally a uniform environment of radiance
     `env_radiance` (already scaled by its intensity), for the layers' environment terms:
     the coat's reflection, sheen and refraction (each sees `env_radiance` in every
     direction). `ibl_diffuse_weight`: the split sum's k_d (..., 3), needed for refraction.
+    `behind` (..., 3): the radiance refraction brings (the opaque copy's where the exit point
+    projects, `transmission_exit`); None: `env_radiance`.
     Returns the radiance views "specular", "diffuse", "transmission", "sheen", "clearcoat",
     the scalars "sheen_scaling" and "coat_blend", the data views "ior", "dielectric_f0" and
     "volume", and "final" (the point light's and these environment terms only: the split
@@ -415,7 +433,8 @@ def shade_layered(n, v, l, c, metallic, roughness, light_in, m: Layers, emissive
     if env_radiance is not None:
         if m.transmission > 0.0:
             out["transmission"] = out["transmission"] + (
-                m.transmission * np.asarray(ibl_diffuse_weight) * env_radiance
+                m.transmission * np.asarray(ibl_diffuse_weight)
+                * (env_radiance if behind is None else np.asarray(behind))
                 * volume_transmittance(np.asarray(m.thickness), m.attenuation_color,
                                        m.attenuation_distance))
         if max(m.sheen_color) > 0.0:

@@ -42,7 +42,7 @@ from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.frames import FrameSlot
 from vkpbr.render.gpu_scene import Draw, GpuScene
 from vkpbr.render.passes import PassContext, record_passes
-from vkpbr.render.recorder import STAMPS, FrameRecorder
+from vkpbr.render.recorder import STAMP_NAMES, STAMPS, FrameRecorder
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.scene.types import Scene
 
@@ -212,7 +212,8 @@ class BatchViews:
         cmd.push(np.array([views, self.draw_count, self.chunk_views], np.uint32))
         cmd.dispatch(*work_groups((views * self.draw_count, 1, 1), (64, 1, 1)))
         cmd.memory_barrier("compute", "indirect|vertex")
-        ring.stamp(cmd, frame, 2)
+        culled = 1 + STAMP_NAMES.index("prepass_opaque")  # the culling's time: the first pass's
+        ring.stamp(cmd, frame, culled)
         shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
         c = self.chunk_views
         for chunk in range(-(-views // c)):
@@ -229,7 +230,7 @@ class BatchViews:
             record_passes(cmd, ctx)
             target.record_chunk_end(cmd, chunk, n)
         target.record_host_barrier(cmd)
-        for i in range(3, STAMPS):  # every query of the frame is written (none is waited on unset)
+        for i in range(culled + 1, STAMPS):  # every query of the frame is written (none is waited on unset)
             ring.stamp(cmd, frame, i)
         cmd.end()
         return cmd

@@ -65,6 +65,11 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("background_batch.vert.spv", "background.vert", (("BATCH", 1),)),
     Variant("batch_cull.comp.spv", "batch_cull.comp", (("STRUCTS_ONLY", 1),)),
     Variant("background.frag.spv", "background.frag"),
+    # KHR_materials_transmission's copy of the opaque scene (render/transmission.py): the
+    # opaque passes writing linear radiance.
+    Variant("pbr_copy_opaque.frag.spv", "pbr.frag", (("ALPHA_MASK", 0), ("OPAQUE_COPY", 1))),
+    Variant("pbr_copy_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1), ("OPAQUE_COPY", 1))),
+    Variant("background_copy.frag.spv", "background.frag", (("OPAQUE_COPY", 1),)),
     # The compute rasteriser (render/compute_path.py).
     *(Variant(f"raster_{name}{'_batch' if batch else ''}.comp.spv", "raster.comp",
               (("COMPUTE_SHADING", 1), ("KERNEL", k), ("BATCH", batch)))

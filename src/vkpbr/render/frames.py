@@ -205,7 +205,7 @@ def write_frame_uniforms(slot: FrameSlot, camera: Camera, lights: tuple[Light, .
         flags |= L.SETTINGS_OCCLUSION if opts.occlusion else 0
         flags |= 0 if linear else L.SETTINGS_SRGB_TARGET
         L.SETTINGS.pack_into(
-            slot.m_settings, camera_forward=(*f, 0.0), view=opts.view, brdf=opts.shading_brdf,
+            slot.m_settings, camera_forward=(*f, 0.0), VP=vp, view=opts.view, brdf=opts.shading_brdf,
             tonemap=opts.tonemap_for(linear), flags=flags, exposure=2.0 ** opts.exposure, znear=znear,
             zfar=zfar, pad0=0.0)
     # The shadow rows change with the shadow plan and the map sizes only (not the camera).

@@ -192,6 +192,10 @@ SETTINGS = Std140Block(
     "settings",
     (
         ("camera_forward", "vec4"),  # xyz: unit view direction (linear depth view)
+        # Camera.VP again, for the fragment and compute shading (the screen-space
+        # transmission's projection, shade.glsl): Mesa 22.3's lavapipe crashes drawing once
+        # the Camera block is visible to fragment shaders.
+        ("VP", "mat4"),
         ("view", "int"),  # View
         ("brdf", "int"),  # Brdf
         ("tonemap", "int"),  # Tonemap
@@ -208,7 +212,7 @@ SETTINGS_SRGB_TARGET = 4  # the colour target encodes sRGB in hardware
 
 # The material's textures, in binding order (set 1, bindings 0-14; the Material block is
 # binding 15): the core's six, then the KHR_materials_* layers' (scene.types.Material). 15
-# samplers of set 1 + 3 of set 2 + 2 of set 3 = 20 a stage (lavapipe allows 32, NVIDIA far
+# samplers of set 1 + 4 of set 2 + 2 of set 3 = 21 a stage (lavapipe allows 32, NVIDIA far
 # more; Vulkan's guaranteed minimum, 16, is below that).
 MATERIAL_TEXTURES = ("base_color", "metallic", "roughness", "normal", "occlusion", "emissive",
                      "clearcoat", "clearcoat_roughness", "clearcoat_normal", "sheen_color",
@@ -279,6 +283,7 @@ LIGHTING = Std140Block(
 LIGHTING_SHADOWS = 1  # shadow maps are sampled
 LIGHTING_IBL = 2  # image-based lighting from the environment
 LIGHTING_BACKGROUND = 4  # the environment is drawn where nothing else is
+LIGHTING_SCREEN_TRANSMISSION = 8  # transmission samples the opaque copy (render/transmission.py)
 
 # One punctual light, as the shaders read it (shaders/lights.glsl). Only vec4 members, so the
 # std140 layout here is also the std430 layout of the storage buffer's array elements.
@@ -456,6 +461,9 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
         (2, "samplerCube", ("fragment", "compute"), "env_specular"),
         (3, "samplerCube", ("fragment", "compute"), "env_irradiance"),
         (4, "sampler", ("fragment", "compute"), "brdf_lut"),
+        # KHR_materials_transmission's linear, mip-mapped copy of the opaque scene
+        # (render/transmission.py), a 1x1 stand-in in scenes where nothing transmits.
+        (5, "sampler", ("fragment", "compute"), "opaque_copy"),
     ),
     # Shadows (render/shadows.py ShadowMaps owns the resources; declared in GLSL by hand in
     # shaders/shadow_data.glsl and shadow_sampling.glsl: ShadowData is a header then matrices).

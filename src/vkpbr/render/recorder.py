@@ -36,6 +36,7 @@ from vkpbr.render.passes import (
     record_passes,
 )
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan
+from vkpbr.render.transmission import COPY_PASSES, OpaqueCopies, copy_classes
 
 __all__ = ["FrameRecorder", "STAMPS", "STAMP_NAMES"]
 
@@ -49,12 +50,13 @@ _TBN_STREAMS = {
 # "colors" (COLOR_0) is one white value read with stride 0 in scenes without vertex colours.
 _BASE_STREAMS = (("positions", "vec3"), ("texcoords", "vec2"), ("texcoords1", "vec2"),
                  ("colors", "unorm16x4"))
-# Timestamps per frame: start, after the shadow passes, after each pass, end (after copies);
+# Timestamps per frame: start, after the shadow passes, after the transmission's copy of the
+# opaque scene (render/transmission.py), after each pass, end (after copies);
 # STAMP_NAMES names the intervals between them up to the last pass.
 # The compute path's shading step (render/compute_path.py) comes after the passes that draw
 # coverage, before the background; the forward path stamps it at once (it takes no time).
 _BEFORE_SHADING = tuple(p.name for p in PASSES[:[q.name for q in PASSES].index("mask") + 1])
-STAMP_NAMES = ("shadows", *_BEFORE_SHADING, "shading",
+STAMP_NAMES = ("shadows", "transmission", *_BEFORE_SHADING, "shading",
                *(p.name for p in PASSES if p.name not in _BEFORE_SHADING))
 # The compute path's visibility pass draws these passes' draws (the coverage: not blending);
 # after its shading step the frame goes on with the rest.
@@ -79,9 +81,11 @@ class FrameRecorder:
                  ring: FrameRing, slots: list[FrameSlot],
                  prepass_for: Callable[[FrameTarget], bool],
                  shadows: ShadowMaps | None = None,
-                 compute_scene: Callable[[], ComputeScene] | None = None) -> None:
+                 compute_scene: Callable[[], ComputeScene] | None = None,
+                 copies: OpaqueCopies | None = None) -> None:
         self.device, self.gpu_scene, self.pipeline_layout = device, gpu_scene, layout
         self.shadows = shadows  # records its passes first; binds its set 3 in the main passes
+        self.copies = copies  # the opaque scene's copies (transmission), drawn after the shadows
         self.ring, self.slots, self.prepass_for = ring, slots, prepass_for
         self.compute_scene = compute_scene  # the compute path's resources, made on first use
         self._recorded: dict[tuple, _Recorded] = {}
@@ -90,13 +94,14 @@ class FrameRecorder:
 
     # --- pipelines --------------------------------------------------------------------------
     def pipeline(self, target: FrameTarget, tbn: L.TbnMode, p: PassSpec, prepass: bool,
-                 visibility: bool = False, batch: bool = False) -> Pipeline:
+                 visibility: bool = False, batch: bool = False, copy: bool = False) -> Pipeline:
         """The pipeline of pass `p` for `target`; `visibility`: its compute-path variant,
         writing (draw + 1, primitive) with pbr.frag's own coverage instead of a colour;
-        `batch`: its batched-views variant (render/batch.py: the shaders' BATCH builds)."""
+        `batch`: its batched-views variant (render/batch.py: the shaders' BATCH builds);
+        `copy`: its opaque-copy variant, writing linear radiance (render/transmission.py)."""
         key = (target.color_format, target.depth_format, target.samples,
                None if p.fullscreen else tbn, p.name, prepass and p.after_prepass, visibility,
-               batch)
+               batch, copy)
         if key not in self._pipelines:
             gs = self.gpu_scene
             streams = [VertexStream(i, i, fmt, 0 if name == "colors" and not gs.has_colors else None)
@@ -111,6 +116,9 @@ class FrameRecorder:
                 vis = spec.fragment_shader.replace("pbr_", "pbr_vis_")  # type: ignore[union-attr]
                 spec = dataclasses.replace(spec, fragment_shader=vis, blend=False,
                                            color_format=getattr(self.device.vk, L.VISIBILITY_FORMAT))
+            if copy:
+                spec = dataclasses.replace(spec, fragment_shader=spec.fragment_shader.replace(  # type: ignore[union-attr]
+                    "pbr_", "pbr_copy_").replace("background.frag", "background_copy.frag"))
             if batch:
                 frag = spec.fragment_shader
                 spec = dataclasses.replace(
@@ -131,12 +139,13 @@ class FrameRecorder:
 
     # --- command buffers --------------------------------------------------------------------
     def begin_frame(self, frame: Frame, tbn: L.TbnMode, alpha_mask: bool, plan: ShadowPlan,
-                    redraw: tuple[range, ...] | None = None
+                    redraw: tuple[range, ...] | None = None, transmission: bool = False
                     ) -> tuple[Commands, list[str], list[str]]:
         """Begin a frame's command buffer (a single frame's or a batch's, render/batch.py):
-        its start timestamp, the shadow-map passes (`redraw`: per plan entry, the range of its layers to draw;
-        maps are drawn; ShadowMaps.stale), the timestamp after them. Returns the buffer, the
-        vertex streams' names for `tbn` and every draw's class."""
+        its start timestamp, the shadow-map passes (`redraw`: per plan entry, the range of its
+        layers to draw; ShadowMaps.stale), the timestamp after them, the copy of the opaque
+        scene (`transmission`: render/transmission.py) and the timestamp after it. Returns the
+        buffer, the vertex streams' names for `tbn` and every draw's class."""
         gs, ring = self.gpu_scene, self.ring
         names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
         gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
@@ -147,17 +156,37 @@ class FrameRecorder:
             self.shadows.record(cmd, frame.index, plan, gs.draws, classes, gs.material_sets,
                                 gs.streams, gs.index_buffer, gs.has_colors, redraw)
         ring.stamp(cmd, frame, 1)
+        if transmission:
+            self._record_opaque_copy(cmd, frame, tbn, names, classes)
+        ring.stamp(cmd, frame, 1 + STAMP_NAMES.index("transmission"))
         return cmd, names, classes
+
+    def _record_opaque_copy(self, cmd: Commands, frame: Frame, tbn: L.TbnMode, names: list[str],
+                            classes: list[str]) -> None:
+        """The frame slot's copy of the opaque scene: the opaque and masked draws that do not
+        transmit and the environment, in linear radiance, then its mip chain."""
+        copies, gs, slot = self.copies, self.gpu_scene, self.slots[frame.index]
+        assert copies is not None and copies.present
+        target = copies.targets[frame.index]
+        ctx = PassContext(
+            draws=gs.draws, classes=copy_classes(classes, copies.transmissive),
+            pipeline=lambda p: self.pipeline(target, tbn, p, False, copy=True),  # type: ignore[arg-type]
+            frame_sets=(slot.set0, slot.set2), material_sets=gs.material_sets,
+            vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
+            shadow_set=None if self.shadows is None else self.shadows.sets[frame.index])
+        target.record_begin(cmd, copies.clear_color)
+        record_passes(cmd, ctx, COPY_PASSES)
+        target.record_end(cmd)
 
     def _record(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
                 alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
                 copy: tuple[str, ...], plan: ShadowPlan, compute: bool = False,
                 outputs: bool = False, redraw: tuple[range, ...] | None = None,
-                raster: bool = False) -> Commands:
+                raster: bool = False, transmission: bool = False) -> Commands:
         gs, ring = self.gpu_scene, self.ring
         slot = self.slots[frame.index]
         prepass = self.prepass_for(target) and not compute  # visibility: its own pre-pass
-        cmd, names, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw)
+        cmd, names, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw, transmission)
         shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
 
         def context(visibility: bool, after_visibility: bool = False,
@@ -232,24 +261,26 @@ class FrameRecorder:
                         alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
                         copy: tuple[str, ...], plan: ShadowPlan = _NO_SHADOWS,
                         compute: bool = False, outputs: bool = False,
-                        redraw: tuple[range, ...] | None = None, raster: bool = False) -> Commands:
+                        redraw: tuple[range, ...] | None = None, raster: bool = False,
+                        transmission: bool = False) -> Commands:
         """The command buffer recorded for these inputs, recorded on first use. A buffer is
         used by one frame of the ring only, whose previous submission has finished: it can be
         re-recorded (new blend order) or freed at once. `plan`: the shadow maps' (a new plan
-        records new buffers; lights that only move keep theirs)."""
+        records new buffers; lights that only move keep theirs); `transmission`: draw the
+        copy of the opaque scene first (render/transmission.py)."""
         tid = id(target)
         if self._generations.get(tid, target.generation) != target.generation:
             self.free(tid)  # recreated swapchain: its images and buffers are new
         self._generations[tid] = target.generation
         key = (tid, image, frame.index, tbn, alpha_mask, id(overlay), copy, plan, compute, outputs,
-               redraw, raster)
+               redraw, raster, transmission)
         rec = self._recorded.get(key)
         if rec is not None and rec.blend_order == order:
             return rec.cmd
         if rec is not None:  # the camera moved enough to reorder blended draws
             rec.cmd.free()
         cmd = self._record(target, frame, image, tbn, alpha_mask, order, overlay, copy, plan,
-                           compute, outputs, redraw, raster)
+                           compute, outputs, redraw, raster, transmission)
         self._recorded[key] = _Recorded(cmd, order)
         return cmd
 

@@ -58,6 +58,7 @@ from vkpbr.render.path_choice import RULE_CPU, RULE_GPU, PathChoice, frame_paths
 from vkpbr.render.path_choice import resolve as resolve_paths
 from vkpbr.render.recorder import STAMP_NAMES, STAMPS, FrameRecorder
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
+from vkpbr.render.transmission import OpaqueCopies
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 from vkpbr.scene.environment import load_panorama
 from vkpbr.scene.lights import course_point_light
@@ -161,9 +162,12 @@ class Renderer:
                 else semantics)
             self._compute_scene: ComputeScene | None = None
             self._batch_path: BatchPath | None = None
+            # Bound in every slot's set 2 before anything is recorded (render/transmission.py).
+            self.opaque_copies = OpaqueCopies(self.device, self.gpu_scene,
+                                              [s.set2 for s in self.slots], (*background, 1.0))
             self.recorder = FrameRecorder(self.device, self.gpu_scene, self.pipeline_layout,
                                           self.ring, self.slots, self.prepass_for, self.shadows,
-                                          self.compute_scene)
+                                          self.compute_scene, self.opaque_copies)
             self._shadow_plan: tuple[tuple, ShadowPlan] = ((), ShadowPlan())
             self._shadow_rows: dict[int, tuple[tuple, np.ndarray | None]] = {}
             self.bounds = Bounds.of(*scene.bounds())
@@ -384,13 +388,21 @@ class Renderer:
         self._last_lighting = (options, lighting)
         return lighting
 
+    def screen_transmission(self, options: RenderOptions) -> bool:
+        """Whether frames with `options` draw the copy of the opaque scene that transmissive
+        surfaces see through (render/transmission.py): the scene has one, and the frame
+        shades with the physically based mode's glTF BRDF (the layers' only)."""
+        return (self.opaque_copies.present and options.lighting == L.Lighting.PBR
+                and options.shading_brdf == L.Brdf.GLTF)
+
     def _frame_lighting(self, options: RenderOptions) -> FrameLighting:
         if options.lighting == L.Lighting.COURSE:
             return FrameLighting(mode=int(L.Lighting.COURSE), ambient=AMBIENT)
-        shadows = L.LIGHTING_SHADOWS if options.shadows else 0
+        flags = ((L.LIGHTING_SHADOWS if options.shadows else 0)
+                 | (L.LIGHTING_SCREEN_TRANSMISSION if self.screen_transmission(options) else 0))
         if not options.has_environment:
-            return FrameLighting(mode=int(L.Lighting.PBR), flags=shadows)
-        flags = shadows | L.LIGHTING_IBL | (L.LIGHTING_BACKGROUND if options.draws_background else 0)
+            return FrameLighting(mode=int(L.Lighting.PBR), flags=flags)
+        flags |= L.LIGHTING_IBL | (L.LIGHTING_BACKGROUND if options.draws_background else 0)
         return FrameLighting(mode=int(L.Lighting.PBR), flags=flags,
                              env_intensity=options.env_intensity,
                              env_rotation=math.radians(options.env_rotation),
@@ -514,7 +526,8 @@ class Renderer:
             cmd = self.recorder.command_buffer(
                 target, frame, image, options.tbn, options.alpha_mask,
                 self.blend_order(camera.eye), overlay, copy, plan, compute, outputs, redraw,
-                compute and self.uses_compute_raster(options, target))
+                compute and self.uses_compute_raster(options, target),
+                self.screen_transmission(options))
             c0 = clock()
             ok = target.submit(frame, cmd, image)
         except BaseException:
@@ -910,6 +923,8 @@ class Renderer:
             self._batch_path = None
         if getattr(self, "shadows", None) is not None:
             self.shadows.destroy()
+        if getattr(self, "opaque_copies", None) is not None:
+            self.opaque_copies.destroy()
         for env in getattr(self, "_environments", {}).values():
             env.destroy()
         self._environments = {}

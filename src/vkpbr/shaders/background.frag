@@ -4,7 +4,9 @@
 // it (Lighting.env_rotation, env_intensity), then the frame's exposure and tone map exactly as
 // pbr.frag applies them (frame_output.glsl). Pixels are left to the clear colour when the
 // frame has no background (Lighting.flags without LIGHTING_BACKGROUND: the course mode, env
-// none, --env-background off) and in debug views other than final.
+// none, --env-background off) and in debug views other than final. OPAQUE_COPY: the
+// transmission's copy of the opaque scene (render/transmission.py), linear radiance, with
+// the environment behind wherever it lights the frame (--env-background off included).
 #extension GL_GOOGLE_include_directive : require
 #include "generated.glsl"
 #include "brdf.glsl"
@@ -16,7 +18,12 @@ layout(location = 0) out vec4 out_color;
 
 void main() {
     opaque_zero = uint(gl_FragCoord.x < 0.0);
-    if ((u(lighting.flags) & LIGHTING_BACKGROUND) == 0u || u(settings.view) != VIEW_FINAL) {
+#if OPAQUE_COPY  // through glass the environment is seen wherever it lights, drawn or not
+    const uint drawn_when = LIGHTING_IBL;
+#else
+    const uint drawn_when = LIGHTING_BACKGROUND;
+#endif
+    if ((u(lighting.flags) & drawn_when) == 0u || frame_view() != VIEW_FINAL) {
         discard;
     }
     vec3 d = env_rotate(normalize(ray), lighting.env_rotation.xy);

@@ -17,8 +17,23 @@ float u(float x) { return x + float(opaque_zero); }  // x + 0.0: exact (the sign
 
 // Scene-referred radiance -> the value written to the colour target: the frame's exposure,
 // then its tone map (Settings.tonemap; an sRGB target encodes in hardware afterwards).
+// OPAQUE_COPY builds (render/transmission.py) write the radiance itself: transmission
+// samples it as light, as the Sample Viewer's LINEAR_OUTPUT pass does.
 vec3 radiance_output(vec3 radiance) {
+#if OPAQUE_COPY
+    return radiance;
+#else
     return tonemap(radiance * settings.exposure, u(settings.tonemap));
+#endif
+}
+
+// The debug view this pass writes (Settings.view): the opaque copy is always the final image.
+int frame_view() {
+#if OPAQUE_COPY
+    return VIEW_FINAL;
+#else
+    return u(settings.view);
+#endif
 }
 
 #endif

@@ -62,6 +62,7 @@ const int VIEW_KIND_DATA = 2;
 const int VIEW_KINDS[30] = int[](0, 2, 2, 2, 0, 0, 0, 2, 2, 2, 2, 1, 2, 2, 2, 2, 2, 2, 0, 2, 2, 2, 0, 0, 2, 2, 0, 0, 0, 1);
 const uint LIGHTING_BACKGROUND = 4u;
 const uint LIGHTING_IBL = 2u;
+const uint LIGHTING_SCREEN_TRANSMISSION = 8u;
 const uint LIGHTING_SHADOWS = 1u;
 const uint MATERIAL_BINDING = 15u;
 const uint MATERIAL_BLEND = 8u;
@@ -156,6 +157,7 @@ layout(set = 0, binding = 0, std140) uniform Camera {
 #if !COMPUTE_SHADING
 layout(set = 0, binding = 1, std140) uniform Settings {
     vec4 camera_forward;
+    mat4 VP;
     int view;
     int brdf;
     int tonemap;
@@ -259,6 +261,7 @@ layout(set = 2, binding = 1, std140) readonly buffer Lights {
 layout(set = 2, binding = 2) uniform samplerCube env_specular;
 layout(set = 2, binding = 3) uniform samplerCube env_irradiance;
 layout(set = 2, binding = 4) uniform sampler2D brdf_lut;
+layout(set = 2, binding = 5) uniform sampler2D opaque_copy;
 #if COMPUTE_SHADING  // the compute path's own set (render/compute_path.py)
 const uint COMPUTE_SET = 4u;
 layout(set = 4, binding = 0) writeonly uniform image2D out_image;
@@ -308,6 +311,7 @@ layout(set = 4, binding = 15, std140) readonly buffer Camera {
 } camera;
 layout(set = 4, binding = 16, std140) readonly buffer Settings {
     vec4 camera_forward;
+    mat4 VP;
     int view;
     int brdf;
     int tonemap;

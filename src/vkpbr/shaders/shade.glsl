@@ -111,10 +111,43 @@ vec3 clearcoat_normal(uint settings_flags, uint material_flags, vec3 ng, vec3 t,
     return safe_normalize(mat3(t, b, ng) * tn, ng);
 }
 
+// KHR_materials_transmission through the opaque scene, as the glTF-Sample-Viewer's
+// getTransmissionSample: the radiance the copy of the opaque scene (render/transmission.py,
+// linear, mip-mapped) holds where `exit_point` projects, blurred by lod log2(width) x
+// `roughness`; false where it projects off the screen or behind the eye. Single frames only:
+// a batch's views share one copy slot, so they keep the environment; the copy's own pass
+// must not read the image it is writing.
+#define SCREEN_TRANSMISSION (!OPAQUE_COPY && !BATCH)
+#if SCREEN_TRANSMISSION
+bool opaque_copy_radiance(vec3 exit_point, float roughness, out vec3 radiance) {
+    vec4 clip = settings.VP * vec4(exit_point, 1.0);
+    radiance = vec3(0.0);
+    if (clip.w <= 1e-6) return false;
+    vec2 uv = clip.xy / clip.w * 0.5 + 0.5;  // NDC to the copy's texels (same viewport maps)
+    if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return false;
+    float lod = log2(float(textureSize(opaque_copy, 0).x)) * roughness;
+    radiance = textureLod(opaque_copy, uv, lod).rgb;
+    return true;
+}
+#endif
+
+// The light a transmissive surface lets through along `d` (unit, into the surface) from its
+// exit point: the opaque copy's where the frame has one and the point is on screen, else the
+// pre-filtered environment (when the frame has image-based light), else none.
+vec3 transmitted_radiance(vec3 d, float thickness, float roughness, bool screen, bool ibl_on) {
+    vec3 radiance = vec3(0.0);
+#if SCREEN_TRANSMISSION
+    if (screen && opaque_copy_radiance(s_world_pos + d * thickness, roughness, radiance)) {
+        return radiance;
+    }
+#endif
+    return ibl_on ? ibl_radiance(d, roughness) : radiance;
+}
+
 vec4 shade_surface() {
     uint settings_flags = u(settings.flags);
     uint material_flags = u(MAT.flags);
-    int view = u(settings.view);
+    int view = frame_view();
     vec2 uv = texture_uv(MAT.base_color_uv_row0, MAT.base_color_uv_row1);
     vec4 base = surface_base_color();
 #if ALPHA_MASK && !COMPUTE_SHADING
@@ -177,25 +210,30 @@ vec4 shade_surface() {
     IblTerms ibl = IblTerms(vec3(0.0), vec3(0.0), vec3(0.0));
     vec3 f0_dielectric = dielectric_f0(layers.ior, layers.specular_color);
     float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
-    if ((lighting_flags & LIGHTING_IBL) != 0u) {
+    bool ibl_on = (lighting_flags & LIGHTING_IBL) != 0u;
+    bool screen = (lighting_flags & LIGHTING_SCREEN_TRANSMISSION) != 0u;
+    // Transmission needs the split sum's weights with or without an environment: the opaque
+    // copy shows what is behind under punctual lights alone too.
+    bool refracts = layered && layers.transmission > 0.0 && (ibl_on || screen);
+    if (ibl_on || refracts) {
         ibl = ibl_evaluate(n, v, c, metallic, roughness, f0_dielectric, layers.specular);
+        if (!ibl_on) { ibl.diffuse = vec3(0.0); ibl.specular = vec3(0.0); }
         ibl.diffuse *= occlusion;
         ibl.specular *= occlusion;
-        if (layered) {
-            if (layers.transmission > 0.0) {
-                // The environment refracted through the surface (KHR_materials_transmission
-                // through the pre-filtered environment, not a screen-space copy of the opaque
-                // image): straight through a thin wall, refracted into a volume; rougher by
-                // clamp(2 ior - 2, 0, 1) (the Sample Viewer's applyIorToRoughness).
-                vec3 d = layers.thickness > 0.0 ? refract(-v, n, 1.0 / layers.ior) : -v;
-                if (dot(d, d) < 1e-8) d = -v;  // no total internal reflection entering
-                float r_t = roughness * clamp(layers.ior * 2.0 - 2.0, 0.0, 1.0);
-                transmission += layers.transmission * ibl.diffuse_weight * occlusion
-                    * ibl_radiance(normalize(d), r_t)
-                    * volume_transmittance(layers.thickness, layers.attenuation_color,
-                                           layers.attenuation_distance);
-                ibl.diffuse *= 1.0 - layers.transmission;
-            }
+        if (refracts) {
+            // The light behind, refracted through the surface: straight through a thin
+            // wall, refracted into a volume (leaving it `thickness` further on); rougher by
+            // clamp(2 ior - 2, 0, 1) (the Sample Viewer's applyIorToRoughness).
+            vec3 d = layers.thickness > 0.0 ? refract(-v, n, 1.0 / layers.ior) : -v;
+            if (dot(d, d) < 1e-8) d = -v;  // no total internal reflection entering
+            float r_t = roughness * clamp(layers.ior * 2.0 - 2.0, 0.0, 1.0);
+            transmission += layers.transmission * ibl.diffuse_weight * occlusion
+                * transmitted_radiance(normalize(d), layers.thickness, r_t, screen, ibl_on)
+                * volume_transmittance(layers.thickness, layers.attenuation_color,
+                                       layers.attenuation_distance);
+            ibl.diffuse *= 1.0 - layers.transmission;
+        }
+        if (layered && ibl_on) {
             if (max3(layers.sheen_color) > 0.0) {
                 // The GGX pre-filtered environment stands in for a Charlie pre-filtered one.
                 sheen += occlusion * layers.sheen_color

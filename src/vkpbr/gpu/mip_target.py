@@ -1,0 +1,69 @@
+"""A colour + depth pair drawn into, then mip-mapped and sampled in the same command buffer.
+
+What a pass needs to give a later pass its image as a texture with a full mip chain (the
+screen-space transmission's copy of the opaque scene: render/transmission.py). Mip 0 is
+drawn with dynamic rendering (cleared), the levels below made by linear blits, and the whole
+chain left SHADER_READ_ONLY for the fragment and compute shaders that sample it. Like every
+frame target it offers `color_format`, `depth_format`, `samples` and `extent`, so that
+pipelines are built for it the same way. Depth is cleared to 0 (reversed-Z).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from vkpbr.gpu.commands import Commands
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, mip_levels
+from vkpbr.gpu.rendering import Attachments, barriers, begin_rendering, end_rendering, redraw_barriers
+
+__all__ = ["MipmappedTarget"]
+
+
+class MipmappedTarget:
+    """`size` (W, H) colour of `color_format` (a VkFormat name that blits and filters
+    linearly: RGBA16F) with its whole mip chain, and a D32 depth of the same size."""
+
+    samples = 1
+
+    def __init__(self, device: Device, size: tuple[int, int], color_format: str,
+                 name: str = "") -> None:
+        vk = device.vk
+        w, h = size
+        self.extent = (w, h)
+        self.color_format = getattr(vk, color_format)
+        self.depth_format = vk.VK_FORMAT_D32_SFLOAT
+        usage = (vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT
+                 | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT)
+        self._owned: list[Any] = []
+        self.color = self._own(Image(device, w, h, self.color_format, usage,
+                                     mip_levels=mip_levels(w, h), name=name))
+        self.view = self._own(ImageView(self.color))  # every level: what is sampled
+        self._level0 = self._own(ImageView(self.color, mips=1))  # what is drawn into
+        self.depth = self._own(Image(device, w, h, self.depth_format,
+                                     vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                                     name=f"{name} depth"))
+        self._depth_view = self._own(ImageView(self.depth, aspect="depth"))
+        self.sampler = self._own(Sampler(device, SamplerSpec(wrap_u="clamp", wrap_v="clamp",
+                                                             anisotropy=1.0)))
+
+    def _own(self, obj: Any) -> Any:
+        self._owned.append(obj)
+        return obj
+
+    def record_begin(self, cmd: Commands, clear_color: tuple[float, ...]) -> None:
+        """Begin drawing into level 0 (cleared), after the previous use's sampling."""
+        cmd.image_barrier(self.color, "undefined", "color_attachment", "sampled", "color", 0, 1)
+        barriers(cmd, redraw_barriers(cmd.vk, [(self.depth.handle, True)]))
+        begin_rendering(cmd, Attachments(self._level0.handle, self._depth_view.handle,
+                                         self.extent), clear_color, 0.0, store_depth=False)
+
+    def record_end(self, cmd: Commands) -> None:
+        """End the drawing; make the mip chain; leave it for the frame's shaders to sample."""
+        end_rendering(cmd)
+        cmd.blit_mips(self.color, "shader_read", "sampled", level0=("color_attachment", "color"),
+                      last_read="sampled")
+
+    def destroy(self) -> None:
+        while self._owned:
+            self._owned.pop().destroy()
