@@ -15,7 +15,13 @@ from typing import Any
 from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, mip_levels
-from vkpbr.gpu.rendering import Attachments, barriers, begin_rendering, end_rendering, redraw_barriers
+from vkpbr.gpu.rendering import (
+    Attachments,
+    barriers,
+    begin_rendering,
+    end_rendering,
+    redraw_barriers,
+)
 
 __all__ = ["MipmappedTarget"]
 
