@@ -43,7 +43,7 @@ PATHS = (("forward", "hardware"), ("compute", "hardware"), ("compute", "compute"
 # drawn once for a still camera, every frame for a walking one).
 ROWS = (("course", "scene", "still"), ("pbr", "scene", "still"), ("pbr", "sun", "still"),
         ("pbr", "sun", "moving"))
-STEPS = ("shadows", "prepass_opaque", "opaque", "opaque_double", "mask", "shading",
+STEPS = ("shadows", "transmission", "prepass_opaque", "opaque", "opaque_double", "mask", "shading",
          "background", "blend", "copy")
 
 
