@@ -24,6 +24,14 @@ def _unmeasured(r: Renderer) -> str:
                                              else "not measured yet (the first auto frame measures it)")
 
 
+@pytest.fixture(autouse=True)
+def few_frames(monkeypatch: pytest.MonkeyPatch) -> None:
+    """What is tested is the choosing and the record, not the timing: few frames a round
+    (lavapipe takes milliseconds a frame), two rounds still."""
+    monkeypatch.setattr(pc, "WARM_UP", 2)
+    monkeypatch.setattr(pc, "TIMED", 3)
+
+
 @pytest.fixture(scope="module")
 def chart():
     with Renderer(validation=True) as r:

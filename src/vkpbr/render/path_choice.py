@@ -3,7 +3,7 @@
 The first auto frame on a GPU (per device, driver and vkpbr version) times the candidates,
 forward, the compute path with the raster units and the compute path with the compute
 rasteriser (where the device has 64-bit atomics), on the renderer's own scene at the frame's
-size (at most 1920x1080), a few frames each by GPU timestamps, and keeps the fastest: in
+size (at most 1920x1080), streams of frames each by GPU timestamps, and keeps the fastest: in
 `<cache_dir>/frame-paths.json` when the renderer has a cache directory (the CLI's:
 $VKPBR_CACHE_DIR, else ~/.cache/vkpbr), else for the process. Later renderers on that device
 read it instead of measuring (a new driver or new shaders measure again). CPUs (lavapipe) take the forward path without measuring: the
@@ -39,7 +39,12 @@ __all__ = ["CACHE_FILE", "RULE_CPU", "RULE_GPU", "PathChoice", "device_key", "fr
 log = logging.getLogger(__name__)
 
 CACHE_FILE = "frame-paths.json"
-WARM_UP, TIMED = 3, 8  # frames per candidate
+# Frames per candidate and round: WARM_UP before the first round (pipelines, caches, clocks),
+# TIMED per round, the rounds interleaving the candidates so that a GPU's clocks ramping up
+# or down between them favour none (the H200's first record, 3 warm-up frames then 8 frames
+# of one candidate after another, measured the two compute paths 0.2% apart where they
+# differ by a third in a steady stream of frames: BENCHMARKS.md, the fourth run).
+WARM_UP, TIMED, ROUNDS = 10, 20, 2
 MAX_SIZE = (1920, 1080)
 _in_process: dict[str, dict] = {}  # device key -> record, for renderers without a cache dir
 
@@ -95,24 +100,29 @@ def _candidates(renderer: Renderer) -> list[PathChoice]:
 
 
 def measure(renderer: Renderer, size: tuple[int, int]) -> dict[str, Any]:
-    """Time every candidate on `renderer`'s scene at `size` (its default camera and lights):
-    the record `resolve` keeps ({"choice": label, "gpu_ms": {label: median ms}, ...})."""
+    """Time every candidate on `renderer`'s scene at `size` (its default camera and lights)
+    in a stream of frames, as an application draws them (render_many: frames queued back to
+    back, no readback), ROUNDS times interleaved: the record `resolve` keeps ({"choice":
+    label, "gpu_ms": {label: the best round's median ms}, ...})."""
     w, h = min(size[0], MAX_SIZE[0]), min(size[1], MAX_SIZE[1])
     camera = renderer.default_camera()
-    times: dict[str, float] = {}
-    for c in _candidates(renderer):
-        opts = {"pipeline": "compute" if c.compute else "forward",
-                "raster": "compute" if c.compute_raster else "hardware"}
-        gpu = []
-        for i in range(WARM_UP + TIMED):
-            renderer.render(camera, size=(w, h), **opts)
-            if i >= WARM_UP:
-                gpu.append(renderer.last_stats.gpu_ms)
-        times[c.label] = statistics.median(gpu)
+    rounds: dict[str, list[float]] = {c.label: [] for c in _candidates(renderer)}
+    for k in range(ROUNDS):
+        for c in _candidates(renderer):
+            opts = {"pipeline": "compute" if c.compute else "forward",
+                    "raster": "compute" if c.compute_raster else "hardware"}
+            skip = WARM_UP if k == 0 else 2  # the other candidates' frames ran in between
+            gpu = []
+            for i, _ in enumerate(renderer.render_many([camera] * (skip + TIMED), size=(w, h),
+                                                       readback=False, **opts)):
+                if i >= skip:
+                    gpu.append(renderer.last_stats.gpu_ms)
+            rounds[c.label].append(statistics.median(gpu))
+    times = {label: min(ms) for label, ms in rounds.items()}
     finite = {k: v for k, v in times.items() if v == v and v > 0}  # NaN: no timestamps
     choice = min(finite, key=finite.get) if finite else RULE_GPU.label
     return {"choice": choice, "gpu_ms": times, "size": [w, h], "scene": renderer.scene.name,
-            "frames": TIMED}
+            "frames": TIMED, "rounds": ROUNDS}
 
 
 def _from_label(label: Any, measured: bool) -> PathChoice | None:
