@@ -5,9 +5,9 @@
 # JPEGs re-encoded at quality 85), and optionally .before (`git archive <commit> src` of an
 # earlier commit, benchmarked in the same run for before/after numbers).
 # STEPS (default "paths env tests"): any of paths, env, bench, viewer, outputs, batch, ray,
-# tests.
+# transmission, auto, tests. SPONZA: the scene file (e.g. .assets-peers/models/...).
 source benchmarks/gpu_env.sh
-SPONZA=.assets/models/Sponza/glTF/Sponza.gltf
+SPONZA=${SPONZA:-.assets/models/Sponza/glTF/Sponza.gltf}
 STEPS=${STEPS:-paths env tests}
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
 python3 -m vkpbr info | head -3
@@ -55,6 +55,20 @@ if has ray; then
       done
     done | tee "$OUT/ray-batch.txt"
   fi
+fi
+if has transmission; then
+  echo "== screen-space transmission: Sponza with and without glass materials, GPU ms per step"
+  timeout ${TRANSMISSION_TIMEOUT:-200} python3 benchmarks/bench_transmission.py --scene $SPONZA --frames ${FRAMES:-60} 2>&1 | tee "$OUT/transmission.txt"
+fi
+if has auto; then
+  echo "== --pipeline auto: the first frame measures the frame paths, the second reads the record"
+  export VKPBR_CACHE_DIR=/tmp/vkpbr-auto; rm -rf $VKPBR_CACHE_DIR
+  for i in 1 2; do
+    t0=$(date +%s.%N)
+    python3 -m vkpbr render $SPONZA --size 1920x1080 --pipeline auto --out /tmp/auto$i.png -v 2>&1 | grep -v "^$"
+    echo "render $i wall: $(python3 -c "print(f'{$(date +%s.%N) - $t0:.3f}')") s"
+  done
+  cat $VKPBR_CACHE_DIR/frame-paths.json; python3 -m vkpbr info | grep -i autoFramePath; unset VKPBR_CACHE_DIR
 fi
 if has tests; then
   echo "== GPU test pass (validation on)"
