@@ -26,6 +26,7 @@ from pinhole import pixel_rays, project
 
 from vkpbr.reference import brdf as ref
 from vkpbr.render.environment import EnvironmentSpec
+from vkpbr.render.transmission import copy_size
 from vkpbr.scene.default import plane
 from vkpbr.scene.types import Camera, Material, Node, Scene
 
@@ -206,3 +207,19 @@ def test_batches_keep_the_environment(make_renderer, uniform_env: Path, tmp_path
     want = mirrored_transmission(SLAB, diffuse_weight(make_renderer, uniform_env, tmp_path), None)
     for view in np.asarray(got)[..., :3]:
         np.testing.assert_allclose(view[1:-1, 1:-1], want[1:-1, 1:-1], rtol=1e-2, atol=1e-4)
+
+
+def test_copy_size_follows_the_frame() -> None:
+    assert [copy_size(e) for e in ((64, 64), (64, 48), (65, 10), (1, 1), (1920, 1080), (4096, 16))] \
+        == [64, 64, 128, 1, 1024, 1024]
+
+
+def test_a_new_frame_size_remakes_the_copies(make_renderer, uniform_env: Path, tmp_path: Path) -> None:
+    """Frames of another size class get copies of their own size (the recordings naming the
+    old ones dropped): 64, then 256, then 64 again gives the first image back exactly."""
+    r = make_renderer(slab_scene(SLAB), env_spec=EnvironmentSpec.small(), cache_dir=tmp_path)
+    first = render(r, "final", "forward", env=str(uniform_env))
+    assert r.opaque_copies.size == 64
+    big = r.render(size=(256, 192), view="final", linear=True, lights=[], env=str(uniform_env))
+    assert r.opaque_copies.size == 256 and np.isfinite(big).all()
+    np.testing.assert_array_equal(render(r, "final", "forward", env=str(uniform_env)), first)

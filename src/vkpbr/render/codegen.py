@@ -92,6 +92,7 @@ def generated_glsl() -> str:
     out.append(f"const uint MAX_LIGHTS = {L.MAX_LIGHTS}u;")
     out.append(f"const float MIN_SHEEN_ROUGHNESS = {L.MIN_SHEEN_ROUGHNESS!r};")
     out.append(f"const float SHEEN_FIT_MIN_N_DOT_V = {L.SHEEN_FIT_MIN_N_DOT_V!r};")
+    out.append(f"const float OPAQUE_COPY_MAX_SIZE = {float(L.OPAQUE_COPY_MAX_SIZE)!r};")
     # KHR_materials_sheen's directional albedo, the polynomial of vkpbr.shading in Horner form
     # (x = cbrt(n.v), y = sqrt(sheen roughness)); literals, no array (lavapipe, see there).
     rows = [" + y * (".join(f"{c!r}" for c in row) + ")" * (len(row) - 1)

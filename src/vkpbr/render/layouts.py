@@ -284,6 +284,9 @@ LIGHTING_SHADOWS = 1  # shadow maps are sampled
 LIGHTING_IBL = 2  # image-based lighting from the environment
 LIGHTING_BACKGROUND = 4  # the environment is drawn where nothing else is
 LIGHTING_SCREEN_TRANSMISSION = 8  # transmission samples the opaque copy (render/transmission.py)
+# The largest copy of the opaque scene (render/transmission.py), square: the Sample Viewer's
+# transmission framebuffer's size; shade.glsl's blur by roughness is relative to it.
+OPAQUE_COPY_MAX_SIZE = 1024
 
 # One punctual light, as the shaders read it (shaders/lights.glsl). Only vec4 members, so the
 # std140 layout here is also the std430 layout of the storage buffer's array elements.

@@ -501,6 +501,9 @@ class Renderer:
             self._choose_auto_paths(target)
         t0 = time.perf_counter()
         self.bind_environment_for(options)
+        transmission = self.screen_transmission(options)
+        if transmission and self.opaque_copies.stale(target.extent):
+            self._fit_opaque_copies(target.extent)
         clock = time.thread_time if driver_time else _no_clock
         c0 = clock()
         frame = self.ring.begin()  # waits for the frame's previous submission
@@ -526,8 +529,7 @@ class Renderer:
             cmd = self.recorder.command_buffer(
                 target, frame, image, options.tbn, options.alpha_mask,
                 self.blend_order(camera.eye), overlay, copy, plan, compute, outputs, redraw,
-                compute and self.uses_compute_raster(options, target),
-                self.screen_transmission(options))
+                compute and self.uses_compute_raster(options, target), transmission)
             c0 = clock()
             ok = target.submit(frame, cmd, image)
         except BaseException:
@@ -539,6 +541,14 @@ class Renderer:
         frame.stamped = self.ring.query_pool is not None
         slot.stats.cpu_ms = (time.perf_counter() - t0) * 1e3
         return Submitted(frame, image, ok)
+
+    def _fit_opaque_copies(self, extent: tuple[int, int]) -> None:
+        """Copies of the opaque scene for frames of `extent` (render/transmission.py). Rare (a
+        new size class): the old ones may be in use by queued frames and named by recorded
+        command buffers, so wait for the device and drop the recordings."""
+        self.device.wait_idle()
+        self._free_recordings()
+        self.opaque_copies.fit(extent)
 
     def _choose_auto_paths(self, target: FrameTarget) -> None:
         """Before the first auto frame on a GPU that `target` lets take the compute path:

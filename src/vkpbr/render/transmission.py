@@ -3,21 +3,23 @@ glTF-Sample-Viewer makes it.
 
 In a scene with a transmissive material, each frame (of the physically based glTF BRDF)
 first draws its opaque and masked draws -- those whose material does not transmit -- and the
-environment behind them into a COPY_SIZE x COPY_SIZE RGBA16F image as *linear* radiance
-(pbr.frag's and background.frag's OPAQUE_COPY builds: no exposure, no tone map, the final
-view whatever the frame shows), mip-maps it by blits, and binds it in set 2
-(`opaque_copy`). The frame's transmissive surfaces then see what is behind them there:
-shade.glsl projects the refracted ray's exit point (the surface point itself for a thin
-wall, `thickness` along the refracted direction into a volume) with the frame's camera and
-samples the copy at lod log2(COPY_SIZE) x roughness x clamp(2 ior - 2, 0, 1), the Sample
-Viewer's getTransmissionSample; where the point leaves the screen, the environment. Only
-the copy's pixels within the camera's view exist, so transmissive surfaces never see one
-another (nor themselves), as in the Sample Viewer.
+environment behind them into a square RGBA16F image as *linear* radiance (pbr.frag's and
+background.frag's OPAQUE_COPY builds: no exposure, no tone map, the final view whatever the
+frame shows), mip-maps it by blits, and binds it in set 2 (`opaque_copy`). The frame's
+transmissive surfaces then see what is behind them there: shade.glsl projects the refracted
+ray's exit point (the surface point itself for a thin wall, `thickness` along the refracted
+direction into a volume) with the frame's camera and samples the copy at lod log2(1024) x
+roughness x clamp(2 ior - 2, 0, 1) (the Sample Viewer's getTransmissionSample; in a smaller
+copy, the lod that blurs the same share of the screen); where the point leaves the screen,
+the environment. Only the copy's pixels within the camera's view exist, so transmissive
+surfaces never see one another (nor themselves), as in the Sample Viewer.
 
 The copy is square whatever the frame's aspect (the projection maps the view onto it as onto
-the frame) and drawn with the fragment path on both frame paths, like the shadow maps, one
-per slot of the frame ring. Batches (render_batch) keep the environment: their views share
-a slot. Scenes where nothing transmits bind a 1x1 stand-in and draw no copy.
+the frame); its side is the power of two at or above the frame's longer side, at most 1024
+(the Sample Viewer's fixed size), remade when frames change size class. It is drawn with the
+fragment path on both frame paths, like the shadow maps, one per slot of the frame ring.
+Batches (render_batch) keep the environment: their views share a slot. Until a frame needs
+one, and in scenes where nothing transmits, a 1x1 stand-in is bound and no copy drawn.
 """
 
 from __future__ import annotations
@@ -30,11 +32,11 @@ from vkpbr.gpu.descriptors import DescriptorWriter
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import ImageView, Sampler, SamplerSpec, TextureUploader
 from vkpbr.gpu.mip_target import MipmappedTarget
+from vkpbr.render import layouts as L
 from vkpbr.render.gpu_scene import GpuScene
 
-__all__ = ["OpaqueCopies", "COPY_SIZE", "COPY_BINDING", "COPY_PASSES", "copy_classes"]
+__all__ = ["OpaqueCopies", "COPY_BINDING", "COPY_PASSES", "copy_classes", "copy_size"]
 
-COPY_SIZE = 1024  # the Sample Viewer's transmission framebuffer is 1024 x 1024 too
 COPY_FORMAT = "VK_FORMAT_R16G16B16A16_SFLOAT"  # linear radiance beyond 1, blits, filters
 COPY_BINDING = 5  # set 2's opaque_copy (render/layouts.py SETS)
 # The passes of the pass table (render/passes.py) the copy draws.
@@ -51,46 +53,66 @@ def copy_classes(classes: list[str], transmissive: list[bool]) -> list[str]:
     return ["transmissive" if t else c for c, t in zip(classes, transmissive, strict=True)]
 
 
+def copy_size(extent: tuple[int, int]) -> int:
+    """The copy's side for frames of `extent`: the power of two at or above its longer side,
+    at most OPAQUE_COPY_MAX_SIZE (a 64 x 64 frame on lavapipe draws a 64 x 64 copy, not a
+    1024 x 1024 one)."""
+    side = max(1, int(max(extent)))
+    return min(1 << (side - 1).bit_length(), L.OPAQUE_COPY_MAX_SIZE)
+
+
 class OpaqueCopies:
-    """One MipmappedTarget a frame slot when `gs` has a transmissive draw, bound as each
-    slot's set 2 `opaque_copy`; else a 1x1 black stand-in bound instead (`targets` empty)."""
+    """One MipmappedTarget a frame slot, bound as each slot's set 2 `opaque_copy`, when `gs`
+    has a transmissive draw; made (and remade) by `fit` for the frame's size. Until then,
+    and in scenes where nothing transmits, a 1x1 black stand-in is bound."""
 
     def __init__(self, device: Device, gs: GpuScene, sets2: list[Any],
-                 clear_color: tuple[float, ...], size: int = COPY_SIZE) -> None:
+                 clear_color: tuple[float, ...]) -> None:
+        self.device, self.sets2 = device, sets2
         self.transmissive = transmits(gs)
+        self.present = any(self.transmissive)  # whether frames draw a copy
         self.clear_color = clear_color  # the renderer's background, linear
         self.targets: list[MipmappedTarget] = []
+        self.size = 0  # the targets' side (0: none yet)
         self._owned: list[Any] = []
+        uploader = TextureUploader(device)
+        image = self._own(uploader.add(np.zeros((1, 1, 4), np.uint8), "unorm", mipmaps=False,
+                                       name="opaque copy stand-in"))
+        uploader.flush()
+        view = self._own(ImageView(image))
+        sampler = self._own(Sampler(device, SamplerSpec(mipmaps=False, anisotropy=1.0)))
         writer = DescriptorWriter(device)
-        if any(self.transmissive):
-            for i, set2 in enumerate(sets2):
-                target = MipmappedTarget(device, (size, size), COPY_FORMAT,
-                                         name=f"opaque copy {i}")
-                self.targets.append(target)
-                writer.sampler(set2, COPY_BINDING, target.view, target.sampler)
-        else:
-            uploader = TextureUploader(device)
-            image = self._own(uploader.add(np.zeros((1, 1, 4), np.uint8), "unorm", mipmaps=False,
-                                           name="opaque copy stand-in"))
-            uploader.flush()
-            view = self._own(ImageView(image))
-            sampler = self._own(Sampler(device, SamplerSpec(mipmaps=False, anisotropy=1.0)))
-            for set2 in sets2:
-                writer.sampler(set2, COPY_BINDING, view, sampler)
+        for set2 in sets2:
+            writer.sampler(set2, COPY_BINDING, view, sampler)
         writer.update()
 
     def _own(self, obj: Any) -> Any:
         self._owned.append(obj)
         return obj
 
-    @property
-    def present(self) -> bool:
-        """Whether frames draw the copy (the scene has a transmissive draw)."""
-        return bool(self.targets)
+    def stale(self, extent: tuple[int, int]) -> bool:
+        """Whether frames of `extent` need copies of another size than the ones made."""
+        return self.present and copy_size(extent) != self.size
 
-    def destroy(self) -> None:
+    def fit(self, extent: tuple[int, int]) -> None:
+        """Make the copies for frames of `extent` and bind them. The caller waits for the
+        device and drops the recorded command buffers first (they name the old ones)."""
+        self._destroy_targets()
+        self.size = copy_size(extent)
+        writer = DescriptorWriter(self.device)
+        for i, set2 in enumerate(self.sets2):
+            target = MipmappedTarget(self.device, (self.size, self.size), COPY_FORMAT,
+                                     name=f"opaque copy {i}")
+            self.targets.append(target)
+            writer.sampler(set2, COPY_BINDING, target.view, target.sampler)
+        writer.update()
+
+    def _destroy_targets(self) -> None:
         for target in self.targets:
             target.destroy()
         self.targets = []
+
+    def destroy(self) -> None:
+        self._destroy_targets()
         while self._owned:
             self._owned.pop().destroy()

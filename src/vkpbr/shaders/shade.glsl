@@ -113,8 +113,10 @@ vec3 clearcoat_normal(uint settings_flags, uint material_flags, vec3 ng, vec3 t,
 
 // KHR_materials_transmission through the opaque scene, as the glTF-Sample-Viewer's
 // getTransmissionSample: the radiance the copy of the opaque scene (render/transmission.py,
-// linear, mip-mapped) holds where `exit_point` projects, blurred by lod log2(width) x
-// `roughness`; false where it projects off the screen or behind the eye. Single frames only:
+// linear, mip-mapped) holds where `exit_point` projects, blurred by lod log2(1024) x
+// `roughness` at the copy's largest size, 1024 (the same share of the screen at any size:
+// log2(size) - log2(1024) (1 - roughness)); false where it projects off the screen or
+// behind the eye. Single frames only:
 // a batch's views share one copy slot, so they keep the environment; the copy's own pass
 // must not read the image it is writing.
 #define SCREEN_TRANSMISSION (!OPAQUE_COPY && !BATCH)
@@ -125,7 +127,8 @@ bool opaque_copy_radiance(vec3 exit_point, float roughness, out vec3 radiance) {
     if (clip.w <= 1e-6) return false;
     vec2 uv = clip.xy / clip.w * 0.5 + 0.5;  // NDC to the copy's texels (same viewport maps)
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return false;
-    float lod = log2(float(textureSize(opaque_copy, 0).x)) * roughness;
+    float lod = max(log2(float(textureSize(opaque_copy, 0).x))
+                    - log2(OPAQUE_COPY_MAX_SIZE) * (1.0 - roughness), 0.0);
     radiance = textureLod(opaque_copy, uv, lod).rgb;
     return true;
 }
