@@ -223,3 +223,15 @@ def test_a_new_frame_size_remakes_the_copies(make_renderer, uniform_env: Path, t
     big = r.render(size=(256, 192), view="final", linear=True, lights=[], env=str(uniform_env))
     assert r.opaque_copies.size == 256 and np.isfinite(big).all()
     np.testing.assert_array_equal(render(r, "final", "forward", env=str(uniform_env)), first)
+
+
+def test_the_depth_prepass_leaves_the_copy_alone(make_renderer, uniform_env: Path,
+                                                 tmp_path: Path) -> None:
+    """With the depth pre-pass (GPUs' rule) the copy is drawn as the frame is, pre-pass
+    first: the same image as without it."""
+    images = []
+    for prepass in (False, True):
+        r = make_renderer(slab_scene(THICK), env_spec=EnvironmentSpec.small(), cache_dir=tmp_path,
+                          depth_prepass=prepass)
+        images.append(render(r, "final", "forward", env=str(uniform_env)))
+    np.testing.assert_allclose(images[1], images[0], rtol=0, atol=1e-6)

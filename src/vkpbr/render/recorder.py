@@ -116,8 +116,8 @@ class FrameRecorder:
                 vis = spec.fragment_shader.replace("pbr_", "pbr_vis_")  # type: ignore[union-attr]
                 spec = dataclasses.replace(spec, fragment_shader=vis, blend=False,
                                            color_format=getattr(self.device.vk, L.VISIBILITY_FORMAT))
-            if copy:
-                spec = dataclasses.replace(spec, fragment_shader=spec.fragment_shader.replace(  # type: ignore[union-attr]
+            if copy and spec.fragment_shader is not None:  # (the pre-pass has none)
+                spec = dataclasses.replace(spec, fragment_shader=spec.fragment_shader.replace(
                     "pbr_", "pbr_copy_").replace("background.frag", "background_copy.frag"))
             if batch:
                 frag = spec.fragment_shader
@@ -168,9 +168,11 @@ class FrameRecorder:
         copies, gs, slot = self.copies, self.gpu_scene, self.slots[frame.index]
         assert copies is not None and copies.present
         target = copies.targets[frame.index]
+        prepass = self.prepass_for(target)  # the frame's rule (GPUs: each pixel shaded once)
         ctx = PassContext(
             draws=gs.draws, classes=copy_classes(classes, copies.transmissive),
-            pipeline=lambda p: self.pipeline(target, tbn, p, False, copy=True),  # type: ignore[arg-type]
+            pipeline=lambda p: self.pipeline(target, tbn, p, prepass, copy=True),  # type: ignore[arg-type]
+            prepass=prepass,
             frame_sets=(slot.set0, slot.set2), material_sets=gs.material_sets,
             vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
             shadow_set=None if self.shadows is None else self.shadows.sets[frame.index])

@@ -40,7 +40,8 @@ __all__ = ["OpaqueCopies", "COPY_BINDING", "COPY_PASSES", "copy_classes", "copy_
 COPY_FORMAT = "VK_FORMAT_R16G16B16A16_SFLOAT"  # linear radiance beyond 1, blits, filters
 COPY_BINDING = 5  # set 2's opaque_copy (render/layouts.py SETS)
 # The passes of the pass table (render/passes.py) the copy draws.
-COPY_PASSES = ("opaque", "opaque_double", "mask", "background")
+COPY_PASSES = ("prepass_opaque", "prepass_opaque_double", "opaque", "opaque_double", "mask",
+               "background")
 
 
 def transmits(gs: GpuScene) -> list[bool]:
