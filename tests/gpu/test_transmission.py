@@ -210,8 +210,8 @@ def test_batches_keep_the_environment(make_renderer, uniform_env: Path, tmp_path
 
 
 def test_copy_size_follows_the_frame() -> None:
-    assert [copy_size(e) for e in ((64, 64), (64, 48), (65, 10), (1, 1), (1920, 1080), (4096, 16))] \
-        == [64, 64, 128, 1, 1024, 1024]
+    assert [copy_size(e) for e in ((64, 64), (64, 48), (65, 10), (100, 5), (1, 1), (640, 360),
+                                   (1920, 1080), (4096, 16))] == [64, 64, 64, 128, 1, 512, 1024, 1024]
 
 
 def test_a_new_frame_size_remakes_the_copies(make_renderer, uniform_env: Path, tmp_path: Path) -> None:
