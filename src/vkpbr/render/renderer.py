@@ -759,7 +759,9 @@ class Renderer:
         (B, H, W, 4) uint8 sRGB (float32 linear with `linear`); with `depth` a tuple (colour,
         depth); with `outputs` {name: (B, ...) array}. pipeline="forward" (and "auto" on
         CPUs): view i equals `render` of view i (`CameraBatch.camera(i)`) with
-        pipeline="forward" bit for bit. pipeline="compute" (and "auto" on GPUs that have
+        pipeline="forward" bit for bit (but for transmissive materials, which see the
+        environment through them in a batch, not the copy of the opaque scene:
+        render/transmission.py). pipeline="compute" (and "auto" on GPUs that have
         64-bit atomics, for scenes without blended materials) is the compute batch (one
         atlas, rasterised and shaded in compute shaders: each view within 1/255 of
         `render(pipeline="compute", raster="compute")`, docs/batch.md). Either way
