@@ -26,6 +26,7 @@ from pinhole import pixel_rays, project
 
 from vkpbr.reference import brdf as ref
 from vkpbr.render.environment import EnvironmentSpec
+from vkpbr.render.options import RenderOptions
 from vkpbr.render.transmission import copy_size
 from vkpbr.scene.default import plane
 from vkpbr.scene.types import Camera, Material, Node, Scene
@@ -235,3 +236,31 @@ def test_the_depth_prepass_leaves_the_copy_alone(make_renderer, uniform_env: Pat
                           depth_prepass=prepass)
         images.append(render(r, "final", "forward", env=str(uniform_env)))
     np.testing.assert_allclose(images[1], images[0], rtol=0, atol=1e-6)
+
+
+def test_every_view_and_option_with_glass(make_renderer, uniform_env: Path, tmp_path: Path) -> None:
+    """A transmissive scene under every debug view, both lightings and BRDFs, the frame paths,
+    4x MSAA, the dataset outputs and a batch: finite images, no validation error (the
+    factory checks), the copy drawn only where the glTF BRDF shades (the others ignore the
+    layers)."""
+    from vkpbr.render.layouts import View
+
+    r = make_renderer(slab_scene(THICK), env_spec=EnvironmentSpec.small(), cache_dir=tmp_path)
+    compute = {View.FINAL, View.TRANSMISSION, View.VOLUME} if r.device.compute_path else set()
+    for view in View:  # the compute path shades every view with the same function: three
+        for pipeline in ("forward", "compute") if view in compute else ("forward",):
+            img = r.render(size=(24, 16), view=view.name.lower().replace("_", "-"),
+                           pipeline=pipeline, lights=[], env=str(uniform_env))
+            assert img.shape == (16, 24, 4)
+    s = make_renderer(slab_scene(SLAB), env_spec=EnvironmentSpec.small(), cache_dir=tmp_path)
+    for lighting, brdf in (("course", None), ("course", "gltf"), ("pbr", "ggx"), ("pbr", "gltf")):
+        s.render(size=(24, 16), lighting=lighting, brdf=brdf)
+        layered = lighting == "pbr" and brdf == "gltf"
+        assert s.screen_transmission(RenderOptions(lighting=lighting, brdf=brdf)) == layered
+        assert s.opaque_copies.size == (32 if layered else 0)  # made on the first frame that draws it
+    out = r.render(size=(24, 16), outputs=("color", "depth", "instance", "normal"), lights=[])
+    assert np.isfinite(out["depth"]).any()
+    views = r.render_batch([CAMERA] * 3, size=(24, 16), linear=True, lights=[])
+    assert np.isfinite(np.asarray(views)).all()
+    msaa = make_renderer(slab_scene(SLAB), msaa=4, env_spec=EnvironmentSpec.small(), cache_dir=tmp_path)
+    assert np.isfinite(msaa.render(size=(24, 16), linear=True, lights=[])).all()
