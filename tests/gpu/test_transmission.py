@@ -144,6 +144,8 @@ def test_the_slab_shows_what_is_behind_it(make_renderer, uniform_env: Path, tmp_
     if pipeline == "compute" and not r.device.compute_path:
         pytest.skip(f"{r.device.info.name} lacks the compute path's features")
     got = render(r, "transmission", pipeline, env=str(uniform_env), env_background=False)
+    if pipeline == "compute":  # the copy was drawn on the compute path too (its resources)
+        assert any(id(t) in r.compute_scene()._targets for t in r.opaque_copies.targets)
     want, behind = expected_transmission(mat, diffuse_weight(make_renderer, uniform_env, tmp_path,
                                                              mat))
     keep = away_from_edges(behind)

@@ -22,34 +22,48 @@ from vkpbr.gpu.rendering import (
     end_rendering,
     redraw_barriers,
 )
+from vkpbr.gpu.target import ComputeSteps
 
 __all__ = ["MipmappedTarget"]
 
 
-class MipmappedTarget:
+class MipmappedTarget(ComputeSteps):
     """`size` (W, H) colour of `color_format` (a VkFormat name that blits and filters
-    linearly: RGBA16F) with its whole mip chain, and a D32 depth of the same size."""
+    linearly: RGBA16F) with its whole mip chain, and a D32 depth of the same size.
+    `compute`: also drawn on the compute path (its visibility image, level 0 as storage:
+    ComputeSteps' record_visibility_begin .. record_resume instead of record_begin)."""
 
     samples = 1
+    outputs = None  # no dataset outputs (render/compute_path.py binds stand-ins)
 
     def __init__(self, device: Device, size: tuple[int, int], color_format: str,
-                 name: str = "") -> None:
+                 name: str = "", clear_color: tuple[float, ...] = (0.0, 0.0, 0.0, 1.0),
+                 compute: bool = False) -> None:
         vk = device.vk
         w, h = size
-        self.extent = (w, h)
+        self.device, self.extent, self.clear_color = device, (w, h), clear_color
         self.color_format = getattr(vk, color_format)
         self.depth_format = vk.VK_FORMAT_D32_SFLOAT
         usage = (vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT
-                 | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT)
+                 | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT
+                 | (vk.VK_IMAGE_USAGE_STORAGE_BIT if compute else 0))
         self._owned: list[Any] = []
         self.color = self._own(Image(device, w, h, self.color_format, usage,
                                      mip_levels=mip_levels(w, h), name=name))
         self.view = self._own(ImageView(self.color))  # every level: what is sampled
         self._level0 = self._own(ImageView(self.color, mips=1))  # what is drawn into
+        self.storage_view = self._level0 if compute else None  # what the compute path writes
         self.depth = self._own(Image(device, w, h, self.depth_format,
                                      vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
                                      name=f"{name} depth"))
         self._depth_view = self._own(ImageView(self.depth, aspect="depth"))
+        self.attachments = Attachments(self._level0.handle, self._depth_view.handle, self.extent)
+        if compute:
+            self.visibility = self._own(Image(
+                device, w, h, vk.VK_FORMAT_R32G32_UINT,
+                vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_STORAGE_BIT,
+                name=f"{name} visibility"))
+            self.visibility_view = self._own(ImageView(self.visibility))
         self.sampler = self._own(Sampler(device, SamplerSpec(wrap_u="clamp", wrap_v="clamp",
                                                              anisotropy=1.0)))
 
@@ -57,12 +71,16 @@ class MipmappedTarget:
         self._owned.append(obj)
         return obj
 
-    def record_begin(self, cmd: Commands, clear_color: tuple[float, ...]) -> None:
+    def _color_last_use(self, vk: Any) -> tuple[int, int]:
+        # The previous frame of its slot sampled the chain, and blitted it.
+        return (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT
+                | vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0)
+
+    def record_begin(self, cmd: Commands) -> None:
         """Begin drawing into level 0 (cleared), after the previous use's sampling."""
         cmd.image_barrier(self.color, "undefined", "color_attachment", "sampled", "color", 0, 1)
         barriers(cmd, redraw_barriers(cmd.vk, [(self.depth.handle, True)]))
-        begin_rendering(cmd, Attachments(self._level0.handle, self._depth_view.handle,
-                                         self.extent), clear_color, 0.0, store_depth=False)
+        begin_rendering(cmd, self.attachments, self.clear_color, 0.0, store_depth=False)
 
     def record_end(self, cmd: Commands) -> None:
         """End the drawing; make the mip chain; leave it for the frame's shaders to sample."""

@@ -43,7 +43,7 @@ from vkpbr.gpu.rendering import (
     redraw_barriers,
 )
 
-__all__ = ["FrameTarget", "OffscreenTarget", "COLOR_FORMATS", "COPY_COLOR", "COPY_DEPTH", "COPY_OUTPUTS"]
+__all__ = ["FrameTarget", "OffscreenTarget", "ComputeSteps", "COLOR_FORMATS", "COPY_COLOR", "COPY_DEPTH", "COPY_OUTPUTS"]
 
 # Colour formats by name: "srgb" for display images, "float" for linear HDR values.
 COLOR_FORMATS = {"srgb": ("VK_FORMAT_R8G8B8A8_SRGB", 4), "float": ("VK_FORMAT_R32G32B32A32_SFLOAT", 16)}
@@ -69,7 +69,72 @@ class FrameTarget(Protocol):
     def submit(self, frame: Frame, cmd: Commands, image: int) -> bool: ...
 
 
-class OffscreenTarget:
+class ComputeSteps:
+    """The compute path's steps over a target's images (render/compute_path.py), shared by
+    the offscreen target and the transmission's copy (gpu/mip_target.py). The includer has
+    `device`, `extent`, `color` (mip 0 is written), `depth`, `visibility` (+ `_view`),
+    `attachments` and `clear_color`, and says in `_color_last_use` which stages last used
+    the colour image (a frame's copy and attachment writes by default)."""
+
+    def _color_last_use(self, vk: Any) -> tuple[int, int]:
+        """(stages, accesses) of the colour image's previous use, ordered before its writes."""
+        stage, access, _ = attachment_stage(vk, False)
+        return (stage | vk.VK_PIPELINE_STAGE_2_COPY_BIT,
+                access & ~vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT)
+
+    def record_visibility_begin(self, cmd: Commands, image: int, rasterised: bool = False) -> None:
+        """Begin rendering the visibility image (cleared to 0: nothing) over the cleared
+        depth buffer; the colour image goes to GENERAL for the compute shader's writes.
+        `rasterised`: the compute rasteriser has filled the visibility image (kept, from
+        GENERAL) and writes the depth buffer next (record_raster_depth)."""
+        vk = self.device.vk
+        color_stage, color_access, color_layout = attachment_stage(vk, False)
+        depth_stage, depth_access, depth_layout = attachment_stage(vk, True)
+        copy = vk.VK_PIPELINE_STAGE_2_COPY_BIT
+        compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT)
+        no_reads = ~(vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT
+                     | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
+        visibility = (image_barrier(vk, self.visibility.handle, False, vk.VK_IMAGE_LAYOUT_GENERAL,
+                                    color_layout, compute, (color_stage, color_access))
+                      if rasterised else
+                      image_barrier(vk, self.visibility.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                                    color_layout, (compute[0], 0), (color_stage, color_access)))
+        barriers(cmd, [
+            # The previous frame's passes and copies of these images come first.
+            visibility,
+            image_barrier(vk, self.depth.handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED, depth_layout,
+                          (depth_stage | copy, depth_access & no_reads), (depth_stage, depth_access)),
+            image_barrier(vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                          vk.VK_IMAGE_LAYOUT_GENERAL, self._color_last_use(vk), compute),
+        ])
+        begin_rendering(cmd, Attachments(self.visibility_view.handle, self.attachments.depth,
+                                         self.extent), None if rasterised else (0.0, 0.0, 0.0, 0.0),
+                        0.0)
+
+    def record_shading_begin(self, cmd: Commands) -> None:
+        """End the visibility pass: its image becomes readable by the compute shader."""
+        vk = self.device.vk
+        end_rendering(cmd)
+        stage, access, layout = attachment_stage(vk, False)
+        barriers(cmd, [image_barrier(
+            vk, self.visibility.handle, False, layout, vk.VK_IMAGE_LAYOUT_GENERAL,
+            (stage, vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT),
+            (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT))])
+
+    def record_resume(self, cmd: Commands, clear: bool = False) -> None:
+        """After the compute steps: render on into the colour image (the shaded one, or
+        `clear`ed for the fragment path's passes) over the visibility pass's depth."""
+        vk = self.device.vk
+        stage, access, layout = attachment_stage(vk, False)
+        barriers(cmd, [image_barrier(
+            vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_GENERAL, layout,
+            (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT),
+            (stage, access))])
+        begin_rendering(cmd, self.attachments, self.clear_color if clear else None, None)
+
+
+class OffscreenTarget(ComputeSteps):
     """Offscreen colour + depth of `size` = (width, height); `color` is "srgb" or "float"."""
 
     generation = 0  # never recreated
@@ -159,58 +224,6 @@ class OffscreenTarget:
         barriers(cmd, [image_barrier(vk, self.visibility.handle, False,
                                      vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_GENERAL,
                                      (compute[0], 0), compute)])
-
-    def record_visibility_begin(self, cmd: Commands, image: int, rasterised: bool = False) -> None:
-        """Begin rendering the visibility image (cleared to 0: nothing) over the cleared
-        depth buffer; the colour image goes to GENERAL for the compute shader's writes.
-        `rasterised`: the compute rasteriser has filled the visibility image (kept, from
-        GENERAL) and writes the depth buffer next (record_raster_depth)."""
-        vk = self.device.vk
-        color_stage, color_access, color_layout = attachment_stage(vk, False)
-        depth_stage, depth_access, depth_layout = attachment_stage(vk, True)
-        copy = vk.VK_PIPELINE_STAGE_2_COPY_BIT
-        compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                   vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT)
-        no_reads = ~(vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT
-                     | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
-        visibility = (image_barrier(vk, self.visibility.handle, False, vk.VK_IMAGE_LAYOUT_GENERAL,
-                                    color_layout, compute, (color_stage, color_access))
-                      if rasterised else
-                      image_barrier(vk, self.visibility.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                                    color_layout, (compute[0], 0), (color_stage, color_access)))
-        barriers(cmd, [
-            # The previous frame's passes and copies of these images come first.
-            visibility,
-            image_barrier(vk, self.depth.handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED, depth_layout,
-                          (depth_stage | copy, depth_access & no_reads), (depth_stage, depth_access)),
-            image_barrier(vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                          vk.VK_IMAGE_LAYOUT_GENERAL,
-                          (color_stage | copy, color_access & no_reads), compute),
-        ])
-        begin_rendering(cmd, Attachments(self.visibility_view.handle, self.attachments.depth,
-                                         self.extent), None if rasterised else (0.0, 0.0, 0.0, 0.0),
-                        0.0)
-
-    def record_shading_begin(self, cmd: Commands) -> None:
-        """End the visibility pass: its image becomes readable by the compute shader."""
-        vk = self.device.vk
-        end_rendering(cmd)
-        stage, access, layout = attachment_stage(vk, False)
-        barriers(cmd, [image_barrier(
-            vk, self.visibility.handle, False, layout, vk.VK_IMAGE_LAYOUT_GENERAL,
-            (stage, vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT),
-            (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT))])
-
-    def record_resume(self, cmd: Commands, clear: bool = False) -> None:
-        """After the compute steps: render on into the colour image (the shaded one, or
-        `clear`ed for the fragment path's passes) over the visibility pass's depth."""
-        vk = self.device.vk
-        stage, access, layout = attachment_stage(vk, False)
-        barriers(cmd, [image_barrier(
-            vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_GENERAL, layout,
-            (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT),
-            (stage, access))])
-        begin_rendering(cmd, self.attachments, self.clear_color if clear else None, None)
 
     # --- dataset outputs (render/compute_path.py writes them) ---------------------------------
     outputs: dict[str, tuple[Image, ImageView]] | None = None

@@ -46,6 +46,13 @@ VARIANTS: tuple[Variant, ...] = (
               (("COMPUTE_SHADING", 1), ("KERNEL", k), ("AGGREGATE", agg)))
       for k, name in ((1, "count"), (2, "offsets"), (3, "scatter")) for agg in (1, 0)
       if agg or k != 2),
+    # The transmission's copy of the opaque scene on the compute path (render/transmission.py):
+    # linear radiance whatever the frame's target encodes.
+    *(Variant(f"shade_copy_{m.name.lower()}.comp.spv", "shade.comp",
+              (("TBN_MODE", int(m)), ("COMPUTE_SHADING", 1), ("OPAQUE_COPY", 1))) for m in L.TbnMode),
+    *(Variant(f"classify_count{'' if agg else '_plain'}_copy.comp.spv", "classify.comp",
+              (("COMPUTE_SHADING", 1), ("KERNEL", 1), ("AGGREGATE", agg), ("OPAQUE_COPY", 1)))
+      for agg in (1, 0)),
     # Shadow-map passes (render/shadows.py): depth only, or cut out by the base colour's alpha.
     Variant("shadow_opaque.vert.spv", "shadow.vert", (("ALPHA_MASK", 0),)),
     Variant("shadow_mask.vert.spv", "shadow.vert", (("ALPHA_MASK", 1),)),
@@ -86,6 +93,9 @@ def generated_glsl() -> str:
         "#ifndef GENERATED_GLSL",
         "#define GENERATED_GLSL",
         "",
+        "#ifndef OPAQUE_COPY  // 1 in the transmission's copy builds (render/transmission.py)",
+        "#define OPAQUE_COPY 0",
+        "#endif",
         f"const float MIN_ROUGHNESS = {L.MIN_ROUGHNESS!r};",
         f"const float AMBIENT = {L.AMBIENT!r};",
     ]

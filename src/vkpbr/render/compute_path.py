@@ -220,11 +220,12 @@ class ComputeScene:
     def record_shading(self, cmd: Any, target: Any, frame_index: int, tbn: L.TbnMode,
                        frame_sets: dict[int, Any], material_sets: list[Any], materials: list[int],
                        clear_color: tuple[float, ...], shade: bool = True,
-                       tiles: tuple[int, int, int, int] | None = None) -> None:
+                       tiles: tuple[int, int, int, int] | None = None, copy: bool = False) -> None:
         """Classify the visibility image's pixels by material, then shade each material of
         `materials` (those the visibility pass drew) with its own set 1 bound (`shade`
         False: classify only, for the outputs of a fragment-path frame; `tiles`: a compute
-        batch's atlas, as record_raster's)."""
+        batch's atlas, as record_raster's; `copy`: the transmission's copy of the opaque
+        scene, linear radiance: render/transmission.py)."""
         res = self._resources(target)
         compute_set = res.sets[frame_index]
         cmd.fill(res.bins, 0)
@@ -234,7 +235,9 @@ class ComputeScene:
         push.view(np.uint32)[4:6] = (self.material_count, SHADE_GROUP)
         pixel_groups = groups((*target.extent, 1), CLASSIFY_GROUP)
         plain = "" if self.aggregate else "_plain"
-        for name, size in ((f"classify_count{plain}", pixel_groups), ("classify_offsets", (1, 1, 1)),
+        suffix = "_copy" if copy else ""
+        for name, size in ((f"classify_count{plain}{suffix}", pixel_groups),
+                           ("classify_offsets", (1, 1, 1)),
                            (f"classify_scatter{plain}", pixel_groups)):
             cmd.bind_pipeline(self._pipeline(name, 32))
             self._bind_frame_sets(cmd, frame_sets, material_sets[0], compute_set)
@@ -242,7 +245,7 @@ class ComputeScene:
             cmd.dispatch(*size)
             cmd.memory_barrier("compute", "compute|indirect")
         if shade:
-            kernel = f"shade_{'batch_' if tiles else ''}{tbn.name.lower()}"
+            kernel = f"shade_{'batch_' if tiles else 'copy_' if copy else ''}{tbn.name.lower()}"
             self._dispatch_bins(cmd, res, frame_index, kernel, frame_sets, material_sets,
                                 materials, tiles)
 

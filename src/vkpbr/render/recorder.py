@@ -36,7 +36,7 @@ from vkpbr.render.passes import (
     record_passes,
 )
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan
-from vkpbr.render.transmission import COPY_PASSES, OpaqueCopies, copy_classes
+from vkpbr.render.transmission import COPY_PASSES, TRANSMISSIVE, OpaqueCopies, copy_classes
 
 __all__ = ["FrameRecorder", "STAMPS", "STAMP_NAMES"]
 
@@ -139,13 +139,14 @@ class FrameRecorder:
 
     # --- command buffers --------------------------------------------------------------------
     def begin_frame(self, frame: Frame, tbn: L.TbnMode, alpha_mask: bool, plan: ShadowPlan,
-                    redraw: tuple[range, ...] | None = None, transmission: bool = False
-                    ) -> tuple[Commands, list[str], list[str]]:
+                    redraw: tuple[range, ...] | None = None, transmission: bool = False,
+                    compute: bool = False) -> tuple[Commands, list[str], list[str]]:
         """Begin a frame's command buffer (a single frame's or a batch's, render/batch.py):
         its start timestamp, the shadow-map passes (`redraw`: per plan entry, the range of its
         layers to draw; ShadowMaps.stale), the timestamp after them, the copy of the opaque
-        scene (`transmission`: render/transmission.py) and the timestamp after it. Returns the
-        buffer, the vertex streams' names for `tbn` and every draw's class."""
+        scene (`transmission`: render/transmission.py; on the compute path with `compute`) and
+        the timestamp after it. Returns the buffer, the vertex streams' names for `tbn` and
+        every draw's class."""
         gs, ring = self.gpu_scene, self.ring
         names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
         gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
@@ -157,27 +158,47 @@ class FrameRecorder:
                                 gs.streams, gs.index_buffer, gs.has_colors, redraw)
         ring.stamp(cmd, frame, 1)
         if transmission:
-            self._record_opaque_copy(cmd, frame, tbn, names, classes)
+            self._record_opaque_copy(cmd, frame, tbn, names, classes, compute)
         ring.stamp(cmd, frame, 1 + STAMP_NAMES.index("transmission"))
         return cmd, names, classes
 
     def _record_opaque_copy(self, cmd: Commands, frame: Frame, tbn: L.TbnMode, names: list[str],
-                            classes: list[str]) -> None:
+                            classes: list[str], compute: bool) -> None:
         """The frame slot's copy of the opaque scene: the opaque and masked draws that do not
-        transmit and the environment, in linear radiance, then its mip chain."""
+        transmit and the environment, in linear radiance, then its mip chain. `compute`: as
+        the compute path draws a frame (visibility, binning, shading in compute shaders, the
+        environment behind), else as the fragment path with the frame's pre-pass rule."""
         copies, gs, slot = self.copies, self.gpu_scene, self.slots[frame.index]
         assert copies is not None and copies.present
         target = copies.targets[frame.index]
-        prepass = self.prepass_for(target)  # the frame's rule (GPUs: each pixel shaded once)
-        ctx = PassContext(
-            draws=gs.draws, classes=copy_classes(classes, copies.transmissive),
-            pipeline=lambda p: self.pipeline(target, tbn, p, prepass, copy=True),  # type: ignore[arg-type]
-            prepass=prepass,
-            frame_sets=(slot.set0, slot.set2), material_sets=gs.material_sets,
-            vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
-            shadow_set=None if self.shadows is None else self.shadows.sets[frame.index])
-        target.record_begin(cmd, copies.clear_color)
-        record_passes(cmd, ctx, COPY_PASSES)
+        classes = copy_classes(classes, copies.transmissive)
+        shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
+
+        def context(visibility: bool, prepass: bool) -> PassContext:
+            return PassContext(
+                draws=gs.draws, classes=classes,
+                pipeline=lambda p: self.pipeline(target, tbn, p, prepass, visibility,  # type: ignore[arg-type]
+                                                 copy=not visibility),
+                prepass=prepass, frame_sets=(slot.set0, slot.set2),
+                material_sets=gs.material_sets, vertex_buffers=[gs.streams[n] for n in names],
+                index_buffer=gs.index_buffer, shadow_set=shadow_set)
+
+        if compute and target.storage_view is not None:
+            target.record_visibility_begin(cmd, 0)
+            record_passes(cmd, context(True, False), VISIBILITY_PASSES)
+            target.record_shading_begin(cmd)
+            frame_sets = {0: slot.set0, 2: slot.set2}
+            if shadow_set is not None:
+                frame_sets[3] = shadow_set
+            self.compute_scene().record_shading(  # type: ignore[misc]
+                cmd, target, frame.index, tbn, frame_sets, gs.material_sets,
+                _shaded_materials(gs.draws, classes), target.clear_color, copy=True)
+            target.record_resume(cmd)
+            record_passes(cmd, context(False, False), ("background",))
+        else:
+            prepass = self.prepass_for(target)  # the frame's rule (GPUs: each pixel shaded once)
+            target.record_begin(cmd)
+            record_passes(cmd, context(False, prepass), COPY_PASSES)
         target.record_end(cmd)
 
     def _record(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
@@ -188,7 +209,8 @@ class FrameRecorder:
         gs, ring = self.gpu_scene, self.ring
         slot = self.slots[frame.index]
         prepass = self.prepass_for(target) and not compute  # visibility: its own pre-pass
-        cmd, names, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw, transmission)
+        cmd, names, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw, transmission,
+                                               compute)
         shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
 
         def context(visibility: bool, after_visibility: bool = False,
@@ -352,5 +374,7 @@ class FrameRecorder:
 
 
 def _shaded_materials(draws: list, classes: list[str]) -> list[int]:
-    """The materials the compute path shades: those of every draw but the blended ones."""
-    return sorted({d.material for d, c in zip(draws, classes, strict=True) if c != "blend"})
+    """The materials the compute path shades: those of every draw but the blended ones (and
+    the transmissive ones, in the copy of the opaque scene)."""
+    return sorted({d.material for d, c in zip(draws, classes, strict=True)
+                   if c not in ("blend", TRANSMISSIVE)})

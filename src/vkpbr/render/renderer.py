@@ -548,6 +548,9 @@ class Renderer:
         command buffers, so wait for the device and drop the recordings."""
         self.device.wait_idle()
         self._free_recordings()
+        if self._compute_scene is not None:  # the compute path's buffers and sets for the old
+            for old in self.opaque_copies.targets:
+                self._compute_scene.forget_target(old, destroy=True)
         self.opaque_copies.fit(extent)
 
     def _choose_auto_paths(self, target: FrameTarget) -> None:

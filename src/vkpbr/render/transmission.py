@@ -36,7 +36,7 @@ from vkpbr.gpu.mip_target import MipmappedTarget
 from vkpbr.render import layouts as L
 from vkpbr.render.gpu_scene import GpuScene
 
-__all__ = ["OpaqueCopies", "COPY_BINDING", "COPY_PASSES", "copy_classes", "copy_size"]
+__all__ = ["OpaqueCopies", "COPY_BINDING", "COPY_PASSES", "TRANSMISSIVE", "copy_classes", "copy_size"]
 
 COPY_FORMAT = "VK_FORMAT_R16G16B16A16_SFLOAT"  # linear radiance beyond 1, blits, filters
 COPY_BINDING = 5  # set 2's opaque_copy (render/layouts.py SETS)
@@ -50,9 +50,12 @@ def transmits(gs: GpuScene) -> list[bool]:
     return [gs.materials[d.material].transmission_factor > 0.0 for d in gs.draws]
 
 
+TRANSMISSIVE = "transmissive"  # the copy's class of the draws it leaves out
+
+
 def copy_classes(classes: list[str], transmissive: list[bool]) -> list[str]:
     """The draw classes of the copy's passes: a transmissive draw is in none of them."""
-    return ["transmissive" if t else c for c, t in zip(classes, transmissive, strict=True)]
+    return [TRANSMISSIVE if t else c for c, t in zip(classes, transmissive, strict=True)]
 
 
 def copy_size(extent: tuple[int, int]) -> int:
@@ -104,7 +107,8 @@ class OpaqueCopies:
         writer = DescriptorWriter(self.device)
         for i, set2 in enumerate(self.sets2):
             target = MipmappedTarget(self.device, (self.size, self.size), COPY_FORMAT,
-                                     name=f"opaque copy {i}")
+                                     name=f"opaque copy {i}", clear_color=self.clear_color,
+                                     compute=self.device.compute_path)
             self.targets.append(target)
             writer.sampler(set2, COPY_BINDING, target.view, target.sampler)
         writer.update()

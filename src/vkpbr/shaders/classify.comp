@@ -49,7 +49,8 @@ void main() {
 #if KERNEL == 1
     if (inside && vis.x == 0u) {
         vec4 bg = pc.clear_color;
-        bool srgb_target = (settings.flags & SETTINGS_SRGB_TARGET) != 0u;
+        // OPAQUE_COPY: the transmission's copy (render/transmission.py) holds linear values.
+        bool srgb_target = OPAQUE_COPY == 0 && (settings.flags & SETTINGS_SRGB_TARGET) != 0u;
         imageStore(out_image, ivec2(pixel), srgb_target ? vec4(linear_to_srgb(bg.rgb), bg.a) : bg);
     }
 #endif

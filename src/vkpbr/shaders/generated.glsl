@@ -2,6 +2,9 @@
 #ifndef GENERATED_GLSL
 #define GENERATED_GLSL
 
+#ifndef OPAQUE_COPY  // 1 in the transmission's copy builds (render/transmission.py)
+#define OPAQUE_COPY 0
+#endif
 const float MIN_ROUGHNESS = 0.03;
 const float AMBIENT = 0.02;
 const uint MAX_LIGHTS = 256u;

@@ -46,7 +46,9 @@ void main() {
     // uniform block for lavapipe to inline (COMPUTE_SET).
     opaque_zero = 0u;
     uvec2 vis = imageLoad(visibility, ivec2(pixel)).xy;
-    bool srgb_target = (u(settings.flags) & SETTINGS_SRGB_TARGET) != 0u;
+    // OPAQUE_COPY: the transmission's copy of the opaque scene (render/transmission.py):
+    // linear radiance, the final view (shade.glsl), whatever the frame's target encodes.
+    bool srgb_target = OPAQUE_COPY == 0 && (u(settings.flags) & SETTINGS_SRGB_TARGET) != 0u;
     uvec3 vi;
     vec3 w0, w1, w2, bary;
 #if BATCH
