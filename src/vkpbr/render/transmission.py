@@ -16,8 +16,9 @@ surfaces never see one another (nor themselves), as in the Sample Viewer.
 
 The copy is square whatever the frame's aspect (the projection maps the view onto it as onto
 the frame); its side is the power of two nearest the frame's longer side, at most 1024 (the
-Sample Viewer's fixed size), remade when frames change size class. It is drawn with the
-fragment path on both frame paths, like the shadow maps, one per slot of the frame ring.
+Sample Viewer's fixed size), remade when frames change size class. It is drawn on the
+frame's own path -- the fragment passes, or the compute path's visibility pass, binning and
+shade.comp into its level 0 (then the environment behind) -- one per slot of the frame ring.
 Batches (render_batch) keep the environment: their views share a slot. Until a frame needs
 one, and in scenes where nothing transmits, a 1x1 stand-in is bound and no copy drawn.
 """
