@@ -266,3 +266,15 @@ def test_every_view_and_option_with_glass(make_renderer, uniform_env: Path, tmp_
     assert np.isfinite(np.asarray(views)).all()
     msaa = make_renderer(slab_scene(SLAB), msaa=4, env_spec=EnvironmentSpec.small(), cache_dir=tmp_path)
     assert np.isfinite(msaa.render(size=(24, 16), linear=True, lights=[])).all()
+
+
+def test_the_copy_holds_no_rasteriser_buffers(make_renderer, uniform_env: Path, tmp_path: Path) -> None:
+    """The copies are drawn with the raster units' visibility pass: the compute path makes
+    them none of the compute rasteriser's per-target buffers (12 bytes a scene triangle)."""
+    r = make_renderer(slab_scene(SLAB), env_spec=EnvironmentSpec.small(), cache_dir=tmp_path)
+    if not r.device.compute_path:
+        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+    render(r, "final", "compute", env=str(uniform_env))
+    cs = r.compute_scene()
+    made = [cs._targets[id(t)] for t in r.opaque_copies.targets if id(t) in cs._targets]
+    assert made and all(res.raster.size == 16 and res.raster_big.size == 16 for res in made)

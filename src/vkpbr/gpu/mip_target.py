@@ -35,6 +35,7 @@ class MipmappedTarget(ComputeSteps):
 
     samples = 1
     outputs = None  # no dataset outputs (render/compute_path.py binds stand-ins)
+    rasterised = False  # its visibility comes from the raster units, never the compute rasteriser
 
     def __init__(self, device: Device, size: tuple[int, int], color_format: str,
                  name: str = "", clear_color: tuple[float, ...] = (0.0, 0.0, 0.0, 1.0),

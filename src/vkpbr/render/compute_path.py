@@ -60,8 +60,10 @@ class _TargetResources:
         self.args = self._own(Buffer(dev, 12 * m, "storage|indirect", name="bin dispatches"))
         self.pixels = self._own(Buffer(dev, 4 * w * h, "storage", name="pixel list"))
         # The compute rasteriser's (raster.comp): depth|triangle per pixel and the big
-        # triangles' list, one entry a triangle at most (16-byte stand-ins without it).
-        raster = dev.compute_raster
+        # triangles' list, one entry a triangle at most (16-byte stand-ins without it, and
+        # for targets it never draws: the transmission's copies, `rasterised` False, whose
+        # list would be 12 bytes a triangle of the scene each).
+        raster = dev.compute_raster and getattr(target, "rasterised", True)
         self.raster = self._own(Buffer(dev, 8 * w * h if raster else 16, "storage|transfer_dst",
                                        name="raster depth|ids"))
         # (triangle, view, chunk) entries (raster.comp BIG_ENTRY): every triangle once for
