@@ -2,10 +2,12 @@
 
 What a pass needs to give a later pass its image as a texture with a full mip chain (the
 screen-space transmission's copy of the opaque scene: render/transmission.py). Mip 0 is
-drawn with dynamic rendering (cleared), the levels below made by linear blits, and the whole
-chain left SHADER_READ_ONLY for the fragment and compute shaders that sample it. Like every
-frame target it offers `color_format`, `depth_format`, `samples` and `extent`, so that
-pipelines are built for it the same way. Depth is cleared to 0 (reversed-Z).
+drawn with dynamic rendering (cleared), or on the compute path (ComputeSteps: a visibility
+image, level 0 written as storage, then rendering resumed), the levels below made by linear
+blits, and the whole chain left SHADER_READ_ONLY for the fragment and compute shaders that
+sample it. Like every frame target it offers `color_format`, `depth_format`, `samples` and
+`extent`, so that pipelines are built for it the same way. Depth is cleared to 0
+(reversed-Z).
 """
 
 from __future__ import annotations

@@ -40,7 +40,7 @@ from vkpbr.render.gpu_scene import GpuScene
 __all__ = ["OpaqueCopies", "COPY_BINDING", "COPY_PASSES", "TRANSMISSIVE", "copy_classes", "copy_size"]
 
 COPY_FORMAT = "VK_FORMAT_R16G16B16A16_SFLOAT"  # linear radiance beyond 1, blits, filters
-COPY_BINDING = 5  # set 2's opaque_copy (render/layouts.py SETS)
+COPY_BINDING = next(b for b, _, _, name in L.SETS[2] if name == "opaque_copy")  # layouts.SETS
 # The passes of the pass table (render/passes.py) the copy draws.
 COPY_PASSES = ("prepass_opaque", "prepass_opaque_double", "opaque", "opaque_double", "mask",
                "background")
