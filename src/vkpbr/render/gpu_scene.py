@@ -373,6 +373,11 @@ class GpuScene:
             self._samplers[spec] = self._own(Sampler(self.device, spec))
         return self._samplers[spec]
 
+    def stand_in(self) -> tuple[ImageView, Sampler]:
+        """A 1x1 white texture and its sampler, for a binding that is written but not read
+        (the transmission's copy in scenes without one: render/transmission.py)."""
+        return self._view(self.default_images["white"], "iiii"), self._sampler(SamplerSpec())
+
     def _texture(self, ref: TextureRef | None, slot: str) -> tuple[ImageView, Sampler, bool]:
         srgb = slot in SRGB_TEXTURE_SLOTS
         scalar = slot not in SRGB_TEXTURE_SLOTS and slot not in _NORMAL_SLOTS

@@ -28,11 +28,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numpy as np
-
 from vkpbr.gpu.descriptors import DescriptorWriter
 from vkpbr.gpu.device import Device
-from vkpbr.gpu.image import ImageView, Sampler, SamplerSpec, TextureUploader
 from vkpbr.gpu.mip_target import MipmappedTarget
 from vkpbr.render import layouts as L
 from vkpbr.render.gpu_scene import GpuScene
@@ -70,7 +67,7 @@ def copy_size(extent: tuple[int, int]) -> int:
 class OpaqueCopies:
     """One MipmappedTarget a frame slot, bound as each slot's set 2 `opaque_copy`, when `gs`
     has a transmissive draw; made (and remade) by `fit` for the frame's size. Until then,
-    and in scenes where nothing transmits, a 1x1 black stand-in is bound."""
+    and in scenes where nothing transmits, the scene's 1x1 stand-in is bound."""
 
     def __init__(self, device: Device, gs: GpuScene, sets2: list[Any],
                  clear_color: tuple[float, ...]) -> None:
@@ -80,21 +77,12 @@ class OpaqueCopies:
         self.clear_color = clear_color  # the renderer's background, linear
         self.targets: list[MipmappedTarget] = []
         self.size = 0  # the targets' side (0: none yet)
-        self._owned: list[Any] = []
-        uploader = TextureUploader(device)
-        image = self._own(uploader.add(np.zeros((1, 1, 4), np.uint8), "unorm", mipmaps=False,
-                                       name="opaque copy stand-in"))
-        uploader.flush()
-        view = self._own(ImageView(image))
-        sampler = self._own(Sampler(device, SamplerSpec(mipmaps=False, anisotropy=1.0)))
+        # Never sampled: a frame that samples the copy fits it first; batches never do.
+        view, sampler = gs.stand_in()
         writer = DescriptorWriter(device)
         for set2 in sets2:
             writer.sampler(set2, COPY_BINDING, view, sampler)
         writer.update()
-
-    def _own(self, obj: Any) -> Any:
-        self._owned.append(obj)
-        return obj
 
     def stale(self, extent: tuple[int, int]) -> bool:
         """Whether frames of `extent` need copies of another size than the ones made."""
@@ -121,5 +109,3 @@ class OpaqueCopies:
 
     def destroy(self) -> None:
         self._destroy_targets()
-        while self._owned:
-            self._owned.pop().destroy()
