@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from vkpbr.errors import UsageError
+from vkpbr.render.recorder import STAMP_NAMES
 from vkpbr.render.renderer import Renderer
 from vkpbr.scene.loader import load_scene
 from vkpbr.scene.types import Camera, Light
@@ -43,8 +44,9 @@ PATHS = (("forward", "hardware"), ("compute", "hardware"), ("compute", "compute"
 # drawn once for a still camera, every frame for a walking one).
 ROWS = (("course", "scene", "still"), ("pbr", "scene", "still"), ("pbr", "sun", "still"),
         ("pbr", "sun", "moving"))
-STEPS = ("shadows", "transmission", "prepass_opaque", "opaque", "opaque_double", "mask", "shading",
-         "background", "blend", "copy")
+# Every timed step of a frame (the compute rasteriser's kernels and the classification on
+# the compute path; "opaque" is then the depths' write) and the copies after them.
+STEPS = (*(n for n in STAMP_NAMES if n != "prepass_opaque_double"), "copy")
 
 
 def walk(frames: int) -> list[Camera]:

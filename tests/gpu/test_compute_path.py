@@ -19,6 +19,7 @@ import pytest
 from vkpbr.errors import UsageError
 from vkpbr.render.layouts import PipelinePath, TbnMode, View
 from vkpbr.render.options import RenderOptions
+from vkpbr.render.recorder import STAMP_NAMES
 
 SIZE = (96, 72)
 
@@ -108,10 +109,17 @@ def test_auto_takes_the_compute_path_on_gpus_only(make_renderer) -> None:  # noq
     assert not m.uses_compute(m.offscreen_target((32, 24)), RenderOptions(pipeline=PipelinePath.AUTO))
 
 
-def test_compute_timings_have_the_shading_step(chart) -> None:  # noqa: ANN001
-    list(chart.render_many([None] * 4, size=SIZE, pipeline="compute"))
-    ms = chart.last_stats.pass_ms
-    assert ms["shading"] >= 0.0 and all(v >= 0.0 for v in ms.values())
+@pytest.mark.parametrize("raster", ["hardware", "compute"])
+def test_compute_timings_have_every_step(chart, raster) -> None:  # noqa: ANN001
+    """Every step of the frame is timed in order (the compute rasteriser's kernels, the
+    classification, the shading: recorder.STAMP_NAMES), each >= 0, together the frame."""
+    if raster == "compute" and not chart.device.compute_raster:
+        pytest.skip("this device lacks 64-bit storage atomics (the compute rasteriser)")
+    list(chart.render_many([None] * 4, size=SIZE, pipeline="compute", raster=raster))
+    stats = chart.last_stats
+    assert set(stats.pass_ms) == {*STAMP_NAMES, "copy"}
+    assert all(v >= 0.0 for v in stats.pass_ms.values()), stats.pass_ms
+    assert sum(stats.pass_ms.values()) == pytest.approx(stats.gpu_ms, rel=1e-6, abs=1e-6)
 
 
 def test_both_classification_kernels_agree(chart) -> None:  # noqa: ANN001

@@ -42,7 +42,7 @@ from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.frames import FrameSlot
 from vkpbr.render.gpu_scene import Draw, GpuScene
 from vkpbr.render.passes import PassContext, record_passes
-from vkpbr.render.recorder import STAMP_NAMES, STAMPS, FrameRecorder
+from vkpbr.render.recorder import FrameRecorder
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.scene.types import Scene
 
@@ -200,8 +200,9 @@ class BatchViews:
     def _record(self, target: BatchTarget, frame: Frame, views: int, tbn: L.TbnMode,
                 alpha_mask: bool, plan: ShadowPlan, groups: tuple, prepass: bool,
                 redraw: tuple[range, ...] | None) -> Commands:
-        gs, ring, slot = self.gpu_scene, self.ring, self.slots[frame.index]
-        cmd, names, classes = self.recorder.begin_frame(frame, tbn, alpha_mask, plan, redraw)
+        gs, slot = self.gpu_scene, self.slots[frame.index]
+        cmd, stamps, names, classes = self.recorder.begin_frame(frame, tbn, alpha_mask, plan,
+                                                                redraw)
         # The previous batch's draws read the commands and lists: order this one's writes.
         cmd.memory_barrier("indirect|vertex", "transfer")
         target.record_external_acquire(cmd)
@@ -212,8 +213,7 @@ class BatchViews:
         cmd.push(np.array([views, self.draw_count, self.chunk_views], np.uint32))
         cmd.dispatch(*work_groups((views * self.draw_count, 1, 1), (64, 1, 1)))
         cmd.memory_barrier("compute", "indirect|vertex")
-        culled = 1 + STAMP_NAMES.index("prepass_opaque")  # the culling's time: the first pass's
-        ring.stamp(cmd, frame, culled)
+        stamps.after("prepass_opaque")  # the culling's time: the first pass's
         shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
         c = self.chunk_views
         for chunk in range(-(-views // c)):
@@ -230,8 +230,7 @@ class BatchViews:
             record_passes(cmd, ctx)
             target.record_chunk_end(cmd, chunk, n)
         target.record_host_barrier(cmd)
-        for i in range(culled + 1, STAMPS):  # every query of the frame is written (none is waited on unset)
-            ring.stamp(cmd, frame, i)
+        stamps.end()
         cmd.end()
         return cmd
 

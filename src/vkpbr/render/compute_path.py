@@ -26,6 +26,7 @@ recorder (render/recorder.py) records the steps; Renderer.uses_compute picks the
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -46,6 +47,10 @@ RASTER_SMALL_GROUP = 64  # raster_small: one triangle an invocation
 RASTER_DOUBLE_SIDED, RASTER_MASKED, RASTER_BLENDED = 1, 2, 4
 MAX_GROUPS_X = 65535  # maxComputeWorkGroupCount[0] every Vulkan device has
 CLASSIFY_GROUP = (8, 8, 1)  # classify.comp's count and scatter kernels
+
+
+def _untimed(step: str) -> None:
+    """A recording's `stamp` when none is taken (the transmission's copies)."""
 
 
 class _TargetResources:
@@ -222,12 +227,14 @@ class ComputeScene:
     def record_shading(self, cmd: Any, target: Any, frame_index: int, tbn: L.TbnMode,
                        frame_sets: dict[int, Any], material_sets: list[Any], materials: list[int],
                        clear_color: tuple[float, ...], shade: bool = True,
-                       tiles: tuple[int, int, int, int] | None = None, copy: bool = False) -> None:
+                       tiles: tuple[int, int, int, int] | None = None, copy: bool = False,
+                       stamp: Callable[[str], None] = _untimed) -> None:
         """Classify the visibility image's pixels by material, then shade each material of
         `materials` (those the visibility pass drew) with its own set 1 bound (`shade`
         False: classify only, for the outputs of a fragment-path frame; `tiles`: a compute
         batch's atlas, as record_raster's; `copy`: the transmission's copy of the opaque
-        scene, linear radiance: render/transmission.py)."""
+        scene, linear radiance: render/transmission.py). `stamp("classify")` after the
+        classification."""
         res = self._resources(target)
         compute_set = res.sets[frame_index]
         cmd.fill(res.bins, 0)
@@ -246,6 +253,7 @@ class ComputeScene:
             cmd.push(push)
             cmd.dispatch(*size)
             cmd.memory_barrier("compute", "compute|indirect")
+        stamp("classify")
         if shade:
             kernel = f"shade_{'batch_' if tiles else 'copy_' if copy else ''}{tbn.name.lower()}"
             self._dispatch_bins(cmd, res, frame_index, kernel, frame_sets, material_sets,
@@ -263,13 +271,14 @@ class ComputeScene:
 
     def record_raster(self, cmd: Any, target: Any, frame_index: int, alpha_mask: bool,
                       material_sets: list[Any], tiles: tuple[int, int, int, int] | None = None,
-                      set0: Any = None) -> None:
+                      set0: Any = None, stamp: Callable[[str], None] = _untimed) -> None:
         """The compute rasteriser (raster.comp): every opaque and masked draw's triangles into
         the target's depth|triangle buffer (masked ones alpha-tested per pixel with their
         material's set 1, one dispatch a masked draw), then the visibility image resolved
         from it (the target has it in GENERAL: record_raster_begin). The depths reach the
         depth buffer with `record_raster_depth`. `tiles` (views, tile width, tile height, tiles
-        a column: the atlas is column-major): a compute batch's atlas, the views' records in `set0` (render/batch_path.py)."""
+        a column: the atlas is column-major): a compute batch's atlas, the views' records in
+        `set0` (render/batch_path.py). `stamp(step)` after each step (recorder.RASTER_STEPS)."""
         res = self._resources(target)
         w, h = target.extent
         views, tile_w, tile_h, rows = tiles or (1, w, h, 1)
@@ -283,9 +292,11 @@ class ComputeScene:
         n = -(-self.triangles // RASTER_SMALL_GROUP)
         # raster_args sizes raster_big's dispatch from the count raster_small listed.
         small = (min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), views)
-        for kernel, size in ((f"raster_small{suffix}", small), ("raster_args", (1, 1, 1)),
-                             (f"raster_big{suffix}", None), (f"raster_masked{suffix}", ()),
-                             ("raster_resolve", groups((w, h, 1), (8, 8, 1)))):
+        for kernel, size, step in (
+                (f"raster_small{suffix}", small, "raster_small"), ("raster_args", (1, 1, 1), None),
+                (f"raster_big{suffix}", None, "raster_big"),
+                (f"raster_masked{suffix}", (), "raster_masked"),
+                ("raster_resolve", groups((w, h, 1), (8, 8, 1)), "raster_resolve")):
             if size == () and not (alpha_mask and self._masked):
                 continue
             cmd.bind_pipeline(self._pipeline(kernel, 48))
@@ -300,6 +311,8 @@ class ComputeScene:
             elif size[0] and size[1]:
                 cmd.dispatch(*size)
             cmd.memory_barrier("compute", "compute|fragment|indirect")
+            if step is not None:
+                stamp(step)
 
     def _dispatch_masked(self, cmd: Any, push: np.ndarray, material_sets: list[Any],
                          views: int) -> None:

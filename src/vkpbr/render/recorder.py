@@ -56,7 +56,13 @@ _BASE_STREAMS = (("positions", "vec3"), ("texcoords", "vec2"), ("texcoords1", "v
 # The compute path's shading step (render/compute_path.py) comes after the passes that draw
 # coverage, before the background; the forward path stamps it at once (it takes no time).
 _BEFORE_SHADING = tuple(p.name for p in PASSES[:[q.name for q in PASSES].index("mask") + 1])
-STAMP_NAMES = ("shadows", "transmission", *_BEFORE_SHADING, "shading",
+_PREPASSES = tuple(p.name for p in PASSES if p.prepass)
+# The compute path's own steps (render/compute_path.py): the compute rasteriser's kernels
+# before the visibility passes (on its frames "opaque" is then the depths' write alone), the
+# pixels' classification before the shading.
+RASTER_STEPS = ("raster_small", "raster_big", "raster_masked", "raster_resolve")
+STAMP_NAMES = ("shadows", "transmission", *_PREPASSES, *RASTER_STEPS,
+               *(n for n in _BEFORE_SHADING if n not in _PREPASSES), "classify", "shading",
                *(p.name for p in PASSES if p.name not in _BEFORE_SHADING))
 # The compute path's visibility pass draws these passes' draws (the coverage: not blending);
 # after its shading step the frame goes on with the rest.
@@ -65,6 +71,30 @@ AFTER_SHADING = tuple(p.name for p in PASSES if p.name not in _BEFORE_SHADING)
 STAMPS = len(STAMP_NAMES) + 2
 _NO_SHADOWS = ShadowPlan()
 
+
+class FrameStamps:
+    """A frame's timestamps, written in STAMP_NAMES order: `after(name)` writes every slot
+    up to `name`'s, so the steps a path skips read as taking no time and every query of the
+    frame is written once (an unwritten one would never be ready). A step already passed is
+    left as written."""
+
+    def __init__(self, ring: FrameRing, cmd: Commands, frame: Frame) -> None:
+        self.ring, self.cmd, self.frame = ring, cmd, frame
+        self.written = 0
+        ring.stamp(cmd, frame, 0)  # the frame's start
+
+    def after(self, *names: str) -> None:
+        for name in names:
+            self._up_to(1 + STAMP_NAMES.index(name))
+
+    def end(self) -> None:
+        """The frame's last timestamp (after its copies)."""
+        self._up_to(STAMPS - 1)
+
+    def _up_to(self, slot: int) -> None:
+        while self.written < slot:
+            self.written += 1
+            self.ring.stamp(self.cmd, self.frame, self.written)
 
 
 @dataclass
@@ -140,27 +170,27 @@ class FrameRecorder:
     # --- command buffers --------------------------------------------------------------------
     def begin_frame(self, frame: Frame, tbn: L.TbnMode, alpha_mask: bool, plan: ShadowPlan,
                     redraw: tuple[range, ...] | None = None, transmission: bool = False,
-                    compute: bool = False) -> tuple[Commands, list[str], list[str]]:
+                    compute: bool = False) -> tuple[Commands, FrameStamps, list[str], list[str]]:
         """Begin a frame's command buffer (a single frame's or a batch's, render/batch.py):
         its start timestamp, the shadow-map passes (`redraw`: per plan entry, the range of its
         layers to draw; ShadowMaps.stale), the timestamp after them, the copy of the opaque
         scene (`transmission`: render/transmission.py; on the compute path with `compute`) and
-        the timestamp after it. Returns the buffer, the vertex streams' names for `tbn` and
-        every draw's class."""
+        the timestamp after it. Returns the buffer, its timestamps, the vertex streams' names
+        for `tbn` and every draw's class."""
         gs, ring = self.gpu_scene, self.ring
         names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
         gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
         classes = [classify(d.alpha_mode, d.double_sided, alpha_mask) for d in gs.draws]
         cmd = Commands(self.device).begin()
-        ring.stamp(cmd, frame, 0)
+        stamps = FrameStamps(ring, cmd, frame)
         if self.shadows is not None:
             self.shadows.record(cmd, frame.index, plan, gs.draws, classes, gs.material_sets,
                                 gs.streams, gs.index_buffer, gs.has_colors, redraw)
-        ring.stamp(cmd, frame, 1)
+        stamps.after("shadows")
         if transmission:
             self._record_opaque_copy(cmd, frame, tbn, names, classes, compute)
-        ring.stamp(cmd, frame, 1 + STAMP_NAMES.index("transmission"))
-        return cmd, names, classes
+        stamps.after("transmission")
+        return cmd, stamps, names, classes
 
     def _record_opaque_copy(self, cmd: Commands, frame: Frame, tbn: L.TbnMode, names: list[str],
                             classes: list[str], compute: bool) -> None:
@@ -206,15 +236,15 @@ class FrameRecorder:
                 copy: tuple[str, ...], plan: ShadowPlan, compute: bool = False,
                 outputs: bool = False, redraw: tuple[range, ...] | None = None,
                 raster: bool = False, transmission: bool = False) -> Commands:
-        gs, ring = self.gpu_scene, self.ring
+        gs = self.gpu_scene
         slot = self.slots[frame.index]
         prepass = self.prepass_for(target) and not compute  # visibility: its own pre-pass
-        cmd, names, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw, transmission,
-                                               compute)
+        cmd, stamps, names, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw,
+                                                       transmission, compute)
         shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
 
         def context(visibility: bool, after_visibility: bool = False,
-                    stamps: bool = True) -> PassContext:
+                    timed: bool = True) -> PassContext:
             # after_visibility: the fragment path's passes over a visibility pass's depth,
             # which is a depth pre-pass for them (test it, write none). The visibility pass
             # itself writes depth whatever the target's pre-pass choice: none ran before it.
@@ -225,8 +255,7 @@ class FrameRecorder:
                 frame_sets=(slot.set0, slot.set2), material_sets=gs.material_sets,
                 vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
                 blend_order=order, prepass=pre,
-                stamp=(lambda name: ring.stamp(cmd, frame, 1 + STAMP_NAMES.index(name)))
-                if stamps else (lambda name: None),
+                stamp=stamps.after if timed else (lambda name: None),
                 shadow_set=shadow_set)
 
         ctx = context(False)
@@ -234,16 +263,13 @@ class FrameRecorder:
             # render/compute_path.py: the visibility pass, the pixels binned by material, then
             # the compute path's shading (or the fragment path's passes over that depth) and
             # the dataset outputs' kernel.
-            for p in PASSES:
-                if p.prepass:  # no pre-pass here: its slots take no time
-                    ctx.stamp(p.name)
             if outputs:
                 target.record_outputs_clear(cmd)  # type: ignore[attr-defined]
-            vis_ctx = context(True, stamps=compute)
+            vis_ctx = context(True, timed=compute)
             if raster:
                 # The compute rasteriser (render/compute_path.py): the opaque and masked draws
                 # on all SMs, then their depths into the depth buffer.
-                self._record_compute_raster(cmd, target, frame, image, alpha_mask)
+                self._record_compute_raster(cmd, target, frame, image, alpha_mask, stamps)
                 for name in VISIBILITY_PASSES:
                     vis_ctx.stamp(name)
             else:
@@ -257,7 +283,8 @@ class FrameRecorder:
                 frame_sets[3] = shadow_set
             cs = self.compute_scene()
             cs.record_shading(cmd, target, frame.index, tbn, frame_sets, gs.material_sets,
-                              drawn, target.clear_color, shade=compute)  # type: ignore[attr-defined]
+                              drawn, target.clear_color, shade=compute,
+                              stamp=vis_ctx.stamp)  # type: ignore[attr-defined]
             if outputs:
                 cs.record_outputs(cmd, target, frame.index, tbn, frame_sets, gs.material_sets,
                                   drawn)
@@ -277,7 +304,7 @@ class FrameRecorder:
         if overlay is not None:
             overlay.record(cmd, frame.index, target.extent)
         target.record_end(cmd, image, frame, copy)
-        ring.stamp(cmd, frame, STAMPS - 1)
+        stamps.end()
         cmd.end()
         return cmd
 
@@ -321,37 +348,31 @@ class FrameRecorder:
         rec = self._recorded.get(key)
         if rec is not None:
             return rec.cmd
-        gs, ring, slot = self.gpu_scene, self.ring, self.slots[frame.index]
-        cmd, _, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw)
-
-        def stamp(*names: str) -> None:
-            for name in names:
-                ring.stamp(cmd, frame, 1 + STAMP_NAMES.index(name))
-
+        gs, slot = self.gpu_scene, self.slots[frame.index]
+        cmd, stamps, _, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw)
         cs = self.compute_scene()
-        prepass = tuple(p.name for p in PASSES if p.prepass)
-        stamp(*prepass)  # no pre-pass: the rasteriser's time is "opaque"'s, as a single frame's
-        self._record_compute_raster(cmd, target, frame, 0, alpha_mask, tiles, set0)
+        self._record_compute_raster(cmd, target, frame, 0, alpha_mask, stamps, tiles, set0)
         target.record_shading_begin(cmd)  # type: ignore[attr-defined]
-        stamp(*(name for name in _BEFORE_SHADING if name not in prepass))
+        stamps.after("mask")  # the depths' write is "opaque"'s, as a single frame's
         frame_sets = {0: set0, 2: slot.set2}
         if self.shadows is not None:
             frame_sets[3] = self.shadows.sets[frame.index]
         drawn = _shaded_materials(gs.draws, classes)
         cs.record_shading(cmd, target, frame.index, tbn, frame_sets, gs.material_sets, drawn,
-                          target.clear_color, tiles=tiles)  # type: ignore[attr-defined]
-        stamp("shading")
+                          target.clear_color, tiles=tiles, stamp=stamps.after)  # type: ignore[attr-defined]
+        stamps.after("shading")
         cs.record_background_batch(cmd, target, frame.index, frame_sets, tiles)
         target.record_resume(cmd)  # type: ignore[attr-defined]
-        stamp(*AFTER_SHADING)
+        stamps.after(*AFTER_SHADING)
         target.record_end(cmd, 0, frame, copy, tiles, external)  # type: ignore[call-arg]
-        ring.stamp(cmd, frame, STAMPS - 1)
+        stamps.end()
         cmd.end()
         self._recorded[key] = _Recorded(cmd, ())
         return cmd
 
     def _record_compute_raster(self, cmd: Commands, target: FrameTarget, frame: Frame, image: int,
-                               alpha_mask: bool, tiles: tuple[int, int, int, int] | None = None,
+                               alpha_mask: bool, stamps: FrameStamps,
+                               tiles: tuple[int, int, int, int] | None = None,
                                set0: object = None) -> None:
         """The compute rasteriser (render/compute_path.py): the opaque and masked draws into the
         visibility image on all SMs, then their depths into the depth buffer, inside the
@@ -359,7 +380,7 @@ class FrameRecorder:
         cs = self.compute_scene()
         target.record_raster_begin(cmd)  # type: ignore[attr-defined]
         cs.record_raster(cmd, target, frame.index, alpha_mask, self.gpu_scene.material_sets,
-                         tiles, set0)
+                         tiles, set0, stamp=stamps.after)
         target.record_visibility_begin(cmd, image, rasterised=True)  # type: ignore[attr-defined]
         cs.record_raster_depth(cmd, target, frame.index)
 
