@@ -2,6 +2,7 @@
 
     python benchmarks/bench_paths.py [--scene Sponza.gltf] [--frames 200]
                                      [--sizes 1920x1080,640x480,128x128] [--lights 1,16,64,256]
+                                     [--rows course/scene/still,...] [--paths compute/compute,...]
                                      [--json OUT.json]
 
 Rows: the course's lighting and the physically based one (the automatic sun's cascaded
@@ -121,8 +122,14 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=200)
     ap.add_argument("--sizes", default="1920x1080,640x480,128x128")
     ap.add_argument("--lights", default="1,16,64,256")
+    ap.add_argument("--rows", default=",".join("/".join(r) for r in ROWS),
+                    help="lighting/light/camera rows (default all)")
+    ap.add_argument("--paths", default=",".join("/".join(p) for p in PATHS),
+                    help="pipeline/raster pairs (default all)")
     ap.add_argument("--json")
     args = ap.parse_args()
+    frame_rows = [tuple(r.split("/")) for r in args.rows.split(",")]
+    paths = [tuple(p.split("/")) for p in args.paths.split(",")]
     scene = load_scene(args.scene)
     sizes = [tuple(int(x) for x in s.split("x")) for s in args.sizes.split(",")]
     rows, light_rows = [], []
@@ -130,8 +137,8 @@ def main() -> None:
         print(f"device: {r.device.info.name}; scene {Path(args.scene).name}, "
               f"{scene.triangle_count} triangles; {args.frames} frames a row")
         for size in sizes:
-            for lighting, light, camera in ROWS:
-                for pipeline, raster in PATHS:
+            for lighting, light, camera in frame_rows:
+                for pipeline, raster in paths:
                     try:
                         row = measure(r, size, args.frames, [r.automatic_sun()] if light == "sun" else None,
                                       lighting=lighting, pipeline=pipeline, raster=raster, camera=camera)
@@ -140,9 +147,9 @@ def main() -> None:
                         print(f"skipped {pipeline} ({raster} raster): {exc}")
         table(rows, ("lighting", "light", "camera", "pipeline", "raster"))
         size = sizes[0]
-        for n in (int(x) for x in args.lights.split(",")):
+        for n in (int(x) for x in args.lights.split(",") if x):
             lights = floor_lights(scene, n)
-            for pipeline, raster in PATHS:
+            for pipeline, raster in paths:
                 try:
                     row = measure(r, size, max(args.frames // 2, 20), lights, lighting="pbr",
                                   pipeline=pipeline, raster=raster, shadows=False, env="none")
@@ -151,8 +158,9 @@ def main() -> None:
                     continue
                 row["lights"] = str(n)
                 light_rows.append(row)
-        print()
-        table(light_rows, ("lights", "pipeline", "raster"))
+        if light_rows:
+            print()
+            table(light_rows, ("lights", "pipeline", "raster"))
     if args.json:
         Path(args.json).write_text(json.dumps({"paths": rows, "lights": light_rows}, indent=1))
 
