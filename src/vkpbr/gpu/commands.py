@@ -116,7 +116,7 @@ class Commands:
     def memory_barrier(self, src: str, dst: str) -> None:
         """A global memory dependency from stages `src` to `dst`, each "|"-joined words of
         "transfer", "compute" (storage reads and writes), "indirect" (dispatch sizes, draws),
-        "vertex", "fragment" (storage reads in those shaders)."""
+        "vertex" (storage reads in vertex shaders)."""
         vk = self.vk
         stages = {
             "transfer": (vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT),
@@ -127,9 +127,6 @@ class Commands:
             # Storage buffers read by vertex shaders (a batch's lists of visible views).
             "vertex": (vk.VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
                        vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT),
-            # Storage buffers read by fragment shaders (the compute rasteriser's depths).
-            "fragment": (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
-                         vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT),
         }
 
         def mask(words: str) -> tuple[int, int]:

@@ -174,6 +174,28 @@ def copy_image_to_buffer(cmd: Commands, image: Any, depth: bool, buffer: Any,
     vk.vkCmdCopyImageToBuffer(cmd.handle, image, layout, buffer.handle, len(regions), regions)
 
 
+def copy_buffer_to_image(cmd: Commands, buffer: Any, image: Any, depth: bool,
+                         extent: tuple[int, int]) -> None:
+    """Copy `buffer`, tightly packed, into mip 0 of `image` (in TRANSFER_DST layout)."""
+    vk = cmd.vk
+    aspect = vk.VK_IMAGE_ASPECT_DEPTH_BIT if depth else vk.VK_IMAGE_ASPECT_COLOR_BIT
+    region = vk.VkBufferImageCopy(
+        bufferOffset=0, imageSubresource=vk.VkImageSubresourceLayers(
+            aspectMask=aspect, mipLevel=0, baseArrayLayer=0, layerCount=1),
+        imageExtent=vk.VkExtent3D(width=extent[0], height=extent[1], depth=1))
+    vk.vkCmdCopyBufferToImage(cmd.handle, buffer.handle, image,
+                              vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, [region])
+
+
+def buffer_barrier(vk: Any, buffer: Any, src: tuple[int, int], dst: tuple[int, int]) -> Any:
+    """A VkBufferMemoryBarrier2 over the whole of `buffer` (a gpu.buffer.Buffer)."""
+    return vk.VkBufferMemoryBarrier2(
+        srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=dst[0], dstAccessMask=dst[1],
+        srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+        dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+        buffer=buffer.handle, offset=0, size=buffer.size)
+
+
 def tile_regions(vk: Any, tiles: tuple[int, int, int, int], offset: int, pixel_bytes: int,
                  aspect: int, layers: int = 1) -> Any:
     """The VkBufferImageCopy array copying an atlas's `tiles` (views, width, height, tiles a
@@ -216,9 +238,6 @@ def external_ownership(vk: Any, queue_family: int, buffer: Any, external_to_ours
 
 def host_read_barrier(vk: Any, buffer: Any) -> Any:
     """Make a copy into `buffer` visible to the host once the frame's fence is waited."""
-    return vk.VkBufferMemoryBarrier2(
-        srcStageMask=vk.VK_PIPELINE_STAGE_2_COPY_BIT, srcAccessMask=vk.VK_ACCESS_2_TRANSFER_WRITE_BIT,
-        dstStageMask=vk.VK_PIPELINE_STAGE_2_HOST_BIT, dstAccessMask=vk.VK_ACCESS_2_HOST_READ_BIT,
-        srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-        dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-        buffer=buffer.handle, offset=0, size=buffer.size)
+    return buffer_barrier(vk, buffer,
+                          (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT),
+                          (vk.VK_PIPELINE_STAGE_2_HOST_BIT, vk.VK_ACCESS_2_HOST_READ_BIT))

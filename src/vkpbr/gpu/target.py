@@ -34,6 +34,8 @@ from vkpbr.gpu.rendering import (
     attachment_stage,
     barriers,
     begin_rendering,
+    buffer_barrier,
+    copy_buffer_to_image,
     copy_image_to_buffer,
     copy_out_barriers,
     end_rendering,
@@ -82,11 +84,9 @@ class ComputeSteps:
         return (stage | vk.VK_PIPELINE_STAGE_2_COPY_BIT,
                 access & ~vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT)
 
-    def record_visibility_begin(self, cmd: Commands, image: int, rasterised: bool = False) -> None:
+    def record_visibility_begin(self, cmd: Commands, image: int) -> None:
         """Begin rendering the visibility image (cleared to 0: nothing) over the cleared
-        depth buffer; the colour image goes to GENERAL for the compute shader's writes.
-        `rasterised`: the compute rasteriser has filled the visibility image (kept, from
-        GENERAL) and writes the depth buffer next (record_raster_depth)."""
+        depth buffer; the colour image goes to GENERAL for the compute shader's writes."""
         vk = self.device.vk
         color_stage, color_access, color_layout = attachment_stage(vk, False)
         depth_stage, depth_access, depth_layout = attachment_stage(vk, True)
@@ -95,22 +95,43 @@ class ComputeSteps:
                    vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT)
         no_reads = ~(vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT
                      | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
-        visibility = (image_barrier(vk, self.visibility.handle, False, vk.VK_IMAGE_LAYOUT_GENERAL,
-                                    color_layout, compute, (color_stage, color_access))
-                      if rasterised else
-                      image_barrier(vk, self.visibility.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                                    color_layout, (compute[0], 0), (color_stage, color_access)))
         barriers(cmd, [
             # The previous frame's passes and copies of these images come first.
-            visibility,
+            image_barrier(vk, self.visibility.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                          color_layout, (compute[0], 0), (color_stage, color_access)),
             image_barrier(vk, self.depth.handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED, depth_layout,
                           (depth_stage | copy, depth_access & no_reads), (depth_stage, depth_access)),
             image_barrier(vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
                           vk.VK_IMAGE_LAYOUT_GENERAL, self._color_last_use(vk), compute),
         ])
         begin_rendering(cmd, Attachments(self.visibility_view.handle, self.attachments.depth,
-                                         self.extent), None if rasterised else (0.0, 0.0, 0.0, 0.0),
-                        0.0)
+                                         self.extent), (0.0, 0.0, 0.0, 0.0), 0.0)
+
+    def record_raster_end(self, cmd: Commands, depths: Buffer) -> None:
+        """After the compute rasteriser, instead of a visibility pass: its depths (`depths`,
+        a float a pixel, written by its resolve) copied into the depth buffer for what tests
+        it afterwards (the background, the blended draws) and depth readback, then ready
+        for those; the colour image to GENERAL for the shading's writes. The visibility
+        image stays in GENERAL, readable by the shading (record_raster's last barrier)."""
+        vk = self.device.vk
+        depth_stage, depth_access, depth_layout = attachment_stage(vk, True)
+        copy = vk.VK_PIPELINE_STAGE_2_COPY_BIT
+        compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT)
+        write, read = vk.VK_ACCESS_2_TRANSFER_WRITE_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT
+        no_reads = ~vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT
+        dst = vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
+        barriers(cmd, [
+            # The previous frame's passes and copies of the depth buffer come first.
+            image_barrier(vk, self.depth.handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED, dst,
+                          (depth_stage | copy, depth_access & no_reads), (copy, write)),
+            image_barrier(vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                          vk.VK_IMAGE_LAYOUT_GENERAL, self._color_last_use(vk), compute),
+        ], [buffer_barrier(vk, depths, compute, (copy, read))])
+        copy_buffer_to_image(cmd, depths, self.depth.handle, True, self.extent)
+        barriers(cmd, [image_barrier(vk, self.depth.handle, True, dst, depth_layout,
+                                     (copy, write), (depth_stage, depth_access))],
+                 [buffer_barrier(vk, depths, (copy, read), (compute[0], 0))])
 
     def record_shading_begin(self, cmd: Commands) -> None:
         """End the visibility pass: its image becomes readable by the compute shader."""
@@ -161,8 +182,10 @@ class OffscreenTarget(ComputeSteps):
         mutable = self.compute and color == "srgb"
         self.color = self._own(Image(device, w, h, self.color_format, attach | storage,
                                      mutable=mutable))
+        # The compute rasteriser's depths are copied in (record_raster_end).
+        depth_in = vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT if self.compute else 0
         self.depth = self._own(Image(device, w, h, self.depth_format,
-                                     vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | src))
+                                     vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | src | depth_in))
         views = [self._own(ImageView(self.color, usage=attach if mutable else None)),
                  self._own(ImageView(self.depth, aspect="depth"))]
         if self.compute:

@@ -82,8 +82,6 @@ VARIANTS: tuple[Variant, ...] = (
               (("COMPUTE_SHADING", 1), ("KERNEL", k), ("BATCH", batch)))
       for k, name in ((1, "small"), (4, "args"), (2, "big"), (3, "resolve"), (5, "masked"))
       for batch in (0, 1) if not batch or k in (1, 2, 5)),
-    Variant("raster_depth.vert.spv", "raster_depth.vert"),
-    Variant("raster_depth.frag.spv", "raster_depth.frag", (("COMPUTE_SHADING", 1),)),
 )
 
 

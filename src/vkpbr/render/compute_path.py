@@ -71,6 +71,8 @@ class _TargetResources:
         raster = dev.compute_raster and getattr(target, "rasterised", True)
         self.raster = self._own(Buffer(dev, 8 * w * h if raster else 16, "storage|transfer_dst",
                                        name="raster depth|ids"))
+        self.raster_depths = self._own(Buffer(dev, 4 * w * h if raster else 16,
+                                              "storage|transfer_src", name="raster depths"))
         # (triangle, view, chunk) entries (raster.comp BIG_ENTRY): every triangle once for
         # one view, or a sixteenth of the target's pixels (what does not fit is drawn by the
         # invocation that found it, slowly but right).
@@ -91,7 +93,7 @@ class _TargetResources:
                    "BinArgs": self.args, "PixelList": self.pixels,
                    "Materials": scene.material_table, "RasterDraws": scene.raster_draws,
                    "RasterDepthIds": self.raster, "RasterBig": self.raster_big,
-                   "RasterSpheres": scene.raster_spheres}
+                   "RasterSpheres": scene.raster_spheres, "RasterDepths": self.raster_depths}
         images = {"out_image": target.storage_view, "visibility": target.visibility_view}
         # The dataset outputs' images once the target has them, else 1x1 stand-ins (no kernel
         # but the outputs one touches them; every binding is written all the same).
@@ -177,9 +179,8 @@ class ComputeScene:
         self.raster_spheres = self._own(upload_buffer(device, spheres, "storage",
                                                       name="raster draw spheres"))
         self.set_index = max(frame_layouts) + 1
-        # Fragment too: raster_depth.frag reads the rasteriser's depths through this set.
         self.set_layout = self._own(DescriptorSetLayout(device, [
-            BindingSpec(b, "storage" if kind == "block" else kind, ("compute", "fragment"), name)
+            BindingSpec(b, "storage" if kind == "block" else kind, ("compute",), name)
             for b, kind, name in L.COMPUTE_SET]))
         self.layouts = [frame_layouts[i] for i in range(self.set_index)] + [self.set_layout]
         self.material_count = len(gs.materials)
@@ -188,7 +189,6 @@ class ComputeScene:
         self.aggregate = device.info.kind != "cpu"
         # Which materials any opaque or masked draw uses: only those get a shading dispatch.
         self._pipelines: dict[str, ComputePipeline] = {}
-        self._graphics: dict[tuple, Any] = {}  # raster_depth's pipeline per depth format
         self._stand_ins: dict[str, tuple[Any, Any]] | None = None
         self._targets: dict[int, _TargetResources] = {}
 
@@ -275,8 +275,8 @@ class ComputeScene:
         """The compute rasteriser (raster.comp): every opaque and masked draw's triangles into
         the target's depth|triangle buffer (masked ones alpha-tested per pixel with their
         material's set 1, one dispatch a masked draw), then the visibility image resolved
-        from it (the target has it in GENERAL: record_raster_begin). The depths reach the
-        depth buffer with `record_raster_depth`. `tiles` (views, tile width, tile height, tiles
+        from it (the target has it in GENERAL: record_raster_begin) with the winners' depths,
+        which are copied into the target's depth buffer (record_raster_end). `tiles` (views, tile width, tile height, tiles
         a column: the atlas is column-major): a compute batch's atlas, the views' records in
         `set0` (render/batch_path.py). `stamp(step)` after each step (recorder.RASTER_STEPS)."""
         res = self._resources(target)
@@ -298,6 +298,7 @@ class ComputeScene:
                 (f"raster_masked{suffix}", (), "raster_masked"),
                 ("raster_resolve", groups((w, h, 1), (8, 8, 1)), "raster_resolve")):
             if size == () and not (alpha_mask and self._masked):
+                stamp(step)  # none: no time
                 continue
             cmd.bind_pipeline(self._pipeline(kernel, 48))
             if set0 is not None:
@@ -310,9 +311,10 @@ class ComputeScene:
                 self._dispatch_masked(cmd, push, material_sets, views)
             elif size[0] and size[1]:
                 cmd.dispatch(*size)
-            cmd.memory_barrier("compute", "compute|fragment|indirect")
+            cmd.memory_barrier("compute", "compute|indirect")
             if step is not None:
                 stamp(step)
+        target.record_raster_end(cmd, res.raster_depths)
 
     def _dispatch_masked(self, cmd: Any, push: np.ndarray, material_sets: list[Any],
                          views: int) -> None:
@@ -323,25 +325,6 @@ class ComputeScene:
             cmd.push(push)
             n = -(-count // RASTER_SMALL_GROUP)
             cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), views)
-
-    def record_raster_depth(self, cmd: Any, target: Any, frame_index: int) -> None:
-        """Inside the visibility rendering: the rasteriser's depths written into the target's
-        depth buffer by one screen-covering triangle (raster_depth.frag)."""
-        key = ("raster_depth", target.depth_format)
-        if key not in self._graphics:
-            from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec
-
-            layout = self._own(PipelineLayout(self.device, self.layouts, 16, stages=("fragment",)))
-            spec = PipelineSpec(vertex_shader="raster_depth.vert.spv",
-                                fragment_shader="raster_depth.frag.spv", streams=(),
-                                color_format=getattr(self.device.vk, L.VISIBILITY_FORMAT),
-                                depth_format=target.depth_format, cull="none",
-                                depth_compare="always", color_write=False)
-            self._graphics[key] = self._own(Pipeline(self.device, spec, layout, SPV_DIR))
-        cmd.bind_pipeline(self._graphics[key])
-        cmd.bind_set(self.set_index, self._resources(target).sets[frame_index])
-        cmd.push(np.array([target.extent[0], 0, 0, 0], np.uint32))
-        cmd.draw(3)
 
     def record_outputs(self, cmd: Any, target: Any, frame_index: int, tbn: L.TbnMode,
                        frame_sets: dict[int, Any], material_sets: list[Any],

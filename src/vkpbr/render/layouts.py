@@ -362,14 +362,16 @@ STORAGE = {
     # The compute rasteriser (render/compute_path.py, shaders/raster.comp): a row a draw in
     # the raster units' submission order (first triangle, flags: 1 double-sided, 2 masked,
     # 4 blended, the draw's index, 0), the 64-bit depth|triangle per pixel, the big
-    # triangles' list (a count, the dispatch size, then (triangle, view) pairs).
+    # triangles' list (a count, the dispatch size, then (triangle, view) pairs), the winners'
+    # depths a float a pixel (copied into the depth buffer).
     "RasterDraws": StorageArray("RasterDraws", "uvec4", "raster_draws"),
     "RasterDepthIds": StorageArray("RasterDepthIds", "uint64_t", "raster"),
     "RasterBig": StorageArray("RasterBig", "uint", "raster_big"),
     "RasterSpheres": StorageArray("RasterSpheres", "vec4", "raster_spheres"),  # per draw, world
+    "RasterDepths": StorageArray("RasterDepths", "float", "raster_depths"),
 }
 # Storage buffers the compute path writes (declared without `readonly`).
-WRITABLE_STORAGE = ("Bins", "BinArgs", "PixelList", "RasterDepthIds", "RasterBig")
+WRITABLE_STORAGE = ("Bins", "BinArgs", "PixelList", "RasterDepthIds", "RasterBig", "RasterDepths")
 
 # The compute path's own set (render/compute_path.py), numbered after SETS: the target's
 # images, the scene's geometry as storage buffers, the per-material pixel bins. Its other sets
@@ -402,11 +404,12 @@ COMPUTE_SET: tuple[tuple[int, str, str], ...] = (
     (20, "storage_image", "out_normal"),  # world shading normal (normal-mapped)
     (21, "storage_image", "out_normal_geometric"),  # world interpolated vertex normal
     (22, "storage_image", "out_depth_range"),  # distance along the view axis, to the eye
-    # The compute rasteriser (raster.comp; raster_depth.frag reads 24 in a fragment shader).
+    # The compute rasteriser (raster.comp).
     (23, "storage", "RasterDraws"),
     (24, "storage", "RasterDepthIds"),
     (25, "storage", "RasterBig"),
     (26, "storage", "RasterSpheres"),  # per draw its world bounding sphere (culling)
+    (27, "storage", "RasterDepths"),  # resolved: copied into the depth buffer
 )
 # GLSL declarations of the storage images (their formats and access).
 STORAGE_IMAGES = {

@@ -74,12 +74,14 @@ _NO_SHADOWS = ShadowPlan()
 
 class FrameStamps:
     """A frame's timestamps, written in STAMP_NAMES order: `after(name)` writes every slot
-    up to `name`'s, so the steps a path skips read as taking no time and every query of the
-    frame is written once (an unwritten one would never be ready). A step already passed is
-    left as written."""
+    up to `name`'s, and the slots of the `untimed` steps (those this frame's path does not
+    take) right after the slot before them, so they read as taking no time, each step's
+    time is its own, and every query of the frame is written once (an unwritten one would
+    never be ready). A step already passed is left as written."""
 
-    def __init__(self, ring: FrameRing, cmd: Commands, frame: Frame) -> None:
-        self.ring, self.cmd, self.frame = ring, cmd, frame
+    def __init__(self, ring: FrameRing, cmd: Commands, frame: Frame,
+                 untimed: frozenset[str] = frozenset()) -> None:
+        self.ring, self.cmd, self.frame, self.untimed = ring, cmd, frame, untimed
         self.written = 0
         ring.stamp(cmd, frame, 0)  # the frame's start
 
@@ -92,7 +94,8 @@ class FrameStamps:
         self._up_to(STAMPS - 1)
 
     def _up_to(self, slot: int) -> None:
-        while self.written < slot:
+        while self.written < slot or (self.written < len(STAMP_NAMES)
+                                      and STAMP_NAMES[self.written] in self.untimed):
             self.written += 1
             self.ring.stamp(self.cmd, self.frame, self.written)
 
@@ -170,19 +173,21 @@ class FrameRecorder:
     # --- command buffers --------------------------------------------------------------------
     def begin_frame(self, frame: Frame, tbn: L.TbnMode, alpha_mask: bool, plan: ShadowPlan,
                     redraw: tuple[range, ...] | None = None, transmission: bool = False,
-                    compute: bool = False) -> tuple[Commands, FrameStamps, list[str], list[str]]:
+                    compute: bool = False, untimed: frozenset[str] = frozenset(),
+                    ) -> tuple[Commands, FrameStamps, list[str], list[str]]:
         """Begin a frame's command buffer (a single frame's or a batch's, render/batch.py):
         its start timestamp, the shadow-map passes (`redraw`: per plan entry, the range of its
         layers to draw; ShadowMaps.stale), the timestamp after them, the copy of the opaque
         scene (`transmission`: render/transmission.py; on the compute path with `compute`) and
-        the timestamp after it. Returns the buffer, its timestamps, the vertex streams' names
-        for `tbn` and every draw's class."""
+        the timestamp after it. Returns the buffer, its timestamps (`untimed`: the steps
+        this frame does not take), the vertex streams' names for `tbn` and every draw's
+        class."""
         gs, ring = self.gpu_scene, self.ring
         names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
         gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
         classes = [classify(d.alpha_mode, d.double_sided, alpha_mask) for d in gs.draws]
         cmd = Commands(self.device).begin()
-        stamps = FrameStamps(ring, cmd, frame)
+        stamps = FrameStamps(ring, cmd, frame, untimed)
         if self.shadows is not None:
             self.shadows.record(cmd, frame.index, plan, gs.draws, classes, gs.material_sets,
                                 gs.streams, gs.index_buffer, gs.has_colors, redraw)
@@ -239,8 +244,13 @@ class FrameRecorder:
         gs = self.gpu_scene
         slot = self.slots[frame.index]
         prepass = self.prepass_for(target) and not compute  # visibility: its own pre-pass
+        untimed = {*RASTER_STEPS} if not raster else set()
+        if compute:
+            untimed |= {*_PREPASSES}  # the visibility pass is its own pre-pass
+        else:
+            untimed.add("classify")
         cmd, stamps, names, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw,
-                                                       transmission, compute)
+                                                       transmission, compute, frozenset(untimed))
         shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
 
         def context(visibility: bool, after_visibility: bool = False,
@@ -269,14 +279,14 @@ class FrameRecorder:
             if raster:
                 # The compute rasteriser (render/compute_path.py): the opaque and masked draws
                 # on all SMs, then their depths into the depth buffer.
-                self._record_compute_raster(cmd, target, frame, image, alpha_mask, stamps)
+                self._record_compute_raster(cmd, target, frame, alpha_mask, stamps)
                 for name in VISIBILITY_PASSES:
                     vis_ctx.stamp(name)
             else:
                 target.record_visibility_begin(cmd, image)  # type: ignore[attr-defined]
                 # The fragment path's own passes follow and take the timestamps.
                 record_passes(cmd, vis_ctx, VISIBILITY_PASSES)
-            target.record_shading_begin(cmd)  # type: ignore[attr-defined]
+                target.record_shading_begin(cmd)  # type: ignore[attr-defined]
             drawn = _shaded_materials(gs.draws, classes)
             frame_sets = {0: slot.set0, 2: slot.set2}
             if shadow_set is not None:
@@ -349,11 +359,11 @@ class FrameRecorder:
         if rec is not None:
             return rec.cmd
         gs, slot = self.gpu_scene, self.slots[frame.index]
-        cmd, stamps, _, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw)
+        cmd, stamps, _, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw,
+                                                   untimed=frozenset(_PREPASSES))
         cs = self.compute_scene()
-        self._record_compute_raster(cmd, target, frame, 0, alpha_mask, stamps, tiles, set0)
-        target.record_shading_begin(cmd)  # type: ignore[attr-defined]
-        stamps.after("mask")  # the depths' write is "opaque"'s, as a single frame's
+        self._record_compute_raster(cmd, target, frame, alpha_mask, stamps, tiles, set0)
+        stamps.after("mask")  # the depths' copy is "opaque"'s, as a single frame's
         frame_sets = {0: set0, 2: slot.set2}
         if self.shadows is not None:
             frame_sets[3] = self.shadows.sets[frame.index]
@@ -370,19 +380,17 @@ class FrameRecorder:
         self._recorded[key] = _Recorded(cmd, ())
         return cmd
 
-    def _record_compute_raster(self, cmd: Commands, target: FrameTarget, frame: Frame, image: int,
+    def _record_compute_raster(self, cmd: Commands, target: FrameTarget, frame: Frame,
                                alpha_mask: bool, stamps: FrameStamps,
                                tiles: tuple[int, int, int, int] | None = None,
                                set0: object = None) -> None:
         """The compute rasteriser (render/compute_path.py): the opaque and masked draws into the
-        visibility image on all SMs, then their depths into the depth buffer, inside the
-        visibility rendering (left open for what follows)."""
-        cs = self.compute_scene()
+        visibility image on all SMs, their depths into the depth buffer; the target is then
+        ready for the shading (as after record_shading_begin)."""
         target.record_raster_begin(cmd)  # type: ignore[attr-defined]
-        cs.record_raster(cmd, target, frame.index, alpha_mask, self.gpu_scene.material_sets,
-                         tiles, set0, stamp=stamps.after)
-        target.record_visibility_begin(cmd, image, rasterised=True)  # type: ignore[attr-defined]
-        cs.record_raster_depth(cmd, target, frame.index)
+        self.compute_scene().record_raster(cmd, target, frame.index, alpha_mask,
+                                           self.gpu_scene.material_sets, tiles, set0,
+                                           stamp=stamps.after)
 
     def free(self, target_id: int | None = None) -> None:
         """Free the recorded command buffers (of one target: its id; None: all)."""

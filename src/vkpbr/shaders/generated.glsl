@@ -355,6 +355,9 @@ layout(set = 4, binding = 25, std430) buffer RasterBig {
 layout(set = 4, binding = 26, std430) readonly buffer RasterSpheres {
     vec4 raster_spheres[];
 };
+layout(set = 4, binding = 27, std430) buffer RasterDepths {
+    float raster_depths[];
+};
 #else  // the compute path has its own push constants
 layout(push_constant, std430) uniform Draw {
     mat4 model;

@@ -18,7 +18,9 @@
 //   A pixel is covered where the surface's base-colour alpha (surface_fetch.glsl + shade.glsl,
 //   exactly as the shading samples it) reaches the cutoff.
 // KERNEL 3 (raster_resolve): per pixel, the visibility image's (draw + 1, primitive) from the
-//   winning triangle (0: nothing) -- what shade.comp and classify.comp read.
+//   winning triangle (0: nothing) -- what shade.comp and classify.comp read -- and its depth
+//   into raster_depths (copied into the depth buffer: a copy, where a screen-filling
+//   fragment pass writing gl_FragDepth cost 0.30 ms at 1080p on the H200's few raster SMs).
 // BATCH = 1 (render/batch_path.py's compute batch): `views` views tiled `rows` to a column in
 // one atlas (column-major, so a column of tiles is one copy into view-major memory), each `tile` pixels, each with its ViewRecord's VP; the work's z index is the view.
 // One view (BATCH 0) is the same with the frame's camera and the whole target as the tile.
@@ -285,7 +287,9 @@ void main() {
 #else
     uvec2 p = gl_GlobalInvocationID.xy;
     if (p.x >= pc.width || p.y >= pc.height) return;
-    uint64_t v = raster[p.y * pc.width + p.x];
+    uint at = p.y * pc.width + p.x;
+    uint64_t v = raster[at];
+    raster_depths[at] = uintBitsToFloat(uint(v >> 32));  // 0 (the far plane): nothing
     uvec2 vis = uvec2(0u);
     if (v != 0ul) {
         uint g = uint(v & 0xffffffffUL) - 1u;
