@@ -198,3 +198,52 @@ def test_screen_filling_triangles_split_into_chunks(count: int) -> None:
         assert not wrong[~band].any(), f"{int(wrong[~band].sum())} pixels differ off the edges"
         assert wrong.mean() <= 0.01, wrong.mean()
         assert r.device.instance.errors == []
+
+
+@pytest.mark.parametrize("capacity", [None, 1])
+def test_big_masked_triangles_agree_with_the_raster_units(monkeypatch, capacity) -> None:  # noqa: ANN001
+    """Masked triangles filling the view, alpha-tested against a checker of holes: their big
+    triangles are listed in each masked draw's segment (raster.comp KERNEL 5) and drawn by
+    work groups a chunk each (KERNEL 6); with room for one entry a draw, the rest falls to
+    the listing work group. Either way the pixels show what the raster units find (the
+    surface through the holes, the nearest triangle elsewhere) off the one-pixel band of
+    the hardware image's edges."""
+    from test_outputs import silhouette_band
+
+    from vkpbr.render import compute_path
+    from vkpbr.render.renderer import Renderer
+    from vkpbr.scene.types import Image, Material, Sampler, TextureRef
+
+    if capacity is not None:
+        monkeypatch.setattr(compute_path, "MASKED_CAPACITY", capacity)
+    rng = np.random.default_rng(7)
+    count = 12
+    base = np.array([[-90.0, -90.0], [90.0, -90.0], [0.0, 120.0]])
+    tris = np.zeros((count, 3, 3))
+    tris[:, :, :2] = base + rng.uniform(-0.5, 0.5, (count, 3, 2))
+    tris[:, :, 2] = np.linspace(-3.0, 3.0, count)[:, None] + rng.uniform(-20.0, 20.0, (count, 3))
+    scene = _soup(tris, [True, False])
+    checker = np.zeros((16, 16, 4), np.uint8)
+    checker[..., :3] = 200
+    checker[..., 3] = np.where((np.indices((16, 16)).sum(axis=0) // 4) % 2 == 0, 255, 0)
+    scene.images = [Image(name="checker.png", pixels=checker)]
+    nearest = Sampler(mag_filter="nearest", min_filter="nearest", mipmaps=False)
+    scene.materials = [Material(name=f"m{k}", alpha_mode="mask", double_sided=k == 0,
+                                base_color_texture=TextureRef(0, nearest)) for k in range(2)]
+    for i, mesh in enumerate(scene.meshes):  # a few checker squares across each triangle
+        mesh.texcoords = ((tris[i, :, :2] + 100.0) / 50.0 + 0.01 * i).astype(np.float32)
+    with Renderer(scene, validation=True) as r:
+        if not r.device.compute_raster:
+            pytest.skip("no 64-bit storage atomics on this device")
+        cam = "0.3,0.2,40,0,0,0"
+        got = {raster: r.render(cam, size=(200, 150), pipeline="compute", raster=raster,
+                                env="none", outputs=("instance",))["instance"]
+               for raster in ("hardware", "compute")}
+        hw, cr = got["hardware"], got["compute"]
+        assert 0.3 <= (hw > 0).mean() <= 0.999, "the holes are meant to show through"
+        assert len(np.unique(hw)) > count // 2, "several layers are meant to show"
+        wrong = hw != cr
+        band = silhouette_band(hw)
+        assert not wrong[~band].any(), f"{int(wrong[~band].sum())} pixels differ off the edges"
+        assert wrong.mean() <= 0.02, wrong.mean()
+        assert r.device.instance.errors == []

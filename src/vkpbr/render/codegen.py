@@ -80,8 +80,9 @@ VARIANTS: tuple[Variant, ...] = (
     # The compute rasteriser (render/compute_path.py).
     *(Variant(f"raster_{name}{'_batch' if batch else ''}.comp.spv", "raster.comp",
               (("COMPUTE_SHADING", 1), ("KERNEL", k), ("BATCH", batch)))
-      for k, name in ((1, "small"), (4, "args"), (2, "big"), (3, "resolve"), (5, "masked"))
-      for batch in (0, 1) if not batch or k in (1, 2, 5)),
+      for k, name in ((1, "small"), (4, "args"), (2, "big"), (3, "resolve"), (5, "masked"),
+                      (6, "masked_big"))
+      for batch in (0, 1) if not batch or k in (1, 2, 5, 6)),
 )
 
 

@@ -46,6 +46,11 @@ SHADE_GROUP = 64  # shade.comp's work group: pixels of one bin
 RASTER_SMALL_GROUP = 64  # raster_small: one triangle an invocation
 RASTER_DOUBLE_SIDED, RASTER_MASKED, RASTER_BLENDED = 1, 2, 4
 MAX_GROUPS_X = 65535  # maxComputeWorkGroupCount[0] every Vulkan device has
+RASTER_PUSH_BYTES = 60  # raster.comp's push constants (15 uints)
+# Entries of a masked draw's segment of big-triangle chunks (raster.comp MASKED_CHUNK box
+# pixels each: 16 M box pixels, ~8 screens at 1080p; what does not fit is drawn by the work
+# group that found it). At most maxComputeWorkGroupCount[0]: an entry is a work group.
+MASKED_CAPACITY = 4096
 CLASSIFY_GROUP = (8, 8, 1)  # classify.comp's count and scatter kernels
 
 
@@ -80,6 +85,11 @@ class _TargetResources:
         self.raster_big = self._own(Buffer(dev, 4 * (4 + 3 * self.big_capacity) if raster else 16,
                                            "storage|transfer_dst|indirect",
                                            name="raster big triangles"))
+        # The masked draws' big triangles: a segment of MASKED_CAPACITY entries each.
+        masked = len(scene.masked_rows)
+        self.raster_masked_big = self._own(Buffer(
+            dev, 4 * (4 * masked + 3 * masked * MASKED_CAPACITY) if raster and masked else 16,
+            "storage|transfer_dst|indirect", name="raster masked big triangles"))
         slots = scene.slots
         pool = self._own(DescriptorPool(dev, [(scene.set_layout, len(slots))]))
         # One set per frame of the ring: the frame's blocks are that frame's.
@@ -93,7 +103,8 @@ class _TargetResources:
                    "BinArgs": self.args, "PixelList": self.pixels,
                    "Materials": scene.material_table, "RasterDraws": scene.raster_draws,
                    "RasterDepthIds": self.raster, "RasterBig": self.raster_big,
-                   "RasterSpheres": scene.raster_spheres, "RasterDepths": self.raster_depths}
+                   "RasterSpheres": scene.raster_spheres, "RasterDepths": self.raster_depths,
+                   "RasterMaskedBig": self.raster_masked_big}
         images = {"out_image": target.storage_view, "visibility": target.visibility_view}
         # The dataset outputs' images once the target has them, else 1x1 stand-ins (no kernel
         # but the outputs one touches them; every binding is written all the same).
@@ -168,7 +179,7 @@ class ComputeScene:
             first += d.index_count // 3
         self.triangles = first
         # (row, material, triangles) of the masked draws: raster_masked's dispatches.
-        self._masked = masked
+        self.masked_rows = masked
         self.raster_draws = self._own(upload_buffer(device, raster, "storage",
                                                     name="raster draw table"))
         # Per draw its world bounding sphere (raster.comp skips a draw outside the view).
@@ -285,9 +296,12 @@ class ComputeScene:
         suffix = "_batch" if tiles else ""
         cmd.fill(res.raster, 0)
         cmd.fill(res.raster_big, 0)
+        cmd.fill(res.raster_masked_big, 0)
         cmd.memory_barrier("transfer", "compute")
         push = np.array([self.triangles, len(self.gs.draws), int(alpha_mask), res.big_capacity,
-                         w, h, 0, 0, views, tile_w, tile_h, rows], np.uint32)
+                         w, h, 0, 0, views, tile_w, tile_h, rows,
+                         len(self.masked_rows) if alpha_mask else 0, 0, MASKED_CAPACITY],
+                        np.uint32)
         dset = res.sets[frame_index]
         n = -(-self.triangles // RASTER_SMALL_GROUP)
         # raster_args sizes raster_big's dispatch from the count raster_small listed.
@@ -297,10 +311,10 @@ class ComputeScene:
                 (f"raster_big{suffix}", None, "raster_big"),
                 (f"raster_masked{suffix}", (), "raster_masked"),
                 ("raster_resolve", groups((w, h, 1), (8, 8, 1)), "raster_resolve")):
-            if size == () and not (alpha_mask and self._masked):
+            if size == () and not (alpha_mask and self.masked_rows):
                 stamp(step)  # none: no time
                 continue
-            cmd.bind_pipeline(self._pipeline(kernel, 48))
+            cmd.bind_pipeline(self._pipeline(kernel, RASTER_PUSH_BYTES))
             if set0 is not None:
                 cmd.bind_set(0, set0)
             cmd.bind_set(self.set_index, dset)
@@ -308,7 +322,7 @@ class ComputeScene:
             if size is None:
                 cmd.dispatch_indirect(res.raster_big, 4)
             elif size == ():
-                self._dispatch_masked(cmd, push, material_sets, views)
+                self._dispatch_masked(cmd, res, dset, push, material_sets, views, set0, suffix)
             elif size[0] and size[1]:
                 cmd.dispatch(*size)
             cmd.memory_barrier("compute", "compute|indirect")
@@ -316,15 +330,30 @@ class ComputeScene:
                 stamp(step)
         target.record_raster_end(cmd, res.raster_depths)
 
-    def _dispatch_masked(self, cmd: Any, push: np.ndarray, material_sets: list[Any],
-                         views: int) -> None:
-        """raster_masked: one invocation a triangle of each masked draw, its material bound."""
-        for k, material, count in self._masked:
+    def _dispatch_masked(self, cmd: Any, res: _TargetResources, dset: Any, push: np.ndarray,
+                         material_sets: list[Any], views: int, set0: Any, suffix: str) -> None:
+        """raster_masked: one invocation a triangle of each masked draw, its material bound
+        (raster_masked's pipeline is bound), then each draw's big triangles listed by it
+        (raster_masked_big: one work group an entry, an indirect dispatch a draw)."""
+        for segment, (k, material, count) in enumerate(self.masked_rows):
             cmd.bind_set(1, material_sets[material])
             push[6:8] = k, material
+            push[13] = segment
             cmd.push(push)
             n = -(-count // RASTER_SMALL_GROUP)
             cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), views)
+        cmd.memory_barrier("compute", "compute|indirect")
+        cmd.bind_pipeline(self._pipeline(f"raster_masked_big{suffix}", RASTER_PUSH_BYTES))
+        if set0 is not None:
+            cmd.bind_set(0, set0)
+        cmd.bind_set(self.set_index, dset)
+        for segment, (k, material, _) in enumerate(self.masked_rows):
+            cmd.bind_set(1, material_sets[material])
+            push[6:8] = k, material
+            push[13] = segment
+            cmd.push(push)
+            cmd.dispatch_indirect(res.raster_masked_big, 16 * segment + 4)
+
 
     def record_outputs(self, cmd: Any, target: Any, frame_index: int, tbn: L.TbnMode,
                        frame_sets: dict[int, Any], material_sets: list[Any],

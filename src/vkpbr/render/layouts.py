@@ -369,9 +369,13 @@ STORAGE = {
     "RasterBig": StorageArray("RasterBig", "uint", "raster_big"),
     "RasterSpheres": StorageArray("RasterSpheres", "vec4", "raster_spheres"),  # per draw, world
     "RasterDepths": StorageArray("RasterDepths", "float", "raster_depths"),
+    # The masked draws' big triangles: per masked draw a count and a dispatch size, then its
+    # segment of (triangle, view, chunk) entries.
+    "RasterMaskedBig": StorageArray("RasterMaskedBig", "uint", "raster_masked_big"),
 }
 # Storage buffers the compute path writes (declared without `readonly`).
-WRITABLE_STORAGE = ("Bins", "BinArgs", "PixelList", "RasterDepthIds", "RasterBig", "RasterDepths")
+WRITABLE_STORAGE = ("Bins", "BinArgs", "PixelList", "RasterDepthIds", "RasterBig", "RasterDepths",
+                    "RasterMaskedBig")
 
 # The compute path's own set (render/compute_path.py), numbered after SETS: the target's
 # images, the scene's geometry as storage buffers, the per-material pixel bins. Its other sets
@@ -410,6 +414,7 @@ COMPUTE_SET: tuple[tuple[int, str, str], ...] = (
     (25, "storage", "RasterBig"),
     (26, "storage", "RasterSpheres"),  # per draw its world bounding sphere (culling)
     (27, "storage", "RasterDepths"),  # resolved: copied into the depth buffer
+    (28, "storage", "RasterMaskedBig"),
 )
 # GLSL declarations of the storage images (their formats and access).
 STORAGE_IMAGES = {

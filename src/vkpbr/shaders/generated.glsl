@@ -358,6 +358,9 @@ layout(set = 4, binding = 26, std430) readonly buffer RasterSpheres {
 layout(set = 4, binding = 27, std430) buffer RasterDepths {
     float raster_depths[];
 };
+layout(set = 4, binding = 28, std430) buffer RasterMaskedBig {
+    uint raster_masked_big[];
+};
 #else  // the compute path has its own push constants
 layout(push_constant, std430) uniform Draw {
     mat4 model;

@@ -14,9 +14,14 @@
 // KERNEL 4 (raster_args): one invocation: raster_big's dispatch size for KERNEL 2.
 // KERNEL 2 (raster_big): one work group a listed entry, its chunk's pixels spread over the group.
 // KERNEL 5 (raster_masked): one invocation a triangle of one masked draw (alpha masking on),
-//   with its material's set 1 bound; the group's big triangles afterwards by the whole group.
-//   A pixel is covered where the surface's base-colour alpha (surface_fetch.glsl + shade.glsl,
-//   exactly as the shading samples it) reaches the cutoff.
+//   with its material's set 1 bound; its big triangles are listed in the draw's segment of
+//   raster_masked_big, a MASKED_CHUNK of box pixels an entry (what does not fit: by the whole
+//   group afterwards). A pixel is covered where the surface's base-colour alpha
+//   (surface_fetch.glsl + shade.glsl, exactly as the shading samples it) reaches the cutoff;
+//   pixels where a nearer surface is already stored skip that test (a plain load: the opaque
+//   draws are done; unlike the opaque atomics, the alpha test costs more than the load).
+// KERNEL 6 (raster_masked_big): one work group an entry of one masked draw's segment (an
+//   indirect dispatch a masked draw, its set 1 bound, after every draw's KERNEL 5).
 // KERNEL 3 (raster_resolve): per pixel, the visibility image's (draw + 1, primitive) from the
 //   winning triangle (0: nothing) -- what shade.comp and classify.comp read -- and its depth
 //   into raster_depths (copied into the depth buffer: a copy, where a screen-filling
@@ -31,7 +36,8 @@
 #include "generated.glsl"
 #include "frustum.glsl"
 
-#if KERNEL == 2
+#define ALPHA_TESTED (KERNEL == 5 || KERNEL == 6)  // masked draws, their material bound
+#if KERNEL == 2 || KERNEL == 6
 layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;  // 256 invocations
 #elif KERNEL == 3
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
@@ -56,6 +62,9 @@ layout(push_constant) uniform Raster {
     uint tile_w;
     uint tile_h;
     uint rows;
+    uint masked_draws;  // raster_masked_big's segments, one a masked draw
+    uint segment;  // raster_masked(_big): this masked draw's
+    uint masked_capacity;  // entries a segment holds
 } pc;
 
 #if BATCH
@@ -68,7 +77,7 @@ uint g_view;  // this invocation's view (surface_fetch.glsl reads its ray from i
 #define VIEW_VP (camera.VP)
 #define VIEW_INDEX 0u
 #endif
-#if KERNEL == 5
+#if ALPHA_TESTED
 #define MATERIAL_INDEX pc.material
 #include "surface_fetch.glsl"
 #endif
@@ -81,6 +90,11 @@ const uint BIG_CHUNK = 16384u;
 // raster_big: [0] the count, [1..3] KERNEL 2's dispatch size (indirect), from 4 the list of
 // (triangle, view, chunk) entries.
 const uint BIG_LIST = 4u, BIG_ENTRY = 3u;
+// raster_masked_big: per masked draw m, [4m] its entries' count, [4m+1..4m+3] KERNEL 6's
+// dispatch size (indirect); from 4 * pc.masked_draws on, each draw's segment of
+// pc.masked_capacity (triangle, view, chunk) entries. Smaller chunks than the opaque ones':
+// each pixel's alpha test costs more than the setup a chunk repeats.
+const uint MASKED_CHUNK = 4096u;
 const uint MAX_GROUPS = 65535u;  // maxComputeWorkGroupCount[0] of every device
 const uint DOUBLE_SIDED = 1u, MASKED = 2u, BLENDED = 4u;  // raster_draws[k].y (compute_path.py)
 // raster_draws' rows follow the raster units' submission order (the opaque pass's draws, the
@@ -99,8 +113,13 @@ uint draw_of(uint g) {
 }
 
 #if KERNEL == 5
-shared uint group_big[64];  // this group's big triangles (raster_masked)
+shared uint group_big[64];  // this group's big triangles not listed (raster_masked)
 shared uint group_big_count;
+#endif
+#if ALPHA_TESTED
+uint masked_entry(uint segment, uint k) {
+    return 4u * pc.masked_draws + BIG_ENTRY * (segment * pc.masked_capacity + k);
+}
 #endif
 
 #if KERNEL != 3
@@ -108,14 +127,14 @@ vec3 position(uint i) { uint k = 3u * i; return vec3(positions[k], positions[k +
 
 // Triangle g's clip-space corners; false when its draw is not rasterised here.
 bool fetch(uint g, out vec4 c[3], out bool double_sided) {
-#if KERNEL == 5
+#if ALPHA_TESTED
     uint k = pc.draw;  // this dispatch's masked draw's row: always drawn
 #else
     uint k = draw_of(g);
 #endif
     uvec4 rd = raster_draws[k];
     double_sided = (rd.y & DOUBLE_SIDED) != 0u;
-#if KERNEL != 5
+#if !ALPHA_TESTED
     if ((rd.y & BLENDED) != 0u || ((rd.y & MASKED) != 0u && pc.alpha_mask != 0u)) return false;
 #endif
     // The draw's bounding sphere outside the view: none of its triangles is seen (one test
@@ -172,7 +191,7 @@ float edge(vec2 a, vec2 b, vec2 p) { return (b.x - a.x) * (p.y - a.y) - (b.y - a
 // indices `first`, `first + stride`, ... below `end` of its box.
 void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, uint first, uint stride,
            uint end) {
-#if KERNEL == 5
+#if ALPHA_TESTED
     uint prim = id - raster_draws[pc.draw].x;
 #endif
     float area = edge(s0.xy, s1.xy, s2.xy);
@@ -184,7 +203,10 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, uint first, u
         float e0 = edge(s1.xy, s2.xy, p), e1 = edge(s2.xy, s0.xy, p), e2 = edge(s0.xy, s1.xy, p);
         if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) continue;
         float depth = clamp((e0 * s0.z + e1 * s1.z + e2 * s2.z) / area, 0.0, 1.0);
-#if KERNEL == 5
+        uint at = uint(px.y) * pc.width + uint(px.x);
+#if ALPHA_TESTED
+        // Nearer already stored (an equal depth loses to this later triangle): no test.
+        if (uint(raster[at] >> 32) > floatBitsToUint(depth)) continue;
         uvec3 vi;
         vec3 w0, w1, w2, bary;
         surface_at(raster_draws[pc.draw].z, prim, uvec2(px - tile_origin()), vec2(pc.tile_w, pc.tile_h), vi, w0,
@@ -192,7 +214,6 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, uint first, u
         if (surface_base_color().a < MAT.alpha_cutoff) continue;  // as pbr.frag's ALPHA_MASK
 #endif
         uint64_t packed = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(id + 1u);
-        uint at = uint(px.y) * pc.width + uint(px.x);
         atomicMax(raster[at], packed);
     }
 }
@@ -225,7 +246,21 @@ void raster_triangle(uint g, bool small_only, uint first, uint stride, uint end)
     if (any(greaterThanEqual(lo, hi))) return;
     if (small_only && float(hi.x - lo.x) * float(hi.y - lo.y) > BIG_AREA) {
 #if KERNEL == 5
-        group_big[atomicAdd(group_big_count, 1u)] = g;  // at most one an invocation
+        // Listed in this draw's segment, a chunk an entry (the dispatch size kept at the
+        // entries listed); what does not fit is left to the whole group.
+        uint box = uint(hi.x - lo.x) * uint(hi.y - lo.y);
+        uint chunks = (box + MASKED_CHUNK - 1u) / MASKED_CHUNK;
+        uint segment = pc.segment;
+        uint slot = atomicAdd(raster_masked_big[4u * segment], chunks);
+        uint listed = slot < pc.masked_capacity ? min(chunks, pc.masked_capacity - slot) : 0u;
+        for (uint c = 0u; c < listed; ++c) {
+            uint e = masked_entry(segment, slot + c);
+            raster_masked_big[e] = g;
+            raster_masked_big[e + 1u] = VIEW_INDEX;
+            raster_masked_big[e + 2u] = c;
+        }
+        if (listed > 0u) atomicMax(raster_masked_big[4u * segment + 1u], slot + listed);
+        if (listed < chunks) group_big[atomicAdd(group_big_count, 1u)] = g;  // one an invocation
         return;
 #else
         // Listed with its view, a chunk an entry; chunks past the list's end (a batch's
@@ -254,7 +289,7 @@ void raster_triangle(uint g, bool small_only, uint first, uint stride, uint end)
 
 void main() {
 #if BATCH
-    g_view = KERNEL == 2 ? 0u : gl_GlobalInvocationID.z;
+    g_view = KERNEL == 2 || KERNEL == 6 ? 0u : gl_GlobalInvocationID.z;
 #endif
 #if KERNEL == 1
     uint g = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
@@ -274,6 +309,22 @@ void main() {
     raster_big[1] = max(min(raster_big[0], MAX_GROUPS), 1u);
     raster_big[2] = 1u;
     raster_big[3] = 1u;
+    for (uint m = 0u; m < pc.masked_draws; ++m) {  // (0, 1, 1): raster_masked counts x up
+        raster_masked_big[4u * m + 2u] = 1u;
+        raster_masked_big[4u * m + 3u] = 1u;
+    }
+#elif KERNEL == 6
+    opaque_zero = 0u;  // shade.glsl's leak guard: a plain 0 here (no uniform block is read)
+    uint listed = min(raster_masked_big[4u * pc.segment], pc.masked_capacity);
+    for (uint k = gl_WorkGroupID.x; k < listed; k += gl_NumWorkGroups.x) {
+        uint e = masked_entry(pc.segment, k);
+#if BATCH
+        g_view = raster_masked_big[e + 1u];
+#endif
+        uint chunk = raster_masked_big[e + 2u] * MASKED_CHUNK;
+        raster_triangle(raster_masked_big[e], false, chunk + gl_LocalInvocationID.x, 256u,
+                        chunk + MASKED_CHUNK);
+    }
 #elif KERNEL == 2
     uint listed = min(raster_big[0], pc.big_capacity);
     for (uint k = gl_WorkGroupID.x; k < listed; k += gl_NumWorkGroups.x) {
