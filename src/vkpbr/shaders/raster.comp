@@ -32,6 +32,7 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
+#extension GL_KHR_shader_subgroup_basic : require
 #define RASTER_INT64 1  // generated.glsl declares the 64-bit buffer
 #include "generated.glsl"
 #include "frustum.glsl"
@@ -187,45 +188,83 @@ vec3 screen(vec4 c) {
 
 float edge(vec2 a, vec2 b, vec2 p) { return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x); }
 
-// Cover pixels [lo, hi) of the screen triangle (s0, s1, s2), positive area, with the pixel
-// indices `first`, `first + stride`, ... below `end` of its box.
-void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, uint first, uint stride,
-           uint end) {
+// Narrow [xl, xr] (pixel indices of a row whose centres are at y = py) to where the edge
+// from a to b can be >= 0: edge(a, b, p) >= 0 where (b.y - a.y) * (p.x - a.x) <=
+// (b.x - a.x) * (py - a.y). Widened by a pixel for rounding: the exact test follows.
+void edge_span(vec2 a, vec2 b, float py, inout float xl, inout float xr) {
+    float slope = b.y - a.y, rhs = (b.x - a.x) * (py - a.y);
+    if (slope == 0.0) {  // parallel to the row: all of it or none
+        if (rhs < 0.0) xr = xl - 1.0;
+        return;
+    }
+    float x = a.x + rhs / slope - 0.5;  // where it crosses the row, in pixel indices
+    if (slope > 0.0) xr = min(xr, floor(x) + 1.0); else xl = max(xl, ceil(x) - 1.0);
+}
+
+// Cover the screen triangle (s0, s1, s2), positive area, in its box [lo, hi): rows y0,
+// y0 + ystep, ... below y1, and in each row the candidates (the three edges' span) from the
+// span's start + lane on, every `lanes`. A row's span, not its box: a sliver across the
+// screen tests its own pixels, not the box's.
+void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, int y0, int y1, int ystep,
+           int lane, int lanes) {
 #if ALPHA_TESTED
     uint prim = id - raster_draws[pc.draw].x;
 #endif
     float area = edge(s0.xy, s1.xy, s2.xy);
-    uint wbox = uint(hi.x - lo.x);
-    uint count = min(wbox * uint(hi.y - lo.y), end);
-    for (uint i = first; i < count; i += stride) {
-        ivec2 px = lo + ivec2(i % wbox, i / wbox);
-        vec2 p = vec2(px) + 0.5;
-        float e0 = edge(s1.xy, s2.xy, p), e1 = edge(s2.xy, s0.xy, p), e2 = edge(s0.xy, s1.xy, p);
-        if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) continue;
-        float depth = clamp((e0 * s0.z + e1 * s1.z + e2 * s2.z) / area, 0.0, 1.0);
-        uint at = uint(px.y) * pc.width + uint(px.x);
+    for (int y = y0; y < y1; y += ystep) {
+        float py = float(y) + 0.5, xl = float(lo.x), xr = float(hi.x - 1);
+        edge_span(s1.xy, s2.xy, py, xl, xr);
+        edge_span(s2.xy, s0.xy, py, xl, xr);
+        edge_span(s0.xy, s1.xy, py, xl, xr);
+        int xa = int(clamp(xl, float(lo.x), float(hi.x))) + lane;
+        int xb = int(clamp(xr, float(lo.x - 1), float(hi.x - 1)));
+        for (int x = xa; x <= xb; x += lanes) {
+            ivec2 px = ivec2(x, y);
+            vec2 p = vec2(px) + 0.5;
+            float e0 = edge(s1.xy, s2.xy, p), e1 = edge(s2.xy, s0.xy, p), e2 = edge(s0.xy, s1.xy, p);
+            if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) continue;
+            float depth = clamp((e0 * s0.z + e1 * s1.z + e2 * s2.z) / area, 0.0, 1.0);
+            uint at = uint(y) * pc.width + uint(x);
 #if ALPHA_TESTED
-        // Nearer already stored (an equal depth loses to this later triangle): no test.
-        if (uint(raster[at] >> 32) > floatBitsToUint(depth)) continue;
-        uvec3 vi;
-        vec3 w0, w1, w2, bary;
-        surface_at(raster_draws[pc.draw].z, prim, uvec2(px - tile_origin()), vec2(pc.tile_w, pc.tile_h), vi, w0,
-                   w1, w2, bary);
-        if (surface_base_color().a < MAT.alpha_cutoff) continue;  // as pbr.frag's ALPHA_MASK
+            // Nearer already stored (an equal depth loses to this later triangle): no test.
+            if (uint(raster[at] >> 32) > floatBitsToUint(depth)) continue;
+            uvec3 vi;
+            vec3 w0, w1, w2, bary;
+            surface_at(raster_draws[pc.draw].z, prim, uvec2(px - tile_origin()),
+                       vec2(pc.tile_w, pc.tile_h), vi, w0, w1, w2, bary);
+            if (surface_base_color().a < MAT.alpha_cutoff) continue;  // as pbr.frag's ALPHA_MASK
 #endif
-        uint64_t packed = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(id + 1u);
-        atomicMax(raster[at], packed);
+            uint64_t packed = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(id + 1u);
+            atomicMax(raster[at], packed);
+        }
     }
 }
+
+// Box pixels of one listed chunk: a big triangle's box is listed as bands of whole rows
+// about this many pixels each (at least a row).
+#if ALPHA_TESTED
+const uint CHUNK = MASKED_CHUNK;
+#else
+const uint CHUNK = BIG_CHUNK;
+#endif
+int chunk_rows(ivec2 lo, ivec2 hi) { return max(1, int(CHUNK) / (hi.x - lo.x)); }
+
+// Which rows of a band and which pixels of each an invocation covers (cover's first row
+// after the band's start, ystep, lane, lanes): ALONE, all of them.
+struct Share {
+    int y_offset, ystep, lane, lanes;
+};
+const Share ALONE = Share(0, 1, 0, 1);
+const uint ALL_CHUNKS = 0xffffffffu;
 
 // The screen triangles of triangle g (its clipped polygon as a fan), each turned to positive
 // `edge` area for `cover`. Vulkan's front faces (counter-clockwise: positive area by its
 // formula, which is minus this `edge` in these y-down coordinates) have negative `edge`
 // area here; a single-sided triangle with positive area is a back face, culled as the
-// pipelines' cull="back" does. Calls `cover` for each (box pixels `first`, `first + stride`,
-// ... below `end`); with `small_only`, lists the triangle in raster_big instead when its box
-// is big.
-void raster_triangle(uint g, bool small_only, uint first, uint stride, uint end) {
+// pipelines' cull="back" does. Covers the row bands [chunk0, chunk1) of its box (chunk_rows
+// rows each) as `share` says; with `small_only`, lists the triangle's bands instead when its
+// box is big (in raster_big, or a masked draw's segment of raster_masked_big).
+void raster_triangle(uint g, bool small_only, uint chunk0, uint chunk1, Share share) {
     vec4 c[3];
     bool double_sided;
     if (!fetch(g, c, double_sided)) return;
@@ -244,12 +283,12 @@ void raster_triangle(uint g, bool small_only, uint first, uint stride, uint end)
     ivec2 lo = max(ivec2(ceil(lo2 - 0.5)), origin);
     ivec2 hi = min(ivec2(floor(hi2 - 0.5)) + 1, origin + ivec2(pc.tile_w, pc.tile_h));
     if (any(greaterThanEqual(lo, hi))) return;
+    int rows = chunk_rows(lo, hi);
+    uint chunks = uint((hi.y - lo.y + rows - 1) / rows);
     if (small_only && float(hi.x - lo.x) * float(hi.y - lo.y) > BIG_AREA) {
 #if KERNEL == 5
-        // Listed in this draw's segment, a chunk an entry (the dispatch size kept at the
+        // Listed in this draw's segment, a band an entry (the dispatch size kept at the
         // entries listed); what does not fit is left to the whole group.
-        uint box = uint(hi.x - lo.x) * uint(hi.y - lo.y);
-        uint chunks = (box + MASKED_CHUNK - 1u) / MASKED_CHUNK;
         uint segment = pc.segment;
         uint slot = atomicAdd(raster_masked_big[4u * segment], chunks);
         uint listed = slot < pc.masked_capacity ? min(chunks, pc.masked_capacity - slot) : 0u;
@@ -263,10 +302,8 @@ void raster_triangle(uint g, bool small_only, uint first, uint stride, uint end)
         if (listed < chunks) group_big[atomicAdd(group_big_count, 1u)] = g;  // one an invocation
         return;
 #else
-        // Listed with its view, a chunk an entry; chunks past the list's end (a batch's
+        // Listed with its view, a band an entry; bands past the list's end (a batch's
         // worst case) are drawn here.
-        uint box = uint(hi.x - lo.x) * uint(hi.y - lo.y);
-        uint chunks = (box + BIG_CHUNK - 1u) / BIG_CHUNK;
         uint slot = atomicAdd(raster_big[0], chunks);
         uint listed = slot < pc.big_capacity ? min(chunks, pc.big_capacity - slot) : 0u;
         for (uint c = 0u; c < listed; ++c) {
@@ -276,14 +313,23 @@ void raster_triangle(uint g, bool small_only, uint first, uint stride, uint end)
             raster_big[e + 2u] = c;
         }
         if (listed == chunks) return;
-        first = listed * BIG_CHUNK;
+        chunk0 = listed;
 #endif
     }
+    int y0 = lo.y + int(min(chunk0, chunks)) * rows + share.y_offset;
+    int y1 = chunk1 >= chunks ? hi.y : lo.y + int(chunk1) * rows;
     for (int j = 1; j + 1 < n; ++j) {
         vec3 a = s[0], b = s[j], d = s[j + 1];
         if (area < 0.0) { vec3 t = b; b = d; d = t; }  // a front face: `cover` wants area > 0
-        cover(a, b, d, g, lo, hi, first, stride, end);
+        cover(a, b, d, g, lo, hi, y0, y1, share.ystep, share.lane, share.lanes);
     }
+}
+
+// A work group's share: its subgroups take rows in turn, a subgroup's invocations the
+// pixels of its row.
+Share group_share() {
+    return Share(int(gl_SubgroupID), int(gl_NumSubgroups), int(gl_SubgroupInvocationID),
+                 int(gl_SubgroupSize));
 }
 #endif
 
@@ -293,7 +339,7 @@ void main() {
 #endif
 #if KERNEL == 1
     uint g = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
-    if (g < pc.triangles) raster_triangle(g, true, 0u, 1u, ~0u);
+    if (g < pc.triangles) raster_triangle(g, true, 0u, ALL_CHUNKS, ALONE);
 #elif KERNEL == 5
     uint first = raster_draws[pc.draw].x;
     uint count = (pc.draw + 1u < pc.draws ? raster_draws[pc.draw + 1u].x : pc.triangles) - first;
@@ -301,10 +347,10 @@ void main() {
     opaque_zero = 0u;  // shade.glsl's leak guard: a plain 0 here (no uniform block is read)
     if (gl_LocalInvocationIndex == 0u) group_big_count = 0u;
     barrier();
-    if (t < count) raster_triangle(first + t, true, 0u, 1u, ~0u);
+    if (t < count) raster_triangle(first + t, true, 0u, ALL_CHUNKS, ALONE);
     barrier();
     for (uint k = 0u; k < group_big_count; ++k)
-        raster_triangle(group_big[k], false, gl_LocalInvocationID.x, 64u, ~0u);
+        raster_triangle(group_big[k], false, 0u, ALL_CHUNKS, group_share());
 #elif KERNEL == 4
     raster_big[1] = max(min(raster_big[0], MAX_GROUPS), 1u);
     raster_big[2] = 1u;
@@ -321,9 +367,8 @@ void main() {
 #if BATCH
         g_view = raster_masked_big[e + 1u];
 #endif
-        uint chunk = raster_masked_big[e + 2u] * MASKED_CHUNK;
-        raster_triangle(raster_masked_big[e], false, chunk + gl_LocalInvocationID.x, 256u,
-                        chunk + MASKED_CHUNK);
+        uint chunk = raster_masked_big[e + 2u];
+        raster_triangle(raster_masked_big[e], false, chunk, chunk + 1u, group_share());
     }
 #elif KERNEL == 2
     uint listed = min(raster_big[0], pc.big_capacity);
@@ -332,8 +377,8 @@ void main() {
 #if BATCH
         g_view = raster_big[e + 1u];
 #endif
-        uint chunk = raster_big[e + 2u] * BIG_CHUNK;
-        raster_triangle(raster_big[e], false, chunk + gl_LocalInvocationID.x, 256u, chunk + BIG_CHUNK);
+        uint chunk = raster_big[e + 2u];
+        raster_triangle(raster_big[e], false, chunk, chunk + 1u, group_share());
     }
 #else
     uvec2 p = gl_GlobalInvocationID.xy;
