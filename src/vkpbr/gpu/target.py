@@ -107,11 +107,12 @@ class ComputeSteps:
         begin_rendering(cmd, Attachments(self.visibility_view.handle, self.attachments.depth,
                                          self.extent), (0.0, 0.0, 0.0, 0.0), 0.0)
 
-    def record_raster_end(self, cmd: Commands, depths: Buffer) -> None:
+    def record_raster_end(self, cmd: Commands, depths: Buffer, copy_depth: bool = True) -> None:
         """After the compute rasteriser, instead of a visibility pass: its depths (`depths`,
         a float a pixel, written by its resolve) copied into the depth buffer for what tests
-        it afterwards (the background, the blended draws) and depth readback, then ready
-        for those; the colour image to GENERAL for the shading's writes. The visibility
+        it afterwards (the blended draws) and depth readback, then ready for those (without
+        `copy_depth`, when nothing reads it, only made an attachment again: its contents
+        undefined); the colour image to GENERAL for the shading's writes. The visibility
         image stays in GENERAL, readable by the shading (record_raster's last barrier)."""
         vk = self.device.vk
         depth_stage, depth_access, depth_layout = attachment_stage(vk, True)
@@ -119,15 +120,19 @@ class ComputeSteps:
         compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                    vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT)
         write, read = vk.VK_ACCESS_2_TRANSFER_WRITE_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT
-        no_reads = ~vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT
+        # The previous frame's passes and copies of the depth buffer come first.
+        before = (depth_stage | copy, depth_access & ~vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
+        color = image_barrier(vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                              vk.VK_IMAGE_LAYOUT_GENERAL, self._color_last_use(vk), compute)
+        if not copy_depth:
+            barriers(cmd, [color, image_barrier(vk, self.depth.handle, True,
+                                                vk.VK_IMAGE_LAYOUT_UNDEFINED, depth_layout,
+                                                before, (depth_stage, depth_access))])
+            return
         dst = vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
-        barriers(cmd, [
-            # The previous frame's passes and copies of the depth buffer come first.
-            image_barrier(vk, self.depth.handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED, dst,
-                          (depth_stage | copy, depth_access & no_reads), (copy, write)),
-            image_barrier(vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                          vk.VK_IMAGE_LAYOUT_GENERAL, self._color_last_use(vk), compute),
-        ], [buffer_barrier(vk, depths, compute, (copy, read))])
+        barriers(cmd, [image_barrier(vk, self.depth.handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                                     dst, before, (copy, write)), color],
+                 [buffer_barrier(vk, depths, compute, (copy, read))])
         copy_buffer_to_image(cmd, depths, self.depth.handle, True, self.extent)
         barriers(cmd, [image_barrier(vk, self.depth.handle, True, dst, depth_layout,
                                      (copy, write), (depth_stage, depth_access))],

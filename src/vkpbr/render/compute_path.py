@@ -270,24 +270,28 @@ class ComputeScene:
             self._dispatch_bins(cmd, res, frame_index, kernel, frame_sets, material_sets,
                                 materials, tiles)
 
-    def record_background_batch(self, cmd: Any, target: Any, frame_index: int,
-                                frame_sets: dict[int, Any], tiles: tuple[int, int, int, int]) -> None:
-        """A compute batch's environment behind its views (background_batch.comp), after the
-        shading: every pixel nothing covers, in its view's direction."""
+    def record_background(self, cmd: Any, target: Any, frame_index: int,
+                          frame_sets: dict[int, Any],
+                          tiles: tuple[int, int, int, int] | None = None) -> None:
+        """The environment behind the shaded pixels (background.comp), after the shading:
+        every pixel nothing covers, in the camera's direction (`tiles`: a compute batch's
+        atlas, each view's)."""
         cmd.memory_barrier("compute", "compute")
-        cmd.bind_pipeline(self._pipeline("background_batch", 16))
+        cmd.bind_pipeline(self._pipeline("background_batch" if tiles else "background_view", 16))
         self._bind_frame_sets(cmd, frame_sets, None, self._resources(target).sets[frame_index])
-        cmd.push(np.array(tiles, np.uint32))
+        cmd.push(np.array(tiles or (1, *target.extent, 1), np.uint32))
         cmd.dispatch(*groups((*target.extent, 1), (8, 8, 1)))
 
     def record_raster(self, cmd: Any, target: Any, frame_index: int, alpha_mask: bool,
                       material_sets: list[Any], tiles: tuple[int, int, int, int] | None = None,
-                      set0: Any = None, stamp: Callable[[str], None] = _untimed) -> None:
+                      set0: Any = None, stamp: Callable[[str], None] = _untimed,
+                      depth: bool = True) -> None:
         """The compute rasteriser (raster.comp): every opaque and masked draw's triangles into
         the target's depth|triangle buffer (masked ones alpha-tested per pixel with their
         material's set 1, one dispatch a masked draw), then the visibility image resolved
         from it (the target has it in GENERAL: record_raster_begin) with the winners' depths,
-        which are copied into the target's depth buffer (record_raster_end). `tiles` (views, tile width, tile height, tiles
+        which are copied into the target's depth buffer (record_raster_end; `depth` False:
+        nothing reads it this frame, not copied). `tiles` (views, tile width, tile height, tiles
         a column: the atlas is column-major): a compute batch's atlas, the views' records in
         `set0` (render/batch_path.py). `stamp(step)` after each step (recorder.RASTER_STEPS)."""
         res = self._resources(target)
@@ -328,7 +332,7 @@ class ComputeScene:
             cmd.memory_barrier("compute", "compute|indirect")
             if step is not None:
                 stamp(step)
-        target.record_raster_end(cmd, res.raster_depths)
+        target.record_raster_end(cmd, res.raster_depths, depth)
 
     def _dispatch_masked(self, cmd: Any, res: _TargetResources, dset: Any, push: np.ndarray,
                          material_sets: list[Any], views: int, set0: Any, suffix: str) -> None:

@@ -20,7 +20,7 @@ from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.frames import Frame, FrameRing
 from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec, VertexStream
-from vkpbr.gpu.target import FrameTarget
+from vkpbr.gpu.target import COPY_DEPTH, FrameTarget
 from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.compute_path import ComputeScene
@@ -68,6 +68,7 @@ STAMP_NAMES = ("shadows", "transmission", *_PREPASSES, *RASTER_STEPS,
 # after its shading step the frame goes on with the rest.
 VISIBILITY_PASSES = tuple(p.name for p in PASSES if p.name in _BEFORE_SHADING and not p.prepass)
 AFTER_SHADING = tuple(p.name for p in PASSES if p.name not in _BEFORE_SHADING)
+_COMPUTE_AFTER_SHADING = tuple(n for n in AFTER_SHADING if n != "background")
 STAMPS = len(STAMP_NAMES) + 2
 _NO_SHADOWS = ShadowPlan()
 
@@ -278,8 +279,10 @@ class FrameRecorder:
             vis_ctx = context(True, timed=compute)
             if raster:
                 # The compute rasteriser (render/compute_path.py): the opaque and masked draws
-                # on all SMs, then their depths into the depth buffer.
-                self._record_compute_raster(cmd, target, frame, alpha_mask, stamps)
+                # on all SMs, then their depths into the depth buffer where anything reads
+                # it: the blended draws, depth readback, the fragment path's passes.
+                depth = not compute or COPY_DEPTH in copy or "blend" in classes
+                self._record_compute_raster(cmd, target, frame, alpha_mask, stamps, depth=depth)
                 for name in VISIBILITY_PASSES:
                     vis_ctx.stamp(name)
             else:
@@ -300,6 +303,8 @@ class FrameRecorder:
                                   drawn)
             if compute:
                 ctx.stamp("shading")
+                cs.record_background(cmd, target, frame.index, frame_sets)
+                ctx.stamp("background")
                 target.record_resume(cmd)  # type: ignore[attr-defined]
             else:
                 target.record_resume(cmd, clear=True)  # type: ignore[attr-defined]
@@ -310,7 +315,8 @@ class FrameRecorder:
             target.record_begin(cmd, image)
             record_passes(cmd, ctx, _BEFORE_SHADING)
             ctx.stamp("shading")
-        record_passes(cmd, ctx, AFTER_SHADING)
+        # The compute path drew its background in compute (above).
+        record_passes(cmd, ctx, _COMPUTE_AFTER_SHADING if compute else AFTER_SHADING)
         if overlay is not None:
             overlay.record(cmd, frame.index, target.extent)
         target.record_end(cmd, image, frame, copy)
@@ -362,7 +368,8 @@ class FrameRecorder:
         cmd, stamps, _, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw,
                                                    untimed=frozenset(_PREPASSES))
         cs = self.compute_scene()
-        self._record_compute_raster(cmd, target, frame, alpha_mask, stamps, tiles, set0)
+        self._record_compute_raster(cmd, target, frame, alpha_mask, stamps, tiles, set0,
+                                    depth=COPY_DEPTH in copy)
         stamps.after("mask")  # the depths' copy is "opaque"'s, as a single frame's
         frame_sets = {0: set0, 2: slot.set2}
         if self.shadows is not None:
@@ -371,7 +378,7 @@ class FrameRecorder:
         cs.record_shading(cmd, target, frame.index, tbn, frame_sets, gs.material_sets, drawn,
                           target.clear_color, tiles=tiles, stamp=stamps.after)  # type: ignore[attr-defined]
         stamps.after("shading")
-        cs.record_background_batch(cmd, target, frame.index, frame_sets, tiles)
+        cs.record_background(cmd, target, frame.index, frame_sets, tiles)
         target.record_resume(cmd)  # type: ignore[attr-defined]
         stamps.after(*AFTER_SHADING)
         target.record_end(cmd, 0, frame, copy, tiles, external)  # type: ignore[call-arg]
@@ -383,14 +390,15 @@ class FrameRecorder:
     def _record_compute_raster(self, cmd: Commands, target: FrameTarget, frame: Frame,
                                alpha_mask: bool, stamps: FrameStamps,
                                tiles: tuple[int, int, int, int] | None = None,
-                               set0: object = None) -> None:
+                               set0: object = None, depth: bool = True) -> None:
         """The compute rasteriser (render/compute_path.py): the opaque and masked draws into the
-        visibility image on all SMs, their depths into the depth buffer; the target is then
-        ready for the shading (as after record_shading_begin)."""
+        visibility image on all SMs, their depths into the depth buffer (`depth`: where this
+        frame reads it); the target is then ready for the shading (as after
+        record_shading_begin)."""
         target.record_raster_begin(cmd)  # type: ignore[attr-defined]
         self.compute_scene().record_raster(cmd, target, frame.index, alpha_mask,
                                            self.gpu_scene.material_sets, tiles, set0,
-                                           stamp=stamps.after)
+                                           stamp=stamps.after, depth=depth)
 
     def free(self, target_id: int | None = None) -> None:
         """Free the recorded command buffers (of one target: its id; None: all)."""

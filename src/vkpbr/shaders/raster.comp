@@ -216,8 +216,9 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, int y0, int y
         edge_span(s1.xy, s2.xy, py, xl, xr);
         edge_span(s2.xy, s0.xy, py, xl, xr);
         edge_span(s0.xy, s1.xy, py, xl, xr);
-        int xa = int(clamp(xl, float(lo.x), float(hi.x))) + lane;
-        int xb = int(clamp(xr, float(lo.x - 1), float(hi.x - 1)));
+        // Clamped as integers: a NaN span (corners at w ~ 0) converts to anything.
+        int xa = clamp(int(clamp(xl, float(lo.x), float(hi.x))), lo.x, hi.x) + lane;
+        int xb = clamp(int(clamp(xr, float(lo.x - 1), float(hi.x - 1))), lo.x - 1, hi.x - 1);
         for (int x = xa; x <= xb; x += lanes) {
             ivec2 px = ivec2(x, y);
             vec2 p = vec2(px) + 0.5;
