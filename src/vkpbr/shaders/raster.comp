@@ -33,8 +33,6 @@
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
 #extension GL_KHR_shader_subgroup_basic : require
-#extension GL_KHR_shader_subgroup_ballot : require
-#extension GL_KHR_shader_subgroup_shuffle : require
 #define RASTER_INT64 1  // generated.glsl declares the 64-bit buffer
 #include "generated.glsl"
 #include "frustum.glsl"
@@ -85,9 +83,7 @@ uint g_view;  // this invocation's view (surface_fetch.glsl reads its ray from i
 #include "surface_fetch.glsl"
 #endif
 
-// Screen-box pixels up to which one invocation draws a triangle, and above which work groups
-// take it (in between: its subgroup).
-const float SMALL_AREA = 64.0, BIG_AREA = 8192.0;
+const float BIG_AREA = 256.0;  // screen-box pixels above which work groups take a triangle
 // Box pixels of one raster_big entry (64 per invocation). Measured on the H200 (Sponza 1080p,
 // BENCHMARKS.md): 16,384 1.24 ms, 4,096 1.36, unsplit 1.57; 1,024 with BIG_AREA 64 2.19: each
 // entry repeats the triangle's fetch, clip and setup, so fewer, bigger entries win.
@@ -262,125 +258,73 @@ struct Share {
 const Share ALONE = Share(0, 1, 0, 1);
 const uint ALL_CHUNKS = 0xffffffffu;
 
-// Triangle g on the screen: its clipped polygon (at most 5 corners: pixels, depth), the
-// polygon's `edge` area (its sign: which way it faces) and its box of pixel centres [lo, hi).
-struct Screen {
-    vec3 s[5];
-    int n;
-    float area;
-    ivec2 lo, hi;
-};
-
-// Triangle g's Screen; false when none of it is drawn: its draw is not rasterised here, it
-// is clipped away, degenerate, a back face, or its box holds no pixel centre. Vulkan's front
-// faces (counter-clockwise: positive area by its formula, which is minus this `edge` in
-// these y-down coordinates) have negative `edge` area here; a single-sided triangle with
-// positive area is a back face, culled as the pipelines' cull="back" does.
-bool on_screen(uint g, out Screen t) {
+// The screen triangles of triangle g (its clipped polygon as a fan), each turned to positive
+// `edge` area for `cover`. Vulkan's front faces (counter-clockwise: positive area by its
+// formula, which is minus this `edge` in these y-down coordinates) have negative `edge`
+// area here; a single-sided triangle with positive area is a back face, culled as the
+// pipelines' cull="back" does. Covers the row bands [chunk0, chunk1) of its box (chunk_rows
+// rows each) as `share` says; with `small_only`, lists the triangle's bands instead when its
+// box is big (in raster_big, or a masked draw's segment of raster_masked_big).
+void raster_triangle(uint g, bool small_only, uint chunk0, uint chunk1, Share share) {
     vec4 c[3];
     bool double_sided;
-    if (!fetch(g, c, double_sided)) return false;
+    if (!fetch(g, c, double_sided)) return;
     vec4 poly[5];
-    t.n = clip(c, poly);
-    if (t.n < 3) return false;
-    for (int j = 0; j < t.n; ++j) t.s[j] = screen(poly[j]);
-    t.area = 0.0;
-    for (int j = 1; j + 1 < t.n; ++j) t.area += edge(t.s[0].xy, t.s[j].xy, t.s[j + 1].xy);
-    if (t.area == 0.0 || (t.area > 0.0 && !double_sided)) return false;
-    vec2 lo2 = t.s[0].xy, hi2 = t.s[0].xy;
-    for (int j = 1; j < t.n; ++j) { lo2 = min(lo2, t.s[j].xy); hi2 = max(hi2, t.s[j].xy); }
+    int n = clip(c, poly);
+    if (n < 3) return;
+    vec3 s[5];
+    for (int j = 0; j < n; ++j) s[j] = screen(poly[j]);
+    float area = 0.0;
+    for (int j = 1; j + 1 < n; ++j) area += edge(s[0].xy, s[j].xy, s[j + 1].xy);
+    if (area == 0.0 || (area > 0.0 && !double_sided)) return;
+    vec2 lo2 = s[0].xy, hi2 = s[0].xy;
+    for (int j = 1; j < n; ++j) { lo2 = min(lo2, s[j].xy); hi2 = max(hi2, s[j].xy); }
     // Pixel centres inside the box: from ceil(lo - 0.5) to floor(hi - 0.5), within the tile.
     ivec2 origin = tile_origin();
-    t.lo = max(ivec2(ceil(lo2 - 0.5)), origin);
-    t.hi = min(ivec2(floor(hi2 - 0.5)) + 1, origin + ivec2(pc.tile_w, pc.tile_h));
-    return all(lessThan(t.lo, t.hi));
-}
-
-float box_area(Screen t) { return float(t.hi.x - t.lo.x) * float(t.hi.y - t.lo.y); }
-uint band_count(Screen t) { int r = chunk_rows(t.lo, t.hi); return uint((t.hi.y - t.lo.y + r - 1) / r); }
-
-// Cover the row bands [chunk0, chunk1) of t's box (chunk_rows rows each) as `share` says:
-// its polygon as a fan of screen triangles, each turned to positive `edge` area for cover.
-void draw_screen(Screen t, uint g, uint chunk0, uint chunk1, Share share) {
-    int rows = chunk_rows(t.lo, t.hi);
-    uint chunks = band_count(t);
-    int y0 = t.lo.y + int(min(chunk0, chunks)) * rows + share.y_offset;
-    int y1 = chunk1 >= chunks ? t.hi.y : t.lo.y + int(chunk1) * rows;
-    for (int j = 1; j + 1 < t.n; ++j) {
-        vec3 a = t.s[0], b = t.s[j], d = t.s[j + 1];
-        if (t.area < 0.0) { vec3 x = b; b = d; d = x; }  // a front face: `cover` wants area > 0
-        cover(a, b, d, g, t.lo, t.hi, y0, y1, share.ystep, share.lane, share.lanes);
-    }
-}
-
-// Triangle g alone: the whole of it by this invocation or the share given.
-void raster_triangle(uint g, uint chunk0, uint chunk1, Share share) {
-    Screen t;
-    if (on_screen(g, t)) draw_screen(t, g, chunk0, chunk1, share);
-}
-
-#if KERNEL == 1 || KERNEL == 5
-// A big triangle's row bands listed for work groups (raster_big, or this masked draw's
-// segment of raster_masked_big), a band an entry.
-void list_bands(Screen t, uint g) {
-    uint chunks = band_count(t);
+    ivec2 lo = max(ivec2(ceil(lo2 - 0.5)), origin);
+    ivec2 hi = min(ivec2(floor(hi2 - 0.5)) + 1, origin + ivec2(pc.tile_w, pc.tile_h));
+    if (any(greaterThanEqual(lo, hi))) return;
+    int rows = chunk_rows(lo, hi);
+    uint chunks = uint((hi.y - lo.y + rows - 1) / rows);
+    if (small_only && float(hi.x - lo.x) * float(hi.y - lo.y) > BIG_AREA) {
 #if KERNEL == 5
-    // The dispatch size kept at the entries listed; what does not fit is left to the group.
-    uint segment = pc.segment;
-    uint slot = atomicAdd(raster_masked_big[4u * segment], chunks);
-    uint listed = slot < pc.masked_capacity ? min(chunks, pc.masked_capacity - slot) : 0u;
-    for (uint c = 0u; c < listed; ++c) {
-        uint e = masked_entry(segment, slot + c);
-        raster_masked_big[e] = g;
-        raster_masked_big[e + 1u] = VIEW_INDEX;
-        raster_masked_big[e + 2u] = c;
-    }
-    if (listed > 0u) atomicMax(raster_masked_big[4u * segment + 1u], slot + listed);
-    if (listed < chunks) group_big[atomicAdd(group_big_count, 1u)] = g;  // one an invocation
+        // Listed in this draw's segment, a band an entry (the dispatch size kept at the
+        // entries listed); what does not fit is left to the whole group.
+        uint segment = pc.segment;
+        uint slot = atomicAdd(raster_masked_big[4u * segment], chunks);
+        uint listed = slot < pc.masked_capacity ? min(chunks, pc.masked_capacity - slot) : 0u;
+        for (uint c = 0u; c < listed; ++c) {
+            uint e = masked_entry(segment, slot + c);
+            raster_masked_big[e] = g;
+            raster_masked_big[e + 1u] = VIEW_INDEX;
+            raster_masked_big[e + 2u] = c;
+        }
+        if (listed > 0u) atomicMax(raster_masked_big[4u * segment + 1u], slot + listed);
+        if (listed < chunks) group_big[atomicAdd(group_big_count, 1u)] = g;  // one an invocation
+        return;
 #else
-    // Bands past the list's end (a batch's worst case) are drawn here.
-    uint slot = atomicAdd(raster_big[0], chunks);
-    uint listed = slot < pc.big_capacity ? min(chunks, pc.big_capacity - slot) : 0u;
-    for (uint c = 0u; c < listed; ++c) {
-        uint e = BIG_LIST + BIG_ENTRY * (slot + c);
-        raster_big[e] = g;
-        raster_big[e + 1u] = VIEW_INDEX;
-        raster_big[e + 2u] = c;
-    }
-    if (listed < chunks) draw_screen(t, g, listed, ALL_CHUNKS, ALONE);
+        // Listed with its view, a band an entry; bands past the list's end (a batch's
+        // worst case) are drawn here.
+        uint slot = atomicAdd(raster_big[0], chunks);
+        uint listed = slot < pc.big_capacity ? min(chunks, pc.big_capacity - slot) : 0u;
+        for (uint c = 0u; c < listed; ++c) {
+            uint e = BIG_LIST + BIG_ENTRY * (slot + c);
+            raster_big[e] = g;
+            raster_big[e + 1u] = VIEW_INDEX;
+            raster_big[e + 2u] = c;
+        }
+        if (listed == chunks) return;
+        chunk0 = listed;
 #endif
-}
-
-Screen shuffled(Screen t, uint lane) {
-    Screen o;
-    for (int j = 0; j < 5; ++j) o.s[j] = subgroupShuffle(t.s[j], lane);
-    o.n = subgroupShuffle(t.n, lane);
-    o.area = subgroupShuffle(t.area, lane);
-    o.lo = subgroupShuffle(t.lo, lane);
-    o.hi = subgroupShuffle(t.hi, lane);
-    return o;
-}
-
-// One triangle an invocation (`valid`: this invocation has one), by size: a box of at most
-// SMALL_AREA pixels by the invocation alone, up to BIG_AREA by the whole subgroup (one after
-// another, each set up once by its invocation: so no invocation walks a big box while the
-// others wait), bigger ones listed in row bands for work groups. Every invocation of the
-// subgroup calls it (the medium triangles' loop is the subgroup's).
-void raster_one(uint g, bool valid) {
-    Screen t;
-    bool drawn = valid && on_screen(g, t);
-    float box = drawn ? box_area(t) : 0.0;
-    if (drawn && box <= SMALL_AREA) draw_screen(t, g, 0u, ALL_CHUNKS, ALONE);
-    else if (drawn && box > BIG_AREA) list_bands(t, g);
-    uvec4 medium = subgroupBallot(drawn && box > SMALL_AREA && box <= BIG_AREA);
-    Share lanes = Share(0, 1, int(gl_SubgroupInvocationID), int(gl_SubgroupSize));
-    for (uint k = subgroupBallotBitCount(medium); k > 0u; --k) {
-        uint lane = subgroupBallotFindLSB(medium);
-        medium[lane / 32u] &= ~(1u << (lane % 32u));
-        draw_screen(shuffled(t, lane), subgroupShuffle(g, lane), 0u, ALL_CHUNKS, lanes);
+    }
+    int y0 = lo.y + int(min(chunk0, chunks)) * rows + share.y_offset;
+    int y1 = chunk1 >= chunks ? hi.y : lo.y + int(chunk1) * rows;
+    for (int j = 1; j + 1 < n; ++j) {
+        vec3 a = s[0], b = s[j], d = s[j + 1];
+        if (area < 0.0) { vec3 t = b; b = d; d = t; }  // a front face: `cover` wants area > 0
+        cover(a, b, d, g, lo, hi, y0, y1, share.ystep, share.lane, share.lanes);
     }
 }
-#endif
 
 // A work group's share: its subgroups take rows in turn, a subgroup's invocations the
 // pixels of its row.
@@ -396,7 +340,7 @@ void main() {
 #endif
 #if KERNEL == 1
     uint g = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
-    raster_one(g, g < pc.triangles);
+    if (g < pc.triangles) raster_triangle(g, true, 0u, ALL_CHUNKS, ALONE);
 #elif KERNEL == 5
     uint first = raster_draws[pc.draw].x;
     uint count = (pc.draw + 1u < pc.draws ? raster_draws[pc.draw + 1u].x : pc.triangles) - first;
@@ -404,10 +348,10 @@ void main() {
     opaque_zero = 0u;  // shade.glsl's leak guard: a plain 0 here (no uniform block is read)
     if (gl_LocalInvocationIndex == 0u) group_big_count = 0u;
     barrier();
-    raster_one(first + t, t < count);
+    if (t < count) raster_triangle(first + t, true, 0u, ALL_CHUNKS, ALONE);
     barrier();
     for (uint k = 0u; k < group_big_count; ++k)
-        raster_triangle(group_big[k], 0u, ALL_CHUNKS, group_share());
+        raster_triangle(group_big[k], false, 0u, ALL_CHUNKS, group_share());
 #elif KERNEL == 4
     raster_big[1] = max(min(raster_big[0], MAX_GROUPS), 1u);
     raster_big[2] = 1u;
@@ -425,7 +369,7 @@ void main() {
         g_view = raster_masked_big[e + 1u];
 #endif
         uint chunk = raster_masked_big[e + 2u];
-        raster_triangle(raster_masked_big[e], chunk, chunk + 1u, group_share());
+        raster_triangle(raster_masked_big[e], false, chunk, chunk + 1u, group_share());
     }
 #elif KERNEL == 2
     uint listed = min(raster_big[0], pc.big_capacity);
@@ -435,7 +379,7 @@ void main() {
         g_view = raster_big[e + 1u];
 #endif
         uint chunk = raster_big[e + 2u];
-        raster_triangle(raster_big[e], chunk, chunk + 1u, group_share());
+        raster_triangle(raster_big[e], false, chunk, chunk + 1u, group_share());
     }
 #else
     uvec2 p = gl_GlobalInvocationID.xy;
