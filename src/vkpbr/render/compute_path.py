@@ -27,6 +27,7 @@ recorder (render/recorder.py) records the steps; Renderer.uses_compute picks the
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import astuple, dataclass
 from typing import Any
 
 import numpy as np
@@ -46,7 +47,23 @@ SHADE_GROUP = 64  # shade.comp's work group: pixels of one bin
 RASTER_SMALL_GROUP = 64  # raster_small: one triangle an invocation
 RASTER_DOUBLE_SIDED, RASTER_MASKED, RASTER_BLENDED = 1, 2, 4
 MAX_GROUPS_X = 65535  # maxComputeWorkGroupCount[0] every Vulkan device has
-RASTER_PUSH_BYTES = 60  # raster.comp's push constants (15 uints)
+RASTER_PUSH_BYTES = 72  # raster.comp's push constants (18 uints)
+
+
+@dataclass(frozen=True)
+class RasterTuning:
+    """The compute rasteriser's work split (raster.comp's pc.big_area, big_chunk,
+    masked_chunk), measured on the H200 (BENCHMARKS.md; benchmarks/bench_raster.py sweeps
+    them): triangles whose screen box exceeds `big_area` pixels are drawn by work groups, in
+    bands of rows of about `big_chunk` box pixels (`masked_chunk` for masked draws, whose
+    every pixel's alpha test costs more than the set-up a band repeats)."""
+
+    big_area: int = 256
+    big_chunk: int = 16384
+    masked_chunk: int = 4096
+
+
+RASTER_TUNING = RasterTuning()
 # Entries of a masked draw's segment of big-triangle chunks (raster.comp MASKED_CHUNK box
 # pixels each: 16 M box pixels, ~8 screens at 1080p; what does not fit is drawn by the work
 # group that found it). At most maxComputeWorkGroupCount[0]: an entry is a work group.
@@ -304,8 +321,8 @@ class ComputeScene:
         cmd.memory_barrier("transfer", "compute")
         push = np.array([self.triangles, len(self.gs.draws), int(alpha_mask), res.big_capacity,
                          w, h, 0, 0, views, tile_w, tile_h, rows,
-                         len(self.masked_rows) if alpha_mask else 0, 0, MASKED_CAPACITY],
-                        np.uint32)
+                         len(self.masked_rows) if alpha_mask else 0, 0, MASKED_CAPACITY,
+                         *astuple(RASTER_TUNING)], np.uint32)
         dset = res.sets[frame_index]
         n = -(-self.triangles // RASTER_SMALL_GROUP)
         # raster_args sizes raster_big's dispatch from the count raster_small listed.

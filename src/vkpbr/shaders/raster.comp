@@ -9,13 +9,14 @@
 // atomic: on the H200 that "skip when nearer is stored" test cost more (1.57 -> 2.13 ms at
 // 1080p) than the atomics it saved.
 // KERNEL 1 (raster_small): one invocation a triangle of the opaque draws; triangles whose
-//   screen box exceeds BIG_AREA pixels are listed in raster_big instead, one entry for each
-//   BIG_CHUNK pixels of the box (a wall filling the screen is ~130 work groups' work, not one).
+//   screen box exceeds pc.big_area pixels are listed in raster_big instead, one entry for
+//   each band of rows of about pc.big_chunk box pixels (a wall filling the screen is ~130
+//   work groups' work, not one). Each row is covered where its edges' spans allow.
 // KERNEL 4 (raster_args): one invocation: raster_big's dispatch size for KERNEL 2.
-// KERNEL 2 (raster_big): one work group a listed entry, its chunk's pixels spread over the group.
+// KERNEL 2 (raster_big): one work group a listed band, set up once, its rows over the subgroups.
 // KERNEL 5 (raster_masked): one invocation a triangle of one masked draw (alpha masking on),
 //   with its material's set 1 bound; its big triangles are listed in the draw's segment of
-//   raster_masked_big, a MASKED_CHUNK of box pixels an entry (what does not fit: by the whole
+//   raster_masked_big, a band of about pc.masked_chunk box pixels an entry (what does not fit: by the whole
 //   group afterwards). A pixel is covered where the surface's base-colour alpha
 //   (surface_fetch.glsl + shade.glsl, exactly as the shading samples it) reaches the cutoff;
 //   pixels where a nearer surface is already stored skip that test (a plain load: the opaque
@@ -66,6 +67,11 @@ layout(push_constant) uniform Raster {
     uint masked_draws;  // raster_masked_big's segments, one a masked draw
     uint segment;  // raster_masked(_big): this masked draw's
     uint masked_capacity;  // entries a segment holds
+    // compute_path.RasterTuning (measured on the H200: BENCHMARKS.md): box pixels above
+    // which work groups take a triangle, and a listed band's box pixels (opaque, masked).
+    uint big_area;
+    uint big_chunk;
+    uint masked_chunk;
 } pc;
 
 #if BATCH
@@ -83,19 +89,13 @@ uint g_view;  // this invocation's view (surface_fetch.glsl reads its ray from i
 #include "surface_fetch.glsl"
 #endif
 
-const float BIG_AREA = 256.0;  // screen-box pixels above which work groups take a triangle
-// Box pixels of one raster_big entry (64 per invocation). Measured on the H200 (Sponza 1080p,
-// BENCHMARKS.md): 16,384 1.24 ms, 4,096 1.36, unsplit 1.57; 1,024 with BIG_AREA 64 2.19: each
-// entry repeats the triangle's fetch, clip and setup, so fewer, bigger entries win.
-const uint BIG_CHUNK = 16384u;
+
 // raster_big: [0] the count, [1..3] KERNEL 2's dispatch size (indirect), from 4 the list of
 // (triangle, view, chunk) entries.
 const uint BIG_LIST = 4u, BIG_ENTRY = 3u;
 // raster_masked_big: per masked draw m, [4m] its entries' count, [4m+1..4m+3] KERNEL 6's
 // dispatch size (indirect); from 4 * pc.masked_draws on, each draw's segment of
-// pc.masked_capacity (triangle, view, chunk) entries. Smaller chunks than the opaque ones':
-// each pixel's alpha test costs more than the setup a chunk repeats.
-const uint MASKED_CHUNK = 4096u;
+// pc.masked_capacity (triangle, view, chunk) entries.
 const uint MAX_GROUPS = 65535u;  // maxComputeWorkGroupCount[0] of every device
 const uint DOUBLE_SIDED = 1u, MASKED = 2u, BLENDED = 4u;  // raster_draws[k].y (compute_path.py)
 // raster_draws' rows follow the raster units' submission order (the opaque pass's draws, the
@@ -241,12 +241,12 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, int y0, int y
     }
 }
 
-// Box pixels of one listed chunk: a big triangle's box is listed as bands of whole rows
-// about this many pixels each (at least a row).
+// A big triangle's box is listed as bands of whole rows of about pc.big_chunk box pixels
+// each (pc.masked_chunk for masked draws; at least a row).
 #if ALPHA_TESTED
-const uint CHUNK = MASKED_CHUNK;
+#define CHUNK pc.masked_chunk
 #else
-const uint CHUNK = BIG_CHUNK;
+#define CHUNK pc.big_chunk
 #endif
 int chunk_rows(ivec2 lo, ivec2 hi) { return max(1, int(CHUNK) / (hi.x - lo.x)); }
 
@@ -258,73 +258,104 @@ struct Share {
 const Share ALONE = Share(0, 1, 0, 1);
 const uint ALL_CHUNKS = 0xffffffffu;
 
-// The screen triangles of triangle g (its clipped polygon as a fan), each turned to positive
-// `edge` area for `cover`. Vulkan's front faces (counter-clockwise: positive area by its
-// formula, which is minus this `edge` in these y-down coordinates) have negative `edge`
-// area here; a single-sided triangle with positive area is a back face, culled as the
-// pipelines' cull="back" does. Covers the row bands [chunk0, chunk1) of its box (chunk_rows
-// rows each) as `share` says; with `small_only`, lists the triangle's bands instead when its
-// box is big (in raster_big, or a masked draw's segment of raster_masked_big).
-void raster_triangle(uint g, bool small_only, uint chunk0, uint chunk1, Share share) {
+// Triangle g on the screen: its clipped polygon (at most 5 corners: pixels, depth), the
+// polygon's `edge` area (its sign: which way it faces) and its box of pixel centres [lo, hi).
+struct Screen {
+    vec3 s[5];
+    int n;
+    float area;
+    ivec2 lo, hi;
+};
+
+// Triangle g's Screen; false when none of it is drawn: its draw is not rasterised here, it
+// is clipped away, degenerate, a back face, or its box holds no pixel centre. Vulkan's front
+// faces (counter-clockwise: positive area by its formula, which is minus this `edge` in
+// these y-down coordinates) have negative `edge` area here; a single-sided triangle with
+// positive area is a back face, culled as the pipelines' cull="back" does.
+bool on_screen(uint g, out Screen t) {
     vec4 c[3];
     bool double_sided;
-    if (!fetch(g, c, double_sided)) return;
+    if (!fetch(g, c, double_sided)) return false;
     vec4 poly[5];
-    int n = clip(c, poly);
-    if (n < 3) return;
-    vec3 s[5];
-    for (int j = 0; j < n; ++j) s[j] = screen(poly[j]);
-    float area = 0.0;
-    for (int j = 1; j + 1 < n; ++j) area += edge(s[0].xy, s[j].xy, s[j + 1].xy);
-    if (area == 0.0 || (area > 0.0 && !double_sided)) return;
-    vec2 lo2 = s[0].xy, hi2 = s[0].xy;
-    for (int j = 1; j < n; ++j) { lo2 = min(lo2, s[j].xy); hi2 = max(hi2, s[j].xy); }
+    t.n = clip(c, poly);
+    if (t.n < 3) return false;
+    for (int j = 0; j < t.n; ++j) t.s[j] = screen(poly[j]);
+    t.area = 0.0;
+    for (int j = 1; j + 1 < t.n; ++j) t.area += edge(t.s[0].xy, t.s[j].xy, t.s[j + 1].xy);
+    if (t.area == 0.0 || (t.area > 0.0 && !double_sided)) return false;
+    vec2 lo2 = t.s[0].xy, hi2 = t.s[0].xy;
+    for (int j = 1; j < t.n; ++j) { lo2 = min(lo2, t.s[j].xy); hi2 = max(hi2, t.s[j].xy); }
     // Pixel centres inside the box: from ceil(lo - 0.5) to floor(hi - 0.5), within the tile.
     ivec2 origin = tile_origin();
-    ivec2 lo = max(ivec2(ceil(lo2 - 0.5)), origin);
-    ivec2 hi = min(ivec2(floor(hi2 - 0.5)) + 1, origin + ivec2(pc.tile_w, pc.tile_h));
-    if (any(greaterThanEqual(lo, hi))) return;
-    int rows = chunk_rows(lo, hi);
-    uint chunks = uint((hi.y - lo.y + rows - 1) / rows);
-    if (small_only && float(hi.x - lo.x) * float(hi.y - lo.y) > BIG_AREA) {
-#if KERNEL == 5
-        // Listed in this draw's segment, a band an entry (the dispatch size kept at the
-        // entries listed); what does not fit is left to the whole group.
-        uint segment = pc.segment;
-        uint slot = atomicAdd(raster_masked_big[4u * segment], chunks);
-        uint listed = slot < pc.masked_capacity ? min(chunks, pc.masked_capacity - slot) : 0u;
-        for (uint c = 0u; c < listed; ++c) {
-            uint e = masked_entry(segment, slot + c);
-            raster_masked_big[e] = g;
-            raster_masked_big[e + 1u] = VIEW_INDEX;
-            raster_masked_big[e + 2u] = c;
-        }
-        if (listed > 0u) atomicMax(raster_masked_big[4u * segment + 1u], slot + listed);
-        if (listed < chunks) group_big[atomicAdd(group_big_count, 1u)] = g;  // one an invocation
-        return;
-#else
-        // Listed with its view, a band an entry; bands past the list's end (a batch's
-        // worst case) are drawn here.
-        uint slot = atomicAdd(raster_big[0], chunks);
-        uint listed = slot < pc.big_capacity ? min(chunks, pc.big_capacity - slot) : 0u;
-        for (uint c = 0u; c < listed; ++c) {
-            uint e = BIG_LIST + BIG_ENTRY * (slot + c);
-            raster_big[e] = g;
-            raster_big[e + 1u] = VIEW_INDEX;
-            raster_big[e + 2u] = c;
-        }
-        if (listed == chunks) return;
-        chunk0 = listed;
-#endif
-    }
-    int y0 = lo.y + int(min(chunk0, chunks)) * rows + share.y_offset;
-    int y1 = chunk1 >= chunks ? hi.y : lo.y + int(chunk1) * rows;
-    for (int j = 1; j + 1 < n; ++j) {
-        vec3 a = s[0], b = s[j], d = s[j + 1];
-        if (area < 0.0) { vec3 t = b; b = d; d = t; }  // a front face: `cover` wants area > 0
-        cover(a, b, d, g, lo, hi, y0, y1, share.ystep, share.lane, share.lanes);
+    t.lo = max(ivec2(ceil(lo2 - 0.5)), origin);
+    t.hi = min(ivec2(floor(hi2 - 0.5)) + 1, origin + ivec2(pc.tile_w, pc.tile_h));
+    return all(lessThan(t.lo, t.hi));
+}
+
+float box_area(Screen t) { return float(t.hi.x - t.lo.x) * float(t.hi.y - t.lo.y); }
+uint band_count(Screen t) { int r = chunk_rows(t.lo, t.hi); return uint((t.hi.y - t.lo.y + r - 1) / r); }
+
+// Cover the row bands [chunk0, chunk1) of t's box (chunk_rows rows each) as `share` says:
+// its polygon as a fan of screen triangles, each turned to positive `edge` area for cover.
+void draw_screen(Screen t, uint g, uint chunk0, uint chunk1, Share share) {
+    int rows = chunk_rows(t.lo, t.hi);
+    uint chunks = band_count(t);
+    int y0 = t.lo.y + int(min(chunk0, chunks)) * rows + share.y_offset;
+    int y1 = chunk1 >= chunks ? t.hi.y : t.lo.y + int(chunk1) * rows;
+    for (int j = 1; j + 1 < t.n; ++j) {
+        vec3 a = t.s[0], b = t.s[j], d = t.s[j + 1];
+        if (t.area < 0.0) { vec3 x = b; b = d; d = x; }  // a front face: `cover` wants area > 0
+        cover(a, b, d, g, t.lo, t.hi, y0, y1, share.ystep, share.lane, share.lanes);
     }
 }
+
+// Triangle g alone: the whole of it by this invocation or the share given.
+void raster_triangle(uint g, uint chunk0, uint chunk1, Share share) {
+    Screen t;
+    if (on_screen(g, t)) draw_screen(t, g, chunk0, chunk1, share);
+}
+
+#if KERNEL == 1 || KERNEL == 5
+// A big triangle's row bands listed for work groups (raster_big, or this masked draw's
+// segment of raster_masked_big), a band an entry.
+void list_bands(Screen t, uint g) {
+    uint chunks = band_count(t);
+#if KERNEL == 5
+    // The dispatch size kept at the entries listed; what does not fit is left to the group.
+    uint segment = pc.segment;
+    uint slot = atomicAdd(raster_masked_big[4u * segment], chunks);
+    uint listed = slot < pc.masked_capacity ? min(chunks, pc.masked_capacity - slot) : 0u;
+    for (uint c = 0u; c < listed; ++c) {
+        uint e = masked_entry(segment, slot + c);
+        raster_masked_big[e] = g;
+        raster_masked_big[e + 1u] = VIEW_INDEX;
+        raster_masked_big[e + 2u] = c;
+    }
+    if (listed > 0u) atomicMax(raster_masked_big[4u * segment + 1u], slot + listed);
+    if (listed < chunks) group_big[atomicAdd(group_big_count, 1u)] = g;  // one an invocation
+#else
+    // Bands past the list's end (a batch's worst case) are drawn here.
+    uint slot = atomicAdd(raster_big[0], chunks);
+    uint listed = slot < pc.big_capacity ? min(chunks, pc.big_capacity - slot) : 0u;
+    for (uint c = 0u; c < listed; ++c) {
+        uint e = BIG_LIST + BIG_ENTRY * (slot + c);
+        raster_big[e] = g;
+        raster_big[e + 1u] = VIEW_INDEX;
+        raster_big[e + 2u] = c;
+    }
+    if (listed < chunks) draw_screen(t, g, listed, ALL_CHUNKS, ALONE);
+#endif
+}
+
+// One triangle an invocation: drawn alone where its box is at most pc.big_area pixels, else
+// listed in row bands for work groups.
+void raster_one(uint g) {
+    Screen t;
+    if (!on_screen(g, t)) return;
+    if (box_area(t) > float(pc.big_area)) list_bands(t, g);
+    else draw_screen(t, g, 0u, ALL_CHUNKS, ALONE);
+}
+#endif
 
 // A work group's share: its subgroups take rows in turn, a subgroup's invocations the
 // pixels of its row.
@@ -332,6 +363,26 @@ Share group_share() {
     return Share(int(gl_SubgroupID), int(gl_NumSubgroups), int(gl_SubgroupInvocationID),
                  int(gl_SubgroupSize));
 }
+
+#if KERNEL == 2 || KERNEL == 6
+shared Screen entry_screen;  // the work group's entry, set up once
+shared bool entry_drawn;
+
+// One listed band (`chunk`) of triangle g by the whole work group: its first invocation sets
+// the triangle up (fetch, transform, clip) for all of them.
+void raster_entry(uint g, uint chunk) {
+    if (gl_LocalInvocationIndex == 0u) {
+        Screen t;
+        entry_drawn = on_screen(g, t);
+        entry_screen = t;
+    }
+    barrier();
+    Screen t = entry_screen;
+    bool drawn = entry_drawn;
+    barrier();  // read before the next entry's set-up
+    if (drawn) draw_screen(t, g, chunk, chunk + 1u, group_share());
+}
+#endif
 #endif
 
 void main() {
@@ -340,7 +391,7 @@ void main() {
 #endif
 #if KERNEL == 1
     uint g = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
-    if (g < pc.triangles) raster_triangle(g, true, 0u, ALL_CHUNKS, ALONE);
+    if (g < pc.triangles) raster_one(g);
 #elif KERNEL == 5
     uint first = raster_draws[pc.draw].x;
     uint count = (pc.draw + 1u < pc.draws ? raster_draws[pc.draw + 1u].x : pc.triangles) - first;
@@ -348,10 +399,10 @@ void main() {
     opaque_zero = 0u;  // shade.glsl's leak guard: a plain 0 here (no uniform block is read)
     if (gl_LocalInvocationIndex == 0u) group_big_count = 0u;
     barrier();
-    if (t < count) raster_triangle(first + t, true, 0u, ALL_CHUNKS, ALONE);
+    if (t < count) raster_one(first + t);
     barrier();
     for (uint k = 0u; k < group_big_count; ++k)
-        raster_triangle(group_big[k], false, 0u, ALL_CHUNKS, group_share());
+        raster_triangle(group_big[k], 0u, ALL_CHUNKS, group_share());
 #elif KERNEL == 4
     raster_big[1] = max(min(raster_big[0], MAX_GROUPS), 1u);
     raster_big[2] = 1u;
@@ -369,7 +420,7 @@ void main() {
         g_view = raster_masked_big[e + 1u];
 #endif
         uint chunk = raster_masked_big[e + 2u];
-        raster_triangle(raster_masked_big[e], false, chunk, chunk + 1u, group_share());
+        raster_entry(raster_masked_big[e], chunk);
     }
 #elif KERNEL == 2
     uint listed = min(raster_big[0], pc.big_capacity);
@@ -379,7 +430,7 @@ void main() {
         g_view = raster_big[e + 1u];
 #endif
         uint chunk = raster_big[e + 2u];
-        raster_triangle(raster_big[e], false, chunk, chunk + 1u, group_share());
+        raster_entry(raster_big[e], chunk);
     }
 #else
     uvec2 p = gl_GlobalInvocationID.xy;
