@@ -1,11 +1,13 @@
 """The compute rasteriser's work split, swept in one process (issue 13): GPU ms per raster step.
 
     python benchmarks/bench_raster.py [--scene Sponza.gltf] [--sizes 1920x1080,640x480]
-        [--frames 40] [--variants 256/16384/4096,1024/16384/4096,...] [--json OUT.json]
+        [--frames 40] [--variants 256/16384/256/4096,...] [--json OUT.json]
 
-Each variant is a compute_path.RasterTuning (big_area/big_chunk/masked_chunk: the box pixels
-above which work groups take a triangle, and a listed band's box pixels for opaque and masked
-draws), set before the frames' command buffers are recorded again. Rows: the preset camera
+Each variant is a compute_path.RasterTuning (big_area/big_chunk/masked_area/masked_chunk: the
+box pixels above which work groups take a triangle, and a listed band's box pixels, for
+opaque and for masked draws), set before the frames' command buffers are recorded again.
+The GPU first renders WARM_UP_FRAMES untimed frames (its clocks ramp up: a cold H200 read
+twice the time on the first rows). Rows: the preset camera
 of bench_paths, course lighting, the compute path with the compute rasteriser; GPU times
 are timestamp medians over `--frames` after 10 warm-up frames. Prints a Markdown table. Not
 a test.
@@ -26,6 +28,7 @@ from vkpbr.render.renderer import Renderer
 from vkpbr.scene.loader import load_scene
 
 WARM_UP = 10
+WARM_UP_FRAMES = 300
 
 
 def measure(r: Renderer, size: tuple[int, int], frames: int) -> dict:
@@ -46,7 +49,7 @@ def main() -> None:
                                            / ".assets/models/Sponza/glTF/Sponza.gltf"))
     ap.add_argument("--sizes", default="1920x1080,640x480")
     ap.add_argument("--frames", type=int, default=40)
-    ap.add_argument("--variants", default="256/16384/4096")
+    ap.add_argument("--variants", default="256/16384/256/4096")
     ap.add_argument("--json")
     args = ap.parse_args()
     sizes = [tuple(int(x) for x in s.split("x")) for s in args.sizes.split(",")]
@@ -56,7 +59,8 @@ def main() -> None:
     with Renderer(load_scene(args.scene)) as r:
         print(f"device: {r.device.info.name}; scene {Path(args.scene).name}; "
               f"{args.frames} frames a row")
-        cols = ["size", "big_area", "big_chunk", "masked_chunk", *RASTER_STEPS, "raster", "frame"]
+        measure(r, sizes[0], WARM_UP_FRAMES)
+        cols = ["size", *vars(variants[0]), *RASTER_STEPS, "raster", "frame"]
         print("| " + " | ".join(cols) + " |\n|" + "---|" * len(cols))
         for size in sizes:
             for tuning in variants:

@@ -47,20 +47,23 @@ SHADE_GROUP = 64  # shade.comp's work group: pixels of one bin
 RASTER_SMALL_GROUP = 64  # raster_small: one triangle an invocation
 RASTER_DOUBLE_SIDED, RASTER_MASKED, RASTER_BLENDED = 1, 2, 4
 MAX_GROUPS_X = 65535  # maxComputeWorkGroupCount[0] every Vulkan device has
-RASTER_PUSH_BYTES = 72  # raster.comp's push constants (18 uints)
+RASTER_PUSH_BYTES = 76  # raster.comp's push constants (19 uints)
 
 
 @dataclass(frozen=True)
 class RasterTuning:
-    """The compute rasteriser's work split (raster.comp's pc.big_area, big_chunk,
-    masked_chunk), measured on the H200 (BENCHMARKS.md; benchmarks/bench_raster.py sweeps
-    them): triangles whose screen box exceeds `big_area` pixels are drawn by work groups, in
-    bands of rows of about `big_chunk` box pixels (`masked_chunk` for masked draws, whose
-    every pixel's alpha test costs more than the set-up a band repeats)."""
+    """The compute rasteriser's work split (raster.comp's pc.big_area .. masked_chunk),
+    measured on the H200 (BENCHMARKS.md; benchmarks/bench_raster.py sweeps them): opaque
+    triangles whose screen box exceeds `big_area` pixels are drawn by work groups, in bands of
+    rows of about `big_chunk` box pixels; masked ones likewise above `masked_area`, in bands
+    of `masked_chunk` (each pixel's alpha test costs more than the set-up a band repeats)."""
 
+    # Sponza on the H200, raster ms at 1080p / 480p: 256/16384/256/4096 0.562/0.328; masked
+    # 64/1024 0.492/0.255 (kept); masked 32 0.943/0.246; opaque 64 0.609/0.263.
     big_area: int = 256
     big_chunk: int = 16384
-    masked_chunk: int = 4096
+    masked_area: int = 64
+    masked_chunk: int = 1024
 
 
 RASTER_TUNING = RasterTuning()

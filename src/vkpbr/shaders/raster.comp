@@ -68,9 +68,10 @@ layout(push_constant) uniform Raster {
     uint segment;  // raster_masked(_big): this masked draw's
     uint masked_capacity;  // entries a segment holds
     // compute_path.RasterTuning (measured on the H200: BENCHMARKS.md): box pixels above
-    // which work groups take a triangle, and a listed band's box pixels (opaque, masked).
+    // which work groups take a triangle, a listed band's box pixels; opaque, then masked.
     uint big_area;
     uint big_chunk;
+    uint masked_area;
     uint masked_chunk;
 } pc;
 
@@ -245,8 +246,10 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, int y0, int y
 // each (pc.masked_chunk for masked draws; at least a row).
 #if ALPHA_TESTED
 #define CHUNK pc.masked_chunk
+#define BIG_AREA pc.masked_area
 #else
 #define CHUNK pc.big_chunk
+#define BIG_AREA pc.big_area
 #endif
 int chunk_rows(ivec2 lo, ivec2 hi) { return max(1, int(CHUNK) / (hi.x - lo.x)); }
 
@@ -347,12 +350,12 @@ void list_bands(Screen t, uint g) {
 #endif
 }
 
-// One triangle an invocation: drawn alone where its box is at most pc.big_area pixels, else
+// One triangle an invocation: drawn alone where its box is at most BIG_AREA pixels, else
 // listed in row bands for work groups.
 void raster_one(uint g) {
     Screen t;
     if (!on_screen(g, t)) return;
-    if (box_area(t) > float(pc.big_area)) list_bands(t, g);
+    if (box_area(t) > float(BIG_AREA)) list_bands(t, g);
     else draw_screen(t, g, 0u, ALL_CHUNKS, ALONE);
 }
 #endif
