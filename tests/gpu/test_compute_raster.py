@@ -166,62 +166,73 @@ def test_random_triangles_and_cameras_agree_with_the_raster_units() -> None:
     check()
 
 
-@pytest.mark.parametrize("count", [3, 1000])
-def test_screen_filling_triangles_split_into_chunks(count: int) -> None:
-    """Triangles bigger than raster.comp's BIG_CHUNK (16,384 box pixels: 200x150 is 2 chunks
-    a triangle) are drawn by several work groups; 1,000 of them overflow the big list (a
-    sixteenth of the pixels, 1,875 entries), whose rest the listing invocation draws.
-    Either way each pixel shows the nearest triangle, as the raster units find it."""
-    from test_outputs import silhouette_band
+def _filling_triangles(count: int, seed: int) -> np.ndarray:
+    """`count` tilted triangles that fill a 200x150 view from FILLING_CAMERA and cross each
+    other, listed far to near."""
+    rng = np.random.default_rng(seed)
+    tris = np.zeros((count, 3, 3))
+    tris[:, :, :2] = np.array([[-90.0, -90.0], [90.0, -90.0], [0.0, 120.0]]) + rng.uniform(
+        -0.5, 0.5, (count, 3, 2))
+    tris[:, :, 2] = np.linspace(-3.0, 3.0, count)[:, None] + rng.uniform(-20.0, 20.0, (count, 3))
+    return tris
 
+
+FILLING_CAMERA = "0.3,0.2,40,0,0,0"
+
+
+def _instances_both_ways(scene) -> tuple[np.ndarray, np.ndarray]:  # noqa: ANN001
+    """`scene`'s instance ids at 200x150 from FILLING_CAMERA through the raster units and
+    through the compute rasteriser (validation clean)."""
     from vkpbr.render.renderer import Renderer
 
-    rng = np.random.default_rng(count)
-    # Drawn far to near: the nearest are listed last, past the big list's end when it overflows.
-    z = np.linspace(-3.0, 3.0, count)
-    jitter = rng.uniform(-0.5, 0.5, (count, 3, 2))
-    base = np.array([[-90.0, -90.0], [90.0, -90.0], [0.0, 120.0]])
-    tris = np.zeros((count, 3, 3))
-    tris[:, :, :2] = base + jitter
-    tris[:, :, 2] = z[:, None] + rng.uniform(-20.0, 20.0, (count, 3))  # tilted: they cross
-    with Renderer(_soup(tris, [True, True]), validation=True) as r:
+    with Renderer(scene, validation=True) as r:
         if not r.device.compute_raster:
             pytest.skip("no 64-bit storage atomics on this device")
-        cam = "0.3,0.2,40,0,0,0"
-        got = {raster: r.render(cam, size=(200, 150), pipeline="compute", raster=raster,
-                                env="none", outputs=("instance",))["instance"]
-               for raster in ("hardware", "compute")}
-        hw, cr = got["hardware"], got["compute"]
-        assert (hw > 0).mean() >= 0.9, "the triangles are meant to fill the view"
-        wrong = hw != cr
-        band = silhouette_band(hw)
-        assert not wrong[~band].any(), f"{int(wrong[~band].sum())} pixels differ off the edges"
-        assert wrong.mean() <= 0.01, wrong.mean()
+        got = [r.render(FILLING_CAMERA, size=(200, 150), pipeline="compute", raster=raster,
+                        env="none", outputs=("instance",))["instance"]
+               for raster in ("hardware", "compute")]
         assert r.device.instance.errors == []
+    return got[0], got[1]
+
+
+def _assert_equal_off_edges(hw: np.ndarray, cr: np.ndarray, most: float) -> None:
+    """Equal ids but on the one-pixel band of the hardware image's edges, where at most
+    `most` of all pixels differ."""
+    from test_outputs import silhouette_band
+
+    wrong = hw != cr
+    band = silhouette_band(hw)
+    assert not wrong[~band].any(), f"{int(wrong[~band].sum())} pixels differ off the edges"
+    assert wrong.mean() <= most, wrong.mean()
+
+
+@pytest.mark.parametrize("count", [3, 1000])
+def test_screen_filling_triangles_split_into_chunks(count: int) -> None:
+    """Triangles bigger than a band of RasterTuning.big_chunk (16,384 box pixels: 200x150 is
+    2 bands a triangle) are drawn by several work groups; 1,000 of them overflow the big list
+    (a sixteenth of the pixels, 1,875 entries), whose rest the listing invocation draws.
+    Either way each pixel shows the nearest triangle, as the raster units find it (the
+    nearest are listed last, past the big list's end when it overflows)."""
+    hw, cr = _instances_both_ways(_soup(_filling_triangles(count, count), [True, True]))
+    assert (hw > 0).mean() >= 0.9, "the triangles are meant to fill the view"
+    _assert_equal_off_edges(hw, cr, 0.01)
 
 
 @pytest.mark.parametrize("capacity", [None, 1])
 def test_big_masked_triangles_agree_with_the_raster_units(monkeypatch, capacity) -> None:  # noqa: ANN001
     """Masked triangles filling the view, alpha-tested against a checker of holes: their big
     triangles are listed in each masked draw's segment (raster.comp KERNEL 5) and drawn by
-    work groups a chunk each (KERNEL 6); with room for one entry a draw, the rest falls to
+    work groups a band each (KERNEL 6); with room for one entry a draw, the rest falls to
     the listing work group. Either way the pixels show what the raster units find (the
     surface through the holes, the nearest triangle elsewhere) off the one-pixel band of
     the hardware image's edges."""
-    from test_outputs import silhouette_band
-
     from vkpbr.render import compute_path
-    from vkpbr.render.renderer import Renderer
     from vkpbr.scene.types import Image, Material, Sampler, TextureRef
 
     if capacity is not None:
         monkeypatch.setattr(compute_path, "MASKED_CAPACITY", capacity)
-    rng = np.random.default_rng(7)
     count = 12
-    base = np.array([[-90.0, -90.0], [90.0, -90.0], [0.0, 120.0]])
-    tris = np.zeros((count, 3, 3))
-    tris[:, :, :2] = base + rng.uniform(-0.5, 0.5, (count, 3, 2))
-    tris[:, :, 2] = np.linspace(-3.0, 3.0, count)[:, None] + rng.uniform(-20.0, 20.0, (count, 3))
+    tris = _filling_triangles(count, 7)
     scene = _soup(tris, [True, False])
     checker = np.zeros((16, 16, 4), np.uint8)
     checker[..., :3] = 200
@@ -232,18 +243,7 @@ def test_big_masked_triangles_agree_with_the_raster_units(monkeypatch, capacity)
                                 base_color_texture=TextureRef(0, nearest)) for k in range(2)]
     for i, mesh in enumerate(scene.meshes):  # a few checker squares across each triangle
         mesh.texcoords = ((tris[i, :, :2] + 100.0) / 50.0 + 0.01 * i).astype(np.float32)
-    with Renderer(scene, validation=True) as r:
-        if not r.device.compute_raster:
-            pytest.skip("no 64-bit storage atomics on this device")
-        cam = "0.3,0.2,40,0,0,0"
-        got = {raster: r.render(cam, size=(200, 150), pipeline="compute", raster=raster,
-                                env="none", outputs=("instance",))["instance"]
-               for raster in ("hardware", "compute")}
-        hw, cr = got["hardware"], got["compute"]
-        assert 0.3 <= (hw > 0).mean() <= 0.999, "the holes are meant to show through"
-        assert len(np.unique(hw)) > count // 2, "several layers are meant to show"
-        wrong = hw != cr
-        band = silhouette_band(hw)
-        assert not wrong[~band].any(), f"{int(wrong[~band].sum())} pixels differ off the edges"
-        assert wrong.mean() <= 0.02, wrong.mean()
-        assert r.device.instance.errors == []
+    hw, cr = _instances_both_ways(scene)
+    assert 0.3 <= (hw > 0).mean() <= 0.999, "the holes are meant to show through"
+    assert len(np.unique(hw)) > count // 2, "several layers are meant to show"
+    _assert_equal_off_edges(hw, cr, 0.02)
