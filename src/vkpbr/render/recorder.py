@@ -246,10 +246,10 @@ class FrameRecorder:
         slot = self.slots[frame.index]
         prepass = self.prepass_for(target) and not compute  # visibility: its own pre-pass
         untimed = {*RASTER_STEPS} if not raster else set()
-        if compute:
+        if compute or outputs:
             untimed |= {*_PREPASSES}  # the visibility pass is its own pre-pass
-        else:
-            untimed.add("classify")
+        if not compute:
+            untimed.add("classify")  # (the outputs' classification is the next step's time)
         cmd, stamps, names, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw,
                                                        transmission, compute, frozenset(untimed))
         shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
