@@ -15,10 +15,11 @@
 // KERNEL 4 (raster_args): one invocation: raster_big's dispatch size for KERNEL 2.
 // KERNEL 2 (raster_big): one work group a listed band, set up once, its rows over the subgroups.
 // KERNEL 5 (raster_masked): one invocation a triangle of one masked draw (alpha masking on),
-//   with its material's set 1 bound; its big triangles are listed in the draw's segment of
-//   raster_masked_big, a band of about pc.masked_chunk box pixels an entry (what does not fit: by the whole
-//   group afterwards). A pixel is covered where the surface's base-colour alpha
-//   (surface_fetch.glsl + shade.glsl, exactly as the shading samples it) reaches the cutoff;
+//   with its material's set 1 bound; its triangles over pc.masked_area box pixels are listed
+//   in the draw's segment of raster_masked_big, a band of about pc.masked_chunk box pixels an
+//   entry (what does not fit: by the whole group afterwards). A pixel is covered where the
+//   surface's base-colour alpha (surface_fetch.glsl + shade.glsl, exactly as the shading
+//   samples it) reaches the cutoff;
 //   pixels where a nearer surface is already stored skip that test (a plain load: the opaque
 //   draws are done; unlike the opaque atomics, the alpha test costs more than the load).
 // KERNEL 6 (raster_masked_big): one work group an entry of one masked draw's segment (an
