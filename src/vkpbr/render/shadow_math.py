@@ -30,6 +30,7 @@ camera, and the splits, radii and matrices would move with it.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -121,7 +122,11 @@ def cascade_splits(znear: float, zfar: float, count: int = CASCADES,
 def _tangent_rect(camera: Camera, size: tuple[int, int]) -> np.ndarray:
     """The view frustum's four corners per unit of view depth: (4, 2) (x, y) in view space
     (OpenGL view axes: x right, y up, looking down -z)."""
-    sx, sy, ox, oy = projection_terms(camera, size)
+    return _terms_rect(projection_terms(camera, size))
+
+
+def _terms_rect(terms: tuple[float, float, float, float]) -> np.ndarray:
+    sx, sy, ox, oy = terms
     return np.array([[(xn - ox) / sx, (oy - yn) / sy] for xn in (-1.0, 1.0) for yn in (-1.0, 1.0)])
 
 
@@ -153,9 +158,25 @@ def slice_sphere(camera: Camera, size: tuple[int, int], d0: float,
 
 def _slice_spheres(camera: Camera, size: tuple[int, int], d0: np.ndarray,
                    d1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """`slice_sphere` for n slices at once: centres (n, 3), radii (n,) (a frame fits its
-    cascades in a few array operations: this runs per frame while the camera moves)."""
-    t = _tangent_rect(camera, size)
+    """`slice_sphere` for n slices at once: centres (n, 3), radii (n,)."""
+    centre_v, radii = _view_slice_spheres(projection_terms(camera, size), tuple(d0), tuple(d1))
+    return _to_world(camera, centre_v), radii
+
+
+def _to_world(camera: Camera, points_v: np.ndarray) -> np.ndarray:
+    """View-space points (n, 3) in world space."""
+    inv = np.linalg.inv(_view_rows(camera))
+    return points_v @ inv[:3, :3].T + inv[:3, 3]
+
+
+@functools.lru_cache(maxsize=64)
+def _view_slice_spheres(terms: tuple[float, float, float, float], d0: tuple[float, ...],
+                        d1: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """The slice spheres in view space: centres (n, 3), radii (n,), read-only. They depend on
+    the projection and the depths only, so a moving camera reuses them (a frame's cascade
+    fit is then a few array operations: it runs per frame while the camera moves)."""
+    t = _terms_rect(terms)
+    d0, d1 = np.array(d0), np.array(d1)
     mid = t.mean(axis=0)
     k2 = float(np.max(np.sum((t - mid) ** 2, axis=1)))
     depth = np.minimum(0.5 * (d0 + d1) * (1.0 + k2), d1)
@@ -164,8 +185,9 @@ def _slice_spheres(camera: Camera, size: tuple[int, int], d0: np.ndarray,
     rect = np.concatenate([t, -np.ones((4, 1))], axis=1)  # (4, 3) per unit depth
     corners_v = (d * rect).reshape(len(d0), 8, 3)
     radii = np.max(np.sqrt(np.sum((corners_v - centre_v[:, None]) ** 2, axis=-1)), axis=1)
-    inv = np.linalg.inv(_view_rows(camera))
-    return centre_v @ inv[:3, :3].T + inv[:3, 3], radii
+    centre_v.setflags(write=False)
+    radii.setflags(write=False)
+    return centre_v, radii
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -175,12 +197,20 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def light_basis(direction: Sequence[float]) -> np.ndarray:
     """(3, 3) rows: right, up, and the unit direction the light travels. Right-handed as the
-    camera's (right, up, -forward) so that front faces keep their winding."""
+    camera's (right, up, -forward) so that front faces keep their winding. Read-only (one
+    per direction, kept)."""
+    return _light_basis(tuple(float(x) for x in direction))
+
+
+@functools.lru_cache(maxsize=256)
+def _light_basis(direction: tuple[float, ...]) -> np.ndarray:
     f = _unit(direction)
     ref = np.array([0.0, 1.0, 0.0]) if abs(f[1]) < 0.99 else np.array([0.0, 0.0, 1.0])
     s = _cross(f, ref)
     s /= math.sqrt(float(s @ s))
-    return np.array([s, _cross(s, f), f])
+    basis = np.array([s, _cross(s, f), f])
+    basis.setflags(write=False)
+    return basis
 
 
 def fit_cascade(centre: Sequence[float], radius: float, direction: Sequence[float],
@@ -250,10 +280,19 @@ def directional_cascades(camera: Camera, size: tuple[int, int], direction: Seque
                          znear: float, zfar: float, count: int = CASCADES) -> CascadeFit:
     """Fit `count` cascades of a directional light travelling along `direction` to the view
     range [znear, zfar] (`cascade_range` of it) of `camera` rendering `size` (W, H) pixels."""
-    splits = cascade_splits(*cascade_range(znear, zfar), count)
+    splits = _splits(cascade_range(znear, zfar), count)
     centres, radii = _slice_spheres(camera, size, splits[:-1], splits[1:])
     mats = _fit_cascades(centres, radii, light_basis(direction), scene_lo, scene_hi, resolution)
     return CascadeFit(mats, splits[1:].copy(), cascade_texel(radii, resolution))
+
+
+@functools.lru_cache(maxsize=64)
+def _splits(view_range: tuple[float, float], count: int) -> np.ndarray:
+    """cascade_splits of a rounded view range (cascade_range: it repeats while the camera
+    moves), read-only."""
+    splits = cascade_splits(*view_range, count)
+    splits.setflags(write=False)
+    return splits
 
 
 def scene_cascade(direction: Sequence[float], scene_lo: Sequence[float],
