@@ -73,5 +73,5 @@ fi
 if has tests; then
   echo "== GPU test pass (validation on)"
   ASSETS=.assets; [ -d .assets-tests ] && ASSETS=.assets-tests  # models but Sponza, beside .whl-extra
-  VKPBR_ASSETS=$PWD/$ASSETS/models timeout ${TEST_TIMEOUT:-400} python3 -m pytest -q -p no:cacheprovider -rs tests/gpu tests/unit tests/test_import_graph.py > "$OUT/gpu-tests.log" 2>&1; tail -12 "$OUT/gpu-tests.log"
+  HYPOTHESIS_PROFILE=report VKPBR_ASSETS=$PWD/$ASSETS/models timeout ${TEST_TIMEOUT:-400} python3 -m pytest -q -p no:cacheprovider -rs tests/gpu tests/unit tests/test_import_graph.py > "$OUT/gpu-tests.log" 2>&1; tail -12 "$OUT/gpu-tests.log"
 fi

@@ -12,6 +12,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 from assets_path import ASSETS
+from hypothesis import Phase, settings
+
+# Property tests shrink a failure before they report it. On the GPU machine each example
+# makes a renderer, so shrinking can outlast the call: HYPOTHESIS_PROFILE=report (set by
+# benchmarks/gpu_run.sh) reports the first failing example as found, unshrunk.
+settings.register_profile("report", phases=(Phase.explicit, Phase.reuse, Phase.generate),
+                          print_blob=True)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
 
 # The sample models: $VKPBR_ASSETS, else .assets/models, else ../shared/assets (assets_path.py).
 # Tests that need them take the `assets` fixture, which skips with the folder's name when absent.
