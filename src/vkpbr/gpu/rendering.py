@@ -89,6 +89,12 @@ def attachment_stage(vk: Any, depth: bool) -> tuple[int, int, int]:
             vk.VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL)
 
 
+def compute_storage(vk: Any) -> tuple[int, int]:
+    """(stages, accesses) of compute shaders reading and writing storage images and buffers."""
+    return (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+            vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT)
+
+
 def begin_rendering(cmd: Commands, att: Attachments, clear_color: tuple[float, ...] | None,
                     clear_depth: float | None, store_depth: bool = True, layers: int = 1) -> None:
     """Begin dynamic rendering over `att` (cleared, or loaded where a clear value is None),

@@ -35,6 +35,7 @@ from vkpbr.gpu.rendering import (
     barriers,
     begin_rendering,
     buffer_barrier,
+    compute_storage,
     copy_buffer_to_image,
     copy_image_to_buffer,
     copy_out_barriers,
@@ -91,8 +92,7 @@ class ComputeSteps:
         color_stage, color_access, color_layout = attachment_stage(vk, False)
         depth_stage, depth_access, depth_layout = attachment_stage(vk, True)
         copy = vk.VK_PIPELINE_STAGE_2_COPY_BIT
-        compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                   vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT)
+        compute = compute_storage(vk)
         no_reads = ~(vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT
                      | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
         barriers(cmd, [
@@ -117,8 +117,7 @@ class ComputeSteps:
         vk = self.device.vk
         depth_stage, depth_access, depth_layout = attachment_stage(vk, True)
         copy = vk.VK_PIPELINE_STAGE_2_COPY_BIT
-        compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                   vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT)
+        compute = compute_storage(vk)
         write, read = vk.VK_ACCESS_2_TRANSFER_WRITE_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT
         # The previous frame's passes and copies of the depth buffer come first.
         before = (depth_stage | copy, depth_access & ~vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
@@ -247,8 +246,7 @@ class OffscreenTarget(ComputeSteps):
         """Before the compute rasteriser resolves into the visibility image: GENERAL for its
         storage writes, after the previous frame's reads (contents discarded)."""
         vk = self.device.vk
-        compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                   vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT)
+        compute = compute_storage(vk)
         barriers(cmd, [image_barrier(vk, self.visibility.handle, False,
                                      vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_GENERAL,
                                      (compute[0], 0), compute)])

@@ -223,11 +223,8 @@ class FrameRecorder:
             target.record_visibility_begin(cmd, 0)
             record_passes(cmd, context(True, False), VISIBILITY_PASSES)
             target.record_shading_begin(cmd)
-            frame_sets = {0: slot.set0, 2: slot.set2}
-            if shadow_set is not None:
-                frame_sets[3] = shadow_set
             self.compute_scene().record_shading(  # type: ignore[misc]
-                cmd, target, frame.index, tbn, frame_sets, gs.material_sets,
+                cmd, target, frame.index, tbn, self._compute_sets(frame), gs.material_sets,
                 _shaded_materials(gs.draws, classes), target.clear_color, copy=True)
             target.record_resume(cmd)
             record_passes(cmd, context(False, False), ("background",))
@@ -291,9 +288,7 @@ class FrameRecorder:
                 record_passes(cmd, vis_ctx, VISIBILITY_PASSES)
                 target.record_shading_begin(cmd)  # type: ignore[attr-defined]
             drawn = _shaded_materials(gs.draws, classes)
-            frame_sets = {0: slot.set0, 2: slot.set2}
-            if shadow_set is not None:
-                frame_sets[3] = shadow_set
+            frame_sets = self._compute_sets(frame)
             cs = self.compute_scene()
             cs.record_shading(cmd, target, frame.index, tbn, frame_sets, gs.material_sets,
                               drawn, target.clear_color, shade=compute,
@@ -364,16 +359,14 @@ class FrameRecorder:
         rec = self._recorded.get(key)
         if rec is not None:
             return rec.cmd
-        gs, slot = self.gpu_scene, self.slots[frame.index]
+        gs = self.gpu_scene
         cmd, stamps, _, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw,
                                                    untimed=frozenset(_PREPASSES))
         cs = self.compute_scene()
         self._record_compute_raster(cmd, target, frame, alpha_mask, stamps, tiles, set0,
                                     depth=COPY_DEPTH in copy)
         stamps.after("mask")  # the depths' copy is "opaque"'s, as a single frame's
-        frame_sets = {0: set0, 2: slot.set2}
-        if self.shadows is not None:
-            frame_sets[3] = self.shadows.sets[frame.index]
+        frame_sets = self._compute_sets(frame, set0)
         drawn = _shaded_materials(gs.draws, classes)
         cs.record_shading(cmd, target, frame.index, tbn, frame_sets, gs.material_sets, drawn,
                           target.clear_color, tiles=tiles, stamp=stamps.after)  # type: ignore[attr-defined]
@@ -386,6 +379,15 @@ class FrameRecorder:
         cmd.end()
         self._recorded[key] = _Recorded(cmd, ())
         return cmd
+
+    def _compute_sets(self, frame: Frame, set0: object = None) -> dict[int, object]:
+        """The frame's sets the compute path's kernels bind: 0 (the camera; `set0`: a batch's
+        views), 2 (lighting) and 3 (the shadow maps, where there are any)."""
+        slot = self.slots[frame.index]
+        sets = {0: slot.set0 if set0 is None else set0, 2: slot.set2}
+        if self.shadows is not None:
+            sets[3] = self.shadows.sets[frame.index]
+        return sets
 
     def _record_compute_raster(self, cmd: Commands, target: FrameTarget, frame: Frame,
                                alpha_mask: bool, stamps: FrameStamps,
