@@ -137,3 +137,57 @@ def test_both_classification_kernels_agree(chart) -> None:  # noqa: ANN001
         scene.aggregate = default
         chart.recorder.free()
     assert np.array_equal(images[0], images[1])
+
+
+def _many_materials_scene(grid: int = 32, materials: int = 48):  # noqa: ANN202
+    """A grid x grid wall of quads facing the camera, each quad one of `materials` materials
+    (a draw each), so that a 16x16 tile of the classification holds more materials than it
+    has shared slots (classify.comp LOCAL_SLOTS): both of its ways of adding get used."""
+    from vkpbr.scene.types import Camera, Material, Mesh, Node, Scene
+
+    cells = np.stack(np.meshgrid(np.arange(grid), np.arange(grid), indexing="ij"), -1).reshape(-1, 2)
+    of = (cells[:, 0] * 7 + cells[:, 1] * 13) % materials
+    corners = np.float32([[0, 0], [1, 0], [1, 1], [0, 1]])
+    meshes = []
+    for m in range(materials):
+        mine = cells[of == m].astype(np.float32)
+        xy = (mine[:, None, :] + corners[None]) * (2.0 / grid) - 1.0
+        pos = np.concatenate([xy, np.zeros((*xy.shape[:2], 1), np.float32)], -1).reshape(-1, 3)
+        quads = np.arange(len(mine), dtype=np.uint32)[:, None] * 4
+        indices = (quads + np.uint32([0, 1, 2, 0, 2, 3])).reshape(-1)
+        meshes.append(Mesh(f"cells {m}", pos, indices, normals=np.tile(np.float32([0, 0, 1]), (len(pos), 1)),
+                           texcoords=np.zeros((len(pos), 2), np.float32), material=m))
+    colours = np.random.default_rng(1).uniform(0.05, 1.0, (materials, 3))
+    return Scene("many materials", meshes=meshes,
+                 materials=[Material(base_color_factor=(*map(float, c), 1.0)) for c in colours],
+                 nodes=[Node(m) for m in range(materials)],
+                 cameras=[Camera(eye=(0.0, 0.0, 1.5), target=(0.0, 0.0, 0.0), yfov_deg=60.0)])
+
+
+@pytest.mark.parametrize("materials", [48, 300])
+def test_classification_bins_every_pixel_once(make_renderer, materials: int) -> None:  # noqa: ANN001
+    """Both binnings (classify.comp: per tile in shared memory, with per-subgroup adds for
+    the materials a tile has no slot for; and one atomic a pixel) list each covered pixel
+    exactly once, in its material's bin, and the images agree with the forward path's (300
+    materials: the offsets' prefix sum takes two chunks)."""
+    r = make_renderer(_many_materials_scene(materials=materials))
+    if not r.device.compute_path:
+        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+    scene = r.compute_scene()
+    size = (96, 80)
+    target = r.offscreen_target(size)
+    forward = r.render(size=size, pipeline="forward", view="base_color")
+    listed = []
+    for aggregate in (True, False):
+        scene.aggregate = aggregate
+        r.recorder.free()  # recorded buffers name the kernels
+        image = r.render(size=size, pipeline="compute", view="base_color")
+        assert_same(forward, image, f"aggregate {aggregate}")
+        bins = scene.pixel_bins(target)
+        assert sum(map(len, bins)) > 0.9 * size[0] * size[1]
+        assert sum(len(b) > 0 for b in bins) > 0.9 * materials  # (and the default material)
+        every = np.concatenate(bins)
+        assert len(np.unique(every)) == len(every), "a pixel listed twice"
+        listed.append([np.sort(b) for b in bins])
+    for m, (tiles, plain) in enumerate(zip(*listed, strict=True)):
+        assert np.array_equal(tiles, plain), f"material {m}: the two binnings differ"

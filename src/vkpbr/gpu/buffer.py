@@ -152,3 +152,24 @@ def upload_buffer(device: Device, data: np.ndarray, usage: int | str, name: str 
     finally:
         staging.destroy()
     return dst
+
+
+def download_buffer(device: Device, buffer: Buffer, dtype: Any = np.uint8) -> np.ndarray:
+    """A copy of a device-local buffer's contents (`buffer` made with "transfer_src"), read
+    after the work submitted so far: for tests and diagnostics, not for frames."""
+    vk = device.vk
+    staging = Buffer(device, buffer.size, vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, host_visible=True,
+                     name=f"{buffer.name} download")
+    try:
+        with device.one_time_commands() as cmd:
+            # The writes of earlier submissions (compute or transfer) before this copy's read.
+            vk.vkCmdPipelineBarrier(
+                cmd, vk.VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, vk.VK_PIPELINE_STAGE_TRANSFER_BIT, 0,
+                1, [vk.VkMemoryBarrier(srcAccessMask=vk.VK_ACCESS_MEMORY_WRITE_BIT,
+                                       dstAccessMask=vk.VK_ACCESS_TRANSFER_READ_BIT)],
+                0, None, 0, None)
+            vk.vkCmdCopyBuffer(cmd, buffer.handle, staging.handle, 1,
+                               [vk.VkBufferCopy(size=buffer.size)])
+        return staging.array(dtype).copy()
+    finally:
+        staging.destroy()

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from vkpbr.gpu.buffer import Buffer, upload_buffer
+from vkpbr.gpu.buffer import Buffer, download_buffer, upload_buffer
 from vkpbr.gpu.compute import ComputePipeline, groups
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
@@ -71,7 +71,7 @@ RASTER_TUNING = RasterTuning()
 # pixels each: 16 M box pixels, ~8 screens at 1080p; what does not fit is drawn by the work
 # group that found it). At most maxComputeWorkGroupCount[0]: an entry is a work group.
 MASKED_CAPACITY = 4096
-CLASSIFY_GROUP = (8, 8, 1)  # classify.comp's count and scatter kernels
+CLASSIFY_GROUP = (16, 16, 1)  # classify.comp's count and scatter kernels
 
 
 def _untimed(step: str) -> None:
@@ -86,9 +86,10 @@ class _TargetResources:
         w, h = target.extent
         m = len(gs.materials)
         self.owned: list[Any] = []
-        self.bins = self._own(Buffer(dev, 16 * m, "storage|transfer_dst", name="material bins"))
+        self.bins = self._own(Buffer(dev, 16 * m, "storage|transfer_dst|transfer_src",
+                                     name="material bins"))
         self.args = self._own(Buffer(dev, 12 * m, "storage|indirect", name="bin dispatches"))
-        self.pixels = self._own(Buffer(dev, 4 * w * h, "storage", name="pixel list"))
+        self.pixels = self._own(Buffer(dev, 4 * w * h, "storage|transfer_src", name="pixel list"))
         # The compute rasteriser's (raster.comp): depth|triangle per pixel and the big
         # triangles' list, one entry a triangle at most (16-byte stand-ins without it, and
         # for targets it never draws: the transmission's copies, `rasterised` False, whose
@@ -410,6 +411,14 @@ class ComputeScene:
         if material_set is not None:  # classify.comp reads no material: any valid set
             cmd.bind_set(1, material_set)
         cmd.bind_set(self.set_index, compute_set)
+
+    def pixel_bins(self, target: Any) -> list[np.ndarray]:
+        """Per material, the pixel indices (y * width + x) that the last classification of
+        `target` listed for it, in list order (tests and diagnostics: reads the GPU's copy)."""
+        res = self._resources(target)
+        bins = download_buffer(self.device, res.bins, np.uint32).reshape(-1, 4)
+        pixels = download_buffer(self.device, res.pixels, np.uint32)
+        return [pixels[offset:offset + count] for count, offset in bins[:, :2]]
 
     def forget_target(self, target: Any, destroy: bool = False) -> None:
         """Make `target`'s buffers and sets again on its next use (its images changed);

@@ -3,12 +3,15 @@
 // (render/compute_path.py), so that shade.comp runs once per material with that material's
 // descriptor set bound -- no texture arrays, no non-uniform indexing (lavapipe has neither).
 // KERNEL 1 (count): per pixel, count it in its material's bin; pixels nothing covers get the
-//   clear colour here. KERNEL 2 (offsets): one invocation turns counts into list offsets and
-//   one indirect dispatch size per material. KERNEL 3 (scatter): per pixel, its index into its
-//   material's part of the pixel list.
-// AGGREGATE = 1: atomics are aggregated per subgroup (one per material present in the
-// subgroup), which keeps a frame's ~2 M pixels from queueing on a few dozen counters on a GPU;
-// AGGREGATE = 0: one atomic per pixel (lavapipe, where the subgroup loop costs ~10x more).
+//   clear colour here. KERNEL 2 (offsets): one work group turns counts into list offsets and
+//   one indirect dispatch size per material (a parallel prefix sum, MATERIAL_SCAN at a time).
+//   KERNEL 3 (scatter): per pixel, its index into its material's part of the pixel list.
+// AGGREGATE = 1 (GPUs): a work group (a 16x16 tile) first totals its pixels per material in
+// shared memory -- a subgroup adds each material it holds once -- and then adds each total to
+// the material's bin with one atomic: ~8 k global atomics a 1080p frame instead of one a
+// pixel (2 M on a few dozen counters, which queue). A tile holding more than LOCAL_SLOTS
+// materials adds the rest per subgroup.
+// AGGREGATE = 0: one global atomic a pixel (lavapipe, where the subgroup loop costs ~10x more).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_KHR_shader_subgroup_vote : require
@@ -16,10 +19,11 @@
 #include "generated.glsl"
 #include "brdf.glsl"
 
+#define MATERIAL_SCAN 256u
 #if KERNEL == 2
-layout(local_size_x = 1, local_size_y = 1, local_size_z = 1) in;
+layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;  // MATERIAL_SCAN
 #else
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+layout(local_size_x = 16, local_size_y = 16, local_size_z = 1) in;  // compute_path.CLASSIFY_GROUP
 #endif
 
 layout(push_constant) uniform Classify {
@@ -29,18 +33,54 @@ layout(push_constant) uniform Classify {
 } pc;
 
 #if KERNEL == 2
+shared uint scan[MATERIAL_SCAN];
+shared uint carried;  // the counts of the chunks before this one
+
 void main() {
-    uint offset = 0u;
-    for (uint m = 0u; m < pc.material_count; ++m) {
-        uint count = bins[m].x;
-        bins[m] = uvec4(count, offset, 0u, 0u);
-        bin_args[3u * m] = (count + pc.shade_group - 1u) / pc.shade_group;
-        bin_args[3u * m + 1u] = 1u;
-        bin_args[3u * m + 2u] = 1u;
-        offset += count;
+    uint t = gl_LocalInvocationID.x;
+    if (t == 0u) carried = 0u;
+    barrier();
+    for (uint first = 0u; first < pc.material_count; first += MATERIAL_SCAN) {
+        uint m = first + t;
+        uint count = m < pc.material_count ? bins[m].x : 0u;
+        scan[t] = count;
+        barrier();
+        for (uint d = 1u; d < MATERIAL_SCAN; d <<= 1u) {  // inclusive Hillis-Steele scan
+            uint before = t >= d ? scan[t - d] : 0u;
+            barrier();
+            scan[t] += before;
+            barrier();
+        }
+        if (m < pc.material_count) {
+            bins[m] = uvec4(count, carried + scan[t] - count, 0u, 0u);
+            bin_args[3u * m] = (count + pc.shade_group - 1u) / pc.shade_group;
+            bin_args[3u * m + 1u] = 1u;
+            bin_args[3u * m + 2u] = 1u;
+        }
+        barrier();
+        if (t == MATERIAL_SCAN - 1u) carried += scan[t];
+        barrier();
     }
 }
 #else
+
+#define LOCAL_SLOTS 16u
+#define NO_MATERIAL 0xFFFFFFFFu
+#if AGGREGATE
+shared uint local_material[LOCAL_SLOTS];  // filled in order, never changed once set
+shared uint local_count[LOCAL_SLOTS];
+shared uint local_base[LOCAL_SLOTS];      // KERNEL 3: the slot's start in its material's bin
+
+// The tile's slot of material m (taken if new), or LOCAL_SLOTS when the tile has no room.
+uint local_slot(uint m) {
+    for (uint i = 0u; i < LOCAL_SLOTS; ++i) {
+        uint held = atomicCompSwap(local_material[i], NO_MATERIAL, m);
+        if (held == NO_MATERIAL || held == m) return i;
+    }
+    return LOCAL_SLOTS;
+}
+#endif
+
 void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
     ivec2 size = imageSize(out_image);
@@ -55,17 +95,28 @@ void main() {
     }
 #endif
     bool covered = inside && vis.x != 0u;
-    uint material = covered ? draws[vis.x - 1u].info.z : 0xFFFFFFFFu;
+    uint material = covered ? draws[vis.x - 1u].info.z : NO_MATERIAL;
+    uint pixel_index = pixel.y * uint(size.x) + pixel.x;
 #if !AGGREGATE
     if (!covered) return;
 #if KERNEL == 1
     atomicAdd(bins[material].x, 1u);
 #else
-    uint slot = atomicAdd(bins[material].z, 1u);
-    pixel_list[bins[material].y + slot] = pixel.y * uint(size.x) + pixel.x;
+    uint at = atomicAdd(bins[material].z, 1u);
+    pixel_list[bins[material].y + at] = pixel_index;
 #endif
 #else
-    // Waterfall over the materials present in this subgroup: one atomic each.
+    uint t = gl_LocalInvocationIndex;
+    if (t < LOCAL_SLOTS) {
+        local_material[t] = NO_MATERIAL;
+        local_count[t] = 0u;
+    }
+    memoryBarrierShared();
+    barrier();
+    // Waterfall over the materials present in this subgroup: the first lane of each adds
+    // the subgroup's pixels of it to the tile's slot (or, with no slot left, to the bin).
+    uint slot = LOCAL_SLOTS;  // this lane's tile slot
+    uint offset = 0u;         // its place in the slot (or, without one, in the bin)
     bool pending = covered;
     // At most one round per lane: each round retires the first pending lane's material, and
     // the bound keeps a mistake here from ever hanging a GPU.
@@ -77,19 +128,43 @@ void main() {
         uvec4 ballot = subgroupBallot(mine);
         if (mine) {
             uint n = subgroupBallotBitCount(ballot);
-            uint rank = subgroupBallotExclusiveBitCount(ballot);
             uint leader = subgroupBallotFindLSB(ballot);
-            uint base = 0u;
+            uint got_slot = 0u, base = 0u;
+            if (gl_SubgroupInvocationID == leader) {
+                got_slot = local_slot(m);
+                if (got_slot < LOCAL_SLOTS) {
+                    base = atomicAdd(local_count[got_slot], n);
+                } else {
 #if KERNEL == 1
-            if (gl_SubgroupInvocationID == leader) atomicAdd(bins[m].x, n);
+                    atomicAdd(bins[m].x, n);
 #else
-            if (gl_SubgroupInvocationID == leader) base = atomicAdd(bins[m].z, n);
-            base = subgroupShuffle(base, leader);
-            pixel_list[bins[m].y + base + rank] = pixel.y * uint(size.x) + pixel.x;
+                    base = atomicAdd(bins[m].z, n);
 #endif
+                }
+            }
+            slot = subgroupShuffle(got_slot, leader);
+            offset = subgroupShuffle(base, leader) + subgroupBallotExclusiveBitCount(ballot);
             pending = false;
         }
     }
+    memoryBarrierShared();
+    barrier();
+    // One invocation a slot the tile filled: one global atomic per material in the tile.
+    if (t < LOCAL_SLOTS && local_material[t] != NO_MATERIAL) {
+#if KERNEL == 1
+        atomicAdd(bins[local_material[t]].x, local_count[t]);
+#else
+        local_base[t] = atomicAdd(bins[local_material[t]].z, local_count[t]);
+#endif
+    }
+#if KERNEL == 3
+    memoryBarrierShared();
+    barrier();
+    if (covered) {
+        uint at = slot < LOCAL_SLOTS ? local_base[slot] + offset : offset;
+        pixel_list[bins[material].y + at] = pixel_index;
+    }
+#endif
 #endif
 }
 #endif
