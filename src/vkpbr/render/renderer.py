@@ -425,8 +425,11 @@ class Renderer:
             return None
         sm = self.shadows
         c = camera  # mutable: its values are the key
-        key = (c.eye, c.target, c.up, c.yfov_deg, c.znear, c.zfar, c.pixel_intrinsics,
-               tuple(size), plan, lights, sm.resolution)
+        # Only directional lights' cascades follow the camera: spot and point lights' maps
+        # are the same for every view, so a moving camera does not remake them.
+        view = ((c.eye, c.target, c.up, c.yfov_deg, c.znear, c.zfar, c.pixel_intrinsics, tuple(size))
+                if plan.follows_camera else None)
+        key = (view, plan, lights, sm.resolution)
         last = self._shadow_rows.get(slot.index)
         if last is not None and last[0] == key:
             return last[1]

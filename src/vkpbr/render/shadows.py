@@ -93,6 +93,12 @@ class ShadowPlan:
     cubes: int = 0  # cubes used
     dropped: int = 0  # shadowed lights beyond MAX_LAYERS / MAX_CUBES (drawn unshadowed)
 
+    @property
+    def follows_camera(self) -> bool:
+        """Whether the maps' matrices depend on the view: directional lights' cascades do,
+        spot and point lights' maps do not."""
+        return any(e.kind == "directional" for e in self.entries)
+
 
 def _kind(light: Light) -> str:
     return getattr(light, "kind", "point")
@@ -256,6 +262,7 @@ class ShadowMaps:
         mats = np.zeros((MATRICES, 4, 4))
         far = np.full(4, np.inf)
         texel = np.zeros(4)
+        bounds = tuple(map(float, scene_lo)), tuple(map(float, scene_hi))  # hashable: the cache's key
         for e in plan.entries:
             light = lights[e.light]
             pos = tuple(getattr(light, "position", (0.0, 0.0, 0.0)))
@@ -270,14 +277,15 @@ class ShadowMaps:
                 far[:n], texel[:n] = fit.far, fit.texel
                 out[e.light] = (e.first, n, 0.0, 0.0)
                 continue
-            near = SM.perspective_near(pos, getattr(light, "range", 0.0), scene_lo, scene_hi)
+            outer = float(getattr(light, "outer_cone", math.pi / 4))
+            fit, near = SM.perspective_maps(
+                e.kind, pos, tuple(getattr(light, "direction", (0.0, 0.0, -1.0))),
+                float(getattr(light, "range", 0.0)), outer, bounds[0], bounds[1])
+            mats[e.matrix_base:e.matrix_base + len(fit)] = fit
             if e.kind == "spot":
-                outer = getattr(light, "outer_cone", math.pi / 4)
-                mats[e.matrix_base] = SM.spot_matrix(pos, light.direction, outer, near)
                 unit = 2.0 * math.tan(SM.spot_half_angle(outer)) / self.resolution
                 out[e.light] = (e.first, 1, near, unit)
             else:
-                mats[e.matrix_base:e.matrix_base + 6] = SM.point_matrices(pos, near)
                 out[e.light] = (e.first, 6, near, 2.0 / self.cube_resolution)
         data[0:4] = np.where(np.isfinite(far), far, 3.0e38)
         data[4:8] = texel
