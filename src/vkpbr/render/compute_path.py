@@ -334,7 +334,7 @@ class ComputeScene:
         for kernel, size, step in (
                 (f"raster_small{suffix}", small, "raster_small"), ("raster_args", (1, 1, 1), None),
                 (f"raster_big{suffix}", None, "raster_big"),
-                (f"raster_masked{suffix}", (), "raster_masked"),
+                (f"raster_masked{suffix}", (), "raster_masked_big"),
                 ("raster_resolve", groups((w, h, 1), (8, 8, 1)), "raster_resolve")):
             if size == () and not (alpha_mask and self.masked_rows):
                 stamp(step)  # none: no time
@@ -347,7 +347,8 @@ class ComputeScene:
             if size is None:
                 cmd.dispatch_indirect(res.raster_big, 4)
             elif size == ():
-                self._dispatch_masked(cmd, res, dset, push, material_sets, views, set0, suffix)
+                self._dispatch_masked(cmd, res, dset, push, material_sets, views, set0, suffix,
+                                      stamp)
             elif size[0] and size[1]:
                 cmd.dispatch(*size)
             cmd.memory_barrier("compute", "compute|indirect")
@@ -356,7 +357,8 @@ class ComputeScene:
         target.record_raster_end(cmd, res.raster_depths, depth)
 
     def _dispatch_masked(self, cmd: Any, res: _TargetResources, dset: Any, push: np.ndarray,
-                         material_sets: list[Any], views: int, set0: Any, suffix: str) -> None:
+                         material_sets: list[Any], views: int, set0: Any, suffix: str,
+                         stamp: Callable[[str], None]) -> None:
         """raster_masked: one invocation a triangle of each masked draw, its material bound
         (raster_masked's pipeline is bound), then each draw's big triangles listed by it
         (raster_masked_big: one work group an entry, an indirect dispatch a draw)."""
@@ -368,6 +370,7 @@ class ComputeScene:
             n = -(-count // RASTER_SMALL_GROUP)
             cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), views)
         cmd.memory_barrier("compute", "compute|indirect")
+        stamp("raster_masked")
         cmd.bind_pipeline(self._pipeline(f"raster_masked_big{suffix}", RASTER_PUSH_BYTES))
         if set0 is not None:
             cmd.bind_set(0, set0)
@@ -378,7 +381,6 @@ class ComputeScene:
             push[13] = segment
             cmd.push(push)
             cmd.dispatch_indirect(res.raster_masked_big, 16 * segment + 4)
-
 
     def record_outputs(self, cmd: Any, target: Any, frame_index: int, tbn: L.TbnMode,
                        frame_sets: dict[int, Any], material_sets: list[Any],

@@ -60,7 +60,7 @@ _PREPASSES = tuple(p.name for p in PASSES if p.prepass)
 # The compute path's own steps (render/compute_path.py): the compute rasteriser's kernels
 # before the visibility passes (on its frames "opaque" is then the depths' write alone), the
 # pixels' classification before the shading.
-RASTER_STEPS = ("raster_small", "raster_big", "raster_masked", "raster_resolve")
+RASTER_STEPS = ("raster_small", "raster_big", "raster_masked", "raster_masked_big", "raster_resolve")
 STAMP_NAMES = ("shadows", "transmission", *_PREPASSES, *RASTER_STEPS,
                *(n for n in _BEFORE_SHADING if n not in _PREPASSES), "classify", "shading",
                *(p.name for p in PASSES if p.name not in _BEFORE_SHADING))
