@@ -455,6 +455,10 @@ class GpuScene:
             flags |= L.MATERIAL_HAS_NORMAL_MAP
         if has["occlusion"]:
             flags |= L.MATERIAL_HAS_OCCLUSION_MAP
+        if has["emissive"]:
+            flags |= L.MATERIAL_HAS_EMISSIVE_MAP
+        if any(has[slot] for slot in L.LAYER_TEXTURES):
+            flags |= L.MATERIAL_HAS_LAYER_MAPS
         if mat.double_sided:
             flags |= L.MATERIAL_DOUBLE_SIDED
         if mat.alpha_mode == "blend":

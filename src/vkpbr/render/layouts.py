@@ -266,6 +266,12 @@ MATERIAL_HAS_OCCLUSION_MAP = 4
 MATERIAL_BLEND = 8  # alphaMode BLEND: output alpha for the blended pass
 MATERIAL_UNLIT = 16  # KHR_materials_unlit: the final view is the base colour
 MATERIAL_HAS_CLEARCOAT_NORMAL_MAP = 32
+# Any of the KHR_materials_* layers' textures (LAYER_TEXTURES) / an emissive texture: without
+# them shade.glsl takes the white default's 1.0 instead of sampling (8 texture reads a pixel).
+MATERIAL_HAS_LAYER_MAPS = 64
+MATERIAL_HAS_EMISSIVE_MAP = 128
+LAYER_TEXTURES = ("clearcoat", "clearcoat_roughness", "sheen_color", "sheen_roughness",
+                  "specular", "specular_color", "transmission", "thickness")
 
 LIGHTING = Std140Block(
     "Lighting",

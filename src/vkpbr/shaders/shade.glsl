@@ -81,21 +81,25 @@ void surface_frame(uint settings_flags, uint material_flags, out vec3 ng, out ve
 
 // The material's KHR_materials_* layers: factors times their textures (white when absent;
 // scalar maps arrive in R, swizzled by the view: gpu_scene.py).
-Layers material_layers() {
+// A layer texture's value, or the white default's (1.0) for a material with none of them
+// (MATERIAL_HAS_LAYER_MAPS): most materials, which then skip eight texture reads a pixel.
+#define LAYER_MAP(name, channels) (maps ? SAMPLE(name).channels : vec4(1.0).channels)
+Layers material_layers(uint material_flags) {
     // Through u() (frame_output.glsl): branches depend on these, which lavapipe would inline.
     vec3 zero = vec3(float(opaque_zero));
+    bool maps = (material_flags & MATERIAL_HAS_LAYER_MAPS) != 0u;
     Layers m;
     m.ior = max(u(MAT.ior), 1.0);
-    m.specular_color = MAT.specular_color_factor * SAMPLE(specular_color).rgb + zero;
-    m.specular = clamp(u(MAT.specular_factor) * SAMPLE(specular).r, 0.0, 1.0);
-    m.clearcoat = clamp(u(MAT.clearcoat_factor) * SAMPLE(clearcoat).r, 0.0, 1.0);
-    m.clearcoat_roughness = clamp(u(MAT.clearcoat_roughness) * SAMPLE(clearcoat_roughness).r,
+    m.specular_color = MAT.specular_color_factor * LAYER_MAP(specular_color, rgb) + zero;
+    m.specular = clamp(u(MAT.specular_factor) * LAYER_MAP(specular, r), 0.0, 1.0);
+    m.clearcoat = clamp(u(MAT.clearcoat_factor) * LAYER_MAP(clearcoat, r), 0.0, 1.0);
+    m.clearcoat_roughness = clamp(u(MAT.clearcoat_roughness) * LAYER_MAP(clearcoat_roughness, r),
                                   MIN_ROUGHNESS, 1.0);
-    m.sheen_color = MAT.sheen_color_factor * SAMPLE(sheen_color).rgb + zero;
-    m.sheen_roughness = clamp(u(MAT.sheen_roughness) * SAMPLE(sheen_roughness).r,
+    m.sheen_color = MAT.sheen_color_factor * LAYER_MAP(sheen_color, rgb) + zero;
+    m.sheen_roughness = clamp(u(MAT.sheen_roughness) * LAYER_MAP(sheen_roughness, r),
                               MIN_SHEEN_ROUGHNESS, 1.0);
-    m.transmission = clamp(u(MAT.transmission_factor) * SAMPLE(transmission).r, 0.0, 1.0);
-    m.thickness = max(u(MAT.thickness) * SAMPLE(thickness).r, 0.0) * s_model_scale;
+    m.transmission = clamp(u(MAT.transmission_factor) * LAYER_MAP(transmission, r), 0.0, 1.0);
+    m.thickness = max(u(MAT.thickness) * LAYER_MAP(thickness, r), 0.0) * s_model_scale;
     m.attenuation_color = MAT.attenuation_color + zero;
     m.attenuation_distance = u(MAT.attenuation_distance);
     return m;
@@ -163,7 +167,8 @@ vec4 shade_surface() {
     if ((settings_flags & SETTINGS_OCCLUSION) != 0u && (material_flags & MATERIAL_HAS_OCCLUSION_MAP) != 0u) {
         occlusion = 1.0 + MAT.occlusion_strength * (SAMPLE(occlusion).r - 1.0);
     }
-    vec3 emissive = SAMPLE(emissive).rgb * MAT.emissive_factor;
+    vec3 emissive = ((material_flags & MATERIAL_HAS_EMISSIVE_MAP) != 0u ? SAMPLE(emissive).rgb
+                                                                        : vec3(1.0)) * MAT.emissive_factor;
 
     vec3 ng, t, b, n;
     surface_frame(settings_flags, material_flags, ng, t, b, n);
@@ -173,7 +178,7 @@ vec4 shade_surface() {
     uint lighting_flags = u(lighting.flags);
     int brdf = u(settings.brdf);
     uint light_count = min(u(lighting.light_count), MAX_LIGHTS);
-    Layers layers = material_layers();
+    Layers layers = material_layers(material_flags);
     // The layers shade the glTF BRDF only (the course's BRDFs are the seed's).
     bool layered = brdf == BRDF_GLTF;
     vec3 nc = clearcoat_normal(settings_flags, material_flags, ng, t, b);
