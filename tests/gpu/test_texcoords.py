@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 
 from vkpbr.bake.bake import bake_scene
+from vkpbr.render import layouts as L
 from vkpbr.render.gpu_scene import uv_transform_rows
 from vkpbr.scene.baked_file import load_baked_scene, write_baked
 from vkpbr.scene.types import Camera, Image, Material, Mesh, Node, Sampler, Scene, TextureRef
@@ -152,6 +153,24 @@ def test_each_texture_reads_its_own_set_and_transform(make_renderer) -> None:
         texel, safe = nearest_texels(texture_uv(REFS[slot], uv0))
         got = r.render(size=(SIZE, SIZE), view=view, lighting="course")  # the 0.02 ambient
         assert_close(got, expected_view(slot, texel), safe, slot)
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
+def test_packed_metallic_roughness_reads_its_two_channels(make_renderer, pipeline: str) -> None:
+    """glTF's packed metallic-roughness texture (one image, sampler and transform; roughness
+    in G) is sampled once through one view holding metallic in R and roughness in G
+    (gpu_scene.py, MATERIAL_SHARED_METALLIC_ROUGHNESS): each view still shows its channel."""
+    packed = TextureRef(0, NEAREST, texcoord=0, offset=(0.5, 0.0), scale=(2.0, 2.0))
+    refs = {"metallic": packed, "roughness": dataclasses.replace(packed, channel=1)}
+    r = make_renderer(scene([quad()], refs))
+    assert r.gpu_scene.material_blocks[0]["flags"] & L.MATERIAL_SHARED_METALLIC_ROUGHNESS
+    if pipeline == "compute" and not r.device.compute_path:
+        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+    texel, safe = nearest_texels(texture_uv(packed, pixel_uv0()))
+    for view, channel in (("metallic", 0), ("roughness", 1)):
+        got = r.render(size=(SIZE, SIZE), view=view, lighting="course", pipeline=pipeline)
+        want = np.repeat(texel[..., channel:channel + 1].astype(np.float64), 3, axis=-1)
+        assert_close(got, want, safe, f"{view} ({pipeline})")
 
 
 def test_texcoords_view_shows_base_colour_coordinates(make_renderer) -> None:

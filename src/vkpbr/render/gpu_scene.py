@@ -51,6 +51,14 @@ __all__ = ["GpuScene", "Draw", "prepare_mesh", "uv_transform_rows"]
 
 _SWIZZLE = {0: "rrrr", 1: "gggg", 2: "bbbb", 3: "aaaa"}
 _NORMAL_SLOTS = ("normal", "clearcoat_normal")  # tangent-space normal maps (RGB, linear)
+
+
+def _shared_metallic_roughness(mat: Material) -> bool:
+    """Whether the material's metallic and roughness maps are one texture read the same way
+    (glTF's metallicRoughnessTexture: roughness in G), differing only in their channel."""
+    m, r = mat.metallic_texture, mat.roughness_texture
+    return (m is not None and r is not None and r.channel == 1
+            and dataclasses.replace(m, channel=1) == r)
 STREAMS = ("positions", "texcoords", "normals", "tangents")  # built at load
 LAZY_STREAMS = ("qtangents", "packed_frames")  # built by ensure_streams on first use
 
@@ -378,7 +386,10 @@ class GpuScene:
         (the transmission's copy in scenes without one: render/transmission.py)."""
         return self._view(self.default_images["white"], "iiii"), self._sampler(SamplerSpec())
 
-    def _texture(self, ref: TextureRef | None, slot: str) -> tuple[ImageView, Sampler, bool]:
+    def _texture(self, ref: TextureRef | None, slot: str, with_roughness: bool = False
+                 ) -> tuple[ImageView, Sampler, bool]:
+        """The view, sampler and presence of one material texture; `with_roughness`: the
+        metallic view of a shared metallic-roughness texture, metallic in R, roughness in G."""
         srgb = slot in SRGB_TEXTURE_SLOTS
         scalar = slot not in SRGB_TEXTURE_SLOTS and slot not in _NORMAL_SLOTS
         image = self.images.get((ref.image, srgb)) if ref is not None else None
@@ -389,6 +400,9 @@ class GpuScene:
         s = ref.sampler
         spec = SamplerSpec(s.wrap_s, s.wrap_t, s.mag_filter, s.min_filter, s.mipmaps)
         swizzle = _SWIZZLE[ref.channel] if scalar else "iiii"
+        if with_roughness:
+            metal = "rgba"[ref.channel]
+            swizzle = f"{metal}g{metal}{metal}"
         return self._view(image, swizzle), self._sampler(spec), True
 
     # --- materials --------------------------------------------------------------------------
@@ -410,11 +424,15 @@ class GpuScene:
             dset = self.pool.allocate(layout)
             self.material_sets.append(dset)
             has = {}
+            shared = _shared_metallic_roughness(mat)
             for binding, slot in enumerate(L.MATERIAL_TEXTURES):
-                view, sampler, present = self._texture(getattr(mat, f"{slot}_texture"), slot)
+                view, sampler, present = self._texture(getattr(mat, f"{slot}_texture"), slot,
+                                                       shared and slot == "metallic")
                 has[slot] = present
                 writer.sampler(dset, binding, view, sampler)
             block = self._material_block(mat, has)
+            if shared and has["metallic"]:
+                block["flags"] |= L.MATERIAL_SHARED_METALLIC_ROUGHNESS
             self.material_blocks.append(block)
             self.material_ubo.write(block.tobytes(), offset=i * stride)
             writer.uniform(dset, L.MATERIAL_BINDING, self.material_ubo, L.MATERIAL.size,

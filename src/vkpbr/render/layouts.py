@@ -270,6 +270,9 @@ MATERIAL_HAS_CLEARCOAT_NORMAL_MAP = 32
 # them shade.glsl takes the white default's 1.0 instead of sampling (8 texture reads a pixel).
 MATERIAL_HAS_LAYER_MAPS = 64
 MATERIAL_HAS_EMISSIVE_MAP = 128
+# glTF's packed metallic-roughness texture: the metallic binding's view holds metallic in R
+# and roughness in G (render/gpu_scene.py), so shade.glsl reads both with one sample.
+MATERIAL_SHARED_METALLIC_ROUGHNESS = 256
 LAYER_TEXTURES = ("clearcoat", "clearcoat_roughness", "sheen_color", "sheen_roughness",
                   "specular", "specular_color", "transmission", "thickness")
 

@@ -161,8 +161,11 @@ vec4 shade_surface() {
     if (base.a < MAT.alpha_cutoff) discard;
 #endif
     vec3 c = base.rgb;
-    float metallic = clamp(SAMPLE(metallic).r * MAT.metallic_factor, 0.0, 1.0);
-    float roughness = clamp(SAMPLE(roughness).r * MAT.roughness_factor, MIN_ROUGHNESS, 1.0);
+    // glTF's packed metallic-roughness texture: one sample (its metallic view's R and G).
+    vec2 mr = (material_flags & MATERIAL_SHARED_METALLIC_ROUGHNESS) != 0u
+        ? SAMPLE(metallic).rg : vec2(SAMPLE(metallic).r, SAMPLE(roughness).r);
+    float metallic = clamp(mr.x * MAT.metallic_factor, 0.0, 1.0);
+    float roughness = clamp(mr.y * MAT.roughness_factor, MIN_ROUGHNESS, 1.0);
     float occlusion = 1.0;
     if ((settings_flags & SETTINGS_OCCLUSION) != 0u && (material_flags & MATERIAL_HAS_OCCLUSION_MAP) != 0u) {
         occlusion = 1.0 + MAT.occlusion_strength * (SAMPLE(occlusion).r - 1.0);
