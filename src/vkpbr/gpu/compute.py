@@ -17,9 +17,11 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from vkpbr.errors import VkpbrError
 from vkpbr.gpu.descriptors import DescriptorSetLayout
 from vkpbr.gpu.device import Device, DeviceObject
 from vkpbr.gpu.pipeline import PipelineLayout, ShaderModule
+from vkpbr.gpu.vk import check_result
 
 __all__ = ["ComputePipeline", "groups", "LAYOUTS", "STAGES"]
 
@@ -64,8 +66,13 @@ class ComputePipeline(DeviceObject):
     bind_point = "compute"
 
     def __init__(self, device: Device, spirv: Path, set_layouts: Sequence[DescriptorSetLayout],
-                 push_bytes: int = 0) -> None:
+                 push_bytes: int = 0, capture_statistics: bool = False) -> None:
+        """`capture_statistics`: keep the driver's statistics of the compiled kernel for
+        `statistics()` (a device with `pipeline_statistics` only)."""
         vk = device.vk
+        if capture_statistics and not device.pipeline_statistics:
+            raise VkpbrError(f"{device.info.name}: the driver reports no pipeline statistics "
+                             "(VK_KHR_pipeline_executable_properties)")
         self.device = device
         self.layout = PipelineLayout(device, list(set_layouts), push_bytes, stages=("compute",))
         module = ShaderModule(device, Path(spirv))
@@ -74,11 +81,51 @@ class ComputePipeline(DeviceObject):
             # into the create info, and the copy's pName points into the original's memory.
             stage = vk.VkPipelineShaderStageCreateInfo(
                 stage=vk.VK_SHADER_STAGE_COMPUTE_BIT, module=module.handle, pName="main")
-            info = vk.VkComputePipelineCreateInfo(stage=stage, layout=self.layout.handle)
+            flags = vk.VK_PIPELINE_CREATE_CAPTURE_STATISTICS_BIT_KHR if capture_statistics else 0
+            info = vk.VkComputePipelineCreateInfo(flags=flags, stage=stage, layout=self.layout.handle)
             self.handle = vk.vkCreateComputePipelines(device.handle, None, 1, [info], None)[0]
         finally:
             module.destroy()
         device.track(self)
+
+    def statistics(self) -> dict[str, float | int | bool]:
+        """The driver's statistics of this kernel (made with `capture_statistics`), by the
+        names it gives them (NVIDIA's: registers, shared memory, instructions, ...); those
+        of several executables (rare for compute) prefixed with the executable's name."""
+        vk = self.device.vk
+        ffi, dev = vk.ffi, self.device.handle
+
+        def listed(name: str, info: Any, ctype: str, stype: int) -> Any:
+            # Raw calls: the binding's wrappers leave the outputs' sType unset.
+            call = ffi.cast(f"PFN_{name}", vk.lib.vkGetDeviceProcAddr(dev, name.encode()))
+            count = ffi.new("uint32_t*")
+            check_result(call(dev, info, count, ffi.NULL), name)
+            items = ffi.new(f"{ctype}[]", count[0])
+            for item in items:
+                item.sType = stype
+            check_result(call(dev, info, count, items), name)
+            return items
+
+        pipeline = ffi.new("VkPipelineInfoKHR*", {"sType": vk.VK_STRUCTURE_TYPE_PIPELINE_INFO_KHR,
+                                                  "pipeline": self.handle})
+        executables = listed("vkGetPipelineExecutablePropertiesKHR", pipeline,
+                             "VkPipelineExecutablePropertiesKHR",
+                             vk.VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_PROPERTIES_KHR)
+        read = {vk.VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_BOOL32_KHR: lambda v: bool(v.b32),
+                vk.VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_INT64_KHR: lambda v: int(v.i64),
+                vk.VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_UINT64_KHR: lambda v: int(v.u64),
+                vk.VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_FLOAT64_KHR: lambda v: float(v.f64)}
+        out: dict[str, float | int | bool] = {}
+        for index, props in enumerate(executables):
+            prefix = "" if len(executables) == 1 else f"{ffi.string(props.name).decode()}: "
+            info = ffi.new("VkPipelineExecutableInfoKHR*", {
+                "sType": vk.VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_INFO_KHR,
+                "pipeline": self.handle, "executableIndex": index})
+            for st in listed("vkGetPipelineExecutableStatisticsKHR", info,
+                             "VkPipelineExecutableStatisticKHR",
+                             vk.VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_STATISTIC_KHR):
+                out[prefix + ffi.string(st.name).decode()] = read[st.format](st.value)
+        return out
 
     def destroy(self) -> None:
         super().destroy()

@@ -198,11 +198,19 @@ class Device:
             drawIndirectFirstInstance=on[self.batch_views],
             shaderStorageImageWriteWithoutFormat=on[self.compute_path],
             shaderInt64=on[self.compute_raster], textureCompressionBC=on[self.bc7_textures])
-        features = vk.VkPhysicalDeviceFeatures2(pNext=f11, features=core)
         available = {
             e.extensionName
             for e in vk.vkEnumerateDeviceExtensionProperties(self.physical, None)
         }
+        # The driver's statistics of compiled pipelines (registers, instructions: a compute
+        # kernel's occupancy; ComputePipeline.statistics), where it reports them. Diagnostics
+        # only: nothing changes unless a pipeline is made with capture_statistics.
+        self.pipeline_statistics = "VK_KHR_pipeline_executable_properties" in available
+        chain = f11
+        if self.pipeline_statistics:
+            chain = vk.VkPhysicalDevicePipelineExecutablePropertiesFeaturesKHR(
+                pNext=f11, pipelineExecutableInfo=vk.VK_TRUE)
+        features = vk.VkPhysicalDeviceFeatures2(pNext=chain, features=core)
         missing = [e for e in self._required_extensions if e not in available]
         if missing:
             raise VkpbrError(f"{self.info.name}: device extension(s) {', '.join(missing)} missing")
@@ -213,6 +221,8 @@ class Device:
         self.external_memory_fd = "VK_KHR_external_memory_fd" in available
         if self.external_memory_fd and "VK_KHR_external_memory_fd" not in self.extensions:
             self.extensions.append("VK_KHR_external_memory_fd")
+        if self.pipeline_statistics and "VK_KHR_pipeline_executable_properties" not in self.extensions:
+            self.extensions.append("VK_KHR_pipeline_executable_properties")
         # Keep the queue info alive until vkCreateDevice returns: the binding copies structs
         # into arrays, and the copy's pQueuePriorities points into the original's memory.
         queue_info = vk.VkDeviceQueueCreateInfo(

@@ -221,6 +221,7 @@ class ComputeScene:
         self.aggregate = device.info.kind != "cpu"
         # Which materials any opaque or masked draw uses: only those get a shading dispatch.
         self._pipelines: dict[str, ComputePipeline] = {}
+        self._push_bytes: dict[str, int] = {}
         self._stand_ins: dict[str, tuple[Any, Any]] | None = None
         self._targets: dict[int, _TargetResources] = {}
 
@@ -232,7 +233,23 @@ class ComputeScene:
         if name not in self._pipelines:
             self._pipelines[name] = self._own(ComputePipeline(
                 self.device, SPV_DIR / f"{name}.comp.spv", self.layouts, push_bytes=push_bytes))
+            self._push_bytes[name] = push_bytes
         return self._pipelines[name]
+
+    def kernel_statistics(self) -> dict[str, dict[str, float | int | bool]]:
+        """Per kernel the frames so far used, the driver's statistics of its compiled code
+        (registers, shared memory, instructions: what bounds its occupancy), from a twin
+        pipeline made to capture them (benchmarks/probe_kernels.py; a device with
+        `pipeline_statistics`)."""
+        out = {}
+        for name in sorted(self._pipelines):
+            twin = ComputePipeline(self.device, SPV_DIR / f"{name}.comp.spv", self.layouts,
+                                   push_bytes=self._push_bytes[name], capture_statistics=True)
+            try:
+                out[name] = twin.statistics()
+            finally:
+                twin.destroy()
+        return out
 
     def _resources(self, target: Any) -> _TargetResources:
         key = id(target)
