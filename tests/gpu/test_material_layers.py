@@ -28,7 +28,9 @@ from pinhole import assert_close_on_raster
 from test_reference import CAMERA, LIGHT, H, W, pixel_geometry
 
 from vkpbr.reference import brdf as ref
+from vkpbr.render import layouts as L
 from vkpbr.render.environment import EnvironmentSpec
+from vkpbr.render.options import RenderOptions
 from vkpbr.scene.default import plane
 from vkpbr.scene.types import Light, Material, Node, Scene
 
@@ -283,3 +285,26 @@ def test_layer_textures_multiply_their_factors(make_renderer, pipeline: str) -> 
         got = render(r, view, pipeline, env="none")
         np.testing.assert_allclose(got, np.broadcast_to(want[view.replace("-", "_")], got.shape),
                                    rtol=3e-3, atol=5e-5, err_msg=view)
+
+
+def test_only_default_layers_take_the_specialised_kernel(make_renderer) -> None:  # noqa: ANN001
+    """The compute path compiles a material's shading without layers (shade.glsl
+    SHADE_LAYERS false) only where its layers are the defaults: every layered material
+    here keeps them (its pixels are checked against the mirror above), a plain one does
+    not, and the kernels a frame binds carry the frame's lighting flags and BRDF."""
+    from vkpbr.render.gpu_scene import GpuScene, has_default_layers
+
+    def block(mat: Material) -> np.ndarray:
+        return GpuScene._material_block(mat, dict.fromkeys(L.MATERIAL_TEXTURES, False))
+
+    assert has_default_layers(block(Material(base_color_factor=(0.3, 0.4, 0.5, 1.0))))
+    for name, mat in LAYERED.items():
+        assert not has_default_layers(block(mat)), name
+    r = make_renderer(plane_scene(LAYERED["clearcoat"]))
+    if not r.device.compute_path:
+        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+    render(r, "final", "compute", env="none")
+    variant = r.shade_variant(RenderOptions(lighting="pbr", brdf="gltf", env="none"))
+    kernels = {k for k in r.compute_scene()._pipelines if k[0].startswith("shade_")}
+    assert any(constants == variant.constants(True) for _, constants in kernels), kernels
+    assert variant.brdf == int(L.Brdf.GLTF) and variant.lighting_flags != 0xFFFFFFFF

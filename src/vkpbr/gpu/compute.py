@@ -13,6 +13,7 @@ constants, and the barriers between dispatches (style.md: Vulkan vocabulary stay
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -66,9 +67,12 @@ class ComputePipeline(DeviceObject):
     bind_point = "compute"
 
     def __init__(self, device: Device, spirv: Path, set_layouts: Sequence[DescriptorSetLayout],
-                 push_bytes: int = 0, capture_statistics: bool = False) -> None:
+                 push_bytes: int = 0, capture_statistics: bool = False,
+                 specialization: Sequence[int] = ()) -> None:
         """`capture_statistics`: keep the driver's statistics of the compiled kernel for
-        `statistics()` (a device with `pipeline_statistics` only)."""
+        `statistics()` (a device with `pipeline_statistics` only). `specialization`: the
+        values of the shader's specialization constants 0, 1, ... (32-bit each: uint, int
+        as its two's complement, bool as 0 or 1); the driver compiles the kernel for them."""
         vk = device.vk
         if capture_statistics and not device.pipeline_statistics:
             raise VkpbrError(f"{device.info.name}: the driver reports no pipeline statistics "
@@ -79,8 +83,17 @@ class ComputePipeline(DeviceObject):
         try:
             # Keep the stage struct referenced until the call returns: the binding copies it
             # into the create info, and the copy's pName points into the original's memory.
+            spec = None
+            if specialization:
+                data = struct.pack(f"<{len(specialization)}I",
+                                   *(int(v) & 0xFFFFFFFF for v in specialization))
+                spec = vk.VkSpecializationInfo(
+                    pMapEntries=[vk.VkSpecializationMapEntry(constantID=i, offset=4 * i, size=4)
+                                 for i in range(len(specialization))],
+                    dataSize=len(data), pData=vk.ffi.from_buffer(data))
             stage = vk.VkPipelineShaderStageCreateInfo(
-                stage=vk.VK_SHADER_STAGE_COMPUTE_BIT, module=module.handle, pName="main")
+                stage=vk.VK_SHADER_STAGE_COMPUTE_BIT, module=module.handle, pName="main",
+                pSpecializationInfo=spec)
             flags = vk.VK_PIPELINE_CREATE_CAPTURE_STATISTICS_BIT_KHR if capture_statistics else 0
             info = vk.VkComputePipelineCreateInfo(flags=flags, stage=stage, layout=self.layout.handle)
             self.handle = vk.vkCreateComputePipelines(device.handle, None, 1, [info], None)[0]

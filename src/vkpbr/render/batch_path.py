@@ -128,7 +128,7 @@ class BatchPath:
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
         self._run(frame, plan, opts, lambda redraw: r.recorder.compute_batch(
             target, frame, opts.tbn, opts.alpha_mask, plan, redraw, (n, w, h, rows),
-            bv.sets0[frame.index], copy, external),
+            bv.sets0[frame.index], copy, external, r.shade_variant(opts)),
             (lambda: self._cuda_wait(external)) if cuda else None)
         if cuda:
             r.device.check_validation()

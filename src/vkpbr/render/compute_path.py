@@ -38,9 +38,9 @@ from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayo
 from vkpbr.gpu.device import Device
 from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
-from vkpbr.render.gpu_scene import GpuScene
+from vkpbr.render.gpu_scene import GpuScene, has_default_layers
 
-__all__ = ["ComputeScene", "SHADE_GROUP"]
+__all__ = ["ComputeScene", "SHADE_GROUP", "ShadeVariant", "GENERAL_SHADING"]
 
 SHADE_GROUP = 64  # shade.comp's work group: pixels of one bin
 # The compute rasteriser (shaders/raster.comp): its work groups and draw-table flags.
@@ -48,6 +48,24 @@ RASTER_SMALL_GROUP = 64  # raster_small: one triangle an invocation
 RASTER_DOUBLE_SIDED, RASTER_MASKED, RASTER_BLENDED = 1, 2, 4
 MAX_GROUPS_X = 65535  # maxComputeWorkGroupCount[0] every Vulkan device has
 RASTER_PUSH_BYTES = 76  # raster.comp's push constants (19 uints)
+
+
+@dataclass(frozen=True)
+class ShadeVariant:
+    """What a frame's shading kernels are specialised for (shade.glsl's specialisation
+    constants): its lighting flags (FrameLighting.flags: shadows, image-based light, screen
+    transmission) and BRDF (Settings.brdf). The default is the general kernel. Each material
+    adds whether it has layers other than the defaults (gpu_scene.has_default_layers)."""
+
+    lighting_flags: int = 0xFFFFFFFF
+    brdf: int = -1
+
+    def constants(self, layers: bool) -> tuple[int, int, int]:
+        """shade.glsl's constants 0-2 for a material with (`layers`) or without layers."""
+        return self.lighting_flags, self.brdf, int(layers)
+
+
+GENERAL_SHADING = ShadeVariant()
 
 
 @dataclass(frozen=True)
@@ -220,8 +238,10 @@ class ComputeScene:
         # loop costs ~10x more (classify.comp). Tests set it to run both kernels on lavapipe.
         self.aggregate = device.info.kind != "cpu"
         # Which materials any opaque or masked draw uses: only those get a shading dispatch.
-        self._pipelines: dict[str, ComputePipeline] = {}
-        self._push_bytes: dict[str, int] = {}
+        self._pipelines: dict[tuple[str, tuple[int, ...]], ComputePipeline] = {}
+        self._push_bytes: dict[tuple[str, tuple[int, ...]], int] = {}
+        # Per material, whether it shades with layers other than the defaults (ShadeVariant).
+        self.layered = [not has_default_layers(b) for b in gs.material_blocks]
         self._stand_ins: dict[str, tuple[Any, Any]] | None = None
         self._targets: dict[int, _TargetResources] = {}
 
@@ -229,12 +249,16 @@ class ComputeScene:
         self._owned.append(obj)
         return obj
 
-    def _pipeline(self, name: str, push_bytes: int) -> ComputePipeline:
-        if name not in self._pipelines:
-            self._pipelines[name] = self._own(ComputePipeline(
-                self.device, SPV_DIR / f"{name}.comp.spv", self.layouts, push_bytes=push_bytes))
-            self._push_bytes[name] = push_bytes
-        return self._pipelines[name]
+    def _pipeline(self, name: str, push_bytes: int, constants: tuple[int, ...] = ()
+                  ) -> ComputePipeline:
+        """Kernel `name` (shaders/spv/<name>.comp.spv), specialised for `constants`."""
+        key = (name, constants)
+        if key not in self._pipelines:
+            self._pipelines[key] = self._own(ComputePipeline(
+                self.device, SPV_DIR / f"{name}.comp.spv", self.layouts, push_bytes=push_bytes,
+                specialization=constants))
+            self._push_bytes[key] = push_bytes
+        return self._pipelines[key]
 
     def kernel_statistics(self) -> dict[str, dict[str, float | int | bool]]:
         """Per kernel the frames so far used, the driver's statistics of its compiled code
@@ -242,11 +266,13 @@ class ComputeScene:
         pipeline made to capture them (benchmarks/probe_kernels.py; a device with
         `pipeline_statistics`)."""
         out = {}
-        for name in sorted(self._pipelines):
+        for name, constants in sorted(self._pipelines):
             twin = ComputePipeline(self.device, SPV_DIR / f"{name}.comp.spv", self.layouts,
-                                   push_bytes=self._push_bytes[name], capture_statistics=True)
+                                   push_bytes=self._push_bytes[name, constants],
+                                   capture_statistics=True, specialization=constants)
             try:
-                out[name] = twin.statistics()
+                label = f"{name} {constants}" if constants else name
+                out[label] = twin.statistics()
             finally:
                 twin.destroy()
         return out
@@ -277,13 +303,14 @@ class ComputeScene:
                        frame_sets: dict[int, Any], material_sets: list[Any], materials: list[int],
                        clear_color: tuple[float, ...], shade: bool = True,
                        tiles: tuple[int, int, int, int] | None = None, copy: bool = False,
-                       stamp: Callable[[str], None] = _untimed) -> None:
+                       stamp: Callable[[str], None] = _untimed,
+                       variant: ShadeVariant = GENERAL_SHADING) -> None:
         """Classify the visibility image's pixels by material, then shade each material of
         `materials` (those the visibility pass drew) with its own set 1 bound (`shade`
         False: classify only, for the outputs of a fragment-path frame; `tiles`: a compute
         batch's atlas, as record_raster's; `copy`: the transmission's copy of the opaque
         scene, linear radiance: render/transmission.py). `stamp("classify")` after the
-        classification."""
+        classification. `variant`: what the frame's shading kernels are specialised for."""
         res = self._resources(target)
         compute_set = res.sets[frame_index]
         cmd.fill(res.bins, 0)
@@ -306,7 +333,7 @@ class ComputeScene:
         if shade:
             kernel = f"shade_{'batch_' if tiles else 'copy_' if copy else ''}{tbn.name.lower()}"
             self._dispatch_bins(cmd, res, frame_index, kernel, frame_sets, material_sets,
-                                materials, tiles)
+                                materials, tiles, variant)
 
     def record_background(self, cmd: Any, target: Any, frame_index: int,
                           frame_sets: dict[int, Any],
@@ -411,13 +438,22 @@ class ComputeScene:
 
     def _dispatch_bins(self, cmd: Any, res: _TargetResources, frame_index: int, kernel: str,
                        frame_sets: dict[int, Any], material_sets: list[Any],
-                       materials: list[int], tiles: tuple[int, int, int, int] | None = None) -> None:
-        cmd.bind_pipeline(self._pipeline(kernel, 32 if tiles else 16))
-        self._bind_frame_sets(cmd, frame_sets, None, res.sets[frame_index])
+                       materials: list[int], tiles: tuple[int, int, int, int] | None = None,
+                       variant: ShadeVariant | None = None) -> None:
+        """One indirect dispatch of `kernel` per material of `materials`, its set 1 bound;
+        `variant`: the kernel specialised per material (ShadeVariant), else the general one."""
+        push_bytes = 32 if tiles else 16
+        bound = None
         material = np.zeros(8 if tiles else 4, np.uint32)
         if tiles:
             material[1:5] = tiles
         for m in materials:
+            constants = variant.constants(self.layered[m]) if variant is not None else ()
+            if constants != bound:  # pipelines share the layout: the sets stay bound
+                cmd.bind_pipeline(self._pipeline(kernel, push_bytes, constants))
+                if bound is None:
+                    self._bind_frame_sets(cmd, frame_sets, None, res.sets[frame_index])
+                bound = constants
             cmd.bind_set(1, material_sets[m])
             material[0] = m
             cmd.push(material)

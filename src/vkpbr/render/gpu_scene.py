@@ -53,6 +53,22 @@ _SWIZZLE = {0: "rrrr", 1: "gggg", 2: "bbbb", 3: "aaaa"}
 _NORMAL_SLOTS = ("normal", "clearcoat_normal")  # tangent-space normal maps (RGB, linear)
 
 
+def default_layers() -> dict[str, np.ndarray]:
+    """The MATERIAL block's layer factors (layouts.LAYER_FIELDS) of a material with none of
+    the KHR_materials_* extensions: generated.glsl's MATERIAL_DEFAULT_* (shade.glsl)."""
+    block = GpuScene._material_block(Material(), dict.fromkeys(L.MATERIAL_TEXTURES, False))
+    return {f: np.atleast_1d(block[f]).astype(np.float32) for f in L.LAYER_FIELDS}
+
+
+def has_default_layers(block: np.ndarray) -> bool:
+    """Whether a material's block shades as the default layers (no layer texture, no coat
+    normal map, every factor the default's): shade.glsl's SHADE_LAYERS false gives it."""
+    maps = L.MATERIAL_HAS_LAYER_MAPS | L.MATERIAL_HAS_CLEARCOAT_NORMAL_MAP
+    return not int(block["flags"]) & maps and all(
+        np.array_equal(np.atleast_1d(block[f]).astype(np.float32), v)
+        for f, v in default_layers().items())
+
+
 def _shared_metallic_roughness(mat: Material) -> bool:
     """Whether the material's metallic and roughness maps are one texture read the same way
     (glTF's metallicRoughnessTexture: roughness in G), differing only in their channel."""

@@ -275,6 +275,10 @@ MATERIAL_HAS_EMISSIVE_MAP = 128
 MATERIAL_SHARED_METALLIC_ROUGHNESS = 256
 LAYER_TEXTURES = ("clearcoat", "clearcoat_roughness", "sheen_color", "sheen_roughness",
                   "specular", "specular_color", "transmission", "thickness")
+# The MATERIAL block's KHR_materials_* layer factors (shade.glsl material_layers).
+LAYER_FIELDS = ("ior", "specular_factor", "specular_color_factor", "clearcoat_factor",
+                "clearcoat_roughness", "sheen_color_factor", "sheen_roughness",
+                "transmission_factor", "thickness", "attenuation_color", "attenuation_distance")
 
 LIGHTING = Std140Block(
     "Lighting",

@@ -23,7 +23,7 @@ from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec, VertexStr
 from vkpbr.gpu.target import COPY_DEPTH, FrameTarget
 from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
-from vkpbr.render.compute_path import ComputeScene
+from vkpbr.render.compute_path import GENERAL_SHADING, ComputeScene, ShadeVariant
 from vkpbr.render.frames import FrameSlot
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.overlay import TextOverlay
@@ -175,6 +175,7 @@ class FrameRecorder:
     def begin_frame(self, frame: Frame, tbn: L.TbnMode, alpha_mask: bool, plan: ShadowPlan,
                     redraw: tuple[range, ...] | None = None, transmission: bool = False,
                     compute: bool = False, untimed: frozenset[str] = frozenset(),
+                    variant: ShadeVariant = GENERAL_SHADING,
                     ) -> tuple[Commands, FrameStamps, list[str], list[str]]:
         """Begin a frame's command buffer (a single frame's or a batch's, render/batch.py):
         its start timestamp, the shadow-map passes (`redraw`: per plan entry, the range of its
@@ -194,12 +195,13 @@ class FrameRecorder:
                                 gs.streams, gs.index_buffer, gs.has_colors, redraw)
         stamps.after("shadows")
         if transmission:
-            self._record_opaque_copy(cmd, frame, tbn, names, classes, compute)
+            self._record_opaque_copy(cmd, frame, tbn, names, classes, compute, variant)
         stamps.after("transmission")
         return cmd, stamps, names, classes
 
     def _record_opaque_copy(self, cmd: Commands, frame: Frame, tbn: L.TbnMode, names: list[str],
-                            classes: list[str], compute: bool) -> None:
+                            classes: list[str], compute: bool,
+                            variant: ShadeVariant = GENERAL_SHADING) -> None:
         """The frame slot's copy of the opaque scene: the opaque and masked draws that do not
         transmit and the environment, in linear radiance, then its mip chain. `compute`: as
         the compute path draws a frame (visibility, binning, shading in compute shaders, the
@@ -225,7 +227,8 @@ class FrameRecorder:
             target.record_shading_begin(cmd)
             self.compute_scene().record_shading(  # type: ignore[misc]
                 cmd, target, frame.index, tbn, self._compute_sets(frame), gs.material_sets,
-                _shaded_materials(gs.draws, classes), target.clear_color, copy=True)
+                _shaded_materials(gs.draws, classes), target.clear_color, copy=True,
+                variant=variant)
             target.record_resume(cmd)
             record_passes(cmd, context(False, False), ("background",))
         else:
@@ -238,7 +241,8 @@ class FrameRecorder:
                 alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
                 copy: tuple[str, ...], plan: ShadowPlan, compute: bool = False,
                 outputs: bool = False, redraw: tuple[range, ...] | None = None,
-                raster: bool = False, transmission: bool = False) -> Commands:
+                raster: bool = False, transmission: bool = False,
+                variant: ShadeVariant = GENERAL_SHADING) -> Commands:
         gs = self.gpu_scene
         slot = self.slots[frame.index]
         prepass = self.prepass_for(target) and not compute  # visibility: its own pre-pass
@@ -248,7 +252,8 @@ class FrameRecorder:
         if not compute:
             untimed.add("classify")  # (the outputs' classification is the next step's time)
         cmd, stamps, names, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw,
-                                                       transmission, compute, frozenset(untimed))
+                                                       transmission, compute, frozenset(untimed),
+                                                       variant)
         shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
 
         def context(visibility: bool, after_visibility: bool = False,
@@ -292,7 +297,7 @@ class FrameRecorder:
             cs = self.compute_scene()
             cs.record_shading(cmd, target, frame.index, tbn, frame_sets, gs.material_sets,
                               drawn, target.clear_color, shade=compute,
-                              stamp=vis_ctx.stamp)  # type: ignore[attr-defined]
+                              stamp=vis_ctx.stamp, variant=variant)  # type: ignore[attr-defined]
             if outputs:
                 cs.record_outputs(cmd, target, frame.index, tbn, frame_sets, gs.material_sets,
                                   drawn)
@@ -324,38 +329,41 @@ class FrameRecorder:
                         copy: tuple[str, ...], plan: ShadowPlan = _NO_SHADOWS,
                         compute: bool = False, outputs: bool = False,
                         redraw: tuple[range, ...] | None = None, raster: bool = False,
-                        transmission: bool = False) -> Commands:
+                        transmission: bool = False,
+                        variant: ShadeVariant = GENERAL_SHADING) -> Commands:
         """The command buffer recorded for these inputs, recorded on first use. A buffer is
         used by one frame of the ring only, whose previous submission has finished: it can be
         re-recorded (new blend order) or freed at once. `plan`: the shadow maps' (a new plan
         records new buffers; lights that only move keep theirs); `transmission`: draw the
-        copy of the opaque scene first (render/transmission.py)."""
+        copy of the opaque scene first (render/transmission.py); `variant`: what the compute
+        path's shading kernels are specialised for (the frame's lighting)."""
         tid = id(target)
         if self._generations.get(tid, target.generation) != target.generation:
             self.free(tid)  # recreated swapchain: its images and buffers are new
         self._generations[tid] = target.generation
         key = (tid, image, frame.index, tbn, alpha_mask, id(overlay), copy, plan, compute, outputs,
-               redraw, raster, transmission)
+               redraw, raster, transmission, variant)
         rec = self._recorded.get(key)
         if rec is not None and rec.blend_order == order:
             return rec.cmd
         if rec is not None:  # the camera moved enough to reorder blended draws
             rec.cmd.free()
         cmd = self._record(target, frame, image, tbn, alpha_mask, order, overlay, copy, plan,
-                           compute, outputs, redraw, raster, transmission)
+                           compute, outputs, redraw, raster, transmission, variant)
         self._recorded[key] = _Recorded(cmd, order)
         return cmd
 
     def compute_batch(self, target: FrameTarget, frame: Frame, tbn: L.TbnMode, alpha_mask: bool,
                       plan: ShadowPlan, redraw: tuple[range, ...], tiles: tuple[int, int, int, int],
-                      set0: object, copy: tuple[str, ...], external: object = None) -> Commands:
+                      set0: object, copy: tuple[str, ...], external: object = None,
+                      variant: ShadeVariant = GENERAL_SHADING) -> Commands:
         """A compute batch's commands (render/batch_path.py), recorded on first use: `tiles`
         (views, tile width, tile height, tiles a column, column-major) of an atlas `target`, every view
         rasterised and shaded in compute shaders (its ViewRecord in `set0`, BatchViews'), the
         environment behind them, the copies (the colour into the exported buffer `external`,
         for CUDA, where given). No blended draws (the layered batch takes those)."""
         key = ("compute batch", id(target), frame.index, tbn, alpha_mask, plan, redraw, tiles,
-               id(set0), copy, id(external))
+               id(set0), copy, id(external), variant)
         rec = self._recorded.get(key)
         if rec is not None:
             return rec.cmd
@@ -369,7 +377,8 @@ class FrameRecorder:
         frame_sets = self._compute_sets(frame, set0)
         drawn = _shaded_materials(gs.draws, classes)
         cs.record_shading(cmd, target, frame.index, tbn, frame_sets, gs.material_sets, drawn,
-                          target.clear_color, tiles=tiles, stamp=stamps.after)  # type: ignore[attr-defined]
+                          target.clear_color, tiles=tiles, stamp=stamps.after,  # type: ignore[attr-defined]
+                          variant=variant)
         stamps.after("shading")
         cs.record_background(cmd, target, frame.index, frame_sets, tiles)
         target.record_resume(cmd)  # type: ignore[attr-defined]

@@ -40,7 +40,7 @@ from vkpbr.render import layouts as L
 from vkpbr.render.batch import draw_spheres
 from vkpbr.render.batch_path import BatchPath
 from vkpbr.render.camera import as_camera, depth_range, forward, linear_depth, validate_camera
-from vkpbr.render.compute_path import ComputeScene
+from vkpbr.render.compute_path import ComputeScene, ShadeVariant
 from vkpbr.render.environment import Environment, EnvironmentBaker, EnvironmentSpec
 from vkpbr.render.frames import (
     Bounds,
@@ -174,6 +174,7 @@ class Renderer:
             blend = [d.center for d in self.gpu_scene.draws if d.alpha_mode == "blend"]
             self._blend_centers = np.array(blend, dtype=np.float64).reshape(-1, 3)
             self._last_lighting: tuple[RenderOptions, FrameLighting] | None = None
+            self._last_variant: tuple[RenderOptions, ShadeVariant] | None = None
             self._auto_choice: PathChoice | None = None  # what auto measured (path_choice.py)
             self.last_stats = FrameStats()
             self.timings = {"setup": time.perf_counter() - t0, **self.gpu_scene.timings}
@@ -388,6 +389,16 @@ class Renderer:
         self._last_lighting = (options, lighting)
         return lighting
 
+    def shade_variant(self, options: RenderOptions) -> ShadeVariant:
+        """What the compute path's shading kernels are specialised for with `options`: the
+        frame's lighting flags and BRDF (render/compute_path.py ShadeVariant)."""
+        last = self._last_variant
+        if last is not None and last[0] is options:
+            return last[1]
+        variant = ShadeVariant(self.frame_lighting(options).flags, int(options.shading_brdf))
+        self._last_variant = (options, variant)
+        return variant
+
     def screen_transmission(self, options: RenderOptions) -> bool:
         """Whether frames with `options` draw the copy of the opaque scene that transmissive
         surfaces see through (render/transmission.py): the scene has one, and the frame
@@ -532,7 +543,8 @@ class Renderer:
             cmd = self.recorder.command_buffer(
                 target, frame, image, options.tbn, options.alpha_mask,
                 self.blend_order(camera.eye), overlay, copy, plan, compute, outputs, redraw,
-                compute and self.uses_compute_raster(options, target), transmission)
+                compute and self.uses_compute_raster(options, target), transmission,
+                self.shade_variant(options))
             c0 = clock()
             ok = target.submit(frame, cmd, image)
         except BaseException:

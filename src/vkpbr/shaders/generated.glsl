@@ -11,6 +11,17 @@ const uint MAX_LIGHTS = 256u;
 const float MIN_SHEEN_ROUGHNESS = 0.07;
 const float SHEEN_FIT_MIN_N_DOT_V = 0.02;
 const float OPAQUE_COPY_MAX_SIZE = 1024.0;
+const float MATERIAL_DEFAULT_ior = 1.5;
+const float MATERIAL_DEFAULT_specular_factor = 1.0;
+const vec3 MATERIAL_DEFAULT_specular_color_factor = vec3(1.0, 1.0, 1.0);
+const float MATERIAL_DEFAULT_clearcoat_factor = 0.0;
+const float MATERIAL_DEFAULT_clearcoat_roughness = 0.0;
+const vec3 MATERIAL_DEFAULT_sheen_color_factor = vec3(0.0, 0.0, 0.0);
+const float MATERIAL_DEFAULT_sheen_roughness = 0.0;
+const float MATERIAL_DEFAULT_transmission_factor = 0.0;
+const float MATERIAL_DEFAULT_thickness = 0.0;
+const vec3 MATERIAL_DEFAULT_attenuation_color = vec3(1.0, 1.0, 1.0);
+const float MATERIAL_DEFAULT_attenuation_distance = 0.0;
 float sheen_albedo_fit(float x, float y) {
     return (1.09927 + y * (-0.4456763 + y * (-2.387564 + y * (6.252952 + y * (-3.489524))))) + x * ((12.52236 + y * (-70.76933 + y * (154.0586 + y * (-146.4862 + y * (50.86578))))) + x * ((-54.14374 + y * (288.7846 + y * (-608.6334 + y * (560.6368 + y * (-189.5136))))) + x * ((66.47369 + y * (-367.9202 + y * (784.6235 + y * (-728.6155 + y * (247.9961))))) + x * ((-25.8705 + y * (149.7473 + y * (-326.3621 + y * (307.6033 + y * (-105.8631)))))))));
 }

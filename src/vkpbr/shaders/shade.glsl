@@ -27,6 +27,19 @@
 #include "ibl.glsl"
 #include "frame_output.glsl"  // opaque_zero / u() (the lavapipe leak guard), radiance_output
 
+// Specialisation (the compute path's shading kernels: render/compute_path.py ShadeVariant):
+// the frame's lighting flags and BRDF as constants, and whether the material has any layer
+// (KHR_materials_*) other than the defaults, so that the driver compiles out what the frame
+// and the material never take (on the H200 the uber-shader's 128 registers a thread held its
+// occupancy to a quarter). The defaults -- every flag, the frame's BRDF, the material's
+// layers -- are the general shader (the fragment path's pipelines set none of them).
+layout(constant_id = 0) const uint SHADE_LIGHTING_FLAGS = 0xFFFFFFFFu;  // ANDed with the frame's
+layout(constant_id = 1) const int SHADE_BRDF = -1;  // >= 0: the frame's Settings.brdf
+layout(constant_id = 2) const bool SHADE_LAYERS = true;  // false: the default layers
+// A layer factor of the material, or (SHADE_LAYERS false) the default material's
+// (generated.glsl MATERIAL_DEFAULT_*: render/gpu_scene.py's block of Material()).
+#define LAYER_FACTOR(field) (SHADE_LAYERS ? MAT.field : MATERIAL_DEFAULT_##field)
+
 // The surface point: world position, TEXCOORD_0 (xy) and _1 (zw), interpolated (unnormalised)
 // normal, tangent and bitangent, COLOR_0, and which side of the triangle faces the camera.
 vec3 s_world_pos;
@@ -86,29 +99,32 @@ void surface_frame(uint settings_flags, uint material_flags, out vec3 ng, out ve
 #define LAYER_MAP(name, channels) (maps ? SAMPLE(name).channels : vec4(1.0).channels)
 Layers material_layers(uint material_flags) {
     // Through u() (frame_output.glsl): branches depend on these, which lavapipe would inline.
-    vec3 zero = vec3(float(opaque_zero));
-    bool maps = (material_flags & MATERIAL_HAS_LAYER_MAPS) != 0u;
+    // (The specialised default layers are constants: there is no uniform to inline.)
+    vec3 zero = SHADE_LAYERS ? vec3(float(opaque_zero)) : vec3(0.0);
+    float zero1 = zero.x;
+    bool maps = SHADE_LAYERS && (material_flags & MATERIAL_HAS_LAYER_MAPS) != 0u;
     Layers m;
-    m.ior = max(u(MAT.ior), 1.0);
-    m.specular_color = MAT.specular_color_factor * LAYER_MAP(specular_color, rgb) + zero;
-    m.specular = clamp(u(MAT.specular_factor) * LAYER_MAP(specular, r), 0.0, 1.0);
-    m.clearcoat = clamp(u(MAT.clearcoat_factor) * LAYER_MAP(clearcoat, r), 0.0, 1.0);
-    m.clearcoat_roughness = clamp(u(MAT.clearcoat_roughness) * LAYER_MAP(clearcoat_roughness, r),
-                                  MIN_ROUGHNESS, 1.0);
-    m.sheen_color = MAT.sheen_color_factor * LAYER_MAP(sheen_color, rgb) + zero;
-    m.sheen_roughness = clamp(u(MAT.sheen_roughness) * LAYER_MAP(sheen_roughness, r),
+    m.ior = max(LAYER_FACTOR(ior) + zero1, 1.0);
+    m.specular_color = LAYER_FACTOR(specular_color_factor) * LAYER_MAP(specular_color, rgb) + zero;
+    m.specular = clamp((LAYER_FACTOR(specular_factor) + zero1) * LAYER_MAP(specular, r), 0.0, 1.0);
+    m.clearcoat = clamp((LAYER_FACTOR(clearcoat_factor) + zero1) * LAYER_MAP(clearcoat, r), 0.0, 1.0);
+    m.clearcoat_roughness = clamp((LAYER_FACTOR(clearcoat_roughness) + zero1)
+                                  * LAYER_MAP(clearcoat_roughness, r), MIN_ROUGHNESS, 1.0);
+    m.sheen_color = LAYER_FACTOR(sheen_color_factor) * LAYER_MAP(sheen_color, rgb) + zero;
+    m.sheen_roughness = clamp((LAYER_FACTOR(sheen_roughness) + zero1) * LAYER_MAP(sheen_roughness, r),
                               MIN_SHEEN_ROUGHNESS, 1.0);
-    m.transmission = clamp(u(MAT.transmission_factor) * LAYER_MAP(transmission, r), 0.0, 1.0);
-    m.thickness = max(u(MAT.thickness) * LAYER_MAP(thickness, r), 0.0) * s_model_scale;
-    m.attenuation_color = MAT.attenuation_color + zero;
-    m.attenuation_distance = u(MAT.attenuation_distance);
+    m.transmission = clamp((LAYER_FACTOR(transmission_factor) + zero1) * LAYER_MAP(transmission, r),
+                           0.0, 1.0);
+    m.thickness = max((LAYER_FACTOR(thickness) + zero1) * LAYER_MAP(thickness, r), 0.0) * s_model_scale;
+    m.attenuation_color = LAYER_FACTOR(attenuation_color) + zero;
+    m.attenuation_distance = LAYER_FACTOR(attenuation_distance) + zero1;
     return m;
 }
 
 // The coat's normal: the interpolated one, or its own normal map (clearcoatNormalTexture)
 // in the surface's tangent frame.
 vec3 clearcoat_normal(uint settings_flags, uint material_flags, vec3 ng, vec3 t, vec3 b) {
-    if ((settings_flags & SETTINGS_NORMAL_MAPPING) == 0u
+    if (!SHADE_LAYERS || (settings_flags & SETTINGS_NORMAL_MAPPING) == 0u
         || (material_flags & MATERIAL_HAS_CLEARCOAT_NORMAL_MAP) == 0u) return ng;
     vec3 tn = SAMPLE(clearcoat_normal).xyz * 2.0 - 1.0;
     tn.xy *= MAT.clearcoat_normal_scale;
@@ -178,8 +194,8 @@ vec4 shade_surface() {
 
     vec3 v = safe_normalize(FRAME_EYE - s_world_pos, ng);
     float view_depth = dot(s_world_pos - FRAME_EYE, FRAME_FORWARD);
-    uint lighting_flags = u(lighting.flags);
-    int brdf = u(settings.brdf);
+    uint lighting_flags = u(lighting.flags) & SHADE_LIGHTING_FLAGS;
+    int brdf = SHADE_BRDF >= 0 ? SHADE_BRDF : u(settings.brdf);
     uint light_count = min(u(lighting.light_count), MAX_LIGHTS);
     Layers layers = material_layers(material_flags);
     // The layers shade the glTF BRDF only (the course's BRDFs are the seed's).
