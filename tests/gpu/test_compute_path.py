@@ -164,15 +164,19 @@ def _many_materials_scene(grid: int = 32, materials: int = 48):  # noqa: ANN202
                  cameras=[Camera(eye=(0.0, 0.0, 1.5), target=(0.0, 0.0, 0.0), yfov_deg=60.0)])
 
 
+@pytest.mark.parametrize("raster", ["hardware", "compute"])
 @pytest.mark.parametrize("materials", [48, 300])
-def test_classification_bins_every_pixel_once(make_renderer, materials: int) -> None:  # noqa: ANN001
+def test_classification_bins_every_pixel_once(make_renderer, materials: int, raster: str) -> None:  # noqa: ANN001
     """Both binnings (classify.comp: per tile in shared memory, with per-subgroup adds for
     the materials a tile has no slot for; and one atomic a pixel) list each covered pixel
     exactly once, in its material's bin, and the images agree with the forward path's (300
-    materials: the offsets' prefix sum takes two chunks)."""
+    materials: the offsets' prefix sum takes two chunks). With the compute rasteriser its
+    resolve counts the bins (bin_tiles.glsl) and the classification scatters."""
     r = make_renderer(_many_materials_scene(materials=materials))
     if not r.device.compute_path:
         pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+    if raster == "compute" and not r.device.compute_raster:
+        pytest.skip(f"{r.device.info.name} lacks 64-bit storage atomics")
     scene = r.compute_scene()
     size = (96, 80)
     target = r.offscreen_target(size)
@@ -181,7 +185,7 @@ def test_classification_bins_every_pixel_once(make_renderer, materials: int) -> 
     for aggregate in (True, False):
         scene.aggregate = aggregate
         r.recorder.free()  # recorded buffers name the kernels
-        image = r.render(size=size, pipeline="compute", view="base_color")
+        image = r.render(size=size, pipeline="compute", raster=raster, view="base_color")
         assert_same(forward, image, f"aggregate {aggregate}")
         bins = scene.pixel_bins(target)
         assert sum(map(len, bins)) > 0.9 * size[0] * size[1]

@@ -20,6 +20,7 @@ from pinhole import raster_slack
 from test_compute_path import SIZE, assert_same
 
 from vkpbr.errors import UsageError
+from vkpbr.scene.types import Camera
 
 
 @pytest.fixture(scope="module")
@@ -66,6 +67,30 @@ def test_the_chart_matches(chart, lighting: str) -> None:  # noqa: ANN001
     hw, cr = pair(chart, lighting=lighting)
     assert (hw["instance"] > 0).mean() > 0.3  # the chart and its floor fill the view
     assert_rasters_agree(hw, cr, lighting)
+
+
+@pytest.mark.parametrize("linear", [False, True])
+def test_uncovered_pixels_get_the_clear_colour(make_renderer, linear: bool) -> None:  # noqa: ANN001
+    """raster_resolve writes the clear colour where nothing covers a pixel (in the course's
+    mode and in debug views no environment is drawn there), sRGB-encoded on an sRGB target,
+    over whatever the image held before (the sky of a physically based frame here)."""
+    from vkpbr.reference.brdf import linear_to_srgb
+
+    background = (0.2, 0.5, 0.8)
+    r = make_renderer(background=background)
+    if not r.device.compute_raster:
+        pytest.skip(f"{r.device.info.name} lacks 64-bit storage atomics")
+    sky = Camera(eye=(0.0, 1.0, 6.0), target=(0.0, 4.0, 0.0), yfov_deg=60.0)  # the chart's top, sky
+    want = np.asarray(background) if linear else linear_to_srgb(np.asarray(background)) * 255.0
+    for options in ({"lighting": "course"}, {"lighting": "pbr", "view": "base_color"}):
+        r.render(sky, size=SIZE, pipeline="compute", raster="compute", linear=linear)  # the sky
+        out = r.render(sky, size=SIZE, pipeline="compute", raster="compute", linear=linear,
+                       outputs=("color", "instance"), **options)
+        empty = out["instance"] == 0
+        assert 0.05 < empty.mean() < 0.95, (options, empty.mean())
+        got = out["color"][..., :3][empty].astype(np.float64)
+        np.testing.assert_allclose(got, np.broadcast_to(want, got.shape), atol=1e-6 if linear else 0.51,
+                                   err_msg=str(options))
 
 
 def test_without_alpha_masking(chart) -> None:  # noqa: ANN001

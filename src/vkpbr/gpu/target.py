@@ -112,8 +112,8 @@ class ComputeSteps:
         a float a pixel, written by its resolve) copied into the depth buffer for what tests
         it afterwards (the blended draws) and depth readback, then ready for those (without
         `copy_depth`, when nothing reads it, only made an attachment again: its contents
-        undefined); the colour image to GENERAL for the shading's writes. The visibility
-        image stays in GENERAL, readable by the shading (record_raster's last barrier)."""
+        undefined). The visibility and colour images stay in GENERAL (record_raster_begin),
+        readable and writable by the shading (record_raster's last barrier)."""
         vk = self.device.vk
         depth_stage, depth_access, depth_layout = attachment_stage(vk, True)
         copy = vk.VK_PIPELINE_STAGE_2_COPY_BIT
@@ -121,16 +121,14 @@ class ComputeSteps:
         write, read = vk.VK_ACCESS_2_TRANSFER_WRITE_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT
         # The previous frame's passes and copies of the depth buffer come first.
         before = (depth_stage | copy, depth_access & ~vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
-        color = image_barrier(vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                              vk.VK_IMAGE_LAYOUT_GENERAL, self._color_last_use(vk), compute)
         if not copy_depth:
-            barriers(cmd, [color, image_barrier(vk, self.depth.handle, True,
-                                                vk.VK_IMAGE_LAYOUT_UNDEFINED, depth_layout,
-                                                before, (depth_stage, depth_access))])
+            barriers(cmd, [image_barrier(vk, self.depth.handle, True,
+                                         vk.VK_IMAGE_LAYOUT_UNDEFINED, depth_layout,
+                                         before, (depth_stage, depth_access))])
             return
         dst = vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
         barriers(cmd, [image_barrier(vk, self.depth.handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                                     dst, before, (copy, write)), color],
+                                     dst, before, (copy, write))],
                  [buffer_barrier(vk, depths, compute, (copy, read))])
         copy_buffer_to_image(cmd, depths, self.depth.handle, True, self.extent)
         barriers(cmd, [image_barrier(vk, self.depth.handle, True, dst, depth_layout,
@@ -243,13 +241,16 @@ class OffscreenTarget(ComputeSteps):
 
     # --- the compute path's steps, instead of record_begin -------------------------------------
     def record_raster_begin(self, cmd: Commands) -> None:
-        """Before the compute rasteriser resolves into the visibility image: GENERAL for its
-        storage writes, after the previous frame's reads (contents discarded)."""
+        """Before the compute rasteriser resolves into the visibility image (and the clear
+        colour into the colour image where nothing covers a pixel): both GENERAL for storage
+        writes, after the previous frame's uses (contents discarded)."""
         vk = self.device.vk
         compute = compute_storage(vk)
         barriers(cmd, [image_barrier(vk, self.visibility.handle, False,
                                      vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_GENERAL,
-                                     (compute[0], 0), compute)])
+                                     (compute[0], 0), compute),
+                       image_barrier(vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
+                                     vk.VK_IMAGE_LAYOUT_GENERAL, self._color_last_use(vk), compute)])
 
     # --- dataset outputs (render/compute_path.py writes them) ---------------------------------
     outputs: dict[str, tuple[Image, ImageView]] | None = None

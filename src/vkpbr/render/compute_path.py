@@ -47,7 +47,7 @@ SHADE_GROUP = 64  # shade.comp's work group: pixels of one bin
 RASTER_SMALL_GROUP = 64  # raster_small: one triangle an invocation
 RASTER_DOUBLE_SIDED, RASTER_MASKED, RASTER_BLENDED = 1, 2, 4
 MAX_GROUPS_X = 65535  # maxComputeWorkGroupCount[0] every Vulkan device has
-RASTER_PUSH_BYTES = 76  # raster.comp's push constants (19 uints)
+RASTER_PUSH_BYTES = 96  # raster.comp's push constants (20 uints, then the clear colour)
 
 
 @dataclass(frozen=True)
@@ -304,26 +304,29 @@ class ComputeScene:
                        clear_color: tuple[float, ...], shade: bool = True,
                        tiles: tuple[int, int, int, int] | None = None, copy: bool = False,
                        stamp: Callable[[str], None] = _untimed,
-                       variant: ShadeVariant = GENERAL_SHADING) -> None:
+                       variant: ShadeVariant = GENERAL_SHADING, counted: bool = False) -> None:
         """Classify the visibility image's pixels by material, then shade each material of
         `materials` (those the visibility pass drew) with its own set 1 bound (`shade`
         False: classify only, for the outputs of a fragment-path frame; `tiles`: a compute
         batch's atlas, as record_raster's; `copy`: the transmission's copy of the opaque
         scene, linear radiance: render/transmission.py). `stamp("classify")` after the
-        classification. `variant`: what the frame's shading kernels are specialised for."""
+        classification. `variant`: what the frame's shading kernels are specialised for;
+        `counted`: the compute rasteriser's resolve counted the bins and cleared the pixels
+        nothing covers (record_raster), so the classification starts at the offsets."""
         res = self._resources(target)
         compute_set = res.sets[frame_index]
-        cmd.fill(res.bins, 0)
-        cmd.memory_barrier("transfer", "compute")
+        if not counted:
+            cmd.fill(res.bins, 0)
+            cmd.memory_barrier("transfer", "compute")
         push = np.zeros(8, np.float32)
         push[:4] = clear_color
         push.view(np.uint32)[4:6] = (self.material_count, SHADE_GROUP)
         pixel_groups = groups((*target.extent, 1), CLASSIFY_GROUP)
         plain = "" if self.aggregate else "_plain"
         suffix = "_copy" if copy else ""
-        for name, size in ((f"classify_count{plain}{suffix}", pixel_groups),
-                           ("classify_offsets", (1, 1, 1)),
-                           (f"classify_scatter{plain}", pixel_groups)):
+        kernels = ((f"classify_count{plain}{suffix}", pixel_groups),
+                   ("classify_offsets", (1, 1, 1)), (f"classify_scatter{plain}", pixel_groups))
+        for name, size in kernels[1:] if counted else kernels:
             cmd.bind_pipeline(self._pipeline(name, 32))
             self._bind_frame_sets(cmd, frame_sets, material_sets[0], compute_set)
             cmd.push(push)
@@ -363,14 +366,15 @@ class ComputeScene:
         w, h = target.extent
         views, tile_w, tile_h, rows = tiles or (1, w, h, 1)
         suffix = "_batch" if tiles else ""
-        cmd.fill(res.raster, 0)
-        cmd.fill(res.raster_big, 0)
-        cmd.fill(res.raster_masked_big, 0)
+        for buffer in (res.raster, res.raster_big, res.raster_masked_big, res.bins):
+            cmd.fill(buffer, 0)  # (the bins: raster_resolve counts them)
         cmd.memory_barrier("transfer", "compute")
-        push = np.array([self.triangles, len(self.gs.draws), int(alpha_mask), res.big_capacity,
-                         w, h, 0, 0, views, tile_w, tile_h, rows,
-                         len(self.masked_rows) if alpha_mask else 0, 0, MASKED_CAPACITY,
-                         *astuple(RASTER_TUNING)], np.uint32)
+        push = np.zeros(RASTER_PUSH_BYTES // 4, np.uint32)
+        push[:20] = (self.triangles, len(self.gs.draws), int(alpha_mask), res.big_capacity,
+                     w, h, 0, 0, views, tile_w, tile_h, rows,
+                     len(self.masked_rows) if alpha_mask else 0, 0, MASKED_CAPACITY,
+                     *astuple(RASTER_TUNING), int(target.color_kind == "srgb"))
+        push.view(np.float32)[20:24] = target.clear_color
         dset = res.sets[frame_index]
         n = -(-self.triangles // RASTER_SMALL_GROUP)
         # raster_args sizes raster_big's dispatch from the count raster_small listed.
@@ -379,7 +383,7 @@ class ComputeScene:
                 (f"raster_small{suffix}", small, "raster_small"), ("raster_args", (1, 1, 1), None),
                 (f"raster_big{suffix}", None, "raster_big"),
                 (f"raster_masked{suffix}", (), "raster_masked_big"),
-                ("raster_resolve", groups((w, h, 1), (8, 8, 1)), "raster_resolve")):
+                ("raster_resolve", groups((w, h, 1), CLASSIFY_GROUP), "raster_resolve")):
             if size == () and not (alpha_mask and self.masked_rows):
                 stamp(step)  # none: no time
                 continue

@@ -297,7 +297,8 @@ class FrameRecorder:
             cs = self.compute_scene()
             cs.record_shading(cmd, target, frame.index, tbn, frame_sets, gs.material_sets,
                               drawn, target.clear_color, shade=compute,
-                              stamp=vis_ctx.stamp, variant=variant)  # type: ignore[attr-defined]
+                              stamp=vis_ctx.stamp, variant=variant,  # type: ignore[attr-defined]
+                              counted=raster)
             if outputs:
                 cs.record_outputs(cmd, target, frame.index, tbn, frame_sets, gs.material_sets,
                                   drawn)
@@ -378,7 +379,7 @@ class FrameRecorder:
         drawn = _shaded_materials(gs.draws, classes)
         cs.record_shading(cmd, target, frame.index, tbn, frame_sets, gs.material_sets, drawn,
                           target.clear_color, tiles=tiles, stamp=stamps.after,  # type: ignore[attr-defined]
-                          variant=variant)
+                          variant=variant, counted=True)
         stamps.after("shading")
         cs.record_background(cmd, target, frame.index, frame_sets, tiles)
         target.record_resume(cmd)  # type: ignore[attr-defined]

@@ -6,11 +6,8 @@
 //   clear colour here. KERNEL 2 (offsets): one work group turns counts into list offsets and
 //   one indirect dispatch size per material (a parallel prefix sum, MATERIAL_SCAN at a time).
 //   KERNEL 3 (scatter): per pixel, its index into its material's part of the pixel list.
-// AGGREGATE = 1 (GPUs): a work group (a 16x16 tile) first totals its pixels per material in
-// shared memory -- a subgroup adds each material it holds once -- and then adds each total to
-// the material's bin with one atomic: ~8 k global atomics a 1080p frame instead of one a
-// pixel (2 M on a few dozen counters, which queue). A tile holding more than LOCAL_SLOTS
-// materials adds the rest per subgroup.
+// AGGREGATE = 1 (GPUs): a work group (a 16x16 tile) totals its pixels per material in shared
+// memory first, then adds each total with one atomic (bin_tiles.glsl).
 // AGGREGATE = 0: one global atomic a pixel (lavapipe, where the subgroup loop costs ~10x more).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_ballot : require
@@ -64,21 +61,13 @@ void main() {
 }
 #else
 
-#define LOCAL_SLOTS 16u
-#define NO_MATERIAL 0xFFFFFFFFu
 #if AGGREGATE
-shared uint local_material[LOCAL_SLOTS];  // filled in order, never changed once set
-shared uint local_count[LOCAL_SLOTS];
-shared uint local_base[LOCAL_SLOTS];      // KERNEL 3: the slot's start in its material's bin
-
-// The tile's slot of material m (taken if new), or LOCAL_SLOTS when the tile has no room.
-uint local_slot(uint m) {
-    for (uint i = 0u; i < LOCAL_SLOTS; ++i) {
-        uint held = atomicCompSwap(local_material[i], NO_MATERIAL, m);
-        if (held == NO_MATERIAL || held == m) return i;
-    }
-    return LOCAL_SLOTS;
-}
+#define TILE_COUNTER x
+#if KERNEL == 3
+#undef TILE_COUNTER
+#define TILE_COUNTER z
+#endif
+#include "bin_tiles.glsl"
 #endif
 
 void main() {
@@ -95,7 +84,7 @@ void main() {
     }
 #endif
     bool covered = inside && vis.x != 0u;
-    uint material = covered ? draws[vis.x - 1u].info.z : NO_MATERIAL;
+    uint material = covered ? draws[vis.x - 1u].info.z : 0xFFFFFFFFu;
     uint pixel_index = pixel.y * uint(size.x) + pixel.x;
 #if !AGGREGATE
     if (!covered) return;
@@ -106,62 +95,13 @@ void main() {
     pixel_list[bins[material].y + at] = pixel_index;
 #endif
 #else
-    uint t = gl_LocalInvocationIndex;
-    if (t < LOCAL_SLOTS) {
-        local_material[t] = NO_MATERIAL;
-        local_count[t] = 0u;
-    }
-    memoryBarrierShared();
-    barrier();
-    // Waterfall over the materials present in this subgroup: the first lane of each adds
-    // the subgroup's pixels of it to the tile's slot (or, with no slot left, to the bin).
-    uint slot = LOCAL_SLOTS;  // this lane's tile slot
-    uint offset = 0u;         // its place in the slot (or, without one, in the bin)
-    bool pending = covered;
-    // At most one round per lane: each round retires the first pending lane's material, and
-    // the bound keeps a mistake here from ever hanging a GPU.
-    for (uint round = 0u; round < gl_SubgroupSize && subgroupAny(pending); ++round) {
-        // The material of the first lane still pending (not of the first active lane: that
-        // one may be done, and then no lane would match).
-        uint m = subgroupShuffle(material, subgroupBallotFindLSB(subgroupBallot(pending)));
-        bool mine = pending && material == m;
-        uvec4 ballot = subgroupBallot(mine);
-        if (mine) {
-            uint n = subgroupBallotBitCount(ballot);
-            uint leader = subgroupBallotFindLSB(ballot);
-            uint got_slot = 0u, base = 0u;
-            if (gl_SubgroupInvocationID == leader) {
-                got_slot = local_slot(m);
-                if (got_slot < LOCAL_SLOTS) {
-                    base = atomicAdd(local_count[got_slot], n);
-                } else {
-#if KERNEL == 1
-                    atomicAdd(bins[m].x, n);
-#else
-                    base = atomicAdd(bins[m].z, n);
-#endif
-                }
-            }
-            slot = subgroupShuffle(got_slot, leader);
-            offset = subgroupShuffle(base, leader) + subgroupBallotExclusiveBitCount(ballot);
-            pending = false;
-        }
-    }
-    memoryBarrierShared();
-    barrier();
-    // One invocation a slot the tile filled: one global atomic per material in the tile.
-    if (t < LOCAL_SLOTS && local_material[t] != NO_MATERIAL) {
-#if KERNEL == 1
-        atomicAdd(bins[local_material[t]].x, local_count[t]);
-#else
-        local_base[t] = atomicAdd(bins[local_material[t]].z, local_count[t]);
-#endif
-    }
+    uint slot, offset;
+    tile_bins_begin();
+    tile_bins_add(covered, material, slot, offset);
+    tile_bins_commit();
 #if KERNEL == 3
-    memoryBarrierShared();
-    barrier();
     if (covered) {
-        uint at = slot < LOCAL_SLOTS ? local_base[slot] + offset : offset;
+        uint at = slot < TILE_SLOTS ? tile_base[slot] + offset : offset;
         pixel_list[bins[material].y + at] = pixel_index;
     }
 #endif

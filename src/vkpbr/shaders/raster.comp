@@ -25,7 +25,8 @@
 // KERNEL 6 (raster_masked_big): one work group an entry of one masked draw's segment (an
 //   indirect dispatch a masked draw, its set 1 bound, after every draw's KERNEL 5).
 // KERNEL 3 (raster_resolve): per pixel, the visibility image's (draw + 1, primitive) from the
-//   winning triangle (0: nothing) -- what shade.comp and classify.comp read -- and its depth
+//   winning triangle (0: nothing, and the clear colour) -- what shade.comp and classify.comp
+//   read -- counted in its material's bin (bin_tiles.glsl: classify.comp's count), and its depth
 //   into raster_depths (copied into the depth buffer: a copy, where a screen-filling
 //   fragment pass writing gl_FragDepth cost 0.30 ms at 1080p on the H200's few raster SMs).
 // BATCH = 1 (render/batch_path.py's compute batch): `views` views tiled `rows` to a column in
@@ -35,15 +36,25 @@
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
 #extension GL_KHR_shader_subgroup_basic : require
+#if KERNEL == 3  // the resolve's material bins (bin_tiles.glsl)
+#extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_KHR_shader_subgroup_vote : require
+#extension GL_KHR_shader_subgroup_shuffle : require
+#endif
 #define RASTER_INT64 1  // generated.glsl declares the 64-bit buffer
 #include "generated.glsl"
 #include "frustum.glsl"
+#if KERNEL == 3
+#include "brdf.glsl"  // linear_to_srgb
+#define TILE_COUNTER x
+#include "bin_tiles.glsl"
+#endif
 
 #define ALPHA_TESTED (KERNEL == 5 || KERNEL == 6)  // masked draws, their material bound
 #if KERNEL == 2 || KERNEL == 6
 layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;  // 256 invocations
 #elif KERNEL == 3
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+layout(local_size_x = 16, local_size_y = 16, local_size_z = 1) in;  // compute_path.CLASSIFY_GROUP
 #elif KERNEL == 4
 layout(local_size_x = 1, local_size_y = 1, local_size_z = 1) in;
 #elif KERNEL == 5
@@ -74,6 +85,8 @@ layout(push_constant) uniform Raster {
     uint big_chunk;
     uint masked_area;
     uint masked_chunk;
+    uint clear_srgb;  // raster_resolve: the colour target stores sRGB (encode the clear colour)
+    vec4 clear_color;  // raster_resolve: linear, where nothing covers a pixel
 } pc;
 
 #if BATCH
@@ -438,16 +451,25 @@ void main() {
     }
 #else
     uvec2 p = gl_GlobalInvocationID.xy;
-    if (p.x >= pc.width || p.y >= pc.height) return;
-    uint at = p.y * pc.width + p.x;
-    uint64_t v = raster[at];
-    raster_depths[at] = uintBitsToFloat(uint(v >> 32));  // 0 (the far plane): nothing
     uvec2 vis = uvec2(0u);
-    if (v != 0ul) {
-        uint g = uint(v & 0xffffffffUL) - 1u;
-        uint k = draw_of(g);
-        vis = uvec2(raster_draws[k].z + 1u, g - raster_draws[k].x);
+    if (p.x < pc.width && p.y < pc.height) {  // (no return: the tile's barriers follow)
+        uint at = p.y * pc.width + p.x;
+        uint64_t v = raster[at];
+        raster_depths[at] = uintBitsToFloat(uint(v >> 32));  // 0 (the far plane): nothing
+        if (v != 0ul) {
+            uint g = uint(v & 0xffffffffUL) - 1u;
+            uint k = draw_of(g);
+            vis = uvec2(raster_draws[k].z + 1u, g - raster_draws[k].x);
+        } else {  // classify.comp's count would write the clear colour here
+            vec4 bg = pc.clear_color;
+            imageStore(out_image, ivec2(p), pc.clear_srgb != 0u ? vec4(linear_to_srgb(bg.rgb), bg.a) : bg);
+        }
+        imageStore(visibility, ivec2(p), uvec4(vis, 0u, 0u));
     }
-    imageStore(visibility, ivec2(p), uvec4(vis, 0u, 0u));
+    // The material bins counted here, so that the classification starts at the offsets.
+    uint slot, offset;
+    tile_bins_begin();
+    tile_bins_add(vis.x != 0u, vis.x != 0u ? draws[vis.x - 1u].info.z : NO_MATERIAL, slot, offset);
+    tile_bins_commit();
 #endif
 }
