@@ -47,7 +47,7 @@ SHADE_GROUP = 64  # shade.comp's work group: pixels of one bin
 RASTER_SMALL_GROUP = 64  # raster_small: one triangle an invocation
 RASTER_DOUBLE_SIDED, RASTER_MASKED, RASTER_BLENDED = 1, 2, 4
 MAX_GROUPS_X = 65535  # maxComputeWorkGroupCount[0] every Vulkan device has
-RASTER_PUSH_BYTES = 104  # raster.comp's push constants (20 uints, the clear colour, 2 uints)
+RASTER_PUSH_BYTES = 100  # raster.comp's push constants (20 uints, the clear colour, 1 uint)
 
 
 @dataclass(frozen=True)
@@ -85,10 +85,9 @@ class RasterTuning:
 
 
 RASTER_TUNING = RasterTuning()
-# Entries each masked draw gives its run's segment of big-triangle chunks (raster.comp
-# MASKED_CHUNK box pixels each: 16 M box pixels, ~8 screens at 1080p; what does not fit is
-# drawn by the work group that found it). An entry is a work group: a dispatch of more than
-# maxComputeWorkGroupCount[0] is clamped, its groups looping over the rest.
+# Entries of a masked draw's segment of big-triangle chunks (raster.comp MASKED_CHUNK box
+# pixels each: 16 M box pixels, ~8 screens at 1080p; what does not fit is drawn by the work
+# group that found it). At most maxComputeWorkGroupCount[0]: an entry is a work group.
 MASKED_CAPACITY = 4096
 CLASSIFY_GROUP = (16, 16, 1)  # classify.comp's count and scatter kernels
 
@@ -139,11 +138,10 @@ class _TargetResources:
         self.raster_big = self._own(Buffer(dev, 4 * (4 + 3 * self.big_capacity) if raster else 16,
                                            "storage|transfer_dst|indirect",
                                            name="raster big triangles"))
-        # The masked draws' big triangles: a segment a run, MASKED_CAPACITY entries a draw.
+        # The masked draws' big triangles: a segment of MASKED_CAPACITY entries each.
         masked = len(scene.masked_rows)
-        entries = sum(rows for _, rows, _, _ in scene.masked_rows) * MASKED_CAPACITY
         self.raster_masked_big = self._own(Buffer(
-            dev, 4 * (4 * masked + 3 * entries) if raster and masked else 16,
+            dev, 4 * (4 * masked + 3 * masked * MASKED_CAPACITY) if raster and masked else 16,
             "storage|transfer_dst|indirect", name="raster masked big triangles"))
         slots = scene.slots
         pool = self._own(DescriptorPool(dev, [(scene.set_layout, len(slots))]))
@@ -389,7 +387,7 @@ class ComputeScene:
         push = np.zeros(RASTER_PUSH_BYTES // 4, np.uint32)
         push[:20] = (self.triangles, len(self.gs.draws), int(alpha_mask), res.big_capacity,
                      w, h, 0, 0, views, tile_w, tile_h, rows,
-                     len(self.masked_rows) if alpha_mask else 0, 0, 0,
+                     len(self.masked_rows) if alpha_mask else 0, 0, MASKED_CAPACITY,
                      *astuple(RASTER_TUNING), int(target.color_kind == "srgb"))
         push.view(np.float32)[20:24] = target.clear_color
         dset = res.sets[frame_index]
@@ -427,13 +425,10 @@ class ComputeScene:
         """raster_masked: one invocation a triangle of each masked draw, its material bound
         (raster_masked's pipeline is bound), then each draw's big triangles listed by it
         (raster_masked_big: one work group an entry, an indirect dispatch a draw)."""
-        base = 0
         for segment, (k, rows, material, count) in enumerate(self.masked_rows):
             cmd.bind_set(1, material_sets[material])
             push[6:8] = k, material
-            push[13:15] = segment, rows * MASKED_CAPACITY  # the run's segment, its entries
-            push[24:26] = rows, base
-            base += rows * MASKED_CAPACITY
+            push[13], push[24] = segment, rows
             cmd.push(push)
             n = -(-count // RASTER_SMALL_GROUP)
             cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), views)
@@ -443,13 +438,10 @@ class ComputeScene:
         if set0 is not None:
             cmd.bind_set(0, set0)
         cmd.bind_set(self.set_index, dset)
-        base = 0
         for segment, (k, rows, material, _) in enumerate(self.masked_rows):
             cmd.bind_set(1, material_sets[material])
             push[6:8] = k, material
-            push[13:15] = segment, rows * MASKED_CAPACITY
-            push[24:26] = rows, base
-            base += rows * MASKED_CAPACITY
+            push[13], push[24] = segment, rows
             cmd.push(push)
             cmd.dispatch_indirect(res.raster_masked_big, 16 * segment + 4)
 

@@ -78,7 +78,7 @@ layout(push_constant) uniform Raster {
     uint rows;
     uint masked_draws;  // raster_masked_big's segments, one a run of masked draws
     uint segment;  // raster_masked(_big): this run's
-    uint masked_capacity;  // entries this run's segment holds
+    uint masked_capacity;  // entries a segment holds
     // compute_path.RasterTuning (measured on the H200: BENCHMARKS.md): box pixels above
     // which work groups take a triangle, a listed band's box pixels; opaque, then masked.
     uint big_area;
@@ -88,7 +88,6 @@ layout(push_constant) uniform Raster {
     uint clear_srgb;  // raster_resolve: the colour target stores sRGB (encode the clear colour)
     vec4 clear_color;  // raster_resolve: linear, where nothing covers a pixel
     uint draw_rows;  // raster_masked(_big): the rows of its run, from pc.draw
-    uint segment_base;  // raster_masked(_big): its segment's first entry
 } pc;
 
 #if BATCH
@@ -110,9 +109,9 @@ uint g_view;  // this invocation's view (surface_fetch.glsl reads its ray from i
 // raster_big: [0] the count, [1..3] KERNEL 2's dispatch size (indirect), from 4 the list of
 // (triangle, view, chunk) entries.
 const uint BIG_LIST = 4u, BIG_ENTRY = 3u;
-// raster_masked_big: per run m of masked draws, [4m] its entries' count, [4m+1..4m+3]
-// KERNEL 6's dispatch size (indirect); from 4 * pc.masked_draws on, each run's segment of
-// (triangle, view, chunk) entries (compute_path.MASKED_CAPACITY a draw of the run).
+// raster_masked_big: per masked draw m, [4m] its entries' count, [4m+1..4m+3] KERNEL 6's
+// dispatch size (indirect); from 4 * pc.masked_draws on, each draw's segment of
+// pc.masked_capacity (triangle, view, chunk) entries.
 const uint MAX_GROUPS = 65535u;  // maxComputeWorkGroupCount[0] of every device
 const uint DOUBLE_SIDED = 1u, MASKED = 2u, BLENDED = 4u;  // raster_draws[k].y (compute_path.py)
 // raster_draws' rows follow the raster units' submission order (the opaque pass's draws, the
@@ -140,9 +139,8 @@ shared uint group_big[64];  // this group's big triangles not listed (raster_mas
 shared uint group_big_count;
 #endif
 #if ALPHA_TESTED
-// Entry k of this run's segment (pc.segment_base its first entry, pc.masked_capacity long).
-uint masked_entry(uint k) {
-    return 4u * pc.masked_draws + BIG_ENTRY * (pc.segment_base + k);
+uint masked_entry(uint segment, uint k) {
+    return 4u * pc.masked_draws + BIG_ENTRY * (segment * pc.masked_capacity + k);
 }
 #endif
 
@@ -352,12 +350,12 @@ void list_bands(Screen t, uint g) {
     uint slot = atomicAdd(raster_masked_big[4u * segment], chunks);
     uint listed = slot < pc.masked_capacity ? min(chunks, pc.masked_capacity - slot) : 0u;
     for (uint c = 0u; c < listed; ++c) {
-        uint e = masked_entry(slot + c);
+        uint e = masked_entry(segment, slot + c);
         raster_masked_big[e] = g;
         raster_masked_big[e + 1u] = VIEW_INDEX;
         raster_masked_big[e + 2u] = c;
     }
-    if (listed > 0u) atomicMax(raster_masked_big[4u * segment + 1u], min(slot + listed, MAX_GROUPS));
+    if (listed > 0u) atomicMax(raster_masked_big[4u * segment + 1u], slot + listed);
     if (listed < chunks) group_big[atomicAdd(group_big_count, 1u)] = g;  // one an invocation
 #else
     // Bands past the list's end (a batch's worst case) are drawn here.
@@ -442,7 +440,7 @@ void main() {
     opaque_zero = 0u;  // shade.glsl's leak guard: a plain 0 here (no uniform block is read)
     uint listed = min(raster_masked_big[4u * pc.segment], pc.masked_capacity);
     for (uint k = gl_WorkGroupID.x; k < listed; k += gl_NumWorkGroups.x) {
-        uint e = masked_entry(k);
+        uint e = masked_entry(pc.segment, k);
 #if BATCH
         g_view = raster_masked_big[e + 1u];
 #endif
