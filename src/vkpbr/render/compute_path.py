@@ -47,7 +47,7 @@ SHADE_GROUP = 64  # shade.comp's work group: pixels of one bin
 RASTER_SMALL_GROUP = 64  # raster_small: one triangle an invocation
 RASTER_DOUBLE_SIDED, RASTER_MASKED, RASTER_BLENDED = 1, 2, 4
 MAX_GROUPS_X = 65535  # maxComputeWorkGroupCount[0] every Vulkan device has
-RASTER_PUSH_BYTES = 100  # raster.comp's push constants (20 uints, the clear colour, 1 uint)
+RASTER_PUSH_BYTES = 96  # raster.comp's push constants (20 uints, then the clear colour)
 
 
 @dataclass(frozen=True)
@@ -90,20 +90,6 @@ RASTER_TUNING = RasterTuning()
 # group that found it). At most maxComputeWorkGroupCount[0]: an entry is a work group.
 MASKED_CAPACITY = 4096
 CLASSIFY_GROUP = (16, 16, 1)  # classify.comp's count and scatter kernels
-
-
-def _runs(masked: list[tuple[int, int, int]]) -> list[tuple[int, int, int, int]]:
-    """(first row, rows, material, triangles) of each run of consecutive `masked` rows
-    ((row, material, triangles), in row order) of one material."""
-    runs: list[list[int]] = []
-    for row, material, triangles in masked:
-        last = runs[-1] if runs else None
-        if last is not None and last[0] + last[1] == row and last[2] == material:
-            last[1] += 1
-            last[3] += triangles
-        else:
-            runs.append([row, 1, material, triangles])
-    return [(a, b, c, d) for a, b, c, d in runs]
 
 
 def _untimed(step: str) -> None:
@@ -231,9 +217,8 @@ class ComputeScene:
                 masked.append((row, d.material, d.index_count // 3))
             first += d.index_count // 3
         self.triangles = first
-        # Runs of consecutive masked rows of one material (first row, rows, material,
-        # triangles): raster_masked's dispatches, one a run (Sponza: 14 masked draws, 3 runs).
-        self.masked_rows = _runs(masked)
+        # (row, material, triangles) of the masked draws: raster_masked's dispatches.
+        self.masked_rows = masked
         self.raster_draws = self._own(upload_buffer(device, raster, "storage",
                                                     name="raster draw table"))
         # Per draw its world bounding sphere (raster.comp skips a draw outside the view).
@@ -425,10 +410,10 @@ class ComputeScene:
         """raster_masked: one invocation a triangle of each masked draw, its material bound
         (raster_masked's pipeline is bound), then each draw's big triangles listed by it
         (raster_masked_big: one work group an entry, an indirect dispatch a draw)."""
-        for segment, (k, rows, material, count) in enumerate(self.masked_rows):
+        for segment, (k, material, count) in enumerate(self.masked_rows):
             cmd.bind_set(1, material_sets[material])
             push[6:8] = k, material
-            push[13], push[24] = segment, rows
+            push[13] = segment
             cmd.push(push)
             n = -(-count // RASTER_SMALL_GROUP)
             cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), views)
@@ -438,10 +423,10 @@ class ComputeScene:
         if set0 is not None:
             cmd.bind_set(0, set0)
         cmd.bind_set(self.set_index, dset)
-        for segment, (k, rows, material, _) in enumerate(self.masked_rows):
+        for segment, (k, material, _) in enumerate(self.masked_rows):
             cmd.bind_set(1, material_sets[material])
             push[6:8] = k, material
-            push[13], push[24] = segment, rows
+            push[13] = segment
             cmd.push(push)
             cmd.dispatch_indirect(res.raster_masked_big, 16 * segment + 4)
 

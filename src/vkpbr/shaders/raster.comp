@@ -14,16 +14,16 @@
 //   work groups' work, not one). Each row is covered where its edges' spans allow.
 // KERNEL 4 (raster_args): one invocation: raster_big's dispatch size for KERNEL 2.
 // KERNEL 2 (raster_big): one work group a listed band, set up once, its rows over the subgroups.
-// KERNEL 5 (raster_masked): one invocation a triangle of one run of masked draws
-//   (consecutive rows of one material; alpha masking on), with that material's set 1
-//   bound; its triangles over pc.masked_area box pixels are listed in the run's segment of
-//   raster_masked_big, a band of about pc.masked_chunk box pixels an entry (what does not fit: by the whole group afterwards). A pixel is covered where the
+// KERNEL 5 (raster_masked): one invocation a triangle of one masked draw (alpha masking on),
+//   with its material's set 1 bound; its triangles over pc.masked_area box pixels are listed
+//   in the draw's segment of raster_masked_big, a band of about pc.masked_chunk box pixels an
+//   entry (what does not fit: by the whole group afterwards). A pixel is covered where the
 //   surface's base-colour alpha (surface_fetch.glsl + shade.glsl, exactly as the shading
 //   samples it) reaches the cutoff;
 //   pixels where a nearer surface is already stored skip that test (a plain load: the opaque
 //   draws are done; unlike the opaque atomics, the alpha test costs more than the load).
-// KERNEL 6 (raster_masked_big): one work group an entry of one run's segment (an
-//   indirect dispatch a run, its set 1 bound, after every draw's KERNEL 5).
+// KERNEL 6 (raster_masked_big): one work group an entry of one masked draw's segment (an
+//   indirect dispatch a masked draw, its set 1 bound, after every draw's KERNEL 5).
 // KERNEL 3 (raster_resolve): per pixel, the visibility image's (draw + 1, primitive) from the
 //   winning triangle (0: nothing, and the clear colour) -- what shade.comp and classify.comp
 //   read -- counted in its material's bin (bin_tiles.glsl: classify.comp's count), and its depth
@@ -70,14 +70,14 @@ layout(push_constant) uniform Raster {
     uint big_capacity;  // entries raster_big's list holds (from BIG_LIST on)
     uint width;
     uint height;
-    uint draw;  // raster_masked(_big): the first row of raster_draws of its run of masked draws
-    uint material;  // raster_masked: their material (set 1 bound)
+    uint draw;  // raster_masked: the masked draw's row of raster_draws
+    uint material;  // raster_masked: its material (set 1 bound)
     uint views;  // the tiles: views, their width and height, tiles a column of the atlas
     uint tile_w;
     uint tile_h;
     uint rows;
-    uint masked_draws;  // raster_masked_big's segments, one a run of masked draws
-    uint segment;  // raster_masked(_big): this run's
+    uint masked_draws;  // raster_masked_big's segments, one a masked draw
+    uint segment;  // raster_masked(_big): this masked draw's
     uint masked_capacity;  // entries a segment holds
     // compute_path.RasterTuning (measured on the H200: BENCHMARKS.md): box pixels above
     // which work groups take a triangle, a listed band's box pixels; opaque, then masked.
@@ -87,7 +87,6 @@ layout(push_constant) uniform Raster {
     uint masked_chunk;
     uint clear_srgb;  // raster_resolve: the colour target stores sRGB (encode the clear colour)
     vec4 clear_color;  // raster_resolve: linear, where nothing covers a pixel
-    uint draw_rows;  // raster_masked(_big): the rows of its run, from pc.draw
 } pc;
 
 #if BATCH
@@ -119,20 +118,15 @@ const uint DOUBLE_SIDED = 1u, MASKED = 2u, BLENDED = 4u;  // raster_draws[k].y (
 // depth goes to the later triangle in that order, as GREATER_OR_EQUAL gives it to the later
 // draw (coincident surfaces pick what the fragment path picks).
 
-// The row holding triangle g among rows [lo, hi): the last k whose first triangle is <= g
-// (rows in order).
-uint row_of(uint g, uint lo, uint hi) {
+// The draw holding triangle g: the last k whose first triangle is <= g (draws in order).
+uint draw_of(uint g) {
+    uint lo = 0u, hi = pc.draws;
     for (uint step = 0u; step < 32u && hi - lo > 1u; ++step) {
         uint mid = (lo + hi) >> 1u;
         if (raster_draws[mid].x <= g) lo = mid; else hi = mid;
     }
     return lo;
 }
-
-uint draw_of(uint g) { return row_of(g, 0u, pc.draws); }
-// raster_masked(_big): the row of masked triangle g in this dispatch's run of rows
-// (consecutive masked draws of one material: compute_path.py's masked runs).
-uint masked_row(uint g) { return row_of(g, pc.draw, pc.draw + pc.draw_rows); }
 
 #if KERNEL == 5
 shared uint group_big[64];  // this group's big triangles not listed (raster_masked)
@@ -150,7 +144,7 @@ vec3 position(uint i) { uint k = 3u * i; return vec3(positions[k], positions[k +
 // Triangle g's clip-space corners; false when its draw is not rasterised here.
 bool fetch(uint g, out vec4 c[3], out bool double_sided) {
 #if ALPHA_TESTED
-    uint k = masked_row(g);  // a row of this dispatch's masked draws: always drawn
+    uint k = pc.draw;  // this dispatch's masked draw's row: always drawn
 #else
     uint k = draw_of(g);
 #endif
@@ -229,8 +223,7 @@ void edge_span(vec2 a, vec2 b, float py, inout float xl, inout float xr) {
 void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, int y0, int y1, int ystep,
            int lane, int lanes) {
 #if ALPHA_TESTED
-    uint row = masked_row(id);
-    uint prim = id - raster_draws[row].x;
+    uint prim = id - raster_draws[pc.draw].x;
 #endif
     float area = edge(s0.xy, s1.xy, s2.xy);
     for (int y = y0; y < y1; y += ystep) {
@@ -253,7 +246,7 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, int y0, int y
             if (uint(raster[at] >> 32) > floatBitsToUint(depth)) continue;
             uvec3 vi;
             vec3 w0, w1, w2, bary;
-            surface_at(raster_draws[row].z, prim, uvec2(px - tile_origin()),
+            surface_at(raster_draws[pc.draw].z, prim, uvec2(px - tile_origin()),
                        vec2(pc.tile_w, pc.tile_h), vi, w0, w1, w2, bary);
             if (surface_base_color().a < MAT.alpha_cutoff) continue;  // as pbr.frag's ALPHA_MASK
 #endif
@@ -418,8 +411,7 @@ void main() {
     if (g < pc.triangles) raster_one(g);
 #elif KERNEL == 5
     uint first = raster_draws[pc.draw].x;
-    uint end = pc.draw + pc.draw_rows;
-    uint count = (end < pc.draws ? raster_draws[end].x : pc.triangles) - first;
+    uint count = (pc.draw + 1u < pc.draws ? raster_draws[pc.draw + 1u].x : pc.triangles) - first;
     uint t = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
     opaque_zero = 0u;  // shade.glsl's leak guard: a plain 0 here (no uniform block is read)
     if (gl_LocalInvocationIndex == 0u) group_big_count = 0u;
