@@ -89,7 +89,7 @@ RASTER_TUNING = RasterTuning()
 # pixels each: 16 M box pixels, ~8 screens at 1080p; what does not fit is drawn by the work
 # group that found it). At most maxComputeWorkGroupCount[0]: an entry is a work group.
 MASKED_CAPACITY = 4096
-CLASSIFY_GROUP = (16, 16, 1)  # classify.comp's count and scatter kernels
+CLASSIFY_GROUP = (16, 16, 1)  # classify.comp's count and scatter, raster_resolve: bin_tiles.glsl's tile
 
 
 def _untimed(step: str) -> None:
