@@ -223,7 +223,9 @@ void edge_span(vec2 a, vec2 b, float py, inout float xl, inout float xr) {
 void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, int y0, int y1, int ystep,
            int lane, int lanes) {
 #if ALPHA_TESTED
-    uint prim = id - raster_draws[pc.draw].x;
+    // The triangle's surface data fetched once for all its candidate pixels.
+    SurfaceTriangle tri = surface_triangle(draws[raster_draws[pc.draw].z],
+                                           id - raster_draws[pc.draw].x);
 #endif
     float area = edge(s0.xy, s1.xy, s2.xy);
     for (int y = y0; y < y1; y += ystep) {
@@ -244,10 +246,7 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, int y0, int y
 #if ALPHA_TESTED
             // Nearer already stored (an equal depth loses to this later triangle): no test.
             if (uint(raster[at] >> 32) > floatBitsToUint(depth)) continue;
-            uvec3 vi;
-            vec3 w0, w1, w2, bary;
-            surface_at(raster_draws[pc.draw].z, prim, uvec2(px - tile_origin()),
-                       vec2(pc.tile_w, pc.tile_h), vi, w0, w1, w2, bary);
+            surface_point(tri, uvec2(px - tile_origin()), vec2(pc.tile_w, pc.tile_h));
             if (surface_base_color().a < MAT.alpha_cutoff) continue;  // as pbr.frag's ALPHA_MASK
 #endif
             uint64_t packed = (uint64_t(floatBitsToUint(depth)) << 32) | uint64_t(id + 1u);

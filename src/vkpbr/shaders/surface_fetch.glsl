@@ -59,40 +59,67 @@ vec2 barycentrics(vec3 o, vec3 d, vec3 a, vec3 b, vec3 c) {
     return vec2(dot(tv, pv), dot(d, qv)) * inv;
 }
 
-// shade.glsl's s_texcoords, s_world_pos, s_color and the gradients for the centre of `pixel`
-// (of a target `extent` pixels) on primitive `prim` of draw `draw`; returns the draw, and the
-// vertices' indices, world positions and the barycentrics for `surface_frame_at`.
-DrawRecord surface_at(uint draw, uint prim, uvec2 pixel, vec2 extent, out uvec3 vi,
-                      out vec3 w0, out vec3 w1, out vec3 w2, out vec3 bary) {
-    DrawRecord dr = draws[draw];
-    uint base = dr.info.x + 3u * prim;
-    vi = uvec3(indices[base], indices[base + 1u], indices[base + 2u]) + dr.info.y;
+// One triangle of a draw as the surface fetch needs it: its vertices' indices, world
+// positions and TEXCOORD_0/1 (a column each), and whether the scene has COLOR_0.
+struct SurfaceTriangle {
+    uvec3 vi;
+    vec3 w0, w1, w2;
+    mat3x4 tex;
+    bool colors;
+};
 
-    w0 = (dr.model * vec4(vec3_at(vi.x, false), 1.0)).xyz;
-    w1 = (dr.model * vec4(vec3_at(vi.y, false), 1.0)).xyz;
-    w2 = (dr.model * vec4(vec3_at(vi.z, false), 1.0)).xyz;
+// Primitive `prim` of the draw `dr` (fetched once for all the pixels that see it: the
+// compute rasteriser's alpha test walks a triangle's pixels).
+SurfaceTriangle surface_triangle(DrawRecord dr, uint prim) {
+    SurfaceTriangle t;
+    uint base = dr.info.x + 3u * prim;
+    t.vi = uvec3(indices[base], indices[base + 1u], indices[base + 2u]) + dr.info.y;
+    t.w0 = (dr.model * vec4(vec3_at(t.vi.x, false), 1.0)).xyz;
+    t.w1 = (dr.model * vec4(vec3_at(t.vi.y, false), 1.0)).xyz;
+    t.w2 = (dr.model * vec4(vec3_at(t.vi.z, false), 1.0)).xyz;
+    t.tex = mat3x4(vec4(texcoords0[t.vi.x], texcoords1[t.vi.x]),
+                   vec4(texcoords0[t.vi.y], texcoords1[t.vi.y]),
+                   vec4(texcoords0[t.vi.z], texcoords1[t.vi.z]));
+    t.colors = dr.info.w != 0u;
+    return t;
+}
+
+// shade.glsl's s_texcoords, s_world_pos, s_color and the gradients for the centre of `pixel`
+// (of a target `extent` pixels) on triangle `t`; returns the barycentrics.
+vec3 surface_point(SurfaceTriangle t, uvec2 pixel, vec2 extent) {
     vec3 eye = FETCH_EYE;
     vec2 centre = vec2(pixel) + 0.5;
-    vec2 b = barycentrics(eye, ray_dir(centre, extent), w0, w1, w2);
+    vec2 b = barycentrics(eye, ray_dir(centre, extent), t.w0, t.w1, t.w2);
     // Texture derivatives as a rasteriser's 2x2 quads take them (fine: across the quad's
     // pixel pair in this row and in this column), so mip levels agree at their boundaries.
     vec2 quad = vec2(pixel & ~1u) + 0.5;
-    vec2 qx = barycentrics(eye, ray_dir(vec2(quad.x, centre.y), extent), w0, w1, w2);
-    vec2 qy = barycentrics(eye, ray_dir(vec2(centre.x, quad.y), extent), w0, w1, w2);
-    vec2 bx = barycentrics(eye, ray_dir(vec2(quad.x + 1.0, centre.y), extent), w0, w1, w2) - qx;
-    vec2 by = barycentrics(eye, ray_dir(vec2(centre.x, quad.y + 1.0), extent), w0, w1, w2) - qy;
-    bary = vec3(1.0 - b.x - b.y, b.x, b.y);
+    vec2 qx = barycentrics(eye, ray_dir(vec2(quad.x, centre.y), extent), t.w0, t.w1, t.w2);
+    vec2 qy = barycentrics(eye, ray_dir(vec2(centre.x, quad.y), extent), t.w0, t.w1, t.w2);
+    vec2 bx = barycentrics(eye, ray_dir(vec2(quad.x + 1.0, centre.y), extent), t.w0, t.w1, t.w2) - qx;
+    vec2 by = barycentrics(eye, ray_dir(vec2(centre.x, quad.y + 1.0), extent), t.w0, t.w1, t.w2) - qy;
+    vec3 bary = vec3(1.0 - b.x - b.y, b.x, b.y);
     vec3 dbx = vec3(-bx.x - bx.y, bx.x, bx.y), dby = vec3(-by.x - by.y, by.x, by.y);
+    s_texcoords = t.tex * bary;
+    g_dtex_dx = t.tex * dbx;
+    g_dtex_dy = t.tex * dby;
+    s_world_pos = mat3(t.w0, t.w1, t.w2) * bary;
+    s_color = t.colors ? mat3x4(color_at(t.vi.x), color_at(t.vi.y), color_at(t.vi.z)) * bary
+                       : vec4(1.0);  // no COLOR_0 in the scene: white, as pbr.vert reads
+    return bary;
+}
 
-    mat3x4 tex = mat3x4(vec4(texcoords0[vi.x], texcoords1[vi.x]),
-                        vec4(texcoords0[vi.y], texcoords1[vi.y]),
-                        vec4(texcoords0[vi.z], texcoords1[vi.z]));
-    s_texcoords = tex * bary;
-    g_dtex_dx = tex * dbx;
-    g_dtex_dy = tex * dby;
-    s_world_pos = mat3(w0, w1, w2) * bary;
-    s_color = dr.info.w != 0u ? mat3x4(color_at(vi.x), color_at(vi.y), color_at(vi.z)) * bary
-                              : vec4(1.0);  // no COLOR_0 in the scene: white, as pbr.vert reads
+// surface_triangle and surface_point for one pixel of primitive `prim` of draw `draw`;
+// returns the draw, and the vertices' indices, world positions and the barycentrics for
+// `surface_frame_at`.
+DrawRecord surface_at(uint draw, uint prim, uvec2 pixel, vec2 extent, out uvec3 vi,
+                      out vec3 w0, out vec3 w1, out vec3 w2, out vec3 bary) {
+    DrawRecord dr = draws[draw];
+    SurfaceTriangle t = surface_triangle(dr, prim);
+    bary = surface_point(t, pixel, extent);
+    vi = t.vi;
+    w0 = t.w0;
+    w1 = t.w1;
+    w2 = t.w2;
     return dr;
 }
 
