@@ -183,7 +183,14 @@ def test_random_triangles_and_cameras_agree_with_the_raster_units() -> None:
             hw, cr = _ids(r, cam, "hardware"), _ids(r, cam, "compute")
             band = silhouette_band(hw)
             wrong = hw != cr
-            assert not wrong[~band].any(), f"{int(wrong[~band].sum())} ids differ off the edges"
+            if wrong[~band].any():  # which path repeats itself (the H200 failed this rarely)
+                again = {k: np.array_equal(v, _ids(r, cam, k))
+                         for k, v in (("hardware", hw), ("compute", cr))}
+                at = [(int(y), int(x), int(hw[y, x]), int(cr[y, x]))
+                      for y, x in zip(*np.nonzero(wrong & ~band), strict=True)][:4]
+                raise AssertionError(f"{int(wrong[~band].sum())} ids differ off the edges "
+                                     f"(row, column, hardware, compute: {at}); each path's "
+                                     f"second render equal to its first: {again}")
             if band.any():
                 assert wrong[band].mean() <= 0.05 + 2.0 / band.sum(), wrong[band].mean()
             assert r.device.instance.errors == []
