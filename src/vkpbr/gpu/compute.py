@@ -74,6 +74,7 @@ class ComputePipeline(DeviceObject):
         values of the shader's specialization constants 0, 1, ... (32-bit each: uint, int
         as its two's complement, bool as 0 or 1); the driver compiles the kernel for them."""
         vk = device.vk
+        self.push_bytes = push_bytes
         if capture_statistics and not device.pipeline_statistics:
             raise VkpbrError(f"{device.info.name}: the driver reports no pipeline statistics "
                              "(VK_KHR_pipeline_executable_properties)")

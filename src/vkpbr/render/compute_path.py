@@ -239,7 +239,6 @@ class ComputeScene:
         self.aggregate = device.info.kind != "cpu"
         # Which materials any opaque or masked draw uses: only those get a shading dispatch.
         self._pipelines: dict[tuple[str, tuple[int, ...]], ComputePipeline] = {}
-        self._push_bytes: dict[tuple[str, tuple[int, ...]], int] = {}
         # Per material, whether it shades with layers other than the defaults (ShadeVariant).
         self.layered = [not has_default_layers(b) for b in gs.material_blocks]
         self._stand_ins: dict[str, tuple[Any, Any]] | None = None
@@ -257,7 +256,6 @@ class ComputeScene:
             self._pipelines[key] = self._own(ComputePipeline(
                 self.device, SPV_DIR / f"{name}.comp.spv", self.layouts, push_bytes=push_bytes,
                 specialization=constants))
-            self._push_bytes[key] = push_bytes
         return self._pipelines[key]
 
     def kernel_statistics(self) -> dict[str, dict[str, float | int | bool]]:
@@ -266,9 +264,9 @@ class ComputeScene:
         pipeline made to capture them (benchmarks/probe_kernels.py; a device with
         `pipeline_statistics`)."""
         out = {}
-        for name, constants in sorted(self._pipelines):
+        for (name, constants), used in sorted(self._pipelines.items()):
             twin = ComputePipeline(self.device, SPV_DIR / f"{name}.comp.spv", self.layouts,
-                                   push_bytes=self._push_bytes[name, constants],
+                                   push_bytes=used.push_bytes,
                                    capture_statistics=True, specialization=constants)
             try:
                 label = f"{name} {constants}" if constants else name

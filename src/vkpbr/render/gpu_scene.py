@@ -51,6 +51,8 @@ __all__ = ["GpuScene", "Draw", "prepare_mesh", "uv_transform_rows"]
 
 _SWIZZLE = {0: "rrrr", 1: "gggg", 2: "bbbb", 3: "aaaa"}
 _NORMAL_SLOTS = ("normal", "clearcoat_normal")  # tangent-space normal maps (RGB, linear)
+STREAMS = ("positions", "texcoords", "normals", "tangents")  # built at load
+LAZY_STREAMS = ("qtangents", "packed_frames")  # built by ensure_streams on first use
 
 
 def default_layers() -> dict[str, np.ndarray]:
@@ -75,8 +77,6 @@ def _shared_metallic_roughness(mat: Material) -> bool:
     m, r = mat.metallic_texture, mat.roughness_texture
     return (m is not None and r is not None and r.channel == 1
             and dataclasses.replace(m, channel=1) == r)
-STREAMS = ("positions", "texcoords", "normals", "tangents")  # built at load
-LAZY_STREAMS = ("qtangents", "packed_frames")  # built by ensure_streams on first use
 
 
 @dataclass

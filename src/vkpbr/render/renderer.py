@@ -174,7 +174,6 @@ class Renderer:
             blend = [d.center for d in self.gpu_scene.draws if d.alpha_mode == "blend"]
             self._blend_centers = np.array(blend, dtype=np.float64).reshape(-1, 3)
             self._last_lighting: tuple[RenderOptions, FrameLighting] | None = None
-            self._last_variant: tuple[RenderOptions, ShadeVariant] | None = None
             self._auto_choice: PathChoice | None = None  # what auto measured (path_choice.py)
             self.last_stats = FrameStats()
             self.timings = {"setup": time.perf_counter() - t0, **self.gpu_scene.timings}
@@ -392,12 +391,7 @@ class Renderer:
     def shade_variant(self, options: RenderOptions) -> ShadeVariant:
         """What the compute path's shading kernels are specialised for with `options`: the
         frame's lighting flags and BRDF (render/compute_path.py ShadeVariant)."""
-        last = self._last_variant
-        if last is not None and last[0] is options:
-            return last[1]
-        variant = ShadeVariant(self.frame_lighting(options).flags, int(options.shading_brdf))
-        self._last_variant = (options, variant)
-        return variant
+        return ShadeVariant(self.frame_lighting(options).flags, int(options.shading_brdf))
 
     def screen_transmission(self, options: RenderOptions) -> bool:
         """Whether frames with `options` draw the copy of the opaque scene that transmissive

@@ -44,5 +44,5 @@ void main() {
     vec3 radiance = textureLod(env_specular, d, 0.0).rgb * lighting.env_intensity;
     vec3 value = radiance_output(radiance);
     bool srgb_target = (settings.flags & SETTINGS_SRGB_TARGET) != 0u;
-    imageStore(out_image, ivec2(pixel), vec4(srgb_target ? linear_to_srgb(value) : value, 1.0));
+    imageStore(out_image, ivec2(pixel), stored_color(vec4(value, 1.0), srgb_target));
 }

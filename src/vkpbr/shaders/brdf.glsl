@@ -276,4 +276,8 @@ vec3 linear_to_srgb(vec3 x) {
     return mix(x * 12.92, 1.055 * pow(x, vec3(1.0 / 2.4)) - 0.055, greaterThan(x, vec3(0.0031308)));
 }
 
+// A linear colour as the compute path stores it into the target's storage view: encoded for
+// an sRGB image (whose view is UNORM), as it is otherwise.
+vec4 stored_color(vec4 c, bool srgb) { return srgb ? vec4(linear_to_srgb(c.rgb), c.a) : c; }
+
 #endif

@@ -77,10 +77,9 @@ void main() {
     uvec2 vis = inside ? imageLoad(visibility, ivec2(pixel)).xy : uvec2(0u);
 #if KERNEL == 1
     if (inside && vis.x == 0u) {
-        vec4 bg = pc.clear_color;
         // OPAQUE_COPY: the transmission's copy (render/transmission.py) holds linear values.
         bool srgb_target = OPAQUE_COPY == 0 && (settings.flags & SETTINGS_SRGB_TARGET) != 0u;
-        imageStore(out_image, ivec2(pixel), srgb_target ? vec4(linear_to_srgb(bg.rgb), bg.a) : bg);
+        imageStore(out_image, ivec2(pixel), stored_color(pc.clear_color, srgb_target));
     }
 #endif
     bool covered = inside && vis.x != 0u;

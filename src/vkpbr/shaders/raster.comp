@@ -45,7 +45,7 @@
 #include "generated.glsl"
 #include "frustum.glsl"
 #if KERNEL == 3
-#include "brdf.glsl"  // linear_to_srgb
+#include "brdf.glsl"  // stored_color
 #define TILE_COUNTER x
 #include "bin_tiles.glsl"
 #endif
@@ -469,8 +469,7 @@ void main() {
             uint k = draw_of(g);
             vis = uvec2(raster_draws[k].z + 1u, g - raster_draws[k].x);
         } else {  // classify.comp's count would write the clear colour here
-            vec4 bg = pc.clear_color;
-            imageStore(out_image, ivec2(p), pc.clear_srgb != 0u ? vec4(linear_to_srgb(bg.rgb), bg.a) : bg);
+            imageStore(out_image, ivec2(p), stored_color(pc.clear_color, pc.clear_srgb != 0u));
         }
         imageStore(visibility, ivec2(p), uvec4(vis, 0u, 0u));
     }

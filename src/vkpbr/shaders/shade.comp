@@ -76,6 +76,6 @@ void main() {
     vec4 value = shade_surface();
     // The storage view is UNORM: encode sRGB here, as the attachment would (shade_surface
     // pre-linearised data views for an sRGB target, exactly as for the fragment path).
-    imageStore(out_image, ivec2(pixel), srgb_target ? vec4(linear_to_srgb(value.rgb), value.a) : value);
+    imageStore(out_image, ivec2(pixel), stored_color(value, srgb_target));
 #endif
 }
