@@ -162,10 +162,13 @@ def download_buffer(device: Device, buffer: Buffer, dtype: Any = np.uint8) -> np
                      name=f"{buffer.name} download")
     try:
         with device.one_time_commands() as cmd:
-            from vkpbr.gpu.commands import Commands  # (it imports this module)
-
-            # The writes of earlier submissions (compute or transfer) before this copy's read.
-            Commands(device, cmd).memory_barrier("compute|transfer", "transfer")
+            # The writes of earlier submissions (compute or transfer) before this copy's read
+            # (a raw barrier: gpu/commands.py imports this module).
+            vk.vkCmdPipelineBarrier(
+                cmd, vk.VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, vk.VK_PIPELINE_STAGE_TRANSFER_BIT, 0,
+                1, [vk.VkMemoryBarrier(srcAccessMask=vk.VK_ACCESS_MEMORY_WRITE_BIT,
+                                       dstAccessMask=vk.VK_ACCESS_TRANSFER_READ_BIT)],
+                0, None, 0, None)
             vk.vkCmdCopyBuffer(cmd, buffer.handle, staging.handle, 1,
                                [vk.VkBufferCopy(size=buffer.size)])
         return staging.array(dtype).copy()
