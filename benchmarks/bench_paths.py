@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from vkpbr.errors import UsageError
-from vkpbr.render.recorder import STAMP_NAMES
+from vkpbr.render.paths import STEP_NAMES
 from vkpbr.render.renderer import Renderer
 from vkpbr.scene.loader import load_scene
 from vkpbr.scene.types import Camera, Light
@@ -47,7 +47,7 @@ ROWS = (("course", "scene", "still"), ("pbr", "scene", "still"), ("pbr", "sun", 
         ("pbr", "sun", "moving"))
 # Every timed step of a frame (the compute rasteriser's kernels and the classification on
 # the compute path; "opaque" is then the depths' write) and the copies after them.
-STEPS = (*(n for n in STAMP_NAMES if n != "prepass_opaque_double"), "copy")
+STEPS = tuple(n for n in STEP_NAMES if n not in ("prepass_opaque_double", "cull", "views"))
 
 
 def walk(frames: int) -> list[Camera]:

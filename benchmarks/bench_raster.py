@@ -23,7 +23,7 @@ from pathlib import Path
 from bench_paths import CAMERA
 
 from vkpbr.render import compute_path
-from vkpbr.render.recorder import RASTER_STEPS
+from vkpbr.render.paths import RASTER_STEPS
 from vkpbr.render.renderer import Renderer
 from vkpbr.scene.loader import load_scene
 
@@ -38,7 +38,7 @@ def measure(r: Renderer, size: tuple[int, int], frames: int) -> dict:
         if i >= WARM_UP:
             steps.append(r.last_stats.pass_ms)
             gpu.append(r.last_stats.gpu_ms)
-    row = {name: statistics.median(s[name] for s in steps) for name in RASTER_STEPS}
+    row = {name: statistics.median(s.get(name, 0.0) for s in steps) for name in RASTER_STEPS}
     return {**row, "raster": sum(row.values()), "frame": statistics.median(gpu)}
 
 

@@ -19,7 +19,7 @@ import pytest
 from vkpbr.errors import UsageError
 from vkpbr.render.layouts import PipelinePath, TbnMode, View
 from vkpbr.render.options import RenderOptions
-from vkpbr.render.recorder import STAMP_NAMES
+from vkpbr.render.paths import PATHS, RASTER_STEPS, STEP_NAMES
 
 SIZE = (96, 72)
 
@@ -111,13 +111,18 @@ def test_auto_takes_the_compute_path_on_gpus_only(make_renderer) -> None:  # noq
 
 @pytest.mark.parametrize("raster", ["hardware", "compute"])
 def test_compute_timings_have_every_step(chart, raster) -> None:  # noqa: ANN001
-    """Every step of the frame is timed in order (the compute rasteriser's kernels, the
-    classification, the shading: recorder.STAMP_NAMES), each >= 0, together the frame."""
+    """Every timed step of the frame's path is timed (the compute rasteriser's kernels, the
+    classification, the shading: render/paths.py), each >= 0, together the frame."""
     if raster == "compute" and not chart.device.compute_raster:
         pytest.skip("this device lacks 64-bit storage atomics (the compute rasteriser)")
     list(chart.render_many([None] * 4, size=SIZE, pipeline="compute", raster=raster))
     stats = chart.last_stats
-    assert set(stats.pass_ms) == {*STAMP_NAMES, "copy"}
+    path = "compute_raster" if raster == "compute" else "compute"
+    wanted = {"shadows", "transmission", "classify", "shading", "background", "blend", "copy"}
+    wanted |= {*RASTER_STEPS} if raster == "compute" else {"opaque", "opaque_double", "mask"}
+    assert "raster" in PATHS[path] or raster == "hardware"
+    assert set(stats.pass_ms) == wanted, stats.pass_ms
+    assert list(stats.pass_ms) == [n for n in STEP_NAMES if n in wanted]  # in frame order
     assert all(v >= 0.0 for v in stats.pass_ms.values()), stats.pass_ms
     assert sum(stats.pass_ms.values()) == pytest.approx(stats.gpu_ms, rel=1e-6, abs=1e-6)
 

@@ -22,6 +22,7 @@ from vkpbr import Renderer
 from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
+from vkpbr.gpu.graph import Rendering, Step, record_steps
 from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec, VertexStream
 from vkpbr.gpu.target import COPY_COLOR
 from vkpbr.render import layouts as L
@@ -107,17 +108,13 @@ def _render(rects, light: Light, tmp: Path) -> tuple[np.ndarray, ShadowMaps]:
         cmd = Commands(dev).begin()
         sm.record(cmd, frame.index, plan, gs.draws, classes, gs.material_sets, gs.streams,
                   gs.index_buffer, gs.has_colors)
-        target.record_begin(cmd, 0)
-        cmd.bind_pipeline(pipe)
-        cmd.bind_set(0, slot.set0)
-        cmd.bind_set(2, s2)
-        cmd.bind_set(3, sm.sets[frame.index])
-        cmd.bind_vertex_buffers([gs.streams[n] for n in names])
-        cmd.bind_index_buffer(gs.index_buffer)
-        for d in gs.draws:
-            cmd.push(d.push)
-            cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset)
-        target.record_end(cmd, 0, frame, (COPY_COLOR,))
+
+        def draw(cmd: Commands) -> None:
+            record_draws(cmd, pipe, slot, s2, sm.sets[frame.index], gs, names)
+
+        steps = [Step("draw", draw, rendering=Rendering("color", "depth", target.clear_color, 0.0)),
+                 *target.finish_steps(0, frame.index, (COPY_COLOR,))]
+        record_steps(cmd, steps, target.resources(0, frame.index), target.extent)
         cmd.end()
         frame.submit(cmd)
         frame.wait()
@@ -161,3 +158,16 @@ def test_a_lone_plane_has_no_acne(kind, shaders) -> None:
     ground = (rid == 0) & (image[..., 1] > 0.05)
     assert ground.mean() > 0.4
     assert np.all(image[..., 0][ground] > 0.999), (kind, np.min(image[..., 0][ground]))
+
+
+def record_draws(cmd, pipe, slot, set2, set3, gs, names) -> None:  # noqa: ANN001
+    """The test pipeline's draws of every draw of `gs` with the frame's sets bound."""
+    cmd.bind_pipeline(pipe)
+    cmd.bind_set(0, slot.set0)
+    cmd.bind_set(2, set2)
+    cmd.bind_set(3, set3)
+    cmd.bind_vertex_buffers([gs.streams[n] for n in names])
+    cmd.bind_index_buffer(gs.index_buffer)
+    for d in gs.draws:
+        cmd.push(d.push)
+        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset)

@@ -18,18 +18,9 @@ import numpy as np
 from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.device import Device
+from vkpbr.gpu.graph import BufferResource, ImageResource, Step
 from vkpbr.gpu.image import Image, ImageView
-from vkpbr.gpu.rendering import (
-    Attachments,
-    barriers,
-    begin_rendering,
-    copy_image_to_buffer,
-    copy_out_barriers,
-    end_rendering,
-    external_ownership,
-    host_read_barrier,
-    redraw_barriers,
-)
+from vkpbr.gpu.rendering import Attachments, barriers, copy_image_to_buffer, external_ownership
 from vkpbr.gpu.target import COLOR_FORMATS, copy_out
 
 __all__ = ["BatchTarget"]
@@ -85,44 +76,60 @@ class BatchTarget:
         self._objects.append(obj)
         return obj
 
-    def record_begin(self, cmd: Commands, image: int = 0) -> None:
-        """Transition every layer for drawing (after the previous chunk's or batch's copy)
-        and begin a layered rendering over all of them, cleared."""
-        images = [(self.color.handle, False), (self.depth.handle, True)]
-        barriers(cmd, redraw_barriers(self.device.vk, images, self.layers))
-        begin_rendering(cmd, self.attachments, self.clear_color, 0.0, layers=self.layers)
+    stores_depth = True
 
-    def record_chunk_end(self, cmd: Commands, chunk: int, views: int) -> None:
-        """End the rendering and copy the chunk's first `views` layers into their place in
-        the readback buffers (views chunk * layers on)."""
-        vk = self.device.vk
-        end_rendering(cmd)
+    def resources(self, image: int = 0, frame_index: int = 0
+                  ) -> dict[str, ImageResource | BufferResource]:
+        """Its images ("color", "depth": every layer) and readback buffers as graph
+        resources (gpu/graph.py). The external colour buffer is not one: its steps hand it
+        between queue families themselves."""
+        out: dict[str, ImageResource | BufferResource] = {
+            "color": ImageResource(self.color.handle, layers=self.layers,
+                                   view=self.attachments.color),
+            "depth": ImageResource(self.depth.handle, depth=True, layers=self.layers,
+                                   view=self.attachments.depth)}
+        if not self.external:
+            out["color_readback"] = BufferResource(self.color_readback)
+        if self.depth_readback is not None:
+            out["depth_readback"] = BufferResource(self.depth_readback)
+        return out
+
+    def chunk_copy_step(self, name: str, chunk: int, views: int, timed: bool) -> Step:
+        """A step copying the chunk's first `views` layers into their place in the readback
+        buffers (views chunk * layers on); an external colour buffer is taken back from the
+        external queue family first (CUDA read the last batch)."""
+        w, h = self.extent
         wanted = [(self.color, False, self.color_readback, self.pixel_bytes)]
         if self.depth_readback is not None:
             wanted.append((self.depth, True, self.depth_readback, 4))
-        barriers(cmd, copy_out_barriers(vk, [(img.handle, d) for img, d, _, _ in wanted],
-                                        self.layers))
-        w, h = self.extent
-        for img, depth, buf, nbytes in wanted:
-            copy_image_to_buffer(cmd, img.handle, depth, buf, self.extent, layers=views,
-                                 offset=chunk * self.layers * w * h * nbytes)
 
-    def record_external_acquire(self, cmd: Commands) -> None:
-        """An external target: take the colour buffer back from the external queue family
-        (CUDA read the last batch) before this batch's copies write it."""
-        if self.external:
-            barriers(cmd, [], [self._ownership(external_to_ours=True)])
+        def record(cmd: Commands) -> None:
+            if self.external and chunk == 0:
+                barriers(cmd, [], [self._ownership(external_to_ours=True)])
+            for img, depth, buf, nbytes in wanted:
+                copy_image_to_buffer(cmd, img.handle, depth, buf, self.extent, layers=views,
+                                     offset=chunk * self.layers * w * h * nbytes)
 
-    def record_host_barrier(self, cmd: Commands) -> None:
-        """Make every chunk's copy visible to the host once the fence is waited (an external
-        target: release the colour to the external queue family, for CUDA)."""
-        vk = self.device.vk
-        bufs = [b for b in (self.color_readback, self.depth_readback)
-                if b is not None and not (self.external and b is self.color_readback)]
-        out = [host_read_barrier(vk, b) for b in bufs]
-        if self.external:
-            out.append(self._ownership(external_to_ours=False))
-        barriers(cmd, [], out)
+        uses = [("color", "transfer_src")]
+        if self.depth_readback is not None:
+            uses.append(("depth", "transfer_src"))
+        uses += [(n, "transfer_dst") for n in ("color_readback", "depth_readback")
+                 if n in self.resources()]
+        return Step(name, record, tuple(uses), timed=timed)
+
+    def finish_steps(self, image: int, frame_index: int, copy: tuple[str, ...]) -> list[Step]:
+        """The frame's last step: the chunks' copies (chunk_copy_step) made visible."""
+        return [self.readback_step()]
+
+    def readback_step(self) -> Step:
+        """Every chunk's copy made visible to the host once the fence is waited (an external
+        colour buffer: released to the external queue family, for CUDA)."""
+        def record(cmd: Commands) -> None:
+            if self.external:
+                barriers(cmd, [], [self._ownership(external_to_ours=False)])
+
+        names = [n for n in ("color_readback", "depth_readback") if n in self.resources()]
+        return Step("readback", record, tuple((n, "host_read") for n in names), timed=False)
 
     def _ownership(self, external_to_ours: bool) -> Any:
         return external_ownership(self.device.vk, self.device.queue_family, self.color_readback,

@@ -41,6 +41,7 @@ class Frame:
         self.number = -1  # the ring's frame number of the last submission from this slot
         self.finished = True  # its last submission is known to have finished (waited)
         self.stamped = False  # the last submission wrote this frame's timestamps
+        self.stamp_names: tuple[str, ...] = ()  # what its timestamps 1.. follow (the steps)
         # Submit info built once; `submit` fills in the command buffer and semaphores.
         self._cmds = ffi.new("VkCommandBuffer[1]")
         self._wait = ffi.new("VkSemaphore[1]")

@@ -2,9 +2,9 @@
 
 What a pass needs to give a later pass its image as a texture with a full mip chain (the
 screen-space transmission's copy of the opaque scene: render/transmission.py). Mip 0 is
-drawn with dynamic rendering (cleared), or on the compute path (ComputeSteps: a visibility
-image, level 0 written as storage, then rendering resumed), the levels below made by linear
-blits, and the whole chain left SHADER_READ_ONLY for the fragment and compute shaders that
+drawn with dynamic rendering (cleared), or on the compute path (a visibility image, level 0
+written as storage, then the background drawn over it), the levels below made by linear
+blits (`mip_step`), and the whole chain left SHADER_READ_ONLY for the fragment and compute shaders that
 sample it. Like every frame target it offers `color_format`, `depth_format`, `samples` and
 `extent`, so that pipelines are built for it the same way. Depth is cleared to 0
 (reversed-Z).
@@ -16,24 +16,17 @@ from typing import Any
 
 from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.device import Device
+from vkpbr.gpu.graph import ImageResource, Step
 from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, mip_levels
-from vkpbr.gpu.rendering import (
-    Attachments,
-    barriers,
-    begin_rendering,
-    end_rendering,
-    redraw_barriers,
-)
-from vkpbr.gpu.target import ComputeSteps
+from vkpbr.gpu.rendering import Attachments
 
 __all__ = ["MipmappedTarget"]
 
 
-class MipmappedTarget(ComputeSteps):
+class MipmappedTarget:
     """`size` (W, H) colour of `color_format` (a VkFormat name that blits and filters
     linearly: RGBA16F) with its whole mip chain, and a D32 depth of the same size.
-    `compute`: also drawn on the compute path (its visibility image, level 0 as storage:
-    ComputeSteps' record_visibility_begin .. record_resume instead of record_begin)."""
+    `compute`: also drawn on the compute path (its visibility image, level 0 as storage)."""
 
     samples = 1
     outputs = None  # no dataset outputs (render/compute_path.py binds stand-ins)
@@ -74,22 +67,27 @@ class MipmappedTarget(ComputeSteps):
         self._owned.append(obj)
         return obj
 
-    def _color_last_use(self, vk: Any) -> tuple[int, int]:
-        # The previous frame of its slot sampled the chain, and blitted it.
-        return (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT
-                | vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT, 0)
+    def resources(self, prefix: str) -> dict[str, ImageResource]:
+        """Its images as graph resources (gpu/graph.py), named `prefix` + "color" (level 0:
+        what is drawn into; `mip_step` makes the rest), "depth", "visibility"."""
+        out = {prefix + "color": ImageResource(self.color.handle, view=self.attachments.color),
+               prefix + "depth": ImageResource(self.depth.handle, depth=True,
+                                               view=self.attachments.depth)}
+        if self.storage_view is not None:
+            out[prefix + "visibility"] = ImageResource(self.visibility.handle,
+                                                       view=self.visibility_view.handle)
+        return out
 
-    def record_begin(self, cmd: Commands) -> None:
-        """Begin drawing into level 0 (cleared), after the previous use's sampling."""
-        cmd.image_barrier(self.color, "undefined", "color_attachment", "sampled", "color", 0, 1)
-        barriers(cmd, redraw_barriers(cmd.vk, [(self.depth.handle, True)]))
-        begin_rendering(cmd, self.attachments, self.clear_color, 0.0, store_depth=False)
+    def mip_step(self, name: str, prefix: str) -> Step:
+        """A step making levels 1.. from level 0 (drawn as a colour attachment) and leaving
+        the whole chain SHADER_READ_ONLY for the shaders that sample it (after the previous
+        use's sampling of levels 1..)."""
+        def record(cmd: Commands) -> None:
+            cmd.blit_mips(self.color, "shader_read", "sampled",
+                          level0=("color_attachment", "color"), last_read="sampled")
 
-    def record_end(self, cmd: Commands) -> None:
-        """End the drawing; make the mip chain; leave it for the frame's shaders to sample."""
-        end_rendering(cmd)
-        cmd.blit_mips(self.color, "shader_read", "sampled", level0=("color_attachment", "color"),
-                      last_read="sampled")
+        # Its own barriers take level 0 from the drawing (the step before it) to the blits.
+        return Step(name, record, leaves=((prefix + "color", "sampled"),))
 
     def destroy(self) -> None:
         while self._owned:

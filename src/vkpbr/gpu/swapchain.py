@@ -26,17 +26,9 @@ from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.frames import Frame
+from vkpbr.gpu.graph import ImageResource, Step
 from vkpbr.gpu.image import Image, ImageView
-from vkpbr.gpu.rendering import (
-    Attachments,
-    attachment_stage,
-    barriers,
-    begin_rendering,
-    copy_image_to_buffer,
-    end_rendering,
-    host_read_barrier,
-    image_barrier,
-)
+from vkpbr.gpu.rendering import Attachments, barriers, copy_image_to_buffer, host_read_barrier
 from vkpbr.gpu.target import COPY_COLOR
 from vkpbr.gpu.vk import check_result
 
@@ -80,6 +72,8 @@ class Swapchain:
     image each. A FrameTarget: `generation` increases on each recreation."""
 
     samples = 1
+
+    stores_depth = False  # nothing reads a window's depth after its frame
 
     def __init__(self, device: Device, surface: Surface, size: tuple[int, int],
                  vsync: bool = True, clear_color: tuple[float, float, float, float] = (0, 0, 0, 1)
@@ -250,44 +244,29 @@ class Swapchain:
     def attachments(self, image: int) -> Attachments:
         return Attachments(self.views[image], self.depth_views[image].handle, self.extent)
 
-    def record_begin(self, cmd: Commands, image: int) -> None:
-        """Move image `image` and its depth out of UNDEFINED, begin rendering (clear)."""
-        vk = self.device.vk
-        # The acquire semaphore is waited at COLOR_ATTACHMENT_OUTPUT: chain on that stage.
-        out = vk.VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT
-        c_stage, c_access, c_layout = attachment_stage(vk, False)
-        d_stage, d_access, d_layout = attachment_stage(vk, True)
-        dw = vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT
-        barriers(cmd, [
-            image_barrier(vk, self.images[image], False, vk.VK_IMAGE_LAYOUT_UNDEFINED, c_layout,
-                          (out, 0), (out, vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT)),
-            image_barrier(vk, self.depth_images[image].handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                          d_layout, (d_stage, dw), (d_stage, d_access)),
-        ])
-        begin_rendering(cmd, self.attachments(image), self.clear_color, 0.0, store_depth=False)
+    def resources(self, image: int, frame_index: int) -> dict[str, ImageResource]:
+        """Image `image` and its depth as graph resources ("color", "depth"). The acquire semaphore is waited at
+        COLOR_ATTACHMENT_OUTPUT; a frame's first use of an image waits for all earlier
+        commands (gpu/graph.py), which chains on it."""
+        return {"color": ImageResource(self.images[image], view=self.views[image]),
+                "depth": ImageResource(self.depth_images[image].handle, depth=True,
+                                       view=self.depth_views[image].handle)}
 
-    def record_end(self, cmd: Commands, image: int, frame: Frame, copy: tuple[str, ...]) -> None:
-        """End rendering; copy the image into `frame`'s screenshot buffer when `copy` names
-        colour; hand the image to the presentation engine."""
-        vk = self.device.vk
-        end_rendering(cmd)
-        c_stage, c_access, c_layout = attachment_stage(vk, False)
-        att = (c_stage, c_access)
-        img = self.images[image]
-        present = vk.VK_IMAGE_LAYOUT_PRESENT_SRC_KHR
-        nothing = (vk.VK_PIPELINE_STAGE_2_NONE, vk.VK_ACCESS_2_NONE)
+    def finish_steps(self, image: int, frame_index: int, copy: tuple[str, ...]) -> list[Step]:
+        """The colour copied into the frame's screenshot buffer when `copy` names it, then
+        the image handed to the presentation engine."""
+        steps = []
         if COPY_COLOR in copy:
             if not self.can_copy:
                 raise VkpbrError("this window's swapchain images cannot be copied (no TRANSFER_SRC)")
-            xfer = (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT)
-            src_l = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
-            buffer = self.screenshot_buffer(frame.index)
-            barriers(cmd, [image_barrier(vk, img, False, c_layout, src_l, att, xfer)])
-            copy_image_to_buffer(cmd, img, False, buffer, self.extent)
-            barriers(cmd, [image_barrier(vk, img, False, src_l, present, xfer, nothing)],
-                     [host_read_barrier(vk, buffer)])
-        else:
-            barriers(cmd, [image_barrier(vk, img, False, c_layout, present, att, nothing)])
+            buffer = self.screenshot_buffer(frame_index)
+
+            def record(cmd: Commands) -> None:  # the buffer is the frame slot's own
+                copy_image_to_buffer(cmd, self.images[image], False, buffer, self.extent)
+                barriers(cmd, [], [host_read_barrier(cmd.vk, buffer)])
+
+            steps.append(Step("copy", record, (("color", "transfer_src"),)))
+        return [*steps, Step("present", uses=(("color", "present"),), timed=False)]
 
     def submit(self, frame: Frame, cmd: Commands, image: int) -> bool:
         """Submit `cmd` (waiting for the acquire, signalling the image's render-finished

@@ -2,18 +2,19 @@
 
 `FrameTarget` is all the frame path (render/renderer.py) knows of a target, in the manner of
 Khronos Vulkan-Samples' RenderContext, which serves swapchains and offscreen images alike:
-  acquire(frame)                         -> image index to draw into (None: recreate first)
-  record_begin(cmd, image)               transitions, begin rendering (clear)
-  record_end(cmd, image, frame, copy)    end rendering, copy into `frame`'s readback buffers
-  submit(frame, cmd, image)              queue it (and present it); False: recreate
-plus `color_format`, `depth_format`, `samples` (pipelines are built for them), `extent` and
-`generation` (bumped when the images are recreated: recorded command buffers are stale).
+  acquire(frame)                       -> image index to draw into (None: recreate first)
+  resources(image, frame_index)        its images and buffers as frame-graph resources
+                                       (gpu/graph.py): "color", "depth", ...
+  finish_steps(image, frame_index, copy)  the frame's last steps: copies out, or present
+  submit(frame, cmd, image)            queue it (and present it); False: recreate
+plus `color_format`, `depth_format`, `samples` (pipelines are built for them), `extent`,
+`clear_color`, `stores_depth` and `generation` (bumped when the images are recreated:
+recorded command buffers are stale). The barriers between steps come from the graph.
 
 `OffscreenTarget` is one colour + D32 depth pair (optionally 4x MSAA, resolved) with a pair
 of persistently mapped readback buffers per frame in flight, so reading frame i never races
-frame i+1's copy. Frames in flight share the images; the barrier at the start of each frame
-orders its writes after the previous frame's copy. The swapchain is gpu/swapchain.py.
-Depth is cleared to 0: the renderer uses reversed-Z (0 = infinitely far).
+frame i+1's copy. Frames in flight share the images; a frame's first use of each waits for
+the frames before it (gpu/graph.py). The swapchain is gpu/swapchain.py.
 """
 
 from __future__ import annotations
@@ -28,32 +29,15 @@ from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.frames import Frame
+from vkpbr.gpu.graph import BufferResource, ImageResource, Step
 from vkpbr.gpu.image import Image, ImageView
-from vkpbr.gpu.rendering import (
-    Attachments,
-    attachment_stage,
-    barriers,
-    begin_rendering,
-    buffer_barrier,
-    compute_storage,
-    copy_buffer_to_image,
-    copy_image_to_buffer,
-    copy_out_barriers,
-    end_rendering,
-    external_ownership,
-    host_read_barrier,
-    image_barrier,
-    redraw_barriers,
-)
+from vkpbr.gpu.rendering import Attachments, barriers, copy_image_to_buffer, external_ownership
 
-__all__ = ["FrameTarget", "OffscreenTarget", "ComputeSteps", "COLOR_FORMATS", "COPY_COLOR", "COPY_DEPTH", "COPY_OUTPUTS"]
+__all__ = ["FrameTarget", "OffscreenTarget", "COLOR_FORMATS", "COPY_COLOR", "COPY_DEPTH", "COPY_OUTPUTS"]
 
 # Colour formats by name: "srgb" for display images, "float" for linear HDR values.
 COLOR_FORMATS = {"srgb": ("VK_FORMAT_R8G8B8A8_SRGB", 4), "float": ("VK_FORMAT_R32G32B32A32_SFLOAT", 16)}
 COPY_COLOR, COPY_DEPTH, COPY_OUTPUTS = "color", "depth", "outputs"
-# The dataset outputs' images (render/layouts.py OUTPUT_IMAGES): Vulkan format names and
-# bytes a pixel, by GLSL name; their clear values: ids 0, normals 0, distances +inf.
-_INF = float("inf")
 
 
 class FrameTarget(Protocol):
@@ -62,105 +46,23 @@ class FrameTarget(Protocol):
     samples: int
     extent: tuple[int, int]
     generation: int
+    clear_color: tuple[float, float, float, float]
+    stores_depth: bool
 
     def acquire(self, frame: Frame) -> int | None: ...
 
-    def record_begin(self, cmd: Commands, image: int) -> None: ...
+    def resources(self, image: int, frame_index: int) -> dict[str, Any]: ...
 
-    def record_end(self, cmd: Commands, image: int, frame: Frame, copy: tuple[str, ...]) -> None: ...
+    def finish_steps(self, image: int, frame_index: int, copy: tuple[str, ...]) -> list[Step]: ...
 
     def submit(self, frame: Frame, cmd: Commands, image: int) -> bool: ...
 
 
-class ComputeSteps:
-    """The compute path's steps over a target's images (render/compute_path.py), shared by
-    the offscreen target and the transmission's copy (gpu/mip_target.py). The includer has
-    `device`, `extent`, `color` (mip 0 is written), `depth`, `visibility` (+ `_view`),
-    `attachments` and `clear_color`, and says in `_color_last_use` which stages last used
-    the colour image (a frame's copy and attachment writes by default)."""
-
-    def _color_last_use(self, vk: Any) -> tuple[int, int]:
-        """(stages, accesses) of the colour image's previous use, ordered before its writes."""
-        stage, access, _ = attachment_stage(vk, False)
-        return (stage | vk.VK_PIPELINE_STAGE_2_COPY_BIT,
-                access & ~vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT)
-
-    def record_visibility_begin(self, cmd: Commands, image: int) -> None:
-        """Begin rendering the visibility image (cleared to 0: nothing) over the cleared
-        depth buffer; the colour image goes to GENERAL for the compute shader's writes."""
-        vk = self.device.vk
-        color_stage, color_access, color_layout = attachment_stage(vk, False)
-        depth_stage, depth_access, depth_layout = attachment_stage(vk, True)
-        copy = vk.VK_PIPELINE_STAGE_2_COPY_BIT
-        compute = compute_storage(vk)
-        no_reads = ~(vk.VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT
-                     | vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
-        barriers(cmd, [
-            # The previous frame's passes and copies of these images come first.
-            image_barrier(vk, self.visibility.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                          color_layout, (compute[0], 0), (color_stage, color_access)),
-            image_barrier(vk, self.depth.handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED, depth_layout,
-                          (depth_stage | copy, depth_access & no_reads), (depth_stage, depth_access)),
-            image_barrier(vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                          vk.VK_IMAGE_LAYOUT_GENERAL, self._color_last_use(vk), compute),
-        ])
-        begin_rendering(cmd, Attachments(self.visibility_view.handle, self.attachments.depth,
-                                         self.extent), (0.0, 0.0, 0.0, 0.0), 0.0)
-
-    def record_raster_end(self, cmd: Commands, depths: Buffer, copy_depth: bool = True) -> None:
-        """After the compute rasteriser, instead of a visibility pass: its depths (`depths`,
-        a float a pixel, written by its resolve) copied into the depth buffer for what tests
-        it afterwards (the blended draws) and depth readback, then ready for those (without
-        `copy_depth`, when nothing reads it, only made an attachment again: its contents
-        undefined). The visibility and colour images stay in GENERAL (record_raster_begin),
-        readable and writable by the shading (record_raster's last barrier)."""
-        vk = self.device.vk
-        depth_stage, depth_access, depth_layout = attachment_stage(vk, True)
-        copy = vk.VK_PIPELINE_STAGE_2_COPY_BIT
-        compute = compute_storage(vk)
-        write, read = vk.VK_ACCESS_2_TRANSFER_WRITE_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT
-        # The previous frame's passes and copies of the depth buffer come first.
-        before = (depth_stage | copy, depth_access & ~vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT)
-        if not copy_depth:
-            barriers(cmd, [image_barrier(vk, self.depth.handle, True,
-                                         vk.VK_IMAGE_LAYOUT_UNDEFINED, depth_layout,
-                                         before, (depth_stage, depth_access))])
-            return
-        dst = vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
-        barriers(cmd, [image_barrier(vk, self.depth.handle, True, vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                                     dst, before, (copy, write))],
-                 [buffer_barrier(vk, depths, compute, (copy, read))])
-        copy_buffer_to_image(cmd, depths, self.depth.handle, True, self.extent)
-        barriers(cmd, [image_barrier(vk, self.depth.handle, True, dst, depth_layout,
-                                     (copy, write), (depth_stage, depth_access))],
-                 [buffer_barrier(vk, depths, (copy, read), (compute[0], 0))])
-
-    def record_shading_begin(self, cmd: Commands) -> None:
-        """End the visibility pass: its image becomes readable by the compute shader."""
-        vk = self.device.vk
-        end_rendering(cmd)
-        stage, access, layout = attachment_stage(vk, False)
-        barriers(cmd, [image_barrier(
-            vk, self.visibility.handle, False, layout, vk.VK_IMAGE_LAYOUT_GENERAL,
-            (stage, vk.VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT),
-            (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT))])
-
-    def record_resume(self, cmd: Commands, clear: bool = False) -> None:
-        """After the compute steps: render on into the colour image (the shaded one, or
-        `clear`ed for the fragment path's passes) over the visibility pass's depth."""
-        vk = self.device.vk
-        stage, access, layout = attachment_stage(vk, False)
-        barriers(cmd, [image_barrier(
-            vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_GENERAL, layout,
-            (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT),
-            (stage, access))])
-        begin_rendering(cmd, self.attachments, self.clear_color if clear else None, None)
-
-
-class OffscreenTarget(ComputeSteps):
+class OffscreenTarget:
     """Offscreen colour + depth of `size` = (width, height); `color` is "srgb" or "float"."""
 
     generation = 0  # never recreated
+    stores_depth = True
 
     def __init__(self, device: Device, size: tuple[int, int], color: str = "srgb",
                  samples: int = 1, clear_color: tuple[float, float, float, float] = (0, 0, 0, 1),
@@ -184,7 +86,7 @@ class OffscreenTarget(ComputeSteps):
         mutable = self.compute and color == "srgb"
         self.color = self._own(Image(device, w, h, self.color_format, attach | storage,
                                      mutable=mutable))
-        # The compute rasteriser's depths are copied in (record_raster_end).
+        # The compute rasteriser's depths are copied in (render/compute_path.py).
         depth_in = vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT if self.compute else 0
         self.depth = self._own(Image(device, w, h, self.depth_format,
                                      vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | src | depth_in))
@@ -199,7 +101,6 @@ class OffscreenTarget(ComputeSteps):
                 vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_STORAGE_BIT,
                 name="visibility"))
             self.visibility_view = self._own(ImageView(self.visibility))
-        self._images = [(self.color, False), (self.depth, True)]
         self.attachments = Attachments(views[0].handle, views[1].handle, self.extent)
         if samples > 1:
             transient = vk.VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT
@@ -208,7 +109,7 @@ class OffscreenTarget(ComputeSteps):
             md = self._own(Image(device, w, h, self.depth_format,
                                  vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | transient,
                                  samples=samples))
-            self._images += [(mc, False), (md, True)]
+            self._msaa = (mc, md)
             self.attachments.msaa_color = self._own(ImageView(mc)).handle
             self.attachments.msaa_depth = self._own(ImageView(md, aspect="depth")).handle
         self._readbacks: dict[int, tuple[Buffer, Buffer]] = {}
@@ -235,22 +136,68 @@ class OffscreenTarget(ComputeSteps):
     def acquire(self, frame: Frame) -> int:
         return 0  # one image; frames in flight are ordered by the barriers below
 
-    def record_begin(self, cmd: Commands, image: int) -> None:
-        barriers(cmd, redraw_barriers(self.device.vk, [(i.handle, d) for i, d in self._images]))
-        begin_rendering(cmd, self.attachments, self.clear_color, 0.0)
+    def resources(self, image: int, frame_index: int) -> dict[str, ImageResource | BufferResource]:
+        """The images and readback buffers of frame `frame_index` as graph resources:
+        "color", "depth" (with their MSAA images), "visibility" (the compute path's),
+        "color_readback", "depth_readback" and the outputs' images by their names."""
+        color = ImageResource(self.color.handle, view=self.attachments.color)
+        depth = ImageResource(self.depth.handle, depth=True, view=self.attachments.depth)
+        if self.samples > 1:
+            color.msaa = ImageResource(self._msaa[0].handle, view=self.attachments.msaa_color)
+            depth.msaa = ImageResource(self._msaa[1].handle, depth=True,
+                                       view=self.attachments.msaa_depth)
+        out: dict[str, ImageResource | BufferResource] = {"color": color, "depth": depth}
+        if self.compute:
+            out["visibility"] = ImageResource(self.visibility.handle,
+                                              view=self.visibility_view.handle)
+        color_buf, depth_buf = self.readback(frame_index)
+        out["color_readback"] = BufferResource(color_buf)
+        out["depth_readback"] = BufferResource(depth_buf)
+        if self.outputs:
+            buffers = self._outputs_readback(frame_index)
+            for name, (img, view) in self.outputs.items():
+                out[name] = ImageResource(img.handle, view=view.handle)
+                out[name + "_readback"] = BufferResource(buffers[name])
+        return out
 
-    # --- the compute path's steps, instead of record_begin -------------------------------------
-    def record_raster_begin(self, cmd: Commands) -> None:
-        """Before the compute rasteriser resolves into the visibility image (and the clear
-        colour into the colour image where nothing covers a pixel): both GENERAL for storage
-        writes, after the previous frame's uses (contents discarded)."""
-        vk = self.device.vk
-        compute = compute_storage(vk)
-        barriers(cmd, [image_barrier(vk, self.visibility.handle, False,
-                                     vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_GENERAL,
-                                     (compute[0], 0), compute),
-                       image_barrier(vk, self.color.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED,
-                                     vk.VK_IMAGE_LAYOUT_GENERAL, self._color_last_use(vk), compute)])
+    def finish_steps(self, image: int, frame_index: int, copy: tuple[str, ...],
+                     tiles: tuple[int, int, int, int] | None = None, external: Any = None
+                     ) -> list[Step]:
+        """"copy": what `copy` names copied into frame `frame_index`'s readback buffers
+        (`tiles`, an atlas of a compute batch (views, tile width, height, tiles a column):
+        colour and depth view by view, read_tiles; `external`: the colour into that exported
+        buffer instead, for CUDA: taken back from the external queue family before the copy,
+        released after it), then made visible to the host ("readback", untimed)."""
+        if not copy:
+            return []
+        color_buf, depth_buf = self.readback(frame_index)
+        images = []
+        if COPY_COLOR in copy:
+            images.append(("color", self.color, False, external or color_buf, self.pixel_bytes))
+        if COPY_DEPTH in copy:
+            images.append(("depth", self.depth, True, depth_buf, 4))
+        outputs = self._outputs_readback(frame_index) if COPY_OUTPUTS in copy else {}
+        family, vk = self.device.queue_family, self.device.vk
+
+        def record(cmd: Commands) -> None:
+            if external is not None:
+                barriers(cmd, [], [external_ownership(vk, family, external, True)])
+            for _, img, depth, buf, nbytes in images:
+                copy_image_to_buffer(cmd, img.handle, depth, buf, self.extent, tiles=tiles,
+                                     pixel_bytes=nbytes)
+            for name, buf in outputs.items():
+                copy_image_to_buffer(cmd, self.outputs[name][0].handle, False, buf,  # type: ignore[index]
+                                     self.extent)
+            if external is not None:
+                barriers(cmd, [], [external_ownership(vk, family, external, False)])
+
+        uses = [(name, "transfer_src") for name, *_ in images]
+        uses += [(f"{name}_readback", "transfer_dst") for name, _, _, buf, _ in images
+                 if buf is not external]
+        uses += [(n, "transfer_src") for n in outputs]
+        uses += [(f"{n}_readback", "transfer_dst") for n in outputs]
+        host = tuple((n, "host_read") for n, u in uses if u == "transfer_dst")
+        return [Step("copy", record, tuple(uses)), Step("readback", uses=host, timed=False)]
 
     # --- dataset outputs (render/compute_path.py writes them) ---------------------------------
     outputs: dict[str, tuple[Image, ImageView]] | None = None
@@ -273,41 +220,6 @@ class OffscreenTarget(ComputeSteps):
         self._output_readbacks: dict[int, dict[str, Buffer]] = {}
         return True
 
-    def record_outputs_clear(self, cmd: Commands) -> None:
-        """Clear the outputs (ids and normals 0, distances +inf) for this frame's writes, after
-        the previous frame's copies of them."""
-        vk = self.device.vk
-        transfer = vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT
-        general = vk.VK_IMAGE_LAYOUT_GENERAL
-        images = [img for img, _ in self.outputs.values()]  # type: ignore[union-attr]
-        barriers(cmd, [image_barrier(vk, img.handle, False, vk.VK_IMAGE_LAYOUT_UNDEFINED, general,
-                                     (transfer, 0), (transfer, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT))
-                       for img in images])
-        full = vk.VkImageSubresourceRange(aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0,
-                                          levelCount=1, baseArrayLayer=0, layerCount=1)
-        for name, (img, _) in self.outputs.items():  # type: ignore[union-attr]
-            value = (vk.VkClearColorValue(uint32=[0, 0, 0, 0]) if name == "out_ids" else
-                     vk.VkClearColorValue(float32=[_INF, _INF, 0.0, 0.0]) if name == "out_depth_range"
-                     else vk.VkClearColorValue(float32=[0.0, 0.0, 0.0, 0.0]))
-            vk.vkCmdClearColorImage(cmd.handle, img.handle, general, value, 1, [full])
-        compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT)
-        barriers(cmd, [image_barrier(vk, img.handle, False, general, general,
-                                     (transfer, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT), compute)
-                       for img in images])
-
-    def _record_outputs_copy(self, cmd: Commands, frame: Frame) -> None:
-        vk = self.device.vk
-        general = vk.VK_IMAGE_LAYOUT_GENERAL
-        xfer = (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT)
-        compute = (vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT)
-        outputs = self.outputs or {}
-        barriers(cmd, [image_barrier(vk, img.handle, False, general, general, compute, xfer)
-                       for img, _ in outputs.values()])
-        buffers = self._outputs_readback(frame.index)
-        for name, (img, _) in outputs.items():
-            copy_image_to_buffer(cmd, img.handle, False, buffers[name], self.extent, general=True)
-        barriers(cmd, [], [host_read_barrier(vk, b) for b in buffers.values()])
-
     def _outputs_readback(self, frame_index: int) -> dict[str, Buffer]:
         if frame_index not in self._output_readbacks:
             n = self.extent[0] * self.extent[1]
@@ -325,32 +237,6 @@ class OffscreenTarget(ComputeSteps):
         buffers = self._outputs_readback(frame_index)
         return {name: buffers[name].array(np.dtype(dt), w * h * ch).reshape(h, w, ch).copy()
                 for name, (dt, ch) in dtypes.items()}
-
-    def record_end(self, cmd: Commands, image: int, frame: Frame, copy: tuple[str, ...],
-                   tiles: tuple[int, int, int, int] | None = None, external: Any = None) -> None:
-        """End the frame's rendering and copy out what `copy` names; `tiles` (an atlas of a
-        compute batch: views, tile width, height, tiles a column): colour and depth view by view
-        (read_tiles); `external`: the colour into that exported buffer instead (for CUDA:
-        taken back from the external queue family before the copy, released after it)."""
-        end_rendering(cmd)
-        if COPY_OUTPUTS in copy:
-            self._record_outputs_copy(cmd, frame)
-            copy = tuple(c for c in copy if c != COPY_OUTPUTS)
-        if not copy:
-            return
-        vk = self.device.vk
-        color_buf, depth_buf = self.readback(frame.index)
-        wanted = [(self.color, False, external or color_buf, COPY_COLOR),
-                  (self.depth, True, depth_buf, COPY_DEPTH)]
-        wanted = [w for w in wanted if w[3] in copy]
-        family = self.device.queue_family
-        barriers(cmd, copy_out_barriers(vk, [(img.handle, depth) for img, depth, _, _ in wanted]),
-                 [external_ownership(vk, family, external, True)] if external is not None else [])
-        for img, depth, buf, _ in wanted:
-            copy_image_to_buffer(cmd, img.handle, depth, buf, self.extent, tiles=tiles,
-                                 pixel_bytes=4 if depth else self.pixel_bytes)
-        barriers(cmd, [], [external_ownership(vk, family, w[2], False) if w[2] is external
-                           else host_read_barrier(vk, w[2]) for w in wanted])
 
     def submit(self, frame: Frame, cmd: Commands, image: int) -> bool:
         frame.submit(cmd)

@@ -24,7 +24,6 @@ camera's depth range; thousands of cameras cannot each have theirs).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -37,6 +36,7 @@ from vkpbr.gpu.compute import groups as work_groups
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.frames import Frame, FrameRing
+from vkpbr.gpu.graph import BufferResource, Rendering, Step
 from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.frames import FrameSlot
@@ -44,6 +44,7 @@ from vkpbr.render.gpu_scene import Draw, GpuScene
 from vkpbr.render.passes import PassContext, record_passes
 from vkpbr.render.recorder import FrameRecorder
 from vkpbr.render.shadows import ShadowPlan
+from vkpbr.render.steps import FrameSpec, FrameSteps
 from vkpbr.scene.types import Scene
 
 __all__ = ["BatchViews", "draw_spheres", "MAX_LAYERS"]
@@ -70,12 +71,6 @@ def draw_spheres(scene: Scene, draws: list[Draw]) -> np.ndarray:
         out[i, 3] = np.linalg.norm(world - centre, axis=1).max() * (1 + 1e-5) + 1e-6
         ranges[i, 4:7] = (d.index_count, d.first_index, d.vertex_offset & 0xFFFFFFFF)
     return out
-
-
-@dataclass
-class _Recorded:
-    key: tuple
-    cmd: Commands
 
 
 class BatchViews:
@@ -106,7 +101,7 @@ class BatchViews:
         self.chunk_views = 0
         self.views: Buffer | None = None
         self._buffers: list[Buffer] = []
-        self._recorded: dict[int, _Recorded] = {}
+        self.generation = 0  # its buffers' (recordings name them)
 
     def _own(self, obj: Any) -> Any:
         self._objects.append(obj)
@@ -119,6 +114,7 @@ class BatchViews:
             return
         self.device.wait_idle()
         self.free_recordings()
+        self.generation += 1
         for b in self._buffers:
             b.destroy()
         dev, d = self.device, max(self.draw_count, 1)
@@ -185,59 +181,64 @@ class BatchViews:
     def command_buffer(self, target: BatchTarget, frame: Frame, views: int, tbn: L.TbnMode,
                        alpha_mask: bool, plan: ShadowPlan, groups: tuple, prepass: bool,
                        redraw: tuple[range, ...] | None = None) -> Commands:
-        """The batch's commands (recorded on first use): `groups` from write_blend_groups;
-        `redraw`: which shadow entries are drawn (ShadowMaps.stale)."""
-        key = (id(target), views, tbn, alpha_mask, plan, groups, prepass, self.capacity, redraw)
-        rec = self._recorded.get(frame.index)
-        if rec is not None and rec.key == key:
-            return rec.cmd
-        if rec is not None:
-            rec.cmd.free()
-        cmd = self._record(target, frame, views, tbn, alpha_mask, plan, groups, prepass, redraw)
-        self._recorded[frame.index] = _Recorded(key, cmd)
-        return cmd
+        """The batch's commands (the layered batch's path, render/paths.py; recorded on first
+        use): `groups` from write_blend_groups; `redraw`: which shadow entries are drawn
+        (ShadowMaps.stale)."""
+        spec = FrameSpec("layered_batch", tbn, alpha_mask, plan, redraw,
+                         batch=(views, groups, prepass, self.generation))
 
-    def _record(self, target: BatchTarget, frame: Frame, views: int, tbn: L.TbnMode,
-                alpha_mask: bool, plan: ShadowPlan, groups: tuple, prepass: bool,
-                redraw: tuple[range, ...] | None) -> Commands:
-        gs, slot = self.gpu_scene, self.slots[frame.index]
-        cmd, stamps, names, classes = self.recorder.begin_frame(frame, tbn, alpha_mask, plan,
-                                                                redraw)
-        # The previous batch's draws read the commands and lists: order this one's writes.
-        cmd.memory_barrier("indirect|vertex", "transfer")
-        target.record_external_acquire(cmd)
-        cmd.fill(self.commands)
-        cmd.memory_barrier("transfer", "compute")
-        cmd.bind_pipeline(self.cull)
-        cmd.bind_set(0, self.cull_set)
-        cmd.push(np.array([views, self.draw_count, self.chunk_views], np.uint32))
-        cmd.dispatch(*work_groups((views * self.draw_count, 1, 1), (64, 1, 1)))
-        cmd.memory_barrier("compute", "indirect|vertex")
-        stamps.after("prepass_opaque")  # the culling's time: the first pass's
-        shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
-        c = self.chunk_views
-        for chunk in range(-(-views // c)):
+        def chunks(fs: FrameSteps) -> list[Step]:
+            return self._chunk_steps(fs, target, views, tbn, groups, prepass)
+
+        return self.recorder.command_buffer(target, frame, 0, spec,
+                                            {"cull": lambda fs: self._cull_steps(fs, views),
+                                             "chunks": chunks})
+
+    def _cull_steps(self, fs: FrameSteps, views: int) -> list[Step]:
+        """The culling kernel: per view and draw, whether the view sees it, into the chunks'
+        indirect draws and lists of views."""
+        fs.resources.update(commands=BufferResource(self.commands),
+                            visible=BufferResource(self.visible))
+
+        def record(cmd: Commands) -> None:
+            cmd.bind_pipeline(self.cull)
+            cmd.bind_set(0, self.cull_set)
+            cmd.push(np.array([views, self.draw_count, self.chunk_views], np.uint32))
+            cmd.dispatch(*work_groups((views * self.draw_count, 1, 1), (64, 1, 1)))
+
+        return [Step("cull_clear", lambda cmd: cmd.fill(self.commands),
+                     (("commands", "transfer_dst"),), timed=False),
+                Step("cull", record, (("commands", "storage"), ("visible", "storage")))]
+
+    def _chunk_steps(self, fs: FrameSteps, target: BatchTarget, views: int, tbn: L.TbnMode,
+                     groups: tuple, prepass: bool) -> list[Step]:
+        """Each chunk of views: every pass in one layered rendering, then its copy out; the
+        last copy is timed ("views": the drawing of every chunk)."""
+        gs, slot, c = self.gpu_scene, self.slots[fs.frame_index], self.chunk_views
+        chunks = -(-views // c)
+        steps = []
+        for chunk in range(chunks):
             n = min(c, views - chunk * c)
-            target.record_begin(cmd)
             ctx = PassContext(
-                draws=gs.draws, classes=classes,
+                draws=gs.draws, classes=fs.classes,
                 pipeline=lambda p: self.recorder.pipeline(target, tbn, p, prepass, batch=True),
-                frame_sets=(self.sets0[frame.index], slot.set2), material_sets=gs.material_sets,
-                vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
-                prepass=prepass, shadow_set=shadow_set,
+                frame_sets=(self.sets0[fs.frame_index], slot.set2),
+                material_sets=gs.material_sets,
+                vertex_buffers=[gs.streams[name] for name in fs.streams],
+                index_buffer=gs.index_buffer, prepass=prepass, shadow_set=fs.shadow_set,
                 indirect=self.commands, indirect_base=chunk * self.draw_count,
                 views=(chunk * c, n), blend_groups=groups[chunk])
-            record_passes(cmd, ctx)
-            target.record_chunk_end(cmd, chunk, n)
-        target.record_host_barrier(cmd)
-        stamps.end()
-        cmd.end()
-        return cmd
+            rendering = Rendering("color", "depth", target.clear_color, 0.0, layers=target.layers)
+            steps.append(Step(f"chunk{chunk}", lambda cmd, ctx=ctx: record_passes(cmd, ctx),
+                              (("commands", "indirect"), ("visible", "vertex_read")),
+                              rendering, timed=False))
+            last = chunk == chunks - 1
+            steps.append(target.chunk_copy_step("views" if last else f"chunk{chunk}_copy",
+                                                chunk, n, timed=last))
+        return steps
 
     def free_recordings(self) -> None:
-        for rec in self._recorded.values():
-            rec.cmd.free()
-        self._recorded.clear()
+        self.recorder.free(None)
 
     def destroy(self) -> None:
         self.free_recordings()

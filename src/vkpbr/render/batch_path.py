@@ -27,6 +27,7 @@ from vkpbr.render.batch import MAX_LAYERS, BatchViews
 from vkpbr.render.camera import batch_frame_terms, linear_depth
 from vkpbr.render.frames import summed_stats, write_frame_uniforms
 from vkpbr.render.options import RenderOptions
+from vkpbr.render.steps import FrameSpec
 from vkpbr.scene.camera_batch import CameraBatch
 
 # The Renderer (render/renderer.py) that owns the path: not imported here (it imports this
@@ -126,9 +127,13 @@ class BatchPath:
         bv = self._views(n, chunk or max(1, min(n, MAX_LAYERS)))
         frame, plan, terms = self._begin(views, size, lights, opts, linear)
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
-        self._run(frame, plan, opts, lambda redraw: r.recorder.compute_batch(
-            target, frame, opts.tbn, opts.alpha_mask, plan, redraw, (n, w, h, rows),
-            bv.sets0[frame.index], copy, external, r.shade_variant(opts)),
+        set0 = bv.sets0[frame.index]
+        self._run(frame, plan, opts, lambda redraw: r.recorder.command_buffer(
+            target, frame, 0, FrameSpec(
+                "compute_batch", opts.tbn, opts.alpha_mask, plan, redraw, copy,
+                variant=r.shade_variant(opts), tiles=(n, w, h, rows), set0=set0,
+                set0_id=id(set0), external=external, external_id=id(external),
+                batch=(bv.generation,))),
             (lambda: self._cuda_wait(external)) if cuda else None)
         if cuda:
             r.device.check_validation()

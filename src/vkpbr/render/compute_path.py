@@ -36,6 +36,8 @@ from vkpbr.gpu.buffer import Buffer, download_buffer, upload_buffer
 from vkpbr.gpu.compute import ComputePipeline, groups
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
+from vkpbr.gpu.graph import BufferResource, Step
+from vkpbr.gpu.rendering import copy_buffer_to_image
 from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.gpu_scene import GpuScene, has_default_layers
@@ -90,10 +92,6 @@ RASTER_TUNING = RasterTuning()
 # group that found it). At most maxComputeWorkGroupCount[0]: an entry is a work group.
 MASKED_CAPACITY = 4096
 CLASSIFY_GROUP = (16, 16, 1)  # classify.comp's count and scatter, raster_resolve: bin_tiles.glsl's tile
-
-
-def _untimed(step: str) -> None:
-    """A recording's `stamp` when none is taken (the transmission's copies)."""
 
 
 class _TargetResources:
@@ -297,25 +295,23 @@ class ComputeScene:
                 self._stand_ins[name] = (image, self._own(ImageView(image)))
         return self._stand_ins
 
-    def record_shading(self, cmd: Any, target: Any, frame_index: int, tbn: L.TbnMode,
-                       frame_sets: dict[int, Any], material_sets: list[Any], materials: list[int],
-                       clear_color: tuple[float, ...], shade: bool = True,
-                       tiles: tuple[int, int, int, int] | None = None, copy: bool = False,
-                       stamp: Callable[[str], None] = _untimed,
-                       variant: ShadeVariant = GENERAL_SHADING, counted: bool = False) -> None:
-        """Classify the visibility image's pixels by material, then shade each material of
-        `materials` (those the visibility pass drew) with its own set 1 bound (`shade`
-        False: classify only, for the outputs of a fragment-path frame; `tiles`: a compute
-        batch's atlas, as record_raster's; `copy`: the transmission's copy of the opaque
-        scene, linear radiance: render/transmission.py). `stamp("classify")` after the
-        classification. `variant`: what the frame's shading kernels are specialised for;
-        `counted`: the compute rasteriser's resolve counted the bins and cleared the pixels
-        nothing covers (record_raster), so the classification starts at the offsets."""
+    # --- steps (render/paths.py lists them; gpu/graph.py derives their barriers) ----------
+    def buffers(self, target: Any, prefix: str = "") -> dict[str, BufferResource]:
+        """`target`'s buffers as graph resources, named as the steps below use them."""
+        res = self._resources(target)
+        return {prefix + name: BufferResource(getattr(res, name)) for name in (
+            "bins", "args", "pixels", "raster", "raster_depths", "raster_big",
+            "raster_masked_big")}
+
+    def classify_step(self, target: Any, frame_index: int, frame_sets: dict[int, Any],
+                      material_sets: list[Any], clear_color: tuple[float, ...],
+                      counted: bool = False, copy: bool = False, prefix: str = "") -> Step:
+        """"classify": the visibility image's pixels binned by material (counted, offsets,
+        scattered into the pixel list: three kernels; `counted`: the compute rasteriser's
+        resolve counted them and cleared the pixels nothing covers, so it starts at the
+        offsets; `copy`: the transmission's copy, linear radiance)."""
         res = self._resources(target)
         compute_set = res.sets[frame_index]
-        if not counted:
-            cmd.fill(res.bins, 0)
-            cmd.memory_barrier("transfer", "compute")
         push = np.zeros(8, np.float32)
         push[:4] = clear_color
         push.view(np.uint32)[4:6] = (self.material_count, SHADE_GROUP)
@@ -324,49 +320,87 @@ class ComputeScene:
         suffix = "_copy" if copy else ""
         kernels = ((f"classify_count{plain}{suffix}", pixel_groups),
                    ("classify_offsets", (1, 1, 1)), (f"classify_scatter{plain}", pixel_groups))
-        for name, size in kernels[1:] if counted else kernels:
-            cmd.bind_pipeline(self._pipeline(name, 32))
-            self._bind_frame_sets(cmd, frame_sets, material_sets[0], compute_set)
-            cmd.push(push)
-            cmd.dispatch(*size)
-            cmd.memory_barrier("compute", "compute|indirect")
-        stamp("classify")
-        if shade:
-            kernel = f"shade_{'batch_' if tiles else 'copy_' if copy else ''}{tbn.name.lower()}"
+
+        def record(cmd: Any) -> None:
+            if not counted:
+                cmd.fill(res.bins, 0)
+                cmd.memory_barrier("transfer", "compute")
+            for name, size in kernels[1:] if counted else kernels:
+                cmd.bind_pipeline(self._pipeline(name, 32))
+                self._bind_frame_sets(cmd, frame_sets, material_sets[0], compute_set)
+                cmd.push(push)
+                cmd.dispatch(*size)
+                if name != kernels[-1][0]:  # the kernels' own order; the graph orders the rest
+                    cmd.memory_barrier("compute", "compute")
+
+        p = prefix
+        uses = ((p + "visibility", "storage_read"), (p + "color", "storage"),
+                (p + "bins", "storage|transfer_dst"), (p + "args", "storage"),
+                (p + "pixels", "storage"))
+        return Step("classify", record, uses)
+
+    def shading_step(self, target: Any, frame_index: int, tbn: L.TbnMode,
+                     frame_sets: dict[int, Any], material_sets: list[Any], materials: list[int],
+                     tiles: tuple[int, int, int, int] | None = None, copy: bool = False,
+                     variant: ShadeVariant = GENERAL_SHADING, prefix: str = "") -> Step:
+        """"shading": each material of `materials` (those the visibility pass drew) shaded
+        over its bin with its own set 1 bound (`tiles`: a compute batch's atlas; `copy`: the
+        transmission's copy; `variant`: what the kernels are specialised for)."""
+        res = self._resources(target)
+        kernel = f"shade_{'batch_' if tiles else 'copy_' if copy else ''}{tbn.name.lower()}"
+
+        def record(cmd: Any) -> None:
             self._dispatch_bins(cmd, res, frame_index, kernel, frame_sets, material_sets,
                                 materials, tiles, variant)
 
-    def record_background(self, cmd: Any, target: Any, frame_index: int,
-                          frame_sets: dict[int, Any],
-                          tiles: tuple[int, int, int, int] | None = None) -> None:
-        """The environment behind the shaded pixels (background.comp), after the shading:
-        every pixel nothing covers, in the camera's direction (`tiles`: a compute batch's
-        atlas, each view's)."""
-        cmd.memory_barrier("compute", "compute")
-        cmd.bind_pipeline(self._pipeline("background_batch" if tiles else "background_view", 16))
-        self._bind_frame_sets(cmd, frame_sets, None, self._resources(target).sets[frame_index])
-        cmd.push(np.array(tiles or (1, *target.extent, 1), np.uint32))
-        cmd.dispatch(*groups((*target.extent, 1), (8, 8, 1)))
+        return Step("shading", record, self._bin_uses(prefix))
 
-    def record_raster(self, cmd: Any, target: Any, frame_index: int, alpha_mask: bool,
-                      material_sets: list[Any], tiles: tuple[int, int, int, int] | None = None,
-                      set0: Any = None, stamp: Callable[[str], None] = _untimed,
-                      depth: bool = True) -> None:
+    def outputs_step(self, target: Any, frame_index: int, tbn: L.TbnMode,
+                     frame_sets: dict[int, Any], material_sets: list[Any],
+                     materials: list[int], outputs: tuple[str, ...]) -> Step:
+        """"outputs": the dataset outputs (ids, normals, distances) of the classified pixels
+        (shade.comp's OUTPUTS variant, per material: the shading normal reads its normal
+        map) into the images named `outputs`."""
+        res = self._resources(target)
+
+        def record(cmd: Any) -> None:
+            self._dispatch_bins(cmd, res, frame_index, f"shade_outputs_{tbn.name.lower()}",
+                                frame_sets, material_sets, materials)
+
+        return Step("outputs", record,
+                    self._bin_uses("") + tuple((name, "storage") for name in outputs))
+
+    @staticmethod
+    def _bin_uses(p: str) -> tuple[tuple[str, str], ...]:
+        return ((p + "visibility", "storage_read"), (p + "color", "storage"),
+                (p + "bins", "storage_read"), (p + "args", "indirect"),
+                (p + "pixels", "storage_read"))
+
+    def background_step(self, target: Any, frame_index: int, frame_sets: dict[int, Any],
+                        tiles: tuple[int, int, int, int] | None = None) -> Step:
+        """"background": the environment behind the shaded pixels (background.comp), every
+        pixel nothing covers, in the camera's direction (`tiles`: each view's of an atlas)."""
+        def record(cmd: Any) -> None:
+            cmd.bind_pipeline(self._pipeline("background_batch" if tiles else "background_view", 16))
+            self._bind_frame_sets(cmd, frame_sets, None, self._resources(target).sets[frame_index])
+            cmd.push(np.array(tiles or (1, *target.extent, 1), np.uint32))
+            cmd.dispatch(*groups((*target.extent, 1), (8, 8, 1)))
+
+        return Step("background", record, (("visibility", "storage_read"), ("color", "storage")))
+
+    def raster_steps(self, target: Any, frame_index: int, alpha_mask: bool,
+                     material_sets: list[Any], tiles: tuple[int, int, int, int] | None = None,
+                     set0: Any = None, depth: bool = True) -> list[Step]:
         """The compute rasteriser (raster.comp): every opaque and masked draw's triangles into
-        the target's depth|triangle buffer (masked ones alpha-tested per pixel with their
-        material's set 1, one dispatch a masked draw), then the visibility image resolved
-        from it (the target has it in GENERAL: record_raster_begin) with the winners' depths,
-        which are copied into the target's depth buffer (record_raster_end; `depth` False:
-        nothing reads it this frame, not copied). `tiles` (views, tile width, tile height, tiles
-        a column: the atlas is column-major): a compute batch's atlas, the views' records in
-        `set0` (render/batch_path.py). `stamp(step)` after each step (recorder.RASTER_STEPS)."""
+        the depth|triangle buffer (masked ones alpha-tested per pixel with their material's
+        set 1, one dispatch a masked draw), then the visibility image resolved from it with
+        the winners' depths, copied into the depth buffer (`depth` False: nothing reads it
+        this frame, not copied). `tiles` (views, tile width, tile height, tiles a column: the
+        atlas is column-major): a compute batch's atlas, the views' records in `set0`."""
         res = self._resources(target)
         w, h = target.extent
         views, tile_w, tile_h, rows = tiles or (1, w, h, 1)
         suffix = "_batch" if tiles else ""
-        for buffer in (res.raster, res.raster_big, res.raster_masked_big, res.bins):
-            cmd.fill(buffer, 0)  # (the bins: raster_resolve counts them)
-        cmd.memory_barrier("transfer", "compute")
         push = np.zeros(RASTER_PUSH_BYTES // 4, np.uint32)
         push[:20] = (self.triangles, len(self.gs.draws), int(alpha_mask), res.big_capacity,
                      w, h, 0, 0, views, tile_w, tile_h, rows,
@@ -374,69 +408,75 @@ class ComputeScene:
                      *astuple(RASTER_TUNING), int(target.color_kind == "srgb"))
         push.view(np.float32)[20:24] = target.clear_color
         dset = res.sets[frame_index]
+
+        def kernel(name: str, size: tuple[int, int, int] | None) -> Callable[[Any], None]:
+            def record(cmd: Any) -> None:
+                cmd.bind_pipeline(self._pipeline(name, RASTER_PUSH_BYTES))
+                if set0 is not None:
+                    cmd.bind_set(0, set0)
+                cmd.bind_set(self.set_index, dset)
+                cmd.push(push)
+                if size is None:
+                    cmd.dispatch_indirect(res.raster_big, 4)
+                elif size[0] and size[1]:
+                    cmd.dispatch(*size)
+            return record
+
+        def clear(cmd: Any) -> None:
+            for buffer in (res.raster, res.raster_big, res.raster_masked_big, res.bins):
+                cmd.fill(buffer, 0)  # (the bins: raster_resolve counts them)
+
         n = -(-self.triangles // RASTER_SMALL_GROUP)
         # raster_args sizes raster_big's dispatch from the count raster_small listed.
         small = (min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), views)
-        for kernel, size, step in (
-                (f"raster_small{suffix}", small, "raster_small"), ("raster_args", (1, 1, 1), None),
-                (f"raster_big{suffix}", None, "raster_big"),
-                (f"raster_masked{suffix}", (), "raster_masked_big"),
-                ("raster_resolve", groups((w, h, 1), CLASSIFY_GROUP), "raster_resolve")):
-            if size == () and not (alpha_mask and self.masked_rows):
-                stamp(step)  # none: no time
-                continue
-            cmd.bind_pipeline(self._pipeline(kernel, RASTER_PUSH_BYTES))
-            if set0 is not None:
-                cmd.bind_set(0, set0)
-            cmd.bind_set(self.set_index, dset)
-            cmd.push(push)
-            if size is None:
-                cmd.dispatch_indirect(res.raster_big, 4)
-            elif size == ():
-                self._dispatch_masked(cmd, res, dset, push, material_sets, views, set0, suffix,
-                                      stamp)
-            elif size[0] and size[1]:
-                cmd.dispatch(*size)
-            cmd.memory_barrier("compute", "compute|indirect")
-            if step is not None:
-                stamp(step)
-        target.record_raster_end(cmd, res.raster_depths, depth)
+        big = (("raster", "storage"), ("raster_big", "storage|indirect"))
+        steps = [
+            Step("raster_clear", clear, tuple((b, "transfer_dst") for b in (
+                "raster", "raster_big", "raster_masked_big", "bins")), timed=False),
+            Step("raster_small", kernel(f"raster_small{suffix}", small),
+                 (("raster", "storage"), ("raster_big", "storage"))),
+            # (it also sizes the masked draws' raster_masked_big dispatches)
+            Step("raster_args", kernel("raster_args", (1, 1, 1)),
+                 (("raster_big", "storage"), ("raster_masked_big", "storage")), timed=False),
+            Step("raster_big", kernel(f"raster_big{suffix}", None), big)]
+        if alpha_mask and self.masked_rows:
+            steps += self._masked_steps(res, dset, push, material_sets, views, set0, suffix)
+        steps.append(Step("raster_resolve", kernel("raster_resolve", groups((w, h, 1), CLASSIFY_GROUP)),
+                          (("raster", "storage"), ("visibility", "storage"), ("color", "storage"),
+                           ("bins", "storage"), ("raster_depths", "storage"))))
+        if depth:
+            steps.append(Step("depth_copy", lambda cmd: copy_buffer_to_image(
+                cmd, res.raster_depths, target.depth.handle, True, target.extent),
+                (("raster_depths", "transfer_src"), ("depth", "transfer_dst")), timed=False))
+        return steps
 
-    def _dispatch_masked(self, cmd: Any, res: _TargetResources, dset: Any, push: np.ndarray,
-                         material_sets: list[Any], views: int, set0: Any, suffix: str,
-                         stamp: Callable[[str], None]) -> None:
-        """raster_masked: one invocation a triangle of each masked draw, its material bound
-        (raster_masked's pipeline is bound), then each draw's big triangles listed by it
-        (raster_masked_big: one work group an entry, an indirect dispatch a draw)."""
-        for segment, (k, material, count) in enumerate(self.masked_rows):
-            cmd.bind_set(1, material_sets[material])
-            push[6:8] = k, material
-            push[13] = segment
-            cmd.push(push)
-            n = -(-count // RASTER_SMALL_GROUP)
-            cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), views)
-        cmd.memory_barrier("compute", "compute|indirect")
-        stamp("raster_masked")
-        cmd.bind_pipeline(self._pipeline(f"raster_masked_big{suffix}", RASTER_PUSH_BYTES))
-        if set0 is not None:
-            cmd.bind_set(0, set0)
-        cmd.bind_set(self.set_index, dset)
-        for segment, (k, material, _) in enumerate(self.masked_rows):
-            cmd.bind_set(1, material_sets[material])
-            push[6:8] = k, material
-            push[13] = segment
-            cmd.push(push)
-            cmd.dispatch_indirect(res.raster_masked_big, 16 * segment + 4)
+    def _masked_steps(self, res: _TargetResources, dset: Any, push: np.ndarray,
+                      material_sets: list[Any], views: int, set0: Any, suffix: str) -> list[Step]:
+        """raster_masked: one invocation a triangle of each masked draw, its material bound,
+        then each draw's big triangles listed by it (raster_masked_big: one work group an
+        entry, an indirect dispatch a draw)."""
+        def draws(kernel: str, big: bool) -> Callable[[Any], None]:
+            def record(cmd: Any) -> None:
+                cmd.bind_pipeline(self._pipeline(kernel, RASTER_PUSH_BYTES))
+                if set0 is not None:
+                    cmd.bind_set(0, set0)
+                cmd.bind_set(self.set_index, dset)
+                for segment, (k, material, count) in enumerate(self.masked_rows):
+                    cmd.bind_set(1, material_sets[material])
+                    push[6:8] = k, material
+                    push[13] = segment
+                    cmd.push(push)
+                    if big:
+                        cmd.dispatch_indirect(res.raster_masked_big, 16 * segment + 4)
+                    else:
+                        n = -(-count // RASTER_SMALL_GROUP)
+                        cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), views)
+            return record
 
-    def record_outputs(self, cmd: Any, target: Any, frame_index: int, tbn: L.TbnMode,
-                       frame_sets: dict[int, Any], material_sets: list[Any],
-                       materials: list[int]) -> None:
-        """Write the dataset outputs (ids, normals, distances) of the classified pixels:
-        shade.comp's OUTPUTS variant, per material (the shading normal reads its normal map)."""
-        cmd.memory_barrier("compute", "compute")  # after the shading kernels' image writes
-        self._dispatch_bins(cmd, self._resources(target), frame_index,
-                            f"shade_outputs_{tbn.name.lower()}", frame_sets, material_sets,
-                            materials)
+        return [Step("raster_masked", draws(f"raster_masked{suffix}", False),
+                     (("raster", "storage"), ("raster_masked_big", "storage"))),
+                Step("raster_masked_big", draws(f"raster_masked_big{suffix}", True),
+                     (("raster", "storage"), ("raster_masked_big", "storage|indirect")))]
 
     def _dispatch_bins(self, cmd: Any, res: _TargetResources, frame_index: int, kernel: str,
                        frame_sets: dict[int, Any], material_sets: list[Any],

@@ -1,10 +1,12 @@
 """The pass table: every pass of a frame, declared once, in drawing order.
 
-A pass names the class of draws it takes (`classify` below is the one place a material is
-put in a class), how its pipeline differs from the base PBR pipeline (vkguide derives its
-transparent pipeline from its opaque one the same way), whether it sorts its draws back to
-front, and whether it belongs to the optional depth pre-pass. `record_passes` records them
-all; a new pass (shadow maps, a post pass) is a new row here plus its shaders.
+A pass names the class of draws it takes (`classify` below puts a draw in a class; the
+compute path's rasteriser ranks draws in the same order, render/compute_path.py), how its
+pipeline differs from the base PBR pipeline (vkguide derives its transparent pipeline from
+its opaque one the same way), whether it sorts its draws back to front, and whether it
+belongs to the optional depth pre-pass. Each row is a step of the paths that list it
+(render/paths.py); `record_pass` records one. A new fragment pass is a row here, its
+shaders, and its name in the paths that draw it.
 
 The depth pre-pass draws the opaque classes depth-only (no fragment shader) with the same
 vertex shader (`invariant gl_Position`), after which the opaque passes test
@@ -26,7 +28,7 @@ from typing import Any
 from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.pipeline import PipelineSpec
 
-__all__ = ["PassSpec", "PASSES", "classify", "record_passes", "PassContext"]
+__all__ = ["PassSpec", "PASSES", "classify", "record_pass", "record_passes", "PassContext"]
 
 _Derive = Callable[[PipelineSpec], PipelineSpec]
 
@@ -110,7 +112,6 @@ class PassContext:
     index_buffer: Any
     blend_order: tuple[int, ...] = ()  # indices into the blend-class draws, far to near
     prepass: bool = False
-    stamp: Callable[[str], None] = lambda name: None  # timestamp after the step `name`
     shadow_set: Any = None  # set 3 (render/shadows.py ShadowMaps.sets), bound when given
     # A batch (render/batch.py): each draw is the indirect command at (indirect_base + its
     # index) of `indirect` (instanced over the views that see it), and the fullscreen passes
@@ -124,39 +125,39 @@ class PassContext:
 
 
 def record_passes(cmd: Commands, ctx: PassContext, names: tuple[str, ...] | None = None) -> None:
-    """Record the enabled passes of PASSES (those in `names`, default all), each followed by
-    its timestamp (ctx.stamp(name)). Each draw is instanced from its own index in ctx.draws
-    (gl_InstanceIndex: the compute path's visibility pass writes it per pixel); the records of
-    one node's instances (EXT_mesh_gpu_instancing) are one draw call of K instances."""
-    cmd.bind_index_buffer(ctx.index_buffer)
+    """Record the enabled passes of PASSES (those in `names`, default all) in one rendering
+    (a batch's chunk of views: render/batch.py)."""
     for p in PASSES:
-        if names is not None and p.name not in names:
-            continue
-        if p.prepass and not ctx.prepass:
-            ctx.stamp(p.name)
-            continue
-        if p.fullscreen:
-            cmd.bind_pipeline(ctx.pipeline(p))
-            cmd.bind_set(0, ctx.frame_sets[0])
-            cmd.bind_set(2, ctx.frame_sets[1])
-            if ctx.views is None:
-                cmd.draw(3)
-            else:
-                cmd.draw(3, instances=ctx.views[1], first_instance=ctx.views[0])
-            ctx.stamp(p.name)
-            continue
-        draws = [(i, d) for i, (d, c) in enumerate(zip(ctx.draws, ctx.classes, strict=True))
-                 if c == p.draw_class]
-        if p.back_to_front and ctx.blend_groups is not None:
-            for order, first, count in ctx.blend_groups:
-                if draws:
-                    _record_draws(cmd, ctx, p, [draws[i] for i in order], (first, count))
+        if (names is None or p.name in names) and not (p.prepass and not ctx.prepass):
+            record_pass(cmd, ctx, p)
+
+
+def record_pass(cmd: Commands, ctx: PassContext, p: PassSpec) -> None:
+    """Record pass `p` (a step of a path: render/steps.py). Each draw is instanced from its own
+    index in ctx.draws (gl_InstanceIndex: the compute path's visibility pass writes it per
+    pixel); the records of one node's instances (EXT_mesh_gpu_instancing) are one draw call
+    of K instances."""
+    cmd.bind_index_buffer(ctx.index_buffer)
+    if p.fullscreen:
+        cmd.bind_pipeline(ctx.pipeline(p))
+        cmd.bind_set(0, ctx.frame_sets[0])
+        cmd.bind_set(2, ctx.frame_sets[1])
+        if ctx.views is None:
+            cmd.draw(3)
         else:
-            if p.back_to_front and len(ctx.blend_order) == len(draws):
-                draws = [draws[i] for i in ctx.blend_order]
+            cmd.draw(3, instances=ctx.views[1], first_instance=ctx.views[0])
+        return
+    draws = [(i, d) for i, (d, c) in enumerate(zip(ctx.draws, ctx.classes, strict=True))
+             if c == p.draw_class]
+    if p.back_to_front and ctx.blend_groups is not None:
+        for order, first, count in ctx.blend_groups:
             if draws:
-                _record_draws(cmd, ctx, p, draws)
-        ctx.stamp(p.name)
+                _record_draws(cmd, ctx, p, [draws[i] for i in order], (first, count))
+        return
+    if p.back_to_front and len(ctx.blend_order) == len(draws):
+        draws = [draws[i] for i in ctx.blend_order]
+    if draws:
+        _record_draws(cmd, ctx, p, draws)
 
 
 def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[tuple[int, Any]],

@@ -1,13 +1,12 @@
 """Pipelines and recorded command buffers: how a frame's commands come to exist.
 
-A `FrameRecorder` builds the PBR pipelines each pass of the pass table (render/passes.py)
-needs, for a target's formats, and records one command buffer per (target image, frame of
-the ring, TBN path, alpha masking, overlay, copies, shadow plan), reused frame after frame:
-the frame's start timestamp, the shadow-map passes (render/shadows.py) and a timestamp, the
-target's begin, every pass with a timestamp after each, the overlay, the target's end
-(copies), the end timestamp. A buffer is used by one frame of the ring
-only, whose previous submission has finished when it is looked up: it can be re-recorded
-(a new blended-draw order) or freed at once.
+A `FrameRecorder` builds the PBR pipelines each pass (render/passes.py) needs, for a
+target's formats, and records one command buffer per (target, image, frame of the ring,
+FrameSpec), reused frame after frame: the path's steps (render/paths.py, made by
+render/steps.py) through gpu/graph.py, which derives their barriers and renderings, with a
+timestamp after each timed step. A buffer is used by one frame of the ring only, whose
+previous submission has finished when it is looked up: it can be re-recorded (a new
+blended-draw order) or freed at once.
 """
 
 from __future__ import annotations
@@ -15,30 +14,25 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.frames import Frame, FrameRing
+from vkpbr.gpu.graph import Step, record_steps
 from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec, VertexStream
-from vkpbr.gpu.target import COPY_DEPTH, FrameTarget
+from vkpbr.gpu.target import FrameTarget
 from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
-from vkpbr.render.compute_path import GENERAL_SHADING, ComputeScene, ShadeVariant
+from vkpbr.render.compute_path import ComputeScene
 from vkpbr.render.frames import FrameSlot
 from vkpbr.render.gpu_scene import GpuScene
-from vkpbr.render.overlay import TextOverlay
-from vkpbr.render.passes import (
-    PASSES,
-    PassContext,
-    PassSpec,
-    classify,
-    pipeline_spec,
-    record_passes,
-)
-from vkpbr.render.shadows import ShadowMaps, ShadowPlan
-from vkpbr.render.transmission import COPY_PASSES, TRANSMISSIVE, OpaqueCopies, copy_classes
+from vkpbr.render.passes import PASSES, PassSpec, pipeline_spec
+from vkpbr.render.shadows import ShadowMaps
+from vkpbr.render.steps import FrameSpec, FrameSteps
+from vkpbr.render.transmission import OpaqueCopies
 
-__all__ = ["FrameRecorder", "STAMPS", "STAMP_NAMES"]
+__all__ = ["FrameRecorder", "STAMPS", "FrameSpec"]
 
 _TBN_STREAMS = {
     L.TbnMode.VECTORS: (("normals", "vec3"), ("tangents", "vec4")),
@@ -50,62 +44,32 @@ _TBN_STREAMS = {
 # "colors" (COLOR_0) is one white value read with stride 0 in scenes without vertex colours.
 _BASE_STREAMS = (("positions", "vec3"), ("texcoords", "vec2"), ("texcoords1", "vec2"),
                  ("colors", "unorm16x4"))
-# Timestamps per frame: start, after the shadow passes, after the transmission's copy of the
-# opaque scene (render/transmission.py), after each pass, end (after copies);
-# STAMP_NAMES names the intervals between them up to the last pass.
-# The compute path's shading step (render/compute_path.py) comes after the passes that draw
-# coverage, before the background; the forward path stamps it at once (it takes no time).
-_BEFORE_SHADING = tuple(p.name for p in PASSES[:[q.name for q in PASSES].index("mask") + 1])
-_PREPASSES = tuple(p.name for p in PASSES if p.prepass)
-# The compute path's own steps (render/compute_path.py): the compute rasteriser's kernels
-# before the visibility passes (on its frames "opaque" is then the depths' write alone), the
-# pixels' classification before the shading.
-RASTER_STEPS = ("raster_small", "raster_big", "raster_masked", "raster_masked_big", "raster_resolve")
-STAMP_NAMES = ("shadows", "transmission", *_PREPASSES, *RASTER_STEPS,
-               *(n for n in _BEFORE_SHADING if n not in _PREPASSES), "classify", "shading",
-               *(p.name for p in PASSES if p.name not in _BEFORE_SHADING))
-# The compute path's visibility pass draws these passes' draws (the coverage: not blending);
-# after its shading step the frame goes on with the rest.
-VISIBILITY_PASSES = tuple(p.name for p in PASSES if p.name in _BEFORE_SHADING and not p.prepass)
-AFTER_SHADING = tuple(p.name for p in PASSES if p.name not in _BEFORE_SHADING)
-_COMPUTE_AFTER_SHADING = tuple(n for n in AFTER_SHADING if n != "background")
-STAMPS = len(STAMP_NAMES) + 2
-_NO_SHADOWS = ShadowPlan()
-
-
-class FrameStamps:
-    """A frame's timestamps, written in STAMP_NAMES order: `after(name)` writes every slot
-    up to `name`'s, and the slots of the `untimed` steps (those this frame's path does not
-    take) right after the slot before them, so they read as taking no time, each step's
-    time is its own, and every query of the frame is written once (an unwritten one would
-    never be ready). A step already passed is left as written."""
-
-    def __init__(self, ring: FrameRing, cmd: Commands, frame: Frame,
-                 untimed: frozenset[str] = frozenset()) -> None:
-        self.ring, self.cmd, self.frame, self.untimed = ring, cmd, frame, untimed
-        self.written = 0
-        ring.stamp(cmd, frame, 0)  # the frame's start
-
-    def after(self, *names: str) -> None:
-        for name in names:
-            self._up_to(1 + STAMP_NAMES.index(name))
-
-    def end(self) -> None:
-        """The frame's last timestamp (after its copies)."""
-        self._up_to(STAMPS - 1)
-
-    def _up_to(self, slot: int) -> None:
-        while self.written < slot or (self.written < len(STAMP_NAMES)
-                                      and STAMP_NAMES[self.written] in self.untimed):
-            self.written += 1
-            self.ring.stamp(self.cmd, self.frame, self.written)
+# Timestamp queries a frame slot has: the start and one after each timed step (the longest
+# path times about 20).
+STAMPS = 48
 
 
 @dataclass
 class _Recorded:
     cmd: Commands
     blend_order: tuple[int, ...]
+    stamp_names: tuple[str, ...]
+    target: int  # id() of the target it draws into
 
+
+class _Stamps:
+    """A recording's timestamps: the start, then one after each timed step."""
+
+    def __init__(self, ring: FrameRing, cmd: Commands, frame: Frame) -> None:
+        self.ring, self.cmd, self.frame = ring, cmd, frame
+        self.names: list[str] = []
+        ring.stamp(cmd, frame, 0)
+
+    def __call__(self, name: str) -> None:
+        if len(self.names) + 1 >= STAMPS:
+            raise ValueError(f"a frame times at most {STAMPS - 1} steps")
+        self.names.append(name)
+        self.ring.stamp(self.cmd, self.frame, len(self.names))
 
 
 class FrameRecorder:
@@ -172,258 +136,58 @@ class FrameRecorder:
                     self.pipeline(target, tbn, p, prepass)
 
     # --- command buffers --------------------------------------------------------------------
-    def begin_frame(self, frame: Frame, tbn: L.TbnMode, alpha_mask: bool, plan: ShadowPlan,
-                    redraw: tuple[range, ...] | None = None, transmission: bool = False,
-                    compute: bool = False, untimed: frozenset[str] = frozenset(),
-                    variant: ShadeVariant = GENERAL_SHADING,
-                    ) -> tuple[Commands, FrameStamps, list[str], list[str]]:
-        """Begin a frame's command buffer (a single frame's or a batch's, render/batch.py):
-        its start timestamp, the shadow-map passes (`redraw`: per plan entry, the range of its
-        layers to draw; ShadowMaps.stale), the timestamp after them, the copy of the opaque
-        scene (`transmission`: render/transmission.py; on the compute path with `compute`) and
-        the timestamp after it. Returns the buffer, its timestamps (`untimed`: the steps
-        this frame does not take), the vertex streams' names for `tbn` and every draw's
-        class."""
-        gs, ring = self.gpu_scene, self.ring
+    def stream_names(self, tbn: L.TbnMode) -> list[str]:
+        """The vertex streams' names for `tbn` (made on first use)."""
         names = [n for n, _ in _BASE_STREAMS + _TBN_STREAMS[tbn]]
-        gs.ensure_streams(tuple(names))  # the quat / packed streams on first use
-        classes = [classify(d.alpha_mode, d.double_sided, alpha_mask) for d in gs.draws]
-        cmd = Commands(self.device).begin()
-        stamps = FrameStamps(ring, cmd, frame, untimed)
-        if self.shadows is not None:
-            self.shadows.record(cmd, frame.index, plan, gs.draws, classes, gs.material_sets,
-                                gs.streams, gs.index_buffer, gs.has_colors, redraw)
-        stamps.after("shadows")
-        if transmission:
-            self._record_opaque_copy(cmd, frame, tbn, names, classes, compute, variant)
-        stamps.after("transmission")
-        return cmd, stamps, names, classes
+        self.gpu_scene.ensure_streams(tuple(names))  # the quat / packed streams on first use
+        return names
 
-    def _record_opaque_copy(self, cmd: Commands, frame: Frame, tbn: L.TbnMode, names: list[str],
-                            classes: list[str], compute: bool,
-                            variant: ShadeVariant = GENERAL_SHADING) -> None:
-        """The frame slot's copy of the opaque scene: the opaque and masked draws that do not
-        transmit and the environment, in linear radiance, then its mip chain. `compute`: as
-        the compute path draws a frame (visibility, binning, shading in compute shaders, the
-        environment behind), else as the fragment path with the frame's pre-pass rule."""
-        copies, gs, slot = self.copies, self.gpu_scene, self.slots[frame.index]
-        assert copies is not None and copies.present
-        target = copies.targets[frame.index]
-        classes = copy_classes(classes, copies.transmissive)
-        shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
-
-        def context(visibility: bool, prepass: bool) -> PassContext:
-            return PassContext(
-                draws=gs.draws, classes=classes,
-                pipeline=lambda p: self.pipeline(target, tbn, p, prepass, visibility,  # type: ignore[arg-type]
-                                                 copy=not visibility),
-                prepass=prepass, frame_sets=(slot.set0, slot.set2),
-                material_sets=gs.material_sets, vertex_buffers=[gs.streams[n] for n in names],
-                index_buffer=gs.index_buffer, shadow_set=shadow_set)
-
-        if compute and target.storage_view is not None:
-            target.record_visibility_begin(cmd, 0)
-            record_passes(cmd, context(True, False), VISIBILITY_PASSES)
-            target.record_shading_begin(cmd)
-            self.compute_scene().record_shading(  # type: ignore[misc]
-                cmd, target, frame.index, tbn, self._compute_sets(frame), gs.material_sets,
-                _shaded_materials(gs.draws, classes), target.clear_color, copy=True,
-                variant=variant)
-            target.record_resume(cmd)
-            record_passes(cmd, context(False, False), ("background",))
-        else:
-            prepass = self.prepass_for(target)  # the frame's rule (GPUs: each pixel shaded once)
-            target.record_begin(cmd)
-            record_passes(cmd, context(False, prepass), COPY_PASSES)
-        target.record_end(cmd)
-
-    def _record(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
-                alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
-                copy: tuple[str, ...], plan: ShadowPlan, compute: bool = False,
-                outputs: bool = False, redraw: tuple[range, ...] | None = None,
-                raster: bool = False, transmission: bool = False,
-                variant: ShadeVariant = GENERAL_SHADING) -> Commands:
-        gs = self.gpu_scene
-        slot = self.slots[frame.index]
-        prepass = self.prepass_for(target) and not compute  # visibility: its own pre-pass
-        untimed = {*RASTER_STEPS} if not raster else set()
-        if compute or outputs:
-            untimed |= {*_PREPASSES}  # the visibility pass is its own pre-pass
-        if not compute:
-            untimed.add("classify")  # (the outputs' classification is the next step's time)
-        cmd, stamps, names, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw,
-                                                       transmission, compute, frozenset(untimed),
-                                                       variant)
-        shadow_set = None if self.shadows is None else self.shadows.sets[frame.index]
-
-        def context(visibility: bool, after_visibility: bool = False,
-                    timed: bool = True) -> PassContext:
-            # after_visibility: the fragment path's passes over a visibility pass's depth,
-            # which is a depth pre-pass for them (test it, write none). The visibility pass
-            # itself writes depth whatever the target's pre-pass choice: none ran before it.
-            pre = after_visibility or (prepass and not visibility)
-            return PassContext(
-                draws=gs.draws, classes=classes,
-                pipeline=lambda p: self.pipeline(target, tbn, p, pre, visibility),
-                frame_sets=(slot.set0, slot.set2), material_sets=gs.material_sets,
-                vertex_buffers=[gs.streams[n] for n in names], index_buffer=gs.index_buffer,
-                blend_order=order, prepass=pre,
-                stamp=stamps.after if timed else (lambda name: None),
-                shadow_set=shadow_set)
-
-        ctx = context(False)
-        if compute or outputs:
-            # render/compute_path.py: the visibility pass, the pixels binned by material, then
-            # the compute path's shading (or the fragment path's passes over that depth) and
-            # the dataset outputs' kernel.
-            if outputs:
-                target.record_outputs_clear(cmd)  # type: ignore[attr-defined]
-            vis_ctx = context(True, timed=compute)
-            if raster:
-                # The compute rasteriser (render/compute_path.py): the opaque and masked draws
-                # on all SMs, then their depths into the depth buffer where anything reads
-                # it: the blended draws, depth readback, the fragment path's passes.
-                depth = not compute or COPY_DEPTH in copy or "blend" in classes
-                self._record_compute_raster(cmd, target, frame, alpha_mask, stamps, depth=depth)
-                for name in VISIBILITY_PASSES:
-                    vis_ctx.stamp(name)
-            else:
-                target.record_visibility_begin(cmd, image)  # type: ignore[attr-defined]
-                # The fragment path's own passes follow and take the timestamps.
-                record_passes(cmd, vis_ctx, VISIBILITY_PASSES)
-                target.record_shading_begin(cmd)  # type: ignore[attr-defined]
-            drawn = _shaded_materials(gs.draws, classes)
-            frame_sets = self._compute_sets(frame)
-            cs = self.compute_scene()
-            cs.record_shading(cmd, target, frame.index, tbn, frame_sets, gs.material_sets,
-                              drawn, target.clear_color, shade=compute,
-                              stamp=vis_ctx.stamp, variant=variant,  # type: ignore[attr-defined]
-                              counted=raster)
-            if outputs:
-                cs.record_outputs(cmd, target, frame.index, tbn, frame_sets, gs.material_sets,
-                                  drawn)
-            if compute:
-                ctx.stamp("shading")
-                cs.record_background(cmd, target, frame.index, frame_sets)
-                ctx.stamp("background")
-                target.record_resume(cmd)  # type: ignore[attr-defined]
-            else:
-                target.record_resume(cmd, clear=True)  # type: ignore[attr-defined]
-                ctx = context(False, after_visibility=True)
-                record_passes(cmd, ctx, VISIBILITY_PASSES)
-                ctx.stamp("shading")
-        else:
-            target.record_begin(cmd, image)
-            record_passes(cmd, ctx, _BEFORE_SHADING)
-            ctx.stamp("shading")
-        # The compute path drew its background in compute (above).
-        record_passes(cmd, ctx, _COMPUTE_AFTER_SHADING if compute else AFTER_SHADING)
-        if overlay is not None:
-            overlay.record(cmd, frame.index, target.extent)
-        target.record_end(cmd, image, frame, copy)
-        stamps.end()
-        cmd.end()
-        return cmd
-
-    def command_buffer(self, target: FrameTarget, frame: Frame, image: int, tbn: L.TbnMode,
-                        alpha_mask: bool, order: tuple[int, ...], overlay: TextOverlay | None,
-                        copy: tuple[str, ...], plan: ShadowPlan = _NO_SHADOWS,
-                        compute: bool = False, outputs: bool = False,
-                        redraw: tuple[range, ...] | None = None, raster: bool = False,
-                        transmission: bool = False,
-                        variant: ShadeVariant = GENERAL_SHADING) -> Commands:
-        """The command buffer recorded for these inputs, recorded on first use. A buffer is
-        used by one frame of the ring only, whose previous submission has finished: it can be
-        re-recorded (new blend order) or freed at once. `plan`: the shadow maps' (a new plan
-        records new buffers; lights that only move keep theirs); `transmission`: draw the
-        copy of the opaque scene first (render/transmission.py); `variant`: what the compute
-        path's shading kernels are specialised for (the frame's lighting)."""
+    def command_buffer(self, target: FrameTarget, frame: Frame, image: int, spec: FrameSpec,
+                       groups: dict[str, Callable[[FrameSteps], list[Step]]] | None = None
+                       ) -> Commands:
+        """The command buffer recorded for `spec` into `target`'s `image` by `frame`'s slot,
+        recorded on first use (re-recorded when only the blended draws' order changed);
+        `groups`: the steps of groups the caller makes (the layered batch's). Sets
+        `frame.stamp_names` to the timed steps' names (FrameStats.pass_ms' keys)."""
         tid = id(target)
         if self._generations.get(tid, target.generation) != target.generation:
             self.free(tid)  # recreated swapchain: its images and buffers are new
         self._generations[tid] = target.generation
-        key = (tid, image, frame.index, tbn, alpha_mask, id(overlay), copy, plan, compute, outputs,
-               redraw, raster, transmission, variant)
+        key = (tid, image, frame.index, spec)
         rec = self._recorded.get(key)
-        if rec is not None and rec.blend_order == order:
-            return rec.cmd
-        if rec is not None:  # the camera moved enough to reorder blended draws
-            rec.cmd.free()
-        cmd = self._record(target, frame, image, tbn, alpha_mask, order, overlay, copy, plan,
-                           compute, outputs, redraw, raster, transmission, variant)
-        self._recorded[key] = _Recorded(cmd, order)
-        return cmd
+        if rec is None or rec.blend_order != spec.blend_order:
+            if rec is not None:  # the camera moved enough to reorder blended draws
+                rec.cmd.free()
+            steps = FrameSteps(self, target, frame.index, image, spec, groups)
+            rec = self._record(frame, steps.steps(), steps.resources, target.extent, tid,
+                               spec.blend_order)
+            self._recorded[key] = rec
+        frame.stamp_names = rec.stamp_names
+        return rec.cmd
 
-    def compute_batch(self, target: FrameTarget, frame: Frame, tbn: L.TbnMode, alpha_mask: bool,
-                      plan: ShadowPlan, redraw: tuple[range, ...], tiles: tuple[int, int, int, int],
-                      set0: object, copy: tuple[str, ...], external: object = None,
-                      variant: ShadeVariant = GENERAL_SHADING) -> Commands:
-        """A compute batch's commands (render/batch_path.py), recorded on first use: `tiles`
-        (views, tile width, tile height, tiles a column, column-major) of an atlas `target`, every view
-        rasterised and shaded in compute shaders (its ViewRecord in `set0`, BatchViews'), the
-        environment behind them, the copies (the colour into the exported buffer `external`,
-        for CUDA, where given). No blended draws (the layered batch takes those)."""
-        key = ("compute batch", id(target), frame.index, tbn, alpha_mask, plan, redraw, tiles,
-               id(set0), copy, id(external), variant)
-        rec = self._recorded.get(key)
-        if rec is not None:
-            return rec.cmd
-        gs = self.gpu_scene
-        cmd, stamps, _, classes = self.begin_frame(frame, tbn, alpha_mask, plan, redraw,
-                                                   untimed=frozenset(_PREPASSES))
-        cs = self.compute_scene()
-        self._record_compute_raster(cmd, target, frame, alpha_mask, stamps, tiles, set0,
-                                    depth=COPY_DEPTH in copy)
-        stamps.after("mask")  # the depths' copy is "opaque"'s, as a single frame's
-        frame_sets = self._compute_sets(frame, set0)
-        drawn = _shaded_materials(gs.draws, classes)
-        cs.record_shading(cmd, target, frame.index, tbn, frame_sets, gs.material_sets, drawn,
-                          target.clear_color, tiles=tiles, stamp=stamps.after,  # type: ignore[attr-defined]
-                          variant=variant, counted=True)
-        stamps.after("shading")
-        cs.record_background(cmd, target, frame.index, frame_sets, tiles)
-        target.record_resume(cmd)  # type: ignore[attr-defined]
-        stamps.after(*AFTER_SHADING)
-        target.record_end(cmd, 0, frame, copy, tiles, external)  # type: ignore[call-arg]
-        stamps.end()
+    def _record(self, frame: Frame, steps: list[Step], resources: dict[str, Any],
+                extent: tuple[int, int], target: int, order: tuple[int, ...]) -> _Recorded:
+        """Record `steps` (with the start timestamp and one after each timed step; the time
+        after the last timed step is "copy")."""
+        cmd = Commands(self.device).begin()
+        stamps = _Stamps(self.ring, cmd, frame)
+        if not any(s.name == "copy" and s.timed for s in steps):
+            steps = [*steps, Step("copy")]
+        record_steps(cmd, steps, resources, extent, stamps)
         cmd.end()
-        self._recorded[key] = _Recorded(cmd, ())
-        return cmd
+        return _Recorded(cmd, order, tuple(stamps.names), target)
 
-    def _compute_sets(self, frame: Frame, set0: object = None) -> dict[int, object]:
+    def compute_sets(self, frame_index: int, set0: object = None) -> dict[int, object]:
         """The frame's sets the compute path's kernels bind: 0 (the camera; `set0`: a batch's
         views), 2 (lighting) and 3 (the shadow maps, where there are any)."""
-        slot = self.slots[frame.index]
+        slot = self.slots[frame_index]
         sets = {0: slot.set0 if set0 is None else set0, 2: slot.set2}
         if self.shadows is not None:
-            sets[3] = self.shadows.sets[frame.index]
+            sets[3] = self.shadows.sets[frame_index]
         return sets
-
-    def _record_compute_raster(self, cmd: Commands, target: FrameTarget, frame: Frame,
-                               alpha_mask: bool, stamps: FrameStamps,
-                               tiles: tuple[int, int, int, int] | None = None,
-                               set0: object = None, depth: bool = True) -> None:
-        """The compute rasteriser (render/compute_path.py): the opaque and masked draws into the
-        visibility image on all SMs, their depths into the depth buffer (`depth`: where this
-        frame reads it); the target is then ready for the shading (as after
-        record_shading_begin)."""
-        target.record_raster_begin(cmd)  # type: ignore[attr-defined]
-        self.compute_scene().record_raster(cmd, target, frame.index, alpha_mask,
-                                           self.gpu_scene.material_sets, tiles, set0,
-                                           stamp=stamps.after, depth=depth)
 
     def free(self, target_id: int | None = None) -> None:
         """Free the recorded command buffers (of one target: its id; None: all)."""
-        def of_target(key: tuple) -> bool:
-            # A frame's key starts with its target's id, a compute batch's with its name.
-            return key[0] == target_id or (key[0] == "compute batch" and key[1] == target_id)
-
-        for key in [k for k in self._recorded if target_id is None or of_target(k)]:
+        for key in [k for k, r in self._recorded.items()
+                    if target_id is None or r.target == target_id]:
             self._recorded.pop(key).cmd.free()
-
-
-def _shaded_materials(draws: list, classes: list[str]) -> list[int]:
-    """The materials the compute path shades: those of every draw but the blended ones (and
-    the transmissive ones, in the copy of the opaque scene)."""
-    return sorted({d.material for d, c in zip(draws, classes, strict=True)
-                   if c not in ("blend", TRANSMISSIVE)})

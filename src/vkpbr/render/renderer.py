@@ -56,8 +56,10 @@ from vkpbr.render.options import RenderOptions
 from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.path_choice import RULE_CPU, RULE_GPU, PathChoice, frame_paths_mode, is_auto
 from vkpbr.render.path_choice import resolve as resolve_paths
-from vkpbr.render.recorder import STAMP_NAMES, STAMPS, FrameRecorder
+from vkpbr.render.paths import choose_path
+from vkpbr.render.recorder import STAMPS, FrameRecorder
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
+from vkpbr.render.steps import FrameSpec
 from vkpbr.render.transmission import OpaqueCopies
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 from vkpbr.scene.environment import load_panorama
@@ -532,13 +534,14 @@ class Renderer:
         if overlay is not None:
             overlay.prepare(frame.index)
         redraw = self.shadows.stale(slot.index, plan, options.alpha_mask)
-        compute, outputs = self.uses_compute(target, options), COPY_OUTPUTS in copy
+        compute = self.uses_compute(target, options)
+        path = choose_path(compute, compute and self.uses_compute_raster(options, target),
+                           COPY_OUTPUTS in copy)
+        spec = FrameSpec(path, options.tbn, options.alpha_mask, plan, redraw, copy,
+                         transmission, self.shade_variant(options),
+                         self.blend_order(camera.eye), overlay, id(overlay))
         try:
-            cmd = self.recorder.command_buffer(
-                target, frame, image, options.tbn, options.alpha_mask,
-                self.blend_order(camera.eye), overlay, copy, plan, compute, outputs, redraw,
-                compute and self.uses_compute_raster(options, target), transmission,
-                self.shade_variant(options))
+            cmd = self.recorder.command_buffer(target, frame, image, spec)
             c0 = clock()
             ok = target.submit(frame, cmd, image)
         except BaseException:
@@ -622,11 +625,13 @@ class Renderer:
         return slot.stats
 
     def _read_timings(self, frame: Frame, slot: FrameSlot) -> None:
-        t = self.ring.timings_ms(frame, STAMPS)
-        slot.stats.gpu_ms = t[-1]
+        """The frame's timestamps: one after each timed step of its recording (its
+        `stamp_names`, set when it was looked up) into the slot's stats."""
+        names = frame.stamp_names
+        t = self.ring.timings_ms(frame, len(names) + 1)
+        slot.stats.gpu_ms = t[-1] if t else float("nan")
         bounds = [0.0, *t]
-        slot.stats.pass_ms = {n: bounds[i + 1] - bounds[i] for i, n in enumerate(STAMP_NAMES)}
-        slot.stats.pass_ms["copy"] = bounds[-1] - bounds[-2]
+        slot.stats.pass_ms = {n: bounds[i + 1] - bounds[i] for i, n in enumerate(names)}
 
     def frame_stats(self, frame: Frame) -> FrameStats:
         """The stats of the frame slot `frame` (after `draw` with timings, or a collect)."""

@@ -1,0 +1,341 @@
+"""Frames declared as steps: barriers, layout transitions and renderings derived, not written.
+
+A `Step` names the images and buffers it touches and how (a `USES` entry: "sampled",
+"storage", "color_attachment", "transfer_src", ...), says whether it draws inside a dynamic
+rendering (`Rendering`: which images are its colour and depth attachments, cleared or loaded)
+and carries a function that records its commands. `record_steps` walks a list of steps in
+order and, before each, emits the one vkCmdPipelineBarrier2 that its declared uses need
+after what earlier steps did (write after read or write, read after write, a new layout),
+begins and ends renderings (consecutive steps of one `Rendering` share one), and writes a
+timestamp after each timed step. This is Filament's FrameGraph and Vulkan-Samples'
+RenderPipeline in small: the order is the list's, resources are the caller's.
+
+A recorded frame is replayed after whatever frame came before it, so the first use of a
+resource in a frame waits for every earlier command (ALL_COMMANDS, every write made
+available) and discards its contents (UNDEFINED), unless the resource is `kept` between
+frames (a shadow map that is not redrawn): then it starts from its resting use's layout, and
+the frame's last use must leave it there (`record_steps` adds the transition back).
+
+This module knows Vulkan and nothing of the renderer: resource and step names are the
+caller's.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from vkpbr.gpu.commands import Commands
+from vkpbr.gpu.rendering import Attachments, barriers, begin_rendering, end_rendering
+
+__all__ = ["Use", "USES", "ImageResource", "BufferResource", "Rendering", "Step",
+           "record_steps", "Tracker"]
+
+
+@dataclass(frozen=True)
+class Use:
+    """One way a step touches a resource, in Vulkan's terms (names of VK_* constants)."""
+
+    stages: tuple[str, ...]
+    accesses: tuple[str, ...]
+    layout: str | None  # images only: the layout the use needs
+    writes: bool
+
+
+_DEPTH_TESTS = ("EARLY_FRAGMENT_TESTS", "LATE_FRAGMENT_TESTS")
+_SHADERS = ("FRAGMENT_SHADER", "COMPUTE_SHADER")
+USES: dict[str, Use] = {
+    "color_attachment": Use(("COLOR_ATTACHMENT_OUTPUT",),
+                            ("COLOR_ATTACHMENT_WRITE", "COLOR_ATTACHMENT_READ"),
+                            "COLOR_ATTACHMENT_OPTIMAL", True),
+    "depth_attachment": Use(_DEPTH_TESTS,
+                            ("DEPTH_STENCIL_ATTACHMENT_WRITE", "DEPTH_STENCIL_ATTACHMENT_READ"),
+                            "DEPTH_ATTACHMENT_OPTIMAL", True),
+    "sampled": Use(_SHADERS, ("SHADER_SAMPLED_READ",), "SHADER_READ_ONLY_OPTIMAL", False),
+    "storage_read": Use(("COMPUTE_SHADER",), ("SHADER_STORAGE_READ",), "GENERAL", False),
+    "storage": Use(("COMPUTE_SHADER",), ("SHADER_STORAGE_READ", "SHADER_STORAGE_WRITE"),
+                   "GENERAL", True),
+    # Storage buffers read by vertex shaders (a batch's lists of visible views).
+    "vertex_read": Use(("VERTEX_SHADER",), ("SHADER_STORAGE_READ",), None, False),
+    "indirect": Use(("DRAW_INDIRECT",), ("INDIRECT_COMMAND_READ",), None, False),
+    "transfer_src": Use(("COPY",), ("TRANSFER_READ",), "TRANSFER_SRC_OPTIMAL", False),
+    "transfer_dst": Use(("COPY", "CLEAR"), ("TRANSFER_WRITE",), "TRANSFER_DST_OPTIMAL", True),
+    # vkCmdClearColorImage on an image then written as storage: GENERAL serves both.
+    "clear": Use(("CLEAR",), ("TRANSFER_WRITE",), "GENERAL", True),
+    "host_read": Use(("HOST",), ("HOST_READ",), None, False),
+    "present": Use((), (), "PRESENT_SRC_KHR", False),
+}
+_ATTACHMENT_USES = ("color_attachment", "depth_attachment")
+
+
+def _flags(vk: Any, kind: str, names: tuple[str, ...]) -> int:
+    out = 0
+    for name in names:
+        out |= getattr(vk, f"VK_{kind}_2_{name}_BIT")
+    return out
+
+
+@dataclass(frozen=True)
+class _Mask:
+    """A use (or a "|"-joined union of uses) as Vulkan flags."""
+
+    stages: int
+    accesses: int
+    layout: int | None
+    writes: bool
+
+
+def _mask(vk: Any, use: str, cache: dict[str, _Mask]) -> _Mask:
+    if use not in cache:
+        stages = accesses = 0
+        layout, writes = None, False
+        for name in use.split("|"):
+            u = USES[name]
+            stages |= _flags(vk, "PIPELINE_STAGE", u.stages)
+            accesses |= _flags(vk, "ACCESS", u.accesses)
+            if u.layout is not None:
+                value = getattr(vk, f"VK_IMAGE_LAYOUT_{u.layout}")
+                # Two layouts: a buffer's use only (an image's is refused in Tracker.use).
+                layout = value if layout in (None, value) else -1
+            writes |= u.writes
+        cache[use] = _Mask(stages or vk.VK_PIPELINE_STAGE_2_NONE, accesses, layout, writes)
+    return cache[use]
+
+
+@dataclass(eq=False)
+class ImageResource:
+    """An image a graph tracks: `handle` (VkImage), whether it is a depth image, how many
+    layers and mip levels its barriers cover; `view` is what a rendering attaches; `msaa` the
+    multisampled image drawn into and resolved into this one; `kept` the use whose layout the
+    contents rest in between frames (None: discarded at each frame's first use)."""
+
+    handle: Any
+    depth: bool = False
+    layers: int = 1
+    levels: int = 1
+    view: Any = None
+    msaa: ImageResource | None = None
+    kept: str | None = None
+
+
+@dataclass(eq=False)
+class BufferResource:
+    """A buffer a graph tracks (a gpu.buffer.Buffer: `handle`, `size`)."""
+
+    buffer: Any
+
+
+@dataclass(frozen=True, eq=False)
+class Rendering:
+    """A dynamic rendering over named attachments (resource names), cleared where a clear
+    value is given and loaded otherwise. Consecutive steps with the same Rendering object
+    draw inside one rendering."""
+
+    color: str | None
+    depth: str | None
+    clear_color: tuple[float, ...] | None = None
+    clear_depth: float | None = None
+    layers: int = 1
+    store_depth: bool = True
+
+
+@dataclass(frozen=True, eq=False)
+class Step:
+    """One step of a frame: `uses` ((resource name, use), ...; a use may join several with
+    "|"), drawn inside `rendering` where given (its attachments are used implicitly),
+    `record(cmd)` its commands; `timed`: a timestamp follows it (FrameStats.pass_ms[name]);
+    `leaves`: (resource, use) the step's own commands leave a resource in (a mip chain
+    blitted and left sampled), so no barrier is derived for that change."""
+
+    name: str
+    record: Callable[[Commands], None] = lambda cmd: None
+    uses: tuple[tuple[str, str], ...] = ()
+    rendering: Rendering | None = None
+    timed: bool = True
+    leaves: tuple[tuple[str, str], ...] = ()
+
+    def all_uses(self) -> tuple[tuple[str, str], ...]:
+        """The declared uses and the rendering's attachments."""
+        r = self.rendering
+        if r is None:
+            return self.uses
+        implied = tuple((n, u) for n, u in ((r.color, "color_attachment"),
+                                            (r.depth, "depth_attachment")) if n is not None)
+        return implied + self.uses
+
+
+@dataclass
+class _State:
+    layout: int
+    write: tuple[int, int] | None = None  # (stages, accesses) of the last write
+    read_stages: int = 0  # stages that read since the last write
+    visible: tuple[int, int] = (0, 0)  # (stages, accesses) the last write is visible to
+    use: str = ""  # the last use's name
+    scope: int = -1  # the rendering it was last attached in
+
+
+@dataclass
+class Tracker:
+    """What each resource's last use in this recording was, and the barriers that follow."""
+
+    vk: Any
+    resources: Mapping[str, ImageResource | BufferResource]
+    states: dict[int, _State] = field(default_factory=dict)
+    masks: dict[str, _Mask] = field(default_factory=dict)
+    images: list[Any] = field(default_factory=list)
+    buffers: list[Any] = field(default_factory=list)
+
+    def use(self, name: str, use: str, scope: int = -1) -> None:
+        """Queue the barrier `use` of resource `name` needs (none when nothing came before
+        it that it must wait for); `scope`: the rendering it is attached in."""
+        res = self.resources[name]
+        for r in (res, res.msaa) if isinstance(res, ImageResource) and res.msaa else (res,):
+            self._use(r, use, scope)
+
+    def _use(self, res: ImageResource | BufferResource, use: str, scope: int) -> None:
+        vk, m = self.vk, _mask(self.vk, use, self.masks)
+        key = id(res)
+        state = self.states.get(key)
+        image = isinstance(res, ImageResource)
+        layout = m.layout if image else None
+        if layout == -1:
+            raise ValueError(f"use {use!r} asks two layouts of one image")
+        if state is None:  # the frame's first use: after every earlier command
+            all_writes = vk.VK_ACCESS_2_MEMORY_WRITE_BIT
+            old = vk.VK_IMAGE_LAYOUT_UNDEFINED
+            if image and res.kept is not None:
+                old = _mask(vk, res.kept, self.masks).layout
+            self._barrier(res, (vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, all_writes), m, old)
+            self.states[key] = self._after(m, use, scope, layout)
+            return
+        attached_again = (use == state.use and use in _ATTACHMENT_USES and scope == state.scope
+                          and scope >= 0)
+        if attached_again:
+            return  # one rendering: attachment accesses are in rasterisation order
+        new_layout = image and layout is not None and layout != state.layout
+        waits: tuple[int, int] | None = None
+        if m.writes or new_layout:
+            stages = state.read_stages | (state.write[0] if state.write else 0)
+            if stages or new_layout:
+                waits = (stages or vk.VK_PIPELINE_STAGE_2_NONE,
+                         state.write[1] if state.write else 0)
+        elif state.write is not None:
+            seen_stages, seen_access = state.visible
+            if m.stages & ~seen_stages or m.accesses & ~seen_access:
+                waits = state.write
+        if waits is not None:
+            self._barrier(res, waits, m, state.layout if image else None)
+        if m.writes:
+            self.states[key] = self._after(m, use, scope, layout if image else state.layout)
+            return
+        state.read_stages |= m.stages
+        if waits is not None:
+            state.visible = (state.visible[0] | m.stages, state.visible[1] | m.accesses)
+        if image and layout is not None:
+            state.layout = layout
+        state.use, state.scope = use, scope
+
+    def _after(self, m: _Mask, use: str, scope: int, layout: int | None) -> _State:
+        write = (m.stages, m.accesses) if m.writes else None
+        return _State(layout=layout if layout is not None else 0, write=write,
+                      read_stages=0 if m.writes else m.stages,
+                      visible=(m.stages, m.accesses) if not m.writes else (0, 0),
+                      use=use, scope=scope)
+
+    def leave(self, name: str, use: str) -> None:
+        """Resource `name` is now as `use` left it (the step's own barriers did that)."""
+        res = self.resources[name]
+        m = _mask(self.vk, use, self.masks)
+        self.states[id(res)] = _State(layout=m.layout or 0, write=None, read_stages=m.stages,
+                                      visible=(m.stages, m.accesses), use=use)
+
+    def _barrier(self, res: ImageResource | BufferResource, src: tuple[int, int], m: _Mask,
+                 old: int | None) -> None:
+        vk = self.vk
+        dst_access = m.accesses
+        if isinstance(res, BufferResource):
+            self.buffers.append(vk.VkBufferMemoryBarrier2(
+                srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=m.stages,
+                dstAccessMask=dst_access, srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, buffer=res.buffer.handle,
+                offset=0, size=res.buffer.size))
+            return
+        aspect = vk.VK_IMAGE_ASPECT_DEPTH_BIT if res.depth else vk.VK_IMAGE_ASPECT_COLOR_BIT
+        new = m.layout if m.layout is not None else old
+        self.images.append(vk.VkImageMemoryBarrier2(
+            srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=m.stages,
+            dstAccessMask=dst_access, oldLayout=old, newLayout=new,
+            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
+            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, image=res.handle,
+            subresourceRange=vk.VkImageSubresourceRange(
+                aspectMask=aspect, baseMipLevel=0, levelCount=res.levels, baseArrayLayer=0,
+                layerCount=res.layers)))
+
+    @property
+    def pending(self) -> bool:
+        return bool(self.images or self.buffers)
+
+    def flush(self, cmd: Commands) -> None:
+        """Record the queued barriers as one vkCmdPipelineBarrier2."""
+        if self.pending:
+            barriers(cmd, self.images, self.buffers)
+            self.images, self.buffers = [], []
+
+    def rest(self) -> None:
+        """Queue the transitions that leave every `kept` image in its resting use."""
+        for name, res in self.resources.items():
+            if isinstance(res, ImageResource) and res.kept is not None \
+                    and id(res) in self.states and self.states[id(res)].use != res.kept:
+                self.use(name, res.kept)
+
+
+def _attachments(r: Rendering, resources: Mapping[str, Any], extent: tuple[int, int]
+                 ) -> Attachments:
+    color = resources[r.color] if r.color is not None else None
+    depth = resources[r.depth] if r.depth is not None else None
+    att = Attachments(color.view if color else None, depth.view if depth else None, extent)
+    if color is not None and color.msaa is not None:
+        att.msaa_color = color.msaa.view
+    if depth is not None and depth.msaa is not None:
+        att.msaa_depth = depth.msaa.view
+    return att
+
+
+def record_steps(cmd: Commands, steps: Sequence[Step],
+                 resources: Mapping[str, ImageResource | BufferResource],
+                 extent: tuple[int, int], stamp: Callable[[str], None] = lambda name: None
+                 ) -> Tracker:
+    """Record `steps` in order into `cmd` with the barriers their uses need, their renderings
+    begun and ended, and `stamp(name)` after each timed step. Returns the tracker (tests read
+    what it derived)."""
+    tracker = Tracker(cmd.vk, resources)
+    open_scope: Rendering | None = None
+    scopes = 0
+    for step in steps:
+        same_scope = step.rendering is not None and step.rendering is open_scope
+        scope = scopes - 1 if same_scope else scopes
+        for name, use in step.all_uses():
+            tracker.use(name, use, scope)
+        if open_scope is not None and (not same_scope or tracker.pending):
+            end_rendering(cmd)
+            open_scope = None
+            if same_scope:  # a barrier inside a rendering is not allowed: begin it again
+                raise ValueError(f"step {step.name!r} needs a barrier inside its rendering")
+        tracker.flush(cmd)
+        if step.rendering is not None and open_scope is None:
+            r = step.rendering
+            begin_rendering(cmd, _attachments(r, resources, extent), r.clear_color,
+                            r.clear_depth, r.store_depth, r.layers)
+            open_scope = r
+            scopes += 1
+        step.record(cmd)
+        for name, use in step.leaves:
+            tracker.leave(name, use)
+        if step.timed:
+            stamp(step.name)
+    if open_scope is not None:
+        end_rendering(cmd)
+    tracker.rest()
+    tracker.flush(cmd)
+    return tracker

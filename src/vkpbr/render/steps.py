@@ -1,0 +1,315 @@
+"""The steps a path's groups stand for (render/paths.py), for one recording.
+
+`FrameSteps(recorder, target, frame_index, image, spec)` turns a path's group names into
+gpu/graph.py steps: each declares what it reads and writes (the target's "color", "depth",
+"visibility", the compute path's buffers, ...) and records its commands; the graph derives
+the barriers and renderings. Consecutive fragment passes share one rendering over the
+target's colour and depth: cleared, unless a compute step already wrote the colour (the
+compute path's shading) or the depth (a visibility pass, the compute rasteriser), when the
+passes draw over it (and test that depth without writing it: a pre-pass for them).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from vkpbr.gpu.commands import Commands
+from vkpbr.gpu.graph import Rendering, Step
+from vkpbr.gpu.target import COPY_DEPTH, COPY_OUTPUTS
+from vkpbr.render import layouts as L
+from vkpbr.render.compute_path import GENERAL_SHADING, ShadeVariant
+from vkpbr.render.passes import PASSES, PassContext, PassSpec, classify, record_pass
+from vkpbr.render.paths import COPY_PATHS, PATHS
+from vkpbr.render.shadows import ShadowPlan
+from vkpbr.render.transmission import TRANSMISSIVE, copy_classes
+
+__all__ = ["FrameSpec", "FrameSteps", "OUTPUT_CLEAR"]
+
+_PASS_BY_NAME = {p.name: p for p in PASSES}
+_VISIBILITY_ROWS = ("opaque", "opaque_double", "mask")  # the coverage: not blending
+# The dataset outputs' clear values (render/layouts.py OUTPUT_IMAGES): ids 0, normals 0,
+# distances +inf.
+OUTPUT_CLEAR = {"out_ids": ("uint32", (0, 0, 0, 0)),
+                "out_depth_range": ("float32", (float("inf"), float("inf"), 0.0, 0.0))}
+
+
+@dataclass(frozen=True)
+class FrameSpec:
+    """What a recording depends on besides its target, image and frame slot (its key):
+    the path (render/paths.py), the TBN path, alpha masking, the shadow plan and which of
+    its layers are redrawn, what the target copies out, the transmission's copy, what the
+    compute path's shading is specialised for, the blended draws' order, the overlay; a
+    compute batch's atlas tiles, views' set 0 and CUDA buffer."""
+
+    path: str
+    tbn: L.TbnMode = L.TbnMode.VECTORS
+    alpha_mask: bool = True
+    plan: ShadowPlan = field(default_factory=ShadowPlan)
+    redraw: tuple[range, ...] | None = None
+    copy: tuple[str, ...] = ()
+    transmission: bool = False
+    variant: ShadeVariant = GENERAL_SHADING
+    blend_order: tuple[int, ...] = field(default=(), compare=False)
+    overlay: Any = field(default=None, compare=False)
+    overlay_id: int = 0
+    tiles: tuple[int, int, int, int] | None = None
+    set0: Any = field(default=None, compare=False)
+    set0_id: int = 0
+    external: Any = field(default=None, compare=False)
+    external_id: int = 0
+    batch: tuple = ()  # what a layered batch's own groups depend on (render/batch.py)
+
+
+class FrameSteps:
+    """The steps of one recording: `steps()` expands the spec's path."""
+
+    def __init__(self, recorder: Any, target: Any, frame_index: int, image: int,
+                 spec: FrameSpec,
+                 groups: dict[str, Callable[[FrameSteps], list[Step]]] | None = None) -> None:
+        # `groups`: the steps of groups a caller makes (the layered batch's "cull", "chunks").
+        self.groups = groups or {}
+        self.r, self.target, self.frame_index, self.image, self.spec = (
+            recorder, target, frame_index, image, spec)
+        self.gs = recorder.gpu_scene
+        self.slot = recorder.slots[frame_index]
+        self.streams = recorder.stream_names(spec.tbn)
+        self.classes = [classify(d.alpha_mode, d.double_sided, spec.alpha_mask)
+                        for d in self.gs.draws]
+        self.shadow_set = (None if recorder.shadows is None
+                           else recorder.shadows.sets[frame_index])
+        self.set0 = spec.set0 if spec.set0 is not None else self.slot.set0
+        self.resources: dict[str, Any] = dict(target.resources(image, frame_index))
+        self._color_written = self._depth_written = False
+        self._rendering: Rendering | None = None
+
+    # --- the path -------------------------------------------------------------------------
+    def steps(self) -> list[Step]:
+        """The path's steps, group by group."""
+        return [step for group in PATHS[self.spec.path] for step in self.group(group)]
+
+    def group(self, name: str) -> list[Step]:
+        if name in _PASS_BY_NAME:
+            return self._fragment_pass(_PASS_BY_NAME[name])
+        if name in self.groups:
+            return self.groups[name](self)
+        return getattr(self, "_" + name)()
+
+    # --- the head ---------------------------------------------------------------------------
+    def _shadows(self) -> list[Step]:
+        """The shadow maps' redrawn layers. Their partial redraw keeps the other layers, so
+        ShadowMaps' layered images take their own transitions (gpu/layered.py) and leave
+        every layer sampled, as the shading steps read them."""
+        sm, spec, gs = self.r.shadows, self.spec, self.gs
+        if sm is None or not spec.plan.entries or (spec.redraw is not None and not any(spec.redraw)):
+            return [Step("shadows", timed=True)]
+
+        def record(cmd: Commands) -> None:
+            sm.record(cmd, self.frame_index, spec.plan, gs.draws, self.classes, gs.material_sets,
+                      gs.streams, gs.index_buffer, gs.has_colors, spec.redraw)
+
+        return [Step("shadows", record)]
+
+    def _transmission(self) -> list[Step]:
+        """The frame slot's copy of the opaque scene: the opaque and masked draws that do not
+        transmit and the environment, in linear radiance, then its mip chain; drawn as the
+        frame is (the compute path's kernels, or the fragment path's passes)."""
+        if not self.spec.transmission:
+            return [Step("transmission")]
+        copies = self.r.copies
+        copy_target = copies.targets[self.frame_index]
+        compute = self.spec.path.startswith("compute") and copy_target.storage_view is not None
+        sub = _CopySteps(self, copy_target, compute)
+        steps = sub.steps(COPY_PATHS["compute" if compute else "forward"])
+        return [*(Step(f"transmission.{s.name}", s.record, s.uses, s.rendering, False, s.leaves)
+                  for s in steps), Step("transmission")]
+
+    # --- fragment passes --------------------------------------------------------------------
+    def _rendering_for(self, after_compute: bool = False) -> Rendering:
+        """The rendering the next fragment passes draw in: the one open, or a new one over
+        the target (cleared unless a step wrote it already)."""
+        if self._rendering is None:
+            t = self.target
+            self._rendering = Rendering(
+                "color", "depth", None if self._color_written else t.clear_color,
+                None if self._depth_written else 0.0, store_depth=t.stores_depth)
+        return self._rendering
+
+    def _close_rendering(self) -> None:
+        self._rendering = None
+
+    def _fragment_pass(self, p: PassSpec) -> list[Step]:
+        over_visibility = self._depth_written  # test its depth, write none
+        prepass = (self.r.prepass_for(self.target) and not over_visibility
+                   and self.spec.path == "forward")
+        if p.prepass and not prepass:
+            return []
+        if p.name == "background" and self._color_written:
+            return []  # the compute path drew it in compute (background_compute)
+        ctx = self._context(visibility=False, prepass=prepass or over_visibility)
+        return [Step(p.name, _pass_recorder(ctx, p), rendering=self._rendering_for())]
+
+    def _context(self, visibility: bool, prepass: bool, target: Any = None,
+                 classes: list[str] | None = None, copy: bool = False) -> PassContext:
+        target = self.target if target is None else target
+        tbn = self.spec.tbn
+        return PassContext(
+            draws=self.gs.draws, classes=self.classes if classes is None else classes,
+            pipeline=lambda p: self.r.pipeline(target, tbn, p, prepass, visibility, copy=copy),
+            frame_sets=(self.set0, self.slot.set2), material_sets=self.gs.material_sets,
+            vertex_buffers=[self.gs.streams[n] for n in self.streams],
+            index_buffer=self.gs.index_buffer, blend_order=self.spec.blend_order,
+            prepass=prepass, shadow_set=self.shadow_set)
+
+    def _visibility(self) -> list[Step]:
+        """The opaque and masked rows into the visibility image (draw + 1, primitive) with
+        pbr.frag's own coverage, over the cleared depth (their own pre-pass)."""
+        ctx = self._context(visibility=True, prepass=False)
+        rendering = Rendering("visibility", "depth", (0.0, 0.0, 0.0, 0.0), 0.0)
+        self._depth_written = True
+        self._close_rendering()
+        # The fragment path's own passes follow (forward_outputs) and take the timestamps.
+        timed = self.spec.path.startswith("compute")
+        return [Step(n, _pass_recorder(ctx, _PASS_BY_NAME[n]), rendering=rendering, timed=timed)
+                for n in _VISIBILITY_ROWS]
+
+    # --- the compute path -------------------------------------------------------------------
+    def _compute(self) -> Any:
+        cs = self.r.compute_scene()
+        if "bins" not in self.resources:
+            self.resources.update(cs.buffers(self.target))
+        return cs
+
+    def _frame_sets(self) -> dict[int, Any]:
+        return self.r.compute_sets(self.frame_index, self.spec.set0)
+
+    def _raster(self) -> list[Step]:
+        cs, spec = self._compute(), self.spec
+        depth = (COPY_DEPTH in spec.copy or "blend" in self.classes
+                 or not spec.path.startswith("compute"))
+        self._depth_written = depth
+        self._color_written = True  # the resolve writes the clear colour where nothing covers
+        self._close_rendering()
+        return cs.raster_steps(self.target, self.frame_index, spec.alpha_mask,
+                               self.gs.material_sets, spec.tiles, spec.set0, depth)
+
+    def _classify(self) -> list[Step]:
+        counted = "raster" in PATHS[self.spec.path]
+        cs = self._compute()
+        self._close_rendering()
+        return [cs.classify_step(self.target, self.frame_index, self._frame_sets(),
+                                 self.gs.material_sets, self.target.clear_color, counted)]
+
+    def _shaded(self) -> list[int]:
+        return shaded_materials(self.gs.draws, self.classes)
+
+    def _shading(self) -> list[Step]:
+        if not self.spec.path.startswith("compute"):
+            return []
+        cs, spec = self._compute(), self.spec
+        self._color_written = True
+        return [cs.shading_step(self.target, self.frame_index, spec.tbn, self._frame_sets(),
+                                self.gs.material_sets, self._shaded(), spec.tiles,
+                                variant=spec.variant)]
+
+    def _outputs(self) -> list[Step]:
+        if COPY_OUTPUTS not in self.spec.copy:
+            return []
+        cs = self._compute()
+        names = tuple(self.target.outputs)
+        return [cs.outputs_step(self.target, self.frame_index, self.spec.tbn, self._frame_sets(),
+                                self.gs.material_sets, self._shaded(), names)]
+
+    def _outputs_clear(self) -> list[Step]:
+        if COPY_OUTPUTS not in self.spec.copy:
+            return []
+        outputs = self.target.outputs
+        return [Step("outputs_clear", lambda cmd: _clear_outputs(cmd, outputs),
+                     tuple((n, "clear") for n in outputs), timed=False)]
+
+    def _background_compute(self) -> list[Step]:
+        cs = self._compute()
+        self._color_written = True
+        self._close_rendering()
+        return [cs.background_step(self.target, self.frame_index, self._frame_sets(),
+                                   self.spec.tiles)]
+
+    # --- the tail ---------------------------------------------------------------------------
+    def _overlay(self) -> list[Step]:
+        overlay = self.spec.overlay
+        if overlay is None:
+            return []
+        return [Step("overlay", lambda cmd: overlay.record(cmd, self.frame_index,
+                                                           self.target.extent),
+                     rendering=self._rendering_for(), timed=False)]
+
+    def _finish(self) -> list[Step]:
+        if self.spec.tiles is not None:
+            return self.target.finish_steps(self.image, self.frame_index, self.spec.copy,
+                                            self.spec.tiles, self.spec.external)
+        return self.target.finish_steps(self.image, self.frame_index, self.spec.copy)
+
+
+class _CopySteps:
+    """The transmission's copy of the opaque scene as steps on its own target, whose
+    resources are the frame's under "copy." names."""
+
+    def __init__(self, frame: FrameSteps, target: Any, compute: bool) -> None:
+        self.f, self.target, self.compute = frame, target, compute
+        frame.resources.update(target.resources("copy."))
+        self.classes = copy_classes(frame.classes, frame.r.copies.transmissive)
+
+    def steps(self, groups: tuple[str, ...]) -> list[Step]:
+        f, t = self.f, self.target
+        out: list[Step] = []
+        if not self.compute:
+            prepass = f.r.prepass_for(t)  # the frame's rule (GPUs: each pixel shaded once)
+            ctx = f._context(False, prepass, t, self.classes, copy=True)
+            rendering = Rendering("copy.color", "copy.depth", t.clear_color, 0.0)
+            for name in groups[:-1]:
+                p = _PASS_BY_NAME[name]
+                if p.prepass and not prepass:
+                    continue
+                out.append(Step(name, _pass_recorder(ctx, p), rendering=rendering))
+            return [*out, t.mip_step("mips", "copy.")]
+        cs = f.r.compute_scene()
+        f.resources.update(cs.buffers(t, "copy."))
+        vis = f._context(True, False, t, self.classes)
+        rendering = Rendering("copy.visibility", "copy.depth", (0.0, 0.0, 0.0, 0.0), 0.0)
+        out += [Step(n, _pass_recorder(vis, _PASS_BY_NAME[n]), rendering=rendering)
+                for n in _VISIBILITY_ROWS]
+        sets = f.r.compute_sets(f.frame_index)
+        materials = shaded_materials(f.gs.draws, self.classes)
+        out += [cs.classify_step(t, f.frame_index, sets, f.gs.material_sets, t.clear_color,
+                                 copy=True, prefix="copy."),
+                cs.shading_step(t, f.frame_index, f.spec.tbn, sets, f.gs.material_sets,
+                                materials, copy=True, variant=f.spec.variant, prefix="copy.")]
+        ctx = f._context(False, False, t, self.classes, copy=True)
+        out.append(Step("background", _pass_recorder(ctx, _PASS_BY_NAME["background"]),
+                        rendering=Rendering("copy.color", "copy.depth", None, None)))
+        return [*out, t.mip_step("mips", "copy.")]
+
+
+def _pass_recorder(ctx: PassContext, p: PassSpec) -> Callable[[Commands], None]:
+    return lambda cmd: record_pass(cmd, ctx, p)
+
+
+def _clear_outputs(cmd: Commands, outputs: dict[str, tuple[Any, Any]]) -> None:
+    """Clear the dataset outputs (OUTPUT_CLEAR: ids and normals 0, distances +inf)."""
+    vk = cmd.vk
+    full = vk.VkImageSubresourceRange(aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, baseMipLevel=0,
+                                      levelCount=1, baseArrayLayer=0, layerCount=1)
+    for name, (img, _) in outputs.items():
+        kind, value = OUTPUT_CLEAR.get(name, ("float32", (0.0, 0.0, 0.0, 0.0)))
+        clear = vk.VkClearColorValue(**{kind: list(value)})
+        vk.vkCmdClearColorImage(cmd.handle, img.handle, vk.VK_IMAGE_LAYOUT_GENERAL, clear, 1,
+                                [full])
+
+
+def shaded_materials(draws: list, classes: list[str]) -> list[int]:
+    """The materials the compute path shades: those of every draw but the blended ones (and
+    the transmissive ones, in the copy of the opaque scene)."""
+    return sorted({d.material for d, c in zip(draws, classes, strict=True)
+                   if c not in ("blend", TRANSMISSIVE)})
+
