@@ -190,8 +190,9 @@ class Tracker:
         """Queue the barrier `use` of resource `name` needs (none when nothing came before
         it that it must wait for); `scope`: the rendering it is attached in."""
         res = self.resources[name]
-        for r in (res, res.msaa) if isinstance(res, ImageResource) and res.msaa else (res,):
-            self._use(r, use, scope)
+        self._use(res, use, scope)
+        if isinstance(res, ImageResource) and res.msaa is not None and use in _ATTACHMENT_USES:
+            self._use(res.msaa, use, scope)  # drawn into, resolved into `res`
 
     def _use(self, res: ImageResource | BufferResource, use: str, scope: int) -> None:
         vk, m = self.vk, _mask(self.vk, use, self.masks)

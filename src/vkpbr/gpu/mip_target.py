@@ -69,12 +69,12 @@ class MipmappedTarget:
 
     def resources(self, prefix: str) -> dict[str, ImageResource]:
         """Its images as graph resources (gpu/graph.py), named `prefix` + "color" (level 0:
-        what is drawn into; `mip_step` makes the rest), "depth", "visibility"."""
+        what is drawn into; `mip_step` makes the rest), "depth", "ids" (its visibility image)."""
         out = {prefix + "color": ImageResource(self.color.handle, view=self.attachments.color),
                prefix + "depth": ImageResource(self.depth.handle, depth=True,
                                                view=self.attachments.depth)}
         if self.storage_view is not None:
-            out[prefix + "visibility"] = ImageResource(self.visibility.handle,
+            out[prefix + "ids"] = ImageResource(self.visibility.handle,
                                                        view=self.visibility_view.handle)
         return out
 

@@ -99,7 +99,7 @@ class OffscreenTarget:
             self.visibility = self._own(Image(
                 device, w, h, vk.VK_FORMAT_R32G32_UINT,
                 vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_STORAGE_BIT,
-                name="visibility"))
+                name="id image"))
             self.visibility_view = self._own(ImageView(self.visibility))
         self.attachments = Attachments(views[0].handle, views[1].handle, self.extent)
         if samples > 1:
@@ -138,7 +138,7 @@ class OffscreenTarget:
 
     def resources(self, image: int, frame_index: int) -> dict[str, ImageResource | BufferResource]:
         """The images and readback buffers of frame `frame_index` as graph resources:
-        "color", "depth" (with their MSAA images), "visibility" (the compute path's),
+        "color", "depth" (with their MSAA images), "ids" (the compute path's visibility image),
         "color_readback", "depth_readback" and the outputs' images by their names."""
         color = ImageResource(self.color.handle, view=self.attachments.color)
         depth = ImageResource(self.depth.handle, depth=True, view=self.attachments.depth)
@@ -148,7 +148,7 @@ class OffscreenTarget:
                                        view=self.attachments.msaa_depth)
         out: dict[str, ImageResource | BufferResource] = {"color": color, "depth": depth}
         if self.compute:
-            out["visibility"] = ImageResource(self.visibility.handle,
+            out["ids"] = ImageResource(self.visibility.handle,
                                               view=self.visibility_view.handle)
         color_buf, depth_buf = self.readback(frame_index)
         out["color_readback"] = BufferResource(color_buf)

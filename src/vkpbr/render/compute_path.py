@@ -334,7 +334,7 @@ class ComputeScene:
                     cmd.memory_barrier("compute", "compute")
 
         p = prefix
-        uses = ((p + "visibility", "storage_read"), (p + "color", "storage"),
+        uses = ((p + "ids", "storage_read"), (p + "color", "storage"),
                 (p + "bins", "storage|transfer_dst"), (p + "args", "storage"),
                 (p + "pixels", "storage"))
         return Step("classify", record, uses)
@@ -372,7 +372,7 @@ class ComputeScene:
 
     @staticmethod
     def _bin_uses(p: str) -> tuple[tuple[str, str], ...]:
-        return ((p + "visibility", "storage_read"), (p + "color", "storage"),
+        return ((p + "ids", "storage_read"), (p + "color", "storage"),
                 (p + "bins", "storage_read"), (p + "args", "indirect"),
                 (p + "pixels", "storage_read"))
 
@@ -386,7 +386,7 @@ class ComputeScene:
             cmd.push(np.array(tiles or (1, *target.extent, 1), np.uint32))
             cmd.dispatch(*groups((*target.extent, 1), (8, 8, 1)))
 
-        return Step("background", record, (("visibility", "storage_read"), ("color", "storage")))
+        return Step("background", record, (("ids", "storage_read"), ("color", "storage")))
 
     def raster_steps(self, target: Any, frame_index: int, alpha_mask: bool,
                      material_sets: list[Any], tiles: tuple[int, int, int, int] | None = None,
@@ -442,7 +442,7 @@ class ComputeScene:
         if alpha_mask and self.masked_rows:
             steps += self._masked_steps(res, dset, push, material_sets, views, set0, suffix)
         steps.append(Step("raster_resolve", kernel("raster_resolve", groups((w, h, 1), CLASSIFY_GROUP)),
-                          (("raster", "storage"), ("visibility", "storage"), ("color", "storage"),
+                          (("raster", "storage"), ("ids", "storage"), ("color", "storage"),
                            ("bins", "storage"), ("raster_depths", "storage"))))
         if depth:
             steps.append(Step("depth_copy", lambda cmd: copy_buffer_to_image(

@@ -2,7 +2,7 @@
 
 `FrameSteps(recorder, target, frame_index, image, spec)` turns a path's group names into
 gpu/graph.py steps: each declares what it reads and writes (the target's "color", "depth",
-"visibility", the compute path's buffers, ...) and records its commands; the graph derives
+"ids" (the visibility image), the compute path's buffers, ...) and records its commands; the graph derives
 the barriers and renderings. Consecutive fragment passes share one rendering over the
 target's colour and depth: cleared, unless a compute step already wrote the colour (the
 compute path's shading) or the depth (a visibility pass, the compute rasteriser), when the
@@ -166,7 +166,7 @@ class FrameSteps:
         """The opaque and masked rows into the visibility image (draw + 1, primitive) with
         pbr.frag's own coverage, over the cleared depth (their own pre-pass)."""
         ctx = self._context(visibility=True, prepass=False)
-        rendering = Rendering("visibility", "depth", (0.0, 0.0, 0.0, 0.0), 0.0)
+        rendering = Rendering("ids", "depth", (0.0, 0.0, 0.0, 0.0), 0.0)
         self._depth_written = True
         self._close_rendering()
         # The fragment path's own passes follow (forward_outputs) and take the timestamps.
@@ -276,7 +276,7 @@ class _CopySteps:
         cs = f.r.compute_scene()
         f.resources.update(cs.buffers(t, "copy."))
         vis = f._context(True, False, t, self.classes)
-        rendering = Rendering("copy.visibility", "copy.depth", (0.0, 0.0, 0.0, 0.0), 0.0)
+        rendering = Rendering("copy.ids", "copy.depth", (0.0, 0.0, 0.0, 0.0), 0.0)
         out += [Step(n, _pass_recorder(vis, _PASS_BY_NAME[n]), rendering=rendering)
                 for n in _VISIBILITY_ROWS]
         sets = f.r.compute_sets(f.frame_index)
