@@ -108,7 +108,8 @@ class ImageResource:
     """An image a graph tracks: `handle` (VkImage), whether it is a depth image, how many
     layers and mip levels its barriers cover; `view` is what a rendering attaches; `msaa` the
     multisampled image drawn into and resolved into this one; `kept` the use whose layout the
-    contents rest in between frames (None: discarded at each frame's first use)."""
+    contents rest in between frames (None: discarded at each frame's first use); `extent` its
+    size where it is not the frame's (a rendering into it covers that)."""
 
     handle: Any
     depth: bool = False
@@ -117,6 +118,7 @@ class ImageResource:
     view: Any = None
     msaa: ImageResource | None = None
     kept: str | None = None
+    extent: tuple[int, int] | None = None  # where it differs from the frame's (a rendering's area)
 
 
 @dataclass(eq=False)
@@ -295,7 +297,9 @@ def _attachments(r: Rendering, resources: Mapping[str, Any], extent: tuple[int, 
                  ) -> Attachments:
     color = resources[r.color] if r.color is not None else None
     depth = resources[r.depth] if r.depth is not None else None
-    att = Attachments(color.view if color else None, depth.view if depth else None, extent)
+    own = (color or depth).extent  # type: ignore[union-attr]
+    att = Attachments(color.view if color else None, depth.view if depth else None,
+                      own or extent)
     if color is not None and color.msaa is not None:
         att.msaa_color = color.msaa.view
     if depth is not None and depth.msaa is not None:

@@ -70,12 +70,14 @@ class MipmappedTarget:
     def resources(self, prefix: str) -> dict[str, ImageResource]:
         """Its images as graph resources (gpu/graph.py), named `prefix` + "color" (level 0:
         what is drawn into; `mip_step` makes the rest), "depth", "ids" (its visibility image)."""
-        out = {prefix + "color": ImageResource(self.color.handle, view=self.attachments.color),
+        size = self.extent
+        out = {prefix + "color": ImageResource(self.color.handle, view=self.attachments.color,
+                                               extent=size),
                prefix + "depth": ImageResource(self.depth.handle, depth=True,
-                                               view=self.attachments.depth)}
+                                               view=self.attachments.depth, extent=size)}
         if self.storage_view is not None:
             out[prefix + "ids"] = ImageResource(self.visibility.handle,
-                                                       view=self.visibility_view.handle)
+                                                view=self.visibility_view.handle, extent=size)
         return out
 
     def mip_step(self, name: str, prefix: str) -> Step:
