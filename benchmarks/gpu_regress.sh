@@ -13,10 +13,16 @@
 #   batch         `vkpbr bench`'s batch-* scenarios but -forward (VIEWS poses, BATCH_VIEWS_PER_CALL
 #                 views a render_batch call, BATCH_FRAMES views timed at least, median of the calls)
 #   batchfwd      the batch-*-forward ones (the layered batch; FWD_BATCH_VIEWS_PER_CALL a call)
-# then one table: scenario, metric, before, after, change % (medians of the rounds).
+# then one table: scenario, metric, before, after, change % (medians of the rounds; the runs
+# beside them where a tree ran more than once).
 #
-# Device call (carry .gl .whl .assets-peers .before; BENCHMARKS.md has the numbers):
-#   bash benchmarks/gpu_regress.sh
+# Make the carry here first: `bash benchmarks/fetch_device_carry.sh` (.gl .whl .assets-peers),
+# then `mkdir -p .before && git archive <commit> src benchmarks/bench_paths.py
+# benchmarks/peers/common.py tests/assets_path.py | tar -x -C .before` (the batch scenarios
+# read benchmarks/peers/common.py beside their src/, bench_paths.py imports the tree's own
+# names). Device call (about 5 minutes on the H200; DEADLINE keeps it inside 600 s), carry
+# [".gl", ".whl", ".assets-peers", ".before"] (about 46 MiB with the tree), timeout_s 600:
+#   set -o pipefail; bash benchmarks/gpu_regress.sh 2>&1 | tee $OUT/regress.txt
 # Here on lavapipe (no setup, .venv's Python; a few minutes):
 #   QUICK=1 OUT=/tmp/regress-out bash benchmarks/gpu_regress.sh
 # Only the table again, from a run's JSON lines:  TABLE=path/regress.jsonl bash benchmarks/gpu_regress.sh
@@ -83,7 +89,10 @@ def add(jsonl, tree, rnd, step, raw, rc, secs):
             if step == "walk":
                 r["key"] = walk_key(r)
             f.write(json.dumps(r) + "\n")
-            print("    " + summary(r))
+            try:
+                print("    " + summary(r))
+            except (KeyError, TypeError, ValueError) as exc:
+                print(f"    a row without {exc}: {sorted(r)}")
         if int(rc) or not rows:
             f.write(json.dumps({"tree": tree, "round": int(rnd), "step": step, "error": int(rc),
                                 "rows": len(rows), "seconds": float(secs)}) + "\n")
@@ -110,7 +119,7 @@ def table(jsonl, out_md, worse_pct):
                 cells[key, label] = {"sign": sign, "before": [], "after": []}
             cells[key, label][r["tree"]].append(float(r[field]))
     fmt = lambda v: f"{v:,.1f}" if abs(v) >= 100 else f"{v:.3f}"  # noqa: E731
-    runs = lambda v: " / ".join(fmt(x) for x in v)  # noqa: E731
+    runs = lambda v: " / ".join(fmt(x) for x in v) if len(v) > 1 else ""  # noqa: E731
     lines = ["| scenario | metric | before | after | change % | | before runs | after runs |",
              "|---|---|---:|---:|---:|---|---|---|"]
     marks = []
@@ -139,8 +148,10 @@ def table(jsonl, out_md, worse_pct):
                  f"direction, 2+ runs a tree, no overlap; WORSE?: one run a tree or overlapping runs. "
                  f"{marks.count('WORSE')} WORSE, {marks.count('WORSE?')} WORSE?")
     for e in errors:
-        lines.append(f"FAILED: {e['tree']} round {e['round']} {e['step']}: rc {e['error']}, "
-                     f"{e['rows']} rows, {e['seconds']:.0f} s (regress.log has its output)")
+        what = ("skipped: past DEADLINE" if e["error"] == -1 else
+                f"rc {e['error']}{' (timeout)' if e['error'] in (124, 137) else ''}, {e['rows']} rows, "
+                f"{e['seconds']:.0f} s (regress.log has its output)")
+        lines.append(f"NOT MEASURED: {e['tree']} round {e['round']} {e['step']}: {what}")
     text = "\n".join(lines)
     print(text)
     if out_md:
@@ -172,6 +183,7 @@ if [ "$DEVICE_SETUP" = 1 ]; then
   PY=${PY:-python3}
 else
   SITE=
+  export PYTHONDONTWRITEBYTECODE=1  # keep .before free of this machine's .pyc (it is carried)
   PY=${PY:-$( [ -x .venv/bin/python ] && echo "$ROOT/.venv/bin/python" || echo python3 )}
 fi
 export PYTHONUNBUFFERED=1 VKPBR_ASSETS=$ROOT/.assets-peers/models
