@@ -150,8 +150,20 @@ def _label(text: str) -> str:
     return text.strip().lower().replace("_", "-")
 
 
+def _with_post(table: tuple[OptionSpec, ...]) -> tuple[OptionSpec, ...]:
+    """SHARED_OPTIONS with the post steps' options (render/options.py POST_OPTIONS: each
+    declared once, with its step); another table as it is."""
+    if table is not SHARED_OPTIONS:
+        return table
+    from vkpbr.render.options import POST_OPTIONS
+
+    return table + tuple(OptionSpec(row.flag, "float", row.help, field=row.field, group="post",
+                                    metavar="STRENGTH") for row in POST_OPTIONS)
+
+
 def add_options(parser: argparse.ArgumentParser, table: tuple[OptionSpec, ...] = SHARED_OPTIONS) -> None:
     """Add every option of `table` to `parser`, in argument groups named by `spec.group`."""
+    table = _with_post(table)
     defaults: Any = None
     enums: dict[str, type] = {}
     if any(spec.field for spec in table):  # only then the render layer (NumPy) is needed
@@ -209,6 +221,7 @@ def render_options_from_args(args: argparse.Namespace,
     """The RenderOptions that the parsed `args` ask for (invalid values raise UsageError)."""
     from vkpbr.render.options import RenderOptions
 
+    table = _with_post(table)
     values = {}
     for spec in table:
         if spec.field is None:
@@ -225,6 +238,7 @@ def render_options_from_args(args: argparse.Namespace,
 def option_flags(options: RenderOptions, table: tuple[OptionSpec, ...] = SHARED_OPTIONS) -> list[str]:
     """Command-line flags that reproduce `options` (every enum and the exposure, and the
     `--no-*` switches that are on), e.g. ["--view", "d", "--brdf", "ggx", ...]."""
+    table = _with_post(table)
     out: list[str] = []
     for spec in table:
         if spec.field is None:
@@ -232,7 +246,7 @@ def option_flags(options: RenderOptions, table: tuple[OptionSpec, ...] = SHARED_
         value = getattr(options, spec.field)
         if spec.kind == "enum" and value is not None:
             out += [spec.flag, str(value)]
-        elif spec.kind == "float":
+        elif spec.kind == "float" and not (spec.group == "post" and value == 0):
             out += [spec.flag, f"{value:g}"]
         elif spec.kind == "int":
             out += [spec.flag, str(value)]

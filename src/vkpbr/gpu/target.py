@@ -161,41 +161,46 @@ class OffscreenTarget:
         return out
 
     def finish_steps(self, image: int, frame_index: int, copy: tuple[str, ...],
-                     tiles: tuple[int, int, int, int] | None = None, external: Any = None
-                     ) -> list[Step]:
+                     tiles: tuple[int, int, int, int] | None = None, external: Any = None,
+                     prefix: str = "", sources: OffscreenTarget | None = None) -> list[Step]:
         """"copy": what `copy` names copied into frame `frame_index`'s readback buffers
         (`tiles`, an atlas of a compute batch (views, tile width, height, tiles a column):
         colour and depth view by view, read_tiles; `external`: the colour into that exported
         buffer instead, for CUDA: taken back from the external queue family before the copy,
-        released after it), then made visible to the host ("readback", untimed)."""
+        released after it), then made visible to the host ("readback", untimed). `prefix`:
+        this target's resource names' (`resources`); `sources`: the target whose depth and
+        outputs are copied, under plain names (the frame drew into it: post steps)."""
         if not copy:
             return []
+        src = self if sources is None else sources
+        p, q = prefix, "" if sources is not None else prefix
         color_buf, depth_buf = self.readback(frame_index)
         images = []
         if COPY_COLOR in copy:
-            images.append(("color", self.color, False, external or color_buf, self.pixel_bytes))
+            images.append((p + "color", self.color, False, external or color_buf,
+                           self.pixel_bytes, p + "color_readback"))
         if COPY_DEPTH in copy:
-            images.append(("depth", self.depth, True, depth_buf, 4))
+            images.append((q + "depth", src.depth, True, depth_buf, 4, p + "depth_readback"))
         outputs = self._outputs_readback(frame_index) if COPY_OUTPUTS in copy else {}
         family, vk = self.device.queue_family, self.device.vk
 
         def record(cmd: Commands) -> None:
             if external is not None:
                 barriers(cmd, [], [external_ownership(vk, family, external, True)])
-            for _, img, depth, buf, nbytes in images:
+            for _, img, depth, buf, nbytes, _ in images:
                 copy_image_to_buffer(cmd, img.handle, depth, buf, self.extent, tiles=tiles,
                                      pixel_bytes=nbytes)
             for name, buf in outputs.items():
-                copy_image_to_buffer(cmd, self.outputs[name][0].handle, False, buf,  # type: ignore[index]
+                copy_image_to_buffer(cmd, src.outputs[name][0].handle, False, buf,  # type: ignore[index]
                                      self.extent)
             if external is not None:
                 barriers(cmd, [], [external_ownership(vk, family, external, False)])
 
         uses = [(name, "transfer_src") for name, *_ in images]
-        uses += [(f"{name}_readback", "transfer_dst") for name, _, _, buf, _ in images
+        uses += [(readback, "transfer_dst") for _, _, _, buf, _, readback in images
                  if buf is not external]
-        uses += [(n, "transfer_src") for n in outputs]
-        uses += [(f"{n}_readback", "transfer_dst") for n in outputs]
+        uses += [(q + n, "transfer_src") for n in outputs]
+        uses += [(f"{p}{n}_readback", "transfer_dst") for n in outputs]
         host = tuple((n, "host_read") for n, u in uses if u == "transfer_dst")
         return [Step("copy", record, tuple(uses)), Step("readback", uses=host, timed=False)]
 

@@ -28,7 +28,12 @@ class Variant:
     defines: tuple[tuple[str, int], ...] = ()
 
 
+# The post steps' kernels (render/post.py): one build of each shaders/post_*.comp, found by name.
+_POST_KERNELS = tuple(Variant(f"{p.stem}.comp.spv", p.name)
+                      for p in sorted(SHADER_DIR.glob("post_*.comp")))
+
 VARIANTS: tuple[Variant, ...] = (
+    *_POST_KERNELS,
     *(Variant(f"pbr_{m.name.lower()}.vert.spv", "pbr.vert", (("TBN_MODE", int(m)),)) for m in L.TbnMode),
     Variant("pbr_opaque.frag.spv", "pbr.frag", (("ALPHA_MASK", 0),)),
     Variant("pbr_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1),)),

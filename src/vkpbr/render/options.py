@@ -26,7 +26,26 @@ from vkpbr.render.layouts import (
 )
 from vkpbr.scene.environment import ENV_SUFFIXES
 
-__all__ = ["RenderOptions", "ENUM_FIELDS"]
+__all__ = ["RenderOptions", "ENUM_FIELDS", "POST_OPTIONS", "PostOption"]
+
+
+@dataclass(frozen=True)
+class PostOption:
+    """A post step's option (render/post.py): the RenderOptions field, its command-line flag,
+    its range (0 is off) and help."""
+
+    field: str
+    flag: str
+    low: float
+    high: float
+    help: str
+
+
+# The post steps, in the order a frame runs them (render/post.py: each a render/post_*.py).
+POST_OPTIONS: tuple[PostOption, ...] = (
+    PostOption("bloom", "--bloom", 0.0, 1.0, "bloom strength 0..1: bright light spreads over "
+               "its surroundings, the frame's total light kept (default 0: off)"),
+)
 
 # RenderOptions field -> the enum its values come from (the CLI's choices, the viewer's cycles).
 ENUM_FIELDS: dict[str, type] = {"view": View, "lighting": Lighting, "brdf": Brdf, "tbn": TbnMode,
@@ -88,6 +107,9 @@ class RenderOptions:
     env_background : bool or None
         Draw the environment where no surface is (None: yes in the physically based mode,
         with an environment; the course mode's background is black).
+    bloom : float
+        Bloom strength, 0..1 (0: off): a post step (render/post_bloom.py) on the frame's HDR
+        radiance before its tone map; the frame's total light is kept.
     """
 
     view: View = View.FINAL
@@ -107,6 +129,7 @@ class RenderOptions:
     env_intensity: float = 1.0
     env_rotation: float = 0.0
     env_background: bool | None = None
+    bloom: float = 0.0
 
     def __post_init__(self) -> None:
         for name, enum_type in ENUM_FIELDS.items():
@@ -125,9 +148,22 @@ class RenderOptions:
         if isinstance(res, bool) or not isinstance(res, int) or not 16 <= res <= 16384:
             raise UsageError(f"shadow resolution {res!r}: expected an integer from 16 to 16384")
         self._check_environment()
+        self._check_post()
         for f in fields(self):
             if f.type == "bool" and not isinstance(getattr(self, f.name), bool):
                 raise UsageError(f"{f.name} {getattr(self, f.name)!r}: expected True or False")
+
+    def _check_post(self) -> None:
+        for row in POST_OPTIONS:
+            value = getattr(self, row.field)
+            try:
+                number = float(value)
+            except (TypeError, ValueError):
+                raise UsageError(f"{row.field} {value!r}: expected a number") from None
+            if isinstance(value, bool) or not row.low <= number <= row.high:  # (NaN fails too)
+                raise UsageError(f"{row.field} {value!r}: expected a number from {row.low:g} "
+                                 f"to {row.high:g}")
+            object.__setattr__(self, row.field, number)
 
     def _check_environment(self) -> None:
         env = os.fspath(self.env) if isinstance(self.env, os.PathLike) else self.env

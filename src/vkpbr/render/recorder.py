@@ -80,12 +80,14 @@ class FrameRecorder:
                  prepass_for: Callable[[FrameTarget], bool],
                  shadows: ShadowMaps | None = None,
                  compute_scene: Callable[[], ComputeScene] | None = None,
-                 copies: OpaqueCopies | None = None) -> None:
+                 copies: OpaqueCopies | None = None,
+                 post_kernels: Callable[[], Any] | None = None) -> None:
         self.device, self.gpu_scene, self.pipeline_layout = device, gpu_scene, layout
         self.shadows = shadows  # records its passes first; binds its set 3 in the main passes
         self.copies = copies  # the opaque scene's copies (transmission), drawn after the shadows
         self.ring, self.slots, self.prepass_for = ring, slots, prepass_for
         self.compute_scene = compute_scene  # the compute path's resources, made on first use
+        self.post_kernels = post_kernels  # the post steps' (render/post.py), made on first use
         self._recorded: dict[tuple, _Recorded] = {}
         self._generations: dict[int, int] = {}
         self._pipelines: dict[tuple, Pipeline] = {}
@@ -143,11 +145,12 @@ class FrameRecorder:
         return names
 
     def command_buffer(self, target: FrameTarget, frame: Frame, image: int, spec: FrameSpec,
-                       groups: dict[str, Callable[[FrameSteps], list[Step]]] | None = None
-                       ) -> Commands:
+                       groups: dict[str, Callable[[FrameSteps], list[Step]]] | None = None,
+                       drawn: FrameTarget | None = None) -> Commands:
         """The command buffer recorded for `spec` into `target`'s `image` by `frame`'s slot,
         recorded on first use (re-recorded when only the blended draws' order changed);
-        `groups`: the steps of groups the caller makes (the layered batch's). Sets
+        `groups`: the steps of groups the caller makes (the layered batch's); `drawn`: with
+        post steps, the HDR target the path draws into before the encode into `target`. Sets
         `frame.stamp_names` to the timed steps' names (FrameStats.pass_ms' keys)."""
         tid = id(target)
         if self._generations.get(tid, target.generation) != target.generation:
@@ -158,7 +161,8 @@ class FrameRecorder:
         if rec is None or rec.blend_order != spec.blend_order:
             if rec is not None:  # the camera moved enough to reorder blended draws
                 rec.cmd.free()
-            steps = FrameSteps(self, target, frame.index, image, spec, groups)
+            steps = FrameSteps(self, drawn or target, frame.index, image, spec, groups,
+                               output=target if drawn is not None else None)
             rec = self._record(frame, steps.steps(), steps.resources, target.extent, tid,
                                spec.blend_order)
             self._recorded[key] = rec

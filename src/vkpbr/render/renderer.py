@@ -57,6 +57,7 @@ from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.path_choice import RULE_CPU, RULE_GPU, PathChoice, frame_paths_mode, is_auto
 from vkpbr.render.path_choice import resolve as resolve_paths
 from vkpbr.render.paths import choose_path
+from vkpbr.render.post import PostKernels, check_post, enabled_post, encode_tonemap
 from vkpbr.render.recorder import STAMPS, FrameRecorder
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
 from vkpbr.render.steps import FrameSpec
@@ -163,13 +164,16 @@ class Renderer:
                 scene, self.gpu_scene.draws, Path(semantics) if isinstance(semantics, os.PathLike)
                 else semantics)
             self._compute_scene: ComputeScene | None = None
+            self._post_kernels: PostKernels | None = None
+            self._last_post_options: tuple[RenderOptions, RenderOptions] | None = None
             self._batch_path: BatchPath | None = None
             # Bound in every slot's set 2 before anything is recorded (render/transmission.py).
             self.opaque_copies = OpaqueCopies(self.device, self.gpu_scene,
                                               [s.set2 for s in self.slots], (*background, 1.0))
             self.recorder = FrameRecorder(self.device, self.gpu_scene, self.pipeline_layout,
                                           self.ring, self.slots, self.prepass_for, self.shadows,
-                                          self.compute_scene, self.opaque_copies)
+                                          self.compute_scene, self.opaque_copies,
+                                          self.post_kernels)
             self._shadow_plan: tuple[tuple, ShadowPlan] = ((), ShadowPlan())
             self._shadow_rows: dict[int, tuple[tuple, np.ndarray | None]] = {}
             self.bounds = Bounds.of(*scene.bounds())
@@ -212,6 +216,33 @@ class Renderer:
         render/batch_path.py; give it back with `drop_target`)."""
         return OffscreenTarget(self.device, size, "float" if linear else "srgb", self.msaa,
                                (*self.background, 1.0), compute=self.device.compute_path)
+
+    def post_target(self, target: FrameTarget, copy: tuple[str, ...]) -> OffscreenTarget:
+        """The HDR target frames of `target` with post steps draw into (render/post.py): the
+        float colour (and depth, ids, outputs) of its size, the renderer's own."""
+        key = (*target.extent, "post")
+        if key not in self._targets:
+            self._targets[key] = self.new_offscreen_target(target.extent, True)
+        hdr = self._targets[key]
+        if COPY_OUTPUTS in copy:
+            self._ensure_outputs(hdr)
+        return hdr
+
+    def post_kernels(self) -> PostKernels:
+        """The post steps' kernels and transient images (render/post.py), made on first use."""
+        if self._post_kernels is None:
+            self._post_kernels = PostKernels(self.device)
+        return self._post_kernels
+
+    def _shading_options(self, options: RenderOptions, post: bool) -> RenderOptions:
+        """The options the shading sees: with post steps, no tone map (the encode's; the
+        last such copy kept: a run of frames has one options object)."""
+        if not post or options.tonemap is None:
+            return options
+        last = self._last_post_options
+        if last is None or last[0] is not options:
+            last = self._last_post_options = (options, dataclasses.replace(options, tonemap=None))
+        return last[1]
 
     def drop_target(self, target: OffscreenTarget) -> None:
         """Destroy a target from `new_offscreen_target` and everything recorded or made for
@@ -528,20 +559,25 @@ class Renderer:
         if options.shadow_resolution != self.shadows.resolution:
             self.shadows.set_resolution(options.shadow_resolution)
         self._ensure_shadow_maps(plan)
-        write_frame_uniforms(slot, camera, lights, target.extent, options, linear, self.bounds,
-                             self.frame_lighting(options),
+        post = check_post(options, target, self.device.compute_path)
+        drawn = self.post_target(target, copy) if post else target  # (HDR with post steps)
+        write_frame_uniforms(slot, camera, lights, target.extent, self._shading_options(options, post),
+                             linear or post, self.bounds, self.frame_lighting(options),
                              self._write_shadows(slot, plan, lights, camera, target.extent))
         if overlay is not None:
             overlay.prepare(frame.index)
         redraw = self.shadows.stale(slot.index, plan, options.alpha_mask)
-        compute = self.uses_compute(target, options)
-        path = choose_path(compute, compute and self.uses_compute_raster(options, target),
+        compute = self.uses_compute(drawn, options)
+        path = choose_path(compute, compute and self.uses_compute_raster(options, drawn),
                            COPY_OUTPUTS in copy)
         spec = FrameSpec(path, options.tbn, options.alpha_mask, plan, redraw, copy,
                          transmission, self.shade_variant(options),
-                         self.blend_order(camera.eye), overlay, id(overlay))
+                         self.blend_order(camera.eye), overlay, id(overlay),
+                         post=enabled_post(options) if post else (),
+                         post_tonemap=encode_tonemap(options, linear) if post else 0)
         try:
-            cmd = self.recorder.command_buffer(target, frame, image, spec)
+            cmd = self.recorder.command_buffer(target, frame, image, spec,
+                                               drawn=drawn if post else None)
             c0 = clock()
             ok = target.submit(frame, cmd, image)
         except BaseException:
@@ -793,10 +829,14 @@ class Renderer:
         if out is not None:
             _check_out(out, (len(views), size[1], size[0], 4), np.float32 if linear else np.uint8,
                        device)
+        post = bool(enabled_post(opts))  # batches have no post stage yet: view by view
         if device == "cuda":
             if depth or outputs:
                 raise UsageError("device='cuda' returns the colour only: ask depth and dataset "
                                  "outputs with device='cpu'")
+            if post:
+                raise UsageError("device='cuda' batches have no post steps (--bloom) yet: "
+                                 "render them with device='cpu'")
             return self.batch_path.render_cuda(views, size, lights, opts, linear, batch)
         wanted = self._check_outputs(outputs, self.offscreen_target(size, linear)) if outputs else ()
         # The dataset outputs but colour come from their own pass (as `render` makes them).
@@ -808,15 +848,16 @@ class Renderer:
         # path (render/batch.py), bit for bit what `render` draws with pipeline="forward".
         explicit_compute = (opts.pipeline == L.PipelinePath.COMPUTE
                             and self.uses_compute(self.offscreen_target(size, linear), opts))
-        if self.takes_compute_batch(opts) and not extra:
+        if self.takes_compute_batch(opts) and not extra and not post:
             color, dist = self.batch_path.render_compute(views, size, lights, opts, linear,
                                                          depth, batch, out=out)
             if not wanted:
                 return (color, dist) if depth else color
             return {"color": color}
-        if not self.device.batch_views or self.msaa > 1 or explicit_compute:
-            # No layered rendering here, MSAA (the batch target is single-sample) or the
-            # compute path asked for: view by view, each exactly as `render` draws it.
+        if not self.device.batch_views or self.msaa > 1 or explicit_compute or post:
+            # No layered rendering here, MSAA (the batch target is single-sample), the
+            # compute path asked for or post steps (not yet in batches): view by view, each
+            # exactly as `render` draws it.
             frames = list(self.render_many((views.camera(i) for i in range(len(views))), lights,
                                            size, opts, linear, depth, outputs=wanted or None))
             return _stack_frames(frames, depth, wanted, out)
@@ -873,13 +914,17 @@ class Renderer:
         if why is not None:
             raise UsageError(f"dataset outputs are not available here: the compute path's "
                              f"visibility pass makes them and {why}")
+        self._ensure_outputs(target)
+        return wanted
+
+    def _ensure_outputs(self, target: OffscreenTarget) -> None:
+        """The dataset outputs' images of `target`, made on first use."""
         formats = {name: (fmt, nbytes) for name, (fmt, nbytes, _, _) in L.OUTPUT_IMAGES.items()}
         if target.ensure_outputs(formats) and self._compute_scene is not None:
             # The target's compute set bound stand-ins: rebuild it (and what recorded it).
             self.device.wait_idle()
             self.recorder.free()
             self._compute_scene.forget_target(target)
-        return wanted
 
     @property
     def max_id(self) -> int:
@@ -954,6 +999,8 @@ class Renderer:
             self.shadows.destroy()
         if getattr(self, "opaque_copies", None) is not None:
             self.opaque_copies.destroy()
+        if getattr(self, "_post_kernels", None) is not None:
+            self._post_kernels.destroy()
         for env in getattr(self, "_environments", {}).values():
             env.destroy()
         self._environments = {}

@@ -22,6 +22,7 @@ from vkpbr.render import layouts as L
 from vkpbr.render.compute_path import GENERAL_SHADING, ShadeVariant
 from vkpbr.render.passes import PASSES, PassContext, PassSpec, classify, record_pass
 from vkpbr.render.paths import COPY_PATHS, PATHS
+from vkpbr.render.post import PostContext, encode_step, post_steps
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.render.transmission import TRANSMISSIVE, copy_classes
 
@@ -60,6 +61,8 @@ class FrameSpec:
     external: Any = field(default=None, compare=False)
     external_id: int = 0
     batch: tuple = ()  # what a layered batch's own groups depend on (render/batch.py)
+    post: tuple[tuple[str, float], ...] = ()  # the post steps on (render/post.py enabled_post)
+    post_tonemap: int = 0  # the encode's tone map (TONEMAP_*) and target encoding
 
 
 class FrameSteps:
@@ -67,9 +70,13 @@ class FrameSteps:
 
     def __init__(self, recorder: Any, target: Any, frame_index: int, image: int,
                  spec: FrameSpec,
-                 groups: dict[str, Callable[[FrameSteps], list[Step]]] | None = None) -> None:
-        # `groups`: the steps of groups a caller makes (the layered batch's "cull", "chunks").
+                 groups: dict[str, Callable[[FrameSteps], list[Step]]] | None = None,
+                 output: Any = None) -> None:
+        # `groups`: the steps of groups a caller makes (the layered batch's "cull", "chunks");
+        # `output`: with post steps, the target the encode writes ("out." resources), while
+        # the path draws into `target`, the HDR one.
         self.groups = groups or {}
+        self.output = target if output is None else output
         self.r, self.target, self.frame_index, self.image, self.spec = (
             recorder, target, frame_index, image, spec)
         self.gs = recorder.gpu_scene
@@ -81,6 +88,9 @@ class FrameSteps:
                            else recorder.shadows.sets[frame_index])
         self.set0 = spec.set0 if spec.set0 is not None else self.slot.set0
         self.resources: dict[str, Any] = dict(target.resources(image, frame_index))
+        if self.output is not target:
+            self.resources.update({f"out.{k}": v for k, v in
+                                   self.output.resources(image, frame_index).items()})
         self._color_written = self._depth_written = False
         self._rendering: Rendering | None = None
 
@@ -244,7 +254,22 @@ class FrameSteps:
                                                            self.target.extent),
                      rendering=self._rendering_for(), timed=False)]
 
+    def _post(self) -> list[Step]:
+        """The post steps on "color" (HDR radiance), then the encode into "out.color"."""
+        if not self.spec.post:
+            return []
+        ctx = PostContext(self.r.post_kernels(), self.target.extent, self.resources,
+                          self.target.storage_view.handle)
+        registry = post_steps()
+        steps = [s for option, value in self.spec.post for s in registry[option]().steps(ctx, value)]
+        out = self.output
+        return [*steps, encode_step(ctx, out.storage_view.handle, self.spec.post_tonemap,
+                                    out.color_kind == "srgb")]
+
     def _finish(self) -> list[Step]:
+        if self.output is not self.target:  # depth and outputs from the frame's HDR target
+            return self.output.finish_steps(self.image, self.frame_index, self.spec.copy,
+                                            prefix="out.", sources=self.target)
         if self.spec.tiles is not None:
             return self.target.finish_steps(self.image, self.frame_index, self.spec.copy,
                                             self.spec.tiles, self.spec.external)
