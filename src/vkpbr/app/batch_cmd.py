@@ -97,8 +97,8 @@ def _semantics_arg(value: str) -> str:
 def render_on_ray(args: argparse.Namespace, options: Any) -> int:
     """`vkpbr render SCENE --cameras POSES --out DIR --ray [ADDRESS]`: the same files as
     without --ray, rendered by the actors of a one-entry job."""
-    from vkpbr.app.output import OUTPUT_SUFFIXES
     from vkpbr.distributed import Job, RenderSettings, SceneJob
+    from vkpbr.io import OUTPUT_SUFFIXES
     from vkpbr.scene.poses import load_poses
 
     if not args.cameras:

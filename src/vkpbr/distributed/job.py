@@ -100,7 +100,7 @@ class RenderSettings:
 def frame_files(settings: RenderSettings, frame: int) -> list[str]:
     """The files view `frame` writes into `settings.out`: the colour image first, then each
     dataset output beside it (the names `vkpbr render --cameras` gives)."""
-    from vkpbr.app.output import output_path
+    from vkpbr.io import output_path
 
     color = f"frame_{frame:05d}{settings.suffix}"
     return [color, *(output_path(Path(color), n).name for n in settings.outputs)]
@@ -204,7 +204,7 @@ def _size(value: object, where: str) -> tuple[int, int]:
 
 
 def _outputs(value: object, where: str) -> tuple[str, ...]:
-    from vkpbr.app.output import OUTPUT_KINDS
+    from vkpbr.io import OUTPUT_KINDS
 
     if isinstance(value, str):
         value = [v.strip() for v in value.split(",") if v.strip()]
