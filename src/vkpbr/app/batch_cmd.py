@@ -9,9 +9,9 @@ import logging
 from pathlib import Path
 from typing import Any
 
-from vkpbr.app.common import BATCH_VIEWS
 from vkpbr.app.log import say
 from vkpbr.app.parsing import EPILOG_FORMATTER
+from vkpbr.config import BATCH_VIEWS
 from vkpbr.errors import UsageError
 
 __all__ = ["add_parser", "run", "add_ray_arguments", "render_on_ray"]

@@ -10,16 +10,11 @@ import time
 from pathlib import Path
 from typing import Any
 
-from vkpbr.app.common import (
-    BATCH_VIEWS,
-    camera_from_args,
-    default_cache_dir,
-    lights_from_args,
-    load_scene_arg,
-)
+from vkpbr.app.common import camera_from_args, lights_from_args, load_scene_arg
 from vkpbr.app.log import is_quiet, say
 from vkpbr.app.options import add_options, render_options_from_args
 from vkpbr.app.parsing import EPILOG_FORMATTER, _as_type, size_arg
+from vkpbr.config import BATCH_VIEWS, default_cache_dir
 from vkpbr.errors import UsageError
 from vkpbr.io import (
     OUTPUT_SUFFIXES,

@@ -51,7 +51,7 @@ def render_views(renderer: Any, cameras: list[Any], lights: Any,
 
 def load_renderer(settings: RenderSettings, device: str | int | None = None) -> Any:
     """A Renderer for `settings.scene`, loaded as `vkpbr render [--cache]` loads it."""
-    from vkpbr.app.common import default_cache_dir
+    from vkpbr.config import default_cache_dir
     from vkpbr.render.renderer import Renderer
 
     scene = None

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from vkpbr.app.common import BATCH_VIEWS
+from vkpbr.config import BATCH_VIEWS
 from vkpbr.errors import UsageError
 
 __all__ = ["Job", "SceneJob", "RenderSettings", "WorkItem", "load_job", "job_from_doc",
