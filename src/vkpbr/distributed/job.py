@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import json
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -36,7 +35,8 @@ from pathlib import Path
 from typing import Any
 
 from vkpbr.config import BATCH_VIEWS
-from vkpbr.errors import UsageError
+from vkpbr.errors import JsonError, UsageError
+from vkpbr.json_input import read_json
 
 __all__ = ["Job", "SceneJob", "RenderSettings", "WorkItem", "load_job", "job_from_doc",
            "frame_files", "DEFAULT_VIEWS_PER_ITEM", "DEFAULT_RETRIES"]
@@ -343,14 +343,9 @@ def load_job(path: str | os.PathLike[str]) -> Job:
     """Read and check a job file; relative paths in it are relative to its folder."""
     p = Path(path)
     try:
-        data = p.read_bytes()
+        doc = read_json(p)
     except OSError as exc:
         raise UsageError(f"{p}: cannot read the job file: {exc.strerror or exc}") from None
-    try:
-        doc = json.loads(data)
-    except RecursionError:
-        raise UsageError(f"{p}: not valid JSON (nested too deeply)") from None
-    except ValueError as exc:
-        problem = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise UsageError(f"{p}: not valid JSON ({problem})") from None
+    except JsonError as exc:
+        raise UsageError(f"{p}: not valid JSON ({exc.problem})") from None
     return job_from_doc(doc, str(p), p.parent)
