@@ -4,8 +4,9 @@
 # bake/ (bake -> scene only), and the library beside the applications (distributed/,
 # display.py) does not import app/ (what both need lives in vkpbr.io and vkpbr.config). Every
 # import counts: module level, inside functions, and under `if TYPE_CHECKING:` (a cycle that
-# only type checkers follow is still a knot to untie). Imports by name at run time
-# (`importlib.import_module("vkpbr....")`) are invisible to ast, so src/ may not contain them.
+# only type checkers follow is still a knot to untie). An import by a name in a string
+# (`importlib.import_module("vkpbr....")`) is invisible to ast, so src/ may not spell one out;
+# vkpbr/__init__.py's table of public names loaded on first use is the one computed import.
 
 from __future__ import annotations
 

@@ -2,8 +2,10 @@
 many views go into one GPU submission. No GPU and nothing of app/ here, so vkpbr.distributed
 and the commands read the same values.
 
-    VKPBR_CACHE_DIR   the cache folder (`default_cache_dir`): baked scenes (`--cache`), the
-                      split-sum BRDF table, the measured frame paths (frame-paths.json)
+    VKPBR_CACHE_DIR   the folder `default_cache_dir` gives: the CLI and Ray's actors keep
+                      baked scenes (`--cache`), the split-sum BRDF table and the measured
+                      frame paths (frame-paths.json) there. A `Renderer` of your own uses
+                      the `cache_dir` it is given (None: nothing on disk).
     XDG_CACHE_HOME    its parent when VKPBR_CACHE_DIR is not set (the XDG base directories)
 """
 

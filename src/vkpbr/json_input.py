@@ -1,6 +1,6 @@
-"""The one reader of JSON inputs: every JSON file or chunk vkpbr reads (glTF, poses, lights,
-semantic mappings, job files, manifests, viewer scripts, baked scenes' tables, the cache's
-frame-paths.json) is decoded here, under one set of limits, so that a hostile or broken file
+"""The one reader of JSON inputs: every JSON file or chunk vkpbr reads (glTF and GLB, poses,
+lights, semantic mappings, job files and their manifests, viewer scripts, a baked file's scene
+JSON, the cache's frame-paths.json, `vkpbr bench --peers-json` rows) is decoded here, under one set of limits, so that a hostile or broken file
 is one error line naming it (JsonError, which each reader words as its own error), not a
 traceback or a decode that exhausts the stack or the memory.
 
@@ -11,13 +11,13 @@ The limits (`JSON_LIMITS`), and why:
   its buffers embedded as base64 is the largest kind, and one over the limit can be written
   as .glb (binary buffers outside the JSON). Decoded, JSON grows into Python objects: 4-8x
   its size for numbers, about 25x for a file of empty arrays, so 128 MiB bounds a decode
-  near the 4 GiB the texture limits allow a scene (scene/limits.py). A regular file over
-  the limit is refused before it is read.
+  near the 4 GiB the texture limits allow a scene (scene/limits.py). `read_json` refuses
+  a regular file over the limit before reading it.
 - nesting: 64 levels of arrays and objects. The deepest real files need about 10 (a glTF
   primitive's extension attributes: 8; a transforms.json frame's matrix rows: 5), plus
-  whatever a glTF's `extras` hold. Python's decoder recurses once per level, and so do
-  checks after it (pygltflib's from_dict among them); 64 keeps all of them far from the
-  interpreter's recursion limit (1,000).
+  whatever a glTF's `extras` hold. Python's decoder recurses once per level, and so can
+  the code that walks the decoded document; 64 keeps both far from the interpreter's
+  recursion limit (1,000).
 - integers: 20 digits (2**64 - 1 has 20; the inputs need less: ids are 32-bit, glTF byte
   lengths below 2**53). CPython's int() takes time quadratic in the digits (its own limit
   is 4,300 digits for that reason), and float() of an integer over 308 digits overflows in

@@ -322,7 +322,8 @@ class Scene:
 
         Raises
         ------
-        UsageError : not a trimesh Trimesh or Scene, or nothing with triangles in it.
+        UsageError : trimesh not installed (with the install line), not a trimesh Trimesh or
+            Scene, a node with a non-finite transform, or nothing with triangles in it.
         """
         # trimesh_parts reads the trimesh object into plain arrays and imports no scene type,
         # so this import makes no cycle; the dataclasses are built here, where they live.
