@@ -135,4 +135,6 @@ def read_json(path: str | os.PathLike[str]) -> Any:
             raise JsonError(p, f"{st.st_size:,} bytes of JSON, more than the {limit:,} vkpbr "
                                "reads")
         data = f.read(limit + 1)
+    if len(data) > limit:  # a pipe or device: its full length is unknown, so say "more than"
+        raise JsonError(p, f"more than {limit:,} bytes of JSON, the most vkpbr reads")
     return decode_json(data, p)

@@ -130,6 +130,13 @@ def test_limits_are_inclusive() -> None:
         decode_json(b" " * (size - 1) + b"[]", "x")
 
 
+@pytest.mark.timeout(60)
+def test_a_stream_is_read_up_to_the_limit() -> None:
+    """/dev/zero never ends: read_json stops one byte past the limit and says so."""
+    with pytest.raises(JsonError, match=f"^/dev/zero: more than {JSON_LIMITS.max_bytes:,} bytes"):
+        read_json("/dev/zero")
+
+
 def test_read_json_names_the_file_and_leaves_os_errors(tmp_path: Path) -> None:
     with pytest.raises(FileNotFoundError):
         read_json(tmp_path / "missing.json")
