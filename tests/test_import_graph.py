@@ -1,8 +1,12 @@
 # The import graph of src/vkpbr, read with ast (nothing is imported): no cycles anywhere, and the
 # layers' one-way arrows (../shared/notes/style.md section 1): scene/, bake/ and reference/
-# import neither Vulkan nor vkpbr.gpu / vkpbr.render / vkpbr.app, and scene/ does not import
-# bake/ (bake -> scene only). Every import counts: module level, inside functions, and under
-# `if TYPE_CHECKING:` (a cycle that only type checkers follow is still a knot to untie).
+# import neither Vulkan nor vkpbr.gpu / vkpbr.render / vkpbr.app, scene/ does not import
+# bake/ (bake -> scene only), and the library beside the applications (distributed/,
+# display.py) does not import app/ (what both need lives in vkpbr.io and vkpbr.config). Every
+# import counts: module level, inside functions, and under `if TYPE_CHECKING:` (a cycle that
+# only type checkers follow is still a knot to untie). An import by a name in a string
+# (`importlib.import_module("vkpbr....")`) is invisible to ast, so src/ may not spell one out;
+# vkpbr/__init__.py's table of public names loaded on first use is the one computed import.
 
 from __future__ import annotations
 
@@ -20,6 +24,10 @@ KNOWN_APP_CYCLES: frozenset[frozenset[str]] = frozenset()  # none left: keep it 
 
 NO_GPU_LAYERS = ("vkpbr.scene", "vkpbr.bake", "vkpbr.reference")
 FORBIDDEN_IN_NO_GPU_LAYERS = ("vulkan", "glfw", "vkpbr.gpu", "vkpbr.render", "vkpbr.app")
+# Library code the applications use, not the other way round: none of it imports vkpbr.app.
+NOT_ABOVE_APP = ("vkpbr.distributed", "vkpbr.display")
+# Text no file under src/ may hold: an import by a name in a string hides an edge from ast.
+HIDDEN_IMPORTS = ('importlib.import_module("vkpbr.', "importlib.import_module('vkpbr.")
 
 
 def module_files() -> dict[str, Path]:
@@ -177,4 +185,40 @@ def test_scene_does_not_import_bake() -> None:
     .vkpbr one included) never needs the bake."""
     bad = [f"{name} imports {t}" for name, targets in graph().items()
            if name.startswith("vkpbr.scene") for t in targets if t.startswith("vkpbr.bake")]
+    assert bad == []
+
+
+def in_layer(name: str, layer: str) -> bool:
+    return name == layer or name.startswith(layer + ".")
+
+
+@pytest.mark.parametrize("layer", NOT_ABOVE_APP)
+def test_library_does_not_import_app(layer: str) -> None:
+    """distributed/ and vkpbr.display are library code: they take the writers from vkpbr.io
+    and the settings from vkpbr.config, never from the CLI's package."""
+    assert any(in_layer(name, layer) for name in MODULES)  # the layer exists (guards the test)
+    bad = [f"{name} imports {imported}" for name, path in MODULES.items() if in_layer(name, layer)
+           for imported in sorted(imported_names(name, path)) if in_layer(imported, "vkpbr.app")]
+    assert bad == []
+
+
+def hidden_imports(text: str) -> list[str]:
+    return [needle for needle in HIDDEN_IMPORTS if needle in text]
+
+
+def test_the_hidden_import_finder_finds_them() -> None:
+    assert hidden_imports('m = importlib.import_module("vkpbr.scene.trimesh_import")')
+    assert hidden_imports("importlib.import_module('vkpbr.app.cli')")
+    assert not hidden_imports("importlib.import_module(module)  # a name from a table")
+
+
+def test_no_imports_by_name_in_src() -> None:
+    """No file under src/ imports a vkpbr module by a string: ast cannot see that edge, so a
+    cycle through it would pass test_no_import_cycles (scene/types.py once reached
+    trimesh_import this way)."""
+    bad = []
+    for path in sorted(SRC.rglob("*")):
+        if path.is_file() and "__pycache__" not in path.parts:
+            text = path.read_bytes().decode("utf-8", errors="replace")
+            bad += [f"{path.relative_to(SRC)}: {needle}" for needle in hidden_imports(text)]
     assert bad == []

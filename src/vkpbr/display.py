@@ -12,7 +12,7 @@ Inside a loop, `IPython.display.display(vkpbr.show(image))`. What is shown:
 - integer (H, W) ids: 0 (background) black, every other id a fixed colour (a hash), so
   neighbouring ids differ.
 
-The PNG comes from `vkpbr.app.output.encode_png`, the encoder every written PNG goes through.
+The PNG comes from `vkpbr.io.encode_png`, the encoder every written PNG goes through.
 """
 
 from __future__ import annotations
@@ -91,7 +91,7 @@ class Shown:
     @property
     def png(self) -> bytes:
         if self._png is None:
-            from vkpbr.app.output import encode_png
+            from vkpbr.io import encode_png
 
             self._png = encode_png(to_display(self.array))
         return self._png

@@ -10,6 +10,7 @@ __all__ = [
     "UsageError",
     "SceneError",
     "BakeFormatError",
+    "JsonError",
     "VulkanError",
     "NoVulkanError",
     "OutOfDeviceMemoryError",
@@ -73,3 +74,14 @@ class ValidationError(VkpbrError):
 
 class ShaderError(VkpbrError):
     """A SPIR-V module is missing or stale, or glslc failed."""
+
+
+class JsonError(VkpbrError, ValueError):
+    """A JSON input that is malformed or over vkpbr's limits (vkpbr/json_input.py). The
+    message names the file (or what the JSON came from) and the problem; readers of one kind
+    of file usually re-raise it as their own error (UsageError, SceneError) with `problem`."""
+
+    def __init__(self, where: object, problem: str) -> None:
+        self.where = str(where)
+        self.problem = problem
+        super().__init__(f"{self.where}: {problem}")

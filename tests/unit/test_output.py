@@ -1,4 +1,4 @@
-# Output files (vkpbr.app.output): every format read back by an independent reader (Pillow for
+# Output files (vkpbr.io): every format read back by an independent reader (Pillow for
 # PNG, OpenEXR's own File for EXR, np.load for NPY) and compared exactly; the PNG headers
 # checked byte by byte; refused writes leave nothing behind (no file, no temporary file, an
 # existing file untouched).
@@ -14,16 +14,17 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from vkpbr.app.output import (
+from vkpbr.errors import UsageError
+from vkpbr.io import (
     MAX_PNG_ID,
     check_id_count,
     check_output_path,
     encode_png,
     output_kind,
+    write_image,
     write_image_atomic,
     write_output,
 )
-from vkpbr.errors import UsageError
 
 
 def png_header(data: bytes) -> tuple[int, int, int, int]:
@@ -179,3 +180,41 @@ def test_os_errors_name_the_file(tmp_path: Path) -> None:
     with pytest.raises(OSError) as info:
         write_output(path, np.zeros((2, 2, 4), np.uint8))
     assert info.value.filename == str(path)
+
+
+def test_write_image_takes_kinds_and_output_names(tmp_path: Path, rng: np.random.Generator) -> None:
+    """vkpbr.io.write_image: the public writer, by kind of file or by the renderer's output
+    name; str paths as well as Paths."""
+    ids = rng.integers(0, MAX_PNG_ID + 1, (3, 4), dtype=np.uint32)
+    write_image(str(tmp_path / "i.png"), ids, kind="instance")
+    write_image(tmp_path / "j.png", ids, kind="ids")
+    assert (tmp_path / "i.png").read_bytes() == (tmp_path / "j.png").read_bytes()
+    np.testing.assert_array_equal(np.asarray(Image.open(tmp_path / "i.png")), ids)
+    rgba = rng.integers(0, 256, (3, 4, 4), dtype=np.uint8)
+    write_image(tmp_path / "c.png", rgba)
+    np.testing.assert_array_equal(np.asarray(Image.open(tmp_path / "c.png")), rgba)
+    depth = rng.random((3, 4), dtype=np.float32)
+    write_image(tmp_path / "d.npy", depth, kind="depth")
+    np.testing.assert_array_equal(np.load(tmp_path / "d.npy"), depth)
+
+
+@pytest.mark.parametrize("kind", ["normals", "", None, ["color"]])
+def test_write_image_refuses_unknown_kinds_in_one_line(tmp_path: Path, kind: object) -> None:
+    with pytest.raises(UsageError, match=r"write_image: unknown kind .* \(color, ids, data or an "
+                                         r"output name: color, depth") as info:
+        write_image(tmp_path / "a.png", np.zeros((2, 2, 4), np.uint8), kind=kind)  # type: ignore[arg-type]
+    assert "\n" not in str(info.value) and only_file(tmp_path) == []
+
+
+def test_write_image_messages_name_the_function_and_file(tmp_path: Path) -> None:
+    with pytest.raises(UsageError, match=r"^write_image: .*a.png: float32 data needs a .npy"):
+        write_image(tmp_path / "a.png", np.zeros((2, 2, 4), np.float32))
+
+
+def test_the_cli_module_keeps_the_names() -> None:
+    """vkpbr.app.output (the name earlier READMEs gave) is vkpbr.io's writers, not a copy."""
+    import vkpbr.app.output as old
+    import vkpbr.io as new
+
+    assert set(old.__all__) == set(new.__all__)
+    assert all(getattr(old, n) is getattr(new, n) for n in old.__all__)

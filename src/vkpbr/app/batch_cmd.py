@@ -9,9 +9,9 @@ import logging
 from pathlib import Path
 from typing import Any
 
-from vkpbr.app.common import BATCH_VIEWS
 from vkpbr.app.log import say
 from vkpbr.app.parsing import EPILOG_FORMATTER
+from vkpbr.config import BATCH_VIEWS
 from vkpbr.errors import UsageError
 
 __all__ = ["add_parser", "run", "add_ray_arguments", "render_on_ray"]
@@ -97,8 +97,8 @@ def _semantics_arg(value: str) -> str:
 def render_on_ray(args: argparse.Namespace, options: Any) -> int:
     """`vkpbr render SCENE --cameras POSES --out DIR --ray [ADDRESS]`: the same files as
     without --ray, rendered by the actors of a one-entry job."""
-    from vkpbr.app.output import OUTPUT_SUFFIXES
     from vkpbr.distributed import Job, RenderSettings, SceneJob
+    from vkpbr.io import OUTPUT_SUFFIXES
     from vkpbr.scene.poses import load_poses
 
     if not args.cameras:

@@ -40,7 +40,8 @@ from typing import Any
 
 from vkpbr.app.options import add_scene_loading_options
 from vkpbr.app.parsing import EPILOG_FORMATTER
-from vkpbr.errors import UsageError
+from vkpbr.errors import JsonError, UsageError
+from vkpbr.json_input import decode_json
 
 log = logging.getLogger(__name__)
 
@@ -291,12 +292,20 @@ def read_peer_rows(args: argparse.Namespace) -> list[dict]:
         path = Path(name)
         if not path.exists():
             raise UsageError(f"--peers-json {path}: no such file")
-        for i, line in enumerate(path.read_text().splitlines(), 1):
+        try:
+            lines = path.read_bytes().splitlines()
+        except OSError as e:
+            raise UsageError(f"--peers-json {path}: {e.strerror or e}") from None
+        for i, line in enumerate(lines, 1):
             if line.strip():
                 try:
-                    rows.append({**json.loads(line), "source": path.name})
-                except json.JSONDecodeError as e:
-                    raise UsageError(f"--peers-json {path}:{i}: not JSON ({e.msg})") from None
+                    row = decode_json(line, f"{path}:{i}")
+                except JsonError as e:
+                    raise UsageError(f"--peers-json {path}:{i}: not JSON ({e.problem})") from None
+                if not isinstance(row, dict):
+                    raise UsageError(f"--peers-json {path}:{i}: expected a JSON object, got "
+                                     f"{type(row).__name__}")
+                rows.append({**row, "source": path.name})
     return rows
 
 
@@ -323,7 +332,7 @@ def run_batch_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
                        "--json", str(out), *extra]
                 _run_peer(cmd, f"{label} {key} {size}", args.peer_timeout)
         if out.exists():
-            peers = [json.loads(line) for line in out.read_text().splitlines() if line.strip()]
+            peers = [decode_json(line, out) for line in out.read_bytes().splitlines() if line.strip()]
     peers += given
     print("\n| peer | scene | size | pixels rendered per view | peer views/s (into NumPy) "
           "| vkpbr views/s | vkpbr / peer | render only: peer | vkpbr (GPU) | vkpbr / peer |")
@@ -375,7 +384,7 @@ def run_peers(args: argparse.Namespace, rows: list[dict]) -> list[dict]:
                     cmd += ["--scene", str(args.sponza)]
                 _run_peer(cmd, f"{peer} {size}", args.peer_timeout)
         if out.exists():
-            peers += [json.loads(line) for line in out.read_text().splitlines() if line.strip()]
+            peers += [decode_json(line, out) for line in out.read_bytes().splitlines() if line.strip()]
     peers += [p for p in read_peer_rows(args) if p.get("scenario") != "batch" and "fps_readback" in p]
     print("\n| peer | size | frames/s (render + readback) | vkpbr frames/s | vkpbr / peer "
           "| render only: peer | vkpbr |")

@@ -9,31 +9,21 @@ import argparse
 import dataclasses
 import inspect
 import logging
-import os
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from vkpbr.config import BATCH_VIEWS, default_cache_dir
 from vkpbr.errors import UsageError
 
 if TYPE_CHECKING:
     from vkpbr.scene.types import Camera, Light, Scene
 
-__all__ = ["default_cache_dir", "load_scene_arg", "camera_from_args", "lights_from_args"]
-
-# Views per GPU submission of `vkpbr render --cameras` (its --batch) and of Ray's actors
-# (Renderer.render_many(batch=...): render/batch.py).
-BATCH_VIEWS = 64
+# BATCH_VIEWS and default_cache_dir are vkpbr.config's, named here too for older imports.
+__all__ = ["BATCH_VIEWS", "default_cache_dir", "load_scene_arg", "camera_from_args",
+           "lights_from_args"]
 
 log = logging.getLogger(__name__)
-
-
-def default_cache_dir() -> Path:
-    """$VKPBR_CACHE_DIR, else $XDG_CACHE_HOME/vkpbr, else ~/.cache/vkpbr."""
-    env = os.environ.get("VKPBR_CACHE_DIR")
-    if env:
-        return Path(env)
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "vkpbr"
 
 
 def load_scene_arg(args: argparse.Namespace) -> Scene | None:

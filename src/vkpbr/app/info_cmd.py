@@ -41,7 +41,7 @@ def _frame_paths(device: dict) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from vkpbr.app.common import default_cache_dir
+    from vkpbr.config import default_cache_dir
     from vkpbr.render.info import device_report
     from vkpbr.render.path_choice import recorded
 

@@ -10,16 +10,13 @@ import time
 from pathlib import Path
 from typing import Any
 
-from vkpbr.app.common import (
-    BATCH_VIEWS,
-    camera_from_args,
-    default_cache_dir,
-    lights_from_args,
-    load_scene_arg,
-)
+from vkpbr.app.common import camera_from_args, lights_from_args, load_scene_arg
 from vkpbr.app.log import is_quiet, say
 from vkpbr.app.options import add_options, render_options_from_args
-from vkpbr.app.output import (
+from vkpbr.app.parsing import EPILOG_FORMATTER, _as_type, size_arg
+from vkpbr.config import BATCH_VIEWS, default_cache_dir
+from vkpbr.errors import UsageError
+from vkpbr.io import (
     OUTPUT_SUFFIXES,
     check_output_path,
     check_outputs,
@@ -28,8 +25,6 @@ from vkpbr.app.output import (
     write_image_atomic,
     write_outputs,
 )
-from vkpbr.app.parsing import EPILOG_FORMATTER, _as_type, size_arg
-from vkpbr.errors import UsageError
 
 __all__ = ["add_parser", "run"]
 
@@ -96,7 +91,7 @@ def add_parser(sub: Any) -> None:
 
 def _output_names(text: str) -> tuple[str, ...]:
     """`--outputs depth,instance`: the names, each checked (argparse's one-line error)."""
-    from vkpbr.app.output import OUTPUT_KINDS
+    from vkpbr.io import OUTPUT_KINDS
 
     names = tuple(n.strip() for n in text.split(",") if n.strip())
     for name in names:
@@ -105,7 +100,7 @@ def _output_names(text: str) -> tuple[str, ...]:
     return tuple(n for n in names if n != "color")
 
 
-# The outputs beside a frame: shared with vkpbr.distributed (app/output.py).
+# The outputs beside a frame: shared with vkpbr.distributed (vkpbr/io.py).
 _output_path, _check_outputs, _write_outputs = output_path, check_outputs, write_outputs
 
 

@@ -9,12 +9,12 @@ event times are wall-clock seconds since the window opened. Each event has a tim
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from vkpbr.errors import UsageError
+from vkpbr.errors import JsonError, UsageError
+from vkpbr.json_input import read_json
 
 __all__ = ["Event", "Script", "load_script", "parse_script", "EVENT_FIELDS"]
 
@@ -94,11 +94,11 @@ def parse_script(obj: Any, source: str = "script") -> Script:
 def load_script(path: str | Path) -> Script:
     path = Path(path)
     try:
-        obj = json.loads(path.read_text())
+        obj = read_json(path)
     except OSError as exc:
-        raise UsageError(f"--script {path}: {exc.strerror}") from None
-    except json.JSONDecodeError as exc:
-        raise UsageError(f"--script {path}: not valid JSON ({exc})") from None
+        raise UsageError(f"--script {path}: {exc.strerror or exc}") from None
+    except JsonError as exc:
+        raise UsageError(f"--script {path}: not valid JSON ({exc.problem})") from None
     return parse_script(obj, f"--script {path}")
 
 

@@ -14,9 +14,9 @@ from typing import Any
 from vkpbr.app.common import camera_from_args, lights_from_args, load_scene_arg
 from vkpbr.app.log import say
 from vkpbr.app.options import add_options, render_options_from_args
-from vkpbr.app.output import check_writable
 from vkpbr.app.parsing import EPILOG_FORMATTER, size_arg
 from vkpbr.errors import UsageError
+from vkpbr.io import check_writable
 
 __all__ = ["add_parser", "run"]
 

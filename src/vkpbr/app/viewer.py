@@ -28,10 +28,10 @@ from vkpbr.app.controls import FlyCamera
 from vkpbr.app.hud import FontAtlas, TextBlock, layout_blocks
 from vkpbr.app.log import say
 from vkpbr.app.options import option_flags
-from vkpbr.app.output import write_image_atomic
 from vkpbr.app.script import Script
 from vkpbr.app.viewer_input import InputHandlers
 from vkpbr.errors import VkpbrError
+from vkpbr.io import write_image_atomic
 from vkpbr.render.camera import format_camera
 from vkpbr.render.layouts import PipelinePath
 from vkpbr.render.options import RenderOptions

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import json
 import logging
 import os
 import time
@@ -32,6 +31,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..errors import BakeFormatError, SceneError
+from ..json_input import read_json
 from ..scene.baked_file import (
     HAS_COLORS,
     HAS_TEXCOORDS,
@@ -300,14 +300,14 @@ def _dependencies(path: Path, allow_outside_paths: bool = False) -> list[Path]:
     deps: list[Path] = []
     try:
         if path.suffix.lower() == ".gltf":
-            doc = json.loads(path.read_text(encoding="utf-8"))
+            doc = read_json(path)
             uris = [x.get("uri") for x in doc.get("buffers", []) + doc.get("images", [])]
             deps = [path.parent / u for u in uris if u and not u.startswith("data:")]
         elif path.suffix.lower() == ".obj":
             with open(path, encoding="utf-8", errors="replace") as f:
                 deps = [path.parent / line.split(None, 1)[1].strip()
                         for line in f if line.startswith("mtllib ")]
-    except (OSError, ValueError, AttributeError):
+    except (OSError, ValueError, AttributeError, TypeError):  # JsonError is a ValueError
         return []  # the loader reports a broken source; the key then covers the main file
     policy = ResourcePolicy(path, allow_outside=allow_outside_paths)
     out = set()

@@ -51,7 +51,7 @@ def render_views(renderer: Any, cameras: list[Any], lights: Any,
 
 def load_renderer(settings: RenderSettings, device: str | int | None = None) -> Any:
     """A Renderer for `settings.scene`, loaded as `vkpbr render [--cache]` loads it."""
-    from vkpbr.app.common import default_cache_dir
+    from vkpbr.config import default_cache_dir
     from vkpbr.render.renderer import Renderer
 
     scene = None
@@ -123,7 +123,7 @@ class RendererActor:
             return {"ok": False, "error": _one_line(exc), "retry": True, "pid": os.getpid()}
 
     def _render(self, item: WorkItem, t0: float) -> dict[str, object]:
-        from vkpbr.app.output import check_id_count, output_kind, output_path, write_output
+        from vkpbr.io import check_id_count, output_kind, output_path, write_output
 
         settings = item.settings
         renderer = self._renderer_for(settings)

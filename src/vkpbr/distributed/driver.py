@@ -119,7 +119,7 @@ def check_job(job: Job) -> list[Manifest]:
     """Everything that can fail before an actor starts: each out folder is writable, each
     output format can be written (OpenEXR for .exr), and each manifest is this job's.
     Returns the manifests, one per entry."""
-    from vkpbr.app.output import check_output_path, output_kind
+    from vkpbr.io import check_output_path, output_kind
 
     manifests = []
     for scene in job.scenes:

@@ -28,15 +28,15 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import json
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from vkpbr.app.common import BATCH_VIEWS
-from vkpbr.errors import UsageError
+from vkpbr.config import BATCH_VIEWS
+from vkpbr.errors import JsonError, UsageError
+from vkpbr.json_input import read_json
 
 __all__ = ["Job", "SceneJob", "RenderSettings", "WorkItem", "load_job", "job_from_doc",
            "frame_files", "DEFAULT_VIEWS_PER_ITEM", "DEFAULT_RETRIES"]
@@ -100,7 +100,7 @@ class RenderSettings:
 def frame_files(settings: RenderSettings, frame: int) -> list[str]:
     """The files view `frame` writes into `settings.out`: the colour image first, then each
     dataset output beside it (the names `vkpbr render --cameras` gives)."""
-    from vkpbr.app.output import output_path
+    from vkpbr.io import output_path
 
     color = f"frame_{frame:05d}{settings.suffix}"
     return [color, *(output_path(Path(color), n).name for n in settings.outputs)]
@@ -204,7 +204,7 @@ def _size(value: object, where: str) -> tuple[int, int]:
 
 
 def _outputs(value: object, where: str) -> tuple[str, ...]:
-    from vkpbr.app.output import OUTPUT_KINDS
+    from vkpbr.io import OUTPUT_KINDS
 
     if isinstance(value, str):
         value = [v.strip() for v in value.split(",") if v.strip()]
@@ -343,14 +343,9 @@ def load_job(path: str | os.PathLike[str]) -> Job:
     """Read and check a job file; relative paths in it are relative to its folder."""
     p = Path(path)
     try:
-        data = p.read_bytes()
+        doc = read_json(p)
     except OSError as exc:
         raise UsageError(f"{p}: cannot read the job file: {exc.strerror or exc}") from None
-    try:
-        doc = json.loads(data)
-    except RecursionError:
-        raise UsageError(f"{p}: not valid JSON (nested too deeply)") from None
-    except ValueError as exc:
-        problem = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise UsageError(f"{p}: not valid JSON ({problem})") from None
+    except JsonError as exc:
+        raise UsageError(f"{p}: not valid JSON ({exc.problem})") from None
     return job_from_doc(doc, str(p), p.parent)

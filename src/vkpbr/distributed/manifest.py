@@ -26,7 +26,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from vkpbr.errors import UsageError
+from vkpbr.errors import JsonError, UsageError
+from vkpbr.json_input import decode_json
 
 __all__ = ["MANIFEST_NAME", "Manifest", "camera_from_record", "camera_record"]
 
@@ -74,8 +75,8 @@ class Manifest:
         complete = lines[:-1]  # the part after the last newline is a line cut short
         for i, line in enumerate(complete):
             try:
-                rec = json.loads(line)
-            except ValueError:
+                rec = decode_json(line, path)
+            except JsonError:
                 raise UsageError(f"{where}: {path}: line {i + 1} is not JSON; the manifest is "
                                  "damaged (delete it to render everything again)") from None
             if i == 0:

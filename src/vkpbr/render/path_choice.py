@@ -26,7 +26,8 @@ from pathlib import Path
 from typing import Any
 
 from vkpbr.atomic import atomic_writer
-from vkpbr.errors import UsageError
+from vkpbr.errors import JsonError, UsageError
+from vkpbr.json_input import read_json
 from vkpbr.render import layouts as L
 
 # The renderer is passed in, not imported (it imports this module): `Renderer` below is any
@@ -145,10 +146,10 @@ def _valid(record: Any) -> dict | None:
 
 def _read(path: Path) -> dict[str, dict]:
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = read_json(path)
     except FileNotFoundError:
         return {}
-    except (OSError, ValueError) as exc:
+    except (OSError, JsonError) as exc:
         log.warning("%s: unreadable (%s); ignored (the next auto frame measures again)", path, exc)
         return {}
     return data if isinstance(data, dict) else {}

@@ -30,7 +30,8 @@ from typing import Any
 import numpy as np
 
 from vkpbr.atomic import atomic_writer
-from vkpbr.errors import BakeFormatError
+from vkpbr.errors import BakeFormatError, JsonError
+from vkpbr.json_input import decode_json
 from vkpbr.scene.mips import is_mip_chain
 from vkpbr.scene.resources import ResourcePolicy, policy_image
 from vkpbr.scene.types import (
@@ -402,11 +403,11 @@ def read_baked(path: str | os.PathLike[str], *, mmap: bool = False) -> BakedScen
             buf = memoryview(bytearray(f.read()))  # writable views for the caller
     sections = _parse_sections(buf, path)
     try:
-        doc = json.loads(bytes(sections["scene"]).decode("utf-8"))
+        doc = decode_json(bytes(sections["scene"]), path)
     except KeyError:
         raise BakeFormatError(path, "missing section 'scene'") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise BakeFormatError(path, f"scene section is not valid JSON: {exc}") from None
+    except JsonError as exc:
+        raise BakeFormatError(path, f"scene section is not valid JSON: {exc.problem}") from None
     try:
         streams = {name: _array(sections, name, dt, c, path)
                    for name, (dt, c, req) in STREAMS.items() if req or name in sections}

@@ -1,6 +1,7 @@
-# Shared, vectorised geometry helpers for the scene loaders: flat normals (unwelding), strip and
-# fan triangulation, clean-up of non-finite vertices, dtype normalisation and an automatic camera
-# that frames a scene. NumPy only; no Python loop runs per vertex or per index.
+# Shared, vectorised geometry helpers for the scene loaders: flat normals (unwelding; the
+# arithmetic is normals.py's), strip and fan triangulation, clean-up of non-finite vertices,
+# dtype normalisation and an automatic camera that frames a scene. NumPy only; no Python loop
+# runs per vertex or per index.
 #
 # References: glTF 2.0 spec section 3.7.2.1 (primitive modes, strip/fan vertex order) and
 # "Meshes" (flat normals when NORMAL is absent).
@@ -13,6 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from vkpbr.scene.normals import flat_normals, unweld_flat
 from vkpbr.scene.types import Camera, Mesh, Scene
 
 __all__ = [
@@ -30,35 +32,6 @@ __all__ = [
 _VERTEX_ATTRS = ("positions", "normals", "texcoords", "texcoords1", "tangents", "colors")
 
 
-def _safe_normalize(v: np.ndarray, fallback: tuple[float, float, float]) -> np.ndarray:
-    """Normalise rows of `v` (N, 3); rows shorter than 1e-20 become `fallback` (no NaN)."""
-    length = np.linalg.norm(v, axis=1, keepdims=True)
-    good = length[:, 0] > 1e-20
-    out = np.empty_like(v)
-    out[good] = v[good] / length[good]
-    out[~good] = fallback
-    return out
-
-
-def flat_normals(positions: np.ndarray, indices: np.ndarray) -> np.ndarray:
-    """Face normals of a triangle list, one per corner.
-
-    Parameters
-    ----------
-    positions : (N, 3) float32
-    indices : (M,) uint32, M % 3 == 0
-
-    Returns
-    -------
-    (M, 3) float32 unit normals, counter-clockwise winding (glTF front faces); degenerate
-    triangles get +Z rather than NaN so that shading stays finite.
-    """
-    tri = positions[indices.reshape(-1, 3)].astype(np.float64)  # (T, 3 corners, 3)
-    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    n = _safe_normalize(n, (0.0, 0.0, 1.0)).astype(np.float32)
-    return np.repeat(n, 3, axis=0)
-
-
 def ensure_normals(mesh: Mesh) -> Mesh:
     """Return `mesh` unchanged if it has normals, else an unwelded copy with flat normals.
 
@@ -67,14 +40,10 @@ def ensure_normals(mesh: Mesh) -> Mesh:
     """
     if mesh.normals is not None:
         return mesh
-    idx = mesh.indices.astype(np.intp)
-    gathered = {
-        name: np.ascontiguousarray(getattr(mesh, name)[idx])
-        for name in _VERTEX_ATTRS
-        if getattr(mesh, name) is not None
-    }
-    gathered["normals"] = flat_normals(mesh.positions, mesh.indices)
-    return replace(mesh, indices=np.arange(len(idx), dtype=np.uint32), **gathered)
+    attributes = {name: getattr(mesh, name) for name in _VERTEX_ATTRS
+                  if getattr(mesh, name) is not None}
+    gathered, indices = unweld_flat(attributes, mesh.indices)
+    return replace(mesh, indices=indices, **gathered)
 
 
 def drop_nonfinite(mesh: Mesh, source: object = "") -> Mesh:

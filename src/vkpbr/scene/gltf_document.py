@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import base64
 import binascii
-import json
 import struct
 import warnings
 from pathlib import Path
@@ -22,7 +21,8 @@ from urllib.parse import unquote
 import numpy as np
 import pygltflib
 
-from vkpbr.errors import SceneError
+from vkpbr.errors import JsonError, SceneError
+from vkpbr.json_input import decode_json
 from vkpbr.scene.gltf_codecs import decode_meshopt, missing_codec
 from vkpbr.scene.resources import ResourcePolicy, read_error, read_resource
 
@@ -172,9 +172,9 @@ class GltfDocument:
             text, bin_chunk = _parse_glb(path, raw)
         self.bin_chunk = bin_chunk
         try:
-            doc = json.loads(text.decode("utf-8-sig"))
-        except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
-            raise SceneError(path, f"malformed JSON: {exc}") from exc
+            doc = decode_json(text, path)
+        except JsonError as exc:
+            raise SceneError(path, f"malformed JSON: {exc.problem}") from None
         if not isinstance(doc, dict):
             raise SceneError(path, "top-level JSON value is not an object")
         version = str(get(get(doc, "asset", {}), "version", "2.0"))

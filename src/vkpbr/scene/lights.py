@@ -25,7 +25,6 @@ names: "type" ("point", "spot", "directional"), "color", "intensity", "range",
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Sequence
@@ -34,7 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from vkpbr.errors import UsageError
+from vkpbr.errors import JsonError, UsageError
+from vkpbr.json_input import read_json
 from vkpbr.scene.types import Light
 
 __all__ = ["parse_light_spec", "light_spec", "load_lights_file", "course_point_light", "normalized"]
@@ -157,11 +157,11 @@ def load_lights_file(path: str | os.PathLike[str]) -> list[Light]:
     """The lights of a lights JSON file (module docstring); UsageError naming the file."""
     p = Path(path)
     try:
-        doc = json.loads(p.read_text(encoding="utf-8"))
+        doc = read_json(p)
     except OSError as exc:
         raise UsageError(f"{p}: cannot read the lights file: {exc.strerror or exc}") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise UsageError(f"{p}: not a JSON lights file: {exc}") from None
+    except JsonError as exc:
+        raise UsageError(f"{p}: not a JSON lights file: {exc.problem}") from None
     items = doc.get("lights") if isinstance(doc, dict) else doc
     if not isinstance(items, list):
         raise UsageError(f"{p}: expected a list of lights (or {{\"lights\": [...]}})")

@@ -18,7 +18,6 @@ the entry and the problem; no other exception escapes.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Mapping
@@ -26,7 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from vkpbr.errors import UsageError
+from vkpbr.errors import JsonError, UsageError
+from vkpbr.json_input import read_json
 from vkpbr.scene._checks import context, real, rigid_pose, shown, size_arg
 from vkpbr.scene.camera import Pose, as_pose, opencv_from_corner
 
@@ -54,16 +54,11 @@ def load_poses(path: str | os.PathLike[str]) -> list[Pose]:
         raise UsageError(f"poses file: expected a path, got {type(path).__name__}")
     p = Path(path)
     try:
-        data = p.read_bytes()
+        doc = read_json(p)
     except OSError as exc:
         raise UsageError(f"{p}: cannot read the poses file: {exc.strerror or exc}") from None
-    try:
-        doc = json.loads(data)
-    except RecursionError:
-        raise UsageError(f"{p}: not valid JSON (nested too deeply)") from None
-    except ValueError as exc:  # JSONDecodeError, UnicodeDecodeError, a 5000-digit integer
-        problem = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise UsageError(f"{p}: not valid JSON ({problem})") from None
+    except JsonError as exc:  # malformed, not text, too big, too deep, a 5000-digit integer
+        raise UsageError(f"{p}: not valid JSON ({exc.problem})") from None
     return parse_poses(doc, p)
 
 

@@ -18,14 +18,14 @@ NumPy only, no Vulkan.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from vkpbr.errors import UsageError
+from vkpbr.errors import JsonError, UsageError
+from vkpbr.json_input import read_json
 
 __all__ = ["SEMANTIC_SOURCES", "semantic_ids", "load_semantic_mapping", "checked_mapping"]
 
@@ -37,11 +37,11 @@ def load_semantic_mapping(path: str | Path) -> dict[str, Label]:
     """A JSON object {name: id or label} from `path` (one-line UsageError naming it)."""
     p = Path(path)
     try:
-        doc = json.loads(p.read_text(encoding="utf-8"))
+        doc = read_json(p)
     except OSError as e:
         raise UsageError(f"semantic mapping {p}: {e.strerror or e}") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as e:
-        raise UsageError(f"semantic mapping {p}: not JSON ({e})") from None
+    except JsonError as e:
+        raise UsageError(f"semantic mapping {p}: not JSON ({e.problem})") from None
     return checked_mapping(doc, str(p))
 
 

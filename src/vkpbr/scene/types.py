@@ -13,7 +13,6 @@ a `Scene`; the renderer consumes one. Conventions:
 
 from __future__ import annotations
 
-import importlib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -303,10 +302,40 @@ class Scene:
 
     @classmethod
     def from_trimesh(cls, scene_or_mesh: object, name: str | None = None) -> Scene:
-        """A Scene from a `trimesh.Trimesh` or `trimesh.Scene`: materials (PBR and simple),
-        UVs, vertex colours, node transforms. Needs trimesh (`pip install 'vkpbr[trimesh]'`).
-        See `vkpbr.scene.trimesh_import.from_trimesh`."""
-        # Imported by name at call time: trimesh_import builds Scenes from this module's
-        # types, and a plain import here would tie the two modules into an import cycle.
-        module = importlib.import_module("vkpbr.scene.trimesh_import")
-        return module.from_trimesh(scene_or_mesh, name=name)
+        """A Scene from a `trimesh.Trimesh` or `trimesh.Scene`. Needs trimesh (`pip install
+        'vkpbr[trimesh]'`).
+
+        Parameters
+        ----------
+        scene_or_mesh : a Trimesh (one Mesh, one identity Node) or a trimesh Scene (one Mesh
+            per triangle geometry, one Node per graph node that instances one, with the
+            node's world transform). Point clouds and paths are skipped with a warning.
+        name : the Scene's name (default: the trimesh object's, else "trimesh").
+
+        Returns
+        -------
+        Scene whose meshes have float32 positions (N, 3), normals (N, 3) (the file's, else
+        flat), texcoords (N, 2) with glTF's top-left origin, colors (N, 4) linear, uint32
+        indices; materials from PBRMaterial (factors, textures, alpha mode, double-sided) or
+        SimpleMaterial (through trimesh's to_pbr); images decoded to (H, W, 4) uint8; the
+        scene's camera, if it has one.
+
+        Raises
+        ------
+        UsageError : trimesh not installed (with the install line), not a trimesh Trimesh or
+            Scene, a node with a non-finite transform, or nothing with triangles in it.
+        """
+        # trimesh_parts reads the trimesh object into plain arrays and imports no scene type,
+        # so this import makes no cycle; the dataclasses are built here, where they live.
+        from vkpbr.scene.trimesh_parts import read_trimesh
+
+        parts = read_trimesh(scene_or_mesh, name)
+        materials = [Material(**m.fields, **{slot: TextureRef(image=image, channel=channel)
+                                             for slot, (image, channel) in m.textures.items()})
+                     for m in parts.materials]
+        return cls(name=parts.name,
+                   meshes=[Mesh(**fields) for fields in parts.meshes],
+                   materials=materials,
+                   images=[Image(name=n, pixels=pixels) for n, pixels in parts.images],
+                   nodes=[Node(mesh=mesh, matrix=matrix, name=n) for mesh, matrix, n in parts.nodes],
+                   cameras=parts.cameras)
