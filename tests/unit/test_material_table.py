@@ -131,6 +131,10 @@ def test_texture_slots_agree_with_the_rows() -> None:
         if p.in_texture_info:  # normalTexture.scale: the normal slot is that textureInfo
             assert slots[p.texture].gltf == p.gltf.rsplit(".", 1)[0], p.name
     assert tuple(s.name for s in TEXTURES if s.bound) == L.MATERIAL_TEXTURES
+    for s in TEXTURES:  # one name: the textureInfo's key in snake case, less "_texture"
+        key = (s.gltf or "").split(".")[-1]
+        if key not in ("", "metallicRoughnessTexture"):  # the packed texture serves two slots
+            assert s.name == _snake(key.removesuffix("Texture")), s.name
 
 
 def test_material_fields_take_the_table_defaults() -> None:

@@ -35,6 +35,7 @@ _ALPHA = {"OPAQUE": "opaque", "MASK": "mask", "BLEND": "blend"}
 # The material extensions read here (for the loader's list of supported extensions).
 MATERIAL_EXTENSIONS = EXTENSIONS
 
+
 def load_images(ld: GltfDocument) -> list[Image]:
     """glTF images -> Image list (same indices); encoded bytes or paths, never decoded here."""
     images = []
