@@ -76,7 +76,7 @@ def test_ior_zero_is_the_schema_special_value(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("name", "body", "words"), [
-    ("KHR_materials_ior", {"ior": 0.5}, "ior 0.5 is below 1"),
+    ("KHR_materials_ior", {"ior": 0.5}, "material 0: ior 0.5 outside 1..1e+06"),
     ("KHR_materials_clearcoat", {"clearcoatFactor": 1.5}, "clearcoatFactor 1.5 outside 0..1"),
     ("KHR_materials_sheen", {"sheenColorFactor": [2, 0, 0]}, "sheenColorFactor"),
     ("KHR_materials_transmission", {"transmissionFactor": -0.1}, "transmissionFactor"),

@@ -108,9 +108,7 @@ def generated_glsl() -> str:
     out.append(f"const float MIN_SHEEN_ROUGHNESS = {L.MIN_SHEEN_ROUGHNESS!r};")
     out.append(f"const float SHEEN_FIT_MIN_N_DOT_V = {L.SHEEN_FIT_MIN_N_DOT_V!r};")
     out.append(f"const float OPAQUE_COPY_MAX_SIZE = {float(L.OPAQUE_COPY_MAX_SIZE)!r};")
-    from vkpbr.render.gpu_scene import default_layers  # (imports the GPU layer: not at load)
-
-    for field, value in default_layers().items():  # shade.glsl LAYER_FACTOR
+    for field, value in L.LAYER_DEFAULTS.items():  # shade.glsl LAYER_FACTOR (material_table.py)
         v = [repr(float(x)) for x in value]
         out.append(f"const float MATERIAL_DEFAULT_{field} = {v[0]};" if len(v) == 1 else
                    f"const vec{len(v)} MATERIAL_DEFAULT_{field} = vec{len(v)}({', '.join(v)});")

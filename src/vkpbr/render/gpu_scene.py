@@ -37,6 +37,7 @@ from vkpbr.gpu.descriptors import DescriptorPool, DescriptorSetLayout, Descripto
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, TextureUploader
 from vkpbr.render import layouts as L
+from vkpbr.scene.material_table import PARAMS, TEXTURES
 from vkpbr.scene.types import (
     SRGB_TEXTURE_SLOTS,
     Material,
@@ -50,16 +51,15 @@ from vkpbr.scene.types import (
 __all__ = ["GpuScene", "Draw", "prepare_mesh", "uv_transform_rows"]
 
 _SWIZZLE = {0: "rrrr", 1: "gggg", 2: "bbbb", 3: "aaaa"}
-_NORMAL_SLOTS = ("normal", "clearcoat_normal")  # tangent-space normal maps (RGB, linear)
+_NORMAL_SLOTS = frozenset(s.name for s in TEXTURES if s.kind == "normal")  # tangent space, RGB
 STREAMS = ("positions", "texcoords", "normals", "tangents")  # built at load
 LAZY_STREAMS = ("qtangents", "packed_frames")  # built by ensure_streams on first use
 
 
 def default_layers() -> dict[str, np.ndarray]:
     """The MATERIAL block's layer factors (layouts.LAYER_FIELDS) of a material with none of
-    the KHR_materials_* extensions: generated.glsl's MATERIAL_DEFAULT_* (shade.glsl)."""
-    block = GpuScene._material_block(Material(), dict.fromkeys(L.MATERIAL_TEXTURES, False))
-    return {f: np.atleast_1d(block[f]).astype(np.float32) for f in L.LAYER_FIELDS}
+    the KHR_materials_* extensions, float32: generated.glsl's MATERIAL_DEFAULT_* (shade.glsl)."""
+    return dict(L.LAYER_DEFAULTS)
 
 
 def has_default_layers(block: np.ndarray) -> bool:
@@ -458,28 +458,11 @@ class GpuScene:
     @staticmethod
     def _material_block(mat: Material, has: dict[str, bool]) -> np.ndarray:
         b = L.MATERIAL.zeros()
-        b["base_color_factor"] = mat.base_color_factor
-        b["emissive_factor"] = mat.emissive_factor
-        b["metallic_factor"] = mat.metallic_factor
-        b["roughness_factor"] = mat.roughness_factor
-        b["normal_scale"] = mat.normal_scale
-        b["occlusion_strength"] = mat.occlusion_strength
-        b["alpha_cutoff"] = mat.alpha_cutoff
+        for p in PARAMS:  # scene/material_table.py: the Material field is the block member
+            b[p.name] = getattr(mat, p.name)
         for slot in L.MATERIAL_TEXTURES:
             rows = uv_transform_rows(getattr(mat, f"{slot}_texture"))
             b[f"{slot}_uv_row0"], b[f"{slot}_uv_row1"] = rows
-        b["ior"] = mat.ior
-        b["specular_factor"] = mat.specular_factor
-        b["specular_color_factor"] = mat.specular_color_factor
-        b["clearcoat_factor"] = mat.clearcoat_factor
-        b["clearcoat_roughness"] = mat.clearcoat_roughness_factor
-        b["sheen_color_factor"] = mat.sheen_color_factor
-        b["sheen_roughness"] = mat.sheen_roughness_factor
-        b["transmission_factor"] = mat.transmission_factor
-        b["thickness"] = mat.thickness_factor
-        b["attenuation_color"] = mat.attenuation_color
-        b["attenuation_distance"] = mat.attenuation_distance
-        b["clearcoat_normal_scale"] = mat.clearcoat_normal_scale
         flags = 0
         if has["clearcoat_normal"]:
             flags |= L.MATERIAL_HAS_CLEARCOAT_NORMAL_MAP

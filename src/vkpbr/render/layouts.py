@@ -26,6 +26,7 @@ from functools import cached_property
 
 import numpy as np
 
+from vkpbr.scene.material_table import LAYER_PARAMS, PARAMS, TEXTURES
 from vkpbr.shading import (
     AMBIENT,
     MAX_LIGHTS,
@@ -211,13 +212,10 @@ SETTINGS_OCCLUSION = 2  # use occlusion maps
 SETTINGS_SRGB_TARGET = 4  # the colour target encodes sRGB in hardware
 
 # The material's textures, in binding order (set 1, bindings 0-14; the Material block is
-# binding 15): the core's six, then the KHR_materials_* layers' (scene.types.Material). 15
-# samplers of set 1 + 4 of set 2 + 2 of set 3 = 21 a stage (lavapipe allows 32, NVIDIA far
-# more; Vulkan's guaranteed minimum, 16, is below that).
-MATERIAL_TEXTURES = ("base_color", "metallic", "roughness", "normal", "occlusion", "emissive",
-                     "clearcoat", "clearcoat_roughness", "clearcoat_normal", "sheen_color",
-                     "sheen_roughness", "specular", "specular_color", "transmission",
-                     "thickness")
+# binding 15): the table's bound slots (scene/material_table.py TEXTURES), the core's six, then
+# the KHR_materials_* layers'. 15 samplers of set 1 + 4 of set 2 + 2 of set 3 = 21 a stage
+# (lavapipe allows 32, NVIDIA far more; Vulkan's guaranteed minimum, 16, is below that).
+MATERIAL_TEXTURES = tuple(slot.name for slot in TEXTURES if slot.bound)
 MATERIAL_BINDING = len(MATERIAL_TEXTURES)  # set 1's Material block
 
 
@@ -232,32 +230,31 @@ def _uv_fields() -> tuple[tuple[str, str], ...]:
     return tuple((f"{slot}_uv_row{r}", "vec4") for slot in MATERIAL_TEXTURES for r in (0, 1))
 
 
+def _parameter_fields() -> tuple[tuple[str, str], ...]:
+    """The material table's parameters as block members (the Material field's name and type),
+    ordered so that std140 wastes no bytes: vec4s, then each vec3 with a float in its 16
+    bytes' last 4 (the next free float of the table after it, else the first free one), then
+    the other floats."""
+    fields = [(p.name, p.glsl) for p in PARAMS]
+    free = [f for f in fields if f[1] == "float"]
+    out = [f for f in fields if f[1] == "vec4"]
+    for k, vec3 in enumerate(fields):
+        if vec3[1] != "vec3":
+            continue
+        after = [f for f in free if fields.index(f) > k]
+        pair = (after or free)[:1]
+        out += [vec3, *pair]
+        free = [f for f in free if f not in pair]
+    return tuple(out + free + [f for f in fields if f[1] not in ("vec4", "vec3", "float")])
+
+
 MATERIAL = Std140Block(
     "Material",
     "material",
     (
-        ("base_color_factor", "vec4"),
-        ("emissive_factor", "vec3"),
-        ("metallic_factor", "float"),
-        ("roughness_factor", "float"),
-        ("normal_scale", "float"),
-        ("occlusion_strength", "float"),
-        ("alpha_cutoff", "float"),
-        *_uv_fields(),  # 15 textures x 2 vec4 = 480 bytes
+        *_parameter_fields(),  # scene/material_table.py: one name from the file to the shader
         ("flags", "uint"),  # MATERIAL_* bits below
-        # The KHR_materials_* layers (scene.types.Material documents each); 624 bytes in all.
-        ("ior", "float"),
-        ("clearcoat_factor", "float"),
-        ("clearcoat_roughness", "float"),
-        ("specular_color_factor", "vec3"),
-        ("specular_factor", "float"),
-        ("sheen_color_factor", "vec3"),
-        ("sheen_roughness", "float"),
-        ("attenuation_color", "vec3"),
-        ("attenuation_distance", "float"),  # 0: infinite (no absorption)
-        ("transmission_factor", "float"),
-        ("thickness", "float"),  # thicknessFactor (the node's scale not applied); 0: thin
-        ("clearcoat_normal_scale", "float"),
+        *_uv_fields(),  # 2 vec4 a texture
     ),
 )
 MATERIAL_HAS_NORMAL_MAP = 1
@@ -273,12 +270,12 @@ MATERIAL_HAS_EMISSIVE_MAP = 128
 # glTF's packed metallic-roughness texture: the metallic binding's view holds metallic in R
 # and roughness in G (render/gpu_scene.py), so shade.glsl reads both with one sample.
 MATERIAL_SHARED_METALLIC_ROUGHNESS = 256
-LAYER_TEXTURES = ("clearcoat", "clearcoat_roughness", "sheen_color", "sheen_roughness",
-                  "specular", "specular_color", "transmission", "thickness")
-# The MATERIAL block's KHR_materials_* layer factors (shade.glsl material_layers).
-LAYER_FIELDS = ("ior", "specular_factor", "specular_color_factor", "clearcoat_factor",
-                "clearcoat_roughness", "sheen_color_factor", "sheen_roughness",
-                "transmission_factor", "thickness", "attenuation_color", "attenuation_distance")
+# The KHR_materials_* layers' factors (shade.glsl material_layers' LAYER_FACTOR), their
+# values in a material without the extensions (generated.glsl MATERIAL_DEFAULT_*), and their
+# textures (MATERIAL_HAS_LAYER_MAPS).
+LAYER_FIELDS = tuple(p.name for p in LAYER_PARAMS)
+LAYER_DEFAULTS = {p.name: np.atleast_1d(np.asarray(p.default, np.float32)) for p in LAYER_PARAMS}
+LAYER_TEXTURES = tuple(p.texture for p in LAYER_PARAMS if p.texture is not None)
 
 LIGHTING = Std140Block(
     "Lighting",

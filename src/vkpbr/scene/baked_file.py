@@ -32,6 +32,7 @@ import numpy as np
 from vkpbr.atomic import atomic_writer
 from vkpbr.errors import BakeFormatError, JsonError
 from vkpbr.json_input import decode_json
+from vkpbr.scene.material_table import PARAMS
 from vkpbr.scene.mips import is_mip_chain
 from vkpbr.scene.resources import ResourcePolicy, policy_image
 from vkpbr.scene.types import (
@@ -332,9 +333,7 @@ def _material(rec: dict) -> Material:
             tex["sampler"] = Sampler(**tex["sampler"])
             rec[key] = _build(TextureRef, tex, ("offset", "scale"))
     # Files baked before the KHR_materials_* fields existed lack them: the defaults apply.
-    return _build(Material, rec, ("base_color_factor", "emissive_factor",
-                                  "specular_color_factor", "sheen_color_factor",
-                                  "attenuation_color"))
+    return _build(Material, rec, tuple(p.name for p in PARAMS if p.size > 1))  # JSON lists
 
 
 def _validate_counts(baked: BakedScene, path: Path) -> None:

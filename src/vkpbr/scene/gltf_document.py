@@ -24,6 +24,7 @@ import pygltflib
 from vkpbr.errors import JsonError, SceneError
 from vkpbr.json_input import decode_json
 from vkpbr.scene.gltf_codecs import decode_meshopt, missing_codec
+from vkpbr.scene.material_table import EXTENSIONS as MATERIAL_EXTENSIONS
 from vkpbr.scene.resources import ResourcePolicy, read_error, read_resource
 
 __all__ = ["SUPPORTED_EXTENSIONS", "GltfDocument", "check_index", "ext", "floats", "get", "scalar",
@@ -47,11 +48,7 @@ SUPPORTED_EXTENSIONS = frozenset(
         "EXT_mesh_gpu_instancing",  # Node.instances (gltf_nodes)
     }
 ) | frozenset(
-    {  # the material layers (gltf_materials.MATERIAL_EXTENSIONS: a test keeps them equal)
-        "KHR_materials_unlit", "KHR_materials_variants", "KHR_materials_ior",
-        "KHR_materials_specular", "KHR_materials_clearcoat", "KHR_materials_sheen",
-        "KHR_materials_transmission", "KHR_materials_volume",
-    }
+    MATERIAL_EXTENSIONS  # the material layers (material_table.py)
 )
 _DTYPES = {5120: "<i1", 5121: "<u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126: "<f4"}
 _NCOMP = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}

@@ -5,7 +5,8 @@
 # primitives' before the meshes are built).
 # Images stay encoded (decoding is textures.py's job, in parallel); a missing image file is
 # not an error here (load_scene reports all of them in one line). Reference: glTF 2.0 spec
-# 3.8 (textures, images, samplers), 3.9 (materials).
+# 3.8 (textures, images, samplers), 3.9 (materials). Which property fills which Material field,
+# its default and its range: scene/material_table.py (a row per parameter and texture slot).
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ import warnings
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.gltf_document import GltfDocument, check_index, ext, floats, get, scalar
+from vkpbr.scene.material_table import EXTENSIONS, PARAMS, TEXTURES, MaterialParam
 from vkpbr.scene.resources import ResourceRefused
 from vkpbr.scene.types import Image, Material, Sampler, TextureRef
 
@@ -31,23 +33,7 @@ _MIN_FILTER = {
 }
 _ALPHA = {"OPAQUE": "opaque", "MASK": "mask", "BLEND": "blend"}
 # The material extensions read here (for the loader's list of supported extensions).
-MATERIAL_EXTENSIONS = (
-    "KHR_materials_emissive_strength", "KHR_materials_unlit", "KHR_materials_variants",
-    "KHR_materials_ior", "KHR_materials_specular", "KHR_materials_clearcoat",
-    "KHR_materials_sheen", "KHR_materials_transmission", "KHR_materials_volume",
-)
-# Each extension's textures: (extension, glTF key, Material slot, channel of a scalar map).
-_EXTENSION_TEXTURES = (
-    ("KHR_materials_clearcoat", "clearcoatTexture", "clearcoat", 0),
-    ("KHR_materials_clearcoat", "clearcoatRoughnessTexture", "clearcoat_roughness", 1),
-    ("KHR_materials_clearcoat", "clearcoatNormalTexture", "clearcoat_normal", 0),
-    ("KHR_materials_sheen", "sheenColorTexture", "sheen_color", 0),
-    ("KHR_materials_sheen", "sheenRoughnessTexture", "sheen_roughness", 3),
-    ("KHR_materials_specular", "specularTexture", "specular", 3),
-    ("KHR_materials_specular", "specularColorTexture", "specular_color", 0),
-    ("KHR_materials_transmission", "transmissionTexture", "transmission", 0),
-    ("KHR_materials_volume", "thicknessTexture", "thickness", 1),
-)
+MATERIAL_EXTENSIONS = EXTENSIONS
 
 
 def load_images(ld: GltfDocument) -> list[Image]:
@@ -131,107 +117,54 @@ def build_materials(ld: GltfDocument, n_images: int) -> list[Material]:
     for i, m in enumerate(ld.gltf.materials or []):
         if m is None:
             raise SceneError(p, f"material {i} is null")
-        pbr = get(m, "pbrMetallicRoughness", {})
-        emissive = floats(get(m, "emissiveFactor"), 3, (0.0, 0.0, 0.0), "emissiveFactor", p)
-        strength = scalar(get(ext(m, "KHR_materials_emissive_strength"),
-                               "emissiveStrength"), 1.0, "emissiveStrength", p)  # fmt: skip
-        mr = get(pbr, "metallicRoughnessTexture")
-        normal, occlusion = get(m, "normalTexture"), get(m, "occlusionTexture")
         alpha_mode = get(m, "alphaMode", "OPAQUE")
         if alpha_mode not in _ALPHA:
             raise SceneError(p, f"material {i}: unknown alphaMode {alpha_mode!r}")
         out.append(
             Material(
-                **_extension_factors(ld, i, m),
                 name=str(get(m, "name", f"material {i}")),
-                base_color_factor=floats(
-                    get(pbr, "baseColorFactor"), 4, (1.0,) * 4, "baseColorFactor", p
-                ),  # fmt: skip
-                metallic_factor=scalar(get(pbr, "metallicFactor"), 1.0, "metallicFactor", p),
-                roughness_factor=scalar(get(pbr, "roughnessFactor"), 1.0, "roughnessFactor", p),
-                emissive_factor=tuple(e * strength for e in emissive),
-                normal_scale=scalar(get(normal, "scale") if normal else None, 1.0, "scale", p),
-                occlusion_strength=scalar(
-                    get(occlusion, "strength") if occlusion else None, 1.0, "strength", p
-                ),  # fmt: skip
                 alpha_mode=_ALPHA[alpha_mode],
-                alpha_cutoff=scalar(get(m, "alphaCutoff"), 0.5, "alphaCutoff", p),
                 double_sided=bool(get(m, "doubleSided", False)),
-                base_color_texture=_texture_ref(ld, get(pbr, "baseColorTexture"), n_images),
-                # The packed texture: B = metalness, G = roughness (glTF spec 3.9.2).
-                metallic_texture=_texture_ref(ld, mr, n_images, channel=2),
-                roughness_texture=_texture_ref(ld, mr, n_images, channel=1),
-                normal_texture=_texture_ref(ld, normal, n_images),
-                occlusion_texture=_texture_ref(ld, occlusion, n_images),
-                emissive_texture=_texture_ref(ld, get(m, "emissiveTexture"), n_images),
+                unlit=isinstance(get(get(m, "extensions", {}), "KHR_materials_unlit"), dict),
+                **{prm.name: _parameter(ld, i, m, prm) for prm in PARAMS},
+                **{f"{slot.name}_texture": _texture_ref(ld, _find(m, slot.gltf), n_images,
+                                                        slot.channel)
+                   for slot in TEXTURES if slot.gltf is not None},
             )
         )
     return out
 
 
-def _unit(value: object, default: float, what: str, path: object, lo: float = 0.0,
-          hi: float = 1.0) -> float:
-    """A scalar factor that the extension's schema bounds to [lo, hi] (a SceneError outside)."""
-    x = scalar(value, default, what, path)
-    if not lo <= x <= hi:
-        raise SceneError(path, f"{what} {x!r} outside {lo:g}..{hi:g}")
-    return x
+def _find(m: object, path: str) -> object:
+    """The value at a material_table path in material `m`: a KHR_* part is the extension
+    object (`ext`: {} when absent or not an object), the others plain keys; None if absent."""
+    obj = m
+    for key in path.split("."):
+        obj = ext(obj, key) if key.startswith("KHR_") else get(obj, key)
+    return obj
 
 
-def _color(value: object, default: tuple, what: str, path: object,
-           hi: float = 1.0) -> tuple[float, float, float]:
-    rgb = floats(value, 3, default, what, path)
-    if not all(0.0 <= c <= hi for c in rgb):
-        raise SceneError(path, f"{what} {list(rgb)} outside 0..{hi:g}")
-    return rgb
-
-
-def _extension_factors(ld: GltfDocument, i: int, m: object) -> dict[str, object]:
-    """The Material fields of material `i`'s KHR_materials_* extensions (defaults when absent)."""
-    p = ld.path
-    where = f"material {i}"
-    n_images = len(ld.gltf.images or [])
-    textures = {f"{slot}_texture": _texture_ref(ld, get(ext(m, name), key), n_images, channel)
-                for name, key, slot, channel in _EXTENSION_TEXTURES}
-    coat_normal = get(ext(m, "KHR_materials_clearcoat"), "clearcoatNormalTexture")
-    spec = ext(m, "KHR_materials_specular")
-    coat = ext(m, "KHR_materials_clearcoat")
-    sheen = ext(m, "KHR_materials_sheen")
-    volume = ext(m, "KHR_materials_volume")
-    ior = scalar(get(ext(m, "KHR_materials_ior"), "ior"), 1.5, "ior", p)
-    if ior == 0.0:
-        ior = 1.0e6  # the schema's special value: a dielectric of maximal reflectance (F0 -> 1)
-    if not 1.0 <= ior <= 1.0e6:
-        raise SceneError(p, f"{where}: ior {ior!r} is below 1")
-    distance = scalar(get(volume, "attenuationDistance"), 0.0, "attenuationDistance", p)
-    if distance < 0.0 or (get(volume, "attenuationDistance") is not None and distance == 0.0):
-        raise SceneError(p, f"{where}: attenuationDistance {distance!r} must be > 0")
-    unlit = isinstance(get(get(m, "extensions", {}), "KHR_materials_unlit"), dict)
-    return {
-        **textures,
-        "clearcoat_normal_scale": scalar(get(coat_normal, "scale") if coat_normal else None,
-                                         1.0, "clearcoatNormalTexture scale", p),
-        "unlit": unlit,
-        "ior": ior,
-        "specular_factor": _unit(get(spec, "specularFactor"), 1.0, "specularFactor", p),
-        # specularColorFactor may exceed 1 (F0 is clamped to 1 where it is used).
-        "specular_color_factor": _color(get(spec, "specularColorFactor"), (1.0, 1.0, 1.0),
-                                        "specularColorFactor", p, hi=1e6),
-        "clearcoat_factor": _unit(get(coat, "clearcoatFactor"), 0.0, "clearcoatFactor", p),
-        "clearcoat_roughness_factor": _unit(get(coat, "clearcoatRoughnessFactor"), 0.0,
-                                            "clearcoatRoughnessFactor", p),
-        "sheen_color_factor": _color(get(sheen, "sheenColorFactor"), (0.0, 0.0, 0.0),
-                                     "sheenColorFactor", p),
-        "sheen_roughness_factor": _unit(get(sheen, "sheenRoughnessFactor"), 0.0,
-                                        "sheenRoughnessFactor", p),
-        "transmission_factor": _unit(get(ext(m, "KHR_materials_transmission"),
-                                         "transmissionFactor"), 0.0, "transmissionFactor", p),
-        "thickness_factor": _unit(get(volume, "thicknessFactor"), 0.0, "thicknessFactor", p,
-                                  hi=1e6),
-        "attenuation_distance": distance,
-        "attenuation_color": _color(get(volume, "attenuationColor"), (1.0, 1.0, 1.0),
-                                    "attenuationColor", p),
-    }
+def _parameter(ld: GltfDocument, i: int, m: object, prm: MaterialParam) -> object:
+    """Material `i`'s value of one table row: the file's (the schema's default when absent),
+    finite and within the row's range, or a one-line SceneError naming the property."""
+    what = f"material {i}: {prm.gltf_property}"
+    raw = _find(m, prm.gltf)
+    default = prm.default if isinstance(prm.default, tuple) else (prm.default,)
+    # A scalar is read as a list of one (gltf_document.scalar's way): one path for both.
+    listed = raw if raw is None or isinstance(prm.default, tuple) else [raw]
+    value = floats(listed, prm.size, default, what, ld.path)
+    if prm.gltf_zero is not None and value == (0.0,):
+        value = (prm.gltf_zero,)
+    if prm.gltf_above_lo and raw is not None and min(value) <= prm.lo:
+        raise SceneError(ld.path, f"{what} {value[0]!r} must be > {prm.lo:g}")
+    if prm.gltf_scale is not None:
+        scale = scalar(_find(m, prm.gltf_scale), 1.0, prm.gltf_scale.split(".")[-1], ld.path)
+        value = tuple(x * scale for x in value)
+    result = value[0] if prm.size == 1 else value
+    problem = prm.problem(result)
+    if problem is not None:
+        raise SceneError(ld.path, f"{what} {problem}")
+    return result
 
 
 def variant_names(ld: GltfDocument) -> list[str]:

@@ -21,6 +21,8 @@ from typing import Literal
 import numpy as np
 
 from vkpbr.scene.camera import Camera  # noqa: F401 - defined there, a scene type like the others
+from vkpbr.scene.material_table import DEFAULTS as _D
+from vkpbr.scene.material_table import TEXTURES
 
 __all__ = [
     "AlphaMode",
@@ -102,17 +104,20 @@ class TextureRef:
 @dataclass
 class Material:
     """Metallic-roughness material (glTF 2.0 core) with the KHR_materials_* layers. Factors
-    multiply the textures. KHR_materials_emissive_strength is folded into emissive_factor."""
+    multiply the textures. KHR_materials_emissive_strength is folded into emissive_factor.
+
+    The numeric parameters' defaults, ranges and glTF properties are rows of
+    vkpbr.scene.material_table (`_D[...]` below): a parameter is that row and its field here."""
 
     name: str = "default"
-    base_color_factor: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
-    metallic_factor: float = 1.0
-    roughness_factor: float = 1.0
-    emissive_factor: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    normal_scale: float = 1.0
-    occlusion_strength: float = 1.0
+    base_color_factor: tuple[float, float, float, float] = _D["base_color_factor"]
+    metallic_factor: float = _D["metallic_factor"]
+    roughness_factor: float = _D["roughness_factor"]
+    emissive_factor: tuple[float, float, float] = _D["emissive_factor"]
+    normal_scale: float = _D["normal_scale"]
+    occlusion_strength: float = _D["occlusion_strength"]
     alpha_mode: AlphaMode = "opaque"
-    alpha_cutoff: float = 0.5
+    alpha_cutoff: float = _D["alpha_cutoff"]
     double_sided: bool = False
     # False: invisible to shadow maps (a bulb around its own light; Blender's shadow mode none).
     casts_shadows: bool = True
@@ -128,18 +133,18 @@ class Material:
     # The KHR_materials_* extensions. Defaults are the core material's: every layer off, ior
     # 1.5 (F0 0.04), white specular. Their textures (below) multiply the factors.
     unlit: bool = False  # KHR_materials_unlit: the base colour is the radiance
-    ior: float = 1.5  # KHR_materials_ior: dielectric F0 = ((ior - 1) / (ior + 1))^2
-    specular_factor: float = 1.0  # KHR_materials_specular: weight of the dielectric lobe
-    specular_color_factor: tuple[float, float, float] = (1.0, 1.0, 1.0)  # scales F0
-    clearcoat_factor: float = 0.0  # KHR_materials_clearcoat
-    clearcoat_roughness_factor: float = 0.0
-    sheen_color_factor: tuple[float, float, float] = (0.0, 0.0, 0.0)  # KHR_materials_sheen
-    sheen_roughness_factor: float = 0.0
-    transmission_factor: float = 0.0  # KHR_materials_transmission
-    thickness_factor: float = 0.0  # KHR_materials_volume: 0 = thin-walled (no volume)
-    attenuation_distance: float = 0.0  # 0 = infinite (no absorption), as Light.range
-    attenuation_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    clearcoat_normal_scale: float = 1.0
+    ior: float = _D["ior"]  # KHR_materials_ior: dielectric F0 = ((ior - 1) / (ior + 1))^2
+    specular_factor: float = _D["specular_factor"]  # KHR_materials_specular: dielectric weight
+    specular_color_factor: tuple[float, float, float] = _D["specular_color_factor"]  # scales F0
+    clearcoat_factor: float = _D["clearcoat_factor"]  # KHR_materials_clearcoat
+    clearcoat_roughness_factor: float = _D["clearcoat_roughness_factor"]
+    sheen_color_factor: tuple[float, float, float] = _D["sheen_color_factor"]  # KHR_materials_sheen
+    sheen_roughness_factor: float = _D["sheen_roughness_factor"]
+    transmission_factor: float = _D["transmission_factor"]  # KHR_materials_transmission
+    thickness_factor: float = _D["thickness_factor"]  # KHR_materials_volume: 0 = thin-walled
+    attenuation_distance: float = _D["attenuation_distance"]  # 0 = infinite (no absorption)
+    attenuation_color: tuple[float, float, float] = _D["attenuation_color"]
+    clearcoat_normal_scale: float = _D["clearcoat_normal_scale"]
     # The extensions' textures; `channel` picks a scalar map's component, as for metallic.
     clearcoat_texture: TextureRef | None = None  # linear; glTF: R
     clearcoat_roughness_texture: TextureRef | None = None  # linear; glTF: G
@@ -154,10 +159,8 @@ class Material:
 
 # Every Material texture slot (the field is f"{slot}_texture"), and those holding colour
 # (sRGB-encoded: decoded by the GPU's sRGB formats); the others are linear data.
-TEXTURE_SLOTS = ("base_color", "metallic", "roughness", "normal", "occlusion", "emissive",
-                 "alpha", "clearcoat", "clearcoat_roughness", "clearcoat_normal", "sheen_color",
-                 "sheen_roughness", "specular", "specular_color", "transmission", "thickness")
-SRGB_TEXTURE_SLOTS = frozenset({"base_color", "emissive", "sheen_color", "specular_color"})
+TEXTURE_SLOTS = tuple(slot.name for slot in TEXTURES)
+SRGB_TEXTURE_SLOTS = frozenset(slot.name for slot in TEXTURES if slot.srgb)
 
 
 @dataclass

@@ -21,6 +21,7 @@ import numpy as np
 from vkpbr.errors import SceneError, UsageError
 from vkpbr.scene.camera import MAX_COORDINATE, Camera, validate_camera
 from vkpbr.scene.limits import limits
+from vkpbr.scene.material_table import PARAMS
 from vkpbr.scene.types import (
     TEXTURE_SLOTS,
     Image,
@@ -141,23 +142,12 @@ def _check_material(m: Material, where: str, n_images: int) -> None:
         _fail(where, "expected a Material", m)
     if not isinstance(m.name, str):
         _fail(f"{where}.name", "expected a string", m.name)
-    _vector(m.base_color_factor, 4, f"{where}.base_color_factor", -1e6, 1e6)
-    _vector(m.emissive_factor, 3, f"{where}.emissive_factor", 0.0, 1e9)
-    for name in ("metallic_factor", "roughness_factor", "normal_scale", "occlusion_strength",
-                 "alpha_cutoff"):
-        _number(getattr(m, name), f"{where}.{name}", -1e6, 1e6)
-    # The KHR_materials_* layers, within their extensions' ranges (gltf_materials.py).
+    for p in PARAMS:  # every numeric parameter within its row's range (material_table.py)
+        if p.size == 1:
+            _number(getattr(m, p.name), f"{where}.{p.name}", p.lo, p.hi)
+        else:
+            _vector(getattr(m, p.name), p.size, f"{where}.{p.name}", p.lo, p.hi)
     _choice(m.unlit, (True, False), f"{where}.unlit")
-    _number(m.ior, f"{where}.ior", 1.0, 1e6)
-    _vector(m.specular_color_factor, 3, f"{where}.specular_color_factor", 0.0, 1e6)
-    _vector(m.sheen_color_factor, 3, f"{where}.sheen_color_factor", 0.0, 1.0)
-    _vector(m.attenuation_color, 3, f"{where}.attenuation_color", 0.0, 1.0)
-    for name in ("specular_factor", "clearcoat_factor", "clearcoat_roughness_factor",
-                 "sheen_roughness_factor", "transmission_factor"):
-        _number(getattr(m, name), f"{where}.{name}", 0.0, 1.0)
-    _number(m.thickness_factor, f"{where}.thickness_factor", 0.0, 1e6)
-    _number(m.attenuation_distance, f"{where}.attenuation_distance", 0.0, 1e9)
-    _number(m.clearcoat_normal_scale, f"{where}.clearcoat_normal_scale", -1e6, 1e6)
     _choice(m.alpha_mode, ("opaque", "mask", "blend"), f"{where}.alpha_mode")
     _choice(m.double_sided, (True, False), f"{where}.double_sided")
     _choice(m.casts_shadows, (True, False), f"{where}.casts_shadows")

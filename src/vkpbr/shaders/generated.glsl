@@ -15,13 +15,13 @@ const float MATERIAL_DEFAULT_ior = 1.5;
 const float MATERIAL_DEFAULT_specular_factor = 1.0;
 const vec3 MATERIAL_DEFAULT_specular_color_factor = vec3(1.0, 1.0, 1.0);
 const float MATERIAL_DEFAULT_clearcoat_factor = 0.0;
-const float MATERIAL_DEFAULT_clearcoat_roughness = 0.0;
+const float MATERIAL_DEFAULT_clearcoat_roughness_factor = 0.0;
 const vec3 MATERIAL_DEFAULT_sheen_color_factor = vec3(0.0, 0.0, 0.0);
-const float MATERIAL_DEFAULT_sheen_roughness = 0.0;
+const float MATERIAL_DEFAULT_sheen_roughness_factor = 0.0;
 const float MATERIAL_DEFAULT_transmission_factor = 0.0;
-const float MATERIAL_DEFAULT_thickness = 0.0;
-const vec3 MATERIAL_DEFAULT_attenuation_color = vec3(1.0, 1.0, 1.0);
+const float MATERIAL_DEFAULT_thickness_factor = 0.0;
 const float MATERIAL_DEFAULT_attenuation_distance = 0.0;
+const vec3 MATERIAL_DEFAULT_attenuation_color = vec3(1.0, 1.0, 1.0);
 float sheen_albedo_fit(float x, float y) {
     return (1.09927 + y * (-0.4456763 + y * (-2.387564 + y * (6.252952 + y * (-3.489524))))) + x * ((12.52236 + y * (-70.76933 + y * (154.0586 + y * (-146.4862 + y * (50.86578))))) + x * ((-54.14374 + y * (288.7846 + y * (-608.6334 + y * (560.6368 + y * (-189.5136))))) + x * ((66.47369 + y * (-367.9202 + y * (784.6235 + y * (-728.6155 + y * (247.9961))))) + x * ((-25.8705 + y * (149.7473 + y * (-326.3621 + y * (307.6033 + y * (-105.8631)))))))));
 }
@@ -116,11 +116,24 @@ struct DrawRecord {
 struct MaterialRecord {
     vec4 base_color_factor;
     vec3 emissive_factor;
+    float normal_scale;
+    vec3 specular_color_factor;
+    float clearcoat_factor;
+    vec3 sheen_color_factor;
+    float sheen_roughness_factor;
+    vec3 attenuation_color;
+    float clearcoat_normal_scale;
     float metallic_factor;
     float roughness_factor;
-    float normal_scale;
     float occlusion_strength;
     float alpha_cutoff;
+    float ior;
+    float specular_factor;
+    float clearcoat_roughness_factor;
+    float transmission_factor;
+    float thickness_factor;
+    float attenuation_distance;
+    uint flags;
     vec4 base_color_uv_row0;
     vec4 base_color_uv_row1;
     vec4 metallic_uv_row0;
@@ -151,19 +164,6 @@ struct MaterialRecord {
     vec4 transmission_uv_row1;
     vec4 thickness_uv_row0;
     vec4 thickness_uv_row1;
-    uint flags;
-    float ior;
-    float clearcoat_factor;
-    float clearcoat_roughness;
-    vec3 specular_color_factor;
-    float specular_factor;
-    vec3 sheen_color_factor;
-    float sheen_roughness;
-    vec3 attenuation_color;
-    float attenuation_distance;
-    float transmission_factor;
-    float thickness;
-    float clearcoat_normal_scale;
 };
 #if !STRUCTS_ONLY
 #if !COMPUTE_SHADING
@@ -213,11 +213,24 @@ layout(set = 1, binding = 14) uniform sampler2D thickness_map;
 layout(set = 1, binding = 15, std140) uniform Material {
     vec4 base_color_factor;
     vec3 emissive_factor;
+    float normal_scale;
+    vec3 specular_color_factor;
+    float clearcoat_factor;
+    vec3 sheen_color_factor;
+    float sheen_roughness_factor;
+    vec3 attenuation_color;
+    float clearcoat_normal_scale;
     float metallic_factor;
     float roughness_factor;
-    float normal_scale;
     float occlusion_strength;
     float alpha_cutoff;
+    float ior;
+    float specular_factor;
+    float clearcoat_roughness_factor;
+    float transmission_factor;
+    float thickness_factor;
+    float attenuation_distance;
+    uint flags;
     vec4 base_color_uv_row0;
     vec4 base_color_uv_row1;
     vec4 metallic_uv_row0;
@@ -248,19 +261,6 @@ layout(set = 1, binding = 15, std140) uniform Material {
     vec4 transmission_uv_row1;
     vec4 thickness_uv_row0;
     vec4 thickness_uv_row1;
-    uint flags;
-    float ior;
-    float clearcoat_factor;
-    float clearcoat_roughness;
-    vec3 specular_color_factor;
-    float specular_factor;
-    vec3 sheen_color_factor;
-    float sheen_roughness;
-    vec3 attenuation_color;
-    float attenuation_distance;
-    float transmission_factor;
-    float thickness;
-    float clearcoat_normal_scale;
 } material;
 #if !COMPUTE_SHADING
 layout(set = 2, binding = 0, std140) uniform Lighting {

@@ -37,7 +37,7 @@ layout(constant_id = 0) const uint SHADE_LIGHTING_FLAGS = 0xFFFFFFFFu;  // ANDed
 layout(constant_id = 1) const int SHADE_BRDF = -1;  // >= 0: the frame's Settings.brdf
 layout(constant_id = 2) const bool SHADE_LAYERS = true;  // false: the default layers
 // A layer factor of the material, or (SHADE_LAYERS false) the default material's
-// (generated.glsl MATERIAL_DEFAULT_*: render/gpu_scene.py's block of Material()).
+// (generated.glsl MATERIAL_DEFAULT_*: the defaults of scene/material_table.py's rows).
 #define LAYER_FACTOR(field) (SHADE_LAYERS ? MAT.field : MATERIAL_DEFAULT_##field)
 
 // The surface point: world position, TEXCOORD_0 (xy) and _1 (zw), interpolated (unnormalised)
@@ -108,14 +108,14 @@ Layers material_layers(uint material_flags) {
     m.specular_color = LAYER_FACTOR(specular_color_factor) * LAYER_MAP(specular_color, rgb) + zero;
     m.specular = clamp((LAYER_FACTOR(specular_factor) + zero1) * LAYER_MAP(specular, r), 0.0, 1.0);
     m.clearcoat = clamp((LAYER_FACTOR(clearcoat_factor) + zero1) * LAYER_MAP(clearcoat, r), 0.0, 1.0);
-    m.clearcoat_roughness = clamp((LAYER_FACTOR(clearcoat_roughness) + zero1)
+    m.clearcoat_roughness = clamp((LAYER_FACTOR(clearcoat_roughness_factor) + zero1)
                                   * LAYER_MAP(clearcoat_roughness, r), MIN_ROUGHNESS, 1.0);
     m.sheen_color = LAYER_FACTOR(sheen_color_factor) * LAYER_MAP(sheen_color, rgb) + zero;
-    m.sheen_roughness = clamp((LAYER_FACTOR(sheen_roughness) + zero1) * LAYER_MAP(sheen_roughness, r),
+    m.sheen_roughness = clamp((LAYER_FACTOR(sheen_roughness_factor) + zero1) * LAYER_MAP(sheen_roughness, r),
                               MIN_SHEEN_ROUGHNESS, 1.0);
     m.transmission = clamp((LAYER_FACTOR(transmission_factor) + zero1) * LAYER_MAP(transmission, r),
                            0.0, 1.0);
-    m.thickness = max((LAYER_FACTOR(thickness) + zero1) * LAYER_MAP(thickness, r), 0.0) * s_model_scale;
+    m.thickness = max((LAYER_FACTOR(thickness_factor) + zero1) * LAYER_MAP(thickness, r), 0.0) * s_model_scale;
     m.attenuation_color = LAYER_FACTOR(attenuation_color) + zero;
     m.attenuation_distance = LAYER_FACTOR(attenuation_distance) + zero1;
     return m;
