@@ -1,4 +1,4 @@
-# The post stage (render/post.py) and its bloom (render/post_bloom.py), from the user's side:
+# The post stage (render/post.py) and its bloom (render/post.py), from the user's side:
 # `render(bloom=s)`, `vkpbr render --bloom S`. Checked against what a bloom must do whatever
 # its filter, not against a mirror of the kernel (one written beside it would share its
 # mistakes):
@@ -29,7 +29,7 @@ from hypothesis import strategies as st
 from vkpbr import Camera
 from vkpbr.errors import UsageError
 from vkpbr.render.options import RenderOptions
-from vkpbr.render.post_bloom import BLOOM_LEVELS, level_sizes
+from vkpbr.render.post import BLOOM_LEVELS, level_sizes
 from vkpbr.scene.camera_batch import CameraBatch
 
 SIZE = (64, 48)

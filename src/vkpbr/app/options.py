@@ -21,7 +21,7 @@ from vkpbr.app.parsing import light_arg, vec3_arg
 if TYPE_CHECKING:
     from vkpbr.render.options import RenderOptions
 
-__all__ = ["OptionSpec", "SHARED_OPTIONS", "SCENE_LOADING_FLAGS", "add_options",
+__all__ = ["OptionSpec", "SHARED_OPTIONS", "shared_options", "SCENE_LOADING_FLAGS", "add_options",
            "add_scene_loading_options", "render_options_from_args", "option_flags"]
 
 Kind = Literal["enum", "float", "int", "vec3", "off", "on", "onoff", "text", "dir?", "choice",
@@ -150,15 +150,18 @@ def _label(text: str) -> str:
     return text.strip().lower().replace("_", "-")
 
 
-def _with_post(table: tuple[OptionSpec, ...]) -> tuple[OptionSpec, ...]:
+def shared_options() -> tuple[OptionSpec, ...]:
     """SHARED_OPTIONS with the post steps' options (render/options.py POST_OPTIONS: each
-    declared once, with its step); another table as it is."""
-    if table is not SHARED_OPTIONS:
-        return table
+    declared once there, beside its field; imports the render layer's options)."""
     from vkpbr.render.options import POST_OPTIONS
 
-    return table + tuple(OptionSpec(row.flag, "float", row.help, field=row.field, group="post",
-                                    metavar="STRENGTH") for row in POST_OPTIONS)
+    return SHARED_OPTIONS + tuple(OptionSpec(row.flag, "float", row.help, field=row.field,
+                                             group="post", metavar="STRENGTH")
+                                  for row in POST_OPTIONS)
+
+
+def _with_post(table: tuple[OptionSpec, ...]) -> tuple[OptionSpec, ...]:
+    return shared_options() if table is SHARED_OPTIONS else table
 
 
 def add_options(parser: argparse.ArgumentParser, table: tuple[OptionSpec, ...] = SHARED_OPTIONS) -> None:

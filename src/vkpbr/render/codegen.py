@@ -28,7 +28,7 @@ class Variant:
     defines: tuple[tuple[str, int], ...] = ()
 
 
-# The post steps' kernels (render/post.py): one build of each shaders/post_*.comp, found by name.
+# The post steps' kernels (render/post.py, render/post_stage.py): one build of each shaders/post_*.comp, found by name.
 _POST_KERNELS = tuple(Variant(f"{p.stem}.comp.spv", p.name)
                       for p in sorted(SHADER_DIR.glob("post_*.comp")))
 

@@ -16,7 +16,7 @@ Groups:
   raster           the compute rasteriser's kernels instead (render/compute_path.py)
   classify, shading, outputs, background_compute   the compute path's kernels
   overlay          the viewer's HUD
-  post             the post steps on the frame's HDR radiance, then its encode (render/post.py;
+  post             the post steps on the frame's HDR radiance, then its encode (render/post_stage.py;
                    none in a frame without post steps, which encodes in its shading)
   cull, chunks     the layered batch's culling and its chunks of views (render/batch.py)
   finish           the target's copies out (or present)

@@ -57,7 +57,7 @@ from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.path_choice import RULE_CPU, RULE_GPU, PathChoice, frame_paths_mode, is_auto
 from vkpbr.render.path_choice import resolve as resolve_paths
 from vkpbr.render.paths import choose_path
-from vkpbr.render.post import PostKernels, check_post, enabled_post, encode_tonemap
+from vkpbr.render.post_stage import PostKernels, check_post, enabled_post, encode_tonemap
 from vkpbr.render.recorder import STAMPS, FrameRecorder
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
 from vkpbr.render.steps import FrameSpec
@@ -218,7 +218,7 @@ class Renderer:
                                (*self.background, 1.0), compute=self.device.compute_path)
 
     def post_target(self, target: FrameTarget, copy: tuple[str, ...]) -> OffscreenTarget:
-        """The HDR target frames of `target` with post steps draw into (render/post.py): the
+        """The HDR target frames of `target` with post steps draw into (render/post_stage.py): the
         float colour (and depth, ids, outputs) of its size, the renderer's own."""
         key = (*target.extent, "post")
         if key not in self._targets:
@@ -229,7 +229,7 @@ class Renderer:
         return hdr
 
     def post_kernels(self) -> PostKernels:
-        """The post steps' kernels and transient images (render/post.py), made on first use."""
+        """The post steps' kernels and transient images (render/post_stage.py), made on first use."""
         if self._post_kernels is None:
             self._post_kernels = PostKernels(self.device)
         return self._post_kernels

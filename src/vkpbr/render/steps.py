@@ -22,7 +22,8 @@ from vkpbr.render import layouts as L
 from vkpbr.render.compute_path import GENERAL_SHADING, ShadeVariant
 from vkpbr.render.passes import PASSES, PassContext, PassSpec, classify, record_pass
 from vkpbr.render.paths import COPY_PATHS, PATHS
-from vkpbr.render.post import PostContext, encode_step, post_steps
+from vkpbr.render.post import post_steps
+from vkpbr.render.post_stage import PostContext, encode_step
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.render.transmission import TRANSMISSIVE, copy_classes
 
@@ -61,7 +62,7 @@ class FrameSpec:
     external: Any = field(default=None, compare=False)
     external_id: int = 0
     batch: tuple = ()  # what a layered batch's own groups depend on (render/batch.py)
-    post: tuple[tuple[str, float], ...] = ()  # the post steps on (render/post.py enabled_post)
+    post: tuple[tuple[str, float], ...] = ()  # the post steps on (render/post_stage.py enabled_post)
     post_tonemap: int = 0  # the encode's tone map (TONEMAP_*) and target encoding
 
 

@@ -1,0 +1,195 @@
+"""The post stage: steps on a frame's HDR radiance after shading, and the encode ending them.
+
+A frame with a post step on (its RenderOptions field, render/options.py POST_OPTIONS, is not
+0) draws its path into the renderer's float target of its size: "color" holds the exposed
+radiance (the shading multiplies by the exposure and tone maps nothing, as for
+`linear=True`). The "post" group of the path (render/paths.py) then runs the enabled steps in
+POST_OPTIONS' order on "color", and `encode` (shaders/post_encode.comp) tone maps it and
+stores it into the output target ("out.color"), whose copies follow. A frame without post
+steps tone maps and encodes in its shading (frame_output.glsl): one full-size image fewer to
+write and read, as Filament skips its post-processing when none is enabled.
+
+A post step is a `PostStep` subclass in render/post.py (the post steps, one class each),
+its kernel shaders/post_<name>.comp (compiled by render/codegen.py, found by name) and its
+row in POST_OPTIONS (the RenderOptions field and its flag). Its `steps` declare what they
+read and write ("color", their own transient images from `PostKernels.transient`);
+gpu/graph.py orders them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+
+from vkpbr.errors import UsageError
+from vkpbr.gpu.compute import ComputePipeline, groups
+from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.graph import ImageResource, Step
+from vkpbr.gpu.image import Image, ImageView
+from vkpbr.render import layouts as L
+from vkpbr.render.codegen import SPV_DIR
+from vkpbr.render.options import POST_OPTIONS, RenderOptions
+
+__all__ = ["PostStep", "PostKernels", "PostContext", "enabled_post",
+           "encode_step", "encode_tonemap", "post_unavailable", "check_post"]
+
+_SETS_PER_POOL = 64
+HDR_FORMAT = "VK_FORMAT_R32G32B32A32_SFLOAT"  # the target's float colour, and transients
+
+
+class PostStep:
+    """A post step: `option` names its RenderOptions field (a POST_OPTIONS row); `steps`
+    makes its gpu/graph.py steps for one frame, reading and writing "color"."""
+
+    option: ClassVar[str]
+
+    def steps(self, ctx: PostContext, value: float) -> list[Step]:
+        raise NotImplementedError
+
+
+def enabled_post(options: RenderOptions) -> tuple[tuple[str, float], ...]:
+    """(option, value) of the post steps `options` turn on, in POST_OPTIONS' order."""
+    return tuple((row.field, float(getattr(options, row.field))) for row in POST_OPTIONS
+                 if getattr(options, row.field))
+
+
+def post_unavailable(target: Any, compute_path: bool) -> str | None:
+    """Why frames of `target` cannot take post steps here, or None."""
+    if not compute_path:
+        return "this device lacks the compute path's features (storage image writes)"
+    if not getattr(target, "compute", False):
+        return "they need a single-sample offscreen target (not MSAA, not a window) for now"
+    return None
+
+
+class PostKernels:
+    """A renderer's post kernels (a pipeline each, one set layout: two storage images),
+    their descriptor sets and the steps' transient images (made on first use, kept)."""
+
+    def __init__(self, device: Device) -> None:
+        self.device = device
+        self.layout = DescriptorSetLayout(device, [
+            BindingSpec(0, "storage_image", ("compute",)), BindingSpec(1, "storage_image", ("compute",))])
+        self._pools: list[DescriptorPool] = []
+        self._free = 0
+        self._pipelines: dict[str, ComputePipeline] = {}
+        self._sets: dict[tuple[int, int], Any] = {}
+        self._images: dict[tuple, tuple[Image, ImageView]] = {}
+
+    def pipeline(self, name: str, push_bytes: int) -> ComputePipeline:
+        """Kernel shaders/spv/<name>.comp.spv."""
+        if name not in self._pipelines:
+            self._pipelines[name] = ComputePipeline(self.device, SPV_DIR / f"{name}.comp.spv",
+                                                    [self.layout], push_bytes=push_bytes)
+        return self._pipelines[name]
+
+    def image_set(self, src: Any, dst: Any) -> Any:
+        """The set binding view `src` (binding 0) and view `dst` (binding 1), as storage."""
+        key = (int(self.device.vk.ffi.cast("uintptr_t", src)),
+               int(self.device.vk.ffi.cast("uintptr_t", dst)))
+        if key not in self._sets:
+            if not self._pools or self._free == 0:
+                self._pools.append(DescriptorPool(self.device, [(self.layout, _SETS_PER_POOL)]))
+                self._free = _SETS_PER_POOL
+            dset = self._pools[-1].allocate(self.layout)
+            self._free -= 1
+            writer = DescriptorWriter(self.device)
+            writer.storage_image(dset, 0, _Handle(src))
+            writer.storage_image(dset, 1, _Handle(dst))
+            writer.update()
+            self._sets[key] = dset
+        return self._sets[key]
+
+    def transient(self, name: str, extent: tuple[int, int]) -> tuple[Image, ImageView]:
+        """Transient image `name` of `extent` (RGBA32F, storage), made on first use. Frames in
+        flight share it: a frame's first use waits for the frames before (gpu/graph.py)."""
+        key = (name, extent)
+        if key not in self._images:
+            vk = self.device.vk
+            image = Image(self.device, extent[0], extent[1], getattr(vk, HDR_FORMAT),
+                          vk.VK_IMAGE_USAGE_STORAGE_BIT, name=f"post {name}")
+            self._images[key] = (image, ImageView(image))
+        return self._images[key]
+
+    def destroy(self) -> None:
+        for image, view in self._images.values():
+            view.destroy()
+            image.destroy()
+        self._images.clear()
+        for p in self._pipelines.values():
+            p.destroy()
+        self._pipelines.clear()
+        for pool in self._pools:
+            pool.destroy()
+        self._pools, self._sets = [], {}
+        self.layout.destroy()
+
+
+@dataclass
+class _Handle:
+    """A raw VkImageView where DescriptorWriter takes an ImageView (`.handle`)."""
+
+    handle: Any
+
+
+@dataclass
+class PostContext:
+    """What a frame's post steps are made from: the kernels, the frame's size and
+    resources (a step adds its transient images there), the HDR colour's view."""
+
+    kernels: PostKernels
+    extent: tuple[int, int]
+    resources: dict[str, Any]
+    color_view: Any  # the HDR "color" image's storage view (a VkImageView)
+    added: list[str] = field(default_factory=list)
+
+    def transient(self, name: str, extent: tuple[int, int]) -> Any:
+        """Transient image `name` as a graph resource (added to the frame's); its view."""
+        image, view = self.kernels.transient(name, extent)
+        self.resources[name] = ImageResource(image.handle, view=view.handle, extent=extent)
+        return view.handle
+
+    def dispatch(self, name: str, push: np.ndarray, src: Any, dst: Any,
+                 extent: tuple[int, int]) -> Callable[[Any], None]:
+        """A recorder of kernel `name` over `extent` with views `src`, `dst` and `push`."""
+        kernels = self.kernels
+        dset = kernels.image_set(src, dst)
+        pipe = kernels.pipeline(name, push.nbytes)
+
+        def record(cmd: Any) -> None:
+            cmd.bind_pipeline(pipe)
+            cmd.bind_set(0, dset)
+            cmd.push(push)
+            cmd.dispatch(*groups((*extent, 1), (8, 8, 1)))
+        return record
+
+
+def encode_tonemap(options: RenderOptions, linear: bool) -> int:
+    """The encode's tone map for frames with `options` (into a `linear` target or not): the
+    frame's, none in debug views (they show values as they are)."""
+    return int(options.tonemap_for(linear) if options.view == L.View.FINAL else L.Tonemap.NONE)
+
+
+def encode_step(ctx: PostContext, out_view: Any, tonemap: int, srgb: bool) -> Step:
+    """"encode": "color" through `tonemap` (TONEMAP_*), stored into "out.color"
+    (sRGB-encoded for an 8-bit target)."""
+    push = np.array([tonemap, int(srgb)], np.int32)
+    record = ctx.dispatch("post_encode", push, ctx.color_view, out_view, ctx.extent)
+    return Step("encode", record, (("color", "storage_read"), ("out.color", "storage")))
+
+
+def check_post(options: RenderOptions, target: Any, compute_path: bool) -> bool:
+    """Whether frames of `target` with `options` take post steps (UsageError where one is
+    asked for and cannot be)."""
+    wanted = enabled_post(options)
+    if not wanted:
+        return False
+    why = post_unavailable(target, compute_path)
+    if why is not None:
+        flags = ", ".join(row.flag for row in POST_OPTIONS if row.field in dict(wanted))
+        raise UsageError(f"{flags} not available here: {why}")
+    return True
