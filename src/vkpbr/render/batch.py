@@ -190,9 +190,8 @@ class BatchViews:
         def chunks(fs: FrameSteps) -> list[Step]:
             return self._chunk_steps(fs, target, views, tbn, groups, prepass)
 
-        return self.recorder.command_buffer(target, frame, 0, spec,
-                                            {"cull": lambda fs: self._cull_steps(fs, views),
-                                             "chunks": chunks})
+        made = {"cull": lambda fs: self._cull_steps(fs, views), "chunks": chunks}
+        return self.recorder.command_buffer(target, frame, 0, spec, groups=made)
 
     def _cull_steps(self, fs: FrameSteps, views: int) -> list[Step]:
         """The culling kernel: per view and draw, whether the view sees it, into the chunks'

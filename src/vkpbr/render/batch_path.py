@@ -27,7 +27,7 @@ from vkpbr.render.batch import MAX_LAYERS, BatchViews
 from vkpbr.render.camera import batch_frame_terms, linear_depth
 from vkpbr.render.frames import summed_stats, write_frame_uniforms
 from vkpbr.render.options import RenderOptions
-from vkpbr.render.steps import FrameSpec
+from vkpbr.render.steps import FrameObjects, FrameSpec
 from vkpbr.scene.camera_batch import CameraBatch
 
 # The Renderer (render/renderer.py) that owns the path: not imported here (it imports this
@@ -131,9 +131,9 @@ class BatchPath:
         self._run(frame, plan, opts, lambda redraw: r.recorder.command_buffer(
             target, frame, 0, FrameSpec(
                 "compute_batch", opts.tbn, opts.alpha_mask, plan, redraw, copy,
-                variant=r.shade_variant(opts), tiles=(n, w, h, rows), set0=set0,
-                set0_id=id(set0), external=external, external_id=id(external),
-                batch=(bv.generation,))),
+                variant=r.shade_variant(opts), tiles=(n, w, h, rows), set0_id=id(set0),
+                external_id=id(external), batch=(bv.generation,)),
+            FrameObjects(set0=set0, external=external)),
             (lambda: self._cuda_wait(external)) if cuda else None)
         if cuda:
             r.device.check_validation()

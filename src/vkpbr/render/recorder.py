@@ -29,10 +29,10 @@ from vkpbr.render.frames import FrameSlot
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.passes import PASSES, PassSpec, pipeline_spec
 from vkpbr.render.shadows import ShadowMaps
-from vkpbr.render.steps import FrameSpec, FrameSteps
+from vkpbr.render.steps import NO_OBJECTS, FrameObjects, FrameSpec, FrameSteps
 from vkpbr.render.transmission import OpaqueCopies
 
-__all__ = ["FrameRecorder", "STAMPS", "FrameSpec"]
+__all__ = ["FrameRecorder", "STAMPS", "FrameSpec", "FrameObjects"]
 
 _TBN_STREAMS = {
     L.TbnMode.VECTORS: (("normals", "vec3"), ("tangents", "vec4")),
@@ -145,6 +145,7 @@ class FrameRecorder:
         return names
 
     def command_buffer(self, target: FrameTarget, frame: Frame, image: int, spec: FrameSpec,
+                       objects: FrameObjects = NO_OBJECTS,
                        groups: dict[str, Callable[[FrameSteps], list[Step]]] | None = None,
                        drawn: FrameTarget | None = None) -> Commands:
         """The command buffer recorded for `spec` into `target`'s `image` by `frame`'s slot,
@@ -158,13 +159,13 @@ class FrameRecorder:
         self._generations[tid] = target.generation
         key = (tid, image, frame.index, spec)
         rec = self._recorded.get(key)
-        if rec is None or rec.blend_order != spec.blend_order:
+        if rec is None or rec.blend_order != objects.blend_order:
             if rec is not None:  # the camera moved enough to reorder blended draws
                 rec.cmd.free()
-            steps = FrameSteps(self, drawn or target, frame.index, image, spec, groups,
+            steps = FrameSteps(self, drawn or target, frame.index, image, spec, objects, groups,
                                output=target if drawn is not None else None)
             rec = self._record(frame, steps.steps(), steps.resources, target.extent, tid,
-                               spec.blend_order)
+                               objects.blend_order)
             self._recorded[key] = rec
         frame.stamp_names = rec.stamp_names
         return rec.cmd

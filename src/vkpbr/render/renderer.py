@@ -60,7 +60,7 @@ from vkpbr.render.paths import choose_path
 from vkpbr.render.post_stage import PostKernels, check_post, enabled_post, encode_tonemap
 from vkpbr.render.recorder import STAMPS, FrameRecorder
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
-from vkpbr.render.steps import FrameSpec
+from vkpbr.render.steps import NO_OBJECTS, FrameObjects, FrameSpec
 from vkpbr.render.transmission import OpaqueCopies
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 from vkpbr.scene.environment import load_panorama
@@ -166,6 +166,7 @@ class Renderer:
             self._compute_scene: ComputeScene | None = None
             self._post_kernels: PostKernels | None = None
             self._last_post_options: tuple[RenderOptions, RenderOptions] | None = None
+            self._last_post: tuple[RenderOptions, tuple] | None = None
             self._batch_path: BatchPath | None = None
             # Bound in every slot's set 2 before anything is recorded (render/transmission.py).
             self.opaque_copies = OpaqueCopies(self.device, self.gpu_scene,
@@ -233,6 +234,13 @@ class Renderer:
         if self._post_kernels is None:
             self._post_kernels = PostKernels(self.device)
         return self._post_kernels
+
+    def _post_of(self, options: RenderOptions) -> tuple[tuple[str, float], ...]:
+        """The post steps `options` turn on (the last answer kept, as frame_lighting's)."""
+        last = self._last_post
+        if last is None or last[0] is not options:
+            last = self._last_post = (options, enabled_post(options))
+        return last[1]
 
     def _shading_options(self, options: RenderOptions, post: bool) -> RenderOptions:
         """The options the shading sees: with post steps, no tone map (the encode's; the
@@ -559,7 +567,8 @@ class Renderer:
         if options.shadow_resolution != self.shadows.resolution:
             self.shadows.set_resolution(options.shadow_resolution)
         self._ensure_shadow_maps(plan)
-        post = check_post(options, target, self.device.compute_path)
+        wanted = self._post_of(options)
+        post = bool(wanted) and check_post(options, target, self.device.compute_path)
         drawn = self.post_target(target, copy) if post else target  # (HDR with post steps)
         write_frame_uniforms(slot, camera, lights, target.extent, self._shading_options(options, post),
                              linear or post, self.bounds, self.frame_lighting(options),
@@ -571,12 +580,12 @@ class Renderer:
         path = choose_path(compute, compute and self.uses_compute_raster(options, drawn),
                            COPY_OUTPUTS in copy)
         spec = FrameSpec(path, options.tbn, options.alpha_mask, plan, redraw, copy,
-                         transmission, self.shade_variant(options),
-                         self.blend_order(camera.eye), overlay, id(overlay),
-                         post=enabled_post(options) if post else (),
-                         post_tonemap=encode_tonemap(options, linear) if post else 0)
+                         transmission, self.shade_variant(options), id(overlay),
+                         post=wanted, post_tonemap=encode_tonemap(options, linear) if post else 0)
+        order = self.blend_order(camera.eye)
+        objects = FrameObjects(order, overlay) if order or overlay is not None else NO_OBJECTS
         try:
-            cmd = self.recorder.command_buffer(target, frame, image, spec,
+            cmd = self.recorder.command_buffer(target, frame, image, spec, objects,
                                                drawn=drawn if post else None)
             c0 = clock()
             ok = target.submit(frame, cmd, image)

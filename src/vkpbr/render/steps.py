@@ -12,8 +12,7 @@ passes draw over it (and test that depth without writing it: a pre-pass for them
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.graph import Rendering, Step
@@ -27,7 +26,7 @@ from vkpbr.render.post_stage import PostContext, encode_step
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.render.transmission import TRANSMISSIVE, copy_classes
 
-__all__ = ["FrameSpec", "FrameSteps", "OUTPUT_CLEAR"]
+__all__ = ["FrameSpec", "FrameObjects", "NO_OBJECTS", "FrameSteps", "OUTPUT_CLEAR"]
 
 _PASS_BY_NAME = {p.name: p for p in PASSES}
 _VISIBILITY_ROWS = ("opaque", "opaque_double", "mask")  # the coverage: not blending
@@ -37,40 +36,50 @@ OUTPUT_CLEAR = {"out_ids": ("uint32", (0, 0, 0, 0)),
                 "out_depth_range": ("float32", (float("inf"), float("inf"), 0.0, 0.0))}
 
 
-@dataclass(frozen=True)
-class FrameSpec:
-    """What a recording depends on besides its target, image and frame slot (its key):
-    the path (render/paths.py), the TBN path, alpha masking, the shadow plan and which of
-    its layers are redrawn, what the target copies out, the transmission's copy, what the
-    compute path's shading is specialised for, the blended draws' order, the overlay; a
-    compute batch's atlas tiles, views' set 0 and CUDA buffer."""
+class FrameSpec(NamedTuple):
+    """What a recording depends on besides its target, image and frame slot: its key (a
+    tuple: built and hashed every frame in a few hundred nanoseconds). The path
+    (render/paths.py), the TBN path, alpha masking, the shadow plan and which of its layers
+    are redrawn, what the target copies out, the transmission's copy, what the compute
+    path's shading is specialised for, the ids of the objects in FrameObjects, a compute
+    batch's atlas tiles, a layered batch's own inputs, the post steps and their encode."""
 
     path: str
     tbn: L.TbnMode = L.TbnMode.VECTORS
     alpha_mask: bool = True
-    plan: ShadowPlan = field(default_factory=ShadowPlan)
+    plan: ShadowPlan = ShadowPlan()
     redraw: tuple[range, ...] | None = None
     copy: tuple[str, ...] = ()
     transmission: bool = False
     variant: ShadeVariant = GENERAL_SHADING
-    blend_order: tuple[int, ...] = field(default=(), compare=False)
-    overlay: Any = field(default=None, compare=False)
     overlay_id: int = 0
-    tiles: tuple[int, int, int, int] | None = None
-    set0: Any = field(default=None, compare=False)
     set0_id: int = 0
-    external: Any = field(default=None, compare=False)
     external_id: int = 0
+    tiles: tuple[int, int, int, int] | None = None
     batch: tuple = ()  # what a layered batch's own groups depend on (render/batch.py)
-    post: tuple[tuple[str, float], ...] = ()  # the post steps on (render/post_stage.py enabled_post)
-    post_tonemap: int = 0  # the encode's tone map (TONEMAP_*) and target encoding
+    post: tuple[tuple[str, float], ...] = ()  # the post steps on (post_stage.enabled_post)
+    post_tonemap: int = 0  # the encode's tone map (TONEMAP_*)
+
+
+class FrameObjects(NamedTuple):
+    """The objects a recording draws with that its key names by id (FrameSpec's *_id) or
+    not at all: the blended draws' order (a new order re-records), the overlay, a batch's
+    views' set 0 and the CUDA buffer the colour goes into."""
+
+    blend_order: tuple[int, ...] = ()
+    overlay: Any = None
+    set0: Any = None
+    external: Any = None
+
+
+NO_OBJECTS = FrameObjects()
 
 
 class FrameSteps:
     """The steps of one recording: `steps()` expands the spec's path."""
 
     def __init__(self, recorder: Any, target: Any, frame_index: int, image: int,
-                 spec: FrameSpec,
+                 spec: FrameSpec, objects: FrameObjects = NO_OBJECTS,
                  groups: dict[str, Callable[[FrameSteps], list[Step]]] | None = None,
                  output: Any = None) -> None:
         # `groups`: the steps of groups a caller makes (the layered batch's "cull", "chunks");
@@ -80,6 +89,7 @@ class FrameSteps:
         self.output = target if output is None else output
         self.r, self.target, self.frame_index, self.image, self.spec = (
             recorder, target, frame_index, image, spec)
+        self.objects = objects
         self.gs = recorder.gpu_scene
         self.slot = recorder.slots[frame_index]
         self.streams = recorder.stream_names(spec.tbn)
@@ -87,7 +97,7 @@ class FrameSteps:
                         for d in self.gs.draws]
         self.shadow_set = (None if recorder.shadows is None
                            else recorder.shadows.sets[frame_index])
-        self.set0 = spec.set0 if spec.set0 is not None else self.slot.set0
+        self.set0 = objects.set0 if objects.set0 is not None else self.slot.set0
         self.resources: dict[str, Any] = dict(target.resources(image, frame_index))
         if self.output is not target:
             self.resources.update({f"out.{k}": v for k, v in
@@ -158,6 +168,10 @@ class FrameSteps:
             return []
         if p.name == "background" and self._color_written:
             return []  # the compute path drew it in compute (background_compute)
+        if not p.fullscreen and p.draw_class not in self.classes:
+            # Nothing to draw: no rendering begun for it (after the compute path's shading,
+            # the colour stays as the kernels left it), none ended (inside an open one).
+            return [Step(p.name, rendering=self._rendering)]
         ctx = self._context(visibility=False, prepass=prepass or over_visibility)
         return [Step(p.name, _pass_recorder(ctx, p), rendering=self._rendering_for())]
 
@@ -170,7 +184,7 @@ class FrameSteps:
             pipeline=lambda p: self.r.pipeline(target, tbn, p, prepass, visibility, copy=copy),
             frame_sets=(self.set0, self.slot.set2), material_sets=self.gs.material_sets,
             vertex_buffers=[self.gs.streams[n] for n in self.streams],
-            index_buffer=self.gs.index_buffer, blend_order=self.spec.blend_order,
+            index_buffer=self.gs.index_buffer, blend_order=self.objects.blend_order,
             prepass=prepass, shadow_set=self.shadow_set)
 
     def _visibility(self) -> list[Step]:
@@ -193,17 +207,19 @@ class FrameSteps:
         return cs
 
     def _frame_sets(self) -> dict[int, Any]:
-        return self.r.compute_sets(self.frame_index, self.spec.set0)
+        return self.r.compute_sets(self.frame_index, self.objects.set0)
 
     def _raster(self) -> list[Step]:
         cs, spec = self._compute(), self.spec
         depth = (COPY_DEPTH in spec.copy or "blend" in self.classes
                  or not spec.path.startswith("compute"))
-        self._depth_written = depth
+        # The raster's depths: copied where anything reads them, else undefined, and nothing
+        # after tests them (no blended draw): the passes after load it, never clear it.
+        self._depth_written = True
         self._color_written = True  # the resolve writes the clear colour where nothing covers
         self._close_rendering()
         return cs.raster_steps(self.target, self.frame_index, spec.alpha_mask,
-                               self.gs.material_sets, spec.tiles, spec.set0, depth)
+                               self.gs.material_sets, spec.tiles, self.objects.set0, depth)
 
     def _classify(self) -> list[Step]:
         counted = "raster" in PATHS[self.spec.path]
@@ -248,7 +264,7 @@ class FrameSteps:
 
     # --- the tail ---------------------------------------------------------------------------
     def _overlay(self) -> list[Step]:
-        overlay = self.spec.overlay
+        overlay = self.objects.overlay
         if overlay is None:
             return []
         return [Step("overlay", lambda cmd: overlay.record(cmd, self.frame_index,
@@ -273,7 +289,7 @@ class FrameSteps:
                                             prefix="out.", sources=self.target)
         if self.spec.tiles is not None:
             return self.target.finish_steps(self.image, self.frame_index, self.spec.copy,
-                                            self.spec.tiles, self.spec.external)
+                                            self.spec.tiles, self.objects.external)
         return self.target.finish_steps(self.image, self.frame_index, self.spec.copy)
 
 
