@@ -5,8 +5,9 @@
 // downsampled into a chain of half-size images (MODE_DOWN: a 4x4 tent, weights 1 3 3 1 per
 // axis), upsampled back (MODE_UP: a bilinear tent of 3x3 taps, added to the level above),
 // and the chain's top, the mean of every level, mixed into the radiance (MODE_MIX:
-// color = mix(color, bloom, strength)). Each step keeps the image's mean, so the mix keeps
-// the frame's total radiance: the bloom moves light, it does not make it.
+// color = mix(color, bloom, strength)). Each step keeps the image's mean (but at the last row
+// or column of an odd size, which it counts twice), so the mix keeps the frame's total
+// radiance: the bloom moves light, it does not make it.
 #extension GL_GOOGLE_include_directive : require
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
