@@ -52,7 +52,7 @@ void main() {
     int kind = int(test_light.direction_kind.w + 0.5);
     vec3 l = kind == 2 ? -test_light.direction_kind.xyz
                        : normalize(test_light.position_range.xyz - v_world_pos);
-    float view_depth = dot(v_world_pos - eye.xyz, settings.camera_forward.xyz);
+    float view_depth = dot(v_world_pos - eye.xyz, views[0].forward_far.xyz);
     out_color = vec4(shadow_factor(test_light, v_world_pos, ng, l, view_depth), dot(ng, l), 0, 1);
 }
 """

@@ -1,4 +1,4 @@
-"""CameraBatch and the batch's camera maths (issue 14; issue 30's one views function): the same
+"""CameraBatch and the batch's camera maths (issue 14; issue 30's one views record): the same
 numbers as one camera at a time, bit for bit, for cameras anywhere (so a batch's views can
 equal single frames)."""
 
@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vkpbr.errors import UsageError
+from vkpbr.render import layouts as L
 from vkpbr.render.camera import (
     batch_frame_terms,
     camera_frame_columns,
@@ -19,7 +20,7 @@ from vkpbr.render.camera import (
     forward,
     view_projection,
 )
-from vkpbr.render.views import ViewTerms, batch_view_terms, camera_view_terms
+from vkpbr.render.views import ViewTerms, batch_view_terms, camera_view_terms, fill_views, pack_view
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 from vkpbr.scene.types import Camera
 
@@ -55,18 +56,24 @@ SIZES = st.sampled_from([(64, 48), (128, 128), (1920, 1080)])
 @settings(max_examples=200, deadline=None)
 @given(st.lists(cameras(), min_size=1, max_size=6), SIZES)
 def test_batch_views_equal_single_frame_views(cams: list[Camera], size: tuple[int, int]) -> None:
-    """The views' one function over a batch's (N,) arrays gives each view the float64 terms
-    that a single frame of that camera gets from it in Python floats: every bit, for cameras
-    anywhere, with and without intrinsics and planes."""
+    """The views record's one function over a batch's (N,) arrays gives each view the float64
+    terms, and then the record bytes, that a single frame of that camera gets from it in
+    Python floats: every bit, for cameras anywhere, with and without intrinsics and planes."""
     b = CameraBatch.from_cameras(cams, cams[0])
     n = len(cams)
     terms = batch_view_terms(b, size, CORNERS, SCALE)
+    records = np.zeros(n, L.VIEW_RECORD.dtype)
+    fill_views(records, terms, np.tile(np.array([0, 0, *size], np.uint32), (n, 1)),
+               np.zeros(n, np.uint32))
     for i, cam in enumerate(cams):
         one = camera_view_terms(cam, size, CORNERS, SCALE)
         for name, batch_value, value in zip(ViewTerms._fields, terms, one, strict=True):
             got = [np.broadcast_to(v, n)[i] for v in batch_value] if isinstance(value, tuple) \
                 else np.broadcast_to(batch_value, n)[i]
             assert np.array_equal(got, value), name  # float64, every bit
+        packed = bytearray(L.VIEW_RECORD.size)
+        pack_view(packed, one, (0, 0, *size))
+        assert records[i].tobytes() == bytes(packed)
         assert b.camera(i) == cam
 
 

@@ -358,8 +358,9 @@ class ComputeScene:
         from it (the target has it in GENERAL: record_raster_begin) with the winners' depths,
         which are copied into the target's depth buffer (record_raster_end; `depth` False:
         nothing reads it this frame, not copied). `tiles` (views, tile width, tile height, tiles
-        a column: the atlas is column-major): a compute batch's atlas, the views' records in
-        `set0` (render/batch_path.py). `stamp(step)` after each step (recorder.RASTER_STEPS)."""
+        a column: the atlas is column-major): a compute batch's atlas. `set0`: the frame's set
+        0 or a batch's (render/batch_path.py), whose view records the kernels read. `stamp(step)`
+        after each step (recorder.RASTER_STEPS)."""
         res = self._resources(target)
         w, h = target.extent
         views, tile_w, tile_h, rows = tiles or (1, w, h, 1)

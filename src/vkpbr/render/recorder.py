@@ -391,8 +391,8 @@ class FrameRecorder:
         return cmd
 
     def _compute_sets(self, frame: Frame, set0: object = None) -> dict[int, object]:
-        """The frame's sets the compute path's kernels bind: 0 (the camera; `set0`: a batch's
-        views), 2 (lighting) and 3 (the shadow maps, where there are any)."""
+        """The frame's sets the compute path's kernels bind: 0 (the frame's view; `set0`: a
+        batch's views), 2 (lighting) and 3 (the shadow maps, where there are any)."""
         slot = self.slots[frame.index]
         sets = {0: slot.set0 if set0 is None else set0, 2: slot.set2}
         if self.shadows is not None:
@@ -408,8 +408,9 @@ class FrameRecorder:
         frame reads it); the target is then ready for the shading (as after
         record_shading_begin)."""
         target.record_raster_begin(cmd)  # type: ignore[attr-defined]
+        views = self.slots[frame.index].set0 if set0 is None else set0  # the frame's or batch's
         self.compute_scene().record_raster(cmd, target, frame.index, alpha_mask,
-                                           self.gpu_scene.material_sets, tiles, set0,
+                                           self.gpu_scene.material_sets, tiles, views,
                                            stamp=stamps.after, depth=depth)
 
     def free(self, target_id: int | None = None) -> None:

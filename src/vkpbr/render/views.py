@@ -1,17 +1,21 @@
-"""The views' camera terms: view-projection, its inverse, eye and near plane, forward and far
-plane, intrinsics, built by one function for 1..N views (a single frame is the batch of
-one), so that frames and batches compute the camera once, the same way.
+"""The views record: every camera a frame or a batch draws through, as layouts.VIEW_RECORD
+(view-projection, its inverse, eye and near plane, forward and far plane, intrinsics,
+viewport, layer), built by one function for 1..N views and read by every shader as
+`views[view_index]` (set 0's Views storage buffer: record 0 for a single frame, the
+instance's or tile's view in a batch).
 
 `view_terms` is the camera maths, written once over columns: each input is either a Python
 float (one view: a single frame) or a (N,) NumPy array (N views: a batch), and each view's
 values come from the same float operations in the same order, element by element. Python
 floats and NumPy float64 round +, -, *, / and sqrt alike (IEEE 754), so view i of a batch
 equals view i drawn alone, bit for bit, by construction. A single frame is the batch of one
-in Python floats: on (1,) arrays NumPy's per-call overhead makes the terms ~70 us, where
-the floats take ~5 us (2-core test machine).
+in Python floats: on (1,) arrays NumPy's per-call overhead makes the terms ~70 us and the
+record ~140 us more, where the floats take ~5 us and one struct pack ~1 (2-core test
+machine; a frame's whole uniform write for a moving camera is ~7 us).
 
 Matrices are GLSL's column-major mat4 as 16 values, column by column (layouts.mat4_to_std140
-is the NumPy matrices' transpose)."""
+is the NumPy matrices' transpose).
+"""
 
 from __future__ import annotations
 
@@ -21,11 +25,12 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from vkpbr.render import layouts as L
 from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.types import Camera
 
 __all__ = ["ViewTerms", "view_terms", "camera_view_terms", "batch_view_terms",
-           "projection_terms"]
+           "projection_terms", "pack_view", "fill_views"]
 
 Value = Any  # a Python float (one view) or a (N,) float64 array (N views)
 Vec3 = tuple[Value, Value, Value]
@@ -212,3 +217,33 @@ def batch_view_terms(batch: CameraBatch, size: Sequence[int], corners: Sequence[
     return view_terms(columns(batch.eye), columns(batch.target), columns(batch.up),  # type: ignore[arg-type]
                       batch.yfov_deg, None if k is None else columns(k), batch.znear,
                       batch.zfar, (int(size[0]), int(size[1])), corners, scale)
+
+
+def pack_view(buffer: Any, terms: ViewTerms, viewport: tuple[int, int, int, int],
+              layer: int = 0) -> None:
+    """Write one view's record (Python floats) into `buffer` (a writable buffer of
+    VIEW_RECORD.size bytes): one struct pack, the per-frame write."""
+    t = terms
+    L.VIEW_RECORD.pack_into(buffer, VP=t.vp, inv_VP=t.inv_vp, eye_near=(*t.eye, t.znear),
+                            forward_far=(*t.forward, t.zfar), intrinsics=t.intrinsics,
+                            viewport=viewport, layer=layer)
+
+
+def fill_views(records: np.ndarray, terms: ViewTerms, viewport: np.ndarray,
+               layer: np.ndarray | int) -> None:
+    """Write N views' records ((N,) arrays) into `records` ((N,) VIEW_RECORD.dtype), field
+    for field what `pack_view` writes; `viewport` (N, 4) and `layer` (N,) unsigned (or one
+    for all)."""
+    n = len(records)
+
+    def stacked(values: Sequence[Value]) -> np.ndarray:  # (N, len(values)); floats broadcast
+        return np.stack([np.broadcast_to(v, n) for v in values], 1)
+
+    t = terms
+    records["VP"] = stacked(t.vp).reshape(n, 4, 4)
+    records["inv_VP"] = stacked(t.inv_vp).reshape(n, 4, 4)
+    records["eye_near"] = stacked((*t.eye, t.znear))
+    records["forward_far"] = stacked((*t.forward, t.zfar))
+    records["intrinsics"] = stacked(t.intrinsics)
+    records["viewport"] = viewport
+    records["layer"] = layer
