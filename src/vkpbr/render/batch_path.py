@@ -4,9 +4,9 @@
 copies), its GPU resources (render/batch.py BatchViews) and, for `device="cuda"`, the CUDA
 imports of the targets' exported memory (gpu/cuda.py). Per submission it does what
 `Renderer.draw` does for one frame, for many views: the frame's lights, environment and
-shadow maps (directional ones over the whole scene), the uniforms of the first view (what the
-views share), every view's record (render/views.py) and blended order, the recorded
-commands, one submit, one wait, one readback (or one device-to-device clone into torch).
+shadow maps (directional ones over the whole scene), the blocks the views share, every
+view's record (render/views.py) and blended order, the recorded commands, one submit, one
+wait, one readback (or one device-to-device clone into torch).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH
 from vkpbr.render import layouts as L
 from vkpbr.render.batch import MAX_LAYERS, BatchViews
 from vkpbr.render.camera import linear_depth
-from vkpbr.render.frames import summed_stats, write_frame_uniforms
+from vkpbr.render.frames import summed_stats, write_frame_blocks
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.views import ViewTerms, batch_view_terms
 from vkpbr.scene.camera_batch import CameraBatch
@@ -222,9 +222,9 @@ class BatchPath:
                opts: RenderOptions, linear: bool, atlas_rows: int = 0
                ) -> tuple[Any, Any, ViewTerms]:
         """A submission's frame of the ring with what every batch writes: the frame's lights,
-        environment and shadow matrices (directional ones over the whole scene), the first
-        view's uniforms (what the views share) and every view's record (`atlas_rows`: a
-        compute batch's tiles a column, BatchViews.write_views). Returns the frame, the
+        environment and shadow matrices (directional ones over the whole scene), the blocks
+        the views share and every view's record (`atlas_rows`: a compute batch's tiles a
+        column, BatchViews.write_views). Returns the frame, the
         shadow plan and the views' terms (views.batch_view_terms)."""
         r = self.r
         frame_lights = r.frame_lights(opts, lights)
@@ -234,8 +234,7 @@ class BatchPath:
         slot = r.slots[frame.index]
         plan = r.shadow_plan(frame_lights, opts)
         rows = r.write_scene_shadows(slot, plan, frame_lights, opts)
-        write_frame_uniforms(slot, views.camera(0), frame_lights, size, opts, linear, r.bounds,
-                             r.frame_lighting(opts), rows)
+        write_frame_blocks(slot, frame_lights, opts, linear, r.frame_lighting(opts), rows)
         self.views.write_views(terms, size, atlas_rows)  # type: ignore[union-attr]
         return frame, plan, terms
 

@@ -3,11 +3,12 @@ into one mapped buffer) and the descriptor sets that point at them, so several f
 queued on the GPU while Python writes the next one's camera.
 
 `write_frame_view` writes the slot's view record (render/views.py: record 0 of set 0's Views,
-what every shader reads the camera from) and `write_frame_uniforms` the settings and
-lighting blocks by field name through the std140 layouts' struct packers
+what every shader reads the camera from), `write_frame_blocks` the settings and lighting
+blocks by field name through the std140 layouts' struct packers
 (layouts.Std140Block.pack_into) and the punctual lights as one NumPy array into the slot's
-storage buffer, each skipping the work when its inputs repeat (a static scene re-rendered;
-the lights are a tuple of frozen Lights, so an unchanged tuple compares equal at once).
+storage buffer (`write_frame_uniforms`: both), each skipping the work when its inputs repeat
+(a static scene re-rendered; the lights are a tuple of frozen Lights, so an unchanged tuple
+compares equal at once).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from vkpbr.render.views import camera_view_terms, pack_view
 from vkpbr.scene.types import Camera, Light
 
 __all__ = ["FrameSlot", "FrameStats", "FrameLighting", "create_slots", "write_frame_uniforms",
-           "write_frame_view", "bind_instances",
+           "write_frame_view", "write_frame_blocks", "bind_instances",
            "light_records", "Bounds"]
 
 FRAME_BLOCKS = (L.VIEW_RECORD, L.SETTINGS, L.LIGHTING)  # the view: one record
@@ -207,10 +208,17 @@ def write_frame_uniforms(slot: FrameSlot, camera: Camera, lights: tuple[Light, .
                          lighting: FrameLighting = FrameLighting(),
                          shadow: np.ndarray | None = None) -> None:
     """Write `slot`'s view record (`write_frame_view`), settings and lighting blocks and its
-    light records for one frame of `size` (W, H). `shadow`: (len(lights), 4) float32, each
-    record's `shadow` vec4 (render/shadows.py ShadowMaps.write); None: no light has a shadow
-    map."""
+    light records (`write_frame_blocks`) for one frame of `size` (W, H)."""
     write_frame_view(slot, camera, size, bounds)
+    write_frame_blocks(slot, lights, opts, linear, lighting, shadow)
+
+
+def write_frame_blocks(slot: FrameSlot, lights: tuple[Light, ...], opts: RenderOptions,
+                       linear: bool, lighting: FrameLighting = FrameLighting(),
+                       shadow: np.ndarray | None = None) -> None:
+    """Write what a frame's views share: `slot`'s settings and lighting blocks and its light
+    records. `shadow`: (len(lights), 4) float32, each record's `shadow` vec4
+    (render/shadows.py ShadowMaps.write); None: no light has a shadow map."""
     # Frames that repeat the slot's last inputs skip the packing: the key is cheap next to it.
     key = (opts, linear)
     if key != slot.settings_key:
