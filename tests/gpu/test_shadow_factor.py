@@ -26,7 +26,6 @@ from vkpbr.gpu.graph import Rendering, Step, record_steps
 from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec, VertexStream
 from vkpbr.gpu.target import COPY_COLOR
 from vkpbr.render import layouts as L
-from vkpbr.render.camera import depth_range, forward
 from vkpbr.render.codegen import SHADER_DIR, SPV_DIR
 from vkpbr.render.frames import write_frame_uniforms
 from vkpbr.render.options import RenderOptions
@@ -53,7 +52,7 @@ void main() {
     int kind = int(test_light.direction_kind.w + 0.5);
     vec3 l = kind == 2 ? -test_light.direction_kind.xyz
                        : normalize(test_light.position_range.xyz - v_world_pos);
-    float view_depth = dot(v_world_pos - eye.xyz, settings.camera_forward.xyz);
+    float view_depth = dot(v_world_pos - eye.xyz, views[0].forward_far.xyz);
     out_color = vec4(shadow_factor(test_light, v_world_pos, ng, l, view_depth), dot(ng, l), 0, 1);
 }
 """
@@ -91,10 +90,8 @@ def _render(rects, light: Light, tmp: Path) -> tuple[np.ndarray, ShadowMaps]:
         frame = r.ring.begin()
         slot = r.slots[frame.index]
         write_frame_uniforms(slot, CAMERA, (light,), SIZE, RenderOptions(), True, r.bounds)
-        f = forward(CAMERA)
-        znear, zfar = depth_range(CAMERA, r.bounds.corners, r.bounds.radius, f)
         lo, hi = scene.bounds()
-        rec = sm.write(frame.index, plan, [light], CAMERA, SIZE, znear, zfar, lo, hi)
+        rec = sm.write(frame.index, plan, [light], CAMERA, SIZE, slot.znear, slot.zfar, lo, hi)
         kind = {"point": 0, "spot": 1, "directional": 2}[light.kind]
         ubo = Buffer(dev, 96, "uniform", host_visible=True)
         ubo.array(np.float32, 24)[:] = np.r_[light.position, 0, light.direction, kind,

@@ -1,5 +1,6 @@
-"""CameraBatch and the batch's camera maths (issue 14): the same numbers as one camera at a
-time, bit for bit, for cameras anywhere (so a batch's views can equal single frames)."""
+"""CameraBatch and the batch's camera maths (issue 14; issue 30's one views record): the same
+numbers as one camera at a time, bit for bit, for cameras anywhere (so a batch's views can
+equal single frames)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vkpbr.errors import UsageError
-from vkpbr.render.camera import batch_frame_terms, camera_frame_columns, depth_range, forward
+from vkpbr.render import layouts as L
+from vkpbr.render.camera import (
+    batch_frame_terms,
+    camera_frame_columns,
+    depth_range,
+    forward,
+    view_projection,
+)
+from vkpbr.render.views import ViewTerms, batch_view_terms, camera_view_terms, fill_views, pack_view
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 from vkpbr.scene.types import Camera
 
@@ -41,22 +50,50 @@ def cameras(draw) -> Camera:  # noqa: ANN001
     return cam
 
 
+SIZES = st.sampled_from([(64, 48), (128, 128), (1920, 1080)])
+
+
 @settings(max_examples=200, deadline=None)
-@given(st.lists(cameras(), min_size=1, max_size=6), st.sampled_from([(64, 48), (128, 128), (1920, 1080)]))
-def test_batch_terms_equal_single_camera_maths(cams: list[Camera], size: tuple[int, int]) -> None:
+@given(st.lists(cameras(), min_size=1, max_size=6), SIZES)
+def test_batch_views_equal_single_frame_views(cams: list[Camera], size: tuple[int, int]) -> None:
+    """The views record's one function over a batch's (N,) arrays gives each view the float64
+    terms, and then the record bytes, that a single frame of that camera gets from it in
+    Python floats: every bit, for cameras anywhere, with and without intrinsics and planes."""
     b = CameraBatch.from_cameras(cams, cams[0])
-    terms = batch_frame_terms(b.eye, b.target, b.up, b.yfov_deg, b.intrinsics, b.znear, b.zfar,
-                              size, CORNERS, SCALE)
+    n = len(cams)
+    terms = batch_view_terms(b, size, CORNERS, SCALE)
+    records = np.zeros(n, L.VIEW_RECORD.dtype)
+    fill_views(records, terms, np.tile(np.array([0, 0, *size], np.uint32), (n, 1)),
+               np.zeros(n, np.uint32))
     for i, cam in enumerate(cams):
-        f = forward(cam)
-        znear, zfar = depth_range(cam, CORNERS, SCALE, f)
-        vp, inv, _ = camera_frame_columns(cam, size, znear, f)
-        assert terms["znear"][i] == znear and terms["zfar"][i] == zfar
-        assert tuple(terms["vp"][i]) == vp  # float64, every bit
-        # The inverse in the same operations but one: (ox / sx) * s here, s * ox / sx there.
-        np.testing.assert_allclose(terms["inv_vp"][i], inv, rtol=1e-12, atol=1e-12 * max(map(abs, inv)))
-        assert tuple(terms["forward"][i]) == f
+        one = camera_view_terms(cam, size, CORNERS, SCALE)
+        for name, batch_value, value in zip(ViewTerms._fields, terms, one, strict=True):
+            got = [np.broadcast_to(v, n)[i] for v in batch_value] if isinstance(value, tuple) \
+                else np.broadcast_to(batch_value, n)[i]
+            assert np.array_equal(got, value), name  # float64, every bit
+        packed = bytearray(L.VIEW_RECORD.size)
+        pack_view(packed, one, (0, 0, *size))
+        assert records[i].tobytes() == bytes(packed)
         assert b.camera(i) == cam
+
+
+@settings(max_examples=100, deadline=None)
+@given(cameras(), SIZES)
+def test_view_terms_equal_the_numpy_matrices(cam: Camera, size: tuple[int, int]) -> None:
+    """The plain-float VP equals the NumPy reference P @ V (render/camera.py); the old names
+    return the views record's values."""
+    t = camera_view_terms(cam, size, CORNERS, SCALE)
+    want = view_projection(cam, size, t.znear)
+    np.testing.assert_allclose(np.array(t.vp).reshape(4, 4).T, want, rtol=1e-12,
+                               atol=1e-12 * np.abs(want).max())
+    assert depth_range(cam, CORNERS, SCALE) == (t.znear, t.zfar)
+    assert camera_frame_columns(cam, size, t.znear) == (t.vp, t.inv_vp, t.rotation)
+    assert forward(cam) == t.forward
+    b = CameraBatch.from_cameras([cam], cam)
+    old = batch_frame_terms(b.eye, b.target, b.up, b.yfov_deg, b.intrinsics, b.znear, b.zfar,
+                            size, CORNERS, SCALE)
+    assert tuple(old["vp"][0]) == t.vp and tuple(old["inv_vp"][0]) == t.inv_vp
+    assert (old["znear"][0], old["zfar"][0]) == (t.znear, t.zfar)
 
 
 @settings(max_examples=100, deadline=None)

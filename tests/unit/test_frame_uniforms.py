@@ -1,6 +1,7 @@
 """The per-frame uniform blocks are written by field name (no GPU needed): each block's
 generated `pack_into` lands every named value where the NumPy std140 layout says, and the
-renderer's `write_frame_uniforms` puts each input in the field of that name."""
+renderer's `write_frame_uniforms` puts each input in the field of that name (the camera in
+the frame's view record)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import numpy as np
 import pytest
 
 from vkpbr.render import layouts as L
-from vkpbr.render.camera import view_projection
+from vkpbr.render.camera import forward, view_projection
 from vkpbr.render.frames import Bounds, FrameLighting, FrameSlot, write_frame_uniforms
 from vkpbr.render.options import RenderOptions
 from vkpbr.scene.types import Camera, Light
@@ -46,18 +47,18 @@ def test_pack_by_name_matches_the_numpy_layout(block: L.Std140Block) -> None:
 def test_packing_needs_every_field_by_name() -> None:
     buf = bytearray(L.LIGHTING.size)
     with pytest.raises(TypeError):
-        L.LIGHTING.pack_into(buf, view_pos=(0, 0, 0, 1))  # the other fields are missing
+        L.LIGHTING.pack_into(buf, light_count=1)  # the other fields are missing
     with pytest.raises(TypeError):
-        L.LIGHTING.pack_into(buf, (0, 0, 0, 1))  # positional values are refused
+        L.LIGHTING.pack_into(buf, 1)  # positional values are refused
 
 
 def test_swapped_fields_are_caught() -> None:
     """A layout whose packer order disagreed with its offsets would fail the check above:
     build one with two fields swapped and show that the by-name bytes differ."""
     fields = list(L.LIGHTING.fields)
-    fields[1], fields[2] = fields[2], fields[1]  # light_count <-> mode
+    fields[0], fields[1] = fields[1], fields[0]  # light_count <-> mode
     swapped = dataclasses.replace(L.LIGHTING, fields=tuple(fields))
-    values = dict(view_pos=(1, 2, 3, 1), light_count=7, mode=1, flags=2, env_intensity=0.5,
+    values = dict(light_count=7, mode=1, flags=2, env_intensity=0.5,
                   env_rotation=(1, 0, 4, 0), ambient_color=(0.02, 0.02, 0.02, 0))
     a, b = bytearray(L.LIGHTING.size), bytearray(swapped.size)
     L.LIGHTING.pack_into(a, **values)
@@ -67,7 +68,7 @@ def test_swapped_fields_are_caught() -> None:
 
 
 def _slot() -> FrameSlot:
-    mv = [memoryview(bytearray(b.size)) for b in (L.CAMERA, L.SETTINGS, L.LIGHTING)]
+    mv = [memoryview(bytearray(b.size)) for b in (L.VIEW_RECORD, L.SETTINGS, L.LIGHTING)]
     return FrameSlot(0, None, None, *mv, lights=np.zeros((L.MAX_LIGHTS, 20), np.float32))
 
 
@@ -84,17 +85,24 @@ def test_frame_uniforms_land_in_their_fields() -> None:
     lighting = FrameLighting(mode=1, flags=L.LIGHTING_IBL, ambient=0.02, env_intensity=0.5,
                              env_rotation=np.pi / 2, env_max_lod=6.0)
     write_frame_uniforms(slot, camera, (light, spot), (64, 32), opts, False, bounds, lighting)
-    cam = np.frombuffer(slot.m_camera, L.CAMERA.dtype)[0]
+    view = np.frombuffer(slot.m_view, L.VIEW_RECORD.dtype)[0]
     st = np.frombuffer(slot.m_settings, L.SETTINGS.dtype)[0]
     lg = np.frombuffer(slot.m_lighting, L.LIGHTING.dtype)[0]
     rec = slot.lights[:2].copy().view(L.LIGHT_RECORD.dtype)[:, 0]
     vp = view_projection(camera, (64, 32), slot.znear)
-    np.testing.assert_allclose(cam["VP"], L.mat4_to_std140(vp), rtol=1e-6, atol=1e-6)
+    np.testing.assert_allclose(view["VP"], L.mat4_to_std140(vp), rtol=1e-6, atol=1e-6)
+    np.testing.assert_allclose(view["inv_VP"], L.mat4_to_std140(np.linalg.inv(vp)), rtol=1e-5,
+                               atol=1e-6)
+    np.testing.assert_allclose(view["eye_near"], (1, 2, 3, slot.znear), rtol=1e-6)
+    np.testing.assert_allclose(view["forward_far"][:3], forward(camera), rtol=1e-6)
+    assert view["forward_far"][3] == np.float32(slot.zfar) > slot.znear
+    g = 1 / np.tan(np.radians(25.0))
+    np.testing.assert_allclose(view["intrinsics"], (g * 32 / 64, g, 0, 0), rtol=1e-6)
+    assert tuple(view["viewport"]) == (0, 0, 64, 32) and view["layer"] == 0
     assert (st["view"], st["brdf"], st["tonemap"]) == (L.View.ROUGHNESS, L.Brdf.BLINN_PHONG, L.Tonemap.ACES)
     assert st["flags"] == L.SETTINGS_NORMAL_MAPPING | L.SETTINGS_SRGB_TARGET
     assert st["exposure"] == pytest.approx(2 ** 1.5)
-    assert st["znear"] == pytest.approx(slot.znear) and 0 < slot.znear < np.linalg.norm(camera.eye) - 1.8
-    np.testing.assert_allclose(lg["view_pos"], (1, 2, 3, 1))
+    assert 0 < slot.znear < np.linalg.norm(camera.eye) - 1.8
     assert (lg["light_count"], lg["mode"], lg["flags"]) == (2, 1, L.LIGHTING_IBL)
     np.testing.assert_allclose(lg["env_rotation"], (0, 1, 6, 0), atol=1e-7)
     np.testing.assert_allclose(lg["ambient_color"], (0.02, 0.02, 0.02, 0), rtol=1e-6)

@@ -45,7 +45,7 @@ def test_std140_offsets_match_compiled_shaders() -> None:
     found: dict[str, dict[str, int]] = {}
     for spv in codegen.SPV_DIR.glob("*.spv"):
         found.update(spirv_member_offsets(spv))
-    for block in L.BLOCKS:
+    for block in (*L.BLOCKS, L.VIEW_RECORD):
         assert block.name in found, f"{block.name} is used by no shader"
         assert found[block.name] == {k: v for k, v in block.offsets.items() if k in found[block.name]}
         # Every member the shader declares is one Python knows, at the same offset.
@@ -53,11 +53,16 @@ def test_std140_offsets_match_compiled_shaders() -> None:
 
 
 def test_std140_rules() -> None:
-    assert L.LIGHTING.offsets == {"view_pos": 0, "light_count": 16, "mode": 20, "flags": 24,
-                                  "env_intensity": 28, "env_rotation": 32, "ambient_color": 48}
-    assert L.LIGHTING.size == 64
+    assert L.LIGHTING.offsets == {"light_count": 0, "mode": 4, "flags": 8, "env_intensity": 12,
+                                  "env_rotation": 16, "ambient_color": 32}
+    assert L.LIGHTING.size == 48
     assert L.LIGHT_RECORD.size == 80 and L.LIGHT_RECORD.dtype.itemsize == 80
-    assert L.CAMERA.size == 128  # VP and its inverse (the compute path's pixel rays)
+    # The views: VP and its inverse (the compute path's pixel rays), eye and near, forward and
+    # far, intrinsics, viewport, layer; the uint pads the record to 208 bytes (std140 and
+    # std430 alike: the array's stride).
+    assert L.VIEW_RECORD.offsets == {"VP": 0, "inv_VP": 64, "eye_near": 128, "forward_far": 144,
+                                     "intrinsics": 160, "viewport": 176, "layer": 192}
+    assert L.VIEW_RECORD.size == L.VIEW_RECORD.dtype.itemsize == 208
     assert L.PUSH.size == 128  # the guaranteed minimum maxPushConstantsSize
     assert L.MATERIAL.dtype.itemsize == L.MATERIAL.size
 
@@ -81,7 +86,8 @@ def test_committed_spirv_is_current(tmp_path: Path) -> None:
     assert {p.name for p in codegen.SPV_DIR.glob('*.spv')} == {f.name for f in fresh}
 
 
-@pytest.mark.parametrize("block", [L.CAMERA, L.SETTINGS, L.LIGHTING, L.LIGHT_RECORD], ids=lambda b: b.name)
+@pytest.mark.parametrize("block", [L.VIEW_RECORD, L.SETTINGS, L.LIGHTING, L.LIGHT_RECORD],
+                         ids=lambda b: b.name)
 def test_struct_packer_writes_the_numpy_layout(block) -> None:  # noqa: ANN001
     """The per-frame struct packer and the structured dtype put every member at the same
     bytes (random values; mat4 flattened column by column)."""

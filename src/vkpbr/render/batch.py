@@ -2,16 +2,18 @@
 
 The frame path's passes (render/passes.py) drawn once for many views, GPU-driven:
 
-1. Python writes one ViewRecord per view (layouts.VIEW_RECORD: VP, eye, forward, planes,
-   layer) with vectorised NumPy (render/camera.py batch_frame_terms): no Python per view.
+1. Python writes one view record per view (layouts.VIEW_RECORD: VP, eye, forward, planes,
+   layer) with vectorised NumPy (render/views.py, a single frame's maths over arrays): no
+   Python per view.
 2. batch_cull.comp tests every (view, draw) pair, the draw's world bounding sphere against
    the view's frustum, and writes per (chunk, draw) an indirect command instanced over the
    views that see the draw, with their list (VisibleViews).
 3. Each chunk of up to `layers` views is one layered rendering into a BatchTarget
    (gpu/batch_target.py): every pass records its draws once as indirect draws; the BATCH
-   builds of pbr.vert / pbr.frag / background.vert read the view of each instance, draw
-   into its layer and shade with its eye. The chunk is copied into its place in the
-   readback buffer; the next chunk reuses the images.
+   builds of pbr.vert / pbr.frag / background.vert read the view of each instance (as
+   every shader reads its camera: views[view_index]), draw into its layer and shade with
+   its eye. The chunk is copied into its place in the readback buffer; the next chunk
+   reuses the images.
 
 Commands are recorded once per (target, views, options, shadow plan, blended order) and
 reused, so a batch costs Python a few NumPy calls and one submission however many views it
@@ -45,6 +47,7 @@ from vkpbr.render.passes import PassContext, record_passes
 from vkpbr.render.recorder import FrameRecorder
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.render.steps import FrameSpec, FrameSteps
+from vkpbr.render.views import ViewTerms, fill_views
 from vkpbr.scene.types import Scene
 
 __all__ = ["BatchViews", "draw_spheres", "MAX_LAYERS"]
@@ -136,27 +139,27 @@ class BatchViews:
         writer = DescriptorWriter(dev)
         for binding, buf in enumerate((self.views, self.bounds, self.commands, self.visible)):
             writer.storage(self.cull_set, binding, buf)
-        for slot, set0 in zip(self.slots, self.sets0, strict=True):
-            camera_buf, camera_at = slot.block_ranges["Camera"]
+        for slot, set0 in zip(self.slots, self.sets0, strict=True):  # a frame's, the batch's views
             settings_buf, settings_at = slot.block_ranges["Settings"]
-            writer.uniform(set0, 0, camera_buf, L.CAMERA.size, camera_at)
+            writer.storage(set0, 0, self.views)
             writer.uniform(set0, 1, settings_buf, L.SETTINGS.size, settings_at)
-            writer.storage(set0, 2, self.views)
-            writer.storage(set0, 3, self.visible)
-            writer.storage(set0, 4, self.gpu_scene.instance_buffer)
+            writer.storage(set0, 2, self.visible)
+            writer.storage(set0, 3, self.gpu_scene.instance_buffer)
         writer.update()
 
-    def write_views(self, terms: dict[str, np.ndarray], eye: np.ndarray) -> None:
-        """The ViewRecords of the batch (`terms`: camera.batch_frame_terms)."""
-        n = len(eye)
-        rec = self.records[:n]
-        rec["VP"] = terms["vp"].reshape(n, 4, 4)
-        rec["inv_VP"] = terms["inv_vp"].reshape(n, 4, 4)
-        rec["eye_near"] = np.concatenate([eye, terms["znear"][:, None]], 1)
-        rec["forward_far"] = np.concatenate([terms["forward"], terms["zfar"][:, None]], 1)
-        info = np.zeros((n, 4), np.uint32)
-        info[:, 0] = np.arange(n, dtype=np.uint32) % self.chunk_views
-        rec["info"] = info
+    def write_views(self, terms: ViewTerms, size: tuple[int, int], rows: int = 0) -> None:
+        """The batch's view records (`terms`: views.batch_view_terms) for views of `size`
+        (W, H): each in its layer of its chunk of the layered target, or (`rows` > 0) in its
+        tile of a compute batch's column-major atlas, `rows` tiles a column."""
+        n = len(terms.znear)
+        w, h = size
+        index = np.arange(n, dtype=np.uint32)
+        viewport = np.zeros((n, 4), np.uint32)
+        viewport[:, 2:] = w, h
+        if rows:
+            viewport[:, 0], viewport[:, 1] = index // rows * w, index % rows * h
+        layer = 0 if rows else index % self.chunk_views
+        fill_views(self.records[:n], terms, viewport, layer)
 
     def write_blend_groups(self, orders: np.ndarray) -> tuple[tuple[tuple[tuple[int, ...], int, int], ...], ...]:
         """Group each chunk's views by their blended draws' back-to-front order (`orders`:

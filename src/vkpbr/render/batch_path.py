@@ -4,9 +4,9 @@
 copies), its GPU resources (render/batch.py BatchViews) and, for `device="cuda"`, the CUDA
 imports of the targets' exported memory (gpu/cuda.py). Per submission it does what
 `Renderer.draw` does for one frame, for many views: the frame's lights, environment and
-shadow maps (directional ones over the whole scene), the uniforms of the first view (what the
-views share), every view's ViewRecord and blended order, the recorded commands, one submit,
-one wait, one readback (or one device-to-device clone into torch).
+shadow maps (directional ones over the whole scene), the blocks the views share, every
+view's record (render/views.py) and blended order, the recorded commands, one submit, one
+wait, one readback (or one device-to-device clone into torch).
 """
 
 from __future__ import annotations
@@ -24,10 +24,11 @@ from vkpbr.gpu.batch_target import BatchTarget
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH
 from vkpbr.render import layouts as L
 from vkpbr.render.batch import MAX_LAYERS, BatchViews
-from vkpbr.render.camera import batch_frame_terms, linear_depth
-from vkpbr.render.frames import summed_stats, write_frame_uniforms
+from vkpbr.render.camera import linear_depth
+from vkpbr.render.frames import summed_stats, write_frame_blocks
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.steps import FrameObjects, FrameSpec
+from vkpbr.render.views import ViewTerms, batch_view_terms
 from vkpbr.scene.camera_batch import CameraBatch
 
 # The Renderer (render/renderer.py) that owns the path: not imported here (it imports this
@@ -125,7 +126,7 @@ class BatchPath:
         # have (a new one reallocates them).
         chunk = self.views.chunk_views if self.views is not None else 0
         bv = self._views(n, chunk or max(1, min(n, MAX_LAYERS)))
-        frame, plan, terms = self._begin(views, size, lights, opts, linear)
+        frame, plan, terms = self._begin(views, size, lights, opts, linear, rows)
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
         set0 = bv.sets0[frame.index]
         self._run(frame, plan, opts, lambda redraw: r.recorder.command_buffer(
@@ -142,7 +143,7 @@ class BatchPath:
         dist = None
         if depth:
             dist = linear_depth(target.read_tiles(frame.index, n, size, depth=True),
-                                terms["znear"][:, None, None])
+                                terms.znear[:, None, None])
         r.device.check_validation()
         return color, dist
 
@@ -209,7 +210,7 @@ class BatchPath:
             target, frame, n, opts.tbn, opts.alpha_mask, plan, groups, r.prepass_for(target),
             redraw), (lambda: self._cuda_wait(target.color_readback)) if cuda else None)
         color = self._cuda_view(target, n, linear) if cuda else target.read_color(n, into)
-        dist = linear_depth(target.read_depth(n), terms["znear"][:, None, None]) if depth else None
+        dist = linear_depth(target.read_depth(n), terms.znear[:, None, None]) if depth else None
         r.device.check_validation()
         return color, dist
 
@@ -223,24 +224,23 @@ class BatchPath:
         return self.views
 
     def _begin(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
-               opts: RenderOptions, linear: bool) -> tuple[Any, Any, dict[str, np.ndarray]]:
+               opts: RenderOptions, linear: bool, atlas_rows: int = 0
+               ) -> tuple[Any, Any, ViewTerms]:
         """A submission's frame of the ring with what every batch writes: the frame's lights,
-        environment and shadow matrices (directional ones over the whole scene), the first
-        view's uniforms (what the views share) and every view's ViewRecord. Returns the
-        frame, the shadow plan and the views' batch_frame_terms."""
+        environment and shadow matrices (directional ones over the whole scene), the blocks
+        the views share and every view's record (`atlas_rows`: a compute batch's tiles a
+        column, BatchViews.write_views). Returns the frame, the
+        shadow plan and the views' terms (views.batch_view_terms)."""
         r = self.r
         frame_lights = r.frame_lights(opts, lights)
         r.bind_environment_for(opts)
-        terms = batch_frame_terms(views.eye, views.target, views.up, views.yfov_deg,
-                                  views.intrinsics, views.znear, views.zfar, tuple(size),
-                                  r.bounds.corners, r.bounds.radius)
+        terms = batch_view_terms(views, size, r.bounds.corners, r.bounds.radius)
         frame = r.ring.begin()
         slot = r.slots[frame.index]
         plan = r.shadow_plan(frame_lights, opts)
         rows = r.write_scene_shadows(slot, plan, frame_lights, opts)
-        write_frame_uniforms(slot, views.camera(0), frame_lights, size, opts, linear, r.bounds,
-                             r.frame_lighting(opts), rows)
-        self.views.write_views(terms, views.eye)  # type: ignore[union-attr]
+        write_frame_blocks(slot, frame_lights, opts, linear, r.frame_lighting(opts), rows)
+        self.views.write_views(terms, size, atlas_rows)  # type: ignore[union-attr]
         return frame, plan, terms
 
     def _run(self, frame: Any, plan: Any, opts: RenderOptions,

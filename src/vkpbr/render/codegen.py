@@ -69,7 +69,7 @@ VARIANTS: tuple[Variant, ...] = (
     *(Variant(f"{n}.comp.spv", f"{n}.comp") for n in (
         "env_equirect", "env_sky", "env_specular", "env_irradiance", "env_brdf_lut")),
     Variant("background.vert.spv", "background.vert"),
-    # Batched views (render/batch.py): the frame's shaders reading each view's ViewRecord,
+    # Batched views (render/batch.py): the frame's shaders reading each instance's view,
     # and the per-view culling kernel writing the instanced indirect draws.
     *(Variant(f"pbr_batch_{m.name.lower()}.vert.spv", "pbr.vert", (("TBN_MODE", int(m)), ("BATCH", 1)))
       for m in L.TbnMode),
@@ -90,6 +90,17 @@ VARIANTS: tuple[Variant, ...] = (
                       (6, "masked_big"))
       for batch in (0, 1) if not batch or k in (1, 2, 5, 6)),
 )
+
+
+# Which of `views` an invocation draws through: every shader reads its camera as
+# views[view_index]. A single frame has one view; a batch's builds (BATCH) set it first
+# thing from their instance (pbr.vert, background.vert), varying (pbr.frag) or tile (the
+# compute kernels).
+VIEW_INDEX = """#if BATCH
+uint view_index;
+#else
+const uint view_index = 0u;
+#endif"""
 
 
 def generated_glsl() -> str:
@@ -167,6 +178,8 @@ def generated_glsl() -> str:
                     out.append("#endif")
             elif kind == "storage":
                 out.append(storage(layout, name))
+                if name == "Views":
+                    out.append(VIEW_INDEX)
             else:
                 sampler = "sampler2D" if kind == "sampler" else kind
                 out.append(f"{layout}) uniform {sampler} {name};")

@@ -396,7 +396,8 @@ class ComputeScene:
         set 1, one dispatch a masked draw), then the visibility image resolved from it with
         the winners' depths, copied into the depth buffer (`depth` False: nothing reads it
         this frame, not copied). `tiles` (views, tile width, tile height, tiles a column: the
-        atlas is column-major): a compute batch's atlas, the views' records in `set0`."""
+        atlas is column-major): a compute batch's atlas. `set0`: the frame's set 0 or a batch's, whose view
+        records the kernels read."""
         res = self._resources(target)
         w, h = target.extent
         views, tile_w, tile_h, rows = tiles or (1, w, h, 1)

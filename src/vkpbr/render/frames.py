@@ -2,11 +2,13 @@
 into one mapped buffer) and the descriptor sets that point at them, so several frames can be
 queued on the GPU while Python writes the next one's camera.
 
-`write_frame_uniforms` writes the camera, settings and lighting blocks by field name through
-the std140 layouts' struct packers (layouts.Std140Block.pack_into) and the punctual lights
-as one NumPy array into the slot's storage buffer, skipping the work when the frame's inputs
-repeat (a static scene re-rendered; the lights are a tuple of frozen Lights, so an unchanged
-tuple compares equal at once).
+`write_frame_view` writes the slot's view record (render/views.py: record 0 of set 0's Views,
+what every shader reads the camera from), `write_frame_blocks` the settings and lighting
+blocks by field name through the std140 layouts' struct packers
+(layouts.Std140Block.pack_into) and the punctual lights as one NumPy array into the slot's
+storage buffer (`write_frame_uniforms`: both), each skipping the work when its inputs repeat
+(a static scene re-rendered; the lights are a tuple of frozen Lights, so an unchanged tuple
+compares equal at once).
 """
 
 from __future__ import annotations
@@ -22,16 +24,17 @@ from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.descriptors import DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
 from vkpbr.render import layouts as L
-from vkpbr.render.camera import camera_frame_columns, depth_range, forward
 from vkpbr.render.options import RenderOptions
+from vkpbr.render.views import camera_view_terms, pack_view
 from vkpbr.scene.types import Camera, Light
 
 __all__ = ["FrameSlot", "FrameStats", "FrameLighting", "create_slots", "write_frame_uniforms",
-           "bind_instances",
+           "write_frame_view", "write_frame_blocks", "bind_instances",
            "light_records", "Bounds"]
 
-FRAME_BLOCKS = (L.CAMERA, L.SETTINGS, L.LIGHTING)
+FRAME_BLOCKS = (L.VIEW_RECORD, L.SETTINGS, L.LIGHTING)  # the view: one record
 LIGHTS_BYTES = L.LIGHT_RECORD.size * L.MAX_LIGHTS  # one slot's storage buffer of lights
+INSTANCES_BINDING = next(b for b, _, _, name in L.SETS[0] if name == "Instances")
 
 
 @dataclass
@@ -56,20 +59,22 @@ def summed_stats(a: FrameStats, b: FrameStats) -> FrameStats:
 @dataclass
 class FrameSlot:
     index: int
-    set0: Any  # camera + settings
+    set0: Any  # the view + settings
     set2: Any  # lighting: the Lighting block, the lights, the environment's maps
     # Zero-copy byte views of the blocks in the mapped uniform buffer.
-    m_camera: memoryview
+    m_view: memoryview  # the frame's view record (Views[0])
     m_settings: memoryview
     m_lighting: memoryview
     lights: np.ndarray  # (MAX_LIGHTS, 20) float32 view of the slot's mapped light records
     # (buffer, offset) of each frame block by GLSL name: the compute path binds them as
     # storage buffers (render/compute_path.py).
     block_ranges: dict[str, tuple[Buffer, int]] = field(default_factory=dict)
-    uniform_key: tuple | None = None  # inputs of the camera and settings last written here
+    view_key: tuple | None = None  # the camera and size of the view record written here
+    settings_key: tuple | None = None  # inputs of the Settings block last written here
     lighting_key: tuple | None = None  # inputs of the Lighting block last written here
     lights_written: tuple = ()  # (lights, shadow rows' bytes) of the records the slot holds
-    znear: float = 0.0  # the near plane last written (depth readback is znear / depth)
+    znear: float = 0.0  # the view's near plane (depth readback is znear / depth)
+    zfar: float = 0.0  # the view's far plane (the shadow cascades' range)
     # World-from-camera rotation of the frame's camera, column-major (OpenGL axes as columns:
     # right, up, backward): the dataset outputs' camera-space normals.
     camera_rotation: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
@@ -119,24 +124,23 @@ def create_slots(
     slots = []
     for i in range(count):
         base = i * stride
-        cam, settings, lighting = (base + o for o in offsets)
+        view, settings, lighting = (base + o for o in offsets)
         set0, set2 = pool.allocate(set0_layout), pool.allocate(set2_layout)
-        writer.uniform(set0, 0, buffer, L.CAMERA.size, cam)
+        writer.storage(set0, 0, buffer, L.VIEW_RECORD.size, view)  # a frame's one view
         writer.uniform(set0, 1, buffer, L.SETTINGS.size, settings)
         writer.uniform(set2, 0, buffer, L.LIGHTING.size, lighting)
         writer.storage(set2, 1, lights, LIGHTS_BYTES, i * s_stride)
-        # Stand-ins for the batch's views (render/batch.py binds its own set 0): every
-        # binding written, none read by the frame shaders.
+        # A stand-in for the batch's visible lists (render/batch.py binds its own set 0):
+        # every binding written, none read by the frame shaders.
         writer.storage(set0, 2, lights, LIGHTS_BYTES, i * s_stride)
-        writer.storage(set0, 3, lights, LIGHTS_BYTES, i * s_stride)
-        writer.storage(set0, 4, lights, LIGHTS_BYTES, i * s_stride)  # the scene's: bind_instances
+        writer.storage(set0, 3, lights, LIGHTS_BYTES, i * s_stride)  # the scene's: bind_instances
         slots.append(FrameSlot(
             index=i, set0=set0, set2=set2,
-            m_camera=memoryview(buffer.array(np.uint8, L.CAMERA.size, cam)),
+            m_view=memoryview(buffer.array(np.uint8, L.VIEW_RECORD.size, view)),
             m_settings=memoryview(buffer.array(np.uint8, L.SETTINGS.size, settings)),
             m_lighting=memoryview(buffer.array(np.uint8, L.LIGHTING.size, lighting)),
             lights=lights.array(np.float32, LIGHTS_BYTES // 4, i * s_stride).reshape(L.MAX_LIGHTS, 20),
-            block_ranges={"Camera": (buffer, cam), "Settings": (buffer, settings),
+            block_ranges={"Views": (buffer, view), "Settings": (buffer, settings),
                           "Lighting": (buffer, lighting), "Lights": (lights, i * s_stride)},
         ))
     writer.update()
@@ -144,10 +148,10 @@ def create_slots(
 
 
 def bind_instances(device: Device, sets0: list[Any], instances: Buffer) -> None:
-    """Point binding 4 of frame sets `sets0` at the scene's instance matrices."""
+    """Point binding 3 of frame sets `sets0` at the scene's instance matrices."""
     writer = DescriptorWriter(device)
     for set0 in sets0:
-        writer.storage(set0, 4, instances)
+        writer.storage(set0, INSTANCES_BINDING, instances)
     writer.update()
 
 
@@ -185,32 +189,49 @@ class FrameLighting:
     env_max_lod: float = 0.0
 
 
+def write_frame_view(slot: FrameSlot, camera: Camera, size: Sequence[int], bounds: Bounds) -> None:
+    """Write `slot`'s view record for `camera` and frames of `size` (W, H): the batch of one
+    (render/views.py), once per new camera or size (a repeat is a tuple comparison). The
+    view's planes and rotation stay on the slot for the depth readback, the dataset outputs
+    and the shadow cascades, so that nothing computes the camera again."""
+    key = (_camera_key(camera), size[0], size[1])
+    if key == slot.view_key:
+        return
+    slot.view_key = key
+    terms = camera_view_terms(camera, size, bounds.corners, bounds.radius)
+    pack_view(slot.m_view, terms, (0, 0, int(size[0]), int(size[1])))
+    slot.znear, slot.zfar, slot.camera_rotation = terms.znear, terms.zfar, terms.rotation
+
+
 def write_frame_uniforms(slot: FrameSlot, camera: Camera, lights: tuple[Light, ...],
                          size: Sequence[int], opts: RenderOptions, linear: bool, bounds: Bounds,
                          lighting: FrameLighting = FrameLighting(),
                          shadow: np.ndarray | None = None) -> None:
-    """Write `slot`'s camera, settings and lighting blocks and its light records for one
-    frame of `size` (W, H). `shadow`: (len(lights), 4) float32, each record's `shadow` vec4
+    """Write `slot`'s view record (`write_frame_view`), settings and lighting blocks and its
+    light records (`write_frame_blocks`) for one frame of `size` (W, H)."""
+    write_frame_view(slot, camera, size, bounds)
+    write_frame_blocks(slot, lights, opts, linear, lighting, shadow)
+
+
+def write_frame_blocks(slot: FrameSlot, lights: tuple[Light, ...], opts: RenderOptions,
+                       linear: bool, lighting: FrameLighting = FrameLighting(),
+                       shadow: np.ndarray | None = None) -> None:
+    """Write what a frame's views share: `slot`'s settings and lighting blocks and its light
+    records. `shadow`: (len(lights), 4) float32, each record's `shadow` vec4
     (render/shadows.py ShadowMaps.write); None: no light has a shadow map."""
-    # Frames that repeat the slot's last inputs skip the maths: the key is cheap next to it.
-    key = (_camera_key(camera), tuple(size), opts, linear)
-    if key != slot.uniform_key:
-        slot.uniform_key = key
-        f = forward(camera)
-        znear, zfar = depth_range(camera, bounds.corners, bounds.radius, f)
-        slot.znear = znear
-        vp, inv_vp, slot.camera_rotation = camera_frame_columns(camera, size, znear, f)
-        L.CAMERA.pack_into(slot.m_camera, VP=vp, inv_VP=inv_vp)
+    # Frames that repeat the slot's last inputs skip the packing: the key is cheap next to it.
+    key = (opts, linear)
+    if key != slot.settings_key:
+        slot.settings_key = key
         flags = L.SETTINGS_NORMAL_MAPPING if opts.normal_mapping else 0
         flags |= L.SETTINGS_OCCLUSION if opts.occlusion else 0
         flags |= 0 if linear else L.SETTINGS_SRGB_TARGET
-        L.SETTINGS.pack_into(
-            slot.m_settings, camera_forward=(*f, 0.0), VP=vp, view=opts.view, brdf=opts.shading_brdf,
-            tonemap=opts.tonemap_for(linear), flags=flags, exposure=2.0 ** opts.exposure, znear=znear,
-            zfar=zfar, pad0=0.0)
+        L.SETTINGS.pack_into(slot.m_settings, view=opts.view, brdf=opts.shading_brdf,
+                             tonemap=opts.tonemap_for(linear), flags=flags,
+                             exposure=2.0 ** opts.exposure)
     # The shadow rows change with the shadow plan and the map sizes only (not the camera).
     records = (lights, None if shadow is None else shadow.tobytes())
-    lighting_key = (camera.eye, records, lighting)
+    lighting_key = (records, lighting)
     if lighting_key != slot.lighting_key:
         slot.lighting_key = lighting_key
         if records != slot.lights_written:
@@ -221,7 +242,7 @@ def write_frame_uniforms(slot: FrameSlot, camera: Camera, lights: tuple[Light, .
             slot.lights_written = records
         a, rot = lighting.ambient, lighting.env_rotation
         L.LIGHTING.pack_into(
-            slot.m_lighting, view_pos=(*camera.eye, 1.0), light_count=len(lights),
+            slot.m_lighting, light_count=len(lights),
             mode=lighting.mode, flags=lighting.flags, env_intensity=lighting.env_intensity,
             env_rotation=(math.cos(rot), math.sin(rot), lighting.env_max_lod, 0.0),
             ambient_color=(a, a, a, 0.0))

@@ -6,7 +6,9 @@ text; `vkpbr.render.codegen` writes the GLSL into shaders/generated.glsl, which 
 includes. A test reads the member offsets back out of the compiled SPIR-V and compares.
 
 Descriptor sets follow the report (renderer-spec section 1):
-  set 0: binding 0 camera {mat4 VP}; binding 1 frame settings (view, BRDF, tonemap, ...)
+  set 0: binding 0 the views (VIEW_RECORD: camera matrices, eye, planes; record 0 for a
+         single frame, one per view for a batch); binding 1 frame settings (view, BRDF,
+         tonemap, ...)
   set 1: bindings 0-4 base colour, metallic, roughness, normal, occlusion; 5 emissive;
          6-14 the KHR_materials_* layers' textures (MATERIAL_TEXTURES); 15 material factors
   set 2: lighting, one per frame: binding 0 Lighting {view position, light count, mode,
@@ -14,7 +16,7 @@ Descriptor sets follow the report (renderer-spec section 1):
          course's one light being lights[0]); 2-4 the environment's pre-filtered maps
   set 3: shadows (render/shadows.py)
 The course's set 2 was one Light block {vec4 lightPos; vec3 color; float intensity; vec4
-viewPos}; its contents now live in Lighting.view_pos and lights[0].
+viewPos}; its contents now live in the view record's eye and lights[0].
 """
 
 from __future__ import annotations
@@ -42,7 +44,7 @@ from vkpbr.shading import (
 
 __all__ = [
     "Std140Block",
-    "CAMERA",
+    "VIEW_RECORD",
     "SETTINGS",
     "MATERIAL",
     "LIGHTING",
@@ -183,28 +185,30 @@ def mat4_to_std140(m: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(np.asarray(m, dtype=np.float32).T)
 
 
-CAMERA = Std140Block("Camera", "camera", (
-    ("VP", "mat4"),
-    ("inv_VP", "mat4"),  # world from clip: the compute path's pixel rays
+# One view a frame or a batch draws through (render/views.py builds and writes them): set 0's
+# Views storage buffer holds one per view, which every shader reads as views[view_index]
+# (generated.glsl: 0 for a single frame; a batch's shaders take their instance's or tile's).
+# mat4 and vec4 members and a trailing uint: std140 here is also the std430 layout of the
+# storage array (stride 208 either way).
+VIEW_RECORD = Std140Block("ViewRecord", "view_record", (
+    ("VP", "mat4"),  # clip from world: reversed-Z, infinite far plane (render/camera.py)
+    ("inv_VP", "mat4"),  # world from clip: the compute path's pixel rays, its background's
+    ("eye_near", "vec4"),  # xyz: the eye; w: znear (depth readback is znear / depth)
+    ("forward_far", "vec4"),  # xyz: unit view direction; w: zfar (the depth view's scale)
+    ("intrinsics", "vec4"),  # sx, sy, ox, oy: NDC x = sx x / -z + ox, y = -sy y / -z + oy
+    ("viewport", "uvec4"),  # x, y, width, height: the pixels of its target the view covers
+    ("layer", "uint"),  # the layer of a layered batch target it is drawn into (else 0)
 ))
 
 SETTINGS = Std140Block(
     "Settings",
     "settings",
     (
-        ("camera_forward", "vec4"),  # xyz: unit view direction (linear depth view)
-        # Camera.VP again, for the fragment and compute shading (the screen-space
-        # transmission's projection, shade.glsl): Mesa 22.3's lavapipe crashes drawing once
-        # the Camera block is visible to fragment shaders.
-        ("VP", "mat4"),
         ("view", "int"),  # View
         ("brdf", "int"),  # Brdf
         ("tonemap", "int"),  # Tonemap
         ("flags", "uint"),  # SETTINGS_* bits below
         ("exposure", "float"),  # linear multiplier (2 ** EV)
-        ("znear", "float"),
-        ("zfar", "float"),
-        ("pad0", "float"),
     ),
 )
 SETTINGS_NORMAL_MAPPING = 1  # use normal maps
@@ -281,7 +285,6 @@ LIGHTING = Std140Block(
     "Lighting",
     "lighting",
     (
-        ("view_pos", "vec4"),  # xyz: the camera position (v = normalize(view_pos - p))
         ("light_count", "uint"),  # records in `lights` this frame
         ("mode", "int"),  # Lighting
         ("flags", "uint"),  # LIGHTING_* bits below
@@ -335,20 +338,10 @@ DRAW_RECORD = Std140Block("DrawRecord", "draw_record", (
     ("ids", "uvec4"),  # instance id, semantic id (dataset outputs; 0 = background), 0, 0
 ))
 
-# One view of a batch (Renderer.render_batch, render/batch.py): what the batch shaders read
-# per view instead of the frame's Camera block and Settings/Lighting camera fields. Only mat4
-# and vec4 members: std140 here is also the std430 layout of the storage array.
-VIEW_RECORD = Std140Block("ViewRecord", "view_record", (
-    ("VP", "mat4"),  # as Camera.VP
-    ("inv_VP", "mat4"),  # as Camera.inv_VP (the compute batch's pixel rays)
-    ("eye_near", "vec4"),  # xyz: the eye (Lighting.view_pos); w: znear (Settings.znear)
-    ("forward_far", "vec4"),  # xyz: unit view direction; w: zfar (Settings.zfar)
-    ("info", "uvec4"),  # x: the layer of the batch target it is drawn into
-))
-
 STORAGE = {
     "Lights": StorageArray("Lights", LIGHT_RECORD, "lights"),
-    # The batch's views and, per (chunk, draw), the views that see the draw (render/batch.py).
+    # Every view drawn (VIEW_RECORD) and, per (chunk, draw) of a batch, the views that see
+    # the draw (render/batch.py).
     "Views": StorageArray("Views", VIEW_RECORD, "views"),
     "VisibleViews": StorageArray("VisibleViews", "uint", "visible_views"),
     # Every draw record's matrices (render/gpu_scene.py): the frame's vertex shader reads its
@@ -408,8 +401,8 @@ COMPUTE_SET: tuple[tuple[int, str, str], ...] = (
     (14, "storage", "PixelList"),
     # The frame's blocks and the materials as storage buffers: the compute path reads no
     # uniform block, which lavapipe 22.3 would compile a variant of the shader for per new set
-    # of values (never freed) and, once a loop depends on one, crash compiling.
-    (15, "block", "Camera"),
+    # of values (never freed) and, once a loop depends on one, crash compiling. (15 is free:
+    # the views are set 0's storage buffer, read there by every path.)
     (16, "block", "Settings"),
     (17, "block", "Lighting"),
     (18, "storage", "Materials"),
@@ -453,20 +446,20 @@ class LightKind(Named):
 
 PUSH = Std140Block("Draw", "draw", (("model", "mat4"), ("normal_matrix", "mat4")))
 
-BLOCKS = (CAMERA, SETTINGS, MATERIAL, LIGHTING, PUSH)
+BLOCKS = (SETTINGS, MATERIAL, LIGHTING, PUSH)
 
 # set -> (binding, kind, stages, name): the one table of descriptor bindings. kind: "uniform"
 # (a block of BLOCKS), "storage" (an array of STORAGE), "sampler" (sampler2D) or another GLSL
 # sampler type ("samplerCube", "sampler2DArrayShadow", ...).
 SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
     0: (
-        (0, "uniform", ("vertex", "compute"), "Camera"),
+        # The views: a frame slot's one record (render/frames.py), a batch's array (batch.py).
+        (0, "storage", ("vertex", "fragment", "compute"), "Views"),
         (1, "uniform", ("vertex", "fragment", "compute"), "Settings"),
-        # Batched views (render/batch.py): frames bind stand-ins the frame shaders never read.
-        (2, "storage", ("vertex", "fragment", "compute"), "Views"),
-        (3, "storage", ("vertex",), "VisibleViews"),
+        # A batch's visible lists (render/batch.py): frames bind a stand-in they never read.
+        (2, "storage", ("vertex",), "VisibleViews"),
         # The scene's instance matrices (GpuScene.instance_buffer), written by the Renderer.
-        (4, "storage", ("vertex",), "Instances"),
+        (3, "storage", ("vertex",), "Instances"),
     ),
     1: (
         *((i, "sampler", ("fragment", "compute"), f"{slot}_map")

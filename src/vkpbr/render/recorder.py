@@ -183,8 +183,8 @@ class FrameRecorder:
         return _Recorded(cmd, order, tuple(stamps.names), target)
 
     def compute_sets(self, frame_index: int, set0: object = None) -> dict[int, object]:
-        """The frame's sets the compute path's kernels bind: 0 (the camera; `set0`: a batch's
-        views), 2 (lighting) and 3 (the shadow maps, where there are any)."""
+        """The frame's sets the compute path's kernels bind: 0 (the frame's view; `set0`: a
+        batch's views), 2 (lighting) and 3 (the shadow maps, where there are any)."""
         slot = self.slots[frame_index]
         sets = {0: slot.set0 if set0 is None else set0, 2: slot.set2}
         if self.shadows is not None:

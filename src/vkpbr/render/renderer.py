@@ -39,7 +39,7 @@ from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, COPY_OUTPUTS, FrameTarget, 
 from vkpbr.render import layouts as L
 from vkpbr.render.batch import draw_spheres
 from vkpbr.render.batch_path import BatchPath
-from vkpbr.render.camera import as_camera, depth_range, forward, linear_depth, validate_camera
+from vkpbr.render.camera import as_camera, linear_depth, validate_camera
 from vkpbr.render.compute_path import ComputeScene, ShadeVariant
 from vkpbr.render.environment import Environment, EnvironmentBaker, EnvironmentSpec
 from vkpbr.render.frames import (
@@ -49,7 +49,8 @@ from vkpbr.render.frames import (
     FrameStats,
     bind_instances,
     create_slots,
-    write_frame_uniforms,
+    write_frame_blocks,
+    write_frame_view,
 )
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.options import RenderOptions
@@ -466,7 +467,8 @@ class Renderer:
     def _write_shadows(self, slot: FrameSlot, plan: ShadowPlan, lights: tuple[Light, ...],
                        camera: Camera, size: tuple[int, int]) -> np.ndarray | None:
         """The slot's shadow matrices for this frame (skipped when its inputs repeat) and the
-        lights' LightRecord.shadow rows; None without shadow maps."""
+        lights' LightRecord.shadow rows; None without shadow maps. The cascades take the
+        frame's planes from its view record: write_frame_view comes first."""
         if not plan.entries:
             return None
         sm = self.shadows
@@ -479,9 +481,7 @@ class Renderer:
         last = self._shadow_rows.get(slot.index)
         if last is not None and last[0] == key:
             return last[1]
-        f = forward(camera)
-        znear, zfar = depth_range(camera, self.bounds.corners, self.bounds.radius, f)
-        rows = sm.write(slot.index, plan, lights, camera, size, znear, zfar,
+        rows = sm.write(slot.index, plan, lights, camera, size, slot.znear, slot.zfar,
                         self.bounds.corners[0], self.bounds.corners[-1])
         self._shadow_rows[slot.index] = (key, rows)
         return rows
@@ -570,9 +570,11 @@ class Renderer:
         wanted = self._post_of(options)
         post = bool(wanted) and check_post(options, target, self.device.compute_path)
         drawn = self.post_target(target, copy) if post else target  # (HDR with post steps)
-        write_frame_uniforms(slot, camera, lights, target.extent, self._shading_options(options, post),
-                             linear or post, self.bounds, self.frame_lighting(options),
-                             self._write_shadows(slot, plan, lights, camera, target.extent))
+        # The camera's maths, once: the shadow cascades take its planes from the slot.
+        write_frame_view(slot, camera, target.extent, self.bounds)
+        write_frame_blocks(slot, lights, self._shading_options(options, post), linear or post,
+                           self.frame_lighting(options),
+                           self._write_shadows(slot, plan, lights, camera, target.extent))
         if overlay is not None:
             overlay.prepare(frame.index)
         redraw = self.shadows.stale(slot.index, plan, options.alpha_mask)

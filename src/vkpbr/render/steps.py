@@ -219,7 +219,7 @@ class FrameSteps:
         self._color_written = True  # the resolve writes the clear colour where nothing covers
         self._close_rendering()
         return cs.raster_steps(self.target, self.frame_index, spec.alpha_mask,
-                               self.gs.material_sets, spec.tiles, self.objects.set0, depth)
+                               self.gs.material_sets, spec.tiles, self.set0, depth)
 
     def _classify(self) -> list[Step]:
         counted = "raster" in PATHS[self.spec.path]

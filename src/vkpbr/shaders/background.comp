@@ -30,14 +30,11 @@ void main() {
     if (imageLoad(visibility, ivec2(pixel)).x != 0u) return;
     uvec2 tile = uvec2(pc.tile_w, pc.tile_h);
 #if BATCH
-    uint v = (pixel.x / tile.x) * pc.rows + pixel.y / tile.y;  // column-major tiles
-    if (v >= pc.views) return;
-    mat4 inv_vp = views[v].inv_VP;
-    vec3 eye = views[v].eye_near.xyz;
-#else
-    mat4 inv_vp = camera.inv_VP;
-    vec3 eye = lighting.view_pos.xyz;
+    view_index = (pixel.x / tile.x) * pc.rows + pixel.y / tile.y;  // column-major tiles
+    if (view_index >= pc.views) return;
 #endif
+    mat4 inv_vp = views[view_index].inv_VP;
+    vec3 eye = views[view_index].eye_near.xyz;
     vec2 ndc = (vec2(pixel % tile) + 0.5) / vec2(tile) * 2.0 - 1.0;
     vec4 near = inv_vp * vec4(ndc, 1.0, 1.0);
     vec3 d = env_rotate(normalize(near.xyz / near.w - eye), lighting.env_rotation.xy);

@@ -105,7 +105,9 @@ struct ViewRecord {
     mat4 inv_VP;
     vec4 eye_near;
     vec4 forward_far;
-    uvec4 info;
+    vec4 intrinsics;
+    uvec4 viewport;
+    uint layer;
 };
 struct DrawRecord {
     mat4 model;
@@ -166,33 +168,27 @@ struct MaterialRecord {
     vec4 thickness_uv_row1;
 };
 #if !STRUCTS_ONLY
-#if !COMPUTE_SHADING
-layout(set = 0, binding = 0, std140) uniform Camera {
-    mat4 VP;
-    mat4 inv_VP;
-} camera;
+layout(set = 0, binding = 0, std140) readonly buffer Views {
+    ViewRecord views[];
+};
+#if BATCH
+uint view_index;
+#else
+const uint view_index = 0u;
 #endif
 #if !COMPUTE_SHADING
 layout(set = 0, binding = 1, std140) uniform Settings {
-    vec4 camera_forward;
-    mat4 VP;
     int view;
     int brdf;
     int tonemap;
     uint flags;
     float exposure;
-    float znear;
-    float zfar;
-    float pad0;
 } settings;
 #endif
-layout(set = 0, binding = 2, std140) readonly buffer Views {
-    ViewRecord views[];
-};
-layout(set = 0, binding = 3, std430) readonly buffer VisibleViews {
+layout(set = 0, binding = 2, std430) readonly buffer VisibleViews {
     uint visible_views[];
 };
-layout(set = 0, binding = 4, std430) readonly buffer Instances {
+layout(set = 0, binding = 3, std430) readonly buffer Instances {
     mat4 instance_matrices[];
 };
 layout(set = 1, binding = 0) uniform sampler2D base_color_map;
@@ -264,7 +260,6 @@ layout(set = 1, binding = 15, std140) uniform Material {
 } material;
 #if !COMPUTE_SHADING
 layout(set = 2, binding = 0, std140) uniform Lighting {
-    vec4 view_pos;
     uint light_count;
     int mode;
     uint flags;
@@ -323,24 +318,14 @@ layout(set = 4, binding = 13, std430) buffer BinArgs {
 layout(set = 4, binding = 14, std430) buffer PixelList {
     uint pixel_list[];
 };
-layout(set = 4, binding = 15, std140) readonly buffer Camera {
-    mat4 VP;
-    mat4 inv_VP;
-} camera;
 layout(set = 4, binding = 16, std140) readonly buffer Settings {
-    vec4 camera_forward;
-    mat4 VP;
     int view;
     int brdf;
     int tonemap;
     uint flags;
     float exposure;
-    float znear;
-    float zfar;
-    float pad0;
 } settings;
 layout(set = 4, binding = 17, std140) readonly buffer Lighting {
-    vec4 view_pos;
     uint light_count;
     int mode;
     uint flags;

@@ -16,11 +16,8 @@ layout(location = 4) in vec3 v_bitangent;
 layout(location = 5) in vec4 v_color;  // COLOR_0 (white when the mesh has none)
 layout(location = 6) flat in uint v_draw;  // the draw's index (its firstInstance)
 layout(location = 8) flat in float v_model_scale;  // the node's scale (shade.glsl s_model_scale)
-#if BATCH  // a view of a batch: the camera's values from its ViewRecord (render/batch.py)
+#if BATCH  // a view of a batch (render/batch.py): the camera is views[v_view]
 layout(location = 7) flat in uint v_view;
-#define FRAME_EYE (views[v_view].eye_near.xyz)
-#define FRAME_FORWARD (views[v_view].forward_far.xyz)
-#define FRAME_ZFAR (views[v_view].forward_far.w)
 #endif
 
 #if VISIBILITY
@@ -34,6 +31,9 @@ layout(location = 0) out vec4 out_color;
 #include "shade.glsl"
 
 void main() {
+#if BATCH
+    view_index = v_view;
+#endif
     opaque_zero = uint(gl_FragCoord.x < 0.0);
     s_world_pos = v_world_pos;
     s_texcoords = v_texcoords;

@@ -1,9 +1,10 @@
 #version 450
 // pbr.vert: world-space position and TBN for pbr.frag (report 1.1). TBN_MODE picks how the
 // tangent frame arrives: 0 normal + tangent vectors, 1 a float QTangent, 2 a packed uint32.
-// BATCH = 1: a view of a batch (render/batch.py): instance i of a draw is the view
-// visible_views[i] (the culling kernel lists the views that see the draw from its
-// firstInstance on), drawn with that view's VP into its layer of the batch target.
+// The camera is views[view_index] (generated.glsl): the frame's one view, or with BATCH = 1
+// a view of a batch (render/batch.py): instance i of a draw is the view visible_views[i]
+// (the culling kernel lists the views that see the draw from its firstInstance on), drawn
+// with that view's VP into its layer of the batch target.
 #extension GL_GOOGLE_include_directive : require
 #if BATCH
 #extension GL_ARB_shader_viewport_layer_array : require
@@ -80,11 +81,9 @@ void main() {
     v_tangent = mat3(model) * t;
     v_bitangent = mat3(model) * b;
 #if BATCH
-    uint view_index = visible_views[gl_InstanceIndex];
+    view_index = visible_views[gl_InstanceIndex];
     v_view = view_index;
-    gl_Layer = int(views[view_index].info.x);
-    gl_Position = views[view_index].VP * world;
-#else
-    gl_Position = camera.VP * world;
+    gl_Layer = int(views[view_index].layer);
 #endif
+    gl_Position = views[view_index].VP * world;
 }

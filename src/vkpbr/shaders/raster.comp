@@ -30,8 +30,8 @@
 //   into raster_depths (copied into the depth buffer: a copy, where a screen-filling
 //   fragment pass writing gl_FragDepth cost 0.30 ms at 1080p on the H200's few raster SMs).
 // BATCH = 1 (render/batch_path.py's compute batch): `views` views tiled `rows` to a column in
-// one atlas (column-major, so a column of tiles is one copy into view-major memory), each `tile` pixels, each with its ViewRecord's VP; the work's z index is the view.
-// One view (BATCH 0) is the same with the frame's camera and the whole target as the tile.
+// one atlas (column-major, so a column of tiles is one copy into view-major memory), each `tile` pixels, each with its view's VP; the work's z index is the view.
+// One view (BATCH 0) is the same with the frame's view and the whole target as the tile.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
@@ -89,16 +89,6 @@ layout(push_constant) uniform Raster {
     vec4 clear_color;  // raster_resolve: linear, where nothing covers a pixel
 } pc;
 
-#if BATCH
-uint g_view;  // this invocation's view (surface_fetch.glsl reads its ray from it)
-#define FETCH_INV_VP (views[g_view].inv_VP)
-#define FETCH_EYE (views[g_view].eye_near.xyz)
-#define VIEW_VP (views[g_view].VP)
-#define VIEW_INDEX g_view
-#else
-#define VIEW_VP (camera.VP)
-#define VIEW_INDEX 0u
-#endif
 #if ALPHA_TESTED
 #define MATERIAL_INDEX pc.material
 #include "surface_fetch.glsl"
@@ -155,12 +145,12 @@ bool fetch(uint g, out vec4 c[3], out bool double_sided) {
 #endif
     // The draw's bounding sphere outside the view: none of its triangles is seen (one test
     // instead of three vertices; most of a scene's draws, for most of a batch's views).
-    if (!sphere_visible(VIEW_VP, raster_spheres[rd.z])) return false;
+    if (!sphere_visible(views[view_index].VP, raster_spheres[rd.z])) return false;
     DrawRecord dr = draws[rd.z];
     uint base = dr.info.x + 3u * (g - rd.x);
     for (int j = 0; j < 3; ++j) {
         uint v = indices[base + uint(j)] + dr.info.y;
-        c[j] = VIEW_VP * (dr.model * vec4(position(v), 1.0));  // as pbr.vert's gl_Position
+        c[j] = views[view_index].VP * (dr.model * vec4(position(v), 1.0));  // as pbr.vert's
     }
     return true;
 }
@@ -189,7 +179,7 @@ int clip(vec4 c[3], out vec4 poly[5]) {
 // The view's tile: its first pixel in the target and its size.
 ivec2 tile_origin() {
 #if BATCH
-    return ivec2(g_view / pc.rows, g_view % pc.rows) * ivec2(pc.tile_w, pc.tile_h);
+    return ivec2(view_index / pc.rows, view_index % pc.rows) * ivec2(pc.tile_w, pc.tile_h);
 #else
     return ivec2(0);
 #endif
@@ -353,7 +343,7 @@ void list_bands(Screen t, uint g) {
     for (uint c = 0u; c < listed; ++c) {
         uint e = masked_entry(segment, slot + c);
         raster_masked_big[e] = g;
-        raster_masked_big[e + 1u] = VIEW_INDEX;
+        raster_masked_big[e + 1u] = view_index;
         raster_masked_big[e + 2u] = c;
     }
     if (listed > 0u) atomicMax(raster_masked_big[4u * segment + 1u], slot + listed);
@@ -365,7 +355,7 @@ void list_bands(Screen t, uint g) {
     for (uint c = 0u; c < listed; ++c) {
         uint e = BIG_LIST + BIG_ENTRY * (slot + c);
         raster_big[e] = g;
-        raster_big[e + 1u] = VIEW_INDEX;
+        raster_big[e + 1u] = view_index;
         raster_big[e + 2u] = c;
     }
     if (listed < chunks) draw_screen(t, g, listed, ALL_CHUNKS, ALONE);
@@ -412,7 +402,7 @@ void raster_entry(uint g, uint chunk) {
 
 void main() {
 #if BATCH
-    g_view = KERNEL == 2 || KERNEL == 6 ? 0u : gl_GlobalInvocationID.z;
+    view_index = KERNEL == 2 || KERNEL == 6 ? 0u : gl_GlobalInvocationID.z;
 #endif
 #if KERNEL == 1
     uint g = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
@@ -442,7 +432,7 @@ void main() {
     for (uint k = gl_WorkGroupID.x; k < listed; k += gl_NumWorkGroups.x) {
         uint e = masked_entry(pc.segment, k);
 #if BATCH
-        g_view = raster_masked_big[e + 1u];
+        view_index = raster_masked_big[e + 1u];
 #endif
         uint chunk = raster_masked_big[e + 2u];
         raster_entry(raster_masked_big[e], chunk);
@@ -452,7 +442,7 @@ void main() {
     for (uint k = gl_WorkGroupID.x; k < listed; k += gl_NumWorkGroups.x) {
         uint e = BIG_LIST + BIG_ENTRY * k;
 #if BATCH
-        g_view = raster_big[e + 1u];
+        view_index = raster_big[e + 1u];
 #endif
         uint chunk = raster_big[e + 2u];
         raster_entry(raster_big[e], chunk);

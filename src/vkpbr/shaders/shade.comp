@@ -24,15 +24,6 @@ layout(push_constant) uniform Shade {
     uint rows;
 } pc;
 
-#if BATCH  // a compute batch (render/batch_path.py): the pixel's view is its tile's
-uint g_view;
-#define FETCH_INV_VP (views[g_view].inv_VP)
-#define FETCH_EYE (views[g_view].eye_near.xyz)
-#define FRAME_EYE (views[g_view].eye_near.xyz)
-#define FRAME_FORWARD (views[g_view].forward_far.xyz)
-#define FRAME_ZFAR (views[g_view].forward_far.w)
-#endif
-
 #define MATERIAL_INDEX pc.material
 #include "surface_fetch.glsl"
 
@@ -51,15 +42,15 @@ void main() {
     bool srgb_target = OPAQUE_COPY == 0 && (u(settings.flags) & SETTINGS_SRGB_TARGET) != 0u;
     uvec3 vi;
     vec3 w0, w1, w2, bary;
-#if BATCH
+#if BATCH  // a compute batch (render/batch_path.py): the pixel's view is its tile's
     uvec2 tile = uvec2(pc.tile_w, pc.tile_h);
-    g_view = (pixel.x / tile.x) * pc.rows + pixel.y / tile.y;  // column-major tiles
+    view_index = (pixel.x / tile.x) * pc.rows + pixel.y / tile.y;  // column-major tiles
     DrawRecord dr = surface_at(vis.x - 1u, vis.y, pixel % tile, vec2(tile), vi, w0, w1, w2, bary);
 #else
     DrawRecord dr = surface_at(vis.x - 1u, vis.y, pixel, vec2(size), vi, w0, w1, w2, bary);
 #endif
     surface_frame_at(dr, vi, w0, w1, w2, bary);
-    vec3 eye = FETCH_EYE;
+    vec3 eye = views[view_index].eye_near.xyz;
 
 #if OUTPUTS
     // Dataset outputs (Renderer.render(outputs=...)): ids, normals, distances of this point.
@@ -70,7 +61,7 @@ void main() {
     imageStore(out_normal, at, vec4(frame_n, 0.0));
     imageStore(out_normal_geometric, at, vec4(frame_ng, 0.0));
     vec3 to_point = s_world_pos - eye;
-    imageStore(out_depth_range, at, vec4(dot(to_point, FRAME_FORWARD),
+    imageStore(out_depth_range, at, vec4(dot(to_point, views[view_index].forward_far.xyz),
                                          length(to_point), 0.0, 0.0));
 #else
     vec4 value = shade_surface();

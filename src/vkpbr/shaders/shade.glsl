@@ -12,15 +12,10 @@
 //                  hardware derivatives in pbr.frag, ray-differential gradients in shade.comp
 // and sets opaque_zero and the surface globals s_* before calling shade_surface().
 // ALPHA_MASK (fragment path) discards below the material's cutoff.
-// FRAME_EYE, FRAME_FORWARD, FRAME_ZFAR: the camera's eye, unit view direction and far depth;
-// the frame's blocks unless the includer defines them (a batch's ViewRecord, pbr.frag BATCH).
+// The camera (eye, view direction, far plane, VP) is views[view_index] (generated.glsl),
+// which a batch's includer sets first.
 #ifndef SHADE_GLSL
 #define SHADE_GLSL
-#ifndef FRAME_EYE
-#define FRAME_EYE (lighting.view_pos.xyz)
-#define FRAME_FORWARD (settings.camera_forward.xyz)
-#define FRAME_ZFAR (settings.zfar)
-#endif
 #include "brdf.glsl"
 #include "lights.glsl"
 #include "shadows.glsl"
@@ -142,7 +137,7 @@ vec3 clearcoat_normal(uint settings_flags, uint material_flags, vec3 ng, vec3 t,
 #define SCREEN_TRANSMISSION (!OPAQUE_COPY && !BATCH)
 #if SCREEN_TRANSMISSION
 bool opaque_copy_radiance(vec3 exit_point, float roughness, out vec3 radiance) {
-    vec4 clip = settings.VP * vec4(exit_point, 1.0);
+    vec4 clip = views[view_index].VP * vec4(exit_point, 1.0);
     radiance = vec3(0.0);
     if (clip.w <= 1e-6) return false;
     vec2 uv = clip.xy / clip.w * 0.5 + 0.5;  // NDC to the copy's texels (same viewport maps)
@@ -192,8 +187,9 @@ vec4 shade_surface() {
     vec3 ng, t, b, n;
     surface_frame(settings_flags, material_flags, ng, t, b, n);
 
-    vec3 v = safe_normalize(FRAME_EYE - s_world_pos, ng);
-    float view_depth = dot(s_world_pos - FRAME_EYE, FRAME_FORWARD);
+    vec3 eye = views[view_index].eye_near.xyz;
+    vec3 v = safe_normalize(eye - s_world_pos, ng);
+    float view_depth = dot(s_world_pos - eye, views[view_index].forward_far.xyz);
     uint lighting_flags = u(lighting.flags) & SHADE_LIGHTING_FLAGS;
     int brdf = SHADE_BRDF >= 0 ? SHADE_BRDF : u(settings.brdf);
     uint light_count = min(u(lighting.light_count), MAX_LIGHTS);
@@ -306,7 +302,7 @@ vec4 shade_surface() {
         case VIEW_OCCLUSION: value = vec3(occlusion); break;
         case VIEW_ALPHA: value = vec3(base.a); break;
         case VIEW_TEXCOORDS: value = vec3(fract(uv), 0.0); break;
-        case VIEW_DEPTH: value = vec3(view_depth / FRAME_ZFAR); break;
+        case VIEW_DEPTH: value = vec3(view_depth / views[view_index].forward_far.w); break;
         case VIEW_EMISSIVE: value = emissive; break;
         case VIEW_TANGENT: value = encode_dir(t); break;
         case VIEW_BITANGENT: value = encode_dir(b); break;

@@ -5,14 +5,10 @@
 // quads take, so mip levels agree), then shade.glsl's surface globals set from them.
 // The includer defines MATERIAL_INDEX (the material whose set 1 is bound) and includes
 // generated.glsl (COMPUTE_SHADING) and, for TBN_MODE != 0, tbn_decode.glsl first.
-// FETCH_INV_VP, FETCH_EYE: the view's inverse view-projection and eye (default the frame's
-// camera; a compute batch's view's ViewRecord otherwise).
+// The rays come from the camera views[view_index] (generated.glsl): its inverse
+// view-projection and eye (a compute batch's includer sets the index first).
 #ifndef SURFACE_FETCH_GLSL
 #define SURFACE_FETCH_GLSL
-#ifndef FETCH_INV_VP
-#define FETCH_INV_VP (camera.inv_VP)
-#define FETCH_EYE (lighting.view_pos.xyz)
-#endif
 
 vec4 g_dtex_dx, g_dtex_dy;  // d(TEXCOORD_0, TEXCOORD_1) per pixel step in x and y
 
@@ -44,8 +40,8 @@ vec4 color_at(uint i) {
 // direction, from the inverse view-projection (any intrinsics included).
 vec3 ray_dir(vec2 p, vec2 extent) {
     vec2 ndc = p / extent * 2.0 - 1.0;
-    vec4 near = FETCH_INV_VP * vec4(ndc, 1.0, 1.0);  // reversed-Z: the near plane is depth 1
-    return normalize(near.xyz / near.w - FETCH_EYE);
+    vec4 near = views[view_index].inv_VP * vec4(ndc, 1.0, 1.0);  // reversed-Z: near is depth 1
+    return normalize(near.xyz / near.w - views[view_index].eye_near.xyz);
 }
 
 // Barycentrics (b1, b2) of the ray's hit on the plane of triangle (a, b, c); b0 = 1 - b1 - b2.
@@ -87,7 +83,7 @@ SurfaceTriangle surface_triangle(DrawRecord dr, uint prim) {
 // shade.glsl's s_texcoords, s_world_pos, s_color and the gradients for the centre of `pixel`
 // (of a target `extent` pixels) on triangle `t`; returns the barycentrics.
 vec3 surface_point(SurfaceTriangle t, uvec2 pixel, vec2 extent) {
-    vec3 eye = FETCH_EYE;
+    vec3 eye = views[view_index].eye_near.xyz;
     vec2 centre = vec2(pixel) + 0.5;
     vec2 b = barycentrics(eye, ray_dir(centre, extent), t.w0, t.w1, t.w2);
     // Texture derivatives as a rasteriser's 2x2 quads take them (fine: across the quad's
@@ -126,7 +122,7 @@ DrawRecord surface_at(uint draw, uint prim, uvec2 pixel, vec2 extent, out uvec3 
 // The rest of the surface globals: the interpolated normal, tangent and bitangent through
 // the draw's matrices (TBN_MODE's stream), which side faces the camera, the node's scale.
 void surface_frame_at(DrawRecord dr, uvec3 vi, vec3 w0, vec3 w1, vec3 w2, vec3 bary) {
-    vec3 eye = FETCH_EYE;
+    vec3 eye = views[view_index].eye_near.xyz;
     vec3 n[3], t[3], bt[3];
     for (int k = 0; k < 3; ++k) {
 #if TBN_MODE == 0
