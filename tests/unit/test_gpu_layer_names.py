@@ -25,7 +25,7 @@ def glsl_identifiers() -> set[str]:
 
 def test_the_identifier_list_is_not_empty() -> None:
     # A renamed attribute in layouts.py must not make the check below vacuous.
-    assert {"out_ids", "out_depth_range", "visibility", "Camera"} <= glsl_identifiers()
+    assert {"out_ids", "out_depth_range", "visibility", "Settings"} <= glsl_identifiers()
 
 
 def docstrings(tree: ast.AST) -> set[int]:
