@@ -240,7 +240,8 @@ class BatchViews:
         return steps
 
     def free_recordings(self) -> None:
-        self.recorder.free(None)
+        """The batches' recordings (they name these buffers and sets); the frames' stay."""
+        self.recorder.free(paths=("layered_batch", "compute_batch"))
 
     def destroy(self) -> None:
         self.free_recordings()

@@ -191,8 +191,11 @@ class FrameRecorder:
             sets[3] = self.shadows.sets[frame_index]
         return sets
 
-    def free(self, target_id: int | None = None) -> None:
-        """Free the recorded command buffers (of one target: its id; None: all)."""
+    def free(self, target_id: int | None = None,
+             paths: tuple[str, ...] | None = None) -> None:
+        """Free the recorded command buffers: of one target (its id; None: every target's),
+        of the paths named in `paths` (None: every path's; render/batch.py frees its own)."""
         for key in [k for k, r in self._recorded.items()
-                    if target_id is None or r.target == target_id]:
+                    if (target_id is None or r.target == target_id)
+                    and (paths is None or k[3].path in paths)]:
             self._recorded.pop(key).cmd.free()
