@@ -18,6 +18,7 @@ gpu/graph.py orders them.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -52,9 +53,14 @@ class PostStep:
 
 
 def enabled_post(options: RenderOptions) -> tuple[tuple[str, float], ...]:
-    """(option, value) of the post steps `options` turn on, in POST_OPTIONS' order."""
-    return tuple((row.field, float(getattr(options, row.field))) for row in POST_OPTIONS
-                 if getattr(options, row.field))
+    """(option, value) of the post steps `options` turn on, in POST_OPTIONS' order.
+    VKPBR_HDR_FRAMES=1 (benchmarks/bench_post.py) sends frames without one through the HDR
+    target and the encode all the same ("hdr", no step): what that costs, measured."""
+    out = tuple((row.field, float(getattr(options, row.field))) for row in POST_OPTIONS
+                if getattr(options, row.field))
+    if not out and os.environ.get("VKPBR_HDR_FRAMES") == "1":
+        return (("hdr", 0.0),)
+    return out
 
 
 def post_unavailable(target: Any, compute_path: bool) -> str | None:

@@ -278,7 +278,8 @@ class FrameSteps:
         ctx = PostContext(self.r.post_kernels(), self.target.extent, self.resources,
                           self.target.storage_view.handle)
         registry = post_steps()
-        steps = [s for option, value in self.spec.post for s in registry[option]().steps(ctx, value)]
+        steps = [s for option, value in self.spec.post if option in registry
+                 for s in registry[option]().steps(ctx, value)]  # ("hdr": none, post_stage)
         out = self.output
         return [*steps, encode_step(ctx, out.storage_view.handle, self.spec.post_tonemap,
                                     out.color_kind == "srgb")]
