@@ -21,7 +21,8 @@ shading off the fragment units:
 
 `ComputeScene` owns what these read besides the frame's and the materials' sets: the draw
 table, the bins, the pixel list (per target) and one descriptor set per target. The
-recorder (render/recorder.py) records the steps; Renderer.uses_compute picks the path.
+recorder (render/recorder.py) records the steps; FramePaths.uses_compute (render/path_choice.py)
+picks the path.
 """
 
 from __future__ import annotations
