@@ -7,7 +7,7 @@ imports of the targets' exported memory (gpu/cuda.py). Per submission it does wh
 shadow maps (directional ones over the whole scene), the uniforms of the first view (what the
 views share), every view's ViewRecord and blended order, the recorded commands, one submit,
 one wait, one readback (or one device-to-device clone into torch). It is given the
-frame parts it draws with (render/frame_path.py FrameParts), as the frame path is.
+frame parts it draws with (render/parts.py FrameParts), as the frame path is.
 """
 
 from __future__ import annotations
