@@ -328,6 +328,7 @@ class Viewer(InputHandlers):
             # A window presents through the fragment path: the cycle goes on to auto.
             self.options = dataclasses.replace(self.options, pipeline=PipelinePath.AUTO)
             self._hud_dirty = True
+        r.choose_paths(self.target, self.options)  # type: ignore[union-attr] - auto: before drawing
         sub = r.draw(self.target, camera, self.lights, self.options,  # type: ignore[union-attr]
                      overlay=self.hud if shot is None or self.shot_hud else None,
                      copy=(COPY_COLOR,) if copy else (), timings=self._want_gpu,

@@ -1,6 +1,6 @@
 """Frame targets: what a frame is drawn into. One protocol, two kinds.
 
-`FrameTarget` is all the frame path (render/renderer.py) knows of a target, in the manner of
+`FrameTarget` is all the frame path (render/frame_path.py) knows of a target, in the manner of
 Khronos Vulkan-Samples' RenderContext, which serves swapchains and offscreen images alike:
   acquire(frame)                       -> image index to draw into (None: recreate first)
   resources(image, frame_index)        its images and buffers as frame-graph resources

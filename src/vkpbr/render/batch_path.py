@@ -1,4 +1,4 @@
-"""The batch path of a Renderer: what `Renderer.render_batch` runs per submission.
+"""The batch path: what `Renderer.render_batch` runs per submission.
 
 `BatchPath` owns the batch's targets (gpu/batch_target.py, by size, chunk, colour kind and
 copies), its GPU resources (render/batch.py BatchViews) and, for `device="cuda"`, the CUDA
@@ -6,7 +6,8 @@ imports of the targets' exported memory (gpu/cuda.py). Per submission it does wh
 `Renderer.draw` does for one frame, for many views: the frame's lights, environment and
 shadow maps (directional ones over the whole scene), the blocks the views share, every
 view's record (render/views.py) and blended order, the recorded commands, one submit, one
-wait, one readback (or one device-to-device clone into torch).
+wait, one readback (or one device-to-device clone into torch). It is given the frame parts
+it draws with (render/parts.py FrameParts), as the frame path is.
 """
 
 from __future__ import annotations
@@ -25,16 +26,14 @@ from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH
 from vkpbr.render import layouts as L
 from vkpbr.render.batch import MAX_LAYERS, BatchViews
 from vkpbr.render.camera import linear_depth
-from vkpbr.render.frames import summed_stats, write_frame_blocks
+from vkpbr.render.frame_path import read_timings
+from vkpbr.render.frames import FrameStats, summed_stats, write_frame_blocks
+from vkpbr.render.lighting import LightsArg
 from vkpbr.render.options import RenderOptions
+from vkpbr.render.parts import FrameParts
 from vkpbr.render.steps import FrameObjects, FrameSpec
 from vkpbr.render.views import ViewTerms, batch_view_terms
 from vkpbr.scene.camera_batch import CameraBatch
-
-# The Renderer (render/renderer.py) that owns the path: not imported here (it imports this
-# module), typed by what it is.
-Renderer = Any
-LightsArg = Any  # renderer.LightsArg: None, a Light or an iterable of Lights
 
 __all__ = ["BatchPath", "COMPUTE_BYTES"]
 
@@ -45,10 +44,12 @@ ATLASES_KEPT = 2  # compute-batch atlases kept between calls (BatchPath._atlas)
 
 
 class BatchPath:
-    """The batch path of `renderer` (made on its first batch, closed with it)."""
+    """The batch path of frames drawn with `parts` (its GPU objects made on the first
+    batch, destroyed by `close`). `stats`: the last call's timings, its submissions' summed."""
 
-    def __init__(self, renderer: Renderer) -> None:
-        self.r = renderer
+    def __init__(self, parts: FrameParts) -> None:
+        self.parts = parts
+        self.stats = FrameStats()
         self.views: BatchViews | None = None
         self.targets: dict[tuple, BatchTarget] = {}
         self._cuda_imports: dict[int, Any] = {}  # gpu/cuda.py CudaImport by target
@@ -57,9 +58,20 @@ class BatchPath:
         # The compute batch's atlases, by (extent, linear), least recently used first: two
         # are kept (a job's full batches and its last, shorter one), older ones destroyed.
         self._atlases: OrderedDict[tuple, Any] = OrderedDict()
-        self._submissions = 0  # of the render_batch call under way (its last_stats summed)
+        self._submissions = 0  # of the render_batch call under way (its stats summed)
 
     # --- whole batches ----------------------------------------------------------------------
+    def run(self, route: str, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
+            opts: RenderOptions, linear: bool, depth: bool, batch: int | str,
+            out: np.ndarray | None = None) -> tuple[Any, np.ndarray | None]:
+        """A render_batch call taking `route` (render/batch_route.py; not "views"): the colour
+        (a torch tensor for "cuda") and the depth or None; the call's timings in `stats`."""
+        if route == "cuda":
+            return self.render_cuda(views, size, lights, opts, linear, batch), None
+        if route == "compute":
+            return self.render_compute(views, size, lights, opts, linear, depth, batch, out=out)
+        return self.render(views, size, lights, opts, linear, depth, batch, out)
+
     def render(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
                opts: RenderOptions, linear: bool, depth: bool, batch: int | str,
                out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
@@ -85,7 +97,7 @@ class BatchPath:
         `cuda`: the colour as one torch tensor (the atlas's tiles copied into exported memory
         that CUDA imports, as the layered batch's)."""
         w, h = int(size[0]), int(size[1])
-        limits = self.r.device.limits
+        limits = self.parts.device.limits
         most = int(limits.maxImageDimension2D)
         # The atlas fits the image size limit, and its rasteriser buffer (8 bytes a pixel) one
         # storage-buffer binding; sized for this call's views, not more.
@@ -118,7 +130,7 @@ class BatchPath:
                         lights: LightsArg, opts: RenderOptions, linear: bool, depth: bool,
                         cuda: bool = False, into: np.ndarray | None = None
                         ) -> tuple[Any, np.ndarray | None]:
-        r, n = self.r, len(views)
+        p, n = self.parts, len(views)
         (w, h), (cols, rows) = size, grid
         target = self._atlas((cols * w, rows * h), linear)
         external = self._exported(target, cols * rows * w * h) if cuda else None
@@ -129,22 +141,22 @@ class BatchPath:
         frame, plan, terms = self._begin(views, size, lights, opts, linear, rows)
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
         set0 = bv.sets0[frame.index]
-        self._run(frame, plan, opts, lambda redraw: r.recorder.command_buffer(
+        self._run(frame, plan, opts, lambda redraw: p.recorder.command_buffer(
             target, frame, 0, FrameSpec(
                 "compute_batch", opts.tbn, opts.alpha_mask, plan, redraw, copy,
-                variant=r.shade_variant(opts), tiles=(n, w, h, rows), set0_id=id(set0),
+                variant=p.lighting.shade_variant(opts), tiles=(n, w, h, rows), set0_id=id(set0),
                 external_id=id(external), batch=(bv.generation,)),
             FrameObjects(set0=set0, external=external)),
             (lambda: self._cuda_wait(external)) if cuda else None)
         if cuda:
-            r.device.check_validation()
+            p.device.check_validation()
             return self._cuda_tensor(external, (n, h, w, 4), linear), None
         color = target.read_tiles(frame.index, n, size, into=into)
         dist = None
         if depth:
             dist = linear_depth(target.read_tiles(frame.index, n, size, depth=True),
                                 terms.znear[:, None, None])
-        r.device.check_validation()
+        p.device.check_validation()
         return color, dist
 
     def render_cuda(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
@@ -152,11 +164,11 @@ class BatchPath:
         """The colour of every view as one torch tensor on the renderer's GPU."""
         from vkpbr.gpu.cuda import cuda_unavailable
 
-        dev = self.r.device
+        dev = self.parts.device
         why = cuda_unavailable()
         if why is None and not dev.external_memory_fd:
             why = f"{dev.info.name} cannot export memory (VK_KHR_external_memory_fd)"
-        compute = self.r.takes_compute_batch(opts)
+        compute = self.parts.paths.takes_compute_batch(opts)
         if why is None and not compute and not dev.batch_views:
             why = f"{dev.info.name} lacks layered rendering for batches"
         if why is not None:
@@ -180,9 +192,9 @@ class BatchPath:
         COMPUTE_BYTES)."""
         w, h = int(size[0]), int(size[1])
         pixel = 16 if linear else 4
-        local, host = self.r.device.memory_available()
+        local, host = self.parts.device.memory_available()
         device_view = (w * h * (pixel + pixel_extra) + L.VIEW_RECORD.size
-                       + 4 * len(self.r.gpu_scene.draws))
+                       + 4 * len(self.parts.gpu_scene.draws))
         host_view = w * h * (pixel + (4 if depth else 0))
         fits = max(1, min(local // device_view, host // host_view))  # all of the free memory
         if batch == "auto":
@@ -198,28 +210,28 @@ class BatchPath:
     def _submit(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
                 opts: RenderOptions, linear: bool, depth: bool, cuda: bool = False,
                 into: np.ndarray | None = None) -> tuple[Any, np.ndarray | None]:
-        r, n = self.r, len(views)
-        limits = r.device.limits
+        p, n = self.parts, len(views)
+        limits = p.device.limits
         layers = max(1, min(n, MAX_LAYERS, int(limits.maxFramebufferLayers),
                             int(limits.maxImageArrayLayers)))
         target = self._target(size, layers, n, linear, depth, cuda)
         bv = self._views(n, layers)
         frame, plan, terms = self._begin(views, size, lights, opts, linear)
-        groups = bv.write_blend_groups(r.blend_orders(views.eye))
+        groups = bv.write_blend_groups(p.blend.orders(views.eye))
         self._run(frame, plan, opts, lambda redraw: bv.command_buffer(
-            target, frame, n, opts.tbn, opts.alpha_mask, plan, groups, r.prepass_for(target),
+            target, frame, n, opts.tbn, opts.alpha_mask, plan, groups, p.paths.prepass_for(target),
             redraw), (lambda: self._cuda_wait(target.color_readback)) if cuda else None)
         color = self._cuda_view(target, n, linear) if cuda else target.read_color(n, into)
         dist = linear_depth(target.read_depth(n), terms.znear[:, None, None]) if depth else None
-        r.device.check_validation()
+        p.device.check_validation()
         return color, dist
 
     def _views(self, n: int, chunk_views: int) -> BatchViews:
         """The batch's ViewRecords and draw lists, made on first use, holding `n` views."""
-        r = self.r
+        p = self.parts
         if self.views is None:
-            self.views = BatchViews(r.device, r.scene, r.gpu_scene, r.ring, r.slots,
-                                    r.set_layouts[0], r.recorder, r.shadows)
+            self.views = BatchViews(p.device, p.scene, p.gpu_scene, p.ring, p.slots,
+                                    p.set_layouts[0], p.recorder, p.shadow_frames.maps)
         self.views.ensure(n, chunk_views)
         return self.views
 
@@ -229,17 +241,17 @@ class BatchPath:
         """A submission's frame of the ring with what every batch writes: the frame's lights,
         environment and shadow matrices (directional ones over the whole scene), the blocks
         the views share and every view's record (`atlas_rows`: a compute batch's tiles a
-        column, BatchViews.write_views). Returns the frame, the
-        shadow plan and the views' terms (views.batch_view_terms)."""
-        r = self.r
-        frame_lights = r.frame_lights(opts, lights)
-        r.bind_environment_for(opts)
-        terms = batch_view_terms(views, size, r.bounds.corners, r.bounds.radius)
-        frame = r.ring.begin()
-        slot = r.slots[frame.index]
-        plan = r.shadow_plan(frame_lights, opts)
-        rows = r.write_scene_shadows(slot, plan, frame_lights, opts)
-        write_frame_blocks(slot, frame_lights, opts, linear, r.frame_lighting(opts), rows)
+        column, BatchViews.write_views). Returns the frame, the shadow plan and the views'
+        terms (views.batch_view_terms)."""
+        p = self.parts
+        frame_lights = p.lighting.frame_lights(opts, lights)
+        p.environments.bind_for(opts)
+        terms = batch_view_terms(views, size, p.bounds.corners, p.bounds.radius)
+        frame = p.ring.begin()
+        slot = p.slots[frame.index]
+        plan = p.shadow_frames.prepare(frame_lights, opts)
+        rows = p.shadow_frames.write_scene(slot, plan, frame_lights)
+        write_frame_blocks(slot, frame_lights, opts, linear, p.lighting.frame_lighting(opts), rows)
         self.views.write_views(terms, size, atlas_rows)  # type: ignore[union-attr]
         return frame, plan, terms
 
@@ -247,22 +259,23 @@ class BatchPath:
              record: Callable[[tuple[bool, ...]], Any], before_submit: Callable[[], None] | None = None
              ) -> None:
         """Record (given which shadow maps to redraw), submit and wait for a submission; its
-        timings into `last_stats`. The shadow maps' record is forgotten if it fails."""
-        r = self.r
-        redraw = r.shadows.stale(frame.index, plan, opts.alpha_mask)
+        timings into `stats`. The shadow maps' record is forgotten if it fails."""
+        p = self.parts
+        shadows = p.shadow_frames.maps
+        redraw = shadows.stale(frame.index, plan, opts.alpha_mask)
         try:
             cmd = record(redraw)
             if before_submit is not None:
                 before_submit()
             frame.submit(cmd)
         except BaseException:
-            r.shadows.forget()
+            shadows.forget()
             raise
-        frame.stamped = r.ring.query_pool is not None
+        frame.stamped = p.ring.query_pool is not None
         frame.wait()
-        stats = dataclasses.replace(r.read_frame_timings(frame))
+        stats = dataclasses.replace(read_timings(p.ring, frame, p.slots[frame.index]))
         # One call's timings: every submission's summed (a batch split by memory).
-        r.last_stats = summed_stats(r.last_stats, stats) if self._submissions else stats
+        self.stats = summed_stats(self.stats, stats) if self._submissions else stats
         self._submissions += 1
 
     def _target(self, size: tuple[int, int], layers: int, views: int, linear: bool,
@@ -272,12 +285,13 @@ class BatchPath:
         if target is not None and target.capacity >= views:
             return target
         if target is not None:
-            self.r.device.wait_idle()
+            self.parts.device.wait_idle()
             self.free_recordings()
             self._forget_cuda(target)
             target.destroy()
-        target = BatchTarget(self.r.device, size, layers, views, "float" if linear else "srgb",
-                             depth, clear_color=(*self.r.background, 1.0), external=cuda)
+        target = BatchTarget(self.parts.device, size, layers, views, "float" if linear else "srgb",
+                             depth, clear_color=(*self.parts.targets.background, 1.0),
+                             external=cuda)
         self.targets[key] = target
         return target
 
@@ -297,7 +311,7 @@ class BatchPath:
 
         imported = self._cuda_imports.get(id(buf))
         if imported is None:
-            dev = self.r.device
+            dev = self.parts.device
             index = cuda_device_for(dev.uuid(), dev.info.name)
             imported = CudaImport(buf.export_fd(), buf.allocation_size, index)
             self._cuda_imports[id(buf)] = imported
@@ -315,7 +329,7 @@ class BatchPath:
         if target is None:
             while len(self._atlases) >= ATLASES_KEPT:
                 self._drop_atlas(self._atlases.popitem(last=False)[1])
-            target = self.r.new_offscreen_target(extent, linear)
+            target = self.parts.targets.new(extent, linear)
         self._atlases[key] = target
         return target
 
@@ -326,7 +340,7 @@ class BatchPath:
             imported = self._cuda_imports.pop(id(buf), None)
             if imported is not None:
                 imported.close()
-        self.r.drop_target(target)  # waits for the device
+        self.parts.targets.drop(target)  # waits for the device
         if buf is not None:
             buf.destroy()
 
@@ -337,7 +351,7 @@ class BatchPath:
 
         buf = self._exports.get(id(target))
         if buf is None:
-            buf = Buffer(self.r.device, pixels * target.pixel_bytes, "transfer_dst",
+            buf = Buffer(self.parts.device, pixels * target.pixel_bytes, "transfer_dst",
                          name="compute batch colour for CUDA", exportable=True)
             self._exports[id(target)] = buf
         return buf

@@ -21,7 +21,8 @@ shading off the fragment units:
 
 `ComputeScene` owns what these read besides the frame's and the materials' sets: the draw
 table, the bins, the pixel list (per target) and one descriptor set per target. The
-recorder (render/recorder.py) records the steps; Renderer.uses_compute picks the path.
+recorder (render/recorder.py) records the steps; FramePaths.uses_compute (render/path_choice.py)
+picks the path.
 """
 
 from __future__ import annotations
@@ -94,6 +95,46 @@ MASKED_CAPACITY = 4096
 CLASSIFY_GROUP = (16, 16, 1)  # classify.comp's count and scatter, raster_resolve: bin_tiles.glsl's tile
 
 
+def _draw_records(gs: GpuScene, semantic: np.ndarray | None) -> np.ndarray:
+    """The draw table (L.DRAW_RECORD a draw): matrices, first index, vertex offset, material,
+    and the dataset ids: instance = the draw's index + 1 (one node's mesh:
+    Renderer.instances), semantic = `semantic[i]` (vkpbr.scene.semantics; default its mesh's
+    index + 1); 0 is the background for both."""
+    draws = np.zeros(max(len(gs.draws), 1), L.DRAW_RECORD.dtype)
+    for i, d in enumerate(gs.draws):
+        m = d.push.reshape(2, 4, 4)
+        draws[i]["model"], draws[i]["normal_matrix"] = m[0], m[1]
+        draws[i]["info"] = (d.first_index, d.vertex_offset, d.material, int(gs.has_colors))
+    for i, d in enumerate(gs.draws):
+        draws[i]["ids"] = (i + 1, d.mesh + 1 if semantic is None else int(semantic[i]), 0, 0)
+    return draws
+
+
+def _raster_table(gs: GpuScene) -> tuple[np.ndarray, int, list[tuple[int, int, int]]]:
+    """The compute rasteriser's draw table, a row a draw in the raster units' submission
+    order (opaque, two-sided, masked, blended; each in draw order: raster.comp breaks depth
+    ties as they do): its first triangle, flags, the draw. Masked draws are two-sided when
+    rasterised (alpha masking off). With the scene's triangle count and (row, material,
+    triangles) of the masked draws (raster_masked's dispatches)."""
+    def rank(d: Any) -> int:
+        return {"blend": 3, "mask": 2}.get(d.alpha_mode, 1 if d.double_sided else 0)
+
+    order = sorted(range(len(gs.draws)), key=lambda i: (rank(gs.draws[i]), i))
+    raster = np.zeros((max(len(gs.draws), 1), 4), np.uint32)
+    first = 0
+    masked = []
+    for row, i in enumerate(order):
+        d = gs.draws[i]
+        flags = ((RASTER_DOUBLE_SIDED if d.double_sided or d.alpha_mode == "mask" else 0)
+                 | (RASTER_MASKED if d.alpha_mode == "mask" else 0)
+                 | (RASTER_BLENDED if d.alpha_mode == "blend" else 0))
+        raster[row, :3] = first, flags, i
+        if d.alpha_mode == "mask" and d.index_count >= 3:
+            masked.append((row, d.material, d.index_count // 3))
+        first += d.index_count // 3
+    return raster, first, masked
+
+
 class _TargetResources:
     """Per target: the bins, their dispatch sizes, the pixel list and the descriptor set."""
 
@@ -127,7 +168,12 @@ class _TargetResources:
         self.raster_masked_big = self._own(Buffer(
             dev, 4 * (4 * masked + 3 * masked * MASKED_CAPACITY) if raster and masked else 16,
             "storage|transfer_dst|indirect", name="raster masked big triangles"))
-        slots = scene.slots
+        self._write_sets(scene, target)
+
+    def _write_sets(self, scene: ComputeScene, target: Any) -> None:
+        """The target's descriptor sets, one per frame of the ring: the scene's buffers,
+        these, the target's images and the frame's blocks (L.COMPUTE_SET)."""
+        dev, gs, slots = scene.device, scene.gs, scene.slots
         pool = self._own(DescriptorPool(dev, [(scene.set_layout, len(slots))]))
         # One set per frame of the ring: the frame's blocks are that frame's.
         self.sets = [pool.allocate(scene.set_layout) for _ in slots]
@@ -178,45 +224,14 @@ class ComputeScene:
         self.device, self.gs, self.slots = device, gs, slots
         self._owned: list[Any] = []
         gs.ensure_streams()  # every TBN path's stream exists: the sets bind them all
-        draws = np.zeros(max(len(gs.draws), 1), L.DRAW_RECORD.dtype)
-        for i, d in enumerate(gs.draws):
-            m = d.push.reshape(2, 4, 4)
-            draws[i]["model"], draws[i]["normal_matrix"] = m[0], m[1]
-            draws[i]["info"] = (d.first_index, d.vertex_offset, d.material, int(gs.has_colors))
-        # Dataset ids: instance = the draw's index + 1 (one node's mesh: Renderer.instances),
-        # semantic = `semantic[i]` (vkpbr.scene.semantics; default its mesh's index + 1);
-        # 0 is the background for both.
-        for i, d in enumerate(gs.draws):
-            draws[i]["ids"] = (i + 1, d.mesh + 1 if semantic is None else int(semantic[i]), 0, 0)
+        draws = _draw_records(gs, semantic)
         self.draw_table = self._own(upload_buffer(device, draws, "storage", name="draw records"))
         table = np.zeros(len(gs.material_blocks), L.MATERIAL.dtype)  # np.stack drops padding
         for i, block in enumerate(gs.material_blocks):
             table[i] = block
         self.material_table = self._own(upload_buffer(device, table, "storage",
                                                       name="material records"))
-        # The compute rasteriser's draw table, a row a draw in the raster units' submission
-        # order (opaque, two-sided, masked, blended; each in draw order: raster.comp breaks
-        # depth ties as they do): its first triangle, flags, the draw. Masked draws are
-        # two-sided when rasterised (alpha masking off).
-        def rank(d: Any) -> int:
-            return {"blend": 3, "mask": 2}.get(d.alpha_mode, 1 if d.double_sided else 0)
-
-        order = sorted(range(len(gs.draws)), key=lambda i: (rank(gs.draws[i]), i))
-        raster = np.zeros((max(len(gs.draws), 1), 4), np.uint32)
-        first = 0
-        masked = []
-        for row, i in enumerate(order):
-            d = gs.draws[i]
-            flags = ((RASTER_DOUBLE_SIDED if d.double_sided or d.alpha_mode == "mask" else 0)
-                     | (RASTER_MASKED if d.alpha_mode == "mask" else 0)
-                     | (RASTER_BLENDED if d.alpha_mode == "blend" else 0))
-            raster[row, :3] = first, flags, i
-            if d.alpha_mode == "mask" and d.index_count >= 3:
-                masked.append((row, d.material, d.index_count // 3))
-            first += d.index_count // 3
-        self.triangles = first
-        # (row, material, triangles) of the masked draws: raster_masked's dispatches.
-        self.masked_rows = masked
+        raster, self.triangles, self.masked_rows = _raster_table(gs)
         self.raster_draws = self._own(upload_buffer(device, raster, "storage",
                                                     name="raster draw table"))
         # Per draw its world bounding sphere (raster.comp skips a draw outside the view).
@@ -402,12 +417,7 @@ class ComputeScene:
         w, h = target.extent
         views, tile_w, tile_h, rows = tiles or (1, w, h, 1)
         suffix = "_batch" if tiles else ""
-        push = np.zeros(RASTER_PUSH_BYTES // 4, np.uint32)
-        push[:20] = (self.triangles, len(self.gs.draws), int(alpha_mask), res.big_capacity,
-                     w, h, 0, 0, views, tile_w, tile_h, rows,
-                     len(self.masked_rows) if alpha_mask else 0, 0, MASKED_CAPACITY,
-                     *astuple(RASTER_TUNING), int(target.color_kind == "srgb"))
-        push.view(np.float32)[20:24] = target.clear_color
+        push = self._raster_push(res, target, alpha_mask, (views, tile_w, tile_h, rows))
         dset = res.sets[frame_index]
 
         def kernel(name: str, size: tuple[int, int, int] | None) -> Callable[[Any], None]:
@@ -450,6 +460,18 @@ class ComputeScene:
                 cmd, res.raster_depths, target.depth.handle, True, target.extent),
                 (("raster_depths", "transfer_src"), ("depth", "transfer_dst")), timed=False))
         return steps
+
+    def _raster_push(self, res: _TargetResources, target: Any, alpha_mask: bool,
+                     tiles: tuple[int, int, int, int]) -> np.ndarray:
+        """The rasteriser kernels' push constants (raster.comp) for frames of `target`."""
+        w, h = target.extent
+        push = np.zeros(RASTER_PUSH_BYTES // 4, np.uint32)
+        push[:20] = (self.triangles, len(self.gs.draws), int(alpha_mask), res.big_capacity,
+                     w, h, 0, 0, *tiles,
+                     len(self.masked_rows) if alpha_mask else 0, 0, MASKED_CAPACITY,
+                     *astuple(RASTER_TUNING), int(target.color_kind == "srgb"))
+        push.view(np.float32)[20:24] = target.clear_color
+        return push
 
     def _masked_steps(self, res: _TargetResources, dset: Any, push: np.ndarray,
                       material_sets: list[Any], views: int, set0: Any, suffix: str) -> list[Step]:

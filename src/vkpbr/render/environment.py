@@ -254,22 +254,7 @@ class EnvironmentBaker:
                 cmd.image_barrier(src, "undefined", "general", "none", "compute", 0, 1)
                 draw_source(cmd, pool, src_store)
                 cmd.blit_mips(src, "shader_read", "compute")
-                cmd.image_barrier(spc, "undefined", "general", "none", "compute")
-                cmd.image_barrier(irr, "undefined", "general", "none", "compute")
-                for k in range(spec_mips):
-                    level = ImageView(spc, kind="2d_array", base_mip=k, mips=1)
-                    temp.append(level)
-                    roughness = k / max(spec_mips - 1, 1)
-                    self._dispatch(cmd, pool, self.specular, src_view, level,
-                                   _push(np.float32(roughness), spec.specular_samples, size,
-                                         max(spec_size >> k, 1)),
-                                   max(spec_size >> k, 1))
-                irr_store = ImageView(irr, kind="2d_array")
-                temp.append(irr_store)
-                self._dispatch(cmd, pool, self.irradiance, src_view, irr_store,
-                               _push(spec.irradiance_samples, size, irr_size), irr_size)
-                cmd.image_barrier(spc, "general", "shader_read", "compute", "sampled")
-                cmd.image_barrier(irr, "general", "shader_read", "compute", "sampled")
+                self._prefilter(cmd, pool, src_view, size, spc, spec_mips, irr, temp)
             bake_ms = (time.perf_counter() - t0) * 1e3
             spc_view = ImageView(spc, kind="cube")
             owned.append(spc_view)
@@ -290,6 +275,29 @@ class EnvironmentBaker:
             brdf_lut=lut,
             source=SampledImage(src, src_view, self.cube_sampler),
             max_lod=spec_mips - 1, bake_ms=bake_ms, _owned=tuple(owned))
+
+    def _prefilter(self, cmd: Commands, pool: DescriptorPool, src_view: ImageView, size: int,
+                   spc: Image, spec_mips: int, irr: Image, views: list[Any]) -> None:
+        """Record the pre-filter of the source cube (`size`, sampled through `src_view`): GGX
+        of roughness k / max_lod into level k of `spc`, the cosine convolution into `irr`.
+        The image views it makes go into `views` (the caller destroys them once it has run)."""
+        spec, spec_size, irr_size = self.spec, spc.width, irr.width
+        cmd.image_barrier(spc, "undefined", "general", "none", "compute")
+        cmd.image_barrier(irr, "undefined", "general", "none", "compute")
+        for k in range(spec_mips):
+            level = ImageView(spc, kind="2d_array", base_mip=k, mips=1)
+            views.append(level)
+            roughness = k / max(spec_mips - 1, 1)
+            self._dispatch(cmd, pool, self.specular, src_view, level,
+                           _push(np.float32(roughness), spec.specular_samples, size,
+                                 max(spec_size >> k, 1)),
+                           max(spec_size >> k, 1))
+        irr_store = ImageView(irr, kind="2d_array")
+        views.append(irr_store)
+        self._dispatch(cmd, pool, self.irradiance, src_view, irr_store,
+                       _push(spec.irradiance_samples, size, irr_size), irr_size)
+        cmd.image_barrier(spc, "general", "shader_read", "compute", "sampled")
+        cmd.image_barrier(irr, "general", "shader_read", "compute", "sampled")
 
     def _dispatch(self, cmd: Commands, pool: DescriptorPool, pipe: ComputePipeline,
                   src: ImageView, dst: ImageView, push: np.ndarray, size: int) -> None:

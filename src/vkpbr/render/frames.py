@@ -179,7 +179,7 @@ def light_records(lights: Sequence[Light]) -> np.ndarray:
 @dataclass(frozen=True)
 class FrameLighting:
     """What lights a frame besides the punctual lights: resolved once per render call from
-    the options (render/renderer.py), a plain value so that frames compare it cheaply."""
+    the options (render/lighting.py), a plain value so that frames compare it cheaply."""
 
     mode: int = 0  # Lighting
     flags: int = 0  # LIGHTING_* bits

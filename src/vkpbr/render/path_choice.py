@@ -11,6 +11,11 @@ compute path is the slower there and the measurement would cost seconds. A devic
 timestamps, or a cache file that cannot be read, falls back to the rule the H200 measured
 (compute path + compute rasteriser on GPUs: BENCHMARKS.md). $VKPBR_FRAME_PATHS=rule never
 measures (reproducible runs); =measure measures on CPUs too.
+
+`FramePaths` is the renderer's side of it: which path a frame of a target takes (and whether
+it has the depth pre-pass), and `choose`, which the caller layer runs before the first auto
+frame (Renderer.render_many, the viewer; never `draw` itself): the measurement renders its
+own frames through the `FrameStream` it is given.
 """
 
 from __future__ import annotations
@@ -23,19 +28,20 @@ import os
 import statistics
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from vkpbr.atomic import atomic_writer
-from vkpbr.errors import JsonError, UsageError
+from vkpbr.errors import JsonError, OutOfDeviceMemoryError, UsageError
+from vkpbr.gpu.device import COMPUTE_PATH_FEATURES, Device
+from vkpbr.gpu.target import FrameTarget
 from vkpbr.json_input import read_json
 from vkpbr.render import layouts as L
+from vkpbr.render.frames import FrameStats
+from vkpbr.render.options import RenderOptions
+from vkpbr.scene.types import Camera, Scene
 
-# The renderer is passed in, not imported (it imports this module): `Renderer` below is any
-# object with its device, scene, render, last_stats and default_camera.
-Renderer = Any
-
-__all__ = ["CACHE_FILE", "RULE_CPU", "RULE_GPU", "PathChoice", "device_key", "frame_paths_mode", "is_auto", "measure",
-           "recorded", "resolve"]
+__all__ = ["CACHE_FILE", "RULE_CPU", "RULE_GPU", "FramePaths", "FrameStream", "PathChoice",
+           "device_key", "frame_paths_mode", "is_auto", "measure", "recorded", "resolve"]
 
 log = logging.getLogger(__name__)
 
@@ -67,7 +73,20 @@ RULE_GPU = PathChoice(compute=True, compute_raster=True)
 RULE_CPU = PathChoice(compute=False, compute_raster=False)
 
 
-def device_key(renderer: Renderer) -> str:
+class FrameStream(Protocol):
+    """What the measurement renders through (a Renderer is one): streams of frames of its
+    scene from its default camera, each frame's timings in `last_stats`."""
+
+    device: Device
+    scene: Scene
+    last_stats: FrameStats
+
+    def default_camera(self) -> Camera: ...
+
+    def render_many(self, cameras: Any, *args: Any, **kwargs: Any) -> Any: ...
+
+
+def device_key(renderer: FrameStream) -> str:
     """The device, its driver and vkpbr's shaders: a new driver or new shaders measure again."""
     info = renderer.device.info
     return _key(info.name, info.vendor_id, info.device_id, info.driver_version)
@@ -93,14 +112,14 @@ def _shaders_digest() -> str:
     return digest.hexdigest()[:12]
 
 
-def _candidates(renderer: Renderer) -> list[PathChoice]:
+def _candidates(renderer: FrameStream) -> list[PathChoice]:
     out = [PathChoice(False, False, True), PathChoice(True, False, True)]
     if renderer.device.compute_raster:
         out.append(PathChoice(True, True, True))
     return out
 
 
-def measure(renderer: Renderer, size: tuple[int, int]) -> dict[str, Any]:
+def measure(renderer: FrameStream, size: tuple[int, int]) -> dict[str, Any]:
     """Time every candidate on `renderer`'s scene at `size` (its default camera and lights)
     in a stream of frames, as an application draws them (render_many: frames queued back to
     back, no readback), ROUNDS times interleaved: the record `resolve` keeps ({"choice":
@@ -155,7 +174,8 @@ def _read(path: Path) -> dict[str, dict]:
     return data if isinstance(data, dict) else {}
 
 
-def resolve(renderer: Renderer, size: tuple[int, int], cache_dir: str | Path | None) -> PathChoice:
+def resolve(renderer: FrameStream, size: tuple[int, int], cache_dir: str | Path | None
+            ) -> PathChoice:
     """The recorded choice for this device, else measure now (and record it)."""
     key = device_key(renderer)
     path = Path(cache_dir) / CACHE_FILE if cache_dir is not None else None
@@ -196,3 +216,113 @@ def frame_paths_mode() -> str:
 def is_auto(options: Any) -> bool:
     """Whether `options` leave the frame path or its rasteriser to auto."""
     return options.pipeline == L.PipelinePath.AUTO or options.raster == L.RasterPath.AUTO
+
+
+class FramePaths:
+    """Which frame path frames take on `device`: the fragment path or the compute path (and
+    its rasteriser), with or without the depth pre-pass; auto's choice once `choose` has
+    made it (until then, and where it cannot, the rule: RULE_GPU's on GPUs, RULE_CPU's on
+    CPUs). `triangles`: the scene's; `blended`: whether it has blended draws (which the
+    compute batch cannot draw); `depth_prepass` and `cache_dir` as the Renderer's."""
+
+    def __init__(self, device: Device, msaa: int, triangles: int, blended: bool,
+                 depth_prepass: bool | None, cache_dir: str | os.PathLike[str] | None) -> None:
+        self.device, self.msaa, self.triangles, self.blended = device, msaa, triangles, blended
+        self.depth_prepass, self.cache_dir = depth_prepass, cache_dir
+        self.choice: PathChoice | None = None  # what auto measured (or read back)
+
+    def prepass_for(self, target: FrameTarget) -> bool:
+        """Whether frames of `target` run the depth pre-pass (see Renderer's `depth_prepass`)."""
+        if self.depth_prepass is not None:
+            return bool(self.depth_prepass)
+        w, h = target.extent
+        return self.device.info.kind != "cpu" and self.triangles <= w * h
+
+    def compute_unavailable(self, target: FrameTarget) -> str | None:
+        """Why frames of `target` cannot take the compute path, or None when they can."""
+        if not self.device.compute_path:
+            return "the device lacks " + ", ".join(COMPUTE_PATH_FEATURES)
+        if not getattr(target, "compute", False):
+            return "it needs a single-sample offscreen target (not MSAA, not a window)"
+        w, h = target.extent
+        limit = int(self.device.limits.maxStorageBufferRange)
+        if 4 * w * h > limit:  # the pixel list: 4 bytes a pixel in one storage binding
+            return f"{w}x{h} exceeds its pixel list's limit here ({limit // 4:,} pixels)"
+        return None
+
+    def uses_compute(self, target: FrameTarget, options: RenderOptions) -> bool:
+        """Whether frames of `target` with `options` take the compute path (UsageError when
+        it is asked for and cannot: say why and what to use)."""
+        if options.pipeline == L.PipelinePath.COMPUTE:
+            why = self.compute_unavailable(target)
+            if why is not None:
+                raise UsageError(f"--pipeline compute is not available here: {why}; use "
+                                 "--pipeline forward or auto")
+            return True
+        if options.pipeline == L.PipelinePath.FORWARD:
+            return False
+        # auto: on GPUs, what measured fastest on the device (until it is measured, the
+        # compute path where the target allows it: the H200 measured it 1.5-3.9x faster at
+        # 128x128 to 1920x1080); the fragment path on CPUs (lavapipe: the slower of the two).
+        if self.choice is not None:  # measured (or read back) for this device
+            return self.choice.compute and self.compute_unavailable(target) is None
+        return self.device.info.kind != "cpu" and self.compute_unavailable(target) is None
+
+    def uses_compute_raster(self, options: RenderOptions, target: FrameTarget) -> bool:
+        """Whether the compute path's visibility buffer comes from the compute rasteriser
+        (UsageError when it is asked for and the device or the target's size cannot; auto
+        takes it on GPUs where it can, the raster units otherwise)."""
+        if options.raster == L.RasterPath.HARDWARE:
+            return False
+        w, h = target.extent
+        limit = int(self.device.limits.maxStorageBufferRange)
+        if options.raster == L.RasterPath.AUTO:
+            wanted = (self.choice.compute_raster if self.choice is not None
+                      else self.device.info.kind != "cpu")
+            return wanted and bool(self.device.compute_raster) and 8 * w * h <= limit
+        if not self.device.compute_raster:
+            raise UsageError("--raster compute is not available here: the device lacks 64-bit "
+                             "storage-buffer atomics (shaderInt64, shaderBufferInt64Atomics); "
+                             "use --raster hardware")
+        if 8 * w * h > limit:  # 8 bytes a pixel in one storage binding
+            raise UsageError(f"--raster compute is not available for {w}x{h} here: at most "
+                             f"{limit // 8:,} pixels; use --raster hardware")
+        return True
+
+    def compute_batch_unavailable(self) -> str | None:
+        """Why `render_batch(pipeline="compute")` cannot take the compute batch (its views
+        are then rendered one by one on the compute path), or None."""
+        if not self.device.compute_raster:
+            return "the device lacks 64-bit storage-buffer atomics"
+        if self.msaa > 1:
+            return "MSAA"
+        if self.blended:
+            return "the scene has blended materials (drawn by the fragment path)"
+        return None
+
+    def takes_compute_batch(self, options: RenderOptions) -> bool:
+        """Whether render_batch takes the compute batch: pipeline "compute", or "auto" on a GPU
+        (the fragment path's layered batch on CPUs), where `compute_batch_unavailable` is None."""
+        if options.pipeline == L.PipelinePath.FORWARD or self.compute_batch_unavailable():
+            return False
+        return options.pipeline == L.PipelinePath.COMPUTE or self.device.info.kind != "cpu"
+
+    def choose(self, target: FrameTarget, options: RenderOptions, stream: FrameStream) -> None:
+        """Before the first auto frame of `target` on a GPU that lets it take the compute
+        path: the recorded choice for the device, or the candidates measured now through
+        `stream` (frames of explicit options, which do not come back here). Run by the
+        caller layer before it draws: never from inside a frame."""
+        if self.choice is not None or not is_auto(options):
+            return
+        mode = frame_paths_mode()  # VKPBR_FRAME_PATHS: auto, measure (CPUs too) or rule
+        cpu = self.device.info.kind == "cpu"
+        if mode == "rule" or (cpu and mode != "measure"):  # decided once, not per frame
+            self.choice = RULE_CPU if cpu else RULE_GPU
+            return
+        if self.compute_unavailable(target) is not None:  # a window: decided by a later target
+            return
+        self.choice = RULE_GPU  # while measuring, and if measuring fails
+        try:
+            self.choice = resolve(stream, target.extent, self.cache_dir)
+        except (OutOfDeviceMemoryError, UsageError) as exc:  # a candidate cannot run here
+            log.warning("frame paths not measured (%s); auto takes %s", exc, RULE_GPU.label)

@@ -72,7 +72,8 @@ STEP_NAMES = ("shadows", "transmission", "cull", "prepass_opaque", "prepass_opaq
 def choose_path(compute: bool, raster: bool, outputs: bool) -> str:
     """The path of a single frame: the compute path (`raster`: with the compute rasteriser)
     where `compute`, else the fragment path (through a visibility pass when it makes dataset
-    `outputs`). Renderer.uses_compute and uses_compute_raster decide the two flags."""
+    `outputs`). FramePaths.uses_compute and uses_compute_raster (render/path_choice.py)
+    decide the two flags."""
     if compute:
         return "compute_raster" if raster else "compute"
     return "forward_outputs" if outputs else "forward"

@@ -1,0 +1,131 @@
+"""Which way `Renderer.render_batch` takes a call, and its results in the shape it returns.
+
+`batch_route` checks the call's arguments (where the result goes, `out=`, the dataset
+outputs, post steps) and picks one of ROUTES: "cuda" (the colour into a torch tensor on the
+GPU), "compute" (the compute batch: all views in one atlas, rasterised and shaded in compute
+shaders) where the device has the compute rasteriser and no draw blends, "layered" (the
+fragment path's batch: render/batch.py), or "views": view by view through render_many, each
+exactly as `render` draws it, where the device has no layered rendering, with MSAA (the batch
+target is single-sample), the compute path asked for, or post steps (not yet in batches).
+"auto" takes the compute batch on GPUs where it can (the H200 measured it 4-5x the layered
+batch: BENCHMARKS.md), else the layered batch, bit for bit what `render` draws with
+pipeline="forward". `render_many(batch=N)` goes through render_batch N cameras at a time
+(`chunked`), yielding view by view (`per_view`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator, Sequence
+from typing import Any
+
+import numpy as np
+
+from vkpbr.errors import UsageError
+from vkpbr.render import layouts as L
+from vkpbr.render.camera import as_camera
+from vkpbr.render.options import RenderOptions
+from vkpbr.render.outputs import check_outputs
+from vkpbr.render.parts import FrameParts
+from vkpbr.render.post_stage import enabled_post
+from vkpbr.scene.types import Camera
+
+__all__ = ["ROUTES", "batch_result", "batch_route", "check_out", "chunked", "per_view",
+           "stack_frames"]
+
+ROUTES = ("cuda", "compute", "layered", "views")
+
+
+def batch_route(parts: FrameParts, views: int, size: tuple[int, int], opts: RenderOptions,
+                linear: bool, depth: bool, outputs: Iterable[str] | None, device: str,
+                out: np.ndarray | None) -> tuple[str, tuple[str, ...]]:
+    """(one of ROUTES, the dataset outputs asked for) for `views` views of `size` (UsageError
+    for what cannot be done: say what to do instead)."""
+    if device not in ("cpu", "cuda"):
+        raise UsageError(f"device {device!r}: choose 'cpu' (NumPy) or 'cuda' (a torch tensor)")
+    if out is not None:
+        check_out(out, (views, size[1], size[0], 4), np.float32 if linear else np.uint8, device)
+    post = bool(enabled_post(opts))  # batches have no post stage yet: view by view
+    if device == "cuda":
+        if depth or outputs:
+            raise UsageError("device='cuda' returns the colour only: ask depth and dataset "
+                             "outputs with device='cpu'")
+        if post:
+            raise UsageError("device='cuda' batches have no post steps (--bloom) yet: "
+                             "render them with device='cpu'")
+        return "cuda", ()
+    targets, paths = parts.targets, parts.paths
+    wanted = (check_outputs(outputs, targets.offscreen(size, linear), paths, targets)
+              if outputs else ())
+    # The dataset outputs but colour come from their own pass (as `render` makes them).
+    extra = any(n != "color" for n in wanted)
+    explicit_compute = (opts.pipeline == L.PipelinePath.COMPUTE
+                        and paths.uses_compute(targets.offscreen(size, linear), opts))
+    if paths.takes_compute_batch(opts) and not extra and not post:
+        return "compute", wanted
+    if not parts.device.batch_views or targets.msaa > 1 or explicit_compute or post:
+        return "views", wanted
+    return "layered", wanted
+
+
+def batch_result(color: Any, dist: np.ndarray | None, depth: bool, wanted: tuple[str, ...],
+                 frames: Sequence[dict[str, np.ndarray]] = ()) -> Any:
+    """What render_batch returns: the colour (and depth), or {name: (B, ...) array} of
+    `wanted` with the outputs but colour from `frames` (render_many's, a dict each)."""
+    if not wanted:
+        return (color, dist) if depth else color
+    result: dict[str, np.ndarray] = {"color": color} if "color" in wanted else {}
+    for name in wanted:
+        if name != "color":
+            result[name] = np.stack([f[name] for f in frames])
+    return {n: result[n] for n in wanted}
+
+
+def stack_frames(frames: list[Any], depth: bool, wanted: tuple[str, ...],
+                 out: np.ndarray | None = None) -> Any:
+    """render_many's frames stacked as render_batch returns them (the colour into `out`)."""
+    if wanted:
+        return {n: np.stack([f[n] for f in frames], out=out if n == "color" else None)
+                for n in wanted}
+    if depth:
+        return np.stack([f[0] for f in frames], out=out), np.stack([f[1] for f in frames])
+    return np.stack(frames, out=out)
+
+
+def check_out(out: Any, shape: tuple[int, ...], dtype: type, device: str) -> None:
+    """render_batch's `out`: a NumPy array render_batch can write the colour into."""
+    if device != "cpu":
+        raise UsageError("out= takes a NumPy array: it is for device='cpu'")
+    if not isinstance(out, np.ndarray) or out.shape != shape or out.dtype != dtype \
+            or not out.flags.c_contiguous or not out.flags.writeable:
+        got = (f"{type(out).__name__}" if not isinstance(out, np.ndarray) else
+               f"{out.dtype} {out.shape}{'' if out.flags.c_contiguous else ' not contiguous'}"
+               f"{'' if out.flags.writeable else ' read-only'}")
+        raise UsageError(f"out= must be a C-contiguous writeable {np.dtype(dtype)} array of "
+                         f"shape {shape}; got {got}")
+
+
+def chunked(cameras: Iterable[Camera | Any], batch: int, base: Camera,
+            outputs: Iterable[str] | None) -> Iterator[tuple[list[Camera], tuple[str, ...] | None]]:
+    """`render_many(batch=N)`'s cameras as Cameras (None: `base`), N at a time, each chunk
+    with the outputs asked for (a tuple, read once: `outputs` may be an iterator)."""
+    if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
+        raise UsageError(f"batch {batch!r}: expected a positive number of views")
+    names = None if outputs is None else (
+        (outputs,) if isinstance(outputs, str) else tuple(outputs))
+    pending: list[Camera] = []
+    for camera in cameras:
+        pending.append(base if camera is None else as_camera(camera, base))
+        if len(pending) == batch:
+            yield pending, names
+            pending = []
+    if pending:
+        yield pending, names
+
+
+def per_view(got: Any, views: int, depth: bool) -> Iterator[Any]:
+    """render_batch's result for `views` views, view by view as render_many yields them."""
+    for i in range(views):
+        if isinstance(got, dict):
+            yield {k: v[i] for k, v in got.items()}
+        else:
+            yield (got[0][i], got[1][i]) if depth else got[i]

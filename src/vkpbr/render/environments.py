@@ -1,0 +1,104 @@
+"""The environments a renderer's frames sample, and the one bound in its frame slots.
+
+`Environments` pre-filters an environment (render/environment.py EnvironmentBaker: the
+built-in sky, a panorama file's, or a black one where none lights the frame) on the first
+frame that asks for it and keeps it, by source, for the renderer's life. Binding another one
+into the slots' set 2 is rare (a new environment): the sets may be in use by queued frames
+and named by recorded command buffers, so it waits for the device and drops the recordings.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from vkpbr.gpu.descriptors import DescriptorWriter
+from vkpbr.gpu.device import Device
+from vkpbr.render.environment import Environment, EnvironmentBaker, EnvironmentSpec
+from vkpbr.render.frames import FrameSlot
+from vkpbr.render.options import RenderOptions
+from vkpbr.render.recorder import FrameRecorder
+from vkpbr.scene.environment import load_panorama
+from vkpbr.shading import SUN_DIRECTION
+
+__all__ = ["Environments", "env_key"]
+
+
+class Environments:
+    """The environments of frames drawn with `slots` (see the module's docstring). `spec`:
+    the pre-filter's sizes (None: the GPU sizes, EnvironmentSpec.cpu() on a CPU device);
+    `cache_dir`: where the split-sum BRDF table is kept between processes (None: made once
+    per process)."""
+
+    def __init__(self, device: Device, slots: list[FrameSlot], recorder: FrameRecorder,
+                 spec: EnvironmentSpec | None = None,
+                 cache_dir: str | os.PathLike[str] | None = None) -> None:
+        self.device, self.slots, self.recorder = device, slots, recorder
+        self._spec, self._cache_dir = spec, cache_dir
+        self._baker: EnvironmentBaker | None = None
+        self._made: dict[tuple, Environment] = {}  # by env_key
+        self._bound: Environment | None = None  # what every slot's set 2 samples
+
+    @property
+    def baker(self) -> EnvironmentBaker:
+        """The environment compute pipelines (made on first use)."""
+        if self._baker is None:
+            spec = self._spec
+            if spec is None:
+                spec = EnvironmentSpec.cpu() if self.device.info.kind == "cpu" else EnvironmentSpec()
+            cache = Path(self._cache_dir) if self._cache_dir is not None else None
+            self._baker = EnvironmentBaker(self.device, spec, cache)
+        return self._baker
+
+    def get(self, options: RenderOptions) -> Environment:
+        """The environment frames with `options` sample (pre-filtered on first use, then
+        kept): the sky, a panorama file's, or a black one where none lights the frame.
+
+        Raises SceneError (one line naming the file) for an unreadable panorama."""
+        key = env_key(options)
+        env = self._made.get(key)
+        if env is None:
+            baker = self.baker
+            if key[0] == "black":
+                env = baker.from_constant((0.0, 0.0, 0.0))
+            elif key[0] == "sky":
+                env = baker.from_sky(SUN_DIRECTION)
+            else:
+                env = baker.from_panorama(load_panorama(key[1]), key[1])
+            self._made[key] = env
+        return env
+
+    def bind_for(self, options: RenderOptions) -> None:
+        """Make every frame slot sample the environment `options` ask for."""
+        env = self.get(options)
+        if env is not self._bound:
+            self._bind(env)
+
+    def _bind(self, env: Environment) -> None:
+        """Point every slot's set 2 samplers at `env`, with the device idle and the recorded
+        command buffers dropped (an updated set invalidates them)."""
+        self.device.wait_idle()
+        self.recorder.free()
+        writer = DescriptorWriter(self.device)
+        for slot in self.slots:
+            for binding, image in ((2, env.specular), (3, env.irradiance), (4, env.brdf_lut)):
+                writer.sampler(slot.set2, binding, image.view, image.sampler)
+        writer.update()
+        self._bound = env
+
+    def destroy(self) -> None:
+        for env in self._made.values():
+            env.destroy()
+        self._made = {}
+        if self._baker is not None:
+            self._baker.destroy()
+            self._baker = None
+
+
+def env_key(options: RenderOptions) -> tuple:
+    """Which environment `options` sample: ("black",), ("sky",) or ("file", absolute path)."""
+    if not options.has_environment:
+        return ("black",)
+    if options.env == "sky":
+        return ("sky",)
+    return ("file", os.path.abspath(options.env))

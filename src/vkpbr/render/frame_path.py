@@ -1,0 +1,236 @@
+"""The one frame path: a frame drawn into any target, and a stream of them read back.
+
+`FramePath.draw(target, camera, lights, options)` takes the next frame of the ring
+(gpu/frames.py; waits for its previous submission), acquires an image of the target
+(gpu/target.py: offscreen images, or a window's swapchain), writes the frame's uniform blocks
+(render/frames.py), picks the command buffer recorded for this (target image, frame, modes)
+or records it (render/recorder.py), and submits it. `stream` is render_many's loop: up to
+the ring's count of frames queued, each collected (waited for, its timings and pixels read)
+in order. Neither measures nor chooses auto's path: the caller does, before its first frame
+(render/path_choice.py FramePaths.choose).
+
+It draws with the renderer's parts (render/parts.py FrameParts), as the batch path does.
+"""
+
+from __future__ import annotations
+
+import collections
+import dataclasses
+import time
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from vkpbr.gpu.frames import Frame, FrameRing
+from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, COPY_OUTPUTS, FrameTarget, OffscreenTarget
+from vkpbr.render import layouts as L
+from vkpbr.render.camera import as_camera, linear_depth, validate_camera
+from vkpbr.render.frames import FrameSlot, FrameStats, write_frame_blocks, write_frame_view
+from vkpbr.render.options import RenderOptions
+from vkpbr.render.outputs import frame_outputs
+from vkpbr.render.overlay import TextOverlay
+from vkpbr.render.parts import FrameParts
+from vkpbr.render.paths import choose_path
+from vkpbr.render.post_stage import check_post, enabled_post, encode_tonemap
+from vkpbr.render.shadows import ShadowPlan
+from vkpbr.render.steps import NO_OBJECTS, FrameObjects, FrameSpec
+from vkpbr.scene.types import Camera, Light
+
+__all__ = ["FramePath", "Submitted", "read_timings"]
+
+
+@dataclass
+class Submitted:
+    """A frame handed to the GPU: `ok` is False when the target must be recreated (the
+    frame was still submitted, or `frame` is None when no image could be acquired)."""
+
+    frame: Frame | None
+    image: int
+    ok: bool
+
+
+def read_timings(ring: FrameRing, frame: Frame, slot: FrameSlot) -> FrameStats:
+    """The frame's timestamps: one after each timed step of its recording (its
+    `stamp_names`, set when it was looked up) into the slot's stats, returned."""
+    names = frame.stamp_names
+    t = ring.timings_ms(frame, len(names) + 1)
+    slot.stats.gpu_ms = t[-1] if t else float("nan")
+    bounds = [0.0, *t]
+    slot.stats.pass_ms = {n: bounds[i + 1] - bounds[i] for i, n in enumerate(names)}
+    return slot.stats
+
+
+class FramePath:
+    """Frames drawn with `parts` (see the module's docstring)."""
+
+    def __init__(self, parts: FrameParts) -> None:
+        self.parts = parts
+        self._post_options: tuple[RenderOptions, RenderOptions] | None = None
+        self._post: tuple[RenderOptions, tuple] | None = None
+
+    def draw(self, target: FrameTarget, camera: Camera, lights: tuple[Light, ...],
+             options: RenderOptions, overlay: TextOverlay | None = None, copy: tuple[str, ...] = (),
+             linear: bool = False, timings: bool = True, driver_time: bool = False) -> Submitted:
+        """Draw one frame into `target` and submit it (Renderer.draw says what each argument
+        is); its Python time in the slot's stats.cpu_ms, the driver's in driver_ms."""
+        t0 = time.perf_counter()
+        p = self.parts
+        p.environments.bind_for(options)
+        transmission = p.lighting.screen_transmission(options)
+        if transmission and p.opaque_copies.stale(target.extent):
+            self._fit_opaque_copies(target.extent)
+        clock = time.thread_time if driver_time else _no_clock
+        c0 = clock()
+        frame = p.ring.begin()  # waits for the frame's previous submission
+        slot = p.slots[frame.index]
+        if timings:
+            read_timings(p.ring, frame, slot)
+        image = target.acquire(frame)
+        driver = clock() - c0
+        if image is None:
+            return Submitted(None, -1, False)
+        plan = p.shadow_frames.prepare(lights, options)
+        wanted = self._post_of(options)
+        post = bool(wanted) and check_post(options, target, p.device.compute_path)
+        drawn = p.targets.post(target, copy) if post else target  # (HDR with post steps)
+        # The camera's maths, once: the shadow cascades take its planes from the slot.
+        write_frame_view(slot, camera, target.extent, p.bounds)
+        write_frame_blocks(slot, lights, self._shading_options(options, post), linear or post,
+                           p.lighting.frame_lighting(options),
+                           p.shadow_frames.write(slot, plan, lights, camera, target.extent))
+        if overlay is not None:
+            overlay.prepare(frame.index)
+        spec = self._spec(drawn, slot, options, plan, overlay, copy, linear, wanted if post else (),
+                          transmission)
+        order = p.blend.order(camera.eye)
+        objects = FrameObjects(order, overlay) if order or overlay is not None else NO_OBJECTS
+        shadows = p.shadow_frames.maps
+        try:
+            cmd = p.recorder.command_buffer(target, frame, image, spec, objects,
+                                            drawn=drawn if post else None)
+            c0 = clock()
+            ok = target.submit(frame, cmd, image)
+        except BaseException:
+            shadows.forget()
+            raise
+        if not ok:
+            shadows.forget()
+        slot.stats.driver_ms = (driver + clock() - c0) * 1e3
+        frame.stamped = p.ring.query_pool is not None
+        slot.stats.cpu_ms = (time.perf_counter() - t0) * 1e3
+        return Submitted(frame, image, ok)
+
+    def _spec(self, drawn: FrameTarget, slot: FrameSlot, options: RenderOptions,
+              plan: ShadowPlan, overlay: TextOverlay | None, copy: tuple[str, ...], linear: bool,
+              post: tuple[tuple[str, float], ...], transmission: bool) -> FrameSpec:
+        """What the frame's recording depends on: its path, modes and shadow redraws."""
+        p = self.parts
+        redraw = p.shadow_frames.maps.stale(slot.index, plan, options.alpha_mask)
+        compute = p.paths.uses_compute(drawn, options)
+        path = choose_path(compute, compute and p.paths.uses_compute_raster(options, drawn),
+                           COPY_OUTPUTS in copy)
+        return FrameSpec(path, options.tbn, options.alpha_mask, plan, redraw, copy,
+                         transmission, p.lighting.shade_variant(options), id(overlay),
+                         post=post, post_tonemap=encode_tonemap(options, linear) if post else 0)
+
+    def _post_of(self, options: RenderOptions) -> tuple[tuple[str, float], ...]:
+        """The post steps `options` turn on (the last answer kept: a run of frames has one
+        options object)."""
+        last = self._post
+        if last is None or last[0] is not options:
+            last = self._post = (options, enabled_post(options))
+        return last[1]
+
+    def _shading_options(self, options: RenderOptions, post: bool) -> RenderOptions:
+        """The options the shading sees: with post steps, no tone map (the encode's; the
+        last such copy kept: a run of frames has one options object)."""
+        if not post or options.tonemap is None:
+            return options
+        last = self._post_options
+        if last is None or last[0] is not options:
+            last = self._post_options = (options, dataclasses.replace(options, tonemap=None))
+        return last[1]
+
+    def _fit_opaque_copies(self, extent: tuple[int, int]) -> None:
+        """Copies of the opaque scene for frames of `extent` (render/transmission.py). Rare (a
+        new size class): the old ones may be in use by queued frames and named by recorded
+        command buffers, so wait for the device and drop the recordings."""
+        p = self.parts
+        p.device.wait_idle()
+        p.recorder.free()
+        if p.compute.made is not None:  # the compute path's buffers and sets for the old
+            for old in p.opaque_copies.targets:
+                p.compute.made.forget_target(old, destroy=True)
+        p.opaque_copies.fit(extent)
+
+    # --- reading frames back ----------------------------------------------------------------
+    def stats(self, frame: Frame) -> FrameStats:
+        """The stats of the frame slot `frame` (after `draw` with timings, or a collect)."""
+        return self.parts.slots[frame.index].stats
+
+    def read_timings(self, frame: Frame) -> FrameStats:
+        """The GPU timestamps of `frame` (waited for) into its slot's stats, returned."""
+        return read_timings(self.parts.ring, frame, self.parts.slots[frame.index])
+
+    def read_color(self, target: FrameTarget, sub: Submitted) -> np.ndarray:
+        """Wait for a frame drawn with copy=(COPY_COLOR,) and return its (H, W, 4) pixels."""
+        sub.frame.wait()  # type: ignore[union-attr]
+        return target.read_color(sub.frame.index)  # type: ignore[attr-defined, union-attr]
+
+    # --- streams of frames into NumPy -------------------------------------------------------
+    def stream(self, cameras: Iterable[Camera | Any], base: Camera, target: OffscreenTarget,
+               lights: tuple[Light, ...], options: RenderOptions, linear: bool, depth: bool,
+               readback: bool, outputs: tuple[str, ...], driver_time: bool = False
+               ) -> Iterator[tuple[Any, FrameStats]]:
+        """render_many's frames (None cameras: `base`): (what `collect` reads, the frame's
+        stats) per camera, in order, with up to the ring's count of frames queued."""
+        copy = ((COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)) if readback else ()
+        if outputs and readback:
+            copy = (*copy, COPY_OUTPUTS)
+        pending: collections.deque[Frame] = collections.deque()
+        try:
+            for camera in cameras:
+                camera = base if camera is None else as_camera(camera, base)
+                validate_camera(camera)
+                if len(pending) == self.parts.ring.count:
+                    yield self.collect(pending.popleft(), target, depth, readback, outputs)
+                sub = self.draw(target, camera, lights, options, copy=copy, linear=linear,
+                                timings=False, driver_time=driver_time)
+                pending.append(sub.frame)  # type: ignore[arg-type] - offscreen: always a frame
+            while pending:
+                yield self.collect(pending.popleft(), target, depth, readback, outputs)
+        finally:
+            # An abandoned generator leaves frames queued: finish them before anything reuses them.
+            for frame in pending:
+                frame.wait()
+
+    def collect(self, frame: Frame, target: OffscreenTarget, depth: bool, readback: bool,
+                outputs: tuple[str, ...] = ()) -> tuple[Any, FrameStats]:
+        """Wait for `frame`; its timings, and with `readback` its colour (and depth, dataset
+        outputs) from `target`: (what `render` returns or None, a copy of its stats)."""
+        slot = self.parts.slots[frame.index]
+        stats = slot.stats
+        t0 = time.perf_counter()
+        frame.wait()
+        t1 = time.perf_counter()
+        stats.wait_ms = (t1 - t0) * 1e3
+        read_timings(self.parts.ring, frame, slot)
+        if not readback:
+            return None, dataclasses.replace(stats, readback_ms=0.0)
+        color = target.read_color(frame.index)
+        out_depth = linear_depth(target.read_depth(frame.index), slot.znear) if depth else None
+        result: Any = (color, out_depth) if depth else color
+        if outputs:
+            dtypes = {name: (dt, ch) for name, (_, _, dt, ch) in L.OUTPUT_IMAGES.items()}
+            result = frame_outputs(target.read_outputs(frame.index, dtypes), color, outputs,
+                                   np.asarray(slot.camera_rotation).reshape(3, 3).T)
+        stats.readback_ms = (time.perf_counter() - t1) * 1e3
+        stats = dataclasses.replace(stats)
+        self.parts.device.check_validation()
+        return result, stats
+
+
+def _no_clock() -> float:
+    return 0.0

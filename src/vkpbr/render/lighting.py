@@ -1,0 +1,118 @@
+"""What lights a frame besides its geometry: the punctual lights and the lighting mode's terms.
+
+`Lighting` resolves the lights a run of frames is drawn with (the scene's; with none, the
+physically based mode's automatic sun or the course's point light), the Lighting block's
+inputs for the options' mode (render/frames.py FrameLighting: its flags, the environment's
+intensity, rotation and mip count), what the compute path's shading kernels are specialised
+for, and whether frames draw the copy of the opaque scene that transmissive surfaces see
+(render/transmission.py). It is given the scene, the opaque copies and the environments
+(render/environments.py); it draws nothing.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Iterable
+
+from vkpbr.render import layouts as L
+from vkpbr.render.compute_path import ShadeVariant
+from vkpbr.render.environments import Environments
+from vkpbr.render.frames import FrameLighting
+from vkpbr.render.options import RenderOptions
+from vkpbr.render.transmission import OpaqueCopies
+from vkpbr.scene.lights import course_point_light
+from vkpbr.scene.sky import sun_radiometry
+from vkpbr.scene.types import Light, Scene
+from vkpbr.scene.validate import validate_lights
+from vkpbr.shading import AMBIENT, SUN_DIRECTION
+
+__all__ = ["Lighting", "LightsArg", "automatic_sun"]
+
+# What a caller may give as the lights of a frame: None (the scene's, or the lighting mode's
+# default), one Light, or a sequence of them (empty: no punctual light at all).
+LightsArg = Light | Iterable[Light] | None
+
+
+class Lighting:
+    """The lights and lighting terms of frames of `scene` (see the module's docstring)."""
+
+    def __init__(self, scene: Scene, opaque_copies: OpaqueCopies,
+                 environments: Environments) -> None:
+        self.scene, self.opaque_copies, self.environments = scene, opaque_copies, environments
+        self._last: tuple[RenderOptions, FrameLighting] | None = None
+
+    def default_light(self) -> Light:
+        """The course's light: the scene's first, else a white point light at (0, 2, 0)."""
+        return self.scene.lights[0] if self.scene.lights else Light()
+
+    def frame_lights(self, options: RenderOptions, lights: LightsArg = None) -> tuple[Light, ...]:
+        """The lights frames are drawn with, resolved once per call (not per frame).
+
+        None: the scene's lights; with none in the scene, the physically based mode's
+        automatic sun, the course's default point light. Course lighting draws one point
+        light: the first light, as `scene.lights.course_point_light` sees it.
+        """
+        if lights is None:
+            if self.scene.lights:
+                chosen: tuple[Light, ...] = tuple(self.scene.lights)
+            elif options.lighting == L.Lighting.COURSE:
+                chosen = (Light(),)
+            else:
+                chosen = (automatic_sun(float(options.env_rotation)),)
+        else:
+            chosen = (lights,) if isinstance(lights, Light) else tuple(lights)
+            validate_lights(chosen)
+        if options.lighting == L.Lighting.COURSE:
+            return (course_point_light(chosen[0], self.scene.bounds()),) if chosen else ()
+        return chosen
+
+    def frame_lighting(self, options: RenderOptions) -> FrameLighting:
+        """What lights a frame besides its punctual lights, for `options`' lighting mode
+        (the last answer kept: a run of frames has one options object)."""
+        last = self._last
+        if last is not None and last[0] is options:
+            return last[1]
+        lighting = self._frame_lighting(options)
+        self._last = (options, lighting)
+        return lighting
+
+    def shade_variant(self, options: RenderOptions) -> ShadeVariant:
+        """What the compute path's shading kernels are specialised for with `options`: the
+        frame's lighting flags and BRDF (render/compute_path.py ShadeVariant)."""
+        return ShadeVariant(self.frame_lighting(options).flags, int(options.shading_brdf))
+
+    def screen_transmission(self, options: RenderOptions) -> bool:
+        """Whether frames with `options` draw the copy of the opaque scene that transmissive
+        surfaces see through (render/transmission.py): the scene has one, and the frame
+        shades with the physically based mode's glTF BRDF (the layers' only)."""
+        return (self.opaque_copies.present and options.lighting == L.Lighting.PBR
+                and options.shading_brdf == L.Brdf.GLTF)
+
+    def _frame_lighting(self, options: RenderOptions) -> FrameLighting:
+        if options.lighting == L.Lighting.COURSE:
+            return FrameLighting(mode=int(L.Lighting.COURSE), ambient=AMBIENT)
+        flags = ((L.LIGHTING_SHADOWS if options.shadows else 0)
+                 | (L.LIGHTING_SCREEN_TRANSMISSION if self.screen_transmission(options) else 0))
+        if not options.has_environment:
+            return FrameLighting(mode=int(L.Lighting.PBR), flags=flags)
+        flags |= L.LIGHTING_IBL | (L.LIGHTING_BACKGROUND if options.draws_background else 0)
+        return FrameLighting(mode=int(L.Lighting.PBR), flags=flags,
+                             env_intensity=options.env_intensity,
+                             env_rotation=math.radians(options.env_rotation),
+                             env_max_lod=float(self.environments.get(options).max_lod))
+
+
+@functools.lru_cache(maxsize=64)
+def automatic_sun(env_rotation: float = 0.0) -> Light:
+    """The physically based mode's key light when the scene has none: the built-in sky's sun
+    (vkpbr.shading.SUN_DIRECTION, colour and illuminance from scene.sky's sun_radiometry) as
+    a directional Light, turned with the environment by `env_rotation` degrees about +Y:
+    R_y(+theta), as the environment's lookups turn by R_y(-theta) (shaders/env_common.glsl
+    env_rotate)."""
+    color, illuminance = sun_radiometry(SUN_DIRECTION)
+    t = math.radians(env_rotation)
+    x, y, z = SUN_DIRECTION
+    direction = (math.cos(t) * x + math.sin(t) * z, y, -math.sin(t) * x + math.cos(t) * z)
+    return Light(kind="directional", direction=direction, color=color, intensity=illuminance,
+                 falloff="inverse_square")

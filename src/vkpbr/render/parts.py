@@ -1,0 +1,144 @@
+"""What frames of one scene are drawn with, made in order and given to those that draw.
+
+`make_parts` makes the scene's GPU objects (frame ring, descriptor layouts, frame slots, the
+scene's GPU copy, the opaque copies transmission samples, the shadow maps, the recorder) and
+the concerns that draw with them, each its own module's and given only what it needs:
+targets (render/targets.py), path choice (render/path_choice.py), environments
+(render/environments.py), lighting (render/lighting.py), shadow maps per frame
+(render/shadow_frames.py) and the blended draws' order (render/blend_order.py). The frame
+path (render/frame_path.py) and the batch path (render/batch_path.py) draw with the
+`FrameParts`; the Renderer (render/renderer.py) holds them. Every GPU object is a child of
+the device, which destroys what was made if making the rest fails.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vkpbr.gpu.buffer import Buffer
+from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout
+from vkpbr.gpu.device import Device, DeviceRequest
+from vkpbr.gpu.frames import FrameRing
+from vkpbr.gpu.pipeline import PipelineLayout
+from vkpbr.render import layouts as L
+from vkpbr.render.batch import draw_spheres
+from vkpbr.render.blend_order import BlendOrder
+from vkpbr.render.compute_path import ComputeScene
+from vkpbr.render.environment import EnvironmentSpec
+from vkpbr.render.environments import Environments
+from vkpbr.render.frames import Bounds, FrameSlot, bind_instances, create_slots
+from vkpbr.render.gpu_scene import GpuScene
+from vkpbr.render.lighting import Lighting
+from vkpbr.render.path_choice import FramePaths
+from vkpbr.render.post_stage import PostKernels
+from vkpbr.render.recorder import STAMPS, FrameRecorder
+from vkpbr.render.shadow_frames import ShadowFrames
+from vkpbr.render.shadows import ShadowMaps
+from vkpbr.render.targets import Lazy, Targets
+from vkpbr.render.transmission import OpaqueCopies
+from vkpbr.scene.semantics import semantic_ids
+from vkpbr.scene.types import Camera, Scene
+
+__all__ = ["FrameParts", "create_layouts", "make_parts", "open_device"]
+
+
+@dataclass(frozen=True, slots=True)
+class FrameParts:
+    """What frames of `scene` are drawn with (see the module's docstring)."""
+
+    device: Device
+    scene: Scene
+    ring: FrameRing
+    set_layouts: list[DescriptorSetLayout]
+    pipeline_layout: PipelineLayout
+    frame_buffers: list[Buffer]  # the slots' uniform blocks and light records
+    frame_pool: DescriptorPool  # the slots' sets
+    slots: list[FrameSlot]
+    gpu_scene: GpuScene
+    semantic_ids: np.ndarray  # (draws,) uint32: the dataset outputs' class per draw
+    semantic_labels: dict[int, str]
+    opaque_copies: OpaqueCopies
+    compute: Lazy[ComputeScene]  # the compute path's resources, made on its first frame
+    post: Lazy[PostKernels]  # the post steps' kernels, made on first use
+    recorder: FrameRecorder
+    bounds: Bounds
+    blend: BlendOrder
+    paths: FramePaths
+    targets: Targets
+    environments: Environments
+    lighting: Lighting
+    shadow_frames: ShadowFrames
+
+    def default_camera(self) -> Camera:
+        """The scene's first camera, else the automatic one (scene/geometry.py auto_camera)."""
+        if self.scene.cameras:
+            return self.scene.cameras[0]
+        from vkpbr.scene.geometry import auto_camera
+
+        return auto_camera(self.scene)
+
+    def close(self) -> None:
+        """Destroy what is not the device's to destroy (the caller waits for the device)."""
+        self.recorder.free()
+        self.shadow_frames.maps.destroy()
+        self.opaque_copies.destroy()
+        if self.post.made is not None:
+            self.post.made.destroy()
+        self.environments.destroy()
+
+
+def open_device(device: str | int | None, validation: bool | None, sync_validation: bool,
+                window_extensions: tuple[str, ...] | None) -> Device:
+    """The Renderer's device (its arguments of those names): with a window system's instance
+    extensions, swapchains too; `validation` None: on where VKPBR_VALIDATION=1."""
+    if window_extensions is not None:
+        device = DeviceRequest(device, tuple(window_extensions), ("VK_KHR_swapchain",))
+    if validation is None:
+        validation = os.environ.get("VKPBR_VALIDATION") == "1"
+    return Device(device, validation=validation, sync_validation=sync_validation)
+
+
+def create_layouts(device: Device, frames: int
+                   ) -> tuple[list[DescriptorSetLayout], ShadowMaps, PipelineLayout]:
+    """The frame's descriptor set layouts (L.SETS), the shadow maps (whose own layout is set
+    3: their sets are per frame slot, `frames` of them) and the pipeline layout of all four."""
+    layouts = [DescriptorSetLayout(device, [BindingSpec(b, k, s, n) for b, k, s, n in rows])
+               for i, rows in sorted(L.SETS.items()) if i != 3]
+    shadows = ShadowMaps(device, layouts[1], frames)
+    layouts.append(shadows.set_layout)
+    return layouts, shadows, PipelineLayout(device, layouts, L.PUSH.size)
+
+
+def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float, float, float],
+               depth_prepass: bool | None, env_spec: EnvironmentSpec | None,
+               cache_dir: str | os.PathLike[str] | None, semantics: Any) -> FrameParts:
+    """The parts of frames of `scene` on `device` (the Renderer's arguments of those names)."""
+    ring = FrameRing(device, queries_per_frame=STAMPS)
+    layouts, shadows, pipeline_layout = create_layouts(device, ring.count)
+    buffers, pool, slots = create_slots(device, layouts[0], layouts[2], ring.count)
+    gs = GpuScene(device, scene, layouts[1])
+    bind_instances(device, [s.set0 for s in slots], gs.instance_buffer)
+    ids, labels = semantic_ids(scene, gs.draws, Path(semantics)
+                               if isinstance(semantics, os.PathLike) else semantics)
+    # Bound in every slot's set 2 before anything is recorded (render/transmission.py).
+    copies = OpaqueCopies(device, gs, [s.set2 for s in slots], (*background, 1.0))
+    compute = Lazy(lambda: ComputeScene(device, gs, dict(enumerate(layouts)), slots, ids,
+                                        draw_spheres(scene, gs.draws) if gs.draws else None))
+    post = Lazy(lambda: PostKernels(device))
+    blend = BlendOrder(gs.draws)
+    paths = FramePaths(device, msaa, scene.triangle_count, len(blend) > 0, depth_prepass,
+                       cache_dir)
+    recorder = FrameRecorder(device, gs, pipeline_layout, ring, slots, paths.prepass_for,
+                             shadows, compute, copies, post)
+    bounds = Bounds.of(*scene.bounds())
+    environments = Environments(device, slots, recorder, env_spec, cache_dir)
+    return FrameParts(
+        device, scene, ring, layouts, pipeline_layout, buffers, pool, slots, gs, ids, labels,
+        copies, compute, post, recorder, bounds, blend, paths,
+        Targets(device, msaa, background, ring.count, recorder, compute), environments,
+        Lighting(scene, copies, environments), ShadowFrames(shadows, bounds, recorder))

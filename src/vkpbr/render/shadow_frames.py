@@ -1,0 +1,88 @@
+"""The shadow maps' work per frame: which lights get maps, the maps' images, the matrices.
+
+`ShadowFrames` keeps the plan of the frames' lights (render/shadows.py plan_shadows: remade
+only when the lights or the option change), makes the maps' images hold it (new images:
+the recorded command buffers name the old ones, so they are dropped), and writes each frame
+slot's shadow matrices, skipping the maths when the slot's inputs repeat. Directional
+lights' cascades follow a frame's camera; a batch's views share one map over the whole scene.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vkpbr.render import layouts as L
+from vkpbr.render.frames import Bounds, FrameSlot
+from vkpbr.render.options import RenderOptions
+from vkpbr.render.recorder import FrameRecorder
+from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
+from vkpbr.scene.types import Camera, Light
+
+__all__ = ["ShadowFrames"]
+
+
+class ShadowFrames:
+    """The per-frame side of `maps` for a scene of `bounds`, whose recordings `recorder` keeps."""
+
+    def __init__(self, maps: ShadowMaps, bounds: Bounds, recorder: FrameRecorder) -> None:
+        self.maps, self.bounds, self.recorder = maps, bounds, recorder
+        self._plan: tuple[tuple, ShadowPlan] = ((), ShadowPlan())
+        self._rows: dict[int, tuple[tuple, np.ndarray | None]] = {}  # by slot: (key, rows)
+
+    def plan(self, lights: tuple[Light, ...], options: RenderOptions) -> ShadowPlan:
+        """Which of the frame's lights get shadow maps (none in course mode or with shadows
+        off); remade only when the lights or the option change."""
+        enabled = options.shadows and options.lighting == L.Lighting.PBR
+        key = (lights, enabled)
+        if key != self._plan[0]:
+            self._plan = (key, plan_shadows(lights, enabled, self.maps.cubes_supported))
+        return self._plan[1]
+
+    def prepare(self, lights: tuple[Light, ...], options: RenderOptions) -> ShadowPlan:
+        """The frame's plan, with maps of `options`' resolution that hold it."""
+        plan = self.plan(lights, options)
+        self.ensure(plan, options)
+        return plan
+
+    def ensure(self, plan: ShadowPlan, options: RenderOptions | None = None) -> None:
+        """Maps that hold `plan` (of `options`' resolution, where given)."""
+        if options is not None and options.shadow_resolution != self.maps.resolution:
+            self.maps.set_resolution(options.shadow_resolution)
+        if self.maps.ensure(plan):  # new images: the recorded buffers name the old ones
+            self.recorder.free()
+            self._rows.clear()
+
+    def write(self, slot: FrameSlot, plan: ShadowPlan, lights: tuple[Light, ...],
+              camera: Camera, size: tuple[int, int]) -> np.ndarray | None:
+        """The slot's shadow matrices for this frame (skipped when its inputs repeat) and the
+        lights' LightRecord.shadow rows; None without shadow maps. The cascades take the
+        frame's planes from its view record: write_frame_view comes first."""
+        if not plan.entries:
+            return None
+        sm = self.maps
+        c = camera  # mutable: its values are the key
+        # Only directional lights' cascades follow the camera: spot and point lights' maps
+        # are the same for every view, so a moving camera does not remake them.
+        view = ((c.eye, c.target, c.up, c.yfov_deg, c.znear, c.zfar, c.pixel_intrinsics, tuple(size))
+                if plan.follows_camera else None)
+        key = (view, plan, lights, sm.resolution)
+        last = self._rows.get(slot.index)
+        if last is not None and last[0] == key:
+            return last[1]
+        rows = sm.write(slot.index, plan, lights, camera, size, slot.znear, slot.zfar,
+                        self.bounds.corners[0], self.bounds.corners[-1])
+        self._rows[slot.index] = (key, rows)
+        return rows
+
+    def write_scene(self, slot: FrameSlot, plan: ShadowPlan, lights: tuple[Light, ...],
+                    options: RenderOptions | None = None) -> np.ndarray | None:
+        """A batch's shadow maps in `slot`: the camera-independent fits (directional lights
+        over the whole scene) and the lights' LightRecord.shadow rows; None without maps.
+        `options`: first make maps of their resolution that hold `plan` (`ensure`)."""
+        if options is not None:
+            self.ensure(plan, options)
+        if not plan.entries:
+            return None
+        self._rows.pop(slot.index, None)  # the slot's cascades are overwritten
+        return self.maps.write(slot.index, plan, lights, None, (1, 1), 0.0, 0.0,
+                               self.bounds.corners[0], self.bounds.corners[-1])

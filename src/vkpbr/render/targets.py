@@ -1,0 +1,115 @@
+"""The targets a renderer draws into: its offscreen targets, the post stage's HDR targets,
+new targets callers own, window swapchains and text overlays.
+
+`Targets` keeps one offscreen target per (size, colour kind) and one HDR target per size for
+frames with post steps (render/post_stage.py), checks sizes against the device's limits, makes the
+dataset outputs' images of a target on first use, and destroys a caller's target with what
+was recorded or made for it (command buffers, the compute path's per-target buffers).
+`Lazy` is an object made on first use: the compute path's resources, the post kernels.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, Generic, TypeVar
+
+import numpy as np
+
+from vkpbr.errors import UsageError
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.swapchain import Surface, Swapchain
+from vkpbr.gpu.target import COPY_OUTPUTS, FrameTarget, OffscreenTarget
+from vkpbr.render import layouts as L
+from vkpbr.render.compute_path import ComputeScene
+from vkpbr.render.overlay import TextOverlay
+from vkpbr.render.recorder import FrameRecorder
+
+__all__ = ["Lazy", "Targets"]
+
+T = TypeVar("T")
+
+
+class Lazy(Generic[T]):
+    """`make()`'s object, made on the first call and then kept; `made` is None until then."""
+
+    def __init__(self, make: Callable[[], T]) -> None:
+        self._make = make
+        self.made: T | None = None
+
+    def __call__(self) -> T:
+        if self.made is None:
+            self.made = self._make()
+        return self.made
+
+
+class Targets:
+    """The targets of frames drawn on `device` (see the module's docstring): `msaa` samples,
+    `background` (linear RGB) where nothing is drawn, `frames` in flight (overlays have one
+    set of quads each); `recorder` and `compute` hold what is recorded and made per target."""
+
+    def __init__(self, device: Device, msaa: int, background: tuple[float, float, float],
+                 frames: int, recorder: FrameRecorder, compute: Lazy[ComputeScene]) -> None:
+        self.device, self.msaa, self.background, self.frames = device, msaa, background, frames
+        self.recorder, self.compute = recorder, compute
+        self._kept: dict[tuple, OffscreenTarget] = {}
+
+    def offscreen(self, size: tuple[int, int], linear: bool = False) -> OffscreenTarget:
+        """The offscreen target of `size` (W, H): sRGB uint8, or float32 `linear`."""
+        w, h = size
+        limit = int(self.device.limits.maxImageDimension2D)
+        if not (isinstance(w, int | np.integer) and isinstance(h, int | np.integer)) or w <= 0 or h <= 0:
+            raise UsageError(f"image size {w}x{h}: width and height must be positive integers")
+        if w > limit or h > limit:
+            raise UsageError(f"image size {w}x{h} exceeds this device's limit of {limit}x{limit}")
+        key = (int(w), int(h), linear)
+        if key not in self._kept:
+            self._kept[key] = self.new((int(w), int(h)), linear)
+        return self._kept[key]
+
+    def new(self, size: tuple[int, int], linear: bool) -> OffscreenTarget:
+        """A new offscreen target of `size` the caller owns (the compute batch's atlases:
+        render/batch_path.py; give it back with `drop`)."""
+        return OffscreenTarget(self.device, size, "float" if linear else "srgb", self.msaa,
+                               (*self.background, 1.0), compute=self.device.compute_path)
+
+    def post(self, target: FrameTarget, copy: tuple[str, ...]) -> OffscreenTarget:
+        """The HDR target frames of `target` with post steps draw into (render/post_stage.py): the
+        float colour (and depth, ids, outputs) of its size, kept here."""
+        key = (*target.extent, "post")
+        if key not in self._kept:
+            self._kept[key] = self.new(target.extent, True)
+        hdr = self._kept[key]
+        if COPY_OUTPUTS in copy:
+            self.ensure_outputs(hdr)
+        return hdr
+
+    def drop(self, target: OffscreenTarget) -> None:
+        """Destroy a target from `new` and everything recorded or made for it (command
+        buffers, the compute path's per-target buffers). Waits for the device."""
+        self.device.wait_idle()
+        self.recorder.free(id(target))
+        if self.compute.made is not None:
+            self.compute.made.forget_target(target, destroy=True)
+        target.destroy()
+
+    def ensure_outputs(self, target: OffscreenTarget) -> None:
+        """The dataset outputs' images of `target`, made on first use."""
+        formats = {name: (fmt, nbytes) for name, (fmt, nbytes, _, _) in L.OUTPUT_IMAGES.items()}
+        if target.ensure_outputs(formats) and self.compute.made is not None:
+            # The target's compute set bound stand-ins: rebuild it (and what recorded it).
+            self.device.wait_idle()
+            self.recorder.free()
+            self.compute.made.forget_target(target)
+
+    def window(self, create_surface: Callable[[Any, Any], int], size: tuple[int, int],
+               vsync: bool = True) -> Swapchain:
+        """A swapchain target on a window surface. `create_surface(instance, out)` makes the
+        VkSurfaceKHR into the pointer `out` and returns a VkResult (GLFW's
+        `glfw.create_window_surface(instance, window, None, out)`)."""
+        surface = Surface(self.device, create_surface)
+        return Swapchain(self.device, surface, size, vsync=vsync,
+                         clear_color=(*self.background, 1.0))
+
+    def overlay(self, atlas: np.ndarray, target: FrameTarget) -> TextOverlay:
+        """A textured-quad overlay (the viewer's HUD) drawn over frames of `target`'s formats."""
+        return TextOverlay(self.device, atlas, target, self.frames)
