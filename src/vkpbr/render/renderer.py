@@ -121,7 +121,13 @@ class Renderer:
         self.blend_order, self.blend_orders = p.blend.order, p.blend.orders
         self.frame_stats, self.read_color = fp.stats, fp.read_color
         self.build_pipelines = p.recorder.build_pipelines
+        self.shadow_plan, self.write_scene_shadows = p.shadow_frames.plan, p.shadow_frames.write_scene
+        self.takes_compute_batch, self.read_frame_timings = paths.takes_compute_batch, fp.read_timings
         self.wait_idle, self.check_validation = self.device.wait_idle, self.device.check_validation
+
+    @property
+    def environment_baker(self) -> Any:
+        return self.environments.baker  # (environments.py: made on first use)
 
     @property
     def instances(self) -> list[dict[str, Any]]:
