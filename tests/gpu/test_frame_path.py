@@ -13,9 +13,11 @@ def test_depth_prepass_changes_no_pixel(make_renderer) -> None:
     from vkpbr.scene.synthetic import sphere_field
 
     scene = sphere_field(draws=40, rings=8, segments=16, materials=4)
-    plain = make_renderer(scene, depth_prepass=False).render(size=(96, 64), depth=True)
+    # The pre-pass is the fragment path's (auto takes the compute path on GPUs).
+    plain = make_renderer(scene, depth_prepass=False).render(size=(96, 64), depth=True,
+                                                              pipeline="forward")
     pre = make_renderer(scene, depth_prepass=True)
-    image = pre.render(size=(96, 64), depth=True)
+    image = pre.render(size=(96, 64), depth=True, pipeline="forward")
     assert np.array_equal(plain[0], image[0]) and np.array_equal(plain[1], image[1])
     passes = pre.last_stats.pass_ms
     assert {"shadows", "prepass_opaque", "opaque", "mask", "blend", "copy"} <= set(passes)
