@@ -54,7 +54,7 @@ class _Recorded:
     cmd: Commands
     blend_order: tuple[int, ...]
     stamp_names: tuple[str, ...]
-    target: int  # id() of the target it draws into
+    targets: tuple[int, ...]  # id() of the targets it draws into (the user's, an HDR one)
 
 
 class _Stamps:
@@ -164,14 +164,16 @@ class FrameRecorder:
                 rec.cmd.free()
             steps = FrameSteps(self, drawn or target, frame.index, image, spec, objects, groups,
                                output=target if drawn is not None else None)
-            rec = self._record(frame, steps.steps(), steps.resources, target.extent, tid,
+            ids = (tid,) if drawn is None else (tid, id(drawn))
+            rec = self._record(frame, steps.steps(), steps.resources, target.extent, ids,
                                objects.blend_order)
             self._recorded[key] = rec
         frame.stamp_names = rec.stamp_names
         return rec.cmd
 
     def _record(self, frame: Frame, steps: list[Step], resources: dict[str, Any],
-                extent: tuple[int, int], target: int, order: tuple[int, ...]) -> _Recorded:
+                extent: tuple[int, int], targets: tuple[int, ...], order: tuple[int, ...]
+                ) -> _Recorded:
         """Record `steps` (with the start timestamp and one after each timed step; the time
         after the last timed step is "copy")."""
         cmd = Commands(self.device).begin()
@@ -180,7 +182,7 @@ class FrameRecorder:
             steps = [*steps, Step("copy")]
         record_steps(cmd, steps, resources, extent, stamps)
         cmd.end()
-        return _Recorded(cmd, order, tuple(stamps.names), target)
+        return _Recorded(cmd, order, tuple(stamps.names), targets)
 
     def compute_sets(self, frame_index: int, set0: object = None) -> dict[int, object]:
         """The frame's sets the compute path's kernels bind: 0 (the frame's view; `set0`: a
@@ -196,6 +198,6 @@ class FrameRecorder:
         """Free the recorded command buffers: of one target (its id; None: every target's),
         of the paths named in `paths` (None: every path's; render/batch.py frees its own)."""
         for key in [k for k, r in self._recorded.items()
-                    if (target_id is None or r.target == target_id)
+                    if (target_id is None or target_id in r.targets)
                     and (paths is None or k[3].path in paths)]:
             self._recorded.pop(key).cmd.free()

@@ -96,9 +96,9 @@ class Targets:
         """The dataset outputs' images of `target`, made on first use."""
         formats = {name: (fmt, nbytes) for name, (fmt, nbytes, _, _) in L.OUTPUT_IMAGES.items()}
         if target.ensure_outputs(formats) and self.compute.made is not None:
-            # The target's compute set bound stand-ins: rebuild it (and what recorded it).
+            # The target's compute set bound stand-ins: rebuild it and what draws into it.
             self.device.wait_idle()
-            self.recorder.free()
+            self.recorder.free(id(target))
             self.compute.made.forget_target(target)
 
     def window(self, create_surface: Callable[[Any, Any], int], size: tuple[int, int],
