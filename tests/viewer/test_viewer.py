@@ -124,6 +124,27 @@ def test_cli_frames_screenshot_matches_render(display: str, tmp_path: Path) -> N
     assert np.array_equal(v, r)
 
 
+def test_window_with_bloom_matches_render(display: str, tmp_path: Path) -> None:
+    """A window's frame with a post step: the HDR image encoded by a fragment pass into the
+    swapchain image (render/post_stage.py), against `render`'s compute encode: within 1/255
+    (the attachment's sRGB encoding against the kernel's)."""
+    from PIL import Image
+
+    from vkpbr.app.cli import main
+
+    cam = "0.8,2.9,7.5,0.3,2.0,0.0"
+    assert main(["view", "--size", "96x72", "--camera", cam, "--frames", "3", "--no-vsync",
+                 "--screenshot", str(tmp_path / "v.png"), "--validation", "--bloom", "0.4"]) == 0
+    assert main(["render", "--size", "96x72", "--camera", cam, "--out", str(tmp_path / "r.png"),
+                 "--validation", "--bloom", "0.4"]) == 0
+    plain = tmp_path / "p.png"
+    assert main(["render", "--size", "96x72", "--camera", cam, "--out", str(plain)]) == 0
+    v = np.asarray(Image.open(tmp_path / "v.png")).astype(int)
+    r = np.asarray(Image.open(tmp_path / "r.png")).astype(int)
+    assert np.abs(v - r).max() <= 1
+    assert np.abs(v - np.asarray(Image.open(plain)).astype(int)).max() > 1  # it did bloom
+
+
 def test_hud_is_drawn_and_fits(display: str, tmp_path: Path) -> None:
     from vkpbr.app.viewer import Viewer, ViewerConfig
 

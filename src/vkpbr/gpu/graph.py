@@ -54,6 +54,7 @@ USES: dict[str, Use] = {
                             "DEPTH_ATTACHMENT_OPTIMAL", True),
     "sampled": Use(_SHADERS, ("SHADER_SAMPLED_READ",), "SHADER_READ_ONLY_OPTIMAL", False),
     "storage_read": Use(("COMPUTE_SHADER",), ("SHADER_STORAGE_READ",), "GENERAL", False),
+    "fragment_storage_read": Use(("FRAGMENT_SHADER",), ("SHADER_STORAGE_READ",), "GENERAL", False),
     "storage": Use(("COMPUTE_SHADER",), ("SHADER_STORAGE_READ", "SHADER_STORAGE_WRITE"),
                    "GENERAL", True),
     # Storage buffers read by vertex shaders (a batch's lists of visible views).

@@ -252,9 +252,11 @@ class Swapchain:
                 "depth": ImageResource(self.depth_images[image].handle, depth=True,
                                        view=self.depth_views[image].handle)}
 
-    def finish_steps(self, image: int, frame_index: int, copy: tuple[str, ...]) -> list[Step]:
+    def finish_steps(self, image: int, frame_index: int, copy: tuple[str, ...],
+                     prefix: str = "", sources: Any = None) -> list[Step]:
         """The colour copied into the frame's screenshot buffer when `copy` names it, then
-        the image handed to the presentation engine."""
+        the image handed to the presentation engine. `prefix`: its resources' names' in the
+        frame (`sources`, where the frame drew its depth, has nothing to copy here)."""
         steps = []
         if COPY_COLOR in copy:
             if not self.can_copy:
@@ -265,8 +267,8 @@ class Swapchain:
                 copy_image_to_buffer(cmd, self.images[image], False, buffer, self.extent)
                 barriers(cmd, [], [host_read_barrier(cmd.vk, buffer)])
 
-            steps.append(Step("copy", record, (("color", "transfer_src"),)))
-        return [*steps, Step("present", uses=(("color", "present"),), timed=False)]
+            steps.append(Step("copy", record, ((prefix + "color", "transfer_src"),)))
+        return [*steps, Step("present", uses=((prefix + "color", "present"),), timed=False)]
 
     def submit(self, frame: Frame, cmd: Commands, image: int) -> bool:
         """Submit `cmd` (waiting for the acquire, signalling the image's render-finished

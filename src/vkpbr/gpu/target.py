@@ -82,8 +82,10 @@ class OffscreenTarget:
         # compute shader, through a storage view: UNORM for the sRGB image (a mutable image),
         # and renders a visibility image with the same depth buffer.
         self.compute = bool(compute and samples == 1)
-        storage = vk.VK_IMAGE_USAGE_STORAGE_BIT if self.compute else 0
-        mutable = self.compute and color == "srgb"
+        # A multisampled target's resolved colour is a storage image too where the device
+        # can (post steps read and write it: render/post_stage.py).
+        storage = vk.VK_IMAGE_USAGE_STORAGE_BIT if compute else 0
+        mutable = bool(compute) and color == "srgb"
         self.color = self._own(Image(device, w, h, self.color_format, attach | storage,
                                      mutable=mutable))
         # The compute rasteriser's depths are copied in (render/compute_path.py).
@@ -92,10 +94,12 @@ class OffscreenTarget:
                                      vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | src | depth_in))
         views = [self._own(ImageView(self.color, usage=attach if mutable else None)),
                  self._own(ImageView(self.depth, aspect="depth"))]
-        if self.compute:
+        self.storage_view = None
+        if compute:
             unorm = vk.VK_FORMAT_R8G8B8A8_UNORM if color == "srgb" else None
             self.storage_view = self._own(ImageView(
                 self.color, format=unorm, usage=vk.VK_IMAGE_USAGE_STORAGE_BIT if mutable else None))
+        if self.compute:
             self.visibility = self._own(Image(
                 device, w, h, vk.VK_FORMAT_R32G32_UINT,
                 vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_STORAGE_BIT,

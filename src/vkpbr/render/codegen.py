@@ -29,9 +29,10 @@ class Variant:
     defines: tuple[tuple[str, int], ...] = ()
 
 
-# The post steps' kernels (render/post.py, render/post_stage.py): one build of each shaders/post_*.comp, found by name.
-_POST_KERNELS = tuple(Variant(f"{p.stem}.comp.spv", p.name)
-                      for p in sorted(SHADER_DIR.glob("post_*.comp")))
+# The post steps' shaders (render/post.py, render/post_stage.py): one build of each
+# shaders/post_*.comp / .vert / .frag, found by name.
+_POST_KERNELS = tuple(Variant(f"{p.name}.spv", p.name) for p in sorted(SHADER_DIR.glob("post_*"))
+                      if p.suffix in (".comp", ".vert", ".frag"))
 
 VARIANTS: tuple[Variant, ...] = (
     *_POST_KERNELS,

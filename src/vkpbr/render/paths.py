@@ -31,18 +31,18 @@ from vkpbr.render.passes import PASSES
 __all__ = ["PATHS", "COPY_PATHS", "RASTER_STEPS", "STEP_NAMES", "choose_path", "architecture_text"]
 
 _SHADE_COMPUTE = ("classify", "shading", "outputs", "background_compute")
-_AFTER_SHADING = ("blend", "overlay", "post", "finish")
+_AFTER_SHADING = ("blend", "post", "overlay", "finish")
 _FRAME_HEAD = ("shadows", "transmission")
 _FRAGMENT_PASSES = ("opaque", "opaque_double", "mask", "background", "blend")
 
 PATHS: dict[str, tuple[str, ...]] = {
     # The fragment path: everything shaded in fragment shaders.
     "forward": (*_FRAME_HEAD, "prepass_opaque", "prepass_opaque_double",
-                *_FRAGMENT_PASSES, "overlay", "post", "finish"),
+                *_FRAGMENT_PASSES, "post", "overlay", "finish"),
     # The fragment path with dataset outputs: a visibility pass makes them, then the
     # fragment passes shade over its depth (their pre-pass).
     "forward_outputs": (*_FRAME_HEAD, "outputs_clear", "visibility", "classify", "outputs",
-                        *_FRAGMENT_PASSES, "overlay", "post", "finish"),
+                        *_FRAGMENT_PASSES, "post", "overlay", "finish"),
     # The compute path: coverage by the raster units, shading in compute shaders.
     "compute": (*_FRAME_HEAD, "outputs_clear", "visibility", *_SHADE_COMPUTE, *_AFTER_SHADING),
     # The compute path with the compute rasteriser (64-bit atomics) making the coverage.

@@ -4,8 +4,10 @@ A frame with a post step on (its RenderOptions field, render/options.py POST_OPT
 0) draws its path into the renderer's float target of its size: "color" holds the exposed
 radiance (the shading multiplies by the exposure and tone maps nothing, as for
 `linear=True`). The "post" group of the path (render/paths.py) then runs the enabled steps in
-POST_OPTIONS' order on "color", and `encode` (shaders/post_encode.comp) tone maps it and
-stores it into the output target ("out.color"), whose copies follow. A frame without post
+POST_OPTIONS' order on "color", and `encode` tone maps it into the output target
+("out.color"): shaders/post_encode.comp where a compute shader can store into it, else
+post_encode.frag as a fullscreen pass (a window's swapchain image, a multisampled target);
+the overlay and the target's copies follow. A frame without post
 steps tone maps and encodes in its shading (frame_output.glsl): one full-size image fewer to
 write and read, as Filament skips its post-processing when none is enabled.
 
@@ -29,8 +31,9 @@ from vkpbr.errors import UsageError
 from vkpbr.gpu.compute import ComputePipeline, groups
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
-from vkpbr.gpu.graph import ImageResource, Step
+from vkpbr.gpu.graph import ImageResource, Rendering, Step
 from vkpbr.gpu.image import Image, ImageView
+from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec
 from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.options import POST_OPTIONS, RenderOptions
@@ -67,8 +70,6 @@ def post_unavailable(target: Any, compute_path: bool) -> str | None:
     """Why frames of `target` cannot take post steps here, or None."""
     if not compute_path:
         return "this device lacks the compute path's features (storage image writes)"
-    if not getattr(target, "compute", False):
-        return "they need a single-sample offscreen target (not MSAA, not a window) for now"
     return None
 
 
@@ -79,7 +80,9 @@ class PostKernels:
     def __init__(self, device: Device) -> None:
         self.device = device
         self.layout = DescriptorSetLayout(device, [
-            BindingSpec(0, "storage_image", ("compute",)), BindingSpec(1, "storage_image", ("compute",))])
+            BindingSpec(b, "storage_image", ("compute", "fragment")) for b in (0, 1)])
+        self._graphics_layout: PipelineLayout | None = None
+        self._graphics: dict[tuple, Pipeline] = {}
         self._pools: list[DescriptorPool] = []
         self._free = 0
         self._pipelines: dict[str, ComputePipeline] = {}
@@ -92,6 +95,22 @@ class PostKernels:
             self._pipelines[name] = ComputePipeline(self.device, SPV_DIR / f"{name}.comp.spv",
                                                     [self.layout], push_bytes=push_bytes)
         return self._pipelines[name]
+
+    def fragment_pipeline(self, name: str, target: Any, push_bytes: int) -> Pipeline:
+        """Fragment shader shaders/spv/<name>.frag.spv over a fullscreen triangle, drawn into
+        `target`'s formats (its colour; its depth attached, neither tested nor written)."""
+        key = (name, target.color_format, target.depth_format, target.samples)
+        if key not in self._graphics:
+            if self._graphics_layout is None:
+                self._graphics_layout = PipelineLayout(self.device, [self.layout], push_bytes,
+                                                       stages=("fragment",))
+            spec = PipelineSpec(vertex_shader="post_fullscreen.vert.spv",
+                                fragment_shader=f"{name}.frag.spv", streams=(),
+                                color_format=target.color_format,
+                                depth_format=target.depth_format, samples=target.samples,
+                                cull="none", depth_test=False, depth_write=False)
+            self._graphics[key] = Pipeline(self.device, spec, self._graphics_layout, SPV_DIR)
+        return self._graphics[key]
 
     def image_set(self, src: Any, dst: Any) -> Any:
         """The set binding view `src` (binding 0) and view `dst` (binding 1), as storage."""
@@ -126,9 +145,13 @@ class PostKernels:
             view.destroy()
             image.destroy()
         self._images.clear()
-        for p in self._pipelines.values():
+        for p in [*self._pipelines.values(), *self._graphics.values()]:
             p.destroy()
         self._pipelines.clear()
+        self._graphics.clear()
+        if self._graphics_layout is not None:
+            self._graphics_layout.destroy()
+            self._graphics_layout = None
         for pool in self._pools:
             pool.destroy()
         self._pools, self._sets = [], {}
@@ -180,12 +203,28 @@ def encode_tonemap(options: RenderOptions, linear: bool) -> int:
     return int(options.tonemap_for(linear) if options.view == L.View.FINAL else L.Tonemap.NONE)
 
 
-def encode_step(ctx: PostContext, out_view: Any, tonemap: int, srgb: bool) -> Step:
-    """"encode": "color" through `tonemap` (TONEMAP_*), stored into "out.color"
-    (sRGB-encoded for an 8-bit target)."""
+def encode_step(ctx: PostContext, out: Any, tonemap: int) -> Step:
+    """"encode": "color" through `tonemap` (TONEMAP_*) into the output target `out`
+    ("out.color"): stored by post_encode.comp where a compute shader can store into it (an
+    offscreen single-sample target: sRGB-encoded by the kernel for an 8-bit one), else drawn
+    by post_encode.frag (a window's image, a multisampled target: the attachment encodes)."""
+    srgb = getattr(out, "color_kind", "srgb") == "srgb"
     push = np.array([tonemap, int(srgb)], np.int32)
-    record = ctx.dispatch("post_encode", push, ctx.color_view, out_view, ctx.extent)
-    return Step("encode", record, (("color", "storage_read"), ("out.color", "storage")))
+    if getattr(out, "compute", False):
+        record = ctx.dispatch("post_encode", push, ctx.color_view, out.storage_view.handle,
+                              ctx.extent)
+        return Step("encode", record, (("color", "storage_read"), ("out.color", "storage")))
+    pipe = ctx.kernels.fragment_pipeline("post_encode", out, push.nbytes)
+    dset = ctx.kernels.image_set(ctx.color_view, ctx.color_view)  # (binding 1 unread)
+
+    def record(cmd: Any) -> None:
+        cmd.bind_pipeline(pipe)
+        cmd.bind_set(0, dset)
+        cmd.push(push)
+        cmd.draw(3)
+
+    rendering = Rendering("out.color", "out.depth", None, None, store_depth=out.stores_depth)
+    return Step("encode", record, (("color", "fragment_storage_read"),), rendering)
 
 
 def check_post(options: RenderOptions, target: Any, compute_path: bool) -> bool:

@@ -267,6 +267,11 @@ class FrameSteps:
         overlay = self.objects.overlay
         if overlay is None:
             return []
+        if self.output is not self.target and (self._rendering is None
+                                               or self._rendering.color != "out.color"):
+            # After the post steps: over the encoded image (out.color), not the HDR one.
+            self._rendering = Rendering("out.color", "out.depth", None, None,
+                                        store_depth=self.output.stores_depth)
         return [Step("overlay", lambda cmd: overlay.record(cmd, self.frame_index,
                                                            self.target.extent),
                      rendering=self._rendering_for(), timed=False)]
@@ -280,9 +285,9 @@ class FrameSteps:
         registry = post_steps()
         steps = [s for option, value in self.spec.post if option in registry
                  for s in registry[option]().steps(ctx, value)]  # ("hdr": none, post_stage)
-        out = self.output
-        return [*steps, encode_step(ctx, out.storage_view.handle, self.spec.post_tonemap,
-                                    out.color_kind == "srgb")]
+        encode = encode_step(ctx, self.output, self.spec.post_tonemap)
+        self._rendering = encode.rendering  # (the overlay draws on in it: out.color)
+        return [*steps, encode]
 
     def _finish(self) -> list[Step]:
         if self.output is not self.target:  # depth and outputs from the frame's HDR target
