@@ -155,3 +155,25 @@ def test_the_cli_flag(tmp_path) -> None:  # noqa: ANN001
     assert bad.returncode != 0
     assert bad.stderr.strip().count("\n") == 0 and "bloom" in bad.stderr, bad.stderr
     assert not (tmp_path / "x.png").exists()
+
+
+def test_a_dropped_target_s_encode_is_not_reused(make_renderer) -> None:  # noqa: ANN001
+    """The encode's descriptor sets are cached by view handle: a dropped target's must go
+    with it (a target made later may get the same handle value; lavapipe rarely reuses one,
+    so the cache itself is checked), and a new target renders as the first did."""
+    from vkpbr.render.options import RenderOptions
+
+    r = make_renderer()
+    options = RenderOptions(bloom=0.5)
+    lights = r.frame_lights(options)
+    frames = []
+    for _ in range(2):
+        target = r.new_offscreen_target((24, 16), False)
+        sub = r.draw(target, r.default_camera(), lights, options, copy=("color",))
+        frames.append(r.read_color(target, sub))
+        handle = int(r.device.vk.ffi.cast("uintptr_t", target.storage_view.handle))
+        kernels = r.post_kernels()
+        assert any(handle in key for key in kernels._sets)
+        r.drop_target(target)
+        assert not any(handle in key for key in kernels._sets)
+    np.testing.assert_array_equal(frames[0], frames[1])

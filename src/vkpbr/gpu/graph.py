@@ -12,9 +12,9 @@ RenderPipeline in small: the order is the list's, resources are the caller's.
 
 A recorded frame is replayed after whatever frame came before it, so the first use of a
 resource in a frame waits for every earlier command (ALL_COMMANDS, every write made
-available) and discards its contents (UNDEFINED), unless the resource is `kept` between
-frames (a shadow map that is not redrawn): then it starts from its resting use's layout, and
-the frame's last use must leave it there (`record_steps` adds the transition back).
+available) and discards its contents (UNDEFINED). What keeps contents between frames (the
+shadow maps' layers that are not redrawn, a mip chain's levels) is transitioned by the
+step that owns it, and told to the graph by the step's `leaves`.
 
 This module knows Vulkan and nothing of the renderer: resource and step names are the
 caller's.
@@ -108,9 +108,9 @@ def _mask(vk: Any, use: str, cache: dict[str, _Mask]) -> _Mask:
 class ImageResource:
     """An image a graph tracks: `handle` (VkImage), whether it is a depth image, how many
     layers and mip levels its barriers cover; `view` is what a rendering attaches; `msaa` the
-    multisampled image drawn into and resolved into this one; `kept` the use whose layout the
-    contents rest in between frames (None: discarded at each frame's first use); `extent` its
-    size where it is not the frame's (a rendering into it covers that)."""
+    multisampled image drawn into and resolved into this one; `extent` its size where it is
+    not the frame's (a rendering into it covers that). Its contents are discarded at each
+    frame's first use."""
 
     handle: Any
     depth: bool = False
@@ -118,7 +118,6 @@ class ImageResource:
     levels: int = 1
     view: Any = None
     msaa: ImageResource | None = None
-    kept: str | None = None
     extent: tuple[int, int] | None = None  # where it differs from the frame's (a rendering's area)
 
 
@@ -207,10 +206,8 @@ class Tracker:
             raise ValueError(f"use {use!r} asks two layouts of one image")
         if state is None:  # the frame's first use: after every earlier command
             all_writes = vk.VK_ACCESS_2_MEMORY_WRITE_BIT
-            old = vk.VK_IMAGE_LAYOUT_UNDEFINED
-            if image and res.kept is not None:
-                old = _mask(vk, res.kept, self.masks).layout
-            self._barrier(res, (vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, all_writes), m, old)
+            self._barrier(res, (vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, all_writes), m,
+                          vk.VK_IMAGE_LAYOUT_UNDEFINED)
             self.states[key] = self._after(m, use, scope, layout)
             return
         attached_again = (use == state.use and use in _ATTACHMENT_USES and scope == state.scope
@@ -286,13 +283,6 @@ class Tracker:
             barriers(cmd, self.images, self.buffers)
             self.images, self.buffers = [], []
 
-    def rest(self) -> None:
-        """Queue the transitions that leave every `kept` image in its resting use."""
-        for name, res in self.resources.items():
-            if isinstance(res, ImageResource) and res.kept is not None \
-                    and id(res) in self.states and self.states[id(res)].use != res.kept:
-                self.use(name, res.kept)
-
 
 def _attachments(r: Rendering, resources: Mapping[str, Any], extent: tuple[int, int]
                  ) -> Attachments:
@@ -342,6 +332,5 @@ def record_steps(cmd: Commands, steps: Sequence[Step],
             stamp(step.name)
     if open_scope is not None:
         end_rendering(cmd)
-    tracker.rest()
     tracker.flush(cmd)
     return tracker

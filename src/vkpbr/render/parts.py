@@ -140,5 +140,5 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     return FrameParts(
         device, scene, ring, layouts, pipeline_layout, buffers, pool, slots, gs, ids, labels,
         copies, compute, post, recorder, bounds, blend, paths,
-        Targets(device, msaa, background, ring.count, recorder, compute), environments,
+        Targets(device, msaa, background, ring.count, recorder, compute, post), environments,
         Lighting(scene, copies, environments), ShadowFrames(shadows, bounds, recorder))

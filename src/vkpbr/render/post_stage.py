@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -129,6 +129,13 @@ class PostKernels:
             self._sets[key] = dset
         return self._sets[key]
 
+    def forget(self, view: Any) -> None:
+        """Drop the sets naming `view` (a VkImageView about to be destroyed: a later view may
+        get its handle value, and the cache is keyed by it)."""
+        handle = int(self.device.vk.ffi.cast("uintptr_t", view))
+        for key in [k for k in self._sets if handle in k]:
+            del self._sets[key]  # (the set stays in its pool until the pool goes)
+
     def transient(self, name: str, extent: tuple[int, int]) -> tuple[Image, ImageView]:
         """Transient image `name` of `extent` (RGBA32F, storage), made on first use. Frames in
         flight share it: a frame's first use waits for the frames before (gpu/graph.py)."""
@@ -174,7 +181,6 @@ class PostContext:
     extent: tuple[int, int]
     resources: dict[str, Any]
     color_view: Any  # the HDR "color" image's storage view (a VkImageView)
-    added: list[str] = field(default_factory=list)
 
     def transient(self, name: str, extent: tuple[int, int]) -> Any:
         """Transient image `name` as a graph resource (added to the frame's); its view."""

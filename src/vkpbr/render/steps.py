@@ -147,7 +147,7 @@ class FrameSteps:
                   for s in steps), Step("transmission")]
 
     # --- fragment passes --------------------------------------------------------------------
-    def _rendering_for(self, after_compute: bool = False) -> Rendering:
+    def _rendering_for(self) -> Rendering:
         """The rendering the next fragment passes draw in: the one open, or a new one over
         the target (cleared unless a step wrote it already)."""
         if self._rendering is None:
@@ -166,8 +166,6 @@ class FrameSteps:
                    and self.spec.path == "forward")
         if p.prepass and not prepass:
             return []
-        if p.name == "background" and self._color_written:
-            return []  # the compute path drew it in compute (background_compute)
         if not p.fullscreen and p.draw_class not in self.classes:
             # Nothing to draw: no rendering begun for it (after the compute path's shading,
             # the colour stays as the kernels left it), none ended (inside an open one).

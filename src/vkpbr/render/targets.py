@@ -22,6 +22,7 @@ from vkpbr.gpu.target import COPY_OUTPUTS, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
 from vkpbr.render.compute_path import ComputeScene
 from vkpbr.render.overlay import TextOverlay
+from vkpbr.render.post_stage import PostKernels
 from vkpbr.render.recorder import FrameRecorder
 
 __all__ = ["Lazy", "Targets"]
@@ -48,9 +49,10 @@ class Targets:
     set of quads each); `recorder` and `compute` hold what is recorded and made per target."""
 
     def __init__(self, device: Device, msaa: int, background: tuple[float, float, float],
-                 frames: int, recorder: FrameRecorder, compute: Lazy[ComputeScene]) -> None:
+                 frames: int, recorder: FrameRecorder, compute: Lazy[ComputeScene],
+                 post: Lazy[PostKernels]) -> None:
         self.device, self.msaa, self.background, self.frames = device, msaa, background, frames
-        self.recorder, self.compute = recorder, compute
+        self.recorder, self.compute, self.post_kernels = recorder, compute, post
         self._kept: dict[tuple, OffscreenTarget] = {}
 
     def offscreen(self, size: tuple[int, int], linear: bool = False) -> OffscreenTarget:
@@ -90,6 +92,8 @@ class Targets:
         self.recorder.free(id(target))
         if self.compute.made is not None:
             self.compute.made.forget_target(target, destroy=True)
+        if self.post_kernels.made is not None and target.storage_view is not None:
+            self.post_kernels.made.forget(target.storage_view.handle)  # (its encode's set)
         target.destroy()
 
     def ensure_outputs(self, target: OffscreenTarget) -> None:

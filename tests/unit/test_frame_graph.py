@@ -1,0 +1,107 @@
+# gpu/graph.py's barrier derivation, checked against the Vulkan specification's rules for
+# synchronisation (no device needed: the barriers are the structs the tracker would record).
+# - A frame's first use of a resource waits for every earlier command and makes every write
+#   available (a recording replays after any other), and discards the contents (UNDEFINED).
+# - Write after write or read: a dependency from the earlier stages (an execution dependency
+#   only, access 0, after reads alone).
+# - Read after write: the write made visible to the reader's stage and access, once.
+# - A new layout is a barrier even between reads.
+# - Attachment uses inside one rendering need none (rasterisation order).
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import pytest
+import vulkan as vk
+
+from vkpbr.gpu.graph import BufferResource, ImageResource, Tracker
+
+
+@dataclass
+class FakeBuffer:  # a gpu.buffer.Buffer's two fields the tracker reads
+    handle: object
+    size: int
+
+
+def tracker() -> Tracker:
+    return Tracker(vk, {"img": ImageResource(vk.ffi.NULL), "buf": BufferResource(FakeBuffer(vk.ffi.NULL, 64)),
+                        "depth": ImageResource(vk.ffi.NULL, depth=True)})
+
+
+def barrier(t: Tracker) -> tuple:
+    """The one queued barrier as (src stage, src access, dst stage, dst access, old, new)."""
+    assert len(t.images) + len(t.buffers) == 1, (t.images, t.buffers)
+    b = (t.images or t.buffers)[0]
+    layouts = (b.oldLayout, b.newLayout) if t.images else (None, None)
+    t.images, t.buffers = [], []
+    return (b.srcStageMask, b.srcAccessMask, b.dstStageMask, b.dstAccessMask, *layouts)
+
+
+COMPUTE = vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT
+READ, WRITE = vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT, vk.VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT
+GENERAL = vk.VK_IMAGE_LAYOUT_GENERAL
+
+
+def test_first_use_waits_for_everything_and_discards() -> None:
+    t = tracker()
+    t.use("img", "storage")
+    assert barrier(t) == (vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, vk.VK_ACCESS_2_MEMORY_WRITE_BIT,
+                          COMPUTE, READ | WRITE, vk.VK_IMAGE_LAYOUT_UNDEFINED, GENERAL)
+
+
+def test_read_after_write_is_made_visible_once() -> None:
+    t = tracker()
+    t.use("img", "storage")
+    barrier(t)
+    t.use("img", "storage_read")
+    assert barrier(t) == (COMPUTE, READ | WRITE, COMPUTE, READ, GENERAL, GENERAL)
+    t.use("img", "storage_read")  # already visible there, same layout: nothing
+    assert not t.pending
+
+
+def test_write_after_read_waits_for_the_reader_only() -> None:
+    t = tracker()
+    t.use("img", "storage")
+    barrier(t)
+    t.use("img", "storage_read")
+    barrier(t)
+    t.use("img", "storage")
+    src_stage, src_access, *_ = barrier(t)
+    assert src_stage & COMPUTE and src_access == READ | WRITE  # the last write, and the reads
+    t.use("buf", "transfer_dst")
+    barrier(t)
+    t.use("buf", "host_read")
+    assert barrier(t)[:4] == (vk.VK_PIPELINE_STAGE_2_COPY_BIT | vk.VK_PIPELINE_STAGE_2_CLEAR_BIT,
+                              vk.VK_ACCESS_2_TRANSFER_WRITE_BIT, vk.VK_PIPELINE_STAGE_2_HOST_BIT,
+                              vk.VK_ACCESS_2_HOST_READ_BIT)
+
+
+def test_a_new_layout_is_a_barrier_even_between_reads() -> None:
+    t = tracker()
+    t.use("img", "storage")
+    barrier(t)
+    t.use("img", "storage_read")
+    barrier(t)
+    t.use("img", "sampled")
+    *_, old, new = barrier(t)
+    assert (old, new) == (GENERAL, vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL)
+
+
+def test_attachments_need_no_barrier_in_one_rendering_one_across_two() -> None:
+    t = tracker()
+    t.use("depth", "depth_attachment", scope=0)
+    barrier(t)
+    t.use("depth", "depth_attachment", scope=0)
+    assert not t.pending
+    t.use("depth", "depth_attachment", scope=1)  # a new rendering loads what the last stored
+    stages = (vk.VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT
+              | vk.VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT)
+    assert barrier(t)[0] == stages
+
+
+def test_two_layouts_in_one_use_of_an_image_is_refused() -> None:
+    t = tracker()
+    t.use("buf", "storage|transfer_dst")  # a buffer has no layout: fine
+    with pytest.raises(ValueError, match="two layouts"):
+        t.use("img", "storage|transfer_dst")
