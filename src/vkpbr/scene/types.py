@@ -23,6 +23,7 @@ import numpy as np
 from vkpbr.scene.camera import Camera  # noqa: F401 - defined there, a scene type like the others
 from vkpbr.scene.material_table import DEFAULTS as _D
 from vkpbr.scene.material_table import TEXTURES
+from vkpbr.scene.tree import NodeTree
 
 __all__ = [
     "AlphaMode",
@@ -205,6 +206,9 @@ class Node:
     # The class the file gives it: glTF `extras: {"semantic": 3}` or `{"semantic": "chair"}`
     # on the node (else on its mesh); None: none given (vkpbr.scene.semantics).
     semantic: int | str | None = None
+    # The node of Scene.tree this hangs from (its index there); -1: not yet given one
+    # (Scene.node_tree() then gives each such Node a root of its own).
+    tree: int = -1
 
     @property
     def instance_count(self) -> int:
@@ -277,6 +281,23 @@ class Scene:
     # KHR_materials_variants: the file's variant names (the one loaded is chosen at load time).
     variants: list[str] = field(default_factory=list)
     source: Path | None = None  # the file it was loaded from, if any
+    # The file's node hierarchy (vkpbr.scene.tree); None: flat (see node_tree()).
+    tree: NodeTree | None = None
+
+    def node_tree(self) -> NodeTree:
+        """The node hierarchy: the file's, else one root per Node (made once, then kept);
+        every Node's `tree` then names its tree node."""
+        if self.tree is None or any(n.tree < 0 or n.tree >= len(self.tree) for n in self.nodes):
+            self.tree = NodeTree.flat([n.matrix for n in self.nodes],
+                                      [n.name or f"node {i}" for i, n in enumerate(self.nodes)])
+            for i, n in enumerate(self.nodes):
+                n.tree = i
+        return self.tree
+
+    def find(self, pattern: str) -> np.ndarray:
+        """Indices into `node_tree()` of the nodes whose name or path ("truck/wheel") matches
+        the shell-style `pattern` ("wheel*"), in tree order; empty when none does."""
+        return self.node_tree().find(pattern)
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """World-space axis-aligned bounds (min, max) over all node instances."""
