@@ -17,7 +17,18 @@ from vkpbr.scene.gltf_meshes import primitive
 from vkpbr.scene.tree import NodeTree
 from vkpbr.scene.types import Camera, Light, Node, Scene
 
-__all__ = ["build_nodes_cameras_lights", "instance_matrices", "trs_matrix"]
+__all__ = ["NodeLinks", "build_nodes_cameras_lights", "instance_matrices", "trs_matrix"]
+
+
+class NodeLinks:
+    """Which file objects the walk made scene objects from (what animation pointers need):
+    `lights[k]` the KHR_lights_punctual index of scene.lights[k], `cameras[k]` the glTF camera
+    index of scene.cameras[k], `mesh_nodes[m]` the tree nodes showing glTF mesh m."""
+
+    def __init__(self) -> None:
+        self.lights: list[int] = []
+        self.cameras: list[int] = []
+        self.mesh_nodes: dict[int, list[int]] = {}
 
 
 def trs_matrix(t: tuple, r: tuple, s: tuple) -> np.ndarray:
@@ -107,14 +118,16 @@ def _root_nodes(ld: GltfDocument, n_nodes: int) -> list[object]:
     return [i for i in range(n_nodes) if i not in children]
 
 
-def build_nodes_cameras_lights(ld: GltfDocument, scene: Scene) -> None:
-    """Walk the displayed scene's node tree: fill scene.meshes/nodes/cameras/lights."""
+def build_nodes_cameras_lights(ld: GltfDocument, scene: Scene) -> NodeLinks:
+    """Walk the displayed scene's node tree: fill scene.meshes/nodes/cameras/lights and
+    scene.tree (with the nodes' morph weights and skin indices)."""
     nodes = ld.gltf.nodes or []
     meshes = ld.gltf.meshes or []
     cameras = ld.gltf.cameras or []
     light_defs = ext(ld.doc, "KHR_lights_punctual").get("lights") or []
     mesh_prims: dict[int, list[int]] = {}  # glTF mesh -> indices of its primitives in scene.meshes
-    pending_lights: list[tuple[dict, np.ndarray]] = []
+    pending_lights: list[tuple[int, np.ndarray]] = []
+    links = NodeLinks()
     stack = [
         (check_index(ld.path, r, len(nodes), "root node"), np.eye(4), -1)
         for r in _root_nodes(ld, len(nodes))
@@ -131,10 +144,12 @@ def build_nodes_cameras_lights(ld: GltfDocument, scene: Scene) -> None:
         world = parent @ local
         name = str(get(node, "name", f"node {i}"))
         row = tree.add(name, parent_row, local, trs, i)
+        _morph_and_skin(ld, i, node, row, tree)
         for c in list(get(node, "children", []) or [])[::-1]:
             stack.append((check_index(ld.path, c, len(nodes), f"node {i} child"), world, row))
         if get(node, "mesh") is not None:
             m = check_index(ld.path, get(node, "mesh"), len(meshes), f"node {i} mesh")
+            links.mesh_nodes.setdefault(m, []).append(row)
             if m not in mesh_prims:
                 mesh_prims[m] = []
                 for k, prim in enumerate(get(meshes[m], "primitives", [])):
@@ -148,15 +163,30 @@ def build_nodes_cameras_lights(ld: GltfDocument, scene: Scene) -> None:
                                  semantic=label, tree=row)
                             for j in mesh_prims[m]]  # primitives share the read-only array
         if get(node, "camera") is not None:
-            cam = cameras[check_index(ld.path, get(node, "camera"), len(cameras), "camera")]
-            _add_camera(ld, scene, cam, world, name)
+            c = check_index(ld.path, get(node, "camera"), len(cameras), "camera")
+            if _add_camera(ld, scene, cameras[c], world, name):
+                links.cameras.append(c)
         ext_light = ext(node, "KHR_lights_punctual").get("light")
         if ext_light is not None:
-            light = light_defs[check_index(ld.path, ext_light, len(light_defs), "light")]
-            pending_lights.append((light, world))
+            pending_lights.append((check_index(ld.path, ext_light, len(light_defs), "light"), world))
     for light, world in pending_lights:  # after the meshes, in file order
-        scene.lights.append(_light(ld, scene, light, world))
+        scene.lights.append(_light(ld, scene, light_defs[light], world))
+        links.lights.append(light)
     scene.tree = tree.tree()
+    return links
+
+
+def _morph_and_skin(ld: GltfDocument, i: int, node: object, row: int, tree: _TreeRows) -> None:
+    """A node's own morph weights (glTF node `weights`) and skin index, on its tree row."""
+    weights = get(node, "weights")
+    if weights is not None:
+        if not isinstance(weights, list):
+            raise SceneError(ld.path, f"node {i}: weights must be a list of numbers")
+        tree.weights[row] = np.asarray(floats(weights, len(weights), (), f"node {i} weights",
+                                              ld.path), np.float64)
+    if get(node, "skin") is not None:
+        tree.skin[row] = check_index(ld.path, get(node, "skin"), len(ld.gltf.skins or []),
+                                     f"node {i} skin")
 
 
 class _TreeRows:
@@ -168,6 +198,8 @@ class _TreeRows:
         self.local: list[np.ndarray] = []
         self.trs: list[tuple] = []
         self.source: list[int] = []
+        self.weights: dict[int, np.ndarray] = {}
+        self.skin: dict[int, int] = {}
 
     def add(self, name: str, parent: int, local: np.ndarray, trs: list, source: int) -> int:
         self.names.append(name)
@@ -184,15 +216,16 @@ class _TreeRows:
                         np.asarray(self.local, np.float64).reshape(k, 4, 4),
                         np.asarray(t, np.float64).reshape(k, 3), np.asarray(r, np.float64).reshape(k, 4),
                         np.asarray(s, np.float64).reshape(k, 3), np.asarray(m, bool).reshape(k),
-                        np.asarray(self.source, np.int64).reshape(k))
+                        np.asarray(self.source, np.int64).reshape(k), self.weights, self.skin)
 
 
-def _add_camera(ld: GltfDocument, scene: Scene, cam: object, world: np.ndarray, name: str) -> None:
-    """A perspective camera node -> Camera. The file's znear is kept; a camera without zfar
-    (glTF's infinite projection) gets zfar None, as the renderer's far plane is infinite."""
+def _add_camera(ld: GltfDocument, scene: Scene, cam: object, world: np.ndarray, name: str) -> bool:
+    """A perspective camera node -> Camera (True), other kinds ignored with a warning (False).
+    The file's znear is kept; a camera without zfar (glTF's infinite projection) gets zfar
+    None, as the renderer's far plane is infinite."""
     if get(cam, "type") != "perspective" or get(cam, "perspective") is None:
         warnings.warn(f"{ld.path}: {get(cam, 'type')} camera {name!r} ignored", stacklevel=5)
-        return
+        return False
     persp = get(cam, "perspective")
     yfov = scalar(get(persp, "yfov"), 0.8, "camera yfov", ld.path)
     znear = None if get(persp, "znear") is None else scalar(get(persp, "znear"), 0.0, "camera znear", ld.path)
@@ -219,6 +252,7 @@ def _add_camera(ld: GltfDocument, scene: Scene, cam: object, world: np.ndarray, 
             name=name,
         )
     )
+    return True
 
 
 def _light(ld: GltfDocument, scene: Scene, light: dict, world: np.ndarray) -> Light:
