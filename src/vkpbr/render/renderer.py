@@ -215,7 +215,7 @@ class Renderer:
         """
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
         cameras = with_times(self.state, cameras, times, animation)
-        if batch is not None and readback and self.device.batch_views:
+        if batch is not None and readback and self.device.batch_views and times is None:
             for chunk, names in chunked(cameras, batch, self.default_camera(), outputs):
                 got = self.render_batch(chunk, size, lights, opts, linear, depth, names)
                 yield from per_view(got, len(chunk), depth)
