@@ -134,6 +134,7 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     state = scene_state(scene, gs.draws)
     layout = DeformLayout(scene, gs.deformed) if gs.deformed else None
     gpu_state = GpuSceneState(device, state, ring.count, scene, layout)
+    gpu_state.first_posed = min(gs.posed_offsets, default=0)
     deform = (DeformKernel(device, scene, gs, layout, [gpu_state.deform_region(s.index) for s in slots])
               if layout is not None else None)
     bind_instances(device, [s.set0 for s in slots], [gpu_state.region(s.index) for s in slots])
@@ -142,7 +143,8 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     # Bound in every slot's set 2 before anything is recorded (render/transmission.py).
     copies = OpaqueCopies(device, gs, [s.set2 for s in slots], (*background, 1.0))
     compute = Lazy(lambda: ComputeScene(device, gs, dict(enumerate(layouts)), slots, ids,
-                                        draw_spheres(scene, gs.draws) if gs.draws else None))
+                                        draw_spheres(scene, gs.draws) if gs.draws else None,
+                                        gpu_state, deform.prev_positions if deform else None))
     post = Lazy(lambda: PostKernels(device))
     blend = BlendOrder(gs.draws, state)
     paths = FramePaths(device, msaa, scene.triangle_count, len(blend) > 0, depth_prepass,

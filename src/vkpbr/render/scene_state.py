@@ -47,6 +47,7 @@ def scene_state(scene: Scene, draws: list[Any]) -> SceneState:
     rest = np.array([d.model for d in draws], np.float64).reshape(-1, 4, 4)
     state = SceneState(tree, draw_tree, local, boxes, rest, np.array([d.skinned for d in draws], bool))
     state.scene = scene
+    state.deformed = np.array([d.deformed for d in draws], bool)  # (the motion table's)
     return state
 
 
@@ -74,15 +75,51 @@ class GpuSceneState:
         self.size = max(len(state.draw_tree), 1) * RECORD_BYTES
         self.deform_at = (self.size + align - 1) // align * align
         self.deform_size = 4 * max(deform.floats, 1) if deform is not None else 0
-        total = self.deform_at + self.deform_size if deform is not None else self.size
-        self.stride = (total + align - 1) // align * align
+        draws = len(state.draw_tree)
+        self.motion_at = (self.deform_at + self.deform_size + align - 1) // align * align
+        self.motion_size = 4 * (20 + 20 * max(draws, 1))
+        self.stride = (self.motion_at + self.motion_size + align - 1) // align * align
+        # The motion table's constant part: which draws are deformed (their previous
+        # positions are in PrevPositions, from the first posed vertex on).
+        self._deformed = np.zeros((max(draws, 1), 4), np.uint32)
+        if scene is not None and deform is not None:
+            flags = getattr(state, "deformed", None)
+            if flags is not None:
+                self._deformed[:draws, 0] = flags
+        self.first_posed = 0
+        self._prev: tuple[Any, Any] | None = None  # the previous frame's (VP, draw models)
         self.buffer = Buffer(device, self.stride * count, "storage", host_visible=True,
                              device_local=True, name="scene state")
         self._written = [-1] * count
+        for slot in range(count):  # every slot holds the rest pose from the start
+            self.write(slot)
 
     def region(self, slot: int) -> tuple[Buffer, int, int]:
         """(buffer, offset, size) of frame slot `slot`'s copy: what its sets bind."""
         return self.buffer, slot * self.stride, self.size
+
+    def motion_region(self, slot: int) -> tuple[Buffer, int, int]:
+        """(buffer, offset, size) of slot `slot`'s motion table (layouts.STORAGE "Motion")."""
+        return self.buffer, slot * self.stride + self.motion_at, self.motion_size
+
+    def write_motion(self, slot: int, vp: tuple[float, ...], table: bool) -> None:
+        """After each frame's view: remember its VP and draw matrices as the next frame's
+        previous ones; with `table` (a frame with dataset outputs) first write the slot's
+        motion table from the previous frame's (valid 0 on a renderer's first frame: motion
+        0, as for a still scene)."""
+        models = self.state.draw_models()
+        if table:
+            out = self.buffer.array(np.float32, self.motion_size // 4, slot * self.stride + self.motion_at)
+            head = out[:20]
+            head[:] = 0.0
+            rows = out[20:].reshape(-1, 20)
+            if self._prev is not None:
+                head[:16] = self._prev[0]
+                head.view(np.uint32)[16:18] = (1, self.first_posed)
+                prev = self._prev[1]
+                rows[:len(prev), :16] = np.swapaxes(prev, -1, -2).reshape(len(prev), 16)
+            rows.view(np.uint32)[:, 16:] = self._deformed
+        self._prev = (np.asarray(vp, np.float32), models)
 
     def deform_region(self, slot: int) -> tuple[Buffer, int, int]:
         """(buffer, offset, size) of slot `slot`'s joint matrices and morph weights."""

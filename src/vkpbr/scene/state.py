@@ -30,34 +30,55 @@ from vkpbr.scene.types import Scene
 __all__ = ["SceneState", "quaternion_matrices", "normal_matrices", "std140_pairs"]
 
 QUATERNION_ORDERS = ("xyzw", "wxyz")
+_LAST_ROW = np.array([0.0, 0.0, 0.0, 1.0])
 SPACES = ("local", "world")
 
 
-def quaternion_matrices(q: np.ndarray, order: str = "xyzw") -> np.ndarray:
+def quaternion_matrices(q: np.ndarray, order: str = "xyzw", out: np.ndarray | None = None
+                        ) -> np.ndarray:
     """(N, 3, 3) rotation matrices of (N, 4) quaternions in `order` (normalised first; a
-    zero quaternion is refused by the caller)."""
+    zero quaternion is refused by the caller), into `out` when given (a (N, 3, 3) view)."""
     q = np.asarray(q, np.float64)
     x, y, z, w = (q.T if order == "xyzw" else q[:, [1, 2, 3, 0]].T)
-    n = np.sqrt(x * x + y * y + z * z + w * w)
-    x, y, z, w = x / n, y / n, z / n, w / n
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
-    ], axis=-2)
+    s = 2.0 / (x * x + y * y + z * z + w * w)  # normalises: 2 / |q|^2
+    xs, ys, zs = x * s, y * s, z * s
+    wx, wy, wz, xx, xy, xz, yy, yz, zz = w * xs, w * ys, w * zs, x * xs, x * ys, x * zs, y * ys, y * zs, z * zs
+    out = np.empty((len(q), 3, 3)) if out is None else out
+    out[:, 0, 0], out[:, 0, 1], out[:, 0, 2] = 1.0 - (yy + zz), xy - wz, xz + wy
+    out[:, 1, 0], out[:, 1, 1], out[:, 1, 2] = xy + wz, 1.0 - (xx + zz), yz - wx
+    out[:, 2, 0], out[:, 2, 1], out[:, 2, 2] = xz - wy, yz + wx, 1.0 - (xx + yy)
+    return out
+
+
+def _cofactors(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The cofactor matrices and determinants of (..., 3, 3) matrices, from the columns'
+    cross products (inverse transpose = cofactors / determinant): a few vector operations
+    for any number of matrices, where np.linalg.inv loops in LAPACK."""
+    m = [[a[..., i, j] for j in range(3)] for i in range(3)]  # m[row][column]
+    cof = np.empty(a.shape, a.dtype)
+    for i in range(3):
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        for j in range(3):
+            j1, j2 = (j + 1) % 3, (j + 2) % 3
+            cof[..., i, j] = m[i1][j1] * m[i2][j2] - m[i1][j2] * m[i2][j1]
+    det = m[0][0] * cof[..., 0, 0] + m[0][1] * cof[..., 0, 1] + m[0][2] * cof[..., 0, 2]
+    return cof, det
+
+
+def determinants(a: np.ndarray) -> np.ndarray:
+    """det of (..., 3, 3) matrices."""
+    return _cofactors(a)[1]
 
 
 def normal_matrices(model: np.ndarray) -> np.ndarray:
     """(..., 4, 4) normal matrices (the inverse transpose of the 3x3 part) of model
     matrices; a singular one (a hidden draw's zero matrix) keeps its 3x3 part."""
     a = model[..., :3, :3]
-    det = np.linalg.det(a)
+    cof, det = _cofactors(a)
     ok = np.abs(det) > 1e-30
-    inv = np.zeros_like(a)
-    if np.any(ok):
-        inv[ok] = np.linalg.inv(a[ok])
     out = np.zeros_like(model)
-    out[..., :3, :3] = np.where(ok[..., None, None], np.swapaxes(inv, -1, -2), a)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out[..., :3, :3] = np.where(ok[..., None, None], cof / np.where(ok, det, 1.0)[..., None, None], a)
     out[..., 3, 3] = 1.0
     return out
 
@@ -65,8 +86,10 @@ def normal_matrices(model: np.ndarray) -> np.ndarray:
 def std140_pairs(model: np.ndarray) -> np.ndarray:
     """(D, 2, 4, 4) float32: each model matrix and its normal matrix as GLSL's column-major
     mat4 (Instances records: layouts.STORAGE)."""
-    pairs = np.stack([model, normal_matrices(model)], axis=1)
-    return np.ascontiguousarray(np.swapaxes(pairs, -1, -2), dtype=np.float32)
+    out = np.empty((len(model), 2, 4, 4), np.float32)
+    out[:, 0] = np.swapaxes(model, -1, -2)
+    out[:, 1] = np.swapaxes(normal_matrices(model), -1, -2)
+    return out
 
 
 class SceneState:
@@ -86,6 +109,9 @@ class SceneState:
         self.tree = tree
         self.draw_tree = np.asarray(draw_tree, np.int64)
         self.draw_local = np.asarray(draw_local, np.float64).reshape(-1, 4, 4)
+        # Draws below their node by more than the identity (instancing): the others skip
+        # the product.
+        self._below = np.flatnonzero(np.any(self.draw_local != np.eye(4), axis=(1, 2)))
         self.mesh_boxes = np.asarray(mesh_boxes, np.float64).reshape(-1, 2, 3)
         self.rest = np.asarray(rest, np.float64).reshape(-1, 4, 4)
         # Skinned draws are posed in world space by their joints: their model stays the
@@ -205,26 +231,29 @@ class SceneState:
             p = p[None] if p.shape == (4, 4) else p
         if p.ndim == 1 and p.shape == (7,) and n == 1:
             p = p[None]
-        if p.shape == (n, 4, 4):
-            out = p
-        elif p.shape == (n, 7):
+        if p.shape == (n, 7):  # rigid by construction: only the numbers are checked
             if quaternion not in QUATERNION_ORDERS:
                 raise UsageError(f"quaternion {quaternion!r}: choose 'xyzw' or 'wxyz'")
-            if np.any(np.linalg.norm(p[:, 3:], axis=1) < 1e-12):
+            if not np.isfinite(p).all():
+                raise UsageError("set_poses: a pose holds NaN or infinity")
+            if np.einsum("ij,ij->i", p[:, 3:], p[:, 3:]).min(initial=1.0) < 1e-24:
                 raise UsageError("set_poses: a quaternion of length 0 is no rotation")
-            out = np.zeros((n, 4, 4))
-            out[:, :3, :3] = quaternion_matrices(p[:, 3:], quaternion)
+            out = np.empty((n, 4, 4))
+            quaternion_matrices(p[:, 3:], quaternion, out[:, :3, :3])
             out[:, :3, 3] = p[:, :3]
-            out[:, 3, 3] = 1.0
+            out[:, 3] = _LAST_ROW
+            return out
+        if p.shape == (n, 4, 4):
+            out = p
         else:
             raise UsageError(f"set_poses: poses of shape {p.shape} for {n} node(s); give "
                              f"({n}, 4, 4) matrices or ({n}, 7) position + quaternion rows")
-        if not np.all(np.isfinite(out)):
+        if not np.isfinite(out).all():
             raise UsageError("set_poses: a pose holds NaN or infinity")
-        if not np.allclose(out[:, 3], [0.0, 0.0, 0.0, 1.0]):
+        if np.abs(out[:, 3] - _LAST_ROW).max(initial=0.0) > 1e-6:
             raise UsageError("set_poses: a matrix's last row must be 0 0 0 1 (an affine "
                              "transform; a projection is not a pose)")
-        if np.any(np.abs(np.linalg.det(out[:, :3, :3])) < 1e-12):
+        if np.abs(determinants(out[:, :3, :3])).min(initial=1.0) < 1e-12:
             raise UsageError("set_poses: a matrix is singular (a scale of 0 flattens the node; "
                              "hide it with set_visible instead)")
         return out
@@ -264,7 +293,9 @@ class SceneState:
         def make() -> np.ndarray:
             if self.version == 0:
                 return self.rest.copy()
-            models = self.world()[self.draw_tree] @ self.draw_local
+            models = self.world()[self.draw_tree]
+            if len(self._below):
+                models[self._below] = models[self._below] @ self.draw_local[self._below]
             models[self.skinned] = np.eye(4)
             models[~self.shown()[self.draw_tree]] = 0.0
             return models
