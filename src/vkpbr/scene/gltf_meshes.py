@@ -250,8 +250,7 @@ def _morph_weights(ld: GltfDocument, mesh_index: int, prim: object) -> np.ndarra
     targets = get(prim, "targets")
     if not targets:
         return None
-    mesh = ld.gltf.meshes[mesh_index]
-    given = get(mesh, "weights")
+    given = get(ld.doc["meshes"][mesh_index], "weights")  # pygltflib's default is []
     if given is None:
         return np.zeros(len(targets))
     if not isinstance(given, list) or len(given) != len(targets):
