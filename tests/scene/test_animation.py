@@ -333,3 +333,30 @@ def test_random_hierarchies_poses_and_times_match_the_reference(tmp_path: Path,
     for b, t in enumerate(times):
         np.testing.assert_allclose(got[b], ref.joint_matrices(0, ref.world(ref.pose(float(t))[0])),
                                    atol=1e-7)
+
+
+def test_validate_checks_skin_and_morph_arrays_of_built_scenes() -> None:
+    """A Scene built in Python passes the same check as a loaded one (scene/validate.py)."""
+    from vkpbr.errors import SceneError
+    from vkpbr.scene.types import Mesh, Node, Scene
+    from vkpbr.scene.validate import validate_scene
+
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+
+    def scene(**fields: object) -> Scene:
+        return Scene("s", meshes=[Mesh("m", pos, np.arange(3, dtype=np.uint32), **fields)],
+                     nodes=[Node(0)])
+
+    validate_scene(scene(joints=np.zeros((3, 8), np.uint16), weights=np.ones((3, 8), np.float32)
+                         / 8), "ok")
+    bad = {"joints.*uint16": {"joints": np.zeros((3, 4), np.int32),
+                              "weights": np.ones((3, 8), np.float32)},
+           "joints and weights come together": {"joints": np.zeros((3, 8), np.uint16)},
+           "morph_targets.*0..64 targets": {"morph_targets": {"POSITION": np.zeros((65, 3, 3),
+                                                                                   np.float32)},
+                                           "morph_weights": np.zeros(65)},
+           "morph_weights": {"morph_targets": {"POSITION": np.zeros((2, 3, 3), np.float32)},
+                             "morph_weights": np.zeros(3)}}
+    for match, fields in bad.items():
+        with pytest.raises(SceneError, match=match):
+            validate_scene(scene(**fields), "built")

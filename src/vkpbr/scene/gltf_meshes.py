@@ -19,14 +19,11 @@ from vkpbr.scene.geometry import (
 )
 from vkpbr.scene.gltf_codecs import decode_draco, missing_codec
 from vkpbr.scene.gltf_document import GltfDocument, check_index, ext, floats, get, to_float
+from vkpbr.scene.limits import MAX_MORPH_TARGETS
 from vkpbr.scene.types import Mesh
 
 __all__ = ["MAX_MORPH_TARGETS", "primitive"]
 
-# Morph targets a primitive may have: the GPU's budget (the deformation step reads every
-# target's displacements each frame); a file with more is refused in one line. Real assets
-# use a few dozen at most (facial rigs: 50-60).
-MAX_MORPH_TARGETS = 64
 _MORPHED = ("POSITION", "NORMAL", "TANGENT")  # the morphable attributes vkpbr applies
 
 _MODES = {0: "POINTS", 1: "LINES", 2: "LINE_LOOP", 3: "LINE_STRIP"}
