@@ -360,3 +360,30 @@ def test_validate_checks_skin_and_morph_arrays_of_built_scenes() -> None:
     for match, fields in bad.items():
         with pytest.raises(SceneError, match=match):
             validate_scene(scene(**fields), "built")
+
+
+def test_sparse_morph_targets_and_quantised_weights(tmp_path: Path) -> None:
+    """A target given as a sparse accessor without a bufferView (how exporters store morphs
+    that move a few vertices) and WEIGHTS_0 as normalized unsigned bytes."""
+    f = GltfFile()
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], np.float32)
+    idx = f.view(np.uint16([2, 0]).tobytes())  # padded to 4 bytes
+    val = f.view(np.float32([0, 0, 1]).tobytes())
+    target = f.accessor(None, ctype=5126, ncomp=3, count=4, sparse={
+        "count": 1, "indices": {"bufferView": idx, "componentType": 5123},
+        "values": {"bufferView": val}})
+    attrs = {"POSITION": f.accessor(pos), "NORMAL": f.accessor(np.float32([[0, 0, 1]] * 4)),
+             "JOINTS_0": f.accessor(np.uint8([[0, 1, 0, 0]] * 4)),
+             "WEIGHTS_0": f.accessor(np.uint8([[255, 0, 0, 0], [128, 127, 0, 0], [51, 51, 0, 0],
+                                               [0, 255, 0, 0]]), normalized=True)}
+    f.mesh(attrs, f.accessor(np.uint16([0, 1, 2, 2, 1, 3])[:, None], padded=False),
+           targets=[{"POSITION": target}])
+    f.node(mesh=0, weights=[0.5])
+    scene = load_gltf(f.save(tmp_path / "sparse.glb"))
+    mesh = scene.meshes[0]
+    np.testing.assert_array_equal(mesh.morph_targets["POSITION"][0],
+                                  [[0, 0, 0], [0, 0, 0], [0, 0, 1], [0, 0, 0]])
+    np.testing.assert_allclose(mesh.weights[:, :2], [[1, 0], [128 / 255, 127 / 255], [0.5, 0.5],
+                                                     [0, 1]], atol=1e-6)
+    p, _ = posed_vertices(scene, 0, sample(scene, 0.0, []))  # [] animations: the rest pose
+    np.testing.assert_allclose(p[2], [0, 1, 0.5])
