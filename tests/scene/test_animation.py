@@ -228,6 +228,11 @@ def test_animation_pointers_sample_supported_targets_and_warn_once(tmp_path: Pat
     chans = {c.pointer: c for c in scene.animations[0].channels}
     assert chans["/extensions/KHR_lights_punctual/lights/0/intensity"].targets == (0,)
     assert chans["/cameras/0/perspective/yfov"].member == "yfov"
+    np.testing.assert_allclose(chans["/cameras/0/perspective/yfov"].rest, [0.8])
+    np.testing.assert_allclose(chans["/extensions/KHR_lights_punctual/lights/0/spot/"
+                                     "outerConeAngle"].rest, [np.pi / 4])  # the default
+    np.testing.assert_allclose(chans["/materials/0/pbrMetallicRoughness/baseColorFactor"].rest,
+                               [1, 1, 1, 1])
     assert chans["/nodes/0/translation"].path == "translation"
     pose = sample(scene, np.array([1.0, 5.0]))
     assert set(pose.pointers) == set(pointers) - {"/materials/0/occlusionTexture/strength",
@@ -271,6 +276,18 @@ def test_morph_weights_node_overrides_mesh_and_animation_overrides_node(tmp_path
     np.testing.assert_allclose(pose.weights[2], [0.25, 0.75])
     p, _ = posed_vertices(scene, 2, pose)
     np.testing.assert_allclose(p, scene.meshes[0].positions + 0.5, atol=1e-7)
+    # A /meshes/0/weights pointer changes the mesh's weights: node 0 follows, 1 keeps its own.
+    s = _sampler(f, anim, [0.0, 1.0], np.array([[0.0], [0.0], [1.0], [1.0]]))
+    f.doc["animations"].append({"samplers": anim["samplers"], "channels": [
+        {"sampler": s, "target": {"path": "pointer", "extensions": {
+            "KHR_animation_pointer": {"pointer": "/meshes/0/weights"}}}}]})
+    scene = load_gltf(f.save(tmp_path / "mesh-pointer.gltf"))
+    assert scene.animations[1].channels[0].targets == (0, 1, 2)
+    np.testing.assert_allclose(scene.animations[1].channels[0].rest, [0.1, 0.2])
+    pose = sample(scene, 0.25)
+    np.testing.assert_allclose(pose.weights[0], [0.25, 0.25])
+    np.testing.assert_allclose(pose.weights[1], [0.3, 0.4])
+    np.testing.assert_allclose(pose.weights[2], [0.25, 0.75])
 
 
 def _random_file(data: st.DataObject, path: Path) -> Path:

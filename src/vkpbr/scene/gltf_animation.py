@@ -38,6 +38,11 @@ POINTER_TARGETS: tuple[tuple[re.Pattern[str], str, str, int], ...] = tuple(
         (r"/cameras/(\d+)/perspective/yfov", "camera", "yfov", 1),
         (r"/meshes/(\d+)/weights", "mesh", "weights", 0),
     ))
+# glTF's defaults of the animatable properties a file may leave out (range: infinite, as 0).
+_POINTER_DEFAULTS = {"base_color_factor": 1.0, "metallic_factor": 1.0, "roughness_factor": 1.0,
+                     "emissive_factor": 0.0, "emissive_strength": 1.0, "color": 1.0,
+                     "intensity": 1.0, "range": 0.0, "inner_cone": 0.0,
+                     "outer_cone": float(np.pi / 4), "weights": 0.0}
 _NODE_POINTER = re.compile(r"/nodes/(\d+)/(translation|rotation|scale|weights)")
 
 
@@ -216,9 +221,31 @@ class _Reader:
                         return None  # a mesh not shown (or without targets): nothing moves
                 sampler = self.sampler(k, ch, n)
                 return AnimationChannel(sampler, "pointer", pointer=pointer, kind=kind,
-                                        index=index, member=member, targets=targets)
+                                        index=index, member=member, targets=targets,
+                                        rest=self.rest_value(pointer, member, n))
         self.unsupported.append(pointer)
         return None
+
+    def rest_value(self, pointer: str, member: str, n: int) -> np.ndarray:
+        """(n,) the file's value at `pointer` (a JSON pointer into the document), else the
+        property's glTF default: what the property holds when no animation plays."""
+        value: object = self.ld.doc
+        for part in pointer.split("/")[1:]:
+            part = part.replace("~1", "/").replace("~0", "~")
+            if isinstance(value, list) and part.isdigit() and int(part) < len(value):
+                value = value[int(part)]
+            elif isinstance(value, dict) and part in value:
+                value = value[part]
+            else:
+                value = _POINTER_DEFAULTS.get(member, 0.0)
+                break
+        try:
+            out = np.broadcast_to(np.asarray(value, np.float64).reshape(-1), (n,)).copy()
+        except (TypeError, ValueError):
+            raise self.fail(f"{pointer}: the file's value {value!r} is not {n} numbers") from None
+        if not np.isfinite(out).all():
+            raise self.fail(f"{pointer}: the file's value is not finite")
+        return out
 
     def pointer_targets(self, k: int, kind: str, index: int) -> tuple[int, ...]:
         """The scene objects made from file object `index` of `kind`; SceneError when the
