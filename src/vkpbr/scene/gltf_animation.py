@@ -132,10 +132,14 @@ def build_animations(ld: GltfDocument, scene: Scene, links: NodeLinks) -> None:
     """scene.animations, every animation of the file in order (even one whose channels all
     target nodes outside the displayed scene: its names and indices stay the file's)."""
     unsupported: list[str] = []
-    for a, anim in enumerate(ld.doc.get("animations") or []):
+    animations = ld.doc.get("animations") or []
+    if not isinstance(animations, list):
+        raise SceneError(ld.path, "animations must be a list")
+    shared = (_row_of(ld, scene), _target_counts(ld, links))
+    for a, anim in enumerate(animations):
         if not isinstance(anim, dict):
             raise SceneError(ld.path, f"animation {a} is not an object")
-        scene.animations.append(_Reader(ld, scene, links, a, anim, unsupported).animation())
+        scene.animations.append(_Reader(ld, scene, links, shared, a, anim, unsupported).animation())
     if unsupported:
         shown = ", ".join(sorted(set(unsupported))[:4])
         more = len(set(unsupported)) - 4
@@ -146,14 +150,14 @@ def build_animations(ld: GltfDocument, scene: Scene, links: NodeLinks) -> None:
 class _Reader:
     """One animation's channels and the samplers they use (renumbered in file order)."""
 
-    def __init__(self, ld: GltfDocument, scene: Scene, links: NodeLinks, a: int, anim: dict,
+    def __init__(self, ld: GltfDocument, scene: Scene, links: NodeLinks,
+                 shared: tuple[dict[int, int], dict[int, int]], a: int, anim: dict,
                  unsupported: list[str]) -> None:
         self.ld, self.scene, self.links, self.anim = ld, scene, links, anim
         self.name = str(anim.get("name") or f"animation {a}")
         self.what = f"animation {self.name!r}"
         self.unsupported = unsupported
-        self.row_of = _row_of(ld, scene)
-        self.counts = _target_counts(ld, links)
+        self.row_of, self.counts = shared  # glTF node -> tree row; mesh -> target count
         self.samplers = anim.get("samplers") or []
         if not isinstance(self.samplers, list):
             raise SceneError(ld.path, f"{self.what}: samplers must be a list")
