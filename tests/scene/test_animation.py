@@ -404,3 +404,14 @@ def test_sparse_morph_targets_and_quantised_weights(tmp_path: Path) -> None:
                                                      [0, 1]], atol=1e-6)
     p, _ = posed_vertices(scene, 0, sample(scene, 0.0, []))  # [] animations: the rest pose
     np.testing.assert_allclose(p[2], [0, 1, 0.5])
+
+
+def test_scenes_without_animation_sample_to_their_rest_pose() -> None:
+    """The built-in scene (a flat tree, no animations): every time gives the nodes' matrices."""
+    from vkpbr.scene.default import default_scene
+
+    scene = default_scene()
+    pose = sample(scene, np.array([0.0, 3.0]))
+    world = pose.world(scene.node_tree())
+    assert pose.weights == {} and pose.pointers == {}
+    np.testing.assert_allclose(world, np.stack([[n.matrix for n in scene.nodes]] * 2), atol=1e-6)
