@@ -285,11 +285,12 @@ def posed_vertices(scene: object, node_index: int, pose: object) -> tuple[np.nda
     primitive instance) under a vkpbr Pose of one time: morph displacements p + sum w_i d_i
     (the node's weights in pose.weights), then skinning sum_k w_k J_k p with J = world[joint]
     @ inverse_bind (the node's own transform ignored), else the node's world matrix. Returns
-    ((N, 3), (N, 3)) float64 in the Mesh's vertex order. A pose with batch axes is refused."""
+    ((N, 3), (N, 3)) float64 in the Mesh's vertex order. A pose of several times is refused:
+    `pose.at(b)` is time b's."""
     tree = scene.node_tree()
     local = np.asarray(pose.local, np.float64)
     if local.ndim != 3:
-        raise ValueError("posed_vertices takes the Pose of one time (pick one: pose of sample(t))")
+        raise ValueError("posed_vertices takes the Pose of one time (pose.at(b) picks one)")
     node = scene.nodes[node_index]
     mesh = scene.meshes[node.mesh]
     world = _world_of(np.asarray(tree.parents), local)

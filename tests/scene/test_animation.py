@@ -162,6 +162,7 @@ def test_sampling_is_vectorised_over_times(assets: Path) -> None:
     for b in (0, 7, 39):
         one = sample(scene, float(times[b]))
         np.testing.assert_array_equal(one.local, batch.local[b])
+        np.testing.assert_array_equal(one.rotation, batch.at(b).rotation)
     grid = sample(scene, times.reshape(5, 8))
     np.testing.assert_array_equal(grid.local.reshape(batch.local.shape), batch.local)
 

@@ -56,6 +56,12 @@ class Pose:
         """(..., K, 4, 4) world matrices of this pose (one batched product per tree level)."""
         return tree.world(self.local)
 
+    def at(self, index: int | tuple[int, ...]) -> Pose:
+        """The pose of one of the times (index into the leading axes)."""
+        return Pose(self.translation[index], self.rotation[index], self.scale[index],
+                    self.local[index], {k: v[index] for k, v in self.weights.items()},
+                    {k: v[index] for k, v in self.pointers.items()})
+
 
 def animation_indices(scene: Scene, animation: int | str | Sequence[int | str] | None) -> list[int]:
     """Indices into scene.animations: None = all, an index, a name, or a list of them.
