@@ -416,3 +416,42 @@ def test_scenes_without_animation_sample_to_their_rest_pose() -> None:
     world = pose.world(scene.node_tree())
     assert pose.weights == {} and pose.pointers == {}
     np.testing.assert_allclose(world, np.stack([[n.matrix for n in scene.nodes]] * 2), atol=1e-6)
+
+
+def test_pointer_animated_lights_and_camera_reach_the_frame(tmp_path: Path, make_renderer) -> None:  # noqa: ANN001
+    """KHR_animation_pointer on a light's intensity, colour and spot cone and on a camera's
+    field of view: Renderer.set_time gives frames those values (the frame's lights, the
+    default camera), as the sampler's linear keyframes say; reset_pose returns the file's."""
+    from vkpbr.render.options import RenderOptions
+
+    f = _cube_file()
+    f.doc["extensions"] = {"KHR_lights_punctual": {"lights": [{"type": "spot", "intensity": 2.0}]}}
+    f.doc["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}]
+    f.node(mesh=0)
+    f.node(extensions={"KHR_lights_punctual": {"light": 0}})
+    f.node(camera=0)
+    anim: dict = {"samplers": [], "channels": []}
+    for pointer, a, b in (("/extensions/KHR_lights_punctual/lights/0/intensity", [4.0], [8.0]),
+                          ("/extensions/KHR_lights_punctual/lights/0/color", [1, 0, 0], [0, 0, 1]),
+                          ("/extensions/KHR_lights_punctual/lights/0/spot/outerConeAngle", [0.5], [0.7]),
+                          ("/cameras/0/perspective/yfov", [0.6], [1.0])):
+        s = _sampler(f, anim, [0.0, 2.0], np.array([a, b], np.float64))
+        anim["channels"].append({"sampler": s, "target": {
+            "path": "pointer", "extensions": {"KHR_animation_pointer": {"pointer": pointer}}}})
+    f.doc["animations"] = [anim]
+    f.used("KHR_animation_pointer")
+    f.used("KHR_lights_punctual")
+    r = make_renderer(load_gltf(f.save(tmp_path / "pointed.glb")))
+    r.set_time(0.5)  # a quarter of the way
+    (light,) = r.lighting.frame_lights(RenderOptions())
+    assert light.intensity == pytest.approx(5.0)
+    np.testing.assert_allclose(light.color, [0.75, 0.0, 0.25], atol=1e-6)
+    assert light.outer_cone == pytest.approx(0.55)
+    assert r.default_camera().yfov_deg == pytest.approx(np.degrees(0.7))
+    image = r.render(size=(32, 24), time=2.0)  # render(time=) too, before the lights resolve
+    assert image.shape == (24, 32, 4)
+    (light,) = r.lighting.frame_lights(RenderOptions())
+    assert light.intensity == pytest.approx(8.0)
+    r.reset_pose()
+    (light,) = r.lighting.frame_lights(RenderOptions())
+    assert light.intensity == pytest.approx(2.0) and r.default_camera().yfov_deg == pytest.approx(np.degrees(0.8))

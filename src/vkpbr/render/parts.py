@@ -83,7 +83,7 @@ class FrameParts:
     def default_camera(self) -> Camera:
         """The scene's first camera, else the automatic one (scene/geometry.py auto_camera)."""
         if self.scene.cameras:
-            return self.scene.cameras[0]
+            return self.state.cameras()[0]  # (its field of view may be animated)
         from vkpbr.scene.geometry import auto_camera
 
         return auto_camera(self.scene)
@@ -157,6 +157,6 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
         device, scene, ring, layouts, pipeline_layout, buffers, pool, slots, gs, ids, labels,
         copies, compute, post, recorder, state, deform, gpu_state, bounds, blend, paths,
         Targets(device, msaa, background, ring.count, recorder, compute, post), environments,
-        Lighting(scene, copies, environments),
+        Lighting(scene, copies, environments, state),
         ShadowFrames(shadows, bounds, recorder, state,
                      np.array([d.casts_shadows for d in gs.draws], bool)))

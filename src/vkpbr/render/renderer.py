@@ -187,8 +187,9 @@ class Renderer:
         view-space distance along the camera axis (inf where nothing was drawn); with
         `outputs`, {name: array}.
         """
+        if time is not None:  # before the lights resolve: animation may drive them too
+            self.set_time(time, animation)
         frames = self.render_many([camera], lights, size, options, linear, depth, outputs=outputs,
-                                  times=None if time is None else [time], animation=animation,
                                   **option_overrides)
         return next(iter(frames))
 
@@ -254,8 +255,7 @@ class Renderer:
             memory and of the free host-visible memory, at most 65,536) or a positive integer.
         device : "cpu": NumPy arrays; "cuda": a torch tensor (B, H, W, 4) on the same GPU,
             never through host memory (colour only; the `cuda` extra: gpu/cuda.py).
-        out : a C-contiguous writeable (B, H, W, 4) uint8 (float32 with `linear`) array the
-            colour is written into and returned as (a loop reusing one skips fresh pages).
+        out : a C-contiguous writeable (B, H, W, 4) array the colour is written into.
 
         Returns
         -------

@@ -19,13 +19,14 @@ frame path or shadow map, so hiding re-records nothing either.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterable, Sequence
 
 import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.scene.tree import NodeRef, NodeTree
-from vkpbr.scene.types import Scene
+from vkpbr.scene.types import Camera, Light, Scene
 
 __all__ = ["SceneState", "quaternion_matrices", "normal_matrices", "std140_pairs"]
 
@@ -124,6 +125,8 @@ class SceneState:
         # node's or mesh's from the file (render/deform.py).
         self.weights: dict[int, np.ndarray] = {}
         self.scene: Scene | None = None  # what set_time samples (vkpbr.scene.animation)
+        # KHR_animation_pointer values set_time gave: pointer -> (channel, value)
+        self.pointers: dict[str, tuple[object, np.ndarray]] = {}
         self.time: float | None = None  # the time set_time last posed
         self.version = 0
         self.draw_versions = np.zeros(len(self.draw_tree), np.int64)  # when each last changed
@@ -191,9 +194,17 @@ class SceneState:
                    if ch.node is not None and ch.path == "weights"} | {
             t for i in chosen for ch in self.scene.animations[i].channels if ch.kind == "mesh"
             for t in ch.targets}
-        if not nodes and not morphed:
+        animates_pointers = any(ch.kind in ("light", "camera") for i in chosen
+                                for ch in self.scene.animations[i].channels)
+        if not nodes and not morphed and not animates_pointers:
             return
         pose = sample(self.scene, float(time), chosen)
+        pointed = {ch.pointer: ch for i in chosen for ch in self.scene.animations[i].channels
+                   if ch.kind in ("light", "camera") and ch.pointer in pose.pointers}
+        if pointed:  # KHR_animation_pointer: lights' and cameras' properties
+            self.pointers.update({p: (ch, np.asarray(pose.pointers[p], np.float64).reshape(-1))
+                                  for p, ch in pointed.items()})
+            self.version += 1
         idx = np.asarray(nodes, np.int64)
         self.local[idx] = pose.local[idx]
         for node in morphed:
@@ -202,11 +213,34 @@ class SceneState:
         self.time = float(time)
         self._changed(np.asarray(sorted(set(nodes) | {int(m) for m in morphed}), np.int64))
 
+    def lights(self) -> list[Light]:
+        """The scene's lights with what animation pointers set (colour, intensity, range,
+        spot cones: KHR_animation_pointer)."""
+        lights = list(self.scene.lights) if self.scene is not None else []
+        for ch, value in self.pointers.values():
+            if getattr(ch, "kind", None) != "light":
+                continue
+            for i in ch.targets:  # type: ignore[attr-defined]
+                if 0 <= i < len(lights):
+                    lights[i] = _pointed_light(lights[i], ch.member, value)  # type: ignore[attr-defined]
+        return lights
+
+    def cameras(self) -> list[Camera]:
+        """The scene's cameras with the field of view animation pointers set."""
+        cams = list(self.scene.cameras) if self.scene is not None else []
+        for ch, value in self.pointers.values():
+            if getattr(ch, "kind", None) == "camera" and ch.member == "yfov":  # type: ignore[attr-defined]
+                for i in ch.targets:  # type: ignore[attr-defined]
+                    if 0 <= i < len(cams) and 0.0 < value[0] < np.pi:
+                        cams[i] = dataclasses.replace(cams[i], yfov_deg=float(np.degrees(value[0])))
+        return cams
+
     def reset(self) -> None:
         """Back to the file's rest pose, everything shown."""
         self.local[:] = self.tree.local
         self.visible[:] = True
         self.weights.clear()
+        self.pointers.clear()
         self._changed(np.arange(len(self.tree)))
 
     def _changed(self, idx: np.ndarray) -> None:
@@ -327,3 +361,17 @@ class SceneState:
             r = np.einsum("dij,dj->di", np.abs(ms[:, :3, :3]), half)
             return (c - r).min(axis=0), (c + r).max(axis=0)
         return self._cached("bounds", make)  # type: ignore[return-value]
+
+
+def _pointed_light(light: Light, member: str, value: np.ndarray) -> Light:
+    """`light` with one animated property (KHR_lights_punctual's names, vkpbr's fields)."""
+    if member == "color":
+        return dataclasses.replace(light, color=tuple(float(v) for v in value[:3]))
+    if member in ("intensity", "range"):
+        return dataclasses.replace(light, **{member: max(float(value[0]), 0.0)})
+    if member in ("inner_cone", "outer_cone") and light.kind == "spot":
+        inner = float(value[0]) if member == "inner_cone" else light.inner_cone
+        outer = float(value[0]) if member == "outer_cone" else light.outer_cone
+        if 0.0 <= inner < outer <= np.pi / 2:  # else the file's (glTF requires it)
+            return dataclasses.replace(light, inner_cone=inner, outer_cone=outer)
+    return light
