@@ -183,7 +183,7 @@ class _TargetResources:
                    "QTangents": gs.streams["qtangents"],
                    "PackedFrames": gs.streams["packed_frames"], "Bins": self.bins,
                    "BinArgs": self.args, "PixelList": self.pixels,
-                   "Materials": scene.material_table, "RasterDraws": scene.raster_draws,
+                   "RasterDraws": scene.raster_draws,
                    "RasterDepthIds": self.raster, "RasterBig": self.raster_big,
                    "RasterSpheres": scene.raster_spheres, "RasterDepths": self.raster_depths,
                    "RasterMaskedBig": self.raster_masked_big,
@@ -199,6 +199,8 @@ class _TargetResources:
             for binding, kind, name in L.COMPUTE_SET:
                 if name == "Motion":  # the slot's own table
                     writer.storage(dset, binding, *_at(scene.motion.motion_region(slot.index)))
+                elif name == "Materials":  # the slot's own copy
+                    writer.storage(dset, binding, *_at(gs.material_table_region(slot.index)))
                 elif kind == "storage":
                     writer.storage(dset, binding, buffers[name])
                 elif kind == "block":
@@ -238,11 +240,6 @@ class ComputeScene:
         gs.ensure_streams()  # every TBN path's stream exists: the sets bind them all
         draws = _draw_records(gs, semantic)
         self.draw_table = self._own(upload_buffer(device, draws, "storage", name="draw records"))
-        table = np.zeros(len(gs.material_blocks), L.MATERIAL.dtype)  # np.stack drops padding
-        for i, block in enumerate(gs.material_blocks):
-            table[i] = block
-        self.material_table = self._own(upload_buffer(device, table, "storage",
-                                                      name="material records"))
         raster, self.triangles, self.masked_rows = _raster_table(gs)
         self.raster_draws = self._own(upload_buffer(device, raster, "storage",
                                                     name="raster draw table"))

@@ -130,7 +130,7 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     ring = FrameRing(device, queries_per_frame=STAMPS)
     layouts, shadows, pipeline_layout = create_layouts(device, ring.count)
     buffers, pool, slots = create_slots(device, layouts[0], layouts[2], ring.count)
-    gs = GpuScene(device, scene, layouts[1])
+    gs = GpuScene(device, scene, layouts[1], ring.count)
     state = scene_state(scene, gs.draws)
     layout = DeformLayout(scene, gs.deformed) if gs.deformed else None
     gpu_state = GpuSceneState(device, state, ring.count, scene, layout)

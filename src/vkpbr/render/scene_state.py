@@ -87,7 +87,7 @@ class GpuSceneState:
             if flags is not None:
                 self._deformed[:draws, 0] = flags
         self.first_posed = 0
-        self._prev: tuple[Any, Any] | None = None  # the previous frame's (VP, draw models)
+        self._prev: tuple[Any, Any, int] | None = None  # previous frame's (VP, models, version)
         self.buffer = Buffer(device, self.stride * count, "storage", host_visible=True,
                              device_local=True, name="scene state")
         self._written = [-1] * count
@@ -107,7 +107,11 @@ class GpuSceneState:
         previous ones; with `table` (a frame with dataset outputs) first write the slot's
         motion table from the previous frame's (valid 0 on a renderer's first frame: motion
         0, as for a still scene)."""
-        models = self.state.draw_models()
+        state = self.state
+        if self._prev is not None and self._prev[2] == state.version and self._prev[0] is vp \
+                and not table:
+            return  # a still frame: the previous frame's are this one's
+        models = state.draw_models()
         if table:
             out = self.buffer.array(np.float32, self.motion_size // 4, slot * self.stride + self.motion_at)
             head = out[:20]
@@ -119,7 +123,7 @@ class GpuSceneState:
                 prev = self._prev[1]
                 rows[:len(prev), :16] = np.swapaxes(prev, -1, -2).reshape(len(prev), 16)
             rows.view(np.uint32)[:, 16:] = self._deformed
-        self._prev = (np.asarray(vp, np.float32), models)
+        self._prev = (vp, models, state.version)
 
     def deform_region(self, slot: int) -> tuple[Buffer, int, int]:
         """(buffer, offset, size) of slot `slot`'s joint matrices and morph weights."""
