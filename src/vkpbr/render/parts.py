@@ -135,6 +135,7 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     layout = DeformLayout(scene, gs.deformed) if gs.deformed else None
     gpu_state = GpuSceneState(device, state, ring.count, scene, layout)
     gpu_state.first_posed = min(gs.posed_offsets, default=0)
+    gpu_state.gpu_scene = gs
     deform = (DeformKernel(device, scene, gs, layout, [gpu_state.deform_region(s.index) for s in slots])
               if layout is not None else None)
     bind_instances(device, [s.set0 for s in slots], [gpu_state.region(s.index) for s in slots])

@@ -124,6 +124,7 @@ class Renderer:
         st = p.state  # the living scene (vkpbr.scene.state): what the next frame shows
         self.state, self.set_pose, self.set_poses, self.reset_pose = st, st.set_pose, st.set_poses, st.reset
         self.set_visible, self.set_time, self.set_weights = st.set_visible, st.set_time, st.set_weights
+        self.set_material = st.set_material
 
 
     @property
@@ -177,8 +178,7 @@ class Renderer:
         outputs : names from OUTPUTS (dataset outputs, from the same frame: "color", "depth",
             "range", "instance", "semantic", "normal", "normal_camera", "normal_geometric");
             a dict of arrays is returned instead (see `frame_outputs`).
-        time, animation : pose the scene at `time` seconds of its glTF animations first
-            (`set_time`; `animation` a name, an index or None for all); None: as it is.
+        time, animation : `set_time(time, animation)` first (glTF animations); None: as is.
 
         Returns
         -------

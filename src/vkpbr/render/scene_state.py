@@ -91,6 +91,8 @@ class GpuSceneState:
         self.buffer = Buffer(device, self.stride * count, "storage", host_visible=True,
                              device_local=True, name="scene state")
         self._written = [-1] * count
+        self._materials_written = [0] * count  # the slots hold the file's factors at first
+        self.gpu_scene: Any = None  # whose material blocks set_material overrides
         for slot in range(count):  # every slot holds the rest pose from the start
             self.write(slot)
 
@@ -138,10 +140,24 @@ class GpuSceneState:
         records = self.state.draw_matrices()
         if records.size:
             self.buffer.array(np.float32, records.size, slot * self.stride)[:] = records.ravel()
+        if self._materials_written[slot] != self.state.material_version:
+            self._write_materials(slot)
         if self.deform is not None and self.scene is not None:
             values = self._deform_values()
             self.buffer.array(np.float32, values.size, slot * self.stride + self.deform_at)[:] = values
         self._written[slot] = version
+
+    def _write_materials(self, slot: int) -> None:
+        """Slot `slot`'s material blocks: the file's, with the state's overrides."""
+        gs = self.gpu_scene
+        if gs is None:
+            return
+        blocks = [b.copy() for b in gs.material_blocks]
+        for i, fields in self.state.materials.items():
+            for field, value in fields.items():
+                blocks[i][field] = value if len(value) > 1 else value[0]
+        gs.write_materials(slot, blocks)
+        self._materials_written[slot] = self.state.material_version
 
     def _deform_values(self) -> np.ndarray:
         cached = getattr(self, "_values", None)

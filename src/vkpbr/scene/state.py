@@ -128,6 +128,9 @@ class SceneState:
         self.scene: Scene | None = None  # what set_time samples (vkpbr.scene.animation)
         # KHR_animation_pointer values set_time gave: pointer -> (channel, value)
         self.pointers: dict[str, tuple[object, np.ndarray]] = {}
+        # Material factor overrides: material index -> {Material field: value}
+        self.materials: dict[int, dict[str, tuple[float, ...]]] = {}
+        self.material_version = 0
         self.time: float | None = None  # the time set_time last posed
         self.version = 0
         self.draw_versions = np.zeros(len(self.draw_tree), np.int64)  # when each last changed
@@ -196,7 +199,7 @@ class SceneState:
                    if ch.node is not None and ch.path == "weights"} | {
             t for i in chosen for ch in self.scene.animations[i].channels if ch.kind == "mesh"
             for t in ch.targets}
-        animates_pointers = any(ch.kind in ("light", "camera") for i in chosen
+        animates_pointers = any(ch.kind in ("light", "camera", "material") for i in chosen
                                 for ch in self.scene.animations[i].channels)
         if not nodes and not morphed and not animates_pointers:
             return
@@ -207,6 +210,9 @@ class SceneState:
             self.pointers.update({p: (ch, np.asarray(pose.pointers[p], np.float64).reshape(-1))
                                   for p, ch in pointed.items()})
             self.version += 1
+        for ch in (ch for i in chosen for ch in self.scene.animations[i].channels
+                   if ch.kind == "material" and ch.pointer in pose.pointers):
+            self._pointed_material(ch, np.asarray(pose.pointers[ch.pointer], np.float64).reshape(-1))
         idx = np.asarray(nodes, np.int64)
         self.local[idx] = pose.local[idx]
         for node in morphed:
@@ -214,6 +220,50 @@ class SceneState:
                 self.weights[int(node)] = np.asarray(pose.weights[node], np.float64)
         self.time = float(time)
         self._changed(np.asarray(sorted(set(nodes) | {int(m) for m in morphed}), np.int64))
+
+    def set_material(self, material: int | str, base_color: Sequence[float] | None = None,
+                     metallic: float | None = None, roughness: float | None = None,
+                     emissive: Sequence[float] | None = None) -> None:
+        """Override a material's factors from the next frame on (randomised datasets; glTF
+        animation pointers go through here too): `base_color` RGBA or RGB in [0, 1],
+        `metallic` and `roughness` in [0, 1], `emissive` linear RGB >= 0. They multiply the
+        material's textures, as glTF's factors do. `material`: index or name."""
+        i = self._material_index(material)
+        given = {"base_color_factor": base_color, "metallic_factor": metallic,
+                 "roughness_factor": roughness, "emissive_factor": emissive}
+        checked = {f: _factor(f, v) for f, v in given.items() if v is not None}
+        self.materials.setdefault(i, {}).update(checked)
+        self.material_version += 1
+        self.version += 1
+
+    def _pointed_material(self, ch: object, value: np.ndarray) -> None:
+        """One KHR_animation_pointer material factor at its sampled value (the emissive
+        strength scales the emissive factor, which already holds the file's strength)."""
+        member, rest = ch.member, ch.rest  # type: ignore[attr-defined]
+        for i in ch.targets:  # type: ignore[attr-defined]
+            mat = self.scene.materials[i]  # type: ignore[union-attr]
+            if member == "emissive_strength":
+                scale = value[0] / rest[0] if rest is not None and rest[0] > 0 else 0.0
+                factor = tuple(float(c) * scale for c in mat.emissive_factor)
+                self.materials.setdefault(i, {})["emissive_factor"] = factor
+            elif member in ("base_color_factor", "metallic_factor", "roughness_factor",
+                            "emissive_factor"):
+                v = tuple(float(x) for x in value)
+                self.materials.setdefault(i, {})[member] = v if len(v) > 1 else (v[0],)
+        self.material_version += 1
+        self.version += 1
+
+    def _material_index(self, material: int | str) -> int:
+        mats = self.scene.materials if self.scene is not None else []
+        if isinstance(material, (int, np.integer)) and not isinstance(material, bool):
+            if 0 <= material < len(mats):
+                return int(material)
+            raise UsageError(f"material {material} is out of range: the scene has {len(mats)}")
+        names = [m.name for m in mats]
+        if material in names:
+            return names.index(material)
+        raise UsageError(f"no material is named {material!r} (the scene's: "
+                         f"{', '.join(names[:8])}{' ...' if len(names) > 8 else ''})")
 
     def lights(self) -> list[Light]:
         """The scene's lights with what animation pointers set (colour, intensity, range,
@@ -243,6 +293,9 @@ class SceneState:
         self.visible[:] = True
         self.weights.clear()
         self.pointers.clear()
+        if self.materials:
+            self.materials.clear()
+            self.material_version += 1
         self._changed(np.arange(len(self.tree)))
 
     def _changed(self, idx: np.ndarray) -> None:
@@ -381,3 +434,21 @@ def _pointed_light(light: Light, member: str, value: np.ndarray) -> Light:
         if 0.0 <= inner < outer <= np.pi / 2:  # else the file's (glTF requires it)
             return dataclasses.replace(light, inner_cone=inner, outer_cone=outer)
     return light
+
+
+def _factor(field: str, value: object) -> tuple[float, ...]:
+    """A material factor checked: its size and range (UsageError naming it)."""
+    v = np.asarray(value, np.float64).reshape(-1)
+    sizes = {"base_color_factor": (3, 4), "emissive_factor": (3,)}.get(field, (1,))
+    name = field.removesuffix("_factor")
+    if len(v) not in sizes or not np.all(np.isfinite(v)):
+        raise UsageError(f"set_material: {name} must be {' or '.join(map(str, sizes))} finite "
+                         f"number(s), got {value!r}")
+    if field == "emissive_factor":
+        if np.any(v < 0):
+            raise UsageError(f"set_material: emissive must be >= 0, got {value!r}")
+    elif np.any((v < 0) | (v > 1)):
+        raise UsageError(f"set_material: {name} must be within [0, 1], got {value!r}")
+    if field == "base_color_factor" and len(v) == 3:
+        v = np.append(v, 1.0)
+    return tuple(float(x) for x in v)
