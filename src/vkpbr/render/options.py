@@ -98,7 +98,8 @@ class RenderOptions:
     env : str
         The environment of the physically based mode: "sky" (the built-in Preetham sky
         matched to the automatic sun), "none" (no image-based light, black background) or
-        the path of an equirectangular .hdr / .exr panorama. The course mode has none.
+        the path of an equirectangular .hdr / .exr panorama, or an LDR .jpg / .png one
+        (sRGB decoded to linear; its light is clipped at 1: scene/environment.py). The course mode has none.
     env_intensity : float
         Scale of the environment's radiance (>= 0; image-based light and background alike).
     env_rotation : float
@@ -168,7 +169,7 @@ class RenderOptions:
     def _check_environment(self) -> None:
         env = os.fspath(self.env) if isinstance(self.env, os.PathLike) else self.env
         if not isinstance(env, str) or not env.strip():
-            raise UsageError(f"env {self.env!r}: expected sky, none or a .hdr / .exr file")
+            raise UsageError(f"env {self.env!r}: expected sky, none or a .hdr / .exr / .jpg / .png file")
         if env.strip().lower() in ("sky", "none"):
             env = env.strip().lower()
         elif os.path.splitext(env)[1].lower() not in ENV_SUFFIXES:
