@@ -155,8 +155,9 @@ def shared_options() -> tuple[OptionSpec, ...]:
     declared once there, beside its field; imports the render layer's options)."""
     from vkpbr.render.options import POST_OPTIONS
 
-    return SHARED_OPTIONS + tuple(OptionSpec(row.flag, "float", row.help, field=row.field,
-                                             group="post", metavar="STRENGTH")
+    return SHARED_OPTIONS + tuple(OptionSpec(row.flag, "float" if row.parse is None else "text",
+                                             row.help, field=row.field, group="post",
+                                             metavar="STRENGTH" if row.parse is None else "SPEC")
                                   for row in POST_OPTIONS)
 
 

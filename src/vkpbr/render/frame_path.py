@@ -33,7 +33,7 @@ from vkpbr.render.outputs import frame_outputs
 from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.parts import FrameParts
 from vkpbr.render.paths import choose_path
-from vkpbr.render.post import check_lens, lens_frame
+from vkpbr.render.post import check_lens, lens_frame, noise_key
 from vkpbr.render.post_stage import check_post, enabled_post, encode_tonemap
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.render.steps import NO_OBJECTS, FrameObjects, FrameSpec
@@ -111,6 +111,8 @@ class FramePath:
             overlay.prepare(frame.index)
         spec = self._spec(drawn, slot, options, plan, overlay, copy, linear, wanted if post else (),
                           transmission, post, lens.push if lens is not None else ())
+        if post and options.noise is not None:  # its random numbers' key: seed and view
+            p.post().write_key(frame.index, noise_key(options.noise, camera, target.extent))
         order = p.blend.order(camera.eye)
         objects = FrameObjects(order, overlay) if order or overlay is not None else NO_OBJECTS
         shadows = p.shadow_frames.maps
@@ -199,12 +201,14 @@ class FramePath:
         if outputs and readback:
             copy = (*copy, COPY_OUTPUTS)
         pending: collections.deque[tuple[Frame, bool]] = collections.deque()
+        noisy = options.noise is not None and options.noise.depth
         try:
             for camera in cameras:
                 camera = base if camera is None else as_camera(camera, base)
                 validate_camera(camera)
-                # A camera model's depth is its resampled output (render/post.py lens_steps).
-                lens_depth = depth and readback and camera.model != "pinhole"
+                # A camera model's depth is its resampled output (render/post.py lens_steps),
+                # a noisy one the outputs' (Noise): the depth buffer has neither.
+                lens_depth = depth and readback and (camera.model != "pinhole" or noisy)
                 if len(pending) == self.parts.ring.count:
                     yield self.collect(*pending.popleft(), target, depth, readback, outputs)
                 sub = self.draw(target, camera, lights, options,

@@ -23,17 +23,18 @@ from __future__ import annotations
 
 import functools
 import math
+import zlib
 
 import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.gpu.graph import Step
-from vkpbr.render.options import POST_OPTIONS
+from vkpbr.render.options import POST_OPTIONS, SensorNoise
 from vkpbr.render.post_stage import PostContext, PostStep, post_unavailable
 from vkpbr.scene import lens as lenses
 from vkpbr.scene.types import Camera
 
-__all__ = ["Bloom", "BLOOM_LEVELS", "post_steps", "LensFrame", "check_lens", "lens_frame", "lens_steps",
+__all__ = ["Bloom", "BLOOM_LEVELS", "Noise", "noise_key", "post_steps", "LensFrame", "check_lens", "lens_frame", "lens_steps",
            "LENS_OUTPUTS", "LENS_PIXELS"]
 
 BLOOM_LEVELS = 6  # the smallest is 1/64 of the frame: a glow some tens of pixels wide
@@ -76,6 +77,61 @@ class Bloom(PostStep):
                                                 ctx.extent),
                           ((names[0], "storage_read"), (ctx.color_name, "storage"))))
         return steps
+
+
+class Noise(PostStep):
+    """A sensor's noise (render/options.py SensorNoise): colour noise on the radiance
+    (post_noise.comp, in place), depth noise and dropouts on the dataset outputs' depth and
+    range where the frame has them (post_noise_depth.comp into a transient, then
+    post_noise_copy.comp back). Random numbers from the frame's key (seed and view:
+    `noise_key`), so the command buffer is the same for every frame."""
+
+    option = "noise"
+
+    def steps(self, ctx: PostContext, value: SensorNoise) -> list[Step]:
+        steps = []
+        if value.colour:
+            push = np.array([ctx.frame_index, 0, 0], np.uint32)
+            push.view(np.float32)[1:] = (value.full_well, value.read_noise)
+            steps.append(Step("noise", ctx.dispatch("post_noise", push, ctx.color_view,
+                                                    ctx.color_view, ctx.extent, keys=True),
+                              ((ctx.color_name, "storage"),)))
+        if value.depth and ctx.outputs:
+            steps += _depth_noise(ctx, value)
+        return steps
+
+
+def _depth_noise(ctx: PostContext, value: SensorNoise) -> list[Step]:
+    depth_name = ctx.outputs_prefix + "out_depth_range"
+    normal_name = ctx.outputs_prefix + "out_normal"
+    depth, normal = ctx.resources[depth_name].view, ctx.resources[normal_name].view
+    noisy = ctx.transient("noise_depth", ctx.extent)
+    push = np.zeros(10, np.float32)
+    push.view(np.uint32)[0] = ctx.frame_index
+    push[1:] = (value.baseline, value.disparity_sigma, value.disparity_step, value.lateral_sigma,
+                value.grazing_start, value.grazing_end, value.edge_jump, value.edge_rate,
+                value.max_range)
+    record = ctx.dispatch("post_noise_depth", push, depth, noisy, ctx.extent, normal, keys=True)
+    back = ctx.dispatch("post_noise_copy", np.zeros(1, np.uint32), noisy, depth, ctx.extent)
+    return [Step("noise_depth", record, ((depth_name, "storage_read"), (normal_name, "storage_read"),
+                                         ("noise_depth", "storage")), timed=False),
+            Step("noise_depth_copy", back, (("noise_depth", "storage_read"), (depth_name, "storage")))]
+
+
+def noise_key(noise: SensorNoise, camera: Camera, extent: tuple[int, int]) -> np.ndarray:
+    """The frame key of `camera` at `extent` with `noise` (noise.glsl FrameKey, 128 bytes):
+    a hash of the seed and the camera (pose, intrinsics, lens: the view), the output's K
+    and camera-from-world rotation (OpenCV axes)."""
+    K = camera.intrinsics(extent)
+    R = camera.world_from_camera("opencv")[:3, :3].T
+    view = np.array([*camera.eye, *camera.target, *camera.up, *K.ravel(), *camera.distortion],
+                    np.float64)
+    key = np.zeros(32, np.float32)
+    key.view(np.uint32)[0] = zlib.crc32(view.tobytes(), noise.seed & 0xFFFFFFFF)
+    key[4:8] = (K[0, 0], K[1, 1], K[0, 2], K[1, 2])
+    for i in range(3):
+        key[8 + 4 * i: 11 + 4 * i] = R[i]
+    return key
 
 
 def post_steps() -> dict[str, type[PostStep]]:
@@ -168,4 +224,5 @@ def lens_steps(ctx: PostContext, push: tuple[float, ...], extent: tuple[int, int
     steps.append(Step("lens", ctx.dispatch("post_lens", data, ctx.color_view, view, extent),
                       ((ctx.color_name, "storage_read"), ("lens", "storage"))))
     ctx.color_view, ctx.color_name, ctx.extent = view, "lens", extent
+    ctx.outputs_prefix = "out."
     return steps

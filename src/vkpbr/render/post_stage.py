@@ -28,6 +28,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from vkpbr.errors import UsageError
+from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.compute import ComputePipeline, groups
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
@@ -42,6 +43,8 @@ __all__ = ["PostStep", "PostKernels", "PostContext", "enabled_post",
            "encode_step", "encode_tonemap", "post_unavailable", "check_post"]
 
 _SETS_PER_POOL = 64
+KEY_BYTES = 128  # noise.glsl FrameKey
+MAX_FRAME_SLOTS = 16  # frame slots with a key (gpu/frames.py rings have 3)
 HDR_FORMAT = "VK_FORMAT_R32G32B32A32_SFLOAT"  # the target's float colour, and transients
 
 
@@ -59,8 +62,8 @@ def enabled_post(options: RenderOptions) -> tuple[tuple[str, float], ...]:
     """(option, value) of the post steps `options` turn on, in POST_OPTIONS' order.
     VKPBR_HDR_FRAMES=1 (benchmarks/bench_post.py) sends frames without one through the HDR
     target and the encode all the same ("hdr", no step): what that costs, measured."""
-    out = tuple((row.field, float(getattr(options, row.field))) for row in POST_OPTIONS
-                if getattr(options, row.field))
+    out = tuple((row.field, getattr(options, row.field) if row.parse else float(getattr(options, row.field)))
+                for row in POST_OPTIONS if getattr(options, row.field))
     if not out and os.environ.get("VKPBR_HDR_FRAMES") == "1":
         return (("hdr", 0.0),)
     return out
@@ -89,6 +92,7 @@ class PostKernels:
         self._pipelines: dict[str, ComputePipeline] = {}
         self._sets: dict[tuple[int, ...], Any] = {}
         self._images: dict[tuple, tuple[Image, ImageView]] = {}
+        self._keys: tuple[DescriptorSetLayout, Any, Buffer, DescriptorPool] | None = None
 
     def set_layout(self, count: int) -> DescriptorSetLayout:
         """The set layout of `count` storage images (bindings 0..count-1), made on first use."""
@@ -97,12 +101,38 @@ class PostKernels:
                 BindingSpec(b, "storage_image", ("compute", "fragment")) for b in range(count)])
         return self._layouts[count]
 
-    def pipeline(self, name: str, push_bytes: int, images: int = 2) -> ComputePipeline:
-        """Kernel shaders/spv/<name>.comp.spv, binding `images` storage images."""
+    def pipeline(self, name: str, push_bytes: int, images: int = 2,
+                 keys: bool = False) -> ComputePipeline:
+        """Kernel shaders/spv/<name>.comp.spv, binding `images` storage images (set 0) and,
+        with `keys`, the frames' keys (set 1: noise.glsl FrameKeys)."""
         if name not in self._pipelines:
+            layouts = [self.set_layout(images)] + ([self.keys()[0]] if keys else [])
             self._pipelines[name] = ComputePipeline(self.device, SPV_DIR / f"{name}.comp.spv",
-                                                    [self.set_layout(images)], push_bytes=push_bytes)
+                                                    layouts, push_bytes=push_bytes)
         return self._pipelines[name]
+
+    def keys(self) -> tuple[DescriptorSetLayout, Any, Buffer]:
+        """The frames' keys (noise.glsl FrameKey, KEY_BYTES a frame slot, host-visible: each
+        frame writes its own before it is submitted): (set layout, set, buffer), made once."""
+        if self._keys is None:
+            layout = DescriptorSetLayout(self.device, [BindingSpec(0, "storage", ("compute",))])
+            pool = DescriptorPool(self.device, [(layout, 1)])
+            buffer = Buffer(self.device, KEY_BYTES * MAX_FRAME_SLOTS,
+                            self.device.vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, host_visible=True,
+                            name="post frame keys")
+            dset = pool.allocate(layout)
+            writer = DescriptorWriter(self.device)
+            writer.storage(dset, 0, buffer)
+            writer.update()
+            self._keys = (layout, dset, buffer, pool)
+        return self._keys[:3]
+
+    def write_key(self, frame_index: int, key: np.ndarray) -> None:
+        """Frame slot `frame_index`'s key (KEY_BYTES: noise.glsl FrameKey), written before
+        its submission (its previous one has finished: the ring waited for it)."""
+        if frame_index >= MAX_FRAME_SLOTS:
+            raise ValueError(f"frame slot {frame_index}: at most {MAX_FRAME_SLOTS}")
+        self.keys()[2].write(np.ascontiguousarray(key).view(np.uint8), frame_index * KEY_BYTES)
 
     def fragment_pipeline(self, name: str, target: Any, push_bytes: int) -> Pipeline:
         """Fragment shader shaders/spv/<name>.frag.spv over a fullscreen triangle, drawn into
@@ -176,6 +206,12 @@ class PostKernels:
         for layout in self._layouts.values():
             layout.destroy()
         self._layouts.clear()
+        if self._keys is not None:
+            layout, _, buffer, pool = self._keys
+            pool.destroy()
+            layout.destroy()
+            buffer.destroy()
+            self._keys = None
 
 
 @dataclass
@@ -197,6 +233,9 @@ class PostContext:
     # The graph resource holding the radiance the next steps read: "color", or a step's own
     # image where it changes the size (the camera models' resample: render/post.py Lens).
     color_name: str = "color"
+    frame_index: int = 0  # the frame slot (its key: PostKernels.write_key)
+    outputs: bool = False  # whether the frame copies out the dataset outputs
+    outputs_prefix: str = ""  # where they are: the HDR target's, or "out." (a lens frame's)
 
     def transient(self, name: str, extent: tuple[int, int]) -> Any:
         """Transient image `name` as a graph resource (added to the frame's); its view."""
@@ -205,16 +244,19 @@ class PostContext:
         return view.handle
 
     def dispatch(self, name: str, push: np.ndarray, src: Any, dst: Any,
-                 extent: tuple[int, int], *more: Any) -> Callable[[Any], None]:
+                 extent: tuple[int, int], *more: Any, keys: bool = False) -> Callable[[Any], None]:
         """A recorder of kernel `name` over `extent` with views `src`, `dst` (and `more`
-        views after them: bindings 2, 3, ...) and `push`."""
+        views after them: bindings 2, 3, ...) and `push`; `keys`: the frames' keys as set 1."""
         kernels = self.kernels
         dset = kernels.image_set(src, dst, *more)
-        pipe = kernels.pipeline(name, push.nbytes, 2 + len(more))
+        pipe = kernels.pipeline(name, push.nbytes, 2 + len(more), keys)
+        key_set = kernels.keys()[1] if keys else None
 
         def record(cmd: Any) -> None:
             cmd.bind_pipeline(pipe)
             cmd.bind_set(0, dset)
+            if key_set is not None:
+                cmd.bind_set(1, key_set)
             cmd.push(push)
             cmd.dispatch(*groups((*extent, 1), (8, 8, 1)))
         return record

@@ -294,7 +294,8 @@ class FrameSteps:
         if not self.spec.post and not self.spec.lens:
             return []
         ctx = PostContext(self.r.post_kernels(), self.target.extent, self.resources,
-                          self.target.storage_view.handle)
+                          self.target.storage_view.handle, frame_index=self.frame_index,
+                          outputs=COPY_OUTPUTS in self.spec.copy)
         steps = (lens_steps(ctx, self.spec.lens, self.output.extent, COPY_OUTPUTS in self.spec.copy)
                  if self.spec.lens else [])
         registry = post_steps()
