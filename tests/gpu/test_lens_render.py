@@ -83,7 +83,32 @@ def opencv_pixels(model: str, distortion: tuple, K: np.ndarray, cam_from_world: 
 def test_rendered_depth_and_ids_where_opencv_projects(lens_renderer, name: str) -> None:  # noqa: ANN001
     model, distortion, focal = LENSES[name]
     cam, K, cfw = camera_for(model, distortion, focal)
-    out = lens_renderer.render(cam, size=SIZE, lights=[], env="none",
+    check_against_opencv(lens_renderer, cam, model, distortion, K, cfw)
+
+
+def test_opencv_fisheye_camera_from_a_colmap_file(lens_renderer, tmp_path) -> None:  # noqa: ANN001
+    """An OPENCV_FISHEYE camera written as COLMAP text by hand (COLMAP's pixel convention:
+    cx, cy + 0.5) and read by read_colmap renders what cv2.fisheye.projectPoints projects."""
+    from vkpbr.scene.camera_files import quaternion_from_rotation, read_colmap
+
+    model, distortion, focal = LENSES["opencv_fisheye"]
+    _, K, cfw = camera_for(model, distortion, focal)
+    q, t = quaternion_from_rotation(cfw[:3, :3]), cfw[:3, 3]
+    (tmp_path / "cameras.txt").write_text(
+        f"1 OPENCV_FISHEYE {SIZE[0]} {SIZE[1]} {float(K[0, 0])!r} {float(K[1, 1])!r} "
+        f"{float(K[0, 2]) + 0.5!r} {float(K[1, 2]) + 0.5!r} " + " ".join(map(repr, distortion)) + "\n")
+    numbers = [repr(float(v)) for v in (*q, *t)]
+    (tmp_path / "images.txt").write_text(" ".join(["1", *numbers, "1", "a.png"]) + "\n\n")
+    (cam,) = read_colmap(tmp_path)
+    assert cam.model == "opencv_fisheye"
+    check_against_opencv(lens_renderer, cam, model, distortion, K, cfw)
+
+
+def check_against_opencv(r, cam: Camera, model: str, distortion: tuple, K: np.ndarray,  # noqa: ANN001
+                         cfw: np.ndarray) -> None:
+    """The rendered depth at OpenCV's pixels of ground points within 0.1 px, and the tiles'
+    ids at their centres' pixels."""
+    out = r.render(cam, size=SIZE, lights=[], env="none",
                                outputs=("depth", "range", "instance"))
     depth, ids = out["depth"], out["instance"]
     ground_id = np.bincount(ids.ravel())[1:].argmax() + 1
