@@ -180,3 +180,34 @@ def test_invalid_depth_is_zero_and_bad_specs(noise_renderer) -> None:  # noqa: A
     assert RenderOptions(noise="none").noise is None
     preset = RenderOptions(noise="kinect-v1,seed=3").noise
     assert dataclasses.replace(preset, seed=0) == RenderOptions(noise="kinect-v1").noise
+
+
+def test_lateral_noise_moves_samples(noise_renderer) -> None:  # noqa: ANN001
+    """lateral_sigma 1 px on a ground plane whose depth changes row by row (and not along a
+    row): each pixel shows the clean depth of the row round(n) pixels off, n ~ N(0, 1), so the
+    offsets' frequencies are P(0) = 0.383, P(+-1) = 0.242, P(+-2) = 0.061 (within 0.02)."""
+    from math import erf, sqrt
+
+    r = noise_renderer
+    cam = Camera(eye=(0.0, 1.2, 6.0), target=(0.0, 0.0, -6.0), up=(0, 1, 0), yfov_deg=60.0)
+    out = depth_of(r, cam, None, ("depth", "instance"))
+    clean = out["depth"]
+    moved = depth_of(r, cam, "lateral_sigma=1,disparity_sigma=0,grazing_start=90,edge_rate=0,"
+                     "max_range=inf,seed=3")["depth"]
+    y0, y1, x0, x1 = SIZE[1] // 2 + 12, SIZE[1] - 12, 12, SIZE[0] - 12
+    got = moved[y0:y1, x0:x1]
+    # Pixels whose 11x11 neighbourhood is all ground (not the tile, not the grey patches).
+    ground = out["instance"] == 1
+    near = np.ones_like(got, bool)
+    for oy in range(-5, 6):
+        for ox in range(-5, 6):
+            near &= ground[y0 + oy:y1 + oy, x0 + ox:x1 + ox]
+    candidates = np.stack([clean[y0 + dy:y1 + dy, x0:x1] for dy in range(-5, 6)])
+    dy = (np.abs(candidates - got).argmin(0) - 5)[near]
+    assert near.sum() > 3000
+    assert (np.abs(candidates - got).min(0)[near] <= 1e-5 * got[near]).all()  # clean depths
+    phi = [0.5 * (1 + erf(v / sqrt(2))) for v in (0.5, 1.5, 2.5)]
+    want = {0: 2 * phi[0] - 1, 1: phi[1] - phi[0], 2: phi[2] - phi[1]}
+    for k, p in want.items():
+        for sign in ((1,) if k == 0 else (1, -1)):
+            assert abs((dy == sign * k).mean() - p) < 0.02, (k, (dy == sign * k).mean(), p)
