@@ -142,6 +142,7 @@ def post_steps() -> dict[str, type[PostStep]]:
 
 # --- camera models -----------------------------------------------------------------------
 LENS_PIXELS = 8  # the source pinhole's pixels at most this many times the output's
+LENS_GRANULE = 64  # source sizes in whole 64s: similar intrinsics share one HDR target
 # The dataset outputs the resample maps, in post_lens_outputs.comp's binding order.
 LENS_OUTPUTS = ("out_ids", "out_depth_range", "out_normal", "out_normal_geometric")
 
@@ -194,7 +195,8 @@ def _plan(model: str, distortion: tuple[float, ...], k: tuple[float, ...],
           extent: tuple[int, int], max_side: int) -> tuple[float, float, float, tuple[int, int]]:
     """scene/lens.py source_view, kept per lens and size (a run of frames has one)."""
     view = lenses.source_view(model, distortion, np.array(k).reshape(3, 3),
-                              extent, LENS_PIXELS * extent[0] * extent[1], max_side)
+                              extent, LENS_PIXELS * extent[0] * extent[1], max_side,
+                              LENS_GRANULE)
     return view.focal, view.cx, view.cy, view.size
 
 

@@ -216,11 +216,14 @@ class SourceView:
 
 
 def source_view(model: str, distortion: tuple[float, ...], K: np.ndarray,
-                size: tuple[int, int], max_pixels: int, max_side: int) -> SourceView:
+                size: tuple[int, int], max_pixels: int, max_side: int,
+                granule: int = 1) -> SourceView:
     """The pinhole view (same pose) whose image covers every valid ray of the model's image of
     `size` through `K`, at least as densely as the model's densest pixel (its smallest
     singular value of d(tangent plane)/d(pixel)), with a texel of margin for the bilinear
-    taps; the focal length is lowered to keep within `max_pixels` and `max_side` pixels.
+    taps; the focal length is lowered to keep within `max_pixels` and `max_side` pixels. The
+    size is rounded up to whole `granule`s (the margin split evenly), so that cameras of
+    nearly the same intrinsics share one source size (the renderer keeps an image per size).
     UsageError when a ray is more than MAX_PINHOLE_ANGLE_DEG off the axis."""
     w, h = size
     step = max(1, min(w, h) // 48)
@@ -249,4 +252,6 @@ def source_view(model: str, distortion: tuple[float, ...], K: np.ndarray,
                 math.sqrt(max_pixels / max(float(span[0] * span[1]), 1e-12)))
     cx, cy = 1.5 - focal * lo[0], 1.5 - focal * lo[1]  # a texel and a half of margin
     sw, sh = math.ceil(focal * hi[0] + cx) + 2, math.ceil(focal * hi[1] + cy) + 2
-    return SourceView(focal, float(cx), float(cy), (int(sw), int(sh)))
+    rw, rh = (min(-(-n // granule) * granule, max(max_side, n)) for n in (sw, sh))
+    cx, cy = cx + (rw - sw) // 2, cy + (rh - sh) // 2
+    return SourceView(focal, float(cx), float(cy), (int(rw), int(rh)))
