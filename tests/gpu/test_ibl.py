@@ -470,6 +470,8 @@ def test_bad_environment_file_is_one_line(e2e) -> None:  # noqa: ANN001
         e2e_render(r, str(bad))
     assert str(bad) in str(e.value) and "\n" not in str(e.value)
     with pytest.raises(UsageError):
+        e2e_render(r, str(folder / "x.tga"))
+    with pytest.raises(SceneError, match="x.png: not found"):  # LDR panoramas are read
         e2e_render(r, str(folder / "x.png"))
     assert e2e_render(r, "none").max() == 0.0  # the renderer is still usable
 
