@@ -2,7 +2,7 @@
 scenario's picture (viewer | vkpbr | 4 x difference):
 
     PYTHONPATH=src /work/main/.venv/bin/python tests/sample_viewer/fidelity_table.py \
-        [--out DIR] [--bake ci|full] [--size N] [NAME ...]
+        [--out DIR] [--bake ci|full] [--size N] [--viewer-roughness-floor F] [NAME ...]
 
 Needs the sample-viewer extra (sample_viewer_ref.missing() says what is not installed) and the
 sample models ($VKPBR_ASSETS, else ../shared/assets).
@@ -35,6 +35,8 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=Path("out/sample-viewer"))
     parser.add_argument("--bake", choices=("ci", "full"), default="ci")
     parser.add_argument("--size", type=int, default=256)
+    parser.add_argument("--viewer-roughness-floor", type=float, default=None,
+                        help="clamp the viewer's roughness to at least this (vkpbr: 0.03)")
     parser.add_argument("names", nargs="*")
     args = parser.parse_args()
     if (why := missing()) is not None:
@@ -49,7 +51,8 @@ def main() -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         env = write_environment(Path(tmp) / "studio.hdr")
-        run = render_viewer(scenarios, assets, env, size=args.size, bake=args.bake)
+        run = render_viewer(scenarios, assets, env, size=args.size, bake=args.bake,
+                            roughness_floor=args.viewer_roughness_floor)
         print(f"Sample Viewer ({args.bake} bake): {run.seconds:.0f} s", file=sys.stderr)
         print("| scenario | dB | covered pixels | vkpbr s |\n| --- | ---: | ---: | ---: |")
         for s in scenarios:

@@ -22,7 +22,7 @@ Conventions matched (docs/fidelity-sample-viewer.md says why each is right):
   and encoded with x^(1/2.2) here;
 - no punctual light in either (the viewer: usePunctual off; vkpbr: lights=[], so no
   automatic sun), vkpbr's shadows off (the viewer has none), 4x MSAA in both;
-- both images are over black; `coverage` marks the pixels either renderer drew.
+- both images are over black; `compare` keeps the pixels either renderer drew.
 
 The viewer's IBL filtering is a fixed cost of the run: at its defaults (256^2 cube faces,
 1024^2 BRDF LUT, 2048 / 1024 samples) SwiftShader takes minutes on two cores. BAKES["ci"]
@@ -147,8 +147,9 @@ class Scenario:
 def environment_panorama(width: int = 512) -> np.ndarray:
     """A studio-like equirectangular environment in vkpbr's panorama convention (row 0 the
     zenith; the centre column along -Z at rotation 0): a blue sky over a brown ground, a warm
-    soft box (radiance up to 8) at the centre column and a small green one a quarter turn to
-    its right, so a wrong rotation or mirror shows at once. Float32 (H, W, 3), H = W / 2."""
+    soft box (radiance 8, 6, 4) at the centre column and a small green one a quarter turn
+    away, so a wrong rotation or mirror shows at once. Float32 (H, W, 3), H = W / 2. 512
+    wide: vkpbr's lavapipe cube faces are W / 4 = 128, the size of the viewer's CI bake."""
     h = width // 2
     v = (np.arange(h) + 0.5) / h
     u = (np.arange(width) + 0.5) / width
@@ -184,9 +185,16 @@ class ViewerRun:
     seconds: float
 
 
-def _viewer_module(bake: str) -> bytes:
+# The viewer's roughness clamp, for `roughness_floor` (an experiment of fidelity_table.py).
+ROUGHNESS_CLAMP = "materialInfo.perceptualRoughness=clamp(materialInfo.perceptualRoughness,0.0,1.0);"
+
+
+def _viewer_module(bake: str, roughness_floor: float | None = None) -> bytes:
     data = (VIEWER_DIST / "gltf-viewer.module.js").read_bytes()
-    for old, new in BAKES[bake].items():
+    patches = dict(BAKES[bake])
+    if roughness_floor is not None:
+        patches[ROUGHNESS_CLAMP] = ROUGHNESS_CLAMP.replace("0.0,1.0", f"{roughness_floor!r},1.0")
+    for old, new in patches.items():
         count = data.count(old.encode())
         if count != 1:
             raise RuntimeError(f"gltf-viewer.module.js has {count} of {old!r}: "
@@ -251,9 +259,11 @@ def _server(files: dict[str, bytes], assets: Path, inbox: dict[str, bytes],
 
 def render_viewer(scenarios: Sequence[Scenario], assets: Path, environment: Path,
                   size: int = 256, env_intensity: float = 1.0, bake: str | None = None,
-                  timeout: float = 900.0) -> ViewerRun:
+                  timeout: float = 900.0, roughness_floor: float | None = None) -> ViewerRun:
     """Render `scenarios` with the Sample Viewer; raises RuntimeError with the page's error or
-    the browser's last lines when the run fails or takes longer than `timeout` seconds."""
+    the browser's last lines when the run fails or takes longer than `timeout` seconds.
+    `roughness_floor`: serve the viewer with its perceptual roughness clamped to at least this
+    (vkpbr's MIN_ROUGHNESS is 0.03), to tell that clamp's effect from others."""
     from PIL import Image
 
     bake = bake or os.environ.get("VKPBR_SV_BAKE", "ci")
@@ -268,7 +278,7 @@ def render_viewer(scenarios: Sequence[Scenario], assets: Path, environment: Path
               "jobs": jobs}
     files = {"/page.html": (HERE / "page.html").read_bytes(),
              "/config.json": json.dumps(config).encode(),
-             "/viewer/gltf-viewer.module.js": _viewer_module(bake),
+             "/viewer/gltf-viewer.module.js": _viewer_module(bake, roughness_floor),
              "/env.hdr": environment.read_bytes(), "/sheen_E.png": _sheen_lut_png()}
     files.update({"/model/" + s.viewer_model: s.viewer_gltf(assets)
                   for s in scenarios if s.viewer_strip})
@@ -284,6 +294,7 @@ def render_viewer(scenarios: Sequence[Scenario], assets: Path, environment: Path
             proc = subprocess.Popen(
                 [browser(), "--headless", "--no-sandbox", "--use-angle=swiftshader",
                  "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist", "--mute-audio",
+                 "--disable-dev-shm-usage",  # containers' /dev/shm is often 64 MB
                  "--no-first-run", f"--user-data-dir={profile}/user",
                  f"http://127.0.0.1:{server.server_port}/page.html"],
                 stdout=subprocess.DEVNULL, stderr=stderr, start_new_session=True)
