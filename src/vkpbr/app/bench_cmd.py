@@ -68,6 +68,30 @@ def _sponza(args: argparse.Namespace):  # noqa: ANN202
     return scene
 
 
+def _sponza_parts(args: argparse.Namespace):  # noqa: ANN202
+    """Sponza with a node of its own for each of its 103 primitives (the file has one node
+    holding them all), so that a scenario can move 100 of them."""
+    scene = _sponza(args)
+    scene.tree = None
+    for node in scene.nodes:
+        node.tree = -1
+    return scene
+
+
+def _moving(r: object, cams: list, count: int):  # noqa: ANN202
+    """`cams`, each after moving `count` of the scene's nodes a little (set_poses: one call a
+    frame, as a simulation's step writes them)."""
+    import numpy as np
+
+    nodes = np.arange(min(count, len(r.state)))  # type: ignore[attr-defined]
+    rest = r.state.local[nodes].copy()  # type: ignore[attr-defined]
+    for step, cam in enumerate(cams):
+        m = rest.copy()
+        m[:, 1, 3] += 0.01 * np.sin(0.1 * step + np.arange(len(m)))
+        r.set_poses(nodes, m)  # type: ignore[attr-defined]
+        yield cam
+
+
 def _default(args: argparse.Namespace):  # noqa: ANN202
     from vkpbr.scene.default import default_scene
 
@@ -101,6 +125,10 @@ SCENARIOS: dict[str, tuple] = {
        for path, options in (("forward", {"pipeline": "forward"}),
                              ("compute", {"pipeline": "compute", "raster": "hardware"}),
                              ("compute-raster", {"pipeline": "compute", "raster": "compute"}))},
+    # Issue 31: 100 of Sponza's nodes moved every frame (its point light's cube map is then
+    # redrawn every frame: the moved nodes cast shadows).
+    "sponza-moving-1080p": (_sponza_parts, (1920, 1080), {"moving": 100}),
+    "sponza-moving-480p": (_sponza_parts, (640, 480), {"moving": 100}),
 }
 
 
@@ -222,7 +250,8 @@ def run_scenario(name: str, args: argparse.Namespace) -> dict:
     from vkpbr.render.renderer import Renderer
 
     make, size, *rest = SCENARIOS[name]
-    options = rest[0] if rest else {}
+    options = dict(rest[0]) if rest else {}
+    moving = options.pop("moving", 0)
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -236,7 +265,8 @@ def run_scenario(name: str, args: argparse.Namespace) -> dict:
         for readback in (True, False):
             cpu, gpu, rb = [], [], []
             t = time.perf_counter()
-            for _ in r.render_many(cams, size=size, readback=readback, **options):
+            views = _moving(r, cams, moving) if moving else cams
+            for _ in r.render_many(views, size=size, readback=readback, **options):
                 s = r.last_stats
                 cpu.append(s.cpu_ms)
                 gpu.append(s.gpu_ms)
