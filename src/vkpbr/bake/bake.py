@@ -31,7 +31,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..errors import BakeFormatError, SceneError
-from ..json_input import read_json
+from ..json_input import SCENE_JSON_LIMITS, read_json
 from ..scene.baked_file import (
     HAS_COLORS,
     HAS_TEXCOORDS,
@@ -300,7 +300,7 @@ def _dependencies(path: Path, allow_outside_paths: bool = False) -> list[Path]:
     deps: list[Path] = []
     try:
         if path.suffix.lower() == ".gltf":
-            doc = read_json(path)
+            doc = read_json(path, SCENE_JSON_LIMITS)
             uris = [x.get("uri") for x in doc.get("buffers", []) + doc.get("images", [])]
             deps = [path.parent / u for u in uris if u and not u.startswith("data:")]
         elif path.suffix.lower() == ".obj":

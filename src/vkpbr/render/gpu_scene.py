@@ -189,6 +189,38 @@ def _normal_matrix(m: np.ndarray) -> np.ndarray:
     return out
 
 
+class MaterialSets:
+    """Material i's descriptor set (its textures and its MATERIAL block), made the first time
+    a draw binds it (`sets[i]`): a file can list tens of thousands of materials that no
+    primitive uses, and a set costs ~0.5 ms of Python to write (16 bindings, each a struct of
+    the Vulkan binding), so unused ones cost nothing."""
+
+    def __init__(self, device: Device, pool: DescriptorPool, layout: DescriptorSetLayout,
+                 ubo: Buffer, stride: int, textures: list[list[tuple[ImageView, Sampler]]]
+                 ) -> None:
+        self.device, self.pool, self.layout = device, pool, layout
+        self.ubo, self.stride, self.textures = ubo, stride, textures
+        self._sets: dict[int, object] = {}
+
+    def __len__(self) -> int:
+        return len(self.textures)
+
+    def __getitem__(self, i: int) -> object:
+        if i not in self._sets:
+            if not -len(self) <= i < len(self):
+                raise IndexError(f"material {i} of {len(self)}")
+            i %= len(self)
+            dset = self.pool.allocate(self.layout)
+            writer = DescriptorWriter(self.device)
+            for binding, (view, sampler) in enumerate(self.textures[i]):
+                writer.sampler(dset, binding, view, sampler)
+            writer.uniform(dset, L.MATERIAL_BINDING, self.ubo, L.MATERIAL.size,
+                           offset=i * self.stride)
+            writer.update()
+            self._sets[i] = dset
+        return self._sets[i]
+
+
 class GpuScene:
     """Owns the GPU copies of one Scene. Built by `Renderer`; destroy with `destroy()`."""
 
@@ -385,6 +417,7 @@ class GpuScene:
         self.texture_bytes = sum(img.bytes for img in self.images.values())
         self._views: dict[tuple[int, str], ImageView] = {}
         self._samplers: dict[SamplerSpec, Sampler] = {}
+        self._textures: dict[tuple, tuple[ImageView, Sampler, bool]] = {}
 
     def _view(self, image: Image, swizzle: str) -> ImageView:
         key = (id(image), swizzle)
@@ -409,7 +442,16 @@ class GpuScene:
         srgb = slot in SRGB_TEXTURE_SLOTS
         scalar = slot not in SRGB_TEXTURE_SLOTS and slot not in _NORMAL_SLOTS
         image = self.images.get((ref.image, srgb)) if ref is not None else None
-        if image is None:
+        key = (slot, with_roughness, None if image is None else (ref.image, ref.sampler, ref.channel))
+        if key not in self._textures:  # many materials share a few textures (or none)
+            self._textures[key] = self._texture_binding(image, ref, slot, srgb, scalar,
+                                                        with_roughness)
+        return self._textures[key]
+
+    def _texture_binding(self, image: Image | None, ref: TextureRef | None, slot: str,
+                         srgb: bool, scalar: bool, with_roughness: bool
+                         ) -> tuple[ImageView, Sampler, bool]:
+        if image is None or ref is None:
             # White: the factor alone decides (emissive's is 0 by default); a flat normal.
             default = "normal" if slot in _NORMAL_SLOTS else "white_srgb" if srgb else "white"
             return self._view(self.default_images[default], "iiii"), self._sampler(SamplerSpec()), False
@@ -432,28 +474,30 @@ class GpuScene:
             Buffer(self.device, stride * len(self.materials), "uniform",
                    host_visible=True, name="materials")
         )
-        self.pool = self._own(DescriptorPool(self.device, [(layout, len(self.materials))]))
-        writer = DescriptorWriter(self.device)
-        self.material_sets = []
         self.material_blocks: list[np.ndarray] = []  # the compute path's table (compute_path.py)
-        for i, mat in enumerate(self.materials):
-            dset = self.pool.allocate(layout)
-            self.material_sets.append(dset)
-            has = {}
+        textures: list[list[tuple[ImageView, Sampler]]] = []
+        for mat in self.materials:
+            has, bound = {}, []
             shared = _shared_metallic_roughness(mat)
-            for binding, slot in enumerate(L.MATERIAL_TEXTURES):
+            for slot in L.MATERIAL_TEXTURES:
                 view, sampler, present = self._texture(getattr(mat, f"{slot}_texture"), slot,
                                                        shared and slot == "metallic")
                 has[slot] = present
-                writer.sampler(dset, binding, view, sampler)
+                bound.append((view, sampler))
             block = self._material_block(mat, has)
             if shared and has["metallic"]:
                 block["flags"] |= L.MATERIAL_SHARED_METALLIC_ROUGHNESS
             self.material_blocks.append(block)
-            self.material_ubo.write(block.tobytes(), offset=i * stride)
-            writer.uniform(dset, L.MATERIAL_BINDING, self.material_ubo, L.MATERIAL.size,
-                           offset=i * stride)
-        writer.update()
+            textures.append(bound)
+        blocks = np.zeros(len(self.materials), L.MATERIAL.dtype)  # np.stack drops padding
+        for i, block in enumerate(self.material_blocks):
+            blocks[i] = block
+        table = np.zeros((len(self.materials), stride), np.uint8)  # one write, not one a material
+        table[:, :L.MATERIAL.size] = blocks.view(np.uint8).reshape(len(self.materials), -1)
+        self.material_ubo.write(table)
+        pool = self._own(DescriptorPool(self.device, [(layout, len(self.materials))]))
+        self.material_sets = MaterialSets(self.device, pool, layout, self.material_ubo, stride,
+                                          textures)
 
     @staticmethod
     def _material_block(mat: Material, has: dict[str, bool]) -> np.ndarray:

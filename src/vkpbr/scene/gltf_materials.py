@@ -32,6 +32,7 @@ _MIN_FILTER = {
     9987: ("linear", True),
 }
 _ALPHA = {"OPAQUE": "opaque", "MASK": "mask", "BLEND": "blend"}
+_PROPERTY = {prm.name: prm.gltf_property for prm in PARAMS}  # messages' names, computed once
 # The material extensions read here (for the loader's list of supported extensions).
 MATERIAL_EXTENSIONS = EXTENSIONS
 
@@ -115,8 +116,6 @@ def build_materials(ld: GltfDocument, n_images: int) -> list[Material]:
     out = []
     p = ld.path
     for i, m in enumerate(ld.gltf.materials or []):
-        if m is None:
-            raise SceneError(p, f"material {i} is null")
         alpha_mode = get(m, "alphaMode", "OPAQUE")
         if alpha_mode not in _ALPHA:
             raise SceneError(p, f"material {i}: unknown alphaMode {alpha_mode!r}")
@@ -147,7 +146,7 @@ def _find(m: object, path: str) -> object:
 def _parameter(ld: GltfDocument, i: int, m: object, prm: MaterialParam) -> object:
     """Material `i`'s value of one table row: the file's (the schema's default when absent),
     finite and within the row's range, or a one-line SceneError naming the property."""
-    what = f"material {i}: {prm.gltf_property}"
+    what = f"material {i}: {_PROPERTY[prm.name]}"
     raw = _find(m, prm.gltf)
     default = prm.default if isinstance(prm.default, tuple) else (prm.default,)
     # A scalar is read as a list of one (gltf_document.scalar's way): one path for both.

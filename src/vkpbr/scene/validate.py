@@ -57,8 +57,8 @@ def _short(value: Any) -> str:
 
 
 def _number(value: Any, where: str, lo: float = -MAX_COORDINATE, hi: float = MAX_COORDINATE) -> None:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        _fail(where, "expected a number", value)
+    if type(value) is not float and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
+        _fail(where, "expected a number", value)  # (the type() test first: ABCs are slow)
     if not (math.isfinite(float(value)) and lo <= float(value) <= hi):
         _fail(where, f"expected a finite number in [{lo:g}, {hi:g}]", value)
 
