@@ -411,7 +411,10 @@ def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: boo
     Textures left as files are logged (INFO, "vkpbr.bake.bake"): how many, and where they must
     stay for the baked file to find them.
     """
+    from vkpbr.user_paths import check_writable_file
+
     source_path, out_path = Path(source_path), Path(out_path)
+    check_writable_file(out_path, "bake_file: out")  # before the work, not after it
     t0 = time.perf_counter()
     scene = load_scene(source_path, strict=strict, allow_outside_paths=allow_outside_paths,
                        variant=variant)
@@ -445,7 +448,10 @@ def cached_bake(source_path: str | Path, cache_dir: str | Path,
     ``load_scene(out, root=source_path.parent)``: its external textures lie beside the source,
     not in the cache. A material `variant` is baked in: each variant has its own file.
     """
+    from vkpbr.user_paths import check_writable_folder
+
     source_path, cache_dir = Path(source_path), Path(cache_dir)
+    check_writable_folder(cache_dir, "cache folder", f"{source_path.stem}-0123456789abcdef.vkpbr")
     key, _ = source_key(source_path, allow_outside_paths)
     tag = "" if variant is None else "-variant-" + hashlib.sha256(variant.encode()).hexdigest()[:8]
     out = cache_dir / f"{source_path.stem}-{key[:16]}{tag}.vkpbr"
