@@ -88,11 +88,12 @@ class Draw:
     first_index: int
     index_count: int
     vertex_offset: int
-    push: np.ndarray  # PUSH block bytes: model and normal matrix
+    model: np.ndarray  # (4, 4) float64 model matrix as loaded (the scene state's rest pose)
     alpha_mode: str  # the material's: "opaque" | "mask" | "blend" (render/passes.py classifies)
     double_sided: bool
     casts_shadows: bool = True  # drawn into shadow maps (Material.casts_shadows)
     node: int = -1  # the scene node it draws (the dataset outputs' instance table)
+    instance: int = -1  # which of the node's EXT_mesh_gpu_instancing instances; -1: none
     center: np.ndarray = field(default_factory=lambda: np.zeros(3))  # world, for blend sorting
 
 
@@ -181,14 +182,6 @@ def _concat(arrays: list[np.ndarray], dtype: type, width: int) -> np.ndarray:
     return np.ascontiguousarray(np.concatenate(arrays), dtype=dtype)
 
 
-def _normal_matrix(m: np.ndarray) -> np.ndarray:
-    out = np.eye(4)
-    a = m[:3, :3].astype(np.float64)
-    det = np.linalg.det(a)
-    out[:3, :3] = np.linalg.inv(a).T if abs(det) > 1e-30 else a
-    return out
-
-
 class MaterialSets:
     """Material i's descriptor set (its textures and its MATERIAL block), made the first time
     a draw binds it (`sets[i]`): a file can list tens of thousands of materials that no
@@ -242,10 +235,6 @@ class GpuScene:
         t2 = time.perf_counter()
         self._create_materials(material_layout)
         self.draws = self._build_draws()
-        # Each draw record's model and normal matrix, as pbr.vert reads them (Instances).
-        matrices = np.concatenate([d.push for d in self.draws]) if self.draws else np.zeros(32, np.float32)
-        self.instance_buffer = self._own(upload_buffer(device, matrices, "storage",
-                                                       name="instance matrices"))
         self.timings.update(geometry=t1 - t0, textures=t2 - t1, materials=time.perf_counter() - t2)
 
     def _own(self, obj):  # noqa: ANN001, ANN202 - any gpu object
@@ -530,7 +519,7 @@ class GpuScene:
     # --- draws ------------------------------------------------------------------------------
     def _build_draws(self) -> list[Draw]:
         draws = []
-        for node_index, node in _draw_nodes(self.scene.nodes):
+        for node_index, instance, node in _draw_nodes(self.scene.nodes):
             if not 0 <= node.mesh < len(self.scene.meshes):
                 continue
             mesh = self.scene.meshes[node.mesh]
@@ -539,16 +528,15 @@ class GpuScene:
             mat_index = mesh.material if 0 <= mesh.material < len(self.scene.materials) else self.default_material
             mat = self.materials[mat_index]
             m = np.asarray(node.matrix, dtype=np.float64)
-            push = np.concatenate([L.mat4_to_std140(m).ravel(), L.mat4_to_std140(_normal_matrix(m)).ravel()])
             p = mesh.positions
             center_local = (p.min(axis=0) + p.max(axis=0)) / 2 if len(p) else np.zeros(3)
             draws.append(Draw(
                 mesh=node.mesh, material=mat_index,
                 first_index=int(self.index_offsets[node.mesh]), index_count=len(mesh.indices),
                 vertex_offset=int(self.vertex_offsets[node.mesh]),
-                push=np.ascontiguousarray(push, dtype=np.float32), alpha_mode=mat.alpha_mode,
+                model=m, alpha_mode=mat.alpha_mode,
                 double_sided=bool(mat.double_sided), casts_shadows=bool(mat.casts_shadows),
-                center=m[:3, :3] @ center_local + m[:3, 3], node=node_index,
+                center=m[:3, :3] @ center_local + m[:3, 3], node=node_index, instance=instance,
             ))
         draws.sort(key=lambda d: d.material)  # fewer material binds within each pass
         return draws
@@ -563,13 +551,14 @@ class GpuScene:
 
 
 # --- EXT_mesh_gpu_instancing -------------------------------------------------------------------
-def _draw_nodes(nodes: list[Node]) -> list[tuple[int, Node]]:
-    """(index in scene.nodes, node) per draw record: a node with `instances`
+def _draw_nodes(nodes: list[Node]) -> list[tuple[int, int, Node]]:
+    """(index in scene.nodes, instance or -1, node) per draw record: a node with `instances`
     (EXT_mesh_gpu_instancing) gets one record per instance (its world matrix, its instance id
     in the dataset outputs), kept adjacent; the frame's passes draw a node's records as one
     instanced draw call (passes._instance_runs; pbr.vert reads each record's matrices). The
     mesh is never copied."""
-    out: list[tuple[int, Node]] = []
+    out: list[tuple[int, int, Node]] = []
     for i, node in enumerate(nodes):
-        out += [(i, n) for n in expand_instances([node])]
+        expanded = expand_instances([node])
+        out += [(i, k if node.instances is not None else -1, n) for k, n in enumerate(expanded)]
     return out

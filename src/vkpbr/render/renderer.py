@@ -124,10 +124,10 @@ class Renderer:
         self.shadow_plan, self.write_scene_shadows = p.shadow_frames.plan, p.shadow_frames.write_scene
         self.takes_compute_batch, self.read_frame_timings = paths.takes_compute_batch, fp.read_timings
         self.wait_idle, self.check_validation = self.device.wait_idle, self.device.check_validation
+        st = p.state  # the living scene (vkpbr.scene.state): what the next frame shows
+        self.state, self.set_pose, self.set_poses = st, st.set_pose, st.set_poses
+        self.set_visible, self.reset_pose = st.set_visible, st.reset
 
-    @property
-    def environment_baker(self) -> Any:
-        return self.environments.baker  # (environments.py: made on first use)
 
     @property
     def instances(self) -> list[dict[str, Any]]:

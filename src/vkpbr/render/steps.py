@@ -128,7 +128,7 @@ class FrameSteps:
 
         def record(cmd: Commands) -> None:
             sm.record(cmd, self.frame_index, spec.plan, gs.draws, self.classes, gs.material_sets,
-                      gs.streams, gs.index_buffer, gs.has_colors, spec.redraw)
+                      gs.streams, gs.index_buffer, gs.has_colors, spec.redraw, self.set0)
 
         return [Step("shadows", record)]
 
