@@ -24,6 +24,11 @@ __all__ = [
 class VkpbrError(Exception):
     """Base class of every error vkpbr raises on purpose."""
 
+    def __str__(self) -> str:
+        # A path from a job file or an API call may hold a NUL byte: shown as \0, so that
+        # a message stays text a terminal and a log can take.
+        return super().__str__().replace("\0", "\\0")
+
 
 class UsageError(VkpbrError, ValueError):
     """A bad option value: unknown view name, image size of 0, malformed camera, ..."""
