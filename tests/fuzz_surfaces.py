@@ -311,7 +311,11 @@ def _manifest_lines(box: Sandbox, job: object) -> list[bytes]:
     folder = box.root / "seed-manifest"
     folder.mkdir(exist_ok=True)
     (folder / MANIFEST_NAME).unlink(missing_ok=True)
+    for name in ("frame_00000.png", "frame_00001.png"):
+        (folder / name).unlink(missing_ok=True)
     m = Manifest.open(folder, scene.fingerprint(), scene.where)
+    for name in ("frame_00000.png", "frame_00001.png"):  # as the out folder will hold them
+        (folder / name).write_bytes(_png())
     base = Camera(eye=(0.0, 0.0, 5.0), target=(0.0, 0.0, 0.0))
     cams = [camera_record(p.camera(base)) for p in scene.poses[:2]]
     m.done([0], ["frame_00000.png"], cams[:1])
