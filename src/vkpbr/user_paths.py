@@ -138,9 +138,12 @@ def check_writable_folder(folder: str | os.PathLike[str], what: str = "--out",
     it. Nothing is created (check first, create last). UsageError otherwise."""
     f = check_path(folder, what)
     problem = path_problem(f / file_name)
+    temporary = len(os.fsencode(file_name)) + len(f"..{os.getpid()}.12345678.tmp")
+    if problem is None and temporary > NAME_MAX:
+        problem = f"has a name too long to write atomically ({temporary} bytes with its temporary)"
     if problem is not None:
         raise UsageError(f"{what} {shown(f)}: its files would be too long: {shown(f / file_name)} "
                          f"{problem}")
     ancestor = _existing_ancestor(f, what, f)
-    _probe(ancestor, file_name if ancestor == f else f.name or "out", what, f)
+    _probe(ancestor, file_name if ancestor == f else "folder", what, f)
     return f

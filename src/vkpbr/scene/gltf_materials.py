@@ -14,6 +14,7 @@ import warnings
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.gltf_document import GltfDocument, check_index, ext, floats, get, scalar
+from vkpbr.scene.limits import limits
 from vkpbr.scene.material_table import EXTENSIONS, PARAMS, TEXTURES, MaterialParam
 from vkpbr.scene.resources import ResourceRefused
 from vkpbr.scene.types import Image, Material, Sampler, TextureRef
@@ -115,6 +116,10 @@ def build_materials(ld: GltfDocument, n_images: int) -> list[Material]:
     """glTF materials -> Material list (same indices)."""
     out = []
     p = ld.path
+    cap = limits().max_materials
+    if len(ld.gltf.materials) > cap:  # before ~60 us of reading each
+        raise SceneError(p, f"{len(ld.gltf.materials):,} materials are over the limit of "
+                            f"{cap:,} (VKPBR_MAX_MATERIALS)")
     for i, m in enumerate(ld.gltf.materials or []):
         alpha_mode = get(m, "alphaMode", "OPAQUE")
         if alpha_mode not in _ALPHA:
