@@ -10,6 +10,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from vkpbr.app.animate_cmd import add_arguments as add_animation_arguments
+from vkpbr.app.animate_cmd import animation_choice, pose_times, run_animation
 from vkpbr.app.common import camera_from_args, lights_from_args, load_scene_arg
 from vkpbr.app.log import is_quiet, say
 from vkpbr.app.options import add_options, render_options_from_args
@@ -85,6 +87,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--linear", action="store_true", help="linear float32 colour (write a .exr or .npy)")
     p.add_argument("--frames", type=int, default=1, metavar="N",
                    help="render N frames and report the median time per frame")
+    add_animation_arguments(p)
     p.defer(add_options)
     p.set_defaults(run=run)
 
@@ -137,6 +140,7 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
                   cache_dir=default_cache_dir()) as renderer:
         base = camera_from_args(args, renderer)
         cameras = [pose.camera(base) for pose in poses]
+        times = pose_times(poses, args.cameras, args.time)
         lights = lights_from_args(args, renderer, options)
         names = args.outputs or ()
         if names:
@@ -147,7 +151,8 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
             jobs = []
             frames = renderer.render_many(cameras, lights, size, options, linear=args.linear,
                                           outputs=("color", *names) if names else None,
-                                          batch=args.batch or None)
+                                          batch=args.batch or None, times=times,
+                                          animation=animation_choice(scene, args.animation))
             bar = tqdm(frames, total=len(cameras), unit="frame", disable=True if is_quiet() else None)
             for i, image in enumerate(bar):
                 path = out_dir / f"frame_{i:05d}{suffix}"
@@ -187,6 +192,8 @@ def run(args: argparse.Namespace) -> int:
         from vkpbr.app.batch_cmd import render_on_ray
 
         return render_on_ray(args, options)
+    if args.animate:
+        return run_animation(args, options)
     if args.cameras:
         return _render_batch(args, options)
     size = args.size
@@ -210,6 +217,8 @@ def run(args: argparse.Namespace) -> int:
         camera = camera_from_args(args, renderer)
         lights = lights_from_args(args, renderer, options)
         log.debug("camera %s, lights %s", camera, lights)
+        if args.time is not None:
+            renderer.set_time(args.time, animation_choice(scene, args.animation))
         names = args.outputs or ()
         if names:
             _check_outputs(out, names, renderer.max_id)

@@ -29,6 +29,7 @@ from vkpbr.render import layouts as L
 from vkpbr.render.batch import draw_spheres
 from vkpbr.render.blend_order import BlendOrder
 from vkpbr.render.compute_path import ComputeScene
+from vkpbr.render.deform import DeformKernel, DeformLayout
 from vkpbr.render.environment import EnvironmentSpec
 from vkpbr.render.environments import Environments
 from vkpbr.render.frames import Bounds, FrameSlot, bind_instances, create_slots
@@ -69,6 +70,7 @@ class FrameParts:
     post: Lazy[PostKernels]  # the post steps' kernels, made on first use
     recorder: FrameRecorder
     state: SceneState  # what changes between frames (vkpbr.scene.state)
+    deform: DeformKernel | None  # skins and morph targets posed each frame (render/deform.py)
     gpu_state: GpuSceneState  # its copy per frame slot (render/scene_state.py)
     bounds: LiveBounds  # the scene's bounds, following the state
     blend: BlendOrder
@@ -90,6 +92,8 @@ class FrameParts:
         """Destroy what is not the device's to destroy (the caller waits for the device)."""
         self.recorder.free()
         self.gpu_state.destroy()
+        if self.deform is not None:
+            self.deform.destroy()
         self.shadow_frames.maps.destroy()
         self.opaque_copies.destroy()
         if self.post.made is not None:
@@ -128,7 +132,10 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     buffers, pool, slots = create_slots(device, layouts[0], layouts[2], ring.count)
     gs = GpuScene(device, scene, layouts[1])
     state = scene_state(scene, gs.draws)
-    gpu_state = GpuSceneState(device, state, ring.count)
+    layout = DeformLayout(scene, gs.deformed) if gs.deformed else None
+    gpu_state = GpuSceneState(device, state, ring.count, scene, layout)
+    deform = (DeformKernel(device, scene, gs, layout, [gpu_state.deform_region(s.index) for s in slots])
+              if layout is not None else None)
     bind_instances(device, [s.set0 for s in slots], [gpu_state.region(s.index) for s in slots])
     ids, labels = semantic_ids(scene, gs.draws, Path(semantics)
                                if isinstance(semantics, os.PathLike) else semantics)
@@ -141,12 +148,12 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     paths = FramePaths(device, msaa, scene.triangle_count, len(blend) > 0, depth_prepass,
                        cache_dir)
     recorder = FrameRecorder(device, gs, pipeline_layout, ring, slots, paths.prepass_for,
-                             shadows, compute, copies, post)
+                             shadows, compute, copies, post, deform)
     bounds = LiveBounds(state, Bounds.of(*scene.bounds()))
     environments = Environments(device, slots, recorder, env_spec, cache_dir)
     return FrameParts(
         device, scene, ring, layouts, pipeline_layout, buffers, pool, slots, gs, ids, labels,
-        copies, compute, post, recorder, state, gpu_state, bounds, blend, paths,
+        copies, compute, post, recorder, state, deform, gpu_state, bounds, blend, paths,
         Targets(device, msaa, background, ring.count, recorder, compute, post), environments,
         Lighting(scene, copies, environments),
         ShadowFrames(shadows, bounds, recorder, state,

@@ -12,12 +12,14 @@ the bounds (LiveBounds), the blended draws' centres and the shadow maps' casters
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator
 from typing import Any
 
 import numpy as np
 
 from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.device import Device
+from vkpbr.render.deform import DeformLayout
 from vkpbr.render.frames import Bounds
 from vkpbr.scene.state import SceneState
 from vkpbr.scene.types import Scene
@@ -43,17 +45,37 @@ def scene_state(scene: Scene, draws: list[Any]) -> SceneState:
         if len(p):
             boxes[i] = p.min(axis=0), p.max(axis=0)
     rest = np.array([d.model for d in draws], np.float64).reshape(-1, 4, 4)
-    return SceneState(tree, draw_tree, local, boxes, rest)
+    state = SceneState(tree, draw_tree, local, boxes, rest, np.array([d.skinned for d in draws], bool))
+    state.scene = scene
+    return state
+
+
+def with_times(state: SceneState, cameras: Iterable[Any], times: Iterable[float] | None,
+               animation: Any) -> Iterator[Any]:
+    """`cameras`, each taken after posing `state` at its time (render_many's per-frame
+    times: each frame slot copies the state when its frame is drawn); `times` None: as is."""
+    if times is None:
+        yield from cameras
+        return
+    for camera, t in zip(cameras, times, strict=True):
+        state.set_time(t, animation)
+        yield camera
 
 
 class GpuSceneState:
-    """`state`'s Instances records, a copy per frame slot (`count` of them)."""
+    """`state`'s Instances records, a copy per frame slot (`count` of them), and where the
+    scene has skins or morph targets (`deform`: render/deform.py's DeformLayout) the deform
+    step's joint matrices and weights after them."""
 
-    def __init__(self, device: Device, state: SceneState, count: int) -> None:
-        self.state = state
+    def __init__(self, device: Device, state: SceneState, count: int, scene: Scene | None = None,
+                 deform: DeformLayout | None = None) -> None:
+        self.state, self.scene, self.deform = state, scene, deform
         align = int(device.limits.minStorageBufferOffsetAlignment)
         self.size = max(len(state.draw_tree), 1) * RECORD_BYTES
-        self.stride = (self.size + align - 1) // align * align
+        self.deform_at = (self.size + align - 1) // align * align
+        self.deform_size = 4 * max(deform.floats, 1) if deform is not None else 0
+        total = self.deform_at + self.deform_size if deform is not None else self.size
+        self.stride = (total + align - 1) // align * align
         self.buffer = Buffer(device, self.stride * count, "storage", host_visible=True,
                              device_local=True, name="scene state")
         self._written = [-1] * count
@@ -61,6 +83,10 @@ class GpuSceneState:
     def region(self, slot: int) -> tuple[Buffer, int, int]:
         """(buffer, offset, size) of frame slot `slot`'s copy: what its sets bind."""
         return self.buffer, slot * self.stride, self.size
+
+    def deform_region(self, slot: int) -> tuple[Buffer, int, int]:
+        """(buffer, offset, size) of slot `slot`'s joint matrices and morph weights."""
+        return self.buffer, slot * self.stride + self.deform_at, self.deform_size
 
     def write(self, slot: int) -> None:
         """Bring slot `slot`'s copy up to the state (after the slot's fence: its previous
@@ -71,7 +97,19 @@ class GpuSceneState:
         records = self.state.draw_matrices()
         if records.size:
             self.buffer.array(np.float32, records.size, slot * self.stride)[:] = records.ravel()
+        if self.deform is not None and self.scene is not None:
+            values = self._deform_values()
+            self.buffer.array(np.float32, values.size, slot * self.stride + self.deform_at)[:] = values
         self._written[slot] = version
+
+    def _deform_values(self) -> np.ndarray:
+        cached = getattr(self, "_values", None)
+        if cached is None or cached[0] != self.state.version:
+            assert self.deform is not None and self.scene is not None
+            cached = (self.state.version,
+                      self.deform.values(self.scene, self.state.world(), self.state.weights))
+            self._values = cached
+        return cached[1]
 
     def destroy(self) -> None:
         self.buffer.destroy()

@@ -118,6 +118,15 @@ class FrameSteps:
         return getattr(self, "_" + name)()
 
     # --- the head ---------------------------------------------------------------------------
+    def _deform(self) -> list[Step]:
+        """Skins and morph targets posed from the slot's scene state (render/deform.py),
+        before anything reads the vertex streams; none in a scene without them."""
+        deform = self.r.deform
+        if deform is None:
+            return []
+        self.resources.update(deform.resources())
+        return deform.steps(self.frame_index)
+
     def _shadows(self) -> list[Step]:
         """The shadow maps' redrawn layers. Their partial redraw keeps the other layers, so
         ShadowMaps' layered images take their own transitions (gpu/layered.py) and leave

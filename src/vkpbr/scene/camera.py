@@ -398,6 +398,7 @@ class Pose:
     pixel_intrinsics: Intrinsics | None = None
     name: str = ""
     where: str = "camera"
+    time: float | None = None  # the scene's animation time of this view ("time"), if given
 
     def camera(self, base: Camera) -> Camera:
         """`base` with this pose applied. Only a pose without `up` can fail here (the base's up
@@ -414,9 +415,9 @@ class Pose:
         return cam
 
 
-_EYE_KEYS = ("eye", "target", "up", "fov", "name")
-_MATRIX_KEYS = ("world_from_camera", "convention", "fov", "name")
-_K_KEYS = ("K", "world_from_camera", "size", "convention", "name")
+_EYE_KEYS = ("eye", "target", "up", "fov", "name", "time")
+_MATRIX_KEYS = ("world_from_camera", "convention", "fov", "name", "time")
+_K_KEYS = ("K", "world_from_camera", "size", "convention", "name", "time")
 
 
 def _pose_from_dict(d: Mapping[str, object]) -> dict[str, object]:
@@ -442,6 +443,11 @@ def _pose_from_dict(d: Mapping[str, object]) -> dict[str, object]:
     if not isinstance(name, str):
         raise UsageError(f'"name": expected a string, got {describe(name)}')
     fields: dict[str, object] = {"name": name}
+    if "time" in d:  # the animation time of the view (docs/living-scenes.md)
+        t = d["time"]
+        if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t):
+            raise UsageError(f'"time": expected a finite number of seconds, got {describe(t)}')
+        fields["time"] = float(t)
     if "K" in d:
         fields.update(_opencv_fields(d["K"], _pose_from_convention(d), d["size"]))
         return fields

@@ -106,7 +106,8 @@ def _nerf_poses(doc: Mapping[str, object], p: Path) -> list[Pose]:
             camera = _nerf_camera({**shared, **{k: frame[k] for k in _NERF_KEYS if k in frame}})
         name = frame.get("file_path")
         entry = {"world_from_camera": pose, "convention": "opengl", **camera,
-                 "name": name if isinstance(name, str) else f"frame {i}"}
+                 "name": name if isinstance(name, str) else f"frame {i}",
+                 **({"time": frame["time"]} if "time" in frame else {})}
         poses.append(as_pose(entry, where))
     return poses
 

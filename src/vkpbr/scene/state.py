@@ -25,6 +25,7 @@ import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.scene.tree import NodeRef, NodeTree
+from vkpbr.scene.types import Scene
 
 __all__ = ["SceneState", "quaternion_matrices", "normal_matrices", "std140_pairs"]
 
@@ -77,17 +78,27 @@ class SceneState:
     mesh_boxes : (D, 2, 3) each draw's mesh bounds (min, max) in the mesh's own space.
     rest : (D, 4, 4) the draws' model matrices as loaded: what frames use until the
         state first changes (so an unchanged scene renders bit for bit as before).
+    skinned : (D,) bool, draws posed by a skin (their model is the identity).
     """
 
     def __init__(self, tree: NodeTree, draw_tree: np.ndarray, draw_local: np.ndarray,
-                 mesh_boxes: np.ndarray, rest: np.ndarray) -> None:
+                 mesh_boxes: np.ndarray, rest: np.ndarray, skinned: np.ndarray | None = None) -> None:
         self.tree = tree
         self.draw_tree = np.asarray(draw_tree, np.int64)
         self.draw_local = np.asarray(draw_local, np.float64).reshape(-1, 4, 4)
         self.mesh_boxes = np.asarray(mesh_boxes, np.float64).reshape(-1, 2, 3)
         self.rest = np.asarray(rest, np.float64).reshape(-1, 4, 4)
+        # Skinned draws are posed in world space by their joints: their model stays the
+        # identity (glTF ignores the skinned node's transform).
+        self.skinned = (np.zeros(len(self.draw_tree), bool) if skinned is None
+                        else np.asarray(skinned, bool))
         self.local = np.array(tree.local, np.float64, copy=True)
         self.visible = np.ones(len(tree), bool)
+        # Morph weights by tree node where set (set_weights, animation); the others take the
+        # node's or mesh's from the file (render/deform.py).
+        self.weights: dict[int, np.ndarray] = {}
+        self.scene: Scene | None = None  # what set_time samples (vkpbr.scene.animation)
+        self.time: float | None = None  # the time set_time last posed
         self.version = 0
         self.draw_versions = np.zeros(len(self.draw_tree), np.int64)  # when each last changed
         self._cache: dict[str, tuple[int, object]] = {}
@@ -128,10 +139,48 @@ class SceneState:
         self.visible[idx] = m
         self._changed(idx)
 
+    def set_weights(self, node: NodeRef, weights: Sequence[float] | np.ndarray) -> None:
+        """Set the morph target weights of the mesh `node` shows (glTF `weights`)."""
+        idx = self.tree.indices(node)
+        w = np.asarray(weights, np.float64).reshape(-1)
+        if not np.all(np.isfinite(w)):
+            raise UsageError("set_weights: a weight is NaN or infinite")
+        for i in idx:
+            self.weights[int(i)] = w
+        self._changed(idx)
+
+    def set_time(self, time: float, animation: int | str | Sequence[int | str] | None = None) -> None:
+        """Pose the scene as its glTF animations are at `time` seconds (`animation`: a name,
+        an index, several, or None for all; vkpbr.scene.animation.sample). Only the nodes
+        and morph weights the chosen animations drive change; times outside an animation's
+        keyframes clamp to its ends."""
+        if self.scene is None:
+            raise UsageError("set_time: this state has no scene to animate")
+        from vkpbr.scene.animation import animation_indices, sample
+
+        chosen = animation_indices(self.scene, animation)
+        nodes = sorted({ch.node for i in chosen for ch in self.scene.animations[i].channels
+                        if ch.node is not None and ch.path != "weights"})
+        morphed = {ch.node for i in chosen for ch in self.scene.animations[i].channels
+                   if ch.node is not None and ch.path == "weights"} | {
+            t for i in chosen for ch in self.scene.animations[i].channels if ch.kind == "mesh"
+            for t in ch.targets}
+        if not nodes and not morphed:
+            return
+        pose = sample(self.scene, float(time), chosen)
+        idx = np.asarray(nodes, np.int64)
+        self.local[idx] = pose.local[idx]
+        for node in morphed:
+            if node in pose.weights:
+                self.weights[int(node)] = np.asarray(pose.weights[node], np.float64)
+        self.time = float(time)
+        self._changed(np.asarray(sorted(set(nodes) | {int(m) for m in morphed}), np.int64))
+
     def reset(self) -> None:
         """Back to the file's rest pose, everything shown."""
         self.local[:] = self.tree.local
         self.visible[:] = True
+        self.weights.clear()
         self._changed(np.arange(len(self.tree)))
 
     def _changed(self, idx: np.ndarray) -> None:
@@ -216,6 +265,7 @@ class SceneState:
             if self.version == 0:
                 return self.rest.copy()
             models = self.world()[self.draw_tree] @ self.draw_local
+            models[self.skinned] = np.eye(4)
             models[~self.shown()[self.draw_tree]] = 0.0
             return models
         return self._cached("models", make)  # type: ignore[return-value]
