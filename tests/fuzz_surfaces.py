@@ -104,6 +104,29 @@ def _exr() -> bytes | None:
         return p.read_bytes()
 
 
+def _animated_doc() -> dict:
+    """The fuzz suite's glTF with one animation: node 0 moves 1 along x in 1 s (its times
+    and translations in a data: URI buffer), for --time, --animation and --animate."""
+    import base64
+
+    import numpy as np
+
+    doc = _gltf_doc("b.bin", "t.png")
+    data = np.array([0, 1], np.float32).tobytes() + np.array([[0, 0, 0], [1, 0, 0]],
+                                                             np.float32).tobytes()
+    doc["buffers"].append({"uri": "data:application/octet-stream;base64,"
+                                  + base64.b64encode(data).decode(), "byteLength": len(data)})
+    doc["bufferViews"] += [{"buffer": 1, "byteOffset": 0, "byteLength": 8},
+                           {"buffer": 1, "byteOffset": 8, "byteLength": 24}]
+    doc["accessors"] += [{"bufferView": 4, "componentType": 5126, "count": 2, "type": "SCALAR",
+                          "min": [0], "max": [1]},
+                         {"bufferView": 5, "componentType": 5126, "count": 2, "type": "VEC3"}]
+    doc["animations"] = [{"name": "slide", "samplers": [{"input": 4, "output": 5}],
+                          "channels": [{"sampler": 0,
+                                        "target": {"node": 0, "path": "translation"}}]}]
+    return doc
+
+
 # --- outcomes -------------------------------------------------------------------------------
 class _Hang(BaseException):
     """Raised by SIGALRM in a case that ran past CASE_SECONDS."""
@@ -179,6 +202,7 @@ class Sandbox:
         (root / "t.png").write_bytes(_png())
         (root / "b.bin").write_bytes(_gltf_buffer())
         (root / "s.gltf").write_text(json.dumps(_gltf_doc("b.bin", "t.png")))
+        (root / "a.gltf").write_text(json.dumps(_animated_doc()))
         (root / "lights.json").write_text(json.dumps(LIGHTS))
         (root / "sem.json").write_text(json.dumps(SEMANTICS))
         (root / "poses.json").write_text(json.dumps(POSES))
@@ -399,17 +423,23 @@ def environment_case(rng: random.Random, box: Sandbox) -> Case:
 _FILE_OPTIONS = {"scene", "--cameras", "--light", "--semantics", "--env", "--script",
                  "--sponza", "--peers-json", "job", "--cache"}
 _OUT_OPTIONS = {"--out", "--screenshot", "--poses-dir"}
+# Options whose valid values scale the work (frames, pixels, views): given only invalid or
+# small values, so that an accepted case stays a short one.
 _COUNTS = {"--frames", "--size", "--batch", "--shadow-resolution", "--views", "--batch-views",
-           "--actors", "--msaa", "--camera-index"}
+           "--actors", "--msaa", "--camera-index", "--fps", "--duration", "--num-gpus"}
 _EVIL_VALUES = ["-1", "0", "1", "nan", "inf", "-inf", "1e308", "x", "", "\0", "1,2", "1,2,3",
                 "a:b:c", "none", "on", "off", "-5,0.6,-0.9", "0x0", "-8x6", "99999x99999",
                 "9" * 5000, "point:0,1,0:color=1,1,1:intensity=nan", "spot:0,1,0:0,-1,0:outer=400",
                 "dir:0,0,0", "1,2,3,4,5,6,7,8,9,10"]
-_SAFE_COUNTS = ["-1", "0", "1", "x", "", "nan", "9" * 5000, "0x0", "-8x6", "1e3"]
+_SAFE_COUNTS = ["-1", "0", "1", "2", "x", "", "nan", "inf", "1e9", "1e308", "9" * 5000, "0x0", "-8x6"]
 
 _BASES = {
     "render": lambda b: ["render", str(b.root / "s.gltf"), "--size", "8x6", "--out",
                          str(b.root / "cli" / "r.png")],
+    "render-animate": lambda b: ["render", str(b.root / "a.gltf"), "--size", "8x6", "--animate",
+                                 "--fps", "2", "--out", str(b.root / "cli" / "anim")],
+    "render-time": lambda b: ["render", str(b.root / "a.gltf"), "--size", "8x6", "--time", "0.5",
+                              "--animation", "slide", "--out", str(b.root / "cli" / "t.png")],
     "view": lambda b: ["view", str(b.root / "s.gltf"), "--offscreen", "--frames", "1",
                        "--size", "8x6"],
     "bake": lambda b: ["bake", str(b.root / "s.gltf"), "--out", str(b.root / "cli" / "s.vkpbr"),
@@ -478,7 +508,8 @@ def cli_case(rng: random.Random, box: Sandbox) -> list[str]:
                 continue  # another scenario would ignore the hostile file
             action = next((a for n, a in options if n == argv[i - 1]), None)
             argv[i] = _value(rng, box, argv[i - 1], action, bench)
-        elif r < 0.55 and command in ("render", "view", "bake", "batch"):  # the file itself
+        elif r < 0.55 and command in ("render", "view", "bake", "batch") and not base.startswith(
+                "render-"):  # the file itself
             argv[1] = rng.choice(box.hostile_files(rng.choice([".gltf", ".json", ".obj", ".vkpbr"])))
         elif r < 0.9 or bench:  # add an option
             name, action = rng.choice(options)

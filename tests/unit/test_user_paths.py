@@ -155,3 +155,31 @@ def test_messages_show_nul_bytes_escaped() -> None:
     assert str(UsageError("a\0b")) == "a\\0b"
     assert str(OutputError("/x/a\0b", "reason")) == "/x/a\\0b: cannot write: reason"
     assert os.fspath(OutputError("/x", "r").filename) == "/x"
+
+
+def test_animate_checks_its_output_and_frame_count_first(tmp_path: Path,
+                                                         capsys: pytest.CaptureFixture) -> None:
+    """`render --animate`: an output it cannot write, and a frame count that overflows
+    (1e308 s), are one line before any rendering (found by the command-line fuzzing)."""
+    import sys
+
+    from vkpbr.app.cli import main
+
+    sys.path.insert(0, str(Path(__file__).parents[1]))
+    from fuzz_surfaces import _animated_doc, _gltf_buffer, _png
+
+    (tmp_path / "t.png").write_bytes(_png())
+    (tmp_path / "b.bin").write_bytes(_gltf_buffer())
+    scene = tmp_path / "a.gltf"
+    scene.write_text(json.dumps(_animated_doc()))
+    for extra, message in ((["--out", "/proc/anim"], "--out /proc/anim: cannot write in /proc"),
+                           (["--out", "/proc/a.gif"], "--out /proc/a.gif: cannot write in /proc"),
+                           (["--out", f"{tmp_path}/x\0y"], "holds a NUL byte"),
+                           (["--out", str(tmp_path / "f"), "--duration", "1e308"],
+                            "--animate would render inf frames (at most 100000)"),
+                           (["--out", str(tmp_path / "f"), "--fps", "1e300", "--duration", "1"],
+                            "--animate would render 1e+300 frames")):
+        assert main(["render", str(scene), "--animate", *extra]) == 2, extra
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and message in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.gltf", "b.bin", "t.png"]
