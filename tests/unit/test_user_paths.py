@@ -124,10 +124,10 @@ def test_job_file_paths_are_one_line(tmp_path: Path) -> None:
     job = tmp_path / "job.json"
     for entry, problem in (({"scene": "a/" * 2500 + "s.gltf", "cameras": [], "out": "o"},
                             "is 5,006 bytes long, more than the 4,096 a path may have"),
-                           ({"cameras": [[0, 0, 5, 0, 0, 0]], "out": "o\0x"},
+                           ({"cameras": ["0,0,5,0,0,0"], "out": "o\0x"},
                             "out o\\0x: holds a NUL byte"),
                            ({"cameras": "c\0.json", "out": "o"}, "holds a NUL byte"),
-                           ({"cameras": [[0, 0, 5, 0, 0, 0]], "out": "o" * 300},
+                           ({"cameras": ["0,0,5,0,0,0"], "out": "o" * 300},
                             "has a name of 300 bytes")):
         job.write_text(json.dumps([entry]))
         with pytest.raises(UsageError) as info:
