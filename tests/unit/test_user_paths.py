@@ -159,8 +159,9 @@ def test_messages_show_nul_bytes_escaped() -> None:
 
 def test_animate_checks_its_output_and_frame_count_first(tmp_path: Path,
                                                          capsys: pytest.CaptureFixture) -> None:
-    """`render --animate`: an output it cannot write, and a frame count that overflows
-    (1e308 s), are one line before any rendering (found by the command-line fuzzing)."""
+    """`render --animate`: an output it cannot write, a frame count that overflows (1e308 s)
+    and a 5,000-digit --animation index are one line before any rendering (found by the
+    command-line fuzzing)."""
     import sys
 
     from vkpbr.app.cli import main
@@ -178,7 +179,9 @@ def test_animate_checks_its_output_and_frame_count_first(tmp_path: Path,
                            (["--out", str(tmp_path / "f"), "--duration", "1e308"],
                             "--animate would render inf frames (at most 100000)"),
                            (["--out", str(tmp_path / "f"), "--fps", "1e300", "--duration", "1"],
-                            "--animate would render 1e+300 frames")):
+                            "--animate would render 1e+300 frames"),
+                           (["--out", str(tmp_path / "f"), "--animation", "9" * 5000],
+                            "no animation has that index (the file has 1)")):
         assert main(["render", str(scene), "--animate", *extra]) == 2, extra
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and message in err, err

@@ -48,7 +48,14 @@ def animation_choice(scene: Any, text: str | None) -> int | str | None:
     """--animation as the API takes it: an index when it is a number."""
     if text is None:
         return None
-    return int(text) if text.strip().lstrip("-").isdigit() else text
+    digits = text.strip().lstrip("-")
+    if digits.isascii() and digits.isdigit():  # ("²".isdigit() too, which int() refuses)
+        if len(digits) > 18:  # no file has that many; int() of 4,300+ digits is an error
+            count = len(getattr(scene, "animations", None) or [])
+            raise UsageError(f"--animation {text[:24]}...: no animation has that index (the "
+                             f"file has {count})")
+        return int(text)
+    return text
 
 
 def animation_times(scene: Any, animation: int | str | None, fps: float,
