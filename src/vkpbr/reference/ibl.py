@@ -1,5 +1,6 @@
 """Image-based lighting by Monte Carlo integration of the glTF 2.0 BRDF, in NumPy: the
-independent reference for shaders/ibl.glsl (which uses the split-sum approximation).
+independent reference for shaders/ibl.glsl (which uses the split-sum approximation), and
+`split_sum_ibl`, the mirror of ibl.glsl's own formula from the texels it reads.
 
     L_o(v) = integral over the hemisphere of f(v, l) L_env(l) (n.l) dl
            + multiple-scattering compensation (Fdez-Aguera 2019) of the specular lobe,
@@ -12,8 +13,9 @@ mixture's pdf (the balance heuristic), so that neither smooth nor rough lobes ar
 
 The compensation term needs the lobe's single-scattering albedo E_ss(n.v) and F-weighted
 albedo; both are integrated here by Monte Carlo too (not read from the GPU's table). In a
-uniform white environment a white metal then returns exactly 1 and a white dielectric 1 up to
-the spec's `fresnel_mix` (which is not exactly energy conserving: within 2%).
+uniform white environment a white metal then returns exactly 1, a white dielectric 1 up to
+the spec's `fresnel_mix` (which is not exactly energy conserving: within 2%), and every mix
+of the two (Appendix B mixes the dielectric and metal BRDFs, each compensated) 1 as well.
 
 `d_ggx` and `f_schlick` are reference/brdf.py's; the height-correlated Smith V is a private
 copy (`_v_smith_ggx_correlated`) until brdf.py has `v_smith_ggx_correlated`.
@@ -28,7 +30,7 @@ import numpy as np
 from vkpbr.reference.brdf import d_ggx
 
 __all__ = ["gltf_brdf", "mc_ibl", "Environment", "uniform_environment", "two_tone_environment",
-           "ggx_albedo"]
+           "ggx_albedo", "ibl_lobe", "split_sum_ibl"]
 
 PI = np.pi
 Environment = Callable[[np.ndarray], np.ndarray]  # unit directions (..., 3) -> RGB (..., 3)
@@ -115,8 +117,9 @@ def _sample(n: np.ndarray, v: np.ndarray, alpha: np.ndarray, count: int,
 
 def ggx_albedo(n_dot_v: np.ndarray, roughness: np.ndarray, f0: np.ndarray | float = 1.0,
                samples: int = 4096, seed: int = 1) -> np.ndarray:
-    """Directional albedo of the glTF specular lobe with Schlick F of `f0` (..., 3 when f0
-    is a colour, else ...): integral of V D F (n.l) dl by Monte Carlo (E_ss for f0 = 1)."""
+    """Directional albedo of the glTF specular lobe with Schlick F of `f0` (..., K when f0
+    has K channels, a colour or several stacked; else ...): integral of V D F (n.l) dl by
+    Monte Carlo (E_ss for f0 = 1)."""
     rng = np.random.default_rng(seed)
     n_dot_v = np.asarray(n_dot_v, dtype=np.float64)
     nrm = np.zeros(n_dot_v.shape + (3,))
@@ -140,11 +143,61 @@ def ggx_albedo(n_dot_v: np.ndarray, roughness: np.ndarray, f0: np.ndarray | floa
     return np.mean(w[..., None] * f, axis=-2)
 
 
+def ibl_lobe(f0: np.ndarray, weight: np.ndarray | float, n_dot_v: np.ndarray,
+             roughness: np.ndarray, a: np.ndarray, b: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """Mirror of ibl.glsl ibl_lobe: one specular lobe's split-sum weights (FssEss, FmsEms),
+    each (..., 3), for Schlick's F of `f0` (..., 3) scaled by `weight`, from the split-sum
+    table's A and B (...) at (n.v, roughness) (Fdez-Aguera 2019, listing 3)."""
+    f0 = np.asarray(f0, dtype=np.float64)
+    weight = np.asarray(weight, dtype=np.float64)[..., None]
+    rough = np.asarray(roughness, dtype=np.float64)[..., None]
+    mu = np.asarray(n_dot_v, dtype=np.float64)[..., None]
+    a, b = np.asarray(a, dtype=np.float64)[..., None], np.asarray(b, dtype=np.float64)[..., None]
+    fr = np.maximum(1.0 - rough, f0) - f0
+    k_s = f0 + fr * (1.0 - mu) ** 5
+    fss_ess = weight * (k_s * a + b)
+    ems = 1.0 - (a + b)
+    f_avg = weight * (f0 + (1.0 - f0) / 21.0)
+    return fss_ess, ems * fss_ess * f_avg / (1.0 - ems * f_avg)
+
+
+def split_sum_ibl(n_dot_v: np.ndarray, c: np.ndarray, metallic: np.ndarray,
+                  roughness: np.ndarray, a: np.ndarray, b: np.ndarray, radiance: np.ndarray,
+                  irradiance: np.ndarray, f0_dielectric: np.ndarray | float = 0.04,
+                  specular_weight: np.ndarray | float = 1.0
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mirror of ibl.glsl ibl_evaluate from the texels it reads: the split-sum table's A, B
+    (...), the pre-filtered `radiance` along the reflection and the `irradiance` about n
+    (..., 3, already scaled by the environment's intensity). glTF Appendix B's mix: the
+    dielectric BRDF (its lobe of F0 `f0_dielectric` x `specular_weight` over the diffuse c,
+    weighted by what that lobe leaves) and the metal BRDF (its lobe of F0 c), each with its
+    own compensation, mixed by metallic. Returns (diffuse, specular, k_d), each (..., 3)."""
+    c = np.asarray(c, dtype=np.float64)
+    m = np.asarray(metallic, dtype=np.float64)[..., None]
+    mu = np.clip(np.asarray(n_dot_v, dtype=np.float64), 1e-4, 1.0)
+    f0_d = np.broadcast_to(np.asarray(f0_dielectric, dtype=np.float64), c.shape)
+    d_ss, d_ms = ibl_lobe(f0_d, specular_weight, mu, roughness, a, b)
+    m_ss, m_ms = ibl_lobe(c, 1.0, mu, roughness, a, b)
+    fss_ess = (1.0 - m) * d_ss + m * m_ss
+    fms_ems = (1.0 - m) * d_ms + m * m_ms
+    k_d = (1.0 - m) * c * (1.0 - d_ss - d_ms)
+    radiance, irradiance = np.asarray(radiance), np.asarray(irradiance)
+    return k_d * irradiance, fss_ess * radiance + fms_ems * irradiance, k_d
+
+
+def _schlick(f0: np.ndarray, fc: np.ndarray) -> np.ndarray:
+    return f0 + (1.0 - f0) * fc
+
+
 def mc_ibl(n: np.ndarray, v: np.ndarray, c: np.ndarray, metallic: np.ndarray,
            roughness: np.ndarray, environment: Environment, samples: int = 2048,
            seed: int = 0, multiple_scattering: bool = True,
            coupling: str = "fdez-aguera") -> np.ndarray:
     """Radiance (..., 3) reflected towards v by the glTF BRDF lit by `environment`.
+
+    glTF 2.0 Appendix B's material: mix(dielectric BRDF, metal BRDF, metallic), each BRDF's
+    specular lobe with its own multiple-scattering compensation.
 
     Parameters
     ----------
@@ -152,15 +205,16 @@ def mc_ibl(n: np.ndarray, v: np.ndarray, c: np.ndarray, metallic: np.ndarray,
     c : (..., 3) base colour; metallic, roughness : (...).
     environment : radiance of unit directions, (..., 3) -> (..., 3).
     samples : Monte Carlo samples per point (standard error ~ 1 / sqrt(samples)).
-    multiple_scattering : add Fdez-Aguera's compensation of the specular lobe's lost energy,
-        with E_ss and the F-weighted albedo integrated here (`ggx_albedo`) and the irradiance
+    multiple_scattering : add Fdez-Aguera's compensation of each specular lobe's lost
+        energy (the dielectric's of F0 0.04, the metal's of F0 c, mixed by metallic), with
+        E_ss and the F-weighted albedos integrated here (`ggx_albedo`) and the irradiance
         (cosine-weighted mean radiance) integrated over the same samples.
     coupling : how the dielectric's diffuse lobe is weighted. "gltf": the specification's
         `fresnel_mix`, (1 - F(v.h)) per direction, which is not energy conserving at grazing
         angles (a white smooth dielectric in a white furnace returns 1.3 at n.v = 0.2);
-        "fdez-aguera": the energy-conserving weight 1 - (FssEss + FmsEms) of Fdez-Aguera's
-        listing 3, which ibl.glsl (and the glTF-Sample-Viewer's IBL) uses; its albedo terms
-        integrated here by Monte Carlo.
+        "fdez-aguera": the energy-conserving weight 1 - (FssEss + FmsEms) of the dielectric's
+        own lobe (Fdez-Aguera's listing 3), which ibl.glsl (and the glTF Sample Renderer's
+        f_dielectric_brdf_ibl) uses; its albedo terms integrated here by Monte Carlo.
     """
     rng = np.random.default_rng(seed)
     n, v, c = (np.asarray(x, dtype=np.float64) for x in (n, v, c))
@@ -171,30 +225,36 @@ def mc_ibl(n: np.ndarray, v: np.ndarray, c: np.ndarray, metallic: np.ndarray,
     nl = _dot(n[..., None, :], l)
     w = np.where(nl > 0.0, np.maximum(nl, 0.0) / np.maximum(pdf, 1e-12), 0.0)[..., None]
     n_dot_v = np.clip(_dot(n, v), 1e-4, 1.0)
-    f0 = (1.0 - metallic)[..., None] * 0.04 + metallic[..., None] * c
-    ess = ggx_albedo(n_dot_v, roughness, 1.0)
-    fss_ess = ggx_albedo(n_dot_v, roughness, f0)
-    ems = (1.0 - ess)[..., None]
-    f_avg = f0 + (1.0 - f0) / 21.0
-    fms_ems = ems * fss_ess * f_avg / (1.0 - ems * f_avg)
-    if not multiple_scattering:
-        fms_ems = np.zeros_like(fms_ems)
+    m = metallic[..., None]
+    # E_ss (F0 = 1) and the dielectric's and the metal's F-weighted albedos from one set of
+    # samples: seven "channels" of F0.
+    f0s = (np.full_like(c, 0.04), c)
+    albedo = ggx_albedo(n_dot_v, roughness, np.concatenate([np.ones_like(c[..., :1]), *f0s], -1))
+    ems = 1.0 - albedo[..., :1]
+    lobes = []  # (FssEss, FmsEms) of the dielectric's lobe, then the metal's
+    for k, f0 in enumerate(f0s):
+        fss_ess = albedo[..., 1 + 3 * k:4 + 3 * k]
+        f_avg = f0 + (1.0 - f0) / 21.0
+        fms_ems = ems * fss_ess * f_avg / (1.0 - ems * f_avg)
+        lobes.append((fss_ess, fms_ems if multiple_scattering else np.zeros_like(fms_ems)))
+    (d_ss, d_ms), (_, m_ms) = lobes
+    fms_ems = (1.0 - m) * d_ms + m * m_ms
     if coupling == "gltf":
         f = gltf_brdf(n[..., None, :], v[..., None, :], l, c[..., None, :],
                       metallic[..., None], roughness[..., None])
     elif coupling == "fdez-aguera":
-        # The specular lobe with Schlick F of the mixed F0 (the spec's dielectric and
-        # conductor Fresnel terms combined), plus the diffuse lobe weighted by what the
-        # specular lobe (single and multiple scattering) leaves.
+        # Each BRDF's specular lobe: V D (n.l) with Schlick F of its F0; the dielectric's
+        # diffuse weighted by what its own lobe (single and multiple scattering) leaves.
         f_spec = gltf_brdf(n[..., None, :], v[..., None, :], l, np.ones_like(c)[..., None, :],
                            np.ones_like(metallic)[..., None], roughness[..., None])
         vv = v[..., None, :]
         hh = l + vv
         hh = hh / np.maximum(np.linalg.norm(hh, axis=-1, keepdims=True), 1e-12)
         fc = ((1.0 - np.abs(_dot(vv, hh))) ** 5)[..., None]
-        f = f_spec * (f0[..., None, :] + (1.0 - f0[..., None, :]) * fc)
-        k_d = c * (1.0 - metallic)[..., None] * (1.0 - fss_ess - fms_ems)
-        f = f + np.where((nl > 0.0)[..., None], k_d[..., None, :] / PI, 0.0)
+        dielectric = f_spec * _schlick(0.04, fc) + np.where(
+            (nl > 0.0)[..., None], (c * (1.0 - d_ss - d_ms))[..., None, :] / PI, 0.0)
+        metal = f_spec * _schlick(c[..., None, :], fc)
+        f = (1.0 - m[..., None]) * dielectric + m[..., None] * metal
     else:
         raise ValueError(f"coupling {coupling!r}: expected 'gltf' or 'fdez-aguera'")
     single = np.mean(f * env * w, axis=-2)

@@ -192,10 +192,11 @@ class MaterialSets:
     the Vulkan binding), so unused ones cost nothing."""
 
     def __init__(self, device: Device, pool: DescriptorPool, layout: DescriptorSetLayout,
-                 ubo: Buffer, stride: int, textures: list[list[tuple[ImageView, Sampler]]]
-                 ) -> None:
+                 ubo: Buffer, stride: int, textures: list[list[tuple[ImageView, Sampler]]],
+                 base: int = 0) -> None:
         self.device, self.pool, self.layout = device, pool, layout
         self.ubo, self.stride, self.textures = ubo, stride, textures
+        self.base = base  # the frame slot's copy of the blocks in `ubo`
         self._sets: dict[int, object] = {}
 
     def __len__(self) -> int:
@@ -211,7 +212,7 @@ class MaterialSets:
             for binding, (view, sampler) in enumerate(self.textures[i]):
                 writer.sampler(dset, binding, view, sampler)
             writer.uniform(dset, L.MATERIAL_BINDING, self.ubo, L.MATERIAL.size,
-                           offset=i * self.stride)
+                           offset=self.base + i * self.stride)
             writer.update()
             self._sets[i] = dset
         return self._sets[i]
@@ -221,9 +222,10 @@ class GpuScene:
     """Owns the GPU copies of one Scene. Built by `Renderer`; destroy with `destroy()`."""
 
     def __init__(
-        self, device: Device, scene: Scene, material_layout: DescriptorSetLayout
+        self, device: Device, scene: Scene, material_layout: DescriptorSetLayout, slots: int = 1
     ) -> None:
         self.device = device
+        self.slots = slots  # frame slots: each has its own copy of the material blocks
         self.scene = scene
         self._owned: list = []
         self.timings: dict[str, float] = {}
@@ -464,17 +466,28 @@ class GpuScene:
 
     # --- materials --------------------------------------------------------------------------
     def _create_materials(self, layout: DescriptorSetLayout) -> None:
+        """Each material's set (its textures and its MATERIAL block). The blocks have a copy
+        per frame slot, in host-visible memory (and as the compute path's storage table), so
+        that a material's factors change between frames (set_material, animation) without
+        touching a frame in flight: a slot's sets name its own copies."""
         materials = list(self.scene_materials)
         self.materials: list[Material] = materials + [Material(name="vkpbr-default")]
         self.default_material = len(self.materials) - 1
         align = int(self.device.limits.minUniformBufferOffsetAlignment)
-        stride = (L.MATERIAL.size + align - 1) // align * align
-        self.material_ubo = self._own(
-            Buffer(self.device, stride * len(self.materials), "uniform",
-                   host_visible=True, name="materials")
-        )
-        self.material_blocks: list[np.ndarray] = []  # the compute path's table (compute_path.py)
-        textures: list[list[tuple[ImageView, Sampler]]] = []
+        s_align = int(self.device.limits.minStorageBufferOffsetAlignment)
+        self._ubo_stride = (L.MATERIAL.size + align - 1) // align * align
+        n = len(self.materials)
+        self._ubo_slot = self._ubo_stride * n
+        self.material_ubo = self._own(Buffer(self.device, self._ubo_slot * self.slots, "uniform",
+                                             host_visible=True, device_local=True, name="materials"))
+        self._table_bytes = L.MATERIAL.size * n
+        self._table_stride = (self._table_bytes + s_align - 1) // s_align * s_align
+        self.material_table = self._own(Buffer(self.device, self._table_stride * self.slots, "storage",
+                                               host_visible=True, device_local=True,
+                                               name="material records"))
+        self.pool = self._own(DescriptorPool(self.device, [(layout, n * self.slots)]))
+        self.material_blocks: list[np.ndarray] = []  # as loaded (compute_path.py's table too)
+        views: list[list[tuple[ImageView, Sampler]]] = []
         for mat in self.materials:
             has, bound = {}, []
             shared = _shared_metallic_roughness(mat)
@@ -487,16 +500,30 @@ class GpuScene:
             if shared and has["metallic"]:
                 block["flags"] |= L.MATERIAL_SHARED_METALLIC_ROUGHNESS
             self.material_blocks.append(block)
-            textures.append(bound)
-        blocks = np.zeros(len(self.materials), L.MATERIAL.dtype)  # np.stack drops padding
-        for i, block in enumerate(self.material_blocks):
-            blocks[i] = block
-        table = np.zeros((len(self.materials), stride), np.uint8)  # one write, not one a material
-        table[:, :L.MATERIAL.size] = blocks.view(np.uint8).reshape(len(self.materials), -1)
-        self.material_ubo.write(table)
-        pool = self._own(DescriptorPool(self.device, [(layout, len(self.materials))]))
-        self.material_sets = MaterialSets(self.device, pool, layout, self.material_ubo, stride,
-                                          textures)
+            views.append(bound)
+        # Each slot's sets are made as draws first bind them (MaterialSets): unused materials
+        # cost no descriptor set in any slot.
+        self.slot_material_sets = [
+            MaterialSets(self.device, self.pool, layout, self.material_ubo, self._ubo_stride,
+                         views, base=s * self._ubo_slot) for s in range(self.slots)]
+        for s in range(self.slots):
+            self.write_materials(s, self.material_blocks)
+        self.material_sets = self.slot_material_sets[0]  # (slot 0's: tools and tests)
+
+    def write_materials(self, slot: int, blocks: list[np.ndarray]) -> None:
+        """Frame slot `slot`'s copies of the MATERIAL blocks (after the slot's fence): one
+        write to each buffer, not one a material."""
+        table = np.zeros(len(blocks), L.MATERIAL.dtype)  # np.stack drops padding
+        for i, block in enumerate(blocks):
+            table[i] = block
+        rows = np.zeros((len(blocks), self._ubo_stride), np.uint8)
+        rows[:, :L.MATERIAL.size] = table.view(np.uint8).reshape(len(blocks), -1)
+        self.material_ubo.write(rows, offset=slot * self._ubo_slot)
+        self.material_table.write(table.tobytes(), offset=slot * self._table_stride)
+
+    def material_table_region(self, slot: int) -> tuple[Buffer, int, int]:
+        """(buffer, offset, size) of slot `slot`'s MATERIAL table (the compute path's)."""
+        return self.material_table, slot * self._table_stride, self._table_bytes
 
     @staticmethod
     def _material_block(mat: Material, has: dict[str, bool]) -> np.ndarray:

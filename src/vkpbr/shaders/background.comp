@@ -33,11 +33,10 @@ void main() {
     view_index = (pixel.x / tile.x) * pc.rows + pixel.y / tile.y;  // column-major tiles
     if (view_index >= pc.views) return;
 #endif
-    mat4 inv_vp = views[view_index].inv_VP;
-    vec3 eye = views[view_index].eye_near.xyz;
     vec2 ndc = (vec2(pixel % tile) + 0.5) / vec2(tile) * 2.0 - 1.0;
-    vec4 near = inv_vp * vec4(ndc, 1.0, 1.0);
-    vec3 d = env_rotate(normalize(near.xyz / near.w - eye), lighting.env_rotation.xy);
+    // The infinite far plane's point: a direction (surface_fetch.glsl ray_dir says why).
+    vec3 ray = (views[view_index].inv_VP * vec4(ndc, 0.0, 1.0)).xyz;
+    vec3 d = env_rotate(normalize(ray), lighting.env_rotation.xy);
     vec3 radiance = textureLod(env_specular, d, 0.0).rgb * lighting.env_intensity;
     vec3 value = radiance_output(radiance);
     bool srgb_target = (settings.flags & SETTINGS_SRGB_TARGET) != 0u;

@@ -2,10 +2,10 @@
 // The background pass (render/passes.py, "background"): one triangle covering the screen at
 // the far plane (reversed-Z: depth 0), drawn after the opaque passes with depth test
 // GREATER_OR_EQUAL and no depth write against the depth cleared to 0, so it reaches exactly
-// the pixels no surface covered. `ray` is the world direction through the pixel: the
-// difference of two points the inverse view-projection unprojects at NDC depths 1 (the near
-// plane) and 0.5. Points of one NDC depth lie on a plane of the camera, affine in NDC xy, so
-// the difference interpolates exactly across the triangle (every vertex has w = 1).
+// the pixels no surface covered. `ray` is the world direction through the pixel: the point
+// the inverse view-projection unprojects at NDC depth 0, the infinite far plane, is a
+// direction (w = 0; its xyz is affine in NDC xy, so it interpolates exactly across the
+// triangle), with no eye to cancel (the compute path's pixel rays: surface_fetch.glsl).
 // The camera is views[view_index]: the frame's one view, or with BATCH = 1 instance i's,
 // view i of the batch (render/batch.py), drawn into its layer.
 #extension GL_GOOGLE_include_directive : require
@@ -23,8 +23,5 @@ void main() {
     view_index = uint(gl_InstanceIndex);
     gl_Layer = int(views[view_index].layer);
 #endif
-    mat4 inv = inverse(views[view_index].VP);
-    vec4 near = inv * vec4(p, 1.0, 1.0);
-    vec4 mid = inv * vec4(p, 0.5, 1.0);
-    ray = mid.xyz / mid.w - near.xyz / near.w;
+    ray = (views[view_index].inv_VP * vec4(p, 0.0, 1.0)).xyz;
 }

@@ -14,13 +14,39 @@
 struct IblTerms {
     vec3 diffuse;
     vec3 specular;
-    vec3 diffuse_weight;  // k_d: what the specular lobe leaves the diffuse (and transmission)
+    vec3 diffuse_weight;  // k_d: (1 - metallic) c times what the dielectric's specular lobe
+                          // leaves its diffuse (and transmission)
 };
 
-// f0_dielectric, specular_weight: KHR_materials_ior / _specular (0.04 and 1 by default); the
-// dielectric's and the metal's F0 and weight are mixed by metalness before the compensation,
-// which for the defaults is the core material's formula exactly (and the Sample Viewer's
-// getIBLGGXFresnel at metalness 0 or 1).
+// One specular lobe's split-sum weights (Fdez-Aguera listing 3; the Sample Renderer's
+// getIBLGGXFresnel returns their sum) for Schlick's F of `f0` scaled by `weight`. For a
+// white lobe (f0 = weight = 1) FssEss + FmsEms = 1: no energy is lost.
+struct IblLobe {
+    vec3 fss_ess;  // single scattering, F-weighted: radiance's weight
+    vec3 fms_ems;  // multiple scattering: irradiance's weight
+};
+
+IblLobe ibl_lobe(vec3 f0, float weight, float n_dot_v, float roughness, vec2 ab) {
+    // Roughness-dependent Fresnel: F at the lobe's mean.
+    vec3 fr = max(vec3(1.0 - roughness), f0) - f0;
+    vec3 k_s = f0 + fr * pow(1.0 - n_dot_v, 5.0);
+    IblLobe lobe;
+    lobe.fss_ess = weight * (k_s * ab.x + ab.y);
+    float ems = 1.0 - (ab.x + ab.y);  // what single scattering loses for F = 1
+    vec3 f_avg = weight * (f0 + (1.0 - f0) / 21.0);  // hemispherical mean of Schlick's F
+    lobe.fms_ems = ems * lobe.fss_ess * f_avg / (1.0 - ems * f_avg);
+    return lobe;
+}
+
+// glTF 2.0 Appendix B's material under the environment: the dielectric BRDF (specular lobe of
+// F0 f0_dielectric, KHR_materials_ior / _specular: 0.04 and 1 by default, over the diffuse c
+// weighted by what that lobe leaves) and the metal BRDF (specular lobe of F0 c), each with its
+// own energy compensation, mixed by metallic: mix(dielectric, metal, metallic), as the
+// punctual lights mix them (brdf.glsl) and the glTF Sample Renderer mixes its
+// f_dielectric_brdf_ibl and f_metal_brdf_ibl. Both lobes read the same three texels. (Mixing
+// F0 = mix(f0_dielectric, c, metallic) into one lobe instead loses energy at fractional
+// metallic: a white sphere in a white furnace returned 0.66-0.84 at metallic 0.25-0.75,
+// issue 34.)
 IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 c, float metallic, float roughness,
                       vec3 f0_dielectric, float specular_weight) {
     vec2 rot = lighting.env_rotation.xy;
@@ -31,18 +57,12 @@ IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 c, float metallic, float roughness,
     vec3 irradiance = textureLod(env_irradiance, env_rotate(n, rot), 0.0).rgb;
     vec2 ab = textureLod(brdf_lut, vec2(n_dot_v, roughness), 0.0).rg;
 
-    vec3 f0 = mix(f0_dielectric, c, metallic);
-    float weight = mix(specular_weight, 1.0, metallic);
-    vec3 diffuse_color = c * (1.0 - metallic);
-    // Roughness-dependent Fresnel (Fdez-Aguera eq. in listing 3): F at the lobe's mean.
-    vec3 fr = max(vec3(1.0 - roughness), f0) - f0;
-    vec3 k_s = f0 + fr * pow(1.0 - n_dot_v, 5.0);
-    vec3 fss_ess = weight * (k_s * ab.x + ab.y);  // single scattering, F-weighted
-    float ess = ab.x + ab.y;                      // single-scattering albedo for F = 1
-    float ems = 1.0 - ess;
-    vec3 f_avg = weight * (f0 + (1.0 - f0) / 21.0);  // hemispherical mean of Schlick's F
-    vec3 fms_ems = ems * fss_ess * f_avg / (1.0 - ems * f_avg);
-    vec3 k_d = diffuse_color * (1.0 - fss_ess - fms_ems);
+    IblLobe dielectric = ibl_lobe(f0_dielectric, specular_weight, n_dot_v, roughness, ab);
+    IblLobe metal = ibl_lobe(c, 1.0, n_dot_v, roughness, ab);
+    vec3 fss_ess = mix(dielectric.fss_ess, metal.fss_ess, metallic);
+    vec3 fms_ems = mix(dielectric.fms_ems, metal.fms_ems, metallic);
+    // The dielectric's diffuse: c under what its own specular lobe leaves.
+    vec3 k_d = (1.0 - metallic) * c * (1.0 - dielectric.fss_ess - dielectric.fms_ems);
 
     IblTerms t;
     t.specular = (fss_ess * radiance + fms_ems * irradiance) * lighting.env_intensity;

@@ -37,11 +37,16 @@ vec4 color_at(uint i) {
 }
 
 // The pixel's ray through pixel position `p` (in pixels, y down): origin at the camera, unit
-// direction, from the inverse view-projection (any intrinsics included).
+// direction, from the inverse view-projection (any intrinsics included). Unprojected at NDC
+// depth 0, the infinite far plane (reversed-Z), whose point is a direction (w = 0): inv_VP's
+// columns x, y and w (render/views.py) hold no eye, so nothing cancels. A near-plane point
+// minus the eye loses float32 digits as |eye| / znear grows: with znear 1e-5 of the scene's
+// radius (a camera inside Sponza: 1.9e-4) the rays were off by a median 1.3 pixels at 1080p,
+// and the texture gradients (differences of neighbouring rays) by more than a mip level
+// (issue 34; docs/fidelity.md).
 vec3 ray_dir(vec2 p, vec2 extent) {
     vec2 ndc = p / extent * 2.0 - 1.0;
-    vec4 near = views[view_index].inv_VP * vec4(ndc, 1.0, 1.0);  // reversed-Z: near is depth 1
-    return normalize(near.xyz / near.w - views[view_index].eye_near.xyz);
+    return normalize((views[view_index].inv_VP * vec4(ndc, 0.0, 1.0)).xyz);
 }
 
 // Barycentrics (b1, b2) of the ray's hit on the plane of triangle (a, b, c); b0 = 1 - b1 - b2.
