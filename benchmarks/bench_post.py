@@ -1,30 +1,51 @@
 """What the post stage costs: Sponza's frame on the compute path (compute rasteriser) as
-`vkpbr bench` draws it, three ways: tone mapped in the shading (the default), through the HDR
-target with only the encode (VKPBR_HDR_FRAMES=1: what an always-on post stage would cost),
-and with a bloom. Prints GPU ms per frame and per step (medians).
+`vkpbr bench` draws it: tone mapped in the shading (the default), through the HDR target
+with only the encode (VKPBR_HDR_FRAMES=1: what an always-on post stage would cost), with a
+bloom, with sensor noise (colour alone, and with the depth output's noise), and through a
+camera model (an OpenCV fisheye of 120 degrees: the resample "lens", with and without the
+dataset outputs it also maps; the frame's own cost includes its larger source pinhole).
+Prints GPU ms per frame and per step (medians): lens is the resample (both kernels with
+outputs), noise the colour noise, noise_depth the depth noise (with its copy back).
 
     python3 benchmarks/bench_post.py --scene Sponza.gltf [--frames 300] [--json out.json]
+    python3 benchmarks/bench_post.py --scene Sponza.gltf --only lens,noise   # those rows
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import statistics
 import sys
 
+import numpy as np
+
 from vkpbr.render.renderer import Renderer
+from vkpbr.scene.camera import Camera
 from vkpbr.scene.loader import load_scene
 
 SIZES = ((1920, 1080), (640, 480))
+OUTPUTS = ("depth", "instance", "normal")
 
 
-def measure(r: Renderer, size: tuple[int, int], frames: int, **options: object) -> dict:
+def fisheye(base: Camera, size: tuple[int, int]) -> Camera:
+    """`base`'s pose through an OpenCV fisheye whose image is 120 degrees across."""
+    w, h = size
+    f = (w / 2) / math.radians(60.0)
+    K = np.array([[f, 0.0, (w - 1) / 2], [0.0, f, (h - 1) / 2], [0.0, 0.0, 1.0]])
+    return Camera.from_opencv(K, base.world_from_camera("opencv"), size, model="opencv_fisheye",
+                              distortion=(0.02, -0.005, 0.001, 0.0))
+
+
+def measure(r: Renderer, size: tuple[int, int], frames: int, camera: Camera | None = None,
+            outputs: tuple[str, ...] | None = None, **options: object) -> dict:
     gpu, steps = [], []
-    cams = [r.default_camera()] * (frames + 20)
-    for i, _ in enumerate(r.render_many(cams, size=size, readback=False, pipeline="compute",
-                                        raster="compute", **options)):
+    cams = [camera or r.default_camera()] * (frames + 20)
+    readback = outputs is not None  # (the dataset outputs are made only when read back)
+    for i, _ in enumerate(r.render_many(cams, size=size, readback=readback, pipeline="compute",
+                                        raster="compute", outputs=outputs, **options)):
         if i >= 20:
             gpu.append(r.last_stats.gpu_ms)
             steps.append(r.last_stats.pass_ms)
@@ -39,22 +60,37 @@ def main() -> None:
     ap.add_argument("--scene", required=True)
     ap.add_argument("--frames", type=int, default=300)
     ap.add_argument("--json")
+    ap.add_argument("--only", default="", help="comma-separated words: rows whose label has one")
     args = ap.parse_args()
     rows = []
+    only = [w for w in args.only.split(",") if w]
     with Renderer(load_scene(args.scene)) as r:
         for size in SIZES:
-            for label, env, options in (("shading tone maps", "0", {}),
-                                        ("HDR target + encode", "1", {}),
-                                        ("bloom 0.3", "0", {"bloom": 0.3})):
+            lens = fisheye(r.default_camera(), size)
+            for label, env, options in (
+                    ("shading tone maps", "0", {}),
+                    ("HDR target + encode", "1", {}),
+                    ("bloom 0.3", "0", {"bloom": 0.3}),
+                    ("outputs (no post step)", "0", {"outputs": OUTPUTS}),
+                    ("noise realsense-d435 colour", "0", {"noise": "realsense-d435"}),
+                    ("noise realsense-d435 + depth", "0", {"noise": "realsense-d435",
+                                                          "outputs": OUTPUTS}),
+                    ("lens fisheye 120", "0", {"camera": lens}),
+                    ("lens fisheye 120 + outputs", "0", {"camera": lens, "outputs": OUTPUTS})):
+                if only and not any(w in label for w in only):
+                    continue
                 os.environ["VKPBR_HDR_FRAMES"] = env
                 r._last_post = None  # the renderer keeps an options object's post steps
                 row = measure(r, size, args.frames, **options)
                 rows.append({"size": f"{size[0]}x{size[1]}", "frame": label, **row})
-    print("| size | frame | GPU ms | encode | bloom |\n|---|---|---:|---:|---:|")
+    print("| size | frame | GPU ms | encode | bloom | lens | noise | noise_depth |\n"
+          "|---|---|---:|---:|---:|---:|---:|---:|")
     for row in rows:
         st = row["steps"]
         print(f"| {row['size']} | {row['frame']} | {row['gpu_ms']:.3f} | "
-              f"{st.get('encode', 0.0):.3f} | {st.get('bloom', 0.0):.3f} |")
+              f"{st.get('encode', 0.0):.3f} | {st.get('bloom', 0.0):.3f} | "
+              f"{st.get('lens', 0.0):.3f} | {st.get('noise', 0.0):.3f} | "
+              f"{st.get('noise_depth_copy', 0.0):.3f} |")
     if args.json:
         with open(args.json, "w") as f:
             json.dump(rows, f, indent=1)

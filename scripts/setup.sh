@@ -37,6 +37,15 @@ if ((${#missing[@]})); then
   $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
+# VKPBR_EXTRAS may name sample-viewer (not a pip extra): the outside reference of
+# tests/sample_viewer, a headless browser and the Khronos glTF Sample Viewer's npm package.
+extras=${VKPBR_EXTRAS:-test}
+if [[ ",$extras," == *",sample-viewer,"* ]]; then
+  bash scripts/setup_sample_viewer.sh
+  extras=$(echo ",$extras," | sed 's/,sample-viewer,/,/; s/^,//; s/,$//')
+  extras=${extras:-test}
+fi
+
 PY=${PYTHON:-python3}
 if [ ! -x .venv/bin/python ]; then
   echo "setup: creating .venv"
@@ -44,7 +53,6 @@ if [ ! -x .venv/bin/python ]; then
 fi
 # Reinstall only when pyproject.toml changed since the last install.
 stamp=.venv/.vkpbr-installed
-extras=${VKPBR_EXTRAS:-test}
 want="$(sha256sum pyproject.toml | cut -d' ' -f1)-$extras"
 if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
   echo "setup: installing vkpbr[$extras] into .venv"

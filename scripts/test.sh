@@ -4,8 +4,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # The tests install the codecs and ray extras as well (tests/distributed start a real
-# local Ray cluster); a plain `scripts/setup.sh` stays lean.
-export VKPBR_EXTRAS=${VKPBR_EXTRAS:-test,codecs,ray}
+# local Ray cluster) and sample-viewer (tests/sample_viewer: Debian's headless Chromium and the
+# Khronos glTF Sample Viewer from npm); a plain `scripts/setup.sh` stays lean.
+export VKPBR_EXTRAS=${VKPBR_EXTRAS:-test,codecs,ray,sample-viewer}
 bash scripts/setup.sh
 .venv/bin/ruff check --quiet src tests benchmarks
 exec .venv/bin/python -m pytest -q "$@"

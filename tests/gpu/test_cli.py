@@ -140,7 +140,10 @@ def test_docs_example_poses_render(capsys, tmp_path: Path) -> None:
     (["render", "--light", "1,2"], "three comma-separated"),
     (["render", "--exposure", "nan"], "exposure"),
     (["render", "--env", "missing.hdr", "--size", "16x16"], "missing.hdr: not found"),
-    (["render", "--env", "sky.png"], "env 'sky.png': expected sky, none or a panorama"),
+    (["render", "--env", "sky.tga"], "env 'sky.tga': expected sky, none or a panorama"),
+    (["render", "--env", "missing.jpg", "--size", "16x16"], "missing.jpg: not found"),
+    (["render", "--noise", "bogus"], "noise preset 'bogus': choose from realsense-d435"),
+    (["render", "--noise", "kinect-v1,baseline=-1"], "noise: baseline=-1: expected a finite number"),
     (["render", "--env-intensity", "-1"], "env-intensity -1.0: expected a finite number >= 0"),
     (["render", "--env-background", "maybe"], "argument --env-background: invalid choice"),
     (["render", "no-such-file.gltf"], "no such file"),
@@ -236,3 +239,25 @@ def test_outputs_beside_the_frame(capsys, tmp_path: Path) -> None:
     assert code == 2 and "unknown output 'albedo'" in err
     code, _, err = run(capsys, "render", "--colmap", "--out", str(tmp_path / "c.png"))
     assert code == 2 and "give --cameras too" in err and err.count("\n") == 1
+
+
+def test_fisheye_transforms_json_with_noise(capsys, tmp_path: Path) -> None:
+    """--cameras with nerfstudio's OPENCV_FISHEYE renders through that lens, --noise makes the
+    depth output noisy (invalid pixels 0), and the folder's transforms.json keeps the lens."""
+    import OpenEXR
+
+    doc = {"camera_model": "OPENCV_FISHEYE", "fl_x": 30.0, "fl_y": 30.0, "cx": 24.0, "cy": 18.0,
+           "w": 48, "h": 36, "k1": 0.05, "k2": -0.01, "k3": 0.0, "k4": 0.0,
+           "frames": [{"file_path": "a.png", "transform_matrix": [
+               [1, 0, 0, 0], [0, 1, 0, 0.5], [0, 0, 1, 4], [0, 0, 0, 1]]}]}
+    (tmp_path / "t.json").write_text(json.dumps(doc))
+    out = tmp_path / "frames"
+    code, _, err = run(capsys, "render", "--cameras", str(tmp_path / "t.json"), "--out", str(out),
+                       "--size", "48x36", "--outputs", "depth", "--noise", "realsense-d435,seed=2")
+    assert code == 0, err
+    written = json.loads((out / "transforms.json").read_text())
+    assert written["camera_model"] == "OPENCV_FISHEYE" and written["k1"] == 0.05
+    depth_file = next(out.glob("*.depth.exr"))
+    with OpenEXR.File(str(depth_file)) as f:
+        depth = next(iter(f.channels().values())).pixels
+    assert (depth == 0).any() and (depth > 0).any() and np.isfinite(depth).all()

@@ -505,5 +505,24 @@ def test_bad_environment_file_is_one_line(e2e) -> None:  # noqa: ANN001
         e2e_render(r, str(bad))
     assert str(bad) in str(e.value) and "\n" not in str(e.value)
     with pytest.raises(UsageError):
+        e2e_render(r, str(folder / "x.tga"))
+    with pytest.raises(SceneError, match="x.png: not found"):  # LDR panoramas are read
         e2e_render(r, str(folder / "x.png"))
     assert e2e_render(r, "none").max() == 0.0  # the renderer is still usable
+
+
+def test_ldr_png_lights_as_its_linear_exr(e2e, rng) -> None:  # noqa: ANN001
+    """An 8-bit sRGB PNG panorama (--env photo.png) lights and backs the scene exactly as an
+    EXR holding its codes decoded with IEC 61966-2-1's curve (written here, not through
+    scene/color.py), with --env-intensity scaling both alike."""
+    from PIL import Image as PILImage
+
+    r, folder = e2e
+    codes = rng.integers(0, 256, (32, 64, 3), dtype=np.uint8)
+    PILImage.fromarray(codes, "RGB").save(folder / "photo.png")
+    e = codes / 255.0
+    write_exr(folder / "photo.exr", np.where(e <= 0.04045, e / 12.92, ((e + 0.055) / 1.055) ** 2.4))
+    png = e2e_render(r, str(folder / "photo.png"), env_intensity=3.0)
+    exr = e2e_render(r, str(folder / "photo.exr"), env_intensity=3.0)
+    assert png.max() > 0.05
+    np.testing.assert_allclose(png, exr, rtol=1e-6, atol=1e-6)

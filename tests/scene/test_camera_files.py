@@ -245,7 +245,7 @@ def test_quaternion_round_trip(q: np.ndarray) -> None:
 
 
 @pytest.mark.parametrize("cameras_txt, images_txt, message", [
-    ("1 OPENCV 8 8 1 1 4 4 0.1 0 0 0\n", "", "camera model OPENCV"),
+    ("1 OPENCV 8 8 1 1 4 4 0.1 0 0\n", "", "camera model OPENCV with 7 parameters"),
     ("1 PINHOLE 8 8 1 1 4\n", "", "PINHOLE with 3 parameters"),
     ("x PINHOLE 8 8 1 1 4 4\n", "", "bad camera id"),
     ("1 PINHOLE 8 8 1 1 4 4\n", "1 1 0 0 0 0 0 0 2 a.png\n\n", "camera 2 is not in"),

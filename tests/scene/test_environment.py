@@ -71,7 +71,40 @@ def test_garbage_and_missing(tmp_path) -> None:  # noqa: ANN001
     with pytest.raises(SceneError, match="not found"):
         load_panorama(tmp_path / "none.hdr")
     with pytest.raises(SceneError, match="unknown environment format"):
-        load_panorama(tmp_path / "x.png")
+        load_panorama(tmp_path / "x.tga")
+    (tmp_path / "g.jpg").write_bytes(b"not a jpeg")
+    with pytest.raises(SceneError, match=r"g\.jpg: corrupt or unreadable image"):
+        load_panorama(tmp_path / "g.jpg")
+
+
+def test_ldr_png_decoded_from_srgb(tmp_path, rng) -> None:  # noqa: ANN001
+    """An 8-bit sRGB PNG panorama: every code through IEC 61966-2-1's curve (written here from
+    the standard, not through scene/color.py), alpha dropped."""
+    from PIL import Image as PILImage
+
+    codes = rng.integers(0, 256, (16, 32, 4), dtype=np.uint8)
+    PILImage.fromarray(codes, "RGBA").save(tmp_path / "p.png")
+    got = load_panorama(tmp_path / "p.png")
+    e = codes[..., :3] / 255.0
+    want = np.where(e <= 0.04045, e / 12.92, ((e + 0.055) / 1.055) ** 2.4)
+    assert got.shape == (16, 32, 3) and got.dtype == np.float32
+    np.testing.assert_allclose(got, want, rtol=1e-6, atol=1e-7)
+    assert got.max() <= 1.0  # LDR light is clipped
+
+
+def test_ldr_jpeg_and_aspect_error(tmp_path) -> None:  # noqa: ANN001
+    """A grey JPEG decodes to its sRGB code's linear value (within JPEG's rounding); a
+    photograph that is not 2:1 is one line naming it."""
+    from PIL import Image as PILImage
+
+    PILImage.new("RGB", (64, 32), (188, 188, 188)).save(tmp_path / "grey.jpg", quality=95)
+    got = load_panorama(tmp_path / "grey.jpg")
+    assert abs(float(got.mean()) - ((188 / 255 + 0.055) / 1.055) ** 2.4) < 0.01
+    PILImage.new("RGB", (48, 32)).save(tmp_path / "wide.jpg")
+    with pytest.raises(SceneError) as e:
+        load_panorama(tmp_path / "wide.jpg")
+    assert str(e.value).count("\n") == 0 and "wide.jpg" in str(e.value)
+    assert "not an equirectangular panorama" in str(e.value)
 
 
 def test_not_two_to_one(tmp_path, rng) -> None:  # noqa: ANN001

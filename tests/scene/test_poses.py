@@ -171,11 +171,17 @@ SCALED = np.diag([2.0, 2.0, 2.0, 1.0]).tolist()
     ({"fl_x": 300, "w": 64.5, "h": 48, "frames": [{"transform_matrix": EYE}]},
      "width must be a positive integer, got 64.5"),
     ({"camera_angle_x": 0.7, "k1": 0.01, "frames": [{"transform_matrix": EYE}]},
-     'lens distortion ("k1": 0.01) is not supported'),
-    ({"camera_angle_x": 0.7, "camera_model": "OPENCV_FISHEYE", "frames": [{"transform_matrix": EYE}]},
-     "\"camera_model\" 'OPENCV_FISHEYE' is not supported"),
+     'a opencv lens needs the image size "w" and "h"'),
+    ({"camera_angle_x": 0.7, "camera_model": "EQUIRECTANGULAR", "frames": [{"transform_matrix": EYE}]},
+     "\"camera_model\" 'EQUIRECTANGULAR' is not supported"),
+    ({"camera_angle_x": 0.7, "w": 8, "h": 8, "camera_model": "OPENCV_FISHEYE", "p1": 0.1,
+      "frames": [{"transform_matrix": EYE}]}, "OPENCV_FISHEYE takes k1..k4, not p1"),
     ({"camera_angle_x": 0.7, "frames": [{"transform_matrix": EYE}, {"transform_matrix": EYE, "k2": 1}]},
-     'frame 1: lens distortion ("k2": 1)'),
+     'frame 1: a opencv lens needs the image size'),
+    ([{"K": [[100, 0, 50], [0, 100, 40], [0, 0, 1]], "world_from_camera": EYE, "size": [100, 80],
+       "model": "opencv", "distortion": [0.1]}], "takes 4 or 5 or 8 distortion coefficients"),
+    ([{"K": [[100, 0, 50], [0, 100, 40], [0, 0, 1]], "world_from_camera": EYE, "size": [100, 80],
+       "model": "kannala"}], "model 'kannala': choose from pinhole, opencv"),
 ])
 def test_bad_files_give_one_line_naming_file_and_entry(tmp_path: Path, doc, match) -> None:  # noqa: ANN001
     path = write(tmp_path, doc)

@@ -11,6 +11,7 @@ import pytest
 
 from vkpbr.app import keys as K
 from vkpbr.app.controls import FAST, FlyCamera
+from vkpbr.app.playback import Playback
 from vkpbr.app.viewer_input import InputHandlers, key_map
 from vkpbr.render.layouts import Brdf, Tonemap, View
 from vkpbr.render.options import RenderOptions
@@ -62,6 +63,7 @@ class Stub(InputHandlers):
         self.printed = 0
         self.centre = (0.0, 0.0, 0.0)
         self._hud_dirty = False
+        self.playback = Playback(None)  # a scene without animations: nothing to play
 
     def print_camera(self) -> None:
         self.printed += 1

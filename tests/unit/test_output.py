@@ -133,7 +133,7 @@ def test_exr_without_the_package_is_one_line(tmp_path: Path, monkeypatch) -> Non
     ("a.png", "data", np.zeros((2, 2), np.float32), ".png is not a format for data output"),
     ("a.exr", "ids", np.zeros((2, 2), np.uint32), ".exr is not a format for ids output"),
     ("a.exr", "color", np.zeros((2, 2, 4), np.uint8), "EXR holds float data, got uint8"),
-    ("a.exr", "data", np.zeros((2, 2, 2), np.float32), "EXR takes (H, W), (H, W, 3)"),
+    ("a.exr", "data", np.zeros((2, 2, 5), np.float32), "EXR takes (H, W), (H, W, 2), (H, W, 3)"),
     ("a.png", "ids", np.zeros((2, 2), np.float32), "ids must be (H, W) integers"),
     ("a.png", "ids", np.zeros((2, 2, 1), np.uint32), "ids must be (H, W) integers"),
     ("a.png", "ids", np.full((2, 2), -1, np.int32), "id -1 does not fit"),

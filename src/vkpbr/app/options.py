@@ -80,7 +80,7 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
                group="camera and light", choices=("none", "inverse-square")),
     OptionSpec("--env", "text", "environment of the pbr lighting: sky (the built-in sky, "
                "matched to the automatic sun), none, or an equirectangular FILE.hdr / FILE.exr "
-               "(default %(default)s)", field="env", group="environment", metavar="ENV"),
+               "(or an LDR FILE.jpg / FILE.png: sRGB, its light clipped) (default %(default)s)", field="env", group="environment", metavar="ENV"),
     OptionSpec("--env-intensity", "float", "scale of the environment's radiance (default "
                "%(default)g)", field="env_intensity", group="environment", metavar="F"),
     OptionSpec("--env-rotation", "float", "turn the environment (and the automatic sun) by "
@@ -155,8 +155,9 @@ def shared_options() -> tuple[OptionSpec, ...]:
     declared once there, beside its field; imports the render layer's options)."""
     from vkpbr.render.options import POST_OPTIONS
 
-    return SHARED_OPTIONS + tuple(OptionSpec(row.flag, "float", row.help, field=row.field,
-                                             group="post", metavar="STRENGTH")
+    return SHARED_OPTIONS + tuple(OptionSpec(row.flag, "float" if row.parse is None else "text",
+                                             row.help, field=row.field, group="post",
+                                             metavar="STRENGTH" if row.parse is None else "SPEC")
                                   for row in POST_OPTIONS)
 
 

@@ -27,6 +27,7 @@ from vkpbr.render.options import RenderOptions
 from vkpbr.render.outputs import check_outputs
 from vkpbr.render.parts import FrameParts
 from vkpbr.render.post_stage import enabled_post
+from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.types import Camera
 
 __all__ = ["ROUTES", "batch_result", "batch_route", "check_out", "chunked", "per_view",
@@ -35,23 +36,25 @@ __all__ = ["ROUTES", "batch_result", "batch_route", "check_out", "chunked", "per
 ROUTES = ("cuda", "compute", "layered", "views")
 
 
-def batch_route(parts: FrameParts, views: int, size: tuple[int, int], opts: RenderOptions,
+def batch_route(parts: FrameParts, batch: CameraBatch, size: tuple[int, int], opts: RenderOptions,
                 linear: bool, depth: bool, outputs: Iterable[str] | None, device: str,
                 out: np.ndarray | None) -> tuple[str, tuple[str, ...]]:
-    """(one of ROUTES, the dataset outputs asked for) for `views` views of `size` (UsageError
-    for what cannot be done: say what to do instead)."""
+    """(one of ROUTES, the dataset outputs asked for) for the views of `batch` of `size`
+    (UsageError for what cannot be done: say what to do instead)."""
+    views = len(batch)
     if device not in ("cpu", "cuda"):
         raise UsageError(f"device {device!r}: choose 'cpu' (NumPy) or 'cuda' (a torch tensor)")
     if out is not None:
         check_out(out, (views, size[1], size[0], 4), np.float32 if linear else np.uint8, device)
-    post = bool(enabled_post(opts))  # batches have no post stage yet: view by view
+    # Batches have no post stage yet (nor the camera models' resample): view by view.
+    post = bool(enabled_post(opts)) or batch.lenses is not None
     if device == "cuda":
         if depth or outputs:
             raise UsageError("device='cuda' returns the colour only: ask depth and dataset "
                              "outputs with device='cpu'")
         if post:
-            raise UsageError("device='cuda' batches have no post steps (--bloom) yet: "
-                             "render them with device='cpu'")
+            raise UsageError("device='cuda' batches have no post steps (--bloom, --noise, "
+                             "camera models) yet: render them with device='cpu'")
         return "cuda", ()
     targets, paths = parts.targets, parts.paths
     wanted = (check_outputs(outputs, targets.offscreen(size, linear), paths, targets)

@@ -33,6 +33,7 @@ from vkpbr.render.outputs import frame_outputs
 from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.parts import FrameParts
 from vkpbr.render.paths import choose_path
+from vkpbr.render.post import check_lens, lens_frame, noise_key
 from vkpbr.render.post_stage import check_post, enabled_post, encode_tonemap
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.render.steps import NO_OBJECTS, FrameObjects, FrameSpec
@@ -79,8 +80,10 @@ class FramePath:
         p = self.parts
         p.environments.bind_for(options)
         transmission = p.lighting.screen_transmission(options)
-        if transmission and p.opaque_copies.stale(target.extent):
-            self._fit_opaque_copies(target.extent)
+        lens = lens_frame(camera, target.extent, int(p.device.limits.maxImageDimension2D))
+        view, extent = (camera, target.extent) if lens is None else (lens.camera, lens.extent)
+        if transmission and p.opaque_copies.stale(extent):
+            self._fit_opaque_copies(extent)
         clock = time.thread_time if driver_time else _no_clock
         c0 = clock()
         frame = p.ring.begin()  # waits for the frame's previous submission
@@ -95,17 +98,22 @@ class FramePath:
         plan = p.shadow_frames.prepare(lights, options)
         wanted = self._post_of(options)
         post = bool(wanted) and check_post(options, target, p.device.compute_path)
-        drawn = p.targets.post(target, copy) if post else target  # (HDR with post steps)
+        if lens is not None:
+            check_lens(camera, target, p.device.compute_path)
+            post = True
+        drawn = p.targets.post(target, copy, extent) if post else target  # (HDR with post steps)
         # The camera's maths, once: the shadow cascades take its planes from the slot.
-        write_frame_view(slot, camera, target.extent, p.bounds)
+        write_frame_view(slot, view, extent, p.bounds)
         p.gpu_state.write_motion(slot.index, slot.vp, COPY_OUTPUTS in copy)
         write_frame_blocks(slot, lights, self._shading_options(options, post), linear or post,
                            p.lighting.frame_lighting(options),
-                           p.shadow_frames.write(slot, plan, lights, camera, target.extent))
+                           p.shadow_frames.write(slot, plan, lights, view, extent))
         if overlay is not None:
             overlay.prepare(frame.index)
         spec = self._spec(drawn, slot, options, plan, overlay, copy, linear, wanted if post else (),
-                          transmission)
+                          transmission, post, lens.push if lens is not None else ())
+        if post and options.noise is not None:  # its random numbers' key: seed and view
+            p.post().write_key(frame.index, noise_key(options.noise, camera, target.extent))
         order = p.blend.order(camera.eye)
         objects = FrameObjects(order, overlay) if order or overlay is not None else NO_OBJECTS
         shadows = p.shadow_frames.maps
@@ -126,7 +134,8 @@ class FramePath:
 
     def _spec(self, drawn: FrameTarget, slot: FrameSlot, options: RenderOptions,
               plan: ShadowPlan, overlay: TextOverlay | None, copy: tuple[str, ...], linear: bool,
-              post: tuple[tuple[str, float], ...], transmission: bool) -> FrameSpec:
+              post: tuple[tuple[str, float], ...], transmission: bool, encode: bool,
+              lens: tuple[float, ...]) -> FrameSpec:
         """What the frame's recording depends on: its path, modes and shadow redraws."""
         p = self.parts
         redraw = p.shadow_frames.stale(slot.index, plan, options.alpha_mask)
@@ -135,7 +144,8 @@ class FramePath:
                            COPY_OUTPUTS in copy)
         return FrameSpec(path, options.tbn, options.alpha_mask, plan, redraw, copy,
                          transmission, p.lighting.shade_variant(options), id(overlay),
-                         post=post, post_tonemap=encode_tonemap(options, linear) if post else 0)
+                         post=post, post_tonemap=encode_tonemap(options, linear) if encode else 0,
+                         lens=lens)
 
     def _post_of(self, options: RenderOptions) -> tuple[tuple[str, float], ...]:
         """The post steps `options` turn on (the last answer kept: a run of frames has one
@@ -191,27 +201,39 @@ class FramePath:
         copy = ((COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)) if readback else ()
         if outputs and readback:
             copy = (*copy, COPY_OUTPUTS)
-        pending: collections.deque[Frame] = collections.deque()
+        pending: collections.deque[tuple[Frame, bool]] = collections.deque()
+        noisy = options.noise is not None and options.noise.depth
         try:
             for camera in cameras:
                 camera = base if camera is None else as_camera(camera, base)
                 validate_camera(camera)
+                # A camera model's depth is its resampled output (render/post.py lens_steps),
+                # a noisy one the outputs' (Noise): the depth buffer has neither.
+                lens_depth = depth and readback and (camera.model != "pinhole" or noisy)
                 if len(pending) == self.parts.ring.count:
-                    yield self.collect(pending.popleft(), target, depth, readback, outputs)
-                sub = self.draw(target, camera, lights, options, copy=copy, linear=linear,
-                                timings=False, driver_time=driver_time)
-                pending.append(sub.frame)  # type: ignore[arg-type] - offscreen: always a frame
+                    yield self.collect(*pending.popleft(), target, depth, readback, outputs)
+                sub = self.draw(target, camera, lights, options,
+                                copy=self._lens_copy(target, copy) if lens_depth else copy,
+                                linear=linear, timings=False, driver_time=driver_time)
+                pending.append((sub.frame, lens_depth))  # type: ignore[arg-type] - offscreen: a frame
             while pending:
-                yield self.collect(pending.popleft(), target, depth, readback, outputs)
+                yield self.collect(*pending.popleft(), target, depth, readback, outputs)
         finally:
             # An abandoned generator leaves frames queued: finish them before anything reuses them.
-            for frame in pending:
+            for frame, _ in pending:
                 frame.wait()
 
-    def collect(self, frame: Frame, target: OffscreenTarget, depth: bool, readback: bool,
-                outputs: tuple[str, ...] = ()) -> tuple[Any, FrameStats]:
+    def _lens_copy(self, target: OffscreenTarget, copy: tuple[str, ...]) -> tuple[str, ...]:
+        """What a camera model's frame copies for `copy` with depth: the outputs (its depth
+        among them) instead of the depth buffer, which it does not draw at its size."""
+        self.parts.targets.ensure_outputs(target)
+        return (*(c for c in copy if c not in (COPY_DEPTH, COPY_OUTPUTS)), COPY_OUTPUTS)
+
+    def collect(self, frame: Frame, lens_depth: bool, target: OffscreenTarget, depth: bool,
+                readback: bool, outputs: tuple[str, ...] = ()) -> tuple[Any, FrameStats]:
         """Wait for `frame`; its timings, and with `readback` its colour (and depth, dataset
-        outputs) from `target`: (what `render` returns or None, a copy of its stats)."""
+        outputs) from `target`: (what `render` returns or None, a copy of its stats).
+        `lens_depth`: the depth is the resampled output's (a camera model's frame)."""
         slot = self.parts.slots[frame.index]
         stats = slot.stats
         t0 = time.perf_counter()
@@ -222,11 +244,17 @@ class FramePath:
         if not readback:
             return None, dataclasses.replace(stats, readback_ms=0.0)
         color = target.read_color(frame.index)
-        out_depth = linear_depth(target.read_depth(frame.index), slot.znear) if depth else None
+        images = None
+        if outputs or lens_depth:
+            dtypes = {name: (dt, ch) for name, (_, _, dt, ch) in L.OUTPUT_IMAGES.items()}
+            images = target.read_outputs(frame.index, dtypes)
+        out_depth = None
+        if depth:
+            out_depth = (images["out_depth_range"][..., 0].copy() if images is not None and lens_depth
+                         else linear_depth(target.read_depth(frame.index), slot.znear))
         result: Any = (color, out_depth) if depth else color
         if outputs:
-            dtypes = {name: (dt, ch) for name, (_, _, dt, ch) in L.OUTPUT_IMAGES.items()}
-            result = frame_outputs(target.read_outputs(frame.index, dtypes), color, outputs,
+            result = frame_outputs(images, color, outputs,  # type: ignore[arg-type]
                                    np.asarray(slot.camera_rotation).reshape(3, 3).T)
         stats.readback_ms = (time.perf_counter() - t1) * 1e3
         stats = dataclasses.replace(stats)

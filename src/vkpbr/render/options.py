@@ -8,8 +8,10 @@ straight out of the members, with no parsing per frame.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -26,23 +28,133 @@ from vkpbr.render.layouts import (
 )
 from vkpbr.scene.environment import ENV_SUFFIXES
 
-__all__ = ["RenderOptions", "ENUM_FIELDS", "POST_OPTIONS", "PostOption"]
+__all__ = ["RenderOptions", "ENUM_FIELDS", "POST_OPTIONS", "PostOption", "SensorNoise",
+           "NOISE_PRESETS", "parse_noise"]
 
 
 @dataclass(frozen=True)
 class PostOption:
     """A post step's option (render/post.py): the RenderOptions field, its command-line flag,
-    its range (0 is off) and help."""
+    its range (0 is off) and help; `parse` where the value is not a number in that range:
+    text (or its own value) -> a hashable value, None or 0 for off (the flag takes text)."""
 
     field: str
     flag: str
     low: float
     high: float
     help: str
+    parse: Callable[[Any], Any] | None = None
+
+
+@dataclass(frozen=True)
+class SensorNoise:
+    """A depth and colour sensor's noise (render/post.py Noise, shaders/post_noise*.comp),
+    drawn on the GPU from counter-based hashes of (seed, view, pixel): the same seed and
+    camera give the same noise, another camera (or seed) independent noise.
+
+    Depth (a stereo camera; the dataset outputs' depth and range, and render(depth=True)):
+    disparity d = f b / Z (f the frame's focal length fy in pixels, b `baseline` metres)
+    gets Gaussian noise of `disparity_sigma` pixels, so sigma(Z) = Z^2 sigma_d / (f b) to
+    first order, then is quantised to `disparity_step` pixels (0: none); the depth is
+    sampled `lateral_sigma` pixels off (Gaussian, nearest texel); a pixel drops out with a
+    probability rising linearly from 0 to 1 as the angle between its ray and the surface
+    normal goes from `grazing_start` to `grazing_end` degrees, with probability `edge_rate`
+    where a 4-neighbour's depth differs by more than `edge_jump` of its own, and beyond
+    `max_range` metres. Invalid depth (dropped, nothing in range, background) is 0 in depth
+    and range, as the sensors' own images write it.
+    Colour (the frame's linear radiance, before the tone map and encoding): Poisson-Gaussian
+    per channel, y = x + sqrt(x / full_well + (read_noise / full_well)^2) n, x in units where
+    1 is the full well (`full_well` electrons; `read_noise` electrons), clamped at 0.
+    0 turns a part off: disparity_sigma 0 and no dropouts (depth untouched), full_well 0.
+    """
+
+    seed: int = 0
+    baseline: float = 0.05
+    disparity_sigma: float = 0.08
+    disparity_step: float = 0.0
+    lateral_sigma: float = 0.0
+    grazing_start: float = 75.0
+    grazing_end: float = 88.0
+    edge_jump: float = 0.05
+    edge_rate: float = 1.0
+    max_range: float = 10.0
+    full_well: float = 0.0
+    read_noise: float = 0.0
+
+    @property
+    def depth(self) -> bool:
+        """Whether the depth outputs get noise or dropouts."""
+        return self.disparity_sigma > 0 or self.lateral_sigma > 0 or self.edge_rate > 0 \
+            or self.grazing_start < 90 or math.isfinite(self.max_range)
+
+    @property
+    def colour(self) -> bool:
+        return self.full_well > 0
+
+
+# Sensor presets (their data sheets' typical figures, as the frame's own focal length sees
+# them): a RealSense D435 (50 mm baseline, ~0.08 px subpixel noise, 1/32 px disparity steps),
+# a Kinect v1 (structured light, 75 mm, 1/8 px steps), a ZED 2 (120 mm, wide range).
+NOISE_PRESETS: dict[str, SensorNoise] = {
+    "realsense-d435": SensorNoise(baseline=0.05, disparity_sigma=0.08, disparity_step=1 / 32,
+                                  lateral_sigma=0.3, max_range=10.0, full_well=6000.0,
+                                  read_noise=2.5),
+    "kinect-v1": SensorNoise(baseline=0.075, disparity_sigma=0.125, disparity_step=1 / 8,
+                             lateral_sigma=0.5, grazing_start=70.0, grazing_end=85.0,
+                             max_range=4.0, full_well=4000.0, read_noise=4.0),
+    "zed2": SensorNoise(baseline=0.12, disparity_sigma=0.1, disparity_step=1 / 16,
+                        lateral_sigma=0.3, max_range=20.0, full_well=10000.0, read_noise=2.0),
+}
+
+
+def parse_noise(value: Any) -> SensorNoise | None:
+    """`noise=`: None, "none", a SensorNoise, a preset name (NOISE_PRESETS), or
+    "PRESET,key=value,..." / "key=value,..." (SensorNoise's fields; the rest default)."""
+    if value is None or isinstance(value, SensorNoise):
+        return value
+    if not isinstance(value, str):
+        raise UsageError(f"noise {value!r}: expected none, a preset ({', '.join(NOISE_PRESETS)}) "
+                         "or key=value pairs")
+    parts = [p.strip() for p in value.split(",") if p.strip()]
+    if not parts or parts == ["none"]:
+        return None
+    base = SensorNoise()
+    if "=" not in parts[0]:
+        if parts[0] not in NOISE_PRESETS:
+            raise UsageError(f"noise preset {parts[0]!r}: choose from {', '.join(NOISE_PRESETS)}")
+        base = NOISE_PRESETS[parts.pop(0)]
+    known = {f.name for f in fields(SensorNoise)}
+    changes: dict[str, Any] = {}
+    for part in parts:
+        key, _, text = part.partition("=")
+        key = key.strip().replace("-", "_")
+        if key not in known:
+            raise UsageError(f"noise: unknown parameter {key!r} (choose from {', '.join(sorted(known))})")
+        try:
+            number = float(text)
+        except ValueError:
+            raise UsageError(f"noise: {key}={text!r}: expected a number") from None
+        if key == "seed":
+            if not number.is_integer() or not 0 <= number < 2**32:
+                raise UsageError(f"noise: seed={text}: expected an integer from 0 to 2^32 - 1")
+            number = int(number)
+        elif not (number >= 0) or (math.isinf(number) and key != "max_range"):
+            raise UsageError(f"noise: {key}={text}: expected a finite number >= 0")
+        changes[key] = number
+    noise = dataclasses.replace(base, **changes)
+    if noise.baseline <= 0:
+        raise UsageError("noise: baseline must be > 0")
+    return noise
 
 
 # The post steps, in the order a frame runs them (render/post.py: each a render/post_*.py).
 POST_OPTIONS: tuple[PostOption, ...] = (
+    PostOption("noise", "--noise", 0.0, 0.0, "sensor noise: none, a preset ("
+               + ", ".join(NOISE_PRESETS) + ") or PRESET,key=value,... (seed, baseline, "
+               "disparity_sigma, disparity_step, lateral_sigma, grazing_start, grazing_end, "
+               "edge_jump, edge_rate, max_range, full_well, read_noise; docs/cameras.md); "
+               "depth noise in the dataset outputs' depth, colour noise before the encoding",
+               parse=parse_noise),
     PostOption("bloom", "--bloom", 0.0, 1.0, "bloom strength 0..1: bright light spreads over "
                "its surroundings, the frame's total light kept (default 0: off)"),
 )
@@ -98,7 +210,8 @@ class RenderOptions:
     env : str
         The environment of the physically based mode: "sky" (the built-in Preetham sky
         matched to the automatic sun), "none" (no image-based light, black background) or
-        the path of an equirectangular .hdr / .exr panorama. The course mode has none.
+        the path of an equirectangular .hdr / .exr panorama, or an LDR .jpg / .png one
+        (sRGB decoded to linear; its light is clipped at 1: scene/environment.py). The course mode has none.
     env_intensity : float
         Scale of the environment's radiance (>= 0; image-based light and background alike).
     env_rotation : float
@@ -110,6 +223,10 @@ class RenderOptions:
     bloom : float
         Bloom strength, 0..1 (0: off): a post step (render/post_bloom.py) on the frame's HDR
         radiance before its tone map; the frame's total light is kept.
+    noise : SensorNoise or str or None
+        Sensor noise (a post step: render/post.py Noise): None / "none", a preset name
+        ("realsense-d435", "kinect-v1", "zed2"), "PRESET,key=value,..." or a SensorNoise.
+        It runs before the bloom (on the sensor's image).
     """
 
     view: View = View.FINAL
@@ -130,6 +247,7 @@ class RenderOptions:
     env_rotation: float = 0.0
     env_background: bool | None = None
     bloom: float = 0.0
+    noise: SensorNoise | str | None = None
 
     def __post_init__(self) -> None:
         for name, enum_type in ENUM_FIELDS.items():
@@ -156,6 +274,9 @@ class RenderOptions:
     def _check_post(self) -> None:
         for row in POST_OPTIONS:
             value = getattr(self, row.field)
+            if row.parse is not None:
+                object.__setattr__(self, row.field, row.parse(value))
+                continue
             try:
                 number = float(value)
             except (TypeError, ValueError):
@@ -168,7 +289,7 @@ class RenderOptions:
     def _check_environment(self) -> None:
         env = os.fspath(self.env) if isinstance(self.env, os.PathLike) else self.env
         if not isinstance(env, str) or not env.strip():
-            raise UsageError(f"env {self.env!r}: expected sky, none or a .hdr / .exr file")
+            raise UsageError(f"env {self.env!r}: expected sky, none or a .hdr / .exr / .jpg / .png file")
         if env.strip().lower() in ("sky", "none"):
             env = env.strip().lower()
         elif os.path.splitext(env)[1].lower() not in ENV_SUFFIXES:

@@ -1,5 +1,15 @@
 """The post steps: each a class here, its kernel shaders/post_<name>.comp and its option
-(render/options.py POST_OPTIONS); the machinery they run on is render/post_stage.py.
+(render/options.py POST_OPTIONS); the machinery they run on is render/post_stage.py. The
+camera models' resample (`lens_frame`, `lens_steps`) runs first where the camera has a lens.
+
+Camera models (scene/lens.py): a camera whose model is not the pinhole is drawn as the wider
+pinhole `lens_frame` plans (same pose; its image covers every ray of the model's pixels, as
+densely as the model's densest pixel, at most LENS_PIXELS times the output's pixels), into
+the HDR target of that size; `lens_steps` then maps it to the model's image
+(shaders/post_lens.comp: each output pixel's ray by Newton's method, lens.glsl, then the
+source's radiance there, bilinear) and the dataset outputs through the same mapping
+(post_lens_outputs.comp: ids nearest, depth bilinear in 1/z within one instance, else
+nearest); the other post steps and the encode follow at the model's size.
 
 Bloom: bright light spreading over its surroundings, as a lens and an eye see it:
 Filament's and pygfx's physically based bloom (shaders/post_bloom.comp): no threshold; the
@@ -11,13 +21,21 @@ total radiance is kept within 0.5% at 64 pixels a side and more (3% in a 5 x 5 f
 
 from __future__ import annotations
 
+import functools
+import math
+import zlib
+
 import numpy as np
 
+from vkpbr.errors import UsageError
 from vkpbr.gpu.graph import Step
-from vkpbr.render.options import POST_OPTIONS
-from vkpbr.render.post_stage import PostContext, PostStep
+from vkpbr.render.options import POST_OPTIONS, SensorNoise
+from vkpbr.render.post_stage import PostContext, PostStep, post_unavailable
+from vkpbr.scene import lens as lenses
+from vkpbr.scene.types import Camera
 
-__all__ = ["Bloom", "BLOOM_LEVELS", "post_steps"]
+__all__ = ["Bloom", "BLOOM_LEVELS", "Noise", "noise_key", "post_steps", "LensFrame", "check_lens", "lens_frame", "lens_steps",
+           "LENS_OUTPUTS", "LENS_PIXELS"]
 
 BLOOM_LEVELS = 6  # the smallest is 1/64 of the frame: a glow some tens of pixels wide
 _DOWN, _UP, _MIX = 0, 1, 2
@@ -41,7 +59,7 @@ class Bloom(PostStep):
             return []
         names = [f"bloom{i}" for i in range(len(sizes))]
         views = [ctx.transient(n, s) for n, s in zip(names, sizes, strict=True)]
-        steps, src, src_name = [], ctx.color_view, "color"
+        steps, src, src_name = [], ctx.color_view, ctx.color_name
         for name, view, size in zip(names, views, sizes, strict=True):
             push = np.array([_DOWN, 0, 0], np.uint32)
             steps.append(Step(f"bloom_down.{name}", ctx.dispatch("post_bloom", push, src, view, size),
@@ -57,11 +75,156 @@ class Bloom(PostStep):
         push.view(np.float32)[1] = value
         steps.append(Step("bloom", ctx.dispatch("post_bloom", push, views[0], ctx.color_view,
                                                 ctx.extent),
-                          ((names[0], "storage_read"), ("color", "storage"))))
+                          ((names[0], "storage_read"), (ctx.color_name, "storage"))))
         return steps
+
+
+class Noise(PostStep):
+    """A sensor's noise (render/options.py SensorNoise): colour noise on the radiance
+    (post_noise.comp, in place), depth noise and dropouts on the dataset outputs' depth and
+    range where the frame has them (post_noise_depth.comp into a transient, then
+    post_noise_copy.comp back). Random numbers from the frame's key (seed and view:
+    `noise_key`), so the command buffer is the same for every frame."""
+
+    option = "noise"
+
+    def steps(self, ctx: PostContext, value: SensorNoise) -> list[Step]:
+        steps = []
+        if value.colour:
+            push = np.array([ctx.frame_index, 0, 0], np.uint32)
+            push.view(np.float32)[1:] = (value.full_well, value.read_noise)
+            steps.append(Step("noise", ctx.dispatch("post_noise", push, ctx.color_view,
+                                                    ctx.color_view, ctx.extent, keys=True),
+                              ((ctx.color_name, "storage"),)))
+        if value.depth and ctx.outputs:
+            steps += _depth_noise(ctx, value)
+        return steps
+
+
+def _depth_noise(ctx: PostContext, value: SensorNoise) -> list[Step]:
+    depth_name = ctx.outputs_prefix + "out_depth_range"
+    normal_name = ctx.outputs_prefix + "out_normal"
+    depth, normal = ctx.resources[depth_name].view, ctx.resources[normal_name].view
+    noisy = ctx.transient("noise_depth", ctx.extent)
+    push = np.zeros(10, np.float32)
+    push.view(np.uint32)[0] = ctx.frame_index
+    push[1:] = (value.baseline, value.disparity_sigma, value.disparity_step, value.lateral_sigma,
+                value.grazing_start, value.grazing_end, value.edge_jump, value.edge_rate,
+                value.max_range)
+    record = ctx.dispatch("post_noise_depth", push, depth, noisy, ctx.extent, normal, keys=True)
+    back = ctx.dispatch("post_noise_copy", np.zeros(1, np.uint32), noisy, depth, ctx.extent)
+    return [Step("noise_depth", record, ((depth_name, "storage_read"), (normal_name, "storage_read"),
+                                         ("noise_depth", "storage")), timed=False),
+            Step("noise_depth_copy", back, (("noise_depth", "storage_read"), (depth_name, "storage")))]
+
+
+def noise_key(noise: SensorNoise, camera: Camera, extent: tuple[int, int]) -> np.ndarray:
+    """The frame key of `camera` at `extent` with `noise` (noise.glsl FrameKey, 128 bytes):
+    a hash of the seed and the camera (pose, intrinsics, lens: the view), the output's K
+    and camera-from-world rotation (OpenCV axes)."""
+    K = camera.intrinsics(extent)
+    R = camera.world_from_camera("opencv")[:3, :3].T
+    view = np.array([*camera.eye, *camera.target, *camera.up, *K.ravel(), *camera.distortion],
+                    np.float64)
+    key = np.zeros(32, np.float32)
+    key.view(np.uint32)[0] = zlib.crc32(view.tobytes(), noise.seed & 0xFFFFFFFF)
+    key[4:8] = (K[0, 0], K[1, 1], K[0, 2], K[1, 2])
+    for i in range(3):
+        key[8 + 4 * i: 11 + 4 * i] = R[i]
+    return key
 
 
 def post_steps() -> dict[str, type[PostStep]]:
     """Every post step by its option, in POST_OPTIONS' order (each row needs its class)."""
     classes = {cls.option: cls for cls in PostStep.__subclasses__()}
     return {row.field: classes[row.field] for row in POST_OPTIONS}
+
+
+# --- camera models -----------------------------------------------------------------------
+LENS_PIXELS = 8  # the source pinhole's pixels at most this many times the output's
+LENS_GRANULE = 64  # source sizes in whole 64s: similar intrinsics share one HDR target
+# The dataset outputs the resample maps, in post_lens_outputs.comp's binding order.
+LENS_OUTPUTS = ("out_ids", "out_depth_range", "out_normal", "out_normal_geometric")
+
+
+class LensFrame(tuple):
+    """(source camera, source size (W, H), the resample's push constants as a tuple): what
+    a frame of a camera with a lens draws and resamples (hashable: FrameSpec keeps the push)."""
+
+    @property
+    def camera(self) -> Camera:
+        return self[0]
+
+    @property
+    def extent(self) -> tuple[int, int]:
+        return self[1]
+
+    @property
+    def push(self) -> tuple[float, ...]:
+        return self[2]
+
+
+def check_lens(camera: Camera, target: object, compute_path: bool) -> None:
+    """UsageError where frames of `target` cannot resample to `camera`'s model."""
+    why = post_unavailable(target, compute_path)
+    if why is not None:
+        raise UsageError(f"camera model {camera.model!r} not available here: {why}")
+
+
+def lens_frame(camera: Camera, extent: tuple[int, int], max_side: int) -> LensFrame | None:
+    """The wide pinhole a frame of `camera` at `extent` is drawn as, and the resample's
+    constants; None for a pinhole (drawn directly). UsageError beyond 150 degrees."""
+    if camera.model == "pinhole":
+        return None
+    K = camera.intrinsics(extent)
+    plan = _plan(camera.model, tuple(camera.distortion), tuple(K.ravel().tolist()), extent,
+                 max_side)
+    f, cx, cy, (w, h) = plan
+    source = Camera(eye=camera.eye, target=camera.target, up=camera.up, znear=camera.znear,
+                    zfar=camera.zfar, yfov_deg=math.degrees(2.0 * math.atan(h / (2.0 * f))),
+                    pixel_intrinsics=(f, f, cx, cy, w, h))
+    c = lenses.distortion_vector(camera.model, camera.distortion).tolist()
+    c += [0.0] * (8 - len(c))
+    push = (K[0, 0], K[1, 1], K[0, 2], K[1, 2], f, f, cx, cy, *c,
+            float(lenses.MODEL_IDS[camera.model]))
+    return LensFrame((source, (w, h), tuple(float(v) for v in push)))
+
+
+@functools.lru_cache(maxsize=64)
+def _plan(model: str, distortion: tuple[float, ...], k: tuple[float, ...],
+          extent: tuple[int, int], max_side: int) -> tuple[float, float, float, tuple[int, int]]:
+    """scene/lens.py source_view, kept per lens and size (a run of frames has one)."""
+    view = lenses.source_view(model, distortion, np.array(k).reshape(3, 3),
+                              extent, LENS_PIXELS * extent[0] * extent[1], max_side,
+                              LENS_GRANULE)
+    return view.focal, view.cx, view.cy, view.size
+
+
+def _lens_push(push: tuple[float, ...]) -> np.ndarray:
+    """lens.glsl's LensPush: 16 floats, then the model as an int (and padding)."""
+    out = np.zeros(20, np.float32)
+    out[:16] = push[:16]
+    out.view(np.int32)[16] = int(push[16])
+    return out
+
+
+def lens_steps(ctx: PostContext, push: tuple[float, ...], extent: tuple[int, int],
+               outputs: bool) -> list[Step]:
+    """The resample of the frame's HDR radiance ("color", the source's size) into the model's
+    image of `extent` (the transient "lens", which the steps after read: ctx now names it),
+    and with `outputs` of the frame's dataset outputs into the output target's ("out.")."""
+    data = _lens_push(push)
+    steps = []
+    if outputs:  # (untimed: FrameStats.pass_ms["lens"] times both kernels)
+        src = [ctx.resources[n].view for n in LENS_OUTPUTS]
+        dst = [ctx.resources["out." + n].view for n in LENS_OUTPUTS]
+        record = ctx.dispatch("post_lens_outputs", data, src[0], src[1], extent, *src[2:], *dst)
+        uses = (*((n, "storage_read") for n in LENS_OUTPUTS),
+                *(("out." + n, "storage") for n in LENS_OUTPUTS))
+        steps.append(Step("lens_outputs", record, uses, timed=False))
+    view = ctx.transient("lens", extent)
+    steps.append(Step("lens", ctx.dispatch("post_lens", data, ctx.color_view, view, extent),
+                      ((ctx.color_name, "storage_read"), ("lens", "storage"))))
+    ctx.color_view, ctx.color_name, ctx.extent = view, "lens", extent
+    ctx.outputs_prefix = "out."
+    return steps

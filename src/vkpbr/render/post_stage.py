@@ -28,6 +28,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from vkpbr.errors import UsageError
+from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.compute import ComputePipeline, groups
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
@@ -42,6 +43,8 @@ __all__ = ["PostStep", "PostKernels", "PostContext", "enabled_post",
            "encode_step", "encode_tonemap", "post_unavailable", "check_post"]
 
 _SETS_PER_POOL = 64
+KEY_BYTES = 128  # noise.glsl FrameKey
+MAX_FRAME_SLOTS = 16  # frame slots with a key (gpu/frames.py rings have 3)
 HDR_FORMAT = "VK_FORMAT_R32G32B32A32_SFLOAT"  # the target's float colour, and transients
 
 
@@ -59,8 +62,8 @@ def enabled_post(options: RenderOptions) -> tuple[tuple[str, float], ...]:
     """(option, value) of the post steps `options` turn on, in POST_OPTIONS' order.
     VKPBR_HDR_FRAMES=1 (benchmarks/bench_post.py) sends frames without one through the HDR
     target and the encode all the same ("hdr", no step): what that costs, measured."""
-    out = tuple((row.field, float(getattr(options, row.field))) for row in POST_OPTIONS
-                if getattr(options, row.field))
+    out = tuple((row.field, getattr(options, row.field) if row.parse else float(getattr(options, row.field)))
+                for row in POST_OPTIONS if getattr(options, row.field))
     if not out and os.environ.get("VKPBR_HDR_FRAMES") == "1":
         return (("hdr", 0.0),)
     return out
@@ -74,27 +77,62 @@ def post_unavailable(target: Any, compute_path: bool) -> str | None:
 
 
 class PostKernels:
-    """A renderer's post kernels (a pipeline each, one set layout: two storage images),
-    their descriptor sets and the steps' transient images (made on first use, kept)."""
+    """A renderer's post kernels (a pipeline each; set layouts of N storage images, two for
+    most kernels: source and destination), their descriptor sets and the steps' transient
+    images (made on first use, kept)."""
 
     def __init__(self, device: Device) -> None:
         self.device = device
-        self.layout = DescriptorSetLayout(device, [
-            BindingSpec(b, "storage_image", ("compute", "fragment")) for b in (0, 1)])
+        self._layouts: dict[int, DescriptorSetLayout] = {}
+        self.layout = self.set_layout(2)
         self._graphics_layout: PipelineLayout | None = None
         self._graphics: dict[tuple, Pipeline] = {}
-        self._pools: list[DescriptorPool] = []
-        self._free = 0
+        self._pools: dict[int, list[DescriptorPool]] = {}
+        self._free: dict[int, int] = {}
         self._pipelines: dict[str, ComputePipeline] = {}
-        self._sets: dict[tuple[int, int], Any] = {}
+        self._sets: dict[tuple[int, ...], Any] = {}
         self._images: dict[tuple, tuple[Image, ImageView]] = {}
+        self._keys: tuple[DescriptorSetLayout, Any, Buffer, DescriptorPool] | None = None
 
-    def pipeline(self, name: str, push_bytes: int) -> ComputePipeline:
-        """Kernel shaders/spv/<name>.comp.spv."""
+    def set_layout(self, count: int) -> DescriptorSetLayout:
+        """The set layout of `count` storage images (bindings 0..count-1), made on first use."""
+        if count not in self._layouts:
+            self._layouts[count] = DescriptorSetLayout(self.device, [
+                BindingSpec(b, "storage_image", ("compute", "fragment")) for b in range(count)])
+        return self._layouts[count]
+
+    def pipeline(self, name: str, push_bytes: int, images: int = 2,
+                 keys: bool = False) -> ComputePipeline:
+        """Kernel shaders/spv/<name>.comp.spv, binding `images` storage images (set 0) and,
+        with `keys`, the frames' keys (set 1: noise.glsl FrameKeys)."""
         if name not in self._pipelines:
+            layouts = [self.set_layout(images)] + ([self.keys()[0]] if keys else [])
             self._pipelines[name] = ComputePipeline(self.device, SPV_DIR / f"{name}.comp.spv",
-                                                    [self.layout], push_bytes=push_bytes)
+                                                    layouts, push_bytes=push_bytes)
         return self._pipelines[name]
+
+    def keys(self) -> tuple[DescriptorSetLayout, Any, Buffer]:
+        """The frames' keys (noise.glsl FrameKey, KEY_BYTES a frame slot, host-visible: each
+        frame writes its own before it is submitted): (set layout, set, buffer), made once."""
+        if self._keys is None:
+            layout = DescriptorSetLayout(self.device, [BindingSpec(0, "storage", ("compute",))])
+            pool = DescriptorPool(self.device, [(layout, 1)])
+            buffer = Buffer(self.device, KEY_BYTES * MAX_FRAME_SLOTS,
+                            self.device.vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, host_visible=True,
+                            name="post frame keys")
+            dset = pool.allocate(layout)
+            writer = DescriptorWriter(self.device)
+            writer.storage(dset, 0, buffer)
+            writer.update()
+            self._keys = (layout, dset, buffer, pool)
+        return self._keys[:3]
+
+    def write_key(self, frame_index: int, key: np.ndarray) -> None:
+        """Frame slot `frame_index`'s key (KEY_BYTES: noise.glsl FrameKey), written before
+        its submission (its previous one has finished: the ring waited for it)."""
+        if frame_index >= MAX_FRAME_SLOTS:
+            raise ValueError(f"frame slot {frame_index}: at most {MAX_FRAME_SLOTS}")
+        self.keys()[2].write(np.ascontiguousarray(key).view(np.uint8), frame_index * KEY_BYTES)
 
     def fragment_pipeline(self, name: str, target: Any, push_bytes: int) -> Pipeline:
         """Fragment shader shaders/spv/<name>.frag.spv over a fullscreen triangle, drawn into
@@ -112,19 +150,21 @@ class PostKernels:
             self._graphics[key] = Pipeline(self.device, spec, self._graphics_layout, SPV_DIR)
         return self._graphics[key]
 
-    def image_set(self, src: Any, dst: Any) -> Any:
-        """The set binding view `src` (binding 0) and view `dst` (binding 1), as storage."""
-        key = (int(self.device.vk.ffi.cast("uintptr_t", src)),
-               int(self.device.vk.ffi.cast("uintptr_t", dst)))
+    def image_set(self, *views: Any) -> Any:
+        """The set binding `views` (VkImageViews) as storage images 0, 1, ...: a kernel's
+        source(s) then destination(s)."""
+        key = tuple(int(self.device.vk.ffi.cast("uintptr_t", v)) for v in views)
         if key not in self._sets:
-            if not self._pools or self._free == 0:
-                self._pools.append(DescriptorPool(self.device, [(self.layout, _SETS_PER_POOL)]))
-                self._free = _SETS_PER_POOL
-            dset = self._pools[-1].allocate(self.layout)
-            self._free -= 1
+            n, layout = len(views), self.set_layout(len(views))
+            if not self._free.get(n):
+                self._pools.setdefault(n, []).append(
+                    DescriptorPool(self.device, [(layout, _SETS_PER_POOL)]))
+                self._free[n] = _SETS_PER_POOL
+            dset = self._pools[n][-1].allocate(layout)
+            self._free[n] -= 1
             writer = DescriptorWriter(self.device)
-            writer.storage_image(dset, 0, _Handle(src))
-            writer.storage_image(dset, 1, _Handle(dst))
+            for binding, view in enumerate(views):
+                writer.storage_image(dset, binding, _Handle(view))
             writer.update()
             self._sets[key] = dset
         return self._sets[key]
@@ -159,10 +199,19 @@ class PostKernels:
         if self._graphics_layout is not None:
             self._graphics_layout.destroy()
             self._graphics_layout = None
-        for pool in self._pools:
+        for pools in self._pools.values():
+            for pool in pools:
+                pool.destroy()
+        self._pools, self._sets, self._free = {}, {}, {}
+        for layout in self._layouts.values():
+            layout.destroy()
+        self._layouts.clear()
+        if self._keys is not None:
+            layout, _, buffer, pool = self._keys
             pool.destroy()
-        self._pools, self._sets = [], {}
-        self.layout.destroy()
+            layout.destroy()
+            buffer.destroy()
+            self._keys = None
 
 
 @dataclass
@@ -181,6 +230,12 @@ class PostContext:
     extent: tuple[int, int]
     resources: dict[str, Any]
     color_view: Any  # the HDR "color" image's storage view (a VkImageView)
+    # The graph resource holding the radiance the next steps read: "color", or a step's own
+    # image where it changes the size (the camera models' resample: render/post.py Lens).
+    color_name: str = "color"
+    frame_index: int = 0  # the frame slot (its key: PostKernels.write_key)
+    outputs: bool = False  # whether the frame copies out the dataset outputs
+    outputs_prefix: str = ""  # where they are: the HDR target's, or "out." (a lens frame's)
 
     def transient(self, name: str, extent: tuple[int, int]) -> Any:
         """Transient image `name` as a graph resource (added to the frame's); its view."""
@@ -189,15 +244,19 @@ class PostContext:
         return view.handle
 
     def dispatch(self, name: str, push: np.ndarray, src: Any, dst: Any,
-                 extent: tuple[int, int]) -> Callable[[Any], None]:
-        """A recorder of kernel `name` over `extent` with views `src`, `dst` and `push`."""
+                 extent: tuple[int, int], *more: Any, keys: bool = False) -> Callable[[Any], None]:
+        """A recorder of kernel `name` over `extent` with views `src`, `dst` (and `more`
+        views after them: bindings 2, 3, ...) and `push`; `keys`: the frames' keys as set 1."""
         kernels = self.kernels
-        dset = kernels.image_set(src, dst)
-        pipe = kernels.pipeline(name, push.nbytes)
+        dset = kernels.image_set(src, dst, *more)
+        pipe = kernels.pipeline(name, push.nbytes, 2 + len(more), keys)
+        key_set = kernels.keys()[1] if keys else None
 
         def record(cmd: Any) -> None:
             cmd.bind_pipeline(pipe)
             cmd.bind_set(0, dset)
+            if key_set is not None:
+                cmd.bind_set(1, key_set)
             cmd.push(push)
             cmd.dispatch(*groups((*extent, 1), (8, 8, 1)))
         return record
@@ -219,7 +278,7 @@ def encode_step(ctx: PostContext, out: Any, tonemap: int) -> Step:
     if getattr(out, "compute", False):
         record = ctx.dispatch("post_encode", push, ctx.color_view, out.storage_view.handle,
                               ctx.extent)
-        return Step("encode", record, (("color", "storage_read"), ("out.color", "storage")))
+        return Step("encode", record, ((ctx.color_name, "storage_read"), ("out.color", "storage")))
     pipe = ctx.kernels.fragment_pipeline("post_encode", out, push.nbytes)
     dset = ctx.kernels.image_set(ctx.color_view, ctx.color_view)  # (binding 1 unread)
 
@@ -230,7 +289,7 @@ def encode_step(ctx: PostContext, out: Any, tonemap: int) -> Step:
         cmd.draw(3)
 
     rendering = Rendering("out.color", "out.depth", None, None, store_depth=out.stores_depth)
-    return Step("encode", record, (("color", "fragment_storage_read"),), rendering)
+    return Step("encode", record, ((ctx.color_name, "fragment_storage_read"),), rendering)
 
 
 def check_post(options: RenderOptions, target: Any, compute_path: bool) -> bool:

@@ -166,8 +166,8 @@ class FrameRecorder:
             steps = FrameSteps(self, drawn or target, frame.index, image, spec, objects, groups,
                                output=target if drawn is not None else None)
             ids = (tid,) if drawn is None else (tid, id(drawn))
-            rec = self._record(frame, steps.steps(), steps.resources, target.extent, ids,
-                               objects.blend_order)
+            rec = self._record(frame, steps.steps(), steps.resources, (drawn or target).extent,
+                               ids, objects.blend_order)
             self._recorded[key] = rec
         frame.stamp_names = rec.stamp_names
         return rec.cmd

@@ -270,7 +270,7 @@ class Renderer:
         """
         views = as_camera_batch(cameras, self.default_camera())
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
-        route, wanted = batch_route(self.parts, len(views), size, opts, linear, depth, outputs,
+        route, wanted = batch_route(self.parts, views, size, opts, linear, depth, outputs,
                                     device, out)
         each = (views.camera(i) for i in range(len(views)))  # view by view, as `render` draws
         if route == "views":  # (render/batch_route.py says when)

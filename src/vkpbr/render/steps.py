@@ -11,6 +11,7 @@ passes draw over it (and test that depth without writing it: a pre-pass for them
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
@@ -21,7 +22,7 @@ from vkpbr.render import layouts as L
 from vkpbr.render.compute_path import GENERAL_SHADING, ShadeVariant
 from vkpbr.render.passes import PASSES, PassContext, PassSpec, classify, record_pass
 from vkpbr.render.paths import COPY_PATHS, PATHS
-from vkpbr.render.post import post_steps
+from vkpbr.render.post import lens_steps, post_steps
 from vkpbr.render.post_stage import PostContext, encode_step
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.render.transmission import TRANSMISSIVE, copy_classes
@@ -59,6 +60,7 @@ class FrameSpec(NamedTuple):
     batch: tuple = ()  # what a layered batch's own groups depend on (render/batch.py)
     post: tuple[tuple[str, float], ...] = ()  # the post steps on (post_stage.enabled_post)
     post_tonemap: int = 0  # the encode's tone map (TONEMAP_*)
+    lens: tuple[float, ...] = ()  # a camera model's resample constants (render/post.py)
 
 
 class FrameObjects(NamedTuple):
@@ -101,7 +103,10 @@ class FrameSteps:
         self.set0 = objects.set0 if objects.set0 is not None else self.slot.set0
         self.resources: dict[str, Any] = dict(target.resources(image, frame_index))
         if self.output is not target:
-            self.resources.update({f"out.{k}": v for k, v in
+            # (a camera model's frame draws a larger image than its output: the output's own
+            # renderings, the encode's and the overlay's, take the output's size)
+            own = self.output.extent if self.output.extent != target.extent else None
+            self.resources.update({f"out.{k}": _sized(v, own) for k, v in
                                    self.output.resources(image, frame_index).items()})
         self._color_written = self._depth_written = False
         self._rendering: Rendering | None = None
@@ -281,26 +286,32 @@ class FrameSteps:
             self._rendering = Rendering("out.color", "out.depth", None, None,
                                         store_depth=self.output.stores_depth)
         return [Step("overlay", lambda cmd: overlay.record(cmd, self.frame_index,
-                                                           self.target.extent),
+                                                           self.output.extent),
                      rendering=self._rendering_for(), timed=False)]
 
     def _post(self) -> list[Step]:
-        """The post steps on "color" (HDR radiance), then the encode into "out.color"."""
-        if not self.spec.post:
+        """The post steps on "color" (HDR radiance), then the encode into "out.color"; a
+        camera model's resample first (render/post.py lens_steps)."""
+        if not self.spec.post and not self.spec.lens:
             return []
         ctx = PostContext(self.r.post_kernels(), self.target.extent, self.resources,
-                          self.target.storage_view.handle)
+                          self.target.storage_view.handle, frame_index=self.frame_index,
+                          outputs=COPY_OUTPUTS in self.spec.copy)
+        steps = (lens_steps(ctx, self.spec.lens, self.output.extent, COPY_OUTPUTS in self.spec.copy)
+                 if self.spec.lens else [])
         registry = post_steps()
-        steps = [s for option, value in self.spec.post if option in registry
-                 for s in registry[option]().steps(ctx, value)]  # ("hdr": none, post_stage)
+        steps += [s for option, value in self.spec.post if option in registry
+                  for s in registry[option]().steps(ctx, value)]  # ("hdr": none, post_stage)
         encode = encode_step(ctx, self.output, self.spec.post_tonemap)
         self._rendering = encode.rendering  # (the overlay draws on in it: out.color)
         return [*steps, encode]
 
     def _finish(self) -> list[Step]:
         if self.output is not self.target:  # depth and outputs from the frame's HDR target
+            # (a camera model's resample wrote the output target's own outputs)
             return self.output.finish_steps(self.image, self.frame_index, self.spec.copy,
-                                            prefix="out.", sources=self.target)
+                                            prefix="out.",
+                                            sources=None if self.spec.lens else self.target)
         if self.spec.tiles is not None:
             return self.target.finish_steps(self.image, self.frame_index, self.spec.copy,
                                             self.spec.tiles, self.objects.external)
@@ -345,6 +356,13 @@ class _CopySteps:
         out.append(Step("background", _pass_recorder(ctx, _PASS_BY_NAME["background"]),
                         rendering=Rendering("copy.color", "copy.depth", None, None)))
         return [*out, t.mip_step("mips", "copy.")]
+
+
+def _sized(resource: Any, extent: tuple[int, int] | None) -> Any:
+    """`resource` with its own `extent` where one is given (ImageResources only)."""
+    if extent is None or not hasattr(resource, "extent"):
+        return resource
+    return dataclasses.replace(resource, extent=extent)
 
 
 def _pass_recorder(ctx: PassContext, p: PassSpec) -> Callable[[Commands], None]:

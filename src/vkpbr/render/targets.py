@@ -74,12 +74,15 @@ class Targets:
         return OffscreenTarget(self.device, size, "float" if linear else "srgb", self.msaa,
                                (*self.background, 1.0), compute=self.device.compute_path)
 
-    def post(self, target: FrameTarget, copy: tuple[str, ...]) -> OffscreenTarget:
+    def post(self, target: FrameTarget, copy: tuple[str, ...],
+             extent: tuple[int, int] | None = None) -> OffscreenTarget:
         """The HDR target frames of `target` with post steps draw into (render/post_stage.py): the
-        float colour (and depth, ids, outputs) of its size, kept here."""
-        key = (*target.extent, "post")
+        float colour (and depth, ids, outputs) of its size (or `extent`: a camera model's
+        wider source, render/post.py lens_frame), kept here."""
+        extent = target.extent if extent is None else extent
+        key = (*extent, "post")
         if key not in self._kept:
-            self._kept[key] = self.new(target.extent, True)
+            self._kept[key] = self.new(extent, True)
         hdr = self._kept[key]
         if COPY_OUTPUTS in copy:
             self.ensure_outputs(hdr)

@@ -437,7 +437,7 @@ def read_baked(path: str | os.PathLike[str], *, mmap: bool = False) -> BakedScen
             images=images,
             nodes=[Node(int(n["mesh"]), mats[i], n["name"]) for i, n in enumerate(doc["nodes"])],
             lights=[_build(Light, dict(x), ("position", "color", "direction")) for x in doc["lights"]],
-            cameras=[_build(Camera, dict(c), ("eye", "target", "up")) for c in doc["cameras"]],
+            cameras=[_build(Camera, dict(c), ("eye", "target", "up", "distortion")) for c in doc["cameras"]],
             source_key=doc["source"]["sha256"], source_files=list(doc["source"]["files"]),
         )
     except (KeyError, TypeError, ValueError, AttributeError) as exc:

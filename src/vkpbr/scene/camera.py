@@ -36,6 +36,7 @@ from vkpbr.scene._checks import (
     size_arg,
     vec3,
 )
+from vkpbr.scene.lens import check_model
 
 # The narrowest field of view: 1 / tan(fov / 2) stays far inside float32 (~1e6 here).
 MIN_YFOV_DEG = 1e-4
@@ -53,6 +54,12 @@ class Camera:
         projection (`intrinsics(size)` scales it to the image size) and `yfov_deg` must be
         its vertical field of view, 2 atan(height / (2 fy)); `validate_camera` checks the two
         agree. To change the field of view, set pixel_intrinsics to None.
+    model: "pinhole" (default), "opencv" (lens distortion), "opencv_fisheye" or
+        "equidistant" (fisheye lenses, up to 150 degrees across); `distortion` its
+        coefficients in OpenCV's order: (k1, k2, p1, p2[, k3[, k4, k5, k6]]) for "opencv",
+        (k1, k2, k3, k4) for "opencv_fisheye", none for the others (vkpbr.scene.lens,
+        docs/cameras.md). A model other than the pinhole needs pixel_intrinsics; it is
+        rendered as a wider pinhole and resampled on the GPU (render/post.py Lens).
 
     Conversions from and to the poses other tools use (OpenCV's K and world-from-camera,
     OpenGL/NeRF/Blender 4x4 poses) live in `vkpbr.scene.camera`; the methods below delegate.
@@ -66,6 +73,8 @@ class Camera:
     zfar: float | None = None
     name: str = ""
     pixel_intrinsics: tuple[float, float, float, float, int, int] | None = None
+    model: str = "pinhole"
+    distortion: tuple[float, ...] = ()
 
     # The imports are deferred: vkpbr.scene.camera builds Cameras, so it imports this module.
     def intrinsics(self, size: tuple[int, int]) -> np.ndarray:
@@ -83,11 +92,14 @@ class Camera:
 
     @classmethod
     def from_opencv(cls, K: object, world_from_camera: object, size: object,
-                    name: str = "") -> Camera:
-        """A camera from OpenCV's K (3, 3), world-from-camera (4, 4) and image size (W, H).
-        See `vkpbr.scene.camera.from_opencv`."""
+                    name: str = "", model: str = "pinhole",
+                    distortion: object = ()) -> Camera:
+        """A camera from OpenCV's K (3, 3), world-from-camera (4, 4) and image size (W, H),
+        with a lens `model` and its `distortion` coefficients (OpenCV's distCoeffs or the
+        fisheye D). See `vkpbr.scene.camera.from_opencv`."""
 
-        return from_opencv(K, world_from_camera, size, name=name)
+        return from_opencv(K, world_from_camera, size, name=name, model=model,
+                           distortion=distortion)
 
     @classmethod
     def from_pose(cls, matrix: object, convention: Literal["opengl", "opencv"] = "opengl",
@@ -189,6 +201,13 @@ def _camera_problem(camera: Camera) -> str | None:
         return f"near plane {near} must be a finite number > 0 (or None: automatic)"
     if far is not None and not far > (near if near is not None else 0.0):
         return f"far plane {far} must be beyond the near plane {near} (or None: automatic)"
+    if camera.model != "pinhole" or camera.distortion:
+        problem = check_model(camera.model, camera.distortion)
+        if problem is None and camera.pixel_intrinsics is None:
+            problem = (f"model {camera.model!r} needs pixel_intrinsics (fx, fy, cx, cy, width, "
+                       "height): make it with Camera.from_opencv(K, pose, size, model=...)")
+        if problem is not None:
+            return problem
     if camera.pixel_intrinsics is not None:
         return _intrinsics_problem(camera.pixel_intrinsics, yfov)
     return None
@@ -342,7 +361,8 @@ def _pose_fields(pose: object, convention: object, what: str = "world_from_camer
     return {"eye": eye, "target": target, "up": up}
 
 
-def from_opencv(K: object, world_from_camera: object, size: object, name: str = "") -> Camera:
+def from_opencv(K: object, world_from_camera: object, size: object, name: str = "",
+                model: str = "pinhole", distortion: object = ()) -> Camera:
     """A camera from OpenCV's calibration and pose.
 
     K: (3, 3) intrinsics [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] in pixels, centre of the
@@ -352,12 +372,28 @@ def from_opencv(K: object, world_from_camera: object, size: object, name: str = 
         camera-from-world: invert it.)
     size: (W, H) of the image K belongs to.
 
+    model, distortion: the lens (vkpbr.scene.lens): "pinhole", "opencv" with
+        cv2.projectPoints' distCoeffs (k1, k2, p1, p2[, k3[, k4, k5, k6]]), "opencv_fisheye"
+        with cv2.fisheye's D (k1, k2, k3, k4), or "equidistant".
+
     Returns a Camera with eye = the translation, target = eye + forward (z), up = -y,
     yfov_deg = 2 atan(H / (2 fy)) and pixel_intrinsics = (fx, fy, cx, cy, W, H); znear and
     zfar None (derived per render, infinite).
     """
     with context("from_opencv"):
-        return Camera(**_opencv_fields(K, world_from_camera, size), name=name)  # type: ignore[arg-type]
+        fields = _opencv_fields(K, world_from_camera, size)
+        fields.update(_lens_fields(model, distortion))
+        return Camera(**fields, name=name)  # type: ignore[arg-type]
+
+
+def _lens_fields(model: object, distortion: object) -> dict[str, object]:
+    """Camera fields `model` and `distortion` (a tuple of floats), checked (UsageError)."""
+    if isinstance(distortion, np.ndarray):
+        distortion = distortion.ravel().tolist()
+    problem = check_model(model, distortion)
+    if problem is not None:
+        raise UsageError(problem)
+    return {"model": model, "distortion": tuple(float(v) for v in distortion)}  # type: ignore[attr-defined]
 
 
 def from_pose(matrix: object, convention: Convention = "opengl", yfov_deg: float | None = None,
@@ -399,6 +435,8 @@ class Pose:
     name: str = ""
     where: str = "camera"
     time: float | None = None  # the scene's animation time of this view ("time"), if given
+    model: str = "pinhole"
+    distortion: tuple[float, ...] = ()
 
     def camera(self, base: Camera) -> Camera:
         """`base` with this pose applied. Only a pose without `up` can fail here (the base's up
@@ -408,6 +446,7 @@ class Pose:
         if self.pixel_intrinsics is not None or self.yfov_deg is not None:
             fields["yfov_deg"] = self.yfov_deg
             fields["pixel_intrinsics"] = self.pixel_intrinsics
+            fields["model"], fields["distortion"] = self.model, self.distortion
         cam = dataclasses.replace(base, **fields)  # type: ignore[arg-type]
         problem = _camera_problem(cam)
         if problem is not None:
@@ -417,7 +456,7 @@ class Pose:
 
 _EYE_KEYS = ("eye", "target", "up", "fov", "name", "time")
 _MATRIX_KEYS = ("world_from_camera", "convention", "fov", "name", "time")
-_K_KEYS = ("K", "world_from_camera", "size", "convention", "name", "time")
+_K_KEYS = ("K", "world_from_camera", "size", "convention", "name", "model", "distortion", "time")
 
 
 def _pose_from_dict(d: Mapping[str, object]) -> dict[str, object]:
@@ -450,6 +489,7 @@ def _pose_from_dict(d: Mapping[str, object]) -> dict[str, object]:
         fields["time"] = float(t)
     if "K" in d:
         fields.update(_opencv_fields(d["K"], _pose_from_convention(d), d["size"]))
+        fields.update(_lens_fields(d.get("model", "pinhole"), d.get("distortion", ())))
         return fields
     if "world_from_camera" in d:
         fields.update(_pose_fields(d["world_from_camera"], d["convention"]))

@@ -64,6 +64,9 @@ class CameraBatch:
     intrinsics: np.ndarray | None = None  # (B, 6) float64: fx, fy, cx, cy, W, H
     znear: np.ndarray | None = None  # (B,) float64, NaN: derived per render
     zfar: np.ndarray | None = None  # (B,) float64, NaN: from the scene's bounds
+    # Each view's (model, distortion) where any view has a lens (scene/lens.py): such
+    # batches render view by view (render/batch_route.py), each resampled to its model.
+    lenses: tuple[tuple[str, tuple[float, ...]], ...] | None = None
 
     def __len__(self) -> int:
         return len(self.eye)
@@ -136,11 +139,13 @@ class CameraBatch:
         if has_k:
             intr = np.array([c.pixel_intrinsics if c.pixel_intrinsics is not None
                              else (math.nan,) * 6 for c in cams], dtype=np.float64)
+        lenses = (tuple((c.model, tuple(c.distortion)) for c in cams)
+                  if any(c.model != "pinhole" for c in cams) else None)
         return cls(np.array([c.eye for c in cams], dtype=np.float64),
                    np.array([c.target for c in cams], dtype=np.float64),
                    np.array([c.up for c in cams], dtype=np.float64),
                    np.array([c.yfov_deg for c in cams], dtype=np.float64),
-                   intr, planes("znear"), planes("zfar"))
+                   intr, planes("znear"), planes("zfar"), lenses)
 
     def camera(self, i: int) -> Camera:
         """View `i` as a Camera (rendered alone, it gives view i's pixels)."""
@@ -151,9 +156,11 @@ class CameraBatch:
         if self.intrinsics is not None and not math.isnan(self.intrinsics[i, 0]):
             fx, fy, cx, cy, w, h = (float(v) for v in self.intrinsics[i])
             k = (fx, fy, cx, cy, int(w), int(h))
+        model, distortion = self.lenses[i] if self.lenses is not None else ("pinhole", ())
         return Camera(eye=tuple(map(float, self.eye[i])), target=tuple(map(float, self.target[i])),
                       up=tuple(map(float, self.up[i])), yfov_deg=float(self.yfov_deg[i]),
-                      znear=opt(self.znear), zfar=opt(self.zfar), pixel_intrinsics=k)
+                      znear=opt(self.znear), zfar=opt(self.zfar), pixel_intrinsics=k,
+                      model=model, distortion=distortion)
 
     def validate(self) -> None:
         """Raise a one-line UsageError naming the first view `validate_camera` would refuse."""

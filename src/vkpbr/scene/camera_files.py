@@ -30,6 +30,7 @@ from vkpbr.atomic import atomic_writer
 from vkpbr.errors import UsageError
 from vkpbr.scene._checks import context, size_arg
 from vkpbr.scene.camera import Camera, corner_from_opencv, from_opencv, opencv_from_corner
+from vkpbr.scene.lens import COEFFICIENTS, distortion_vector
 from vkpbr.scene.poses import load_poses
 
 __all__ = [
@@ -109,13 +110,26 @@ def _cameras(cameras: Sequence[Camera], what: str) -> list[Camera]:
     return cams
 
 
-def _nerf_intrinsics(K: np.ndarray, w: int, h: int) -> dict[str, float | int]:
+def _nerf_intrinsics(K: np.ndarray, w: int, h: int, cam: Camera) -> dict[str, object]:
     k = corner_from_opencv(K)
     fl_x, fl_y = float(k[0, 0]), float(k[1, 1])
     return {"camera_angle_x": 2.0 * math.atan(w / (2.0 * fl_x)),
             "camera_angle_y": 2.0 * math.atan(h / (2.0 * fl_y)),
             "fl_x": fl_x, "fl_y": fl_y, "cx": float(k[0, 2]), "cy": float(k[1, 2]),
-            "w": w, "h": h}
+            "w": w, "h": h, **_nerf_lens(cam)}
+
+
+def _nerf_lens(cam: Camera) -> dict[str, object]:
+    """nerfstudio's lens keys: "camera_model" OPENCV with k1, k2, p1, p2 (k3..k6 where
+    given) or OPENCV_FISHEYE with k1..k4 (an equidistant lens: all 0); none for a pinhole."""
+    if cam.model == "pinhole":
+        return {}
+    if cam.model == "opencv":
+        names = COEFFICIENTS["opencv"][: len(cam.distortion)]
+        return {"camera_model": "OPENCV", **dict(zip(names, cam.distortion, strict=True))}
+    values = distortion_vector(cam.model, cam.distortion) if cam.model == "opencv_fisheye" else (0.0,) * 4
+    return {"camera_model": "OPENCV_FISHEYE",
+            **{k: float(v) for k, v in zip(("k1", "k2", "k3", "k4"), values, strict=True)}}
 
 
 def transforms_dict(cameras: Sequence[Camera], size: tuple[int, int],
@@ -129,12 +143,15 @@ def transforms_dict(cameras: Sequence[Camera], size: tuple[int, int],
     read both). Each frame has `file_path` (default "frame_00000.png", ..., the names
     `vkpbr render --cameras` writes; relative to the JSON file's folder) and
     `transform_matrix`, the (4, 4) world-from-camera pose in OpenGL axes; with `times`,
-    each frame's animation "time" in seconds (what `--cameras` reads back).
+    each frame's animation "time" in seconds (what `--cameras` reads back). A lens is written
+    as nerfstudio writes it: "camera_model" OPENCV with k1, k2, p1, p2 (and k3..k6 where the
+    camera has them), OPENCV_FISHEYE with k1..k4 (an equidistant lens as OPENCV_FISHEYE with
+    zeros).
     """
     w, h = size_arg(size, "transforms.json: size")
     cams = _cameras(cameras, "transforms.json")
     paths = _names(file_paths, len(cams), "transforms.json: file_paths", "frame_{:05d}.png")
-    intrinsics = [_nerf_intrinsics(c.intrinsics((w, h)), w, h) for c in cams]
+    intrinsics = [_nerf_intrinsics(c.intrinsics((w, h)), w, h, c) for c in cams]
     shared = all(k == intrinsics[0] for k in intrinsics)
     doc: dict[str, object] = dict(intrinsics[0]) if shared else {}
     frames = []
@@ -184,9 +201,20 @@ def read_transforms(path: str | os.PathLike[str]) -> list[Camera]:
 # -- COLMAP text model -------------------------------------------------------------------------
 
 
-def _colmap_params(K: np.ndarray) -> tuple[float, float, float, float]:
+def _colmap_params(K: np.ndarray, cam: Camera) -> tuple[str, tuple[float, ...]]:
+    """COLMAP's camera model and PARAMS of `cam` with `K`: PINHOLE, OPENCV (k1 k2 p1 p2),
+    FULL_OPENCV (k1 k2 p1 p2 k3 k4 k5 k6) or OPENCV_FISHEYE (k1 k2 k3 k4)."""
     k = corner_from_opencv(K)
-    return float(k[0, 0]), float(k[1, 1]), float(k[0, 2]), float(k[1, 2])
+    base = (float(k[0, 0]), float(k[1, 1]), float(k[0, 2]), float(k[1, 2]))
+    if cam.model == "pinhole":
+        return "PINHOLE", base
+    if cam.model == "opencv":
+        full = distortion_vector("opencv", cam.distortion)
+        if len(cam.distortion) == 4:
+            return "OPENCV", (*base, *map(float, full[:4]))
+        return "FULL_OPENCV", (*base, *map(float, full))
+    return "OPENCV_FISHEYE", (*base, *map(float, distortion_vector("opencv_fisheye", cam.distortion
+                                                                     if cam.model == "opencv_fisheye" else ())))
 
 
 def colmap_text(cameras: Sequence[Camera], size: tuple[int, int],
@@ -194,8 +222,9 @@ def colmap_text(cameras: Sequence[Camera], size: tuple[int, int],
     """COLMAP's text model of `cameras` rendered at `size`: {"cameras.txt": ...,
     "images.txt": ..., "points3D.txt": ...}.
 
-    cameras.txt has one PINHOLE camera (fx fy cx cy, top-left pixel centre at (0.5, 0.5))
-    per distinct K; images.txt one image per camera, "IMAGE_ID QW QX QY QZ TX TY TZ
+    cameras.txt has one camera per distinct K and lens: PINHOLE (fx fy cx cy, top-left pixel
+    centre at (0.5, 0.5)), OPENCV (... k1 k2 p1 p2), FULL_OPENCV (... k1 k2 p1 p2 k3 k4 k5 k6)
+    or OPENCV_FISHEYE (... k1 k2 k3 k4; an equidistant lens with zeros); images.txt one image per camera, "IMAGE_ID QW QX QY QZ TX TY TZ
     CAMERA_ID NAME" with the world-to-camera pose in OpenCV axes, then an empty 2D-points
     line; points3D.txt no points.
     """
@@ -205,18 +234,18 @@ def colmap_text(cameras: Sequence[Camera], size: tuple[int, int],
     for name in names:
         if name != name.strip() or " " in name:
             raise UsageError(f"COLMAP: image name {name!r} has spaces (images.txt splits on them)")
-    camera_ids: dict[tuple[float, ...], int] = {}
+    camera_ids: dict[tuple[str, tuple[float, ...]], int] = {}
     image_lines = []
     for i, (cam, name) in enumerate(zip(cams, names, strict=True), start=1):
-        params = _colmap_params(cam.intrinsics((w, h)))
+        params = _colmap_params(cam.intrinsics((w, h)), cam)
         cid = camera_ids.setdefault(params, len(camera_ids) + 1)
         camera_from_world = np.linalg.inv(cam.world_from_camera("opencv"))
         q = quaternion_from_rotation(camera_from_world[:3, :3])
         t = camera_from_world[:3, 3]
         numbers = " ".join(repr(float(v)) for v in (*q, *t))
         image_lines += [f"{i} {numbers} {cid} {name}", ""]
-    camera_lines = [f"{cid} PINHOLE {w} {h} " + " ".join(repr(p) for p in params)
-                    for params, cid in camera_ids.items()]
+    camera_lines = [f"{cid} {model} {w} {h} " + " ".join(repr(p) for p in params)
+                    for (model, params), cid in camera_ids.items()]
     return {
         "cameras.txt": "\n".join([
             "# Camera list with one line of data per camera:",
@@ -279,7 +308,20 @@ def _floats(fields: list[str], where: str) -> list[float]:
     return values
 
 
-def _read_colmap_cameras(path: Path) -> dict[int, tuple[np.ndarray, tuple[int, int]]]:
+# COLMAP camera model -> (number of PARAMS, vkpbr model, indices of fx fy cx cy (fy = fx for
+# one focal), the distortion's positions in OpenCV's order).
+_COLMAP_MODELS: dict[str, tuple[int, str, tuple[int, int, int, int], tuple[int, ...]]] = {
+    "SIMPLE_PINHOLE": (3, "pinhole", (0, 0, 1, 2), ()),
+    "PINHOLE": (4, "pinhole", (0, 1, 2, 3), ()),
+    "SIMPLE_RADIAL": (4, "opencv", (0, 0, 1, 2), (3, -1, -1, -1)),
+    "RADIAL": (5, "opencv", (0, 0, 1, 2), (3, 4, -1, -1)),
+    "OPENCV": (8, "opencv", (0, 1, 2, 3), (4, 5, 6, 7)),
+    "FULL_OPENCV": (12, "opencv", (0, 1, 2, 3), tuple(range(4, 12))),
+    "OPENCV_FISHEYE": (8, "opencv_fisheye", (0, 1, 2, 3), (4, 5, 6, 7)),
+}
+
+
+def _read_colmap_cameras(path: Path) -> dict[int, tuple[np.ndarray, tuple[int, int], str, tuple[float, ...]]]:
     cams = {}
     for n, line in _data_lines(path):
         if not line:
@@ -294,17 +336,13 @@ def _read_colmap_cameras(path: Path) -> dict[int, tuple[np.ndarray, tuple[int, i
         except (ValueError, UsageError):
             raise UsageError(f"{where}: bad camera id or size {' '.join(parts[:4])!r}") from None
         p = _floats(params, where)
-        if model == "PINHOLE" and len(p) == 4:
-            fx, fy, cx, cy = p
-        elif model == "SIMPLE_PINHOLE" and len(p) == 3:
-            fx, cx, cy = p
-            fy = fx
-        else:
+        if model not in _COLMAP_MODELS or len(p) != _COLMAP_MODELS[model][0]:
             raise UsageError(f"{where}: camera model {model} with {len(p)} parameters is not "
-                             "supported (PINHOLE fx fy cx cy or SIMPLE_PINHOLE f cx cy; "
-                             "undistort the images first)")
-        K = np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
-        cams[cid_i] = (opencv_from_corner(K), size)
+                             f"supported ({', '.join(_COLMAP_MODELS)} with their parameters)")
+        _, lens, (ifx, ify, icx, icy), positions = _COLMAP_MODELS[model]
+        K = np.array([[p[ifx], 0.0, p[icx]], [0.0, p[ify], p[icy]], [0.0, 0.0, 1.0]])
+        distortion = tuple(p[i] if i >= 0 else 0.0 for i in positions)
+        cams[cid_i] = (opencv_from_corner(K), size, lens, distortion)
     return cams
 
 
@@ -344,9 +382,10 @@ def read_colmap(folder: str | os.PathLike[str]) -> list[Camera]:
         world_from_camera = np.eye(4)
         world_from_camera[:3, :3] = R.T
         world_from_camera[:3, 3] = -R.T @ t
-        K, size = intrinsics[cid]
+        K, size, lens, distortion = intrinsics[cid]
         with context(where):
-            cameras.append(from_opencv(K, world_from_camera, size, name=parts[9]))
+            cameras.append(from_opencv(K, world_from_camera, size, name=parts[9], model=lens,
+                                       distortion=distortion))
     if not cameras:
         raise UsageError(f"{path}: no images")
     return cameras

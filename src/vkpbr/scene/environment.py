@@ -7,6 +7,10 @@ Readers (maintained libraries, no system installs, wheels for Linux, Windows and
   the FreeImage binary (downloaded at run time) for it, and OpenCV 5's wheels dropped EXR.
 - ``.exr`` (OpenEXR): the `OpenEXR` package, the Academy Software Foundation's own Python
   bindings of the reference library (any compression, half or float channels).
+- ``.jpg`` / ``.jpeg`` / ``.png`` (LDR photographs): Pillow, 8 or 16 bits a channel, decoded
+  from sRGB to linear with the one sRGB curve (scene/color.py). An LDR panorama's light is
+  clipped: the sun and bright sky saturate at 1.0, so it lights more softly and dimly than
+  the scene it photographed (`--env-intensity` scales it; an .hdr/.exr keeps the range).
 
 Both are imported lazily, so scenes without an environment file never load them.
 
@@ -41,11 +45,12 @@ from vkpbr.errors import SceneError
 from vkpbr.scene.limits import limits
 
 __all__ = ["load_panorama", "check_panorama", "direction_to_equirect", "equirect_to_direction",
-           "sample_equirect", "ENV_SUFFIXES"]
+           "sample_equirect", "ENV_SUFFIXES", "LDR_SUFFIXES"]
 
 log = logging.getLogger(__name__)
 
-ENV_SUFFIXES = (".hdr", ".pic", ".exr")
+LDR_SUFFIXES = (".jpg", ".jpeg", ".png")
+ENV_SUFFIXES = (".hdr", ".pic", ".exr", *LDR_SUFFIXES)
 _RGBE_SIZE = re.compile(rb"^([-+])([YX]) (\d+) ([-+])([YX]) (\d+)$")
 
 
@@ -161,6 +166,28 @@ def _read_exr(OpenEXR: Any, path: Path) -> np.ndarray:  # noqa: N803 (the module
     return np.asarray(rgb, dtype=np.float32)
 
 
+def _decode_ldr(path: Path, data: bytes) -> np.ndarray:
+    """An 8- or 16-bit sRGB JPEG/PNG as linear float32 RGB (values in [0, 1]: clipped light)."""
+    import warnings
+
+    from PIL import Image as PILImage
+
+    from vkpbr.scene.color import srgb_to_linear
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PILImage.DecompressionBombWarning)
+            pil = PILImage.open(io.BytesIO(data))
+            _check_pixels(path, *pil.size)
+            if pil.mode.startswith("I;16"):  # 16-bit grey PNG (Pillow reads RGB as 8 bits)
+                codes = np.asarray(pil, dtype=np.float64)[..., None].repeat(3, -1) / 65535.0
+            else:
+                codes = np.asarray(pil.convert("RGB"), dtype=np.float64) / 255.0
+    except (OSError, ValueError, SyntaxError, PILImage.DecompressionBombError) as exc:
+        raise SceneError(path, f"corrupt or unreadable image ({exc})") from None
+    return srgb_to_linear(codes).astype(np.float32)
+
+
 def check_panorama(pixels: np.ndarray, source: object = "<array>") -> np.ndarray:
     """Validate an equirectangular panorama and make its pixels finite and non-negative.
 
@@ -197,7 +224,8 @@ def check_panorama(pixels: np.ndarray, source: object = "<array>") -> np.ndarray
 
 
 def load_panorama(path: str | os.PathLike[str]) -> np.ndarray:
-    """Read an equirectangular .hdr / .pic / .exr environment.
+    """Read an equirectangular .hdr / .pic / .exr environment, or an LDR .jpg / .png one
+    (sRGB decoded to linear; its light is clipped at 1).
 
     Returns
     -------
@@ -216,6 +244,8 @@ def load_panorama(path: str | os.PathLike[str]) -> np.ndarray:
     if suffix == ".exr":
         _read_bytes(path)  # existence, regular file, byte limit
         rgb = _decode_exr(path)
+    elif suffix in LDR_SUFFIXES:
+        rgb = _decode_ldr(path, _read_bytes(path))
     else:
         rgb = _decode_hdr(path, _read_bytes(path))
     return check_panorama(rgb, path)

@@ -8,7 +8,9 @@ applies each pose to the scene's default camera. Accepted forms (docs/poses.md):
   objects {"eye", "target", "up"?, "fov"?}, {"world_from_camera", "convention", "fov"?} or
   {"K", "world_from_camera", "size", "convention"? (default "opencv")}, each with "name"?;
 - a NeRF transforms.json object {"camera_angle_x", "frames": [{"transform_matrix"}, ...]}
-  (OpenGL axes), with fl_x/fl_y/cx/cy/w/h honoured, per frame or for all.
+  (OpenGL axes), with fl_x/fl_y/cx/cy/w/h honoured, per frame or for all, and nerfstudio's
+  lenses: "camera_model" OPENCV (k1, k2, p1, p2, k3..k6) or OPENCV_FISHEYE (k1..k4).
+  A K entry may also carry "model" and "distortion" (vkpbr.scene.lens).
 
 The checks are plain Python: neither pydantic nor jsonschema is installed, and a schema would
 not check what matters here (a 4x4 rotation is orthonormal, a focal length positive) nor word
@@ -34,8 +36,8 @@ __all__ = ["Pose", "load_poses", "parse_poses"]
 
 # Intrinsics keys of NeRF-style transforms.json (instant-ngp, nerfstudio), per frame or global.
 _NERF_KEYS = ("camera_angle_x", "camera_angle_y", "fl_x", "fl_y", "cx", "cy", "w", "h",
-              "camera_model", "k1", "k2", "k3", "k4", "p1", "p2")
-_DISTORTION = ("k1", "k2", "k3", "k4", "p1", "p2")
+              "camera_model", "k1", "k2", "k3", "k4", "k5", "k6", "p1", "p2")
+_DISTORTION = ("k1", "k2", "k3", "k4", "k5", "k6", "p1", "p2")
 
 
 def _json_type(value: object) -> str:
@@ -115,13 +117,7 @@ def _nerf_poses(doc: Mapping[str, object], p: Path) -> list[Pose]:
 def _nerf_camera(keys: Mapping[str, object]) -> dict[str, object]:
     """NeRF intrinsics as the keys of a pose entry: {"K", "size"} with "w" and "h", else
     {"fov"} (then the images are taken to be square, as in NeRF's synthetic scenes)."""
-    model = keys.get("camera_model", "OPENCV")
-    if model not in ("OPENCV", "PINHOLE", "SIMPLE_PINHOLE"):
-        raise UsageError(f'"camera_model" {shown(model)} is not supported (only pinhole cameras)')
-    for k in _DISTORTION:
-        if k in keys and real(keys[k], f'"{k}"') != 0.0:
-            raise UsageError(f'lens distortion ("{k}": {keys[k]}) is not supported; '
-                             "undistort the images and set the coefficients to 0")
+    lens = _nerf_lens(keys)
     angles = {}
     for k in ("camera_angle_x", "camera_angle_y"):
         if k in keys:
@@ -134,6 +130,8 @@ def _nerf_camera(keys: Mapping[str, object]) -> dict[str, object]:
                 raise UsageError(f'"{k}" needs the image size "w" and "h"')
         if "camera_angle_x" not in angles:
             raise UsageError('missing "camera_angle_x" (or "fl_x" with "w" and "h")')
+        if lens:
+            raise UsageError(f'a {lens["model"]} lens needs the image size "w" and "h"')
         return {"fov": math.degrees(angles.get("camera_angle_y", angles["camera_angle_x"]))}
     for k in ("w", "h"):
         if k not in keys:
@@ -160,4 +158,31 @@ def _nerf_camera(keys: Mapping[str, object]) -> dict[str, object]:
     cx = real(keys["cx"], '"cx"') if "cx" in keys else w / 2.0
     cy = real(keys["cy"], '"cy"') if "cy" in keys else h / 2.0
     K = opencv_from_corner(np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]]))
-    return {"K": K.tolist(), "size": [w, h]}
+    return {"K": K.tolist(), "size": [w, h], **lens}
+
+
+def _nerf_lens(keys: Mapping[str, object]) -> dict[str, object]:
+    """The lens of NeRF intrinsics as pose-entry keys ({} for a pinhole): "camera_model"
+    OPENCV (or FULL_OPENCV) with k1, k2, p1, p2 and optionally k3..k6 (OpenCV's meaning: k4..k6
+    the rational denominator), OPENCV_FISHEYE with k1..k4, as nerfstudio writes them."""
+    model = keys.get("camera_model", "OPENCV")
+    coefficients = {k: real(keys[k], f'"{k}"') for k in _DISTORTION if k in keys}
+    if model in ("OPENCV", "FULL_OPENCV"):
+        order = ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6")
+        values = [coefficients.get(k, 0.0) for k in order]
+        if not any(values):
+            return {}
+        n = 8 if any(values[5:]) else 5 if values[4] else 4
+        return {"model": "opencv", "distortion": values[:n]}
+    if model == "OPENCV_FISHEYE":
+        extra = sorted(k for k in coefficients if k not in ("k1", "k2", "k3", "k4") and coefficients[k])
+        if extra:
+            raise UsageError(f'"camera_model" OPENCV_FISHEYE takes k1..k4, not {extra[0]}')
+        return {"model": "opencv_fisheye",
+                "distortion": [coefficients.get(k, 0.0) for k in ("k1", "k2", "k3", "k4")]}
+    if model in ("PINHOLE", "SIMPLE_PINHOLE"):
+        if any(coefficients.values()):
+            raise UsageError(f'"camera_model" {model} has no distortion coefficients')
+        return {}
+    raise UsageError(f'"camera_model" {shown(model)} is not supported (OPENCV, FULL_OPENCV, '
+                     "OPENCV_FISHEYE, PINHOLE)")
