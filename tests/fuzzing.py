@@ -40,7 +40,12 @@ from pathlib import Path
 import numpy as np
 
 SEED = 1111
-N_FORMATS = 12  # the rows of the table (Corpus.formats)
+# The rows of the scene formats' part of the table (Corpus.formats' keys)
+FORMAT_NAMES = ("gltf json", "gltf bytes", "glb bytes", "obj bytes", "mtl bytes",
+                "comp5822mesh bytes", "vkpbr bytes", "vkpbr json (checksums fixed)",
+                "texture bytes and bombs", "count bombs", "path tricks",
+                "codec payloads (Draco, meshopt, KTX2, WebP)")
+N_FORMATS = len(FORMAT_NAMES)
 
 _EVIL = [1e30, 1e308, -1, 2**31, 2**32, 2**64, -(2**40), 0, 7, float("nan"), float("inf"), "x",
          "../../etc/passwd", None, [], {}, True, 3.5, [1, 2], [1e30] * 3, {"a": 1}]  # fmt: skip
@@ -63,6 +68,8 @@ def mutate_json(doc: dict, rng: random.Random) -> dict:
     doc = json.loads(json.dumps(doc))
     for _ in range(rng.randint(1, 3)):
         paths = [p for p in _paths(doc) if p]
+        if not paths:  # an earlier edit deleted everything
+            break
         path = rng.choice(paths)
         parent = doc
         for key in path[:-1]:
@@ -623,8 +630,11 @@ def run_one(path: Path, names: str, allow_outside_paths: bool = False,
     return outcome, detail
 
 
-def fuzz(folder: Path, per_format: int, seed: int = SEED) -> tuple[dict, list[str]]:
-    """Run `per_format` inputs of every format; returns (counts, unclean details)."""
+def fuzz(folder: Path, per_format: int, seed: int = SEED,
+         only: tuple[str, ...] = ()) -> tuple[dict, list[str]]:
+    """Run `per_format` inputs of every format (or of those whose names start with one of
+    `only`); returns (counts, unclean details). Each format's counter holds its time too
+    ("seconds")."""
     corpus = Corpus(folder)
     rng = random.Random(seed)
     counts: dict[str, collections.Counter] = {}
@@ -636,7 +646,10 @@ def fuzz(folder: Path, per_format: int, seed: int = SEED) -> tuple[dict, list[st
     logger.setLevel(logging.CRITICAL)  # the loaders' one-line warnings, restored after
     try:
         for name, make in corpus.formats().items():
+            if only and not name.startswith(only):
+                continue
             c = counts[name] = collections.Counter()
+            t0 = time.perf_counter()
             for i in range(per_format):
                 made = make(rng)
                 if isinstance(made[0], PathTrickCorpus):
@@ -647,29 +660,84 @@ def fuzz(folder: Path, per_format: int, seed: int = SEED) -> tuple[dict, list[st
                 c[outcome] += 1
                 if outcome == "unclean":
                     failures.append(f"{name} #{i}: {detail}")
+            c["seconds"] = time.perf_counter() - t0  # type: ignore[assignment]
+    finally:
+        logger.setLevel(level)
+    return counts, failures
+
+
+def fuzz_surfaces(folder: Path, per_surface: int | dict[str, int], seed: int = SEED,
+                  only: tuple[str, ...] = ()) -> tuple[dict, list[str]]:
+    """Run `per_surface` cases of every surface of tests/fuzz_surfaces.py (lights,
+    semantics, poses, job files, manifests, environments, command lines), or of those whose
+    names start with one of `only`; returns (counts, unclean details) as `fuzz` does. An
+    accepted case counts as "loaded"."""
+    import logging
+
+    import fuzz_surfaces as fs
+
+    box = fs.Sandbox(folder)
+    rng = random.Random(seed)
+    counts: dict[str, collections.Counter] = {}
+    failures: list[str] = []
+    logger = logging.getLogger("vkpbr")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL)
+    try:
+        with fs.no_display():
+            for name in fs.SURFACES:
+                if only and not name.startswith(only):
+                    continue
+                n = per_surface if isinstance(per_surface, int) else per_surface.get(name, 0)
+                c = counts[name] = collections.Counter()
+                t0 = time.perf_counter()
+                for i in range(n):
+                    outcome, detail = fs.run_surface(name, rng, box)
+                    c["tried"] += 1
+                    c["loaded" if outcome == "accepted" else outcome] += 1
+                    if outcome == "unclean":
+                        failures.append(f"{name} #{i}: {detail}")
+                c["seconds"] = time.perf_counter() - t0  # type: ignore[assignment]
     finally:
         logger.setLevel(level)
     return counts, failures
 
 
 def table(counts: dict) -> str:
-    lines = ["| format | tried | clean errors | loaded | unclean |", "|---|---:|---:|---:|---:|"]
+    lines = ["| format or surface | tried | clean errors | loaded or accepted | unclean | s |",
+             "|---|---:|---:|---:|---:|---:|"]
     total = collections.Counter()
     for name, c in counts.items():
-        lines.append(f"| {name} | {c['tried']} | {c['clean']} | {c['loaded']} | {c['unclean']} |")
+        lines.append(f"| {name} | {c['tried']} | {c['clean']} | {c['loaded']} | {c['unclean']} "
+                     f"| {c['seconds']:.0f} |")
         total.update(c)
-    lines.append(f"| all | {total['tried']} | {total['clean']} | {total['loaded']} | {total['unclean']} |")
+    lines.append(f"| all | {total['tried']} | {total['clean']} | {total['loaded']} | "
+                 f"{total['unclean']} | {total['seconds']:.0f} |")
     return "\n".join(lines)
+
+
+def surface_count() -> int:
+    import fuzz_surfaces as fs
+
+    return len(fs.SURFACES)
 
 
 if __name__ == "__main__":
     import tempfile
 
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 2000
-    formats = N_FORMATS
+    seed = int(sys.argv[2]) if len(sys.argv) > 2 else SEED
+    only = tuple(sys.argv[3:])  # names (prefixes) of formats or surfaces: only those
+    per = max(1, n // (N_FORMATS + surface_count()))
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
-        counts, failures = fuzz(Path(tmp), max(1, n // formats), int(sys.argv[2]) if len(sys.argv) > 2 else SEED)
+        counts, failures = {}, []
+        if not only or any(name.startswith(only) for name in FORMAT_NAMES):
+            (Path(tmp) / "formats").mkdir()
+            counts, failures = fuzz(Path(tmp) / "formats", per, seed, only)
+        more, more_failures = fuzz_surfaces(Path(tmp) / "surfaces", per, seed, only)
+        counts.update(more)
+        failures += more_failures
         print(table(counts))
         print(f"\n{sum(c['tried'] for c in counts.values())} inputs in {time.perf_counter() - t0:.0f} s")
         for line in failures[:40]:

@@ -92,16 +92,23 @@ def remove_stale_temporaries(path: str | Path, now: float | None = None) -> list
 def atomic_writer(path: str | Path, fsync: bool = False) -> Iterator[BinaryIO]:
     """`with atomic_writer(path) as f: f.write(...)`: `path` appears only when the block
     succeeds; on an exception the temporary file is removed and `path` is untouched.
-    Leftovers of killed writes of `path` are removed first (`remove_stale_temporaries`). An
-    OSError from writing (or from creating or renaming the temporary file) is re-raised with
-    `path` as its filename, so messages name the user's file."""
+    Leftovers of killed writes of `path` are removed first (`remove_stale_temporaries`).
+    A path no file can have (a NUL byte, a name over NAME_MAX) and an OSError from writing
+    (or from creating or renaming the temporary file) are OutputError (vkpbr.errors: one
+    line naming `path`, never the temporary file; an OSError too, with its errno)."""
+    from vkpbr.errors import OutputError
+    from vkpbr.user_paths import os_reason, path_problem
+
     path = Path(path)
+    problem = path_problem(path)
+    if problem is not None:
+        raise OutputError(path, f"the path {problem}")
     remove_stale_temporaries(path)
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp",
                                    dir=path.parent)
     except OSError as exc:  # name the user's path, not the temporary one mkstemp tried
-        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
+        raise OutputError(path, os_reason(exc), exc.errno) from exc
     try:
         with os.fdopen(fd, "wb") as f:
             yield f
@@ -112,11 +119,11 @@ def atomic_writer(path: str | Path, fsync: bool = False) -> Iterator[BinaryIO]:
         os.replace(tmp, path)
     except OSError as exc:
         Path(tmp).unlink(missing_ok=True)
-        if exc.filename is None or exc.filename == tmp:
-            # A failed write names the user's path, never the temporary file (which is gone)
-            # and never nothing ("File too large" from a write has no filename).
-            raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
-        raise
+        if isinstance(exc, OutputError) or exc.filename not in (None, tmp):
+            raise  # another file's error (a nested writer's, a source's): it names its file
+        # A failed write names the user's path, never the temporary file (which is gone)
+        # and never nothing ("File too large" from a write has no filename).
+        raise OutputError(path, os_reason(exc), exc.errno) from exc
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

@@ -11,6 +11,7 @@ __all__ = [
     "SceneError",
     "BakeFormatError",
     "JsonError",
+    "OutputError",
     "VulkanError",
     "NoVulkanError",
     "OutOfDeviceMemoryError",
@@ -22,6 +23,11 @@ __all__ = [
 
 class VkpbrError(Exception):
     """Base class of every error vkpbr raises on purpose."""
+
+    def __str__(self) -> str:
+        # A path from a job file or an API call may hold a NUL byte: shown as \0, so that
+        # a message stays text a terminal and a log can take.
+        return super().__str__().replace("\0", "\\0")
 
 
 class UsageError(VkpbrError, ValueError):
@@ -85,3 +91,26 @@ class JsonError(VkpbrError, ValueError):
         self.where = str(where)
         self.problem = problem
         super().__init__(f"{self.where}: {problem}")
+
+
+def shown_path(path: object) -> str:
+    """`path` as messages show it: whole when short, else its start and end around "..."
+    (a 5,000-character path would bury the problem), NUL bytes written as \\0."""
+    text = str(path).replace("\0", "\\0")
+    if len(text) <= 120:
+        return text
+    return f"{text[:60]}...{text[-50:]} ({len(text):,} characters)"
+
+
+class OutputError(VkpbrError, OSError):
+    """A file vkpbr writes (an image, a baked file, a camera file, a manifest) could not be
+    written: one line naming the file and the reason. An OSError too (`errno`, `filename`),
+    so code that caught the OSError of a failed write still catches it."""
+
+    def __init__(self, path: object, problem: str, code: int | None = None) -> None:
+        OSError.__init__(self, code, problem, str(path))
+        self.path = str(path)
+        self.problem = problem
+
+    def __str__(self) -> str:
+        return f"{shown_path(self.path)}: cannot write: {self.problem}"

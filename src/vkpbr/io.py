@@ -24,7 +24,8 @@ Kinds of array and the formats each takes (the suffix of the path picks the form
 "instance", ...: `OUTPUT_KINDS`). `check_writable` and `check_output_path` fail at once, before
 any rendering, when an output cannot be written. EXR goes through the ASWF's OpenEXR package
 (a dependency; a missing one is a one-line error with the install command). Errors are
-UsageError (what vkpbr refuses) or OSError (what the file system refuses, naming the path).
+UsageError (what vkpbr refuses) or OutputError (what the file system refuses, naming the
+path; an OSError too).
 """
 
 from __future__ import annotations
@@ -88,14 +89,12 @@ _EXR_INSTALL = "pip install 'OpenEXR>=3.5'"
 
 
 def check_writable(path: Path, option: str = "--out") -> None:
-    """Raise UsageError when `path` is a folder or its folder is missing or read-only."""
-    folder = path.parent if str(path.parent) else Path(".")
-    if path.is_dir():
-        raise UsageError(f"{option} {path}: is a directory; give a file name such as {path / 'image.png'}")
-    if not folder.is_dir():
-        raise UsageError(f"{option} {path}: folder {folder} does not exist")
-    if not os.access(folder, os.W_OK):
-        raise UsageError(f"{option} {path}: folder {folder} is not writable")
+    """Raise UsageError when `path` cannot be written as a file: a name no file can have, a
+    folder, a folder that is missing or is a file, a folder that takes no new file (read-only,
+    /proc, full): vkpbr.user_paths.check_writable_file, which tries."""
+    from vkpbr.user_paths import check_writable_file
+
+    check_writable_file(path, option)
 
 
 def output_kind(name: str, option: str = "--outputs") -> Kind:
@@ -232,7 +231,8 @@ def write_output(path: Path, array: np.ndarray, kind: Kind = "color", option: st
     ------
     UsageError : a suffix the kind does not take, an array the format cannot hold (float in a
         PNG, an id above 65,535 in a PNG), EXR without the OpenEXR package. Nothing is written.
-    OSError : from the file system (the message names `path`); nothing is left under `path`.
+    OutputError : from the file system (one line naming `path`; an OSError too); nothing is
+        left under `path`.
     """
     import numpy as np
 
@@ -281,7 +281,8 @@ def write_image(path: str | os.PathLike[str], array: np.ndarray, kind: str = "co
     UsageError : an unknown kind, a suffix the kind does not take, an array the format cannot
         hold (float in a PNG, an id above 65,535 in a PNG), EXR without the OpenEXR package.
         Nothing is written.
-    OSError : from the file system (the message names `path`); nothing is left under `path`.
+    OutputError : from the file system (one line naming `path`; an OSError too); nothing is
+        left under `path`.
     """
     file_kind = None  # a kind of file ("ids"), else the kind an output name ("instance") has
     if isinstance(kind, str):

@@ -197,3 +197,73 @@ def test_bake_embedding_textures_honours_the_total_texture_bytes_limit(tmp_path:
         bake_file(tmp_path / "s.gltf", tmp_path / "e.vkpbr", embed_textures=True, progress=False)
     monkeypatch.setenv("VKPBR_MAX_TEXTURE_BYTES", "256")
     bake_file(tmp_path / "s.gltf", tmp_path / "e.vkpbr", embed_textures=True, progress=False)
+
+
+# --- issue 35: large inputs within the limits load in bounded time ---------------------------
+def _materials_gltf(tmp_path: Path, count: int) -> Path:
+    """The fuzz suite's textured quad with `count` distinct materials (about 105 bytes of JSON
+    each: 29,000 of them are 3 MB), of which the mesh uses material 0."""
+    import json
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).parents[1]))
+    from fuzzing import _gltf_buffer, _gltf_doc, _png
+
+    (tmp_path / "t.png").write_bytes(_png())
+    (tmp_path / "b.bin").write_bytes(_gltf_buffer())
+    doc = _gltf_doc("b.bin", "t.png")
+    base = doc["materials"][0]
+    doc["materials"] = [dict(base, pbrMetallicRoughness=dict(
+        base["pbrMetallicRoughness"], metallicFactor=(i % 1000) / 1000)) for i in range(count)]
+    path = tmp_path / "many-materials.gltf"
+    path.write_text(json.dumps(doc))
+    return path
+
+
+@pytest.mark.timeout(120)
+def test_a_3mb_materials_array_loads_in_seconds(tmp_path: Path) -> None:
+    """A glTF whose materials array is 3 MB of JSON (29,000 materials) loaded in 10-19 s
+    (pygltflib built a dataclass per JSON object); the arrays are read as checked dicts now:
+    2-3 s of CPU on the 2-core machine. Bound: 10 s of this process's CPU time."""
+    import time
+
+    path = _materials_gltf(tmp_path, 29_000)
+    assert path.stat().st_size > 3_000_000
+    t0 = time.process_time()
+    scene = load_scene(path)
+    cpu = time.process_time() - t0
+    assert len(scene.materials) == 29_000
+    assert scene.materials[999].metallic_factor == pytest.approx(0.999)
+    assert cpu < 10, f"{cpu:.1f} s of CPU to load 29,000 materials"
+
+
+def test_the_material_count_is_limited(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    path = _materials_gltf(tmp_path, 12)
+    monkeypatch.setenv("VKPBR_MAX_MATERIALS", "11")
+    with pytest.raises(SceneError, match=r"many-materials.gltf: 12 materials are over the limit "
+                                         r"of 11 \(VKPBR_MAX_MATERIALS\)$"):
+        load_scene(path)
+    monkeypatch.setenv("VKPBR_MAX_MATERIALS", "12")
+    assert len(load_scene(path).materials) == 12
+
+
+@pytest.mark.timeout(120)
+def test_a_million_face_crlf_obj_loads_in_seconds(tmp_path: Path) -> None:
+    """1,000,000 faces over 500,000 vertices with CRLF line endings (the issue measured 10 s
+    for such a file): a few seconds of CPU (vectorised checks, tinyobjloader for the parse).
+    Bound: 15 s of this process's CPU time, and every face present."""
+    import time
+
+    rng = np.random.default_rng(35)
+    n_v, n_f = 500_000, 1_000_000
+    xyz = rng.random((n_v, 3)).round(4).tolist()
+    faces = rng.integers(1, n_v + 1, (n_f, 3)).tolist()
+    data = (b"".join(b"v %g %g %g\r\n" % tuple(p) for p in xyz)
+            + b"".join(b"f %d %d %d\r\n" % tuple(f) for f in faces))
+    obj = tmp_path / "million-crlf.obj"
+    obj.write_bytes(data)
+    t0 = time.process_time()
+    scene = load_scene(obj)
+    cpu = time.process_time() - t0
+    assert scene.triangle_count == n_f
+    assert cpu < 15, f"{cpu:.1f} s of CPU to load 1,000,000 CRLF faces"

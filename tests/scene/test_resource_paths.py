@@ -443,13 +443,14 @@ def test_failed_bake_names_the_output_not_its_temporary(tree: tuple[Path, Path])
                            "--no-progress", "--embed-textures"],
                           capture_output=True, text=True, env=env, timeout=50)
     assert proc.returncode == 1, proc.stderr
-    assert proc.stderr == (f"vkpbr: error: {out}: File too large (the file size limit "
+    assert proc.stderr == (f"vkpbr: error: {out}: cannot write: File too large (the file size limit "
                            "(ulimit -f) is too low)\n")
     assert not out.exists() and not list(scene.glob(".*.tmp"))
 
 
 def test_atomic_writer_errors_name_the_target(tmp_path: Path) -> None:
     from vkpbr.atomic import atomic_writer
+    from vkpbr.errors import OutputError
 
     target = tmp_path / "out.bin"
     with pytest.raises(OSError) as exc, atomic_writer(target) as f:
@@ -458,9 +459,11 @@ def test_atomic_writer_errors_name_the_target(tmp_path: Path) -> None:
     assert exc.value.errno == errno.ENOSPC and exc.value.filename == str(target)
     assert not list(tmp_path.iterdir())
     missing = tmp_path / "no" / "out.bin"  # mkstemp fails: named as the target, not a .tmp
-    with pytest.raises(FileNotFoundError) as exc, atomic_writer(missing):
+    with pytest.raises(OutputError) as exc, atomic_writer(missing):
         pass
-    assert exc.value.filename == str(missing)
+    assert exc.value.filename == str(missing) and exc.value.errno == errno.ENOENT
+    assert str(exc.value) == f"{missing}: cannot write: No such file or directory"
+    assert isinstance(exc.value, OSError)  # what callers of the OSError days still catch
     other = OSError(errno.EIO, "I/O error", "/some/source")  # another file's error stays its own
     with pytest.raises(OSError) as exc, atomic_writer(target):
         raise other

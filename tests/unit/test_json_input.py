@@ -117,6 +117,56 @@ def test_manifest_lines_are_read_the_same_way(tmp_path: Path) -> None:
     check_one_line(info.value, UsageError, "job.json: ", "line 1 is not JSON; the manifest is damaged")
 
 
+CHARS = JSON_LIMITS.max_string_chars
+NOT_SCENES = [e for e in ENTRIES if e != "gltf"]
+
+
+@pytest.mark.parametrize("entry", NOT_SCENES)
+@pytest.mark.parametrize("where", ["value", "key"])
+def test_every_input_but_scenes_refuses_a_long_string(tmp_path: Path, entry: str,
+                                                      where: str) -> None:
+    """A string (a value or a key) of max_string_chars + 1 characters is one error line from
+    every reader of JSON inputs; scene files are bounded by their size alone."""
+    text = "s" * (CHARS + 1)
+    doc = {"a": [1, {"b": text}]} if where == "value" else {"a": {text: 1}}
+    path = tmp_path / "long.json"
+    path.write_text(json.dumps(doc))
+    read, cls, start = ENTRIES[entry]
+    with pytest.raises(VkpbrError) as info:
+        read(path)
+    check_one_line(info.value, cls, start(path),
+                   f"a string of {CHARS + 1:,} characters ('ssssssssssssssssssss'...), more "
+                   f"than the {CHARS:,} vkpbr reads")
+    assert decode_json(json.dumps({"a": "s" * CHARS}).encode(), "x") == {"a": "s" * CHARS}
+
+
+def test_scene_json_takes_long_strings(tmp_path: Path) -> None:
+    """A glTF's buffers and images may be data: URIs of many megabytes: no string limit."""
+    from vkpbr.json_input import SCENE_JSON_LIMITS
+
+    long = "x" * (4 * CHARS)
+    assert decode_json(json.dumps([long]).encode(), "x", SCENE_JSON_LIMITS) == [long]
+    with pytest.raises(JsonError, match="a string of 262,144 characters"):
+        decode_json(json.dumps([long]).encode(), "x")
+
+
+def test_paths_no_file_can_have_are_os_errors_callers_word(tmp_path: Path) -> None:
+    """read_json refuses a NUL byte or an over-long name as an OSError (which every reader
+    words as its own one-line error), not open()'s ValueError."""
+    for path, problem in ((f"{tmp_path}/a\0b.json", "holds a NUL byte"),
+                          (tmp_path / ("n" * 300 + ".json"), "has a name of 305 bytes"),
+                          (tmp_path / ("d/" * 2100 + "x.json"), "more than the 4,096")):
+        with pytest.raises(OSError, match=problem):
+            read_json(path)
+        for entry in NOT_SCENES:
+            read, cls, _ = ENTRIES[entry]
+            with pytest.raises(VkpbrError) as info:
+                read(path)
+            text = str(info.value)
+            assert type(info.value) is cls and problem in text and "\n" not in text
+            assert "\0" not in text, text  # shown as \\0
+
+
 def test_limits_are_inclusive() -> None:
     """Exactly at each limit decodes; one past it does not."""
     assert depth(decode_json(nested(DEPTH), "x")) == DEPTH

@@ -46,7 +46,14 @@ def animation_choice(scene: Any, text: str | None) -> int | str | None:
     """--animation as the API takes it: an index when it is a number."""
     if text is None:
         return None
-    return int(text) if text.strip().lstrip("-").isdigit() else text
+    digits = text.strip().lstrip("-")
+    if digits.isascii() and digits.isdigit():  # ("²".isdigit() too, which int() refuses)
+        if len(digits) > 18:  # no file has that many; int() of 4,300+ digits is an error
+            count = len(getattr(scene, "animations", None) or [])
+            raise UsageError(f"--animation {text[:24]}...: no animation has that index (the "
+                             f"file has {count})")
+        return int(text)
+    return text
 
 
 def animation_times(scene: Any, animation: int | str | None, fps: float,
@@ -66,10 +73,13 @@ def animation_times(scene: Any, animation: int | str | None, fps: float,
         duration = max(scene.animations[i].duration for i in chosen)
     if not (np.isfinite(duration) and duration >= 0):
         raise UsageError(f"--duration {duration}: give a number of seconds >= 0")
-    count = int(np.floor(duration * fps + 1e-9)) + 1
+    # A float until it is known to be small: 1e308 s at 30 fps is inf, which int() refuses.
+    count = float(np.floor(duration * fps + 1e-9)) + 1
     if count > MAX_FRAMES:
-        raise UsageError(f"--animate would render {count} frames (at most {MAX_FRAMES}): "
+        shown = f"{count:,.0f}" if count < 1e15 else f"{count:.3g}"
+        raise UsageError(f"--animate would render {shown} frames (at most {MAX_FRAMES}): "
                          "lower --fps or --duration")
+    count = int(count)
     return np.arange(count) / fps
 
 
@@ -87,7 +97,7 @@ def pose_times(poses: list[Any], where: str, time_arg: float | None) -> list[flo
 
 
 def check_animation_args(args: argparse.Namespace) -> None:
-    """Before any work: the output kind --animate writes."""
+    """Before any work: the output kind --animate writes, and that it can be written."""
     out = Path(args.out)
     if out.suffix.lower() == ".mp4":
         try:
@@ -104,6 +114,12 @@ def check_animation_args(args: argparse.Namespace) -> None:
     if args.cameras:
         raise UsageError("--animate plays one camera: use --camera, --camera-index or none "
                          "(a poses file can give each camera its own \"time\" instead)")
+    from vkpbr.user_paths import check_writable_file, check_writable_folder
+
+    if out.suffix.lower() in CLIP_SUFFIXES:  # where it goes can take it (vkpbr.user_paths)
+        check_writable_file(out, "--out")
+    else:  # a folder of frames, made after the rendering
+        check_writable_folder(out, "--out", "transforms.json")
 
 
 def run_animation(args: argparse.Namespace, options: Any) -> int:

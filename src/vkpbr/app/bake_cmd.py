@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import resource
 import time
 from pathlib import Path
@@ -60,8 +59,8 @@ def add_parser(subparsers: Any) -> None:
 
 
 def check_out(out: Path) -> Path:
-    """Check an output path before any work is done: the .vkpbr suffix, an existing and
-    writable folder, not a folder itself.
+    """Check an output path before any work is done: the .vkpbr suffix, not a folder, a
+    name a file can have, an existing folder that takes a new file (vkpbr.user_paths).
 
     Raises
     ------
@@ -71,14 +70,12 @@ def check_out(out: Path) -> Path:
     if out.suffix.lower() != ".vkpbr":
         raise UsageError(f"--out {out}: the output must be a .vkpbr file "
                          f"(got {out.suffix or 'no extension'!r})")
-    if out.is_dir():
+    from vkpbr.user_paths import check_path, check_writable_file
+
+    if check_path(out, "--out").is_dir():
         raise UsageError(f"--out {out}: is a folder; name the .vkpbr file to write")
-    folder = out.parent
-    if not folder.is_dir():
-        raise UsageError(f"--out {out}: folder {folder} does not exist")
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise UsageError(f"--out {out}: folder {folder} is not writable")
-    return out
+
+    return check_writable_file(out, "--out")  # the folder takes a new file (/proc does not)
 
 
 def format_report(report: dict[str, Any]) -> str:

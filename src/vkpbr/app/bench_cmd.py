@@ -167,9 +167,12 @@ def batch_poses_file(args: argparse.Namespace, key: str) -> Path:
     common = peers_common()
     if common is None:
         raise UsageError(f"batch scenarios need {PEERS_DIR / 'common.py'} (a source checkout)")
-    folder = Path(args.poses_dir)
+    from vkpbr.user_paths import check_writable_folder
+
+    name = f"poses_{key}_{args.views}.npy"
+    folder = check_writable_folder(args.poses_dir, "--poses-dir", name)  # before any work
     folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"poses_{key}_{args.views}.npy"
+    path = folder / name
     common.load_poses(path, key, args.views)
     return path
 

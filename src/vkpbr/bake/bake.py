@@ -32,7 +32,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..errors import BakeFormatError, SceneError
-from ..json_input import read_json
+from ..json_input import SCENE_JSON_LIMITS, read_json
 from ..scene.baked_file import (
     HAS_COLORS,
     HAS_TEXCOORDS,
@@ -302,7 +302,7 @@ def _dependencies(path: Path, allow_outside_paths: bool = False) -> list[Path]:
     deps: list[Path] = []
     try:
         if path.suffix.lower() == ".gltf":
-            doc = read_json(path)
+            doc = read_json(path, SCENE_JSON_LIMITS)
             uris = [x.get("uri") for x in doc.get("buffers", []) + doc.get("images", [])]
             deps = [path.parent / u for u in uris if u and not u.startswith("data:")]
         elif path.suffix.lower() == ".obj":
@@ -425,7 +425,10 @@ def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: boo
     Textures left as files are logged (INFO, "vkpbr.bake.bake"): how many, and where they must
     stay for the baked file to find them.
     """
+    from vkpbr.user_paths import check_writable_file
+
     source_path, out_path = Path(source_path), Path(out_path)
+    check_writable_file(out_path, "bake_file: out")  # before the work, not after it
     t0 = time.perf_counter()
     scene = load_scene(source_path, strict=strict, allow_outside_paths=allow_outside_paths,
                        variant=variant)
@@ -459,7 +462,10 @@ def cached_bake(source_path: str | Path, cache_dir: str | Path,
     ``load_scene(out, root=source_path.parent)``: its external textures lie beside the source,
     not in the cache. A material `variant` is baked in: each variant has its own file.
     """
+    from vkpbr.user_paths import check_writable_folder
+
     source_path, cache_dir = Path(source_path), Path(cache_dir)
+    check_writable_folder(cache_dir, "cache folder", f"{source_path.stem}-0123456789abcdef.vkpbr")
     key, _ = source_key(source_path, allow_outside_paths)
     tag = "" if variant is None else "-variant-" + hashlib.sha256(variant.encode()).hexdigest()[:8]
     out = cache_dir / f"{source_path.stem}-{key[:16]}{tag}.vkpbr"

@@ -181,10 +181,13 @@ def _bool(entry: Mapping[str, object], key: str, where: str, default: bool) -> b
 
 
 def _path(value: object, key: str, where: str, base: Path) -> Path:
+    from vkpbr.user_paths import check_path
+
     if not isinstance(value, str) or not value.strip():
         raise UsageError(f"{where}: {key}: expected a path, got {_type(value)}")
+    check_path(value, f"{where}: {key}")  # a NUL byte, a name over NAME_MAX: one line, now
     p = Path(os.path.expanduser(value))
-    return p if p.is_absolute() else base / p
+    return check_path(p if p.is_absolute() else base / p, f"{where}: {key}")
 
 
 def _size(value: object, where: str) -> tuple[int, int]:

@@ -185,6 +185,39 @@ def _concat(arrays: list[np.ndarray], dtype: type, width: int) -> np.ndarray:
     return np.ascontiguousarray(np.concatenate(arrays), dtype=dtype)
 
 
+class MaterialSets:
+    """Material i's descriptor set (its textures and its MATERIAL block), made the first time
+    a draw binds it (`sets[i]`): a file can list tens of thousands of materials that no
+    primitive uses, and a set costs ~0.5 ms of Python to write (16 bindings, each a struct of
+    the Vulkan binding), so unused ones cost nothing."""
+
+    def __init__(self, device: Device, pool: DescriptorPool, layout: DescriptorSetLayout,
+                 ubo: Buffer, stride: int, textures: list[list[tuple[ImageView, Sampler]]],
+                 base: int = 0) -> None:
+        self.device, self.pool, self.layout = device, pool, layout
+        self.ubo, self.stride, self.textures = ubo, stride, textures
+        self.base = base  # the frame slot's copy of the blocks in `ubo`
+        self._sets: dict[int, object] = {}
+
+    def __len__(self) -> int:
+        return len(self.textures)
+
+    def __getitem__(self, i: int) -> object:
+        if i not in self._sets:
+            if not -len(self) <= i < len(self):
+                raise IndexError(f"material {i} of {len(self)}")
+            i %= len(self)
+            dset = self.pool.allocate(self.layout)
+            writer = DescriptorWriter(self.device)
+            for binding, (view, sampler) in enumerate(self.textures[i]):
+                writer.sampler(dset, binding, view, sampler)
+            writer.uniform(dset, L.MATERIAL_BINDING, self.ubo, L.MATERIAL.size,
+                           offset=self.base + i * self.stride)
+            writer.update()
+            self._sets[i] = dset
+        return self._sets[i]
+
+
 class GpuScene:
     """Owns the GPU copies of one Scene. Built by `Renderer`; destroy with `destroy()`."""
 
@@ -385,6 +418,7 @@ class GpuScene:
         self.texture_bytes = sum(img.bytes for img in self.images.values())
         self._views: dict[tuple[int, str], ImageView] = {}
         self._samplers: dict[SamplerSpec, Sampler] = {}
+        self._textures: dict[tuple, tuple[ImageView, Sampler, bool]] = {}
 
     def _view(self, image: Image, swizzle: str) -> ImageView:
         key = (id(image), swizzle)
@@ -409,7 +443,16 @@ class GpuScene:
         srgb = slot in SRGB_TEXTURE_SLOTS
         scalar = slot not in SRGB_TEXTURE_SLOTS and slot not in _NORMAL_SLOTS
         image = self.images.get((ref.image, srgb)) if ref is not None else None
-        if image is None:
+        key = (slot, with_roughness, None if image is None else (ref.image, ref.sampler, ref.channel))
+        if key not in self._textures:  # many materials share a few textures (or none)
+            self._textures[key] = self._texture_binding(image, ref, slot, srgb, scalar,
+                                                        with_roughness)
+        return self._textures[key]
+
+    def _texture_binding(self, image: Image | None, ref: TextureRef | None, slot: str,
+                         srgb: bool, scalar: bool, with_roughness: bool
+                         ) -> tuple[ImageView, Sampler, bool]:
+        if image is None or ref is None:
             # White: the factor alone decides (emissive's is 0 by default); a flat normal.
             default = "normal" if slot in _NORMAL_SLOTS else "white_srgb" if srgb else "white"
             return self._view(self.default_images[default], "iiii"), self._sampler(SamplerSpec()), False
@@ -443,43 +486,39 @@ class GpuScene:
                                                host_visible=True, device_local=True,
                                                name="material records"))
         self.pool = self._own(DescriptorPool(self.device, [(layout, n * self.slots)]))
-        writer = DescriptorWriter(self.device)
         self.material_blocks: list[np.ndarray] = []  # as loaded (compute_path.py's table too)
-        views = []
+        views: list[list[tuple[ImageView, Sampler]]] = []
         for mat in self.materials:
             has, bound = {}, []
             shared = _shared_metallic_roughness(mat)
-            for binding, slot in enumerate(L.MATERIAL_TEXTURES):
+            for slot in L.MATERIAL_TEXTURES:
                 view, sampler, present = self._texture(getattr(mat, f"{slot}_texture"), slot,
                                                        shared and slot == "metallic")
                 has[slot] = present
-                bound.append((binding, view, sampler))
+                bound.append((view, sampler))
             block = self._material_block(mat, has)
             if shared and has["metallic"]:
                 block["flags"] |= L.MATERIAL_SHARED_METALLIC_ROUGHNESS
             self.material_blocks.append(block)
             views.append(bound)
-        self.slot_material_sets: list[list[object]] = []
+        # Each slot's sets are made as draws first bind them (MaterialSets): unused materials
+        # cost no descriptor set in any slot.
+        self.slot_material_sets = [
+            MaterialSets(self.device, self.pool, layout, self.material_ubo, self._ubo_stride,
+                         views, base=s * self._ubo_slot) for s in range(self.slots)]
         for s in range(self.slots):
-            sets = []
-            for i, bound in enumerate(views):
-                dset = self.pool.allocate(layout)
-                for binding, view, sampler in bound:
-                    writer.sampler(dset, binding, view, sampler)
-                writer.uniform(dset, L.MATERIAL_BINDING, self.material_ubo, L.MATERIAL.size,
-                               offset=s * self._ubo_slot + i * self._ubo_stride)
-                sets.append(dset)
-            self.slot_material_sets.append(sets)
             self.write_materials(s, self.material_blocks)
         self.material_sets = self.slot_material_sets[0]  # (slot 0's: tools and tests)
-        writer.update()
 
     def write_materials(self, slot: int, blocks: list[np.ndarray]) -> None:
-        """Frame slot `slot`'s copies of the MATERIAL blocks (after the slot's fence)."""
+        """Frame slot `slot`'s copies of the MATERIAL blocks (after the slot's fence): one
+        write to each buffer, not one a material."""
         table = np.zeros(len(blocks), L.MATERIAL.dtype)  # np.stack drops padding
         for i, block in enumerate(blocks):
             table[i] = block
-            self.material_ubo.write(block.tobytes(), offset=slot * self._ubo_slot + i * self._ubo_stride)
+        rows = np.zeros((len(blocks), self._ubo_stride), np.uint8)
+        rows[:, :L.MATERIAL.size] = table.view(np.uint8).reshape(len(blocks), -1)
+        self.material_ubo.write(rows, offset=slot * self._ubo_slot)
         self.material_table.write(table.tobytes(), offset=slot * self._table_stride)
 
     def material_table_region(self, slot: int) -> tuple[Buffer, int, int]:

@@ -109,7 +109,9 @@ class Std140Block:
     instance: str  # GLSL instance name
     fields: tuple[tuple[str, str], ...]
 
-    @property
+    # Cached: a block's layout never changes, and a scene with tens of thousands of materials
+    # asks for MATERIAL's dtype once per material.
+    @cached_property
     def offsets(self) -> dict[str, int]:
         out, offset = {}, 0
         for name, glsl in self.fields:
@@ -119,13 +121,13 @@ class Std140Block:
             offset += size
         return out
 
-    @property
+    @cached_property
     def size(self) -> int:
         name, glsl = self.fields[-1]
         end = self.offsets[name] + _BASE[glsl][1]
         return (end + 15) // 16 * 16
 
-    @property
+    @cached_property
     def dtype(self) -> np.dtype:
         offs = self.offsets
         return np.dtype(

@@ -31,7 +31,7 @@ import numpy as np
 
 from vkpbr.atomic import atomic_writer
 from vkpbr.errors import BakeFormatError, JsonError
-from vkpbr.json_input import decode_json
+from vkpbr.json_input import SCENE_JSON_LIMITS, decode_json
 from vkpbr.scene.material_table import PARAMS
 from vkpbr.scene.mips import is_mip_chain
 from vkpbr.scene.resources import ResourcePolicy, policy_image
@@ -402,7 +402,7 @@ def read_baked(path: str | os.PathLike[str], *, mmap: bool = False) -> BakedScen
             buf = memoryview(bytearray(f.read()))  # writable views for the caller
     sections = _parse_sections(buf, path)
     try:
-        doc = decode_json(bytes(sections["scene"]), path)
+        doc = decode_json(bytes(sections["scene"]), path, SCENE_JSON_LIMITS)
     except KeyError:
         raise BakeFormatError(path, "missing section 'scene'") from None
     except JsonError as exc:

@@ -270,9 +270,15 @@ def write_colmap(folder: str | os.PathLike[str], cameras: Sequence[Camera],
 
     Everything is checked and formatted before the first file is written. Returns the paths.
     """
+    from vkpbr.errors import OutputError
+    from vkpbr.user_paths import check_writable_folder, os_reason
+
     texts = colmap_text(cameras, size, image_names)
-    out = Path(folder)
-    out.mkdir(parents=True, exist_ok=True)
+    out = check_writable_folder(folder, "write_colmap: folder", "cameras.txt")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:  # made between the check and here, or the disk filled
+        raise OutputError(out, os_reason(exc), exc.errno) from exc
     paths = []
     for name, text in texts.items():
         with atomic_writer(out / name) as f:

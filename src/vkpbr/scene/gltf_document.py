@@ -13,16 +13,15 @@ from __future__ import annotations
 
 import base64
 import binascii
+import math
 import struct
-import warnings
 from pathlib import Path
 from urllib.parse import unquote
 
 import numpy as np
-import pygltflib
 
 from vkpbr.errors import JsonError, SceneError
-from vkpbr.json_input import decode_json
+from vkpbr.json_input import SCENE_JSON_LIMITS, decode_json
 from vkpbr.scene.gltf_codecs import decode_meshopt, missing_codec
 from vkpbr.scene.material_table import EXTENSIONS as MATERIAL_EXTENSIONS
 from vkpbr.scene.resources import ResourcePolicy, read_error, read_resource
@@ -51,6 +50,7 @@ SUPPORTED_EXTENSIONS = frozenset(
 ) | frozenset(
     MATERIAL_EXTENSIONS  # the material layers (material_table.py)
 )
+_PLAIN = (int, float)  # the JSON decoder's numbers (bool excluded: type(), not isinstance)
 _DTYPES = {5120: "<i1", 5121: "<u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126: "<f4"}
 _NCOMP = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 # An accessor without a bufferView is zero-filled (sparse-only). Its size is not bounded by any
@@ -59,7 +59,8 @@ _ZERO_FILL_SLACK = 64 << 20
 
 
 def get(obj: object, key: str, default: object = None) -> object:
-    """Field of a pygltflib object or of a plain dict (pygltflib keeps some parts as dicts)."""
+    """Field `key` of a JSON object (`default` when absent or null, or when `obj` is not an
+    object: the caller's checks then see the default or None)."""
     value = obj.get(key) if isinstance(obj, dict) else getattr(obj, key, None)
     return default if value is None else value
 
@@ -82,6 +83,13 @@ def floats(value: object, n: int, default: tuple[float, ...], what: str, path: o
     """`n` finite floats from a JSON list, or SceneError."""
     if value is None:
         return default
+    if isinstance(value, list) and len(value) == n and all(type(x) in _PLAIN for x in value):
+        # The common case without NumPy (~10x cheaper for a few numbers: a file with tens
+        # of thousands of materials reads 20 of these each).
+        out = tuple(float(x) for x in value)  # JSON integers have at most 20 digits
+        if all(map(math.isfinite, out)):
+            return out
+        raise SceneError(path, f"{what}: expected {n} finite numbers, got {value!r}")
     try:
         arr = np.asarray(value, dtype=np.float64).reshape(-1)
     except (TypeError, ValueError) as exc:
@@ -135,7 +143,7 @@ def _parse_glb(path: Path, raw: bytes) -> tuple[bytes, memoryview | None]:
 
 def _pick_texture_sources(doc: dict, basisu: bool) -> None:
     """Point each texture's `source` at its KHR_texture_basisu or EXT_texture_webp image
-    when the file gives one (in place, before pygltflib sees the JSON): the extension image is
+    when the file gives one (in place, before the arrays are read): the extension image is
     the one the exporter meant, `source` (PNG/JPEG, or absent) only its fallback. The rest of
     the importer then reads `source` alone. KTX2 is decoded in textures.py (only when `basisu`:
     its decoder is installed; otherwise the fallback stays), WebP by Pillow."""
@@ -155,8 +163,37 @@ def _pick_texture_sources(doc: dict, basisu: bool) -> None:
                 break
 
 
+# The glTF 2.0 top-level arrays (glTF 2.0 section 5.17, "glTF"), each a list of objects.
+GLTF_ARRAYS = ("accessors", "animations", "buffers", "bufferViews", "cameras", "images",
+               "materials", "meshes", "nodes", "samplers", "scenes", "skins", "textures")
+
+
+class GltfArrays:
+    """The top-level arrays of a glTF document as attributes (`gltf.materials`, ...), each
+    checked to be a list of JSON objects ([] when absent or null); the objects are the
+    document's own dicts, read with `get`.
+
+    Plain dicts, not a typed object model (pygltflib's, before): building dataclasses for
+    every object took 10-20 s for a 3 MB materials array, and the readers check each field
+    they use anyway (a wrong kind of value is a one-line SceneError naming the field).
+    """
+
+    def __init__(self, path: Path, doc: dict) -> None:
+        for name in GLTF_ARRAYS:
+            value = doc.get(name)
+            if value is None:
+                value = []
+            elif not isinstance(value, list):
+                raise SceneError(path, f"{name} is not a list (got {type(value).__name__})")
+            for i, item in enumerate(value):
+                if not isinstance(item, dict):
+                    raise SceneError(path, f"{name}[{i}] is not an object (got "
+                                           f"{'null' if item is None else type(item).__name__})")
+            setattr(self, name, value)
+
+
 class GltfDocument:
-    """One parsed glTF file: its JSON (`doc`, and pygltflib's `gltf` view of it), its buffers
+    """One parsed glTF file: its JSON (`doc`, and `gltf`: its top-level arrays, checked), its buffers
     resolved and bounds-checked, and a cache of decoded accessors."""
 
     def __init__(self, path: Path, raw: bytes, policy: ResourcePolicy | None = None) -> None:
@@ -170,7 +207,7 @@ class GltfDocument:
             text, bin_chunk = _parse_glb(path, raw)
         self.bin_chunk = bin_chunk
         try:
-            doc = decode_json(text, path)
+            doc = decode_json(text, path, SCENE_JSON_LIMITS)
         except JsonError as exc:
             raise SceneError(path, f"malformed JSON: {exc.problem}") from None
         if not isinstance(doc, dict):
@@ -188,15 +225,7 @@ class GltfDocument:
             if (package := missing_codec(name)) is not None:
                 raise SceneError(path, f"requires {name}, which needs the {package} package")
         _pick_texture_sources(doc, basisu=missing_codec("KHR_texture_basisu") is None)
-        with warnings.catch_warnings():
-            # dataclasses_json warns about every optional field given as null: noise, not news.
-            warnings.simplefilter("ignore")
-            try:
-                self.gltf = pygltflib.GLTF2.from_dict(doc)
-            except (TypeError, ValueError, AttributeError, KeyError, OverflowError) as exc:
-                # pygltflib coerces fields to their declared types; a JSON value of the wrong
-                # kind (a list for a count, NaN for an index) fails here.
-                raise SceneError(path, f"invalid glTF structure ({exc})") from exc
+        self.gltf = GltfArrays(path, doc)
         self.doc = doc
         self.buffers: dict[int, memoryview] = {}
         self.decoded_views: dict[int, memoryview] = {}  # EXT_meshopt_compression

@@ -14,6 +14,7 @@ import warnings
 
 from vkpbr.errors import SceneError
 from vkpbr.scene.gltf_document import GltfDocument, check_index, ext, floats, get, scalar
+from vkpbr.scene.limits import limits
 from vkpbr.scene.material_table import EXTENSIONS, PARAMS, TEXTURES, MaterialParam
 from vkpbr.scene.resources import ResourceRefused
 from vkpbr.scene.types import Image, Material, Sampler, TextureRef
@@ -32,6 +33,7 @@ _MIN_FILTER = {
     9987: ("linear", True),
 }
 _ALPHA = {"OPAQUE": "opaque", "MASK": "mask", "BLEND": "blend"}
+_PROPERTY = {prm.name: prm.gltf_property for prm in PARAMS}  # messages' names, computed once
 # The material extensions read here (for the loader's list of supported extensions).
 MATERIAL_EXTENSIONS = EXTENSIONS
 
@@ -114,9 +116,11 @@ def build_materials(ld: GltfDocument, n_images: int) -> list[Material]:
     """glTF materials -> Material list (same indices)."""
     out = []
     p = ld.path
+    cap = limits().max_materials
+    if len(ld.gltf.materials) > cap:  # before ~60 us of reading each
+        raise SceneError(p, f"{len(ld.gltf.materials):,} materials are over the limit of "
+                            f"{cap:,} (VKPBR_MAX_MATERIALS)")
     for i, m in enumerate(ld.gltf.materials or []):
-        if m is None:
-            raise SceneError(p, f"material {i} is null")
         alpha_mode = get(m, "alphaMode", "OPAQUE")
         if alpha_mode not in _ALPHA:
             raise SceneError(p, f"material {i}: unknown alphaMode {alpha_mode!r}")
@@ -147,7 +151,7 @@ def _find(m: object, path: str) -> object:
 def _parameter(ld: GltfDocument, i: int, m: object, prm: MaterialParam) -> object:
     """Material `i`'s value of one table row: the file's (the schema's default when absent),
     finite and within the row's range, or a one-line SceneError naming the property."""
-    what = f"material {i}: {prm.gltf_property}"
+    what = f"material {i}: {_PROPERTY[prm.name]}"
     raw = _find(m, prm.gltf)
     default = prm.default if isinstance(prm.default, tuple) else (prm.default,)
     # A scalar is read as a list of one (gltf_document.scalar's way): one path for both.

@@ -26,7 +26,7 @@ SUFFIXES = (".gltf", ".glb", ".obj", ".comp5822mesh", ".vkpbr")
 
 def _loader(suffix: str) -> Callable[..., Scene] | None:
     # Imports are local so that loading one format never imports the others' dependencies
-    # (pygltflib for glTF, say).
+    # (the codecs for glTF, say).
     if suffix in (".gltf", ".glb"):
         from vkpbr.scene.gltf import load_gltf
 

@@ -57,8 +57,8 @@ def _short(value: Any) -> str:
 
 
 def _number(value: Any, where: str, lo: float = -MAX_COORDINATE, hi: float = MAX_COORDINATE) -> None:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        _fail(where, "expected a number", value)
+    if type(value) is not float and (isinstance(value, bool) or not isinstance(value, numbers.Real)):
+        _fail(where, "expected a number", value)  # (the type() test first: ABCs are slow)
     if not (math.isfinite(float(value)) and lo <= float(value) <= hi):
         _fail(where, f"expected a finite number in [{lo:g}, {hi:g}]", value)
 
@@ -280,6 +280,13 @@ def _check_bounds(scene: Scene) -> None:
         _fail("bounds", f"the geometry reaches beyond +-{MAX_COORDINATE:g} in world space")
 
 
+def _check_material_count(scene: Scene) -> None:
+    cap = limits().max_materials  # (the glTF reader checks it before reading them too)
+    if len(scene.materials) > cap:
+        _fail("materials", f"{len(scene.materials):,} materials are over the limit of {cap:,} "
+                           "(VKPBR_MAX_MATERIALS)")
+
+
 def _check_limits(scene: Scene) -> None:
     cap = limits()
     vertices = sum(m.vertex_count for m in scene.meshes)
@@ -300,6 +307,7 @@ def validate_scene(scene: Scene, path: str | Path) -> None:
         for name in ("meshes", "materials", "images", "nodes", "lights", "cameras"):
             if not isinstance(getattr(scene, name), list):
                 _fail(name, "expected a list", getattr(scene, name))
+        _check_material_count(scene)  # before checking each of them
         for i, img in enumerate(scene.images):
             _check_image(img, f"images[{i}]")
         for i, mat in enumerate(scene.materials):
