@@ -167,7 +167,7 @@ def test_manifest_records_resume_and_refuses_another_job(tmp_path: Path) -> None
     assert Manifest.open(tmp_path, scene.fingerprint(), "e").done_views() == {2}
     # Another size: the files would be stale; refused in one line.
     other = job_from_doc([{"cameras": POSES, "out": str(tmp_path), "size": "16x9"}]).scenes[0]
-    with pytest.raises(UsageError, match=r"written by a job with another size \(\[16, 8\], now \[16, 9\]\)"):
+    with pytest.raises(UsageError, match=r"written by a run with another size \(\[16, 8\], now \[16, 9\]\)"):
         Manifest.open(tmp_path, other.fingerprint(), "e")
 
 

@@ -30,7 +30,7 @@ examples:
 _NOT_WITH_RAY = (("camera", "--camera"), ("camera_index", "--camera-index"), ("fov", "--fov"),
                  ("light", "--light"), ("light_color", "--light-color"),
                  ("light_intensity", "--light-intensity"), ("falloff", "--falloff"),
-                 ("device", "--device"))
+                 ("device", "--device"), ("variant", "--variant"))
 
 
 def add_ray_arguments(p: argparse.ArgumentParser, with_flag: bool = True) -> None:
@@ -94,12 +94,44 @@ def _semantics_arg(value: str) -> str:
     return str(Path(value).resolve())
 
 
+# `vkpbr render --cameras` options besides RenderOptions that change the frames (the Ray
+# path refuses them): they are part of the folder's fingerprint when given.
+_FRAME_ARGS = ("camera", "camera_index", "fov", "light", "light_color", "light_intensity",
+               "falloff", "variant")
+
+
+def frames_job(args: argparse.Namespace, options: Any, where: str = "--out") -> Any:
+    """The one-entry job of `vkpbr render SCENE --cameras POSES --out DIR [--ray]`: its
+    settings, poses (read and checked) and the folder's fingerprint, the same with and
+    without --ray so that either may resume the other's folder. Nothing is created."""
+    from vkpbr.distributed.job import RenderSettings, SceneJob
+    from vkpbr.io import OUTPUT_SUFFIXES
+    from vkpbr.scene.poses import load_poses, poses_size
+
+    out = Path(args.out)
+    if out.suffix.lower() in OUTPUT_SUFFIXES:
+        raise UsageError(f"--out {out}: with --cameras, --out is a folder")
+    poses = tuple(load_poses(args.cameras))  # the whole file is checked before the scene loads
+    settings = RenderSettings(
+        scene=Path(args.scene) if args.scene else None, out=out,
+        size=poses_size(list(poses), args.size, "--size"),
+        outputs=tuple(args.outputs or ()), linear=args.linear, msaa=args.msaa,
+        cache=args.cache is not None, cache_dir=args.cache or None, options=options,
+        strict=bool(getattr(args, "strict", False)),
+        allow_outside_paths=bool(getattr(args, "allow_outside_paths", False)),
+        semantics=_semantics_arg(getattr(args, "semantics", "mesh")),
+        batch=int(getattr(args, "batch", BATCH_VIEWS)))
+    if settings.scene is not None and not settings.scene.is_file():
+        raise UsageError(f"{settings.scene}: no such scene file")
+    extra = tuple(sorted((name, repr(getattr(args, name))) for name in _FRAME_ARGS
+                         if getattr(args, name, None) not in (None, [], ())))
+    return SceneJob(settings, poses, colmap=args.colmap, where=where, extra=extra)
+
+
 def render_on_ray(args: argparse.Namespace, options: Any) -> int:
     """`vkpbr render SCENE --cameras POSES --out DIR --ray [ADDRESS]`: the same files as
     without --ray, rendered by the actors of a one-entry job."""
-    from vkpbr.distributed import Job, RenderSettings, SceneJob
-    from vkpbr.io import OUTPUT_SUFFIXES
-    from vkpbr.scene.poses import load_poses
+    from vkpbr.distributed import Job
 
     if not args.cameras:
         raise UsageError("--ray renders a --cameras batch: give --cameras too")
@@ -109,18 +141,5 @@ def render_on_ray(args: argparse.Namespace, options: Any) -> int:
                              "scene's camera and lights); drop it or render without --ray")
     if args.frames != 1:
         raise UsageError("--frames is a timing option: not available with --ray")
-    out = Path(args.out)
-    if out.suffix.lower() in OUTPUT_SUFFIXES:
-        raise UsageError(f"--out {out}: with --cameras, --out is a folder")
-    settings = RenderSettings(
-        scene=Path(args.scene) if args.scene else None, out=out, size=args.size,
-        outputs=tuple(args.outputs or ()), linear=args.linear, msaa=args.msaa,
-        cache=args.cache is not None, cache_dir=args.cache or None, options=options,
-        strict=bool(getattr(args, "strict", False)),
-        allow_outside_paths=bool(getattr(args, "allow_outside_paths", False)),
-        semantics=_semantics_arg(getattr(args, "semantics", "mesh")),
-        batch=int(getattr(args, "batch", BATCH_VIEWS)))
-    if settings.scene is not None and not settings.scene.is_file():
-        raise UsageError(f"{settings.scene}: no such scene file")
-    scene = SceneJob(settings, tuple(load_poses(args.cameras)), colmap=args.colmap, where="--out")
+    scene = frames_job(args, options)
     return _render(Job((scene,), source="--cameras"), args)

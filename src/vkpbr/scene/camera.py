@@ -398,6 +398,8 @@ class Pose:
     pixel_intrinsics: Intrinsics | None = None
     name: str = ""
     where: str = "camera"
+    # A NeRF frame's "file_path" (relative, as the file wrote it): the rendered frame's name.
+    file_path: str | None = None
 
     def camera(self, base: Camera) -> Camera:
         """`base` with this pose applied. Only a pose without `up` can fail here (the base's up
