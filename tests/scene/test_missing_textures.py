@@ -100,13 +100,13 @@ def test_baked_file_with_external_textures(tmp_path: Path, caplog: pytest.LogCap
     src = triangle_gltf(src_dir / "t.gltf", ["maps/a.png", "maps/b.png"])
     out = out_dir / "t.vkpbr"
     caplog.set_level(logging.INFO, logger="vkpbr.bake")
-    report = bake_file(src, out, progress=False)
+    report = bake_file(src, out, progress=False, textures="external", allow_outside_paths=True)
     assert report["external_textures"] == 2 and report["embedded_textures"] == 0
     # Said when baked: how many stay external and where they must be.
     assert messages(caplog) == [
         f"t.vkpbr: 2 of 2 textures stay external files; they must stay in "
         f"{(src_dir / 'maps').resolve()} (../src/maps from the baked file), or bake with "
-        "--embed-textures to store them inside; they lie outside the baked file's folder, so "
+        "--textures source to store them inside; they lie outside the baked file's folder, so "
         "loading it needs --allow-outside-paths"]
     caplog.clear()
     # They lie outside the baked file's folder: the path policy refuses them by default
@@ -134,6 +134,40 @@ def test_baked_file_with_external_textures(tmp_path: Path, caplog: pytest.LogCap
     shutil.rmtree(src_dir)
     scene = load_scene(embedded, strict=True)
     assert messages(caplog) == [] and all(img.pixels is not None for img in scene.images)
+
+
+def test_a_plain_bake_elsewhere_is_self_contained(tmp_path: Path) -> None:
+    """README's two lines in a row (`vkpbr bake scene.gltf --out elsewhere/scene.vkpbr`, then
+    load that): the texture files' bytes are inside, as they are (PNG and JPEG), so the
+    baked file loads with every texture after the sources are gone, and it is about as large
+    as its sources, not their decoded pixels. A bake that cannot store a texture fails,
+    naming it, instead of writing a file that renders untextured."""
+    src_dir, out_dir = tmp_path / "src", tmp_path / "elsewhere"
+    (src_dir / "maps").mkdir(parents=True)
+    out_dir.mkdir()
+    rng = np.random.default_rng(3)
+    noise = rng.integers(0, 256, (256, 256, 3), dtype=np.uint8)
+    PILImage.fromarray(noise).save(src_dir / "maps" / "a.png")
+    PILImage.fromarray(noise).save(src_dir / "maps" / "b.jpg", quality=90)
+    src = triangle_gltf(src_dir / "t.gltf", ["maps/a.png", "maps/b.jpg"])
+    sources = sum((src_dir / "maps" / n).stat().st_size for n in ("a.png", "b.jpg"))
+    out = out_dir / "t.vkpbr"
+    report = bake_file(src, out, progress=False)
+    assert report["embedded_textures"] == 2 and report["external_textures"] == 0
+    assert sources < out.stat().st_size < sources + 64 * 1024  # the bytes, not 2 x 256 KiB RGBA
+    originals = [(src_dir / "maps" / n).read_bytes() for n in ("a.png", "b.jpg")]
+    shutil.rmtree(src_dir)
+    scene = load_scene(out, strict=True)
+    assert [img.data for img in scene.images] == originals  # stored as they were
+    assert [img.mime_type for img in scene.images] == ["image/png", "image/jpeg"]
+    pixels = decode_images(scene)
+    assert np.array_equal(pixels[0][..., :3], noise)
+    # A texture that is gone: the bake fails in one line naming it, and writes nothing.
+    src_dir.mkdir()
+    src = triangle_gltf(src_dir / "t.gltf", ["maps/gone.png"])
+    with pytest.raises(SceneError, match=r"texture maps/gone.png: cannot embed it .*untextured"):
+        bake_file(src, out_dir / "g.vkpbr", progress=False)
+    assert not (out_dir / "g.vkpbr").exists()
 
 
 def test_strict_bake_fails_before_writing(tmp_path: Path) -> None:
