@@ -67,3 +67,62 @@ def test_each_frame_keeps_its_file_path(capsys, tmp_path: Path) -> None:
     poses.write_text(json.dumps(bad))
     code, _, err = run(capsys, "render", "--cameras", str(poses), "--out", str(tmp_path / "x"))
     assert code == 2 and err.count("\n") == 1 and "file_path" in err, err
+
+
+def test_camera_index_on_a_file_without_cameras(capsys, tmp_path: Path) -> None:
+    """Not "the scene has 1 camera(s)" (the automatic one): the file has none, and the
+    message says what the index means."""
+    trimesh = __import__("pytest").importorskip("trimesh", reason="trimesh (test extra) builds the file")
+    box = tmp_path / "box.glb"
+    trimesh.creation.box().export(box)
+    code, _, err = run(capsys, "render", str(box), "--camera-index", "3", "--out",
+                       str(tmp_path / "x.png"))
+    assert code == 2 and err.count("\n") == 1, err
+    assert "the scene file has no cameras" in err and "counting from 0" in err, err
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_view_without_a_display_is_one_clean_line(tmp_path: Path) -> None:
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    env["PYTHONPATH"] = str(Path(__file__).resolve().parents[2] / "src")
+    proc = subprocess.run([sys.executable, "-m", "vkpbr", "view"], capture_output=True,
+                          text=True, env=env, timeout=120)
+    assert proc.returncode == 1 and proc.stderr.count("\n") == 1, proc.stderr
+    assert "b'" not in proc.stderr and "GLFWError" not in proc.stderr, proc.stderr
+    assert proc.stderr.startswith("vkpbr: error: cannot open a window: ") and "--offscreen" in proc.stderr
+
+
+def test_out_bmp_is_accepted_and_documented(capsys, tmp_path: Path) -> None:
+    """--out x.bmp writes a BMP (as docs/outputs.md and --help say), the PNG's pixels less
+    alpha where BMP keeps none."""
+    assert run(capsys, "render", "--size", "32x24", "--out", str(tmp_path / "a.png"))[0] == 0
+    assert run(capsys, "render", "--size", "32x24", "--out", str(tmp_path / "a.bmp"))[0] == 0
+    bmp = Image.open(tmp_path / "a.bmp")
+    assert bmp.format == "BMP"
+    png = np.asarray(Image.open(tmp_path / "a.png").convert("RGB"))
+    assert np.array_equal(np.asarray(bmp.convert("RGB")), png)
+    code, out, _ = run(capsys, "render", "--help")
+    assert ".bmp" in out
+    assert ".bmp" in (DOCS / "outputs.md").read_text()
+
+
+def test_bench_finds_sponza_under_vkpbr_assets(tmp_path: Path, monkeypatch) -> None:  # noqa: ANN001
+    """`vkpbr bench` looks for Sponza where the tests do: $VKPBR_ASSETS/Sponza/glTF."""
+    import argparse
+
+    import pytest
+
+    from vkpbr.app.bench_cmd import sponza_path
+    from vkpbr.errors import UsageError
+
+    (tmp_path / "Sponza" / "glTF").mkdir(parents=True)
+    (tmp_path / "Sponza" / "glTF" / "Sponza.gltf").write_text("{}")
+    monkeypatch.setenv("VKPBR_ASSETS", str(tmp_path))
+    assert sponza_path(argparse.Namespace(sponza=None)) == tmp_path / "Sponza" / "glTF" / "Sponza.gltf"
+    monkeypatch.setenv("VKPBR_ASSETS", str(tmp_path / "empty"))
+    with pytest.raises(UsageError, match=r"\$VKPBR_ASSETS="):
+        sponza_path(argparse.Namespace(sponza=None))

@@ -196,3 +196,25 @@ def test_textureless_sponza_prints_one_line(assets: Path, tmp_path: Path,
         load_scene(path, strict=True, allow_outside_paths=True)
     with pytest.raises(SceneError, match=r"Sponza.gltf: buffer 0 refers to Sponza.bin, which resolves outside "):
         load_scene(path)
+
+
+def test_undecodable_texture_names_the_file_and_what_it_holds(tmp_path: Path,
+                                                              caplog: pytest.LogCaptureFixture) -> None:
+    """Not "cannot identify image file <_io.BytesIO object at 0x...>": the file's name and
+    the format its first bytes show."""
+    (tmp_path / "page.png").write_text("<html>404 Not Found</html>")
+    (tmp_path / "cut.png").write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\x0dIHDR")
+    (tmp_path / "odd.jpg").write_bytes(bytes(range(7, 40)))
+    scene = load_scene(triangle_gltf(tmp_path / "t.gltf", ["page.png", "cut.png", "odd.jpg"]))
+    caplog.clear()
+    decode_images(scene)
+    text = " ".join(messages(caplog))
+    assert "BytesIO" not in text and " at 0x" not in text, text
+    assert "page.png (not a decodable image: text (HTML, XML or JSON), not an image" in text, text
+    from vkpbr.scene.textures import decode_image
+
+    said = [decode_image(img)[1][0][1] for img in scene.images]  # each image's own note
+    assert said[0].startswith("page.png (not a decodable image: text"), said
+    assert said[1].startswith("cut.png (PNG data") and "BytesIO" not in said[1], said
+    assert said[2].startswith("odd.jpg (not a decodable image: data of no known image format "
+                              "(first bytes 07 08"), said

@@ -48,7 +48,9 @@ def add_parser(sub: Any) -> None:
     p.add_argument("scene", nargs="?",
                    help="glTF/GLB/OBJ/.comp5822mesh/.vkpbr file; default: the built-in PBR chart")
     p.add_argument("--out", "-o", default="render.png",
-                   help="output image (.png, .jpg, .exr, .npy; a folder with --cameras); default render.png")
+                   help="output image: 8-bit .png, .jpg, .bmp, .tif, .webp (RGBA where the format "
+                        "has alpha; .jpg drops it), float .exr or .npy with --linear; a folder "
+                        "with --cameras; default render.png")
     p.add_argument("--size", type=size_arg, metavar="WxH",
                    help="image size (default 1280x720; with --cameras, the size the poses "
                         "file states, else 1280x720)")
