@@ -126,3 +126,29 @@ def test_bench_finds_sponza_under_vkpbr_assets(tmp_path: Path, monkeypatch) -> N
     monkeypatch.setenv("VKPBR_ASSETS", str(tmp_path / "empty"))
     with pytest.raises(UsageError, match=r"\$VKPBR_ASSETS="):
         sponza_path(argparse.Namespace(sponza=None))
+
+
+def test_transparent_background_alpha_is_coverage(capsys, tmp_path: Path) -> None:
+    """Where no background is drawn (--env-background off, --env none, the course mode),
+    alpha is coverage: 0 where the instance output says nothing was drawn, 255 where a
+    surface was (no MSAA: every pixel whole); with the background drawn, 255 everywhere.
+    The colour is premultiplied (over black): the background's pixels are (0, 0, 0, 0)."""
+    from vkpbr import Renderer
+
+    with Renderer(msaa=1) as r:
+        for pipeline in ("forward", "compute"):
+            frame = r.render(size=(64, 48), env_background=False, pipeline=pipeline,
+                             outputs=("color", "instance"))
+            alpha, ids = frame["color"][..., 3], frame["instance"]
+            assert 0 < (ids == 0).sum() < ids.size
+            assert np.array_equal(alpha == 255, ids > 0) and set(np.unique(alpha)) == {0, 255}
+            assert not frame["color"][ids == 0][:, :3].any()  # premultiplied: black
+            assert (r.render(size=(64, 48), pipeline=pipeline)[..., 3] == 255).all()
+        batch = r.render_batch([r.default_camera()] * 2, size=(64, 48), env_background=False)
+        assert np.array_equal(batch[0][..., 3], alpha)
+    with Renderer(msaa=4) as r:  # edges: partial coverage
+        a = r.render(size=(64, 48), env_background=False)[..., 3]
+        assert ((a > 0) & (a < 255)).any() and (a == 0).any() and (a == 255).any()
+    code, _, _ = run(capsys, "render", "--env-background", "off", "--size", "32x24", "--out",
+                     str(tmp_path / "t.png"))
+    assert code == 0 and np.asarray(Image.open(tmp_path / "t.png"))[..., 3].min() == 0

@@ -290,7 +290,7 @@ class BatchPath:
             self._forget_cuda(target)
             target.destroy()
         target = BatchTarget(self.parts.device, size, layers, views, "float" if linear else "srgb",
-                             depth, clear_color=(*self.parts.targets.background, 1.0),
+                             depth, clear_color=(*self.parts.targets.background, 0.0),
                              external=cuda)
         self.targets[key] = target
         return target

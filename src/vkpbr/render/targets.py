@@ -72,7 +72,7 @@ class Targets:
         """A new offscreen target of `size` the caller owns (the compute batch's atlases:
         render/batch_path.py; give it back with `drop`)."""
         return OffscreenTarget(self.device, size, "float" if linear else "srgb", self.msaa,
-                               (*self.background, 1.0), compute=self.device.compute_path)
+                               (*self.background, 0.0), compute=self.device.compute_path)
 
     def post(self, target: FrameTarget, copy: tuple[str, ...]) -> OffscreenTarget:
         """The HDR target frames of `target` with post steps draw into (render/post_stage.py): the
