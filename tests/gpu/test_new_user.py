@@ -152,3 +152,22 @@ def test_transparent_background_alpha_is_coverage(capsys, tmp_path: Path) -> Non
     code, _, _ = run(capsys, "render", "--env-background", "off", "--size", "32x24", "--out",
                      str(tmp_path / "t.png"))
     assert code == 0 and np.asarray(Image.open(tmp_path / "t.png"))[..., 3].min() == 0
+
+
+def test_render_orbit_writes_a_turntable(capsys, tmp_path: Path) -> None:
+    """`vkpbr render --orbit N` renders N views around the scene into a frames folder, with
+    its transforms.json; the views differ and the chart stays inside each image."""
+    out = tmp_path / "orbit"
+    code, stdout, _ = run(capsys, "render", "--orbit", "4", "--out", str(out), "--size", "32x24",
+                          "--validation", "--outputs", "instance")
+    assert code == 0 and "wrote 4 images" in stdout, stdout
+    doc = json.loads((out / "transforms.json").read_text())
+    assert len(doc["frames"]) == 4
+    frames = [np.asarray(Image.open(out / f"frame_{i:05d}.png")) for i in range(4)]
+    assert not np.array_equal(frames[0], frames[1])
+    for i in range(4):
+        ids = np.asarray(Image.open(out / f"frame_{i:05d}.instance.png"))
+        edge = np.concatenate([ids[0], ids[-1], ids[:, 0], ids[:, -1]])
+        assert ids.any() and not edge.any(), i  # framed: nothing cut at the borders
+    code, _, err = run(capsys, "render", "--orbit", "0", "--out", str(tmp_path / "x"))
+    assert code == 2 and "--orbit 0" in err

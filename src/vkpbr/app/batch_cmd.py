@@ -100,7 +100,24 @@ _FRAME_ARGS = ("camera", "camera_index", "fov", "light", "light_color", "light_i
                "falloff", "variant")
 
 
-def frames_job(args: argparse.Namespace, options: Any, where: str = "--out") -> Any:
+def orbit_poses(n: int, scene: Any) -> tuple[Any, ...]:
+    """`--orbit N`: N views of a turntable around the scene's bounds (CameraBatch.orbit: 20
+    degrees above the horizon, 45 degree field of view, the bounds framed)."""
+    from vkpbr.scene.camera import Pose
+    from vkpbr.scene.camera_batch import CameraBatch
+
+    if scene is None:  # the built-in chart
+        from vkpbr.scene.default import default_scene
+
+        scene = default_scene()
+    batch = CameraBatch.orbit(n, bounds=scene.bounds())
+    return tuple(Pose(tuple(map(float, batch.eye[i])), tuple(map(float, batch.target[i])),
+                      tuple(map(float, batch.up[i])), float(batch.yfov_deg[i]),
+                      name=f"orbit {i}", where=f"--orbit view {i}") for i in range(n))
+
+
+def frames_job(args: argparse.Namespace, options: Any, where: str = "--out",
+               poses: tuple[Any, ...] | None = None) -> Any:
     """The one-entry job of `vkpbr render SCENE --cameras POSES --out DIR [--ray]`: its
     settings, poses (read and checked) and the folder's fingerprint, the same with and
     without --ray so that either may resume the other's folder. Nothing is created."""
@@ -111,7 +128,8 @@ def frames_job(args: argparse.Namespace, options: Any, where: str = "--out") -> 
     out = Path(args.out)
     if out.suffix.lower() in OUTPUT_SUFFIXES:
         raise UsageError(f"--out {out}: with --cameras, --out is a folder")
-    poses = tuple(load_poses(args.cameras))  # the whole file is checked before the scene loads
+    if poses is None:  # the whole file is checked before the scene loads
+        poses = tuple(load_poses(args.cameras))
     settings = RenderSettings(
         scene=Path(args.scene) if args.scene else None, out=out,
         size=poses_size(list(poses), args.size, "--size"),
@@ -133,13 +151,18 @@ def render_on_ray(args: argparse.Namespace, options: Any) -> int:
     without --ray, rendered by the actors of a one-entry job."""
     from vkpbr.distributed import Job
 
-    if not args.cameras:
-        raise UsageError("--ray renders a --cameras batch: give --cameras too")
+    if not args.cameras and not getattr(args, "orbit", None):
+        raise UsageError("--ray renders a --cameras batch (or --orbit N): give --cameras too")
     for dest, flag in _NOT_WITH_RAY:
         if getattr(args, dest, None) not in (None, [], ()):
             raise UsageError(f"{flag} is not available with --ray (the actors render with the "
                              "scene's camera and lights); drop it or render without --ray")
     if args.frames != 1:
         raise UsageError("--frames is a timing option: not available with --ray")
-    scene = frames_job(args, options)
+    poses = None
+    if getattr(args, "orbit", None):  # the bounds need the scene, here as well as on the actors
+        from vkpbr.app.common import load_scene_arg
+
+        poses = orbit_poses(args.orbit, load_scene_arg(args))
+    scene = frames_job(args, options, poses=poses)
     return _render(Job((scene,), source="--cameras"), args)

@@ -62,6 +62,10 @@ def add_parser(sub: Any) -> None:
                         '"ex,ey,ez,tx,ty,tz[,ux,uy,uz]" strings or {"eye","target","up","fov"} '
                         "objects, pose matrices, K + pose, a NeRF transforms.json) into the folder "
                         "--out, with the cameras as written as a NeRF transforms.json there")
+    p.add_argument("--orbit", type=int, metavar="N",
+                   help="render N views of a turntable around the scene into the folder --out "
+                        "(CameraBatch.orbit: 20 degrees above the horizon, the bounds framed), "
+                        "as --cameras does")
     p.add_argument("--batch", type=int, default=BATCH_VIEWS, metavar="N",
                    help="with --cameras, render N views per GPU submission (Renderer.render_batch; "
                         "directional lights' shadows then use one map over the whole scene); "
@@ -129,11 +133,18 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
     from vkpbr.render.renderer import Renderer
 
     t0 = time.perf_counter()
-    job = frames_job(args, options)  # poses, size, fingerprint: before the scene loads
+    scene, poses = None, None
+    if args.orbit:  # the orbit frames the scene's bounds: the scene loads first
+        from vkpbr.app.batch_cmd import orbit_poses
+
+        scene = load_scene_arg(args)
+        poses = orbit_poses(args.orbit, scene)
+    job = frames_job(args, options, poses=poses)  # poses, size, fingerprint: before the scene
     manifest = open_frames_folder(job)  # a folder another run made is refused here
     try:
         todo = sorted(set(range(len(job.poses))) - manifest.done_views())
-        scene = load_scene_arg(args) if todo else None
+        if todo and scene is None:
+            scene = load_scene_arg(args)
         with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa,
                       semantics=args.semantics,
                       cache_dir=default_cache_dir()) as renderer:
@@ -222,15 +233,20 @@ def run(args: argparse.Namespace) -> int:
     if args.list_views:
         return list_views()
     options = render_options_from_args(args)  # bad values fail here, before any expensive work
-    if args.colmap and not args.cameras:
+    if args.colmap and not (args.cameras or args.orbit):
         raise UsageError("--colmap writes the cameras of a --cameras batch: give --cameras too")
     if args.batch < 0:
         raise UsageError(f"--batch {args.batch}: give a number of views per submission, or 0")
+    if args.orbit is not None:
+        if args.cameras:
+            raise UsageError("--orbit makes the cameras: not with --cameras")
+        if args.orbit < 1:
+            raise UsageError(f"--orbit {args.orbit}: give a number of views >= 1")
     if args.ray is not None:
         from vkpbr.app.batch_cmd import render_on_ray
 
         return render_on_ray(args, options)
-    if args.cameras:
+    if args.cameras or args.orbit:
         return _render_batch(args, options)
     size = args.size or (1280, 720)
     out = Path(args.out)
