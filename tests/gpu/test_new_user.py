@@ -171,3 +171,26 @@ def test_render_orbit_writes_a_turntable(capsys, tmp_path: Path) -> None:
         assert ids.any() and not edge.any(), i  # framed: nothing cut at the borders
     code, _, err = run(capsys, "render", "--orbit", "0", "--out", str(tmp_path / "x"))
     assert code == 2 and "--orbit 0" in err
+
+
+def test_render_batch_last_stats_are_the_calls() -> None:
+    """render_batch's last_stats: the Python time up to the submit, the wait and the
+    readback are measured (not 0), and the GPU steps' times add up to the GPU time, on the
+    layered batch, the compute batch and the view-by-view route (with a post step), whose
+    stats are every view's summed."""
+    import math
+
+    from vkpbr import Renderer
+
+    with Renderer() as r:
+        cams = [r.default_camera()] * 3
+        for kw in ({"pipeline": "forward"}, {"pipeline": "compute"},
+                   {"pipeline": "forward", "bloom": 0.2}):
+            r.render_batch(cams, size=(32, 24), **kw)
+            s = r.last_stats
+            assert s.cpu_ms > 0 and s.wait_ms > 0 and s.readback_ms > 0, (kw, s)
+            assert math.isclose(sum(s.pass_ms.values()), s.gpu_ms, rel_tol=1e-6, abs_tol=1e-6), (kw, s)
+        r.render(size=(32, 24), bloom=0.2)
+        one = r.last_stats.readback_ms
+        r.render_batch([r.default_camera()] * 6, size=(32, 24), bloom=0.2)
+        assert r.last_stats.readback_ms > one  # six views' readbacks summed, not the last one's
