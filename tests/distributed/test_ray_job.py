@@ -18,6 +18,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # a local Ray cluster: the end-to-end tier
+
 ray = pytest.importorskip("ray", reason="the ray extra is not installed (pip install 'vkpbr[ray]')",
                           exc_type=ImportError)
 

@@ -170,6 +170,7 @@ def _render_many(tmp_path: Path, out: Path, views: int) -> subprocess.Popen:
                             stderr=subprocess.PIPE, text=True)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL])
 def test_a_run_killed_midway_leaves_a_consistent_folder(capsys, tmp_path: Path, sig: int) -> None:  # noqa: ANN001
     """Killed after its first recorded group: the folder is consistent (what the manifest
