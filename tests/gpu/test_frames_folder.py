@@ -114,6 +114,7 @@ def _hostile_lines(header: dict) -> dict[str, list[object]]:
         "a view out of range": [header, {**done, "views": [10 ** 6]}],
         "sizes of the wrong type": [header, {**done, "sizes": ["1"]}],
         "a camera of the wrong type": [header, {**done, "cameras": [{**cam, "eye": "0,0,0"}]}],
+        "a camera that cannot render": [header, {**done, "cameras": [{**cam, "yfov_deg": -5}]}],
         "a list for a header": [[header]],
         "a header of another version": [{**header, "version": 1}],
         "a header with an unknown key": [{**header, "who": "me"}],

@@ -97,7 +97,11 @@ def _check_camera(rec: object) -> Any:
     if rec.get("pixel_intrinsics") is not None and not _numbers(rec["pixel_intrinsics"], 6):
         raise _Bad("camera pixel_intrinsics: expected 6 numbers")
     try:
-        return camera_from_record(rec)
+        from vkpbr.scene.camera import validate_camera
+
+        camera = camera_from_record(rec)
+        validate_camera(camera)  # a field of view, up vector, intrinsics that render
+        return camera
     except (UsageError, ValueError, TypeError) as exc:
         raise _Bad(f"not a valid camera ({str(exc).splitlines()[0] if str(exc) else exc})") from None
 
@@ -411,7 +415,8 @@ def start_frames_folder(scene: Any, manifest: Manifest) -> bool:
     subfolders = {str(Path(f).parent) for v in range(len(scene.poses)) for f in scene.files(v)}
     for sub in sorted(subfolders - {"."}):
         create_folder(out / sub, where)
-    manifest.begin()
+    colmap = ("cameras.txt", "images.txt", "points3D.txt") if getattr(scene, "colmap", False) else ()
+    manifest.begin(complete=("transforms.json", *colmap))
     manifest.created = manifest.created or created
     return created
 
