@@ -403,8 +403,8 @@ def test_points_mode_rejected(tmp_path: Path) -> None:
 def test_unsupported_required_extension(tmp_path: Path) -> None:
     b = GltfBuilder()
     b.node(mesh=b.triangle())
-    b.doc["extensionsRequired"] = ["KHR_lights_punctual", "KHR_animation_pointer"]
-    _bad(b, tmp_path, "unsupported extension.*KHR_animation_pointer")
+    b.doc["extensionsRequired"] = ["KHR_lights_punctual", "EXT_lights_image_based"]
+    _bad(b, tmp_path, "unsupported extension.*EXT_lights_image_based")
 
 
 @pytest.mark.parametrize(

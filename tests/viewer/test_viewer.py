@@ -264,3 +264,40 @@ def test_pipeline_key_takes_the_compute_path_offscreen(tmp_path: Path) -> None:
     finally:
         viewer.close()
     assert instance.errors == [], instance.errors[:3]
+
+
+def test_animation_playback_keys(tmp_path: Path, assets: Path) -> None:
+    """The viewer plays a glTF animation: J pauses it, ' doubles the speed, Y picks one by
+    name, a script's "time" event seeks; the screenshot equals Renderer.render at the time
+    the HUD shows."""
+    from vkpbr.app.viewer import Viewer, ViewerConfig
+    from vkpbr.scene.loader import load_scene
+
+    path = assets / "BoxAnimated" / "glTF" / "BoxAnimated.gltf"
+    if not path.is_file():
+        pytest.skip(f"{path} not in the assets")
+    shot = tmp_path / "anim.png"
+    events = [_key(0.2, "apostrophe"), _key(0.4, "j"), _key(0.45, "y"),
+              {"t": 0.5, "type": "time", "seconds": 2.0},
+              {"t": 0.6, "type": "screenshot", "path": str(shot)}, {"t": 0.65, "type": "quit"}]
+    from vkpbr.scene.types import Camera
+
+    config = ViewerConfig(size=(64, 48), validation=True, offscreen=True,
+                          camera=Camera(eye=(2.0, 3.0, 9.0), target=(0.0, 1.2, 0.0)),
+                          script=parse_script({"fixed_dt": 0.05, "events": events}))
+    viewer = Viewer(load_scene(path), config)
+    instance = viewer.renderer.device.instance
+    try:
+        assert viewer.run() == 0
+        pb = viewer.playback
+        assert (pb.playing, pb.speed, pb.index, pb.time) == (False, 2.0, 0, 2.0)
+        hud = "\n".join(line for b in viewer._hud_blocks() for line in b.lines)
+        assert "2.00 /" in hud and "paused" in hud and "x2" in hud
+        image, camera, lights, options, size = viewer.last_screenshot
+        headless = viewer.renderer.render(camera, lights, size, options, time=2.0, animation=0)
+        assert np.array_equal(image, headless)
+        still = viewer.renderer.render(camera, lights, size, options, time=0.0)
+        assert not np.array_equal(image, still)
+    finally:
+        viewer.close()
+    assert instance.errors == [], instance.errors[:3]

@@ -30,7 +30,8 @@ examples:
 _NOT_WITH_RAY = (("camera", "--camera"), ("camera_index", "--camera-index"), ("fov", "--fov"),
                  ("light", "--light"), ("light_color", "--light-color"),
                  ("light_intensity", "--light-intensity"), ("falloff", "--falloff"),
-                 ("device", "--device"), ("variant", "--variant"))
+                 ("device", "--device"), ("variant", "--variant"), ("time", "--time"),
+                 ("animation", "--animation"), ("animate", "--animate"))
 
 
 def add_ray_arguments(p: argparse.ArgumentParser, with_flag: bool = True) -> None:
@@ -97,7 +98,7 @@ def _semantics_arg(value: str) -> str:
 # `vkpbr render --cameras` options besides RenderOptions that change the frames (the Ray
 # path refuses them): they are part of the folder's fingerprint when given.
 _FRAME_ARGS = ("camera", "camera_index", "fov", "light", "light_color", "light_intensity",
-               "falloff", "variant")
+               "falloff", "variant", "time", "animation")
 
 
 def orbit_poses(n: int, scene: Any) -> tuple[Any, ...]:
@@ -114,6 +115,11 @@ def orbit_poses(n: int, scene: Any) -> tuple[Any, ...]:
     return tuple(Pose(tuple(map(float, batch.eye[i])), tuple(map(float, batch.target[i])),
                       tuple(map(float, batch.up[i])), float(batch.yfov_deg[i]),
                       name=f"orbit {i}", where=f"--orbit view {i}") for i in range(n))
+
+
+def _given(value: object) -> bool:
+    """Whether an option was given: not its default None, False or an empty list (0 is)."""
+    return not (value is None or value is False or value == [] or value == ())
 
 
 def frames_job(args: argparse.Namespace, options: Any, where: str = "--out",
@@ -142,7 +148,7 @@ def frames_job(args: argparse.Namespace, options: Any, where: str = "--out",
     if settings.scene is not None and not settings.scene.is_file():
         raise UsageError(f"{settings.scene}: no such scene file")
     extra = tuple(sorted((name, repr(getattr(args, name))) for name in _FRAME_ARGS
-                         if getattr(args, name, None) not in (None, [], ())))
+                         if _given(getattr(args, name, None))))
     return SceneJob(settings, poses, colmap=args.colmap, where=where, extra=extra)
 
 
@@ -154,7 +160,7 @@ def render_on_ray(args: argparse.Namespace, options: Any) -> int:
     if not args.cameras and not getattr(args, "orbit", None):
         raise UsageError("--ray renders a --cameras batch (or --orbit N): give --cameras too")
     for dest, flag in _NOT_WITH_RAY:
-        if getattr(args, dest, None) not in (None, [], ()):
+        if _given(getattr(args, dest, None)):
             raise UsageError(f"{flag} is not available with --ray (the actors render with the "
                              "scene's camera and lights); drop it or render without --ray")
     if args.frames != 1:
@@ -165,4 +171,7 @@ def render_on_ray(args: argparse.Namespace, options: Any) -> int:
 
         poses = orbit_poses(args.orbit, load_scene_arg(args))
     scene = frames_job(args, options, poses=poses)
+    if any(getattr(p, "time", None) is not None for p in scene.poses):
+        raise UsageError(f'{args.cameras}: poses with a "time" (an animation pose) are not '
+                         "rendered on Ray yet: render them without --ray")
     return _render(Job((scene,), source="--cameras"), args)

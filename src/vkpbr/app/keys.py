@@ -42,7 +42,8 @@ ENV_ROTATION_STEP = 15.0  # degrees per , / . press
 
 PRESS_ACTIONS = ("quit", "view", "cycle", "toggle", "exposure", "fov", "animate_light",
                  "light_to_camera", "reset", "print_camera", "screenshot", "toggle_help",
-                 "toggle_hud", "environment", "env_rotation")
+                 "toggle_hud", "environment", "env_rotation", "play", "next_animation",
+                 "animation_speed")
 HELD_ACTIONS = ("fly", "move_light", "speed")
 
 
@@ -173,6 +174,14 @@ BINDINGS: tuple[Binding, ...] = (
             "HUD; `C` prints it as `--fov`)"),
     Binding("Space", "light animation on/off", (_once("space", "animate_light"),),
             doc="light animation (orbit about the scene centre's vertical axis) on/off"),
+    Binding("J", "play / pause the animation", (_once("j", "play"),),
+            doc="play / pause the scene's glTF animation (the HUD shows its time)"),
+    Binding("Y / Shift+Y", "next / previous animation (all, then each)", (
+        _press("y", "next_animation", 1), _press("shift+y", "next_animation", -1)),
+        doc="next / previous animation: all of them at once, then each by name"),
+    Binding("; / '", "animation speed / 2, x 2", (
+        _press("semicolon", "animation_speed", -1), _press("apostrophe", "animation_speed", 1)),
+        doc="animation speed halved / doubled (x0.125 .. x4)"),
     Binding("arrows PgUp/PgDn", "move the light (camera-relative), up/down", (
         Chord("up", "move_light", (0, 1)), Chord("down", "move_light", (0, -1)),
         Chord("right", "move_light", (1, 1)), Chord("left", "move_light", (1, -1)),

@@ -10,6 +10,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from vkpbr.app.animate_cmd import add_arguments as add_animation_arguments
+from vkpbr.app.animate_cmd import animation_choice, pose_times, run_animation
 from vkpbr.app.common import camera_from_args, lights_from_args, load_scene_arg
 from vkpbr.app.log import is_quiet, say
 from vkpbr.app.options import add_options, render_options_from_args
@@ -92,6 +94,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--linear", action="store_true", help="linear float32 colour (write a .exr or .npy)")
     p.add_argument("--frames", type=int, default=1, metavar="N",
                    help="render N frames and report the median time per frame")
+    add_animation_arguments(p)
     p.defer(add_options)
     p.set_defaults(run=run)
 
@@ -150,10 +153,11 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
                       cache_dir=default_cache_dir()) as renderer:
             base = camera_from_args(args, renderer)
             cameras = [pose.camera(base) for pose in job.poses]
+            times = pose_times(list(job.poses), args.cameras or "--orbit", args.time)
             if todo:
                 t1 = time.perf_counter()
                 log.info("load + set-up %.2f s", t1 - t0)
-                _render_views(args, options, job, manifest, renderer, cameras, todo)
+                _render_views(args, options, job, manifest, renderer, cameras, todo, times)
             t2 = time.perf_counter()
     except BaseException:
         abandon_frames_folder(job, manifest, manifest.created)
@@ -166,7 +170,7 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
 
     size, out_dir, n = job.settings.size, Path(job.settings.out), len(job.poses)
     names = [job.transforms_name(i) for i in range(n)]
-    write_transforms(out_dir / "transforms.json", cameras, size, names)
+    write_transforms(out_dir / "transforms.json", cameras, size, names, times=times)
     wrote = ["transforms.json"]
     if args.colmap:
         wrote += [p.name for p in write_colmap(out_dir, cameras, size, names)]
@@ -180,7 +184,8 @@ def _render_batch(args: argparse.Namespace, options: Any) -> int:
 
 
 def _render_views(args: argparse.Namespace, options: Any, job: Any, manifest: Any,
-                  renderer: Any, cameras: list[Any], todo: list[int]) -> None:
+                  renderer: Any, cameras: list[Any], todo: list[int],
+                  times: list[float] | None = None) -> None:
     """Render views `todo` and record them in the manifest as their files land (in order,
     a group at a time: a killed run loses only what it had not recorded)."""
     from concurrent.futures import ThreadPoolExecutor
@@ -214,7 +219,9 @@ def _render_views(args: argparse.Namespace, options: Any, job: Any, manifest: An
         frames = renderer.render_many([cameras[v] for v in todo], lights, size, options,
                                       linear=args.linear,
                                       outputs=("color", *names) if names else None,
-                                      batch=args.batch or None)
+                                      batch=args.batch or None,
+                                      times=None if times is None else [times[v] for v in todo],
+                                      animation=animation_choice(renderer.scene, args.animation))
         bar = tqdm(frames, total=len(todo), unit="frame", disable=True if is_quiet() else None)
         for view, image in zip(todo, bar, strict=True):
             files = [out_dir / f for f in job.files(view)]
@@ -246,6 +253,8 @@ def run(args: argparse.Namespace) -> int:
         from vkpbr.app.batch_cmd import render_on_ray
 
         return render_on_ray(args, options)
+    if args.animate:
+        return run_animation(args, options)
     if args.cameras or args.orbit:
         return _render_batch(args, options)
     size = args.size or (1280, 720)
@@ -269,6 +278,8 @@ def run(args: argparse.Namespace) -> int:
         camera = camera_from_args(args, renderer)
         lights = lights_from_args(args, renderer, options)
         log.debug("camera %s, lights %s", camera, lights)
+        if args.time is not None:
+            renderer.set_time(args.time, animation_choice(scene, args.animation))
         names = args.outputs or ()
         if names:
             _check_outputs(out, names, renderer.max_id)

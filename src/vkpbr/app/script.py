@@ -29,6 +29,7 @@ EVENT_FIELDS: dict[str, tuple[str, ...]] = {
     "restore": (),
     "screenshot": ("path",),  # write the current frame as PNG
     "print_camera": (),
+    "time": ("seconds",),  # the animation's time; "play": true/false plays or pauses it
     "quit": (),
 }
 _ACTIONS = ("press", "release", "tap")
@@ -81,6 +82,10 @@ def parse_script(obj: Any, source: str = "script") -> Script:
             key_code(raw["key"], where)
         if kind == "mouse_button" and raw["button"] not in ("left", "middle", "right"):
             raise UsageError(f"{where}: button must be left, middle or right")
+        if kind == "time" and not (isinstance(raw["seconds"], int | float) and raw["seconds"] >= 0
+                                   and raw["seconds"] == raw["seconds"]
+                                   and raw["seconds"] != float("inf")):
+            raise UsageError(f"{where}: \"seconds\" must be a time in seconds >= 0")
         if kind == "resize" and not all(isinstance(raw[k], int) and 0 < raw[k] <= 16384
                                         for k in ("width", "height")):
             raise UsageError(f"{where}: width and height must be positive integers")

@@ -28,6 +28,7 @@ from vkpbr.app.controls import FlyCamera
 from vkpbr.app.hud import FontAtlas, TextBlock, layout_blocks
 from vkpbr.app.log import say
 from vkpbr.app.options import option_flags
+from vkpbr.app.playback import Playback
 from vkpbr.app.script import Script
 from vkpbr.app.viewer_input import InputHandlers
 from vkpbr.errors import VkpbrError
@@ -190,6 +191,7 @@ class Viewer(InputHandlers):
         self.start_lights = self.lights = r.frame_lights(self.options, lights)
         self.env_choices = K.env_choices(self.options)  # what K cycles through
         self.animate_light = False
+        self.playback = Playback(r.scene)  # the scene's glTF animations (app/playback.py)
         # The help panel starts open where it leaves room for the picture.
         self.show_help, self.show_hud = cfg.size[0] >= 1200 and cfg.size[1] >= 600, True
         self.held: set[int] = set()
@@ -267,6 +269,7 @@ class Viewer(InputHandlers):
             f"path {o.pipeline}"
             + (f" ({'compute' if self.renderer.uses_compute(self.target, o) else 'forward'})"
                if o.pipeline == PipelinePath.AUTO else ""),
+            self.playback.label() if self.playback.names else "",
             "H: key help" if not self.show_help else "",
         )
         blocks = [TextBlock(lines, "top-left")]

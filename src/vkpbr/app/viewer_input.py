@@ -124,6 +124,15 @@ class InputHandlers:
     def _act_animate_light(self, _arg: None) -> None:
         self.animate_light = not self.animate_light
 
+    def _act_play(self, _arg: None) -> None:
+        self.playback.toggle()
+
+    def _act_next_animation(self, step: int) -> None:
+        self.playback.next(step)
+
+    def _act_animation_speed(self, step: int) -> None:
+        self.playback.faster(step)
+
     @property
     def light(self) -> Light | None:
         """The light the keys move: the first of the frame's lights (None without any)."""
@@ -229,10 +238,18 @@ class InputHandlers:
             self.pending_shots.append(Path(d["path"]))
         elif kind == "print_camera":
             self.print_camera()
+        elif kind == "time":  # the animation's time (docs/viewer.md)
+            self.playback.seek(float(d["seconds"]))
+            if "play" in d:
+                self.playback.playing = bool(d["play"]) and bool(self.playback.names)
         elif kind == "quit":
             self.quit = True
 
     def _update(self, dt: float) -> None:
+        posed = self.playback.advance(dt)
+        if posed is not None:
+            self.renderer.set_time(posed, self.playback.animation)
+            self._hud_dirty = True
         h = self.held
         fly, lm = [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]  # (forward, right, up) from held keys
         if h:

@@ -155,7 +155,8 @@ class SceneJob:
         """What the files depend on; a manifest written for another fingerprint is refused.
         The poses by value (not where they were read from), the scene by path and hash."""
         s = self.settings
-        values = [(p.eye, p.target, p.up, p.yfov_deg, p.pixel_intrinsics, p.name)
+        values = [(p.eye, p.target, p.up, p.yfov_deg, p.pixel_intrinsics, p.name,
+                   *((p.time,) if getattr(p, "time", None) is not None else ()))
                   for p in self.poses]
         poses = hashlib.sha256(repr(values).encode()).hexdigest()
         names = [self.files(v)[0] for v in range(len(self.poses))]
@@ -332,6 +333,9 @@ def scene_entry(entry: object, where: str, base: Path) -> SceneJob:
         allow_outside_paths=_bool(entry, "allow_outside_paths", where, False),
         semantics=_semantics(entry.get("semantics", "mesh"), where, base),
         batch=_count(entry, "batch", where, BATCH_VIEWS, 0))
+    if any(getattr(p, "time", None) is not None for p in poses):
+        raise UsageError(f'{where}: cameras: poses with a "time" (an animation pose) are not '
+                         "rendered on Ray yet: render them with `vkpbr render --cameras`")
     return SceneJob(settings, poses, colmap=_bool(entry, "colmap", where, False), where=where)
 
 

@@ -51,9 +51,12 @@ class Buffer:
         host_visible: bool = False,
         name: str = "",
         exportable: bool = False,
+        device_local: bool = False,
     ) -> None:
         """`exportable`: its memory can be handed to another API as a POSIX file descriptor
-        (`export_fd`; VK_KHR_external_memory_fd: CUDA imports it, gpu/cuda.py)."""
+        (`export_fd`; VK_KHR_external_memory_fd: CUDA imports it, gpu/cuda.py).
+        `device_local` (with `host_visible`): prefer memory that is both (the GPU reads it
+        often, the host writes it), else plain host-visible memory."""
         vk = device.vk
         usage = buffer_usage(vk, usage)
         self.device = device
@@ -78,7 +81,8 @@ class Buffer:
                 vk.VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | vk.VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
             )
             # Cached memory makes CPU reads of readback buffers fast on discrete GPUs.
-            preferred = required | vk.VK_MEMORY_PROPERTY_HOST_CACHED_BIT
+            preferred = required | (vk.VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT if device_local
+                                    else vk.VK_MEMORY_PROPERTY_HOST_CACHED_BIT)
         else:
             required = preferred = vk.VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT
         mtype = device.memory_type(req.memoryTypeBits, required, preferred)

@@ -41,6 +41,7 @@ from vkpbr.gpu.frames import Frame, FrameRing
 from vkpbr.gpu.graph import BufferResource, Rendering, Step
 from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
+from vkpbr.render.deform import UNBOUNDED_RADIUS
 from vkpbr.render.frames import FrameSlot
 from vkpbr.render.gpu_scene import Draw, GpuScene
 from vkpbr.render.passes import PassContext, record_passes
@@ -57,21 +58,18 @@ _COMMAND_BYTES = 20  # VkDrawIndexedIndirectCommand
 
 
 def draw_spheres(scene: Scene, draws: list[Draw]) -> np.ndarray:
-    """(D, 8) float32 per draw: its world bounding sphere (centre, radius) around the
-    transformed corners of its mesh's box, then (index count, first index, vertex offset, 0)
-    as uint32 bits (what batch_cull.comp reads)."""
+    """(D, 8) float32 per draw: the bounding sphere (centre, radius) of its mesh's box in the
+    mesh's own space (the shaders place it with the draw's model matrix: frustum.glsl
+    world_sphere), then (index count, first index, vertex offset, 0) as uint32 bits (what
+    batch_cull.comp reads)."""
     out = np.zeros((len(draws), 8), np.float32)
     ranges = out.view(np.uint32)
     for i, d in enumerate(draws):
         p = scene.meshes[d.mesh].positions
         lo, hi = p.min(axis=0).astype(np.float64), p.max(axis=0).astype(np.float64)
-        corners = np.array([(x, y, z) for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                            for z in (lo[2], hi[2])])
-        model = d.push[:16].reshape(4, 4).T.astype(np.float64)  # std140 columns -> rows
-        world = corners @ model[:3, :3].T + model[:3, 3]
-        centre = (world.min(axis=0) + world.max(axis=0)) / 2
-        out[i, :3] = centre
-        out[i, 3] = np.linalg.norm(world - centre, axis=1).max() * (1 + 1e-5) + 1e-6
+        out[i, :3] = (lo + hi) / 2
+        out[i, 3] = (np.linalg.norm(hi - lo) / 2 * (1 + 1e-5) + 1e-6 if not d.deformed
+                     else UNBOUNDED_RADIUS)  # posed beyond its rest bounds: never culled
         ranges[i, 4:7] = (d.index_count, d.first_index, d.vertex_offset & 0xFFFFFFFF)
     return out
 
@@ -82,8 +80,10 @@ class BatchViews:
 
     def __init__(self, device: Device, scene: Scene, gpu_scene: GpuScene, ring: FrameRing,
                  slots: list[FrameSlot], set0_layout: DescriptorSetLayout,
-                 recorder: FrameRecorder, shadows: Any) -> None:
+                 recorder: FrameRecorder, shadows: Any, gpu_state: Any) -> None:
+        # gpu_state: the scene state's copies per slot (render/scene_state.py)
         self.device, self.gpu_scene, self.ring, self.slots = device, gpu_scene, ring, slots
+        self.gpu_state = gpu_state
         self.set0_layout, self.recorder, self.shadows = set0_layout, recorder, shadows
         self._objects: list[Any] = []
         self.draw_count = len(gpu_scene.draws)
@@ -93,12 +93,13 @@ class BatchViews:
         stages = ("compute",)
         self.cull_layout = self._own(DescriptorSetLayout(device, [
             BindingSpec(i, "storage", stages, n)
-            for i, n in enumerate(("CullViews", "DrawBounds", "Commands", "CullVisible"))]))
+            for i, n in enumerate(("CullViews", "DrawBounds", "Commands", "CullVisible",
+                                   "CullInstances"))]))
         self.cull = self._own(ComputePipeline(device, SPV_DIR / "batch_cull.comp.spv",
                                               [self.cull_layout], push_bytes=12))
-        self.pool = self._own(DescriptorPool(device, [(self.cull_layout, 1),
+        self.pool = self._own(DescriptorPool(device, [(self.cull_layout, len(slots)),
                                                       (set0_layout, len(slots))]))
-        self.cull_set = self.pool.allocate(self.cull_layout)
+        self.cull_sets = [self.pool.allocate(self.cull_layout) for _ in slots]
         self.sets0 = [self.pool.allocate(set0_layout) for _ in slots]
         self.capacity = 0  # views the buffers hold
         self.chunk_views = 0
@@ -137,14 +138,16 @@ class BatchViews:
         self.records = self.views.array(np.uint8, self.capacity * L.VIEW_RECORD.size).view(
             L.VIEW_RECORD.dtype)
         writer = DescriptorWriter(dev)
-        for binding, buf in enumerate((self.views, self.bounds, self.commands, self.visible)):
-            writer.storage(self.cull_set, binding, buf)
-        for slot, set0 in zip(self.slots, self.sets0, strict=True):  # a frame's, the batch's views
-            settings_buf, settings_at = slot.block_ranges["Settings"]
+        for slot, set0, cull in zip(self.slots, self.sets0, self.cull_sets, strict=True):
+            state_buf, state_at, state_size = self.gpu_state.region(slot.index)
+            for binding, buf in enumerate((self.views, self.bounds, self.commands, self.visible)):
+                writer.storage(cull, binding, buf)
+            writer.storage(cull, 4, state_buf, state_size, state_at)
+            settings_buf, settings_at = slot.block_ranges["Settings"]  # a frame's, the batch's views
             writer.storage(set0, 0, self.views)
             writer.uniform(set0, 1, settings_buf, L.SETTINGS.size, settings_at)
             writer.storage(set0, 2, self.visible)
-            writer.storage(set0, 3, self.gpu_scene.instance_buffer)
+            writer.storage(set0, 3, state_buf, state_size, state_at)
         writer.update()
 
     def write_views(self, terms: ViewTerms, size: tuple[int, int], rows: int = 0) -> None:
@@ -204,7 +207,7 @@ class BatchViews:
 
         def record(cmd: Commands) -> None:
             cmd.bind_pipeline(self.cull)
-            cmd.bind_set(0, self.cull_set)
+            cmd.bind_set(0, self.cull_sets[fs.frame_index])
             cmd.push(np.array([views, self.draw_count, self.chunk_views], np.uint32))
             cmd.dispatch(*work_groups((views * self.draw_count, 1, 1), (64, 1, 1)))
 

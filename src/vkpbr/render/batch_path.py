@@ -239,7 +239,8 @@ class BatchPath:
         p = self.parts
         if self.views is None:
             self.views = BatchViews(p.device, p.scene, p.gpu_scene, p.ring, p.slots,
-                                    p.set_layouts[0], p.recorder, p.shadow_frames.maps)
+                                    p.set_layouts[0], p.recorder, p.shadow_frames.maps,
+                                    p.gpu_state)
         self.views.ensure(n, chunk_views)
         return self.views
 
@@ -257,6 +258,7 @@ class BatchPath:
         terms = batch_view_terms(views, size, p.bounds.corners, p.bounds.radius)
         frame = p.ring.begin()
         slot = p.slots[frame.index]
+        p.gpu_state.write(frame.index)
         plan = p.shadow_frames.prepare(frame_lights, opts)
         rows = p.shadow_frames.write_scene(slot, plan, frame_lights)
         write_frame_blocks(slot, frame_lights, opts, linear, p.lighting.frame_lighting(opts), rows)
@@ -270,7 +272,7 @@ class BatchPath:
         timings into `stats`. The shadow maps' record is forgotten if it fails."""
         p = self.parts
         shadows = p.shadow_frames.maps
-        redraw = shadows.stale(frame.index, plan, opts.alpha_mask)
+        redraw = p.shadow_frames.stale(frame.index, plan, opts.alpha_mask)
         try:
             cmd = record(redraw)
             if before_submit is not None:

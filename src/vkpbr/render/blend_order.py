@@ -19,12 +19,24 @@ class BlendOrder:
     """The blended draws of `draws` (render/gpu_scene.py's, each with `alpha_mode` and
     `center`), in the order the frame path draws them."""
 
-    def __init__(self, draws: Sequence[Any]) -> None:
+    def __init__(self, draws: Sequence[Any], state: Any = None) -> None:
+        # `state` (vkpbr.scene.state.SceneState): the centres follow it; None: as loaded.
+        self.blended = np.array([d.alpha_mode == "blend" for d in draws], bool)
+        self.state = state
         blend = [d.center for d in draws if d.alpha_mode == "blend"]
-        self.centers = np.array(blend, dtype=np.float64).reshape(-1, 3)
+        self._centers = np.array(blend, dtype=np.float64).reshape(-1, 3)
+        self._version = 0
 
     def __len__(self) -> int:
-        return len(self.centers)
+        return len(self._centers)
+
+    @property
+    def centers(self) -> np.ndarray:
+        """(blended draws, 3) world centres, as the scene state places them now."""
+        if self.state is not None and self.state.version != self._version and len(self._centers):
+            self._centers = self.state.draw_centers()[self.blended]
+            self._version = self.state.version
+        return self._centers
 
     def order(self, eye: Any) -> tuple[int, ...]:
         """Indices into the blended draws, farthest first from `eye` (painter's order)."""

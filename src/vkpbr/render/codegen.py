@@ -79,6 +79,7 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("pbr_batch_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1), ("BATCH", 1))),
     Variant("background_batch.vert.spv", "background.vert", (("BATCH", 1),)),
     Variant("batch_cull.comp.spv", "batch_cull.comp", (("STRUCTS_ONLY", 1),)),
+    Variant("deform.comp.spv", "deform.comp", (("STRUCTS_ONLY", 1),)),
     Variant("background.frag.spv", "background.frag"),
     # KHR_materials_transmission's copy of the opaque scene (render/transmission.py): the
     # opaque passes writing linear radiance.

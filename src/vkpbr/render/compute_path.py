@@ -96,14 +96,13 @@ CLASSIFY_GROUP = (16, 16, 1)  # classify.comp's count and scatter, raster_resolv
 
 
 def _draw_records(gs: GpuScene, semantic: np.ndarray | None) -> np.ndarray:
-    """The draw table (L.DRAW_RECORD a draw): matrices, first index, vertex offset, material,
+    """The draw table (L.DRAW_RECORD a draw; its matrices are the scene state's Instances
+    records, render/scene_state.py): first index, vertex offset, material,
     and the dataset ids: instance = the draw's index + 1 (one node's mesh:
     Renderer.instances), semantic = `semantic[i]` (vkpbr.scene.semantics; default its mesh's
     index + 1); 0 is the background for both."""
     draws = np.zeros(max(len(gs.draws), 1), L.DRAW_RECORD.dtype)
     for i, d in enumerate(gs.draws):
-        m = d.push.reshape(2, 4, 4)
-        draws[i]["model"], draws[i]["normal_matrix"] = m[0], m[1]
         draws[i]["info"] = (d.first_index, d.vertex_offset, d.material, int(gs.has_colors))
     for i, d in enumerate(gs.draws):
         draws[i]["ids"] = (i + 1, d.mesh + 1 if semantic is None else int(semantic[i]), 0, 0)

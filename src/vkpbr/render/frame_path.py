@@ -85,6 +85,7 @@ class FramePath:
         c0 = clock()
         frame = p.ring.begin()  # waits for the frame's previous submission
         slot = p.slots[frame.index]
+        p.gpu_state.write(frame.index)  # the scene state, if it changed since the slot had it
         if timings:
             read_timings(p.ring, frame, slot)
         image = target.acquire(frame)
@@ -127,7 +128,7 @@ class FramePath:
               post: tuple[tuple[str, float], ...], transmission: bool) -> FrameSpec:
         """What the frame's recording depends on: its path, modes and shadow redraws."""
         p = self.parts
-        redraw = p.shadow_frames.maps.stale(slot.index, plan, options.alpha_mask)
+        redraw = p.shadow_frames.stale(slot.index, plan, options.alpha_mask)
         compute = p.paths.uses_compute(drawn, options)
         path = choose_path(compute, compute and p.paths.uses_compute_raster(options, drawn),
                            COPY_OUTPUTS in copy)

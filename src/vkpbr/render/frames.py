@@ -147,11 +147,13 @@ def create_slots(
     return [buffer, lights], pool, slots
 
 
-def bind_instances(device: Device, sets0: list[Any], instances: Buffer) -> None:
-    """Point binding 3 of frame sets `sets0` at the scene's instance matrices."""
+def bind_instances(device: Device, sets0: list[Any],
+                   regions: list[tuple[Buffer, int, int]]) -> None:
+    """Point binding 3 of each of frame sets `sets0` at its slot's copy of the scene
+    state's matrices ((buffer, offset, size): render/scene_state.py)."""
     writer = DescriptorWriter(device)
-    for set0 in sets0:
-        writer.storage(set0, INSTANCES_BINDING, instances)
+    for set0, (buffer, offset, size) in zip(sets0, regions, strict=True):
+        writer.storage(set0, INSTANCES_BINDING, buffer, size, offset)
     writer.update()
 
 
@@ -189,12 +191,14 @@ class FrameLighting:
     env_max_lod: float = 0.0
 
 
-def write_frame_view(slot: FrameSlot, camera: Camera, size: Sequence[int], bounds: Bounds) -> None:
+def write_frame_view(slot: FrameSlot, camera: Camera, size: Sequence[int], bounds: Any) -> None:
     """Write `slot`'s view record for `camera` and frames of `size` (W, H): the batch of one
     (render/views.py), once per new camera or size (a repeat is a tuple comparison). The
     view's planes and rotation stay on the slot for the depth readback, the dataset outputs
     and the shadow cascades, so that nothing computes the camera again."""
-    key = (_camera_key(camera), size[0], size[1])
+    # `bounds` (Bounds, or render/scene_state.py's LiveBounds with a version) set the
+    # automatic planes: a moved scene makes a new view.
+    key = (_camera_key(camera), size[0], size[1], getattr(bounds, "version", 0))
     if key == slot.view_key:
         return
     slot.view_key = key

@@ -37,6 +37,7 @@ from vkpbr.gpu.descriptors import DescriptorPool, DescriptorSetLayout, Descripto
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, TextureUploader
 from vkpbr.render import layouts as L
+from vkpbr.render.deform import deformed_records
 from vkpbr.scene.material_table import PARAMS, TEXTURES
 from vkpbr.scene.types import (
     SRGB_TEXTURE_SLOTS,
@@ -88,11 +89,14 @@ class Draw:
     first_index: int
     index_count: int
     vertex_offset: int
-    push: np.ndarray  # PUSH block bytes: model and normal matrix
+    model: np.ndarray  # (4, 4) float64 model matrix as loaded (the scene state's rest pose)
     alpha_mode: str  # the material's: "opaque" | "mask" | "blend" (render/passes.py classifies)
     double_sided: bool
     casts_shadows: bool = True  # drawn into shadow maps (Material.casts_shadows)
     node: int = -1  # the scene node it draws (the dataset outputs' instance table)
+    instance: int = -1  # which of the node's EXT_mesh_gpu_instancing instances; -1: none
+    deformed: bool = False  # posed by the deform step (render/deform.py): never culled
+    skinned: bool = False  # deformed by a skin: posed in world space, its model the identity
     center: np.ndarray = field(default_factory=lambda: np.zeros(3))  # world, for blend sorting
 
 
@@ -181,14 +185,6 @@ def _concat(arrays: list[np.ndarray], dtype: type, width: int) -> np.ndarray:
     return np.ascontiguousarray(np.concatenate(arrays), dtype=dtype)
 
 
-def _normal_matrix(m: np.ndarray) -> np.ndarray:
-    out = np.eye(4)
-    a = m[:3, :3].astype(np.float64)
-    det = np.linalg.det(a)
-    out[:3, :3] = np.linalg.inv(a).T if abs(det) > 1e-30 else a
-    return out
-
-
 class GpuScene:
     """Owns the GPU copies of one Scene. Built by `Renderer`; destroy with `destroy()`."""
 
@@ -199,6 +195,9 @@ class GpuScene:
         self.scene = scene
         self._owned: list = []
         self.timings: dict[str, float] = {}
+        # Skinned and morphed draw records: each gets its own posed copy of its mesh's
+        # vertices after the meshes' (render/deform.py).
+        self.deformed = deformed_records(scene)
         t0 = time.perf_counter()
         # Decode images (Pillow, threads, GIL released) while the geometry streams are built.
         with concurrent.futures.ThreadPoolExecutor(1) as pool:
@@ -210,10 +209,6 @@ class GpuScene:
         t2 = time.perf_counter()
         self._create_materials(material_layout)
         self.draws = self._build_draws()
-        # Each draw record's model and normal matrix, as pbr.vert reads them (Instances).
-        matrices = np.concatenate([d.push for d in self.draws]) if self.draws else np.zeros(32, np.float32)
-        self.instance_buffer = self._own(upload_buffer(device, matrices, "storage",
-                                                       name="instance matrices"))
         self.timings.update(geometry=t1 - t0, textures=t2 - t1, materials=time.perf_counter() - t2)
 
     def _own(self, obj):  # noqa: ANN001, ANN202 - any gpu object
@@ -225,6 +220,10 @@ class GpuScene:
         per_mesh = [prepare_mesh(m, self._tangent_uv_set(m), frames=False)
                     for m in self.scene.meshes]
         self.vertex_offsets = np.cumsum([0] + [m.vertex_count for m in self.scene.meshes])
+        regions = per_mesh + [per_mesh[r.mesh] for r in self.deformed]  # posed copies last
+        sizes = [m.vertex_count for m in self.scene.meshes] + [
+            self.scene.meshes[r.mesh].vertex_count for r in self.deformed]
+        self.posed_offsets = [int(o) for o in np.cumsum([0] + sizes)[len(per_mesh):-1]]
         self.index_offsets = np.cumsum([0] + [len(m.indices) for m in self.scene.meshes])
         self.streams: dict[str, Buffer] = {}
         self.stream_bytes: dict[str, int] = {}
@@ -233,12 +232,12 @@ class GpuScene:
         optional = (("texcoords1",) if self.has_texcoords1 else ()) + (
             ("colors",) if self.has_colors else ())
         for name in STREAMS + optional:
-            arrays = [p[name] for p in per_mesh]
+            arrays = [p[name] for p in regions]
             data = np.concatenate(arrays) if arrays else np.zeros(4, np.uint8)
             self._add_stream(name, data)
         # Per mesh (normal, tangent, QTangent or None, packed or None) for ensure_streams.
         self._frame_sources: list[tuple] | None = [
-            (p["normals"], p["tangents"], p["qtangents"], p["packed_frames"]) for p in per_mesh]
+            (p["normals"], p["tangents"], p["qtangents"], p["packed_frames"]) for p in regions]
         if not self.has_texcoords1:
             # The shader's TEXCOORD_1 input reads the TEXCOORD_0 buffer: an alias, not a copy
             # (not in stream_bytes, owned once).
@@ -251,7 +250,7 @@ class GpuScene:
         self.index_buffer = self._own(
             upload_buffer(self.device, idx, "index|storage", name="indices")
         )
-        self.vertex_count = int(self.vertex_offsets[-1])
+        self.vertex_count = int(sum(sizes))
 
     def _add_stream(self, name: str, data: np.ndarray) -> None:
         # Storage too: the compute path reads vertices in its shader (render/compute_path.py).
@@ -486,7 +485,9 @@ class GpuScene:
     # --- draws ------------------------------------------------------------------------------
     def _build_draws(self) -> list[Draw]:
         draws = []
-        for node_index, node in _draw_nodes(self.scene.nodes):
+        posed = {(r.node, r.instance): (offset, r.skin is not None)
+                 for r, offset in zip(self.deformed, self.posed_offsets, strict=True)}
+        for node_index, instance, node in _draw_nodes(self.scene.nodes):
             if not 0 <= node.mesh < len(self.scene.meshes):
                 continue
             mesh = self.scene.meshes[node.mesh]
@@ -495,16 +496,19 @@ class GpuScene:
             mat_index = mesh.material if 0 <= mesh.material < len(self.scene.materials) else self.default_material
             mat = self.materials[mat_index]
             m = np.asarray(node.matrix, dtype=np.float64)
-            push = np.concatenate([L.mat4_to_std140(m).ravel(), L.mat4_to_std140(_normal_matrix(m)).ravel()])
+            offset, skinned = posed.get((node_index, instance), (int(self.vertex_offsets[node.mesh]), False))
+            if skinned:
+                m = np.eye(4)  # skinned vertices are posed in world space (render/deform.py)
             p = mesh.positions
             center_local = (p.min(axis=0) + p.max(axis=0)) / 2 if len(p) else np.zeros(3)
             draws.append(Draw(
                 mesh=node.mesh, material=mat_index,
                 first_index=int(self.index_offsets[node.mesh]), index_count=len(mesh.indices),
-                vertex_offset=int(self.vertex_offsets[node.mesh]),
-                push=np.ascontiguousarray(push, dtype=np.float32), alpha_mode=mat.alpha_mode,
+                vertex_offset=offset,
+                model=m, alpha_mode=mat.alpha_mode,
                 double_sided=bool(mat.double_sided), casts_shadows=bool(mat.casts_shadows),
-                center=m[:3, :3] @ center_local + m[:3, 3], node=node_index,
+                center=m[:3, :3] @ center_local + m[:3, 3], node=node_index, instance=instance,
+                deformed=(node_index, instance) in posed, skinned=skinned,
             ))
         draws.sort(key=lambda d: d.material)  # fewer material binds within each pass
         return draws
@@ -519,13 +523,14 @@ class GpuScene:
 
 
 # --- EXT_mesh_gpu_instancing -------------------------------------------------------------------
-def _draw_nodes(nodes: list[Node]) -> list[tuple[int, Node]]:
-    """(index in scene.nodes, node) per draw record: a node with `instances`
+def _draw_nodes(nodes: list[Node]) -> list[tuple[int, int, Node]]:
+    """(index in scene.nodes, instance or -1, node) per draw record: a node with `instances`
     (EXT_mesh_gpu_instancing) gets one record per instance (its world matrix, its instance id
     in the dataset outputs), kept adjacent; the frame's passes draw a node's records as one
     instanced draw call (passes._instance_runs; pbr.vert reads each record's matrices). The
     mesh is never copied."""
-    out: list[tuple[int, Node]] = []
+    out: list[tuple[int, int, Node]] = []
     for i, node in enumerate(nodes):
-        out += [(i, n) for n in expand_instances([node])]
+        expanded = expand_instances([node])
+        out += [(i, k if node.instances is not None else -1, n) for k, n in enumerate(expanded)]
     return out

@@ -63,6 +63,7 @@ __all__ = [
     "Lighting",
     "MAX_LIGHTS",
     "PUSH",
+    "draw_push",
     "BLOCKS",
     "Named",
     "View",
@@ -331,9 +332,8 @@ class StorageArray:
 
 
 # One mesh instance as the compute path reads it (render/compute_path.py writes them).
+# Its matrices are the draw's Instances record (the scene state's, render/scene_state.py).
 DRAW_RECORD = Std140Block("DrawRecord", "draw_record", (
-    ("model", "mat4"),
-    ("normal_matrix", "mat4"),
     ("info", "uvec4"),  # first index, vertex offset, material, 1 if the scene has COLOR_0
     ("ids", "uvec4"),  # instance id, semantic id (dataset outputs; 0 = background), 0, 0
 ))
@@ -344,9 +344,12 @@ STORAGE = {
     # the draw (render/batch.py).
     "Views": StorageArray("Views", VIEW_RECORD, "views"),
     "VisibleViews": StorageArray("VisibleViews", "uint", "visible_views"),
-    # Every draw record's matrices (render/gpu_scene.py): the frame's vertex shader reads its
-    # instance's, so that a node's K instances (EXT_mesh_gpu_instancing) are one draw call.
-    "Instances": StorageArray("Instances", "mat4", "instance_matrices"),  # model, normal: 2 a record
+    # Every draw record's matrices, the frame slot's copy of the scene state
+    # (render/scene_state.py): model, then the normal matrix (the inverse transpose), 2 a
+    # record. Every step that places geometry reads them here (pbr.vert by gl_InstanceIndex,
+    # so that a node's K instances (EXT_mesh_gpu_instancing) are one draw call; a batch's and
+    # the shadow maps' draws by the pushed record index; the compute path by the draw).
+    "Instances": StorageArray("Instances", "mat4", "instance_matrices"),
     "Draws": StorageArray("Draws", DRAW_RECORD, "draws"),
     "Indices": StorageArray("Indices", "uint", "indices"),
     "Positions": StorageArray("Positions", "float", "positions"),  # 3 floats a vertex
@@ -370,7 +373,7 @@ STORAGE = {
     "RasterDraws": StorageArray("RasterDraws", "uvec4", "raster_draws"),
     "RasterDepthIds": StorageArray("RasterDepthIds", "uint64_t", "raster"),
     "RasterBig": StorageArray("RasterBig", "uint", "raster_big"),
-    "RasterSpheres": StorageArray("RasterSpheres", "vec4", "raster_spheres"),  # per draw, world
+    "RasterSpheres": StorageArray("RasterSpheres", "vec4", "raster_spheres"),  # per draw, its mesh's
     "RasterDepths": StorageArray("RasterDepths", "float", "raster_depths"),
     # The masked draws' big triangles: per masked draw a count and a dispatch size, then its
     # segment of (triangle, view, chunk) entries.
@@ -415,7 +418,7 @@ COMPUTE_SET: tuple[tuple[int, str, str], ...] = (
     (23, "storage", "RasterDraws"),
     (24, "storage", "RasterDepthIds"),
     (25, "storage", "RasterBig"),
-    (26, "storage", "RasterSpheres"),  # per draw its world bounding sphere (culling)
+    (26, "storage", "RasterSpheres"),  # per draw its mesh's bounding sphere (culling)
     (27, "storage", "RasterDepths"),  # resolved: copied into the depth buffer
     (28, "storage", "RasterMaskedBig"),
 )
@@ -444,7 +447,14 @@ class LightKind(Named):
     DIRECTIONAL = 2
 
 
-PUSH = Std140Block("Draw", "draw", (("model", "mat4"), ("normal_matrix", "mat4")))
+# A draw's push constant: x = its record in Instances (a batch's and the shadow maps' draws,
+# whose instance index says the view or the map layer).
+PUSH = Std140Block("Draw", "draw", (("index", "uvec4"),))
+
+
+def draw_push(index: int) -> np.ndarray:
+    """The PUSH bytes of draw record `index`."""
+    return np.array([index, 0, 0, 0], np.uint32)
 
 BLOCKS = (SETTINGS, MATERIAL, LIGHTING, PUSH)
 
@@ -458,8 +468,8 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
         (1, "uniform", ("vertex", "fragment", "compute"), "Settings"),
         # A batch's visible lists (render/batch.py): frames bind a stand-in they never read.
         (2, "storage", ("vertex",), "VisibleViews"),
-        # The scene's instance matrices (GpuScene.instance_buffer), written by the Renderer.
-        (3, "storage", ("vertex",), "Instances"),
+        # The scene state's matrices, the slot's copy (render/scene_state.py).
+        (3, "storage", ("vertex", "compute"), "Instances"),
     ),
     1: (
         *((i, "sampler", ("fragment", "compute"), f"{slot}_map")

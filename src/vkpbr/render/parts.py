@@ -29,6 +29,7 @@ from vkpbr.render import layouts as L
 from vkpbr.render.batch import draw_spheres
 from vkpbr.render.blend_order import BlendOrder
 from vkpbr.render.compute_path import ComputeScene
+from vkpbr.render.deform import DeformKernel, DeformLayout
 from vkpbr.render.environment import EnvironmentSpec
 from vkpbr.render.environments import Environments
 from vkpbr.render.frames import Bounds, FrameSlot, bind_instances, create_slots
@@ -37,11 +38,13 @@ from vkpbr.render.lighting import Lighting
 from vkpbr.render.path_choice import FramePaths
 from vkpbr.render.post_stage import PostKernels
 from vkpbr.render.recorder import STAMPS, FrameRecorder
+from vkpbr.render.scene_state import GpuSceneState, LiveBounds, scene_state
 from vkpbr.render.shadow_frames import ShadowFrames
 from vkpbr.render.shadows import ShadowMaps
 from vkpbr.render.targets import Lazy, Targets
 from vkpbr.render.transmission import OpaqueCopies
 from vkpbr.scene.semantics import semantic_ids
+from vkpbr.scene.state import SceneState
 from vkpbr.scene.types import Camera, Scene
 
 __all__ = ["FrameParts", "create_layouts", "make_parts", "open_device"]
@@ -66,7 +69,10 @@ class FrameParts:
     compute: Lazy[ComputeScene]  # the compute path's resources, made on its first frame
     post: Lazy[PostKernels]  # the post steps' kernels, made on first use
     recorder: FrameRecorder
-    bounds: Bounds
+    state: SceneState  # what changes between frames (vkpbr.scene.state)
+    deform: DeformKernel | None  # skins and morph targets posed each frame (render/deform.py)
+    gpu_state: GpuSceneState  # its copy per frame slot (render/scene_state.py)
+    bounds: LiveBounds  # the scene's bounds, following the state
     blend: BlendOrder
     paths: FramePaths
     targets: Targets
@@ -85,6 +91,9 @@ class FrameParts:
     def close(self) -> None:
         """Destroy what is not the device's to destroy (the caller waits for the device)."""
         self.recorder.free()
+        self.gpu_state.destroy()
+        if self.deform is not None:
+            self.deform.destroy()
         self.shadow_frames.maps.destroy()
         self.opaque_copies.destroy()
         if self.post.made is not None:
@@ -109,7 +118,7 @@ def create_layouts(device: Device, frames: int
     3: their sets are per frame slot, `frames` of them) and the pipeline layout of all four."""
     layouts = [DescriptorSetLayout(device, [BindingSpec(b, k, s, n) for b, k, s, n in rows])
                for i, rows in sorted(L.SETS.items()) if i != 3]
-    shadows = ShadowMaps(device, layouts[1], frames)
+    shadows = ShadowMaps(device, layouts[1], frames, frame_layout=layouts[0])
     layouts.append(shadows.set_layout)
     return layouts, shadows, PipelineLayout(device, layouts, L.PUSH.size)
 
@@ -122,7 +131,12 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     layouts, shadows, pipeline_layout = create_layouts(device, ring.count)
     buffers, pool, slots = create_slots(device, layouts[0], layouts[2], ring.count)
     gs = GpuScene(device, scene, layouts[1])
-    bind_instances(device, [s.set0 for s in slots], gs.instance_buffer)
+    state = scene_state(scene, gs.draws)
+    layout = DeformLayout(scene, gs.deformed) if gs.deformed else None
+    gpu_state = GpuSceneState(device, state, ring.count, scene, layout)
+    deform = (DeformKernel(device, scene, gs, layout, [gpu_state.deform_region(s.index) for s in slots])
+              if layout is not None else None)
+    bind_instances(device, [s.set0 for s in slots], [gpu_state.region(s.index) for s in slots])
     ids, labels = semantic_ids(scene, gs.draws, Path(semantics)
                                if isinstance(semantics, os.PathLike) else semantics)
     # Bound in every slot's set 2 before anything is recorded (render/transmission.py).
@@ -130,15 +144,17 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     compute = Lazy(lambda: ComputeScene(device, gs, dict(enumerate(layouts)), slots, ids,
                                         draw_spheres(scene, gs.draws) if gs.draws else None))
     post = Lazy(lambda: PostKernels(device))
-    blend = BlendOrder(gs.draws)
+    blend = BlendOrder(gs.draws, state)
     paths = FramePaths(device, msaa, scene.triangle_count, len(blend) > 0, depth_prepass,
                        cache_dir)
     recorder = FrameRecorder(device, gs, pipeline_layout, ring, slots, paths.prepass_for,
-                             shadows, compute, copies, post)
-    bounds = Bounds.of(*scene.bounds())
+                             shadows, compute, copies, post, deform)
+    bounds = LiveBounds(state, Bounds.of(*scene.bounds()))
     environments = Environments(device, slots, recorder, env_spec, cache_dir)
     return FrameParts(
         device, scene, ring, layouts, pipeline_layout, buffers, pool, slots, gs, ids, labels,
-        copies, compute, post, recorder, bounds, blend, paths,
+        copies, compute, post, recorder, state, deform, gpu_state, bounds, blend, paths,
         Targets(device, msaa, background, ring.count, recorder, compute, post), environments,
-        Lighting(scene, copies, environments), ShadowFrames(shadows, bounds, recorder))
+        Lighting(scene, copies, environments),
+        ShadowFrames(shadows, bounds, recorder, state,
+                     np.array([d.casts_shadows for d in gs.draws], bool)))

@@ -27,6 +27,7 @@ from typing import Any
 
 from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.pipeline import PipelineSpec
+from vkpbr.render.layouts import draw_push
 
 __all__ = ["PassSpec", "PASSES", "classify", "record_pass", "record_passes", "PassContext"]
 
@@ -176,7 +177,7 @@ def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[tupl
         if d.material != bound:
             cmd.bind_set(1, ctx.material_sets[d.material])
             bound = d.material
-        cmd.push(d.push)
+        cmd.push(draw_push(index))
         if instanced is not None:
             cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset,
                              first_instance=instanced[0], instances=instanced[1])

@@ -7,6 +7,7 @@ that share steps share a sub-list. docs/architecture.md draws these lists (gener
 `python -m vkpbr.render.paths`, checked by a test).
 
 Groups:
+  deform           skins and morph targets posed into their vertex regions (render/deform.py)
   shadows          the shadow maps a frame redraws (render/shadows.py)
   transmission     the copy of the opaque scene transmissive surfaces see (COPY_* below)
   outputs_clear    the dataset outputs' images cleared
@@ -32,7 +33,7 @@ __all__ = ["PATHS", "COPY_PATHS", "RASTER_STEPS", "STEP_NAMES", "choose_path", "
 
 _SHADE_COMPUTE = ("classify", "shading", "outputs", "background_compute")
 _AFTER_SHADING = ("blend", "post", "overlay", "finish")
-_FRAME_HEAD = ("shadows", "transmission")
+_FRAME_HEAD = ("deform", "shadows", "transmission")
 _FRAGMENT_PASSES = ("opaque", "opaque_double", "mask", "background", "blend")
 
 PATHS: dict[str, tuple[str, ...]] = {
@@ -49,8 +50,9 @@ PATHS: dict[str, tuple[str, ...]] = {
     "compute_raster": (*_FRAME_HEAD, "outputs_clear", "raster", *_SHADE_COMPUTE,
                        *_AFTER_SHADING),
     # Batches: every view of a call in one submission (render/batch_path.py).
-    "compute_batch": ("shadows", "raster", "classify", "shading", "background_compute", "finish"),
-    "layered_batch": ("shadows", "cull", "chunks", "finish"),
+    "compute_batch": ("deform", "shadows", "raster", "classify", "shading", "background_compute",
+                      "finish"),
+    "layered_batch": ("deform", "shadows", "cull", "chunks", "finish"),
 }
 # The transmission's copy of the opaque scene (render/transmission.py), drawn as the frame is.
 COPY_PATHS: dict[str, tuple[str, ...]] = {
@@ -64,7 +66,7 @@ COPY_PATHS: dict[str, tuple[str, ...]] = {
 RASTER_STEPS = ("raster_small", "raster_big", "raster_masked", "raster_masked_big",
                 "raster_resolve")
 # Every timed step a frame can report in FrameStats.pass_ms, in frame order.
-STEP_NAMES = ("shadows", "transmission", "cull", "prepass_opaque", "prepass_opaque_double",
+STEP_NAMES = ("deform", "shadows", "transmission", "cull", "prepass_opaque", "prepass_opaque_double",
               *RASTER_STEPS, "opaque", "opaque_double", "mask", "classify", "shading", "outputs",
               "background", "blend", "views", "copy")
 

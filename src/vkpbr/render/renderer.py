@@ -32,6 +32,7 @@ from vkpbr.render.options import RenderOptions
 from vkpbr.render.outputs import OUTPUTS, frame_outputs
 from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.parts import FrameParts, make_parts, open_device
+from vkpbr.render.scene_state import with_times
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 from vkpbr.scene.types import Camera, Light, Scene
 
@@ -40,8 +41,8 @@ __all__ = ["Renderer", "RenderOptions", "FrameStats", "Submitted", "COPY_COLOR",
 
 
 class Renderer:
-    """Renders a Scene (the built-in default scene when None) into NumPy arrays or a window.
-
+    """Renders a Scene (the built-in default scene when None) into NumPy arrays or a window;
+    poses, visibility and animation time change between frames (docs/living-scenes.md).
     Parameters
     ----------
     scene : the scene to draw; None renders the built-in PBR chart.
@@ -53,15 +54,11 @@ class Renderer:
     msaa : 1 or 4 samples per pixel (offscreen renders).
     background : linear RGB of pixels where nothing was drawn.
     depth_prepass : draw opaque geometry depth-only first, so each pixel is shaded once.
-        None (default): where it was measured to win (BENCHMARKS.md: it halves a fragment-
-        bound frame's shading, doubles the vertex work), on a GPU when the scene has no more
-        triangles than the target has pixels.
-    window_extensions : instance extensions a window system needs (the viewer's GLFW list);
-        the device then also enables swapchains.
+        None (default): where it was measured to win (render/path_choice.py).
+    window_extensions : a window system's instance extensions (GLFW's): swapchains too.
     env_spec : cube sizes and sample counts of the environments' pre-filter (None: the GPU
         sizes, or EnvironmentSpec.cpu() on a CPU device).
-    cache_dir : where the split-sum BRDF table is kept between processes (None: made once
-        per process).
+    cache_dir : where the split-sum BRDF table is kept between processes (None: none).
     semantics : where the dataset outputs' semantic ids come from (vkpbr.scene.semantics):
         "mesh" (each mesh primitive its own class), "material", "extras" (glTF `extras:
         {"semantic": ...}` of nodes or meshes), a {node/mesh/material name: id or label}
@@ -124,22 +121,20 @@ class Renderer:
         self.shadow_plan, self.write_scene_shadows = p.shadow_frames.plan, p.shadow_frames.write_scene
         self.takes_compute_batch, self.read_frame_timings = paths.takes_compute_batch, fp.read_timings
         self.wait_idle, self.check_validation = self.device.wait_idle, self.device.check_validation
+        st = p.state  # the living scene (vkpbr.scene.state): what the next frame shows
+        self.state, self.set_pose, self.set_poses, self.reset_pose = st, st.set_pose, st.set_poses, st.reset
+        self.set_visible, self.set_time, self.set_weights = st.set_visible, st.set_time, st.set_weights
 
-    @property
-    def environment_baker(self) -> Any:
-        return self.environments.baker  # (environments.py: made on first use)
 
     @property
     def instances(self) -> list[dict[str, Any]]:
-        """What each instance id of the outputs is: [{"id", "node", "mesh", "material",
-        "semantic", "label"}], id = index + 1 (0: the background); the semantic id from
-        `semantics` (by default the mesh's index + 1), `label` its name ("" for 0)."""
+        """Each output instance id's {"id", "node", "mesh", "material", "semantic", "label"}
+        (id = index + 1; 0: the background); outputs.instances says more."""
         return O.instances(self.scene, self.gpu_scene, self.semantic_ids, self.semantic_labels)
 
     def choose_paths(self, target: FrameTarget, options: RenderOptions) -> None:
-        """Before auto frames of `target`: auto's path for this device, measured on the first
-        call that can (render/path_choice.py). `render` and `render_many` call it; callers
-        of `draw` call it first (the viewer does): `draw` never measures."""
+        """Before auto frames of `target`: auto's path, measured on the first call that can
+        (render/path_choice.py); callers of `draw` call it first (`draw` never measures)."""
         self.paths.choose(target, options, self)
 
     def draw(self, target: FrameTarget, camera: Camera, lights: tuple[Light, ...],
@@ -165,7 +160,7 @@ class Renderer:
     def render(self, camera: Camera | Any = None, lights: LightsArg = None,
                size: tuple[int, int] = (640, 480), options: RenderOptions | None = None,
                linear: bool = False, depth: bool = False, outputs: Iterable[str] | None = None,
-               **option_overrides: Any
+               time: float | None = None, animation: Any = None, **option_overrides: Any
                ) -> np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray]:
         """Render one frame.
 
@@ -182,6 +177,8 @@ class Renderer:
         outputs : names from OUTPUTS (dataset outputs, from the same frame: "color", "depth",
             "range", "instance", "semantic", "normal", "normal_camera", "normal_geometric");
             a dict of arrays is returned instead (see `frame_outputs`).
+        time, animation : pose the scene at `time` seconds of its glTF animations first
+            (`set_time`; `animation` a name, an index or None for all); None: as it is.
 
         Returns
         -------
@@ -190,15 +187,17 @@ class Renderer:
         view-space distance along the camera axis (inf where nothing was drawn); with
         `outputs`, {name: array}.
         """
-        frames = self.render_many([camera], lights, size, options, linear, depth,
-                                  outputs=outputs, **option_overrides)
+        frames = self.render_many([camera], lights, size, options, linear, depth, outputs=outputs,
+                                  times=None if time is None else [time], animation=animation,
+                                  **option_overrides)
         return next(iter(frames))
 
     def render_many(self, cameras: Iterable[Camera | Any], lights: LightsArg = None,
                     size: tuple[int, int] = (640, 480), options: RenderOptions | None = None,
                     linear: bool = False, depth: bool = False, readback: bool = True,
                     outputs: Iterable[str] | None = None, batch: int | None = None,
-                    driver_time: bool = False, **option_overrides: Any
+                    driver_time: bool = False, times: Iterable[float] | None = None,
+                    animation: Any = None, **option_overrides: Any
                     ) -> Iterator[np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray] | None]:
         """Render one frame per camera, yielding what `render` returns, in order.
 
@@ -212,9 +211,11 @@ class Renderer:
         layered rendering; None: frame by frame.
         `driver_time`: each frame's `last_stats.driver_ms` (the part of `cpu_ms` spent in the
         driver: `draw`'s), for benchmarks that split Python from the driver.
+        `times`: one animation time per camera (`render`'s `time`), frame by frame.
         """
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
-        if batch is not None and readback and self.device.batch_views:
+        cameras = with_times(self.state, cameras, times, animation)
+        if batch is not None and readback and self.device.batch_views and times is None:
             for chunk, names in chunked(cameras, batch, self.default_camera(), outputs):
                 got = self.render_batch(chunk, size, lights, opts, linear, depth, names)
                 yield from per_view(got, len(chunk), depth)
@@ -285,13 +286,12 @@ class Renderer:
     def close(self) -> None:
         """Destroy everything (idempotent). The Renderer is unusable afterwards."""
         dev = getattr(self, "device", None)
-        if dev is None or dev.handle is None:
-            return
-        dev.wait_idle()
-        for part in (getattr(self, "batch_path", None), getattr(self, "parts", None)):
-            if part is not None:
-                part.close()
-        dev.close()
+        if dev is not None and dev.handle is not None:
+            dev.wait_idle()
+            for part in (getattr(self, "batch_path", None), getattr(self, "parts", None)):
+                if part is not None:
+                    part.close()
+            dev.close()
 
     def __enter__(self) -> Renderer:
         return self

@@ -9,10 +9,12 @@ lights' cascades follow a frame's camera; a batch's views share one map over the
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from vkpbr.render import layouts as L
-from vkpbr.render.frames import Bounds, FrameSlot
+from vkpbr.render.frames import FrameSlot
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.recorder import FrameRecorder
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
@@ -24,8 +26,12 @@ __all__ = ["ShadowFrames"]
 class ShadowFrames:
     """The per-frame side of `maps` for a scene of `bounds`, whose recordings `recorder` keeps."""
 
-    def __init__(self, maps: ShadowMaps, bounds: Bounds, recorder: FrameRecorder) -> None:
+    def __init__(self, maps: ShadowMaps, bounds: Any, recorder: FrameRecorder,
+                 state: Any = None, casters: np.ndarray | None = None) -> None:
+        # bounds: Bounds or render/scene_state.py's LiveBounds; state (vkpbr.scene.state) and
+        # `casters` (a bool per draw): a map is redrawn when one of its casters moved.
         self.maps, self.bounds, self.recorder = maps, bounds, recorder
+        self.state, self.casters = state, casters
         self._plan: tuple[tuple, ShadowPlan] = ((), ShadowPlan())
         self._rows: dict[int, tuple[tuple, np.ndarray | None]] = {}  # by slot: (key, rows)
 
@@ -52,6 +58,12 @@ class ShadowFrames:
             self.recorder.free()
             self._rows.clear()
 
+    def stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool) -> tuple[range, ...]:
+        """ShadowMaps.stale for frame `slot`, with the version of the state that last moved a
+        caster: a map whose matrices and casters are unchanged is kept."""
+        moved = 0 if self.state is None else self.state.changed_since(self.casters)
+        return self.maps.stale(slot, plan, alpha_mask, moved)
+
     def write(self, slot: FrameSlot, plan: ShadowPlan, lights: tuple[Light, ...],
               camera: Camera, size: tuple[int, int]) -> np.ndarray | None:
         """The slot's shadow matrices for this frame (skipped when its inputs repeat) and the
@@ -65,7 +77,7 @@ class ShadowFrames:
         # are the same for every view, so a moving camera does not remake them.
         view = ((c.eye, c.target, c.up, c.yfov_deg, c.znear, c.zfar, c.pixel_intrinsics, tuple(size))
                 if plan.follows_camera else None)
-        key = (view, plan, lights, sm.resolution)
+        key = (view, plan, lights, sm.resolution, getattr(self.bounds, "version", 0))
         last = self._rows.get(slot.index)
         if last is not None and last[0] == key:
             return last[1]

@@ -145,7 +145,8 @@ class ShadowMaps:
     """
 
     def __init__(self, device: Device, material_layout: DescriptorSetLayout, slots: int,
-                 resolution: int = DEFAULT_RESOLUTION, readable: bool = False) -> None:
+                 resolution: int = DEFAULT_RESOLUTION, readable: bool = False,
+                 frame_layout: DescriptorSetLayout | None = None) -> None:
         if not (isinstance(resolution, int) and 16 <= resolution
                 <= int(device.limits.maxImageDimension2D)):
             from vkpbr.errors import UsageError
@@ -163,8 +164,11 @@ class ShadowMaps:
         self.pass_layout = self._own(DescriptorSetLayout(device, [
             BindingSpec(0, "storage", ("vertex",), "ShadowData")]))
         empty = self._own(DescriptorSetLayout(device, []))
+        # Set 0: the frame's (its Instances: the scene state's matrices the passes place
+        # their draws with).
         self.pipeline_layout = self._own(PipelineLayout(
-            device, [empty, material_layout, empty, self.pass_layout], L.PUSH.size))
+            device, [frame_layout or empty, material_layout, empty, self.pass_layout],
+            L.PUSH.size))
         align = int(device.limits.minStorageBufferOffsetAlignment)
         size = HEADER_BYTES + 64 * MATRICES
         self.stride = (size + align - 1) // align * align
@@ -294,7 +298,8 @@ class ShadowMaps:
         data[12:].reshape(MATRICES, 4, 4)[:] = mats.transpose(0, 2, 1)
         return out
 
-    def stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool) -> tuple[range, ...]:
+    def stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool, casters: int = 0
+              ) -> tuple[range, ...]:
         """Which layers of each of `plan`'s entries frame `slot` must draw (a range of the
         entry's layers, empty for none): the span of those that hold other matrices (as
         `write` left them for the slot) or other casters. A walking camera usually changes
@@ -303,9 +308,10 @@ class ShadowMaps:
         mats = self._views[slot][12:].reshape(MATRICES, 16)
         # The usual frame: the same matrices, casters and plan as the previous call (any
         # slot), whose layers are drawn already: nothing to compare entry by entry.
-        key = (mats.tobytes(), alpha_mask, plan)  # a plan is kept while its lights are
+        # `casters`: the scene state's version that last moved a caster (0: never).
+        key = (mats.tobytes(), (alpha_mask, casters), plan)  # a plan is kept while its lights are
         last = self._last_stale
-        if last is not None and last[2] is plan and last[1] == alpha_mask and last[0] == key[0]:
+        if last is not None and last[2] is plan and last[1] == key[1] and last[0] == key[0]:
             self.last_redrawn_layers = tuple((e.kind, 0) for e in plan.entries)
             return tuple(range(0) for _ in plan.entries)
         self._last_stale = key
@@ -319,7 +325,7 @@ class ShadowMaps:
                 where = (image, e.first, i)
                 rows = mats[e.matrix_base:e.matrix_base + 6] if e.kind == "point" \
                     else mats[e.matrix_base + i]
-                held = (rows.tobytes(), alpha_mask)
+                held = (rows.tobytes(), alpha_mask, casters)
                 if self._drawn.get(where) != held:
                     changed.append(i)
                 self._drawn[where] = held
@@ -359,21 +365,22 @@ class ShadowMaps:
 
     def record(self, cmd: Commands, slot: int, plan: ShadowPlan, draws: Sequence[Any],
                classes: Sequence[str], material_sets: Sequence[Any], streams: dict[str, Any],
-               index_buffer: Any, has_colors: bool, redraw: tuple[range, ...] | None = None) -> None:
+               index_buffer: Any, has_colors: bool, redraw: tuple[range, ...] | None = None,
+               set0: Any = None) -> None:
         """Record `plan`'s passes for frame `slot` (before the main target begins).
 
         draws / classes: render.gpu_scene.Draw and passes.classify of each; streams: the
         scene's vertex buffers by name (positions, texcoords, texcoords1, colors); redraw:
         per entry, the range of its layers to draw (`stale`; None: all); the others keep
-        their contents."""
+        their contents; set0: a frame set 0 (its Instances: the scene state's matrices)."""
         if redraw is None:
             redraw = tuple(range(e.count) for e in plan.entries)
         if not any(redraw):
             return
-        casters = [(d, c) for d, c in zip(draws, classes, strict=True)
+        casters = [(i, d, c) for i, (d, c) in enumerate(zip(draws, classes, strict=True))
                    if getattr(d, "casts_shadows", True)]
-        opaque = [d for d, c in casters if c in ("opaque", "opaque_double")]
-        masked = [d for d, c in casters if c in ("mask", "blend")]
+        opaque = [(i, d) for i, d, c in casters if c in ("opaque", "opaque_double")]
+        masked = [(i, d) for i, d, c in casters if c in ("mask", "blend")]
         keep = not all(len(r) == e.count for e, r in zip(plan.entries, redraw, strict=True))
         self.maps.record_begin_writes(cmd, keep)
         self.cubes.record_begin_writes(cmd, keep)
@@ -387,16 +394,17 @@ class ShadowMaps:
                 if not group:
                     continue
                 cmd.bind_pipeline(self.pipeline(e.kind, is_masked, not has_colors))
+                cmd.bind_set(0, set0)  # the scene state's matrices (Instances)
                 cmd.bind_set(3, self.pass_sets[slot])
                 names = ("positions", "texcoords", "texcoords1", "colors") if is_masked \
                     else ("positions",)
                 cmd.bind_vertex_buffers([streams[n] for n in names])
                 bound = None
-                for d in group:
+                for index, d in group:
                     if is_masked and d.material != bound:
                         cmd.bind_set(1, material_sets[d.material])
                         bound = d.material
-                    cmd.push(d.push)
+                    cmd.push(L.draw_push(index))
                     cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset,
                                      first_instance=e.matrix_base + layers.start,
                                      instances=len(layers))

@@ -118,6 +118,15 @@ class FrameSteps:
         return getattr(self, "_" + name)()
 
     # --- the head ---------------------------------------------------------------------------
+    def _deform(self) -> list[Step]:
+        """Skins and morph targets posed from the slot's scene state (render/deform.py),
+        before anything reads the vertex streams; none in a scene without them."""
+        deform = self.r.deform
+        if deform is None:
+            return []
+        self.resources.update(deform.resources())
+        return deform.steps(self.frame_index)
+
     def _shadows(self) -> list[Step]:
         """The shadow maps' redrawn layers. Their partial redraw keeps the other layers, so
         ShadowMaps' layered images take their own transitions (gpu/layered.py) and leave
@@ -128,7 +137,7 @@ class FrameSteps:
 
         def record(cmd: Commands) -> None:
             sm.record(cmd, self.frame_index, spec.plan, gs.draws, self.classes, gs.material_sets,
-                      gs.streams, gs.index_buffer, gs.has_colors, spec.redraw)
+                      gs.streams, gs.index_buffer, gs.has_colors, spec.redraw, self.set0)
 
         return [Step("shadows", record)]
 

@@ -398,6 +398,7 @@ class Pose:
     pixel_intrinsics: Intrinsics | None = None
     name: str = ""
     where: str = "camera"
+    time: float | None = None  # the scene's animation time of this view ("time"), if given
     # A NeRF frame's "file_path" (relative, as the file wrote it): the rendered frame's name.
     file_path: str | None = None
 
@@ -416,9 +417,9 @@ class Pose:
         return cam
 
 
-_EYE_KEYS = ("eye", "target", "up", "fov", "name")
-_MATRIX_KEYS = ("world_from_camera", "convention", "fov", "name")
-_K_KEYS = ("K", "world_from_camera", "size", "convention", "name")
+_EYE_KEYS = ("eye", "target", "up", "fov", "name", "time")
+_MATRIX_KEYS = ("world_from_camera", "convention", "fov", "name", "time")
+_K_KEYS = ("K", "world_from_camera", "size", "convention", "name", "time")
 
 
 def _pose_from_dict(d: Mapping[str, object]) -> dict[str, object]:
@@ -444,6 +445,11 @@ def _pose_from_dict(d: Mapping[str, object]) -> dict[str, object]:
     if not isinstance(name, str):
         raise UsageError(f'"name": expected a string, got {describe(name)}')
     fields: dict[str, object] = {"name": name}
+    if "time" in d:  # the animation time of the view (docs/living-scenes.md)
+        t = d["time"]
+        if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t):
+            raise UsageError(f'"time": expected a finite number of seconds, got {describe(t)}')
+        fields["time"] = float(t)
     if "K" in d:
         fields.update(_opencv_fields(d["K"], _pose_from_convention(d), d["size"]))
         return fields

@@ -119,7 +119,8 @@ def _nerf_intrinsics(K: np.ndarray, w: int, h: int) -> dict[str, float | int]:
 
 
 def transforms_dict(cameras: Sequence[Camera], size: tuple[int, int],
-                    file_paths: Sequence[str] | None = None) -> dict[str, object]:
+                    file_paths: Sequence[str] | None = None,
+                    times: Sequence[float] | None = None) -> dict[str, object]:
     """The NeRF / instant-ngp transforms.json of `cameras` rendered at `size` (W, H).
 
     The intrinsics (camera_angle_x, camera_angle_y in radians; fl_x, fl_y, cx, cy in pixels
@@ -127,7 +128,8 @@ def transforms_dict(cameras: Sequence[Camera], size: tuple[int, int],
     every camera has the same K at `size`, else in each frame (instant-ngp and nerfstudio
     read both). Each frame has `file_path` (default "frame_00000.png", ..., the names
     `vkpbr render --cameras` writes; relative to the JSON file's folder) and
-    `transform_matrix`, the (4, 4) world-from-camera pose in OpenGL axes.
+    `transform_matrix`, the (4, 4) world-from-camera pose in OpenGL axes; with `times`,
+    each frame's animation "time" in seconds (what `--cameras` reads back).
     """
     w, h = size_arg(size, "transforms.json: size")
     cams = _cameras(cameras, "transforms.json")
@@ -141,6 +143,8 @@ def transforms_dict(cameras: Sequence[Camera], size: tuple[int, int],
         if not shared:
             frame.update(k)
         frame["transform_matrix"] = cam.world_from_camera("opengl").tolist()
+        if times is not None:
+            frame["time"] = float(times[len(frames)])
         frames.append(frame)
     doc["frames"] = frames
     return doc
@@ -148,13 +152,14 @@ def transforms_dict(cameras: Sequence[Camera], size: tuple[int, int],
 
 def write_transforms(path: str | os.PathLike[str], cameras: Sequence[Camera],
                      size: tuple[int, int], file_paths: Sequence[str] | None = None, *,
-                     extra: Mapping[str, object] | None = None) -> dict[str, object]:
+                     extra: Mapping[str, object] | None = None,
+                     times: Sequence[float] | None = None) -> dict[str, object]:
     """Write `transforms_dict(cameras, size, file_paths)` to `path` atomically; returns it.
 
     extra : more top-level keys ("aabb_scale", "scale", ...), written as given; they may not
         replace the ones vkpbr writes.
     """
-    doc = transforms_dict(cameras, size, file_paths)
+    doc = transforms_dict(cameras, size, file_paths, times)
     if extra:
         clash = sorted(set(extra) & set(doc))
         if clash:

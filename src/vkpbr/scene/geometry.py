@@ -40,10 +40,15 @@ def ensure_normals(mesh: Mesh) -> Mesh:
     """
     if mesh.normals is not None:
         return mesh
-    attributes = {name: getattr(mesh, name) for name in _VERTEX_ATTRS
+    attributes = {name: getattr(mesh, name) for name in _VERTEX_ATTRS + ("joints", "weights")
                   if getattr(mesh, name) is not None}
     gathered, indices = unweld_flat(attributes, mesh.indices)
-    return replace(mesh, indices=indices, **gathered)
+    # Morph displacements are per vertex too: (T, N, 3) gathered along N. Normal ones are
+    # dropped, as the normals they displace are made here (docs/animation.md).
+    idx = np.asarray(mesh.indices).astype(np.intp)
+    targets = {key: np.ascontiguousarray(d[:, idx]) for key, d in mesh.morph_targets.items()
+               if key != "NORMAL"}
+    return replace(mesh, indices=indices, morph_targets=targets, **gathered)
 
 
 def drop_nonfinite(mesh: Mesh, source: object = "") -> Mesh:

@@ -1,7 +1,7 @@
 # glTF 2.0 (.gltf / .glb) -> vkpbr Scene, the entry point. The importer is split by concept:
 # gltf_document (JSON, GLB, buffers, accessors), gltf_meshes (primitives), gltf_materials
-# (images, samplers, materials), gltf_nodes (hierarchy, cameras, lights); the arrows point one
-# way, from here down to gltf_document. Reference: the glTF 2.0 specification (Khronos).
+# (images, samplers, materials), gltf_nodes (hierarchy, cameras, lights), gltf_animation (skins,
+# animations); the arrows point one way, from here down to gltf_document. Reference: the glTF 2.0 specification (Khronos).
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from vkpbr.errors import SceneError
+from vkpbr.scene.gltf_animation import build_animations, build_skins
 from vkpbr.scene.gltf_document import SUPPORTED_EXTENSIONS, GltfDocument
 from vkpbr.scene.gltf_materials import apply_variant, build_materials, load_images
 from vkpbr.scene.gltf_nodes import build_nodes_cameras_lights
@@ -65,5 +66,7 @@ def _build(ld: GltfDocument, variant: str | None = None) -> Scene:
     scene.variants = apply_variant(ld, variant)
     scene.images = load_images(ld)
     scene.materials = build_materials(ld, len(scene.images))
-    build_nodes_cameras_lights(ld, scene)
+    links = build_nodes_cameras_lights(ld, scene)
+    build_skins(ld, scene, links)
+    build_animations(ld, scene, links)
     return scene

@@ -36,6 +36,7 @@ SUPPORTED_EXTENSIONS = frozenset(
         "KHR_lights_punctual",
         "KHR_materials_emissive_strength",
         "KHR_mesh_quantization",  # integer attributes: handled by the generic accessor decoder
+        "KHR_animation_pointer",  # animated properties (gltf_animation, docs/animation.md)
     }
 ) | frozenset(
     {

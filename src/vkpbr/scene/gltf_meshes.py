@@ -18,10 +18,16 @@ from vkpbr.scene.geometry import (
     strip_triangles,
 )
 from vkpbr.scene.gltf_codecs import decode_draco, missing_codec
-from vkpbr.scene.gltf_document import GltfDocument, check_index, ext, get, to_float
+from vkpbr.scene.gltf_document import GltfDocument, check_index, ext, floats, get, to_float
 from vkpbr.scene.types import Mesh
 
-__all__ = ["primitive"]
+__all__ = ["MAX_MORPH_TARGETS", "primitive"]
+
+# Morph targets a primitive may have: the GPU's budget (the deformation step reads every
+# target's displacements each frame); a file with more is refused in one line. Real assets
+# use a few dozen at most (facial rigs: 50-60).
+MAX_MORPH_TARGETS = 64
+_MORPHED = ("POSITION", "NORMAL", "TANGENT")  # the morphable attributes vkpbr applies
 
 _MODES = {0: "POINTS", 1: "LINES", 2: "LINE_LOOP", 3: "LINE_STRIP"}
 
@@ -102,7 +108,11 @@ def primitive(ld: GltfDocument, mesh_index: int, prim_index: int, prim: object) 
         tangents=optional("TANGENT", (4,)),
         colors=colors,
         material=material,
+        morph_targets=_morph_targets(ld, name, prim, attrs, n),
+        morph_weights=_morph_weights(ld, mesh_index, prim),
     )
+    if draco is None:  # Draco primitives keep their skin in the payload: not read (yet)
+        mesh.joints, mesh.weights = _skin_attributes(ld, name, attrs, n)
     return normalize_mesh_arrays(ensure_normals(drop_nonfinite(mesh, ld.path)))
 
 
@@ -159,3 +169,93 @@ def _draco(ld: GltfDocument, name: str, prim: object, attrs: dict,
             raise SceneError(ld.path, f"{what}: indices accessor count {get(acc, 'count')!r} != "
                                       f"{len(faces)} decoded Draco indices")
     return faces, out
+
+
+def _skin_attributes(ld: GltfDocument, name: str, attrs: dict, n: int
+                     ) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """JOINTS_0/1 and WEIGHTS_0/1 as (n, 8) uint16 joints and (n, 8) float32 weights.
+
+    Set 0 fills columns 0-3, set 1 columns 4-7 (zeros where absent; sets from 2 on are
+    ignored). Weights are dequantised as `normalized` says, then each row is divided by its
+    sum (the spec lets a loader renormalise); a row summing to 0 gets weight 1 on its first
+    joint. Joints whose weight is 0 are set to 0, so that none of them can index past the
+    skin's joint list. Negative or non-finite weights are errors."""
+    sets = [k for k in (0, 1) if attrs.get(f"JOINTS_{k}") is not None]
+    for k in (0, 1):
+        if (attrs.get(f"JOINTS_{k}") is None) != (attrs.get(f"WEIGHTS_{k}") is None):
+            raise SceneError(ld.path, f"mesh {name}: JOINTS_{k} and WEIGHTS_{k} come in pairs")
+    if not sets:
+        return None, None
+    joints = np.zeros((n, 8), np.uint16)
+    weights = np.zeros((n, 8), np.float32)
+    for k in sets:
+        arr, _ = ld.accessor(attrs[f"JOINTS_{k}"])
+        if arr.dtype.kind != "u" or arr.dtype.itemsize > 2 or arr.shape[1] != 4:
+            raise SceneError(ld.path, f"mesh {name}: JOINTS_{k} must be VEC4 unsigned byte or "
+                                      "short")
+        w = ld.attribute(attrs[f"WEIGHTS_{k}"], (4,), f"mesh {name} WEIGHTS_{k}")
+        if len(arr) != n or len(w) != n:
+            raise SceneError(ld.path, f"mesh {name}: JOINTS_{k}/WEIGHTS_{k} have {len(arr)}/"
+                                      f"{len(w)} items, not {n}")
+        joints[:, 4 * k:4 * k + 4] = arr
+        weights[:, 4 * k:4 * k + 4] = w
+    if not np.isfinite(weights).all() or (weights < 0).any():
+        raise SceneError(ld.path, f"mesh {name}: skin weights must be finite and >= 0")
+    total = weights.sum(axis=1, dtype=np.float64)
+    empty = total <= 0
+    weights[empty, 0] = 1.0
+    total[empty] = 1.0
+    weights = (weights / total[:, None]).astype(np.float32)
+    joints[weights == 0] = 0
+    return joints, weights
+
+
+def _morph_targets(ld: GltfDocument, name: str, prim: object, attrs: dict,
+                   n: int) -> dict[str, np.ndarray]:
+    """The primitive's `targets` as {attribute: (T, n, 3) float32 displacements}.
+
+    POSITION, NORMAL and TANGENT (xyz: targets do not move the handedness) are read where the
+    primitive has the base attribute; a target that lacks an attribute another target gives
+    displaces it by 0. Other morphed attributes (texture coordinates, colours) are ignored."""
+    targets = get(prim, "targets")
+    if not targets:
+        return {}
+    if not isinstance(targets, list) or not all(isinstance(t, dict) for t in targets):
+        raise SceneError(ld.path, f"mesh {name}: targets must be a list of objects")
+    if len(targets) > MAX_MORPH_TARGETS:
+        raise SceneError(ld.path, f"mesh {name}: {len(targets)} morph targets, more than "
+                                  f"vkpbr's budget of {MAX_MORPH_TARGETS}")
+    out: dict[str, np.ndarray] = {}
+    for key in _MORPHED:
+        if attrs.get(key) is None or not any(t.get(key) is not None for t in targets):
+            continue
+        d = np.zeros((len(targets), n, 3), np.float32)
+        for i, t in enumerate(targets):
+            if t.get(key) is None:
+                continue
+            arr = ld.attribute(t[key], (3,), f"mesh {name} target {i} {key}")
+            if len(arr) != n:
+                raise SceneError(ld.path, f"mesh {name}: target {i} {key} has {len(arr)} items, "
+                                          f"not {n}")
+            d[i] = arr
+        if not np.isfinite(d).all():
+            raise SceneError(ld.path, f"mesh {name}: morph target {key} has non-finite values")
+        out[key] = d
+    return out
+
+
+def _morph_weights(ld: GltfDocument, mesh_index: int, prim: object) -> np.ndarray | None:
+    """The glTF mesh's default morph weights (T,), zeros when it gives none; None without
+    targets. Its length must match the primitive's target count (as must every primitive's)."""
+    targets = get(prim, "targets")
+    if not targets:
+        return None
+    mesh = ld.gltf.meshes[mesh_index]
+    given = get(mesh, "weights")
+    if given is None:
+        return np.zeros(len(targets))
+    if not isinstance(given, list) or len(given) != len(targets):
+        raise SceneError(ld.path, f"mesh {mesh_index}: weights must be {len(targets)} numbers "
+                                  "(one per morph target)")
+    return np.asarray(floats(given, len(targets), (), f"mesh {mesh_index} weights", ld.path),
+                      np.float64)

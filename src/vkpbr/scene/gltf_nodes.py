@@ -14,9 +14,21 @@ import numpy as np
 from vkpbr.errors import SceneError
 from vkpbr.scene.gltf_document import GltfDocument, check_index, ext, floats, get, scalar
 from vkpbr.scene.gltf_meshes import primitive
+from vkpbr.scene.tree import NodeTree
 from vkpbr.scene.types import Camera, Light, Node, Scene
 
-__all__ = ["build_nodes_cameras_lights", "instance_matrices", "trs_matrix"]
+__all__ = ["NodeLinks", "build_nodes_cameras_lights", "instance_matrices", "trs_matrix"]
+
+
+class NodeLinks:
+    """Which file objects the walk made scene objects from (what animation pointers need):
+    `lights[k]` the KHR_lights_punctual index of scene.lights[k], `cameras[k]` the glTF camera
+    index of scene.cameras[k], `mesh_nodes[m]` the tree nodes showing glTF mesh m."""
+
+    def __init__(self) -> None:
+        self.lights: list[int] = []
+        self.cameras: list[int] = []
+        self.mesh_nodes: dict[int, list[int]] = {}
 
 
 def trs_matrix(t: tuple, r: tuple, s: tuple) -> np.ndarray:
@@ -82,16 +94,19 @@ def instance_matrices(ld: GltfDocument, i: int, node: object) -> np.ndarray | No
     return out
 
 
-def _local_matrix(ld: GltfDocument, i: int, node: object) -> np.ndarray:
+def _local_transform(ld: GltfDocument, i: int, node: object
+                     ) -> tuple[np.ndarray, tuple, tuple, tuple, bool]:
+    """A node's local matrix, its TRS (identity for a matrix node) and whether it gives a
+    matrix (glTF: a node gives TRS or a matrix; only TRS nodes are animated)."""
     matrix = get(node, "matrix")
     if matrix is not None and len(matrix) and list(matrix) != [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]:  # fmt: skip
         # glTF stores matrices column-major; numpy reshape is row-major, hence .T
-        return np.asarray(floats(matrix, 16, (), f"node {i} matrix", ld.path)).reshape(4, 4).T
-    return trs_matrix(
-        floats(get(node, "translation"), 3, (0.0, 0.0, 0.0), f"node {i} translation", ld.path),
-        floats(get(node, "rotation"), 4, (0.0, 0.0, 0.0, 1.0), f"node {i} rotation", ld.path),
-        floats(get(node, "scale"), 3, (1.0, 1.0, 1.0), f"node {i} scale", ld.path),
-    )
+        m = np.asarray(floats(matrix, 16, (), f"node {i} matrix", ld.path)).reshape(4, 4).T
+        return m, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0), (1.0, 1.0, 1.0), True
+    t = floats(get(node, "translation"), 3, (0.0, 0.0, 0.0), f"node {i} translation", ld.path)
+    r = floats(get(node, "rotation"), 4, (0.0, 0.0, 0.0, 1.0), f"node {i} rotation", ld.path)
+    s = floats(get(node, "scale"), 3, (1.0, 1.0, 1.0), f"node {i} scale", ld.path)
+    return trs_matrix(t, r, s), t, r, s, False
 
 
 def _root_nodes(ld: GltfDocument, n_nodes: int) -> list[object]:
@@ -103,31 +118,38 @@ def _root_nodes(ld: GltfDocument, n_nodes: int) -> list[object]:
     return [i for i in range(n_nodes) if i not in children]
 
 
-def build_nodes_cameras_lights(ld: GltfDocument, scene: Scene) -> None:
-    """Walk the displayed scene's node tree: fill scene.meshes/nodes/cameras/lights."""
+def build_nodes_cameras_lights(ld: GltfDocument, scene: Scene) -> NodeLinks:
+    """Walk the displayed scene's node tree: fill scene.meshes/nodes/cameras/lights and
+    scene.tree (with the nodes' morph weights and skin indices)."""
     nodes = ld.gltf.nodes or []
     meshes = ld.gltf.meshes or []
     cameras = ld.gltf.cameras or []
     light_defs = ext(ld.doc, "KHR_lights_punctual").get("lights") or []
     mesh_prims: dict[int, list[int]] = {}  # glTF mesh -> indices of its primitives in scene.meshes
-    pending_lights: list[tuple[dict, np.ndarray]] = []
+    pending_lights: list[tuple[int, np.ndarray]] = []
+    links = NodeLinks()
     stack = [
-        (check_index(ld.path, r, len(nodes), "root node"), np.eye(4))
+        (check_index(ld.path, r, len(nodes), "root node"), np.eye(4), -1)
         for r in _root_nodes(ld, len(nodes))
     ][::-1]  # reversed: the stack pops them in document order (nodes, lights keep file order)
     seen: set[int] = set()
+    tree = _TreeRows()
     while stack:
-        i, parent = stack.pop()
+        i, parent, parent_row = stack.pop()
         if i in seen:
             raise SceneError(ld.path, f"node {i} is reached twice (cycle or shared child)")
         seen.add(i)
         node = nodes[i]
-        world = parent @ _local_matrix(ld, i, node)
+        local, *trs = _local_transform(ld, i, node)
+        world = parent @ local
         name = str(get(node, "name", f"node {i}"))
+        row = tree.add(name, parent_row, local, trs, i)
+        _morph_and_skin(ld, i, node, row, tree)
         for c in list(get(node, "children", []) or [])[::-1]:
-            stack.append((check_index(ld.path, c, len(nodes), f"node {i} child"), world))
+            stack.append((check_index(ld.path, c, len(nodes), f"node {i} child"), world, row))
         if get(node, "mesh") is not None:
             m = check_index(ld.path, get(node, "mesh"), len(meshes), f"node {i} mesh")
+            links.mesh_nodes.setdefault(m, []).append(row)
             if m not in mesh_prims:
                 mesh_prims[m] = []
                 for k, prim in enumerate(get(meshes[m], "primitives", [])):
@@ -138,25 +160,72 @@ def build_nodes_cameras_lights(ld: GltfDocument, scene: Scene) -> None:
             label = _semantic_extra(node)
             label = _semantic_extra(meshes[m]) if label is None else label
             scene.nodes += [Node(mesh=j, matrix=w32.copy(), name=name, instances=inst,
-                                 semantic=label)
+                                 semantic=label, tree=row)
                             for j in mesh_prims[m]]  # primitives share the read-only array
         if get(node, "camera") is not None:
-            cam = cameras[check_index(ld.path, get(node, "camera"), len(cameras), "camera")]
-            _add_camera(ld, scene, cam, world, name)
+            c = check_index(ld.path, get(node, "camera"), len(cameras), "camera")
+            if _add_camera(ld, scene, cameras[c], world, name):
+                links.cameras.append(c)
         ext_light = ext(node, "KHR_lights_punctual").get("light")
         if ext_light is not None:
-            light = light_defs[check_index(ld.path, ext_light, len(light_defs), "light")]
-            pending_lights.append((light, world))
+            pending_lights.append((check_index(ld.path, ext_light, len(light_defs), "light"), world))
     for light, world in pending_lights:  # after the meshes, in file order
-        scene.lights.append(_light(ld, scene, light, world))
+        scene.lights.append(_light(ld, scene, light_defs[light], world))
+        links.lights.append(light)
+    scene.tree = tree.tree()
+    return links
 
 
-def _add_camera(ld: GltfDocument, scene: Scene, cam: object, world: np.ndarray, name: str) -> None:
-    """A perspective camera node -> Camera. The file's znear is kept; a camera without zfar
-    (glTF's infinite projection) gets zfar None, as the renderer's far plane is infinite."""
+def _morph_and_skin(ld: GltfDocument, i: int, node: object, row: int, tree: _TreeRows) -> None:
+    """A node's own morph weights (glTF node `weights`) and skin index, on its tree row."""
+    weights = get(node, "weights")
+    if weights is not None:
+        if not isinstance(weights, list):
+            raise SceneError(ld.path, f"node {i}: weights must be a list of numbers")
+        tree.weights[row] = np.asarray(floats(weights, len(weights), (), f"node {i} weights",
+                                              ld.path), np.float64)
+    if get(node, "skin") is not None:
+        tree.skin[row] = check_index(ld.path, get(node, "skin"), len(ld.gltf.skins or []),
+                                     f"node {i} skin")
+
+
+class _TreeRows:
+    """The displayed scene's nodes as the walk meets them (parents first): NodeTree rows."""
+
+    def __init__(self) -> None:
+        self.names: list[str] = []
+        self.parents: list[int] = []
+        self.local: list[np.ndarray] = []
+        self.trs: list[tuple] = []
+        self.source: list[int] = []
+        self.weights: dict[int, np.ndarray] = {}
+        self.skin: dict[int, int] = {}
+
+    def add(self, name: str, parent: int, local: np.ndarray, trs: list, source: int) -> int:
+        self.names.append(name)
+        self.parents.append(parent)
+        self.local.append(local)
+        self.trs.append(trs)
+        self.source.append(source)
+        return len(self.names) - 1
+
+    def tree(self) -> NodeTree:
+        k = len(self.names)
+        t, r, s, m = ([row[j] for row in self.trs] for j in range(4))
+        return NodeTree(self.names, np.asarray(self.parents, np.int64),
+                        np.asarray(self.local, np.float64).reshape(k, 4, 4),
+                        np.asarray(t, np.float64).reshape(k, 3), np.asarray(r, np.float64).reshape(k, 4),
+                        np.asarray(s, np.float64).reshape(k, 3), np.asarray(m, bool).reshape(k),
+                        np.asarray(self.source, np.int64).reshape(k), self.weights, self.skin)
+
+
+def _add_camera(ld: GltfDocument, scene: Scene, cam: object, world: np.ndarray, name: str) -> bool:
+    """A perspective camera node -> Camera (True), other kinds ignored with a warning (False).
+    The file's znear is kept; a camera without zfar (glTF's infinite projection) gets zfar
+    None, as the renderer's far plane is infinite."""
     if get(cam, "type") != "perspective" or get(cam, "perspective") is None:
         warnings.warn(f"{ld.path}: {get(cam, 'type')} camera {name!r} ignored", stacklevel=5)
-        return
+        return False
     persp = get(cam, "perspective")
     yfov = scalar(get(persp, "yfov"), 0.8, "camera yfov", ld.path)
     znear = None if get(persp, "znear") is None else scalar(get(persp, "znear"), 0.0, "camera znear", ld.path)
@@ -183,6 +252,7 @@ def _add_camera(ld: GltfDocument, scene: Scene, cam: object, world: np.ndarray, 
             name=name,
         )
     )
+    return True
 
 
 def _light(ld: GltfDocument, scene: Scene, light: dict, world: np.ndarray) -> Light:

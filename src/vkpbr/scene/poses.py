@@ -107,7 +107,8 @@ def _nerf_poses(doc: Mapping[str, object], p: Path) -> list[Pose]:
             camera = _nerf_camera({**shared, **{k: frame[k] for k in _NERF_KEYS if k in frame}})
         name = frame.get("file_path")
         entry = {"world_from_camera": pose, "convention": "opengl", **camera,
-                 "name": name if isinstance(name, str) else f"frame {i}"}
+                 "name": name if isinstance(name, str) else f"frame {i}",
+                 **({"time": frame["time"]} if "time" in frame else {})}
         file_path = _file_path(name, where) if "file_path" in frame else None
         poses.append(dataclasses.replace(as_pose(entry, where), file_path=file_path))
     seen: dict[str, int] = {}

@@ -23,6 +23,7 @@ import numpy as np
 from vkpbr.scene.camera import Camera  # noqa: F401 - defined there, a scene type like the others
 from vkpbr.scene.material_table import DEFAULTS as _D
 from vkpbr.scene.material_table import TEXTURES
+from vkpbr.scene.tree import NodeTree
 
 __all__ = [
     "AlphaMode",
@@ -35,6 +36,10 @@ __all__ = [
     "Sampler",
     "Scene",
     "TextureRef",
+    "Skin",
+    "Animation",
+    "AnimationChannel",
+    "AnimationSampler",
     "expand_instances",
     "TEXTURE_SLOTS",
     "SRGB_TEXTURE_SLOTS",
@@ -178,6 +183,14 @@ class Mesh:
     material: int = -1  # index into Scene.materials; -1 = the default material
     qtangents: np.ndarray | None = None  # (N, 4) float32 QTangent frames (baked scenes)
     packed_frames: np.ndarray | None = None  # (N,) uint32 packed frames (baked scenes)
+    # Skinning (glTF JOINTS_0/1, WEIGHTS_0/1; docs/animation.md): up to 8 influences a vertex,
+    # set 0's four then set 1's, zeros where a set is absent; weights sum to 1 per row.
+    joints: np.ndarray | None = None  # (N, 8) uint16 indices into the node's Skin.joints
+    weights: np.ndarray | None = None  # (N, 8) float32
+    # Morph targets: {"POSITION" | "NORMAL" | "TANGENT": (T, N, 3) float32 displacements}, an
+    # attribute the targets do not give is absent; morph_weights the mesh's default weights.
+    morph_targets: dict[str, np.ndarray] = field(default_factory=dict)
+    morph_weights: np.ndarray | None = None  # (T,) float64, zeros when the file gives none
 
     @property
     def vertex_count(self) -> int:
@@ -205,6 +218,9 @@ class Node:
     # The class the file gives it: glTF `extras: {"semantic": 3}` or `{"semantic": "chair"}`
     # on the node (else on its mesh); None: none given (vkpbr.scene.semantics).
     semantic: int | str | None = None
+    # The node of Scene.tree this hangs from (its index there); -1: not yet given one
+    # (Scene.node_tree() then gives each such Node a root of its own).
+    tree: int = -1
 
     @property
     def instance_count(self) -> int:
@@ -264,6 +280,83 @@ class Light:
 
 
 @dataclass
+class Skin:
+    """A glTF skin, its joints as tree nodes (Scene.tree indices).
+
+    joints : (J,) int64 tree indices; a vertex's JOINTS value j means joints[j].
+    inverse_bind : (J, 4, 4) float64 inverse bind matrices (identity where the file has none).
+    skeleton : the tree index of the skeleton root the file names, None if it names none (it is
+        informative only: joint matrices use the joints' world transforms alone).
+    """
+
+    name: str
+    joints: np.ndarray
+    inverse_bind: np.ndarray
+    skeleton: int | None = None
+
+
+Interpolation = Literal["STEP", "LINEAR", "CUBICSPLINE"]
+
+
+@dataclass
+class AnimationSampler:
+    """Keyframes: `input` (k,) float64 strictly increasing times in seconds; `output` the
+    values, (k, C) float64 for STEP and LINEAR, (k, 3, C) for CUBICSPLINE (in-tangent, value,
+    out-tangent per keyframe, as glTF stores them). C is 3 (translation, scale), 4 (rotation
+    quaternion x, y, z, w), T (morph weights) or the pointed-at property's size."""
+
+    input: np.ndarray
+    output: np.ndarray
+    interpolation: Interpolation = "LINEAR"
+
+
+@dataclass
+class AnimationChannel:
+    """What one sampler drives.
+
+    path : "translation", "rotation", "scale" or "weights" of tree node `node` (also when a
+        KHR_animation_pointer names a node's property), or "pointer" for the other
+        KHR_animation_pointer targets.
+    node : the tree index for node paths, else None.
+    pointer : the KHR_animation_pointer string ("/materials/0/pbrMetallicRoughness/
+        baseColorFactor"), None for a plain channel.
+    kind, index, member : a pointer's target parsed: kind "material" | "light" | "camera" |
+        "mesh", the file's index of that object, and the vkpbr field it sets
+        ("base_color_factor", "metallic_factor", "roughness_factor", "emissive_factor",
+        "emissive_strength", "color", "intensity", "range", "inner_cone", "outer_cone",
+        "yfov", "weights"); None for node paths.
+    targets : the Scene objects a pointer changes: indices into scene.materials,
+        scene.lights or scene.cameras (every one made from that file object), or for
+        "/meshes/M/weights" the tree nodes showing mesh M; () for node paths.
+    """
+
+    sampler: int
+    path: Literal["translation", "rotation", "scale", "weights", "pointer"]
+    node: int | None = None
+    pointer: str | None = None
+    kind: str | None = None
+    index: int | None = None
+    member: str | None = None
+    targets: tuple[int, ...] = ()
+
+
+@dataclass
+class Animation:
+    """A glTF animation: channels, each driven by one of `samplers`."""
+
+    name: str
+    channels: list[AnimationChannel] = field(default_factory=list)
+    samplers: list[AnimationSampler] = field(default_factory=list)
+
+    @property
+    def duration(self) -> float:
+        """Seconds from 0 to the last keyframe of any sampler a channel uses (0 when none):
+        times past it hold the last values."""
+        ends = [float(self.samplers[c.sampler].input[-1]) for c in self.channels]
+        return max(ends, default=0.0)
+
+
+@dataclass
 class Scene:
     """Everything a renderer needs, as plain arrays."""
 
@@ -277,6 +370,26 @@ class Scene:
     # KHR_materials_variants: the file's variant names (the one loaded is chosen at load time).
     variants: list[str] = field(default_factory=list)
     source: Path | None = None  # the file it was loaded from, if any
+    # The file's node hierarchy (vkpbr.scene.tree); None: flat (see node_tree()).
+    tree: NodeTree | None = None
+    # glTF skins and animations (docs/animation.md; sampled by vkpbr.scene.animation).
+    skins: list[Skin] = field(default_factory=list)
+    animations: list[Animation] = field(default_factory=list)
+
+    def node_tree(self) -> NodeTree:
+        """The node hierarchy: the file's, else one root per Node (made once, then kept);
+        every Node's `tree` then names its tree node."""
+        if self.tree is None or any(n.tree < 0 or n.tree >= len(self.tree) for n in self.nodes):
+            self.tree = NodeTree.flat([n.matrix for n in self.nodes],
+                                      [n.name or f"node {i}" for i, n in enumerate(self.nodes)])
+            for i, n in enumerate(self.nodes):
+                n.tree = i
+        return self.tree
+
+    def find(self, pattern: str) -> np.ndarray:
+        """Indices into `node_tree()` of the nodes whose name or path ("truck/wheel") matches
+        the shell-style `pattern` ("wheel*"), in tree order; empty when none does."""
+        return self.node_tree().find(pattern)
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """World-space axis-aligned bounds of everything the scene draws: (lo, hi), two (3,)

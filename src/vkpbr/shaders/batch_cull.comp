@@ -18,7 +18,8 @@ layout(local_size_x = 64) in;
 layout(set = 0, binding = 0, std140) readonly buffer CullViews {
     ViewRecord cull_views[];
 };
-// Per draw: xyz centre, w radius (world), then (index count, first index, vertex offset, 0).
+// Per draw: xyz centre, w radius of its mesh (placed by the draw's model matrix, below), then
+// (index count, first index, vertex offset, 0).
 layout(set = 0, binding = 1, std430) readonly buffer DrawBounds {
     vec4 spheres_and_ranges[];  // 2 vec4 a draw: the sphere, then the range as uint bits
 };
@@ -27,6 +28,10 @@ layout(set = 0, binding = 2, std430) buffer Commands {
 };
 layout(set = 0, binding = 3, std430) writeonly buffer CullVisible {
     uint cull_visible[];
+};
+// The scene state's matrices (Instances: model, normal matrix a draw; render/scene_state.py).
+layout(set = 0, binding = 4, std430) readonly buffer CullInstances {
+    mat4 cull_matrices[];
 };
 
 layout(push_constant, std430) uniform CullPush {
@@ -50,7 +55,8 @@ void main() {
         commands[base + 3u] = floatBitsToUint(range.z);
         commands[base + 4u] = command * pc.chunk_views;
     }
-    if (sphere_visible(cull_views[view].VP, spheres_and_ranges[2u * d])) {
+    vec4 sphere = world_sphere(cull_matrices[2u * d], spheres_and_ranges[2u * d]);
+    if (sphere_visible(cull_views[view].VP, sphere)) {
         uint k = atomicAdd(commands[base + 1u], 1u);
         cull_visible[command * pc.chunk_views + k] = view;
     }

@@ -21,4 +21,12 @@ bool sphere_visible(mat4 vp, vec4 sphere) {
     return true;
 }
 
+// A mesh's bounding sphere (xyz centre, w radius) placed by `model`: the radius scaled by the
+// longest axis, so that any scale or shear keeps it conservative. A hidden draw's zero matrix
+// (render/scene_state.py) gives a point, whose triangles have no area.
+vec4 world_sphere(mat4 model, vec4 local) {
+    float s = max(length(model[0].xyz), max(length(model[1].xyz), length(model[2].xyz)));
+    return vec4((model * vec4(local.xyz, 1.0)).xyz, local.w * s);
+}
+
 #endif

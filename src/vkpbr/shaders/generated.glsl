@@ -110,8 +110,6 @@ struct ViewRecord {
     uint layer;
 };
 struct DrawRecord {
-    mat4 model;
-    mat4 normal_matrix;
     uvec4 info;
     uvec4 ids;
 };
@@ -362,8 +360,7 @@ layout(set = 4, binding = 28, std430) buffer RasterMaskedBig {
 };
 #else  // the compute path has its own push constants
 layout(push_constant, std430) uniform Draw {
-    mat4 model;
-    mat4 normal_matrix;
+    uvec4 index;
 } draw;
 #endif
 #endif  // !STRUCTS_ONLY

@@ -62,9 +62,9 @@ void main() {
     vec3 b = tbn[1];
     vec3 n = tbn[2];
 #endif
-#if BATCH  // one record a draw: its matrices pushed
-    mat4 model = draw.model;
-    mat3 normal_matrix = mat3(draw.normal_matrix);
+#if BATCH  // one record a draw, pushed: the instance index is the view
+    mat4 model = instance_matrices[2u * draw.index.x];
+    mat3 normal_matrix = mat3(instance_matrices[2u * draw.index.x + 1u]);
 #else  // a draw's instances are consecutive records (EXT_mesh_gpu_instancing: one draw call)
     mat4 model = instance_matrices[2u * uint(gl_InstanceIndex)];
     mat3 normal_matrix = mat3(instance_matrices[2u * uint(gl_InstanceIndex) + 1u]);

@@ -145,12 +145,13 @@ bool fetch(uint g, out vec4 c[3], out bool double_sided) {
 #endif
     // The draw's bounding sphere outside the view: none of its triangles is seen (one test
     // instead of three vertices; most of a scene's draws, for most of a batch's views).
-    if (!sphere_visible(views[view_index].VP, raster_spheres[rd.z])) return false;
+    mat4 model = instance_matrices[2u * rd.z];
+    if (!sphere_visible(views[view_index].VP, world_sphere(model, raster_spheres[rd.z]))) return false;
     DrawRecord dr = draws[rd.z];
     uint base = dr.info.x + 3u * (g - rd.x);
     for (int j = 0; j < 3; ++j) {
         uint v = indices[base + uint(j)] + dr.info.y;
-        c[j] = views[view_index].VP * (dr.model * vec4(position(v), 1.0));  // as pbr.vert's
+        c[j] = views[view_index].VP * (model * vec4(position(v), 1.0));  // as pbr.vert's
     }
     return true;
 }
@@ -219,7 +220,7 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, int y0, int y
     // A small triangle's surface data fetched once for all its candidate pixels. (Not in
     // raster_masked_big: held across its bands' loops it took 80 -> 128 registers there,
     // 0.127 -> 0.148 ms at 1080p on the H200, where raster_masked went 0.100 -> 0.088.)
-    SurfaceTriangle tri = surface_triangle(draws[draw], prim);
+    SurfaceTriangle tri = surface_triangle(draw, prim);
 #endif
     float area = edge(s0.xy, s1.xy, s2.xy);
     for (int y = y0; y < y1; y += ystep) {
@@ -243,7 +244,7 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, int y0, int y
 #if KERNEL == 5
             surface_point(tri, uvec2(px - tile_origin()), vec2(pc.tile_w, pc.tile_h));
 #else
-            surface_point(surface_triangle(draws[draw], prim), uvec2(px - tile_origin()),
+            surface_point(surface_triangle(draw, prim), uvec2(px - tile_origin()),
                           vec2(pc.tile_w, pc.tile_h));
 #endif
             if (surface_base_color().a < MAT.alpha_cutoff) continue;  // as pbr.frag's ALPHA_MASK

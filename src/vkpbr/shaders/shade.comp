@@ -49,7 +49,7 @@ void main() {
 #else
     DrawRecord dr = surface_at(vis.x - 1u, vis.y, pixel, vec2(size), vi, w0, w1, w2, bary);
 #endif
-    surface_frame_at(dr, vi, w0, w1, w2, bary);
+    surface_frame_at(vis.x - 1u, vi, w0, w1, w2, bary);
     vec3 eye = views[view_index].eye_near.xyz;
 
 #if OUTPUTS

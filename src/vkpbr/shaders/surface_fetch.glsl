@@ -64,15 +64,17 @@ struct SurfaceTriangle {
     bool colors;
 };
 
-// Primitive `prim` of the draw `dr` (fetched once for all the pixels that see it: the
+// Primitive `prim` of draw `draw` (fetched once for all the pixels that see it: the
 // compute rasteriser's alpha test walks a triangle's pixels).
-SurfaceTriangle surface_triangle(DrawRecord dr, uint prim) {
+SurfaceTriangle surface_triangle(uint draw, uint prim) {
     SurfaceTriangle t;
+    DrawRecord dr = draws[draw];
+    mat4 model = instance_matrices[2u * draw];
     uint base = dr.info.x + 3u * prim;
     t.vi = uvec3(indices[base], indices[base + 1u], indices[base + 2u]) + dr.info.y;
-    t.w0 = (dr.model * vec4(vec3_at(t.vi.x, false), 1.0)).xyz;
-    t.w1 = (dr.model * vec4(vec3_at(t.vi.y, false), 1.0)).xyz;
-    t.w2 = (dr.model * vec4(vec3_at(t.vi.z, false), 1.0)).xyz;
+    t.w0 = (model * vec4(vec3_at(t.vi.x, false), 1.0)).xyz;
+    t.w1 = (model * vec4(vec3_at(t.vi.y, false), 1.0)).xyz;
+    t.w2 = (model * vec4(vec3_at(t.vi.z, false), 1.0)).xyz;
     t.tex = mat3x4(vec4(texcoords0[t.vi.x], texcoords1[t.vi.x]),
                    vec4(texcoords0[t.vi.y], texcoords1[t.vi.y]),
                    vec4(texcoords0[t.vi.z], texcoords1[t.vi.z]));
@@ -110,7 +112,7 @@ vec3 surface_point(SurfaceTriangle t, uvec2 pixel, vec2 extent) {
 DrawRecord surface_at(uint draw, uint prim, uvec2 pixel, vec2 extent, out uvec3 vi,
                       out vec3 w0, out vec3 w1, out vec3 w2, out vec3 bary) {
     DrawRecord dr = draws[draw];
-    SurfaceTriangle t = surface_triangle(dr, prim);
+    SurfaceTriangle t = surface_triangle(draw, prim);
     bary = surface_point(t, pixel, extent);
     vi = t.vi;
     w0 = t.w0;
@@ -121,7 +123,9 @@ DrawRecord surface_at(uint draw, uint prim, uvec2 pixel, vec2 extent, out uvec3 
 
 // The rest of the surface globals: the interpolated normal, tangent and bitangent through
 // the draw's matrices (TBN_MODE's stream), which side faces the camera, the node's scale.
-void surface_frame_at(DrawRecord dr, uvec3 vi, vec3 w0, vec3 w1, vec3 w2, vec3 bary) {
+void surface_frame_at(uint draw, uvec3 vi, vec3 w0, vec3 w1, vec3 w2, vec3 bary) {
+    mat4 model = instance_matrices[2u * draw];
+    mat3 normal_matrix = mat3(instance_matrices[2u * draw + 1u]);
     vec3 eye = views[view_index].eye_near.xyz;
     vec3 n[3], t[3], bt[3];
     for (int k = 0; k < 3; ++k) {
@@ -142,14 +146,14 @@ void surface_frame_at(DrawRecord dr, uvec3 vi, vec3 w0, vec3 w1, vec3 w2, vec3 b
 #endif
     }
     // As pbr.vert: normals through the inverse transpose, tangents through the model matrix.
-    s_normal = mat3(dr.normal_matrix) * (mat3(n[0], n[1], n[2]) * bary);
-    s_tangent = mat3(dr.model) * (mat3(t[0], t[1], t[2]) * bary);
-    s_bitangent = mat3(dr.model) * (mat3(bt[0], bt[1], bt[2]) * bary);
+    s_normal = normal_matrix * (mat3(n[0], n[1], n[2]) * bary);
+    s_tangent = mat3(model) * (mat3(t[0], t[1], t[2]) * bary);
+    s_bitangent = mat3(model) * (mat3(bt[0], bt[1], bt[2]) * bary);
     // Counter-clockwise in the image is the front (the pipelines' front face), i.e. the
     // triangle's world normal facing the camera; mirrored transforms are handled by the world
     // positions themselves.
     s_front_facing = dot(cross(w1 - w0, w2 - w0), eye - w0) > 0.0;
-    s_model_scale = length(dr.model[0].xyz);
+    s_model_scale = length(model[0].xyz);
 }
 
 #endif

@@ -1,0 +1,220 @@
+"""Sampling glTF animations into poses, vectorised over times (NumPy, no GPU).
+
+`sample(scene, time, animation)` evaluates every channel of the chosen animations at one
+time or at B times at once (1,000 instances each at its own time: one call, no Python loop
+over times or keyframes; the loop is over channels) and returns a `Pose`: the tree's local
+TRS, local matrices, morph weights and KHR_animation_pointer values, each with the times'
+shape in front. `Pose.world(tree)` gives world matrices; `joint_matrices(world, skin)` a
+skin's joint matrices. The rules (glTF 2.0 spec 3.11 and Appendix C) and fallbacks are in
+docs/animation.md:
+
+- STEP holds a keyframe's value until the next one; LINEAR interpolates (rotations by
+  spherical linear interpolation, the shorter way round); CUBICSPLINE is the cubic Hermite
+  spline with the file's tangents scaled by the keyframe interval. Rotations are normalised.
+- Times before the first keyframe take the first value, after the last the last.
+- Nodes no channel animates keep the file's TRS; a node given as a matrix keeps its matrix.
+- Morph weights: the node's `weights`, else its mesh's, replaced by what animation gives.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from vkpbr.errors import UsageError
+from vkpbr.scene.tree import NodeTree
+from vkpbr.scene.types import Animation, AnimationSampler, Scene, Skin
+
+__all__ = ["Pose", "sample", "sample_sampler", "joint_matrices", "trs_matrices",
+           "quaternion_matrices", "animation_indices"]
+
+
+@dataclass
+class Pose:
+    """The tree's state at one or more times; `...` is the shape of the times given
+    (() for one float, (B,) for B times).
+
+    translation (..., K, 3), rotation (..., K, 4) unit quaternions x, y, z, w, scale
+        (..., K, 3): every tree node's TRS (the file's where nothing animates it; identity
+        for nodes given as a matrix).
+    local : (..., K, 4, 4) float64 local matrices, T * R * S, or the node's matrix.
+    weights : {tree node: (..., T)} morph weights of every node showing a morphed mesh.
+    pointers : {KHR_animation_pointer string: (..., C)} the sampled values of the pointer
+        channels (C = 1 for a scalar property), node properties included.
+    """
+
+    translation: np.ndarray
+    rotation: np.ndarray
+    scale: np.ndarray
+    local: np.ndarray
+    weights: dict[int, np.ndarray] = field(default_factory=dict)
+    pointers: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def world(self, tree: NodeTree) -> np.ndarray:
+        """(..., K, 4, 4) world matrices of this pose (one batched product per tree level)."""
+        return tree.world(self.local)
+
+
+def animation_indices(scene: Scene, animation: int | str | Sequence[int | str] | None) -> list[int]:
+    """Indices into scene.animations: None = all, an index, a name, or a list of them.
+    UsageError naming the animations when one matches nothing."""
+    n = len(scene.animations)
+    if animation is None:
+        return list(range(n))
+    refs = [animation] if isinstance(animation, (int, np.integer, str)) else list(animation)
+    out = []
+    for ref in refs:
+        if isinstance(ref, (int, np.integer)) and not isinstance(ref, bool):
+            if not 0 <= int(ref) < n:
+                raise UsageError(f"animation {int(ref)} is out of range: the scene has {n} "
+                                 f"animation{'s' * (n != 1)}")
+            out.append(int(ref))
+            continue
+        names = [a.name for a in scene.animations]
+        if ref not in names:
+            shown = ", ".join(repr(x) for x in names[:8]) or "none"
+            raise UsageError(f"no animation is named {ref!r} (the scene has: {shown})")
+        out.append(names.index(ref))
+    return out
+
+
+def sample(scene: Scene, time: float | np.ndarray,
+           animation: int | str | Sequence[int | str] | None = None) -> Pose:
+    """The pose of `scene` at `time` (seconds: a float or an array of B times) under the
+    chosen animations (None: all of them, applied in order; a later channel on the same
+    property wins). UsageError for a non-finite time or an unknown animation."""
+    t = np.asarray(time, dtype=np.float64)
+    if not np.isfinite(t).all():
+        raise UsageError(f"animation time must be finite, got {time!r}")
+    lead = t.shape
+    flat = t.reshape(-1)
+    tree = scene.node_tree()
+    k = len(tree)
+    b = len(flat)
+    trs = {"translation": np.broadcast_to(tree.translation, (b, k, 3)).copy(),
+           "rotation": np.broadcast_to(tree.rotation, (b, k, 4)).copy(),
+           "scale": np.broadcast_to(tree.scale, (b, k, 3)).copy()}
+    weights = _rest_weights(scene, tree, b)
+    pointers: dict[str, np.ndarray] = {}
+    chosen = [scene.animations[i] for i in animation_indices(scene, animation)]
+    for anim in chosen:  # mesh weights first: a node's own weights override them
+        for ch in anim.channels:
+            if ch.kind == "mesh":
+                value = _value(anim, ch.sampler, flat, False)
+                pointers[str(ch.pointer)] = value
+                for row in ch.targets:
+                    if row not in tree.weights and row in weights:
+                        weights[row] = value
+    for anim in chosen:
+        for ch in anim.channels:
+            if ch.kind == "mesh":
+                continue
+            value = _value(anim, ch.sampler, flat, ch.path == "rotation")
+            if ch.pointer is not None:
+                pointers[ch.pointer] = value
+            if ch.node is None:
+                continue
+            if ch.path == "weights":
+                if ch.node in weights:
+                    weights[ch.node] = value
+            else:
+                trs[ch.path][:, ch.node] = value
+    local = trs_matrices(trs["translation"], trs["rotation"], trs["scale"])
+    local[:, tree.uses_matrix] = tree.local[tree.uses_matrix]
+    return Pose(trs["translation"].reshape(*lead, k, 3), trs["rotation"].reshape(*lead, k, 4),
+                trs["scale"].reshape(*lead, k, 3), local.reshape(*lead, k, 4, 4),
+                {r: w.reshape(*lead, -1) for r, w in weights.items()},
+                {p: v.reshape(*lead, -1) for p, v in pointers.items()})
+
+
+def _rest_weights(scene: Scene, tree: NodeTree, b: int) -> dict[int, np.ndarray]:
+    """(b, T) morph weights of each tree node showing a morphed mesh: node's, else mesh's."""
+    out: dict[int, np.ndarray] = {}
+    for node in scene.nodes:
+        mesh_weights = scene.meshes[node.mesh].morph_weights
+        if mesh_weights is None or node.tree in out:
+            continue
+        w = tree.weights.get(node.tree, mesh_weights)
+        out[node.tree] = np.broadcast_to(np.asarray(w, np.float64), (b, len(w))).copy()
+    return out
+
+
+def _value(anim: Animation, sampler: int, times: np.ndarray, rotation: bool) -> np.ndarray:
+    return sample_sampler(anim.samplers[sampler], times, rotation)
+
+
+def sample_sampler(s: AnimationSampler, times: np.ndarray, rotation: bool = False) -> np.ndarray:
+    """(B, C) values of sampler `s` at (B,) `times`; `rotation`: quaternions, interpolated
+    by slerp (LINEAR) and normalised."""
+    inp, out = s.input, s.output
+    cubic = s.interpolation == "CUBICSPLINE"
+    values = out[:, 1] if cubic else out  # (k, C) keyframe values
+    if len(inp) == 1:
+        v = np.broadcast_to(values[0], (len(times), values.shape[-1])).copy()
+        return _normalised(v) if rotation else v
+    if s.interpolation == "STEP":
+        i = np.clip(np.searchsorted(inp, times, side="right") - 1, 0, len(inp) - 1)
+        v = values[i]
+        return _normalised(v) if rotation else v
+    i = np.clip(np.searchsorted(inp, times, side="right") - 1, 0, len(inp) - 2)
+    dt = inp[i + 1] - inp[i]
+    u = np.clip((times - inp[i]) / dt, 0.0, 1.0)[:, None]  # clamps times outside the range
+    if cubic:
+        u2, u3 = u * u, u * u * u
+        v = ((2 * u3 - 3 * u2 + 1) * values[i] + (u3 - 2 * u2 + u) * dt[:, None] * out[i, 2]
+             + (-2 * u3 + 3 * u2) * values[i + 1] + (u3 - u2) * dt[:, None] * out[i + 1, 0])
+    elif rotation:
+        v = _slerp(values[i], values[i + 1], u)
+    else:
+        v = values[i] + u * (values[i + 1] - values[i])
+    return _normalised(v) if rotation else v
+
+
+def _slerp(a: np.ndarray, b: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Spherical linear interpolation of (B, 4) quaternions (glTF Appendix C): the shorter
+    arc (b negated when a . b < 0), linear interpolation where the angle is tiny."""
+    d = np.sum(a * b, axis=-1, keepdims=True)
+    b = np.where(d < 0, -b, b)
+    d = np.abs(d)
+    angle = np.arccos(np.clip(d, -1.0, 1.0))
+    sin_angle = np.sin(angle)
+    small = sin_angle < 1e-6
+    safe = np.where(small, 1.0, sin_angle)
+    wa = np.where(small, 1.0 - u, np.sin((1.0 - u) * angle) / safe)
+    wb = np.where(small, u, np.sin(u * angle) / safe)
+    return wa * a + wb * b
+
+
+def _normalised(q: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(q, axis=-1, keepdims=True)
+    return np.where(n > 1e-12, q / np.maximum(n, 1e-300), np.float64([0, 0, 0, 1]))
+
+
+def quaternion_matrices(q: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) rotation matrices of (..., 4) quaternions x, y, z, w (normalised first)."""
+    x, y, z, w = np.moveaxis(_normalised(np.asarray(q, np.float64)), -1, 0)
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+    ], axis=-2)
+
+
+def trs_matrices(t: np.ndarray, r: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """(..., 4, 4) float64 T * R * S of (..., 3) translations, (..., 4) quaternions and (..., 3)
+    scales (the glTF node transform)."""
+    t = np.asarray(t, np.float64)
+    out = np.zeros((*t.shape[:-1], 4, 4))
+    out[..., :3, :3] = quaternion_matrices(r) * np.asarray(s, np.float64)[..., None, :]
+    out[..., :3, 3] = t
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def joint_matrices(world: np.ndarray, skin: Skin) -> np.ndarray:
+    """(..., J, 4, 4) joint matrices: world[joints] @ inverse_bind. They take a skinned
+    vertex from the mesh's bind space to world space; the skinned mesh's own node transform
+    is not applied (glTF 3.7.3: only the joints' transforms count)."""
+    return np.asarray(world)[..., skin.joints, :, :] @ skin.inverse_bind
