@@ -79,6 +79,7 @@ OUTPUT_KINDS: dict[str, Kind] = {
     "normal": "data",
     "normal_camera": "data",
     "normal_geometric": "data",
+    "motion": "data",  # (H, W, 2): EXR channels R (x) and G (y), in pixels
     "instance": "ids",
     "semantic": "ids",
 }
@@ -208,9 +209,11 @@ def _exr_channels(array: np.ndarray, path: Path, option: str) -> dict[str, np.nd
         return {"Y": a}
     if a.ndim == 3 and a.shape[2] == 1:
         return {"Y": np.ascontiguousarray(a[..., 0])}
+    if a.ndim == 3 and a.shape[2] == 2:  # a flow field (the motion output): R = x, G = y
+        return {"R": np.ascontiguousarray(a[..., 0]), "G": np.ascontiguousarray(a[..., 1])}
     if a.ndim == 3 and a.shape[2] in (3, 4):
         return {"RGB" if a.shape[2] == 3 else "RGBA": a}
-    raise UsageError(f"{option} {path}: EXR takes (H, W), (H, W, 3) or (H, W, 4) arrays, got "
+    raise UsageError(f"{option} {path}: EXR takes (H, W), (H, W, 2), (H, W, 3) or (H, W, 4) arrays, got "
                      f"shape {array.shape}")
 
 

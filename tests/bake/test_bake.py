@@ -179,3 +179,18 @@ def test_bake_help_has_description_and_examples() -> None:
     text = sub.format_help()
     assert "examples:\n  vkpbr bake " in text and text.count("\n  vkpbr bake ") == 3
     assert "--embed-textures" in text and "--strict" in text and "docs/baked-format.md" in text
+
+
+def test_an_animated_scene_bakes_its_rest_pose_with_one_warning(tmp_path: Path, assets: Path) -> None:
+    """The baked format stores no animation: the bake says so in one line (docs/animation.md)."""
+    import warnings
+
+    source = assets / "CesiumMan" / "glTF" / "CesiumMan.gltf"
+    if not source.is_file():
+        pytest.skip(f"{source} not in the assets")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        bake_file(source, tmp_path / "man.vkpbr", progress=False)
+    lines = [str(w.message) for w in caught if "not baked" in str(w.message)]
+    assert len(lines) == 1 and "\n" not in lines[0] and "CesiumMan.gltf" in lines[0]
+    assert "animations (1), skins (1, 1 skinned meshes)" in lines[0]

@@ -194,3 +194,34 @@ def test_bad_poses_are_one_line_errors(make_renderer, nodes, poses, kw, message)
         r.set_poses(nodes, poses, **kw)
     with pytest.raises(UsageError, match="mask"):
         r.set_visible(["box", "ground"], [True])
+
+
+def test_material_overrides_match_a_scene_loaded_with_them(make_renderer) -> None:  # noqa: ANN001
+    """set_material changes the next frame as a scene loaded with those factors renders, on
+    both paths; frames in flight keep theirs (each slot has its copy); bad values are one
+    line."""
+    scene = analytic_scene()
+    r = make_renderer(scene)
+    before = r.render(CAMERA, size=(W, H))
+    r.set_material("m2", base_color=(0.9, 0.1, 0.1), metallic=0.7, roughness=0.3,
+                   emissive=(0.0, 0.2, 0.0))
+    changed = copy.deepcopy(scene)
+    changed.materials[2] = dataclasses.replace(
+        changed.materials[2], base_color_factor=(0.9, 0.1, 0.1, 1.0), metallic_factor=0.7,
+        roughness_factor=0.3, emissive_factor=(0.0, 0.2, 0.0))
+    fresh = make_renderer(changed)
+    for pipeline in ("forward", "compute"):
+        if pipeline == "compute" and r.compute_unavailable(r.offscreen_target((W, H), False)):
+            continue
+        got = r.render(CAMERA, size=(W, H), pipeline=pipeline)
+        want = fresh.render(CAMERA, size=(W, H), pipeline=pipeline)
+        assert np.array_equal(got, want)
+    assert not np.array_equal(before, r.render(CAMERA, size=(W, H)))
+    for bad, message in (({"metallic": 2.0}, "metallic"), ({"base_color": (1, 1)}, "base_color"),
+                         ({"emissive": (-1, 0, 0)}, "emissive")):
+        with pytest.raises(UsageError, match=message):
+            r.set_material(0, **bad)
+    with pytest.raises(UsageError, match="no material is named"):
+        r.set_material("nope", metallic=0.5)
+    r.reset_pose()
+    assert np.array_equal(before, r.render(CAMERA, size=(W, H)))

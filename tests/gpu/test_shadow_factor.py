@@ -72,7 +72,8 @@ def _render(rects, light: Light, tmp: Path) -> tuple[np.ndarray, ShadowMaps]:
     scene = rect_scene(rects)
     with Renderer(scene, validation=True) as r:
         dev = r.device
-        sm = ShadowMaps(dev, r.set_layouts[1], r.ring.count, resolution=RES)
+        sm = ShadowMaps(dev, r.set_layouts[1], r.ring.count, resolution=RES,
+                        frame_layout=r.set_layouts[0])
         plan = plan_shadows([light])
         sm.ensure(plan)
         test_layout = DescriptorSetLayout(dev, [BindingSpec(7, "uniform", ("fragment",))])
@@ -104,7 +105,7 @@ def _render(rects, light: Light, tmp: Path) -> tuple[np.ndarray, ShadowMaps]:
         classes = [classify(d.alpha_mode, d.double_sided, True) for d in gs.draws]
         cmd = Commands(dev).begin()
         sm.record(cmd, frame.index, plan, gs.draws, classes, gs.material_sets, gs.streams,
-                  gs.index_buffer, gs.has_colors)
+                  gs.index_buffer, gs.has_colors, set0=r.slots[frame.index].set0)
 
         def draw(cmd: Commands) -> None:
             record_draws(cmd, pipe, slot, s2, sm.sets[frame.index], gs, names)
@@ -165,6 +166,6 @@ def record_draws(cmd, pipe, slot, set2, set3, gs, names) -> None:  # noqa: ANN00
     cmd.bind_set(3, set3)
     cmd.bind_vertex_buffers([gs.streams[n] for n in names])
     cmd.bind_index_buffer(gs.index_buffer)
-    for d in gs.draws:
-        cmd.push(d.push)
-        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset)
+    for i, d in enumerate(gs.draws):  # pbr.vert reads record i's matrices (gl_InstanceIndex)
+        cmd.push(L.draw_push(i))
+        cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset, first_instance=i)

@@ -118,7 +118,8 @@ def _expected(m: np.ndarray, res: int, rects=RECTS) -> tuple[np.ndarray, np.ndar
 def maps():
     scene = _scene()
     with Renderer(scene, validation=True) as r:
-        sm = ShadowMaps(r.device, r.set_layouts[1], r.ring.count, resolution=RES, readable=True)
+        sm = ShadowMaps(r.device, r.set_layouts[1], r.ring.count, resolution=RES, readable=True,
+                        frame_layout=r.set_layouts[0])
         plan = plan_shadows(LIGHTS)
         sm.ensure(plan)
         camera = Camera(eye=(0.0, 1.5, 2.5), target=(0.0, 0.0, 0.0))
@@ -129,7 +130,8 @@ def maps():
         cmd = Commands(r.device).begin()
         sm.record(cmd, frame.index, plan, gs.draws,
                   [classify(d.alpha_mode, d.double_sided, True) for d in gs.draws],
-                  gs.material_sets, gs.streams, gs.index_buffer, gs.has_colors)
+                  gs.material_sets, gs.streams, gs.index_buffer, gs.has_colors,
+                  set0=r.slots[frame.index].set0)  # its Instances: the draws' matrices
         cmd.end()
         frame.submit(cmd)
         frame.wait()

@@ -17,8 +17,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from vkpbr.app.common import camera_from_args, lights_from_args, load_scene_arg
 from vkpbr.app.log import is_quiet, say
 from vkpbr.errors import UsageError
@@ -52,9 +50,11 @@ def animation_choice(scene: Any, text: str | None) -> int | str | None:
 
 
 def animation_times(scene: Any, animation: int | str | None, fps: float,
-                    duration: float | None) -> np.ndarray:
-    """The frame times of --animate: 0, 1/fps, ... up to `duration` (default: the longest
-    chosen animation's), at least one frame."""
+                    duration: float | None) -> Any:
+    """The frame times of --animate ((N,) float64): 0, 1/fps, ... up to `duration` (default:
+    the longest chosen animation's), at least one frame."""
+    import numpy as np
+
     from vkpbr.scene.animation import animation_indices
 
     if not (np.isfinite(fps) and fps > 0):
@@ -98,6 +98,9 @@ def check_animation_args(args: argparse.Namespace) -> None:
                              "(or write a .gif, or a folder of frames)") from None
     elif out.suffix and out.suffix.lower() not in CLIP_SUFFIXES:
         raise UsageError(f"--out {out}: with --animate, give a folder, a .gif or a .mp4")
+    if args.outputs and out.suffix.lower() in CLIP_SUFFIXES:
+        raise UsageError("--outputs writes files beside each frame: with --animate, give a "
+                         "folder as --out")
     if args.cameras:
         raise UsageError("--animate plays one camera: use --camera, --camera-index or none "
                          "(a poses file can give each camera its own \"time\" instead)")
@@ -108,6 +111,7 @@ def run_animation(args: argparse.Namespace, options: Any) -> int:
     from tqdm import tqdm
 
     from vkpbr.app.output import write_image_atomic
+    from vkpbr.io import check_outputs, write_outputs
     from vkpbr.render.renderer import Renderer
     from vkpbr.scene.camera_files import write_transforms
 
@@ -123,21 +127,29 @@ def run_animation(args: argparse.Namespace, options: Any) -> int:
                   semantics=args.semantics) as renderer:
         camera = camera_from_args(args, renderer)
         lights = lights_from_args(args, renderer, options)
+        names = tuple(args.outputs or ())
+        if names:  # the folder is made last, after the frames: check its parent's here
+            check_outputs(out.parent / "frame_00000.png", names, renderer.max_id)
         t1 = time.perf_counter()
         frames = renderer.render_many([camera] * len(times), lights, args.size, options,
-                                      times=times, animation=animation)
+                                      times=times, animation=animation,
+                                      outputs=("color", *names) if names else None)
         bar = tqdm(frames, total=len(times), unit="frame", disable=True if is_quiet() else None)
         images = list(bar)
         t2 = time.perf_counter()
+    extras = images if names else None  # the outputs (motion: from each frame's previous)
+    images = [f["color"] for f in images] if names else images
     if out.suffix.lower() in CLIP_SUFFIXES:
         _write_clip(out, images, args.fps)
         wrote = str(out)
     else:
         out.mkdir(parents=True, exist_ok=True)
-        names = [f"frame_{i:05d}.png" for i in range(len(images))]
-        for name, image in zip(names, images, strict=True):
+        names_ = [f"frame_{i:05d}.png" for i in range(len(images))]
+        for i, (name, image) in enumerate(zip(names_, images, strict=True)):
             write_image_atomic(out / name, image)
-        write_transforms(out / "transforms.json", [camera] * len(images), args.size, names,
+            if extras is not None:
+                write_outputs(out / name, extras[i], names)
+        write_transforms(out / "transforms.json", [camera] * len(images), args.size, names_,
                          times=list(map(float, times)))
         wrote = f"{len(images)} frames and transforms.json to {out}/"
     say(f"wrote {wrote} ({args.size[0]}x{args.size[1]}, {len(times)} frames at {args.fps:g} fps, "
@@ -147,9 +159,11 @@ def run_animation(args: argparse.Namespace, options: Any) -> int:
     return 0
 
 
-def _write_clip(out: Path, images: list[np.ndarray], fps: float) -> None:
+def _write_clip(out: Path, images: list[Any], fps: float) -> None:
     """A .gif (Pillow) or .mp4 (imageio-ffmpeg, H.264) of RGBA frames, written beside `out`
     and renamed onto it."""
+    import numpy as np
+
     tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp{out.suffix}")
     try:
         if out.suffix.lower() == ".gif":

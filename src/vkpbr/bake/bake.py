@@ -22,6 +22,7 @@ import hashlib
 import logging
 import os
 import time
+import warnings
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -209,6 +210,7 @@ def bake_scene(scene: Scene, progress: bool = False) -> BakedScene:
     their mip chain; `embed_images` replaces references by mip chains.
     """
     start = time.perf_counter()
+    _warn_unbaked(scene)
     parts: list[dict[str, np.ndarray]] = []
     table = np.zeros(len(scene.meshes), dtype=MESH_DTYPE)
     first_v = first_i = 0
@@ -454,6 +456,18 @@ def _external_textures_note(out_path: Path, images: list[BakedImage]) -> str | N
     return (f"{out_path.name}: {len(external)} of {len(images)} textures stay external files; they "
             f"must stay in {where}" + (f" ({Path(rel).as_posix()} from the baked file)" if rel else "")
             + ", or bake with --textures source to store them inside" + outside)
+
+
+def _warn_unbaked(scene: Scene) -> None:
+    """One line when the scene moves: the baked format keeps the rest pose only (its nodes
+    are flat world matrices), so animations, skins and morph targets are not stored."""
+    morphs = sum(bool(m.morph_targets) for m in scene.meshes)
+    skinned = sum(m.joints is not None for m in scene.meshes)
+    if scene.animations or scene.skins or morphs:
+        warnings.warn(f"{scene.source or scene.name}: animations ({len(scene.animations)}), "
+                      f"skins ({len(scene.skins)}, {skinned} skinned meshes) and morph targets "
+                      f"({morphs} meshes) are not baked: the baked file is the rest pose "
+                      "(load the glTF file to animate it)", stacklevel=3)
 
 
 def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: bool = False,

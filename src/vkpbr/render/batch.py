@@ -228,7 +228,7 @@ class BatchViews:
                 draws=gs.draws, classes=fs.classes,
                 pipeline=lambda p: self.recorder.pipeline(target, tbn, p, prepass, batch=True),
                 frame_sets=(self.sets0[fs.frame_index], slot.set2),
-                material_sets=gs.material_sets,
+                material_sets=fs.material_sets,
                 vertex_buffers=[gs.streams[name] for name in fs.streams],
                 index_buffer=gs.index_buffer, prepass=prepass, shadow_set=fs.shadow_set,
                 indirect=self.commands, indirect_base=chunk * self.draw_count,

@@ -183,10 +183,11 @@ class _TargetResources:
                    "QTangents": gs.streams["qtangents"],
                    "PackedFrames": gs.streams["packed_frames"], "Bins": self.bins,
                    "BinArgs": self.args, "PixelList": self.pixels,
-                   "Materials": scene.material_table, "RasterDraws": scene.raster_draws,
+                   "RasterDraws": scene.raster_draws,
                    "RasterDepthIds": self.raster, "RasterBig": self.raster_big,
                    "RasterSpheres": scene.raster_spheres, "RasterDepths": self.raster_depths,
-                   "RasterMaskedBig": self.raster_masked_big}
+                   "RasterMaskedBig": self.raster_masked_big,
+                   "PrevPositions": scene.prev_positions}
         images = {"out_image": target.storage_view, "visibility": target.visibility_view}
         # The dataset outputs' images once the target has them, else 1x1 stand-ins (no kernel
         # but the outputs one touches them; every binding is written all the same).
@@ -196,7 +197,11 @@ class _TargetResources:
         writer = DescriptorWriter(dev)
         for dset, slot in zip(self.sets, slots, strict=True):
             for binding, kind, name in L.COMPUTE_SET:
-                if kind == "storage":
+                if name == "Motion":  # the slot's own table
+                    writer.storage(dset, binding, *_at(scene.motion.motion_region(slot.index)))
+                elif name == "Materials":  # the slot's own copy
+                    writer.storage(dset, binding, *_at(gs.material_table_region(slot.index)))
+                elif kind == "storage":
                     writer.storage(dset, binding, buffers[name])
                 elif kind == "block":
                     buf, offset = slot.block_ranges[name]
@@ -210,6 +215,12 @@ class _TargetResources:
         return obj
 
 
+def _at(region: tuple[Any, int, int]) -> tuple[Any, int, int]:
+    """(buffer, size, offset) for DescriptorWriter.storage of a (buffer, offset, size)."""
+    buffer, offset, size = region
+    return buffer, size, offset
+
+
 class ComputeScene:
     """The compute path's view of a GpuScene (built on the path's first frame).
 
@@ -219,17 +230,16 @@ class ComputeScene:
 
     def __init__(self, device: Device, gs: GpuScene, frame_layouts: dict[int, DescriptorSetLayout],
                  slots: list[Any], semantic: np.ndarray | None = None,
-                 draw_spheres: np.ndarray | None = None) -> None:
+                 draw_spheres: np.ndarray | None = None, motion: Any = None,
+                 prev_positions: Any = None) -> None:
+        # motion: the scene state's motion tables (render/scene_state.py GpuSceneState);
+        # prev_positions: the deform step's previous posed positions (render/deform.py).
         self.device, self.gs, self.slots = device, gs, slots
+        self.motion = motion
         self._owned: list[Any] = []
         gs.ensure_streams()  # every TBN path's stream exists: the sets bind them all
         draws = _draw_records(gs, semantic)
         self.draw_table = self._own(upload_buffer(device, draws, "storage", name="draw records"))
-        table = np.zeros(len(gs.material_blocks), L.MATERIAL.dtype)  # np.stack drops padding
-        for i, block in enumerate(gs.material_blocks):
-            table[i] = block
-        self.material_table = self._own(upload_buffer(device, table, "storage",
-                                                      name="material records"))
         raster, self.triangles, self.masked_rows = _raster_table(gs)
         self.raster_draws = self._own(upload_buffer(device, raster, "storage",
                                                     name="raster draw table"))
@@ -240,6 +250,8 @@ class ComputeScene:
             spheres[:, 3] = np.inf  # unknown: never culled
         self.raster_spheres = self._own(upload_buffer(device, spheres, "storage",
                                                       name="raster draw spheres"))
+        self.prev_positions = prev_positions if prev_positions is not None else self._own(
+            upload_buffer(device, np.zeros(3, np.float32), "storage", name="no posed vertices"))
         self.set_index = max(frame_layouts) + 1
         self.set_layout = self._own(DescriptorSetLayout(device, [
             BindingSpec(b, "storage" if kind == "block" else kind, ("compute",), name)

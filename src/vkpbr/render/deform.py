@@ -128,11 +128,16 @@ class DeformKernel:
         bufs = [self._own(upload_buffer(device, a, "storage", name=n)) for a, n in
                 ((skin_rows, "skin vertices"), (deltas, "morph displacements"), (jobs, "deform jobs"))]
         names = ("DeformPositions", "DeformNormals", "DeformTangents", "SkinVertices",
-                 "MorphDeltas", "DeformJobs", "DeformState")
+                 "MorphDeltas", "DeformJobs", "DeformState", "DeformPrev")
+        self.first_posed = min(gs.posed_offsets, default=0)
+        posed = max(gs.vertex_count - self.first_posed, 1)
+        # The previous frame's posed positions (the motion output reads them).
+        self.prev_positions = self._own(Buffer(device, 12 * posed, "storage",
+                                               name="previous posed positions"))
         self.set_layout = self._own(DescriptorSetLayout(device, [
             BindingSpec(i, "storage", ("compute",), n) for i, n in enumerate(names)]))
         self.pipeline = self._own(ComputePipeline(device, SPV_DIR / "deform.comp.spv",
-                                                  [self.set_layout]))
+                                                  [self.set_layout], push_bytes=4))
         pool = self._own(DescriptorPool(device, [(self.set_layout, len(state_regions))]))
         self.sets = [pool.allocate(self.set_layout) for _ in state_regions]
         self.streams = gs.streams
@@ -143,6 +148,7 @@ class DeformKernel:
             for i, b in enumerate(bufs):
                 w.storage(s, 3 + i, b)
             w.storage(s, 6, buf, size, offset)
+            w.storage(s, 7, self.prev_positions)
         w.update()
 
     def _own(self, obj: Any) -> Any:
@@ -188,13 +194,15 @@ class DeformKernel:
         def record(cmd: Commands) -> None:
             cmd.bind_pipeline(self.pipeline)
             cmd.bind_set(0, self.sets[frame_index])
+            cmd.push(np.array([self.first_posed], np.uint32))
             cmd.dispatch(work_groups((self.max_vertices, 1, 1), (_GROUP, 1, 1))[0], self.jobs)
             cmd.memory_barrier("compute", "vertex_input|vertex|compute")
 
-        return [Step("deform", record, (("posed", "storage"),))]
+        return [Step("deform", record, (("posed", "storage"), ("prev_posed", "storage")))]
 
     def resources(self) -> dict[str, BufferResource]:
-        return {"posed": BufferResource(self.streams["positions"])}
+        return {"posed": BufferResource(self.streams["positions"]),
+                "prev_posed": BufferResource(self.prev_positions)}
 
     def destroy(self) -> None:
         while self._objects:

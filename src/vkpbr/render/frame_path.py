@@ -98,6 +98,7 @@ class FramePath:
         drawn = p.targets.post(target, copy) if post else target  # (HDR with post steps)
         # The camera's maths, once: the shadow cascades take its planes from the slot.
         write_frame_view(slot, camera, target.extent, p.bounds)
+        p.gpu_state.write_motion(slot.index, slot.vp, COPY_OUTPUTS in copy)
         write_frame_blocks(slot, lights, self._shading_options(options, post), linear or post,
                            p.lighting.frame_lighting(options),
                            p.shadow_frames.write(slot, plan, lights, camera, target.extent))

@@ -79,6 +79,7 @@ class FrameSlot:
     # right, up, backward): the dataset outputs' camera-space normals.
     camera_rotation: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
     stats: FrameStats = field(default_factory=FrameStats)
+    vp: tuple[float, ...] = ()  # the view's clip-from-world, column-major (the motion output)
 
 
 @dataclass(frozen=True)
@@ -205,6 +206,7 @@ def write_frame_view(slot: FrameSlot, camera: Camera, size: Sequence[int], bound
     terms = camera_view_terms(camera, size, bounds.corners, bounds.radius)
     pack_view(slot.m_view, terms, (0, 0, int(size[0]), int(size[1])))
     slot.znear, slot.zfar, slot.camera_rotation = terms.znear, terms.zfar, terms.rotation
+    slot.vp = terms.vp
 
 
 def write_frame_uniforms(slot: FrameSlot, camera: Camera, lights: tuple[Light, ...],

@@ -189,9 +189,10 @@ class GpuScene:
     """Owns the GPU copies of one Scene. Built by `Renderer`; destroy with `destroy()`."""
 
     def __init__(
-        self, device: Device, scene: Scene, material_layout: DescriptorSetLayout
+        self, device: Device, scene: Scene, material_layout: DescriptorSetLayout, slots: int = 1
     ) -> None:
         self.device = device
+        self.slots = slots  # frame slots: each has its own copy of the material blocks
         self.scene = scene
         self._owned: list = []
         self.timings: dict[str, float] = {}
@@ -422,37 +423,68 @@ class GpuScene:
 
     # --- materials --------------------------------------------------------------------------
     def _create_materials(self, layout: DescriptorSetLayout) -> None:
+        """Each material's set (its textures and its MATERIAL block). The blocks have a copy
+        per frame slot, in host-visible memory (and as the compute path's storage table), so
+        that a material's factors change between frames (set_material, animation) without
+        touching a frame in flight: a slot's sets name its own copies."""
         materials = list(self.scene_materials)
         self.materials: list[Material] = materials + [Material(name="vkpbr-default")]
         self.default_material = len(self.materials) - 1
         align = int(self.device.limits.minUniformBufferOffsetAlignment)
-        stride = (L.MATERIAL.size + align - 1) // align * align
-        self.material_ubo = self._own(
-            Buffer(self.device, stride * len(self.materials), "uniform",
-                   host_visible=True, name="materials")
-        )
-        self.pool = self._own(DescriptorPool(self.device, [(layout, len(self.materials))]))
+        s_align = int(self.device.limits.minStorageBufferOffsetAlignment)
+        self._ubo_stride = (L.MATERIAL.size + align - 1) // align * align
+        n = len(self.materials)
+        self._ubo_slot = self._ubo_stride * n
+        self.material_ubo = self._own(Buffer(self.device, self._ubo_slot * self.slots, "uniform",
+                                             host_visible=True, device_local=True, name="materials"))
+        self._table_bytes = L.MATERIAL.size * n
+        self._table_stride = (self._table_bytes + s_align - 1) // s_align * s_align
+        self.material_table = self._own(Buffer(self.device, self._table_stride * self.slots, "storage",
+                                               host_visible=True, device_local=True,
+                                               name="material records"))
+        self.pool = self._own(DescriptorPool(self.device, [(layout, n * self.slots)]))
         writer = DescriptorWriter(self.device)
-        self.material_sets = []
-        self.material_blocks: list[np.ndarray] = []  # the compute path's table (compute_path.py)
-        for i, mat in enumerate(self.materials):
-            dset = self.pool.allocate(layout)
-            self.material_sets.append(dset)
-            has = {}
+        self.material_blocks: list[np.ndarray] = []  # as loaded (compute_path.py's table too)
+        views = []
+        for mat in self.materials:
+            has, bound = {}, []
             shared = _shared_metallic_roughness(mat)
             for binding, slot in enumerate(L.MATERIAL_TEXTURES):
                 view, sampler, present = self._texture(getattr(mat, f"{slot}_texture"), slot,
                                                        shared and slot == "metallic")
                 has[slot] = present
-                writer.sampler(dset, binding, view, sampler)
+                bound.append((binding, view, sampler))
             block = self._material_block(mat, has)
             if shared and has["metallic"]:
                 block["flags"] |= L.MATERIAL_SHARED_METALLIC_ROUGHNESS
             self.material_blocks.append(block)
-            self.material_ubo.write(block.tobytes(), offset=i * stride)
-            writer.uniform(dset, L.MATERIAL_BINDING, self.material_ubo, L.MATERIAL.size,
-                           offset=i * stride)
+            views.append(bound)
+        self.slot_material_sets: list[list[object]] = []
+        for s in range(self.slots):
+            sets = []
+            for i, bound in enumerate(views):
+                dset = self.pool.allocate(layout)
+                for binding, view, sampler in bound:
+                    writer.sampler(dset, binding, view, sampler)
+                writer.uniform(dset, L.MATERIAL_BINDING, self.material_ubo, L.MATERIAL.size,
+                               offset=s * self._ubo_slot + i * self._ubo_stride)
+                sets.append(dset)
+            self.slot_material_sets.append(sets)
+            self.write_materials(s, self.material_blocks)
+        self.material_sets = self.slot_material_sets[0]  # (slot 0's: tools and tests)
         writer.update()
+
+    def write_materials(self, slot: int, blocks: list[np.ndarray]) -> None:
+        """Frame slot `slot`'s copies of the MATERIAL blocks (after the slot's fence)."""
+        table = np.zeros(len(blocks), L.MATERIAL.dtype)  # np.stack drops padding
+        for i, block in enumerate(blocks):
+            table[i] = block
+            self.material_ubo.write(block.tobytes(), offset=slot * self._ubo_slot + i * self._ubo_stride)
+        self.material_table.write(table.tobytes(), offset=slot * self._table_stride)
+
+    def material_table_region(self, slot: int) -> tuple[Buffer, int, int]:
+        """(buffer, offset, size) of slot `slot`'s MATERIAL table (the compute path's)."""
+        return self.material_table, slot * self._table_stride, self._table_bytes
 
     @staticmethod
     def _material_block(mat: Material, has: dict[str, bool]) -> np.ndarray:

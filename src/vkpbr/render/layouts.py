@@ -378,6 +378,10 @@ STORAGE = {
     # The masked draws' big triangles: per masked draw a count and a dispatch size, then its
     # segment of (triangle, view, chunk) entries.
     "RasterMaskedBig": StorageArray("RasterMaskedBig", "uint", "raster_masked_big"),
+    # vec4s: the previous VP (4), (valid, first posed vertex, 0, 0) as uint bits, then per
+    # draw its previous model matrix (4) and (deformed, 0, 0, 0) (render/scene_state.py).
+    "Motion": StorageArray("Motion", "vec4", "motion"),
+    "PrevPositions": StorageArray("PrevPositions", "float", "prev_positions"),  # 3 a vertex
 }
 # Storage buffers the compute path writes (declared without `readonly`).
 WRITABLE_STORAGE = ("Bins", "BinArgs", "PixelList", "RasterDepthIds", "RasterBig", "RasterDepths",
@@ -413,7 +417,7 @@ COMPUTE_SET: tuple[tuple[int, str, str], ...] = (
     (19, "storage_image", "out_ids"),  # instance, semantic
     (20, "storage_image", "out_normal"),  # world shading normal (normal-mapped)
     (21, "storage_image", "out_normal_geometric"),  # world interpolated vertex normal
-    (22, "storage_image", "out_depth_range"),  # distance along the view axis, to the eye
+    (22, "storage_image", "out_depth_range"),  # distance along the view axis, to the eye; motion
     # The compute rasteriser (raster.comp).
     (23, "storage", "RasterDraws"),
     (24, "storage", "RasterDepthIds"),
@@ -421,6 +425,10 @@ COMPUTE_SET: tuple[tuple[int, str, str], ...] = (
     (26, "storage", "RasterSpheres"),  # per draw its mesh's bounding sphere (culling)
     (27, "storage", "RasterDepths"),  # resolved: copied into the depth buffer
     (28, "storage", "RasterMaskedBig"),
+    # The motion output (render/scene_state.py): the frame slot's previous view and draw
+    # matrices, and the deformed vertices' previous positions (render/deform.py).
+    (29, "storage", "Motion"),
+    (30, "storage", "PrevPositions"),
 )
 # GLSL declarations of the storage images (their formats and access).
 STORAGE_IMAGES = {
@@ -436,7 +444,9 @@ OUTPUT_IMAGES = {
     "out_ids": ("VK_FORMAT_R32G32_UINT", 8, "uint32", 2),
     "out_normal": ("VK_FORMAT_R32G32B32A32_SFLOAT", 16, "float32", 4),
     "out_normal_geometric": ("VK_FORMAT_R32G32B32A32_SFLOAT", 16, "float32", 4),
-    "out_depth_range": ("VK_FORMAT_R32G32_SFLOAT", 8, "float32", 2),
+    # depth, range, then the motion (render/scene_state.py): where the point was in the
+    # previous frame's image, in pixels from where it is now (x right, y down)
+    "out_depth_range": ("VK_FORMAT_R32G32B32A32_SFLOAT", 16, "float32", 4),
 }
 VISIBILITY_FORMAT = "VK_FORMAT_R32G32_UINT"
 

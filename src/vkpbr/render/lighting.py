@@ -14,6 +14,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Iterable
+from typing import Any
 
 from vkpbr.render import layouts as L
 from vkpbr.render.compute_path import ShadeVariant
@@ -38,8 +39,10 @@ class Lighting:
     """The lights and lighting terms of frames of `scene` (see the module's docstring)."""
 
     def __init__(self, scene: Scene, opaque_copies: OpaqueCopies,
-                 environments: Environments) -> None:
+                 environments: Environments, state: Any = None) -> None:
+        # state: the living scene (vkpbr.scene.state): its lights follow animation pointers
         self.scene, self.opaque_copies, self.environments = scene, opaque_copies, environments
+        self.state = state
         self._last: tuple[RenderOptions, FrameLighting] | None = None
 
     def default_light(self) -> Light:
@@ -55,7 +58,8 @@ class Lighting:
         """
         if lights is None:
             if self.scene.lights:
-                chosen: tuple[Light, ...] = tuple(self.scene.lights)
+                chosen: tuple[Light, ...] = tuple(
+                    self.state.lights() if self.state is not None else self.scene.lights)
             elif options.lighting == L.Lighting.COURSE:
                 chosen = (Light(),)
             else:

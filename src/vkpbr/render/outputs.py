@@ -34,6 +34,9 @@ OUTPUTS = {
                      "y up, z towards the viewer); 0 = background",
     "normal_geometric": "(H, W, 3) float32 world interpolated vertex normal (before normal "
                         "mapping); 0 = background",
+    "motion": "(H, W, 2) float32 where each surface point was in the previous frame's image, "
+              "in pixels from where it is now (x right, y down): camera, node, skin and morph "
+              "motion; 0 = background and on a renderer's first frame",
 }
 
 
@@ -73,6 +76,7 @@ def frame_outputs(images: dict[str, np.ndarray], color: np.ndarray, wanted: tupl
         # 1080p on the CI machine, against 7 ms; within 5e-7 of it).
         "normal_camera": lambda: normal @ np.asarray(camera_rotation, np.float32),
         "normal_geometric": lambda: images["out_normal_geometric"][..., :3].copy(),
+        "motion": lambda: dr[..., 2:4].copy(),
     }
     return {name: available[name]() for name in wanted}
 

@@ -83,7 +83,7 @@ class FrameParts:
     def default_camera(self) -> Camera:
         """The scene's first camera, else the automatic one (scene/geometry.py auto_camera)."""
         if self.scene.cameras:
-            return self.scene.cameras[0]
+            return self.state.cameras()[0]  # (its field of view may be animated)
         from vkpbr.scene.geometry import auto_camera
 
         return auto_camera(self.scene)
@@ -130,10 +130,12 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     ring = FrameRing(device, queries_per_frame=STAMPS)
     layouts, shadows, pipeline_layout = create_layouts(device, ring.count)
     buffers, pool, slots = create_slots(device, layouts[0], layouts[2], ring.count)
-    gs = GpuScene(device, scene, layouts[1])
+    gs = GpuScene(device, scene, layouts[1], ring.count)
     state = scene_state(scene, gs.draws)
     layout = DeformLayout(scene, gs.deformed) if gs.deformed else None
     gpu_state = GpuSceneState(device, state, ring.count, scene, layout)
+    gpu_state.first_posed = min(gs.posed_offsets, default=0)
+    gpu_state.gpu_scene = gs
     deform = (DeformKernel(device, scene, gs, layout, [gpu_state.deform_region(s.index) for s in slots])
               if layout is not None else None)
     bind_instances(device, [s.set0 for s in slots], [gpu_state.region(s.index) for s in slots])
@@ -142,7 +144,8 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     # Bound in every slot's set 2 before anything is recorded (render/transmission.py).
     copies = OpaqueCopies(device, gs, [s.set2 for s in slots], (*background, 1.0))
     compute = Lazy(lambda: ComputeScene(device, gs, dict(enumerate(layouts)), slots, ids,
-                                        draw_spheres(scene, gs.draws) if gs.draws else None))
+                                        draw_spheres(scene, gs.draws) if gs.draws else None,
+                                        gpu_state, deform.prev_positions if deform else None))
     post = Lazy(lambda: PostKernels(device))
     blend = BlendOrder(gs.draws, state)
     paths = FramePaths(device, msaa, scene.triangle_count, len(blend) > 0, depth_prepass,
@@ -155,6 +158,6 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
         device, scene, ring, layouts, pipeline_layout, buffers, pool, slots, gs, ids, labels,
         copies, compute, post, recorder, state, deform, gpu_state, bounds, blend, paths,
         Targets(device, msaa, background, ring.count, recorder, compute, post), environments,
-        Lighting(scene, copies, environments),
+        Lighting(scene, copies, environments, state),
         ShadowFrames(shadows, bounds, recorder, state,
                      np.array([d.casts_shadows for d in gs.draws], bool)))

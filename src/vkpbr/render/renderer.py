@@ -124,6 +124,7 @@ class Renderer:
         st = p.state  # the living scene (vkpbr.scene.state): what the next frame shows
         self.state, self.set_pose, self.set_poses, self.reset_pose = st, st.set_pose, st.set_poses, st.reset
         self.set_visible, self.set_time, self.set_weights = st.set_visible, st.set_time, st.set_weights
+        self.set_material = st.set_material
 
 
     @property
@@ -177,8 +178,7 @@ class Renderer:
         outputs : names from OUTPUTS (dataset outputs, from the same frame: "color", "depth",
             "range", "instance", "semantic", "normal", "normal_camera", "normal_geometric");
             a dict of arrays is returned instead (see `frame_outputs`).
-        time, animation : pose the scene at `time` seconds of its glTF animations first
-            (`set_time`; `animation` a name, an index or None for all); None: as it is.
+        time, animation : `set_time(time, animation)` first (glTF animations); None: as is.
 
         Returns
         -------
@@ -187,8 +187,9 @@ class Renderer:
         view-space distance along the camera axis (inf where nothing was drawn); with
         `outputs`, {name: array}.
         """
+        if time is not None:  # before the lights resolve: animation may drive them too
+            self.set_time(time, animation)
         frames = self.render_many([camera], lights, size, options, linear, depth, outputs=outputs,
-                                  times=None if time is None else [time], animation=animation,
                                   **option_overrides)
         return next(iter(frames))
 
@@ -254,8 +255,7 @@ class Renderer:
             memory and of the free host-visible memory, at most 65,536) or a positive integer.
         device : "cpu": NumPy arrays; "cuda": a torch tensor (B, H, W, 4) on the same GPU,
             never through host memory (colour only; the `cuda` extra: gpu/cuda.py).
-        out : a C-contiguous writeable (B, H, W, 4) uint8 (float32 with `linear`) array the
-            colour is written into and returned as (a loop reusing one skips fresh pages).
+        out : a C-contiguous writeable (B, H, W, 4) array the colour is written into.
 
         Returns
         -------

@@ -47,6 +47,7 @@ def scene_state(scene: Scene, draws: list[Any]) -> SceneState:
     rest = np.array([d.model for d in draws], np.float64).reshape(-1, 4, 4)
     state = SceneState(tree, draw_tree, local, boxes, rest, np.array([d.skinned for d in draws], bool))
     state.scene = scene
+    state.deformed = np.array([d.deformed for d in draws], bool)  # (the motion table's)
     return state
 
 
@@ -74,15 +75,57 @@ class GpuSceneState:
         self.size = max(len(state.draw_tree), 1) * RECORD_BYTES
         self.deform_at = (self.size + align - 1) // align * align
         self.deform_size = 4 * max(deform.floats, 1) if deform is not None else 0
-        total = self.deform_at + self.deform_size if deform is not None else self.size
-        self.stride = (total + align - 1) // align * align
+        draws = len(state.draw_tree)
+        self.motion_at = (self.deform_at + self.deform_size + align - 1) // align * align
+        self.motion_size = 4 * (20 + 20 * max(draws, 1))
+        self.stride = (self.motion_at + self.motion_size + align - 1) // align * align
+        # The motion table's constant part: which draws are deformed (their previous
+        # positions are in PrevPositions, from the first posed vertex on).
+        self._deformed = np.zeros((max(draws, 1), 4), np.uint32)
+        if scene is not None and deform is not None:
+            flags = getattr(state, "deformed", None)
+            if flags is not None:
+                self._deformed[:draws, 0] = flags
+        self.first_posed = 0
+        self._prev: tuple[Any, Any, int] | None = None  # previous frame's (VP, models, version)
         self.buffer = Buffer(device, self.stride * count, "storage", host_visible=True,
                              device_local=True, name="scene state")
         self._written = [-1] * count
+        self._materials_written = [0] * count  # the slots hold the file's factors at first
+        self.gpu_scene: Any = None  # whose material blocks set_material overrides
+        for slot in range(count):  # every slot holds the rest pose from the start
+            self.write(slot)
 
     def region(self, slot: int) -> tuple[Buffer, int, int]:
         """(buffer, offset, size) of frame slot `slot`'s copy: what its sets bind."""
         return self.buffer, slot * self.stride, self.size
+
+    def motion_region(self, slot: int) -> tuple[Buffer, int, int]:
+        """(buffer, offset, size) of slot `slot`'s motion table (layouts.STORAGE "Motion")."""
+        return self.buffer, slot * self.stride + self.motion_at, self.motion_size
+
+    def write_motion(self, slot: int, vp: tuple[float, ...], table: bool) -> None:
+        """After each frame's view: remember its VP and draw matrices as the next frame's
+        previous ones; with `table` (a frame with dataset outputs) first write the slot's
+        motion table from the previous frame's (valid 0 on a renderer's first frame: motion
+        0, as for a still scene)."""
+        state = self.state
+        if self._prev is not None and self._prev[2] == state.version and self._prev[0] is vp \
+                and not table:
+            return  # a still frame: the previous frame's are this one's
+        models = state.draw_models()
+        if table:
+            out = self.buffer.array(np.float32, self.motion_size // 4, slot * self.stride + self.motion_at)
+            head = out[:20]
+            head[:] = 0.0
+            rows = out[20:].reshape(-1, 20)
+            if self._prev is not None:
+                head[:16] = self._prev[0]
+                head.view(np.uint32)[16:18] = (1, self.first_posed)
+                prev = self._prev[1]
+                rows[:len(prev), :16] = np.swapaxes(prev, -1, -2).reshape(len(prev), 16)
+            rows.view(np.uint32)[:, 16:] = self._deformed
+        self._prev = (vp, models, state.version)
 
     def deform_region(self, slot: int) -> tuple[Buffer, int, int]:
         """(buffer, offset, size) of slot `slot`'s joint matrices and morph weights."""
@@ -97,10 +140,24 @@ class GpuSceneState:
         records = self.state.draw_matrices()
         if records.size:
             self.buffer.array(np.float32, records.size, slot * self.stride)[:] = records.ravel()
+        if self._materials_written[slot] != self.state.material_version:
+            self._write_materials(slot)
         if self.deform is not None and self.scene is not None:
             values = self._deform_values()
             self.buffer.array(np.float32, values.size, slot * self.stride + self.deform_at)[:] = values
         self._written[slot] = version
+
+    def _write_materials(self, slot: int) -> None:
+        """Slot `slot`'s material blocks: the file's, with the state's overrides."""
+        gs = self.gpu_scene
+        if gs is None:
+            return
+        blocks = [b.copy() for b in gs.material_blocks]
+        for i, fields in self.state.materials.items():
+            for field, value in fields.items():
+                blocks[i][field] = value if len(value) > 1 else value[0]
+        gs.write_materials(slot, blocks)
+        self._materials_written[slot] = self.state.material_version
 
     def _deform_values(self) -> np.ndarray:
         cached = getattr(self, "_values", None)

@@ -92,6 +92,7 @@ class FrameSteps:
         self.objects = objects
         self.gs = recorder.gpu_scene
         self.slot = recorder.slots[frame_index]
+        self.material_sets = self.gs.slot_material_sets[frame_index]  # the slot's copies
         self.streams = recorder.stream_names(spec.tbn)
         self.classes = [classify(d.alpha_mode, d.double_sided, spec.alpha_mask)
                         for d in self.gs.draws]
@@ -136,7 +137,7 @@ class FrameSteps:
             return [Step("shadows", timed=True)]
 
         def record(cmd: Commands) -> None:
-            sm.record(cmd, self.frame_index, spec.plan, gs.draws, self.classes, gs.material_sets,
+            sm.record(cmd, self.frame_index, spec.plan, gs.draws, self.classes, self.material_sets,
                       gs.streams, gs.index_buffer, gs.has_colors, spec.redraw, self.set0)
 
         return [Step("shadows", record)]
@@ -189,7 +190,7 @@ class FrameSteps:
         return PassContext(
             draws=self.gs.draws, classes=self.classes if classes is None else classes,
             pipeline=lambda p: self.r.pipeline(target, tbn, p, prepass, visibility, copy=copy),
-            frame_sets=(self.set0, self.slot.set2), material_sets=self.gs.material_sets,
+            frame_sets=(self.set0, self.slot.set2), material_sets=self.material_sets,
             vertex_buffers=[self.gs.streams[n] for n in self.streams],
             index_buffer=self.gs.index_buffer, blend_order=self.objects.blend_order,
             prepass=prepass, shadow_set=self.shadow_set)
@@ -226,14 +227,14 @@ class FrameSteps:
         self._color_written = True  # the resolve writes the clear colour where nothing covers
         self._close_rendering()
         return cs.raster_steps(self.target, self.frame_index, spec.alpha_mask,
-                               self.gs.material_sets, spec.tiles, self.set0, depth)
+                               self.material_sets, spec.tiles, self.set0, depth)
 
     def _classify(self) -> list[Step]:
         counted = "raster" in PATHS[self.spec.path]
         cs = self._compute()
         self._close_rendering()
         return [cs.classify_step(self.target, self.frame_index, self._frame_sets(),
-                                 self.gs.material_sets, self.target.clear_color, counted)]
+                                 self.material_sets, self.target.clear_color, counted)]
 
     def _shaded(self) -> list[int]:
         return shaded_materials(self.gs.draws, self.classes)
@@ -244,7 +245,7 @@ class FrameSteps:
         cs, spec = self._compute(), self.spec
         self._color_written = True
         return [cs.shading_step(self.target, self.frame_index, spec.tbn, self._frame_sets(),
-                                self.gs.material_sets, self._shaded(), spec.tiles,
+                                self.material_sets, self._shaded(), spec.tiles,
                                 variant=spec.variant)]
 
     def _outputs(self) -> list[Step]:
@@ -253,7 +254,7 @@ class FrameSteps:
         cs = self._compute()
         names = tuple(self.target.outputs)
         return [cs.outputs_step(self.target, self.frame_index, self.spec.tbn, self._frame_sets(),
-                                self.gs.material_sets, self._shaded(), names)]
+                                self.material_sets, self._shaded(), names)]
 
     def _outputs_clear(self) -> list[Step]:
         if COPY_OUTPUTS not in self.spec.copy:
@@ -336,9 +337,9 @@ class _CopySteps:
                 for n in _VISIBILITY_ROWS]
         sets = f.r.compute_sets(f.frame_index)
         materials = shaded_materials(f.gs.draws, self.classes)
-        out += [cs.classify_step(t, f.frame_index, sets, f.gs.material_sets, t.clear_color,
+        out += [cs.classify_step(t, f.frame_index, sets, f.material_sets, t.clear_color,
                                  copy=True, prefix="copy."),
-                cs.shading_step(t, f.frame_index, f.spec.tbn, sets, f.gs.material_sets,
+                cs.shading_step(t, f.frame_index, f.spec.tbn, sets, f.material_sets,
                                 materials, copy=True, variant=f.spec.variant, prefix="copy.")]
         ctx = f._context(False, False, t, self.classes, copy=True)
         out.append(Step("background", _pass_recorder(ctx, _PASS_BY_NAME["background"]),

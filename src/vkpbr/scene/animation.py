@@ -56,6 +56,12 @@ class Pose:
         """(..., K, 4, 4) world matrices of this pose (one batched product per tree level)."""
         return tree.world(self.local)
 
+    def at(self, index: int | tuple[int, ...]) -> Pose:
+        """The pose of one of the times (index into the leading axes)."""
+        return Pose(self.translation[index], self.rotation[index], self.scale[index],
+                    self.local[index], {k: v[index] for k, v in self.weights.items()},
+                    {k: v[index] for k, v in self.pointers.items()})
+
 
 def animation_indices(scene: Scene, animation: int | str | Sequence[int | str] | None) -> list[int]:
     """Indices into scene.animations: None = all, an index, a name, or a list of them.
@@ -99,10 +105,11 @@ def sample(scene: Scene, time: float | np.ndarray,
     weights = _rest_weights(scene, tree, b)
     pointers: dict[str, np.ndarray] = {}
     chosen = [scene.animations[i] for i in animation_indices(scene, animation)]
+    spans: dict[int, tuple] = {}
     for anim in chosen:  # mesh weights first: a node's own weights override them
         for ch in anim.channels:
             if ch.kind == "mesh":
-                value = _value(anim, ch.sampler, flat, False)
+                value = _value(anim, ch.sampler, flat, False, spans)
                 pointers[str(ch.pointer)] = value
                 for row in ch.targets:
                     if row not in tree.weights and row in weights:
@@ -111,7 +118,7 @@ def sample(scene: Scene, time: float | np.ndarray,
         for ch in anim.channels:
             if ch.kind == "mesh":
                 continue
-            value = _value(anim, ch.sampler, flat, ch.path == "rotation")
+            value = _value(anim, ch.sampler, flat, ch.path == "rotation", spans)
             if ch.pointer is not None:
                 pointers[ch.pointer] = value
             if ch.node is None:
@@ -141,44 +148,62 @@ def _rest_weights(scene: Scene, tree: NodeTree, b: int) -> dict[int, np.ndarray]
     return out
 
 
-def _value(anim: Animation, sampler: int, times: np.ndarray, rotation: bool) -> np.ndarray:
-    return sample_sampler(anim.samplers[sampler], times, rotation)
+def _value(anim: Animation, sampler: int, times: np.ndarray, rotation: bool,
+           spans: dict[int, tuple]) -> np.ndarray:
+    return sample_sampler(anim.samplers[sampler], times, rotation, spans)
 
 
-def sample_sampler(s: AnimationSampler, times: np.ndarray, rotation: bool = False) -> np.ndarray:
+def _span(inp: np.ndarray, times: np.ndarray, spans: dict[int, tuple] | None) -> tuple:
+    """(i, dt, s) of `times` in keyframe times `inp`: the interval t_i <= t < t_i+1, its
+    length and the clamped fraction s in [0, 1], shared by the samplers with the same input
+    array in one sample() call (exporters write one time accessor for many channels:
+    CesiumMan's 57 channels use 19)."""
+    key = id(inp)
+    if spans is not None and key in spans:
+        return spans[key][1]
+    i = np.clip(np.searchsorted(inp, times, side="right") - 1, 0, len(inp) - 2)
+    dt = inp[i + 1] - inp[i]
+    s = np.clip((times - inp[i]) / dt, 0.0, 1.0)[:, None]  # clamps times outside the range
+    if spans is not None:
+        spans[key] = (inp, (i, dt[:, None], s))  # inp kept alive: its id stays its own
+    return i, dt[:, None], s
+
+
+def sample_sampler(s: AnimationSampler, times: np.ndarray, rotation: bool = False,
+                   spans: dict[int, tuple] | None = None) -> np.ndarray:
     """(B, C) values of sampler `s` at (B,) `times`; `rotation`: quaternions, interpolated
-    by slerp (LINEAR) and normalised."""
+    by slerp (LINEAR) and normalised. `spans`: a cache of keyframe intervals by input array,
+    for many samplers at the same times."""
     inp, out = s.input, s.output
     cubic = s.interpolation == "CUBICSPLINE"
     values = out[:, 1] if cubic else out  # (k, C) keyframe values
     if len(inp) == 1:
         v = np.broadcast_to(values[0], (len(times), values.shape[-1])).copy()
-        return _normalised(v) if rotation else v
-    if s.interpolation == "STEP":
-        i = np.clip(np.searchsorted(inp, times, side="right") - 1, 0, len(inp) - 1)
-        v = values[i]
-        return _normalised(v) if rotation else v
-    i = np.clip(np.searchsorted(inp, times, side="right") - 1, 0, len(inp) - 2)
-    dt = inp[i + 1] - inp[i]
-    u = np.clip((times - inp[i]) / dt, 0.0, 1.0)[:, None]  # clamps times outside the range
-    if cubic:
-        u2, u3 = u * u, u * u * u
-        v = ((2 * u3 - 3 * u2 + 1) * values[i] + (u3 - 2 * u2 + u) * dt[:, None] * out[i, 2]
-             + (-2 * u3 + 3 * u2) * values[i + 1] + (u3 - u2) * dt[:, None] * out[i + 1, 0])
-    elif rotation:
-        v = _slerp(values[i], values[i + 1], u)
+    elif s.interpolation == "STEP":
+        v = values[np.clip(np.searchsorted(inp, times, side="right") - 1, 0, len(inp) - 1)]
     else:
-        v = values[i] + u * (values[i + 1] - values[i])
+        i, dt, u = _span(inp, times, spans)
+        if cubic:
+            u2, u3 = u * u, u * u * u
+            v = ((2 * u3 - 3 * u2 + 1) * values[i] + (u3 - 2 * u2 + u) * dt * out[i, 2]
+                 + (-2 * u3 + 3 * u2) * values[i + 1] + (u3 - u2) * dt * out[i + 1, 0])
+        elif rotation:
+            v = _slerp(values[i], values[i + 1], u)
+        else:
+            v = values[i] + u * (values[i + 1] - values[i])
     return _normalised(v) if rotation else v
 
 
 def _slerp(a: np.ndarray, b: np.ndarray, u: np.ndarray) -> np.ndarray:
     """Spherical linear interpolation of (B, 4) quaternions (glTF Appendix C): the shorter
-    arc (b negated when a . b < 0), linear interpolation where the angle is tiny."""
-    d = np.sum(a * b, axis=-1, keepdims=True)
+    arc (b negated when a . b < 0), linear interpolation where the angle is tiny. The
+    keyframes are normalised first (as the Sample Viewer does): files store them to float32
+    or 8/16-bit precision, and AnimatedTriangle's (0, 0, 0.707, 0.707) is 1.5e-4 short."""
+    a, b = _normalised(a), _normalised(b)
+    d = np.einsum("bi,bi->b", a, b)[:, None]
     b = np.where(d < 0, -b, b)
     d = np.abs(d)
-    angle = np.arccos(np.clip(d, -1.0, 1.0))
+    angle = np.arccos(np.minimum(d, 1.0))
     sin_angle = np.sin(angle)
     small = sin_angle < 1e-6
     safe = np.where(small, 1.0, sin_angle)
@@ -188,18 +213,31 @@ def _slerp(a: np.ndarray, b: np.ndarray, u: np.ndarray) -> np.ndarray:
 
 
 def _normalised(q: np.ndarray) -> np.ndarray:
-    n = np.linalg.norm(q, axis=-1, keepdims=True)
-    return np.where(n > 1e-12, q / np.maximum(n, 1e-300), np.float64([0, 0, 0, 1]))
+    """Unit quaternions; a zero one becomes the identity."""
+    n = np.sqrt(np.einsum("...i,...i->...", q, q))[..., None]
+    zero = n < 1e-12
+    if zero.any():
+        return np.where(zero, np.float64([0, 0, 0, 1]), q / np.where(zero, 1.0, n))
+    return q / n
 
 
 def quaternion_matrices(q: np.ndarray) -> np.ndarray:
     """(..., 3, 3) rotation matrices of (..., 4) quaternions x, y, z, w (normalised first)."""
-    x, y, z, w = np.moveaxis(_normalised(np.asarray(q, np.float64)), -1, 0)
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
-    ], axis=-2)
+    q = _normalised(np.asarray(q, np.float64))
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    out = np.empty((*q.shape[:-1], 3, 3))
+    xx, yy, zz = x * x, y * y, z * z
+    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
+    out[..., 0, 0] = 1 - 2 * (yy + zz)
+    out[..., 0, 1] = 2 * (xy - wz)
+    out[..., 0, 2] = 2 * (xz + wy)
+    out[..., 1, 0] = 2 * (xy + wz)
+    out[..., 1, 1] = 1 - 2 * (xx + zz)
+    out[..., 1, 2] = 2 * (yz - wx)
+    out[..., 2, 0] = 2 * (xz - wy)
+    out[..., 2, 1] = 2 * (yz + wx)
+    out[..., 2, 2] = 1 - 2 * (xx + yy)
+    return out
 
 
 def trs_matrices(t: np.ndarray, r: np.ndarray, s: np.ndarray) -> np.ndarray:
@@ -207,7 +245,8 @@ def trs_matrices(t: np.ndarray, r: np.ndarray, s: np.ndarray) -> np.ndarray:
     scales (the glTF node transform)."""
     t = np.asarray(t, np.float64)
     out = np.zeros((*t.shape[:-1], 4, 4))
-    out[..., :3, :3] = quaternion_matrices(r) * np.asarray(s, np.float64)[..., None, :]
+    out[..., :3, :3] = quaternion_matrices(r)
+    out[..., :3, :3] *= np.asarray(s, np.float64)[..., None, :]
     out[..., :3, 3] = t
     out[..., 3, 3] = 1.0
     return out

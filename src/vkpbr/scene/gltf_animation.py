@@ -38,6 +38,11 @@ POINTER_TARGETS: tuple[tuple[re.Pattern[str], str, str, int], ...] = tuple(
         (r"/cameras/(\d+)/perspective/yfov", "camera", "yfov", 1),
         (r"/meshes/(\d+)/weights", "mesh", "weights", 0),
     ))
+# glTF's defaults of the animatable properties a file may leave out (range: infinite, as 0).
+_POINTER_DEFAULTS = {"base_color_factor": 1.0, "metallic_factor": 1.0, "roughness_factor": 1.0,
+                     "emissive_factor": 0.0, "emissive_strength": 1.0, "color": 1.0,
+                     "intensity": 1.0, "range": 0.0, "inner_cone": 0.0,
+                     "outer_cone": float(np.pi / 4), "weights": 0.0}
 _NODE_POINTER = re.compile(r"/nodes/(\d+)/(translation|rotation|scale|weights)")
 
 
@@ -127,10 +132,14 @@ def build_animations(ld: GltfDocument, scene: Scene, links: NodeLinks) -> None:
     """scene.animations, every animation of the file in order (even one whose channels all
     target nodes outside the displayed scene: its names and indices stay the file's)."""
     unsupported: list[str] = []
-    for a, anim in enumerate(ld.doc.get("animations") or []):
+    animations = ld.doc.get("animations") or []
+    if not isinstance(animations, list):
+        raise SceneError(ld.path, "animations must be a list")
+    shared = (_row_of(ld, scene), _target_counts(ld, links))
+    for a, anim in enumerate(animations):
         if not isinstance(anim, dict):
             raise SceneError(ld.path, f"animation {a} is not an object")
-        scene.animations.append(_Reader(ld, scene, links, a, anim, unsupported).animation())
+        scene.animations.append(_Reader(ld, scene, links, shared, a, anim, unsupported).animation())
     if unsupported:
         shown = ", ".join(sorted(set(unsupported))[:4])
         more = len(set(unsupported)) - 4
@@ -141,14 +150,14 @@ def build_animations(ld: GltfDocument, scene: Scene, links: NodeLinks) -> None:
 class _Reader:
     """One animation's channels and the samplers they use (renumbered in file order)."""
 
-    def __init__(self, ld: GltfDocument, scene: Scene, links: NodeLinks, a: int, anim: dict,
+    def __init__(self, ld: GltfDocument, scene: Scene, links: NodeLinks,
+                 shared: tuple[dict[int, int], dict[int, int]], a: int, anim: dict,
                  unsupported: list[str]) -> None:
         self.ld, self.scene, self.links, self.anim = ld, scene, links, anim
         self.name = str(anim.get("name") or f"animation {a}")
         self.what = f"animation {self.name!r}"
         self.unsupported = unsupported
-        self.row_of = _row_of(ld, scene)
-        self.counts = _target_counts(ld, links)
+        self.row_of, self.counts = shared  # glTF node -> tree row; mesh -> target count
         self.samplers = anim.get("samplers") or []
         if not isinstance(self.samplers, list):
             raise SceneError(ld.path, f"{self.what}: samplers must be a list")
@@ -216,9 +225,31 @@ class _Reader:
                         return None  # a mesh not shown (or without targets): nothing moves
                 sampler = self.sampler(k, ch, n)
                 return AnimationChannel(sampler, "pointer", pointer=pointer, kind=kind,
-                                        index=index, member=member, targets=targets)
+                                        index=index, member=member, targets=targets,
+                                        rest=self.rest_value(pointer, member, n))
         self.unsupported.append(pointer)
         return None
+
+    def rest_value(self, pointer: str, member: str, n: int) -> np.ndarray:
+        """(n,) the file's value at `pointer` (a JSON pointer into the document), else the
+        property's glTF default: what the property holds when no animation plays."""
+        value: object = self.ld.doc
+        for part in pointer.split("/")[1:]:
+            part = part.replace("~1", "/").replace("~0", "~")
+            if isinstance(value, list) and part.isdigit() and int(part) < len(value):
+                value = value[int(part)]
+            elif isinstance(value, dict) and part in value:
+                value = value[part]
+            else:
+                value = _POINTER_DEFAULTS.get(member, 0.0)
+                break
+        try:
+            out = np.broadcast_to(np.asarray(value, np.float64).reshape(-1), (n,)).copy()
+        except (TypeError, ValueError):
+            raise self.fail(f"{pointer}: the file's value {value!r} is not {n} numbers") from None
+        if not np.isfinite(out).all():
+            raise self.fail(f"{pointer}: the file's value is not finite")
+        return out
 
     def pointer_targets(self, k: int, kind: str, index: int) -> tuple[int, ...]:
         """The scene objects made from file object `index` of `kind`; SceneError when the

@@ -19,14 +19,11 @@ from vkpbr.scene.geometry import (
 )
 from vkpbr.scene.gltf_codecs import decode_draco, missing_codec
 from vkpbr.scene.gltf_document import GltfDocument, check_index, ext, floats, get, to_float
+from vkpbr.scene.limits import MAX_MORPH_TARGETS
 from vkpbr.scene.types import Mesh
 
 __all__ = ["MAX_MORPH_TARGETS", "primitive"]
 
-# Morph targets a primitive may have: the GPU's budget (the deformation step reads every
-# target's displacements each frame); a file with more is refused in one line. Real assets
-# use a few dozen at most (facial rigs: 50-60).
-MAX_MORPH_TARGETS = 64
 _MORPHED = ("POSITION", "NORMAL", "TANGENT")  # the morphable attributes vkpbr applies
 
 _MODES = {0: "POINTS", 1: "LINES", 2: "LINE_LOOP", 3: "LINE_STRIP"}
@@ -250,8 +247,7 @@ def _morph_weights(ld: GltfDocument, mesh_index: int, prim: object) -> np.ndarra
     targets = get(prim, "targets")
     if not targets:
         return None
-    mesh = ld.gltf.meshes[mesh_index]
-    given = get(mesh, "weights")
+    given = get(ld.doc["meshes"][mesh_index], "weights")  # pygltflib's default is []
     if given is None:
         return np.zeros(len(targets))
     if not isinstance(given, list) or len(given) != len(targets):

@@ -178,7 +178,7 @@ def build_nodes_cameras_lights(ld: GltfDocument, scene: Scene) -> NodeLinks:
 
 def _morph_and_skin(ld: GltfDocument, i: int, node: object, row: int, tree: _TreeRows) -> None:
     """A node's own morph weights (glTF node `weights`) and skin index, on its tree row."""
-    weights = get(node, "weights")
+    weights = get(ld.doc["nodes"][i], "weights")  # pygltflib's Node drops `weights`
     if weights is not None:
         if not isinstance(weights, list):
             raise SceneError(ld.path, f"node {i}: weights must be a list of numbers")

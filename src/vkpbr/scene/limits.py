@@ -21,7 +21,12 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 
-__all__ = ["Limits", "limits"]
+__all__ = ["MAX_MORPH_TARGETS", "Limits", "limits"]
+
+# Morph targets one mesh may have: the GPU's budget (the deformation step reads every target's
+# displacements each frame), fixed rather than configurable. Real assets use a few dozen at
+# most (facial rigs: 50-60); a file with more is refused in one line (docs/animation.md).
+MAX_MORPH_TARGETS = 64
 
 
 @dataclass(frozen=True)

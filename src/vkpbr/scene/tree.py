@@ -40,7 +40,7 @@ class NodeTree:
     uses_matrix : (K,) bool, the node gives `matrix` rather than TRS.
     source : (K,) int64, the node's index in the file (glTF `nodes`; animations target it).
     weights : {tree node: (T,) float64} morph weights the node gives (glTF `weights`).
-    skin : {tree node: skin index} nodes whose mesh is skinned (glTF `skin`).
+    skin : {tree node: index into Scene.skins} nodes whose mesh is skinned (glTF `skin`).
     """
 
     names: list[str]

@@ -328,6 +328,9 @@ class AnimationChannel:
     targets : the Scene objects a pointer changes: indices into scene.materials,
         scene.lights or scene.cameras (every one made from that file object), or for
         "/meshes/M/weights" the tree nodes showing mesh M; () for node paths.
+    rest : (C,) float64, a pointer's property as the file gives it (else glTF's default):
+        its value with no animation playing (for emissive_strength, the strength that
+        Material.emissive_factor already includes); None for node paths.
     """
 
     sampler: int
@@ -338,6 +341,7 @@ class AnimationChannel:
     index: int | None = None
     member: str | None = None
     targets: tuple[int, ...] = ()
+    rest: np.ndarray | None = None
 
 
 @dataclass

@@ -20,7 +20,7 @@ import numpy as np
 
 from vkpbr.errors import SceneError, UsageError
 from vkpbr.scene.camera import MAX_COORDINATE, Camera, validate_camera
-from vkpbr.scene.limits import limits
+from vkpbr.scene.limits import MAX_MORPH_TARGETS, limits
 from vkpbr.scene.material_table import PARAMS
 from vkpbr.scene.types import (
     TEXTURE_SLOTS,
@@ -114,6 +114,40 @@ def _check_mesh(m: Mesh, where: str, n_materials: int) -> None:
     if m.packed_frames is not None:
         _array(m.packed_frames, f"{where}.packed_frames", np.uint32, (n,))
     _integer(m.material, f"{where}.material", -1, n_materials - 1)
+    _check_deformation(m, where, n)
+
+
+def _check_deformation(m: Mesh, where: str, n: int) -> None:
+    """Skin attributes and morph targets (docs/animation.md): shapes, dtypes, the budget."""
+    if (m.joints is None) != (m.weights is None):
+        _fail(f"{where}.joints", "joints and weights come together")
+    if m.joints is not None:
+        _array(m.joints, f"{where}.joints", np.uint16, (n, 8))
+        _array(m.weights, f"{where}.weights", np.float32, (n, 8), 1e6)
+    if not isinstance(m.morph_targets, dict):
+        _fail(f"{where}.morph_targets", "expected a dict", m.morph_targets)
+    counts = set()
+    for key, d in m.morph_targets.items():
+        _choice(key, ("POSITION", "NORMAL", "TANGENT"), f"{where}.morph_targets key")
+        _array(d, f"{where}.morph_targets[{key!r}]", np.float32, (None, n, 3), MAX_COORDINATE)
+        counts.add(d.shape[0])
+    if m.morph_targets or m.morph_weights is not None:
+        t = counts.pop() if len(counts) == 1 else -1
+        if t < 0 or t > MAX_MORPH_TARGETS:
+            _fail(f"{where}.morph_targets", f"expected 0..{MAX_MORPH_TARGETS} targets, the same "
+                  "number for every attribute")
+        _array(m.morph_weights, f"{where}.morph_weights", np.float64, (t,), 1e9)
+
+
+def _check_skins(scene: Scene) -> None:
+    k = len(scene.tree) if scene.tree is not None else 0
+    for i, skin in enumerate(scene.skins):
+        where = f"skins[{i}]"
+        _array(skin.joints, f"{where}.joints", np.int64, (None,))
+        j = len(skin.joints)
+        if j and (skin.joints.min() < 0 or skin.joints.max() >= k):
+            _fail(f"{where}.joints", f"expected tree node indices in [0, {k - 1}]")
+        _array(skin.inverse_bind, f"{where}.inverse_bind", np.float64, (j, 4, 4), 1e12)
 
 
 def _check_texture(t: TextureRef | None, where: str, n_images: int) -> None:
@@ -274,6 +308,7 @@ def validate_scene(scene: Scene, path: str | Path) -> None:
             _check_mesh(mesh, f"meshes[{i}]", len(scene.materials))
         for i, node in enumerate(scene.nodes):
             _check_node(node, f"nodes[{i}]", len(scene.meshes))
+        _check_skins(scene)
         _check_lights(scene.lights, "lights")
         for i, cam in enumerate(scene.cameras):
             _check_camera(cam, f"cameras[{i}]")

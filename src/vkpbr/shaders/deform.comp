@@ -26,6 +26,12 @@ layout(set = 0, binding = 4, std430) readonly buffer MorphDeltas { float morph_d
 layout(set = 0, binding = 5, std430) readonly buffer DeformJobs { uvec4 deform_jobs[]; };
 // The frame slot's: the joint matrices (16 floats each, column-major), then the weights.
 layout(set = 0, binding = 6, std430) readonly buffer DeformState { float deform_state[]; };
+// The posed positions the previous frame drew (the motion output), from first_posed on.
+layout(set = 0, binding = 7, std430) writeonly buffer DeformPrev { float deform_prev[]; };
+
+layout(push_constant, std430) uniform DeformPush {
+    uint first_posed;  // the first posed vertex (GpuScene.posed_offsets[0])
+} pc;
 
 vec3 vec3_of(float a[1], uint i);  // (declared for clarity; the reads below index directly)
 
@@ -72,6 +78,10 @@ void main() {
     float nl = length(n), tl = length(t.xyz);
     n = nl > 0.0 ? n / nl : vec3(0.0, 0.0, 1.0);
     t.xyz = tl > 0.0 ? t.xyz / tl : vec3(1.0, 0.0, 0.0);
+    uint prev = 3u * (dst - pc.first_posed);  // what the region held: the previous frame's
+    deform_prev[prev] = d_positions[3u * dst];
+    deform_prev[prev + 1u] = d_positions[3u * dst + 1u];
+    deform_prev[prev + 2u] = d_positions[3u * dst + 2u];
     d_positions[3u * dst] = p.x;
     d_positions[3u * dst + 1u] = p.y;
     d_positions[3u * dst + 2u] = p.z;

@@ -358,6 +358,12 @@ layout(set = 4, binding = 27, std430) buffer RasterDepths {
 layout(set = 4, binding = 28, std430) buffer RasterMaskedBig {
     uint raster_masked_big[];
 };
+layout(set = 4, binding = 29, std430) readonly buffer Motion {
+    vec4 motion[];
+};
+layout(set = 4, binding = 30, std430) readonly buffer PrevPositions {
+    float prev_positions[];
+};
 #else  // the compute path has its own push constants
 layout(push_constant, std430) uniform Draw {
     uvec4 index;

@@ -27,6 +27,31 @@ layout(push_constant) uniform Shade {
 #define MATERIAL_INDEX pc.material
 #include "surface_fetch.glsl"
 
+#if OUTPUTS
+// The motion output: where this surface point was in the previous frame's image, in pixels
+// from where it is now (x right, y down; 0 on a renderer's first frame). The point keeps its
+// triangle and barycentrics; its previous world position comes from the draw's previous model
+// matrix (the frame slot's Motion table, render/scene_state.py) and, for skinned and morphed
+// draws, the previous frame's posed vertices (PrevPositions, render/deform.py).
+vec2 surface_motion(uint draw, uvec3 vi, vec3 bary, vec2 size) {
+    uvec4 head = floatBitsToUint(motion[4]);
+    if (head.x == 0u) return vec2(0.0);
+    mat4 prev_vp = mat4(motion[0], motion[1], motion[2], motion[3]);
+    uint row = 5u + 5u * draw;
+    mat4 prev_model = mat4(motion[row], motion[row + 1u], motion[row + 2u], motion[row + 3u]);
+    bool deformed = floatBitsToUint(motion[row + 4u]).x != 0u;
+    vec3 p[3];
+    for (int k = 0; k < 3; ++k) {
+        uint at = 3u * (vi[k] - head.y);
+        p[k] = deformed ? vec3(prev_positions[at], prev_positions[at + 1u], prev_positions[at + 2u])
+                        : vec3_at(vi[k], false);
+    }
+    vec4 was = prev_vp * (prev_model * vec4(mat3(p[0], p[1], p[2]) * bary, 1.0));
+    vec4 now = views[view_index].VP * vec4(s_world_pos, 1.0);
+    return (was.xy / was.w - now.xy / now.w) * 0.5 * size;
+}
+#endif
+
 void main() {
     uvec4 bin = bins[pc.material];
     if (gl_GlobalInvocationID.x >= bin.x) return;
@@ -61,8 +86,13 @@ void main() {
     imageStore(out_normal, at, vec4(frame_n, 0.0));
     imageStore(out_normal_geometric, at, vec4(frame_ng, 0.0));
     vec3 to_point = s_world_pos - eye;
+#if BATCH
+    vec2 moved = vec2(0.0);  // a batch's views have no previous frame
+#else
+    vec2 moved = surface_motion(vis.x - 1u, vi, bary, vec2(size));
+#endif
     imageStore(out_depth_range, at, vec4(dot(to_point, views[view_index].forward_far.xyz),
-                                         length(to_point), 0.0, 0.0));
+                                         length(to_point), moved));
 #else
     vec4 value = shade_surface();
     // The storage view is UNORM: encode sRGB here, as the attachment would (shade_surface

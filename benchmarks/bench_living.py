@@ -1,0 +1,204 @@
+"""What a living scene costs (issue 31's speed table): Python per pose call, the frame with
+moving nodes against the still frame, skinning on the GPU. Prints one Markdown table.
+
+    python3 benchmarks/bench_living.py --assets DIR [--frames 300] [--json out.json]
+
+Rows:
+  set_poses 10k         Python ms per Renderer.set_poses call of 10,000 nodes ((N,7) and
+                        (N,4,4)), and the frame's share: the slot copy of 10,000 draw records
+                        (SceneState.draw_matrices + the write), median.
+  sponza still/moving   Sponza 1920x1080 (and 640x480), the compute path as `vkpbr bench`
+                        draws it, the sun's shadow maps, frames/s through render_many (three
+                        in flight, no readback): still, and 100 of its nodes moved every frame
+                        (every moved node a caster: the maps redraw each frame).
+  crowd N               N CesiumMan instances on a grid, each at its own animation time
+                        (one vectorised sample a frame), 1920x1080 compute path: GPU ms per
+                        frame, the deform step's ms and ms per million skinned vertices,
+                        Python ms per frame to pose them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+from vkpbr.render.renderer import Renderer
+from vkpbr.scene.animation import sample
+from vkpbr.scene.loader import load_scene
+from vkpbr.scene.synthetic import sphere_field
+from vkpbr.scene.tree import NodeTree
+from vkpbr.scene.types import Camera, Skin
+
+
+def _median(xs: list[float]) -> float:
+    return statistics.median(xs) if xs else float("nan")
+
+
+def set_poses_rows(reps: int = 50) -> list[dict]:
+    scene = sphere_field(10_000, rings=4, segments=8)
+    rows = []
+    with Renderer(scene) as r:
+        n = len(r.state)
+        idx = np.arange(n)
+        rng = np.random.default_rng(0)
+        pos7 = np.zeros((n, 7))
+        pos7[:, :3], pos7[:, 6] = rng.random((n, 3)), 1.0
+        mats = np.tile(np.eye(4), (n, 1, 1))
+        mats[:, :3, 3] = rng.random((n, 3))
+        for label, poses in (("(N,7)", pos7), ("(N,4,4)", mats)):
+            ts, up = [], []
+            for _ in range(reps):
+                t0 = time.perf_counter()
+                r.set_poses(idx, poses)
+                t1 = time.perf_counter()
+                r.parts.gpu_state.write(0)
+                up.append(time.perf_counter() - t1)
+                ts.append(t1 - t0)
+            rows.append({"row": f"set_poses 10k {label}", "python_ms": 1e3 * _median(ts),
+                         "frame_copy_ms": 1e3 * _median(up), "nodes": n})
+    return rows
+
+
+def moving_views(r: Renderer, cams: list, moving: np.ndarray, rest: np.ndarray):  # noqa: ANN201
+    """`cams`, each after moving the `moving` nodes (a small bob each frame)."""
+    for step, cam in enumerate(cams):
+        m = rest.copy()
+        m[:, 1, 3] += 0.01 * np.sin(step * 0.1 + np.arange(len(m)))
+        r.set_poses(moving, m)
+        yield cam
+
+
+def crowd_views(r: Renderer, man, cam: Camera, offsets: np.ndarray, k: int, count: int,  # noqa: ANN001, ANN201
+                frames: int, py: list):
+    """`cam` each frame, after posing every copy at its own time (one vectorised sample)."""
+    for f in range(frames):
+        t0 = time.perf_counter()
+        pose = sample(man, offsets + f / 30.0)  # (count, k, 4, 4): one call
+        roots = r.state.local[::k].copy()
+        r.state.local[:] = pose.local.reshape(-1, 4, 4)
+        r.state.local[::k] = roots  # each copy keeps its place on the grid
+        r.state._changed(np.arange(0, count * k, k))
+        py.append(time.perf_counter() - t0)
+        yield cam
+
+
+def walk_rows(assets: Path, frames: int) -> list[dict]:
+    scene = load_scene(assets / "Sponza" / "glTF" / "Sponza.gltf")
+    # The file has one node holding all 103 primitives: a node each, so that 100 can move.
+    scene.tree = None
+    for node in scene.nodes:
+        node.tree = -1
+    rows = []
+    with Renderer(scene) as r:
+        moving = np.arange(min(100, len(r.state)))
+        rest = r.state.local[moving].copy()
+        for size in ((1920, 1080), (640, 480)):
+            for label in ("still", "100 moving"):
+                cams = [r.default_camera()] * (frames + 30)
+                views = moving_views(r, cams, moving, rest) if label != "still" else iter(cams)
+                t0, gpu, py = 0.0, [], []
+                for i, _ in enumerate(r.render_many(views, size=size, readback=False,
+                                                    pipeline="compute", raster="compute")):
+                    if i == 30:
+                        t0 = time.perf_counter()
+                    if i >= 30:
+                        gpu.append(r.last_stats.gpu_ms)
+                        py.append(r.last_stats.cpu_ms)
+                fps = frames / (time.perf_counter() - t0)
+                rows.append({"row": f"sponza {size[0]}x{size[1]} {label}", "fps": fps,
+                             "gpu_ms": _median(gpu), "python_ms": _median(py),
+                             "shadows_ms": r.last_stats.pass_ms.get("shadows", 0.0)})
+                r.reset_pose()
+    return rows
+
+
+def crowd(man, count: int) -> tuple:  # noqa: ANN001
+    """`count` copies of CesiumMan's tree, skin and mesh nodes on a grid: (scene, the copies'
+    root indices, nodes per copy)."""
+    tree = man.node_tree()
+    k = len(tree)
+    side = int(np.ceil(np.sqrt(count)))
+    parents = np.concatenate([np.where(tree.parents < 0, -1, tree.parents + c * k) for c in range(count)])
+    local = np.tile(tree.local, (count, 1, 1))
+    roots = np.flatnonzero(parents < 0)
+    grid = np.stack([np.arange(count) % side, np.zeros(count), np.arange(count) // side], -1) * 1.5
+    local[roots, :3, 3] += grid[np.arange(len(roots)) // max(len(roots) // count, 1)]
+    rep = lambda a: np.tile(a, (count, 1))  # noqa: E731
+    big = NodeTree([f"{n}#{c}" for c in range(count) for n in tree.names], parents, local,
+                   rep(tree.translation), rep(tree.rotation), rep(tree.scale),
+                   np.tile(tree.uses_matrix, count), np.arange(count * k))
+    big.skin = {node + c * k: s + c * len(man.skins) for c in range(count) for node, s in tree.skin.items()}
+    scene = copy.copy(man)
+    scene.tree = big
+    scene.skins = [Skin(s.name, s.joints + c * k, s.inverse_bind, None)
+                   for c in range(count) for s in man.skins]
+    scene.nodes = []
+    for c in range(count):
+        for node in man.nodes:
+            n = copy.copy(node)
+            n.tree = node.tree + c * k
+            scene.nodes.append(n)
+    scene.animations = []
+    return scene, k
+
+
+def crowd_rows(assets: Path, counts: tuple[int, ...], frames: int) -> list[dict]:
+    man = load_scene(assets / "CesiumMan" / "glTF" / "CesiumMan.gltf")
+    verts = sum(man.meshes[n.mesh].vertex_count for n in man.nodes)
+    rows = []
+    for count in counts:
+        scene, k = crowd(man, count)
+        side = int(np.ceil(np.sqrt(count))) * 1.5
+        cam = Camera(eye=(side / 2, side * 0.6, side * 1.3), target=(side / 2, 0.5, side / 2),
+                     yfov_deg=50.0)
+        offsets = np.random.default_rng(1).random(count) * 2.0
+        with Renderer(scene) as r:
+            py, gpu, deform = [], [], []
+            views = crowd_views(r, man, cam, offsets, k, count, frames + 20, py)
+            for i, _ in enumerate(r.render_many(views, size=(1920, 1080), readback=False,
+                                                pipeline="compute", raster="compute")):
+                if i >= 20:
+                    gpu.append(r.last_stats.gpu_ms)
+                    deform.append(r.last_stats.pass_ms.get("deform", float("nan")))
+        mverts = count * verts / 1e6
+        rows.append({"row": f"crowd {count} CesiumMan 1920x1080", "gpu_ms": _median(gpu),
+                     "deform_ms": _median(deform), "deform_ms_per_mvert": _median(deform) / mverts,
+                     "python_ms": 1e3 * _median(py[20:]), "skinned_vertices": count * verts})
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--assets", type=Path, required=True)
+    ap.add_argument("--frames", type=int, default=300)
+    ap.add_argument("--crowds", default="100,1000")
+    ap.add_argument("--only", default="poses,walk,crowd")
+    ap.add_argument("--json")
+    args = ap.parse_args()
+    rows: list[dict] = []
+    if "poses" in args.only:
+        rows += set_poses_rows()
+    if "walk" in args.only:
+        rows += walk_rows(args.assets, args.frames)
+    if "crowd" in args.only:
+        rows += crowd_rows(args.assets, tuple(int(c) for c in args.crowds.split(",")),
+                           max(args.frames // 3, 30))
+    keys = ("python_ms", "frame_copy_ms", "fps", "gpu_ms", "shadows_ms", "deform_ms",
+            "deform_ms_per_mvert")
+    print("| row | " + " | ".join(keys) + " |\n|---|" + "---:|" * len(keys))
+    for row in rows:
+        cells = [f"{row[k]:.3f}" if isinstance(row.get(k), float) else "" for k in keys]
+        print(f"| {row['row']} | " + " | ".join(cells) + " |")
+    if args.json:
+        Path(args.json).write_text(json.dumps(rows, indent=1))
+
+
+if __name__ == "__main__":
+    main()
