@@ -25,6 +25,7 @@ SCENES = {
     "Sponza.gltf": "Sponza/glTF/Sponza.gltf",
     "DamagedHelmet.gltf": "DamagedHelmet/glTF/DamagedHelmet.gltf",
     "CesiumMilkTruck.gltf": "CesiumMilkTruck/glTF/CesiumMilkTruck.gltf",
+    "CesiumMan.gltf": "CesiumMan/glTF/CesiumMan.gltf",
     "scene.gltf": "TextureCoordinateTest/glTF/TextureCoordinateTest.gltf",
 }
 # What a block needs besides vkpbr: (a module, the extra or install that brings it).
