@@ -111,8 +111,10 @@ class Targets:
         VkSurfaceKHR into the pointer `out` and returns a VkResult (GLFW's
         `glfw.create_window_surface(instance, window, None, out)`)."""
         surface = Surface(self.device, create_surface)
+        # Alpha 0 where nothing is drawn, as offscreen frames: the window composites opaque
+        # (VK_COMPOSITE_ALPHA_OPAQUE), and its screenshots equal `render`'s pixels.
         return Swapchain(self.device, surface, size, vsync=vsync,
-                         clear_color=(*self.background, 1.0))
+                         clear_color=(*self.background, 0.0))
 
     def overlay(self, atlas: np.ndarray, target: FrameTarget) -> TextOverlay:
         """A textured-quad overlay (the viewer's HUD) drawn over frames of `target`'s formats."""
