@@ -29,6 +29,7 @@ import dataclasses
 import json
 import logging
 import math
+import os
 import statistics
 import subprocess
 import sys
@@ -47,9 +48,31 @@ log = logging.getLogger(__name__)
 
 REPO = Path(__file__).resolve().parents[3]
 SPONZA_CANDIDATES = (
+    REPO / ".assets" / "models" / "Sponza" / "glTF" / "Sponza.gltf",
     REPO / ".assets" / "Sponza" / "Sponza.gltf",
     REPO.parent / "shared" / "assets" / "Sponza" / "glTF" / "Sponza.gltf",
 )
+
+
+def sponza_path(args: argparse.Namespace) -> Path:
+    """--sponza, else Sponza under $VKPBR_ASSETS (the sample models' folder the tests use:
+    Sponza/glTF/Sponza.gltf), else the checkout's usual places. UsageError naming where it
+    looked when none exists."""
+    if getattr(args, "sponza", None):
+        return Path(args.sponza)
+    env = os.environ.get("VKPBR_ASSETS")
+    if env:  # set: it wins, as for the tests, so that a wrong value is reported
+        root = Path(env).expanduser()
+        found = next((p for p in (root / "Sponza" / "glTF" / "Sponza.gltf",
+                                  root / "Sponza" / "Sponza.gltf") if p.exists()), None)
+        if found is None:
+            raise UsageError(f"Sponza not found under $VKPBR_ASSETS={env} (Sponza/glTF/"
+                             "Sponza.gltf): pass --sponza PATH/Sponza.gltf")
+        return found
+    path = next((p for p in SPONZA_CANDIDATES if p.exists()), None)
+    if path is None:
+        raise UsageError("Sponza not found: set $VKPBR_ASSETS or pass --sponza PATH/Sponza.gltf")
+    return path
 # The peers' scenario (shared/notes/peers.md): same camera, light and field of view.
 SPONZA_CAMERA = dict(eye=(9.0, 1.8, -0.4), target=(-9.0, 3.5, -0.4), yfov_deg=45.0)
 
@@ -58,10 +81,7 @@ def _sponza(args: argparse.Namespace):  # noqa: ANN202
     from vkpbr.scene.loader import load_scene
     from vkpbr.scene.types import Light
 
-    path = args.sponza or next((p for p in SPONZA_CANDIDATES if p.exists()), None)
-    if path is None:
-        raise UsageError("Sponza not found: pass --sponza PATH/Sponza.gltf")
-    scene = load_scene(path, strict=args.strict, allow_outside_paths=args.allow_outside_paths,
+    scene = load_scene(sponza_path(args), strict=args.strict, allow_outside_paths=args.allow_outside_paths,
                        variant=getattr(args, "variant", None))
     scene.cameras = [dataclasses.replace(scene.cameras[0], **SPONZA_CAMERA)]
     scene.lights = [Light(position=(0.0, 4.0, 0.0))]
