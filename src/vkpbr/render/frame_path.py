@@ -26,6 +26,7 @@ import numpy as np
 from vkpbr.gpu.frames import Frame, FrameRing
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, COPY_OUTPUTS, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
+from vkpbr.render.ao import AoSpec, prepare_ao
 from vkpbr.render.camera import as_camera, linear_depth, validate_camera
 from vkpbr.render.frames import FrameSlot, FrameStats, write_frame_blocks, write_frame_view
 from vkpbr.render.options import RenderOptions
@@ -95,15 +96,16 @@ class FramePath:
         wanted = self._post_of(options)
         post = bool(wanted) and check_post(options, target, p.device.compute_path)
         drawn = p.targets.post(target, copy) if post else target  # (HDR with post steps)
+        ao = prepare_ao(p.ao, p.recorder, options, drawn, p.bounds.radius, COPY_OUTPUTS in copy)
         # The camera's maths, once: the shadow cascades take its planes from the slot.
         write_frame_view(slot, camera, target.extent, p.bounds)
         write_frame_blocks(slot, lights, self._shading_options(options, post), linear or post,
-                           p.lighting.frame_lighting(options),
+                           p.lighting.frame_lighting(options, ao is not None and ao.shading),
                            p.shadow_frames.write(slot, plan, lights, camera, target.extent))
         if overlay is not None:
             overlay.prepare(frame.index)
         spec = self._spec(drawn, slot, options, plan, overlay, copy, linear, wanted if post else (),
-                          transmission)
+                          transmission, ao)
         order = p.blend.order(camera.eye)
         objects = FrameObjects(order, overlay) if order or overlay is not None else NO_OBJECTS
         shadows = p.shadow_frames.maps
@@ -124,16 +126,18 @@ class FramePath:
 
     def _spec(self, drawn: FrameTarget, slot: FrameSlot, options: RenderOptions,
               plan: ShadowPlan, overlay: TextOverlay | None, copy: tuple[str, ...], linear: bool,
-              post: tuple[tuple[str, float], ...], transmission: bool) -> FrameSpec:
+              post: tuple[tuple[str, float], ...], transmission: bool, ao: AoSpec | None
+              ) -> FrameSpec:
         """What the frame's recording depends on: its path, modes and shadow redraws."""
         p = self.parts
         redraw = p.shadow_frames.maps.stale(slot.index, plan, options.alpha_mask)
         compute = p.paths.uses_compute(drawn, options)
         path = choose_path(compute, compute and p.paths.uses_compute_raster(options, drawn),
                            COPY_OUTPUTS in copy)
+        variant = p.lighting.shade_variant(options, ao is not None and ao.shading)
         return FrameSpec(path, options.tbn, options.alpha_mask, plan, redraw, copy,
-                         transmission, p.lighting.shade_variant(options), id(overlay),
-                         post=post, post_tonemap=encode_tonemap(options, linear) if post else 0)
+                         transmission, variant, id(overlay), post=post,
+                         post_tonemap=encode_tonemap(options, linear) if post else 0, ao=ao)
 
     def _post_of(self, options: RenderOptions) -> tuple[tuple[str, float], ...]:
         """The post steps `options` turn on (the last answer kept: a run of frames has one

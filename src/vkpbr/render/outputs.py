@@ -34,6 +34,8 @@ OUTPUTS = {
                      "y up, z towards the viewer); 0 = background",
     "normal_geometric": "(H, W, 3) float32 world interpolated vertex normal (before normal "
                         "mapping); 0 = background",
+    "ao": "(H, W) float32 screen-space ambient occlusion (GTAO, render/ao.py): visibility of "
+          "the image-based light, 1 unoccluded; 1 = background",
 }
 
 
@@ -73,6 +75,7 @@ def frame_outputs(images: dict[str, np.ndarray], color: np.ndarray, wanted: tupl
         # 1080p on the CI machine, against 7 ms; within 5e-7 of it).
         "normal_camera": lambda: normal @ np.asarray(camera_rotation, np.float32),
         "normal_geometric": lambda: images["out_normal_geometric"][..., :3].copy(),
+        "ao": lambda: images["out_ao"][..., 0].copy(),
     }
     return {name: available[name]() for name in wanted}
 

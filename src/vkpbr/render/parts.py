@@ -26,6 +26,7 @@ from vkpbr.gpu.device import Device, DeviceRequest
 from vkpbr.gpu.frames import FrameRing
 from vkpbr.gpu.pipeline import PipelineLayout
 from vkpbr.render import layouts as L
+from vkpbr.render.ao import AoImages
 from vkpbr.render.batch import draw_spheres
 from vkpbr.render.blend_order import BlendOrder
 from vkpbr.render.compute_path import ComputeScene
@@ -73,6 +74,7 @@ class FrameParts:
     environments: Environments
     lighting: Lighting
     shadow_frames: ShadowFrames
+    ao: AoImages  # the ambient occlusion's images and kernels (render/ao.py)
 
     def default_camera(self) -> Camera:
         """The scene's first camera, else the automatic one (scene/geometry.py auto_camera)."""
@@ -87,6 +89,7 @@ class FrameParts:
         self.recorder.free()
         self.shadow_frames.maps.destroy()
         self.opaque_copies.destroy()
+        self.ao.destroy()
         if self.post.made is not None:
             self.post.made.destroy()
         self.environments.destroy()
@@ -133,12 +136,13 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     blend = BlendOrder(gs.draws)
     paths = FramePaths(device, msaa, scene.triangle_count, len(blend) > 0, depth_prepass,
                        cache_dir)
+    ao = AoImages(device, [s.set2 for s in slots], layouts[0], gs.stand_in())
     recorder = FrameRecorder(device, gs, pipeline_layout, ring, slots, paths.prepass_for,
-                             shadows, compute, copies, post)
+                             shadows, compute, copies, post, ao)
     bounds = Bounds.of(*scene.bounds())
     environments = Environments(device, slots, recorder, env_spec, cache_dir)
     return FrameParts(
         device, scene, ring, layouts, pipeline_layout, buffers, pool, slots, gs, ids, labels,
         copies, compute, post, recorder, bounds, blend, paths,
         Targets(device, msaa, background, ring.count, recorder, compute, post), environments,
-        Lighting(scene, copies, environments), ShadowFrames(shadows, bounds, recorder))
+        Lighting(scene, copies, environments), ShadowFrames(shadows, bounds, recorder), ao)

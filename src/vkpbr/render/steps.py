@@ -18,6 +18,7 @@ from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.graph import Rendering, Step
 from vkpbr.gpu.target import COPY_DEPTH, COPY_OUTPUTS
 from vkpbr.render import layouts as L
+from vkpbr.render.ao import AoSpec
 from vkpbr.render.compute_path import GENERAL_SHADING, ShadeVariant
 from vkpbr.render.passes import PASSES, PassContext, PassSpec, classify, record_pass
 from vkpbr.render.paths import COPY_PATHS, PATHS
@@ -42,7 +43,8 @@ class FrameSpec(NamedTuple):
     (render/paths.py), the TBN path, alpha masking, the shadow plan and which of its layers
     are redrawn, what the target copies out, the transmission's copy, what the compute
     path's shading is specialised for, the ids of the objects in FrameObjects, a compute
-    batch's atlas tiles, a layered batch's own inputs, the post steps and their encode."""
+    batch's atlas tiles, a layered batch's own inputs, the post steps and their encode, the
+    ambient occlusion (render/ao.py; None: none)."""
 
     path: str
     tbn: L.TbnMode = L.TbnMode.VECTORS
@@ -59,6 +61,7 @@ class FrameSpec(NamedTuple):
     batch: tuple = ()  # what a layered batch's own groups depend on (render/batch.py)
     post: tuple[tuple[str, float], ...] = ()  # the post steps on (post_stage.enabled_post)
     post_tonemap: int = 0  # the encode's tone map (TONEMAP_*)
+    ao: AoSpec | None = None  # the "ao" group's GTAO (render/ao.py ao_spec)
 
 
 class FrameObjects(NamedTuple):
@@ -162,8 +165,9 @@ class FrameSteps:
 
     def _fragment_pass(self, p: PassSpec) -> list[Step]:
         over_visibility = self._depth_written  # test its depth, write none
-        prepass = (self.r.prepass_for(self.target) and not over_visibility
-                   and self.spec.path == "forward")
+        # The pre-pass where the device gains by it, and wherever GTAO needs the depth first.
+        prepass = ((self.r.prepass_for(self.target) or self.spec.ao is not None)
+                   and not over_visibility and self.spec.path == "forward")
         if p.prepass and not prepass:
             return []
         if not p.fullscreen and p.draw_class not in self.classes:
@@ -171,7 +175,9 @@ class FrameSteps:
             # the colour stays as the kernels left it), none ended (inside an open one).
             return [Step(p.name, rendering=self._rendering)]
         ctx = self._context(visibility=False, prepass=prepass or over_visibility)
-        return [Step(p.name, _pass_recorder(ctx, p), rendering=self._rendering_for())]
+        shades = self.spec.ao is not None and not (p.prepass or p.fullscreen)
+        return [Step(p.name, _pass_recorder(ctx, p), (("ao", "sampled"),) if shades else (),
+                     rendering=self._rendering_for())]
 
     def _context(self, visibility: bool, prepass: bool, target: Any = None,
                  classes: list[str] | None = None, copy: bool = False) -> PassContext:
@@ -210,7 +216,7 @@ class FrameSteps:
     def _raster(self) -> list[Step]:
         cs, spec = self._compute(), self.spec
         depth = (COPY_DEPTH in spec.copy or "blend" in self.classes
-                 or not spec.path.startswith("compute"))
+                 or not spec.path.startswith("compute") or spec.ao is not None)
         # The raster's depths: copied where anything reads them, else undefined, and nothing
         # after tests them (no blended draw): the passes after load it, never clear it.
         self._depth_written = True
@@ -234,9 +240,24 @@ class FrameSteps:
             return []
         cs, spec = self._compute(), self.spec
         self._color_written = True
-        return [cs.shading_step(self.target, self.frame_index, spec.tbn, self._frame_sets(),
-                                self.gs.material_sets, self._shaded(), spec.tiles,
-                                variant=spec.variant)]
+        step = cs.shading_step(self.target, self.frame_index, spec.tbn, self._frame_sets(),
+                               self.gs.material_sets, self._shaded(), spec.tiles,
+                               variant=spec.variant)
+        if spec.ao is not None:  # reads the frame's GTAO (set 2 ao_map)
+            step = Step(step.name, step.record, (*step.uses, ("ao", "sampled")), step.rendering,
+                        step.timed, step.leaves)
+        return [step]
+
+    def _ao(self) -> list[Step]:
+        """GTAO from the depth written so far, then its denoise, into the slot's "ao"
+        image (render/ao.py); the fragment passes after load that depth."""
+        if self.spec.ao is None:
+            return []
+        self._close_rendering()
+        self._depth_written = True
+        copy_out = COPY_OUTPUTS in self.spec.copy and "out_ao" in self.resources
+        return self.r.ao.steps(self.resources, self.set0, self.frame_index, self.spec.ao,
+                               self.spec.tiles, copy_out)
 
     def _outputs(self) -> list[Step]:
         if COPY_OUTPUTS not in self.spec.copy:
