@@ -92,7 +92,7 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
     OptionSpec("--ao", "enum", "screen-space ambient occlusion of the image-based light "
                "(default %(default)s: GTAO where frames have an environment; off)", field="ao",
                group="environment"),
-    OptionSpec("--ao-radius", "float", "GTAO's radius in world units (default 0: 5%% of the "
+    OptionSpec("--ao-radius", "float", "GTAO's radius in world units (default 0: 15%% of the "
                "scene's bounding radius)", field="ao_radius", group="environment",
                metavar="R"),
     OptionSpec("--view", "enum", "debug view, one of: %(choices)s (default %(default)s; "

@@ -114,7 +114,7 @@ class RenderOptions:
         default: XeGTAO's ground-truth ambient occlusion, in the physically based mode with an
         environment, on single-sample offscreen frames) or "off".
     ao_radius : float
-        GTAO's effect radius in world units (>= 0; 0: 5% of the scene's bounding radius).
+        GTAO's effect radius in world units (>= 0; 0: 15% of the scene's bounding radius).
     bloom : float
         Bloom strength, 0..1 (0: off): a post step (render/post_bloom.py) on the frame's HDR
         radiance before its tone map; the frame's total light is kept.
