@@ -143,9 +143,9 @@ def test_only_the_image_based_light_is_occluded(make_renderer) -> None:  # noqa:
     np.testing.assert_allclose(ibl_on[..., 0][lit], (ibl_off[..., 0] * bounce)[lit],
                                rtol=2e-3, atol=2e-3)
     for options in ({"ao": "off"}, {"lighting": "course"}, {"env": "none"}):
-        r.render(camera=cam, size=(W, H), **options)
+        r.render(camera=cam, size=(W, H), pipeline="compute", **options)
         assert "ao" not in r.last_stats.pass_ms, options
-    r.render(camera=cam, size=(W, H))
+    r.render(camera=cam, size=(W, H), pipeline="compute")
     assert "ao" in r.last_stats.pass_ms
 
 

@@ -151,10 +151,12 @@ class AoImages:
 
     # --- the steps ----------------------------------------------------------------------------
     def steps(self, resources: dict[str, Any], set0: Any, frame_index: int, spec: AoSpec,
-              tiles: tuple[int, int, int, int] | None, copy_out: bool) -> list[Step]:
+              tiles: tuple[int, int, int, int] | None, copy_out: bool, timed: bool = True
+              ) -> list[Step]:
         """The "ao" group's steps for one recording: GTAO, the denoise passes (and, for the
         `ao` output, a copy into "out_ao"); adds "ao", "ao_raw", "ao_mid" to `resources`.
-        `tiles`: a batch's atlas (views, tile width, height, tiles a column)."""
+        `tiles`: a batch's atlas (views, tile width, height, tiles a column); `timed`: a
+        timestamp after the last pass (FrameStats.pass_ms["ao"])."""
         assert self.size is not None, "fit() first"
         w, h = self.size
         image, view = self.images[frame_index]
@@ -183,7 +185,7 @@ class AoImages:
                 # (every pass binds "ao": a storage image of the set, GENERAL when bound)
                 (depth, (src, "storage_read"), (dst, "storage"), ("ao", "storage")),
                 timed=final))
-        steps[-1] = Step("ao", steps[-1].record, steps[-1].uses)
+        steps[-1] = Step("ao", steps[-1].record, steps[-1].uses, timed=timed)
         if copy_out:
             steps.append(Step("ao_output", lambda cmd: _copy_image(cmd, image, resources),
                               (("ao", "transfer_src"), ("out_ao", "transfer_dst")), timed=False))

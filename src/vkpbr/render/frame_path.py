@@ -133,7 +133,7 @@ class FramePath:
         redraw = p.shadow_frames.maps.stale(slot.index, plan, options.alpha_mask)
         compute = p.paths.uses_compute(drawn, options)
         path = choose_path(compute, compute and p.paths.uses_compute_raster(options, drawn),
-                           COPY_OUTPUTS in copy)
+                           COPY_OUTPUTS in copy or ao is not None)
         variant = p.lighting.shade_variant(options, ao is not None and ao.shading)
         return FrameSpec(path, options.tbn, options.alpha_mask, plan, redraw, copy,
                          transmission, variant, id(overlay), post=post,

@@ -39,10 +39,11 @@ _FRAGMENT_PASSES = ("opaque", "opaque_double", "mask", "background", "blend")
 
 PATHS: dict[str, tuple[str, ...]] = {
     # The fragment path: everything shaded in fragment shaders.
-    "forward": (*_FRAME_HEAD, "prepass_opaque", "prepass_opaque_double", "ao",
+    "forward": (*_FRAME_HEAD, "prepass_opaque", "prepass_opaque_double",
                 *_FRAGMENT_PASSES, "post", "overlay", "finish"),
-    # The fragment path with dataset outputs: a visibility pass makes them, then the
-    # fragment passes shade over its depth (their pre-pass).
+    # The fragment path with dataset outputs or ambient occlusion: a visibility pass makes
+    # the outputs and the depth GTAO reads (alpha-masked surfaces included, which the depth
+    # pre-pass leaves out), then the fragment passes shade over its depth (their pre-pass).
     "forward_outputs": (*_FRAME_HEAD, "outputs_clear", "visibility", "ao", "classify", "outputs",
                         *_FRAGMENT_PASSES, "post", "overlay", "finish"),
     # The compute path: coverage by the raster units, shading in compute shaders.
@@ -69,14 +70,14 @@ RASTER_STEPS = ("raster_small", "raster_big", "raster_masked", "raster_masked_bi
                 "raster_resolve")
 # Every timed step a frame can report in FrameStats.pass_ms, in frame order.
 STEP_NAMES = ("shadows", "transmission", "cull", "prepass_opaque", "prepass_opaque_double",
-              *RASTER_STEPS, "ao", "opaque", "opaque_double", "mask", "classify", "shading", "outputs",
-              "background", "blend", "views", "copy")
+              *RASTER_STEPS, "opaque", "opaque_double", "mask", "ao", "classify", "shading",
+              "outputs", "background", "blend", "views", "copy")
 
 
 def choose_path(compute: bool, raster: bool, outputs: bool) -> str:
     """The path of a single frame: the compute path (`raster`: with the compute rasteriser)
     where `compute`, else the fragment path (through a visibility pass when it makes dataset
-    `outputs`). FramePaths.uses_compute and uses_compute_raster (render/path_choice.py)
+    `outputs` or ambient occlusion). FramePaths.uses_compute and uses_compute_raster (render/path_choice.py)
     decide the two flags."""
     if compute:
         return "compute_raster" if raster else "compute"

@@ -165,9 +165,8 @@ class FrameSteps:
 
     def _fragment_pass(self, p: PassSpec) -> list[Step]:
         over_visibility = self._depth_written  # test its depth, write none
-        # The pre-pass where the device gains by it, and wherever GTAO needs the depth first.
-        prepass = ((self.r.prepass_for(self.target) or self.spec.ao is not None)
-                   and not over_visibility and self.spec.path == "forward")
+        prepass = (self.r.prepass_for(self.target) and not over_visibility
+                   and self.spec.path == "forward")
         if p.prepass and not prepass:
             return []
         if not p.fullscreen and p.draw_class not in self.classes:
@@ -226,6 +225,8 @@ class FrameSteps:
                                self.gs.material_sets, spec.tiles, self.set0, depth)
 
     def _classify(self) -> list[Step]:
+        if self.spec.path == "forward_outputs" and COPY_OUTPUTS not in self.spec.copy:
+            return []  # (a visibility pass for GTAO's depth alone: nothing to bin)
         counted = "raster" in PATHS[self.spec.path]
         cs = self._compute()
         self._close_rendering()
@@ -256,8 +257,10 @@ class FrameSteps:
         self._close_rendering()
         self._depth_written = True
         copy_out = COPY_OUTPUTS in self.spec.copy and "out_ao" in self.resources
+        # Timed on the compute paths; the fragment path's passes take the timestamps after
+        # its visibility pass (paths.STEP_NAMES' one order).
         return self.r.ao.steps(self.resources, self.set0, self.frame_index, self.spec.ao,
-                               self.spec.tiles, copy_out)
+                               self.spec.tiles, copy_out, self.spec.path.startswith("compute"))
 
     def _outputs(self) -> list[Step]:
         if COPY_OUTPUTS not in self.spec.copy:
