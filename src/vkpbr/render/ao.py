@@ -120,14 +120,19 @@ class AoImages:
         writer.update()
 
     def stale(self, extent: tuple[int, int]) -> bool:
-        return self.size != tuple(extent)
+        """Whether frames of `extent` need larger images than the ones made (they only grow:
+        a smaller frame uses their top-left corner, so frames and batches of other sizes in
+        turn neither wait for the device nor re-record)."""
+        return self.size is None or extent[0] > self.size[0] or extent[1] > self.size[1]
 
     def fit(self, extent: tuple[int, int]) -> None:
-        """The images for frames of `extent`, bound in every slot's set 2 (left in the
-        sampled layout, as frames leave them). The caller waits for the device and drops the
-        recorded command buffers first (they name the old images)."""
+        """Images for frames of `extent` (and of any size made before), bound in every
+        slot's set 2 (left in the sampled layout, as frames leave them). The caller waits for
+        the device and drops the recorded command buffers first (they name the old images)."""
+        old = self.size or (0, 0)
         self._destroy_images()
-        vk, w, h = self.device.vk, int(extent[0]), int(extent[1])
+        vk = self.device.vk
+        w, h = max(int(extent[0]), old[0]), max(int(extent[1]), old[1])
         usage = (vk.VK_IMAGE_USAGE_STORAGE_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT
                  | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT)
         for i in range(len(self.sets2)):
@@ -151,14 +156,14 @@ class AoImages:
 
     # --- the steps ----------------------------------------------------------------------------
     def steps(self, resources: dict[str, Any], set0: Any, frame_index: int, spec: AoSpec,
-              tiles: tuple[int, int, int, int] | None, copy_out: bool, timed: bool = True
-              ) -> list[Step]:
+              extent: tuple[int, int], tiles: tuple[int, int, int, int] | None, copy_out: bool,
+              timed: bool = True) -> list[Step]:
         """The "ao" group's steps for one recording: GTAO, the denoise passes (and, for the
         `ao` output, a copy into "out_ao"); adds "ao", "ao_raw", "ao_mid" to `resources`.
-        `tiles`: a batch's atlas (views, tile width, height, tiles a column); `timed`: a
+        `extent`: the frame's (the images' top-left corner); `tiles`: a batch's atlas (views, tile width, height, tiles a column); `timed`: a
         timestamp after the last pass (FrameStats.pass_ms["ao"])."""
-        assert self.size is not None, "fit() first"
-        w, h = self.size
+        assert not self.stale(extent), "fit() first"
+        w, h = extent
         image, view = self.images[frame_index]
         resources["ao"] = ImageResource(image.handle, view=view.handle)
         for name, (img, v) in zip(("ao_raw", "ao_mid"), self.work, strict=True):
@@ -175,32 +180,32 @@ class AoImages:
             p["final_pass"], p["read_mid"] = final, read_mid
             return p
 
-        steps = [Step("ao_gtao", self._dispatch("ao_gtao", push(0, 0), set0, dset),
+        steps = [Step("ao_gtao", self._dispatch("ao_gtao", push(0, 0), set0, dset, extent),
                       (depth, ("ao_raw", "storage")), timed=False)]
         for k in range(DENOISE_PASSES):  # ao_raw -> (ao_mid ->) ao
             final, src = k == DENOISE_PASSES - 1, ("ao_mid" if k else "ao_raw")
             dst = "ao" if final else "ao_mid"
             steps.append(Step(f"ao_denoise{k}", self._dispatch(
-                "ao_denoise", push(int(final), int(src == "ao_mid")), set0, dset),
+                "ao_denoise", push(int(final), int(src == "ao_mid")), set0, dset, extent),
                 # (every pass binds "ao": a storage image of the set, GENERAL when bound)
                 (depth, (src, "storage_read"), (dst, "storage"), ("ao", "storage")),
                 timed=final))
         steps[-1] = Step("ao", steps[-1].record, steps[-1].uses, timed=timed)
         if copy_out:
-            steps.append(Step("ao_output", lambda cmd: _copy_image(cmd, image, resources),
+            steps.append(Step("ao_output", lambda cmd: _copy_image(cmd, image, resources, extent),
                               (("ao", "transfer_src"), ("out_ao", "transfer_dst")), timed=False))
         return steps
 
-    def _dispatch(self, name: str, push: np.ndarray, set0: Any, dset: Any) -> Any:
+    def _dispatch(self, name: str, push: np.ndarray, set0: Any, dset: Any,
+                  size: tuple[int, int]) -> Any:
         pipe = self._kernel(name, push.nbytes)
-        size = self.size
 
         def record(cmd: Any) -> None:
             cmd.bind_pipeline(pipe)
             cmd.bind_set(0, set0)
             cmd.bind_set(1, dset)
             cmd.push(push)
-            cmd.dispatch(*groups((*size, 1), AO_GROUP))  # type: ignore[misc]
+            cmd.dispatch(*groups((*size, 1), AO_GROUP))
         return record
 
     # --- kernels and sets -----------------------------------------------------------------
@@ -271,14 +276,16 @@ class AoImages:
         self._layout = self._sampler = None
 
 
-def _copy_image(cmd: Any, image: Image, resources: dict[str, Any]) -> None:
-    """The slot's "ao" image into the target's "out_ao" (the `ao` dataset output)."""
+def _copy_image(cmd: Any, image: Image, resources: dict[str, Any], extent: tuple[int, int]
+                ) -> None:
+    """The frame's corner of the slot's "ao" image into the target's "out_ao" (the `ao`
+    dataset output)."""
     vk = cmd.vk
     layers = vk.VkImageSubresourceLayers(aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0,
                                          baseArrayLayer=0, layerCount=1)
     region = vk.VkImageCopy(srcSubresource=layers, srcOffset=vk.VkOffset3D(0, 0, 0),
                             dstSubresource=layers, dstOffset=vk.VkOffset3D(0, 0, 0),
-                            extent=vk.VkExtent3D(image.width, image.height, 1))
+                            extent=vk.VkExtent3D(extent[0], extent[1], 1))
     vk.vkCmdCopyImage(cmd.handle, image.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
                       resources["out_ao"].handle, vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
                       [region])

@@ -260,7 +260,8 @@ class FrameSteps:
         # Timed on the compute paths; the fragment path's passes take the timestamps after
         # its visibility pass (paths.STEP_NAMES' one order).
         return self.r.ao.steps(self.resources, self.set0, self.frame_index, self.spec.ao,
-                               self.spec.tiles, copy_out, self.spec.path.startswith("compute"))
+                               self.target.extent, self.spec.tiles, copy_out,
+                               self.spec.path.startswith("compute"))
 
     def _outputs(self) -> list[Step]:
         if COPY_OUTPUTS not in self.spec.copy:
