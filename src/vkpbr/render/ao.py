@@ -5,9 +5,9 @@ The image-based light reaches every surface as if nothing stood around it; the s
 Sponza's arcades as brightly as its courtyard. Direct light has its shadows; the environment
 gets this. `--ao gtao` (the default in the physically based mode with an environment;
 `--ao off`, the course mode and `--env none` have none) adds the "ao" group to a frame's path
-(render/paths.py), after whatever makes its depth -- the forward path's depth pre-pass (run for
-it on every device), the compute path's visibility pass or compute rasteriser, a batch's
-atlas -- and before the shading:
+(render/paths.py), after whatever makes its depth -- the visibility pass (the fragment path
+takes it as its pre-pass, as for dataset outputs: alpha-masked surfaces are in its depth),
+the compute rasteriser, a compute batch's atlas -- and before the shading:
 
 1. `ao_gtao` (shaders/ao_gtao.comp): GTAO (Jimenez et al. 2016) as XeGTAO's main pass, at
    full resolution: the view-space normal made from the depth in place, SLICES directions of
@@ -22,9 +22,10 @@ atlas -- and before the shading:
    Lagarde's specular occlusion. Blended surfaces take none (GTAO saw what is behind them).
 
 The step runs where the target's depth can be sampled and its frames are single-sample
-offscreen ones (`OffscreenTarget.compute`): renders, render_many, batches, the viewer's
---offscreen loop; window frames and multisampled ones draw without it (the frame's
-LIGHTING_AO flag is cleared, so the shading never reads an image the frame did not make).
+offscreen ones (`OffscreenTarget.compute`): renders, render_many, compute batches, the
+viewer's --offscreen loop; window frames, multisampled ones and the layered batch draw
+without it (the frame's LIGHTING_AO flag is cleared, so the shading never reads an image the
+frame did not make), and so does the transmission's copy of the opaque scene.
 The `ao` dataset output is the last pass's image, copied into the target's "out_ao".
 
 Correctness: tests/gpu/test_ao.py compares it with a NumPy Monte Carlo reference that ray
@@ -39,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.compute import ComputePipeline, groups
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
@@ -142,8 +144,6 @@ class AoImages:
             image = Image(self.device, w, h, vk.VK_FORMAT_R32_UINT, vk.VK_IMAGE_USAGE_STORAGE_BIT,
                           name=name)
             self.work.append((image, ImageView(image)))
-        from vkpbr.gpu.commands import Commands
-
         with self.device.one_time_commands() as handle:
             cmd = Commands(self.device, handle)
             for image, _ in self.images:
