@@ -9,10 +9,10 @@ the other in the cast), measured on lavapipe (compute path; the forward path's i
 image, tested below):
 
     scene          mean    p95     bound (mean, p95)
-    box corner     0.019   0.107   0.03, 0.14    (64 x 48, radius 0.5)
-    sphere/plane   0.012   0.057   0.02, 0.09    (64 x 48, radius 0.5)
-    Sponza crop    0.034   0.137   0.045, 0.18   (400 pixels of the arcade's floor and wall at
-                                                  160 x 90, radius 1 m)
+    box corner     0.020   0.113   0.03, 0.14    (64 x 48, radius 0.5)
+    sphere/plane   0.010   0.057   0.02, 0.09    (64 x 48, radius 0.5)
+    Sponza crop    0.024   0.107   0.035, 0.14   (400 pixels of the arcade's floor and wall at
+                                                  160 x 90, 8 px off the border, radius 1 m)
 
 GTAO is a screen-space estimate: it sees only what the depth buffer holds (nothing behind a
 surface, nothing off screen) and assumes surfaces are thick; the largest errors are at the
@@ -35,7 +35,7 @@ from vkpbr.scene.types import Camera, Material, Node, Scene
 W, H = 64, 48
 RADIUS = 0.5
 # (mean, p95) bounds: the measured errors (docstring) with some room for other drivers.
-BOUNDS = {"corner": (0.03, 0.14), "sphere": (0.02, 0.09), "sponza": (0.045, 0.18)}
+BOUNDS = {"corner": (0.03, 0.14), "sphere": (0.02, 0.09), "sponza": (0.035, 0.14)}
 
 
 def _matrix(t: tuple[float, float, float], axis: int = 0, degrees: float = 0.0) -> np.ndarray:
@@ -154,7 +154,8 @@ SPONZA_CAMERA = Camera(eye=(9.0, 1.6, -4.2), target=(-9.0, 0.8, -4.7), yfov_deg=
 
 def test_gtao_matches_the_ray_cast_in_sponza(make_renderer, assets: Path) -> None:  # noqa: ANN001
     """A crop of Sponza's arcade (wall, floor, column bases: no alpha-masked geometry) at
-    400 seeded pixels, radius 1 m."""
+    400 seeded pixels at least 8 pixels from the frame's border (screen space sees nothing
+    beyond it), radius 1 m."""
     from vkpbr.scene.loader import load_scene
 
     path = assets / "Sponza" / "glTF" / "Sponza.gltf"
@@ -164,12 +165,12 @@ def test_gtao_matches_the_ray_cast_in_sponza(make_renderer, assets: Path) -> Non
     r = make_renderer(scene)
     size = (160, 90)
     out = r.render(camera=SPONZA_CAMERA, size=size, outputs=("depth",), pipeline="compute")
-    rows, cols = np.nonzero(~edge_band(out["depth"])[45:, 100:])
+    rows, cols = np.nonzero(~edge_band(out["depth"])[45:82, 100:152])  # 8 px off the border
     pick = np.random.default_rng(7).choice(len(rows), 400, replace=False)
     pixels = np.stack([rows[pick] + 45, cols[pick] + 100], 1)
     err, ref = errors(r, scene, SPONZA_CAMERA, size, 1.0, pixels, pipeline="compute")
     print(f"sponza reference: mean {ref.mean():.3f}, {(ref < 0.8).mean():.1%} below 0.8")
-    assert (ref < 0.8).mean() > 0.03
+    assert (ref < 0.8).mean() > 0.02  # the crop sees occlusion (2.5% of it below 0.8)
     mean, p95 = float(err.mean()), float(np.percentile(err, 95))
     print(f"sponza: mean {mean:.4f} p95 {p95:.4f} over {err.size} pixels")
     assert mean <= BOUNDS["sponza"][0] and p95 <= BOUNDS["sponza"][1], (mean, p95)

@@ -71,9 +71,13 @@ float fast_acos(float x) {  // XeGTAO_FastACos (Lagarde), [-1, 1] -> [0, pi]
     return x >= 0.0 ? res : PI - res;
 }
 
-// The depth at a sample (clamped to the tile), as a view-space point.
-vec3 sample_pos(ivec2 p, ivec2 lo, float znear, vec4 intr) {
+// The depth at a sample, as a view-space point; `inside`: whether the sample is in the tile
+// (one outside is unknown: it gets no weight, as a sample beyond the radius. Clamped to the
+// border, as a clamping sampler would, it sat beside the slice, not in it, and on a plane
+// receding past the frame's edge made a horizon higher than the plane's: false occlusion).
+vec3 sample_pos(ivec2 p, ivec2 lo, float znear, vec4 intr, out bool inside) {
     ivec2 q = ao_clamp(p, lo);
+    inside = q == p;
     float z = min(ao_view_z(q, znear), 3.0e38);
     return ao_view_pos(vec2(q - lo) + 0.5, z, intr);
 }
@@ -111,11 +115,12 @@ float gtao(ivec2 p, ivec2 lo, vec3 center, vec3 n, float znear, vec4 intr) {
             float s = (float(step) + step_noise) / steps;
             s = s * s + min_s;  // XeGTAO's sample distribution power 2: more samples near
             vec2 offset = round(s * omega);
-            vec3 d0 = sample_pos(p + ivec2(offset), lo, znear, intr) - center;
-            vec3 d1 = sample_pos(p - ivec2(offset), lo, znear, intr) - center;
+            bool in0, in1;
+            vec3 d0 = sample_pos(p + ivec2(offset), lo, znear, intr, in0) - center;
+            vec3 d1 = sample_pos(p - ivec2(offset), lo, znear, intr, in1) - center;
             float l0 = length(d0), l1 = length(d1);
-            float w0 = clamp(l0 * falloff_mul + falloff_add, 0.0, 1.0);
-            float w1 = clamp(l1 * falloff_mul + falloff_add, 0.0, 1.0);
+            float w0 = in0 ? clamp(l0 * falloff_mul + falloff_add, 0.0, 1.0) : 0.0;
+            float w1 = in1 ? clamp(l1 * falloff_mul + falloff_add, 0.0, 1.0) : 0.0;
             float shc0 = l0 > 0.0 ? dot(d0 / l0, view_vec) : low0;
             float shc1 = l1 > 0.0 ? dot(d1 / l1, view_vec) : low1;
             h0c = max(h0c, mix(low0, shc0, w0));
@@ -150,13 +155,16 @@ void main() {
     vec4 edges = calculate_edges(z, zl, zr, zt, zb);
     // The tile's border is an edge: the denoise never mixes in another view.
     ivec2 q = p - lo;
-    edges *= vec4(q.x > 0, q.x < int(pc.tile_w) - 1, q.y > 0, q.y < int(pc.tile_h) - 1);
+    vec4 inside = vec4(q.x > 0, q.x < int(pc.tile_w) - 1, q.y > 0, q.y < int(pc.tile_h) - 1);
+    edges *= inside;
     vec2 pix = vec2(q) + 0.5;
     vec3 c = ao_view_pos(pix, z, intr);
-    vec3 n = calculate_normal(edges, c, ao_view_pos(pix + vec2(-1, 0), zl, intr),
-                              ao_view_pos(pix + vec2(1, 0), zr, intr),
-                              ao_view_pos(pix + vec2(0, -1), zt, intr),
-                              ao_view_pos(pix + vec2(0, 1), zb, intr));
+    // A neighbour past the border is the pixel itself (its depth, its position): a zero
+    // vector, no part in the normal (XeGTAO's 0.01 floor would let a wrong point in).
+    vec3 n = calculate_normal(edges, c, ao_view_pos(pix + vec2(-inside.x, 0), zl, intr),
+                              ao_view_pos(pix + vec2(inside.y, 0), zr, intr),
+                              ao_view_pos(pix + vec2(0, -inside.z), zt, intr),
+                              ao_view_pos(pix + vec2(0, inside.w), zb, intr));
     if (dot(n, c) > 0.0) n = -n;  // facing the eye
     // Nudged towards the eye against depth imprecision (XeGTAO's 0.99999 for 32-bit depths).
     vec3 center = ao_view_pos(pix, z * 0.99999, intr);
