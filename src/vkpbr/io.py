@@ -81,6 +81,7 @@ OUTPUT_KINDS: dict[str, Kind] = {
     "normal_camera": "data",
     "normal_geometric": "data",
     "motion": "data",  # (H, W, 2): EXR channels R (x) and G (y), in pixels
+    "ao": "data",
     "instance": "ids",
     "semantic": "ids",
 }
@@ -273,7 +274,7 @@ def write_image(path: str | os.PathLike[str], array: np.ndarray, kind: str = "co
         "data", (H, W) or (H, W, 3) float32 (depth and range in scene units, normals as
         unit vectors). A .npy file holds any array as given.
     kind : "color", "ids" or "data", or one of the renderer's output names (`OUTPUT_KINDS`:
-        "color", "depth", "range", "normal", "normal_camera", "normal_geometric",
+        "color", "depth", "range", "normal", "normal_camera", "normal_geometric", "ao",
         "instance", "semantic"), which name their kind.
 
     Raises

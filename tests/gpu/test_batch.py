@@ -2,6 +2,8 @@
 "auto" takes on CPUs): every view of a batch equals the same view rendered alone, bit for bit
 (issue 14; float32 frames to 8 ulp), whatever form the cameras come in, however the batch is
 chunked and split. (The compute batch, auto's choice on GPUs, is test_compute_batch.py's.)
+The layered batch has no ambient occlusion yet (render/ao.py): its views equal `render`'s with
+ao="off".
 
 The scenes are the built-in chart (blended and masked materials, vertex colours: blended
 draws need each view's own back-to-front order) and a glTF sample model; the cameras are
@@ -76,7 +78,7 @@ def test_views_equal_single_renders(chart, count: int) -> None:  # noqa: ANN001
     cams = cameras_of(chart, count, seed=count)
     batch = layered(chart, cams, size=SIZE)
     assert batch.dtype == np.uint8
-    assert_views_equal(batch, [chart.render(c, size=SIZE, pipeline="forward") for c in cams], f"B={count}")
+    assert_views_equal(batch, [chart.render(c, size=SIZE, pipeline="forward", ao="off") for c in cams], f"B={count}")
     assert (batch[..., :3] > 0).any(axis=(1, 2, 3)).sum() > 0.5 * count  # the scene is seen
 
 
@@ -90,10 +92,10 @@ def test_camera_forms_give_the_same_views(chart) -> None:  # noqa: ANN001
     poses = np.stack([c.world_from_camera("opengl") for c in cams])
     from_poses = [Camera.from_pose(m, yfov_deg=50.0) for m in poses]
     assert_views_equal(layered(chart, CameraBatch.from_poses(poses, 50.0), size=SIZE),
-                       [chart.render(c, size=SIZE, pipeline="forward") for c in from_poses], "poses")
+                       [chart.render(c, size=SIZE, pipeline="forward", ao="off") for c in from_poses], "poses")
     assert_views_equal(layered(chart, poses, size=SIZE),
                        [chart.render(dataclasses.replace(c, yfov_deg=chart.default_camera().yfov_deg),
-                                     size=SIZE, pipeline="forward") for c in from_poses],
+                                     size=SIZE, pipeline="forward", ao="off") for c in from_poses],
                        "a (B, 4, 4) array")
     eye, target = np.array([c.eye for c in cams]), np.array([c.target for c in cams])
     planes = {k: [getattr(c, k) for c in cams] for k in ("znear", "zfar")}  # the chart's camera's
@@ -105,7 +107,7 @@ def test_camera_forms_give_the_same_views(chart) -> None:  # noqa: ANN001
     cv = np.stack([c.world_from_camera("opencv") for c in cams])
     size2 = (SIZE[0] * 2, SIZE[1] * 2)
     batch = layered(chart, CameraBatch.from_opencv(k, cv, SIZE), size=size2)
-    singles = [chart.render(Camera.from_opencv(k, m, SIZE), size=size2, pipeline="forward") for m in cv]
+    singles = [chart.render(Camera.from_opencv(k, m, SIZE), size=size2, pipeline="forward", ao="off") for m in cv]
     assert_views_equal(batch, singles, "OpenCV K")
 
 
@@ -121,7 +123,7 @@ def test_chunks_and_splits(chart, monkeypatch) -> None:  # noqa: ANN001
 def test_depth_linear_and_options(chart) -> None:  # noqa: ANN001
     cams = cameras_of(chart, 6, seed=3)
     color, depth = layered(chart, cams, size=SIZE, depth=True)
-    singles = [chart.render(c, size=SIZE, pipeline="forward", depth=True) for c in cams]
+    singles = [chart.render(c, size=SIZE, pipeline="forward", ao="off", depth=True) for c in cams]
     assert_views_equal(color, [s[0] for s in singles], "colour with depth")
     assert_views_equal(depth, [s[1] for s in singles], "depth")
     assert np.isinf(depth).any() and np.isfinite(depth).any()
@@ -133,11 +135,11 @@ def test_depth_linear_and_options(chart) -> None:  # noqa: ANN001
     linear = layered(chart, cams, size=SIZE, linear=True)
     assert linear.dtype == np.float32
     for i, c in enumerate(cams):
-        np.testing.assert_array_max_ulp(linear[i], chart.render(c, size=SIZE, pipeline="forward", linear=True), 8)
+        np.testing.assert_array_max_ulp(linear[i], chart.render(c, size=SIZE, pipeline="forward", ao="off", linear=True), 8)
     for opts in ({"view": "f"}, {"lighting": "course"}, {"tbn": "packed", "alpha_mask": False},
                  {"env": "none", "exposure": 1.5}):
         assert_views_equal(layered(chart, cams, size=SIZE, **opts),
-                           [chart.render(c, size=SIZE, pipeline="forward", **opts) for c in cams], str(opts))
+                           [chart.render(c, size=SIZE, pipeline="forward", ao="off", **opts) for c in cams], str(opts))
 
 
 @pytest.mark.parametrize("options", [{}, {"batch": 3}, {"pipeline": "compute"},
@@ -183,7 +185,7 @@ def test_shadowed_spot_and_point_lights(chart) -> None:  # noqa: ANN001
               Light(kind="point", position=tuple(top + (hi - lo) * 0.3), intensity=20.0)]
     cams = cameras_of(chart, 6, seed=8)
     assert_views_equal(layered(chart, cams, size=SIZE, lights=lights),
-                       [chart.render(c, size=SIZE, pipeline="forward", lights=lights) for c in cams], "spot + point")
+                       [chart.render(c, size=SIZE, pipeline="forward", ao="off", lights=lights) for c in cams], "spot + point")
 
 
 def test_directional_shadows_share_one_scene_map(chart) -> None:  # noqa: ANN001
@@ -194,7 +196,7 @@ def test_directional_shadows_share_one_scene_map(chart) -> None:  # noqa: ANN001
     batch = layered(chart, cams, size=SIZE)
     for i in (0, 3):
         assert (layered(chart, [cams[i]], size=SIZE)[0] == batch[i]).all()
-    single = np.stack([chart.render(c, size=SIZE, pipeline="forward") for c in cams])
+    single = np.stack([chart.render(c, size=SIZE, pipeline="forward", ao="off") for c in cams])
     differ = np.abs(batch.astype(int) - single.astype(int)).max(axis=-1) > 8
     assert differ.mean() < 0.05, f"{differ.mean():.3%} of pixels differ by more than 8/255"
 
@@ -206,7 +208,7 @@ def test_outputs_are_stacked_per_view(chart) -> None:  # noqa: ANN001
     names = ("color", "depth", "instance", "normal")
     out = layered(chart, cams, size=SIZE, outputs=names)
     assert tuple(out) == names
-    singles = [chart.render(c, size=SIZE, pipeline="forward", outputs=names) for c in cams]
+    singles = [chart.render(c, size=SIZE, pipeline="forward", ao="off", outputs=names) for c in cams]
     for name in names:
         assert_views_equal(out[name], [s[name] for s in singles], name)
 
@@ -218,7 +220,7 @@ def test_sample_model(assets, make_renderer) -> None:  # noqa: ANN001
     if not r.device.batch_views:
         pytest.skip("no layered rendering on this device")
     cams = cameras_of(r, 7, seed=4)
-    assert_views_equal(layered(r, cams, size=SIZE), [r.render(c, size=SIZE, pipeline="forward") for c in cams],
+    assert_views_equal(layered(r, cams, size=SIZE), [r.render(c, size=SIZE, pipeline="forward", ao="off") for c in cams],
                        "DamagedHelmet")
 
 
@@ -262,7 +264,7 @@ def test_cli_cameras_batched_equal_frame_by_frame(capsys, tmp_path) -> None:  # 
     cams.write_text(json.dumps(["0.6,3.2,9,0.4,2.2,0", {"eye": [3, 3, 8], "target": [0, 2, 0], "fov": 50},
                                 "-4,2,6,0,1,0", "2,-1,-7,0,1,0"]))
     common = ["render", "--cameras", str(cams), "--size", "40x30", "--light", "point:0,4,3",
-              "--validation", "--pipeline", "forward"]
+              "--validation", "--pipeline", "forward", "--ao", "off"]
     assert main([*common, "--out", str(tmp_path / "a")]) == 0
     assert main([*common, "--out", str(tmp_path / "b"), "--batch", "0", "--pipeline", "forward"]) == 0
     assert main([*common, "--out", str(tmp_path / "c"), "--batch", "3"]) == 0
@@ -304,7 +306,7 @@ def test_blended_draws_in_each_views_order(make_renderer) -> None:  # noqa: ANN0
     cams = cameras_of(r, 12, seed=21)
     orders = {r.blend_order(c.eye) for c in cams}
     assert len(orders) >= 4, "the cameras should disagree on the blended order"
-    assert_views_equal(layered(r, cams, size=SIZE), [r.render(c, size=SIZE, pipeline="forward") for c in cams],
+    assert_views_equal(layered(r, cams, size=SIZE), [r.render(c, size=SIZE, pipeline="forward", ao="off") for c in cams],
                        "blended spheres")
 
 
@@ -389,7 +391,7 @@ def test_msaa_renders_view_by_view(make_renderer) -> None:  # noqa: ANN001
     batch, and its view-by-view fallback for blended scenes: test_compute_batch.py.)"""
     r = make_renderer(msaa=4)
     cams = cameras_of(r, 3, seed=51)
-    assert_views_equal(layered(r, cams, size=SIZE), [r.render(c, size=SIZE, pipeline="forward") for c in cams],
+    assert_views_equal(layered(r, cams, size=SIZE), [r.render(c, size=SIZE, pipeline="forward", ao="off") for c in cams],
                        "msaa 4")
 
 
@@ -455,6 +457,6 @@ def test_random_cameras_batch_equals_single_frames(chart, data) -> None:  # noqa
     cams = data.draw(st.lists(scene_cameras(lo, hi), min_size=1, max_size=5), label="cameras")
     size = (40, 30)
     color, depth = layered(chart, cams, size=size, depth=True)
-    singles = [chart.render(c, size=size, pipeline="forward", depth=True) for c in cams]
+    singles = [chart.render(c, size=size, pipeline="forward", ao="off", depth=True) for c in cams]
     assert_views_equal(color, [s[0] for s in singles], "colour")
     assert_views_equal(depth, [s[1] for s in singles], "depth")

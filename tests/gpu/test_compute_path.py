@@ -118,7 +118,8 @@ def test_compute_timings_have_every_step(chart, raster) -> None:  # noqa: ANN001
     list(chart.render_many([None] * 4, size=SIZE, pipeline="compute", raster=raster))
     stats = chart.last_stats
     path = "compute_raster" if raster == "compute" else "compute"
-    wanted = {"shadows", "transmission", "classify", "shading", "background", "blend", "copy"}
+    wanted = {"shadows", "transmission", "ao", "classify", "shading", "background", "blend",
+              "copy"}
     wanted |= {*RASTER_STEPS} if raster == "compute" else {"opaque", "opaque_double", "mask"}
     assert "raster" in PATHS[path] or raster == "hardware"
     assert set(stats.pass_ms) == wanted, stats.pass_ms

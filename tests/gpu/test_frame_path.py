@@ -13,11 +13,12 @@ def test_depth_prepass_changes_no_pixel(make_renderer) -> None:
     from vkpbr.scene.synthetic import sphere_field
 
     scene = sphere_field(draws=40, rings=8, segments=16, materials=4)
-    # The pre-pass is the fragment path's (auto takes the compute path on GPUs).
+    # The pre-pass is the fragment path's (auto takes the compute path on GPUs); GTAO off,
+    # which takes the visibility pass as the fragment passes' pre-pass (render/paths.py).
     plain = make_renderer(scene, depth_prepass=False).render(size=(96, 64), depth=True,
-                                                              pipeline="forward")
+                                                              pipeline="forward", ao="off")
     pre = make_renderer(scene, depth_prepass=True)
-    image = pre.render(size=(96, 64), depth=True, pipeline="forward")
+    image = pre.render(size=(96, 64), depth=True, pipeline="forward", ao="off")
     assert np.array_equal(plain[0], image[0]) and np.array_equal(plain[1], image[1])
     passes = pre.last_stats.pass_ms
     assert {"shadows", "prepass_opaque", "opaque", "mask", "blend", "copy"} <= set(passes)

@@ -107,10 +107,11 @@ def away_from_edges(behind: np.ndarray) -> np.ndarray:
 
 
 def diffuse_weight(make_renderer, env: Path, cache: Path, slab: Material = SLAB) -> np.ndarray:  # noqa: ANN001
-    """k_d per pixel: the slab without transmission, IBL diffuse view / L."""
+    """k_d per pixel: the slab without transmission, IBL diffuse view / L (GTAO off: it
+    occludes that view, and k_d is the BRDF's weight alone)."""
     opaque = dataclasses.replace(slab, transmission_factor=0.0)
     r = make_renderer(slab_scene(opaque), env_spec=EnvironmentSpec.small(), cache_dir=cache)
-    return render(r, "ibl-diffuse", "forward", env=str(env)) / L_ENV
+    return render(r, "ibl-diffuse", "forward", env=str(env), ao="off") / L_ENV
 
 
 def mirrored_transmission(slab: Material, k_d: np.ndarray, behind: np.ndarray | None

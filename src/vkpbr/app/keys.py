@@ -92,7 +92,8 @@ def _once(key: str, action: str, arg: Any = None) -> Chord:
     return Chord(key, action, arg, repeat=False)
 
 
-_DIGITS = "1234567890"  # keys 1..9, 0 select views 0..9 (Shift: 10..19, Ctrl: 20..29)
+_DIGITS = "1234567890"  # keys 1..9, 0 select views 0..9 (Shift: 10..19, Ctrl: 20..29,
+# Ctrl+Shift: 30..)
 _VIEWS = list(L.View)
 
 
@@ -139,6 +140,8 @@ BINDINGS: tuple[Binding, ...] = (
             doc="view: " + _view_doc(10)),
     Binding("Ctrl+1..0", "view: " + _view_names(20), _view_chords("ctrl+", 20),
             doc="view: " + _view_doc(20)),
+    Binding("Ctrl+Shift+1..0", "view: " + _view_names(30), _view_chords("ctrl+shift+", 30),
+            doc="view: " + _view_doc(30)),
     Binding("V / Shift+V", "next / previous debug view",
             (_press("v", "cycle", ("view", 1)), _press("shift+v", "cycle", ("view", -1)))),
     Binding("G", "lighting: pbr <-> course", (_press("g", "cycle", ("lighting", 1)),)),

@@ -89,6 +89,12 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
     OptionSpec("--env-background", "choice", "draw the environment behind the scene (default: "
                "on with pbr lighting and an environment; course: black)",
                field="env_background", group="environment", choices=("on", "off")),
+    OptionSpec("--ao", "enum", "screen-space ambient occlusion of the image-based light "
+               "(default %(default)s: GTAO where frames have an environment; off)", field="ao",
+               group="environment"),
+    OptionSpec("--ao-radius", "float", "GTAO's radius in world units (default 0: 15%% of the "
+               "scene's bounding radius)", field="ao_radius", group="environment",
+               metavar="R"),
     OptionSpec("--view", "enum", "debug view, one of: %(choices)s (default %(default)s; "
                "`vkpbr render --list-views` says what each shows)", field="view", metavar="NAME"),
     OptionSpec("--brdf", "enum", "BRDF: gltf (the glTF spec's), or the course's Cook-Torrance "

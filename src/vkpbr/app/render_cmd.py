@@ -78,7 +78,8 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--outputs", metavar="NAME,...",
                    type=_as_type(_output_names, "--outputs", "output list"),
                    help="dataset outputs of the same frame, written beside --out as "
-                        "STEM.NAME.exr (depth, range, normal, normal_camera, normal_geometric: "
+                        "STEM.NAME.exr (depth, range, normal, normal_camera, normal_geometric, "
+                        "ao: "
                         "float) or STEM.NAME.png (instance, semantic: 16-bit ids); see "
                         "docs/outputs.md")
     p.add_argument("--semantics", default="mesh", metavar="mesh|material|extras|FILE.json",

@@ -185,12 +185,16 @@ class Sampler(DeviceObject):
         aniso = min(spec.anisotropy, float(device.limits.maxSamplerAnisotropy))
         use_aniso = device.anisotropy and aniso > 1.0 and spec.mipmaps
         filt = {"linear": vk.VK_FILTER_LINEAR, "nearest": vk.VK_FILTER_NEAREST}
+        nearest = spec.mag == spec.min == "nearest" and not spec.mipmaps
         self.handle = vk.vkCreateSampler(
             device.handle,
             vk.VkSamplerCreateInfo(
                 magFilter=filt[spec.mag],
                 minFilter=filt[spec.min],
-                mipmapMode=vk.VK_SAMPLER_MIPMAP_MODE_LINEAR,
+                # Nearest throughout for a point sampler without mips (a depth texture read
+                # by texelFetch: D32 need not filter linearly).
+                mipmapMode=vk.VK_SAMPLER_MIPMAP_MODE_NEAREST if nearest
+                else vk.VK_SAMPLER_MIPMAP_MODE_LINEAR,
                 addressModeU=getattr(vk, f"VK_SAMPLER_ADDRESS_MODE_{self._WRAP[spec.wrap_u]}"),
                 addressModeV=getattr(vk, f"VK_SAMPLER_ADDRESS_MODE_{self._WRAP[spec.wrap_v]}"),
                 addressModeW=vk.VK_SAMPLER_ADDRESS_MODE_REPEAT,

@@ -25,6 +25,7 @@ from vkpbr.errors import UsageError
 from vkpbr.gpu.batch_target import BatchTarget
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH
 from vkpbr.render import layouts as L
+from vkpbr.render.ao import prepare_ao
 from vkpbr.render.batch import MAX_LAYERS, BatchViews
 from vkpbr.render.camera import linear_depth
 from vkpbr.render.frame_path import read_timings
@@ -141,14 +142,16 @@ class BatchPath:
         chunk = self.views.chunk_views if self.views is not None else 0
         bv = self._views(n, chunk or max(1, min(n, MAX_LAYERS)))
         self._t_start = time.perf_counter()
-        frame, plan, terms = self._begin(views, size, lights, opts, linear, rows)
+        ao = prepare_ao(p.ao, p.recorder, opts, target, p.bounds.radius, False)
+        shading_ao = ao is not None and ao.shading
+        frame, plan, terms = self._begin(views, size, lights, opts, linear, rows, shading_ao)
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
         set0 = bv.sets0[frame.index]
         self._run(frame, plan, opts, lambda redraw: p.recorder.command_buffer(
             target, frame, 0, FrameSpec(
                 "compute_batch", opts.tbn, opts.alpha_mask, plan, redraw, copy,
-                variant=p.lighting.shade_variant(opts), tiles=(n, w, h, rows), set0_id=id(set0),
-                external_id=id(external), batch=(bv.generation,)),
+                variant=p.lighting.shade_variant(opts, shading_ao), tiles=(n, w, h, rows),
+                set0_id=id(set0), external_id=id(external), batch=(bv.generation,), ao=ao),
             FrameObjects(set0=set0, external=external)),
             (lambda: self._cuda_wait(external)) if cuda else None)
         if cuda:
@@ -245,12 +248,12 @@ class BatchPath:
         return self.views
 
     def _begin(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
-               opts: RenderOptions, linear: bool, atlas_rows: int = 0
+               opts: RenderOptions, linear: bool, atlas_rows: int = 0, ao: bool = False
                ) -> tuple[Any, Any, ViewTerms]:
         """A submission's frame of the ring with what every batch writes: the frame's lights,
         environment and shadow matrices (directional ones over the whole scene), the blocks
         the views share and every view's record (`atlas_rows`: a compute batch's tiles a
-        column, BatchViews.write_views). Returns the frame, the shadow plan and the views'
+        column, BatchViews.write_views; `ao`: its shading reads GTAO). Returns the frame, the shadow plan and the views'
         terms (views.batch_view_terms)."""
         p = self.parts
         frame_lights = p.lighting.frame_lights(opts, lights)
@@ -261,7 +264,8 @@ class BatchPath:
         p.gpu_state.write(frame.index)
         plan = p.shadow_frames.prepare(frame_lights, opts)
         rows = p.shadow_frames.write_scene(slot, plan, frame_lights)
-        write_frame_blocks(slot, frame_lights, opts, linear, p.lighting.frame_lighting(opts), rows)
+        write_frame_blocks(slot, frame_lights, opts, linear, p.lighting.frame_lighting(opts, ao),
+                           rows)
         self.views.write_views(terms, size, atlas_rows)  # type: ignore[union-attr]
         return frame, plan, terms
 

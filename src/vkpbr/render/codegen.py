@@ -61,6 +61,9 @@ VARIANTS: tuple[Variant, ...] = (
     *(Variant(f"classify_count{'' if agg else '_plain'}_copy.comp.spv", "classify.comp",
               (("COMPUTE_SHADING", 1), ("KERNEL", 1), ("AGGREGATE", agg), ("OPAQUE_COPY", 1)))
       for agg in (1, 0)),
+    # Screen-space ambient occlusion (render/ao.py): GTAO, then its spatial denoise.
+    Variant("ao_gtao.comp.spv", "ao_gtao.comp"),
+    Variant("ao_denoise.comp.spv", "ao_denoise.comp"),
     # Shadow-map passes (render/shadows.py): depth only, or cut out by the base colour's alpha.
     Variant("shadow_opaque.vert.spv", "shadow.vert", (("ALPHA_MASK", 0),)),
     Variant("shadow_mask.vert.spv", "shadow.vert", (("ALPHA_MASK", 1),)),

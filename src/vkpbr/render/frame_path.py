@@ -26,6 +26,7 @@ import numpy as np
 from vkpbr.gpu.frames import Frame, FrameRing
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, COPY_OUTPUTS, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
+from vkpbr.render.ao import AoSpec, prepare_ao
 from vkpbr.render.camera import as_camera, linear_depth, validate_camera
 from vkpbr.render.frames import FrameSlot, FrameStats, write_frame_blocks, write_frame_view
 from vkpbr.render.options import RenderOptions
@@ -87,8 +88,7 @@ class FramePath:
         clock = time.thread_time if driver_time else _no_clock
         c0 = clock()
         frame = p.ring.begin()  # waits for the frame's previous submission
-        slot = p.slots[frame.index]
-        p.gpu_state.write(frame.index)  # the scene state, if it changed since the slot had it
+        slot = p.gpu_state.write(frame.index, p.slots)  # the slot, its scene state up to date
         if timings:
             read_timings(p.ring, frame, slot)
         image = target.acquire(frame)
@@ -102,16 +102,17 @@ class FramePath:
             check_lens(camera, target, p.device.compute_path)
             post = True
         drawn = p.targets.post(target, copy, extent) if post else target  # (HDR with post steps)
+        ao = prepare_ao(p.ao, p.recorder, options, drawn, p.bounds.radius, COPY_OUTPUTS in copy)
         # The camera's maths, once: the shadow cascades take its planes from the slot.
         write_frame_view(slot, view, extent, p.bounds)
         p.gpu_state.write_motion(slot.index, slot.vp, COPY_OUTPUTS in copy)
         write_frame_blocks(slot, lights, self._shading_options(options, post), linear or post,
-                           p.lighting.frame_lighting(options),
+                           p.lighting.frame_lighting(options, ao is not None and ao.shading),
                            p.shadow_frames.write(slot, plan, lights, view, extent))
         if overlay is not None:
             overlay.prepare(frame.index)
         spec = self._spec(drawn, slot, options, plan, overlay, copy, linear, wanted if post else (),
-                          transmission, post, lens.push if lens is not None else ())
+                          transmission, post, lens.push if lens is not None else (), ao)
         if post and options.noise is not None:  # its random numbers' key: seed and view
             p.post().write_key(frame.index, noise_key(options.noise, camera, target.extent))
         order = p.blend.order(camera.eye)
@@ -135,17 +136,18 @@ class FramePath:
     def _spec(self, drawn: FrameTarget, slot: FrameSlot, options: RenderOptions,
               plan: ShadowPlan, overlay: TextOverlay | None, copy: tuple[str, ...], linear: bool,
               post: tuple[tuple[str, float], ...], transmission: bool, encode: bool,
-              lens: tuple[float, ...]) -> FrameSpec:
+              lens: tuple[float, ...], ao: AoSpec | None) -> FrameSpec:
         """What the frame's recording depends on: its path, modes and shadow redraws."""
         p = self.parts
         redraw = p.shadow_frames.stale(slot.index, plan, options.alpha_mask)
         compute = p.paths.uses_compute(drawn, options)
         path = choose_path(compute, compute and p.paths.uses_compute_raster(options, drawn),
-                           COPY_OUTPUTS in copy)
+                           COPY_OUTPUTS in copy or ao is not None)
+        variant = p.lighting.shade_variant(options, ao is not None and ao.shading)
         return FrameSpec(path, options.tbn, options.alpha_mask, plan, redraw, copy,
-                         transmission, p.lighting.shade_variant(options), id(overlay),
-                         post=post, post_tonemap=encode_tonemap(options, linear) if encode else 0,
-                         lens=lens)
+                         transmission, variant, id(overlay), post=post,
+                         post_tonemap=encode_tonemap(options, linear) if encode else 0,
+                         lens=lens, ao=ao)
 
     def _post_of(self, options: RenderOptions) -> tuple[tuple[str, float], ...]:
         """The post steps `options` turn on (the last answer kept: a run of frames has one

@@ -73,6 +73,7 @@ __all__ = [
     "Brdf",
     "Tonemap",
     "TbnMode",
+    "Ao",
     "SETS",
     "HAND_DECLARED_SETS",
     "MATERIAL_TEXTURES",
@@ -220,7 +221,7 @@ SETTINGS_SRGB_TARGET = 4  # the colour target encodes sRGB in hardware
 
 # The material's textures, in binding order (set 1, bindings 0-14; the Material block is
 # binding 15): the table's bound slots (scene/material_table.py TEXTURES), the core's six, then
-# the KHR_materials_* layers'. 15 samplers of set 1 + 4 of set 2 + 2 of set 3 = 21 a stage
+# the KHR_materials_* layers'. 15 samplers of set 1 + 5 of set 2 + 2 of set 3 = 22 a stage
 # (lavapipe allows 32, NVIDIA far more; Vulkan's guaranteed minimum, 16, is below that).
 MATERIAL_TEXTURES = tuple(slot.name for slot in TEXTURES if slot.bound)
 MATERIAL_BINDING = len(MATERIAL_TEXTURES)  # set 1's Material block
@@ -300,6 +301,7 @@ LIGHTING_SHADOWS = 1  # shadow maps are sampled
 LIGHTING_IBL = 2  # image-based lighting from the environment
 LIGHTING_BACKGROUND = 4  # the environment is drawn where nothing else is
 LIGHTING_SCREEN_TRANSMISSION = 8  # transmission samples the opaque copy (render/transmission.py)
+LIGHTING_AO = 16  # the image-based light is occluded by the frame's GTAO (render/ao.py, set 2 ao_map)
 # The largest copy of the opaque scene (render/transmission.py), square: the Sample Viewer's
 # transmission framebuffer's size; shade.glsl's blur by roughness is relative to it.
 OPAQUE_COPY_MAX_SIZE = 1024
@@ -449,6 +451,8 @@ OUTPUT_IMAGES = {
     # depth, range, then the motion (render/scene_state.py): where the point was in the
     # previous frame's image, in pixels from where it is now (x right, y down)
     "out_depth_range": ("VK_FORMAT_R32G32B32A32_SFLOAT", 16, "float32", 4),
+    # GTAO's visibility (render/ao.py), copied from the frame slot's "ao" image.
+    "out_ao": ("VK_FORMAT_R32_SFLOAT", 4, "float32", 1),
 }
 VISIBILITY_FORMAT = "VK_FORMAT_R32G32_UINT"
 
@@ -500,6 +504,9 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
         # KHR_materials_transmission's linear, mip-mapped copy of the opaque scene
         # (render/transmission.py), a 1x1 stand-in in scenes where nothing transmits.
         (5, "sampler", ("fragment", "compute"), "opaque_copy"),
+        # The frame's screen-space ambient occlusion (render/ao.py): GTAO's visibility a
+        # pixel, read by texelFetch at the shaded pixel; a 1x1 stand-in until frames have it.
+        (6, "sampler", ("fragment", "compute"), "ao_map"),
     ),
     # Shadows (render/shadows.py ShadowMaps owns the resources; declared in GLSL by hand in
     # shaders/shadow_data.glsl and shadow_sampling.glsl: ShadowData is a header then matrices).
@@ -547,6 +554,7 @@ class View(Named):
     SHEEN = 27
     TRANSMISSION = 28
     VOLUME = 29
+    AO = 30  # the frame's screen-space ambient occlusion (render/ao.py)
 
 
 VIEW_HELP = {
@@ -586,6 +594,8 @@ VIEW_HELP = {
                        "the surface and the refracted environment, after volume attenuation",
     View.VOLUME: "volume transmittance (KHR_materials_volume): attenuation colour ^ (thickness "
                  "/ attenuation distance), as a colour",
+    View.AO: "screen-space ambient occlusion (GTAO, --ao): visibility of the image-based light, "
+             "1 unoccluded, grey (1 where frames have none)",
 }
 
 
@@ -632,6 +642,14 @@ class RasterPath(Named):
     HARDWARE = 0
     COMPUTE = 1
     AUTO = 2
+
+
+class Ao(Named):
+    """Screen-space ambient occlusion of the image-based light (render/ao.py): OFF, or GTAO
+    (XeGTAO's ground-truth ambient occlusion, between depth and shading)."""
+
+    OFF = 0
+    GTAO = 1
 
 
 class TbnMode(Named):

@@ -11,6 +11,7 @@ for, and whether frames draw the copy of the opaque scene that transmissive surf
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Iterable
@@ -43,7 +44,7 @@ class Lighting:
         # state: the living scene (vkpbr.scene.state): its lights follow animation pointers
         self.scene, self.opaque_copies, self.environments = scene, opaque_copies, environments
         self.state = state
-        self._last: tuple[RenderOptions, FrameLighting] | None = None
+        self._last: tuple[RenderOptions, bool, FrameLighting] | None = None
 
     def default_light(self) -> Light:
         """The course's light: the scene's first, else a white point light at (0, 2, 0)."""
@@ -71,20 +72,24 @@ class Lighting:
             return (course_point_light(chosen[0], self.scene.bounds()),) if chosen else ()
         return chosen
 
-    def frame_lighting(self, options: RenderOptions) -> FrameLighting:
-        """What lights a frame besides its punctual lights, for `options`' lighting mode
-        (the last answer kept: a run of frames has one options object)."""
+    def frame_lighting(self, options: RenderOptions, ao: bool = False) -> FrameLighting:
+        """What lights a frame besides its punctual lights, for `options`' lighting mode;
+        `ao`: the frame's GTAO occludes its image-based light (render/ao.py, LIGHTING_AO).
+        The last answer kept: a run of frames has one options object."""
         last = self._last
-        if last is not None and last[0] is options:
-            return last[1]
+        if last is not None and last[0] is options and last[1] == ao:
+            return last[2]
         lighting = self._frame_lighting(options)
-        self._last = (options, lighting)
+        if ao:
+            lighting = dataclasses.replace(lighting, flags=lighting.flags | L.LIGHTING_AO)
+        self._last = (options, ao, lighting)
         return lighting
 
-    def shade_variant(self, options: RenderOptions) -> ShadeVariant:
-        """What the compute path's shading kernels are specialised for with `options`: the
-        frame's lighting flags and BRDF (render/compute_path.py ShadeVariant)."""
-        return ShadeVariant(self.frame_lighting(options).flags, int(options.shading_brdf))
+    def shade_variant(self, options: RenderOptions, ao: bool = False) -> ShadeVariant:
+        """What the compute path's shading kernels are specialised for with `options` (and
+        `ao`, as frame_lighting's): the frame's lighting flags and BRDF
+        (render/compute_path.py ShadeVariant)."""
+        return ShadeVariant(self.frame_lighting(options, ao).flags, int(options.shading_brdf))
 
     def screen_transmission(self, options: RenderOptions) -> bool:
         """Whether frames with `options` draw the copy of the opaque scene that transmissive

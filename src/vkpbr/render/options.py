@@ -17,6 +17,7 @@ from typing import Any
 
 from vkpbr.errors import UsageError
 from vkpbr.render.layouts import (
+    Ao,
     Brdf,
     Lighting,
     PipelinePath,
@@ -161,7 +162,8 @@ POST_OPTIONS: tuple[PostOption, ...] = (
 
 # RenderOptions field -> the enum its values come from (the CLI's choices, the viewer's cycles).
 ENUM_FIELDS: dict[str, type] = {"view": View, "lighting": Lighting, "brdf": Brdf, "tbn": TbnMode,
-                                "tonemap": Tonemap, "pipeline": PipelinePath, "raster": RasterPath}
+                                "tonemap": Tonemap, "pipeline": PipelinePath, "raster": RasterPath,
+                                "ao": Ao}
 # Fields whose None means "the lighting mode's choice" (MODE_DEFAULTS).
 MODE_DEFAULT_FIELDS = ("brdf", "tonemap")
 MODE_DEFAULTS: dict[Lighting, dict[str, Any]] = {
@@ -220,6 +222,12 @@ class RenderOptions:
     env_background : bool or None
         Draw the environment where no surface is (None: yes in the physically based mode,
         with an environment; the course mode's background is black).
+    ao : Ao or str
+        Screen-space ambient occlusion of the image-based light (render/ao.py): "gtao" (the
+        default: XeGTAO's ground-truth ambient occlusion, in the physically based mode with an
+        environment, on single-sample offscreen frames) or "off".
+    ao_radius : float
+        GTAO's effect radius in world units (>= 0; 0: 15% of the scene's bounding radius).
     bloom : float
         Bloom strength, 0..1 (0: off): a post step (render/post_bloom.py) on the frame's HDR
         radiance before its tone map; the frame's total light is kept.
@@ -246,6 +254,8 @@ class RenderOptions:
     env_intensity: float = 1.0
     env_rotation: float = 0.0
     env_background: bool | None = None
+    ao: Ao = Ao.GTAO
+    ao_radius: float = 0.0
     bloom: float = 0.0
     noise: SensorNoise | str | None = None
 
@@ -296,7 +306,7 @@ class RenderOptions:
             raise UsageError(f"env {env!r}: expected sky, none or a panorama file "
                              f"({', '.join(ENV_SUFFIXES)})")
         object.__setattr__(self, "env", env)
-        for name, low in (("env_intensity", 0.0), ("env_rotation", -1e6)):
+        for name, low in (("env_intensity", 0.0), ("env_rotation", -1e6), ("ao_radius", 0.0)):
             try:
                 value = float(getattr(self, name))
             except (TypeError, ValueError):

@@ -37,6 +37,8 @@ OUTPUTS = {
     "motion": "(H, W, 2) float32 where each surface point was in the previous frame's image, "
               "in pixels from where it is now (x right, y down): camera, node, skin and morph "
               "motion; 0 = background and on a renderer's first frame",
+    "ao": "(H, W) float32 screen-space ambient occlusion (GTAO, render/ao.py): visibility of "
+          "the image-based light, 1 unoccluded; 1 = background",
 }
 
 
@@ -77,6 +79,7 @@ def frame_outputs(images: dict[str, np.ndarray], color: np.ndarray, wanted: tupl
         "normal_camera": lambda: normal @ np.asarray(camera_rotation, np.float32),
         "normal_geometric": lambda: images["out_normal_geometric"][..., :3].copy(),
         "motion": lambda: dr[..., 2:4].copy(),
+        "ao": lambda: images["out_ao"][..., 0].copy(),
     }
     return {name: available[name]() for name in wanted}
 

@@ -26,6 +26,7 @@ from vkpbr.gpu.device import Device, DeviceRequest
 from vkpbr.gpu.frames import FrameRing
 from vkpbr.gpu.pipeline import PipelineLayout
 from vkpbr.render import layouts as L
+from vkpbr.render.ao import AoImages
 from vkpbr.render.batch import draw_spheres
 from vkpbr.render.blend_order import BlendOrder
 from vkpbr.render.compute_path import ComputeScene
@@ -79,6 +80,7 @@ class FrameParts:
     environments: Environments
     lighting: Lighting
     shadow_frames: ShadowFrames
+    ao: AoImages  # the ambient occlusion's images and kernels (render/ao.py)
 
     def default_camera(self) -> Camera:
         """The scene's first camera, else the automatic one (scene/geometry.py auto_camera)."""
@@ -96,6 +98,7 @@ class FrameParts:
             self.deform.destroy()
         self.shadow_frames.maps.destroy()
         self.opaque_copies.destroy()
+        self.ao.destroy()
         if self.post.made is not None:
             self.post.made.destroy()
         self.environments.destroy()
@@ -150,8 +153,9 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     blend = BlendOrder(gs.draws, state)
     paths = FramePaths(device, msaa, scene.triangle_count, len(blend) > 0, depth_prepass,
                        cache_dir)
+    ao = AoImages(device, [s.set2 for s in slots], layouts[0], gs.stand_in())
     recorder = FrameRecorder(device, gs, pipeline_layout, ring, slots, paths.prepass_for,
-                             shadows, compute, copies, post, deform)
+                             shadows, compute, copies, post, deform, ao)
     bounds = LiveBounds(state, Bounds.of(*scene.bounds()))
     environments = Environments(device, slots, recorder, env_spec, cache_dir)
     return FrameParts(
@@ -160,4 +164,4 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
         Targets(device, msaa, background, ring.count, recorder, compute, post), environments,
         Lighting(scene, copies, environments, state),
         ShadowFrames(shadows, bounds, recorder, state,
-                     np.array([d.casts_shadows for d in gs.draws], bool)))
+                     np.array([d.casts_shadows for d in gs.draws], bool)), ao)

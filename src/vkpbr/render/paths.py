@@ -15,6 +15,8 @@ Groups:
                    target (the rows between one compute step and the next share a rendering)
   visibility       the opaque and masked rows drawn into the visibility image
   raster           the compute rasteriser's kernels instead (render/compute_path.py)
+  ao               screen-space ambient occlusion from the depth (render/ao.py: GTAO and its
+                   denoise), before the shading that reads it; empty in frames without it
   classify, shading, outputs, background_compute   the compute path's kernels
   overlay          the viewer's HUD
   post             the post steps on the frame's HDR radiance, then its encode (render/post_stage.py;
@@ -40,18 +42,20 @@ PATHS: dict[str, tuple[str, ...]] = {
     # The fragment path: everything shaded in fragment shaders.
     "forward": (*_FRAME_HEAD, "prepass_opaque", "prepass_opaque_double",
                 *_FRAGMENT_PASSES, "post", "overlay", "finish"),
-    # The fragment path with dataset outputs: a visibility pass makes them, then the
-    # fragment passes shade over its depth (their pre-pass).
-    "forward_outputs": (*_FRAME_HEAD, "outputs_clear", "visibility", "classify", "outputs",
+    # The fragment path with dataset outputs or ambient occlusion: a visibility pass makes
+    # the outputs and the depth GTAO reads (alpha-masked surfaces included, which the depth
+    # pre-pass leaves out), then the fragment passes shade over its depth (their pre-pass).
+    "forward_outputs": (*_FRAME_HEAD, "outputs_clear", "visibility", "ao", "classify", "outputs",
                         *_FRAGMENT_PASSES, "post", "overlay", "finish"),
     # The compute path: coverage by the raster units, shading in compute shaders.
-    "compute": (*_FRAME_HEAD, "outputs_clear", "visibility", *_SHADE_COMPUTE, *_AFTER_SHADING),
+    "compute": (*_FRAME_HEAD, "outputs_clear", "visibility", "ao", *_SHADE_COMPUTE,
+                *_AFTER_SHADING),
     # The compute path with the compute rasteriser (64-bit atomics) making the coverage.
-    "compute_raster": (*_FRAME_HEAD, "outputs_clear", "raster", *_SHADE_COMPUTE,
+    "compute_raster": (*_FRAME_HEAD, "outputs_clear", "raster", "ao", *_SHADE_COMPUTE,
                        *_AFTER_SHADING),
     # Batches: every view of a call in one submission (render/batch_path.py).
-    "compute_batch": ("deform", "shadows", "raster", "classify", "shading", "background_compute",
-                      "finish"),
+    "compute_batch": ("deform", "shadows", "raster", "ao", "classify", "shading",
+                      "background_compute", "finish"),
     "layered_batch": ("deform", "shadows", "cull", "chunks", "finish"),
 }
 # The transmission's copy of the opaque scene (render/transmission.py), drawn as the frame is.
@@ -66,15 +70,15 @@ COPY_PATHS: dict[str, tuple[str, ...]] = {
 RASTER_STEPS = ("raster_small", "raster_big", "raster_masked", "raster_masked_big",
                 "raster_resolve")
 # Every timed step a frame can report in FrameStats.pass_ms, in frame order.
-STEP_NAMES = ("deform", "shadows", "transmission", "cull", "prepass_opaque", "prepass_opaque_double",
-              *RASTER_STEPS, "opaque", "opaque_double", "mask", "classify", "shading", "outputs",
-              "background", "blend", "views", "copy")
+STEP_NAMES = ("deform", "shadows", "transmission", "cull", "prepass_opaque",
+              "prepass_opaque_double", *RASTER_STEPS, "opaque", "opaque_double", "mask", "ao",
+              "classify", "shading", "outputs", "background", "blend", "views", "copy")
 
 
 def choose_path(compute: bool, raster: bool, outputs: bool) -> str:
     """The path of a single frame: the compute path (`raster`: with the compute rasteriser)
     where `compute`, else the fragment path (through a visibility pass when it makes dataset
-    `outputs`). FramePaths.uses_compute and uses_compute_raster (render/path_choice.py)
+    `outputs` or ambient occlusion). FramePaths.uses_compute and uses_compute_raster (render/path_choice.py)
     decide the two flags."""
     if compute:
         return "compute_raster" if raster else "compute"

@@ -81,7 +81,8 @@ class FrameRecorder:
                  shadows: ShadowMaps | None = None,
                  compute_scene: Callable[[], ComputeScene] | None = None,
                  copies: OpaqueCopies | None = None,
-                 post_kernels: Callable[[], Any] | None = None, deform: Any = None) -> None:
+                 post_kernels: Callable[[], Any] | None = None, deform: Any = None,
+                 ao: Any = None) -> None:
         self.device, self.gpu_scene, self.pipeline_layout = device, gpu_scene, layout
         self.shadows = shadows  # records its passes first; binds its set 3 in the main passes
         self.copies = copies  # the opaque scene's copies (transmission), drawn after the shadows
@@ -89,6 +90,7 @@ class FrameRecorder:
         self.compute_scene = compute_scene  # the compute path's resources, made on first use
         self.post_kernels = post_kernels  # the post steps' (render/post.py), made on first use
         self.deform = deform  # skins and morph targets (render/deform.py); None: none
+        self.ao = ao  # the ambient occlusion's images and kernels (render/ao.py AoImages)
         self._recorded: dict[tuple, _Recorded] = {}
         self._generations: dict[int, int] = {}
         self._pipelines: dict[tuple, Pipeline] = {}

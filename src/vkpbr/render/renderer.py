@@ -261,9 +261,9 @@ class Renderer:
         -------
         (B, H, W, 4) uint8 sRGB (float32 linear with `linear`); with `depth` a tuple (colour,
         depth); with `outputs` {name: (B, ...) array}. pipeline="forward" (and "auto" on
-        CPUs): view i is `render` of `CameraBatch.camera(i)` with pipeline="forward" bit for
-        bit (but transmissive materials, which see the environment through them in a batch,
-        not the copy of the opaque scene). pipeline="compute" (and "auto" on GPUs that have
+        CPUs): view i is `render` of `CameraBatch.camera(i)` with pipeline="forward", ao="off"
+        bit for bit (no GTAO there yet; transmissive materials see the environment through
+        them in a batch, not the copy of the opaque scene). pipeline="compute" (and "auto" on GPUs that have
         64-bit atomics, for scenes without blended materials) is the compute batch: each
         view within 1/255 of `render(pipeline="compute", raster="compute")`. Either way
         directional lights' shadow maps are one map over the whole scene, shared by the views.

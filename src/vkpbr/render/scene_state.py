@@ -131,12 +131,13 @@ class GpuSceneState:
         """(buffer, offset, size) of slot `slot`'s joint matrices and morph weights."""
         return self.buffer, slot * self.stride + self.deform_at, self.deform_size
 
-    def write(self, slot: int) -> None:
+    def write(self, slot: int, slots: Any = None) -> Any:
         """Bring slot `slot`'s copy up to the state (after the slot's fence: its previous
-        frame has finished reading it); nothing when it already holds this version."""
+        frame has finished reading it); nothing when it already holds this version.
+        Returns `slots[slot]` (the frame slot, for the caller) when `slots` is given."""
         version = self.state.version
         if self._written[slot] == version:
-            return
+            return None if slots is None else slots[slot]
         records = self.state.draw_matrices()
         if records.size:
             self.buffer.array(np.float32, records.size, slot * self.stride)[:] = records.ravel()
@@ -146,6 +147,7 @@ class GpuSceneState:
             values = self._deform_values()
             self.buffer.array(np.float32, values.size, slot * self.stride + self.deform_at)[:] = values
         self._written[slot] = version
+        return None if slots is None else slots[slot]
 
     def _write_materials(self, slot: int) -> None:
         """Slot `slot`'s material blocks: the file's, with the state's overrides."""

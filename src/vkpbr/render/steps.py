@@ -19,6 +19,7 @@ from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.graph import Rendering, Step
 from vkpbr.gpu.target import COPY_DEPTH, COPY_OUTPUTS
 from vkpbr.render import layouts as L
+from vkpbr.render.ao import AoSpec
 from vkpbr.render.compute_path import GENERAL_SHADING, ShadeVariant
 from vkpbr.render.passes import PASSES, PassContext, PassSpec, classify, record_pass
 from vkpbr.render.paths import COPY_PATHS, PATHS
@@ -43,7 +44,8 @@ class FrameSpec(NamedTuple):
     (render/paths.py), the TBN path, alpha masking, the shadow plan and which of its layers
     are redrawn, what the target copies out, the transmission's copy, what the compute
     path's shading is specialised for, the ids of the objects in FrameObjects, a compute
-    batch's atlas tiles, a layered batch's own inputs, the post steps and their encode."""
+    batch's atlas tiles, a layered batch's own inputs, the post steps and their encode, the
+    ambient occlusion (render/ao.py; None: none)."""
 
     path: str
     tbn: L.TbnMode = L.TbnMode.VECTORS
@@ -61,6 +63,7 @@ class FrameSpec(NamedTuple):
     post: tuple[tuple[str, float], ...] = ()  # the post steps on (post_stage.enabled_post)
     post_tonemap: int = 0  # the encode's tone map (TONEMAP_*)
     lens: tuple[float, ...] = ()  # a camera model's resample constants (render/post.py)
+    ao: AoSpec | None = None  # the "ao" group's GTAO (render/ao.py ao_spec)
 
 
 class FrameObjects(NamedTuple):
@@ -186,7 +189,9 @@ class FrameSteps:
             # the colour stays as the kernels left it), none ended (inside an open one).
             return [Step(p.name, rendering=self._rendering)]
         ctx = self._context(visibility=False, prepass=prepass or over_visibility)
-        return [Step(p.name, _pass_recorder(ctx, p), rendering=self._rendering_for())]
+        shades = self.spec.ao is not None and not (p.prepass or p.fullscreen)
+        return [Step(p.name, _pass_recorder(ctx, p), (("ao", "sampled"),) if shades else (),
+                     rendering=self._rendering_for())]
 
     def _context(self, visibility: bool, prepass: bool, target: Any = None,
                  classes: list[str] | None = None, copy: bool = False) -> PassContext:
@@ -225,7 +230,7 @@ class FrameSteps:
     def _raster(self) -> list[Step]:
         cs, spec = self._compute(), self.spec
         depth = (COPY_DEPTH in spec.copy or "blend" in self.classes
-                 or not spec.path.startswith("compute"))
+                 or not spec.path.startswith("compute") or spec.ao is not None)
         # The raster's depths: copied where anything reads them, else undefined, and nothing
         # after tests them (no blended draw): the passes after load it, never clear it.
         self._depth_written = True
@@ -235,6 +240,8 @@ class FrameSteps:
                                self.material_sets, spec.tiles, self.set0, depth)
 
     def _classify(self) -> list[Step]:
+        if self.spec.path == "forward_outputs" and COPY_OUTPUTS not in self.spec.copy:
+            return []  # (a visibility pass for GTAO's depth alone: nothing to bin)
         counted = "raster" in PATHS[self.spec.path]
         cs = self._compute()
         self._close_rendering()
@@ -249,9 +256,27 @@ class FrameSteps:
             return []
         cs, spec = self._compute(), self.spec
         self._color_written = True
-        return [cs.shading_step(self.target, self.frame_index, spec.tbn, self._frame_sets(),
-                                self.material_sets, self._shaded(), spec.tiles,
-                                variant=spec.variant)]
+        step = cs.shading_step(self.target, self.frame_index, spec.tbn, self._frame_sets(),
+                               self.material_sets, self._shaded(), spec.tiles,
+                               variant=spec.variant)
+        if spec.ao is not None:  # reads the frame's GTAO (set 2 ao_map)
+            step = Step(step.name, step.record, (*step.uses, ("ao", "sampled")), step.rendering,
+                        step.timed, step.leaves)
+        return [step]
+
+    def _ao(self) -> list[Step]:
+        """GTAO from the depth written so far, then its denoise, into the slot's "ao"
+        image (render/ao.py); the fragment passes after load that depth."""
+        if self.spec.ao is None:
+            return []
+        self._close_rendering()
+        self._depth_written = True
+        copy_out = COPY_OUTPUTS in self.spec.copy and "out_ao" in self.resources
+        # Timed on the compute paths; the fragment path's passes take the timestamps after
+        # its visibility pass (paths.STEP_NAMES' one order).
+        return self.r.ao.steps(self.resources, self.set0, self.frame_index, self.spec.ao,
+                               self.target.extent, self.spec.tiles, copy_out,
+                               self.spec.path.startswith("compute"))
 
     def _outputs(self) -> list[Step]:
         if COPY_OUTPUTS not in self.spec.copy:

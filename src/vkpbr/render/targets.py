@@ -97,6 +97,8 @@ class Targets:
             self.compute.made.forget_target(target, destroy=True)
         if self.post_kernels.made is not None and target.storage_view is not None:
             self.post_kernels.made.forget(target.storage_view.handle)  # (its encode's set)
+        if self.recorder.ao is not None:  # GTAO's sets name its depth view (render/ao.py)
+            self.recorder.ao.forget(target.attachments.depth)
         target.destroy()
 
     def ensure_outputs(self, target: OffscreenTarget) -> None:

@@ -43,6 +43,7 @@ void main() {
     s_color = v_color;
     s_front_facing = gl_FrontFacing;
     s_model_scale = v_model_scale;
+    s_pixel = ivec2(gl_FragCoord.xy);
 #if VISIBILITY
 #if ALPHA_MASK
     if (surface_base_color().a < MAT.alpha_cutoff) discard;

@@ -75,6 +75,7 @@ void main() {
     DrawRecord dr = surface_at(vis.x - 1u, vis.y, pixel, vec2(size), vi, w0, w1, w2, bary);
 #endif
     surface_frame_at(vis.x - 1u, vi, w0, w1, w2, bary);
+    s_pixel = ivec2(pixel);
     vec3 eye = views[view_index].eye_near.xyz;
 
 #if OUTPUTS

@@ -20,6 +20,7 @@
 #include "lights.glsl"
 #include "shadows.glsl"
 #include "ibl.glsl"
+#include "ao.glsl"  // the image-based light's occlusion: material and GTAO (render/ao.py)
 #include "frame_output.glsl"  // opaque_zero / u() (the lavapipe leak guard), radiance_output
 
 // Specialisation (the compute path's shading kernels: render/compute_path.py ShadeVariant):
@@ -241,8 +242,12 @@ vec4 shade_surface() {
     if (ibl_on || refracts) {
         ibl = ibl_evaluate(n, v, c, metallic, roughness, f0_dielectric, layers.specular);
         if (!ibl_on) { ibl.diffuse = vec3(0.0); ibl.specular = vec3(0.0); }
-        ibl.diffuse *= occlusion;
-        ibl.specular *= occlusion;
+        bool ssao = (lighting_flags & LIGHTING_AO) != 0u;
+        IblOcclusion ao = ibl_occlusion(occlusion, screen_occlusion(lighting_flags, material_flags),
+                                        ssao, c * (1.0 - metallic),
+                                        mix(f0_dielectric, c, metallic), n_dot_v, roughness);
+        ibl.diffuse *= ao.diffuse;
+        ibl.specular *= ao.specular;
         if (refracts) {
             // The light behind, refracted through the surface: straight through a thin
             // wall, refracted into a volume (leaving it `thickness` further on); rougher by
@@ -314,6 +319,7 @@ vec4 shade_surface() {
         case VIEW_CLEARCOAT: value = clearcoat; break;
         case VIEW_SHEEN: value = sheen; break;
         case VIEW_TRANSMISSION: value = transmission; break;
+        case VIEW_AO: value = vec3(screen_occlusion(lighting_flags, material_flags)); break;
         case VIEW_VOLUME:
             value = volume_transmittance(layers.thickness, layers.attenuation_color,
                                          layers.attenuation_distance);

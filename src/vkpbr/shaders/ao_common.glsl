@@ -1,0 +1,69 @@
+// ao_common.glsl: what the ambient occlusion kernels share (render/ao.py): their bindings,
+// push constants, the view a pixel belongs to (one frame, or a batch's atlas of tiles), view
+// space from the depth buffer, and the packed working term (visibility and edges).
+#ifndef AO_COMMON_GLSL
+#define AO_COMMON_GLSL
+#define STRUCTS_ONLY 1
+#include "generated.glsl"
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;  // render/ao.py AO_GROUP
+
+// Set 0: the frame's (or a batch's) views; set 1: this step's images (render/ao.py AoKernels).
+layout(set = 0, binding = 0, std140) readonly buffer Views {
+    ViewRecord views[];
+};
+layout(set = 1, binding = 0) uniform sampler2D depth_map;  // the target's depth (reversed-Z)
+layout(set = 1, binding = 1, r32ui) uniform uimage2D ao_raw;  // GTAO's term, packed
+layout(set = 1, binding = 2, r32ui) uniform uimage2D ao_mid;  // after the first denoise pass
+layout(set = 1, binding = 3, r32f) uniform image2D ao_out;  // the visibility shading reads
+
+layout(push_constant) uniform Ao {
+    uint tile_w;  // a view's pixels: the frame's size, or a batch's tile (column-major tiles)
+    uint tile_h;
+    uint rows;  // tiles a column (1 for a frame)
+    uint views;  // views drawn (tiles past them are left alone)
+    float radius;  // the effect radius, world units
+    float falloff;  // share of the radius over which a sample's weight falls to 0 (XeGTAO)
+    uint slices;  // GTAO's slice directions a pixel
+    uint steps;  // samples a side of a slice
+    uint final_pass;  // ao_denoise.comp: 0 raw -> mid, 1 mid (or raw) -> out
+    uint read_mid;  // ao_denoise.comp: the pass reads ao_mid (else ao_raw)
+} pc;
+
+// The view pixel p is drawn through, and its tile's first pixel; false past the last view.
+bool ao_view(ivec2 p, out uint view, out ivec2 lo) {
+    uvec2 t = uvec2(p) / uvec2(pc.tile_w, pc.tile_h);
+    view = t.x * pc.rows + t.y;
+    lo = ivec2(t * uvec2(pc.tile_w, pc.tile_h));
+    return t.y < pc.rows && view < pc.views;
+}
+
+ivec2 ao_clamp(ivec2 p, ivec2 lo) {
+    return clamp(p, lo, lo + ivec2(pc.tile_w, pc.tile_h) - 1);
+}
+
+// Distance along the view axis at pixel p: znear / depth (reversed-Z, infinite far plane);
+// +inf where nothing was drawn (depth 0).
+float ao_view_z(ivec2 p, float znear) {
+    float d = texelFetch(depth_map, p, 0).r;
+    return d > 0.0 ? znear / d : 1.0 / 0.0;
+}
+
+// View space as XeGTAO's (x right, y up, z forward, into the screen) of the point at pixel
+// position `pix` of the tile (pixel centres at + 0.5, y down) with view-axis distance z. The
+// view record's intrinsics: NDC x = sx x / z + ox, NDC y (down) = -sy y / z + oy.
+vec3 ao_view_pos(vec2 pix, float z, vec4 intr) {
+    vec2 ndc = pix / vec2(pc.tile_w, pc.tile_h) * 2.0 - 1.0;
+    return vec3((ndc.x - intr.z) / intr.x, (intr.w - ndc.y) / intr.y, 1.0) * z;
+}
+
+// The working term: visibility in 16 bits, the four edges (2 bits each, XeGTAO's) above.
+uint ao_pack(float visibility, uint edges) {
+    return uint(clamp(visibility, 0.0, 1.0) * 65535.0 + 0.5) | (edges << 16);
+}
+float ao_visibility(uint packed) { return float(packed & 0xFFFFu) / 65535.0; }
+vec4 ao_edges(uint packed) {  // left, right, top, bottom: 1 continuous, 0 an edge
+    uint e = packed >> 16;
+    return vec4((e >> 6) & 3u, (e >> 4) & 3u, (e >> 2) & 3u, e & 3u) / 3.0;
+}
+#endif
