@@ -54,7 +54,8 @@ VERSION = 2
 _DONE_KEYS = frozenset({"type", "views", "files", "sizes", "cameras", "time", "attempts", "pid",
                         "seconds"})
 _FAILED_KEYS = frozenset({"type", "views", "error", "attempts", "time"})
-_CAMERA_FIELDS = ("eye", "target", "up", "yfov_deg", "znear", "zfar", "name", "pixel_intrinsics")
+_CAMERA_FIELDS = ("eye", "target", "up", "yfov_deg", "znear", "zfar", "name", "pixel_intrinsics",
+                  "model", "distortion")
 
 
 def camera_record(camera: Any) -> dict[str, object]:
@@ -94,6 +95,12 @@ def _check_camera(rec: object) -> Any:
             raise _Bad(f"camera {key}: expected a number")
     if "name" in rec and not isinstance(rec["name"], str):
         raise _Bad("camera name: expected a string")
+    if "model" in rec and not isinstance(rec["model"], str):
+        raise _Bad("camera model: expected a string")
+    if "distortion" in rec and not (isinstance(rec["distortion"], list)
+                                    and len(rec["distortion"]) <= 8
+                                    and all(_number(x) for x in rec["distortion"])):
+        raise _Bad("camera distortion: expected at most 8 numbers")
     if rec.get("pixel_intrinsics") is not None and not _numbers(rec["pixel_intrinsics"], 6):
         raise _Bad("camera pixel_intrinsics: expected 6 numbers")
     try:
