@@ -11,6 +11,8 @@ Rows:
                         draws it, the sun's shadow maps, frames/s through render_many (three
                         in flight, no readback): still, and 100 of its nodes moved every frame
                         (every moved node a caster: the maps redraw each frame).
+  2CylinderEngine       every node moved before each 256-view render_batch at 128x128:
+                        views/s (the fps column) and Python ms per set_poses.
   crowd N               N CesiumMan instances on a grid, each at its own animation time
                         (one vectorised sample a frame), 1920x1080 compute path: GPU ms per
                         frame, the deform step's ms and ms per million skinned vertices,
@@ -30,6 +32,7 @@ import numpy as np
 
 from vkpbr.render.renderer import Renderer
 from vkpbr.scene.animation import sample
+from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.loader import load_scene
 from vkpbr.scene.synthetic import sphere_field
 from vkpbr.scene.tree import NodeTree
@@ -118,6 +121,41 @@ def walk_rows(assets: Path, frames: int) -> list[dict]:
     return rows
 
 
+def engine_rows(assets: Path, calls: int) -> list[dict]:
+    """2CylinderEngine, every one of its nodes moved before each 256-view render_batch
+    (128x128): views/s and Python ms per pose update."""
+    path = assets / "2CylinderEngine" / "glTF" / "2CylinderEngine.gltf"
+    if not path.is_file():
+        return []
+    scene = load_scene(path)
+    rows = []
+    with Renderer(scene) as r:
+        n = len(r.state)
+        idx = np.arange(n)
+        rest = r.state.local.copy()
+        base = r.default_camera()
+        angles = np.linspace(0, 2 * np.pi, 256, endpoint=False)
+        eye = np.asarray(base.eye) - np.asarray(base.target)
+        eyes = np.stack([np.asarray(base.target) + np.array(
+            [eye[0] * np.cos(a) - eye[2] * np.sin(a), eye[1], eye[0] * np.sin(a) + eye[2] * np.cos(a)])
+            for a in angles])
+        cams = CameraBatch.from_look_at(eyes, np.tile(base.target, (256, 1)), yfov_deg=base.yfov_deg)
+        py, t_all = [], []
+        for call in range(calls + 3):
+            t0 = time.perf_counter()
+            m = rest.copy()
+            m[:, :3, 3] += 0.002 * np.sin(call + np.arange(n))[:, None]
+            r.set_poses(idx, m)
+            t1 = time.perf_counter()
+            r.render_batch(cams, size=(128, 128))
+            if call >= 3:
+                py.append(t1 - t0)
+                t_all.append(time.perf_counter() - t0)
+        rows.append({"row": f"2CylinderEngine {n} nodes moving, render_batch 256 x 128x128",
+                     "python_ms": 1e3 * _median(py), "fps": 256 / _median(t_all)})
+    return rows
+
+
 def crowd(man, count: int) -> tuple:  # noqa: ANN001
     """`count` copies of CesiumMan's tree, skin and mesh nodes on a grid: (scene, the copies'
     root indices, nodes per copy)."""
@@ -179,7 +217,7 @@ def main() -> None:
     ap.add_argument("--assets", type=Path, required=True)
     ap.add_argument("--frames", type=int, default=300)
     ap.add_argument("--crowds", default="100,1000")
-    ap.add_argument("--only", default="poses,walk,crowd")
+    ap.add_argument("--only", default="poses,walk,engine,crowd")
     ap.add_argument("--json")
     args = ap.parse_args()
     rows: list[dict] = []
@@ -187,6 +225,8 @@ def main() -> None:
         rows += set_poses_rows()
     if "walk" in args.only:
         rows += walk_rows(args.assets, args.frames)
+    if "engine" in args.only:
+        rows += engine_rows(args.assets, 20)
     if "crowd" in args.only:
         rows += crowd_rows(args.assets, tuple(int(c) for c in args.crowds.split(",")),
                            max(args.frames // 3, 30))

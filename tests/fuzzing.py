@@ -535,7 +535,8 @@ class PathTrickCorpus:
 
         base = self.scene_dir / "base.gltf"
         base.write_text(json.dumps(self.gltf_doc))
-        bake_file(base, self.scene_dir / "base.vkpbr", progress=False)
+        # External references: the trick replaces the image record's path.
+        bake_file(base, self.scene_dir / "base.vkpbr", progress=False, textures="external")
         self.sections = read_sections(self.scene_dir / "base.vkpbr")
         base.unlink()
         (self.scene_dir / "base.vkpbr").unlink()

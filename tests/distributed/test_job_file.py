@@ -124,6 +124,29 @@ def test_missing_ray_extra_is_one_line(tmp_path: Path) -> None:
                               text=True, env=env, timeout=120)
         assert proc.returncode == 2, proc.stderr
         assert proc.stderr.count("\n") == 1 and "pip install 'vkpbr[ray]'" in proc.stderr, proc.stderr
+    # Checked first, created last: the failed runs left no out folder.
+    assert not (tmp_path / "frames").exists() and not (tmp_path / "f2").exists()
+
+
+@pytest.mark.parametrize("line", [
+    {"type": "done", "views": {"0": 1}, "files": [], "sizes": [], "cameras": []},
+    {"type": "done", "views": [0], "files": ["frame_00000.png"], "sizes": [3], "cameras": [7]},
+    {"type": "done", "views": [0], "files": ["frame_00000.png\x00"], "sizes": [3], "cameras": [{}]},
+    {"type": "failed", "views": [0], "error": 5},
+    {"type": "gone"},
+    ["done"],
+])
+def test_a_hostile_manifest_in_a_job_folder_is_one_line(capsys, tmp_path: Path, line: object) -> None:  # noqa: ANN001
+    """`vkpbr batch` reads an out folder's manifest with validation before Ray is touched:
+    wrong types, unknown types and NUL bytes are one line, exit 2, no traceback."""
+    job = _job(tmp_path, tmp_path / "frames")
+    scene = load_job(job).scenes[0]
+    (tmp_path / "frames").mkdir()
+    header = {"type": "job", "version": 2, **scene.fingerprint()}
+    (tmp_path / "frames" / MANIFEST_NAME).write_text(json.dumps(header) + "\n" + json.dumps(line) + "\n")
+    code = main(["batch", str(job)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "line 2" in err and "Traceback" not in err, err
 
 
 def test_render_ray_needs_cameras_and_no_camera_flags(capsys, tmp_path: Path) -> None:
@@ -167,7 +190,7 @@ def test_manifest_records_resume_and_refuses_another_job(tmp_path: Path) -> None
     assert Manifest.open(tmp_path, scene.fingerprint(), "e").done_views() == {2}
     # Another size: the files would be stale; refused in one line.
     other = job_from_doc([{"cameras": POSES, "out": str(tmp_path), "size": "16x9"}]).scenes[0]
-    with pytest.raises(UsageError, match=r"written by a job with another size \(\[16, 8\], now \[16, 9\]\)"):
+    with pytest.raises(UsageError, match=r"written by a run with another size \(\[16, 8\], now \[16, 9\]\)"):
         Manifest.open(tmp_path, other.fingerprint(), "e")
 
 

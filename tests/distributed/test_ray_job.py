@@ -18,6 +18,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # a local Ray cluster: the end-to-end tier
+
 ray = pytest.importorskip("ray", reason="the ray extra is not installed (pip install 'vkpbr[ray]')",
                           exc_type=ImportError)
 
@@ -235,6 +237,69 @@ def test_unreachable_cluster_is_one_line(cluster: dict, capsys, tmp_path: Path) 
     err = capsys.readouterr().err
     assert code == 1 and err.count("\n") == 1, err
     assert f"Ray cluster at 127.0.0.1:{port}: cannot connect" in err
+    assert not (tmp_path / "o").exists()  # a failed run leaves no out folder
     code = main(["batch", str(job), "--ray", "head-without-port"])
     err = capsys.readouterr().err
     assert code == 2 and "expected HOST:PORT" in err and err.count("\n") == 1
+
+
+def test_plain_ray_and_batch_runs_share_one_folder(cluster: dict, reference: dict, capsys,
+                                                   tmp_path: Path) -> None:  # noqa: ANN001
+    """The issue's sequence (--ray at one size, plainly at another, --ray again) cannot mix
+    sizes any more: every writer keeps the one manifest. --ray, then plain at another size
+    (refused, nothing changed), plain at the same size (nothing to do), two files deleted
+    and cut short, `vkpbr batch` (renders those two): the folder equals one plain run's."""
+    from folder_checks import check_consistent
+
+    poses = tmp_path / "poses.json"
+    poses.write_text(json.dumps(POSES))
+    out = tmp_path / "f"
+    common = ["--cameras", str(poses), "--out", str(out), "--outputs", "depth,instance"]
+    assert main(["render", *common, "--size", SIZE, "--ray", cluster["address"]]) == 0
+    capsys.readouterr()
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert main(["render", *common, "--size", "32x24"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "written by a run with another size" in err, err
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert main(["render", *common, "--size", SIZE]) == 0
+    assert f"wrote 0 images, {len(POSES)} done before" in capsys.readouterr().out
+    (out / "frame_00003.png").unlink()
+    depth = out / "frame_00007.depth.exr"
+    depth.write_bytes(depth.read_bytes()[:100])
+    job = write_job(tmp_path, [{"cameras": "poses.json", "out": "f", "size": SIZE,
+                                "outputs": ["depth", "instance"]}])
+    result = render(job, cluster["address"])
+    assert result.ok and result.rendered == 2 and result.skipped == len(POSES) - 2, result.summary()
+    assert check_consistent(out) == set(range(len(POSES)))
+    assert_same_files(out, reference["chart"])
+
+
+def test_a_killed_plain_run_resumes_on_ray(cluster: dict, tmp_path: Path) -> None:
+    """A plain `render --cameras` killed with SIGKILL after its first recorded views; `--ray`
+    renders only the rest, and the folder equals an uninterrupted plain run's."""
+    from folder_checks import check_consistent, done_lines
+
+    poses = tmp_path / "many.json"
+    poses.write_text(json.dumps([f"{3 * __import__('math').cos(a / 9):.4f},1.2,"
+                                 f"{3 * __import__('math').sin(a / 9):.4f},0,0,0" for a in range(80)]))
+    out = tmp_path / "f"
+    argv = ["-q", "render", "--cameras", str(poses), "--out", str(out), "--size", "32x24"]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.Popen([sys.executable, "-m", "vkpbr", *argv, "--batch", "4"], env=env,
+                            stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 90
+    try:
+        while time.monotonic() < deadline and proc.poll() is None and done_lines(out) < 1:
+            time.sleep(0.01)
+        assert proc.poll() is None, proc.stderr.read().decode() if proc.stderr else ""
+    finally:
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+    done = check_consistent(out)
+    assert 0 < len(done) < 80
+    assert main([*argv, "--ray", cluster["address"]]) == 0
+    assert check_consistent(out) == set(range(80))
+    whole = tmp_path / "whole"
+    assert main(["-q", "render", "--cameras", str(poses), "--out", str(whole), "--size", "32x24"]) == 0
+    assert_same_files(out, whole)

@@ -122,7 +122,34 @@ def load(golden: Golden, assets: Path) -> Scene | None:
 
     if not (assets / golden.scene).exists():  # a partial copy of the assets
         pytest.skip(f"{golden.scene} is not in {assets}")
-    return load_scene(assets / golden.scene)
+    return pinned_view(load_scene(assets / golden.scene))
+
+
+def pinned_view(scene: Scene) -> Scene:
+    """A scene without cameras of its own viewed as the goldens were made: from the
+    automatic camera of before issue 35 (the bounding sphere fitted to the 60 degree field
+    of view; the camera now frames the bounds themselves) and its automatic light. The
+    goldens test shading, not framing: tests/scene/test_textures.py tests the framing."""
+    import math
+
+    from vkpbr.scene.presets import auto_light
+    from vkpbr.scene.types import Camera
+
+    if [c.name for c in scene.cameras] != ["auto"]:
+        return scene
+    auto_lights = [auto_light(scene, scene.cameras[0])]
+    lo, hi = scene.bounds()
+    centre = (lo + hi) / 2.0
+    radius = float(np.linalg.norm(hi - lo)) / 2.0
+    radius = radius if math.isfinite(radius) and radius > 1e-9 else 1.0
+    direction = np.array([0.35, 0.3, 1.0]) / np.linalg.norm([0.35, 0.3, 1.0])
+    eye = centre + direction * radius / math.sin(math.radians(30.0))
+    camera = Camera(eye=tuple(float(x) for x in eye), target=tuple(float(x) for x in centre),
+                    up=(0.0, 1.0, 0.0), yfov_deg=60.0, name="auto")
+    scene.cameras = [camera]
+    if scene.lights == auto_lights:
+        scene.lights = [auto_light(scene, camera)]
+    return scene
 
 
 def render(renderer: Renderer, golden: Golden) -> np.ndarray:

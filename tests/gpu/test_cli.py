@@ -69,7 +69,7 @@ def test_batch_cameras(capsys, tmp_path: Path) -> None:
                           "--size", "40x30", "--validation")
     assert code == 0 and "wrote 2 images" in stdout
     assert sorted(p.name for p in (tmp_path / "frames").iterdir()) == [
-        "frame_00000.png", "frame_00001.png", "transforms.json"]
+        "frame_00000.png", "frame_00001.png", "transforms.json", "vkpbr-manifest.jsonl"]
 
 
 def test_batch_writes_camera_files_that_reproduce_the_images(capsys, tmp_path: Path) -> None:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from pinhole import basis, pixel_rays
+from raycast import first_hits
 from test_outputs import silhouette_band
 
 from vkpbr.scene.animation import sample
@@ -53,28 +54,10 @@ def posed_triangles(scene, time: float) -> tuple[np.ndarray, np.ndarray]:  # noq
 
 def ray_cast(tri: np.ndarray, owner: np.ndarray, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
     """(H, W) node hit (-1 none) and depth along the view axis of the pixel-centre rays."""
-    eye = np.asarray(camera.eye, np.float64)
     d = pixel_rays(camera, W, H).reshape(-1, 3)
-    e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-    best_t, best = np.full(len(d), np.inf), np.full(len(d), -1)
-    for s in range(0, len(d), 256):
-        dd = d[s:s + 256, None, :]
-        pv = np.cross(dd, e2[None])
-        det = np.sum(e1[None] * pv, -1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            inv = 1.0 / det
-            tv = eye - tri[None, :, 0]
-            u = np.sum(tv * pv, -1) * inv
-            qv = np.cross(tv, e1[None])
-            v = np.sum(dd * qv, -1) * inv
-            t = np.sum(e2[None] * qv, -1) * inv
-            ok = (np.abs(det) > 1e-14) & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-6)
-        t = np.where(ok, t, np.inf)
-        j = np.argmin(t, axis=1)
-        rows = np.arange(len(j))
-        best_t[s:s + 256] = t[rows, j]
-        best[s:s + 256] = np.where(np.isfinite(t[rows, j]), owner[j], -1)
-    return best.reshape(H, W), (best_t * (d @ basis(camera)[2])).reshape(H, W)
+    best, t, _ = first_hits(tri, np.asarray(camera.eye), d)
+    node = np.where(best >= 0, owner[np.maximum(best, 0)], -1)
+    return node.reshape(H, W), (t * (d @ basis(camera)[2])).reshape(H, W)
 
 
 def camera_for(tri: np.ndarray) -> Camera:

@@ -17,6 +17,7 @@ import dataclasses
 import numpy as np
 import pytest
 from pinhole import pixel_rays, project
+from raycast import first_hits
 from test_deform import posed_triangles
 from test_outputs import CAMERA, H, W, analytic_scene, silhouette_band
 
@@ -25,31 +26,7 @@ from vkpbr.scene.types import Camera
 
 def cast(tri: np.ndarray, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
     """(H*W,) triangle index (-1: none) and (H*W, 3) barycentrics of the pixel-centre rays."""
-    eye = np.asarray(camera.eye, np.float64)
-    d = pixel_rays(camera, W, H).reshape(-1, 3)
-    e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-    best_t, best = np.full(len(d), np.inf), np.full(len(d), -1)
-    bary = np.zeros((len(d), 3))
-    for s in range(0, len(d), 256):
-        dd = d[s:s + 256, None, :]
-        pv = np.cross(dd, e2[None])
-        det = np.sum(e1[None] * pv, -1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            inv = 1.0 / det
-            tv = eye - tri[None, :, 0]
-            u = np.sum(tv * pv, -1) * inv
-            qv = np.cross(tv, e1[None])
-            v = np.sum(dd * qv, -1) * inv
-            t = np.sum(e2[None] * qv, -1) * inv
-            ok = (np.abs(det) > 1e-14) & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-6)
-        t = np.where(ok, t, np.inf)
-        j = np.argmin(t, axis=1)
-        rows = np.arange(len(j))
-        hit = np.isfinite(t[rows, j])
-        best_t[s:s + 256] = t[rows, j]
-        best[s:s + 256] = np.where(hit, j, -1)
-        uu, vv = u[rows, j], v[rows, j]
-        bary[s:s + 256] = np.where(hit[:, None], np.stack([1 - uu - vv, uu, vv], -1), 0.0)
+    best, _, bary = first_hits(tri, np.asarray(camera.eye), pixel_rays(camera, W, H).reshape(-1, 3))
     return best, bary
 
 

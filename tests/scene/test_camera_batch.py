@@ -134,3 +134,75 @@ def test_absurd_magnitudes_are_refused_for_one_camera_too() -> None:
     with pytest.raises(UsageError, match=r"within \+-1e\+15"):
         validate_camera(Camera(eye=(1e300, 0.0, 0.0), target=(0.0, 0.0, 0.0)))
     validate_camera(Camera(eye=(1e14, 0.0, 0.0), target=(0.0, 0.0, 0.0)))  # large, still fine
+
+
+# -- generators (issue 35): orbits, spheres, random views, checked with tests/pinhole.py --------
+
+def _corners(lo, hi):  # noqa: ANN001, ANN202
+    return [(x, y, z) for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+
+
+def _sees_all(batch, bounds, size=(64, 48)) -> bool:  # noqa: ANN001
+    from pinhole import project
+
+    for i in range(len(batch)):
+        cam = batch.camera(i)
+        for p in _corners(*bounds):
+            row, col, z = project(cam, p, *size)
+            if not (z > 0 and 0 <= row <= size[1] and 0 <= col <= size[0]):
+                return False
+    return True
+
+
+def test_orbit_is_a_framed_turntable() -> None:
+    import numpy as np
+
+    from vkpbr.scene.camera_batch import CameraBatch, framing_distance
+
+    bounds = ((-1.0, 0.0, -0.5), (3.0, 2.0, 0.5))
+    b = CameraBatch.orbit(12, bounds=bounds, elevation_deg=30.0)
+    centre = np.array([1.0, 1.0, 0.0])
+    rel = b.eye - centre
+    r = framing_distance(bounds, 45.0)
+    assert np.allclose(np.linalg.norm(rel, axis=1), r) and np.allclose(b.target, centre)
+    assert np.allclose(np.degrees(np.arcsin(rel[:, 1] / r)), 30.0)  # the elevation
+    az = np.unwrap(np.arctan2(rel[:, 0], rel[:, 2]))
+    assert np.allclose(np.diff(az), 2 * np.pi / 12) and abs(az[0]) < 1e-12  # +Z first, CCW
+    assert _sees_all(b, bounds)  # every corner of the bounds in every image
+    explicit = CameraBatch.orbit(4, center=(0, 0, 0), radius=2.0, elevation_deg=0.0)
+    assert np.allclose(explicit.eye, [[0, 0, 2], [2, 0, 0], [0, 0, -2], [-2, 0, 0]], atol=1e-12)
+
+
+def test_sphere_spreads_views_evenly() -> None:
+    import numpy as np
+
+    from vkpbr.scene.camera_batch import CameraBatch
+
+    b = CameraBatch.sphere(200, center=(1, 2, 3), radius=5.0)
+    d = (b.eye - (1, 2, 3)) / 5.0
+    assert np.allclose(np.linalg.norm(d, axis=1), 1.0)
+    assert np.linalg.norm(d.mean(axis=0)) < 0.02  # balanced
+    gaps = np.sort(np.linalg.norm(d[:, None] - d[None], axis=-1), axis=1)[:, 1]
+    assert gaps.min() > 0.5 * gaps.mean()  # no clumps (a Fibonacci lattice: ~0.25 apart here)
+    upper = CameraBatch.sphere(50, bounds=((0, 0, 0), (1, 1, 1)), upper=True)
+    assert (upper.eye[:, 1] > 0.5).all() and _sees_all(upper, ((0, 0, 0), (1, 1, 1)))
+
+
+def test_look_at_random_views_of_the_bounds() -> None:
+    import numpy as np
+    import pytest
+
+    from vkpbr.errors import UsageError
+    from vkpbr.scene.camera_batch import CameraBatch, framing_distance
+
+    bounds = ((0.0, 0.0, 0.0), (1.0, 2.0, 3.0))
+    a = CameraBatch.look_at_random(300, bounds, seed=7, distance=(1.0, 1.5))
+    assert np.array_equal(a.eye, CameraBatch.look_at_random(300, bounds, seed=7, distance=(1.0, 1.5)).eye)
+    assert ((a.target >= 0) & (a.target <= (1, 2, 3))).all()
+    dist = np.linalg.norm(a.eye - a.target, axis=1) / framing_distance(bounds)
+    assert dist.min() >= 1.0 - 1e-9 and dist.max() <= 1.5 + 1e-9
+    for bad in (dict(n=0, bounds=bounds), dict(n=3, bounds=((0, 0, 0), (1, 1)))):
+        with pytest.raises(UsageError):
+            CameraBatch.look_at_random(**bad)
+    with pytest.raises(UsageError, match="center"):
+        CameraBatch.orbit(3)

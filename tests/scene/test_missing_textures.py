@@ -100,13 +100,13 @@ def test_baked_file_with_external_textures(tmp_path: Path, caplog: pytest.LogCap
     src = triangle_gltf(src_dir / "t.gltf", ["maps/a.png", "maps/b.png"])
     out = out_dir / "t.vkpbr"
     caplog.set_level(logging.INFO, logger="vkpbr.bake")
-    report = bake_file(src, out, progress=False)
+    report = bake_file(src, out, progress=False, textures="external", allow_outside_paths=True)
     assert report["external_textures"] == 2 and report["embedded_textures"] == 0
     # Said when baked: how many stay external and where they must be.
     assert messages(caplog) == [
         f"t.vkpbr: 2 of 2 textures stay external files; they must stay in "
         f"{(src_dir / 'maps').resolve()} (../src/maps from the baked file), or bake with "
-        "--embed-textures to store them inside; they lie outside the baked file's folder, so "
+        "--textures source to store them inside; they lie outside the baked file's folder, so "
         "loading it needs --allow-outside-paths"]
     caplog.clear()
     # They lie outside the baked file's folder: the path policy refuses them by default
@@ -136,6 +136,40 @@ def test_baked_file_with_external_textures(tmp_path: Path, caplog: pytest.LogCap
     assert messages(caplog) == [] and all(img.pixels is not None for img in scene.images)
 
 
+def test_a_plain_bake_elsewhere_is_self_contained(tmp_path: Path) -> None:
+    """README's two lines in a row (`vkpbr bake scene.gltf --out elsewhere/scene.vkpbr`, then
+    load that): the texture files' bytes are inside, as they are (PNG and JPEG), so the
+    baked file loads with every texture after the sources are gone, and it is about as large
+    as its sources, not their decoded pixels. A bake that cannot store a texture fails,
+    naming it, instead of writing a file that renders untextured."""
+    src_dir, out_dir = tmp_path / "src", tmp_path / "elsewhere"
+    (src_dir / "maps").mkdir(parents=True)
+    out_dir.mkdir()
+    rng = np.random.default_rng(3)
+    noise = rng.integers(0, 256, (256, 256, 3), dtype=np.uint8)
+    PILImage.fromarray(noise).save(src_dir / "maps" / "a.png")
+    PILImage.fromarray(noise).save(src_dir / "maps" / "b.jpg", quality=90)
+    src = triangle_gltf(src_dir / "t.gltf", ["maps/a.png", "maps/b.jpg"])
+    sources = sum((src_dir / "maps" / n).stat().st_size for n in ("a.png", "b.jpg"))
+    out = out_dir / "t.vkpbr"
+    report = bake_file(src, out, progress=False)
+    assert report["embedded_textures"] == 2 and report["external_textures"] == 0
+    assert sources < out.stat().st_size < sources + 64 * 1024  # the bytes, not 2 x 256 KiB RGBA
+    originals = [(src_dir / "maps" / n).read_bytes() for n in ("a.png", "b.jpg")]
+    shutil.rmtree(src_dir)
+    scene = load_scene(out, strict=True)
+    assert [img.data for img in scene.images] == originals  # stored as they were
+    assert [img.mime_type for img in scene.images] == ["image/png", "image/jpeg"]
+    pixels = decode_images(scene)
+    assert np.array_equal(pixels[0][..., :3], noise)
+    # A texture that is gone: the bake fails in one line naming it, and writes nothing.
+    src_dir.mkdir()
+    src = triangle_gltf(src_dir / "t.gltf", ["maps/gone.png"])
+    with pytest.raises(SceneError, match=r"texture maps/gone.png: cannot embed it .*untextured"):
+        bake_file(src, out_dir / "g.vkpbr", progress=False)
+    assert not (out_dir / "g.vkpbr").exists()
+
+
 def test_strict_bake_fails_before_writing(tmp_path: Path) -> None:
     src = triangle_gltf(tmp_path / "t.gltf", ["gone.png"])
     with pytest.raises(SceneError, match="1 of 1 textures not found"):
@@ -162,3 +196,25 @@ def test_textureless_sponza_prints_one_line(assets: Path, tmp_path: Path,
         load_scene(path, strict=True, allow_outside_paths=True)
     with pytest.raises(SceneError, match=r"Sponza.gltf: buffer 0 refers to Sponza.bin, which resolves outside "):
         load_scene(path)
+
+
+def test_undecodable_texture_names_the_file_and_what_it_holds(tmp_path: Path,
+                                                              caplog: pytest.LogCaptureFixture) -> None:
+    """Not "cannot identify image file <_io.BytesIO object at 0x...>": the file's name and
+    the format its first bytes show."""
+    (tmp_path / "page.png").write_text("<html>404 Not Found</html>")
+    (tmp_path / "cut.png").write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\x0dIHDR")
+    (tmp_path / "odd.jpg").write_bytes(bytes(range(7, 40)))
+    scene = load_scene(triangle_gltf(tmp_path / "t.gltf", ["page.png", "cut.png", "odd.jpg"]))
+    caplog.clear()
+    decode_images(scene)
+    text = " ".join(messages(caplog))
+    assert "BytesIO" not in text and " at 0x" not in text, text
+    assert "page.png (not a decodable image: text (HTML, XML or JSON), not an image" in text, text
+    from vkpbr.scene.textures import decode_image
+
+    said = [decode_image(img)[1][0][1] for img in scene.images]  # each image's own note
+    assert said[0].startswith("page.png (not a decodable image: text"), said
+    assert said[1].startswith("cut.png (PNG data") and "BytesIO" not in said[1], said
+    assert said[2].startswith("odd.jpg (not a decodable image: data of no known image format "
+                              "(first bytes 07 08"), said

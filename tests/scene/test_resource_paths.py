@@ -354,7 +354,11 @@ def test_vkpbr_external_image_outside(tree: tuple[Path, Path],
     scene, outside = tree
     src = write_gltf(outside / "s.gltf", "tri.bin", ("t.png",))
     out = scene / "s.vkpbr"
-    bake_file(src, out, progress=False)
+    # Only an external-references bake keeps a path, and one outside its folder only when
+    # asked to (a plain bake stores the texture inside: test_bake_embeds_source_bytes).
+    with pytest.raises(SceneError, match="lies outside"):
+        bake_file(src, out, progress=False, textures="external")
+    bake_file(src, out, progress=False, textures="external", allow_outside_paths=True)
     caplog.clear()
     assert load_scene(out).images[0].refused == "outside the scene's folder"
     assert len(warnings_of(caplog)) == 1 and "outside the scene's folder" in warnings_of(caplog)[0]
@@ -402,12 +406,15 @@ def test_cli_refusal_is_one_line_and_flag_is_documented(tree: tuple[Path, Path],
     assert main(["bake", str(path), "--out", str(tree[0] / "o.vkpbr"), "--allow-outside-paths",
                  "--no-progress"]) == 0
     capsys.readouterr()
-    # A bake whose textures stay outside its folder says, in its result line, what loading
-    # it will need.
+    # A bake that keeps textures outside its folder (asked for) says, in its result line,
+    # what loading it will need; a plain bake stores them inside.
     src = write_gltf(tree[1] / "s.gltf", "tri.bin", ("t.png",))
-    assert main(["bake", str(src), "--out", str(tree[0] / "s.vkpbr"), "--no-progress"]) == 0
+    assert main(["bake", str(src), "--out", str(tree[0] / "s.vkpbr"), "--no-progress",
+                 "--textures", "external", "--allow-outside-paths"]) == 0
     assert ("1 texture external (1 outside the .vkpbr's folder: loading it needs "
-            "--allow-outside-paths, or bake with --embed-textures)") in capsys.readouterr().out
+            "--allow-outside-paths)") in capsys.readouterr().out
+    assert main(["bake", str(src), "--out", str(tree[0] / "s.vkpbr"), "--no-progress"]) == 0
+    assert "1 texture embedded)" in capsys.readouterr().out
     for command in ("render", "view", "bake"):
         assert main([command, "--help"]) == 0
         assert "--allow-outside-paths" in capsys.readouterr().out

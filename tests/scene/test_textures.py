@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import io
 import logging
-import math
 import warnings
 from pathlib import Path
 
@@ -105,10 +104,18 @@ def test_auto_camera_frames_bounds() -> None:
     cam = auto_camera(Scene("s", meshes=[mesh], nodes=[Node(0, matrix)]))
     assert cam.target == (10, 0, 0) and cam.yfov_deg == 60
     eye = np.subtract(cam.eye, cam.target)
-    distance = np.linalg.norm(eye)
-    radius = math.sqrt(3)
-    assert distance * math.sin(math.radians(30)) >= radius - 1e-9  # sphere fits the fov
     assert eye[2] > abs(eye[0]) and eye[2] > abs(eye[1])  # mostly +Z
+    # The bounds framed to the field of view (issue 35), by an independent pinhole: every
+    # corner of the box inside 95% of the half height (and of a square image's half width),
+    # one of them at that limit: the model fills the view, not a seventh of it.
+    from pinhole import project
+
+    corners = [(x, y, z) for x in (9, 11) for y in (-1, 1) for z in (-1, 1)]
+    size = 120
+    reach = [max(abs(r - size / 2), abs(c - size / 2)) / (size / 2)
+             for r, c, depth in (project(cam, p, size, size) for p in corners)]
+    assert max(reach) <= 0.95 + 1e-9 and max(reach) > 0.95 - 1e-6, reach
+    assert min(depth for _, _, depth in (project(cam, p, size, size) for p in corners)) > 0
     assert cam.znear is None and cam.zfar is None  # chosen per render from the bounds
     empty = auto_camera(Scene("e"))
     assert np.isfinite(empty.eye).all()

@@ -24,9 +24,12 @@ Bake a scene into one GPU-ready .vkpbr file: every mesh cleaned (non-finite
 data repaired, exact duplicate vertices merged, degenerate triangles dropped)
 and reordered for the vertex cache, tangent frames computed (float vectors, a
 quaternion and a packed 32-bit form), and all of it written as checksummed,
-aligned sections that load without parsing. Textures stay references to their
-files (the log says where they must stay) unless --embed-textures stores them
-inside, decoded, with their mip chains. The file format: docs/baked-format.md."""
+aligned sections that load without parsing. Textures are stored inside as their
+source files' bytes (PNG, JPEG, KTX2 as they are: the .vkpbr is self-contained and
+about as large as its sources); --textures decoded stores decoded mip chains
+(larger, loads faster), --textures external keeps references to the files. A
+texture that cannot be stored or reached is an error, never a file that renders
+untextured. The file format: docs/baked-format.md."""
 
 EPILOG = """\
 examples:
@@ -51,8 +54,12 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--report", action="store_true",
                    help="print memory per vertex, frame precision and sizes")
     p.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
+    p.add_argument("--textures", choices=("source", "decoded", "external"), default=None,
+                   help="source (default): the texture files' bytes inside, as they are; "
+                        "decoded: RGBA8 mip chains inside (larger, loads faster); external: "
+                        "references to the files, which must stay where they are")
     p.add_argument("--embed-textures", action="store_true",
-                   help="store decoded RGBA8 mip chains in the file (larger, loads faster)")
+                   help="the same as --textures decoded (its earlier name)")
     add_scene_loading_options(p)  # --strict, --allow-outside-paths, --variant: app/options.py
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
@@ -115,7 +122,10 @@ def run(args: argparse.Namespace) -> int:
     from vkpbr.bake.bake import bake_file  # lazily: keeps `vkpbr --help` fast
 
     start = time.perf_counter()
+    if args.embed_textures and args.textures not in (None, "decoded"):
+        raise UsageError(f"--embed-textures is --textures decoded: not with --textures {args.textures}")
     report = bake_file(args.scene, args.out, embed_textures=args.embed_textures,
+                       textures=args.textures,
                        progress=not (args.no_progress or args.json),
                        strict=args.strict, allow_outside_paths=args.allow_outside_paths,
                        variant=getattr(args, "variant", None))
@@ -135,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
             textures += f", {n} texture{'s' if n != 1 else ''} {kind}"
     if report.get("outside_textures"):
         textures += (f" ({report['outside_textures']} outside the .vkpbr's folder: loading it "
-                     "needs --allow-outside-paths, or bake with --embed-textures)")
+                     "needs --allow-outside-paths)")
     elif report.get("external_textures"):
         textures += " (they must stay where they are, relative to the .vkpbr)"
     say(f"wrote {args.out} ({report['file_bytes'] / 2**20:.2f} MiB, "

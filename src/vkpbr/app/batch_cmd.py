@@ -30,7 +30,8 @@ examples:
 _NOT_WITH_RAY = (("camera", "--camera"), ("camera_index", "--camera-index"), ("fov", "--fov"),
                  ("light", "--light"), ("light_color", "--light-color"),
                  ("light_intensity", "--light-intensity"), ("falloff", "--falloff"),
-                 ("device", "--device"))
+                 ("device", "--device"), ("variant", "--variant"), ("time", "--time"),
+                 ("animation", "--animation"), ("animate", "--animate"))
 
 
 def add_ray_arguments(p: argparse.ArgumentParser, with_flag: bool = True) -> None:
@@ -94,26 +95,50 @@ def _semantics_arg(value: str) -> str:
     return str(Path(value).resolve())
 
 
-def render_on_ray(args: argparse.Namespace, options: Any) -> int:
-    """`vkpbr render SCENE --cameras POSES --out DIR --ray [ADDRESS]`: the same files as
-    without --ray, rendered by the actors of a one-entry job."""
-    from vkpbr.distributed import Job, RenderSettings, SceneJob
-    from vkpbr.io import OUTPUT_SUFFIXES
-    from vkpbr.scene.poses import load_poses
+# `vkpbr render --cameras` options besides RenderOptions that change the frames (the Ray
+# path refuses them): they are part of the folder's fingerprint when given.
+_FRAME_ARGS = ("camera", "camera_index", "fov", "light", "light_color", "light_intensity",
+               "falloff", "variant", "time", "animation")
 
-    if not args.cameras:
-        raise UsageError("--ray renders a --cameras batch: give --cameras too")
-    for dest, flag in _NOT_WITH_RAY:
-        if getattr(args, dest, None) not in (None, [], ()):
-            raise UsageError(f"{flag} is not available with --ray (the actors render with the "
-                             "scene's camera and lights); drop it or render without --ray")
-    if args.frames != 1:
-        raise UsageError("--frames is a timing option: not available with --ray")
+
+def orbit_poses(n: int, scene: Any) -> tuple[Any, ...]:
+    """`--orbit N`: N views of a turntable around the scene's bounds (CameraBatch.orbit: 20
+    degrees above the horizon, 45 degree field of view, the bounds framed)."""
+    from vkpbr.scene.camera import Pose
+    from vkpbr.scene.camera_batch import CameraBatch
+
+    if scene is None:  # the built-in chart
+        from vkpbr.scene.default import default_scene
+
+        scene = default_scene()
+    batch = CameraBatch.orbit(n, bounds=scene.bounds())
+    return tuple(Pose(tuple(map(float, batch.eye[i])), tuple(map(float, batch.target[i])),
+                      tuple(map(float, batch.up[i])), float(batch.yfov_deg[i]),
+                      name=f"orbit {i}", where=f"--orbit view {i}") for i in range(n))
+
+
+def _given(value: object) -> bool:
+    """Whether an option was given: not its default None, False or an empty list (0 is)."""
+    return not (value is None or value is False or value == [] or value == ())
+
+
+def frames_job(args: argparse.Namespace, options: Any, where: str = "--out",
+               poses: tuple[Any, ...] | None = None) -> Any:
+    """The one-entry job of `vkpbr render SCENE --cameras POSES --out DIR [--ray]`: its
+    settings, poses (read and checked) and the folder's fingerprint, the same with and
+    without --ray so that either may resume the other's folder. Nothing is created."""
+    from vkpbr.distributed.job import RenderSettings, SceneJob
+    from vkpbr.io import OUTPUT_SUFFIXES
+    from vkpbr.scene.poses import load_poses, poses_size
+
     out = Path(args.out)
     if out.suffix.lower() in OUTPUT_SUFFIXES:
         raise UsageError(f"--out {out}: with --cameras, --out is a folder")
+    if poses is None:  # the whole file is checked before the scene loads
+        poses = tuple(load_poses(args.cameras))
     settings = RenderSettings(
-        scene=Path(args.scene) if args.scene else None, out=out, size=args.size,
+        scene=Path(args.scene) if args.scene else None, out=out,
+        size=poses_size(list(poses), args.size, "--size"),
         outputs=tuple(args.outputs or ()), linear=args.linear, msaa=args.msaa,
         cache=args.cache is not None, cache_dir=args.cache or None, options=options,
         strict=bool(getattr(args, "strict", False)),
@@ -122,5 +147,31 @@ def render_on_ray(args: argparse.Namespace, options: Any) -> int:
         batch=int(getattr(args, "batch", BATCH_VIEWS)))
     if settings.scene is not None and not settings.scene.is_file():
         raise UsageError(f"{settings.scene}: no such scene file")
-    scene = SceneJob(settings, tuple(load_poses(args.cameras)), colmap=args.colmap, where="--out")
+    extra = tuple(sorted((name, repr(getattr(args, name))) for name in _FRAME_ARGS
+                         if _given(getattr(args, name, None))))
+    return SceneJob(settings, poses, colmap=args.colmap, where=where, extra=extra)
+
+
+def render_on_ray(args: argparse.Namespace, options: Any) -> int:
+    """`vkpbr render SCENE --cameras POSES --out DIR --ray [ADDRESS]`: the same files as
+    without --ray, rendered by the actors of a one-entry job."""
+    from vkpbr.distributed import Job
+
+    if not args.cameras and not getattr(args, "orbit", None):
+        raise UsageError("--ray renders a --cameras batch (or --orbit N): give --cameras too")
+    for dest, flag in _NOT_WITH_RAY:
+        if _given(getattr(args, dest, None)):
+            raise UsageError(f"{flag} is not available with --ray (the actors render with the "
+                             "scene's camera and lights); drop it or render without --ray")
+    if args.frames != 1:
+        raise UsageError("--frames is a timing option: not available with --ray")
+    poses = None
+    if getattr(args, "orbit", None):  # the bounds need the scene, here as well as on the actors
+        from vkpbr.app.common import load_scene_arg
+
+        poses = orbit_poses(args.orbit, load_scene_arg(args))
+    scene = frames_job(args, options, poses=poses)
+    if any(getattr(p, "time", None) is not None for p in scene.poses):
+        raise UsageError(f'{args.cameras}: poses with a "time" (an animation pose) are not '
+                         "rendered on Ray yet: render them without --ray")
     return _render(Job((scene,), source="--cameras"), args)

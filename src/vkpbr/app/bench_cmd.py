@@ -29,6 +29,7 @@ import dataclasses
 import json
 import logging
 import math
+import os
 import statistics
 import subprocess
 import sys
@@ -47,9 +48,31 @@ log = logging.getLogger(__name__)
 
 REPO = Path(__file__).resolve().parents[3]
 SPONZA_CANDIDATES = (
+    REPO / ".assets" / "models" / "Sponza" / "glTF" / "Sponza.gltf",
     REPO / ".assets" / "Sponza" / "Sponza.gltf",
     REPO.parent / "shared" / "assets" / "Sponza" / "glTF" / "Sponza.gltf",
 )
+
+
+def sponza_path(args: argparse.Namespace) -> Path:
+    """--sponza, else Sponza under $VKPBR_ASSETS (the sample models' folder the tests use:
+    Sponza/glTF/Sponza.gltf), else the checkout's usual places. UsageError naming where it
+    looked when none exists."""
+    if getattr(args, "sponza", None):
+        return Path(args.sponza)
+    env = os.environ.get("VKPBR_ASSETS")
+    if env:  # set: it wins, as for the tests, so that a wrong value is reported
+        root = Path(env).expanduser()
+        found = next((p for p in (root / "Sponza" / "glTF" / "Sponza.gltf",
+                                  root / "Sponza" / "Sponza.gltf") if p.exists()), None)
+        if found is None:
+            raise UsageError(f"Sponza not found under $VKPBR_ASSETS={env} (Sponza/glTF/"
+                             "Sponza.gltf): pass --sponza PATH/Sponza.gltf")
+        return found
+    path = next((p for p in SPONZA_CANDIDATES if p.exists()), None)
+    if path is None:
+        raise UsageError("Sponza not found: set $VKPBR_ASSETS or pass --sponza PATH/Sponza.gltf")
+    return path
 # The peers' scenario (shared/notes/peers.md): same camera, light and field of view.
 SPONZA_CAMERA = dict(eye=(9.0, 1.8, -0.4), target=(-9.0, 3.5, -0.4), yfov_deg=45.0)
 
@@ -58,14 +81,35 @@ def _sponza(args: argparse.Namespace):  # noqa: ANN202
     from vkpbr.scene.loader import load_scene
     from vkpbr.scene.types import Light
 
-    path = args.sponza or next((p for p in SPONZA_CANDIDATES if p.exists()), None)
-    if path is None:
-        raise UsageError("Sponza not found: pass --sponza PATH/Sponza.gltf")
-    scene = load_scene(path, strict=args.strict, allow_outside_paths=args.allow_outside_paths,
+    scene = load_scene(sponza_path(args), strict=args.strict, allow_outside_paths=args.allow_outside_paths,
                        variant=getattr(args, "variant", None))
     scene.cameras = [dataclasses.replace(scene.cameras[0], **SPONZA_CAMERA)]
     scene.lights = [Light(position=(0.0, 4.0, 0.0))]
     return scene
+
+
+def _sponza_parts(args: argparse.Namespace):  # noqa: ANN202
+    """Sponza with a node of its own for each of its 103 primitives (the file has one node
+    holding them all), so that a scenario can move 100 of them."""
+    scene = _sponza(args)
+    scene.tree = None
+    for node in scene.nodes:
+        node.tree = -1
+    return scene
+
+
+def _moving(r: object, cams: list, count: int):  # noqa: ANN202
+    """`cams`, each after moving `count` of the scene's nodes a little (set_poses: one call a
+    frame, as a simulation's step writes them)."""
+    import numpy as np
+
+    nodes = np.arange(min(count, len(r.state)))  # type: ignore[attr-defined]
+    rest = r.state.local[nodes].copy()  # type: ignore[attr-defined]
+    for step, cam in enumerate(cams):
+        m = rest.copy()
+        m[:, 1, 3] += 0.01 * np.sin(0.1 * step + np.arange(len(m)))
+        r.set_poses(nodes, m)  # type: ignore[attr-defined]
+        yield cam
 
 
 def _default(args: argparse.Namespace):  # noqa: ANN202
@@ -101,6 +145,10 @@ SCENARIOS: dict[str, tuple] = {
        for path, options in (("forward", {"pipeline": "forward"}),
                              ("compute", {"pipeline": "compute", "raster": "hardware"}),
                              ("compute-raster", {"pipeline": "compute", "raster": "compute"}))},
+    # Issue 31: 100 of Sponza's nodes moved every frame (its point light's cube map is then
+    # redrawn every frame: the moved nodes cast shadows).
+    "sponza-moving-1080p": (_sponza_parts, (1920, 1080), {"moving": 100}),
+    "sponza-moving-480p": (_sponza_parts, (640, 480), {"moving": 100}),
 }
 
 
@@ -225,7 +273,8 @@ def run_scenario(name: str, args: argparse.Namespace) -> dict:
     from vkpbr.render.renderer import Renderer
 
     make, size, *rest = SCENARIOS[name]
-    options = rest[0] if rest else {}
+    options = dict(rest[0]) if rest else {}
+    moving = options.pop("moving", 0)
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -239,7 +288,8 @@ def run_scenario(name: str, args: argparse.Namespace) -> dict:
         for readback in (True, False):
             cpu, gpu, rb = [], [], []
             t = time.perf_counter()
-            for _ in r.render_many(cams, size=size, readback=readback, **options):
+            views = _moving(r, cams, moving) if moving else cams
+            for _ in r.render_many(views, size=size, readback=readback, **options):
                 s = r.last_stats
                 cpu.append(s.cpu_ms)
                 gpu.append(s.gpu_ms)

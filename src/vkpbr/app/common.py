@@ -69,9 +69,16 @@ def camera_from_args(args: argparse.Namespace, renderer: Any) -> Camera:
 
     scene = renderer.scene
     if args.camera_index is not None:
+        # A file without cameras gets an automatic one (or a known scene's preset): it is
+        # not the file's, so say what the file has.
+        own = [c for c in scene.cameras if c.name != "auto" and not c.name.startswith("vkpbr:")]
+        if not own:
+            raise UsageError(f"--camera-index {args.camera_index}: the scene file has no "
+                             "cameras (--camera-index N picks the file's camera N, counting "
+                             "from 0); leave it out for the automatic camera, or give --camera")
         if not 0 <= args.camera_index < len(scene.cameras):
-            raise UsageError(f"--camera-index {args.camera_index}: the scene has "
-                             f"{len(scene.cameras)} camera(s)")
+            raise UsageError(f"--camera-index {args.camera_index}: the scene file has "
+                             f"{len(own)} camera(s): give 0..{len(own) - 1} (counting from 0)")
         camera = scene.cameras[args.camera_index]
     else:
         camera = renderer.default_camera()

@@ -166,7 +166,7 @@ BINDINGS: tuple[Binding, ...] = (
         _press("equal", "exposure", EXPOSURE_STEP), _press("kp_add", "exposure", EXPOSURE_STEP),
         _press("minus", "exposure", -EXPOSURE_STEP),
         _press("kp_subtract", "exposure", -EXPOSURE_STEP)),
-        doc=f"tone map: none -> reinhard -> aces; exposure +/- {EXPOSURE_STEP:g} EV (keypad + / - "
+        doc=f"tone map: none -> reinhard -> aces -> aces-hill -> pbr-neutral; exposure +/- {EXPOSURE_STEP:g} EV (keypad + / - "
             f"too), within {EXPOSURE_RANGE[0]:g}..{EXPOSURE_RANGE[1]:g}"),
     Binding("[ / ]", f"field of view -/+ {FOV_STEP:g} degrees ({_LO:g}..{_HI:g})", (
         _press("left_bracket", "fov", -FOV_STEP), _press("right_bracket", "fov", FOV_STEP)),

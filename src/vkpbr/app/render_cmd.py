@@ -19,10 +19,10 @@ from vkpbr.app.parsing import EPILOG_FORMATTER, _as_type, size_arg
 from vkpbr.config import BATCH_VIEWS, default_cache_dir
 from vkpbr.errors import UsageError
 from vkpbr.io import (
-    OUTPUT_SUFFIXES,
+    check_id_count,
     check_output_path,
     check_outputs,
-    check_writable,
+    output_kind,
     output_path,
     write_image_atomic,
     write_outputs,
@@ -50,9 +50,12 @@ def add_parser(sub: Any) -> None:
     p.add_argument("scene", nargs="?",
                    help="glTF/GLB/OBJ/.comp5822mesh/.vkpbr file; default: the built-in PBR chart")
     p.add_argument("--out", "-o", default="render.png",
-                   help="output image (.png, .jpg, .exr, .npy; a folder with --cameras); default render.png")
-    p.add_argument("--size", type=size_arg, default="1280x720", metavar="WxH",
-                   help="image size (default 1280x720)")
+                   help="output image: 8-bit .png, .jpg, .bmp, .tif, .webp (RGBA where the format "
+                        "has alpha; .jpg drops it), float .exr or .npy with --linear; a folder "
+                        "with --cameras; default render.png")
+    p.add_argument("--size", type=size_arg, metavar="WxH",
+                   help="image size (default 1280x720; with --cameras, the size the poses "
+                        "file states, else 1280x720)")
     p.add_argument("--camera", metavar="EX,EY,EZ,TX,TY,TZ[,UX,UY,UZ]",
                    help="eye, target and up (default: the scene's camera, else one framing it)")
     p.add_argument("--camera-index", type=int, metavar="N", help="use the scene file's camera N")
@@ -61,6 +64,10 @@ def add_parser(sub: Any) -> None:
                         '"ex,ey,ez,tx,ty,tz[,ux,uy,uz]" strings or {"eye","target","up","fov"} '
                         "objects, pose matrices, K + pose, a NeRF transforms.json) into the folder "
                         "--out, with the cameras as written as a NeRF transforms.json there")
+    p.add_argument("--orbit", type=int, metavar="N",
+                   help="render N views of a turntable around the scene into the folder --out "
+                        "(CameraBatch.orbit: 20 degrees above the horizon, the bounds framed), "
+                        "as --cameras does")
     p.add_argument("--batch", type=int, default=BATCH_VIEWS, metavar="N",
                    help="with --cameras, render N views per GPU submission (Renderer.render_batch; "
                         "directional lights' shadows then use one map over the whole scene); "
@@ -116,87 +123,141 @@ def list_views() -> int:
 
 
 def _render_batch(args: argparse.Namespace, options: Any) -> int:
-    """--cameras: frames in flight on the GPU, PNG encoding on worker threads."""
+    """--cameras: frames in flight on the GPU, PNG encoding on worker threads, into a frames
+    folder kept by its manifest (vkpbr.distributed.manifest): a folder of another run is
+    refused, one of this run resumed (views whose files are there with their recorded sizes
+    are not rendered again), and transforms.json is written once every view is done."""
+    from vkpbr.app.batch_cmd import frames_job
+    from vkpbr.distributed.manifest import (
+        abandon_frames_folder,
+        open_frames_folder,
+        remove_leftovers,
+    )
+    from vkpbr.render.renderer import Renderer
+
+    t0 = time.perf_counter()
+    scene, poses = None, None
+    if args.orbit:  # the orbit frames the scene's bounds: the scene loads first
+        from vkpbr.app.batch_cmd import orbit_poses
+
+        scene = load_scene_arg(args)
+        poses = orbit_poses(args.orbit, scene)
+    job = frames_job(args, options, poses=poses)  # poses, size, fingerprint: before the scene
+    manifest = open_frames_folder(job)  # a folder another run made is refused here
+    try:
+        todo = sorted(set(range(len(job.poses))) - manifest.done_views())
+        if todo and scene is None:
+            scene = load_scene_arg(args)
+        with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa,
+                      semantics=args.semantics,
+                      cache_dir=default_cache_dir()) as renderer:
+            base = camera_from_args(args, renderer)
+            cameras = [pose.camera(base) for pose in job.poses]
+            times = pose_times(list(job.poses), args.cameras or "--orbit", args.time)
+            if todo:
+                t1 = time.perf_counter()
+                log.info("load + set-up %.2f s", t1 - t0)
+                _render_views(args, options, job, manifest, renderer, cameras, todo, times)
+            t2 = time.perf_counter()
+    except BaseException:
+        abandon_frames_folder(job, manifest, manifest.created)
+        raise
+    finally:
+        manifest.close()
+    remove_leftovers(job)
+    # The cameras as rendered, for NeRF / 3D-reconstruction tools (docs/camera-files.md).
+    from vkpbr.scene.camera_files import write_colmap, write_transforms
+
+    size, out_dir, n = job.settings.size, Path(job.settings.out), len(job.poses)
+    names = [job.transforms_name(i) for i in range(n)]
+    write_transforms(out_dir / "transforms.json", cameras, size, names, times=times)
+    wrote = ["transforms.json"]
+    if args.colmap:
+        wrote += [p.name for p in write_colmap(out_dir, cameras, size, names)]
+    before = f", {n - len(todo)} done before" if len(todo) < n else ""
+    say(f"wrote {len(todo)} images{before} and {', '.join(wrote)} to {out_dir}/ "
+        f"({size[0]}x{size[1]}, view {options.view})")
+    if todo:
+        say(f"load + set-up {t1 - t0:.2f} s, rendering {1e3 * (t2 - t1) / len(todo):.2f} ms "
+            f"per frame ({len(todo) / (t2 - t1):.1f} frames/s)")
+    return 0
+
+
+def _render_views(args: argparse.Namespace, options: Any, job: Any, manifest: Any,
+                  renderer: Any, cameras: list[Any], todo: list[int],
+                  times: list[float] | None = None) -> None:
+    """Render views `todo` and record them in the manifest as their files land (in order,
+    a group at a time: a killed run loses only what it had not recorded)."""
     from concurrent.futures import ThreadPoolExecutor
 
     from tqdm import tqdm
 
-    from vkpbr.render.renderer import Renderer
+    from vkpbr.distributed.manifest import camera_record, start_frames_folder
 
-    size = args.size
-    out_dir = Path(args.out)
-    if out_dir.suffix.lower() in OUTPUT_SUFFIXES:
-        raise UsageError(f"--out {out_dir}: with --cameras, --out is a folder")
-    out_dir.mkdir(parents=True, exist_ok=True)
-    check_writable(out_dir / "x.png")
-    suffix = ".npy" if args.linear else ".png"
-    from vkpbr.scene.poses import load_poses
+    out_dir, size = Path(job.settings.out), job.settings.size
+    names = job.settings.outputs
+    lights = lights_from_args(args, renderer, options)
+    for name in names:  # the formats were checked before the scene loaded; now the id count
+        if output_kind(name) == "ids":
+            check_id_count(renderer.max_id, output_path(out_dir / job.files(0)[0], name),
+                           "--outputs")
+    manifest.created = start_frames_folder(job, manifest)  # made last: all checks are done
+    pending: list[tuple[int, list[Any]]] = []
 
-    t0 = time.perf_counter()
-    poses = load_poses(args.cameras)  # the whole file is checked before the scene loads
-    scene = load_scene_arg(args)
-    with Renderer(scene, device=args.device, validation=args.validation, msaa=args.msaa,
-                  semantics=args.semantics,
-                  cache_dir=default_cache_dir()) as renderer:
-        base = camera_from_args(args, renderer)
-        cameras = [pose.camera(base) for pose in poses]
-        times = pose_times(poses, args.cameras, args.time)
-        lights = lights_from_args(args, renderer, options)
-        names = args.outputs or ()
-        if names:
-            _check_outputs(out_dir / f"frame_00000{suffix}", names, renderer.max_id)
-        t1 = time.perf_counter()
-        log.info("load + set-up %.2f s", t1 - t0)
-        with ThreadPoolExecutor(max(2, (os.cpu_count() or 2) - 1)) as pool:
-            jobs = []
-            frames = renderer.render_many(cameras, lights, size, options, linear=args.linear,
-                                          outputs=("color", *names) if names else None,
-                                          batch=args.batch or None, times=times,
-                                          animation=animation_choice(scene, args.animation))
-            bar = tqdm(frames, total=len(cameras), unit="frame", disable=True if is_quiet() else None)
-            for i, image in enumerate(bar):
-                path = out_dir / f"frame_{i:05d}{suffix}"
-                if names:
-                    jobs.append(pool.submit(_write_outputs, path, image, names))
-                    image = image["color"]
-                jobs.append(pool.submit(write_image_atomic, path, image))
-            t2 = time.perf_counter()
-            for job in jobs:
-                job.result()
-    t3 = time.perf_counter()
-    n = len(cameras)
-    # The cameras as rendered, for NeRF / 3D-reconstruction tools (docs/camera-files.md).
-    from vkpbr.scene.camera_files import write_colmap, write_transforms
+    def record(done_only: bool) -> None:
+        group = []
+        while pending and (not done_only or all(f.done() for f in pending[0][1])):
+            view, futures = pending.pop(0)
+            for f in futures:
+                f.result()
+            group.append(view)
+        if group:
+            manifest.done(group, [f for v in group for f in job.files(v)],
+                          [camera_record(cameras[v]) for v in group])
 
-    names = [f"frame_{i:05d}{suffix}" for i in range(n)]
-    write_transforms(out_dir / "transforms.json", cameras, size, names)
-    wrote = ["transforms.json"]
-    if args.colmap:
-        wrote += [p.name for p in write_colmap(out_dir, cameras, size, names)]
-    say(f"wrote {n} images and {', '.join(wrote)} to {out_dir}/ ({size[0]}x{size[1]}, "
-        f"view {options.view})")
-    say(f"load + set-up {t1 - t0:.2f} s, rendering {1e3 * (t2 - t1) / n:.2f} ms per frame "
-        f"({n / (t2 - t1):.1f} frames/s), all written after {t3 - t1:.2f} s")
-    return 0
+    with ThreadPoolExecutor(max(2, (os.cpu_count() or 2) - 1)) as pool:
+        frames = renderer.render_many([cameras[v] for v in todo], lights, size, options,
+                                      linear=args.linear,
+                                      outputs=("color", *names) if names else None,
+                                      batch=args.batch or None,
+                                      times=None if times is None else [times[v] for v in todo],
+                                      animation=animation_choice(renderer.scene, args.animation))
+        bar = tqdm(frames, total=len(todo), unit="frame", disable=True if is_quiet() else None)
+        for view, image in zip(todo, bar, strict=True):
+            files = [out_dir / f for f in job.files(view)]
+            futures = []
+            if names:
+                futures.append(pool.submit(_write_outputs, files[0], image, names))
+                image = image["color"]
+            futures.append(pool.submit(write_image_atomic, files[0], image))
+            pending.append((view, futures))
+            if len(pending) >= 16:
+                record(done_only=True)
+        record(done_only=False)
 
 
 def run(args: argparse.Namespace) -> int:
     if args.list_views:
         return list_views()
     options = render_options_from_args(args)  # bad values fail here, before any expensive work
-    if args.colmap and not args.cameras:
+    if args.colmap and not (args.cameras or args.orbit):
         raise UsageError("--colmap writes the cameras of a --cameras batch: give --cameras too")
     if args.batch < 0:
         raise UsageError(f"--batch {args.batch}: give a number of views per submission, or 0")
+    if args.orbit is not None:
+        if args.cameras:
+            raise UsageError("--orbit makes the cameras: not with --cameras")
+        if args.orbit < 1:
+            raise UsageError(f"--orbit {args.orbit}: give a number of views >= 1")
     if args.ray is not None:
         from vkpbr.app.batch_cmd import render_on_ray
 
         return render_on_ray(args, options)
     if args.animate:
         return run_animation(args, options)
-    if args.cameras:
+    if args.cameras or args.orbit:
         return _render_batch(args, options)
-    size = args.size
+    size = args.size or (1280, 720)
     out = Path(args.out)
     check_output_path(out)  # the folder, the image type, OpenEXR for .exr: before any work
     if args.linear and out.suffix.lower() not in (".npy", ".exr"):

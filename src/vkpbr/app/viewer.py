@@ -124,6 +124,27 @@ class FrameMeter:
         return statistics.median(ms) if ms else float("nan")
 
 
+def _glfw_init() -> tuple[bool, str]:
+    """glfw.init(), with what GLFW said on failure as plain text: the glfw package reports
+    errors as Python warnings holding a bytes repr ("(65550) b'X11: ...'"), which would be
+    a second, raw line before the one error line."""
+    import re
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ok = bool(glfw.init())
+    said = []
+    for w in caught:
+        text = str(w.message)
+        m = re.fullmatch(r"\(\d+\) b(['\"])(.*)\1", text, re.S)
+        said.append(m.group(2) if m else text)
+    if ok:
+        for text in said:  # not fatal: keep them as the warnings they were
+            warnings.warn(text, stacklevel=2)
+    return ok, "; ".join(t.strip().rstrip(".") for t in said if t.strip())
+
+
 class Viewer(InputHandlers):
     """Owns the window, the Renderer, the frame target and the input state. `run()` loops
     until Esc / close / the script's quit / `frames`; `close()` releases everything."""
@@ -137,9 +158,10 @@ class Viewer(InputHandlers):
         self.hud: Any = None
         try:
             if not config.offscreen:
-                if not glfw.init():
-                    raise VkpbrError("cannot open a window: GLFW failed to initialise (no "
-                                     "display?); use xvfb-run, or --offscreen to run without one")
+                ok, why = _glfw_init()
+                if not ok:
+                    raise VkpbrError(f"cannot open a window: {why or 'GLFW failed to initialise'}"
+                                     "; use xvfb-run, or --offscreen to run without one")
                 self._glfw = True
             self._open(scene)
         except BaseException:

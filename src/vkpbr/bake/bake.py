@@ -63,7 +63,8 @@ try:  # optional: a C++ vertex cache optimiser; the bake works (less optimally) 
 except ImportError:  # pragma: no cover - depends on the environment
     _meshopt = None
 
-__all__ = ["bake_file", "bake_report", "bake_scene", "cached_bake", "embed_images", "source_key"]
+__all__ = ["bake_file", "bake_report", "bake_scene", "cached_bake", "embed_images", "embed_sources", "source_key",
+           "TEXTURE_MODES"]
 
 log = logging.getLogger(__name__)
 
@@ -368,6 +369,75 @@ def embed_images(scene: Scene, baked: BakedScene, workers: int | None = None) ->
     return sum(levels is not None for levels in chains)
 
 
+# The textures a bake writes (`bake_file(textures=...)`, `vkpbr bake --textures`).
+TEXTURE_MODES = ("source", "decoded", "external")
+_MAGIC = ((b"\x89PNG\r\n\x1a\n", "image/png"), (b"\xff\xd8\xff", "image/jpeg"),
+          (b"\xabKTX 20\xbb\r\n\x1a\n", "image/ktx2"), (b"RIFF", "image/webp"),
+          (b"GIF8", "image/gif"), (b"BM", "image/bmp"))
+
+
+def _sniff_mime(data: bytes, fallback: str | None) -> str | None:
+    """The MIME type the first bytes of an encoded image say, else `fallback`."""
+    return next((mime for magic, mime in _MAGIC if data.startswith(magic)), fallback)
+
+
+def embed_sources(scene: Scene, baked: BakedScene, source: Path) -> int:
+    """Store each texture the source names as a file in `baked` as that file's bytes, as
+    they are (PNG, JPEG, KTX2: compressed, decoded at load like a .glb's images), so the
+    baked file is self-contained and about as large as its sources. Returns how many.
+
+    Raises
+    ------
+    SceneError : a texture that cannot be read (missing, refused by the path policy, over
+        the texture file limit): the baked file would render it untextured.
+    """
+    from ..scene.limits import limits
+
+    cap = limits().max_texture_file_bytes
+    images = list(baked.images)
+    count = 0
+    for i, (img, b) in enumerate(zip(scene.images, images, strict=True)):
+        if b.path is None:
+            continue
+        why = img.refused
+        data = b""
+        if not why:
+            try:
+                data = read_resource(b.path, max_bytes=cap + 1)
+            except OSError as exc:
+                why = exc.strerror or str(exc)
+            else:
+                if len(data) > cap:
+                    why = f"over the {cap:,}-byte texture file limit"
+        if why:
+            raise SceneError(source, f"texture {img.name}: cannot embed it ({why}); the baked "
+                                     "file would render it untextured (fix the file, or bake "
+                                     "with --textures external)")
+        images[i] = BakedImage(b.name, data=data, mime_type=_sniff_mime(data, img.mime_type))
+        count += 1
+    baked.images = images
+    return count
+
+
+def _check_external(source: Path, out_path: Path, images: list[BakedImage],
+                    allow_outside_paths: bool) -> None:
+    """--textures external: every referenced file exists and, unless `allow_outside_paths`,
+    lies in the baked file's folder tree (else loading it renders untextured)."""
+    tree = out_path.resolve().parent
+    for img in images:
+        if img.path is None:
+            continue
+        path = Path(img.path).resolve()
+        if not path.is_file():
+            raise SceneError(source, f"texture {img.name}: no such file; the baked file would "
+                                     "render it untextured")
+        if not allow_outside_paths and not path.is_relative_to(tree):
+            raise SceneError(source, f"texture {img.name} lies outside {tree}, the baked file's "
+                                     "folder: loading it would render untextured; bake with "
+                                     "--textures source (the default) to store it inside, "
+                                     "or write the .vkpbr beside the source")
+
+
 def _external_textures_note(out_path: Path, images: list[BakedImage]) -> str | None:
     """One line about the textures a baked file refers to on disk, or None if there are none."""
     external = [Path(img.path).resolve() for img in images if img.path is not None]
@@ -385,7 +455,7 @@ def _external_textures_note(out_path: Path, images: list[BakedImage]) -> str | N
         "; they lie outside the baked file's folder, so loading it needs --allow-outside-paths")
     return (f"{out_path.name}: {len(external)} of {len(images)} textures stay external files; they "
             f"must stay in {where}" + (f" ({Path(rel).as_posix()} from the baked file)" if rel else "")
-            + ", or bake with --embed-textures to store them inside" + outside)
+            + ", or bake with --textures source to store them inside" + outside)
 
 
 def _warn_unbaked(scene: Scene) -> None:
@@ -402,14 +472,21 @@ def _warn_unbaked(scene: Scene) -> None:
 
 def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: bool = False,
               progress: bool = True, strict: bool = False,
-              allow_outside_paths: bool = False, variant: str | None = None) -> dict[str, Any]:
+              allow_outside_paths: bool = False, variant: str | None = None,
+              textures: str | None = None, _cache: bool = False) -> dict[str, Any]:
     """Load a scene file, bake it, write `out_path`.
 
     Parameters
     ----------
     source_path : any format `load_scene` reads.
     out_path : the .vkpbr file to write (atomically).
-    embed_textures : store decoded mip chains instead of references (`embed_images`).
+    textures : what the file holds of textures the source names as files: "source" (the
+        default) their files' bytes as they are (`embed_sources`: self-contained, about as
+        large as the sources), "decoded" RGBA8 mip chains (`embed_images`: loads fastest,
+        ~30x larger), "external" references to the files (they must stay where they are;
+        one outside the baked file's folder is an error unless `allow_outside_paths`).
+        Textures the source embeds (a .glb's) are stored as they are in every mode.
+    embed_textures : the earlier name of textures="decoded".
     progress : a tqdm bar over meshes.
     strict : a missing texture file is an error (see `load_scene`).
     allow_outside_paths : read files the source names outside its folder tree (see
@@ -436,7 +513,14 @@ def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: boo
     baked = bake_scene(scene, progress=progress)
     baked.source_key, baked.source_files = source_key(source_path, allow_outside_paths)
     te = time.perf_counter()
-    embedded = embed_images(scene, baked) if embed_textures else 0
+    mode = textures or ("decoded" if embed_textures else "source")
+    if mode not in TEXTURE_MODES:
+        raise ValueError(f"textures={mode!r}: expected one of {', '.join(TEXTURE_MODES)}")
+    embedded = embed_images(scene, baked) if mode == "decoded" else 0
+    if mode != "external":  # (what "decoded" could not decode fails here, naming it)
+        embedded += embed_sources(scene, baked, source_path)
+    elif not _cache:
+        _check_external(source_path, out_path, baked.images, allow_outside_paths)
     t2 = time.perf_counter()
     size = write_baked(out_path, baked)
     note = _external_textures_note(out_path, baked.images)
@@ -476,6 +560,8 @@ def cached_bake(source_path: str | Path, cache_dir: str | Path,
         except BakeFormatError:
             pass
     cache_dir.mkdir(parents=True, exist_ok=True)
+    # The cache keeps references: its files are made again from the sources at will, and
+    # load with root=source_path.parent.
     bake_file(source_path, out, progress=False, allow_outside_paths=allow_outside_paths,
-              variant=variant)
+              variant=variant, textures="external", _cache=True)
     return out

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from vkpbr.distributed.job import RenderSettings, WorkItem, frame_files
+from vkpbr.distributed.job import RenderSettings, WorkItem
 from vkpbr.distributed.manifest import camera_record
 from vkpbr.errors import SceneError, UsageError
 
@@ -139,9 +139,11 @@ class RendererActor:
                                f"{item.label()}: outputs")
         files: list[str] = []
         writes = []
-        for view, frame in zip(item.frames, render_views(renderer, cameras, lights, settings),
-                               strict=True):
-            names = frame_files(settings, view)
+        for k, (_view, frame) in enumerate(zip(item.frames, render_views(renderer, cameras,
+                                                                         lights, settings),
+                                               strict=True)):
+            names = item.files_of(k)
+            (out / names[0]).parent.mkdir(parents=True, exist_ok=True)  # a file_path's folder
             writes.append(self._pool.submit(write_output, out / names[0], frame["color"], "color"))
             for name, file in zip(settings.outputs, names[1:], strict=True):
                 writes.append(self._pool.submit(write_output, out / file, frame[name],
@@ -149,7 +151,8 @@ class RendererActor:
             files += names
         for w in writes:
             w.result()
-        return {"ok": True, "views": list(item.frames), "files": files,
+        sizes = [(out / f).stat().st_size for f in files]
+        return {"ok": True, "views": list(item.frames), "files": files, "sizes": sizes,
                 "cameras": [camera_record(c) for c in cameras], "pid": os.getpid(),
                 "load_s": t_load - t0, "seconds": time.perf_counter() - t0}
 

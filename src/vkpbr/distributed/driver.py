@@ -20,7 +20,6 @@ import collections
 import contextlib
 import logging
 import os
-import re
 import time
 import uuid
 from collections.abc import Callable
@@ -36,9 +35,14 @@ from vkpbr.distributed.cluster import (
     import_ray,
     preflight,
 )
-from vkpbr.distributed.job import Job, SceneJob, WorkItem, frame_files, job_from_doc, load_job
-from vkpbr.distributed.manifest import Manifest
-from vkpbr.errors import UsageError
+from vkpbr.distributed.job import Job, SceneJob, WorkItem, job_from_doc, load_job
+from vkpbr.distributed.manifest import (
+    Manifest,
+    abandon_frames_folder,
+    open_frames_folder,
+    remove_leftovers,
+    start_frames_folder,
+)
 
 __all__ = ["render", "JobResult", "Failure", "ClusterError", "check_job", "import_ray"]
 
@@ -103,34 +107,12 @@ def _as_job(job: Job | dict | list | str | os.PathLike[str]) -> Job:
     return load_job(job)
 
 
-def _writable(folder: Path, where: str) -> None:
-    """Create `folder` and write a file there: os.access says yes to root on a read-only
-    mount and to anyone on a full disk."""
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        probe = folder / f".vkpbr-probe.{os.getpid()}"
-        probe.write_bytes(b"")
-        probe.unlink()
-    except OSError as exc:
-        raise UsageError(f"{where}: out {folder}: not writable ({exc.strerror or exc})") from None
-
-
 def check_job(job: Job) -> list[Manifest]:
-    """Everything that can fail before an actor starts: each out folder is writable, each
-    output format can be written (OpenEXR for .exr), and each manifest is this job's.
-    Returns the manifests, one per entry."""
-    from vkpbr.io import check_output_path, output_kind
-
-    manifests = []
-    for scene in job.scenes:
-        s = scene.settings
-        _writable(Path(s.out), scene.where)
-        names = frame_files(s, 0)
-        check_output_path(Path(s.out) / names[0], "color", f"{scene.where}: out")
-        for name, file in zip(s.outputs, names[1:], strict=True):
-            check_output_path(Path(s.out) / file, output_kind(name), f"{scene.where}: outputs")
-        manifests.append(Manifest.open(Path(s.out), scene.fingerprint(), scene.where))
-    return manifests
+    """Everything that can fail before an actor starts, without creating anything: each out
+    folder is writable or can be made, each output format can be written (OpenEXR for
+    .exr), and each folder is new or this job's (its manifest, read and checked). Returns
+    the manifests, one per entry."""
+    return [open_frames_folder(scene) for scene in job.scenes]
 
 
 @dataclass
@@ -149,25 +131,11 @@ def _finish_entry(scene: SceneJob, manifest: Manifest) -> bool:
     cameras = manifest.cameras(len(scene.poses))
     if cameras is None:
         return False
-    names = [frame_files(s, i)[0] for i in range(len(cameras))]
+    names = [scene.transforms_name(i) for i in range(len(cameras))]
     write_transforms(Path(s.out) / "transforms.json", cameras, s.size, names)
     if scene.colmap:
         write_colmap(Path(s.out), cameras, s.size, names)
     return True
-
-
-def _remove_leftovers(scene: SceneJob) -> None:
-    """Remove the temporary files of writes that a killed actor left (atomic.py names them
-    .NAME.PID.RANDOM.tmp). At the end of a job no actor writes here any more."""
-    pattern = re.compile(r"\.(frame_\d{5}[^/]*)\.\d+\.[a-z0-9_]{8}\.tmp")
-    folder = Path(scene.settings.out)
-    try:
-        entries = list(os.scandir(folder))
-    except OSError:
-        return
-    for entry in entries:
-        if pattern.fullmatch(entry.name):
-            Path(entry.path).unlink(missing_ok=True)
 
 
 def render(job: Job | dict | list | str | os.PathLike[str], address: str | None = None, *,
@@ -207,14 +175,23 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
         items = job.items(done)
         if items:
             started = connect(ray, address, local_cpus)
-            try:
+            made: list[tuple[SceneJob, Manifest, bool]] = []
+            try:  # the folders are made last, right before the actors write into them
+                busy = {item.entry for item in items}
+                for e in sorted(busy):
+                    made.append((job.scenes[e], manifests[e],
+                                 start_frames_folder(job.scenes[e], manifests[e])))
                 _run(ray, job, items, manifests, result, actors, num_cpus, num_gpus, progress,
                      on_result)
+            except BaseException:
+                for scene, manifest, created in made:
+                    abandon_frames_folder(scene, manifest, created)
+                raise
             finally:
                 if started:
                     ray.shutdown()
         for scene, manifest in zip(job.scenes, manifests, strict=True):
-            _remove_leftovers(scene)
+            remove_leftovers(scene)
             if not _finish_entry(scene, manifest):
                 result.incomplete.append(str(scene.settings.out))
     finally:
@@ -308,7 +285,7 @@ def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], r
             if res.get("ok"):
                 item = task.item
                 manifests[item.entry].done(item.frames, res["files"], res["cameras"],
-                                           attempts=task.attempts, pid=res.get("pid"),
+                                           sizes=res.get("sizes"), attempts=task.attempts, pid=res.get("pid"),
                                            seconds=round(float(res.get("seconds", 0.0)), 4))
                 result.rendered += len(item.frames)
                 bar.update(len(item.frames))

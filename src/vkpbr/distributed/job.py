@@ -12,7 +12,8 @@ Job file (JSON), a list of entries or {"scenes": [entries], "views_per_item"?, "
     {"scene": "model.glb",           # null or absent: the built-in PBR chart
      "cameras": "poses.json",        # a poses file (docs/poses.md), or the poses inline
      "out": "frames/model",          # a folder, one per entry
-     "size": "256x256",              # or [256, 256]; default 1280x720
+     "size": "256x256",              # or [256, 256]; default: the poses' own (a NeRF file's
+                                     # w/h), else 1280x720
      "outputs": ["depth", "normal"], # dataset outputs besides colour (docs/outputs.md)
      "linear": false, "msaa": 1, "colmap": false, "cache": true,
      "semantics": "mesh",            # or "material", "extras", a mapping file or {name: id}
@@ -97,13 +98,30 @@ class RenderSettings:
                 self.allow_outside_paths, self.msaa, self.semantics)
 
 
-def frame_files(settings: RenderSettings, frame: int) -> list[str]:
+def frame_files(settings: RenderSettings, frame: int, stem: str | None = None) -> list[str]:
     """The files view `frame` writes into `settings.out`: the colour image first, then each
-    dataset output beside it (the names `vkpbr render --cameras` gives)."""
+    dataset output beside it (the names `vkpbr render --cameras` gives). `stem`: the frame's
+    name without suffix, relative to the folder (a NeRF frame's file_path); None:
+    frame_NNNNN."""
     from vkpbr.io import output_path
 
-    color = f"frame_{frame:05d}{settings.suffix}"
-    return [color, *(output_path(Path(color), n).name for n in settings.outputs)]
+    color = f"{stem or f'frame_{frame:05d}'}{settings.suffix}"
+    return [color, *(output_path(Path(color), n).as_posix() for n in settings.outputs)]
+
+
+def _sha256_of_file(path: Path | None) -> str | None:
+    """The scene file's hash (its own bytes: a .gltf's JSON, a .glb whole): an edited scene
+    is another run's."""
+    if path is None:
+        return None
+    h = hashlib.sha256()
+    try:
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                h.update(block)
+    except OSError as exc:
+        raise UsageError(f"{path}: cannot read the scene file: {exc.strerror or exc}") from None
+    return h.hexdigest()
 
 
 @dataclass(frozen=True)
@@ -114,16 +132,44 @@ class SceneJob:
     poses: tuple[Any, ...]
     colmap: bool = False
     where: str = "entry 0"  # how messages name the entry ("job.json: entry 2")
+    # What else the frames depend on (`vkpbr render --cameras` without --ray: --camera,
+    # --light, ... as given), as sorted (name, value) pairs; empty for a job's entries.
+    extra: tuple[tuple[str, str], ...] = ()
+
+    def files(self, view: int) -> list[str]:
+        """The files view `view` writes, relative to the out folder (`frame_files`)."""
+        from vkpbr.scene.poses import frame_stem
+
+        fp = getattr(self.poses[view], "file_path", None)
+        return frame_files(self.settings, view, frame_stem(fp) if fp else None)
+
+    def transforms_name(self, view: int) -> str:
+        """The frame's file_path in the transforms.json written: the poses file's own where it
+        named the frame without a suffix (NeRF's synthetic scenes), else the file written."""
+        from vkpbr.scene.poses import frame_stem
+
+        fp = getattr(self.poses[view], "file_path", None)
+        return fp if fp and frame_stem(fp) == fp else self.files(view)[0]
 
     def fingerprint(self) -> dict[str, object]:
-        """What the files depend on; a manifest written for another fingerprint is refused."""
+        """What the files depend on; a manifest written for another fingerprint is refused.
+        The poses by value (not where they were read from), the scene by path and hash."""
         s = self.settings
-        poses = hashlib.sha256(repr(self.poses).encode()).hexdigest()
-        return {"scene": str(s.scene.resolve()) if s.scene else None, "views": len(self.poses),
+        values = [(p.eye, p.target, p.up, p.yfov_deg, p.pixel_intrinsics, p.name,
+                   *((p.time,) if getattr(p, "time", None) is not None else ()))
+                  for p in self.poses]
+        poses = hashlib.sha256(repr(values).encode()).hexdigest()
+        names = [self.files(v)[0] for v in range(len(self.poses))]
+        named = any(getattr(p, "file_path", None) for p in self.poses)
+        return {"scene": str(s.scene.resolve()) if s.scene else None,
+                "scene_sha256": _sha256_of_file(s.scene), "views": len(self.poses),
                 "poses_sha256": poses, "size": list(s.size), "outputs": list(s.outputs),
                 "linear": s.linear, "msaa": s.msaa, "options": repr(s.render_options()),
                 **({} if s.semantics == "mesh" else {"semantics": repr(s.semantics)}),
-                **({} if s.batch else {"batch": 0})}
+                **({} if s.batch else {"batch": 0}),
+                **({"names_sha256": hashlib.sha256("\n".join(names).encode()).hexdigest()}
+                   if named else {}),
+                **({"extra": dict(self.extra)} if self.extra else {})}
 
 
 @dataclass(frozen=True)
@@ -134,6 +180,11 @@ class WorkItem:
     frames: tuple[int, ...]
     poses: tuple[Any, ...]
     settings: RenderSettings
+    files: tuple[tuple[str, ...], ...] = ()  # per frame, its files (SceneJob.files)
+
+    def files_of(self, k: int) -> list[str]:
+        """The files of the item's k-th frame."""
+        return list(self.files[k]) if self.files else frame_files(self.settings, self.frames[k])
 
     def label(self) -> str:
         scene = self.settings.scene.name if self.settings.scene else "<built-in chart>"
@@ -163,7 +214,8 @@ class Job:
             todo = [i for i in range(len(scene.poses)) if i not in done]
             for k in range(0, len(todo), self.views_per_item):
                 frames = tuple(todo[k:k + self.views_per_item])
-                out.append(WorkItem(e, frames, tuple(scene.poses[i] for i in frames), scene.settings))
+                out.append(WorkItem(e, frames, tuple(scene.poses[i] for i in frames), scene.settings,
+                                    tuple(tuple(scene.files(i)) for i in frames)))
         return out
 
 
@@ -269,9 +321,13 @@ def scene_entry(entry: object, where: str, base: Path) -> SceneJob:
     msaa = entry.get("msaa", 1)
     if msaa not in (1, 4) or isinstance(msaa, bool):
         raise UsageError(f"{where}: msaa: expected 1 or 4, got {msaa!r}")
+    poses = _poses(entry["cameras"], where, base)
+    from vkpbr.scene.poses import poses_size
+
+    size = _size(entry["size"], where) if "size" in entry else None
     settings = RenderSettings(
         scene=scene_path, out=_path(entry["out"], "out", where, base),
-        size=_size(entry.get("size", "1280x720"), where),
+        size=poses_size(list(poses), size, f"{where}: size"),
         outputs=_outputs(entry.get("outputs", []), where),
         linear=_bool(entry, "linear", where, False), msaa=int(msaa),
         cache=_bool(entry, "cache", where, True),
@@ -280,8 +336,10 @@ def scene_entry(entry: object, where: str, base: Path) -> SceneJob:
         allow_outside_paths=_bool(entry, "allow_outside_paths", where, False),
         semantics=_semantics(entry.get("semantics", "mesh"), where, base),
         batch=_count(entry, "batch", where, BATCH_VIEWS, 0))
-    return SceneJob(settings, _poses(entry["cameras"], where, base),
-                    colmap=_bool(entry, "colmap", where, False), where=where)
+    if any(getattr(p, "time", None) is not None for p in poses):
+        raise UsageError(f'{where}: cameras: poses with a "time" (an animation pose) are not '
+                         "rendered on Ray yet: render them with `vkpbr render --cameras`")
+    return SceneJob(settings, poses, colmap=_bool(entry, "colmap", where, False), where=where)
 
 
 def _semantics(value: object, where: str, base: Path) -> str | tuple[tuple[str, int | str], ...]:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from collections import OrderedDict
 from collections.abc import Callable
 from typing import Any
@@ -59,6 +60,7 @@ class BatchPath:
         # are kept (a job's full batches and its last, shorter one), older ones destroyed.
         self._atlases: OrderedDict[tuple, Any] = OrderedDict()
         self._submissions = 0  # of the render_batch call under way (its stats summed)
+        self._t_start = 0.0  # when the submission under way began (its Python time)
 
     # --- whole batches ----------------------------------------------------------------------
     def run(self, route: str, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
@@ -138,6 +140,7 @@ class BatchPath:
         # have (a new one reallocates them).
         chunk = self.views.chunk_views if self.views is not None else 0
         bv = self._views(n, chunk or max(1, min(n, MAX_LAYERS)))
+        self._t_start = time.perf_counter()
         frame, plan, terms = self._begin(views, size, lights, opts, linear, rows)
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
         set0 = bv.sets0[frame.index]
@@ -151,11 +154,13 @@ class BatchPath:
         if cuda:
             p.device.check_validation()
             return self._cuda_tensor(external, (n, h, w, 4), linear), None
+        t_read = time.perf_counter()
         color = target.read_tiles(frame.index, n, size, into=into)
         dist = None
         if depth:
             dist = linear_depth(target.read_tiles(frame.index, n, size, depth=True),
                                 terms.znear[:, None, None])
+        self.stats.readback_ms += 1e3 * (time.perf_counter() - t_read)
         p.device.check_validation()
         return color, dist
 
@@ -215,14 +220,17 @@ class BatchPath:
         layers = max(1, min(n, MAX_LAYERS, int(limits.maxFramebufferLayers),
                             int(limits.maxImageArrayLayers)))
         target = self._target(size, layers, n, linear, depth, cuda)
+        self._t_start = time.perf_counter()
         bv = self._views(n, layers)
         frame, plan, terms = self._begin(views, size, lights, opts, linear)
         groups = bv.write_blend_groups(p.blend.orders(views.eye))
         self._run(frame, plan, opts, lambda redraw: bv.command_buffer(
             target, frame, n, opts.tbn, opts.alpha_mask, plan, groups, p.paths.prepass_for(target),
             redraw), (lambda: self._cuda_wait(target.color_readback)) if cuda else None)
+        t_read = time.perf_counter()
         color = self._cuda_view(target, n, linear) if cuda else target.read_color(n, into)
         dist = linear_depth(target.read_depth(n), terms.znear[:, None, None]) if depth else None
+        self.stats.readback_ms += 1e3 * (time.perf_counter() - t_read)
         p.device.check_validation()
         return color, dist
 
@@ -274,8 +282,14 @@ class BatchPath:
             shadows.forget()
             raise
         frame.stamped = p.ring.query_pool is not None
+        t_submitted = time.perf_counter()
         frame.wait()
-        stats = dataclasses.replace(read_timings(p.ring, frame, p.slots[frame.index]))
+        # The Python side up to the submit and the readback are added by the caller
+        # (`_timed`); the wait is this submission's.
+        stats = dataclasses.replace(read_timings(p.ring, frame, p.slots[frame.index]),
+                                    cpu_ms=1e3 * (t_submitted - self._t_start), wait_ms=1e3 * (
+                                        time.perf_counter() - t_submitted), readback_ms=0.0,
+                                    driver_ms=0.0)
         # One call's timings: every submission's summed (a batch split by memory).
         self.stats = summed_stats(self.stats, stats) if self._submissions else stats
         self._submissions += 1
@@ -292,7 +306,7 @@ class BatchPath:
             self._forget_cuda(target)
             target.destroy()
         target = BatchTarget(self.parts.device, size, layers, views, "float" if linear else "srgb",
-                             depth, clear_color=(*self.parts.targets.background, 1.0),
+                             depth, clear_color=(*self.parts.targets.background, 0.0),
                              external=cuda)
         self.targets[key] = target
         return target

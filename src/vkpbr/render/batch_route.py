@@ -15,6 +15,7 @@ pipeline="forward". `render_many(batch=N)` goes through render_batch N cameras a
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
 
@@ -92,6 +93,24 @@ def stack_frames(frames: list[Any], depth: bool, wanted: tuple[str, ...],
     if depth:
         return np.stack([f[0] for f in frames], out=out), np.stack([f[1] for f in frames])
     return np.stack(frames, out=out)
+
+
+def stack_views(renderer: Any, frames: Iterator[Any], depth: bool, wanted: tuple[str, ...],
+                out: np.ndarray | None = None) -> Any:
+    """The "views" route: render_many's `frames` stacked (`stack_frames`), and the call's
+    timings as the batch routes give them, every view's summed into `renderer.last_stats`
+    (not the last view's alone)."""
+    from vkpbr.render.frames import summed_stats
+
+    got, total = [], None
+    for frame in frames:
+        got.append(frame)
+        stats = dataclasses.replace(renderer.last_stats)  # the slot's object is reused
+        total = stats if total is None else summed_stats(total, stats)
+    result = stack_frames(got, depth, wanted, out)
+    if total is not None:
+        renderer.last_stats = total
+    return result
 
 
 def check_out(out: Any, shape: tuple[int, ...], dtype: type, device: str) -> None:

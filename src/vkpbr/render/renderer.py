@@ -23,7 +23,7 @@ from vkpbr.errors import UsageError
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, FrameTarget
 from vkpbr.render import outputs as O
 from vkpbr.render.batch_path import BatchPath
-from vkpbr.render.batch_route import batch_result, batch_route, chunked, per_view, stack_frames
+from vkpbr.render.batch_route import batch_result, batch_route, chunked, per_view, stack_views
 from vkpbr.render.environment import EnvironmentSpec
 from vkpbr.render.frame_path import FramePath, Submitted
 from vkpbr.render.frames import FrameStats
@@ -274,13 +274,13 @@ class Renderer:
                                     device, out)
         each = (views.camera(i) for i in range(len(views)))  # view by view, as `render` draws
         if route == "views":  # (render/batch_route.py says when)
-            return stack_frames(list(self.render_many(each, lights, size, opts, linear, depth,
-                                                      outputs=wanted or None)), depth, wanted, out)
+            return stack_views(self, self.render_many(each, lights, size, opts, linear, depth,
+                                                      outputs=wanted or None), depth, wanted, out)
         color, dist = self.batch_path.run(route, views, size, lights, opts, linear, depth,
                                           batch, out)
-        self.last_stats = self.batch_path.stats
         extra = tuple(n for n in wanted if n != "color")  # from their own pass, view by view
         frames = list(self.render_many(each, lights, size, opts, linear, outputs=extra)) if extra else []
+        self.last_stats = self.batch_path.stats  # the batch's (not the outputs' passes)
         return batch_result(color, dist, depth, wanted, frames)
 
     def close(self) -> None:

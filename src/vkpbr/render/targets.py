@@ -72,7 +72,7 @@ class Targets:
         """A new offscreen target of `size` the caller owns (the compute batch's atlases:
         render/batch_path.py; give it back with `drop`)."""
         return OffscreenTarget(self.device, size, "float" if linear else "srgb", self.msaa,
-                               (*self.background, 1.0), compute=self.device.compute_path)
+                               (*self.background, 0.0), compute=self.device.compute_path)
 
     def post(self, target: FrameTarget, copy: tuple[str, ...],
              extent: tuple[int, int] | None = None) -> OffscreenTarget:
@@ -114,8 +114,10 @@ class Targets:
         VkSurfaceKHR into the pointer `out` and returns a VkResult (GLFW's
         `glfw.create_window_surface(instance, window, None, out)`)."""
         surface = Surface(self.device, create_surface)
+        # Alpha 0 where nothing is drawn, as offscreen frames: the window composites opaque
+        # (VK_COMPOSITE_ALPHA_OPAQUE), and its screenshots equal `render`'s pixels.
         return Swapchain(self.device, surface, size, vsync=vsync,
-                         clear_color=(*self.background, 1.0))
+                         clear_color=(*self.background, 0.0))
 
     def overlay(self, atlas: np.ndarray, target: FrameTarget) -> TextOverlay:
         """A textured-quad overlay (the viewer's HUD) drawn over frames of `target`'s formats."""

@@ -437,6 +437,8 @@ class Pose:
     time: float | None = None  # the scene's animation time of this view ("time"), if given
     model: str = "pinhole"
     distortion: tuple[float, ...] = ()
+    # A NeRF frame's "file_path" (relative, as the file wrote it): the rendered frame's name.
+    file_path: str | None = None
 
     def camera(self, base: Camera) -> Camera:
         """`base` with this pose applied. Only a pose without `up` can fail here (the base's up

@@ -23,7 +23,7 @@ from vkpbr.errors import UsageError
 from vkpbr.scene.camera import MAX_COORDINATE, MIN_YFOV_DEG, as_camera, validate_camera
 from vkpbr.scene.types import Camera
 
-__all__ = ["CameraBatch", "as_camera_batch"]
+__all__ = ["CameraBatch", "as_camera_batch", "framing_distance"]
 
 # OpenGL camera axes (x right, y up, z backward) from OpenCV's (x right, y down, z forward).
 _FLIP = np.diag([1.0, -1.0, -1.0, 1.0])
@@ -147,6 +147,72 @@ class CameraBatch:
                    np.array([c.yfov_deg for c in cams], dtype=np.float64),
                    intr, planes("znear"), planes("zfar"), lenses)
 
+    # -- generators: orbits, spheres and random views around a scene's bounds -----------------
+
+    @classmethod
+    def orbit(cls, n: int, center: Any = None, radius: float | None = None, *,
+              bounds: Any = None, elevation_deg: float = 20.0, start_deg: float = 0.0,
+              turns: float = 1.0, yfov_deg: float = 45.0,
+              up: Any = (0.0, 1.0, 0.0)) -> CameraBatch:
+        """`n` views on a circle about `up` through `center` (a turntable), each looking at
+        `center` from `radius` away, `elevation_deg` above the circle's plane; azimuths from
+        `start_deg` over `turns` turns (the last view one step short of the first), counter-
+        clockwise seen from above, starting on the +Z side for up = +Y.
+
+        `bounds` (lo, hi), as `Scene.bounds()` returns them, gives the centre and a radius
+        that frames the bounds (`framing_distance`) where `center` / `radius` are not given.
+        """
+        c, r, u = _orbit_frame(center, radius, bounds, yfov_deg, up)
+        a = np.radians(start_deg) + 2.0 * np.pi * turns * np.arange(_count(n)) / _count(n)
+        e = np.radians(elevation_deg)
+        side, front = _basis(u)
+        d = (np.cos(e) * (np.sin(a)[:, None] * side + np.cos(a)[:, None] * front)
+             + np.sin(e) * u)
+        return cls.from_look_at(c + r * d, c, u, yfov_deg)
+
+    @classmethod
+    def sphere(cls, n: int, center: Any = None, radius: float | None = None, *,
+               bounds: Any = None, upper: bool = False, yfov_deg: float = 45.0,
+               up: Any = (0.0, 1.0, 0.0)) -> CameraBatch:
+        """`n` views spread evenly over a sphere about `center` (a Fibonacci lattice: equal
+        areas, no clumping at the poles), each looking at `center` from `radius` away;
+        `upper`: the hemisphere on `up`'s side only (views from above the ground). `bounds`
+        as for `orbit`. No view looks along `up` exactly (the lattice avoids the poles)."""
+        c, r, u = _orbit_frame(center, radius, bounds, yfov_deg, up)
+        k = _count(n)
+        i = np.arange(k) + 0.5
+        h = 1.0 - i / k if upper else 1.0 - 2.0 * i / k  # height along up, in (-1, 1)
+        ring = np.sqrt(np.maximum(0.0, 1.0 - h * h))
+        a = np.pi * (3.0 - math.sqrt(5.0)) * np.arange(k)  # the golden angle
+        side, front = _basis(u)
+        d = ring[:, None] * (np.cos(a)[:, None] * front + np.sin(a)[:, None] * side) + h[:, None] * u
+        return cls.from_look_at(c + r * d, c, u, yfov_deg)
+
+    @classmethod
+    def look_at_random(cls, n: int, bounds: Any, *, distance: tuple[float, float] = (1.0, 2.0),
+                       seed: int | None = None, yfov_deg: float = 45.0,
+                       up: Any = (0.0, 1.0, 0.0)) -> CameraBatch:
+        """`n` random views of the box `bounds` (lo, hi): each looks at a point drawn
+        uniformly inside the box from a direction drawn uniformly over the sphere, at
+        `distance` (a range, drawn uniformly) times the distance that frames the whole box
+        (`framing_distance`). `seed` makes the batch repeatable (NumPy's default_rng). A
+        direction within 1 degree of `up` is drawn again."""
+        lo, hi = _bounds(bounds)
+        rng = np.random.default_rng(seed)
+        k = _count(n)
+        u = _unit(up, "up")
+        dirs = np.empty((0, 3))
+        while len(dirs) < k:  # rejection: keep views off the up axis (look_at needs a side)
+            d = rng.normal(size=(2 * k, 3))
+            d /= np.linalg.norm(d, axis=1, keepdims=True)
+            dirs = np.concatenate([dirs, d[np.abs(d @ u) < math.cos(math.radians(1.0))]])
+        target = lo + rng.random((k, 3)) * (hi - lo)
+        lo_d, hi_d = (float(x) for x in distance)
+        if not 0.0 < lo_d <= hi_d:
+            raise UsageError(f"cameras: distance {distance}: expected 0 < low <= high")
+        far = framing_distance((lo, hi), yfov_deg) * rng.uniform(lo_d, hi_d, k)
+        return cls.from_look_at(target + far[:, None] * dirs[:k], target, u, yfov_deg)
+
     def camera(self, i: int) -> Camera:
         """View `i` as a Camera (rendered alone, it gives view i's pixels)."""
         def opt(a: np.ndarray | None) -> float | None:
@@ -192,6 +258,70 @@ class CameraBatch:
         if self.znear is not None and self.zfar is not None:
             bad |= ~(np.isnan(self.zfar) | (self.zfar > np.nan_to_num(self.znear)))
         return bad
+
+
+def framing_distance(bounds: Any, yfov_deg: float = 45.0) -> float:
+    """How far from the centre of the box `bounds` (lo, hi) a camera with vertical field of
+    view `yfov_deg` sees all of it from any direction (and horizontally too in an image at
+    least as wide as it is high): the bounding sphere's radius over sin(fov / 2)."""
+    lo, hi = _bounds(bounds)
+    r = float(np.linalg.norm(hi - lo)) / 2.0
+    r = r if math.isfinite(r) and r > 1e-9 else 1.0
+    if not MIN_YFOV_DEG <= yfov_deg < 180.0:
+        raise UsageError(f"cameras: yfov_deg {yfov_deg}: expected a field of view in (0, 180)")
+    return r / math.sin(math.radians(yfov_deg) / 2.0)
+
+
+def _count(n: Any) -> int:
+    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+        raise UsageError(f"cameras: n {n!r}: expected a number of views >= 1")
+    return int(n)
+
+
+def _unit(v: Any, name: str) -> np.ndarray:
+    a = _vectors([v], None, name)[0]
+    n = float(np.linalg.norm(a))
+    if not math.isfinite(n) or n < 1e-12:
+        raise UsageError(f"cameras: {name} {tuple(a)}: expected a non-zero vector")
+    return a / n
+
+
+def _bounds(bounds: Any) -> tuple[np.ndarray, np.ndarray]:
+    try:
+        lo, hi = (np.asarray(b, dtype=np.float64).reshape(3) for b in bounds)
+    except (TypeError, ValueError):
+        raise UsageError("cameras: bounds must be (lo, hi), two 3-vectors (Scene.bounds())") from None
+    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(hi >= lo)):
+        raise UsageError(f"cameras: bounds {lo.tolist()}, {hi.tolist()}: expected finite lo <= hi")
+    return lo, hi
+
+
+def _basis(up: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors completing `up` to a right-handed frame: (side, front), front = +Z
+    and side = +X for up = +Y."""
+    ref = np.array([0.0, 0.0, 1.0]) if abs(up[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    front = ref - (ref @ up) * up
+    front /= np.linalg.norm(front)
+    return np.cross(up, front), front
+
+
+def _orbit_frame(center: Any, radius: float | None, bounds: Any, yfov_deg: float,
+                 up: Any) -> tuple[np.ndarray, float, np.ndarray]:
+    """The centre, radius and unit up of an orbit or sphere of views."""
+    if center is None and bounds is None:
+        raise UsageError("cameras: give center (and radius), or bounds (Scene.bounds())")
+    if center is None:
+        lo, hi = _bounds(bounds)
+        center = (lo + hi) / 2.0
+    c = _vectors([center], None, "center")[0]
+    if radius is None:
+        if bounds is None:
+            raise UsageError("cameras: give radius, or bounds to frame")
+        radius = framing_distance(bounds, yfov_deg)
+    r = float(radius)
+    if not (math.isfinite(r) and r > 0.0):
+        raise UsageError(f"cameras: radius {radius!r}: expected a number > 0")
+    return c, r, _unit(up, "up")
 
 
 def as_camera_batch(cameras: Any, base: Camera) -> CameraBatch:

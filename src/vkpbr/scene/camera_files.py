@@ -183,6 +183,7 @@ def write_transforms(path: str | os.PathLike[str], cameras: Sequence[Camera],
             raise UsageError(f"{path}: extra keys {clash} would replace vkpbr's")
         doc = {**doc, **extra}
     text = json.dumps(doc, indent=2, allow_nan=False)  # floats as repr: exact round trips
+    Path(path).parent.mkdir(parents=True, exist_ok=True)  # as write_colmap makes its folder
     with atomic_writer(path) as f:
         f.write(text.encode() + b"\n")
     return doc

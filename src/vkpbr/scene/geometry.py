@@ -153,21 +153,27 @@ def polygon_fan(counts: np.ndarray) -> np.ndarray:
     return np.stack([s, s + k + 1, s + k + 2], axis=1)
 
 
+# The share of the field of view the automatic camera gives the scene's bounds: the box's
+# farthest corner reaches 95% of the way to the image's edge (top and bottom, or left and
+# right of a square image; a wider image has room to spare at the sides).
+AUTO_FILL = 0.95
+
+
 def auto_camera(scene: Scene, yfov_deg: float = 60.0) -> Camera:
-    """A camera that shows the whole scene.
+    """A camera that frames the whole scene.
 
     The eye looks at the centre of the world bounds from a +Z-leaning diagonal (slightly from
-    above and the right, so that flat test models are not seen edge-on), far enough that the
-    bounding sphere fits the vertical field of view. Near and far are left to each render
-    (reversed-Z: see render/camera.py depth_range).
+    above and the right, so that flat test models are not seen edge-on), as close as it can
+    while every corner of the bounds projects inside `AUTO_FILL` of the vertical field of
+    view, and of the horizontal one of a square image (`framing_distance_to_box`): the
+    model fills the view, as the glTF Sample Viewer frames it, instead of its bounding
+    sphere (about a seventh of the image for a flat model). Near and far are left to each
+    render (reversed-Z: see render/camera.py depth_range).
     """
     lo, hi = scene.bounds()
     centre = (lo + hi) / 2.0
-    radius = float(np.linalg.norm(hi - lo)) / 2.0
-    if not math.isfinite(radius) or radius <= 1e-9:
-        radius = 1.0
-    distance = radius / math.sin(math.radians(yfov_deg) / 2.0)
     direction = np.array([0.35, 0.3, 1.0]) / np.linalg.norm([0.35, 0.3, 1.0])
+    distance = framing_distance_to_box(lo, hi, direction, (0.0, 1.0, 0.0), yfov_deg)
     eye = centre + direction * distance
     return Camera(
         eye=tuple(float(x) for x in eye),
@@ -176,3 +182,29 @@ def auto_camera(scene: Scene, yfov_deg: float = 60.0) -> Camera:
         yfov_deg=yfov_deg,
         name="auto",
     )
+
+
+def framing_distance_to_box(lo: np.ndarray, hi: np.ndarray, direction: np.ndarray,
+                            up: tuple[float, float, float], yfov_deg: float,
+                            fill: float = AUTO_FILL) -> float:
+    """The distance from the box's centre, along unit `direction` (towards the eye), at
+    which a camera looking at the centre sees every corner of the box [lo, hi] within
+    `fill` of its half field of view, vertically and horizontally at aspect 1: for each
+    corner at (x, y) across and z along the view from the centre (z > 0: beyond it), at
+    depth d + z, |x| <= t (d + z) and |y| <= t (d + z), t = fill tan(yfov / 2). The eye
+    stays outside the box. An empty or degenerate box: a unit one."""
+    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))) or np.linalg.norm(hi - lo) <= 1e-9:
+        c = (lo + hi) / 2.0 if np.all(np.isfinite(lo + hi)) else np.zeros(3)
+        lo, hi = c - 0.5, c + 0.5
+    forward = -np.asarray(direction, np.float64)
+    right = np.cross(forward, up)
+    right /= np.linalg.norm(right)
+    true_up = np.cross(right, forward)
+    half = (hi - lo) / 2.0
+    corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half
+    x, y, z = corners @ right, corners @ true_up, corners @ forward
+    t = fill * math.tan(math.radians(yfov_deg) / 2.0)
+    need = np.maximum(np.abs(x), np.abs(y)) / t - z
+    outside = float((-z).max() + 0.05 * np.linalg.norm(hi - lo))  # the nearest corner ahead
+    return float(max(need.max(), outside))

@@ -20,6 +20,7 @@ the entry and the problem; no other exception escapes.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from collections.abc import Mapping
@@ -32,7 +33,7 @@ from vkpbr.json_input import read_json
 from vkpbr.scene._checks import context, real, rigid_pose, shown, size_arg
 from vkpbr.scene.camera import Pose, as_pose, opencv_from_corner
 
-__all__ = ["Pose", "load_poses", "parse_poses"]
+__all__ = ["Pose", "load_poses", "parse_poses", "poses_size", "frame_stem", "DEFAULT_SIZE"]
 
 # Intrinsics keys of NeRF-style transforms.json (instant-ngp, nerfstudio), per frame or global.
 _NERF_KEYS = ("camera_angle_x", "camera_angle_y", "fl_x", "fl_y", "cx", "cy", "w", "h",
@@ -110,8 +111,75 @@ def _nerf_poses(doc: Mapping[str, object], p: Path) -> list[Pose]:
         entry = {"world_from_camera": pose, "convention": "opengl", **camera,
                  "name": name if isinstance(name, str) else f"frame {i}",
                  **({"time": frame["time"]} if "time" in frame else {})}
-        poses.append(as_pose(entry, where))
+        file_path = _file_path(name, where) if "file_path" in frame else None
+        poses.append(dataclasses.replace(as_pose(entry, where), file_path=file_path))
+    seen: dict[str, int] = {}
+    for i, pose in enumerate(poses):
+        if pose.file_path is not None:
+            key = frame_stem(pose.file_path)
+            if key in seen:
+                raise UsageError(f'{p}: frame {i}: "file_path" {pose.file_path!r} names the same '
+                                 f"frame as frame {seen[key]}")
+            seen[key] = i
     return poses
+
+
+# The image suffixes a frame's file_path may carry: the rendered frame takes its own.
+_IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".exr", ".npy", ".bmp", ".tif", ".tiff", ".webp")
+
+
+def _file_path(value: object, where: str) -> str:
+    """A frame's "file_path", checked: a relative path inside the output folder ("./" and
+    absolute prefixes are dropped as NeRF tools write both; ".." is refused)."""
+    if not isinstance(value, str) or not value.strip():
+        raise UsageError(f'{where}: "file_path": expected a relative file name, got {shown(value)}')
+    if "\0" in value or "\\" in value or len(value) > 1024:
+        raise UsageError(f'{where}: "file_path": {shown(value)} is not a usable file name')
+    parts = [x for x in value.split("/") if x not in ("", ".")]
+    if not parts or ".." in parts or any(x.startswith(".") or len(x.encode()) > 200 for x in parts):
+        raise UsageError(f'{where}: "file_path" {shown(value)}: give a relative path inside the '
+                         "output folder (no .., no hidden names)")
+    if value.startswith("/"):  # an absolute path: the file's name, in the output folder
+        parts = parts[-1:]
+    return "/".join(parts)
+
+
+def frame_stem(file_path: str) -> str:
+    """A checked file_path without its image suffix: the rendered frame's name less its own."""
+    lower = file_path.lower()
+    for suffix in _IMAGE_SUFFIXES:
+        if lower.endswith(suffix) and len(file_path) > len(suffix):
+            return file_path[: -len(suffix)]
+    return file_path
+
+
+DEFAULT_SIZE = (1280, 720)
+
+
+def poses_size(poses: list[Pose], size: tuple[int, int] | None, where: str = "--size"
+               ) -> tuple[int, int]:
+    """The image size to render `poses` at: the size their calibrations state (a NeRF
+    file's w/h, a K pose's size), else `size`, else 1280x720. A `size` of the calibrations'
+    aspect ratio rescales them (within half a pixel); another aspect ratio would stretch the
+    intrinsics (fx and fy scaled differently) and is a UsageError, as are poses of different
+    image sizes."""
+    sizes = sorted({(int(p.pixel_intrinsics[4]), int(p.pixel_intrinsics[5]))
+                    for p in poses if p.pixel_intrinsics is not None})
+    if not sizes:
+        return size if size is not None else DEFAULT_SIZE
+    if len(sizes) > 1:
+        (a, b), (c, d) = sizes[:2]
+        raise UsageError(f"{where}: the poses are of images of different sizes ({a}x{b}, "
+                         f"{c}x{d}): render each size into its own folder")
+    w0, h0 = sizes[0]
+    if size is None:
+        return (w0, h0)
+    w, h = size
+    if abs(w * h0 - h * w0) > (w0 + h0) / 2:
+        raise UsageError(f"{where} {w}x{h}: the poses' cameras are calibrated for {w0}x{h0} "
+                         "images, another aspect ratio (their intrinsics would stretch); give "
+                         f"a size of the same aspect ratio, or leave it out to render {w0}x{h0}")
+    return (w, h)
 
 
 def _nerf_camera(keys: Mapping[str, object]) -> dict[str, object]:

@@ -134,7 +134,7 @@ class SceneState:
         self.time: float | None = None  # the time set_time last posed
         self.version = 0
         self.draw_versions = np.zeros(len(self.draw_tree), np.int64)  # when each last changed
-        self._since: dict[tuple[int, int], int] = {}
+        self._since: tuple[int, object, int] | None = None
         self._cache: dict[str, tuple[int, object]] = {}
 
     def __len__(self) -> int:
@@ -310,12 +310,12 @@ class SceneState:
     def changed_since(self, draws: np.ndarray | None = None) -> int:
         """The latest version that changed any of `draws` (a bool mask; None: all): what
         a cache of their images (the shadow maps) compares."""
-        key = (self.version, id(draws))
-        hit = self._since.get(key)
-        if hit is None:  # once per change, not per frame
-            versions = self.draw_versions if draws is None else self.draw_versions[draws]
-            hit = int(versions.max(initial=0))
-            self._since = {key: hit}
+        last = self._since
+        if last is not None and last[0] == self.version and last[1] is draws:
+            return last[2]  # the same mask (the casters') and state: once per change
+        versions = self.draw_versions if draws is None else self.draw_versions[draws]
+        hit = int(versions.max(initial=0))
+        self._since = (self.version, draws, hit)  # keeps the mask: its identity is the key
         return hit
 
     def _pose_matrices(self, poses: np.ndarray, n: int, quaternion: str) -> np.ndarray:

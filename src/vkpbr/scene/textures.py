@@ -11,6 +11,7 @@ import errno
 import io
 import logging
 import os
+import re
 import threading
 import warnings
 from collections.abc import Sequence
@@ -200,17 +201,67 @@ def decode_image(image: Image, max_size: int | None = None,
             return _decode(image, max_size, messages, budget, blocks, block_levels), messages
     except (FileNotFoundError, NotADirectoryError):
         messages.append(("missing", image.name))
+    except PILImage.UnidentifiedImageError:  # "cannot identify image file <_io.BytesIO ...>"
+        messages.append(("undecodable", f"{image.name} ({_what_it_is(image)})"))
     except OSError as exc:
         # Pillow reports some corrupt data as OSError (no errno); a name too long for the OS
         # is a texture that is not there, as load_scene's summary already counted it.
         if exc.errno == errno.ENAMETOOLONG:
             messages.append(("missing", f"{image.name} (name too long)"))
         else:
-            messages.append(("undecodable", f"{image.name} ({exc.strerror or exc})"))
+            messages.append(("undecodable", f"{image.name} ({_format_of(image)}"
+                                            f"{_no_repr(exc.strerror or str(exc), image)})"))
     except (ValueError, SyntaxError, PILImage.DecompressionBombError) as exc:
         # ...and others as ValueError/SyntaxError, depending on the codec.
-        messages.append(("undecodable", f"{image.name} ({exc})"))
+        messages.append(("undecodable", f"{image.name} ({_format_of(image)}"
+                                        f"{_no_repr(str(exc), image)})"))
     return None, messages
+
+
+# What the first bytes of a file say it is: for the message about one that cannot be decoded.
+_SIGNATURES = ((b"\x89PNG\r\n\x1a\n", "PNG"), (b"\xff\xd8\xff", "JPEG"), (KTX2_MAGIC, "KTX2"),
+               (b"GIF8", "GIF"), (b"BM", "BMP"), (b"DDS ", "DDS"), (b"II*\x00", "TIFF"),
+               (b"MM\x00*", "TIFF"), (b"\x00\x00\x00\x0cjP  ", "JPEG 2000"),
+               (b"#?RADIANCE", "Radiance HDR"), (b"v/1\x01", "OpenEXR"), (b"glTF", "GLB"))
+
+
+def _head(image: Image) -> bytes:
+    try:
+        return image.data[:16] if image.data is not None else (
+            read_resource(image.path, max_bytes=16) if image.path is not None else b"")
+    except OSError:
+        return b""
+
+
+def _format_of(image: Image) -> str:
+    """"PNG data: " (the format the first bytes show, for a codec's own message), or ""."""
+    head = _head(image)
+    name = next((n for magic, n in _SIGNATURES if head.startswith(magic)), None)
+    return f"{name} data: " if name else ""
+
+
+def _what_it_is(image: Image) -> str:
+    """'not a decodable image: found <format> data' from the data's first bytes."""
+    head = _head(image)
+    if head[:4] == b"RIFF" and head[8:12] == b"WEBP":
+        kind = "WebP data (corrupt, or a variant Pillow does not read)"
+    else:
+        name = next((n for magic, n in _SIGNATURES if head.startswith(magic)), None)
+        if name is not None:
+            kind = f"{name} data that cannot be decoded (corrupt or truncated)"
+        elif not head:
+            kind = "an empty file"
+        elif head.lstrip()[:1] in (b"<", b"{", b"["):
+            kind = "text (HTML, XML or JSON), not an image"
+        else:
+            kind = f"data of no known image format (first bytes {head[:8].hex(' ')})"
+    declared = f"; declared {image.mime_type}" if image.mime_type else ""
+    return f"not a decodable image: {kind}{declared}"
+
+
+def _no_repr(text: str, image: Image) -> str:
+    """A codec's message without Python object reprs (Pillow names its stream by repr)."""
+    return re.sub(r"<_io\.BytesIO object at 0x[0-9a-f]+>", image.name, text)
 
 
 def _decode(image: Image, max_size: int | None, messages: list[tuple[str, str]],

@@ -396,7 +396,13 @@ class Scene:
         return self.node_tree().find(pattern)
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """World-space axis-aligned bounds (min, max) over all node instances."""
+        """World-space axis-aligned bounds of everything the scene draws: (lo, hi), two (3,)
+        float64 arrays, the minimum and maximum x, y, z over every node's mesh (each instance
+        of EXT_mesh_gpu_instancing included) after its world transform. Each mesh's own box
+        is transformed (its 8 corners), so a rotated mesh's bounds may be a little loose. An
+        empty scene gives two zero vectors. `CameraBatch.orbit / .sphere / .look_at_random
+        (bounds=scene.bounds())` frame views with it; `Renderer.scene.bounds()` is the
+        loaded scene's."""
         lo = np.full(3, np.inf)
         hi = np.full(3, -np.inf)
         corners = np.array(
