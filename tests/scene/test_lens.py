@@ -145,3 +145,13 @@ def test_colmap_round_trip_and_opencv_fisheye_file(tmp_path: Path) -> None:
     (folder / "cameras.txt").write_text("1 THIN_PRISM_FISHEYE 640 480 1 2 3 4\n")
     with pytest.raises(UsageError, match="line 1: camera model THIN_PRISM_FISHEYE with 4 parameters"):
         read_colmap(folder)
+
+
+def test_a_model_of_the_wrong_type_is_a_problem_not_a_type_error() -> None:
+    """A baked file's scene JSON can hold any value as a camera's model (the fuzz suite gave
+    a dict: `dict in COEFFICIENTS` raised TypeError)."""
+    from vkpbr.scene.lens import check_model
+
+    for model in ({"a": 1}, ["opencv"], 3, None):
+        problem = check_model(model, [])
+        assert problem is not None and problem.startswith("model ") and "choose from" in problem

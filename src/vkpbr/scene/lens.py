@@ -68,8 +68,9 @@ CONVERGED = 1e-7
 
 def check_model(model: object, distortion: object) -> str | None:
     """What is wrong with a camera's `model` and `distortion`, or None."""
-    if model not in COEFFICIENTS:
-        return f"model {model!r}: choose from {', '.join(MODELS)}"
+    if not isinstance(model, str) or model not in COEFFICIENTS:  # (a dict from JSON: unhashable)
+        shown = repr(model) if len(repr(model)) <= 40 else repr(model)[:37] + "..."
+        return f"model {shown}: choose from {', '.join(MODELS)}"
     try:
         values = [float(v) for v in distortion]  # type: ignore[attr-defined]
     except (TypeError, ValueError):
