@@ -205,7 +205,8 @@ def test_lateral_noise_moves_samples(noise_renderer) -> None:  # noqa: ANN001
     candidates = np.stack([clean[y0 + dy:y1 + dy, x0:x1] for dy in range(-5, 6)])
     dy = (np.abs(candidates - got).argmin(0) - 5)[near]
     assert near.sum() > 3000
-    assert (np.abs(candidates - got).min(0)[near] <= 1e-5 * got[near]).all()  # clean depths
+    # clean depths (1e-4: the H200 rounds the depth copy differently from lavapipe, 1e-5 there)
+    assert (np.abs(candidates - got).min(0)[near] <= 1e-4 * got[near]).all()
     phi = [0.5 * (1 + erf(v / sqrt(2))) for v in (0.5, 1.5, 2.5)]
     want = {0: 2 * phi[0] - 1, 1: phi[1] - phi[0], 2: phi[2] - phi[1]}
     for k, p in want.items():

@@ -60,7 +60,9 @@ def test_tbn_paths_render_normal_mapped_models_alike(make_renderer, assets: Path
     # The course's lighting (issue 4's measurement); with image-based light the packed
     # frames' 0.2 degrees show in sharp reflections (measured max 10/255, PSNR 61 dB on
     # lavapipe; 18/255, PSNR 58.9 dB on the H200, whose sharper highlights move further).
-    for lighting, max_diff in (("course", 4), ("pbr", 24)):
+    # (course: 4/255 on lavapipe, 6/255 on the H200 since the automatic camera frames the
+    # model's bounds: larger on screen, its packed frames' 0.2 degrees show at more pixels.)
+    for lighting, max_diff in (("course", 6), ("pbr", 24)):
         ref = r.render(size=(128, 128), tbn="vectors", lighting=lighting).astype(np.int16)
         for path in ("quat", "packed"):
             got = r.render(size=(128, 128), tbn=path, lighting=lighting).astype(np.int16)

@@ -74,6 +74,11 @@ def run(args: argparse.Namespace) -> int:
         from vkpbr.app.script import load_script
 
         script = load_script(args.script)
+    try:  # GLFW is the viewer's window system: a base dependency, but installs can lack it
+        import glfw  # noqa: F401
+    except ImportError:
+        raise UsageError("the viewer needs the glfw package: pip install glfw (or install "
+                         "vkpbr with scripts/setup.sh); `vkpbr render` needs no window") from None
     scene = load_scene_arg(args)
     from vkpbr.app.viewer import Viewer, ViewerConfig
 
