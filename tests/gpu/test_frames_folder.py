@@ -50,6 +50,25 @@ def frames(folder: Path) -> dict[str, bytes]:
             if p.name.startswith("frame_") or p.name == "transforms.json"}
 
 
+def assert_same_frames(got: dict[str, bytes], want: dict[str, bytes]) -> None:
+    """The same files; images equal bit for bit on lavapipe, within 1 level a channel on a GPU,
+    where a view re-rendered alone and the same view in a batch's atlas may round apart (the
+    compute batch's stated bound: docs/batch.md)."""
+    import io
+
+    import numpy as np
+    from PIL import Image
+
+    assert sorted(got) == sorted(want)
+    for name in got:
+        if got[name] == want[name]:
+            continue
+        assert name.endswith(".png"), name
+        a = np.asarray(Image.open(io.BytesIO(got[name]))).astype(int)
+        b = np.asarray(Image.open(io.BytesIO(want[name]))).astype(int)
+        assert a.shape == b.shape and np.abs(a - b).max() <= 1, name
+
+
 def test_another_size_or_options_is_refused_and_changes_nothing(capsys, reference, tmp_path: Path) -> None:  # noqa: ANN001
     poses, ref = reference
     out = tmp_path / "f"
@@ -65,7 +84,7 @@ def test_another_size_or_options_is_refused_and_changes_nothing(capsys, referenc
     # The same run again renders nothing and says so.
     code, o, _ = render(capsys, out, poses)
     assert code == 0 and f"wrote 0 images, {len(POSES)} done before" in o, o
-    assert frames(out) == frames(ref)
+    assert_same_frames(frames(out), frames(ref))
 
 
 def test_deleted_and_truncated_files_are_rendered_again(capsys, reference, tmp_path: Path) -> None:  # noqa: ANN001
@@ -79,7 +98,7 @@ def test_deleted_and_truncated_files_are_rendered_again(capsys, reference, tmp_p
     assert check_consistent(out, strict=False) == set(range(len(POSES))) - {2, 4}
     code, o, _ = render(capsys, out, poses)
     assert code == 0 and f"wrote 2 images, {len(POSES) - 2} done before" in o, o
-    assert frames(out) == frames(ref)
+    assert_same_frames(frames(out), frames(ref))
     assert check_consistent(out) == set(range(len(POSES)))
 
 
@@ -200,4 +219,4 @@ def test_a_run_killed_midway_leaves_a_consistent_folder(capsys, tmp_path: Path, 
     whole = tmp_path / "whole"
     assert main(["-q", "render", "--cameras", str(tmp_path / "many.json"), "--out", str(whole),
                  "--size", SIZE, "--batch", "4"]) == 0
-    assert frames(out) == frames(whole)
+    assert_same_frames(frames(out), frames(whole))
