@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from pinhole import basis, pixel_rays
+from raycast import first_hits
 
 from vkpbr.errors import UsageError
 from vkpbr.scene.default import plane, uv_sphere
@@ -79,28 +80,8 @@ def ray_cast(scene: Scene) -> dict[str, np.ndarray]:
     tri, nrm, own = np.concatenate(tris), np.concatenate(normals), np.concatenate(owner)
     eye = np.asarray(CAMERA.eye, np.float64)
     d = pixel_rays(CAMERA, W, H).reshape(-1, 3)
-    e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-    best_t = np.full(len(d), np.inf)
-    best = np.full(len(d), -1)
-    best_b = np.zeros((len(d), 2))
-    for s in range(0, len(d), 128):
-        dd = d[s:s + 128, None, :]
-        pv = np.cross(dd, e2[None])
-        det = np.sum(e1[None] * pv, -1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            inv = 1.0 / det
-            tv = eye - tri[None, :, 0]
-            u = np.sum(tv * pv, -1) * inv
-            qv = np.cross(tv, e1[None])
-            v = np.sum(dd * qv, -1) * inv
-            t = np.sum(e2[None] * qv, -1) * inv
-            ok = (np.abs(det) > 1e-12) & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-6)
-        t = np.where(ok, t, np.inf)
-        j = np.argmin(t, axis=1)
-        rows = np.arange(len(j))
-        best_t[s:s + 128] = t[rows, j]
-        best[s:s + 128] = np.where(np.isfinite(t[rows, j]), j, -1)
-        best_b[s:s + 128] = np.stack([u[rows, j], v[rows, j]], -1)
+    best, best_t, bary = first_hits(tri, eye, d, chunk=128)
+    best_b = bary[:, 1:]
     hit = best >= 0
     best_b = np.where(hit[:, None], best_b, 0.0)  # no hit: no barycentrics (NaN)
     b0 = 1 - best_b.sum(-1)
