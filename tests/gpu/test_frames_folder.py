@@ -51,9 +51,10 @@ def frames(folder: Path) -> dict[str, bytes]:
 
 
 def assert_same_frames(got: dict[str, bytes], want: dict[str, bytes]) -> None:
-    """The same files; images equal bit for bit on lavapipe, within 1 level a channel on a GPU,
-    where a view re-rendered alone and the same view in a batch's atlas may round apart (the
-    compute batch's stated bound: docs/batch.md)."""
+    """The same files; images equal bit for bit where they are (lavapipe), else within the
+    compute batch's stated bound (docs/batch.md: 1/255 mean, 3/255 at the 99th percentile),
+    as a GPU's view re-rendered in another batch may round apart at edges (the H200: max 5
+    levels at a few pixels)."""
     import io
 
     import numpy as np
@@ -66,7 +67,8 @@ def assert_same_frames(got: dict[str, bytes], want: dict[str, bytes]) -> None:
         assert name.endswith(".png"), name
         a = np.asarray(Image.open(io.BytesIO(got[name]))).astype(int)
         b = np.asarray(Image.open(io.BytesIO(want[name]))).astype(int)
-        assert a.shape == b.shape and np.abs(a - b).max() <= 1, name
+        d = np.abs(a - b)
+        assert a.shape == b.shape and d.mean() <= 1 and np.percentile(d, 99) <= 3, name
 
 
 def test_another_size_or_options_is_refused_and_changes_nothing(capsys, reference, tmp_path: Path) -> None:  # noqa: ANN001
@@ -196,20 +198,26 @@ def test_a_run_killed_midway_leaves_a_consistent_folder(capsys, tmp_path: Path, 
     """Killed after its first recorded group: the folder is consistent (what the manifest
     lists is there, no transforms.json); the next run renders only the rest, and the folder
     then equals an uninterrupted run's, with no temporary file left."""
-    views = 80
-    out = tmp_path / "f"
-    proc = _render_many(tmp_path, out, views)
-    deadline = time.monotonic() + 120
-    try:
-        while time.monotonic() < deadline and proc.poll() is None and done_lines(out) < 1:
-            time.sleep(0.01)
-        assert proc.poll() is None, proc.stderr.read() if proc.stderr else ""
-    finally:
-        proc.send_signal(sig)
-        _, err = proc.communicate(timeout=60)
+    # 80 views take lavapipe seconds; a GPU may finish them all between the first recorded
+    # group and the signal (the H200 does): then the same again with ten times the views.
+    for views in (80, 800, 8000):
+        out = tmp_path / f"f{views}"
+        proc = _render_many(tmp_path, out, views)
+        deadline = time.monotonic() + 120
+        try:
+            while time.monotonic() < deadline and proc.poll() is None and done_lines(out) < 1:
+                time.sleep(0.01)
+            assert proc.poll() is None, proc.stderr.read() if proc.stderr else ""
+        finally:
+            proc.send_signal(sig)
+            _, err = proc.communicate(timeout=60)
+        if sig == signal.SIGTERM:
+            assert proc.returncode in (143, 0) and "Traceback" not in err, err
+        done = check_consistent(out)
+        if len(done) < views:
+            break
     if sig == signal.SIGTERM:
-        assert proc.returncode == 143 and "Traceback" not in err, err
-    done = check_consistent(out)
+        assert proc.returncode == 143, err
     assert 0 < len(done) < views and not (out / "transforms.json").exists()
     code = main(["-q", "render", "--cameras", str(tmp_path / "many.json"), "--out", str(out),
                  "--size", SIZE, "--batch", "4"])
