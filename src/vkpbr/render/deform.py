@@ -71,35 +71,51 @@ def deformed_records(scene: Scene) -> list[Deformed]:
 
 class DeformLayout:
     """Where each deformed record's joint matrices and weights lie in the scene state's
-    deform floats (a frame slot's copy), and what the state computes them from."""
+    deform floats (a frame slot's copy), and what the state computes them from. The joint
+    matrices of every skinned record are one contiguous run (record order), made per frame by
+    one gather and one batched product over all of them; the weights follow."""
 
     def __init__(self, scene: Scene, records: list[Deformed]) -> None:
         self.records = records
-        joint_at, weight_at, at = [], [], 0
+        skins = [scene.skins[r.skin] for r in records if r.skin is not None]
+        self.joint_nodes = np.concatenate([s.joints for s in skins]) if skins else np.zeros(0, np.int64)
+        self.inverse_bind = (np.concatenate([s.inverse_bind for s in skins]) if skins
+                             else np.zeros((0, 4, 4)))
+        # Each record's first joint float (its skin's run; 0 for an unskinned record).
+        joint_at, at = [], 0
         for r in records:
             joint_at.append(at)
             at += 16 * len(scene.skins[r.skin].joints) if r.skin is not None else 0
+        self.joint_at = joint_at
+        # (record, tree node, first float, targets, the mesh's default weights) of the morphed.
+        self.morphed: list[tuple[int, int, int, np.ndarray | None]] = []
+        weight_at = []
         for r in records:
             weight_at.append(at)
-            at += len(_targets(scene, r.mesh))
-        self.joint_at, self.weight_at, self.floats = joint_at, weight_at, at
+            t = target_count(scene.meshes[r.mesh])
+            if t:
+                self.morphed.append((r.tree, at, t, scene.meshes[r.mesh].morph_weights))
+            at += t
+        self.weight_at, self.floats = weight_at, at
 
-    def values(self, scene: Scene, world: np.ndarray, weights: dict[int, np.ndarray]) -> np.ndarray:
+    def values(self, world: np.ndarray, weights: dict[int, np.ndarray]) -> np.ndarray:
         """(floats,) float32: every record's joint matrices (world[joints] @ inverse bind,
         column-major) and morph weights (`weights` by tree node, else the mesh's)."""
         out = np.zeros(max(self.floats, 1), np.float32)
-        for r, j_at, w_at in zip(self.records, self.joint_at, self.weight_at, strict=True):
-            if r.skin is not None:
-                skin = scene.skins[r.skin]
-                joints = world[skin.joints] @ skin.inverse_bind
-                out[j_at:j_at + joints.size] = np.swapaxes(joints, -1, -2).ravel()
-            t = len(_targets(scene, r.mesh))
-            if t:
-                w = weights.get(r.tree)
-                if w is None:
-                    w = scene.meshes[r.mesh].morph_weights
-                out[w_at:w_at + t] = np.zeros(t) if w is None else np.asarray(w, np.float64)[:t]
+        if len(self.joint_nodes):
+            joints = world[self.joint_nodes] @ self.inverse_bind
+            out[:joints.size] = np.swapaxes(joints, -1, -2).ravel()
+        for tree, at, t, default in self.morphed:
+            w = weights.get(tree, default)
+            if w is not None:
+                out[at:at + t] = np.asarray(w, np.float64)[:t]
         return out
+
+
+def target_count(mesh: object) -> int:
+    """How many morph targets a mesh has (0: none)."""
+    targets = getattr(mesh, "morph_targets", None) or {}
+    return max((len(a) for a in targets.values()), default=0)
 
 
 def _targets(scene: Scene, mesh: int) -> np.ndarray:
@@ -181,7 +197,7 @@ class DeformKernel:
                 floats += d.size
             jobs[k, 0] = (gs.vertex_offsets[r.mesh], gs.posed_offsets[k], mesh.vertex_count,
                           skin_at[r.mesh] if r.skin is not None else _NO_SKIN)
-            jobs[k, 1] = (delta_at[r.mesh], len(_targets(scene, r.mesh)), layout.joint_at[k],
+            jobs[k, 1] = (delta_at[r.mesh], target_count(mesh), layout.joint_at[k],
                           layout.weight_at[k])
         skin = np.concatenate(skin_rows).ravel() if skin_rows else np.zeros(12, np.uint32)
         delta = np.concatenate(deltas) if deltas and floats else np.zeros(9, np.float32)

@@ -91,6 +91,7 @@ class GpuSceneState:
         self.buffer = Buffer(device, self.stride * count, "storage", host_visible=True,
                              device_local=True, name="scene state")
         self._written = [-1] * count
+        self._values: tuple[int, np.ndarray] | None = None  # (version, deform floats)
         self._materials_written = [0] * count  # the slots hold the file's factors at first
         self.gpu_scene: Any = None  # whose material blocks set_material overrides
         for slot in range(count):  # every slot holds the rest pose from the start
@@ -143,7 +144,7 @@ class GpuSceneState:
             self.buffer.array(np.float32, records.size, slot * self.stride)[:] = records.ravel()
         if self._materials_written[slot] != self.state.material_version:
             self._write_materials(slot)
-        if self.deform is not None and self.scene is not None:
+        if self.deform is not None:
             values = self._deform_values()
             self.buffer.array(np.float32, values.size, slot * self.stride + self.deform_at)[:] = values
         self._written[slot] = version
@@ -162,13 +163,12 @@ class GpuSceneState:
         self._materials_written[slot] = self.state.material_version
 
     def _deform_values(self) -> np.ndarray:
-        cached = getattr(self, "_values", None)
-        if cached is None or cached[0] != self.state.version:
-            assert self.deform is not None and self.scene is not None
-            cached = (self.state.version,
-                      self.deform.values(self.scene, self.state.world(), self.state.weights))
-            self._values = cached
-        return cached[1]
+        """The deform floats of the state's version (made once for all the slots)."""
+        assert self.deform is not None
+        if self._values is None or self._values[0] != self.state.version:
+            self._values = (self.state.version,
+                            self.deform.values(self.state.world(), self.state.weights))
+        return self._values[1]
 
     def destroy(self) -> None:
         self.buffer.destroy()
