@@ -47,7 +47,8 @@ def test_animate_writes_the_frames_the_api_renders(capsys, tmp_path: Path, asset
     for i in (0, 3, 6):  # each frame is `render --time` of its time
         one = tmp_path / f"one{i}.png"
         code, _, err = run(capsys, "render", str(path), "--time", str(i / 4), "--size", "48x40",
-                           "--camera", CAM_ARG, "--light", "none", "--out", str(one))
+                           "--camera", CAM_ARG, "--light", "none", "--out", str(one),
+                           "--validation")
         assert code == 0, err
         assert np.array_equal(np.asarray(Image.open(files[i])), np.asarray(Image.open(one)))
     assert not np.array_equal(np.asarray(Image.open(files[0])), np.asarray(Image.open(files[3])))
