@@ -202,6 +202,9 @@ VIEW_RECORD = Std140Block("ViewRecord", "view_record", (
     ("intrinsics", "vec4"),  # sx, sy, ox, oy: NDC x = sx x / -z + ox, y = -sy y / -z + oy
     ("viewport", "uvec4"),  # x, y, width, height: the pixels of its target the view covers
     ("layer", "uint"),  # the layer of a layered batch target it is drawn into (else 0)
+    # Where its world's draw records start in Instances (render/worlds.py: a batch of worlds
+    # holds the renderer's state then one run of draw records per world; else 0).
+    ("instance_base", "uint"),
 ))
 
 SETTINGS = Std140Block(

@@ -110,6 +110,7 @@ struct ViewRecord {
     vec4 intrinsics;
     uvec4 viewport;
     uint layer;
+    uint instance_base;
 };
 struct DrawRecord {
     uvec4 info;

@@ -74,7 +74,7 @@ struct SurfaceTriangle {
 SurfaceTriangle surface_triangle(uint draw, uint prim) {
     SurfaceTriangle t;
     DrawRecord dr = draws[draw];
-    mat4 model = instance_matrices[2u * draw];
+    mat4 model = instance_matrices[2u * (views[view_index].instance_base + draw)];
     uint base = dr.info.x + 3u * prim;
     t.vi = uvec3(indices[base], indices[base + 1u], indices[base + 2u]) + dr.info.y;
     t.w0 = (model * vec4(vec3_at(t.vi.x, false), 1.0)).xyz;
@@ -129,8 +129,8 @@ DrawRecord surface_at(uint draw, uint prim, uvec2 pixel, vec2 extent, out uvec3 
 // The rest of the surface globals: the interpolated normal, tangent and bitangent through
 // the draw's matrices (TBN_MODE's stream), which side faces the camera, the node's scale.
 void surface_frame_at(uint draw, uvec3 vi, vec3 w0, vec3 w1, vec3 w2, vec3 bary) {
-    mat4 model = instance_matrices[2u * draw];
-    mat3 normal_matrix = mat3(instance_matrices[2u * draw + 1u]);
+    mat4 model = instance_matrices[2u * (views[view_index].instance_base + draw)];
+    mat3 normal_matrix = mat3(instance_matrices[2u * (views[view_index].instance_base + draw) + 1u]);
     vec3 eye = views[view_index].eye_near.xyz;
     vec3 n[3], t[3], bt[3];
     for (int k = 0; k < 3; ++k) {
