@@ -66,6 +66,7 @@ class BatchPath:
         self.world_call: WorldCall | None = None  # the call under way's worlds, if any
         self._world_writes: list[int] = []  # per slot: which call's worlds it holds
         self._calls = 0
+        self._last_views: tuple | None = None  # (batch, key, instance bases, terms) written
         self._submissions = 0  # of the render_batch call under way (its stats summed)
         self._t_start = 0.0  # when the submission under way began (its Python time)
 
@@ -280,7 +281,6 @@ class BatchPath:
         p = self.parts
         frame_lights = p.lighting.frame_lights(opts, lights)
         p.environments.bind_for(opts)
-        terms = batch_view_terms(views, size, p.bounds.corners, p.bounds.radius)
         frame = p.ring.begin()
         slot = p.slots[frame.index]
         p.gpu_state.write(frame.index)
@@ -289,8 +289,24 @@ class BatchPath:
         write_frame_blocks(slot, frame_lights, opts, linear, p.lighting.frame_lighting(opts, ao),
                            rows)
         base = self._write_worlds(frame.index, start, len(views))
+        return frame, plan, self._view_records(views, size, atlas_rows, base)
+
+    def _view_records(self, views: CameraBatch, size: tuple[int, int], atlas_rows: int,
+                      base: np.ndarray | None) -> ViewTerms:
+        """Write the views' records, unless they hold these already: the same batch (a
+        CameraBatch never changes), size, tiling, scene bounds and worlds as the last
+        submission's (a simulator's loop renders the same cameras every step)."""
+        p = self.parts
+        key = (size, atlas_rows, p.bounds.corners, p.bounds.radius, self.views.generation)  # type: ignore[union-attr]
+        last = self._last_views
+        if (last is not None and last[0] is views and last[1] == key
+                and (base is None) == (last[2] is None)
+                and (base is None or np.array_equal(base, last[2]))):
+            return last[3]
+        terms = batch_view_terms(views, size, p.bounds.corners, p.bounds.radius)
         self.views.write_views(terms, size, atlas_rows, base)  # type: ignore[union-attr]
-        return frame, plan, terms
+        self._last_views = (views, key, base, terms)
+        return terms
 
     def _write_worlds(self, slot: int, start: int, n: int) -> np.ndarray | None:
         """In a batch of worlds: slot `slot`'s world records (once a call), and the
@@ -490,6 +506,8 @@ def _joined(parts: list[np.ndarray], out: np.ndarray | None = None) -> np.ndarra
 
 
 def _slice(views: CameraBatch, start: int, stop: int) -> CameraBatch:
+    if start == 0 and stop == len(views):
+        return views  # (the same batch: its records may be written already)
     def part(a: np.ndarray | None) -> np.ndarray | None:
         return None if a is None else a[start:stop]
 

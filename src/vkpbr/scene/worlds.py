@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -99,14 +100,26 @@ class WorldPoses:
     """W worlds' poses of N slots as (W, N, 4, 4) float64 world matrices, and which slots
     each world shows ((W, N) bool, or None: all)."""
 
-    matrices: np.ndarray
+    given: np.ndarray  # (W, N, 4, 4) matrices, or (W, N, 7) rows (position + quaternion)
     visible: np.ndarray | None
-    rows: np.ndarray | None = None  # the (W, N, 7) rows as given (position + quaternion)
-    wxyz: bool = False  # their quaternion order
+    wxyz: bool = False  # the rows' quaternion order
 
     @property
     def count(self) -> int:
-        return len(self.matrices)
+        return len(self.given)
+
+    @property
+    def rows(self) -> np.ndarray | None:
+        """The (W, N, 7) rows as given, or None for matrices."""
+        return self.given if self.given.ndim == 3 else None
+
+    @cached_property
+    def matrices(self) -> np.ndarray:
+        """(W, N, 4, 4) float64 world matrices (made from the rows on first use: the GPU
+        expands rows itself)."""
+        if self.given.ndim == 4:
+            return self.given
+        return _rows_to_matrices(self.given, "wxyz" if self.wxyz else "xyzw")
 
     @classmethod
     def of(cls, poses: Any, slots: int, quaternion: str = "xyzw", visible: Any = None
@@ -117,25 +130,24 @@ class WorldPoses:
         p = _array("worlds", poses)
         if p.ndim == 2 and p.shape[-1] == 7 and slots == 1:
             p = p[:, None]
-        rows = None
         if p.ndim == 3 and p.shape[1:] == (slots, 7):
-            matrices, rows = _rows_to_matrices(p, quaternion), p
+            given = _checked_rows(p, quaternion)
         elif p.ndim == 4 and p.shape[1:] == (slots, 4, 4):
-            matrices = _checked_matrices(p)
+            given = _checked_matrices(p)
         else:
             raise UsageError(f"worlds: poses of shape {tuple(p.shape)} for {slots} slot node(s); "
                              f"give (W, {slots}, 4, 4) world matrices or (W, {slots}, 7) "
                              "position + quaternion rows")
-        if len(matrices) == 0:
+        if len(given) == 0:
             raise UsageError("worlds: no worlds given (W = 0)")
         shown = None
         if visible is not None:
             v = _array("visible", visible)
-            if v.shape != matrices.shape[:2]:
+            if v.shape != given.shape[:2]:
                 raise UsageError(f"visible: shape {tuple(v.shape)}, expected "
-                                 f"{matrices.shape[:2]} (worlds, slot nodes)")
+                                 f"{given.shape[:2]} (worlds, slot nodes)")
             shown = v.astype(bool)
-        return cls(matrices, shown, rows, quaternion == "wxyz")
+        return cls(given, shown, quaternion == "wxyz")
 
 
 def _array(what: str, value: Any) -> np.ndarray:
@@ -154,15 +166,20 @@ def _array(what: str, value: Any) -> np.ndarray:
         raise UsageError(f"{what}: not an array of numbers ({exc})") from None
 
 
-def _rows_to_matrices(p: np.ndarray, quaternion: str) -> np.ndarray:
+def _checked_rows(p: np.ndarray, quaternion: str) -> np.ndarray:
     if quaternion not in QUATERNION_ORDERS:
         raise UsageError(f"quaternion {quaternion!r}: choose 'xyzw' or 'wxyz'")
     if not np.isfinite(p).all():
         raise UsageError("worlds: a pose holds NaN or infinity")
-    w, n = p.shape[:2]
     q = p[..., 3:].reshape(-1, 4)
     if np.einsum("ij,ij->i", q, q).min(initial=1.0) < 1e-24:
         raise UsageError("worlds: a quaternion of length 0 is no rotation")
+    return p
+
+
+def _rows_to_matrices(p: np.ndarray, quaternion: str) -> np.ndarray:
+    w, n = p.shape[:2]
+    q = p[..., 3:].reshape(-1, 4)
     out = np.empty((w * n, 4, 4))
     quaternion_matrices(q, quaternion, out[:, :3, :3])
     out[:, :3, 3] = p[..., :3].reshape(-1, 3)
