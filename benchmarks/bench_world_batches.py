@@ -90,7 +90,7 @@ def row(r: Renderer, name: str, size: int, worlds: int, into: str, steps: int, d
         rows = np.zeros((worlds, slots, 7))
     rows[..., 6] = 1.0
     before = r.device.bytes_allocated()[0]
-    walls, py, gpu, kernel = [], [], [], []
+    walls, py, gpu, kernel, per_step = [], [], [], [], []
     for s in range(WARM + steps):
         t0 = time.perf_counter()
         step_poses(rows, s, torch)
@@ -104,13 +104,15 @@ def row(r: Renderer, name: str, size: int, worlds: int, into: str, steps: int, d
             py.append(st.cpu_ms)
             gpu.append(st.gpu_ms)
             kernel.append(st.pass_ms.get("worlds", 0.0))
+            per_step.append(dict(st.pass_ms))
     del out
     held = r.device.bytes_allocated()[0] - before
     med = statistics.median(walls)
     return {"row": f"{name}-{size}", "worlds": worlds, "into": into,
             "world_views_per_s": worlds / med, "python_ms": statistics.median(py),
             "gpu_ms": statistics.median(gpu), "worlds_kernel_ms": statistics.median(kernel),
-            "mib_per_1k_worlds": held / 2**20 / worlds * 1000}
+            "mib_per_1k_worlds": held / 2**20 / worlds * 1000,
+            "steps_ms": {k: statistics.median(x.get(k, 0.0) for x in per_step) for k in per_step[0]}}
 
 
 def main() -> None:

@@ -175,3 +175,74 @@ def test_gpu_expanded_worlds_match_the_host_ones(make_renderer, pipeline: str) -
         diff = np.abs(host.astype(int) - gpu)
         assert diff.max() <= 1 or np.mean(diff > 1) <= 0.001, diff.max()
         assert np.mean(diff) <= 0.05
+
+
+def world_factors(worlds: int, seed: int = 3) -> dict:
+    rng = np.random.default_rng(seed)
+    return {"base_color": rng.uniform(0.1, 1.0, (worlds, 2, 4)),
+            "metallic": rng.uniform(0.0, 1.0, (worlds, 2)),
+            "roughness": rng.uniform(0.2, 1.0, (worlds, 2)),
+            "emissive": rng.uniform(0.0, 0.3, (worlds, 2, 3))}
+
+
+def alone_with(r, camera: Camera, factors: dict, w: int, poses=None, **kw) -> np.ndarray:  # noqa: ANN001
+    """`render` of world `w`: its factors set with set_material (and its poses), then put back."""
+    before = {k: dict(v) for k, v in r.state.materials.items()}
+    for k, name in enumerate(["m2", "m1"]):
+        r.set_material(name, base_color=factors["base_color"][w, k],
+                       metallic=float(factors["metallic"][w, k]),
+                       roughness=float(factors["roughness"][w, k]),
+                       emissive=factors["emissive"][w, k])
+    if poses is not None:
+        r.set_poses(MOVED, poses[w], space="world", quaternion="wxyz")
+    try:
+        return r.render(camera, size=(W, H), **kw)
+    finally:
+        r.state.materials = before
+        r.state.material_version += 1
+        r.state.version += 1
+        r.reset_pose()
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
+def test_world_material_factors(make_renderer, pipeline: str) -> None:  # noqa: ANN001
+    """world_materials: each world's base colour, metallic, roughness and emissive of the
+    named materials (the box's m2, the small sphere's m1), with and without poses, equal
+    `render` with set_material of that world (the fragment path view by view: bit for bit;
+    the compute batch within its bound)."""
+    r = make_renderer(analytic_scene())
+    if pipeline == "compute" and r.compute_batch_unavailable() is not None:
+        pytest.skip(f"no compute batch here: {r.compute_batch_unavailable()}")
+    r.world_slots(MOVED, materials=["m2", "m1"])
+    factors, poses = world_factors(3), world_poses(3, seed=4)
+    single = {"pipeline": pipeline, **NO_SHADOWS}
+    if pipeline == "compute":
+        single["raster"] = "compute"
+    for given in (None, poses):
+        kw = {} if given is None else {"worlds": given, "quaternion": "wxyz"}
+        got = r.render_batch(cameras(3), (W, H), world_materials=factors, pipeline=pipeline,
+                             **kw, **NO_SHADOWS)
+        for w, cam in enumerate(cameras(3)):
+            want = alone_with(r, cam, factors, w, given, **single)
+            diff = np.abs(got[w].astype(int) - want)
+            if pipeline == "forward":
+                assert np.array_equal(got[w], want), f"world {w}"
+            else:
+                assert diff.mean() <= 1.0 and np.percentile(diff, 99) <= 3, (w, diff.mean())
+    plain = r.render(cameras(1)[0], size=(W, H), pipeline=pipeline, **NO_SHADOWS)
+    assert not np.array_equal(plain, got[0])  # the factors did change the image
+
+
+def test_bad_world_materials(make_renderer) -> None:  # noqa: ANN001
+    r = make_renderer(analytic_scene())
+    with pytest.raises(UsageError, match="name the materials"):
+        r.render_batch([CAMERA] * 2, (W, H), world_materials={"metallic": np.zeros((2, 1))})
+    with pytest.raises(UsageError, match="no material is named"):
+        r.world_slots(materials=["paint"])
+    r.world_slots(materials=["m2"])
+    for given, message in (({"metallic": np.full((2, 1), 2.0)}, r"within \[0, 1\]"),
+                           ({"shine": np.zeros((2, 1))}, "unknown factor"),
+                           ({"base_color": np.zeros((2, 2, 4))}, "shape"),
+                           ({"emissive": np.full((2, 1, 3), -1.0)}, ">= 0")):
+        with pytest.raises(UsageError, match=message):
+            r.render_batch([CAMERA] * 2, (W, H), world_materials=given)

@@ -175,11 +175,13 @@ class BatchViews:
         return (self.world_sets0 if worlds else self.sets0)[frame_index]
 
     def write_views(self, terms: ViewTerms, size: tuple[int, int], rows: int = 0,
-                    instance_base: np.ndarray | None = None) -> None:
+                    instance_base: np.ndarray | None = None,
+                    factor_base: np.ndarray | None = None) -> None:
         """The batch's view records (`terms`: views.batch_view_terms) for views of `size`
         (W, H): each in its layer of its chunk of the layered target, or (`rows` > 0) in its
         tile of a compute batch's column-major atlas, `rows` tiles a column; in a batch of
-        worlds, where each view's world's draw records start (`instance_base`, (N,))."""
+        worlds, where each view's world's draw records (`instance_base`, (N,)) and material
+        factors (`factor_base`, (N,), render/worlds.py) start."""
         n = len(terms.znear)
         w, h = size
         index = np.arange(n, dtype=np.uint32)
@@ -191,6 +193,8 @@ class BatchViews:
         fill_views(self.records[:n], terms, viewport, layer)
         if instance_base is not None:
             self.records["instance_base"][:n] = instance_base
+        if factor_base is not None:
+            self.records["factor_base"][:n] = factor_base
 
     def write_blend_groups(self, orders: np.ndarray) -> tuple[tuple[tuple[tuple[int, ...], int, int], ...], ...]:
         """Group each chunk's views by their blended draws' back-to-front order (`orders`:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -19,35 +20,79 @@ from vkpbr.errors import UsageError
 from vkpbr.render.batch_route import batch_result, batch_route, stack_views
 from vkpbr.render.lighting import LightsArg
 from vkpbr.render.options import RenderOptions
-from vkpbr.render.worlds import GpuWorlds, WorldCall
+from vkpbr.render.worlds import GpuWorlds, WorldCall, base_factors
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 from vkpbr.scene.state import SceneState
-from vkpbr.scene.worlds import WorldPoses, WorldSlots, world_records
+from vkpbr.scene.worlds import (
+    WorldMaterials,
+    WorldPoses,
+    WorldSlots,
+    factor_records,
+    world_records,
+)
 
 __all__ = ["render_batch", "world_slots", "WorldsArg"]
 
 WorldsArg = Any  # (W, N, 4, 4) | (W, N, 7) NumPy array or torch tensor
 
 
-def world_slots(renderer: Any, nodes: Any) -> WorldSlots:
+@dataclass(frozen=True)
+class WorldPlan:
+    """A call's worlds as checked on the host: the slots and poses (or None: the state's
+    poses in every world), the materials' factors (or None) and the world of each view."""
+
+    slots: WorldSlots | None
+    poses: WorldPoses | None
+    materials: WorldMaterials | None
+    index: np.ndarray
+
+
+def world_slots(renderer: Any, nodes: Any = None, materials: Any = None) -> WorldSlots | None:
     """Name the N nodes whose world poses each world of a batch gives (names, paths,
-    patterns or indices, in the order the worlds' arrays list them); kept by the renderer
-    for its next batches of worlds."""
-    renderer._world_slots = WorldSlots.of(renderer.state, nodes)
+    patterns or indices, in the order the worlds' arrays list them) and the K materials whose
+    factors `world_materials` gives; kept by the renderer for its next batches of worlds."""
+    if nodes is None and materials is None:
+        raise UsageError("world_slots: name nodes (poses) or materials (factors) or both")
+    renderer._world_slots = None if nodes is None else WorldSlots.of(renderer.state, nodes)
+    renderer._world_materials = None if materials is None else (
+        [materials] if isinstance(materials, (str, int)) else list(materials))
+    if materials is not None:  # names checked now, once
+        WorldMaterials.indices(renderer.state, renderer._world_materials)
     return renderer._world_slots
 
 
-def _world_call(renderer: Any, views: int, worlds: WorldsArg, world_of_view: Any,
-                quaternion: str, visible: Any) -> tuple[WorldSlots, WorldPoses, np.ndarray]:
-    """The checked worlds of a call of `views` views: (slots, poses, world of each view)."""
+def _slots(renderer: Any) -> WorldSlots:
     slots = getattr(renderer, "_world_slots", None)
     if slots is None:
         raise UsageError("worlds: name the nodes each world poses first: "
                          "renderer.world_slots(['cube', 'arm/*'])")
     slots = slots.refreshed(renderer.state)
     renderer._world_slots = slots
-    poses = WorldPoses.of(worlds, len(slots), quaternion, visible)
-    return slots, poses, _world_index(views, poses.count, world_of_view)
+    return slots
+
+
+def _world_plan(renderer: Any, views: int, worlds: WorldsArg, world_of_view: Any,
+                quaternion: str, visible: Any, materials: Any) -> WorldPlan:
+    """The checked worlds of a call of `views` views (NumPy or CPU tensors)."""
+    slots = poses = wm = None
+    if worlds is not None:
+        slots = _slots(renderer)
+        poses = WorldPoses.of(worlds, len(slots), quaternion, visible)
+    if materials is not None:
+        wm = _materials(renderer, materials)
+    counts = {x.count for x in (poses, wm) if x is not None}
+    if len(counts) > 1:
+        raise UsageError(f"worlds: {poses.count} worlds of poses but {wm.count} of "  # type: ignore[union-attr]
+                         "world_materials; give both for every world")
+    return WorldPlan(slots, poses, wm, _world_index(views, counts.pop(), world_of_view))
+
+
+def _materials(renderer: Any, given: Any) -> WorldMaterials:
+    names = getattr(renderer, "_world_materials", None)
+    if names is None:
+        raise UsageError("world_materials: name the materials first: "
+                         "renderer.world_slots(nodes, materials=['paint', ...])")
+    return WorldMaterials.of(renderer.state, names, given)
 
 
 def _world_index(views: int, w: int, world_of_view: Any) -> np.ndarray:
@@ -73,23 +118,29 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
                  outputs: Iterable[str] | None, batch: int | str, device: str,
                  out: np.ndarray | None, worlds: WorldsArg = None, world_of_view: Any = None,
                  quaternion: str = "xyzw", world_visible: Any = None,
-                 overrides: dict[str, Any] | None = None, world_expand: str = "auto") -> Any:
+                 overrides: dict[str, Any] | None = None, world_expand: str = "auto",
+                 world_materials: Any = None) -> Any:
     """Renderer.render_batch (its docstring says what each argument is)."""
     r = renderer
     views = as_camera_batch(cameras, r.default_camera())
     opts = dataclasses.replace(options or RenderOptions(), **(overrides or {}))
     route, wanted = batch_route(r.parts, views, size, opts, linear, depth, outputs, device, out)
-    if worlds is None and (world_of_view is not None or world_visible is not None):
+    if worlds is None and world_materials is None and (world_of_view is not None
+                                                       or world_visible is not None):
         raise UsageError("world_of_view and world_visible need worlds= (the worlds' poses)")
+    if world_materials is not None and route == "layered":
+        route = "views"  # (the fragment path's batch has no per-world materials yet)
     call, plan = None, None
     if worlds is not None and _on_cuda(worlds):
-        if route == "views":
-            raise UsageError("worlds on CUDA render in a batch only: this call renders view by "
-                             "view (dataset outputs, post steps or MSAA): give NumPy poses")
+        if route == "views" or world_materials is not None:
+            raise UsageError("worlds on CUDA render in a batch only, without world_materials "
+                             "(this call renders view by view: dataset outputs, post steps, "
+                             "MSAA or the fragment path's batch): give NumPy poses")
         call = _cuda_call(r, len(views), worlds, world_of_view, quaternion, world_visible)
-    elif worlds is not None:
-        plan = _world_call(r, len(views), worlds, world_of_view, quaternion, world_visible)
-        call = _host_call(r.state, plan, world_expand)
+    elif worlds is not None or world_materials is not None:
+        plan = _world_plan(r, len(views), worlds, world_of_view, quaternion, world_visible,
+                           world_materials)
+        call = _host_call(r, plan, world_expand)
     each = _each_view(r.state, views, plan)  # view by view, as `render` draws
     if route == "views":  # (render/batch_route.py says when)
         return stack_views(r, r.render_many(each, lights, size, opts, linear, depth,
@@ -102,15 +153,21 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
     return batch_result(color, dist, depth, wanted, frames)
 
 
-def _host_call(state: SceneState, plan: tuple[WorldSlots, WorldPoses, np.ndarray],
-               expand: str) -> WorldCall:
+def _host_call(renderer: Any, plan: WorldPlan, expand: str) -> WorldCall:
     """NumPy worlds: their records made here (exact: "auto", "host"), or the poses handed to
-    the GPU's kernel as CUDA tensors are ("gpu": float32, what the CUDA route computes)."""
-    slots, poses, index = plan
+    the GPU's kernel as CUDA tensors are ("gpu": float32, what the CUDA route computes); the
+    materials' factor records (render/worlds.py base_factors: the state's, then the worlds')."""
+    state = renderer.state
+    slots, poses, index = plan.slots, plan.poses, plan.index
     if expand not in ("auto", "host", "gpu"):
         raise UsageError(f"world_expand {expand!r}: choose 'auto', 'host' or 'gpu'")
+    factors = None
+    if plan.materials is not None:
+        factors = factor_records(base_factors(renderer.gpu_scene, state), plan.materials)
+    if poses is None or slots is None:
+        return WorldCall(index, factors=factors)
     if expand != "gpu":
-        return WorldCall(index, records=world_records(state, slots, poses))
+        return WorldCall(index, records=world_records(state, slots, poses), factors=factors)
     # The rows as given (7 floats: the kernel makes the rotation) or the matrices (16)
     flat = poses.rows if poses.rows is not None else poses.matrices
     shown = poses.visible
@@ -120,7 +177,7 @@ def _host_call(state: SceneState, plan: tuple[WorldSlots, WorldPoses, np.ndarray
 
     gw = GpuWorlds(slots, poses.count, 7 if poses.rows is not None else 16, poses.wxyz,
                    shown is not None, fill)
-    return WorldCall(index, gpu=gw)
+    return WorldCall(index, gpu=gw, factors=factors)
 
 
 def _on_cuda(value: Any) -> bool:
@@ -188,33 +245,49 @@ def _same_gpu(renderer: Any, tensor: Any) -> None:
                          f"cuda:{index} ({dev.info.name}); move it there with .to('cuda:{index}')")
 
 
-def _each_view(state: SceneState, views: CameraBatch,
-               plan: tuple[WorldSlots, WorldPoses, np.ndarray] | None) -> Iterator[Any]:
+def _each_view(state: SceneState, views: CameraBatch, plan: WorldPlan | None) -> Iterator[Any]:
     """The views' cameras one by one; in a batch of worlds each taken with its world applied
     to `state` (and the state as it was once the last is drawn or the caller stops)."""
     if plan is None:
         yield from (views.camera(i) for i in range(len(views)))
         return
-    slots, poses, index = plan
     saved = apply_saved(state)
     try:
         for i in range(len(views)):
-            apply_world(state, slots, poses, int(index[i]))
+            w = int(plan.index[i])
+            if plan.slots is not None and plan.poses is not None:
+                apply_world(state, plan.slots, plan.poses, w)
+            if plan.materials is not None:
+                apply_materials(state, plan.materials, w)
             yield views.camera(i)
     finally:
         saved()
 
 
 def apply_saved(state: SceneState) -> Any:
-    """A function that puts `state`'s poses and visibility back as they are now."""
+    """A function that puts `state`'s poses, visibility and material overrides back as they
+    are now."""
     local, visible = state.local.copy(), state.visible.copy()
+    materials = {k: dict(v) for k, v in state.materials.items()}
     every = np.arange(len(state.tree))
 
     def restore() -> None:
         state.local[:] = local
         state.set_visible(every, visible)  # (a change: the frames copy the state again)
+        if state.materials != materials:
+            state.materials = materials
+            state.material_version += 1
+            state.version += 1
 
     return restore
+
+
+def apply_materials(state: SceneState, wm: WorldMaterials, w: int) -> None:
+    """Set world `w`'s factors of the named materials on `state` (set_material)."""
+    for k, material in enumerate(wm.materials):  # (the factors' names are set_material's)
+        given = {f: (v[w, k] if v.shape[2] > 1 else float(v[w, k, 0]))
+                 for f, v in wm.values.items()}
+        state.set_material(int(material), **given)
 
 
 def apply_world(state: SceneState, slots: WorldSlots, poses: WorldPoses, w: int) -> None:

@@ -65,6 +65,7 @@ class BatchPath:
         self.world_kernel: WorldKernel | None = None
         self.world_call: WorldCall | None = None  # the call under way's worlds, if any
         self._world_writes: list[int] = []  # per slot: which call's worlds it holds
+        self._factor_writes = 0  # which call's factors the compute scene holds
         self._calls = 0
         self._last_views: tuple | None = None  # (batch, key, instance bases, terms) written
         self._submissions = 0  # of the render_batch call under way (its stats summed)
@@ -166,7 +167,7 @@ class BatchPath:
         shading_ao = ao is not None and ao.shading
         frame, plan, terms = self._begin(views, size, lights, opts, linear, rows, shading_ao, start)
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
-        set0 = bv.set0(frame.index, self.world_call is not None)
+        set0 = bv.set0(frame.index, self.world_call is not None and self.world_call.poses)
         self._run(frame, plan, opts, lambda redraw: p.recorder.command_buffer(
             target, frame, 0, FrameSpec(
                 "compute_batch", opts.tbn, opts.alpha_mask, plan, redraw, copy,
@@ -250,7 +251,8 @@ class BatchPath:
         groups = bv.write_blend_groups(p.blend.orders(views.eye))
         self._run(frame, plan, opts, lambda redraw: bv.command_buffer(
             target, frame, n, opts.tbn, opts.alpha_mask, plan, groups, p.paths.prepass_for(target),
-            redraw, self._world_key() or None, self._world_groups()),
+            redraw, self._world_key() if self.world_call is not None and self.world_call.poses else None,
+            self._world_groups()),
             (lambda: self._cuda_wait(target.color_readback)) if cuda else None)
         t_read = time.perf_counter()
         color = self._cuda_view(target, n, linear) if cuda else target.read_color(n, into)
@@ -292,7 +294,7 @@ class BatchPath:
         return frame, plan, self._view_records(views, size, atlas_rows, base)
 
     def _view_records(self, views: CameraBatch, size: tuple[int, int], atlas_rows: int,
-                      base: np.ndarray | None) -> ViewTerms:
+                      base: tuple[Any, Any]) -> ViewTerms:
         """Write the views' records, unless they hold these already: the same batch (a
         CameraBatch never changes), size, tiling, scene bounds and worlds as the last
         submission's (a simulator's loop renders the same cameras every step)."""
@@ -300,20 +302,36 @@ class BatchPath:
         key = (size, atlas_rows, p.bounds.corners, p.bounds.radius, self.views.generation)  # type: ignore[union-attr]
         last = self._last_views
         if (last is not None and last[0] is views and last[1] == key
-                and (base is None) == (last[2] is None)
-                and (base is None or np.array_equal(base, last[2]))):
+                and all(_same(a, b) for a, b in zip(base, last[2], strict=True))):
             return last[3]
         terms = batch_view_terms(views, size, p.bounds.corners, p.bounds.radius)
-        self.views.write_views(terms, size, atlas_rows, base)  # type: ignore[union-attr]
+        self.views.write_views(terms, size, atlas_rows, *base)  # type: ignore[union-attr]
         self._last_views = (views, key, base, terms)
         return terms
 
-    def _write_worlds(self, slot: int, start: int, n: int) -> np.ndarray | None:
-        """In a batch of worlds: slot `slot`'s world records (once a call), and the
-        instance_base of views start..start+n; else None."""
+    def _write_worlds(self, slot: int, start: int, n: int) -> tuple[Any, Any]:
+        """In a batch of worlds: slot `slot`'s world records and the worlds' material
+        factors (once a call); the instance_base and factor_base of views start..start+n
+        (each None where the worlds do not have it)."""
         call = self.world_call
         if call is None:
-            return None
+            return None, None
+        index = call.world_of_view[start:start + n]
+        factor_base = None
+        if call.factors is not None:
+            if self._factor_writes != self._calls:
+                if self.parts.compute().set_world_factors(call.factors):
+                    self.free_recordings()  # (its sets were rewritten)
+                self._factor_writes = self._calls
+            m = len(self.parts.gpu_scene.materials)
+            factor_base = (1 + index * m).astype(np.uint32)
+        if not call.poses:
+            return None, factor_base
+        return self._write_poses(slot, index), factor_base
+
+    def _write_poses(self, slot: int, index: np.ndarray) -> np.ndarray:
+        call = self.world_call
+        assert call is not None
         p, bv = self.parts, self.views
         assert bv is not None
         if self.world_buffers is None:
@@ -337,7 +355,7 @@ class BatchPath:
             state = p.gpu_state.state.draw_matrices()
             wb.write(slot, state, call.records if gpu is None else np.zeros(0, np.float32))
             self._world_writes[slot] = self._calls
-        return wb.instance_base(call.world_of_view[start:start + n])
+        return wb.instance_base(index)
 
     def _world_key(self) -> tuple:
         """What a batch's recording of worlds depends on (nothing without worlds)."""
@@ -503,6 +521,10 @@ def _joined(parts: list[np.ndarray], out: np.ndarray | None = None) -> np.ndarra
     if out is not None:
         return out
     return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+
+def _same(a: np.ndarray | None, b: np.ndarray | None) -> bool:
+    return (a is None) == (b is None) and (a is None or np.array_equal(a, b))
 
 
 def _slice(views: CameraBatch, start: int, stop: int) -> CameraBatch:

@@ -242,7 +242,7 @@ class Renderer:
                      out: np.ndarray | None = None, worlds: WorldsArg = None,
                      world_of_view: Any = None, quaternion: str = "xyzw",
                      world_visible: Any = None, world_expand: str = "auto",
-                     **option_overrides: Any
+                     world_materials: Any = None, **option_overrides: Any
                      ) -> np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray] | Any:
         """Render B views of the scene in one submission and return them stacked
         (docs/batch.md).
@@ -260,8 +260,9 @@ class Renderer:
             matrices or (W, N, 7) position + quaternion (`quaternion` "xyzw" or "wxyz"),
             NumPy or torch; `world_of_view` (B,) the world each view sees (omit when B = W);
             `world_visible` (W, N) bools; `world_expand` "gpu" expands NumPy poses on the
-            GPU as CUDA tensors are (float32), "auto"/"host" exactly on the host.
-            docs/batch.md "Worlds".
+            GPU as CUDA tensors are (float32), "auto"/"host" exactly on the host;
+            `world_materials` {"base_color": (W, K, 4), "metallic", "roughness": (W, K),
+            "emissive": (W, K, 3)} of the K materials named by `world_slots`. docs/batch.md.
 
         Returns (B, H, W, 4) uint8 sRGB (float32 with `linear`), (colour, depth) with `depth`,
         {name: (B, ...)} with `outputs`. pipeline="forward" (and "auto" on CPUs): view i is
@@ -272,11 +273,12 @@ class Renderer:
         """
         return batch_call(self, cameras, size, lights, options, linear, depth, outputs, batch,
                           device, out, worlds, world_of_view, quaternion, world_visible,
-                          option_overrides, world_expand)
+                          option_overrides, world_expand, world_materials)
 
-    def world_slots(self, nodes: Any) -> WorldSlots:
-        """Name the nodes each world of `render_batch(worlds=...)` poses, in its arrays' order."""
-        return world_slots(self, nodes)
+    def world_slots(self, nodes: Any = None, materials: Any = None) -> WorldSlots | None:
+        """Name the nodes each world of `render_batch(worlds=...)` poses and the materials
+        whose factors `world_materials` gives, in their arrays' order."""
+        return world_slots(self, nodes, materials)
 
     def close(self) -> None:
         """Destroy everything (idempotent). The Renderer is unusable afterwards."""

@@ -68,6 +68,12 @@ class WorldCall:
     world_of_view: np.ndarray
     records: np.ndarray | None = None
     gpu: GpuWorlds | None = None
+    factors: np.ndarray | None = None  # (W * M, 3, 4) float32 WorldFactors records
+
+    @property
+    def poses(self) -> bool:
+        """The worlds pose nodes (else only their materials differ)."""
+        return self.records is not None or self.gpu is not None
 
     @property
     def count(self) -> int:
@@ -75,7 +81,25 @@ class WorldCall:
 
     @property
     def key(self) -> tuple:
-        return self.gpu.key if self.gpu is not None else ("host",)
+        return (self.gpu.key if self.gpu is not None else ("host", self.poses),
+                self.factors is not None)
+
+
+def base_factors(gpu_scene: Any, state: Any) -> np.ndarray:
+    """(M, 3, 4) each material's factors as the renderer's state has them (the file's, with
+    set_material's overrides): base colour; emissive, metallic; roughness (WorldFactors)."""
+    blocks = gpu_scene.material_blocks
+    out = np.zeros((len(blocks), 3, 4))
+    for i, b in enumerate(blocks):
+        fields = {k: np.asarray(b[k], np.float64) for k in (
+            "base_color_factor", "emissive_factor", "metallic_factor", "roughness_factor")}
+        fields.update({k: np.asarray(v, np.float64).reshape(-1)[:fields[k].size].reshape(fields[k].shape)
+                       for k, v in state.materials.get(i, {}).items()})
+        out[i, 0] = fields["base_color_factor"]
+        out[i, 1, :3] = fields["emissive_factor"]
+        out[i, 1, 3] = fields["metallic_factor"]
+        out[i, 2, 0] = fields["roughness_factor"]
+    return out
 
 
 class WorldBuffers:

@@ -222,3 +222,82 @@ def world_records(state: SceneState, slots: WorldSlots, poses: WorldPoses) -> np
     (what a batch of worlds' views read from their world's instance_base)."""
     models = world_models(state, slots, poses)
     return std140_pairs(models.reshape(-1, 4, 4))
+
+
+# Per-world material factors: the glTF factors a dataset randomises (what set_material sets).
+FACTOR_CHANNELS = {"base_color": (3, 4), "metallic": (1,), "roughness": (1,), "emissive": (3,)}
+
+
+@dataclass(frozen=True)
+class WorldMaterials:
+    """W worlds' factors of K named materials: `materials` (K,) indices into the scene's,
+    `values` {field: (W, K, channels) float64} for the fields given (base_color RGBA,
+    metallic, roughness, emissive), checked as set_material checks one."""
+
+    materials: np.ndarray
+    values: dict[str, np.ndarray]
+
+    @property
+    def count(self) -> int:
+        return len(next(iter(self.values.values())))
+
+    @staticmethod
+    def indices(state: SceneState, materials: Iterable[int | str]) -> np.ndarray:
+        """(K,) indices of the named materials (names or indices; UsageError for others)."""
+        return np.array([state._material_index(m) for m in materials], np.int64)
+
+    @classmethod
+    def of(cls, state: SceneState, materials: Iterable[int | str], given: Any) -> WorldMaterials:
+        idx = cls.indices(state, materials)
+        if len(idx) == 0:
+            raise UsageError("world_materials: name the materials first: "
+                             "renderer.world_slots(nodes, materials=['paint', ...])")
+        if not isinstance(given, dict) or not given:
+            raise UsageError("world_materials: a dict of base_color, metallic, roughness, "
+                             "emissive arrays, each (W, K[, channels])")
+        values: dict[str, np.ndarray] = {}
+        for field, value in given.items():
+            if field not in FACTOR_CHANNELS:
+                raise UsageError(f"world_materials: unknown factor {field!r} (choose "
+                                 f"{', '.join(FACTOR_CHANNELS)})")
+            values[field] = _factor_array(field, _array(f"world_materials[{field!r}]", value),
+                                          len(idx))
+        counts = {len(v) for v in values.values()}
+        if len(counts) != 1 or 0 in counts:
+            raise UsageError(f"world_materials: every factor needs the same number of worlds "
+                             f"(got {sorted(counts)})")
+        return cls(idx, values)
+
+
+def _factor_array(field: str, v: np.ndarray, k: int) -> np.ndarray:
+    sizes = FACTOR_CHANNELS[field]
+    if sizes == (1,) and v.ndim == 2:
+        v = v[..., None]
+    if v.ndim != 3 or v.shape[1] != k or v.shape[2] not in sizes:
+        shapes = " or ".join(f"(W, {k}{'' if c == 1 else f', {c}'})" for c in sizes)
+        raise UsageError(f"world_materials[{field!r}]: shape {tuple(v.shape)}, expected {shapes}")
+    if not np.isfinite(v).all():
+        raise UsageError(f"world_materials[{field!r}]: NaN or infinity")
+    if field == "emissive":
+        if (v < 0).any():
+            raise UsageError("world_materials['emissive']: must be >= 0")
+    elif ((v < 0) | (v > 1)).any():
+        raise UsageError(f"world_materials[{field!r}]: must be within [0, 1]")
+    if field == "base_color" and v.shape[2] == 3:
+        v = np.concatenate([v, np.ones(v.shape[:2] + (1,))], axis=2)
+    return v
+
+
+def factor_records(base: np.ndarray, wm: WorldMaterials) -> np.ndarray:
+    """(W * M, 3, 4) float32 WorldFactors records: every world's factors of all M materials,
+    `base` (M, 3, 4) (each material's own: base colour; emissive, metallic; roughness) with
+    the named materials' given fields replaced."""
+    w, m = wm.count, len(base)
+    out = np.broadcast_to(base, (w, m, 3, 4)).copy()
+    idx = wm.materials
+    slots = {"base_color": (0, slice(0, 4)), "emissive": (1, slice(0, 3)),
+             "metallic": (1, slice(3, 4)), "roughness": (2, slice(0, 1))}
+    for field, value in wm.values.items():
+        row, cols = slots[field]
+        out[:, idx, row, cols] = value
+    return out.reshape(w * m, 3, 4).astype(np.float32)
