@@ -66,6 +66,27 @@ def test_a_step_loop_rewrites_poses_in_place(renderer) -> None:  # noqa: ANN001
     assert not np.array_equal(frames[0], frames[1])
 
 
+def test_back_to_back_steps_keep_their_frames(renderer) -> None:  # noqa: ANN001
+    """Two steps submitted without waiting (the poses buffer rewritten right after the first
+    call returns): each step's tensor holds its own poses' frames (the GPU-side ordering of
+    render/cuda_order.py, where the driver shares semaphores)."""
+    import torch
+
+    r = renderer
+    buf = torch.zeros((4, 2, 7), device="cuda")
+    got = []
+    for seed in (5, 6, 7):
+        buf.copy_(torch.as_tensor(world_poses(4, seed=seed), device="cuda"))
+        got.append(r.render_batch(cameras(4), (W, H), worlds=buf, quaternion="wxyz",
+                                  device="cuda", pipeline="compute", **NO_SHADOWS))
+    # Where the driver shares semaphores (NVIDIA's), the steps were ordered on the GPU.
+    assert (r.batch_path.cuda_order is not None) == bool(r.device.external_semaphore_fd)
+    for seed, frames in zip((5, 6, 7), got, strict=True):
+        want = r.render_batch(cameras(4), (W, H), worlds=world_poses(4, seed=seed),
+                              quaternion="wxyz", pipeline="compute", **NO_SHADOWS)
+        assert np.mean(np.abs(frames.cpu().numpy().astype(int) - want)) <= 0.05, seed
+
+
 @pytest.mark.parametrize(("make", "message"), [
     (lambda t: t.full((2, 2, 7), float("nan"), device="cuda"), "NaN"),
     (lambda t: t.zeros((2, 2, 7), device="cuda"), "length 0"),

@@ -171,6 +171,7 @@ class WorldKernel:
         self._bound: tuple = ()
         self.generation = 0  # bumped when the sets change (recordings name them)
         self._imports: list[Any] = []  # gpu/cuda.py CudaImport of the inputs (cuda)
+        self.order: Any = None  # render/cuda_order.py CudaOrder of the call, if any
 
     def _own(self, obj: Any) -> Any:
         self._objects.append(obj)
@@ -248,11 +249,17 @@ class WorldKernel:
 
             index = cuda_device_for(self.device.uuid(), self.device.info.name)
             self._imports = [CudaImport(b.export_fd(), b.allocation_size, index) for b in self.inputs]
+        order = self.order
+        if order is not None:  # ordered on the GPU (render/cuda_order.py): no host wait
+            order.before_inputs()
         p = poses.reshape(-1)
         self._imports[0].tensor((p.numel(),), "<f4").copy_(p)
         if visible is not None:
             v = visible.reshape(-1)
             self._imports[1].tensor((v.numel(),), "<i4").copy_(v)
+        if order is not None:
+            order.inputs_written()
+            return
         event = torch.cuda.Event()
         event.record()
         event.synchronize()
