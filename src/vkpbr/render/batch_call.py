@@ -186,8 +186,8 @@ def _on_cuda(value: Any) -> bool:
 
 def _cuda_call(renderer: Any, views: int, worlds: Any, world_of_view: Any, quaternion: str,
                visible: Any) -> WorldCall:
-    """Worlds whose poses are CUDA tensors: checked on the GPU (one reduction, read back:
-    NaN, zero quaternions), then copied device to device into the kernel's inputs."""
+    """Worlds whose poses are CUDA tensors: shapes and dtypes checked here, the values by the
+    worlds kernel on the GPU; copied device to device into the kernel's inputs."""
     import torch
 
     slots = getattr(renderer, "_world_slots", None)
@@ -210,12 +210,9 @@ def _cuda_call(renderer: Any, views: int, worlds: Any, world_of_view: Any, quate
     if not worlds.is_floating_point():
         raise UsageError(f"worlds: a tensor of {worlds.dtype}; give float32 or float64")
     _same_gpu(renderer, worlds)
+    # NaN, infinity and zero quaternions are found by the worlds kernel on the GPU (no read
+    # back before the batch: render/worlds.py), their worlds' draws hidden and reported.
     p = worlds.detach().to(torch.float32).contiguous()
-    ok = torch.isfinite(p).all()
-    if floats == 7:
-        ok = ok & (p[..., 3:].square().sum(-1) > 1e-24).all()
-    if not bool(ok):  # (one read back: the checks' single bool)
-        raise UsageError("worlds: a pose holds NaN or infinity, or a quaternion of length 0")
     w = shape[0]
     shown = None
     if visible is not None:

@@ -389,9 +389,21 @@ class BatchPath:
         frame, cpu_ms = self._pending
         self._pending = None
         frame.wait()
+        self._world_errors(frame.index, "the last step's ")
         self._pending_stats = dataclasses.replace(
             read_timings(self.parts.ring, frame, self.parts.slots[frame.index]), cpu_ms=cpu_ms,
             wait_ms=0.0, readback_ms=0.0, driver_ms=0.0)
+
+    def _world_errors(self, slot: int, which: str) -> None:
+        """After a batch's fence: its worlds kernel's report of poses that are none (CUDA
+        tensors are not read back before the batch), as one UsageError line."""
+        if self.world_kernel is None:
+            return
+        count, world = self.world_kernel.take_errors(slot)
+        if count:
+            raise UsageError(f"worlds: {which}world {world} has a pose with NaN or infinity, or "
+                             f"a quaternion of length 0 ({count} draw records of such worlds "
+                             "were hidden)")
 
     def _world_key(self) -> tuple:
         """What a batch's recording of worlds depends on (nothing without worlds)."""
@@ -438,6 +450,7 @@ class BatchPath:
             self.stats = dataclasses.replace(self._pending_stats, cpu_ms=self._pending[1])
             return
         frame.wait()
+        self._world_errors(frame.index, "")
         # The Python side up to the submit and the readback are added by the caller
         # (`_timed`); the wait is this submission's.
         stats = dataclasses.replace(read_timings(p.ring, frame, p.slots[frame.index]),

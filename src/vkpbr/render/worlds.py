@@ -156,7 +156,8 @@ class WorldKernel:
     def __init__(self, device: Device, slots: int) -> None:
         self.device, self.slot_count = device, slots
         self._objects: list[Any] = []
-        names = ("WorldRecords", "WorldPoses", "WorldVisible", "WorldDraws", "WorldCovers")
+        names = ("WorldRecords", "WorldPoses", "WorldVisible", "WorldDraws", "WorldCovers",
+                 "WorldErrors")
         self.layout = self._own(DescriptorSetLayout(device, [
             BindingSpec(i, "storage", ("compute",), n) for i, n in enumerate(names)]))
         self.pipeline = self._own(ComputePipeline(device, SPV_DIR / "worlds.comp.spv",
@@ -171,6 +172,13 @@ class WorldKernel:
         self._bound: tuple = ()
         self.generation = 0  # bumped when the sets change (recordings name them)
         self._imports: list[Any] = []  # gpu/cuda.py CudaImport of the inputs (cuda)
+        # worlds.comp's report of poses that are none (count, lowest world), per slot
+        self._error_stride = max(8, int(device.limits.minStorageBufferOffsetAlignment))
+        self.errors = Buffer(device, self._error_stride * slots, "storage", host_visible=True,
+                             name="world errors")
+        self._errors = self.errors.array(np.uint32, self._error_stride // 4 * slots).reshape(
+            slots, -1)[:, :2]
+        self._errors[:] = (0, 0xFFFFFFFF)
         self.order: Any = None  # render/cuda_order.py CudaOrder of the call, if any
 
     def _own(self, obj: Any) -> Any:
@@ -202,6 +210,7 @@ class WorldKernel:
                 w.storage(dset, 0, buf, size, at)
                 for i, b in enumerate((*self.inputs, *self.tables)):
                     w.storage(dset, 1 + i, b)
+                w.storage(dset, 5, self.errors, 8, self._error_stride * slot)
             w.update()
             self._bound = bound
             self.generation += 1
@@ -227,6 +236,13 @@ class WorldKernel:
         self.tables[0].array(np.uint8, draws.nbytes)[:] = draws.view(np.uint8).ravel()
         self.tables[1].array(np.uint32, bits.size)[:] = bits.ravel()
         self._slots = slots
+
+    def take_errors(self, slot: int) -> tuple[int, int]:
+        """(records whose pose was none, the lowest such world) of slot `slot`'s last batch
+        (after its fence), and the report reset for its next."""
+        count, world = (int(x) for x in self._errors[slot])
+        self._errors[slot] = (0, 0xFFFFFFFF)
+        return count, world
 
     def write_numpy(self, poses: np.ndarray, visible: np.ndarray | None) -> None:
         """NumPy inputs: (W, N, 7 or 16) poses and (W, N) visibility into the host-visible
@@ -286,6 +302,7 @@ class WorldKernel:
 
     def destroy(self) -> None:
         self._close_imports()
+        self.errors.destroy()
         for b in (*self.inputs, *self.tables):
             b.destroy()
         self.inputs, self.tables = [], []

@@ -27,6 +27,10 @@ struct WorldDraw {
 layout(set = 0, binding = 3, std430) readonly buffer WorldDraws { WorldDraw world_draws[]; };
 // Per draw, covers_words words: bit n set where slot n is the draw's node or an ancestor.
 layout(set = 0, binding = 4, std430) readonly buffer WorldCovers { uint world_covers[]; };
+// Poses that are no pose (NaN, infinity, a zero quaternion; CUDA tensors are not read back
+// before the batch): how many (world, draw) records met one, and the lowest such world. Their
+// draws are hidden; the host reports the first after the batch (render/worlds.py).
+layout(set = 0, binding = 5, std430) buffer WorldErrors { uint world_errors[2]; };
 
 layout(push_constant, std430) uniform WorldsPush {
     uint worlds;
@@ -38,6 +42,19 @@ layout(push_constant, std430) uniform WorldsPush {
     uint covers_words;
     uint pad;
 } pc;
+
+bool pose_valid(uint w, uint n) {
+    uint at = (w * pc.slots + n) * pc.pose_floats;
+    for (uint k = 0u; k < pc.pose_floats; ++k) {
+        float x = world_poses[at + k];
+        if (isnan(x) || isinf(x)) return false;
+    }
+    if (pc.pose_floats == 7u) {
+        vec4 q = vec4(world_poses[at + 3u], world_poses[at + 4u], world_poses[at + 5u], world_poses[at + 6u]);
+        return dot(q, q) >= 1e-24;
+    }
+    return true;
+}
 
 mat4 pose_of(uint w, uint n) {
     uint at = (w * pc.slots + n) * pc.pose_floats;
@@ -98,6 +115,13 @@ void main() {
     if (wd.anchor < 0) {
         world_records[out_at] = base;
         world_records[out_at + 1u] = world_records[2u * d + 1u];
+        return;
+    }
+    if (!pose_valid(w, uint(wd.anchor))) {  // hidden, and reported
+        atomicAdd(world_errors[0], 1u);
+        atomicMin(world_errors[1], w);
+        world_records[out_at] = mat4(0.0);
+        world_records[out_at + 1u] = mat4(vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0, 0.0, 0.0, 1.0));
         return;
     }
     mat4 pose = pose_of(w, uint(wd.anchor));
