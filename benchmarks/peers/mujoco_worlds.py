@@ -36,7 +36,6 @@ import importlib.metadata
 from pathlib import Path
 
 import numpy as np
-
 import worlds_common as c
 
 
