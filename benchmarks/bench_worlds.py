@@ -86,7 +86,8 @@ def row_args(args: argparse.Namespace, size: tuple[int, int], worlds: int, mode:
     """The Namespace worlds_common.report reads, for one row."""
     png = None
     if args.png_dir:
-        png = str(Path(args.png_dir) / f"vkpbr-{args.variant}-{size[0]}x{size[1]}-{worlds}-{mode}.png")
+        tag = mode.replace(" -> ", "-into-").replace(" ", "-")
+        png = str(Path(args.png_dir) / f"vkpbr-{args.variant}-{size[0]}x{size[1]}-{worlds}-{tag}.png")
     return argparse.Namespace(variant=args.variant, width=size[0], height=size[1], worlds=worlds,
                               steps=args.steps, reps=args.reps, device="cuda" if "torch" in mode or
                               mode == "worlds" else "cpu", json=args.json, png=png)

@@ -49,4 +49,8 @@ for p in "${pieces[@]}"; do
 done
 (cd "$tmp" && sha256sum worlds-site.tar.xz | sed 's/ .*//') > "$OUTDIR/last/worlds-site.sha256"
 printf '%s\n' "${PKGS[@]}" > "$OUTDIR/last/worlds-site.txt"
-du -sh "$OUTDIR/stage" "$OUTDIR/last"
+# The two sample models of the full tabletop (tabletop.MODELS), for STEP=sapien's carry.
+ASSETS=${VKPBR_ASSETS:-../shared/assets}
+mkdir -p .assets-worlds/models
+for m in DamagedHelmet CesiumMilkTruck; do cp -r "$ASSETS/$m" .assets-worlds/models/; done
+du -sh "$OUTDIR/stage" "$OUTDIR/last" .assets-worlds
