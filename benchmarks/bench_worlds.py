@@ -149,7 +149,7 @@ def record(r: Renderer, args, world, size, w, mode, step, poses, sync, baseline,
         return out
 
     t = time.perf_counter()
-    vps, host_us = c.time_steps(timed, poses, args.reps, sync)
+    vps, host_us = c.time_steps(timed, poses, args.reps, sync, worlds=w)
     mib = (r.device.bytes_allocated()[0] - baseline) / 2**20
     a = row_args(args, size, w, mode)
     c.report(a, "vkpbr", "main", world, vps, host_us, r.device.info.name, mode, first(timed.out),

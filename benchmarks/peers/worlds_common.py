@@ -94,9 +94,11 @@ def poses_sha1(world: tabletop.Tabletop, worlds: int) -> str:
     return hashlib.sha1(np.ascontiguousarray(first, "<f4").tobytes()).hexdigest()
 
 
-def time_steps(step: Callable[[object], object], poses, reps: int, sync: Callable[[], None]) -> tuple[float, float]:  # noqa: ANN001
+def time_steps(step: Callable[[object], object], poses, reps: int, sync: Callable[[], None],  # noqa: ANN001
+               worlds: int | None = None) -> tuple[float, float]:
     """(world-views/s, host us/step) of `step(poses[s])` over `reps` passes of the S steps,
-    after WARM_UP untimed steps; `sync` waits for the device."""
+    after WARM_UP untimed steps; `sync` waits for the device. A step renders `worlds` views
+    (default: poses.shape[1], the W of (S, W, N, 7) poses)."""
     count = len(poses)
     for s in range(WARM_UP):
         step(poses[s % count])
@@ -110,7 +112,7 @@ def time_steps(step: Callable[[object], object], poses, reps: int, sync: Callabl
             host += time.perf_counter() - t
     sync()
     wall = time.perf_counter() - t0
-    worlds = poses.shape[1]
+    worlds = poses.shape[1] if worlds is None else worlds
     return worlds * count * reps / wall, host / (count * reps) * 1e6
 
 
