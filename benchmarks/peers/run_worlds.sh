@@ -15,13 +15,17 @@
 #                them into /tmp/worlds-site, then vkpbr, MuJoCo Warp's renderer and
 #                mujoco-warp-pbr (tiled and world order) on the primitives-only tabletop.
 # WORLDS (default 1024,4096) and SIZES (default 128x128) choose the rows; RUN_TIMEOUT (s) caps
-# each run.
+# each run; BUDGET (s, default 540: one device call has 600) skips what would start later, one
+# line each; SHADOW_WORLDS (default the last W) the W values of SAPIEN's run with shadow maps
+# (SAPIEN_SHADOW_MAP, default 1024: one map a sub-scene, 4 MiB each, 16 GiB for 4,096 worlds).
 set -uo pipefail
 STEP=${STEP:-sapien}
 OUT=${OUT:-out/worlds}
 WORLDS=${WORLDS:-1024,4096}
 SIZES=${SIZES:-128x128}
-RUN_TIMEOUT=${RUN_TIMEOUT:-240}
+RUN_TIMEOUT=${RUN_TIMEOUT:-150}
+BUDGET=${BUDGET:-540}
+SHADOW_WORLDS=${SHADOW_WORLDS:-${WORLDS##*,}}
 mkdir -p "$OUT" /tmp/worlds-png
 LOG=$OUT/worlds-$STEP.log
 export VKPBR_ASSETS=$PWD/.assets-worlds/models
@@ -37,8 +41,12 @@ first_w=${WORLDS%%,*}
 first_size=${SIZES%%,*}
 peer_runs() {  # script, label, then its extra arguments: every W and size
   local script=$1 label=$2; shift 2
-  for w in ${WORLDS//,/ }; do
+  for w in ${RUN_WORLDS:-${WORLDS//,/ }}; do
     for size in ${SIZES//,/ }; do
+      if (( SECONDS > BUDGET )); then
+        echo "| $label | $size | $w | skipped: past BUDGET=$BUDGET s of this call |"
+        continue
+      fi
       png=()
       [ "$w" = "$first_w" ] && [ "$size" = "$first_size" ] && png=(--png "/tmp/worlds-png/$label.png")
       timeout "$RUN_TIMEOUT" python3 "benchmarks/peers/$script" --worlds "$w" --size "$size" \
@@ -80,7 +88,8 @@ if [ "$STEP" = sapien ]; then
   for t in .whl-sapien/*.tar.xz; do tar -xJf "$t" -C /tmp/peers; done
   export PYTHONPATH=/tmp/peers:$PYTHONPATH
   peer_runs sapien_worlds.py sapien --variant tabletop --shadows 0
-  first_w=none peer_runs sapien_worlds.py sapien-shadows --variant tabletop --shadows 2048
+  first_w=none RUN_WORLDS=${SHADOW_WORLDS//,/ } peer_runs sapien_worlds.py sapien-shadows \
+    --variant tabletop --shadows "${SAPIEN_SHADOW_MAP:-1024}"
 elif [ "$STEP" = mujoco ]; then
   pieces=$(printf '%s\n' /tmp/worlds-stage/worlds-site.tar.xz.* .whl-worlds/last/worlds-site.tar.xz.* \
     | awk -F/ '{print $NF " " $0}' | sort | cut -d' ' -f2)
