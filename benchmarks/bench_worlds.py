@@ -7,6 +7,10 @@ bodies posed anew every step, S distinct steps made before the clock starts).
 
 Rows (one per variant, size, W and mode; a Markdown table, and JSON lines as the peers'):
 
+Variants: the tabletop (full, or primitives only) and "helmet": DamagedHelmet alone, its mesh
+node turning per world (tabletop.Spin), the camera 3 units away (issue 32's worlds-helmet-64:
+`--variant helmet --worlds 8192 --sizes 64x64`).
+
 - "one state" (today's API): each step sets ONE world's poses (world 0's, from NumPy:
   `Renderer.set_poses(MOVING, poses, quaternion="xyzw")`, local to the glTF's z-up root, so the
   simulator's rows as they are) and renders the W views with `render_batch` (into NumPy, and
@@ -71,7 +75,8 @@ def render_worlds(r: Renderer, views: CameraBatch, size: tuple[int, int], poses,
 
 def parse() -> argparse.Namespace:
     ap = argparse.ArgumentParser(description="vkpbr on the tabletop worlds: world-views/s")
-    ap.add_argument("--variant", choices=("tabletop", "primitives"), default="tabletop")
+    ap.add_argument("--variant", choices=("tabletop", "primitives", "helmet"), default="tabletop",
+                    help="helmet: DamagedHelmet alone, turning (tabletop.Spin), camera 3 units away")
     ap.add_argument("--worlds", default="1024,4096", help="comma-separated W values")
     ap.add_argument("--sizes", default="128x128,256x256", help="comma-separated WIDTHxHEIGHT")
     ap.add_argument("--steps", type=int, default=16, help="distinct pose steps made beforehand")
@@ -93,45 +98,62 @@ def row_args(args: argparse.Namespace, size: tuple[int, int], worlds: int, mode:
                               mode == "worlds" else "cpu", json=args.json, png=png)
 
 
-def run(args: argparse.Namespace) -> None:
-    world = c.world_of(args)
-    folder = Path(args.scene_dir or tempfile.mkdtemp(prefix="tabletop-"))
+def scene_of(args: argparse.Namespace):  # noqa: ANN201
+    """(scene, slots, camera pose (4, 4) OpenGL, yfov degrees, motion(W), sha source(W)) of the
+    variant: the tabletop's 17 moving nodes, or the helmet's mesh node."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
+        if args.variant == "helmet":
+            scene = load_scene(tabletop.assets_dir() / "DamagedHelmet/glTF/DamagedHelmet.gltf")
+            tree = scene.node_tree()
+            slots = [n.tree for n in scene.nodes if n.mesh is not None][:1]
+            m = tree.local[slots[0]]
+            rest = np.array([[*m[:3, 3], *tabletop.matrix_quat(m[:3, :3])]])
+            eye = tabletop.look_at((0.0, 0.0, 3.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+            spin = lambda w: tabletop.Spin(rest, w)  # noqa: E731
+            return scene, slots, eye, 45.0, spin, spin
+        world = c.world_of(args)
+        folder = Path(args.scene_dir or tempfile.mkdtemp(prefix="tabletop-"))
         scene = load_scene(tabletop.write_gltf(world, folder))
+        return (scene, list(tabletop.MOVING), tabletop.camera_gltf(world), world.yfov_deg,
+                lambda w: tabletop.Motion(world, w), lambda w: world)
+
+
+def run(args: argparse.Namespace) -> None:
+    scene, names, eye, yfov, motion, sha = scene_of(args)
     torch = torch_cuda()
     print("| peer | variant | size | W | world-views/s | host us/step | GPU MiB | mode |")
     print("|---|---|---|---|---|---|---|---|")
     with Renderer(scene) as r:
         r.render(size=(64, 64))  # the scene's own buffers, pipelines and environment
         baseline = r.device.bytes_allocated()[0]
-        slots = r.world_slots(list(tabletop.MOVING)) if hasattr(r, "world_slots") else None
+        slots = r.world_slots(names) if hasattr(r, "world_slots") else None
         for size in [tuple(int(v) for v in s.lower().split("x")) for s in args.sizes.split(",")]:
             for w in [int(v) for v in args.worlds.split(",")]:
-                views = CameraBatch.from_poses(np.repeat(tabletop.camera_gltf(world)[None], w, 0),
-                                               world.yfov_deg)
-                one_state(r, args, world, views, size, w, baseline, torch)
+                views = CameraBatch.from_poses(np.repeat(eye[None], w, 0), yfov)
+                row = (r, args, sha(w), size, w)
+                one_state(*row, views, names, motion(w), baseline, torch)
                 if torch is None:
                     continue
                 if not has_worlds(r):
                     print(f"skipped worlds {size[0]}x{size[1]} W={w}: render_batch has no worlds= yet "
                           "(render_worlds in this file)", file=sys.stderr)
                     continue
-                poses = c.pose_steps(row_args(args, size, w, "worlds"), world, "xyzw", "cuda")
+                poses = motion(w).steps(args.steps, "xyzw", "cuda")
                 step = lambda p, v=views, s=size: render_worlds(r, v, s, p, slots)  # noqa: E731
-                record(r, args, world, size, w, "worlds", step, poses, torch.cuda.synchronize, baseline,
+                record(*row, "worlds", step, poses, torch.cuda.synchronize, baseline,
                        lambda out: out[0].cpu().numpy())
 
 
-def one_state(r: Renderer, args, world, views, size, w, baseline, torch) -> None:  # noqa: ANN001
+def one_state(r: Renderer, args, world, size, w, views, names, motion, baseline, torch) -> None:  # noqa: ANN001
     """Today's API: world 0's poses set from NumPy each step, W views of that one state."""
-    poses = c.pose_steps(row_args(args, size, w, "one"), world, "xyzw", "numpy")[:, 0]
+    poses = motion.steps(args.steps, "xyzw")[:, 0]
     modes = [("one state -> numpy", "cpu", lambda: None)]
     if torch is not None:
         modes.append(("one state -> torch", "cuda", torch.cuda.synchronize))
     for mode, device, sync in modes:
         def step(p, device=device):  # noqa: ANN001, ANN202
-            r.set_poses(list(tabletop.MOVING), p, quaternion="xyzw")
+            r.set_poses(names, p, quaternion="xyzw")
             return r.render_batch(views, size=size, device=device)
 
         record(r, args, world, size, w, mode, step, poses, sync, baseline,

@@ -354,7 +354,77 @@ def camera_gltf(world: Tabletop) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------
 # Motion: what a simulator would write every step
 
-class Motion:
+class _Steps:
+    """What the motions share: several steps at once, and the arrays on a device."""
+
+    params: dict[str, np.ndarray]
+    _on: dict[str, dict]
+
+    def _arrays(self, device: str | None):  # noqa: ANN202
+        if device is None:
+            return np, self.params
+        import torch
+
+        if device not in self._on:  # float64 on the device: the same numbers as NumPy's
+            self._on[device] = {n: torch.as_tensor(a, dtype=torch.float64, device=device)
+                                for n, a in self.params.items()}
+        return torch, self._on[device]
+
+    def poses(self, step: int, quaternion: str = "wxyz", device: str | None = None):  # noqa: ANN201
+        raise NotImplementedError
+
+    def steps(self, count: int, quaternion: str = "wxyz", device: str | None = None, start: int = 0):  # noqa: ANN201
+        """(count, W, N, 7): `count` consecutive steps, made before a timed loop so that the
+        loop measures the renderer, not this (a simulator's step is its own cost)."""
+        frames = [self.poses(start + s, quaternion, device) for s in range(count)]
+        if device is None:
+            return np.stack(frames)
+        import torch
+
+        return torch.stack(frames)
+
+
+def _rows(xp, p, q, quaternion: str):  # noqa: ANN001, ANN202
+    """(..., 7) float32 rows of positions and x, y, z, w quaternions, in `quaternion` order."""
+    if quaternion not in ("xyzw", "wxyz"):
+        raise ValueError(f"quaternion {quaternion!r}: choose 'xyzw' or 'wxyz'")
+    if quaternion == "wxyz":
+        q = q[..., [3, 0, 1, 2]]
+    out = xp.concatenate([p, q], -1) if xp is np else xp.cat([p, q], -1)
+    return out.astype(np.float32) if xp is np else out.float()
+
+
+class Spin(_Steps):
+    """Objects turning in place, each world its own way (the helmet worlds of issue 32): node
+    n of world w turns about a random axis (uniform on the sphere) at 0.5 to 2 rad/s from a
+    random angle, about its rest pose `rest` ((N, 7) position + quaternion x, y, z, w: the
+    rows of its local transform), and drifts up to `drift` (0.1) along x and y. poses(step) as
+    Motion's."""
+
+    def __init__(self, rest: np.ndarray, worlds: int, seed: int = SEED, dt: float = DT,
+                 drift: float = 0.1) -> None:
+        rest = np.asarray(rest, np.float64).reshape(-1, 7)
+        rng = np.random.default_rng([seed, 64])
+        n = len(rest)
+        axis = rng.normal(size=(worlds, n, 3))
+        self.worlds, self.dt, self._on = worlds, dt, {}
+        self.params = {"axis": axis / np.linalg.norm(axis, axis=-1, keepdims=True),
+                       "rate": rng.uniform(0.5, 2.0, (worlds, n)) * rng.choice([-1, 1], (worlds, n)),
+                       "angle": rng.uniform(0, 2 * np.pi, (worlds, n)),
+                       "offset": np.concatenate([rng.uniform(-drift, drift, (worlds, n, 2)),
+                                                 np.zeros((worlds, n, 1))], -1),
+                       "rest": np.broadcast_to(rest, (worlds, n, 7)).copy()}
+
+    def poses(self, step: int, quaternion: str = "wxyz", device: str | None = None):  # noqa: ANN201
+        xp, a = self._arrays(device)
+        half = (a["angle"] + a["rate"] * step * self.dt) / 2
+        s = xp.sin(half)
+        turn = _stack(xp, [a["axis"][..., 0] * s, a["axis"][..., 1] * s, a["axis"][..., 2] * s, xp.cos(half)])
+        q = qmul(xp, turn, a["rest"][..., 3:])
+        return _rows(xp, a["rest"][..., :3] + a["offset"], q, quaternion)
+
+
+class Motion(_Steps):
     """Per-world motion of the 17 moving bodies, drawn once from `seed`:
 
     - the arm: joint j at ARM_REST[j] + a_wj sin(2 pi f_wj t + phi_wj), amplitudes 0.5 to 1
@@ -390,22 +460,10 @@ class Motion:
         }
         self._on: dict[str, dict] = {}
 
-    def _arrays(self, device: str | None):  # noqa: ANN202
-        if device is None:
-            return np, self.params
-        import torch
-
-        if device not in self._on:  # float64 on the device: the same numbers as NumPy's
-            self._on[device] = {n: torch.as_tensor(a, dtype=torch.float64, device=device)
-                                for n, a in self.params.items()}
-        return torch, self._on[device]
-
     def poses(self, step: int, quaternion: str = "wxyz", device: str | None = None):  # noqa: ANN201
         """(W, N, 7) float32 poses at time step * dt: link0..link6 then obj0..obj9, each
         position + quaternion in `quaternion` order ("xyzw" or "wxyz"). A torch tensor on
         `device` when one is given (computed there), else a NumPy array."""
-        if quaternion not in ("xyzw", "wxyz"):
-            raise ValueError(f"quaternion {quaternion!r}: choose 'xyzw' or 'wxyz'")
         xp, a = self._arrays(device)
         t = step * self.dt
         angles = a["q0"] + a["amp"] * xp.sin(a["freq"] * t + a["phase"])
@@ -417,20 +475,8 @@ class Motion:
         obj_q = qmul(xp, yaw, a["rest"][..., 1:])
         p = xp.concatenate([arm_p, obj_p], 1) if xp is np else xp.cat([arm_p, obj_p], 1)
         q = xp.concatenate([arm_q, obj_q], 1) if xp is np else xp.cat([arm_q, obj_q], 1)
-        if quaternion == "wxyz":
-            q = q[..., [3, 0, 1, 2]]
-        out = xp.concatenate([p, q], -1) if xp is np else xp.cat([p, q], -1)
-        return out.astype(np.float32) if xp is np else out.float()
+        return _rows(xp, p, q, quaternion)
 
-    def steps(self, count: int, quaternion: str = "wxyz", device: str | None = None, start: int = 0):  # noqa: ANN201
-        """(count, W, N, 7): `count` consecutive steps, made before a timed loop so that the
-        loop measures the renderer, not this (a simulator's step is its own cost)."""
-        frames = [self.poses(start + s, quaternion, device) for s in range(count)]
-        if device is None:
-            return np.stack(frames)
-        import torch
-
-        return torch.stack(frames)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -584,7 +630,7 @@ def _add_camera_and_light(doc: dict, world: Tabletop, root: dict) -> None:
         "yfov": math.radians(world.yfov_deg), "znear": 0.05}}]
     cam = world.camera
     doc["nodes"].append({"name": "camera", "camera": 0, "translation": cam[:3, 3].tolist(),
-                         "rotation": _matrix_quat(cam[:3, :3]).tolist()})
+                         "rotation": matrix_quat(cam[:3, :3]).tolist()})
     d = np.asarray(world.light_direction, np.float64)
     d /= np.linalg.norm(d)
     # a directional light shines down its node's -z: turn -z onto d
@@ -595,12 +641,12 @@ def _add_camera_and_light(doc: dict, world: Tabletop, root: dict) -> None:
     doc["extensionsUsed"] = sorted(set(doc.get("extensionsUsed", [])) | {"KHR_lights_punctual"})
     doc.setdefault("extensions", {})["KHR_lights_punctual"] = {"lights": [
         {"name": "sun", "type": "directional", "color": [1.0, 0.97, 0.92], "intensity": world.light_lux}]}
-    doc["nodes"].append({"name": "sun", "rotation": _matrix_quat(rot).tolist(),
+    doc["nodes"].append({"name": "sun", "rotation": matrix_quat(rot).tolist(),
                          "extensions": {"KHR_lights_punctual": {"light": 0}}})
     root["children"] += [len(doc["nodes"]) - 2, len(doc["nodes"]) - 1]
 
 
-def _matrix_quat(r: np.ndarray) -> np.ndarray:
+def matrix_quat(r: np.ndarray) -> np.ndarray:
     """Unit quaternion x, y, z, w of a rotation matrix (Shepperd's method)."""
     t = np.trace(r)
     if t > 0:

@@ -88,9 +88,11 @@ def pose_steps(args: argparse.Namespace, world: tabletop.Tabletop, quaternion: s
     return motion.steps(args.steps, quaternion, None if device == "numpy" else device)
 
 
-def poses_sha1(world: tabletop.Tabletop, worlds: int) -> str:
-    """SHA-1 of step 0's poses (x, y, z, qx, qy, qz, qw as little-endian float32)."""
-    first = tabletop.Motion(world, worlds).poses(0, "xyzw")
+def poses_sha1(world: tabletop.Tabletop | tabletop.Spin, worlds: int) -> str:
+    """SHA-1 of step 0's poses (x, y, z, qx, qy, qz, qw as little-endian float32) of the
+    tabletop's Motion, or of a motion given as is."""
+    motion = world if isinstance(world, tabletop.Spin) else tabletop.Motion(world, worlds)
+    first = motion.poses(0, "xyzw")
     return hashlib.sha1(np.ascontiguousarray(first, "<f4").tobytes()).hexdigest()
 
 
@@ -130,7 +132,7 @@ def gpu_mib() -> float | None:
         return None
 
 
-def report(args: argparse.Namespace, peer: str, version: str, world: tabletop.Tabletop,
+def report(args: argparse.Namespace, peer: str, version: str, world: tabletop.Tabletop | tabletop.Spin,
            views_per_s: float, host_us: float, gpu: str | None, settings: str,
            image: np.ndarray | None = None, extra: dict | None = None) -> dict:
     """Print one Markdown row, append the JSON line to --json, save --png."""

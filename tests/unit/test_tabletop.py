@@ -131,3 +131,18 @@ def test_mjcf_refuses_the_world_with_models(tmp_path: Path) -> None:
     world = tt.make_tabletop(models=("DamagedHelmet",))
     with pytest.raises(ValueError, match="primitives-only"):
         tt.write_mjcf(world, tmp_path / "x.xml")
+
+
+def test_spin_turns_each_world_about_its_own_axis() -> None:
+    rest = np.array([[0.1, 0.2, 0.3, *tt.matrix_quat(tt.quat_matrix(np.array([0.5, 0.5, 0.5, 0.5])))]])
+    spin = tt.Spin(rest, 32)
+    a = spin.poses(9, quaternion="xyzw")
+    assert a.shape == (32, 1, 7) and a.dtype == np.float32
+    np.testing.assert_array_equal(a, tt.Spin(rest, 32).poses(9, "xyzw"))
+    np.testing.assert_allclose(np.linalg.norm(a[..., 3:], axis=-1), 1.0, atol=1e-6)
+    assert np.all(np.abs(a[..., :2] - rest[0, :2]) <= 0.1 + 1e-6) and np.allclose(a[..., 2], 0.3)
+    # rotation = turn about the world's axis, then the rest rotation: the turn keeps its axis
+    turn = tt.quat_matrix(a[:, 0, 3:].astype(np.float64)) @ tt.quat_matrix(rest[0, 3:]).T
+    axis = spin.params["axis"][:, 0]
+    np.testing.assert_allclose(np.einsum("wij,wj->wi", turn, axis), axis, atol=1e-5)
+    assert np.ptp(a[:, 0, 3:], axis=0).max() > 0.3  # the worlds differ
