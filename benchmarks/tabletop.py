@@ -12,6 +12,7 @@ directional light and the sky. W worlds share it all but the poses of N = 17 mov
     motion = Motion(world, worlds=4096)             # per-world joint phases, object paths
     poses = motion.poses(step=10, quaternion="wxyz")          # (W, N, 7) float32, NumPy
     poses = motion.poses(10, "wxyz", device="cuda")           # the same numbers, a torch tensor
+    spin = Spin(rest_rows, worlds=8192)             # any objects turning in place (the helmet worlds)
 
 Frames and conventions:
 - The world is z-up, in metres (MuJoCo, SAPIEN, ROS). A pose row is position (x, y, z) then
@@ -662,10 +663,6 @@ def matrix_quat(r: np.ndarray) -> np.ndarray:
     return q / np.linalg.norm(q)
 
 
-_OFFSET_KEYS = {"buffer": "buffers", "bufferView": "bufferViews", "sampler": "samplers",
-                "source": "images", "mesh": "meshes", "material": "materials"}
-
-
 def _merge_model(doc: dict, buf: _Bin, shape: Shape, folder: Path) -> int:
     """Copy a sample model into the document: its buffers, views, accessors, images,
     samplers, textures, materials, meshes and the nodes of its scene, with every index
@@ -814,8 +811,11 @@ def main() -> None:
     ap.add_argument("--primitives", action="store_true",
                     help="boxes, spheres and capsules only (no sample models): also writes tabletop.xml")
     args = ap.parse_args()
-    world = make_tabletop(args.seed, () if args.primitives else tuple(MODELS))
-    print(write_gltf(world, args.out))
+    try:
+        world = make_tabletop(args.seed, () if args.primitives else tuple(MODELS))
+        print(write_gltf(world, args.out))
+    except (FileNotFoundError, ValueError) as e:
+        raise SystemExit(f"tabletop.py: {e}") from None
     if world.primitives_only:
         print(write_mjcf(world, Path(args.out) / "tabletop.xml"))
 
