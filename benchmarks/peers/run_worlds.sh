@@ -101,7 +101,7 @@ elif [ "$STEP" = mujoco ]; then
   fi
   mkdir -p /tmp/worlds-site && tar -xJf /tmp/worlds-site.tar.xz -C /tmp/worlds-site
   vkpbr_rows primitives
-  export PYTHONPATH=/tmp/worlds-site:$PYTHONPATH
+  export PYTHONPATH=/tmp/worlds-site:$PYTHONPATH MUJOCO_GL=disable  # no GL context: Warp renders
   peer_runs mujoco_worlds.py mujoco-warp --renderer mjwarp
   peer_runs mujoco_worlds.py mujoco-warp-pbr --renderer pbr --render-order tiled
   first_w=none peer_runs mujoco_worlds.py mujoco-warp-pbr-world --renderer pbr --render-order world
