@@ -16,9 +16,8 @@ node turning per world (tabletop.Spin), the camera 3 units away (issue 32's worl
   simulator's rows as they are) and renders the W views with `render_batch` (into NumPy, and
   into torch on the GPU where torch sees CUDA). Every view shows world 0: the ceiling of the
   pose upload of one world plus W views, not yet W different worlds.
-- "worlds" (issue 32's API, finished by the lead: the marked function `render_worlds`): each
-  step hands the (W, N, 7) CUDA tensor of all W worlds to `render_batch(worlds=...)`, views
-  into torch. Skipped, saying so, while `render_batch` has no `worlds=`.
+- "worlds" (issue 32's API, `render_worlds`): each step hands the (W, N, 7) CUDA tensor of
+  all W worlds to `render_batch(worlds=..., space="local")`, views into torch.
 
 Columns: world-views/s (W x steps / wall clock, the device synchronised at the end), host
 us/step (Python time of a step's calls), GPU ms/step (`last_stats.gpu_ms`), vkpbr MiB (device
@@ -64,13 +63,14 @@ def has_worlds(r: Renderer) -> bool:
 
 
 def render_worlds(r: Renderer, views: CameraBatch, size: tuple[int, int], poses, slots):  # noqa: ANN001, ANN201
-    # ---- LEAD: the worlds= call goes here (issue 32, must-haves 1 and 2) -------------------------
     # `poses`: this step's (W, N, 7) float32 CUDA tensor, rows position + quaternion x, y, z, w
-    # for tabletop.MOVING in order (local to the glTF's root = the simulator's z-up world);
-    # `slots`: what `r.world_slots(list(tabletop.MOVING))` returned. View w sees world w
-    # (B == W, so world_of_view is left out). Adjust the names to the final API.
-    return r.render_batch(views, size=size, worlds=poses, quaternion="xyzw", device="cuda")
-    # ----------------------------------------------------------------------------------------------
+    # for tabletop.MOVING in order, local to the glTF's root (the simulator's z-up world:
+    # space="local"); `slots`: what `r.world_slots(list(tabletop.MOVING))` named. View w sees
+    # world w (B == W, so world_of_view is left out).
+    # shadows off: a batch of worlds draws the state's shadow maps, which do not follow the
+    # worlds (docs/batch.md), and SAPIEN's camera group draws none by default
+    return r.render_batch(views, size=size, worlds=poses, quaternion="xyzw", space="local",
+                          device="cuda", shadows=False)
 
 
 def parse() -> argparse.Namespace:

@@ -36,7 +36,7 @@ from vkpbr.scene.worlds import WorldSlots
 
 __all__ = ["WorldBuffers", "WorldCall", "GpuWorlds", "WorldKernel"]
 
-_DRAW_BYTES = 80  # worlds.comp WorldDraw: mat4 relative, int anchor, uint identity, covers_at, pad
+_DRAW_BYTES = 144  # worlds.comp WorldDraw: mat4 relative, mat4 frame, int anchor, uint identity, covers_at, pad
 
 
 @dataclass(frozen=True)
@@ -52,11 +52,13 @@ class GpuWorlds:
     has_visible: bool
     fill: Callable[[Any], None]
     cuda: bool = False  # the inputs come from CUDA tensors (exported memory)
+    local: bool = False  # poses relative to each node's parent in the state (WorldSlots.frame)
 
     @property
     def key(self) -> tuple:
         """What the recorded commands depend on (the kernel's push constants)."""
-        return ("gpu", self.worlds, len(self.slots), self.pose_floats, self.wxyz, self.has_visible)
+        return ("gpu", self.worlds, len(self.slots), self.pose_floats, self.wxyz, self.has_visible,
+                self.local)
 
 
 @dataclass(frozen=True)
@@ -219,10 +221,13 @@ class WorldKernel:
     def _write_tables(self, slots: WorldSlots) -> None:
         d = len(slots.anchor)
         words = -(-len(slots) // 32)
-        draws = np.zeros(max(d, 1), np.dtype([("relative", "<f4", (4, 4)), ("anchor", "<i4"),
-                                              ("identity", "<u4"), ("covers_at", "<u4"),
-                                              ("pad", "<u4")]))
+        draws = np.zeros(max(d, 1), np.dtype([("relative", "<f4", (4, 4)), ("frame", "<f4", (4, 4)),
+                                              ("anchor", "<i4"), ("identity", "<u4"),
+                                              ("covers_at", "<u4"), ("pad", "<u4")]))
         draws["relative"][:d] = np.swapaxes(slots.relative, -1, -2)  # GLSL columns
+        has = slots.anchor >= 0
+        draws["frame"][:d] = np.eye(4, dtype=np.float32)
+        draws["frame"][:d][has] = np.swapaxes(slots.frame[slots.anchor[has]], -1, -2)
         draws["anchor"][:d] = slots.anchor
         draws["identity"][:d] = slots.identity
         draws["covers_at"][:d] = np.arange(d) * words
@@ -284,7 +289,7 @@ class WorldKernel:
         """The batch's first step: every world's records from its poses, then a barrier
         (compute writes -> the culling kernel's, vertex shaders' and compute reads)."""
         push = np.array([gw.worlds, len(gw.slots), draws, gw.pose_floats, int(gw.wxyz),
-                         int(gw.has_visible), -(-len(gw.slots) // 32), 0], np.uint32)
+                         int(gw.has_visible), -(-len(gw.slots) // 32), int(gw.local)], np.uint32)
 
         def record(cmd: Commands) -> None:
             cmd.bind_pipeline(self.pipeline)

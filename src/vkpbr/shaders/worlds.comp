@@ -19,6 +19,7 @@ layout(set = 0, binding = 1, std430) readonly buffer WorldPoses { float world_po
 layout(set = 0, binding = 2, std430) readonly buffer WorldVisible { uint world_visible[]; };
 struct WorldDraw {
     mat4 relative;  // model = pose * relative
+    mat4 frame;  // local poses: the anchor's parent's world matrix in the state (model = frame * pose * relative)
     int anchor;  // the slot the draw hangs from, -1: none (the state's record in every world)
     uint identity;  // relative is the identity: model = pose
     uint covers_at;  // its first word in WorldCovers
@@ -40,7 +41,7 @@ layout(push_constant, std430) uniform WorldsPush {
     uint wxyz;  // quaternion order: 1 w, x, y, z; 0 x, y, z, w
     uint has_visible;
     uint covers_words;
-    uint pad;
+    uint local;  // poses relative to the node's parent (WorldDraw.frame), else world poses
 } pc;
 
 bool pose_valid(uint w, uint n) {
@@ -125,6 +126,7 @@ void main() {
         return;
     }
     mat4 pose = pose_of(w, uint(wd.anchor));
+    if (pc.local != 0u) pose = wd.frame * pose;
     mat4 model = wd.identity != 0u ? pose : pose * wd.relative;
     world_records[out_at] = model;
     world_records[out_at + 1u] = normal_of(model);
