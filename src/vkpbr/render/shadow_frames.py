@@ -17,6 +17,7 @@ from vkpbr.render import layouts as L
 from vkpbr.render.frames import FrameSlot
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.recorder import FrameRecorder
+from vkpbr.render.shadow_raster import wants_compute
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
 from vkpbr.scene.types import Camera, Light
 
@@ -48,7 +49,18 @@ class ShadowFrames:
         """The frame's plan, with maps of `options`' resolution that hold it."""
         plan = self.plan(lights, options)
         self.ensure(plan, options)
+        self.choose_raster(options)
         return plan
+
+    def choose_raster(self, options: RenderOptions) -> None:
+        """Draw the maps by compute shaders or the raster units, as `options` say
+        (shadow_raster.wants_compute); a change drops the recordings made the other way."""
+        compute = wants_compute(options.shadow_raster, self.maps.device)
+        if compute != self.maps.compute:
+            self.maps.device.wait_idle()  # recordings in flight are freed
+            self.maps.compute = compute
+            self.recorder.free()
+            self.maps.forget()
 
     def ensure(self, plan: ShadowPlan, options: RenderOptions | None = None) -> None:
         """Maps that hold `plan` (of `options`' resolution, where given)."""

@@ -1,0 +1,314 @@
+"""Shadow maps drawn by compute shaders (RenderOptions.shadow_raster; shaders/shadow_raster.comp).
+
+A moving caster, or a camera the sun's cascades follow, redraws shadow maps every frame, and
+through the raster units that is the H200's ceiling: 4 of its 132 SMs rasterise (4.45 ms for
+Sponza's 262 k triangles x 4 cascades). Here every caster triangle x every redrawn layer of a
+light is one invocation of one dispatch (cascades, a spot map, a cube's six faces alike:
+a layer is named by its matrix in ShadowData), writing its depth with a 32-bit atomicMax
+into a buffer of every layer's texels (reversed-Z: the largest depth is the nearest to the
+light; depths >= 0, so their float bits order as the depths). The redrawn layers are then
+copied into the shadow images the lighting samples: the sampling (hardware compare and 2x2
+filter, shaders/shadow_sampling.glsl) and the raster path's images stay as they are, and
+the copy (~4 bytes a texel) costs less than a compare done by hand in every shading thread.
+
+Triangles whose box exceeds BIG_AREA texels (a floor under a whole cascade) are listed as
+bands of rows and drawn by work groups, as the main compute rasteriser does (raster.comp);
+alpha-masked and blended casters are drawn one dispatch a draw with their material bound,
+alpha-tested per texel where they would win (foliage casts leaf shadows), their big
+triangles covered by the whole work group. The depth bias is the raster pipelines'
+(shadows.DEPTH_BIAS, Vulkan's slope-scaled formula); the normal offset stays in
+shadow_sampling.glsl. Vertices are the scene's posed ones (the deform step writes them in
+place, before) placed by the frame's Instances, as every other step reads them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from vkpbr.gpu.buffer import Buffer, upload_buffer
+from vkpbr.gpu.compute import ComputePipeline
+from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
+from vkpbr.gpu.graph import BufferResource, Step
+from vkpbr.render.codegen import SPV_DIR
+
+__all__ = ["ShadowRaster", "wants_compute", "SET_ROWS"]
+
+SMALL_GROUP = 64  # shadow_small / shadow_masked: one (triangle, layer) an invocation
+MAX_GROUPS_X = 65535
+BIG_AREA, BIG_CHUNK = 256, 16384  # raster.comp's opaque split (compute_path.RasterTuning)
+MASKED_AREA = 64  # masked triangles over this many box texels: the work group covers them
+PUSH_BYTES = 96  # shadow_raster.comp's push constants
+# Set 4: generated.glsl's compute-path bindings of the streams, then the kernels' own.
+SET_ROWS = ((3, "Indices"), (4, "Positions"), (5, "Texcoords0"), (6, "Texcoords1"),
+            (7, "Colors"), (40, "ShadowMatrices"), (41, "Casters"), (42, "Depths"), (43, "Big"))
+_OPAQUE, _MASKED = ("opaque", "opaque_double"), ("mask", "blend")
+_KINDS = ("directional", "spot", "point")  # shadow_raster.comp's bias index
+
+
+def wants_compute(choice: Any, device: Any) -> bool:
+    """Whether a frame's shadow maps are drawn by compute shaders: "compute" always,
+    "hardware" never, "auto" on GPUs (a datacenter GPU has few raster units: the compute
+    path's own rule, render/path_choice.py) and not on CPUs (lavapipe rasterises faster
+    than it runs these kernels)."""
+    name = getattr(choice, "name", str(choice)).lower()
+    if name == "auto":
+        return device.info.kind != "cpu"
+    return name == "compute"
+
+
+class _Table:
+    """The caster draws of one draw classification: opaque rows first (their triangles
+    numbered from 0 over the table), then one row a masked or blended draw; a row is (first
+    triangle, first index, vertex offset, record in Instances)."""
+
+    def __init__(self, device: Any, draws: Sequence[Any], classes: Sequence[str]) -> None:
+        casters = [(i, d, c) for i, (d, c) in enumerate(zip(draws, classes, strict=True))
+                   if getattr(d, "casts_shadows", True) and d.index_count >= 3]
+        opaque = [(i, d) for i, d, c in casters if c in _OPAQUE]
+        masked = [(i, d) for i, d, c in casters if c in _MASKED]
+        rows = np.zeros((max(len(opaque) + len(masked), 1), 4), np.uint32)
+        first = 0
+        self.masked: list[tuple[int, int, int]] = []  # (row, material, triangles)
+        self.opaque_rows = len(opaque)
+        self.opaque_triangles = 0  # the opaque rows' triangles, 0 .. this
+        for row, (i, d) in enumerate(opaque + masked):
+            if row == len(opaque):
+                self.opaque_triangles = first
+            rows[row] = first, d.first_index, d.vertex_offset, i
+            if row >= len(opaque):
+                self.masked.append((row, d.material, d.index_count // 3))
+            first += d.index_count // 3
+        if not masked:
+            self.opaque_triangles = first
+        self.buffer = upload_buffer(device, rows, "storage", name="shadow caster table")
+
+
+class ShadowRaster:
+    """The compute side of a renderer's ShadowMaps (`maps`) for the scene `gs` (GpuScene).
+
+    Parameters
+    ----------
+    frame_layout, material_layout : sets 0 and 1 (Instances; a masked draw's material).
+    slots : frames in flight (a descriptor set each, over the slot's shadow matrices).
+    """
+
+    def __init__(self, device: Any, maps: Any, gs: Any, frame_layout: DescriptorSetLayout,
+                 material_layout: DescriptorSetLayout, slots: int) -> None:
+        self.device, self.maps, self.gs, self.slots = device, maps, gs, slots
+        self._owned: list[Any] = []
+        self.set_layout = self._own(DescriptorSetLayout(device, [
+            BindingSpec(b, "storage", ("compute",), name) for b, name in SET_ROWS]))
+        empty = self._own(DescriptorSetLayout(device, []))
+        self.layouts = [frame_layout, material_layout, empty, empty, self.set_layout]
+        self._pipelines: dict[str, ComputePipeline] = {}
+        self._tables: dict[tuple, _Table] = {}
+        self._sets: dict[tuple, Any] = {}  # (table key, slot) -> set, for the buffers below
+        self._pools: list[Any] = []
+        self._images: tuple[int, int] | None = None  # the maps' images the buffers fit
+        self.depths: Buffer | None = None
+        self.big: Buffer | None = None
+        self.big_capacity = 0
+
+    def _own(self, obj: Any) -> Any:
+        self._owned.append(obj)
+        return obj
+
+    def _pipeline(self, name: str) -> ComputePipeline:
+        if name not in self._pipelines:
+            self._pipelines[name] = self._own(ComputePipeline(
+                self.device, SPV_DIR / f"shadow_{name}.comp.spv", self.layouts,
+                push_bytes=PUSH_BYTES))
+        return self._pipelines[name]
+
+    # --- resources -------------------------------------------------------------------------
+    def _fit(self) -> None:
+        """Buffers for the maps' current images (every layer's texels; the big triangles'
+        list); the sets made for older ones are dropped (the maps' `ensure` waited for the
+        device when it remade the images)."""
+        maps, cubes = self.maps.maps, self.maps.cubes
+        key = (id(maps), id(cubes))
+        if self._images == key:
+            return
+        for buffer in (self.depths, self.big):
+            if buffer is not None:
+                self._owned.remove(buffer)
+                buffer.destroy()
+        for pool in self._pools:
+            self._owned.remove(pool)
+            pool.destroy()
+        self._pools.clear()
+        self._sets.clear()
+        self.cube_base = maps.layers * maps.size * maps.size
+        texels = self.cube_base + cubes.layers * cubes.size * cubes.size
+        self.depths = self._own(Buffer(self.device, 4 * texels, "storage|transfer_dst|transfer_src",
+                                       name="shadow depths"))
+        # (triangle, matrix, band) entries: a band is ~BIG_CHUNK texels; what does not fit is
+        # drawn by the invocation that found it.
+        self.big_capacity = max(65536, texels // 256)
+        self.big = self._own(Buffer(self.device, 4 * (4 + 3 * self.big_capacity),
+                                    "storage|transfer_dst|indirect", name="shadow big triangles"))
+        self._images = key
+
+    def _table(self, classes: Sequence[str]) -> tuple[tuple, _Table]:
+        key = (len(self.gs.draws), tuple(classes))
+        if key not in self._tables:
+            table = _Table(self.device, self.gs.draws, classes)
+            self._own(table.buffer)
+            self._tables[key] = table
+        return key, self._tables[key]
+
+    def _set(self, key: tuple, table: _Table, slot: int) -> Any:
+        if (key, slot) not in self._sets:
+            pool = self._own(DescriptorPool(self.device, [(self.set_layout, self.slots)]))
+            self._pools.append(pool)
+            streams = self.gs.streams
+            buffers = {"Indices": self.gs.index_buffer, "Positions": streams["positions"],
+                       "Texcoords0": streams["texcoords"], "Texcoords1": streams["texcoords1"],
+                       "Colors": streams["colors"], "Casters": table.buffer,
+                       "Depths": self.depths, "Big": self.big}
+            w = DescriptorWriter(self.device)
+            for s in range(self.slots):
+                dset = pool.allocate(self.set_layout)
+                for binding, name in SET_ROWS:
+                    if name == "ShadowMatrices":  # the slot's ShadowData
+                        w.storage(dset, binding, self.maps.buffer, self.maps.matrix_bytes,
+                                  s * self.maps.stride)
+                    else:
+                        w.storage(dset, binding, buffers[name])
+                self._sets[(key, s)] = dset
+            w.update()
+        return self._sets[(key, slot)]
+
+    def resources(self) -> dict[str, BufferResource]:
+        """The graph resources the steps name (after `steps` made them)."""
+        return {"shadow_depths": BufferResource(self.depths),
+                "shadow_big": BufferResource(self.big)}
+
+    # --- steps -----------------------------------------------------------------------------
+    def _push(self, plan: Any, table: _Table) -> np.ndarray:
+        from vkpbr.render.shadows import DEPTH_BIAS, MAX_LAYERS
+
+        push = np.zeros(PUSH_BYTES // 4, np.uint32)
+        spot = 0
+        for e in plan.entries:
+            if e.kind == "spot":
+                spot |= 1 << e.first
+        push[:16] = (table.opaque_triangles, max(table.opaque_rows, 1), 0, 0, self.maps.maps.size,
+                     self.maps.cubes.size, self.cube_base, MAX_LAYERS, self.big_capacity,
+                     int(self.gs.has_colors), BIG_AREA, BIG_CHUNK, MASKED_AREA, spot, 0, 0)
+        bias = push.view(np.float32)
+        for k, kind in enumerate(_KINDS):
+            bias[16 + k], bias[20 + k] = DEPTH_BIAS[kind]
+        return push
+
+    def steps(self, slot: int, plan: Any, redraw: Sequence[range] | None, classes: Sequence[str],
+              material_sets: Sequence[Any], set0: Any) -> list[Step]:
+        """The steps that draw `plan`'s layers `redraw` (per entry, a range of its layers)
+        for frame `slot` and copy them into the maps; the last, "shadows", is timed (all of
+        them: the steps before it take no timestamp)."""
+        if redraw is None:
+            redraw = tuple(range(e.count) for e in plan.entries)
+        self._fit()
+        key, table = self._table(classes)
+        dset = self._set(key, table, slot)
+        push = self._push(plan, table)
+        # Per drawn entry: its first matrix, layers, and where they go in the images.
+        jobs = [(e.matrix_base + r.start, len(r), e) for e, r in zip(plan.entries, redraw, strict=True)
+                if len(r)]
+
+        def bind(cmd: Any, name: str) -> None:
+            cmd.bind_pipeline(self._pipeline(name))
+            cmd.bind_set(0, set0)
+            cmd.bind_set(4, dset)
+
+        def clear(cmd: Any) -> None:
+            cmd.fill(self.depths, 0)  # depth 0: the farthest (reversed-Z), as the passes clear
+            cmd.fill(self.big, 0)
+
+        def small(cmd: Any) -> None:
+            bind(cmd, "small")
+            for matrix, layers, _ in jobs:
+                push[3] = matrix
+                cmd.push(push)
+                n = -(-table.opaque_triangles // SMALL_GROUP)
+                if n:
+                    cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), layers)
+
+        def args(cmd: Any) -> None:
+            bind(cmd, "args")
+            cmd.push(push)
+            cmd.dispatch(1)
+
+        def big(cmd: Any) -> None:
+            bind(cmd, "big")
+            cmd.push(push)
+            cmd.dispatch_indirect(self.big, 4)
+
+        def masked(cmd: Any) -> None:
+            bind(cmd, "masked")
+            for matrix, layers, _ in jobs:
+                for row, material, triangles in table.masked:
+                    cmd.bind_set(1, material_sets[material])
+                    push[0], push[2], push[3] = triangles, row, matrix
+                    cmd.push(push)
+                    n = -(-triangles // SMALL_GROUP)
+                    cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), layers)
+
+        def copy(cmd: Any) -> None:
+            self._copy(cmd, jobs)
+
+        depths, big_list = "shadow_depths", "shadow_big"
+        out = [Step("shadows.clear", clear, ((depths, "transfer_dst"), (big_list, "transfer_dst")),
+                    timed=False),
+               Step("shadows.small", small, ((depths, "storage"), (big_list, "storage")), timed=False),
+               Step("shadows.args", args, ((big_list, "storage"),), timed=False),
+               Step("shadows.big", big, ((depths, "storage"), (big_list, "storage|indirect")),
+                    timed=False)]
+        if table.masked:
+            out.append(Step("shadows.masked", masked, ((depths, "storage"),), timed=False))
+        out.append(Step("shadows", copy, ((depths, "transfer_src"),)))
+        return out
+
+    def _copy(self, cmd: Any, jobs: list[tuple[int, int, Any]]) -> None:
+        """The drawn layers into the maps' images (ShadowMaps' layered images keep the others)."""
+        from vkpbr.render.shadows import MAX_LAYERS
+
+        maps, cubes = self.maps.maps, self.maps.cubes
+        regions: dict[str, list[tuple[int, int, int]]] = {"maps": [], "cubes": []}
+        for matrix, layers, e in jobs:
+            if e.kind == "point":
+                layer = matrix - MAX_LAYERS
+                offset = 4 * (self.cube_base + layer * cubes.size * cubes.size)
+                regions["cubes"].append((offset, layer, layers))
+            else:
+                regions["maps"].append((4 * matrix * maps.size * maps.size, matrix, layers))
+        for name, image in (("maps", maps), ("cubes", cubes)):
+            if regions[name]:
+                image.record_copy(cmd, self.depths, regions[name])
+
+    def read_depths(self) -> np.ndarray:
+        """The depth buffer as float32 (tests; waits for the device)."""
+        from vkpbr.gpu.buffer import download_buffer
+
+        self.device.wait_idle()
+        return download_buffer(self.device, self.depths, np.float32)
+
+    def destroy(self) -> None:
+        while self._owned:
+            self._owned.pop().destroy()
+
+
+def make_steps(maps: Any, recorder: Any, frame_index: int, plan: Any, redraw: Sequence[range] | None,
+               classes: Sequence[str], material_sets: Sequence[Any], set0: Any,
+               resources: dict[str, Any]) -> list[Step]:
+    """render/steps.py's "shadows" group when the maps are drawn by compute shaders: the
+    renderer's ShadowRaster (made on first use) and its steps, its buffers added to
+    `resources`."""
+    raster = maps.compute_raster(recorder.gpu_scene)
+    out = raster.steps(frame_index, plan, redraw, classes, material_sets, set0)
+    resources.update(raster.resources())
+    return out
+
