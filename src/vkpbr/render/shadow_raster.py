@@ -23,7 +23,7 @@ place, before) placed by the frame's Instances, as every other step reads them.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -93,11 +93,15 @@ class ShadowRaster:
     ----------
     frame_layout, material_layout : sets 0 and 1 (Instances; a masked draw's material).
     slots : frames in flight (a descriptor set each, over the slot's shadow matrices).
+    max_layers, depth_bias : render/shadows.py's MAX_LAYERS (the first cube matrix) and
+        DEPTH_BIAS (per light kind: the pipelines' (constant, slope)).
     """
 
     def __init__(self, device: Any, maps: Any, gs: Any, frame_layout: DescriptorSetLayout,
-                 material_layout: DescriptorSetLayout, slots: int) -> None:
+                 material_layout: DescriptorSetLayout, slots: int, max_layers: int,
+                 depth_bias: dict[str, tuple[float, float]]) -> None:
         self.device, self.maps, self.gs, self.slots = device, maps, gs, slots
+        self.max_layers, self.depth_bias = max_layers, depth_bias
         self._owned: list[Any] = []
         self.set_layout = self._own(DescriptorSetLayout(device, [
             BindingSpec(b, "storage", ("compute",), name) for b, name in SET_ROWS]))
@@ -189,19 +193,17 @@ class ShadowRaster:
 
     # --- steps -----------------------------------------------------------------------------
     def _push(self, plan: Any, table: _Table) -> np.ndarray:
-        from vkpbr.render.shadows import DEPTH_BIAS, MAX_LAYERS
-
         push = np.zeros(PUSH_BYTES // 4, np.uint32)
         spot = 0
         for e in plan.entries:
             if e.kind == "spot":
                 spot |= 1 << e.first
         push[:16] = (table.opaque_triangles, max(table.opaque_rows, 1), 0, 0, self.maps.maps.size,
-                     self.maps.cubes.size, self.cube_base, MAX_LAYERS, self.big_capacity,
+                     self.maps.cubes.size, self.cube_base, self.max_layers, self.big_capacity,
                      int(self.gs.has_colors), BIG_AREA, BIG_CHUNK, MASKED_AREA, spot, 0, 0)
         bias = push.view(np.float32)
         for k, kind in enumerate(_KINDS):
-            bias[16 + k], bias[20 + k] = DEPTH_BIAS[kind]
+            bias[16 + k], bias[20 + k] = self.depth_bias[kind]
         return push
 
     def steps(self, slot: int, plan: Any, redraw: Sequence[range] | None, classes: Sequence[str],
@@ -219,6 +221,23 @@ class ShadowRaster:
         jobs = [(e.matrix_base + r.start, len(r), e) for e, r in zip(plan.entries, redraw, strict=True)
                 if len(r)]
 
+        record = self._records(table, dset, push, jobs, material_sets, set0)
+        depths, big_list = "shadow_depths", "shadow_big"
+        out = [Step("shadows.clear", record["clear"], ((depths, "transfer_dst"), (big_list, "transfer_dst")),
+                    timed=False),
+               Step("shadows.small", record["small"], ((depths, "storage"), (big_list, "storage")), timed=False),
+               Step("shadows.args", record["args"], ((big_list, "storage"),), timed=False),
+               Step("shadows.big", record["big"], ((depths, "storage"), (big_list, "storage|indirect")),
+                    timed=False)]
+        if table.masked:
+            out.append(Step("shadows.masked", record["masked"], ((depths, "storage"),), timed=False))
+        out.append(Step("shadows", record["copy"], ((depths, "transfer_src"),)))
+        return out
+
+    def _records(self, table: _Table, dset: Any, push: np.ndarray,
+                 jobs: list[tuple[int, int, Any]], material_sets: Sequence[Any], set0: Any
+                 ) -> dict[str, Callable[[Any], None]]:
+        """Each step's commands: `jobs` are (first matrix, layers, entry) of the drawn ranges."""
         def bind(cmd: Any, name: str) -> None:
             cmd.bind_pipeline(self._pipeline(name))
             cmd.bind_set(0, set0)
@@ -260,27 +279,16 @@ class ShadowRaster:
         def copy(cmd: Any) -> None:
             self._copy(cmd, jobs)
 
-        depths, big_list = "shadow_depths", "shadow_big"
-        out = [Step("shadows.clear", clear, ((depths, "transfer_dst"), (big_list, "transfer_dst")),
-                    timed=False),
-               Step("shadows.small", small, ((depths, "storage"), (big_list, "storage")), timed=False),
-               Step("shadows.args", args, ((big_list, "storage"),), timed=False),
-               Step("shadows.big", big, ((depths, "storage"), (big_list, "storage|indirect")),
-                    timed=False)]
-        if table.masked:
-            out.append(Step("shadows.masked", masked, ((depths, "storage"),), timed=False))
-        out.append(Step("shadows", copy, ((depths, "transfer_src"),)))
-        return out
+        return {"clear": clear, "small": small, "args": args, "big": big, "masked": masked,
+                "copy": copy}
 
     def _copy(self, cmd: Any, jobs: list[tuple[int, int, Any]]) -> None:
         """The drawn layers into the maps' images (ShadowMaps' layered images keep the others)."""
-        from vkpbr.render.shadows import MAX_LAYERS
-
         maps, cubes = self.maps.maps, self.maps.cubes
         regions: dict[str, list[tuple[int, int, int]]] = {"maps": [], "cubes": []}
         for matrix, layers, e in jobs:
             if e.kind == "point":
-                layer = matrix - MAX_LAYERS
+                layer = matrix - self.max_layers
                 offset = 4 * (self.cube_base + layer * cubes.size * cubes.size)
                 regions["cubes"].append((offset, layer, layers))
             else:

@@ -423,7 +423,8 @@ class ShadowMaps:
         if self._raster is None:
             from vkpbr.render.shadow_raster import ShadowRaster
 
-            self._raster = ShadowRaster(self.device, self, gs, *self._layouts, len(self.sets))
+            self._raster = ShadowRaster(self.device, self, gs, *self._layouts, len(self.sets),
+                                        MAX_LAYERS, DEPTH_BIAS)
         return self._raster
 
     def read_maps(self) -> tuple[np.ndarray, np.ndarray]:
