@@ -28,11 +28,12 @@ class ShadowFrames:
     """The per-frame side of `maps` for a scene of `bounds`, whose recordings `recorder` keeps."""
 
     def __init__(self, maps: ShadowMaps, bounds: Any, recorder: FrameRecorder,
-                 state: Any = None, casters: np.ndarray | None = None) -> None:
+                 state: Any = None, casters: np.ndarray | None = None, paths: Any = None) -> None:
         # bounds: Bounds or render/scene_state.py's LiveBounds; state (vkpbr.scene.state) and
         # `casters` (a bool per draw): a map is redrawn when one of its casters moved.
         self.maps, self.bounds, self.recorder = maps, bounds, recorder
         self.state, self.casters = state, casters
+        self.paths = paths  # render/path_choice.py FramePaths: shadow_raster auto follows its choice
         self._plan: tuple[tuple, ShadowPlan] = ((), ShadowPlan())
         self._rows: dict[int, tuple[tuple, np.ndarray | None]] = {}  # by slot: (key, rows)
 
@@ -55,7 +56,9 @@ class ShadowFrames:
     def choose_raster(self, options: RenderOptions) -> None:
         """Draw the maps by compute shaders or the raster units, as `options` say
         (shadow_raster.wants_compute); a change drops the recordings made the other way."""
-        compute = wants_compute(options.shadow_raster, self.maps.device)
+        choice = getattr(self.paths, "choice", None)
+        compute = wants_compute(options.shadow_raster, self.maps.device,
+                                None if choice is None else choice.compute_raster)
         if compute != self.maps.compute:
             self.maps.device.wait_idle()  # recordings in flight are freed
             self.maps.compute = compute

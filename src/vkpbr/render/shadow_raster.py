@@ -48,14 +48,16 @@ _OPAQUE, _MASKED = ("opaque", "opaque_double"), ("mask", "blend")
 _KINDS = ("directional", "spot", "point")  # shadow_raster.comp's bias index
 
 
-def wants_compute(choice: Any, device: Any) -> bool:
+def wants_compute(choice: Any, device: Any, measured: bool | None = None) -> bool:
     """Whether a frame's shadow maps are drawn by compute shaders: "compute" always,
-    "hardware" never, "auto" on GPUs (a datacenter GPU has few raster units: the compute
-    path's own rule, render/path_choice.py) and not on CPUs (lavapipe rasterises faster
-    than it runs these kernels)."""
+    "hardware" never, "auto" as the main path's own choice of rasteriser for the view
+    (`measured`: render/path_choice.py's measured or recorded compute_raster for the device;
+    the same raster units draw both), else by its rule: on GPUs (a datacenter GPU's few raster
+    units are the limit of a redrawn map), not on CPUs (lavapipe rasterises faster than it
+    runs these kernels)."""
     name = getattr(choice, "name", str(choice)).lower()
     if name == "auto":
-        return device.info.kind != "cpu"
+        return measured if measured is not None else device.info.kind != "cpu"
     return name == "compute"
 
 
