@@ -126,6 +126,14 @@ def test_partial_redraws_and_the_choice(renderer) -> None:  # noqa: ANN001
 
     with pytest.raises(UsageError):
         renderer.render(CAMERA, ALL, size=SIZE, shadow_raster="fast", **opts)
+    # Every layer's depths in one storage binding: lavapipe's is 128 MiB, 4 x 4096^2 x 4 bytes
+    # are not, a one-line error (and the renderer draws on after it).
+    limit = int(renderer.device.limits.maxStorageBufferRange)
+    if limit < 4 * 4 * 4096 ** 2:
+        with pytest.raises(UsageError, match="shadow-resolution"):
+            renderer.render(CAMERA, [LIGHTS["directional"]], size=SIZE, shadow_raster="compute",
+                            shadow_resolution=4096, env="none")
+    renderer.render(CAMERA, ALL, size=SIZE, shadow_raster="compute", **opts)
 
 
 def test_a_moving_caster_redraws(renderer) -> None:  # noqa: ANN001

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from vkpbr.errors import UsageError
 from vkpbr.render import layouts as L
 from vkpbr.render.frames import FrameSlot
 from vkpbr.render.options import RenderOptions
@@ -59,6 +60,14 @@ class ShadowFrames:
         choice = getattr(self.paths, "choice", None)
         compute = wants_compute(options.shadow_raster, self.maps.device,
                                 None if choice is None else choice.compute_raster)
+        limit = int(self.maps.device.limits.maxStorageBufferRange)
+        if compute and self.maps.compute_bytes() > limit:  # every layer in one binding
+            if options.shadow_raster.name.lower() == "compute":
+                raise UsageError(f"--shadow-raster compute: the shadow maps' "
+                                 f"{self.maps.compute_bytes() >> 20} MiB of depths exceed one "
+                                 f"storage binding here ({limit >> 20} MiB); lower "
+                                 "--shadow-resolution or use --shadow-raster hardware")
+            compute = False
         if compute != self.maps.compute:
             self.maps.device.wait_idle()  # recordings in flight are freed
             self.maps.compute = compute

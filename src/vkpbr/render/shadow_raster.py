@@ -153,7 +153,7 @@ class ShadowRaster:
                                        name="shadow depths"))
         # (triangle, matrix, band) entries: a band is ~BIG_CHUNK texels; what does not fit is
         # drawn by the invocation that found it.
-        self.big_capacity = max(65536, texels // 256)
+        self.big_capacity = max(1 << 18, texels // 64)  # (3 MiB at the least)
         self.big = self._own(Buffer(self.device, 4 * (4 + 3 * self.big_capacity),
                                     "storage|transfer_dst|indirect", name="shadow big triangles"))
         self._images = key

@@ -418,6 +418,11 @@ class ShadowMaps:
         self.maps.record_end_writes(cmd)
         self.cubes.record_end_writes(cmd)
 
+    def compute_bytes(self) -> int:
+        """Bytes the compute rasteriser's depth buffer takes for the current images (every
+        layer's texels: one storage binding, at most the device's maxStorageBufferRange)."""
+        return 4 * (self.maps.layers * self.maps.size ** 2 + self.cubes.layers * self.cubes.size ** 2)
+
     def compute_raster(self, gs: Any) -> Any:
         """The compute rasteriser of these maps for the scene `gs` (made on first use)."""
         if self._raster is None:
