@@ -33,6 +33,7 @@ from vkpbr.gpu.compute import ComputePipeline
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.graph import BufferResource, Step
 from vkpbr.render.codegen import SPV_DIR
+from vkpbr.render.deform import UNBOUNDED_RADIUS
 
 __all__ = ["ShadowRaster", "wants_compute", "SET_ROWS"]
 
@@ -64,14 +65,17 @@ def wants_compute(choice: Any, device: Any, measured: bool | None = None) -> boo
 class _Table:
     """The caster draws of one draw classification: opaque rows first (their triangles
     numbered from 0 over the table), then one row a masked or blended draw; a row is (first
-    triangle, first index, vertex offset, record in Instances)."""
+    triangle, first index, vertex offset, record in Instances), then its mesh's bounding
+    sphere in the mesh's space (float32 bits; a deformed draw's never culls)."""
 
-    def __init__(self, device: Any, draws: Sequence[Any], classes: Sequence[str]) -> None:
-        casters = [(i, d, c) for i, (d, c) in enumerate(zip(draws, classes, strict=True))
+    def __init__(self, device: Any, gs: Any, classes: Sequence[str]) -> None:
+        casters = [(i, d, c) for i, (d, c) in enumerate(zip(gs.draws, classes, strict=True))
                    if getattr(d, "casts_shadows", True) and d.index_count >= 3]
         opaque = [(i, d) for i, d, c in casters if c in _OPAQUE]
         masked = [(i, d) for i, d, c in casters if c in _MASKED]
-        rows = np.zeros((max(len(opaque) + len(masked), 1), 4), np.uint32)
+        rows = np.zeros((max(len(opaque) + len(masked), 1), 8), np.uint32)
+        spheres = rows.view(np.float32)[:, 4:]
+        spheres[:, 3] = UNBOUNDED_RADIUS
         first = 0
         self.masked: list[tuple[int, int, int]] = []  # (row, material, triangles)
         self.opaque_rows = len(opaque)
@@ -79,13 +83,21 @@ class _Table:
         for row, (i, d) in enumerate(opaque + masked):
             if row == len(opaque):
                 self.opaque_triangles = first
-            rows[row] = first, d.first_index, d.vertex_offset, i
+            rows[row, :4] = first, d.first_index, d.vertex_offset, i
+            spheres[row] = _sphere(gs.scene.meshes[d.mesh].positions, d.deformed)
             if row >= len(opaque):
                 self.masked.append((row, d.material, d.index_count // 3))
             first += d.index_count // 3
         if not masked:
             self.opaque_triangles = first
         self.buffer = upload_buffer(device, rows, "storage", name="shadow caster table")
+
+
+def _sphere(positions: np.ndarray, deformed: bool) -> tuple[float, float, float, float]:
+    """A mesh's bounding sphere (its box's) in its own space; unbounded when posed."""
+    lo, hi = positions.min(axis=0).astype(np.float64), positions.max(axis=0).astype(np.float64)
+    radius = UNBOUNDED_RADIUS if deformed else np.linalg.norm(hi - lo) / 2 * (1 + 1e-5) + 1e-6
+    return (*((lo + hi) / 2), radius)
 
 
 class ShadowRaster:
@@ -161,7 +173,7 @@ class ShadowRaster:
     def _table(self, classes: Sequence[str]) -> tuple[tuple, _Table]:
         key = (len(self.gs.draws), tuple(classes))
         if key not in self._tables:
-            table = _Table(self.device, self.gs.draws, classes)
+            table = _Table(self.device, self.gs, classes)
             self._own(table.buffer)
             self._tables[key] = table
         return key, self._tables[key]

@@ -26,6 +26,7 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #include "generated.glsl"
+#include "frustum.glsl"
 
 #if KERNEL == 2
 layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;
@@ -42,8 +43,9 @@ layout(set = 4, binding = 40, std430) readonly buffer ShadowMatrices {
     vec4 header[3];  // shaders/shadow_data.glsl's cascade_far, cascade_texel, params
     mat4 layer_vp[];
 };
-// A row a caster draw: its first triangle over the table, first index, vertex offset and its
-// record in Instances (the scene state's model matrix 2 * record).
+// Two uvec4 a caster draw: its first triangle over the table, first index, vertex offset and
+// its record in Instances (the scene state's model matrix 2 * record); then its mesh's
+// bounding sphere in the mesh's space (float bits: centre, radius).
 layout(set = 4, binding = 41, std430) readonly buffer Casters { uvec4 casters[]; };
 layout(set = 4, binding = 42, std430) buffer Depths { uint depths[]; };
 // [0] entries listed, [1..3] KERNEL 2's dispatch size, from 4 (triangle, matrix, band) entries.
@@ -77,7 +79,7 @@ uint row_of(uint g) {
     uint lo = 0u, hi = pc.rows;
     for (uint step = 0u; step < 32u && hi - lo > 1u; ++step) {
         uint mid = (lo + hi) >> 1u;
-        if (casters[mid].x <= g) lo = mid; else hi = mid;
+        if (casters[2u * mid].x <= g) lo = mid; else hi = mid;
     }
     return lo;
 }
@@ -91,19 +93,25 @@ uint layer_base(uint m) {
 
 vec3 position(uint i) { uint k = 3u * i; return vec3(positions[k], positions[k + 1u], positions[k + 2u]); }
 
-// Triangle g's vertex indices and clip-space corners in layer m.
-void fetch(uint g, uint m, out uvec3 vi, out vec4 c[3]) {
+// Triangle g's vertex indices and clip-space corners in layer m; false when its draw's
+// bounding sphere is outside the layer's frustum (one test instead of three vertices: most
+// of a scene's draws for a near cascade or a cube face).
+bool fetch(uint g, uint m, out uvec3 vi, out vec4 c[3]) {
 #if KERNEL == 4
-    uvec4 r = casters[pc.row];
+    uint k = pc.row;
 #else
-    uvec4 r = casters[row_of(g)];
+    uint k = row_of(g);
 #endif
+    uvec4 r = casters[2u * k];
     mat4 model = instance_matrices[2u * r.w];
+    if (!sphere_visible(layer_vp[m], world_sphere(model, uintBitsToFloat(casters[2u * k + 1u]))))
+        return false;
     uint base = r.y + 3u * (g - r.x);
     for (int j = 0; j < 3; ++j) {
         vi[j] = indices[base + uint(j)] + r.z;
         c[j] = layer_vp[m] * (model * vec4(position(vi[j]), 1.0));  // as shadow.vert's
     }
+    return true;
 }
 
 // The polygon left of the triangle inside z <= w and z >= 0: at most 5 corners.
@@ -157,7 +165,8 @@ struct Screen {
 bool on_layer(uint g, uint m, out Screen t) {
     vec4 c[3];
     uvec3 vi;
-    fetch(g, m, vi, c);
+    t.m = m;
+    if (!fetch(g, m, vi, c)) return false;
     vec4 poly[5];
     t.n = clip(c, poly);
     t.m = m;
@@ -350,7 +359,7 @@ void main() {
     }
 #else
     opaque_zero = uint(gl_NumWorkGroups.x == 0u);  // 0, unknown to the compiler (u())
-    uint first = casters[pc.row].x;
+    uint first = casters[2u * pc.row].x;
     if (gl_LocalInvocationIndex == 0u) group_big_count = 0u;
     barrier();
     if (i < pc.triangles) {
