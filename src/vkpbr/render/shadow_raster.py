@@ -258,8 +258,10 @@ class ShadowRaster:
             cmd.bind_set(4, dset)
 
         def clear(cmd: Any) -> None:
-            cmd.fill(self.depths, 0)  # depth 0: the farthest (reversed-Z), as the passes clear
-            cmd.fill(self.big, 0)
+            # Depth 0: the farthest (reversed-Z), as the passes clear; the drawn layers only.
+            for offset, size in self._spans(jobs):
+                cmd.fill(self.depths, 0, offset, size)
+            cmd.fill(self.big, 0, 0, 16)  # the count and the dispatch size
 
         def small(cmd: Any) -> None:
             bind(cmd, "small")
@@ -296,17 +298,26 @@ class ShadowRaster:
         return {"clear": clear, "small": small, "args": args, "big": big, "masked": masked,
                 "copy": copy}
 
+    def _spans(self, jobs: list[tuple[int, int, Any]]) -> list[tuple[int, int]]:
+        """(byte offset, bytes) of the drawn layers' depths in `depths`, a span a job."""
+        out = []
+        for matrix, layers, e in jobs:
+            if e.kind == "point":
+                n = self.maps.cubes.size ** 2
+                out.append((4 * (self.cube_base + (matrix - self.max_layers) * n), 4 * layers * n))
+            else:
+                n = self.maps.maps.size ** 2
+                out.append((4 * matrix * n, 4 * layers * n))
+        return out
+
     def _copy(self, cmd: Any, jobs: list[tuple[int, int, Any]]) -> None:
         """The drawn layers into the maps' images (ShadowMaps' layered images keep the others)."""
         maps, cubes = self.maps.maps, self.maps.cubes
         regions: dict[str, list[tuple[int, int, int]]] = {"maps": [], "cubes": []}
-        for matrix, layers, e in jobs:
-            if e.kind == "point":
-                layer = matrix - self.max_layers
-                offset = 4 * (self.cube_base + layer * cubes.size * cubes.size)
-                regions["cubes"].append((offset, layer, layers))
-            else:
-                regions["maps"].append((4 * matrix * maps.size * maps.size, matrix, layers))
+        for (matrix, layers, e), (offset, _) in zip(jobs, self._spans(jobs), strict=True):
+            point = e.kind == "point"
+            regions["cubes" if point else "maps"].append(
+                (offset, matrix - self.max_layers if point else matrix, layers))
         for name, image in (("maps", maps), ("cubes", cubes)):
             if regions[name]:
                 image.record_copy(cmd, self.depths, regions[name])
