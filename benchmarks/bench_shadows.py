@@ -2,13 +2,14 @@
 render/shadow_raster.py): issue 31's shadow rows. Prints one Markdown table.
 
     python3 benchmarks/bench_shadows.py --scene .assets/models/Sponza/glTF/Sponza.gltf [--frames 300] [--json out.json]
+    (on a CPU, to try it: --size 64x48 --resolution 128 --frames 3)
 
 Rows, each with shadow_raster = hardware and = compute (the compute path with the compute
 rasteriser, as `vkpbr bench` draws Sponza):
-  maps: sun cascades   the automatic sun's 4 cascades (2048 texels) redrawn every frame (the
+  maps: sun cascades   the automatic sun's 4 cascades (--resolution 2048) redrawn every frame (the
                        maps forgotten before each): the "shadows" step's GPU ms (timestamps,
                        median), 1920x1080.
-  maps: point cube     Sponza's preset point light's 6 faces (1024 texels), likewise.
+  maps: point cube     Sponza's preset point light's 6 faces (half the resolution), likewise.
   walk + sun           the preset camera walking 2 cm a frame (bench_paths.walk) lit by the
                        automatic sun, 1920x1080: frames/s through render_many (three frames in
                        flight, into NumPy), and through render() once a frame; the shadow
@@ -40,7 +41,7 @@ from vkpbr.scene.loader import load_scene  # noqa: E402
 
 MODES = ("hardware", "compute")
 SIZE = (1920, 1080)
-COMMON = {"pipeline": "compute", "raster": "compute"}
+COMMON = {"pipeline": "compute", "raster": "compute", "shadow_resolution": 2048}
 
 
 def _median(xs: list[float]) -> float:
@@ -134,10 +135,12 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=300)
     ap.add_argument("--only", default="maps,walk,moving")
     ap.add_argument("--size", default="1920x1080", help="WxH (a small one to try it on a CPU)")
+    ap.add_argument("--resolution", type=int, default=2048, help="shadow-map texels a side")
     ap.add_argument("--json")
     args = ap.parse_args()
     global SIZE
     SIZE = tuple(int(x) for x in args.size.split("x"))
+    COMMON["shadow_resolution"] = args.resolution
     rows: list[dict] = []
     if "maps" in args.only or "walk" in args.only:
         with Renderer(load_scene(args.scene)) as r:

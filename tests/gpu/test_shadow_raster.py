@@ -228,7 +228,10 @@ def test_frames_in_flight_and_batches(renderer) -> None:  # noqa: ANN001
         _compare_images(a, b, f"frame {i} of the walk")
     assert not np.array_equal(frames["compute"][0], frames["compute"][-1])
     for pipeline in ("forward", "compute"):
-        views = {mode: renderer.render_batch(cams[:3], SIZE, ALL, pipeline=pipeline, ao="off",
-                                             shadow_raster=mode, **opts)
-                 for mode in ("hardware", "compute")}
+        views = {}
+        for mode in ("hardware", "compute"):
+            renderer.shadows.forget()
+            views[mode] = renderer.render_batch(cams[:3], SIZE, ALL, pipeline=pipeline, ao="off",
+                                                shadow_raster=mode, **opts)
+            assert renderer.shadows.compute == (mode == "compute")
         _compare_images(views["hardware"], views["compute"], f"{pipeline} batch")
