@@ -36,6 +36,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_paths import CAMERA, walk  # noqa: E402
 
+from vkpbr.render import shadow_raster  # noqa: E402
 from vkpbr.render.renderer import Renderer  # noqa: E402
 from vkpbr.scene.loader import load_scene  # noqa: E402
 
@@ -48,6 +49,11 @@ def _median(xs: list[float]) -> float:
     return statistics.median(xs) if xs else float("nan")
 
 
+def _shadow_ms(r: Renderer) -> float:
+    """The frame's shadow steps' GPU ms (with --steps, their parts summed)."""
+    return sum(v for k, v in r.last_stats.pass_ms.items() if k.startswith("shadows"))
+
+
 def map_rows(r: Renderer, frames: int) -> list[dict]:
     """Every layer redrawn each frame: the "shadows" step's GPU ms."""
     rows = []
@@ -57,14 +63,18 @@ def map_rows(r: Renderer, frames: int) -> list[dict]:
                 for _ in range(frames + 10):
                     r.shadows.forget()  # every layer stale: drawn again
                     yield CAMERA
-            ms, layers = [], []
+            ms, layers, parts = [], [], []
             for i, _ in enumerate(r.render_many(views(), lights, size=SIZE, readback=False,
                                                 shadow_raster=mode, **COMMON)):
                 if i >= 10:
-                    ms.append(r.last_stats.pass_ms.get("shadows", 0.0))
+                    passes = r.last_stats.pass_ms
+                    ms.append(_shadow_ms(r))
+                    parts.append({k: v for k, v in passes.items() if k.startswith("shadows")})
                     layers.append(sum(n for _, n in r.shadows.last_redrawn_layers))
+            steps = {k: _median([p.get(k, 0.0) for p in parts]) for k in parts[0]} if parts else {}
             rows.append({"row": label, "shadow_raster": mode, "shadows_ms": _median(ms),
-                         "layers": statistics.fmean(layers)})
+                         "layers": statistics.fmean(layers),
+                         "steps": " ".join(f"{k} {v:.3f}" for k, v in steps.items())})
     return rows
 
 
@@ -79,7 +89,7 @@ def walk_rows(r: Renderer, frames: int) -> list[dict]:
                 pass
             t = time.perf_counter()
             for _ in r.render_many(cams, lights, **opts):
-                ms.append(r.last_stats.pass_ms.get("shadows", 0.0))
+                ms.append(_shadow_ms(r))
                 layers.append(sum(n for _, n in r.shadows.last_redrawn_layers))
             fps_many = frames / (time.perf_counter() - t)
             t = time.perf_counter()
@@ -119,7 +129,7 @@ def moving_rows(scene_path: Path, frames: int) -> list[dict]:
                         t0 = time.perf_counter()
                     if i >= 30:
                         gpu.append(r.last_stats.gpu_ms)
-                        ms.append(r.last_stats.pass_ms.get("shadows", 0.0))
+                        ms.append(_shadow_ms(r))
                 fps = frames / (time.perf_counter() - t0)
                 rows.append({"row": f"sponza sun {label}", "shadow_raster": mode, "fps_render_many": fps,
                              "gpu_ms": _median(gpu), "shadows_ms": _median(ms)})
@@ -136,11 +146,14 @@ def main() -> None:
     ap.add_argument("--only", default="maps,walk,moving")
     ap.add_argument("--size", default="1920x1080", help="WxH (a small one to try it on a CPU)")
     ap.add_argument("--resolution", type=int, default=2048, help="shadow-map texels a side")
+    ap.add_argument("--steps", action="store_true",
+                    help="time the compute kernels apart (the maps rows' small/big/masked/copy ms)")
     ap.add_argument("--json")
     args = ap.parse_args()
     global SIZE
     SIZE = tuple(int(x) for x in args.size.split("x"))
     COMMON["shadow_resolution"] = args.resolution
+    shadow_raster.TIMED_STEPS = args.steps
     rows: list[dict] = []
     if "maps" in args.only or "walk" in args.only:
         with Renderer(load_scene(args.scene)) as r:
@@ -152,10 +165,12 @@ def main() -> None:
     if "moving" in args.only:
         rows += moving_rows(args.scene, args.frames)
     keys = ("shadows_ms", "layers", "fps_render_many", "fps_render", "gpu_ms")
-    print("| row | shadow_raster | " + " | ".join(keys) + " |\n|---|---|" + "---:|" * len(keys))
+    print("| row | shadow_raster | " + " | ".join(keys) + " | steps (ms) |\n|---|---|"
+          + "---:|" * len(keys) + "---|")
     for row in rows:
         cells = [f"{row[k]:.3f}" if isinstance(row.get(k), float) else "" for k in keys]
-        print(f"| {row['row']} | {row['shadow_raster']} | " + " | ".join(cells) + " |")
+        print(f"| {row['row']} | {row['shadow_raster']} | " + " | ".join(cells)
+              + f" | {row.get('steps', '')} |")
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1))
 

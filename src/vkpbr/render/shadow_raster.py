@@ -47,6 +47,10 @@ SET_ROWS = ((3, "Indices"), (4, "Positions"), (5, "Texcoords0"), (6, "Texcoords1
             (7, "Colors"), (40, "ShadowMatrices"), (41, "Casters"), (42, "Depths"), (43, "Big"))
 _OPAQUE, _MASKED = ("opaque", "opaque_double"), ("mask", "blend")
 _KINDS = ("directional", "spot", "point")  # shadow_raster.comp's bias index
+# Timestamps after each kernel (benchmarks/bench_shadows.py --steps): FrameStats.pass_ms then
+# has "shadows.small", "shadows.big", "shadows.masked" and "shadows" (the copy) apart. Off:
+# one timestamp, "shadows", for them all.
+TIMED_STEPS = False
 
 
 def wants_compute(choice: Any, device: Any, measured: bool | None = None) -> bool:
@@ -237,14 +241,16 @@ class ShadowRaster:
 
         record = self._records(table, dset, push, jobs, material_sets, set0)
         depths, big_list = "shadow_depths", "shadow_big"
+        apart = TIMED_STEPS
         out = [Step("shadows.clear", record["clear"], ((depths, "transfer_dst"), (big_list, "transfer_dst")),
                     timed=False),
-               Step("shadows.small", record["small"], ((depths, "storage"), (big_list, "storage")), timed=False),
+               Step("shadows.small", record["small"], ((depths, "storage"), (big_list, "storage")),
+                    timed=apart),
                Step("shadows.args", record["args"], ((big_list, "storage"),), timed=False),
                Step("shadows.big", record["big"], ((depths, "storage"), (big_list, "storage|indirect")),
-                    timed=False)]
+                    timed=apart)]
         if table.masked:
-            out.append(Step("shadows.masked", record["masked"], ((depths, "storage"),), timed=False))
+            out.append(Step("shadows.masked", record["masked"], ((depths, "storage"),), timed=apart))
         out.append(Step("shadows", record["copy"], ((depths, "transfer_src"),)))
         return out
 
