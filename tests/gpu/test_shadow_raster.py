@@ -11,6 +11,10 @@ Bounds (measured on lavapipe, Mesa 22.3, in brackets):
   alpha-tested texels on a hole's border, where the two samplings' gradients differ] and at
   most 0.1% of those away from a depth step or the coverage's border [0].
 - images lit through them (8-bit): mean <= 0.25/255 and p99 <= 1/255 [0 and 0].
+On GPUs the depth bounds also allow the slope-scaled bias's own spread: Vulkan lets the
+raster units take m as sqrt(dz/dx^2 + dz/dy^2) or approximate it by the larger of the two
+(what lavapipe and shadow_raster.comp do), so a difference of up to (sqrt 2 - 1) x |slope
+factor| x m (m from the map's own gradient) is the spec's, not an error.
 """
 
 from __future__ import annotations
@@ -34,7 +38,13 @@ def _maps(r, camera, lights, mode: str, **opts):  # noqa: ANN001, ANN202
     return image, *r.shadows.read_maps()
 
 
-def _compare_layers(a: np.ndarray, b: np.ndarray, label: str, min_inner: float = 0.02) -> None:
+def _compare_layers(a: np.ndarray, b: np.ndarray, label: str, r, min_inner: float = 0.02  # noqa: ANN001
+                    ) -> None:
+    """Layers `a` (the raster units') and `b` (compute) within the bounds above; `r` the
+    renderer (on a GPU the slope bias's spread is allowed)."""
+    from vkpbr.render.shadows import DEPTH_BIAS
+
+    slope_factor = max(abs(s) for _, s in DEPTH_BIAS.values())
     for i, (x, y) in enumerate(zip(a, b, strict=True)):
         xor = (x > 0) != (y > 0)
         assert xor.mean() <= 0.002, (label, i, xor.mean())
@@ -42,6 +52,9 @@ def _compare_layers(a: np.ndarray, b: np.ndarray, label: str, min_inner: float =
         if not both.any():
             continue
         d = np.abs(x - y)
+        if r.device.info.kind != "cpu":
+            gy, gx = np.gradient(x.astype(np.float64))
+            d = np.maximum(d - (np.sqrt(2) - 1) * slope_factor * np.maximum(abs(gx), abs(gy)) * 1.01, 0)
         inner = both & ~_edges(x)
         far = (d > 1e-5)
         if inner.any():
@@ -96,8 +109,8 @@ def test_every_layer_equals_the_raster_units(renderer, alpha_mask: bool) -> None
         opts = {"shadow_resolution": res, "env": "none", "alpha_mask": alpha_mask}
         hard = _maps(renderer, CAMERA, ALL, "hardware", **opts)
         comp = _maps(renderer, CAMERA, ALL, "compute", **opts)
-        _compare_layers(hard[1][:6], comp[1][:6], f"2D layers at {res}")
-        _compare_layers(hard[2][:6], comp[2][:6], f"cube faces at {res}")
+        _compare_layers(hard[1][:6], comp[1][:6], f"2D layers at {res}", renderer)
+        _compare_layers(hard[2][:6], comp[2][:6], f"cube faces at {res}", renderer)
         _compare_images(hard[0], comp[0], f"image at {res}")
         # The layers hold something: the ground under every cascade, the card's hole.
         assert all((layer > 0).mean() > 0.1 for layer in comp[1][:5])
@@ -118,8 +131,8 @@ def test_partial_redraws_and_the_choice(renderer) -> None:  # noqa: ANN001
                                                   "point": False}
     moved = renderer.shadows.read_maps()
     hard = _maps(renderer, MOVED, ALL, "hardware", **opts)
-    _compare_layers(hard[1][:5], moved[0][:5], "moved camera")
-    _compare_layers(hard[2][:6], moved[1][:6], "kept cube")
+    _compare_layers(hard[1][:5], moved[0][:5], "moved camera", renderer)
+    _compare_layers(hard[2][:6], moved[1][:6], "kept cube", renderer)
     renderer.render(CAMERA, ALL, size=SIZE, shadow_raster="auto", **opts)
     assert not renderer.shadows.compute  # lavapipe: a CPU
     from vkpbr.errors import UsageError
@@ -153,8 +166,8 @@ def test_a_moving_caster_redraws(renderer) -> None:  # noqa: ANN001
         hard = _maps(renderer, CAMERA, ALL, "hardware", shadow_resolution=256, env="none")
         assert not np.array_equal(before, after)
         _compare_images(hard[0], after, "moved block")
-        _compare_layers(hard[1][:5], maps[0][:5], "moved block 2D")
-        _compare_layers(hard[2][:6], maps[1][:6], "moved block cube")
+        _compare_layers(hard[1][:5], maps[0][:5], "moved block 2D", renderer)
+        _compare_layers(hard[2][:6], maps[1][:6], "moved block cube", renderer)
     finally:
         renderer.set_pose(1, np.eye(4))
 
@@ -182,7 +195,7 @@ def test_skinned_casters(make_renderer, sample_scene) -> None:  # noqa: ANN001
             image = r.render(cam, lights, size=SIZE, time=t, shadow_raster=mode,
                              shadow_resolution=256, env="none")
             got[t, mode] = (image, r.shadows.maps.read())  # (no cube: its stand-in is not readable)
-        _compare_layers(got[t, "hardware"][1][:5], got[t, "compute"][1][:5], f"CesiumMan at {t}",
+        _compare_layers(got[t, "hardware"][1][:5], got[t, "compute"][1][:5], f"CesiumMan at {t}", r,
                         min_inner=0.0)  # (a figure: few planes)
         assert (got[t, "compute"][1][4] > 0).mean() > 0.01  # the spot map sees the figure
         _compare_images(got[t, "hardware"][0], got[t, "compute"][0], f"CesiumMan at {t}")
@@ -209,7 +222,8 @@ def test_sponza_cascades(make_renderer, assets) -> None:  # noqa: ANN001
         image = r.render(None, lights, size=(48, 32), shadow_raster=mode, shadow_resolution=256,
                          ao="off")
         got[mode] = (image, r.shadows.maps.read())
-    _compare_layers(got["hardware"][1][:4], got["compute"][1][:4], "Sponza cascades", min_inner=0.0)
+    _compare_layers(got["hardware"][1][:4], got["compute"][1][:4], "Sponza cascades", r,
+                    min_inner=0.0)
     _compare_images(got["hardware"][0], got["compute"][0], "Sponza")
     assert (got["compute"][1][0] > 0).mean() > 0.5
 
