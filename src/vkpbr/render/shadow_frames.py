@@ -119,6 +119,13 @@ class ShadowFrames:
             self.ensure(plan, options)
         if not plan.entries:
             return None
-        self._rows.pop(slot.index, None)  # the slot's cascades are overwritten
-        return self.maps.write(slot.index, plan, lights, None, (1, 1), 0.0, 0.0,
+        # Skipped when the slot holds these already (a loop of batches: the fits are the
+        # scene's, the same every step); a frame's cascades in between change the key.
+        key = ("scene", plan, lights, self.maps.resolution, getattr(self.bounds, "version", 0))
+        last = self._rows.get(slot.index)
+        if last is not None and last[0] == key:
+            return last[1]
+        rows = self.maps.write(slot.index, plan, lights, None, (1, 1), 0.0, 0.0,
                                self.bounds.corners[0], self.bounds.corners[-1])
+        self._rows[slot.index] = (key, rows)
+        return rows
