@@ -355,7 +355,8 @@ def scene_entry(entry: object, where: str, base: Path) -> SceneJob:
     if entry.get("worlds") is not None:
         from vkpbr.distributed.worlds import job_worlds
 
-        worlds = job_worlds(entry["worlds"], len(poses), where, base, settings.allow_outside_paths)
+        worlds = job_worlds(entry["worlds"], len(poses), f"{where}: worlds", base,
+                            settings.allow_outside_paths)
     return SceneJob(settings, poses, colmap=_bool(entry, "colmap", where, False), where=where,
                     worlds=worlds)
 

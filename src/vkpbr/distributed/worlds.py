@@ -246,8 +246,8 @@ def _world_of_view(value: object, views: int, worlds: int, where: str, base: Pat
 
 def job_worlds(value: object, views: int, where: str, base: Path, outside: bool) -> JobWorlds:
     """An entry's checked `"worlds"` (see the module docstring) for its `views` views;
-    `base`: the job file's folder; `outside`: the entry's allow_outside_paths."""
-    where = f"{where}: worlds"
+    `where` starts every message ("job.json: entry 2: worlds"), `base`: the job file's
+    folder, `outside`: the entry's allow_outside_paths."""
     if not isinstance(value, Mapping):
         raise UsageError(f"{where}: expected an object with nodes and poses, got {_type(value)}")
     unknown = sorted(set(value) - _KEYS)
