@@ -49,13 +49,16 @@ def test_ray_job_with_worlds(cluster: dict, make_renderer, capsys, tmp_path: Pat
     shown[4, 1] = False  # view 4's world hides the second sphere
     np.save(tmp_path / "w.npy", rows)
     np.save(tmp_path / "v.npy", shown)
+    np.save(tmp_path / "c.npy", np.random.default_rng(5).uniform(0, 1, (len(POSES), 1, 3)))
     worlds = {"nodes": NODES, "poses": "w.npy", "visible": "v.npy"}
-    (tmp_path / "worlds.json").write_text(json.dumps(worlds))
+    painted = {**worlds, "materials": {"names": ["floor"], "base_color": "c.npy"}}
+    (tmp_path / "worlds.json").write_text(json.dumps(painted))
     (tmp_path / "poses.json").write_text(json.dumps(POSES))
-    entry = {"cameras": "poses.json", "size": list(SIZE), "worlds": worlds}
-    job = tmp_path / "job.json"  # the batch of worlds, and world by world (shadows on)
+    entry = {"cameras": "poses.json", "size": list(SIZE)}
+    job = tmp_path / "job.json"  # the batch of worlds; world by world (shadows, materials)
     job.write_text(json.dumps({"views_per_item": 2, "scenes": [
-        {**entry, "out": "batched", "options": NO_SHADOWS}, {**entry, "out": "shadowed"}]}))
+        {**entry, "out": "batched", "options": NO_SHADOWS, "worlds": worlds},
+        {**entry, "out": "shadowed", "worlds": painted}]}))
     result = render(job)
     assert result.ok and result.rendered == 2 * len(POSES) and result.actors == 2, result.summary()
     for name in ("batched", "shadowed"):

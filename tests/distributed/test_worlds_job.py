@@ -93,7 +93,24 @@ def _bad_cases(tmp: Path) -> list[tuple[object, str]]:
         ({"nodes": NODES, "poses": ok, "pose": 1}, "worlds: unknown key 'pose'"),
         ({"nodes": [], "poses": ok}, "worlds: nodes: expected a list of node names"),
         ({"nodes": [True], "poses": ok}, "worlds: nodes: expected"),
-        ({"nodes": ["a", "a"], "poses": ok}, "names a node twice"),
+        ({"nodes": ["a", "a"], "poses": ok}, "names one twice"),
+        ({"poses": ok}, 'worlds: missing "nodes"'),
+        ({"quaternion": "wxyz"}, 'worlds: missing "poses" (or "materials")'),
+        ({"materials": {"names": ["floor"]}}, "worlds: materials: no factor given"),
+        ({"materials": {"base_color": [[[1, 1, 1]]] * 4}}, 'materials: missing "names"'),
+        ({"materials": {"names": ["floor"], "shine": 1}}, "materials: unknown key 'shine'"),
+        ({"materials": {"names": ["floor"], "metallic": [[0.5]] * 3}},
+         "3 world(s) for 4 view(s)"),
+        ({"materials": {"names": ["floor"], "metallic": [[0.5, 0.5]] * 4}},
+         r"metallic \(inline\): shape \(4, 2\) of float64; give \(worlds, 1\)"),
+        ({"materials": {"names": ["floor"], "roughness": [[0.5]] * 3 + [[1.5]]}},
+         r"roughness \(inline\): world 3 holds a value not within \[0, 1\]"),
+        ({"materials": {"names": ["floor"], "emissive": [[[0, 0, -1]]] * 4}},
+         "world 0 holds a value not >= 0"),
+        ({"materials": {"names": ["floor"], "base_color": [[[0, 0, 1]]] * 4,
+                        "metallic": [[0.5]] * 3}}, "the factors give [3, 4] worlds"),
+        ({"nodes": NODES, "poses": ok, "materials": {"names": ["floor"], "metallic": [[0.5]] * 3}},
+         "materials give 3 worlds, poses 4"),
         ({"nodes": NODES, "poses": ok, "quaternion": "wxzy"}, 'quaternion: expected "xyzw"'),
         ({"nodes": NODES, "poses": "missing.npy"}, "worlds: poses missing.npy: no such file"),
         ({"nodes": NODES, "poses": "../outside.npy"}, "is outside the job file's folder"),
@@ -106,7 +123,7 @@ def _bad_cases(tmp: Path) -> list[tuple[object, str]]:
          r"shape \(4, 2, 6\); give \(worlds, nodes, 7\)"),
         ({"nodes": NODES[:1], "poses": ok}, "2 node(s) a world, but nodes names 1"),
         ({"nodes": NODES, "poses": _save(tmp, "three.npy", world_rows(3))},
-         'poses: 3 world(s) for 4 view(s); give one world per view, or "world_of_view"'),
+         'worlds: 3 world(s) for 4 view(s); give one world per view, or "world_of_view"'),
         ({"nodes": NODES, "poses": _save(tmp, "nan.npy", nan)}, "world 2 holds NaN or infinity"),
         ({"nodes": NODES, "poses": _save(tmp, "zq.npy", zero_q)}, "a quaternion of length 0"),
         ({"nodes": NODES, "poses": ok, "visible": [[True, False]]},
@@ -237,3 +254,39 @@ def test_actor_fails_an_item_whose_nodes_the_scene_lacks(actor, tmp_path: Path) 
                                        "nodes"), res["error"]
         assert message in res["error"] and "\n" not in res["error"]
         assert not (tmp_path / "out").exists()
+
+
+def test_actor_renders_material_overrides_per_world(actor, tmp_path: Path) -> None:  # noqa: ANN001
+    """Material factors per world (with poses, and alone): each view as `render` after
+    set_material of its world's factors; the overrides are put back after the item."""
+    rng = np.random.default_rng(8)
+    colors = rng.uniform(0.0, 1.0, (4, 2, 3))
+    rough = rng.uniform(0.0, 1.0, (4, 2))
+    np.save(tmp_path / "c.npy", colors)
+    rows = world_rows(4, seed=9)
+    np.save(tmp_path / "w.npy", rows)
+    materials = {"names": ["floor", "sphere-m0-r0"], "base_color": "c.npy", "roughness": rough.tolist()}
+    for worlds in ({"materials": materials}, {"nodes": NODES, "poses": "w.npy", "materials": materials}):
+        job = load_job(write_job(tmp_path, worlds, options={"ao": "off"}))
+        res = actor.render(job.items()[0])
+        assert res["ok"], res
+        r = actor._renderer
+        assert r.state.materials == {}  # the item's overrides put back
+        cams = [p.camera(r.default_camera()) for p in job.scenes[0].poses]
+        rest = r.render(cams[0], size=SIZE, ao="off")
+        for v in range(4):
+            if "poses" in worlds:
+                r.set_poses(NODES, rows[v], space="world")
+            for m, name in enumerate(materials["names"]):
+                r.state.set_material(name, base_color=colors[v, m], roughness=rough[v, m])
+            want = r.render(cams[v], size=SIZE, ao="off")
+            r.state.reset()
+            got = np.asarray(Image.open(tmp_path / "out" / f"frame_{v:05d}.png"))
+            assert np.array_equal(got, want), (worlds.keys(), v)
+        assert not np.array_equal(np.asarray(Image.open(tmp_path / "out" / "frame_00000.png")), rest)
+        for f in (tmp_path / "out").iterdir():
+            f.unlink()
+    job = load_job(write_job(tmp_path, {"materials": {**materials, "names": ["floor", "flor"]}}))
+    res = actor.render(job.items()[0])
+    assert not res["ok"] and res["retry"] is False and "\n" not in res["error"]
+    assert "entry 0: worlds: materials: no material is named 'flor'" in res["error"], res["error"]

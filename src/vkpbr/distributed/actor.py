@@ -57,11 +57,12 @@ def render_views(renderer: Any, cameras: list[Any], lights: Any, settings: Rende
 def world_views(renderer: Any, cameras: list[Any], lights: Any, settings: RenderSettings,
                 worlds: ItemWorlds, where: str = "worlds") -> Iterator[dict[str, np.ndarray]]:
     """`render_views` of views that each see their own world: view i equals the scene
-    rendered with world `worlds.index[i]` set on it (set_poses(space="world"), set_visible),
-    as a batch of worlds renders it (docs/batch.md). Two routes give those frames:
+    rendered with world `worlds.index[i]` set on it (set_poses(space="world"), set_visible,
+    set_material), as a batch of worlds renders it (docs/batch.md). Two routes give them:
 
     - a batch of worlds, `render_batch(worlds=...)`, `settings.batch` views at a time, where
-      shadows are off: its shadow maps are the renderer's state's, shared by every world;
+      shadows are off and no material is overridden (a batch's shadow maps are the
+      renderer's state's, shared by every world; it takes no per-world materials);
     - else each world set on the renderer's state in turn and its views rendered as plain
       views are (a batch, or frame by frame with batch 0), so each world casts its own
       shadows; the state is put back afterwards.
@@ -72,8 +73,9 @@ def world_views(renderer: Any, cameras: list[Any], lights: Any, settings: Render
     options, names = settings.render_options(), settings.outputs
     wanted = ("color", *names) if names else None
     batch = settings.batch if renderer.device.batch_views else 0
-    if options.shadows or not batch:
-        yield from _world_by_world(renderer, cameras, lights, settings, slots, poses, worlds.index)
+    if options.shadows or not batch or worlds.materials is not None or poses is None:
+        yield from _world_by_world(renderer, cameras, lights, settings, (slots, poses), worlds,
+                                   where)
         return
     for lo in range(0, len(cameras), batch):
         chunk = cameras[lo:lo + batch]
@@ -86,10 +88,13 @@ def world_views(renderer: Any, cameras: list[Any], lights: Any, settings: Render
 
 
 def _world_slots(renderer: Any, worlds: ItemWorlds, where: str) -> tuple[Any, Any]:
-    """The renderer's slots of `worlds.nodes` and the checked poses; a node the scene lacks,
-    or patterns that match another count of nodes than the poses give, is one line."""
+    """The renderer's slots of `worlds.nodes` and the checked poses (None, None without
+    poses); a node the scene lacks, or patterns that match another count of nodes than the
+    poses give, is one line."""
     from vkpbr.scene.worlds import WorldPoses
 
+    if worlds.poses is None:
+        return None, None
     n = worlds.poses.shape[1]
     try:
         slots = renderer.world_slots(list(worlds.nodes))
@@ -103,18 +108,24 @@ def _world_slots(renderer: Any, worlds: ItemWorlds, where: str) -> tuple[Any, An
 
 
 def _world_by_world(renderer: Any, cameras: list[Any], lights: Any, settings: RenderSettings,
-                    slots: Any, poses: Any, index: np.ndarray) -> Iterator[dict[str, np.ndarray]]:
-    """Each world set on the renderer's state, its views rendered as plain views (shadow maps
-    of that world), the state put back; the frames in the views' order."""
+                    placed: tuple[Any, Any], worlds: ItemWorlds,
+                    where: str) -> Iterator[dict[str, np.ndarray]]:
+    """Each world set on the renderer's state (`placed`: its slots and poses, or None),
+    its views rendered as plain views (shadow maps of that world), the state put back; the
+    frames in the views' order."""
     from vkpbr.render.batch_call import apply_saved, apply_world
 
-    names = settings.outputs
+    names, index, state = settings.outputs, worlds.index, renderer.state
+    slots, poses = placed
     frames: dict[int, dict[str, np.ndarray]] = {}
-    restore = apply_saved(renderer.state)
+    restore, materials = apply_saved(state), {k: dict(v) for k, v in state.materials.items()}
     try:
         for w in dict.fromkeys(index.tolist()):  # the worlds in the order views first see them
             views = np.flatnonzero(index == w)
-            apply_world(renderer.state, slots, poses, w)
+            if poses is not None:
+                apply_world(state, slots, poses, w)
+            if worlds.materials is not None:
+                _set_materials(state, worlds.materials.of_world(w), where)
             got = renderer.render_many([cameras[v] for v in views], lights, settings.size,
                                        settings.render_options(), linear=settings.linear,
                                        outputs=("color", *names) if names else None,
@@ -123,8 +134,22 @@ def _world_by_world(renderer: Any, cameras: list[Any], lights: Any, settings: Re
                 frames[int(v)] = frame if names else {"color": frame}
     finally:
         restore()
+        if worlds.materials is not None:  # the overrides as they were (set_material's way)
+            state.materials.clear()
+            state.materials.update(materials)
+            state.material_version += 1
+            state.version += 1
     for v in range(len(cameras)):
         yield frames.pop(v)
+
+
+def _set_materials(state: Any, calls: list[tuple[str | int, dict[str, Any]]], where: str) -> None:
+    """One world's material overrides; a material the scene lacks is one line."""
+    for material, factors in calls:
+        try:
+            state.set_material(material, **factors)
+        except UsageError as exc:
+            raise UsageError(f"{where}: materials: {exc}") from None
 
 
 def load_renderer(settings: RenderSettings, device: str | int | None = None) -> Any:

@@ -8,8 +8,14 @@ their own and some hidden. An entry names those nodes once and gives the state p
                "poses": "worlds.npy",          # (W, N, 7) position + quaternion, or (W, N, 4, 4)
                "quaternion": "xyzw",           # the rows' order: "xyzw" (default) or "wxyz"
                "visible": "visible.npy",       # optional (W, N) bools
+               "materials": {"names": ["floor"],           # optional material factor overrides
+                             "base_color": "colors.npy",   # (W, M, 3 or 4) in [0, 1]
+                             "metallic": ..., "roughness": ...,  # (W, M) in [0, 1]
+                             "emissive": ...},             # (W, M, 3) >= 0
                "world_of_view": "index.npy"}   # optional (V,) integers; omitted: W = V, view v
                                                # sees world v
+
+"poses" (with "nodes") or "materials" or both; each array's first axis is the W worlds.
 
 Everything is checked when the job is read, before any actor starts: the arrays' headers
 (shape, dtype) before their data, the shapes against the entry's V views and the N nodes,
@@ -40,22 +46,50 @@ from vkpbr.errors import UsageError
 
 __all__ = ["JobWorlds", "ItemWorlds", "job_worlds"]
 
-_KEYS = frozenset({"nodes", "poses", "quaternion", "visible", "world_of_view"})
+_KEYS = frozenset({"nodes", "poses", "quaternion", "visible", "world_of_view", "materials"})
+# Material factors a world may override: (values per material, low, high) as set_material
+# takes them (vkpbr.scene.state).
+_FACTORS = {"base_color": ((3, 4), 0.0, 1.0), "metallic": ((), 0.0, 1.0),
+            "roughness": ((), 0.0, 1.0), "emissive": ((3,), 0.0, np.inf)}
 _MAX_BYTES = 4 << 30  # one array the driver holds in memory: 4 GiB (33 million 4x4 poses)
 _GLOB = frozenset("*?[")
+
+
+@dataclass(frozen=True, eq=False)
+class Materials:
+    """Material factor overrides of W worlds: M materials (`names`: names or indices) and
+    per factor a (W, M) or (W, M, k) float64 array (`factors`, the names of _FACTORS)."""
+
+    names: tuple[str | int, ...]
+    factors: dict[str, np.ndarray]
+
+    @property
+    def count(self) -> int:
+        """W: the worlds the factors give."""
+        return len(next(iter(self.factors.values())))
+
+    def rows(self, used: np.ndarray) -> Materials:
+        return Materials(self.names, {k: v[used] for k, v in self.factors.items()})
+
+    def of_world(self, w: int) -> list[tuple[str | int, dict[str, Any]]]:
+        """World `w`'s set_material calls: (material, {factor: value})."""
+        return [(name, {k: (v[w, m] if v.ndim == 3 else float(v[w, m]))
+                        for k, v in self.factors.items()})
+                for m, name in enumerate(self.names)]
 
 
 @dataclass(frozen=True)
 class ItemWorlds:
     """The worlds of one work item's views: `poses` (K, N, 7) or (K, N, 4, 4) float64 of the
-    K distinct worlds it sees, `visible` (K, N) bool or None, and `index` (views,) the row
-    each of the item's views sees."""
+    K distinct worlds it sees (None: no poses), `visible` (K, N) bool or None, `materials`
+    their material overrides or None, and `index` (views,) the row each of its views sees."""
 
     nodes: tuple[str | int, ...]
     quaternion: str
-    poses: np.ndarray
+    poses: np.ndarray | None
     visible: np.ndarray | None
     index: np.ndarray
+    materials: Materials | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -64,29 +98,46 @@ class JobWorlds:
 
     nodes: tuple[str | int, ...]
     quaternion: str
-    poses: np.ndarray  # (W, N, 7) or (W, N, 4, 4) float64
+    poses: np.ndarray | None  # (W, N, 7) or (W, N, 4, 4) float64
     visible: np.ndarray | None  # (W, N) bool
     world_of_view: np.ndarray  # (V,) int64
+    materials: Materials | None = None
 
     def item(self, views: tuple[int, ...]) -> ItemWorlds:
         """The worlds `views` see, as few as there are distinct ones (what an item ships)."""
         used, index = np.unique(self.world_of_view[list(views)], return_inverse=True)
-        return ItemWorlds(self.nodes, self.quaternion, self.poses[used],
+        return ItemWorlds(self.nodes, self.quaternion,
+                          None if self.poses is None else self.poses[used],
                           None if self.visible is None else self.visible[used],
-                          index.astype(np.int64))
+                          index.astype(np.int64),
+                          None if self.materials is None else self.materials.rows(used))
+
+    def _parts(self, w: int) -> list[np.ndarray]:
+        """World `w`'s arrays, in a fixed order."""
+        parts = [a[w] for a in (self.poses, self.visible) if a is not None]
+        if self.materials is not None:
+            parts += [self.materials.factors[k][w] for k in sorted(self.materials.factors)]
+        return parts
 
     @cached_property
     def _world_digests(self) -> list[str]:
         """A digest of each world's state: what its views' files depend on."""
-        head = repr((self.nodes, self.quaternion if self.poses.ndim == 3 else "matrices"))
+        rows = self.poses is not None and self.poses.ndim == 3
+        mats = self.materials
+        head = repr((self.nodes, self.quaternion if rows else "matrices",
+                     self.visible is not None, mats.names if mats else None,
+                     sorted(mats.factors) if mats else None))
         out = []
-        for w in range(len(self.poses)):
+        for w in range(self._count):
             h = hashlib.blake2b(head.encode(), digest_size=16)
-            h.update(np.ascontiguousarray(self.poses[w]).tobytes())
-            if self.visible is not None:
-                h.update(np.ascontiguousarray(self.visible[w]).tobytes())
+            for part in self._parts(w):
+                h.update(np.ascontiguousarray(part).tobytes())
             out.append(h.hexdigest())
         return out
+
+    @property
+    def _count(self) -> int:
+        return len(self.poses) if self.poses is not None else self.materials.count  # type: ignore[union-attr]
 
     def digest(self, view: int) -> str:
         """The digest of view `view`'s world (recorded with the view in the manifest)."""
@@ -99,17 +150,21 @@ def _type(value: object) -> str:
     return _json_type(value)
 
 
-def _nodes(value: object, where: str) -> tuple[str | int, ...]:
+def _nodes(value: object, where: str, key: str = "nodes",
+           what: str = "node names, paths, patterns or indices") -> tuple[str | int, ...]:
+    """A list of names or indices (a single one is a list of one)."""
     if isinstance(value, (str, int)) and not isinstance(value, bool):
         value = [value]
-    ok = isinstance(value, list) and value and all(
-        (isinstance(v, str) and v.strip()) or (isinstance(v, int) and not isinstance(v, bool)
-                                               and v >= 0) for v in value)
-    if not ok:
-        raise UsageError(f"{where}: nodes: expected a list of node names, paths, patterns or "
-                         f"indices, got {_type(value) if not isinstance(value, list) else value!r}")
+    if not isinstance(value, list) or not value:
+        raise UsageError(f"{where}: {key}: expected a list of {what}, got "
+                         f"{'an empty list' if value == [] else _type(value)}")
+    for v in value:
+        if not ((isinstance(v, str) and v.strip())
+                or (isinstance(v, int) and not isinstance(v, bool) and v >= 0)):
+            raise UsageError(f"{where}: {key}: expected a list of {what}, got {_type(v)} "
+                             f"{str(v)[:40]!r} in it")
     if len(set(value)) != len(value):
-        raise UsageError(f"{where}: nodes: {value!r} names a node twice")
+        raise UsageError(f"{where}: {key}: {str(value)[:80]} names one twice")
     return tuple(value)
 
 
@@ -227,7 +282,7 @@ def _world_of_view(value: object, views: int, worlds: int, where: str, base: Pat
                    outside: bool) -> np.ndarray:
     if value is None:
         if worlds != views:
-            raise UsageError(f"{where}: poses: {worlds} world(s) for {views} view(s); give one "
+            raise UsageError(f"{where}: {worlds} world(s) for {views} view(s); give one "
                              'world per view, or "world_of_view" (the world each view sees)')
         return np.arange(views, dtype=np.int64)
     a = _array(value, "world_of_view", where, base, outside)
@@ -244,6 +299,44 @@ def _world_of_view(value: object, views: int, worlds: int, where: str, base: Pat
     return a
 
 
+def _materials(value: object, where: str, base: Path, outside: bool) -> Materials:
+    """The "materials" object: names and per-world factor arrays, each checked (shape, range,
+    NaN); the names are the actor's to find in the scene."""
+    where = f"{where}: materials"
+    if not isinstance(value, Mapping):
+        raise UsageError(f"{where}: expected an object with names and factors, got {_type(value)}")
+    unknown = sorted(set(value) - {"names", *_FACTORS})
+    if unknown:
+        raise UsageError(f"{where}: unknown key {unknown[0]!r} (known: names, "
+                         f"{', '.join(_FACTORS)})")
+    if "names" not in value:
+        raise UsageError(f'{where}: missing "names" (the materials each world overrides)')
+    names = _nodes(value["names"], where, "names", "material names or indices")
+    factors = {}
+    for key, (sizes, lo, hi) in _FACTORS.items():
+        if key not in value:
+            continue
+        a = _array(value[key], key, where, base, outside)
+        shown = value[key] if isinstance(value[key], str) else "(inline)"
+        tails = [(len(names), k) for k in sizes] if sizes else [(len(names),)]
+        if a.dtype.kind not in "fiu" or a.dtype == bool or a.ndim < 2 or a.shape[1:] not in tails:
+            want = " or ".join(f"(worlds, {', '.join(map(str, t))})" for t in tails)
+            raise UsageError(f"{where}: {key} {shown}: shape {a.shape} of {a.dtype}; give {want}")
+        a = a.astype(np.float64)
+        bad = ~((a >= lo) & (a <= hi)).reshape(len(a), -1).all(axis=1)  # NaN fails both
+        if bad.any():
+            rng = f">= {lo:g}" if hi == np.inf else f"within [{lo:g}, {hi:g}]"
+            raise UsageError(f"{where}: {key} {shown}: world {int(np.argmax(bad))} holds a value "
+                             f"not {rng} (or NaN)")
+        factors[key] = a
+    if not factors:
+        raise UsageError(f"{where}: no factor given ({', '.join(_FACTORS)})")
+    counts = {len(a) for a in factors.values()}
+    if len(counts) > 1 or 0 in counts:
+        raise UsageError(f"{where}: the factors give {sorted(counts)} worlds; give each the same")
+    return Materials(names, factors)
+
+
 def job_worlds(value: object, views: int, where: str, base: Path, outside: bool) -> JobWorlds:
     """An entry's checked `"worlds"` (see the module docstring) for its `views` views;
     `where` starts every message ("job.json: entry 2: worlds"), `base`: the job file's
@@ -253,16 +346,28 @@ def job_worlds(value: object, views: int, where: str, base: Path, outside: bool)
     unknown = sorted(set(value) - _KEYS)
     if unknown:
         raise UsageError(f"{where}: unknown key {unknown[0]!r} (known: {', '.join(sorted(_KEYS))})")
-    for key in ("nodes", "poses"):
-        if key not in value:
-            raise UsageError(f'{where}: missing "{key}"')
-    nodes = _nodes(value["nodes"], where)
+    if "poses" not in value and "materials" not in value:
+        raise UsageError(f'{where}: missing "poses" (or "materials")')
+    if ("nodes" in value) != ("poses" in value):
+        missing = "poses" if "nodes" in value else "nodes"
+        raise UsageError(f'{where}: missing "{missing}" ("nodes" names what "poses" moves)')
     quaternion = value.get("quaternion", "xyzw")
     if quaternion not in ("xyzw", "wxyz"):
         raise UsageError(f'{where}: quaternion: expected "xyzw" or "wxyz", got {quaternion!r}')
-    poses = _poses(value["poses"], nodes, quaternion, where, base, outside)
-    visible = None
-    if value.get("visible") is not None:
-        visible = _visible(value["visible"], poses.shape[:2], where, base, outside)
-    index = _world_of_view(value.get("world_of_view"), views, len(poses), where, base, outside)
-    return JobWorlds(nodes, quaternion, poses, visible, index)
+    nodes, poses, visible = (), None, None
+    if "poses" in value:
+        nodes = _nodes(value["nodes"], where)
+        poses = _poses(value["poses"], nodes, quaternion, where, base, outside)
+        if value.get("visible") is not None:
+            visible = _visible(value["visible"], poses.shape[:2], where, base, outside)
+    elif value.get("visible") is not None:
+        raise UsageError(f'{where}: visible needs "nodes" and "poses"')
+    materials = None
+    if value.get("materials") is not None:
+        materials = _materials(value["materials"], where, base, outside)
+    worlds = len(poses) if poses is not None else materials.count
+    if materials is not None and materials.count != worlds:
+        raise UsageError(f"{where}: materials give {materials.count} worlds, poses {worlds}; "
+                         "give each the same")
+    index = _world_of_view(value.get("world_of_view"), views, worlds, where, base, outside)
+    return JobWorlds(nodes, quaternion, poses, visible, index, materials)
