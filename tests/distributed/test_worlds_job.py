@@ -290,3 +290,25 @@ def test_actor_renders_material_overrides_per_world(actor, tmp_path: Path) -> No
     res = actor.render(job.items()[0])
     assert not res["ok"] and res["retry"] is False and "\n" not in res["error"]
     assert "entry 0: worlds: materials: no material is named 'flor'" in res["error"], res["error"]
+
+
+@pytest.mark.parametrize(("argv", "worlds", "message"), [
+    (["--worlds", "w.json"], None, "--worlds gives each view of a --cameras batch its world"),
+    (["--cameras", "p.json", "--worlds", "none.json"], None, "--worlds none.json: cannot read it"),
+    (["--cameras", "p.json", "--worlds", "w.json"], "{", "--worlds w.json: not valid JSON"),
+    (["--cameras", "p.json", "--worlds", "w.json", "--time", "1"], {"materials": {}},
+     "--worlds poses nodes per view: not with --time"),
+    (["--cameras", "p.json", "--worlds", "w.json"], {"nodes": NODES, "poses": "x.npy"},
+     "--worlds w.json: poses x.npy: no such file"),
+])
+def test_render_worlds_option_errors(capsys, monkeypatch: pytest.MonkeyPatch, tmp_path: Path,  # noqa: ANN001
+                                     argv: list[str], worlds: object, message: str) -> None:
+    """`vkpbr render --cameras --worlds`: the same checks, one line, before any work."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "p.json").write_text(json.dumps(POSES))
+    if worlds is not None:
+        (tmp_path / "w.json").write_text(worlds if isinstance(worlds, str) else json.dumps(worlds))
+    code = main(["render", *argv, "--out", "out"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and message in err, err
+    assert not (tmp_path / "out").exists()

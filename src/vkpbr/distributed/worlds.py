@@ -78,7 +78,7 @@ class Materials:
                 for m, name in enumerate(self.names)]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ItemWorlds:
     """The worlds of one work item's views: `poses` (K, N, 7) or (K, N, 4, 4) float64 of the
     K distinct worlds it sees (None: no poses), `visible` (K, N) bool or None, `materials`
@@ -191,7 +191,8 @@ def _read_npy(value: str, key: str, where: str, base: Path, outside: bool) -> np
     try:
         if not stat.S_ISREG(os.stat(p).st_mode):  # a FIFO, /dev/zero, a folder: not opened
             raise UsageError(f"{what}: not a regular file")
-        with open(p, "rb") as f:
+        # Non-blocking, and checked again: a file swapped for a FIFO meanwhile cannot block.
+        with os.fdopen(os.open(p, os.O_RDONLY | os.O_NONBLOCK), "rb") as f:
             if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
                 raise UsageError(f"{what}: not a regular file")
             shape, dtype = _header(f, what)
