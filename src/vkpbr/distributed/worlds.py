@@ -347,7 +347,7 @@ def job_worlds(value: object, views: int, where: str, base: Path, outside: bool)
     unknown = sorted(set(value) - _KEYS)
     if unknown:
         raise UsageError(f"{where}: unknown key {unknown[0]!r} (known: {', '.join(sorted(_KEYS))})")
-    if "poses" not in value and "materials" not in value:
+    if "poses" not in value and value.get("materials") is None:
         raise UsageError(f'{where}: missing "poses" (or "materials")')
     if ("nodes" in value) != ("poses" in value):
         missing = "poses" if "nodes" in value else "nodes"
