@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from PIL import Image
 
 from vkpbr.app.cli import main
@@ -146,6 +148,32 @@ def test_bad_worlds_are_one_line_before_any_work(capsys, tmp_path: Path) -> None
         assert err.startswith(f"vkpbr: error: {folder / 'job.json'}: entry 0: worlds"), err
         assert re.search(message if "\\" in message else re.escape(message), err), (message, err)
         assert not (folder / "out").exists()
+
+
+_KEYS = ["nodes", "poses", "quaternion", "visible", "world_of_view", "materials", "names",
+         "base_color", "metallic", "roughness", "emissive"]
+_LEAF = st.one_of(st.none(), st.booleans(), st.integers(-5, 10**30),
+                  st.floats(allow_nan=False, allow_infinity=False), st.text(max_size=5),
+                  st.sampled_from(["ok.npy", "../ok.npy", "sphere-*", "xyzw", "wxyz", "floor"]))
+_DOCS = st.recursive(_LEAF, lambda c: st.one_of(st.lists(c, max_size=4),
+                                                st.dictionaries(st.sampled_from(_KEYS), c, max_size=5)),
+                     max_leaves=30)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=list(HealthCheck))
+@given(worlds=_DOCS)
+def test_any_worlds_document_is_checked_or_one_line(tmp_path_factory: pytest.TempPathFactory,
+                                                    worlds: object) -> None:
+    """Random "worlds" values: accepted, or one UsageError line naming the entry; nothing
+    else escapes (an AttributeError on a null was found this way)."""
+    base = tmp_path_factory.getbasetemp() / "any-worlds"
+    if not (base / "ok.npy").exists():
+        base.mkdir(exist_ok=True)
+        np.save(base / "ok.npy", world_rows(3))
+    try:
+        job_from_doc([{"cameras": POSES[:3], "out": str(base / "o"), "worlds": worlds}], "job", base)
+    except UsageError as exc:
+        assert str(exc).startswith("job: entry 0: worlds") and "\n" not in str(exc), exc
 
 
 def test_outside_paths_are_read_when_the_entry_allows_them(tmp_path: Path) -> None:
