@@ -245,17 +245,20 @@ def _alone(renderer, camera, rows: np.ndarray, shown: np.ndarray | None, **optio
         renderer.state.reset()
 
 
-@pytest.mark.parametrize("shadows", [False, True])
-def test_actor_renders_each_view_in_its_world(actor, tmp_path: Path, shadows: bool) -> None:  # noqa: ANN001
-    """Shadows off: one batch of worlds; on: world by world on the state (a batch's shadow
-    maps are the state's). Both give each view as `render` of its world alone."""
+@pytest.mark.parametrize(("shadows", "batch"), [(False, 64), (True, 64), (False, 0)])
+def test_actor_renders_each_view_in_its_world(actor, tmp_path: Path, shadows: bool,  # noqa: ANN001
+                                              batch: int) -> None:
+    """Shadows off: one batch of worlds; on (or batch 0): world by world on the state (a
+    batch's shadow maps are the state's). Each gives each view as `render` of its world
+    alone."""
     rows = world_rows(3, seed=4)
     shown = np.array([[True, True], [False, True], [True, True]])
     np.save(tmp_path / "w.npy", rows)
     np.save(tmp_path / "v.npy", shown)
     options = {"shadows": shadows, "ao": "off"}
     job = load_job(write_job(tmp_path, {"nodes": NODES, "poses": "w.npy", "visible": "v.npy",
-                                        "world_of_view": [2, 0, 1, 2]}, options=options))
+                                        "world_of_view": [2, 0, 1, 2]}, options=options,
+                             batch=batch))
     item = job.items()[0]
     res = actor.render(item)
     assert res["ok"], res
