@@ -13,8 +13,9 @@ the numbers are a Ray actor's steady rate (bench_ray.py measures Ray's own overh
 - "worlds, world by world": every view its own world (random poses of the nodes, every
   tenth node hidden), shadows on: each world set on the state, its views a plain batch;
 - "worlds + materials": the same with a base colour and roughness per world and material;
-- with --no-shadows as well: "plain" and "worlds, batch of worlds" with shadows and AO off
-  (one render_batch(worlds=...) per item).
+- with --no-shadows as well: "plain", "worlds, batch of worlds" and the same with
+  materials, with shadows and AO off (one render_batch(worlds=..., world_materials=...) per
+  item).
 
 `--views-per-world K` lets K views share each world (world_of_view): the world-by-world
 route then submits K views at a time. Default scene: the built-in chart, its 25 spheres
@@ -116,7 +117,8 @@ def main() -> None:
                  ("worlds + materials", spec, None)]
         if args.no_shadows:
             cases += [("plain, no shadows/AO", None, off),
-                      ("worlds, batch of worlds, no shadows/AO", no_mats, off)]
+                      ("worlds, batch of worlds, no shadows/AO", no_mats, off),
+                      ("worlds + materials, batch of worlds, no shadows/AO", spec, off)]
         for k, (name, worlds, options) in enumerate(cases):
             settings = RenderSettings(scene=args.scene, out=work / f"out{k}", size=args.size,
                                       cache=True, cache_dir=str(work / "cache"), options=options)

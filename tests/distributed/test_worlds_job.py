@@ -287,8 +287,10 @@ def test_actor_fails_an_item_whose_nodes_the_scene_lacks(actor, tmp_path: Path) 
         assert not (tmp_path / "out").exists()
 
 
-def test_actor_renders_material_overrides_per_world(actor, tmp_path: Path) -> None:  # noqa: ANN001
-    """Material factors per world (with poses, and alone): each view as `render` after
+@pytest.mark.parametrize("shadows", [True, False])
+def test_actor_renders_material_overrides_per_world(actor, tmp_path: Path, shadows: bool) -> None:  # noqa: ANN001
+    """Material factors per world (with poses, and alone; world by world, and through
+    render_batch(world_materials=) with shadows off): each view as `render` after
     set_material of its world's factors; the overrides are put back after the item."""
     rng = np.random.default_rng(8)
     colors = rng.uniform(0.0, 1.0, (4, 2, 3))
@@ -298,19 +300,19 @@ def test_actor_renders_material_overrides_per_world(actor, tmp_path: Path) -> No
     np.save(tmp_path / "w.npy", rows)
     materials = {"names": ["floor", "sphere-m0-r0"], "base_color": "c.npy", "roughness": rough.tolist()}
     for worlds in ({"materials": materials}, {"nodes": NODES, "poses": "w.npy", "materials": materials}):
-        job = load_job(write_job(tmp_path, worlds, options={"ao": "off"}))
+        job = load_job(write_job(tmp_path, worlds, options={"ao": "off", "shadows": shadows}))
         res = actor.render(job.items()[0])
         assert res["ok"], res
         r = actor._renderer
         assert r.state.materials == {}  # the item's overrides put back
         cams = [p.camera(r.default_camera()) for p in job.scenes[0].poses]
-        rest = r.render(cams[0], size=SIZE, ao="off")
+        rest = r.render(cams[0], size=SIZE, ao="off", shadows=shadows)
         for v in range(4):
             if "poses" in worlds:
                 r.set_poses(NODES, rows[v], space="world")
             for m, name in enumerate(materials["names"]):
                 r.state.set_material(name, base_color=colors[v, m], roughness=rough[v, m])
-            want = r.render(cams[v], size=SIZE, ao="off")
+            want = r.render(cams[v], size=SIZE, ao="off", shadows=shadows)
             r.state.reset()
             got = np.asarray(Image.open(tmp_path / "out" / f"frame_{v:05d}.png"))
             assert np.array_equal(got, want), (worlds.keys(), v)

@@ -60,72 +60,82 @@ def world_views(renderer: Any, cameras: list[Any], lights: Any, settings: Render
     rendered with world `worlds.index[i]` set on it (set_poses(space="world"), set_visible,
     set_material), as a batch of worlds renders it (docs/batch.md). Two routes give them:
 
-    - a batch of worlds, `render_batch(worlds=...)`, `settings.batch` views at a time, where
-      shadows are off and no material is overridden (a batch's shadow maps are the
-      renderer's state's, shared by every world; it takes no per-world materials);
+    - a batch of worlds, `render_batch(worlds=..., world_materials=...)`, `settings.batch`
+      views at a time, where shadows are off: a batch's shadow maps are the renderer's
+      state's, shared by every world;
     - else each world set on the renderer's state in turn and its views rendered as plain
       views are (a batch, or frame by frame with batch 0), so each world casts its own
       shadows; the state is put back afterwards.
     """
     from vkpbr.render.batch_route import per_view
 
-    slots, poses = _world_slots(renderer, worlds, where)
+    placed = _world_slots(renderer, worlds, where)
     options, names = settings.render_options(), settings.outputs
     wanted = ("color", *names) if names else None
     batch = settings.batch if renderer.device.batch_views else 0
-    if options.shadows or not batch or worlds.materials is not None or poses is None:
-        yield from _world_by_world(renderer, cameras, lights, settings, (slots, poses), worlds,
-                                   where)
+    if options.shadows or not batch:
+        yield from _world_by_world(renderer, cameras, lights, settings, placed, worlds.index)
         return
+    factors = None if worlds.materials is None else worlds.materials.factors
     for lo in range(0, len(cameras), batch):
         chunk = cameras[lo:lo + batch]
         got = renderer.render_batch(chunk, settings.size, lights, options, settings.linear,
                                     outputs=wanted, worlds=worlds.poses,
                                     world_of_view=worlds.index[lo:lo + batch],
-                                    quaternion=worlds.quaternion, world_visible=worlds.visible)
+                                    quaternion=worlds.quaternion, world_visible=worlds.visible,
+                                    world_materials=factors)
         for frame in per_view(got, len(chunk), False):
             yield frame if names else {"color": frame}
 
 
-def _world_slots(renderer: Any, worlds: ItemWorlds, where: str) -> tuple[Any, Any]:
-    """The renderer's slots of `worlds.nodes` and the checked poses (None, None without
-    poses); a node the scene lacks, or patterns that match another count of nodes than the
-    poses give, is one line."""
-    from vkpbr.scene.worlds import WorldPoses
+def _world_slots(renderer: Any, worlds: ItemWorlds, where: str) -> tuple[Any, Any, Any]:
+    """The renderer's slots of `worlds.nodes` (world_slots, for its batches of worlds), the
+    checked poses and material factors (None where not given). A node or material the
+    scene lacks, or patterns that match another count of nodes than the poses give, is one
+    line."""
+    from vkpbr.scene.worlds import WorldMaterials, WorldPoses
 
-    if worlds.poses is None:
-        return None, None
-    n = worlds.poses.shape[1]
+    names = None if worlds.materials is None else list(worlds.materials.names)
+    mats = None
+    if names is not None:
+        try:
+            mats = WorldMaterials.of(renderer.state, names, worlds.materials.factors)  # type: ignore[union-attr]
+        except UsageError as exc:
+            raise UsageError(f"{where}: materials: {exc}") from None
+    nodes = None if worlds.poses is None else list(worlds.nodes)
     try:
-        slots = renderer.world_slots(list(worlds.nodes))
+        slots = renderer.world_slots(nodes, materials=names)
     except UsageError as exc:
         raise UsageError(f"{where}: nodes: {exc}") from None
+    if worlds.poses is None:
+        return None, None, mats
+    n = worlds.poses.shape[1]
     if len(slots) != n:
         shown = ", ".join(slots.names[:6]) + (" ..." if len(slots) > 6 else "")
-        raise UsageError(f"{where}: nodes {list(worlds.nodes)} are {len(slots)} node(s) of "
-                         f"the scene ({shown}), but the poses give {n} a world")
-    return slots, WorldPoses.of(worlds.poses, n, worlds.quaternion, worlds.visible)
+        raise UsageError(f"{where}: nodes {nodes} are {len(slots)} node(s) of the scene "
+                         f"({shown}), but the poses give {n} a world")
+    return slots, WorldPoses.of(worlds.poses, n, worlds.quaternion, worlds.visible), mats
 
 
 def _world_by_world(renderer: Any, cameras: list[Any], lights: Any, settings: RenderSettings,
-                    placed: tuple[Any, Any], worlds: ItemWorlds,
-                    where: str) -> Iterator[dict[str, np.ndarray]]:
-    """Each world set on the renderer's state (`placed`: its slots and poses, or None),
-    its views rendered as plain views (shadow maps of that world), the state put back; the
-    frames in the views' order."""
-    from vkpbr.render.batch_call import apply_saved, apply_world
+                    placed: tuple[Any, Any, Any], index: np.ndarray
+                    ) -> Iterator[dict[str, np.ndarray]]:
+    """Each world set on the renderer's state (`placed`: its slots, poses and materials, each
+    or None), its views rendered as plain views (shadow maps of that world), the state put
+    back; the frames in the views' order."""
+    from vkpbr.render.batch_call import apply_materials, apply_saved, apply_world
 
-    names, index, state = settings.outputs, worlds.index, renderer.state
-    slots, poses = placed
+    names, state = settings.outputs, renderer.state
+    slots, poses, materials = placed
     frames: dict[int, dict[str, np.ndarray]] = {}
-    restore, materials = apply_saved(state), {k: dict(v) for k, v in state.materials.items()}
+    restore = apply_saved(state)  # poses, visibility and material overrides
     try:
         for w in dict.fromkeys(index.tolist()):  # the worlds in the order views first see them
             views = np.flatnonzero(index == w)
             if poses is not None:
                 apply_world(state, slots, poses, w)
-            if worlds.materials is not None:
-                _set_materials(state, worlds.materials.of_world(w), where)
+            if materials is not None:
+                apply_materials(state, materials, w)
             got = renderer.render_many([cameras[v] for v in views], lights, settings.size,
                                        settings.render_options(), linear=settings.linear,
                                        outputs=("color", *names) if names else None,
@@ -134,22 +144,8 @@ def _world_by_world(renderer: Any, cameras: list[Any], lights: Any, settings: Re
                 frames[int(v)] = frame if names else {"color": frame}
     finally:
         restore()
-        if worlds.materials is not None:  # the overrides as they were (set_material's way)
-            state.materials.clear()
-            state.materials.update(materials)
-            state.material_version += 1
-            state.version += 1
     for v in range(len(cameras)):
         yield frames.pop(v)
-
-
-def _set_materials(state: Any, calls: list[tuple[str | int, dict[str, Any]]], where: str) -> None:
-    """One world's material overrides; a material the scene lacks is one line."""
-    for material, factors in calls:
-        try:
-            state.set_material(material, **factors)
-        except UsageError as exc:
-            raise UsageError(f"{where}: materials: {exc}") from None
 
 
 def load_renderer(settings: RenderSettings, device: str | int | None = None) -> Any:

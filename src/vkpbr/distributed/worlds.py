@@ -71,11 +71,6 @@ class Materials:
     def rows(self, used: np.ndarray) -> Materials:
         return Materials(self.names, {k: v[used] for k, v in self.factors.items()})
 
-    def of_world(self, w: int) -> list[tuple[str | int, dict[str, Any]]]:
-        """World `w`'s set_material calls: (material, {factor: value})."""
-        return [(name, {k: (v[w, m] if v.ndim == 3 else float(v[w, m]))
-                        for k, v in self.factors.items()})
-                for m, name in enumerate(self.names)]
 
 
 @dataclass(frozen=True, eq=False)
