@@ -123,6 +123,32 @@ class _Task:
     last_error: str = ""
 
 
+def _pick(pending: collections.deque[_Task], actor: int, keys: tuple[tuple | None, ...]) -> int:
+    """The waiting task for `actor`: one of the scene it has (then the one it loaded ahead),
+    so that scenes are not loaded twice; else the first it has not failed; else the first."""
+    mine = [k for k, t in enumerate(pending) if actor not in t.avoid]
+    for key in keys:
+        if key is not None:
+            k = next((k for k in mine if pending[k].item.settings.scene_key() == key), None)
+            if k is not None:
+                return k
+    return mine[0] if mine else 0
+
+
+def _next_scene(pending: collections.deque[_Task], actor: int, scenes: dict[int, tuple],
+                ahead: dict[int, tuple]) -> Any:
+    """The settings of the first waiting scene no actor has or loads ahead (the scene
+    `actor` should load while it renders; recorded in `ahead`), or None."""
+    taken = {*scenes.values(), *(v for a, v in ahead.items() if a != actor)}
+    for task in pending:
+        key = task.item.settings.scene_key()
+        if key not in taken:
+            ahead[actor] = key
+            return task.item.settings
+    ahead.pop(actor, None)
+    return None
+
+
 def _finish_entry(scene: SceneJob, manifest: Manifest) -> bool:
     """Write transforms.json (and COLMAP text) of a complete entry; False when incomplete."""
     from vkpbr.scene.camera_files import write_colmap, write_transforms
@@ -229,16 +255,20 @@ def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], r
                disable=None if progress is None else not progress, desc="vkpbr")
     t_first: float | None = None
 
+    scenes: dict[int, tuple] = {}  # actor -> the scene of its last item (its renderer's)
+    ahead: dict[int, tuple] = {}  # actor -> the scene it was told to load ahead
+
     def give_out() -> None:
         nonlocal t_first
         while idle and pending:
             actor = idle.popleft()
-            # The first waiting task this actor has not failed; else the first one.
-            k = next((k for k, t in enumerate(pending) if actor not in t.avoid), 0)
+            k = _pick(pending, actor, (scenes.get(actor), ahead.get(actor)))
             task = pending[k]
             del pending[k]
             task.attempts += 1
-            in_flight[pool[actor].render.remote(task.item)] = (actor, task)
+            scenes[actor] = task.item.settings.scene_key()
+            hint = _next_scene(pending, actor, scenes, ahead)
+            in_flight[pool[actor].render.remote(task.item, hint)] = (actor, task)
             t_first = time.perf_counter() if t_first is None else t_first
 
     def fail(task: _Task, error: str, retry: bool, actor: int) -> None:
@@ -267,6 +297,8 @@ def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], r
                 # The actor is gone (killed, crashed, its node lost): replace it, retry the item.
                 result.actors_lost += 1
                 pool.pop(actor, None)
+                scenes.pop(actor, None)
+                ahead.pop(actor, None)
                 if replacements > 0:
                     replacements -= 1
                     start_actor()
