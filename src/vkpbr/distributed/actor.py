@@ -198,6 +198,8 @@ class RendererActor:
         try:
             return self._render(item, t0, ahead)
         except (SceneError, UsageError) as exc:
+            if ahead is not None:  # this scene failed: the next one still loads meanwhile
+                self.prefetch(ahead)
             return {"ok": False, "error": _one_line(exc), "retry": False, "pid": os.getpid()}
         except Exception as exc:  # noqa: BLE001 - reported to the driver, which retries elsewhere
             log.exception("work item %s failed", item.label())

@@ -44,9 +44,12 @@ from vkpbr.distributed.manifest import (
     start_frames_folder,
 )
 
-__all__ = ["render", "JobResult", "Failure", "ClusterError", "check_job", "import_ray"]
+__all__ = ["render", "JobResult", "Failure", "ClusterError", "check_job", "import_ray",
+           "IN_PROCESS"]
 
 log = logging.getLogger(__name__)
+
+IN_PROCESS = "in-process"  # render(address=...): no Ray, one renderer in this process
 
 
 @dataclass(frozen=True)
@@ -176,6 +179,8 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
     job : a Job, a job document (dict or list, as in a job file) or a job file's path.
     address : a Ray cluster ("HOST:PORT", "ray://HOST:PORT", "auto"); None starts a local
         Ray instance (with `local_cpus` CPUs; None: all). An initialised Ray is used as is.
+        "in-process" (IN_PROCESS): no Ray; one renderer in this process renders the items in
+        order, loading the next scene on a thread meanwhile (the same files and manifests).
     actors : how many renderer actors (None: one per GPU, else one per CPU of the cluster).
     num_cpus, num_gpus : Ray resources of each actor (None: 1 GPU and 1 CPU where the cluster
         has GPUs, else 1 CPU); num_gpus=0.5 puts two actors on each GPU.
@@ -191,8 +196,9 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
     t0 = time.perf_counter()
     job = _as_job(job)
     manifests = check_job(job)
-    ray = import_ray()
-    if address not in (None, "local"):
+    here = address == IN_PROCESS
+    ray = None if here else import_ray()
+    if address not in (None, "local", IN_PROCESS):
         preflight(address)  # unreachable: one line now, even when nothing is left to render
     result = JobResult(views=job.views)
     try:
@@ -200,15 +206,18 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
         result.skipped = sum(len(d) for d in done)
         items = job.items(done)
         if items:
-            started = connect(ray, address, local_cpus)
+            started = False if here else connect(ray, address, local_cpus)
             made: list[tuple[SceneJob, Manifest, bool]] = []
             try:  # the folders are made last, right before the actors write into them
                 busy = {item.entry for item in items}
                 for e in sorted(busy):
                     made.append((job.scenes[e], manifests[e],
                                  start_frames_folder(job.scenes[e], manifests[e])))
-                _run(ray, job, items, manifests, result, actors, num_cpus, num_gpus, progress,
-                     on_result)
+                if here:
+                    _run_here(job, items, manifests, result, progress, on_result)
+                else:
+                    _run(ray, job, items, manifests, result, actors, num_cpus, num_gpus,
+                         progress, on_result)
             except BaseException:
                 for scene, manifest, created in made:
                     abandon_frames_folder(scene, manifest, created)
@@ -225,6 +234,53 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
             m.close()
     result.seconds = time.perf_counter() - t0
     return result
+
+
+def _record(item: WorkItem, res: dict, attempts: int, manifests: list[Manifest],
+            result: JobResult) -> None:
+    """A finished item's views and files into its entry's manifest."""
+    manifests[item.entry].done(item.frames, res["files"], res["cameras"], sizes=res.get("sizes"),
+                               attempts=attempts, pid=res.get("pid"),
+                               seconds=round(float(res.get("seconds", 0.0)), 4))
+    result.rendered += len(item.frames)
+
+
+def _run_here(job: Job, items: list[WorkItem], manifests: list[Manifest], result: JobResult,
+              progress: bool | None, on_result: Callable[[WorkItem, dict], None] | None) -> None:
+    """The items in order by one RendererActor in this process, each told the next item's
+    scene when it differs (loaded on its thread meanwhile); an item that fails with an
+    error of the machine is tried again up to `job.retries` times."""
+    from tqdm import tqdm
+
+    from vkpbr.distributed.actor import RendererActor
+
+    actor = RendererActor()
+    result.actors = 1
+    bar = tqdm(total=sum(len(i.frames) for i in items), unit="view", dynamic_ncols=True,
+               disable=None if progress is None else not progress, desc="vkpbr")
+    t0 = time.perf_counter()
+    try:
+        for n, item in enumerate(items):
+            key = item.settings.scene_key()
+            ahead = next((i.settings for i in items[n + 1:] if i.settings.scene_key() != key), None)
+            for attempt in range(1, job.retries + 2):
+                res = actor.render(item, ahead)
+                if on_result is not None:
+                    on_result(item, res)
+                if res.get("ok") or not res.get("retry") or attempt > job.retries:
+                    break
+                result.retries += 1
+            if res.get("ok"):
+                _record(item, res, attempt, manifests, result)
+            else:
+                manifests[item.entry].failed(item.frames, str(res.get("error")), attempt)
+                result.failures.append(Failure(item.entry, item.frames, item.label(),
+                                               str(res.get("error")), attempt))
+            bar.update(len(item.frames))
+    finally:
+        bar.close()
+        result.render_seconds = time.perf_counter() - t0
+        actor.close()
 
 
 def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], result: JobResult,
@@ -315,12 +371,8 @@ def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], r
             if on_result is not None:
                 on_result(task.item, res)
             if res.get("ok"):
-                item = task.item
-                manifests[item.entry].done(item.frames, res["files"], res["cameras"],
-                                           sizes=res.get("sizes"), attempts=task.attempts, pid=res.get("pid"),
-                                           seconds=round(float(res.get("seconds", 0.0)), 4))
-                result.rendered += len(item.frames)
-                bar.update(len(item.frames))
+                _record(task.item, res, task.attempts, manifests, result)
+                bar.update(len(task.item.frames))
             else:
                 fail(task, str(res.get("error")), bool(res.get("retry")), actor)
             idle.append(actor)

@@ -1,0 +1,143 @@
+"""Jobs of many scenes without Ray (issue 32, must-have 7): `vkpbr batch --in-process` and the
+actor it runs, which changes scene with `Renderer.set_scene` and loads the next scene on a
+thread while it renders this one. The files equal `vkpbr render --cameras` of each scene
+byte for byte (what the Ray tests compare with too), in the job's order; a scene that fails
+to load ahead fails only its own items, when they come; a job stopped midway resumes and
+renders only what is missing."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from vkpbr.app.cli import main
+from vkpbr.distributed import MANIFEST_NAME, job_from_doc, render
+from vkpbr.distributed.actor import RendererActor
+from vkpbr.distributed.driver import IN_PROCESS
+
+SIZE = "48x32"
+POSES = ["3,1.2,2,0,0,0", "2,1,3,0,0,0", "-2,1.5,3,0,0,0"]
+MODELS = ("TextureCoordinateTest", "OrientationTest")
+
+
+@pytest.fixture(scope="module")
+def scenes(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path | None]:
+    from assets_path import ASSETS
+
+    found = {m: ASSETS / m / "glTF" / f"{m}.gltf" for m in MODELS}
+    if not all(p.is_file() for p in found.values()):
+        pytest.skip(f"sample models {', '.join(MODELS)} not found in {ASSETS}")
+    bad = tmp_path_factory.mktemp("bad") / "broken.gltf"
+    bad.write_text('{"asset": {"version": "2.0"}, "scenes": [')  # cut short
+    return {"chart": None, **found, "broken": bad}
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory: pytest.TempPathFactory, scenes: dict) -> dict[str, Path]:
+    """Each good scene's frames from the single-process `vkpbr render --cameras`."""
+    base = tmp_path_factory.mktemp("reference")
+    (base / "poses.json").write_text(json.dumps(POSES))
+    out = {}
+    for name, path in scenes.items():
+        if name == "broken":
+            continue
+        argv = [str(path)] if path is not None else []
+        assert main(["-q", "render", *argv, "--cameras", str(base / "poses.json"), "--out",
+                     str(base / name), "--size", SIZE, "--validation"]) == 0
+        out[name] = base / name
+    return out
+
+
+def job_doc(folder: Path, scenes: dict) -> dict:
+    """chart, model, model, broken, chart again: every item a change of scene but the views
+    of one entry, which come in two items."""
+    (folder / "poses.json").write_text(json.dumps(POSES))
+    order = ["chart", *MODELS, "broken", "chart"]
+    entries = []
+    for k, name in enumerate(order):
+        entry = {"cameras": "poses.json", "out": f"{k}-{name}", "size": SIZE}
+        if scenes[name] is not None:
+            entry["scene"] = str(scenes[name])
+        entries.append(entry)
+    return {"scenes": entries, "views_per_item": 2}
+
+
+def frames(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.glob("frame_*"))}
+
+
+def check_against(reference: dict[str, Path], folder: Path) -> None:
+    for out in sorted(folder.glob("[0-9]-*")):
+        name = out.name.split("-", 1)[1]
+        if name == "broken":
+            assert not frames(out)
+            continue
+        got = frames(out)
+        assert got and got == frames(reference[name]), out.name
+
+
+@pytest.fixture(autouse=True)
+def validated(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    monkeypatch.setenv("VKPBR_VALIDATION", "1")  # the actor's renderers, as in the Ray tests
+    monkeypatch.setenv("VKPBR_CACHE_DIR", str(tmp_path / "cache"))
+
+
+def test_in_process_job_equals_single_process(tmp_path: Path, scenes: dict, reference: dict) -> None:
+    order: list[tuple[int, tuple[int, ...]]] = []
+    result = render(job_from_doc(job_doc(tmp_path, scenes), base=tmp_path), IN_PROCESS,
+                    on_result=lambda item, res: order.append((item.entry, item.frames)))
+    assert order == sorted(order)  # the job's order
+    assert result.rendered == 4 * len(POSES) and result.failed_views == len(POSES)
+    assert {f.entry for f in result.failures} == {3}
+    assert all("\n" not in f.error and "broken.gltf" in f.error for f in result.failures)
+    check_against(reference, tmp_path)
+    assert list((tmp_path / "cache").glob("pipelines-*.bin"))  # the renderer kept its pipelines
+
+
+def test_next_scene_loads_ahead(tmp_path: Path, scenes: dict, reference: dict) -> None:
+    job = job_from_doc(job_doc(tmp_path, scenes), base=tmp_path)
+    items = job.items()
+    actor = RendererActor()
+    seen = []
+    try:
+        for n, item in enumerate(items):
+            key = item.settings.scene_key()
+            ahead = next((i.settings for i in items[n + 1:] if i.settings.scene_key() != key), None)
+            (tmp_path / job.scenes[item.entry].settings.out.name).mkdir(exist_ok=True)
+            res = actor.render(item, ahead)
+            assert res["ok"] == (item.entry != 3), res
+            if item.entry == 1 and actor._renderer is not None:
+                seen.append(all(img.pixels is not None for img in actor._renderer.scene.images))
+    finally:
+        actor.close()
+    # The first scene loads when needed; the four changes after it came from the thread (the
+    # broken one's error too), the models' textures decoded there.
+    assert actor.loads == {"now": 1, "ahead": 4}
+    assert seen and all(seen)
+    check_against(reference, tmp_path)
+
+
+def test_stopped_job_resumes(tmp_path: Path, scenes: dict, reference: dict) -> None:
+    doc = job_doc(tmp_path, scenes)
+
+    class Stop(Exception):
+        pass
+
+    def stop_after_three(item, res) -> None:  # noqa: ANN001
+        stop_after_three.n = getattr(stop_after_three, "n", 0) + 1
+        if stop_after_three.n == 3:
+            raise Stop  # as a killed run: after its third item is written, before recording
+
+    with pytest.raises(Stop):
+        render(job_from_doc(doc, base=tmp_path), IN_PROCESS, on_result=stop_after_three)
+    result = render(job_from_doc(doc, base=tmp_path), IN_PROCESS)
+    assert result.skipped == len(POSES)  # items 1 and 2: the chart's 2 + 1 views
+    assert result.rendered == 4 * len(POSES) - result.skipped
+    check_against(reference, tmp_path)
+    for out in tmp_path.glob("[0-9]-*"):
+        if "broken" not in out.name:
+            done = [json.loads(line) for line in (out / MANIFEST_NAME).read_text().splitlines()]
+            views = sorted(v for r in done if r["type"] == "done" for v in r["views"])
+            assert views == list(range(len(POSES)))  # each view recorded once
