@@ -4,7 +4,8 @@ scene rendered in-process.
 
     python benchmarks/bench_load.py [--scene SPONZA.gltf] [--size 1280x720]
                                     [--models DIR] [--scenes 100] [--views 16] [--job-size 256x256]
-                                    [--no-job] [--ray] [--json OUT.json]
+                                    [--no-job] [--no-load] [--ray] [--profile DIR]
+                                    [--json OUT.json]
 
 Part 1, one scene (default: the sample models' Sponza), each row a fresh process with its own
 cache folder ($VKPBR_CACHE_DIR) in this order:
@@ -88,7 +89,7 @@ def child(scene: str, size: tuple[int, int], cached: bool) -> dict:
     return out
 
 
-def load_table(scene: Path, size: tuple[int, int]) -> list[dict]:
+def load_table(scene: Path, size: tuple[int, int], profile: Path | None) -> list[dict]:
     cache = Path(tempfile.mkdtemp(prefix="vkpbr-bench-load-"))
     rows = []
     try:
@@ -98,6 +99,9 @@ def load_table(scene: Path, size: tuple[int, int]) -> list[dict]:
                     f.unlink()
             env = {**os.environ, "VKPBR_CACHE_DIR": str(cache)}
             cmd = [sys.executable, __file__, "--child", str(scene), "--size", f"{size[0]}x{size[1]}"]
+            if profile is not None:
+                profile.mkdir(parents=True, exist_ok=True)
+                cmd += ["--profile", str(profile / f"load-{name.replace(' ', '-')}.txt")]
             got = subprocess.run(cmd + (["--cached"] if cached else []), env=env, check=True,
                                  capture_output=True, text=True)
             rows.append({"row": name, **json.loads(got.stdout.strip().splitlines()[-1])})
@@ -236,16 +240,30 @@ def main() -> None:
     p.add_argument("--no-load", action="store_true")
     p.add_argument("--ray", action="store_true", help="also the job on Ray with one actor")
     p.add_argument("--json", type=Path)
+    p.add_argument("--profile", type=Path, metavar="DIR",
+                   help="also write each row's cProfile (top 60 by cumulative time) into DIR")
     p.add_argument("--child", help=argparse.SUPPRESS)
     p.add_argument("--cached", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args()
     size = tuple(int(v) for v in args.size.split("x"))
     if args.child:
-        print(json.dumps(child(args.child, size, args.cached)))
+        if args.profile is None:
+            print(json.dumps(child(args.child, size, args.cached)))
+            return
+        import cProfile
+        import io
+        import pstats
+
+        prof = cProfile.Profile()
+        got = prof.runcall(child, args.child, size, args.cached)
+        text = io.StringIO()
+        pstats.Stats(prof, stream=text).sort_stats("cumulative").print_stats(60)
+        args.profile.write_text(text.getvalue())
+        print(json.dumps(got))
         return
     out: dict = {}
     if not args.no_load:
-        out["load"] = load_table(args.scene, size)
+        out["load"] = load_table(args.scene, size, args.profile)
         print_load_table(args.scene, size, out["load"])
     if not args.no_job:
         out["job"] = job_table(args)
