@@ -385,8 +385,8 @@ def decode_images(
     ----------
     scene_or_images : a Scene (its `images`) or a sequence of Image.
     max_size : images wider or taller than this are downscaled (aspect kept).
-    workers : decoding threads; default min(16, CPU count) (a GPU machine's 16 cores decode
-        a scene's images twice as fast as 8: the load's largest part, docs/batch.md).
+    workers : decoding threads; default min(16, CPU count) (the H200 machine has 16 cores;
+        decoding is the largest part of a scene's load there: benchmarks/bench_load.py).
     source : the scene file, for the total-bytes error (default: the Scene's `source`, else
         its name).
     blocks, block_levels : "bc7" and a dict: the KTX2 (Basis Universal) images that hold
