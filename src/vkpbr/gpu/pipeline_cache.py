@@ -14,7 +14,8 @@ line and the pipelines are compiled afresh, never a crash. Writes are atomic
 last writer's data is the file's.
 
 `stats` counts the builds, the driver's reported cache hits (VK_PIPELINE_CREATION_FEEDBACK:
-drivers that do not report them leave `hits` 0) and the seconds spent building.
+drivers that do not report them leave `hits` 0) and the seconds spent building (summed over
+the threads that build at once: FrameRecorder.build_pipelines).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from __future__ import annotations
 import hashlib
 import logging
 import struct
+import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,6 +36,7 @@ from vkpbr.gpu.vk import check_result
 __all__ = ["PipelineCache", "PipelineStats", "Feedback", "pipeline_cache", "MAGIC", "FILE_PREFIX"]
 
 log = logging.getLogger(__name__)
+_STATS_LOCK = threading.Lock()
 
 MAGIC = b"VKPBRPC1"
 FILE_PREFIX = "pipelines-"
@@ -189,10 +192,12 @@ class Feedback:
         create = vk.vkCreateGraphicsPipelines if kind == "graphics" else vk.vkCreateComputePipelines
         t0 = time.perf_counter()
         handle = create(device.handle, cache.handle, 1, [info], None)[0]
-        cache.stats.seconds += time.perf_counter() - t0
-        cache.stats.built += 1
+        seconds = time.perf_counter() - t0
         flags = int(self.result.flags)
-        if flags & vk.VK_PIPELINE_CREATION_FEEDBACK_VALID_BIT and (
-                flags & vk.VK_PIPELINE_CREATION_FEEDBACK_APPLICATION_PIPELINE_CACHE_HIT_BIT):
-            cache.stats.hits += 1
+        hit = bool(flags & vk.VK_PIPELINE_CREATION_FEEDBACK_VALID_BIT and (
+            flags & vk.VK_PIPELINE_CREATION_FEEDBACK_APPLICATION_PIPELINE_CACHE_HIT_BIT))
+        with _STATS_LOCK:  # builds may run on several threads (FrameRecorder.build_pipelines)
+            cache.stats.seconds += seconds
+            cache.stats.built += 1
+            cache.stats.hits += hit
         return handle
