@@ -119,7 +119,8 @@ def test_next_scene_loads_ahead(tmp_path: Path, scenes: dict, reference: dict) -
     check_against(reference, tmp_path)
 
 
-def test_stopped_job_resumes(tmp_path: Path, scenes: dict, reference: dict) -> None:
+def test_stopped_job_resumes(tmp_path: Path, scenes: dict, reference: dict,
+                            capsys: pytest.CaptureFixture) -> None:
     doc = job_doc(tmp_path, scenes)
 
     class Stop(Exception):
@@ -132,9 +133,12 @@ def test_stopped_job_resumes(tmp_path: Path, scenes: dict, reference: dict) -> N
 
     with pytest.raises(Stop):
         render(job_from_doc(doc, base=tmp_path), IN_PROCESS, on_result=stop_after_three)
-    result = render(job_from_doc(doc, base=tmp_path), IN_PROCESS)
-    assert result.skipped == len(POSES)  # items 1 and 2: the chart's 2 + 1 views
-    assert result.rendered == 4 * len(POSES) - result.skipped
+    (tmp_path / "job.json").write_text(json.dumps(doc))  # the rest through the command
+    assert main(["batch", str(tmp_path / "job.json"), "--in-process"]) == 1  # (the broken one)
+    out = capsys.readouterr()
+    # items 1 and 2 were recorded: the chart's 2 + 1 views; the broken scene's 3 fail
+    assert f"{5 * len(POSES)} views: {3 * len(POSES)} rendered, {len(POSES)} done before, " \
+           f"{len(POSES)} failed" in out.out + out.err
     check_against(reference, tmp_path)
     for out in tmp_path.glob("[0-9]-*"):
         if "broken" not in out.name:
