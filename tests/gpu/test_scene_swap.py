@@ -6,7 +6,9 @@ leaves no Vulkan object behind."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
+from vkpbr.errors import UsageError
 from vkpbr.gpu.device import live_objects
 
 SIZE = (64, 48)
@@ -34,7 +36,10 @@ def test_set_scene_renders_what_a_fresh_renderer_renders(make_renderer, sample_s
     chart = _frame(renderer)
     device, cache = renderer.device, renderer.device.pipeline_cache
     before = live_objects()
+    renderer.world_slots(["sphere-m0-r0"])  # a node of the chart, gone with it
     renderer.set_scene(textured)
+    with pytest.raises(UsageError, match="world_slots"):
+        renderer.render_batch([renderer.default_camera()], size=SIZE, worlds=np.eye(4)[None, None])
     assert renderer.device is device and renderer.device.pipeline_cache is cache
     assert renderer.scene is textured
     _equal(_frame(renderer), want)
