@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import collections
 import contextlib
+import itertools
 import logging
 import os
 import time
@@ -124,18 +125,32 @@ class _Task:
     attempts: int = 0
     avoid: set[int] = field(default_factory=set)  # actor numbers it failed on
     last_error: str = ""
+    key: tuple = ()  # its scene (settings.scene_key()), for the hand-out's choices
+
+    def __post_init__(self) -> None:
+        self.key = self.item.settings.scene_key()
+
+
+# How far down the waiting tasks the driver looks for an actor's scene (_PICK) or the next
+# scene to load ahead (_AHEAD): a job's items are in entry order, so a scene's items are
+# together near the front; the bounds keep a hand-out cheap in jobs of millions of items.
+_PICK, _AHEAD = 64, 256
 
 
 def _pick(pending: collections.deque[_Task], actor: int, keys: tuple[tuple | None, ...]) -> int:
     """The waiting task for `actor`: one of the scene it has (then the one it loaded ahead),
     so that scenes are not loaded twice; else the first it has not failed; else the first."""
-    mine = [k for k, t in enumerate(pending) if actor not in t.avoid]
-    for key in keys:
-        if key is not None:
-            k = next((k for k in mine if pending[k].item.settings.scene_key() == key), None)
-            if k is not None:
+    first = None
+    for key in (k for k in keys if k is not None):
+        for k, task in enumerate(itertools.islice(pending, _PICK)):
+            if actor in task.avoid:
+                continue
+            first = k if first is None else first
+            if task.key == key:
                 return k
-    return mine[0] if mine else 0
+    if first is None:
+        first = next((k for k, t in enumerate(pending) if actor not in t.avoid), 0)
+    return first
 
 
 def _next_scene(pending: collections.deque[_Task], actor: int, scenes: dict[int, tuple],
@@ -143,13 +158,21 @@ def _next_scene(pending: collections.deque[_Task], actor: int, scenes: dict[int,
     """The settings of the first waiting scene no actor has or loads ahead (the scene
     `actor` should load while it renders; recorded in `ahead`), or None."""
     taken = {*scenes.values(), *(v for a, v in ahead.items() if a != actor)}
-    for task in pending:
-        key = task.item.settings.scene_key()
-        if key not in taken:
-            ahead[actor] = key
+    for task in itertools.islice(pending, _AHEAD):
+        if task.key not in taken:
+            ahead[actor] = task.key
             return task.item.settings
     ahead.pop(actor, None)
     return None
+
+
+def _scenes_after(items: list[WorkItem]) -> list[Any]:
+    """For each item, the settings of the first later item of another scene (None: none)."""
+    out: list[Any] = [None] * len(items)
+    for n in range(len(items) - 2, -1, -1):
+        same = items[n + 1].settings.scene_key() == items[n].settings.scene_key()
+        out[n] = out[n + 1] if same else items[n + 1].settings
+    return out
 
 
 def _finish_entry(scene: SceneJob, manifest: Manifest) -> bool:
@@ -260,9 +283,7 @@ def _run_here(job: Job, items: list[WorkItem], manifests: list[Manifest], result
                disable=None if progress is None else not progress, desc="vkpbr")
     t0 = time.perf_counter()
     try:
-        for n, item in enumerate(items):
-            key = item.settings.scene_key()
-            ahead = next((i.settings for i in items[n + 1:] if i.settings.scene_key() != key), None)
+        for item, ahead in zip(items, _scenes_after(items), strict=True):
             for attempt in range(1, job.retries + 2):
                 res = actor.render(item, ahead)
                 if on_result is not None:
@@ -322,7 +343,7 @@ def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], r
             task = pending[k]
             del pending[k]
             task.attempts += 1
-            scenes[actor] = task.item.settings.scene_key()
+            scenes[actor] = task.key
             hint = _next_scene(pending, actor, scenes, ahead)
             in_flight[pool[actor].render.remote(task.item, hint)] = (actor, task)
             t_first = time.perf_counter() if t_first is None else t_first
