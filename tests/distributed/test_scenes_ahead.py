@@ -145,3 +145,33 @@ def test_stopped_job_resumes(tmp_path: Path, scenes: dict, reference: dict,
             done = [json.loads(line) for line in (out / MANIFEST_NAME).read_text().splitlines()]
             views = sorted(v for r in done if r["type"] == "done" for v in r["views"])
             assert views == list(range(len(POSES)))  # each view recorded once
+
+
+def test_hand_outs_keep_scenes_together_and_hint_the_next(tmp_path: Path) -> None:
+    """The driver's choices, without a cluster: an actor gets items of the scene it has (then
+    of the one it loads ahead), and is told the first scene no actor has or loads."""
+    import collections
+
+    from vkpbr.distributed.driver import _next_scene, _pick, _scenes_after, _Task
+
+    for name in "abc":
+        (tmp_path / f"{name}.glb").write_bytes(b"")  # only their existence is checked here
+    (tmp_path / "poses.json").write_text(json.dumps(POSES))
+    doc = {"views_per_item": 1, "scenes": [
+        {"scene": f"{name}.glb", "cameras": "poses.json", "out": f"{k}-{name}"}
+        for k, name in enumerate("abca")]}
+    items = job_from_doc(doc, base=tmp_path).items()
+    key = {name: next(i.settings.scene_key() for i in items if i.settings.scene.stem == name)
+           for name in "abc"}
+    after = _scenes_after(items)
+    assert [a.scene.stem if a else None for a in after] == ["b"] * 3 + ["c"] * 3 + ["a"] * 3 + [None] * 3
+    pending = collections.deque(_Task(i) for i in items)
+    scenes, ahead = {0: key["b"]}, {1: key["c"]}
+    assert pending[_pick(pending, 0, (key["b"], None))].key == key["b"]  # its scene's first
+    assert _pick(pending, 2, (None, None)) == 0  # a new actor: the first
+    pending[0].avoid.add(2)
+    assert _pick(pending, 2, (None, None)) == 1  # not one it failed
+    hint = _next_scene(pending, 2, scenes, ahead)  # a is nobody's: the first waiting
+    assert hint.scene.stem == "a" and ahead[2] == key["a"]
+    scenes[2] = key["a"]
+    assert _next_scene(pending, 3, scenes, ahead) is None and 3 not in ahead  # all taken
