@@ -1,16 +1,20 @@
 """Jobs of many scenes without Ray (issue 32, must-have 7): `vkpbr batch --in-process` and the
 actor it runs, which changes scene with `Renderer.set_scene` and loads the next scene on a
 thread while it renders this one. The files equal `vkpbr render --cameras` of each scene
-byte for byte (what the Ray tests compare with too), in the job's order; a scene that fails
+byte for byte on lavapipe (within 1 level on a GPU: check_against), in the job's order; a scene that fails
 to load ahead fails only its own items, when they come; a job stopped midway resumes and
 renders only what is missing."""
 
 from __future__ import annotations
 
+import functools
+import io
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
+from PIL import Image
 
 from vkpbr.app.cli import main
 from vkpbr.distributed import MANIFEST_NAME, job_from_doc, render
@@ -68,14 +72,31 @@ def frames(folder: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in sorted(folder.glob("frame_*"))}
 
 
+@functools.cache
+def on_cpu() -> bool:
+    from vkpbr.gpu.device import Device
+
+    with Device() as device:
+        return device.info.kind == "cpu"
+
+
 def check_against(reference: dict[str, Path], folder: Path) -> None:
+    """The same frames as the reference: byte for byte on lavapipe; on a GPU within 1 level
+    a channel, where a view in a batch of 2 and the same view in the reference's batch of 3
+    may round apart (the compute batch's stated bound, docs/batch.md)."""
     for out in sorted(folder.glob("[0-9]-*")):
         name = out.name.split("-", 1)[1]
         if name == "broken":
             assert not frames(out)
             continue
-        got = frames(out)
-        assert got and got == frames(reference[name]), out.name
+        got, want = frames(out), frames(reference[name])
+        assert got and sorted(got) == sorted(want), out.name
+        for file in got:
+            if got[file] != want[file]:
+                assert not on_cpu(), f"{out.name}/{file}"
+                a = np.asarray(Image.open(io.BytesIO(got[file]))).astype(int)
+                b = np.asarray(Image.open(io.BytesIO(want[file]))).astype(int)
+                assert a.shape == b.shape and np.abs(a - b).max() <= 1, f"{out.name}/{file}"
 
 
 @pytest.fixture(autouse=True)
