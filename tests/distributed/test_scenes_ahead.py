@@ -1,9 +1,9 @@
 """Jobs of many scenes without Ray (issue 32, must-have 7): `vkpbr batch --in-process` and the
 actor it runs, which changes scene with `Renderer.set_scene` and loads the next scene on a
 thread while it renders this one. The files equal `vkpbr render --cameras` of each scene
-byte for byte on lavapipe (within 1 level on a GPU: check_against), in the job's order; a scene that fails
-to load ahead fails only its own items, when they come; a job stopped midway resumes and
-renders only what is missing."""
+byte for byte on lavapipe (within 1 level on a GPU: check_against), in the job's order; a
+scene that fails to load ahead fails only its own items, when they come; a job stopped
+midway resumes and renders only what is missing."""
 
 from __future__ import annotations
 
