@@ -125,14 +125,30 @@ def print_load_table(scene: Path, size: tuple[int, int], rows: list[dict]) -> No
 
 # --- part 2: many scenes --------------------------------------------------------------------
 def job_doc(models: list[Path], scenes: int, views: int, size: str, out: Path) -> dict:
+    """`scenes` entries cycling over `models`, each a scene of its own: its model's folder
+    under its own name (a symlink), so no two entries share a scene (a renderer keeps the
+    scene it has, and the driver gives an actor the items of its scene first: entries of one
+    path would be rendered without a load between them)."""
     from bench_ray import orbit
 
     poses = {m: [{"eye": list(map(float, p.eye)), "target": list(map(float, p.target))}
                  for p in orbit(m, views)] for m in models}
-    entries = [{"scene": str(models[i % len(models)]), "cameras": poses[models[i % len(models)]],
-                "out": str(out / f"{i:03d}-{models[i % len(models)].stem}"), "size": size}
-               for i in range(scenes)]
+    entries = []
+    for i in range(scenes):
+        model = models[i % len(models)]
+        folder = out.parent / "scenes" / f"{i:03d}-{model.parents[1].name}"
+        folder.parent.mkdir(parents=True, exist_ok=True)
+        if not folder.exists():
+            folder.symlink_to(model.parents[1], target_is_directory=True)
+        scene = folder / model.relative_to(model.parents[1])
+        entries.append({"scene": str(scene), "cameras": poses[model],
+                        "out": str(out / f"{i:03d}-{model.stem}"), "size": size})
     return {"scenes": entries, "views_per_item": views}
+
+
+def _model_of(entry: dict) -> str:
+    """The model an entry's scene is (its symlinked folder resolved)."""
+    return str(Path(entry["scene"]).resolve())
 
 
 def one_scene_rates(doc: dict, work: Path) -> dict[str, float]:
@@ -143,13 +159,13 @@ def one_scene_rates(doc: dict, work: Path) -> dict[str, float]:
     rates = {}
     firsts = {}
     for entry in doc["scenes"]:
-        firsts.setdefault(entry["scene"], entry)
+        firsts.setdefault(_model_of(entry), entry)
     actor = RendererActor()
     try:
         for scene, entry in firsts.items():
-            job = job_from_doc([{**entry, "out": str(work / Path(scene).stem)}])
+            job = job_from_doc([{**entry, "out": str(work / Path(scene).name)}])
             item = job.items()[0]
-            (work / Path(scene).stem).mkdir(parents=True, exist_ok=True)
+            (work / Path(scene).name).mkdir(parents=True, exist_ok=True)
             if not actor.render(item)["ok"]:  # the load and first renders: not timed
                 continue  # (the job's rows count its views as failed)
             t = time.perf_counter()
@@ -216,8 +232,8 @@ def job_table(args: argparse.Namespace) -> list[dict]:
             except Exception as exc:  # noqa: BLE001 - Ray missing or failing: the other rows stand
                 print(f"{how}: not measured ({type(exc).__name__}: {exc})", file=sys.stderr)
         rates = one_scene_rates(doc, work / "one")  # after: the bake cache is warm by now
-        ideal = sum(args.views / rates[e["scene"]] for e in doc["scenes"] if e["scene"] in rates)
-        good = sum(e["scene"] in rates for e in doc["scenes"])
+        known = [_model_of(e) for e in doc["scenes"] if _model_of(e) in rates]
+        ideal, good = sum(args.views / rates[m] for m in known), len(known)
         rows.insert(0, {"run": "one scene in-process", "views": args.views * good, "failed": 0,
                         "seconds": ideal, "rates": {Path(k).stem: v for k, v in rates.items()}})
     finally:
