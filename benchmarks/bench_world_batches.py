@@ -112,6 +112,7 @@ def row(r: Renderer, name: str, size: int, worlds: int, into: str, steps: int, d
             "world_views_per_s": worlds / med, "python_ms": statistics.median(py),
             "gpu_ms": statistics.median(gpu), "worlds_kernel_ms": statistics.median(kernel),
             "mib_per_1k_worlds": held / 2**20 / worlds * 1000,
+            "gpu_ordered": r.batch_path.cuda_order is not None and into == "torch",
             "steps_ms": {k: statistics.median(x.get(k, 0.0) for x in per_step) for k in per_step[0]}}
 
 

@@ -246,3 +246,40 @@ def test_bad_world_materials(make_renderer) -> None:  # noqa: ANN001
                            ({"emissive": np.full((2, 1, 3), -1.0)}, ">= 0")):
         with pytest.raises(UsageError, match=message):
             r.render_batch([CAMERA] * 2, (W, H), world_materials=given)
+
+
+@pytest.mark.parametrize("expand", ["host", "gpu"])
+def test_local_poses_below_a_turned_root(make_renderer, tmp_path, expand: str) -> None:  # noqa: ANN001
+    """space="local" on the tabletop worlds (benchmarks/tabletop.py: a simulator's z-up rows
+    below a glTF root that turns them y-up, 17 moving bodies): each view equals
+    set_poses(..., space="local") of its world (bit for bit on the host path, within 1 level
+    on the GPU's)."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    from vkpbr.scene.loader import load_scene
+
+    bench = Path(__file__).resolve().parents[2] / "benchmarks" / "tabletop.py"
+    spec = importlib.util.spec_from_file_location("tabletop", bench)
+    tt = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault("tabletop", tt)
+    spec.loader.exec_module(tt)
+    world = tt.make_tabletop(models=())
+    r = make_renderer(load_scene(tt.write_gltf(world, tmp_path)))
+    moving = list(tt.MOVING)
+    r.world_slots(moving)
+    rows = tt.Motion(world, 3).poses(20, quaternion="xyzw").astype(np.float64)
+    cam = Camera(eye=(2.2, 2.0, 2.2), target=(0.0, 0.8, 0.0))
+    got = r.render_batch([cam] * 3, (W, H), worlds=rows, space="local", world_expand=expand,
+                         pipeline="forward", **NO_SHADOWS)
+    for w in range(3):
+        r.set_poses(moving, rows[w], space="local")
+        want = r.render(cam, size=(W, H), pipeline="forward", **NO_SHADOWS)
+        r.reset_pose()
+        diff = np.abs(got[w].astype(int) - want)
+        if expand == "host":
+            assert np.array_equal(got[w], want), f"world {w}"
+        else:
+            assert np.mean(diff) <= 0.05 and np.mean(diff > 1) <= 0.001, (w, diff.max())
+    assert not np.array_equal(got[0], got[1])

@@ -66,9 +66,50 @@ def test_a_step_loop_rewrites_poses_in_place(renderer) -> None:  # noqa: ANN001
     assert not np.array_equal(frames[0], frames[1])
 
 
+def test_back_to_back_steps_keep_their_frames(renderer) -> None:  # noqa: ANN001
+    """Two steps submitted without waiting (the poses buffer rewritten right after the first
+    call returns): each step's tensor holds its own poses' frames (the GPU-side ordering of
+    render/cuda_order.py, where the driver shares semaphores)."""
+    import torch
+
+    r = renderer
+    buf = torch.zeros((4, 2, 7), device="cuda")
+    got = []
+    for seed in (5, 6, 7):
+        buf.copy_(torch.as_tensor(world_poses(4, seed=seed), device="cuda"))
+        got.append(r.render_batch(cameras(4), (W, H), worlds=buf, quaternion="wxyz",
+                                  device="cuda", pipeline="compute", **NO_SHADOWS))
+    # Where the driver shares semaphores (NVIDIA's), the steps were ordered on the GPU.
+    assert (r.batch_path.cuda_order is not None) == bool(r.device.external_semaphore_fd)
+    for seed, frames in zip((5, 6, 7), got, strict=True):
+        want = r.render_batch(cameras(4), (W, H), worlds=world_poses(4, seed=seed),
+                              quaternion="wxyz", pipeline="compute", **NO_SHADOWS)
+        assert np.mean(np.abs(frames.cpu().numpy().astype(int) - want)) <= 0.05, seed
+
+
+@pytest.mark.parametrize("device", ["cpu", "cuda"])
+def test_nan_poses_on_the_gpu_are_hidden_and_reported(renderer, device: str) -> None:  # noqa: ANN001
+    """CUDA poses are not read back before the batch: the kernel hides a world whose pose is
+    NaN or a zero quaternion and the renderer reports it in one line once the batch is done
+    (into torch: at the next call, which waits for it)."""
+    import torch
+
+    poses = torch.as_tensor(world_poses(3, seed=2), device="cuda", dtype=torch.float32)
+    poses[1, 0, 0] = float("nan")
+    poses[2, 1, 3:] = 0.0
+    r = renderer
+
+    def call() -> object:
+        return r.render_batch(cameras(3), (W, H), worlds=poses, quaternion="wxyz",
+                              device=device, pipeline="compute", **NO_SHADOWS)
+
+    with pytest.raises(UsageError, match="world 1 has a pose with NaN") as err:
+        call()
+        call()  # (into torch, the first call returns before the batch is done)
+    assert "\n" not in str(err.value)
+
+
 @pytest.mark.parametrize(("make", "message"), [
-    (lambda t: t.full((2, 2, 7), float("nan"), device="cuda"), "NaN"),
-    (lambda t: t.zeros((2, 2, 7), device="cuda"), "length 0"),
     (lambda t: t.zeros((2, 2, 7), device="cuda", dtype=t.int32), "float32"),
     (lambda t: t.zeros((2, 3, 7), device="cuda"), "shape"),
 ])

@@ -50,18 +50,22 @@ def random_state(rng: np.random.Generator, nodes: int, draws: int) -> SceneState
     return state
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=60, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), nodes=st.integers(1, 9), draws=st.integers(1, 12),
-       worlds=st.integers(1, 4), hide=st.booleans())
+       worlds=st.integers(1, 4), hide=st.booleans(), space=st.sampled_from(["world", "local"]))
 def test_world_models_equal_the_state_posed_world_by_world(seed: int, nodes: int, draws: int,
-                                                           worlds: int, hide: bool) -> None:
+                                                           worlds: int, hide: bool, space: str) -> None:
     rng = np.random.default_rng(seed)
     state = random_state(rng, nodes, draws)
     chosen = rng.choice(nodes, int(rng.integers(1, nodes + 1)), replace=False)
     slots = WorldSlots.of(state, chosen.tolist())
     poses = random_rigid(rng, worlds * len(chosen)).reshape(worlds, len(chosen), 4, 4)
     visible = rng.random((worlds, len(chosen))) < 0.7 if hide else None
-    wp = WorldPoses.of(poses, len(chosen), visible=visible)
+    wp = WorldPoses.of(poses, len(chosen), visible=visible, space=space)
+    if space == "local" and slots.nested:  # (local poses below another chosen node: refused)
+        with pytest.raises(UsageError, match="space='local'"):
+            world_models(state, slots, wp)
+        return
     got = world_models(state, slots, wp)
     restore = apply_saved(state)
     before = state.draw_models().copy()

@@ -27,6 +27,7 @@ from vkpbr.scene.worlds import (
     WorldMaterials,
     WorldPoses,
     WorldSlots,
+    check_space,
     factor_records,
     world_records,
 )
@@ -61,6 +62,25 @@ def world_slots(renderer: Any, nodes: Any = None, materials: Any = None) -> Worl
     return renderer._world_slots
 
 
+_OPTIONS: dict[Any, RenderOptions] = {}  # (options, overrides) -> the call's options
+
+
+def _options(options: RenderOptions | None, overrides: dict[str, Any]) -> RenderOptions:
+    """The call's options (checked once: a loop that passes the same ones each step does not
+    build and check them again)."""
+    try:
+        key = (options, tuple(sorted(overrides.items())))
+        hash(key)
+    except TypeError:  # (an unhashable override value: made each time)
+        return dataclasses.replace(options or RenderOptions(), **overrides)
+    made = _OPTIONS.get(key)
+    if made is None:
+        if len(_OPTIONS) > 64:
+            _OPTIONS.clear()
+        made = _OPTIONS[key] = dataclasses.replace(options or RenderOptions(), **overrides)
+    return made
+
+
 def _slots(renderer: Any) -> WorldSlots:
     slots = getattr(renderer, "_world_slots", None)
     if slots is None:
@@ -72,12 +92,15 @@ def _slots(renderer: Any) -> WorldSlots:
 
 
 def _world_plan(renderer: Any, views: int, worlds: WorldsArg, world_of_view: Any,
-                quaternion: str, visible: Any, materials: Any) -> WorldPlan:
+                quaternion: str, visible: Any, materials: Any, space: str) -> WorldPlan:
     """The checked worlds of a call of `views` views (NumPy or CPU tensors)."""
     slots = poses = wm = None
     if worlds is not None:
         slots = _slots(renderer)
-        poses = WorldPoses.of(worlds, len(slots), quaternion, visible)
+        poses = WorldPoses.of(worlds, len(slots), quaternion, visible, space)
+        if poses.local and slots.nested:
+            raise UsageError("worlds: space='local' with a chosen node below another chosen "
+                             "node; give world poses (space='world')")
     if materials is not None:
         wm = _materials(renderer, materials)
     counts = {x.count for x in (poses, wm) if x is not None}
@@ -119,11 +142,11 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
                  out: np.ndarray | None, worlds: WorldsArg = None, world_of_view: Any = None,
                  quaternion: str = "xyzw", world_visible: Any = None,
                  overrides: dict[str, Any] | None = None, world_expand: str = "auto",
-                 world_materials: Any = None) -> Any:
+                 world_materials: Any = None, space: str = "world") -> Any:
     """Renderer.render_batch (its docstring says what each argument is)."""
     r = renderer
     views = as_camera_batch(cameras, r.default_camera())
-    opts = dataclasses.replace(options or RenderOptions(), **(overrides or {}))
+    opts = _options(options, overrides or {})
     route, wanted = batch_route(r.parts, views, size, opts, linear, depth, outputs, device, out)
     if worlds is None and world_materials is None and (world_of_view is not None
                                                        or world_visible is not None):
@@ -136,10 +159,10 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
             raise UsageError("worlds on CUDA render in a batch only, without world_materials "
                              "(this call renders view by view: dataset outputs, post steps, "
                              "MSAA or the fragment path's batch): give NumPy poses")
-        call = _cuda_call(r, len(views), worlds, world_of_view, quaternion, world_visible)
+        call = _cuda_call(r, len(views), worlds, world_of_view, quaternion, world_visible, space)
     elif worlds is not None or world_materials is not None:
         plan = _world_plan(r, len(views), worlds, world_of_view, quaternion, world_visible,
-                           world_materials)
+                           world_materials, space)
         call = _host_call(r, plan, world_expand)
     each = _each_view(r.state, views, plan)  # view by view, as `render` draws
     if route == "views":  # (render/batch_route.py says when)
@@ -176,7 +199,7 @@ def _host_call(renderer: Any, plan: WorldPlan, expand: str) -> WorldCall:
         kernel.write_numpy(flat, shown)
 
     gw = GpuWorlds(slots, poses.count, 7 if poses.rows is not None else 16, poses.wxyz,
-                   shown is not None, fill)
+                   shown is not None, fill, local=poses.local)
     return WorldCall(index, gpu=gw, factors=factors)
 
 
@@ -185,9 +208,9 @@ def _on_cuda(value: Any) -> bool:
 
 
 def _cuda_call(renderer: Any, views: int, worlds: Any, world_of_view: Any, quaternion: str,
-               visible: Any) -> WorldCall:
-    """Worlds whose poses are CUDA tensors: checked on the GPU (one reduction, read back:
-    NaN, zero quaternions), then copied device to device into the kernel's inputs."""
+               visible: Any, space: str = "world") -> WorldCall:
+    """Worlds whose poses are CUDA tensors: shapes and dtypes checked here, the values by the
+    worlds kernel on the GPU; copied device to device into the kernel's inputs."""
     import torch
 
     slots = getattr(renderer, "_world_slots", None)
@@ -207,15 +230,16 @@ def _cuda_call(renderer: Any, views: int, worlds: Any, world_of_view: Any, quate
                          f"(W, {n}, 4, 4) world matrices or (W, {n}, 7) position + quaternion rows")
     if quaternion not in ("xyzw", "wxyz"):
         raise UsageError(f"quaternion {quaternion!r}: choose 'xyzw' or 'wxyz'")
+    local = check_space(space)
+    if local and slots.nested:
+        raise UsageError("worlds: space='local' with a chosen node below another chosen "
+                         "node; give world poses (space='world')")
     if not worlds.is_floating_point():
         raise UsageError(f"worlds: a tensor of {worlds.dtype}; give float32 or float64")
     _same_gpu(renderer, worlds)
+    # NaN, infinity and zero quaternions are found by the worlds kernel on the GPU (no read
+    # back before the batch: render/worlds.py), their worlds' draws hidden and reported.
     p = worlds.detach().to(torch.float32).contiguous()
-    ok = torch.isfinite(p).all()
-    if floats == 7:
-        ok = ok & (p[..., 3:].square().sum(-1) > 1e-24).all()
-    if not bool(ok):  # (one read back: the checks' single bool)
-        raise UsageError("worlds: a pose holds NaN or infinity, or a quaternion of length 0")
     w = shape[0]
     shown = None
     if visible is not None:
@@ -229,7 +253,7 @@ def _cuda_call(renderer: Any, views: int, worlds: Any, world_of_view: Any, quate
         kernel.write_cuda(p, shown)
 
     return WorldCall(index, gpu=GpuWorlds(slots, w, floats, quaternion == "wxyz", shown is not None, fill,
-                                           cuda=True))
+                                           cuda=True, local=local))
 
 
 def _same_gpu(renderer: Any, tensor: Any) -> None:
@@ -292,7 +316,13 @@ def apply_materials(state: SceneState, wm: WorldMaterials, w: int) -> None:
 
 def apply_world(state: SceneState, slots: WorldSlots, poses: WorldPoses, w: int) -> None:
     """Pose `state` as world `w`: each slot node at its world pose (parents first, so a
-    chosen node below another takes its own pose), hidden where the world hides it."""
+    chosen node below another takes its own pose) or its local one, hidden where the world
+    hides it."""
+    if poses.local:
+        state.set_poses(slots.nodes, poses.matrices[w], space="local")
+        if poses.visible is not None:
+            state.set_visible(slots.nodes, poses.visible[w])
+        return
     depth = np.zeros(len(state.tree), np.int64)
     for d, level in enumerate(state.tree.levels()):
         depth[level] = d

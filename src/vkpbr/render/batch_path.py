@@ -28,6 +28,7 @@ from vkpbr.render import layouts as L
 from vkpbr.render.ao import prepare_ao
 from vkpbr.render.batch import MAX_LAYERS, BatchViews
 from vkpbr.render.camera import linear_depth
+from vkpbr.render.cuda_order import CudaOrder
 from vkpbr.render.frame_path import read_timings
 from vkpbr.render.frames import FrameStats, summed_stats, write_frame_blocks
 from vkpbr.render.lighting import LightsArg
@@ -67,6 +68,10 @@ class BatchPath:
         self._world_writes: list[int] = []  # per slot: which call's worlds it holds
         self._factor_writes = 0  # which call's factors the compute scene holds
         self._calls = 0
+        self.cuda_order: CudaOrder | None = None  # made on the first CUDA-ordered call
+        self._pending: tuple[Any, float] | None = None  # (frame, its Python ms) not waited for
+        self._pending_stats = FrameStats()  # the last waited CUDA-ordered submission's
+        self._ordered = False  # the submission under way is CUDA-ordered
         self._last_views: tuple | None = None  # (batch, key, instance bases, terms) written
         self._submissions = 0  # of the render_batch call under way (its stats summed)
         self._t_start = 0.0  # when the submission under way began (its Python time)
@@ -80,6 +85,8 @@ class BatchPath:
         (a torch tensor for "cuda") and the depth or None; the call's timings in `stats`.
         `worlds`: each view sees its world (render/worlds.py)."""
         self._calls += 1
+        self._finish_pending()
+        self._ordered = False
         self.world_call = worlds
         try:
             return self._run_route(route, views, size, lights, opts, linear, depth, batch, out)
@@ -165,6 +172,8 @@ class BatchPath:
         self._t_start = time.perf_counter()
         ao = prepare_ao(p.ao, p.recorder, opts, target, p.bounds.radius, False)
         shading_ao = ao is not None and ao.shading
+        order = self._order(cuda)
+        self._ordered = order is not None  # (the worlds' inputs are written in _begin)
         frame, plan, terms = self._begin(views, size, lights, opts, linear, rows, shading_ao, start)
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
         set0 = bv.set0(frame.index, self.world_call is not None and self.world_call.poses)
@@ -174,9 +183,11 @@ class BatchPath:
                 variant=p.lighting.shade_variant(opts, shading_ao), tiles=(n, w, h, rows),
                 set0_id=id(set0), external_id=id(external), batch=(bv.generation, *self._world_key()),
                 ao=ao), FrameObjects(set0=set0, external=external), self._world_groups()),
-            (lambda: self._cuda_wait(external)) if cuda else None)
+            (lambda: self._cuda_wait(external)) if cuda and order is None else None, order)
         if cuda:
             p.device.check_validation()
+            if order is not None:
+                order.frames_ready()
             return self._cuda_tensor(external, (n, h, w, 4), linear), None
         t_read = time.perf_counter()
         color = target.read_tiles(frame.index, n, size, into=into)
@@ -348,6 +359,7 @@ class BatchPath:
                 self.world_kernel = WorldKernel(p.device, len(p.slots))
             kernel = self.world_kernel
             before = kernel.generation
+            kernel.order = self.cuda_order if self._ordered else None
             kernel.prepare(gpu, wb, gpu.cuda)  # the call's poses into its inputs
             if kernel.generation != before:
                 self.free_recordings()
@@ -356,6 +368,42 @@ class BatchPath:
             wb.write(slot, state, call.records if gpu is None else np.zeros(0, np.float32))
             self._world_writes[slot] = self._calls
         return wb.instance_base(index)
+
+    def _order(self, cuda: bool) -> CudaOrder | None:
+        """The GPU-side ordering of a call whose inputs are CUDA tensors and whose frames go to
+        torch, where the driver shares semaphores (else None: the host waits, as before)."""
+        call = self.world_call
+        if not (cuda and call is not None and call.gpu is not None and call.gpu.cuda):
+            return None
+        if not CudaOrder.available(self.parts.device):
+            return None
+        if self.cuda_order is None:
+            self.cuda_order = CudaOrder(self.parts.device)
+        return self.cuda_order
+
+    def _finish_pending(self) -> None:
+        """Wait for the last CUDA-ordered submission (its host-written buffers are then free)
+        and keep its GPU timings for the next such call's stats."""
+        if self._pending is None:
+            return
+        frame, cpu_ms = self._pending
+        self._pending = None
+        frame.wait()
+        self._world_errors(frame.index, "the last step's ")
+        self._pending_stats = dataclasses.replace(
+            read_timings(self.parts.ring, frame, self.parts.slots[frame.index]), cpu_ms=cpu_ms,
+            wait_ms=0.0, readback_ms=0.0, driver_ms=0.0)
+
+    def _world_errors(self, slot: int, which: str) -> None:
+        """After a batch's fence: its worlds kernel's report of poses that are none (CUDA
+        tensors are not read back before the batch), as one UsageError line."""
+        if self.world_kernel is None:
+            return
+        count, world = self.world_kernel.take_errors(slot)
+        if count:
+            raise UsageError(f"worlds: {which}world {world} has a pose with NaN or infinity, or "
+                             f"a quaternion of length 0 ({count} draw records of such worlds "
+                             "were hidden)")
 
     def _world_key(self) -> tuple:
         """What a batch's recording of worlds depends on (nothing without worlds)."""
@@ -374,10 +422,12 @@ class BatchPath:
         return {"worlds": lambda fs: kernel.steps(fs.frame_index, call.gpu, d)}
 
     def _run(self, frame: Any, plan: Any, opts: RenderOptions,
-             record: Callable[[tuple[bool, ...]], Any], before_submit: Callable[[], None] | None = None
-             ) -> None:
+             record: Callable[[tuple[bool, ...]], Any], before_submit: Callable[[], None] | None = None,
+             order: CudaOrder | None = None) -> None:
         """Record (given which shadow maps to redraw), submit and wait for a submission; its
-        timings into `stats`. The shadow maps' record is forgotten if it fails."""
+        timings into `stats`. The shadow maps' record is forgotten if it fails. With `order`
+        (render/cuda_order.py) the submission waits for and signals CUDA's timelines and the
+        host does not wait: the next call does, and reads its timings then."""
         p = self.parts
         shadows = p.shadow_frames.maps
         redraw = p.shadow_frames.stale(frame.index, plan, opts.alpha_mask)
@@ -385,13 +435,22 @@ class BatchPath:
             cmd = record(redraw)
             if before_submit is not None:
                 before_submit()
-            frame.submit(cmd)
+            if order is None:
+                frame.submit(cmd)
+            else:
+                frame.submit(cmd, wait=order.inputs.handle, signal=order.done.handle,
+                             values=order.submit_values())
         except BaseException:
             shadows.forget()
             raise
         frame.stamped = p.ring.query_pool is not None
         t_submitted = time.perf_counter()
+        if order is not None:
+            self._pending = (frame, 1e3 * (t_submitted - self._t_start))
+            self.stats = dataclasses.replace(self._pending_stats, cpu_ms=self._pending[1])
+            return
         frame.wait()
+        self._world_errors(frame.index, "")
         # The Python side up to the submit and the readback are added by the caller
         # (`_timed`); the wait is this submission's.
         stats = dataclasses.replace(read_timings(p.ring, frame, p.slots[frame.index]),
@@ -499,6 +558,10 @@ class BatchPath:
             self.views.free_recordings()
 
     def close(self) -> None:
+        self._finish_pending()
+        if self.cuda_order is not None:
+            self.cuda_order.destroy()
+            self.cuda_order = None
         if self.views is not None:
             self.views.destroy()
             self.views = None

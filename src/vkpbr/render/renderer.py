@@ -245,7 +245,7 @@ class Renderer:
                      out: np.ndarray | None = None, worlds: WorldsArg = None,
                      world_of_view: Any = None, quaternion: str = "xyzw",
                      world_visible: Any = None, world_expand: str = "auto",
-                     world_materials: Any = None, **option_overrides: Any
+                     world_materials: Any = None, space: str = "world", **option_overrides: Any
                      ) -> np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray] | Any:
         """Render B views of the scene in one submission and return them stacked
         (docs/batch.md).
@@ -260,7 +260,8 @@ class Renderer:
         device : "cpu": NumPy arrays; "cuda": a torch tensor (B, H, W, 4) on the same GPU.
         out : a C-contiguous writeable (B, H, W, 4) array the colour is written into.
         worlds : W worlds' world poses of the nodes named by `world_slots`: (W, N, 4, 4)
-            matrices or (W, N, 7) position + quaternion (`quaternion` "xyzw" or "wxyz"),
+            matrices or (W, N, 7) position + quaternion (`quaternion` "xyzw" or "wxyz";
+            `space` "world", or "local": relative to each node's parent as the state has it),
             NumPy or torch; `world_of_view` (B,) the world each view sees (omit when B = W);
             `world_visible` (W, N) bools; `world_expand` "gpu" expands NumPy poses on the
             GPU as CUDA tensors are (float32), "auto"/"host" exactly on the host;
@@ -276,7 +277,7 @@ class Renderer:
         """
         return batch_call(self, cameras, size, lights, options, linear, depth, outputs, batch,
                           device, out, worlds, world_of_view, quaternion, world_visible,
-                          option_overrides, world_expand, world_materials)
+                          option_overrides, world_expand, world_materials, space)
 
     def world_slots(self, nodes: Any = None, materials: Any = None) -> WorldSlots | None:
         """Name the nodes each world of `render_batch(worlds=...)` poses and the materials

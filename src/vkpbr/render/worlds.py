@@ -36,7 +36,7 @@ from vkpbr.scene.worlds import WorldSlots
 
 __all__ = ["WorldBuffers", "WorldCall", "GpuWorlds", "WorldKernel"]
 
-_DRAW_BYTES = 80  # worlds.comp WorldDraw: mat4 relative, int anchor, uint identity, covers_at, pad
+_DRAW_BYTES = 144  # worlds.comp WorldDraw: mat4 relative, mat4 frame, int anchor, uint identity, covers_at, pad
 
 
 @dataclass(frozen=True)
@@ -52,11 +52,13 @@ class GpuWorlds:
     has_visible: bool
     fill: Callable[[Any], None]
     cuda: bool = False  # the inputs come from CUDA tensors (exported memory)
+    local: bool = False  # poses relative to each node's parent in the state (WorldSlots.frame)
 
     @property
     def key(self) -> tuple:
         """What the recorded commands depend on (the kernel's push constants)."""
-        return ("gpu", self.worlds, len(self.slots), self.pose_floats, self.wxyz, self.has_visible)
+        return ("gpu", self.worlds, len(self.slots), self.pose_floats, self.wxyz, self.has_visible,
+                self.local)
 
 
 @dataclass(frozen=True)
@@ -156,7 +158,8 @@ class WorldKernel:
     def __init__(self, device: Device, slots: int) -> None:
         self.device, self.slot_count = device, slots
         self._objects: list[Any] = []
-        names = ("WorldRecords", "WorldPoses", "WorldVisible", "WorldDraws", "WorldCovers")
+        names = ("WorldRecords", "WorldPoses", "WorldVisible", "WorldDraws", "WorldCovers",
+                 "WorldErrors")
         self.layout = self._own(DescriptorSetLayout(device, [
             BindingSpec(i, "storage", ("compute",), n) for i, n in enumerate(names)]))
         self.pipeline = self._own(ComputePipeline(device, SPV_DIR / "worlds.comp.spv",
@@ -171,6 +174,14 @@ class WorldKernel:
         self._bound: tuple = ()
         self.generation = 0  # bumped when the sets change (recordings name them)
         self._imports: list[Any] = []  # gpu/cuda.py CudaImport of the inputs (cuda)
+        # worlds.comp's report of poses that are none (count, lowest world), per slot
+        self._error_stride = max(8, int(device.limits.minStorageBufferOffsetAlignment))
+        self.errors = Buffer(device, self._error_stride * slots, "storage", host_visible=True,
+                             name="world errors")
+        self._errors = self.errors.array(np.uint32, self._error_stride // 4 * slots).reshape(
+            slots, -1)[:, :2]
+        self._errors[:] = (0, 0xFFFFFFFF)
+        self.order: Any = None  # render/cuda_order.py CudaOrder of the call, if any
 
     def _own(self, obj: Any) -> Any:
         self._objects.append(obj)
@@ -201,6 +212,7 @@ class WorldKernel:
                 w.storage(dset, 0, buf, size, at)
                 for i, b in enumerate((*self.inputs, *self.tables)):
                     w.storage(dset, 1 + i, b)
+                w.storage(dset, 5, self.errors, 8, self._error_stride * slot)
             w.update()
             self._bound = bound
             self.generation += 1
@@ -209,10 +221,13 @@ class WorldKernel:
     def _write_tables(self, slots: WorldSlots) -> None:
         d = len(slots.anchor)
         words = -(-len(slots) // 32)
-        draws = np.zeros(max(d, 1), np.dtype([("relative", "<f4", (4, 4)), ("anchor", "<i4"),
-                                              ("identity", "<u4"), ("covers_at", "<u4"),
-                                              ("pad", "<u4")]))
+        draws = np.zeros(max(d, 1), np.dtype([("relative", "<f4", (4, 4)), ("frame", "<f4", (4, 4)),
+                                              ("anchor", "<i4"), ("identity", "<u4"),
+                                              ("covers_at", "<u4"), ("pad", "<u4")]))
         draws["relative"][:d] = np.swapaxes(slots.relative, -1, -2)  # GLSL columns
+        has = slots.anchor >= 0
+        draws["frame"][:d] = np.eye(4, dtype=np.float32)
+        draws["frame"][:d][has] = np.swapaxes(slots.frame[slots.anchor[has]], -1, -2)
         draws["anchor"][:d] = slots.anchor
         draws["identity"][:d] = slots.identity
         draws["covers_at"][:d] = np.arange(d) * words
@@ -226,6 +241,13 @@ class WorldKernel:
         self.tables[0].array(np.uint8, draws.nbytes)[:] = draws.view(np.uint8).ravel()
         self.tables[1].array(np.uint32, bits.size)[:] = bits.ravel()
         self._slots = slots
+
+    def take_errors(self, slot: int) -> tuple[int, int]:
+        """(records whose pose was none, the lowest such world) of slot `slot`'s last batch
+        (after its fence), and the report reset for its next."""
+        count, world = (int(x) for x in self._errors[slot])
+        self._errors[slot] = (0, 0xFFFFFFFF)
+        return count, world
 
     def write_numpy(self, poses: np.ndarray, visible: np.ndarray | None) -> None:
         """NumPy inputs: (W, N, 7 or 16) poses and (W, N) visibility into the host-visible
@@ -248,11 +270,17 @@ class WorldKernel:
 
             index = cuda_device_for(self.device.uuid(), self.device.info.name)
             self._imports = [CudaImport(b.export_fd(), b.allocation_size, index) for b in self.inputs]
+        order = self.order
+        if order is not None:  # ordered on the GPU (render/cuda_order.py): no host wait
+            order.before_inputs()
         p = poses.reshape(-1)
         self._imports[0].tensor((p.numel(),), "<f4").copy_(p)
         if visible is not None:
             v = visible.reshape(-1)
             self._imports[1].tensor((v.numel(),), "<i4").copy_(v)
+        if order is not None:
+            order.inputs_written()
+            return
         event = torch.cuda.Event()
         event.record()
         event.synchronize()
@@ -261,7 +289,7 @@ class WorldKernel:
         """The batch's first step: every world's records from its poses, then a barrier
         (compute writes -> the culling kernel's, vertex shaders' and compute reads)."""
         push = np.array([gw.worlds, len(gw.slots), draws, gw.pose_floats, int(gw.wxyz),
-                         int(gw.has_visible), -(-len(gw.slots) // 32), 0], np.uint32)
+                         int(gw.has_visible), -(-len(gw.slots) // 32), int(gw.local)], np.uint32)
 
         def record(cmd: Commands) -> None:
             cmd.bind_pipeline(self.pipeline)
@@ -279,6 +307,7 @@ class WorldKernel:
 
     def destroy(self) -> None:
         self._close_imports()
+        self.errors.destroy()
         for b in (*self.inputs, *self.tables):
             b.destroy()
         self.inputs, self.tables = [], []

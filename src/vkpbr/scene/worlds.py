@@ -46,6 +46,8 @@ class WorldSlots:
     identity: np.ndarray  # (D,) bool: relative is exactly the identity (model = pose)
     covers: np.ndarray  # (N, D) bool: slot n is the draw's node or an ancestor (hides it)
     version: int  # the state version these were made at
+    frame: np.ndarray  # (N, 4, 4) each slot's parent's world matrix in the state (local poses)
+    nested: bool  # a slot has another slot above it
 
     @classmethod
     def of(cls, state: SceneState, nodes: NodeRef | Iterable[NodeRef] | np.ndarray) -> WorldSlots:
@@ -84,7 +86,12 @@ class WorldSlots:
         # Skinned draws are posed by their joints (world space): their model stays as is.
         relative[has & state.skinned] = models[has & state.skinned]
         anchor = np.where(state.skinned, -1, anchor)
-        return cls(idx, names, anchor, relative, identity, below[:, state.draw_tree], state.version)
+        parents = tree.parents[idx]
+        frame = np.tile(np.eye(4), (len(idx), 1, 1))
+        frame[parents >= 0] = state.world()[parents[parents >= 0]]
+        nested = bool(np.any(below[:, idx].sum(axis=0) > 1))
+        return cls(idx, names, anchor, relative, identity, below[:, state.draw_tree], state.version,
+                   frame, nested)
 
     def refreshed(self, state: SceneState) -> WorldSlots:
         """These slots against the state now (the renderer's set_poses moved what they hang
@@ -103,6 +110,7 @@ class WorldPoses:
     given: np.ndarray  # (W, N, 4, 4) matrices, or (W, N, 7) rows (position + quaternion)
     visible: np.ndarray | None
     wxyz: bool = False  # the rows' quaternion order
+    local: bool = False  # relative to each node's parent as the state places it (else world)
 
     @property
     def count(self) -> int:
@@ -122,8 +130,8 @@ class WorldPoses:
         return _rows_to_matrices(self.given, "wxyz" if self.wxyz else "xyzw")
 
     @classmethod
-    def of(cls, poses: Any, slots: int, quaternion: str = "xyzw", visible: Any = None
-           ) -> WorldPoses:
+    def of(cls, poses: Any, slots: int, quaternion: str = "xyzw", visible: Any = None,
+           space: str = "world") -> WorldPoses:
         """Checked poses: (W, N, 4, 4) affine world matrices or (W, N, 7) position + unit
         quaternion rows (`quaternion` "xyzw" as SAPIEN/scipy, or "wxyz" as MuJoCo/Isaac);
         `visible` (W, N) of bools. One-line UsageErrors name what is wrong."""
@@ -147,7 +155,15 @@ class WorldPoses:
                 raise UsageError(f"visible: shape {tuple(v.shape)}, expected "
                                  f"{given.shape[:2]} (worlds, slot nodes)")
             shown = v.astype(bool)
-        return cls(given, shown, quaternion == "wxyz")
+        return cls(given, shown, quaternion == "wxyz", check_space(space))
+
+
+def check_space(space: str) -> bool:
+    """True for "local" (poses relative to each node's parent as the renderer's state places
+    it: a simulator's frame below a fixed root), False for "world"; UsageError otherwise."""
+    if space not in ("world", "local"):
+        raise UsageError(f"space {space!r}: choose 'world' or 'local'")
+    return space == "local"
 
 
 def _array(what: str, value: Any) -> np.ndarray:
@@ -205,6 +221,11 @@ def world_models(state: SceneState, slots: WorldSlots, poses: WorldPoses) -> np.
     exact = slots.identity
     moved = has & ~exact
     pose = poses.matrices
+    if poses.local:
+        if slots.nested:
+            raise UsageError("worlds: space='local' with a chosen node below another chosen "
+                             "node; give world poses (space='world')")
+        pose = slots.frame[None] @ pose
     if np.any(exact):
         out[:, exact] = pose[:, slots.anchor[exact]]
     if np.any(moved):

@@ -19,6 +19,7 @@ layout(set = 0, binding = 1, std430) readonly buffer WorldPoses { float world_po
 layout(set = 0, binding = 2, std430) readonly buffer WorldVisible { uint world_visible[]; };
 struct WorldDraw {
     mat4 relative;  // model = pose * relative
+    mat4 frame;  // local poses: the anchor's parent's world matrix in the state (model = frame * pose * relative)
     int anchor;  // the slot the draw hangs from, -1: none (the state's record in every world)
     uint identity;  // relative is the identity: model = pose
     uint covers_at;  // its first word in WorldCovers
@@ -27,6 +28,10 @@ struct WorldDraw {
 layout(set = 0, binding = 3, std430) readonly buffer WorldDraws { WorldDraw world_draws[]; };
 // Per draw, covers_words words: bit n set where slot n is the draw's node or an ancestor.
 layout(set = 0, binding = 4, std430) readonly buffer WorldCovers { uint world_covers[]; };
+// Poses that are no pose (NaN, infinity, a zero quaternion; CUDA tensors are not read back
+// before the batch): how many (world, draw) records met one, and the lowest such world. Their
+// draws are hidden; the host reports the first after the batch (render/worlds.py).
+layout(set = 0, binding = 5, std430) buffer WorldErrors { uint world_errors[2]; };
 
 layout(push_constant, std430) uniform WorldsPush {
     uint worlds;
@@ -36,8 +41,21 @@ layout(push_constant, std430) uniform WorldsPush {
     uint wxyz;  // quaternion order: 1 w, x, y, z; 0 x, y, z, w
     uint has_visible;
     uint covers_words;
-    uint pad;
+    uint local;  // poses relative to the node's parent (WorldDraw.frame), else world poses
 } pc;
+
+bool pose_valid(uint w, uint n) {
+    uint at = (w * pc.slots + n) * pc.pose_floats;
+    for (uint k = 0u; k < pc.pose_floats; ++k) {
+        float x = world_poses[at + k];
+        if (isnan(x) || isinf(x)) return false;
+    }
+    if (pc.pose_floats == 7u) {
+        vec4 q = vec4(world_poses[at + 3u], world_poses[at + 4u], world_poses[at + 5u], world_poses[at + 6u]);
+        return dot(q, q) >= 1e-24;
+    }
+    return true;
+}
 
 mat4 pose_of(uint w, uint n) {
     uint at = (w * pc.slots + n) * pc.pose_floats;
@@ -100,7 +118,15 @@ void main() {
         world_records[out_at + 1u] = world_records[2u * d + 1u];
         return;
     }
+    if (!pose_valid(w, uint(wd.anchor))) {  // hidden, and reported
+        atomicAdd(world_errors[0], 1u);
+        atomicMin(world_errors[1], w);
+        world_records[out_at] = mat4(0.0);
+        world_records[out_at + 1u] = mat4(vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0, 0.0, 0.0, 1.0));
+        return;
+    }
     mat4 pose = pose_of(w, uint(wd.anchor));
+    if (pc.local != 0u) pose = wd.frame * pose;
     mat4 model = wd.identity != 0u ? pose : pose * wd.relative;
     world_records[out_at] = model;
     world_records[out_at + 1u] = normal_of(model);
