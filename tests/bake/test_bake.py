@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from vkpbr.app import bake_cmd
-from vkpbr.bake.bake import bake_file, bake_report, bake_scene, cached_bake
+from vkpbr.bake.bake import KEYS_FILE, bake_file, bake_report, bake_scene, cached_bake
 from vkpbr.scene.baked_file import TANGENTS_FROM_FILE, read_baked, write_baked
 from vkpbr.scene.types import Material, Mesh, Node, Scene
 
@@ -116,6 +118,35 @@ def test_bake_file_and_cache(tmp_path: Path, fake_loader: None) -> None:
     (tmp_path / "scene.bin").write_bytes(b"5678")  # a dependency changed: new key, new file
     assert cached_bake(src, cache) != first
     first.write_bytes(first.read_bytes()[:100])  # a broken cache entry is baked again
+
+
+def test_cache_keys_are_remembered_by_file_stats(tmp_path: Path, fake_loader: None) -> None:
+    """A source whose files kept their sizes and times is not hashed again (KEYS_FILE): the
+    proof is a change the index cannot see (same size, time put back), which it misses; a
+    time changed, or a file written within 2 s of the record, is hashed again."""
+    src, dep = tmp_path / "scene.gltf", tmp_path / "scene.bin"
+    src.write_text('{"asset": {"version": "2.0"}, "buffers": [{"uri": "scene.bin"}]}')
+    dep.write_bytes(b"1234")
+    old = time.time() - 3600
+    for f in (src, dep):
+        os.utime(f, (old, old))
+    cache = tmp_path / "cache"
+    first = cached_bake(src, cache)
+    keys = json.loads((cache / KEYS_FILE).read_text())
+    assert [rec["out"] for rec in keys.values()] == [str(first)]
+    dep.write_bytes(b"5678")
+    os.utime(dep, (old, old))  # unseen by size and time: the remembered bake
+    assert cached_bake(src, cache) == first
+    os.utime(dep, (old + 1, old + 1))  # its time changed: hashed, a new key
+    second = cached_bake(src, cache)
+    assert second != first and read_baked(second).source_key != read_baked(first).source_key
+    now = time.time_ns()  # a file changed within a clock tick of its record keeps its stats
+    dep.write_bytes(b"9abc")
+    os.utime(dep, ns=(now, now))
+    third = cached_bake(src, cache)
+    dep.write_bytes(b"defg")
+    os.utime(dep, ns=(now, now))  # same size, same time: only its recency says to hash it
+    assert cached_bake(src, cache) not in (first, second, third)
 
 
 def test_bake_command(tmp_path: Path, fake_loader: None, capsys: pytest.CaptureFixture) -> None:

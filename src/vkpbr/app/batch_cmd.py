@@ -23,6 +23,8 @@ examples:
   vkpbr batch job.json                      a local Ray instance, one actor per CPU or GPU
   vkpbr batch job.json --ray head:6379      an existing Ray cluster
   vkpbr batch job.json --ray auto --num-gpus 0.5   two actors on each GPU
+  vkpbr batch job.json --in-process         no Ray: one renderer here, the next scene loading
+                                            on a thread while this one renders
 """
 
 # `vkpbr render` options a --ray job does not carry (each actor uses the scene's camera and
@@ -56,6 +58,9 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--ray", default="local", metavar="ADDRESS",
                    help="a Ray cluster's HOST:PORT, ray://HOST:PORT or auto (default: start a "
                         "local Ray instance)")
+    p.add_argument("--in-process", action="store_true",
+                   help="render in this process without Ray (one renderer on the default "
+                        "device; the same files and manifests, resumable alike)")
     add_ray_arguments(p, with_flag=False)
     p.set_defaults(run=run)
 
@@ -73,9 +78,12 @@ def _report(result: Any) -> int:
 def _render(job: Any, args: argparse.Namespace) -> int:
     from vkpbr.app.log import is_quiet
     from vkpbr.distributed import render
+    from vkpbr.distributed.driver import IN_PROCESS
 
-    result = render(job, None if args.ray == "local" else args.ray, actors=args.actors,
-                    num_gpus=args.num_gpus, progress=False if is_quiet() else None)
+    address = IN_PROCESS if getattr(args, "in_process", False) else (
+        None if args.ray == "local" else args.ray)
+    result = render(job, address, actors=args.actors, num_gpus=args.num_gpus,
+                    progress=False if is_quiet() else None)
     return _report(result)
 
 

@@ -317,6 +317,11 @@ def run(args: argparse.Namespace) -> int:
             per_frame.append(time.perf_counter() - t)
         stats = renderer.last_stats
         device_name = renderer.device.info.name
+        from vkpbr.render.scene_swap import pipeline_timings
+
+        phases = {**renderer.timings, **pipeline_timings(renderer.device)}  # pipelines: so far
+        log.info("set-up by phase: %s", ", ".join(  # -v: where the load's time went
+            f"{k} {v:.3f} s" if isinstance(v, float) else f"{k} {v}" for k, v in phases.items()))
     write_image_atomic(out, image)
     t_write = time.perf_counter()
     extra = "".join(f", {_output_path(out, n).name}" for n in (args.outputs or ()))

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import json
 import logging
 import os
 import time
@@ -537,12 +538,72 @@ def bake_file(source_path: str | Path, out_path: str | Path, embed_textures: boo
     return report
 
 
+# cached_bake's index of the keys it computed (in the cache folder): a source whose files have
+# not changed (size and modification time) since is not read and hashed again.
+KEYS_FILE = "bake-keys.json"
+_KEYS_MAX = 20_000  # entries kept (the oldest are dropped)
+_RACY_NS = 2_000_000_000  # a file changed this close to when its key was recorded: hash it
+
+
+def _file_stats(files: list[Path]) -> list[list[Any]] | None:
+    try:
+        return [[str(f), st.st_size, st.st_mtime_ns] for f in files for st in [f.stat()]]
+    except OSError:
+        return None
+
+
+def _read_keys(cache_dir: Path) -> dict[str, Any]:
+    try:
+        data = read_json(cache_dir / KEYS_FILE)
+    except (OSError, ValueError):  # none yet, or unreadable: keys are computed again
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def _remembered(cache_dir: Path, entry: str, stats: list[list[Any]] | None) -> Path | None:
+    """The bake recorded for `entry` when its files' sizes and times are those recorded, were
+    older than the record by _RACY_NS (a file written within the file system's clock tick of
+    the record could have changed unseen: git's "racily clean"), and the bake is unchanged."""
+    rec = _read_keys(cache_dir).get(entry)
+    if stats is None or not isinstance(rec, dict) or rec.get("stats") != stats:
+        return None
+    recorded = rec.get("recorded_ns")
+    if not isinstance(recorded, int) or any(m >= recorded - _RACY_NS for _, _, m in stats):
+        return None
+    out = Path(str(rec.get("out")))
+    if out.parent != cache_dir or _file_stats([out]) != [rec.get("out_stat")]:
+        return None
+    return out
+
+
+def _remember(cache_dir: Path, entry: str, stats: list[list[Any]] | None, out: Path) -> None:
+    out_stat = _file_stats([out])
+    if stats is None or out_stat is None:
+        return
+    keys = _read_keys(cache_dir)
+    keys.pop(entry, None)
+    keys[entry] = {"stats": stats, "out": str(out), "out_stat": out_stat[0],
+                   "recorded_ns": time.time_ns()}
+    for old in list(keys)[: max(0, len(keys) - _KEYS_MAX)]:
+        del keys[old]
+    from ..atomic import atomic_writer
+
+    try:
+        with atomic_writer(cache_dir / KEYS_FILE) as f:
+            f.write(json.dumps(keys).encode())
+    except OSError as exc:  # a read-only cache: keys are hashed again next time
+        log.debug("%s: not written (%s)", cache_dir / KEYS_FILE, exc)
+
+
 def cached_bake(source_path: str | Path, cache_dir: str | Path,
                 allow_outside_paths: bool = False, variant: str | None = None) -> Path:
     """Path of an up-to-date bake of `source_path` in `cache_dir`, baking only when needed.
 
     The file name carries the source's content hash, so an edited source misses the cache;
-    an existing file that fails validation is baked again. Load the result with
+    an existing file that fails validation is baked again. The hash is computed again only
+    when a file of the source changed size or modification time since it was last computed
+    (KEYS_FILE in `cache_dir`; a file changed within 2 s of that is hashed regardless), so a
+    hit reads neither the sources nor the bake: loading it checks the bake's checksums. Load the result with
     ``load_scene(out, root=source_path.parent)``: its external textures lie beside the source,
     not in the cache. A material `variant` is baked in: each variant has its own file.
     """
@@ -550,12 +611,18 @@ def cached_bake(source_path: str | Path, cache_dir: str | Path,
 
     source_path, cache_dir = Path(source_path), Path(cache_dir)
     check_writable_folder(cache_dir, "cache folder", f"{source_path.stem}-0123456789abcdef.vkpbr")
-    key, _ = source_key(source_path, allow_outside_paths)
     tag = "" if variant is None else "-variant-" + hashlib.sha256(variant.encode()).hexdigest()[:8]
+    entry = f"{source_path.resolve()}|{int(allow_outside_paths)}{tag}"
+    stats = _file_stats([source_path, *_dependencies(source_path, allow_outside_paths)])
+    out = _remembered(cache_dir, entry, stats)
+    if out is not None:  # nothing changed since its key was computed: no hashing, no read
+        return out
+    key, _ = source_key(source_path, allow_outside_paths)
     out = cache_dir / f"{source_path.stem}-{key[:16]}{tag}.vkpbr"
     if out.is_file():
         try:
             if read_baked(out).source_key == key:
+                _remember(cache_dir, entry, stats, out)
                 return out
         except BakeFormatError:
             pass
@@ -564,4 +631,5 @@ def cached_bake(source_path: str | Path, cache_dir: str | Path,
     # load with root=source_path.parent.
     bake_file(source_path, out, progress=False, allow_outside_paths=allow_outside_paths,
               variant=variant, textures="external", _cache=True)
+    _remember(cache_dir, entry, stats, out)
     return out

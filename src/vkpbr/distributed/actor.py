@@ -14,7 +14,7 @@ import os
 import socket
 import time
 from collections.abc import Iterator
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +25,7 @@ from vkpbr.distributed.manifest import camera_record
 from vkpbr.distributed.worlds import ItemWorlds
 from vkpbr.errors import SceneError, UsageError
 
-__all__ = ["RendererActor", "render_views", "load_renderer"]
+__all__ = ["RendererActor", "render_views", "load_renderer", "load_scene_for", "predecode"]
 
 log = logging.getLogger(__name__)
 
@@ -52,6 +52,46 @@ def render_views(renderer: Any, cameras: list[Any], lights: Any, settings: Rende
                                   batch=settings.batch or None)
     for frame in frames:
         yield frame if names else {"color": frame}
+
+
+def load_scene_for(settings: RenderSettings) -> Any:
+    """`settings.scene` loaded as `vkpbr render [--cache]` loads it (None: the built-in chart)."""
+    if settings.scene is None:
+        return None
+    from vkpbr.config import default_cache_dir
+    from vkpbr.scene.loader import load_scene
+
+    path, root = Path(settings.scene), None
+    if settings.cache and path.suffix.lower() != ".vkpbr":
+        from vkpbr.bake.bake import cached_bake
+
+        root = path.parent  # the bake's external textures lie beside the source
+        path = cached_bake(path, settings.cache_dir or default_cache_dir(),
+                           allow_outside_paths=settings.allow_outside_paths)
+    kwargs: dict[str, Any] = {"strict": True} if settings.strict else {}
+    return load_scene(path, allow_outside_paths=settings.allow_outside_paths, root=root, **kwargs)
+
+
+def predecode(scene: Any, max_size: int) -> Any:
+    """`scene` with its images decoded to RGBA8 as the renderer's upload decodes them
+    (render/gpu_scene.py: the same decoder and size limit), so that the upload, on the
+    thread that drives the GPU, only copies: the actor runs this one scene ahead, on its
+    prefetch thread. Scenes with KTX2 images are left as they are (their BC7 levels are the
+    device's choice, made on upload)."""
+    import dataclasses
+
+    from vkpbr.scene.textures import decode_images
+
+    images = getattr(scene, "images", None)
+    if not images or any((img.mime_type or "").endswith("ktx2")
+                         or str(img.path or "").lower().endswith(".ktx2") for img in images):
+        return scene
+    pixels = decode_images(scene, max_size=max_size)
+    if any(p is None for p in pixels):  # missing or undecodable: the upload reports them
+        return scene
+    decoded = [img if img.pixels is not None else dataclasses.replace(img, pixels=px)
+               for img, px in zip(images, pixels, strict=True)]
+    return dataclasses.replace(scene, images=decoded)
 
 
 def world_views(renderer: Any, cameras: list[Any], lights: Any, settings: RenderSettings,
@@ -148,25 +188,15 @@ def _world_by_world(renderer: Any, cameras: list[Any], lights: Any, settings: Re
         yield frames.pop(v)
 
 
-def load_renderer(settings: RenderSettings, device: str | int | None = None) -> Any:
-    """A Renderer for `settings.scene`, loaded as `vkpbr render [--cache]` loads it."""
+def load_renderer(settings: RenderSettings, device: str | int | None = None,
+                  scene: Any = None) -> Any:
+    """A Renderer for `settings.scene` (or the `scene` given, loaded from it already),
+    loaded as `vkpbr render [--cache]` loads it."""
     from vkpbr.config import default_cache_dir
     from vkpbr.render.renderer import Renderer
 
-    scene = None
-    if settings.scene is not None:
-        from vkpbr.scene.loader import load_scene
-
-        path, root = Path(settings.scene), None
-        if settings.cache and path.suffix.lower() != ".vkpbr":
-            from vkpbr.bake.bake import cached_bake
-
-            root = path.parent  # the bake's external textures lie beside the source
-            path = cached_bake(path, settings.cache_dir or default_cache_dir(),
-                               allow_outside_paths=settings.allow_outside_paths)
-        kwargs: dict[str, Any] = {"strict": True} if settings.strict else {}
-        scene = load_scene(path, allow_outside_paths=settings.allow_outside_paths, root=root,
-                           **kwargs)
+    if scene is None:
+        scene = load_scene_for(settings)
     return Renderer(scene, device=device, msaa=settings.msaa, cache_dir=default_cache_dir(),
                     semantics=settings.semantic_source())
 
@@ -177,56 +207,113 @@ def _one_line(exc: BaseException) -> str:
 
 
 class RendererActor:
-    """Renders work items; one Renderer kept per scene key (the last one used).
+    """Renders work items with one Renderer, which changes scene (`Renderer.set_scene`: the
+    device and its pipeline cache are kept) when an item's scene is not the last one's, and
+    is made anew only when the renderer's own settings (msaa, semantics) change. The scene
+    the driver says comes next (`render(item, ahead=...)`) is loaded on a thread of its own
+    while this item renders: parsed or read from the bake cache, its textures decoded; at
+    most one scene ahead (docs/batch.md, "Many scenes").
 
     device : the Vulkan device (name substring or index) the Renderer opens; None: the default.
     """
 
     def __init__(self, device: str | int | None = None) -> None:
         self.device = device
-        self._key: tuple | None = None
+        self._key: tuple | None = None  # the scene the renderer draws
         self._renderer: Any = None
+        self._renderer_args: tuple | None = None  # (msaa, semantics) it was made with
         self._bad_scenes: dict[tuple, str] = {}  # scene key -> why it cannot load
         self._pool = ThreadPoolExecutor(2)  # encoding overlaps the next views' rendering
+        self._loader = ThreadPoolExecutor(1, thread_name_prefix="vkpbr-next-scene")
+        self._ahead: tuple[tuple, Future] | None = None  # (scene key, its load)
+        self.loads = {"ahead": 0, "now": 0}  # scenes loaded on the thread / when needed
 
     def info(self) -> dict[str, object]:
         return {"pid": os.getpid(), "host": socket.gethostname(), "device": self.device}
+
+    def prefetch(self, settings: RenderSettings) -> None:
+        """Start loading `settings`' scene on the prefetch thread (not the current one, a
+        known bad one or the one already ahead). One scene ahead at most: a load not yet
+        started is replaced; one under way is left to finish and this hint dropped."""
+        key = settings.scene_key()
+        if key == self._key or key in self._bad_scenes:
+            return
+        ahead = self._ahead  # a finished load of another scene is dropped, one under way kept
+        if ahead is not None and (ahead[0] == key or not (ahead[1].done() or ahead[1].cancel())):
+            return
+        size = (int(self._renderer.device.limits.maxImageDimension2D)
+                if self._renderer is not None else None)
+        self._ahead = (key, self._loader.submit(self._load, settings, size))
+
+    @staticmethod
+    def _load(settings: RenderSettings, max_size: int | None) -> Any:
+        scene = load_scene_for(settings)
+        return predecode(scene, max_size) if max_size and scene is not None else scene
+
+    def _scene(self, settings: RenderSettings, key: tuple) -> Any:
+        """`settings`' scene: the one loaded ahead when it is that one, else loaded now."""
+        ahead, self._ahead = self._ahead, None
+        if ahead is not None and ahead[0] == key:
+            self.loads["ahead"] += 1
+            return ahead[1].result()  # (its load's error, as loading now would raise it)
+        if ahead is not None:
+            ahead[1].cancel()
+        self.loads["now"] += 1
+        return load_scene_for(settings)
 
     def _renderer_for(self, settings: RenderSettings) -> Any:
         key = settings.scene_key()
         if key in self._bad_scenes:
             raise SceneError(settings.scene, self._bad_scenes[key])
-        if key != self._key:
-            self.close()
-            try:
-                self._renderer = load_renderer(settings, self.device)
-            except (SceneError, UsageError) as exc:
-                self._bad_scenes[key] = str(exc)
-                raise
-            self._key = key
+        if key == self._key:
+            return self._renderer
+        same = self._renderer is not None and self._renderer_args == (settings.msaa,
+                                                                      settings.semantics)
+        try:
+            scene = self._scene(settings, key)
+            self._key = None  # (the renderer's scene is about to change)
+            if same:
+                self._renderer.set_scene(scene)
+            else:
+                self.close()
+                self._renderer = load_renderer(settings, self.device, scene)
+                self._renderer_args = (settings.msaa, settings.semantics)
+        except (SceneError, UsageError) as exc:
+            self._bad_scenes[key] = str(exc)
+            raise
+        finally:
+            if self._renderer is not None and self._renderer.device.handle is None:
+                self._renderer = None  # closed by a failed set_scene
+        self._key = key
         return self._renderer
 
-    def render(self, item: WorkItem) -> dict[str, object]:
-        """Render and write `item`'s views. Returns {"ok": True, "views", "files",
+    def render(self, item: WorkItem, ahead: RenderSettings | None = None) -> dict[str, object]:
+        """Render and write `item`'s views; `ahead`: the settings of the scene expected next,
+        loaded on the prefetch thread meanwhile. Returns {"ok": True, "views", "files",
         "cameras", "seconds", "pid"}, or {"ok": False, "error": one line, "retry": bool}:
         an error in the input (a scene that does not load, a bad option) fails the same
         way everywhere and is not retried."""
         t0 = time.perf_counter()
         try:
-            return self._render(item, t0)
+            return self._render(item, t0, ahead)
         except (SceneError, UsageError) as exc:
+            if ahead is not None:  # this scene failed: the next one still loads meanwhile
+                self.prefetch(ahead)
             return {"ok": False, "error": _one_line(exc), "retry": False, "pid": os.getpid()}
         except Exception as exc:  # noqa: BLE001 - reported to the driver, which retries elsewhere
             log.exception("work item %s failed", item.label())
             self.close()  # a device error may leave the Renderer unusable: start afresh
             return {"ok": False, "error": _one_line(exc), "retry": True, "pid": os.getpid()}
 
-    def _render(self, item: WorkItem, t0: float) -> dict[str, object]:
+    def _render(self, item: WorkItem, t0: float, ahead: RenderSettings | None
+                ) -> dict[str, object]:
         from vkpbr.io import check_id_count, output_kind, output_path, write_output
 
         settings = item.settings
         renderer = self._renderer_for(settings)
         t_load = time.perf_counter()
+        if ahead is not None:  # after this scene's load: the two do not contend
+            self.prefetch(ahead)
         base = renderer.default_camera()
         cameras = [pose.camera(base) for pose in item.poses]
         options = settings.render_options()
@@ -250,6 +337,9 @@ class RendererActor:
             files += names
         for w in writes:
             w.result()
+        cache = getattr(renderer.device, "pipeline_cache", None)
+        if cache is not None:  # Ray kills actors without close(): keep new pipelines now
+            cache.save()
         sizes = [(out / f).stat().st_size for f in files]
         return {"ok": True, "views": list(item.frames), "files": files, "sizes": sizes,
                 "cameras": [camera_record(c) for c in cameras], "pid": os.getpid(),

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import collections
 import contextlib
+import itertools
 import logging
 import os
 import time
@@ -44,9 +45,12 @@ from vkpbr.distributed.manifest import (
     start_frames_folder,
 )
 
-__all__ = ["render", "JobResult", "Failure", "ClusterError", "check_job", "import_ray"]
+__all__ = ["render", "JobResult", "Failure", "ClusterError", "check_job", "import_ray",
+           "IN_PROCESS"]
 
 log = logging.getLogger(__name__)
+
+IN_PROCESS = "in-process"  # render(address=...): no Ray, one renderer in this process
 
 
 @dataclass(frozen=True)
@@ -121,6 +125,54 @@ class _Task:
     attempts: int = 0
     avoid: set[int] = field(default_factory=set)  # actor numbers it failed on
     last_error: str = ""
+    key: tuple = ()  # its scene (settings.scene_key()), for the hand-out's choices
+
+    def __post_init__(self) -> None:
+        self.key = self.item.settings.scene_key()
+
+
+# How far down the waiting tasks the driver looks for an actor's scene (_PICK) or the next
+# scene to load ahead (_AHEAD): a job's items are in entry order, so a scene's items are
+# together near the front; the bounds keep a hand-out cheap in jobs of millions of items.
+_PICK, _AHEAD = 64, 256
+
+
+def _pick(pending: collections.deque[_Task], actor: int, keys: tuple[tuple | None, ...]) -> int:
+    """The waiting task for `actor`: one of the scene it has (then the one it loaded ahead),
+    so that scenes are not loaded twice; else the first it has not failed; else the first."""
+    first = None
+    for key in (k for k in keys if k is not None):
+        for k, task in enumerate(itertools.islice(pending, _PICK)):
+            if actor in task.avoid:
+                continue
+            first = k if first is None else first
+            if task.key == key:
+                return k
+    if first is None:
+        first = next((k for k, t in enumerate(pending) if actor not in t.avoid), 0)
+    return first
+
+
+def _next_scene(pending: collections.deque[_Task], actor: int, scenes: dict[int, tuple],
+                ahead: dict[int, tuple]) -> Any:
+    """The settings of the first waiting scene no actor has or loads ahead (the scene
+    `actor` should load while it renders; recorded in `ahead`), or None."""
+    taken = {*scenes.values(), *(v for a, v in ahead.items() if a != actor)}
+    for task in itertools.islice(pending, _AHEAD):
+        if task.key not in taken:
+            ahead[actor] = task.key
+            return task.item.settings
+    ahead.pop(actor, None)
+    return None
+
+
+def _scenes_after(items: list[WorkItem]) -> list[Any]:
+    """For each item, the settings of the first later item of another scene (None: none)."""
+    out: list[Any] = [None] * len(items)
+    for n in range(len(items) - 2, -1, -1):
+        same = items[n + 1].settings.scene_key() == items[n].settings.scene_key()
+        out[n] = out[n + 1] if same else items[n + 1].settings
+    return out
 
 
 def _finish_entry(scene: SceneJob, manifest: Manifest) -> bool:
@@ -150,6 +202,8 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
     job : a Job, a job document (dict or list, as in a job file) or a job file's path.
     address : a Ray cluster ("HOST:PORT", "ray://HOST:PORT", "auto"); None starts a local
         Ray instance (with `local_cpus` CPUs; None: all). An initialised Ray is used as is.
+        "in-process" (IN_PROCESS): no Ray; one renderer in this process renders the items in
+        order, loading the next scene on a thread meanwhile (the same files and manifests).
     actors : how many renderer actors (None: one per GPU, else one per CPU of the cluster).
     num_cpus, num_gpus : Ray resources of each actor (None: 1 GPU and 1 CPU where the cluster
         has GPUs, else 1 CPU); num_gpus=0.5 puts two actors on each GPU.
@@ -165,8 +219,9 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
     t0 = time.perf_counter()
     job = _as_job(job)
     manifests = check_job(job)
-    ray = import_ray()
-    if address not in (None, "local"):
+    here = address == IN_PROCESS
+    ray = None if here else import_ray()
+    if address not in (None, "local", IN_PROCESS):
         preflight(address)  # unreachable: one line now, even when nothing is left to render
     result = JobResult(views=job.views)
     try:
@@ -174,15 +229,18 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
         result.skipped = sum(len(d) for d in done)
         items = job.items(done)
         if items:
-            started = connect(ray, address, local_cpus)
+            started = False if here else connect(ray, address, local_cpus)
             made: list[tuple[SceneJob, Manifest, bool]] = []
             try:  # the folders are made last, right before the actors write into them
                 busy = {item.entry for item in items}
                 for e in sorted(busy):
                     made.append((job.scenes[e], manifests[e],
                                  start_frames_folder(job.scenes[e], manifests[e])))
-                _run(ray, job, items, manifests, result, actors, num_cpus, num_gpus, progress,
-                     on_result)
+                if here:
+                    _run_here(job, items, manifests, result, progress, on_result)
+                else:
+                    _run(ray, job, items, manifests, result, actors, num_cpus, num_gpus,
+                         progress, on_result)
             except BaseException:
                 for scene, manifest, created in made:
                     abandon_frames_folder(scene, manifest, created)
@@ -199,6 +257,51 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
             m.close()
     result.seconds = time.perf_counter() - t0
     return result
+
+
+def _record(item: WorkItem, res: dict, attempts: int, manifests: list[Manifest],
+            result: JobResult) -> None:
+    """A finished item's views and files into its entry's manifest."""
+    manifests[item.entry].done(item.frames, res["files"], res["cameras"], sizes=res.get("sizes"),
+                               attempts=attempts, pid=res.get("pid"),
+                               seconds=round(float(res.get("seconds", 0.0)), 4))
+    result.rendered += len(item.frames)
+
+
+def _run_here(job: Job, items: list[WorkItem], manifests: list[Manifest], result: JobResult,
+              progress: bool | None, on_result: Callable[[WorkItem, dict], None] | None) -> None:
+    """The items in order by one RendererActor in this process, each told the next item's
+    scene when it differs (loaded on its thread meanwhile); an item that fails with an
+    error of the machine is tried again up to `job.retries` times."""
+    from tqdm import tqdm
+
+    from vkpbr.distributed.actor import RendererActor
+
+    actor = RendererActor()
+    result.actors = 1
+    bar = tqdm(total=sum(len(i.frames) for i in items), unit="view", dynamic_ncols=True,
+               disable=None if progress is None else not progress, desc="vkpbr")
+    t0 = time.perf_counter()
+    try:
+        for item, ahead in zip(items, _scenes_after(items), strict=True):
+            for attempt in range(1, job.retries + 2):
+                res = actor.render(item, ahead)
+                if on_result is not None:
+                    on_result(item, res)
+                if res.get("ok") or not res.get("retry") or attempt > job.retries:
+                    break
+                result.retries += 1
+            if res.get("ok"):
+                _record(item, res, attempt, manifests, result)
+            else:
+                manifests[item.entry].failed(item.frames, str(res.get("error")), attempt)
+                result.failures.append(Failure(item.entry, item.frames, item.label(),
+                                               str(res.get("error")), attempt))
+            bar.update(len(item.frames))
+    finally:
+        bar.close()
+        result.render_seconds = time.perf_counter() - t0
+        actor.close()
 
 
 def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], result: JobResult,
@@ -229,16 +332,20 @@ def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], r
                disable=None if progress is None else not progress, desc="vkpbr")
     t_first: float | None = None
 
+    scenes: dict[int, tuple] = {}  # actor -> the scene of its last item (its renderer's)
+    ahead: dict[int, tuple] = {}  # actor -> the scene it was told to load ahead
+
     def give_out() -> None:
         nonlocal t_first
         while idle and pending:
             actor = idle.popleft()
-            # The first waiting task this actor has not failed; else the first one.
-            k = next((k for k, t in enumerate(pending) if actor not in t.avoid), 0)
+            k = _pick(pending, actor, (scenes.get(actor), ahead.get(actor)))
             task = pending[k]
             del pending[k]
             task.attempts += 1
-            in_flight[pool[actor].render.remote(task.item)] = (actor, task)
+            scenes[actor] = task.key
+            hint = _next_scene(pending, actor, scenes, ahead)
+            in_flight[pool[actor].render.remote(task.item, hint)] = (actor, task)
             t_first = time.perf_counter() if t_first is None else t_first
 
     def fail(task: _Task, error: str, retry: bool, actor: int) -> None:
@@ -267,6 +374,8 @@ def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], r
                 # The actor is gone (killed, crashed, its node lost): replace it, retry the item.
                 result.actors_lost += 1
                 pool.pop(actor, None)
+                scenes.pop(actor, None)
+                ahead.pop(actor, None)
                 if replacements > 0:
                     replacements -= 1
                     start_actor()
@@ -283,12 +392,8 @@ def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], r
             if on_result is not None:
                 on_result(task.item, res)
             if res.get("ok"):
-                item = task.item
-                manifests[item.entry].done(item.frames, res["files"], res["cameras"],
-                                           sizes=res.get("sizes"), attempts=task.attempts, pid=res.get("pid"),
-                                           seconds=round(float(res.get("seconds", 0.0)), 4))
-                result.rendered += len(item.frames)
-                bar.update(len(item.frames))
+                _record(task.item, res, task.attempts, manifests, result)
+                bar.update(len(task.item.frames))
             else:
                 fail(task, str(res.get("error")), bool(res.get("retry")), actor)
             idle.append(actor)

@@ -22,6 +22,7 @@ from vkpbr.errors import VkpbrError
 from vkpbr.gpu.descriptors import DescriptorSetLayout
 from vkpbr.gpu.device import Device, DeviceObject
 from vkpbr.gpu.pipeline import PipelineLayout, ShaderModule
+from vkpbr.gpu.pipeline_cache import Feedback
 from vkpbr.gpu.vk import check_result
 
 __all__ = ["ComputePipeline", "groups", "LAYOUTS", "STAGES"]
@@ -96,8 +97,10 @@ class ComputePipeline(DeviceObject):
                 stage=vk.VK_SHADER_STAGE_COMPUTE_BIT, module=module.handle, pName="main",
                 pSpecializationInfo=spec)
             flags = vk.VK_PIPELINE_CREATE_CAPTURE_STATISTICS_BIT_KHR if capture_statistics else 0
-            info = vk.VkComputePipelineCreateInfo(flags=flags, stage=stage, layout=self.layout.handle)
-            self.handle = vk.vkCreateComputePipelines(device.handle, None, 1, [info], None)[0]
+            feedback = Feedback(device)  # the build goes through the device's pipeline cache
+            info = vk.VkComputePipelineCreateInfo(pNext=feedback.info, flags=flags, stage=stage,
+                                                  layout=self.layout.handle)
+            self.handle = feedback.build("compute", info)
         finally:
             module.destroy()
         device.track(self)

@@ -121,6 +121,9 @@ class Device:
         self.vk = vk = self.instance.vk
         self._children: list[Destroyable] = []
         self.handle = None
+        # Its VkPipelineCache (gpu/pipeline_cache.py): set by the caller with a file to keep
+        # it in, else made in memory by the first pipeline build.
+        self.pipeline_cache: Any = None
         try:
             self.info: PhysicalDeviceInfo = self.instance.choose_device(device)
             self.physical = self.info.handle
@@ -400,6 +403,13 @@ class Device:
     @property
     def live_children(self) -> int:
         return len(self._children)
+
+    def destroy_children(self, since: int) -> None:
+        """Destroy the children made after the first `since` (`live_children` then), newest
+        first, as `close` does: what one scene's parts made (Renderer.set_scene). The caller
+        waits for the device first."""
+        while len(self._children) > since:
+            self._children.pop().destroy()
 
     def bytes_allocated(self) -> tuple[int, int]:
         """(device-local, host-visible) bytes of the live buffers and images this device made,

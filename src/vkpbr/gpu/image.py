@@ -7,7 +7,9 @@ copied level by level; otherwise its chain is made by successive linear blits on
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
@@ -246,6 +248,11 @@ def pipeline_barrier(vk: Any, cmd: Any, image_barriers: list, buffer_barriers: l
     )
 
 
+# A batch at least this large is copied into the staging buffer on threads (a scene's 64 MiB
+# batches: one thread's memcpy of them was a share of Sponza's texture upload).
+_PARALLEL_COPY_BYTES = 16 << 20
+
+
 class TextureUploader:
     """Uploads RGBA8 images with full mip chains (and BC7 ones with theirs: `add_blocks`),
     batching many into one submission.
@@ -259,6 +266,7 @@ class TextureUploader:
         self.batch_bytes = batch_bytes
         self._pending: list[tuple[Image, list[np.ndarray]]] = []
         self._pending_bytes = 0
+        self._staging: Buffer | None = None  # reused by every batch until `flush` ends
 
     def add(self, pixels: np.ndarray, format: int | str, mipmaps: bool = True, name: str = "",
             mips: Sequence[np.ndarray] = ()) -> Image:
@@ -290,7 +298,7 @@ class TextureUploader:
         image = Image(self.device, w, h, format, usage, mip_levels=levels, name=name)
         nbytes = sum(a.nbytes for a in levels_data)
         if self._pending_bytes + nbytes > self.batch_bytes:
-            self.flush()
+            self._submit()
         self._pending.append((image, levels_data))
         self._pending_bytes += nbytes
         return image
@@ -310,33 +318,67 @@ class TextureUploader:
         data = [np.ascontiguousarray(a, dtype=np.uint8) for a in levels]
         nbytes = sum(_aligned(a.nbytes) for a in data)
         if self._pending_bytes + nbytes > self.batch_bytes:
-            self.flush()
+            self._submit()
         self._pending.append((image, data))
         self._pending_bytes += nbytes
         return image
 
     def flush(self) -> None:
+        """Upload what is queued (and wait for it); the staging buffer is freed."""
+        try:
+            self._submit()
+        finally:
+            if self._staging is not None:
+                self._staging.destroy()
+                self._staging = None
+
+    def _staging_for(self, total: int) -> Buffer:
+        """The one staging buffer, reused by every batch of this uploader: made again only
+        when a batch needs more (a batch of at least half `batch_bytes` gets `batch_bytes`,
+        so the next full ones fit; a small one-off upload gets what it needs)."""
+        if self._staging is None or self._staging.size < total:
+            if self._staging is not None:
+                self._staging.destroy()
+            size = max(total, self.batch_bytes) if 2 * total >= self.batch_bytes else total
+            self._staging = Buffer(self.device, size, self.device.vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                   host_visible=True)
+        return self._staging
+
+    def _submit(self) -> None:
+        """Copy the queued levels into the staging buffer (on threads when large: NumPy
+        releases the GIL), record their copies (and mip blits), submit and wait."""
         if not self._pending:
             return
-        device, vk = self.device, self.device.vk
-        total = sum(_aligned(a.nbytes) for _, levels in self._pending for a in levels)
-        staging = Buffer(device, total, vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT, host_visible=True)
+        device = self.device
         try:
+            total = sum(_aligned(a.nbytes) for _, levels in self._pending for a in levels)
+            staging = self._staging_for(total)
             dst = staging.array(np.uint8, total)
-            offset = 0
+            copies, offsets_of, offset = [], [], 0
+            for _, levels in self._pending:  # offsets multiples of 16: a BC7 block (RGBA8: 4)
+                offsets_of.append([])
+                for a in levels:
+                    copies.append((offset, a))
+                    offsets_of[-1].append(offset)
+                    offset += _aligned(a.nbytes)
+
+            def copy(job: tuple[int, np.ndarray]) -> None:
+                at, a = job
+                dst[at : at + a.nbytes] = a.reshape(-1)
+
+            if total >= _PARALLEL_COPY_BYTES and len(copies) > 1:
+                with ThreadPoolExecutor(min(8, os.cpu_count() or 1)) as pool:
+                    list(pool.map(copy, copies))
+            else:
+                for job in copies:
+                    copy(job)
             with device.one_time_commands() as cmd:
-                for image, levels in self._pending:
-                    offsets = []
-                    for a in levels:  # offsets multiples of 16: a BC7 block (RGBA8 needs 4)
-                        dst[offset : offset + a.nbytes] = a.reshape(-1)
-                        offsets.append(offset)
-                        offset += _aligned(a.nbytes)
+                for (image, levels), offsets in zip(self._pending, offsets_of, strict=True):
                     if len(levels) > 1:
                         self._record_levels(cmd, image, staging, offsets)
                     else:
                         self._record_upload(cmd, image, staging, offsets[0])
         finally:
-            staging.destroy()
             self._pending.clear()
             self._pending_bytes = 0
 

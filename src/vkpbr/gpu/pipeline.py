@@ -15,6 +15,7 @@ from typing import Any
 from vkpbr.errors import ShaderError
 from vkpbr.gpu.descriptors import DescriptorSetLayout
 from vkpbr.gpu.device import Device, DeviceObject
+from vkpbr.gpu.pipeline_cache import Feedback
 
 __all__ = ["VertexStream", "PipelineSpec", "PipelineLayout", "Pipeline", "ShaderModule"]
 
@@ -181,7 +182,9 @@ class Pipeline(DeviceObject):
             colorWriteMask=all_rgba if spec.color_write else 0,
         )
         has_color = spec.color_format is not None
+        feedback = Feedback(self.device)  # the build goes through the device's pipeline cache
         rendering = vk.VkPipelineRenderingCreateInfo(
+            pNext=feedback.info,
             colorAttachmentCount=1 if has_color else 0,
             pColorAttachmentFormats=[spec.color_format] if has_color else None,
             depthAttachmentFormat=spec.depth_format,
@@ -221,5 +224,5 @@ class Pipeline(DeviceObject):
             ),
             layout=layout.handle,
         )
-        return vk.vkCreateGraphicsPipelines(self.device.handle, None, 1, [info], None)[0]
+        return feedback.build("graphics", info)
 

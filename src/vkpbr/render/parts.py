@@ -25,6 +25,7 @@ from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayo
 from vkpbr.gpu.device import Device, DeviceRequest
 from vkpbr.gpu.frames import FrameRing
 from vkpbr.gpu.pipeline import PipelineLayout
+from vkpbr.gpu.pipeline_cache import PipelineCache
 from vkpbr.render import layouts as L
 from vkpbr.render.ao import AoImages
 from vkpbr.render.batch import draw_spheres
@@ -36,7 +37,7 @@ from vkpbr.render.environments import Environments
 from vkpbr.render.frames import Bounds, FrameSlot, bind_instances, create_slots
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.lighting import Lighting
-from vkpbr.render.path_choice import FramePaths
+from vkpbr.render.path_choice import FramePaths, shaders_digest
 from vkpbr.render.post_stage import PostKernels
 from vkpbr.render.recorder import STAMPS, FrameRecorder
 from vkpbr.render.scene_state import GpuSceneState, LiveBounds, scene_state
@@ -105,14 +106,22 @@ class FrameParts:
 
 
 def open_device(device: str | int | None, validation: bool | None, sync_validation: bool,
-                window_extensions: tuple[str, ...] | None) -> Device:
+                window_extensions: tuple[str, ...] | None,
+                cache_dir: str | os.PathLike[str] | None = None) -> Device:
     """The Renderer's device (its arguments of those names): with a window system's instance
-    extensions, swapchains too; `validation` None: on where VKPBR_VALIDATION=1."""
+    extensions, swapchains too; `validation` None: on where VKPBR_VALIDATION=1. Its pipeline
+    cache is kept in `cache_dir` (None: in memory), keyed by the device and the SPIR-V."""
     if window_extensions is not None:
         device = DeviceRequest(device, tuple(window_extensions), ("VK_KHR_swapchain",))
     if validation is None:
         validation = os.environ.get("VKPBR_VALIDATION") == "1"
-    return Device(device, validation=validation, sync_validation=sync_validation)
+    dev = Device(device, validation=validation, sync_validation=sync_validation)
+    try:
+        dev.pipeline_cache = PipelineCache(dev, cache_dir, shaders_digest())
+    except BaseException:
+        dev.close()
+        raise
+    return dev
 
 
 def create_layouts(device: Device, frames: int

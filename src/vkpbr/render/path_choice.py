@@ -41,7 +41,7 @@ from vkpbr.render.options import RenderOptions
 from vkpbr.scene.types import Camera, Scene
 
 __all__ = ["CACHE_FILE", "RULE_CPU", "RULE_GPU", "FramePaths", "FrameStream", "PathChoice",
-           "device_key", "frame_paths_mode", "is_auto", "measure", "recorded", "resolve"]
+           "device_key", "shaders_digest", "frame_paths_mode", "is_auto", "measure", "recorded", "resolve"]
 
 log = logging.getLogger(__name__)
 
@@ -93,7 +93,7 @@ def device_key(renderer: FrameStream) -> str:
 
 
 def _key(name: str, vendor_id: int, device_id: int, driver_version: int) -> str:
-    return f"{name} [{vendor_id:04x}:{device_id:04x}] driver {driver_version} shaders {_shaders_digest()}"
+    return f"{name} [{vendor_id:04x}:{device_id:04x}] driver {driver_version} shaders {shaders_digest()}"
 
 
 def recorded(cache_dir: str | Path, device: dict) -> dict | None:
@@ -103,7 +103,7 @@ def recorded(cache_dir: str | Path, device: dict) -> dict | None:
 
 
 @functools.cache
-def _shaders_digest() -> str:
+def shaders_digest() -> str:
     """sha1 of the SPIR-V vkpbr runs (src/vkpbr/shaders/spv), first 12 hex digits."""
     digest = hashlib.sha1()
     for path in sorted((Path(__file__).resolve().parent.parent / "shaders" / "spv").glob("*.spv")):

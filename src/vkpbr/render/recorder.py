@@ -12,7 +12,9 @@ blended-draw order) or freed at once.
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
@@ -72,6 +74,14 @@ class _Stamps:
         self.ring.stamp(self.cmd, self.frame, len(self.names))
 
 
+def _pipeline_key(target: FrameTarget, tbn: L.TbnMode, p: PassSpec, prepass: bool,
+                  visibility: bool = False, batch: bool = False, copy: bool = False) -> tuple:
+    """What a pass's pipeline for `target` depends on (FrameRecorder.pipeline's arguments)."""
+    return (target.color_format, target.depth_format, target.samples,
+            None if p.fullscreen else tbn, p.name, prepass and p.after_prepass, visibility,
+            batch, copy)
+
+
 class FrameRecorder:
     """Pipelines and command buffers for drawing `gpu_scene` with the frame ring `ring`."""
 
@@ -102,9 +112,7 @@ class FrameRecorder:
         writing (draw + 1, primitive) with pbr.frag's own coverage instead of a colour;
         `batch`: its batched-views variant (render/batch.py: the shaders' BATCH builds);
         `copy`: its opaque-copy variant, writing linear radiance (render/transmission.py)."""
-        key = (target.color_format, target.depth_format, target.samples,
-               None if p.fullscreen else tbn, p.name, prepass and p.after_prepass, visibility,
-               batch, copy)
+        key = _pipeline_key(target, tbn, p, prepass, visibility, batch, copy)
         if key not in self._pipelines:
             gs = self.gpu_scene
             streams = [VertexStream(i, i, fmt, 0 if name == "colors" and not gs.has_colors else None)
@@ -131,14 +139,18 @@ class FrameRecorder:
             self._pipelines[key] = Pipeline(self.device, spec, self.pipeline_layout, SPV_DIR)
         return self._pipelines[key]
 
-    def build_pipelines(self, target: FrameTarget) -> None:
+    def build_pipelines(self, target: FrameTarget, threads: int | None = None) -> None:
         """Create every pipeline and vertex stream (all TBN paths and passes) for `target`
-        now, so that no later mode switch waits for one (the viewer calls this)."""
+        now, so that no later mode switch waits for one (the viewer calls this). The driver
+        compiles them on `threads` threads at once (default: up to 8): the binding releases
+        the GIL in its calls, the device's pipeline cache is internally synchronised, and
+        each pipeline is its own key here."""
         self.gpu_scene.ensure_streams()
-        for tbn in L.TbnMode:
-            for p in PASSES:
-                for prepass in (False, True):  # the window may be resized across the bound
-                    self.pipeline(target, tbn, p, prepass)
+        keys = {_pipeline_key(target, tbn, p, prepass): (tbn, p, prepass) for tbn in L.TbnMode
+                for p in PASSES for prepass in (False, True)}  # (resized across the bound)
+        workers = threads or min(8, os.cpu_count() or 1)
+        with ThreadPoolExecutor(max(1, workers)) as pool:
+            list(pool.map(lambda k: self.pipeline(target, *k), keys.values()))  # one per key
 
     # --- command buffers --------------------------------------------------------------------
     def stream_names(self, tbn: L.TbnMode) -> list[str]:

@@ -1,13 +1,8 @@
-"""The renderer: a Scene drawn through one frame path into any frame target.
-
-`Renderer` is a facade over the parts frames are drawn with (render/parts.py: targets, path
-choice, lighting, environments, shadow maps, the blended draws' order; each its own module,
-none calling back into the Renderer). `draw` is the one frame path for every target
-(render/frame_path.py); `render` / `render_many` are that path on offscreen targets plus the
-readback, once auto's path is chosen (render/path_choice.py: before the first frame, never
-inside one); `render_batch` takes the batch path (render/batch_route.py, batch_path.py). The
-viewer (app/viewer.py) is the frame path on a swapchain or offscreen target, plus a HUD.
-"""
+"""The renderer: a Scene drawn through one frame path into any frame target; a facade over
+its parts (render/parts.py: each concern its own module, none calling back into it). `draw`
+(render/frame_path.py) serves every target; `render`/`render_many` are it on offscreen targets
+once auto's path is chosen (render/path_choice.py); `render_batch` the batch path
+(render/batch_route.py); `set_scene` render/scene_swap.py. The viewer is `draw` plus a HUD."""
 
 from __future__ import annotations
 
@@ -24,17 +19,17 @@ from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, FrameTarget
 from vkpbr.render import outputs as O
 from vkpbr.render.batch_call import WorldsArg, world_slots
 from vkpbr.render.batch_call import render_batch as batch_call
-from vkpbr.render.batch_path import BatchPath
 from vkpbr.render.batch_route import chunked, per_view
 from vkpbr.render.environment import EnvironmentSpec
-from vkpbr.render.frame_path import FramePath, Submitted
+from vkpbr.render.frame_path import Submitted
 from vkpbr.render.frames import FrameStats
 from vkpbr.render.lighting import LightsArg, automatic_sun
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.outputs import OUTPUTS, frame_outputs
 from vkpbr.render.overlay import TextOverlay
-from vkpbr.render.parts import FrameParts, make_parts, open_device
+from vkpbr.render.parts import FrameParts, open_device
 from vkpbr.render.scene_state import with_times
+from vkpbr.render.scene_swap import SceneMaker
 from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.types import Camera, Light, Scene
 from vkpbr.scene.worlds import WorldSlots
@@ -61,7 +56,7 @@ class Renderer:
     window_extensions : a window system's instance extensions (GLFW's): swapchains too.
     env_spec : cube sizes and sample counts of the environments' pre-filter (None: the GPU
         sizes, or EnvironmentSpec.cpu() on a CPU device).
-    cache_dir : where the split-sum BRDF table is kept between processes (None: none).
+    cache_dir : where the BRDF table, frame-path record and pipeline cache are kept (None: none).
     semantics : where the dataset outputs' semantic ids come from (vkpbr.scene.semantics):
         "mesh" (each mesh primitive its own class), "material", "extras" (glTF `extras:
         {"semantic": ...}` of nodes or meshes), a {node/mesh/material name: id or label}
@@ -78,22 +73,30 @@ class Renderer:
         t0 = time.perf_counter()
         if msaa not in (1, 4):
             raise UsageError(f"msaa {msaa}: choose 1 or 4")
-        if scene is None:
-            from vkpbr.scene.default import default_scene
+        self.msaa, self.background, self.depth_prepass = msaa, background, depth_prepass
+        self.device = open_device(device, validation, sync_validation, window_extensions, cache_dir)
+        self._maker = SceneMaker(self.device, msaa, background, depth_prepass, env_spec,
+                                 cache_dir, semantics)
+        self._made, t_device = None, time.perf_counter() - t0
+        self.set_scene(scene)
+        self.timings.update(device=t_device, setup=self.timings["setup"] + t_device)
 
-            scene = default_scene()
-        self.scene, self.msaa, self.background = scene, msaa, background
-        self.depth_prepass, self.last_stats = depth_prepass, FrameStats()
-        self.device = open_device(device, validation, sync_validation, window_extensions)
+    def set_scene(self, scene: Scene | None) -> None:
+        """Draw `scene` (None: the built-in one) from now on, on the same device and pipeline
+        cache (render/scene_swap.py): as `Renderer(scene)` would; targets made before and
+        `world_slots` are gone."""
+        if self._made is not None:
+            self._maker.unmake(self._made)
+            self._made = self.parts = self.batch_path = None
+        self._world_slots = self._world_materials = None  # (named in the old scene's nodes)
         try:
-            self.parts = make_parts(self.device, scene, msaa, background, depth_prepass,
-                                    env_spec, cache_dir, semantics)
+            made = self._maker.make(scene)
         except BaseException:
             self.close()
             raise
-        self.frame_path, self.batch_path = FramePath(self.parts), BatchPath(self.parts)
+        self._made, self.scene, self.parts, self.timings = made, made.scene, made.parts, made.timings
+        self.frame_path, self.batch_path, self.last_stats = made.frame_path, made.batch_path, FrameStats()
         self._expose(self.parts)
-        self.timings = {"setup": time.perf_counter() - t0, **self.gpu_scene.timings}
 
     def _expose(self, p: FrameParts) -> None:
         """The parts, and the methods of theirs callers use on the Renderer, by the names
@@ -285,10 +288,8 @@ class Renderer:
         """Destroy everything (idempotent). The Renderer is unusable afterwards."""
         dev = getattr(self, "device", None)
         if dev is not None and dev.handle is not None:
-            dev.wait_idle()
-            for part in (getattr(self, "batch_path", None), getattr(self, "parts", None)):
-                if part is not None:
-                    part.close()
+            if getattr(self, "_made", None) is not None:  # (None: set_scene failed midway)
+                self._maker.unmake(self._made)
             dev.close()
 
     def __enter__(self) -> Renderer:

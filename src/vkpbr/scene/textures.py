@@ -385,7 +385,8 @@ def decode_images(
     ----------
     scene_or_images : a Scene (its `images`) or a sequence of Image.
     max_size : images wider or taller than this are downscaled (aspect kept).
-    workers : decoding threads; default min(8, CPU count).
+    workers : decoding threads; default min(16, CPU count) (the H200 machine has 16 cores;
+        decoding is the largest part of a scene's load there: benchmarks/bench_load.py).
     source : the scene file, for the total-bytes error (default: the Scene's `source`, else
         its name).
     blocks, block_levels : "bc7" and a dict: the KTX2 (Basis Universal) images that hold
@@ -419,7 +420,7 @@ def decode_images(
         images = scene_or_images
     if not images:
         return []
-    workers = workers or min(8, os.cpu_count() or 1)
+    workers = workers or min(16, os.cpu_count() or 1)
     if max_size is not None and max_size < 1:
         raise ValueError(f"max_size must be >= 1, got {max_size}")
     budget = TextureBudget()

@@ -1,0 +1,299 @@
+"""Load time and many-scene jobs (issue 32, must-have 7): where a scene's file-to-first-frame
+time goes, cold and with each cache warm, and a job of many different scenes against one
+scene rendered in-process.
+
+    python benchmarks/bench_load.py [--scene SPONZA.gltf] [--size 1280x720]
+                                    [--models DIR] [--scenes 100] [--views 16] [--job-size 256x256]
+                                    [--no-job] [--no-load] [--ray] [--profile DIR]
+                                    [--json OUT.json]
+
+Part 1, one scene (default: the sample models' Sponza), each row a fresh process with its own
+cache folder ($VKPBR_CACHE_DIR) in this order:
+  cold                  nothing cached: the glTF parsed, pipelines compiled, auto's frame path
+                        measured (on a GPU), the BRDF table made
+  warm pipelines        the same folder again: the pipeline cache and frame-path record read
+  bake (first)          through the bake cache (`--cache`), which bakes now
+  warm bake + pipelines through the bake cache again: everything warm
+  warm bake only        the pipeline cache and frame-path record removed first
+Columns: the scene's load (parse or bake-cache read), the Renderer's set-up split into the
+device, the scene's upload (geometry, textures: decode + upload + mips) and the rest of its
+GPU objects, auto's path choice (a measurement when nothing is recorded), the first frame's
+render call, the pipelines built in the process (the driver's reported cache hits) and their
+seconds, and file-to-first-frame (load + set-up + choice + first frame; Python's import of
+vkpbr is the separate "import" column).
+
+Part 2, a job (docs/batch.md, "Many scenes"): `--scenes` entries cycling over the sample
+models under `--models` (every */glTF/*.gltf; consecutive entries are different scenes, so
+every item changes scene), `--views` orbit views each at `--job-size`, PNG files written:
+  one scene in-process  each model's views rendered by a warm actor (no loads): the job's
+                        views over the sum of its entries' times at their model's rate
+  in-process job        `vkpbr batch --in-process`: one renderer, set_scene per change, the next
+                        scene loaded on a thread (cold bake cache, then warm)
+  no load ahead         the same actor without hints (every scene loaded when needed)
+  Ray, 1 actor          `vkpbr batch` (with --ray): the render span, Ray's start excluded
+Prints Markdown tables. Not a test: asserts nothing but that the jobs succeed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "tests"))
+sys.path.insert(0, str(REPO / "benchmarks"))
+from assets_path import ASSETS  # noqa: E402
+
+ROWS = (("cold", False, ()), ("warm pipelines", False, ()), ("bake (first)", True, ()),
+        ("warm bake + pipelines", True, ()),
+        ("warm bake only", True, ("pipelines-*.bin", "frame-paths.json")))
+
+
+# --- part 1: one scene, a child process per row ---------------------------------------------
+def child(scene: str, size: tuple[int, int], cached: bool) -> dict:
+    """Runs in the child: load, set up, choose the path, first frame; the phases' seconds."""
+    t0 = time.perf_counter()
+    from vkpbr.config import default_cache_dir
+    from vkpbr.render.options import RenderOptions
+    from vkpbr.render.renderer import Renderer
+    from vkpbr.render.scene_swap import pipeline_timings
+    from vkpbr.scene.loader import load_scene
+
+    t_import = time.perf_counter()
+    path, root = Path(scene), None
+    if cached:
+        from vkpbr.bake.bake import cached_bake
+
+        root, path = path.parent, cached_bake(path, default_cache_dir())
+    loaded = load_scene(path, root=root)
+    t_load = time.perf_counter()
+    renderer = Renderer(loaded, cache_dir=default_cache_dir())
+    t_setup = time.perf_counter()
+    renderer.choose_paths(renderer.offscreen_target(size, False), RenderOptions())
+    t_choice = time.perf_counter()
+    renderer.render(size=size)
+    t_first = time.perf_counter()
+    out = {"import": t_import - t0, "load": t_load - t_import, **renderer.timings,
+           "choice": t_choice - t_setup, "first_frame": t_first - t_choice,
+           **pipeline_timings(renderer.device), "total": t_first - t_import,
+           "path": renderer.paths.choice.label if renderer.paths.choice else "rule",
+           "device_name": renderer.device.info.name}
+    renderer.close()
+    return out
+
+
+def load_table(scene: Path, size: tuple[int, int], profile: Path | None) -> list[dict]:
+    cache = Path(tempfile.mkdtemp(prefix="vkpbr-bench-load-"))
+    rows = []
+    try:
+        for name, cached, remove in ROWS:
+            for pattern in remove:
+                for f in cache.glob(pattern):
+                    f.unlink()
+            env = {**os.environ, "VKPBR_CACHE_DIR": str(cache)}
+            cmd = [sys.executable, __file__, "--child", str(scene), "--size", f"{size[0]}x{size[1]}"]
+            if profile is not None:
+                profile.mkdir(parents=True, exist_ok=True)
+                cmd += ["--profile", str(profile / f"load-{name.replace(' ', '-')}.txt")]
+            got = subprocess.run(cmd + (["--cached"] if cached else []), env=env, check=True,
+                                 capture_output=True, text=True)
+            rows.append({"row": name, **json.loads(got.stdout.strip().splitlines()[-1])})
+    finally:
+        shutil.rmtree(cache, ignore_errors=True)
+    return rows
+
+
+def print_load_table(scene: Path, size: tuple[int, int], rows: list[dict]) -> None:
+    print(f"\n### {scene.name} file to first frame at {size[0]}x{size[1]} on {rows[0]['device_name']}"
+          f" (auto: {rows[-1]['path']})\n")
+    print("| row | import | load | device | geometry | textures | other set-up | path choice "
+          "| first frame | pipelines (hits) | pipeline s | **file to first frame** |")
+    print("|---|" + "---:|" * 11)
+    for r in rows:
+        print(f"| {r['row']} | {r['import']:.2f} | {r['load']:.2f} | {r['device']:.2f} | "
+              f"{r['geometry']:.2f} | {r['textures']:.2f} | {r['parts']:.2f} | {r['choice']:.2f} | "
+              f"{r['first_frame']:.2f} | {r['pipelines_built']} ({r['pipeline_hits']}) | "
+              f"{r['pipelines_s']:.2f} | **{r['total']:.2f}** |")
+
+
+# --- part 2: many scenes --------------------------------------------------------------------
+def job_doc(models: list[Path], scenes: int, views: int, size: str, out: Path) -> dict:
+    """`scenes` entries cycling over `models`, each a scene of its own: its model's folder
+    under its own name (a symlink), so no two entries share a scene (a renderer keeps the
+    scene it has, and the driver gives an actor the items of its scene first: entries of one
+    path would be rendered without a load between them)."""
+    from bench_ray import orbit
+
+    poses = {m: [{"eye": list(map(float, p.eye)), "target": list(map(float, p.target))}
+                 for p in orbit(m, views)] for m in models}
+    entries = []
+    for i in range(scenes):
+        model = models[i % len(models)]
+        folder = out.parent / "scenes" / f"{i:03d}-{model.parents[1].name}"
+        folder.parent.mkdir(parents=True, exist_ok=True)
+        if not folder.exists():
+            folder.symlink_to(model.parents[1], target_is_directory=True)
+        scene = folder / model.relative_to(model.parents[1])
+        entries.append({"scene": str(scene), "cameras": poses[model],
+                        "out": str(out / f"{i:03d}-{model.stem}"), "size": size})
+    return {"scenes": entries, "views_per_item": views}
+
+
+def _model_of(entry: dict) -> str:
+    """The model an entry's scene is (its symlinked folder resolved)."""
+    return str(Path(entry["scene"]).resolve())
+
+
+def one_scene_rates(doc: dict, work: Path) -> dict[str, float]:
+    """Views/s of each model's items rendered by a warm actor (its scene loaded once)."""
+    from vkpbr.distributed import job_from_doc
+    from vkpbr.distributed.actor import RendererActor
+
+    rates = {}
+    firsts = {}
+    for entry in doc["scenes"]:
+        firsts.setdefault(_model_of(entry), entry)
+    actor = RendererActor()
+    try:
+        for scene, entry in firsts.items():
+            job = job_from_doc([{**entry, "out": str(work / Path(scene).name)}])
+            item = job.items()[0]
+            (work / Path(scene).name).mkdir(parents=True, exist_ok=True)
+            if not actor.render(item)["ok"]:  # the load and first renders: not timed
+                continue  # (the job's rows count its views as failed)
+            t = time.perf_counter()
+            for _ in range(3):
+                res = actor.render(item)
+                assert res["ok"], res
+            rates[scene] = 3 * len(item.frames) / (time.perf_counter() - t)
+    finally:
+        actor.close()
+    return rates
+
+
+def run_job(doc: dict, how: str) -> dict:
+    from vkpbr.distributed import job_from_doc, render
+    from vkpbr.distributed.driver import IN_PROCESS
+
+    for entry in doc["scenes"]:
+        shutil.rmtree(entry["out"], ignore_errors=True)
+    job = job_from_doc(doc)
+    if how == "no load ahead":
+        return sequential(job)
+    result = render(job, IN_PROCESS if how.startswith("in-process") else None,
+                    actors=1, progress=False)
+    for line in result.summary()[1:4]:  # the first failures, if any (a model that needs a codec)
+        print(f"  {how}: {line}", file=sys.stderr)
+    return {"views": result.rendered, "seconds": result.render_seconds,
+            "failed": result.failed_views}
+
+
+def sequential(job: object) -> dict:
+    from vkpbr.distributed import check_job
+    from vkpbr.distributed.actor import RendererActor
+    from vkpbr.distributed.manifest import start_frames_folder
+
+    for scene, manifest in zip(job.scenes, check_job(job), strict=True):
+        start_frames_folder(scene, manifest)
+        manifest.close()
+    actor = RendererActor()
+    t = time.perf_counter()
+    views = failed = 0
+    try:
+        for item in job.items():
+            res = actor.render(item)
+            failed += 0 if res["ok"] else len(item.frames)
+            views += len(item.frames) if res["ok"] else 0
+    finally:
+        actor.close()
+    return {"views": views, "seconds": time.perf_counter() - t, "failed": failed}
+
+
+def job_table(args: argparse.Namespace) -> list[dict]:
+    models = sorted(p.resolve() for p in args.models.glob("*/glTF/*.gltf"))
+    if not models:
+        raise SystemExit(f"no */glTF/*.gltf under {args.models}")
+    work = Path(tempfile.mkdtemp(prefix="vkpbr-bench-job-"))
+    os.environ["VKPBR_CACHE_DIR"] = str(work / "cache")
+    rows = []
+    try:
+        doc = job_doc(models, args.scenes, args.views, args.job_size, work / "out")
+        runs = ["in-process job (cold bake cache)", "in-process job (warm)", "no load ahead"]
+        for how in runs + (["Ray, 1 actor"] if args.ray else []):
+            try:
+                rows.append({"run": how, **run_job(doc, how)})
+            except Exception as exc:  # noqa: BLE001 - Ray missing or failing: the other rows stand
+                print(f"{how}: not measured ({type(exc).__name__}: {exc})", file=sys.stderr)
+        rates = one_scene_rates(doc, work / "one")  # after: the bake cache is warm by now
+        known = [_model_of(e) for e in doc["scenes"] if _model_of(e) in rates]
+        ideal, good = sum(args.views / rates[m] for m in known), len(known)
+        rows.insert(0, {"run": "one scene in-process", "views": args.views * good, "failed": 0,
+                        "seconds": ideal, "rates": {Path(k).stem: v for k, v in rates.items()}})
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    print(f"\n### {args.scenes} scenes ({len(models)} models: {', '.join(m.stem for m in models)})"
+          f" x {args.views} views at {args.job_size}, PNG written\n")
+    print("| run | views | failed | s | views/s | of one scene in-process |")
+    print("|---|---:|---:|---:|---:|---:|")
+    base = rows[0]["views"] / rows[0]["seconds"]
+    for r in rows:
+        rate = r["views"] / r["seconds"]
+        print(f"| {r['run']} | {r['views']} | {r['failed']} | {r['seconds']:.2f} | {rate:.1f} | "
+              f"{rate / base:.0%} |")
+    print("\none scene in-process, views/s per model: "
+          + ", ".join(f"{k} {v:.0f}" for k, v in rows[0]["rates"].items()))
+    return rows
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--scene", type=Path, default=ASSETS / "Sponza" / "glTF" / "Sponza.gltf")
+    p.add_argument("--size", default="1280x720", help="the first frame's (vkpbr render's default)")
+    p.add_argument("--models", type=Path, default=ASSETS)
+    p.add_argument("--scenes", type=int, default=100)
+    p.add_argument("--views", type=int, default=16)
+    p.add_argument("--job-size", default="256x256")
+    p.add_argument("--no-job", action="store_true")
+    p.add_argument("--no-load", action="store_true")
+    p.add_argument("--ray", action="store_true", help="also the job on Ray with one actor")
+    p.add_argument("--json", type=Path)
+    p.add_argument("--profile", type=Path, metavar="DIR",
+                   help="also write each row's cProfile (top 60 by cumulative time) into DIR")
+    p.add_argument("--child", help=argparse.SUPPRESS)
+    p.add_argument("--cached", action="store_true", help=argparse.SUPPRESS)
+    args = p.parse_args()
+    size = tuple(int(v) for v in args.size.split("x"))
+    if args.child:
+        if args.profile is None:
+            print(json.dumps(child(args.child, size, args.cached)))
+            return
+        import cProfile
+        import io
+        import pstats
+
+        prof = cProfile.Profile()
+        got = prof.runcall(child, args.child, size, args.cached)
+        text = io.StringIO()
+        pstats.Stats(prof, stream=text).sort_stats("cumulative").print_stats(60)
+        args.profile.write_text(text.getvalue())
+        print(json.dumps(got))
+        return
+    out: dict = {}
+    if not args.no_load:
+        out["load"] = load_table(args.scene, size, args.profile)
+        print_load_table(args.scene, size, out["load"])
+    if not args.no_job:
+        out["job"] = job_table(args)
+    if args.json:
+        args.json.write_text(json.dumps(out, indent=1, default=str))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,92 @@
+"""A Renderer's scene made and unmade on one device: `Renderer.set_scene` without a new device.
+
+`SceneMaker` holds what a Renderer was made with besides its scene (msaa, background, ...)
+and makes a scene's `FrameParts` (render/parts.py) with the frame and batch paths that draw
+them, noting how many device children existed before; `unmake` closes them and destroys
+every device child made since (buffers, images, pipelines, sets), newest first. What is
+kept: the device, its queue and command pool, and its pipeline cache (gpu/pipeline_cache.py),
+so the new scene's pipelines are the driver's cache hits (in memory, and from the cache
+folder's file in a new process), and auto's frame-path record. A Renderer after
+`set_scene(b)` renders what `Renderer(b)` renders, bit for bit (tests/gpu/test_scene_swap.py):
+both make the same parts from the same scene.
+
+Timings of a scene's making (`Renderer.timings`): "setup" (all of it, seconds), "parts" (the
+GPU objects besides the scene's upload), the scene upload's "geometry", "textures" and
+"materials", and the pipeline cache's totals so far ("pipelines_built", "pipeline_hits",
+"pipelines_s").
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from vkpbr.gpu.device import Device
+from vkpbr.render.batch_path import BatchPath
+from vkpbr.render.environment import EnvironmentSpec
+from vkpbr.render.frame_path import FramePath
+from vkpbr.render.parts import FrameParts, make_parts
+from vkpbr.scene.types import Scene
+
+__all__ = ["SceneMaker", "MadeScene", "pipeline_timings"]
+
+
+@dataclass
+class MadeScene:
+    """One scene's parts and the paths that draw them, and the device children before them."""
+
+    scene: Scene
+    parts: FrameParts
+    frame_path: FramePath
+    batch_path: BatchPath
+    mark: int  # device.live_children before the parts were made
+    timings: dict[str, float]
+
+
+def pipeline_timings(device: Device) -> dict[str, float]:
+    """The device's pipeline builds so far: how many, the driver's cache hits, seconds."""
+    cache = getattr(device, "pipeline_cache", None)
+    if cache is None:
+        return {"pipelines_built": 0, "pipeline_hits": 0, "pipelines_s": 0.0}
+    st = cache.stats
+    return {"pipelines_built": st.built, "pipeline_hits": st.hits, "pipelines_s": st.seconds}
+
+
+class SceneMaker:
+    """Makes a scene's parts on `device` with a Renderer's other arguments (their names)."""
+
+    def __init__(self, device: Device, msaa: int, background: tuple[float, float, float],
+                 depth_prepass: bool | None, env_spec: EnvironmentSpec | None,
+                 cache_dir: str | os.PathLike[str] | None, semantics: Any) -> None:
+        self.device = device
+        self.args = (msaa, background, depth_prepass, env_spec, cache_dir, semantics)
+
+    def make(self, scene: Scene | None) -> MadeScene:
+        """The parts of `scene` (None: the built-in PBR chart); on failure, whatever was made
+        for it is destroyed again before the error propagates."""
+        t0 = time.perf_counter()
+        if scene is None:
+            from vkpbr.scene.default import default_scene
+
+            scene = default_scene()
+        mark = self.device.live_children
+        try:
+            parts = make_parts(self.device, scene, *self.args)
+        except BaseException:
+            self.device.wait_idle()
+            self.device.destroy_children(mark)
+            raise
+        setup = time.perf_counter() - t0
+        upload = parts.gpu_scene.timings
+        timings = {"setup": setup, "parts": setup - sum(upload.values()), **upload,
+                   **pipeline_timings(self.device)}
+        return MadeScene(scene, parts, FramePath(parts), BatchPath(parts), mark, timings)
+
+    def unmake(self, made: MadeScene) -> None:
+        """Close `made`'s parts and paths and destroy the device children made for them."""
+        self.device.wait_idle()
+        made.batch_path.close()
+        made.parts.close()
+        self.device.destroy_children(made.mark)

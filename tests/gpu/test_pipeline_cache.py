@@ -1,0 +1,163 @@
+"""The pipeline cache kept in the cache folder (gpu/pipeline_cache.py; issue 32, must-have 7).
+
+What is asserted: a Renderer with a cache folder writes its device's VkPipelineCache there,
+atomically, with vkpbr's header; the next Renderer hands the same bytes back to the driver
+(`loaded_bytes`), and where the driver keeps compiled pipelines in it, the second Renderer's
+builds are its hits (the cache does not grow, and every build the driver reports on is a
+hit). A file that is cut short, altered, of other shaders or not vkpbr's is ignored with one
+warning line naming it, and the pipelines are compiled afresh. Nothing here times anything:
+counts and sizes only.
+"""
+
+from __future__ import annotations
+
+import logging
+import struct
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vkpbr.gpu.compute import ComputePipeline
+from vkpbr.gpu.descriptors import BindingSpec, DescriptorSetLayout
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.pipeline_cache import FILE_PREFIX, MAGIC, PipelineCache
+from vkpbr.render.codegen import SPV_DIR
+
+VK_HEADER_BYTES = 32  # VkPipelineCacheHeaderVersionOne
+
+
+def _build_one(device: Device) -> None:
+    """One compute pipeline built through the device's cache (the smallest real build)."""
+    layout = DescriptorSetLayout(device, [BindingSpec(i, "storage", ("compute",))
+                                          for i in range(5)])  # batch_cull.comp's bindings
+    ComputePipeline(device, SPV_DIR / "batch_cull.comp.spv", [layout], push_bytes=12)
+
+
+def _cache(tmp_path: Path, salt: str = "shaders-a") -> tuple[Device, PipelineCache]:
+    device = Device(validation=True)
+    device.pipeline_cache = PipelineCache(device, tmp_path, salt)
+    return device, device.pipeline_cache
+
+
+def _saved(tmp_path: Path, salt: str = "shaders-a") -> Path:
+    """A cache file of this device and `salt`, written by a device that built a pipeline."""
+    device, cache = _cache(tmp_path, salt)
+    try:
+        _build_one(device)
+    finally:
+        device.close()  # saves
+    assert cache.path is not None and cache.path.is_file()
+    return cache.path
+
+
+def test_renderers_write_and_read_the_cache(make_renderer, tmp_path: Path) -> None:  # noqa: ANN001
+    first = make_renderer(cache_dir=tmp_path)
+    first.render(size=(32, 32))
+    built = first.device.pipeline_cache.stats.built
+    first.close()
+    files = sorted(tmp_path.glob(f"{FILE_PREFIX}*.bin"))
+    assert len(files) == 1 and built > 0
+    raw = files[0].read_bytes()
+    magic, _key, _digest, size = struct.unpack_from("<8s32s32sQ", raw)
+    payload = raw[80:]
+    assert magic == MAGIC and size == len(payload) >= VK_HEADER_BYTES
+    header_size, version = struct.unpack_from("<II", payload)
+    assert (header_size, version) == (VK_HEADER_BYTES, 1)
+
+    second = make_renderer(cache_dir=tmp_path)
+    cache = second.device.pipeline_cache
+    assert cache.loaded_bytes == len(payload)  # the driver got the file's data back
+    second.render(size=(32, 32))
+    assert cache.stats.built == built  # the same pipelines, asked of the cache
+    grown = len(cache.data())
+    if len(payload) == VK_HEADER_BYTES:
+        pytest.skip(f"{second.device.info.name} keeps no pipelines in its cache (its data is "
+                    "the 32-byte header): hits are checked on drivers that keep them (the GPU)")
+    assert grown == len(payload), "the second renderer compiled pipelines the file did not hold"
+    if cache.stats.hits:  # where the driver reports hits (creation feedback), all are hits
+        assert cache.stats.hits == cache.stats.built
+
+
+def test_saved_file_is_reloaded(tmp_path: Path) -> None:
+    path = _saved(tmp_path)
+    device, cache = _cache(tmp_path)
+    try:
+        assert cache.path == path
+        assert cache.loaded_bytes == len(path.read_bytes()) - 80 >= VK_HEADER_BYTES
+    finally:
+        device.close()
+
+
+def _truncated(raw: bytes) -> bytes:
+    return raw[: len(raw) - 7]
+
+
+def _flipped(raw: bytes) -> bytes:
+    body = bytearray(raw)
+    body[-1] ^= 0xFF
+    return bytes(body)
+
+
+def _not_ours(raw: bytes) -> bytes:
+    return b"\x00" * len(raw)
+
+
+@pytest.mark.parametrize(("damage", "why"), [(_truncated, "corrupt"), (_flipped, "corrupt"),
+                                              (_not_ours, "not a vkpbr pipeline cache"),
+                                              (lambda raw: raw[:10], "too short")])
+def test_damaged_file_is_ignored_with_a_note(tmp_path: Path, caplog: pytest.LogCaptureFixture,
+                                             damage, why: str) -> None:  # noqa: ANN001
+    path = _saved(tmp_path)
+    path.write_bytes(damage(path.read_bytes()))
+    with caplog.at_level(logging.WARNING, logger="vkpbr.gpu.pipeline_cache"):
+        device, cache = _cache(tmp_path)
+    try:
+        notes = [r.getMessage() for r in caplog.records]
+        assert len(notes) == 1 and str(path) in notes[0] and why in notes[0], notes
+        assert "\n" not in notes[0]
+        assert cache.loaded_bytes == 0
+        _build_one(device)  # compiled afresh
+    finally:
+        device.close()
+    assert path.read_bytes()[:8] == MAGIC  # written again, whole
+    device, cache = _cache(tmp_path)
+    try:
+        assert cache.loaded_bytes > 0
+    finally:
+        device.close()
+
+
+def test_foreign_file_is_ignored_and_stale_files_removed(
+        tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    old = _saved(tmp_path, "shaders-a")
+    device, cache = _cache(tmp_path, "shaders-b")  # new shaders: a file of their own
+    try:
+        assert cache.path != old and cache.loaded_bytes == 0
+        assert cache.path is not None
+        cache.path.write_bytes(old.read_bytes())  # another key under this name
+        with caplog.at_level(logging.WARNING, logger="vkpbr.gpu.pipeline_cache"):
+            other = PipelineCache(device, tmp_path, "shaders-b")
+        assert other.loaded_bytes == 0
+        assert any("another device, driver or set of shaders" in r.getMessage()
+                   for r in caplog.records)
+        other.destroy()
+        cache.path.unlink()
+        _build_one(device)
+    finally:
+        device.close()
+    assert not old.exists()  # the same device's file of the old shaders is gone
+    assert [p.name for p in tmp_path.glob(f"{FILE_PREFIX}*")] == [cache.path.name]
+
+
+def test_unwritable_folder_is_a_warning(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_bytes(b"")
+    device, cache = _cache(blocker / "sub")  # its parent is a file: cannot be made
+    with caplog.at_level(logging.WARNING, logger="vkpbr.gpu.pipeline_cache"):
+        try:
+            _build_one(device)
+        finally:
+            device.close()
+    assert any("not written" in r.getMessage() for r in caplog.records)
+    assert np.all([not p.name.startswith(FILE_PREFIX) for p in tmp_path.iterdir()])
