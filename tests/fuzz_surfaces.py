@@ -174,7 +174,10 @@ def run_cli(argv: list[str]) -> tuple[str, str]:
     err, out = io.StringIO(), io.StringIO()
     shown = " ".join(a[:60] for a in argv)[:400]
     try:
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(out), \
+        # In a scratch folder: an edit that turns a value into a relative path ("--out -1")
+        # writes there, not into the checkout the tests run from.
+        with tempfile.TemporaryDirectory() as scratch, contextlib.chdir(scratch), \
+                contextlib.redirect_stderr(err), contextlib.redirect_stdout(out), \
                 warnings.catch_warnings(), _deadline(CASE_SECONDS):
             code = main(argv)
     except _Hang:
