@@ -35,6 +35,7 @@ import json
 import os
 import random
 import signal
+import tempfile
 import warnings
 from collections.abc import Callable
 from pathlib import Path
