@@ -10,12 +10,15 @@ takes it as its pre-pass, as for dataset outputs: alpha-masked surfaces are in i
 the compute rasteriser, a compute batch's atlas -- and before the shading:
 
 1. `ao_gtao` (shaders/ao_gtao.comp): GTAO (Jimenez et al. 2016) as XeGTAO's main pass, at
-   full resolution: the view-space normal made from the depth in place, SLICES directions of
-   STEPS samples a side, the cosine-weighted visible arc integrated within the effect radius
-   (`RenderOptions.ao_radius`; 0: RADIUS_SHARE of the scene's bounding radius), with the
-   depth edges packed beside it.
-2. `ao_denoise` (shaders/ao_denoise.comp), DENOISE_PASSES times: XeGTAO's edge-aware 3x3
-   spatial denoise; the last pass writes the frame slot's "ao" image (R32F).
+   the preset's resolution (PRESETS: the default half, one pixel of each 2 x 2): the
+   view-space normal made from the full-resolution depth in place, `slices` directions of
+   `steps` samples a side, the cosine-weighted visible arc integrated within the effect
+   radius (`RenderOptions.ao_radius`; 0: RADIUS_SHARE of the scene's bounding radius), with
+   the depth edges packed beside it.
+2. `ao_denoise` (shaders/ao_denoise.comp), `passes` times: XeGTAO's edge-aware 3x3 spatial
+   denoise; at full resolution the last pass writes the frame slot's "ao" image (R32F), at
+   half resolution `ao_upsample` (shaders/ao_upsample.comp) does, a depth-aware bilinear
+   upsample.
 3. The shading (shade.glsl through shaders/ao.glsl) reads "ao" at its pixel (set 2 `ao_map`)
    and occludes the image-based light only: min(GTAO, the occlusion texture), as Filament
    combines them, with GTAO's multi-bounce approximation on the diffuse albedo and

@@ -4,7 +4,9 @@
 // Intel): per pixel, `slices` directions in the screen, each searched `steps` samples to a side
 // for the highest horizon within the effect radius, and the cosine-weighted visible arc
 // between the two horizons integrated analytically about the normal projected into the
-// slice. The view-space normal is made from the depth buffer in place
+// slice, on the working pixels (render/ao.py PRESETS: at half resolution, the top-left pixel
+// of each 2 x 2 block; ao_upsample.comp brings it back). The view-space normal is made from
+// the full-resolution depth buffer in place
 // (XE_GTAO_GENERATE_NORMALS_INPLACE: of the four neighbour pairs, those not across a depth
 // edge), so one kernel serves every frame path. Slice angles and sample offsets are jittered
 // by a 64x64 Hilbert-curve R2 sequence (XeGTAO's spatio-temporal noise at frame 0), which the
