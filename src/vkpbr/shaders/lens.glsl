@@ -72,6 +72,21 @@ vec4 lens_ray(vec2 pixel) {
     return vec4(s, cos(t), 1.0);
 }
 
+// The output pixel (OpenCV convention) of a ray `d` in front of the camera (d.z > 0): the
+// model's forward projection (scene/lens.py `project`), as cv2.projectPoints and
+// cv2.fisheye.projectPoints compute it.
+vec2 lens_project(vec3 d) {
+    vec2 x = d.xy / d.z;
+    if (lens.model == MODEL_OPENCV) {
+        vec3 unused;
+        x = radial_tangential(x, unused);
+    } else if (lens.model != MODEL_PINHOLE) {
+        float r = length(d.xy);
+        x = r > 0.0 ? d.xy * (theta_d(atan(r, d.z)) / r) : vec2(0.0);
+    }
+    return lens.k_out.xy * x + lens.k_out.zw;
+}
+
 // The source pinhole's texel position (OpenCV convention: texel centres at integers) of ray `d`.
 vec2 source_texel(vec3 d) { return lens.k_src.xy * (d.xy / d.z) + lens.k_src.zw; }
 
