@@ -33,6 +33,7 @@ from vkpbr.render.frames import FrameStats, summed_stats, write_frame_blocks
 from vkpbr.render.lighting import LightsArg
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.parts import FrameParts
+from vkpbr.render.post import batch_post
 from vkpbr.render.steps import FrameObjects, FrameSpec
 from vkpbr.render.views import ViewTerms, batch_view_terms
 from vkpbr.scene.camera_batch import CameraBatch
@@ -144,15 +145,19 @@ class BatchPath:
         self._t_start = time.perf_counter()
         ao = prepare_ao(p.ao, p.recorder, opts, target, p.bounds.radius, False)
         shading_ao = ao is not None and ao.shading
-        frame, plan, terms = self._begin(views, size, lights, opts, linear, rows, shading_ao)
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
+        # Post steps (render/post.py batch_post: colour noise): drawn into an HDR atlas.
+        post = batch_post(p, opts, views, size, target, copy, linear)
+        frame, plan, terms = self._begin(views, size, lights, post.shading, post.linear, rows,
+                                         shading_ao)
         set0 = bv.sets0[frame.index]
         self._run(frame, plan, opts, lambda redraw: p.recorder.command_buffer(
             target, frame, 0, FrameSpec(
                 "compute_batch", opts.tbn, opts.alpha_mask, plan, redraw, copy,
                 variant=p.lighting.shade_variant(opts, shading_ao), tiles=(n, w, h, rows),
-                set0_id=id(set0), external_id=id(external), batch=(bv.generation,), ao=ao),
-            FrameObjects(set0=set0, external=external)),
+                set0_id=id(set0), external_id=id(external), batch=(bv.generation,), ao=ao,
+                post=post.post, post_tonemap=post.tonemap),
+            FrameObjects(set0=set0, external=external), drawn=post.drawn),
             (lambda: self._cuda_wait(external)) if cuda else None)
         if cuda:
             p.device.check_validation()

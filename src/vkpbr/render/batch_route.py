@@ -27,6 +27,7 @@ from vkpbr.render.camera import as_camera
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.outputs import check_outputs
 from vkpbr.render.parts import FrameParts
+from vkpbr.render.post import batch_post_supported
 from vkpbr.render.post_stage import enabled_post
 from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.types import Camera
@@ -47,8 +48,10 @@ def batch_route(parts: FrameParts, batch: CameraBatch, size: tuple[int, int], op
         raise UsageError(f"device {device!r}: choose 'cpu' (NumPy) or 'cuda' (a torch tensor)")
     if out is not None:
         check_out(out, (views, size[1], size[0], 4), np.float32 if linear else np.uint8, device)
-    # Batches have no post stage yet (nor the camera models' resample): view by view.
+    # Post steps: the compute batch takes colour noise (render/post.py batch_post_supported);
+    # the others (bloom, depth noise, the camera models' resample) go view by view.
     post = bool(enabled_post(opts)) or batch.lenses is not None
+    tiled_post = batch_post_supported(opts, batch.lenses, depth)
     if device == "cuda":
         if depth or outputs:
             raise UsageError("device='cuda' returns the colour only: ask depth and dataset "
@@ -64,7 +67,7 @@ def batch_route(parts: FrameParts, batch: CameraBatch, size: tuple[int, int], op
     extra = any(n != "color" for n in wanted)
     explicit_compute = (opts.pipeline == L.PipelinePath.COMPUTE
                         and paths.uses_compute(targets.offscreen(size, linear), opts))
-    if paths.takes_compute_batch(opts) and not extra and not post:
+    if paths.takes_compute_batch(opts) and not extra and tiled_post:
         return "compute", wanted
     if not parts.device.batch_views or targets.msaa > 1 or explicit_compute or post:
         return "views", wanted

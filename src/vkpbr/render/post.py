@@ -21,20 +21,29 @@ total radiance is kept within 0.5% at 64 pixels a side and more (3% in a 5 x 5 f
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import zlib
+from typing import Any
 
 import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.gpu.graph import Step
-from vkpbr.render.options import POST_OPTIONS, SensorNoise
-from vkpbr.render.post_stage import PostContext, PostStep, post_unavailable
+from vkpbr.render.options import POST_OPTIONS, RenderOptions, SensorNoise
+from vkpbr.render.post_stage import (
+    PostContext,
+    PostStep,
+    enabled_post,
+    encode_tonemap,
+    post_unavailable,
+)
 from vkpbr.scene import lens as lenses
 from vkpbr.scene.types import Camera
 
-__all__ = ["Bloom", "BLOOM_LEVELS", "Noise", "noise_key", "post_steps", "LensFrame", "check_lens", "lens_frame", "lens_steps",
+__all__ = ["Bloom", "BLOOM_LEVELS", "Noise", "noise_key", "noise_keys", "post_steps",
+           "BatchPost", "batch_post", "batch_post_supported", "LensFrame", "check_lens", "lens_frame", "lens_steps",
            "LENS_OUTPUTS", "LENS_PIXELS"]
 
 BLOOM_LEVELS = 6  # the smallest is 1/64 of the frame: a glow some tens of pixels wide
@@ -91,8 +100,9 @@ class Noise(PostStep):
     def steps(self, ctx: PostContext, value: SensorNoise) -> list[Step]:
         steps = []
         if value.colour:
-            push = np.array([ctx.frame_index, 0, 0], np.uint32)
-            push.view(np.float32)[1:] = (value.full_well, value.read_noise)
+            n, tw, th, rows = ctx.view_tiles()
+            push = np.array([ctx.first_key(), 0, 0, tw, th, rows, n], np.uint32)
+            push.view(np.float32)[1:3] = (value.full_well, value.read_noise)
             steps.append(Step("noise", ctx.dispatch("post_noise", push, ctx.color_view,
                                                     ctx.color_view, ctx.extent, keys=True),
                               ((ctx.color_name, "storage"),)))
@@ -132,6 +142,57 @@ def noise_key(noise: SensorNoise, camera: Camera, extent: tuple[int, int]) -> np
     for i in range(3):
         key[8 + 4 * i: 11 + 4 * i] = R[i]
     return key
+
+
+def noise_keys(noise: SensorNoise, views: Any, extent: tuple[int, int]) -> np.ndarray:
+    """(B, 32) float32: each view's frame key (`noise_key` of `views.camera(i)`, the camera
+    a batch view is rendered alone as), for a compute batch's keys."""
+    return np.stack([noise_key(noise, views.camera(i), extent) for i in range(len(views))])
+
+
+def batch_post_supported(options: RenderOptions, lenses: Any, depth: bool) -> bool:
+    """Whether a compute batch takes `options`' post steps itself (render/batch_route.py;
+    else its views render one by one): colour noise, over the atlas in one dispatch, each
+    tile its view's key. Not yet: camera models, bloom (it would spread over the tiles), the
+    depth noise (the batch reads the depth buffer, not the outputs it noises)."""
+    wanted = dict(enabled_post(options))
+    if lenses is not None or not wanted:
+        return lenses is None
+    noise = wanted.get("noise")
+    return set(wanted) == {"noise"} and not (depth and noise.depth)
+
+
+@dataclasses.dataclass(frozen=True)
+class BatchPost:
+    """A compute batch's post stage (render/batch_path.py): the HDR atlas it draws into
+    (None: no post steps), the steps, the encode's tone map, the options and linear flag
+    its shading takes (no tone map: the encode's)."""
+
+    drawn: Any
+    post: tuple[tuple[str, Any], ...]
+    tonemap: int
+    shading: RenderOptions
+    linear: bool
+
+
+def batch_post(parts: Any, options: RenderOptions, views: Any, size: tuple[int, int],
+               target: Any, copy: tuple[str, ...], linear: bool) -> BatchPost:
+    """The post stage of a compute batch of `views` (tiles of `size`) into the atlas
+    `target`: with post steps, the HDR atlas and every view's noise key written (the
+    device waited for and the recordings dropped where the keys' buffer grows)."""
+    post = enabled_post(options)
+    if not post:
+        return BatchPost(None, (), 0, options, linear)
+    noise = options.noise
+    if noise is not None and noise.colour:
+        kernels = parts.post()
+        if kernels.view_keys_stale(len(views)):
+            parts.device.wait_idle()
+            parts.recorder.free()
+        kernels.write_view_keys(noise_keys(noise, views, size))
+    shading = options if options.tonemap is None else dataclasses.replace(options, tonemap=None)
+    return BatchPost(parts.targets.post(target, copy), post, encode_tonemap(options, linear),
+                     shading, True)
 
 
 def post_steps() -> dict[str, type[PostStep]]:

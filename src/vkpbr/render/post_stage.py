@@ -93,6 +93,9 @@ class PostKernels:
         self._sets: dict[tuple[int, ...], Any] = {}
         self._images: dict[tuple, tuple[Image, ImageView]] = {}
         self._keys: tuple[DescriptorSetLayout, Any, Buffer, DescriptorPool] | None = None
+        # A compute batch's keys, a view each (one batch is in flight at a time: its
+        # submission is waited for): (capacity in views, set, buffer, pool).
+        self._view_keys: tuple[int, Any, Buffer, DescriptorPool] | None = None
 
     def set_layout(self, count: int) -> DescriptorSetLayout:
         """The set layout of `count` storage images (bindings 0..count-1), made on first use."""
@@ -133,6 +136,43 @@ class PostKernels:
         if frame_index >= MAX_FRAME_SLOTS:
             raise ValueError(f"frame slot {frame_index}: at most {MAX_FRAME_SLOTS}")
         self.keys()[2].write(np.ascontiguousarray(key).view(np.uint8), frame_index * KEY_BYTES)
+
+    def view_keys_stale(self, views: int) -> bool:
+        """Whether a batch of `views` views needs a larger keys buffer than the one made
+        (the caller then waits for the device and drops the recordings that bind it)."""
+        return self._view_keys is None or self._view_keys[0] < views
+
+    def write_view_keys(self, keys: np.ndarray) -> Any:
+        """A compute batch's keys ((views, 32) float32 rows: noise.glsl FrameKey) into the
+        batch keys buffer (made or grown to fit: see view_keys_stale), its set returned."""
+        n = len(keys)
+        if self.view_keys_stale(n):
+            self._destroy_view_keys()
+            capacity = 1 << max(6, (n - 1).bit_length())
+            layout = self.keys()[0]
+            pool = DescriptorPool(self.device, [(layout, 1)])
+            buffer = Buffer(self.device, KEY_BYTES * capacity,
+                            self.device.vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, host_visible=True,
+                            name="post batch keys")
+            dset = pool.allocate(layout)
+            writer = DescriptorWriter(self.device)
+            writer.storage(dset, 0, buffer)
+            writer.update()
+            self._view_keys = (capacity, dset, buffer, pool)
+        _, dset, buffer, _ = self._view_keys  # type: ignore[misc]
+        buffer.write(np.ascontiguousarray(keys, np.float32).view(np.uint8), 0)
+        return dset
+
+    def view_key_set(self) -> Any:
+        """The batch keys' set (write_view_keys made it), or None before the first."""
+        return None if self._view_keys is None else self._view_keys[1]
+
+    def _destroy_view_keys(self) -> None:
+        if self._view_keys is not None:
+            _, _, buffer, pool = self._view_keys
+            pool.destroy()
+            buffer.destroy()
+            self._view_keys = None
 
     def fragment_pipeline(self, name: str, target: Any, push_bytes: int) -> Pipeline:
         """Fragment shader shaders/spv/<name>.frag.spv over a fullscreen triangle, drawn into
@@ -206,6 +246,7 @@ class PostKernels:
         for layout in self._layouts.values():
             layout.destroy()
         self._layouts.clear()
+        self._destroy_view_keys()
         if self._keys is not None:
             layout, _, buffer, pool = self._keys
             pool.destroy()
@@ -236,6 +277,18 @@ class PostContext:
     frame_index: int = 0  # the frame slot (its key: PostKernels.write_key)
     outputs: bool = False  # whether the frame copies out the dataset outputs
     outputs_prefix: str = ""  # where they are: the HDR target's, or "out." (a lens frame's)
+    # A compute batch's atlas (views, tile width, height, tiles a column; None: one frame)
+    # and its keys' set (PostKernels.write_view_keys: a key a view, from 0).
+    tiles: tuple[int, int, int, int] | None = None
+    key_set: Any = None
+
+    def view_tiles(self) -> tuple[int, int, int, int]:
+        """(views, tile width, height, tiles a column): the atlas's, or the frame as one."""
+        return self.tiles if self.tiles is not None else (1, *self.extent, 1)
+
+    def first_key(self) -> int:
+        """The index of the first view's key: the frame slot's, or 0 in a batch's keys."""
+        return 0 if self.key_set is not None else self.frame_index
 
     def transient(self, name: str, extent: tuple[int, int]) -> Any:
         """Transient image `name` as a graph resource (added to the frame's); its view."""
@@ -250,7 +303,7 @@ class PostContext:
         kernels = self.kernels
         dset = kernels.image_set(src, dst, *more)
         pipe = kernels.pipeline(name, push.nbytes, 2 + len(more), keys)
-        key_set = kernels.keys()[1] if keys else None
+        key_set = (self.key_set or kernels.keys()[1]) if keys else None
 
         def record(cmd: Any) -> None:
             cmd.bind_pipeline(pipe)
