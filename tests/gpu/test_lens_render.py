@@ -171,6 +171,40 @@ def test_colour_depth_and_batches(lens_renderer) -> None:  # noqa: ANN001
     assert "lens" not in r.last_stats.pass_ms
 
 
+def test_compute_batch_of_one_lens(lens_renderer) -> None:  # noqa: ANN001
+    """A compute batch of cameras sharing one lens (render/post.py batch_post): the views'
+    source pinholes drawn as the batch's tiles, then one resample dispatch over the atlas
+    (post_lens_batch.comp, each view its constants) and the encode. Each view equals that
+    camera rendered alone on the compute path (the compute batch's bound: 1/255 mean, 3/255
+    p99); with colour noise too; views of different lenses go view by view."""
+    from vkpbr.render.batch_route import batch_route
+    from vkpbr.render.options import RenderOptions
+    from vkpbr.scene.camera_batch import CameraBatch
+
+    r = lens_renderer
+    if r.compute_batch_unavailable() is not None:
+        pytest.skip(f"no compute batch here: {r.compute_batch_unavailable()}")
+    model, distortion, focal = LENSES["opencv_fisheye"]
+    cams = [camera_for(model, distortion, focal, eye=eye)[0]
+            for eye in ((0.3, 3.2, 4.6), (-0.6, 2.9, 4.4), (1.1, 3.4, 5.0))]
+    views = CameraBatch.from_cameras(cams, cams[0])
+    opts = RenderOptions(pipeline="compute", env="none")
+    assert batch_route(r.parts, views, SIZE, opts, False, False, None, "cpu", None)[0] == "compute"
+    mixed = CameraBatch.from_cameras([cams[0], camera_for("opencv", LENSES["opencv"][1], 95.0)[0]],
+                                     cams[0])
+    assert batch_route(r.parts, mixed, SIZE, opts, False, False, None, "cpu", None)[0] == "views"
+    for extra in ({}, {"noise": "realsense-d435,seed=2"}):
+        kw = {"lights": [], **extra}  # (lit by the sky, GTAO on)
+        got = r.render_batch(cams, SIZE, pipeline="compute", **kw)
+        assert "lens" in r.last_stats.pass_ms
+        for i in range(len(cams)):
+            one = r.render(views.camera(i), size=SIZE, pipeline="compute", raster="compute", **kw)
+            off = np.abs(got[i].astype(int) - one)
+            print(f"view {i} {extra}: mean {off.mean():.3f}, p99 {np.percentile(off, 99):.0f}, max {off.max()}")
+            assert off.mean() <= 1.0 and np.percentile(off, 99) <= 3, (extra, i, off.mean())
+            assert one[..., :3].std() > 10  # the scene is there
+
+
 @pytest.mark.parametrize("name", ["opencv", "opencv_fisheye"])
 def test_motion_through_the_lens(lens_renderer, name: str) -> None:  # noqa: ANN001
     """The motion output of a camera with a lens moving over the static scene, against

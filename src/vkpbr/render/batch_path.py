@@ -33,7 +33,7 @@ from vkpbr.render.frames import FrameStats, summed_stats, write_frame_blocks
 from vkpbr.render.lighting import LightsArg
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.parts import FrameParts
-from vkpbr.render.post import batch_post
+from vkpbr.render.post import batch_draw_size, batch_post
 from vkpbr.render.steps import FrameObjects, FrameSpec
 from vkpbr.render.views import ViewTerms, batch_view_terms
 from vkpbr.scene.camera_batch import CameraBatch
@@ -100,9 +100,10 @@ class BatchPath:
         and shaded in compute shaders (render/compute_path.py's kernels, BATCH builds).
         `cuda`: the colour as one torch tensor (the atlas's tiles copied into exported memory
         that CUDA imports, as the layered batch's)."""
-        w, h = int(size[0]), int(size[1])
         limits = self.parts.device.limits
         most = int(limits.maxImageDimension2D)
+        # (a lens batch draws its views' wider source pinholes: render/post.py batch_post)
+        w, h = batch_draw_size(views, (int(size[0]), int(size[1])), most)
         # The atlas fits the image size limit, and its rasteriser buffer (8 bytes a pixel) one
         # storage-buffer binding; sized for this call's views, not more.
         per = min(self.per_submission(size, linear, depth, batch, COMPUTE_BYTES),
@@ -119,7 +120,8 @@ class BatchPath:
         colors, depths = [], []
         for start in range(0, len(views), per):
             stop = min(start + per, len(views))
-            color, dist = self._submit_compute(_slice(views, start, stop), (w, h), (cols, rows),
+            color, dist = self._submit_compute(_slice(views, start, stop),
+                                               (int(size[0]), int(size[1])), (cols, rows),
                                                lights, opts, linear, depth, cuda,
                                                None if out is None else out[start:stop])
             colors.append(color)
@@ -143,20 +145,20 @@ class BatchPath:
         chunk = self.views.chunk_views if self.views is not None else 0
         bv = self._views(n, chunk or max(1, min(n, MAX_LAYERS)))
         self._t_start = time.perf_counter()
-        ao = prepare_ao(p.ao, p.recorder, opts, target, p.bounds.radius, False)
-        shading_ao = ao is not None and ao.shading
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
-        # Post steps (render/post.py batch_post: colour noise): drawn into an HDR atlas.
-        post = batch_post(p, opts, views, size, target, copy, linear)
-        frame, plan, terms = self._begin(views, size, lights, post.shading, post.linear, rows,
-                                         shading_ao)
+        # Post steps (render/post.py batch_post: colour noise, a lens): drawn into an HDR atlas.
+        post = batch_post(p, opts, views, size, grid, target, copy, linear)
+        ao = prepare_ao(p.ao, p.recorder, opts, post.drawn or target, p.bounds.radius, False)
+        shading_ao = ao is not None and ao.shading
+        frame, plan, terms = self._begin(post.views, post.size, lights, post.shading,
+                                         post.linear, rows, shading_ao)
         set0 = bv.sets0[frame.index]
         self._run(frame, plan, opts, lambda redraw: p.recorder.command_buffer(
             target, frame, 0, FrameSpec(
                 "compute_batch", opts.tbn, opts.alpha_mask, plan, redraw, copy,
-                variant=p.lighting.shade_variant(opts, shading_ao), tiles=(n, w, h, rows),
+                variant=p.lighting.shade_variant(opts, shading_ao), tiles=(n, *post.size, rows),
                 set0_id=id(set0), external_id=id(external), batch=(bv.generation,), ao=ao,
-                post=post.post, post_tonemap=post.tonemap),
+                post=post.post, post_tonemap=post.tonemap, lens=post.lens),
             FrameObjects(set0=set0, external=external), drawn=post.drawn),
             (lambda: self._cuda_wait(external)) if cuda else None)
         if cuda:
@@ -424,4 +426,5 @@ def _slice(views: CameraBatch, start: int, stop: int) -> CameraBatch:
 
     return CameraBatch(views.eye[start:stop], views.target[start:stop], views.up[start:stop],
                        views.yfov_deg[start:stop], part(views.intrinsics), part(views.znear),
-                       part(views.zfar))
+                       part(views.zfar),
+                       None if views.lenses is None else views.lenses[start:stop])

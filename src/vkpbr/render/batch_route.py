@@ -51,7 +51,7 @@ def batch_route(parts: FrameParts, batch: CameraBatch, size: tuple[int, int], op
     # Post steps: the compute batch takes colour noise (render/post.py batch_post_supported);
     # the others (bloom, depth noise, the camera models' resample) go view by view.
     post = bool(enabled_post(opts)) or batch.lenses is not None
-    tiled_post = batch_post_supported(opts, batch.lenses, depth)
+    tiled_post = batch_post_supported(opts, batch, size, depth)
     if device == "cuda":
         if depth or outputs:
             raise UsageError("device='cuda' returns the colour only: ask depth and dataset "

@@ -42,7 +42,7 @@ from vkpbr.scene import lens as lenses
 from vkpbr.scene.types import Camera
 
 __all__ = ["Bloom", "BLOOM_LEVELS", "Noise", "noise_key", "noise_keys", "post_steps",
-           "BatchPost", "batch_post", "batch_post_supported", "LensFrame", "check_lens", "lens_frame", "lens_steps",
+           "BatchPost", "batch_post", "batch_post_supported", "batch_lens", "batch_draw_size", "LensFrame", "check_lens", "lens_frame", "lens_steps",
            "LENS_OUTPUTS", "LENS_PIXELS"]
 
 BLOOM_LEVELS = 6  # the smallest is 1/64 of the frame: a glow some tens of pixels wide
@@ -158,7 +158,7 @@ def noise_keys(noise: SensorNoise, views: Any, extent: tuple[int, int]) -> np.nd
     return keys
 
 
-_MIX = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB))
+_SPLITMIX = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB))
 
 
 def view_hashes(seed: int, extent: tuple[int, int], eye: np.ndarray, target: np.ndarray,
@@ -178,59 +178,104 @@ def view_hashes(seed: int, extent: tuple[int, int], eye: np.ndarray, target: np.
                            (eye, target, up, yfov, intrinsics, lens_rows,
                             np.broadcast_to(np.array(extent, np.float64), (n, 2)))], axis=1)
     bits = np.ascontiguousarray(rows).view(np.uint64)
-    h = np.full(n, ((seed & 0xFFFFFFFF) * int(_MIX[0])) & 0xFFFFFFFFFFFFFFFF, np.uint64)
+    h = np.full(n, ((seed & 0xFFFFFFFF) * int(_SPLITMIX[0])) & 0xFFFFFFFFFFFFFFFF, np.uint64)
     with np.errstate(over="ignore"):  # (uint64 arithmetic wraps, as the hash means it to)
         for col in bits.T:
-            h = (h ^ col) + _MIX[0]
-            h = (h ^ (h >> np.uint64(30))) * _MIX[1]
-            h = (h ^ (h >> np.uint64(27))) * _MIX[2]
+            h = (h ^ col) + _SPLITMIX[0]
+            h = (h ^ (h >> np.uint64(30))) * _SPLITMIX[1]
+            h = (h ^ (h >> np.uint64(27))) * _SPLITMIX[2]
             h = h ^ (h >> np.uint64(31))
     return ((h ^ (h >> np.uint64(32))) & np.uint64(0xFFFFFFFF)).astype(np.uint32)
 
 
-def batch_post_supported(options: RenderOptions, lenses: Any, depth: bool) -> bool:
-    """Whether a compute batch takes `options`' post steps itself (render/batch_route.py;
-    else its views render one by one): colour noise, over the atlas in one dispatch, each
-    tile its view's key. Not yet: camera models, bloom (it would spread over the tiles), the
-    depth noise (the batch reads the depth buffer, not the outputs it noises)."""
+def batch_post_supported(options: RenderOptions, views: Any, size: tuple[int, int],
+                         depth: bool) -> bool:
+    """Whether a compute batch takes `options`' post steps and `views`' lenses itself
+    (render/batch_route.py; else its views render one by one): colour noise, over the atlas
+    in one dispatch, each tile its view's key; a camera model where every view has the same
+    one (model, distortion, intrinsics: one source size, `batch_lens`). Not yet: bloom (it
+    would spread over the tiles), the depth noise and a lens batch's depth (the batch reads
+    its depth buffer, not the outputs that carry them), views of different lenses."""
     wanted = dict(enabled_post(options))
-    if lenses is not None or not wanted:
-        return lenses is None
-    noise = wanted.get("noise")
-    return set(wanted) == {"noise"} and not (depth and noise.depth)
+    if views.lenses is not None and (depth or batch_lens(views, size) is None):
+        return False
+    noise = wanted.pop("noise", None)
+    return not wanted and not (depth and noise is not None and noise.depth)
+
+
+def batch_lens(views: Any, size: tuple[int, int], max_side: int = 1 << 14
+               ) -> tuple[LensFrame, Any] | None:
+    """(view 0's LensFrame, the batch of source pinholes to draw) where every view of `views`
+    has one lens and one set of intrinsics (so one source plan: view i's source is view 0's
+    at view i's pose, as `lens_frame` plans it alone), else None (and None without lenses)."""
+    if views.lenses is None or any(lens != views.lenses[0] for lens in views.lenses):
+        return None
+    for values in (views.intrinsics, views.yfov_deg):
+        if values is not None and not (np.isnan(values).all() or (values == values[0]).all()):
+            return None
+    frame = lens_frame(views.camera(0), size, max_side)
+    if frame is None:
+        return None
+    src = frame.camera
+    intr = np.tile(np.array(src.pixel_intrinsics, np.float64), (len(views), 1))
+    source = dataclasses.replace(views, intrinsics=intr, lenses=None,
+                                 yfov_deg=np.full(len(views), src.yfov_deg))
+    return frame, source
 
 
 @dataclasses.dataclass(frozen=True)
 class BatchPost:
     """A compute batch's post stage (render/batch_path.py): the HDR atlas it draws into
     (None: no post steps), the steps, the encode's tone map, the options and linear flag
-    its shading takes (no tone map: the encode's)."""
+    its shading takes (no tone map: the encode's); with a lens the views drawn (the source
+    pinholes), their tile size and the resample's marker for FrameSpec.lens."""
 
     drawn: Any
     post: tuple[tuple[str, Any], ...]
     tonemap: int
     shading: RenderOptions
     linear: bool
+    views: Any = None
+    size: tuple[int, int] = (0, 0)
+    lens: tuple[float, ...] = ()
 
 
 def batch_post(parts: Any, options: RenderOptions, views: Any, size: tuple[int, int],
-               target: Any, copy: tuple[str, ...], linear: bool) -> BatchPost:
-    """The post stage of a compute batch of `views` (tiles of `size`) into the atlas
-    `target`: with post steps, the HDR atlas and every view's noise key written (the
-    device waited for and the recordings dropped where the keys' buffer grows)."""
+               grid: tuple[int, int], target: Any, copy: tuple[str, ...], linear: bool
+               ) -> BatchPost:
+    """The post stage of a compute batch of `views` (tiles of `size`, `grid` columns and
+    rows) into the atlas `target`: with post steps or lenses, the HDR atlas it draws into and
+    every view's noise key and lens constants written (the device waited for and the
+    recordings dropped where their buffers grow)."""
     post = enabled_post(options)
-    if not post:
-        return BatchPost(None, (), 0, options, linear)
-    noise = options.noise
-    if noise is not None and noise.colour:
-        kernels = parts.post()
-        if kernels.view_keys_stale(len(views)):
-            parts.device.wait_idle()
-            parts.recorder.free()
-        kernels.write_view_keys(noise_keys(noise, views, size))
+    lens = batch_lens(views, size, int(parts.device.limits.maxImageDimension2D))
+    if not post and lens is None:
+        return BatchPost(None, (), 0, options, linear, views, size)
+    kernels = parts.post()
+    rows: list[tuple[str, np.ndarray]] = []
+    if options.noise is not None and options.noise.colour:
+        rows.append(("keys", noise_keys(options.noise, views, size)))
+    drawn_views, drawn_size, marker = views, size, ()
+    if lens is not None:
+        frame, drawn_views = lens
+        drawn_size, marker = frame.extent, (float(frame.extent[0]), float(frame.extent[1]))
+        rows.append(("lens", np.tile(_lens_push(frame.push), (len(views), 1))))
+    if any(kernels.view_keys_stale(len(views), name) for name, _ in rows):
+        parts.device.wait_idle()
+        parts.recorder.free()
+    for name, data in rows:
+        kernels.write_view_keys(data, name)
     shading = options if options.tonemap is None else dataclasses.replace(options, tonemap=None)
-    return BatchPost(parts.targets.post(target, copy), post, encode_tonemap(options, linear),
-                     shading, True)
+    extent = (grid[0] * drawn_size[0], grid[1] * drawn_size[1])
+    return BatchPost(parts.targets.post(target, copy, extent), post,
+                     encode_tonemap(options, linear), shading, True, drawn_views, drawn_size,
+                     marker)
+
+
+def batch_draw_size(views: Any, size: tuple[int, int], max_side: int) -> tuple[int, int]:
+    """The tile size a compute batch of `views` draws: `size`, or a lens batch's source."""
+    lens = batch_lens(views, size, max_side)
+    return size if lens is None else lens[0].extent
 
 
 def post_steps() -> dict[str, type[PostStep]]:
@@ -307,11 +352,32 @@ def _lens_push(push: tuple[float, ...]) -> np.ndarray:
     return out
 
 
+def lens_batch_steps(ctx: PostContext, extent: tuple[int, int]) -> list[Step]:
+    """A compute batch's resample (post_lens_batch.comp): every view's tile of the HDR atlas
+    ("color": source tiles) into its tile of the output atlas (`extent`: the transient
+    "lens", which the steps after read: ctx then names it and its tiles), each view with its
+    lens constants (PostKernels buffer "lens", batch_post)."""
+    n, sw, sh, rows = ctx.view_tiles()
+    cols = -(-n // rows)
+    tw, th = extent[0] // cols, extent[1] // rows
+    push = np.array([tw, th, rows, n, sw, sh], np.uint32)
+    view = ctx.transient("lens", extent)
+    record = ctx.dispatch("post_lens_batch", push, ctx.color_view, view, extent,
+                          set1=ctx.kernels.view_key_set("lens"))
+    step = Step("lens", record, ((ctx.color_name, "storage_read"), ("lens", "storage")))
+    ctx.color_view, ctx.color_name, ctx.extent = view, "lens", extent
+    ctx.tiles = (n, tw, th, rows)
+    return [step]
+
+
 def lens_steps(ctx: PostContext, push: tuple[float, ...], extent: tuple[int, int],
                outputs: bool) -> list[Step]:
     """The resample of the frame's HDR radiance ("color", the source's size) into the model's
     image of `extent` (the transient "lens", which the steps after read: ctx now names it),
-    and with `outputs` of the frame's dataset outputs into the output target's ("out.")."""
+    and with `outputs` of the frame's dataset outputs into the output target's ("out.");
+    over a compute batch's atlas (ctx.tiles), `lens_batch_steps`."""
+    if ctx.tiles is not None:
+        return lens_batch_steps(ctx, extent)
     data = _lens_push(push)
     steps = []
     if outputs:  # (untimed: FrameStats.pass_ms["lens"] times both kernels)

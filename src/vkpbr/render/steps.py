@@ -336,8 +336,13 @@ class FrameSteps:
     def _finish(self) -> list[Step]:
         if self.output is not self.target:  # depth and outputs from the frame's HDR target
             # (a camera model's resample wrote the output target's own outputs)
+            tiles = self.spec.tiles
+            if tiles is not None and self.spec.lens:  # a lens batch: the output's own tiles
+                n, _, _, rows = tiles
+                w, h = self.output.extent
+                tiles = (n, w // -(-n // rows), h // rows, rows)
             return self.output.finish_steps(self.image, self.frame_index, self.spec.copy,
-                                            self.spec.tiles, self.objects.external, prefix="out.",
+                                            tiles, self.objects.external, prefix="out.",
                                             sources=None if self.spec.lens else self.target)
         if self.spec.tiles is not None:
             return self.target.finish_steps(self.image, self.frame_index, self.spec.copy,
