@@ -7,7 +7,9 @@ dataset outputs it also maps; the frame's own cost includes its larger source pi
 Prints GPU ms per frame and per step (medians): lens is the resample (both kernels with
 outputs), noise the colour noise, noise_depth the depth noise (with its copy back). And a
 compute batch of 4,096 views of 128x128 without and with colour noise (one dispatch over
-the atlas; the batch then draws into an HDR atlas and encodes after: "encode").
+the atlas; the batch then draws into an HDR atlas and encodes after: "encode"), and through
+a 100-degree fisheye (each view's wider source drawn as its tile, then one resample
+dispatch: "lens").
 
     python3 benchmarks/bench_post.py --scene Sponza.gltf [--frames 300] [--json out.json]
     python3 benchmarks/bench_post.py --scene Sponza.gltf --only lens,noise   # those rows
@@ -34,10 +36,10 @@ BATCH_SIZE = (128, 128)
 OUTPUTS = ("depth", "instance", "normal")
 
 
-def fisheye(base: Camera, size: tuple[int, int]) -> Camera:
-    """`base`'s pose through an OpenCV fisheye whose image is 120 degrees across."""
+def fisheye(base: Camera, size: tuple[int, int], degrees: float = 120.0) -> Camera:
+    """`base`'s pose through an OpenCV fisheye whose image is `degrees` across."""
     w, h = size
-    f = (w / 2) / math.radians(60.0)
+    f = (w / 2) / math.radians(degrees / 2)
     K = np.array([[f, 0.0, (w - 1) / 2], [0.0, f, (h - 1) / 2], [0.0, 0.0, 1.0]])
     return Camera.from_opencv(K, base.world_from_camera("opencv"), size, model="opencv_fisheye",
                               distortion=(0.02, -0.005, 0.001, 0.0))
@@ -58,14 +60,20 @@ def measure(r: Renderer, size: tuple[int, int], frames: int, camera: Camera | No
             "steps": {n: statistics.median(s.get(n, 0.0) for s in steps) for n in sorted(names)}}
 
 
-def measure_batch(r: Renderer, views: int, reps: int, **options: object) -> dict:
+def measure_batch(r: Renderer, views: int, reps: int, lens: bool = False,
+                  **options: object) -> dict:
     """A compute batch of `views` views of BATCH_SIZE on a ring about the default camera's
-    target (bench_ao.py ring_poses): medians of its GPU ms and steps."""
+    target (bench_ao.py ring_poses; `lens`: each through a 100-degree fisheye, 141 across the
+    diagonal of the square): medians of
+    its GPU ms and steps."""
     from bench_ao import ring_poses
 
     from vkpbr.scene.camera_batch import CameraBatch
 
     cams = CameraBatch.from_poses(ring_poses(r, views), yfov_deg=60.0)
+    if lens:
+        cams = CameraBatch.from_cameras([fisheye(cams.camera(i), BATCH_SIZE, 100.0)
+                                         for i in range(views)], r.default_camera())
     gpu, steps = [], []
     for i in range(reps + 1):
         r.render_batch(cams, size=BATCH_SIZE, pipeline="compute", **options)
@@ -110,7 +118,8 @@ def main() -> None:
                 rows.append({"size": f"{size[0]}x{size[1]}", "frame": label, **row})
         os.environ["VKPBR_HDR_FRAMES"] = "0"
         for label, options in (("batch", {}), ("batch noise realsense-d435 colour",
-                                               {"noise": "realsense-d435"})):
+                                               {"noise": "realsense-d435"}),
+                               ("batch lens fisheye 100", {"lens": True})):
             if only and not any(w in label for w in only):
                 continue
             row = measure_batch(r, args.views, args.batches, **options)
