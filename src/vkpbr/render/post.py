@@ -62,28 +62,35 @@ class Bloom(PostStep):
     option = "bloom"
 
     def steps(self, ctx: PostContext, value: float) -> list[Step]:
-        sizes = level_sizes(ctx.extent)
+        n, tw, th, rows = ctx.view_tiles()
+        sizes = level_sizes((tw, th))  # a view's; a batch's levels are atlases of them
         if not sizes:
             return []
+        cols = -(-n // rows)
+        atlas = [(cols * w, rows * h) for w, h in sizes]
         names = [f"bloom{i}" for i in range(len(sizes))]
-        views = [ctx.transient(n, s) for n, s in zip(names, sizes, strict=True)]
-        steps, src, src_name = [], ctx.color_view, ctx.color_name
-        for name, view, size in zip(names, views, sizes, strict=True):
-            push = np.array([_DOWN, 0, 0], np.uint32)
-            steps.append(Step(f"bloom_down.{name}", ctx.dispatch("post_bloom", push, src, view, size),
-                              ((src_name, "storage_read"), (name, "storage")), timed=False))
-            src, src_name = view, name
+        views = [ctx.transient(nm, s) for nm, s in zip(names, atlas, strict=True)]
+
+        def push(mode: int, src: tuple[int, int], dst: tuple[int, int], value: float = 0.0
+                 ) -> np.ndarray:
+            out = np.array([mode, 0, 0, n, rows, *src, *dst], np.uint32)
+            out.view(np.float32)[1 if mode == _MIX else 2] = value
+            return out
+
+        steps, src, src_name, src_tile = [], ctx.color_view, ctx.color_name, (tw, th)
+        for name, view, size, extent in zip(names, views, sizes, atlas, strict=True):
+            steps.append(Step(f"bloom_down.{name}", ctx.dispatch(
+                "post_bloom", push(_DOWN, src_tile, size), src, view, extent),
+                ((src_name, "storage_read"), (name, "storage")), timed=False))
+            src, src_name, src_tile = view, name, size
         for k in range(len(sizes) - 2, -1, -1):  # level k becomes the mean of levels k..
-            push = np.array([_UP, 0, 0], np.uint32)
-            push.view(np.float32)[2] = 1.0 / (len(sizes) - k)
-            steps.append(Step(f"bloom_up.{names[k]}",
-                              ctx.dispatch("post_bloom", push, views[k + 1], views[k], sizes[k]),
-                              ((names[k + 1], "storage_read"), (names[k], "storage")), timed=False))
-        push = np.array([_MIX, 0, 0], np.uint32)
-        push.view(np.float32)[1] = value
-        steps.append(Step("bloom", ctx.dispatch("post_bloom", push, views[0], ctx.color_view,
-                                                ctx.extent),
-                          ((names[0], "storage_read"), (ctx.color_name, "storage"))))
+            steps.append(Step(f"bloom_up.{names[k]}", ctx.dispatch(
+                "post_bloom", push(_UP, sizes[k + 1], sizes[k], 1.0 / (len(sizes) - k)),
+                views[k + 1], views[k], atlas[k]),
+                ((names[k + 1], "storage_read"), (names[k], "storage")), timed=False))
+        steps.append(Step("bloom", ctx.dispatch(
+            "post_bloom", push(_MIX, sizes[0], (tw, th), value), views[0], ctx.color_view,
+            ctx.extent), ((names[0], "storage_read"), (ctx.color_name, "storage"))))
         return steps
 
 
@@ -192,14 +199,15 @@ def batch_post_supported(options: RenderOptions, views: Any, size: tuple[int, in
                          depth: bool) -> bool:
     """Whether a compute batch takes `options`' post steps and `views`' lenses itself
     (render/batch_route.py; else its views render one by one): colour noise, over the atlas
-    in one dispatch, each tile its view's key; a camera model where every view has the same
-    one (model, distortion, intrinsics: one source size, `batch_lens`). Not yet: bloom (it
-    would spread over the tiles), the depth noise and a lens batch's depth (the batch reads
+    in one dispatch, each tile its view's key; bloom, each tile its own chain; a camera
+    model where every view has the same one (model, distortion, intrinsics: one source
+    size, `batch_lens`). Not yet: the depth noise and a lens batch's depth (the batch reads
     its depth buffer, not the outputs that carry them), views of different lenses."""
     wanted = dict(enabled_post(options))
     if views.lenses is not None and (depth or batch_lens(views, size) is None):
         return False
     noise = wanted.pop("noise", None)
+    wanted.pop("bloom", None)
     return not wanted and not (depth and noise is not None and noise.depth)
 
 
