@@ -6,8 +6,9 @@ camera model (an OpenCV fisheye of 120 degrees: the resample "lens", with and wi
 dataset outputs it also maps; the frame's own cost includes its larger source pinhole).
 Prints GPU ms per frame and per step (medians): lens is the resample (both kernels with
 outputs), noise the colour noise, noise_depth the depth noise (with its copy back). And a
-compute batch of 4,096 views of 128x128 without and with colour noise (one dispatch over
-the atlas; the batch then draws into an HDR atlas and encodes after: "encode"), and through
+compute batch of 4,096 views of 128x128 without and with colour noise or a bloom (each
+step one dispatch over the atlas; the batch then draws into an HDR atlas and encodes after:
+"encode"), and through
 a 100-degree fisheye (each view's wider source drawn as its tile, then one resample
 dispatch: "lens").
 
@@ -119,6 +120,7 @@ def main() -> None:
         os.environ["VKPBR_HDR_FRAMES"] = "0"
         for label, options in (("batch", {}), ("batch noise realsense-d435 colour",
                                                {"noise": "realsense-d435"}),
+                               ("batch bloom 0.3", {"bloom": 0.3}),
                                ("batch lens fisheye 100", {"lens": True})):
             if only and not any(w in label for w in only):
                 continue
