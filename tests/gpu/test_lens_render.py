@@ -203,6 +203,12 @@ def test_compute_batch_of_one_lens(lens_renderer) -> None:  # noqa: ANN001
             print(f"view {i} {extra}: mean {off.mean():.3f}, p99 {np.percentile(off, 99):.0f}, max {off.max()}")
             assert off.mean() <= 1.0 and np.percentile(off, 99) <= 3, (extra, i, off.mean())
             assert one[..., :3].std() > 10  # the scene is there
+    # Two submissions (2 views, then 1: the noise keys and lens constants per submission),
+    # linear: the same views (to float rounding: a view's place in the atlas moves).
+    kw = {"lights": [], "noise": "realsense-d435,seed=2", "linear": True}
+    whole = r.render_batch(cams, SIZE, pipeline="compute", **kw)
+    np.testing.assert_allclose(r.render_batch(cams, SIZE, pipeline="compute", batch=2, **kw),
+                               whole, rtol=1e-4, atol=1e-5)
 
 
 @pytest.mark.parametrize("name", ["opencv", "opencv_fisheye"])
