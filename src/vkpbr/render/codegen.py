@@ -84,6 +84,7 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("background_batch.vert.spv", "background.vert", (("BATCH", 1),)),
     Variant("batch_cull.comp.spv", "batch_cull.comp", (("STRUCTS_ONLY", 1),)),
     Variant("deform.comp.spv", "deform.comp", (("STRUCTS_ONLY", 1),)),
+    Variant("worlds.comp.spv", "worlds.comp"),
     Variant("background.frag.spv", "background.frag"),
     # KHR_materials_transmission's copy of the opaque scene (render/transmission.py): the
     # opaque passes writing linear radiance.

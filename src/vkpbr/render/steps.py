@@ -136,6 +136,11 @@ class FrameSteps:
         self.resources.update(deform.resources())
         return deform.steps(self.frame_index)
 
+    def _worlds(self) -> list[Step]:
+        """A batch of worlds' records from poses on the GPU (render/worlds.py WorldKernel):
+        the batch path gives the step where its call has such worlds; none otherwise."""
+        return []
+
     def _shadows(self) -> list[Step]:
         """The shadow maps' redrawn layers. Their partial redraw keeps the other layers, so
         ShadowMaps' layered images take their own transitions (gpu/layered.py) and leave
