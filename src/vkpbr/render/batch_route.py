@@ -48,8 +48,9 @@ def batch_route(parts: FrameParts, batch: CameraBatch, size: tuple[int, int], op
         raise UsageError(f"device {device!r}: choose 'cpu' (NumPy) or 'cuda' (a torch tensor)")
     if out is not None:
         check_out(out, (views, size[1], size[0], 4), np.float32 if linear else np.uint8, device)
-    # Post steps: the compute batch takes colour noise (render/post.py batch_post_supported);
-    # the others (bloom, depth noise, the camera models' resample) go view by view.
+    # Post steps: the compute batch takes colour noise, bloom and a lens its views share
+    # (render/post.py batch_post_supported); the others (depth noise, views of different
+    # lenses, a lens with depth) go view by view.
     post = bool(enabled_post(opts)) or batch.lenses is not None
     tiled_post = batch_post_supported(opts, batch, size, depth)
     if device == "cuda":
