@@ -6,7 +6,8 @@ GPU), "compute" (the compute batch: all views in one atlas, rasterised and shade
 shaders) where the device has the compute rasteriser and no draw blends, "layered" (the
 fragment path's batch: render/batch.py), or "views": view by view through render_many, each
 exactly as `render` draws it, where the device has no layered rendering, with MSAA (the batch
-target is single-sample), the compute path asked for, or post steps (not yet in batches).
+target is single-sample), the compute path asked for, or post steps the compute batch does
+not take (render/post.py batch_post_supported; the layered batch takes none).
 "auto" takes the compute batch on GPUs where it can (the H200 measured it 4-5x the layered
 batch: BENCHMARKS.md), else the layered batch, bit for bit what `render` draws with
 pipeline="forward". `render_many(batch=N)` goes through render_batch N cameras at a time
