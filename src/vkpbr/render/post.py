@@ -174,7 +174,7 @@ def view_hashes(seed: int, extent: tuple[int, int], eye: np.ndarray, target: np.
     """(B,) uint32: a hash of the seed and each view (its float64 eye, target, up, vertical
     field of view, pixel intrinsics (NaN: none), lens model and distortion, and the output
     size), SplitMix64's finaliser folded over the values' bits: vectorised, so a batch's
-    4,096 keys take a millisecond, and bit for bit the hash a single frame's camera gets."""
+    4,096 keys take about 14 ms, and bit for bit the hash a single frame's camera gets."""
     n = len(eye)
     lens_rows = np.zeros((n, 9))
     if lenses_ is not None:
