@@ -62,6 +62,25 @@ def world_slots(renderer: Any, nodes: Any = None, materials: Any = None) -> Worl
     return renderer._world_slots
 
 
+_OPTIONS: dict[Any, RenderOptions] = {}  # (options, overrides) -> the call's options
+
+
+def _options(options: RenderOptions | None, overrides: dict[str, Any]) -> RenderOptions:
+    """The call's options (checked once: a loop that passes the same ones each step does not
+    build and check them again)."""
+    try:
+        key = (options, tuple(sorted(overrides.items())))
+        hash(key)
+    except TypeError:  # (an unhashable override value: made each time)
+        return dataclasses.replace(options or RenderOptions(), **overrides)
+    made = _OPTIONS.get(key)
+    if made is None:
+        if len(_OPTIONS) > 64:
+            _OPTIONS.clear()
+        made = _OPTIONS[key] = dataclasses.replace(options or RenderOptions(), **overrides)
+    return made
+
+
 def _slots(renderer: Any) -> WorldSlots:
     slots = getattr(renderer, "_world_slots", None)
     if slots is None:
@@ -127,7 +146,7 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
     """Renderer.render_batch (its docstring says what each argument is)."""
     r = renderer
     views = as_camera_batch(cameras, r.default_camera())
-    opts = dataclasses.replace(options or RenderOptions(), **(overrides or {}))
+    opts = _options(options, overrides or {})
     route, wanted = batch_route(r.parts, views, size, opts, linear, depth, outputs, device, out)
     if worlds is None and world_materials is None and (world_of_view is not None
                                                        or world_visible is not None):
