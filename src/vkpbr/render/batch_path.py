@@ -34,7 +34,7 @@ from vkpbr.render.frames import FrameStats, summed_stats, write_frame_blocks
 from vkpbr.render.lighting import LightsArg
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.parts import FrameParts
-from vkpbr.render.post import batch_draw_size, batch_post
+from vkpbr.render.post import batch_draw_size, batch_post, batch_post_bytes
 from vkpbr.render.steps import FrameObjects, FrameSpec
 from vkpbr.render.views import ViewTerms, batch_view_terms
 from vkpbr.render.worlds import WorldBuffers, WorldCall, WorldKernel
@@ -134,7 +134,8 @@ class BatchPath:
         w, h = batch_draw_size(views, (int(size[0]), int(size[1])), most)
         # The atlas fits the image size limit, and its rasteriser buffer (8 bytes a pixel) one
         # storage-buffer binding; sized for this call's views, not more.
-        per = min(self.per_submission(size, linear, depth, batch, COMPUTE_BYTES),
+        extra = COMPUTE_BYTES + batch_post_bytes(opts, views, size, (w, h))
+        per = min(self.per_submission(size, linear, depth, batch, extra),
                   (most // w) * (most // h), int(limits.maxStorageBufferRange) // (8 * w * h),
                   len(views))
         if per < 1:

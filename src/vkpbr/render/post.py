@@ -42,7 +42,8 @@ from vkpbr.scene import lens as lenses
 from vkpbr.scene.types import Camera
 
 __all__ = ["Bloom", "BLOOM_LEVELS", "Noise", "noise_key", "noise_keys", "post_steps",
-           "BatchPost", "batch_post", "batch_post_supported", "batch_lens", "batch_draw_size", "LensFrame", "check_lens", "lens_frame", "lens_steps",
+           "BatchPost", "batch_post", "batch_post_supported", "batch_lens", "batch_draw_size",
+           "batch_post_bytes", "LensFrame", "check_lens", "lens_frame", "lens_steps",
            "LENS_OUTPUTS", "LENS_PIXELS"]
 
 BLOOM_LEVELS = 6  # the smallest is 1/64 of the frame: a glow some tens of pixels wide
@@ -284,6 +285,17 @@ def batch_draw_size(views: Any, size: tuple[int, int], max_side: int) -> tuple[i
     """The tile size a compute batch of `views` draws: `size`, or a lens batch's source."""
     lens = batch_lens(views, size, max_side)
     return size if lens is None else lens[0].extent
+
+
+def batch_post_bytes(options: RenderOptions, views: Any, size: tuple[int, int],
+                     drawn: tuple[int, int]) -> int:
+    """Device bytes a compute batch's post stage adds per output pixel (for its views per
+    submission): the HDR atlas (RGBA32F at the `drawn` tile size: a lens batch's sources
+    are larger) and a transient of the output's size (the resample's, the bloom's levels
+    and the noise's are at most that)."""
+    if not enabled_post(options) and views.lenses is None:
+        return 0
+    return 16 * -(-drawn[0] * drawn[1] // (size[0] * size[1])) + 16
 
 
 def post_steps() -> dict[str, type[PostStep]]:
