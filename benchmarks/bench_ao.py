@@ -1,11 +1,14 @@
-"""What ambient occlusion costs (render/ao.py: GTAO and its denoise, the "ao" step): Sponza on
-the compute path (compute rasteriser) as `vkpbr bench` draws it, with `--ao gtao` and
-`--ao off`, at 1920x1080 and 640x480; and a compute batch of 4,096 views of 128x128 both ways.
-Prints GPU ms per frame (or per batch) and the "ao" step's own time (the GTAO kernel and the
-denoise passes, from the timestamps around them), medians. Targets (issue 33): the step
-<= 0.15 ms at 1080p on the H200.
+"""What ambient occlusion costs (render/ao.py: GTAO, its denoise and at half resolution the
+upsample: the "ao" step): Sponza on the compute path (compute rasteriser) as `vkpbr bench`
+draws it, with `--ao off` and each GTAO preset (`gtao`: half resolution, the default;
+`gtao-full`: full resolution, XeGTAO's High; `gtao-low`: half resolution, 2 slices of 2), at
+1920x1080 and 640x480; and a compute batch of 4,096 views of 128x128 each way. Prints GPU ms
+per frame (or per batch) and the "ao" step's own time (from the timestamps around it),
+medians; `--profile` adds each kernel's (GTAO, the denoise passes, the upsample: a timestamp
+after each). Targets (issue 33): the step <= 0.15 ms at 1080p on the H200.
 
-    python3 benchmarks/bench_ao.py --scene Sponza.gltf [--frames 300] [--batches 5] [--json out.json]
+    python3 benchmarks/bench_ao.py --scene Sponza.gltf [--frames 300] [--batches 5] \
+        [--modes off,gtao,gtao-full,gtao-low] [--profile] [--json out.json]
 """
 
 from __future__ import annotations
@@ -25,15 +28,30 @@ from vkpbr.scene.loader import load_scene
 BATCH_VIEWS, BATCH_SIZE = 4096, (128, 128)
 
 
+KERNELS = ("ao_gtao", "ao_denoise0", "ao_denoise1", "ao")  # --profile: each timed apart
+
+
+def ao_times(r: Renderer, into: dict[str, list[float]]) -> None:
+    """The frame's "ao" step time (the sum of its kernels' where --profile times them
+    apart) and each kernel's, appended to `into`."""
+    ms = r.last_stats.pass_ms
+    into.setdefault("ao_ms", []).append(sum(ms.get(k, 0.0) for k in KERNELS))
+    for k in KERNELS:
+        if k in ms and k != "ao":
+            into.setdefault(f"{k}_ms", []).append(ms[k])
+    if "ao" in ms and len(ms.keys() & set(KERNELS)) > 1:  # the last kernel, alone
+        into.setdefault("ao_last_ms", []).append(ms["ao"])
+
+
 def frames(r: Renderer, size: tuple[int, int], count: int, ao: str) -> dict:
-    gpu, step = [], []
+    times: dict[str, list[float]] = {"gpu_ms": []}
     cams = [r.default_camera()] * (count + 20)
     for i, _ in enumerate(r.render_many(cams, size=size, readback=False, pipeline="compute",
                                         raster="compute", ao=ao)):
         if i >= 20:
-            gpu.append(r.last_stats.gpu_ms)
-            step.append(r.last_stats.pass_ms.get("ao", 0.0))
-    return {"gpu_ms": statistics.median(gpu), "ao_ms": statistics.median(step)}
+            times["gpu_ms"].append(r.last_stats.gpu_ms)
+            ao_times(r, times)
+    return {k: statistics.median(v) for k, v in times.items()}
 
 
 def ring_poses(r: Renderer, count: int) -> np.ndarray:
@@ -60,13 +78,13 @@ def ring_poses(r: Renderer, count: int) -> np.ndarray:
 
 def batch(r: Renderer, reps: int, ao: str, count: int) -> dict:
     views = CameraBatch.from_poses(ring_poses(r, count), yfov_deg=60.0)
-    gpu, step = [], []
+    times: dict[str, list[float]] = {"gpu_ms": []}
     for i in range(reps + 1):
         r.render_batch(views, size=BATCH_SIZE, pipeline="compute", ao=ao)
         if i:
-            gpu.append(r.last_stats.gpu_ms)
-            step.append(r.last_stats.pass_ms.get("ao", 0.0))
-    return {"gpu_ms": statistics.median(gpu), "ao_ms": statistics.median(step)}
+            times["gpu_ms"].append(r.last_stats.gpu_ms)
+            ao_times(r, times)
+    return {k: statistics.median(v) for k, v in times.items()}
 
 
 def main() -> None:
@@ -77,21 +95,30 @@ def main() -> None:
     ap.add_argument("--batches", type=int, default=5)
     ap.add_argument("--views", type=int, default=BATCH_VIEWS, help="views of the batch")
     ap.add_argument("--sizes", default="1920x1080,640x480")
+    ap.add_argument("--modes", default="off,gtao,gtao-full,gtao-low", help="--ao values")
+    ap.add_argument("--profile", action="store_true", help="time each GTAO kernel apart")
     ap.add_argument("--json")
     args = ap.parse_args()
     sizes = [tuple(int(v) for v in s.split("x")) for s in args.sizes.split(",")]
+    modes = args.modes.split(",")
     rows = []
     with Renderer(load_scene(args.scene)) as r:
+        r.parts.ao.profile = args.profile
         for size in sizes:
-            for ao in ("off", "gtao"):
+            for ao in modes:
                 rows.append({"what": f"frame {size[0]}x{size[1]}", "ao": ao,
                              **frames(r, size, args.frames, ao)})
-        for ao in ("off", "gtao"):
-            rows.append({"what": f"batch {args.views} x {BATCH_SIZE[0]}x{BATCH_SIZE[1]}",
-                         "ao": ao, **batch(r, args.batches, ao, args.views)})
-    print("| what | --ao | GPU ms | ao step ms |\n|---|---|---:|---:|")
+        if args.views:
+            for ao in modes:
+                rows.append({"what": f"batch {args.views} x {BATCH_SIZE[0]}x{BATCH_SIZE[1]}",
+                             "ao": ao, **batch(r, args.batches, ao, args.views)})
+    kernels = ["ao_gtao_ms", "ao_denoise0_ms", "ao_denoise1_ms", "ao_last_ms"]
+    cols = [k for k in kernels if any(k in row for row in rows)]
+    print("| what | --ao | GPU ms | ao step ms |" + "".join(f" {k[:-3]} |" for k in cols))
+    print("|---|---|---:|---:|" + "---:|" * len(cols))
     for row in rows:
-        print(f"| {row['what']} | {row['ao']} | {row['gpu_ms']:.3f} | {row['ao_ms']:.3f} |")
+        print(f"| {row['what']} | {row['ao']} | {row['gpu_ms']:.3f} | {row.get('ao_ms', 0):.3f} |"
+              + "".join(f" {row.get(k, 0.0):.3f} |" for k in cols))
     if args.json:
         with open(args.json, "w") as f:
             json.dump(rows, f, indent=1)

@@ -5,10 +5,16 @@ bloom, with sensor noise (colour alone, and with the depth output's noise), and 
 camera model (an OpenCV fisheye of 120 degrees: the resample "lens", with and without the
 dataset outputs it also maps; the frame's own cost includes its larger source pinhole).
 Prints GPU ms per frame and per step (medians): lens is the resample (both kernels with
-outputs), noise the colour noise, noise_depth the depth noise (with its copy back).
+outputs), noise the colour noise, noise_depth the depth noise (with its copy back). And a
+compute batch of 4,096 views of 128x128 without and with colour noise or a bloom (each
+step one dispatch over the atlas; the batch then draws into an HDR atlas and encodes after:
+"encode"), and through
+a 100-degree fisheye (each view's wider source drawn as its tile, then one resample
+dispatch: "lens").
 
     python3 benchmarks/bench_post.py --scene Sponza.gltf [--frames 300] [--json out.json]
     python3 benchmarks/bench_post.py --scene Sponza.gltf --only lens,noise   # those rows
+    python3 benchmarks/bench_post.py --scene Sponza.gltf --only batch [--views 4096]
 """
 
 from __future__ import annotations
@@ -27,13 +33,14 @@ from vkpbr.scene.camera import Camera
 from vkpbr.scene.loader import load_scene
 
 SIZES = ((1920, 1080), (640, 480))
+BATCH_SIZE = (128, 128)
 OUTPUTS = ("depth", "instance", "normal")
 
 
-def fisheye(base: Camera, size: tuple[int, int]) -> Camera:
-    """`base`'s pose through an OpenCV fisheye whose image is 120 degrees across."""
+def fisheye(base: Camera, size: tuple[int, int], degrees: float = 120.0) -> Camera:
+    """`base`'s pose through an OpenCV fisheye whose image is `degrees` across."""
     w, h = size
-    f = (w / 2) / math.radians(60.0)
+    f = (w / 2) / math.radians(degrees / 2)
     K = np.array([[f, 0.0, (w - 1) / 2], [0.0, f, (h - 1) / 2], [0.0, 0.0, 1.0]])
     return Camera.from_opencv(K, base.world_from_camera("opencv"), size, model="opencv_fisheye",
                               distortion=(0.02, -0.005, 0.001, 0.0))
@@ -54,6 +61,31 @@ def measure(r: Renderer, size: tuple[int, int], frames: int, camera: Camera | No
             "steps": {n: statistics.median(s.get(n, 0.0) for s in steps) for n in sorted(names)}}
 
 
+def measure_batch(r: Renderer, views: int, reps: int, lens: bool = False,
+                  **options: object) -> dict:
+    """A compute batch of `views` views of BATCH_SIZE on a ring about the default camera's
+    target (bench_ao.py ring_poses; `lens`: each through a 100-degree fisheye, 141 across the
+    diagonal of the square): medians of
+    its GPU ms and steps."""
+    from bench_ao import ring_poses
+
+    from vkpbr.scene.camera_batch import CameraBatch
+
+    cams = CameraBatch.from_poses(ring_poses(r, views), yfov_deg=60.0)
+    if lens:
+        cams = CameraBatch.from_cameras([fisheye(cams.camera(i), BATCH_SIZE, 100.0)
+                                         for i in range(views)], r.default_camera())
+    gpu, steps = [], []
+    for i in range(reps + 1):
+        r.render_batch(cams, size=BATCH_SIZE, pipeline="compute", **options)
+        if i:
+            gpu.append(r.last_stats.gpu_ms)
+            steps.append(r.last_stats.pass_ms)
+    names = {n for s in steps for n in s}
+    return {"gpu_ms": statistics.median(gpu),
+            "steps": {n: statistics.median(s.get(n, 0.0) for s in steps) for n in sorted(names)}}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -61,6 +93,8 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=300)
     ap.add_argument("--json")
     ap.add_argument("--only", default="", help="comma-separated words: rows whose label has one")
+    ap.add_argument("--views", type=int, default=4096, help="views of the batch rows")
+    ap.add_argument("--batches", type=int, default=5)
     args = ap.parse_args()
     rows = []
     only = [w for w in args.only.split(",") if w]
@@ -83,6 +117,16 @@ def main() -> None:
                 r._last_post = None  # the renderer keeps an options object's post steps
                 row = measure(r, size, args.frames, **options)
                 rows.append({"size": f"{size[0]}x{size[1]}", "frame": label, **row})
+        os.environ["VKPBR_HDR_FRAMES"] = "0"
+        for label, options in (("batch", {}), ("batch noise realsense-d435 colour",
+                                               {"noise": "realsense-d435"}),
+                               ("batch bloom 0.3", {"bloom": 0.3}),
+                               ("batch lens fisheye 100", {"lens": True})):
+            if only and not any(w in label for w in only):
+                continue
+            row = measure_batch(r, args.views, args.batches, **options)
+            rows.append({"size": f"{args.views} x {BATCH_SIZE[0]}x{BATCH_SIZE[1]}",
+                         "frame": label, **row})
     print("| size | frame | GPU ms | encode | bloom | lens | noise | noise_depth |\n"
           "|---|---|---:|---:|---:|---:|---:|---:|")
     for row in rows:

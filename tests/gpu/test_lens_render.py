@@ -46,9 +46,10 @@ def lens_renderer():  # noqa: ANN201
     assert instance.errors == [], instance.errors[:3]
 
 
-def camera_for(model: str, distortion: tuple, focal: float) -> tuple[Camera, np.ndarray, np.ndarray]:
+def camera_for(model: str, distortion: tuple, focal: float, eye: tuple = (0.3, 3.2, 4.6)
+               ) -> tuple[Camera, np.ndarray, np.ndarray]:
     """A camera above the scene looking down at it obliquely: (Camera, K, camera_from_world)."""
-    eye, target = np.array([0.3, 3.2, 4.6]), np.array([0.0, 0.0, -0.3])
+    eye, target = np.array(eye, float), np.array([0.0, 0.0, -0.3])
     f = (target - eye) / np.linalg.norm(target - eye)
     s = np.cross(f, [0.0, 1.0, 0.0])
     s /= np.linalg.norm(s)
@@ -168,6 +169,82 @@ def test_colour_depth_and_batches(lens_renderer) -> None:  # noqa: ANN001
     pin, _, _ = camera_for("pinhole", (), focal)
     r.render(pin, size=SIZE, lights=[], env="none")
     assert "lens" not in r.last_stats.pass_ms
+
+
+def test_compute_batch_of_one_lens(lens_renderer) -> None:  # noqa: ANN001
+    """A compute batch of cameras sharing one lens (render/post.py batch_post): the views'
+    source pinholes drawn as the batch's tiles, then one resample dispatch over the atlas
+    (post_lens_batch.comp, each view its constants) and the encode. Each view equals that
+    camera rendered alone on the compute path (the compute batch's bound: 1/255 mean, 3/255
+    p99); with colour noise too; views of different lenses go view by view."""
+    from vkpbr.render.batch_route import batch_route
+    from vkpbr.render.options import RenderOptions
+    from vkpbr.scene.camera_batch import CameraBatch
+
+    r = lens_renderer
+    if r.compute_batch_unavailable() is not None:
+        pytest.skip(f"no compute batch here: {r.compute_batch_unavailable()}")
+    model, distortion, focal = LENSES["opencv_fisheye"]
+    cams = [camera_for(model, distortion, focal, eye=eye)[0]
+            for eye in ((0.3, 3.2, 4.6), (-0.6, 2.9, 4.4), (1.1, 3.4, 5.0))]
+    views = CameraBatch.from_cameras(cams, cams[0])
+    opts = RenderOptions(pipeline="compute", env="none")
+    assert batch_route(r.parts, views, SIZE, opts, False, False, None, "cpu", None)[0] == "compute"
+    mixed = CameraBatch.from_cameras([cams[0], camera_for("opencv", LENSES["opencv"][1], 95.0)[0]],
+                                     cams[0])
+    assert batch_route(r.parts, mixed, SIZE, opts, False, False, None, "cpu", None)[0] == "views"
+    for extra in ({}, {"noise": "realsense-d435,seed=2"}):
+        kw = {"lights": [], **extra}  # (lit by the sky, GTAO on)
+        got = r.render_batch(cams, SIZE, pipeline="compute", **kw)
+        assert "lens" in r.last_stats.pass_ms
+        for i in range(len(cams)):
+            one = r.render(views.camera(i), size=SIZE, pipeline="compute", raster="compute", **kw)
+            off = np.abs(got[i].astype(int) - one)
+            print(f"view {i} {extra}: mean {off.mean():.3f}, p99 {np.percentile(off, 99):.0f}, max {off.max()}")
+            assert off.mean() <= 1.0 and np.percentile(off, 99) <= 3, (extra, i, off.mean())
+            assert one[..., :3].std() > 10  # the scene is there
+    # Two submissions (2 views, then 1: the noise keys and lens constants per submission),
+    # linear: the same views (to float rounding: a view's place in the atlas moves).
+    kw = {"lights": [], "noise": "realsense-d435,seed=2", "linear": True}
+    whole = r.render_batch(cams, SIZE, pipeline="compute", **kw)
+    np.testing.assert_allclose(r.render_batch(cams, SIZE, pipeline="compute", batch=2, **kw),
+                               whole, rtol=1e-4, atol=1e-5)
+
+
+@pytest.mark.parametrize("name", ["opencv", "opencv_fisheye"])
+def test_motion_through_the_lens(lens_renderer, name: str) -> None:  # noqa: ANN001
+    """The motion output of a camera with a lens moving over the static scene, against
+    OpenCV: each ground pixel's ray (lens.pixel_rays, checked against cv2.undistortPoints in
+    tests/scene/test_lens.py) meets the ground at a world point; cv2's projection of that
+    point with the first frame's pose, less the pixel, is its motion. Within 0.05 px on 99% of
+    the ground pixels away from tiles, 0.2 px on all (measured: 0.0002 and 0.013 px); 0 on
+    the background."""
+    r = lens_renderer
+    model, distortion, focal = LENSES[name]
+    cam0, K, cfw0 = camera_for(model, distortion, focal)
+    cam1, _, cfw1 = camera_for(model, distortion, focal, eye=(0.5, 3.0, 4.9))
+    kw = {"size": SIZE, "lights": [], "env": "none", "outputs": ("motion", "instance")}
+    r.render(cam0, **kw)  # the previous frame: the same model and size
+    out = r.render(cam1, **kw)
+    motion, ids = out["motion"], out["instance"]
+    assert np.all(motion[ids == 0] == 0)
+    ground_id = np.bincount(ids.ravel())[1:].argmax() + 1
+    rows, cols = np.nonzero(ids == ground_id)
+    nb = np.stack([ids[np.clip(rows + dy, 0, SIZE[1] - 1), np.clip(cols + dx, 0, SIZE[0] - 1)]
+                   for dy in range(-2, 3) for dx in range(-2, 3)])
+    keep = (nb == ground_id).all(0)
+    rows, cols = rows[keep], cols[keep]
+    assert len(rows) > 3000, len(rows)
+    pixels = np.c_[cols, rows].astype(np.float64)
+    rays = lens.pixel_rays(model, distortion, K, pixels) @ np.linalg.inv(cfw1)[:3, :3].T
+    eye1 = np.linalg.inv(cfw1)[:3, 3]
+    world = eye1 + rays * (-eye1[1] / rays[:, 1])[:, None]  # on the ground, y = 0
+    was, z = opencv_pixels(model, distortion, K, cfw0, world)
+    assert np.isfinite(z).all()
+    err = np.abs(motion[rows, cols] - (was - pixels)).max(axis=1)
+    assert np.abs(was - pixels).max() > 2.0  # the camera moved
+    print(f"{name}: motion error p99 {np.percentile(err, 99):.4f} px, max {err.max():.4f}")
+    assert np.percentile(err, 99) <= 0.05 and err.max() <= 0.2, (np.percentile(err, 99), err.max())
 
 
 def test_too_wide_is_one_line(lens_renderer) -> None:  # noqa: ANN001

@@ -212,3 +212,41 @@ def test_lateral_noise_moves_samples(noise_renderer) -> None:  # noqa: ANN001
     for k, p in want.items():
         for sign in ((1,) if k == 0 else (1, -1)):
             assert abs((dy == sign * k).mean() - p) < 0.02, (k, (dy == sign * k).mean(), p)
+
+
+def test_compute_batch_views_equal_single_renders(noise_renderer) -> None:  # noqa: ANN001
+    """Colour noise in a compute batch (render/post.py batch_post: over the atlas in one
+    dispatch, each tile its view's key and its own pixel coordinates): each view equals that
+    camera rendered alone with the same noise (the same random numbers: reproducible per
+    (seed, view)); the batch takes the compute route, not view by view."""
+    from vkpbr.render.batch_route import batch_route
+    from vkpbr.render.options import RenderOptions
+    from vkpbr.scene.camera_batch import CameraBatch
+
+    r = noise_renderer
+    if r.compute_batch_unavailable() is not None:
+        pytest.skip(f"no compute batch here: {r.compute_batch_unavailable()}")
+    size = (64, 48)
+    cams = [Camera(eye=(x, 2.0, 2.5), target=(-0.5, 0.0, 2.5), up=(0, 0, -1), yfov_deg=60.0)
+            for x in (-0.8, -0.5, -0.1)]
+    spec = f"full_well=800,read_noise=6,seed=3,{QUIET}"
+    kw = {"lights": [], "env": "none", "linear": True, "view": "base_color", "noise": spec}
+    batch = CameraBatch.from_cameras(cams, r.default_camera())
+    opts = RenderOptions(view="base_color", env="none", noise=spec, pipeline="compute")
+    assert batch_route(r.parts, batch, size, opts, True, False, None, "cpu", None)[0] == "compute"
+    got = r.render_batch(cams, size, pipeline="compute", **kw)
+    assert "noise" in r.last_stats.pass_ms
+    clean = r.render_batch(cams, size, pipeline="compute", **{**kw, "noise": None})
+    for i in range(len(cams)):
+        one = r.render(batch.camera(i), size=size, pipeline="compute", raster="compute", **kw)
+        close = np.isclose(got[i], one, rtol=0, atol=1e-6).all(axis=-1)
+        assert close.mean() >= 0.995, (i, close.mean())  # (patch edges: a ray's rounding)
+        assert np.abs(got[i] - clean[i])[..., :3].std() > 0.005  # the noise is there
+    assert not np.array_equal(got[0] - clean[0], got[1] - clean[1])  # each view its own
+    # 8-bit: the encode's tone map after the noise, as a single frame's.
+    kw = {**kw, "linear": False, "view": "final", "env": "sky"}
+    got = r.render_batch(cams, size, pipeline="compute", **kw)
+    for i in range(len(cams)):
+        one = r.render(batch.camera(i), size=size, pipeline="compute", raster="compute", **kw)
+        off = np.abs(got[i].astype(int) - one).max(axis=-1)
+        assert (off <= 1).mean() >= 0.995 and off.mean() < 0.05, (i, off.max(), off.mean())

@@ -115,6 +115,26 @@ def test_a_batch_with_bloom_is_its_views(chart) -> None:  # noqa: ANN001
         np.testing.assert_array_equal(batch[i], chart.render(views.camera(i), size=(32, 24), bloom=0.4))
 
 
+def test_a_compute_batch_blooms_each_view_alone(chart) -> None:  # noqa: ANN001
+    """The compute batch's bloom (render/post.py Bloom over the atlas: each tile its own chain
+    of levels, reads clamped to the tile): each view as that camera alone with the bloom, to
+    1/255 (the compute batch's own bound); odd tile sizes, so the levels' last rows count."""
+    if chart.compute_batch_unavailable() is not None:
+        pytest.skip(f"no compute batch here: {chart.compute_batch_unavailable()}")
+    eyes = np.array([[3.0, 2.0, 3.0], [-3.0, 1.0, 2.5], [0.5, 3.0, -3.0]])
+    views = CameraBatch.from_look_at(eyes, target=(0.0, 0.5, 0.0))
+    size = (37, 29)
+    batch = chart.render_batch(views, size=size, bloom=0.6, pipeline="compute")
+    assert "bloom" in chart.last_stats.pass_ms
+    plain = chart.render_batch(views, size=size, pipeline="compute")
+    for i in range(len(eyes)):
+        one = chart.render(views.camera(i), size=size, bloom=0.6, pipeline="compute",
+                           raster="compute")
+        off = np.abs(batch[i].astype(int) - one)
+        assert off.max() <= 1, (i, off.max())
+        assert np.abs(batch[i].astype(int) - plain[i]).max() > 8  # the bloom is there
+
+
 def test_level_sizes() -> None:
     assert level_sizes((1920, 1080)) == [(960, 540), (480, 270), (240, 135), (120, 68),
                                          (60, 34), (30, 17)][:BLOOM_LEVELS]

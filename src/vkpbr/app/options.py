@@ -90,7 +90,8 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
                "on with pbr lighting and an environment; course: black)",
                field="env_background", group="environment", choices=("on", "off")),
     OptionSpec("--ao", "enum", "screen-space ambient occlusion of the image-based light "
-               "(default %(default)s: GTAO where frames have an environment; off)", field="ao",
+               "(default %(default)s: GTAO at half resolution where frames have an "
+               "environment; gtao-full: full resolution; gtao-low: fewer samples; off)", field="ao",
                group="environment"),
     OptionSpec("--ao-radius", "float", "GTAO's radius in world units (default 0: 15%% of the "
                "scene's bounding radius)", field="ao_radius", group="environment",

@@ -10,12 +10,15 @@ takes it as its pre-pass, as for dataset outputs: alpha-masked surfaces are in i
 the compute rasteriser, a compute batch's atlas -- and before the shading:
 
 1. `ao_gtao` (shaders/ao_gtao.comp): GTAO (Jimenez et al. 2016) as XeGTAO's main pass, at
-   full resolution: the view-space normal made from the depth in place, SLICES directions of
-   STEPS samples a side, the cosine-weighted visible arc integrated within the effect radius
-   (`RenderOptions.ao_radius`; 0: RADIUS_SHARE of the scene's bounding radius), with the
-   depth edges packed beside it.
-2. `ao_denoise` (shaders/ao_denoise.comp), DENOISE_PASSES times: XeGTAO's edge-aware 3x3
-   spatial denoise; the last pass writes the frame slot's "ao" image (R32F).
+   the preset's resolution (PRESETS: the default half, one pixel of each 2 x 2): the
+   view-space normal made from the full-resolution depth in place, `slices` directions of
+   `steps` samples a side, the cosine-weighted visible arc integrated within the effect
+   radius (`RenderOptions.ao_radius`; 0: RADIUS_SHARE of the scene's bounding radius), with
+   the depth edges packed beside it.
+2. `ao_denoise` (shaders/ao_denoise.comp), `passes` times: XeGTAO's edge-aware 3x3 spatial
+   denoise; at full resolution the last pass writes the frame slot's "ao" image (R32F), at
+   half resolution `ao_upsample` (shaders/ao_upsample.comp) does, a depth-aware bilinear
+   upsample.
 3. The shading (shade.glsl through shaders/ao.glsl) reads "ao" at its pixel (set 2 `ao_map`)
    and occludes the image-based light only: min(GTAO, the occlusion texture), as Filament
    combines them, with GTAO's multi-bounce approximation on the diffuse albedo and
@@ -50,13 +53,11 @@ from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.options import RenderOptions
 
-__all__ = ["AoImages", "AoSpec", "ao_spec", "prepare_ao", "AO_BINDING", "SLICES", "STEPS",
-           "DENOISE_PASSES", "RADIUS_SHARE", "RADIUS_MULTIPLIER", "FALLOFF"]
+__all__ = ["AoImages", "AoQuality", "AoSpec", "ao_spec", "prepare_ao", "AO_BINDING", "PRESETS",
+           "RADIUS_SHARE", "RADIUS_MULTIPLIER", "FALLOFF"]
 
 AO_BINDING = next(b for b, _, _, name in L.SETS[2] if name == "ao_map")  # layouts.SETS
 AO_GROUP = (8, 8, 1)  # ao_common.glsl's work group
-SLICES, STEPS = 3, 3  # XeGTAO's High preset: 3 slices of 3 samples a side
-DENOISE_PASSES = 2  # 1 or 2 (XeGTAO's choice without temporal accumulation: 2 or more)
 FALLOFF = 0.2  # the last fifth of the radius fades a sample's weight to 0 (XeGTAO: 0.615)
 # The search radius over the effect radius: XeGTAO's default, which its authors fitted to ray
 # traced ground truth of the same radius (screen space sees less than the scene holds). Here
@@ -66,16 +67,42 @@ RADIUS_MULTIPLIER = 1.457
 RADIUS_SHARE = 0.15  # the automatic radius: 15% of the scene's bounding radius (Sponza: 2.7 m)
 _SETS_PER_POOL = 16
 _PUSH = np.dtype([("tile", "<u4", 4), ("radius", "<f4"), ("falloff", "<f4"), ("slices", "<u4"),
-                  ("steps", "<u4"), ("final_pass", "<u4"), ("read_mid", "<u4")])
+                  ("steps", "<u4"), ("final_pass", "<u4"), ("read_mid", "<u4"), ("scale", "<u4")])
+
+
+@dataclass(frozen=True)
+class AoQuality:
+    """A GTAO preset: `scale` 1 (full resolution) or 2 (half: GTAO and the denoise on one pixel
+    of each 2 x 2, then ao_upsample.comp's depth-aware upsample); `slices` directions of
+    `steps` samples a side; `passes` of the denoise (at the working resolution)."""
+
+    scale: int
+    slices: int
+    steps: int
+    passes: int
+
+
+# The `--ao` presets. GTAO_FULL is XeGTAO's High preset at full resolution (2 denoise passes,
+# XeGTAO's choice without temporal accumulation); the default GTAO runs it on a quarter of the
+# pixels, the XeGTAO High sample pattern over the same screen radius: the cost of GTAO (the
+# step's largest part) falls by about 4, its error against the ray-cast reference rises a
+# little (docs/ambient-occlusion.md has both); GTAO_LOW takes XeGTAO's Medium sampling
+# (2 slices of 2 samples) on top.
+PRESETS: dict[L.Ao, AoQuality] = {
+    L.Ao.GTAO: AoQuality(2, 3, 3, 1),
+    L.Ao.GTAO_FULL: AoQuality(1, 3, 3, 2),
+    L.Ao.GTAO_LOW: AoQuality(2, 2, 2, 1),
+}
 
 
 @dataclass(frozen=True)
 class AoSpec:
     """What a recording's ambient occlusion depends on (FrameSpec.ao): the effect radius in
-    world units; whether the shading reads it (else only the `ao` output does)."""
+    world units; whether the shading reads it (else only the `ao` output does); the preset."""
 
     radius: float
     shading: bool = True
+    quality: AoQuality = PRESETS[L.Ao.GTAO]
 
 
 def ao_spec(options: RenderOptions, target: Any, scene_radius: float, output: bool
@@ -84,11 +111,11 @@ def ao_spec(options: RenderOptions, target: Any, scene_radius: float, output: bo
     physically based mode with an environment) or the `ao` `output` is asked for, on targets
     whose depth the step can read (single-sample offscreen ones with the compute path's
     features)."""
-    shading = options.ao == L.Ao.GTAO and options.has_environment
+    shading = options.ao != L.Ao.OFF and options.has_environment
     if not (shading or output) or not getattr(target, "compute", False):
         return None
     radius = options.ao_radius if options.ao_radius > 0 else RADIUS_SHARE * scene_radius
-    return AoSpec(float(radius), shading)
+    return AoSpec(float(radius), shading, PRESETS.get(options.ao, PRESETS[L.Ao.GTAO]))
 
 
 @dataclass
@@ -108,6 +135,10 @@ class AoImages:
                  stand_in: tuple[Any, Any]) -> None:
         self.device, self.sets2, self.set0_layout = device, sets2, set0_layout
         self.size: tuple[int, int] | None = None
+        # Benchmarks (bench_ao.py --profile) time each kernel apart: FrameStats.pass_ms
+        # "ao_gtao", "ao_denoise0", ..., "ao_upsample" and "ao" (the last one's). Set before the
+        # first frame (recordings are kept).
+        self.profile = False
         self.images: list[tuple[Image, ImageView]] = []
         self.work: list[tuple[Image, ImageView]] = []  # ao_raw, ao_mid (R32_UINT)
         self._kernels: dict[str, ComputePipeline] = {}
@@ -158,10 +189,11 @@ class AoImages:
     def steps(self, resources: dict[str, Any], set0: Any, frame_index: int, spec: AoSpec,
               extent: tuple[int, int], tiles: tuple[int, int, int, int] | None, copy_out: bool,
               timed: bool = True) -> list[Step]:
-        """The "ao" group's steps for one recording: GTAO, the denoise passes (and, for the
-        `ao` output, a copy into "out_ao"); adds "ao", "ao_raw", "ao_mid" to `resources`.
-        `extent`: the frame's (the images' top-left corner); `tiles`: a batch's atlas (views, tile width, height, tiles a column); `timed`: a
-        timestamp after the last pass (FrameStats.pass_ms["ao"])."""
+        """The "ao" group's steps for one recording: GTAO, the denoise passes, at half
+        resolution the upsample (and, for the `ao` output, a copy into "out_ao"); adds "ao",
+        "ao_raw", "ao_mid" to `resources`. `extent`: the frame's (the images' top-left
+        corner); `tiles`: a batch's atlas (views, tile width, height, tiles a column);
+        `timed`: a timestamp after the last pass (FrameStats.pass_ms["ao"])."""
         assert not self.stale(extent), "fit() first"
         w, h = extent
         image, view = self.images[frame_index]
@@ -169,27 +201,39 @@ class AoImages:
         for name, (img, v) in zip(("ao_raw", "ao_mid"), self.work, strict=True):
             resources[name] = ImageResource(img.handle, view=v.handle)
         dset = self._set(resources["depth"].view, frame_index)
+        q = spec.quality
         n, tw, th, rows = tiles if tiles is not None else (1, w, h, 1)
+        # The working images' corner: the tile grid at 1 / scale (tiles rounded up).
+        cols = -(-w // tw)
+        work = (cols * -(-tw // q.scale), rows * -(-th // q.scale))
         depth = ("depth", "sampled")
 
         def push(final: int, read_mid: int) -> np.ndarray:
             p = np.zeros((), _PUSH)
             p["tile"] = (tw, th, rows, n)
             p["radius"], p["falloff"] = spec.radius * RADIUS_MULTIPLIER, FALLOFF
-            p["slices"], p["steps"] = SLICES, STEPS
+            p["slices"], p["steps"], p["scale"] = q.slices, q.steps, q.scale
             p["final_pass"], p["read_mid"] = final, read_mid
             return p
 
-        steps = [Step("ao_gtao", self._dispatch("ao_gtao", push(0, 0), set0, dset, extent),
-                      (depth, ("ao_raw", "storage")), timed=False)]
-        for k in range(DENOISE_PASSES):  # ao_raw -> (ao_mid ->) ao
-            final, src = k == DENOISE_PASSES - 1, ("ao_mid" if k else "ao_raw")
-            dst = "ao" if final else "ao_mid"
+        # The denoise and the upsample name every image of their set: the shaders choose
+        # between the working images by a push constant, so each statically reads and writes
+        # both (and "ao", a storage image of the set, GENERAL when bound).
+        both = (depth, ("ao_raw", "storage"), ("ao_mid", "storage"), ("ao", "storage"))
+        steps = [Step("ao_gtao", self._dispatch("ao_gtao", push(0, 0), set0, dset, work),
+                      (depth, ("ao_raw", "storage")), timed=self.profile)]
+        src = "ao_raw"
+        for k in range(q.passes):  # ao_raw -> ao_mid -> ao_raw ... (-> ao at full resolution)
+            final = k == q.passes - 1
+            dst = "ao" if final and q.scale == 1 else ("ao_raw" if src == "ao_mid" else "ao_mid")
             steps.append(Step(f"ao_denoise{k}", self._dispatch(
-                "ao_denoise", push(int(final), int(src == "ao_mid")), set0, dset, extent),
-                # (every pass binds "ao": a storage image of the set, GENERAL when bound)
-                (depth, (src, "storage_read"), (dst, "storage"), ("ao", "storage")),
-                timed=final))
+                "ao_denoise", push(int(final), int(src == "ao_mid")), set0, dset, work),
+                both, timed=self.profile))
+            src = dst
+        if q.scale > 1:
+            steps.append(Step("ao_upsample", self._dispatch(
+                "ao_upsample", push(1, int(src == "ao_mid")), set0, dset, extent),
+                both, timed=False))
         steps[-1] = Step("ao", steps[-1].record, steps[-1].uses, timed=timed)
         if copy_out:
             steps.append(Step("ao_output", lambda cmd: _copy_image(cmd, image, resources, extent),

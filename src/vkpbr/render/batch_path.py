@@ -34,6 +34,7 @@ from vkpbr.render.frames import FrameStats, summed_stats, write_frame_blocks
 from vkpbr.render.lighting import LightsArg
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.parts import FrameParts
+from vkpbr.render.post import batch_draw_size, batch_post, batch_post_bytes
 from vkpbr.render.steps import FrameObjects, FrameSpec
 from vkpbr.render.views import ViewTerms, batch_view_terms
 from vkpbr.render.worlds import WorldBuffers, WorldCall, WorldKernel
@@ -127,12 +128,14 @@ class BatchPath:
         and shaded in compute shaders (render/compute_path.py's kernels, BATCH builds).
         `cuda`: the colour as one torch tensor (the atlas's tiles copied into exported memory
         that CUDA imports, as the layered batch's)."""
-        w, h = int(size[0]), int(size[1])
         limits = self.parts.device.limits
         most = int(limits.maxImageDimension2D)
+        # (a lens batch draws its views' wider source pinholes: render/post.py batch_post)
+        w, h = batch_draw_size(views, (int(size[0]), int(size[1])), most)
         # The atlas fits the image size limit, and its rasteriser buffer (8 bytes a pixel) one
         # storage-buffer binding; sized for this call's views, not more.
-        per = min(self.per_submission(size, linear, depth, batch, COMPUTE_BYTES),
+        extra = COMPUTE_BYTES + batch_post_bytes(opts, views, size, (w, h))
+        per = min(self.per_submission(size, linear, depth, batch, extra),
                   (most // w) * (most // h), int(limits.maxStorageBufferRange) // (8 * w * h),
                   len(views))
         if per < 1:
@@ -146,7 +149,8 @@ class BatchPath:
         colors, depths = [], []
         for start in range(0, len(views), per):
             stop = min(start + per, len(views))
-            color, dist = self._submit_compute(_slice(views, start, stop), (w, h), (cols, rows),
+            color, dist = self._submit_compute(_slice(views, start, stop),
+                                               (int(size[0]), int(size[1])), (cols, rows),
                                                lights, opts, linear, depth, cuda,
                                                None if out is None else out[start:stop], start)
             colors.append(color)
@@ -170,19 +174,24 @@ class BatchPath:
         chunk = self.views.chunk_views if self.views is not None else 0
         bv = self._views(n, chunk or max(1, min(n, MAX_LAYERS)))
         self._t_start = time.perf_counter()
-        ao = prepare_ao(p.ao, p.recorder, opts, target, p.bounds.radius, False)
+        copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
+        # Post steps (render/post.py batch_post: colour noise, bloom, a lens): drawn into an
+        # HDR atlas.
+        post = batch_post(p, opts, views, size, grid, target, copy, linear)
+        ao = prepare_ao(p.ao, p.recorder, opts, post.drawn or target, p.bounds.radius, False)
         shading_ao = ao is not None and ao.shading
         order = self._order(cuda)
         self._ordered = order is not None  # (the worlds' inputs are written in _begin)
-        frame, plan, terms = self._begin(views, size, lights, opts, linear, rows, shading_ao, start)
-        copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
+        frame, plan, terms = self._begin(post.views, post.size, lights, post.shading,
+                                         post.linear, rows, shading_ao, start)
         set0 = bv.set0(frame.index, self.world_call is not None and self.world_call.poses)
         self._run(frame, plan, opts, lambda redraw: p.recorder.command_buffer(
             target, frame, 0, FrameSpec(
                 "compute_batch", opts.tbn, opts.alpha_mask, plan, redraw, copy,
-                variant=p.lighting.shade_variant(opts, shading_ao), tiles=(n, w, h, rows),
+                variant=p.lighting.shade_variant(opts, shading_ao), tiles=(n, *post.size, rows),
                 set0_id=id(set0), external_id=id(external), batch=(bv.generation, *self._world_key()),
-                ao=ao), FrameObjects(set0=set0, external=external), self._world_groups()),
+                ao=ao, post=post.post, post_tonemap=post.tonemap, lens=post.lens),
+            FrameObjects(set0=set0, external=external), self._world_groups(), drawn=post.drawn),
             (lambda: self._cuda_wait(external)) if cuda and order is None else None, order)
         if cuda:
             p.device.check_validation()
@@ -598,4 +607,5 @@ def _slice(views: CameraBatch, start: int, stop: int) -> CameraBatch:
 
     return CameraBatch(views.eye[start:stop], views.target[start:stop], views.up[start:stop],
                        views.yfov_deg[start:stop], part(views.intrinsics), part(views.znear),
-                       part(views.zfar))
+                       part(views.zfar),
+                       None if views.lenses is None else views.lenses[start:stop])

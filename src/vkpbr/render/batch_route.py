@@ -6,7 +6,8 @@ GPU), "compute" (the compute batch: all views in one atlas, rasterised and shade
 shaders) where the device has the compute rasteriser and no draw blends, "layered" (the
 fragment path's batch: render/batch.py), or "views": view by view through render_many, each
 exactly as `render` draws it, where the device has no layered rendering, with MSAA (the batch
-target is single-sample), the compute path asked for, or post steps (not yet in batches).
+target is single-sample), the compute path asked for, or post steps the compute batch does
+not take (render/post.py batch_post_supported; the layered batch takes none).
 "auto" takes the compute batch on GPUs where it can (the H200 measured it 4-5x the layered
 batch: BENCHMARKS.md), else the layered batch, bit for bit what `render` draws with
 pipeline="forward". `render_many(batch=N)` goes through render_batch N cameras at a time
@@ -27,6 +28,7 @@ from vkpbr.render.camera import as_camera
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.outputs import check_outputs
 from vkpbr.render.parts import FrameParts
+from vkpbr.render.post import batch_post_supported
 from vkpbr.render.post_stage import enabled_post
 from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.types import Camera
@@ -47,8 +49,11 @@ def batch_route(parts: FrameParts, batch: CameraBatch, size: tuple[int, int], op
         raise UsageError(f"device {device!r}: choose 'cpu' (NumPy) or 'cuda' (a torch tensor)")
     if out is not None:
         check_out(out, (views, size[1], size[0], 4), np.float32 if linear else np.uint8, device)
-    # Batches have no post stage yet (nor the camera models' resample): view by view.
+    # Post steps: the compute batch takes colour noise, bloom and a lens its views share
+    # (render/post.py batch_post_supported); the others (depth noise, views of different
+    # lenses, a lens with depth) go view by view.
     post = bool(enabled_post(opts)) or batch.lenses is not None
+    tiled_post = batch_post_supported(opts, batch, size, depth)
     if device == "cuda":
         if depth or outputs:
             raise UsageError("device='cuda' returns the colour only: ask depth and dataset "
@@ -64,7 +69,7 @@ def batch_route(parts: FrameParts, batch: CameraBatch, size: tuple[int, int], op
     extra = any(n != "color" for n in wanted)
     explicit_compute = (opts.pipeline == L.PipelinePath.COMPUTE
                         and paths.uses_compute(targets.offscreen(size, linear), opts))
-    if paths.takes_compute_batch(opts) and not extra and not post:
+    if paths.takes_compute_batch(opts) and not extra and tiled_post:
         return "compute", wanted
     if not parts.device.batch_views or targets.msaa > 1 or explicit_compute or post:
         return "views", wanted

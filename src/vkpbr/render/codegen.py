@@ -64,6 +64,7 @@ VARIANTS: tuple[Variant, ...] = (
     # Screen-space ambient occlusion (render/ao.py): GTAO, then its spatial denoise.
     Variant("ao_gtao.comp.spv", "ao_gtao.comp"),
     Variant("ao_denoise.comp.spv", "ao_denoise.comp"),
+    Variant("ao_upsample.comp.spv", "ao_upsample.comp"),
     # Shadow-map passes (render/shadows.py): depth only, or cut out by the base colour's alpha.
     Variant("shadow_opaque.vert.spv", "shadow.vert", (("ALPHA_MASK", 0),)),
     Variant("shadow_mask.vert.spv", "shadow.vert", (("ALPHA_MASK", 1),)),

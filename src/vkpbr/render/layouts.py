@@ -656,10 +656,14 @@ class RasterPath(Named):
 
 class Ao(Named):
     """Screen-space ambient occlusion of the image-based light (render/ao.py): OFF, or GTAO
-    (XeGTAO's ground-truth ambient occlusion, between depth and shading)."""
+    (XeGTAO's ground-truth ambient occlusion, between depth and shading) in one of its
+    presets (render/ao.py PRESETS): GTAO at half resolution with a depth-aware upsample (the
+    default), GTAO_FULL at full resolution, GTAO_LOW at half resolution with fewer samples."""
 
     OFF = 0
     GTAO = 1
+    GTAO_FULL = 2
+    GTAO_LOW = 3
 
 
 class TbnMode(Named):

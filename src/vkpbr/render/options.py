@@ -228,8 +228,9 @@ class RenderOptions:
         with an environment; the course mode's background is black).
     ao : Ao or str
         Screen-space ambient occlusion of the image-based light (render/ao.py): "gtao" (the
-        default: XeGTAO's ground-truth ambient occlusion, in the physically based mode with an
-        environment, on single-sample offscreen frames) or "off".
+        default: XeGTAO's ground-truth ambient occlusion at half resolution, upsampled by
+        depth, in the physically based mode with an environment, on single-sample offscreen
+        frames), "gtao-full" (full resolution), "gtao-low" (half, fewer samples) or "off".
     ao_radius : float
         GTAO's effect radius in world units (>= 0; 0: 15% of the scene's bounding radius).
     bloom : float

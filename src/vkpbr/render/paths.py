@@ -56,7 +56,7 @@ PATHS: dict[str, tuple[str, ...]] = {
                        *_AFTER_SHADING),
     # Batches: every view of a call in one submission (render/batch_path.py).
     "compute_batch": ("deform", "worlds", "shadows", "raster", "ao", "classify", "shading",
-                      "background_compute", "finish"),
+                      "background_compute", "post", "finish"),
     "layered_batch": ("deform", "worlds", "shadows", "cull", "chunks", "finish"),
 }
 # The transmission's copy of the opaque scene (render/transmission.py), drawn as the frame is.

@@ -93,6 +93,9 @@ class PostKernels:
         self._sets: dict[tuple[int, ...], Any] = {}
         self._images: dict[tuple, tuple[Image, ImageView]] = {}
         self._keys: tuple[DescriptorSetLayout, Any, Buffer, DescriptorPool] | None = None
+        # A compute batch's rows a view ("keys", "lens"; one batch is in flight at a time: its
+        # submission is waited for): name -> (capacity in views, set, buffer, pool).
+        self._view_buffers: dict[str, tuple[int, Any, Buffer, DescriptorPool]] = {}
 
     def set_layout(self, count: int) -> DescriptorSetLayout:
         """The set layout of `count` storage images (bindings 0..count-1), made on first use."""
@@ -133,6 +136,46 @@ class PostKernels:
         if frame_index >= MAX_FRAME_SLOTS:
             raise ValueError(f"frame slot {frame_index}: at most {MAX_FRAME_SLOTS}")
         self.keys()[2].write(np.ascontiguousarray(key).view(np.uint8), frame_index * KEY_BYTES)
+
+    def view_keys_stale(self, views: int, name: str = "keys") -> bool:
+        """Whether a batch of `views` views needs a larger buffer `name` ("keys": the noise's
+        keys, "lens": the camera models' constants) than the one made (the caller then
+        waits for the device and drops the recordings that bind it)."""
+        made = self._view_buffers.get(name)
+        return made is None or made[0] < views
+
+    def write_view_keys(self, keys: np.ndarray, name: str = "keys") -> Any:
+        """A compute batch's rows of `name` ((views, 32) float32 keys: noise.glsl FrameKey;
+        or (views, 20) lens constants: lens.glsl LensParams) into its buffer (made or grown
+        to fit: see view_keys_stale), bound as a set of the keys' layout; the set returned."""
+        n, row = len(keys), np.ascontiguousarray(keys, np.float32).view(np.uint8)
+        if self.view_keys_stale(n, name):
+            self._destroy_view_buffer(name)
+            capacity = 1 << max(6, (n - 1).bit_length())
+            layout = self.keys()[0]
+            pool = DescriptorPool(self.device, [(layout, 1)])
+            buffer = Buffer(self.device, row.shape[1] * capacity,
+                            self.device.vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, host_visible=True,
+                            name=f"post batch {name}")
+            dset = pool.allocate(layout)
+            writer = DescriptorWriter(self.device)
+            writer.storage(dset, 0, buffer)
+            writer.update()
+            self._view_buffers[name] = (capacity, dset, buffer, pool)
+        _, dset, buffer, _ = self._view_buffers[name]
+        buffer.write(row, 0)
+        return dset
+
+    def view_key_set(self, name: str = "keys") -> Any:
+        """Buffer `name`'s set (write_view_keys made it), or None before the first."""
+        made = self._view_buffers.get(name)
+        return None if made is None else made[1]
+
+    def _destroy_view_buffer(self, name: str) -> None:
+        made = self._view_buffers.pop(name, None)
+        if made is not None:
+            made[3].destroy()
+            made[2].destroy()
 
     def fragment_pipeline(self, name: str, target: Any, push_bytes: int) -> Pipeline:
         """Fragment shader shaders/spv/<name>.frag.spv over a fullscreen triangle, drawn into
@@ -206,6 +249,8 @@ class PostKernels:
         for layout in self._layouts.values():
             layout.destroy()
         self._layouts.clear()
+        for name in list(self._view_buffers):
+            self._destroy_view_buffer(name)
         if self._keys is not None:
             layout, _, buffer, pool = self._keys
             pool.destroy()
@@ -236,6 +281,18 @@ class PostContext:
     frame_index: int = 0  # the frame slot (its key: PostKernels.write_key)
     outputs: bool = False  # whether the frame copies out the dataset outputs
     outputs_prefix: str = ""  # where they are: the HDR target's, or "out." (a lens frame's)
+    # A compute batch's atlas (views, tile width, height, tiles a column; None: one frame)
+    # and its keys' set (PostKernels.write_view_keys: a key a view, from 0).
+    tiles: tuple[int, int, int, int] | None = None
+    key_set: Any = None
+
+    def view_tiles(self) -> tuple[int, int, int, int]:
+        """(views, tile width, height, tiles a column): the atlas's, or the frame as one."""
+        return self.tiles if self.tiles is not None else (1, *self.extent, 1)
+
+    def first_key(self) -> int:
+        """The index of the first view's key: the frame slot's, or 0 in a batch's keys."""
+        return 0 if self.key_set is not None else self.frame_index
 
     def transient(self, name: str, extent: tuple[int, int]) -> Any:
         """Transient image `name` as a graph resource (added to the frame's); its view."""
@@ -244,13 +301,16 @@ class PostContext:
         return view.handle
 
     def dispatch(self, name: str, push: np.ndarray, src: Any, dst: Any,
-                 extent: tuple[int, int], *more: Any, keys: bool = False) -> Callable[[Any], None]:
+                 extent: tuple[int, int], *more: Any, keys: bool = False,
+                 set1: Any = None) -> Callable[[Any], None]:
         """A recorder of kernel `name` over `extent` with views `src`, `dst` (and `more`
-        views after them: bindings 2, 3, ...) and `push`; `keys`: the frames' keys as set 1."""
+        views after them: bindings 2, 3, ...) and `push`; `keys`: the frames' keys as set 1
+        (`set1`: another set of that layout, a batch's lens constants)."""
         kernels = self.kernels
         dset = kernels.image_set(src, dst, *more)
-        pipe = kernels.pipeline(name, push.nbytes, 2 + len(more), keys)
-        key_set = kernels.keys()[1] if keys else None
+        pipe = kernels.pipeline(name, push.nbytes, 2 + len(more), keys or set1 is not None)
+        key_set = set1 if set1 is not None else (
+            (self.key_set or kernels.keys()[1]) if keys else None)
 
         def record(cmd: Any) -> None:
             cmd.bind_pipeline(pipe)

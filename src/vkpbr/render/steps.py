@@ -328,9 +328,11 @@ class FrameSteps:
         camera model's resample first (render/post.py lens_steps)."""
         if not self.spec.post and not self.spec.lens:
             return []
-        ctx = PostContext(self.r.post_kernels(), self.target.extent, self.resources,
+        kernels, tiles = self.r.post_kernels(), self.spec.tiles
+        ctx = PostContext(kernels, self.target.extent, self.resources,
                           self.target.storage_view.handle, frame_index=self.frame_index,
-                          outputs=COPY_OUTPUTS in self.spec.copy)
+                          outputs=COPY_OUTPUTS in self.spec.copy, tiles=tiles,
+                          key_set=kernels.view_key_set() if tiles is not None else None)
         steps = (lens_steps(ctx, self.spec.lens, self.output.extent, COPY_OUTPUTS in self.spec.copy)
                  if self.spec.lens else [])
         registry = post_steps()
@@ -343,8 +345,13 @@ class FrameSteps:
     def _finish(self) -> list[Step]:
         if self.output is not self.target:  # depth and outputs from the frame's HDR target
             # (a camera model's resample wrote the output target's own outputs)
+            tiles = self.spec.tiles
+            if tiles is not None and self.spec.lens:  # a lens batch: the output's own tiles
+                n, _, _, rows = tiles
+                w, h = self.output.extent
+                tiles = (n, w // -(-n // rows), h // rows, rows)
             return self.output.finish_steps(self.image, self.frame_index, self.spec.copy,
-                                            prefix="out.",
+                                            tiles, self.objects.external, prefix="out.",
                                             sources=None if self.spec.lens else self.target)
         if self.spec.tiles is not None:
             return self.target.finish_steps(self.image, self.frame_index, self.spec.copy,

@@ -26,8 +26,10 @@ layout(push_constant) uniform Ao {
     float falloff;  // share of the radius over which a sample's weight falls to 0 (XeGTAO)
     uint slices;  // GTAO's slice directions a pixel
     uint steps;  // samples a side of a slice
-    uint final_pass;  // ao_denoise.comp: 0 raw -> mid, 1 mid (or raw) -> out
-    uint read_mid;  // ao_denoise.comp: the pass reads ao_mid (else ao_raw)
+    uint final_pass;  // ao_denoise.comp: the last pass (full blur; at full resolution -> out)
+    uint read_mid;  // ao_denoise.comp, ao_upsample.comp: read ao_mid (else ao_raw)
+    uint scale;  // 1: GTAO at full resolution; 2: at half (a pixel of the working images per
+                 // 2 x 2 of the frame's; ao_upsample.comp makes the full-resolution "ao")
 } pc;
 
 // The view pixel p is drawn through, and its tile's first pixel; false past the last view.
@@ -40,6 +42,32 @@ bool ao_view(ivec2 p, out uint view, out ivec2 lo) {
 
 ivec2 ao_clamp(ivec2 p, ivec2 lo) {
     return clamp(p, lo, lo + ivec2(pc.tile_w, pc.tile_h) - 1);
+}
+
+// The working images (ao_raw, ao_mid) hold a view's tile at 1 / scale of its size (rounded
+// up), in the same grid of tiles: working pixel w stands for the frame's pixel
+// lo + (w - wlo) * scale, the top-left one of its scale x scale block.
+ivec2 ao_work_tile() {
+    return (ivec2(pc.tile_w, pc.tile_h) + int(pc.scale) - 1) / int(pc.scale);
+}
+
+// The view working pixel w belongs to, its tile's first working pixel and first frame pixel.
+bool ao_work_view(ivec2 w, out uint view, out ivec2 wlo, out ivec2 lo) {
+    uvec2 t = uvec2(w) / uvec2(ao_work_tile());
+    view = t.x * pc.rows + t.y;
+    wlo = ivec2(t) * ao_work_tile();
+    lo = ivec2(t * uvec2(pc.tile_w, pc.tile_h));
+    return t.y < pc.rows && view < pc.views;
+}
+
+ivec2 ao_work_clamp(ivec2 w, ivec2 wlo) {
+    return clamp(w, wlo, wlo + ao_work_tile() - 1);
+}
+
+// The frame pixel a working pixel stands for (in the tile: the last block of an odd size
+// is one pixel wide).
+ivec2 ao_frame_pixel(ivec2 w, ivec2 wlo, ivec2 lo) {
+    return ao_clamp(lo + (w - wlo) * int(pc.scale), lo);
 }
 
 // Distance along the view axis at pixel p: znear / depth (reversed-Z, infinite far plane);

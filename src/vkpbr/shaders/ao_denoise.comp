@@ -3,27 +3,29 @@
 // invocation: the 3x3 neighbourhood averaged with weights from the depth edges of ao_gtao.comp
 // (made symmetric, a little leak where a pixel has 3 or 4 edges, diagonals through both of
 // their paths), the centre weighted by the blur beta (a fifth of it on passes before the
-// last). Passes before the last keep the edges (ao_raw -> ao_mid); the last writes the
-// visibility the shading reads (ao_out); background pixels get 1.
+// last). It runs on the working images (at 1 / scale of the frame's size): passes write the
+// other working image, edges kept (ao_raw -> ao_mid -> ao_raw ...), except the last at full
+// resolution, which writes the visibility the shading reads (ao_out; background pixels get
+// 1). At half resolution ao_upsample.comp makes ao_out from the last pass's image.
 #extension GL_GOOGLE_include_directive : require
 #include "ao_common.glsl"
 
 const float BLUR_BETA = 1.2;  // XeGTAO's DenoiseBlurBeta
 const float DIAGONAL = 0.85 * 0.5;
 
-uint load(ivec2 p, ivec2 lo) {
-    ivec2 q = ao_clamp(p, lo);
+uint load(ivec2 w, ivec2 wlo) {
+    ivec2 q = ao_work_clamp(w, wlo);
     return pc.read_mid != 0u ? imageLoad(ao_mid, q).r : imageLoad(ao_raw, q).r;
 }
 
 void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);  // a working pixel
     uint view;
-    ivec2 lo;
-    if (any(greaterThanEqual(p, imageSize(ao_raw))) || !ao_view(p, view, lo)) return;
-    uint c = load(p, lo);
-    uint l = load(p + ivec2(-1, 0), lo), r = load(p + ivec2(1, 0), lo);
-    uint t = load(p + ivec2(0, -1), lo), b = load(p + ivec2(0, 1), lo);
+    ivec2 lo, wlo;
+    if (any(greaterThanEqual(p, imageSize(ao_raw))) || !ao_work_view(p, view, wlo, lo)) return;
+    uint c = load(p, wlo);
+    uint l = load(p + ivec2(-1, 0), wlo), r = load(p + ivec2(1, 0), wlo);
+    uint t = load(p + ivec2(0, -1), wlo), b = load(p + ivec2(0, 1), wlo);
     vec4 el = ao_edges(l), er = ao_edges(r), et = ao_edges(t), eb = ao_edges(b);
     vec4 e = ao_edges(c) * vec4(el.y, er.x, et.w, eb.z);
     const float leak_threshold = 2.5, leak_strength = 0.5;
@@ -39,14 +41,16 @@ void main() {
     sum += e.x * ao_visibility(l) + e.y * ao_visibility(r) + e.z * ao_visibility(t)
         + e.w * ao_visibility(b);
     weight += e.x + e.y + e.z + e.w;
-    sum += w_tl * ao_visibility(load(p + ivec2(-1, -1), lo))
-        + w_tr * ao_visibility(load(p + ivec2(1, -1), lo))
-        + w_bl * ao_visibility(load(p + ivec2(-1, 1), lo))
-        + w_br * ao_visibility(load(p + ivec2(1, 1), lo));
+    sum += w_tl * ao_visibility(load(p + ivec2(-1, -1), wlo))
+        + w_tr * ao_visibility(load(p + ivec2(1, -1), wlo))
+        + w_bl * ao_visibility(load(p + ivec2(-1, 1), wlo))
+        + w_br * ao_visibility(load(p + ivec2(1, 1), wlo));
     weight += w_tl + w_tr + w_bl + w_br;
     float v = sum / weight;
-    if (pc.final_pass == 0u) {
-        imageStore(ao_mid, p, uvec4(ao_pack(v, c >> 16)));
+    if (pc.final_pass == 0u || pc.scale > 1u) {  // into the other working image
+        uint packed = ao_pack(v, c >> 16);
+        if (pc.read_mid != 0u) imageStore(ao_raw, p, uvec4(packed));
+        else imageStore(ao_mid, p, uvec4(packed));
     } else {
         bool background = texelFetch(depth_map, p, 0).r <= 0.0;
         imageStore(ao_out, p, vec4(background ? 1.0 : v, 0.0, 0.0, 0.0));

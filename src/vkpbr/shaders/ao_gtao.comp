@@ -4,7 +4,9 @@
 // Intel): per pixel, `slices` directions in the screen, each searched `steps` samples to a side
 // for the highest horizon within the effect radius, and the cosine-weighted visible arc
 // between the two horizons integrated analytically about the normal projected into the
-// slice. The view-space normal is made from the depth buffer in place
+// slice, on the working pixels (render/ao.py PRESETS: at half resolution, the top-left pixel
+// of each 2 x 2 block; ao_upsample.comp brings it back). The view-space normal is made from
+// the full-resolution depth buffer in place
 // (XE_GTAO_GENERATE_NORMALS_INPLACE: of the four neighbour pairs, those not across a depth
 // edge), so one kernel serves every frame path. Slice angles and sample offsets are jittered
 // by a 64x64 Hilbert-curve R2 sequence (XeGTAO's spatio-temporal noise at frame 0), which the
@@ -82,7 +84,7 @@ vec3 sample_pos(ivec2 p, ivec2 lo, float znear, vec4 intr, out bool inside) {
     return ao_view_pos(vec2(q - lo) + 0.5, z, intr);
 }
 
-float gtao(ivec2 p, ivec2 lo, vec3 center, vec3 n, float znear, vec4 intr) {
+float gtao(ivec2 p, ivec2 lo, uvec2 tile_p, vec3 center, vec3 n, float znear, vec4 intr) {
     vec3 view_vec = normalize(-center);
     // World radius in pixels at this depth: sx * size.x / 2 pixels a unit of x / z.
     float px_per_unit = intr.x * float(pc.tile_w) * 0.5 / center.z;
@@ -93,7 +95,6 @@ float gtao(ivec2 p, ivec2 lo, vec3 center, vec3 n, float znear, vec4 intr) {
     float falloff_add = pc.radius * (1.0 - pc.falloff) / falloff_range + 1.0;
     const float too_close = 1.3;  // pixels: samples nearer than this are pushed out
     float min_s = too_close / screen_radius;
-    uvec2 tile_p = uvec2(p - lo);
     vec2 noise = fract(0.5 + float(hilbert_index(tile_p.x % 64u, tile_p.y % 64u))
                        * vec2(0.75487766624669276005, 0.5698402909980532659114));
     float slices = float(pc.slices), steps = float(pc.steps);
@@ -136,22 +137,27 @@ float gtao(ivec2 p, ivec2 lo, vec3 center, vec3 n, float znear, vec4 intr) {
     return max(visibility / slices, 0.03);
 }
 
+float neighbour_z(ivec2 p, ivec2 lo, float znear) {
+    return min(ao_view_z(ao_clamp(p, lo), znear), 3.0e38);
+}
+
 void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 wp = ivec2(gl_GlobalInvocationID.xy);  // the working pixel
     uint view;
-    ivec2 lo;
-    if (any(greaterThanEqual(p, imageSize(ao_raw))) || !ao_view(p, view, lo)) return;
+    ivec2 wlo, lo;
+    if (any(greaterThanEqual(wp, imageSize(ao_raw))) || !ao_work_view(wp, view, wlo, lo)) return;
+    ivec2 p = ao_frame_pixel(wp, wlo, lo);  // the frame's pixel it stands for
     float znear = views[view].eye_near.w;
     vec4 intr = views[view].intrinsics;
     float z = ao_view_z(p, znear);
     if (isinf(z)) {  // nothing drawn: unoccluded, an edge all round
-        imageStore(ao_raw, p, uvec4(ao_pack(1.0, 0u)));
+        imageStore(ao_raw, wp, uvec4(ao_pack(1.0, 0u)));
         return;
     }
-    float zl = min(ao_view_z(ao_clamp(p + ivec2(-1, 0), lo), znear), 3.0e38);
-    float zr = min(ao_view_z(ao_clamp(p + ivec2(1, 0), lo), znear), 3.0e38);
-    float zt = min(ao_view_z(ao_clamp(p + ivec2(0, -1), lo), znear), 3.0e38);
-    float zb = min(ao_view_z(ao_clamp(p + ivec2(0, 1), lo), znear), 3.0e38);
+    float zl = neighbour_z(p + ivec2(-1, 0), lo, znear);
+    float zr = neighbour_z(p + ivec2(1, 0), lo, znear);
+    float zt = neighbour_z(p + ivec2(0, -1), lo, znear);
+    float zb = neighbour_z(p + ivec2(0, 1), lo, znear);
     vec4 edges = calculate_edges(z, zl, zr, zt, zb);
     // The tile's border is an edge: the denoise never mixes in another view.
     ivec2 q = p - lo;
@@ -166,8 +172,19 @@ void main() {
                               ao_view_pos(pix + vec2(0, -inside.z), zt, intr),
                               ao_view_pos(pix + vec2(0, inside.w), zb, intr));
     if (dot(n, c) > 0.0) n = -n;  // facing the eye
+    if (pc.scale > 1u) {
+        // The denoise's edges at half resolution: to the neighbouring working pixels' frame
+        // pixels (scale apart; past the working tile's border, an edge).
+        int s = int(pc.scale);
+        ivec2 wq = wp - wlo, wt = ao_work_tile();
+        edges = calculate_edges(z, neighbour_z(p + ivec2(-s, 0), lo, znear),
+                                neighbour_z(p + ivec2(s, 0), lo, znear),
+                                neighbour_z(p + ivec2(0, -s), lo, znear),
+                                neighbour_z(p + ivec2(0, s), lo, znear))
+            * vec4(wq.x > 0, wq.x < wt.x - 1, wq.y > 0, wq.y < wt.y - 1);
+    }
     // Nudged towards the eye against depth imprecision (XeGTAO's 0.99999 for 32-bit depths).
     vec3 center = ao_view_pos(pix, z * 0.99999, intr);
-    float v = dot(n, n) > 0.0 ? gtao(p, lo, center, n, znear, intr) : 1.0;
-    imageStore(ao_raw, p, uvec4(ao_pack(v, pack_edges(edges))));
+    float v = dot(n, n) > 0.0 ? gtao(p, lo, uvec2(wp - wlo), center, n, znear, intr) : 1.0;
+    imageStore(ao_raw, wp, uvec4(ao_pack(v, pack_edges(edges))));
 }

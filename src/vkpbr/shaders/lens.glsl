@@ -8,6 +8,19 @@
 const int MODEL_PINHOLE = 0, MODEL_OPENCV = 1, MODEL_FISHEYE = 2, MODEL_EQUIDISTANT = 3;
 const int NEWTON_STEPS = 20;
 
+#ifdef LENS_BATCH
+// A compute batch's views (post_lens_batch.comp): each view's constants in a buffer (set 1,
+// render/post.py lens_batch_steps), copied into `lens` by the kernel for its pixel's view.
+struct LensParams {
+    vec4 k_out;
+    vec4 k_src;
+    vec4 c0;
+    vec4 c1;
+    int model;
+};
+layout(set = 1, binding = 0, std430) readonly buffer LensViews { LensParams view_lens[]; };
+LensParams lens;
+#else
 layout(push_constant) uniform LensPush {
     vec4 k_out;  // the model's fx, fy, cx, cy (pixels, at the output's size)
     vec4 k_src;  // the source pinhole's fx, fy, cx, cy
@@ -15,6 +28,7 @@ layout(push_constant) uniform LensPush {
     vec4 c1;  // opencv: k3 k4 k5 k6
     int model;  // MODEL_*
 } lens;
+#endif
 
 // (x', y') of OpenCV's radial-tangential model at undistorted (x, y); `d` its Jacobian's
 // entries (dxx, dyy, dxy: symmetric).
@@ -70,6 +84,21 @@ vec4 lens_ray(vec2 pixel) {
     if (t > 3.14159265) return vec4(0.0);
     vec2 s = td > 0.0 ? xd * (sin(t) / td) : vec2(0.0);
     return vec4(s, cos(t), 1.0);
+}
+
+// The output pixel (OpenCV convention) of a ray `d` in front of the camera (d.z > 0): the
+// model's forward projection (scene/lens.py `project`), as cv2.projectPoints and
+// cv2.fisheye.projectPoints compute it.
+vec2 lens_project(vec3 d) {
+    vec2 x = d.xy / d.z;
+    if (lens.model == MODEL_OPENCV) {
+        vec3 unused;
+        x = radial_tangential(x, unused);
+    } else if (lens.model != MODEL_PINHOLE) {
+        float r = length(d.xy);
+        x = r > 0.0 ? d.xy * (theta_d(atan(r, d.z)) / r) : vec2(0.0);
+    }
+    return lens.k_out.xy * x + lens.k_out.zw;
 }
 
 // The source pinhole's texel position (OpenCV convention: texel centres at integers) of ray `d`.

@@ -7,7 +7,8 @@
 // and the chain's top, the mean of every level, mixed into the radiance (MODE_MIX:
 // color = mix(color, bloom, strength)). Each step keeps the image's mean (but at the last row
 // or column of an odd size, which it counts twice), so the mix keeps the frame's total
-// radiance: the bloom moves light, it does not make it.
+// radiance: the bloom moves light, it does not make it. Over a frame, or a compute batch's
+// atlas in one dispatch a step: every view's tile its own chain (reads clamped to the tile).
 #extension GL_GOOGLE_include_directive : require
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
@@ -19,9 +20,17 @@ layout(push_constant) uniform Bloom {
     uint mode;
     float strength;  // MODE_MIX
     float weight;  // MODE_UP: 1 / the levels added so far (the result is their mean)
+    uint views;  // a compute batch's views (1: a frame), their tiles column-major,
+    uint rows;  // `rows` a column, in every image of the chain
+    uint src_w, src_h;  // a view's pixels in src (a frame: its whole size)
+    uint dst_w, dst_h;  // and in dst
 } pc;
 
-vec3 load(ivec2 p) { return imageLoad(src, clamp(p, ivec2(0), imageSize(src) - 1)).rgb; }
+ivec2 src_lo;  // the view's first pixel in src: reads are clamped to its tile
+
+vec3 load(ivec2 p) {
+    return imageLoad(src, src_lo + clamp(p, ivec2(0), ivec2(pc.src_w, pc.src_h) - 1)).rgb;
+}
 
 // src at continuous texel position `x` (texel centres at integer + 0.5), bilinear, clamped.
 vec3 bilinear(vec2 x) {
@@ -53,16 +62,21 @@ vec3 up(ivec2 p, vec2 scale) {
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    ivec2 size = imageSize(dst);
-    if (any(greaterThanEqual(p, size))) return;
-    vec2 scale = vec2(imageSize(src)) / vec2(size);
+    if (any(greaterThanEqual(p, imageSize(dst)))) return;
+    // The view p belongs to (a frame: the one), p in its tile, and the tile's place in src.
+    uvec2 dst_tile = uvec2(pc.dst_w, pc.dst_h), src_tile = uvec2(pc.src_w, pc.src_h);
+    uvec2 t = uvec2(p) / dst_tile;
+    if (t.y >= pc.rows || t.x * pc.rows + t.y >= pc.views) return;
+    src_lo = ivec2(t * src_tile);
+    ivec2 q = p - ivec2(t * dst_tile);
+    vec2 scale = vec2(src_tile) / vec2(dst_tile);
     if (pc.mode == MODE_DOWN) {
-        imageStore(dst, p, vec4(down(p), 1.0));
+        imageStore(dst, p, vec4(down(q), 1.0));
     } else if (pc.mode == MODE_UP) {  // the mean of this level and the ones below
         vec3 here = imageLoad(dst, p).rgb;
-        imageStore(dst, p, vec4(mix(up(p, scale), here, pc.weight), 1.0));
+        imageStore(dst, p, vec4(mix(up(q, scale), here, pc.weight), 1.0));
     } else {
         vec4 c = imageLoad(dst, p);
-        imageStore(dst, p, vec4(mix(c.rgb, up(p, scale), pc.strength), c.a));
+        imageStore(dst, p, vec4(mix(c.rgb, up(q, scale), pc.strength), c.a));
     }
 }
