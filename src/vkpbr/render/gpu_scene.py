@@ -37,7 +37,7 @@ from vkpbr.gpu.descriptors import DescriptorPool, DescriptorSetLayout, Descripto
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, TextureUploader
 from vkpbr.render import layouts as L
-from vkpbr.render.deform import deformed_records
+from vkpbr.render.deform import convex_weights, deformed_records
 from vkpbr.scene.material_table import PARAMS, TEXTURES
 from vkpbr.scene.types import (
     SRGB_TEXTURE_SLOTS,
@@ -96,7 +96,8 @@ class Draw:
     node: int = -1  # the scene node it draws (the dataset outputs' instance table)
     instance: int = -1  # which of the node's EXT_mesh_gpu_instancing instances; -1: none
     deformed: bool = False  # posed by the deform step (render/deform.py): never culled
-    skinned: bool = False  # deformed by a skin: posed in world space, its model the identity
+    skinned: bool = False  # deformed by a skin: posed in world space (its model: the frame)
+    unbounded: bool = False  # deformed with no bounding sphere (weights not convex): never culled
     center: np.ndarray = field(default_factory=lambda: np.zeros(3))  # world, for blend sorting
 
 
@@ -580,6 +581,7 @@ class GpuScene:
                 double_sided=bool(mat.double_sided), casts_shadows=bool(mat.casts_shadows),
                 center=m[:3, :3] @ center_local + m[:3, 3], node=node_index, instance=instance,
                 deformed=(node_index, instance) in posed, skinned=skinned,
+                unbounded=skinned and not convex_weights(mesh),
             ))
         draws.sort(key=lambda d: d.material)  # fewer material binds within each pass
         return draws

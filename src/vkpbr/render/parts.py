@@ -134,8 +134,8 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     layouts, shadows, pipeline_layout = create_layouts(device, ring.count)
     buffers, pool, slots = create_slots(device, layouts[0], layouts[2], ring.count)
     gs = GpuScene(device, scene, layouts[1], ring.count)
-    state = scene_state(scene, gs.draws)
     layout = DeformLayout(scene, gs.deformed) if gs.deformed else None
+    state = scene_state(scene, gs.draws, layout)
     gpu_state = GpuSceneState(device, state, ring.count, scene, layout)
     gpu_state.first_posed = min(gs.posed_offsets, default=0)
     gpu_state.gpu_scene = gs

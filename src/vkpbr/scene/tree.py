@@ -116,9 +116,9 @@ class NodeTree:
             nodes = [nodes]
         arr = np.asarray(nodes) if not isinstance(nodes, np.ndarray) else nodes
         if arr.dtype.kind in "iu":
-            idx = arr.astype(np.int64).ravel()
-            bad = idx[(idx < 0) | (idx >= len(self))]
-            if len(bad):
+            idx = arr.astype(np.int64, copy=False).ravel()
+            if len(idx) and (idx.min() < 0 or idx.max() >= len(self)):  # two reductions
+                bad = idx[(idx < 0) | (idx >= len(self))]
                 raise UsageError(f"node index {int(bad[0])} is out of range: the scene has "
                                  f"{len(self)} nodes (0..{len(self) - 1})")
             return idx

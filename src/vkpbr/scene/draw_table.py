@@ -1,0 +1,110 @@
+"""The draws' side of the living scene: each draw record's model and normal matrix, world box
+and centre, kept as arrays and brought up to date only where something changed.
+
+`SceneState` (vkpbr.scene.state) says which draws a change touched (the subtrees of the
+nodes set since the last frame, and the deformed draws whose joints or weights moved);
+`DrawTable.update` recomputes those rows alone, once per frame: the model matrices (the
+node's world matrix, an instance matrix below it, a deformed draw's frame), the GPU's
+Instances records (model + normal matrix, float32, column-major: layouts.STORAGE), the
+world boxes the scene's bounds are the union of, and the centres the blended draws are
+sorted by. A frame slot then copies the records of the draws changed since it last held
+them (render/scene_state.py): moving 100 of 10,000 nodes costs 100 rows, not 10,000.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["DrawTable", "normal_matrices", "std140_pairs", "determinants"]
+
+_EYE = np.eye(4)
+
+
+def _cofactors(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The cofactor matrices and determinants of (..., 3, 3) matrices (inverse transpose =
+    cofactors / determinant): a few vector operations for any number of matrices, where
+    np.linalg.inv loops in LAPACK."""
+    # Components as contiguous (...) arrays (elementwise products of strided views cost 10x).
+    m = np.ascontiguousarray(np.moveaxis(a, (-2, -1), (0, 1)))  # m[row][column]
+    cof = np.empty((3, 3, *a.shape[:-2]), a.dtype)
+    for i in range(3):
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        for j in range(3):
+            j1, j2 = (j + 1) % 3, (j + 2) % 3
+            np.subtract(m[i1, j1] * m[i2, j2], m[i1, j2] * m[i2, j1], out=cof[i, j])
+    det = m[0, 0] * cof[0, 0] + m[0, 1] * cof[0, 1] + m[0, 2] * cof[0, 2]
+    return cof, det  # cof[row][column][...]
+
+
+def determinants(a: np.ndarray) -> np.ndarray:
+    """det of (..., 3, 3) matrices."""
+    return _cofactors(a)[1]
+
+
+def normal_matrices(model: np.ndarray) -> np.ndarray:
+    """(..., 4, 4) normal matrices (the inverse transpose of the 3x3 part) of model
+    matrices; a singular one (a hidden draw's zero matrix) keeps its 3x3 part."""
+    a = model[..., :3, :3]
+    cof, det = _cofactors(a)
+    ok = np.abs(det) > 1e-30
+    scale = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    out = np.zeros_like(model)
+    out[..., :3, :3] = np.moveaxis(cof * scale, (0, 1), (-2, -1))
+    if not ok.all():
+        out[~ok, :3, :3] = a[~ok]
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def std140_pairs(model: np.ndarray) -> np.ndarray:
+    """(D, 2, 4, 4) float32: each model matrix and its normal matrix as GLSL's column-major
+    mat4 (Instances records: layouts.STORAGE)."""
+    out = np.empty((len(model), 2, 4, 4), np.float32)
+    out[:, 0] = np.swapaxes(model, -1, -2)
+    out[:, 1] = np.swapaxes(normal_matrices(model), -1, -2)
+    return out
+
+
+class DrawTable:
+    """D draw records' models, Instances records, world boxes and centres.
+
+    mesh_boxes : (D, 2, 3) each draw's mesh bounds (min, max) in its own (model) space.
+    rest : (D, 4, 4) the models as loaded: the table starts from them, so an unchanged scene
+        renders bit for bit as it was loaded.
+    """
+
+    def __init__(self, mesh_boxes: np.ndarray, rest: np.ndarray) -> None:
+        self.mesh_boxes = np.asarray(mesh_boxes, np.float64).reshape(-1, 2, 3)
+        self.models = np.array(rest, np.float64).reshape(-1, 4, 4)
+        self.records = std140_pairs(self.models)
+        self._mesh_centre = self.mesh_boxes.mean(axis=1)
+        self._mesh_half = (self.mesh_boxes[:, 1] - self.mesh_boxes[:, 0]) / 2
+        self.boxes = np.empty((len(self.models), 2, 3))  # world (min, max); empty: hidden
+        self.centers = np.empty((len(self.models), 3))
+        self._place(slice(None), self.models)
+
+    def __len__(self) -> int:
+        return len(self.models)
+
+    def update(self, rows: np.ndarray | slice, models: np.ndarray) -> None:
+        """Rows `rows` (indices, or a slice for all) take `models` ((R, 4, 4), zero for a
+        hidden draw): their records, boxes and centres follow."""
+        self.models[rows] = models
+        self.records[rows] = std140_pairs(models)
+        self._place(rows, models)
+
+    def _place(self, rows: np.ndarray | slice, m: np.ndarray) -> None:
+        a = m[:, :3, :3]
+        c = np.einsum("dij,dj->di", a, self._mesh_centre[rows]) + m[:, :3, 3]
+        r = np.einsum("dij,dj->di", np.abs(a), self._mesh_half[rows])
+        self.centers[rows] = c
+        shown = np.any(a != 0.0, axis=(1, 2))[:, None]
+        self.boxes[rows, 0] = np.where(shown, c - r, np.inf)
+        self.boxes[rows, 1] = np.where(shown, c + r, -np.inf)
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World bounds (min, max) of the shown draws; zeros when nothing is shown."""
+        lo, hi = self.boxes[:, 0].min(axis=0, initial=np.inf), self.boxes[:, 1].max(axis=0, initial=-np.inf)
+        if not np.all(lo <= hi):
+            return np.zeros(3), np.zeros(3)
+        return lo, hi
