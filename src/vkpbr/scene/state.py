@@ -25,7 +25,7 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from vkpbr.errors import UsageError
-from vkpbr.scene.draw_table import DrawTable, determinants, normal_matrices, std140_pairs
+from vkpbr.scene.draw_table import DrawTable, blocks, determinants, normal_matrices, std140_pairs
 from vkpbr.scene.tree import NodeRef, NodeTree
 from vkpbr.scene.types import Camera, Light, Scene
 
@@ -459,9 +459,10 @@ def _read_only(a: np.ndarray) -> np.ndarray:
 def pose_matrices(rows: np.ndarray, order: str = "xyzw") -> np.ndarray:
     """(N, 4, 4) matrices of (N, 7) position + quaternion rows (`order` of the quaternion)."""
     out = np.empty((len(rows), 4, 4))
-    quaternion_matrices(rows[:, 3:], order, out[:, :3, :3])
-    out[:, :3, 3] = rows[:, :3]
-    out[:, 3] = (0.0, 0.0, 0.0, 1.0)
+    for b in blocks(len(rows)):  # (cache-sized blocks: scene/draw_table.py)
+        quaternion_matrices(rows[b, 3:], order, out[b, :3, :3])
+        out[b, :3, 3] = rows[b, :3]
+        out[b, 3] = (0.0, 0.0, 0.0, 1.0)
     return out
 
 
