@@ -61,7 +61,7 @@ def set_poses_rows(reps: int = 50) -> list[dict]:
                 r.set_poses(idx, poses)
                 t1 = time.perf_counter()
                 r.parts.gpu_state.write(0)  # the frame's share: its slot's copy, the bounds
-                r.parts.bounds.radius
+                _ = r.parts.bounds.radius
                 up.append(time.perf_counter() - t1)
                 ts.append(t1 - t0)
             rows.append({"row": f"set_poses 10k {label}", "python_ms": 1e3 * _median(ts),

@@ -39,6 +39,7 @@ from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayo
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.graph import BufferResource, Step
 from vkpbr.render.codegen import SPV_DIR
+from vkpbr.scene.draw_table import blocks
 from vkpbr.scene.types import Mesh, Scene
 
 __all__ = ["Deformed", "deformed_records", "DeformLayout", "DeformKernel", "UNBOUNDED_RADIUS",
@@ -161,7 +162,9 @@ class DeformLayout:
         extent = self._extents(weights)
         centre, radius = self.rest_centre.copy(), self.rest_radius + extent
         if len(self.joint_nodes):
-            joints = world[self.joint_nodes] @ self.inverse_bind
+            joints = np.empty((len(self.joint_nodes), 4, 4))
+            for b in blocks(len(joints)):  # (cache-sized blocks: scene/draw_table.py)
+                np.matmul(world[self.joint_nodes[b]], self.inverse_bind[b], out=joints[b])
             self._joints = joints
             c, r = joint_union(joints, self.joint_centre,
                                self.joint_radius + extent[self.joint_record], self.joint_starts)
@@ -208,14 +211,20 @@ def joint_union(joints: np.ndarray, centre: np.ndarray, radius: np.ndarray, star
     moves no vertex) goes to joints[j] x centre with radius x the matrix's largest stretch
     (bounded by the square root of the largest row sum of |A^T A|: exact for a rotation
     times a uniform scale)."""
-    a = joints[:, :3, :3]
-    c = np.einsum("jik,jk->ji", a, centre) + joints[:, :3, 3]
-    gram = np.einsum("jki,jkl->jil", a, a)
-    stretch = np.sqrt(np.abs(gram).sum(axis=2).max(axis=1))
-    r = radius * stretch
-    used = (radius >= 0)[:, None]
-    lo = np.minimum.reduceat(np.where(used, c - r[:, None], np.inf), starts)
-    hi = np.maximum.reduceat(np.where(used, c + r[:, None], -np.inf), starts)
+    lo, hi = np.empty((len(joints), 3)), np.empty((len(joints), 3))
+    for b in blocks(len(joints)):
+        # Components as contiguous rows (m[i][k]: row i, column k), centres as columns.
+        m = np.ascontiguousarray(joints[b, :3].transpose(1, 2, 0))
+        p = np.ascontiguousarray(centre[b].T)
+        c = np.stack([m[i, 0] * p[0] + m[i, 1] * p[1] + m[i, 2] * p[2] + m[i, 3] for i in range(3)], 1)
+        gram = [[m[0, k] * m[0, j] + m[1, k] * m[1, j] + m[2, k] * m[2, j] for j in range(3)]
+                for k in range(3)]
+        rows = [np.abs(g[0]) + np.abs(g[1]) + np.abs(g[2]) for g in gram]
+        r = (radius[b] * np.sqrt(np.maximum(np.maximum(rows[0], rows[1]), rows[2])))[:, None]
+        used = (radius[b] >= 0)[:, None]
+        lo[b] = np.where(used, c - r, np.inf)
+        hi[b] = np.where(used, c + r, -np.inf)
+    lo, hi = np.minimum.reduceat(lo, starts), np.maximum.reduceat(hi, starts)
     empty = ~np.all(lo <= hi, axis=1)  # a skin none of whose joints moves a vertex
     lo[empty], hi[empty] = 0.0, 0.0
     return (lo + hi) / 2, np.linalg.norm(hi - lo, axis=1) / 2
