@@ -25,8 +25,8 @@ import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.scene.draw_table import blocks
-from vkpbr.scene.state import quaternion_matrices as rotation_matrices
 from vkpbr.scene.tree import NodeTree
+from vkpbr.scene.tree import quaternion_matrices as rotation_matrices
 from vkpbr.scene.types import Animation, AnimationSampler, Scene, Skin
 
 __all__ = ["Pose", "sample", "sample_sampler", "joint_matrices", "trs_matrices",

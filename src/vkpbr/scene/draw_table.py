@@ -102,6 +102,18 @@ class DrawTable:
     def __len__(self) -> int:
         return len(self.models)
 
+    def grow(self, mesh_boxes: np.ndarray) -> None:
+        """Rows for new draws with these mesh boxes, hidden (zero models) until updated."""
+        n = len(mesh_boxes)
+        self.mesh_boxes = np.concatenate([self.mesh_boxes, mesh_boxes])
+        self._mesh_centre = self.mesh_boxes.mean(axis=1)
+        self._mesh_half = (self.mesh_boxes[:, 1] - self.mesh_boxes[:, 0]) / 2
+        self.models = np.concatenate([self.models, np.zeros((n, 4, 4))])
+        self.records = np.concatenate([self.records, std140_pairs(np.zeros((n, 4, 4)))])
+        self.centers = np.concatenate([self.centers, np.zeros((n, 3))])
+        self.lo = np.concatenate([self.lo, np.full((n, 3), np.inf)])
+        self.hi = np.concatenate([self.hi, np.full((n, 3), -np.inf)])
+
     def update(self, rows: np.ndarray | slice, models: np.ndarray) -> None:
         """Rows `rows` (indices, or a slice for all) take `models` ((R, 4, 4), zero for a
         hidden draw): their records, boxes and centres follow."""

@@ -26,32 +26,13 @@ import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.scene.draw_table import DrawTable, blocks, determinants, normal_matrices, std140_pairs
-from vkpbr.scene.tree import NodeRef, NodeTree
+from vkpbr.scene.tree import NodeRef, NodeTree, quaternion_matrices
 from vkpbr.scene.types import Camera, Light, Scene
 
 __all__ = ["SceneState", "quaternion_matrices", "pose_matrices", "normal_matrices", "std140_pairs"]
 
 QUATERNION_ORDERS = ("xyzw", "wxyz")
 SPACES = ("local", "world")
-
-
-def quaternion_matrices(q: np.ndarray, order: str = "xyzw", out: np.ndarray | None = None
-                        ) -> np.ndarray:
-    """(N, 3, 3) rotation matrices of (N, 4) quaternions in `order` (normalised first; a
-    zero quaternion is refused by the caller), into `out` when given (a (N, 3, 3) view)."""
-    q = np.asarray(q, np.float64)
-    x, y, z, w = np.ascontiguousarray(q.T if order == "xyzw" else q[:, [1, 2, 3, 0]].T)
-    s = 2.0 / (x * x + y * y + z * z + w * w)  # normalises: 2 / |q|^2
-    xs, ys, zs = x * s, y * s, z * s
-    wx, wy, wz, xx, xy, xz, yy, yz, zz = w * xs, w * ys, w * zs, x * xs, x * ys, x * zs, y * ys, y * zs, z * zs
-    # Built as (3, 3, N) contiguous rows, then one transposing copy (9 strided writes cost more).
-    m = np.empty((3, 3, len(q)))
-    m[0, 0], m[0, 1], m[0, 2] = 1.0 - (yy + zz), xy - wz, xz + wy
-    m[1, 0], m[1, 1], m[1, 2] = xy + wz, 1.0 - (xx + zz), yz - wx
-    m[2, 0], m[2, 1], m[2, 2] = xz - wy, yz + wx, 1.0 - (xx + yy)
-    out = np.empty((len(q), 3, 3)) if out is None else out
-    out[...] = m.transpose(2, 0, 1)
-    return out
 
 
 class SceneState:
@@ -108,6 +89,7 @@ class SceneState:
         self.table = DrawTable(self.mesh_boxes, self.rest)
         self.deform: object | None = None  # render/deform.py's DeformLayout, when attached
         self.deform_draws = np.zeros(0, np.int64)  # the draw of each deformed record
+        self._record_of = -np.ones(len(self.draw_tree), np.int64)
 
     def __len__(self) -> int:
         return len(self.tree)
@@ -223,7 +205,14 @@ class SceneState:
         animation pointers go through here too): `base_color` RGBA or RGB in [0, 1],
         `metallic` and `roughness` in [0, 1], `emissive` linear RGB >= 0. They multiply the
         material's textures, as glTF's factors do. `material`: index or name."""
-        i = self._material_index(material)
+        self.override_material(self._material_index(material), base_color, metallic, roughness,
+                               emissive)
+
+    def override_material(self, i: int, base_color: Sequence[float] | None = None,
+                          metallic: float | None = None, roughness: float | None = None,
+                          emissive: Sequence[float] | None = None) -> None:
+        """set_material of the renderer's material `i` (an index into GpuScene.materials:
+        the file's, then the default, then nodes' own copies: render/instances.py)."""
         given = {"base_color_factor": base_color, "metallic_factor": metallic,
                  "roughness_factor": roughness, "emissive_factor": emissive}
         checked = {f: _factor(f, v) for f, v in given.items() if v is not None}
@@ -324,6 +313,38 @@ class SceneState:
         if np.any(has):
             parent_world[has] = self.world()[parents[has]]
         return np.linalg.solve(parent_world, world)
+
+    def grow(self, count: int, mesh_box: np.ndarray, names: Sequence[str]) -> np.ndarray:
+        """`count` new draws, each below a new root node of the tree named `names` (new
+        instances of a mesh whose (2, 3) box is `mesh_box`: render/instances.py), hidden until
+        placed; returns their tree nodes. The draw records and tree indices before stay."""
+        k, d = len(self.tree), len(self.draw_tree)
+        nodes = np.arange(k, k + count)
+        self._flush_pending()
+        self.tree = grown_tree(self.tree, list(names))
+        eye = np.tile(np.eye(4), (count, 1, 1))
+        self._local = np.concatenate([self._local, eye])
+        self._world = np.concatenate([self._world, eye])
+        self.visible = np.concatenate([self.visible, np.zeros(count, bool)])
+        self._shown = np.concatenate([self._shown, np.zeros(count, bool)])
+        self._dirty = np.concatenate([self._dirty, np.zeros(count, bool)])
+        self.draw_tree = np.concatenate([self.draw_tree, nodes])
+        self.draw_local = np.concatenate([self.draw_local, eye])
+        self._below = np.concatenate([self._below, np.zeros(count, bool)])
+        boxes = np.broadcast_to(np.asarray(mesh_box, np.float64), (count, 2, 3))
+        self.mesh_boxes = np.concatenate([self.mesh_boxes, boxes])
+        self.rest = np.concatenate([self.rest, np.zeros((count, 4, 4))])
+        self.skinned = np.concatenate([self.skinned, np.zeros(count, bool)])
+        self.draw_versions = np.concatenate([self.draw_versions, np.zeros(count, np.int64)])
+        self._record_of = np.concatenate([self._record_of, -np.ones(count, np.int64)])
+        if hasattr(self, "deformed"):
+            self.deformed = np.concatenate([self.deformed, np.zeros(count, bool)])
+        self.table.grow(boxes)
+        self._since = None
+        self._shown_dirty = True
+        self._mark(nodes)
+        assert len(self.draw_tree) == d + count
+        return nodes
 
     # --- the frame's update -----------------------------------------------------------------
     def attach_deform(self, layout: object, draws: np.ndarray) -> None:
@@ -448,6 +469,20 @@ class SceneState:
         """World bounds (min, max) of the shown draws; zeros when nothing is shown."""
         self._update()
         return self._cached("bounds", self.table.bounds)  # type: ignore[return-value]
+
+
+def grown_tree(tree: NodeTree, names: list[str]) -> NodeTree:
+    """`tree` with new roots named `names` after its nodes (identity, given as matrices:
+    no animation drives them; no file node: source -1)."""
+    n = len(names)
+    return NodeTree(tree.names + names, np.concatenate([tree.parents, -np.ones(n, np.int64)]),
+                    np.concatenate([tree.local, np.tile(np.eye(4), (n, 1, 1))]),
+                    np.concatenate([tree.translation, np.zeros((n, 3))]),
+                    np.concatenate([tree.rotation, np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))]),
+                    np.concatenate([tree.scale, np.ones((n, 3))]),
+                    np.concatenate([tree.uses_matrix, np.ones(n, bool)]),
+                    np.concatenate([tree.source, -np.ones(n, np.int64)]),
+                    dict(tree.weights), dict(tree.skin))
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:
