@@ -72,7 +72,7 @@ def std140_pairs(model: np.ndarray, out: np.ndarray | None = None) -> np.ndarray
     cof, det = _cofactors(model[:, :3, :3])
     ok = np.abs(det) > 1e-30
     # Column-major N = cof / det: out[d, 1, column j, row i] = cof[i, j, d] / det[d].
-    out[:, 1, :3, :3] = np.transpose(cof * np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0), (2, 1, 0))
+    out[:, 1, :3, :3] = np.transpose(cof / np.where(ok, det, np.inf), (2, 1, 0))
     if not ok.all():  # a singular one (a hidden draw's zero matrix) keeps its 3x3 part
         out[~ok, 1, :3, :3] = np.swapaxes(model[~ok, :3, :3], -1, -2)
     out[:, 1, :3, 3] = 0.0
