@@ -81,6 +81,7 @@ class SceneState:
         # What changed since the last frame (`_update` makes the frame's arrays from it):
         # nodes set, quaternion rows not yet turned into matrices, whether visibility did.
         self._dirty = np.zeros(len(tree), bool)
+        self._all = np.arange(len(tree))
         self._any_dirty = self._shown_dirty = False
         self._pending: list[tuple[np.ndarray, np.ndarray, str]] = []
         self._updated = 0
@@ -128,7 +129,10 @@ class SceneState:
         if space == "world":
             p = self._world_to_local(idx, p)
         self._flush_pending()  # (an earlier call's rows must not land after these)
-        self._local[idx] = p
+        if len(idx) == len(self._local) and np.array_equal(idx, self._all):
+            self._local[:] = p  # every node in order: one copy, no scatter
+        else:
+            self._local[idx] = p
         self._mark(idx)
 
     def set_pose(self, node: NodeRef, matrix: np.ndarray, space: str = "local") -> None:
@@ -328,6 +332,7 @@ class SceneState:
         self.visible = np.concatenate([self.visible, np.zeros(count, bool)])
         self._shown = np.concatenate([self._shown, np.zeros(count, bool)])
         self._dirty = np.concatenate([self._dirty, np.zeros(count, bool)])
+        self._all = np.arange(len(self.tree))
         self.draw_tree = np.concatenate([self.draw_tree, nodes])
         self.draw_local = np.concatenate([self.draw_local, eye])
         self._below = np.concatenate([self._below, np.zeros(count, bool)])
@@ -527,14 +532,16 @@ def _check_rows(p: np.ndarray) -> None:
 
 
 def _check_matrices(p: np.ndarray) -> None:
-    """(N, 4, 4): finite, affine (last row 0 0 0 1), not singular."""
+    """(N, 4, 4): finite, affine (last row 0 0 0 1), not singular; a block at a time, each
+    block's tests while it is in the CPU's cache."""
     _finite(p)
-    if len(p):
-        last, w = p[:, 3, :3], p[:, 3, 3]
+    for b in blocks(len(p)):
+        m = p[b]
+        last, w = m[:, 3, :3], m[:, 3, 3]
         if max(last.max(), -last.min(), w.max() - 1.0, 1.0 - w.min()) > 1e-6:
             raise UsageError("set_poses: a matrix's last row must be 0 0 0 1 (an affine "
                              "transform; a projection is not a pose)")
-        if np.abs(determinants(p[:, :3, :3])).min() < 1e-12:
+        if np.abs(determinants(m[:, :3, :3])).min() < 1e-12:
             raise UsageError("set_poses: a matrix is singular (a scale of 0 flattens the node; "
                              "hide it with set_visible instead)")
 
