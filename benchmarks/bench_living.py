@@ -8,6 +8,9 @@ Rows:
                         (N,4,4); and of 100 of them), and the frame's share (frame_copy_ms):
                         the state's update (world matrices, the changed draws' records,
                         boxes), the slot copy of the changed records and the bounds, median.
+  instances 10k         add_instances of 10,000 instances of one mesh (the table's one growth:
+                        the draw-dependent parts made again), then move_instances of all of
+                        them per call: Python ms and the frame's share.
   sponza still/moving   Sponza 1920x1080 (and 640x480), the compute path as `vkpbr bench`
                         draws it, the sun's shadow maps, frames/s through render_many (three
                         in flight, no readback): still, and 100 of its nodes moved every frame
@@ -71,6 +74,36 @@ def set_poses_rows(reps: int = 50) -> list[dict]:
                 ts.append(t1 - t0)
             rows.append({"row": f"set_poses 10k {label}", "python_ms": 1e3 * _median(ts),
                          "frame_copy_ms": 1e3 * _median(up), "nodes": n})
+    return rows
+
+
+def instance_rows(reps: int = 50) -> list[dict]:
+    """10,000 instances of one loaded mesh (add_instances: the one growth, python_ms), then
+    moved every call (move_instances of (N,7) rows: Python per call, the frame's share)."""
+    from vkpbr.scene.default import default_scene
+
+    rows = []
+    with Renderer(default_scene()) as r:
+        rng = np.random.default_rng(0)
+        pos7 = np.zeros((10_000, 7))
+        pos7[:, :3], pos7[:, 6] = rng.random((10_000, 3)) * 4.0, 1.0
+        t0 = time.perf_counter()
+        ids = r.add_instances(0, pos7)
+        r.parts.gpu_state.write(0)
+        rows.append({"row": "add_instances 10k (the table grows once)",
+                     "python_ms": 1e3 * (time.perf_counter() - t0)})
+        ts, up = [], []
+        for _ in range(reps):
+            pos7[:, 1] += 0.01
+            t0 = time.perf_counter()
+            r.move_instances(ids, pos7)
+            t1 = time.perf_counter()
+            r.parts.gpu_state.write(0)
+            _ = r.parts.bounds.radius
+            up.append(time.perf_counter() - t1)
+            ts.append(t1 - t0)
+        rows.append({"row": "move_instances 10k (N,7)", "python_ms": 1e3 * _median(ts),
+                     "frame_copy_ms": 1e3 * _median(up)})
     return rows
 
 
@@ -225,12 +258,14 @@ def main() -> None:
     ap.add_argument("--assets", type=Path, required=True)
     ap.add_argument("--frames", type=int, default=300)
     ap.add_argument("--crowds", default="100,1000")
-    ap.add_argument("--only", default="poses,walk,engine,crowd")
+    ap.add_argument("--only", default="poses,instances,walk,engine,crowd")
     ap.add_argument("--json")
     args = ap.parse_args()
     rows: list[dict] = []
     if "poses" in args.only:
         rows += set_poses_rows()
+    if "instances" in args.only:
+        rows += instance_rows()
     if "walk" in args.only:
         rows += walk_rows(args.assets, args.frames)
     if "engine" in args.only:

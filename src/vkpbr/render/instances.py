@@ -46,7 +46,17 @@ class InstanceTable:
     made: dict[int, list[int]] = dataclasses.field(default_factory=dict)  # mesh -> draws
     free: dict[int, list[int]] = dataclasses.field(default_factory=dict)  # mesh -> draws
     live: set[int] = dataclasses.field(default_factory=set)  # draws
-    node_materials: dict[int, int] = dataclasses.field(default_factory=dict)  # node -> material
+    node_materials: dict[int, int] = dataclasses.field(default_factory=dict)  # copy -> source
+    _mask: tuple[int, np.ndarray] | None = None  # (size, live as a mask), made on demand
+    made_mask: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, bool))
+
+    def live_mask(self, n: int) -> np.ndarray:
+        """(n,) bool: the live records (cached until live changes: add and remove reset it)."""
+        if self._mask is None or self._mask[0] != n:
+            mask = np.zeros(n, bool)
+            mask[list(self.live)] = True
+            self._mask = (n, mask)
+        return self._mask[1]
 
 
 def instance_api(renderer: Any) -> tuple[Any, ...]:
@@ -71,8 +81,9 @@ def instance_api(renderer: Any) -> tuple[Any, ...]:
         table: InstanceTable = renderer._instance_table
         draws = _live(renderer, ids)
         renderer.state.set_visible(renderer.state.draw_tree[draws], False)
+        table.live.difference_update(draws.tolist())
+        table._mask = None
         for d in draws.tolist():
-            table.live.discard(d)
             table.free.setdefault(renderer.gpu_scene.draws[d].mesh, []).append(d)
 
     def set_material(material: int | str | None = None, base_color: Any = None,
@@ -128,6 +139,7 @@ def _add(renderer: Any, mesh: int | str, matrices: np.ndarray) -> np.ndarray:
         _grow(renderer, m, max(n - len(free), len(table.made.get(m, []))))
     draws, table.free[m] = np.array(free[:n], np.int64), free[n:]
     table.live.update(draws.tolist())
+    table._mask = None
     state = renderer.state
     state.set_poses(state.draw_tree[draws], p)  # roots: local = world
     state.set_visible(state.draw_tree[draws], True)
@@ -141,16 +153,19 @@ def _live(renderer: Any, ids: Any) -> np.ndarray:
     if arr.dtype.kind not in "iu":
         raise UsageError(f"instance ids must be integers, got {arr.dtype}")
     table: InstanceTable = renderer._instance_table
-    made = {d for ds in table.made.values() for d in ds}
-    for i in arr.tolist():
-        if i - 1 not in made:
-            raise UsageError(f"instance {i} was not made by add_instances (a file's draw: "
-                             "hide its node with set_visible)")
-        if i - 1 not in table.live:
-            raise UsageError(f"instance {i} was removed already")
-    if len(set(arr.tolist())) != len(arr):
+    d = arr.astype(np.int64) - 1
+    made = table.made_mask
+    inside = (d >= 0) & (d < len(made))
+    bad = ~inside | ~made[np.where(inside, d, 0)]
+    if bad.any():
+        raise UsageError(f"instance {int(arr[bad][0])} was not made by add_instances (a "
+                         "file's draw: hide its node with set_visible)")
+    gone = ~table.live_mask(len(made))[d]
+    if gone.any():
+        raise UsageError(f"instance {int(arr[gone][0])} was removed already")
+    if len(d) > 1 and np.bincount(d, minlength=len(made)).max() > 1:
         raise UsageError("instance ids repeat")
-    return arr.astype(np.int64) - 1
+    return d
 
 
 def _node_materials(renderer: Any, node: Any, material: int | str | None) -> list[int]:
@@ -192,6 +207,8 @@ def _grow(renderer: Any, mesh: int, count: int) -> None:
     table: InstanceTable = renderer._instance_table
     new = list(range(first, first + count))
     table.made.setdefault(mesh, []).extend(new)
+    table.made_mask = np.concatenate([table.made_mask, np.zeros(first + count - len(table.made_mask), bool)])
+    table.made_mask[first:] = True
     table.free.setdefault(mesh, []).extend(new)
     same = [i for i, d in enumerate(gs.draws[:first]) if d.mesh == mesh]
     sem = renderer.parts.semantic_ids[same[0]] if same else mesh + 1

@@ -120,13 +120,15 @@ class DrawTable:
         self.hi = np.concatenate([self.hi, np.full((n, 3), -np.inf)])
 
     def update(self, rows: np.ndarray | slice, models: np.ndarray) -> None:
-        """Rows `rows` (indices, or a slice for all) take `models` ((R, 4, 4), zero for a
-        hidden draw): their records, boxes and centres follow."""
+        """Rows `rows` (indices, or a slice of consecutive ones) take `models` ((R, 4, 4),
+        zero for a hidden draw): their records, boxes and centres follow."""
         self.models[rows] = models
+        first = (rows.start or 0) if isinstance(rows, slice) else 0
         for b in blocks(len(models)):
-            if isinstance(rows, slice):
-                std140_pairs(models[b], self.records[b])
-                self._place(b, models[b])
+            if isinstance(rows, slice):  # (a run of rows: written in place)
+                at = slice(first + b.start, first + b.stop)
+                std140_pairs(models[b], self.records[at])
+                self._place(at, models[b])
             else:
                 self.records[rows[b]] = std140_pairs(models[b])
                 self._place(rows[b], models[b])
