@@ -43,7 +43,7 @@ def scene_state(scene: Scene, draws: list[Any], deform: DeformLayout | None = No
     boxes = np.zeros((len(draws), 2, 3))
     for i, d in enumerate(draws):
         p = scene.meshes[d.mesh].positions
-        if d.deformed:  # posed within the unit sphere of its frame (render/deform.py)
+        if d.deformed and not d.unbounded:  # posed within its frame's unit sphere (deform.py)
             boxes[i, 0], boxes[i, 1] = -1.0, 1.0
         elif len(p):
             boxes[i] = p.min(axis=0), p.max(axis=0)
