@@ -174,3 +174,21 @@ def test_the_culling_spheres_hold_every_posed_vertex(sample_scene, model: str) -
             if shake == 0.0:  # and not much larger than the mesh: half its sphere at least
                 r = np.array([f[0, 0] for f in frames])
                 assert np.all(r < 10 * np.maximum(layout.rest_radius, 1e-3))
+
+
+def test_skins_with_weights_that_are_not_convex_are_never_culled(sample_scene) -> None:  # noqa: ANN001
+    """A skin whose weights are negative or do not sum to one has no bounding sphere: its
+    draw keeps the unbounded one and an identity frame (posed in world space as before)."""
+    from vkpbr.render.deform import DeformLayout, convex_weights, deformed_records
+
+    scene = sample_scene("RiggedSimple")
+    mesh = next(m for m in scene.meshes if m.joints is not None)
+    assert convex_weights(mesh)
+    w = mesh.weights.copy()
+    w[0, :2] = (1.5, -0.5)  # sums to one, one negative
+    mesh.weights = w
+    assert not convex_weights(mesh)
+    layout = DeformLayout(scene, deformed_records(scene))
+    frames = layout.frames(scene.node_tree().world(), {})
+    skinned = [k for k, r in enumerate(layout.records) if r.skin is not None]
+    assert skinned and all(np.array_equal(frames[k], np.eye(4)) for k in skinned)
