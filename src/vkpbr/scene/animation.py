@@ -174,12 +174,48 @@ def _sample_linear(samplers: list[AnimationSampler], times: np.ndarray, rotation
     interpolation over all of them (sample_sampler's rules)."""
     found = [_span(s.input, times, spans) for s in samplers]
     base = np.cumsum([0] + [len(s.input) for s in samplers[:-1]])
-    values = np.concatenate([s.output for s in samplers])
     idx = np.stack([b + f[0] for b, f in zip(base, found, strict=True)]).reshape(-1)
     u = np.stack([f[2] for f in found]).reshape(-1, 1)
-    a, b = values[idx], values[idx + 1]
-    v = _normalised(_slerp(a, b, u)) if rotation else a + u * (b - a)
+    if rotation:
+        v = _normalised(_slerp_intervals(samplers, idx, u))
+    else:
+        values = np.concatenate([s.output for s in samplers])
+        a, b = values[idx], values[idx + 1]
+        v = a + u * (b - a)
     return v.reshape(len(samplers), len(times), -1)
+
+
+def _slerp_intervals(samplers: list[AnimationSampler], idx: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """_slerp of keyframes idx and idx + 1 (into the samplers' concatenated keyframes) at
+    fractions u, with what depends on the interval alone (unit ends, the shorter arc's
+    sign, its angle and sine) made once per sampler (`_arcs`), not once per sample."""
+    parts = [_arcs(s) for s in samplers]
+    a_all, b_all, angle_all, inv_all = (np.concatenate([p[k] for p in parts]) for k in range(4))
+    a, b, angle, inv = a_all[idx], b_all[idx], angle_all[idx], inv_all[idx]
+    small = inv == 0.0
+    wa = np.where(small, 1.0 - u, np.sin((1.0 - u) * angle) * inv)
+    wb = np.where(small, u, np.sin(u * angle) * inv)
+    return wa * a + wb * b
+
+
+def _arcs(s: AnimationSampler) -> tuple[np.ndarray, ...]:
+    """Per keyframe k of a rotation sampler, the arc to keyframe k + 1 as _slerp takes it:
+    (K, 4) unit start, (K, 4) unit end on the shorter side, (K, 1) angle, (K, 1) 1 / sine
+    (0 where the angle is tiny: linear there). Kept on the sampler (its keyframes do not
+    change once loaded)."""
+    cached = getattr(s, "_arcs", None)
+    if cached is not None and cached[0] is s.output:
+        return cached[1]
+    q = _normalised(np.asarray(s.output, np.float64))
+    a, b = q, np.concatenate([q[1:], q[-1:]])
+    d = np.einsum("bi,bi->b", a, b)[:, None]
+    b = np.where(d < 0, -b, b)
+    angle = np.arccos(np.minimum(np.abs(d), 1.0))
+    sin_angle = np.sin(angle)
+    inv = np.where(sin_angle < 1e-6, 0.0, 1.0 / np.where(sin_angle < 1e-6, 1.0, sin_angle))
+    arcs = (a, b, angle, inv)
+    s._arcs = (s.output, arcs)  # type: ignore[attr-defined]
+    return arcs
 
 
 def _rest_weights(scene: Scene, tree: NodeTree, b: int) -> dict[int, np.ndarray]:
@@ -293,7 +329,7 @@ def trs_matrices(t: np.ndarray, r: np.ndarray, s: np.ndarray) -> np.ndarray:
     t = np.asarray(t, np.float64)
     lead = t.shape[:-1]
     t3 = t.reshape(-1, 3)
-    q = _normalised(np.asarray(r, np.float64).reshape(-1, 4))
+    q = np.asarray(r, np.float64).reshape(-1, 4)  # (rotation_matrices normalises)
     s3 = np.broadcast_to(np.asarray(s, np.float64), (*lead, 3)).reshape(-1, 3)
     out = np.zeros((len(t3), 4, 4))
     for b in blocks(len(t3)):  # cache-sized blocks, contiguous components (scene/state.py)

@@ -29,11 +29,12 @@ NodeRef = int | str  # a tree node: its index, name or path
 
 def quaternion_matrices(q: np.ndarray, order: str = "xyzw", out: np.ndarray | None = None
                         ) -> np.ndarray:
-    """(N, 3, 3) rotation matrices of (N, 4) quaternions in `order` (normalised first; a
-    zero quaternion is refused by the caller), into `out` when given (a (N, 3, 3) view)."""
+    """(N, 3, 3) rotation matrices of (N, 4) quaternions in `order` (normalised by the
+    formula; a zero quaternion gives the identity), into `out` when given (a (N, 3, 3) view)."""
     q = np.asarray(q, np.float64)
     x, y, z, w = np.ascontiguousarray(q.T if order == "xyzw" else q[:, [1, 2, 3, 0]].T)
-    s = 2.0 / (x * x + y * y + z * z + w * w)  # normalises: 2 / |q|^2
+    n2 = x * x + y * y + z * z + w * w
+    s = 2.0 / np.where(n2 > 1e-24, n2, np.inf)  # normalises: 2 / |q|^2 (0: the identity)
     xs, ys, zs = x * s, y * s, z * s
     wx, wy, wz, xx, xy, xz, yy, yz, zz = w * xs, w * ys, w * zs, x * xs, x * ys, x * zs, y * ys, y * zs, z * zs
     # Built as (3, 3, N) contiguous rows, then one transposing copy (9 strided writes cost more).
