@@ -333,7 +333,7 @@ def trs_matrices(t: np.ndarray, r: np.ndarray, s: np.ndarray) -> np.ndarray:
     s3 = np.broadcast_to(np.asarray(s, np.float64), (*lead, 3)).reshape(-1, 3)
     out = np.zeros((len(t3), 4, 4))
     for b in blocks(len(t3)):  # cache-sized blocks, contiguous components (scene/state.py)
-        out[b, :3, :3] = rotation_matrices(q[b]) * s3[b, None, :]
+        rotation_matrices(q[b], out=out[b, :3, :3], scale=s3[b])
         out[b, :3, 3] = t3[b]
     out[:, 3, 3] = 1.0
     return out.reshape(*lead, 4, 4)

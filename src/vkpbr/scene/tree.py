@@ -27,10 +27,11 @@ __all__ = ["NodeTree", "NodeRef", "quaternion_matrices"]
 NodeRef = int | str  # a tree node: its index, name or path
 
 
-def quaternion_matrices(q: np.ndarray, order: str = "xyzw", out: np.ndarray | None = None
-                        ) -> np.ndarray:
+def quaternion_matrices(q: np.ndarray, order: str = "xyzw", out: np.ndarray | None = None,
+                        scale: np.ndarray | None = None) -> np.ndarray:
     """(N, 3, 3) rotation matrices of (N, 4) quaternions in `order` (normalised by the
-    formula; a zero quaternion gives the identity), into `out` when given (a (N, 3, 3) view)."""
+    formula; a zero quaternion gives the identity), into `out` when given (a (N, 3, 3) view);
+    with `scale` ((N, 3)), R * diag(scale)."""
     q = np.asarray(q, np.float64)
     x, y, z, w = np.ascontiguousarray(q.T if order == "xyzw" else q[:, [1, 2, 3, 0]].T)
     n2 = x * x + y * y + z * z + w * w
@@ -42,6 +43,8 @@ def quaternion_matrices(q: np.ndarray, order: str = "xyzw", out: np.ndarray | No
     m[0, 0], m[0, 1], m[0, 2] = 1.0 - (yy + zz), xy - wz, xz + wy
     m[1, 0], m[1, 1], m[1, 2] = xy + wz, 1.0 - (xx + zz), yz - wx
     m[2, 0], m[2, 1], m[2, 2] = xz - wy, yz + wx, 1.0 - (xx + yy)
+    if scale is not None:  # R * S: column j times scale j
+        m *= np.ascontiguousarray(np.asarray(scale, np.float64).T)[None]
     out = np.empty((len(q), 3, 3)) if out is None else out
     out[...] = m.transpose(2, 0, 1)
     return out
