@@ -217,9 +217,9 @@ def joint_union(joints: np.ndarray, centre: np.ndarray, radius: np.ndarray, star
         m = np.ascontiguousarray(joints[b, :3].transpose(1, 2, 0))
         p = np.ascontiguousarray(centre[b].T)
         c = np.stack([m[i, 0] * p[0] + m[i, 1] * p[1] + m[i, 2] * p[2] + m[i, 3] for i in range(3)], 1)
-        gram = [[m[0, k] * m[0, j] + m[1, k] * m[1, j] + m[2, k] * m[2, j] for j in range(3)]
-                for k in range(3)]
-        rows = [np.abs(g[0]) + np.abs(g[1]) + np.abs(g[2]) for g in gram]
+        g = {(k, j): _column_dot(m, k, j) for k, j in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))}
+        g01, g02, g12 = np.abs(g[0, 1]), np.abs(g[0, 2]), np.abs(g[1, 2])  # (symmetric)
+        rows = [g[0, 0] + g01 + g02, g01 + g[1, 1] + g12, g02 + g12 + g[2, 2]]
         r = (radius[b] * np.sqrt(np.maximum(np.maximum(rows[0], rows[1]), rows[2])))[:, None]
         used = (radius[b] >= 0)[:, None]
         lo[b] = np.where(used, c - r, np.inf)
@@ -228,6 +228,11 @@ def joint_union(joints: np.ndarray, centre: np.ndarray, radius: np.ndarray, star
     empty = ~np.all(lo <= hi, axis=1)  # a skin none of whose joints moves a vertex
     lo[empty], hi[empty] = 0.0, 0.0
     return (lo + hi) / 2, np.linalg.norm(hi - lo, axis=1) / 2
+
+
+def _column_dot(m: np.ndarray, k: int, j: int) -> np.ndarray:
+    """Columns k and j of the 3x3 parts (m[row][column]: component rows) dotted."""
+    return m[0, k] * m[0, j] + m[1, k] * m[1, j] + m[2, k] * m[2, j]
 
 
 def convex_weights(mesh: Mesh) -> bool:
