@@ -87,6 +87,7 @@ class SceneState:
         self._world = tree.world(self._local)
         self._shown = np.ones(len(tree), bool)
         self.table = DrawTable(self.mesh_boxes, self.rest)
+        self._direct = self._is_direct()
         self.deform: object | None = None  # render/deform.py's DeformLayout, when attached
         self.deform_draws = np.zeros(0, np.int64)  # the draw of each deformed record
         self._record_of = -np.ones(len(self.draw_tree), np.int64)
@@ -340,11 +341,18 @@ class SceneState:
         if hasattr(self, "deformed"):
             self.deformed = np.concatenate([self.deformed, np.zeros(count, bool)])
         self.table.grow(boxes)
+        self._direct = self._is_direct()
         self._since = None
         self._shown_dirty = True
         self._mark(nodes)
         assert len(self.draw_tree) == d + count
         return nodes
+
+    def _is_direct(self) -> bool:
+        """Whether draw i is tree node i with nothing below it (one draw a root-level node:
+        the frame's models are a view of the world matrices)."""
+        return (len(self.draw_tree) == len(self.tree) and not self._below.any()
+                and bool(np.array_equal(self.draw_tree, np.arange(len(self.tree)))))
 
     # --- the frame's update -----------------------------------------------------------------
     def attach_deform(self, layout: object, draws: np.ndarray) -> None:
@@ -394,8 +402,9 @@ class SceneState:
         self._updated = self.version
 
     def _update_world(self, touched: np.ndarray) -> None:
-        if touched.all():
-            self._world = self.tree.world(self._local)
+        if touched.all():  # (a tree of roots alone: its world is its local, no copy)
+            levels = len(self.tree.levels())
+            self._world = self._local if levels == 1 else self.tree.world(self._local)
             return
         for depth, level in enumerate(self.tree.levels()):
             lv = as_slice(level[touched[level]])
@@ -411,18 +420,19 @@ class SceneState:
         if not len(dd):
             return
         sel: np.ndarray | slice = slice(None) if len(dd) == len(rows) else as_slice(dd)
-        m = self.rest[sel].copy() if rest else self._world[self.draw_tree[sel]]
-        below = self._below[sel]
+        direct = not rest and self._direct and isinstance(sel, slice)  # draw i is node i
+        nodes = sel if direct else self.draw_tree[sel]
+        m = self.rest[sel].copy() if rest else self._world[nodes]
+        below, skinned, hidden = self._below[sel], self.skinned[sel], ~self._shown[nodes]
+        has = self._record_of[sel] >= 0 if frames is not None else None
+        if direct and (skinned.any() or hidden.any() or (has is not None and has.any())):
+            m = m.copy()  # (a view of the world matrices until something differs)
         if below.any() and not rest:
             m[below] = m[below] @ self.draw_local[sel][below]
-        skinned = self.skinned[sel]
         if skinned.any():
             m[skinned] = np.eye(4)
-        if frames is not None:
-            rec = self._record_of[sel]
-            has = rec >= 0
-            m[has] = m[has] @ frames[rec[has]]
-        hidden = ~self._shown[self.draw_tree[sel]]
+        if has is not None:
+            m[has] = m[has] @ frames[self._record_of[sel][has]]
         if hidden.any():
             m[hidden] = 0.0
         self.table.update(sel, m)
