@@ -5,7 +5,7 @@
 # JPEGs re-encoded at quality 85), and optionally .before (`git archive <commit> src` of an
 # earlier commit, benchmarked in the same run for before/after numbers).
 # STEPS (default "paths env tests"): any of paths, env, bench, viewer, outputs, batch, ray,
-# transmission, auto, ao, tests. SPONZA: the scene file (e.g. .assets-peers/models/...).
+# transmission, auto, ao, shadows, tests. SPONZA: the scene file (e.g. .assets-peers/models/...).
 source benchmarks/gpu_env.sh
 SPONZA=${SPONZA:-.assets/models/Sponza/glTF/Sponza.gltf}
 STEPS=${STEPS:-paths env tests}
@@ -19,6 +19,10 @@ fi
 if has ao; then
   echo "== ambient occlusion (GTAO): Sponza frames and a 4,096-view 128x128 batch, on and off"
   timeout ${AO_TIMEOUT:-400} python3 benchmarks/bench_ao.py --scene $SPONZA --frames ${FRAMES:-200} --json "$OUT/ao.json" 2>&1 | tee "$OUT/ao.txt"
+fi
+if has shadows; then
+  echo "== shadow maps: the raster units against compute shaders (Sponza 1080p: map ms, the walk with the sun, 100 moving nodes)"
+  timeout ${SHADOWS_TIMEOUT:-500} python3 benchmarks/bench_shadows.py --scene $SPONZA --frames ${FRAMES:-300} --json "$OUT/shadows.json" 2>&1 | tee "$OUT/shadows.txt"
 fi
 if has env; then
   echo "== environment pre-filter (2048x1024 panorama, the sky)"

@@ -34,25 +34,6 @@ POSES = [f"{3 * __import__('math').cos(a / 3):.4f},1.2,{3 * __import__('math').s
 
 
 @pytest.fixture(scope="module")
-def cluster(tmp_path_factory: pytest.TempPathFactory):  # noqa: ANN201
-    """One Ray instance for the module; the actors inherit the validation layer and a bake
-    cache of the test's own."""
-    saved = {k: os.environ.get(k) for k in ("VKPBR_VALIDATION", "VKPBR_CACHE_DIR")}
-    cache = tmp_path_factory.mktemp("cache")
-    os.environ.update(VKPBR_VALIDATION="1", VKPBR_CACHE_DIR=str(cache))
-    if ray.is_initialized():
-        ray.shutdown()
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, logging_level="WARNING")
-    yield {"address": ray.get_runtime_context().gcs_address, "cache": cache}
-    ray.shutdown()
-    for k, v in saved.items():
-        if v is None:
-            os.environ.pop(k, None)
-        else:
-            os.environ[k] = v
-
-
-@pytest.fixture(scope="module")
 def box(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A tiny glTF scene (a box) made here."""
     trimesh = pytest.importorskip("trimesh")

@@ -61,7 +61,8 @@ def test_std140_rules() -> None:
     # far, intrinsics, viewport, layer; the uint pads the record to 208 bytes (std140 and
     # std430 alike: the array's stride).
     assert L.VIEW_RECORD.offsets == {"VP": 0, "inv_VP": 64, "eye_near": 128, "forward_far": 144,
-                                     "intrinsics": 160, "viewport": 176, "layer": 192}
+                                     "intrinsics": 160, "viewport": 176, "layer": 192,
+                                     "instance_base": 196, "factor_base": 200}
     assert L.VIEW_RECORD.size == L.VIEW_RECORD.dtype.itemsize == 208
     assert L.PUSH.size <= 128  # the guaranteed minimum maxPushConstantsSize
     assert L.MATERIAL.dtype.itemsize == L.MATERIAL.size

@@ -149,7 +149,30 @@ def frames_job(args: argparse.Namespace, options: Any, where: str = "--out",
         raise UsageError(f"{settings.scene}: no such scene file")
     extra = tuple(sorted((name, repr(getattr(args, name))) for name in _FRAME_ARGS
                          if _given(getattr(args, name, None))))
-    return SceneJob(settings, poses, colmap=args.colmap, where=where, extra=extra)
+    worlds = _worlds_arg(args, len(poses), settings.allow_outside_paths)
+    return SceneJob(settings, poses, colmap=args.colmap, where=where, extra=extra, worlds=worlds)
+
+
+def _worlds_arg(args: argparse.Namespace, views: int, outside: bool) -> Any:
+    """`--worlds FILE.json`: a job entry's "worlds" object in a file of its own, its paths
+    relative to that file (vkpbr.distributed.worlds); None without the option."""
+    path = getattr(args, "worlds", None)
+    if not path:
+        return None
+    from vkpbr.distributed.worlds import job_worlds
+    from vkpbr.errors import JsonError
+    from vkpbr.json_input import read_json
+    from vkpbr.user_paths import check_path, os_reason
+
+    if args.time is not None or getattr(args, "animate", None):
+        raise UsageError("--worlds poses nodes per view: not with --time or --animate")
+    try:
+        doc = read_json(check_path(path, "--worlds"))
+    except OSError as exc:
+        raise UsageError(f"--worlds {path}: cannot read it: {os_reason(exc)}") from None
+    except JsonError as exc:
+        raise UsageError(f"--worlds {path}: not valid JSON ({exc.problem})") from None
+    return job_worlds(doc, views, f"--worlds {path}", Path(path).parent, outside)
 
 
 def render_on_ray(args: argparse.Namespace, options: Any) -> int:

@@ -10,6 +10,8 @@ issue 13's scale rows, minutes a frame on a CPU).
 Each scenario renders an orbit of camera poses through `Renderer.render_many` (frames in
 flight), then the same without copying into NumPy.
 
+Worlds scenarios (issue 32): worlds-tabletop-{128,256} (4,096 worlds) and worlds-helmet-64
+(8,192): benchmarks/bench_worlds.py, every world's poses anew each step (named to run them).
 Batch scenarios (issue 14): batch-{sponza,helmet}-{128,512}: the peers' batch views
 (benchmarks/peers/common.py: a seeded orbit of `--views` poses, written once as a .npy that
 every peer reads) rendered through `Renderer.render_batch`, `--batch-views` views a call (the
@@ -165,6 +167,31 @@ BATCH_SCENARIOS: dict[str, tuple[str, tuple[int, int], str]] = {
                                                  ("-compute", "compute"))
 }
 PEERS_DIR = REPO / "benchmarks" / "peers"
+# Batches of worlds (issue 32, docs/batch.md "Worlds"): name -> (benchmarks/bench_worlds.py
+# variant, (width, height), worlds W); each step every world's poses anew from the GPU.
+WORLD_SCENARIOS: dict[str, tuple[str, tuple[int, int], int]] = {
+    "worlds-tabletop-128": ("tabletop", (128, 128), 4096),
+    "worlds-tabletop-256": ("tabletop", (256, 256), 4096),
+    "worlds-helmet-64": ("helmet", (64, 64), 8192),
+}
+
+
+def run_world_scenario(name: str, args: argparse.Namespace) -> None:
+    """A worlds-* scenario through benchmarks/bench_worlds.py (a source checkout; it prints
+    its own table, rows as the peers' in benchmarks/peers/worlds_common.py)."""
+    import importlib.util
+
+    path = REPO / "benchmarks" / "bench_worlds.py"
+    if not path.exists():
+        raise UsageError(f"worlds scenarios need {path} (a source checkout)")
+    spec = importlib.util.spec_from_file_location("vkpbr_bench_worlds", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    variant, (w, h), worlds = WORLD_SCENARIOS[name]
+    module.run(argparse.Namespace(variant=variant, worlds=str(worlds), sizes=f"{w}x{h}", steps=16,
+                                  reps=max(1, math.ceil(args.frames / (16 * worlds))) + 1,
+                                  scene_dir=None, json=None, png_dir=None, seed=None))
 
 
 def peers_common():  # noqa: ANN201
@@ -471,7 +498,8 @@ def add_parser(sub: Any) -> None:
                     "time and the load time. Scenarios: " + ", ".join(SCENARIOS) + " (the "
                     "sphere fields show how cost grows with draws and triangles).",
         epilog=EPILOG, formatter_class=EPILOG_FORMATTER)
-    p.add_argument("--scenario", action="append", choices=[*SCENARIOS, *BATCH_SCENARIOS],
+    p.add_argument("--scenario", action="append",
+                   choices=[*SCENARIOS, *BATCH_SCENARIOS, *WORLD_SCENARIOS],
                    help="scenario to run (repeatable); default: every frame scenario but the "
                         "spheres-5k-20m* ones (not the batch-* ones: --batch)")
     p.add_argument("--batch", action="store_true",
@@ -507,8 +535,13 @@ def run(args: argparse.Namespace) -> int:
     names = list(args.scenario or ([] if args.batch else DEFAULT_SCENARIOS))
     if args.batch:
         names += [n for n in BATCH_SCENARIOS if n not in names]
+    for n in (n for n in names if n in WORLD_SCENARIOS):  # (they print their own table)
+        run_world_scenario(n, args)
+    names = [n for n in names if n not in WORLD_SCENARIOS]
     rows = [run_batch_scenario(n, args) if n in BATCH_SCENARIOS else run_scenario(n, args)
             for n in names]
+    if not rows:
+        return 0
     frame_rows = [r for r in rows if "batch" not in r]
     batch_rows = [r for r in rows if "batch" in r]
     if args.json:

@@ -7,6 +7,7 @@ import argparse
 import logging
 import os
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -72,6 +73,10 @@ def add_parser(sub: Any) -> None:
                    help="with --cameras, render N views per GPU submission (Renderer.render_batch; "
                         "directional lights' shadows then use one map over the whole scene); "
                         "0: frame by frame, each with its own shadow cascades (default %(default)s)")
+    p.add_argument("--worlds", metavar="FILE.json",
+                   help="with --cameras, each view in its own world: a JSON object {nodes, "
+                        "poses: .npy of (views, nodes, 7) or (views, nodes, 4, 4), quaternion, "
+                        'visible, world_of_view}, as a job entry\'s "worlds" (docs/distributed.md)')
     p.add_argument("--colmap", action="store_true",
                    help="with --cameras, also write the cameras as COLMAP text files "
                         "(cameras.txt, images.txt, points3D.txt) in --out")
@@ -217,12 +222,15 @@ def _render_views(args: argparse.Namespace, options: Any, job: Any, manifest: An
                           [camera_record(cameras[v]) for v in group])
 
     with ThreadPoolExecutor(max(2, (os.cpu_count() or 2) - 1)) as pool:
-        frames = renderer.render_many([cameras[v] for v in todo], lights, size, options,
-                                      linear=args.linear,
-                                      outputs=("color", *names) if names else None,
-                                      batch=args.batch or None,
-                                      times=None if times is None else [times[v] for v in todo],
-                                      animation=animation_choice(renderer.scene, args.animation))
+        if job.worlds is not None:  # each view in its world, as the Ray actors render them
+            frames = _world_frames(args, job, renderer, cameras, lights, todo)
+        else:
+            frames = renderer.render_many([cameras[v] for v in todo], lights, size, options,
+                                          linear=args.linear,
+                                          outputs=("color", *names) if names else None,
+                                          batch=args.batch or None,
+                                          times=None if times is None else [times[v] for v in todo],
+                                          animation=animation_choice(renderer.scene, args.animation))
         bar = tqdm(frames, total=len(todo), unit="frame", disable=True if is_quiet() else None)
         for view, image in zip(todo, bar, strict=True):
             files = [out_dir / f for f in job.files(view)]
@@ -237,10 +245,23 @@ def _render_views(args: argparse.Namespace, options: Any, job: Any, manifest: An
         record(done_only=False)
 
 
+def _world_frames(args: argparse.Namespace, job: Any, renderer: Any, cameras: list[Any],
+                  lights: Any, todo: list[int]) -> Iterator[Any]:
+    """--worlds: views `todo`, each in its world, as a Ray actor renders them
+    (vkpbr.distributed.actor.render_views), in render_many's form."""
+    from vkpbr.distributed.actor import render_views
+
+    frames = render_views(renderer, [cameras[v] for v in todo], lights, job.settings,
+                          job.worlds.item(tuple(todo)), f"--worlds {args.worlds}")
+    return (f if job.settings.outputs else f["color"] for f in frames)
+
+
 def run(args: argparse.Namespace) -> int:
     if args.list_views:
         return list_views()
     options = render_options_from_args(args)  # bad values fail here, before any expensive work
+    if args.worlds and not (args.cameras or args.orbit):
+        raise UsageError("--worlds gives each view of a --cameras batch its world: give --cameras too")
     if args.colmap and not (args.cameras or args.orbit):
         raise UsageError("--colmap writes the cameras of a --cameras batch: give --cameras too")
     if args.batch < 0:

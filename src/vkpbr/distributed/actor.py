@@ -22,6 +22,7 @@ import numpy as np
 
 from vkpbr.distributed.job import RenderSettings, WorkItem
 from vkpbr.distributed.manifest import camera_record
+from vkpbr.distributed.worlds import ItemWorlds
 from vkpbr.errors import SceneError, UsageError
 
 __all__ = ["RendererActor", "render_views", "load_renderer"]
@@ -29,15 +30,19 @@ __all__ = ["RendererActor", "render_views", "load_renderer"]
 log = logging.getLogger(__name__)
 
 
-def render_views(renderer: Any, cameras: list[Any], lights: Any,
-                 settings: RenderSettings) -> Iterator[dict[str, np.ndarray]]:
+def render_views(renderer: Any, cameras: list[Any], lights: Any, settings: RenderSettings,
+                 worlds: ItemWorlds | None = None, where: str = "worlds"
+                 ) -> Iterator[dict[str, np.ndarray]]:
     """The one render call of a work item: its views in order, each a dict of arrays
-    ("color" and the dataset outputs), through the batch path (`Renderer.render_batch`).
+    ("color" and the dataset outputs), through the batch path (`Renderer.render_batch`);
+    with `worlds`, each view in its own world (`world_views`; `where` starts its messages).
 
     Yields per view: "color" (H, W, 4) uint8 sRGB, or float32 linear with `settings.linear`;
     each dataset output as `Renderer.render(outputs=...)` returns it.
     """
-
+    if worlds is not None:
+        yield from world_views(renderer, cameras, lights, settings, worlds, where)
+        return
     names = settings.outputs
     # The batch path, as `vkpbr render --cameras` takes it (a view renders the same in any
     # batch, so items of any size give the single-process frames).
@@ -47,6 +52,100 @@ def render_views(renderer: Any, cameras: list[Any], lights: Any,
                                   batch=settings.batch or None)
     for frame in frames:
         yield frame if names else {"color": frame}
+
+
+def world_views(renderer: Any, cameras: list[Any], lights: Any, settings: RenderSettings,
+                worlds: ItemWorlds, where: str = "worlds") -> Iterator[dict[str, np.ndarray]]:
+    """`render_views` of views that each see their own world: view i equals the scene
+    rendered with world `worlds.index[i]` set on it (set_poses(space="world"), set_visible,
+    set_material), as a batch of worlds renders it (docs/batch.md). Two routes give them:
+
+    - a batch of worlds, `render_batch(worlds=..., world_materials=...)`, `settings.batch`
+      views at a time, where shadows are off: a batch's shadow maps are the renderer's
+      state's, shared by every world;
+    - else each world set on the renderer's state in turn and its views rendered as plain
+      views are (a batch, or frame by frame with batch 0), so each world casts its own
+      shadows; the state is put back afterwards.
+    """
+    from vkpbr.render.batch_route import per_view
+
+    placed = _world_slots(renderer, worlds, where)
+    options, names = settings.render_options(), settings.outputs
+    wanted = ("color", *names) if names else None
+    batch = settings.batch if renderer.device.batch_views else 0
+    if options.shadows or not batch:
+        yield from _world_by_world(renderer, cameras, lights, settings, placed, worlds.index)
+        return
+    factors = None if worlds.materials is None else worlds.materials.factors
+    for lo in range(0, len(cameras), batch):
+        chunk = cameras[lo:lo + batch]
+        got = renderer.render_batch(chunk, settings.size, lights, options, settings.linear,
+                                    outputs=wanted, worlds=worlds.poses,
+                                    world_of_view=worlds.index[lo:lo + batch],
+                                    quaternion=worlds.quaternion, world_visible=worlds.visible,
+                                    world_materials=factors)
+        for frame in per_view(got, len(chunk), False):
+            yield frame if names else {"color": frame}
+
+
+def _world_slots(renderer: Any, worlds: ItemWorlds, where: str) -> tuple[Any, Any, Any]:
+    """The renderer's slots of `worlds.nodes` (world_slots, for its batches of worlds), the
+    checked poses and material factors (None where not given). A node or material the
+    scene lacks, or patterns that match another count of nodes than the poses give, is one
+    line."""
+    from vkpbr.scene.worlds import WorldMaterials, WorldPoses
+
+    names = None if worlds.materials is None else list(worlds.materials.names)
+    mats = None
+    if names is not None:
+        try:
+            mats = WorldMaterials.of(renderer.state, names, worlds.materials.factors)  # type: ignore[union-attr]
+        except UsageError as exc:
+            raise UsageError(f"{where}: materials: {exc}") from None
+    nodes = None if worlds.poses is None else list(worlds.nodes)
+    try:
+        slots = renderer.world_slots(nodes, materials=names)
+    except UsageError as exc:
+        raise UsageError(f"{where}: nodes: {exc}") from None
+    if worlds.poses is None:
+        return None, None, mats
+    n = worlds.poses.shape[1]
+    if len(slots) != n:
+        shown = ", ".join(slots.names[:6]) + (" ..." if len(slots) > 6 else "")
+        raise UsageError(f"{where}: nodes {nodes} are {len(slots)} node(s) of the scene "
+                         f"({shown}), but the poses give {n} a world")
+    return slots, WorldPoses.of(worlds.poses, n, worlds.quaternion, worlds.visible), mats
+
+
+def _world_by_world(renderer: Any, cameras: list[Any], lights: Any, settings: RenderSettings,
+                    placed: tuple[Any, Any, Any], index: np.ndarray
+                    ) -> Iterator[dict[str, np.ndarray]]:
+    """Each world set on the renderer's state (`placed`: its slots, poses and materials, each
+    or None), its views rendered as plain views (shadow maps of that world), the state put
+    back; the frames in the views' order."""
+    from vkpbr.render.batch_call import apply_materials, apply_saved, apply_world
+
+    names, state = settings.outputs, renderer.state
+    slots, poses, materials = placed
+    frames: dict[int, dict[str, np.ndarray]] = {}
+    restore = apply_saved(state)  # poses, visibility and material overrides
+    try:
+        for w in dict.fromkeys(index.tolist()):  # the worlds in the order views first see them
+            views = np.flatnonzero(index == w)
+            if poses is not None:
+                apply_world(state, slots, poses, w)
+            if materials is not None:
+                apply_materials(state, materials, w)
+            got = renderer.render_many([cameras[v] for v in views], lights, settings.size,
+                                       settings.render_options(), linear=settings.linear,
+                                       outputs=("color", *names) if names else None,
+                                       batch=settings.batch or None)
+            for v, frame in zip(views, got, strict=True):
+                frames[int(v)] = frame if names else {"color": frame}
+    finally:
+        restore()
+    for v in range(len(cameras)):
+        yield frames.pop(v)
 
 
 def load_renderer(settings: RenderSettings, device: str | int | None = None) -> Any:
@@ -139,9 +238,9 @@ class RendererActor:
                                f"{item.label()}: outputs")
         files: list[str] = []
         writes = []
-        for k, (_view, frame) in enumerate(zip(item.frames, render_views(renderer, cameras,
-                                                                         lights, settings),
-                                               strict=True)):
+        frames = render_views(renderer, cameras, lights, settings, item.worlds,
+                              f"{item.where}: worlds")
+        for k, (_view, frame) in enumerate(zip(item.frames, frames, strict=True)):
             names = item.files_of(k)
             (out / names[0]).parent.mkdir(parents=True, exist_ok=True)  # a file_path's folder
             writes.append(self._pool.submit(write_output, out / names[0], frame["color"], "color"))

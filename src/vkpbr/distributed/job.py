@@ -18,6 +18,8 @@ Job file (JSON), a list of entries or {"scenes": [entries], "views_per_item"?, "
      "linear": false, "msaa": 1, "colmap": false, "cache": true,
      "semantics": "mesh",            # or "material", "extras", a mapping file or {name: id}
      "batch": 64,                    # views per GPU submission (0: frame by frame; default 64)
+     "worlds": {"nodes": ["cube"], "poses": "worlds.npy"},  # per-view world state
+                                     # (vkpbr.distributed.worlds)
      "options": {"view": "final"}}   # RenderOptions fields (vkpbr.render.options)
 
 Relative paths are relative to the job file's folder. The checks are plain Python, as in
@@ -47,7 +49,7 @@ DEFAULT_RETRIES = 2  # further attempts of a failed item, each on another actor 
 MAX_SIDE = 16384
 _ENTRY_KEYS = frozenset({"scene", "cameras", "out", "size", "outputs", "linear", "msaa",
                          "colmap", "cache", "options", "strict", "allow_outside_paths",
-                         "semantics", "batch"})
+                         "semantics", "batch", "worlds"})
 _JOB_KEYS = frozenset({"scenes", "views_per_item", "retries"})
 
 
@@ -135,6 +137,12 @@ class SceneJob:
     # What else the frames depend on (`vkpbr render --cameras` without --ray: --camera,
     # --light, ... as given), as sorted (name, value) pairs; empty for a job's entries.
     extra: tuple[tuple[str, str], ...] = ()
+    worlds: Any = None  # JobWorlds (vkpbr.distributed.worlds): each view's world, or None
+
+    def world_digest(self, view: int) -> str | None:
+        """The digest of view `view`'s world (None without worlds): the manifest records it
+        with the view, and a view whose world changed is not done."""
+        return None if self.worlds is None else self.worlds.digest(view)
 
     def files(self, view: int) -> list[str]:
         """The files view `view` writes, relative to the out folder (`frame_files`)."""
@@ -181,6 +189,8 @@ class WorkItem:
     poses: tuple[Any, ...]
     settings: RenderSettings
     files: tuple[tuple[str, ...], ...] = ()  # per frame, its files (SceneJob.files)
+    worlds: Any = None  # ItemWorlds: the worlds its views see (vkpbr.distributed.worlds)
+    where: str = ""  # how messages name its entry ("job.json: entry 2")
 
     def files_of(self, k: int) -> list[str]:
         """The files of the item's k-th frame."""
@@ -214,8 +224,10 @@ class Job:
             todo = [i for i in range(len(scene.poses)) if i not in done]
             for k in range(0, len(todo), self.views_per_item):
                 frames = tuple(todo[k:k + self.views_per_item])
+                worlds = scene.worlds.item(frames) if scene.worlds is not None else None
                 out.append(WorkItem(e, frames, tuple(scene.poses[i] for i in frames), scene.settings,
-                                    tuple(tuple(scene.files(i)) for i in frames)))
+                                    tuple(tuple(scene.files(i)) for i in frames), worlds,
+                                    scene.where))
         return out
 
 
@@ -339,7 +351,14 @@ def scene_entry(entry: object, where: str, base: Path) -> SceneJob:
     if any(getattr(p, "time", None) is not None for p in poses):
         raise UsageError(f'{where}: cameras: poses with a "time" (an animation pose) are not '
                          "rendered on Ray yet: render them with `vkpbr render --cameras`")
-    return SceneJob(settings, poses, colmap=_bool(entry, "colmap", where, False), where=where)
+    worlds = None
+    if entry.get("worlds") is not None:
+        from vkpbr.distributed.worlds import job_worlds
+
+        worlds = job_worlds(entry["worlds"], len(poses), f"{where}: worlds", base,
+                            settings.allow_outside_paths)
+    return SceneJob(settings, poses, colmap=_bool(entry, "colmap", where, False), where=where,
+                    worlds=worlds)
 
 
 def _semantics(value: object, where: str, base: Path) -> str | tuple[tuple[str, int | str], ...]:

@@ -11,12 +11,14 @@ there.
 - {"type": "done", "views": [...], "files": [...], "sizes": [...], "cameras": [...], ...}
   per finished group of views: the views, the files they wrote (relative to the folder), each
   file's size in bytes and the cameras as rendered (fields of vkpbr.scene.camera.Camera),
-  from which transforms.json is written once every view is done.
+  from which transforms.json is written once every view is done; for an entry with
+  per-view worlds, "worlds": each view's world digest (vkpbr.distributed.worlds).
 - {"type": "failed", "views": [...], "error": "...", "attempts": n} per item that failed
   after its retries. A re-run renders it again.
 
 A view is done when a "done" line lists it and each of its files exists with the recorded
-size (a deleted or truncated file is rendered again). transforms.json is removed when a run
+size (a deleted or truncated file is rendered again), and its recorded world digest is the
+one its world has now (none without worlds): a view whose world changed is rendered again. transforms.json is removed when a run
 starts that has views to render and written when all are done, so it is there exactly when
 the folder is complete. A folder that holds frame files or a transforms.json but no manifest
 was made by something else (an older vkpbr, another tool): it is refused, not overwritten.
@@ -52,7 +54,8 @@ __all__ = ["MANIFEST_NAME", "Manifest", "camera_from_record", "camera_record", "
 MANIFEST_NAME = "vkpbr-manifest.jsonl"
 VERSION = 2
 _DONE_KEYS = frozenset({"type", "views", "files", "sizes", "cameras", "time", "attempts", "pid",
-                        "seconds"})
+                        "seconds", "worlds"})
+_DIGEST = re.compile(r"[0-9a-f]{32}")  # a view's world digest (vkpbr.distributed.worlds)
 _FAILED_KEYS = frozenset({"type", "views", "error", "attempts", "time"})
 _CAMERA_FIELDS = ("eye", "target", "up", "yfov_deg", "znear", "zfar", "name", "pixel_intrinsics",
                   "model", "distortion")
@@ -132,6 +135,10 @@ def _check_done(rec: dict[str, Any], count: int, files_of: Callable[[int], list[
         raise _Bad("sizes: expected one byte count per file")
     if not isinstance(cameras, list) or len(cameras) != len(views):
         raise _Bad("cameras: expected one camera per view")
+    worlds = rec.get("worlds")
+    if worlds is not None and not (isinstance(worlds, list) and len(worlds) == len(views) and all(
+            isinstance(d, str) and _DIGEST.fullmatch(d) for d in worlds)):
+        raise _Bad("worlds: expected one world digest (32 hex digits) per view")
     for c in cameras:
         _check_camera(c)
 
@@ -212,11 +219,13 @@ class Manifest:
     `cameras()` gives every done view's camera."""
 
     def __init__(self, path: Path, header: dict[str, object], views: int,
-                 files_of: Callable[[int], list[str]]) -> None:
+                 files_of: Callable[[int], list[str]],
+                 digest_of: Callable[[int], str | None] | None = None) -> None:
         self.path = path
         self.header = header
         self.views = views
         self.files_of = files_of
+        self.digest_of = digest_of  # view -> its world's digest (None: no worlds)
         self.records: dict[int, dict[str, Any]] = {}  # view -> its latest "done" record
         self.failures: dict[int, str] = {}  # view -> error of its latest "failed" record
         self._file: Any = None
@@ -227,11 +236,13 @@ class Manifest:
     @classmethod
     def open(cls, folder: Path, fingerprint: dict[str, object], where: str,
              views: int | None = None,
-             files_of: Callable[[int], list[str]] | None = None) -> Manifest:
+             files_of: Callable[[int], list[str]] | None = None,
+             digest_of: Callable[[int], str | None] | None = None) -> Manifest:
         """Read the manifest in `folder` (none yet: an empty one). UsageError in one line when
         it was written for another run, is not a manifest or is damaged, or when the folder
         holds frame files without one. `views`: how many (None: the fingerprint's "views");
-        `files_of(view)` names a view's files (None: frame_NNNNN.png)."""
+        `files_of(view)` names a view's files (None: frame_NNNNN.png); `digest_of(view)` its
+        world's digest (None: the entry has no worlds)."""
         path = Path(folder) / MANIFEST_NAME
         if views is None:
             count = fingerprint.get("views")
@@ -239,7 +250,7 @@ class Manifest:
         if files_of is None:
             files_of = _default_files
         header = {"type": "job", "version": VERSION, **fingerprint}
-        m = cls(path, header, views, files_of)
+        m = cls(path, header, views, files_of, digest_of)
         try:
             data = path.read_bytes()
         except FileNotFoundError:
@@ -296,28 +307,37 @@ class Manifest:
                              f"{_short(unknown[0])}; use another out folder")
 
     def done_views(self, files_exist: bool = True) -> set[int]:
-        """Views recorded done (and, with `files_exist`, whose own files are all there with
-        the recorded sizes: a deleted or truncated file makes only its view undone)."""
-        if not files_exist:
-            return set(self.records)
+        """Views recorded done with the world they have now (see `digest_of`), and, with
+        `files_exist`, whose own files are all there with the recorded sizes: a deleted or
+        truncated file makes only its view undone."""
         folder = self.path.parent
         out = set()
         for view, rec in self.records.items():
+            i = rec["views"].index(view)
+            if _digest(rec, i) != (self.digest_of(view) if self.digest_of else None):
+                continue  # rendered in another world
+            if not files_exist:
+                out.add(view)
+                continue
             per = len(rec["files"]) // len(rec["views"])  # every view writes as many files
-            k = rec["views"].index(view) * per
+            k = i * per
             if all(_size(folder / f) == s
                    for f, s in zip(rec["files"][k:k + per], rec["sizes"][k:k + per], strict=True)):
                 out.add(view)
         return out
 
     def cameras(self, views: int | None = None) -> list[Any] | None:
-        """The cameras of views 0..views-1 as rendered, or None while one is not done."""
+        """The cameras of views 0..views-1 as rendered, or None while one is not done (in
+        the world it has now)."""
         out = []
         for v in range(self.views if views is None else views):
             rec = self.records.get(v)
             if rec is None:
                 return None
-            out.append(camera_from_record(rec["cameras"][rec["views"].index(v)]))
+            k = rec["views"].index(v)
+            if _digest(rec, k) != (self.digest_of(v) if self.digest_of else None):
+                return None
+            out.append(camera_from_record(rec["cameras"][k]))
         return out
 
     def begin(self, complete: Sequence[str] = ("transforms.json",)) -> None:
@@ -354,6 +374,8 @@ class Manifest:
         rec = {"type": "done", "views": list(views), "files": list(files),
                "sizes": [int(s) for s in sizes], "cameras": list(cameras), "time": time.time(),
                **info}
+        if self.digest_of is not None:  # the worlds the views were rendered in
+            rec["worlds"] = [self.digest_of(v) for v in views]
         self._append(rec)
         for v in views:
             self.records[v] = rec
@@ -369,6 +391,12 @@ class Manifest:
         if self._file is not None:
             self._file.close()
             self._file = None
+
+
+def _digest(rec: dict[str, Any], k: int) -> str | None:
+    """The world digest a "done" record gives its k-th view (None: rendered without worlds)."""
+    worlds = rec.get("worlds")
+    return None if worlds is None else worlds[k]
 
 
 def _default_files(view: int) -> list[str]:
@@ -408,7 +436,9 @@ def open_frames_folder(scene: Any) -> Manifest:
     check_output_path(existing / names[0], "color", where)
     for name, file in zip(s.outputs, names[1:], strict=True):
         check_output_path(existing / file, output_kind(name), where.replace("out", "outputs"))
-    return Manifest.open(out, scene.fingerprint(), scene.where, len(scene.poses), scene.files)
+    digest_of = scene.world_digest if getattr(scene, "worlds", None) is not None else None
+    return Manifest.open(out, scene.fingerprint(), scene.where, len(scene.poses), scene.files,
+                         digest_of)
 
 
 def start_frames_folder(scene: Any, manifest: Manifest) -> bool:

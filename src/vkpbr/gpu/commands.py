@@ -109,9 +109,11 @@ class Commands:
         """A dispatch whose group counts are 3 uint32 at `offset` of `buffer` (GPU-written)."""
         self.vk.vkCmdDispatchIndirect(self.handle, buffer.handle, offset)
 
-    def fill(self, buffer: Buffer, value: int = 0) -> None:
-        """Set every uint32 of `buffer` to `value` (a transfer write)."""
-        self.vk.vkCmdFillBuffer(self.handle, buffer.handle, 0, buffer.size, value)
+    def fill(self, buffer: Buffer, value: int = 0, offset: int = 0, size: int | None = None) -> None:
+        """Set every uint32 of `buffer` (or of `size` bytes from `offset`) to `value` (a
+        transfer write)."""
+        self.vk.vkCmdFillBuffer(self.handle, buffer.handle, offset,
+                                buffer.size - offset if size is None else size, value)
 
     def memory_barrier(self, src: str, dst: str) -> None:
         """A global memory dependency from stages `src` to `dst`, each "|"-joined words of

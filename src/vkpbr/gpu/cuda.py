@@ -18,7 +18,7 @@ from typing import Any
 
 from vkpbr.errors import UsageError, VkpbrError
 
-__all__ = ["CudaImport", "cuda_unavailable", "cuda_device_for"]
+__all__ = ["CudaImport", "CudaTimeline", "cuda_unavailable", "cuda_device_for"]
 
 
 def _runtime() -> Any:
@@ -108,3 +108,47 @@ class CudaImport:
         _check(rt.cudaFree(self.ptr), "cudaFree")
         _check(rt.cudaDestroyExternalMemory(self._ext), "cudaDestroyExternalMemory")
         self._ext = None
+
+
+def _stream(rt: Any, stream: int) -> Any:
+    """A cudaStream_t of torch's `cuda_stream` handle (an int)."""
+    return rt.cudaStream_t(stream) if hasattr(rt, "cudaStream_t") else stream
+
+
+class CudaTimeline:
+    """A Vulkan timeline semaphore (gpu/timeline.py SharedTimeline) exported as `fd`, imported
+    into CUDA device `device`: a stream signals it to a value or waits for one."""
+
+    def __init__(self, fd: int, device: int) -> None:
+        rt = _runtime()
+        _check(rt.cudaSetDevice(device), "cudaSetDevice")
+        desc = rt.cudaExternalSemaphoreHandleDesc()
+        desc.type = rt.cudaExternalSemaphoreHandleType.cudaExternalSemaphoreHandleTypeTimelineSemaphoreFd
+        desc.handle.fd = int(fd)
+        desc.flags = 0
+        self._sem = _check(rt.cudaImportExternalSemaphore(desc), "cudaImportExternalSemaphore")
+
+    def signal(self, value: int, stream: int) -> None:
+        """On `stream` (torch's cuda_stream handle): set the semaphore to `value` once the
+        stream's work queued so far is done."""
+        rt = _runtime()
+        params = rt.cudaExternalSemaphoreSignalParams()
+        params.params.fence.value = int(value)
+        params.flags = 0
+        _check(rt.cudaSignalExternalSemaphoresAsync([self._sem], [params], 1, _stream(rt, stream)),
+               "cudaSignalExternalSemaphoresAsync")
+
+    def wait(self, value: int, stream: int) -> None:
+        """On `stream`: the work queued after this waits until the semaphore reaches `value`."""
+        rt = _runtime()
+        params = rt.cudaExternalSemaphoreWaitParams()
+        params.params.fence.value = int(value)
+        params.flags = 0
+        _check(rt.cudaWaitExternalSemaphoresAsync([self._sem], [params], 1, _stream(rt, stream)),
+               "cudaWaitExternalSemaphoresAsync")
+
+    def close(self) -> None:
+        if self._sem is None:
+            return
+        _check(_runtime().cudaDestroyExternalSemaphore(self._sem), "cudaDestroyExternalSemaphore")
+        self._sem = None

@@ -176,9 +176,13 @@ class Device:
         self.compute_raster = bool(all(supported[k] for k in COMPUTE_PATH_FEATURES)
                                    and supported["shaderInt64"]
                                    and supported["shaderBufferInt64Atomics"])
+        # Timeline semaphores shared with CUDA (gpu/timeline.py: batches whose inputs and
+        # frames live in torch tensors), where the driver exports them.
+        self.timeline_semaphores = bool(supported["timelineSemaphore"])
         f12 = vk.VkPhysicalDeviceVulkan12Features(
             pNext=f13, shaderOutputLayer=on[self.layered_shadows],
-            shaderBufferInt64Atomics=on[self.compute_raster])
+            shaderBufferInt64Atomics=on[self.compute_raster],
+            timelineSemaphore=on[self.timeline_semaphores])
         f11 = vk.VkPhysicalDeviceVulkan11Features(
             pNext=f12, shaderDrawParameters=on[self.layered_shadows])
         # The compute path (render/compute_path.py) needs the primitive index in fragment
@@ -221,6 +225,10 @@ class Device:
         self.external_memory_fd = "VK_KHR_external_memory_fd" in available
         if self.external_memory_fd and "VK_KHR_external_memory_fd" not in self.extensions:
             self.extensions.append("VK_KHR_external_memory_fd")
+        self.external_semaphore_fd = (self.timeline_semaphores
+                                      and "VK_KHR_external_semaphore_fd" in available)
+        if self.external_semaphore_fd and "VK_KHR_external_semaphore_fd" not in self.extensions:
+            self.extensions.append("VK_KHR_external_semaphore_fd")
         if self.pipeline_statistics and "VK_KHR_pipeline_executable_properties" not in self.extensions:
             self.extensions.append("VK_KHR_pipeline_executable_properties")
         # Keep the queue info alive until vkCreateDevice returns: the binding copies structs
@@ -265,6 +273,7 @@ class Device:
                 "shaderInt64": core.shaderInt64,
                 "textureCompressionBC": core.textureCompressionBC,
                 "shaderBufferInt64Atomics": f12.shaderBufferInt64Atomics,
+                "timelineSemaphore": f12.timelineSemaphore,
                 "shaderStorageImageWriteWithoutFormat": core.shaderStorageImageWriteWithoutFormat,
                 "subgroupOperations": int((sub.supportedOperations & ops) == ops and bool(
                     sub.supportedStages & vk.VK_SHADER_STAGE_COMPUTE_BIT))}

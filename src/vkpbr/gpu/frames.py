@@ -52,6 +52,13 @@ class Frame:
             "sType": vk.VK_STRUCTURE_TYPE_SUBMIT_INFO, "commandBufferCount": 1,
             "pCommandBuffers": self._cmds, "pWaitSemaphores": self._wait,
             "pWaitDstStageMask": self._stage, "pSignalSemaphores": self._signal})
+        # Timeline values (gpu/timeline.py: semaphores shared with CUDA), chained when given.
+        self._values = ffi.new("uint64_t[2]")
+        self._timeline = ffi.new("VkTimelineSemaphoreSubmitInfo*", {
+            "sType": vk.VK_STRUCTURE_TYPE_TIMELINE_SEMAPHORE_SUBMIT_INFO,
+            "pWaitSemaphoreValues": self._values, "pSignalSemaphoreValues": self._values + 1})
+        self._stages = (vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+                        vk.VK_PIPELINE_STAGE_ALL_COMMANDS_BIT)
 
     def wait(self) -> None:
         """Block until this frame's last submission has finished on the GPU."""
@@ -60,10 +67,14 @@ class Frame:
         self.device.wait_fences(self.fences, "a frame")
         self.finished = True
 
-    def submit(self, cmd: Commands, wait: Any = None, signal: Any = None) -> None:
+    def submit(self, cmd: Commands, wait: Any = None, signal: Any = None,
+               values: tuple[int, int] | None = None) -> None:
         """Submit `cmd`, signalling this frame's fence; optionally waiting on `wait` (at the
-        colour-output stage) and signalling `signal` (semaphores of a swapchain)."""
-        lib = self.device.vk.lib
+        colour-output stage) and signalling `signal` (semaphores of a swapchain), or with
+        `values` (wait value, signal value) two timeline semaphores (gpu/timeline.py: the
+        wait before any command)."""
+        vk = self.device.vk
+        lib = vk.lib
         check_result(lib.vkResetFences(self.device.handle, 1, self.fences), "vkResetFences")
         info = self._submit
         self._cmds[0] = cmd.handle
@@ -73,6 +84,16 @@ class Frame:
             self._wait[0] = wait
         if signal is not None:
             self._signal[0] = signal
+        if values is None:
+            info.pNext = vk.ffi.NULL
+            self._stage[0] = self._stages[0]
+        else:
+            t = self._timeline
+            t.waitSemaphoreValueCount = info.waitSemaphoreCount
+            t.signalSemaphoreValueCount = info.signalSemaphoreCount
+            self._values[0], self._values[1] = values
+            info.pNext = t
+            self._stage[0] = self._stages[1]
         self.finished = False
         check_result(lib.vkQueueSubmit(self.device.queue, 1, info, self.fence), "vkQueueSubmit")
 

@@ -98,10 +98,14 @@ class BatchViews:
                                    "CullInstances"))]))
         self.cull = self._own(ComputePipeline(device, SPV_DIR / "batch_cull.comp.spv",
                                               [self.cull_layout], push_bytes=12))
-        self.pool = self._own(DescriptorPool(device, [(self.cull_layout, len(slots)),
-                                                      (set0_layout, len(slots))]))
+        # Two of each per slot: the renderer's state, and a batch of worlds' (render/worlds.py)
+        self.pool = self._own(DescriptorPool(device, [(self.cull_layout, 2 * len(slots)),
+                                                      (set0_layout, 2 * len(slots))]))
         self.cull_sets = [self.pool.allocate(self.cull_layout) for _ in slots]
         self.sets0 = [self.pool.allocate(set0_layout) for _ in slots]
+        self.world_cull_sets = [self.pool.allocate(self.cull_layout) for _ in slots]
+        self.world_sets0 = [self.pool.allocate(set0_layout) for _ in slots]
+        self.worlds: Any = None  # render/worlds.py WorldBuffers once a batch of worlds came
         self.capacity = 0  # views the buffers hold
         self.chunk_views = 0
         self.views: Buffer | None = None
@@ -138,9 +142,25 @@ class BatchViews:
         self._buffers = [self.views, self.commands, self.visible]
         self.records = self.views.array(np.uint8, self.capacity * L.VIEW_RECORD.size).view(
             L.VIEW_RECORD.dtype)
-        writer = DescriptorWriter(dev)
-        for slot, set0, cull in zip(self.slots, self.sets0, self.cull_sets, strict=True):
-            state_buf, state_at, state_size = self.gpu_state.region(slot.index)
+        self._bind(self.sets0, self.cull_sets, self.gpu_state.region)
+        if self.worlds is not None:
+            self.bind_worlds(self.worlds)
+
+    def bind_worlds(self, worlds: Any) -> None:
+        """Point the worlds' sets at `worlds` (render/worlds.py WorldBuffers: each slot's
+        state and worlds' records); after it grew, its recordings are stale (freed)."""
+        if self.worlds is not None and self.views is not None:
+            self.free_recordings()
+        self.worlds = worlds
+        if self.views is not None:
+            self._bind(self.world_sets0, self.world_cull_sets, worlds.region)
+
+    def _bind(self, sets0: list[Any], cull_sets: list[Any], instances: Any) -> None:
+        """Write each slot's set 0 and culling set: the views, lists and `instances(slot)`
+        ((buffer, offset, size) of the draw records its views read)."""
+        writer = DescriptorWriter(self.device)
+        for slot, set0, cull in zip(self.slots, sets0, cull_sets, strict=True):
+            state_buf, state_at, state_size = instances(slot.index)
             for binding, buf in enumerate((self.views, self.bounds, self.commands, self.visible)):
                 writer.storage(cull, binding, buf)
             writer.storage(cull, 4, state_buf, state_size, state_at)
@@ -151,10 +171,18 @@ class BatchViews:
             writer.storage(set0, 3, state_buf, state_size, state_at)
         writer.update()
 
-    def write_views(self, terms: ViewTerms, size: tuple[int, int], rows: int = 0) -> None:
+    def set0(self, frame_index: int, worlds: bool) -> Any:
+        """Frame slot `frame_index`'s set 0 of a batch (of worlds, with `worlds`)."""
+        return (self.world_sets0 if worlds else self.sets0)[frame_index]
+
+    def write_views(self, terms: ViewTerms, size: tuple[int, int], rows: int = 0,
+                    instance_base: np.ndarray | None = None,
+                    factor_base: np.ndarray | None = None) -> None:
         """The batch's view records (`terms`: views.batch_view_terms) for views of `size`
         (W, H): each in its layer of its chunk of the layered target, or (`rows` > 0) in its
-        tile of a compute batch's column-major atlas, `rows` tiles a column."""
+        tile of a compute batch's column-major atlas, `rows` tiles a column; in a batch of
+        worlds, where each view's world's draw records (`instance_base`, (N,)) and material
+        factors (`factor_base`, (N,), render/worlds.py) start."""
         n = len(terms.znear)
         w, h = size
         index = np.arange(n, dtype=np.uint32)
@@ -164,6 +192,10 @@ class BatchViews:
             viewport[:, 0], viewport[:, 1] = index // rows * w, index % rows * h
         layer = 0 if rows else index % self.chunk_views
         fill_views(self.records[:n], terms, viewport, layer)
+        if instance_base is not None:
+            self.records["instance_base"][:n] = instance_base
+        if factor_base is not None:
+            self.records["factor_base"][:n] = factor_base
 
     def write_blend_groups(self, orders: np.ndarray) -> tuple[tuple[tuple[tuple[int, ...], int, int], ...], ...]:
         """Group each chunk's views by their blended draws' back-to-front order (`orders`:
@@ -187,20 +219,24 @@ class BatchViews:
     # --- commands ---------------------------------------------------------------------------
     def command_buffer(self, target: BatchTarget, frame: Frame, views: int, tbn: L.TbnMode,
                        alpha_mask: bool, plan: ShadowPlan, groups: tuple, prepass: bool,
-                       redraw: tuple[range, ...] | None = None) -> Commands:
+                       redraw: tuple[range, ...] | None = None, worlds: tuple | None = None,
+                       extra: dict[str, Any] | None = None) -> Commands:
         """The batch's commands (the layered batch's path, render/paths.py; recorded on first
         use): `groups` from write_blend_groups; `redraw`: which shadow entries are drawn
-        (ShadowMaps.stale)."""
+        (ShadowMaps.stale); `worlds`: the views read their worlds' draw records (the key of
+        what the worlds' steps depend on, render/worlds.py); `extra`: groups made elsewhere
+        (the worlds' kernel)."""
         spec = FrameSpec("layered_batch", tbn, alpha_mask, plan, redraw,
-                         batch=(views, groups, prepass, self.generation))
+                         batch=(views, groups, prepass, self.generation, worlds))
+        on = worlds is not None
 
         def chunks(fs: FrameSteps) -> list[Step]:
-            return self._chunk_steps(fs, target, views, tbn, groups, prepass)
+            return self._chunk_steps(fs, target, views, tbn, groups, prepass, on)
 
-        made = {"cull": lambda fs: self._cull_steps(fs, views), "chunks": chunks}
+        made = {"cull": lambda fs: self._cull_steps(fs, views, on), "chunks": chunks, **(extra or {})}
         return self.recorder.command_buffer(target, frame, 0, spec, groups=made)
 
-    def _cull_steps(self, fs: FrameSteps, views: int) -> list[Step]:
+    def _cull_steps(self, fs: FrameSteps, views: int, worlds: bool) -> list[Step]:
         """The culling kernel: per view and draw, whether the view sees it, into the chunks'
         indirect draws and lists of views."""
         fs.resources.update(commands=BufferResource(self.commands),
@@ -208,7 +244,7 @@ class BatchViews:
 
         def record(cmd: Commands) -> None:
             cmd.bind_pipeline(self.cull)
-            cmd.bind_set(0, self.cull_sets[fs.frame_index])
+            cmd.bind_set(0, (self.world_cull_sets if worlds else self.cull_sets)[fs.frame_index])
             cmd.push(np.array([views, self.draw_count, self.chunk_views], np.uint32))
             cmd.dispatch(*work_groups((views * self.draw_count, 1, 1), (64, 1, 1)))
 
@@ -217,7 +253,7 @@ class BatchViews:
                 Step("cull", record, (("commands", "storage"), ("visible", "storage")))]
 
     def _chunk_steps(self, fs: FrameSteps, target: BatchTarget, views: int, tbn: L.TbnMode,
-                     groups: tuple, prepass: bool) -> list[Step]:
+                     groups: tuple, prepass: bool, worlds: bool) -> list[Step]:
         """Each chunk of views: every pass in one layered rendering, then its copy out; the
         last copy is timed ("views": the drawing of every chunk)."""
         gs, slot, c = self.gpu_scene, self.slots[fs.frame_index], self.chunk_views
@@ -228,7 +264,7 @@ class BatchViews:
             ctx = PassContext(
                 draws=gs.draws, classes=fs.classes,
                 pipeline=lambda p: self.recorder.pipeline(target, tbn, p, prepass, batch=True),
-                frame_sets=(self.sets0[fs.frame_index], slot.set2),
+                frame_sets=(self.set0(fs.frame_index, worlds), slot.set2),
                 material_sets=fs.material_sets,
                 vertex_buffers=[gs.streams[name] for name in fs.streams],
                 index_buffer=gs.index_buffer, prepass=prepass, shadow_set=fs.shadow_set,

@@ -28,6 +28,7 @@ from vkpbr.render import layouts as L
 from vkpbr.render.ao import prepare_ao
 from vkpbr.render.batch import MAX_LAYERS, BatchViews
 from vkpbr.render.camera import linear_depth
+from vkpbr.render.cuda_order import CudaOrder
 from vkpbr.render.frame_path import read_timings
 from vkpbr.render.frames import FrameStats, summed_stats, write_frame_blocks
 from vkpbr.render.lighting import LightsArg
@@ -35,6 +36,7 @@ from vkpbr.render.options import RenderOptions
 from vkpbr.render.parts import FrameParts
 from vkpbr.render.steps import FrameObjects, FrameSpec
 from vkpbr.render.views import ViewTerms, batch_view_terms
+from vkpbr.render.worlds import WorldBuffers, WorldCall, WorldKernel
 from vkpbr.scene.camera_batch import CameraBatch
 
 __all__ = ["BatchPath", "COMPUTE_BYTES"]
@@ -60,15 +62,40 @@ class BatchPath:
         # The compute batch's atlases, by (extent, linear), least recently used first: two
         # are kept (a job's full batches and its last, shorter one), older ones destroyed.
         self._atlases: OrderedDict[tuple, Any] = OrderedDict()
+        self.world_buffers: WorldBuffers | None = None
+        self.world_kernel: WorldKernel | None = None
+        self.world_call: WorldCall | None = None  # the call under way's worlds, if any
+        self._world_writes: list[int] = []  # per slot: which call's worlds it holds
+        self._factor_writes = 0  # which call's factors the compute scene holds
+        self._calls = 0
+        self.cuda_order: CudaOrder | None = None  # made on the first CUDA-ordered call
+        self._pending: tuple[Any, float] | None = None  # (frame, its Python ms) not waited for
+        self._pending_stats = FrameStats()  # the last waited CUDA-ordered submission's
+        self._ordered = False  # the submission under way is CUDA-ordered
+        self._last_views: tuple | None = None  # (batch, key, instance bases, terms) written
         self._submissions = 0  # of the render_batch call under way (its stats summed)
         self._t_start = 0.0  # when the submission under way began (its Python time)
 
     # --- whole batches ----------------------------------------------------------------------
     def run(self, route: str, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
             opts: RenderOptions, linear: bool, depth: bool, batch: int | str,
-            out: np.ndarray | None = None) -> tuple[Any, np.ndarray | None]:
+            out: np.ndarray | None = None, worlds: WorldCall | None = None
+            ) -> tuple[Any, np.ndarray | None]:
         """A render_batch call taking `route` (render/batch_route.py; not "views"): the colour
-        (a torch tensor for "cuda") and the depth or None; the call's timings in `stats`."""
+        (a torch tensor for "cuda") and the depth or None; the call's timings in `stats`.
+        `worlds`: each view sees its world (render/worlds.py)."""
+        self._calls += 1
+        self._finish_pending()
+        self._ordered = False
+        self.world_call = worlds
+        try:
+            return self._run_route(route, views, size, lights, opts, linear, depth, batch, out)
+        finally:
+            self.world_call = None
+
+    def _run_route(self, route: str, views: CameraBatch, size: tuple[int, int],
+                   lights: LightsArg, opts: RenderOptions, linear: bool, depth: bool,
+                   batch: int | str, out: np.ndarray | None) -> tuple[Any, np.ndarray | None]:
         if route == "cuda":
             return self.render_cuda(views, size, lights, opts, linear, batch), None
         if route == "compute":
@@ -86,7 +113,8 @@ class BatchPath:
         for start in range(0, len(views), per):
             stop = min(start + per, len(views))
             color, dist = self._submit(_slice(views, start, stop), size, lights, opts, linear,
-                                       depth, into=None if out is None else out[start:stop])
+                                       depth, into=None if out is None else out[start:stop],
+                                       start=start)
             colors.append(color)
             depths.append(dist)
         return _joined(colors, out), (None if depths[0] is None else _joined(depths))
@@ -120,7 +148,7 @@ class BatchPath:
             stop = min(start + per, len(views))
             color, dist = self._submit_compute(_slice(views, start, stop), (w, h), (cols, rows),
                                                lights, opts, linear, depth, cuda,
-                                               None if out is None else out[start:stop])
+                                               None if out is None else out[start:stop], start)
             colors.append(color)
             depths.append(dist)
         if cuda:
@@ -131,7 +159,7 @@ class BatchPath:
 
     def _submit_compute(self, views: CameraBatch, size: tuple[int, int], grid: tuple[int, int],
                         lights: LightsArg, opts: RenderOptions, linear: bool, depth: bool,
-                        cuda: bool = False, into: np.ndarray | None = None
+                        cuda: bool = False, into: np.ndarray | None = None, start: int = 0
                         ) -> tuple[Any, np.ndarray | None]:
         p, n = self.parts, len(views)
         (w, h), (cols, rows) = size, grid
@@ -144,18 +172,22 @@ class BatchPath:
         self._t_start = time.perf_counter()
         ao = prepare_ao(p.ao, p.recorder, opts, target, p.bounds.radius, False)
         shading_ao = ao is not None and ao.shading
-        frame, plan, terms = self._begin(views, size, lights, opts, linear, rows, shading_ao)
+        order = self._order(cuda)
+        self._ordered = order is not None  # (the worlds' inputs are written in _begin)
+        frame, plan, terms = self._begin(views, size, lights, opts, linear, rows, shading_ao, start)
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
-        set0 = bv.sets0[frame.index]
+        set0 = bv.set0(frame.index, self.world_call is not None and self.world_call.poses)
         self._run(frame, plan, opts, lambda redraw: p.recorder.command_buffer(
             target, frame, 0, FrameSpec(
                 "compute_batch", opts.tbn, opts.alpha_mask, plan, redraw, copy,
                 variant=p.lighting.shade_variant(opts, shading_ao), tiles=(n, w, h, rows),
-                set0_id=id(set0), external_id=id(external), batch=(bv.generation,), ao=ao),
-            FrameObjects(set0=set0, external=external)),
-            (lambda: self._cuda_wait(external)) if cuda else None)
+                set0_id=id(set0), external_id=id(external), batch=(bv.generation, *self._world_key()),
+                ao=ao), FrameObjects(set0=set0, external=external), self._world_groups()),
+            (lambda: self._cuda_wait(external)) if cuda and order is None else None, order)
         if cuda:
             p.device.check_validation()
+            if order is not None:
+                order.frames_ready()
             return self._cuda_tensor(external, (n, h, w, 4), linear), None
         t_read = time.perf_counter()
         color = target.read_tiles(frame.index, n, size, into=into)
@@ -189,7 +221,8 @@ class BatchPath:
         per = self.per_submission(size, linear, False, batch)
         self._submissions = 0
         parts = [self._submit(_slice(views, s, min(s + per, len(views))), size, lights, opts,
-                              linear, False, cuda=True)[0] for s in range(0, len(views), per)]
+                              linear, False, cuda=True, start=s)[0]
+                 for s in range(0, len(views), per)]
         return parts[0] if len(parts) == 1 else torch.cat(parts)
 
     def per_submission(self, size: tuple[int, int], linear: bool, depth: bool,
@@ -217,7 +250,7 @@ class BatchPath:
     # --- one submission ---------------------------------------------------------------------
     def _submit(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
                 opts: RenderOptions, linear: bool, depth: bool, cuda: bool = False,
-                into: np.ndarray | None = None) -> tuple[Any, np.ndarray | None]:
+                into: np.ndarray | None = None, start: int = 0) -> tuple[Any, np.ndarray | None]:
         p, n = self.parts, len(views)
         limits = p.device.limits
         layers = max(1, min(n, MAX_LAYERS, int(limits.maxFramebufferLayers),
@@ -225,11 +258,13 @@ class BatchPath:
         target = self._target(size, layers, n, linear, depth, cuda)
         self._t_start = time.perf_counter()
         bv = self._views(n, layers)
-        frame, plan, terms = self._begin(views, size, lights, opts, linear)
+        frame, plan, terms = self._begin(views, size, lights, opts, linear, start=start)
         groups = bv.write_blend_groups(p.blend.orders(views.eye))
         self._run(frame, plan, opts, lambda redraw: bv.command_buffer(
             target, frame, n, opts.tbn, opts.alpha_mask, plan, groups, p.paths.prepass_for(target),
-            redraw), (lambda: self._cuda_wait(target.color_readback)) if cuda else None)
+            redraw, self._world_key() if self.world_call is not None and self.world_call.poses else None,
+            self._world_groups()),
+            (lambda: self._cuda_wait(target.color_readback)) if cuda else None)
         t_read = time.perf_counter()
         color = self._cuda_view(target, n, linear) if cuda else target.read_color(n, into)
         dist = linear_depth(target.read_depth(n), terms.znear[:, None, None]) if depth else None
@@ -248,17 +283,17 @@ class BatchPath:
         return self.views
 
     def _begin(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
-               opts: RenderOptions, linear: bool, atlas_rows: int = 0, ao: bool = False
-               ) -> tuple[Any, Any, ViewTerms]:
+               opts: RenderOptions, linear: bool, atlas_rows: int = 0, ao: bool = False,
+               start: int = 0) -> tuple[Any, Any, ViewTerms]:
         """A submission's frame of the ring with what every batch writes: the frame's lights,
         environment and shadow matrices (directional ones over the whole scene), the blocks
         the views share and every view's record (`atlas_rows`: a compute batch's tiles a
-        column, BatchViews.write_views; `ao`: its shading reads GTAO). Returns the frame, the shadow plan and the views'
-        terms (views.batch_view_terms)."""
+        column, BatchViews.write_views; `ao`: its shading reads GTAO; `start`: the first
+        view's index in the call, for its worlds). Returns the frame, the shadow plan and the
+        views' terms (views.batch_view_terms)."""
         p = self.parts
         frame_lights = p.lighting.frame_lights(opts, lights)
         p.environments.bind_for(opts)
-        terms = batch_view_terms(views, size, p.bounds.corners, p.bounds.radius)
         frame = p.ring.begin()
         slot = p.slots[frame.index]
         p.gpu_state.write(frame.index)
@@ -266,14 +301,133 @@ class BatchPath:
         rows = p.shadow_frames.write_scene(slot, plan, frame_lights)
         write_frame_blocks(slot, frame_lights, opts, linear, p.lighting.frame_lighting(opts, ao),
                            rows)
-        self.views.write_views(terms, size, atlas_rows)  # type: ignore[union-attr]
-        return frame, plan, terms
+        base = self._write_worlds(frame.index, start, len(views))
+        return frame, plan, self._view_records(views, size, atlas_rows, base)
+
+    def _view_records(self, views: CameraBatch, size: tuple[int, int], atlas_rows: int,
+                      base: tuple[Any, Any]) -> ViewTerms:
+        """Write the views' records, unless they hold these already: the same batch (a
+        CameraBatch never changes), size, tiling, scene bounds and worlds as the last
+        submission's (a simulator's loop renders the same cameras every step)."""
+        p = self.parts
+        key = (size, atlas_rows, p.bounds.corners, p.bounds.radius, self.views.generation)  # type: ignore[union-attr]
+        last = self._last_views
+        if (last is not None and last[0] is views and last[1] == key
+                and all(_same(a, b) for a, b in zip(base, last[2], strict=True))):
+            return last[3]
+        terms = batch_view_terms(views, size, p.bounds.corners, p.bounds.radius)
+        self.views.write_views(terms, size, atlas_rows, *base)  # type: ignore[union-attr]
+        self._last_views = (views, key, base, terms)
+        return terms
+
+    def _write_worlds(self, slot: int, start: int, n: int) -> tuple[Any, Any]:
+        """In a batch of worlds: slot `slot`'s world records and the worlds' material
+        factors (once a call); the instance_base and factor_base of views start..start+n
+        (each None where the worlds do not have it)."""
+        call = self.world_call
+        if call is None:
+            return None, None
+        index = call.world_of_view[start:start + n]
+        factor_base = None
+        if call.factors is not None:
+            if self._factor_writes != self._calls:
+                if self.parts.compute().set_world_factors(call.factors):
+                    self.free_recordings()  # (its sets were rewritten)
+                self._factor_writes = self._calls
+            m = len(self.parts.gpu_scene.materials)
+            factor_base = (1 + index * m).astype(np.uint32)
+        if not call.poses:
+            return None, factor_base
+        return self._write_poses(slot, index), factor_base
+
+    def _write_poses(self, slot: int, index: np.ndarray) -> np.ndarray:
+        call = self.world_call
+        assert call is not None
+        p, bv = self.parts, self.views
+        assert bv is not None
+        if self.world_buffers is None:
+            self.world_buffers = WorldBuffers(p.device, len(p.slots), len(p.gpu_scene.draws))
+            self._world_writes = [0] * len(p.slots)
+        wb = self.world_buffers
+        gpu = call.gpu
+        worlds = gpu.worlds if gpu is not None else len(call.records) // wb.draws
+        if wb.ensure(worlds) or bv.worlds is not wb:
+            bv.bind_worlds(wb)
+            self._world_writes = [0] * len(p.slots)
+        if gpu is not None and self._world_writes.count(self._calls) == 0:
+            if self.world_kernel is None:
+                self.world_kernel = WorldKernel(p.device, len(p.slots))
+            kernel = self.world_kernel
+            before = kernel.generation
+            kernel.order = self.cuda_order if self._ordered else None
+            kernel.prepare(gpu, wb, gpu.cuda)  # the call's poses into its inputs
+            if kernel.generation != before:
+                self.free_recordings()
+        if self._world_writes[slot] != self._calls:
+            state = p.gpu_state.state.draw_matrices()
+            wb.write(slot, state, call.records if gpu is None else np.zeros(0, np.float32))
+            self._world_writes[slot] = self._calls
+        return wb.instance_base(index)
+
+    def _order(self, cuda: bool) -> CudaOrder | None:
+        """The GPU-side ordering of a call whose inputs are CUDA tensors and whose frames go to
+        torch, where the driver shares semaphores (else None: the host waits, as before)."""
+        call = self.world_call
+        if not (cuda and call is not None and call.gpu is not None and call.gpu.cuda):
+            return None
+        if not CudaOrder.available(self.parts.device):
+            return None
+        if self.cuda_order is None:
+            self.cuda_order = CudaOrder(self.parts.device)
+        return self.cuda_order
+
+    def _finish_pending(self) -> None:
+        """Wait for the last CUDA-ordered submission (its host-written buffers are then free)
+        and keep its GPU timings for the next such call's stats."""
+        if self._pending is None:
+            return
+        frame, cpu_ms = self._pending
+        self._pending = None
+        frame.wait()
+        self._world_errors(frame.index, "the last step's ")
+        self._pending_stats = dataclasses.replace(
+            read_timings(self.parts.ring, frame, self.parts.slots[frame.index]), cpu_ms=cpu_ms,
+            wait_ms=0.0, readback_ms=0.0, driver_ms=0.0)
+
+    def _world_errors(self, slot: int, which: str) -> None:
+        """After a batch's fence: its worlds kernel's report of poses that are none (CUDA
+        tensors are not read back before the batch), as one UsageError line."""
+        if self.world_kernel is None:
+            return
+        count, world = self.world_kernel.take_errors(slot)
+        if count:
+            raise UsageError(f"worlds: {which}world {world} has a pose with NaN or infinity, or "
+                             f"a quaternion of length 0 ({count} draw records of such worlds "
+                             "were hidden)")
+
+    def _world_key(self) -> tuple:
+        """What a batch's recording of worlds depends on (nothing without worlds)."""
+        call = self.world_call
+        if call is None:
+            return ()
+        kernel = self.world_kernel
+        return (*call.key, kernel.generation if kernel is not None and call.gpu else 0)
+
+    def _world_groups(self) -> dict[str, Any] | None:
+        """The worlds' kernel step of a call whose poses the GPU expands."""
+        call, kernel = self.world_call, self.world_kernel
+        if call is None or call.gpu is None or kernel is None:
+            return None
+        d = self.world_buffers.draws  # type: ignore[union-attr]
+        return {"worlds": lambda fs: kernel.steps(fs.frame_index, call.gpu, d)}
 
     def _run(self, frame: Any, plan: Any, opts: RenderOptions,
-             record: Callable[[tuple[bool, ...]], Any], before_submit: Callable[[], None] | None = None
-             ) -> None:
+             record: Callable[[tuple[bool, ...]], Any], before_submit: Callable[[], None] | None = None,
+             order: CudaOrder | None = None) -> None:
         """Record (given which shadow maps to redraw), submit and wait for a submission; its
-        timings into `stats`. The shadow maps' record is forgotten if it fails."""
+        timings into `stats`. The shadow maps' record is forgotten if it fails. With `order`
+        (render/cuda_order.py) the submission waits for and signals CUDA's timelines and the
+        host does not wait: the next call does, and reads its timings then."""
         p = self.parts
         shadows = p.shadow_frames.maps
         redraw = p.shadow_frames.stale(frame.index, plan, opts.alpha_mask)
@@ -281,13 +435,22 @@ class BatchPath:
             cmd = record(redraw)
             if before_submit is not None:
                 before_submit()
-            frame.submit(cmd)
+            if order is None:
+                frame.submit(cmd)
+            else:
+                frame.submit(cmd, wait=order.inputs.handle, signal=order.done.handle,
+                             values=order.submit_values())
         except BaseException:
             shadows.forget()
             raise
         frame.stamped = p.ring.query_pool is not None
         t_submitted = time.perf_counter()
+        if order is not None:
+            self._pending = (frame, 1e3 * (t_submitted - self._t_start))
+            self.stats = dataclasses.replace(self._pending_stats, cpu_ms=self._pending[1])
+            return
         frame.wait()
+        self._world_errors(frame.index, "")
         # The Python side up to the submit and the readback are added by the caller
         # (`_timed`); the wait is this submission's.
         stats = dataclasses.replace(read_timings(p.ring, frame, p.slots[frame.index]),
@@ -395,9 +558,19 @@ class BatchPath:
             self.views.free_recordings()
 
     def close(self) -> None:
+        self._finish_pending()
+        if self.cuda_order is not None:
+            self.cuda_order.destroy()
+            self.cuda_order = None
         if self.views is not None:
             self.views.destroy()
             self.views = None
+        if self.world_buffers is not None:
+            self.world_buffers.destroy()
+            self.world_buffers = None
+        if self.world_kernel is not None:
+            self.world_kernel.destroy()
+            self.world_kernel = None
         for target in self.targets.values():
             self._forget_cuda(target)
             target.destroy()
@@ -413,7 +586,13 @@ def _joined(parts: list[np.ndarray], out: np.ndarray | None = None) -> np.ndarra
     return parts[0] if len(parts) == 1 else np.concatenate(parts)
 
 
+def _same(a: np.ndarray | None, b: np.ndarray | None) -> bool:
+    return (a is None) == (b is None) and (a is None or np.array_equal(a, b))
+
+
 def _slice(views: CameraBatch, start: int, stop: int) -> CameraBatch:
+    if start == 0 and stop == len(views):
+        return views  # (the same batch: its records may be written already)
     def part(a: np.ndarray | None) -> np.ndarray | None:
         return None if a is None else a[start:stop]
 

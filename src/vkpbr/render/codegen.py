@@ -83,6 +83,7 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("background_batch.vert.spv", "background.vert", (("BATCH", 1),)),
     Variant("batch_cull.comp.spv", "batch_cull.comp", (("STRUCTS_ONLY", 1),)),
     Variant("deform.comp.spv", "deform.comp", (("STRUCTS_ONLY", 1),)),
+    Variant("worlds.comp.spv", "worlds.comp"),
     Variant("background.frag.spv", "background.frag"),
     # KHR_materials_transmission's copy of the opaque scene (render/transmission.py): the
     # opaque passes writing linear radiance.
@@ -95,6 +96,10 @@ VARIANTS: tuple[Variant, ...] = (
       for k, name in ((1, "small"), (4, "args"), (2, "big"), (3, "resolve"), (5, "masked"),
                       (6, "masked_big"))
       for batch in (0, 1) if not batch or k in (1, 2, 5, 6)),
+    # Shadow maps drawn by compute shaders (render/shadow_raster.py).
+    *(Variant(f"shadow_{name}.comp.spv", "shadow_raster.comp",
+              (("COMPUTE_SHADING", 1), ("KERNEL", k)))
+      for k, name in ((1, "small"), (3, "args"), (2, "big"), (4, "masked"))),
 )
 
 

@@ -187,7 +187,7 @@ class _TargetResources:
                    "RasterDepthIds": self.raster, "RasterBig": self.raster_big,
                    "RasterSpheres": scene.raster_spheres, "RasterDepths": self.raster_depths,
                    "RasterMaskedBig": self.raster_masked_big,
-                   "PrevPositions": scene.prev_positions}
+                   "PrevPositions": scene.prev_positions, "WorldFactors": scene.world_factors}
         images = {"out_image": target.storage_view, "visibility": target.visibility_view}
         # The dataset outputs' images once the target has them, else 1x1 stand-ins (no kernel
         # but the outputs one touches them; every binding is written all the same).
@@ -252,6 +252,8 @@ class ComputeScene:
                                                       name="raster draw spheres"))
         self.prev_positions = prev_positions if prev_positions is not None else self._own(
             upload_buffer(device, np.zeros(3, np.float32), "storage", name="no posed vertices"))
+        # A batch of worlds' material factors (render/worlds.py), grown by set_world_factors.
+        self.world_factors = Buffer(device, 48, "storage", host_visible=True, name="world factors")
         self.set_index = max(frame_layouts) + 1
         self.set_layout = self._own(DescriptorSetLayout(device, [
             BindingSpec(b, "storage" if kind == "block" else kind, ("compute",), name)
@@ -271,6 +273,24 @@ class ComputeScene:
     def _own(self, obj: Any) -> Any:
         self._owned.append(obj)
         return obj
+
+    def set_world_factors(self, factors: np.ndarray) -> bool:
+        """Write a batch of worlds' material factors ((K, 3, 4) float32 records); True when
+        the buffer grew (every target's sets were rewritten: the caller frees recordings)."""
+        grew = factors.nbytes > self.world_factors.size
+        if grew:
+            self.device.wait_idle()
+            self.world_factors.destroy()
+            self.world_factors = Buffer(self.device, max(factors.nbytes, 2 * self.world_factors.size),
+                                        "storage", host_visible=True, name="world factors")
+            binding = next(b for b, _, n in L.COMPUTE_SET if n == "WorldFactors")
+            writer = DescriptorWriter(self.device)
+            for res in self._targets.values():
+                for dset in res.sets:
+                    writer.storage(dset, binding, self.world_factors)
+            writer.update()
+        self.world_factors.array(np.float32, factors.size)[:] = factors.ravel()
+        return grew
 
     def _pipeline(self, name: str, push_bytes: int, constants: tuple[int, ...] = ()
                   ) -> ComputePipeline:
@@ -562,6 +582,7 @@ class ComputeScene:
                 obj.destroy()
 
     def destroy(self) -> None:
+        self.world_factors.destroy()
         while self._owned:
             self._owned.pop().destroy()
 

@@ -246,6 +246,10 @@ def _rebuild(renderer: Any, semantic_ids: np.ndarray | None = None) -> None:
     blend = BlendOrder(gs.draws, state)
     p.paths.blended = len(blend) > 0
     p.shadow_frames.casters = np.array([d.casts_shadows for d in gs.draws], bool)
+    maps = p.shadow_frames.maps  # the compute-drawn maps' caster tables name the draws
+    if getattr(maps, "_raster", None) is not None:
+        maps._raster.destroy()
+        maps._raster = None
     parts = dataclasses.replace(p, gpu_state=gpu_state, deform=deform, semantic_ids=ids,
                                 compute=compute, blend=blend)
     renderer.parts = parts

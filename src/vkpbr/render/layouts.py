@@ -202,6 +202,12 @@ VIEW_RECORD = Std140Block("ViewRecord", "view_record", (
     ("intrinsics", "vec4"),  # sx, sy, ox, oy: NDC x = sx x / -z + ox, y = -sy y / -z + oy
     ("viewport", "uvec4"),  # x, y, width, height: the pixels of its target the view covers
     ("layer", "uint"),  # the layer of a layered batch target it is drawn into (else 0)
+    # Where its world's draw records start in Instances (render/worlds.py: a batch of worlds
+    # holds the renderer's state then one run of draw records per world; else 0).
+    ("instance_base", "uint"),
+    # Where its world's material factors start in WorldFactors (render/worlds.py: 3 vec4 a
+    # material, FACTOR_VEC4S) plus one; 0: the materials' own (frames, plain batches).
+    ("factor_base", "uint"),
 ))
 
 SETTINGS = Std140Block(
@@ -385,6 +391,9 @@ STORAGE = {
     # vec4s: the previous VP (4), (valid, first posed vertex, 0, 0) as uint bits, then per
     # draw its previous model matrix (4) and (deformed, 0, 0, 0) (render/scene_state.py).
     "Motion": StorageArray("Motion", "vec4", "motion"),
+    # A batch of worlds' material factors (render/worlds.py): per (world, material) base
+    # colour, (emissive, metallic), (roughness, 0, 0, 0); a stand-in without worlds.
+    "WorldFactors": StorageArray("WorldFactors", "vec4", "world_factors"),
     "PrevPositions": StorageArray("PrevPositions", "float", "prev_positions"),  # 3 a vertex
 }
 # Storage buffers the compute path writes (declared without `readonly`).
@@ -412,8 +421,9 @@ COMPUTE_SET: tuple[tuple[int, str, str], ...] = (
     (14, "storage", "PixelList"),
     # The frame's blocks and the materials as storage buffers: the compute path reads no
     # uniform block, which lavapipe 22.3 would compile a variant of the shader for per new set
-    # of values (never freed) and, once a loop depends on one, crash compiling. (15 is free:
-    # the views are set 0's storage buffer, read there by every path.)
+    # of values (never freed) and, once a loop depends on one, crash compiling. (The views
+    # are set 0's storage buffer, read there by every path.)
+    (15, "storage", "WorldFactors"),  # a batch of worlds' material factors
     (16, "block", "Settings"),
     (17, "block", "Lighting"),
     (18, "storage", "Materials"),

@@ -163,7 +163,7 @@ POST_OPTIONS: tuple[PostOption, ...] = (
 # RenderOptions field -> the enum its values come from (the CLI's choices, the viewer's cycles).
 ENUM_FIELDS: dict[str, type] = {"view": View, "lighting": Lighting, "brdf": Brdf, "tbn": TbnMode,
                                 "tonemap": Tonemap, "pipeline": PipelinePath, "raster": RasterPath,
-                                "ao": Ao}
+                                "shadow_raster": RasterPath, "ao": Ao}
 # Fields whose None means "the lighting mode's choice" (MODE_DEFAULTS).
 MODE_DEFAULT_FIELDS = ("brdf", "tonemap")
 MODE_DEFAULTS: dict[Lighting, dict[str, Any]] = {
@@ -209,6 +209,10 @@ class RenderOptions:
         Shadow maps for the lights that cast shadows (Light.shadows); False: none at all.
     shadow_resolution : int
         Texels per side of a shadow map (cascade or spot map; cube faces get half), 16..16384.
+    shadow_raster : RasterPath or str
+        What draws the shadow maps: "auto" (compute shaders on GPUs, whose few raster units
+        are the limit of a redrawn map; the raster units on CPUs), "hardware" (the raster
+        units) or "compute" (compute shaders: render/shadow_raster.py, the same maps).
     env : str
         The environment of the physically based mode: "sky" (the built-in Preetham sky
         matched to the automatic sun), "none" (no image-based light, black background) or
@@ -250,6 +254,7 @@ class RenderOptions:
     occlusion: bool = True
     shadows: bool = True
     shadow_resolution: int = 2048
+    shadow_raster: RasterPath = RasterPath.AUTO
     env: str = "sky"
     env_intensity: float = 1.0
     env_rotation: float = 0.0

@@ -171,4 +171,4 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
         Targets(device, msaa, background, ring.count, recorder, compute, post), environments,
         Lighting(scene, copies, environments, state),
         ShadowFrames(shadows, bounds, recorder, state,
-                     np.array([d.casts_shadows for d in gs.draws], bool)), ao)
+                     np.array([d.casts_shadows for d in gs.draws], bool), paths), ao)

@@ -8,6 +8,7 @@ that share steps share a sub-list. docs/architecture.md draws these lists (gener
 
 Groups:
   deform           skins and morph targets posed into their vertex regions (render/deform.py)
+  worlds           a batch of worlds' draw records expanded from poses on the GPU (render/worlds.py)
   shadows          the shadow maps a frame redraws (render/shadows.py)
   transmission     the copy of the opaque scene transmissive surfaces see (COPY_* below)
   outputs_clear    the dataset outputs' images cleared
@@ -54,9 +55,9 @@ PATHS: dict[str, tuple[str, ...]] = {
     "compute_raster": (*_FRAME_HEAD, "outputs_clear", "raster", "ao", *_SHADE_COMPUTE,
                        *_AFTER_SHADING),
     # Batches: every view of a call in one submission (render/batch_path.py).
-    "compute_batch": ("deform", "shadows", "raster", "ao", "classify", "shading",
+    "compute_batch": ("deform", "worlds", "shadows", "raster", "ao", "classify", "shading",
                       "background_compute", "finish"),
-    "layered_batch": ("deform", "shadows", "cull", "chunks", "finish"),
+    "layered_batch": ("deform", "worlds", "shadows", "cull", "chunks", "finish"),
 }
 # The transmission's copy of the opaque scene (render/transmission.py), drawn as the frame is.
 COPY_PATHS: dict[str, tuple[str, ...]] = {
@@ -70,7 +71,7 @@ COPY_PATHS: dict[str, tuple[str, ...]] = {
 RASTER_STEPS = ("raster_small", "raster_big", "raster_masked", "raster_masked_big",
                 "raster_resolve")
 # Every timed step a frame can report in FrameStats.pass_ms, in frame order.
-STEP_NAMES = ("deform", "shadows", "transmission", "cull", "prepass_opaque",
+STEP_NAMES = ("deform", "worlds", "shadows", "transmission", "cull", "prepass_opaque",
               "prepass_opaque_double", *RASTER_STEPS, "opaque", "opaque_double", "mask", "ao",
               "classify", "shading", "outputs", "background", "blend", "views", "copy")
 

@@ -22,8 +22,10 @@ import numpy as np
 from vkpbr.errors import UsageError
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, FrameTarget
 from vkpbr.render import outputs as O
+from vkpbr.render.batch_call import WorldsArg, world_slots
+from vkpbr.render.batch_call import render_batch as batch_call
 from vkpbr.render.batch_path import BatchPath
-from vkpbr.render.batch_route import batch_result, batch_route, chunked, per_view, stack_views
+from vkpbr.render.batch_route import chunked, per_view
 from vkpbr.render.environment import EnvironmentSpec
 from vkpbr.render.frame_path import FramePath, Submitted
 from vkpbr.render.frames import FrameStats
@@ -34,8 +36,9 @@ from vkpbr.render.outputs import OUTPUTS, frame_outputs
 from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.parts import FrameParts, make_parts, open_device
 from vkpbr.render.scene_state import with_times
-from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
+from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.types import Camera, Light, Scene
+from vkpbr.scene.worlds import WorldSlots
 
 __all__ = ["Renderer", "RenderOptions", "FrameStats", "Submitted", "COPY_COLOR", "COPY_DEPTH",
            "LightsArg", "OUTPUTS", "frame_outputs"]
@@ -236,52 +239,47 @@ class Renderer:
                      options: RenderOptions | None = None, linear: bool = False,
                      depth: bool = False, outputs: Iterable[str] | None = None,
                      batch: int | str = "auto", device: str = "cpu",
-                     out: np.ndarray | None = None, **option_overrides: Any
+                     out: np.ndarray | None = None, worlds: WorldsArg = None,
+                     world_of_view: Any = None, quaternion: str = "xyzw",
+                     world_visible: Any = None, world_expand: str = "auto",
+                     world_materials: Any = None, space: str = "world", **option_overrides: Any
                      ) -> np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray] | Any:
         """Render B views of the scene in one submission and return them stacked
         (docs/batch.md).
 
-        Parameters
-        ----------
-        cameras : a CameraBatch (vkpbr.scene.camera_batch: from eye/target arrays, (B, 4, 4)
-            poses or OpenCV K + poses, no Python object per view), a (B, 4, 4) array of
-            OpenGL world-from-camera poses, or a list of Cameras (anything `render` takes).
-        size : (width, height) of every view.
-        lights, options, linear, option_overrides : as `render`.
-        depth : also return (B, H, W) float32 distances along each view's axis.
-        outputs : as `render`'s, stacked per view; "color" comes from the batch, the others
-            from the dataset outputs' pass, view by view (as `render` makes them).
-        batch : views per submission: "auto" (as many as fit in a quarter of the free device
-            memory and of the free host-visible memory, at most 65,536) or a positive integer.
-        device : "cpu": NumPy arrays; "cuda": a torch tensor (B, H, W, 4) on the same GPU,
-            never through host memory (colour only; the `cuda` extra: gpu/cuda.py).
+        cameras : a CameraBatch (vkpbr.scene.camera_batch: eye/target arrays, (B, 4, 4) poses
+            or OpenCV K + poses), a (B, 4, 4) array of OpenGL world-from-camera poses, or a
+            list of Cameras (anything `render` takes).
+        size : (width, height) of every view. lights, options, linear, option_overrides: as
+            `render`. depth : also (B, H, W) float32 distances along each view's axis.
+        outputs : as `render`'s, stacked per view ("color" from the batch, the others view
+            by view). batch : views per submission, "auto" or a positive integer.
+        device : "cpu": NumPy arrays; "cuda": a torch tensor (B, H, W, 4) on the same GPU.
         out : a C-contiguous writeable (B, H, W, 4) array the colour is written into.
+        worlds : W worlds' world poses of the nodes named by `world_slots`: (W, N, 4, 4)
+            matrices or (W, N, 7) position + quaternion (`quaternion` "xyzw" or "wxyz";
+            `space` "world", or "local": relative to each node's parent as the state has it),
+            NumPy or torch; `world_of_view` (B,) the world each view sees (omit when B = W);
+            `world_visible` (W, N) bools; `world_expand` "gpu" expands NumPy poses on the
+            GPU as CUDA tensors are (float32), "auto"/"host" exactly on the host;
+            `world_materials` {"base_color": (W, K, 4), "metallic", "roughness": (W, K),
+            "emissive": (W, K, 3)} of the K materials named by `world_slots`. docs/batch.md.
 
-        Returns
-        -------
-        (B, H, W, 4) uint8 sRGB (float32 linear with `linear`); with `depth` a tuple (colour,
-        depth); with `outputs` {name: (B, ...) array}. pipeline="forward" (and "auto" on
-        CPUs): view i is `render` of `CameraBatch.camera(i)` with pipeline="forward", ao="off"
-        bit for bit (no GTAO there yet; transmissive materials see the environment through
-        them in a batch, not the copy of the opaque scene). pipeline="compute" (and "auto" on GPUs that have
-        64-bit atomics, for scenes without blended materials) is the compute batch: each
-        view within 1/255 of `render(pipeline="compute", raster="compute")`. Either way
-        directional lights' shadow maps are one map over the whole scene, shared by the views.
+        Returns (B, H, W, 4) uint8 sRGB (float32 with `linear`), (colour, depth) with `depth`,
+        {name: (B, ...)} with `outputs`. pipeline="forward" (and "auto" on CPUs): view i is
+        `render` of `CameraBatch.camera(i)` (in its world) with pipeline="forward", ao="off"
+        bit for bit; pipeline="compute" (and "auto" on GPUs with 64-bit atomics, scenes
+        without blended materials): within 1/255 of `render(pipeline="compute")`. Shadow maps
+        (directional ones over the whole scene) are shared by the views and worlds.
         """
-        views = as_camera_batch(cameras, self.default_camera())
-        opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
-        route, wanted = batch_route(self.parts, views, size, opts, linear, depth, outputs,
-                                    device, out)
-        each = (views.camera(i) for i in range(len(views)))  # view by view, as `render` draws
-        if route == "views":  # (render/batch_route.py says when)
-            return stack_views(self, self.render_many(each, lights, size, opts, linear, depth,
-                                                      outputs=wanted or None), depth, wanted, out)
-        color, dist = self.batch_path.run(route, views, size, lights, opts, linear, depth,
-                                          batch, out)
-        extra = tuple(n for n in wanted if n != "color")  # from their own pass, view by view
-        frames = list(self.render_many(each, lights, size, opts, linear, outputs=extra)) if extra else []
-        self.last_stats = self.batch_path.stats  # the batch's (not the outputs' passes)
-        return batch_result(color, dist, depth, wanted, frames)
+        return batch_call(self, cameras, size, lights, options, linear, depth, outputs, batch,
+                          device, out, worlds, world_of_view, quaternion, world_visible,
+                          option_overrides, world_expand, world_materials, space)
+
+    def world_slots(self, nodes: Any = None, materials: Any = None) -> WorldSlots | None:
+        """Name the nodes each world of `render_batch(worlds=...)` poses and the materials
+        whose factors `world_materials` gives, in their arrays' order."""
+        return world_slots(self, nodes, materials)
 
     def close(self) -> None:
         """Destroy everything (idempotent). The Renderer is unusable afterwards."""

@@ -13,10 +13,12 @@ from typing import Any
 
 import numpy as np
 
+from vkpbr.errors import UsageError
 from vkpbr.render import layouts as L
 from vkpbr.render.frames import FrameSlot
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.recorder import FrameRecorder
+from vkpbr.render.shadow_raster import wants_compute
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
 from vkpbr.scene.types import Camera, Light
 
@@ -27,11 +29,12 @@ class ShadowFrames:
     """The per-frame side of `maps` for a scene of `bounds`, whose recordings `recorder` keeps."""
 
     def __init__(self, maps: ShadowMaps, bounds: Any, recorder: FrameRecorder,
-                 state: Any = None, casters: np.ndarray | None = None) -> None:
+                 state: Any = None, casters: np.ndarray | None = None, paths: Any = None) -> None:
         # bounds: Bounds or render/scene_state.py's LiveBounds; state (vkpbr.scene.state) and
         # `casters` (a bool per draw): a map is redrawn when one of its casters moved.
         self.maps, self.bounds, self.recorder = maps, bounds, recorder
         self.state, self.casters = state, casters
+        self.paths = paths  # render/path_choice.py FramePaths: shadow_raster auto follows its choice
         self._plan: tuple[tuple, ShadowPlan] = ((), ShadowPlan())
         self._rows: dict[int, tuple[tuple, np.ndarray | None]] = {}  # by slot: (key, rows)
 
@@ -48,7 +51,28 @@ class ShadowFrames:
         """The frame's plan, with maps of `options`' resolution that hold it."""
         plan = self.plan(lights, options)
         self.ensure(plan, options)
+        self.choose_raster(options)
         return plan
+
+    def choose_raster(self, options: RenderOptions) -> None:
+        """Draw the maps by compute shaders or the raster units, as `options` say
+        (shadow_raster.wants_compute); a change drops the recordings made the other way."""
+        choice = getattr(self.paths, "choice", None)
+        compute = wants_compute(options.shadow_raster, self.maps.device,
+                                None if choice is None else choice.compute_raster)
+        limit = int(self.maps.device.limits.maxStorageBufferRange)
+        if compute and self.maps.compute_bytes() > limit:  # every layer in one binding
+            if options.shadow_raster.name.lower() == "compute":
+                raise UsageError(f"--shadow-raster compute: the shadow maps' "
+                                 f"{self.maps.compute_bytes() >> 20} MiB of depths exceed one "
+                                 f"storage binding here ({limit >> 20} MiB); lower "
+                                 "--shadow-resolution or use --shadow-raster hardware")
+            compute = False
+        if compute != self.maps.compute:
+            self.maps.device.wait_idle()  # recordings in flight are freed
+            self.maps.compute = compute
+            self.recorder.free()
+            self.maps.forget()
 
     def ensure(self, plan: ShadowPlan, options: RenderOptions | None = None) -> None:
         """Maps that hold `plan` (of `options`' resolution, where given)."""
@@ -95,6 +119,13 @@ class ShadowFrames:
             self.ensure(plan, options)
         if not plan.entries:
             return None
-        self._rows.pop(slot.index, None)  # the slot's cascades are overwritten
-        return self.maps.write(slot.index, plan, lights, None, (1, 1), 0.0, 0.0,
+        # Skipped when the slot holds these already (a loop of batches: the fits are the
+        # scene's, the same every step); a frame's cascades in between change the key.
+        key = ("scene", plan, lights, self.maps.resolution, getattr(self.bounds, "version", 0))
+        last = self._rows.get(slot.index)
+        if last is not None and last[0] == key:
+            return last[1]
+        rows = self.maps.write(slot.index, plan, lights, None, (1, 1), 0.0, 0.0,
                                self.bounds.corners[0], self.bounds.corners[-1])
+        self._rows[slot.index] = (key, rows)
+        return rows

@@ -171,6 +171,7 @@ class ShadowMaps:
             L.PUSH.size))
         align = int(device.limits.minStorageBufferOffsetAlignment)
         size = HEADER_BYTES + 64 * MATRICES
+        self.matrix_bytes = size
         self.stride = (size + align - 1) // align * align
         self.buffer = self._own(Buffer(device, self.stride * slots, "storage", host_visible=True,
                                        name="shadow matrices"))
@@ -191,6 +192,11 @@ class ShadowMaps:
         self._last_stale: tuple | None = None  # stale()'s last inputs, while _drawn holds them
         self.last_redrawn_layers: tuple[tuple[str, int], ...] = ()  # latest frame: (kind, layers drawn)
         self._warned = False
+        # Drawn by compute shaders (render/shadow_raster.py) instead of the raster units: the
+        # frames' choice (ShadowFrames.prepare, RenderOptions.shadow_raster).
+        self.compute = False
+        self._layouts = (frame_layout or empty, material_layout)
+        self._raster: Any = None
         self.ensure(ShadowPlan())
 
     def _own(self, obj: Any) -> Any:
@@ -412,11 +418,28 @@ class ShadowMaps:
         self.maps.record_end_writes(cmd)
         self.cubes.record_end_writes(cmd)
 
+    def compute_bytes(self) -> int:
+        """Bytes the compute rasteriser's depth buffer takes for the current images (every
+        layer's texels: one storage binding, at most the device's maxStorageBufferRange)."""
+        return 4 * (self.maps.layers * self.maps.size ** 2 + self.cubes.layers * self.cubes.size ** 2)
+
+    def compute_raster(self, gs: Any) -> Any:
+        """The compute rasteriser of these maps for the scene `gs` (made on first use)."""
+        if self._raster is None:
+            from vkpbr.render.shadow_raster import ShadowRaster
+
+            self._raster = ShadowRaster(self.device, self, gs, *self._layouts, len(self.sets),
+                                        MAX_LAYERS, DEPTH_BIAS)
+        return self._raster
+
     def read_maps(self) -> tuple[np.ndarray, np.ndarray]:
         """(2D layers, cube layers) as float32 arrays (tests; needs `readable`)."""
         return self.maps.read(), self.cubes.read()
 
     def destroy(self) -> None:
+        if self._raster is not None:
+            self._raster.destroy()
+            self._raster = None
         for p in self._pipelines.values():
             p.destroy()
         self._pipelines.clear()

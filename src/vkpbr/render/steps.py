@@ -25,6 +25,7 @@ from vkpbr.render.passes import PASSES, PassContext, PassSpec, classify, record_
 from vkpbr.render.paths import COPY_PATHS, PATHS
 from vkpbr.render.post import lens_steps, post_steps
 from vkpbr.render.post_stage import PostContext, encode_step
+from vkpbr.render.shadow_raster import make_steps as shadow_compute_steps
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.render.transmission import TRANSMISSIVE, copy_classes
 
@@ -136,6 +137,11 @@ class FrameSteps:
         self.resources.update(deform.resources())
         return deform.steps(self.frame_index)
 
+    def _worlds(self) -> list[Step]:
+        """A batch of worlds' records from poses on the GPU (render/worlds.py WorldKernel):
+        the batch path gives the step where its call has such worlds; none otherwise."""
+        return []
+
     def _shadows(self) -> list[Step]:
         """The shadow maps' redrawn layers. Their partial redraw keeps the other layers, so
         ShadowMaps' layered images take their own transitions (gpu/layered.py) and leave
@@ -143,6 +149,9 @@ class FrameSteps:
         sm, spec, gs = self.r.shadows, self.spec, self.gs
         if sm is None or not spec.plan.entries or (spec.redraw is not None and not any(spec.redraw)):
             return [Step("shadows", timed=True)]
+        if sm.compute:  # drawn by compute shaders (render/shadow_raster.py)
+            return shadow_compute_steps(sm, self.r, self.frame_index, spec.plan, spec.redraw,
+                                        self.classes, self.material_sets, self.set0, self.resources)
 
         def record(cmd: Commands) -> None:
             sm.record(cmd, self.frame_index, spec.plan, gs.draws, self.classes, self.material_sets,

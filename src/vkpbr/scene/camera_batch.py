@@ -68,6 +68,18 @@ class CameraBatch:
     # batches render view by view (render/batch_route.py), each resampled to its model.
     lenses: tuple[tuple[str, tuple[float, ...]], ...] | None = None
 
+    def __post_init__(self) -> None:
+        # Read-only copies of the arrays (where they are the caller's, writable): a batch
+        # never changes after it is made, so a renderer given the same batch again reuses
+        # what it made of it (its validation, its view records) without comparing arrays.
+        for name in ("eye", "target", "up", "yfov_deg", "intrinsics", "znear", "zfar"):
+            a = getattr(self, name)
+            if isinstance(a, np.ndarray) and a.flags.writeable:
+                a = a.copy()
+                a.flags.writeable = False
+                object.__setattr__(self, name, a)
+        object.__setattr__(self, "_valid", False)
+
     def __len__(self) -> int:
         return len(self.eye)
 
@@ -229,7 +241,10 @@ class CameraBatch:
                       model=model, distortion=distortion)
 
     def validate(self) -> None:
-        """Raise a one-line UsageError naming the first view `validate_camera` would refuse."""
+        """Raise a one-line UsageError naming the first view `validate_camera` would refuse
+        (once: the batch cannot change afterwards)."""
+        if self._valid:  # type: ignore[attr-defined]
+            return
         with np.errstate(all="ignore"):  # NaN and inf are what is being looked for
             bad = self._bad_views()
         if bad.any():
@@ -239,6 +254,7 @@ class CameraBatch:
             except UsageError as e:
                 raise UsageError(f"cameras[{i}]: {str(e).removeprefix('camera: ')}") from None
             raise UsageError(f"cameras[{i}]: not a valid camera")
+        object.__setattr__(self, "_valid", True)
 
     def _bad_views(self) -> np.ndarray:
         """(B,) bool: the views `validate_camera` refuses (its checks, vectorised)."""

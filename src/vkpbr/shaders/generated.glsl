@@ -110,6 +110,8 @@ struct ViewRecord {
     vec4 intrinsics;
     uvec4 viewport;
     uint layer;
+    uint instance_base;
+    uint factor_base;
 };
 struct DrawRecord {
     uvec4 info;
@@ -318,6 +320,9 @@ layout(set = 4, binding = 13, std430) buffer BinArgs {
 };
 layout(set = 4, binding = 14, std430) buffer PixelList {
     uint pixel_list[];
+};
+layout(set = 4, binding = 15, std430) readonly buffer WorldFactors {
+    vec4 world_factors[];
 };
 layout(set = 4, binding = 16, std140) readonly buffer Settings {
     int view;

@@ -62,9 +62,12 @@ void main() {
     vec3 b = tbn[1];
     vec3 n = tbn[2];
 #endif
-#if BATCH  // one record a draw, pushed: the instance index is the view
-    mat4 model = instance_matrices[2u * draw.index.x];
-    mat3 normal_matrix = mat3(instance_matrices[2u * draw.index.x + 1u]);
+#if BATCH  // one record a draw, pushed: the instance index is the view, and the view's
+    // world's records start at its instance_base (0 but in a batch of worlds)
+    view_index = visible_views[gl_InstanceIndex];
+    uint record = 2u * (views[view_index].instance_base + draw.index.x);
+    mat4 model = instance_matrices[record];
+    mat3 normal_matrix = mat3(instance_matrices[record + 1u]);
 #else  // a draw's instances are consecutive records (EXT_mesh_gpu_instancing: one draw call)
     mat4 model = instance_matrices[2u * uint(gl_InstanceIndex)];
     mat3 normal_matrix = mat3(instance_matrices[2u * uint(gl_InstanceIndex) + 1u]);
@@ -81,7 +84,6 @@ void main() {
     v_tangent = mat3(model) * t;
     v_bitangent = mat3(model) * b;
 #if BATCH
-    view_index = visible_views[gl_InstanceIndex];
     v_view = view_index;
     gl_Layer = int(views[view_index].layer);
 #endif

@@ -145,7 +145,7 @@ bool fetch(uint g, out vec4 c[3], out bool double_sided) {
 #endif
     // The draw's bounding sphere outside the view: none of its triangles is seen (one test
     // instead of three vertices; most of a scene's draws, for most of a batch's views).
-    mat4 model = instance_matrices[2u * rd.z];
+    mat4 model = instance_matrices[2u * (views[view_index].instance_base + rd.z)];
     if (!sphere_visible(views[view_index].VP, world_sphere(model, raster_spheres[rd.z]))) return false;
     DrawRecord dr = draws[rd.z];
     uint base = dr.info.x + 3u * (g - rd.x);

@@ -18,8 +18,27 @@ vec2 texture_grad(vec4 row0, vec4 row1, vec4 d) {
 }
 
 // The material from the compute path's table (the frame's blocks, too, are storage buffers
-// here: generated.glsl, COMPUTE_SET); its textures from its own set 1.
+// here: generated.glsl, COMPUTE_SET); its textures from its own set 1. A batch's view of a
+// world with its own material factors (views[].factor_base > 0: render/worlds.py) takes
+// the record with those four factors replaced; every other view reads the table as is.
+#if BATCH
+MaterialRecord world_material(uint index) {
+    MaterialRecord m = materials[index];
+    uint base = views[view_index].factor_base;
+    if (base != 0u) {
+        uint at = 3u * (base - 1u + index);
+        vec4 e = world_factors[at + 1u];
+        m.base_color_factor = world_factors[at];
+        m.emissive_factor = e.rgb;
+        m.metallic_factor = e.a;
+        m.roughness_factor = world_factors[at + 2u].x;
+    }
+    return m;
+}
+#define MAT world_material(MATERIAL_INDEX)
+#else
 #define MAT materials[MATERIAL_INDEX]
+#endif
 #define SAMPLE(name) textureGrad(name##_map, texture_uv(MAT.name##_uv_row0, MAT.name##_uv_row1), \
     texture_grad(MAT.name##_uv_row0, MAT.name##_uv_row1, g_dtex_dx), \
     texture_grad(MAT.name##_uv_row0, MAT.name##_uv_row1, g_dtex_dy))
@@ -74,7 +93,7 @@ struct SurfaceTriangle {
 SurfaceTriangle surface_triangle(uint draw, uint prim) {
     SurfaceTriangle t;
     DrawRecord dr = draws[draw];
-    mat4 model = instance_matrices[2u * draw];
+    mat4 model = instance_matrices[2u * (views[view_index].instance_base + draw)];
     uint base = dr.info.x + 3u * prim;
     t.vi = uvec3(indices[base], indices[base + 1u], indices[base + 2u]) + dr.info.y;
     t.w0 = (model * vec4(vec3_at(t.vi.x, false), 1.0)).xyz;
@@ -129,8 +148,8 @@ DrawRecord surface_at(uint draw, uint prim, uvec2 pixel, vec2 extent, out uvec3 
 // The rest of the surface globals: the interpolated normal, tangent and bitangent through
 // the draw's matrices (TBN_MODE's stream), which side faces the camera, the node's scale.
 void surface_frame_at(uint draw, uvec3 vi, vec3 w0, vec3 w1, vec3 w2, vec3 bary) {
-    mat4 model = instance_matrices[2u * draw];
-    mat3 normal_matrix = mat3(instance_matrices[2u * draw + 1u]);
+    mat4 model = instance_matrices[2u * (views[view_index].instance_base + draw)];
+    mat3 normal_matrix = mat3(instance_matrices[2u * (views[view_index].instance_base + draw) + 1u]);
     vec3 eye = views[view_index].eye_near.xyz;
     vec3 n[3], t[3], bt[3];
     for (int k = 0; k < 3; ++k) {

@@ -1,0 +1,334 @@
+"""`Renderer.render_batch`'s body: the route, the worlds, the results (docs/batch.md).
+
+Kept out of renderer.py (a facade) so that the call's parts read in one place: the checks
+and route (render/batch_route.py), a batch of worlds (vkpbr.scene.worlds for the poses,
+render/worlds.py on the GPU), the batch path's submission (render/batch_path.py) and, view
+by view where a batch cannot draw something, `render_many` with each view's world applied
+to the renderer's state and the state put back afterwards.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from vkpbr.errors import UsageError
+from vkpbr.render.batch_route import batch_result, batch_route, stack_views
+from vkpbr.render.lighting import LightsArg
+from vkpbr.render.options import RenderOptions
+from vkpbr.render.worlds import GpuWorlds, WorldCall, base_factors
+from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
+from vkpbr.scene.state import SceneState
+from vkpbr.scene.worlds import (
+    WorldMaterials,
+    WorldPoses,
+    WorldSlots,
+    check_space,
+    factor_records,
+    world_records,
+)
+
+__all__ = ["render_batch", "world_slots", "WorldsArg"]
+
+WorldsArg = Any  # (W, N, 4, 4) | (W, N, 7) NumPy array or torch tensor
+
+
+@dataclass(frozen=True)
+class WorldPlan:
+    """A call's worlds as checked on the host: the slots and poses (or None: the state's
+    poses in every world), the materials' factors (or None) and the world of each view."""
+
+    slots: WorldSlots | None
+    poses: WorldPoses | None
+    materials: WorldMaterials | None
+    index: np.ndarray
+
+
+def world_slots(renderer: Any, nodes: Any = None, materials: Any = None) -> WorldSlots | None:
+    """Name the N nodes whose world poses each world of a batch gives (names, paths,
+    patterns or indices, in the order the worlds' arrays list them) and the K materials whose
+    factors `world_materials` gives; kept by the renderer for its next batches of worlds."""
+    if nodes is None and materials is None:
+        raise UsageError("world_slots: name nodes (poses) or materials (factors) or both")
+    renderer._world_slots = None if nodes is None else WorldSlots.of(renderer.state, nodes)
+    renderer._world_materials = None if materials is None else (
+        [materials] if isinstance(materials, (str, int)) else list(materials))
+    if materials is not None:  # names checked now, once
+        WorldMaterials.indices(renderer.state, renderer._world_materials)
+    return renderer._world_slots
+
+
+_OPTIONS: dict[Any, RenderOptions] = {}  # (options, overrides) -> the call's options
+
+
+def _options(options: RenderOptions | None, overrides: dict[str, Any]) -> RenderOptions:
+    """The call's options (checked once: a loop that passes the same ones each step does not
+    build and check them again)."""
+    try:
+        key = (options, tuple(sorted(overrides.items())))
+        hash(key)
+    except TypeError:  # (an unhashable override value: made each time)
+        return dataclasses.replace(options or RenderOptions(), **overrides)
+    made = _OPTIONS.get(key)
+    if made is None:
+        if len(_OPTIONS) > 64:
+            _OPTIONS.clear()
+        made = _OPTIONS[key] = dataclasses.replace(options or RenderOptions(), **overrides)
+    return made
+
+
+def _slots(renderer: Any) -> WorldSlots:
+    slots = getattr(renderer, "_world_slots", None)
+    if slots is None:
+        raise UsageError("worlds: name the nodes each world poses first: "
+                         "renderer.world_slots(['cube', 'arm/*'])")
+    slots = slots.refreshed(renderer.state)
+    renderer._world_slots = slots
+    return slots
+
+
+def _world_plan(renderer: Any, views: int, worlds: WorldsArg, world_of_view: Any,
+                quaternion: str, visible: Any, materials: Any, space: str) -> WorldPlan:
+    """The checked worlds of a call of `views` views (NumPy or CPU tensors)."""
+    slots = poses = wm = None
+    if worlds is not None:
+        slots = _slots(renderer)
+        poses = WorldPoses.of(worlds, len(slots), quaternion, visible, space)
+        if poses.local and slots.nested:
+            raise UsageError("worlds: space='local' with a chosen node below another chosen "
+                             "node; give world poses (space='world')")
+    if materials is not None:
+        wm = _materials(renderer, materials)
+    counts = {x.count for x in (poses, wm) if x is not None}
+    if len(counts) > 1:
+        raise UsageError(f"worlds: {poses.count} worlds of poses but {wm.count} of "  # type: ignore[union-attr]
+                         "world_materials; give both for every world")
+    return WorldPlan(slots, poses, wm, _world_index(views, counts.pop(), world_of_view))
+
+
+def _materials(renderer: Any, given: Any) -> WorldMaterials:
+    names = getattr(renderer, "_world_materials", None)
+    if names is None:
+        raise UsageError("world_materials: name the materials first: "
+                         "renderer.world_slots(nodes, materials=['paint', ...])")
+    return WorldMaterials.of(renderer.state, names, given)
+
+
+def _world_index(views: int, w: int, world_of_view: Any) -> np.ndarray:
+    """(views,) int64: the world each view sees (checked; omitted: view b sees world b)."""
+    if world_of_view is None:
+        if views != w:
+            raise UsageError(f"worlds: {views} views of {w} worlds; give world_of_view, the "
+                             "world each view sees ((B,) integers)")
+        return np.arange(w, dtype=np.int64)
+    raw = np.asarray(world_of_view.cpu() if hasattr(world_of_view, "cpu") else world_of_view)
+    if raw.shape != (views,) or not np.issubdtype(raw.dtype, np.integer):
+        raise UsageError(f"world_of_view: expected ({views},) integers, got shape "
+                         f"{tuple(raw.shape)} of {raw.dtype}")
+    index = raw.astype(np.int64)
+    if views and (index.min() < 0 or index.max() >= w):
+        bad = int(index.min() if index.min() < 0 else index.max())
+        raise UsageError(f"world_of_view: world {bad} is out of range (0..{w - 1})")
+    return index
+
+
+def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: LightsArg,
+                 options: RenderOptions | None, linear: bool, depth: bool,
+                 outputs: Iterable[str] | None, batch: int | str, device: str,
+                 out: np.ndarray | None, worlds: WorldsArg = None, world_of_view: Any = None,
+                 quaternion: str = "xyzw", world_visible: Any = None,
+                 overrides: dict[str, Any] | None = None, world_expand: str = "auto",
+                 world_materials: Any = None, space: str = "world") -> Any:
+    """Renderer.render_batch (its docstring says what each argument is)."""
+    r = renderer
+    views = as_camera_batch(cameras, r.default_camera())
+    opts = _options(options, overrides or {})
+    route, wanted = batch_route(r.parts, views, size, opts, linear, depth, outputs, device, out)
+    if worlds is None and world_materials is None and (world_of_view is not None
+                                                       or world_visible is not None):
+        raise UsageError("world_of_view and world_visible need worlds= (the worlds' poses)")
+    if world_materials is not None and route == "layered":
+        route = "views"  # (the fragment path's batch has no per-world materials yet)
+    call, plan = None, None
+    if worlds is not None and _on_cuda(worlds):
+        if route == "views" or world_materials is not None:
+            raise UsageError("worlds on CUDA render in a batch only, without world_materials "
+                             "(this call renders view by view: dataset outputs, post steps, "
+                             "MSAA or the fragment path's batch): give NumPy poses")
+        call = _cuda_call(r, len(views), worlds, world_of_view, quaternion, world_visible, space)
+    elif worlds is not None or world_materials is not None:
+        plan = _world_plan(r, len(views), worlds, world_of_view, quaternion, world_visible,
+                           world_materials, space)
+        call = _host_call(r, plan, world_expand)
+    each = _each_view(r.state, views, plan)  # view by view, as `render` draws
+    if route == "views":  # (render/batch_route.py says when)
+        return stack_views(r, r.render_many(each, lights, size, opts, linear, depth,
+                                            outputs=wanted or None), depth, wanted, out)
+    color, dist = r.batch_path.run(route, views, size, lights, opts, linear, depth, batch, out,
+                                   call)
+    extra = tuple(n for n in wanted if n != "color")  # from their own pass, view by view
+    frames = list(r.render_many(each, lights, size, opts, linear, outputs=extra)) if extra else []
+    r.last_stats = r.batch_path.stats  # the batch's (not the outputs' passes)
+    return batch_result(color, dist, depth, wanted, frames)
+
+
+def _host_call(renderer: Any, plan: WorldPlan, expand: str) -> WorldCall:
+    """NumPy worlds: their records made here (exact: "auto", "host"), or the poses handed to
+    the GPU's kernel as CUDA tensors are ("gpu": float32, what the CUDA route computes); the
+    materials' factor records (render/worlds.py base_factors: the state's, then the worlds')."""
+    state = renderer.state
+    slots, poses, index = plan.slots, plan.poses, plan.index
+    if expand not in ("auto", "host", "gpu"):
+        raise UsageError(f"world_expand {expand!r}: choose 'auto', 'host' or 'gpu'")
+    factors = None
+    if plan.materials is not None:
+        factors = factor_records(base_factors(renderer.gpu_scene, state), plan.materials)
+    if poses is None or slots is None:
+        return WorldCall(index, factors=factors)
+    if expand != "gpu":
+        return WorldCall(index, records=world_records(state, slots, poses), factors=factors)
+    # The rows as given (7 floats: the kernel makes the rotation) or the matrices (16)
+    flat = poses.rows if poses.rows is not None else poses.matrices
+    shown = poses.visible
+
+    def fill(kernel: Any) -> None:
+        kernel.write_numpy(flat, shown)
+
+    gw = GpuWorlds(slots, poses.count, 7 if poses.rows is not None else 16, poses.wxyz,
+                   shown is not None, fill, local=poses.local)
+    return WorldCall(index, gpu=gw, factors=factors)
+
+
+def _on_cuda(value: Any) -> bool:
+    return hasattr(value, "device") and getattr(value.device, "type", "") == "cuda"
+
+
+def _cuda_call(renderer: Any, views: int, worlds: Any, world_of_view: Any, quaternion: str,
+               visible: Any, space: str = "world") -> WorldCall:
+    """Worlds whose poses are CUDA tensors: shapes and dtypes checked here, the values by the
+    worlds kernel on the GPU; copied device to device into the kernel's inputs."""
+    import torch
+
+    slots = getattr(renderer, "_world_slots", None)
+    if slots is None:
+        raise UsageError("worlds: name the nodes each world poses first: "
+                         "renderer.world_slots(['cube', 'arm/*'])")
+    slots = slots.refreshed(renderer.state)
+    renderer._world_slots = slots
+    n = len(slots)
+    shape = tuple(worlds.shape)
+    if len(shape) == 3 and shape[1:] == (n, 7):
+        floats = 7
+    elif len(shape) == 4 and shape[1:] == (n, 4, 4):
+        floats = 16
+    else:
+        raise UsageError(f"worlds: poses of shape {shape} for {n} slot node(s); give "
+                         f"(W, {n}, 4, 4) world matrices or (W, {n}, 7) position + quaternion rows")
+    if quaternion not in ("xyzw", "wxyz"):
+        raise UsageError(f"quaternion {quaternion!r}: choose 'xyzw' or 'wxyz'")
+    local = check_space(space)
+    if local and slots.nested:
+        raise UsageError("worlds: space='local' with a chosen node below another chosen "
+                         "node; give world poses (space='world')")
+    if not worlds.is_floating_point():
+        raise UsageError(f"worlds: a tensor of {worlds.dtype}; give float32 or float64")
+    _same_gpu(renderer, worlds)
+    # NaN, infinity and zero quaternions are found by the worlds kernel on the GPU (no read
+    # back before the batch: render/worlds.py), their worlds' draws hidden and reported.
+    p = worlds.detach().to(torch.float32).contiguous()
+    w = shape[0]
+    shown = None
+    if visible is not None:
+        if tuple(visible.shape) != (w, n):
+            raise UsageError(f"world_visible: shape {tuple(visible.shape)}, expected ({w}, {n})")
+        shown = (visible.to(torch.int32) if _on_cuda(visible)
+                 else torch.as_tensor(np.asarray(visible), device=p.device).to(torch.int32)).contiguous()
+    index = _world_index(views, w, world_of_view)
+
+    def fill(kernel: Any) -> None:
+        kernel.write_cuda(p, shown)
+
+    return WorldCall(index, gpu=GpuWorlds(slots, w, floats, quaternion == "wxyz", shown is not None, fill,
+                                           cuda=True, local=local))
+
+
+def _same_gpu(renderer: Any, tensor: Any) -> None:
+    from vkpbr.gpu.cuda import cuda_device_for, cuda_unavailable
+
+    why = cuda_unavailable()
+    if why is not None:
+        raise UsageError(f"worlds on CUDA: {why}")
+    dev = renderer.device
+    index = cuda_device_for(dev.uuid(), dev.info.name)
+    if tensor.device.index not in (None, index):
+        raise UsageError(f"worlds: a tensor on {tensor.device}, but the renderer draws on "
+                         f"cuda:{index} ({dev.info.name}); move it there with .to('cuda:{index}')")
+
+
+def _each_view(state: SceneState, views: CameraBatch, plan: WorldPlan | None) -> Iterator[Any]:
+    """The views' cameras one by one; in a batch of worlds each taken with its world applied
+    to `state` (and the state as it was once the last is drawn or the caller stops)."""
+    if plan is None:
+        yield from (views.camera(i) for i in range(len(views)))
+        return
+    saved = apply_saved(state)
+    try:
+        for i in range(len(views)):
+            w = int(plan.index[i])
+            if plan.slots is not None and plan.poses is not None:
+                apply_world(state, plan.slots, plan.poses, w)
+            if plan.materials is not None:
+                apply_materials(state, plan.materials, w)
+            yield views.camera(i)
+    finally:
+        saved()
+
+
+def apply_saved(state: SceneState) -> Any:
+    """A function that puts `state`'s poses, visibility and material overrides back as they
+    are now."""
+    local, visible = state.local.copy(), state.visible.copy()
+    materials = {k: dict(v) for k, v in state.materials.items()}
+    every = np.arange(len(state.tree))
+
+    def restore() -> None:
+        state.local[:] = local
+        state.set_visible(every, visible)  # (a change: the frames copy the state again)
+        if state.materials != materials:
+            state.materials = materials
+            state.material_version += 1
+            state.version += 1
+
+    return restore
+
+
+def apply_materials(state: SceneState, wm: WorldMaterials, w: int) -> None:
+    """Set world `w`'s factors of the named materials on `state` (set_material)."""
+    for k, material in enumerate(wm.materials):  # (the factors' names are set_material's)
+        given = {f: (v[w, k] if v.shape[2] > 1 else float(v[w, k, 0]))
+                 for f, v in wm.values.items()}
+        state.set_material(int(material), **given)
+
+
+def apply_world(state: SceneState, slots: WorldSlots, poses: WorldPoses, w: int) -> None:
+    """Pose `state` as world `w`: each slot node at its world pose (parents first, so a
+    chosen node below another takes its own pose) or its local one, hidden where the world
+    hides it."""
+    if poses.local:
+        state.set_poses(slots.nodes, poses.matrices[w], space="local")
+        if poses.visible is not None:
+            state.set_visible(slots.nodes, poses.visible[w])
+        return
+    depth = np.zeros(len(state.tree), np.int64)
+    for d, level in enumerate(state.tree.levels()):
+        depth[level] = d
+    depth = depth[slots.nodes]
+    for level in np.unique(depth):
+        pick = np.flatnonzero(depth == level)
+        state.set_poses(slots.nodes[pick], poses.matrices[w, pick], space="world")
+    if poses.visible is not None:
+        state.set_visible(slots.nodes, poses.visible[w])

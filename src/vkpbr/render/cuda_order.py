@@ -1,0 +1,84 @@
+"""A batch ordered against torch's current stream on the GPU, with no host wait for CUDA.
+
+`render_batch(worlds=<CUDA tensor>, device="cuda")` (docs/batch.md "Worlds") takes a
+simulator's poses and gives frames back as torch tensors. `CudaOrder` orders each step on the
+GPU with two timeline semaphores shared by Vulkan and CUDA (gpu/timeline.py, gpu/cuda.py):
+
+    torch's stream:  wait done >= n-1 | copy the poses into the inputs | signal inputs = n
+    Vulkan:          wait inputs >= n | the batch (worlds kernel first) | signal done = n
+    torch's stream:  wait done >= n   | clone the frames into the tensor returned
+
+so the copy never overwrites inputs the previous batch still reads, the batch never reads
+inputs before they are written, the clone never reads frames before they are drawn, and the
+next batch never draws over frames before the clone read them (it waits for inputs n + 1,
+signalled after the clone). Python returns once the batch is submitted; the next call first
+waits for this batch's fence (the host's own buffers of the batch are then free to rewrite).
+"""
+
+from __future__ import annotations
+
+from vkpbr.gpu.device import Device
+from vkpbr.gpu.timeline import SharedTimeline
+
+__all__ = ["CudaOrder"]
+
+
+class CudaOrder:
+    """The two shared timelines of a renderer's CUDA-ordered batches and the step counter."""
+
+    def __init__(self, device: Device) -> None:
+        from vkpbr.gpu.cuda import CudaTimeline, cuda_device_for
+
+        self.device = device
+        self.inputs, self.done = SharedTimeline(device), SharedTimeline(device)
+        index = cuda_device_for(device.uuid(), device.info.name)
+        self._cuda_inputs = CudaTimeline(self.inputs.export_fd(), index)
+        self._cuda_done = CudaTimeline(self.done.export_fd(), index)
+        self.value = 0  # the last value signalled on either
+        self._fresh = False  # inputs signalled for the next submission
+
+    @staticmethod
+    def _stream() -> int:
+        import torch
+
+        return int(torch.cuda.current_stream().cuda_stream)
+
+    def before_inputs(self) -> None:
+        """Queue on torch's stream: wait until the last batch is done (its inputs read)."""
+        self._cuda_done.wait(self.value, self._stream())
+
+    def inputs_written(self) -> None:
+        """Queue on torch's stream: signal the next value once what is queued is done."""
+        self.value += 1
+        self._cuda_inputs.signal(self.value, self._stream())
+        self._fresh = True
+
+    def submit_values(self) -> tuple[int, int]:
+        """(wait, signal) values of the next submission (a fresh value where the call's
+        earlier submission used the last one)."""
+        if not self._fresh:
+            self.inputs_written()
+        self._fresh = False
+        return self.value, self.value
+
+    def frames_ready(self) -> None:
+        """Queue on torch's stream: wait until the submitted batch is done (before the
+        frames' clone)."""
+        self._cuda_done.wait(self.value, self._stream())
+
+    def destroy(self) -> None:
+        import torch
+
+        self.device.wait_idle()
+        torch.cuda.current_stream().synchronize()  # (its waits on `done` have returned)
+        for c in (self._cuda_inputs, self._cuda_done):
+            c.close()
+        self.inputs.destroy()
+        self.done.destroy()
+
+    def __repr__(self) -> str:  # (for messages)
+        return f"CudaOrder(value={self.value})"
+
+    @classmethod
+    def available(cls, device: Device) -> bool:
+        return bool(getattr(device, "external_semaphore_fd", False))

@@ -1,0 +1,355 @@
+"""Shadow maps drawn by compute shaders (RenderOptions.shadow_raster; shaders/shadow_raster.comp).
+
+A moving caster, or a camera the sun's cascades follow, redraws shadow maps every frame, and
+through the raster units that is the H200's ceiling: 4 of its 132 SMs rasterise (4.45 ms for
+Sponza's 262 k triangles x 4 cascades). Here every caster triangle x every redrawn layer of a
+light is one invocation of one dispatch (cascades, a spot map, a cube's six faces alike:
+a layer is named by its matrix in ShadowData), writing its depth with a 32-bit atomicMax
+into a buffer of every layer's texels (reversed-Z: the largest depth is the nearest to the
+light; depths >= 0, so their float bits order as the depths). The redrawn layers are then
+copied into the shadow images the lighting samples: the sampling (hardware compare and 2x2
+filter, shaders/shadow_sampling.glsl) and the raster path's images stay as they are, and
+the copy (~4 bytes a texel) costs less than a compare done by hand in every shading thread.
+
+Triangles whose box exceeds BIG_AREA texels (a floor under a whole cascade) are listed as
+bands of rows and drawn by work groups, as the main compute rasteriser does (raster.comp);
+alpha-masked and blended casters are drawn one dispatch a draw with their material bound,
+alpha-tested per texel where they would win (foliage casts leaf shadows), their big
+triangles covered by the whole work group. The depth bias is the raster pipelines'
+(shadows.DEPTH_BIAS, Vulkan's slope-scaled formula); the normal offset stays in
+shadow_sampling.glsl. Vertices are the scene's posed ones (the deform step writes them in
+place, before) placed by the frame's Instances, as every other step reads them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from vkpbr.gpu.buffer import Buffer, upload_buffer
+from vkpbr.gpu.compute import ComputePipeline
+from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
+from vkpbr.gpu.graph import BufferResource, Step
+from vkpbr.render.codegen import SPV_DIR
+from vkpbr.render.deform import DEFORMED_RADIUS, UNBOUNDED_RADIUS
+
+__all__ = ["ShadowRaster", "wants_compute", "SET_ROWS"]
+
+SMALL_GROUP = 64  # shadow_small / shadow_masked: one (triangle, layer) an invocation
+MAX_GROUPS_X = 65535
+BIG_AREA, BIG_CHUNK = 256, 16384  # raster.comp's opaque split (compute_path.RasterTuning)
+MASKED_AREA = 64  # masked triangles over this many box texels: the work group covers them
+PUSH_BYTES = 96  # shadow_raster.comp's push constants
+# Set 4: generated.glsl's compute-path bindings of the streams, then the kernels' own.
+SET_ROWS = ((3, "Indices"), (4, "Positions"), (5, "Texcoords0"), (6, "Texcoords1"),
+            (7, "Colors"), (40, "ShadowMatrices"), (41, "Casters"), (42, "Depths"), (43, "Big"))
+_OPAQUE, _MASKED = ("opaque", "opaque_double"), ("mask", "blend")
+_KINDS = ("directional", "spot", "point")  # shadow_raster.comp's bias index
+# Timestamps after each kernel (benchmarks/bench_shadows.py --steps): FrameStats.pass_ms then
+# has "shadows.small", "shadows.big", "shadows.masked" and "shadows" (the copy) apart. Off:
+# one timestamp, "shadows", for them all.
+TIMED_STEPS = False
+
+
+def wants_compute(choice: Any, device: Any, measured: bool | None = None) -> bool:
+    """Whether a frame's shadow maps are drawn by compute shaders: "compute" always,
+    "hardware" never, "auto" as the main path's own choice of rasteriser for the view
+    (`measured`: render/path_choice.py's measured or recorded compute_raster for the device;
+    the same raster units draw both), else by its rule: on GPUs (a datacenter GPU's few raster
+    units are the limit of a redrawn map), not on CPUs (lavapipe rasterises faster than it
+    runs these kernels)."""
+    name = getattr(choice, "name", str(choice)).lower()
+    if name == "auto":
+        return measured if measured is not None else device.info.kind != "cpu"
+    return name == "compute"
+
+
+class _Table:
+    """The caster draws of one draw classification: opaque rows first (their triangles
+    numbered from 0 over the table), then one row a masked or blended draw; a row is (first
+    triangle, first index, vertex offset, record in Instances), then its mesh's bounding
+    sphere in the mesh's space (float32 bits; a deformed draw's never culls)."""
+
+    def __init__(self, device: Any, gs: Any, classes: Sequence[str]) -> None:
+        casters = [(i, d, c) for i, (d, c) in enumerate(zip(gs.draws, classes, strict=True))
+                   if getattr(d, "casts_shadows", True) and d.index_count >= 3]
+        opaque = [(i, d) for i, d, c in casters if c in _OPAQUE]
+        masked = [(i, d) for i, d, c in casters if c in _MASKED]
+        rows = np.zeros((max(len(opaque) + len(masked), 1), 8), np.uint32)
+        spheres = rows.view(np.float32)[:, 4:]
+        spheres[:, 3] = UNBOUNDED_RADIUS
+        first = 0
+        self.masked: list[tuple[int, int, int]] = []  # (row, material, triangles)
+        self.opaque_rows = len(opaque)
+        self.opaque_triangles = 0  # the opaque rows' triangles, 0 .. this
+        for row, (i, d) in enumerate(opaque + masked):
+            if row == len(opaque):
+                self.opaque_triangles = first
+            rows[row, :4] = first, d.first_index, d.vertex_offset, i
+            spheres[row] = _sphere(gs.scene.meshes[d.mesh].positions, d)
+            if row >= len(opaque):
+                self.masked.append((row, d.material, d.index_count // 3))
+            first += d.index_count // 3
+        if not masked:
+            self.opaque_triangles = first
+        self.buffer = upload_buffer(device, rows, "storage", name="shadow caster table")
+
+
+def _sphere(positions: np.ndarray, d: Any) -> tuple[float, float, float, float]:
+    """A draw's bounding sphere in its mesh's space: its box's; a deformed draw's the unit
+    sphere its posed vertices are written in (render/deform.py), unbounded without one."""
+    if d.deformed:
+        return (0.0, 0.0, 0.0, UNBOUNDED_RADIUS if d.unbounded else DEFORMED_RADIUS)
+    lo, hi = positions.min(axis=0).astype(np.float64), positions.max(axis=0).astype(np.float64)
+    return (*((lo + hi) / 2), np.linalg.norm(hi - lo) / 2 * (1 + 1e-5) + 1e-6)
+
+
+class ShadowRaster:
+    """The compute side of a renderer's ShadowMaps (`maps`) for the scene `gs` (GpuScene).
+
+    Parameters
+    ----------
+    frame_layout, material_layout : sets 0 and 1 (Instances; a masked draw's material).
+    slots : frames in flight (a descriptor set each, over the slot's shadow matrices).
+    max_layers, depth_bias : render/shadows.py's MAX_LAYERS (the first cube matrix) and
+        DEPTH_BIAS (per light kind: the pipelines' (constant, slope)).
+    """
+
+    def __init__(self, device: Any, maps: Any, gs: Any, frame_layout: DescriptorSetLayout,
+                 material_layout: DescriptorSetLayout, slots: int, max_layers: int,
+                 depth_bias: dict[str, tuple[float, float]]) -> None:
+        self.device, self.maps, self.gs, self.slots = device, maps, gs, slots
+        self.max_layers, self.depth_bias = max_layers, depth_bias
+        self._owned: list[Any] = []
+        self.set_layout = self._own(DescriptorSetLayout(device, [
+            BindingSpec(b, "storage", ("compute",), name) for b, name in SET_ROWS]))
+        empty = self._own(DescriptorSetLayout(device, []))
+        self.layouts = [frame_layout, material_layout, empty, empty, self.set_layout]
+        self._pipelines: dict[str, ComputePipeline] = {}
+        self._tables: dict[tuple, _Table] = {}
+        self._sets: dict[tuple, Any] = {}  # (table key, slot) -> set, for the buffers below
+        self._pools: list[Any] = []
+        self._images: tuple[int, int] | None = None  # the maps' images the buffers fit
+        self.depths: Buffer | None = None
+        self.big: Buffer | None = None
+        self.big_capacity = 0
+
+    def _own(self, obj: Any) -> Any:
+        self._owned.append(obj)
+        return obj
+
+    def _pipeline(self, name: str) -> ComputePipeline:
+        if name not in self._pipelines:
+            self._pipelines[name] = self._own(ComputePipeline(
+                self.device, SPV_DIR / f"shadow_{name}.comp.spv", self.layouts,
+                push_bytes=PUSH_BYTES))
+        return self._pipelines[name]
+
+    # --- resources -------------------------------------------------------------------------
+    def _fit(self) -> None:
+        """Buffers for the maps' current images (every layer's texels; the big triangles'
+        list); the sets made for older ones are dropped (the maps' `ensure` waited for the
+        device when it remade the images)."""
+        maps, cubes = self.maps.maps, self.maps.cubes
+        key = (id(maps), id(cubes))
+        if self._images == key:
+            return
+        for buffer in (self.depths, self.big):
+            if buffer is not None:
+                self._owned.remove(buffer)
+                buffer.destroy()
+        for pool in self._pools:
+            self._owned.remove(pool)
+            pool.destroy()
+        self._pools.clear()
+        self._sets.clear()
+        self.cube_base = maps.layers * maps.size * maps.size
+        texels = self.cube_base + cubes.layers * cubes.size * cubes.size
+        self.depths = self._own(Buffer(self.device, 4 * texels, "storage|transfer_dst|transfer_src",
+                                       name="shadow depths"))
+        # (triangle, matrix, band) entries: a band is ~BIG_CHUNK texels; what does not fit is
+        # drawn by the invocation that found it.
+        self.big_capacity = max(1 << 18, texels // 64)  # (3 MiB at the least)
+        self.big = self._own(Buffer(self.device, 4 * (4 + 3 * self.big_capacity),
+                                    "storage|transfer_dst|indirect", name="shadow big triangles"))
+        self._images = key
+
+    def _table(self, classes: Sequence[str]) -> tuple[tuple, _Table]:
+        key = (len(self.gs.draws), tuple(classes))
+        if key not in self._tables:
+            table = _Table(self.device, self.gs, classes)
+            self._own(table.buffer)
+            self._tables[key] = table
+        return key, self._tables[key]
+
+    def _set(self, key: tuple, table: _Table, slot: int) -> Any:
+        if (key, slot) not in self._sets:
+            pool = self._own(DescriptorPool(self.device, [(self.set_layout, self.slots)]))
+            self._pools.append(pool)
+            streams = self.gs.streams
+            buffers = {"Indices": self.gs.index_buffer, "Positions": streams["positions"],
+                       "Texcoords0": streams["texcoords"], "Texcoords1": streams["texcoords1"],
+                       "Colors": streams["colors"], "Casters": table.buffer,
+                       "Depths": self.depths, "Big": self.big}
+            w = DescriptorWriter(self.device)
+            for s in range(self.slots):
+                dset = pool.allocate(self.set_layout)
+                for binding, name in SET_ROWS:
+                    if name == "ShadowMatrices":  # the slot's ShadowData
+                        w.storage(dset, binding, self.maps.buffer, self.maps.matrix_bytes,
+                                  s * self.maps.stride)
+                    else:
+                        w.storage(dset, binding, buffers[name])
+                self._sets[(key, s)] = dset
+            w.update()
+        return self._sets[(key, slot)]
+
+    def resources(self) -> dict[str, BufferResource]:
+        """The graph resources the steps name (after `steps` made them)."""
+        return {"shadow_depths": BufferResource(self.depths),
+                "shadow_big": BufferResource(self.big)}
+
+    # --- steps -----------------------------------------------------------------------------
+    def _push(self, plan: Any, table: _Table) -> np.ndarray:
+        push = np.zeros(PUSH_BYTES // 4, np.uint32)
+        spot = 0
+        for e in plan.entries:
+            if e.kind == "spot":
+                spot |= 1 << e.first
+        push[:16] = (table.opaque_triangles, max(table.opaque_rows, 1), 0, 0, self.maps.maps.size,
+                     self.maps.cubes.size, self.cube_base, self.max_layers, self.big_capacity,
+                     int(self.gs.has_colors), BIG_AREA, BIG_CHUNK, MASKED_AREA, spot, 0, 0)
+        bias = push.view(np.float32)
+        for k, kind in enumerate(_KINDS):
+            bias[16 + k], bias[20 + k] = self.depth_bias[kind]
+        return push
+
+    def steps(self, slot: int, plan: Any, redraw: Sequence[range] | None, classes: Sequence[str],
+              material_sets: Sequence[Any], set0: Any) -> list[Step]:
+        """The steps that draw `plan`'s layers `redraw` (per entry, a range of its layers)
+        for frame `slot` and copy them into the maps; the last, "shadows", is timed (all of
+        them: the steps before it take no timestamp)."""
+        if redraw is None:
+            redraw = tuple(range(e.count) for e in plan.entries)
+        self._fit()
+        key, table = self._table(classes)
+        dset = self._set(key, table, slot)
+        push = self._push(plan, table)
+        # Per drawn entry: its first matrix, layers, and where they go in the images.
+        jobs = [(e.matrix_base + r.start, len(r), e) for e, r in zip(plan.entries, redraw, strict=True)
+                if len(r)]
+
+        record = self._records(table, dset, push, jobs, material_sets, set0)
+        depths, big_list = "shadow_depths", "shadow_big"
+        apart = TIMED_STEPS
+        out = [Step("shadows.clear", record["clear"], ((depths, "transfer_dst"), (big_list, "transfer_dst")),
+                    timed=False),
+               Step("shadows.small", record["small"], ((depths, "storage"), (big_list, "storage")),
+                    timed=apart),
+               Step("shadows.args", record["args"], ((big_list, "storage"),), timed=False),
+               Step("shadows.big", record["big"], ((depths, "storage"), (big_list, "storage|indirect")),
+                    timed=apart)]
+        if table.masked:
+            out.append(Step("shadows.masked", record["masked"], ((depths, "storage"),), timed=apart))
+        out.append(Step("shadows", record["copy"], ((depths, "transfer_src"),)))
+        return out
+
+    def _records(self, table: _Table, dset: Any, push: np.ndarray,
+                 jobs: list[tuple[int, int, Any]], material_sets: Sequence[Any], set0: Any
+                 ) -> dict[str, Callable[[Any], None]]:
+        """Each step's commands: `jobs` are (first matrix, layers, entry) of the drawn ranges."""
+        def bind(cmd: Any, name: str) -> None:
+            cmd.bind_pipeline(self._pipeline(name))
+            cmd.bind_set(0, set0)
+            cmd.bind_set(4, dset)
+
+        def clear(cmd: Any) -> None:
+            # Depth 0: the farthest (reversed-Z), as the passes clear; the drawn layers only.
+            for offset, size in self._spans(jobs):
+                cmd.fill(self.depths, 0, offset, size)
+            cmd.fill(self.big, 0, 0, 16)  # the count and the dispatch size
+
+        def small(cmd: Any) -> None:
+            bind(cmd, "small")
+            for matrix, layers, _ in jobs:
+                push[3] = matrix
+                cmd.push(push)
+                n = -(-table.opaque_triangles // SMALL_GROUP)
+                if n:
+                    cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), layers)
+
+        def args(cmd: Any) -> None:
+            bind(cmd, "args")
+            cmd.push(push)
+            cmd.dispatch(1)
+
+        def big(cmd: Any) -> None:
+            bind(cmd, "big")
+            cmd.push(push)
+            cmd.dispatch_indirect(self.big, 4)
+
+        def masked(cmd: Any) -> None:
+            bind(cmd, "masked")
+            for matrix, layers, _ in jobs:
+                for row, material, triangles in table.masked:
+                    cmd.bind_set(1, material_sets[material])
+                    push[0], push[2], push[3] = triangles, row, matrix
+                    cmd.push(push)
+                    n = -(-triangles // SMALL_GROUP)
+                    cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), layers)
+
+        def copy(cmd: Any) -> None:
+            self._copy(cmd, jobs)
+
+        return {"clear": clear, "small": small, "args": args, "big": big, "masked": masked,
+                "copy": copy}
+
+    def _spans(self, jobs: list[tuple[int, int, Any]]) -> list[tuple[int, int]]:
+        """(byte offset, bytes) of the drawn layers' depths in `depths`, a span a job."""
+        out = []
+        for matrix, layers, e in jobs:
+            if e.kind == "point":
+                n = self.maps.cubes.size ** 2
+                out.append((4 * (self.cube_base + (matrix - self.max_layers) * n), 4 * layers * n))
+            else:
+                n = self.maps.maps.size ** 2
+                out.append((4 * matrix * n, 4 * layers * n))
+        return out
+
+    def _copy(self, cmd: Any, jobs: list[tuple[int, int, Any]]) -> None:
+        """The drawn layers into the maps' images (ShadowMaps' layered images keep the others)."""
+        maps, cubes = self.maps.maps, self.maps.cubes
+        regions: dict[str, list[tuple[int, int, int]]] = {"maps": [], "cubes": []}
+        for (matrix, layers, e), (offset, _) in zip(jobs, self._spans(jobs), strict=True):
+            point = e.kind == "point"
+            regions["cubes" if point else "maps"].append(
+                (offset, matrix - self.max_layers if point else matrix, layers))
+        for name, image in (("maps", maps), ("cubes", cubes)):
+            if regions[name]:
+                image.record_copy(cmd, self.depths, regions[name])
+
+    def read_depths(self) -> np.ndarray:
+        """The depth buffer as float32 (tests; waits for the device)."""
+        from vkpbr.gpu.buffer import download_buffer
+
+        self.device.wait_idle()
+        return download_buffer(self.device, self.depths, np.float32)
+
+    def destroy(self) -> None:
+        while self._owned:
+            self._owned.pop().destroy()
+
+
+def make_steps(maps: Any, recorder: Any, frame_index: int, plan: Any, redraw: Sequence[range] | None,
+               classes: Sequence[str], material_sets: Sequence[Any], set0: Any,
+               resources: dict[str, Any]) -> list[Step]:
+    """render/steps.py's "shadows" group when the maps are drawn by compute shaders: the
+    renderer's ShadowRaster (made on first use) and its steps, its buffers added to
+    `resources`."""
+    raster = maps.compute_raster(recorder.gpu_scene)
+    out = raster.steps(frame_index, plan, redraw, classes, material_sets, set0)
+    resources.update(raster.resources())
+    return out
+

@@ -1,0 +1,324 @@
+"""Worlds: many states of one scene, each its own poses of a few named nodes (NumPy, no GPU).
+
+A batch of worlds (Renderer.render_batch(worlds=...), docs/batch.md "Worlds") shares the
+scene's geometry, materials and the renderer's state, and differs in the world poses of N
+chosen nodes (`WorldSlots`: picked once by name, path, pattern or index) and, optionally,
+which of them are shown. Each of those nodes carries its subtree: every draw hangs from its
+nearest chosen ancestor-or-self (its anchor) by the transform it has in the renderer's state,
+
+    model[w, d] = pose[w, anchor(d)] @ relative[d],   relative[d] = inverse(world(anchor)) @ model(d),
+
+and draws with no chosen ancestor keep the state's model in every world. A draw directly on a
+chosen node (relative[d] the identity, the usual case: one rigid body a node) takes the pose
+itself, so a world of root-level nodes equals `set_poses(..., space="world")` of that world
+bit for bit. This module is that formula in NumPy (the mirror of render/shaders/worlds.comp,
+which evaluates it on the GPU for poses that live there) and the checks of what users give.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from vkpbr.errors import UsageError
+from vkpbr.scene.state import QUATERNION_ORDERS, SceneState, quaternion_matrices, std140_pairs
+from vkpbr.scene.tree import NodeRef
+
+__all__ = ["WorldSlots", "WorldPoses", "world_models", "world_records"]
+
+_LAST_ROW = np.array([0.0, 0.0, 0.0, 1.0])
+
+
+@dataclass(frozen=True)
+class WorldSlots:
+    """The N nodes whose poses each world gives (`nodes`: tree indices, in the order the
+    worlds' arrays list them) and what follows from the state at `version`: each draw's
+    anchor (index into `nodes`, -1 for none) and its transform below it."""
+
+    nodes: np.ndarray  # (N,) tree indices
+    names: tuple[str, ...]  # their paths, for messages
+    anchor: np.ndarray  # (D,) int64
+    relative: np.ndarray  # (D, 4, 4) float64: model = pose @ relative (state model if no anchor)
+    identity: np.ndarray  # (D,) bool: relative is exactly the identity (model = pose)
+    covers: np.ndarray  # (N, D) bool: slot n is the draw's node or an ancestor (hides it)
+    version: int  # the state version these were made at
+    frame: np.ndarray  # (N, 4, 4) each slot's parent's world matrix in the state (local poses)
+    nested: bool  # a slot has another slot above it
+
+    @classmethod
+    def of(cls, state: SceneState, nodes: NodeRef | Iterable[NodeRef] | np.ndarray) -> WorldSlots:
+        """The slots of `nodes` (NodeTree.indices: names, paths, patterns, indices) in `state`."""
+        idx = state.tree.indices(nodes)
+        if len(idx) == 0:
+            raise UsageError("world_slots: no nodes given; name the nodes each world poses")
+        if len(np.unique(idx)) != len(idx):
+            raise UsageError("world_slots: a node is named twice")
+        paths = state.tree.paths()
+        return cls._made(state, idx, tuple(paths[i] for i in idx))
+
+    @classmethod
+    def _made(cls, state: SceneState, idx: np.ndarray, names: tuple[str, ...]) -> WorldSlots:
+        tree = state.tree
+        slot_of = np.full(len(tree), -1, np.int64)
+        slot_of[idx] = np.arange(len(idx))
+        anchor_of = slot_of.copy()  # nearest chosen ancestor-or-self, level by level
+        for level in tree.levels()[1:]:
+            own = anchor_of[level]
+            anchor_of[level] = np.where(own >= 0, own, anchor_of[tree.parents[level]])
+        anchor = anchor_of[state.draw_tree]
+        below = np.zeros((len(idx), len(tree)), bool)  # each slot's subtree
+        below[np.arange(len(idx)), idx] = True
+        for level in tree.levels()[1:]:
+            below[:, level] |= below[:, tree.parents[level]]
+        models = state.draw_models()
+        world = state.world()
+        relative = models.copy()
+        has = anchor >= 0
+        if np.any(has):
+            relative[has] = np.linalg.solve(world[idx[anchor[has]]], models[has])
+        identity = has & (state.draw_tree == idx[np.maximum(anchor, 0)]) & ~state.skinned
+        identity &= np.all(state.draw_local == np.eye(4), axis=(1, 2))
+        relative[identity] = np.eye(4)
+        # Skinned draws are posed by their joints (world space): their model stays as is.
+        relative[has & state.skinned] = models[has & state.skinned]
+        anchor = np.where(state.skinned, -1, anchor)
+        parents = tree.parents[idx]
+        frame = np.tile(np.eye(4), (len(idx), 1, 1))
+        frame[parents >= 0] = state.world()[parents[parents >= 0]]
+        nested = bool(np.any(below[:, idx].sum(axis=0) > 1))
+        return cls(idx, names, anchor, relative, identity, below[:, state.draw_tree], state.version,
+                   frame, nested)
+
+    def refreshed(self, state: SceneState) -> WorldSlots:
+        """These slots against the state now (the renderer's set_poses moved what they hang
+        from): remade when its version changed."""
+        return self if state.version == self.version else self._made(state, self.nodes, self.names)
+
+    def __len__(self) -> int:
+        return len(self.nodes)
+
+
+@dataclass(frozen=True)
+class WorldPoses:
+    """W worlds' poses of N slots as (W, N, 4, 4) float64 world matrices, and which slots
+    each world shows ((W, N) bool, or None: all)."""
+
+    given: np.ndarray  # (W, N, 4, 4) matrices, or (W, N, 7) rows (position + quaternion)
+    visible: np.ndarray | None
+    wxyz: bool = False  # the rows' quaternion order
+    local: bool = False  # relative to each node's parent as the state places it (else world)
+
+    @property
+    def count(self) -> int:
+        return len(self.given)
+
+    @property
+    def rows(self) -> np.ndarray | None:
+        """The (W, N, 7) rows as given, or None for matrices."""
+        return self.given if self.given.ndim == 3 else None
+
+    @cached_property
+    def matrices(self) -> np.ndarray:
+        """(W, N, 4, 4) float64 world matrices (made from the rows on first use: the GPU
+        expands rows itself)."""
+        if self.given.ndim == 4:
+            return self.given
+        return _rows_to_matrices(self.given, "wxyz" if self.wxyz else "xyzw")
+
+    @classmethod
+    def of(cls, poses: Any, slots: int, quaternion: str = "xyzw", visible: Any = None,
+           space: str = "world") -> WorldPoses:
+        """Checked poses: (W, N, 4, 4) affine world matrices or (W, N, 7) position + unit
+        quaternion rows (`quaternion` "xyzw" as SAPIEN/scipy, or "wxyz" as MuJoCo/Isaac);
+        `visible` (W, N) of bools. One-line UsageErrors name what is wrong."""
+        p = _array("worlds", poses)
+        if p.ndim == 2 and p.shape[-1] == 7 and slots == 1:
+            p = p[:, None]
+        if p.ndim == 3 and p.shape[1:] == (slots, 7):
+            given = _checked_rows(p, quaternion)
+        elif p.ndim == 4 and p.shape[1:] == (slots, 4, 4):
+            given = _checked_matrices(p)
+        else:
+            raise UsageError(f"worlds: poses of shape {tuple(p.shape)} for {slots} slot node(s); "
+                             f"give (W, {slots}, 4, 4) world matrices or (W, {slots}, 7) "
+                             "position + quaternion rows")
+        if len(given) == 0:
+            raise UsageError("worlds: no worlds given (W = 0)")
+        shown = None
+        if visible is not None:
+            v = _array("visible", visible)
+            if v.shape != given.shape[:2]:
+                raise UsageError(f"visible: shape {tuple(v.shape)}, expected "
+                                 f"{given.shape[:2]} (worlds, slot nodes)")
+            shown = v.astype(bool)
+        return cls(given, shown, quaternion == "wxyz", check_space(space))
+
+
+def check_space(space: str) -> bool:
+    """True for "local" (poses relative to each node's parent as the renderer's state places
+    it: a simulator's frame below a fixed root), False for "world"; UsageError otherwise."""
+    if space not in ("world", "local"):
+        raise UsageError(f"space {space!r}: choose 'world' or 'local'")
+    return space == "local"
+
+
+def _array(what: str, value: Any) -> np.ndarray:
+    """`value` as a float64 NumPy array (a CPU torch tensor or anything array-like)."""
+    if hasattr(value, "detach") and hasattr(value, "device"):  # torch, not imported here
+        if str(value.device) != "cpu":
+            raise UsageError(f"{what}: a tensor on {value.device} reaches this path only "
+                             "through the GPU route (render_batch(device='cuda'))")
+        value = value.detach().numpy()
+    try:
+        a = np.asarray(value)
+        if a.dtype == bool:
+            return a
+        return a.astype(np.float64)
+    except (TypeError, ValueError) as exc:
+        raise UsageError(f"{what}: not an array of numbers ({exc})") from None
+
+
+def _checked_rows(p: np.ndarray, quaternion: str) -> np.ndarray:
+    if quaternion not in QUATERNION_ORDERS:
+        raise UsageError(f"quaternion {quaternion!r}: choose 'xyzw' or 'wxyz'")
+    if not np.isfinite(p).all():
+        raise UsageError("worlds: a pose holds NaN or infinity")
+    q = p[..., 3:].reshape(-1, 4)
+    if np.einsum("ij,ij->i", q, q).min(initial=1.0) < 1e-24:
+        raise UsageError("worlds: a quaternion of length 0 is no rotation")
+    return p
+
+
+def _rows_to_matrices(p: np.ndarray, quaternion: str) -> np.ndarray:
+    w, n = p.shape[:2]
+    q = p[..., 3:].reshape(-1, 4)
+    out = np.empty((w * n, 4, 4))
+    quaternion_matrices(q, quaternion, out[:, :3, :3])
+    out[:, :3, 3] = p[..., :3].reshape(-1, 3)
+    out[:, 3] = _LAST_ROW
+    return out.reshape(w, n, 4, 4)
+
+
+def _checked_matrices(p: np.ndarray) -> np.ndarray:
+    if not np.isfinite(p).all():
+        raise UsageError("worlds: a pose holds NaN or infinity")
+    if np.abs(p[..., 3, :] - _LAST_ROW).max(initial=0.0) > 1e-6:
+        raise UsageError("worlds: a matrix's last row must be 0 0 0 1 (an affine transform)")
+    return p
+
+
+def world_models(state: SceneState, slots: WorldSlots, poses: WorldPoses) -> np.ndarray:
+    """(W, D, 4, 4) float64 model matrices of every draw in every world (zero where hidden:
+    hidden in the state, or its anchor hidden in that world)."""
+    base = state.draw_models()
+    w, d = poses.count, len(base)
+    out = np.broadcast_to(base, (w, d, 4, 4)).copy()
+    has = slots.anchor >= 0
+    exact = slots.identity
+    moved = has & ~exact
+    pose = poses.matrices
+    if poses.local:
+        if slots.nested:
+            raise UsageError("worlds: space='local' with a chosen node below another chosen "
+                             "node; give world poses (space='world')")
+        pose = slots.frame[None] @ pose
+    if np.any(exact):
+        out[:, exact] = pose[:, slots.anchor[exact]]
+    if np.any(moved):
+        out[:, moved] = pose[:, slots.anchor[moved]] @ slots.relative[moved]
+    hidden = ~np.any(base[:, :3, :3] != 0.0, axis=(1, 2))  # hidden in the state: in all
+    if poses.visible is not None:  # a hidden node hides its subtree, as set_visible does
+        off = (~poses.visible).astype(np.int64) @ slots.covers.astype(np.int64) > 0
+        out[off] = 0.0
+    out[:, hidden] = 0.0
+    return out
+
+
+def world_records(state: SceneState, slots: WorldSlots, poses: WorldPoses) -> np.ndarray:
+    """(W * D, 2, 4, 4) float32 Instances records of every world's draws, world after world
+    (what a batch of worlds' views read from their world's instance_base)."""
+    models = world_models(state, slots, poses)
+    return std140_pairs(models.reshape(-1, 4, 4))
+
+
+# Per-world material factors: the glTF factors a dataset randomises (what set_material sets).
+FACTOR_CHANNELS = {"base_color": (3, 4), "metallic": (1,), "roughness": (1,), "emissive": (3,)}
+
+
+@dataclass(frozen=True)
+class WorldMaterials:
+    """W worlds' factors of K named materials: `materials` (K,) indices into the scene's,
+    `values` {field: (W, K, channels) float64} for the fields given (base_color RGBA,
+    metallic, roughness, emissive), checked as set_material checks one."""
+
+    materials: np.ndarray
+    values: dict[str, np.ndarray]
+
+    @property
+    def count(self) -> int:
+        return len(next(iter(self.values.values())))
+
+    @staticmethod
+    def indices(state: SceneState, materials: Iterable[int | str]) -> np.ndarray:
+        """(K,) indices of the named materials (names or indices; UsageError for others)."""
+        return np.array([state._material_index(m) for m in materials], np.int64)
+
+    @classmethod
+    def of(cls, state: SceneState, materials: Iterable[int | str], given: Any) -> WorldMaterials:
+        idx = cls.indices(state, materials)
+        if len(idx) == 0:
+            raise UsageError("world_materials: name the materials first: "
+                             "renderer.world_slots(nodes, materials=['paint', ...])")
+        if not isinstance(given, dict) or not given:
+            raise UsageError("world_materials: a dict of base_color, metallic, roughness, "
+                             "emissive arrays, each (W, K[, channels])")
+        values: dict[str, np.ndarray] = {}
+        for field, value in given.items():
+            if field not in FACTOR_CHANNELS:
+                raise UsageError(f"world_materials: unknown factor {field!r} (choose "
+                                 f"{', '.join(FACTOR_CHANNELS)})")
+            values[field] = _factor_array(field, _array(f"world_materials[{field!r}]", value),
+                                          len(idx))
+        counts = {len(v) for v in values.values()}
+        if len(counts) != 1 or 0 in counts:
+            raise UsageError(f"world_materials: every factor needs the same number of worlds "
+                             f"(got {sorted(counts)})")
+        return cls(idx, values)
+
+
+def _factor_array(field: str, v: np.ndarray, k: int) -> np.ndarray:
+    sizes = FACTOR_CHANNELS[field]
+    if sizes == (1,) and v.ndim == 2:
+        v = v[..., None]
+    if v.ndim != 3 or v.shape[1] != k or v.shape[2] not in sizes:
+        shapes = " or ".join(f"(W, {k}{'' if c == 1 else f', {c}'})" for c in sizes)
+        raise UsageError(f"world_materials[{field!r}]: shape {tuple(v.shape)}, expected {shapes}")
+    if not np.isfinite(v).all():
+        raise UsageError(f"world_materials[{field!r}]: NaN or infinity")
+    if field == "emissive":
+        if (v < 0).any():
+            raise UsageError("world_materials['emissive']: must be >= 0")
+    elif ((v < 0) | (v > 1)).any():
+        raise UsageError(f"world_materials[{field!r}]: must be within [0, 1]")
+    if field == "base_color" and v.shape[2] == 3:
+        v = np.concatenate([v, np.ones(v.shape[:2] + (1,))], axis=2)
+    return v
+
+
+def factor_records(base: np.ndarray, wm: WorldMaterials) -> np.ndarray:
+    """(W * M, 3, 4) float32 WorldFactors records: every world's factors of all M materials,
+    `base` (M, 3, 4) (each material's own: base colour; emissive, metallic; roughness) with
+    the named materials' given fields replaced."""
+    w, m = wm.count, len(base)
+    out = np.broadcast_to(base, (w, m, 3, 4)).copy()
+    idx = wm.materials
+    slots = {"base_color": (0, slice(0, 4)), "emissive": (1, slice(0, 3)),
+             "metallic": (1, slice(3, 4)), "roughness": (2, slice(0, 1))}
+    for field, value in wm.values.items():
+        row, cols = slots[field]
+        out[:, idx, row, cols] = value
+    return out.reshape(w * m, 3, 4).astype(np.float32)

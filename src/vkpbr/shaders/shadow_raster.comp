@@ -1,0 +1,381 @@
+#version 450
+// shadow_raster.comp: shadow maps drawn by compute shaders (render/shadow_raster.py,
+// RenderOptions.shadow_raster): every caster triangle x every redrawn layer of a light
+// (cascades, a spot map, a cube's six faces) in one dispatch, on all SMs instead of the few
+// that rasterise. A layer is named by its matrix in ShadowData (render/shadows.py): matrix m
+// < pc.max_layers is 2D layer m of the maps, else cube layer m - pc.max_layers. Each covered
+// texel centre takes one 32-bit atomicMax of its reversed depth's float bits in `depths`
+// (depths are >= 0, so their bits order as the depths: the nearest to the light wins), then
+// the redrawn layers are copied into the shadow images the lighting samples (a transfer: the
+// sampling keeps its hardware compare and 2x2 filter). The depth carries the raster
+// pipelines' DEPTH_BIAS: Vulkan's slope-scaled bias m * slope + r * constant, m the largest
+// of |dz/dx| and |dz/dy| in texels, r 2^(e - 23) for the primitive's largest depth exponent
+// e (D32_SFLOAT), then clamped to [0, 1] as a float attachment's depth is.
+// Triangles are clipped to 0 <= z <= w (the pipelines clip depth: no depth clamp); no face is
+// culled (the shadow pipelines' cull "none").
+// KERNEL 1 (shadow_small): one invocation a (opaque caster triangle, layer); triangles whose
+//   box exceeds pc.big_area texels are listed as bands of rows of ~pc.big_chunk box texels.
+// KERNEL 3 (shadow_args): the listed bands' dispatch size.
+// KERNEL 2 (shadow_big): one work group a listed band, set up once in shared memory.
+// KERNEL 4 (shadow_masked): one invocation a (triangle of one masked caster draw, layer),
+//   its material's set 1 bound; a texel counts where the base colour's alpha (texture x
+//   factor x COLOR_0, as shadow_mask.frag) reaches the cutoff, sampled at the texel's
+//   perspective-correct texture coordinates with their per-texel differences as gradients
+//   (the quad differences the fragment shader's texture() takes). Triangles over
+//   pc.masked_area box texels are covered by the whole work group afterwards.
+#extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#include "generated.glsl"
+#include "frustum.glsl"
+
+#if KERNEL == 2
+layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;
+#elif KERNEL == 3
+layout(local_size_x = 1, local_size_y = 1, local_size_z = 1) in;
+#else
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;  // shadow_raster.SMALL_GROUP
+#endif
+
+// Set 4 (render/shadow_raster.py SET_ROWS): the scene's streams where generated.glsl declares
+// them for the compute path (Indices, Positions, Texcoords0/1, Colors: bindings 3-7), and
+// the shadow raster's own from binding 40.
+layout(set = 4, binding = 40, std430) readonly buffer ShadowMatrices {
+    vec4 header[3];  // shaders/shadow_data.glsl's cascade_far, cascade_texel, params
+    mat4 layer_vp[];
+};
+// Two uvec4 a caster draw: its first triangle over the table, first index, vertex offset and
+// its record in Instances (the scene state's model matrix 2 * record); then its mesh's
+// bounding sphere in the mesh's space (float bits: centre, radius).
+layout(set = 4, binding = 41, std430) readonly buffer Casters { uvec4 casters[]; };
+layout(set = 4, binding = 42, std430) buffer Depths { uint depths[]; };
+// [0] entries listed, [1..3] KERNEL 2's dispatch size, from 4 (triangle, matrix, band) entries.
+layout(set = 4, binding = 43, std430) buffer Big { uint big[]; };
+
+layout(push_constant) uniform Raster {
+    uint triangles;  // of the caster rows this dispatch draws (KERNEL 4: its draw's)
+    uint rows;  // caster rows of the table
+    uint row;  // KERNEL 4: the masked draw's row
+    uint matrix;  // the dispatch's first layer's matrix (its layer z is matrix + z)
+    uint map_size;  // texels a side: the 2D layers, the cube faces
+    uint cube_size;
+    uint cube_base;  // where the cube layers start in `depths` (texels)
+    uint max_layers;  // render/shadows.py MAX_LAYERS: the first cube matrix
+    uint big_capacity;  // entries `big` holds
+    uint has_colors;  // COLOR_0 per vertex (else colors[0..1] holds the one value)
+    uint big_area;  // box texels above which work groups take a triangle, and their band's
+    uint big_chunk;
+    uint masked_area;  // KERNEL 4's: box texels above which the group covers it
+    uint spot_layers;  // bit m: 2D layer m is a spot light's (else a directional light's)
+    uint pad0, pad1;
+    vec4 bias_constant;  // DEPTH_BIAS by light kind: directional, spot, point
+    vec4 bias_slope;
+} pc;
+
+const uint BIG_LIST = 4u, BIG_ENTRY = 3u;
+const uint MAX_GROUPS = 65535u;
+
+// The row holding triangle g: the last k whose first triangle is <= g.
+uint row_of(uint g) {
+    uint lo = 0u, hi = pc.rows;
+    for (uint step = 0u; step < 32u && hi - lo > 1u; ++step) {
+        uint mid = (lo + hi) >> 1u;
+        if (casters[2u * mid].x <= g) lo = mid; else hi = mid;
+    }
+    return lo;
+}
+
+#if KERNEL != 3
+uint layer_size(uint m) { return m < pc.max_layers ? pc.map_size : pc.cube_size; }
+uint layer_base(uint m) {
+    uint s = layer_size(m);
+    return m < pc.max_layers ? m * s * s : pc.cube_base + (m - pc.max_layers) * s * s;
+}
+
+vec3 position(uint i) { uint k = 3u * i; return vec3(positions[k], positions[k + 1u], positions[k + 2u]); }
+
+// Triangle g's vertex indices and clip-space corners in layer m; false when its draw's
+// bounding sphere is outside the layer's frustum (one test instead of three vertices: most
+// of a scene's draws for a near cascade or a cube face).
+bool fetch(uint g, uint m, out uvec3 vi, out vec4 c[3]) {
+#if KERNEL == 4
+    uint k = pc.row;
+#else
+    uint k = row_of(g);
+#endif
+    uvec4 r = casters[2u * k];
+    mat4 model = instance_matrices[2u * r.w];
+    if (!sphere_visible(layer_vp[m], world_sphere(model, uintBitsToFloat(casters[2u * k + 1u]))))
+        return false;
+    uint base = r.y + 3u * (g - r.x);
+    for (int j = 0; j < 3; ++j) {
+        vi[j] = indices[base + uint(j)] + r.z;
+        c[j] = layer_vp[m] * (model * vec4(position(vi[j]), 1.0));  // as shadow.vert's
+    }
+    return true;
+}
+
+// The polygon left of the triangle inside z <= w and z >= 0: at most 5 corners.
+int clip(vec4 c[3], out vec4 poly[5]) {
+    vec4 a[5], b[5];
+    int n = 3;
+    for (int j = 0; j < 3; ++j) a[j] = c[j];
+    for (int plane = 0; plane < 2; ++plane) {
+        int k = 0;
+        for (int j = 0; j < n; ++j) {
+            vec4 p = a[j], q = a[(j + 1) % n];
+            float dp = plane == 0 ? p.w - p.z : p.z, dq = plane == 0 ? q.w - q.z : q.z;
+            if (dp >= 0.0 && k < 5) b[k++] = p;
+            if ((dp >= 0.0) != (dq >= 0.0) && k < 5) b[k++] = mix(p, q, dp / (dp - dq));
+        }
+        n = k;
+        for (int j = 0; j < n; ++j) a[j] = b[j];
+    }
+    for (int j = 0; j < n; ++j) poly[j] = a[j];
+    return n;
+}
+
+float edge(vec2 a, vec2 b, vec2 p) { return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x); }
+
+// Narrow [xl, xr] to where the edge a -> b can be >= 0 on the row at py (raster.comp's).
+void edge_span(vec2 a, vec2 b, float py, inout float xl, inout float xr) {
+    float slope = b.y - a.y, rhs = (b.x - a.x) * (py - a.y);
+    if (slope == 0.0) {
+        if (rhs < 0.0) xr = xl - 1.0;
+        return;
+    }
+    float x = a.x + rhs / slope - 0.5;
+    if (slope > 0.0) xr = min(xr, floor(x) + 1.0); else xl = max(xl, ceil(x) - 1.0);
+}
+
+// Triangle g in layer m: its clipped polygon in texels (x, y, depth), the polygon's `edge`
+// area, its box of texel centres [lo, hi), the depth bias and, for the alpha test, the
+// unclipped corners and vertices.
+struct Screen {
+    vec3 s[5];
+    int n;
+    float area, bias;
+    ivec2 lo, hi;
+    uint m;
+#if KERNEL == 4
+    vec4 c[3];
+    uvec3 vi;
+#endif
+};
+
+bool on_layer(uint g, uint m, out Screen t) {
+    vec4 c[3];
+    uvec3 vi;
+    t.m = m;
+    if (!fetch(g, m, vi, c)) return false;
+    vec4 poly[5];
+    t.n = clip(c, poly);
+    t.m = m;
+#if KERNEL == 4
+    t.c = c;
+    t.vi = vi;
+#endif
+    if (t.n < 3) return false;
+    float size = float(layer_size(m));
+    float zmax = 0.0;
+    for (int j = 0; j < t.n; ++j) {
+        vec3 ndc = poly[j].xyz / poly[j].w;
+        t.s[j] = vec3((ndc.xy * 0.5 + 0.5) * size, ndc.z);
+        zmax = max(zmax, abs(ndc.z));
+    }
+    t.area = 0.0;
+    for (int j = 1; j + 1 < t.n; ++j) t.area += edge(t.s[0].xy, t.s[j].xy, t.s[j + 1].xy);
+    if (!(abs(t.area) > 0.0)) return false;  // degenerate (a hidden draw's zero matrix), or NaN
+    // The plane's depth slopes in texels, from the polygon's largest fan triangle (all of
+    // them lie in one plane): Vulkan's m = max(|dz/dx|, |dz/dy|).
+    int best = 1;
+    float best_area = 0.0;
+    for (int j = 1; j + 1 < t.n; ++j) {
+        float a = abs(edge(t.s[0].xy, t.s[j].xy, t.s[j + 1].xy));
+        if (a > best_area) { best_area = a; best = j; }
+    }
+    vec3 p = t.s[0], q = t.s[best], r = t.s[best + 1];
+    vec3 u = q - p, v = r - p;
+    float det = u.x * v.y - v.x * u.y;
+    float dzdx = (u.z * v.y - v.z * u.y) / det, dzdy = (v.z * u.x - u.z * v.x) / det;
+    float slope = max(abs(dzdx), abs(dzdy));
+    int e;
+    frexp(zmax, e);  // zmax = f * 2^e, f in [0.5, 1): its float exponent is e - 1
+    float r_unit = zmax > 0.0 ? ldexp(1.0, e - 1 - 23) : 0.0;
+    uint kind = m >= pc.max_layers ? 2u : (pc.spot_layers >> m) & 1u;
+    t.bias = slope * pc.bias_slope[kind] + r_unit * pc.bias_constant[kind];
+    vec2 lo2 = t.s[0].xy, hi2 = t.s[0].xy;
+    for (int j = 1; j < t.n; ++j) { lo2 = min(lo2, t.s[j].xy); hi2 = max(hi2, t.s[j].xy); }
+    int isize = int(size);
+    t.lo = clamp(ivec2(ceil(lo2 - 0.5)), ivec2(0), ivec2(isize));
+    t.hi = clamp(ivec2(floor(hi2 - 0.5)) + 1, ivec2(0), ivec2(isize));
+    return all(lessThan(t.lo, t.hi));
+}
+
+float box_area(Screen t) { return float(t.hi.x - t.lo.x) * float(t.hi.y - t.lo.y); }
+int chunk_rows(Screen t) { return max(1, int(pc.big_chunk) / (t.hi.x - t.lo.x)); }
+uint band_count(Screen t) { int r = chunk_rows(t); return uint((t.hi.y - t.lo.y + r - 1) / r); }
+
+#if KERNEL == 4
+// The alpha test at texel centre p (texels) of layer t.m: the base colour's alpha at the
+// perspective-correct barycentrics of the unclipped triangle, gradients from the next texels.
+// (See shadow_mask.frag: u() keeps lavapipe from compiling a variant per material.)
+uint opaque_zero;
+float u(float x) { return x + float(opaque_zero); }
+
+vec3 barycentrics(Screen t, vec2 p) {
+    vec2 ndc = p / float(layer_size(t.m)) * 2.0 - 1.0;
+    // sum b_i (c_i.xy - ndc c_i.w) = 0 and sum b_i = 1.
+    mat3 a = mat3(vec3(t.c[0].xy - ndc * t.c[0].w, 1.0), vec3(t.c[1].xy - ndc * t.c[1].w, 1.0),
+                  vec3(t.c[2].xy - ndc * t.c[2].w, 1.0));
+    return inverse(a) * vec3(0.0, 0.0, 1.0);
+}
+
+vec4 color_at(uint i) {
+    uint k = pc.has_colors != 0u ? i : 0u;
+    return vec4(unpackUnorm2x16(colors[2u * k]), unpackUnorm2x16(colors[2u * k + 1u]));
+}
+
+bool alpha_passes(Screen t, vec2 p) {
+    vec4 row0 = material.base_color_uv_row0, row1 = material.base_color_uv_row1;
+    bool second = u(row0.w) > 0.5;
+    vec2 tc[3];
+    for (int j = 0; j < 3; ++j) tc[j] = second ? texcoords1[t.vi[j]] : texcoords0[t.vi[j]];
+    vec3 b = barycentrics(t, p), bx = barycentrics(t, p + vec2(1.0, 0.0)),
+         by = barycentrics(t, p + vec2(0.0, 1.0));
+    vec2 uv0 = b.x * tc[0] + b.y * tc[1] + b.z * tc[2];
+    vec2 uvx = bx.x * tc[0] + bx.y * tc[1] + bx.z * tc[2];
+    vec2 uvy = by.x * tc[0] + by.y * tc[1] + by.z * tc[2];
+    mat2 rows = mat2(row0.x, row1.x, row0.y, row1.y);  // the UV transform's linear part
+    vec2 uv = rows * uv0 + vec2(row0.z, row1.z);
+    float vertex_alpha = dot(b, vec3(color_at(t.vi.x).a, color_at(t.vi.y).a, color_at(t.vi.z).a));
+    float alpha = textureGrad(base_color_map, uv, rows * (uvx - uv0), rows * (uvy - uv0)).a
+                  * material.base_color_factor.a * vertex_alpha;
+    return alpha >= u(material.alpha_cutoff);
+}
+#endif
+
+// Cover fan triangle (s0, s1, s2) of t (positive `edge` area) in rows y0, y0 + ystep, ...
+// below y1, in each row the candidates from the span's start + lane on, every `lanes`.
+void cover(Screen t, vec3 s0, vec3 s1, vec3 s2, int y0, int y1, int ystep, int lane, int lanes) {
+    uint size = layer_size(t.m), base = layer_base(t.m);
+    float area = edge(s0.xy, s1.xy, s2.xy);
+    for (int y = y0; y < y1; y += ystep) {
+        float py = float(y) + 0.5, xl = float(t.lo.x), xr = float(t.hi.x - 1);
+        edge_span(s1.xy, s2.xy, py, xl, xr);
+        edge_span(s2.xy, s0.xy, py, xl, xr);
+        edge_span(s0.xy, s1.xy, py, xl, xr);
+        int xa = clamp(int(clamp(xl, float(t.lo.x), float(t.hi.x))), t.lo.x, t.hi.x) + lane;
+        int xb = clamp(int(clamp(xr, float(t.lo.x - 1), float(t.hi.x - 1))), t.lo.x - 1, t.hi.x - 1);
+        for (int x = xa; x <= xb; x += lanes) {
+            vec2 p = vec2(x, y) + 0.5;
+            float e0 = edge(s1.xy, s2.xy, p), e1 = edge(s2.xy, s0.xy, p), e2 = edge(s0.xy, s1.xy, p);
+            if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) continue;
+            float z = (e0 * s0.z + e1 * s1.z + e2 * s2.z) / area;
+            uint bits = floatBitsToUint(clamp(z + t.bias, 0.0, 1.0));
+            uint at = base + uint(y) * size + uint(x);
+#if KERNEL == 4
+            if (depths[at] >= bits) continue;  // nearer already stored: no alpha test
+            if (!alpha_passes(t, p)) continue;
+#endif
+            atomicMax(depths[at], bits);
+        }
+    }
+}
+
+// Bands [band0, band1) of t's box (chunk_rows rows each) as the share says, the polygon as
+// a fan of triangles each turned to positive area.
+void draw_layer(Screen t, uint band0, uint band1, int y_offset, int ystep, int lane, int lanes) {
+    int rows = chunk_rows(t);
+    uint bands = band_count(t);
+    int y0 = t.lo.y + int(min(band0, bands)) * rows + y_offset;
+    int y1 = band1 >= bands ? t.hi.y : t.lo.y + int(band1) * rows;
+    for (int j = 1; j + 1 < t.n; ++j) {
+        vec3 a = t.s[0], b = t.s[j], d = t.s[j + 1];
+        if (t.area < 0.0) { vec3 x = b; b = d; d = x; }
+        cover(t, a, b, d, y0, y1, ystep, lane, lanes);
+    }
+}
+
+const uint ALL_BANDS = 0xffffffffu;
+
+#if KERNEL == 1
+// A big triangle's bands listed for work groups; those past the list's end drawn here.
+void list_bands(Screen t, uint g) {
+    uint bands = band_count(t);
+    uint slot = atomicAdd(big[0], bands);
+    uint listed = slot < pc.big_capacity ? min(bands, pc.big_capacity - slot) : 0u;
+    for (uint k = 0u; k < listed; ++k) {
+        uint e = BIG_LIST + BIG_ENTRY * (slot + k);
+        big[e] = g;
+        big[e + 1u] = t.m;
+        big[e + 2u] = k;
+    }
+    if (listed < bands) draw_layer(t, listed, ALL_BANDS, 0, 1, 0, 1);
+}
+#endif
+
+#if KERNEL == 2
+shared Screen entry_screen;
+shared bool entry_drawn;
+#endif
+#if KERNEL == 4
+shared uint group_big[64];  // this group's big triangles (triangle), covered by the group
+shared uint group_big_count;
+#endif
+#endif  // KERNEL != 3
+
+void main() {
+#if KERNEL == 3
+    big[1] = max(min(big[0], MAX_GROUPS), 1u);
+    big[2] = 1u;
+    big[3] = 1u;
+#elif KERNEL == 2
+    uint listed = min(big[0], pc.big_capacity);
+    for (uint k = gl_WorkGroupID.x; k < listed; k += gl_NumWorkGroups.x) {
+        uint e = BIG_LIST + BIG_ENTRY * k;
+        if (gl_LocalInvocationIndex == 0u) {
+            Screen t;
+            entry_drawn = on_layer(big[e], big[e + 1u], t);
+            entry_screen = t;
+        }
+        barrier();
+        Screen t = entry_screen;
+        bool drawn = entry_drawn;
+        barrier();  // read before the next entry's set-up
+        if (drawn) draw_layer(t, big[e + 2u], big[e + 2u] + 1u, int(gl_SubgroupID),
+                              int(gl_NumSubgroups), int(gl_SubgroupInvocationID),
+                              int(gl_SubgroupSize));
+    }
+#else
+    uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
+    uint m = pc.matrix + gl_GlobalInvocationID.z;
+#if KERNEL == 1
+    if (i < pc.triangles) {
+        Screen t;
+        if (on_layer(i, m, t)) {
+            if (box_area(t) > float(pc.big_area)) list_bands(t, i);
+            else draw_layer(t, 0u, ALL_BANDS, 0, 1, 0, 1);
+        }
+    }
+#else
+    opaque_zero = uint(gl_NumWorkGroups.x == 0u);  // 0, unknown to the compiler (u())
+    uint first = casters[2u * pc.row].x;
+    if (gl_LocalInvocationIndex == 0u) group_big_count = 0u;
+    barrier();
+    if (i < pc.triangles) {
+        Screen t;
+        if (on_layer(first + i, m, t)) {
+            if (box_area(t) > float(pc.masked_area)) group_big[atomicAdd(group_big_count, 1u)] = first + i;
+            else draw_layer(t, 0u, ALL_BANDS, 0, 1, 0, 1);
+        }
+    }
+    barrier();
+    for (uint k = 0u; k < group_big_count; ++k) {
+        Screen t;
+        if (on_layer(group_big[k], m, t))
+            draw_layer(t, 0u, ALL_BANDS, int(gl_SubgroupID), int(gl_NumSubgroups),
+                       int(gl_SubgroupInvocationID), int(gl_SubgroupSize));
+    }
+#endif
+#endif
+}

@@ -1,0 +1,121 @@
+"""Batches of worlds fed from PyTorch on the GPU (issue 32 must-have 2): CUDA tensors of
+poses read without a host copy (device to device into exported Vulkan memory, expanded by
+worlds.comp) give the views the exact host path gives within 1 level (float32 matrices), into
+NumPy and into torch; one-line errors for NaN poses, integer tensors and wrong shapes. Runs
+where torch sees CUDA on the Vulkan device's GPU (the GPU test pass), skips saying why else.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_outputs import H, W, analytic_scene
+from test_worlds import MOVED, NO_SHADOWS, cameras, world_poses
+
+from vkpbr.errors import UsageError
+from vkpbr.gpu.cuda import cuda_unavailable
+
+WHY = cuda_unavailable()
+pytestmark = pytest.mark.skipif(WHY is not None, reason=f"worlds on CUDA need CUDA: {WHY}")
+
+
+@pytest.fixture
+def renderer(make_renderer):  # noqa: ANN001, ANN201
+    r = make_renderer(analytic_scene())
+    if not r.device.external_memory_fd:
+        pytest.skip(f"{r.device.info.name} cannot export memory to CUDA")
+    r.world_slots(MOVED)
+    return r
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
+def test_cuda_poses_give_the_host_worlds(renderer, pipeline: str) -> None:  # noqa: ANN001
+    import torch
+
+    r = renderer
+    poses = world_poses(6, seed=3)
+    shown = np.ones((6, 2), bool)
+    shown[2, 0] = shown[4, 1] = False
+    kw = dict(quaternion="wxyz", pipeline=pipeline, **NO_SHADOWS)
+    host = r.render_batch(cameras(6), (W, H), worlds=poses, world_visible=shown, **kw)
+    on_gpu = torch.as_tensor(poses, device="cuda", dtype=torch.float32)
+    visible = torch.as_tensor(shown, device="cuda")
+    into_numpy = r.render_batch(cameras(6), (W, H), worlds=on_gpu, world_visible=visible, **kw)
+    into_torch = r.render_batch(cameras(6), (W, H), worlds=on_gpu, world_visible=visible,
+                                device="cuda", **kw)
+    assert into_torch.device.type == "cuda"
+    for got in (into_numpy, into_torch.cpu().numpy()):
+        diff = np.abs(host.astype(int) - got)
+        assert np.mean(diff) <= 0.05 and np.mean(diff > 1) <= 0.001, (diff.mean(), diff.max())
+
+
+def test_a_step_loop_rewrites_poses_in_place(renderer) -> None:  # noqa: ANN001
+    """A simulator's loop: one tensor rewritten each step; each step's frames follow it."""
+    import torch
+
+    r = renderer
+    buf = torch.zeros((3, 2, 7), device="cuda")
+    frames = []
+    for seed in (1, 2):
+        buf.copy_(torch.as_tensor(world_poses(3, seed=seed), device="cuda"))
+        frames.append(r.render_batch(cameras(3), (W, H), worlds=buf, quaternion="wxyz",
+                                     device="cuda", **NO_SHADOWS).cpu().numpy())
+        want = r.render_batch(cameras(3), (W, H), worlds=world_poses(3, seed=seed),
+                              quaternion="wxyz", **NO_SHADOWS)
+        assert np.mean(np.abs(frames[-1].astype(int) - want)) <= 0.05
+    assert not np.array_equal(frames[0], frames[1])
+
+
+def test_back_to_back_steps_keep_their_frames(renderer) -> None:  # noqa: ANN001
+    """Two steps submitted without waiting (the poses buffer rewritten right after the first
+    call returns): each step's tensor holds its own poses' frames (the GPU-side ordering of
+    render/cuda_order.py, where the driver shares semaphores)."""
+    import torch
+
+    r = renderer
+    buf = torch.zeros((4, 2, 7), device="cuda")
+    got = []
+    for seed in (5, 6, 7):
+        buf.copy_(torch.as_tensor(world_poses(4, seed=seed), device="cuda"))
+        got.append(r.render_batch(cameras(4), (W, H), worlds=buf, quaternion="wxyz",
+                                  device="cuda", pipeline="compute", **NO_SHADOWS))
+    # Where the driver shares semaphores (NVIDIA's), the steps were ordered on the GPU.
+    assert (r.batch_path.cuda_order is not None) == bool(r.device.external_semaphore_fd)
+    for seed, frames in zip((5, 6, 7), got, strict=True):
+        want = r.render_batch(cameras(4), (W, H), worlds=world_poses(4, seed=seed),
+                              quaternion="wxyz", pipeline="compute", **NO_SHADOWS)
+        assert np.mean(np.abs(frames.cpu().numpy().astype(int) - want)) <= 0.05, seed
+
+
+@pytest.mark.parametrize("device", ["cpu", "cuda"])
+def test_nan_poses_on_the_gpu_are_hidden_and_reported(renderer, device: str) -> None:  # noqa: ANN001
+    """CUDA poses are not read back before the batch: the kernel hides a world whose pose is
+    NaN or a zero quaternion and the renderer reports it in one line once the batch is done
+    (into torch: at the next call, which waits for it)."""
+    import torch
+
+    poses = torch.as_tensor(world_poses(3, seed=2), device="cuda", dtype=torch.float32)
+    poses[1, 0, 0] = float("nan")
+    poses[2, 1, 3:] = 0.0
+    r = renderer
+
+    def call() -> object:
+        return r.render_batch(cameras(3), (W, H), worlds=poses, quaternion="wxyz",
+                              device=device, pipeline="compute", **NO_SHADOWS)
+
+    with pytest.raises(UsageError, match="world 1 has a pose with NaN") as err:
+        call()
+        call()  # (into torch, the first call returns before the batch is done)
+    assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize(("make", "message"), [
+    (lambda t: t.zeros((2, 2, 7), device="cuda", dtype=t.int32), "float32"),
+    (lambda t: t.zeros((2, 3, 7), device="cuda"), "shape"),
+])
+def test_bad_cuda_poses_are_one_line_errors(renderer, make, message: str) -> None:  # noqa: ANN001
+    import torch
+
+    with pytest.raises(UsageError, match=message) as err:
+        renderer.render_batch(cameras(2), (W, H), worlds=make(torch))
+    assert "\n" not in str(err.value)
