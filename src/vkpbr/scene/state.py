@@ -3,9 +3,12 @@
 A `SceneState` holds the node tree's local transforms (vkpbr.scene.tree) and which nodes are
 shown, and turns them into what the GPU reads per draw: its model and normal matrices
 (`draw_matrices`), the world bounds and the draws' centres (culling, the blended draws'
-order, the shadow maps' fit). Every change bumps `version`; the renderer copies the state
-into a frame slot when the slot's copy is older (render/scene_state.py), so a pose change is
-one buffer write per frame and re-records nothing.
+order, the shadow maps' fit). Every change bumps `version` and marks its nodes; the calls
+only check and keep what they are given. The frame's first reader (`_update`, once per
+version) recomputes the world matrices of the marked nodes' subtrees and the rows of the
+draws below them (vkpbr.scene.draw_table), and the renderer copies the rows changed since
+a frame slot last held them (render/scene_state.py): a pose change is one buffer write per
+frame of what moved, and re-records nothing.
 
 Poses come as (N, 4, 4) matrices or as (N, 7) position + unit quaternion rows; the
 quaternion order is "xyzw" (glTF, SciPy) by default, "wxyz" (SAPIEN, MuJoCo, Isaac) on
@@ -319,7 +322,7 @@ class SceneState:
         """`count` new draws, each below a new root node of the tree named `names` (new
         instances of a mesh whose (2, 3) box is `mesh_box`: render/instances.py), hidden until
         placed; returns their tree nodes. The draw records and tree indices before stay."""
-        k, d = len(self.tree), len(self.draw_tree)
+        k = len(self.tree)
         nodes = np.arange(k, k + count)
         self._flush_pending()
         self.tree = grown_tree(self.tree, list(names))
@@ -345,7 +348,6 @@ class SceneState:
         self._since = None
         self._shown_dirty = True
         self._mark(nodes)
-        assert len(self.draw_tree) == d + count
         return nodes
 
     def _is_direct(self) -> bool:
