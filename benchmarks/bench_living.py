@@ -5,8 +5,12 @@ moving nodes against the still frame, skinning on the GPU. Prints one Markdown t
 
 Rows:
   set_poses 10k         Python ms per Renderer.set_poses call of 10,000 nodes ((N,7) and
-                        (N,4,4)), and the frame's share: the slot copy of 10,000 draw records
-                        (SceneState.draw_matrices + the write), median.
+                        (N,4,4); and of 100 of them), and the frame's share (frame_copy_ms):
+                        the state's update (world matrices, the changed draws' records,
+                        boxes), the slot copy of the changed records and the bounds, median.
+  instances 10k         add_instances of 10,000 instances of one mesh (the table's one growth:
+                        the draw-dependent parts made again), then move_instances of all of
+                        them per call: Python ms and the frame's share.
   sponza still/moving   Sponza 1920x1080 (and 640x480), the compute path as `vkpbr bench`
                         draws it, the sun's shadow maps, frames/s through render_many (three
                         in flight, no readback): still, and 100 of its nodes moved every frame
@@ -16,7 +20,9 @@ Rows:
   crowd N               N CesiumMan instances on a grid, each at its own animation time
                         (one vectorised sample a frame), 1920x1080 compute path: GPU ms per
                         frame, the deform step's ms and ms per million skinned vertices,
-                        Python ms per frame to pose them.
+                        Python ms per frame to pose them (python_ms: the vectorised sample and
+                        setting the locals) and the frame's own Python (frame_python_ms:
+                        the state's update, joint matrices, culling spheres, the copy).
 """
 
 from __future__ import annotations
@@ -54,17 +60,50 @@ def set_poses_rows(reps: int = 50) -> list[dict]:
         pos7[:, :3], pos7[:, 6] = rng.random((n, 3)), 1.0
         mats = np.tile(np.eye(4), (n, 1, 1))
         mats[:, :3, 3] = rng.random((n, 3))
-        for label, poses in (("(N,7)", pos7), ("(N,4,4)", mats)):
+        some = idx[::100]  # 100 of the 10,000: the frame copies their rows only
+        for label, nodes, poses in (("(N,7)", idx, pos7), ("(N,4,4)", idx, mats),
+                                    ("(N,7), 100 of them", some, pos7[some])):
             ts, up = [], []
             for _ in range(reps):
                 t0 = time.perf_counter()
-                r.set_poses(idx, poses)
+                r.set_poses(nodes, poses)
                 t1 = time.perf_counter()
-                r.parts.gpu_state.write(0)
+                r.parts.gpu_state.write(0)  # the frame's share: its slot's copy, the bounds
+                _ = r.parts.bounds.radius
                 up.append(time.perf_counter() - t1)
                 ts.append(t1 - t0)
             rows.append({"row": f"set_poses 10k {label}", "python_ms": 1e3 * _median(ts),
                          "frame_copy_ms": 1e3 * _median(up), "nodes": n})
+    return rows
+
+
+def instance_rows(reps: int = 50) -> list[dict]:
+    """10,000 instances of one loaded mesh (add_instances: the one growth, python_ms), then
+    moved every call (move_instances of (N,7) rows: Python per call, the frame's share)."""
+    from vkpbr.scene.default import default_scene
+
+    rows = []
+    with Renderer(default_scene()) as r:
+        rng = np.random.default_rng(0)
+        pos7 = np.zeros((10_000, 7))
+        pos7[:, :3], pos7[:, 6] = rng.random((10_000, 3)) * 4.0, 1.0
+        t0 = time.perf_counter()
+        ids = r.add_instances(0, pos7)
+        r.parts.gpu_state.write(0)
+        rows.append({"row": "add_instances 10k (the table grows once)",
+                     "python_ms": 1e3 * (time.perf_counter() - t0)})
+        ts, up = [], []
+        for _ in range(reps):
+            pos7[:, 1] += 0.01
+            t0 = time.perf_counter()
+            r.move_instances(ids, pos7)
+            t1 = time.perf_counter()
+            r.parts.gpu_state.write(0)
+            _ = r.parts.bounds.radius
+            up.append(time.perf_counter() - t1)
+            ts.append(t1 - t0)
+        rows.append({"row": "move_instances 10k (N,7)", "python_ms": 1e3 * _median(ts),
+                     "frame_copy_ms": 1e3 * _median(up)})
     return rows
 
 
@@ -197,17 +236,19 @@ def crowd_rows(assets: Path, counts: tuple[int, ...], frames: int) -> list[dict]
                      yfov_deg=50.0)
         offsets = np.random.default_rng(1).random(count) * 2.0
         with Renderer(scene) as r:
-            py, gpu, deform = [], [], []
+            py, gpu, deform, frame_py = [], [], [], []
             views = crowd_views(r, man, cam, offsets, k, count, frames + 20, py)
             for i, _ in enumerate(r.render_many(views, size=(1920, 1080), readback=False,
                                                 pipeline="compute", raster="compute")):
                 if i >= 20:
                     gpu.append(r.last_stats.gpu_ms)
+                    frame_py.append(r.last_stats.cpu_ms)
                     deform.append(r.last_stats.pass_ms.get("deform", float("nan")))
         mverts = count * verts / 1e6
         rows.append({"row": f"crowd {count} CesiumMan 1920x1080", "gpu_ms": _median(gpu),
                      "deform_ms": _median(deform), "deform_ms_per_mvert": _median(deform) / mverts,
-                     "python_ms": 1e3 * _median(py[20:]), "skinned_vertices": count * verts})
+                     "python_ms": 1e3 * _median(py[20:]), "frame_python_ms": _median(frame_py),
+                     "skinned_vertices": count * verts})
     return rows
 
 
@@ -217,12 +258,14 @@ def main() -> None:
     ap.add_argument("--assets", type=Path, required=True)
     ap.add_argument("--frames", type=int, default=300)
     ap.add_argument("--crowds", default="100,1000")
-    ap.add_argument("--only", default="poses,walk,engine,crowd")
+    ap.add_argument("--only", default="poses,instances,walk,engine,crowd")
     ap.add_argument("--json")
     args = ap.parse_args()
     rows: list[dict] = []
     if "poses" in args.only:
         rows += set_poses_rows()
+    if "instances" in args.only:
+        rows += instance_rows()
     if "walk" in args.only:
         rows += walk_rows(args.assets, args.frames)
     if "engine" in args.only:
@@ -230,8 +273,8 @@ def main() -> None:
     if "crowd" in args.only:
         rows += crowd_rows(args.assets, tuple(int(c) for c in args.crowds.split(",")),
                            max(args.frames // 3, 30))
-    keys = ("python_ms", "frame_copy_ms", "fps", "gpu_ms", "shadows_ms", "deform_ms",
-            "deform_ms_per_mvert")
+    keys = ("python_ms", "frame_copy_ms", "frame_python_ms", "fps", "gpu_ms", "shadows_ms",
+            "deform_ms", "deform_ms_per_mvert")
     print("| row | " + " | ".join(keys) + " |\n|---|" + "---:|" * len(keys))
     for row in rows:
         cells = [f"{row[k]:.3f}" if isinstance(row.get(k), float) else "" for k in keys]

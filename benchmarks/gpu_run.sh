@@ -5,7 +5,7 @@
 # JPEGs re-encoded at quality 85), and optionally .before (`git archive <commit> src` of an
 # earlier commit, benchmarked in the same run for before/after numbers).
 # STEPS (default "paths env tests"): any of paths, env, bench, viewer, outputs, batch, ray,
-# transmission, auto, ao, shadows, tests. SPONZA: the scene file (e.g. .assets-peers/models/...).
+# transmission, auto, ao, shadows, living, tests. SPONZA: the scene file (e.g. .assets-peers/models/...).
 source benchmarks/gpu_env.sh
 SPONZA=${SPONZA:-.assets/models/Sponza/glTF/Sponza.gltf}
 STEPS=${STEPS:-paths env tests}
@@ -23,6 +23,15 @@ fi
 if has shadows; then
   echo "== shadow maps: the raster units against compute shaders (Sponza 1080p: map ms, the walk with the sun, 100 moving nodes)"
   timeout ${SHADOWS_TIMEOUT:-500} python3 benchmarks/bench_shadows.py --scene $SPONZA --frames ${FRAMES:-300} --json "$OUT/shadows.json" 2>&1 | tee "$OUT/shadows.txt"
+fi
+if has living; then
+  echo "== living scenes: set_poses, instances, Sponza with moving nodes, 2CylinderEngine, CesiumMan crowds"
+  ASSETS=${ASSETS:-$(dirname "$(dirname "$(dirname "$SPONZA")")")}
+  timeout ${LIVING_TIMEOUT:-540} python3 benchmarks/bench_living.py --assets "$ASSETS" --frames ${FRAMES:-300} --crowds 100,1000 --json "$OUT/living.json" 2>&1 | tee "$OUT/living.txt"
+  if [ -d .before/src ]; then
+    echo "== living scenes (before: .before; no instance rows)"
+    PYTHONPATH=/tmp/site:$PWD/.before/src timeout ${LIVING_TIMEOUT:-540} python3 benchmarks/bench_living.py --assets "$ASSETS" --frames ${FRAMES:-300} --crowds 1000 --only poses,walk,crowd 2>&1 | tee "$OUT/living-before.txt"
+  fi
 fi
 if has env; then
   echo "== environment pre-filter (2048x1024 panorama, the sky)"

@@ -12,6 +12,8 @@ other triangle). Every frame path and a batch.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from pinhole import basis, pixel_rays
@@ -131,3 +133,62 @@ def test_times_per_frame_of_a_sequence(make_renderer, sample_scene) -> None:  # 
     for t, frame in zip(times, seq, strict=True):
         assert np.array_equal(frame, r.render(cam, size=(W, H), time=t, lights=[]))
     assert not np.array_equal(seq[0], seq[2])
+
+
+@pytest.mark.parametrize("model", [m for m, _ in MODELS])
+def test_the_culling_spheres_hold_every_posed_vertex(sample_scene, model: str) -> None:  # noqa: ANN001
+    """DeformLayout.frames (each deformed record's culling sphere, the frame its vertices are
+    written in) holds every vertex the NumPy reference poses (tests/gltf_animation_reference.py),
+    at the animation's times and with random joint rotations, non-uniform scales and weights
+    beyond the animation's: a posed vertex in its frame's space is within the unit sphere."""
+    from gltf_animation_reference import posed_vertices
+
+    from vkpbr.render.deform import DEFORMED_RADIUS, DeformLayout, deformed_records
+
+    scene = sample_scene(model)
+    layout = DeformLayout(scene, deformed_records(scene))
+    tree = scene.node_tree()
+    rng = np.random.default_rng(7)
+    for t in np.linspace(0.0, 2.0, 5):
+        pose = sample(scene, t)
+        for shake in (0.0, 0.4):
+            local = pose.local.copy()
+            joints = np.unique(np.concatenate([s.joints for s in scene.skins] or [np.zeros(0, int)]))
+            for j in joints:  # a random turn and stretch of each joint
+                q = rng.normal(size=4) * shake + np.array([0, 0, 0, 1.0])
+                x, y, z, w = q / np.linalg.norm(q)
+                rot = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                                [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                                [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+                local[j, :3, :3] = local[j, :3, :3] @ (rot * rng.uniform(1 - shake, 1 + shake, 3))
+            weights = {k: np.asarray(v) * (1 + shake * rng.uniform(-2, 2, np.shape(v)))
+                       for k, v in pose.weights.items()}
+            shaken = dataclasses.replace(pose, local=local, weights=weights)
+            world = tree.world(local)
+            frames = layout.frames(world, weights)
+            for k, rec in enumerate(layout.records):
+                p = posed_vertices(scene, rec.node, shaken)[0]
+                m = frames[k] if rec.skin is not None else world[rec.tree] @ frames[k]
+                inside = np.c_[p, np.ones(len(p))] @ np.linalg.inv(m).T
+                assert np.linalg.norm(inside[:, :3], axis=1).max() <= DEFORMED_RADIUS, (t, shake, k)
+            if shake == 0.0:  # and not much larger than the mesh: half its sphere at least
+                r = np.array([f[0, 0] for f in frames])
+                assert np.all(r < 10 * np.maximum(layout.rest_radius, 1e-3))
+
+
+def test_skins_with_weights_that_are_not_convex_are_never_culled(sample_scene) -> None:  # noqa: ANN001
+    """A skin whose weights are negative or do not sum to one has no bounding sphere: its
+    draw keeps the unbounded one and an identity frame (posed in world space as before)."""
+    from vkpbr.render.deform import DeformLayout, convex_weights, deformed_records
+
+    scene = sample_scene("RiggedSimple")
+    mesh = next(m for m in scene.meshes if m.joints is not None)
+    assert convex_weights(mesh)
+    w = mesh.weights.copy()
+    w[0, :2] = (1.5, -0.5)  # sums to one, one negative
+    mesh.weights = w
+    assert not convex_weights(mesh)
+    layout = DeformLayout(scene, deformed_records(scene))
+    frames = layout.frames(scene.node_tree().world(), {})
+    skinned = [k for k, r in enumerate(layout.records) if r.skin is not None]
+    assert skinned and all(np.array_equal(frames[k], np.eye(4)) for k in skinned)

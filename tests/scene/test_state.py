@@ -116,3 +116,77 @@ def test_names_paths_and_patterns() -> None:
         tree.indices("axle")
     with pytest.raises(UsageError, match="out of range"):
         tree.indices(4)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), k=st.integers(1, 25), steps=st.integers(1, 8))
+def test_frame_updates_of_changed_subtrees_match_plain_numpy(seed: int, k: int, steps: int) -> None:
+    """Poses and visibility set in random steps, the frame's arrays read between some of
+    them (so that each update covers only what changed since): the world matrices, models,
+    GPU records (model and np.linalg.inv normal matrix) and bounds equal plain NumPy's of
+    the final state, and a draw's version moves exactly when its subtree changed."""
+    rng = np.random.default_rng(seed)
+    tree = random_tree(rng, k)
+    state = state_of(tree)
+    local, visible = tree.local.copy(), np.ones(k, bool)
+    for _ in range(steps):
+        nodes = rng.choice(k, size=int(rng.integers(1, k + 1)), replace=False)
+        before = state.draw_versions.copy() if rng.random() < 0.5 else None
+        if before is not None:
+            state.draw_models()
+            before = state.draw_versions.copy()
+        if rng.random() < 0.3:
+            mask = rng.random(len(nodes)) < 0.5
+            state.set_visible(nodes, mask)
+            visible[nodes] = mask
+        elif rng.random() < 0.5:
+            rows = np.concatenate([rng.normal(size=(len(nodes), 3)), rng.normal(size=(len(nodes), 4))], 1)
+            state.set_poses(nodes, rows)
+            for n, row in zip(nodes, rows, strict=True):
+                local[n] = np.eye(4)
+                local[n, :3, :3], local[n, :3, 3] = rotation(row[3:]), row[:3]
+        else:
+            mats = np.tile(np.eye(4), (len(nodes), 1, 1))
+            mats[:, :3, :3] = rng.normal(size=(len(nodes), 3, 3)) + 2 * np.eye(3)
+            mats[:, :3, 3] = rng.normal(size=(len(nodes), 3))
+            state.set_poses(nodes, mats)
+            local[nodes] = mats
+        if before is not None:  # the draws below the changed nodes, and only they, move on
+            below = np.zeros(k, bool)
+            below[nodes] = True
+            for i in range(k):
+                below[i] |= tree.parents[i] >= 0 and below[tree.parents[i]]
+            state.draw_models()
+            assert np.all((state.draw_versions > before) == below)
+    world = world_by_walking(tree, local)
+    shown = visible.copy()
+    for i in range(k):
+        shown[i] &= tree.parents[i] < 0 or shown[tree.parents[i]]
+    want = np.where(shown[:, None, None], world, 0.0)
+    np.testing.assert_allclose(state.world(), world, atol=1e-9)
+    np.testing.assert_allclose(state.draw_models(), want, atol=1e-9)
+    rec = state.draw_matrices()
+    np.testing.assert_allclose(rec[:, 0], np.swapaxes(want, 1, 2), atol=1e-5)
+    for i in np.flatnonzero(shown):
+        inv_t = np.linalg.inv(world[i, :3, :3]).T
+        np.testing.assert_allclose(rec[i, 1, :3, :3], inv_t.T, rtol=1e-4, atol=1e-4)
+    lo, hi = state.bounds()
+    if shown.any():
+        corners = np.array([[x, y, z, 1.0] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+        pts = np.einsum("dij,cj->dci", world[shown], corners)[..., :3].reshape(-1, 3)
+        np.testing.assert_allclose(lo, pts.min(0), atol=1e-9)
+        np.testing.assert_allclose(hi, pts.max(0), atol=1e-9)
+    else:
+        assert np.all(lo == 0) and np.all(hi == 0)
+
+
+def test_set_poses_keeps_no_reference_to_the_callers_arrays() -> None:
+    tree = random_tree(np.random.default_rng(1), 4)
+    state = state_of(tree)
+    rows = np.array([[1.0, 2, 3, 0, 0, 0, 1]] * 2)
+    nodes = np.array([0, 1])
+    state.set_poses(nodes, rows)
+    rows[:] = 0.0  # changed after the call (the frame makes the matrices later)
+    nodes[:] = 3
+    np.testing.assert_allclose(state.local[:2, :3, 3], [[1, 2, 3], [1, 2, 3]])
+    np.testing.assert_allclose(state.local[3], tree.local[3])

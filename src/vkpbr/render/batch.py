@@ -41,7 +41,7 @@ from vkpbr.gpu.frames import Frame, FrameRing
 from vkpbr.gpu.graph import BufferResource, Rendering, Step
 from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
-from vkpbr.render.deform import UNBOUNDED_RADIUS
+from vkpbr.render.deform import DEFORMED_RADIUS, UNBOUNDED_RADIUS
 from vkpbr.render.frames import FrameSlot
 from vkpbr.render.gpu_scene import Draw, GpuScene
 from vkpbr.render.passes import PassContext, record_passes
@@ -67,9 +67,10 @@ def draw_spheres(scene: Scene, draws: list[Draw]) -> np.ndarray:
     for i, d in enumerate(draws):
         p = scene.meshes[d.mesh].positions
         lo, hi = p.min(axis=0).astype(np.float64), p.max(axis=0).astype(np.float64)
-        out[i, :3] = (lo + hi) / 2
+        out[i, :3] = (lo + hi) / 2 if not d.deformed else 0.0
         out[i, 3] = (np.linalg.norm(hi - lo) / 2 * (1 + 1e-5) + 1e-6 if not d.deformed
-                     else UNBOUNDED_RADIUS)  # posed beyond its rest bounds: never culled
+                     else UNBOUNDED_RADIUS if d.unbounded  # (never culled)
+                     else DEFORMED_RADIUS)  # posed within its frame's unit sphere
         ranges[i, 4:7] = (d.index_count, d.first_index, d.vertex_offset & 0xFFFFFFFF)
     return out
 

@@ -37,7 +37,7 @@ from vkpbr.gpu.descriptors import DescriptorPool, DescriptorSetLayout, Descripto
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, TextureUploader
 from vkpbr.render import layouts as L
-from vkpbr.render.deform import deformed_records
+from vkpbr.render.deform import convex_weights, deformed_records
 from vkpbr.scene.material_table import PARAMS, TEXTURES
 from vkpbr.scene.types import (
     SRGB_TEXTURE_SLOTS,
@@ -96,7 +96,8 @@ class Draw:
     node: int = -1  # the scene node it draws (the dataset outputs' instance table)
     instance: int = -1  # which of the node's EXT_mesh_gpu_instancing instances; -1: none
     deformed: bool = False  # posed by the deform step (render/deform.py): never culled
-    skinned: bool = False  # deformed by a skin: posed in world space, its model the identity
+    skinned: bool = False  # deformed by a skin: posed in world space (its model: the frame)
+    unbounded: bool = False  # deformed with no bounding sphere (weights not convex): never culled
     center: np.ndarray = field(default_factory=lambda: np.zeros(3))  # world, for blend sorting
 
 
@@ -473,19 +474,7 @@ class GpuScene:
         materials = list(self.scene_materials)
         self.materials: list[Material] = materials + [Material(name="vkpbr-default")]
         self.default_material = len(self.materials) - 1
-        align = int(self.device.limits.minUniformBufferOffsetAlignment)
-        s_align = int(self.device.limits.minStorageBufferOffsetAlignment)
-        self._ubo_stride = (L.MATERIAL.size + align - 1) // align * align
-        n = len(self.materials)
-        self._ubo_slot = self._ubo_stride * n
-        self.material_ubo = self._own(Buffer(self.device, self._ubo_slot * self.slots, "uniform",
-                                             host_visible=True, device_local=True, name="materials"))
-        self._table_bytes = L.MATERIAL.size * n
-        self._table_stride = (self._table_bytes + s_align - 1) // s_align * s_align
-        self.material_table = self._own(Buffer(self.device, self._table_stride * self.slots, "storage",
-                                               host_visible=True, device_local=True,
-                                               name="material records"))
-        self.pool = self._own(DescriptorPool(self.device, [(layout, n * self.slots)]))
+        self.material_layout = layout
         self.material_blocks: list[np.ndarray] = []  # as loaded (compute_path.py's table too)
         views: list[list[tuple[ImageView, Sampler]]] = []
         for mat in self.materials:
@@ -501,6 +490,25 @@ class GpuScene:
                 block["flags"] |= L.MATERIAL_SHARED_METALLIC_ROUGHNESS
             self.material_blocks.append(block)
             views.append(bound)
+        self._material_buffers(views)
+
+    def _material_buffers(self, views: list[list[tuple[ImageView, Sampler]]]) -> None:
+        """The MATERIAL blocks' buffers (a copy per frame slot), the sets' pool and each
+        slot's sets, for `self.materials` with their texture `views`."""
+        align = int(self.device.limits.minUniformBufferOffsetAlignment)
+        s_align = int(self.device.limits.minStorageBufferOffsetAlignment)
+        self._ubo_stride = (L.MATERIAL.size + align - 1) // align * align
+        n = len(self.materials)
+        self._ubo_slot = self._ubo_stride * n
+        self.material_ubo = self._own(Buffer(self.device, self._ubo_slot * self.slots, "uniform",
+                                             host_visible=True, device_local=True, name="materials"))
+        self._table_bytes = L.MATERIAL.size * n
+        self._table_stride = (self._table_bytes + s_align - 1) // s_align * s_align
+        self.material_table = self._own(Buffer(self.device, self._table_stride * self.slots, "storage",
+                                               host_visible=True, device_local=True,
+                                               name="material records"))
+        layout = self.material_layout
+        self.pool = self._own(DescriptorPool(self.device, [(layout, n * self.slots)]))
         # Each slot's sets are made as draws first bind them (MaterialSets): unused materials
         # cost no descriptor set in any slot.
         self.slot_material_sets = [
@@ -509,6 +517,31 @@ class GpuScene:
         for s in range(self.slots):
             self.write_materials(s, self.material_blocks)
         self.material_sets = self.slot_material_sets[0]  # (slot 0's: tools and tests)
+
+    def copy_material(self, i: int) -> int:
+        """A new material, a copy of material `i` (its textures and factors), for draws that
+        take their own factors (set_material(node=)); returns its index. The blocks' buffers
+        and sets are made again (the caller waits for the device and re-records)."""
+        views = list(self.slot_material_sets[0].textures) + [self.slot_material_sets[0].textures[i]]
+        self.materials.append(dataclasses.replace(self.materials[i]))
+        self.material_blocks.append(self.material_blocks[i].copy())
+        for old in (self.material_ubo, self.material_table, self.pool):
+            self._owned.remove(old)
+            old.destroy()
+        self._material_buffers(views)
+        return len(self.materials) - 1
+
+    def instance_draws(self, mesh: int, count: int) -> list[Draw]:
+        """`count` new draw records of mesh `mesh` (add_instances): no node (-1), the mesh's
+        material, a zero model (hidden until placed)."""
+        m = self.scene.meshes[mesh]
+        mat_index = m.material if 0 <= m.material < len(self.scene.materials) else self.default_material
+        mat = self.materials[mat_index]
+        return [Draw(mesh=mesh, material=mat_index, first_index=int(self.index_offsets[mesh]),
+                     index_count=len(m.indices), vertex_offset=int(self.vertex_offsets[mesh]),
+                     model=np.zeros((4, 4)), alpha_mode=mat.alpha_mode,
+                     double_sided=bool(mat.double_sided), casts_shadows=bool(mat.casts_shadows))
+                for _ in range(count)]
 
     def write_materials(self, slot: int, blocks: list[np.ndarray]) -> None:
         """Frame slot `slot`'s copies of the MATERIAL blocks (after the slot's fence): one
@@ -580,6 +613,7 @@ class GpuScene:
                 double_sided=bool(mat.double_sided), casts_shadows=bool(mat.casts_shadows),
                 center=m[:3, :3] @ center_local + m[:3, 3], node=node_index, instance=instance,
                 deformed=(node_index, instance) in posed, skinned=skinned,
+                unbounded=skinned and not convex_weights(mesh),
             ))
         draws.sort(key=lambda d: d.material)  # fewer material binds within each pass
         return draws

@@ -49,7 +49,7 @@ from vkpbr.scene.semantics import semantic_ids
 from vkpbr.scene.state import SceneState
 from vkpbr.scene.types import Camera, Scene
 
-__all__ = ["FrameParts", "create_layouts", "make_parts", "open_device"]
+__all__ = ["FrameParts", "create_layouts", "make_parts", "open_device", "lazy_compute"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -135,6 +135,15 @@ def create_layouts(device: Device, frames: int
     return layouts, shadows, PipelineLayout(device, layouts, L.PUSH.size)
 
 
+def lazy_compute(device: Device, scene: Scene, gs: GpuScene, layouts: list[DescriptorSetLayout],
+                 slots: list[FrameSlot], ids: np.ndarray, gpu_state: GpuSceneState,
+                 deform: DeformKernel | None) -> Lazy[ComputeScene]:
+    """The compute path's resources for the scene's draws as they are now, made on first use."""
+    return Lazy(lambda: ComputeScene(device, gs, dict(enumerate(layouts)), slots, ids,
+                                     draw_spheres(scene, gs.draws) if gs.draws else None,
+                                     gpu_state, deform.prev_positions if deform else None))
+
+
 def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float, float, float],
                depth_prepass: bool | None, env_spec: EnvironmentSpec | None,
                cache_dir: str | os.PathLike[str] | None, semantics: Any) -> FrameParts:
@@ -143,8 +152,8 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     layouts, shadows, pipeline_layout = create_layouts(device, ring.count)
     buffers, pool, slots = create_slots(device, layouts[0], layouts[2], ring.count)
     gs = GpuScene(device, scene, layouts[1], ring.count)
-    state = scene_state(scene, gs.draws)
     layout = DeformLayout(scene, gs.deformed) if gs.deformed else None
+    state = scene_state(scene, gs.draws, layout)
     gpu_state = GpuSceneState(device, state, ring.count, scene, layout)
     gpu_state.first_posed = min(gs.posed_offsets, default=0)
     gpu_state.gpu_scene = gs
@@ -155,9 +164,7 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
                                if isinstance(semantics, os.PathLike) else semantics)
     # Bound in every slot's set 2 before anything is recorded (render/transmission.py).
     copies = OpaqueCopies(device, gs, [s.set2 for s in slots], (*background, 1.0))
-    compute = Lazy(lambda: ComputeScene(device, gs, dict(enumerate(layouts)), slots, ids,
-                                        draw_spheres(scene, gs.draws) if gs.draws else None,
-                                        gpu_state, deform.prev_positions if deform else None))
+    compute = lazy_compute(device, scene, gs, layouts, slots, ids, gpu_state, deform)
     post = Lazy(lambda: PostKernels(device))
     blend = BlendOrder(gs.draws, state)
     paths = FramePaths(device, msaa, scene.triangle_count, len(blend) > 0, depth_prepass,

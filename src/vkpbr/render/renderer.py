@@ -23,6 +23,7 @@ from vkpbr.render.batch_route import chunked, per_view
 from vkpbr.render.environment import EnvironmentSpec
 from vkpbr.render.frame_path import Submitted
 from vkpbr.render.frames import FrameStats
+from vkpbr.render.instances import instance_api
 from vkpbr.render.lighting import LightsArg, automatic_sun
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.outputs import OUTPUTS, frame_outputs
@@ -130,8 +131,7 @@ class Renderer:
         st = p.state  # the living scene (vkpbr.scene.state): what the next frame shows
         self.state, self.set_pose, self.set_poses, self.reset_pose = st, st.set_pose, st.set_poses, st.reset
         self.set_visible, self.set_time, self.set_weights = st.set_visible, st.set_time, st.set_weights
-        self.set_material = st.set_material
-
+        self.add_instances, self.move_instances, self.remove_instances, self.set_material = instance_api(self)
 
     @property
     def instances(self) -> list[dict[str, Any]]:

@@ -29,8 +29,9 @@ __all__ = ["GpuSceneState", "LiveBounds", "scene_state"]
 RECORD_BYTES = 2 * 64  # model + normal matrix
 
 
-def scene_state(scene: Scene, draws: list[Any]) -> SceneState:
-    """The state of `scene` whose draw records (render/gpu_scene.py) are `draws`."""
+def scene_state(scene: Scene, draws: list[Any], deform: DeformLayout | None = None) -> SceneState:
+    """The state of `scene` whose draw records (render/gpu_scene.py) are `draws`; `deform`:
+    the deformed records' layout (their models are the frames they are posed in)."""
     tree = scene.node_tree()
     nodes = scene.nodes
     draw_tree = np.array([nodes[d.node].tree for d in draws], np.int64)
@@ -42,12 +43,18 @@ def scene_state(scene: Scene, draws: list[Any]) -> SceneState:
     boxes = np.zeros((len(draws), 2, 3))
     for i, d in enumerate(draws):
         p = scene.meshes[d.mesh].positions
-        if len(p):
+        if d.deformed and not d.unbounded:  # posed within its frame's unit sphere (deform.py)
+            boxes[i, 0], boxes[i, 1] = -1.0, 1.0
+        elif len(p):
             boxes[i] = p.min(axis=0), p.max(axis=0)
     rest = np.array([d.model for d in draws], np.float64).reshape(-1, 4, 4)
     state = SceneState(tree, draw_tree, local, boxes, rest, np.array([d.skinned for d in draws], bool))
     state.scene = scene
     state.deformed = np.array([d.deformed for d in draws], bool)  # (the motion table's)
+    if deform is not None:
+        at = {(d.node, d.instance): i for i, d in enumerate(draws)}
+        state.attach_deform(deform, np.array([at[(r.node, r.instance)] for r in deform.records],
+                                             np.int64))
     return state
 
 
@@ -90,6 +97,9 @@ class GpuSceneState:
         self._prev: tuple[Any, Any, int] | None = None  # previous frame's (VP, models, version)
         self.buffer = Buffer(device, self.stride * count, "storage", host_visible=True,
                              device_local=True, name="scene state")
+        # Each slot's Instances records as a (D, 32) float32 view of the mapped memory.
+        self._rows = [self.buffer.array(np.float32, 32 * draws, slot * self.stride).reshape(draws, 32)
+                      for slot in range(count)]
         self._written = [-1] * count
         self._values: tuple[int, np.ndarray] | None = None  # (version, deform floats)
         self._materials_written = [0] * count  # the slots hold the file's factors at first
@@ -114,7 +124,7 @@ class GpuSceneState:
         if self._prev is not None and self._prev[2] == state.version and self._prev[0] is vp \
                 and not table:
             return  # a still frame: the previous frame's are this one's
-        models = state.draw_models()
+        models = state.draw_models().copy()  # (the state updates its own in place)
         if table:
             out = self.buffer.array(np.float32, self.motion_size // 4, slot * self.stride + self.motion_at)
             head = out[:20]
@@ -137,11 +147,17 @@ class GpuSceneState:
         frame has finished reading it); nothing when it already holds this version.
         Returns `slots[slot]` (the frame slot, for the caller) when `slots` is given."""
         version = self.state.version
-        if self._written[slot] == version:
+        last = self._written[slot]
+        if last == version:
             return None if slots is None else slots[slot]
-        records = self.state.draw_matrices()
-        if records.size:
-            self.buffer.array(np.float32, records.size, slot * self.stride)[:] = records.ravel()
+        records = self.state.draw_matrices().reshape(-1, 32)
+        rows = self._rows[slot]
+        if len(records):  # the draws changed since the slot's copy; all when most did
+            changed = np.flatnonzero(self.state.draw_versions > last) if last >= 0 else None
+            if changed is None or 2 * len(changed) > len(records):
+                rows[:] = records
+            elif len(changed):
+                rows[changed] = records[changed]
         if self._materials_written[slot] != self.state.material_version:
             self._write_materials(slot)
         if self.deform is not None:

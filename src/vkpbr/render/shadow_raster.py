@@ -33,7 +33,7 @@ from vkpbr.gpu.compute import ComputePipeline
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.graph import BufferResource, Step
 from vkpbr.render.codegen import SPV_DIR
-from vkpbr.render.deform import UNBOUNDED_RADIUS
+from vkpbr.render.deform import DEFORMED_RADIUS, UNBOUNDED_RADIUS
 
 __all__ = ["ShadowRaster", "wants_compute", "SET_ROWS"]
 
@@ -88,7 +88,7 @@ class _Table:
             if row == len(opaque):
                 self.opaque_triangles = first
             rows[row, :4] = first, d.first_index, d.vertex_offset, i
-            spheres[row] = _sphere(gs.scene.meshes[d.mesh].positions, d.deformed)
+            spheres[row] = _sphere(gs.scene.meshes[d.mesh].positions, d)
             if row >= len(opaque):
                 self.masked.append((row, d.material, d.index_count // 3))
             first += d.index_count // 3
@@ -97,11 +97,13 @@ class _Table:
         self.buffer = upload_buffer(device, rows, "storage", name="shadow caster table")
 
 
-def _sphere(positions: np.ndarray, deformed: bool) -> tuple[float, float, float, float]:
-    """A mesh's bounding sphere (its box's) in its own space; unbounded when posed."""
+def _sphere(positions: np.ndarray, d: Any) -> tuple[float, float, float, float]:
+    """A draw's bounding sphere in its mesh's space: its box's; a deformed draw's the unit
+    sphere its posed vertices are written in (render/deform.py), unbounded without one."""
+    if d.deformed:
+        return (0.0, 0.0, 0.0, UNBOUNDED_RADIUS if d.unbounded else DEFORMED_RADIUS)
     lo, hi = positions.min(axis=0).astype(np.float64), positions.max(axis=0).astype(np.float64)
-    radius = UNBOUNDED_RADIUS if deformed else np.linalg.norm(hi - lo) / 2 * (1 + 1e-5) + 1e-6
-    return (*((lo + hi) / 2), radius)
+    return (*((lo + hi) / 2), np.linalg.norm(hi - lo) / 2 * (1 + 1e-5) + 1e-6)
 
 
 class ShadowRaster:

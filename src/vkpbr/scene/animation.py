@@ -24,7 +24,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vkpbr.errors import UsageError
+from vkpbr.scene.draw_table import blocks
 from vkpbr.scene.tree import NodeTree
+from vkpbr.scene.tree import quaternion_matrices as rotation_matrices
 from vkpbr.scene.types import Animation, AnimationSampler, Scene, Skin
 
 __all__ = ["Pose", "sample", "sample_sampler", "joint_matrices", "trs_matrices",
@@ -114,9 +116,10 @@ def sample(scene: Scene, time: float | np.ndarray,
                 for row in ch.targets:
                     if row not in tree.weights and row in weights:
                         weights[row] = value
+    grouped = _sample_groups(chosen, flat, spans, trs)
     for anim in chosen:
         for ch in anim.channels:
-            if ch.kind == "mesh":
+            if ch.kind == "mesh" or id(ch) in grouped:
                 continue
             value = _value(anim, ch.sampler, flat, ch.path == "rotation", spans)
             if ch.pointer is not None:
@@ -134,6 +137,85 @@ def sample(scene: Scene, time: float | np.ndarray,
                 trs["scale"].reshape(*lead, k, 3), local.reshape(*lead, k, 4, 4),
                 {r: w.reshape(*lead, -1) for r, w in weights.items()},
                 {p: v.reshape(*lead, -1) for p, v in pointers.items()})
+
+
+def _sample_groups(chosen: list[Animation], times: np.ndarray, spans: dict, trs: dict[str, np.ndarray]
+                   ) -> set[int]:
+    """The LINEAR translation, rotation and scale channels sampled together, a group per
+    path (a skeleton's 19 rotations in one interpolation over (19, B) rows, not 19 of B):
+    written into `trs`; returns the id() of each channel done. None when two channels
+    drive the same property (then the later must win: channel by channel)."""
+    groups: dict[str, list[tuple[AnimationSampler, int, int]]] = {}
+    seen: set[tuple[int, str]] = set()
+    for anim in chosen:
+        for ch in anim.channels:
+            if ch.kind == "mesh" or ch.node is None:
+                continue
+            if (ch.node, ch.path) in seen:
+                return set()
+            seen.add((ch.node, ch.path))
+            s = anim.samplers[ch.sampler]
+            if (ch.pointer is None and ch.path in trs and s.interpolation == "LINEAR"
+                    and len(s.input) >= 2):
+                groups.setdefault(ch.path, []).append((s, ch.node, id(ch)))
+    done: set[int] = set()
+    for path, members in groups.items():
+        if len(members) < 2:
+            continue
+        value = _sample_linear([m[0] for m in members], times, path == "rotation", spans)
+        trs[path][:, [m[1] for m in members]] = value.transpose(1, 0, 2)
+        done.update(m[2] for m in members)
+    return done
+
+
+def _sample_linear(samplers: list[AnimationSampler], times: np.ndarray, rotation: bool,
+                   spans: dict) -> np.ndarray:
+    """(G, B, C) values of G LINEAR samplers at (B,) times: one gather and one
+    interpolation over all of them (sample_sampler's rules)."""
+    found = [_span(s.input, times, spans) for s in samplers]
+    base = np.cumsum([0] + [len(s.input) for s in samplers[:-1]])
+    idx = np.stack([b + f[0] for b, f in zip(base, found, strict=True)]).reshape(-1)
+    u = np.stack([f[2] for f in found]).reshape(-1, 1)
+    if rotation:
+        v = _normalised(_slerp_intervals(samplers, idx, u))
+    else:
+        values = np.concatenate([s.output for s in samplers])
+        a, b = values[idx], values[idx + 1]
+        v = a + u * (b - a)
+    return v.reshape(len(samplers), len(times), -1)
+
+
+def _slerp_intervals(samplers: list[AnimationSampler], idx: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """_slerp of keyframes idx and idx + 1 (into the samplers' concatenated keyframes) at
+    fractions u, with what depends on the interval alone (unit ends, the shorter arc's
+    sign, its angle and sine) made once per sampler (`_arcs`), not once per sample."""
+    parts = [_arcs(s) for s in samplers]
+    a_all, b_all, angle_all, inv_all = (np.concatenate([p[k] for p in parts]) for k in range(4))
+    a, b, angle, inv = a_all[idx], b_all[idx], angle_all[idx], inv_all[idx]
+    small = inv == 0.0
+    wa = np.where(small, 1.0 - u, np.sin((1.0 - u) * angle) * inv)
+    wb = np.where(small, u, np.sin(u * angle) * inv)
+    return wa * a + wb * b
+
+
+def _arcs(s: AnimationSampler) -> tuple[np.ndarray, ...]:
+    """Per keyframe k of a rotation sampler, the arc to keyframe k + 1 as _slerp takes it:
+    (K, 4) unit start, (K, 4) unit end on the shorter side, (K, 1) angle, (K, 1) 1 / sine
+    (0 where the angle is tiny: linear there). Kept on the sampler (its keyframes do not
+    change once loaded)."""
+    cached = getattr(s, "_arcs", None)
+    if cached is not None and cached[0] is s.output:
+        return cached[1]
+    q = _normalised(np.asarray(s.output, np.float64))
+    a, b = q, np.concatenate([q[1:], q[-1:]])
+    d = np.einsum("bi,bi->b", a, b)[:, None]
+    b = np.where(d < 0, -b, b)
+    angle = np.arccos(np.minimum(np.abs(d), 1.0))
+    sin_angle = np.sin(angle)
+    inv = np.where(sin_angle < 1e-6, 0.0, 1.0 / np.where(sin_angle < 1e-6, 1.0, sin_angle))
+    arcs = (a, b, angle, inv)
+    s._arcs = (s.output, arcs)  # type: ignore[attr-defined]
+    return arcs
 
 
 def _rest_weights(scene: Scene, tree: NodeTree, b: int) -> dict[int, np.ndarray]:
@@ -158,7 +240,8 @@ def _span(inp: np.ndarray, times: np.ndarray, spans: dict[int, tuple] | None) ->
     length and the clamped fraction s in [0, 1], shared by the samplers with the same input
     array in one sample() call (exporters write one time accessor for many channels:
     CesiumMan's 57 channels use 19)."""
-    key = id(inp)
+    # By content where small (exporters often write equal time arrays, one per channel).
+    key = inp.tobytes() if len(inp) <= 4096 else id(inp)
     if spans is not None and key in spans:
         return spans[key][1]
     i = np.clip(np.searchsorted(inp, times, side="right") - 1, 0, len(inp) - 2)
@@ -244,12 +327,16 @@ def trs_matrices(t: np.ndarray, r: np.ndarray, s: np.ndarray) -> np.ndarray:
     """(..., 4, 4) float64 T * R * S of (..., 3) translations, (..., 4) quaternions and (..., 3)
     scales (the glTF node transform)."""
     t = np.asarray(t, np.float64)
-    out = np.zeros((*t.shape[:-1], 4, 4))
-    out[..., :3, :3] = quaternion_matrices(r)
-    out[..., :3, :3] *= np.asarray(s, np.float64)[..., None, :]
-    out[..., :3, 3] = t
-    out[..., 3, 3] = 1.0
-    return out
+    lead = t.shape[:-1]
+    t3 = t.reshape(-1, 3)
+    q = np.asarray(r, np.float64).reshape(-1, 4)  # (rotation_matrices normalises)
+    s3 = np.broadcast_to(np.asarray(s, np.float64), (*lead, 3)).reshape(-1, 3)
+    out = np.zeros((len(t3), 4, 4))
+    for b in blocks(len(t3)):  # cache-sized blocks, contiguous components (scene/state.py)
+        rotation_matrices(q[b], out=out[b, :3, :3], scale=s3[b])
+        out[b, :3, 3] = t3[b]
+    out[:, 3, 3] = 1.0
+    return out.reshape(*lead, 4, 4)
 
 
 def joint_matrices(world: np.ndarray, skin: Skin) -> np.ndarray:

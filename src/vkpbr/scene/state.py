@@ -3,9 +3,12 @@
 A `SceneState` holds the node tree's local transforms (vkpbr.scene.tree) and which nodes are
 shown, and turns them into what the GPU reads per draw: its model and normal matrices
 (`draw_matrices`), the world bounds and the draws' centres (culling, the blended draws'
-order, the shadow maps' fit). Every change bumps `version`; the renderer copies the state
-into a frame slot when the slot's copy is older (render/scene_state.py), so a pose change is
-one buffer write per frame and re-records nothing.
+order, the shadow maps' fit). Every change bumps `version` and marks its nodes; the calls
+only check and keep what they are given. The frame's first reader (`_update`, once per
+version) recomputes the world matrices of the marked nodes' subtrees and the rows of the
+draws below them (vkpbr.scene.draw_table), and the renderer copies the rows changed since
+a frame slot last held them (render/scene_state.py): a pose change is one buffer write per
+frame of what moved, and re-records nothing.
 
 Poses come as (N, 4, 4) matrices or as (N, 7) position + unit quaternion rows; the
 quaternion order is "xyzw" (glTF, SciPy) by default, "wxyz" (SAPIEN, MuJoCo, Isaac) on
@@ -25,73 +28,14 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from vkpbr.errors import UsageError
-from vkpbr.scene.tree import NodeRef, NodeTree
+from vkpbr.scene.draw_table import DrawTable, blocks, determinants, normal_matrices, std140_pairs
+from vkpbr.scene.tree import NodeRef, NodeTree, quaternion_matrices
 from vkpbr.scene.types import Camera, Light, Scene
 
-__all__ = ["SceneState", "quaternion_matrices", "normal_matrices", "std140_pairs"]
+__all__ = ["SceneState", "quaternion_matrices", "pose_matrices", "normal_matrices", "std140_pairs"]
 
 QUATERNION_ORDERS = ("xyzw", "wxyz")
-_LAST_ROW = np.array([0.0, 0.0, 0.0, 1.0])
 SPACES = ("local", "world")
-
-
-def quaternion_matrices(q: np.ndarray, order: str = "xyzw", out: np.ndarray | None = None
-                        ) -> np.ndarray:
-    """(N, 3, 3) rotation matrices of (N, 4) quaternions in `order` (normalised first; a
-    zero quaternion is refused by the caller), into `out` when given (a (N, 3, 3) view)."""
-    q = np.asarray(q, np.float64)
-    x, y, z, w = np.ascontiguousarray(q.T if order == "xyzw" else q[:, [1, 2, 3, 0]].T)
-    s = 2.0 / (x * x + y * y + z * z + w * w)  # normalises: 2 / |q|^2
-    xs, ys, zs = x * s, y * s, z * s
-    wx, wy, wz, xx, xy, xz, yy, yz, zz = w * xs, w * ys, w * zs, x * xs, x * ys, x * zs, y * ys, y * zs, z * zs
-    out = np.empty((len(q), 3, 3)) if out is None else out
-    out[:, 0, 0], out[:, 0, 1], out[:, 0, 2] = 1.0 - (yy + zz), xy - wz, xz + wy
-    out[:, 1, 0], out[:, 1, 1], out[:, 1, 2] = xy + wz, 1.0 - (xx + zz), yz - wx
-    out[:, 2, 0], out[:, 2, 1], out[:, 2, 2] = xz - wy, yz + wx, 1.0 - (xx + yy)
-    return out
-
-
-def _cofactors(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The cofactor matrices and determinants of (..., 3, 3) matrices, from the columns'
-    cross products (inverse transpose = cofactors / determinant): a few vector operations
-    for any number of matrices, where np.linalg.inv loops in LAPACK."""
-    # Components as contiguous (...) arrays (elementwise products of strided views cost 10x).
-    m = np.ascontiguousarray(np.moveaxis(a, (-2, -1), (0, 1)))  # m[row][column]
-    cof = np.empty((3, 3, *a.shape[:-2]), a.dtype)
-    for i in range(3):
-        i1, i2 = (i + 1) % 3, (i + 2) % 3
-        for j in range(3):
-            j1, j2 = (j + 1) % 3, (j + 2) % 3
-            cof[i, j] = m[i1, j1] * m[i2, j2] - m[i1, j2] * m[i2, j1]
-    det = m[0, 0] * cof[0, 0] + m[0, 1] * cof[0, 1] + m[0, 2] * cof[0, 2]
-    return np.moveaxis(cof, (0, 1), (-2, -1)), det
-
-
-def determinants(a: np.ndarray) -> np.ndarray:
-    """det of (..., 3, 3) matrices."""
-    return _cofactors(a)[1]
-
-
-def normal_matrices(model: np.ndarray) -> np.ndarray:
-    """(..., 4, 4) normal matrices (the inverse transpose of the 3x3 part) of model
-    matrices; a singular one (a hidden draw's zero matrix) keeps its 3x3 part."""
-    a = model[..., :3, :3]
-    cof, det = _cofactors(a)
-    ok = np.abs(det) > 1e-30
-    out = np.zeros_like(model)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        out[..., :3, :3] = np.where(ok[..., None, None], cof / np.where(ok, det, 1.0)[..., None, None], a)
-    out[..., 3, 3] = 1.0
-    return out
-
-
-def std140_pairs(model: np.ndarray) -> np.ndarray:
-    """(D, 2, 4, 4) float32: each model matrix and its normal matrix as GLSL's column-major
-    mat4 (Instances records: layouts.STORAGE)."""
-    out = np.empty((len(model), 2, 4, 4), np.float32)
-    out[:, 0] = np.swapaxes(model, -1, -2)
-    out[:, 1] = np.swapaxes(normal_matrices(model), -1, -2)
-    return out
 
 
 class SceneState:
@@ -113,14 +57,15 @@ class SceneState:
         self.draw_local = np.asarray(draw_local, np.float64).reshape(-1, 4, 4)
         # Draws below their node by more than the identity (instancing): the others skip
         # the product.
-        self._below = np.flatnonzero(np.any(self.draw_local != np.eye(4), axis=(1, 2)))
+        self._below = np.any(self.draw_local != np.eye(4), axis=(1, 2))
         self.mesh_boxes = np.asarray(mesh_boxes, np.float64).reshape(-1, 2, 3)
         self.rest = np.asarray(rest, np.float64).reshape(-1, 4, 4)
-        # Skinned draws are posed in world space by their joints: their model stays the
-        # identity (glTF ignores the skinned node's transform).
+        # Skinned draws are posed in world space by their joints: their model is the frame
+        # the deform step poses them in (identity without one; glTF ignores the skinned
+        # node's transform).
         self.skinned = (np.zeros(len(self.draw_tree), bool) if skinned is None
                         else np.asarray(skinned, bool))
-        self.local = np.array(tree.local, np.float64, copy=True)
+        self._local = np.array(tree.local, np.float64, copy=True)
         self.visible = np.ones(len(tree), bool)
         # Morph weights by tree node where set (set_weights, animation); the others take the
         # node's or mesh's from the file (render/deform.py).
@@ -136,25 +81,59 @@ class SceneState:
         self.draw_versions = np.zeros(len(self.draw_tree), np.int64)  # when each last changed
         self._since: tuple[int, object, int] | None = None
         self._cache: dict[str, tuple[int, object]] = {}
+        # What changed since the last frame (`_update` makes the frame's arrays from it):
+        # nodes set, quaternion rows not yet turned into matrices, whether visibility did.
+        self._dirty = np.zeros(len(tree), bool)
+        self._any_dirty = self._shown_dirty = False
+        self._pending: list[tuple[np.ndarray, np.ndarray, str]] = []
+        self._updated = 0
+        self._world = tree.world(self._local)
+        self._shown = np.ones(len(tree), bool)
+        self.table = DrawTable(self.mesh_boxes, self.rest)
+        self._direct = self._is_direct()
+        self.deform: object | None = None  # render/deform.py's DeformLayout, when attached
+        self.deform_draws = np.zeros(0, np.int64)  # the draw of each deformed record
+        self._record_of = -np.ones(len(self.draw_tree), np.int64)
 
     def __len__(self) -> int:
         return len(self.tree)
 
     # --- changing it ----------------------------------------------------------------------
+    @property
+    def local(self) -> np.ndarray:
+        """(K, 4, 4) float64 local transforms of the tree's nodes (writing into it directly
+        changes nothing until `_changed` names the nodes)."""
+        self._flush_pending()
+        return self._local
+
     def set_poses(self, nodes: NodeRef | Iterable[NodeRef] | np.ndarray, poses: np.ndarray,
                   space: str = "local", quaternion: str = "xyzw") -> None:
         """Set the transforms of `nodes` (indices, names, paths or patterns: NodeTree.indices)
         from (N, 4, 4) affine matrices or (N, 7) rows of position + unit quaternion
         (`quaternion` "xyzw" or "wxyz"), relative to each node's parent (`space="local"`) or
-        in the world (`space="world"`)."""
+        in the world (`space="world"`). The call checks and keeps the poses; the frame
+        makes the matrices (once, vectorised, only for what changed)."""
         idx = self.tree.indices(nodes)
-        matrices = self._pose_matrices(poses, len(idx), quaternion)
         if space not in SPACES:
             raise UsageError(f"space {space!r}: choose 'local' or 'world'")
+        p = _poses_of(poses, len(idx))
+        if p.shape[-1] == 7:
+            if quaternion not in QUATERNION_ORDERS:
+                raise UsageError(f"quaternion {quaternion!r}: choose 'xyzw' or 'wxyz'")
+            _check_rows(p)
+            if space == "local":  # the matrices are the frame's to make
+                self._pending.append((idx.copy(), p if p is not poses and p.base is None else p.copy(),
+                                      quaternion))
+                self._mark(idx)
+                return
+            p = pose_matrices(p, quaternion)
+        else:
+            _check_matrices(p)
         if space == "world":
-            matrices = self._world_to_local(idx, matrices)
-        self.local[idx] = matrices
-        self._changed(idx)
+            p = self._world_to_local(idx, p)
+        self._flush_pending()  # (an earlier call's rows must not land after these)
+        self._local[as_slice(idx)] = p
+        self._mark(idx)
 
     def set_pose(self, node: NodeRef, matrix: np.ndarray, space: str = "local") -> None:
         """Set one node's (4, 4) transform, or its (7,) position + quaternion x, y, z, w
@@ -171,7 +150,8 @@ class SceneState:
             raise UsageError(f"set_visible: the mask must be one bool or {len(idx)} of them "
                              f"(one per node), got {m.dtype} of shape {m.shape}")
         self.visible[idx] = m
-        self._changed(idx)
+        self._shown_dirty = True
+        self._mark(idx)
 
     def set_weights(self, node: NodeRef, weights: Sequence[float] | np.ndarray) -> None:
         """Set the morph target weights of the mesh `node` shows (glTF `weights`)."""
@@ -214,7 +194,8 @@ class SceneState:
                    if ch.kind == "material" and ch.pointer in pose.pointers):
             self._pointed_material(ch, np.asarray(pose.pointers[ch.pointer], np.float64).reshape(-1))
         idx = np.asarray(nodes, np.int64)
-        self.local[idx] = pose.local[idx]
+        self._flush_pending()
+        self._local[idx] = pose.local[idx]
         for node in morphed:
             if node in pose.weights:
                 self.weights[int(node)] = np.asarray(pose.weights[node], np.float64)
@@ -228,7 +209,14 @@ class SceneState:
         animation pointers go through here too): `base_color` RGBA or RGB in [0, 1],
         `metallic` and `roughness` in [0, 1], `emissive` linear RGB >= 0. They multiply the
         material's textures, as glTF's factors do. `material`: index or name."""
-        i = self._material_index(material)
+        self.override_material(self._material_index(material), base_color, metallic, roughness,
+                               emissive)
+
+    def override_material(self, i: int, base_color: Sequence[float] | None = None,
+                          metallic: float | None = None, roughness: float | None = None,
+                          emissive: Sequence[float] | None = None) -> None:
+        """set_material of the renderer's material `i` (an index into GpuScene.materials:
+        the file's, then the default, then nodes' own copies: render/instances.py)."""
         given = {"base_color_factor": base_color, "metallic_factor": metallic,
                  "roughness_factor": roughness, "emissive_factor": emissive}
         checked = {f: _factor(f, v) for f, v in given.items() if v is not None}
@@ -289,8 +277,10 @@ class SceneState:
 
     def reset(self) -> None:
         """Back to the file's rest pose, everything shown."""
-        self.local[:] = self.tree.local
+        self._pending.clear()
+        self._local[:] = self.tree.local
         self.visible[:] = True
+        self._shown_dirty = True
         self.weights.clear()
         self.pointers.clear()
         if self.materials:
@@ -299,17 +289,19 @@ class SceneState:
         self._changed(np.arange(len(self.tree)))
 
     def _changed(self, idx: np.ndarray) -> None:
+        """Nodes whose local transform, visibility or weights changed (their subtrees'
+        draws follow at the next frame)."""
+        self._mark(np.asarray(idx, np.int64))
+
+    def _mark(self, idx: np.ndarray) -> None:
+        self._dirty[idx] = True
+        self._any_dirty = True
         self.version += 1
-        # The draws below the changed nodes (their subtrees): what the shadow cache asks.
-        touched = np.zeros(len(self.tree), bool)
-        touched[idx] = True
-        for level in self.tree.levels()[1:]:
-            touched[level] |= touched[self.tree.parents[level]]
-        self.draw_versions[touched[self.draw_tree]] = self.version
 
     def changed_since(self, draws: np.ndarray | None = None) -> int:
         """The latest version that changed any of `draws` (a bool mask; None: all): what
         a cache of their images (the shadow maps) compares."""
+        self._update()
         last = self._since
         if last is not None and last[0] == self.version and last[1] is draws:
             return last[2]  # the same mask (the casters') and state: once per change
@@ -318,39 +310,6 @@ class SceneState:
         self._since = (self.version, draws, hit)  # keeps the mask: its identity is the key
         return hit
 
-    def _pose_matrices(self, poses: np.ndarray, n: int, quaternion: str) -> np.ndarray:
-        p = np.asarray(poses, dtype=np.float64)
-        if p.ndim == 2 and n == 1 and p.shape in ((4, 4), (1, 7)):
-            p = p[None] if p.shape == (4, 4) else p
-        if p.ndim == 1 and p.shape == (7,) and n == 1:
-            p = p[None]
-        if p.shape == (n, 7):  # rigid by construction: only the numbers are checked
-            if quaternion not in QUATERNION_ORDERS:
-                raise UsageError(f"quaternion {quaternion!r}: choose 'xyzw' or 'wxyz'")
-            if not np.isfinite(p).all():
-                raise UsageError("set_poses: a pose holds NaN or infinity")
-            if np.einsum("ij,ij->i", p[:, 3:], p[:, 3:]).min(initial=1.0) < 1e-24:
-                raise UsageError("set_poses: a quaternion of length 0 is no rotation")
-            out = np.empty((n, 4, 4))
-            quaternion_matrices(p[:, 3:], quaternion, out[:, :3, :3])
-            out[:, :3, 3] = p[:, :3]
-            out[:, 3] = _LAST_ROW
-            return out
-        if p.shape == (n, 4, 4):
-            out = p
-        else:
-            raise UsageError(f"set_poses: poses of shape {p.shape} for {n} node(s); give "
-                             f"({n}, 4, 4) matrices or ({n}, 7) position + quaternion rows")
-        if not np.isfinite(out).all():
-            raise UsageError("set_poses: a pose holds NaN or infinity")
-        if np.abs(out[:, 3] - _LAST_ROW).max(initial=0.0) > 1e-6:
-            raise UsageError("set_poses: a matrix's last row must be 0 0 0 1 (an affine "
-                             "transform; a projection is not a pose)")
-        if np.abs(determinants(out[:, :3, :3])).min(initial=1.0) < 1e-12:
-            raise UsageError("set_poses: a matrix is singular (a scale of 0 flattens the node; "
-                             "hide it with set_visible instead)")
-        return out
-
     def _world_to_local(self, idx: np.ndarray, world: np.ndarray) -> np.ndarray:
         parents = self.tree.parents[idx]
         parent_world = np.broadcast_to(np.eye(4), world.shape).copy()
@@ -358,6 +317,129 @@ class SceneState:
         if np.any(has):
             parent_world[has] = self.world()[parents[has]]
         return np.linalg.solve(parent_world, world)
+
+    def grow(self, count: int, mesh_box: np.ndarray, names: Sequence[str]) -> np.ndarray:
+        """`count` new draws, each below a new root node of the tree named `names` (new
+        instances of a mesh whose (2, 3) box is `mesh_box`: render/instances.py), hidden until
+        placed; returns their tree nodes. The draw records and tree indices before stay."""
+        k = len(self.tree)
+        nodes = np.arange(k, k + count)
+        self._flush_pending()
+        self.tree = grown_tree(self.tree, list(names))
+        eye = np.tile(np.eye(4), (count, 1, 1))
+        self._local = np.concatenate([self._local, eye])
+        self._world = np.concatenate([self._world, eye])
+        self.visible = np.concatenate([self.visible, np.zeros(count, bool)])
+        self._shown = np.concatenate([self._shown, np.zeros(count, bool)])
+        self._dirty = np.concatenate([self._dirty, np.zeros(count, bool)])
+        self.draw_tree = np.concatenate([self.draw_tree, nodes])
+        self.draw_local = np.concatenate([self.draw_local, eye])
+        self._below = np.concatenate([self._below, np.zeros(count, bool)])
+        boxes = np.broadcast_to(np.asarray(mesh_box, np.float64), (count, 2, 3))
+        self.mesh_boxes = np.concatenate([self.mesh_boxes, boxes])
+        self.rest = np.concatenate([self.rest, np.zeros((count, 4, 4))])
+        self.skinned = np.concatenate([self.skinned, np.zeros(count, bool)])
+        self.draw_versions = np.concatenate([self.draw_versions, np.zeros(count, np.int64)])
+        self._record_of = np.concatenate([self._record_of, -np.ones(count, np.int64)])
+        if hasattr(self, "deformed"):
+            self.deformed = np.concatenate([self.deformed, np.zeros(count, bool)])
+        self.table.grow(boxes)
+        self._direct = self._is_direct()
+        self._since = None
+        self._shown_dirty = True
+        self._mark(nodes)
+        return nodes
+
+    def _is_direct(self) -> bool:
+        """Whether draw i is tree node i with nothing below it (one draw a root-level node:
+        the frame's models are a view of the world matrices)."""
+        return (len(self.draw_tree) == len(self.tree) and not self._below.any()
+                and bool(np.array_equal(self.draw_tree, np.arange(len(self.tree)))))
+
+    # --- the frame's update -----------------------------------------------------------------
+    def attach_deform(self, layout: object, draws: np.ndarray) -> None:
+        """The deformed records (render/deform.py's DeformLayout) and the draw of each:
+        their models become the frames the deform step poses them in (a sphere around the
+        posed vertices, which culling places: DeformLayout.frames)."""
+        self.deform, self.deform_draws = layout, np.asarray(draws, np.int64)
+        self._record_of = -np.ones(len(self.draw_tree), np.int64)
+        self._record_of[self.deform_draws] = np.arange(len(self.deform_draws))
+        rows = np.zeros(len(self.draw_tree), bool)
+        rows[self.deform_draws] = True
+        self._update_draws(rows, self.deform.frames(self._world, self.weights), rest=True)  # type: ignore[attr-defined]
+
+    def _flush_pending(self) -> None:
+        """The quaternion rows set_poses kept, as local matrices (in call order)."""
+        for idx, rows, order in self._pending:
+            self._local[as_slice(idx)] = pose_matrices(rows, order)
+        self._pending.clear()
+
+    def _update(self) -> None:
+        """Bring the frame's arrays to this version: world matrices of the changed nodes'
+        subtrees, then the rows of the draws below them (DrawTable.update). Once per
+        version, whatever asks first (the frame slot's copy, the bounds, the shadow cache)."""
+        if self._updated == self.version:
+            return
+        self._flush_pending()
+        if self._any_dirty:
+            touched = self._dirty
+            for level in self.tree.levels()[1:]:  # the subtrees of what changed
+                touched[level] |= touched[self.tree.parents[level]]
+            self._update_world(touched)
+            if self._shown_dirty:
+                self._shown = self.visible.copy()
+                for level in self.tree.levels()[1:]:
+                    self._shown[level] &= self._shown[self.tree.parents[level]]
+                self._shown_dirty = False
+            rows = touched[self.draw_tree]
+            frames = None
+            if self.deform is not None:
+                moved = self.deform.affected(touched)  # type: ignore[attr-defined]
+                rows[self.deform_draws[moved]] = True
+                if rows[self.deform_draws].any():
+                    frames = self.deform.frames(self._world, self.weights)  # type: ignore[attr-defined]
+            self._update_draws(rows, frames)
+            touched[:] = False
+            self._any_dirty = False
+        self._updated = self.version
+
+    def _update_world(self, touched: np.ndarray) -> None:
+        if touched.all():  # (a tree of roots alone: its world is its local, no copy)
+            levels = len(self.tree.levels())
+            self._world = self._local if levels == 1 else self.tree.world(self._local)
+            return
+        for depth, level in enumerate(self.tree.levels()):
+            lv = as_slice(level[touched[level]])
+            if not isinstance(lv, np.ndarray) or len(lv):
+                self._world[lv] = (self._local[lv] if depth == 0 else
+                                   self._world[self.tree.parents[lv]] @ self._local[lv])
+
+    def _update_draws(self, rows: np.ndarray, frames: np.ndarray | None, rest: bool = False) -> None:
+        """Draws `rows` (bool) take their node's world matrix (with the instance matrix below
+        it, a deformed draw's frame, zero when hidden); `rest`: at set-up, the deformed
+        draws' frames on their loaded models, no version."""
+        dd = np.flatnonzero(rows)
+        if not len(dd):
+            return
+        sel: np.ndarray | slice = slice(None) if len(dd) == len(rows) else as_slice(dd)
+        direct = not rest and self._direct and isinstance(sel, slice)  # draw i is node i
+        nodes = sel if direct else self.draw_tree[sel]
+        m = self.rest[sel].copy() if rest else self._world[nodes]
+        below, skinned, hidden = self._below[sel], self.skinned[sel], ~self._shown[nodes]
+        has = self._record_of[sel] >= 0 if frames is not None else None
+        if direct and (skinned.any() or hidden.any() or (has is not None and has.any())):
+            m = m.copy()  # (a view of the world matrices until something differs)
+        if below.any() and not rest:
+            m[below] = m[below] @ self.draw_local[sel][below]
+        if skinned.any():
+            m[skinned] = np.eye(4)
+        if has is not None:
+            m[has] = m[has] @ frames[self._record_of[sel][has]]
+        if hidden.any():
+            m[hidden] = 0.0
+        self.table.update(sel, m)
+        if not rest:
+            self.draw_versions[sel] = self.version
 
     # --- what frames read ------------------------------------------------------------------
     def _cached(self, name: str, make: object) -> object:
@@ -369,57 +451,115 @@ class SceneState:
         return value
 
     def world(self) -> np.ndarray:
-        """(K, 4, 4) float64 world matrices of the tree's nodes."""
-        return self._cached("world", lambda: self.tree.world(self.local))  # type: ignore[return-value]
+        """(K, 4, 4) float64 world matrices of the tree's nodes (read-only; valid until the
+        next change)."""
+        self._update()
+        return _read_only(self._world)
 
     def shown(self) -> np.ndarray:
         """(K,) bool: the node and every ancestor visible."""
-        def make() -> np.ndarray:
-            out = self.visible.copy()
-            for level in self.tree.levels()[1:]:
-                out[level] &= out[self.tree.parents[level]]
-            return out
-        return self._cached("shown", make)  # type: ignore[return-value]
+        self._update()
+        return _read_only(self._shown)
 
     def draw_models(self) -> np.ndarray:
-        """(D, 4, 4) float64 model matrices of the draws (zero for hidden ones)."""
-        def make() -> np.ndarray:
-            if self.version == 0:
-                return self.rest.copy()
-            models = self.world()[self.draw_tree]
-            if len(self._below):
-                models[self._below] = models[self._below] @ self.draw_local[self._below]
-            models[self.skinned] = np.eye(4)
-            models[~self.shown()[self.draw_tree]] = 0.0
-            return models
-        return self._cached("models", make)  # type: ignore[return-value]
+        """(D, 4, 4) float64 model matrices of the draws (zero for hidden ones; read-only,
+        updated in place by the next frame: copy to keep)."""
+        self._update()
+        return _read_only(self.table.models)
 
     def draw_matrices(self) -> np.ndarray:
         """(D, 2, 4, 4) float32 Instances records: model and normal matrix, column-major."""
-        return self._cached("records", lambda: std140_pairs(self.draw_models()))  # type: ignore[return-value]
+        self._update()
+        return _read_only(self.table.records)
 
     def draw_centers(self) -> np.ndarray:
         """(D, 3) world centres of the draws' mesh boxes (the blended draws' order)."""
-        def make() -> np.ndarray:
-            m = self.draw_models()
-            c = self.mesh_boxes.mean(axis=1)
-            return np.einsum("dij,dj->di", m[:, :3, :3], c) + m[:, :3, 3]
-        return self._cached("centers", make)  # type: ignore[return-value]
+        self._update()
+        return _read_only(self.table.centers)
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """World bounds (min, max) of the shown draws; zeros when nothing is shown."""
-        def make() -> tuple[np.ndarray, np.ndarray]:
-            m = self.draw_models()
-            shown = np.any(m[:, :3, :3] != 0.0, axis=(1, 2))
-            if not np.any(shown):
-                return np.zeros(3), np.zeros(3)
-            lo, hi = self.mesh_boxes[shown, 0], self.mesh_boxes[shown, 1]
-            centre, half = (lo + hi) / 2, (hi - lo) / 2
-            ms = m[shown]
-            c = np.einsum("dij,dj->di", ms[:, :3, :3], centre) + ms[:, :3, 3]
-            r = np.einsum("dij,dj->di", np.abs(ms[:, :3, :3]), half)
-            return (c - r).min(axis=0), (c + r).max(axis=0)
-        return self._cached("bounds", make)  # type: ignore[return-value]
+        self._update()
+        return self._cached("bounds", self.table.bounds)  # type: ignore[return-value]
+
+
+def grown_tree(tree: NodeTree, names: list[str]) -> NodeTree:
+    """`tree` with new roots named `names` after its nodes (identity, given as matrices:
+    no animation drives them; no file node: source -1)."""
+    n = len(names)
+    return NodeTree(tree.names + names, np.concatenate([tree.parents, -np.ones(n, np.int64)]),
+                    np.concatenate([tree.local, np.tile(np.eye(4), (n, 1, 1))]),
+                    np.concatenate([tree.translation, np.zeros((n, 3))]),
+                    np.concatenate([tree.rotation, np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))]),
+                    np.concatenate([tree.scale, np.ones((n, 3))]),
+                    np.concatenate([tree.uses_matrix, np.ones(n, bool)]),
+                    np.concatenate([tree.source, -np.ones(n, np.int64)]),
+                    dict(tree.weights), dict(tree.skin))
+
+
+def as_slice(idx: np.ndarray) -> np.ndarray | slice:
+    """`idx` as a slice when it is a run of consecutive indices (copies instead of scatters:
+    several times faster for thousands of rows), else itself."""
+    n = len(idx)
+    if n and int(idx[-1]) - int(idx[0]) == n - 1 and (n < 3 or bool(np.all(np.diff(idx) == 1))):
+        return slice(int(idx[0]), int(idx[0]) + n)
+    return idx
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    v = a.view()
+    v.flags.writeable = False
+    return v
+
+
+def pose_matrices(rows: np.ndarray, order: str = "xyzw") -> np.ndarray:
+    """(N, 4, 4) matrices of (N, 7) position + quaternion rows (`order` of the quaternion)."""
+    out = np.empty((len(rows), 4, 4))
+    for b in blocks(len(rows)):  # (cache-sized blocks: scene/draw_table.py)
+        quaternion_matrices(rows[b, 3:], order, out[b, :3, :3])
+        out[b, :3, 3] = rows[b, :3]
+        out[b, 3] = (0.0, 0.0, 0.0, 1.0)
+    return out
+
+
+def _poses_of(poses: np.ndarray, n: int) -> np.ndarray:
+    """`poses` as (n, 7) rows or (n, 4, 4) matrices (one pose may come without its axis)."""
+    p = np.asarray(poses, dtype=np.float64)
+    if n == 1 and p.shape in ((4, 4), (7,)):
+        p = p[None]
+    if p.shape in ((n, 7), (n, 4, 4)):
+        return p
+    raise UsageError(f"set_poses: poses of shape {p.shape} for {n} node(s); give "
+                     f"({n}, 4, 4) matrices or ({n}, 7) position + quaternion rows")
+
+
+def _finite(p: np.ndarray) -> None:
+    # One sum first (a NaN or infinity makes it non-finite); the exact test only if not.
+    if not np.isfinite(np.add.reduce(p, axis=None)) and not np.isfinite(p).all():
+        raise UsageError("set_poses: a pose holds NaN or infinity")
+
+
+def _check_rows(p: np.ndarray) -> None:
+    """(N, 7) rows: rigid by construction, so only the numbers are checked."""
+    _finite(p)
+    q = p[:, 3:]
+    if len(q) and np.einsum("ij,ij->i", q, q).min() < 1e-24:
+        raise UsageError("set_poses: a quaternion of length 0 is no rotation")
+
+
+def _check_matrices(p: np.ndarray) -> None:
+    """(N, 4, 4): finite, affine (last row 0 0 0 1), not singular; a block at a time, each
+    block's tests while it is in the CPU's cache."""
+    _finite(p)
+    for b in blocks(len(p)):
+        m = p[b]
+        last, w = m[:, 3, :3], m[:, 3, 3]
+        if max(last.max(), -last.min(), w.max() - 1.0, 1.0 - w.min()) > 1e-6:
+            raise UsageError("set_poses: a matrix's last row must be 0 0 0 1 (an affine "
+                             "transform; a projection is not a pose)")
+        if np.abs(determinants(m[:, :3, :3])).min() < 1e-12:
+            raise UsageError("set_poses: a matrix is singular (a scale of 0 flattens the node; "
+                             "hide it with set_visible instead)")
 
 
 def _pointed_light(light: Light, member: str, value: np.ndarray) -> Light:

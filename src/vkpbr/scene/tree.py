@@ -22,9 +22,32 @@ import numpy as np
 
 from vkpbr.errors import UsageError
 
-__all__ = ["NodeTree", "NodeRef"]
+__all__ = ["NodeTree", "NodeRef", "quaternion_matrices"]
 
 NodeRef = int | str  # a tree node: its index, name or path
+
+
+def quaternion_matrices(q: np.ndarray, order: str = "xyzw", out: np.ndarray | None = None,
+                        scale: np.ndarray | None = None) -> np.ndarray:
+    """(N, 3, 3) rotation matrices of (N, 4) quaternions in `order` (normalised by the
+    formula; a zero quaternion gives the identity), into `out` when given (a (N, 3, 3) view);
+    with `scale` ((N, 3)), R * diag(scale)."""
+    q = np.asarray(q, np.float64)
+    x, y, z, w = np.ascontiguousarray(q.T if order == "xyzw" else q[:, [1, 2, 3, 0]].T)
+    n2 = x * x + y * y + z * z + w * w
+    s = 2.0 / np.where(n2 > 1e-24, n2, np.inf)  # normalises: 2 / |q|^2 (0: the identity)
+    xs, ys, zs = x * s, y * s, z * s
+    wx, wy, wz, xx, xy, xz, yy, yz, zz = w * xs, w * ys, w * zs, x * xs, x * ys, x * zs, y * ys, y * zs, z * zs
+    # Built as (3, 3, N) contiguous rows, then one transposing copy (9 strided writes cost more).
+    m = np.empty((3, 3, len(q)))
+    m[0, 0], m[0, 1], m[0, 2] = 1.0 - (yy + zz), xy - wz, xz + wy
+    m[1, 0], m[1, 1], m[1, 2] = xy + wz, 1.0 - (xx + zz), yz - wx
+    m[2, 0], m[2, 1], m[2, 2] = xz - wy, yz + wx, 1.0 - (xx + yy)
+    if scale is not None:  # R * S: column j times scale j
+        m *= np.ascontiguousarray(np.asarray(scale, np.float64).T)[None]
+    out = np.empty((len(q), 3, 3)) if out is None else out
+    out[...] = m.transpose(2, 0, 1)
+    return out
 
 
 @dataclass
@@ -116,9 +139,9 @@ class NodeTree:
             nodes = [nodes]
         arr = np.asarray(nodes) if not isinstance(nodes, np.ndarray) else nodes
         if arr.dtype.kind in "iu":
-            idx = arr.astype(np.int64).ravel()
-            bad = idx[(idx < 0) | (idx >= len(self))]
-            if len(bad):
+            idx = arr.astype(np.int64, copy=False).ravel()
+            if len(idx) and (idx.min() < 0 or idx.max() >= len(self)):  # two reductions
+                bad = idx[(idx < 0) | (idx >= len(self))]
                 raise UsageError(f"node index {int(bad[0])} is out of range: the scene has "
                                  f"{len(self)} nodes (0..{len(self) - 1})")
             return idx

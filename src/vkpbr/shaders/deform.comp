@@ -7,8 +7,11 @@
 // and writes the posed vertex into the instance's own region of the same streams, which every
 // later step (both frame paths, shadow maps, batches, outputs) draws from like any vertex.
 // Skinned positions are world positions (the skinned node's own transform is ignored, as the
-// specification says: the instance's model matrix is the identity); normals take the inverse
-// transpose of the blended matrix, tangents the matrix itself (as pbr.vert's model matrix).
+// specification says), morphed ones mesh positions; either is written relative to the job's
+// frame, (p - c) / r, a sphere (c, r) that holds every posed vertex of the job, so that the
+// record's model matrix (translate(c) x scale(r) after the node's) places the unit sphere the
+// culling kernels test (render/deform.py). Normals take the inverse transpose of the blended
+// matrix, tangents the matrix itself (as pbr.vert's model matrix).
 #extension GL_GOOGLE_include_directive : require
 #include "generated.glsl"
 
@@ -24,13 +27,15 @@ layout(set = 0, binding = 4, std430) readonly buffer MorphDeltas { float morph_d
 // Per job, two uvec4: (rest vertex, posed vertex, vertex count, skin vertex or ~0u) and
 // (first delta, targets, first joint matrix, first weight) in DeformState's floats.
 layout(set = 0, binding = 5, std430) readonly buffer DeformJobs { uvec4 deform_jobs[]; };
-// The frame slot's: the joint matrices (16 floats each, column-major), then the weights.
+// The frame slot's: the joint matrices (16 floats each, column-major), then the weights,
+// then each job's frame (centre, 1 / radius) from pc.frames_at.
 layout(set = 0, binding = 6, std430) readonly buffer DeformState { float deform_state[]; };
 // The posed positions the previous frame drew (the motion output), from first_posed on.
 layout(set = 0, binding = 7, std430) writeonly buffer DeformPrev { float deform_prev[]; };
 
 layout(push_constant, std430) uniform DeformPush {
     uint first_posed;  // the first posed vertex (GpuScene.posed_offsets[0])
+    uint frames_at;  // the first frame float in DeformState
 } pc;
 
 vec3 vec3_of(float a[1], uint i);  // (declared for clarity; the reads below index directly)
@@ -75,6 +80,8 @@ void main() {
         n = transpose(inverse(m3)) * n;
         t.xyz = m3 * t.xyz;
     }
+    uint f = pc.frames_at + 4u * gl_WorkGroupID.y;
+    p = (p - vec3(deform_state[f], deform_state[f + 1u], deform_state[f + 2u])) * deform_state[f + 3u];
     float nl = length(n), tl = length(t.xyz);
     n = nl > 0.0 ? n / nl : vec3(0.0, 0.0, 1.0);
     t.xyz = tl > 0.0 ? t.xyz / tl : vec3(1.0, 0.0, 0.0);
