@@ -24,15 +24,17 @@ from vkpbr.render.worlds import GpuWorlds, WorldCall, base_factors
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 from vkpbr.scene.state import SceneState
 from vkpbr.scene.worlds import (
+    WorldEnvironment,
+    WorldLights,
     WorldMaterials,
     WorldPoses,
     WorldSlots,
     check_space,
-    factor_records,
+    world_blocks,
     world_records,
 )
 
-__all__ = ["render_batch", "world_slots", "WorldsArg"]
+__all__ = ["render_batch", "world_slots", "WorldsArg", "WorldArgs"]
 
 WorldsArg = Any  # (W, N, 4, 4) | (W, N, 7) NumPy array or torch tensor
 
@@ -46,6 +48,14 @@ class WorldPlan:
     poses: WorldPoses | None
     materials: WorldMaterials | None
     index: np.ndarray
+    lights: WorldLights | None = None
+    environment: WorldEnvironment | None = None
+
+    @property
+    def count(self) -> int:
+        """W, the number of worlds."""
+        return next(x.count for x in (self.poses, self.materials, self.lights, self.environment)
+                    if x is not None)
 
 
 def world_slots(renderer: Any, nodes: Any = None, materials: Any = None) -> WorldSlots | None:
@@ -91,23 +101,25 @@ def _slots(renderer: Any) -> WorldSlots:
     return slots
 
 
-def _world_plan(renderer: Any, views: int, worlds: WorldsArg, world_of_view: Any,
-                quaternion: str, visible: Any, materials: Any, space: str) -> WorldPlan:
-    """The checked worlds of a call of `views` views (NumPy or CPU tensors)."""
+def _world_plan(renderer: Any, views: int, g: WorldArgs, light_count: int) -> WorldPlan:
+    """The checked worlds of a call of `views` views (NumPy or CPU tensors); `light_count`:
+    the frame's lights (world_lights gives each)."""
     slots = poses = wm = None
-    if worlds is not None:
+    if g.worlds is not None:
         slots = _slots(renderer)
-        poses = WorldPoses.of(worlds, len(slots), quaternion, visible, space)
+        poses = WorldPoses.of(g.worlds, len(slots), g.quaternion, g.visible, g.space)
         if poses.local and slots.nested:
             raise UsageError("worlds: space='local' with a chosen node below another chosen "
                              "node; give world poses (space='world')")
-    if materials is not None:
-        wm = _materials(renderer, materials)
-    counts = {x.count for x in (poses, wm) if x is not None}
+    if g.materials is not None:
+        wm = _materials(renderer, g.materials)
+    wl = None if g.lights is None else WorldLights.of(g.lights, light_count)
+    we = None if g.environment is None else WorldEnvironment.of(g.environment)
+    counts = {x.count for x in (poses, wm, wl, we) if x is not None}
     if len(counts) > 1:
-        raise UsageError(f"worlds: {poses.count} worlds of poses but {wm.count} of "  # type: ignore[union-attr]
-                         "world_materials; give both for every world")
-    return WorldPlan(slots, poses, wm, _world_index(views, counts.pop(), world_of_view))
+        raise UsageError(f"worlds: the world arrays disagree on the number of worlds "
+                         f"({sorted(counts)}); give each for every world")
+    return WorldPlan(slots, poses, wm, _world_index(views, counts.pop(), g.world_of_view), wl, we)
 
 
 def _materials(renderer: Any, given: Any) -> WorldMaterials:
@@ -139,31 +151,14 @@ def _world_index(views: int, w: int, world_of_view: Any) -> np.ndarray:
 def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: LightsArg,
                  options: RenderOptions | None, linear: bool, depth: bool,
                  outputs: Iterable[str] | None, batch: int | str, device: str,
-                 out: np.ndarray | None, worlds: WorldsArg = None, world_of_view: Any = None,
-                 quaternion: str = "xyzw", world_visible: Any = None,
-                 overrides: dict[str, Any] | None = None, world_expand: str = "auto",
-                 world_materials: Any = None, space: str = "world") -> Any:
+                 out: np.ndarray | None, given: WorldArgs | None = None,
+                 overrides: dict[str, Any] | None = None) -> Any:
     """Renderer.render_batch (its docstring says what each argument is)."""
     r = renderer
     views = as_camera_batch(cameras, r.default_camera())
     opts = _options(options, overrides or {})
     route, wanted = batch_route(r.parts, views, size, opts, linear, depth, outputs, device, out)
-    if worlds is None and world_materials is None and (world_of_view is not None
-                                                       or world_visible is not None):
-        raise UsageError("world_of_view and world_visible need worlds= (the worlds' poses)")
-    if world_materials is not None and route == "layered":
-        route = "views"  # (the fragment path's batch has no per-world materials yet)
-    call, plan = None, None
-    if worlds is not None and _on_cuda(worlds):
-        if route == "views" or world_materials is not None:
-            raise UsageError("worlds on CUDA render in a batch only, without world_materials "
-                             "(this call renders view by view: dataset outputs, post steps, "
-                             "MSAA or the fragment path's batch): give NumPy poses")
-        call = _cuda_call(r, len(views), worlds, world_of_view, quaternion, world_visible, space)
-    elif worlds is not None or world_materials is not None:
-        plan = _world_plan(r, len(views), worlds, world_of_view, quaternion, world_visible,
-                           world_materials, space)
-        call = _host_call(r, plan, world_expand)
+    route, call, plan = _worlds_of(r, views, route, lights, opts, given or NO_WORLDS)
     each = _each_view(r.state, views, plan)  # view by view, as `render` draws
     if route == "views":  # (render/batch_route.py says when)
         return stack_views(r, r.render_many(each, lights, size, opts, linear, depth,
@@ -176,17 +171,76 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
     return batch_result(color, dist, depth, wanted, frames)
 
 
-def _host_call(renderer: Any, plan: WorldPlan, expand: str) -> WorldCall:
+@dataclass(frozen=True)
+class WorldArgs:
+    """render_batch's world arguments as given."""
+
+    worlds: Any
+    world_of_view: Any
+    quaternion: str
+    visible: Any
+    expand: str
+    materials: Any
+    space: str
+    lights: Any
+    environment: Any
+
+    @property
+    def any(self) -> bool:
+        return any(x is not None for x in (self.worlds, self.materials, self.lights,
+                                           self.environment))
+
+
+NO_WORLDS = WorldArgs(None, None, "xyzw", None, "auto", None, "world", None, None)
+
+
+def _worlds_of(r: Any, views: CameraBatch, route: str, lights: LightsArg, opts: RenderOptions,
+               g: WorldArgs) -> tuple[str, WorldCall | None, WorldPlan | None]:
+    """(route, the call's worlds for the batch path, the host's plan for view by view)."""
+    if not g.any:
+        if g.world_of_view is not None or g.visible is not None:
+            raise UsageError("world_of_view and world_visible need worlds= (the worlds' poses)")
+        return route, None, None
+    lit = g.lights is not None or g.environment is not None
+    if lit and route != "compute":
+        raise UsageError("world_lights and world_environment render in the compute batch only "
+                         "(pipeline='compute' on a GPU with 64-bit atomics, no dataset outputs)")
+    if g.materials is not None and route == "layered":
+        route = "views"  # (the fragment path's batch has no per-world materials yet)
+    if g.worlds is not None and _on_cuda(g.worlds):
+        if route == "views" or g.materials is not None or lit:
+            raise UsageError("worlds on CUDA render in the batch only, without world_materials, "
+                             "world_lights or world_environment (give those with NumPy poses); "
+                             "this call may render view by view (dataset outputs, post steps, "
+                             "MSAA, the fragment path's batch)")
+        return route, _cuda_call(r, len(views), g.worlds, g.world_of_view, g.quaternion,
+                                 g.visible, g.space), None
+    frame = r.frame_lights(opts, lights)
+    plan = _world_plan(r, len(views), g, len(frame))
+    return route, _host_call(r, plan, g.expand, _factor_blocks(r, plan, frame, opts)), plan
+
+
+def _factor_blocks(r: Any, plan: WorldPlan, frame: tuple[Any, ...], opts: RenderOptions
+                   ) -> np.ndarray | None:
+    """The worlds' WorldFactors blocks (scene/worlds.py world_blocks: materials, the frame's
+    lights, the environment), or None where the worlds give none of them."""
+    if plan.materials is None and plan.lights is None and plan.environment is None:
+        return None
+    rows = np.array([(*li.color, li.intensity) for li in frame], np.float64).reshape(-1, 4)
+    environment = (opts.env_intensity, float(np.radians(opts.env_rotation)))
+    return world_blocks(plan.count, base_factors(r.gpu_scene, r.state), plan.materials, rows,
+                        plan.lights, environment, plan.environment)
+
+
+def _host_call(renderer: Any, plan: WorldPlan, expand: str,
+               factors: np.ndarray | None = None) -> WorldCall:
     """NumPy worlds: their records made here (exact: "auto", "host"), or the poses handed to
-    the GPU's kernel as CUDA tensors are ("gpu": float32, what the CUDA route computes); the
-    materials' factor records (render/worlds.py base_factors: the state's, then the worlds')."""
+    the GPU's kernel as CUDA tensors are ("gpu": float32, what the CUDA route computes); with
+    `factors`, the worlds' WorldFactors blocks ((W, S, 4): materials, lights, environment)."""
     state = renderer.state
     slots, poses, index = plan.slots, plan.poses, plan.index
     if expand not in ("auto", "host", "gpu"):
         raise UsageError(f"world_expand {expand!r}: choose 'auto', 'host' or 'gpu'")
-    factors = None
-    if plan.materials is not None:
-        factors = factor_records(base_factors(renderer.gpu_scene, state), plan.materials)
     if poses is None or slots is None:
         return WorldCall(index, factors=factors)
     if expand != "gpu":

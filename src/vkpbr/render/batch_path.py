@@ -340,11 +340,11 @@ class BatchPath:
         factor_base = None
         if call.factors is not None:
             if self._factor_writes != self._calls:
-                if self.parts.compute().set_world_factors(call.factors):
+                if self.parts.compute().set_world_factors(call.factors.reshape(-1, 4)):
                     self.free_recordings()  # (its sets were rewritten)
                 self._factor_writes = self._calls
-            m = len(self.parts.gpu_scene.materials)
-            factor_base = (1 + index * m).astype(np.uint32)
+            stride = call.factors.shape[1]  # a world's block (shaders/worlds.glsl)
+            factor_base = (1 + index * stride).astype(np.uint32)
         if not call.poses:
             return None, factor_base
         return self._write_poses(slot, index), factor_base

@@ -275,7 +275,7 @@ class ComputeScene:
         return obj
 
     def set_world_factors(self, factors: np.ndarray) -> bool:
-        """Write a batch of worlds' material factors ((K, 3, 4) float32 records); True when
+        """Write a batch of worlds' WorldFactors ((K, 4) float32, shaders/worlds.glsl); True when
         the buffer grew (every target's sets were rewritten: the caller frees recordings)."""
         grew = factors.nbytes > self.world_factors.size
         if grew:

@@ -17,7 +17,7 @@ import numpy as np
 from vkpbr.errors import UsageError
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, FrameTarget
 from vkpbr.render import outputs as O
-from vkpbr.render.batch_call import WorldsArg, world_slots
+from vkpbr.render.batch_call import WorldArgs, WorldsArg, world_slots
 from vkpbr.render.batch_call import render_batch as batch_call
 from vkpbr.render.batch_route import chunked, per_view
 from vkpbr.render.environment import EnvironmentSpec
@@ -245,16 +245,16 @@ class Renderer:
                      out: np.ndarray | None = None, worlds: WorldsArg = None,
                      world_of_view: Any = None, quaternion: str = "xyzw",
                      world_visible: Any = None, world_expand: str = "auto",
-                     world_materials: Any = None, space: str = "world", **option_overrides: Any
+                     world_materials: Any = None, space: str = "world", world_lights: Any = None,
+                     world_environment: Any = None, **option_overrides: Any
                      ) -> np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray] | Any:
         """Render B views of the scene in one submission and return them stacked
         (docs/batch.md).
 
-        cameras : a CameraBatch (vkpbr.scene.camera_batch: eye/target arrays, (B, 4, 4) poses
-            or OpenCV K + poses), a (B, 4, 4) array of OpenGL world-from-camera poses, or a
-            list of Cameras (anything `render` takes).
-        size : (width, height) of every view. lights, options, linear, option_overrides: as
-            `render`. depth : also (B, H, W) float32 distances along each view's axis.
+        cameras : a CameraBatch (vkpbr.scene.camera_batch), (B, 4, 4) OpenGL world-from-camera
+            poses, or a list of Cameras (anything `render` takes). size : (width, height).
+        lights, options, linear, option_overrides: as `render`. depth : also (B, H, W) float32
+            distances along each view's axis.
         outputs : as `render`'s, stacked per view ("color" from the batch, the others view
             by view). batch : views per submission, "auto" or a positive integer.
         device : "cpu": NumPy arrays; "cuda": a torch tensor (B, H, W, 4) on the same GPU.
@@ -266,18 +266,19 @@ class Renderer:
             `world_visible` (W, N) bools; `world_expand` "gpu" expands NumPy poses on the
             GPU as CUDA tensors are (float32), "auto"/"host" exactly on the host;
             `world_materials` {"base_color": (W, K, 4), "metallic", "roughness": (W, K),
-            "emissive": (W, K, 3)} of the K materials named by `world_slots`. docs/batch.md.
+            "emissive": (W, K, 3)} of the K materials named by `world_slots`; `world_lights`
+            {"intensity": (W, L), "color": (W, L, 3)} of the frame's L lights;
+            `world_environment` {"intensity", "rotation" (degrees)}: (W,). docs/batch.md.
 
         Returns (B, H, W, 4) uint8 sRGB (float32 with `linear`), (colour, depth) with `depth`,
         {name: (B, ...)} with `outputs`. pipeline="forward" (and "auto" on CPUs): view i is
-        `render` of `CameraBatch.camera(i)` (in its world) with pipeline="forward", ao="off"
-        bit for bit; pipeline="compute" (and "auto" on GPUs with 64-bit atomics, scenes
-        without blended materials): within 1/255 of `render(pipeline="compute")`. Shadow maps
-        (directional ones over the whole scene) are shared by the views and worlds.
+        `render` of `CameraBatch.camera(i)` (in its world) bit for bit; "compute" (and "auto"
+        on GPUs): within 1/255 of `render(pipeline="compute")`. Shadow maps are shared.
         """
         return batch_call(self, cameras, size, lights, options, linear, depth, outputs, batch,
-                          device, out, worlds, world_of_view, quaternion, world_visible,
-                          option_overrides, world_expand, world_materials, space)
+                          device, out, WorldArgs(worlds, world_of_view, quaternion, world_visible,
+                                                 world_expand, world_materials, space,
+                                                 world_lights, world_environment), option_overrides)
 
     def world_slots(self, nodes: Any = None, materials: Any = None) -> WorldSlots | None:
         """Name the nodes each world of `render_batch(worlds=...)` poses and the materials

@@ -70,7 +70,7 @@ class WorldCall:
     world_of_view: np.ndarray
     records: np.ndarray | None = None
     gpu: GpuWorlds | None = None
-    factors: np.ndarray | None = None  # (W * M, 3, 4) float32 WorldFactors records
+    factors: np.ndarray | None = None  # (W, S, 4) float32 WorldFactors blocks (worlds.glsl)
 
     @property
     def poses(self) -> bool:

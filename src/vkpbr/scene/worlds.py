@@ -28,7 +28,8 @@ from vkpbr.errors import UsageError
 from vkpbr.scene.state import QUATERNION_ORDERS, SceneState, quaternion_matrices, std140_pairs
 from vkpbr.scene.tree import NodeRef
 
-__all__ = ["WorldSlots", "WorldPoses", "world_models", "world_records"]
+__all__ = ["WorldSlots", "WorldPoses", "WorldMaterials", "WorldLights", "WorldEnvironment",
+           "world_models", "world_records", "world_blocks"]
 
 _LAST_ROW = np.array([0.0, 0.0, 0.0, 1.0])
 
@@ -309,16 +310,100 @@ def _factor_array(field: str, v: np.ndarray, k: int) -> np.ndarray:
     return v
 
 
-def factor_records(base: np.ndarray, wm: WorldMaterials) -> np.ndarray:
-    """(W * M, 3, 4) float32 WorldFactors records: every world's factors of all M materials,
-    `base` (M, 3, 4) (each material's own: base colour; emissive, metallic; roughness) with
-    the named materials' given fields replaced."""
-    w, m = wm.count, len(base)
-    out = np.broadcast_to(base, (w, m, 3, 4)).copy()
-    idx = wm.materials
-    slots = {"base_color": (0, slice(0, 4)), "emissive": (1, slice(0, 3)),
-             "metallic": (1, slice(3, 4)), "roughness": (2, slice(0, 1))}
-    for field, value in wm.values.items():
-        row, cols = slots[field]
-        out[:, idx, row, cols] = value
-    return out.reshape(w * m, 3, 4).astype(np.float32)
+@dataclass(frozen=True)
+class WorldLights:
+    """W worlds' intensity (W, L) and/or colour (W, L, 3) of the frame's L lights, in the
+    order the frame lists them (the call's `lights`, else the scene's or the preset's)."""
+
+    values: dict[str, np.ndarray]
+
+    @property
+    def count(self) -> int:
+        return len(next(iter(self.values.values())))
+
+    @classmethod
+    def of(cls, given: Any, lights: int) -> WorldLights:
+        if not isinstance(given, dict) or not given or set(given) - {"intensity", "color"}:
+            raise UsageError("world_lights: a dict of 'intensity' (W, L) and/or 'color' "
+                             f"(W, L, 3) arrays for the frame's {lights} light(s)")
+        values = {}
+        for field, value in given.items():
+            v = _array(f"world_lights[{field!r}]", value)
+            want = (lights,) if field == "intensity" else (lights, 3)
+            if v.ndim != 1 + len(want) or v.shape[1:] != want or len(v) == 0:
+                raise UsageError(f"world_lights[{field!r}]: shape {tuple(v.shape)}, expected "
+                                 f"(W, {', '.join(map(str, want))}) for the frame's {lights} light(s)")
+            if not np.isfinite(v).all() or (v < 0).any():
+                raise UsageError(f"world_lights[{field!r}]: must be finite and >= 0")
+            values[field] = v
+        if len({len(v) for v in values.values()}) != 1:
+            raise UsageError("world_lights: intensity and color need the same number of worlds")
+        return cls(values)
+
+
+@dataclass(frozen=True)
+class WorldEnvironment:
+    """W worlds' environment intensity and/or rotation about +Y in degrees, (W,) each."""
+
+    values: dict[str, np.ndarray]
+
+    @property
+    def count(self) -> int:
+        return len(next(iter(self.values.values())))
+
+    @classmethod
+    def of(cls, given: Any) -> WorldEnvironment:
+        if not isinstance(given, dict) or not given or set(given) - {"intensity", "rotation"}:
+            raise UsageError("world_environment: a dict of 'intensity' and/or 'rotation' "
+                             "(degrees about +Y), each (W,)")
+        values = {}
+        for field, value in given.items():
+            v = _array(f"world_environment[{field!r}]", value)
+            if v.ndim != 1 or len(v) == 0 or not np.isfinite(v).all():
+                raise UsageError(f"world_environment[{field!r}]: (W,) finite numbers, got "
+                                 f"shape {tuple(v.shape)}")
+            if field == "intensity" and (v < 0).any():
+                raise UsageError("world_environment['intensity']: must be >= 0")
+            values[field] = v
+        if len({len(v) for v in values.values()}) != 1:
+            raise UsageError("world_environment: intensity and rotation need the same number of worlds")
+        return cls(values)
+
+
+def world_blocks(worlds: int, materials: np.ndarray, wm: WorldMaterials | None,
+                 lights: np.ndarray, wl: WorldLights | None, environment: tuple[float, float],
+                 we: WorldEnvironment | None) -> np.ndarray:
+    """(W, S, 4) float32 WorldFactors blocks (shaders/worlds.glsl): a header (uint bits:
+    where the lights and the environment start, whether each is given), every material's
+    three factor rows (`materials` (M, 3, 4): base colour; emissive, metallic; roughness; the
+    named ones replaced), each light's colour x intensity (`lights` (L, 4): colour, intensity)
+    and the environment's (intensity, cos, sin) of its rotation (`environment`: intensity,
+    radians)."""
+    m, n = len(materials), len(lights)
+    size = 1 + 3 * m + n + 1
+    out = np.zeros((worlds, size, 4), np.float32)
+    head = out[:, 0].view(np.uint32)
+    head[:, 0], head[:, 1] = 1 + 3 * m, 1 + 3 * m + n
+    head[:, 2], head[:, 3] = wl is not None, we is not None
+    mats = np.broadcast_to(materials, (worlds, m, 3, 4)).copy()
+    if wm is not None:
+        rows = {"base_color": (0, slice(0, 4)), "emissive": (1, slice(0, 3)),
+                "metallic": (1, slice(3, 4)), "roughness": (2, slice(0, 1))}
+        for field, value in wm.values.items():
+            row, cols = rows[field]
+            mats[:, wm.materials, row, cols] = value
+    out[:, 1:1 + 3 * m] = mats.reshape(worlds, 3 * m, 4)
+    if n:
+        color = np.broadcast_to(lights[:, :3], (worlds, n, 3))
+        intensity = np.broadcast_to(lights[:, 3], (worlds, n))
+        if wl is not None:
+            color = wl.values.get("color", color)
+            intensity = wl.values.get("intensity", intensity)
+        out[:, 1 + 3 * m:1 + 3 * m + n, :3] = color * intensity[..., None]
+    env_i = np.full(worlds, environment[0])
+    env_r = np.full(worlds, environment[1])
+    if we is not None:
+        env_i = we.values.get("intensity", env_i)
+        env_r = np.radians(we.values["rotation"]) if "rotation" in we.values else env_r
+    out[:, -1, 0], out[:, -1, 1], out[:, -1, 2] = env_i, np.cos(env_r), np.sin(env_r)
+    return out

@@ -11,6 +11,7 @@
 #include "brdf.glsl"
 #include "env_common.glsl"
 #include "frame_output.glsl"
+#include "worlds.glsl"  // a batch of worlds' environment
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
@@ -36,8 +37,8 @@ void main() {
     vec2 ndc = (vec2(pixel % tile) + 0.5) / vec2(tile) * 2.0 - 1.0;
     // The infinite far plane's point: a direction (surface_fetch.glsl ray_dir says why).
     vec3 ray = (views[view_index].inv_VP * vec4(ndc, 0.0, 1.0)).xyz;
-    vec3 d = env_rotate(normalize(ray), lighting.env_rotation.xy);
-    vec3 radiance = textureLod(env_specular, d, 0.0).rgb * lighting.env_intensity;
+    vec3 d = env_rotate(normalize(ray), ENV_ROTATION);
+    vec3 radiance = textureLod(env_specular, d, 0.0).rgb * ENV_INTENSITY;
     vec3 value = radiance_output(radiance);
     bool srgb_target = (settings.flags & SETTINGS_SRGB_TARGET) != 0u;
     imageStore(out_image, ivec2(pixel), stored_color(vec4(value, 1.0), srgb_target));

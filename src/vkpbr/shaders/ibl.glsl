@@ -49,7 +49,7 @@ IblLobe ibl_lobe(vec3 f0, float weight, float n_dot_v, float roughness, vec2 ab)
 // issue 34.)
 IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 c, float metallic, float roughness,
                       vec3 f0_dielectric, float specular_weight) {
-    vec2 rot = lighting.env_rotation.xy;
+    vec2 rot = ENV_ROTATION;
     float max_lod = lighting.env_rotation.z;
     float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
     vec3 r = reflect(-v, n);
@@ -65,8 +65,8 @@ IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 c, float metallic, float roughness,
     vec3 k_d = (1.0 - metallic) * c * (1.0 - dielectric.fss_ess - dielectric.fms_ems);
 
     IblTerms t;
-    t.specular = (fss_ess * radiance + fms_ems * irradiance) * lighting.env_intensity;
-    t.diffuse = k_d * irradiance * lighting.env_intensity;
+    t.specular = (fss_ess * radiance + fms_ems * irradiance) * ENV_INTENSITY;
+    t.diffuse = k_d * irradiance * ENV_INTENSITY;
     t.diffuse_weight = k_d;
     return t;
 }
@@ -78,8 +78,8 @@ IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 c, float metallic, float roughness) {
 // The pre-filtered environment's radiance along unit direction d at perceptual roughness
 // `roughness` (the layers' lobes: the coat's reflection, sheen, refraction), scaled.
 vec3 ibl_radiance(vec3 d, float roughness) {
-    return textureLod(env_specular, env_rotate(d, lighting.env_rotation.xy),
-                      roughness * lighting.env_rotation.z).rgb * lighting.env_intensity;
+    return textureLod(env_specular, env_rotate(d, ENV_ROTATION),
+                      roughness * lighting.env_rotation.z).rgb * ENV_INTENSITY;
 }
 
 #endif

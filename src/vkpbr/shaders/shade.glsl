@@ -17,6 +17,7 @@
 #ifndef SHADE_GLSL
 #define SHADE_GLSL
 #include "brdf.glsl"
+#include "worlds.glsl"  // a batch of worlds' lights and environment (render/worlds.py)
 #include "lights.glsl"
 #include "shadows.glsl"
 #include "ibl.glsl"
@@ -205,7 +206,7 @@ vec4 shade_surface() {
     float first_shadow = 1.0;
     bool shadow_seen = false;
     for (uint i = 0u; i < light_count; ++i) {
-        LightRecord light = lights[i];
+        LightRecord light = WORLD_LIGHT(lights[i], i);
         vec3 l;
         vec3 light_in = light_incident(light, s_world_pos, ng, l);
         float shadow = 1.0;

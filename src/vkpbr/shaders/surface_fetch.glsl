@@ -21,20 +21,8 @@ vec2 texture_grad(vec4 row0, vec4 row1, vec4 d) {
 // here: generated.glsl, COMPUTE_SET); its textures from its own set 1. A batch's view of a
 // world with its own material factors (views[].factor_base > 0: render/worlds.py) takes
 // the record with those four factors replaced; every other view reads the table as is.
+#include "worlds.glsl"
 #if BATCH
-MaterialRecord world_material(uint index) {
-    MaterialRecord m = materials[index];
-    uint base = views[view_index].factor_base;
-    if (base != 0u) {
-        uint at = 3u * (base - 1u + index);
-        vec4 e = world_factors[at + 1u];
-        m.base_color_factor = world_factors[at];
-        m.emissive_factor = e.rgb;
-        m.metallic_factor = e.a;
-        m.roughness_factor = world_factors[at + 2u].x;
-    }
-    return m;
-}
 #define MAT world_material(MATERIAL_INDEX)
 #else
 #define MAT materials[MATERIAL_INDEX]
