@@ -10,6 +10,7 @@ import sys
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -167,6 +168,63 @@ LAYERED = Material(name="layered", unlit=True, ior=1.7, specular_factor=0.3,
                    attenuation_distance=3.0, attenuation_color=(0.5, 0.6, 0.7))
 
 
+SG = "KHR_materials_pbrSpecularGlossiness"
+
+
+def test_specular_glossiness_replaces_the_fallback(tmp_path: Path) -> None:
+    """KHR_materials_pbrSpecularGlossiness (archived) becomes a dielectric: the diffuse colour
+    and texture are the base colour, F0 = 0.04 x specular colour = specularFactor (the
+    specular-glossiness texture's RGB multiplying it), glossiness in the roughness slot
+    (channel A) with the `glossiness` switch; the metallic-roughness fallback is dropped.
+    Absent factors take the extension schema's defaults (1, 1, 1)."""
+    info = lambda k, **kw: {"index": k, **kw}  # noqa: E731
+    mats = [{"pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.1, 0.1, 1], "metallicFactor": 1,
+                                      "metallicRoughnessTexture": info(0)},
+             "extensions": {SG: {"diffuseFactor": [0.5, 0.25, 1.0, 0.75],
+                                 "specularFactor": [0.2, 0.4, 0.8], "glossinessFactor": 0.6,
+                                 "diffuseTexture": info(1, texCoord=1),
+                                 "specularGlossinessTexture": info(2)}}},
+            {"extensions": {SG: {}}}]
+    b = GltfBuilder()
+    b.node(mesh=b.triangle())
+    b.doc["meshes"][0]["primitives"][0]["material"] = 0
+    b.doc["materials"] = mats
+    b.doc["images"] = [{"uri": f"data:image/png;base64,{k}AAA="} for k in "ABC"]
+    b.doc["textures"] = [{"source": k} for k in range(3)]
+    b.doc["extensionsRequired"] = [SG]
+    b.doc["extensionsUsed"] = [SG]
+    m, plain = load_scene(b.save(tmp_path / "sg.gltf", "datauri")).materials
+    assert m.glossiness and plain.glossiness
+    assert m.base_color_factor == (0.5, 0.25, 1.0, 0.75) and m.roughness_factor == 0.6
+    assert (m.metallic_factor, m.metallic_texture) == (0.0, None)
+    f0 = 0.04 * np.asarray(m.specular_color_factor)
+    np.testing.assert_allclose(f0, (0.2, 0.4, 0.8), rtol=1e-12)
+    assert (m.ior, m.specular_factor) == (1.5, 1.0)
+    assert (m.base_color_texture.image, m.base_color_texture.texcoord) == (1, 1)
+    assert (m.roughness_texture.image, m.roughness_texture.channel) == (2, 3)
+    assert (m.specular_color_texture.image, m.specular_color_texture.channel) == (2, 0)
+    assert plain.base_color_factor == (1.0, 1.0, 1.0, 1.0) and plain.roughness_factor == 1.0
+    np.testing.assert_allclose(0.04 * np.asarray(plain.specular_color_factor), 1.0)
+    out = tmp_path / "sg.vkpbr"  # the switch survives the baked format
+    from vkpbr.bake.bake import bake_scene
+    from vkpbr.scene.baked_file import write_baked
+
+    write_baked(out, bake_scene(load_scene(tmp_path / "sg.gltf"), progress=False))
+    assert dataclasses.asdict(load_scene(out).materials[0]) == dataclasses.asdict(m)
+
+
+@pytest.mark.parametrize(("body", "words"), [
+    ({"glossinessFactor": 1.5}, "material 0: glossinessFactor 1.5 outside 0..1"),
+    ({"specularFactor": [0.1, 2, 0]}, "specularFactor [0.1, 2.0, 0.0] outside 0..1"),
+    ({"diffuseFactor": [1, 1, 1]}, "diffuseFactor: expected 4 finite numbers"),
+])
+def test_bad_specular_glossiness_is_one_line_error(tmp_path: Path, body: dict, words: str) -> None:
+    with pytest.raises(SceneError) as info:
+        load_scene(write(tmp_path, [{"extensions": {SG: body}}]))
+    assert words in str(info.value) and "m.gltf" in str(info.value)
+    assert "\n" not in str(info.value)
+
+
 def test_layers_round_trip_through_the_baked_format(tmp_path: Path) -> None:
     from vkpbr.bake.bake import bake_scene
     from vkpbr.scene.baked_file import write_baked
@@ -185,7 +243,7 @@ def test_layers_round_trip_through_the_baked_format(tmp_path: Path) -> None:
 @pytest.mark.parametrize(("field", "value"), [
     ("ior", 0.9), ("clearcoat_factor", 1.1), ("sheen_color_factor", (0.0, 1.5, 0.0)),
     ("attenuation_distance", -1.0), ("transmission_factor", float("nan")), ("unlit", "yes"),
-    ("specular_color_factor", (1.0, 1.0)), ("thickness_factor", -0.5),
+    ("specular_color_factor", (1.0, 1.0)), ("thickness_factor", -0.5), ("glossiness", 1),
 ])
 def test_validation_rejects_bad_layers(field: str, value: object) -> None:
     from vkpbr.scene.default import plane
@@ -231,7 +289,10 @@ _KEYS = {"KHR_materials_ior": ["ior"], "KHR_materials_specular": ["specularFacto
          "KHR_materials_sheen": ["sheenColorFactor", "sheenRoughnessFactor"],
          "KHR_materials_transmission": ["transmissionFactor", "transmissionTexture"],
          "KHR_materials_volume": ["thicknessFactor", "attenuationDistance", "attenuationColor"],
-         "KHR_materials_unlit": ["x"], "KHR_materials_emissive_strength": ["emissiveStrength"]}
+         "KHR_materials_unlit": ["x"], "KHR_materials_emissive_strength": ["emissiveStrength"],
+         "KHR_materials_pbrSpecularGlossiness": ["diffuseFactor", "specularFactor",
+                                                 "glossinessFactor", "diffuseTexture",
+                                                 "specularGlossinessTexture"]}
 
 
 @settings(max_examples=150, deadline=None,

@@ -148,7 +148,7 @@ def test_material_fields_take_the_table_defaults() -> None:
         assert hints[p.name] == want, p.name
     rows = {p.name for p in PARAMS}
     textures = {f"{s}_texture" for s in TEXTURE_SLOTS}
-    switches = {"name", "alpha_mode", "double_sided", "casts_shadows", "unlit"}
+    switches = {"name", "alpha_mode", "double_sided", "casts_shadows", "unlit", "glossiness"}
     assert set(fields) == rows | textures | switches
 
 

@@ -53,6 +53,7 @@ __all__ = [
     "LayeredTerms",
     "evaluate_layered_brdf",
     "shade_layered",
+    "specular_glossiness",
     "AMBIENT",
     "MIN_ROUGHNESS",
     "MIN_SHEEN_ROUGHNESS",
@@ -456,3 +457,19 @@ def shade_layered(n, v, l, c, metallic, roughness, light_in, m: Layers, emissive
     out["volume"] = np.broadcast_to(volume_transmittance(np.asarray(m.thickness), m.attenuation_color,
                                                          m.attenuation_distance), shape)
     return out
+
+
+def specular_glossiness(diffuse, specular, glossiness) -> tuple:  # noqa: ANN001
+    """KHR_materials_pbrSpecularGlossiness (archived) as the glTF BRDF's inputs, as the glTF
+    Sample Viewer shades it (getSpecularGlossinessInfo, getBaseColor): a dielectric whose base
+    colour is the diffuse colour, whose F0 is the specular colour and whose perceptual
+    roughness is 1 - glossiness. Returns (c (..., 3), metallic, roughness, Layers): the
+    roughness before the punctual floor (`shade_layered` clamps it), the Layers' dielectric F0
+    (`dielectric_f0`, ior 1.5: 0.04 x specular colour) the specular colour. Inputs are texel x
+    factor already (diffuse RGB, specular RGB, glossiness)."""
+    specular = np.asarray(specular, dtype=np.float64)
+    c = np.asarray(diffuse, dtype=np.float64)[..., :3]
+    roughness = 1.0 - np.asarray(glossiness, dtype=np.float64)
+    f0_ior = ((1.5 - 1.0) / (1.5 + 1.0)) ** 2
+    layers = Layers(ior=1.5, specular_color=tuple(specular / f0_ior), specular=1.0)
+    return c, np.zeros_like(roughness), roughness, layers

@@ -538,6 +538,8 @@ class GpuScene:
             flags |= L.MATERIAL_HAS_CLEARCOAT_NORMAL_MAP
         if mat.unlit:
             flags |= L.MATERIAL_UNLIT
+        if mat.glossiness:
+            flags |= L.MATERIAL_GLOSSINESS
         if has["normal"]:
             flags |= L.MATERIAL_HAS_NORMAL_MAP
         if has["occlusion"]:

@@ -278,6 +278,8 @@ MATERIAL_HAS_EMISSIVE_MAP = 128
 # glTF's packed metallic-roughness texture: the metallic binding's view holds metallic in R
 # and roughness in G (render/gpu_scene.py), so shade.glsl reads both with one sample.
 MATERIAL_SHARED_METALLIC_ROUGHNESS = 256
+# KHR_materials_pbrSpecularGlossiness (Material.glossiness): roughness = 1 - factor x texel.
+MATERIAL_GLOSSINESS = 512
 # The KHR_materials_* layers' factors (shade.glsl material_layers' LAYER_FACTOR), their
 # values in a material without the extensions (generated.glsl MATERIAL_DEFAULT_*), and their
 # textures (MATERIAL_HAS_LAYER_MAPS).

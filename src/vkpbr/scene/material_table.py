@@ -216,9 +216,12 @@ PARAMS: tuple[MaterialParam, ...] = (
 DEFAULTS: Mapping[str, Any] = MappingProxyType({p.name: p.default for p in PARAMS})
 # The KHR_materials_* factors that shade.glsl's LAYER_FACTOR reads (render/layouts.py).
 LAYER_PARAMS: tuple[MaterialParam, ...] = tuple(p for p in PARAMS if p.layer)
-# Every material extension vkpbr reads: the rows', and two without rows (KHR_materials_unlit
-# is a switch; KHR_materials_variants chooses among materials).
+# Every material extension vkpbr reads: the rows', and three without rows (KHR_materials_unlit
+# is a switch; KHR_materials_variants chooses among materials; the archived
+# KHR_materials_pbrSpecularGlossiness is converted to the rows and the `glossiness` switch
+# when the file is read: scene/gltf_materials.py).
 EXTENSIONS: tuple[str, ...] = tuple(dict.fromkeys(
     x for x in [*(_extension(p.gltf) for p in PARAMS), *(_extension(p.gltf_scale) for p in PARAMS),
                 *(_extension(s.gltf) for s in TEXTURES),
-                "KHR_materials_unlit", "KHR_materials_variants"] if x))
+                "KHR_materials_unlit", "KHR_materials_variants",
+                "KHR_materials_pbrSpecularGlossiness"] if x))

@@ -138,6 +138,9 @@ class Material:
     # The KHR_materials_* extensions. Defaults are the core material's: every layer off, ior
     # 1.5 (F0 0.04), white specular. Their textures (below) multiply the factors.
     unlit: bool = False  # KHR_materials_unlit: the base colour is the radiance
+    # KHR_materials_pbrSpecularGlossiness (converted when read: scene/gltf_materials.py):
+    # roughness_factor and roughness_texture hold glossiness, roughness = 1 - their product.
+    glossiness: bool = False
     ior: float = _D["ior"]  # KHR_materials_ior: dielectric F0 = ((ior - 1) / (ior + 1))^2
     specular_factor: float = _D["specular_factor"]  # KHR_materials_specular: dielectric weight
     specular_color_factor: tuple[float, float, float] = _D["specular_color_factor"]  # scales F0

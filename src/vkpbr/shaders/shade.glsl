@@ -177,7 +177,13 @@ vec4 shade_surface() {
     vec2 mr = (material_flags & MATERIAL_SHARED_METALLIC_ROUGHNESS) != 0u
         ? SAMPLE(metallic).rg : vec2(SAMPLE(metallic).r, SAMPLE(roughness).r);
     float metallic = clamp(mr.x * MAT.metallic_factor, 0.0, 1.0);
-    float roughness = clamp(mr.y * MAT.roughness_factor, MIN_ROUGHNESS, 1.0);
+    float roughness_map = mr.y * MAT.roughness_factor;
+    // KHR_materials_pbrSpecularGlossiness: the factor and texel are glossiness.
+    if ((material_flags & MATERIAL_GLOSSINESS) != 0u) roughness_map = 1.0 - roughness_map;
+    // The environment's level and split-sum row take the roughness as it is: a mirror reads
+    // the sharpest level (the Sample Viewer's too). The punctual lights' D needs the floor.
+    float roughness_ibl = clamp(roughness_map, 0.0, 1.0);
+    float roughness = max(roughness_ibl, MIN_ROUGHNESS);
     float occlusion = 1.0;
     if ((settings_flags & SETTINGS_OCCLUSION) != 0u && (material_flags & MATERIAL_HAS_OCCLUSION_MAP) != 0u) {
         occlusion = 1.0 + MAT.occlusion_strength * (SAMPLE(occlusion).r - 1.0);
@@ -240,7 +246,7 @@ vec4 shade_surface() {
     // copy shows what is behind under punctual lights alone too.
     bool refracts = layered && layers.transmission > 0.0 && (ibl_on || screen);
     if (ibl_on || refracts) {
-        ibl = ibl_evaluate(n, v, c, metallic, roughness, f0_dielectric, layers.specular);
+        ibl = ibl_evaluate(n, v, c, metallic, roughness_ibl, f0_dielectric, layers.specular);
         if (!ibl_on) { ibl.diffuse = vec3(0.0); ibl.specular = vec3(0.0); }
         bool ssao = (lighting_flags & LIGHTING_AO) != 0u;
         IblOcclusion ao = ibl_occlusion(occlusion, screen_occlusion(lighting_flags, material_flags),
