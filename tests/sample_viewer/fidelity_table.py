@@ -44,9 +44,10 @@ def main() -> int:
         return 2
     from PIL import Image
 
-    from vkpbr import Renderer, load_scene
+    from vkpbr import Renderer
 
     scenarios = [s for s in SCENARIOS if not args.names or s.name in args.names]
+    scenarios = [s for s in scenarios if s.available(assets_dir())]
     assets = assets_dir()
     args.out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
@@ -57,7 +58,7 @@ def main() -> int:
         print("| scenario | dB | covered pixels | vkpbr s |\n| --- | ---: | ---: | ---: |")
         for s in scenarios:
             t0 = time.perf_counter()
-            with Renderer(load_scene(assets / s.model), msaa=4) as r:
+            with Renderer(s.load(assets, Path(tmp)), msaa=4) as r:
                 rgb, covered = render_vkpbr(r, s, env, size=args.size)
             c = compare(s, run.images[s.name], rgb, covered)
             Image.fromarray(c.picture()).save(args.out / f"{s.name}.png")

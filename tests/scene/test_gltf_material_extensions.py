@@ -33,6 +33,7 @@ ALL = {
     "KHR_materials_volume": {"thicknessFactor": 0.25, "attenuationDistance": 2.0,
                              "attenuationColor": [0.9, 0.5, 0.1]},
     "KHR_materials_emissive_strength": {"emissiveStrength": 3.0},
+    "KHR_materials_anisotropy": {"anisotropyStrength": 0.7, "anisotropyRotation": 1.25},
 }
 
 
@@ -60,6 +61,7 @@ def test_every_extension_factor_is_read(tmp_path: Path) -> None:
     assert (m.thickness_factor, m.attenuation_distance, m.attenuation_color) == (
         0.25, 2.0, (0.9, 0.5, 0.1))
     assert m.emissive_factor == (3.0, 1.5, 0.0)  # emissive strength folded into the factor
+    assert (m.anisotropy_strength, m.anisotropy_rotation) == (0.7, 1.25)
 
 
 def test_defaults_are_the_core_material(tmp_path: Path) -> None:
@@ -83,6 +85,7 @@ def test_ior_zero_is_the_schema_special_value(tmp_path: Path) -> None:
     ("KHR_materials_transmission", {"transmissionFactor": -0.1}, "transmissionFactor"),
     ("KHR_materials_volume", {"attenuationDistance": 0}, "attenuationDistance 0.0 must be > 0"),
     ("KHR_materials_specular", {"specularFactor": "x"}, "specularFactor"),
+    ("KHR_materials_anisotropy", {"anisotropyStrength": 1.5}, "anisotropyStrength 1.5 outside 0..1"),
 ])
 def test_bad_factor_is_one_line_error(tmp_path: Path, name: str, body: dict, words: str) -> None:
     with pytest.raises(SceneError) as info:
@@ -105,6 +108,7 @@ def test_extension_textures_are_read(tmp_path: Path) -> None:
         "KHR_materials_transmission": {"transmissionTexture": info(0, extensions={
             "KHR_texture_transform": {"scale": [2, 3]}})},
         "KHR_materials_volume": {"thicknessTexture": info(0)},
+        "KHR_materials_anisotropy": {"anisotropyTexture": info(2, texCoord=1)},
     }}
     b = GltfBuilder()
     b.node(mesh=b.triangle())
@@ -115,13 +119,13 @@ def test_extension_textures_are_read(tmp_path: Path) -> None:
     m = load_scene(b.save(tmp_path / "t.gltf", "datauri")).materials[0]
     got = {slot: (ref.image, ref.channel, ref.texcoord) for slot in (
         "clearcoat", "clearcoat_roughness", "clearcoat_normal", "sheen_color", "sheen_roughness",
-        "specular", "specular_color", "transmission", "thickness")
+        "specular", "specular_color", "transmission", "thickness", "anisotropy")
         for ref in (getattr(m, f"{slot}_texture"),)}
     assert got == {"clearcoat": (0, 0, 0), "clearcoat_roughness": (1, 1, 1),
                    "clearcoat_normal": (2, 0, 0), "sheen_color": (1, 0, 0),
                    "sheen_roughness": (1, 3, 0), "specular": (0, 3, 0),
                    "specular_color": (2, 0, 0), "transmission": (0, 0, 0),
-                   "thickness": (0, 1, 0)}
+                   "thickness": (0, 1, 0), "anisotropy": (2, 0, 1)}
     assert m.clearcoat_normal_scale == 0.5 and m.transmission_texture.scale == (2, 3)
     out = tmp_path / "t.vkpbr"  # and through the baked format
     from vkpbr.bake.bake import bake_scene
@@ -290,6 +294,8 @@ _KEYS = {"KHR_materials_ior": ["ior"], "KHR_materials_specular": ["specularFacto
          "KHR_materials_transmission": ["transmissionFactor", "transmissionTexture"],
          "KHR_materials_volume": ["thicknessFactor", "attenuationDistance", "attenuationColor"],
          "KHR_materials_unlit": ["x"], "KHR_materials_emissive_strength": ["emissiveStrength"],
+         "KHR_materials_anisotropy": ["anisotropyStrength", "anisotropyRotation",
+                                      "anisotropyTexture"],
          "KHR_materials_pbrSpecularGlossiness": ["diffuseFactor", "specularFactor",
                                                  "glossinessFactor", "diffuseTexture",
                                                  "specularGlossinessTexture"]}

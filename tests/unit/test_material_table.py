@@ -63,6 +63,9 @@ SPEC: dict[str, tuple[object, st.SearchStrategy]] = {
     # exclusiveMinimum 0; absent: +infinity.
     "KHR_materials_volume.attenuationDistance": (math.inf, st.floats(1e-3, 1e3)),
     "KHR_materials_volume.attenuationColor": ([1.0, 1.0, 1.0], _rgb()),
+    "KHR_materials_anisotropy.anisotropyStrength": (0.0, _UNIT),
+    # Radians; the schema sets no range.
+    "KHR_materials_anisotropy.anisotropyRotation": (0.0, st.floats(-10.0, 10.0)),
 }
 # vkpbr's encodings of two spec values that a float32 uniform cannot hold as such.
 IOR_ZERO = 1e6  # ior 0: F0 -> 1 (((1e6 - 1) / (1e6 + 1))^2)

@@ -54,6 +54,11 @@ __all__ = [
     "evaluate_layered_brdf",
     "shade_layered",
     "specular_glossiness",
+    "d_ggx_anisotropic",
+    "v_ggx_anisotropic",
+    "anisotropic_alphas",
+    "anisotropy_frame",
+    "ibl_reflection",
     "AMBIENT",
     "MIN_ROUGHNESS",
     "MIN_SHEEN_ROUGHNESS",
@@ -304,6 +309,59 @@ def volume_transmittance(dist: np.ndarray, attenuation_color: np.ndarray,
                     1.0)
 
 
+def d_ggx_anisotropic(n_dot_h, t_dot_h, b_dot_h, at, ab):  # noqa: ANN001, ANN201
+    """Anisotropic GGX D (KHR_materials_anisotropy): a2 w2^2 / pi with a2 = at ab and
+    w2 = a2 / |(ab t.h, at b.h, a2 n.h)|^2."""
+    a2 = at * ab
+    f2 = (ab * t_dot_h) ** 2 + (at * b_dot_h) ** 2 + (a2 * n_dot_h) ** 2
+    w2 = a2 / f2
+    return a2 * w2 * w2 / PI
+
+
+def v_ggx_anisotropic(n_dot_l, n_dot_v, b_dot_v, t_dot_v, t_dot_l, b_dot_l, at, ab):  # noqa: ANN001, ANN201
+    """Anisotropic height-correlated Smith V: 0.5 / (n.l |(at t.v, ab b.v, n.v)| +
+    n.v |(at t.l, ab b.l, n.l)|), clamped to [0, 1] (the Sample Viewer's)."""
+    ggx_v = n_dot_l * np.sqrt((at * t_dot_v) ** 2 + (ab * b_dot_v) ** 2 + n_dot_v**2)
+    ggx_l = n_dot_v * np.sqrt((at * t_dot_l) ** 2 + (ab * b_dot_l) ** 2 + n_dot_l**2)
+    with np.errstate(divide="ignore"):
+        return np.clip(0.5 / (ggx_v + ggx_l), 0.0, 1.0)
+
+
+def anisotropic_alphas(alpha, strength):  # noqa: ANN001, ANN201
+    """(alpha_t, alpha_b) = (mix(alpha, 1, s^2), clamp(alpha, 0.001, 1))."""
+    alpha = np.asarray(alpha, dtype=np.float64)
+    return alpha + (1.0 - alpha) * strength * strength, np.clip(alpha, 0.001, 1.0)
+
+
+def anisotropy_frame(t, b, n, ng, rotation: float, texel=None):  # noqa: ANN001, ANN201
+    """KHR_materials_anisotropy's direction in world space and its cross direction, (..., 3)
+    each, and the strength's texel factor: the direction (texel RG * 2 - 1, else (1, 0))
+    rotated by `rotation` (radians, towards b), in the frame (t, b, n); b_a = ng x t_a."""
+    t, b, n, ng = (np.asarray(x, dtype=np.float64) for x in (t, b, n, ng))
+    direction, scale = np.array([1.0, 0.0]), 1.0
+    if texel is not None:
+        direction, scale = np.asarray(texel[:2], np.float64) * 2.0 - 1.0, float(texel[2])
+    c, s_ = np.cos(rotation), np.sin(rotation)
+    d = np.array([c * direction[0] - s_ * direction[1], s_ * direction[0] + c * direction[1]])
+    d = d / np.linalg.norm(d)
+    at = t * d[0] + b * d[1]
+    return at, np.cross(ng, at), scale
+
+
+def ibl_reflection(n, v, roughness, strength, ab):  # noqa: ANN001, ANN201
+    """The direction the environment is read along (shade.glsl ibl_reflection): reflect(-v,
+    n), or for strength > 0 about the bent normal normalize(mix(cross(cross(b_a, v), b_a), n,
+    (1 - s (1 - r))^4)) (the Sample Viewer's getIBLRadianceAnisotropy)."""
+    n, v = np.asarray(n, dtype=np.float64), np.asarray(v, dtype=np.float64)
+    bent = n
+    if strength > 0.0:
+        ab = np.asarray(ab, dtype=np.float64)
+        normal = np.cross(np.cross(ab, v), ab)
+        k = (1.0 - strength * (1.0 - np.asarray(roughness, dtype=np.float64))) ** 4
+        bent = _normalize(normal + (n - normal) * np.asarray(k)[..., None])
+    return _normalize(2.0 * _dot(bent, v)[..., None] * bent - v)
+
+
 @dataclass(frozen=True)
 class Layers:
     """A material's KHR_materials_* parameters (brdf.glsl `Layers`; shade.glsl clamps them
@@ -320,6 +378,8 @@ class Layers:
     thickness: float = 0.0
     attenuation_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
     attenuation_distance: float = 0.0
+    anisotropy: float = 0.0  # strength, times the texture's B
+    anisotropy_rotation: float = 0.0
 
     @classmethod
     def of(cls, material: object, model_scale: float = 1.0) -> Layers:
@@ -337,7 +397,9 @@ class Layers:
             transmission=float(np.clip(m.transmission_factor, 0.0, 1.0)),
             thickness=max(float(m.thickness_factor), 0.0) * float(model_scale),
             attenuation_color=tuple(m.attenuation_color),
-            attenuation_distance=float(m.attenuation_distance))
+            attenuation_distance=float(m.attenuation_distance),
+            anisotropy=float(np.clip(m.anisotropy_strength, 0.0, 1.0)),
+            anisotropy_rotation=float(m.anisotropy_rotation))
 
 
 @dataclass
@@ -348,9 +410,11 @@ class LayeredTerms:
     clearcoat: np.ndarray  # (...)
 
 
-def evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m: Layers) -> LayeredTerms:  # noqa: ANN001, E741
+def evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m: Layers,  # noqa: ANN001, E741
+                          frame=None) -> LayeredTerms:  # noqa: ANN001
     """Mirror of brdf.glsl evaluate_layered_brdf: the glTF BRDF with the KHR_materials_*
-    layers for one light (before its radiance and shadow)."""
+    layers for one light (before its radiance and shadow). `frame`: (t_a, b_a), the
+    anisotropy's directions (`anisotropy_frame`), needed when m.anisotropy > 0."""
     n, nc, v, l, c = (np.asarray(x, dtype=np.float64) for x in (n, nc, v, l, c))
     metallic = np.asarray(metallic, dtype=np.float64)
     alpha = np.asarray(roughness, dtype=np.float64) ** 2
@@ -361,6 +425,12 @@ def evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m: Layers) -> Lay
     v_dot_h = np.maximum(_dot(v, h), 0.0)
     d = d_ggx(n_dot_h, alpha)
     vis = v_smith_ggx_correlated(n_dot_l, n_dot_v, alpha)
+    if m.anisotropy > 0.0:
+        at, ab = (np.asarray(x, dtype=np.float64) for x in frame)
+        a_t, a_b = anisotropic_alphas(alpha, m.anisotropy)
+        d = d_ggx_anisotropic(np.clip(_dot(n, h), 0.001, 1.0), _dot(at, h), _dot(ab, h), a_t, a_b)
+        vis = v_ggx_anisotropic(n_dot_l, n_dot_v, _dot(ab, v), _dot(at, v), _dot(at, l),
+                                _dot(ab, l), a_t, a_b)
     f_dielectric = m.specular * f_schlick(dielectric_f0(m.ior, m.specular_color), v_dot_h)
     f = (1.0 - metallic)[..., None] * f_dielectric + metallic[..., None] * f_schlick(c, v_dot_h)
     specular = f * (d * vis * n_dot_l)[..., None]
@@ -409,7 +479,8 @@ def transmission_exit(p, n, v, m: Layers) -> np.ndarray:  # noqa: ANN001
 
 def shade_layered(n, v, l, c, metallic, roughness, light_in, m: Layers, emissive=0.0,  # noqa: ANN001, E741
                   nc=None, env_radiance: float | None = None,  # noqa: ANN001
-                  ibl_diffuse_weight=None, behind=None) -> dict[str, np.ndarray]:  # noqa: ANN001
+                  ibl_diffuse_weight=None, behind=None,  # noqa: ANN001
+                  frame=None) -> dict[str, np.ndarray]:  # noqa: ANN001
     """The views shade.glsl writes for a layered glTF material lit by one light (`l`,
     `light_in`; light_in 0 for none) and optionally a uniform environment of radiance
     `env_radiance` (already scaled by its intensity), for the layers' environment terms:
@@ -420,13 +491,14 @@ def shade_layered(n, v, l, c, metallic, roughness, light_in, m: Layers, emissive
     Returns the radiance views "specular", "diffuse", "transmission", "sheen", "clearcoat",
     the scalars "sheen_scaling" and "coat_blend", the data views "ior", "dielectric_f0" and
     "volume", and "final" (the point light's and these environment terms only: the split
-    sum's own diffuse and specular are not mirrored here), each (..., 3)."""
+    sum's own diffuse and specular are not mirrored here), each (..., 3).
+    `frame`: the anisotropy's (t_a, b_a) (`anisotropy_frame`) when m.anisotropy > 0."""
     roughness = np.clip(roughness, MIN_ROUGHNESS, 1.0)
     n = np.asarray(n, dtype=np.float64)
     v = np.asarray(v, dtype=np.float64)
     nc = n if nc is None else np.asarray(nc, dtype=np.float64)
     light_in = np.asarray(light_in, dtype=np.float64)
-    t = evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m)
+    t = evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m, frame)
     out = {"specular": t.base.specular * light_in, "diffuse": t.base.diffuse * light_in,
            "transmission": t.transmission * light_in, "sheen": t.sheen * light_in,
            "clearcoat": t.clearcoat[..., None] * light_in, "terms": t}

@@ -10,7 +10,7 @@ Descriptor sets follow the report (renderer-spec section 1):
          single frame, one per view for a batch); binding 1 frame settings (view, BRDF,
          tonemap, ...)
   set 1: bindings 0-4 base colour, metallic, roughness, normal, occlusion; 5 emissive;
-         6-14 the KHR_materials_* layers' textures (MATERIAL_TEXTURES); 15 material factors
+         6-15 the KHR_materials_* layers' textures (MATERIAL_TEXTURES); 16 material factors
   set 2: lighting, one per frame: binding 0 Lighting {view position, light count, mode,
          flags, environment}; 1 the punctual lights (a storage buffer of LightRecord, the
          course's one light being lights[0]); 2-4 the environment's pre-filtered maps
@@ -219,9 +219,9 @@ SETTINGS_NORMAL_MAPPING = 1  # use normal maps
 SETTINGS_OCCLUSION = 2  # use occlusion maps
 SETTINGS_SRGB_TARGET = 4  # the colour target encodes sRGB in hardware
 
-# The material's textures, in binding order (set 1, bindings 0-14; the Material block is
-# binding 15): the table's bound slots (scene/material_table.py TEXTURES), the core's six, then
-# the KHR_materials_* layers'. 15 samplers of set 1 + 5 of set 2 + 2 of set 3 = 22 a stage
+# The material's textures, in binding order (set 1, bindings 0-15; the Material block is
+# binding 16): the table's bound slots (scene/material_table.py TEXTURES), the core's six, then
+# the KHR_materials_* layers'. 16 samplers of set 1 + 5 of set 2 + 2 of set 3 = 23 a stage
 # (lavapipe allows 32, NVIDIA far more; Vulkan's guaranteed minimum, 16, is below that).
 MATERIAL_TEXTURES = tuple(slot.name for slot in TEXTURES if slot.bound)
 MATERIAL_BINDING = len(MATERIAL_TEXTURES)  # set 1's Material block
@@ -280,6 +280,8 @@ MATERIAL_HAS_EMISSIVE_MAP = 128
 MATERIAL_SHARED_METALLIC_ROUGHNESS = 256
 # KHR_materials_pbrSpecularGlossiness (Material.glossiness): roughness = 1 - factor x texel.
 MATERIAL_GLOSSINESS = 512
+# KHR_materials_anisotropy's texture (direction RG, strength B): read only when present.
+MATERIAL_HAS_ANISOTROPY_MAP = 1024
 # The KHR_materials_* layers' factors (shade.glsl material_layers' LAYER_FACTOR), their
 # values in a material without the extensions (generated.glsl MATERIAL_DEFAULT_*), and their
 # textures (MATERIAL_HAS_LAYER_MAPS).
@@ -557,6 +559,7 @@ class View(Named):
     TRANSMISSION = 28
     VOLUME = 29
     AO = 30  # the frame's screen-space ambient occlusion (render/ao.py)
+    ANISOTROPY = 31  # KHR_materials_anisotropy's direction and strength
 
 
 VIEW_HELP = {
@@ -596,6 +599,8 @@ VIEW_HELP = {
                        "the surface and the refracted environment, after volume attenuation",
     View.VOLUME: "volume transmittance (KHR_materials_volume): attenuation colour ^ (thickness "
                  "/ attenuation distance), as a colour",
+    View.ANISOTROPY: "anisotropy (KHR_materials_anisotropy): RG the direction in the tangent "
+                      "plane (tangent, bitangent) * 0.5 + 0.5, B the strength",
     View.AO: "screen-space ambient occlusion (GTAO, --ao): visibility of the image-based light, "
              "1 unoccluded, grey (1 where frames have none)",
 }

@@ -53,7 +53,8 @@ class TextureSlot:
     channel: where a scalar map's value is (0 R .. 3 A), as the glTF specification puts it;
         the GPU view swizzles it into R (render/gpu_scene.py).
     kind: "color" (sRGB-encoded: decoded by the GPU's sRGB formats), "scalar" (linear, one
-        channel) or "normal" (linear, tangent-space xyz * 2 - 1).
+        channel), "normal" (linear, tangent-space xyz * 2 - 1) or "vector" (linear, RGB as
+        stored: KHR_materials_anisotropy's direction in RG, strength in B).
     bound: has a binding in the material's descriptor set (binding order = table order); the
         alpha mask is merged into the base colour's A on upload instead.
     """
@@ -61,7 +62,7 @@ class TextureSlot:
     name: str
     gltf: str | None
     channel: int = 0
-    kind: Literal["color", "scalar", "normal"] = "scalar"
+    kind: Literal["color", "scalar", "normal", "vector"] = "scalar"
     bound: bool = True
 
     @property
@@ -147,6 +148,7 @@ _SHEEN = "KHR_materials_sheen"
 _SPECULAR = "KHR_materials_specular"
 _TRANSMISSION = "KHR_materials_transmission"
 _VOLUME = "KHR_materials_volume"
+_ANISOTROPY = "KHR_materials_anisotropy"
 
 # The texture slots, in Material's order; the bound ones' order is set 1's binding order.
 TEXTURES: tuple[TextureSlot, ...] = (
@@ -169,6 +171,7 @@ TEXTURES: tuple[TextureSlot, ...] = (
     TextureSlot("specular_color", f"{_SPECULAR}.specularColorTexture", kind="color"),
     TextureSlot("transmission", f"{_TRANSMISSION}.transmissionTexture"),  # R
     TextureSlot("thickness", f"{_VOLUME}.thicknessTexture", channel=1),
+    TextureSlot("anisotropy", f"{_ANISOTROPY}.anisotropyTexture", kind="vector"),  # RG, B
 )
 
 # The parameters, in Material's field order. Ranges: the extensions' schemas; the wide bounds
@@ -209,6 +212,12 @@ PARAMS: tuple[MaterialParam, ...] = (
     _P("attenuation_color", f"{_VOLUME}.attenuationColor", (1.0, 1.0, 1.0), lo=0.0, hi=1.0),
     _P("clearcoat_normal_scale", f"{_COAT}.clearcoatNormalTexture.scale", 1.0,
        texture="clearcoat_normal"),
+    # KHR_materials_anisotropy: the strength (times the texture's B) and the rotation of the
+    # direction (the texture's RG * 2 - 1, else +tangent) from the tangent, radians
+    # counter-clockwise towards the bitangent.
+    _P("anisotropy_strength", f"{_ANISOTROPY}.anisotropyStrength", 0.0, lo=0.0, hi=1.0,
+       texture="anisotropy"),
+    _P("anisotropy_rotation", f"{_ANISOTROPY}.anisotropyRotation", 0.0),
 )
 
 # Material's field defaults (types.py takes them from here; Any: each field's annotation

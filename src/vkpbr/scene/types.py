@@ -153,6 +153,8 @@ class Material:
     attenuation_distance: float = _D["attenuation_distance"]  # 0 = infinite (no absorption)
     attenuation_color: tuple[float, float, float] = _D["attenuation_color"]
     clearcoat_normal_scale: float = _D["clearcoat_normal_scale"]
+    anisotropy_strength: float = _D["anisotropy_strength"]  # KHR_materials_anisotropy
+    anisotropy_rotation: float = _D["anisotropy_rotation"]  # radians from the tangent
     # The extensions' textures; `channel` picks a scalar map's component, as for metallic.
     clearcoat_texture: TextureRef | None = None  # linear; glTF: R
     clearcoat_roughness_texture: TextureRef | None = None  # linear; glTF: G
@@ -163,6 +165,7 @@ class Material:
     specular_color_texture: TextureRef | None = None  # sRGB; RGB
     transmission_texture: TextureRef | None = None  # linear; glTF: R
     thickness_texture: TextureRef | None = None  # linear; glTF: G
+    anisotropy_texture: TextureRef | None = None  # linear; RG direction * 2 - 1, B strength
 
 
 # Every Material texture slot (the field is f"{slot}_texture"), and those holding colour

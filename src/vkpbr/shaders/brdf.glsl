@@ -138,6 +138,29 @@ vec3 volume_transmittance(float dist, vec3 attenuation_color, float attenuation_
     return pow(attenuation_color, vec3(dist / attenuation_distance));
 }
 
+// KHR_materials_anisotropy's GGX (Burley 2012; the extension's README and the glTF Sample
+// Viewer's D_GGX_anisotropic / V_GGX_anisotropic): alpha_t along the anisotropy direction t,
+// alpha_b along b = ng x t; t.h, b.h, t.v, ... the directions' components in that frame.
+float d_ggx_anisotropic(float n_dot_h, float t_dot_h, float b_dot_h, float at, float ab) {
+    float a2 = at * ab;
+    vec3 f = vec3(ab * t_dot_h, at * b_dot_h, a2 * n_dot_h);
+    float w2 = a2 / dot(f, f);
+    return a2 * w2 * w2 / PI;
+}
+
+float v_ggx_anisotropic(float n_dot_l, float n_dot_v, float b_dot_v, float t_dot_v,
+                        float t_dot_l, float b_dot_l, float at, float ab) {
+    float ggx_v = n_dot_l * length(vec3(at * t_dot_v, ab * b_dot_v, n_dot_v));
+    float ggx_l = n_dot_v * length(vec3(at * t_dot_l, ab * b_dot_l, n_dot_l));
+    return clamp(0.5 / (ggx_v + ggx_l), 0.0, 1.0);
+}
+
+// The anisotropic roughnesses of strength s: alpha_t = mix(alpha, 1, s^2) along the
+// direction, alpha_b = alpha (at least 0.001) across it.
+vec2 anisotropic_alphas(float alpha, float s) {
+    return vec2(mix(alpha, 1.0, s * s), clamp(alpha, 0.001, 1.0));
+}
+
 // The layers' parameters at a shading point (scene.types.Material documents each).
 struct Layers {
     float ior;
@@ -151,6 +174,10 @@ struct Layers {
     float thickness;
     vec3 attenuation_color;
     float attenuation_distance;
+    float anisotropy;       // strength (0: the isotropic lobe)
+    float anisotropy_rotation;
+    vec3 anisotropic_t;     // the anisotropy direction in world space (shade.glsl)
+    vec3 anisotropic_b;     // ng x anisotropic_t
 };
 
 // One punctual light's layered glTF BRDF (values before the light's radiance and shadow).
@@ -180,6 +207,13 @@ LayeredTerms evaluate_layered_brdf(vec3 n, vec3 nc, vec3 v, vec3 l, vec3 c, floa
     LayeredTerms t;
     t.base.D = d_ggx(n_dot_h, alpha);
     float vis = v_smith_ggx_correlated(n_dot_l, n_dot_v, alpha);
+    if (m.anisotropy > 0.0) {  // KHR_materials_anisotropy: the specular lobe only
+        vec2 a = anisotropic_alphas(alpha, m.anisotropy);
+        vec3 at = m.anisotropic_t, ab = m.anisotropic_b;
+        t.base.D = d_ggx_anisotropic(clamp(dot(n, h), 0.001, 1.0), dot(at, h), dot(ab, h), a.x, a.y);
+        vis = v_ggx_anisotropic(n_dot_l, n_dot_v, dot(ab, v), dot(at, v), dot(at, l), dot(ab, l),
+                                a.x, a.y);
+    }
     t.base.G = vis * 4.0 * n_dot_l * n_dot_v;
     vec3 f_dielectric = m.specular * f_schlick(dielectric_f0(m.ior, m.specular_color), v_dot_h);
     t.base.F = (1.0 - metallic) * f_dielectric + metallic * f_schlick(c, v_dot_h);

@@ -47,12 +47,13 @@ IblLobe ibl_lobe(vec3 f0, float weight, float n_dot_v, float roughness, vec2 ab)
 // F0 = mix(f0_dielectric, c, metallic) into one lobe instead loses energy at fractional
 // metallic: a white sphere in a white furnace returned 0.66-0.84 at metallic 0.25-0.75,
 // issue 34.)
-IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 c, float metallic, float roughness,
+// `r`: the direction the pre-filtered environment is read along (the reflection of v about
+// n, or about KHR_materials_anisotropy's bent normal: shade.glsl).
+IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 r, vec3 c, float metallic, float roughness,
                       vec3 f0_dielectric, float specular_weight) {
     vec2 rot = lighting.env_rotation.xy;
     float max_lod = lighting.env_rotation.z;
     float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
-    vec3 r = reflect(-v, n);
     vec3 radiance = textureLod(env_specular, env_rotate(r, rot), roughness * max_lod).rgb;
     vec3 irradiance = textureLod(env_irradiance, env_rotate(n, rot), 0.0).rgb;
     vec2 ab = textureLod(brdf_lut, vec2(n_dot_v, roughness), 0.0).rg;
@@ -69,6 +70,11 @@ IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 c, float metallic, float roughness,
     t.diffuse = k_d * irradiance * lighting.env_intensity;
     t.diffuse_weight = k_d;
     return t;
+}
+
+IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 c, float metallic, float roughness,
+                      vec3 f0_dielectric, float specular_weight) {
+    return ibl_evaluate(n, v, reflect(-v, n), c, metallic, roughness, f0_dielectric, specular_weight);
 }
 
 IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 c, float metallic, float roughness) {

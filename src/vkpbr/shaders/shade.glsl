@@ -114,7 +114,42 @@ Layers material_layers(uint material_flags) {
     m.thickness = max((LAYER_FACTOR(thickness_factor) + zero1) * LAYER_MAP(thickness, r), 0.0) * s_model_scale;
     m.attenuation_color = LAYER_FACTOR(attenuation_color) + zero;
     m.attenuation_distance = LAYER_FACTOR(attenuation_distance) + zero1;
+    m.anisotropy = clamp(LAYER_FACTOR(anisotropy_strength) + zero1, 0.0, 1.0);
+    m.anisotropy_rotation = LAYER_FACTOR(anisotropy_rotation) + zero1;
+    m.anisotropic_t = vec3(1.0, 0.0, 0.0);
+    m.anisotropic_b = vec3(0.0, 1.0, 0.0);
     return m;
+}
+
+// KHR_materials_anisotropy's frame, as the glTF Sample Viewer's getAnisotropyInfo: the
+// direction (the texture's RG * 2 - 1, else +x) rotated by the material's rotation, in the
+// tangent frame (t, b, n) of the mapped normal; b_a = ng x t_a; the strength times the
+// texture's B. A material without anisotropy keeps its isotropic lobe (strength 0).
+void anisotropy_frame(uint material_flags, vec3 t, vec3 b, vec3 n, vec3 ng, inout Layers m) {
+    if (!SHADE_LAYERS || m.anisotropy <= 0.0) return;
+    vec2 direction = vec2(1.0, 0.0);
+    if ((material_flags & MATERIAL_HAS_ANISOTROPY_MAP) != 0u) {
+        vec3 texel = SAMPLE(anisotropy).rgb;
+        direction = texel.rg * 2.0 - 1.0;
+        m.anisotropy *= texel.b;
+    }
+    vec2 cs = vec2(cos(m.anisotropy_rotation), sin(m.anisotropy_rotation));
+    direction = mat2(cs.x, cs.y, -cs.y, cs.x) * direction;
+    m.anisotropic_t = mat3(t, b, n) * normalize(vec3(direction, 0.0));
+    m.anisotropic_b = cross(ng, m.anisotropic_t);
+}
+
+// The direction the environment is read along: the reflection about n, or for an anisotropic
+// material about the Sample Viewer's bent normal (getIBLRadianceAnisotropy): the normal of
+// the plane through the anisotropy's b_a and v, mixed back to n by (1 - s (1 - r))^4.
+vec3 ibl_reflection(vec3 n, vec3 v, float roughness, Layers m) {
+    if (!SHADE_LAYERS || m.anisotropy <= 0.0) return reflect(-v, n);
+    vec3 anisotropic_tangent = cross(m.anisotropic_b, v);
+    vec3 anisotropic_normal = cross(anisotropic_tangent, m.anisotropic_b);
+    float bend = 1.0 - m.anisotropy * (1.0 - roughness);
+    bend *= bend;
+    vec3 bent = normalize(mix(anisotropic_normal, n, bend * bend));
+    return normalize(reflect(-v, bent));
 }
 
 // The coat's normal: the interpolated one, or its own normal map (clearcoatNormalTexture)
@@ -201,6 +236,7 @@ vec4 shade_surface() {
     int brdf = SHADE_BRDF >= 0 ? SHADE_BRDF : u(settings.brdf);
     uint light_count = min(u(lighting.light_count), MAX_LIGHTS);
     Layers layers = material_layers(material_flags);
+    anisotropy_frame(material_flags, t, b, n, ng, layers);
     // The layers shade the glTF BRDF only (the course's BRDFs are the seed's).
     bool layered = brdf == BRDF_GLTF;
     vec3 nc = clearcoat_normal(settings_flags, material_flags, ng, t, b);
@@ -246,7 +282,8 @@ vec4 shade_surface() {
     // copy shows what is behind under punctual lights alone too.
     bool refracts = layered && layers.transmission > 0.0 && (ibl_on || screen);
     if (ibl_on || refracts) {
-        ibl = ibl_evaluate(n, v, c, metallic, roughness_ibl, f0_dielectric, layers.specular);
+        ibl = ibl_evaluate(n, v, ibl_reflection(n, v, roughness_ibl, layers), c, metallic,
+                           roughness_ibl, f0_dielectric, layers.specular);
         if (!ibl_on) { ibl.diffuse = vec3(0.0); ibl.specular = vec3(0.0); }
         bool ssao = (lighting_flags & LIGHTING_AO) != 0u;
         IblOcclusion ao = ibl_occlusion(occlusion, screen_occlusion(lighting_flags, material_flags),
@@ -325,6 +362,12 @@ vec4 shade_surface() {
         case VIEW_CLEARCOAT: value = clearcoat; break;
         case VIEW_SHEEN: value = sheen; break;
         case VIEW_TRANSMISSION: value = transmission; break;
+        case VIEW_ANISOTROPY:
+            value = layers.anisotropy > 0.0
+                ? vec3(vec2(dot(layers.anisotropic_t, t), dot(layers.anisotropic_t, b)) * 0.5 + 0.5,
+                       layers.anisotropy)
+                : vec3(1.0, 0.5, 0.0);
+            break;
         case VIEW_AO: value = vec3(screen_occlusion(lighting_flags, material_flags)); break;
         case VIEW_VOLUME:
             value = volume_transmittance(layers.thickness, layers.attenuation_color,
