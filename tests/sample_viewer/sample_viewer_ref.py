@@ -220,9 +220,29 @@ class ViewerRun:
 ROUGHNESS_CLAMP = "materialInfo.perceptualRoughness=clamp(materialInfo.perceptualRoughness,0.0,1.0);"
 
 
-def _viewer_module(bake: str, roughness_floor: float | None = None) -> bytes:
+# Experiments of fidelity_table.py (`--viewer-fix NAME`), never the test's reference: the
+# viewer 1.1.0's handling of KHR_materials_pbrSpecularGlossiness, made as the extension says.
+# "sg": its diffuse and specular-glossiness textures decoded as sRGB (gltfTextureInfo is
+# linear by default, and only the metallic-roughness colour textures are made sRGB), and its
+# metallic-roughness shading off where the extension is present (material.type is never
+# "SG", so MATERIAL_METALLICROUGHNESS is always defined and the fallback's metallic and
+# roughness replace the extension's).
+VIEWER_FIXES: dict[str, dict[str, str]] = {
+    "sg": {"const diffuseTexture = new gltfTextureInfo();":
+           "const diffuseTexture = new gltfTextureInfo(undefined, 0, false);",
+           "const specularGlossinessTexture = new gltfTextureInfo();":
+           "const specularGlossinessTexture = new gltfTextureInfo(undefined, 0, false);",
+           'if (this.type !== "SG")':
+           "if (this.extensions?.KHR_materials_pbrSpecularGlossiness === undefined)"},
+}
+
+
+def _viewer_module(bake: str, roughness_floor: float | None = None,
+                   fixes: Sequence[str] = ()) -> bytes:
     data = (VIEWER_DIST / "gltf-viewer.module.js").read_bytes()
     patches = dict(BAKES[bake])
+    for fix in fixes:
+        patches.update(VIEWER_FIXES[fix])
     if roughness_floor is not None:
         patches[ROUGHNESS_CLAMP] = ROUGHNESS_CLAMP.replace("0.0,1.0", f"{roughness_floor!r},1.0")
     for old, new in patches.items():
@@ -290,11 +310,13 @@ def _server(files: dict[str, bytes], assets: Path, inbox: dict[str, bytes],
 
 def render_viewer(scenarios: Sequence[Scenario], assets: Path, environment: Path,
                   size: int = 256, env_intensity: float = 1.0, bake: str | None = None,
-                  timeout: float = 900.0, roughness_floor: float | None = None) -> ViewerRun:
+                  timeout: float = 900.0, roughness_floor: float | None = None,
+                  fixes: Sequence[str] = ()) -> ViewerRun:
     """Render `scenarios` with the Sample Viewer; raises RuntimeError with the page's error or
     the browser's last lines when the run fails or takes longer than `timeout` seconds.
     `roughness_floor`: serve the viewer with its perceptual roughness clamped to at least this
-    (vkpbr's MIN_ROUGHNESS is 0.03), to tell that clamp's effect from others."""
+    (vkpbr's MIN_ROUGHNESS is 0.03), to tell that clamp's effect from others; `fixes`: names
+    of VIEWER_FIXES to apply (experiments)."""
     from PIL import Image
 
     bake = bake or os.environ.get("VKPBR_SV_BAKE", "ci")
@@ -309,7 +331,7 @@ def render_viewer(scenarios: Sequence[Scenario], assets: Path, environment: Path
               "jobs": jobs}
     files = {"/page.html": (HERE / "page.html").read_bytes(),
              "/config.json": json.dumps(config).encode(),
-             "/viewer/gltf-viewer.module.js": _viewer_module(bake, roughness_floor),
+             "/viewer/gltf-viewer.module.js": _viewer_module(bake, roughness_floor, fixes),
              "/env.hdr": environment.read_bytes(), "/sheen_E.png": _sheen_lut_png()}
     files.update({"/model/" + s.viewer_model: json.dumps(doc).encode()
                   for s in scenarios if (doc := s.document(assets)) is not None})
