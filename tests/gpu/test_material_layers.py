@@ -430,3 +430,47 @@ def test_anisotropy_matches_mirror(make_renderer, pipeline: str, texture: bool) 
     got = render(r, "anisotropy", pipeline, env="none")
     np.testing.assert_allclose(got[..., :2], direction, atol=2e-3)
     np.testing.assert_allclose(got[..., 2], layers.anisotropy, atol=2e-3)
+
+
+IRIDESCENT = Material(base_color_factor=(0.3, 0.5, 0.7, 1), metallic_factor=0.4,
+                      roughness_factor=0.35, iridescence_factor=0.9, iridescence_ior=1.6,
+                      iridescence_thickness_minimum=150.0, iridescence_thickness_maximum=520.0)
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
+@pytest.mark.parametrize("texture", [False, True])
+def test_iridescence_matches_mirror(make_renderer, pipeline: str, texture: bool) -> None:
+    """KHR_materials_iridescence: the thin film's Fresnel (the mirror's eval_iridescence at
+    n.v over the dielectric's F0 and over the base colour) mixed into both lobes by the
+    factor, with and without textures (factor x R; thickness = mix(minimum, maximum, G));
+    the specular, diffuse, final and iridescence views against the mirror."""
+    from vkpbr.scene.types import TextureRef
+
+    texel = (204, 77, 0, 255)
+    mat = IRIDESCENT
+    scene = plane_scene(mat)
+    if texture:
+        scene.images = [constant_image("iridescence", texel)]
+        mat = dataclasses.replace(mat, iridescence_texture=TextureRef(0),
+                                  iridescence_thickness_texture=TextureRef(0, channel=1))
+        scene.materials = [mat]
+    r = make_renderer(scene)
+    if pipeline == "compute" and not r.device.compute_path:
+        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+    layers = ref.Layers.of(mat)
+    if texture:
+        g = texel[1] / 255.0
+        layers = dataclasses.replace(layers, iridescence=mat.iridescence_factor * texel[0] / 255.0,
+                                     iridescence_thickness=150.0 + (520.0 - 150.0) * g)
+    _, n, v, l = pixel_geometry()
+    c = np.broadcast_to(np.asarray(mat.base_color_factor[:3]), n.shape)
+    shape = n.shape[:2]
+    args = (n, v, l, c, np.full(shape, mat.metallic_factor), np.full(shape, mat.roughness_factor),
+            np.asarray(LIGHT.color) * LIGHT.intensity)
+    want = ref.shade_layered(*args, layers)
+    plain = ref.shade_layered(*args, ref.Layers())
+    assert np.abs(want["specular"] - plain["specular"]).max() > 0.1 * plain["specular"].max()
+    for view in ("specular", "diffuse", "final", "iridescence"):
+        got = render(r, view, pipeline, env="none")
+        assert_close_on_raster(got, np.broadcast_to(want[view], got.shape), rtol=3e-3,
+                               atol=1e-4, what=view)

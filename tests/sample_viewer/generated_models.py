@@ -131,3 +131,32 @@ def anisotropy_spheres() -> dict:
         _anisotropic("red-45", (0.7, 0.1, 0.1), 0.0, 0.3, 0.6, math.pi / 4),
         _anisotropic("texture", (0.9, 0.9, 0.9), 1.0, 0.35, 1.0, 0.3, texture=True),
     ], "AnisotropySpheres", images=(png_uri((200, 128, 200, 255)),))
+
+
+_IRIDESCENCE = "KHR_materials_iridescence"
+
+
+def _iridescent(name: str, color: tuple, metallic: float, roughness: float, factor: float,
+                ior: float, thickness: float, texture: bool = False) -> dict:
+    extension = {"iridescenceFactor": factor, "iridescenceIor": ior,
+                 "iridescenceThicknessMinimum": 100.0, "iridescenceThicknessMaximum": thickness}
+    if texture:
+        extension["iridescenceThicknessTexture"] = {"index": 0}
+    return {"name": name,
+            "pbrMetallicRoughness": {"baseColorFactor": [*color, 1.0], "metallicFactor": metallic,
+                                     "roughnessFactor": roughness},
+            "extensions": {_IRIDESCENCE: extension}}
+
+
+def iridescence_spheres() -> dict:
+    """KHR_materials_iridescence: a soap-bubble-like film (ior 1.3, 300 nm) on black, 500 nm on
+    a grey dielectric, 800 nm at ior 2.0 on a rough red, a film over metal (gold, 400 nm),
+    half the factor on white, and a thickness texture (G 0.5: 100 + 0.5 x 700 nm)."""
+    return sphere_grid([
+        _iridescent("bubble", (0.02, 0.02, 0.02), 0.0, 0.1, 1.0, 1.3, 300.0),
+        _iridescent("grey-500", (0.3, 0.3, 0.3), 0.0, 0.25, 1.0, 1.5, 500.0),
+        _iridescent("red-800", (0.6, 0.1, 0.1), 0.0, 0.5, 1.0, 2.0, 800.0),
+        _iridescent("gold", (1.0, 0.78, 0.34), 1.0, 0.2, 1.0, 1.4, 400.0),
+        _iridescent("white-half", (0.9, 0.9, 0.9), 0.0, 0.3, 0.5, 1.3, 350.0),
+        _iridescent("texture", (0.1, 0.1, 0.3), 0.0, 0.2, 1.0, 1.5, 800.0, texture=True),
+    ], "IridescenceSpheres", images=(png_uri((0, 128, 0, 255)),))

@@ -34,6 +34,9 @@ ALL = {
                              "attenuationColor": [0.9, 0.5, 0.1]},
     "KHR_materials_emissive_strength": {"emissiveStrength": 3.0},
     "KHR_materials_anisotropy": {"anisotropyStrength": 0.7, "anisotropyRotation": 1.25},
+    "KHR_materials_iridescence": {"iridescenceFactor": 0.9, "iridescenceIor": 1.8,
+                                  "iridescenceThicknessMinimum": 50.0,
+                                  "iridescenceThicknessMaximum": 600.0},
 }
 
 
@@ -62,6 +65,8 @@ def test_every_extension_factor_is_read(tmp_path: Path) -> None:
         0.25, 2.0, (0.9, 0.5, 0.1))
     assert m.emissive_factor == (3.0, 1.5, 0.0)  # emissive strength folded into the factor
     assert (m.anisotropy_strength, m.anisotropy_rotation) == (0.7, 1.25)
+    assert (m.iridescence_factor, m.iridescence_ior, m.iridescence_thickness_minimum,
+            m.iridescence_thickness_maximum) == (0.9, 1.8, 50.0, 600.0)
 
 
 def test_defaults_are_the_core_material(tmp_path: Path) -> None:
@@ -86,6 +91,7 @@ def test_ior_zero_is_the_schema_special_value(tmp_path: Path) -> None:
     ("KHR_materials_volume", {"attenuationDistance": 0}, "attenuationDistance 0.0 must be > 0"),
     ("KHR_materials_specular", {"specularFactor": "x"}, "specularFactor"),
     ("KHR_materials_anisotropy", {"anisotropyStrength": 1.5}, "anisotropyStrength 1.5 outside 0..1"),
+    ("KHR_materials_iridescence", {"iridescenceIor": 0.5}, "iridescenceIor 0.5 outside 1..1e+06"),
 ])
 def test_bad_factor_is_one_line_error(tmp_path: Path, name: str, body: dict, words: str) -> None:
     with pytest.raises(SceneError) as info:
@@ -109,6 +115,8 @@ def test_extension_textures_are_read(tmp_path: Path) -> None:
             "KHR_texture_transform": {"scale": [2, 3]}})},
         "KHR_materials_volume": {"thicknessTexture": info(0)},
         "KHR_materials_anisotropy": {"anisotropyTexture": info(2, texCoord=1)},
+        "KHR_materials_iridescence": {"iridescenceTexture": info(1),
+                                      "iridescenceThicknessTexture": info(0)},
     }}
     b = GltfBuilder()
     b.node(mesh=b.triangle())
@@ -119,13 +127,15 @@ def test_extension_textures_are_read(tmp_path: Path) -> None:
     m = load_scene(b.save(tmp_path / "t.gltf", "datauri")).materials[0]
     got = {slot: (ref.image, ref.channel, ref.texcoord) for slot in (
         "clearcoat", "clearcoat_roughness", "clearcoat_normal", "sheen_color", "sheen_roughness",
-        "specular", "specular_color", "transmission", "thickness", "anisotropy")
+        "specular", "specular_color", "transmission", "thickness", "anisotropy", "iridescence",
+        "iridescence_thickness")
         for ref in (getattr(m, f"{slot}_texture"),)}
     assert got == {"clearcoat": (0, 0, 0), "clearcoat_roughness": (1, 1, 1),
                    "clearcoat_normal": (2, 0, 0), "sheen_color": (1, 0, 0),
                    "sheen_roughness": (1, 3, 0), "specular": (0, 3, 0),
                    "specular_color": (2, 0, 0), "transmission": (0, 0, 0),
-                   "thickness": (0, 1, 0), "anisotropy": (2, 0, 1)}
+                   "thickness": (0, 1, 0), "anisotropy": (2, 0, 1), "iridescence": (1, 0, 0),
+                   "iridescence_thickness": (0, 1, 0)}
     assert m.clearcoat_normal_scale == 0.5 and m.transmission_texture.scale == (2, 3)
     out = tmp_path / "t.vkpbr"  # and through the baked format
     from vkpbr.bake.bake import bake_scene
@@ -296,6 +306,9 @@ _KEYS = {"KHR_materials_ior": ["ior"], "KHR_materials_specular": ["specularFacto
          "KHR_materials_unlit": ["x"], "KHR_materials_emissive_strength": ["emissiveStrength"],
          "KHR_materials_anisotropy": ["anisotropyStrength", "anisotropyRotation",
                                       "anisotropyTexture"],
+         "KHR_materials_iridescence": ["iridescenceFactor", "iridescenceIor",
+                                       "iridescenceThicknessMaximum",
+                                       "iridescenceThicknessTexture"],
          "KHR_materials_pbrSpecularGlossiness": ["diffuseFactor", "specularFactor",
                                                  "glossinessFactor", "diffuseTexture",
                                                  "specularGlossinessTexture"]}

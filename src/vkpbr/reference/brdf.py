@@ -59,6 +59,8 @@ __all__ = [
     "anisotropic_alphas",
     "anisotropy_frame",
     "ibl_reflection",
+    "eval_iridescence",
+    "iridescence_fresnel",
     "AMBIENT",
     "MIN_ROUGHNESS",
     "MIN_SHEEN_ROUGHNESS",
@@ -362,6 +364,65 @@ def ibl_reflection(n, v, roughness, strength, ab):  # noqa: ANN001, ANN201
     return _normalize(2.0 * _dot(bent, v)[..., None] * bent - v)
 
 
+_XYZ_TO_REC709 = np.array([[3.2404542, -1.5371385, -0.4985314],
+                           [-0.9692660, 1.8760108, 0.0415560],
+                           [0.0556434, -0.2040259, 1.0572252]])
+
+
+def _eval_sensitivity(opd: np.ndarray, shift: np.ndarray) -> np.ndarray:
+    """The XYZ sensitivity's Fourier transform at optical path difference opd (nm, (...)),
+    phase `shift` (..., 3), as linear Rec. 709 (brdf.glsl eval_sensitivity)."""
+    phase = 2.0 * PI * np.asarray(opd)[..., None] * 1.0e-9
+    val = np.array([5.4856e-13, 4.4201e-13, 5.2481e-13])
+    pos = np.array([1.6810e06, 1.7953e06, 2.2084e06])
+    var = np.array([4.3278e09, 9.3046e09, 6.6121e09])
+    xyz = val * np.sqrt(2.0 * PI * var) * np.cos(pos * phase + shift) * np.exp(-(phase**2) * var)
+    xyz[..., 0] += (9.7470e-14 * np.sqrt(2.0 * PI * 4.5282e09) * np.cos(2.2399e06 * phase[..., 0]
+                    + shift[..., 0]) * np.exp(-4.5282e09 * phase[..., 0] ** 2))
+    return (xyz / 1.0685e-7) @ _XYZ_TO_REC709.T
+
+
+def eval_iridescence(outside_ior: float, eta2: float, cos_theta1, thickness: float,  # noqa: ANN001
+                     base_f0) -> np.ndarray:  # noqa: ANN001
+    """KHR_materials_iridescence's thin-film Fresnel (..., 3) at cos(theta1) (...), film index
+    eta2 and thickness (nm) over a base of reflectance base_f0 (3,) or (..., 3): Belcour and
+    Barla 2017's two-order airy sum, as the extension's README and the Sample Viewer."""
+    cos1 = np.asarray(cos_theta1, dtype=np.float64)
+    t = float(np.clip(thickness / 0.03, 0.0, 1.0))
+    film = outside_ior + (eta2 - outside_ior) * t * t * (3.0 - 2.0 * t)  # smoothstep
+    cos2_sq = 1.0 - (outside_ior / film) ** 2 * (1.0 - cos1**2)
+    cos2 = np.sqrt(np.maximum(cos2_sq, 0.0))
+    r0 = ((film - outside_ior) / (film + outside_ior)) ** 2
+    r12 = (r0 + (1.0 - r0) * (1.0 - cos1) ** 5)[..., None]
+    t121 = 1.0 - r12
+    phi21 = PI - (PI if film < outside_ior else 0.0)
+    f0 = np.clip(np.asarray(base_f0, dtype=np.float64), 0.0, 0.9999)
+    base_ior = (1.0 + np.sqrt(f0)) / (1.0 - np.sqrt(f0))
+    r1 = ((base_ior - film) / (base_ior + film)) ** 2
+    r23 = r1 + (1.0 - r1) * ((1.0 - cos2) ** 5)[..., None]
+    phi = phi21 + np.where(base_ior < film, PI, 0.0) * np.ones_like(r23)
+    opd = 2.0 * film * thickness * cos2
+    r123 = np.clip(r12 * r23, 1e-5, 0.9999)
+    rs = t121**2 * r23 / (1.0 - r123)
+    out = r12 + rs
+    cm = rs - t121
+    for m in (1, 2):
+        cm = cm * np.sqrt(r123)
+        out = out + cm * 2.0 * _eval_sensitivity(m * opd, m * phi)
+    out = np.maximum(out, 0.0)
+    return np.where((cos2_sq < 0.0)[..., None], 1.0, out)
+
+
+def iridescence_fresnel(m: Layers, n_dot_v, c) -> tuple | None:  # noqa: ANN001
+    """(film Fresnel over the dielectric's F0, over the base colour c) at n.v, for `m`'s film;
+    None without one (factor or thickness 0), as shade.glsl iridescence_fresnel."""
+    if m.iridescence <= 0.0 or m.iridescence_thickness <= 0.0:
+        return None
+    f0 = dielectric_f0(m.ior, m.specular_color)
+    return (eval_iridescence(1.0, m.iridescence_ior, n_dot_v, m.iridescence_thickness, f0),
+            eval_iridescence(1.0, m.iridescence_ior, n_dot_v, m.iridescence_thickness, c))
+
+
 @dataclass(frozen=True)
 class Layers:
     """A material's KHR_materials_* parameters (brdf.glsl `Layers`; shade.glsl clamps them
@@ -380,6 +441,9 @@ class Layers:
     attenuation_distance: float = 0.0
     anisotropy: float = 0.0  # strength, times the texture's B
     anisotropy_rotation: float = 0.0
+    iridescence: float = 0.0  # factor, times the texture's R
+    iridescence_ior: float = 1.3
+    iridescence_thickness: float = 400.0  # nm: mix(minimum, maximum, texel G), else maximum
 
     @classmethod
     def of(cls, material: object, model_scale: float = 1.0) -> Layers:
@@ -399,7 +463,10 @@ class Layers:
             attenuation_color=tuple(m.attenuation_color),
             attenuation_distance=float(m.attenuation_distance),
             anisotropy=float(np.clip(m.anisotropy_strength, 0.0, 1.0)),
-            anisotropy_rotation=float(m.anisotropy_rotation))
+            anisotropy_rotation=float(m.anisotropy_rotation),
+            iridescence=float(np.clip(m.iridescence_factor, 0.0, 1.0)),
+            iridescence_ior=max(float(m.iridescence_ior), 1.0),
+            iridescence_thickness=max(float(m.iridescence_thickness_maximum), 0.0))
 
 
 @dataclass
@@ -411,10 +478,11 @@ class LayeredTerms:
 
 
 def evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m: Layers,  # noqa: ANN001, E741
-                          frame=None) -> LayeredTerms:  # noqa: ANN001
+                          frame=None, iridescence=None) -> LayeredTerms:  # noqa: ANN001
     """Mirror of brdf.glsl evaluate_layered_brdf: the glTF BRDF with the KHR_materials_*
     layers for one light (before its radiance and shadow). `frame`: (t_a, b_a), the
-    anisotropy's directions (`anisotropy_frame`), needed when m.anisotropy > 0."""
+    anisotropy's directions (`anisotropy_frame`), needed when m.anisotropy > 0;
+    `iridescence`: `iridescence_fresnel`'s pair, None without a film."""
     n, nc, v, l, c = (np.asarray(x, dtype=np.float64) for x in (n, nc, v, l, c))
     metallic = np.asarray(metallic, dtype=np.float64)
     alpha = np.asarray(roughness, dtype=np.float64) ** 2
@@ -432,9 +500,16 @@ def evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m: Layers,  # noq
         vis = v_ggx_anisotropic(n_dot_l, n_dot_v, _dot(ab, v), _dot(at, v), _dot(at, l),
                                 _dot(ab, l), a_t, a_b)
     f_dielectric = m.specular * f_schlick(dielectric_f0(m.ior, m.specular_color), v_dot_h)
-    f = (1.0 - metallic)[..., None] * f_dielectric + metallic[..., None] * f_schlick(c, v_dot_h)
+    f_metal = f_schlick(c, v_dot_h)
+    f_max = max3(f_dielectric)
+    if iridescence is not None:
+        k = m.iridescence
+        f_dielectric = f_dielectric + (iridescence[0] - f_dielectric) * k
+        f_metal = f_metal + (iridescence[1] - f_metal) * k
+        f_max = f_max + (max3(iridescence[0]) - f_max) * k
+    f = (1.0 - metallic)[..., None] * f_dielectric + metallic[..., None] * f_metal
     specular = f * (d * vis * n_dot_l)[..., None]
-    diffuse_weight = (1.0 - metallic) * (1.0 - max3(f_dielectric))
+    diffuse_weight = (1.0 - metallic) * (1.0 - f_max)
     diffuse = (diffuse_weight * (1.0 - m.transmission) / PI * n_dot_l)[..., None] * c
     base = BrdfTerms(D=d, F=f, G=vis * 4.0 * n_dot_l * n_dot_v, specular=specular, diffuse=diffuse)
     transmission = np.zeros_like(specular)
@@ -498,7 +573,8 @@ def shade_layered(n, v, l, c, metallic, roughness, light_in, m: Layers, emissive
     v = np.asarray(v, dtype=np.float64)
     nc = n if nc is None else np.asarray(nc, dtype=np.float64)
     light_in = np.asarray(light_in, dtype=np.float64)
-    t = evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m, frame)
+    irid = iridescence_fresnel(m, np.clip(_dot(n, v), 0.0, 1.0), np.asarray(c, dtype=np.float64))
+    t = evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m, frame, irid)
     out = {"specular": t.base.specular * light_in, "diffuse": t.base.diffuse * light_in,
            "transmission": t.transmission * light_in, "sheen": t.sheen * light_in,
            "clearcoat": t.clearcoat[..., None] * light_in, "terms": t}
@@ -526,6 +602,8 @@ def shade_layered(n, v, l, c, metallic, roughness, light_in, m: Layers, emissive
     out["sheen_scaling"], out["coat_blend"] = scaling, blend
     out["ior"] = np.full(shape, min(m.ior - 1.0, 1.0))
     out["dielectric_f0"] = np.broadcast_to(dielectric_f0(m.ior, m.specular_color) * m.specular, shape)
+    out["iridescence"] = (np.zeros(shape) if irid is None
+                          else np.broadcast_to(irid[0] * m.iridescence, shape))
     out["volume"] = np.broadcast_to(volume_transmittance(np.asarray(m.thickness), m.attenuation_color,
                                                          m.attenuation_distance), shape)
     return out

@@ -10,7 +10,7 @@ Descriptor sets follow the report (renderer-spec section 1):
          single frame, one per view for a batch); binding 1 frame settings (view, BRDF,
          tonemap, ...)
   set 1: bindings 0-4 base colour, metallic, roughness, normal, occlusion; 5 emissive;
-         6-15 the KHR_materials_* layers' textures (MATERIAL_TEXTURES); 16 material factors
+         6-17 the KHR_materials_* layers' textures (MATERIAL_TEXTURES); 18 material factors
   set 2: lighting, one per frame: binding 0 Lighting {view position, light count, mode,
          flags, environment}; 1 the punctual lights (a storage buffer of LightRecord, the
          course's one light being lights[0]); 2-4 the environment's pre-filtered maps
@@ -219,9 +219,9 @@ SETTINGS_NORMAL_MAPPING = 1  # use normal maps
 SETTINGS_OCCLUSION = 2  # use occlusion maps
 SETTINGS_SRGB_TARGET = 4  # the colour target encodes sRGB in hardware
 
-# The material's textures, in binding order (set 1, bindings 0-15; the Material block is
-# binding 16): the table's bound slots (scene/material_table.py TEXTURES), the core's six, then
-# the KHR_materials_* layers'. 16 samplers of set 1 + 5 of set 2 + 2 of set 3 = 23 a stage
+# The material's textures, in binding order (set 1, bindings 0-17; the Material block is
+# binding 18): the table's bound slots (scene/material_table.py TEXTURES), the core's six, then
+# the KHR_materials_* layers'. 18 samplers of set 1 + 5 of set 2 + 2 of set 3 = 25 a stage
 # (lavapipe allows 32, NVIDIA far more; Vulkan's guaranteed minimum, 16, is below that).
 MATERIAL_TEXTURES = tuple(slot.name for slot in TEXTURES if slot.bound)
 MATERIAL_BINDING = len(MATERIAL_TEXTURES)  # set 1's Material block
@@ -560,6 +560,7 @@ class View(Named):
     VOLUME = 29
     AO = 30  # the frame's screen-space ambient occlusion (render/ao.py)
     ANISOTROPY = 31  # KHR_materials_anisotropy's direction and strength
+    IRIDESCENCE = 32  # KHR_materials_iridescence's thin-film Fresnel
 
 
 VIEW_HELP = {
@@ -601,6 +602,8 @@ VIEW_HELP = {
                  "/ attenuation distance), as a colour",
     View.ANISOTROPY: "anisotropy (KHR_materials_anisotropy): RG the direction in the tangent "
                       "plane (tangent, bitangent) * 0.5 + 0.5, B the strength",
+    View.IRIDESCENCE: "the thin-film Fresnel of KHR_materials_iridescence on the dielectric's "
+                       "F0 at n.v, times the iridescence factor, as RGB",
     View.AO: "screen-space ambient occlusion (GTAO, --ao): visibility of the image-based light, "
              "1 unoccluded, grey (1 where frames have none)",
 }

@@ -149,6 +149,7 @@ _SPECULAR = "KHR_materials_specular"
 _TRANSMISSION = "KHR_materials_transmission"
 _VOLUME = "KHR_materials_volume"
 _ANISOTROPY = "KHR_materials_anisotropy"
+_IRIDESCENCE = "KHR_materials_iridescence"
 
 # The texture slots, in Material's order; the bound ones' order is set 1's binding order.
 TEXTURES: tuple[TextureSlot, ...] = (
@@ -172,6 +173,10 @@ TEXTURES: tuple[TextureSlot, ...] = (
     TextureSlot("transmission", f"{_TRANSMISSION}.transmissionTexture"),  # R
     TextureSlot("thickness", f"{_VOLUME}.thicknessTexture", channel=1),
     TextureSlot("anisotropy", f"{_ANISOTROPY}.anisotropyTexture", kind="vector"),  # RG, B
+    TextureSlot("iridescence", f"{_IRIDESCENCE}.iridescenceTexture"),  # R
+    # G: the thin film's thickness between the minimum and the maximum (mix, not a product).
+    TextureSlot("iridescence_thickness", f"{_IRIDESCENCE}.iridescenceThicknessTexture",
+                channel=1),
 )
 
 # The parameters, in Material's field order. Ranges: the extensions' schemas; the wide bounds
@@ -218,6 +223,15 @@ PARAMS: tuple[MaterialParam, ...] = (
     _P("anisotropy_strength", f"{_ANISOTROPY}.anisotropyStrength", 0.0, lo=0.0, hi=1.0,
        texture="anisotropy"),
     _P("anisotropy_rotation", f"{_ANISOTROPY}.anisotropyRotation", 0.0),
+    # KHR_materials_iridescence: a thin film (ior, thickness in nanometres) over the base;
+    # without its texture the thickness is the maximum.
+    _P("iridescence_factor", f"{_IRIDESCENCE}.iridescenceFactor", 0.0, lo=0.0, hi=1.0,
+       texture="iridescence"),
+    _P("iridescence_ior", f"{_IRIDESCENCE}.iridescenceIor", 1.3, lo=1.0),
+    _P("iridescence_thickness_minimum", f"{_IRIDESCENCE}.iridescenceThicknessMinimum", 100.0,
+       lo=0.0),
+    _P("iridescence_thickness_maximum", f"{_IRIDESCENCE}.iridescenceThicknessMaximum", 400.0,
+       lo=0.0, texture="iridescence_thickness"),
 )
 
 # Material's field defaults (types.py takes them from here; Any: each field's annotation

@@ -155,6 +155,10 @@ class Material:
     clearcoat_normal_scale: float = _D["clearcoat_normal_scale"]
     anisotropy_strength: float = _D["anisotropy_strength"]  # KHR_materials_anisotropy
     anisotropy_rotation: float = _D["anisotropy_rotation"]  # radians from the tangent
+    iridescence_factor: float = _D["iridescence_factor"]  # KHR_materials_iridescence
+    iridescence_ior: float = _D["iridescence_ior"]  # the thin film's
+    iridescence_thickness_minimum: float = _D["iridescence_thickness_minimum"]  # nanometres
+    iridescence_thickness_maximum: float = _D["iridescence_thickness_maximum"]
     # The extensions' textures; `channel` picks a scalar map's component, as for metallic.
     clearcoat_texture: TextureRef | None = None  # linear; glTF: R
     clearcoat_roughness_texture: TextureRef | None = None  # linear; glTF: G
@@ -166,6 +170,8 @@ class Material:
     transmission_texture: TextureRef | None = None  # linear; glTF: R
     thickness_texture: TextureRef | None = None  # linear; glTF: G
     anisotropy_texture: TextureRef | None = None  # linear; RG direction * 2 - 1, B strength
+    iridescence_texture: TextureRef | None = None  # linear; glTF: R
+    iridescence_thickness_texture: TextureRef | None = None  # linear; glTF: G (min..max)
 
 
 # Every Material texture slot (the field is f"{slot}_texture"), and those holding colour

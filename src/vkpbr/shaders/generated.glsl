@@ -24,6 +24,10 @@ const float MATERIAL_DEFAULT_attenuation_distance = 0.0;
 const vec3 MATERIAL_DEFAULT_attenuation_color = vec3(1.0, 1.0, 1.0);
 const float MATERIAL_DEFAULT_anisotropy_strength = 0.0;
 const float MATERIAL_DEFAULT_anisotropy_rotation = 0.0;
+const float MATERIAL_DEFAULT_iridescence_factor = 0.0;
+const float MATERIAL_DEFAULT_iridescence_ior = 1.2999999523162842;
+const float MATERIAL_DEFAULT_iridescence_thickness_minimum = 100.0;
+const float MATERIAL_DEFAULT_iridescence_thickness_maximum = 400.0;
 float sheen_albedo_fit(float x, float y) {
     return (1.09927 + y * (-0.4456763 + y * (-2.387564 + y * (6.252952 + y * (-3.489524))))) + x * ((12.52236 + y * (-70.76933 + y * (154.0586 + y * (-146.4862 + y * (50.86578))))) + x * ((-54.14374 + y * (288.7846 + y * (-608.6334 + y * (560.6368 + y * (-189.5136))))) + x * ((66.47369 + y * (-367.9202 + y * (784.6235 + y * (-728.6155 + y * (247.9961))))) + x * ((-25.8705 + y * (149.7473 + y * (-326.3621 + y * (307.6033 + y * (-105.8631)))))))));
 }
@@ -59,6 +63,7 @@ const int VIEW_TRANSMISSION = 28;
 const int VIEW_VOLUME = 29;
 const int VIEW_AO = 30;
 const int VIEW_ANISOTROPY = 31;
+const int VIEW_IRIDESCENCE = 32;
 const int BRDF_GGX = 0;
 const int BRDF_BLINN_PHONG = 1;
 const int BRDF_GLTF = 2;
@@ -78,13 +83,13 @@ const int LIGHT_DIRECTIONAL = 2;
 const int VIEW_KIND_RADIANCE = 0;
 const int VIEW_KIND_COLOR = 1;
 const int VIEW_KIND_DATA = 2;
-const int VIEW_KINDS[32] = int[](0, 2, 2, 2, 0, 0, 0, 2, 2, 2, 2, 1, 2, 2, 2, 2, 2, 2, 0, 2, 2, 2, 0, 0, 2, 2, 0, 0, 0, 1, 2, 2);
+const int VIEW_KINDS[33] = int[](0, 2, 2, 2, 0, 0, 0, 2, 2, 2, 2, 1, 2, 2, 2, 2, 2, 2, 0, 2, 2, 2, 0, 0, 2, 2, 0, 0, 0, 1, 2, 2, 2);
 const uint LIGHTING_AO = 16u;
 const uint LIGHTING_BACKGROUND = 4u;
 const uint LIGHTING_IBL = 2u;
 const uint LIGHTING_SCREEN_TRANSMISSION = 8u;
 const uint LIGHTING_SHADOWS = 1u;
-const uint MATERIAL_BINDING = 16u;
+const uint MATERIAL_BINDING = 18u;
 const uint MATERIAL_BLEND = 8u;
 const uint MATERIAL_DOUBLE_SIDED = 2u;
 const uint MATERIAL_GLOSSINESS = 512u;
@@ -142,6 +147,10 @@ struct MaterialRecord {
     float attenuation_distance;
     float anisotropy_strength;
     float anisotropy_rotation;
+    float iridescence_factor;
+    float iridescence_ior;
+    float iridescence_thickness_minimum;
+    float iridescence_thickness_maximum;
     uint flags;
     vec4 base_color_uv_row0;
     vec4 base_color_uv_row1;
@@ -175,6 +184,10 @@ struct MaterialRecord {
     vec4 thickness_uv_row1;
     vec4 anisotropy_uv_row0;
     vec4 anisotropy_uv_row1;
+    vec4 iridescence_uv_row0;
+    vec4 iridescence_uv_row1;
+    vec4 iridescence_thickness_uv_row0;
+    vec4 iridescence_thickness_uv_row1;
 };
 #if !STRUCTS_ONLY
 layout(set = 0, binding = 0, std140) readonly buffer Views {
@@ -216,7 +229,9 @@ layout(set = 1, binding = 12) uniform sampler2D specular_color_map;
 layout(set = 1, binding = 13) uniform sampler2D transmission_map;
 layout(set = 1, binding = 14) uniform sampler2D thickness_map;
 layout(set = 1, binding = 15) uniform sampler2D anisotropy_map;
-layout(set = 1, binding = 16, std140) uniform Material {
+layout(set = 1, binding = 16) uniform sampler2D iridescence_map;
+layout(set = 1, binding = 17) uniform sampler2D iridescence_thickness_map;
+layout(set = 1, binding = 18, std140) uniform Material {
     vec4 base_color_factor;
     vec3 emissive_factor;
     float normal_scale;
@@ -238,6 +253,10 @@ layout(set = 1, binding = 16, std140) uniform Material {
     float attenuation_distance;
     float anisotropy_strength;
     float anisotropy_rotation;
+    float iridescence_factor;
+    float iridescence_ior;
+    float iridescence_thickness_minimum;
+    float iridescence_thickness_maximum;
     uint flags;
     vec4 base_color_uv_row0;
     vec4 base_color_uv_row1;
@@ -271,6 +290,10 @@ layout(set = 1, binding = 16, std140) uniform Material {
     vec4 thickness_uv_row1;
     vec4 anisotropy_uv_row0;
     vec4 anisotropy_uv_row1;
+    vec4 iridescence_uv_row0;
+    vec4 iridescence_uv_row1;
+    vec4 iridescence_thickness_uv_row0;
+    vec4 iridescence_thickness_uv_row1;
 } material;
 #if !COMPUTE_SHADING
 layout(set = 2, binding = 0, std140) uniform Lighting {

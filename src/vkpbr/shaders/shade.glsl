@@ -118,7 +118,27 @@ Layers material_layers(uint material_flags) {
     m.anisotropy_rotation = LAYER_FACTOR(anisotropy_rotation) + zero1;
     m.anisotropic_t = vec3(1.0, 0.0, 0.0);
     m.anisotropic_b = vec3(0.0, 1.0, 0.0);
+    m.iridescence = clamp((LAYER_FACTOR(iridescence_factor) + zero1) * LAYER_MAP(iridescence, r),
+                          0.0, 1.0);
+    m.iridescence_ior = max(LAYER_FACTOR(iridescence_ior) + zero1, 1.0);
+    m.iridescence_thickness = max(mix(LAYER_FACTOR(iridescence_thickness_minimum),
+                                      LAYER_FACTOR(iridescence_thickness_maximum),
+                                      LAYER_MAP(iridescence_thickness, r)) + zero1, 0.0);
+    m.iridescence_dielectric = vec3(0.0);
+    m.iridescence_metal = vec3(0.0);
     return m;
+}
+
+// KHR_materials_iridescence's Fresnel at n.v over the dielectric's F0 and over the base colour
+// (the metal's), once a pixel; a film of thickness 0 is none (the Sample Viewer's).
+void iridescence_fresnel(float n_dot_v, vec3 c, inout Layers m) {
+    if (!SHADE_LAYERS || m.iridescence <= 0.0) return;
+    if (m.iridescence_thickness <= 0.0) { m.iridescence = 0.0; return; }
+    m.iridescence_dielectric = eval_iridescence(1.0, m.iridescence_ior, n_dot_v,
+                                                m.iridescence_thickness,
+                                                dielectric_f0(m.ior, m.specular_color));
+    m.iridescence_metal = eval_iridescence(1.0, m.iridescence_ior, n_dot_v,
+                                           m.iridescence_thickness, c);
 }
 
 // KHR_materials_anisotropy's frame, as the glTF Sample Viewer's getAnisotropyInfo: the
@@ -237,6 +257,7 @@ vec4 shade_surface() {
     uint light_count = min(u(lighting.light_count), MAX_LIGHTS);
     Layers layers = material_layers(material_flags);
     anisotropy_frame(material_flags, t, b, n, ng, layers);
+    iridescence_fresnel(clamp(dot(n, v), 0.0, 1.0), c, layers);
     // The layers shade the glTF BRDF only (the course's BRDFs are the seed's).
     bool layered = brdf == BRDF_GLTF;
     vec3 nc = clearcoat_normal(settings_flags, material_flags, ng, t, b);
@@ -283,7 +304,8 @@ vec4 shade_surface() {
     bool refracts = layered && layers.transmission > 0.0 && (ibl_on || screen);
     if (ibl_on || refracts) {
         ibl = ibl_evaluate(n, v, ibl_reflection(n, v, roughness_ibl, layers), c, metallic,
-                           roughness_ibl, f0_dielectric, layers.specular);
+                           roughness_ibl, f0_dielectric, layers.specular, layers.iridescence,
+                           layers.iridescence_dielectric, layers.iridescence_metal);
         if (!ibl_on) { ibl.diffuse = vec3(0.0); ibl.specular = vec3(0.0); }
         bool ssao = (lighting_flags & LIGHTING_AO) != 0u;
         IblOcclusion ao = ibl_occlusion(occlusion, screen_occlusion(lighting_flags, material_flags),
@@ -368,6 +390,7 @@ vec4 shade_surface() {
                        layers.anisotropy)
                 : vec3(1.0, 0.5, 0.0);
             break;
+        case VIEW_IRIDESCENCE: value = layers.iridescence_dielectric * layers.iridescence; break;
         case VIEW_AO: value = vec3(screen_occlusion(lighting_flags, material_flags)); break;
         case VIEW_VOLUME:
             value = volume_transmittance(layers.thickness, layers.attenuation_color,
