@@ -160,3 +160,33 @@ def iridescence_spheres() -> dict:
         _iridescent("white-half", (0.9, 0.9, 0.9), 0.0, 0.3, 0.5, 1.3, 350.0),
         _iridescent("texture", (0.1, 0.1, 0.3), 0.0, 0.2, 1.0, 1.5, 800.0, texture=True),
     ], "IridescenceSpheres", images=(png_uri((0, 128, 0, 255)),))
+
+
+_DIFFUSE_TRANSMISSION = "KHR_materials_diffuse_transmission"
+
+
+def _diffuse_transmissive(name: str, color: tuple, roughness: float, factor: float,
+                          dt_color: tuple, texture: bool = False) -> dict:
+    extension = {"diffuseTransmissionFactor": factor,
+                 "diffuseTransmissionColorFactor": list(dt_color)}
+    if texture:
+        extension["diffuseTransmissionTexture"] = {"index": 0}
+    return {"name": name,
+            "pbrMetallicRoughness": {"baseColorFactor": [*color, 1.0], "metallicFactor": 0.0,
+                                     "roughnessFactor": roughness},
+            "extensions": {_DIFFUSE_TRANSMISSION: extension}}
+
+
+def diffuse_transmission_spheres() -> dict:
+    """KHR_materials_diffuse_transmission (thin-walled: no volume): factors 0.25, 0.5 and 1 on
+    white, an orange transmission colour on green, a leaf-like green, and a factor texture
+    (A 0.6). The colour texture is left out: the viewer 1.1.0 reads it as linear data."""
+    return sphere_grid([
+        _diffuse_transmissive("white-0.25", (0.9, 0.9, 0.9), 0.6, 0.25, (1.0, 1.0, 1.0)),
+        _diffuse_transmissive("white-0.5", (0.9, 0.9, 0.9), 0.6, 0.5, (1.0, 1.0, 1.0)),
+        _diffuse_transmissive("white-1", (0.9, 0.9, 0.9), 0.6, 1.0, (1.0, 1.0, 1.0)),
+        _diffuse_transmissive("orange-on-green", (0.2, 0.6, 0.2), 0.4, 0.7, (1.0, 0.5, 0.1)),
+        _diffuse_transmissive("leaf", (0.1, 0.4, 0.05), 0.5, 0.5, (0.5, 0.9, 0.2)),
+        _diffuse_transmissive("texture", (0.8, 0.3, 0.3), 0.5, 1.0, (1.0, 1.0, 1.0),
+                              texture=True),
+    ], "DiffuseTransmissionSpheres", images=(png_uri((255, 255, 255, 153)),))

@@ -414,6 +414,8 @@ SCENARIOS: tuple[Scenario, ...] = (
              make=generated_models.anisotropy_spheres),
     Scenario("IridescenceSpheres", "generated/IridescenceSpheres.gltf", (0, 0, 10.5),
              (0, 0, 0), make=generated_models.iridescence_spheres),
+    Scenario("DiffuseTransmissionSpheres", "generated/DiffuseTransmissionSpheres.gltf",
+             (0, 0, 10.5), (0, 0, 0), make=generated_models.diffuse_transmission_spheres),
     # The environment drawn behind the helmet, turned by 30 degrees in the viewer (vkpbr:
     # 240): the panorama mapping and the rotation's sense, apart from any shading. Looking
     # along +Z at the soft boxes.

@@ -50,6 +50,7 @@ THRESHOLDS_DB = {
     "SpecGlossSpheres": -21.0,
     "AnisotropySpheres": -18.5,
     "IridescenceSpheres": -21.0,
+    "DiffuseTransmissionSpheres": -20.0,
     # The viewer draws its background with a 10% magnification (cubemap.vert's w = z + 0.1).
     "EnvironmentBackground": -15.5,
 }

@@ -37,6 +37,8 @@ ALL = {
     "KHR_materials_iridescence": {"iridescenceFactor": 0.9, "iridescenceIor": 1.8,
                                   "iridescenceThicknessMinimum": 50.0,
                                   "iridescenceThicknessMaximum": 600.0},
+    "KHR_materials_diffuse_transmission": {"diffuseTransmissionFactor": 0.4,
+                                           "diffuseTransmissionColorFactor": [0.5, 0.6, 0.7]},
 }
 
 
@@ -67,6 +69,8 @@ def test_every_extension_factor_is_read(tmp_path: Path) -> None:
     assert (m.anisotropy_strength, m.anisotropy_rotation) == (0.7, 1.25)
     assert (m.iridescence_factor, m.iridescence_ior, m.iridescence_thickness_minimum,
             m.iridescence_thickness_maximum) == (0.9, 1.8, 50.0, 600.0)
+    assert (m.diffuse_transmission_factor, m.diffuse_transmission_color_factor) == (
+        0.4, (0.5, 0.6, 0.7))
 
 
 def test_defaults_are_the_core_material(tmp_path: Path) -> None:
@@ -117,6 +121,8 @@ def test_extension_textures_are_read(tmp_path: Path) -> None:
         "KHR_materials_anisotropy": {"anisotropyTexture": info(2, texCoord=1)},
         "KHR_materials_iridescence": {"iridescenceTexture": info(1),
                                       "iridescenceThicknessTexture": info(0)},
+        "KHR_materials_diffuse_transmission": {"diffuseTransmissionTexture": info(0),
+                                               "diffuseTransmissionColorTexture": info(1)},
     }}
     b = GltfBuilder()
     b.node(mesh=b.triangle())
@@ -128,14 +134,15 @@ def test_extension_textures_are_read(tmp_path: Path) -> None:
     got = {slot: (ref.image, ref.channel, ref.texcoord) for slot in (
         "clearcoat", "clearcoat_roughness", "clearcoat_normal", "sheen_color", "sheen_roughness",
         "specular", "specular_color", "transmission", "thickness", "anisotropy", "iridescence",
-        "iridescence_thickness")
+        "iridescence_thickness", "diffuse_transmission", "diffuse_transmission_color")
         for ref in (getattr(m, f"{slot}_texture"),)}
     assert got == {"clearcoat": (0, 0, 0), "clearcoat_roughness": (1, 1, 1),
                    "clearcoat_normal": (2, 0, 0), "sheen_color": (1, 0, 0),
                    "sheen_roughness": (1, 3, 0), "specular": (0, 3, 0),
                    "specular_color": (2, 0, 0), "transmission": (0, 0, 0),
                    "thickness": (0, 1, 0), "anisotropy": (2, 0, 1), "iridescence": (1, 0, 0),
-                   "iridescence_thickness": (0, 1, 0)}
+                   "iridescence_thickness": (0, 1, 0), "diffuse_transmission": (0, 3, 0),
+                   "diffuse_transmission_color": (1, 0, 0)}
     assert m.clearcoat_normal_scale == 0.5 and m.transmission_texture.scale == (2, 3)
     out = tmp_path / "t.vkpbr"  # and through the baked format
     from vkpbr.bake.bake import bake_scene
@@ -309,6 +316,8 @@ _KEYS = {"KHR_materials_ior": ["ior"], "KHR_materials_specular": ["specularFacto
          "KHR_materials_iridescence": ["iridescenceFactor", "iridescenceIor",
                                        "iridescenceThicknessMaximum",
                                        "iridescenceThicknessTexture"],
+         "KHR_materials_diffuse_transmission": ["diffuseTransmissionFactor",
+                                                "diffuseTransmissionColorFactor"],
          "KHR_materials_pbrSpecularGlossiness": ["diffuseFactor", "specularFactor",
                                                  "glossinessFactor", "diffuseTexture",
                                                  "specularGlossinessTexture"]}

@@ -70,6 +70,9 @@ SPEC: dict[str, tuple[object, st.SearchStrategy]] = {
     "KHR_materials_iridescence.iridescenceIor": (1.3, st.floats(1.0, 3.0)),  # minimum 1
     "KHR_materials_iridescence.iridescenceThicknessMinimum": (100.0, st.floats(0.0, 1000.0)),
     "KHR_materials_iridescence.iridescenceThicknessMaximum": (400.0, st.floats(0.0, 1000.0)),
+    "KHR_materials_diffuse_transmission.diffuseTransmissionFactor": (0.0, _UNIT),
+    "KHR_materials_diffuse_transmission.diffuseTransmissionColorFactor": ([1.0, 1.0, 1.0],
+                                                                          _rgb()),
 }
 # vkpbr's encodings of two spec values that a float32 uniform cannot hold as such.
 IOR_ZERO = 1e6  # ior 0: F0 -> 1 (((1e6 - 1) / (1e6 + 1))^2)

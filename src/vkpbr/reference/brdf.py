@@ -444,6 +444,8 @@ class Layers:
     iridescence: float = 0.0  # factor, times the texture's R
     iridescence_ior: float = 1.3
     iridescence_thickness: float = 400.0  # nm: mix(minimum, maximum, texel G), else maximum
+    diffuse_transmission: float = 0.0
+    diffuse_transmission_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
 
     @classmethod
     def of(cls, material: object, model_scale: float = 1.0) -> Layers:
@@ -466,7 +468,9 @@ class Layers:
             anisotropy_rotation=float(m.anisotropy_rotation),
             iridescence=float(np.clip(m.iridescence_factor, 0.0, 1.0)),
             iridescence_ior=max(float(m.iridescence_ior), 1.0),
-            iridescence_thickness=max(float(m.iridescence_thickness_maximum), 0.0))
+            iridescence_thickness=max(float(m.iridescence_thickness_maximum), 0.0),
+            diffuse_transmission=float(np.clip(m.diffuse_transmission_factor, 0.0, 1.0)),
+            diffuse_transmission_color=tuple(np.clip(m.diffuse_transmission_color_factor, 0, 1)))
 
 
 @dataclass
@@ -474,6 +478,7 @@ class LayeredTerms:
     base: BrdfTerms  # specular and diffuse include n.l here (brdf.glsl LayeredTerms)
     transmission: np.ndarray  # (..., 3)
     sheen: np.ndarray  # (..., 3)
+    diffuse_transmission: np.ndarray  # (..., 3), also in base.diffuse
     clearcoat: np.ndarray  # (...)
 
 
@@ -511,6 +516,17 @@ def evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m: Layers,  # noq
     specular = f * (d * vis * n_dot_l)[..., None]
     diffuse_weight = (1.0 - metallic) * (1.0 - f_max)
     diffuse = (diffuse_weight * (1.0 - m.transmission) / PI * n_dot_l)[..., None] * c
+    diffuse_transmission = np.zeros_like(diffuse)
+    if m.diffuse_transmission > 0.0:
+        # KHR_materials_diffuse_transmission: mix(Lambert of c, Lambert of the transmission
+        # colour about -n, factor), the volume's transmittance on the latter.
+        btdf = (np.asarray(m.diffuse_transmission_color) / PI
+                * np.maximum(-_dot(n, l), 0.0)[..., None]
+                * volume_transmittance(np.asarray(m.thickness), m.attenuation_color,
+                                       m.attenuation_distance))
+        diffuse_transmission = ((diffuse_weight * (1.0 - m.transmission)
+                                 * m.diffuse_transmission)[..., None] * btdf)
+        diffuse = diffuse * (1.0 - m.diffuse_transmission) + diffuse_transmission
     base = BrdfTerms(D=d, F=f, G=vis * 4.0 * n_dot_l * n_dot_v, specular=specular, diffuse=diffuse)
     transmission = np.zeros_like(specular)
     if m.transmission > 0.0:
@@ -533,7 +549,8 @@ def evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m: Layers,  # noq
         nc_dot_l = np.maximum(_dot(nc, l), 0.0)
         clearcoat = (d_ggx(np.maximum(_dot(nc, h), 0.0), a_c)
                      * v_smith_ggx_correlated(nc_dot_l, np.maximum(_dot(nc, v), 0.0), a_c) * nc_dot_l)
-    return LayeredTerms(base=base, transmission=transmission, sheen=sheen, clearcoat=clearcoat)
+    return LayeredTerms(base=base, transmission=transmission, sheen=sheen, clearcoat=clearcoat,
+                        diffuse_transmission=diffuse_transmission)
 
 
 def transmission_exit(p, n, v, m: Layers) -> np.ndarray:  # noqa: ANN001
@@ -576,6 +593,7 @@ def shade_layered(n, v, l, c, metallic, roughness, light_in, m: Layers, emissive
     irid = iridescence_fresnel(m, np.clip(_dot(n, v), 0.0, 1.0), np.asarray(c, dtype=np.float64))
     t = evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m, frame, irid)
     out = {"specular": t.base.specular * light_in, "diffuse": t.base.diffuse * light_in,
+           "diffuse_transmission": t.diffuse_transmission * light_in,
            "transmission": t.transmission * light_in, "sheen": t.sheen * light_in,
            "clearcoat": t.clearcoat[..., None] * light_in, "terms": t}
     n_dot_v = np.clip(_dot(n, v), 1e-4, 1.0)

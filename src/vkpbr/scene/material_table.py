@@ -150,6 +150,7 @@ _TRANSMISSION = "KHR_materials_transmission"
 _VOLUME = "KHR_materials_volume"
 _ANISOTROPY = "KHR_materials_anisotropy"
 _IRIDESCENCE = "KHR_materials_iridescence"
+_DIFFUSE_TRANSMISSION = "KHR_materials_diffuse_transmission"
 
 # The texture slots, in Material's order; the bound ones' order is set 1's binding order.
 TEXTURES: tuple[TextureSlot, ...] = (
@@ -177,6 +178,10 @@ TEXTURES: tuple[TextureSlot, ...] = (
     # G: the thin film's thickness between the minimum and the maximum (mix, not a product).
     TextureSlot("iridescence_thickness", f"{_IRIDESCENCE}.iridescenceThicknessTexture",
                 channel=1),
+    TextureSlot("diffuse_transmission", f"{_DIFFUSE_TRANSMISSION}.diffuseTransmissionTexture",
+                channel=3),
+    TextureSlot("diffuse_transmission_color",
+                f"{_DIFFUSE_TRANSMISSION}.diffuseTransmissionColorTexture", kind="color"),
 )
 
 # The parameters, in Material's field order. Ranges: the extensions' schemas; the wide bounds
@@ -232,6 +237,13 @@ PARAMS: tuple[MaterialParam, ...] = (
        lo=0.0),
     _P("iridescence_thickness_maximum", f"{_IRIDESCENCE}.iridescenceThicknessMaximum", 400.0,
        lo=0.0, texture="iridescence_thickness"),
+    # KHR_materials_diffuse_transmission: the share of the diffuse lobe that passes through
+    # the surface as a Lambertian lobe on the other side, and the colour it takes.
+    _P("diffuse_transmission_factor", f"{_DIFFUSE_TRANSMISSION}.diffuseTransmissionFactor", 0.0,
+       lo=0.0, hi=1.0, texture="diffuse_transmission"),
+    _P("diffuse_transmission_color_factor",
+       f"{_DIFFUSE_TRANSMISSION}.diffuseTransmissionColorFactor", (1.0, 1.0, 1.0), lo=0.0,
+       hi=1.0, texture="diffuse_transmission_color"),
 )
 
 # Material's field defaults (types.py takes them from here; Any: each field's annotation

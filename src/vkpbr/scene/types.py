@@ -159,6 +159,9 @@ class Material:
     iridescence_ior: float = _D["iridescence_ior"]  # the thin film's
     iridescence_thickness_minimum: float = _D["iridescence_thickness_minimum"]  # nanometres
     iridescence_thickness_maximum: float = _D["iridescence_thickness_maximum"]
+    # KHR_materials_diffuse_transmission
+    diffuse_transmission_factor: float = _D["diffuse_transmission_factor"]
+    diffuse_transmission_color_factor: tuple[float, float, float] = _D["diffuse_transmission_color_factor"]
     # The extensions' textures; `channel` picks a scalar map's component, as for metallic.
     clearcoat_texture: TextureRef | None = None  # linear; glTF: R
     clearcoat_roughness_texture: TextureRef | None = None  # linear; glTF: G
@@ -172,6 +175,8 @@ class Material:
     anisotropy_texture: TextureRef | None = None  # linear; RG direction * 2 - 1, B strength
     iridescence_texture: TextureRef | None = None  # linear; glTF: R
     iridescence_thickness_texture: TextureRef | None = None  # linear; glTF: G (min..max)
+    diffuse_transmission_texture: TextureRef | None = None  # linear; glTF: A
+    diffuse_transmission_color_texture: TextureRef | None = None  # sRGB; RGB
 
 
 # Every Material texture slot (the field is f"{slot}_texture"), and those holding colour

@@ -252,12 +252,15 @@ struct Layers {
     float iridescence_thickness;  // nm
     vec3 iridescence_dielectric;  // the film's Fresnel over the dielectric's F0 at n.v
     vec3 iridescence_metal;       // and over the base colour (shade.glsl)
+    float diffuse_transmission;   // the share of the diffuse lobe passing through
+    vec3 diffuse_transmission_color;
 };
 
 // One punctual light's layered glTF BRDF (values before the light's radiance and shadow).
 struct LayeredTerms {
     BrdfTerms base;    // D, F (the mixed specular Fresnel), G; specular and diffuse * n.l
     vec3 transmission; // the transmitted lobe (no n.l), weighted like the diffuse
+    vec3 diffuse_transmission;  // the diffuse lobe's share through the surface (in base.diffuse)
     vec3 sheen;        // sheen colour D_charlie V_charlie n.l
     float clearcoat;   // the coat's D V (n_c.l): its Fresnel is in the blend (shade.glsl)
 };
@@ -301,6 +304,17 @@ LayeredTerms evaluate_layered_brdf(vec3 n, vec3 nc, vec3 v, vec3 l, vec3 c, floa
     t.base.specular = t.base.F * (t.base.D * vis) * n_dot_l;
     float diffuse_weight = (1.0 - metallic) * (1.0 - f_max);
     t.base.diffuse = diffuse_weight * (1.0 - m.transmission) * c / PI * n_dot_l;
+    t.diffuse_transmission = vec3(0.0);
+    if (m.diffuse_transmission > 0.0) {
+        // KHR_materials_diffuse_transmission: mix(Lambert of c on this side, Lambert of the
+        // transmission colour on the other, factor), the volume's transmittance on the latter
+        // (the Sample Viewer's diffuse_btdf).
+        vec3 btdf = m.diffuse_transmission_color / PI * max(-dot(n, l), 0.0)
+            * volume_transmittance(m.thickness, m.attenuation_color, m.attenuation_distance);
+        t.diffuse_transmission = diffuse_weight * (1.0 - m.transmission) * m.diffuse_transmission
+            * btdf;
+        t.base.diffuse = t.base.diffuse * (1.0 - m.diffuse_transmission) + t.diffuse_transmission;
+    }
     t.transmission = vec3(0.0);
     if (m.transmission > 0.0) {
         vec3 l_mirror = normalize(l - 2.0 * n * dot(l, n));

@@ -28,6 +28,8 @@ const float MATERIAL_DEFAULT_iridescence_factor = 0.0;
 const float MATERIAL_DEFAULT_iridescence_ior = 1.2999999523162842;
 const float MATERIAL_DEFAULT_iridescence_thickness_minimum = 100.0;
 const float MATERIAL_DEFAULT_iridescence_thickness_maximum = 400.0;
+const float MATERIAL_DEFAULT_diffuse_transmission_factor = 0.0;
+const vec3 MATERIAL_DEFAULT_diffuse_transmission_color_factor = vec3(1.0, 1.0, 1.0);
 float sheen_albedo_fit(float x, float y) {
     return (1.09927 + y * (-0.4456763 + y * (-2.387564 + y * (6.252952 + y * (-3.489524))))) + x * ((12.52236 + y * (-70.76933 + y * (154.0586 + y * (-146.4862 + y * (50.86578))))) + x * ((-54.14374 + y * (288.7846 + y * (-608.6334 + y * (560.6368 + y * (-189.5136))))) + x * ((66.47369 + y * (-367.9202 + y * (784.6235 + y * (-728.6155 + y * (247.9961))))) + x * ((-25.8705 + y * (149.7473 + y * (-326.3621 + y * (307.6033 + y * (-105.8631)))))))));
 }
@@ -64,6 +66,7 @@ const int VIEW_VOLUME = 29;
 const int VIEW_AO = 30;
 const int VIEW_ANISOTROPY = 31;
 const int VIEW_IRIDESCENCE = 32;
+const int VIEW_DIFFUSE_TRANSMISSION = 33;
 const int BRDF_GGX = 0;
 const int BRDF_BLINN_PHONG = 1;
 const int BRDF_GLTF = 2;
@@ -83,13 +86,13 @@ const int LIGHT_DIRECTIONAL = 2;
 const int VIEW_KIND_RADIANCE = 0;
 const int VIEW_KIND_COLOR = 1;
 const int VIEW_KIND_DATA = 2;
-const int VIEW_KINDS[33] = int[](0, 2, 2, 2, 0, 0, 0, 2, 2, 2, 2, 1, 2, 2, 2, 2, 2, 2, 0, 2, 2, 2, 0, 0, 2, 2, 0, 0, 0, 1, 2, 2, 2);
+const int VIEW_KINDS[34] = int[](0, 2, 2, 2, 0, 0, 0, 2, 2, 2, 2, 1, 2, 2, 2, 2, 2, 2, 0, 2, 2, 2, 0, 0, 2, 2, 0, 0, 0, 1, 2, 2, 2, 0);
 const uint LIGHTING_AO = 16u;
 const uint LIGHTING_BACKGROUND = 4u;
 const uint LIGHTING_IBL = 2u;
 const uint LIGHTING_SCREEN_TRANSMISSION = 8u;
 const uint LIGHTING_SHADOWS = 1u;
-const uint MATERIAL_BINDING = 18u;
+const uint MATERIAL_BINDING = 20u;
 const uint MATERIAL_BLEND = 8u;
 const uint MATERIAL_DOUBLE_SIDED = 2u;
 const uint MATERIAL_GLOSSINESS = 512u;
@@ -135,6 +138,7 @@ struct MaterialRecord {
     float sheen_roughness_factor;
     vec3 attenuation_color;
     float clearcoat_normal_scale;
+    vec3 diffuse_transmission_color_factor;
     float metallic_factor;
     float roughness_factor;
     float occlusion_strength;
@@ -151,6 +155,7 @@ struct MaterialRecord {
     float iridescence_ior;
     float iridescence_thickness_minimum;
     float iridescence_thickness_maximum;
+    float diffuse_transmission_factor;
     uint flags;
     vec4 base_color_uv_row0;
     vec4 base_color_uv_row1;
@@ -188,6 +193,10 @@ struct MaterialRecord {
     vec4 iridescence_uv_row1;
     vec4 iridescence_thickness_uv_row0;
     vec4 iridescence_thickness_uv_row1;
+    vec4 diffuse_transmission_uv_row0;
+    vec4 diffuse_transmission_uv_row1;
+    vec4 diffuse_transmission_color_uv_row0;
+    vec4 diffuse_transmission_color_uv_row1;
 };
 #if !STRUCTS_ONLY
 layout(set = 0, binding = 0, std140) readonly buffer Views {
@@ -231,7 +240,9 @@ layout(set = 1, binding = 14) uniform sampler2D thickness_map;
 layout(set = 1, binding = 15) uniform sampler2D anisotropy_map;
 layout(set = 1, binding = 16) uniform sampler2D iridescence_map;
 layout(set = 1, binding = 17) uniform sampler2D iridescence_thickness_map;
-layout(set = 1, binding = 18, std140) uniform Material {
+layout(set = 1, binding = 18) uniform sampler2D diffuse_transmission_map;
+layout(set = 1, binding = 19) uniform sampler2D diffuse_transmission_color_map;
+layout(set = 1, binding = 20, std140) uniform Material {
     vec4 base_color_factor;
     vec3 emissive_factor;
     float normal_scale;
@@ -241,6 +252,7 @@ layout(set = 1, binding = 18, std140) uniform Material {
     float sheen_roughness_factor;
     vec3 attenuation_color;
     float clearcoat_normal_scale;
+    vec3 diffuse_transmission_color_factor;
     float metallic_factor;
     float roughness_factor;
     float occlusion_strength;
@@ -257,6 +269,7 @@ layout(set = 1, binding = 18, std140) uniform Material {
     float iridescence_ior;
     float iridescence_thickness_minimum;
     float iridescence_thickness_maximum;
+    float diffuse_transmission_factor;
     uint flags;
     vec4 base_color_uv_row0;
     vec4 base_color_uv_row1;
@@ -294,6 +307,10 @@ layout(set = 1, binding = 18, std140) uniform Material {
     vec4 iridescence_uv_row1;
     vec4 iridescence_thickness_uv_row0;
     vec4 iridescence_thickness_uv_row1;
+    vec4 diffuse_transmission_uv_row0;
+    vec4 diffuse_transmission_uv_row1;
+    vec4 diffuse_transmission_color_uv_row0;
+    vec4 diffuse_transmission_color_uv_row1;
 } material;
 #if !COMPUTE_SHADING
 layout(set = 2, binding = 0, std140) uniform Lighting {

@@ -16,6 +16,7 @@ struct IblTerms {
     vec3 specular;
     vec3 diffuse_weight;  // k_d: (1 - metallic) c times what the dielectric's specular lobe
                           // leaves its diffuse (and transmission)
+    vec3 diffuse_leaves;  // k_d without c: (1 - metallic) times what that lobe leaves
 };
 
 // One specular lobe's split-sum weights (Fdez-Aguera listing 3; the Sample Renderer's
@@ -81,6 +82,7 @@ IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 r, vec3 c, float metallic, float roug
     t.specular = (fss_ess * radiance + fms_ems * irradiance) * lighting.env_intensity;
     t.diffuse = k_d * irradiance * lighting.env_intensity;
     t.diffuse_weight = k_d;
+    t.diffuse_leaves = (1.0 - metallic) * leaves;
     return t;
 }
 
@@ -92,6 +94,13 @@ IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 c, float metallic, float roughness,
 
 IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 c, float metallic, float roughness) {
     return ibl_evaluate(n, v, c, metallic, roughness, vec3(0.04), 1.0);
+}
+
+// The environment's irradiance about unit direction d (cosine-weighted mean radiance), scaled:
+// KHR_materials_diffuse_transmission's light from behind (about -n).
+vec3 ibl_irradiance(vec3 d) {
+    return textureLod(env_irradiance, env_rotate(d, lighting.env_rotation.xy), 0.0).rgb
+        * lighting.env_intensity;
 }
 
 // The pre-filtered environment's radiance along unit direction d at perceptual roughness

@@ -126,6 +126,11 @@ Layers material_layers(uint material_flags) {
                                       LAYER_MAP(iridescence_thickness, r)) + zero1, 0.0);
     m.iridescence_dielectric = vec3(0.0);
     m.iridescence_metal = vec3(0.0);
+    m.diffuse_transmission = clamp((LAYER_FACTOR(diffuse_transmission_factor) + zero1)
+                                   * LAYER_MAP(diffuse_transmission, r), 0.0, 1.0);
+    m.diffuse_transmission_color = clamp(LAYER_FACTOR(diffuse_transmission_color_factor)
+                                         * LAYER_MAP(diffuse_transmission_color, rgb) + zero,
+                                         0.0, 1.0);
     return m;
 }
 
@@ -262,6 +267,7 @@ vec4 shade_surface() {
     bool layered = brdf == BRDF_GLTF;
     vec3 nc = clearcoat_normal(settings_flags, material_flags, ng, t, b);
     vec3 specular = vec3(0.0), diffuse = vec3(0.0), transmission = vec3(0.0), sheen = vec3(0.0);
+    vec3 diffuse_transmission = vec3(0.0);
     vec3 clearcoat = vec3(0.0);
     BrdfTerms first_terms = BrdfTerms(0.0, vec3(0.0), 0.0, vec3(0.0), vec3(0.0));
     vec3 first_l = ng;
@@ -283,6 +289,7 @@ vec4 shade_surface() {
             specular += lt.base.specular * incident;
             diffuse += lt.base.diffuse * incident;
             transmission += lt.transmission * incident;
+            diffuse_transmission += lt.diffuse_transmission * incident;
             sheen += lt.sheen * incident;
             clearcoat += vec3(lt.clearcoat) * incident;
         } else {
@@ -294,7 +301,7 @@ vec4 shade_surface() {
         }
     }
     vec3 ambient = lighting.ambient_color.rgb * c * occlusion;
-    IblTerms ibl = IblTerms(vec3(0.0), vec3(0.0), vec3(0.0));
+    IblTerms ibl = IblTerms(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
     vec3 f0_dielectric = dielectric_f0(layers.ior, layers.specular_color);
     float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
     bool ibl_on = (lighting_flags & LIGHTING_IBL) != 0u;
@@ -307,6 +314,17 @@ vec4 shade_surface() {
                            roughness_ibl, f0_dielectric, layers.specular, layers.iridescence,
                            layers.iridescence_dielectric, layers.iridescence_metal);
         if (!ibl_on) { ibl.diffuse = vec3(0.0); ibl.specular = vec3(0.0); }
+        if (layered && ibl_on && layers.diffuse_transmission > 0.0) {
+            // KHR_materials_diffuse_transmission: the irradiance from behind (about -n) in the
+            // colour of the transmission, mixed with the front's by the factor.
+            vec3 behind = ibl.diffuse_leaves * layers.diffuse_transmission_color
+                * ibl_irradiance(-n) * volume_transmittance(layers.thickness,
+                                                            layers.attenuation_color,
+                                                            layers.attenuation_distance);
+            ibl.diffuse = mix(ibl.diffuse, behind, layers.diffuse_transmission);
+            // (The view's share, before occlusion.)
+            diffuse_transmission += behind * layers.diffuse_transmission * (1.0 - layers.transmission);
+        }
         bool ssao = (lighting_flags & LIGHTING_AO) != 0u;
         IblOcclusion ao = ibl_occlusion(occlusion, screen_occlusion(lighting_flags, material_flags),
                                         ssao, c * (1.0 - metallic),
@@ -391,6 +409,7 @@ vec4 shade_surface() {
                 : vec3(1.0, 0.5, 0.0);
             break;
         case VIEW_IRIDESCENCE: value = layers.iridescence_dielectric * layers.iridescence; break;
+        case VIEW_DIFFUSE_TRANSMISSION: value = diffuse_transmission; break;
         case VIEW_AO: value = vec3(screen_occlusion(lighting_flags, material_flags)); break;
         case VIEW_VOLUME:
             value = volume_transmittance(layers.thickness, layers.attenuation_color,
