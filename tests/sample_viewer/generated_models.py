@@ -190,3 +190,80 @@ def diffuse_transmission_spheres() -> dict:
         _diffuse_transmissive("texture", (0.8, 0.3, 0.3), 0.5, 1.0, (1.0, 1.0, 1.0),
                               texture=True),
     ], "DiffuseTransmissionSpheres", images=(png_uri((255, 255, 255, 153)),))
+
+
+def _stripes_png() -> str:
+    """A 64 x 8 texture of vertical stripes (red, green, blue, white, black, ...): dispersion
+    splits its edges by colour."""
+    from PIL import Image
+
+    colors = np.array([(230, 40, 40), (40, 200, 60), (50, 70, 230), (240, 240, 240), (20, 20, 20),
+                       (240, 200, 40), (40, 200, 220), (200, 60, 200)], np.uint8)
+    row = np.repeat(colors, 8, axis=0)  # 64 texels, 8 a stripe
+    pixels = np.broadcast_to(row[None], (8, 64, 3)).copy()
+    out = io.BytesIO()
+    Image.fromarray(pixels).save(out, "PNG")
+    return "data:image/png;base64," + base64.b64encode(out.getvalue()).decode()
+
+
+def _add_backdrop(doc: dict, z: float, half: float, material: int) -> dict:
+    """A square (2 half wide) at depth z facing +Z, UV 0..1 repeated 4 times across, as a
+    second buffer and a node of the first scene."""
+    pos = np.array([[-half, -half, z], [half, -half, z], [half, half, z], [-half, half, z]],
+                   np.float32)
+    nrm = np.tile(np.array([0.0, 0.0, 1.0], np.float32), (4, 1))
+    uv = np.array([[0, 1], [4, 1], [4, 0], [0, 0]], np.float32)
+    idx = np.array([0, 1, 2, 0, 2, 3], np.uint32)
+    parts = (pos, nrm, uv, idx)
+    offsets = np.cumsum([0, *(p.nbytes for p in parts)])
+    blob = b"".join(p.tobytes() for p in parts)
+    buffer = len(doc["buffers"])
+    doc["buffers"].append({"byteLength": len(blob), "uri": "data:application/octet-stream;base64,"
+                           + base64.b64encode(blob).decode()})
+    view0, acc0 = len(doc["bufferViews"]), len(doc["accessors"])
+    doc["bufferViews"] += [{"buffer": buffer, "byteOffset": int(o), "byteLength": p.nbytes}
+                           for o, p in zip(offsets, parts, strict=False)]
+    doc["accessors"] += [
+        {"bufferView": view0, "componentType": 5126, "count": 4, "type": "VEC3",
+         "min": pos.min(0).tolist(), "max": pos.max(0).tolist()},
+        {"bufferView": view0 + 1, "componentType": 5126, "count": 4, "type": "VEC3"},
+        {"bufferView": view0 + 2, "componentType": 5126, "count": 4, "type": "VEC2"},
+        {"bufferView": view0 + 3, "componentType": 5125, "count": 6, "type": "SCALAR"}]
+    doc["meshes"].append({"name": "backdrop", "primitives": [{"attributes": {
+        "POSITION": acc0, "NORMAL": acc0 + 1, "TEXCOORD_0": acc0 + 2}, "indices": acc0 + 3,
+        "material": material}]})
+    doc["nodes"].append({"mesh": len(doc["meshes"]) - 1})
+    doc["scenes"][0]["nodes"].append(len(doc["nodes"]) - 1)
+    return doc
+
+
+def _glass(name: str, ior: float, dispersion: float, roughness: float = 0.0,
+           attenuation: tuple = (1.0, 1.0, 1.0)) -> dict:
+    extensions = {"KHR_materials_transmission": {"transmissionFactor": 1.0},
+                  "KHR_materials_volume": {"thicknessFactor": 2.0, "attenuationDistance": 2.0,
+                                           "attenuationColor": list(attenuation)},
+                  "KHR_materials_ior": {"ior": ior}}
+    if dispersion > 0.0:
+        extensions["KHR_materials_dispersion"] = {"dispersion": dispersion}
+    return {"name": name, "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0],
+                                                    "metallicFactor": 0.0,
+                                                    "roughnessFactor": roughness},
+            "extensions": extensions}
+
+
+def dispersion_spheres() -> dict:
+    """KHR_materials_dispersion: glass spheres (a volume 2 thick, the diameter) in front of a
+    striped backdrop that fills the view, so that both renderers' copies of the opaque scene
+    hold the backdrop behind them (the viewer draws no environment into its copy when the
+    background is off, vkpbr does): dispersion 0, 1 and 5 at ior 1.5, 3 at ior 1.8, a tinted
+    one and a rough one."""
+    materials = [
+        _glass("d0", 1.5, 0.0), _glass("d1", 1.5, 1.0), _glass("d5", 1.5, 5.0),
+        _glass("d3-ior1.8", 1.8, 3.0), _glass("tinted", 1.5, 3.0, attenuation=(0.9, 0.7, 0.5)),
+        _glass("rough", 1.5, 3.0, roughness=0.3),
+        {"name": "stripes", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
+                                                      "metallicFactor": 0.0, "roughnessFactor": 1.0}},
+    ]
+    doc = sphere_grid(materials[:6], "DispersionSpheres", images=(_stripes_png(),))
+    doc["materials"] = materials
+    return _add_backdrop(doc, -3.0, 12.0, 6)

@@ -416,6 +416,8 @@ SCENARIOS: tuple[Scenario, ...] = (
              (0, 0, 0), make=generated_models.iridescence_spheres),
     Scenario("DiffuseTransmissionSpheres", "generated/DiffuseTransmissionSpheres.gltf",
              (0, 0, 10.5), (0, 0, 0), make=generated_models.diffuse_transmission_spheres),
+    Scenario("DispersionSpheres", "generated/DispersionSpheres.gltf", (0, 0, 10.5), (0, 0, 0),
+             make=generated_models.dispersion_spheres),
     # The environment drawn behind the helmet, turned by 30 degrees in the viewer (vkpbr:
     # 240): the panorama mapping and the rotation's sense, apart from any shading. Looking
     # along +Z at the soft boxes.

@@ -39,6 +39,7 @@ ALL = {
                                   "iridescenceThicknessMaximum": 600.0},
     "KHR_materials_diffuse_transmission": {"diffuseTransmissionFactor": 0.4,
                                            "diffuseTransmissionColorFactor": [0.5, 0.6, 0.7]},
+    "KHR_materials_dispersion": {"dispersion": 0.33},
 }
 
 
@@ -71,6 +72,7 @@ def test_every_extension_factor_is_read(tmp_path: Path) -> None:
             m.iridescence_thickness_maximum) == (0.9, 1.8, 50.0, 600.0)
     assert (m.diffuse_transmission_factor, m.diffuse_transmission_color_factor) == (
         0.4, (0.5, 0.6, 0.7))
+    assert m.dispersion == 0.33
 
 
 def test_defaults_are_the_core_material(tmp_path: Path) -> None:
@@ -96,6 +98,7 @@ def test_ior_zero_is_the_schema_special_value(tmp_path: Path) -> None:
     ("KHR_materials_specular", {"specularFactor": "x"}, "specularFactor"),
     ("KHR_materials_anisotropy", {"anisotropyStrength": 1.5}, "anisotropyStrength 1.5 outside 0..1"),
     ("KHR_materials_iridescence", {"iridescenceIor": 0.5}, "iridescenceIor 0.5 outside 1..1e+06"),
+    ("KHR_materials_dispersion", {"dispersion": -1}, "dispersion -1.0 outside 0..1e+06"),
 ])
 def test_bad_factor_is_one_line_error(tmp_path: Path, name: str, body: dict, words: str) -> None:
     with pytest.raises(SceneError) as info:
@@ -318,6 +321,7 @@ _KEYS = {"KHR_materials_ior": ["ior"], "KHR_materials_specular": ["specularFacto
                                        "iridescenceThicknessTexture"],
          "KHR_materials_diffuse_transmission": ["diffuseTransmissionFactor",
                                                 "diffuseTransmissionColorFactor"],
+         "KHR_materials_dispersion": ["dispersion"],
          "KHR_materials_pbrSpecularGlossiness": ["diffuseFactor", "specularFactor",
                                                  "glossinessFactor", "diffuseTexture",
                                                  "specularGlossinessTexture"]}

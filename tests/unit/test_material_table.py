@@ -73,6 +73,7 @@ SPEC: dict[str, tuple[object, st.SearchStrategy]] = {
     "KHR_materials_diffuse_transmission.diffuseTransmissionFactor": (0.0, _UNIT),
     "KHR_materials_diffuse_transmission.diffuseTransmissionColorFactor": ([1.0, 1.0, 1.0],
                                                                           _rgb()),
+    "KHR_materials_dispersion.dispersion": (0.0, st.floats(0.0, 100.0)),  # minimum 0
 }
 # vkpbr's encodings of two spec values that a float32 uniform cannot hold as such.
 IOR_ZERO = 1e6  # ior 0: F0 -> 1 (((1e6 - 1) / (1e6 + 1))^2)

@@ -61,6 +61,7 @@ __all__ = [
     "ibl_reflection",
     "eval_iridescence",
     "iridescence_fresnel",
+    "dispersion_iors",
     "AMBIENT",
     "MIN_ROUGHNESS",
     "MIN_SHEEN_ROUGHNESS",
@@ -446,6 +447,7 @@ class Layers:
     iridescence_thickness: float = 400.0  # nm: mix(minimum, maximum, texel G), else maximum
     diffuse_transmission: float = 0.0
     diffuse_transmission_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    dispersion: float = 0.0
 
     @classmethod
     def of(cls, material: object, model_scale: float = 1.0) -> Layers:
@@ -470,7 +472,8 @@ class Layers:
             iridescence_ior=max(float(m.iridescence_ior), 1.0),
             iridescence_thickness=max(float(m.iridescence_thickness_maximum), 0.0),
             diffuse_transmission=float(np.clip(m.diffuse_transmission_factor, 0.0, 1.0)),
-            diffuse_transmission_color=tuple(np.clip(m.diffuse_transmission_color_factor, 0, 1)))
+            diffuse_transmission_color=tuple(np.clip(m.diffuse_transmission_color_factor, 0, 1)),
+            dispersion=max(float(m.dispersion), 0.0))
 
 
 @dataclass
@@ -551,6 +554,16 @@ def evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m: Layers,  # noq
                      * v_smith_ggx_correlated(nc_dot_l, np.maximum(_dot(nc, v), 0.0), a_c) * nc_dot_l)
     return LayeredTerms(base=base, transmission=transmission, sheen=sheen, clearcoat=clearcoat,
                         diffuse_transmission=diffuse_transmission)
+
+
+def dispersion_iors(m: Layers) -> tuple[float, float, float]:
+    """The index each channel refracts at (shade.glsl refracted_behind): KHR_materials_
+    dispersion's spread s = (ior - 1) 0.025 dispersion, red ior - s, green ior, blue ior + s
+    (at least 1), in a volume (thickness > 0); the material's ior for all three otherwise."""
+    if m.dispersion <= 0.0 or m.thickness <= 0.0:
+        return (m.ior, m.ior, m.ior)
+    s = (m.ior - 1.0) * 0.025 * m.dispersion
+    return (max(m.ior - s, 1.0), m.ior, m.ior + s)
 
 
 def transmission_exit(p, n, v, m: Layers) -> np.ndarray:  # noqa: ANN001

@@ -151,6 +151,7 @@ _VOLUME = "KHR_materials_volume"
 _ANISOTROPY = "KHR_materials_anisotropy"
 _IRIDESCENCE = "KHR_materials_iridescence"
 _DIFFUSE_TRANSMISSION = "KHR_materials_diffuse_transmission"
+_DISPERSION = "KHR_materials_dispersion"
 
 # The texture slots, in Material's order; the bound ones' order is set 1's binding order.
 TEXTURES: tuple[TextureSlot, ...] = (
@@ -244,6 +245,9 @@ PARAMS: tuple[MaterialParam, ...] = (
     _P("diffuse_transmission_color_factor",
        f"{_DIFFUSE_TRANSMISSION}.diffuseTransmissionColorFactor", (1.0, 1.0, 1.0), lo=0.0,
        hi=1.0, texture="diffuse_transmission_color"),
+    # KHR_materials_dispersion: 20 / Abbe number; spreads a volume's ior over the three
+    # channels (the Sample Viewer's (ior - 1) x 0.025 x dispersion either side of green).
+    _P("dispersion", f"{_DISPERSION}.dispersion", 0.0, lo=0.0),
 )
 
 # Material's field defaults (types.py takes them from here; Any: each field's annotation

@@ -162,6 +162,7 @@ class Material:
     # KHR_materials_diffuse_transmission
     diffuse_transmission_factor: float = _D["diffuse_transmission_factor"]
     diffuse_transmission_color_factor: tuple[float, float, float] = _D["diffuse_transmission_color_factor"]
+    dispersion: float = _D["dispersion"]  # KHR_materials_dispersion: 20 / Abbe number
     # The extensions' textures; `channel` picks a scalar map's component, as for metallic.
     clearcoat_texture: TextureRef | None = None  # linear; glTF: R
     clearcoat_roughness_texture: TextureRef | None = None  # linear; glTF: G

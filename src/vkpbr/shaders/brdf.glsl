@@ -254,6 +254,7 @@ struct Layers {
     vec3 iridescence_metal;       // and over the base colour (shade.glsl)
     float diffuse_transmission;   // the share of the diffuse lobe passing through
     vec3 diffuse_transmission_color;
+    float dispersion;             // KHR_materials_dispersion (a volume's refraction)
 };
 
 // One punctual light's layered glTF BRDF (values before the light's radiance and shadow).

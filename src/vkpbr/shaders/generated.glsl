@@ -30,6 +30,7 @@ const float MATERIAL_DEFAULT_iridescence_thickness_minimum = 100.0;
 const float MATERIAL_DEFAULT_iridescence_thickness_maximum = 400.0;
 const float MATERIAL_DEFAULT_diffuse_transmission_factor = 0.0;
 const vec3 MATERIAL_DEFAULT_diffuse_transmission_color_factor = vec3(1.0, 1.0, 1.0);
+const float MATERIAL_DEFAULT_dispersion = 0.0;
 float sheen_albedo_fit(float x, float y) {
     return (1.09927 + y * (-0.4456763 + y * (-2.387564 + y * (6.252952 + y * (-3.489524))))) + x * ((12.52236 + y * (-70.76933 + y * (154.0586 + y * (-146.4862 + y * (50.86578))))) + x * ((-54.14374 + y * (288.7846 + y * (-608.6334 + y * (560.6368 + y * (-189.5136))))) + x * ((66.47369 + y * (-367.9202 + y * (784.6235 + y * (-728.6155 + y * (247.9961))))) + x * ((-25.8705 + y * (149.7473 + y * (-326.3621 + y * (307.6033 + y * (-105.8631)))))))));
 }
@@ -139,6 +140,7 @@ struct MaterialRecord {
     vec3 attenuation_color;
     float clearcoat_normal_scale;
     vec3 diffuse_transmission_color_factor;
+    float dispersion;
     float metallic_factor;
     float roughness_factor;
     float occlusion_strength;
@@ -253,6 +255,7 @@ layout(set = 1, binding = 20, std140) uniform Material {
     vec3 attenuation_color;
     float clearcoat_normal_scale;
     vec3 diffuse_transmission_color_factor;
+    float dispersion;
     float metallic_factor;
     float roughness_factor;
     float occlusion_strength;

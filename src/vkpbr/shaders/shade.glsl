@@ -131,6 +131,7 @@ Layers material_layers(uint material_flags) {
     m.diffuse_transmission_color = clamp(LAYER_FACTOR(diffuse_transmission_color_factor)
                                          * LAYER_MAP(diffuse_transmission_color, rgb) + zero,
                                          0.0, 1.0);
+    m.dispersion = max(LAYER_FACTOR(dispersion) + zero1, 0.0);
     return m;
 }
 
@@ -221,6 +222,33 @@ vec3 transmitted_radiance(vec3 d, float thickness, float roughness, bool screen,
     }
 #endif
     return ibl_on ? ibl_radiance(d, roughness) : radiance;
+}
+
+// The light behind, refracted through the surface at index `ior`: straight through a thin
+// wall, refracted into a volume (leaving it `thickness` further on); rougher by
+// clamp(2 ior - 2, 0, 1) (the Sample Viewer's applyIorToRoughness).
+vec3 refracted_radiance(vec3 v, vec3 n, float ior, float thickness, float roughness,
+                        bool screen, bool ibl_on) {
+    vec3 d = thickness > 0.0 ? refract(-v, n, 1.0 / ior) : -v;
+    if (dot(d, d) < 1e-8) d = -v;  // no total internal reflection entering
+    float r_t = roughness * clamp(ior * 2.0 - 2.0, 0.0, 1.0);
+    return transmitted_radiance(normalize(d), thickness, r_t, screen, ibl_on);
+}
+
+// What refraction brings; KHR_materials_dispersion spreads a volume's ior over the channels,
+// each read along its own refracted ray (the Sample Viewer's getIBLVolumeRefraction: red at
+// ior - s, green at ior, blue at ior + s, s = (ior - 1) 0.025 dispersion).
+vec3 refracted_behind(vec3 v, vec3 n, Layers m, float roughness, bool screen, bool ibl_on) {
+    if (!SHADE_LAYERS || m.dispersion <= 0.0 || m.thickness <= 0.0) {
+        return refracted_radiance(v, n, m.ior, m.thickness, roughness, screen, ibl_on);
+    }
+    float spread = (m.ior - 1.0) * 0.025 * m.dispersion;
+    vec3 behind;
+    for (int i = 0; i < 3; ++i) {
+        float ior = max(m.ior + float(i - 1) * spread, 1.0);
+        behind[i] = refracted_radiance(v, n, ior, m.thickness, roughness, screen, ibl_on)[i];
+    }
+    return behind;
 }
 
 vec4 shade_surface() {
@@ -332,14 +360,8 @@ vec4 shade_surface() {
         ibl.diffuse *= ao.diffuse;
         ibl.specular *= ao.specular;
         if (refracts) {
-            // The light behind, refracted through the surface: straight through a thin
-            // wall, refracted into a volume (leaving it `thickness` further on); rougher by
-            // clamp(2 ior - 2, 0, 1) (the Sample Viewer's applyIorToRoughness).
-            vec3 d = layers.thickness > 0.0 ? refract(-v, n, 1.0 / layers.ior) : -v;
-            if (dot(d, d) < 1e-8) d = -v;  // no total internal reflection entering
-            float r_t = roughness * clamp(layers.ior * 2.0 - 2.0, 0.0, 1.0);
             transmission += layers.transmission * ibl.diffuse_weight * occlusion
-                * transmitted_radiance(normalize(d), layers.thickness, r_t, screen, ibl_on)
+                * refracted_behind(v, n, layers, roughness, screen, ibl_on)
                 * volume_transmittance(layers.thickness, layers.attenuation_color,
                                        layers.attenuation_distance);
             ibl.diffuse *= 1.0 - layers.transmission;
