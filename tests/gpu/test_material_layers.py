@@ -524,3 +524,31 @@ def test_diffuse_transmission_in_a_uniform_environment(make_renderer, uniform_en
     view = render(r, "diffuse-transmission", pipeline, **opts)
     np.testing.assert_allclose(view, render(r0, "ibl-diffuse", pipeline, **opts) * f * dtc / c,
                                rtol=1e-2, atol=1e-5)
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
+def test_iridescence_in_a_uniform_environment(make_renderer, uniform_env: Path, tmp_path: Path,
+                                              pipeline: str) -> None:
+    """Under a uniform environment L the film's share of each lobe is F_i L (radiance alone):
+    ibl-specular = (1 - k) x the same material's without the film + k L ((1 - M) F_i,d +
+    M F_i,m), ibl-diffuse = (1 - k) x its + k (1 - M) c (1 - max3 F_i,d) L, with F_i the
+    mirror's eval_iridescence at n.v (split_sum_ibl's mix, written out: no table needed)."""
+    mat = IRIDESCENT
+    plain = dataclasses.replace(mat, iridescence_factor=0.0)
+    kw = {"env_spec": EnvironmentSpec.small(), "cache_dir": tmp_path / "cache"}
+    opts = {"env": str(uniform_env), "lights": [], "env_background": False, "ao": "off"}
+    r, r0 = make_renderer(plane_scene(mat), **kw), make_renderer(plane_scene(plain), **kw)
+    if pipeline == "compute" and not r.device.compute_path:
+        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+    _, n, v, _ = pixel_geometry()
+    c = np.asarray(mat.base_color_factor[:3])
+    f_d, f_m = ref.iridescence_fresnel(ref.Layers.of(mat), np.clip(np.sum(n * v, -1), 0, 1),
+                                       np.broadcast_to(c, n.shape))
+    k, m, big_l = mat.iridescence_factor, mat.metallic_factor, ENV_RADIANCE
+    spec0, diff0 = (render(r0, view, pipeline, **opts) for view in ("ibl-specular", "ibl-diffuse"))
+    want_spec = (1 - k) * spec0 + k * big_l * ((1 - m) * f_d + m * f_m)
+    want_diff = (1 - k) * diff0 + k * (1 - m) * c * (1 - f_d.max(-1, keepdims=True)) * big_l
+    np.testing.assert_allclose(render(r, "ibl-specular", pipeline, **opts), want_spec,
+                               rtol=1e-2, atol=1e-4)
+    np.testing.assert_allclose(render(r, "ibl-diffuse", pipeline, **opts), want_diff,
+                               rtol=1e-2, atol=1e-4)
