@@ -17,7 +17,7 @@ SIZE = (160, 120)
 # The KHR_materials_* layer views are flat on the chart (no layered material) and checked in
 # test_material_layers.py.
 LAYER_VIEWS = (View.IOR, View.DIELECTRIC_F0, View.CLEARCOAT, View.SHEEN, View.TRANSMISSION,
-               View.VOLUME)
+               View.VOLUME, View.ANISOTROPY, View.IRIDESCENCE, View.DIFFUSE_TRANSMISSION)
 COURSE_VIEWS = [v for v in View
                 if v not in (View.SHADOW, View.IBL_DIFFUSE, View.IBL_SPECULAR, *LAYER_VIEWS)]
 

@@ -41,12 +41,13 @@ import subprocess
 import tempfile
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from io import BytesIO
 from pathlib import Path
 
+import generated_models
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
@@ -96,8 +97,9 @@ def missing() -> str | None:
 
 @dataclass(frozen=True)
 class Scenario:
-    """One image: a model (path under the assets folder), a camera by eye / target and vertical
-    field of view, and whether the environment is drawn behind it."""
+    """One image: a model (path under the assets folder, or a document `make` generates), a
+    camera by eye / target and vertical field of view, and whether the environment is drawn
+    behind it."""
 
     name: str
     model: str
@@ -106,25 +108,54 @@ class Scenario:
     yfov_deg: float = 45.0
     background: bool = False
     viewer_rotation: float = SV_ROTATION  # the viewer's environmentRotation, degrees
-    # Material extensions removed from the viewer's copy of the .gltf (vkpbr ignores them).
-    viewer_strip: tuple[str, ...] = ()
+    # Material extensions removed from both renderers' copies of the .gltf.
+    strip: tuple[str, ...] = ()
+    # A generated model (generated_models.py): the glTF document, buffers and images embedded.
+    make: Callable[[], dict] | None = None
 
     @property
     def viewer_model(self) -> str:
         """The path the viewer loads: the model's, or a stripped copy's beside it."""
-        if not self.viewer_strip:
+        if not self.strip:
             return self.model
         return self.model[:-len(".gltf")] + f".{self.name}.gltf"
 
-    def viewer_gltf(self, assets: Path) -> bytes:
-        """The stripped copy's JSON (the same buffers and images: relative URIs)."""
+    def document(self, assets: Path) -> dict | None:
+        """The glTF document both renderers load when it is not the file as it is: the
+        generated one, or the model's without the `strip` extensions (relative URIs kept)."""
+        if self.make is not None:
+            return self.make()
+        if not self.strip:
+            return None
         doc = json.loads((assets / self.model).read_text())
         for material in doc.get("materials", []):
-            for ext in self.viewer_strip:
+            for ext in self.strip:
                 material.get("extensions", {}).pop(ext, None)
-        doc["extensionsUsed"] = [e for e in doc.get("extensionsUsed", [])
-                                 if e not in self.viewer_strip]
-        return json.dumps(doc).encode()
+        for key in ("extensionsUsed", "extensionsRequired"):
+            if key in doc:
+                doc[key] = [e for e in doc[key] if e not in self.strip]
+        return doc
+
+    def available(self, assets: Path) -> bool:
+        return self.make is not None or (assets / self.model).is_file()
+
+    def load(self, assets: Path, folder: Path):  # noqa: ANN201 (a vkpbr Scene)
+        """The scenario's model as vkpbr loads it: a stripped or generated document is written
+        into `folder` (a stripped copy names its model's buffers and images by absolute path,
+        so it is loaded with outside paths allowed)."""
+        from vkpbr import load_scene
+
+        doc = self.document(assets)
+        if doc is None:
+            return load_scene(assets / self.model)
+        path = folder / f"{self.name}.gltf"
+        if self.make is None:
+            base = (assets / self.model).parent.resolve()
+            for item in [*doc.get("buffers", []), *doc.get("images", [])]:
+                if "uri" in item and not item["uri"].startswith("data:"):
+                    item["uri"] = str(base / item["uri"])
+        path.write_text(json.dumps(doc))
+        return load_scene(path, allow_outside_paths=self.make is None)
 
     def world_from_camera(self) -> np.ndarray:
         """4x4 camera-to-world with OpenGL axes (x right, y up, looking down -z), up +Y."""
@@ -189,9 +220,29 @@ class ViewerRun:
 ROUGHNESS_CLAMP = "materialInfo.perceptualRoughness=clamp(materialInfo.perceptualRoughness,0.0,1.0);"
 
 
-def _viewer_module(bake: str, roughness_floor: float | None = None) -> bytes:
+# Experiments of fidelity_table.py (`--viewer-fix NAME`), never the test's reference: the
+# viewer 1.1.0's handling of KHR_materials_pbrSpecularGlossiness, made as the extension says.
+# "sg": its diffuse and specular-glossiness textures decoded as sRGB (gltfTextureInfo is
+# linear by default, and only the metallic-roughness colour textures are made sRGB), and its
+# metallic-roughness shading off where the extension is present (material.type is never
+# "SG", so MATERIAL_METALLICROUGHNESS is always defined and the fallback's metallic and
+# roughness replace the extension's).
+VIEWER_FIXES: dict[str, dict[str, str]] = {
+    "sg": {"const diffuseTexture = new gltfTextureInfo();":
+           "const diffuseTexture = new gltfTextureInfo(undefined, 0, false);",
+           "const specularGlossinessTexture = new gltfTextureInfo();":
+           "const specularGlossinessTexture = new gltfTextureInfo(undefined, 0, false);",
+           'if (this.type !== "SG")':
+           "if (this.extensions?.KHR_materials_pbrSpecularGlossiness === undefined)"},
+}
+
+
+def _viewer_module(bake: str, roughness_floor: float | None = None,
+                   fixes: Sequence[str] = ()) -> bytes:
     data = (VIEWER_DIST / "gltf-viewer.module.js").read_bytes()
     patches = dict(BAKES[bake])
+    for fix in fixes:
+        patches.update(VIEWER_FIXES[fix])
     if roughness_floor is not None:
         patches[ROUGHNESS_CLAMP] = ROUGHNESS_CLAMP.replace("0.0,1.0", f"{roughness_floor!r},1.0")
     for old, new in patches.items():
@@ -259,11 +310,13 @@ def _server(files: dict[str, bytes], assets: Path, inbox: dict[str, bytes],
 
 def render_viewer(scenarios: Sequence[Scenario], assets: Path, environment: Path,
                   size: int = 256, env_intensity: float = 1.0, bake: str | None = None,
-                  timeout: float = 900.0, roughness_floor: float | None = None) -> ViewerRun:
+                  timeout: float = 900.0, roughness_floor: float | None = None,
+                  fixes: Sequence[str] = ()) -> ViewerRun:
     """Render `scenarios` with the Sample Viewer; raises RuntimeError with the page's error or
     the browser's last lines when the run fails or takes longer than `timeout` seconds.
     `roughness_floor`: serve the viewer with its perceptual roughness clamped to at least this
-    (vkpbr's MIN_ROUGHNESS is 0.03), to tell that clamp's effect from others."""
+    (vkpbr's MIN_ROUGHNESS is 0.03), to tell that clamp's effect from others; `fixes`: names
+    of VIEWER_FIXES to apply (experiments)."""
     from PIL import Image
 
     bake = bake or os.environ.get("VKPBR_SV_BAKE", "ci")
@@ -278,10 +331,10 @@ def render_viewer(scenarios: Sequence[Scenario], assets: Path, environment: Path
               "jobs": jobs}
     files = {"/page.html": (HERE / "page.html").read_bytes(),
              "/config.json": json.dumps(config).encode(),
-             "/viewer/gltf-viewer.module.js": _viewer_module(bake, roughness_floor),
+             "/viewer/gltf-viewer.module.js": _viewer_module(bake, roughness_floor, fixes),
              "/env.hdr": environment.read_bytes(), "/sheen_E.png": _sheen_lut_png()}
-    files.update({"/model/" + s.viewer_model: s.viewer_gltf(assets)
-                  for s in scenarios if s.viewer_strip})
+    files.update({"/model/" + s.viewer_model: json.dumps(doc).encode()
+                  for s in scenarios if (doc := s.document(assets)) is not None})
     inbox: dict[str, bytes] = {}
     done = threading.Event()
     server = _server(files, assets, inbox, done)
@@ -348,13 +401,23 @@ SCENARIOS: tuple[Scenario, ...] = (
     Scenario("TextureCoordinateTest", "TextureCoordinateTest/glTF/TextureCoordinateTest.gltf",
              (0, 0, 3.2), (0, 0, 0)),
     # The only BoomBox in the assets has KHR_materials_pbrSpecularGlossiness over a
-    # metallic-roughness fallback: the viewer renders the extension, vkpbr (without it) the
-    # fallback. "BoomBoxMetalRough" gives the viewer the fallback too.
+    # metallic-roughness fallback: both render the extension. "BoomBoxMetalRough": both the
+    # fallback (the extension stripped from both copies).
     Scenario("BoomBox", "BoomBox/glTF-pbrSpecularGlossiness/BoomBox.gltf",
              (0, 0, 0.03), (0, 0, 0)),
     Scenario("BoomBoxMetalRough", "BoomBox/glTF-pbrSpecularGlossiness/BoomBox.gltf",
-             (0, 0, 0.03), (0, 0, 0),
-             viewer_strip=("KHR_materials_pbrSpecularGlossiness",)),
+             (0, 0, 0.03), (0, 0, 0), strip=("KHR_materials_pbrSpecularGlossiness",)),
+    # Generated models (generated_models.py): six spheres a material extension's parameters.
+    Scenario("SpecGlossSpheres", "generated/SpecGlossSpheres.gltf", (0, 0, 10.5), (0, 0, 0),
+             make=generated_models.specular_glossiness_spheres),
+    Scenario("AnisotropySpheres", "generated/AnisotropySpheres.gltf", (0, 0, 10.5), (0, 0, 0),
+             make=generated_models.anisotropy_spheres),
+    Scenario("IridescenceSpheres", "generated/IridescenceSpheres.gltf", (0, 0, 10.5),
+             (0, 0, 0), make=generated_models.iridescence_spheres),
+    Scenario("DiffuseTransmissionSpheres", "generated/DiffuseTransmissionSpheres.gltf",
+             (0, 0, 10.5), (0, 0, 0), make=generated_models.diffuse_transmission_spheres),
+    Scenario("DispersionSpheres", "generated/DispersionSpheres.gltf", (0, 0, 10.5), (0, 0, 0),
+             make=generated_models.dispersion_spheres),
     # The environment drawn behind the helmet, turned by 30 degrees in the viewer (vkpbr:
     # 240): the panorama mapping and the rotation's sense, apart from any shading. Looking
     # along +Z at the soft boxes.

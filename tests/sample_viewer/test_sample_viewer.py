@@ -36,14 +36,23 @@ THRESHOLDS_DB = {
     # Fractional metallic (the middle rows): vkpbr mixes F0 before the compensation, the viewer
     # mixes the dielectric and metal lobes (issue 34 item 1); tighten when that lands.
     "MetalRoughSpheresNoTextures": -17.5,
-    # Mirror panels (roughness 0) reflect the soft boxes' hard edges: the two cubes' texels.
-    "NormalTangentMirrorTest": -16.5,
+    # Mirror panels (roughness 0) reflect the soft boxes' hard edges: the two cubes' texels
+    # (-19.0 dB while vkpbr read its environment at the punctual floor's roughness, 0.03).
+    "NormalTangentMirrorTest": -19.0,
     "AlphaBlendModeTest": -19.5,
     "TextureCoordinateTest": -25.0,
-    # The viewer renders KHR_materials_pbrSpecularGlossiness, vkpbr (without it) the
-    # metallic-roughness fallback: a different material, kept as a number (issue 34 item 4).
+    # KHR_materials_pbrSpecularGlossiness in both, but the viewer 1.1.0 reads its textures as
+    # linear and shades the fallback's metallic and roughness (docs/fidelity-sample-viewer.md:
+    # with both fixed in the viewer, -23.6 dB); the generated spheres (factors only, a
+    # fallback that agrees) compare the extension itself.
     "BoomBox": -12.0,
     "BoomBoxMetalRough": -22.5,
+    "SpecGlossSpheres": -21.0,
+    "AnisotropySpheres": -18.5,
+    "IridescenceSpheres": -21.0,
+    "DiffuseTransmissionSpheres": -20.0,
+    # The striped backdrop fills the frame (the spheres' pixels alone: -26.3 dB).
+    "DispersionSpheres": -26.5,
     # The viewer draws its background with a 10% magnification (cubemap.vert's w = z + 0.1).
     "EnvironmentBackground": -15.5,
 }
@@ -88,7 +97,7 @@ def viewer(assets: Path, tmp_path_factory: pytest.TempPathFactory):
     why = missing()
     if why is not None:
         pytest.skip(f"Sample Viewer reference not installed: {why}")
-    present = [s for s in SCENARIOS if (assets / s.model).is_file()]
+    present = [s for s in SCENARIOS if s.available(assets)]
     env = write_environment(tmp_path_factory.mktemp("sv") / "studio.hdr")
     return render_viewer(present, assets, env, timeout=540.0), env
 
@@ -105,9 +114,7 @@ def test_vkpbr_against_sample_viewer(scenario: Scenario, viewer, assets: Path, m
         pytest.skip(f"{scenario.model} not in the assets at {assets}")
     from PIL import Image
 
-    from vkpbr import load_scene
-
-    r = make_renderer(load_scene(assets / scenario.model), msaa=4)
+    r = make_renderer(scenario.load(assets, tmp_path), msaa=4)
     rgb, covered = render_vkpbr(r, scenario, env)
     c = compare(scenario, run.images[scenario.name], rgb, covered)
     if not scenario.background:  # both drew the model: each covers most of what the other does

@@ -99,11 +99,19 @@ def test_every_sample_model_loads(assets: Path) -> None:
             assert m.indices.dtype == np.uint32 and int(m.indices.max()) < m.vertex_count
 
 
-def test_boombox_specgloss_folder_uses_core_material(assets: Path) -> None:
+def test_boombox_specgloss_folder_reads_the_extension(assets: Path) -> None:
+    """KHR_materials_pbrSpecularGlossiness wins over the metallic-roughness fallback: the
+    diffuse texture is the base colour, the specular-glossiness texture's RGB the specular
+    colour and its A the glossiness (roughness = 1 - glossiness), metallic 0."""
     scene = load_gltf(assets / "BoomBox/glTF-pbrSpecularGlossiness/BoomBox.gltf")
     mat = scene.materials[0]
-    assert mat.metallic_texture.image == mat.roughness_texture.image
-    assert (mat.metallic_texture.channel, mat.roughness_texture.channel) == (2, 1)
+    names = [Path(scene.images[t.image].name).name
+             for t in (mat.base_color_texture, mat.roughness_texture, mat.specular_color_texture)]
+    assert names == ["BoomBox_diffuse.png", "BoomBox_specularGlossiness.png",
+                     "BoomBox_specularGlossiness.png"]
+    assert mat.glossiness and mat.roughness_texture.channel == 3
+    assert mat.metallic_factor == 0.0 and mat.metallic_texture is None
+    assert mat.specular_color_factor == (25.0, 25.0, 25.0)  # F0 = 0.04 x 25 x texel
     assert mat.occlusion_texture is not None and mat.emissive_texture is not None
 
 

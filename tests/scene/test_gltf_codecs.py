@@ -570,9 +570,9 @@ def test_basisu_without_decoder_keeps_fallback(tmp_path: Path,
 
 
 def test_unhonourable_required_extension_is_named(tmp_path: Path) -> None:
-    path = _textured(tmp_path, {"KHR_materials_iridescence": {}},
-                     [(_png((1, 2, 3, 255)), "image/png")], required=("KHR_materials_iridescence",))
-    with pytest.raises(SceneError, match=r"tex\.glb.*unsupported extension.*KHR_materials_iridescence"):
+    path = _textured(tmp_path, {"EXT_lights_image_based": {}},
+                     [(_png((1, 2, 3, 255)), "image/png")], required=("EXT_lights_image_based",))
+    with pytest.raises(SceneError, match=r"tex\.glb.*unsupported extension.*EXT_lights_image_based"):
         load_scene(path)
 
 

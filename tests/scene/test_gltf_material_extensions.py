@@ -10,6 +10,7 @@ import sys
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -32,6 +33,13 @@ ALL = {
     "KHR_materials_volume": {"thicknessFactor": 0.25, "attenuationDistance": 2.0,
                              "attenuationColor": [0.9, 0.5, 0.1]},
     "KHR_materials_emissive_strength": {"emissiveStrength": 3.0},
+    "KHR_materials_anisotropy": {"anisotropyStrength": 0.7, "anisotropyRotation": 1.25},
+    "KHR_materials_iridescence": {"iridescenceFactor": 0.9, "iridescenceIor": 1.8,
+                                  "iridescenceThicknessMinimum": 50.0,
+                                  "iridescenceThicknessMaximum": 600.0},
+    "KHR_materials_diffuse_transmission": {"diffuseTransmissionFactor": 0.4,
+                                           "diffuseTransmissionColorFactor": [0.5, 0.6, 0.7]},
+    "KHR_materials_dispersion": {"dispersion": 0.33},
 }
 
 
@@ -59,6 +67,12 @@ def test_every_extension_factor_is_read(tmp_path: Path) -> None:
     assert (m.thickness_factor, m.attenuation_distance, m.attenuation_color) == (
         0.25, 2.0, (0.9, 0.5, 0.1))
     assert m.emissive_factor == (3.0, 1.5, 0.0)  # emissive strength folded into the factor
+    assert (m.anisotropy_strength, m.anisotropy_rotation) == (0.7, 1.25)
+    assert (m.iridescence_factor, m.iridescence_ior, m.iridescence_thickness_minimum,
+            m.iridescence_thickness_maximum) == (0.9, 1.8, 50.0, 600.0)
+    assert (m.diffuse_transmission_factor, m.diffuse_transmission_color_factor) == (
+        0.4, (0.5, 0.6, 0.7))
+    assert m.dispersion == 0.33
 
 
 def test_defaults_are_the_core_material(tmp_path: Path) -> None:
@@ -82,6 +96,9 @@ def test_ior_zero_is_the_schema_special_value(tmp_path: Path) -> None:
     ("KHR_materials_transmission", {"transmissionFactor": -0.1}, "transmissionFactor"),
     ("KHR_materials_volume", {"attenuationDistance": 0}, "attenuationDistance 0.0 must be > 0"),
     ("KHR_materials_specular", {"specularFactor": "x"}, "specularFactor"),
+    ("KHR_materials_anisotropy", {"anisotropyStrength": 1.5}, "anisotropyStrength 1.5 outside 0..1"),
+    ("KHR_materials_iridescence", {"iridescenceIor": 0.5}, "iridescenceIor 0.5 outside 1..1e+06"),
+    ("KHR_materials_dispersion", {"dispersion": -1}, "dispersion -1.0 outside 0..1e+06"),
 ])
 def test_bad_factor_is_one_line_error(tmp_path: Path, name: str, body: dict, words: str) -> None:
     with pytest.raises(SceneError) as info:
@@ -104,6 +121,11 @@ def test_extension_textures_are_read(tmp_path: Path) -> None:
         "KHR_materials_transmission": {"transmissionTexture": info(0, extensions={
             "KHR_texture_transform": {"scale": [2, 3]}})},
         "KHR_materials_volume": {"thicknessTexture": info(0)},
+        "KHR_materials_anisotropy": {"anisotropyTexture": info(2, texCoord=1)},
+        "KHR_materials_iridescence": {"iridescenceTexture": info(1),
+                                      "iridescenceThicknessTexture": info(0)},
+        "KHR_materials_diffuse_transmission": {"diffuseTransmissionTexture": info(0),
+                                               "diffuseTransmissionColorTexture": info(1)},
     }}
     b = GltfBuilder()
     b.node(mesh=b.triangle())
@@ -114,13 +136,16 @@ def test_extension_textures_are_read(tmp_path: Path) -> None:
     m = load_scene(b.save(tmp_path / "t.gltf", "datauri")).materials[0]
     got = {slot: (ref.image, ref.channel, ref.texcoord) for slot in (
         "clearcoat", "clearcoat_roughness", "clearcoat_normal", "sheen_color", "sheen_roughness",
-        "specular", "specular_color", "transmission", "thickness")
+        "specular", "specular_color", "transmission", "thickness", "anisotropy", "iridescence",
+        "iridescence_thickness", "diffuse_transmission", "diffuse_transmission_color")
         for ref in (getattr(m, f"{slot}_texture"),)}
     assert got == {"clearcoat": (0, 0, 0), "clearcoat_roughness": (1, 1, 1),
                    "clearcoat_normal": (2, 0, 0), "sheen_color": (1, 0, 0),
                    "sheen_roughness": (1, 3, 0), "specular": (0, 3, 0),
                    "specular_color": (2, 0, 0), "transmission": (0, 0, 0),
-                   "thickness": (0, 1, 0)}
+                   "thickness": (0, 1, 0), "anisotropy": (2, 0, 1), "iridescence": (1, 0, 0),
+                   "iridescence_thickness": (0, 1, 0), "diffuse_transmission": (0, 3, 0),
+                   "diffuse_transmission_color": (1, 0, 0)}
     assert m.clearcoat_normal_scale == 0.5 and m.transmission_texture.scale == (2, 3)
     out = tmp_path / "t.vkpbr"  # and through the baked format
     from vkpbr.bake.bake import bake_scene
@@ -167,6 +192,63 @@ LAYERED = Material(name="layered", unlit=True, ior=1.7, specular_factor=0.3,
                    attenuation_distance=3.0, attenuation_color=(0.5, 0.6, 0.7))
 
 
+SG = "KHR_materials_pbrSpecularGlossiness"
+
+
+def test_specular_glossiness_replaces_the_fallback(tmp_path: Path) -> None:
+    """KHR_materials_pbrSpecularGlossiness (archived) becomes a dielectric: the diffuse colour
+    and texture are the base colour, F0 = 0.04 x specular colour = specularFactor (the
+    specular-glossiness texture's RGB multiplying it), glossiness in the roughness slot
+    (channel A) with the `glossiness` switch; the metallic-roughness fallback is dropped.
+    Absent factors take the extension schema's defaults (1, 1, 1)."""
+    info = lambda k, **kw: {"index": k, **kw}  # noqa: E731
+    mats = [{"pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.1, 0.1, 1], "metallicFactor": 1,
+                                      "metallicRoughnessTexture": info(0)},
+             "extensions": {SG: {"diffuseFactor": [0.5, 0.25, 1.0, 0.75],
+                                 "specularFactor": [0.2, 0.4, 0.8], "glossinessFactor": 0.6,
+                                 "diffuseTexture": info(1, texCoord=1),
+                                 "specularGlossinessTexture": info(2)}}},
+            {"extensions": {SG: {}}}]
+    b = GltfBuilder()
+    b.node(mesh=b.triangle())
+    b.doc["meshes"][0]["primitives"][0]["material"] = 0
+    b.doc["materials"] = mats
+    b.doc["images"] = [{"uri": f"data:image/png;base64,{k}AAA="} for k in "ABC"]
+    b.doc["textures"] = [{"source": k} for k in range(3)]
+    b.doc["extensionsRequired"] = [SG]
+    b.doc["extensionsUsed"] = [SG]
+    m, plain = load_scene(b.save(tmp_path / "sg.gltf", "datauri")).materials
+    assert m.glossiness and plain.glossiness
+    assert m.base_color_factor == (0.5, 0.25, 1.0, 0.75) and m.roughness_factor == 0.6
+    assert (m.metallic_factor, m.metallic_texture) == (0.0, None)
+    f0 = 0.04 * np.asarray(m.specular_color_factor)
+    np.testing.assert_allclose(f0, (0.2, 0.4, 0.8), rtol=1e-12)
+    assert (m.ior, m.specular_factor) == (1.5, 1.0)
+    assert (m.base_color_texture.image, m.base_color_texture.texcoord) == (1, 1)
+    assert (m.roughness_texture.image, m.roughness_texture.channel) == (2, 3)
+    assert (m.specular_color_texture.image, m.specular_color_texture.channel) == (2, 0)
+    assert plain.base_color_factor == (1.0, 1.0, 1.0, 1.0) and plain.roughness_factor == 1.0
+    np.testing.assert_allclose(0.04 * np.asarray(plain.specular_color_factor), 1.0)
+    out = tmp_path / "sg.vkpbr"  # the switch survives the baked format
+    from vkpbr.bake.bake import bake_scene
+    from vkpbr.scene.baked_file import write_baked
+
+    write_baked(out, bake_scene(load_scene(tmp_path / "sg.gltf"), progress=False))
+    assert dataclasses.asdict(load_scene(out).materials[0]) == dataclasses.asdict(m)
+
+
+@pytest.mark.parametrize(("body", "words"), [
+    ({"glossinessFactor": 1.5}, "material 0: glossinessFactor 1.5 outside 0..1"),
+    ({"specularFactor": [0.1, 2, 0]}, "specularFactor [0.1, 2.0, 0.0] outside 0..1"),
+    ({"diffuseFactor": [1, 1, 1]}, "diffuseFactor: expected 4 finite numbers"),
+])
+def test_bad_specular_glossiness_is_one_line_error(tmp_path: Path, body: dict, words: str) -> None:
+    with pytest.raises(SceneError) as info:
+        load_scene(write(tmp_path, [{"extensions": {SG: body}}]))
+    assert words in str(info.value) and "m.gltf" in str(info.value)
+    assert "\n" not in str(info.value)
+
+
 def test_layers_round_trip_through_the_baked_format(tmp_path: Path) -> None:
     from vkpbr.bake.bake import bake_scene
     from vkpbr.scene.baked_file import write_baked
@@ -185,7 +267,7 @@ def test_layers_round_trip_through_the_baked_format(tmp_path: Path) -> None:
 @pytest.mark.parametrize(("field", "value"), [
     ("ior", 0.9), ("clearcoat_factor", 1.1), ("sheen_color_factor", (0.0, 1.5, 0.0)),
     ("attenuation_distance", -1.0), ("transmission_factor", float("nan")), ("unlit", "yes"),
-    ("specular_color_factor", (1.0, 1.0)), ("thickness_factor", -0.5),
+    ("specular_color_factor", (1.0, 1.0)), ("thickness_factor", -0.5), ("glossiness", 1),
 ])
 def test_validation_rejects_bad_layers(field: str, value: object) -> None:
     from vkpbr.scene.default import plane
@@ -231,7 +313,18 @@ _KEYS = {"KHR_materials_ior": ["ior"], "KHR_materials_specular": ["specularFacto
          "KHR_materials_sheen": ["sheenColorFactor", "sheenRoughnessFactor"],
          "KHR_materials_transmission": ["transmissionFactor", "transmissionTexture"],
          "KHR_materials_volume": ["thicknessFactor", "attenuationDistance", "attenuationColor"],
-         "KHR_materials_unlit": ["x"], "KHR_materials_emissive_strength": ["emissiveStrength"]}
+         "KHR_materials_unlit": ["x"], "KHR_materials_emissive_strength": ["emissiveStrength"],
+         "KHR_materials_anisotropy": ["anisotropyStrength", "anisotropyRotation",
+                                      "anisotropyTexture"],
+         "KHR_materials_iridescence": ["iridescenceFactor", "iridescenceIor",
+                                       "iridescenceThicknessMaximum",
+                                       "iridescenceThicknessTexture"],
+         "KHR_materials_diffuse_transmission": ["diffuseTransmissionFactor",
+                                                "diffuseTransmissionColorFactor"],
+         "KHR_materials_dispersion": ["dispersion"],
+         "KHR_materials_pbrSpecularGlossiness": ["diffuseFactor", "specularFactor",
+                                                 "glossinessFactor", "diffuseTexture",
+                                                 "specularGlossinessTexture"]}
 
 
 @settings(max_examples=150, deadline=None,

@@ -63,6 +63,17 @@ SPEC: dict[str, tuple[object, st.SearchStrategy]] = {
     # exclusiveMinimum 0; absent: +infinity.
     "KHR_materials_volume.attenuationDistance": (math.inf, st.floats(1e-3, 1e3)),
     "KHR_materials_volume.attenuationColor": ([1.0, 1.0, 1.0], _rgb()),
+    "KHR_materials_anisotropy.anisotropyStrength": (0.0, _UNIT),
+    # Radians; the schema sets no range.
+    "KHR_materials_anisotropy.anisotropyRotation": (0.0, st.floats(-10.0, 10.0)),
+    "KHR_materials_iridescence.iridescenceFactor": (0.0, _UNIT),
+    "KHR_materials_iridescence.iridescenceIor": (1.3, st.floats(1.0, 3.0)),  # minimum 1
+    "KHR_materials_iridescence.iridescenceThicknessMinimum": (100.0, st.floats(0.0, 1000.0)),
+    "KHR_materials_iridescence.iridescenceThicknessMaximum": (400.0, st.floats(0.0, 1000.0)),
+    "KHR_materials_diffuse_transmission.diffuseTransmissionFactor": (0.0, _UNIT),
+    "KHR_materials_diffuse_transmission.diffuseTransmissionColorFactor": ([1.0, 1.0, 1.0],
+                                                                          _rgb()),
+    "KHR_materials_dispersion.dispersion": (0.0, st.floats(0.0, 100.0)),  # minimum 0
 }
 # vkpbr's encodings of two spec values that a float32 uniform cannot hold as such.
 IOR_ZERO = 1e6  # ior 0: F0 -> 1 (((1e6 - 1) / (1e6 + 1))^2)
@@ -148,7 +159,7 @@ def test_material_fields_take_the_table_defaults() -> None:
         assert hints[p.name] == want, p.name
     rows = {p.name for p in PARAMS}
     textures = {f"{s}_texture" for s in TEXTURE_SLOTS}
-    switches = {"name", "alpha_mode", "double_sided", "casts_shadows", "unlit"}
+    switches = {"name", "alpha_mode", "double_sided", "casts_shadows", "unlit", "glossiness"}
     assert set(fields) == rows | textures | switches
 
 

@@ -53,6 +53,15 @@ __all__ = [
     "LayeredTerms",
     "evaluate_layered_brdf",
     "shade_layered",
+    "specular_glossiness",
+    "d_ggx_anisotropic",
+    "v_ggx_anisotropic",
+    "anisotropic_alphas",
+    "anisotropy_frame",
+    "ibl_reflection",
+    "eval_iridescence",
+    "iridescence_fresnel",
+    "dispersion_iors",
     "AMBIENT",
     "MIN_ROUGHNESS",
     "MIN_SHEEN_ROUGHNESS",
@@ -303,6 +312,118 @@ def volume_transmittance(dist: np.ndarray, attenuation_color: np.ndarray,
                     1.0)
 
 
+def d_ggx_anisotropic(n_dot_h, t_dot_h, b_dot_h, at, ab):  # noqa: ANN001, ANN201
+    """Anisotropic GGX D (KHR_materials_anisotropy): a2 w2^2 / pi with a2 = at ab and
+    w2 = a2 / |(ab t.h, at b.h, a2 n.h)|^2."""
+    a2 = at * ab
+    f2 = (ab * t_dot_h) ** 2 + (at * b_dot_h) ** 2 + (a2 * n_dot_h) ** 2
+    w2 = a2 / f2
+    return a2 * w2 * w2 / PI
+
+
+def v_ggx_anisotropic(n_dot_l, n_dot_v, b_dot_v, t_dot_v, t_dot_l, b_dot_l, at, ab):  # noqa: ANN001, ANN201
+    """Anisotropic height-correlated Smith V: 0.5 / (n.l |(at t.v, ab b.v, n.v)| +
+    n.v |(at t.l, ab b.l, n.l)|), clamped to [0, 1] (the Sample Viewer's)."""
+    ggx_v = n_dot_l * np.sqrt((at * t_dot_v) ** 2 + (ab * b_dot_v) ** 2 + n_dot_v**2)
+    ggx_l = n_dot_v * np.sqrt((at * t_dot_l) ** 2 + (ab * b_dot_l) ** 2 + n_dot_l**2)
+    with np.errstate(divide="ignore"):
+        return np.clip(0.5 / (ggx_v + ggx_l), 0.0, 1.0)
+
+
+def anisotropic_alphas(alpha, strength):  # noqa: ANN001, ANN201
+    """(alpha_t, alpha_b) = (mix(alpha, 1, s^2), clamp(alpha, 0.001, 1))."""
+    alpha = np.asarray(alpha, dtype=np.float64)
+    return alpha + (1.0 - alpha) * strength * strength, np.clip(alpha, 0.001, 1.0)
+
+
+def anisotropy_frame(t, b, n, ng, rotation: float, texel=None):  # noqa: ANN001, ANN201
+    """KHR_materials_anisotropy's direction in world space and its cross direction, (..., 3)
+    each, and the strength's texel factor: the direction (texel RG * 2 - 1, else (1, 0))
+    rotated by `rotation` (radians, towards b), in the frame (t, b, n); b_a = ng x t_a."""
+    t, b, n, ng = (np.asarray(x, dtype=np.float64) for x in (t, b, n, ng))
+    direction, scale = np.array([1.0, 0.0]), 1.0
+    if texel is not None:
+        direction, scale = np.asarray(texel[:2], np.float64) * 2.0 - 1.0, float(texel[2])
+    c, s_ = np.cos(rotation), np.sin(rotation)
+    d = np.array([c * direction[0] - s_ * direction[1], s_ * direction[0] + c * direction[1]])
+    d = d / np.linalg.norm(d)
+    at = t * d[0] + b * d[1]
+    return at, np.cross(ng, at), scale
+
+
+def ibl_reflection(n, v, roughness, strength, ab):  # noqa: ANN001, ANN201
+    """The direction the environment is read along (shade.glsl ibl_reflection): reflect(-v,
+    n), or for strength > 0 about the bent normal normalize(mix(cross(cross(b_a, v), b_a), n,
+    (1 - s (1 - r))^4)) (the Sample Viewer's getIBLRadianceAnisotropy)."""
+    n, v = np.asarray(n, dtype=np.float64), np.asarray(v, dtype=np.float64)
+    bent = n
+    if strength > 0.0:
+        ab = np.asarray(ab, dtype=np.float64)
+        normal = np.cross(np.cross(ab, v), ab)
+        k = (1.0 - strength * (1.0 - np.asarray(roughness, dtype=np.float64))) ** 4
+        bent = _normalize(normal + (n - normal) * np.asarray(k)[..., None])
+    return _normalize(2.0 * _dot(bent, v)[..., None] * bent - v)
+
+
+_XYZ_TO_REC709 = np.array([[3.2404542, -1.5371385, -0.4985314],
+                           [-0.9692660, 1.8760108, 0.0415560],
+                           [0.0556434, -0.2040259, 1.0572252]])
+
+
+def _eval_sensitivity(opd: np.ndarray, shift: np.ndarray) -> np.ndarray:
+    """The XYZ sensitivity's Fourier transform at optical path difference opd (nm, (...)),
+    phase `shift` (..., 3), as linear Rec. 709 (brdf.glsl eval_sensitivity)."""
+    phase = 2.0 * PI * np.asarray(opd)[..., None] * 1.0e-9
+    val = np.array([5.4856e-13, 4.4201e-13, 5.2481e-13])
+    pos = np.array([1.6810e06, 1.7953e06, 2.2084e06])
+    var = np.array([4.3278e09, 9.3046e09, 6.6121e09])
+    xyz = val * np.sqrt(2.0 * PI * var) * np.cos(pos * phase + shift) * np.exp(-(phase**2) * var)
+    xyz[..., 0] += (9.7470e-14 * np.sqrt(2.0 * PI * 4.5282e09) * np.cos(2.2399e06 * phase[..., 0]
+                    + shift[..., 0]) * np.exp(-4.5282e09 * phase[..., 0] ** 2))
+    return (xyz / 1.0685e-7) @ _XYZ_TO_REC709.T
+
+
+def eval_iridescence(outside_ior: float, eta2: float, cos_theta1, thickness: float,  # noqa: ANN001
+                     base_f0) -> np.ndarray:  # noqa: ANN001
+    """KHR_materials_iridescence's thin-film Fresnel (..., 3) at cos(theta1) (...), film index
+    eta2 and thickness (nm) over a base of reflectance base_f0 (3,) or (..., 3): Belcour and
+    Barla 2017's two-order airy sum, as the extension's README and the Sample Viewer."""
+    cos1 = np.asarray(cos_theta1, dtype=np.float64)
+    t = float(np.clip(thickness / 0.03, 0.0, 1.0))
+    film = outside_ior + (eta2 - outside_ior) * t * t * (3.0 - 2.0 * t)  # smoothstep
+    cos2_sq = 1.0 - (outside_ior / film) ** 2 * (1.0 - cos1**2)
+    cos2 = np.sqrt(np.maximum(cos2_sq, 0.0))
+    r0 = ((film - outside_ior) / (film + outside_ior)) ** 2
+    r12 = (r0 + (1.0 - r0) * (1.0 - cos1) ** 5)[..., None]
+    t121 = 1.0 - r12
+    phi21 = PI - (PI if film < outside_ior else 0.0)
+    f0 = np.clip(np.asarray(base_f0, dtype=np.float64), 0.0, 0.9999)
+    base_ior = (1.0 + np.sqrt(f0)) / (1.0 - np.sqrt(f0))
+    r1 = ((base_ior - film) / (base_ior + film)) ** 2
+    r23 = r1 + (1.0 - r1) * ((1.0 - cos2) ** 5)[..., None]
+    phi = phi21 + np.where(base_ior < film, PI, 0.0) * np.ones_like(r23)
+    opd = 2.0 * film * thickness * cos2
+    r123 = np.clip(r12 * r23, 1e-5, 0.9999)
+    rs = t121**2 * r23 / (1.0 - r123)
+    out = r12 + rs
+    cm = rs - t121
+    for m in (1, 2):
+        cm = cm * np.sqrt(r123)
+        out = out + cm * 2.0 * _eval_sensitivity(m * opd, m * phi)
+    out = np.maximum(out, 0.0)
+    return np.where((cos2_sq < 0.0)[..., None], 1.0, out)
+
+
+def iridescence_fresnel(m: Layers, n_dot_v, c) -> tuple | None:  # noqa: ANN001
+    """(film Fresnel over the dielectric's F0, over the base colour c) at n.v, for `m`'s film;
+    None without one (factor or thickness 0), as shade.glsl iridescence_fresnel."""
+    if m.iridescence <= 0.0 or m.iridescence_thickness <= 0.0:
+        return None
+    f0 = dielectric_f0(m.ior, m.specular_color)
+    return (eval_iridescence(1.0, m.iridescence_ior, n_dot_v, m.iridescence_thickness, f0),
+            eval_iridescence(1.0, m.iridescence_ior, n_dot_v, m.iridescence_thickness, c))
+
+
 @dataclass(frozen=True)
 class Layers:
     """A material's KHR_materials_* parameters (brdf.glsl `Layers`; shade.glsl clamps them
@@ -319,6 +440,14 @@ class Layers:
     thickness: float = 0.0
     attenuation_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
     attenuation_distance: float = 0.0
+    anisotropy: float = 0.0  # strength, times the texture's B
+    anisotropy_rotation: float = 0.0
+    iridescence: float = 0.0  # factor, times the texture's R
+    iridescence_ior: float = 1.3
+    iridescence_thickness: float = 400.0  # nm: mix(minimum, maximum, texel G), else maximum
+    diffuse_transmission: float = 0.0
+    diffuse_transmission_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    dispersion: float = 0.0
 
     @classmethod
     def of(cls, material: object, model_scale: float = 1.0) -> Layers:
@@ -336,7 +465,15 @@ class Layers:
             transmission=float(np.clip(m.transmission_factor, 0.0, 1.0)),
             thickness=max(float(m.thickness_factor), 0.0) * float(model_scale),
             attenuation_color=tuple(m.attenuation_color),
-            attenuation_distance=float(m.attenuation_distance))
+            attenuation_distance=float(m.attenuation_distance),
+            anisotropy=float(np.clip(m.anisotropy_strength, 0.0, 1.0)),
+            anisotropy_rotation=float(m.anisotropy_rotation),
+            iridescence=float(np.clip(m.iridescence_factor, 0.0, 1.0)),
+            iridescence_ior=max(float(m.iridescence_ior), 1.0),
+            iridescence_thickness=max(float(m.iridescence_thickness_maximum), 0.0),
+            diffuse_transmission=float(np.clip(m.diffuse_transmission_factor, 0.0, 1.0)),
+            diffuse_transmission_color=tuple(np.clip(m.diffuse_transmission_color_factor, 0, 1)),
+            dispersion=max(float(m.dispersion), 0.0))
 
 
 @dataclass
@@ -344,12 +481,16 @@ class LayeredTerms:
     base: BrdfTerms  # specular and diffuse include n.l here (brdf.glsl LayeredTerms)
     transmission: np.ndarray  # (..., 3)
     sheen: np.ndarray  # (..., 3)
+    diffuse_transmission: np.ndarray  # (..., 3), also in base.diffuse
     clearcoat: np.ndarray  # (...)
 
 
-def evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m: Layers) -> LayeredTerms:  # noqa: ANN001, E741
+def evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m: Layers,  # noqa: ANN001, E741
+                          frame=None, iridescence=None) -> LayeredTerms:  # noqa: ANN001
     """Mirror of brdf.glsl evaluate_layered_brdf: the glTF BRDF with the KHR_materials_*
-    layers for one light (before its radiance and shadow)."""
+    layers for one light (before its radiance and shadow). `frame`: (t_a, b_a), the
+    anisotropy's directions (`anisotropy_frame`), needed when m.anisotropy > 0;
+    `iridescence`: `iridescence_fresnel`'s pair, None without a film."""
     n, nc, v, l, c = (np.asarray(x, dtype=np.float64) for x in (n, nc, v, l, c))
     metallic = np.asarray(metallic, dtype=np.float64)
     alpha = np.asarray(roughness, dtype=np.float64) ** 2
@@ -360,11 +501,35 @@ def evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m: Layers) -> Lay
     v_dot_h = np.maximum(_dot(v, h), 0.0)
     d = d_ggx(n_dot_h, alpha)
     vis = v_smith_ggx_correlated(n_dot_l, n_dot_v, alpha)
+    if m.anisotropy > 0.0:
+        at, ab = (np.asarray(x, dtype=np.float64) for x in frame)
+        a_t, a_b = anisotropic_alphas(alpha, m.anisotropy)
+        d = d_ggx_anisotropic(np.clip(_dot(n, h), 0.001, 1.0), _dot(at, h), _dot(ab, h), a_t, a_b)
+        vis = v_ggx_anisotropic(n_dot_l, n_dot_v, _dot(ab, v), _dot(at, v), _dot(at, l),
+                                _dot(ab, l), a_t, a_b)
     f_dielectric = m.specular * f_schlick(dielectric_f0(m.ior, m.specular_color), v_dot_h)
-    f = (1.0 - metallic)[..., None] * f_dielectric + metallic[..., None] * f_schlick(c, v_dot_h)
+    f_metal = f_schlick(c, v_dot_h)
+    f_max = max3(f_dielectric)
+    if iridescence is not None:
+        k = m.iridescence
+        f_dielectric = f_dielectric + (iridescence[0] - f_dielectric) * k
+        f_metal = f_metal + (iridescence[1] - f_metal) * k
+        f_max = f_max + (max3(iridescence[0]) - f_max) * k
+    f = (1.0 - metallic)[..., None] * f_dielectric + metallic[..., None] * f_metal
     specular = f * (d * vis * n_dot_l)[..., None]
-    diffuse_weight = (1.0 - metallic) * (1.0 - max3(f_dielectric))
+    diffuse_weight = (1.0 - metallic) * (1.0 - f_max)
     diffuse = (diffuse_weight * (1.0 - m.transmission) / PI * n_dot_l)[..., None] * c
+    diffuse_transmission = np.zeros_like(diffuse)
+    if m.diffuse_transmission > 0.0:
+        # KHR_materials_diffuse_transmission: mix(Lambert of c, Lambert of the transmission
+        # colour about -n, factor), the volume's transmittance on the latter.
+        btdf = (np.asarray(m.diffuse_transmission_color) / PI
+                * np.maximum(-_dot(n, l), 0.0)[..., None]
+                * volume_transmittance(np.asarray(m.thickness), m.attenuation_color,
+                                       m.attenuation_distance))
+        diffuse_transmission = ((diffuse_weight * (1.0 - m.transmission)
+                                 * m.diffuse_transmission)[..., None] * btdf)
+        diffuse = diffuse * (1.0 - m.diffuse_transmission) + diffuse_transmission
     base = BrdfTerms(D=d, F=f, G=vis * 4.0 * n_dot_l * n_dot_v, specular=specular, diffuse=diffuse)
     transmission = np.zeros_like(specular)
     if m.transmission > 0.0:
@@ -387,7 +552,18 @@ def evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m: Layers) -> Lay
         nc_dot_l = np.maximum(_dot(nc, l), 0.0)
         clearcoat = (d_ggx(np.maximum(_dot(nc, h), 0.0), a_c)
                      * v_smith_ggx_correlated(nc_dot_l, np.maximum(_dot(nc, v), 0.0), a_c) * nc_dot_l)
-    return LayeredTerms(base=base, transmission=transmission, sheen=sheen, clearcoat=clearcoat)
+    return LayeredTerms(base=base, transmission=transmission, sheen=sheen, clearcoat=clearcoat,
+                        diffuse_transmission=diffuse_transmission)
+
+
+def dispersion_iors(m: Layers) -> tuple[float, float, float]:
+    """The index each channel refracts at (shade.glsl refracted_behind): KHR_materials_
+    dispersion's spread s = (ior - 1) 0.025 dispersion, red ior - s, green ior, blue ior + s
+    (at least 1), in a volume (thickness > 0); the material's ior for all three otherwise."""
+    if m.dispersion <= 0.0 or m.thickness <= 0.0:
+        return (m.ior, m.ior, m.ior)
+    s = (m.ior - 1.0) * 0.025 * m.dispersion
+    return (max(m.ior - s, 1.0), m.ior, m.ior + s)
 
 
 def transmission_exit(p, n, v, m: Layers) -> np.ndarray:  # noqa: ANN001
@@ -408,7 +584,8 @@ def transmission_exit(p, n, v, m: Layers) -> np.ndarray:  # noqa: ANN001
 
 def shade_layered(n, v, l, c, metallic, roughness, light_in, m: Layers, emissive=0.0,  # noqa: ANN001, E741
                   nc=None, env_radiance: float | None = None,  # noqa: ANN001
-                  ibl_diffuse_weight=None, behind=None) -> dict[str, np.ndarray]:  # noqa: ANN001
+                  ibl_diffuse_weight=None, behind=None,  # noqa: ANN001
+                  frame=None) -> dict[str, np.ndarray]:  # noqa: ANN001
     """The views shade.glsl writes for a layered glTF material lit by one light (`l`,
     `light_in`; light_in 0 for none) and optionally a uniform environment of radiance
     `env_radiance` (already scaled by its intensity), for the layers' environment terms:
@@ -419,14 +596,17 @@ def shade_layered(n, v, l, c, metallic, roughness, light_in, m: Layers, emissive
     Returns the radiance views "specular", "diffuse", "transmission", "sheen", "clearcoat",
     the scalars "sheen_scaling" and "coat_blend", the data views "ior", "dielectric_f0" and
     "volume", and "final" (the point light's and these environment terms only: the split
-    sum's own diffuse and specular are not mirrored here), each (..., 3)."""
+    sum's own diffuse and specular are not mirrored here), each (..., 3).
+    `frame`: the anisotropy's (t_a, b_a) (`anisotropy_frame`) when m.anisotropy > 0."""
     roughness = np.clip(roughness, MIN_ROUGHNESS, 1.0)
     n = np.asarray(n, dtype=np.float64)
     v = np.asarray(v, dtype=np.float64)
     nc = n if nc is None else np.asarray(nc, dtype=np.float64)
     light_in = np.asarray(light_in, dtype=np.float64)
-    t = evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m)
+    irid = iridescence_fresnel(m, np.clip(_dot(n, v), 0.0, 1.0), np.asarray(c, dtype=np.float64))
+    t = evaluate_layered_brdf(n, nc, v, l, c, metallic, roughness, m, frame, irid)
     out = {"specular": t.base.specular * light_in, "diffuse": t.base.diffuse * light_in,
+           "diffuse_transmission": t.diffuse_transmission * light_in,
            "transmission": t.transmission * light_in, "sheen": t.sheen * light_in,
            "clearcoat": t.clearcoat[..., None] * light_in, "terms": t}
     n_dot_v = np.clip(_dot(n, v), 1e-4, 1.0)
@@ -453,6 +633,24 @@ def shade_layered(n, v, l, c, metallic, roughness, light_in, m: Layers, emissive
     out["sheen_scaling"], out["coat_blend"] = scaling, blend
     out["ior"] = np.full(shape, min(m.ior - 1.0, 1.0))
     out["dielectric_f0"] = np.broadcast_to(dielectric_f0(m.ior, m.specular_color) * m.specular, shape)
+    out["iridescence"] = (np.zeros(shape) if irid is None
+                          else np.broadcast_to(irid[0] * m.iridescence, shape))
     out["volume"] = np.broadcast_to(volume_transmittance(np.asarray(m.thickness), m.attenuation_color,
                                                          m.attenuation_distance), shape)
     return out
+
+
+def specular_glossiness(diffuse, specular, glossiness) -> tuple:  # noqa: ANN001
+    """KHR_materials_pbrSpecularGlossiness (archived) as the glTF BRDF's inputs, as the glTF
+    Sample Viewer shades it (getSpecularGlossinessInfo, getBaseColor): a dielectric whose base
+    colour is the diffuse colour, whose F0 is the specular colour and whose perceptual
+    roughness is 1 - glossiness. Returns (c (..., 3), metallic, roughness, Layers): the
+    roughness before the punctual floor (`shade_layered` clamps it), the Layers' dielectric F0
+    (`dielectric_f0`, ior 1.5: 0.04 x specular colour) the specular colour. Inputs are texel x
+    factor already (diffuse RGB, specular RGB, glossiness)."""
+    specular = np.asarray(specular, dtype=np.float64)
+    c = np.asarray(diffuse, dtype=np.float64)[..., :3]
+    roughness = 1.0 - np.asarray(glossiness, dtype=np.float64)
+    f0_ior = ((1.5 - 1.0) / (1.5 + 1.0)) ** 2
+    layers = Layers(ior=1.5, specular_color=tuple(specular / f0_ior), specular=1.0)
+    return c, np.zeros_like(roughness), roughness, layers

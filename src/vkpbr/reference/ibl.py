@@ -165,25 +165,46 @@ def ibl_lobe(f0: np.ndarray, weight: np.ndarray | float, n_dot_v: np.ndarray,
 def split_sum_ibl(n_dot_v: np.ndarray, c: np.ndarray, metallic: np.ndarray,
                   roughness: np.ndarray, a: np.ndarray, b: np.ndarray, radiance: np.ndarray,
                   irradiance: np.ndarray, f0_dielectric: np.ndarray | float = 0.04,
-                  specular_weight: np.ndarray | float = 1.0
+                  specular_weight: np.ndarray | float = 1.0, iridescence: float = 0.0,
+                  iridescence_fresnel: tuple | None = None, diffuse_transmission: float = 0.0,
+                  diffuse_transmission_color: tuple = (1.0, 1.0, 1.0),
+                  irradiance_behind: np.ndarray | None = None
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Mirror of ibl.glsl ibl_evaluate from the texels it reads: the split-sum table's A, B
     (...), the pre-filtered `radiance` along the reflection and the `irradiance` about n
     (..., 3, already scaled by the environment's intensity). glTF Appendix B's mix: the
     dielectric BRDF (its lobe of F0 `f0_dielectric` x `specular_weight` over the diffuse c,
     weighted by what that lobe leaves) and the metal BRDF (its lobe of F0 c), each with its
-    own compensation, mixed by metallic. Returns (diffuse, specular, k_d), each (..., 3)."""
+    own compensation, mixed by metallic. KHR_materials_iridescence (factor `iridescence`,
+    `iridescence_fresnel` the film's Fresnel over the dielectric and over c, brdf.py
+    `iridescence_fresnel`): each lobe mixed by the factor with the film's Fresnel (no
+    multiple scattering), the dielectric's diffuse with 1 - max3 of it (the Sample Viewer's
+    composition). KHR_materials_diffuse_transmission: the diffuse mixed by its factor with
+    the same weight times the transmission colour and the `irradiance_behind` (about -n).
+    Returns (diffuse, specular, k_d), each (..., 3)."""
     c = np.asarray(c, dtype=np.float64)
     m = np.asarray(metallic, dtype=np.float64)[..., None]
     mu = np.clip(np.asarray(n_dot_v, dtype=np.float64), 1e-4, 1.0)
     f0_d = np.broadcast_to(np.asarray(f0_dielectric, dtype=np.float64), c.shape)
     d_ss, d_ms = ibl_lobe(f0_d, specular_weight, mu, roughness, a, b)
     m_ss, m_ms = ibl_lobe(c, 1.0, mu, roughness, a, b)
+    leaves = 1.0 - d_ss - d_ms
+    if iridescence > 0.0 and iridescence_fresnel is not None:
+        k = iridescence
+        fi_d, fi_m = (np.asarray(x, dtype=np.float64) for x in iridescence_fresnel)
+        leaves = leaves + (1.0 - fi_d.max(axis=-1, keepdims=True) - leaves) * k
+        d_ss, d_ms = d_ss + (fi_d - d_ss) * k, d_ms * (1.0 - k)
+        m_ss, m_ms = m_ss + (fi_m - m_ss) * k, m_ms * (1.0 - k)
     fss_ess = (1.0 - m) * d_ss + m * m_ss
     fms_ems = (1.0 - m) * d_ms + m * m_ms
-    k_d = (1.0 - m) * c * (1.0 - d_ss - d_ms)
+    k_d = (1.0 - m) * c * leaves
     radiance, irradiance = np.asarray(radiance), np.asarray(irradiance)
-    return k_d * irradiance, fss_ess * radiance + fms_ems * irradiance, k_d
+    diffuse = k_d * irradiance
+    if diffuse_transmission > 0.0:
+        behind = ((1.0 - m) * leaves * np.asarray(diffuse_transmission_color)
+                  * np.asarray(irradiance if irradiance_behind is None else irradiance_behind))
+        diffuse = diffuse + (behind - diffuse) * diffuse_transmission
+    return diffuse, fss_ess * radiance + fms_ems * irradiance, k_d
 
 
 def _schlick(f0: np.ndarray, fc: np.ndarray) -> np.ndarray:

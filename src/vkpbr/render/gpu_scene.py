@@ -52,7 +52,8 @@ from vkpbr.scene.types import (
 __all__ = ["GpuScene", "Draw", "prepare_mesh", "uv_transform_rows"]
 
 _SWIZZLE = {0: "rrrr", 1: "gggg", 2: "bbbb", 3: "aaaa"}
-_NORMAL_SLOTS = frozenset(s.name for s in TEXTURES if s.kind == "normal")  # tangent space, RGB
+# Tangent-space normals and other linear vectors (RGB as stored, no swizzle).
+_NORMAL_SLOTS = frozenset(s.name for s in TEXTURES if s.kind in ("normal", "vector"))
 STREAMS = ("positions", "texcoords", "normals", "tangents")  # built at load
 LAZY_STREAMS = ("qtangents", "packed_frames")  # built by ensure_streams on first use
 
@@ -569,8 +570,12 @@ class GpuScene:
         flags = 0
         if has["clearcoat_normal"]:
             flags |= L.MATERIAL_HAS_CLEARCOAT_NORMAL_MAP
+        if has["anisotropy"]:
+            flags |= L.MATERIAL_HAS_ANISOTROPY_MAP
         if mat.unlit:
             flags |= L.MATERIAL_UNLIT
+        if mat.glossiness:
+            flags |= L.MATERIAL_GLOSSINESS
         if has["normal"]:
             flags |= L.MATERIAL_HAS_NORMAL_MAP
         if has["occlusion"]:

@@ -10,7 +10,7 @@ Descriptor sets follow the report (renderer-spec section 1):
          single frame, one per view for a batch); binding 1 frame settings (view, BRDF,
          tonemap, ...)
   set 1: bindings 0-4 base colour, metallic, roughness, normal, occlusion; 5 emissive;
-         6-14 the KHR_materials_* layers' textures (MATERIAL_TEXTURES); 15 material factors
+         6-19 the KHR_materials_* layers' textures (MATERIAL_TEXTURES); 20 material factors
   set 2: lighting, one per frame: binding 0 Lighting {view position, light count, mode,
          flags, environment}; 1 the punctual lights (a storage buffer of LightRecord, the
          course's one light being lights[0]); 2-4 the environment's pre-filtered maps
@@ -225,9 +225,9 @@ SETTINGS_NORMAL_MAPPING = 1  # use normal maps
 SETTINGS_OCCLUSION = 2  # use occlusion maps
 SETTINGS_SRGB_TARGET = 4  # the colour target encodes sRGB in hardware
 
-# The material's textures, in binding order (set 1, bindings 0-14; the Material block is
-# binding 15): the table's bound slots (scene/material_table.py TEXTURES), the core's six, then
-# the KHR_materials_* layers'. 15 samplers of set 1 + 5 of set 2 + 2 of set 3 = 22 a stage
+# The material's textures, in binding order (set 1, bindings 0-19; the Material block is
+# binding 20): the table's bound slots (scene/material_table.py TEXTURES), the core's six, then
+# the KHR_materials_* layers'. 20 samplers of set 1 + 5 of set 2 + 2 of set 3 = 27 a stage
 # (lavapipe allows 32, NVIDIA far more; Vulkan's guaranteed minimum, 16, is below that).
 MATERIAL_TEXTURES = tuple(slot.name for slot in TEXTURES if slot.bound)
 MATERIAL_BINDING = len(MATERIAL_TEXTURES)  # set 1's Material block
@@ -284,6 +284,10 @@ MATERIAL_HAS_EMISSIVE_MAP = 128
 # glTF's packed metallic-roughness texture: the metallic binding's view holds metallic in R
 # and roughness in G (render/gpu_scene.py), so shade.glsl reads both with one sample.
 MATERIAL_SHARED_METALLIC_ROUGHNESS = 256
+# KHR_materials_pbrSpecularGlossiness (Material.glossiness): roughness = 1 - factor x texel.
+MATERIAL_GLOSSINESS = 512
+# KHR_materials_anisotropy's texture (direction RG, strength B): read only when present.
+MATERIAL_HAS_ANISOTROPY_MAP = 1024
 # The KHR_materials_* layers' factors (shade.glsl material_layers' LAYER_FACTOR), their
 # values in a material without the extensions (generated.glsl MATERIAL_DEFAULT_*), and their
 # textures (MATERIAL_HAS_LAYER_MAPS).
@@ -565,6 +569,9 @@ class View(Named):
     TRANSMISSION = 28
     VOLUME = 29
     AO = 30  # the frame's screen-space ambient occlusion (render/ao.py)
+    ANISOTROPY = 31  # KHR_materials_anisotropy's direction and strength
+    IRIDESCENCE = 32  # KHR_materials_iridescence's thin-film Fresnel
+    DIFFUSE_TRANSMISSION = 33  # KHR_materials_diffuse_transmission's radiance
 
 
 VIEW_HELP = {
@@ -604,6 +611,13 @@ VIEW_HELP = {
                        "the surface and the refracted environment, after volume attenuation",
     View.VOLUME: "volume transmittance (KHR_materials_volume): attenuation colour ^ (thickness "
                  "/ attenuation distance), as a colour",
+    View.ANISOTROPY: "anisotropy (KHR_materials_anisotropy): RG the direction in the tangent "
+                      "plane (tangent, bitangent) * 0.5 + 0.5, B the strength",
+    View.IRIDESCENCE: "the thin-film Fresnel of KHR_materials_iridescence on the dielectric's "
+                       "F0 at n.v, times the iridescence factor, as RGB",
+    View.DIFFUSE_TRANSMISSION: "diffusely transmitted radiance (KHR_materials_diffuse_transmission): "
+                                "the Lambertian lobe through the surface of the lights and the "
+                                "environment behind",
     View.AO: "screen-space ambient occlusion (GTAO, --ao): visibility of the image-based light, "
              "1 unoccluded, grey (1 where frames have none)",
 }
@@ -620,7 +634,7 @@ VIEW_KIND = {
         ViewKind.RADIANCE
         if v in (View.FINAL, View.SPECULAR, View.DIFFUSE, View.AMBIENT, View.EMISSIVE,
                  View.IBL_DIFFUSE, View.IBL_SPECULAR, View.CLEARCOAT, View.SHEEN,
-                 View.TRANSMISSION)
+                 View.TRANSMISSION, View.DIFFUSE_TRANSMISSION)
         else ViewKind.COLOR
         if v in (View.BASE_COLOR, View.VOLUME)
         else ViewKind.DATA

@@ -1,6 +1,7 @@
 # glTF images, samplers, textures and materials -> Image, Sampler, TextureRef, Material:
 # the metallic-roughness core, KHR_texture_transform, KHR_materials_emissive_strength, _unlit,
-# _ior, _specular, _clearcoat, _sheen, _transmission and _volume (factors and textures), and
+# _ior, _specular, _clearcoat, _sheen, _transmission and _volume (factors and textures),
+# KHR_materials_pbrSpecularGlossiness (converted: `_specular_glossiness`), and
 # KHR_materials_variants (`apply_variant`: the chosen variant's materials replace the
 # primitives' before the meshes are built).
 # Images stay encoded (decoding is textures.py's job, in parallel); a missing image file is
@@ -124,19 +125,69 @@ def build_materials(ld: GltfDocument, n_images: int) -> list[Material]:
         alpha_mode = get(m, "alphaMode", "OPAQUE")
         if alpha_mode not in _ALPHA:
             raise SceneError(p, f"material {i}: unknown alphaMode {alpha_mode!r}")
+        fields = {
+            **{prm.name: _parameter(ld, i, m, prm) for prm in PARAMS},
+            **{f"{slot.name}_texture": _texture_ref(ld, _find(m, slot.gltf), n_images, slot.channel)
+               for slot in TEXTURES if slot.gltf is not None},
+        }
+        extensions = get(m, "extensions", {})
+        if isinstance(get(extensions, _SG), dict):
+            fields.update(_specular_glossiness(ld, i, get(extensions, _SG), n_images))
         out.append(
             Material(
                 name=str(get(m, "name", f"material {i}")),
                 alpha_mode=_ALPHA[alpha_mode],
                 double_sided=bool(get(m, "doubleSided", False)),
-                unlit=isinstance(get(get(m, "extensions", {}), "KHR_materials_unlit"), dict),
-                **{prm.name: _parameter(ld, i, m, prm) for prm in PARAMS},
-                **{f"{slot.name}_texture": _texture_ref(ld, _find(m, slot.gltf), n_images,
-                                                        slot.channel)
-                   for slot in TEXTURES if slot.gltf is not None},
+                unlit=isinstance(get(extensions, "KHR_materials_unlit"), dict),
+                **fields,
             )
         )
     return out
+
+
+_SG = "KHR_materials_pbrSpecularGlossiness"
+# The dielectric F0 of ior 1.5 (the core's, ((1.5 - 1) / (1.5 + 1))^2): the specular colour
+# factor that makes vkpbr's dielectric F0 (shade.glsl dielectric_f0) a given specular colour.
+_F0_IOR_1_5 = 0.04
+
+
+def _sg_factor(ld: GltfDocument, i: int, sg: dict, name: str, default: tuple) -> tuple:
+    """One of the extension's factors: finite, each component in [0, 1] (its schema)."""
+    what = f"material {i}: {name}"
+    value = floats(get(sg, name), len(default), default, what, ld.path)
+    if not all(0.0 <= x <= 1.0 for x in value):
+        shown = list(value) if len(value) > 1 else value[0]
+        raise SceneError(ld.path, f"{what} {shown!r} outside 0..1")
+    return value
+
+
+def _specular_glossiness(ld: GltfDocument, i: int, sg: dict, n_images: int) -> dict:
+    """Material `i`'s KHR_materials_pbrSpecularGlossiness (archived by Khronos) as Material
+    fields, replacing the metallic-roughness fallback the file may also hold.
+
+    As the glTF Sample Viewer shades it (material_info.glsl getSpecularGlossinessInfo and
+    getBaseColor): a dielectric (metallic 0) whose base colour is diffuseFactor x
+    diffuseTexture, whose F0 is specularFactor x the specularGlossinessTexture's RGB (sRGB),
+    and whose perceptual roughness is 1 - glossinessFactor x its A (linear). F0 goes through
+    KHR_materials_specular's colour at ior 1.5 (F0 = 0.04 x specular colour: the colour is
+    specular / 0.04, its texture the same RGB); roughness_factor and roughness_texture hold
+    the glossiness, which the `glossiness` switch inverts in the shader (shade.glsl): 1 - g x
+    texel is no product of a factor and a texel."""
+    diffuse = _sg_factor(ld, i, sg, "diffuseFactor", (1.0, 1.0, 1.0, 1.0))
+    specular = _sg_factor(ld, i, sg, "specularFactor", (1.0, 1.0, 1.0))
+    (glossiness,) = _sg_factor(ld, i, sg, "glossinessFactor", (1.0,))
+    sg_texture = get(sg, "specularGlossinessTexture")
+    return {
+        "base_color_factor": diffuse,
+        "base_color_texture": _texture_ref(ld, get(sg, "diffuseTexture"), n_images),
+        "metallic_factor": 0.0, "metallic_texture": None,
+        "roughness_factor": glossiness,
+        "roughness_texture": _texture_ref(ld, sg_texture, n_images, channel=3),
+        "ior": 1.5, "specular_factor": 1.0, "specular_texture": None,
+        "specular_color_factor": tuple(x / _F0_IOR_1_5 for x in specular),
+        "specular_color_texture": _texture_ref(ld, sg_texture, n_images),
+        "glossiness": True,
+    }
 
 
 def _find(m: object, path: str) -> object:

@@ -53,7 +53,8 @@ class TextureSlot:
     channel: where a scalar map's value is (0 R .. 3 A), as the glTF specification puts it;
         the GPU view swizzles it into R (render/gpu_scene.py).
     kind: "color" (sRGB-encoded: decoded by the GPU's sRGB formats), "scalar" (linear, one
-        channel) or "normal" (linear, tangent-space xyz * 2 - 1).
+        channel), "normal" (linear, tangent-space xyz * 2 - 1) or "vector" (linear, RGB as
+        stored: KHR_materials_anisotropy's direction in RG, strength in B).
     bound: has a binding in the material's descriptor set (binding order = table order); the
         alpha mask is merged into the base colour's A on upload instead.
     """
@@ -61,7 +62,7 @@ class TextureSlot:
     name: str
     gltf: str | None
     channel: int = 0
-    kind: Literal["color", "scalar", "normal"] = "scalar"
+    kind: Literal["color", "scalar", "normal", "vector"] = "scalar"
     bound: bool = True
 
     @property
@@ -147,6 +148,10 @@ _SHEEN = "KHR_materials_sheen"
 _SPECULAR = "KHR_materials_specular"
 _TRANSMISSION = "KHR_materials_transmission"
 _VOLUME = "KHR_materials_volume"
+_ANISOTROPY = "KHR_materials_anisotropy"
+_IRIDESCENCE = "KHR_materials_iridescence"
+_DIFFUSE_TRANSMISSION = "KHR_materials_diffuse_transmission"
+_DISPERSION = "KHR_materials_dispersion"
 
 # The texture slots, in Material's order; the bound ones' order is set 1's binding order.
 TEXTURES: tuple[TextureSlot, ...] = (
@@ -169,6 +174,15 @@ TEXTURES: tuple[TextureSlot, ...] = (
     TextureSlot("specular_color", f"{_SPECULAR}.specularColorTexture", kind="color"),
     TextureSlot("transmission", f"{_TRANSMISSION}.transmissionTexture"),  # R
     TextureSlot("thickness", f"{_VOLUME}.thicknessTexture", channel=1),
+    TextureSlot("anisotropy", f"{_ANISOTROPY}.anisotropyTexture", kind="vector"),  # RG, B
+    TextureSlot("iridescence", f"{_IRIDESCENCE}.iridescenceTexture"),  # R
+    # G: the thin film's thickness between the minimum and the maximum (mix, not a product).
+    TextureSlot("iridescence_thickness", f"{_IRIDESCENCE}.iridescenceThicknessTexture",
+                channel=1),
+    TextureSlot("diffuse_transmission", f"{_DIFFUSE_TRANSMISSION}.diffuseTransmissionTexture",
+                channel=3),
+    TextureSlot("diffuse_transmission_color",
+                f"{_DIFFUSE_TRANSMISSION}.diffuseTransmissionColorTexture", kind="color"),
 )
 
 # The parameters, in Material's field order. Ranges: the extensions' schemas; the wide bounds
@@ -209,6 +223,31 @@ PARAMS: tuple[MaterialParam, ...] = (
     _P("attenuation_color", f"{_VOLUME}.attenuationColor", (1.0, 1.0, 1.0), lo=0.0, hi=1.0),
     _P("clearcoat_normal_scale", f"{_COAT}.clearcoatNormalTexture.scale", 1.0,
        texture="clearcoat_normal"),
+    # KHR_materials_anisotropy: the strength (times the texture's B) and the rotation of the
+    # direction (the texture's RG * 2 - 1, else +tangent) from the tangent, radians
+    # counter-clockwise towards the bitangent.
+    _P("anisotropy_strength", f"{_ANISOTROPY}.anisotropyStrength", 0.0, lo=0.0, hi=1.0,
+       texture="anisotropy"),
+    _P("anisotropy_rotation", f"{_ANISOTROPY}.anisotropyRotation", 0.0),
+    # KHR_materials_iridescence: a thin film (ior, thickness in nanometres) over the base;
+    # without its texture the thickness is the maximum.
+    _P("iridescence_factor", f"{_IRIDESCENCE}.iridescenceFactor", 0.0, lo=0.0, hi=1.0,
+       texture="iridescence"),
+    _P("iridescence_ior", f"{_IRIDESCENCE}.iridescenceIor", 1.3, lo=1.0),
+    _P("iridescence_thickness_minimum", f"{_IRIDESCENCE}.iridescenceThicknessMinimum", 100.0,
+       lo=0.0),
+    _P("iridescence_thickness_maximum", f"{_IRIDESCENCE}.iridescenceThicknessMaximum", 400.0,
+       lo=0.0, texture="iridescence_thickness"),
+    # KHR_materials_diffuse_transmission: the share of the diffuse lobe that passes through
+    # the surface as a Lambertian lobe on the other side, and the colour it takes.
+    _P("diffuse_transmission_factor", f"{_DIFFUSE_TRANSMISSION}.diffuseTransmissionFactor", 0.0,
+       lo=0.0, hi=1.0, texture="diffuse_transmission"),
+    _P("diffuse_transmission_color_factor",
+       f"{_DIFFUSE_TRANSMISSION}.diffuseTransmissionColorFactor", (1.0, 1.0, 1.0), lo=0.0,
+       hi=1.0, texture="diffuse_transmission_color"),
+    # KHR_materials_dispersion: 20 / Abbe number; spreads a volume's ior over the three
+    # channels (the Sample Viewer's (ior - 1) x 0.025 x dispersion either side of green).
+    _P("dispersion", f"{_DISPERSION}.dispersion", 0.0, lo=0.0),
 )
 
 # Material's field defaults (types.py takes them from here; Any: each field's annotation
@@ -216,9 +255,12 @@ PARAMS: tuple[MaterialParam, ...] = (
 DEFAULTS: Mapping[str, Any] = MappingProxyType({p.name: p.default for p in PARAMS})
 # The KHR_materials_* factors that shade.glsl's LAYER_FACTOR reads (render/layouts.py).
 LAYER_PARAMS: tuple[MaterialParam, ...] = tuple(p for p in PARAMS if p.layer)
-# Every material extension vkpbr reads: the rows', and two without rows (KHR_materials_unlit
-# is a switch; KHR_materials_variants chooses among materials).
+# Every material extension vkpbr reads: the rows', and three without rows (KHR_materials_unlit
+# is a switch; KHR_materials_variants chooses among materials; the archived
+# KHR_materials_pbrSpecularGlossiness is converted to the rows and the `glossiness` switch
+# when the file is read: scene/gltf_materials.py).
 EXTENSIONS: tuple[str, ...] = tuple(dict.fromkeys(
     x for x in [*(_extension(p.gltf) for p in PARAMS), *(_extension(p.gltf_scale) for p in PARAMS),
                 *(_extension(s.gltf) for s in TEXTURES),
-                "KHR_materials_unlit", "KHR_materials_variants"] if x))
+                "KHR_materials_unlit", "KHR_materials_variants",
+                "KHR_materials_pbrSpecularGlossiness"] if x))

@@ -138,6 +138,9 @@ class Material:
     # The KHR_materials_* extensions. Defaults are the core material's: every layer off, ior
     # 1.5 (F0 0.04), white specular. Their textures (below) multiply the factors.
     unlit: bool = False  # KHR_materials_unlit: the base colour is the radiance
+    # KHR_materials_pbrSpecularGlossiness (converted when read: scene/gltf_materials.py):
+    # roughness_factor and roughness_texture hold glossiness, roughness = 1 - their product.
+    glossiness: bool = False
     ior: float = _D["ior"]  # KHR_materials_ior: dielectric F0 = ((ior - 1) / (ior + 1))^2
     specular_factor: float = _D["specular_factor"]  # KHR_materials_specular: dielectric weight
     specular_color_factor: tuple[float, float, float] = _D["specular_color_factor"]  # scales F0
@@ -150,6 +153,16 @@ class Material:
     attenuation_distance: float = _D["attenuation_distance"]  # 0 = infinite (no absorption)
     attenuation_color: tuple[float, float, float] = _D["attenuation_color"]
     clearcoat_normal_scale: float = _D["clearcoat_normal_scale"]
+    anisotropy_strength: float = _D["anisotropy_strength"]  # KHR_materials_anisotropy
+    anisotropy_rotation: float = _D["anisotropy_rotation"]  # radians from the tangent
+    iridescence_factor: float = _D["iridescence_factor"]  # KHR_materials_iridescence
+    iridescence_ior: float = _D["iridescence_ior"]  # the thin film's
+    iridescence_thickness_minimum: float = _D["iridescence_thickness_minimum"]  # nanometres
+    iridescence_thickness_maximum: float = _D["iridescence_thickness_maximum"]
+    # KHR_materials_diffuse_transmission
+    diffuse_transmission_factor: float = _D["diffuse_transmission_factor"]
+    diffuse_transmission_color_factor: tuple[float, float, float] = _D["diffuse_transmission_color_factor"]
+    dispersion: float = _D["dispersion"]  # KHR_materials_dispersion: 20 / Abbe number
     # The extensions' textures; `channel` picks a scalar map's component, as for metallic.
     clearcoat_texture: TextureRef | None = None  # linear; glTF: R
     clearcoat_roughness_texture: TextureRef | None = None  # linear; glTF: G
@@ -160,6 +173,11 @@ class Material:
     specular_color_texture: TextureRef | None = None  # sRGB; RGB
     transmission_texture: TextureRef | None = None  # linear; glTF: R
     thickness_texture: TextureRef | None = None  # linear; glTF: G
+    anisotropy_texture: TextureRef | None = None  # linear; RG direction * 2 - 1, B strength
+    iridescence_texture: TextureRef | None = None  # linear; glTF: R
+    iridescence_thickness_texture: TextureRef | None = None  # linear; glTF: G (min..max)
+    diffuse_transmission_texture: TextureRef | None = None  # linear; glTF: A
+    diffuse_transmission_color_texture: TextureRef | None = None  # sRGB; RGB
 
 
 # Every Material texture slot (the field is f"{slot}_texture"), and those holding colour

@@ -182,6 +182,7 @@ def _check_material(m: Material, where: str, n_images: int) -> None:
         else:
             _vector(getattr(m, p.name), p.size, f"{where}.{p.name}", p.lo, p.hi)
     _choice(m.unlit, (True, False), f"{where}.unlit")
+    _choice(m.glossiness, (True, False), f"{where}.glossiness")
     _choice(m.alpha_mode, ("opaque", "mask", "blend"), f"{where}.alpha_mode")
     _choice(m.double_sided, (True, False), f"{where}.double_sided")
     _choice(m.casts_shadows, (True, False), f"{where}.casts_shadows")

@@ -138,6 +138,98 @@ vec3 volume_transmittance(float dist, vec3 attenuation_color, float attenuation_
     return pow(attenuation_color, vec3(dist / attenuation_distance));
 }
 
+// KHR_materials_anisotropy's GGX (Burley 2012; the extension's README and the glTF Sample
+// Viewer's D_GGX_anisotropic / V_GGX_anisotropic): alpha_t along the anisotropy direction t,
+// alpha_b along b = ng x t; t.h, b.h, t.v, ... the directions' components in that frame.
+float d_ggx_anisotropic(float n_dot_h, float t_dot_h, float b_dot_h, float at, float ab) {
+    float a2 = at * ab;
+    vec3 f = vec3(ab * t_dot_h, at * b_dot_h, a2 * n_dot_h);
+    float w2 = a2 / dot(f, f);
+    return a2 * w2 * w2 / PI;
+}
+
+float v_ggx_anisotropic(float n_dot_l, float n_dot_v, float b_dot_v, float t_dot_v,
+                        float t_dot_l, float b_dot_l, float at, float ab) {
+    float ggx_v = n_dot_l * length(vec3(at * t_dot_v, ab * b_dot_v, n_dot_v));
+    float ggx_l = n_dot_v * length(vec3(at * t_dot_l, ab * b_dot_l, n_dot_l));
+    return clamp(0.5 / (ggx_v + ggx_l), 0.0, 1.0);
+}
+
+// The anisotropic roughnesses of strength s: alpha_t = mix(alpha, 1, s^2) along the
+// direction, alpha_b = alpha (at least 0.001) across it.
+vec2 anisotropic_alphas(float alpha, float s) {
+    return vec2(mix(alpha, 1.0, s * s), clamp(alpha, 0.001, 1.0));
+}
+
+// KHR_materials_iridescence: the Fresnel reflectance of a thin film (index eta2, thickness
+// in nm) between the outside (index 1) and a base of reflectance base_f0, at cos(theta1) =
+// n.v: Belcour and Barla 2017's airy summation (two orders) with the spectral sensitivity
+// fitted in XYZ, as the extension's README and the glTF Sample Viewer's evalIridescence.
+const mat3 XYZ_TO_REC709 = mat3(3.2404542, -0.9692660, 0.0556434, -1.5371385, 1.8760108,
+                                -0.2040259, -0.4985314, 0.0415560, 1.0572252);
+
+float sq(float x) { return x * x; }
+vec3 sq(vec3 x) { return x * x; }
+
+vec3 fresnel0_to_ior(vec3 f0) {
+    vec3 s = sqrt(f0);
+    return (1.0 + s) / (1.0 - s);
+}
+
+vec3 ior_to_fresnel0(vec3 transmitted, float incident) {
+    return sq((transmitted - incident) / (transmitted + incident));
+}
+
+float ior_to_fresnel0(float transmitted, float incident) {
+    return sq((transmitted - incident) / (transmitted + incident));
+}
+
+// The XYZ sensitivity's Fourier transform at optical path difference opd (nm), phase shift
+// `shift`, as linear Rec. 709 (sRGB primaries).
+vec3 eval_sensitivity(float opd, vec3 shift) {
+    float phase = 2.0 * PI * opd * 1.0e-9;
+    const vec3 val = vec3(5.4856e-13, 4.4201e-13, 5.2481e-13);
+    const vec3 pos = vec3(1.6810e+06, 1.7953e+06, 2.2084e+06);
+    const vec3 var = vec3(4.3278e+09, 9.3046e+09, 6.6121e+09);
+    vec3 xyz = val * sqrt(2.0 * PI * var) * cos(pos * phase + shift) * exp(-sq(phase) * var);
+    xyz.x += 9.7470e-14 * sqrt(2.0 * PI * 4.5282e+09) * cos(2.2399e+06 * phase + shift[0])
+        * exp(-4.5282e+09 * sq(phase));
+    return XYZ_TO_REC709 * (xyz / 1.0685e-7);
+}
+
+vec3 eval_iridescence(float outside_ior, float eta2, float cos_theta1, float thickness,
+                      vec3 base_f0) {
+    // The film fades into the outside medium as it thins to nothing.
+    float film_ior = mix(outside_ior, eta2, smoothstep(0.0, 0.03, thickness));
+    float sin_theta2_sq = sq(outside_ior / film_ior) * (1.0 - sq(cos_theta1));
+    float cos_theta2_sq = 1.0 - sin_theta2_sq;
+    if (cos_theta2_sq < 0.0) return vec3(1.0);  // total internal reflection
+    float cos_theta2 = sqrt(cos_theta2_sq);
+    // First interface (outside | film).
+    float r0 = ior_to_fresnel0(film_ior, outside_ior);
+    float r12 = r0 + (1.0 - r0) * pow(1.0 - cos_theta1, 5.0);
+    float t121 = 1.0 - r12;
+    float phi12 = film_ior < outside_ior ? PI : 0.0;
+    float phi21 = PI - phi12;
+    // Second interface (film | base).
+    vec3 base_ior = fresnel0_to_ior(clamp(base_f0, 0.0, 0.9999));
+    vec3 r1 = ior_to_fresnel0(base_ior, film_ior);
+    vec3 r23 = r1 + (1.0 - r1) * pow(1.0 - cos_theta2, 5.0);
+    vec3 phi23 = mix(vec3(0.0), vec3(PI), lessThan(base_ior, vec3(film_ior)));
+    float opd = 2.0 * film_ior * thickness * cos_theta2;
+    vec3 phi = vec3(phi21) + phi23;
+    vec3 r123 = clamp(r12 * r23, 1e-5, 0.9999);
+    vec3 r123_sqrt = sqrt(r123);
+    vec3 rs = sq(t121) * r23 / (1.0 - r123);
+    vec3 intensity = r12 + rs;  // order 0
+    vec3 cm = rs - t121;
+    for (int m = 1; m <= 2; ++m) {
+        cm *= r123_sqrt;
+        intensity += cm * 2.0 * eval_sensitivity(float(m) * opd, float(m) * phi);
+    }
+    return max(intensity, vec3(0.0));
+}
+
 // The layers' parameters at a shading point (scene.types.Material documents each).
 struct Layers {
     float ior;
@@ -151,12 +243,25 @@ struct Layers {
     float thickness;
     vec3 attenuation_color;
     float attenuation_distance;
+    float anisotropy;       // strength (0: the isotropic lobe)
+    float anisotropy_rotation;
+    vec3 anisotropic_t;     // the anisotropy direction in world space (shade.glsl)
+    vec3 anisotropic_b;     // ng x anisotropic_t
+    float iridescence;      // factor (0: no film)
+    float iridescence_ior;
+    float iridescence_thickness;  // nm
+    vec3 iridescence_dielectric;  // the film's Fresnel over the dielectric's F0 at n.v
+    vec3 iridescence_metal;       // and over the base colour (shade.glsl)
+    float diffuse_transmission;   // the share of the diffuse lobe passing through
+    vec3 diffuse_transmission_color;
+    float dispersion;             // KHR_materials_dispersion (a volume's refraction)
 };
 
 // One punctual light's layered glTF BRDF (values before the light's radiance and shadow).
 struct LayeredTerms {
     BrdfTerms base;    // D, F (the mixed specular Fresnel), G; specular and diffuse * n.l
     vec3 transmission; // the transmitted lobe (no n.l), weighted like the diffuse
+    vec3 diffuse_transmission;  // the diffuse lobe's share through the surface (in base.diffuse)
     vec3 sheen;        // sheen colour D_charlie V_charlie n.l
     float clearcoat;   // the coat's D V (n_c.l): its Fresnel is in the blend (shade.glsl)
 };
@@ -180,12 +285,37 @@ LayeredTerms evaluate_layered_brdf(vec3 n, vec3 nc, vec3 v, vec3 l, vec3 c, floa
     LayeredTerms t;
     t.base.D = d_ggx(n_dot_h, alpha);
     float vis = v_smith_ggx_correlated(n_dot_l, n_dot_v, alpha);
+    if (m.anisotropy > 0.0) {  // KHR_materials_anisotropy: the specular lobe only
+        vec2 a = anisotropic_alphas(alpha, m.anisotropy);
+        vec3 at = m.anisotropic_t, ab = m.anisotropic_b;
+        t.base.D = d_ggx_anisotropic(clamp(dot(n, h), 0.001, 1.0), dot(at, h), dot(ab, h), a.x, a.y);
+        vis = v_ggx_anisotropic(n_dot_l, n_dot_v, dot(ab, v), dot(at, v), dot(at, l), dot(ab, l),
+                                a.x, a.y);
+    }
     t.base.G = vis * 4.0 * n_dot_l * n_dot_v;
     vec3 f_dielectric = m.specular * f_schlick(dielectric_f0(m.ior, m.specular_color), v_dot_h);
-    t.base.F = (1.0 - metallic) * f_dielectric + metallic * f_schlick(c, v_dot_h);
+    vec3 f_metal = f_schlick(c, v_dot_h);
+    float f_max = max3(f_dielectric);
+    if (m.iridescence > 0.0) {  // KHR_materials_iridescence: the film's Fresnel mixed in
+        f_dielectric = mix(f_dielectric, m.iridescence_dielectric, m.iridescence);
+        f_metal = mix(f_metal, m.iridescence_metal, m.iridescence);
+        f_max = mix(f_max, max3(m.iridescence_dielectric), m.iridescence);
+    }
+    t.base.F = (1.0 - metallic) * f_dielectric + metallic * f_metal;
     t.base.specular = t.base.F * (t.base.D * vis) * n_dot_l;
-    float diffuse_weight = (1.0 - metallic) * (1.0 - max3(f_dielectric));
+    float diffuse_weight = (1.0 - metallic) * (1.0 - f_max);
     t.base.diffuse = diffuse_weight * (1.0 - m.transmission) * c / PI * n_dot_l;
+    t.diffuse_transmission = vec3(0.0);
+    if (m.diffuse_transmission > 0.0) {
+        // KHR_materials_diffuse_transmission: mix(Lambert of c on this side, Lambert of the
+        // transmission colour on the other, factor), the volume's transmittance on the latter
+        // (the Sample Viewer's diffuse_btdf).
+        vec3 btdf = m.diffuse_transmission_color / PI * max(-dot(n, l), 0.0)
+            * volume_transmittance(m.thickness, m.attenuation_color, m.attenuation_distance);
+        t.diffuse_transmission = diffuse_weight * (1.0 - m.transmission) * m.diffuse_transmission
+            * btdf;
+        t.base.diffuse = t.base.diffuse * (1.0 - m.diffuse_transmission) + t.diffuse_transmission;
+    }
     t.transmission = vec3(0.0);
     if (m.transmission > 0.0) {
         vec3 l_mirror = normalize(l - 2.0 * n * dot(l, n));

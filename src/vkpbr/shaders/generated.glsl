@@ -22,6 +22,15 @@ const float MATERIAL_DEFAULT_transmission_factor = 0.0;
 const float MATERIAL_DEFAULT_thickness_factor = 0.0;
 const float MATERIAL_DEFAULT_attenuation_distance = 0.0;
 const vec3 MATERIAL_DEFAULT_attenuation_color = vec3(1.0, 1.0, 1.0);
+const float MATERIAL_DEFAULT_anisotropy_strength = 0.0;
+const float MATERIAL_DEFAULT_anisotropy_rotation = 0.0;
+const float MATERIAL_DEFAULT_iridescence_factor = 0.0;
+const float MATERIAL_DEFAULT_iridescence_ior = 1.2999999523162842;
+const float MATERIAL_DEFAULT_iridescence_thickness_minimum = 100.0;
+const float MATERIAL_DEFAULT_iridescence_thickness_maximum = 400.0;
+const float MATERIAL_DEFAULT_diffuse_transmission_factor = 0.0;
+const vec3 MATERIAL_DEFAULT_diffuse_transmission_color_factor = vec3(1.0, 1.0, 1.0);
+const float MATERIAL_DEFAULT_dispersion = 0.0;
 float sheen_albedo_fit(float x, float y) {
     return (1.09927 + y * (-0.4456763 + y * (-2.387564 + y * (6.252952 + y * (-3.489524))))) + x * ((12.52236 + y * (-70.76933 + y * (154.0586 + y * (-146.4862 + y * (50.86578))))) + x * ((-54.14374 + y * (288.7846 + y * (-608.6334 + y * (560.6368 + y * (-189.5136))))) + x * ((66.47369 + y * (-367.9202 + y * (784.6235 + y * (-728.6155 + y * (247.9961))))) + x * ((-25.8705 + y * (149.7473 + y * (-326.3621 + y * (307.6033 + y * (-105.8631)))))))));
 }
@@ -56,6 +65,9 @@ const int VIEW_SHEEN = 27;
 const int VIEW_TRANSMISSION = 28;
 const int VIEW_VOLUME = 29;
 const int VIEW_AO = 30;
+const int VIEW_ANISOTROPY = 31;
+const int VIEW_IRIDESCENCE = 32;
+const int VIEW_DIFFUSE_TRANSMISSION = 33;
 const int BRDF_GGX = 0;
 const int BRDF_BLINN_PHONG = 1;
 const int BRDF_GLTF = 2;
@@ -75,15 +87,17 @@ const int LIGHT_DIRECTIONAL = 2;
 const int VIEW_KIND_RADIANCE = 0;
 const int VIEW_KIND_COLOR = 1;
 const int VIEW_KIND_DATA = 2;
-const int VIEW_KINDS[31] = int[](0, 2, 2, 2, 0, 0, 0, 2, 2, 2, 2, 1, 2, 2, 2, 2, 2, 2, 0, 2, 2, 2, 0, 0, 2, 2, 0, 0, 0, 1, 2);
+const int VIEW_KINDS[34] = int[](0, 2, 2, 2, 0, 0, 0, 2, 2, 2, 2, 1, 2, 2, 2, 2, 2, 2, 0, 2, 2, 2, 0, 0, 2, 2, 0, 0, 0, 1, 2, 2, 2, 0);
 const uint LIGHTING_AO = 16u;
 const uint LIGHTING_BACKGROUND = 4u;
 const uint LIGHTING_IBL = 2u;
 const uint LIGHTING_SCREEN_TRANSMISSION = 8u;
 const uint LIGHTING_SHADOWS = 1u;
-const uint MATERIAL_BINDING = 15u;
+const uint MATERIAL_BINDING = 20u;
 const uint MATERIAL_BLEND = 8u;
 const uint MATERIAL_DOUBLE_SIDED = 2u;
+const uint MATERIAL_GLOSSINESS = 512u;
+const uint MATERIAL_HAS_ANISOTROPY_MAP = 1024u;
 const uint MATERIAL_HAS_CLEARCOAT_NORMAL_MAP = 32u;
 const uint MATERIAL_HAS_EMISSIVE_MAP = 128u;
 const uint MATERIAL_HAS_LAYER_MAPS = 64u;
@@ -127,6 +141,8 @@ struct MaterialRecord {
     float sheen_roughness_factor;
     vec3 attenuation_color;
     float clearcoat_normal_scale;
+    vec3 diffuse_transmission_color_factor;
+    float dispersion;
     float metallic_factor;
     float roughness_factor;
     float occlusion_strength;
@@ -137,6 +153,13 @@ struct MaterialRecord {
     float transmission_factor;
     float thickness_factor;
     float attenuation_distance;
+    float anisotropy_strength;
+    float anisotropy_rotation;
+    float iridescence_factor;
+    float iridescence_ior;
+    float iridescence_thickness_minimum;
+    float iridescence_thickness_maximum;
+    float diffuse_transmission_factor;
     uint flags;
     vec4 base_color_uv_row0;
     vec4 base_color_uv_row1;
@@ -168,6 +191,16 @@ struct MaterialRecord {
     vec4 transmission_uv_row1;
     vec4 thickness_uv_row0;
     vec4 thickness_uv_row1;
+    vec4 anisotropy_uv_row0;
+    vec4 anisotropy_uv_row1;
+    vec4 iridescence_uv_row0;
+    vec4 iridescence_uv_row1;
+    vec4 iridescence_thickness_uv_row0;
+    vec4 iridescence_thickness_uv_row1;
+    vec4 diffuse_transmission_uv_row0;
+    vec4 diffuse_transmission_uv_row1;
+    vec4 diffuse_transmission_color_uv_row0;
+    vec4 diffuse_transmission_color_uv_row1;
 };
 #if !STRUCTS_ONLY
 layout(set = 0, binding = 0, std140) readonly buffer Views {
@@ -208,7 +241,12 @@ layout(set = 1, binding = 11) uniform sampler2D specular_map;
 layout(set = 1, binding = 12) uniform sampler2D specular_color_map;
 layout(set = 1, binding = 13) uniform sampler2D transmission_map;
 layout(set = 1, binding = 14) uniform sampler2D thickness_map;
-layout(set = 1, binding = 15, std140) uniform Material {
+layout(set = 1, binding = 15) uniform sampler2D anisotropy_map;
+layout(set = 1, binding = 16) uniform sampler2D iridescence_map;
+layout(set = 1, binding = 17) uniform sampler2D iridescence_thickness_map;
+layout(set = 1, binding = 18) uniform sampler2D diffuse_transmission_map;
+layout(set = 1, binding = 19) uniform sampler2D diffuse_transmission_color_map;
+layout(set = 1, binding = 20, std140) uniform Material {
     vec4 base_color_factor;
     vec3 emissive_factor;
     float normal_scale;
@@ -218,6 +256,8 @@ layout(set = 1, binding = 15, std140) uniform Material {
     float sheen_roughness_factor;
     vec3 attenuation_color;
     float clearcoat_normal_scale;
+    vec3 diffuse_transmission_color_factor;
+    float dispersion;
     float metallic_factor;
     float roughness_factor;
     float occlusion_strength;
@@ -228,6 +268,13 @@ layout(set = 1, binding = 15, std140) uniform Material {
     float transmission_factor;
     float thickness_factor;
     float attenuation_distance;
+    float anisotropy_strength;
+    float anisotropy_rotation;
+    float iridescence_factor;
+    float iridescence_ior;
+    float iridescence_thickness_minimum;
+    float iridescence_thickness_maximum;
+    float diffuse_transmission_factor;
     uint flags;
     vec4 base_color_uv_row0;
     vec4 base_color_uv_row1;
@@ -259,6 +306,16 @@ layout(set = 1, binding = 15, std140) uniform Material {
     vec4 transmission_uv_row1;
     vec4 thickness_uv_row0;
     vec4 thickness_uv_row1;
+    vec4 anisotropy_uv_row0;
+    vec4 anisotropy_uv_row1;
+    vec4 iridescence_uv_row0;
+    vec4 iridescence_uv_row1;
+    vec4 iridescence_thickness_uv_row0;
+    vec4 iridescence_thickness_uv_row1;
+    vec4 diffuse_transmission_uv_row0;
+    vec4 diffuse_transmission_uv_row1;
+    vec4 diffuse_transmission_color_uv_row0;
+    vec4 diffuse_transmission_color_uv_row1;
 } material;
 #if !COMPUTE_SHADING
 layout(set = 2, binding = 0, std140) uniform Lighting {

@@ -16,6 +16,7 @@ struct IblTerms {
     vec3 specular;
     vec3 diffuse_weight;  // k_d: (1 - metallic) c times what the dielectric's specular lobe
                           // leaves its diffuse (and transmission)
+    vec3 diffuse_leaves;  // k_d without c: (1 - metallic) times what that lobe leaves
 };
 
 // One specular lobe's split-sum weights (Fdez-Aguera listing 3; the Sample Renderer's
@@ -47,32 +48,58 @@ IblLobe ibl_lobe(vec3 f0, float weight, float n_dot_v, float roughness, vec2 ab)
 // F0 = mix(f0_dielectric, c, metallic) into one lobe instead loses energy at fractional
 // metallic: a white sphere in a white furnace returned 0.66-0.84 at metallic 0.25-0.75,
 // issue 34.)
-IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 c, float metallic, float roughness,
-                      vec3 f0_dielectric, float specular_weight) {
+// `r`: the direction the pre-filtered environment is read along (the reflection of v about
+// n, or about KHR_materials_anisotropy's bent normal: shade.glsl). KHR_materials_iridescence
+// (`iridescence` > 0, the Sample Viewer's composition): each lobe mixed by the factor with
+// the film's Fresnel times the radiance alone, the dielectric's diffuse with 1 - max3 of it.
+IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 r, vec3 c, float metallic, float roughness,
+                      vec3 f0_dielectric, float specular_weight, float iridescence,
+                      vec3 iridescence_dielectric, vec3 iridescence_metal) {
     vec2 rot = ENV_ROTATION;
     float max_lod = lighting.env_rotation.z;
     float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
-    vec3 r = reflect(-v, n);
     vec3 radiance = textureLod(env_specular, env_rotate(r, rot), roughness * max_lod).rgb;
     vec3 irradiance = textureLod(env_irradiance, env_rotate(n, rot), 0.0).rgb;
     vec2 ab = textureLod(brdf_lut, vec2(n_dot_v, roughness), 0.0).rg;
 
     IblLobe dielectric = ibl_lobe(f0_dielectric, specular_weight, n_dot_v, roughness, ab);
     IblLobe metal = ibl_lobe(c, 1.0, n_dot_v, roughness, ab);
+    // The dielectric's diffuse: c under what its own specular lobe leaves.
+    vec3 leaves = 1.0 - dielectric.fss_ess - dielectric.fms_ems;
+    if (iridescence > 0.0) {
+        vec3 fi = iridescence_dielectric;
+        leaves = mix(leaves, vec3(1.0 - max(fi.r, max(fi.g, fi.b))), iridescence);
+        dielectric.fss_ess = mix(dielectric.fss_ess, iridescence_dielectric, iridescence);
+        dielectric.fms_ems *= 1.0 - iridescence;
+        metal.fss_ess = mix(metal.fss_ess, iridescence_metal, iridescence);
+        metal.fms_ems *= 1.0 - iridescence;
+    }
     vec3 fss_ess = mix(dielectric.fss_ess, metal.fss_ess, metallic);
     vec3 fms_ems = mix(dielectric.fms_ems, metal.fms_ems, metallic);
-    // The dielectric's diffuse: c under what its own specular lobe leaves.
-    vec3 k_d = (1.0 - metallic) * c * (1.0 - dielectric.fss_ess - dielectric.fms_ems);
+    vec3 k_d = (1.0 - metallic) * c * leaves;
 
     IblTerms t;
     t.specular = (fss_ess * radiance + fms_ems * irradiance) * ENV_INTENSITY;
     t.diffuse = k_d * irradiance * ENV_INTENSITY;
     t.diffuse_weight = k_d;
+    t.diffuse_leaves = (1.0 - metallic) * leaves;
     return t;
+}
+
+IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 c, float metallic, float roughness,
+                      vec3 f0_dielectric, float specular_weight) {
+    return ibl_evaluate(n, v, reflect(-v, n), c, metallic, roughness, f0_dielectric,
+                        specular_weight, 0.0, vec3(0.0), vec3(0.0));
 }
 
 IblTerms ibl_evaluate(vec3 n, vec3 v, vec3 c, float metallic, float roughness) {
     return ibl_evaluate(n, v, c, metallic, roughness, vec3(0.04), 1.0);
+}
+
+// The environment's irradiance about unit direction d (cosine-weighted mean radiance), scaled:
+// KHR_materials_diffuse_transmission's light from behind (about -n).
+vec3 ibl_irradiance(vec3 d) {
+    return textureLod(env_irradiance, env_rotate(d, ENV_ROTATION), 0.0).rgb * ENV_INTENSITY;
 }
 
 // The pre-filtered environment's radiance along unit direction d at perceptual roughness

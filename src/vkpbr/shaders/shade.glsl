@@ -115,7 +115,68 @@ Layers material_layers(uint material_flags) {
     m.thickness = max((LAYER_FACTOR(thickness_factor) + zero1) * LAYER_MAP(thickness, r), 0.0) * s_model_scale;
     m.attenuation_color = LAYER_FACTOR(attenuation_color) + zero;
     m.attenuation_distance = LAYER_FACTOR(attenuation_distance) + zero1;
+    m.anisotropy = clamp(LAYER_FACTOR(anisotropy_strength) + zero1, 0.0, 1.0);
+    m.anisotropy_rotation = LAYER_FACTOR(anisotropy_rotation) + zero1;
+    m.anisotropic_t = vec3(1.0, 0.0, 0.0);
+    m.anisotropic_b = vec3(0.0, 1.0, 0.0);
+    m.iridescence = clamp((LAYER_FACTOR(iridescence_factor) + zero1) * LAYER_MAP(iridescence, r),
+                          0.0, 1.0);
+    m.iridescence_ior = max(LAYER_FACTOR(iridescence_ior) + zero1, 1.0);
+    m.iridescence_thickness = max(mix(LAYER_FACTOR(iridescence_thickness_minimum),
+                                      LAYER_FACTOR(iridescence_thickness_maximum),
+                                      LAYER_MAP(iridescence_thickness, r)) + zero1, 0.0);
+    m.iridescence_dielectric = vec3(0.0);
+    m.iridescence_metal = vec3(0.0);
+    m.diffuse_transmission = clamp((LAYER_FACTOR(diffuse_transmission_factor) + zero1)
+                                   * LAYER_MAP(diffuse_transmission, r), 0.0, 1.0);
+    m.diffuse_transmission_color = clamp(LAYER_FACTOR(diffuse_transmission_color_factor)
+                                         * LAYER_MAP(diffuse_transmission_color, rgb) + zero,
+                                         0.0, 1.0);
+    m.dispersion = max(LAYER_FACTOR(dispersion) + zero1, 0.0);
     return m;
+}
+
+// KHR_materials_iridescence's Fresnel at n.v over the dielectric's F0 and over the base colour
+// (the metal's), once a pixel; a film of thickness 0 is none (the Sample Viewer's).
+void iridescence_fresnel(float n_dot_v, vec3 c, inout Layers m) {
+    if (!SHADE_LAYERS || m.iridescence <= 0.0) return;
+    if (m.iridescence_thickness <= 0.0) { m.iridescence = 0.0; return; }
+    m.iridescence_dielectric = eval_iridescence(1.0, m.iridescence_ior, n_dot_v,
+                                                m.iridescence_thickness,
+                                                dielectric_f0(m.ior, m.specular_color));
+    m.iridescence_metal = eval_iridescence(1.0, m.iridescence_ior, n_dot_v,
+                                           m.iridescence_thickness, c);
+}
+
+// KHR_materials_anisotropy's frame, as the glTF Sample Viewer's getAnisotropyInfo: the
+// direction (the texture's RG * 2 - 1, else +x) rotated by the material's rotation, in the
+// tangent frame (t, b, n) of the mapped normal; b_a = ng x t_a; the strength times the
+// texture's B. A material without anisotropy keeps its isotropic lobe (strength 0).
+void anisotropy_frame(uint material_flags, vec3 t, vec3 b, vec3 n, vec3 ng, inout Layers m) {
+    if (!SHADE_LAYERS || m.anisotropy <= 0.0) return;
+    vec2 direction = vec2(1.0, 0.0);
+    if ((material_flags & MATERIAL_HAS_ANISOTROPY_MAP) != 0u) {
+        vec3 texel = SAMPLE(anisotropy).rgb;
+        direction = texel.rg * 2.0 - 1.0;
+        m.anisotropy *= texel.b;
+    }
+    vec2 cs = vec2(cos(m.anisotropy_rotation), sin(m.anisotropy_rotation));
+    direction = mat2(cs.x, cs.y, -cs.y, cs.x) * direction;
+    m.anisotropic_t = mat3(t, b, n) * normalize(vec3(direction, 0.0));
+    m.anisotropic_b = cross(ng, m.anisotropic_t);
+}
+
+// The direction the environment is read along: the reflection about n, or for an anisotropic
+// material about the Sample Viewer's bent normal (getIBLRadianceAnisotropy): the normal of
+// the plane through the anisotropy's b_a and v, mixed back to n by (1 - s (1 - r))^4.
+vec3 ibl_reflection(vec3 n, vec3 v, float roughness, Layers m) {
+    if (!SHADE_LAYERS || m.anisotropy <= 0.0) return reflect(-v, n);
+    vec3 anisotropic_tangent = cross(m.anisotropic_b, v);
+    vec3 anisotropic_normal = cross(anisotropic_tangent, m.anisotropic_b);
+    float bend = 1.0 - m.anisotropy * (1.0 - roughness);
+    bend *= bend;
+    vec3 bent = normalize(mix(anisotropic_normal, n, bend * bend));
+    return normalize(reflect(-v, bent));
 }
 
 // The coat's normal: the interpolated one, or its own normal map (clearcoatNormalTexture)
@@ -164,6 +225,33 @@ vec3 transmitted_radiance(vec3 d, float thickness, float roughness, bool screen,
     return ibl_on ? ibl_radiance(d, roughness) : radiance;
 }
 
+// The light behind, refracted through the surface at index `ior`: straight through a thin
+// wall, refracted into a volume (leaving it `thickness` further on); rougher by
+// clamp(2 ior - 2, 0, 1) (the Sample Viewer's applyIorToRoughness).
+vec3 refracted_radiance(vec3 v, vec3 n, float ior, float thickness, float roughness,
+                        bool screen, bool ibl_on) {
+    vec3 d = thickness > 0.0 ? refract(-v, n, 1.0 / ior) : -v;
+    if (dot(d, d) < 1e-8) d = -v;  // no total internal reflection entering
+    float r_t = roughness * clamp(ior * 2.0 - 2.0, 0.0, 1.0);
+    return transmitted_radiance(normalize(d), thickness, r_t, screen, ibl_on);
+}
+
+// What refraction brings; KHR_materials_dispersion spreads a volume's ior over the channels,
+// each read along its own refracted ray (the Sample Viewer's getIBLVolumeRefraction: red at
+// ior - s, green at ior, blue at ior + s, s = (ior - 1) 0.025 dispersion).
+vec3 refracted_behind(vec3 v, vec3 n, Layers m, float roughness, bool screen, bool ibl_on) {
+    if (!SHADE_LAYERS || m.dispersion <= 0.0 || m.thickness <= 0.0) {
+        return refracted_radiance(v, n, m.ior, m.thickness, roughness, screen, ibl_on);
+    }
+    float spread = (m.ior - 1.0) * 0.025 * m.dispersion;
+    vec3 behind;
+    for (int i = 0; i < 3; ++i) {
+        float ior = max(m.ior + float(i - 1) * spread, 1.0);
+        behind[i] = refracted_radiance(v, n, ior, m.thickness, roughness, screen, ibl_on)[i];
+    }
+    return behind;
+}
+
 vec4 shade_surface() {
     uint settings_flags = u(settings.flags);
     uint material_flags = u(MAT.flags);
@@ -178,7 +266,13 @@ vec4 shade_surface() {
     vec2 mr = (material_flags & MATERIAL_SHARED_METALLIC_ROUGHNESS) != 0u
         ? SAMPLE(metallic).rg : vec2(SAMPLE(metallic).r, SAMPLE(roughness).r);
     float metallic = clamp(mr.x * MAT.metallic_factor, 0.0, 1.0);
-    float roughness = clamp(mr.y * MAT.roughness_factor, MIN_ROUGHNESS, 1.0);
+    float roughness_map = mr.y * MAT.roughness_factor;
+    // KHR_materials_pbrSpecularGlossiness: the factor and texel are glossiness.
+    if ((material_flags & MATERIAL_GLOSSINESS) != 0u) roughness_map = 1.0 - roughness_map;
+    // The environment's level and split-sum row take the roughness as it is: a mirror reads
+    // the sharpest level (the Sample Viewer's too). The punctual lights' D needs the floor.
+    float roughness_ibl = clamp(roughness_map, 0.0, 1.0);
+    float roughness = max(roughness_ibl, MIN_ROUGHNESS);
     float occlusion = 1.0;
     if ((settings_flags & SETTINGS_OCCLUSION) != 0u && (material_flags & MATERIAL_HAS_OCCLUSION_MAP) != 0u) {
         occlusion = 1.0 + MAT.occlusion_strength * (SAMPLE(occlusion).r - 1.0);
@@ -196,10 +290,13 @@ vec4 shade_surface() {
     int brdf = SHADE_BRDF >= 0 ? SHADE_BRDF : u(settings.brdf);
     uint light_count = min(u(lighting.light_count), MAX_LIGHTS);
     Layers layers = material_layers(material_flags);
+    anisotropy_frame(material_flags, t, b, n, ng, layers);
+    iridescence_fresnel(clamp(dot(n, v), 0.0, 1.0), c, layers);
     // The layers shade the glTF BRDF only (the course's BRDFs are the seed's).
     bool layered = brdf == BRDF_GLTF;
     vec3 nc = clearcoat_normal(settings_flags, material_flags, ng, t, b);
     vec3 specular = vec3(0.0), diffuse = vec3(0.0), transmission = vec3(0.0), sheen = vec3(0.0);
+    vec3 diffuse_transmission = vec3(0.0);
     vec3 clearcoat = vec3(0.0);
     BrdfTerms first_terms = BrdfTerms(0.0, vec3(0.0), 0.0, vec3(0.0), vec3(0.0));
     vec3 first_l = ng;
@@ -221,6 +318,7 @@ vec4 shade_surface() {
             specular += lt.base.specular * incident;
             diffuse += lt.base.diffuse * incident;
             transmission += lt.transmission * incident;
+            diffuse_transmission += lt.diffuse_transmission * incident;
             sheen += lt.sheen * incident;
             clearcoat += vec3(lt.clearcoat) * incident;
         } else {
@@ -232,7 +330,7 @@ vec4 shade_surface() {
         }
     }
     vec3 ambient = lighting.ambient_color.rgb * c * occlusion;
-    IblTerms ibl = IblTerms(vec3(0.0), vec3(0.0), vec3(0.0));
+    IblTerms ibl = IblTerms(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
     vec3 f0_dielectric = dielectric_f0(layers.ior, layers.specular_color);
     float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
     bool ibl_on = (lighting_flags & LIGHTING_IBL) != 0u;
@@ -241,8 +339,21 @@ vec4 shade_surface() {
     // copy shows what is behind under punctual lights alone too.
     bool refracts = layered && layers.transmission > 0.0 && (ibl_on || screen);
     if (ibl_on || refracts) {
-        ibl = ibl_evaluate(n, v, c, metallic, roughness, f0_dielectric, layers.specular);
+        ibl = ibl_evaluate(n, v, ibl_reflection(n, v, roughness_ibl, layers), c, metallic,
+                           roughness_ibl, f0_dielectric, layers.specular, layers.iridescence,
+                           layers.iridescence_dielectric, layers.iridescence_metal);
         if (!ibl_on) { ibl.diffuse = vec3(0.0); ibl.specular = vec3(0.0); }
+        if (layered && ibl_on && layers.diffuse_transmission > 0.0) {
+            // KHR_materials_diffuse_transmission: the irradiance from behind (about -n) in the
+            // colour of the transmission, mixed with the front's by the factor.
+            vec3 behind = ibl.diffuse_leaves * layers.diffuse_transmission_color
+                * ibl_irradiance(-n) * volume_transmittance(layers.thickness,
+                                                            layers.attenuation_color,
+                                                            layers.attenuation_distance);
+            ibl.diffuse = mix(ibl.diffuse, behind, layers.diffuse_transmission);
+            // (The view's share, before occlusion.)
+            diffuse_transmission += behind * layers.diffuse_transmission * (1.0 - layers.transmission);
+        }
         bool ssao = (lighting_flags & LIGHTING_AO) != 0u;
         IblOcclusion ao = ibl_occlusion(occlusion, screen_occlusion(lighting_flags, material_flags),
                                         ssao, c * (1.0 - metallic),
@@ -250,14 +361,8 @@ vec4 shade_surface() {
         ibl.diffuse *= ao.diffuse;
         ibl.specular *= ao.specular;
         if (refracts) {
-            // The light behind, refracted through the surface: straight through a thin
-            // wall, refracted into a volume (leaving it `thickness` further on); rougher by
-            // clamp(2 ior - 2, 0, 1) (the Sample Viewer's applyIorToRoughness).
-            vec3 d = layers.thickness > 0.0 ? refract(-v, n, 1.0 / layers.ior) : -v;
-            if (dot(d, d) < 1e-8) d = -v;  // no total internal reflection entering
-            float r_t = roughness * clamp(layers.ior * 2.0 - 2.0, 0.0, 1.0);
             transmission += layers.transmission * ibl.diffuse_weight * occlusion
-                * transmitted_radiance(normalize(d), layers.thickness, r_t, screen, ibl_on)
+                * refracted_behind(v, n, layers, roughness, screen, ibl_on)
                 * volume_transmittance(layers.thickness, layers.attenuation_color,
                                        layers.attenuation_distance);
             ibl.diffuse *= 1.0 - layers.transmission;
@@ -320,6 +425,14 @@ vec4 shade_surface() {
         case VIEW_CLEARCOAT: value = clearcoat; break;
         case VIEW_SHEEN: value = sheen; break;
         case VIEW_TRANSMISSION: value = transmission; break;
+        case VIEW_ANISOTROPY:
+            value = layers.anisotropy > 0.0
+                ? vec3(vec2(dot(layers.anisotropic_t, t), dot(layers.anisotropic_t, b)) * 0.5 + 0.5,
+                       layers.anisotropy)
+                : vec3(1.0, 0.5, 0.0);
+            break;
+        case VIEW_IRIDESCENCE: value = layers.iridescence_dielectric * layers.iridescence; break;
+        case VIEW_DIFFUSE_TRANSMISSION: value = diffuse_transmission; break;
         case VIEW_AO: value = vec3(screen_occlusion(lighting_flags, material_flags)); break;
         case VIEW_VOLUME:
             value = volume_transmittance(layers.thickness, layers.attenuation_color,
