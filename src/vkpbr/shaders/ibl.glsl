@@ -10,6 +10,10 @@
 #define IBL_GLSL
 
 #include "env_common.glsl"
+#ifndef ENV_INTENSITY  // the frame's environment (worlds.glsl defines a batch of worlds' first)
+#define ENV_INTENSITY lighting.env_intensity
+#define ENV_ROTATION lighting.env_rotation.xy
+#endif
 
 struct IblTerms {
     vec3 diffuse;
