@@ -16,17 +16,19 @@ def check_consistent(folder: Path, strict: bool = True) -> set[int]:
     views."""
     lines = (folder / MANIFEST_NAME).read_bytes().split(b"\n")
     header = json.loads(lines[0])
-    done: set[int] = set()
+    latest: dict[int, list[tuple[str, int]]] = {}  # a view rendered again: its last record
     for line in lines[1:-1]:  # the part after the last newline: a line a kill cut short
         rec = json.loads(line)
         if rec["type"] == "done":
             per = len(rec["files"]) // len(rec["views"])
             for k, view in enumerate(rec["views"]):
-                files = rec["files"][k * per:(k + 1) * per]
-                there = [(folder / f).is_file() and (folder / f).stat().st_size == size
-                         for f, size in zip(files, rec["sizes"][k * per:(k + 1) * per], strict=True)]
-                assert all(there) or not strict, files
-                done |= {view} if all(there) else set()
+                latest[view] = list(zip(rec["files"][k * per:(k + 1) * per],
+                                        rec["sizes"][k * per:(k + 1) * per], strict=True))
+    done: set[int] = set()
+    for view, files in latest.items():
+        there = [(folder / f).is_file() and (folder / f).stat().st_size == size for f, size in files]
+        assert all(there) or not strict, files
+        done |= {view} if all(there) else set()
     if (folder / "transforms.json").exists():
         assert done == set(range(header["views"]))
         frames = json.loads((folder / "transforms.json").read_text())["frames"]

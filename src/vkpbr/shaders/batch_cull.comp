@@ -55,8 +55,9 @@ void main() {
         commands[base + 3u] = floatBitsToUint(range.z);
         commands[base + 4u] = command * pc.chunk_views;
     }
-    vec4 sphere = world_sphere(cull_matrices[2u * (cull_views[view].instance_base + d)], spheres_and_ranges[2u * d]);
-    if (sphere_visible(cull_views[view].VP, sphere)) {
+    mat4 model = cull_matrices[2u * (cull_views[view].instance_base + d)];
+    vec4 sphere = world_sphere(model, spheres_and_ranges[2u * d]);
+    if (model[3][3] != 0.0 && sphere_visible(cull_views[view].VP, sphere)) {  // (0: hidden)
         uint k = atomicAdd(commands[base + 1u], 1u);
         cull_visible[command * pc.chunk_views + k] = view;
     }

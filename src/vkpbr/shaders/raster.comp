@@ -146,6 +146,9 @@ bool fetch(uint g, out vec4 c[3], out bool double_sided) {
     // The draw's bounding sphere outside the view: none of its triangles is seen (one test
     // instead of three vertices; most of a scene's draws, for most of a batch's views).
     mat4 model = instance_matrices[2u * (views[view_index].instance_base + rd.z)];
+    // A hidden draw (the scene state's zero matrix): its vertices would all be (0, 0, 0, 0),
+    // whose division by w = 0 a GPU turns into pixel (0, 0)'s coverage.
+    if (model[3][3] == 0.0) return false;
     if (!sphere_visible(views[view_index].VP, world_sphere(model, raster_spheres[rd.z]))) return false;
     DrawRecord dr = draws[rd.z];
     uint base = dr.info.x + 3u * (g - rd.x);
