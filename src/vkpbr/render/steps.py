@@ -350,9 +350,13 @@ class FrameSteps:
                 n, _, _, rows = tiles
                 w, h = self.output.extent
                 tiles = (n, w // -(-n // rows), h // rows, rows)
+            sources = None if self.spec.lens else self.target
+            if tiles is None and self.objects.external is None:  # (a window's too)
+                return self.output.finish_steps(self.image, self.frame_index, self.spec.copy,
+                                                prefix="out.", sources=sources)
             return self.output.finish_steps(self.image, self.frame_index, self.spec.copy,
                                             tiles, self.objects.external, prefix="out.",
-                                            sources=None if self.spec.lens else self.target)
+                                            sources=sources)
         if self.spec.tiles is not None:
             return self.target.finish_steps(self.image, self.frame_index, self.spec.copy,
                                             self.spec.tiles, self.objects.external)
