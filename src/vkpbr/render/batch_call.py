@@ -267,12 +267,7 @@ def _cuda_call(renderer: Any, views: int, worlds: Any, world_of_view: Any, quate
     worlds kernel on the GPU; copied device to device into the kernel's inputs."""
     import torch
 
-    slots = getattr(renderer, "_world_slots", None)
-    if slots is None:
-        raise UsageError("worlds: name the nodes each world poses first: "
-                         "renderer.world_slots(['cube', 'arm/*'])")
-    slots = slots.refreshed(renderer.state)
-    renderer._world_slots = slots
+    slots = _slots(renderer)
     n = len(slots)
     shape = tuple(worlds.shape)
     if len(shape) == 3 and shape[1:] == (n, 7):
