@@ -67,7 +67,7 @@ vec2 texture_uv(vec4 row0, vec4 row1) {
 // The base colour and its alpha (texture x factor x COLOR_0): alpha masking and the
 // visibility pass decide coverage from this one function.
 vec4 surface_base_color() {
-    return SAMPLE(base_color) * MAT.base_color_factor * s_color;
+    return SAMPLE(base_color) * MAT_BASE_COLOR_FACTOR * s_color;
 }
 
 // The surface's frame: ng the interpolated vertex normal, t and b the tangent and bitangent
@@ -265,8 +265,8 @@ vec4 shade_surface() {
     // glTF's packed metallic-roughness texture: one sample (its metallic view's R and G).
     vec2 mr = (material_flags & MATERIAL_SHARED_METALLIC_ROUGHNESS) != 0u
         ? SAMPLE(metallic).rg : vec2(SAMPLE(metallic).r, SAMPLE(roughness).r);
-    float metallic = clamp(mr.x * MAT.metallic_factor, 0.0, 1.0);
-    float roughness_map = mr.y * MAT.roughness_factor;
+    float metallic = clamp(mr.x * MAT_METALLIC_FACTOR, 0.0, 1.0);
+    float roughness_map = mr.y * MAT_ROUGHNESS_FACTOR;
     // KHR_materials_pbrSpecularGlossiness: the factor and texel are glossiness.
     if ((material_flags & MATERIAL_GLOSSINESS) != 0u) roughness_map = 1.0 - roughness_map;
     // The environment's level and split-sum row take the roughness as it is: a mirror reads
@@ -278,7 +278,7 @@ vec4 shade_surface() {
         occlusion = 1.0 + MAT.occlusion_strength * (SAMPLE(occlusion).r - 1.0);
     }
     vec3 emissive = ((material_flags & MATERIAL_HAS_EMISSIVE_MAP) != 0u ? SAMPLE(emissive).rgb
-                                                                        : vec3(1.0)) * MAT.emissive_factor;
+                                                                        : vec3(1.0)) * MAT_EMISSIVE_FACTOR;
 
     vec3 ng, t, b, n;
     surface_frame(settings_flags, material_flags, ng, t, b, n);

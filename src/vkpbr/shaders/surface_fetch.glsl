@@ -21,12 +21,8 @@ vec2 texture_grad(vec4 row0, vec4 row1, vec4 d) {
 // here: generated.glsl, COMPUTE_SET); its textures from its own set 1. A batch's view of a
 // world with its own material factors (views[].factor_base > 0: render/worlds.py) takes
 // the record with those four factors replaced; every other view reads the table as is.
-#include "worlds.glsl"
-#if BATCH
-#define MAT world_material(MATERIAL_INDEX)
-#else
 #define MAT materials[MATERIAL_INDEX]
-#endif
+#include "worlds.glsl"  // a batch of worlds' factors (MAT_*_FACTOR)
 #define SAMPLE(name) textureGrad(name##_map, texture_uv(MAT.name##_uv_row0, MAT.name##_uv_row1), \
     texture_grad(MAT.name##_uv_row0, MAT.name##_uv_row1, g_dtex_dx), \
     texture_grad(MAT.name##_uv_row0, MAT.name##_uv_row1, g_dtex_dy))

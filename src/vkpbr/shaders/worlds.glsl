@@ -11,19 +11,17 @@
 #if BATCH && COMPUTE_SHADING
 uint world_base() { return views[view_index].factor_base; }
 
-MaterialRecord world_material(uint index) {
-    MaterialRecord m = materials[index];
-    uint base = world_base();
-    if (base != 0u) {
-        uint at = base + 3u * index;
-        vec4 e = world_factors[at + 1u];
-        m.base_color_factor = world_factors[at];
-        m.emissive_factor = e.rgb;
-        m.metallic_factor = e.a;
-        m.roughness_factor = world_factors[at + 2u].x;
-    }
-    return m;
+// A world's four factors of the material MATERIAL_INDEX (the includer's), else the table's;
+// only these fields are read (a copy of the whole record per use cost lavapipe 5x).
+#ifdef MATERIAL_INDEX  // (the shading and rasterising kernels; not the background's)
+vec4 world_material_row(uint row) {
+    return world_factors[world_base() + 3u * MATERIAL_INDEX + row];
 }
+#define MAT_BASE_COLOR_FACTOR (world_base() != 0u ? world_material_row(0u) : MAT.base_color_factor)
+#define MAT_EMISSIVE_FACTOR (world_base() != 0u ? world_material_row(1u).rgb : MAT.emissive_factor)
+#define MAT_METALLIC_FACTOR (world_base() != 0u ? world_material_row(1u).a : MAT.metallic_factor)
+#define MAT_ROUGHNESS_FACTOR (world_base() != 0u ? world_material_row(2u).x : MAT.roughness_factor)
+#endif
 
 LightRecord world_light(LightRecord light, uint i) {
     uint base = world_base();
@@ -46,6 +44,10 @@ vec3 world_environment() {  // (intensity, cos, sin)
 #define ENV_INTENSITY world_environment().x
 #define ENV_ROTATION world_environment().yz
 #else
+#define MAT_BASE_COLOR_FACTOR MAT.base_color_factor
+#define MAT_EMISSIVE_FACTOR MAT.emissive_factor
+#define MAT_METALLIC_FACTOR MAT.metallic_factor
+#define MAT_ROUGHNESS_FACTOR MAT.roughness_factor
 #define WORLD_LIGHT(light, i) (light)
 #define ENV_INTENSITY lighting.env_intensity
 #define ENV_ROTATION lighting.env_rotation.xy
