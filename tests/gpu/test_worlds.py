@@ -324,3 +324,29 @@ def test_world_lights_and_environment(make_renderer) -> None:  # noqa: ANN001
                        world_lights={"intensity": np.ones((3, 2))})
     with pytest.raises(UsageError, match="compute batch only"):
         r.render_batch(cameras(3), (W, H), [lamp], pipeline="forward", world_environment=env)
+
+
+@pytest.mark.parametrize("model", ["InterpolationTest", "CesiumMilkTruck", "CesiumMan"])
+def test_per_view_times_equal_render_at_each_time(make_renderer, model: str) -> None:  # noqa: ANN001
+    """render_batch(times=): each view the scene's animations at its own time, bit for bit
+    `render(time=)` on the fragment path: node animations as a batch of worlds (the distinct
+    times sampled at once), skins (CesiumMan) view by view."""
+    from assets_path import ASSETS
+
+    from vkpbr.scene.loader import load_scene
+
+    path = ASSETS / model / "glTF" / f"{model}.gltf"
+    if not path.exists():
+        pytest.skip(f"{path} is not there (the sample models: tests/assets_path.py)")
+    r = make_renderer(load_scene(path))
+    cam = r.default_camera()
+    times = np.array([0.0, 0.4, 1.1, 0.4, 2.0])
+    kw = {"pipeline": "forward", "ao": "off", **NO_SHADOWS}
+    got = r.render_batch([cam] * len(times), (48, 36), times=times, **kw)
+    for i, t in enumerate(times):
+        assert np.array_equal(got[i], r.render(cam, size=(48, 36), time=float(t), **kw)), t
+    assert len({g.tobytes() for g in got}) > 1  # the times differ on screen
+    with pytest.raises(UsageError, match="finite animation times"):
+        r.render_batch([cam] * 2, (48, 36), times=[0.0, float("nan")], **kw)
+    with pytest.raises(UsageError, match="without worlds"):
+        r.render_batch([cam] * 2, (48, 36), times=[0.0, 1.0], worlds=np.zeros((2, 1, 7)), **kw)

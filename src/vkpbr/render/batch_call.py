@@ -158,8 +158,17 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
     views = as_camera_batch(cameras, r.default_camera())
     opts = _options(options, overrides or {})
     route, wanted = batch_route(r.parts, views, size, opts, linear, depth, outputs, device, out)
-    route, call, plan = _worlds_of(r, views, route, lights, opts, given or NO_WORLDS)
+    g = given or NO_WORLDS
+    if g.times is not None:
+        route, call, plan = _times_of(r, views, route, g)
+    else:
+        route, call, plan = _worlds_of(r, views, route, lights, opts, g)
     each = _each_view(r.state, views, plan)  # view by view, as `render` draws
+    if route == "views" and g.times is not None and plan is None:  # (skins, morphs, pointers)
+        frames = r.render_many((views.camera(i) for i in range(len(views))), lights, size, opts,
+                               linear, depth, outputs=wanted or None, times=g.times,
+                               animation=g.animation)
+        return stack_views(r, frames, depth, wanted, out)
     if route == "views":  # (render/batch_route.py says when)
         return stack_views(r, r.render_many(each, lights, size, opts, linear, depth,
                                             outputs=wanted or None), depth, wanted, out)
@@ -184,6 +193,8 @@ class WorldArgs:
     space: str
     lights: Any
     environment: Any
+    times: Any = None  # (B,) animation times, one a view
+    animation: Any = None  # which animations `times` plays (None: all)
 
     @property
     def any(self) -> bool:
@@ -218,6 +229,38 @@ def _worlds_of(r: Any, views: CameraBatch, route: str, lights: LightsArg, opts: 
     frame = r.frame_lights(opts, lights)
     plan = _world_plan(r, len(views), g, len(frame))
     return route, _host_call(r, plan, g.expand, _factor_blocks(r, plan, frame, opts)), plan
+
+
+def _times_of(r: Any, views: CameraBatch, route: str, g: WorldArgs
+              ) -> tuple[str, WorldCall | None, WorldPlan | None]:
+    """A batch whose views each see the scene's animations at their own time: the distinct
+    times become worlds (the animated nodes' world matrices, vkpbr.scene.animation.sample over
+    all of them at once); where the animations also drive skins, morph weights or
+    KHR_animation_pointer properties (which the worlds do not hold), view by view instead
+    ("views" and no plan: render_many(times=))."""
+    from vkpbr.scene.animation import animation_indices, sample
+
+    if g.any:
+        raise UsageError("times= poses every view's world itself: give it without worlds=, "
+                         "world_materials=, world_lights= or world_environment=")
+    t = np.asarray(g.times, dtype=np.float64).reshape(-1) if np.ndim(g.times) else None
+    if t is None or len(t) != len(views) or not np.isfinite(t).all():
+        raise UsageError(f"times: {len(views)} finite animation times (one a view) expected")
+    scene, state = r.scene, r.state
+    channels = [ch for i in animation_indices(scene, g.animation)
+                for ch in scene.animations[i].channels]
+    nodes = sorted({ch.node for ch in channels if ch.node is not None and ch.path != "weights"})
+    deforms = bool(np.any(state.skinned)) or any(
+        ch.path == "weights" or ch.kind in ("mesh", "light", "camera", "material") for ch in channels)
+    if not nodes or deforms:
+        return "views", None, None
+    unique, inverse = np.unique(t, return_inverse=True)
+    local = np.broadcast_to(state.local, (len(unique), *state.local.shape)).copy()
+    local[:, nodes] = sample(scene, unique, g.animation).local[:, nodes]
+    slots = WorldSlots.of(state, nodes)
+    poses = WorldPoses(state.tree.world(local)[:, slots.nodes], None)
+    plan = WorldPlan(slots, poses, None, inverse.astype(np.int64).reshape(-1))
+    return route, _host_call(r, plan, "auto"), plan
 
 
 def _factor_blocks(r: Any, plan: WorldPlan, frame: tuple[Any, ...], opts: RenderOptions

@@ -246,19 +246,17 @@ class Renderer:
                      world_of_view: Any = None, quaternion: str = "xyzw",
                      world_visible: Any = None, world_expand: str = "auto",
                      world_materials: Any = None, space: str = "world", world_lights: Any = None,
-                     world_environment: Any = None, **option_overrides: Any
+                     world_environment: Any = None, times: Any = None, animation: Any = None,
+                     **option_overrides: Any
                      ) -> np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray] | Any:
-        """Render B views of the scene in one submission and return them stacked
-        (docs/batch.md).
-
+        """Render B views of the scene in one submission, stacked (docs/batch.md).
         cameras : a CameraBatch (vkpbr.scene.camera_batch), (B, 4, 4) OpenGL world-from-camera
             poses, or a list of Cameras (anything `render` takes). size : (width, height).
         lights, options, linear, option_overrides: as `render`. depth : also (B, H, W) float32
-            distances along each view's axis.
-        outputs : as `render`'s, stacked per view ("color" from the batch, the others view
-            by view). batch : views per submission, "auto" or a positive integer.
-        device : "cpu": NumPy arrays; "cuda": a torch tensor (B, H, W, 4) on the same GPU.
-        out : a C-contiguous writeable (B, H, W, 4) array the colour is written into.
+            distances along each view's axis. outputs : as `render`'s, stacked per view.
+        batch : views per submission, "auto" or a positive integer. device : "cpu": NumPy
+            arrays; "cuda": a torch tensor (B, H, W, 4) on the same GPU. out : a C-contiguous
+            writeable (B, H, W, 4) array the colour is written into.
         worlds : W worlds' world poses of the nodes named by `world_slots`: (W, N, 4, 4)
             matrices or (W, N, 7) position + quaternion (`quaternion` "xyzw" or "wxyz";
             `space` "world", or "local": relative to each node's parent as the state has it),
@@ -269,6 +267,7 @@ class Renderer:
             "emissive": (W, K, 3)} of the K materials named by `world_slots`; `world_lights`
             {"intensity": (W, L), "color": (W, L, 3)} of the frame's L lights;
             `world_environment` {"intensity", "rotation" (degrees)}: (W,). docs/batch.md.
+        times, animation : (B,) animation times, one a view (`render`'s `time`; its worlds).
 
         Returns (B, H, W, 4) uint8 sRGB (float32 with `linear`), (colour, depth) with `depth`,
         {name: (B, ...)} with `outputs`. pipeline="forward" (and "auto" on CPUs): view i is
@@ -278,7 +277,8 @@ class Renderer:
         return batch_call(self, cameras, size, lights, options, linear, depth, outputs, batch,
                           device, out, WorldArgs(worlds, world_of_view, quaternion, world_visible,
                                                  world_expand, world_materials, space,
-                                                 world_lights, world_environment), option_overrides)
+                                                 world_lights, world_environment, times,
+                                                 animation), option_overrides)
 
     def world_slots(self, nodes: Any = None, materials: Any = None) -> WorldSlots | None:
         """Name the nodes each world of `render_batch(worlds=...)` poses and the materials
