@@ -76,9 +76,6 @@ class CudaOrder:
         self.inputs.destroy()
         self.done.destroy()
 
-    def __repr__(self) -> str:  # (for messages)
-        return f"CudaOrder(value={self.value})"
-
     @classmethod
     def available(cls, device: Device) -> bool:
         return bool(getattr(device, "external_semaphore_fd", False))

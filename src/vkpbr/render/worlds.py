@@ -36,8 +36,6 @@ from vkpbr.scene.worlds import WorldSlots
 
 __all__ = ["WorldBuffers", "WorldCall", "GpuWorlds", "WorldKernel"]
 
-_DRAW_BYTES = 144  # worlds.comp WorldDraw: mat4 relative, mat4 frame, int anchor, uint identity, covers_at, pad
-
 
 @dataclass(frozen=True)
 class GpuWorlds:
@@ -78,10 +76,6 @@ class WorldCall:
         return self.records is not None or self.gpu is not None
 
     @property
-    def count(self) -> int:
-        return self.gpu.worlds if self.gpu is not None else -1
-
-    @property
     def key(self) -> tuple:
         return (self.gpu.key if self.gpu is not None else ("host", self.poses),
                 self.factors is not None)
@@ -89,18 +83,25 @@ class WorldCall:
 
 def base_factors(gpu_scene: Any, state: Any) -> np.ndarray:
     """(M, 3, 4) each material's factors as the renderer's state has them (the file's, with
-    set_material's overrides): base colour; emissive, metallic; roughness (WorldFactors)."""
+    set_material's overrides): base colour; emissive, metallic; roughness (WorldFactors).
+    The blocks' columns at once; only the overridden materials (a few) one by one."""
     blocks = gpu_scene.material_blocks
+    table = np.array(blocks, dtype=blocks[0].dtype) if blocks else None
     out = np.zeros((len(blocks), 3, 4))
-    for i, b in enumerate(blocks):
-        fields = {k: np.asarray(b[k], np.float64) for k in (
-            "base_color_factor", "emissive_factor", "metallic_factor", "roughness_factor")}
-        fields.update({k: np.asarray(v, np.float64).reshape(-1)[:fields[k].size].reshape(fields[k].shape)
-                       for k, v in state.materials.get(i, {}).items()})
-        out[i, 0] = fields["base_color_factor"]
-        out[i, 1, :3] = fields["emissive_factor"]
-        out[i, 1, 3] = fields["metallic_factor"]
-        out[i, 2, 0] = fields["roughness_factor"]
+    if table is None:
+        return out
+    out[:, 0] = table["base_color_factor"]
+    out[:, 1, :3] = table["emissive_factor"]
+    out[:, 1, 3] = table["metallic_factor"]
+    out[:, 2, 0] = table["roughness_factor"]
+    rows = {"base_color_factor": (0, slice(0, 4)), "emissive_factor": (1, slice(0, 3)),
+            "metallic_factor": (1, slice(3, 4)), "roughness_factor": (2, slice(0, 1))}
+    for i, fields in state.materials.items():
+        if i >= len(out):  # (not a block of the table)
+            continue
+        for field, value in fields.items():
+            row, cols = rows[field]
+            out[i, row, cols] = np.asarray(value, np.float64).reshape(-1)[:cols.stop - cols.start]
     return out
 
 
