@@ -82,13 +82,21 @@ class FramePath:
         is); its Python time in the slot's stats.cpu_ms, the driver's in driver_ms. A wide
         fisheye draws a frame a cube face (render/lens_cube.py: `source`, a face's LensFrame)."""
         t0 = time.perf_counter()
-        p = self.parts
-        lens = (lens_frame(camera, target.extent, int(p.device.limits.maxImageDimension2D))
+        lens = (lens_frame(camera, target.extent, int(self.parts.device.limits.maxImageDimension2D))
                 if source is None else LensFrame(source))
         if isinstance(lens, CubeFrame):
             return draw_cube(self, target, camera, lens, lights=lights, options=options,
                              overlay=overlay, copy=copy, linear=linear, timings=timings,
                              driver_time=driver_time)
+        return self._draw(t0, target, camera, lens, lights, options, overlay, copy, linear,
+                          timings, driver_time)
+
+    def _draw(self, t0: float, target: FrameTarget, camera: Camera, lens: LensFrame | None,
+              lights: tuple[Light, ...], options: RenderOptions, overlay: TextOverlay | None,
+              copy: tuple[str, ...], linear: bool, timings: bool, driver_time: bool
+              ) -> Submitted:
+        """`draw`'s frame, drawn as `lens` (None: the camera's pinhole) says."""
+        p = self.parts
         p.environments.bind_for(options)
         transmission = p.lighting.screen_transmission(options)
         view, extent = (camera, target.extent) if lens is None else (lens.camera, lens.extent)
