@@ -336,7 +336,9 @@ class BatchPath:
         call = self.world_call
         if call is None:
             return None, None
-        index = call.world_of_view[start:start + n]
+        index = call.world_of_view
+        if start or n != len(index):  # (the whole array itself where it is: its identity
+            index = index[start:start + n]  # keys what was made of it)
         factor_base = None
         if call.factors is not None:
             if self._factor_writes != self._calls:
@@ -596,7 +598,7 @@ def _joined(parts: list[np.ndarray], out: np.ndarray | None = None) -> np.ndarra
 
 
 def _same(a: np.ndarray | None, b: np.ndarray | None) -> bool:
-    return (a is None) == (b is None) and (a is None or np.array_equal(a, b))
+    return a is b or ((a is None) == (b is None) and (a is None or np.array_equal(a, b)))
 
 
 def _slice(views: CameraBatch, start: int, stop: int) -> CameraBatch:
