@@ -15,8 +15,10 @@ the frames come back as torch tensors on the GPU (device="cuda"), as on the H200
 Each phase is the time inside one function (wrapped here with time.perf_counter: nested
 phases are indented and counted in their parents too). "GPU wait" rows are the host
 waiting for the GPU (a fence: the step's own batch, or the last step's before its buffers
-are rewritten); "readback" copies the frames out; "Python" is the call less those. Keep the
-GPU part small (--size 8 or 16) to read the Python. Not a test.
+are rewritten); "readback" copies the frames out; "Python" is the call less those (its
+median over the steps is the number to compare: on lavapipe the GPU's threads share the
+CPU, and the first Python after a wait runs on cold caches). Keep the GPU part small
+(--variant box, --size 8) to read the Python. Not a test.
 """
 
 from __future__ import annotations
@@ -228,8 +230,10 @@ def main() -> None:
         sync()
         prof = cProfile.Profile() if args.cprofile else None
         walls: list[float] = []
+        python: list[float] = []  # each step's Python: its time less waits and readback
         timers.on = True
         for s in range(3, 3 + args.steps):
+            before = dict(timers.total)
             if prof is not None:
                 prof.enable()
             t = time.perf_counter()
@@ -238,14 +242,17 @@ def main() -> None:
             if prof is not None:
                 prof.disable()
             sync()  # (outside the step's time: the loop's next step waits anyway)
+            spent = {k: v - before.get(k, 0.0) for k, v in timers.total.items()}
+            python.append(walls[-1] - sum(spent.get(k, 0.0) for k in (*WAITS, *READBACK)))
         timers.on = False
-        report(args, r, timers, walls)
+        report(args, r, timers, walls, python)
     if prof is not None:
         print(f"\ncProfile over the {args.steps} timed steps (its overhead inflates the times):")
         pstats.Stats(prof).sort_stats("tottime").print_stats(args.cprofile)
 
 
-def report(args: argparse.Namespace, r: Renderer, timers: Timers, walls: list[float]) -> None:
+def report(args: argparse.Namespace, r: Renderer, timers: Timers, walls: list[float],
+           python: list[float]) -> None:
     n = len(walls)
     us = {k: 1e6 * v / n for k, v in timers.total.items()}
     mode = "CUDA poses -> torch" if args.torch else f"NumPy poses -> NumPy (world_expand={args.expand})"
@@ -261,7 +268,9 @@ def report(args: argparse.Namespace, r: Renderer, timers: Timers, walls: list[fl
     call = us.get("render_batch (the whole call)", 1e6 * statistics.fmean(walls))
     waits = sum(us.get(k, 0.0) for k in WAITS)
     read = sum(us.get(k, 0.0) for k in READBACK)
-    print(f"| **Python (the call less GPU waits and readback)** | **{call - waits - read:.1f}** | |")
+    print(f"| Python (the call less GPU waits and readback), mean | {call - waits - read:.1f} | |")
+    print(f"| **Python per step, median** (min {1e6 * min(python):.1f}) | "
+          f"**{1e6 * statistics.median(python):.1f}** | |")
     print(f"| step wall clock, median (the timers' overhead in) | "
           f"{1e6 * statistics.median(walls):.1f} | |")
     print(f"| GPU time of the last step (last_stats.gpu_ms) | {1e3 * r.last_stats.gpu_ms:.1f} | |")
