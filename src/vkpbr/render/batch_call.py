@@ -236,7 +236,8 @@ def _worlds_of(r: Any, prep: Prepared, lights: LightsArg, g: WorldArgs
                              "MSAA, the fragment path's batch)")
         return route, _cuda_call(r, prep, g.worlds, g.world_of_view, g.quaternion, g.visible,
                                  g.space), None
-    frame = r.frame_lights(opts, lights)
+    # (the frame's lights: what world_lights gives per world, and the factors' base rows)
+    frame = () if not lit and g.materials is None else r.frame_lights(opts, lights)
     plan = _world_plan(r, prep, g, len(frame))
     return route, _host_call(r, plan, g.expand, _factor_blocks(r, plan, frame, opts)), plan
 

@@ -256,8 +256,9 @@ class WorldKernel:
     def take_errors(self, slot: int) -> tuple[int, int]:
         """(records whose pose was none, the lowest such world) of slot `slot`'s last batch
         (after its fence), and the report reset for its next."""
-        count, world = (int(x) for x in self._errors[slot])
-        self._errors[slot] = (0, 0xFFFFFFFF)
+        count, world = self._errors[slot].tolist()
+        if count:  # (else it is as reset: the kernel writes only where a pose is none)
+            self._errors[slot] = (0, 0xFFFFFFFF)
         return count, world
 
     def write_numpy(self, poses: np.ndarray, visible: np.ndarray | None) -> None:
