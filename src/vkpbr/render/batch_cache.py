@@ -142,10 +142,6 @@ class BatchCache:
             self._worlds.popitem(last=False)
         return made
 
-    def has_cuda(self, device: Any) -> bool:
-        """Whether `cuda_index` found `device` already."""
-        return self._cuda is not None and self._cuda[0] is device
-
     def cuda_index(self, device: Any) -> int:
         """The CUDA device index of Vulkan `device` (by UUID, found once)."""
         if self._cuda is None or self._cuda[0] is not device:

@@ -379,11 +379,10 @@ def _same_gpu(renderer: Any, cache: BatchCache, tensor: Any) -> None:
     from vkpbr.gpu.cuda import cuda_unavailable
 
     dev = renderer.device
-    if not cache.has_cuda(dev):  # (checked once: found, CUDA is there)
-        why = cuda_unavailable()
-        if why is not None:
-            raise UsageError(f"worlds on CUDA: {why}")
-    index = cache.cuda_index(dev)
+    why = cuda_unavailable()
+    if why is not None:
+        raise UsageError(f"worlds on CUDA: {why}")
+    index = cache.cuda_index(dev)  # (found once: cudaGetDeviceProperties is slow)
     if tensor.device.index not in (None, index):
         raise UsageError(f"worlds: a tensor on {tensor.device}, but the renderer draws on "
                          f"cuda:{index} ({dev.info.name}); move it there with .to('cuda:{index}')")

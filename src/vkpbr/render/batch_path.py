@@ -78,7 +78,6 @@ class BatchPath:
         self._submissions = 0  # of the render_batch call under way (its stats summed)
         self._t_start = 0.0  # when the submission under way began (its Python time)
         self._memory: tuple[float, int, tuple[int, int]] | None = None  # _memory_available's
-        self._cuda_found = False  # torch and cuda-python were found (render_cuda)
 
     # --- whole batches ----------------------------------------------------------------------
     def run(self, route: str, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
@@ -217,7 +216,7 @@ class BatchPath:
         from vkpbr.gpu.cuda import cuda_unavailable
 
         dev = self.parts.device
-        why = None if self._cuda_found else cuda_unavailable()  # (torch and CUDA stay)
+        why = cuda_unavailable()
         if why is None and not dev.external_memory_fd:
             why = f"{dev.info.name} cannot export memory (VK_KHR_external_memory_fd)"
         compute = self.parts.paths.takes_compute_batch(opts)
@@ -225,7 +224,6 @@ class BatchPath:
             why = f"{dev.info.name} lacks layered rendering for batches"
         if why is not None:
             raise UsageError(f"device='cuda' is not available here: {why}")
-        self._cuda_found = True
         if compute:  # the compute batch, its atlas's tiles into exported memory
             return self.render_compute(views, size, lights, opts, linear, False, batch,
                                        cuda=True)[0]
