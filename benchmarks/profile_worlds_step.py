@@ -53,7 +53,7 @@ from vkpbr.scene.loader import load_scene  # noqa: E402
 # renderer changes.
 PHASES: tuple[tuple[int, str, str, str, str], ...] = (
     (0, "render_batch (the whole call)", "vkpbr.render.renderer", "Renderer", "render_batch"),
-    (1, "prepared step lookup (batch_cache)", "vkpbr.render.batch_cache", "", "prepared_step"),
+    (1, "cached arguments (BatchCache.prepared)", "vkpbr.render.batch_cache", "BatchCache", "prepared"),
     (1, "cameras (as_camera_batch)", "vkpbr.render.batch_call", "", "as_camera_batch"),
     (1, "options", "vkpbr.render.batch_call", "", "_options"),
     (1, "route and checks (batch_route)", "vkpbr.render.batch_call", "", "batch_route"),
