@@ -7,15 +7,17 @@ counters: no array is hashed or compared):
 
 - `Prepared`: the cameras as a CameraBatch, the options, the route and outputs
   (render/batch_route.py), by (frame parts, cameras, size, options and overrides, linear,
-  depth, outputs, batch, device). The cameras are cached only as a CameraBatch (its arrays
-  are read-only: it cannot change); (B, 4, 4) arrays and lists are converted every call.
-  The parts are replaced when the scene is, so a new scene is a new key.
-- `WorldShape` (CUDA poses) and the world of each view: the checks of a batch of worlds' poses that do not depend on their values
-  (the slot count, shape, quaternion order, space, the world of each view), by (prepared,
-  slots and their version, shape, dtype, quaternion, space, world_of_view). `world_of_view`
-  is cached when it is None (view b sees world b) or a read-only NumPy array; a writable one
-  is checked every call (it could change in place).
-- The CUDA device of the renderer's GPU (found by UUID once; cudaGetDeviceProperties is slow).
+  depth, outputs, device). The cameras are cached only as a CameraBatch (its arrays are
+  read-only: it cannot change); (B, 4, 4) arrays and lists are converted every call. The
+  parts are replaced when the scene is: a new scene clears the cache.
+- `WorldShape` (CUDA poses) and the world of each view: the checks of a batch of worlds'
+  poses that do not read their values (the slot count, shape, dtype, quaternion order,
+  space, world_of_view), by (prepared, slots and the state version they were made at, shape,
+  dtype, quaternion, space, world_of_view). `world_of_view` is cached when it is None (view
+  b sees world b) or a read-only NumPy array; a writable one is checked every call (it could
+  change in place).
+- The CUDA device index of the renderer's GPU (found by UUID once: the Vulkan query and
+  cudaGetDeviceProperties took every call before).
 
 The recorded commands, the view records and the worlds' buffers are the batch path's and
 already reused (render/batch_path.py): the poses are data in buffers, not recorded state.
