@@ -233,6 +233,7 @@ def main() -> None:
         walls: list[float] = []
         python: list[float] = []  # each step's Python: its time less waits and readback
         cpu: list[float] = []  # each step's CPU time (the thread's) less the readback's
+        stats_cpu: list[float] = []  # last_stats.cpu_ms (bench_world_batches' "Python ms")
         timers.on = True
         for s in range(3, 3 + args.steps):
             before, before_cpu = dict(timers.total), dict(timers.cpu)
@@ -242,6 +243,7 @@ def main() -> None:
             call(poses[s])
             walls.append(time.perf_counter() - t)
             cpu.append(time.thread_time() - c)
+            stats_cpu.append(r.last_stats.cpu_ms / 1e3)
             if prof is not None:
                 prof.disable()
             sync()  # (outside the step's time: the loop's next step waits anyway)
@@ -249,14 +251,14 @@ def main() -> None:
             python.append(walls[-1] - sum(spent.get(k, 0.0) for k in (*WAITS, *READBACK)))
             cpu[-1] -= sum(timers.cpu.get(k, 0.0) - before_cpu.get(k, 0.0) for k in READBACK)
         timers.on = False
-        report(args, r, timers, walls, python, cpu)
+        report(args, r, timers, walls, python, cpu, stats_cpu)
     if prof is not None:
         print(f"\ncProfile over the {args.steps} timed steps (its overhead inflates the times):")
         pstats.Stats(prof).sort_stats("tottime").print_stats(args.cprofile)
 
 
 def report(args: argparse.Namespace, r: Renderer, timers: Timers, walls: list[float],
-           python: list[float], cpu: list[float]) -> None:
+           python: list[float], cpu: list[float], stats_cpu: list[float]) -> None:
     n = len(walls)
     us = {k: 1e6 * v / n for k, v in timers.total.items()}
     mode = "CUDA poses -> torch" if args.torch else f"NumPy poses -> NumPy (world_expand={args.expand})"
@@ -277,6 +279,8 @@ def report(args: argparse.Namespace, r: Renderer, timers: Timers, walls: list[fl
           f"{1e6 * statistics.median(python):.1f} | | |")
     print(f"| **Python per step: the thread's CPU time less the readback's, median** (min "
           f"{1e6 * min(cpu):.1f}) | | **{1e6 * statistics.median(cpu):.1f}** | |")
+    print(f"| last_stats.cpu_ms: the batch path's Python up to its submission, median | "
+          f"{1e6 * statistics.median(stats_cpu):.1f} | | |")
     print(f"| step wall clock, median (the timers' overhead in) | "
           f"{1e6 * statistics.median(walls):.1f} | | |")
     print(f"| GPU time of the last step (last_stats.gpu_ms) | {1e3 * r.last_stats.gpu_ms:.1f} | | |")
