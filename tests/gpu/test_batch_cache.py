@@ -121,3 +121,11 @@ def test_other_slots_are_noticed(r: Any) -> None:
     second = batch(r, cams, p, world_expand="gpu")
     assert not np.array_equal(first, second), "other slots changed nothing (test is moot)"
     assert np.array_equal(second, fresh(r, cams, p, world_expand="gpu"))
+
+
+def test_batch_step_takes_the_poses_each_call(r: Any) -> None:
+    from vkpbr.errors import UsageError
+
+    cams = CameraBatch.from_cameras(cameras(2), CAMERA)
+    with pytest.raises(UsageError, match="worlds is given each call"):
+        r.batch_step(cams, SIZE, worlds=world_poses(2))
