@@ -92,19 +92,29 @@ class CudaImport:
         buf.offset, buf.size, buf.flags = 0, self.size, 0
         self.ptr = int(_check(rt.cudaExternalMemoryGetMappedBuffer(self._ext, buf),
                               "cudaExternalMemoryGetMappedBuffer"))
+        self._views: dict[tuple[tuple[int, ...], str], Any] = {}  # tensor()'s, by shape and type
 
     def tensor(self, shape: tuple[int, ...], dtype: str = "|u1") -> Any:
         """A torch tensor viewing the start of the buffer (no copy): valid until the memory
-        is written again; callers clone it before handing it out."""
-        import torch
+        is written again; callers clone it before handing it out. Made once per shape and
+        type (a loop asks for the same each step; torch.as_tensor costs tens of us)."""
+        key = (shape, dtype)
+        view = self._views.get(key)
+        if view is None:
+            import torch
 
-        return torch.as_tensor(_CudaArray(self.ptr, shape, dtype, self),
-                               device=f"cuda:{self.device}")
+            view = torch.as_tensor(_CudaArray(self.ptr, shape, dtype, self),
+                                   device=f"cuda:{self.device}")
+            if len(self._views) > 8:
+                self._views.clear()
+            self._views[key] = view
+        return view
 
     def close(self) -> None:
         if self._ext is None:
             return
         rt = _runtime()
+        self._views.clear()
         _check(rt.cudaFree(self.ptr), "cudaFree")
         _check(rt.cudaDestroyExternalMemory(self._ext), "cudaDestroyExternalMemory")
         self._ext = None
@@ -127,25 +137,37 @@ class CudaTimeline:
         desc.handle.fd = int(fd)
         desc.flags = 0
         self._sem = _check(rt.cudaImportExternalSemaphore(desc), "cudaImportExternalSemaphore")
+        self._sems = [self._sem]
+        self._made: tuple[Any, Any, Any] | None = None  # (runtime, signal, wait parameters)
+        self._stream: tuple[int, Any] | None = None  # (torch's handle, as a cudaStream_t)
 
     def signal(self, value: int, stream: int) -> None:
         """On `stream` (torch's cuda_stream handle): set the semaphore to `value` once the
         stream's work queued so far is done."""
-        rt = _runtime()
-        params = rt.cudaExternalSemaphoreSignalParams()
+        rt, params, handle = self._call(stream, signal=True)
         params.params.fence.value = int(value)
-        params.flags = 0
-        _check(rt.cudaSignalExternalSemaphoresAsync([self._sem], [params], 1, _stream(rt, stream)),
+        _check(rt.cudaSignalExternalSemaphoresAsync(self._sems, [params], 1, handle),
                "cudaSignalExternalSemaphoresAsync")
 
     def wait(self, value: int, stream: int) -> None:
         """On `stream`: the work queued after this waits until the semaphore reaches `value`."""
-        rt = _runtime()
-        params = rt.cudaExternalSemaphoreWaitParams()
+        rt, params, handle = self._call(stream, signal=False)
         params.params.fence.value = int(value)
-        params.flags = 0
-        _check(rt.cudaWaitExternalSemaphoresAsync([self._sem], [params], 1, _stream(rt, stream)),
+        _check(rt.cudaWaitExternalSemaphoresAsync(self._sems, [params], 1, handle),
                "cudaWaitExternalSemaphoresAsync")
+
+    def _call(self, stream: int, signal: bool) -> tuple[Any, Any, Any]:
+        """(the runtime, the signal or wait parameters, `stream` as a cudaStream_t): made
+        once (a loop signals and waits every step on torch's same stream)."""
+        if self._made is None:
+            rt = _runtime()
+            sig, wait = rt.cudaExternalSemaphoreSignalParams(), rt.cudaExternalSemaphoreWaitParams()
+            sig.flags = wait.flags = 0
+            self._made = (rt, sig, wait)
+        rt, sig, wait = self._made
+        if self._stream is None or self._stream[0] != stream:
+            self._stream = (stream, _stream(rt, stream))
+        return rt, sig if signal else wait, self._stream[1]
 
     def close(self) -> None:
         if self._sem is None:

@@ -17,11 +17,12 @@ from typing import Any
 import numpy as np
 
 from vkpbr.errors import UsageError
-from vkpbr.render.batch_route import batch_result, batch_route, stack_views
+from vkpbr.render.batch_cache import BatchCache, Prepared, WorldShape, batch_cache, batch_step
+from vkpbr.render.batch_route import batch_result, stack_views
 from vkpbr.render.lighting import LightsArg
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.worlds import GpuWorlds, WorldCall, base_factors
-from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
+from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.state import SceneState
 from vkpbr.scene.worlds import (
     WorldEnvironment,
@@ -34,7 +35,7 @@ from vkpbr.scene.worlds import (
     world_records,
 )
 
-__all__ = ["render_batch", "world_slots", "WorldsArg", "WorldArgs"]
+__all__ = ["render_batch", "batch_call", "world_slots", "WorldsArg", "WorldArgs", "batch_step"]
 
 WorldsArg = Any  # (W, N, 4, 4) | (W, N, 7) NumPy array or torch tensor
 
@@ -101,9 +102,10 @@ def _slots(renderer: Any) -> WorldSlots:
     return slots
 
 
-def _world_plan(renderer: Any, views: int, g: WorldArgs, light_count: int) -> WorldPlan:
-    """The checked worlds of a call of `views` views (NumPy or CPU tensors); `light_count`:
+def _world_plan(renderer: Any, prep: Prepared, g: WorldArgs, light_count: int) -> WorldPlan:
+    """The checked worlds of a call of `prep`'s views (NumPy or CPU tensors); `light_count`:
     the frame's lights (world_lights gives each)."""
+    views = len(prep.views)
     slots = poses = wm = None
     if g.worlds is not None:
         slots = _slots(renderer)
@@ -119,7 +121,10 @@ def _world_plan(renderer: Any, views: int, g: WorldArgs, light_count: int) -> Wo
     if len(counts) > 1:
         raise UsageError(f"worlds: the world arrays disagree on the number of worlds "
                          f"({sorted(counts)}); give each for every world")
-    return WorldPlan(slots, poses, wm, _world_index(views, counts.pop(), g.world_of_view), wl, we)
+    w = counts.pop()
+    index = batch_cache(renderer).world_index(prep, w, g.world_of_view,
+                                              lambda: _world_index(views, w, g.world_of_view))
+    return WorldPlan(slots, poses, wm, index, wl, we)
 
 
 def _materials(renderer: Any, given: Any) -> WorldMaterials:
@@ -155,14 +160,15 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
                  overrides: dict[str, Any] | None = None) -> Any:
     """Renderer.render_batch (its docstring says what each argument is)."""
     r = renderer
-    views = as_camera_batch(cameras, r.default_camera())
-    opts = _options(options, overrides or {})
-    route, wanted = batch_route(r.parts, views, size, opts, linear, depth, outputs, device, out)
+    # The cameras, options and route: made once for a loop's calls (render/batch_cache.py)
+    prep = batch_cache(r).prepared(r, cameras, size, options, overrides or {}, linear, depth,
+                                   outputs, device, out, _options)
+    views, opts, route, wanted = prep.views, prep.opts, prep.route, prep.wanted
     g = given or NO_WORLDS
     if g.times is not None:
         route, call, plan = _times_of(r, views, route, g)
     else:
-        route, call, plan = _worlds_of(r, views, route, lights, opts, g)
+        route, call, plan = _worlds_of(r, prep, lights, g)
     each = _each_view(r.state, views, plan)  # view by view, as `render` draws
     if route == "views" and g.times is not None and plan is None:  # (skins, morphs, pointers)
         frames = r.render_many((views.camera(i) for i in range(len(views))), lights, size, opts,
@@ -178,6 +184,9 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
     frames = list(r.render_many(each, lights, size, opts, linear, outputs=extra)) if extra else []
     r.last_stats = r.batch_path.stats  # the batch's (not the outputs' passes)
     return batch_result(color, dist, depth, wanted, frames)
+
+
+batch_call = render_batch  # (the name renderer.py imports: its own method is render_batch)
 
 
 @dataclass(frozen=True)
@@ -205,9 +214,10 @@ class WorldArgs:
 NO_WORLDS = WorldArgs(None, None, "xyzw", None, "auto", None, "world", None, None)
 
 
-def _worlds_of(r: Any, views: CameraBatch, route: str, lights: LightsArg, opts: RenderOptions,
-               g: WorldArgs) -> tuple[str, WorldCall | None, WorldPlan | None]:
+def _worlds_of(r: Any, prep: Prepared, lights: LightsArg, g: WorldArgs
+               ) -> tuple[str, WorldCall | None, WorldPlan | None]:
     """(route, the call's worlds for the batch path, the host's plan for view by view)."""
+    route, opts = prep.route, prep.opts
     if not g.any:
         if g.world_of_view is not None or g.visible is not None:
             raise UsageError("world_of_view and world_visible need worlds= (the worlds' poses)")
@@ -224,10 +234,11 @@ def _worlds_of(r: Any, views: CameraBatch, route: str, lights: LightsArg, opts: 
                              "world_lights or world_environment (give those with NumPy poses); "
                              "this call may render view by view (dataset outputs, post steps, "
                              "MSAA, the fragment path's batch)")
-        return route, _cuda_call(r, len(views), g.worlds, g.world_of_view, g.quaternion,
-                                 g.visible, g.space), None
-    frame = r.frame_lights(opts, lights)
-    plan = _world_plan(r, len(views), g, len(frame))
+        return route, _cuda_call(r, prep, g.worlds, g.world_of_view, g.quaternion, g.visible,
+                                 g.space), None
+    # (the frame's lights: what world_lights gives per world, and the factors' base rows)
+    frame = () if not lit and g.materials is None else r.frame_lights(opts, lights)
+    plan = _world_plan(r, prep, g, len(frame))
     return route, _host_call(r, plan, g.expand, _factor_blocks(r, plan, frame, opts)), plan
 
 
@@ -304,13 +315,44 @@ def _on_cuda(value: Any) -> bool:
     return hasattr(value, "device") and getattr(value.device, "type", "") == "cuda"
 
 
-def _cuda_call(renderer: Any, views: int, worlds: Any, world_of_view: Any, quaternion: str,
+def _cuda_call(renderer: Any, prep: Prepared, worlds: Any, world_of_view: Any, quaternion: str,
                visible: Any, space: str = "world") -> WorldCall:
-    """Worlds whose poses are CUDA tensors: shapes and dtypes checked here, the values by the
-    worlds kernel on the GPU; copied device to device into the kernel's inputs."""
+    """Worlds whose poses are CUDA tensors: shapes and dtypes checked here (once for a loop's
+    calls: BatchCache.world_shape), the values by the worlds kernel on the GPU; copied
+    device to device into the kernel's inputs."""
     import torch
 
+    cache = batch_cache(renderer)
     slots = _slots(renderer)
+    shape = tuple(worlds.shape)
+    ws = cache.world_shape(prep, slots, shape, worlds.dtype, quaternion, space, world_of_view,
+                           lambda: _cuda_shape(prep, slots, worlds, world_of_view, quaternion,
+                                               space))
+    _same_gpu(renderer, cache, worlds)
+    # NaN, infinity and zero quaternions are found by the worlds kernel on the GPU (no read
+    # back before the batch: render/worlds.py), their worlds' draws hidden and reported.
+    p = worlds if worlds.dtype == torch.float32 and not worlds.requires_grad else \
+        worlds.detach().to(torch.float32)
+    p = p if p.is_contiguous() else p.contiguous()
+    w, n = shape[0], len(slots)
+    shown = None
+    if visible is not None:
+        if tuple(visible.shape) != (w, n):
+            raise UsageError(f"world_visible: shape {tuple(visible.shape)}, expected ({w}, {n})")
+        shown = (visible.to(torch.int32) if _on_cuda(visible)
+                 else torch.as_tensor(np.asarray(visible), device=p.device).to(torch.int32)).contiguous()
+
+    def fill(kernel: Any) -> None:
+        kernel.write_cuda(p, shown)
+
+    return WorldCall(ws.index, gpu=GpuWorlds(slots, w, ws.floats, ws.wxyz, shown is not None,
+                                             fill, cuda=True, local=ws.local))
+
+
+def _cuda_shape(prep: Prepared, slots: WorldSlots, worlds: Any, world_of_view: Any,
+                quaternion: str, space: str) -> WorldShape:
+    """The checks of CUDA poses that do not read their values (shape, dtype, quaternion
+    order, space, the world of each view), as a WorldShape."""
     n = len(slots)
     shape = tuple(worlds.shape)
     if len(shape) == 3 and shape[1:] == (n, 7):
@@ -328,34 +370,19 @@ def _cuda_call(renderer: Any, views: int, worlds: Any, world_of_view: Any, quate
                          "node; give world poses (space='world')")
     if not worlds.is_floating_point():
         raise UsageError(f"worlds: a tensor of {worlds.dtype}; give float32 or float64")
-    _same_gpu(renderer, worlds)
-    # NaN, infinity and zero quaternions are found by the worlds kernel on the GPU (no read
-    # back before the batch: render/worlds.py), their worlds' draws hidden and reported.
-    p = worlds.detach().to(torch.float32).contiguous()
-    w = shape[0]
-    shown = None
-    if visible is not None:
-        if tuple(visible.shape) != (w, n):
-            raise UsageError(f"world_visible: shape {tuple(visible.shape)}, expected ({w}, {n})")
-        shown = (visible.to(torch.int32) if _on_cuda(visible)
-                 else torch.as_tensor(np.asarray(visible), device=p.device).to(torch.int32)).contiguous()
-    index = _world_index(views, w, world_of_view)
-
-    def fill(kernel: Any) -> None:
-        kernel.write_cuda(p, shown)
-
-    return WorldCall(index, gpu=GpuWorlds(slots, w, floats, quaternion == "wxyz", shown is not None, fill,
-                                           cuda=True, local=local))
+    index = _world_index(len(prep.views), shape[0], world_of_view)
+    index.flags.writeable = False  # (shared by the calls that hit the cache)
+    return WorldShape(slots, floats, quaternion == "wxyz", local, index)
 
 
-def _same_gpu(renderer: Any, tensor: Any) -> None:
-    from vkpbr.gpu.cuda import cuda_device_for, cuda_unavailable
+def _same_gpu(renderer: Any, cache: BatchCache, tensor: Any) -> None:
+    from vkpbr.gpu.cuda import cuda_unavailable
 
+    dev = renderer.device
     why = cuda_unavailable()
     if why is not None:
         raise UsageError(f"worlds on CUDA: {why}")
-    dev = renderer.device
-    index = cuda_device_for(dev.uuid(), dev.info.name)
+    index = cache.cuda_index(dev)  # (found once: cudaGetDeviceProperties is slow)
     if tensor.device.index not in (None, index):
         raise UsageError(f"worlds: a tensor on {tensor.device}, but the renderer draws on "
                          f"cuda:{index} ({dev.info.name}); move it there with .to('cuda:{index}')")

@@ -46,6 +46,7 @@ __all__ = ["BatchPath", "COMPUTE_BYTES"]
 # visibility image 8, the rasteriser's depth|triangle 8, the pixel list 4, the big list ~1.
 COMPUTE_BYTES = 25
 ATLASES_KEPT = 2  # compute-batch atlases kept between calls (BatchPath._atlas)
+MEMORY_AGE_S = 0.5  # how long a free-memory query serves the calls after it (per_submission)
 
 
 class BatchPath:
@@ -76,6 +77,7 @@ class BatchPath:
         self._last_views: tuple | None = None  # (batch, key, instance bases, terms) written
         self._submissions = 0  # of the render_batch call under way (its stats summed)
         self._t_start = 0.0  # when the submission under way began (its Python time)
+        self._memory: tuple[float, int, tuple[int, int]] | None = None  # _memory_available's
 
     # --- whole batches ----------------------------------------------------------------------
     def run(self, route: str, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
@@ -242,7 +244,7 @@ class BatchPath:
         COMPUTE_BYTES)."""
         w, h = int(size[0]), int(size[1])
         pixel = 16 if linear else 4
-        local, host = self.parts.device.memory_available()
+        local, host = self._memory_available()
         device_view = (w * h * (pixel + pixel_extra) + L.VIEW_RECORD.size
                        + 4 * len(self.parts.gpu_scene.draws))
         host_view = w * h * (pixel + (4 if depth else 0))
@@ -255,6 +257,17 @@ class BatchPath:
             raise UsageError(f"batch {batch}: {batch:,} views of {w}x{h} need more memory than "
                              f"is free ({fits:,} fit); give batch='auto' or at most {fits // 2:,}")
         return batch
+
+    def _memory_available(self) -> tuple[int, int]:
+        """Device.memory_available, asked again once MEMORY_AGE_S has passed or vkpbr's own
+        allocations changed (a loop's steps would query the driver's budget each call: tens
+        of microseconds through the Vulkan binding on NVIDIA)."""
+        dev, now = self.parts.device, time.perf_counter()
+        count = dev.live_children  # (a buffer or image made or destroyed changes it)
+        last = self._memory
+        if last is None or now - last[0] > MEMORY_AGE_S or last[1] != count:
+            last = self._memory = (now, count, dev.memory_available())
+        return last[2]
 
     # --- one submission ---------------------------------------------------------------------
     def _submit(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
@@ -336,7 +349,9 @@ class BatchPath:
         call = self.world_call
         if call is None:
             return None, None
-        index = call.world_of_view[start:start + n]
+        index = call.world_of_view
+        if start or n != len(index):  # (the whole array itself where it is: its identity
+            index = index[start:start + n]  # keys what was made of it)
         factor_base = None
         if call.factors is not None:
             if self._factor_writes != self._calls:
@@ -596,7 +611,7 @@ def _joined(parts: list[np.ndarray], out: np.ndarray | None = None) -> np.ndarra
 
 
 def _same(a: np.ndarray | None, b: np.ndarray | None) -> bool:
-    return (a is None) == (b is None) and (a is None or np.array_equal(a, b))
+    return a is b or ((a is None) == (b is None) and (a is None or np.array_equal(a, b)))
 
 
 def _slice(views: CameraBatch, start: int, stop: int) -> CameraBatch:

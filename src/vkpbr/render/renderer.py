@@ -17,8 +17,7 @@ import numpy as np
 from vkpbr.errors import UsageError
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, FrameTarget
 from vkpbr.render import outputs as O
-from vkpbr.render.batch_call import WorldArgs, WorldsArg, world_slots
-from vkpbr.render.batch_call import render_batch as batch_call
+from vkpbr.render.batch_call import WorldArgs, WorldsArg, batch_call, batch_step, world_slots
 from vkpbr.render.batch_route import chunked, per_view
 from vkpbr.render.environment import EnvironmentSpec
 from vkpbr.render.frame_path import Submitted
@@ -281,9 +280,10 @@ class Renderer:
                                                  animation), option_overrides)
 
     def world_slots(self, nodes: Any = None, materials: Any = None) -> WorldSlots | None:
-        """Name the nodes each world of `render_batch(worlds=...)` poses and the materials
-        whose factors `world_materials` gives, in their arrays' order."""
+        """The nodes each world of `render_batch(worlds=)` poses, the materials it sets."""
         return world_slots(self, nodes, materials)
+
+    batch_step = batch_step  # a loop's render_batch made once (render/batch_cache.py)
 
     def close(self) -> None:
         """Destroy everything (idempotent). The Renderer is unusable afterwards."""

@@ -114,6 +114,7 @@ class WorldBuffers:
         self.capacity = 0
         self.buffers: list[Buffer] = []
         self.slots = slots
+        self._base: tuple[np.ndarray, np.ndarray] | None = None  # instance_base's last
 
     def ensure(self, worlds: int) -> bool:
         """Room for `worlds` worlds; True when the buffers were (re)made (their sets must be
@@ -141,8 +142,17 @@ class WorldBuffers:
         out[state_records.size:] = world_records.ravel()
 
     def instance_base(self, world_of_view: np.ndarray) -> np.ndarray:
-        """(B,) uint32: where each view's world's records start (in records of a draw)."""
-        return ((np.asarray(world_of_view, np.int64) + 1) * self.draws).astype(np.uint32)
+        """(B,) uint32: where each view's world's records start (in records of a draw); the
+        same array again for the same read-only `world_of_view` (render/batch_cache.py keeps
+        it: a loop's steps then compare their view records by identity, not by value)."""
+        last = self._base
+        if last is not None and last[0] is world_of_view:
+            return last[1]
+        base = ((np.asarray(world_of_view, np.int64) + 1) * self.draws).astype(np.uint32)
+        if isinstance(world_of_view, np.ndarray) and not world_of_view.flags.writeable:
+            base.flags.writeable = False
+            self._base = (world_of_view, base)
+        return base
 
     def destroy(self) -> None:
         for b in self.buffers:
@@ -246,8 +256,9 @@ class WorldKernel:
     def take_errors(self, slot: int) -> tuple[int, int]:
         """(records whose pose was none, the lowest such world) of slot `slot`'s last batch
         (after its fence), and the report reset for its next."""
-        count, world = (int(x) for x in self._errors[slot])
-        self._errors[slot] = (0, 0xFFFFFFFF)
+        count, world = self._errors[slot].tolist()
+        if count:  # (else it is as reset: the kernel writes only where a pose is none)
+            self._errors[slot] = (0, 0xFFFFFFFF)
         return count, world
 
     def write_numpy(self, poses: np.ndarray, visible: np.ndarray | None) -> None:

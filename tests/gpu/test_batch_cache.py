@@ -1,0 +1,131 @@
+"""A loop's render_batch calls reuse what they share (render/batch_cache.py, issue 32's
+Python per step): a repeated call gives bit for bit what a fresh call gives (the cache
+cleared), and a call that changes any part of the cache's key (the cameras, the size, the
+options, the world count, the slots, a writable world_of_view changed in place) gives what
+a fresh call with its arguments gives, and differs from the call before (so a stale result
+would be seen). Renderer.batch_step is render_batch with its arguments fixed.
+
+One renderer for the module (validated), 24x18 views of the tests' analytic scene; the
+layered batch (lavapipe's), and the compute batch where the device has it."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+import pytest
+from test_outputs import CAMERA, analytic_scene
+from test_worlds import MOVED, NO_SHADOWS, cameras, world_poses
+
+from vkpbr.render.batch_cache import batch_cache
+from vkpbr.scene.camera_batch import CameraBatch
+
+SIZE = (24, 18)
+
+
+@pytest.fixture(scope="module")
+def r() -> Iterator[Any]:
+    from vkpbr.render.renderer import Renderer
+
+    renderer = Renderer(analytic_scene(), validation=True,
+                        sync_validation=os.environ.get("VKPBR_SYNC_VALIDATION", "1") != "0")
+    yield renderer
+    instance = renderer.device.instance
+    renderer.close()
+    assert instance.errors == [], instance.errors[:3]
+
+
+def batch(r: Any, cams: CameraBatch, poses: np.ndarray, size: tuple[int, int] = SIZE,
+          **kw: Any) -> np.ndarray:
+    kw = {"quaternion": "wxyz", "pipeline": "forward", **NO_SHADOWS, **kw}
+    return r.render_batch(cams, size, worlds=poses, **kw)
+
+
+def fresh(r: Any, *args: Any, **kw: Any) -> np.ndarray:
+    """`batch` with nothing cached (the renderer's BatchCache cleared first)."""
+    batch_cache(r).clear()
+    return batch(r, *args, **kw)
+
+
+def pipelines(r: Any) -> list[str]:
+    return ["forward"] + ([] if r.compute_batch_unavailable() else ["compute"])
+
+
+def test_repeated_calls_equal_a_fresh_call(r: Any) -> None:
+    r.world_slots(MOVED)
+    cams = CameraBatch.from_cameras(cameras(3), CAMERA)
+    p1, p2 = world_poses(3, seed=1), world_poses(3, seed=2)
+    for pipeline in pipelines(r):
+        for expand in ("auto", "gpu"):
+            kw = {"pipeline": pipeline, "world_expand": expand}
+            first = fresh(r, cams, p1, **kw)
+            hits = batch_cache(r).hits
+            again = batch(r, cams, p2, **kw)  # the same call but the poses: from the cache
+            assert batch_cache(r).hits > hits, "a repeated call missed the cache"
+            assert not np.array_equal(first, again), "the poses changed nothing (test is moot)"
+            assert np.array_equal(again, fresh(r, cams, p2, **kw)), (pipeline, expand)
+            step = r.batch_step(cams, SIZE, quaternion="wxyz", **NO_SHADOWS, **kw)
+            assert np.array_equal(step(worlds=p2), again), (pipeline, expand)
+            assert np.array_equal(step(worlds=p1), first), (pipeline, expand)
+
+
+def _changed(part: str) -> tuple[tuple, dict, tuple, dict, Any]:
+    """(args, kwargs) of a call, (args, kwargs) of the same call with `part` changed, and
+    what changes between them (or None)."""
+    cams = CameraBatch.from_cameras(cameras(3), CAMERA)
+    p = world_poses(3, seed=4)
+    base: tuple = ((cams, p), {"world_expand": "gpu"})
+    if part == "cameras":
+        other = CameraBatch.from_cameras(cameras(4)[1:], CAMERA)
+        return (*base, (other, p), base[1], None)
+    if part == "size":
+        return (*base, (cams, p, (18, 24)), base[1], None)
+    if part == "options":
+        return (*base, (cams, p), {**base[1], "exposure": 1.0}, None)
+    if part == "world count":  # the same views (a read-only world_of_view), 2 then 3 worlds
+        which = np.array([0, 1, 1])
+        which.flags.writeable = False
+        return ((cams, p[:2]), {**base[1], "world_of_view": which},
+                (cams, world_poses(3, seed=5)), {**base[1], "world_of_view": which}, None)
+    if part == "world_of_view":  # a writable array, changed in place between the calls
+        which = np.array([0, 1, 2])
+        kw = {**base[1], "world_of_view": which}
+        return ((cams, p), kw, (cams, p), kw, lambda: which.__setitem__(slice(None), [2, 0, 1]))
+    raise AssertionError(part)
+
+
+@pytest.mark.parametrize("part", ["cameras", "size", "options", "world count",
+                                  "world_of_view"])
+def test_a_changed_key_part_is_noticed(r: Any, part: str) -> None:
+    r.world_slots(MOVED)
+    args, kw, args2, kw2, between = _changed(part)
+    batch_cache(r).clear()
+    first = batch(r, *args, **kw).copy()
+    if between is not None:
+        between()
+    second = batch(r, *args2, **kw2)
+    assert first.shape != second.shape or not np.array_equal(first, second), \
+        f"changing the {part} changed nothing (test is moot)"
+    assert np.array_equal(second, fresh(r, *args2, **kw2)), f"a stale cache after the {part}"
+
+
+def test_other_slots_are_noticed(r: Any) -> None:
+    cams = CameraBatch.from_cameras(cameras(3), CAMERA)
+    p = world_poses(3, seed=6)[:, :1]  # one slot node's poses
+    batch_cache(r).clear()
+    r.world_slots(MOVED[:1])
+    first = batch(r, cams, p, world_expand="gpu")
+    r.world_slots(MOVED[1:])
+    second = batch(r, cams, p, world_expand="gpu")
+    assert not np.array_equal(first, second), "other slots changed nothing (test is moot)"
+    assert np.array_equal(second, fresh(r, cams, p, world_expand="gpu"))
+
+
+def test_batch_step_takes_the_poses_each_call(r: Any) -> None:
+    from vkpbr.errors import UsageError
+
+    cams = CameraBatch.from_cameras(cameras(2), CAMERA)
+    with pytest.raises(UsageError, match="worlds is given each call"):
+        r.batch_step(cams, SIZE, worlds=world_poses(2))
