@@ -306,11 +306,11 @@ class BatchPath:
         p = self.parts
         frame_lights = p.lighting.frame_lights(opts, lights)
         p.environments.bind_for(opts)
+        plan = p.shadow_frames.prepare(frame_lights, opts)
+        ws = self._shadow_worlds(plan, opts)  # (its errors come before any GPU work)
         frame = p.ring.begin()
         slot = p.slots[frame.index]
         p.gpu_state.write(frame.index)
-        plan = p.shadow_frames.prepare(frame_lights, opts)
-        ws = self._shadow_worlds(plan, opts)
         if ws is None:
             rows = p.shadow_frames.write_scene(slot, plan, frame_lights)
         else:  # each world's own maps (render/world_shadows.py)

@@ -297,37 +297,16 @@ class ShadowRaster:
                  world: WorldJob | None = None) -> dict[str, Callable[[Any], None]]:
         """Each step's commands: `jobs` are (first matrix, layers, entry) of the drawn ranges;
         `world`: every world's layers of each job (no copy: `world_steps`)."""
-        worlds = 1 if world is None else world.worlds
-        depths = self.depths if world is None else world.depths
         big_buffer = self.big if world is None else world.big
+        dispatch = self._dispatcher(push, world)
 
-        def dispatch(cmd: Any, matrix: int, layers: int, groups: int) -> None:
-            # z: (world, layer), at most MAX_Z a dispatch: worlds in runs
-            push[3] = matrix
-            run = max(1, MAX_Z // layers)
-            for w0 in range(0, worlds, run):
-                n = min(run, worlds - w0)
-                if world is not None:
-                    push[24:29] = (world.draws, world.draws, world.stride, layers, w0)
-                else:
-                    push[27] = layers
-                cmd.push(push)
-                cmd.dispatch(min(groups, MAX_GROUPS_X), -(-groups // MAX_GROUPS_X), n * layers)
         def bind(cmd: Any, name: str) -> None:
             cmd.bind_pipeline(self._pipeline(name))
             cmd.bind_set(0, set0)
             cmd.bind_set(4, dset)
 
         def clear(cmd: Any) -> None:
-            # Depth 0: the farthest (reversed-Z), as the passes clear; the drawn layers only
-            # (a batch of worlds: all of them, after the last submission's reads).
-            if world is not None:
-                cmd.memory_barrier("compute|fragment", "transfer")
-                cmd.fill(depths, 0, 0, 4 * world.worlds * world.stride)
-            else:
-                for offset, size in self._spans(jobs):
-                    cmd.fill(depths, 0, offset, size)
-            cmd.fill(big_buffer, 0, 0, 16)  # the count and the dispatch size
+            self._clear(cmd, jobs, world)
 
         def small(cmd: Any) -> None:
             bind(cmd, "small")
@@ -362,6 +341,38 @@ class ShadowRaster:
 
         return {"clear": clear, "small": small, "args": args, "big": big, "masked": masked,
                 "copy": copy}
+
+    def _dispatcher(self, push: np.ndarray, world: WorldJob | None
+                    ) -> Callable[[Any, int, int, int], None]:
+        """dispatch(cmd, first matrix, layers, groups): the layers of every world (one
+        without `world`), z = (world, layer), at most MAX_Z a dispatch (worlds in runs)."""
+        worlds = 1 if world is None else world.worlds
+
+        def dispatch(cmd: Any, matrix: int, layers: int, groups: int) -> None:
+            push[3] = matrix
+            run = max(1, MAX_Z // layers)
+            for w0 in range(0, worlds, run):
+                n = min(run, worlds - w0)
+                if world is not None:
+                    push[24:29] = (world.draws, world.draws, world.stride, layers, w0)
+                else:
+                    push[27] = layers
+                cmd.push(push)
+                cmd.dispatch(min(groups, MAX_GROUPS_X), -(-groups // MAX_GROUPS_X), n * layers)
+
+        return dispatch
+
+    def _clear(self, cmd: Any, jobs: list[tuple[int, int, Any]], world: WorldJob | None) -> None:
+        """Depth 0: the farthest (reversed-Z), as the passes clear; the drawn layers only (a
+        batch of worlds: all of them, after the last submission's reads); the big list."""
+        if world is not None:
+            cmd.memory_barrier("compute|fragment", "transfer")
+            cmd.fill(world.depths, 0, 0, 4 * world.worlds * world.stride)
+            cmd.fill(world.big, 0, 0, 16)
+            return
+        for offset, size in self._spans(jobs):
+            cmd.fill(self.depths, 0, offset, size)
+        cmd.fill(self.big, 0, 0, 16)  # the count and the dispatch size
 
     def world_steps(self, slot: int, plan: Any, job: WorldJob, classes: Sequence[str],
                     material_sets: Sequence[Any], set0: Any, resources: dict[str, Any]

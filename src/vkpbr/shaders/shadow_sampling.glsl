@@ -41,7 +41,9 @@ float world_texel(uint base, int size, ivec2 p, float ref, bool clamp_edge) {
 // texture(sampler, (uv, layer), ref) of a layer starting at texel `base`, `size` a side.
 float world_compare(uint base, int size, vec2 uv, float ref, bool clamp_edge) {
     vec2 t = uv * float(size) - 0.5;
-    vec2 f = fract(t);
+    // The filter's weights in 1/256ths, as samplers take them (subTexelPrecisionBits 8 on
+    // lavapipe and NVIDIA): a shadow's edge then filters as the images' does.
+    vec2 f = floor(fract(t) * 256.0) / 256.0;
     ivec2 i = ivec2(floor(t));
     float a = world_texel(base, size, i, ref, clamp_edge);
     float b = world_texel(base, size, i + ivec2(1, 0), ref, clamp_edge);
