@@ -32,7 +32,7 @@ from vkpbr.gpu.buffer import Buffer
 from vkpbr.render.shadow_raster import WorldJob
 from vkpbr.render.shadows import ShadowEntry, ShadowPlan
 
-__all__ = ["WorldShadows", "world_plan", "world_bytes", "casters"]
+__all__ = ["WorldShadows", "world_plan", "world_layout", "casters"]
 
 
 def world_plan(plan: ShadowPlan) -> ShadowPlan:
@@ -54,11 +54,6 @@ def world_layout(plan: ShadowPlan, resolution: int) -> tuple[int, int, int]:
     cube = max(resolution // 2, 16)
     base = plan.layers * resolution * resolution
     return base + 6 * plan.cubes * cube * cube, base, cube
-
-
-def world_bytes(plan: ShadowPlan, resolution: int, worlds: int) -> int:
-    """Device bytes `worlds` worlds' maps of `plan` take (world_plan's) at `resolution`."""
-    return 4 * worlds * world_layout(world_plan(plan), resolution)[0]
 
 
 def casters(draws: Any) -> np.ndarray:
