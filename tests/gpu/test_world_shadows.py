@@ -95,3 +95,19 @@ def test_maps_past_one_binding_are_one_line(r) -> None:  # noqa: ANN001
         r.render_batch([CAMERA] * worlds, (W, H), worlds=poses, lights=[POINT], ao="off",
                        world_shadow_resolution=16384)
     assert "\n" not in str(e.value)
+
+
+def test_a_world_holds_one_layer_a_light() -> None:
+    """A world's maps: one 2D layer a directional or spot light (the scene-wide map), a cube
+    a point light, at world_shadow_resolution (docs/batch.md's MiB per 1,000 worlds)."""
+    from vkpbr.render.shadows import plan_shadows
+    from vkpbr.render.world_shadows import world_layout, world_plan
+
+    plan = world_plan(plan_shadows([SUN, SPOT, POINT]))
+    assert [(e.kind, e.first, e.count) for e in plan.entries] == [
+        ("directional", 0, 1), ("spot", 1, 1), ("point", 0, 6)]
+    stride, cube_base, cube = world_layout(plan, 256)
+    assert (cube_base, cube) == (2 * 256 ** 2, 128)
+    assert 4 * (stride - cube_base) * 1000 / 2 ** 20 == 375.0  # a point light: MiB per 1,000 worlds
+    for light in (SUN, SPOT):  # 250 MiB per 1,000 worlds
+        assert 4 * world_layout(world_plan(plan_shadows([light])), 256)[0] * 1000 / 2 ** 20 == 250.0
