@@ -15,7 +15,8 @@ layers).
 Memory: W x (2D layers x r^2 + 6 x cubes x (r / 2)^2) x 4 bytes, r =
 RenderOptions.world_shadow_resolution (default 256): a point light 384 KiB a world (375
 MiB per 1,000 worlds), a spot or directional light 256 KiB (250 MiB per 1,000), all of it in
-one storage binding (at most the device's maxStorageBufferRange: a one-line error past it).
+one storage binding (at most the device's maxStorageBufferRange and the free device memory:
+a one-line error past either, before any GPU work).
 
 Worlds that move no caster (their slot nodes carry no shadow-casting draw; worlds that only
 set materials or lights) keep the renderer's state's maps, shared: nothing differs.
@@ -62,6 +63,15 @@ def casters(draws: Any) -> np.ndarray:
                     bool)
 
 
+def _fits(need: int, limit: int, what: str, worlds: int, stride: int, resolution: int) -> None:
+    if need > limit:
+        raise UsageError(
+            f"world shadows: {worlds:,} worlds x {4 * stride >> 10} KiB of shadow maps "
+            f"({need >> 20} MiB) exceed {what} ({limit >> 20} MiB); lower "
+            f"world_shadow_resolution ({resolution}), render fewer worlds a call or give "
+            "shadows=False")
+
+
 class WorldShadows:
     """The buffers of a batch of worlds' maps (grown, never shrunk), bound as set 3's
     ShadowWorldDepths of the renderer's ShadowMaps `maps`."""
@@ -95,14 +105,12 @@ class WorldShadows:
         stride, cube_base, cube = world_layout(plan, resolution)
         need = 4 * worlds * stride
         limit = int(self.device.limits.maxStorageBufferRange)
-        if need > limit:
-            raise UsageError(
-                f"world shadows: {worlds:,} worlds x {4 * stride >> 10} KiB of shadow maps "
-                f"({need >> 20} MiB) exceed one storage binding here ({limit >> 20} MiB); "
-                f"lower world_shadow_resolution ({resolution}), render fewer worlds a call "
-                "or give shadows=False")
+        _fits(need, limit, "one storage binding here", worlds, stride, resolution)
         made = need > self.bytes
         if made:
+            free = self.device.memory_available()[0] + self.bytes  # (ours are given back first)
+            _fits(need, free, "the free device memory", worlds, stride, resolution)
+            limit = min(limit, free)
             self.device.wait_idle()
             self._free()
             self.bytes = max(need, min(2 * self.bytes, limit))
