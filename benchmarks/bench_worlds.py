@@ -3,7 +3,8 @@ the peers run (benchmarks/peers/worlds_common.py: W worlds, one camera a world, 
 bodies posed anew every step, S distinct steps made before the clock starts).
 
     python benchmarks/bench_worlds.py [--variant tabletop|primitives] [--worlds 1024,4096]
-        [--sizes 128x128,256x256] [--steps 16] [--reps 4] [--json OUT.jsonl] [--png-dir DIR]
+        [--sizes 128x128,256x256] [--steps 16] [--reps 4] [--shadows N] [--json OUT.jsonl]
+        [--png-dir DIR]
 
 Rows (one per variant, size, W and mode; a Markdown table, and JSON lines as the peers'):
 
@@ -17,7 +18,10 @@ node turning per world (tabletop.Spin), the camera 3 units away (issue 32's worl
   into torch on the GPU where torch sees CUDA). Every view shows world 0: the ceiling of the
   pose upload of one world plus W views, not yet W different worlds.
 - "worlds" (issue 32's API, `render_worlds`): each step hands the (W, N, 7) CUDA tensor of
-  all W worlds to `render_batch(worlds=..., space="local")`, views into torch.
+  all W worlds to `render_batch(worlds=..., space="local")`, views into torch, shadows off.
+- "worlds + shadows" (`--shadows N`): the same with each world's own shadow maps of N texels
+  a side (render/world_shadows.py: the tabletop's sun, one scene-wide map per world), e.g.
+  `--worlds 1024 --sizes 128x128 --shadows 256`.
 
 Columns: world-views/s (W x steps / wall clock, the device synchronised at the end), host
 us/step (Python time of a step's calls), GPU ms/step (`last_stats.gpu_ms`), vkpbr MiB (device
@@ -62,13 +66,18 @@ def has_worlds(r: Renderer) -> bool:
     return "worlds" in inspect.signature(r.render_batch).parameters
 
 
-def render_worlds(r: Renderer, views: CameraBatch, size: tuple[int, int], poses, slots):  # noqa: ANN001, ANN201
+def render_worlds(r: Renderer, views: CameraBatch, size: tuple[int, int], poses, slots,  # noqa: ANN001, ANN201
+                  shadow_resolution: int = 0):
     # `poses`: this step's (W, N, 7) float32 CUDA tensor, rows position + quaternion x, y, z, w
     # for tabletop.MOVING in order, local to the glTF's root (the simulator's z-up world:
     # space="local"); `slots`: what `r.world_slots(list(tabletop.MOVING))` named. View w sees
     # world w (B == W, so world_of_view is left out).
-    # shadows off: a batch of worlds draws the state's shadow maps, which do not follow the
-    # worlds (docs/batch.md), and SAPIEN's camera group draws none by default
+    # shadows off as SAPIEN's camera group draws none by default; `shadow_resolution` > 0
+    # (--shadows): each world's own shadow maps of that size (render/world_shadows.py: the
+    # sun's scene-wide map per world)
+    if shadow_resolution:
+        return r.render_batch(views, size=size, worlds=poses, quaternion="xyzw", space="local",
+                              device="cuda", world_shadow_resolution=shadow_resolution)
     return r.render_batch(views, size=size, worlds=poses, quaternion="xyzw", space="local",
                           device="cuda", shadows=False)
 
@@ -83,6 +92,9 @@ def parse() -> argparse.Namespace:
     ap.add_argument("--reps", type=int, default=4, help="timed passes over the steps")
     ap.add_argument("--scene-dir", default=None, help="where the glTF is written (default: a temp dir)")
     ap.add_argument("--json", default=None, help="append one JSON line a row")
+    ap.add_argument("--shadows", type=int, default=0, metavar="N",
+                    help="also a row 'worlds + shadows': each world's own shadow maps of N texels "
+                         "a side (world_shadow_resolution, e.g. 256)")
     ap.add_argument("--png-dir", default=None, help="save world 0's view of each row there")
     return ap.parse_args()
 
@@ -95,7 +107,7 @@ def row_args(args: argparse.Namespace, size: tuple[int, int], worlds: int, mode:
         png = str(Path(args.png_dir) / f"vkpbr-{args.variant}-{size[0]}x{size[1]}-{worlds}-{tag}.png")
     return argparse.Namespace(variant=args.variant, width=size[0], height=size[1], worlds=worlds,
                               steps=args.steps, reps=args.reps, device="cuda" if "torch" in mode or
-                              mode == "worlds" else "cpu", json=args.json, png=png)
+                              mode.startswith("worlds") else "cpu", json=args.json, png=png)
 
 
 def scene_of(args: argparse.Namespace):  # noqa: ANN201
@@ -143,6 +155,10 @@ def run(args: argparse.Namespace) -> None:
                 step = lambda p, v=views, s=size: render_worlds(r, v, s, p, slots)  # noqa: E731
                 record(*row, "worlds", step, poses, torch.cuda.synchronize, baseline,
                        lambda out: out[0].cpu().numpy())
+                if args.shadows:
+                    lit = lambda p, v=views, s=size: render_worlds(r, v, s, p, slots, args.shadows)  # noqa: E731
+                    record(*row, "worlds + shadows", lit, poses, torch.cuda.synchronize, baseline,
+                           lambda out: out[0].cpu().numpy())
 
 
 def one_state(r: Renderer, args, world, size, w, views, names, motion, baseline, torch) -> None:  # noqa: ANN001

@@ -137,7 +137,8 @@ def maps():
         frame.wait()
         cmd.free()
         layers, cubes = sm.read_maps()
-        mats = sm._views[frame.index][12:].reshape(-1, 4, 4).transpose(0, 2, 1).astype(np.float64)
+        mats = sm._views[frame.index][SH.HEADER_BYTES // 4:].reshape(-1, 4, 4)
+        mats = mats.transpose(0, 2, 1).astype(np.float64)
         r.check_validation()
         sm.destroy()
         yield plan, rec, layers, cubes, mats

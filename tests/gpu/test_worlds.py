@@ -5,8 +5,8 @@ bit for bit on the layered batch, and on the compute batch within its documented
 depth against the NumPy ray cast of the moved triangles; visibility per world; a new step's
 poses re-record nothing; the renderer's own state is untouched; one-line errors.
 
-Shadows are off in the comparisons with `render`: a batch's shadow maps are the renderer's
-state's, shared by every world (documented), where `render` of a moved world draws its own.
+Shadows are off in the comparisons with `render` (the layered batch's bit-for-bit guarantee
+holds without them); each world's own shadow maps are tests/gpu/test_world_shadows.py's.
 """
 
 from __future__ import annotations

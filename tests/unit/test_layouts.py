@@ -62,7 +62,8 @@ def test_std140_rules() -> None:
     # std430 alike: the array's stride).
     assert L.VIEW_RECORD.offsets == {"VP": 0, "inv_VP": 64, "eye_near": 128, "forward_far": 144,
                                      "intrinsics": 160, "viewport": 176, "layer": 192,
-                                     "instance_base": 196, "factor_base": 200}
+                                     "instance_base": 196, "factor_base": 200,
+                                         "shadow_base": 204}
     assert L.VIEW_RECORD.size == L.VIEW_RECORD.dtype.itemsize == 208
     assert L.PUSH.size <= 128  # the guaranteed minimum maxPushConstantsSize
     assert L.MATERIAL.dtype.itemsize == L.MATERIAL.size

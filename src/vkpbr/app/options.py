@@ -122,6 +122,9 @@ SHARED_OPTIONS: tuple[OptionSpec, ...] = (
     OptionSpec("--shadow-resolution", "int", "texels per side of a shadow map, 16..16384 "
                "(cube faces get half; default %(default)s)", field="shadow_resolution",
                metavar="N"),
+    OptionSpec("--world-shadow-resolution", "int", "texels per side of each world's own shadow "
+               "map in a batch of worlds that move shadow casters, 16..16384 (cube faces get "
+               "half; default %(default)s)", field="world_shadow_resolution", metavar="N"),
     OptionSpec("--shadow-raster", "enum", "what draws the shadow maps (default %(default)s): "
                "hardware (the raster units), compute (compute shaders on all SMs) or auto "
                "(compute on GPUs, hardware on CPUs)", field="shadow_raster"),

@@ -118,7 +118,8 @@ class Commands:
     def memory_barrier(self, src: str, dst: str) -> None:
         """A global memory dependency from stages `src` to `dst`, each "|"-joined words of
         "transfer", "compute" (storage reads and writes), "indirect" (dispatch sizes, draws),
-        "vertex" (storage reads in vertex shaders), "vertex_input" (vertex buffers)."""
+        "vertex" (storage reads in vertex shaders), "fragment" (storage reads in fragment
+        shaders), "vertex_input" (vertex buffers)."""
         vk = self.vk
         stages = {
             "transfer": (vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT),
@@ -129,6 +130,9 @@ class Commands:
             # Storage buffers read by vertex shaders (a batch's lists of visible views).
             "vertex": (vk.VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT,
                        vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT),
+            # Storage buffers read by fragment shaders (a batch of worlds' shadow maps).
+            "fragment": (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                         vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT),
             # Vertex buffers read by draws (streams a compute kernel wrote).
             "vertex_input": (vk.VK_PIPELINE_STAGE_2_VERTEX_ATTRIBUTE_INPUT_BIT,
                              vk.VK_ACCESS_2_VERTEX_ATTRIBUTE_READ_BIT),

@@ -179,7 +179,8 @@ class BatchViews:
 
     def write_views(self, terms: ViewTerms, size: tuple[int, int], rows: int = 0,
                     instance_base: np.ndarray | None = None,
-                    factor_base: np.ndarray | None = None) -> None:
+                    factor_base: np.ndarray | None = None,
+                    shadow_base: np.ndarray | None = None) -> None:
         """The batch's view records (`terms`: views.batch_view_terms) for views of `size`
         (W, H): each in its layer of its chunk of the layered target, or (`rows` > 0) in its
         tile of a compute batch's column-major atlas, `rows` tiles a column; in a batch of
@@ -198,6 +199,8 @@ class BatchViews:
             self.records["instance_base"][:n] = instance_base
         if factor_base is not None:
             self.records["factor_base"][:n] = factor_base
+        if shadow_base is not None:  # each view's world's own shadow maps (world_shadows.py)
+            self.records["shadow_base"][:n] = shadow_base
 
     def write_blend_groups(self, orders: np.ndarray) -> tuple[tuple[tuple[tuple[int, ...], int, int], ...], ...]:
         """Group each chunk's views by their blended draws' back-to-front order (`orders`:

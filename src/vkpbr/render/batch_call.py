@@ -298,7 +298,8 @@ def _host_call(renderer: Any, plan: WorldPlan, expand: str,
     if poses is None or slots is None:
         return WorldCall(index, factors=factors)
     if expand != "gpu":
-        return WorldCall(index, records=world_records(state, slots, poses), factors=factors)
+        return WorldCall(index, records=world_records(state, slots, poses), factors=factors,
+                         moved=slots.anchor >= 0)
     # The rows as given (7 floats: the kernel makes the rotation) or the matrices (16)
     flat = poses.rows if poses.rows is not None else poses.matrices
     shown = poses.visible

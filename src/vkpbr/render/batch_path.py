@@ -37,6 +37,7 @@ from vkpbr.render.parts import FrameParts
 from vkpbr.render.post import batch_draw_size, batch_post, batch_post_bytes
 from vkpbr.render.steps import FrameObjects, FrameSpec
 from vkpbr.render.views import ViewTerms, batch_view_terms
+from vkpbr.render.world_shadows import WorldShadows, world_plan
 from vkpbr.render.worlds import WorldBuffers, WorldCall, WorldKernel
 from vkpbr.scene.camera_batch import CameraBatch
 
@@ -68,6 +69,8 @@ class BatchPath:
         self.world_kernel: WorldKernel | None = None
         self.world_call: WorldCall | None = None  # the call under way's worlds, if any
         self._world_writes: list[int] = []  # per slot: which call's worlds it holds
+        self.world_shadows: WorldShadows | None = None  # each world's maps (world_shadows.py)
+        self._wshadow: tuple[Any, Any] | None = None  # the submission's (world plan, WorldJob)
         self._factor_writes = 0  # which call's factors the compute scene holds
         self._calls = 0
         self.cuda_order: CudaOrder | None = None  # made on the first CUDA-ordered call
@@ -316,15 +319,47 @@ class BatchPath:
         p = self.parts
         frame_lights = p.lighting.frame_lights(opts, lights)
         p.environments.bind_for(opts)
+        plan = p.shadow_frames.prepare(frame_lights, opts)
+        ws = self._shadow_worlds(plan, opts)  # (its errors come before any GPU work)
         frame = p.ring.begin()
         slot = p.slots[frame.index]
         p.gpu_state.write(frame.index)
-        plan = p.shadow_frames.prepare(frame_lights, opts)
-        rows = p.shadow_frames.write_scene(slot, plan, frame_lights)
+        if ws is None:
+            rows = p.shadow_frames.write_scene(slot, plan, frame_lights)
+        else:  # each world's own maps (render/world_shadows.py)
+            rows = p.shadow_frames.write_worlds(slot, ws[0], frame_lights, opts.world_shadow_resolution,
+                                                (ws[1].stride, ws[1].cube_base))
         write_frame_blocks(slot, frame_lights, opts, linear, p.lighting.frame_lighting(opts, ao),
                            rows)
         base = self._write_worlds(frame.index, start, len(views))
+        shadow_base = None  # each view's world's own maps: 1 + its world
+        if ws is not None and self.world_call is not None:
+            shadow_base = (1 + self.world_call.world_of_view[start:start + len(views)]).astype(np.uint32)
+        base = (*base, shadow_base)
         return frame, plan, self._view_records(views, size, atlas_rows, base)
+
+    def _shadow_worlds(self, plan: Any, opts: RenderOptions) -> tuple[Any, Any] | None:
+        """A batch of worlds that moves shadow casters: its world plan and maps (WorldJob,
+        render/world_shadows.py), kept for the submission; None (the state's maps, shared)
+        for other batches."""
+        p, call = self.parts, self.world_call
+        self._wshadow = None
+        if call is None or not plan.entries or not call.poses:
+            return None
+        if self.world_shadows is None:
+            self.world_shadows = WorldShadows(p.shadow_frames.maps)
+        ws = self.world_shadows
+        if not ws.moves_casters(call, p.gpu_scene.draws):
+            return None
+        d = max(len(p.gpu_scene.draws), 1)
+        worlds = call.gpu.worlds if call.gpu is not None else len(call.records) // d  # type: ignore[arg-type]
+        wplan = world_plan(plan)
+        job, made = ws.job(wplan, opts.world_shadow_resolution, worlds, d)
+        if made:  # set 3 rewritten: every recording that binds it
+            p.recorder.free()
+            self.free_recordings()
+        self._wshadow = (wplan, job)
+        return self._wshadow
 
     def _view_records(self, views: CameraBatch, size: tuple[int, int], atlas_rows: int,
                       base: tuple[Any, Any]) -> ViewTerms:
@@ -435,15 +470,26 @@ class BatchPath:
         if call is None:
             return ()
         kernel = self.world_kernel
-        return (*call.key, kernel.generation if kernel is not None and call.gpu else 0)
+        ws = self._wshadow
+        shadows = () if ws is None else (ws[0], ws[1].worlds, ws[1].stride, ws[1].generation)
+        return (*call.key, kernel.generation if kernel is not None and call.gpu else 0, shadows)
 
     def _world_groups(self) -> dict[str, Any] | None:
-        """The worlds' kernel step of a call whose poses the GPU expands."""
-        call, kernel = self.world_call, self.world_kernel
-        if call is None or call.gpu is None or kernel is None:
-            return None
-        d = self.world_buffers.draws  # type: ignore[union-attr]
-        return {"worlds": lambda fs: kernel.steps(fs.frame_index, call.gpu, d)}
+        """The worlds' kernel step of a call whose poses the GPU expands; the worlds' own
+        shadow maps (render/world_shadows.py) where the call moves casters."""
+        call, kernel, ws = self.world_call, self.world_kernel, self._wshadow
+        out: dict[str, Any] = {}
+        if ws is not None:
+            raster = self.parts.shadow_frames.maps.compute_raster(self.parts.gpu_scene)
+            bv = self.views
+            assert bv is not None  # (its set 0 names the worlds' records, either batch's)
+            out["shadows"] = lambda fs: raster.world_steps(
+                fs.frame_index, ws[0], ws[1], fs.classes, fs.material_sets,
+                bv.set0(fs.frame_index, True), fs.resources)
+        if call is not None and call.gpu is not None and kernel is not None:
+            d = self.world_buffers.draws  # type: ignore[union-attr]
+            out["worlds"] = lambda fs: kernel.steps(fs.frame_index, call.gpu, d)
+        return out or None
 
     def _run(self, frame: Any, plan: Any, opts: RenderOptions,
              record: Callable[[tuple[bool, ...]], Any], before_submit: Callable[[], None] | None = None,
@@ -454,7 +500,8 @@ class BatchPath:
         host does not wait: the next call does, and reads its timings then."""
         p = self.parts
         shadows = p.shadow_frames.maps
-        redraw = p.shadow_frames.stale(frame.index, plan, opts.alpha_mask)
+        # (a batch of worlds' own maps are drawn whole, every submission; the images are not)
+        redraw = None if self._wshadow else p.shadow_frames.stale(frame.index, plan, opts.alpha_mask)
         try:
             cmd = record(redraw)
             if before_submit is not None:
@@ -595,6 +642,9 @@ class BatchPath:
         if self.world_kernel is not None:
             self.world_kernel.destroy()
             self.world_kernel = None
+        if self.world_shadows is not None:
+            self.world_shadows.destroy()
+            self.world_shadows = None
         for target in self.targets.values():
             self._forget_cuda(target)
             target.destroy()

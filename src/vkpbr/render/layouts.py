@@ -208,6 +208,9 @@ VIEW_RECORD = Std140Block("ViewRecord", "view_record", (
     # Where its world's material factors start in WorldFactors (render/worlds.py: 3 vec4 a
     # material, FACTOR_VEC4S) plus one; 0: the materials' own (frames, plain batches).
     ("factor_base", "uint"),
+    # Its world's shadow maps in ShadowWorldDepths plus one (render/world_shadows.py: a batch
+    # of worlds whose poses move casters); 0: the shadow images (frames, other batches).
+    ("shadow_base", "uint"),
 ))
 
 SETTINGS = Std140Block(
@@ -528,6 +531,9 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
         (0, "storage", ("fragment", "compute"), "ShadowData"),
         (1, "sampler2DArrayShadow", ("fragment", "compute"), "shadow_maps"),
         (2, "samplerCubeArrayShadow", ("fragment", "compute"), "shadow_cubes"),
+        # A batch of worlds' shadow maps, every world's (render/world_shadows.py): depths
+        # read by hand (a stand-in where there are none).
+        (3, "storage", ("fragment", "compute"), "ShadowWorldDepths"),
     ),
 }
 # Sets whose GLSL declarations are not generated (codegen skips them).

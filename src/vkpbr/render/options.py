@@ -209,6 +209,10 @@ class RenderOptions:
         Shadow maps for the lights that cast shadows (Light.shadows); False: none at all.
     shadow_resolution : int
         Texels per side of a shadow map (cascade or spot map; cube faces get half), 16..16384.
+    world_shadow_resolution : int
+        Texels per side of each world's own shadow maps in a batch of worlds whose poses move
+        shadow casters (render/world_shadows.py; cube faces get half), 16..16384: W worlds
+        take W x layers x this^2 x 4 bytes (256: a point light's cube 384 KiB a world).
     shadow_raster : RasterPath or str
         What draws the shadow maps: "auto" (compute shaders on GPUs, whose few raster units
         are the limit of a redrawn map; the raster units on CPUs), "hardware" (the raster
@@ -255,6 +259,7 @@ class RenderOptions:
     occlusion: bool = True
     shadows: bool = True
     shadow_resolution: int = 2048
+    world_shadow_resolution: int = 256
     shadow_raster: RasterPath = RasterPath.AUTO
     env: str = "sky"
     env_intensity: float = 1.0
@@ -278,9 +283,11 @@ class RenderOptions:
         if not math.isfinite(exposure) or abs(exposure) > 64:
             raise UsageError(f"exposure {self.exposure} must be a finite number of stops in [-64, 64]")
         object.__setattr__(self, "exposure", exposure)
-        res = self.shadow_resolution
-        if isinstance(res, bool) or not isinstance(res, int) or not 16 <= res <= 16384:
-            raise UsageError(f"shadow resolution {res!r}: expected an integer from 16 to 16384")
+        for name in ("shadow_resolution", "world_shadow_resolution"):
+            res = getattr(self, name)
+            if isinstance(res, bool) or not isinstance(res, int) or not 16 <= res <= 16384:
+                raise UsageError(f"{name.replace('_', ' ')} {res!r}: expected an integer from "
+                                 "16 to 16384")
         self._check_environment()
         self._check_post()
         for f in fields(self):

@@ -110,6 +110,23 @@ class ShadowFrames:
         self._rows[slot.index] = (key, rows)
         return rows
 
+    def write_worlds(self, slot: FrameSlot, plan: ShadowPlan, lights: tuple[Light, ...],
+                     resolution: int, layout: tuple[int, int]) -> np.ndarray | None:
+        """A batch of worlds' own maps in `slot` (render/world_shadows.py: `plan` its world
+        plan, maps of `resolution`, `layout` (texels a world, its cubes' start)): the
+        matrices every world's maps share (directional lights over the whole scene) and the
+        lights' LightRecord.shadow rows; None without maps."""
+        if not plan.entries:
+            return None
+        key = ("worlds", plan, lights, resolution, layout, getattr(self.bounds, "version", 0))
+        last = self._rows.get(slot.index)
+        if last is not None and last[0] == key:
+            return last[1]
+        rows = self.maps.write(slot.index, plan, lights, None, (1, 1), 0.0, 0.0,
+                               self.bounds.corners[0], self.bounds.corners[-1], resolution, layout)
+        self._rows[slot.index] = (key, rows)
+        return rows
+
     def write_scene(self, slot: FrameSlot, plan: ShadowPlan, lights: tuple[Light, ...],
                     options: RenderOptions | None = None) -> np.ndarray | None:
         """A batch's shadow maps in `slot`: the camera-independent fits (directional lights

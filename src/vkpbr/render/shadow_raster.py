@@ -19,11 +19,17 @@ triangles covered by the whole work group. The depth bias is the raster pipeline
 (shadows.DEPTH_BIAS, Vulkan's slope-scaled formula); the normal offset stays in
 shadow_sampling.glsl. Vertices are the scene's posed ones (the deform step writes them in
 place, before) placed by the frame's Instances, as every other step reads them.
+
+A batch of worlds whose poses move casters (render/world_shadows.py) draws every world's
+maps in the same dispatches (`world_steps`): a dispatch's z is (world, layer), a caster's
+matrices are its world's records in Instances, its texels its world's in the worlds'
+buffer, which the shading reads as it is (no copy: image layers could not hold thousands).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -35,13 +41,14 @@ from vkpbr.gpu.graph import BufferResource, Step
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.deform import DEFORMED_RADIUS, UNBOUNDED_RADIUS
 
-__all__ = ["ShadowRaster", "wants_compute", "SET_ROWS"]
+__all__ = ["ShadowRaster", "WorldJob", "wants_compute", "SET_ROWS"]
 
 SMALL_GROUP = 64  # shadow_small / shadow_masked: one (triangle, layer) an invocation
 MAX_GROUPS_X = 65535
 BIG_AREA, BIG_CHUNK = 256, 16384  # raster.comp's opaque split (compute_path.RasterTuning)
 MASKED_AREA = 64  # masked triangles over this many box texels: the work group covers them
-PUSH_BYTES = 96  # shadow_raster.comp's push constants
+PUSH_BYTES = 128  # shadow_raster.comp's push constants
+MAX_Z = 65535  # a dispatch's (world, layer) invocations in z
 # Set 4: generated.glsl's compute-path bindings of the streams, then the kernels' own.
 SET_ROWS = ((3, "Indices"), (4, "Positions"), (5, "Texcoords0"), (6, "Texcoords1"),
             (7, "Colors"), (40, "ShadowMatrices"), (41, "Casters"), (42, "Depths"), (43, "Big"))
@@ -51,6 +58,25 @@ _KINDS = ("directional", "spot", "point")  # shadow_raster.comp's bias index
 # has "shadows.small", "shadows.big", "shadows.masked" and "shadows" (the copy) apart. Off:
 # one timestamp, "shadows", for them all.
 TIMED_STEPS = False
+
+
+@dataclass(frozen=True)
+class WorldJob:
+    """A batch of worlds' maps (render/world_shadows.py): `worlds` worlds of `draws` records
+    each (world w's from record (1 + w) * draws), every world's maps in `depths`, `stride`
+    texels a world (its 2D layers of `map_size`, then from `cube_base` its cubes' faces of
+    `cube_size`); `big` / `big_capacity`: their big triangles' list."""
+
+    depths: Buffer
+    big: Buffer
+    big_capacity: int
+    worlds: int
+    draws: int
+    stride: int
+    cube_base: int
+    map_size: int
+    cube_size: int
+    generation: int = 0  # of the buffers (render/world_shadows.py): the sets made for them
 
 
 def wants_compute(choice: Any, device: Any, measured: bool | None = None) -> bool:
@@ -186,7 +212,10 @@ class ShadowRaster:
             self._tables[key] = table
         return key, self._tables[key]
 
-    def _set(self, key: tuple, table: _Table, slot: int) -> Any:
+    def _set(self, key: tuple, table: _Table, slot: int, job: WorldJob | None = None) -> Any:
+        depths, big = (self.depths, self.big) if job is None else (job.depths, job.big)
+        if job is not None:
+            key = (*key, "worlds", job.generation)
         if (key, slot) not in self._sets:
             pool = self._own(DescriptorPool(self.device, [(self.set_layout, self.slots)]))
             self._pools.append(pool)
@@ -194,7 +223,7 @@ class ShadowRaster:
             buffers = {"Indices": self.gs.index_buffer, "Positions": streams["positions"],
                        "Texcoords0": streams["texcoords"], "Texcoords1": streams["texcoords1"],
                        "Colors": streams["colors"], "Casters": table.buffer,
-                       "Depths": self.depths, "Big": self.big}
+                       "Depths": depths, "Big": big}
             w = DescriptorWriter(self.device)
             for s in range(self.slots):
                 dset = pool.allocate(self.set_layout)
@@ -214,15 +243,17 @@ class ShadowRaster:
                 "shadow_big": BufferResource(self.big)}
 
     # --- steps -----------------------------------------------------------------------------
-    def _push(self, plan: Any, table: _Table) -> np.ndarray:
+    def _push(self, plan: Any, table: _Table, job: WorldJob | None = None) -> np.ndarray:
         push = np.zeros(PUSH_BYTES // 4, np.uint32)
         spot = 0
         for e in plan.entries:
             if e.kind == "spot":
                 spot |= 1 << e.first
-        push[:16] = (table.opaque_triangles, max(table.opaque_rows, 1), 0, 0, self.maps.maps.size,
-                     self.maps.cubes.size, self.cube_base, self.max_layers, self.big_capacity,
-                     int(self.gs.has_colors), BIG_AREA, BIG_CHUNK, MASKED_AREA, spot, 0, 0)
+        sizes = ((self.maps.maps.size, self.maps.cubes.size, self.cube_base, self.big_capacity)
+                 if job is None else (job.map_size, job.cube_size, job.cube_base, job.big_capacity))
+        push[:16] = (table.opaque_triangles, max(table.opaque_rows, 1), 0, 0, sizes[0], sizes[1],
+                     sizes[2], self.max_layers, sizes[3], int(self.gs.has_colors), BIG_AREA,
+                     BIG_CHUNK, MASKED_AREA, spot, 0, 0)
         bias = push.view(np.float32)
         for k, kind in enumerate(_KINDS):
             bias[16 + k], bias[20 + k] = self.depth_bias[kind]
@@ -244,7 +275,10 @@ class ShadowRaster:
                 if len(r)]
 
         record = self._records(table, dset, push, jobs, material_sets, set0)
-        depths, big_list = "shadow_depths", "shadow_big"
+        return self._steps(record, table, "shadow_depths", "shadow_big")
+
+    def _steps(self, record: dict[str, Callable[[Any], None]], table: _Table, depths: str,
+               big_list: str) -> list[Step]:
         apart = TIMED_STEPS
         out = [Step("shadows.clear", record["clear"], ((depths, "transfer_dst"), (big_list, "transfer_dst")),
                     timed=False),
@@ -259,28 +293,27 @@ class ShadowRaster:
         return out
 
     def _records(self, table: _Table, dset: Any, push: np.ndarray,
-                 jobs: list[tuple[int, int, Any]], material_sets: Sequence[Any], set0: Any
-                 ) -> dict[str, Callable[[Any], None]]:
-        """Each step's commands: `jobs` are (first matrix, layers, entry) of the drawn ranges."""
+                 jobs: list[tuple[int, int, Any]], material_sets: Sequence[Any], set0: Any,
+                 world: WorldJob | None = None) -> dict[str, Callable[[Any], None]]:
+        """Each step's commands: `jobs` are (first matrix, layers, entry) of the drawn ranges;
+        `world`: every world's layers of each job (no copy: `world_steps`)."""
+        big_buffer = self.big if world is None else world.big
+        dispatch = self._dispatcher(push, world)
+
         def bind(cmd: Any, name: str) -> None:
             cmd.bind_pipeline(self._pipeline(name))
             cmd.bind_set(0, set0)
             cmd.bind_set(4, dset)
 
         def clear(cmd: Any) -> None:
-            # Depth 0: the farthest (reversed-Z), as the passes clear; the drawn layers only.
-            for offset, size in self._spans(jobs):
-                cmd.fill(self.depths, 0, offset, size)
-            cmd.fill(self.big, 0, 0, 16)  # the count and the dispatch size
+            self._clear(cmd, jobs, world)
 
         def small(cmd: Any) -> None:
             bind(cmd, "small")
             for matrix, layers, _ in jobs:
-                push[3] = matrix
-                cmd.push(push)
                 n = -(-table.opaque_triangles // SMALL_GROUP)
                 if n:
-                    cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), layers)
+                    dispatch(cmd, matrix, layers, n)
 
         def args(cmd: Any) -> None:
             bind(cmd, "args")
@@ -290,23 +323,73 @@ class ShadowRaster:
         def big(cmd: Any) -> None:
             bind(cmd, "big")
             cmd.push(push)
-            cmd.dispatch_indirect(self.big, 4)
+            cmd.dispatch_indirect(big_buffer, 4)
 
         def masked(cmd: Any) -> None:
             bind(cmd, "masked")
             for matrix, layers, _ in jobs:
                 for row, material, triangles in table.masked:
                     cmd.bind_set(1, material_sets[material])
-                    push[0], push[2], push[3] = triangles, row, matrix
-                    cmd.push(push)
-                    n = -(-triangles // SMALL_GROUP)
-                    cmd.dispatch(min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), layers)
+                    push[0], push[2] = triangles, row
+                    dispatch(cmd, matrix, layers, -(-triangles // SMALL_GROUP))
 
         def copy(cmd: Any) -> None:
-            self._copy(cmd, jobs)
+            if world is None:
+                self._copy(cmd, jobs)
+            else:  # the shading reads the worlds' maps as they are
+                cmd.memory_barrier("compute", "compute|fragment")
 
         return {"clear": clear, "small": small, "args": args, "big": big, "masked": masked,
                 "copy": copy}
+
+    def _dispatcher(self, push: np.ndarray, world: WorldJob | None
+                    ) -> Callable[[Any, int, int, int], None]:
+        """dispatch(cmd, first matrix, layers, groups): the layers of every world (one
+        without `world`), z = (world, layer), at most MAX_Z a dispatch (worlds in runs)."""
+        worlds = 1 if world is None else world.worlds
+
+        def dispatch(cmd: Any, matrix: int, layers: int, groups: int) -> None:
+            push[3] = matrix
+            run = max(1, MAX_Z // layers)
+            for w0 in range(0, worlds, run):
+                n = min(run, worlds - w0)
+                if world is not None:
+                    push[24:29] = (world.draws, world.draws, world.stride, layers, w0)
+                else:
+                    push[27] = layers
+                cmd.push(push)
+                cmd.dispatch(min(groups, MAX_GROUPS_X), -(-groups // MAX_GROUPS_X), n * layers)
+
+        return dispatch
+
+    def _clear(self, cmd: Any, jobs: list[tuple[int, int, Any]], world: WorldJob | None) -> None:
+        """Depth 0: the farthest (reversed-Z), as the passes clear; the drawn layers only (a
+        batch of worlds: all of them, after the last submission's reads); the big list."""
+        if world is not None:
+            cmd.memory_barrier("compute|fragment", "transfer")
+            cmd.fill(world.depths, 0, 0, 4 * world.worlds * world.stride)
+            cmd.fill(world.big, 0, 0, 16)
+            return
+        for offset, size in self._spans(jobs):
+            cmd.fill(self.depths, 0, offset, size)
+        cmd.fill(self.big, 0, 0, 16)  # the count and the dispatch size
+
+    def world_steps(self, slot: int, plan: Any, job: WorldJob, classes: Sequence[str],
+                    material_sets: Sequence[Any], set0: Any, resources: dict[str, Any]
+                    ) -> list[Step]:
+        """The steps that draw every layer of `plan` (render/world_shadows.py's plan: one
+        layer a directional light) for each of `job`'s worlds into `job.depths`; the last,
+        "shadows", orders them before the shading's reads."""
+        key, table = self._table(classes)
+        dset = self._set(key, table, slot, job)
+        push = self._push(plan, table, job)
+        jobs = [(e.matrix_base, e.count, e) for e in plan.entries]
+        record = self._records(table, dset, push, jobs, material_sets, set0, job)
+        resources.update({"shadow_world_depths": BufferResource(job.depths),
+                          "shadow_world_big": BufferResource(job.big)})
+        out = self._steps(record, table, "shadow_world_depths", "shadow_world_big")
+        out[-1] = Step("shadows", record["copy"], (("shadow_world_depths", "storage"),))
+        return out
 
     def _spans(self, jobs: list[tuple[int, int, Any]]) -> list[tuple[int, int]]:
         """(byte offset, bytes) of the drawn layers' depths in `depths`, a span a job."""

@@ -56,7 +56,8 @@ __all__ = ["ShadowMaps", "ShadowPlan", "ShadowEntry", "plan_shadows", "MAX_LAYER
 MAX_LAYERS = 16  # 2D layers: 4 directional lights' cascades, or spot lights
 MAX_CUBES = 4  # point lights with shadows
 MATRICES = MAX_LAYERS + 6 * MAX_CUBES  # the 2D layers' matrices, then 6 per cube
-HEADER_BYTES = 48  # shaders/shadow_data.glsl: cascade_far, cascade_texel, params
+HEADER_BYTES = 64  # shaders/shadow_data.glsl: cascade_far, cascade_texel, params, world_layout
+HEADER_FLOATS = HEADER_BYTES // 4
 DEFAULT_RESOLUTION = 2048
 # (constant, slope) depth bias of the passes, in Vulkan's units; negative: away from the light
 # under reversed-Z. Per projection: orthographic depth is linear in distance, perspective
@@ -197,6 +198,10 @@ class ShadowMaps:
         self.compute = False
         self._layouts = (frame_layout or empty, material_layout)
         self._raster: Any = None
+        # Set 3's ShadowWorldDepths: a batch of worlds' maps (render/world_shadows.py), else
+        # a stand-in no shader reads (views' shadow_base 0).
+        self.world_stand_in = self._own(Buffer(device, 16, "storage", name="world shadows stand-in"))
+        self.world_depths: Buffer = self.world_stand_in
         self.ensure(ShadowPlan())
 
     def _own(self, obj: Any) -> Any:
@@ -254,18 +259,34 @@ class ShadowMaps:
             w.storage(s, 0, self.buffer, size, i * self.stride)
             w.sampler(s, 1, self.maps.view, self.sampler)
             w.sampler(s, 2, self.cubes.view, self.sampler)
+            w.storage(s, 3, self.world_depths)
             w.storage(ps, 0, self.buffer, size, i * self.stride)
         w.update()
         return True
 
+    def bind_world_depths(self, buffer: Buffer | None) -> None:
+        """Set 3's ShadowWorldDepths: `buffer` (a batch of worlds' maps) or the stand-in.
+        The caller waited for the device and frees the recordings (their sets changed)."""
+        self.world_depths = self.world_stand_in if buffer is None else buffer
+        w = DescriptorWriter(self.device)
+        for s in self.sets:
+            w.storage(s, 3, self.world_depths)
+        w.update()
+
     # --- per frame --------------------------------------------------------------------------
     def write(self, slot: int, plan: ShadowPlan, lights: Sequence[Light], camera: Camera | None,
               size: tuple[int, int], znear: float, zfar: float, scene_lo: Sequence[float],
-              scene_hi: Sequence[float]) -> np.ndarray:
+              scene_hi: Sequence[float], resolution: int | None = None,
+              world_layout: tuple[int, int] = (0, 0)) -> np.ndarray:
         """Fill frame `slot`'s ShadowData for `plan` and return every light's
         LightRecord.shadow: (len(lights), 4) float32, x = -1 for unshadowed lights.
         `camera` None: directional lights get one cascade over the whole scene (a batch's
-        views share the maps; `znear`, `zfar` and `size` are then unused)."""
+        views share the maps; `znear`, `zfar` and `size` are then unused). `resolution`:
+        the maps' size where not the images' (a batch of worlds' own maps, `world_layout`:
+        render/world_shadows.py)."""
+        resolution = self.resolution if resolution is None else int(resolution)
+        cube_resolution = self.cube_resolution if resolution == self.resolution else max(
+            resolution // 2, 16)
         out = np.zeros((len(lights), 4), np.float32)
         out[:, 0] = -1.0
         data = self._views[slot]
@@ -278,10 +299,10 @@ class ShadowMaps:
             pos = tuple(getattr(light, "position", (0.0, 0.0, 0.0)))
             if e.kind == "directional":
                 if camera is None:
-                    fit = SM.scene_cascade(light.direction, scene_lo, scene_hi, self.resolution)
+                    fit = SM.scene_cascade(light.direction, scene_lo, scene_hi, resolution)
                 else:
                     fit = SM.directional_cascades(camera, size, light.direction, scene_lo,
-                                                  scene_hi, self.resolution, znear, zfar, e.count)
+                                                  scene_hi, resolution, znear, zfar, e.count)
                 n = len(fit.matrices)
                 mats[e.matrix_base:e.matrix_base + n] = fit.matrices
                 far[:n], texel[:n] = fit.far, fit.texel
@@ -293,15 +314,18 @@ class ShadowMaps:
                 float(getattr(light, "range", 0.0)), outer, bounds[0], bounds[1])
             mats[e.matrix_base:e.matrix_base + len(fit)] = fit
             if e.kind == "spot":
-                unit = 2.0 * math.tan(SM.spot_half_angle(outer)) / self.resolution
+                unit = 2.0 * math.tan(SM.spot_half_angle(outer)) / resolution
                 out[e.light] = (e.first, 1, near, unit)
             else:
-                out[e.light] = (e.first, 6, near, 2.0 / self.cube_resolution)
+                out[e.light] = (e.first, 6, near, 2.0 / cube_resolution)
         data[0:4] = np.where(np.isfinite(far), far, 3.0e38)
         data[4:8] = texel
-        data[8:12] = (self.resolution, self.cube_resolution, NORMAL_OFFSET, PCF_RADIUS)
+        data[8:12] = (resolution, cube_resolution, NORMAL_OFFSET, PCF_RADIUS)
+        # A batch of worlds' layout of a world's maps in ShadowWorldDepths (texels: a world's,
+        # where its cubes start; render/world_shadows.py), else zeros.
+        data[12:16].view(np.uint32)[:] = (*world_layout, 0, 0)
         # mat4 is column-major in GLSL: each row-major matrix transposed.
-        data[12:].reshape(MATRICES, 4, 4)[:] = mats.transpose(0, 2, 1)
+        data[HEADER_FLOATS:].reshape(MATRICES, 4, 4)[:] = mats.transpose(0, 2, 1)
         return out
 
     def stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool, casters: int = 0
@@ -311,7 +335,7 @@ class ShadowMaps:
         `write` left them for the slot) or other casters. A walking camera usually changes
         only its nearest cascade (shadow_math's snapping grid). Marks them drawn: the frame's
         commands draw them and submissions run in order (`forget` if it is not submitted)."""
-        mats = self._views[slot][12:].reshape(MATRICES, 16)
+        mats = self._views[slot][HEADER_FLOATS:].reshape(MATRICES, 16)
         # The usual frame: the same matrices, casters and plan as the previous call (any
         # slot), whose layers are drawn already: nothing to compare entry by entry.
         # `casters`: the scene state's version that last moved a caster (0: never).

@@ -226,7 +226,8 @@ def pack_view(buffer: Any, terms: ViewTerms, viewport: tuple[int, int, int, int]
     t = terms
     L.VIEW_RECORD.pack_into(buffer, VP=t.vp, inv_VP=t.inv_vp, eye_near=(*t.eye, t.znear),
                             forward_far=(*t.forward, t.zfar), intrinsics=t.intrinsics,
-                            viewport=viewport, layer=layer, instance_base=0, factor_base=0)
+                            viewport=viewport, layer=layer, instance_base=0, factor_base=0,
+                            shadow_base=0)
 
 
 def fill_views(records: np.ndarray, terms: ViewTerms, viewport: np.ndarray,
@@ -249,3 +250,4 @@ def fill_views(records: np.ndarray, terms: ViewTerms, viewport: np.ndarray,
     records["layer"] = layer
     records["instance_base"] = 0
     records["factor_base"] = 0
+    records["shadow_base"] = 0

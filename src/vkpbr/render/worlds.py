@@ -11,7 +11,7 @@ worlds binds instead its slot's buffer here,
 
 and gives view b the base (1 + world_of_view[b]) * D. What reads record `draw` without a
 view (the shadow maps) reads the state's, so shadow maps are the renderer's state's, shared
-by every world (docs/batch.md says so). Each slot has its own buffer (host-visible,
+by every world, unless the worlds move casters (render/world_shadows.py: each world's own). Each slot has its own buffer (host-visible,
 device-local where the GPU has it), written after the slot's fence as GpuSceneState's is.
 """
 
@@ -69,6 +69,7 @@ class WorldCall:
     records: np.ndarray | None = None
     gpu: GpuWorlds | None = None
     factors: np.ndarray | None = None  # (W, S, 4) float32 WorldFactors blocks (worlds.glsl)
+    moved: np.ndarray | None = None  # (D,) bool: the draws `records` move (world_shadows.py)
 
     @property
     def poses(self) -> bool:

@@ -126,6 +126,7 @@ struct ViewRecord {
     uint layer;
     uint instance_base;
     uint factor_base;
+    uint shadow_base;
 };
 struct DrawRecord {
     uvec4 info;

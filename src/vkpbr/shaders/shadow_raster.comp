@@ -13,6 +13,12 @@
 // e (D32_SFLOAT), then clamped to [0, 1] as a float attachment's depth is.
 // Triangles are clipped to 0 <= z <= w (the pipelines clip depth: no depth clamp); no face is
 // culled (the shadow pipelines' cull "none").
+// A batch of worlds whose poses move casters (render/world_shadows.py) draws every world's
+// maps in the same dispatches: invocation z is (world, layer) = (pc.world_at.x + z / pc.world.w,
+// z % pc.world.w), a caster's record in Instances is pc.world.y + world * pc.world.x + its draw
+// (the world's records, as views[].instance_base names them for the main rasteriser) and its
+// texels are its world's, pc.world.z texels a world (no copy: the shading reads them). A
+// frame's maps are world 0 of one: pc.world = (0, 0, 0, layers).
 // KERNEL 1 (shadow_small): one invocation a (opaque caster triangle, layer); triangles whose
 //   box exceeds pc.big_area texels are listed as bands of rows of ~pc.big_chunk box texels.
 // KERNEL 3 (shadow_args): the listed bands' dispatch size.
@@ -40,7 +46,7 @@ layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;  // shadow_ras
 // them for the compute path (Indices, Positions, Texcoords0/1, Colors: bindings 3-7), and
 // the shadow raster's own from binding 40.
 layout(set = 4, binding = 40, std430) readonly buffer ShadowMatrices {
-    vec4 header[3];  // shaders/shadow_data.glsl's cascade_far, cascade_texel, params
+    vec4 header[4];  // shaders/shadow_data.glsl's cascade_far, cascade_texel, params, world_layout
     mat4 layer_vp[];
 };
 // Two uvec4 a caster draw: its first triangle over the table, first index, vertex offset and
@@ -48,7 +54,8 @@ layout(set = 4, binding = 40, std430) readonly buffer ShadowMatrices {
 // bounding sphere in the mesh's space (float bits: centre, radius).
 layout(set = 4, binding = 41, std430) readonly buffer Casters { uvec4 casters[]; };
 layout(set = 4, binding = 42, std430) buffer Depths { uint depths[]; };
-// [0] entries listed, [1..3] KERNEL 2's dispatch size, from 4 (triangle, matrix, band) entries.
+// [0] entries listed, [1..3] KERNEL 2's dispatch size, from 4 (triangle, matrix | world << 6,
+// band) entries.
 layout(set = 4, binding = 43, std430) buffer Big { uint big[]; };
 
 layout(push_constant) uniform Raster {
@@ -69,6 +76,8 @@ layout(push_constant) uniform Raster {
     uint pad0, pad1;
     vec4 bias_constant;  // DEPTH_BIAS by light kind: directional, spot, point
     vec4 bias_slope;
+    uvec4 world;  // records a world, the first world's first record, texels a world, layers a world
+    uvec4 world_at;  // x: the dispatch's first world
 } pc;
 
 const uint BIG_LIST = 4u, BIG_ENTRY = 3u;
@@ -86,9 +95,10 @@ uint row_of(uint g) {
 
 #if KERNEL != 3
 uint layer_size(uint m) { return m < pc.max_layers ? pc.map_size : pc.cube_size; }
-uint layer_base(uint m) {
+uint layer_base(uint m, uint w) {
     uint s = layer_size(m);
-    return m < pc.max_layers ? m * s * s : pc.cube_base + (m - pc.max_layers) * s * s;
+    return w * pc.world.z
+           + (m < pc.max_layers ? m * s * s : pc.cube_base + (m - pc.max_layers) * s * s);
 }
 
 vec3 position(uint i) { uint k = 3u * i; return vec3(positions[k], positions[k + 1u], positions[k + 2u]); }
@@ -96,14 +106,14 @@ vec3 position(uint i) { uint k = 3u * i; return vec3(positions[k], positions[k +
 // Triangle g's vertex indices and clip-space corners in layer m; false when its draw's
 // bounding sphere is outside the layer's frustum (one test instead of three vertices: most
 // of a scene's draws for a near cascade or a cube face).
-bool fetch(uint g, uint m, out uvec3 vi, out vec4 c[3]) {
+bool fetch(uint g, uint m, uint w, out uvec3 vi, out vec4 c[3]) {
 #if KERNEL == 4
     uint k = pc.row;
 #else
     uint k = row_of(g);
 #endif
     uvec4 r = casters[2u * k];
-    mat4 model = instance_matrices[2u * r.w];
+    mat4 model = instance_matrices[2u * (pc.world.y + w * pc.world.x + r.w)];
     if (!sphere_visible(layer_vp[m], world_sphere(model, uintBitsToFloat(casters[2u * k + 1u]))))
         return false;
     uint base = r.y + 3u * (g - r.x);
@@ -155,21 +165,21 @@ struct Screen {
     int n;
     float area, bias;
     ivec2 lo, hi;
-    uint m;
+    uint m, w;  // the layer's matrix, the world (of the dispatch's)
 #if KERNEL == 4
     vec4 c[3];
     uvec3 vi;
 #endif
 };
 
-bool on_layer(uint g, uint m, out Screen t) {
+bool on_layer(uint g, uint m, uint w, out Screen t) {
     vec4 c[3];
     uvec3 vi;
     t.m = m;
-    if (!fetch(g, m, vi, c)) return false;
+    t.w = w;
+    if (!fetch(g, m, w, vi, c)) return false;
     vec4 poly[5];
     t.n = clip(c, poly);
-    t.m = m;
 #if KERNEL == 4
     t.c = c;
     t.vi = vi;
@@ -257,7 +267,7 @@ bool alpha_passes(Screen t, vec2 p) {
 // Cover fan triangle (s0, s1, s2) of t (positive `edge` area) in rows y0, y0 + ystep, ...
 // below y1, in each row the candidates from the span's start + lane on, every `lanes`.
 void cover(Screen t, vec3 s0, vec3 s1, vec3 s2, int y0, int y1, int ystep, int lane, int lanes) {
-    uint size = layer_size(t.m), base = layer_base(t.m);
+    uint size = layer_size(t.m), base = layer_base(t.m, t.w);
     float area = edge(s0.xy, s1.xy, s2.xy);
     for (int y = y0; y < y1; y += ystep) {
         float py = float(y) + 0.5, xl = float(t.lo.x), xr = float(t.hi.x - 1);
@@ -310,7 +320,7 @@ void list_bands(Screen t, uint g) {
     for (uint k = 0u; k < listed; ++k) {
         uint e = BIG_LIST + BIG_ENTRY * (slot + k);
         big[e] = g;
-        big[e + 1u] = t.m;
+        big[e + 1u] = t.m | (t.w << 6u);
         big[e + 2u] = k;
     }
     if (listed < bands) draw_layer(t, listed, ALL_BANDS, 0, 1, 0, 1);
@@ -338,7 +348,7 @@ void main() {
         uint e = BIG_LIST + BIG_ENTRY * k;
         if (gl_LocalInvocationIndex == 0u) {
             Screen t;
-            entry_drawn = on_layer(big[e], big[e + 1u], t);
+            entry_drawn = on_layer(big[e], big[e + 1u] & 63u, big[e + 1u] >> 6u, t);
             entry_screen = t;
         }
         barrier();
@@ -351,11 +361,12 @@ void main() {
     }
 #else
     uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
-    uint m = pc.matrix + gl_GlobalInvocationID.z;
+    uint m = pc.matrix + gl_GlobalInvocationID.z % pc.world.w;
+    uint w = pc.world_at.x + gl_GlobalInvocationID.z / pc.world.w;
 #if KERNEL == 1
     if (i < pc.triangles) {
         Screen t;
-        if (on_layer(i, m, t)) {
+        if (on_layer(i, m, w, t)) {
             if (box_area(t) > float(pc.big_area)) list_bands(t, i);
             else draw_layer(t, 0u, ALL_BANDS, 0, 1, 0, 1);
         }
@@ -367,7 +378,7 @@ void main() {
     barrier();
     if (i < pc.triangles) {
         Screen t;
-        if (on_layer(first + i, m, t)) {
+        if (on_layer(first + i, m, w, t)) {
             if (box_area(t) > float(pc.masked_area)) group_big[atomicAdd(group_big_count, 1u)] = first + i;
             else draw_layer(t, 0u, ALL_BANDS, 0, 1, 0, 1);
         }
@@ -375,7 +386,7 @@ void main() {
     barrier();
     for (uint k = 0u; k < group_big_count; ++k) {
         Screen t;
-        if (on_layer(group_big[k], m, t))
+        if (on_layer(group_big[k], m, w, t))
             draw_layer(t, 0u, ALL_BANDS, int(gl_SubgroupID), int(gl_NumSubgroups),
                        int(gl_SubgroupInvocationID), int(gl_SubgroupSize));
     }

@@ -19,6 +19,64 @@ layout(set = 3, binding = 2) uniform samplerCubeArrayShadow shadow_cubes;
 
 const int SHADOW_PCF_HALF = 1;  // (2 * 1 + 1)^2 = 9 taps
 
+// A batch of worlds whose poses move shadow casters (render/world_shadows.py): each world's
+// maps, drawn by shadow_raster.comp into one buffer (shadow_data.world_layout.x texels a
+// world: its 2D layers, then its cubes' faces from .y), read here by hand where the view's
+// record names them (views[].shadow_base = 1 + world; 0: the images above). The compare and
+// the 2x2 filter are the images' sampler's (GREATER_OR_EQUAL, linear, depth 0 past the
+// border; a cube face's edge texels clamped, as lavapipe filters cube maps).
+layout(set = 3, binding = 3, std430) readonly buffer ShadowWorldDepths { uint world_depths[]; };
+#if BATCH
+uint shadow_world() { return views[view_index].shadow_base; }
+#else
+uint shadow_world() { return 0u; }
+#endif
+
+float world_texel(uint base, int size, ivec2 p, float ref, bool clamp_edge) {
+    if (clamp_edge) p = clamp(p, ivec2(0), ivec2(size - 1));
+    else if (any(lessThan(p, ivec2(0))) || any(greaterThanEqual(p, ivec2(size)))) return ref >= 0.0 ? 1.0 : 0.0;
+    return ref >= uintBitsToFloat(world_depths[base + uint(p.y * size + p.x)]) ? 1.0 : 0.0;
+}
+
+// texture(sampler, (uv, layer), ref) of a layer starting at texel `base`, `size` a side.
+float world_compare(uint base, int size, vec2 uv, float ref, bool clamp_edge) {
+    vec2 t = uv * float(size) - 0.5;
+    // The filter's weights in 1/256ths, as samplers take them (subTexelPrecisionBits 8 on
+    // lavapipe and NVIDIA): a shadow's edge then filters as the images' does.
+    vec2 f = floor(fract(t) * 256.0) / 256.0;
+    ivec2 i = ivec2(floor(t));
+    float a = world_texel(base, size, i, ref, clamp_edge);
+    float b = world_texel(base, size, i + ivec2(1, 0), ref, clamp_edge);
+    float c = world_texel(base, size, i + ivec2(0, 1), ref, clamp_edge);
+    float d = world_texel(base, size, i + ivec2(1, 1), ref, clamp_edge);
+    return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
+}
+
+// The 2D layers' and cubes' comparisons: the images', or the view's world's maps.
+float compare_2d(vec2 uv, float layer, float ref) {
+    uint world = shadow_world();
+    if (world == 0u) return texture(shadow_maps, vec4(uv, layer, ref));
+    int size = int(shadow_data.params.x);
+    uint base = (world - 1u) * shadow_data.world_layout.x + uint(layer + 0.5) * uint(size * size);
+    return world_compare(base, size, uv, ref, false);
+}
+
+float compare_cube(vec3 q, float cube, float ref) {
+    uint world = shadow_world();
+    if (world == 0u) return texture(shadow_cubes, vec4(q, cube), ref);
+    // Vulkan's face selection and face coordinates (+X -X +Y -Y +Z -Z).
+    vec3 a = abs(q);
+    uint face;
+    float ma, sc, tc;
+    if (a.x >= a.y && a.x >= a.z) { face = q.x > 0.0 ? 0u : 1u; ma = a.x; sc = q.x > 0.0 ? -q.z : q.z; tc = -q.y; }
+    else if (a.y >= a.z) { face = q.y > 0.0 ? 2u : 3u; ma = a.y; sc = q.x; tc = q.y > 0.0 ? q.z : -q.z; }
+    else { face = q.z > 0.0 ? 4u : 5u; ma = a.z; sc = q.z > 0.0 ? q.x : -q.x; tc = -q.y; }
+    int size = int(shadow_data.params.y);
+    uint base = (world - 1u) * shadow_data.world_layout.x + shadow_data.world_layout.y
+                + (6u * uint(cube + 0.5) + face) * uint(size * size);
+    return world_compare(base, size, 0.5 * vec2(sc, tc) / ma + 0.5, ref, true);
+}
+
 // The receiver moved towards the light's side along its geometric normal, by `texel` world
 // units times params.z, scaled by the sine of the angle to the light (no move when facing it,
 // whose depth slope is zero; the full amount at grazing angles, where acne comes from).
@@ -34,7 +92,7 @@ float shadow_pcf_2d(float layer, vec3 ndc) {
     float sum = 0.0;
     for (int j = -SHADOW_PCF_HALF; j <= SHADOW_PCF_HALF; ++j)
         for (int i = -SHADOW_PCF_HALF; i <= SHADOW_PCF_HALF; ++i)
-            sum += texture(shadow_maps, vec4(uv + vec2(i, j) * step_uv, layer, ndc.z));
+            sum += compare_2d(uv + vec2(i, j) * step_uv, layer, ndc.z);
     float n = float(2 * SHADOW_PCF_HALF + 1);
     return sum / (n * n);
 }
@@ -83,7 +141,7 @@ float shadow_factor(LightRecord light, vec3 world_pos, vec3 ng, vec3 l, float vi
             // whose depth is near / (another component), where the centre's ref would be off.
             vec3 qt = q + (float(i) * t1 + float(j) * t2) * step_w;
             float mt = max(max(abs(qt.x), abs(qt.y)), abs(qt.z));
-            sum += texture(shadow_cubes, vec4(qt, first), light.shadow.z * seam / mt);
+            sum += compare_cube(qt, first, light.shadow.z * seam / mt);
         }
     float n = float(2 * SHADOW_PCF_HALF + 1);
     return sum / (n * n);

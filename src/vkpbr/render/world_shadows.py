@@ -1,0 +1,140 @@
+"""Each world's own shadow maps in a batch of worlds (docs/batch.md "Worlds", issue 32).
+
+A batch of worlds whose poses move a shadow caster draws, once per WORLD (not per view),
+every shadowed light's maps from that world's draw records: spot lights one map, point
+lights a cube's six faces, directional lights one scene-wide map (the batch's rule for
+views, made per world: its fit is the scene's bounds as the renderer's state has them).
+All worlds' maps are drawn by shadow_raster.comp in the same dispatches (a dispatch's z is
+(world, layer): render/shadow_raster.py world_steps), into one buffer of every world's
+texels, which the shading reads by hand (shaders/shadow_sampling.glsl compare_2d /
+compare_cube) at its view's world (views[].shadow_base = 1 + world). The compute
+rasteriser draws them on every device (the raster units' passes are not used for worlds:
+a layered image could hold at most maxImageArrayLayers, 2,048 on NVIDIA, of the worlds'
+layers).
+
+Memory: W x (2D layers x r^2 + 6 x cubes x (r / 2)^2) x 4 bytes, r =
+RenderOptions.world_shadow_resolution (default 256): a point light 384 KiB a world (375
+MiB per 1,000 worlds), a spot or directional light 256 KiB (250 MiB per 1,000), all of it in
+one storage binding (at most the device's maxStorageBufferRange and the free device memory:
+a one-line error past either, before any GPU work).
+
+Worlds that move no caster (their slot nodes carry no shadow-casting draw; worlds that only
+set materials or lights) keep the renderer's state's maps, shared: nothing differs.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from vkpbr.errors import UsageError
+from vkpbr.gpu.buffer import Buffer
+from vkpbr.render.shadow_raster import WorldJob
+from vkpbr.render.shadows import ShadowEntry, ShadowPlan
+
+__all__ = ["WorldShadows", "world_plan", "world_layout", "casters"]
+
+
+def world_plan(plan: ShadowPlan) -> ShadowPlan:
+    """`plan` with one layer a directional light (its scene-wide map), the 2D layers and
+    cubes packed in order: what a world's maps hold."""
+    entries, layers, cubes = [], 0, 0
+    for e in plan.entries:
+        if e.kind == "point":
+            entries.append(ShadowEntry(e.light, e.kind, cubes, 6))
+            cubes += 1
+        else:
+            entries.append(ShadowEntry(e.light, e.kind, layers, 1))
+            layers += 1
+    return ShadowPlan(tuple(entries), layers, cubes, plan.dropped)
+
+
+def world_layout(plan: ShadowPlan, resolution: int) -> tuple[int, int, int]:
+    """(texels a world, where its cubes start, cube face size) for a world plan."""
+    cube = max(resolution // 2, 16)
+    base = plan.layers * resolution * resolution
+    return base + 6 * plan.cubes * cube * cube, base, cube
+
+
+def casters(draws: Any) -> np.ndarray:
+    """(D,) bool: the draws that cast shadows (shadow_raster's caster table's)."""
+    return np.array([getattr(d, "casts_shadows", True) and d.index_count >= 3 for d in draws],
+                    bool)
+
+
+def _fits(need: int, limit: int, what: str, worlds: int, stride: int, resolution: int) -> None:
+    if need > limit:
+        raise UsageError(
+            f"world shadows: {worlds:,} worlds x {4 * stride >> 10} KiB of shadow maps "
+            f"({need >> 20} MiB) exceed {what} ({limit >> 20} MiB); lower "
+            f"world_shadow_resolution ({resolution}), render fewer worlds a call or give "
+            "shadows=False")
+
+
+class WorldShadows:
+    """The buffers of a batch of worlds' maps (grown, never shrunk), bound as set 3's
+    ShadowWorldDepths of the renderer's ShadowMaps `maps`."""
+
+    def __init__(self, maps: Any) -> None:
+        self.maps, self.device = maps, maps.device
+        self.depths: Buffer | None = None
+        self.big: Buffer | None = None
+        self.bytes = 0
+        self.big_capacity = 0
+        self.generation = 0  # bumped when the buffers are remade (the raster's sets name them)
+        self._casts: tuple[Any, np.ndarray] | None = None  # (draws, casters(draws))
+
+    def moves_casters(self, call: Any, draws: Any) -> bool:
+        """Whether a call's worlds (render/worlds.py WorldCall) move a draw that casts
+        shadows: the cheap check that keeps the state's maps where no shadow can change."""
+        if not call.poses:
+            return False
+        moved = call.gpu.slots.anchor >= 0 if call.gpu is not None else call.moved
+        if moved is None:
+            return True
+        if self._casts is None or self._casts[0] is not draws:
+            self._casts = (draws, casters(draws))
+        casts = self._casts[1]
+        n = min(len(casts), len(moved))
+        return bool(np.any(np.asarray(moved, bool)[:n] & casts[:n]))
+
+    def job(self, plan: ShadowPlan, resolution: int, worlds: int, draws: int) -> tuple[WorldJob, bool]:
+        """The maps of `worlds` worlds (`plan`: world_plan's) and whether the buffers were
+        (re)made: set 3 was rewritten, the recordings that named the old ones are stale."""
+        stride, cube_base, cube = world_layout(plan, resolution)
+        need = 4 * worlds * stride
+        limit = int(self.device.limits.maxStorageBufferRange)
+        _fits(need, limit, "one storage binding here", worlds, stride, resolution)
+        made = need > self.bytes
+        if made:
+            free = self.device.memory_available()[0] + self.bytes  # (ours are given back first)
+            _fits(need, free, "the free device memory", worlds, stride, resolution)
+            limit = min(limit, free)
+            self.device.wait_idle()
+            self._free()
+            self.bytes = max(need, min(2 * self.bytes, limit))
+            self.depths = Buffer(self.device, self.bytes, "storage|transfer_dst",
+                                 name="world shadow depths")
+            # (triangle, matrix | world, band) entries of big triangles; the rest are drawn
+            # by the invocation that finds them
+            self.big_capacity = max(1 << 16, self.bytes // 4 // 256)
+            self.big = Buffer(self.device, 4 * (4 + 3 * self.big_capacity),
+                              "storage|transfer_dst|indirect", name="world shadow big triangles")
+            self.maps.bind_world_depths(self.depths)
+            self.generation += 1
+        assert self.depths is not None and self.big is not None
+        return WorldJob(self.depths, self.big, self.big_capacity, worlds, draws, stride,
+                        cube_base, resolution, cube, self.generation), made
+
+    def _free(self) -> None:
+        if self.depths is not None:
+            self.maps.bind_world_depths(None)
+        for b in (self.depths, self.big):
+            if b is not None:
+                b.destroy()
+        self.depths = self.big = None
+        self.bytes = 0
+
+    def destroy(self) -> None:
+        self._free()
