@@ -159,6 +159,16 @@ bool fetch(uint g, out vec4 c[3], out bool double_sided) {
     return true;
 }
 
+// Whether the triangle lies within both clip planes (z <= w and z >= 0), where clip() would
+// return its three corners unchanged, in order. Checked first because clip()'s arrays,
+// indexed by a running count, live in local memory (the H200's driver reported 240 bytes a
+// thread for raster_small): the common triangle then never touches them. NaN corners fail
+// the test and take clip() as before.
+bool unclipped(vec4 c[3]) {
+    vec3 z = vec3(c[0].z, c[1].z, c[2].z), w = vec3(c[0].w, c[1].w, c[2].w);
+    return all(greaterThanEqual(w - z, vec3(0.0))) && all(greaterThanEqual(z, vec3(0.0)));
+}
+
 // The polygon left of the triangle inside z <= w (the near plane, reversed-Z) and z >= 0
 // (the far plane): at most 5 corners.
 int clip(vec4 c[3], out vec4 poly[5]) {
@@ -295,10 +305,17 @@ bool on_screen(uint g, out Screen t) {
     vec4 c[3];
     bool double_sided;
     if (!fetch(g, c, double_sided)) return false;
-    vec4 poly[5];
-    t.n = clip(c, poly);
-    if (t.n < 3) return false;
-    for (int j = 0; j < t.n; ++j) t.s[j] = screen(poly[j]);
+    if (unclipped(c)) {  // most triangles: no clipping, no arrays indexed at run time
+        t.n = 3;
+        t.s[0] = screen(c[0]);
+        t.s[1] = screen(c[1]);
+        t.s[2] = screen(c[2]);
+    } else {
+        vec4 poly[5];
+        t.n = clip(c, poly);
+        if (t.n < 3) return false;
+        for (int j = 0; j < t.n; ++j) t.s[j] = screen(poly[j]);
+    }
     t.area = 0.0;
     for (int j = 1; j + 1 < t.n; ++j) t.area += edge(t.s[0].xy, t.s[j].xy, t.s[j + 1].xy);
     if (t.area == 0.0 || (t.area > 0.0 && !double_sided)) return false;

@@ -124,6 +124,13 @@ bool fetch(uint g, uint m, uint w, out uvec3 vi, out vec4 c[3]) {
     return true;
 }
 
+// Whether the triangle lies within both clip planes, where clip() would return its three
+// corners unchanged (raster.comp's unclipped: clip()'s arrays live in local memory).
+bool unclipped(vec4 c[3]) {
+    vec3 z = vec3(c[0].z, c[1].z, c[2].z), w = vec3(c[0].w, c[1].w, c[2].w);
+    return all(greaterThanEqual(w - z, vec3(0.0))) && all(greaterThanEqual(z, vec3(0.0)));
+}
+
 // The polygon left of the triangle inside z <= w and z >= 0: at most 5 corners.
 int clip(vec4 c[3], out vec4 poly[5]) {
     vec4 a[5], b[5];
@@ -172,25 +179,36 @@ struct Screen {
 #endif
 };
 
+// Clip corner c in texels of a `size`-texel layer (x, y) and its depth; zmax: the largest
+// |depth| so far (the constant bias's exponent).
+vec3 texel(vec4 c, float size, inout float zmax) {
+    vec3 ndc = c.xyz / c.w;
+    zmax = max(zmax, abs(ndc.z));
+    return vec3((ndc.xy * 0.5 + 0.5) * size, ndc.z);
+}
+
 bool on_layer(uint g, uint m, uint w, out Screen t) {
     vec4 c[3];
     uvec3 vi;
     t.m = m;
     t.w = w;
     if (!fetch(g, m, w, vi, c)) return false;
-    vec4 poly[5];
-    t.n = clip(c, poly);
 #if KERNEL == 4
     t.c = c;
     t.vi = vi;
 #endif
-    if (t.n < 3) return false;
     float size = float(layer_size(m));
     float zmax = 0.0;
-    for (int j = 0; j < t.n; ++j) {
-        vec3 ndc = poly[j].xyz / poly[j].w;
-        t.s[j] = vec3((ndc.xy * 0.5 + 0.5) * size, ndc.z);
-        zmax = max(zmax, abs(ndc.z));
+    if (unclipped(c)) {  // most triangles: no clipping, no arrays indexed at run time
+        t.n = 3;
+        t.s[0] = texel(c[0], size, zmax);
+        t.s[1] = texel(c[1], size, zmax);
+        t.s[2] = texel(c[2], size, zmax);
+    } else {
+        vec4 poly[5];
+        t.n = clip(c, poly);
+        if (t.n < 3) return false;
+        for (int j = 0; j < t.n; ++j) t.s[j] = texel(poly[j], size, zmax);
     }
     t.area = 0.0;
     for (int j = 1; j + 1 < t.n; ++j) t.area += edge(t.s[0].xy, t.s[j].xy, t.s[j + 1].xy);
