@@ -82,7 +82,7 @@ def step_poses(rows: object, step: int, torch: object) -> None:
 
 
 def row(r: Renderer, name: str, size: int, worlds: int, into: str, steps: int, distance: float,
-        slots: int, torch: object) -> dict:
+        slots: int, torch: object, shadows: bool = True) -> dict:
     cams = cameras(worlds, distance)
     if torch is not None:
         rows = torch.zeros((worlds, slots, 7), device="cuda")  # type: ignore[attr-defined]
@@ -94,7 +94,8 @@ def row(r: Renderer, name: str, size: int, worlds: int, into: str, steps: int, d
     for s in range(WARM + steps):
         t0 = time.perf_counter()
         step_poses(rows, s, torch)
-        out = r.render_batch(cams, (size, size), worlds=rows, device="cuda" if into == "torch" else "cpu")
+        out = r.render_batch(cams, (size, size), worlds=rows, device="cuda" if into == "torch" else "cpu",
+                             shadows=shadows)
         if torch is not None:
             torch.cuda.synchronize()  # type: ignore[attr-defined]
         wall = time.perf_counter() - t0
@@ -108,7 +109,7 @@ def row(r: Renderer, name: str, size: int, worlds: int, into: str, steps: int, d
     del out
     held = r.device.bytes_allocated()[0] - before
     med = statistics.median(walls)
-    return {"row": f"{name}-{size}", "worlds": worlds, "into": into,
+    return {"row": f"{name}-{size}" + ("" if shadows else " no shadows"), "worlds": worlds, "into": into,
             "world_views_per_s": worlds / med, "python_ms": statistics.median(py),
             "gpu_ms": statistics.median(gpu), "worlds_kernel_ms": statistics.median(kernel),
             "mib_per_1k_worlds": held / 2**20 / worlds * 1000,
@@ -122,9 +123,12 @@ def main() -> None:
     ap.add_argument("--rows", default="helmet-64,analytic-128")
     ap.add_argument("--worlds", default="1024,8192")
     ap.add_argument("--steps", type=int, default=30)
+    ap.add_argument("--shadows", choices=("on", "off", "both"), default="on",
+                    help="shadow maps (a batch of worlds draws each world's own)")
     ap.add_argument("--json")
     args = ap.parse_args()
     torch = _torch()
+    shadow_modes = {"on": (True,), "off": (False,), "both": (True, False)}[args.shadows]
     results = []
     for spec in args.rows.split(","):
         name, size = spec.rsplit("-", 1)
@@ -132,15 +136,18 @@ def main() -> None:
         with Renderer(scene) as r:
             slots = len(r.world_slots(nodes))
             for w in (int(x) for x in args.worlds.split(",")):
-                for into in (("torch", "numpy") if torch is not None else ("numpy",)):
-                    results.append(row(r, name, int(size), w, into, args.steps, distance, slots, torch))
+                for into, shadows in ((i, m) for i in (("torch", "numpy") if torch is not None else ("numpy",))
+                                      for m in shadow_modes):
+                    results.append(row(r, name, int(size), w, into, args.steps, distance, slots, torch,
+                                       shadows))
                     print(json.dumps(results[-1]), file=sys.stderr)
-    print("| row | worlds | into | world-views/s | Python ms | GPU ms | worlds kernel ms | MiB/1k worlds |")
-    print("|---|---:|---|---:|---:|---:|---:|---:|")
+    print("| row | worlds | into | world-views/s | Python ms | GPU ms | worlds kernel ms | MiB/1k worlds | steps (GPU ms) |")
+    print("|---|---:|---|---:|---:|---:|---:|---:|---|")
     for x in results:
         print(f"| {x['row']} | {x['worlds']:,} | {x['into']} | {x['world_views_per_s']:,.0f} | "
               f"{x['python_ms']:.3f} | {x['gpu_ms']:.3f} | {x['worlds_kernel_ms']:.3f} | "
-              f"{x['mib_per_1k_worlds']:.2f} |")
+              f"{x['mib_per_1k_worlds']:.2f} | "
+              + " ".join(f"{k} {v:.2f}" for k, v in x["steps_ms"].items() if v > 0.05) + " |")
     if args.json:
         with open(args.json, "a", encoding="utf-8") as f:
             for x in results:
