@@ -38,6 +38,7 @@ a plane and a crop of Sponza (docs/ambient-occlusion.md states the errors).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -52,9 +53,10 @@ from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec
 from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.options import RenderOptions
+from vkpbr.render.passes import PASSES, PassSpec
 
 __all__ = ["AoImages", "AoQuality", "AoSpec", "ao_spec", "prepare_ao", "AO_BINDING", "PRESETS",
-           "RADIUS_SHARE", "RADIUS_MULTIPLIER", "FALLOFF"]
+           "RADIUS_SHARE", "RADIUS_MULTIPLIER", "FALLOFF", "AO_MASK_PASS", "PREPASS_ROWS"]
 
 AO_BINDING = next(b for b, _, _, name in L.SETS[2] if name == "ao_map")  # layouts.SETS
 AO_GROUP = (8, 8, 1)  # ao_common.glsl's work group
@@ -109,13 +111,22 @@ def ao_spec(options: RenderOptions, target: Any, scene_radius: float, output: bo
             ) -> AoSpec | None:
     """The frame's ambient occlusion (None: none): where `options` turn it on (GTAO, the
     physically based mode with an environment) or the `ao` `output` is asked for, on targets
-    whose depth the step can read (single-sample offscreen ones with the compute path's
-    features)."""
+    whose depth the step can read (`depth_sampled`: offscreen ones on devices with the compute
+    path's features, multisampled ones through their resolved depth, windows)."""
     shading = options.ao != L.Ao.OFF and options.has_environment
-    if not (shading or output) or not getattr(target, "compute", False):
+    if not (shading or output) or not getattr(target, "depth_sampled", False):
         return None
     radius = options.ao_radius if options.ao_radius > 0 else RADIUS_SHARE * scene_radius
     return AoSpec(float(radius), shading, PRESETS.get(options.ao, PRESETS[L.Ao.GTAO]))
+
+
+# The depth pre-pass of frames without a visibility image (render/paths.py "forward_ao":
+# multisampled frames, windows): the opaque rows depth-only (passes.py's pre-pass rows) and
+# the masked ones through pbr.frag's DEPTH_ONLY build (its alpha test, no output), so that
+# GTAO sees what the compute path's visibility pass sees (alpha-masked surfaces included).
+AO_MASK_PASS = PassSpec("ao_prepass_mask", "mask", lambda s: dataclasses.replace(
+    s, cull="none", fragment_shader="pbr_depth_mask.frag.spv", color_write=False))
+PREPASS_ROWS = (*(p for p in PASSES if p.prepass), AO_MASK_PASS)
 
 
 @dataclass
@@ -188,19 +199,20 @@ class AoImages:
     # --- the steps ----------------------------------------------------------------------------
     def steps(self, resources: dict[str, Any], set0: Any, frame_index: int, spec: AoSpec,
               extent: tuple[int, int], tiles: tuple[int, int, int, int] | None, copy_out: bool,
-              timed: bool = True) -> list[Step]:
+              timed: bool = True, generation: int = 0) -> list[Step]:
         """The "ao" group's steps for one recording: GTAO, the denoise passes, at half
         resolution the upsample (and, for the `ao` output, a copy into "out_ao"); adds "ao",
         "ao_raw", "ao_mid" to `resources`. `extent`: the frame's (the images' top-left
         corner); `tiles`: a batch's atlas (views, tile width, height, tiles a column);
-        `timed`: a timestamp after the last pass (FrameStats.pass_ms["ao"])."""
+        `timed`: a timestamp after the last pass (FrameStats.pass_ms["ao"]); `generation`:
+        the target's (a recreated swapchain's depth views are new objects)."""
         assert not self.stale(extent), "fit() first"
         w, h = extent
         image, view = self.images[frame_index]
         resources["ao"] = ImageResource(image.handle, view=view.handle)
         for name, (img, v) in zip(("ao_raw", "ao_mid"), self.work, strict=True):
             resources[name] = ImageResource(img.handle, view=v.handle)
-        dset = self._set(resources["depth"].view, frame_index)
+        dset = self._set(resources["depth"].view, frame_index, generation)
         q = spec.quality
         n, tw, th, rows = tiles if tiles is not None else (1, w, h, 1)
         # The working images' corner: the tile grid at 1 / scale (tiles rounded up).
@@ -274,10 +286,13 @@ class AoImages:
                                                              "nearest", False, 1.0))
         return self._sampler
 
-    def _set(self, depth_view: Any, frame_index: int) -> Any:
-        """The kernels' set 1 for a target's depth view and a slot's "ao" image."""
+    def _set(self, depth_view: Any, frame_index: int, generation: int = 0) -> Any:
+        """The kernels' set 1 for a target's depth view and a slot's "ao" image. A set made
+        for another generation of the target named a view since destroyed (a recreated
+        swapchain's; the new one may have its handle value): made anew (the old one stays
+        allocated until the images are next fitted: a few sets a window resize)."""
         key = (int(self.device.vk.ffi.cast("uintptr_t", depth_view)), frame_index)
-        if key not in self._sets:
+        if key not in self._sets or self._sets[key][1] != generation:
             layout = self._set_layout()
             if not self._pools or self._free == 0:
                 self._pools.append(DescriptorPool(self.device, [(layout, _SETS_PER_POOL)]))
@@ -290,8 +305,8 @@ class AoImages:
             writer.storage_image(dset, 2, self.work[1][1])
             writer.storage_image(dset, 3, self.images[frame_index][1])
             writer.update()
-            self._sets[key] = dset
-        return self._sets[key]
+            self._sets[key] = (dset, generation)
+        return self._sets[key][0]
 
     def forget(self, depth_view: Any) -> None:
         """Drop the sets naming `depth_view` (a target's, about to be destroyed: a later view
