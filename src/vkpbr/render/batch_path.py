@@ -267,12 +267,14 @@ class BatchPath:
         target = self._target(size, layers, n, linear, depth, cuda)
         self._t_start = time.perf_counter()
         bv = self._views(n, layers)
-        frame, plan, terms = self._begin(views, size, lights, opts, linear, start=start)
+        ao = prepare_ao(p.ao, p.recorder, opts, target, p.bounds.radius, False)
+        frame, plan, terms = self._begin(views, size, lights, opts, linear,
+                                         ao=ao is not None and ao.shading, start=start)
         groups = bv.write_blend_groups(p.blend.orders(views.eye))
         self._run(frame, plan, opts, lambda redraw: bv.command_buffer(
             target, frame, n, opts.tbn, opts.alpha_mask, plan, groups, p.paths.prepass_for(target),
             redraw, self._world_key() if self.world_call is not None and self.world_call.poses else None,
-            self._world_groups()),
+            self._world_groups(), ao),
             (lambda: self._cuda_wait(target.color_readback)) if cuda else None)
         t_read = time.perf_counter()
         color = self._cuda_view(target, n, linear) if cuda else target.read_color(n, into)

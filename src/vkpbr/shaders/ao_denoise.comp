@@ -15,14 +15,14 @@ const float DIAGONAL = 0.85 * 0.5;
 
 uint load(ivec2 w, ivec2 wlo) {
     ivec2 q = ao_work_clamp(w, wlo);
-    return pc.read_mid != 0u ? imageLoad(ao_mid, q).r : imageLoad(ao_raw, q).r;
+    return pc.read_mid != 0u ? imageLoad(ao_mid, AO_AT(q)).r : imageLoad(ao_raw, AO_AT(q)).r;
 }
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);  // a working pixel
     uint view;
     ivec2 lo, wlo;
-    if (any(greaterThanEqual(p, imageSize(ao_raw))) || !ao_work_view(p, view, wlo, lo)) return;
+    if (any(greaterThanEqual(p, imageSize(ao_raw).xy)) || !ao_work_view(p, view, wlo, lo)) return;
     uint c = load(p, wlo);
     uint l = load(p + ivec2(-1, 0), wlo), r = load(p + ivec2(1, 0), wlo);
     uint t = load(p + ivec2(0, -1), wlo), b = load(p + ivec2(0, 1), wlo);
@@ -49,10 +49,10 @@ void main() {
     float v = sum / weight;
     if (pc.final_pass == 0u || pc.scale > 1u) {  // into the other working image
         uint packed = ao_pack(v, c >> 16);
-        if (pc.read_mid != 0u) imageStore(ao_raw, p, uvec4(packed));
-        else imageStore(ao_mid, p, uvec4(packed));
+        if (pc.read_mid != 0u) imageStore(ao_raw, AO_AT(p), uvec4(packed));
+        else imageStore(ao_mid, AO_AT(p), uvec4(packed));
     } else {
-        bool background = texelFetch(depth_map, p, 0).r <= 0.0;
-        imageStore(ao_out, p, vec4(background ? 1.0 : v, 0.0, 0.0, 0.0));
+        bool background = texelFetch(depth_map, AO_AT(p), 0).r <= 0.0;
+        imageStore(ao_out, AO_AT(p), vec4(background ? 1.0 : v, 0.0, 0.0, 0.0));
     }
 }

@@ -19,11 +19,11 @@ void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     uint view;
     ivec2 lo;
-    if (any(greaterThanEqual(p, imageSize(ao_out))) || !ao_view(p, view, lo)) return;
+    if (any(greaterThanEqual(p, imageSize(ao_out).xy)) || !ao_view(p, view, lo)) return;
     float znear = views[view].eye_near.w;
     float z = ao_view_z(p, znear);
     if (isinf(z)) {
-        imageStore(ao_out, p, vec4(1.0, 0.0, 0.0, 0.0));
+        imageStore(ao_out, AO_AT(p), vec4(1.0, 0.0, 0.0, 0.0));
         return;
     }
     ivec2 q = p - lo;
@@ -37,7 +37,7 @@ void main() {
             float bilinear = (i == 0 ? 1.0 - f.x : f.x) * (j == 0 ? 1.0 - f.y : f.y);
             if (bilinear == 0.0) continue;
             ivec2 w = wlo + min(base + ivec2(i, j), wt - 1);
-            uint packed = pc.read_mid != 0u ? imageLoad(ao_mid, w).r : imageLoad(ao_raw, w).r;
+            uint packed = pc.read_mid != 0u ? imageLoad(ao_mid, AO_AT(w)).r : imageLoad(ao_raw, AO_AT(w)).r;
             float v = ao_visibility(packed);
             float dz = abs(ao_view_z(ao_frame_pixel(w, wlo, lo), znear) - z);  // inf: none
             float r = dz / (DEPTH_SHARE * z);
@@ -48,5 +48,5 @@ void main() {
         }
     }
     float v = weight > 1e-6 ? sum / weight : nearest;
-    imageStore(ao_out, p, vec4(v, 0.0, 0.0, 0.0));
+    imageStore(ao_out, AO_AT(p), vec4(v, 0.0, 0.0, 0.0));
 }

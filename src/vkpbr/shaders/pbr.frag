@@ -36,6 +36,7 @@ layout(location = 0) out vec4 out_color;
 void main() {
 #if BATCH
     view_index = v_view;
+    s_ao_layer = int(views[v_view].layer);  // the layer it draws into (render/ao.py)
 #endif
     opaque_zero = uint(gl_FragCoord.x < 0.0);
     s_world_pos = v_world_pos;
