@@ -226,10 +226,7 @@ class AoImages:
         every layer in one dispatch (its z)."""
         assert not self.stale(extent, layered[1] if layered else 1), "fit() first"
         w, h = extent
-        image, _, view = self.images[frame_index]
-        resources["ao"] = ImageResource(image.handle, view=view.handle, layers=self.layers)
-        for name, (img, _, v) in zip(("ao_raw", "ao_mid"), self.work, strict=True):
-            resources[name] = ImageResource(img.handle, view=v.handle, layers=self.layers)
+        image = self._resources(resources, frame_index)
         dset = self._set(resources["depth"].view, frame_index, generation, layered is not None)
         q = spec.quality
         n, tw, th, rows = tiles if tiles is not None else (1, w, h, 1)
@@ -274,6 +271,14 @@ class AoImages:
             steps.append(Step("ao_output", lambda cmd: _copy_image(cmd, image, resources, extent),
                               (("ao", "transfer_src"), ("out_ao", "transfer_dst")), timed=False))
         return steps
+
+    def _resources(self, resources: dict[str, Any], frame_index: int) -> Image:
+        """"ao" (the slot's), "ao_raw", "ao_mid" into `resources`, every layer; the slot's."""
+        image, _, view = self.images[frame_index]
+        resources["ao"] = ImageResource(image.handle, view=view.handle, layers=self.layers)
+        for name, (img, _, v) in zip(("ao_raw", "ao_mid"), self.work, strict=True):
+            resources[name] = ImageResource(img.handle, view=v.handle, layers=self.layers)
+        return image
 
     def _dispatch(self, name: str, push: np.ndarray, set0: Any, dset: Any,
                   size: tuple[int, int, int]) -> Any:
