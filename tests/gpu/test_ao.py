@@ -136,7 +136,10 @@ def test_half_resolution_at_odd_sizes(make_renderer) -> None:  # noqa: ANN001
 
 def test_forward_and_compute_paths_agree(make_renderer) -> None:  # noqa: ANN001
     """The forward path's depth pre-pass and the compute path's visibility pass give GTAO the
-    same depths, so the same occlusion; and the "ao" debug view shows it (to 1/255)."""
+    same depths, so the same occlusion; and the "ao" debug view shows it (to 1/255). The
+    layered batch (render_batch(pipeline="forward"): a view a layer, every layer's GTAO in
+    one dispatch) gives each view render(pipeline="forward")'s image bit for bit, GTAO on,
+    and its "ao" view shows the same occlusion."""
     scene, cam = corner()
     r = make_renderer(scene)
     f = r.render(camera=cam, size=(W, H), outputs=("ao",), pipeline="forward")["ao"]
@@ -146,6 +149,14 @@ def test_forward_and_compute_paths_agree(make_renderer) -> None:  # noqa: ANN001
     surface = f < 1.0
     assert surface.mean() > 0.2
     assert np.abs(view[surface] / 255.0 - f[surface]).max() <= 1.0 / 255.0 + 1e-6
+    cams = [cam, Camera(eye=(2.6, 1.5, 2.2), target=(0.3, 0.3, 0.2), yfov_deg=55.0, znear=0.05)]
+    batch = r.render_batch(cams, size=(W, H), pipeline="forward")
+    for i, camera in enumerate(cams):
+        single = r.render(camera=camera, size=(W, H), pipeline="forward")
+        assert np.array_equal(batch[i], single), i
+    assert not np.array_equal(batch[0], r.render(camera=cam, size=(W, H), ao="off"))
+    views = r.render_batch(cams, size=(W, H), pipeline="forward", view="ao")
+    assert np.array_equal(views[0][..., 0], view)
 
 
 def test_only_the_image_based_light_is_occluded(make_renderer) -> None:  # noqa: ANN001
