@@ -5,10 +5,12 @@ draws it, with `--ao off` and each GTAO preset (`gtao`: half resolution, the def
 1920x1080 and 640x480; and a compute batch of 4,096 views of 128x128 each way. Prints GPU ms
 per frame (or per batch) and the "ao" step's own time (from the timestamps around it),
 medians; `--profile` adds each kernel's (GTAO, the denoise passes, the upsample: a timestamp
-after each). Targets (issue 33): the step <= 0.15 ms at 1080p on the H200.
+after each). Targets (issue 33): the step <= 0.15 ms at 1080p on the H200. `--fuse both`
+runs the half-resolution presets twice: the last denoise pass as its own kernel (off, the
+default) and run by the upsample on the pixels it blends (on: render/ao.py AoImages.fuse).
 
     python3 benchmarks/bench_ao.py --scene Sponza.gltf [--frames 300] [--batches 5] \
-        [--modes off,gtao,gtao-full,gtao-low] [--profile] [--json out.json]
+        [--modes off,gtao,gtao-full,gtao-low] [--profile] [--fuse off|on|both] [--json out.json]
 """
 
 from __future__ import annotations
@@ -87,6 +89,14 @@ def batch(r: Renderer, reps: int, ao: str, count: int) -> dict:
     return {k: statistics.median(v) for k, v in times.items()}
 
 
+def set_fuse(r: Renderer, fuse: bool) -> None:
+    """Fuse the last denoise pass into the upsample, or not; the recordings made the other
+    way are dropped (their steps differ)."""
+    r.device.wait_idle()
+    r.parts.recorder.free()
+    r.parts.ao.fuse = fuse
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -97,21 +107,28 @@ def main() -> None:
     ap.add_argument("--sizes", default="1920x1080,640x480")
     ap.add_argument("--modes", default="off,gtao,gtao-full,gtao-low", help="--ao values")
     ap.add_argument("--profile", action="store_true", help="time each GTAO kernel apart")
+    ap.add_argument("--fuse", choices=("off", "on", "both"), default="off",
+                    help="the last denoise pass in the upsample (half resolution)")
     ap.add_argument("--json")
     args = ap.parse_args()
     sizes = [tuple(int(v) for v in s.split("x")) for s in args.sizes.split(",")]
     modes = args.modes.split(",")
     rows = []
+    fuses = {"off": [False], "on": [True], "both": [False, True]}[args.fuse]
     with Renderer(load_scene(args.scene)) as r:
         r.parts.ao.profile = args.profile
-        for size in sizes:
-            for ao in modes:
-                rows.append({"what": f"frame {size[0]}x{size[1]}", "ao": ao,
-                             **frames(r, size, args.frames, ao)})
-        if args.views:
-            for ao in modes:
-                rows.append({"what": f"batch {args.views} x {BATCH_SIZE[0]}x{BATCH_SIZE[1]}",
-                             "ao": ao, **batch(r, args.batches, ao, args.views)})
+        for fuse in fuses:
+            set_fuse(r, fuse)
+            runs = [m for m in modes if not fuse or m in ("gtao", "gtao-low")]
+            label = (lambda ao: f"{ao} fused") if fuse else (lambda ao: ao)  # noqa: E731
+            for size in sizes:
+                for ao in runs:
+                    rows.append({"what": f"frame {size[0]}x{size[1]}", "ao": label(ao),
+                                 **frames(r, size, args.frames, ao)})
+            if args.views:
+                for ao in runs:
+                    rows.append({"what": f"batch {args.views} x {BATCH_SIZE[0]}x{BATCH_SIZE[1]}",
+                                 "ao": label(ao), **batch(r, args.batches, ao, args.views)})
     kernels = ["ao_gtao_ms", "ao_denoise0_ms", "ao_denoise1_ms", "ao_last_ms"]
     cols = [k for k in kernels if any(k in row for row in rows)]
     print("| what | --ao | GPU ms | ao step ms |" + "".join(f" {k[:-3]} |" for k in cols))

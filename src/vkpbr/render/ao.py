@@ -24,11 +24,15 @@ the compute rasteriser, a compute batch's atlas -- and before the shading:
    combines them, with GTAO's multi-bounce approximation on the diffuse albedo and
    Lagarde's specular occlusion. Blended surfaces take none (GTAO saw what is behind them).
 
-The step runs where the target's depth can be sampled and its frames are single-sample
-offscreen ones (`OffscreenTarget.compute`): renders, render_many, compute batches, the
-viewer's --offscreen loop; window frames, multisampled ones and the layered batch draw
-without it (the frame's LIGHTING_AO flag is cleared, so the shading never reads an image the
-frame did not make), and so does the transmission's copy of the opaque scene.
+The step runs wherever the target's depth can be sampled (`depth_sampled`): on the compute
+path and the compute batch after their visibility pass or rasteriser; on the fragment path
+after the visibility pass where the target has one, else after a depth pre-pass of its own
+(paths.py "forward_ao", PREPASS_ROWS: multisampled frames, whose pre-pass resolves sample 0,
+and windows); in the layered batch (render/batch.py) after each chunk's layered depth
+pre-pass, its kernels' AO_LAYERED builds over every layer at once (a view a layer; ao_map is
+an array image for them, frames read layer 0). Frames without it clear the LIGHTING_AO flag
+(the shading never reads an image the frame did not make), and so does the transmission's
+copy of the opaque scene.
 The `ao` dataset output is the last pass's image, copied into the target's "out_ao".
 
 Correctness: tests/gpu/test_ao.py compares it with a NumPy Monte Carlo reference that ray
@@ -70,7 +74,7 @@ RADIUS_SHARE = 0.15  # the automatic radius: 15% of the scene's bounding radius 
 _SETS_PER_POOL = 16
 _PUSH = np.dtype([("tile", "<u4", 4), ("radius", "<f4"), ("falloff", "<f4"), ("slices", "<u4"),
                   ("steps", "<u4"), ("final_pass", "<u4"), ("read_mid", "<u4"), ("scale", "<u4"),
-                  ("first_view", "<u4")])
+                  ("first_view", "<u4"), ("fused", "<u4")])
 
 
 @dataclass(frozen=True)
@@ -154,6 +158,11 @@ class AoImages:
         # "ao_gtao", "ao_denoise0", ..., "ao_upsample" and "ao" (the last one's). Set before the
         # first frame (recordings are kept).
         self.profile = False
+        # At half resolution, the last denoise pass run by ao_upsample.comp on the working
+        # pixels it blends (one dispatch and barrier fewer, more loads a pixel: on a GPU the
+        # dispatches' gaps may cost more than the loads; benchmarks/bench_ao.py --fuse
+        # measures both). Off until measured; set before the first frame, as `profile`.
+        self.fuse = False
         # (image, its layer 0's 2D view, its array view) each
         self.images: list[tuple[Image, ImageView, ImageView]] = []
         self.work: list[tuple[Image, ImageView, ImageView]] = []  # ao_raw, ao_mid (R32_UINT)
@@ -237,8 +246,9 @@ class AoImages:
         work = (cols * -(-tw // q.scale), rows * -(-th // q.scale))
         depth = ("depth", "sampled")
 
-        def push(final: int, read_mid: int) -> np.ndarray:
+        def push(final: int, read_mid: int, fused: int = 0) -> np.ndarray:
             p = np.zeros((), _PUSH)
+            p["fused"] = fused
             p["tile"] = (tw, th, rows, n)
             p["radius"], p["falloff"] = spec.radius * RADIUS_MULTIPLIER, FALLOFF
             p["slices"], p["steps"], p["scale"] = q.slices, q.steps, q.scale
@@ -253,7 +263,8 @@ class AoImages:
                                                 (*work, depth_layers)),
                       (depth, ("ao_raw", "storage")), timed=self.profile)]
         src = "ao_raw"
-        for k in range(q.passes):  # ao_raw -> ao_mid -> ao_raw ... (-> ao at full resolution)
+        fused = int(self.fuse and q.scale > 1)  # (the upsample runs the last pass)
+        for k in range(q.passes - fused):  # ao_raw -> ao_mid -> ao_raw ... (-> ao at full resolution)
             final = k == q.passes - 1
             dst = "ao" if final and q.scale == 1 else ("ao_raw" if src == "ao_mid" else "ao_mid")
             steps.append(Step(f"ao_denoise{k}", self._dispatch(
@@ -263,7 +274,7 @@ class AoImages:
             src = dst
         if q.scale > 1:
             steps.append(Step("ao_upsample", self._dispatch(
-                "ao_upsample" + kernel, push(1, int(src == "ao_mid")), set0, dset,
+                "ao_upsample" + kernel, push(1, int(src == "ao_mid"), fused), set0, dset,
                 (*extent, depth_layers)),
                 both, timed=False))
         steps[-1] = Step("ao", steps[-1].record, steps[-1].uses, timed=timed)

@@ -46,6 +46,7 @@ layout(push_constant) uniform Ao {
     uint scale;  // 1: GTAO at full resolution; 2: at half (a pixel of the working images per
                  // 2 x 2 of the frame's; ao_upsample.comp makes the full-resolution "ao")
     uint first_view;  // the view of the first tile (AO_LAYERED: of layer 0)
+    uint fused;  // ao_upsample.comp: run the last denoise pass on the pixels it blends
 } pc;
 
 // The view a tile (and, layered, the invocation's layer) stands for.
