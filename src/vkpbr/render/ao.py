@@ -60,7 +60,8 @@ from vkpbr.render.options import RenderOptions
 from vkpbr.render.passes import PASSES, PassSpec
 
 __all__ = ["AoImages", "AoQuality", "AoSpec", "ao_spec", "prepare_ao", "AO_BINDING", "PRESETS",
-           "RADIUS_SHARE", "RADIUS_MULTIPLIER", "FALLOFF", "AO_MASK_PASS", "PREPASS_ROWS"]
+           "RADIUS_SHARE", "RADIUS_MULTIPLIER", "FALLOFF", "AO_MASK_PASS", "PREPASS_ROWS",
+           "ao_pixel_bytes"]
 
 AO_BINDING = next(b for b, _, _, name in L.SETS[2] if name == "ao_map")  # layouts.SETS
 AO_GROUP = (8, 8, 1)  # ao_common.glsl's work group
@@ -132,6 +133,13 @@ def ao_spec(options: RenderOptions, target: Any, scene_radius: float, output: bo
 AO_MASK_PASS = PassSpec("ao_prepass_mask", "mask", lambda s: dataclasses.replace(
     s, cull="none", fragment_shader="pbr_depth_mask.frag.spv", color_write=False))
 PREPASS_ROWS = (*(p for p in PASSES if p.prepass), AO_MASK_PASS)
+
+
+def ao_pixel_bytes(options: RenderOptions, slots: int) -> int:
+    """Device bytes a view's pixel takes for GTAO where `options` turn it on (a batch's
+    memory budget): each of the `slots` frame slots' "ao" image and the two working images,
+    4 bytes a pixel each (made for the largest frame or chunk of layers)."""
+    return 4 * (slots + 2) if options.ao != L.Ao.OFF and options.has_environment else 0
 
 
 @dataclass
