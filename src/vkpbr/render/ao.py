@@ -256,8 +256,7 @@ class AoImages:
 
         def push(final: int, read_mid: int, fused: int = 0) -> np.ndarray:
             p = np.zeros((), _PUSH)
-            p["fused"] = fused
-            p["tile"] = (tw, th, rows, n)
+            p["tile"], p["fused"] = (tw, th, rows, n), fused
             p["radius"], p["falloff"] = spec.radius * RADIUS_MULTIPLIER, FALLOFF
             p["slices"], p["steps"], p["scale"] = q.slices, q.steps, q.scale
             p["final_pass"], p["read_mid"], p["first_view"] = final, read_mid, first
@@ -267,24 +266,23 @@ class AoImages:
         # between the working images by a push constant, so each statically reads and writes
         # both (and "ao", a storage image of the set, GENERAL when bound).
         both = (depth, ("ao_raw", "storage"), ("ao_mid", "storage"), ("ao", "storage"))
-        steps = [Step("ao_gtao", self._dispatch("ao_gtao" + kernel, push(0, 0), set0, dset,
-                                                (*work, depth_layers)),
+        def run(name: str, p: np.ndarray, size: tuple[int, int]) -> Any:
+            return self._dispatch(name + kernel, p, set0, dset, (*size, depth_layers))
+
+        steps = [Step("ao_gtao", run("ao_gtao", push(0, 0), work),
                       (depth, ("ao_raw", "storage")), timed=self.profile)]
         src = "ao_raw"
         fused = int(self.fuse and q.scale > 1)  # (the upsample runs the last pass)
         for k in range(q.passes - fused):  # ao_raw -> ao_mid -> ao_raw ... (-> ao at full resolution)
             final = k == q.passes - 1
             dst = "ao" if final and q.scale == 1 else ("ao_raw" if src == "ao_mid" else "ao_mid")
-            steps.append(Step(f"ao_denoise{k}", self._dispatch(
-                "ao_denoise" + kernel, push(int(final), int(src == "ao_mid")), set0, dset,
-                (*work, depth_layers)),
-                both, timed=self.profile))
+            steps.append(Step(f"ao_denoise{k}", run(
+                "ao_denoise", push(int(final), int(src == "ao_mid")), work), both,
+                timed=self.profile))
             src = dst
         if q.scale > 1:
-            steps.append(Step("ao_upsample", self._dispatch(
-                "ao_upsample" + kernel, push(1, int(src == "ao_mid"), fused), set0, dset,
-                (*extent, depth_layers)),
-                both, timed=False))
+            steps.append(Step("ao_upsample", run(
+                "ao_upsample", push(1, int(src == "ao_mid"), fused), extent), both, timed=False))
         steps[-1] = Step("ao", steps[-1].record, steps[-1].uses, timed=timed)
         if copy_out:
             steps.append(Step("ao_output", lambda cmd: _copy_image(cmd, image, resources, extent),
