@@ -225,6 +225,12 @@ def crowd(man, count: int) -> tuple:  # noqa: ANN001
     return scene, k
 
 
+def _steps(passes: list[dict]) -> str:
+    """Each timed step's median GPU ms over the frames, as 'name ms' pairs (where time goes)."""
+    names = [n for n in (passes[0] if passes else {}) if _median([p.get(n, 0.0) for p in passes]) > 0.005]
+    return " ".join(f"{n} {_median([p.get(n, 0.0) for p in passes]):.3f}" for n in names)
+
+
 def crowd_rows(assets: Path, counts: tuple[int, ...], frames: int) -> list[dict]:
     man = load_scene(assets / "CesiumMan" / "glTF" / "CesiumMan.gltf")
     verts = sum(man.meshes[n.mesh].vertex_count for n in man.nodes)
@@ -236,7 +242,7 @@ def crowd_rows(assets: Path, counts: tuple[int, ...], frames: int) -> list[dict]
                      yfov_deg=50.0)
         offsets = np.random.default_rng(1).random(count) * 2.0
         with Renderer(scene) as r:
-            py, gpu, deform, frame_py = [], [], [], []
+            py, gpu, deform, frame_py, passes = [], [], [], [], []
             views = crowd_views(r, man, cam, offsets, k, count, frames + 20, py)
             for i, _ in enumerate(r.render_many(views, size=(1920, 1080), readback=False,
                                                 pipeline="compute", raster="compute")):
@@ -244,11 +250,12 @@ def crowd_rows(assets: Path, counts: tuple[int, ...], frames: int) -> list[dict]
                     gpu.append(r.last_stats.gpu_ms)
                     frame_py.append(r.last_stats.cpu_ms)
                     deform.append(r.last_stats.pass_ms.get("deform", float("nan")))
+                    passes.append(dict(r.last_stats.pass_ms))
         mverts = count * verts / 1e6
         rows.append({"row": f"crowd {count} CesiumMan 1920x1080", "gpu_ms": _median(gpu),
                      "deform_ms": _median(deform), "deform_ms_per_mvert": _median(deform) / mverts,
                      "python_ms": 1e3 * _median(py[20:]), "frame_python_ms": _median(frame_py),
-                     "skinned_vertices": count * verts})
+                     "skinned_vertices": count * verts, "steps": _steps(passes)})
     return rows
 
 

@@ -10,11 +10,15 @@ compute batch of 4,096 views of 128x128 without and with colour noise or a bloom
 step one dispatch over the atlas; the batch then draws into an HDR atlas and encodes after:
 "encode"), and through
 a 100-degree fisheye (each view's wider source drawn as its tile, then one resample
-dispatch: "lens").
+dispatch: "lens"). The "cube" rows: a 200-degree OpenCV fisheye, drawn as 5 cube faces (a
+frame each, render/lens_cube.py) and resampled from them: its GPU ms and steps are the last
+face frame's (that face, the resample "lens", the encode), its "wall ms" (the median time
+between frames of render_many, every column has it) the whole frame's, its 5 faces included.
 
     python3 benchmarks/bench_post.py --scene Sponza.gltf [--frames 300] [--json out.json]
     python3 benchmarks/bench_post.py --scene Sponza.gltf --only lens,noise   # those rows
     python3 benchmarks/bench_post.py --scene Sponza.gltf --only batch [--views 4096]
+    python3 benchmarks/bench_post.py --scene Sponza.gltf --only cube --frames 100
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ import math
 import os
 import statistics
 import sys
+import time
 
 import numpy as np
 
@@ -48,16 +53,20 @@ def fisheye(base: Camera, size: tuple[int, int], degrees: float = 120.0) -> Came
 
 def measure(r: Renderer, size: tuple[int, int], frames: int, camera: Camera | None = None,
             outputs: tuple[str, ...] | None = None, **options: object) -> dict:
-    gpu, steps = [], []
+    gpu, steps, wall = [], [], []
     cams = [camera or r.default_camera()] * (frames + 20)
     readback = outputs is not None  # (the dataset outputs are made only when read back)
+    t = time.perf_counter()
     for i, _ in enumerate(r.render_many(cams, size=size, readback=readback, pipeline="compute",
                                         raster="compute", outputs=outputs, **options)):
+        now = time.perf_counter()
         if i >= 20:
             gpu.append(r.last_stats.gpu_ms)
             steps.append(r.last_stats.pass_ms)
+            wall.append((now - t) * 1e3)
+        t = now
     names = {n for s in steps for n in s}
-    return {"gpu_ms": statistics.median(gpu),
+    return {"gpu_ms": statistics.median(gpu), "wall_ms": statistics.median(wall),
             "steps": {n: statistics.median(s.get(n, 0.0) for s in steps) for n in sorted(names)}}
 
 
@@ -101,6 +110,7 @@ def main() -> None:
     with Renderer(load_scene(args.scene)) as r:
         for size in SIZES:
             lens = fisheye(r.default_camera(), size)
+            cube = fisheye(r.default_camera(), size, 200.0)  # (5 cube faces)
             for label, env, options in (
                     ("shading tone maps", "0", {}),
                     ("HDR target + encode", "1", {}),
@@ -110,7 +120,9 @@ def main() -> None:
                     ("noise realsense-d435 + depth", "0", {"noise": "realsense-d435",
                                                           "outputs": OUTPUTS}),
                     ("lens fisheye 120", "0", {"camera": lens}),
-                    ("lens fisheye 120 + outputs", "0", {"camera": lens, "outputs": OUTPUTS})):
+                    ("lens fisheye 120 + outputs", "0", {"camera": lens, "outputs": OUTPUTS}),
+                    ("cube fisheye 200", "0", {"camera": cube}),
+                    ("cube fisheye 200 + outputs", "0", {"camera": cube, "outputs": OUTPUTS})):
                 if only and not any(w in label for w in only):
                     continue
                 os.environ["VKPBR_HDR_FRAMES"] = env
@@ -127,14 +139,14 @@ def main() -> None:
             row = measure_batch(r, args.views, args.batches, **options)
             rows.append({"size": f"{args.views} x {BATCH_SIZE[0]}x{BATCH_SIZE[1]}",
                          "frame": label, **row})
-    print("| size | frame | GPU ms | encode | bloom | lens | noise | noise_depth |\n"
-          "|---|---|---:|---:|---:|---:|---:|---:|")
+    print("| size | frame | GPU ms | encode | bloom | lens | noise | noise_depth | wall ms |\n"
+          "|---|---|---:|---:|---:|---:|---:|---:|---:|")
     for row in rows:
         st = row["steps"]
         print(f"| {row['size']} | {row['frame']} | {row['gpu_ms']:.3f} | "
               f"{st.get('encode', 0.0):.3f} | {st.get('bloom', 0.0):.3f} | "
               f"{st.get('lens', 0.0):.3f} | {st.get('noise', 0.0):.3f} | "
-              f"{st.get('noise_depth_copy', 0.0):.3f} |")
+              f"{st.get('noise_depth_copy', 0.0):.3f} | {row.get('wall_ms', math.nan):.2f} |")
     if args.json:
         with open(args.json, "w") as f:
             json.dump(rows, f, indent=1)

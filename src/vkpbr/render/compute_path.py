@@ -88,10 +88,24 @@ class RasterTuning:
 
 
 RASTER_TUNING = RasterTuning()
-# Entries of a masked draw's segment of big-triangle chunks (raster.comp MASKED_CHUNK box
-# pixels each: 16 M box pixels, ~8 screens at 1080p; what does not fit is drawn by the work
-# group that found it). At most maxComputeWorkGroupCount[0]: an entry is a work group.
-MASKED_CAPACITY = 4096
+# Entries of a masked draw's segment of big-triangle chunks (raster.comp: masked_chunk box
+# pixels each; what does not fit is drawn by the work group that found it, 64 invocations
+# for what a band's work groups would share: on the H200 Sponza's walk overflowed 4,096
+# entries, 1,654,586 box pixels of one foliage draw, and raster_masked took 0.58 ms instead of
+# 0.08). Sized per target by masked_capacity; a number here overrides it (tests: 1).
+MASKED_CAPACITY: int | None = None
+MASKED_SCREENS = 8  # box pixels a masked draw's segment holds, in target pixels
+MASKED_BYTES = 64 << 20  # all masked draws' segments together at most
+
+
+def masked_capacity(pixels: int, draws: int) -> int:
+    """Entries of each of `draws` masked draws' segments for a target of `pixels`: MASKED_SCREENS
+    targets of box pixels, at least 4,096, at most MAX_GROUPS_X (an entry is a work group of
+    the segment's indirect dispatch) and MASKED_BYTES over all segments."""
+    if MASKED_CAPACITY is not None:
+        return MASKED_CAPACITY
+    wanted = max(4096, MASKED_SCREENS * pixels // RASTER_TUNING.masked_chunk)
+    return max(1, min(wanted, MAX_GROUPS_X, MASKED_BYTES // (12 * max(draws, 1))))
 CLASSIFY_GROUP = (16, 16, 1)  # classify.comp's count and scatter, raster_resolve: bin_tiles.glsl's tile
 
 
@@ -162,10 +176,11 @@ class _TargetResources:
         self.raster_big = self._own(Buffer(dev, 4 * (4 + 3 * self.big_capacity) if raster else 16,
                                            "storage|transfer_dst|indirect",
                                            name="raster big triangles"))
-        # The masked draws' big triangles: a segment of MASKED_CAPACITY entries each.
+        # The masked draws' big triangles: a segment of masked_capacity entries each.
         masked = len(scene.masked_rows)
+        self.masked_capacity = masked_capacity(w * h, masked)
         self.raster_masked_big = self._own(Buffer(
-            dev, 4 * (4 * masked + 3 * masked * MASKED_CAPACITY) if raster and masked else 16,
+            dev, 4 * (4 * masked + 3 * masked * self.masked_capacity) if raster and masked else 16,
             "storage|transfer_dst|indirect", name="raster masked big triangles"))
         self._write_sets(scene, target)
 
@@ -499,7 +514,7 @@ class ComputeScene:
         push = np.zeros(RASTER_PUSH_BYTES // 4, np.uint32)
         push[:20] = (self.triangles, len(self.gs.draws), int(alpha_mask), res.big_capacity,
                      w, h, 0, 0, *tiles,
-                     len(self.masked_rows) if alpha_mask else 0, 0, MASKED_CAPACITY,
+                     len(self.masked_rows) if alpha_mask else 0, 0, res.masked_capacity,
                      *astuple(RASTER_TUNING), int(target.color_kind == "srgb"))
         push.view(np.float32)[20:24] = target.clear_color
         return push

@@ -29,12 +29,13 @@ from vkpbr.render import layouts as L
 from vkpbr.render.ao import AoSpec, prepare_ao
 from vkpbr.render.camera import as_camera, linear_depth, validate_camera
 from vkpbr.render.frames import FrameSlot, FrameStats, write_frame_blocks, write_frame_view
+from vkpbr.render.lens_cube import CubeFrame, draw_cube
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.outputs import frame_outputs
 from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.parts import FrameParts
 from vkpbr.render.paths import choose_path
-from vkpbr.render.post import check_lens, lens_frame, noise_key
+from vkpbr.render.post import LensFrame, check_lens, lens_frame, noise_key
 from vkpbr.render.post_stage import check_post, enabled_post, encode_tonemap
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.render.steps import NO_OBJECTS, FrameObjects, FrameSpec
@@ -71,17 +72,33 @@ class FramePath:
         self.parts = parts
         self._post_options: tuple[RenderOptions, RenderOptions] | None = None
         self._post: tuple[RenderOptions, tuple] | None = None
+        self.cube_prev: dict[tuple, Any] = {}  # each cube face's last view (render/lens_cube.py)
 
     def draw(self, target: FrameTarget, camera: Camera, lights: tuple[Light, ...],
              options: RenderOptions, overlay: TextOverlay | None = None, copy: tuple[str, ...] = (),
-             linear: bool = False, timings: bool = True, driver_time: bool = False) -> Submitted:
+             linear: bool = False, timings: bool = True, driver_time: bool = False,
+             source: tuple | None = None) -> Submitted:
         """Draw one frame into `target` and submit it (Renderer.draw says what each argument
-        is); its Python time in the slot's stats.cpu_ms, the driver's in driver_ms."""
+        is); its Python time in the slot's stats.cpu_ms, the driver's in driver_ms. A wide
+        fisheye draws a frame a cube face (render/lens_cube.py: `source`, a face's LensFrame)."""
         t0 = time.perf_counter()
+        lens = (lens_frame(camera, target.extent, int(self.parts.device.limits.maxImageDimension2D))
+                if source is None else LensFrame(source))
+        if isinstance(lens, CubeFrame):
+            return draw_cube(self, target, camera, lens, lights=lights, options=options,
+                             overlay=overlay, copy=copy, linear=linear, timings=timings,
+                             driver_time=driver_time)
+        return self._draw(t0, target, camera, lens, lights, options, overlay, copy, linear,
+                          timings, driver_time)
+
+    def _draw(self, t0: float, target: FrameTarget, camera: Camera, lens: LensFrame | None,
+              lights: tuple[Light, ...], options: RenderOptions, overlay: TextOverlay | None,
+              copy: tuple[str, ...], linear: bool, timings: bool, driver_time: bool
+              ) -> Submitted:
+        """`draw`'s frame, drawn as `lens` (None: the camera's pinhole) says."""
         p = self.parts
         p.environments.bind_for(options)
         transmission = p.lighting.screen_transmission(options)
-        lens = lens_frame(camera, target.extent, int(p.device.limits.maxImageDimension2D))
         view, extent = (camera, target.extent) if lens is None else (lens.camera, lens.extent)
         if transmission and p.opaque_copies.stale(extent):
             self._fit_opaque_copies(extent)
@@ -213,7 +230,10 @@ class FramePath:
                 # A camera model's depth is its resampled output (render/post.py lens_steps),
                 # a noisy one the outputs' (Noise): the depth buffer has neither.
                 lens_depth = depth and readback and (camera.model != "pinhole" or noisy)
-                if len(pending) == self.parts.ring.count:
+                cube = isinstance(lens_frame(camera, target.extent, int(
+                    self.parts.device.limits.maxImageDimension2D)), CubeFrame)
+                while pending and (len(pending) == self.parts.ring.count or cube):
+                    # (a cube frame's face frames take the ring's slots: none may be queued)
                     yield self.collect(*pending.popleft(), target, depth, readback, outputs)
                 sub = self.draw(target, camera, lights, options,
                                 copy=self._lens_copy(target, copy) if lens_depth else copy,

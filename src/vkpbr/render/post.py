@@ -30,6 +30,7 @@ import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.gpu.graph import Step
+from vkpbr.render.lens_cube import CubeFrame, cube_frame, cube_steps, is_cube
 from vkpbr.render.options import POST_OPTIONS, RenderOptions, SensorNoise
 from vkpbr.render.post_stage import (
     PostContext,
@@ -223,7 +224,7 @@ def batch_lens(views: Any, size: tuple[int, int], max_side: int = 1 << 14
         if values is not None and not (np.isnan(values).all() or (values == values[0]).all()):
             return None
     frame = lens_frame(views.camera(0), size, max_side)
-    if frame is None:
+    if frame is None or isinstance(frame, CubeFrame):  # (cube faces: view by view)
         return None
     src = frame.camera
     intr = np.tile(np.array(src.pixel_intrinsics, np.float64), (len(views), 1))
@@ -335,12 +336,17 @@ def check_lens(camera: Camera, target: object, compute_path: bool) -> None:
         raise UsageError(f"camera model {camera.model!r} not available here: {why}")
 
 
-def lens_frame(camera: Camera, extent: tuple[int, int], max_side: int) -> LensFrame | None:
+def lens_frame(camera: Camera, extent: tuple[int, int], max_side: int
+               ) -> LensFrame | CubeFrame | None:
     """The wide pinhole a frame of `camera` at `extent` is drawn as, and the resample's
-    constants; None for a pinhole (drawn directly). UsageError beyond 150 degrees."""
+    constants; None for a pinhole (drawn directly); a fisheye wider than one pinhole renders
+    (150 degrees) its cube faces (render/lens_cube.py). UsageError for an `opencv` lens
+    beyond 150 degrees."""
     if camera.model == "pinhole":
         return None
     K = camera.intrinsics(extent)
+    if _wide(camera.model, tuple(camera.distortion), tuple(K.ravel().tolist()), extent):
+        return cube_frame(camera, K, extent, LENS_PIXELS * extent[0] * extent[1], max_side)
     plan = _plan(camera.model, tuple(camera.distortion), tuple(K.ravel().tolist()), extent,
                  max_side)
     f, cx, cy, (w, h) = plan
@@ -352,6 +358,14 @@ def lens_frame(camera: Camera, extent: tuple[int, int], max_side: int) -> LensFr
     push = (K[0, 0], K[1, 1], K[0, 2], K[1, 2], f, f, cx, cy, *c,
             float(lenses.MODEL_IDS[camera.model]))
     return LensFrame((source, (w, h), tuple(float(v) for v in push)))
+
+
+@functools.lru_cache(maxsize=64)
+def _wide(model: str, distortion: tuple[float, ...], k: tuple[float, ...],
+          extent: tuple[int, int]) -> bool:
+    """Whether a fisheye's rays reach beyond what one pinhole renders (scene/lens.py)."""
+    return model in ("opencv_fisheye", "equidistant") and lenses.widest_ray(
+        model, distortion, np.array(k).reshape(3, 3), extent) > lenses.MAX_PINHOLE_ANGLE_DEG + 1e-9
 
 
 @functools.lru_cache(maxsize=64)
@@ -398,6 +412,8 @@ def lens_steps(ctx: PostContext, push: tuple[float, ...], extent: tuple[int, int
     over a compute batch's atlas (ctx.tiles), `lens_batch_steps`."""
     if ctx.tiles is not None:
         return lens_batch_steps(ctx, extent)
+    if is_cube(push):
+        return cube_steps(ctx, push, extent, outputs)
     data = _lens_push(push)
     steps = []
     if outputs:  # (untimed: FrameStats.pass_ms["lens"] times both kernels)

@@ -219,13 +219,15 @@ class PostKernels:
         for key in [k for k in self._sets if handle in k]:
             del self._sets[key]  # (the set stays in its pool until the pool goes)
 
-    def transient(self, name: str, extent: tuple[int, int]) -> tuple[Image, ImageView]:
-        """Transient image `name` of `extent` (RGBA32F, storage), made on first use. Frames in
-        flight share it: a frame's first use waits for the frames before (gpu/graph.py)."""
-        key = (name, extent)
+    def transient(self, name: str, extent: tuple[int, int], fmt: str = HDR_FORMAT
+                  ) -> tuple[Image, ImageView]:
+        """Transient image `name` of `extent` (`fmt`: RGBA32F unless told, storage), made on
+        first use. Frames in flight share it: a frame's first use waits for the frames before
+        (gpu/graph.py)."""
+        key = (name, extent, fmt)
         if key not in self._images:
             vk = self.device.vk
-            image = Image(self.device, extent[0], extent[1], getattr(vk, HDR_FORMAT),
+            image = Image(self.device, extent[0], extent[1], getattr(vk, fmt),
                           vk.VK_IMAGE_USAGE_STORAGE_BIT, name=f"post {name}")
             self._images[key] = (image, ImageView(image))
         return self._images[key]
@@ -294,9 +296,9 @@ class PostContext:
         """The index of the first view's key: the frame slot's, or 0 in a batch's keys."""
         return 0 if self.key_set is not None else self.frame_index
 
-    def transient(self, name: str, extent: tuple[int, int]) -> Any:
+    def transient(self, name: str, extent: tuple[int, int], fmt: str = HDR_FORMAT) -> Any:
         """Transient image `name` as a graph resource (added to the frame's); its view."""
-        image, view = self.kernels.transient(name, extent)
+        image, view = self.kernels.transient(name, extent, fmt)
         self.resources[name] = ImageResource(image.handle, view=view.handle, extent=extent)
         return view.handle
 

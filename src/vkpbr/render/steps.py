@@ -21,6 +21,7 @@ from vkpbr.gpu.target import COPY_DEPTH, COPY_OUTPUTS
 from vkpbr.render import layouts as L
 from vkpbr.render.ao import PREPASS_ROWS, AoSpec
 from vkpbr.render.compute_path import GENERAL_SHADING, ShadeVariant
+from vkpbr.render.lens_cube import store_only
 from vkpbr.render.passes import PASSES, PassContext, PassSpec, classify, record_pass
 from vkpbr.render.paths import COPY_PATHS, PATHS
 from vkpbr.render.post import lens_steps, post_steps
@@ -350,6 +351,8 @@ class FrameSteps:
                           key_set=kernels.view_key_set() if tiles is not None else None)
         steps = (lens_steps(ctx, self.spec.lens, self.output.extent, COPY_OUTPUTS in self.spec.copy)
                  if self.spec.lens else [])
+        if store_only(self.spec.lens):  # a cube face's frame: a later one encodes
+            return steps
         registry = post_steps()
         steps += [s for option, value in self.spec.post if option in registry
                   for s in registry[option]().steps(ctx, value)]  # ("hdr": none, post_stage)

@@ -32,7 +32,9 @@ resample writes the background there.
 
 `source_view` plans how a model's image is rendered: a wider pinhole camera with the same
 pose whose image covers every ray of the model's pixels, sampled at least as densely as the
-model's densest pixel, then resampled on the GPU (render/post.py Lens).
+model's densest pixel, then resampled on the GPU (render/post.py Lens). A fisheye whose
+rays reach more than MAX_PINHOLE_ANGLE_DEG off its axis (up to 180: a 360-degree field) is
+rendered as cube faces instead (`cube_view`: the faces its pixels see, FACES' axes).
 """
 
 from __future__ import annotations
@@ -45,7 +47,8 @@ import numpy as np
 from vkpbr.errors import UsageError
 
 __all__ = ["MODELS", "COEFFICIENTS", "MAX_PINHOLE_ANGLE_DEG", "check_model", "distortion_vector",
-           "project", "distort", "undistort", "pixel_rays", "source_view", "SourceView"]
+           "project", "distort", "undistort", "pixel_rays", "source_view", "SourceView",
+           "FACES", "CUBE_MARGIN", "face_of", "cube_view", "CubeView", "widest_angle", "widest_ray"]
 
 # Model -> the names of its coefficients, in OpenCV's order (the longest form).
 COEFFICIENTS: dict[str, tuple[str, ...]] = {
@@ -226,22 +229,15 @@ def source_view(model: str, distortion: tuple[float, ...], K: np.ndarray,
     size is rounded up to whole `granule`s (the margin split evenly), so that cameras of
     nearly the same intrinsics share one source size (the renderer keeps an image per size).
     UsageError when a ray is more than MAX_PINHOLE_ANGLE_DEG off the axis."""
-    w, h = size
-    step = max(1, min(w, h) // 48)
-    xs = np.unique(np.r_[np.arange(0, w, step), w - 1, -0.5, w - 0.5])
-    ys = np.unique(np.r_[np.arange(0, h, step), h - 1, -0.5, h - 0.5])
-    gx, gy = np.meshgrid(xs, ys)
-    grid = np.stack([gx, gy], -1)
-    rays = [pixel_rays(model, distortion, K, grid + off) for off in ((0, 0), (1, 0), (0, 1))]
+    rays, valid = _sampled_rays(model, distortion, K, size)
     d = rays[0]
-    valid = np.isfinite(d).all(-1)
-    if not valid.any():
-        raise UsageError(f"camera: model {model!r} has no valid ray in its image")
-    widest = math.degrees(math.acos(float(np.clip(d[valid][:, 2].min(), -1.0, 1.0))))
+    widest = widest_angle(d, valid)
     if widest > MAX_PINHOLE_ANGLE_DEG + 1e-9:
+        wider = ("; a wider field needs opencv_fisheye or equidistant (cube faces)"
+                 if model in ("pinhole", "opencv") else "")
         raise UsageError(f"camera: model {model!r} sees rays {widest:.1f} degrees off its axis; "
-                         f"at most {MAX_PINHOLE_ANGLE_DEG:g} are rendered (a {2 * MAX_PINHOLE_ANGLE_DEG:g}"
-                         "-degree field; wider needs a cube map, not yet implemented)")
+                         f"at most {MAX_PINHOLE_ANGLE_DEG:g} are rendered through one pinhole (a "
+                         f"{2 * MAX_PINHOLE_ANGLE_DEG:g}-degree field){wider}")
     t = [r[..., :2] / r[..., 2:3] for r in rays]
     jac = np.stack([t[1] - t[0], t[2] - t[0]], -1)  # (..., 2, 2): columns d/du, d/dv
     both = valid & np.isfinite(jac).all((-1, -2))
@@ -256,3 +252,117 @@ def source_view(model: str, distortion: tuple[float, ...], K: np.ndarray,
     rw, rh = (min(-(-n // granule) * granule, max(max_side, n)) for n in (sw, sh))
     cx, cy = cx + (rw - sw) // 2, cy + (rh - sh) // 2
     return SourceView(focal, float(cx), float(cy), (int(rw), int(rh)))
+
+
+def _sampled_rays(model: str, distortion: tuple[float, ...], K: np.ndarray,
+                  size: tuple[int, int]) -> tuple[list[np.ndarray], np.ndarray]:
+    """Rays of a grid of the image's pixels (every `min(w, h) // 48`th, its borders and outer
+    edges) and of their right and lower neighbours, and where the first are valid.
+    UsageError where no ray is."""
+    w, h = size
+    step = max(1, min(w, h) // 48)
+    xs = np.unique(np.r_[np.arange(0, w, step), w - 1, -0.5, w - 0.5])
+    ys = np.unique(np.r_[np.arange(0, h, step), h - 1, -0.5, h - 0.5])
+    gx, gy = np.meshgrid(xs, ys)
+    grid = np.stack([gx, gy], -1)
+    rays = [pixel_rays(model, distortion, K, grid + off) for off in ((0, 0), (1, 0), (0, 1))]
+    valid = np.isfinite(rays[0]).all(-1)
+    if not valid.any():
+        raise UsageError(f"camera: model {model!r} has no valid ray in its image")
+    return rays, valid
+
+
+def widest_ray(model: str, distortion: tuple[float, ...], K: np.ndarray,
+               size: tuple[int, int]) -> float:
+    """The largest angle (degrees) off the axis of a ray of the model's image."""
+    rays, valid = _sampled_rays(model, distortion, K, size)
+    return widest_angle(rays[0], valid)
+
+
+def widest_angle(rays: np.ndarray, valid: np.ndarray) -> float:
+    """The largest angle (degrees) between a valid ray and the optical axis."""
+    return math.degrees(math.acos(float(np.clip(rays[valid][:, 2].min(), -1.0, 1.0))))
+
+
+# -- cube faces: fisheyes wider than a pinhole can render ------------------------------------
+# Each face's camera axes (rows: right, down, forward) in the lens camera's OpenCV axes:
+# front (+z), right (+x), left (-x), down (+y), up (-y), back (-z); right x down = forward.
+FACES = np.array([
+    [[1, 0, 0], [0, 1, 0], [0, 0, 1]],
+    [[0, 0, -1], [0, 1, 0], [1, 0, 0]],
+    [[0, 0, 1], [0, 1, 0], [-1, 0, 0]],
+    [[1, 0, 0], [0, 0, -1], [0, 1, 0]],
+    [[1, 0, 0], [0, 0, 1], [0, -1, 0]],
+    [[-1, 0, 0], [0, 1, 0], [0, 0, -1]],
+], np.float64)
+# Texels each face image has beyond its 90-degree square on every side, so that a ray's
+# bilinear taps always lie in the one face its major axis picks (no sampling across seams).
+CUBE_MARGIN = 2
+
+
+def face_of(rays: np.ndarray) -> np.ndarray:
+    """The face (index into FACES) each ray (..., 3) lies in: its major axis, ties to z
+    before x before y (as lens_cube.glsl `cube_face`)."""
+    a = np.abs(rays)
+    z_major = (a[..., 2] >= a[..., 0]) & (a[..., 2] >= a[..., 1])
+    x_major = ~z_major & (a[..., 0] >= a[..., 1])
+    return np.where(z_major, np.where(rays[..., 2] >= 0, 0, 5),
+                    np.where(x_major, np.where(rays[..., 0] >= 0, 1, 2),
+                             np.where(rays[..., 1] >= 0, 3, 4)))
+
+
+@dataclass(frozen=True)
+class CubeView:
+    """The cube faces a model's image is resampled from: `faces` (indices into FACES, in the
+    order they are drawn), each a square pinhole image of `size` pixels a side whose focal
+    length `focal` maps the face's 90 degrees to all but CUBE_MARGIN texels each side."""
+
+    faces: tuple[int, ...]
+    focal: float
+    size: int
+
+    def K(self) -> np.ndarray:  # noqa: N802 (the matrix's usual name)
+        c = (self.size - 1) / 2.0
+        return np.array([[self.focal, 0.0, c], [0.0, self.focal, c], [0.0, 0.0, 1.0]])
+
+
+def cube_view(model: str, distortion: tuple[float, ...], K: np.ndarray, size: tuple[int, int],
+              max_pixels: int, max_side: int, granule: int = 1) -> CubeView:
+    """The cube faces that cover every valid ray of the model's image of `size` through `K`
+    (a face is drawn where a sampled ray lies in it or within a grid step's angle of it: no
+    output pixel between samples falls in a face left out), each sampled at least as densely
+    as the model's densest pixel (the smallest singular value of d(unit ray)/d(pixel); a
+    pinhole face is densest at its edges, sparsest at its centre, where its focal length is
+    its density), lowered to keep all faces within `max_pixels` and `max_side`; the side a
+    multiple of `granule`. UsageError for models that cannot see beyond 90 degrees."""
+    if model in ("pinhole", "opencv"):
+        raise UsageError(f"camera: model {model!r} cannot see beyond 90 degrees off its axis; "
+                         "use opencv_fisheye or equidistant")
+    rays, valid = _sampled_rays(model, distortion, K, size)
+    jac = np.stack([rays[1] - rays[0], rays[2] - rays[0]], -1)  # (..., 3, 2)
+    both = valid & np.isfinite(jac).all((-1, -2))
+    sigma = np.linalg.svd(jac[both], compute_uv=False)[:, -1]
+    density = 1.0 / float(sigma.min())  # texels a radian
+    # The grid's step as an angle: rays within it of a face's boundary count for that face.
+    gap = float(np.linalg.norm(jac[both], axis=-2).max()) * max(1, min(size) // 48) * 1.5
+    d = rays[0][valid]
+    faces = set(face_of(d).tolist())
+    for tilt in ((gap, 0), (-gap, 0), (0, gap), (0, -gap)):
+        faces |= set(face_of(d + _perpendicular(d, tilt)).tolist())
+    order = tuple(sorted(faces, key=lambda f: (f == 0, f)))  # the front face last
+    n = len(order)
+    side = 2.0 * density + 2 * CUBE_MARGIN + 1
+    side = min(side, max_side, math.sqrt(max_pixels / n))
+    side = max(granule, int(-(-int(math.ceil(side)) // granule) * granule))
+    side = min(side, max_side)
+    focal = (side - 1) / 2.0 - CUBE_MARGIN
+    return CubeView(order, focal, side)
+
+
+def _perpendicular(d: np.ndarray, tilt: tuple[float, float]) -> np.ndarray:
+    """Offsets of unit rays `d` by `tilt` radians along two directions across them."""
+    up = np.where(np.abs(d[:, 1:2]) < 0.9, np.array([[0.0, 1.0, 0.0]]), np.array([[1.0, 0.0, 0.0]]))
+    a = np.cross(d, up)
+    a /= np.linalg.norm(a, axis=1, keepdims=True)
+    b = np.cross(d, a)
+    return tilt[0] * a + tilt[1] * b

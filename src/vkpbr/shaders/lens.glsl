@@ -20,6 +20,21 @@ struct LensParams {
 };
 layout(set = 1, binding = 0, std430) readonly buffer LensViews { LensParams view_lens[]; };
 LensParams lens;
+#elif defined(LENS_CUBE)
+// A cube-face lens (render/lens_cube.py): LensPush with k_src the faces' pinhole (focal,
+// focal, centre, centre) and which cube face is drawn into which slot.
+layout(push_constant) uniform LensPush {
+    vec4 k_out;
+    vec4 k_src;
+    vec4 c0;
+    vec4 c1;
+    int model;
+    int store;  // post_cube_store*.comp: unused (the slot is the bound image)
+    int size;  // a face image's side, texels
+    int pad;
+    ivec4 slot_a;  // the slot (bound image) of faces 0..3 (lens_cube.glsl FACE_*), -1: none
+    ivec4 slot_b;  // of faces 4, 5
+} lens;
 #else
 layout(push_constant) uniform LensPush {
     vec4 k_out;  // the model's fx, fy, cx, cy (pixels, at the output's size)

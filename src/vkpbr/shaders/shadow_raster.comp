@@ -273,8 +273,11 @@ void cover(Screen t, vec3 s0, vec3 s1, vec3 s2, int y0, int y1, int ystep, int l
             float z = (e0 * s0.z + e1 * s1.z + e2 * s2.z) / area;
             uint bits = floatBitsToUint(clamp(z + t.bias, 0.0, 1.0));
             uint at = base + uint(y) * size + uint(x);
+            // Nearer already stored: no atomic (nor, masked, an alpha test). A stale read
+            // (another invocation's atomic not yet seen) is never larger than the stored
+            // depth, so this only skips what atomicMax would leave unchanged.
+            if (depths[at] >= bits) continue;
 #if KERNEL == 4
-            if (depths[at] >= bits) continue;  // nearer already stored: no alpha test
             if (!alpha_passes(t, p)) continue;
 #endif
             atomicMax(depths[at], bits);
