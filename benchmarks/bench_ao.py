@@ -10,7 +10,8 @@ runs the half-resolution presets twice: the last denoise pass as its own kernel 
 default) and run by the upsample on the pixels it blends (on: render/ao.py AoImages.fuse).
 
     python3 benchmarks/bench_ao.py --scene Sponza.gltf [--frames 300] [--batches 5] \
-        [--modes off,gtao,gtao-full,gtao-low] [--profile] [--fuse off|on|both] [--json out.json]
+        [--modes off,gtao,gtao-full,gtao-low] [--profile] [--fuse off|on|both] \
+        [--batch-pipelines compute,forward] [--json out.json]
 """
 
 from __future__ import annotations
@@ -78,11 +79,13 @@ def ring_poses(r: Renderer, count: int) -> np.ndarray:
     return poses
 
 
-def batch(r: Renderer, reps: int, ao: str, count: int) -> dict:
+def batch(r: Renderer, reps: int, ao: str, count: int, pipeline: str = "compute") -> dict:
+    """`pipeline` "forward": the layered batch (its GTAO steps untimed apart: compare the
+    GPU ms with and without)."""
     views = CameraBatch.from_poses(ring_poses(r, count), yfov_deg=60.0)
     times: dict[str, list[float]] = {"gpu_ms": []}
     for i in range(reps + 1):
-        r.render_batch(views, size=BATCH_SIZE, pipeline="compute", ao=ao)
+        r.render_batch(views, size=BATCH_SIZE, pipeline=pipeline, ao=ao)
         if i:
             times["gpu_ms"].append(r.last_stats.gpu_ms)
             ao_times(r, times)
@@ -107,6 +110,9 @@ def main() -> None:
     ap.add_argument("--sizes", default="1920x1080,640x480")
     ap.add_argument("--modes", default="off,gtao,gtao-full,gtao-low", help="--ao values")
     ap.add_argument("--profile", action="store_true", help="time each GTAO kernel apart")
+    ap.add_argument("--batch-pipelines", default="compute",
+                    help="the batches' pipelines: compute (the compute batch), forward (the "
+                    "layered batch) or both, comma-separated")
     ap.add_argument("--fuse", choices=("off", "on", "both"), default="off",
                     help="the last denoise pass in the upsample (half resolution)")
     ap.add_argument("--json")
@@ -125,10 +131,11 @@ def main() -> None:
                 for ao in runs:
                     rows.append({"what": f"frame {size[0]}x{size[1]}", "ao": label(ao),
                                  **frames(r, size, args.frames, ao)})
-            if args.views:
+            for pipeline in args.batch_pipelines.split(",") if args.views else ():
+                what = f"batch {args.views} x {BATCH_SIZE[0]}x{BATCH_SIZE[1]} {pipeline}"
                 for ao in runs:
-                    rows.append({"what": f"batch {args.views} x {BATCH_SIZE[0]}x{BATCH_SIZE[1]}",
-                                 "ao": label(ao), **batch(r, args.batches, ao, args.views)})
+                    rows.append({"what": what, "ao": label(ao),
+                                 **batch(r, args.batches, ao, args.views, pipeline)})
     kernels = ["ao_gtao_ms", "ao_denoise0_ms", "ao_denoise1_ms", "ao_last_ms"]
     cols = [k for k in kernels if any(k in row for row in rows)]
     print("| what | --ao | GPU ms | ao step ms |" + "".join(f" {k[:-3]} |" for k in cols))
