@@ -112,7 +112,7 @@ def main() -> None:
     ap.add_argument("--profile", action="store_true", help="time each GTAO kernel apart")
     ap.add_argument("--batch-pipelines", default="compute",
                     help="the batches' pipelines: compute (the compute batch), forward (the "
-                    "layered batch) or both, comma-separated")
+                    "layered batch), comma-separated")
     ap.add_argument("--fuse", choices=("off", "on", "both"), default="off",
                     help="the last denoise pass in the upsample (half resolution)")
     ap.add_argument("--json")
