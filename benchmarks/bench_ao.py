@@ -5,10 +5,13 @@ draws it, with `--ao off` and each GTAO preset (`gtao`: half resolution, the def
 1920x1080 and 640x480; and a compute batch of 4,096 views of 128x128 each way. Prints GPU ms
 per frame (or per batch) and the "ao" step's own time (from the timestamps around it),
 medians; `--profile` adds each kernel's (GTAO, the denoise passes, the upsample: a timestamp
-after each). Targets (issue 33): the step <= 0.15 ms at 1080p on the H200.
+after each). Targets (issue 33): the step <= 0.15 ms at 1080p on the H200. `--fuse both`
+runs the half-resolution presets twice: the last denoise pass as its own kernel (off, the
+default) and run by the upsample on the pixels it blends (on: render/ao.py AoImages.fuse).
 
     python3 benchmarks/bench_ao.py --scene Sponza.gltf [--frames 300] [--batches 5] \
-        [--modes off,gtao,gtao-full,gtao-low] [--profile] [--json out.json]
+        [--modes off,gtao,gtao-full,gtao-low] [--profile] [--fuse off|on|both] \
+        [--batch-pipelines compute,forward] [--json out.json]
 """
 
 from __future__ import annotations
@@ -76,15 +79,25 @@ def ring_poses(r: Renderer, count: int) -> np.ndarray:
     return poses
 
 
-def batch(r: Renderer, reps: int, ao: str, count: int) -> dict:
+def batch(r: Renderer, reps: int, ao: str, count: int, pipeline: str = "compute") -> dict:
+    """`pipeline` "forward": the layered batch (its GTAO steps untimed apart: compare the
+    GPU ms with and without)."""
     views = CameraBatch.from_poses(ring_poses(r, count), yfov_deg=60.0)
     times: dict[str, list[float]] = {"gpu_ms": []}
     for i in range(reps + 1):
-        r.render_batch(views, size=BATCH_SIZE, pipeline="compute", ao=ao)
+        r.render_batch(views, size=BATCH_SIZE, pipeline=pipeline, ao=ao)
         if i:
             times["gpu_ms"].append(r.last_stats.gpu_ms)
             ao_times(r, times)
     return {k: statistics.median(v) for k, v in times.items()}
+
+
+def set_fuse(r: Renderer, fuse: bool) -> None:
+    """Fuse the last denoise pass into the upsample, or not; the recordings made the other
+    way are dropped (their steps differ)."""
+    r.device.wait_idle()
+    r.parts.recorder.free()
+    r.parts.ao.fuse = fuse
 
 
 def main() -> None:
@@ -97,21 +110,32 @@ def main() -> None:
     ap.add_argument("--sizes", default="1920x1080,640x480")
     ap.add_argument("--modes", default="off,gtao,gtao-full,gtao-low", help="--ao values")
     ap.add_argument("--profile", action="store_true", help="time each GTAO kernel apart")
+    ap.add_argument("--batch-pipelines", default="compute",
+                    help="the batches' pipelines: compute (the compute batch), forward (the "
+                    "layered batch), comma-separated")
+    ap.add_argument("--fuse", choices=("off", "on", "both"), default="off",
+                    help="the last denoise pass in the upsample (half resolution)")
     ap.add_argument("--json")
     args = ap.parse_args()
     sizes = [tuple(int(v) for v in s.split("x")) for s in args.sizes.split(",")]
     modes = args.modes.split(",")
     rows = []
+    fuses = {"off": [False], "on": [True], "both": [False, True]}[args.fuse]
     with Renderer(load_scene(args.scene)) as r:
         r.parts.ao.profile = args.profile
-        for size in sizes:
-            for ao in modes:
-                rows.append({"what": f"frame {size[0]}x{size[1]}", "ao": ao,
-                             **frames(r, size, args.frames, ao)})
-        if args.views:
-            for ao in modes:
-                rows.append({"what": f"batch {args.views} x {BATCH_SIZE[0]}x{BATCH_SIZE[1]}",
-                             "ao": ao, **batch(r, args.batches, ao, args.views)})
+        for fuse in fuses:
+            set_fuse(r, fuse)
+            runs = [m for m in modes if not fuse or m in ("gtao", "gtao-low")]
+            label = (lambda ao: f"{ao} fused") if fuse else (lambda ao: ao)  # noqa: E731
+            for size in sizes:
+                for ao in runs:
+                    rows.append({"what": f"frame {size[0]}x{size[1]}", "ao": label(ao),
+                                 **frames(r, size, args.frames, ao)})
+            for pipeline in args.batch_pipelines.split(",") if args.views else ():
+                what = f"batch {args.views} x {BATCH_SIZE[0]}x{BATCH_SIZE[1]} {pipeline}"
+                for ao in runs:
+                    rows.append({"what": what, "ao": label(ao),
+                                 **batch(r, args.batches, ao, args.views, pipeline)})
     kernels = ["ao_gtao_ms", "ao_denoise0_ms", "ao_denoise1_ms", "ao_last_ms"]
     cols = [k for k in kernels if any(k in row for row in rows)]
     print("| what | --ao | GPU ms | ao step ms |" + "".join(f" {k[:-3]} |" for k in cols))

@@ -2,8 +2,9 @@
 "auto" takes on CPUs): every view of a batch equals the same view rendered alone, bit for bit
 (issue 14; float32 frames to 8 ulp), whatever form the cameras come in, however the batch is
 chunked and split. (The compute batch, auto's choice on GPUs, is test_compute_batch.py's.)
-The layered batch has no ambient occlusion yet (render/ao.py): its views equal `render`'s with
-ao="off".
+Most cases compare views with ao="off" (GTAO, render/ao.py, costs every render here a depth
+pass and its kernels); B=7 compares them with GTAO on (the layered batch runs it a layer a
+view: a chunk's depth pre-pass, masked materials alpha-tested, then one dispatch a kernel).
 
 The scenes are the built-in chart (blended and masked materials, vertex colours: blended
 draws need each view's own back-to-front order) and a glTF sample model; the cameras are
@@ -30,7 +31,7 @@ SIZE = (48, 36)
 
 def layered(r, *args, **kwargs):  # noqa: ANN001, ANN201
     """render_batch on the layered batch (pipeline "forward") unless a test names another."""
-    return r.render_batch(*args, **{"pipeline": "forward", **kwargs})
+    return r.render_batch(*args, **{"pipeline": "forward", "ao": "off", **kwargs})
 
 
 def random_cameras(base: Camera, count: int, seed: int, lo: np.ndarray, hi: np.ndarray) -> list[Camera]:
@@ -76,9 +77,10 @@ def assert_views_equal(batch: np.ndarray, singles: list[np.ndarray], what: str) 
 @pytest.mark.parametrize("count", [1, 7, 64])
 def test_views_equal_single_renders(chart, count: int) -> None:  # noqa: ANN001
     cams = cameras_of(chart, count, seed=count)
-    batch = layered(chart, cams, size=SIZE)
+    ao = "gtao" if count == 7 else "off"
+    batch = layered(chart, cams, size=SIZE, ao=ao)
     assert batch.dtype == np.uint8
-    assert_views_equal(batch, [chart.render(c, size=SIZE, pipeline="forward", ao="off") for c in cams], f"B={count}")
+    assert_views_equal(batch, [chart.render(c, size=SIZE, pipeline="forward", ao=ao) for c in cams], f"B={count} ao={ao}")
     assert (batch[..., :3] > 0).any(axis=(1, 2, 3)).sum() > 0.5 * count  # the scene is seen
 
 

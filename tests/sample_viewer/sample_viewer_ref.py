@@ -383,7 +383,7 @@ def render_vkpbr(renderer: object, scenario: Scenario, environment: Path,
         camera, lights=[], size=(size, size), linear=True, depth=True, tonemap="pbr-neutral",
         exposure=0.0, env=str(environment), env_intensity=env_intensity,
         env_rotation=vkpbr_rotation(scenario.viewer_rotation), env_background=scenario.background,
-        shadows=False)
+        shadows=False, ao="off")  # (the Sample Viewer has no screen-space occlusion)
     return encode_gamma(linear[..., :3]), np.isfinite(depth)
 
 

@@ -114,7 +114,9 @@ def test_cli_frames_screenshot_matches_render(display: str, tmp_path: Path) -> N
     from vkpbr.app.cli import main
 
     cam = "0.8,2.9,7.5,0.3,2.0,0.0"
-    modes = ["--view", "mapped-normal", "--tbn", "packed", "--no-occlusion"]
+    # The final image with GTAO (render/ao.py): the window draws it through its own depth
+    # pre-pass (paths.py forward_ao), `render` through its visibility pass: the same pixels.
+    modes = ["--tbn", "packed", "--no-occlusion", "--ao", "gtao"]
     assert main(["view", "--size", "96x72", "--camera", cam, "--frames", "3", "--no-vsync",
                  "--screenshot", str(tmp_path / "v.png"), "--validation", *modes]) == 0
     assert main(["render", "--size", "96x72", "--camera", cam, "--out", str(tmp_path / "r.png"),

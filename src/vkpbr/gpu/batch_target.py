@@ -39,6 +39,7 @@ class BatchTarget:
 
     generation = 0  # never recreated
     samples = 1
+    depth_sampled = True
 
     def __init__(self, device: Device, size: tuple[int, int], layers: int, capacity: int,
                  color: str = "srgb", depth: bool = False,
@@ -57,8 +58,10 @@ class BatchTarget:
         self.color = self._own(Image(device, w, h, self.color_format,
                                      vk.VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | src,
                                      layers=self.layers, name="batch color"))
+        # (sampled: ambient occlusion reads each view's layer, render/ao.py)
         self.depth = self._own(Image(device, w, h, self.depth_format,
-                                     vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | src,
+                                     vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | src
+                                     | vk.VK_IMAGE_USAGE_SAMPLED_BIT,
                                      layers=self.layers, name="batch depth"))
         color_view = self._own(ImageView(self.color, kind="2d_array"))
         depth_view = self._own(ImageView(self.depth, aspect="depth", kind="2d_array"))

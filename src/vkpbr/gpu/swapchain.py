@@ -74,6 +74,7 @@ class Swapchain:
     samples = 1
 
     stores_depth = False  # nothing reads a window's depth after its frame
+    depth_sampled = True  # ambient occlusion reads it within the frame (render/ao.py)
 
     def __init__(self, device: Device, surface: Surface, size: tuple[int, int],
                  vsync: bool = True, clear_color: tuple[float, float, float, float] = (0, 0, 0, 1)
@@ -194,8 +195,8 @@ class Swapchain:
                     baseArrayLayer=0, layerCount=1)), None)
             self.views.append(view)
             depth = self._own(Image(self.device, w, h, self.depth_format,
-                                    vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
-                                    name="window depth"))
+                                    vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT
+                                    | vk.VK_IMAGE_USAGE_SAMPLED_BIT, name="window depth"))
             self.depth_images.append(depth)
             self.depth_views.append(self._own(ImageView(depth, aspect="depth")))
             self._render_done.append(vk.vkCreateSemaphore(dev, vk.VkSemaphoreCreateInfo(), None))

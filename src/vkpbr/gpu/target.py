@@ -89,9 +89,10 @@ class OffscreenTarget:
         self.color = self._own(Image(device, w, h, self.color_format, attach | storage,
                                      mutable=mutable))
         # The compute rasteriser's depths are copied in (render/compute_path.py); ambient
-        # occlusion samples the depth (render/ao.py).
+        # occlusion samples the depth (render/ao.py; a multisampled target's resolved one).
+        self.depth_sampled = bool(compute)
         depth_in = (vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT
-                    if self.compute else 0)
+                    if compute else 0)
         self.depth = self._own(Image(device, w, h, self.depth_format,
                                      vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | src | depth_in))
         views = [self._own(ImageView(self.color, usage=attach if mutable else None)),

@@ -24,11 +24,15 @@ the compute rasteriser, a compute batch's atlas -- and before the shading:
    combines them, with GTAO's multi-bounce approximation on the diffuse albedo and
    Lagarde's specular occlusion. Blended surfaces take none (GTAO saw what is behind them).
 
-The step runs where the target's depth can be sampled and its frames are single-sample
-offscreen ones (`OffscreenTarget.compute`): renders, render_many, compute batches, the
-viewer's --offscreen loop; window frames, multisampled ones and the layered batch draw
-without it (the frame's LIGHTING_AO flag is cleared, so the shading never reads an image the
-frame did not make), and so does the transmission's copy of the opaque scene.
+The step runs wherever the target's depth can be sampled (`depth_sampled`): on the compute
+path and the compute batch after their visibility pass or rasteriser; on the fragment path
+after the visibility pass where the target has one, else after a depth pre-pass of its own
+(paths.py "forward_ao", PREPASS_ROWS: multisampled frames, whose pre-pass resolves sample 0,
+and windows); in the layered batch (render/batch.py) after each chunk's layered depth
+pre-pass, its kernels' AO_LAYERED builds over every layer at once (a view a layer; ao_map is
+an array image for them, frames read layer 0). Frames without it clear the LIGHTING_AO flag
+(the shading never reads an image the frame did not make), and so does the transmission's
+copy of the opaque scene.
 The `ao` dataset output is the last pass's image, copied into the target's "out_ao".
 
 Correctness: tests/gpu/test_ao.py compares it with a NumPy Monte Carlo reference that ray
@@ -38,6 +42,7 @@ a plane and a crop of Sponza (docs/ambient-occlusion.md states the errors).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -52,9 +57,11 @@ from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec
 from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.options import RenderOptions
+from vkpbr.render.passes import PASSES, PassSpec
 
 __all__ = ["AoImages", "AoQuality", "AoSpec", "ao_spec", "prepare_ao", "AO_BINDING", "PRESETS",
-           "RADIUS_SHARE", "RADIUS_MULTIPLIER", "FALLOFF"]
+           "RADIUS_SHARE", "RADIUS_MULTIPLIER", "FALLOFF", "AO_MASK_PASS", "PREPASS_ROWS",
+           "ao_pixel_bytes"]
 
 AO_BINDING = next(b for b, _, _, name in L.SETS[2] if name == "ao_map")  # layouts.SETS
 AO_GROUP = (8, 8, 1)  # ao_common.glsl's work group
@@ -67,7 +74,8 @@ RADIUS_MULTIPLIER = 1.457
 RADIUS_SHARE = 0.15  # the automatic radius: 15% of the scene's bounding radius (Sponza: 2.7 m)
 _SETS_PER_POOL = 16
 _PUSH = np.dtype([("tile", "<u4", 4), ("radius", "<f4"), ("falloff", "<f4"), ("slices", "<u4"),
-                  ("steps", "<u4"), ("final_pass", "<u4"), ("read_mid", "<u4"), ("scale", "<u4")])
+                  ("steps", "<u4"), ("final_pass", "<u4"), ("read_mid", "<u4"), ("scale", "<u4"),
+                  ("first_view", "<u4"), ("fused", "<u4")])
 
 
 @dataclass(frozen=True)
@@ -109,13 +117,29 @@ def ao_spec(options: RenderOptions, target: Any, scene_radius: float, output: bo
             ) -> AoSpec | None:
     """The frame's ambient occlusion (None: none): where `options` turn it on (GTAO, the
     physically based mode with an environment) or the `ao` `output` is asked for, on targets
-    whose depth the step can read (single-sample offscreen ones with the compute path's
-    features)."""
+    whose depth the step can read (`depth_sampled`: offscreen ones on devices with the compute
+    path's features, multisampled ones through their resolved depth, windows)."""
     shading = options.ao != L.Ao.OFF and options.has_environment
-    if not (shading or output) or not getattr(target, "compute", False):
+    if not (shading or output) or not getattr(target, "depth_sampled", False):
         return None
     radius = options.ao_radius if options.ao_radius > 0 else RADIUS_SHARE * scene_radius
     return AoSpec(float(radius), shading, PRESETS.get(options.ao, PRESETS[L.Ao.GTAO]))
+
+
+# The depth pre-pass of frames without a visibility image (render/paths.py "forward_ao":
+# multisampled frames, windows): the opaque rows depth-only (passes.py's pre-pass rows) and
+# the masked ones through pbr.frag's DEPTH_ONLY build (its alpha test, no output), so that
+# GTAO sees what the compute path's visibility pass sees (alpha-masked surfaces included).
+AO_MASK_PASS = PassSpec("ao_prepass_mask", "mask", lambda s: dataclasses.replace(
+    s, cull="none", fragment_shader="pbr_depth_mask.frag.spv", color_write=False))
+PREPASS_ROWS = (*(p for p in PASSES if p.prepass), AO_MASK_PASS)
+
+
+def ao_pixel_bytes(options: RenderOptions, slots: int) -> int:
+    """Device bytes a view's pixel takes for GTAO where `options` turn it on (a batch's
+    memory budget): each of the `slots` frame slots' "ao" image and the two working images,
+    4 bytes a pixel each (made for the largest frame or chunk of layers)."""
+    return 4 * (slots + 2) if options.ao != L.Ao.OFF and options.has_environment else 0
 
 
 @dataclass
@@ -128,120 +152,153 @@ class _Handle:
 class AoImages:
     """Each frame slot's "ao" image (bound as its set 2 `ao_map`), the working images the
     kernels share (frames in flight take turns: a frame's first use waits for the frames
-    before, gpu/graph.py), the two kernels and their descriptor sets. Made (and remade) by
-    `fit` for the frame's size; until then a 1x1 stand-in is bound, never read."""
+    before, gpu/graph.py), the kernels and their descriptor sets. Made (and remade) by
+    `fit` for the frame's size and layers (arrays: the layered batch's views are layers;
+    frames and compute batches use layer 0 through 2D views); until then a 1x1 stand-in is
+    bound, never read."""
 
     def __init__(self, device: Device, sets2: list[Any], set0_layout: DescriptorSetLayout,
                  stand_in: tuple[Any, Any]) -> None:
         self.device, self.sets2, self.set0_layout = device, sets2, set0_layout
         self.size: tuple[int, int] | None = None
+        self.layers = 1
         # Benchmarks (bench_ao.py --profile) time each kernel apart: FrameStats.pass_ms
         # "ao_gtao", "ao_denoise0", ..., "ao_upsample" and "ao" (the last one's). Set before the
         # first frame (recordings are kept).
         self.profile = False
-        self.images: list[tuple[Image, ImageView]] = []
-        self.work: list[tuple[Image, ImageView]] = []  # ao_raw, ao_mid (R32_UINT)
+        # At half resolution, the last denoise pass run by ao_upsample.comp on the working
+        # pixels it blends (one dispatch and barrier fewer, more loads a pixel: on a GPU the
+        # dispatches' gaps may cost more than the loads; benchmarks/bench_ao.py --fuse
+        # measures both). Off until measured; set before the first frame, as `profile`.
+        self.fuse = False
+        # (image, its layer 0's 2D view, its array view) each
+        self.images: list[tuple[Image, ImageView, ImageView]] = []
+        self.work: list[tuple[Image, ImageView, ImageView]] = []  # ao_raw, ao_mid (R32_UINT)
         self._kernels: dict[str, ComputePipeline] = {}
         self._layout: DescriptorSetLayout | None = None
         self._sampler: Sampler | None = None
         self._pools: list[DescriptorPool] = []
         self._free = 0
-        self._sets: dict[tuple[int, int], Any] = {}
+        self._sets: dict[tuple[int, int, bool], Any] = {}
+        # The stand-in: ao_map is an array (the layered batch's layers), so a 1x1 array.
+        vk = device.vk
+        image = Image(device, 1, 1, vk.VK_FORMAT_R32_SFLOAT, vk.VK_IMAGE_USAGE_SAMPLED_BIT,
+                      name="ao stand-in")
+        self._stand_in = (image, ImageView(image, kind="2d_array"))
+        with device.one_time_commands() as handle:
+            Commands(device, handle).image_barrier(image, "undefined", "shader_read", "none",
+                                                   "sampled")
         writer = DescriptorWriter(device)
         for set2 in sets2:
-            writer.sampler(set2, AO_BINDING, *stand_in)
+            writer.sampler(set2, AO_BINDING, self._stand_in[1], stand_in[1])
         writer.update()
 
-    def stale(self, extent: tuple[int, int]) -> bool:
-        """Whether frames of `extent` need larger images than the ones made (they only grow:
-        a smaller frame uses their top-left corner, so frames and batches of other sizes in
-        turn neither wait for the device nor re-record)."""
-        return self.size is None or extent[0] > self.size[0] or extent[1] > self.size[1]
+    def stale(self, extent: tuple[int, int], layers: int = 1) -> bool:
+        """Whether frames of `extent` (`layers`: a layered batch's chunk) need larger images
+        than the ones made (they only grow: a smaller frame uses their top-left corner, so
+        frames and batches of other sizes in turn neither wait for the device nor re-record)."""
+        return (self.size is None or extent[0] > self.size[0] or extent[1] > self.size[1]
+                or layers > self.layers)
 
-    def fit(self, extent: tuple[int, int]) -> None:
-        """Images for frames of `extent` (and of any size made before), bound in every
-        slot's set 2 (left in the sampled layout, as frames leave them). The caller waits for
-        the device and drops the recorded command buffers first (they name the old images)."""
-        old = self.size or (0, 0)
+    def fit(self, extent: tuple[int, int], layers: int = 1) -> None:
+        """Images for frames of `extent` and `layers` (and of any size made before), bound in
+        every slot's set 2 (left in the sampled layout, as frames leave them). The caller
+        waits for the device and drops the recorded command buffers first (they name the old
+        images)."""
+        old, layers = self.size or (0, 0), max(int(layers), self.layers)
         self._destroy_images()
         vk = self.device.vk
         w, h = max(int(extent[0]), old[0]), max(int(extent[1]), old[1])
         usage = (vk.VK_IMAGE_USAGE_STORAGE_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT
                  | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT)
-        for i in range(len(self.sets2)):
-            image = Image(self.device, w, h, vk.VK_FORMAT_R32_SFLOAT, usage, name=f"ao {i}")
-            self.images.append((image, ImageView(image)))
-        for name in ("ao raw", "ao mid"):
-            image = Image(self.device, w, h, vk.VK_FORMAT_R32_UINT, vk.VK_IMAGE_USAGE_STORAGE_BIT,
-                          name=name)
-            self.work.append((image, ImageView(image)))
+        names = [(f"ao {i}", vk.VK_FORMAT_R32_SFLOAT, usage) for i in range(len(self.sets2))]
+        for i, (name, fmt, use) in enumerate(
+                [*names, *((n, vk.VK_FORMAT_R32_UINT, vk.VK_IMAGE_USAGE_STORAGE_BIT)
+                           for n in ("ao raw", "ao mid"))]):
+            image = Image(self.device, w, h, fmt, use, layers=layers, name=name)
+            made = (image, ImageView(image), ImageView(image, kind="2d_array"))
+            (self.images if i < len(names) else self.work).append(made)
         with self.device.one_time_commands() as handle:
             cmd = Commands(self.device, handle)
-            for image, _ in self.images:
+            for image, _, _ in self.images:
                 cmd.image_barrier(image, "undefined", "shader_read", "none", "sampled")
         writer = DescriptorWriter(self.device)
-        for set2, (_, view) in zip(self.sets2, self.images, strict=True):
+        for set2, (_, _, view) in zip(self.sets2, self.images, strict=True):
             writer.sampler(set2, AO_BINDING, view, self._depth_sampler())
         writer.update()
-        self.size = (w, h)
+        self.size, self.layers = (w, h), layers
 
     # --- the steps ----------------------------------------------------------------------------
     def steps(self, resources: dict[str, Any], set0: Any, frame_index: int, spec: AoSpec,
               extent: tuple[int, int], tiles: tuple[int, int, int, int] | None, copy_out: bool,
-              timed: bool = True) -> list[Step]:
+              timed: bool = True, generation: int = 0,
+              layered: tuple[int, int] | None = None) -> list[Step]:
         """The "ao" group's steps for one recording: GTAO, the denoise passes, at half
         resolution the upsample (and, for the `ao` output, a copy into "out_ao"); adds "ao",
         "ao_raw", "ao_mid" to `resources`. `extent`: the frame's (the images' top-left
         corner); `tiles`: a batch's atlas (views, tile width, height, tiles a column);
-        `timed`: a timestamp after the last pass (FrameStats.pass_ms["ao"])."""
-        assert not self.stale(extent), "fit() first"
+        `timed`: a timestamp after the last pass (FrameStats.pass_ms["ao"]); `generation`:
+        the target's (a recreated swapchain's depth views are new objects); `layered`: a
+        layered batch's chunk (its first view, views), a view a layer of the target's depth,
+        every layer in one dispatch (its z)."""
+        assert not self.stale(extent, layered[1] if layered else 1), "fit() first"
         w, h = extent
-        image, view = self.images[frame_index]
-        resources["ao"] = ImageResource(image.handle, view=view.handle)
-        for name, (img, v) in zip(("ao_raw", "ao_mid"), self.work, strict=True):
-            resources[name] = ImageResource(img.handle, view=v.handle)
-        dset = self._set(resources["depth"].view, frame_index)
+        image = self._resources(resources, frame_index)
+        dset = self._set(resources["depth"].view, frame_index, generation, layered is not None)
         q = spec.quality
         n, tw, th, rows = tiles if tiles is not None else (1, w, h, 1)
+        first, depth_layers = layered if layered is not None else (0, 1)
+        kernel = "_layers" if layered is not None else ""
         # The working images' corner: the tile grid at 1 / scale (tiles rounded up).
         cols = -(-w // tw)
         work = (cols * -(-tw // q.scale), rows * -(-th // q.scale))
         depth = ("depth", "sampled")
 
-        def push(final: int, read_mid: int) -> np.ndarray:
+        def push(final: int, read_mid: int, fused: int = 0) -> np.ndarray:
             p = np.zeros((), _PUSH)
-            p["tile"] = (tw, th, rows, n)
+            p["tile"], p["fused"] = (tw, th, rows, n), fused
             p["radius"], p["falloff"] = spec.radius * RADIUS_MULTIPLIER, FALLOFF
             p["slices"], p["steps"], p["scale"] = q.slices, q.steps, q.scale
-            p["final_pass"], p["read_mid"] = final, read_mid
+            p["final_pass"], p["read_mid"], p["first_view"] = final, read_mid, first
             return p
 
         # The denoise and the upsample name every image of their set: the shaders choose
         # between the working images by a push constant, so each statically reads and writes
         # both (and "ao", a storage image of the set, GENERAL when bound).
         both = (depth, ("ao_raw", "storage"), ("ao_mid", "storage"), ("ao", "storage"))
-        steps = [Step("ao_gtao", self._dispatch("ao_gtao", push(0, 0), set0, dset, work),
+        def run(name: str, p: np.ndarray, size: tuple[int, int]) -> Any:
+            return self._dispatch(name + kernel, p, set0, dset, (*size, depth_layers))
+
+        steps = [Step("ao_gtao", run("ao_gtao", push(0, 0), work),
                       (depth, ("ao_raw", "storage")), timed=self.profile)]
         src = "ao_raw"
-        for k in range(q.passes):  # ao_raw -> ao_mid -> ao_raw ... (-> ao at full resolution)
+        fused = int(self.fuse and q.scale > 1)  # (the upsample runs the last pass)
+        for k in range(q.passes - fused):  # ao_raw -> ao_mid -> ao_raw ... (-> ao at full resolution)
             final = k == q.passes - 1
             dst = "ao" if final and q.scale == 1 else ("ao_raw" if src == "ao_mid" else "ao_mid")
-            steps.append(Step(f"ao_denoise{k}", self._dispatch(
-                "ao_denoise", push(int(final), int(src == "ao_mid")), set0, dset, work),
-                both, timed=self.profile))
+            steps.append(Step(f"ao_denoise{k}", run(
+                "ao_denoise", push(int(final), int(src == "ao_mid")), work), both,
+                timed=self.profile))
             src = dst
         if q.scale > 1:
-            steps.append(Step("ao_upsample", self._dispatch(
-                "ao_upsample", push(1, int(src == "ao_mid")), set0, dset, extent),
-                both, timed=False))
+            steps.append(Step("ao_upsample", run(
+                "ao_upsample", push(1, int(src == "ao_mid"), fused), extent), both, timed=False))
         steps[-1] = Step("ao", steps[-1].record, steps[-1].uses, timed=timed)
         if copy_out:
             steps.append(Step("ao_output", lambda cmd: _copy_image(cmd, image, resources, extent),
                               (("ao", "transfer_src"), ("out_ao", "transfer_dst")), timed=False))
         return steps
 
+    def _resources(self, resources: dict[str, Any], frame_index: int) -> Image:
+        """"ao" (the slot's), "ao_raw", "ao_mid" into `resources`, every layer; the slot's."""
+        image, _, view = self.images[frame_index]
+        resources["ao"] = ImageResource(image.handle, view=view.handle, layers=self.layers)
+        for name, (img, _, v) in zip(("ao_raw", "ao_mid"), self.work, strict=True):
+            resources[name] = ImageResource(img.handle, view=v.handle, layers=self.layers)
+        return image
+
     def _dispatch(self, name: str, push: np.ndarray, set0: Any, dset: Any,
-                  size: tuple[int, int]) -> Any:
+                  size: tuple[int, int, int]) -> Any:
         pipe = self._kernel(name, push.nbytes)
 
         def record(cmd: Any) -> None:
@@ -249,7 +306,7 @@ class AoImages:
             cmd.bind_set(0, set0)
             cmd.bind_set(1, dset)
             cmd.push(push)
-            cmd.dispatch(*groups((*size, 1), AO_GROUP))
+            cmd.dispatch(*groups(size, AO_GROUP))
         return record
 
     # --- kernels and sets -----------------------------------------------------------------
@@ -274,10 +331,15 @@ class AoImages:
                                                              "nearest", False, 1.0))
         return self._sampler
 
-    def _set(self, depth_view: Any, frame_index: int) -> Any:
-        """The kernels' set 1 for a target's depth view and a slot's "ao" image."""
-        key = (int(self.device.vk.ffi.cast("uintptr_t", depth_view)), frame_index)
-        if key not in self._sets:
+    def _set(self, depth_view: Any, frame_index: int, generation: int = 0,
+             layered: bool = False) -> Any:
+        """The kernels' set 1 for a target's depth view and a slot's "ao" image. A set made
+        for another generation of the target named a view since destroyed (a recreated
+        swapchain's; the new one may have its handle value): made anew (the old one stays
+        allocated until the images are next fitted: a few sets a window resize). `layered`:
+        the layered kernels' (array views of the images; `depth_view` an array's)."""
+        key = (int(self.device.vk.ffi.cast("uintptr_t", depth_view)), frame_index, layered)
+        if key not in self._sets or self._sets[key][1] != generation:
             layout = self._set_layout()
             if not self._pools or self._free == 0:
                 self._pools.append(DescriptorPool(self.device, [(layout, _SETS_PER_POOL)]))
@@ -286,12 +348,13 @@ class AoImages:
             self._free -= 1
             writer = DescriptorWriter(self.device)
             writer.sampler(dset, 0, _Handle(depth_view), self._depth_sampler())
-            writer.storage_image(dset, 1, self.work[0][1])
-            writer.storage_image(dset, 2, self.work[1][1])
-            writer.storage_image(dset, 3, self.images[frame_index][1])
+            v = 2 if layered else 1
+            writer.storage_image(dset, 1, self.work[0][v])
+            writer.storage_image(dset, 2, self.work[1][v])
+            writer.storage_image(dset, 3, self.images[frame_index][v])
             writer.update()
-            self._sets[key] = dset
-        return self._sets[key]
+            self._sets[key] = (dset, generation)
+        return self._sets[key][0]
 
     def forget(self, depth_view: Any) -> None:
         """Drop the sets naming `depth_view` (a target's, about to be destroyed: a later view
@@ -301,8 +364,9 @@ class AoImages:
             del self._sets[key]
 
     def _destroy_images(self) -> None:
-        for image, view in [*self.images, *self.work]:
-            view.destroy()
+        for image, *views in [*self.images, *self.work]:
+            for view in views:
+                view.destroy()
             image.destroy()
         self.images, self.work, self._sets = [], [], {}
         for pool in self._pools:
@@ -311,6 +375,8 @@ class AoImages:
 
     def destroy(self) -> None:
         self._destroy_images()
+        self._stand_in[1].destroy()
+        self._stand_in[0].destroy()
         for pipe in self._kernels.values():
             pipe.destroy()
         self._kernels.clear()
@@ -341,8 +407,9 @@ def prepare_ao(ao: AoImages, recorder: Any, options: RenderOptions, target: Any,
     its size: rare (a new size), so the device is waited for and the recordings that name
     the old images are dropped."""
     spec = ao_spec(options, target, scene_radius, output)
-    if spec is not None and ao.stale(target.extent):
+    layers = getattr(target, "layers", 1)  # (a layered batch's)
+    if spec is not None and ao.stale(target.extent, layers):
         ao.device.wait_idle()
         recorder.free()
-        ao.fit(target.extent)
+        ao.fit(target.extent, layers)
     return spec

@@ -26,6 +26,7 @@ camera's depth range; thousands of cameras cannot each have theirs).
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -40,11 +41,12 @@ from vkpbr.gpu.device import Device
 from vkpbr.gpu.frames import Frame, FrameRing
 from vkpbr.gpu.graph import BufferResource, Rendering, Step
 from vkpbr.render import layouts as L
+from vkpbr.render.ao import PREPASS_ROWS, AoSpec
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.deform import DEFORMED_RADIUS, UNBOUNDED_RADIUS
 from vkpbr.render.frames import FrameSlot
 from vkpbr.render.gpu_scene import Draw, GpuScene
-from vkpbr.render.passes import PassContext, record_passes
+from vkpbr.render.passes import PASSES, PassContext, record_pass, record_passes
 from vkpbr.render.recorder import FrameRecorder
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.render.steps import FrameSpec, FrameSteps
@@ -55,6 +57,7 @@ __all__ = ["BatchViews", "draw_spheres", "MAX_LAYERS"]
 
 MAX_LAYERS = 2048  # views per chunk at most (every device's array-layer limits allow 256+)
 _COMMAND_BYTES = 20  # VkDrawIndexedIndirectCommand
+_SHADING = tuple(p.name for p in PASSES if not p.prepass)  # (after GTAO's depth pre-pass)
 
 
 def draw_spheres(scene: Scene, draws: list[Draw]) -> np.ndarray:
@@ -239,14 +242,16 @@ class BatchViews:
     def command_buffer(self, target: BatchTarget, frame: Frame, views: int, tbn: L.TbnMode,
                        alpha_mask: bool, plan: ShadowPlan, groups: tuple, prepass: bool,
                        redraw: tuple[range, ...] | None = None, worlds: tuple | None = None,
-                       extra: dict[str, Any] | None = None) -> Commands:
+                       extra: dict[str, Any] | None = None, ao: AoSpec | None = None
+                       ) -> Commands:
         """The batch's commands (the layered batch's path, render/paths.py; recorded on first
         use): `groups` from write_blend_groups; `redraw`: which shadow entries are drawn
         (ShadowMaps.stale); `worlds`: the views read their worlds' draw records (the key of
         what the worlds' steps depend on, render/worlds.py); `extra`: groups made elsewhere
-        (the worlds' kernel)."""
+        (the worlds' kernel); `ao`: each chunk's GTAO (render/ao.py) between a depth pre-pass
+        and its passes."""
         spec = FrameSpec("layered_batch", tbn, alpha_mask, plan, redraw,
-                         batch=(views, groups, prepass, self.generation, worlds))
+                         batch=(views, groups, prepass, self.generation, worlds), ao=ao)
         on = worlds is not None
 
         def chunks(fs: FrameSteps) -> list[Step]:
@@ -289,14 +294,40 @@ class BatchViews:
                 index_buffer=gs.index_buffer, prepass=prepass, shadow_set=fs.shadow_set,
                 indirect=self.commands, indirect_base=chunk * self.draw_count,
                 views=(chunk * c, n), blend_groups=groups[chunk])
-            rendering = Rendering("color", "depth", target.clear_color, 0.0, layers=target.layers)
-            steps.append(Step(f"chunk{chunk}", lambda cmd, ctx=ctx: record_passes(cmd, ctx),
-                              (("commands", "indirect"), ("visible", "vertex_read")),
-                              rendering, timed=False))
+            if fs.spec.ao is not None:
+                steps += self._ao_chunk_steps(fs, target, ctx, tbn, chunk, n)
+            else:
+                rendering = Rendering("color", "depth", target.clear_color, 0.0,
+                                      layers=target.layers)
+                steps.append(Step(f"chunk{chunk}", lambda cmd, ctx=ctx: record_passes(cmd, ctx),
+                                  (("commands", "indirect"), ("visible", "vertex_read")),
+                                  rendering, timed=False))
             last = chunk == chunks - 1
             steps.append(target.chunk_copy_step("views" if last else f"chunk{chunk}_copy",
                                                 chunk, n, timed=last))
         return steps
+
+    def _ao_chunk_steps(self, fs: FrameSteps, target: BatchTarget, ctx: PassContext,
+                        tbn: L.TbnMode, chunk: int, n: int) -> list[Step]:
+        """A chunk with ambient occlusion, as the fragment path's frame (paths.py
+        "forward_outputs"): the depth of every layer (render/ao.py PREPASS_ROWS, a layered
+        rendering), GTAO on every layer in one dispatch of each kernel, then the passes over
+        that depth (testing it, writing none) reading their layer's GTAO."""
+        reads = (("commands", "indirect"), ("visible", "vertex_read"))
+        pre = dataclasses.replace(ctx, pipeline=lambda p: self.recorder.pipeline(
+            target, tbn, p, False, batch=True))
+        depth = Rendering("color", "depth", target.clear_color, 0.0, layers=target.layers)
+        steps = [Step(f"chunk{chunk}_depth", lambda cmd: [record_pass(cmd, pre, p)
+                                                          for p in PREPASS_ROWS],
+                      reads, depth, timed=False)]
+        steps += self.recorder.ao.steps(fs.resources, ctx.frame_sets[0], fs.frame_index,
+                                        fs.spec.ao, target.extent, None, False, False,
+                                        layered=(chunk * self.chunk_views, n))
+        over = dataclasses.replace(ctx, prepass=True, pipeline=lambda p: self.recorder.pipeline(
+            target, tbn, p, True, batch=True))
+        shade = Rendering("color", "depth", target.clear_color, None, layers=target.layers)
+        return [*steps, Step(f"chunk{chunk}", lambda cmd: record_passes(cmd, over, _SHADING),
+                             (*reads, ("ao", "sampled")), shade, timed=False)]
 
     def free_recordings(self) -> None:
         """The batches' recordings (they name these buffers and sets); the frames' stay."""

@@ -25,7 +25,7 @@ from vkpbr.errors import UsageError
 from vkpbr.gpu.batch_target import BatchTarget
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH
 from vkpbr.render import layouts as L
-from vkpbr.render.ao import prepare_ao
+from vkpbr.render.ao import ao_pixel_bytes, prepare_ao
 from vkpbr.render.batch import MAX_LAYERS, BatchViews
 from vkpbr.render.camera import linear_depth
 from vkpbr.render.cuda_order import CudaOrder
@@ -113,7 +113,8 @@ class BatchPath:
                out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
         """Colour (and depth) of every view, in submissions of `per_submission` views; the
         colour into `out` where given."""
-        per = self.per_submission(size, linear, depth, batch)
+        ao = ao_pixel_bytes(opts, len(self.parts.slots))  # (GTAO's images, each chunk's layers)
+        per = self.per_submission(size, linear, depth, batch, 4 + ao)
         self._submissions = 0
         colors, depths = [], []
         for start in range(0, len(views), per):
@@ -139,7 +140,8 @@ class BatchPath:
         w, h = batch_draw_size(views, (int(size[0]), int(size[1])), most)
         # The atlas fits the image size limit, and its rasteriser buffer (8 bytes a pixel) one
         # storage-buffer binding; sized for this call's views, not more.
-        extra = COMPUTE_BYTES + batch_post_bytes(opts, views, size, (w, h))
+        extra = (COMPUTE_BYTES + batch_post_bytes(opts, views, size, (w, h))
+                 + ao_pixel_bytes(opts, len(self.parts.slots)))
         per = min(self.per_submission(size, linear, depth, batch, extra),
                   (most // w) * (most // h), int(limits.maxStorageBufferRange) // (8 * w * h),
                   len(views))
@@ -232,7 +234,8 @@ class BatchPath:
                                        cuda=True)[0]
         import torch
 
-        per = self.per_submission(size, linear, False, batch)
+        per = self.per_submission(size, linear, False, batch,
+                                  4 + ao_pixel_bytes(opts, len(self.parts.slots)))
         self._submissions = 0
         parts = [self._submit(_slice(views, s, min(s + per, len(views))), size, lights, opts,
                               linear, False, cuda=True, start=s)[0]
@@ -283,12 +286,14 @@ class BatchPath:
         target = self._target(size, layers, n, linear, depth, cuda)
         self._t_start = time.perf_counter()
         bv = self._views(n, layers)
-        frame, plan, terms = self._begin(views, size, lights, opts, linear, start=start)
+        ao = prepare_ao(p.ao, p.recorder, opts, target, p.bounds.radius, False)
+        frame, plan, terms = self._begin(views, size, lights, opts, linear,
+                                         ao=ao is not None and ao.shading, start=start)
         groups = bv.write_blend_groups(p.blend.orders(views.eye))
         self._run(frame, plan, opts, lambda redraw: bv.command_buffer(
             target, frame, n, opts.tbn, opts.alpha_mask, plan, groups, p.paths.prepass_for(target),
             redraw, self._world_key() if self.world_call is not None and self.world_call.poses else None,
-            self._world_groups()),
+            self._world_groups(), ao),
             (lambda: self._cuda_wait(target.color_readback)) if cuda else None)
         t_read = time.perf_counter()
         color = self._cuda_view(target, n, linear) if cuda else target.read_color(n, into)

@@ -65,6 +65,13 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("ao_gtao.comp.spv", "ao_gtao.comp"),
     Variant("ao_denoise.comp.spv", "ao_denoise.comp"),
     Variant("ao_upsample.comp.spv", "ao_upsample.comp"),
+    # ... and their layered batch's builds (a view a layer of array images).
+    *(Variant(f"{n}_layers.comp.spv", f"{n}.comp", (("AO_LAYERED", 1),))
+      for n in ("ao_gtao", "ao_denoise", "ao_upsample")),
+    # Its depth pre-pass's masked rows where a frame has no visibility image (MSAA, windows).
+    Variant("pbr_depth_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1), ("DEPTH_ONLY", 1))),
+    Variant("pbr_batch_depth_mask.frag.spv", "pbr.frag",
+            (("ALPHA_MASK", 1), ("DEPTH_ONLY", 1), ("BATCH", 1))),
     # Shadow-map passes (render/shadows.py): depth only, or cut out by the base colour's alpha.
     Variant("shadow_opaque.vert.spv", "shadow.vert", (("ALPHA_MASK", 0),)),
     Variant("shadow_mask.vert.spv", "shadow.vert", (("ALPHA_MASK", 1),)),

@@ -159,7 +159,8 @@ class FramePath:
         redraw = p.shadow_frames.stale(slot.index, plan, options.alpha_mask)
         compute = p.paths.uses_compute(drawn, options)
         path = choose_path(compute, compute and p.paths.uses_compute_raster(options, drawn),
-                           COPY_OUTPUTS in copy or ao is not None)
+                           COPY_OUTPUTS in copy or ao is not None,
+                           ao is not None and not getattr(drawn, "compute", False))
         variant = p.lighting.shade_variant(options, ao is not None and ao.shading)
         return FrameSpec(path, options.tbn, options.alpha_mask, plan, redraw, copy,
                          transmission, variant, id(overlay), post=post,

@@ -523,7 +523,8 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
         (5, "sampler", ("fragment", "compute"), "opaque_copy"),
         # The frame's screen-space ambient occlusion (render/ao.py): GTAO's visibility a
         # pixel, read by texelFetch at the shaded pixel; a 1x1 stand-in until frames have it.
-        (6, "sampler", ("fragment", "compute"), "ao_map"),
+        # An array: the layered batch's views are its layers (frames read layer 0).
+        (6, "sampler2DArray", ("fragment", "compute"), "ao_map"),
     ),
     # Shadows (render/shadows.py ShadowMaps owns the resources; declared in GLSL by hand in
     # shaders/shadow_data.glsl and shadow_sampling.glsl: ShadowData is a header then matrices).

@@ -16,6 +16,7 @@ Groups:
                    target (the rows between one compute step and the next share a rendering)
   visibility       the opaque and masked rows drawn into the visibility image
   raster           the compute rasteriser's kernels instead (render/compute_path.py)
+  ao_prepass       the depth pre-pass GTAO reads where a frame has no visibility image
   ao               screen-space ambient occlusion from the depth (render/ao.py: GTAO and its
                    denoise), before the shading that reads it; empty in frames without it
   classify, shading, outputs, background_compute   the compute path's kernels
@@ -48,6 +49,12 @@ PATHS: dict[str, tuple[str, ...]] = {
     # pre-pass leaves out), then the fragment passes shade over its depth (their pre-pass).
     "forward_outputs": (*_FRAME_HEAD, "outputs_clear", "visibility", "ao", "classify", "outputs",
                         *_FRAGMENT_PASSES, "post", "overlay", "finish"),
+    # The fragment path with ambient occlusion where the target has no visibility image
+    # (multisampled frames, windows): a depth pre-pass (alpha-masked rows included) whose
+    # single-sample depth GTAO reads, then the passes (over that depth; a multisampled frame
+    # keeps no samples between renderings: its passes draw their depth again).
+    "forward_ao": (*_FRAME_HEAD, "ao_prepass", "ao", *_FRAGMENT_PASSES, "post", "overlay",
+                   "finish"),
     # The compute path: coverage by the raster units, shading in compute shaders.
     "compute": (*_FRAME_HEAD, "outputs_clear", "visibility", "ao", *_SHADE_COMPUTE,
                 *_AFTER_SHADING),
@@ -76,13 +83,16 @@ STEP_NAMES = ("deform", "worlds", "shadows", "transmission", "cull", "prepass_op
               "classify", "shading", "outputs", "background", "blend", "views", "copy")
 
 
-def choose_path(compute: bool, raster: bool, outputs: bool) -> str:
+def choose_path(compute: bool, raster: bool, outputs: bool, ao_prepass: bool = False) -> str:
     """The path of a single frame: the compute path (`raster`: with the compute rasteriser)
     where `compute`, else the fragment path (through a visibility pass when it makes dataset
-    `outputs` or ambient occlusion). FramePaths.uses_compute and uses_compute_raster (render/path_choice.py)
-    decide the two flags."""
+    `outputs` or ambient occlusion; through a depth pre-pass for ambient occlusion where
+    `ao_prepass`: the target has no visibility image). FramePaths.uses_compute and
+    uses_compute_raster (render/path_choice.py) decide the two flags."""
     if compute:
         return "compute_raster" if raster else "compute"
+    if ao_prepass:
+        return "forward_ao"
     return "forward_outputs" if outputs else "forward"
 
 

@@ -19,7 +19,7 @@ from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.graph import Rendering, Step
 from vkpbr.gpu.target import COPY_DEPTH, COPY_OUTPUTS
 from vkpbr.render import layouts as L
-from vkpbr.render.ao import AoSpec
+from vkpbr.render.ao import PREPASS_ROWS, AoSpec
 from vkpbr.render.compute_path import GENERAL_SHADING, ShadeVariant
 from vkpbr.render.lens_cube import store_only
 from vkpbr.render.passes import PASSES, PassContext, PassSpec, classify, record_pass
@@ -286,7 +286,22 @@ class FrameSteps:
         # its visibility pass (paths.STEP_NAMES' one order).
         return self.r.ao.steps(self.resources, self.set0, self.frame_index, self.spec.ao,
                                self.target.extent, self.spec.tiles, copy_out,
-                               self.spec.path.startswith("compute"))
+                               self.spec.path.startswith("compute"), self.target.generation)
+
+    def _ao_prepass(self) -> list[Step]:
+        """The depth GTAO reads where the frame has no visibility image (render/ao.py
+        PREPASS_ROWS: opaque rows depth-only, masked rows alpha-tested), in a rendering of
+        its own whose depth is stored (a multisampled one's resolved: sample 0). A
+        single-sample frame's passes then draw over it; a multisampled one's draw their depth
+        again (its samples are not kept between renderings)."""
+        if self.spec.ao is None:
+            return []
+        ctx = self._context(visibility=False, prepass=False)
+        rendering = Rendering("color", "depth", self.target.clear_color, 0.0)
+        self._close_rendering()
+        self._depth_written = self.target.samples == 1
+        return [Step(p.name, _pass_recorder(ctx, p), rendering=rendering, timed=False)
+                for p in PREPASS_ROWS if p.draw_class in self.classes or p is PREPASS_ROWS[0]]
 
     def _outputs(self) -> list[Step]:
         if COPY_OUTPUTS not in self.spec.copy:

@@ -15,6 +15,9 @@
 // The pixel being shaded (pbr.frag: gl_FragCoord; shade.comp: its pixel of the target or
 // the batch's atlas), where the frame's GTAO is read.
 ivec2 s_pixel = ivec2(0);
+// Its layer of ao_map (an array: the layered batch's views are its layers; frames and the
+// compute batch's atlas use layer 0): pbr.frag's BATCH build sets its view's.
+int s_ao_layer = 0;
 
 // The frame's GTAO visibility at s_pixel: 1 without it (LIGHTING_AO off), for blended
 // surfaces (GTAO saw what is behind them) and in the transmission's copy (another size).
@@ -23,7 +26,7 @@ float screen_occlusion(uint lighting_flags, uint material_flags) {
     return 1.0;
 #else
     if ((lighting_flags & LIGHTING_AO) == 0u || (material_flags & MATERIAL_BLEND) != 0u) return 1.0;
-    return texelFetch(ao_map, s_pixel, 0).r;
+    return texelFetch(ao_map, ivec3(s_pixel, s_ao_layer), 0).r;
 #endif
 }
 

@@ -12,10 +12,25 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;  // render/ao.p
 layout(set = 0, binding = 0, std140) readonly buffer Views {
     ViewRecord views[];
 };
+// AO_LAYERED = 1: the layered batch's build (render/batch.py): its views are the layers of
+// array images, a view a layer, the dispatch's z the layer; else one 2D image (a frame, or a
+// compute batch's atlas of tiles). AO_AT(p) addresses pixel p in the invocation's layer.
+#ifndef AO_LAYERED
+#define AO_LAYERED 0
+#endif
+#if AO_LAYERED
+layout(set = 1, binding = 0) uniform sampler2DArray depth_map;
+layout(set = 1, binding = 1, r32ui) uniform uimage2DArray ao_raw;
+layout(set = 1, binding = 2, r32ui) uniform uimage2DArray ao_mid;
+layout(set = 1, binding = 3, r32f) uniform image2DArray ao_out;
+#define AO_AT(p) ivec3((p), int(gl_GlobalInvocationID.z))
+#else
 layout(set = 1, binding = 0) uniform sampler2D depth_map;  // the target's depth (reversed-Z)
 layout(set = 1, binding = 1, r32ui) uniform uimage2D ao_raw;  // GTAO's term, packed
 layout(set = 1, binding = 2, r32ui) uniform uimage2D ao_mid;  // after the first denoise pass
 layout(set = 1, binding = 3, r32f) uniform image2D ao_out;  // the visibility shading reads
+#define AO_AT(p) (p)
+#endif
 
 layout(push_constant) uniform Ao {
     uint tile_w;  // a view's pixels: the frame's size, or a batch's tile (column-major tiles)
@@ -30,14 +45,26 @@ layout(push_constant) uniform Ao {
     uint read_mid;  // ao_denoise.comp, ao_upsample.comp: read ao_mid (else ao_raw)
     uint scale;  // 1: GTAO at full resolution; 2: at half (a pixel of the working images per
                  // 2 x 2 of the frame's; ao_upsample.comp makes the full-resolution "ao")
+    uint first_view;  // the view of the first tile (AO_LAYERED: of layer 0)
+    uint fused;  // ao_upsample.comp: run the last denoise pass on the pixels it blends
 } pc;
+
+// The view a tile (and, layered, the invocation's layer) stands for.
+uint ao_view_of(uint tile) {
+#if AO_LAYERED
+    return pc.first_view + tile + gl_GlobalInvocationID.z;
+#else
+    return pc.first_view + tile;
+#endif
+}
 
 // The view pixel p is drawn through, and its tile's first pixel; false past the last view.
 bool ao_view(ivec2 p, out uint view, out ivec2 lo) {
     uvec2 t = uvec2(p) / uvec2(pc.tile_w, pc.tile_h);
-    view = t.x * pc.rows + t.y;
+    uint tile = t.x * pc.rows + t.y;
+    view = ao_view_of(tile);
     lo = ivec2(t * uvec2(pc.tile_w, pc.tile_h));
-    return t.y < pc.rows && view < pc.views;
+    return t.y < pc.rows && tile < pc.views;
 }
 
 ivec2 ao_clamp(ivec2 p, ivec2 lo) {
@@ -54,10 +81,11 @@ ivec2 ao_work_tile() {
 // The view working pixel w belongs to, its tile's first working pixel and first frame pixel.
 bool ao_work_view(ivec2 w, out uint view, out ivec2 wlo, out ivec2 lo) {
     uvec2 t = uvec2(w) / uvec2(ao_work_tile());
-    view = t.x * pc.rows + t.y;
+    uint tile = t.x * pc.rows + t.y;
+    view = ao_view_of(tile);
     wlo = ivec2(t) * ao_work_tile();
     lo = ivec2(t * uvec2(pc.tile_w, pc.tile_h));
-    return t.y < pc.rows && view < pc.views;
+    return t.y < pc.rows && tile < pc.views;
 }
 
 ivec2 ao_work_clamp(ivec2 w, ivec2 wlo) {
@@ -73,7 +101,7 @@ ivec2 ao_frame_pixel(ivec2 w, ivec2 wlo, ivec2 lo) {
 // Distance along the view axis at pixel p: znear / depth (reversed-Z, infinite far plane);
 // +inf where nothing was drawn (depth 0).
 float ao_view_z(ivec2 p, float znear) {
-    float d = texelFetch(depth_map, p, 0).r;
+    float d = texelFetch(depth_map, AO_AT(p), 0).r;
     return d > 0.0 ? znear / d : 1.0 / 0.0;
 }
 

@@ -145,13 +145,13 @@ void main() {
     ivec2 wp = ivec2(gl_GlobalInvocationID.xy);  // the working pixel
     uint view;
     ivec2 wlo, lo;
-    if (any(greaterThanEqual(wp, imageSize(ao_raw))) || !ao_work_view(wp, view, wlo, lo)) return;
+    if (any(greaterThanEqual(wp, imageSize(ao_raw).xy)) || !ao_work_view(wp, view, wlo, lo)) return;
     ivec2 p = ao_frame_pixel(wp, wlo, lo);  // the frame's pixel it stands for
     float znear = views[view].eye_near.w;
     vec4 intr = views[view].intrinsics;
     float z = ao_view_z(p, znear);
     if (isinf(z)) {  // nothing drawn: unoccluded, an edge all round
-        imageStore(ao_raw, wp, uvec4(ao_pack(1.0, 0u)));
+        imageStore(ao_raw, AO_AT(wp), uvec4(ao_pack(1.0, 0u)));
         return;
     }
     float zl = neighbour_z(p + ivec2(-1, 0), lo, znear);
@@ -186,5 +186,5 @@ void main() {
     // Nudged towards the eye against depth imprecision (XeGTAO's 0.99999 for 32-bit depths).
     vec3 center = ao_view_pos(pix, z * 0.99999, intr);
     float v = dot(n, n) > 0.0 ? gtao(p, lo, uvec2(wp - wlo), center, n, znear, intr) : 1.0;
-    imageStore(ao_raw, wp, uvec4(ao_pack(v, pack_edges(edges))));
+    imageStore(ao_raw, AO_AT(wp), uvec4(ao_pack(v, pack_edges(edges))));
 }

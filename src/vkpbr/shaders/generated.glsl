@@ -335,7 +335,7 @@ layout(set = 2, binding = 2) uniform samplerCube env_specular;
 layout(set = 2, binding = 3) uniform samplerCube env_irradiance;
 layout(set = 2, binding = 4) uniform sampler2D brdf_lut;
 layout(set = 2, binding = 5) uniform sampler2D opaque_copy;
-layout(set = 2, binding = 6) uniform sampler2D ao_map;
+layout(set = 2, binding = 6) uniform sampler2DArray ao_map;
 #if COMPUTE_SHADING  // the compute path's own set (render/compute_path.py)
 const uint COMPUTE_SET = 4u;
 layout(set = 4, binding = 0) writeonly uniform image2D out_image;

@@ -5,6 +5,8 @@
 // ALPHA_MASK = 1 builds the masked-material variant that discards below the cutoff (report 1.3).
 // VISIBILITY = 1 builds the compute path's visibility pass (render/compute_path.py): coverage
 // decided exactly as here (the same alpha test), writing (draw index + 1, primitive index).
+// DEPTH_ONLY = 1 (with ALPHA_MASK) builds the masked rows of the ambient occlusion's depth
+// pre-pass (render/ao.py, frames without a visibility image): the same alpha test, no output.
 #extension GL_GOOGLE_include_directive : require
 #include "generated.glsl"
 
@@ -22,6 +24,7 @@ layout(location = 7) flat in uint v_view;
 
 #if VISIBILITY
 layout(location = 0) out uvec2 out_visibility;
+#elif DEPTH_ONLY
 #else
 layout(location = 0) out vec4 out_color;
 #endif
@@ -33,6 +36,7 @@ layout(location = 0) out vec4 out_color;
 void main() {
 #if BATCH
     view_index = v_view;
+    s_ao_layer = int(views[v_view].layer);  // the layer it draws into (render/ao.py)
 #endif
     opaque_zero = uint(gl_FragCoord.x < 0.0);
     s_world_pos = v_world_pos;
@@ -44,7 +48,9 @@ void main() {
     s_front_facing = gl_FrontFacing;
     s_model_scale = v_model_scale;
     s_pixel = ivec2(gl_FragCoord.xy);
-#if VISIBILITY
+#if DEPTH_ONLY
+    if (surface_base_color().a < MAT.alpha_cutoff) discard;
+#elif VISIBILITY
 #if ALPHA_MASK
     if (surface_base_color().a < MAT.alpha_cutoff) discard;
 #endif

@@ -1,0 +1,101 @@
+"""GTAO (render/ao.py) on multisampled frames (paths.py "forward_ao": a depth pre-pass whose
+resolved depth -- each pixel's sample 0 -- GTAO reads, then the passes). The other paths:
+the layered batch in test_ao.py (test_forward_and_compute_paths_agree: its views equal
+render(pipeline="forward") bit for bit, GTAO on) and test_batch.py (B=7, the chart's masked
+and blended materials); windows in tests/viewer/test_viewer.py (a window's GTAO frame
+equals `render`'s bit for bit).
+
+On test_ao.py's box corner (64 x 48, radius 0.5, `gtao`), lavapipe, off the edge band:
+
+    msaa 4 "ao" view against    mean     p95      bound (mean, p95)
+    the compute path's `ao`     0.0068   0.033    0.01, 0.045
+    the ray-cast reference      0.026    0.142    0.035, 0.16  (compute path: 0.023, 0.118)
+
+The multisampled frame's GTAO differs from the compute path's by its depths only: sample 0
+lies (-1/8, -3/8) of a pixel from the centre GTAO reconstructs it at, so the depth image is
+the scene shifted by that fraction of a pixel -- against the reference, cast through the
+pixels' centres, the creases move by it (the p95 rises there; the mean by 0.003).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+import pytest
+from ao_reference import first_hits, scene_triangles, visibility
+from test_ao import RADIUS, H, W, corner, edge_band
+
+from vkpbr.render import ao as AO
+
+
+@pytest.fixture(scope="module")
+def renderers() -> Iterator[dict[int, object]]:
+    """The corner with 1 and 4 samples a pixel (validation and synchronization validation
+    on: any error fails at teardown)."""
+    from vkpbr.render.renderer import Renderer
+
+    scene, _ = corner()
+    made = {n: Renderer(scene, validation=True, sync_validation=True, msaa=n) for n in (1, 4)}
+    yield made
+    for r in made.values():
+        instance = r.device.instance
+        r.close()
+        assert instance.errors == [], instance.errors[:3]
+
+
+def test_msaa_frames_take_gtao(renderers) -> None:  # noqa: ANN001
+    """A 4x frame's GTAO (its "ao" view, float) against the compute path's `ao` and the ray
+    cast reference off the edge band; and its image-based light occluded as the compute path
+    does (the ibl-diffuse view is the one without GTAO times GTAO's multi-bounce)."""
+    scene, cam = corner()
+    kw = {"camera": cam, "size": (W, H), "ao_radius": RADIUS, "linear": True}
+    msaa = renderers[4].render(view="ao", **kw)[..., 0]
+    out = renderers[1].render(camera=cam, size=(W, H), outputs=("ao", "depth"),
+                              pipeline="compute", ao_radius=RADIUS)
+    tris = scene_triangles(scene)
+    p, n, hit = first_hits(cam, W, H, tris)
+    keep = hit & ~edge_band(out["depth"])
+    d = np.abs(msaa - out["ao"])[keep]
+    ref = visibility(p[keep], n[keep], tris, RADIUS, AO.FALLOFF)
+    e = np.abs(msaa[keep] - ref)
+    print(f"msaa vs compute: mean {d.mean():.4f} p95 {np.percentile(d, 95):.4f}; "
+          f"vs reference: mean {e.mean():.4f} p95 {np.percentile(e, 95):.4f}")
+    assert d.mean() <= 0.01 and np.percentile(d, 95) <= 0.045
+    assert e.mean() <= 0.035 and np.percentile(e, 95) <= 0.16
+    on = renderers[4].render(view="ibl-diffuse", **kw)[..., 0]
+    off = renderers[4].render(view="ibl-diffuse", ao="off", **kw)[..., 0]
+    a, b, c = 2.0404 - 0.3324, -4.7951 + 0.6417, 2.7552 + 0.6903
+    bounce = np.maximum(msaa, ((msaa * a + b) * msaa + c) * msaa)
+    # (two pixels off the band: a pixel's samples may straddle a silhouette its 4-neighbours'
+    # depths do not show, where the resolve averages lit and unlit samples)
+    inner = keep.copy()
+    for axis in (0, 1):
+        for shift in (1, -1):
+            inner &= np.roll(keep, shift, axis)
+    lit = inner & (off > 0.05)
+    assert lit.mean() > 0.5 and (msaa[lit] < 0.9).any()
+    np.testing.assert_allclose(on[lit], (off * bounce)[lit], rtol=2e-3, atol=2e-3)
+
+
+def test_the_upsample_may_run_the_last_denoise_pass(renderers) -> None:  # noqa: ANN001
+    """AoImages.fuse (benchmarks/bench_ao.py --fuse): the half-resolution presets' last
+    denoise pass run by the upsample gives the same `ao` but for the 16 bits the working
+    image keeps between them (measured 7.7e-6 on the corner and the sphere; their errors
+    against the reference unchanged to 4 decimals), with no kernel of its own."""
+    r, (_, cam) = renderers[1], corner()
+    kw = {"camera": cam, "size": (W, H), "outputs": ("ao",), "pipeline": "compute",
+          "ao_radius": RADIUS}
+    apart = r.render(**kw)["ao"]
+    r.device.wait_idle()
+    r.parts.recorder.free()  # (its recordings run the pass apart)
+    r.parts.ao.fuse, r.parts.ao.profile = True, True
+    try:
+        fused = r.render(**kw)["ao"]
+        assert not any(k.startswith("ao_denoise") for k in r.last_stats.pass_ms)
+    finally:
+        r.device.wait_idle()
+        r.parts.recorder.free()
+        r.parts.ao.fuse, r.parts.ao.profile = False, False
+    assert (apart < 0.9).any()
+    assert np.abs(fused - apart).max() <= 2.0 / 65535.0
