@@ -9,8 +9,8 @@ scene rendered in-process.
 
 Part 1, one scene (default: the sample models' Sponza), each row a fresh process with its own
 cache folder ($VKPBR_CACHE_DIR) in this order:
-  cold                  nothing cached: the glTF parsed, pipelines compiled, auto's frame path
-                        measured (on a GPU), the BRDF table made
+  cold                  nothing cached: the glTF parsed, pipelines compiled, the BRDF table
+                        made; auto takes the rule (it measures only after 10 s of frames)
   warm pipelines        the same folder again: the pipeline cache and frame-path record read
   bake (first)          through the bake cache (`--cache`), which bakes now
   warm bake + pipelines through the bake cache again: everything warm
