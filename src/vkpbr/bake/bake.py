@@ -60,7 +60,6 @@ from .frames import (
 from .tangents import generate_tangents, normalize_safe, orthonormal_tangent, tangent_uv_set
 
 
-
 @functools.cache
 def _meshopt() -> Any:
     """meshoptimizer, optional: a C++ vertex cache optimiser (the bake works, less optimally,
