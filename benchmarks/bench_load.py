@@ -83,7 +83,8 @@ def child(scene: str, size: tuple[int, int], cached: bool) -> dict:
     out = {"import": t_import - t0, "load": t_load - t_import, **renderer.timings,
            "choice": t_choice - t_setup, "first_frame": t_first - t_choice,
            **pipeline_timings(renderer.device), "total": t_first - t_import,
-           "decode_wait": renderer.gpu_scene.decode_wait, "bytecode": _bytecode(),
+           "decode_wait": getattr(renderer.gpu_scene, "decode_wait", float("nan")),
+           "bytecode": _bytecode(),
            "path": renderer.paths.choice.label if renderer.paths.choice else "rule",
            "device_name": renderer.device.info.name}
     renderer.close()
@@ -95,8 +96,8 @@ def _bytecode() -> str:
     binding's 1 MB of source compiled on every start cost 0.2-0.5 s: import and device)."""
     import vulkan
 
-    cached = [Path(m.__cached__).is_file() for m in (vulkan._vulkan, sys.modules[__name__])
-              if getattr(m, "__cached__", None)]
+    mods = (vulkan._vulkan, sys.modules["vkpbr.render.renderer"])
+    cached = [bool(m.__cached__) and Path(m.__cached__).is_file() for m in mods]
     return ("not written (PYTHONDONTWRITEBYTECODE)" if sys.dont_write_bytecode and not all(cached)
             else "cached" if cached and all(cached) else "compiled")
 
