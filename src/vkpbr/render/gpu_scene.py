@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vkpbr.gpu.buffer import Buffer, upload_buffer
+from vkpbr.gpu.buffer import Buffer, upload_buffer, upload_buffers
 from vkpbr.gpu.descriptors import DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, TextureUploader
@@ -271,25 +271,32 @@ class GpuScene:
         self.has_colors = any(m.colors is not None for m in self.scene.meshes)
         optional = (("texcoords1",) if self.has_texcoords1 else ()) + (
             ("colors",) if self.has_colors else ())
-        for name in STREAMS + optional:
-            arrays = [p[name] for p in regions]
-            data = np.concatenate(arrays) if arrays else np.zeros(4, np.uint8)
-            self._add_stream(name, data)
+        uploads = {name: [p[name] for p in regions] or [np.zeros(4, np.uint8)]
+                   for name in STREAMS + optional}
         # Per mesh (normal, tangent, QTangent or None, packed or None) for ensure_streams.
         self._frame_sources: list[tuple] | None = [
             (p["normals"], p["tangents"], p["qtangents"], p["packed_frames"]) for p in regions]
+        if not self.has_colors:
+            # COLOR_0 absent everywhere: one white RGBA16 value, read with stride 0.
+            uploads["colors"] = [np.full(4, 65535, np.uint16)]
+        indices = [np.asarray(m.indices, dtype=np.uint32) for m in self.scene.meshes]
+        # Every stream and the indices through one staging buffer and one submission (storage
+        # too: the compute path reads vertices in its shader, render/compute_path.py).
+        made = upload_buffers(self.device, [(arrays, "vertex|storage", name)
+                                            for name, arrays in uploads.items()]
+                              + [(indices or [np.zeros(3, np.uint32)], "index|storage", "indices")])
+        buffers = dict(zip(uploads, made, strict=False))
+        for name in STREAMS + optional:
+            self.streams[name] = self._own(buffers[name])
+            self.stream_bytes[name] = int(sum(a.nbytes for a in uploads[name]))
         if not self.has_texcoords1:
             # The shader's TEXCOORD_1 input reads the TEXCOORD_0 buffer: an alias, not a copy
             # (not in stream_bytes, owned once).
             self.streams["texcoords1"] = self.streams["texcoords"]
         if not self.has_colors:
-            # COLOR_0 absent everywhere: one white RGBA16 value, read with stride 0.
-            self._add_stream("colors", np.full(4, 65535, np.uint16))
-        indices = [np.asarray(m.indices, dtype=np.uint32) for m in self.scene.meshes]
-        idx = np.concatenate(indices) if indices else np.zeros(3, np.uint32)
-        self.index_buffer = self._own(
-            upload_buffer(self.device, idx, "index|storage", name="indices")
-        )
+            self.streams["colors"] = self._own(buffers["colors"])
+            self.stream_bytes["colors"] = 8
+        self.index_buffer = self._own(made[-1])
         self.vertex_count = int(sum(sizes))
 
     def _add_stream(self, name: str, data: np.ndarray) -> None:
