@@ -9,8 +9,8 @@ scene rendered in-process.
 
 Part 1, one scene (default: the sample models' Sponza), each row a fresh process with its own
 cache folder ($VKPBR_CACHE_DIR) in this order:
-  cold                  nothing cached: the glTF parsed, pipelines compiled, auto's frame path
-                        measured (on a GPU), the BRDF table made
+  cold                  nothing cached: the glTF parsed, pipelines compiled, the BRDF table
+                        made; auto takes the rule (it measures only after 10 s of frames)
   warm pipelines        the same folder again: the pipeline cache and frame-path record read
   bake (first)          through the bake cache (`--cache`), which bakes now
   warm bake + pipelines through the bake cache again: everything warm
@@ -83,10 +83,23 @@ def child(scene: str, size: tuple[int, int], cached: bool) -> dict:
     out = {"import": t_import - t0, "load": t_load - t_import, **renderer.timings,
            "choice": t_choice - t_setup, "first_frame": t_first - t_choice,
            **pipeline_timings(renderer.device), "total": t_first - t_import,
+           "decode_wait": getattr(renderer.gpu_scene, "decode_wait", float("nan")),
+           "bytecode": _bytecode(),
            "path": renderer.paths.choice.label if renderer.paths.choice else "rule",
            "device_name": renderer.device.info.name}
     renderer.close()
     return out
+
+
+def _bytecode() -> str:
+    """Whether this process's modules came from cached bytecode (vkpbr's and the vulkan
+    binding's 1 MB of source compiled on every start cost 0.2-0.5 s: import and device)."""
+    import vulkan
+
+    mods = (vulkan._vulkan, sys.modules["vkpbr.render.renderer"])
+    cached = [bool(m.__cached__) and Path(m.__cached__).is_file() for m in mods]
+    return ("not written (PYTHONDONTWRITEBYTECODE)" if sys.dont_write_bytecode and not all(cached)
+            else "cached" if cached and all(cached) else "compiled")
 
 
 def load_table(scene: Path, size: tuple[int, int], profile: Path | None) -> list[dict]:
@@ -112,13 +125,14 @@ def load_table(scene: Path, size: tuple[int, int], profile: Path | None) -> list
 
 def print_load_table(scene: Path, size: tuple[int, int], rows: list[dict]) -> None:
     print(f"\n### {scene.name} file to first frame at {size[0]}x{size[1]} on {rows[0]['device_name']}"
-          f" (auto: {rows[-1]['path']})\n")
-    print("| row | import | load | device | geometry | textures | other set-up | path choice "
-          "| first frame | pipelines (hits) | pipeline s | **file to first frame** |")
+          f" (auto: {rows[-1]['path']}; bytecode {rows[-1]['bytecode']})\n")
+    print("| row | import | load | device | geometry | textures (decode wait) | other set-up "
+          "| path choice | first frame | pipelines (hits) | pipeline s | **file to first frame** |")
     print("|---|" + "---:|" * 11)
     for r in rows:
         print(f"| {r['row']} | {r['import']:.2f} | {r['load']:.2f} | {r['device']:.2f} | "
-              f"{r['geometry']:.2f} | {r['textures']:.2f} | {r['parts']:.2f} | {r['choice']:.2f} | "
+              f"{r['geometry']:.2f} | {r['textures']:.2f} ({r['decode_wait']:.2f}) | "
+              f"{r['parts']:.2f} | {r['choice']:.2f} | "
               f"{r['first_frame']:.2f} | {r['pipelines_built']} ({r['pipeline_hits']}) | "
               f"{r['pipelines_s']:.2f} | **{r['total']:.2f}** |")
 

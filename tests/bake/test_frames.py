@@ -10,6 +10,7 @@ from hypothesis.extra.numpy import arrays
 from vkpbr.bake.frames import (
     QTANGENT_BIAS,
     frame_angular_error_deg,
+    frame_streams,
     pack_qtangent,
     qtangent_to_tbn,
     tbn_to_qtangent,
@@ -100,3 +101,28 @@ def test_frame_error_sees_handedness() -> None:
     t2[:, 3] *= -1
     np.testing.assert_allclose(frame_angular_error_deg(n, t, n, t2), 180.0, atol=1e-3)
     np.testing.assert_allclose(frame_angular_error_deg(n, t, n, t), 0.0, atol=1e-3)
+
+
+def test_frame_streams_equal_one_call_per_mesh() -> None:
+    """frame_streams (one encode over every mesh, in chunks on threads) is bit for bit the
+    per-mesh calls, a mesh's own QTangents / packed frames kept as they are."""
+    rng = np.random.default_rng(7)
+    sizes = (5, 70_000, 1, 40_000)  # > frames._CHUNK: several threads' shares
+    meshes = [(rng.normal(size=(n, 3)).astype(np.float32),
+               np.concatenate([rng.normal(size=(n, 3)), rng.choice([-1.0, 1.0], (n, 1))], 1)
+               .astype(np.float32)) for n in sizes]
+    qs = [tbn_to_qtangent(n, t) for n, t in meshes]
+    packed = [pack_qtangent(q) for q in qs]
+    own_q = [None, None, qs[2], qs[3] * 2]  # a baked mesh's own are used, not recomputed
+    own_pk = [None, packed[1], None, packed[3] ^ 1]
+    sources = [(n, t, q, pk) for (n, t), q, pk in zip(meshes, own_q, own_pk, strict=True)]
+    want_q = np.concatenate([q if o is None else o for q, o in zip(qs, own_q, strict=True)])
+    want_pk = np.concatenate([pack_qtangent(q) if o is None else o for q, o in
+                              zip([qs[0], qs[1], qs[2], qs[3] * 2], own_pk, strict=True)])
+    for threads in (1, 3):
+        got_q, got_pk = frame_streams(sources, threads=threads)
+        np.testing.assert_array_equal(got_q, want_q)
+        np.testing.assert_array_equal(got_pk, want_pk)
+    got_q, got_pk = frame_streams(sources, packed=False)
+    assert got_pk is None
+    np.testing.assert_array_equal(got_q, want_q)

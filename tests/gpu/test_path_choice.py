@@ -21,7 +21,7 @@ SIZE = (48, 36)
 def _unmeasured(r: Renderer) -> str:
     """`vkpbr info`'s autoFramePath line for `r`'s device with nothing recorded."""
     return "autoFramePath                " + ("forward (CPUs are not measured)" if r.device.info.kind == "cpu"
-                                             else "not measured yet (the first auto frame measures it)")
+                                             else "not measured yet (the rule until a renderer has drawn 10 s)")
 
 
 @pytest.fixture(autouse=True)
@@ -165,3 +165,37 @@ def test_info_ignores_a_hand_edited_record(chart, tmp_path: Path, monkeypatch: p
         {pc.device_key(chart): {"choice": "compute/compute", "gpu_ms": "fast", "size": [1, 1]}}))
     assert main(["info"]) == 0
     assert _unmeasured(chart) in capsys.readouterr().out
+
+
+def test_when_auto_measures() -> None:
+    """The policy (path_choice.when): a GPU with nothing recorded reads the record once, then
+    waits on the rule, and measures at the first auto frame MEASURE_AFTER_S after its first;
+    =measure measures at once (CPUs too); =rule and CPUs under auto never measure."""
+    after = pc.MEASURE_AFTER_S
+    assert [pc.when("auto", False, w) for w in (None, 0.0, after - 0.1, after)] == [
+        "read", "wait", "wait", "measure"]
+    assert [pc.when("measure", cpu, None) for cpu in (False, True)] == ["measure", "measure"]
+    assert {pc.when(m, cpu, w) for m, cpu in (("rule", False), ("rule", True), ("auto", True))
+            for w in (None, after)} == {"rule"}
+
+
+def test_a_gpu_measures_only_after_rendering_a_while(chart, tmp_path: Path,  # noqa: ANN001
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """On a GPU (the H200's test pass): the first auto frames take the rule and record
+    nothing; the first auto frame MEASURE_AFTER_S later measures and records."""
+    if chart.device.info.kind == "cpu":  # auto never measures on a CPU (tested above)
+        pytest.skip(f"{chart.device.info.name} is a CPU: auto does not measure there")
+    with Renderer(validation=True, cache_dir=tmp_path) as r:
+        target = r.new_offscreen_target(SIZE, linear=False)
+        try:
+            r.render(size=SIZE)
+            r.render(size=SIZE)
+            assert not (tmp_path / pc.CACHE_FILE).exists() and not r.paths.choice.measured
+            assert r.uses_compute(target, RenderOptions()) == (r.compute_unavailable(target) is None)
+            monkeypatch.setattr(pc, "MEASURE_AFTER_S", 0.0)
+            r.render(size=SIZE)
+            records = json.loads((tmp_path / pc.CACHE_FILE).read_text())
+            assert records[pc.device_key(r)]["choice"] == r.paths.choice.label and r.paths.choice.measured
+        finally:
+            r.drop_target(target)
+        assert r.device.instance.errors == []

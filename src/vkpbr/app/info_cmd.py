@@ -35,7 +35,7 @@ def _frame_paths(device: dict) -> str:
     record = device["frame_paths"]
     if record is None:
         return ("forward (CPUs are not measured)" if device["kind"] == "cpu" else
-                "not measured yet (the first auto frame measures it)")
+                "not measured yet (the rule until a renderer has drawn 10 s)")
     times = ", ".join(f"{k} {v:.3f} ms" for k, v in record["gpu_ms"].items())
     return f"{record['choice']} ({times} at {record['size'][0]}x{record['size'][1]})"
 

@@ -18,6 +18,7 @@ gives the same bytes.
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import json
 import logging
@@ -30,7 +31,6 @@ from typing import Any
 from urllib.parse import unquote
 
 import numpy as np
-from tqdm import tqdm
 
 from ..errors import BakeFormatError, SceneError
 from ..json_input import SCENE_JSON_LIMITS, read_json
@@ -59,10 +59,16 @@ from .frames import (
 )
 from .tangents import generate_tangents, normalize_safe, orthonormal_tangent, tangent_uv_set
 
-try:  # optional: a C++ vertex cache optimiser; the bake works (less optimally) without it
-    import meshoptimizer as _meshopt
-except ImportError:  # pragma: no cover - depends on the environment
-    _meshopt = None
+
+@functools.cache
+def _meshopt() -> Any:
+    """meshoptimizer, optional: a C++ vertex cache optimiser (the bake works, less optimally,
+    without it); imported when a bake runs, not with the module (a cache hit needs none)."""
+    try:
+        import meshoptimizer
+    except ImportError:  # pragma: no cover - depends on the environment
+        return None
+    return meshoptimizer
 
 __all__ = ["bake_file", "bake_report", "bake_scene", "cached_bake", "embed_images", "embed_sources", "source_key",
            "TEXTURE_MODES"]
@@ -141,9 +147,9 @@ def _dedup(attrs: dict[str, np.ndarray], tri: np.ndarray) -> tuple[dict[str, np.
 def _optimise(attrs: dict[str, np.ndarray], tri: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """Vertex-cache triangle order, then first-use vertex order (drops unused vertices)."""
     idx = np.ascontiguousarray(tri.reshape(-1), dtype=np.uint32)
-    if _meshopt is not None and len(idx):
+    if _meshopt() is not None and len(idx):
         out = np.empty_like(idx)
-        _meshopt.optimize_vertex_cache(out, idx, len(idx), len(attrs["positions"]))
+        _meshopt().optimize_vertex_cache(out, idx, len(idx), len(attrs["positions"]))
         idx = out
     used, first = np.unique(idx, return_index=True)
     order = used[np.argsort(first, kind="stable")]  # old vertex ids in first-use order
@@ -215,6 +221,8 @@ def bake_scene(scene: Scene, progress: bool = False) -> BakedScene:
     parts: list[dict[str, np.ndarray]] = []
     table = np.zeros(len(scene.meshes), dtype=MESH_DTYPE)
     first_v = first_i = 0
+    from tqdm import tqdm  # (0.1-0.25 s to import: only when a bake runs)
+
     meshes = tqdm(scene.meshes, desc="bake", unit="mesh", disable=not progress, leave=False)
     for i, mesh in enumerate(meshes):
         material = scene.materials[mesh.material] if 0 <= mesh.material < len(scene.materials) else None
@@ -293,7 +301,7 @@ def bake_report(scene: Scene, baked: BakedScene) -> dict[str, Any]:
         "source_triangles": int(sum(m.triangle_count for m in scene.meshes)),
         "meshes": len(scene.meshes),
         "seconds": float(baked.bake_seconds),
-        "vertex_cache_order": "meshoptimizer" if _meshopt is not None else "source order",
+        "vertex_cache_order": "meshoptimizer" if _meshopt() is not None else "source order",
     }
 
 

@@ -52,6 +52,7 @@ __all__ = [
     "PACK_LEVELS",
     "QTANGENT_BIAS",
     "frame_angular_error_deg",
+    "frame_streams",
     "pack_qtangent",
     "qtangent_to_tbn",
     "tbn_to_qtangent",
@@ -250,3 +251,68 @@ def frame_angular_error_deg(
     b0 = np.cross(n0, t0) * s0[:, None]
     b1 = np.cross(n1, t1) * s1[:, None]
     return np.maximum.reduce([_angle_deg(n0, n1), _angle_deg(t0, t1), _angle_deg(b0, b1)])
+
+
+# Vertices a thread's share of `frame_streams` at least: smaller shares cost more in NumPy's
+# per-call overhead than the threads win.
+_CHUNK = 32768
+
+
+def frame_streams(sources: list[tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]],
+                  packed: bool = True, threads: int | None = None
+                  ) -> tuple[np.ndarray, np.ndarray | None]:
+    """The QTangent (N, 4) float32 and (with `packed`) packed (N,) uint32 streams of meshes'
+    frames, each mesh's (normals, tangents4, QTangents or None, packed or None) in order (a
+    mesh's own ones used as they are): the missing ones encoded at once, in chunks on
+    `threads` threads (None: the cores, at most 8; NumPy releases the GIL). Every function
+    here is per row, so the result is bit for bit that of one call per mesh."""
+    import os
+    from concurrent.futures import ThreadPoolExecutor
+
+    sizes = [len(n) for n, _, _, _ in sources]
+    need_q = [i for i, (_, _, q, _) in enumerate(sources) if q is None]
+    need_pk = [i for i, (_, _, _, pk) in enumerate(sources) if pk is None] if packed else []
+    normals = np.concatenate([sources[i][0] for i in need_q]) if need_q else np.zeros((0, 3))
+    tangents = np.concatenate([sources[i][1] for i in need_q]) if need_q else np.zeros((0, 4))
+    count = len(normals)
+    threads = threads or min(8, os.cpu_count() or 1)
+    bounds = np.linspace(0, count, max(1, min(threads, count // _CHUNK)) + 1).astype(int)
+    parts = list(zip(bounds[:-1], bounds[1:], strict=True))
+
+    def encode(span: tuple[int, int]) -> np.ndarray:
+        return tbn_to_qtangent(normals[span[0]:span[1]], tangents[span[0]:span[1]])
+
+    with ThreadPoolExecutor(len(parts)) as pool:
+        new_q = np.concatenate(list(pool.map(encode, parts))) if count else np.zeros((0, 4), np.float32)
+        qs = _spliced(sizes, [s[2] for s in sources], need_q, new_q, np.float32, (4,))
+        # The packed frames of meshes without theirs, from their quaternions.
+        q_pk = np.concatenate([qs[_offset(sizes, i):_offset(sizes, i) + sizes[i]] for i in need_pk]
+                              ) if need_pk else np.zeros((0, 4), np.float32)
+        bounds = np.linspace(0, len(q_pk), max(1, min(threads, len(q_pk) // _CHUNK)) + 1).astype(int)
+        spans = list(zip(bounds[:-1], bounds[1:], strict=True))
+        new_pk = (np.concatenate(list(pool.map(lambda s: pack_qtangent(q_pk[s[0]:s[1]]), spans)))
+                  if len(q_pk) else np.zeros(0, np.uint32))
+    if not packed:
+        return qs, None
+    return qs, _spliced(sizes, [s[3] for s in sources], need_pk, new_pk, np.uint32, ())
+
+
+def _offset(sizes: list[int], i: int) -> int:
+    return int(sum(sizes[:i]))
+
+
+def _spliced(sizes: list[int], own: list[np.ndarray | None], computed: list[int],
+             new: np.ndarray, dtype: type, tail: tuple[int, ...]) -> np.ndarray:
+    """One stream of every mesh's rows: its `own` where it has them, else its share of `new`
+    (the meshes in `computed`, concatenated in order)."""
+    out = np.empty((int(sum(sizes)), *tail), dtype)
+    at, taken = 0, 0
+    computed_set = set(computed)
+    for i, n in enumerate(sizes):
+        if i in computed_set:
+            out[at:at + n] = new[taken:taken + n]
+            taken += n
+        else:
+            out[at:at + n] = own[i]
+        at += n
+    return out

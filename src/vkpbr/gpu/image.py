@@ -1,7 +1,7 @@
 """Images, image views (with component swizzles), samplers, and texture upload with mips.
 
-Textures are uploaded in batches: many images share one command buffer and a bounded staging
-buffer. An image whose mip chain was made beforehand (a baked file's, vkpbr.scene.mips) is
+Textures are uploaded in batches: many images share one command buffer and one of two
+bounded staging buffers (one filled while the GPU reads the other). An image whose mip chain was made beforehand (a baked file's, vkpbr.scene.mips) is
 copied level by level; otherwise its chain is made by successive linear blits on the GPU.
 """
 
@@ -257,8 +257,9 @@ class TextureUploader:
     """Uploads RGBA8 images with full mip chains (and BC7 ones with theirs: `add_blocks`),
     batching many into one submission.
 
-    Staging memory is bounded by `batch_bytes`: when a batch would exceed it, the batch is
-    submitted and the staging buffer reused.
+    Staging memory is bounded by twice `batch_bytes`: when a batch would exceed it, the batch
+    is submitted and the next one copied into a second staging buffer while the GPU uploads
+    it (the two take turns); `flush` waits for them all.
     """
 
     def __init__(self, device: Device, batch_bytes: int = 64 << 20) -> None:
@@ -266,7 +267,10 @@ class TextureUploader:
         self.batch_bytes = batch_bytes
         self._pending: list[tuple[Image, list[np.ndarray]]] = []
         self._pending_bytes = 0
-        self._staging: Buffer | None = None  # reused by every batch until `flush` ends
+        # Staging buffers: free ones, and (command buffer, fence, buffer) of submitted batches
+        # not yet waited for (at most two: see _staging_for).
+        self._free: list[Buffer] = []
+        self._in_flight: list[tuple[Any, Any, Buffer]] = []
 
     def add(self, pixels: np.ndarray, format: int | str, mipmaps: bool = True, name: str = "",
             mips: Sequence[np.ndarray] = ()) -> Image:
@@ -324,63 +328,106 @@ class TextureUploader:
         return image
 
     def flush(self) -> None:
-        """Upload what is queued (and wait for it); the staging buffer is freed."""
+        """Upload what is queued (and wait for every batch); the staging buffers are freed."""
         try:
             self._submit()
+            while self._in_flight:
+                self._retire()
         finally:
-            if self._staging is not None:
-                self._staging.destroy()
-                self._staging = None
+            while self._in_flight:  # (an error: still wait before freeing what the GPU reads)
+                self._retire(check=False)
+            for staging in self._free:
+                staging.destroy()
+            self._free.clear()
 
     def _staging_for(self, total: int) -> Buffer:
-        """The one staging buffer, reused by every batch of this uploader: made again only
-        when a batch needs more (a batch of at least half `batch_bytes` gets `batch_bytes`,
-        so the next full ones fit; a small one-off upload gets what it needs)."""
-        if self._staging is None or self._staging.size < total:
-            if self._staging is not None:
-                self._staging.destroy()
-            size = max(total, self.batch_bytes) if 2 * total >= self.batch_bytes else total
-            self._staging = Buffer(self.device, size, self.device.vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                   host_visible=True)
-        return self._staging
+        """A staging buffer the GPU is done with: two take turns, so that one batch is copied
+        into one while the GPU uploads the other's (a batch of at least half `batch_bytes`
+        gets `batch_bytes`, so the next full ones fit; a small one-off upload what it needs)."""
+        if not self._free and len(self._in_flight) >= 2:
+            self._retire()  # the older batch: its buffer comes back
+        for i, staging in enumerate(self._free):
+            if staging.size >= total:
+                return self._free.pop(i)
+        for staging in self._free:
+            staging.destroy()
+        self._free.clear()
+        size = max(total, self.batch_bytes) if 2 * total >= self.batch_bytes else total
+        return Buffer(self.device, size, self.device.vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                      host_visible=True)
+
+    def _retire(self, check: bool = True) -> None:
+        """Wait for the oldest batch in flight; its command buffer and fence go, its staging
+        buffer is free again."""
+        cmd, fence, staging = self._in_flight.pop(0)
+        vk, device = self.device.vk, self.device
+        try:
+            if check:
+                device.wait_fences(vk.ffi.new("VkFence[1]", [fence]), "an upload")
+            else:
+                device.wait_idle()
+        finally:
+            vk.vkDestroyFence(device.handle, fence, None)
+            device.free_command_buffer(cmd)
+            self._free.append(staging)
 
     def _submit(self) -> None:
-        """Copy the queued levels into the staging buffer (on threads when large: NumPy
-        releases the GIL), record their copies (and mip blits), submit and wait."""
+        """Copy the queued levels into a staging buffer (on threads when large: NumPy
+        releases the GIL), record their copies (and mip blits) and submit them, without
+        waiting: `flush` (or the batch after next, for its buffer) waits."""
         if not self._pending:
             return
-        device = self.device
+        device, vk = self.device, self.device.vk
         try:
             total = sum(_aligned(a.nbytes) for _, levels in self._pending for a in levels)
             staging = self._staging_for(total)
-            dst = staging.array(np.uint8, total)
-            copies, offsets_of, offset = [], [], 0
-            for _, levels in self._pending:  # offsets multiples of 16: a BC7 block (RGBA8: 4)
-                offsets_of.append([])
-                for a in levels:
-                    copies.append((offset, a))
-                    offsets_of[-1].append(offset)
-                    offset += _aligned(a.nbytes)
-
-            def copy(job: tuple[int, np.ndarray]) -> None:
-                at, a = job
-                dst[at : at + a.nbytes] = a.reshape(-1)
-
-            if total >= _PARALLEL_COPY_BYTES and len(copies) > 1:
-                with ThreadPoolExecutor(min(8, os.cpu_count() or 1)) as pool:
-                    list(pool.map(copy, copies))
-            else:
-                for job in copies:
-                    copy(job)
-            with device.one_time_commands() as cmd:
+            offsets_of = self._copy_in(staging, total)
+            cmd = device.allocate_command_buffer()
+            fence = None
+            try:
+                vk.vkBeginCommandBuffer(cmd, vk.VkCommandBufferBeginInfo(
+                    flags=vk.VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT))
                 for (image, levels), offsets in zip(self._pending, offsets_of, strict=True):
                     if len(levels) > 1:
                         self._record_levels(cmd, image, staging, offsets)
                     else:
                         self._record_upload(cmd, image, staging, offsets[0])
+                vk.vkEndCommandBuffer(cmd)
+                fence = vk.vkCreateFence(device.handle, vk.VkFenceCreateInfo(), None)
+                vk.vkQueueSubmit(device.queue, 1, [vk.VkSubmitInfo(pCommandBuffers=[cmd])], fence)
+            except BaseException:
+                if fence is not None:
+                    vk.vkDestroyFence(device.handle, fence, None)
+                device.free_command_buffer(cmd)
+                self._free.append(staging)
+                raise
+            self._in_flight.append((cmd, fence, staging))
         finally:
             self._pending.clear()
             self._pending_bytes = 0
+
+    def _copy_in(self, staging: Buffer, total: int) -> list[list[int]]:
+        """The queued levels copied into `staging`; each image's levels' offsets."""
+        dst = staging.array(np.uint8, total)
+        copies, offsets_of, offset = [], [], 0
+        for _, levels in self._pending:  # offsets multiples of 16: a BC7 block (RGBA8: 4)
+            offsets_of.append([])
+            for a in levels:
+                copies.append((offset, a))
+                offsets_of[-1].append(offset)
+                offset += _aligned(a.nbytes)
+
+        def copy(job: tuple[int, np.ndarray]) -> None:
+            at, a = job
+            dst[at : at + a.nbytes] = a.reshape(-1)
+
+        if total >= _PARALLEL_COPY_BYTES and len(copies) > 1:
+            with ThreadPoolExecutor(min(8, os.cpu_count() or 1)) as pool:
+                list(pool.map(copy, copies))
+        else:
+            for job in copies:
+                copy(job)
+        return offsets_of
 
     def _record_levels(self, cmd: Any, image: Image, staging: Buffer, offsets: list[int]) -> None:
         """Copy a whole mip chain from the staging buffer: one copy region per level."""

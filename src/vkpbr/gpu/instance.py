@@ -33,7 +33,9 @@ _anchor: Any = None
 
 
 def _keep_drivers_loaded(vk: Any) -> None:
-    """Hold one bare VkInstance for the life of the process (destroyed at exit).
+    """Hold one bare VkInstance for the life of the process (destroyed at exit), made when
+    the last live instance is destroyed (not beside the first: a second vkCreateInstance on
+    the way to the first frame).
 
     The loader unloads the driver (ICD) when the last instance goes away. NVIDIA's driver
     (580, measured on an H100) fails vkCreateInstance with VK_ERROR_INCOMPATIBLE_DRIVER after
@@ -107,7 +109,6 @@ class Instance:
         """`extensions`: extra instance extensions that must be present (a window's surface
         extensions, for example); missing ones raise NoVulkanError."""
         vk = load()
-        _keep_drivers_loaded(vk)
         self.vk = vk
         self.validation = validation
         self.errors: list[str] = []
@@ -252,5 +253,7 @@ class Instance:
             destroy(self.handle, self._messenger, None)
             self._messenger = None
         handle, self.handle = self.handle, None
+        if not any(inst is not self and getattr(inst, "handle", None) is not None for inst in list(_live)):
+            _keep_drivers_loaded(vk)  # before the last instance goes: the driver stays loaded
         vk.vkDestroyInstance(handle, None)
         _live.discard(self)

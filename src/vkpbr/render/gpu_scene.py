@@ -5,7 +5,8 @@ texcoord, normal, tangent, QTangent, packed frame) plus one index buffer, so a f
 vertex buffers once per pipeline and each draw is one vkCmdDrawIndexed with offsets.
 The QTangent and packed streams are built on first use of their path (`ensure_streams`):
 the default vectors path never pays for them (~0.4 s of Sponza's load on 2 CPU cores); the
-viewer asks for all three up front. A
+viewer asks for all three up front. On GPUs, whose first auto frames take the compute path
+(which binds them), they are built on a thread while the textures upload. A
 TEXCOORD_1 stream exists only when some mesh has TEXCOORD_1; otherwise the TEXCOORD_0 buffer
 is bound for the shader's second UV input, so such scenes (Sponza) cost no extra memory.
 
@@ -32,7 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vkpbr.gpu.buffer import Buffer, upload_buffer
+from vkpbr.gpu.buffer import Buffer, upload_buffer, upload_buffers
 from vkpbr.gpu.descriptors import DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, TextureUploader
@@ -241,11 +242,14 @@ class GpuScene:
             self._upload_geometry()
             t1 = time.perf_counter()
             pixels, blocks = decoding.result()
+            t_decoded = time.perf_counter()  # (textures' share spent waiting on the decode)
+        self._frames = self._start_frames()
         self._upload_textures(pixels, blocks)
         t2 = time.perf_counter()
         self._create_materials(material_layout)
         self.draws = self._build_draws()
         self.timings.update(geometry=t1 - t0, textures=t2 - t1, materials=time.perf_counter() - t2)
+        self.decode_wait = t_decoded - t1  # (benchmarks/bench_load.py)
 
     def _own(self, obj):  # noqa: ANN001, ANN202 - any gpu object
         self._owned.append(obj)
@@ -267,25 +271,32 @@ class GpuScene:
         self.has_colors = any(m.colors is not None for m in self.scene.meshes)
         optional = (("texcoords1",) if self.has_texcoords1 else ()) + (
             ("colors",) if self.has_colors else ())
-        for name in STREAMS + optional:
-            arrays = [p[name] for p in regions]
-            data = np.concatenate(arrays) if arrays else np.zeros(4, np.uint8)
-            self._add_stream(name, data)
+        uploads = {name: [p[name] for p in regions] or [np.zeros(4, np.uint8)]
+                   for name in STREAMS + optional}
         # Per mesh (normal, tangent, QTangent or None, packed or None) for ensure_streams.
         self._frame_sources: list[tuple] | None = [
             (p["normals"], p["tangents"], p["qtangents"], p["packed_frames"]) for p in regions]
+        if not self.has_colors:
+            # COLOR_0 absent everywhere: one white RGBA16 value, read with stride 0.
+            uploads["colors"] = [np.full(4, 65535, np.uint16)]
+        indices = [np.asarray(m.indices, dtype=np.uint32) for m in self.scene.meshes]
+        # Every stream and the indices through one staging buffer and one submission (storage
+        # too: the compute path reads vertices in its shader, render/compute_path.py).
+        made = upload_buffers(self.device, [(arrays, "vertex|storage", name)
+                                            for name, arrays in uploads.items()]
+                              + [(indices or [np.zeros(3, np.uint32)], "index|storage", "indices")])
+        buffers = dict(zip(uploads, made, strict=False))
+        for name in STREAMS + optional:
+            self.streams[name] = self._own(buffers[name])
+            self.stream_bytes[name] = int(sum(a.nbytes for a in uploads[name]))
         if not self.has_texcoords1:
             # The shader's TEXCOORD_1 input reads the TEXCOORD_0 buffer: an alias, not a copy
             # (not in stream_bytes, owned once).
             self.streams["texcoords1"] = self.streams["texcoords"]
         if not self.has_colors:
-            # COLOR_0 absent everywhere: one white RGBA16 value, read with stride 0.
-            self._add_stream("colors", np.full(4, 65535, np.uint16))
-        indices = [np.asarray(m.indices, dtype=np.uint32) for m in self.scene.meshes]
-        idx = np.concatenate(indices) if indices else np.zeros(3, np.uint32)
-        self.index_buffer = self._own(
-            upload_buffer(self.device, idx, "index|storage", name="indices")
-        )
+            self.streams["colors"] = self._own(buffers["colors"])
+            self.stream_bytes["colors"] = 8
+        self.index_buffer = self._own(made[-1])
         self.vertex_count = int(sum(sizes))
 
     def _add_stream(self, name: str, data: np.ndarray) -> None:
@@ -293,26 +304,43 @@ class GpuScene:
         self.streams[name] = self._own(upload_buffer(self.device, data, "vertex|storage", name=name))
         self.stream_bytes[name] = int(data.nbytes)
 
+    def _start_frames(self) -> concurrent.futures.Future | None:
+        """On a GPU, the QTangent and packed streams built on a thread while the textures
+        upload: auto's first frames take the compute path there, which binds them (0.3-0.6 s
+        of Sponza's first frame when built then)."""
+        if (self.device.info.kind == "cpu" or self._frame_sources is None
+                or all(q is not None and pk is not None for _, _, q, pk in self._frame_sources)):
+            return None  # (a baked scene brings both)
+        from vkpbr.bake.frames import frame_streams
+
+        pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="vkpbr-frames")
+        try:
+            return pool.submit(frame_streams, self._frame_sources)
+        finally:
+            pool.shutdown(wait=False)
+
     def ensure_streams(self, names: tuple[str, ...] = LAZY_STREAMS) -> None:
         """Build the QTangent / packed-frame streams among `names` not built yet (a mesh's own
         baked ones are used as they are). Safe at any time: a new buffer is bound only by
         command buffers recorded after it exists."""
-        from vkpbr.bake.frames import pack_qtangent, tbn_to_qtangent
+        from vkpbr.bake.frames import frame_streams
 
         missing = [n for n in LAZY_STREAMS if n in names and n not in self.streams]
         if not missing or self._frame_sources is None:
             return
-        qs = [tbn_to_qtangent(nrm, tan) if q is None else q
-              for nrm, tan, q, _ in self._frame_sources]
+        if self._frames is not None:  # started at load: both streams
+            qs, packed = self._frames.result()
+            self._frames = None
+        else:
+            qs, packed = frame_streams(self._frame_sources, packed="packed_frames" in missing)
         # Keep the quaternions: the other path's stream, built later, starts from them.
-        self._frame_sources = [(n, t, q, pk) for q, (n, t, _, pk) in
-                               zip(qs, self._frame_sources, strict=True)]
+        at = np.cumsum([0] + [len(n) for n, _, _, _ in self._frame_sources])
+        self._frame_sources = [(n, t, qs[a:b], pk) for a, b, (n, t, _, pk) in
+                               zip(at[:-1], at[1:], self._frame_sources, strict=True)]
         if "qtangents" in missing:
-            self._add_stream("qtangents", _concat(qs, np.float32, 4))
+            self._add_stream("qtangents", _concat([qs] if len(qs) else [], np.float32, 4))
         if "packed_frames" in missing:
-            packed = [pack_qtangent(q) if pk is None else pk
-                      for q, (_, _, _, pk) in zip(qs, self._frame_sources, strict=True)]
-            self._add_stream("packed_frames", _concat(packed, np.uint32, 1))
+            self._add_stream("packed_frames", _concat([packed] if len(packed) else [], np.uint32, 1))
         if all(n in self.streams for n in LAZY_STREAMS):
             self._frame_sources = None  # nothing left to build from
 

@@ -1,21 +1,30 @@
 """`--pipeline auto` on a GPU: the frame path that measured fastest on this device.
 
-The first auto frame on a GPU (per device, driver and vkpbr version) times the candidates,
-forward, the compute path with the raster units and the compute path with the compute
-rasteriser (where the device has 64-bit atomics), on the renderer's own scene at the frame's
-size (at most 1920x1080), streams of frames each by GPU timestamps, and keeps the fastest: in
-`<cache_dir>/frame-paths.json` when the renderer has a cache directory (the CLI's:
-$VKPBR_CACHE_DIR, else ~/.cache/vkpbr), else for the process. Later renderers on that device
-read it instead of measuring (a new driver or new shaders measure again). CPUs (lavapipe) take the forward path without measuring: the
-compute path is the slower there and the measurement would cost seconds. A device without
-timestamps, or a cache file that cannot be read, falls back to the rule the H200 measured
-(compute path + compute rasteriser on GPUs: BENCHMARKS.md). $VKPBR_FRAME_PATHS=rule never
-measures (reproducible runs); =measure measures on CPUs too.
+Auto's measurement times the candidates, forward, the compute path with the raster units and
+the compute path with the compute rasteriser (where the device has 64-bit atomics), on the
+renderer's own scene at the frame's size (at most 1920x1080), streams of frames each by GPU
+timestamps, and keeps the fastest: in `<cache_dir>/frame-paths.json` when the renderer has a
+cache directory (the CLI's: $VKPBR_CACHE_DIR, else ~/.cache/vkpbr), else for the process.
+Renderers on that device read the record (a new driver or new shaders measure again).
+
+When it measures (`when`): not on the first frame. The measurement costs about 150 frames
+and the other paths' pipelines (1.24 s of the H200's 2.21 s from Sponza's file to its first
+frame), more than a short run renders in all, so a GPU with nothing recorded takes the rule
+(the compute path + compute rasteriser: what the H200 measured fastest, BENCHMARKS.md) and
+measures at the first auto frame MEASURE_AFTER_S after its first one: a process that renders
+that long (the viewer, a job, a benchmark) pays the measurement once for every later process,
+at most a tenth of its time; a one-shot `vkpbr render` never does. Frames of one renderer
+may so change path once, mid-run (the paths agree within 1/255: docs/compute-path.md).
+CPUs (lavapipe) take the forward path without measuring: the compute path is the slower
+there and the measurement would cost seconds. A device without timestamps, or a cache file
+that cannot be read, falls back to the rule. $VKPBR_FRAME_PATHS=rule never measures
+(reproducible runs: one path from the first frame to the last); =measure measures at the
+first auto frame, on CPUs too.
 
 `FramePaths` is the renderer's side of it: which path a frame of a target takes (and whether
-it has the depth pre-pass), and `choose`, which the caller layer runs before the first auto
-frame (Renderer.render_many, the viewer; never `draw` itself): the measurement renders its
-own frames through the `FrameStream` it is given.
+it has the depth pre-pass), and `choose`, which the caller layer runs before auto frames
+(Renderer.render_many, the viewer; never `draw` itself): the measurement renders its own
+frames through the `FrameStream` it is given.
 """
 
 from __future__ import annotations
@@ -26,6 +35,7 @@ import json
 import logging
 import os
 import statistics
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
@@ -40,8 +50,9 @@ from vkpbr.render.frames import FrameStats
 from vkpbr.render.options import RenderOptions
 from vkpbr.scene.types import Camera, Scene
 
-__all__ = ["CACHE_FILE", "RULE_CPU", "RULE_GPU", "FramePaths", "FrameStream", "PathChoice",
-           "device_key", "shaders_digest", "frame_paths_mode", "is_auto", "measure", "recorded", "resolve"]
+__all__ = ["CACHE_FILE", "MEASURE_AFTER_S", "RULE_CPU", "RULE_GPU", "FramePaths", "FrameStream",
+           "PathChoice", "device_key", "shaders_digest", "frame_paths_mode", "is_auto", "measure",
+           "recorded", "resolve", "when"]
 
 log = logging.getLogger(__name__)
 
@@ -53,6 +64,9 @@ CACHE_FILE = "frame-paths.json"
 # differ by a third in a steady stream of frames: BENCHMARKS.md, the fourth run).
 WARM_UP, TIMED, ROUNDS = 10, 20, 2
 MAX_SIZE = (1920, 1080)
+# Seconds of auto frames on the rule before a GPU with nothing recorded measures (`when`): the
+# measurement's ~1 s is then at most a tenth of the process's rendering time.
+MEASURE_AFTER_S = 10.0
 _in_process: dict[str, dict] = {}  # device key -> record, for renderers without a cache dir
 
 
@@ -174,9 +188,10 @@ def _read(path: Path) -> dict[str, dict]:
     return data if isinstance(data, dict) else {}
 
 
-def resolve(renderer: FrameStream, size: tuple[int, int], cache_dir: str | Path | None
-            ) -> PathChoice:
-    """The recorded choice for this device, else measure now (and record it)."""
+def resolve(renderer: FrameStream, size: tuple[int, int], cache_dir: str | Path | None,
+            measure_now: bool = True) -> PathChoice | None:
+    """The recorded choice for this device, else measure now (and record it); None when
+    nothing is recorded and not `measure_now`."""
     key = device_key(renderer)
     path = Path(cache_dir) / CACHE_FILE if cache_dir is not None else None
     records = _read(path) if path is not None else _in_process
@@ -184,6 +199,8 @@ def resolve(renderer: FrameStream, size: tuple[int, int], cache_dir: str | Path 
     choice = _from_label(record["choice"], True) if record is not None else None
     if choice is not None and (not choice.compute_raster or renderer.device.compute_raster):
         return choice
+    if not measure_now:
+        return None
     record = measure(renderer, size)
     log.info("frame paths measured on %s at %dx%d: %s -> %s", renderer.device.info.name,
              *record["size"], ", ".join(f"{k} {v:.3f} ms" for k, v in record["gpu_ms"].items()),
@@ -230,6 +247,7 @@ class FramePaths:
         self.device, self.msaa, self.triangles, self.blended = device, msaa, triangles, blended
         self.depth_prepass, self.cache_dir = depth_prepass, cache_dir
         self.choice: PathChoice | None = None  # what auto measured (or read back)
+        self._since: float | None = None  # when auto frames began on the rule, nothing recorded
 
     def prepass_for(self, target: FrameTarget) -> bool:
         """Whether frames of `target` run the depth pre-pass (see Renderer's `depth_prepass`)."""
@@ -308,21 +326,43 @@ class FramePaths:
         return options.pipeline == L.PipelinePath.COMPUTE or self.device.info.kind != "cpu"
 
     def choose(self, target: FrameTarget, options: RenderOptions, stream: FrameStream) -> None:
-        """Before the first auto frame of `target` on a GPU that lets it take the compute
-        path: the recorded choice for the device, or the candidates measured now through
-        `stream` (frames of explicit options, which do not come back here). Run by the
-        caller layer before it draws: never from inside a frame."""
-        if self.choice is not None or not is_auto(options):
-            return
+        """Before auto frames of `target` where it can take the compute path: the rule, the
+        recorded choice for the device, or the candidates measured now through `stream`
+        (frames of explicit options, which do not come back here), as `when` says. Run by
+        the caller layer before it draws: never from inside a frame."""
+        if not is_auto(options) or (self.choice is not None and self._since is None):
+            return  # explicit options, or decided for good
         mode = frame_paths_mode()  # VKPBR_FRAME_PATHS: auto, measure (CPUs too) or rule
-        cpu = self.device.info.kind == "cpu"
-        if mode == "rule" or (cpu and mode != "measure"):  # decided once, not per frame
+        cpu, now = self.device.info.kind == "cpu", time.perf_counter()
+        what = when(mode, cpu, None if self._since is None else now - self._since)
+        if what == "wait":
+            return
+        if what == "rule":  # decided once, not per frame
             self.choice = RULE_CPU if cpu else RULE_GPU
             return
         if self.compute_unavailable(target) is not None:  # a window: decided by a later target
             return
+        since, self._since = self._since, None  # (no auto frames come back here meanwhile)
         self.choice = RULE_GPU  # while measuring, and if measuring fails
         try:
-            self.choice = resolve(stream, target.extent, self.cache_dir)
+            got = resolve(stream, target.extent, self.cache_dir, measure_now=what == "measure")
         except (OutOfDeviceMemoryError, UsageError) as exc:  # a candidate cannot run here
             log.warning("frame paths not measured (%s); auto takes %s", exc, RULE_GPU.label)
+            return
+        if got is None:  # nothing recorded: the rule, measured MEASURE_AFTER_S from now
+            self._since = now if since is None else since
+        else:
+            self.choice = got
+
+
+def when(mode: str, cpu: bool, waited_s: float | None) -> str:
+    """What `FramePaths.choose` does before an auto frame (the module docstring says why):
+    "rule" (the rule for good), "read" (the record, else the rule while MEASURE_AFTER_S
+    pass), "wait" (on the rule, still waiting: nothing read), "measure" (the record, else
+    measure now). `mode`: frame_paths_mode(); `cpu`: the device is one; `waited_s`: seconds
+    since the renderer's first auto frame on the rule (None: nothing read yet)."""
+    if mode == "rule" or (cpu and mode != "measure"):
+        return "rule"
+    if mode == "measure" or (waited_s is not None and waited_s >= MEASURE_AFTER_S):
+        return "measure"
+    return "read" if waited_s is None else "wait"

@@ -139,7 +139,7 @@ class Renderer:
         return O.instances(self.scene, self.gpu_scene, self.semantic_ids, self.semantic_labels)
 
     def choose_paths(self, target: FrameTarget, options: RenderOptions) -> None:
-        """Before auto frames of `target`: auto's path, measured on the first call that can
+        """Before auto frames of `target`: auto's path, the rule until it is measured
         (render/path_choice.py); callers of `draw` call it first (`draw` never measures)."""
         self.paths.choose(target, options, self)
 
