@@ -195,7 +195,8 @@ class DeformLayout:
         out = np.zeros(max(self.floats, 1), np.float32)
         if len(self.joint_nodes):
             joints = self._joints if self._joints is not None else world[self.joint_nodes] @ self.inverse_bind
-            out[:joints.size] = np.swapaxes(joints, -1, -2).ravel()
+            # (column-major: one transposing, converting pass, no float64 temporary)
+            out[:joints.size].reshape(-1, 4, 4)[:] = np.swapaxes(joints, -1, -2)
         for tree, at, t, default in self.morphed:
             w = weights.get(tree, default)
             if w is not None:

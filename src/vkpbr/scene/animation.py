@@ -163,39 +163,61 @@ def _sample_groups(chosen: list[Animation], times: np.ndarray, spans: dict, trs:
         if len(members) < 2:
             continue
         value = _sample_linear([m[0] for m in members], times, path == "rotation", spans)
-        trs[path][:, [m[1] for m in members]] = value.transpose(1, 0, 2)
+        trs[path][:, [m[1] for m in members]] = value
         done.update(m[2] for m in members)
     return done
 
 
 def _sample_linear(samplers: list[AnimationSampler], times: np.ndarray, rotation: bool,
                    spans: dict) -> np.ndarray:
-    """(G, B, C) values of G LINEAR samplers at (B,) times: one gather and one
-    interpolation over all of them (sample_sampler's rules)."""
+    """(B, G, C) values of G LINEAR samplers at (B,) times: one gather and one
+    interpolation over all of them (sample_sampler's rules), in the (time, sampler) order
+    the caller writes them in. What depends on the keyframes alone (the concatenated
+    values, each rotation interval's arc) is made once per group of samplers (`_group`)."""
     found = [_span(s.input, times, spans) for s in samplers]
-    base = np.cumsum([0] + [len(s.input) for s in samplers[:-1]])
-    idx = np.stack([b + f[0] for b, f in zip(base, found, strict=True)]).reshape(-1)
-    u = np.stack([f[2] for f in found]).reshape(-1, 1)
-    if rotation:
-        v = _normalised(_slerp_intervals(samplers, idx, u))
+    base, table = _group(samplers, rotation)
+    first = found[0]
+    if all(f is first for f in found):  # one time accessor for the group (exporters' habit)
+        idx = first[0][:, None] + base
+        u = np.broadcast_to(first[2], (len(times), len(samplers)))[..., None]
     else:
-        values = np.concatenate([s.output for s in samplers])
-        a, b = values[idx], values[idx + 1]
-        v = a + u * (b - a)
-    return v.reshape(len(samplers), len(times), -1)
-
-
-def _slerp_intervals(samplers: list[AnimationSampler], idx: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """_slerp of keyframes idx and idx + 1 (into the samplers' concatenated keyframes) at
-    fractions u, with what depends on the interval alone (unit ends, the shorter arc's
-    sign, its angle and sine) made once per sampler (`_arcs`), not once per sample."""
-    parts = [_arcs(s) for s in samplers]
-    a_all, b_all, angle_all, inv_all = (np.concatenate([p[k] for p in parts]) for k in range(4))
-    a, b, angle, inv = a_all[idx], b_all[idx], angle_all[idx], inv_all[idx]
+        idx = np.stack([f[0] for f in found], axis=1) + base
+        u = np.stack([f[2][:, 0] for f in found], axis=1)[..., None]
+    if not rotation:
+        a, d = table[0][idx], table[1][idx]  # start and (end - start) of each interval
+        return a + u * d
+    a, b, angle, inv = (t[idx] for t in table)
     small = inv == 0.0
     wa = np.where(small, 1.0 - u, np.sin((1.0 - u) * angle) * inv)
     wb = np.where(small, u, np.sin(u * angle) * inv)
-    return wa * a + wb * b
+    return _normalised(wa * a + wb * b)
+
+
+_GROUPS: dict[tuple, tuple] = {}  # (sampler ids, rotation) -> (samplers, base, table)
+
+
+def _group(samplers: list[AnimationSampler], rotation: bool) -> tuple[np.ndarray, tuple]:
+    """(G,) each sampler's first keyframe in the concatenation and the concatenated tables:
+    (start, end - start) of every interval, or for rotations _arcs' (start, end, angle,
+    1 / sine). Cached while the same samplers (and outputs) live: a crowd samples the same
+    group every frame."""
+    key = (tuple(id(s) for s in samplers), rotation)
+    hit = _GROUPS.get(key)
+    if hit is not None and all(a is b and a.output is o for a, b, o in
+                               zip(samplers, hit[0], hit[3], strict=True)):
+        return hit[1], hit[2]
+    base = np.cumsum([0] + [len(s.input) for s in samplers[:-1]]).astype(np.int64)
+    if rotation:
+        parts = [_arcs(s) for s in samplers]
+        table = tuple(np.concatenate([p[k] for p in parts]) for k in range(4))
+    else:
+        values = np.concatenate([np.asarray(s.output, np.float64) for s in samplers])
+        nxt = np.concatenate([np.concatenate([s.output[1:], s.output[-1:]]) for s in samplers])
+        table = (values, np.asarray(nxt, np.float64) - values)
+    if len(_GROUPS) > 256:  # (files come and go: keep the cache small)
+        _GROUPS.clear()
+    _GROUPS[key] = (list(samplers), base, table, [s.output for s in samplers])
+    return base, table
 
 
 def _arcs(s: AnimationSampler) -> tuple[np.ndarray, ...]:
