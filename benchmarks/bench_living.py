@@ -22,7 +22,9 @@ Rows:
                         the least of --frames calls.
   crowd N               N CesiumMan instances on a grid, each at its own animation time
                         (one vectorised sample a frame), 1920x1080 compute path: GPU ms per
-                        frame, the deform step's ms and ms per million skinned vertices,
+                        frame, the deform step's ms (the kernel alone) and ms per million
+                        skinned vertices, deform_wait_ms (the frame's start: its first step
+                        waits for the previous frame, which drew from the same vertices),
                         Python ms per frame to pose them (python_ms: the vectorised sample and
                         setting the locals) and the frame's own Python (frame_python_ms:
                         the state's update, joint matrices, culling spheres, the copy).
@@ -240,7 +242,7 @@ def crowd_rows(assets: Path, counts: tuple[int, ...], frames: int,
                      yfov_deg=50.0)
         offsets = np.random.default_rng(1).random(count) * 2.0
         with Renderer(scene) as r:
-            py, gpu, deform, frame_py = [], [], [], []
+            py, gpu, deform, wait, frame_py = [], [], [], [], []
             views = crowd_views(r, man, cam, offsets, k, count, frames + 20, py)
             for i, _ in enumerate(r.render_many(views, size=size, readback=False,
                                                 pipeline="compute", raster="compute")):
@@ -248,9 +250,11 @@ def crowd_rows(assets: Path, counts: tuple[int, ...], frames: int,
                     gpu.append(r.last_stats.gpu_ms)
                     frame_py.append(r.last_stats.cpu_ms)
                     deform.append(r.last_stats.pass_ms.get("deform", float("nan")))
+                    wait.append(r.last_stats.pass_ms.get("deform_wait", float("nan")))
         mverts = count * verts / 1e6
         rows.append({"row": f"crowd {count} CesiumMan {size[0]}x{size[1]}", "gpu_ms": _median(gpu),
-                     "deform_ms": _median(deform), "deform_ms_per_mvert": _median(deform) / mverts,
+                     "deform_ms": _median(deform), "deform_wait_ms": _median(wait),
+                     "deform_ms_per_mvert": _median(deform) / mverts,
                      "python_ms": 1e3 * _median(py[20:]), "frame_python_ms": _median(frame_py),
                      "skinned_vertices": count * verts})
     return rows
@@ -314,7 +318,7 @@ def main() -> None:
         rows += crowd_python_rows(args.assets, tuple(int(c) for c in args.crowds.split(",")),
                                   args.frames)
     keys = ("python_ms", "frame_copy_ms", "frame_python_ms", "fps", "gpu_ms", "shadows_ms",
-            "deform_ms", "deform_ms_per_mvert")
+            "deform_ms", "deform_ms_per_mvert", "deform_wait_ms")
     print("| row | " + " | ".join(keys) + " |\n|---|" + "---:|" * len(keys))
     for row in rows:
         cells = [f"{row[k]:.3f}" if isinstance(row.get(k), float) else "" for k in keys]
