@@ -283,6 +283,7 @@ class SceneState:
         self._shown_dirty = True
         self.weights.clear()
         self.pointers.clear()
+        self.time = None
         if self.materials:
             self.materials.clear()
             self.material_version += 1
