@@ -20,6 +20,7 @@ from pinhole import basis, pixel_rays
 from raycast import first_hits
 from test_outputs import silhouette_band
 
+from vkpbr.errors import UsageError
 from vkpbr.scene.animation import sample
 from vkpbr.scene.types import Camera
 
@@ -237,6 +238,8 @@ def test_instances_of_a_deformed_mesh_match_the_reference(make_renderer, sample_
     place = np.tile(np.eye(4), (2, 1, 1))  # one beside, one turned about y on the other side
     place[0, 0, 3], place[1, :3, :3], place[1, 0, 3] = span, [[0, 0, 1], [0, 1, 0], [-1, 0, 0]], -span
     t, offsets = 0.45, np.array([0.5, 0.9])
+    with pytest.raises(UsageError, match="time_offsets must be one finite number or 2"):
+        r.add_instances(scene.nodes[0].mesh, place, time_offsets=[0.1, 0.2, 0.3])
     ids = r.add_instances(scene.nodes[0].mesh, place, time_offsets=offsets)
     r.set_time(t)
     parts, owners = [posed_triangles(scene, t)[0]], [np.ones(len(tri), np.int64)]
