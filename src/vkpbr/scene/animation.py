@@ -146,6 +146,7 @@ def _sample_groups(chosen: list[Animation], times: np.ndarray, spans: dict, trs:
     written into `trs`; returns the id() of each channel done. None when two channels
     drive the same property (then the later must win: channel by channel)."""
     groups: dict[str, list[tuple[AnimationSampler, int, int]]] = {}
+    constant: list[tuple[str, int, np.ndarray, int]] = []
     seen: set[tuple[int, str]] = set()
     for anim in chosen:
         for ch in anim.channels:
@@ -157,8 +158,14 @@ def _sample_groups(chosen: list[Animation], times: np.ndarray, spans: dict, trs:
             s = anim.samplers[ch.sampler]
             if (ch.pointer is None and ch.path in trs and s.interpolation == "LINEAR"
                     and len(s.input) >= 2):
-                groups.setdefault(ch.path, []).append((s, ch.node, id(ch)))
+                if ch.path != "rotation" and _constant(s):  # (exporters key every bone's
+                    constant.append((ch.path, ch.node, s.output[0], id(ch)))  # translation)
+                else:
+                    groups.setdefault(ch.path, []).append((s, ch.node, id(ch)))
     done: set[int] = set()
+    for path, node, value, key in constant:  # a + u (a - a) is a, bit for bit
+        trs[path][:, node] = value
+        done.add(key)
     for path, members in groups.items():
         if len(members) < 2:
             continue
@@ -218,6 +225,18 @@ def _group(samplers: list[AnimationSampler], rotation: bool) -> tuple[np.ndarray
         _GROUPS.clear()
     _GROUPS[key] = (list(samplers), base, table, [s.output for s in samplers])
     return base, table
+
+
+def _constant(s: AnimationSampler) -> bool:
+    """Whether every keyframe of a LINEAR sampler holds the same value (kept on the sampler,
+    as _arcs)."""
+    cached = getattr(s, "_constant", None)
+    if cached is not None and cached[0] is s.output:
+        return cached[1]
+    out = np.asarray(s.output)
+    same = bool(np.all(np.isfinite(out)) and np.array_equal(out, np.broadcast_to(out[:1], out.shape)))
+    s._constant = (s.output, same)  # type: ignore[attr-defined]
+    return same
 
 
 def _arcs(s: AnimationSampler) -> tuple[np.ndarray, ...]:
