@@ -17,6 +17,9 @@ Rows:
                         (every moved node a caster: the maps redraw each frame).
   2CylinderEngine       every node moved before each 256-view render_batch at 128x128:
                         views/s (the fps column) and Python ms per set_poses.
+  crowdinst N           (not in the default set) the crowd through the API: N instances
+                        of CesiumMan's skinned mesh (add_instances with time_offsets),
+                        render_many(times=): the crowd rows' GPU and frame columns.
   crowdpy N             (not in the default set) the crowd rows' Python alone, no frame drawn:
                         python_ms as below, frame_copy_ms the state work of the frame;
                         the least of --frames calls.
@@ -260,6 +263,44 @@ def crowd_rows(assets: Path, counts: tuple[int, ...], frames: int,
     return rows
 
 
+def crowd_instance_rows(assets: Path, counts: tuple[int, ...], frames: int,
+                        size: tuple[int, int] = (1920, 1080)) -> list[dict]:
+    """The crowd through the API: N instances of CesiumMan's skinned mesh (add_instances with
+    time_offsets: each its own skeleton, skin and posed vertices), played by render_many's
+    times= (set_time poses every copy in one vectorised sample a frame)."""
+    man = load_scene(assets / "CesiumMan" / "glTF" / "CesiumMan.gltf")
+    verts = man.meshes[man.nodes[0].mesh].vertex_count
+    rows = []
+    for count in counts:
+        side = int(np.ceil(np.sqrt(count)))
+        place = np.tile(np.eye(4), (count, 1, 1))
+        place[:, 0, 3], place[:, 2, 3] = np.arange(count) % side * 1.5, np.arange(count) // side * 1.5
+        cam = Camera(eye=(side * 0.75, side * 0.9, side * 1.95), target=(side * 0.75, 0.5, side * 0.75),
+                     yfov_deg=50.0)
+        with Renderer(man) as r:
+            r.set_visible(np.flatnonzero(r.state.tree.parents < 0)[:1], False)  # the file's own
+            t0 = time.perf_counter()
+            r.add_instances(man.nodes[0].mesh, place,
+                            time_offsets=np.random.default_rng(1).random(count) * 2.0)
+            add_s = time.perf_counter() - t0
+            gpu, deform, wait, frame_py = [], [], [], []
+            times = [f / 30.0 for f in range(frames + 20)]
+            for i, _ in enumerate(r.render_many([cam] * len(times), size=size, times=times,
+                                                readback=False, pipeline="compute", raster="compute")):
+                if i >= 20:
+                    gpu.append(r.last_stats.gpu_ms)
+                    frame_py.append(r.last_stats.cpu_ms)
+                    deform.append(r.last_stats.pass_ms.get("deform", float("nan")))
+                    wait.append(r.last_stats.pass_ms.get("deform_wait", float("nan")))
+        mverts = count * verts / 1e6
+        rows.append({"row": f"crowd {count} CesiumMan instances {size[0]}x{size[1]} "
+                            f"(add_instances {add_s:.2f} s)", "gpu_ms": _median(gpu),
+                     "deform_ms": _median(deform), "deform_wait_ms": _median(wait),
+                     "deform_ms_per_mvert": _median(deform) / mverts,
+                     "frame_python_ms": _median(frame_py)})
+    return rows
+
+
 def crowd_python_rows(assets: Path, counts: tuple[int, ...], frames: int) -> list[dict]:
     """The crowd's Python alone, no frame drawn: the vectorised sample and setting the locals
     (python_ms), then the frame's state work (frame_copy_ms: world matrices, joint matrices,
@@ -314,6 +355,10 @@ def main() -> None:
         rows += crowd_rows(args.assets, tuple(int(c) for c in args.crowds.split(",")),
                            max(args.frames // 3, 30),
                            tuple(int(v) for v in args.size.split("x")))  # type: ignore[arg-type]
+    if "crowdinst" in args.only:
+        rows += crowd_instance_rows(args.assets, tuple(int(c) for c in args.crowds.split(",")),
+                                    max(args.frames // 3, 30),
+                                    tuple(int(v) for v in args.size.split("x")))  # type: ignore[arg-type]
     if "crowdpy" in args.only:
         rows += crowd_python_rows(args.assets, tuple(int(c) for c in args.crowds.split(",")),
                                   args.frames)
