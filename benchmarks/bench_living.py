@@ -17,9 +17,17 @@ Rows:
                         (every moved node a caster: the maps redraw each frame).
   2CylinderEngine       every node moved before each 256-view render_batch at 128x128:
                         views/s (the fps column) and Python ms per set_poses.
+  crowdinst N           (not in the default set) the crowd through the API: N instances
+                        of CesiumMan's skinned mesh (add_instances with time_offsets),
+                        render_many(times=): the crowd rows' GPU and frame columns.
+  crowdpy N             (not in the default set) the crowd rows' Python alone, no frame drawn:
+                        python_ms as below, frame_copy_ms the state work of the frame;
+                        the least of --frames calls.
   crowd N               N CesiumMan instances on a grid, each at its own animation time
                         (one vectorised sample a frame), 1920x1080 compute path: GPU ms per
-                        frame, the deform step's ms and ms per million skinned vertices,
+                        frame, the deform step's ms (the kernel alone) and ms per million
+                        skinned vertices, deform_wait_ms (the frame's start: its first step
+                        waits for the previous frame, which drew from the same vertices),
                         Python ms per frame to pose them (python_ms: the vectorised sample and
                         setting the locals) and the frame's own Python (frame_python_ms:
                         the state's update, joint matrices, culling spheres, the copy).
@@ -231,7 +239,8 @@ def _steps(passes: list[dict]) -> str:
     return " ".join(f"{n} {_median([p.get(n, 0.0) for p in passes]):.3f}" for n in names)
 
 
-def crowd_rows(assets: Path, counts: tuple[int, ...], frames: int) -> list[dict]:
+def crowd_rows(assets: Path, counts: tuple[int, ...], frames: int,
+               size: tuple[int, int] = (1920, 1080)) -> list[dict]:
     man = load_scene(assets / "CesiumMan" / "glTF" / "CesiumMan.gltf")
     verts = sum(man.meshes[n.mesh].vertex_count for n in man.nodes)
     rows = []
@@ -242,20 +251,91 @@ def crowd_rows(assets: Path, counts: tuple[int, ...], frames: int) -> list[dict]
                      yfov_deg=50.0)
         offsets = np.random.default_rng(1).random(count) * 2.0
         with Renderer(scene) as r:
-            py, gpu, deform, frame_py, passes = [], [], [], [], []
+            py, gpu, deform, wait, frame_py, passes = [], [], [], [], [], []
             views = crowd_views(r, man, cam, offsets, k, count, frames + 20, py)
-            for i, _ in enumerate(r.render_many(views, size=(1920, 1080), readback=False,
+            for i, _ in enumerate(r.render_many(views, size=size, readback=False,
                                                 pipeline="compute", raster="compute")):
                 if i >= 20:
                     gpu.append(r.last_stats.gpu_ms)
                     frame_py.append(r.last_stats.cpu_ms)
                     deform.append(r.last_stats.pass_ms.get("deform", float("nan")))
+                    wait.append(r.last_stats.pass_ms.get("deform_wait", float("nan")))
                     passes.append(dict(r.last_stats.pass_ms))
         mverts = count * verts / 1e6
-        rows.append({"row": f"crowd {count} CesiumMan 1920x1080", "gpu_ms": _median(gpu),
-                     "deform_ms": _median(deform), "deform_ms_per_mvert": _median(deform) / mverts,
+        rows.append({"row": f"crowd {count} CesiumMan {size[0]}x{size[1]}", "gpu_ms": _median(gpu),
+                     "deform_ms": _median(deform), "deform_wait_ms": _median(wait),
+                     "deform_ms_per_mvert": _median(deform) / mverts,
                      "python_ms": 1e3 * _median(py[20:]), "frame_python_ms": _median(frame_py),
                      "skinned_vertices": count * verts, "steps": _steps(passes)})
+    return rows
+
+
+def crowd_instance_rows(assets: Path, counts: tuple[int, ...], frames: int,
+                        size: tuple[int, int] = (1920, 1080)) -> list[dict]:
+    """The crowd through the API: N instances of CesiumMan's skinned mesh (add_instances with
+    time_offsets: each its own skeleton, skin and posed vertices), played by render_many's
+    times= (set_time poses every copy in one vectorised sample a frame)."""
+    man = load_scene(assets / "CesiumMan" / "glTF" / "CesiumMan.gltf")
+    verts = man.meshes[man.nodes[0].mesh].vertex_count
+    rows = []
+    for count in counts:
+        side = int(np.ceil(np.sqrt(count)))
+        place = np.tile(np.eye(4), (count, 1, 1))
+        place[:, 0, 3], place[:, 2, 3] = np.arange(count) % side * 1.5, np.arange(count) // side * 1.5
+        cam = Camera(eye=(side * 0.75, side * 0.9, side * 1.95), target=(side * 0.75, 0.5, side * 0.75),
+                     yfov_deg=50.0)
+        with Renderer(man) as r:
+            r.set_visible(np.flatnonzero(r.state.tree.parents < 0)[:1], False)  # the file's own
+            t0 = time.perf_counter()
+            r.add_instances(man.nodes[0].mesh, place,
+                            time_offsets=np.random.default_rng(1).random(count) * 2.0)
+            add_s = time.perf_counter() - t0
+            gpu, deform, wait, frame_py = [], [], [], []
+            times = [f / 30.0 for f in range(frames + 20)]
+            for i, _ in enumerate(r.render_many([cam] * len(times), size=size, times=times,
+                                                readback=False, pipeline="compute", raster="compute")):
+                if i >= 20:
+                    gpu.append(r.last_stats.gpu_ms)
+                    frame_py.append(r.last_stats.cpu_ms)
+                    deform.append(r.last_stats.pass_ms.get("deform", float("nan")))
+                    wait.append(r.last_stats.pass_ms.get("deform_wait", float("nan")))
+        mverts = count * verts / 1e6
+        rows.append({"row": f"crowd {count} CesiumMan instances {size[0]}x{size[1]} "
+                            f"(add_instances {add_s:.2f} s)", "gpu_ms": _median(gpu),
+                     "deform_ms": _median(deform), "deform_wait_ms": _median(wait),
+                     "deform_ms_per_mvert": _median(deform) / mverts,
+                     "frame_python_ms": _median(frame_py)})
+    return rows
+
+
+def crowd_python_rows(assets: Path, counts: tuple[int, ...], frames: int) -> list[dict]:
+    """The crowd's Python alone, no frame drawn: the vectorised sample and setting the locals
+    (python_ms), then the frame's state work (frame_copy_ms: world matrices, joint matrices,
+    culling spheres, the draws' records, one frame slot's copy and the bounds); the least of
+    `frames` calls each, in this thread's CPU time (time.thread_time: what
+    other processes on a shared machine take is not counted)."""
+    man = load_scene(assets / "CesiumMan" / "glTF" / "CesiumMan.gltf")
+    rows = []
+    for count in counts:
+        scene, k = crowd(man, count)
+        offsets = np.random.default_rng(1).random(count) * 2.0
+        with Renderer(scene) as r:
+            roots = np.arange(0, count * k, k)
+            pose_s, frame_s = [], []
+            for f in range(frames + 3):
+                t0 = time.thread_time()
+                pose = sample(man, offsets + f / 30.0)
+                keep = r.state.local[roots].copy()
+                r.state.local[:] = pose.local.reshape(-1, 4, 4)
+                r.state.local[roots] = keep
+                r.state._changed(roots)
+                t1 = time.thread_time()
+                r.parts.gpu_state.write(f % 3)
+                _ = r.parts.bounds.radius
+                pose_s.append(t1 - t0)
+                frame_s.append(time.thread_time() - t1)
+        rows.append({"row": f"crowd {count} CesiumMan, Python only (least of {frames})",
+                     "python_ms": 1e3 * min(pose_s[3:]), "frame_copy_ms": 1e3 * min(frame_s[3:])})
     return rows
 
 
@@ -266,6 +346,7 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=300)
     ap.add_argument("--crowds", default="100,1000")
     ap.add_argument("--only", default="poses,instances,walk,engine,crowd")
+    ap.add_argument("--size", default="1920x1080", help="the crowd rows' image size, WxH")
     ap.add_argument("--json")
     args = ap.parse_args()
     rows: list[dict] = []
@@ -277,11 +358,19 @@ def main() -> None:
         rows += walk_rows(args.assets, args.frames)
     if "engine" in args.only:
         rows += engine_rows(args.assets, 20)
-    if "crowd" in args.only:
+    if "crowd" in args.only.split(","):
         rows += crowd_rows(args.assets, tuple(int(c) for c in args.crowds.split(",")),
-                           max(args.frames // 3, 30))
+                           max(args.frames // 3, 30),
+                           tuple(int(v) for v in args.size.split("x")))  # type: ignore[arg-type]
+    if "crowdinst" in args.only:
+        rows += crowd_instance_rows(args.assets, tuple(int(c) for c in args.crowds.split(",")),
+                                    max(args.frames // 3, 30),
+                                    tuple(int(v) for v in args.size.split("x")))  # type: ignore[arg-type]
+    if "crowdpy" in args.only:
+        rows += crowd_python_rows(args.assets, tuple(int(c) for c in args.crowds.split(",")),
+                                  args.frames)
     keys = ("python_ms", "frame_copy_ms", "frame_python_ms", "fps", "gpu_ms", "shadows_ms",
-            "deform_ms", "deform_ms_per_mvert")
+            "deform_ms", "deform_ms_per_mvert", "deform_wait_ms")
     print("| row | " + " | ".join(keys) + " |\n|---|" + "---:|" * len(keys))
     for row in rows:
         cells = [f"{row[k]:.3f}" if isinstance(row.get(k), float) else "" for k in keys]

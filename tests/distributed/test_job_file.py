@@ -71,6 +71,10 @@ def test_job_file_entries_and_items(tmp_path: Path) -> None:
     ([{"cameras": "poses.json", "out": "a", "semantics": "node"}], "semantics: expected mesh"),
     ([{"cameras": "poses.json", "out": "a", "semantics": "classes.json"}], "classes.json: No such file"),
     ([{"cameras": "poses.json", "out": "a", "semantics": {"floor": -3}}], "the value must be an id"),
+    ([{"cameras": [{"eye": [0, 1, 3], "target": [0, 0, 0], "time": 0.5},
+                   {"eye": [0, 1, 3], "target": [0, 0, 0]}], "out": "a"}],
+     'entry 0: cameras: entry 1 has no "time" while others do'),
+    ([{"cameras": "poses.json", "out": "a", "animation": True}], "animation: expected an animation"),
 ])
 def test_bad_job_file_is_one_line_before_any_work(capsys, tmp_path: Path, doc: object,
                                                   message: str) -> None:
@@ -156,6 +160,24 @@ def test_render_ray_needs_cameras_and_no_camera_flags(capsys, tmp_path: Path) ->
     assert main(["render", "--cameras", str(tmp_path / "p.json"), "--out", str(tmp_path / "x"),
                  "--ray", "--light", "1,2,3"]) == 2
     assert "--light is not available with --ray" in capsys.readouterr().err
+
+
+def test_times_of_an_entry(tmp_path: Path) -> None:
+    """Poses with a "time" render at it (view_times: what the actors pass to render_many);
+    the times are in the poses' digest, so a folder rendered at other times is refused."""
+    from vkpbr.distributed.job import view_times
+
+    def entry(times: list[float], **more: object) -> object:
+        cams = [{"eye": [0, 1, 3], "target": [0, 0, 0], "time": t} for t in times]
+        return job_from_doc([{"cameras": cams, "out": str(tmp_path), "size": "16x8", **more}]).scenes[0]
+
+    a = entry([0.5, 1.25], animation="Walk")
+    assert view_times(a.poses, a.settings) == [0.5, 1.25] and a.settings.animation == "Walk"
+    assert view_times(_entry(tmp_path).poses, _entry(tmp_path).settings) is None
+    # (the manifest refuses a folder whose header differs: test_manifest_records_...)
+    other = entry([0.5, 1.5], animation="Walk").fingerprint()
+    assert other["poses_sha256"] != a.fingerprint()["poses_sha256"]
+    assert entry([0.5, 1.25]).fingerprint() != a.fingerprint()  # another animation
 
 
 def _entry(tmp_path: Path) -> object:

@@ -284,3 +284,28 @@ def test_a_killed_plain_run_resumes_on_ray(cluster: dict, tmp_path: Path) -> Non
     whole = tmp_path / "whole"
     assert main(["-q", "render", "--cameras", str(poses), "--out", str(whole), "--size", "32x24"]) == 0
     assert_same_files(out, whole)
+
+
+def test_render_cli_on_ray_plays_the_poses_times(cluster: dict, capsys, tmp_path: Path) -> None:  # noqa: ANN001
+    """Poses with a "time" on Ray (each view at its time of the file's animation, --time for
+    the views without one): the files equal `vkpbr render --cameras` without --ray, and the
+    frames differ from one another (the triangle turns)."""
+    from assets_path import assets_dir
+
+    scene = assets_dir() / "AnimatedTriangle" / "glTF" / "AnimatedTriangle.gltf"
+    if not scene.is_file():
+        pytest.skip(f"{scene} is missing (the sample models: tests/assets_path.py)")
+    cams = [{"eye": [0.5, 0.5, 3.0], "target": [0.5, 0.5, 0.0],
+             **({"time": t} if t is not None else {})} for t in (None, 0.6, 1.7)]
+    poses = tmp_path / "poses.json"
+    poses.write_text(json.dumps(cams))
+    common = ["render", str(scene), "--cameras", str(poses), "--size", "32x24", "--time", "0.3"]
+    assert main([*common, "--out", str(tmp_path / "plain")]) == 0
+    assert main([*common, "--out", str(tmp_path / "ray"), "--ray", cluster["address"],
+                 "--actors", "1"]) == 0
+    assert "3 views: 3 rendered" in capsys.readouterr().out
+    assert_same_files(tmp_path / "ray", tmp_path / "plain")
+    frames = [(tmp_path / "ray" / f"frame_{i:05d}.png").read_bytes() for i in range(3)]
+    assert len(set(frames)) == 3
+    doc = json.loads((tmp_path / "ray" / "transforms.json").read_text())
+    assert [f["time"] for f in doc["frames"]] == [0.3, 0.6, 1.7]

@@ -5,6 +5,7 @@ Both end with the job's summary; exit status 1 when items failed. See docs/distr
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import logging
 from pathlib import Path
 from typing import Any
@@ -32,8 +33,7 @@ examples:
 _NOT_WITH_RAY = (("camera", "--camera"), ("camera_index", "--camera-index"), ("fov", "--fov"),
                  ("light", "--light"), ("light_color", "--light-color"),
                  ("light_intensity", "--light-intensity"), ("falloff", "--falloff"),
-                 ("device", "--device"), ("variant", "--variant"), ("time", "--time"),
-                 ("animation", "--animation"), ("animate", "--animate"))
+                 ("device", "--device"), ("variant", "--variant"), ("animate", "--animate"))
 
 
 def add_ray_arguments(p: argparse.ArgumentParser, with_flag: bool = True) -> None:
@@ -187,6 +187,7 @@ def render_on_ray(args: argparse.Namespace, options: Any) -> int:
     """`vkpbr render SCENE --cameras POSES --out DIR --ray [ADDRESS]`: the same files as
     without --ray, rendered by the actors of a one-entry job."""
     from vkpbr.distributed import Job
+    from vkpbr.distributed.job import view_times
 
     if not args.cameras and not getattr(args, "orbit", None):
         raise UsageError("--ray renders a --cameras batch (or --orbit N): give --cameras too")
@@ -202,7 +203,14 @@ def render_on_ray(args: argparse.Namespace, options: Any) -> int:
 
         poses = orbit_poses(args.orbit, load_scene_arg(args))
     scene = frames_job(args, options, poses=poses)
-    if any(getattr(p, "time", None) is not None for p in scene.poses):
-        raise UsageError(f'{args.cameras}: poses with a "time" (an animation pose) are not '
-                         "rendered on Ray yet: render them without --ray")
+    time, animation = getattr(args, "time", None), getattr(args, "animation", None)
+    if time is not None or animation is not None:  # the poses' "time"s, else --time
+        from vkpbr.app.animate_cmd import animation_choice
+
+        scene = dataclasses.replace(scene, settings=dataclasses.replace(
+            scene.settings, time=time, animation=animation_choice(None, animation)))
+    if scene.worlds is not None and view_times(scene.poses, scene.settings) is not None:
+        raise UsageError('--worlds with animation times ("time" in the poses, --time) is not '
+                         "rendered yet: give one or the other")
+    view_times(scene.poses, scene.settings, str(args.cameras or "--orbit"))
     return _render(Job((scene,), source="--cameras"), args)

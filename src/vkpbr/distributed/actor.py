@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from vkpbr.distributed.job import RenderSettings, WorkItem
+from vkpbr.distributed.job import RenderSettings, WorkItem, view_times
 from vkpbr.distributed.manifest import camera_record
 from vkpbr.distributed.worlds import ItemWorlds
 from vkpbr.errors import SceneError, UsageError
@@ -31,11 +31,13 @@ log = logging.getLogger(__name__)
 
 
 def render_views(renderer: Any, cameras: list[Any], lights: Any, settings: RenderSettings,
-                 worlds: ItemWorlds | None = None, where: str = "worlds"
-                 ) -> Iterator[dict[str, np.ndarray]]:
+                 worlds: ItemWorlds | None = None, where: str = "worlds",
+                 times: list[float] | None = None) -> Iterator[dict[str, np.ndarray]]:
     """The one render call of a work item: its views in order, each a dict of arrays
     ("color" and the dataset outputs), through the batch path (`Renderer.render_batch`);
-    with `worlds`, each view in its own world (`world_views`; `where` starts its messages).
+    with `worlds`, each view in its own world (`world_views`; `where` starts its messages);
+    with `times`, each view at its time of `settings.animation` (render_many's `times=`, as
+    `vkpbr render --cameras` renders a poses file's "time"s).
 
     Yields per view: "color" (H, W, 4) uint8 sRGB, or float32 linear with `settings.linear`;
     each dataset output as `Renderer.render(outputs=...)` returns it.
@@ -49,7 +51,8 @@ def render_views(renderer: Any, cameras: list[Any], lights: Any, settings: Rende
     frames = renderer.render_many(cameras, lights, settings.size, settings.render_options(),
                                   linear=settings.linear,
                                   outputs=("color", *names) if names else None,
-                                  batch=settings.batch or None)
+                                  batch=settings.batch or None, times=times,
+                                  animation=settings.animation if times is not None else None)
     for frame in frames:
         yield frame if names else {"color": frame}
 
@@ -314,6 +317,9 @@ class RendererActor:
         t_load = time.perf_counter()
         if ahead is not None:  # after this scene's load: the two do not contend
             self.prefetch(ahead)
+        times = view_times(item.poses, settings)
+        if renderer.state.time is not None:  # an earlier item played the animation: the rest
+            renderer.reset_pose()             # pose, as a fresh renderer draws it
         base = renderer.default_camera()
         cameras = [pose.camera(base) for pose in item.poses]
         options = settings.render_options()
@@ -326,7 +332,7 @@ class RendererActor:
         files: list[str] = []
         writes = []
         frames = render_views(renderer, cameras, lights, settings, item.worlds,
-                              f"{item.where}: worlds")
+                              f"{item.where}: worlds", times)
         for k, (_view, frame) in enumerate(zip(item.frames, frames, strict=True)):
             names = item.files_of(k)
             (out / names[0]).parent.mkdir(parents=True, exist_ok=True)  # a file_path's folder

@@ -36,7 +36,7 @@ from vkpbr.distributed.cluster import (
     import_ray,
     preflight,
 )
-from vkpbr.distributed.job import Job, SceneJob, WorkItem, job_from_doc, load_job
+from vkpbr.distributed.job import Job, SceneJob, WorkItem, job_from_doc, load_job, view_times
 from vkpbr.distributed.manifest import (
     Manifest,
     abandon_frames_folder,
@@ -184,7 +184,8 @@ def _finish_entry(scene: SceneJob, manifest: Manifest) -> bool:
     if cameras is None:
         return False
     names = [scene.transforms_name(i) for i in range(len(cameras))]
-    write_transforms(Path(s.out) / "transforms.json", cameras, s.size, names)
+    write_transforms(Path(s.out) / "transforms.json", cameras, s.size, names,
+                     times=view_times(scene.poses, s))  # (each frame's "time", as render writes)
     if scene.colmap:
         write_colmap(Path(s.out), cameras, s.size, names)
     return True

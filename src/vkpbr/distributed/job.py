@@ -20,7 +20,13 @@ Job file (JSON), a list of entries or {"scenes": [entries], "views_per_item"?, "
      "batch": 64,                    # views per GPU submission (0: frame by frame; default 64)
      "worlds": {"nodes": ["cube"], "poses": "worlds.npy"},  # per-view world state
                                      # (vkpbr.distributed.worlds)
+     "animation": "Walk",            # what the poses' "time"s play (name or index;
+                                     # default: every animation of the file)
      "options": {"view": "final"}}   # RenderOptions fields (vkpbr.render.options)
+
+Poses with a "time" (docs/poses.md) are rendered at that time of the file's animations, as
+`vkpbr render --cameras` renders them (every view a time, or none); the time is part of the
+poses' digest, so a folder resumes only the times it was rendered at.
 
 Relative paths are relative to the job file's folder. The checks are plain Python, as in
 vkpbr.scene.poses (no schema library is a dependency): each error is one UsageError line
@@ -47,7 +53,7 @@ __all__ = ["Job", "SceneJob", "RenderSettings", "WorkItem", "load_job", "job_fro
 DEFAULT_VIEWS_PER_ITEM = 16
 DEFAULT_RETRIES = 2  # further attempts of a failed item, each on another actor where one is free
 MAX_SIDE = 16384
-_ENTRY_KEYS = frozenset({"scene", "cameras", "out", "size", "outputs", "linear", "msaa",
+_ENTRY_KEYS = frozenset({"animation", "scene", "cameras", "out", "size", "outputs", "linear", "msaa",
                          "colmap", "cache", "options", "strict", "allow_outside_paths",
                          "semantics", "batch", "worlds"})
 _JOB_KEYS = frozenset({"scenes", "views_per_item", "retries"})
@@ -80,6 +86,11 @@ class RenderSettings:
     # Views per GPU submission (render --cameras --batch): 0 renders frame by frame, each
     # view with its own shadow cascades; any other number gives the same pixels.
     batch: int = BATCH_VIEWS
+    # The animation time of views whose pose gives none ("time" in a poses file: per view;
+    # `vkpbr render --time`), and the animation(s) the times play (a name, an index, or
+    # None: all; `Renderer.render_many(times=, animation=)`).
+    time: float | None = None
+    animation: str | int | None = None
 
     def semantic_source(self) -> Any:
         """What Renderer(semantics=...) takes."""
@@ -348,17 +359,44 @@ def scene_entry(entry: object, where: str, base: Path) -> SceneJob:
         allow_outside_paths=_bool(entry, "allow_outside_paths", where, False),
         semantics=_semantics(entry.get("semantics", "mesh"), where, base),
         batch=_count(entry, "batch", where, BATCH_VIEWS, 0))
-    if any(getattr(p, "time", None) is not None for p in poses):
-        raise UsageError(f'{where}: cameras: poses with a "time" (an animation pose) are not '
-                         "rendered on Ray yet: render them with `vkpbr render --cameras`")
+    animation = _animation(entry.get("animation"), where)
+    if animation is not None:
+        settings = dataclasses.replace(settings, animation=animation)
+    view_times(poses, settings, f"{where}: cameras")  # every view a time, or none
     worlds = None
     if entry.get("worlds") is not None:
         from vkpbr.distributed.worlds import job_worlds
 
         worlds = job_worlds(entry["worlds"], len(poses), f"{where}: worlds", base,
                             settings.allow_outside_paths)
+    if worlds is not None and view_times(poses, settings) is not None:
+        raise UsageError(f'{where}: cameras with a "time" and worlds together are not rendered '
+                         "yet: give the times or the worlds")
     return SceneJob(settings, poses, colmap=_bool(entry, "colmap", where, False), where=where,
-                    worlds=worlds)
+                    worlds=worlds,
+                    extra=() if animation is None else (("animation", repr(animation)),))
+
+
+def view_times(poses: Sequence[Any], settings: RenderSettings, where: str = "cameras"
+               ) -> list[float] | None:
+    """The animation time of each view: its pose's "time", else `settings.time`; None when
+    neither gives one. Some views with a time and others without is a one-line error."""
+    given = [getattr(p, "time", None) for p in poses]
+    if all(t is None for t in given):
+        return None if settings.time is None else [settings.time] * len(given)
+    if settings.time is None and any(t is None for t in given):
+        missing = next(i for i, t in enumerate(given) if t is None)
+        raise UsageError(f'{where}: entry {missing} has no "time" while others do (give every '
+                         "view a time)")
+    return [settings.time if t is None else float(t) for t in given]
+
+
+def _animation(value: object, where: str) -> str | int | None:
+    """An entry's "animation": the name or index of the animation its times play."""
+    if value is None or (isinstance(value, str) and value) or (
+            isinstance(value, int) and not isinstance(value, bool) and value >= 0):
+        return value  # type: ignore[return-value]
+    raise UsageError(f"{where}: animation: expected an animation's name or index, got {value!r}")
 
 
 def _semantics(value: object, where: str, base: Path) -> str | tuple[tuple[str, int | str], ...]:

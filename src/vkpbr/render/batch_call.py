@@ -246,8 +246,9 @@ def _times_of(r: Any, views: CameraBatch, route: str, g: WorldArgs
               ) -> tuple[str, WorldCall | None, WorldPlan | None]:
     """A batch whose views each see the scene's animations at their own time: the distinct
     times become worlds (the animated nodes' world matrices, vkpbr.scene.animation.sample over
-    all of them at once); where the animations also drive skins, morph weights or
-    KHR_animation_pointer properties (which the worlds do not hold), view by view instead
+    all of them at once); where the animations also drive skins, morph weights,
+    KHR_animation_pointer properties or instances' copied skeletons (which the worlds do not
+    hold: SceneState.pose_copies), view by view instead
     ("views" and no plan: render_many(times=))."""
     from vkpbr.scene.animation import animation_indices, sample
 
@@ -261,7 +262,7 @@ def _times_of(r: Any, views: CameraBatch, route: str, g: WorldArgs
     channels = [ch for i in animation_indices(scene, g.animation)
                 for ch in scene.animations[i].channels]
     nodes = sorted({ch.node for ch in channels if ch.node is not None and ch.path != "weights"})
-    deforms = bool(np.any(state.skinned)) or any(
+    deforms = bool(np.any(state.skinned)) or bool(state.copies) or any(
         ch.path == "weights" or ch.kind in ("mesh", "light", "camera", "material") for ch in channels)
     if not nodes or deforms:
         return "views", None, None

@@ -113,8 +113,9 @@ class DeformLayout:
             if t:
                 self.morphed.append((r.tree, at, t, scene.meshes[r.mesh].morph_weights))
             at += t
-        self.weight_at, self.frames_at = weight_at, at
-        self.floats = at + 4 * len(records)
+        # The frames start at a multiple of 4 floats: deform.comp reads each as one vec4.
+        self.weight_at, self.frames_at = weight_at, (at + 3) // 4 * 4
+        self.floats = self.frames_at + 4 * len(records)
         self._bounds_tables(scene)
         self._joints: np.ndarray | None = None
         self._frames = np.zeros((len(records), 4))  # (centre, 1 / radius) per record
@@ -195,7 +196,8 @@ class DeformLayout:
         out = np.zeros(max(self.floats, 1), np.float32)
         if len(self.joint_nodes):
             joints = self._joints if self._joints is not None else world[self.joint_nodes] @ self.inverse_bind
-            out[:joints.size] = np.swapaxes(joints, -1, -2).ravel()
+            # (column-major: one transposing, converting pass, no float64 temporary)
+            out[:joints.size].reshape(-1, 4, 4)[:] = np.swapaxes(joints, -1, -2)
         for tree, at, t, default in self.morphed:
             w = weights.get(tree, default)
             if w is not None:
@@ -375,7 +377,13 @@ class DeformKernel:
     def steps(self, frame_index: int) -> list[Step]:
         """The frame's deform step: every deformed record's vertices posed from the slot's
         state. It ends with its own barrier (compute writes -> vertex input and shader
-        reads of the streams), which every later step draws after."""
+        reads of the streams), which every later step draws after.
+
+        Before it, "deform_wait" records nothing but is timed: the posed streams are every
+        frame slot's, so their first use in a frame waits for all earlier commands (the
+        previous frame still drawing from them: gpu/graph.py); its timestamp falls when
+        that wait ends, and FrameStats.pass_ms["deform"] is the kernel alone
+        (pass_ms["deform_wait"]: the previous frame's tail, and the frame's start)."""
         def record(cmd: Commands) -> None:
             cmd.bind_pipeline(self.pipeline)
             cmd.bind_set(0, self.sets[frame_index])
@@ -383,7 +391,8 @@ class DeformKernel:
             cmd.dispatch(work_groups((self.max_vertices, 1, 1), (_GROUP, 1, 1))[0], self.jobs)
             cmd.memory_barrier("compute", "vertex_input|vertex|compute")
 
-        return [Step("deform", record, (("posed", "storage"), ("prev_posed", "storage")))]
+        uses = (("posed", "storage"), ("prev_posed", "storage"))
+        return [Step("deform_wait", lambda cmd: None, uses), Step("deform", record, uses)]
 
     def resources(self) -> dict[str, BufferResource]:
         return {"posed": BufferResource(self.streams["positions"]),

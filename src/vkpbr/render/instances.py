@@ -22,6 +22,7 @@ later is one buffer write, as for any material.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from typing import Any
 
@@ -29,11 +30,14 @@ import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.render.blend_order import BlendOrder
-from vkpbr.render.deform import DeformKernel
+from vkpbr.render.deform import Deformed, DeformKernel, DeformLayout, convex_weights
 from vkpbr.render.frames import bind_instances
+from vkpbr.render.gpu_scene import LAZY_STREAMS
 from vkpbr.render.parts import FrameParts, lazy_compute
 from vkpbr.render.scene_state import GpuSceneState
 from vkpbr.render.transmission import transmits
+from vkpbr.scene.state import NodeCopies
+from vkpbr.scene.types import Skin
 
 __all__ = ["InstanceTable", "instance_api"]
 
@@ -47,6 +51,11 @@ class InstanceTable:
     free: dict[int, list[int]] = dataclasses.field(default_factory=dict)  # mesh -> draws
     live: set[int] = dataclasses.field(default_factory=set)  # draws
     node_materials: dict[int, int] = dataclasses.field(default_factory=dict)  # copy -> source
+    # Skinned and morphed meshes' instances: their copied skeletons (mesh -> NodeCopies)
+    # and skins (after the scene's: Deformed.skin indexes scene.skins + skins).
+    copies: dict[int, NodeCopies] = dataclasses.field(default_factory=dict)
+    skins: list[Skin] = dataclasses.field(default_factory=list)
+    roots: dict[int, int] = dataclasses.field(default_factory=dict)  # deformed draw -> root
     _mask: tuple[int, np.ndarray] | None = None  # (size, live as a mask), made on demand
     made_mask: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, bool))
 
@@ -65,22 +74,25 @@ def instance_api(renderer: Any) -> tuple[Any, ...]:
     if not hasattr(renderer, "_instance_table"):
         renderer._instance_table = InstanceTable()
 
-    def add_instances(mesh: int | str, matrices: np.ndarray) -> np.ndarray:
+    def add_instances(mesh: int | str, matrices: np.ndarray, time_offsets: Any = None) -> np.ndarray:
         """New instances of loaded mesh `mesh` (index or name) at (N, 4, 4) world matrices
-        or (N, 7) position + quaternion x, y, z, w rows; returns their (N,) instance ids."""
-        return _add(renderer, mesh, matrices)
+        or (N, 7) position + quaternion x, y, z, w rows; returns their (N,) instance ids.
+        A skinned or morphed mesh's instance has its own posed vertices and a copy of the
+        skeleton (`matrices` place it relative to the file's pose), played at the state's
+        time plus its `time_offsets` entry (seconds; default 0)."""
+        return _add(renderer, mesh, matrices, time_offsets)
 
     def move_instances(ids: Any, matrices: np.ndarray) -> None:
         """Place instances `ids` (from add_instances) at new world matrices or (N, 7) rows."""
         draws = _live(renderer, ids)
-        renderer.state.set_poses(renderer.state.draw_tree[draws], matrices)
+        renderer.state.set_poses(_roots(renderer, draws), matrices)
 
     def remove_instances(ids: Any) -> None:
         """Remove instances `ids` (from add_instances): hidden, their records free for the
         next add_instances of their mesh."""
         table: InstanceTable = renderer._instance_table
         draws = _live(renderer, ids)
-        renderer.state.set_visible(renderer.state.draw_tree[draws], False)
+        renderer.state.set_visible(_roots(renderer, draws), False)
         table.live.difference_update(draws.tolist())
         table._mask = None
         for d in draws.tolist():
@@ -115,14 +127,16 @@ def _mesh_index(renderer: Any, mesh: int | str) -> int:
     raise UsageError(f"add_instances: no mesh is named {mesh!r} (the scene's: {shown})")
 
 
-def _add(renderer: Any, mesh: int | str, matrices: np.ndarray) -> np.ndarray:
+def _add(renderer: Any, mesh: int | str, matrices: np.ndarray, time_offsets: Any = None
+         ) -> np.ndarray:
     from vkpbr.scene.state import _check_matrices, _check_rows, _poses_of, pose_matrices
 
     m = _mesh_index(renderer, mesh)
     gs = renderer.gpu_scene
-    if any(r.mesh == m for r in gs.deformed):
-        raise UsageError(f"add_instances: mesh {renderer.scene.meshes[m].name!r} is skinned or "
-                         "morphed: its instances need their own posed vertices (not supported)")
+    deformed = any(r.mesh == m for r in gs.deformed)
+    if time_offsets is not None and not deformed:
+        raise UsageError(f"add_instances: time_offsets: mesh {renderer.scene.meshes[m].name!r} "
+                         "is neither skinned nor morphed (nothing of it is animated)")
     if not len(renderer.scene.meshes[m].indices):
         raise UsageError(f"add_instances: mesh {renderer.scene.meshes[m].name!r} has no triangles")
     p = np.asarray(matrices, np.float64)
@@ -133,17 +147,48 @@ def _add(renderer: Any, mesh: int | str, matrices: np.ndarray) -> np.ndarray:
         p = pose_matrices(p)
     else:
         _check_matrices(p)
+    offsets = _offsets(time_offsets, n)
     table: InstanceTable = renderer._instance_table
     free = table.free.setdefault(m, [])
     if len(free) < n:  # at least doubles the mesh's records: few regrowths
-        _grow(renderer, m, max(n - len(free), len(table.made.get(m, []))))
+        grow = _grow_deformed if deformed else _grow
+        grow(renderer, m, max(n - len(free), len(table.made.get(m, []))))
     draws, table.free[m] = np.array(free[:n], np.int64), free[n:]
     table.live.update(draws.tolist())
     table._mask = None
     state = renderer.state
-    state.set_poses(state.draw_tree[draws], p)  # roots: local = world
-    state.set_visible(state.draw_tree[draws], True)
+    roots = _roots(renderer, draws)
+    state.set_poses(roots, p)  # roots: local = world
+    state.set_visible(roots, True)
+    if deformed:  # each instance's time offset, and its pose at the state's time
+        copies = table.copies[m]
+        copies.offsets[np.searchsorted(copies.roots, roots)] = offsets
+        state.pose_copies()
     return draws + 1
+
+
+def _roots(renderer: Any, draws: np.ndarray) -> np.ndarray:
+    """The instance root nodes of instance records `draws` (a deformed mesh's draw hangs
+    from its copy of the mesh's node, below the root)."""
+    table: InstanceTable = renderer._instance_table
+    nodes = renderer.state.draw_tree[draws].copy()
+    if table.roots:
+        for k, d in enumerate(draws.tolist()):
+            nodes[k] = table.roots.get(d, nodes[k])
+    return nodes
+
+
+def _offsets(value: Any, n: int) -> np.ndarray:
+    """(n,) time offsets: one number for all, or one each; finite."""
+    if value is None:
+        return np.zeros(n)
+    v = np.asarray(value, np.float64).reshape(-1)
+    if len(v) == 1:
+        v = np.full(n, v[0])
+    if len(v) != n or not np.all(np.isfinite(v)):
+        raise UsageError(f"add_instances: time_offsets must be one finite number or {n} of "
+                         f"them (one per instance), got {len(v)}")
+    return v
 
 
 def _live(renderer: Any, ids: Any) -> np.ndarray:
@@ -204,6 +249,90 @@ def _grow(renderer: Any, mesh: int, count: int) -> None:
     p = renderer.scene.meshes[mesh].positions
     box = np.array([p.min(axis=0), p.max(axis=0)]) if len(p) else np.zeros((2, 3))
     state.grow(count, box, [f"instance {i}" for i in ids])
+    _made(renderer, mesh, first, count)
+
+
+def _grow_deformed(renderer: Any, mesh: int, count: int) -> None:
+    """`count` more instances of a skinned or morphed `mesh`, free: each a new root with a
+    copy of the skeleton below it (the skin's joints and their ancestors; none for a morphed
+    mesh alone), a skin of its own on those copies, a posed region of its own in the vertex
+    streams (which are uploaded again, a stream per deformed instance), a deform record and a
+    draw; then the draw-dependent parts made again."""
+    gs, state, scene = renderer.gpu_scene, renderer.state, renderer.scene
+    table: InstanceTable = renderer._instance_table
+    src = next(r for r in gs.deformed if r.mesh == mesh and r.node >= 0)  # the file's record
+    copies = table.copies.get(mesh)
+    if copies is None:  # the mesh's node, its skeleton and their ancestors
+        joints = scene.skins[src.skin].joints if src.skin is not None else []
+        nodes = _skeleton(state.tree.parents, np.concatenate([[src.tree], joints]))
+        copies = table.copies[mesh] = NodeCopies(nodes, src.tree)
+    first, done = len(gs.draws), len(copies.roots)
+    ids = range(first + 1, first + count + 1)
+    bounded = src.skin is None or convex_weights(scene.meshes[mesh])
+    p = scene.meshes[mesh].positions
+    box = np.array([[-1.0] * 3, [1.0] * 3]) if bounded else np.array([p.min(axis=0), p.max(axis=0)])
+    roots = state.grow(count, box, [f"instance {i}" for i in ids], copies, deformed=True,
+                       skinned=src.skin is not None)
+    records = []
+    for k in range(count):
+        skin = None
+        if src.skin is not None:  # the file's skin, on this instance's copies of its joints
+            at = {int(s): j for j, s in enumerate(copies.sources)}
+            s = scene.skins[src.skin]
+            joints = copies.nodes[done + k][[at[int(j)] for j in s.joints]]
+            table.skins.append(Skin(s.name, joints, s.inverse_bind, None))
+            skin = len(scene.skins) + len(table.skins) - 1
+        records.append(Deformed(-1, -1, mesh, skin, int(state.draw_tree[first + k])))
+    table.roots.update(zip(range(first, first + count), roots.tolist(), strict=True))
+    offsets = _grow_posed(renderer, records)
+    gs.draws.extend(dataclasses.replace(d, vertex_offset=o, model=np.eye(4), deformed=True,
+                                        skinned=src.skin is not None, unbounded=not bounded)
+                    for d, o in zip(gs.instance_draws(mesh, count), offsets, strict=True))
+    view = copy.copy(scene)
+    view.skins = list(scene.skins) + table.skins
+    state.attach_deform(DeformLayout(view, gs.deformed),
+                        np.concatenate([state.deform_draws, np.arange(first, first + count)]))
+    _made(renderer, mesh, first, count)
+
+
+def _skeleton(parents: np.ndarray, joints: np.ndarray) -> np.ndarray:
+    """The joints and every ancestor of theirs, sorted (parents first)."""
+    keep = np.zeros(len(parents), bool)
+    todo = list(np.asarray(joints, np.int64).tolist())
+    while todo:
+        j = todo.pop()
+        if j >= 0 and not keep[j]:
+            keep[j] = True
+            todo.append(int(parents[j]))
+    return np.flatnonzero(keep)
+
+
+def _grow_posed(renderer: Any, records: list[Deformed]) -> list[int]:
+    """Posed regions for `records` (appended to GpuScene.deformed): the vertex streams and
+    indices are uploaded again with the regions after the others (the earlier ones keep
+    their offsets); returns the new regions' first vertices. The old buffers are destroyed
+    once the device is idle and nothing recorded names them any more (_rebuild follows)."""
+    gs, p = renderer.gpu_scene, renderer.parts
+    p.device.wait_idle()
+    renderer.batch_path.close()
+    p.recorder.free()
+    old = {id(b) for b in gs.streams.values()} | {id(gs.index_buffer)}
+    lazy = tuple(n for n in LAZY_STREAMS if n in gs.streams)
+    for obj in [o for o in gs._owned if id(o) in old]:
+        gs._owned.remove(obj)
+        obj.destroy()
+    first = len(gs.deformed)
+    gs.deformed.extend(records)
+    gs._upload_geometry()
+    if lazy:
+        gs.ensure_streams(lazy)
+    return list(gs.posed_offsets[first:])
+
+
+def _made(renderer: Any, mesh: int, first: int, count: int) -> None:
+    """Records first .. first + count of `mesh` made, free; their semantic ids the mesh's;
+    the draw-dependent parts made again."""
+    gs = renderer.gpu_scene
     table: InstanceTable = renderer._instance_table
     new = list(range(first, first + count))
     table.made.setdefault(mesh, []).extend(new)

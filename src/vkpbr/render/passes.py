@@ -195,7 +195,8 @@ def _instance_runs(draws: list[tuple[int, Any]]) -> list[tuple[int, Any, int]]:
     for index, d in draws:
         if runs:
             first, head, count = runs[-1]
-            if index == first + count and d.node == head.node and d.mesh == head.mesh:
+            if (index == first + count and d.node == head.node and d.mesh == head.mesh
+                    and d.vertex_offset == head.vertex_offset):  # (deformed: a region each)
                 runs[-1] = (first, head, count + 1)
                 continue
         runs.append((index, d, 1))

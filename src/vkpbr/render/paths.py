@@ -78,7 +78,7 @@ COPY_PATHS: dict[str, tuple[str, ...]] = {
 RASTER_STEPS = ("raster_small", "raster_big", "raster_masked", "raster_masked_big",
                 "raster_resolve")
 # Every timed step a frame can report in FrameStats.pass_ms, in frame order.
-STEP_NAMES = ("deform", "worlds", "shadows", "transmission", "cull", "prepass_opaque",
+STEP_NAMES = ("deform_wait", "deform", "worlds", "shadows", "transmission", "cull", "prepass_opaque",
               "prepass_opaque_double", *RASTER_STEPS, "opaque", "opaque_double", "mask", "ao",
               "classify", "shading", "outputs", "background", "blend", "views", "copy")
 

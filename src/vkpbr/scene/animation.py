@@ -146,6 +146,7 @@ def _sample_groups(chosen: list[Animation], times: np.ndarray, spans: dict, trs:
     written into `trs`; returns the id() of each channel done. None when two channels
     drive the same property (then the later must win: channel by channel)."""
     groups: dict[str, list[tuple[AnimationSampler, int, int]]] = {}
+    constant: list[tuple[str, int, np.ndarray, int]] = []
     seen: set[tuple[int, str]] = set()
     for anim in chosen:
         for ch in anim.channels:
@@ -157,45 +158,85 @@ def _sample_groups(chosen: list[Animation], times: np.ndarray, spans: dict, trs:
             s = anim.samplers[ch.sampler]
             if (ch.pointer is None and ch.path in trs and s.interpolation == "LINEAR"
                     and len(s.input) >= 2):
-                groups.setdefault(ch.path, []).append((s, ch.node, id(ch)))
+                if ch.path != "rotation" and _constant(s):  # (exporters key every bone's
+                    constant.append((ch.path, ch.node, s.output[0], id(ch)))  # translation)
+                else:
+                    groups.setdefault(ch.path, []).append((s, ch.node, id(ch)))
     done: set[int] = set()
+    for path, node, value, key in constant:  # a + u (a - a) is a, bit for bit
+        trs[path][:, node] = value
+        done.add(key)
     for path, members in groups.items():
         if len(members) < 2:
             continue
         value = _sample_linear([m[0] for m in members], times, path == "rotation", spans)
-        trs[path][:, [m[1] for m in members]] = value.transpose(1, 0, 2)
+        trs[path][:, [m[1] for m in members]] = value
         done.update(m[2] for m in members)
     return done
 
 
 def _sample_linear(samplers: list[AnimationSampler], times: np.ndarray, rotation: bool,
                    spans: dict) -> np.ndarray:
-    """(G, B, C) values of G LINEAR samplers at (B,) times: one gather and one
-    interpolation over all of them (sample_sampler's rules)."""
+    """(B, G, C) values of G LINEAR samplers at (B,) times: one gather and one
+    interpolation over all of them (sample_sampler's rules), in the (time, sampler) order
+    the caller writes them in. What depends on the keyframes alone (the concatenated
+    values, each rotation interval's arc) is made once per group of samplers (`_group`)."""
     found = [_span(s.input, times, spans) for s in samplers]
-    base = np.cumsum([0] + [len(s.input) for s in samplers[:-1]])
-    idx = np.stack([b + f[0] for b, f in zip(base, found, strict=True)]).reshape(-1)
-    u = np.stack([f[2] for f in found]).reshape(-1, 1)
-    if rotation:
-        v = _normalised(_slerp_intervals(samplers, idx, u))
+    base, table = _group(samplers, rotation)
+    first = found[0]
+    if all(f is first for f in found):  # one time accessor for the group (exporters' habit)
+        idx = first[0][:, None] + base
+        u = np.broadcast_to(first[2], (len(times), len(samplers)))[..., None]
     else:
-        values = np.concatenate([s.output for s in samplers])
-        a, b = values[idx], values[idx + 1]
-        v = a + u * (b - a)
-    return v.reshape(len(samplers), len(times), -1)
-
-
-def _slerp_intervals(samplers: list[AnimationSampler], idx: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """_slerp of keyframes idx and idx + 1 (into the samplers' concatenated keyframes) at
-    fractions u, with what depends on the interval alone (unit ends, the shorter arc's
-    sign, its angle and sine) made once per sampler (`_arcs`), not once per sample."""
-    parts = [_arcs(s) for s in samplers]
-    a_all, b_all, angle_all, inv_all = (np.concatenate([p[k] for p in parts]) for k in range(4))
-    a, b, angle, inv = a_all[idx], b_all[idx], angle_all[idx], inv_all[idx]
+        idx = np.stack([f[0] for f in found], axis=1) + base
+        u = np.stack([f[2][:, 0] for f in found], axis=1)[..., None]
+    if not rotation:
+        a, d = table[0][idx], table[1][idx]  # start and (end - start) of each interval
+        return a + u * d
+    a, b, angle, inv = (t[idx] for t in table)
     small = inv == 0.0
     wa = np.where(small, 1.0 - u, np.sin((1.0 - u) * angle) * inv)
     wb = np.where(small, u, np.sin(u * angle) * inv)
-    return wa * a + wb * b
+    return _normalised(wa * a + wb * b)
+
+
+_GROUPS: dict[tuple, tuple] = {}  # (sampler ids, rotation) -> (samplers, base, table)
+
+
+def _group(samplers: list[AnimationSampler], rotation: bool) -> tuple[np.ndarray, tuple]:
+    """(G,) each sampler's first keyframe in the concatenation and the concatenated tables:
+    (start, end - start) of every interval, or for rotations _arcs' (start, end, angle,
+    1 / sine). Cached while the same samplers (and outputs) live: a crowd samples the same
+    group every frame."""
+    key = (tuple(id(s) for s in samplers), rotation)
+    hit = _GROUPS.get(key)
+    if hit is not None and all(a is b and a.output is o for a, b, o in
+                               zip(samplers, hit[0], hit[3], strict=True)):
+        return hit[1], hit[2]
+    base = np.cumsum([0] + [len(s.input) for s in samplers[:-1]]).astype(np.int64)
+    if rotation:
+        parts = [_arcs(s) for s in samplers]
+        table = tuple(np.concatenate([p[k] for p in parts]) for k in range(4))
+    else:
+        values = np.concatenate([np.asarray(s.output, np.float64) for s in samplers])
+        nxt = np.concatenate([np.concatenate([s.output[1:], s.output[-1:]]) for s in samplers])
+        table = (values, np.asarray(nxt, np.float64) - values)
+    if len(_GROUPS) > 256:  # (files come and go: keep the cache small)
+        _GROUPS.clear()
+    _GROUPS[key] = (list(samplers), base, table, [s.output for s in samplers])
+    return base, table
+
+
+def _constant(s: AnimationSampler) -> bool:
+    """Whether every keyframe of a LINEAR sampler holds the same value (kept on the sampler,
+    as _arcs)."""
+    cached = getattr(s, "_constant", None)
+    if cached is not None and cached[0] is s.output:
+        return cached[1]
+    out = np.asarray(s.output)
+    same = bool(np.all(np.isfinite(out)) and np.array_equal(out, np.broadcast_to(out[:1], out.shape)))
+    s._constant = (s.output, same)  # type: ignore[attr-defined]
+    return same
 
 
 def _arcs(s: AnimationSampler) -> tuple[np.ndarray, ...]:

@@ -32,7 +32,7 @@ from vkpbr.scene.draw_table import DrawTable, blocks, determinants, normal_matri
 from vkpbr.scene.tree import NodeRef, NodeTree, quaternion_matrices
 from vkpbr.scene.types import Camera, Light, Scene
 
-__all__ = ["SceneState", "quaternion_matrices", "pose_matrices", "normal_matrices", "std140_pairs"]
+__all__ = ["SceneState", "NodeCopies", "quaternion_matrices", "pose_matrices", "normal_matrices", "std140_pairs"]
 
 QUATERNION_ORDERS = ("xyzw", "wxyz")
 SPACES = ("local", "world")
@@ -94,6 +94,10 @@ class SceneState:
         self.deform: object | None = None  # render/deform.py's DeformLayout, when attached
         self.deform_draws = np.zeros(0, np.int64)  # the draw of each deformed record
         self._record_of = -np.ones(len(self.draw_tree), np.int64)
+        # Copied skeletons of skinned and morphed instances (render/instances.py), which
+        # set_time poses at the time plus each copy's offset.
+        self.copies: list[NodeCopies] = []
+        self._chosen: list[int] | None = None  # the animations set_time last played
 
     def __len__(self) -> int:
         return len(self.tree)
@@ -199,8 +203,9 @@ class SceneState:
         for node in morphed:
             if node in pose.weights:
                 self.weights[int(node)] = np.asarray(pose.weights[node], np.float64)
-        self.time = float(time)
+        self.time, self._chosen = float(time), chosen
         self._changed(np.asarray(sorted(set(nodes) | {int(m) for m in morphed}), np.int64))
+        self.pose_copies()
 
     def set_material(self, material: int | str, base_color: Sequence[float] | None = None,
                      metallic: float | None = None, roughness: float | None = None,
@@ -283,6 +288,7 @@ class SceneState:
         self._shown_dirty = True
         self.weights.clear()
         self.pointers.clear()
+        self.time = None
         if self.materials:
             self.materials.clear()
             self.material_version += 1
@@ -318,10 +324,15 @@ class SceneState:
             parent_world[has] = self.world()[parents[has]]
         return np.linalg.solve(parent_world, world)
 
-    def grow(self, count: int, mesh_box: np.ndarray, names: Sequence[str]) -> np.ndarray:
+    def grow(self, count: int, mesh_box: np.ndarray, names: Sequence[str],
+             copies: NodeCopies | None = None, deformed: bool = False,
+             skinned: bool = False) -> np.ndarray:
         """`count` new draws, each below a new root node of the tree named `names` (new
         instances of a mesh whose (2, 3) box is `mesh_box`: render/instances.py), hidden until
-        placed; returns their tree nodes. The draw records and tree indices before stay."""
+        placed; returns their tree nodes. The draw records and tree indices before stay.
+        `copies`: below each new root, a copy of those nodes of the tree (a skinned mesh's
+        skeleton: NodeCopies, which takes the copies' indices); `deformed`: the draws are
+        posed by the deform step (`skinned`: by a skin, in world space)."""
         k = len(self.tree)
         nodes = np.arange(k, k + count)
         self._flush_pending()
@@ -332,23 +343,81 @@ class SceneState:
         self.visible = np.concatenate([self.visible, np.zeros(count, bool)])
         self._shown = np.concatenate([self._shown, np.zeros(count, bool)])
         self._dirty = np.concatenate([self._dirty, np.zeros(count, bool)])
-        self.draw_tree = np.concatenate([self.draw_tree, nodes])
+        draws = nodes
+        if copies is not None:
+            self._grow_copies(nodes, copies)
+            if copies.draw_source is not None:  # the draws hang from the copy of that node
+                draws = copies.nodes[-count:, int(np.flatnonzero(copies.sources == copies.draw_source)[0])]
+        self.draw_tree = np.concatenate([self.draw_tree, draws])
         self.draw_local = np.concatenate([self.draw_local, eye])
         self._below = np.concatenate([self._below, np.zeros(count, bool)])
         boxes = np.broadcast_to(np.asarray(mesh_box, np.float64), (count, 2, 3))
         self.mesh_boxes = np.concatenate([self.mesh_boxes, boxes])
         self.rest = np.concatenate([self.rest, np.zeros((count, 4, 4))])
-        self.skinned = np.concatenate([self.skinned, np.zeros(count, bool)])
+        self.skinned = np.concatenate([self.skinned, np.full(count, skinned)])
         self.draw_versions = np.concatenate([self.draw_versions, np.zeros(count, np.int64)])
         self._record_of = np.concatenate([self._record_of, -np.ones(count, np.int64)])
         if hasattr(self, "deformed"):
-            self.deformed = np.concatenate([self.deformed, np.zeros(count, bool)])
+            self.deformed = np.concatenate([self.deformed, np.full(count, deformed)])
         self.table.grow(boxes)
         self._direct = self._is_direct()
         self._since = None
         self._shown_dirty = True
         self._mark(nodes)
         return nodes
+
+    def _grow_copies(self, roots: np.ndarray, copies: NodeCopies) -> None:
+        """Below each of `roots`, a copy of the nodes `copies.sources` (parents first), whose
+        local transforms start as the file's; `copies` takes their indices (one row a root)."""
+        src, n, s = copies.sources, len(roots), len(copies.sources)
+        k = len(self.tree)
+        at = -np.ones(k, np.int64)
+        at[src] = np.arange(s)
+        first = k + np.arange(n)[:, None] * s  # (n, 1): each root's copies, in source order
+        parent = self.tree.parents[src]
+        inside = parent >= 0
+        parents = np.where(inside[None], first + at[np.maximum(parent, 0)][None], roots[:, None])
+        names = [self.tree.names[i] for i in src] * n
+        rest = np.tile(self.tree.local[src], (n, 1, 1))
+        self.tree = copied_tree(self.tree, names, parents.ravel(), rest)
+        self._local = np.concatenate([self._local, rest])
+        self._world = np.concatenate([self._world, np.tile(np.eye(4), (n * s, 1, 1))])
+        for name in ("visible", "_shown"):
+            setattr(self, name, np.concatenate([getattr(self, name), np.ones(n * s, bool)]))
+        self._dirty = np.concatenate([self._dirty, np.ones(n * s, bool)])
+        copies.nodes = np.concatenate([copies.nodes, first + np.arange(s)[None]])
+        copies.roots = np.concatenate([copies.roots, roots])
+        copies.offsets = np.concatenate([copies.offsets, np.zeros(n)])
+        self.copies.append(copies) if not any(c is copies for c in self.copies) else None
+
+    def pose_copies(self) -> None:
+        """The copied skeletons (`copies`: skinned and morphed instances) at the state's
+        time plus each one's offset, under the animations set_time last played: one
+        vectorised sample of all their times a group, the animated nodes' locals and the
+        morph weights written to the copies."""
+        if self.scene is None or self.time is None or not self.copies:
+            return
+        from vkpbr.scene.animation import sample
+
+        chosen = self._chosen
+        channels = [ch for i in (range(len(self.scene.animations)) if chosen is None else chosen)
+                    for ch in self.scene.animations[i].channels]
+        driven = {ch.node for ch in channels if ch.node is not None and ch.path != "weights"}
+        for c in self.copies:
+            if not len(c.roots):
+                continue
+            pose = sample(self.scene, self.time + c.offsets, chosen)
+            cols = np.flatnonzero(np.isin(c.sources, list(driven)))
+            if len(cols):
+                self._local[c.nodes[:, cols]] = pose.local[:, c.sources[cols]]
+            w = pose.weights.get(c.draw_source) if c.draw_source is not None else None
+            touched = [c.nodes[:, cols].ravel(), c.roots]
+            if w is not None:  # (the draws' nodes: the copies of draw_source)
+                col = int(np.flatnonzero(c.sources == c.draw_source)[0])
+                for node, row in zip(c.nodes[:, col].tolist(), w, strict=True):
+                    self.weights[node] = np.asarray(row, np.float64)
+                touched.append(c.nodes[:, col])
+            self._changed(np.concatenate(touched))
 
     def _is_direct(self) -> bool:
         """Whether draw i is tree node i with nothing below it (one draw a root-level node:
@@ -481,6 +550,40 @@ class SceneState:
         """World bounds (min, max) of the shown draws; zeros when nothing is shown."""
         self._update()
         return self._cached("bounds", self.table.bounds)  # type: ignore[return-value]
+
+
+@dataclasses.dataclass
+class NodeCopies:
+    """Copies of some tree nodes below instance roots (a skinned or morphed mesh's node, its
+    ancestors and its skeleton, one copy an instance): `sources` (S,) the copied nodes
+    (parents first); per instance its root, (S,) copy indices (`nodes`, one row a root) and
+    its time offset; `draw_source` the node whose copy each instance's draw hangs from and
+    whose animated morph weights it takes."""
+
+    sources: np.ndarray
+    draw_source: int | None = None
+    nodes: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 0), np.int64))
+    roots: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, np.int64))
+    offsets: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+
+    def __post_init__(self) -> None:
+        self.nodes = np.zeros((0, len(self.sources)), np.int64)
+
+
+def copied_tree(tree: NodeTree, names: list[str], parents: np.ndarray, local: np.ndarray
+                ) -> NodeTree:
+    """`tree` with new nodes after its own: `names`, `parents` (earlier indices) and `local`
+    transforms, given as matrices and of no file node (animation reaches copies through
+    SceneState.pose_copies, not through channels)."""
+    n = len(names)
+    return NodeTree(tree.names + names, np.concatenate([tree.parents, parents]),
+                    np.concatenate([tree.local, local]),
+                    np.concatenate([tree.translation, np.zeros((n, 3))]),
+                    np.concatenate([tree.rotation, np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))]),
+                    np.concatenate([tree.scale, np.ones((n, 3))]),
+                    np.concatenate([tree.uses_matrix, np.ones(n, bool)]),
+                    np.concatenate([tree.source, -np.ones(n, np.int64)]),
+                    dict(tree.weights), dict(tree.skin))
 
 
 def grown_tree(tree: NodeTree, names: list[str]) -> NodeTree:

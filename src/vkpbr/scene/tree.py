@@ -110,8 +110,11 @@ class NodeTree:
         """(..., K, 4, 4) world matrices of `local` (default: the rest pose's), with any
         leading batch axes (worlds): one batched product per depth level."""
         local = self.local if local is None else local
-        world = np.array(local, dtype=np.float64, copy=True)
-        for level in self.levels()[1:]:
+        levels = self.levels()
+        # Roots copied; every deeper level is written by its product (no copy of it first).
+        world = np.empty(np.shape(local), np.float64)
+        world[..., levels[0], :, :] = local[..., levels[0], :, :]
+        for level in levels[1:]:
             world[..., level, :, :] = world[..., self.parents[level], :, :] @ local[..., level, :, :]
         return world
 

@@ -28,8 +28,10 @@ layout(set = 0, binding = 4, std430) readonly buffer MorphDeltas { float morph_d
 // (first delta, targets, first joint matrix, first weight) in DeformState's floats.
 layout(set = 0, binding = 5, std430) readonly buffer DeformJobs { uvec4 deform_jobs[]; };
 // The frame slot's: the joint matrices (16 floats each, column-major), then the weights,
-// then each job's frame (centre, 1 / radius) from pc.frames_at.
-layout(set = 0, binding = 6, std430) readonly buffer DeformState { float deform_state[]; };
+// then each job's frame (centre, 1 / radius) from pc.frames_at. Read as vec4s: a joint
+// matrix is 4 16-byte loads, not 16 scalar ones (each job's joints start at a multiple of
+// 16 floats, its frame at a multiple of 4: render/deform.py DeformLayout).
+layout(set = 0, binding = 6, std430) readonly buffer DeformState { vec4 deform_state[]; };
 // The posed positions the previous frame drew (the motion output), from first_posed on.
 layout(set = 0, binding = 7, std430) writeonly buffer DeformPrev { float deform_prev[]; };
 
@@ -38,13 +40,13 @@ layout(push_constant, std430) uniform DeformPush {
     uint frames_at;  // the first frame float in DeformState
 } pc;
 
-vec3 vec3_of(float a[1], uint i);  // (declared for clarity; the reads below index directly)
+float state_float(uint i) {  // float i of DeformState
+    return deform_state[i >> 2u][i & 3u];
+}
 
-mat4 joint_matrix(uint at) {
-    return mat4(deform_state[at + 0u], deform_state[at + 1u], deform_state[at + 2u], deform_state[at + 3u],
-                deform_state[at + 4u], deform_state[at + 5u], deform_state[at + 6u], deform_state[at + 7u],
-                deform_state[at + 8u], deform_state[at + 9u], deform_state[at + 10u], deform_state[at + 11u],
-                deform_state[at + 12u], deform_state[at + 13u], deform_state[at + 14u], deform_state[at + 15u]);
+mat4 joint_matrix(uint at) {  // `at`: the matrix's first float, a multiple of 16
+    uint q = at >> 2u;
+    return mat4(deform_state[q], deform_state[q + 1u], deform_state[q + 2u], deform_state[q + 3u]);
 }
 
 void main() {
@@ -57,7 +59,7 @@ void main() {
     vec3 n = vec3(d_normals[3u * src], d_normals[3u * src + 1u], d_normals[3u * src + 2u]);
     vec4 t = d_tangents[src];
     for (uint k = 0u; k < b.y; ++k) {  // morph targets: p + sum w_k d_k (glTF 3.7.2.2)
-        float w = deform_state[b.w + k];
+        float w = state_float(b.w + k);
         if (w == 0.0) continue;
         uint m = b.x + (k * a.z + v) * 9u;
         p += w * vec3(morph_deltas[m], morph_deltas[m + 1u], morph_deltas[m + 2u]);
@@ -80,8 +82,8 @@ void main() {
         n = transpose(inverse(m3)) * n;
         t.xyz = m3 * t.xyz;
     }
-    uint f = pc.frames_at + 4u * gl_WorkGroupID.y;
-    p = (p - vec3(deform_state[f], deform_state[f + 1u], deform_state[f + 2u])) * deform_state[f + 3u];
+    vec4 frame = deform_state[(pc.frames_at >> 2u) + gl_WorkGroupID.y];  // (centre, 1 / radius)
+    p = (p - frame.xyz) * frame.w;
     float nl = length(n), tl = length(t.xyz);
     n = nl > 0.0 ? n / nl : vec3(0.0, 0.0, 1.0);
     t.xyz = tl > 0.0 ? t.xyz / tl : vec3(1.0, 0.0, 0.0);
