@@ -110,9 +110,13 @@ def test_depth_and_outputs_through_a_post_frame(chart) -> None:  # noqa: ANN001
 def test_a_batch_with_bloom_is_its_views(chart) -> None:  # noqa: ANN001
     eyes = np.array([[3.0, 2.0, 3.0], [-3.0, 1.0, 2.5]])
     views = CameraBatch.from_look_at(eyes, target=(0.0, 0.5, 0.0))
-    batch = chart.render_batch(views, size=(32, 24), bloom=0.4)
+    # The layered batch's guarantee (bit for bit its views on the fragment path); the compute
+    # batch's bound is the next test's. (auto picks the compute batch on GPUs: 57 values 1-3
+    # apart on the H200.)
+    batch = chart.render_batch(views, size=(32, 24), bloom=0.4, pipeline="forward")
     for i in range(len(eyes)):
-        np.testing.assert_array_equal(batch[i], chart.render(views.camera(i), size=(32, 24), bloom=0.4))
+        np.testing.assert_array_equal(batch[i], chart.render(views.camera(i), size=(32, 24), bloom=0.4,
+                                                             pipeline="forward"))
 
 
 def test_a_compute_batch_blooms_each_view_alone(chart) -> None:  # noqa: ANN001
@@ -128,10 +132,16 @@ def test_a_compute_batch_blooms_each_view_alone(chart) -> None:  # noqa: ANN001
     assert "bloom" in chart.last_stats.pass_ms
     plain = chart.render_batch(views, size=size, pipeline="compute")
     for i in range(len(eyes)):
-        one = chart.render(views.camera(i), size=size, bloom=0.6, pipeline="compute",
-                           raster="compute")
+        kw = {"size": size, "pipeline": "compute", "raster": "compute"}
+        one = chart.render(views.camera(i), bloom=0.6, **kw)
         off = np.abs(batch[i].astype(int) - one)
-        assert off.max() <= 1, (i, off.max())
+        # The bloom adds nothing to what the views differ by without it: on lavapipe they are
+        # equal (0); on the H200 a compute-batch view can differ from its frame at a few
+        # edge pixels (docs/batch.md's bound), which the bloom then spreads at less than
+        # full weight (run l: 11 with bloom where the views alone differ more).
+        base = np.abs(plain[i].astype(int) - chart.render(views.camera(i), **kw)).max()
+        assert off.max() <= max(base, 1), (i, off.max(), base)
+        assert np.percentile(off, 99) <= 1, (i, np.percentile(off, 99))
         assert np.abs(batch[i].astype(int) - plain[i]).max() > 8  # the bloom is there
 
 
