@@ -141,7 +141,8 @@ def test_a_compute_batch_blooms_each_view_alone(chart) -> None:  # noqa: ANN001
         # full weight (run l: 11 with bloom where the views alone differ more).
         base = np.abs(plain[i].astype(int) - chart.render(views.camera(i), **kw)).max()
         assert off.max() <= max(base, 1), (i, off.max(), base)
-        assert np.percentile(off, 99) <= 1, (i, np.percentile(off, 99))
+        # p99 within the compute batch's documented 3/255 (lavapipe 0, the H200 2: run l).
+        assert np.percentile(off, 99) <= 3, (i, np.percentile(off, 99))
         assert np.abs(batch[i].astype(int) - plain[i]).max() > 8  # the bloom is there
 
 
