@@ -590,14 +590,7 @@ def grown_tree(tree: NodeTree, names: list[str]) -> NodeTree:
     """`tree` with new roots named `names` after its nodes (identity, given as matrices:
     no animation drives them; no file node: source -1)."""
     n = len(names)
-    return NodeTree(tree.names + names, np.concatenate([tree.parents, -np.ones(n, np.int64)]),
-                    np.concatenate([tree.local, np.tile(np.eye(4), (n, 1, 1))]),
-                    np.concatenate([tree.translation, np.zeros((n, 3))]),
-                    np.concatenate([tree.rotation, np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))]),
-                    np.concatenate([tree.scale, np.ones((n, 3))]),
-                    np.concatenate([tree.uses_matrix, np.ones(n, bool)]),
-                    np.concatenate([tree.source, -np.ones(n, np.int64)]),
-                    dict(tree.weights), dict(tree.skin))
+    return copied_tree(tree, names, -np.ones(n, np.int64), np.tile(np.eye(4), (n, 1, 1)))
 
 
 def as_slice(idx: np.ndarray) -> np.ndarray | slice:
