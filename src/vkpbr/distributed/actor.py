@@ -104,8 +104,8 @@ def world_views(renderer: Any, cameras: list[Any], lights: Any, settings: Render
     set_material), as a batch of worlds renders it (docs/batch.md). Two routes give them:
 
     - a batch of worlds, `render_batch(worlds=..., world_materials=...)`, `settings.batch`
-      views at a time, where shadows are off: a batch's shadow maps are the renderer's
-      state's, shared by every world;
+      views at a time, where shadows are off (a batch of worlds gives each world one
+      scene-wide map a light, not the cascades a frame fits to its camera: docs/batch.md);
     - else each world set on the renderer's state in turn and its views rendered as plain
       views are (a batch, or frame by frame with batch 0), so each world casts its own
       shadows; the state is put back afterwards.
