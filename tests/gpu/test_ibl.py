@@ -376,7 +376,7 @@ def test_render_furnace(e2e) -> None:  # noqa: ANN001
 
 def test_render_two_tone_matches_monte_carlo(e2e) -> None:  # noqa: ANN001
     """Grey dielectrics and gold metals lit by a sky of 1 over a ground of 0.1 (an EXR):
-    every sphere pixel against the Monte Carlo integral (1024 samples) at its n and v.
+    every other sphere pixel against the Monte Carlo integral (1024 samples) at its n and v.
 
     The split sum (pre-filtered radiance times the lobe's albedo) is exact for a uniform
     environment but not for a sharp horizon crossing the lobe: where it does, at grazing
@@ -399,7 +399,10 @@ def test_render_two_tone_matches_monte_carlo(e2e) -> None:  # noqa: ANN001
         r.check_validation()
     finally:
         r.close()
+    # Every other sphere pixel in raster order (the Monte Carlo reference is the test's
+    # cost: 13 s for all of them on the 2-core machine); each sphere keeps hundreds.
     on = index >= 0
+    on[on] = np.arange(on.sum()) % 2 == 0
     c = np.where((index[on] >= 3)[:, None], gold, grey)
     metallic = (index[on] >= 3).astype(float)
     rough = np.asarray(ROUGHNESS)[index[on] % 3]
@@ -418,7 +421,7 @@ def test_render_two_tone_matches_monte_carlo(e2e) -> None:  # noqa: ANN001
         assert np.abs(mean_got - mean_ref).max() < 0.03 * mean_ref.max(), i
     # The background is the panorama: sky above the horizon, ground below.
     rays = pixel_rays(E2E_CAMERA, *E2E_SIZE)
-    off = ~on & (np.abs(rays[..., 1]) > 0.08)  # 2 texels of the 32^2 sharpest level
+    off = (index < 0) & (np.abs(rays[..., 1]) > 0.08)  # 2 texels of the 32^2 sharpest level
     np.testing.assert_allclose(got[off][:, 0], np.where(rays[off][:, 1] > 0, 1.0, 0.1),
                                rtol=2e-3)
 
