@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import json
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -36,14 +35,11 @@ def test_unused_materials_cost_no_descriptor_sets(tmp_path: Path) -> None:
     many = load_scene(_file(tmp_path, 29_000))
     one = load_scene(_file(tmp_path, 1))
     paths = ("forward", "compute")
-    t0 = time.thread_time()  # this thread's CPU: the set-up's Python, not lavapipe's threads
     with Renderer(one) as r:
         expected = [r.render(size=(32, 24), pipeline=p) for p in paths]
-        t1 = time.thread_time()
+    # (No time asserted: what made it slow was a descriptor set per material, counted below.)
     with Renderer(many) as r:
         images = [r.render(size=(32, 24), pipeline=p) for p in paths]
-        extra = time.thread_time() - t1 - (t1 - t0)
-        assert extra < 5, f"{extra:.1f} s of CPU for 28,999 more materials (18 s before)"
         sets = r.gpu_scene.material_sets
         assert len(sets) == 29_001 and len(sets._sets) <= 2  # the used one (and the default)
     for path, image, want in zip(paths, images, expected, strict=True):
