@@ -19,9 +19,8 @@ import argparse
 import dataclasses
 from pathlib import Path
 
-from bench_paths import PATHS, measure, table
+from bench_paths import PATHS, scene_rows, table
 
-from vkpbr.render.renderer import Renderer
 from vkpbr.scene.loader import load_scene
 
 # Each extension as Material fields (dispersion needs a volume that transmits).
@@ -60,15 +59,7 @@ def main() -> None:
     paths = PATHS if args.paths == "all" else [p for p in PATHS if p[0] == "compute"]
     scenes = [("none", plain)] + [(name, with_extension(plain, indices, EXTENSIONS[name]))
                                   for name in args.extensions.split(",")]
-    rows = []
-    for label, scene in scenes:
-        with Renderer(scene) as r:
-            print(f"device: {r.device.info.name}; extension: {label}")
-            for size in sizes:
-                for pipeline, raster in paths:
-                    row = measure(r, size, args.frames, [r.automatic_sun()], lighting="pbr",
-                                  pipeline=pipeline, raster=raster)
-                    rows.append({**row, "extension": label})
+    rows = scene_rows(scenes, sizes, args.frames, "extension", paths)
     table(rows, ("extension", "pipeline", "raster"))
 
 

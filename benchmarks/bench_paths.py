@@ -100,6 +100,23 @@ def floor_lights(scene, n: int) -> list[Light]:  # noqa: ANN001
             for x, z in xz]
 
 
+def scene_rows(scenes: list[tuple[str, object]], sizes: list[tuple[int, int]], frames: int,
+               key: str, paths: tuple = PATHS) -> list[dict]:
+    """`measure` of each (label, scene) at every size and frame path, lit by the automatic sun
+    (bench_materials.py, bench_transmission.py: a scene with and without a material feature),
+    each row labelled `key`: label."""
+    rows = []
+    for label, scene in scenes:
+        with Renderer(scene) as r:
+            print(f"device: {r.device.info.name}; {key}: {label}")
+            for size in sizes:
+                for pipeline, raster in paths:
+                    row = measure(r, size, frames, [r.automatic_sun()], lighting="pbr",
+                                  pipeline=pipeline, raster=raster)
+                    rows.append({**row, key: label})
+    return rows
+
+
 def table(rows: list[dict], keys: tuple[str, ...]) -> None:
     head = ["size", *keys, "GPU ms", "mean", "max", "shadow layers drawn", *STEPS,
             "fps (NumPy)", "fps (GPU only)", "draw() ms", "of which driver", "Python alone"]

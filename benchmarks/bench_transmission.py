@@ -15,9 +15,8 @@ import argparse
 import dataclasses
 from pathlib import Path
 
-from bench_paths import PATHS, measure, table
+from bench_paths import scene_rows, table
 
-from vkpbr.render.renderer import Renderer
 from vkpbr.scene.loader import load_scene
 
 
@@ -41,15 +40,8 @@ def main() -> None:
     indices = {int(i) for i in args.materials.split(",")}
     glass = with_glass(plain, indices)
     sizes = [tuple(int(x) for x in s.split("x")) for s in args.sizes.split(",")]
-    rows = []
-    for label, scene in (("none", plain), ("materials " + args.materials, glass)):
-        with Renderer(scene) as r:
-            print(f"device: {r.device.info.name}; transmissive: {label}")
-            for size in sizes:
-                for pipeline, raster in PATHS:
-                    row = measure(r, size, args.frames, [r.automatic_sun()], lighting="pbr",
-                                  pipeline=pipeline, raster=raster)
-                    rows.append({**row, "transmissive": label})
+    rows = scene_rows([("none", plain), ("materials " + args.materials, glass)], sizes, args.frames,
+                      "transmissive")
     table(rows, ("transmissive", "pipeline", "raster"))
 
 
