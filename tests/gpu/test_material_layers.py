@@ -164,6 +164,19 @@ def uniform_env(tmp_path_factory) -> Path:  # noqa: ANN001
     return path
 
 
+def _uniform_pair(make_renderer, mat, plain, tmp_path: Path, uniform_env: Path,  # noqa: ANN001, ANN202
+                  pipeline: str):
+    """Renderers of a plane of `mat` and of `plain` (the material without the layer) lit by
+    the uniform environment alone, and the render options (GTAO off: the layers' image-based
+    terms, not occlusion); skips the compute path where the device lacks it."""
+    kw = {"env_spec": EnvironmentSpec.small(), "cache_dir": tmp_path / "cache"}
+    r = make_renderer(plane_scene(mat), **kw)
+    if pipeline == "compute" and not r.device.compute_path:
+        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+    opts = {"env": str(uniform_env), "lights": [], "env_background": False, "ao": "off"}
+    return r, make_renderer(plane_scene(plain), **kw), opts
+
+
 @pytest.mark.parametrize("pipeline", ["forward", "compute"])
 @pytest.mark.parametrize("material", ["clearcoat", "sheen", "transmission-volume", "everything"])
 def test_environment_layers_in_a_uniform_environment(make_renderer, uniform_env: Path,
@@ -171,14 +184,9 @@ def test_environment_layers_in_a_uniform_environment(make_renderer, uniform_env:
                                                      pipeline: str) -> None:
     mat = LAYERED[material]
     opaque = dataclasses.replace(mat, transmission_factor=0.0)
-    kw = {"env_spec": EnvironmentSpec.small(), "cache_dir": tmp_path / "cache"}
-    r = make_renderer(plane_scene(mat), **kw)
-    if pipeline == "compute" and not r.device.compute_path:
-        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
-    r0 = make_renderer(plane_scene(opaque), **kw)
-    # GTAO off: the layers' image-based terms against the reference, not occlusion (which
-    # occludes the ibl-diffuse view k_d is measured from, not the transmission's share).
-    opts = {"env": str(uniform_env), "lights": [], "env_background": False, "ao": "off"}
+    # GTAO off (in opts): occlusion would occlude the ibl-diffuse view k_d is measured from,
+    # not the transmission's share.
+    r, r0, opts = _uniform_pair(make_renderer, mat, opaque, tmp_path, uniform_env, pipeline)
     k_d = render(r0, "ibl-diffuse", pipeline, **opts) / ENV_RADIANCE
     want = mirror(mat, LIGHT, env_radiance=ENV_RADIANCE, ibl_diffuse_weight=k_d)
     got = {view: render(r, view, pipeline, **opts)
@@ -511,11 +519,7 @@ def test_diffuse_transmission_in_a_uniform_environment(make_renderer, uniform_en
     colour, factor) / c, channel by channel (split_sum_ibl's mix, analytic here)."""
     mat = DIFFUSE_TRANSMISSIVE
     plain = dataclasses.replace(mat, diffuse_transmission_factor=0.0)
-    kw = {"env_spec": EnvironmentSpec.small(), "cache_dir": tmp_path / "cache"}
-    opts = {"env": str(uniform_env), "lights": [], "env_background": False, "ao": "off"}
-    r, r0 = make_renderer(plane_scene(mat), **kw), make_renderer(plane_scene(plain), **kw)
-    if pipeline == "compute" and not r.device.compute_path:
-        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+    r, r0, opts = _uniform_pair(make_renderer, mat, plain, tmp_path, uniform_env, pipeline)
     c = np.asarray(mat.base_color_factor[:3])
     f, dtc = mat.diffuse_transmission_factor, np.asarray(mat.diffuse_transmission_color_factor)
     got = render(r, "ibl-diffuse", pipeline, **opts)
@@ -535,11 +539,7 @@ def test_iridescence_in_a_uniform_environment(make_renderer, uniform_env: Path, 
     mirror's eval_iridescence at n.v (split_sum_ibl's mix, written out: no table needed)."""
     mat = IRIDESCENT
     plain = dataclasses.replace(mat, iridescence_factor=0.0)
-    kw = {"env_spec": EnvironmentSpec.small(), "cache_dir": tmp_path / "cache"}
-    opts = {"env": str(uniform_env), "lights": [], "env_background": False, "ao": "off"}
-    r, r0 = make_renderer(plane_scene(mat), **kw), make_renderer(plane_scene(plain), **kw)
-    if pipeline == "compute" and not r.device.compute_path:
-        pytest.skip(f"{r.device.info.name} lacks the compute path's features")
+    r, r0, opts = _uniform_pair(make_renderer, mat, plain, tmp_path, uniform_env, pipeline)
     _, n, v, _ = pixel_geometry()
     c = np.asarray(mat.base_color_factor[:3])
     f_d, f_m = ref.iridescence_fresnel(ref.Layers.of(mat), np.clip(np.sum(n * v, -1), 0, 1),
