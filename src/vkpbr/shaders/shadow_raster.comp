@@ -33,6 +33,7 @@
 #extension GL_KHR_shader_subgroup_basic : require
 #include "generated.glsl"
 #include "frustum.glsl"
+#include "raster_clip.glsl"
 
 #if KERNEL == 2
 layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;
@@ -122,46 +123,6 @@ bool fetch(uint g, uint m, uint w, out uvec3 vi, out vec4 c[3]) {
         c[j] = layer_vp[m] * (model * vec4(position(vi[j]), 1.0));  // as shadow.vert's
     }
     return true;
-}
-
-// Whether the triangle lies within both clip planes, where clip() would return its three
-// corners unchanged (raster.comp's unclipped: clip()'s arrays live in local memory).
-bool unclipped(vec4 c[3]) {
-    vec3 z = vec3(c[0].z, c[1].z, c[2].z), w = vec3(c[0].w, c[1].w, c[2].w);
-    return all(greaterThanEqual(w - z, vec3(0.0))) && all(greaterThanEqual(z, vec3(0.0)));
-}
-
-// The polygon left of the triangle inside z <= w and z >= 0: at most 5 corners.
-int clip(vec4 c[3], out vec4 poly[5]) {
-    vec4 a[5], b[5];
-    int n = 3;
-    for (int j = 0; j < 3; ++j) a[j] = c[j];
-    for (int plane = 0; plane < 2; ++plane) {
-        int k = 0;
-        for (int j = 0; j < n; ++j) {
-            vec4 p = a[j], q = a[(j + 1) % n];
-            float dp = plane == 0 ? p.w - p.z : p.z, dq = plane == 0 ? q.w - q.z : q.z;
-            if (dp >= 0.0 && k < 5) b[k++] = p;
-            if ((dp >= 0.0) != (dq >= 0.0) && k < 5) b[k++] = mix(p, q, dp / (dp - dq));
-        }
-        n = k;
-        for (int j = 0; j < n; ++j) a[j] = b[j];
-    }
-    for (int j = 0; j < n; ++j) poly[j] = a[j];
-    return n;
-}
-
-float edge(vec2 a, vec2 b, vec2 p) { return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x); }
-
-// Narrow [xl, xr] to where the edge a -> b can be >= 0 on the row at py (raster.comp's).
-void edge_span(vec2 a, vec2 b, float py, inout float xl, inout float xr) {
-    float slope = b.y - a.y, rhs = (b.x - a.x) * (py - a.y);
-    if (slope == 0.0) {
-        if (rhs < 0.0) xr = xl - 1.0;
-        return;
-    }
-    float x = a.x + rhs / slope - 0.5;
-    if (slope > 0.0) xr = min(xr, floor(x) + 1.0); else xl = max(xl, ceil(x) - 1.0);
 }
 
 // Triangle g in layer m: its clipped polygon in texels (x, y, depth), the polygon's `edge`
