@@ -348,7 +348,13 @@ def main() -> None:
     ap.add_argument("--only", default="poses,instances,walk,engine,crowd")
     ap.add_argument("--size", default="1920x1080", help="the crowd rows' image size, WxH")
     ap.add_argument("--json")
+    ap.add_argument("--shadow-steps", action="store_true",
+                    help="time the compute shadow kernels apart (shadow_raster.TIMED_STEPS)")
     args = ap.parse_args()
+    if args.shadow_steps:
+        from vkpbr.render import shadow_raster
+
+        shadow_raster.TIMED_STEPS = True
     rows: list[dict] = []
     if "poses" in args.only:
         rows += set_poses_rows()
@@ -375,6 +381,9 @@ def main() -> None:
     for row in rows:
         cells = [f"{row[k]:.3f}" if isinstance(row.get(k), float) else "" for k in keys]
         print(f"| {row['row']} | " + " | ".join(cells) + " |")
+    for row in rows:  # where the GPU time goes (the crowd rows)
+        if row.get("steps"):
+            print(f"| {row['row']} | GPU ms by step: {row['steps']} |")
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1))
 

@@ -41,11 +41,12 @@ from vkpbr.gpu.graph import BufferResource, Step
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.deform import DEFORMED_RADIUS, UNBOUNDED_RADIUS
 
-__all__ = ["ShadowRaster", "WorldJob", "wants_compute", "SET_ROWS"]
+__all__ = ["ShadowRaster", "WorldJob", "wants_compute", "SET_ROWS", "big_list_bytes"]
 
 SMALL_GROUP = 64  # shadow_small / shadow_masked: one (triangle, layer) an invocation
 MAX_GROUPS_X = 65535
 BIG_AREA, BIG_CHUNK = 256, 16384  # raster.comp's opaque split (compute_path.RasterTuning)
+BIG_ENTRY = 4  # uints a listed band: (triangle, matrix | world << 6, band, caster row)
 MASKED_AREA = 64  # masked triangles over this many box texels: the work group covers them
 PUSH_BYTES = 128  # shadow_raster.comp's push constants
 MAX_Z = 65535  # a dispatch's (world, layer) invocations in z
@@ -94,11 +95,31 @@ def wants_compute(choice: Any, device: Any, measured: bool | None = None) -> boo
     return name == "compute"
 
 
+def big_list_bytes(capacity: int) -> int:
+    """Bytes of a big-triangle list of `capacity` bands: its count and dispatch size, then
+    the entries (shadow_raster.comp's Big)."""
+    return 4 * (4 + BIG_ENTRY * capacity)
+
+
+def _chunks(firsts: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """(row, first triangle, triangles, 0) for each run of up to SMALL_GROUP triangles of
+    each row (rows of `counts` triangles from `firsts`): shadow_small's work groups."""
+    per_row = -(-counts // SMALL_GROUP)
+    rows = np.repeat(np.arange(len(counts), dtype=np.int64), per_row)
+    k = np.arange(len(rows)) - np.repeat(np.cumsum(per_row) - per_row, per_row)
+    out = np.zeros((len(rows), 4), np.uint32)
+    out[:, 0] = rows
+    out[:, 1] = firsts[rows] + SMALL_GROUP * k
+    out[:, 2] = np.minimum(counts[rows] - SMALL_GROUP * k, SMALL_GROUP)
+    return out
+
+
 class _Table:
     """The caster draws of one draw classification: opaque rows first (their triangles
     numbered from 0 over the table), then one row a masked or blended draw; a row is (first
     triangle, first index, vertex offset, record in Instances), then its mesh's bounding
-    sphere in the mesh's space (float32 bits; a deformed draw's never culls)."""
+    sphere in the mesh's space (float32 bits; a deformed draw's never culls). After the
+    rows, the opaque rows' chunks (`_chunks`) from uvec4 `chunks_at`."""
 
     def __init__(self, device: Any, gs: Any, classes: Sequence[str]) -> None:
         casters = [(i, d, c) for i, (d, c) in enumerate(zip(gs.draws, classes, strict=True))
@@ -122,7 +143,12 @@ class _Table:
             first += d.index_count // 3
         if not masked:
             self.opaque_triangles = first
-        self.buffer = upload_buffer(device, rows, "storage", name="shadow caster table")
+        n = len(opaque)
+        chunks = _chunks(rows[:n, 0].astype(np.int64),
+                         np.array([d.index_count // 3 for _, d in opaque], np.int64))
+        self.chunks_at, self.chunks = 2 * len(rows), len(chunks)
+        table = np.concatenate([rows.reshape(-1, 4), chunks]) if len(chunks) else rows
+        self.buffer = upload_buffer(device, table, "storage", name="shadow caster table")
 
 
 def _sphere(positions: np.ndarray, d: Any) -> tuple[float, float, float, float]:
@@ -200,7 +226,7 @@ class ShadowRaster:
         # (triangle, matrix, band) entries: a band is ~BIG_CHUNK texels; what does not fit is
         # drawn by the invocation that found it.
         self.big_capacity = max(1 << 18, texels // 64)  # (3 MiB at the least)
-        self.big = self._own(Buffer(self.device, 4 * (4 + 3 * self.big_capacity),
+        self.big = self._own(Buffer(self.device, big_list_bytes(self.big_capacity),
                                     "storage|transfer_dst|indirect", name="shadow big triangles"))
         self._images = key
 
@@ -253,7 +279,7 @@ class ShadowRaster:
                  if job is None else (job.map_size, job.cube_size, job.cube_base, job.big_capacity))
         push[:16] = (table.opaque_triangles, max(table.opaque_rows, 1), 0, 0, sizes[0], sizes[1],
                      sizes[2], self.max_layers, sizes[3], int(self.gs.has_colors), BIG_AREA,
-                     BIG_CHUNK, MASKED_AREA, spot, 0, 0)
+                     BIG_CHUNK, MASKED_AREA, spot, table.chunks_at, table.chunks)
         bias = push.view(np.float32)
         for k, kind in enumerate(_KINDS):
             bias[16 + k], bias[20 + k] = self.depth_bias[kind]
@@ -311,9 +337,8 @@ class ShadowRaster:
         def small(cmd: Any) -> None:
             bind(cmd, "small")
             for matrix, layers, _ in jobs:
-                n = -(-table.opaque_triangles // SMALL_GROUP)
-                if n:
-                    dispatch(cmd, matrix, layers, n)
+                if table.chunks:  # a work group a chunk
+                    dispatch(cmd, matrix, layers, table.chunks)
 
         def args(cmd: Any) -> None:
             bind(cmd, "args")

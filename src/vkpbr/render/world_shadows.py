@@ -30,7 +30,7 @@ import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.gpu.buffer import Buffer
-from vkpbr.render.shadow_raster import WorldJob
+from vkpbr.render.shadow_raster import WorldJob, big_list_bytes
 from vkpbr.render.shadows import ShadowEntry, ShadowPlan
 
 __all__ = ["WorldShadows", "world_plan", "world_layout", "casters"]
@@ -119,7 +119,7 @@ class WorldShadows:
             # (triangle, matrix | world, band) entries of big triangles; the rest are drawn
             # by the invocation that finds them
             self.big_capacity = max(1 << 16, self.bytes // 4 // 256)
-            self.big = Buffer(self.device, 4 * (4 + 3 * self.big_capacity),
+            self.big = Buffer(self.device, big_list_bytes(self.big_capacity),
                               "storage|transfer_dst|indirect", name="world shadow big triangles")
             self.maps.bind_world_depths(self.depths)
             self.generation += 1

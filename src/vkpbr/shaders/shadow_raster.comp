@@ -19,10 +19,17 @@
 // (the world's records, as views[].instance_base names them for the main rasteriser) and its
 // texels are its world's, pc.world.z texels a world (no copy: the shading reads them). A
 // frame's maps are world 0 of one: pc.world = (0, 0, 0, layers).
-// KERNEL 1 (shadow_small): one invocation a (opaque caster triangle, layer); triangles whose
-//   box exceeds pc.big_area texels are listed as bands of rows of ~pc.big_chunk box texels.
+// KERNEL 1 (shadow_small): one invocation a (opaque caster triangle, layer), a work group a
+//   chunk of up to 64 triangles of one caster row (the table's chunk list: the row is the
+//   group's, so its bounding-sphere test is uniform and no invocation searches the rows);
+//   triangles whose box exceeds pc.big_area texels are listed as bands of rows of
+//   ~pc.big_chunk box texels.
 // KERNEL 3 (shadow_args): the listed bands' dispatch size.
-// KERNEL 2 (shadow_big): one work group a listed band, set up once in shared memory.
+// KERNEL 2 (shadow_big): one subgroup a listed band, every lane setting it up alike (the
+//   same loads: broadcasts), no shared memory and no barrier: a work group's subgroups take
+//   their bands independently, so a band's set-up latency hides behind the others' drawing
+//   (one work group a band, set up by one invocation behind two barriers, left Sponza's
+//   111 k bands to wait on it).
 // KERNEL 4 (shadow_masked): one invocation a (triangle of one masked caster draw, layer),
 //   its material's set 1 bound; a texel counts where the base colour's alpha (texture x
 //   factor x COLOR_0, as shadow_mask.frag) reaches the cutoff, sampled at the texel's
@@ -52,11 +59,12 @@ layout(set = 4, binding = 40, std430) readonly buffer ShadowMatrices {
 };
 // Two uvec4 a caster draw: its first triangle over the table, first index, vertex offset and
 // its record in Instances (the scene state's model matrix 2 * record); then its mesh's
-// bounding sphere in the mesh's space (float bits: centre, radius).
+// bounding sphere in the mesh's space (float bits: centre, radius). From uvec4
+// pc.chunks_at, KERNEL 1's chunks: (row, first triangle, triangles, 0) each.
 layout(set = 4, binding = 41, std430) readonly buffer Casters { uvec4 casters[]; };
 layout(set = 4, binding = 42, std430) buffer Depths { uint depths[]; };
 // [0] entries listed, [1..3] KERNEL 2's dispatch size, from 4 (triangle, matrix | world << 6,
-// band) entries.
+// band, caster row) entries.
 layout(set = 4, binding = 43, std430) buffer Big { uint big[]; };
 
 layout(push_constant) uniform Raster {
@@ -74,25 +82,17 @@ layout(push_constant) uniform Raster {
     uint big_chunk;
     uint masked_area;  // KERNEL 4's: box texels above which the group covers it
     uint spot_layers;  // bit m: 2D layer m is a spot light's (else a directional light's)
-    uint pad0, pad1;
+    uint chunks_at;  // uvec4 index of the table's first chunk (KERNEL 1)
+    uint chunks;  // the opaque rows' chunks
     vec4 bias_constant;  // DEPTH_BIAS by light kind: directional, spot, point
     vec4 bias_slope;
     uvec4 world;  // records a world, the first world's first record, texels a world, layers a world
     uvec4 world_at;  // x: the dispatch's first world
 } pc;
 
-const uint BIG_LIST = 4u, BIG_ENTRY = 3u;
+const uint BIG_LIST = 4u, BIG_ENTRY = 4u;
 const uint MAX_GROUPS = 65535u;
-
-// The row holding triangle g: the last k whose first triangle is <= g.
-uint row_of(uint g) {
-    uint lo = 0u, hi = pc.rows;
-    for (uint step = 0u; step < 32u && hi - lo > 1u; ++step) {
-        uint mid = (lo + hi) >> 1u;
-        if (casters[2u * mid].x <= g) lo = mid; else hi = mid;
-    }
-    return lo;
-}
+const uint BIG_SUBGROUPS = 8u;  // KERNEL 2's bands a work group (256 lanes of subgroups of 32)
 
 #if KERNEL != 3
 uint layer_size(uint m) { return m < pc.max_layers ? pc.map_size : pc.cube_size; }
@@ -104,15 +104,10 @@ uint layer_base(uint m, uint w) {
 
 vec3 position(uint i) { uint k = 3u * i; return vec3(positions[k], positions[k + 1u], positions[k + 2u]); }
 
-// Triangle g's vertex indices and clip-space corners in layer m; false when its draw's
-// bounding sphere is outside the layer's frustum (one test instead of three vertices: most
-// of a scene's draws for a near cascade or a cube face).
-bool fetch(uint g, uint m, uint w, out uvec3 vi, out vec4 c[3]) {
-#if KERNEL == 4
-    uint k = pc.row;
-#else
-    uint k = row_of(g);
-#endif
+// Triangle g of caster row k: its vertex indices and clip-space corners in layer m; false
+// when its draw's bounding sphere is outside the layer's frustum (one test instead of three
+// vertices: most of a scene's draws for a near cascade or a cube face).
+bool fetch(uint g, uint k, uint m, uint w, out uvec3 vi, out vec4 c[3]) {
     uvec4 r = casters[2u * k];
     mat4 model = instance_matrices[2u * (pc.world.y + w * pc.world.x + r.w)];
     if (!sphere_visible(layer_vp[m], world_sphere(model, uintBitsToFloat(casters[2u * k + 1u]))))
@@ -133,7 +128,7 @@ struct Screen {
     int n;
     float area, bias;
     ivec2 lo, hi;
-    uint m, w;  // the layer's matrix, the world (of the dispatch's)
+    uint m, w, row;  // the layer's matrix, the world (of the dispatch's), the caster row
 #if KERNEL == 4
     vec4 c[3];
     uvec3 vi;
@@ -148,12 +143,13 @@ vec3 texel(vec4 c, float size, inout float zmax) {
     return vec3((ndc.xy * 0.5 + 0.5) * size, ndc.z);
 }
 
-bool on_layer(uint g, uint m, uint w, out Screen t) {
+bool on_layer(uint g, uint k, uint m, uint w, out Screen t) {
     vec4 c[3];
     uvec3 vi;
     t.m = m;
     t.w = w;
-    if (!fetch(g, m, w, vi, c)) return false;
+    t.row = k;
+    if (!fetch(g, k, m, w, vi, c)) return false;
 #if KERNEL == 4
     t.c = c;
     t.vi = vi;
@@ -301,15 +297,12 @@ void list_bands(Screen t, uint g) {
         big[e] = g;
         big[e + 1u] = t.m | (t.w << 6u);
         big[e + 2u] = k;
+        big[e + 3u] = t.row;
     }
     if (listed < bands) draw_layer(t, listed, ALL_BANDS, 0, 1, 0, 1);
 }
 #endif
 
-#if KERNEL == 2
-shared Screen entry_screen;
-shared bool entry_drawn;
-#endif
 #if KERNEL == 4
 shared uint group_big[64];  // this group's big triangles (triangle), covered by the group
 shared uint group_big_count;
@@ -318,46 +311,45 @@ shared uint group_big_count;
 
 void main() {
 #if KERNEL == 3
-    big[1] = max(min(big[0], MAX_GROUPS), 1u);
+    big[1] = max(min((big[0] + BIG_SUBGROUPS - 1u) / BIG_SUBGROUPS, MAX_GROUPS), 1u);
     big[2] = 1u;
     big[3] = 1u;
 #elif KERNEL == 2
+    // Subgroups in a grid stride over the list (any subgroup size: the dispatch is sized for
+    // BIG_SUBGROUPS a group, and a group of more subgroups takes more bands a pass).
     uint listed = min(big[0], pc.big_capacity);
-    for (uint k = gl_WorkGroupID.x; k < listed; k += gl_NumWorkGroups.x) {
+    uint stride = gl_NumWorkGroups.x * gl_NumSubgroups;
+    for (uint k = gl_WorkGroupID.x * gl_NumSubgroups + gl_SubgroupID; k < listed; k += stride) {
         uint e = BIG_LIST + BIG_ENTRY * k;
-        if (gl_LocalInvocationIndex == 0u) {
-            Screen t;
-            entry_drawn = on_layer(big[e], big[e + 1u] & 63u, big[e + 1u] >> 6u, t);
-            entry_screen = t;
-        }
-        barrier();
-        Screen t = entry_screen;
-        bool drawn = entry_drawn;
-        barrier();  // read before the next entry's set-up
-        if (drawn) draw_layer(t, big[e + 2u], big[e + 2u] + 1u, int(gl_SubgroupID),
-                              int(gl_NumSubgroups), int(gl_SubgroupInvocationID),
-                              int(gl_SubgroupSize));
+        Screen t;
+        if (on_layer(big[e], big[e + 3u], big[e + 1u] & 63u, big[e + 1u] >> 6u, t))
+            draw_layer(t, big[e + 2u], big[e + 2u] + 1u, 0, 1, int(gl_SubgroupInvocationID),
+                       int(gl_SubgroupSize));
     }
 #else
-    uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
     uint m = pc.matrix + gl_GlobalInvocationID.z % pc.world.w;
     uint w = pc.world_at.x + gl_GlobalInvocationID.z / pc.world.w;
 #if KERNEL == 1
-    if (i < pc.triangles) {
+    uint chunk = gl_WorkGroupID.x + gl_WorkGroupID.y * gl_NumWorkGroups.x;
+    if (chunk >= pc.chunks) return;  // the whole group
+    uvec4 c = casters[pc.chunks_at + chunk];  // (row, first triangle, triangles)
+    uint i = c.y + gl_LocalInvocationIndex;
+    if (gl_LocalInvocationIndex < c.z) {
         Screen t;
-        if (on_layer(i, m, w, t)) {
+        if (on_layer(i, c.x, m, w, t)) {
             if (box_area(t) > float(pc.big_area)) list_bands(t, i);
             else draw_layer(t, 0u, ALL_BANDS, 0, 1, 0, 1);
         }
     }
 #else
+    uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
     opaque_zero = uint(gl_NumWorkGroups.x == 0u);  // 0, unknown to the compiler (u())
     uint first = casters[2u * pc.row].x;
     if (gl_LocalInvocationIndex == 0u) group_big_count = 0u;
     barrier();
     if (i < pc.triangles) {
         Screen t;
-        if (on_layer(first + i, m, w, t)) {
+        if (on_layer(first + i, pc.row, m, w, t)) {
             if (box_area(t) > float(pc.masked_area)) group_big[atomicAdd(group_big_count, 1u)] = first + i;
             else draw_layer(t, 0u, ALL_BANDS, 0, 1, 0, 1);
         }
@@ -365,7 +357,7 @@ void main() {
     barrier();
     for (uint k = 0u; k < group_big_count; ++k) {
         Screen t;
-        if (on_layer(group_big[k], m, w, t))
+        if (on_layer(group_big[k], pc.row, m, w, t))
             draw_layer(t, 0u, ALL_BANDS, int(gl_SubgroupID), int(gl_NumSubgroups),
                        int(gl_SubgroupInvocationID), int(gl_SubgroupSize));
     }
