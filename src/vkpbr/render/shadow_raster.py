@@ -50,6 +50,7 @@ BIG_ENTRY = 4  # uints a listed band: (triangle, matrix | world << 6, band, cast
 MASKED_AREA = 64  # masked triangles over this many box texels: the work group covers them
 PUSH_BYTES = 128  # shadow_raster.comp's push constants
 MAX_Z = 65535  # a dispatch's (world, layer) invocations in z
+MAX_LOOP_LAYERS = 32  # shadow_small's layers of a dispatch (a bit each in a uint)
 # Set 4: generated.glsl's compute-path bindings of the streams, then the kernels' own.
 SET_ROWS = ((3, "Indices"), (4, "Positions"), (5, "Texcoords0"), (6, "Texcoords1"),
             (7, "Colors"), (40, "ShadowMatrices"), (41, "Casters"), (42, "Depths"), (43, "Big"))
@@ -337,8 +338,9 @@ class ShadowRaster:
         def small(cmd: Any) -> None:
             bind(cmd, "small")
             for matrix, layers, _ in jobs:
-                if table.chunks:  # a work group a chunk
-                    dispatch(cmd, matrix, layers, table.chunks)
+                if table.chunks:  # a work group a chunk, its layers in a loop (at most 32)
+                    assert layers <= MAX_LOOP_LAYERS, layers
+                    dispatch(cmd, matrix, layers, table.chunks, layers_in_z=False)
 
         def args(cmd: Any) -> None:
             bind(cmd, "args")
@@ -369,11 +371,12 @@ class ShadowRaster:
 
     def _dispatcher(self, push: np.ndarray, world: WorldJob | None
                     ) -> Callable[[Any, int, int, int], None]:
-        """dispatch(cmd, first matrix, layers, groups): the layers of every world (one
-        without `world`), z = (world, layer), at most MAX_Z a dispatch (worlds in runs)."""
+        """dispatch(cmd, first matrix, layers, groups[, layers_in_z]): the layers of every
+        world (one without `world`), z = (world, layer) (or the world alone where the kernel
+        loops over the layers), at most MAX_Z a dispatch (worlds in runs)."""
         worlds = 1 if world is None else world.worlds
 
-        def dispatch(cmd: Any, matrix: int, layers: int, groups: int) -> None:
+        def dispatch(cmd: Any, matrix: int, layers: int, groups: int, layers_in_z: bool = True) -> None:
             push[3] = matrix
             run = max(1, MAX_Z // layers)
             for w0 in range(0, worlds, run):
@@ -383,7 +386,8 @@ class ShadowRaster:
                 else:
                     push[27] = layers
                 cmd.push(push)
-                cmd.dispatch(min(groups, MAX_GROUPS_X), -(-groups // MAX_GROUPS_X), n * layers)
+                cmd.dispatch(min(groups, MAX_GROUPS_X), -(-groups // MAX_GROUPS_X),
+                             n * layers if layers_in_z else n)
 
         return dispatch
 

@@ -15,13 +15,14 @@
 // culled (the shadow pipelines' cull "none").
 // A batch of worlds whose poses move casters (render/world_shadows.py) draws every world's
 // maps in the same dispatches: invocation z is (world, layer) = (pc.world_at.x + z / pc.world.w,
-// z % pc.world.w), a caster's record in Instances is pc.world.y + world * pc.world.x + its draw
+// z % pc.world.w) (KERNEL 1: the world, its layers in a loop), a caster's record in Instances is pc.world.y + world * pc.world.x + its draw
 // (the world's records, as views[].instance_base names them for the main rasteriser) and its
 // texels are its world's, pc.world.z texels a world (no copy: the shading reads them). A
 // frame's maps are world 0 of one: pc.world = (0, 0, 0, layers).
-// KERNEL 1 (shadow_small): one invocation a (opaque caster triangle, layer), a work group a
-//   chunk of up to 64 triangles of one caster row (the table's chunk list: the row is the
-//   group's, so its bounding-sphere test is uniform and no invocation searches the rows);
+// KERNEL 1 (shadow_small): one invocation an opaque caster triangle (in every layer of the
+//   dispatch: z is the world alone), a work group a chunk of up to 64 triangles of one
+//   caster row (the table's chunk list: the row is the group's, so its bounding-sphere tests
+//   are uniform and no invocation searches the rows);
 //   triangles whose box exceeds pc.big_area texels are listed as bands of rows of
 //   ~pc.big_chunk box texels.
 // KERNEL 3 (shadow_args): the listed bands' dispatch size.
@@ -104,20 +105,27 @@ uint layer_base(uint m, uint w) {
 
 vec3 position(uint i) { uint k = 3u * i; return vec3(positions[k], positions[k + 1u], positions[k + 2u]); }
 
-// Triangle g of caster row k: its vertex indices and clip-space corners in layer m; false
-// when its draw's bounding sphere is outside the layer's frustum (one test instead of three
-// vertices: most of a scene's draws for a near cascade or a cube face).
-bool fetch(uint g, uint k, uint m, uint w, out uvec3 vi, out vec4 c[3]) {
-    uvec4 r = casters[2u * k];
-    mat4 model = instance_matrices[2u * (pc.world.y + w * pc.world.x + r.w)];
-    if (!sphere_visible(layer_vp[m], world_sphere(model, uintBitsToFloat(casters[2u * k + 1u]))))
-        return false;
-    uint base = r.y + 3u * (g - r.x);
+// Caster row k in world w: its row, model matrix and bounding sphere in the world.
+struct Caster { uvec4 r; mat4 model; vec4 sphere; };
+Caster caster(uint k, uint w) {
+    Caster a;
+    a.r = casters[2u * k];
+    a.model = instance_matrices[2u * (pc.world.y + w * pc.world.x + a.r.w)];
+    a.sphere = world_sphere(a.model, uintBitsToFloat(casters[2u * k + 1u]));
+    return a;
+}
+
+// Whether layer m's frustum meets the caster's sphere (one test instead of three vertices:
+// most of a scene's draws miss a near cascade or a cube face).
+bool layer_sees(Caster a, uint m) { return sphere_visible(layer_vp[m], a.sphere); }
+
+// Triangle g of the caster: its vertex indices and world positions (model x position).
+void corners(Caster a, uint g, out uvec3 vi, out vec4 wp[3]) {
+    uint base = a.r.y + 3u * (g - a.r.x);
     for (int j = 0; j < 3; ++j) {
-        vi[j] = indices[base + uint(j)] + r.z;
-        c[j] = layer_vp[m] * (model * vec4(position(vi[j]), 1.0));  // as shadow.vert's
+        vi[j] = indices[base + uint(j)] + a.r.z;
+        wp[j] = a.model * vec4(position(vi[j]), 1.0);
     }
-    return true;
 }
 
 // Triangle g in layer m: its clipped polygon in texels (x, y, depth), the polygon's `edge`
@@ -143,13 +151,13 @@ vec3 texel(vec4 c, float size, inout float zmax) {
     return vec3((ndc.xy * 0.5 + 0.5) * size, ndc.z);
 }
 
-bool on_layer(uint g, uint k, uint m, uint w, out Screen t) {
+// Triangle (vertices vi, world positions wp) of caster row k in layer m of world w.
+bool screen(uvec3 vi, vec4 wp[3], uint k, uint m, uint w, out Screen t) {
     vec4 c[3];
-    uvec3 vi;
+    for (int j = 0; j < 3; ++j) c[j] = layer_vp[m] * wp[j];  // as shadow.vert's
     t.m = m;
     t.w = w;
     t.row = k;
-    if (!fetch(g, k, m, w, vi, c)) return false;
 #if KERNEL == 4
     t.c = c;
     t.vi = vi;
@@ -194,6 +202,16 @@ bool on_layer(uint g, uint k, uint m, uint w, out Screen t) {
     t.lo = clamp(ivec2(ceil(lo2 - 0.5)), ivec2(0), ivec2(isize));
     t.hi = clamp(ivec2(floor(hi2 - 0.5)) + 1, ivec2(0), ivec2(isize));
     return all(lessThan(t.lo, t.hi));
+}
+
+// Triangle g of caster row k in layer m of world w (KERNELs 2 and 4: one layer).
+bool on_layer(uint g, uint k, uint m, uint w, out Screen t) {
+    Caster a = caster(k, w);
+    if (!layer_sees(a, m)) return false;
+    uvec3 vi;
+    vec4 wp[3];
+    corners(a, g, vi, wp);
+    return screen(vi, wp, k, m, w, t);
 }
 
 float box_area(Screen t) { return float(t.hi.x - t.lo.x) * float(t.hi.y - t.lo.y); }
@@ -322,26 +340,42 @@ void main() {
     for (uint k = gl_WorkGroupID.x * gl_NumSubgroups + gl_SubgroupID; k < listed; k += stride) {
         uint e = BIG_LIST + BIG_ENTRY * k;
         Screen t;
-        if (on_layer(big[e], big[e + 3u], big[e + 1u] & 63u, big[e + 1u] >> 6u, t))
-            draw_layer(t, big[e + 2u], big[e + 2u] + 1u, 0, 1, int(gl_SubgroupInvocationID),
-                       int(gl_SubgroupSize));
+        if (!on_layer(big[e], big[e + 3u], big[e + 1u] & 63u, big[e + 1u] >> 6u, t)) continue;
+        // A band of a narrow box has many short rows: a lane a row, each walking its span
+        // (the lanes along each row in turn pay every row's set-up in sequence, mostly for
+        // one or two texels a lane). A wide box's band has few rows: the lanes along them.
+        int lane = int(gl_SubgroupInvocationID), lanes = int(gl_SubgroupSize);
+        if (chunk_rows(t) >= lanes) draw_layer(t, big[e + 2u], big[e + 2u] + 1u, lane, lanes, 0, 1);
+        else draw_layer(t, big[e + 2u], big[e + 2u] + 1u, 0, 1, lane, lanes);
+    }
+#else
+#if KERNEL == 1
+    // Invocation z is the world; each invocation draws its triangle in every layer of the
+    // dispatch (pc.world.w <= 32) whose frustum meets its row's sphere: the vertices are
+    // fetched and placed once, not once a layer, and a chunk no layer sees stops at once.
+    uint w = pc.world_at.x + gl_GlobalInvocationID.z;
+    uint chunk = gl_WorkGroupID.x + gl_WorkGroupID.y * gl_NumWorkGroups.x;
+    if (chunk >= pc.chunks) return;  // the whole group
+    uvec4 c = casters[pc.chunks_at + chunk];  // (row, first triangle, triangles)
+    Caster a = caster(c.x, w);
+    uint seen = 0u;
+    for (uint l = 0u; l < pc.world.w; ++l)
+        if (layer_sees(a, pc.matrix + l)) seen |= 1u << l;
+    if (seen == 0u || gl_LocalInvocationIndex >= c.z) return;
+    uint i = c.y + gl_LocalInvocationIndex;
+    uvec3 vi;
+    vec4 wp[3];
+    corners(a, i, vi, wp);
+    for (uint l = 0u; l < pc.world.w; ++l) {
+        if ((seen & (1u << l)) == 0u) continue;
+        Screen t;
+        if (!screen(vi, wp, c.x, pc.matrix + l, w, t)) continue;
+        if (box_area(t) > float(pc.big_area)) list_bands(t, i);
+        else draw_layer(t, 0u, ALL_BANDS, 0, 1, 0, 1);
     }
 #else
     uint m = pc.matrix + gl_GlobalInvocationID.z % pc.world.w;
     uint w = pc.world_at.x + gl_GlobalInvocationID.z / pc.world.w;
-#if KERNEL == 1
-    uint chunk = gl_WorkGroupID.x + gl_WorkGroupID.y * gl_NumWorkGroups.x;
-    if (chunk >= pc.chunks) return;  // the whole group
-    uvec4 c = casters[pc.chunks_at + chunk];  // (row, first triangle, triangles)
-    uint i = c.y + gl_LocalInvocationIndex;
-    if (gl_LocalInvocationIndex < c.z) {
-        Screen t;
-        if (on_layer(i, c.x, m, w, t)) {
-            if (box_area(t) > float(pc.big_area)) list_bands(t, i);
-            else draw_layer(t, 0u, ALL_BANDS, 0, 1, 0, 1);
-        }
-    }
-#else
     uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
     opaque_zero = uint(gl_NumWorkGroups.x == 0u);  // 0, unknown to the compiler (u())
     uint first = casters[2u * pc.row].x;
