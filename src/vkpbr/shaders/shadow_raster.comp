@@ -128,9 +128,20 @@ void corners(Caster a, uint g, out uvec3 vi, out vec4 wp[3]) {
     }
 }
 
+#if KERNEL == 4
+// (See shadow_mask.frag: u() keeps lavapipe from compiling a variant per material.)
+uint opaque_zero;
+float u(float x) { return x + float(opaque_zero); }
+
+vec4 color_at(uint i) {
+    uint k = pc.has_colors != 0u ? i : 0u;
+    return vec4(unpackUnorm2x16(colors[2u * k]), unpackUnorm2x16(colors[2u * k + 1u]));
+}
+#endif
+
 // Triangle g in layer m: its clipped polygon in texels (x, y, depth), the polygon's `edge`
-// area, its box of texel centres [lo, hi), the depth bias and, for the alpha test, the
-// unclipped corners and vertices.
+// area, its box of texel centres [lo, hi), the depth bias and, for the alpha test, what the
+// unclipped triangle's texels interpolate (set up once a triangle, not once a texel).
 struct Screen {
     vec3 s[5];
     int n;
@@ -138,8 +149,9 @@ struct Screen {
     ivec2 lo, hi;
     uint m, w, row;  // the layer's matrix, the world (of the dispatch's), the caster row
 #if KERNEL == 4
-    vec4 c[3];
-    uvec3 vi;
+    mat3 inv_c;  // the inverse of the corners' (x, y, w) columns (`barycentrics`)
+    vec2 tc[3];  // the vertices' texture coordinates of the base colour's set
+    vec3 alpha;  // the vertices' COLOR_0 alpha
 #endif
 };
 
@@ -159,8 +171,10 @@ bool screen(uvec3 vi, vec4 wp[3], uint k, uint m, uint w, out Screen t) {
     t.w = w;
     t.row = k;
 #if KERNEL == 4
-    t.c = c;
-    t.vi = vi;
+    t.inv_c = inverse(mat3(c[0].xyw, c[1].xyw, c[2].xyw));
+    bool second = u(material.base_color_uv_row0.w) > 0.5;
+    for (int j = 0; j < 3; ++j) t.tc[j] = second ? texcoords1[vi[j]] : texcoords0[vi[j]];
+    t.alpha = vec3(color_at(vi.x).a, color_at(vi.y).a, color_at(vi.z).a);
 #endif
     float size = float(layer_size(m));
     float zmax = 0.0;
@@ -221,36 +235,26 @@ uint band_count(Screen t) { int r = chunk_rows(t); return uint((t.hi.y - t.lo.y 
 #if KERNEL == 4
 // The alpha test at texel centre p (texels) of layer t.m: the base colour's alpha at the
 // perspective-correct barycentrics of the unclipped triangle, gradients from the next texels.
-// (See shadow_mask.frag: u() keeps lavapipe from compiling a variant per material.)
-uint opaque_zero;
-float u(float x) { return x + float(opaque_zero); }
 
+// The clip-space point of the triangle under ndc p has (x, y, w) = C b (C: the corners'
+// (x, y, w) columns, b its barycentrics) and (x, y, w) = w (ndc, 1): b is C^-1 (ndc, 1)
+// normalised to sum 1 (C inverted once a triangle, in `screen`).
 vec3 barycentrics(Screen t, vec2 p) {
     vec2 ndc = p / float(layer_size(t.m)) * 2.0 - 1.0;
-    // sum b_i (c_i.xy - ndc c_i.w) = 0 and sum b_i = 1.
-    mat3 a = mat3(vec3(t.c[0].xy - ndc * t.c[0].w, 1.0), vec3(t.c[1].xy - ndc * t.c[1].w, 1.0),
-                  vec3(t.c[2].xy - ndc * t.c[2].w, 1.0));
-    return inverse(a) * vec3(0.0, 0.0, 1.0);
-}
-
-vec4 color_at(uint i) {
-    uint k = pc.has_colors != 0u ? i : 0u;
-    return vec4(unpackUnorm2x16(colors[2u * k]), unpackUnorm2x16(colors[2u * k + 1u]));
+    vec3 b = t.inv_c * vec3(ndc, 1.0);
+    return b / (b.x + b.y + b.z);
 }
 
 bool alpha_passes(Screen t, vec2 p) {
     vec4 row0 = material.base_color_uv_row0, row1 = material.base_color_uv_row1;
-    bool second = u(row0.w) > 0.5;
-    vec2 tc[3];
-    for (int j = 0; j < 3; ++j) tc[j] = second ? texcoords1[t.vi[j]] : texcoords0[t.vi[j]];
     vec3 b = barycentrics(t, p), bx = barycentrics(t, p + vec2(1.0, 0.0)),
          by = barycentrics(t, p + vec2(0.0, 1.0));
-    vec2 uv0 = b.x * tc[0] + b.y * tc[1] + b.z * tc[2];
-    vec2 uvx = bx.x * tc[0] + bx.y * tc[1] + bx.z * tc[2];
-    vec2 uvy = by.x * tc[0] + by.y * tc[1] + by.z * tc[2];
+    vec2 uv0 = b.x * t.tc[0] + b.y * t.tc[1] + b.z * t.tc[2];
+    vec2 uvx = bx.x * t.tc[0] + bx.y * t.tc[1] + bx.z * t.tc[2];
+    vec2 uvy = by.x * t.tc[0] + by.y * t.tc[1] + by.z * t.tc[2];
     mat2 rows = mat2(row0.x, row1.x, row0.y, row1.y);  // the UV transform's linear part
     vec2 uv = rows * uv0 + vec2(row0.z, row1.z);
-    float vertex_alpha = dot(b, vec3(color_at(t.vi.x).a, color_at(t.vi.y).a, color_at(t.vi.z).a));
+    float vertex_alpha = dot(b, t.alpha);
     float alpha = textureGrad(base_color_map, uv, rows * (uvx - uv0), rows * (uvy - uv0)).a
                   * material.base_color_factor.a * vertex_alpha;
     return alpha >= u(material.alpha_cutoff);
