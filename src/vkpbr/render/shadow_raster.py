@@ -46,7 +46,7 @@ __all__ = ["ShadowRaster", "WorldJob", "wants_compute", "SET_ROWS", "big_list_by
 SMALL_GROUP = 64  # shadow_small / shadow_masked: one (triangle, layer) an invocation
 MAX_GROUPS_X = 65535
 BIG_AREA, BIG_CHUNK = 256, 16384  # raster.comp's opaque split (compute_path.RasterTuning)
-BIG_ENTRY = 4  # uints a listed band: (triangle, matrix | world << 6, band, caster row)
+BIG_ENTRY = 24  # uints a listed band: its triangle set up (shadow_raster.comp store_band)
 MASKED_AREA = 64  # masked triangles over this many box texels: the work group covers them
 PUSH_BYTES = 128  # shadow_raster.comp's push constants
 MAX_Z = 65535  # a dispatch's (world, layer) invocations in z
@@ -224,9 +224,10 @@ class ShadowRaster:
         texels = self.cube_base + cubes.layers * cubes.size * cubes.size
         self.depths = self._own(Buffer(self.device, 4 * texels, "storage|transfer_dst|transfer_src",
                                        name="shadow depths"))
-        # (triangle, matrix, band) entries: a band is ~BIG_CHUNK texels; what does not fit is
-        # drawn by the invocation that found it.
-        self.big_capacity = max(1 << 18, texels // 64)  # (3 MiB at the least)
+        # Bands of ~BIG_CHUNK texels (96 bytes each: the band and its triangle's set-up);
+        # what does not fit is drawn by the invocation that found it. Sponza's 4 cascades
+        # at 2048 list ~111 k of the 262 k.
+        self.big_capacity = max(1 << 16, texels // 64)  # (6 MiB at the least)
         self.big = self._own(Buffer(self.device, big_list_bytes(self.big_capacity),
                                     "storage|transfer_dst|indirect", name="shadow big triangles"))
         self._images = key

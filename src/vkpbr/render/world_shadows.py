@@ -116,9 +116,10 @@ class WorldShadows:
             self.bytes = max(need, min(2 * self.bytes, limit))
             self.depths = Buffer(self.device, self.bytes, "storage|transfer_dst",
                                  name="world shadow depths")
-            # (triangle, matrix | world, band) entries of big triangles; the rest are drawn
-            # by the invocation that finds them
-            self.big_capacity = max(1 << 16, self.bytes // 4 // 256)
+            # Bands of big triangles (96 bytes each: a band and its triangle's set-up), one
+            # for every 512 texels (~5% of the maps' bytes); the rest are drawn by the
+            # invocation that finds them
+            self.big_capacity = max(1 << 16, self.bytes // 4 // 512)
             self.big = Buffer(self.device, big_list_bytes(self.big_capacity),
                               "storage|transfer_dst|indirect", name="world shadow big triangles")
             self.maps.bind_world_depths(self.depths)

@@ -26,11 +26,11 @@
 //   triangles whose box exceeds pc.big_area texels are listed as bands of rows of
 //   ~pc.big_chunk box texels.
 // KERNEL 3 (shadow_args): the listed bands' dispatch size.
-// KERNEL 2 (shadow_big): one subgroup a listed band, every lane setting it up alike (the
-//   same loads: broadcasts), no shared memory and no barrier: a work group's subgroups take
-//   their bands independently, so a band's set-up latency hides behind the others' drawing
-//   (one work group a band, set up by one invocation behind two barriers, left Sponza's
-//   111 k bands to wait on it).
+// KERNEL 2 (shadow_big): one subgroup a listed band, its triangle's set-up read from the
+//   list as KERNEL 1 stored it (every lane alike: broadcasts), no shared memory and no
+//   barrier: a work group's subgroups take their bands independently (one work group a
+//   band, set up again by one invocation behind two barriers, left Sponza's 111 k bands to
+//   wait on it).
 // KERNEL 4 (shadow_masked): one invocation a (triangle of one masked caster draw, layer),
 //   its material's set 1 bound; a texel counts where the base colour's alpha (texture x
 //   factor x COLOR_0, as shadow_mask.frag) reaches the cutoff, sampled at the texel's
@@ -64,8 +64,8 @@ layout(set = 4, binding = 40, std430) readonly buffer ShadowMatrices {
 // pc.chunks_at, KERNEL 1's chunks: (row, first triangle, triangles, 0) each.
 layout(set = 4, binding = 41, std430) readonly buffer Casters { uvec4 casters[]; };
 layout(set = 4, binding = 42, std430) buffer Depths { uint depths[]; };
-// [0] entries listed, [1..3] KERNEL 2's dispatch size, from 4 (triangle, matrix | world << 6,
-// band, caster row) entries.
+// [0] entries listed, [1..3] KERNEL 2's dispatch size, from 4 BIG_ENTRY-uint entries: a
+// band and its triangle's Screen as KERNEL 1 set it up (`store_band`).
 layout(set = 4, binding = 43, std430) buffer Big { uint big[]; };
 
 layout(push_constant) uniform Raster {
@@ -91,7 +91,7 @@ layout(push_constant) uniform Raster {
     uvec4 world_at;  // x: the dispatch's first world
 } pc;
 
-const uint BIG_LIST = 4u, BIG_ENTRY = 4u;
+const uint BIG_LIST = 4u, BIG_ENTRY = 24u;  // render/shadow_raster.py BIG_ENTRY
 const uint MAX_GROUPS = 65535u;
 const uint BIG_SUBGROUPS = 8u;  // KERNEL 2's bands a work group (256 lanes of subgroups of 32)
 
@@ -308,19 +308,45 @@ void draw_layer(Screen t, uint band0, uint band1, int y_offset, int ystep, int l
 
 const uint ALL_BANDS = 0xffffffffu;
 
+// A listed band: its triangle's Screen as set up (KERNEL 2 reads it back instead of setting
+// the triangle up again: no chain of dependent loads from the table to the vertices a band):
+// s[0..4] (15 floats), n, area, bias, lo, hi, m | w << 6, the band.
+void store_band(uint e, Screen t, uint band) {
+    for (int j = 0; j < 5; ++j)
+        for (int i = 0; i < 3; ++i) big[e + uint(3 * j + i)] = floatBitsToUint(t.s[j][i]);
+    big[e + 15u] = uint(t.n);
+    big[e + 16u] = floatBitsToUint(t.area);
+    big[e + 17u] = floatBitsToUint(t.bias);
+    big[e + 18u] = uint(t.lo.x);
+    big[e + 19u] = uint(t.lo.y);
+    big[e + 20u] = uint(t.hi.x);
+    big[e + 21u] = uint(t.hi.y);
+    big[e + 22u] = t.m | (t.w << 6u);
+    big[e + 23u] = band;
+}
+
+Screen load_band(uint e, out uint band) {
+    Screen t;
+    for (int j = 0; j < 5; ++j)
+        for (int i = 0; i < 3; ++i) t.s[j][i] = uintBitsToFloat(big[e + uint(3 * j + i)]);
+    t.n = int(big[e + 15u]);
+    t.area = uintBitsToFloat(big[e + 16u]);
+    t.bias = uintBitsToFloat(big[e + 17u]);
+    t.lo = ivec2(big[e + 18u], big[e + 19u]);
+    t.hi = ivec2(big[e + 20u], big[e + 21u]);
+    t.m = big[e + 22u] & 63u;
+    t.w = big[e + 22u] >> 6u;
+    band = big[e + 23u];
+    return t;
+}
+
 #if KERNEL == 1
 // A big triangle's bands listed for work groups; those past the list's end drawn here.
-void list_bands(Screen t, uint g) {
+void list_bands(Screen t) {
     uint bands = band_count(t);
     uint slot = atomicAdd(big[0], bands);
     uint listed = slot < pc.big_capacity ? min(bands, pc.big_capacity - slot) : 0u;
-    for (uint k = 0u; k < listed; ++k) {
-        uint e = BIG_LIST + BIG_ENTRY * (slot + k);
-        big[e] = g;
-        big[e + 1u] = t.m | (t.w << 6u);
-        big[e + 2u] = k;
-        big[e + 3u] = t.row;
-    }
+    for (uint k = 0u; k < listed; ++k) store_band(BIG_LIST + BIG_ENTRY * (slot + k), t, k);
     if (listed < bands) draw_layer(t, listed, ALL_BANDS, 0, 1, 0, 1);
 }
 #endif
@@ -342,15 +368,14 @@ void main() {
     uint listed = min(big[0], pc.big_capacity);
     uint stride = gl_NumWorkGroups.x * gl_NumSubgroups;
     for (uint k = gl_WorkGroupID.x * gl_NumSubgroups + gl_SubgroupID; k < listed; k += stride) {
-        uint e = BIG_LIST + BIG_ENTRY * k;
-        Screen t;
-        if (!on_layer(big[e], big[e + 3u], big[e + 1u] & 63u, big[e + 1u] >> 6u, t)) continue;
+        uint band;
+        Screen t = load_band(BIG_LIST + BIG_ENTRY * k, band);
         // A band of a narrow box has many short rows: a lane a row, each walking its span
         // (the lanes along each row in turn pay every row's set-up in sequence, mostly for
         // one or two texels a lane). A wide box's band has few rows: the lanes along them.
         int lane = int(gl_SubgroupInvocationID), lanes = int(gl_SubgroupSize);
-        if (chunk_rows(t) >= lanes) draw_layer(t, big[e + 2u], big[e + 2u] + 1u, lane, lanes, 0, 1);
-        else draw_layer(t, big[e + 2u], big[e + 2u] + 1u, 0, 1, lane, lanes);
+        if (chunk_rows(t) >= lanes) draw_layer(t, band, band + 1u, lane, lanes, 0, 1);
+        else draw_layer(t, band, band + 1u, 0, 1, lane, lanes);
     }
 #else
 #if KERNEL == 1
@@ -374,7 +399,7 @@ void main() {
         if ((seen & (1u << l)) == 0u) continue;
         Screen t;
         if (!screen(vi, wp, c.x, pc.matrix + l, w, t)) continue;
-        if (box_area(t) > float(pc.big_area)) list_bands(t, i);
+        if (box_area(t) > float(pc.big_area)) list_bands(t);
         else draw_layer(t, 0u, ALL_BANDS, 0, 1, 0, 1);
     }
 #else
