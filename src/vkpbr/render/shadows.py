@@ -206,12 +206,11 @@ class ShadowMaps:
         self.compute = False
         self._layouts = (frame_layout or empty, material_layout)
         self._raster: Any = None
-        # Set 3's ShadowWorldDepths: a batch of worlds' maps (render/world_shadows.py), else
-        # a stand-in no shader reads (views' shadow_base 0).
-        self.world_stand_in = self._own(Buffer(device, 16, "storage", name="world shadows stand-in"))
+        # Set 3's ShadowWorldDepths (a batch of worlds' maps, render/world_shadows.py) and
+        # ShadowDepths (the compute rasteriser's, once it draws the frames' maps), else a
+        # stand-in no shader reads (views' shadow_base 0; ShadowData's header flag clear).
+        self.world_stand_in = self._own(Buffer(device, 16, "storage", name="shadow depths stand-in"))
         self.world_depths: Buffer = self.world_stand_in
-        # Set 3's ShadowDepths: the compute rasteriser's depth buffer once it has one (the
-        # shading reads it where ShadowData's header says the maps are compute-drawn).
         self.frame_depths: Buffer = self.world_stand_in
         self.ensure(ShadowPlan())
 
@@ -491,11 +490,12 @@ class ShadowMaps:
                                         MAX_LAYERS, DEPTH_BIAS)
         return self._raster
 
-    def read_maps(self) -> tuple[np.ndarray, np.ndarray]:
-        """(2D layers, cube layers) as float32 arrays (tests): the images (needs `readable`),
-        or the compute rasteriser's buffer where the frames' maps are drawn there."""
+    def read_maps(self, cubes: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
+        """(2D layers, cube layers or None without `cubes`) as float32 arrays (tests): the
+        images (needs `readable`), or the compute rasteriser's buffer where the frames' maps
+        are drawn there."""
         if not self.compute or self._raster is None:
-            return self.maps.read(), self.cubes.read()
+            return self.maps.read(), self.cubes.read() if cubes else None
         depths, base = self._raster.read_depths(), self.compute_cube_base()
         m, c = self.maps, self.cubes
         return (depths[:base].reshape(m.layers, m.size, m.size),
