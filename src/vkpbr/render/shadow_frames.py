@@ -57,6 +57,11 @@ class ShadowFrames:
         plan = self.plan(lights, options)
         self.ensure(plan, options)
         self.choose_raster(options)
+        # The compute kernels' buffers for these images, before the frame asks which layers
+        # are stale: new ones forget them all (nothing is drawn in a new buffer).
+        if self.maps.compute and plan.entries and self.maps.compute_raster(
+                self.recorder.gpu_scene).fit():
+            self.recorder.free()  # (set 3 rebound: the recordings that bound it are stale)
         return plan
 
     def choose_raster(self, options: RenderOptions) -> None:
@@ -79,8 +84,6 @@ class ShadowFrames:
             self.recorder.free()
             self.maps.forget()  # the other side's layers hold none of what was drawn
             self._rows.clear()  # ShadowData's header says which side the shading reads
-        if compute and self.maps.compute_raster(self.recorder.gpu_scene).fit():
-            self.recorder.free()  # (new buffers: set 3 rebound, the maps forgotten)
 
     def ensure(self, plan: ShadowPlan, options: RenderOptions | None = None) -> None:
         """Maps that hold `plan` (of `options`' resolution, where given)."""
