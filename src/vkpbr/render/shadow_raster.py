@@ -11,11 +11,13 @@ light; depths >= 0, so their float bits order as the depths).
 The shading reads that buffer as it is (no copy into the images: on the H200 copying
 Sponza's 4 x 2048^2 texels into optimal-tiled D32 layers took 0.73 ms a frame, a quarter of
 the shadow work, while the by-hand compare, 4 loads for a 2x2 filter instead of one
-texture instruction, is a few hundredths of a millisecond for ~2 M pixels):
-shaders/shadow_sampling.glsl's hand_compare, the one filter that a batch of worlds' maps
-use too, with the images' sampler's compare, border and filter (nearest on lavapipe, which
-cannot filter D32 linearly: the images drawn either way are then bit for bit equal there;
-linear with 1/256 weights on NVIDIA). Where it is, and what the shading must know:
+texture instruction, is estimated at a few hundredths of a millisecond for ~2 M pixels:
+benchmarks/bench_shadows.py's shading_ms measures it): shaders/shadow_sampling.glsl's
+hand_compare, the one filter that a batch of worlds' maps use too, with the images'
+sampler's compare, border and filter (nearest on lavapipe, which cannot filter D32
+linearly: the test scenes' frames then equal the copy's bit for bit there; linear with
+1/256 weights on NVIDIA). The images stay allocated (the raster units may draw the next
+frame's maps) but are not written. Where the maps are, and what the shading must know:
 - Layout: the buffer mirrors the images (`fit`): 2D layer l's texels from l x size^2, row
   by row; then, from ShadowMaps.compute_cube_base(), cube c's face f (+X -X +Y -Y +Z -Z) at
   (6c + f) x cube_size^2 - where a layer's matrix (ShadowData.layer_vp) puts its texels
