@@ -8,7 +8,9 @@ Rows, each with shadow_raster = hardware and = compute (the compute path with th
 rasteriser, as `vkpbr bench` draws Sponza):
   maps: sun cascades   the automatic sun's 4 cascades (--resolution 2048) redrawn every frame (the
                        maps forgotten before each): the "shadows" step's GPU ms (timestamps,
-                       median), 1920x1080.
+                       median), 1920x1080, and the compute path's "shading" step's: with
+                       compute-drawn maps it compares by hand from their buffer
+                       (render/shadow_raster.py), with the raster units' by the sampler.
   maps: point cube     Sponza's preset point light's 6 faces (half the resolution), likewise.
   walk + sun           the preset camera walking 2 cm a frame (bench_paths.walk) lit by the
                        automatic sun, 1920x1080: frames/s through render_many (three frames in
@@ -63,17 +65,18 @@ def map_rows(r: Renderer, frames: int) -> list[dict]:
                 for _ in range(frames + 10):
                     r.shadows.forget()  # every layer stale: drawn again
                     yield CAMERA
-            ms, layers, parts = [], [], []
+            ms, layers, parts, shading = [], [], [], []
             for i, _ in enumerate(r.render_many(views(), lights, size=SIZE, readback=False,
                                                 shadow_raster=mode, **COMMON)):
                 if i >= 10:
                     passes = r.last_stats.pass_ms
                     ms.append(_shadow_ms(r))
+                    shading.append(passes.get("shading", float("nan")))
                     parts.append({k: v for k, v in passes.items() if k.startswith("shadows")})
                     layers.append(sum(n for _, n in r.shadows.last_redrawn_layers))
             steps = {k: _median([p.get(k, 0.0) for p in parts]) for k in parts[0]} if parts else {}
             rows.append({"row": label, "shadow_raster": mode, "shadows_ms": _median(ms),
-                         "layers": statistics.fmean(layers),
+                         "shading_ms": _median(shading), "layers": statistics.fmean(layers),
                          "steps": " ".join(f"{k} {v:.3f}" for k, v in steps.items())})
     return rows
 
@@ -147,7 +150,9 @@ def main() -> None:
     ap.add_argument("--size", default="1920x1080", help="WxH (a small one to try it on a CPU)")
     ap.add_argument("--resolution", type=int, default=2048, help="shadow-map texels a side")
     ap.add_argument("--steps", action="store_true",
-                    help="time the compute kernels apart (the maps rows' small/big/masked/copy ms)")
+                    help="time the compute kernels apart (the maps rows' small/big/masked ms; "
+                    "'shadows' is then the last kernel's end to the barrier that hands the maps "
+                    "to the shading: ~0, there is no copy)")
     ap.add_argument("--json")
     args = ap.parse_args()
     global SIZE
@@ -164,7 +169,7 @@ def main() -> None:
                 rows += walk_rows(r, args.frames)
     if "moving" in args.only:
         rows += moving_rows(args.scene, args.frames)
-    keys = ("shadows_ms", "layers", "fps_render_many", "fps_render", "gpu_ms")
+    keys = ("shadows_ms", "shading_ms", "layers", "fps_render_many", "fps_render", "gpu_ms")
     print("| row | shadow_raster | " + " | ".join(keys) + " | steps (ms) |\n|---|---|"
           + "---:|" * len(keys) + "---|")
     for row in rows:

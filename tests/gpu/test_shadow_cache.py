@@ -1,9 +1,10 @@
 """Shadow maps are redrawn only when what they hold changes (ShadowMaps.stale): a frame whose
 lights' matrices equal the ones its maps were drawn with skips their passes. Every frame of a
 sequence that changes one input at a time (the camera, a light, the alpha mask, the map
-size, a batch in between) must equal the same frame drawn with every map redrawn
-(ShadowMaps.forget before it), bit for bit; and the maps that do not depend on the camera
-(spot, point) are not redrawn when only the camera moves."""
+size, a batch in between, who draws the maps: the raster units into the images or the compute
+kernels into the buffer the shading reads, and the frame path) must equal the same frame drawn
+with every map redrawn (ShadowMaps.forget before it), bit for bit; and the maps that do not
+depend on the camera (spot, point) are not redrawn when only the camera moves."""
 
 from __future__ import annotations
 
@@ -47,7 +48,17 @@ STEPS = [  # (camera, lights, options): each changes one thing from the step bef
     (CAMERA, [ALL[0], ALL[1], POINT_MOVED], {"alpha_mask": False}),  # the card drawn whole
     (CAMERA, [ALL[0], ALL[1], POINT_MOVED], {"shadow_resolution": 128}),
     (MOVED, ALL, {}),
+    # The compute kernels draw into their buffer: a switch redraws every layer (the buffer
+    # holds none of the images' layers), then their cache works as the images' did, on
+    # either frame path; back to the raster units, every layer of the images is redrawn.
+    (MOVED, ALL, {"shadow_raster": "compute"}),
+    (CAMERA, ALL, {"shadow_raster": "compute"}),
+    (CAMERA, ALL, {"shadow_raster": "compute", "pipeline": "compute"}),
+    (CAMERA, ALL, {}),
 ]
+# The maps each step redraws from the one of STEPS[9] on: (directional, spot, point).
+REDRAWN = {9: (True, True, True), 10: (True, False, False), 11: (False, False, False),
+           12: (True, True, True)}
 
 
 def test_cached_maps_draw_what_redrawn_maps_draw(pair) -> None:  # noqa: ANN001
@@ -61,6 +72,8 @@ def test_cached_maps_draw_what_redrawn_maps_draw(pair) -> None:  # noqa: ANN001
         fresh.shadows.forget()
         want = fresh.render(camera, lights, size=SIZE, linear=True, **o)
         assert np.array_equal(got, want), (i, float(np.abs(got - want).max()))
+        if i in REDRAWN:
+            assert tuple(dict(cached.shadows.last_redraw).values()) == REDRAWN[i], i
         images.append(got)
     # The inputs matter: the sequence is not one image over and over.
     assert not np.array_equal(images[0], images[2])

@@ -11,6 +11,12 @@ Bounds (measured on lavapipe, Mesa 22.3, in brackets):
   alpha-tested texels on a hole's border, where the two samplings' gradients differ] and at
   most 0.1% of those away from a depth step or the coverage's border [0].
 - images lit through them (8-bit): mean <= 0.25/255 and p99 <= 1/255 [0 and 0].
+The shading reads the compute-drawn maps from the kernels' depth buffer by hand (no copy into
+the images: shaders/shadow_sampling.glsl hand_compare). Measured on lavapipe, whose sampler
+filters these D32 images nearest (hand_compare then does too): linear float frames of a sun,
+a spot, a point light and all three, at 256 and 512 texels, on the fragment and the compute
+frame path and both batches, equal bit for bit those of the copy into the images it replaced
+and those of the raster units' maps (the bounds above stay the test's, for GPUs).
 On GPUs the depth bounds also allow the slope-scaled bias's own spread: Vulkan lets the
 raster units take m as sqrt(dz/dx^2 + dz/dy^2) or approximate it by the larger of the two
 (what lavapipe and shadow_raster.comp do), so a difference of up to (sqrt 2 - 1) x |slope
@@ -196,12 +202,13 @@ def test_skinned_casters(make_renderer, sample_scene) -> None:  # noqa: ANN001
             r.shadows.forget()
             image = r.render(cam, lights, size=SIZE, time=t, shadow_raster=mode,
                              shadow_resolution=256, env="none")
-            got[t, mode] = (image, r.shadows.maps.read())  # (no cube: its stand-in is not readable)
+            got[t, mode] = (image, r.shadows.read_maps(cubes=False)[0])  # (no cube: its stand-in is not readable)
         _compare_layers(got[t, "hardware"][1][:5], got[t, "compute"][1][:5], f"CesiumMan at {t}", r,
                         min_inner=0.0)  # (a figure: few planes)
         assert (got[t, "compute"][1][4] > 0).mean() > 0.01  # the spot map sees the figure
         _compare_images(got[t, "hardware"][0], got[t, "compute"][0], f"CesiumMan at {t}")
     assert not np.array_equal(got[0.3, "compute"][1][4], got[1.1, "compute"][1][4])
+    assert not np.array_equal(got[0.3, "hardware"][1][4], got[1.1, "compute"][1][4])
 
 
 @pytest.mark.slow  # ~20 s on 2 shared cores (the load, lavapipe's kernels over 262 k triangles)
@@ -223,7 +230,7 @@ def test_sponza_cascades(make_renderer, assets) -> None:  # noqa: ANN001
         r.shadows.forget()
         image = r.render(None, lights, size=(48, 32), shadow_raster=mode, shadow_resolution=256,
                          ao="off")
-        got[mode] = (image, r.shadows.maps.read())
+        got[mode] = (image, r.shadows.read_maps(cubes=False)[0])
     _compare_layers(got["hardware"][1][:4], got["compute"][1][:4], "Sponza cascades", r,
                     min_inner=0.0)
     _compare_images(got["hardware"][0], got["compute"][0], "Sponza")
@@ -251,3 +258,36 @@ def test_frames_in_flight_and_batches(renderer) -> None:  # noqa: ANN001
                                                 shadow_raster=mode, **opts)
             assert renderer.shadows.compute == (mode == "compute")
         _compare_images(views["hardware"], views["compute"], f"{pipeline} batch")
+
+
+def test_the_shading_reads_the_kernels_buffer(renderer, monkeypatch) -> None:  # noqa: ANN001
+    """No copy step: the compute-drawn frame's shadow steps touch only the kernels' buffers,
+    and their last, "shadows", hands the depth buffer to the shading (a read by compute and
+    fragment shaders, the graph's barrier). The shading reads that buffer, not the images:
+    the images still hold another light's maps, drawn by the raster units just before."""
+    import vkpbr.render.recorder as recorder
+
+    recorded: list[list] = []
+    real = recorder.record_steps
+
+    def spy(cmd, steps, *args, **kwargs):  # noqa: ANN001, ANN002, ANN003, ANN202
+        recorded.append(list(steps))
+        return real(cmd, steps, *args, **kwargs)
+
+    monkeypatch.setattr(recorder, "record_steps", spy)
+    opts = {"shadow_resolution": 256, "env": "none"}
+    away = [dataclasses.replace(LIGHTS["spot"], position=(-2.0, 3.0, -1.0)), LIGHTS["point"]]
+    other = renderer.render(CAMERA, away, size=SIZE, shadow_raster="hardware", **opts)  # images: `away`'s
+    spot = [LIGHTS["spot"], LIGHTS["point"]]
+    recorded.clear()
+    renderer.shadows.forget()
+    got = renderer.render(CAMERA, spot, size=SIZE, shadow_raster="compute", **opts)
+    steps = [s for s in recorded[-1] if s.name.startswith("shadows")]
+    assert [s.name for s in steps] == ["shadows.clear", "shadows.small", "shadows.args",
+                                       "shadows.big", "shadows.masked", "shadows"]
+    uses = {u for s in steps for _, u in s.all_uses()}
+    assert not any("transfer_src" in u for u in uses), uses  # (the copy's)
+    assert steps[-1].uses == (("shadow_depths", "storage_read|fragment_storage_read"),)
+    want = renderer.render(CAMERA, spot, size=SIZE, shadow_raster="hardware", **opts)
+    _compare_images(want, got, "over the buffer")
+    assert not np.array_equal(want, other)  # (the images' maps would have shown)

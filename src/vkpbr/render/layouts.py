@@ -535,6 +535,9 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
         # A batch of worlds' shadow maps, every world's (render/world_shadows.py): depths
         # read by hand (a stand-in where there are none).
         (3, "storage", ("fragment", "compute"), "ShadowWorldDepths"),
+        # The frame's maps where the compute rasteriser draws them (render/shadow_raster.py):
+        # its depth buffer, read by hand (a stand-in where the raster units draw them).
+        (4, "storage", ("fragment", "compute"), "ShadowDepths"),
     ),
 }
 # Sets whose GLSL declarations are not generated (codegen skips them).

@@ -5,6 +5,11 @@ only when the lights or the option change), makes the maps' images hold it (new 
 the recorded command buffers name the old ones, so they are dropped), and writes each frame
 slot's shadow matrices, skipping the maths when the slot's inputs repeat. Directional
 lights' cascades follow a frame's camera; a batch's views share one map over the whole scene.
+
+It also chooses who draws the maps (`choose_raster`: the raster units into the images, or
+the compute kernels into the buffer the shading reads, render/shadow_raster.py): a switch
+forgets which layers are drawn (neither side holds the other's), and the compute side's
+buffers are fitted here, before the frame asks which layers are stale.
 """
 
 from __future__ import annotations
@@ -52,6 +57,11 @@ class ShadowFrames:
         plan = self.plan(lights, options)
         self.ensure(plan, options)
         self.choose_raster(options)
+        # The compute kernels' buffers for these images, before the frame asks which layers
+        # are stale: new ones forget them all (nothing is drawn in a new buffer).
+        if self.maps.compute and plan.entries and self.maps.compute_raster(
+                self.recorder.gpu_scene).fit():
+            self.recorder.free()  # (set 3 rebound: the recordings that bound it are stale)
         return plan
 
     def choose_raster(self, options: RenderOptions) -> None:
@@ -72,7 +82,8 @@ class ShadowFrames:
             self.maps.device.wait_idle()  # recordings in flight are freed
             self.maps.compute = compute
             self.recorder.free()
-            self.maps.forget()
+            self.maps.forget()  # the other side's layers hold none of what was drawn
+            self._rows.clear()  # ShadowData's header says which side the shading reads
 
     def ensure(self, plan: ShadowPlan, options: RenderOptions | None = None) -> None:
         """Maps that hold `plan` (of `options`' resolution, where given)."""
@@ -101,7 +112,7 @@ class ShadowFrames:
         # are the same for every view, so a moving camera does not remake them.
         view = ((c.eye, c.target, c.up, c.yfov_deg, c.znear, c.zfar, c.pixel_intrinsics, tuple(size))
                 if plan.follows_camera else None)
-        key = (view, plan, lights, sm.resolution, getattr(self.bounds, "version", 0))
+        key = (view, plan, lights, sm.resolution, sm.compute, getattr(self.bounds, "version", 0))
         last = self._rows.get(slot.index)
         if last is not None and last[0] == key:
             return last[1]
@@ -138,7 +149,8 @@ class ShadowFrames:
             return None
         # Skipped when the slot holds these already (a loop of batches: the fits are the
         # scene's, the same every step); a frame's cascades in between change the key.
-        key = ("scene", plan, lights, self.maps.resolution, getattr(self.bounds, "version", 0))
+        key = ("scene", plan, lights, self.maps.resolution, self.maps.compute,
+               getattr(self.bounds, "version", 0))
         last = self._rows.get(slot.index)
         if last is not None and last[0] == key:
             return last[1]

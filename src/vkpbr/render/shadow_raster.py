@@ -6,10 +6,40 @@ Sponza's 262 k triangles x 4 cascades). Here every caster triangle x every redra
 light is one invocation of one dispatch (cascades, a spot map, a cube's six faces alike:
 a layer is named by its matrix in ShadowData), writing its depth with a 32-bit atomicMax
 into a buffer of every layer's texels (reversed-Z: the largest depth is the nearest to the
-light; depths >= 0, so their float bits order as the depths). The redrawn layers are then
-copied into the shadow images the lighting samples: the sampling (hardware compare and 2x2
-filter, shaders/shadow_sampling.glsl) and the raster path's images stay as they are, and
-the copy (~4 bytes a texel) costs less than a compare done by hand in every shading thread.
+light; depths >= 0, so their float bits order as the depths).
+
+The shading reads that buffer as it is (no copy into the images: on the H200 copying
+Sponza's 4 x 2048^2 texels into optimal-tiled D32 layers took 0.73 ms a frame, a quarter of
+the shadow work, while the by-hand compare, 4 loads for a 2x2 filter instead of one
+texture instruction, is estimated at a few hundredths of a millisecond for ~2 M pixels:
+benchmarks/bench_shadows.py's shading_ms measures it): shaders/shadow_sampling.glsl's
+hand_compare, the one filter that a batch of worlds' maps use too, with the images'
+sampler's compare, border and filter (nearest on lavapipe, which cannot filter D32
+linearly: the test scenes' frames then equal the copy's bit for bit there; linear with
+1/256 weights on NVIDIA). The images stay allocated (the raster units may draw the next
+frame's maps) but are not written. Where the maps are, and what the shading must know:
+- Layout: the buffer mirrors the images (`fit`): 2D layer l's texels from l x size^2, row
+  by row; then, from ShadowMaps.compute_cube_base(), cube c's face f (+X -X +Y -Y +Z -Z) at
+  (6c + f) x cube_size^2 - where a layer's matrix (ShadowData.layer_vp) puts its texels
+  here (`_spans`) and where shadow_sampling.glsl compare_2d / compare_cube read them.
+- The shading knows from ShadowData's header (ShadowMaps.write): world_layout.z bit 0
+  (compute-drawn maps, in set 3's ShadowDepths), .w the cubes' first texel; clear: the
+  raster units' images, compared by the sampler (nothing changes for them).
+- Layers not redrawn (ShadowMaps.stale's cache) keep their texels: `_clear` fills only the
+  redrawn layers, so a cached layer is valid in the buffer as it was in the images. A switch
+  between the compute kernels and the raster units (RenderOptions.shadow_raster, or "auto"
+  following render/path_choice.py's measured choice) forgets the cache (ShadowFrames.
+  choose_raster): the new side redraws every layer, nothing stale is read. New buffers (new
+  images, a new scene) rebind ShadowDepths and forget it too (ShadowMaps.bind_frame_depths),
+  before the frame's `stale`: ShadowFrames.prepare fits them (`fit`).
+- Frames in flight share the one buffer, as they shared the images. The last step,
+  "shadows", declares the buffer read by compute and fragment shaders: the frame graph puts
+  the barrier from the kernels' writes before it, so every shading step after it (fragment
+  passes, compute shading, the transmission's copy, a batch's) sees the maps without each
+  naming them. The next frame's clear is the buffer's first use in its recording, which the
+  graph orders after every earlier command (gpu/graph.py: ALL_COMMANDS), this frame's reads
+  included; a frame that redraws nothing touches it not at all and reads what the last
+  drawing frame made visible.
 
 Triangles whose box exceeds BIG_AREA texels (a floor under a whole cascade) are listed as
 bands of rows and drawn by work groups, as the main compute rasteriser does (raster.comp);
@@ -57,8 +87,8 @@ SET_ROWS = ((3, "Indices"), (4, "Positions"), (5, "Texcoords0"), (6, "Texcoords1
 _OPAQUE, _MASKED = ("opaque", "opaque_double"), ("mask", "blend")
 _KINDS = ("directional", "spot", "point")  # shadow_raster.comp's bias index
 # Timestamps after each kernel (benchmarks/bench_shadows.py --steps): FrameStats.pass_ms then
-# has "shadows.small", "shadows.big", "shadows.masked" and "shadows" (the copy) apart. Off:
-# one timestamp, "shadows", for them all.
+# has "shadows.small", "shadows.big", "shadows.masked" and "shadows" (after the last kernel:
+# the barrier to the shading only) apart. Off: one timestamp, "shadows", for them all.
 TIMED_STEPS = False
 
 
@@ -203,14 +233,16 @@ class ShadowRaster:
         return self._pipelines[name]
 
     # --- resources -------------------------------------------------------------------------
-    def _fit(self) -> None:
+    def fit(self) -> bool:
         """Buffers for the maps' current images (every layer's texels; the big triangles'
         list); the sets made for older ones are dropped (the maps' `ensure` waited for the
-        device when it remade the images)."""
+        device when it remade the images). True when they were made: the new depth buffer is
+        bound as set 3's ShadowDepths (and the maps' cache forgotten), so recordings made
+        before are stale."""
         maps, cubes = self.maps.maps, self.maps.cubes
-        key = (id(maps), id(cubes))
+        key = (id(maps), id(cubes), maps.layers, maps.size, cubes.layers, cubes.size)
         if self._images == key:
-            return
+            return False
         for buffer in (self.depths, self.big):
             if buffer is not None:
                 self._owned.remove(buffer)
@@ -220,7 +252,7 @@ class ShadowRaster:
             pool.destroy()
         self._pools.clear()
         self._sets.clear()
-        self.cube_base = maps.layers * maps.size * maps.size
+        self.cube_base = self.maps.compute_cube_base()
         texels = self.cube_base + cubes.layers * cubes.size * cubes.size
         self.depths = self._own(Buffer(self.device, 4 * texels, "storage|transfer_dst|transfer_src",
                                        name="shadow depths"))
@@ -231,6 +263,8 @@ class ShadowRaster:
         self.big = self._own(Buffer(self.device, big_list_bytes(self.big_capacity),
                                     "storage|transfer_dst|indirect", name="shadow big triangles"))
         self._images = key
+        self.maps.bind_frame_depths(self.depths)
+        return True
 
     def _table(self, classes: Sequence[str]) -> tuple[tuple, _Table]:
         key = (len(self.gs.draws), tuple(classes))
@@ -290,11 +324,13 @@ class ShadowRaster:
     def steps(self, slot: int, plan: Any, redraw: Sequence[range] | None, classes: Sequence[str],
               material_sets: Sequence[Any], set0: Any) -> list[Step]:
         """The steps that draw `plan`'s layers `redraw` (per entry, a range of its layers)
-        for frame `slot` and copy them into the maps; the last, "shadows", is timed (all of
-        them: the steps before it take no timestamp)."""
+        for frame `slot` into the depth buffer the shading reads; the last, "shadows", is
+        timed (all of them: the steps before it take no timestamp). The buffers were fitted
+        before the frame's `stale` (ShadowFrames.prepare)."""
         if redraw is None:
             redraw = tuple(range(e.count) for e in plan.entries)
-        self._fit()
+        if self._images is None:  # (prepare fits them: new ones here would forget `redraw`)
+            raise RuntimeError("ShadowRaster.steps before fit()")
         key, table = self._table(classes)
         dset = self._set(key, table, slot)
         push = self._push(plan, table)
@@ -317,14 +353,16 @@ class ShadowRaster:
                     timed=apart)]
         if table.masked:
             out.append(Step("shadows.masked", record["masked"], ((depths, "storage"),), timed=apart))
-        out.append(Step("shadows", record["copy"], ((depths, "transfer_src"),)))
+        # Nothing to record: its declared read puts the barrier from the kernels' writes to
+        # every shader that reads the maps after it (the module's docstring).
+        out.append(Step("shadows", uses=((depths, "storage_read|fragment_storage_read"),)))
         return out
 
     def _records(self, table: _Table, dset: Any, push: np.ndarray,
                  jobs: list[tuple[int, int, Any]], material_sets: Sequence[Any], set0: Any,
                  world: WorldJob | None = None) -> dict[str, Callable[[Any], None]]:
         """Each step's commands: `jobs` are (first matrix, layers, entry) of the drawn ranges;
-        `world`: every world's layers of each job (no copy: `world_steps`)."""
+        `world`: every world's layers of each job (`world_steps`)."""
         big_buffer = self.big if world is None else world.big
         dispatch = self._dispatcher(push, world)
 
@@ -361,14 +399,7 @@ class ShadowRaster:
                     push[0], push[2] = triangles, row
                     dispatch(cmd, matrix, layers, -(-triangles // SMALL_GROUP))
 
-        def copy(cmd: Any) -> None:
-            if world is None:
-                self._copy(cmd, jobs)
-            else:  # the shading reads the worlds' maps as they are
-                cmd.memory_barrier("compute", "compute|fragment")
-
-        return {"clear": clear, "small": small, "args": args, "big": big, "masked": masked,
-                "copy": copy}
+        return {"clear": clear, "small": small, "args": args, "big": big, "masked": masked}
 
     def _dispatcher(self, push: np.ndarray, world: WorldJob | None
                     ) -> Callable[[Any, int, int, int], None]:
@@ -409,7 +440,7 @@ class ShadowRaster:
                     ) -> list[Step]:
         """The steps that draw every layer of `plan` (render/world_shadows.py's plan: one
         layer a directional light) for each of `job`'s worlds into `job.depths`; the last,
-        "shadows", orders them before the shading's reads."""
+        "shadows", orders them before the shading's reads (as `steps`')."""
         key, table = self._table(classes)
         dset = self._set(key, table, slot, job)
         push = self._push(plan, table, job)
@@ -417,9 +448,7 @@ class ShadowRaster:
         record = self._records(table, dset, push, jobs, material_sets, set0, job)
         resources.update({"shadow_world_depths": BufferResource(job.depths),
                           "shadow_world_big": BufferResource(job.big)})
-        out = self._steps(record, table, "shadow_world_depths", "shadow_world_big")
-        out[-1] = Step("shadows", record["copy"], (("shadow_world_depths", "storage"),))
-        return out
+        return self._steps(record, table, "shadow_world_depths", "shadow_world_big")
 
     def _spans(self, jobs: list[tuple[int, int, Any]]) -> list[tuple[int, int]]:
         """(byte offset, bytes) of the drawn layers' depths in `depths`, a span a job."""
@@ -433,18 +462,6 @@ class ShadowRaster:
                 out.append((4 * matrix * n, 4 * layers * n))
         return out
 
-    def _copy(self, cmd: Any, jobs: list[tuple[int, int, Any]]) -> None:
-        """The drawn layers into the maps' images (ShadowMaps' layered images keep the others)."""
-        maps, cubes = self.maps.maps, self.maps.cubes
-        regions: dict[str, list[tuple[int, int, int]]] = {"maps": [], "cubes": []}
-        for (matrix, layers, e), (offset, _) in zip(jobs, self._spans(jobs), strict=True):
-            point = e.kind == "point"
-            regions["cubes" if point else "maps"].append(
-                (offset, matrix - self.max_layers if point else matrix, layers))
-        for name, image in (("maps", maps), ("cubes", cubes)):
-            if regions[name]:
-                image.record_copy(cmd, self.depths, regions[name])
-
     def read_depths(self) -> np.ndarray:
         """The depth buffer as float32 (tests; waits for the device)."""
         from vkpbr.gpu.buffer import download_buffer
@@ -453,6 +470,8 @@ class ShadowRaster:
         return download_buffer(self.device, self.depths, np.float32)
 
     def destroy(self) -> None:
+        if self.depths is not None and self.maps.frame_depths is self.depths:
+            self.maps.bind_frame_depths(None)  # (set 3 must not name a destroyed buffer)
         while self._owned:
             self._owned.pop().destroy()
 

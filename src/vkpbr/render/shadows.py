@@ -20,6 +20,14 @@ shadow_mask.frag, which discards below the alpha cutoff (foliage casts leaf shad
 face culling (single-sided sheets cast too; the lit side's acne is handled by the bias).
 Materials with casts_shadows False are left out (the default scene's bulb around its light).
 Depth bias: slope-scaled in the pipelines (`DEPTH_BIAS`), normal offset in shaders/shadow_sampling.glsl.
+
+Drawn by compute shaders instead (`compute`, render/shadow_raster.py), the maps are that
+rasteriser's depth buffer, which the shading reads by hand (set 3's ShadowDepths, named in
+ShadowData's header: world_layout z bit 0, w = where its cubes start; `write`); the images
+then hold nothing the shading reads, and `read_maps` reads the buffer. One cache (`stale`)
+serves both: what it says is drawn is in whichever of the two the frames draw into now, and
+a switch between them forgets it (render/shadow_frames.py choose_raster), as does a new
+buffer (`bind_frame_depths`).
 """
 
 from __future__ import annotations
@@ -198,10 +206,12 @@ class ShadowMaps:
         self.compute = False
         self._layouts = (frame_layout or empty, material_layout)
         self._raster: Any = None
-        # Set 3's ShadowWorldDepths: a batch of worlds' maps (render/world_shadows.py), else
-        # a stand-in no shader reads (views' shadow_base 0).
-        self.world_stand_in = self._own(Buffer(device, 16, "storage", name="world shadows stand-in"))
+        # Set 3's ShadowWorldDepths (a batch of worlds' maps, render/world_shadows.py) and
+        # ShadowDepths (the compute rasteriser's, once it draws the frames' maps), else a
+        # stand-in no shader reads (views' shadow_base 0; ShadowData's header flag clear).
+        self.world_stand_in = self._own(Buffer(device, 16, "storage", name="shadow depths stand-in"))
         self.world_depths: Buffer = self.world_stand_in
+        self.frame_depths: Buffer = self.world_stand_in
         self.ensure(ShadowPlan())
 
     def _own(self, obj: Any) -> Any:
@@ -260,6 +270,7 @@ class ShadowMaps:
             w.sampler(s, 1, self.maps.view, self.sampler)
             w.sampler(s, 2, self.cubes.view, self.sampler)
             w.storage(s, 3, self.world_depths)
+            w.storage(s, 4, self.frame_depths)
             w.storage(ps, 0, self.buffer, size, i * self.stride)
         w.update()
         return True
@@ -272,6 +283,24 @@ class ShadowMaps:
         for s in self.sets:
             w.storage(s, 3, self.world_depths)
         w.update()
+
+    def bind_frame_depths(self, buffer: Buffer | None) -> None:
+        """Set 3's ShadowDepths: the compute rasteriser's (new) depth buffer, or the stand-in
+        (it was destroyed). Waits for the device (every slot's set changes; recordings that
+        bound them are stale: the caller frees them) and forgets the maps (a new buffer
+        holds none of them)."""
+        self.device.wait_idle()
+        self.frame_depths = self.world_stand_in if buffer is None else buffer
+        w = DescriptorWriter(self.device)
+        for s in self.sets:
+            w.storage(s, 4, self.frame_depths)
+        w.update()
+        self.forget()
+
+    def compute_cube_base(self) -> int:
+        """Where the cubes' texels start in the compute rasteriser's depth buffer: after
+        every 2D layer of the images' size (the buffer mirrors the images' layers)."""
+        return self.maps.layers * self.maps.size * self.maps.size
 
     # --- per frame --------------------------------------------------------------------------
     def write(self, slot: int, plan: ShadowPlan, lights: Sequence[Light], camera: Camera | None,
@@ -322,8 +351,13 @@ class ShadowMaps:
         data[4:8] = texel
         data[8:12] = (resolution, cube_resolution, NORMAL_OFFSET, PCF_RADIUS)
         # A batch of worlds' layout of a world's maps in ShadowWorldDepths (texels: a world's,
-        # where its cubes start; render/world_shadows.py), else zeros.
-        data[12:16].view(np.uint32)[:] = (*world_layout, 0, 0)
+        # where its cubes start; render/world_shadows.py), else zeros; then flags (1: the
+        # frame's maps are the compute rasteriser's buffer, ShadowDepths; 2: the sampler
+        # filters linearly, and so does the by-hand compare) and that buffer's cubes' start.
+        frame = self.compute and world_layout == (0, 0)
+        flags = int(frame) | 2 * int(self.maps.filterable)
+        data[12:16].view(np.uint32)[:] = (*world_layout, flags,
+                                          self.compute_cube_base() if frame else 0)
         # mat4 is column-major in GLSL: each row-major matrix transposed.
         data[HEADER_FLOATS:].reshape(MATRICES, 4, 4)[:] = mats.transpose(0, 2, 1)
         return out
@@ -456,9 +490,16 @@ class ShadowMaps:
                                         MAX_LAYERS, DEPTH_BIAS)
         return self._raster
 
-    def read_maps(self) -> tuple[np.ndarray, np.ndarray]:
-        """(2D layers, cube layers) as float32 arrays (tests; needs `readable`)."""
-        return self.maps.read(), self.cubes.read()
+    def read_maps(self, cubes: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
+        """(2D layers, cube layers or None without `cubes`) as float32 arrays (tests): the
+        images (needs `readable`), or the compute rasteriser's buffer where the frames' maps
+        are drawn there."""
+        if not self.compute or self._raster is None:
+            return self.maps.read(), self.cubes.read() if cubes else None
+        depths, base = self._raster.read_depths(), self.compute_cube_base()
+        m, c = self.maps, self.cubes
+        return (depths[:base].reshape(m.layers, m.size, m.size),
+                depths[base:base + c.layers * c.size ** 2].reshape(c.layers, c.size, c.size))
 
     def destroy(self) -> None:
         if self._raster is not None:

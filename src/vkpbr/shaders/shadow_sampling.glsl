@@ -19,51 +19,70 @@ layout(set = 3, binding = 2) uniform samplerCubeArrayShadow shadow_cubes;
 
 const int SHADOW_PCF_HALF = 1;  // (2 * 1 + 1)^2 = 9 taps
 
-// A batch of worlds whose poses move shadow casters (render/world_shadows.py): each world's
-// maps, drawn by shadow_raster.comp into one buffer (shadow_data.world_layout.x texels a
-// world: its 2D layers, then its cubes' faces from .y), read here by hand where the view's
-// record names them (views[].shadow_base = 1 + world; 0: the images above). The compare and
-// the 2x2 filter are the images' sampler's (GREATER_OR_EQUAL, linear, depth 0 past the
-// border; a cube face's edge texels clamped, as lavapipe filters cube maps).
+// Depths read by hand (no sampler): shadow_raster.comp's buffers of every layer's texels,
+// a layer `size` x `size` texels row by row from its first texel, a cube's six faces in
+// Vulkan's order (+X -X +Y -Y +Z -Z) one after the other, as that kernel writes them. Two:
+// - ShadowDepths: the frame's own maps where the compute rasteriser draws them
+//   (RenderOptions.shadow_raster; shadow_data.world_layout.z bit 0): the 2D layers from texel
+//   0, the cubes from world_layout.w (render/shadow_raster.py). The raster units' maps
+//   (bit 0 clear) are the images above, compared by the sampler.
+// - ShadowWorldDepths: a batch of worlds whose poses move shadow casters
+//   (render/world_shadows.py): each world's maps (world_layout.x texels a world: its 2D
+//   layers, then its cubes' faces from .y), where the view's record names them
+//   (views[].shadow_base = 1 + world; 0: the frame's maps).
+// The compare and the filter are the images' sampler's (GREATER_OR_EQUAL, linear or nearest,
+// depth 0 past the border; a cube face's edge texels clamped, as lavapipe filters cube maps).
 layout(set = 3, binding = 3, std430) readonly buffer ShadowWorldDepths { uint world_depths[]; };
+layout(set = 3, binding = 4, std430) readonly buffer ShadowDepths { uint frame_depths[]; };
 #if BATCH
 uint shadow_world() { return views[view_index].shadow_base; }
 #else
 uint shadow_world() { return 0u; }
 #endif
 
-float world_texel(uint base, int size, ivec2 p, float ref, bool clamp_edge) {
+// The depth bits of texel `i` of the frame's maps (`frame`) or the worlds'.
+uint depth_bits(bool frame, uint i) { return frame ? frame_depths[i] : world_depths[i]; }
+
+float hand_texel(bool frame, uint base, int size, ivec2 p, float ref, bool clamp_edge) {
     if (clamp_edge) p = clamp(p, ivec2(0), ivec2(size - 1));
     else if (any(lessThan(p, ivec2(0))) || any(greaterThanEqual(p, ivec2(size)))) return ref >= 0.0 ? 1.0 : 0.0;
-    return ref >= uintBitsToFloat(world_depths[base + uint(p.y * size + p.x)]) ? 1.0 : 0.0;
+    return ref >= uintBitsToFloat(depth_bits(frame, base + uint(p.y * size + p.x))) ? 1.0 : 0.0;
 }
 
-// texture(sampler, (uv, layer), ref) of a layer starting at texel `base`, `size` a side.
-float world_compare(uint base, int size, vec2 uv, float ref, bool clamp_edge) {
+// texture(sampler, (uv, layer), ref) of a layer starting at texel `base`, `size` a side, with
+// the images' filter: world_layout.z bit 1 where it is linear (ShadowMaps.sampler: where the
+// device filters D32 linearly, NVIDIA), else nearest (lavapipe), so that both sides agree.
+float hand_compare(bool frame, uint base, int size, vec2 uv, float ref, bool clamp_edge) {
+    if ((shadow_data.world_layout.z & 2u) == 0u)
+        return hand_texel(frame, base, size, ivec2(floor(uv * float(size))), ref, clamp_edge);
     vec2 t = uv * float(size) - 0.5;
     // The filter's weights in 1/256ths, as samplers take them (subTexelPrecisionBits 8 on
-    // lavapipe and NVIDIA): a shadow's edge then filters as the images' does.
+    // NVIDIA): a shadow's edge then filters as the images' does.
     vec2 f = floor(fract(t) * 256.0) / 256.0;
     ivec2 i = ivec2(floor(t));
-    float a = world_texel(base, size, i, ref, clamp_edge);
-    float b = world_texel(base, size, i + ivec2(1, 0), ref, clamp_edge);
-    float c = world_texel(base, size, i + ivec2(0, 1), ref, clamp_edge);
-    float d = world_texel(base, size, i + ivec2(1, 1), ref, clamp_edge);
+    float a = hand_texel(frame, base, size, i, ref, clamp_edge);
+    float b = hand_texel(frame, base, size, i + ivec2(1, 0), ref, clamp_edge);
+    float c = hand_texel(frame, base, size, i + ivec2(0, 1), ref, clamp_edge);
+    float d = hand_texel(frame, base, size, i + ivec2(1, 1), ref, clamp_edge);
     return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
 }
 
-// The 2D layers' and cubes' comparisons: the images', or the view's world's maps.
+// The 2D layers' and cubes' comparisons: the images', the frame's compute-drawn maps, or the
+// view's world's maps.
 float compare_2d(vec2 uv, float layer, float ref) {
     uint world = shadow_world();
-    if (world == 0u) return texture(shadow_maps, vec4(uv, layer, ref));
+    bool frame = world == 0u;
+    if (frame && (shadow_data.world_layout.z & 1u) == 0u) return texture(shadow_maps, vec4(uv, layer, ref));
     int size = int(shadow_data.params.x);
-    uint base = (world - 1u) * shadow_data.world_layout.x + uint(layer + 0.5) * uint(size * size);
-    return world_compare(base, size, uv, ref, false);
+    uint base = (frame ? 0u : (world - 1u) * shadow_data.world_layout.x)
+                + uint(layer + 0.5) * uint(size * size);
+    return hand_compare(frame, base, size, uv, ref, false);
 }
 
 float compare_cube(vec3 q, float cube, float ref) {
     uint world = shadow_world();
-    if (world == 0u) return texture(shadow_cubes, vec4(q, cube), ref);
+    bool frame = world == 0u;
+    if (frame && (shadow_data.world_layout.z & 1u) == 0u) return texture(shadow_cubes, vec4(q, cube), ref);
     // Vulkan's face selection and face coordinates (+X -X +Y -Y +Z -Z).
     vec3 a = abs(q);
     uint face;
@@ -72,9 +91,10 @@ float compare_cube(vec3 q, float cube, float ref) {
     else if (a.y >= a.z) { face = q.y > 0.0 ? 2u : 3u; ma = a.y; sc = q.x; tc = q.y > 0.0 ? q.z : -q.z; }
     else { face = q.z > 0.0 ? 4u : 5u; ma = a.z; sc = q.z > 0.0 ? q.x : -q.x; tc = -q.y; }
     int size = int(shadow_data.params.y);
-    uint base = (world - 1u) * shadow_data.world_layout.x + shadow_data.world_layout.y
-                + (6u * uint(cube + 0.5) + face) * uint(size * size);
-    return world_compare(base, size, 0.5 * vec2(sc, tc) / ma + 0.5, ref, true);
+    uint cubes = frame ? shadow_data.world_layout.w
+                       : (world - 1u) * shadow_data.world_layout.x + shadow_data.world_layout.y;
+    uint base = cubes + (6u * uint(cube + 0.5) + face) * uint(size * size);
+    return hand_compare(frame, base, size, 0.5 * vec2(sc, tc) / ma + 0.5, ref, true);
 }
 
 // The receiver moved towards the light's side along its geometric normal, by `texel` world
