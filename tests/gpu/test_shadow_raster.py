@@ -291,3 +291,74 @@ def test_the_shading_reads_the_kernels_buffer(renderer, monkeypatch) -> None:  #
     want = renderer.render(CAMERA, spot, size=SIZE, shadow_raster="hardware", **opts)
     _compare_images(want, got, "over the buffer")
     assert not np.array_equal(want, other)  # (the images' maps would have shown)
+
+
+def test_moving_frames_read_the_buffer_then_the_images_catch_up(renderer) -> None:  # noqa: ANN001
+    """Where the shading reads compute-drawn maps (ShadowMaps._choose_reads): frames that
+    redraw every layer (a caster moving each frame) read the kernels' buffer; still frames
+    keep reading it for SETTLE_FRAMES - 1 frames, then every layer is redrawn and copied into
+    the images, which later frames compare in hardware. The images last held the block at
+    rest: without the catch-up copy the still frames would show its old shadow."""
+    from vkpbr.render.shadows import SETTLE_FRAMES
+
+    opts = {"shadow_resolution": 256, "env": "none", "shadow_raster": "compute"}
+    sm = renderer.shadows
+    renderer.render(CAMERA, ALL, size=SIZE, **opts)  # (the images: at rest, after SETTLE)
+    for _ in range(SETTLE_FRAMES):
+        renderer.render(CAMERA, ALL, size=SIZE, **opts)
+    assert not sm.reads_buffer
+    try:
+        for k in range(3):
+            lifted = np.eye(4)
+            lifted[:3, 3] = (0.2 * k + 0.3, 0.5, -0.4)
+            renderer.set_pose(1, lifted)
+            moving = renderer.render(CAMERA, ALL, size=SIZE, **opts)
+            assert sm.reads_buffer and all(n > 0 for _, n in sm.last_redrawn_layers)
+        still = []
+        for k in range(SETTLE_FRAMES + 1):
+            still.append(renderer.render(CAMERA, ALL, size=SIZE, **opts))
+            redrawn = [n for _, n in sm.last_redrawn_layers]
+            if k < SETTLE_FRAMES - 1:
+                assert sm.reads_buffer and not any(redrawn), (k, redrawn)
+            elif k == SETTLE_FRAMES - 1:  # the catch-up: every layer again, into the images
+                assert not sm.reads_buffer and all(redrawn), (k, redrawn)
+            else:
+                assert not sm.reads_buffer and not any(redrawn), (k, redrawn)
+        for k, image in enumerate(still):
+            assert np.array_equal(image, moving) if renderer.device.info.kind == "cpu" else True, k
+        hard = _maps(renderer, CAMERA, ALL, "hardware", shadow_resolution=256, env="none")
+        _compare_images(hard[0], still[-1], "images after the catch-up")
+        renderer.set_pose(1, np.eye(4))
+        assert renderer.render(CAMERA, ALL, size=SIZE, **opts) is not None
+        assert sm.reads_buffer  # a moved caster: the buffer again at once, no copy
+    finally:
+        renderer.set_pose(1, np.eye(4))
+
+
+def test_the_4x4_by_hand_pcf_equals_nine_taps(renderer, monkeypatch) -> None:  # noqa: ANN001
+    """shadow_sampling.glsl hand_pcf_linear (the 3 x 3 linear taps of a by-hand compare
+    from their 4 x 4 texels) against the nine taps it replaces: the same frame with taps
+    2^-20 texel further apart takes the nine-tap path. Run where the maps filter linearly
+    (NVIDIA); on lavapipe the header's linear flag is forced (the by-hand compare needs no
+    sampler), and the nearest frame differs at the shadows' edges, so a wrong weight shows."""
+    import vkpbr.render.shadows as shadows
+
+    opts = {"shadow_resolution": 256, "env": "none", "shadow_raster": "compute"}
+    sun = [LIGHTS["directional"]]
+    frames_of = renderer.shadow_plan.__self__  # (ShadowFrames: its per-slot header cache)
+
+    def frame() -> np.ndarray:
+        frames_of._rows.clear()
+        renderer.shadows.forget()  # every layer redrawn: the buffer is read
+        out = renderer.render(CAMERA, sun, size=SIZE, **opts)
+        assert renderer.shadows.reads_buffer
+        return out.astype(np.int16)
+
+    nearest = frame()
+    monkeypatch.setattr(renderer.shadows.maps, "filterable", True)
+    fast = frame()
+    monkeypatch.setattr(shadows, "PCF_RADIUS", 1.0 + 2.0 ** -20)
+    nine = frame()
+    assert np.abs(fast - nine).max() <= 1, np.abs(fast - nine).max()
+    if not renderer.shadows.maps.filterable or renderer.device.info.kind == "cpu":
+        assert np.abs(fast - nearest).max() >= 3  # (linear and nearest edges differ)

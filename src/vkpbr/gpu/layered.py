@@ -49,7 +49,9 @@ class LayeredDepth:
             raise ValueError(f"cube array {name!r}: {layers} layers is not a multiple of 6")
         self.device, self.size, self.layers, self.cube = device, int(size), int(layers), cube
         self.format = vk.VK_FORMAT_D32_SFLOAT
-        usage = vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT
+        # (transfer destination: compute-drawn maps are copied in, record_copy)
+        usage = (vk.VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT
+                 | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT)
         if readable:
             usage |= vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT
         self.image = Image(device, self.size, self.size, self.format, usage, name=name,
@@ -119,6 +121,27 @@ class LayeredDepth:
              vk.VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT),
             (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT
                 | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT))])
+
+    def record_copy(self, cmd: Commands, buffer: Any, regions: list[tuple[int, int, int]]) -> None:
+        """Copy depths drawn elsewhere (float32, layer after layer, rows of `size` texels) from
+        `buffer` into layers of the image: `regions` (byte offset in the buffer, first layer,
+        layers). The other layers keep their contents; every layer is left readable by the
+        fragment and compute shaders, as after `record_end_writes`."""
+        vk = cmd.vk
+        sampled = (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT
+                   | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT)
+        ro, dst = (vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                   vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL)
+        copy = (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT)
+        barriers(cmd, [self._barrier(ro, dst, (sampled, vk.VK_ACCESS_2_NONE), copy)])
+        vk.vkCmdCopyBufferToImage(cmd.handle, buffer.handle, self.image.handle, dst, len(regions), [
+            vk.VkBufferImageCopy(
+                bufferOffset=offset, imageSubresource=vk.VkImageSubresourceLayers(
+                    aspectMask=vk.VK_IMAGE_ASPECT_DEPTH_BIT, mipLevel=0, baseArrayLayer=first,
+                    layerCount=count),
+                imageExtent=vk.VkExtent3D(width=self.size, height=self.size, depth=1))
+            for offset, first, count in regions])
+        barriers(cmd, [self._barrier(dst, ro, copy, (sampled, vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT))])
 
     # --- readback (tests, debugging) -----------------------------------------------------------
     def read(self) -> np.ndarray:

@@ -172,7 +172,10 @@ class FrameRecorder:
         if self._generations.get(tid, target.generation) != target.generation:
             self.free(tid)  # recreated swapchain: its images and buffers are new
         self._generations[tid] = target.generation
-        key = (tid, image, frame.index, spec)
+        # (+ where the shading reads compute-drawn shadow maps this frame: their buffer, or the
+        # images the redrawn layers are copied into; ShadowMaps.stale chooses)
+        sm = self.shadows
+        key = (tid, image, frame.index, spec, sm is not None and sm.compute and sm.reads_buffer)
         rec = self._recorded.get(key)
         if rec is None or rec.blend_order != objects.blend_order:
             if rec is not None:  # the camera moved enough to reorder blended draws

@@ -322,11 +322,12 @@ class ShadowRaster:
         return push
 
     def steps(self, slot: int, plan: Any, redraw: Sequence[range] | None, classes: Sequence[str],
-              material_sets: Sequence[Any], set0: Any) -> list[Step]:
+              material_sets: Sequence[Any], set0: Any, copy: bool = False) -> list[Step]:
         """The steps that draw `plan`'s layers `redraw` (per entry, a range of its layers)
-        for frame `slot` into the depth buffer the shading reads; the last, "shadows", is
-        timed (all of them: the steps before it take no timestamp). The buffers were fitted
-        before the frame's `stale` (ShadowFrames.prepare)."""
+        for frame `slot` into the depth buffer, and with `copy` into the images too (where
+        the shading reads this frame: ShadowMaps.stale); the last, "shadows", is timed (all
+        of them: the steps before it take no timestamp). The buffers were fitted before the
+        frame's `stale` (ShadowFrames.prepare)."""
         if redraw is None:
             redraw = tuple(range(e.count) for e in plan.entries)
         if self._images is None:  # (prepare fits them: new ones here would forget `redraw`)
@@ -339,7 +340,13 @@ class ShadowRaster:
                 if len(r)]
 
         record = self._records(table, dset, push, jobs, material_sets, set0)
-        return self._steps(record, table, "shadow_depths", "shadow_big")
+        out = self._steps(record, table, "shadow_depths", "shadow_big")
+        if copy:  # the images the shading compares in hardware get the redrawn layers
+            # (the buffer stays declared read by the shaders too: their descriptor set binds
+            # it, and synchronization validation counts a bound buffer as read)
+            out[-1] = Step("shadows", lambda cmd: self._copy(cmd, jobs),
+                           (("shadow_depths", "transfer_src|storage_read|fragment_storage_read"),))
+        return out
 
     def _steps(self, record: dict[str, Callable[[Any], None]], table: _Table, depths: str,
                big_list: str) -> list[Step]:
@@ -462,6 +469,18 @@ class ShadowRaster:
                 out.append((4 * matrix * n, 4 * layers * n))
         return out
 
+    def _copy(self, cmd: Any, jobs: list[tuple[int, int, Any]]) -> None:
+        """The drawn layers into the maps' images (ShadowMaps' layered images keep the others)."""
+        maps, cubes = self.maps.maps, self.maps.cubes
+        regions: dict[str, list[tuple[int, int, int]]] = {"maps": [], "cubes": []}
+        for (matrix, layers, e), (offset, _) in zip(jobs, self._spans(jobs), strict=True):
+            point = e.kind == "point"
+            regions["cubes" if point else "maps"].append(
+                (offset, matrix - self.max_layers if point else matrix, layers))
+        for name, image in (("maps", maps), ("cubes", cubes)):
+            if regions[name]:
+                image.record_copy(cmd, self.depths, regions[name])
+
     def read_depths(self) -> np.ndarray:
         """The depth buffer as float32 (tests; waits for the device)."""
         from vkpbr.gpu.buffer import download_buffer
@@ -478,12 +497,12 @@ class ShadowRaster:
 
 def make_steps(maps: Any, recorder: Any, frame_index: int, plan: Any, redraw: Sequence[range] | None,
                classes: Sequence[str], material_sets: Sequence[Any], set0: Any,
-               resources: dict[str, Any]) -> list[Step]:
+               resources: dict[str, Any], copy: bool = False) -> list[Step]:
     """render/steps.py's "shadows" group when the maps are drawn by compute shaders: the
     renderer's ShadowRaster (made on first use) and its steps, its buffers added to
     `resources`."""
     raster = maps.compute_raster(recorder.gpu_scene)
-    out = raster.steps(frame_index, plan, redraw, classes, material_sets, set0)
+    out = raster.steps(frame_index, plan, redraw, classes, material_sets, set0, copy)
     resources.update(raster.resources())
     return out
 

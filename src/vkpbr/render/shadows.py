@@ -22,12 +22,17 @@ Materials with casts_shadows False are left out (the default scene's bulb around
 Depth bias: slope-scaled in the pipelines (`DEPTH_BIAS`), normal offset in shaders/shadow_sampling.glsl.
 
 Drawn by compute shaders instead (`compute`, render/shadow_raster.py), the maps are that
-rasteriser's depth buffer, which the shading reads by hand (set 3's ShadowDepths, named in
-ShadowData's header: world_layout z bit 0, w = where its cubes start; `write`); the images
-then hold nothing the shading reads, and `read_maps` reads the buffer. One cache (`stale`)
+rasteriser's depth buffer (`read_maps` reads it). Where the shading reads them is chosen a
+frame at a time (`stale`, `reads_buffer`): a frame that redraws every layer (casters that
+move every frame) reads the buffer by hand (set 3's ShadowDepths, named in ShadowData's
+header: world_layout z bit 0, w = where its cubes start), no copy; a frame that redraws some
+or none (a still scene, a walking camera's nearest cascade) copies the redrawn layers into
+the images and compares in hardware (on the H200: copying Sponza's 4 x 2048^2 texels costs
+0.73 ms, reading them by hand ~0.04-0.07 ms of every frame's shading). The images catch up
+when the frames leave the buffer (every layer redrawn and copied once). One cache (`stale`)
 serves both: what it says is drawn is in whichever of the two the frames draw into now, and
-a switch between them forgets it (render/shadow_frames.py choose_raster), as does a new
-buffer (`bind_frame_depths`).
+a switch between the raster units and the kernels forgets it (render/shadow_frames.py
+choose_raster), as does a new buffer (`bind_frame_depths`).
 """
 
 from __future__ import annotations
@@ -62,6 +67,8 @@ __all__ = ["ShadowMaps", "ShadowPlan", "ShadowEntry", "plan_shadows", "MAX_LAYER
            "DEFAULT_RESOLUTION", "SET3_ROWS"]
 
 MAX_LAYERS = 16  # 2D layers: 4 directional lights' cascades, or spot lights
+SETTLE_FRAMES = 8  # frames redrawing less than every layer before compute-drawn maps are
+# read from the images again (ShadowMaps._choose_reads)
 MAX_CUBES = 4  # point lights with shadows
 MATRICES = MAX_LAYERS + 6 * MAX_CUBES  # the 2D layers' matrices, then 6 per cube
 HEADER_BYTES = 64  # shaders/shadow_data.glsl: cascade_far, cascade_texel, params, world_layout
@@ -212,6 +219,10 @@ class ShadowMaps:
         self.world_stand_in = self._own(Buffer(device, 16, "storage", name="shadow depths stand-in"))
         self.world_depths: Buffer = self.world_stand_in
         self.frame_depths: Buffer = self.world_stand_in
+        # Where this frame's shading reads compute-drawn maps (`stale`): their buffer (True)
+        # or the images; frames in a row that redrew fewer than every layer.
+        self.reads_buffer = False
+        self._partial_frames = 0
         self.ensure(ShadowPlan())
 
     def _own(self, obj: Any) -> Any:
@@ -355,7 +366,7 @@ class ShadowMaps:
         # frame's maps are the compute rasteriser's buffer, ShadowDepths; 2: the sampler
         # filters linearly, and so does the by-hand compare) and that buffer's cubes' start.
         frame = self.compute and world_layout == (0, 0)
-        flags = int(frame) | 2 * int(self.maps.filterable)
+        flags = int(frame and self.reads_buffer) | 2 * int(self.maps.filterable)  # (`stale` sets bit 0)
         data[12:16].view(np.uint32)[:] = (*world_layout, flags,
                                           self.compute_cube_base() if frame else 0)
         # mat4 is column-major in GLSL: each row-major matrix transposed.
@@ -364,6 +375,34 @@ class ShadowMaps:
 
     def stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool, casters: int = 0
               ) -> tuple[range, ...]:
+        """Which layers of each of `plan`'s entries frame `slot` must draw (`_stale`); with
+        compute-drawn maps, also where its shading reads them (`_choose_reads`)."""
+        redraw = self._stale(slot, plan, alpha_mask, casters)
+        return self._choose_reads(slot, plan, redraw) if self.compute else redraw
+
+    def _choose_reads(self, slot: int, plan: ShadowPlan, redraw: tuple[range, ...]
+                      ) -> tuple[range, ...]:
+        """`reads_buffer` for frame `slot` (its ShadowData header's bit 0 set to match): a
+        frame that redraws every layer reads the buffer (a copy would cost more than the
+        by-hand compare); so do the next SETTLE_FRAMES - 1 frames (casters that move every
+        other frame do not pay a catch-up each time); after them the images catch up: every
+        layer is redrawn and copied (the redraw returned), and frames compare in hardware."""
+        whole = tuple(range(6) if e.kind == "point" else range(e.count) for e in plan.entries)
+        if plan.entries and redraw == whole:
+            self._partial_frames, reads = 0, True
+        else:
+            self._partial_frames += 1
+            reads = self.reads_buffer and self._partial_frames < SETTLE_FRAMES
+            if self.reads_buffer and not reads:
+                redraw = whole  # the images lack what the buffer's frames drew
+                self.last_redrawn_layers = tuple((e.kind, len(r)) for e, r in zip(plan.entries, whole, strict=True))
+        self.reads_buffer = reads
+        header = self._views[slot][12:16].view(np.uint32)
+        header[2] = (header[2] & ~np.uint32(1)) | np.uint32(reads)
+        return redraw
+
+    def _stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool, casters: int = 0
+               ) -> tuple[range, ...]:
         """Which layers of each of `plan`'s entries frame `slot` must draw (a range of the
         entry's layers, empty for none): the span of those that hold other matrices (as
         `write` left them for the slot) or other casters. A walking camera usually changes

@@ -152,7 +152,8 @@ class FrameSteps:
             return [Step("shadows", timed=True)]
         if sm.compute:  # drawn by compute shaders (render/shadow_raster.py)
             return shadow_compute_steps(sm, self.r, self.frame_index, spec.plan, spec.redraw,
-                                        self.classes, self.material_sets, self.set0, self.resources)
+                                        self.classes, self.material_sets, self.set0, self.resources,
+                                        copy=not sm.reads_buffer)
 
         def record(cmd: Commands) -> None:
             sm.record(cmd, self.frame_index, spec.plan, gs.draws, self.classes, self.material_sets,

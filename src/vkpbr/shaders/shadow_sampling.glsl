@@ -67,16 +67,43 @@ float hand_compare(bool frame, uint base, int size, vec2 uv, float ref, bool cla
     return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
 }
 
+// Whether 2D layer `layer` is read by hand (the frame's compute-drawn maps or the view's
+// world's), and then where: `frame` (which buffer), its first texel and its size.
+bool hand_layer(float layer, out bool frame, out uint base, out int size) {
+    uint world = shadow_world();
+    frame = world == 0u;
+    size = int(shadow_data.params.x);
+    base = (frame ? 0u : (world - 1u) * shadow_data.world_layout.x) + uint(layer + 0.5) * uint(size * size);
+    return !frame || (shadow_data.world_layout.z & 1u) != 0u;
+}
+
 // The 2D layers' and cubes' comparisons: the images', the frame's compute-drawn maps, or the
 // view's world's maps.
 float compare_2d(vec2 uv, float layer, float ref) {
-    uint world = shadow_world();
-    bool frame = world == 0u;
-    if (frame && (shadow_data.world_layout.z & 1u) == 0u) return texture(shadow_maps, vec4(uv, layer, ref));
-    int size = int(shadow_data.params.x);
-    uint base = (frame ? 0u : (world - 1u) * shadow_data.world_layout.x)
-                + uint(layer + 0.5) * uint(size * size);
+    bool frame;
+    uint base;
+    int size;
+    if (!hand_layer(layer, frame, base, size)) return texture(shadow_maps, vec4(uv, layer, ref));
     return hand_compare(frame, base, size, uv, ref, false);
+}
+
+// shadow_pcf_2d's 3 x 3 taps a texel apart (PCF_RADIUS 1), each a linear 2 x 2 compare, by
+// hand: the 4 x 4 texels they cover read once (16 loads, not 9 x 4), each weighted by the
+// taps' filter weights on it, per axis (1 - f, 1, 1, f) (every tap has the same fraction f).
+float hand_pcf_linear(bool frame, uint base, int size, vec2 uv, float ref) {
+    vec2 t = uv * float(size) - 0.5;
+    vec2 f = floor(fract(t) * 256.0) / 256.0;  // (hand_compare's weights)
+    ivec2 i = ivec2(floor(t)) - 1;
+    vec4 wx = vec4(1.0 - f.x, 1.0, 1.0, f.x), wy = vec4(1.0 - f.y, 1.0, 1.0, f.y);
+    float sum = 0.0;
+    for (int y = 0; y < 4; ++y) {
+        vec4 row = vec4(hand_texel(frame, base, size, i + ivec2(0, y), ref, false),
+                        hand_texel(frame, base, size, i + ivec2(1, y), ref, false),
+                        hand_texel(frame, base, size, i + ivec2(2, y), ref, false),
+                        hand_texel(frame, base, size, i + ivec2(3, y), ref, false));
+        sum += wy[y] * dot(wx, row);
+    }
+    return sum / 9.0;
 }
 
 float compare_cube(vec3 q, float cube, float ref) {
@@ -108,6 +135,12 @@ vec3 shadow_offset_position(vec3 p, vec3 ng, vec3 l, float texel) {
 
 float shadow_pcf_2d(float layer, vec3 ndc) {
     vec2 uv = ndc.xy * 0.5 + 0.5;
+    bool frame;
+    uint base;
+    int size;
+    if (SHADOW_PCF_HALF == 1 && shadow_data.params.w == 1.0 && (shadow_data.world_layout.z & 2u) != 0u
+        && hand_layer(layer, frame, base, size))
+        return hand_pcf_linear(frame, base, size, uv, ndc.z);
     float step_uv = shadow_data.params.w / shadow_data.params.x;
     float sum = 0.0;
     for (int j = -SHADOW_PCF_HALF; j <= SHADOW_PCF_HALF; ++j)
