@@ -8,23 +8,23 @@ a layer is named by its matrix in ShadowData), writing its depth with a 32-bit a
 into a buffer of every layer's texels (reversed-Z: the largest depth is the nearest to the
 light; depths >= 0, so their float bits order as the depths).
 
-The shading reads that buffer as it is (no copy into the images: on the H200 copying
-Sponza's 4 x 2048^2 texels into optimal-tiled D32 layers took 0.73 ms a frame, a quarter of
-the shadow work, while the by-hand compare, 4 loads for a 2x2 filter instead of one
-texture instruction, is estimated at a few hundredths of a millisecond for ~2 M pixels:
-benchmarks/bench_shadows.py's shading_ms measures it): shaders/shadow_sampling.glsl's
-hand_compare, the one filter that a batch of worlds' maps use too, with the images'
-sampler's compare, border and filter (nearest on lavapipe, which cannot filter D32
-linearly: the test scenes' frames then equal the copy's bit for bit there; linear with
-1/256 weights on NVIDIA). The images stay allocated (the raster units may draw the next
-frame's maps) but are not written. Where the maps are, and what the shading must know:
+Where the shading reads them is chosen a frame at a time (render/shadows.py
+ShadowMaps._choose_reads): a frame that redraws every layer (casters moving every frame)
+reads that buffer as it is, by hand (shaders/shadow_sampling.glsl hand_compare, the one
+filter a batch of worlds' maps use too, with the images' sampler's compare, border and
+filter: nearest on lavapipe, which cannot filter D32 linearly, linear with 1/256 weights on
+NVIDIA; its 3 x 3 taps from their 4 x 4 texels, hand_pcf_linear); a frame that redraws some
+layers or none copies the redrawn ones into the images (`_copy`) and compares in hardware.
+On the H200 (runs p, q): copying Sponza's 4 x 2048^2 texels into optimal-tiled D32 layers
+takes 0.73 ms, a quarter of the shadow work of a frame that redraws them all, while reading
+them by hand cost every frame's shading 0.04-0.07 ms (the still frame 0.88 -> 0.95 ms).
 - Layout: the buffer mirrors the images (`fit`): 2D layer l's texels from l x size^2, row
   by row; then, from ShadowMaps.compute_cube_base(), cube c's face f (+X -X +Y -Y +Z -Z) at
   (6c + f) x cube_size^2 - where a layer's matrix (ShadowData.layer_vp) puts its texels
   here (`_spans`) and where shadow_sampling.glsl compare_2d / compare_cube read them.
-- The shading knows from ShadowData's header (ShadowMaps.write): world_layout.z bit 0
-  (compute-drawn maps, in set 3's ShadowDepths), .w the cubes' first texel; clear: the
-  raster units' images, compared by the sampler (nothing changes for them).
+- The shading knows from ShadowData's header (ShadowMaps.write, bit 0 set per frame by
+  ShadowMaps._choose_reads): world_layout.z bit 0 (read the buffer, set 3's ShadowDepths),
+  .w the cubes' first texel; clear: the images, compared by the sampler.
 - Layers not redrawn (ShadowMaps.stale's cache) keep their texels: `_clear` fills only the
   redrawn layers, so a cached layer is valid in the buffer as it was in the images. A switch
   between the compute kernels and the raster units (RenderOptions.shadow_raster, or "auto"
@@ -32,8 +32,9 @@ frame's maps) but are not written. Where the maps are, and what the shading must
   choose_raster): the new side redraws every layer, nothing stale is read. New buffers (new
   images, a new scene) rebind ShadowDepths and forget it too (ShadowMaps.bind_frame_depths),
   before the frame's `stale`: ShadowFrames.prepare fits them (`fit`).
-- Frames in flight share the one buffer, as they shared the images. The last step,
-  "shadows", declares the buffer read by compute and fragment shaders: the frame graph puts
+- Frames in flight share the one buffer, as they share the images. The last step,
+  "shadows" (the copy, where the frame copies), declares the buffer read by compute and
+  fragment shaders (their sets bind it either way): the frame graph puts
   the barrier from the kernels' writes before it, so every shading step after it (fragment
   passes, compute shading, the transmission's copy, a batch's) sees the maps without each
   naming them. The next frame's clear is the buffer's first use in its recording, which the
