@@ -30,6 +30,7 @@ import concurrent.futures
 import dataclasses
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -225,9 +226,13 @@ class GpuScene:
     """Owns the GPU copies of one Scene. Built by `Renderer`; destroy with `destroy()`."""
 
     def __init__(
-        self, device: Device, scene: Scene, material_layout: DescriptorSetLayout, slots: int = 1
+        self, device: Device, scene: Scene, material_layout: DescriptorSetLayout, slots: int = 1,
+        ahead: Any = None,
     ) -> None:
+        """`ahead`: the vkpbr.bake.ahead.SceneAhead that loaded `scene`, whose images decoded
+        while the device was made are used where this device would decode them the same."""
         self.device = device
+        self._ahead = ahead
         self.slots = slots  # frame slots: each has its own copy of the material blocks
         self.scene = scene
         self._owned: list = []
@@ -363,9 +368,14 @@ class GpuScene:
         blocks: dict[int, list[np.ndarray]] = {}
         if all(img.pixels is not None for img in images):
             return [img.pixels for img in images], blocks
+        max_size = int(self.device.limits.maxImageDimension2D)
+        if self._ahead is not None:
+            got = self._ahead.decoded_for(max_size)
+            self._ahead = None  # (its pixels are not kept beyond the upload)
+            if got is not None:
+                return list(got), blocks
         from vkpbr.scene.textures import decode_images
 
-        max_size = int(self.device.limits.maxImageDimension2D)
         pixels = decode_images(self.scene, max_size=max_size,  # a Scene: errors name its file
                                blocks="bc7" if self.device.bc7_textures else None,
                                block_levels=blocks)
