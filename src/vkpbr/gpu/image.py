@@ -8,6 +8,7 @@ copied level by level; otherwise its chain is made by successive linear blits on
 from __future__ import annotations
 
 import os
+import time
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -221,6 +222,25 @@ def _aligned(nbytes: int) -> int:
     return -(-nbytes // 16) * 16
 
 
+def _slot_bytes(target: Image | Buffer, arrays: list[np.ndarray]) -> int:
+    """Staging bytes of one queued upload: an image's levels each aligned, a buffer's parts
+    joined (TextureUploader._copy_in)."""
+    if isinstance(target, Buffer):
+        return _aligned(sum(a.nbytes for a in arrays))
+    return sum(_aligned(a.nbytes) for a in arrays)
+
+
+def _buffers_barrier(vk: Any, cmd: Any) -> None:
+    """The batch's buffer copies made available to every later read (vertex, index, storage,
+    indirect: any stage of a later submission)."""
+    vk.vkCmdPipelineBarrier2(cmd, vk.VkDependencyInfo(
+        memoryBarrierCount=1, pMemoryBarriers=[vk.VkMemoryBarrier2(
+            srcStageMask=vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+            srcAccessMask=vk.VK_ACCESS_2_TRANSFER_WRITE_BIT,
+            dstStageMask=vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+            dstAccessMask=vk.VK_ACCESS_2_MEMORY_READ_BIT)]))
+
+
 def _barrier(vk: Any, image: Image, old: int, new: int, src: tuple, dst: tuple,
              base_mip: int = 0, mips: int = 1, layers: int = 1) -> Any:
     return vk.VkImageMemoryBarrier2(
@@ -255,7 +275,8 @@ _PARALLEL_COPY_BYTES = 16 << 20
 
 class TextureUploader:
     """Uploads RGBA8 images with full mip chains (and BC7 ones with theirs: `add_blocks`),
-    batching many into one submission.
+    batching many into one submission; buffers too (`add_buffer`: a scene's vertex streams
+    ride in the textures' first batch, so a scene's upload waits once, at `flush`).
 
     Staging memory is bounded by twice `batch_bytes`: when a batch would exceed it, the batch
     is submitted and the next one copied into a second staging buffer while the GPU uploads
@@ -265,8 +286,12 @@ class TextureUploader:
     def __init__(self, device: Device, batch_bytes: int = 64 << 20) -> None:
         self.device = device
         self.batch_bytes = batch_bytes
-        self._pending: list[tuple[Image, list[np.ndarray]]] = []
+        self._pending: list[tuple[Image | Buffer, list[np.ndarray]]] = []
         self._pending_bytes = 0
+        # Seconds in each part of the upload (benchmarks/bench_load.py): creating images and
+        # buffers, copying into staging memory (with its allocation), recording and
+        # submitting, waiting for the GPU.
+        self.stats = {"create": 0.0, "copy": 0.0, "record": 0.0, "wait": 0.0}
         # Staging buffers: free ones, and (command buffer, fence, buffer) of submitted batches
         # not yet waited for (at most two: see _staging_for).
         self._free: list[Buffer] = []
@@ -299,7 +324,9 @@ class TextureUploader:
         usage = vk.VK_IMAGE_USAGE_SAMPLED_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT
         if levels > len(levels_data):  # the blits read the level above
             usage |= vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT
+        t = time.perf_counter()
         image = Image(self.device, w, h, format, usage, mip_levels=levels, name=name)
+        self.stats["create"] += time.perf_counter() - t
         nbytes = sum(a.nbytes for a in levels_data)
         if self._pending_bytes + nbytes > self.batch_bytes:
             self._submit()
@@ -327,12 +354,45 @@ class TextureUploader:
         self._pending_bytes += nbytes
         return image
 
+    def add_buffer(self, parts: Sequence[np.ndarray], usage: int | str, name: str = "") -> Buffer:
+        """A device-local buffer of `usage` (gpu.buffer.buffer_usage) holding `parts` one after
+        another (their concatenation, each copied once into the staging memory), queued like
+        an image; readable by any command submitted after `flush` (or after this batch)."""
+        from vkpbr.gpu.buffer import buffer_usage
+
+        vk = self.device.vk
+        data = [np.ascontiguousarray(a) for a in parts]
+        nbytes = sum(a.nbytes for a in data)
+        t = time.perf_counter()
+        buffer = Buffer(self.device, nbytes, buffer_usage(vk, usage)
+                        | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, name=name)
+        self.stats["create"] += time.perf_counter() - t
+        if nbytes == 0:
+            return buffer
+        if self._pending_bytes + nbytes > self.batch_bytes:
+            self._submit()
+        self._pending.append((buffer, data))
+        self._pending_bytes += _aligned(nbytes)
+        return buffer
+
+    def submit(self) -> None:
+        """Send what is queued to the GPU now, without waiting (`flush` waits)."""
+        self._submit()
+
+    def abandon(self) -> None:
+        """After an error: drop what is queued, wait for what was sent, free the staging."""
+        self._pending.clear()
+        self._pending_bytes = 0
+        self.flush()
+
     def flush(self) -> None:
         """Upload what is queued (and wait for every batch); the staging buffers are freed."""
         try:
             self._submit()
+            t = time.perf_counter()
             while self._in_flight:
                 self._retire()
+            self.stats["wait"] += time.perf_counter() - t
         finally:
             while self._in_flight:  # (an error: still wait before freeing what the GPU reads)
                 self._retire(check=False)
@@ -379,19 +439,29 @@ class TextureUploader:
             return
         device, vk = self.device, self.device.vk
         try:
-            total = sum(_aligned(a.nbytes) for _, levels in self._pending for a in levels)
+            t = time.perf_counter()
+            total = sum(_slot_bytes(target, levels) for target, levels in self._pending)
             staging = self._staging_for(total)
             offsets_of = self._copy_in(staging, total)
+            t_copied = time.perf_counter()
+            self.stats["copy"] += t_copied - t
             cmd = device.allocate_command_buffer()
             fence = None
             try:
                 vk.vkBeginCommandBuffer(cmd, vk.VkCommandBufferBeginInfo(
                     flags=vk.VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT))
+                buffers = False
                 for (image, levels), offsets in zip(self._pending, offsets_of, strict=True):
-                    if len(levels) > 1:
+                    if isinstance(image, Buffer):
+                        vk.vkCmdCopyBuffer(cmd, staging.handle, image.handle, 1, [vk.VkBufferCopy(
+                            srcOffset=offsets[0], dstOffset=0, size=sum(a.nbytes for a in levels))])
+                        buffers = True
+                    elif len(levels) > 1:
                         self._record_levels(cmd, image, staging, offsets)
                     else:
                         self._record_upload(cmd, image, staging, offsets[0])
+                if buffers:  # the copies before any later submission's reads of them
+                    _buffers_barrier(vk, cmd)
                 vk.vkEndCommandBuffer(cmd)
                 fence = vk.vkCreateFence(device.handle, vk.VkFenceCreateInfo(), None)
                 vk.vkQueueSubmit(device.queue, 1, [vk.VkSubmitInfo(pCommandBuffers=[cmd])], fence)
@@ -402,6 +472,7 @@ class TextureUploader:
                 self._free.append(staging)
                 raise
             self._in_flight.append((cmd, fence, staging))
+            self.stats["record"] += time.perf_counter() - t_copied
         finally:
             self._pending.clear()
             self._pending_bytes = 0
@@ -410,16 +481,18 @@ class TextureUploader:
         """The queued levels copied into `staging`; each image's levels' offsets."""
         dst = staging.array(np.uint8, total)
         copies, offsets_of, offset = [], [], 0
-        for _, levels in self._pending:  # offsets multiples of 16: a BC7 block (RGBA8: 4)
+        for target, levels in self._pending:  # offsets multiples of 16: a BC7 block (RGBA8: 4)
             offsets_of.append([])
+            joined = isinstance(target, Buffer)  # a buffer's parts: one after another
             for a in levels:
                 copies.append((offset, a))
                 offsets_of[-1].append(offset)
-                offset += _aligned(a.nbytes)
+                offset += a.nbytes if joined else _aligned(a.nbytes)
+            offset = _aligned(offset)
 
         def copy(job: tuple[int, np.ndarray]) -> None:
             at, a = job
-            dst[at : at + a.nbytes] = a.reshape(-1)
+            dst[at : at + a.nbytes] = a.reshape(-1).view(np.uint8)  # (any dtype: buffers)
 
         if total >= _PARALLEL_COPY_BYTES and len(copies) > 1:
             with ThreadPoolExecutor(min(8, os.cpu_count() or 1)) as pool:
