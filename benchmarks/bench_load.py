@@ -99,7 +99,9 @@ def child(scene: str, size: tuple[int, int], cached: bool, serial: bool = False)
            "decode_wait": getattr(renderer.gpu_scene, "decode_wait", float("nan")),
            "bytecode": _bytecode(),
            "path": renderer.paths.choice.label if renderer.paths.choice else "rule",
-           "device_name": renderer.device.info.name}
+           "device_name": renderer.device.info.name,
+           "device_parts": getattr(renderer.device, "timings", {}),
+           "upload_parts": getattr(renderer.gpu_scene, "upload_stats", {})}
     renderer.close()
     return out
 
@@ -151,6 +153,21 @@ def print_load_table(scene: Path, size: tuple[int, int], rows: list[dict], seria
               f"{r['parts']:.2f} | {r['choice']:.2f} | "
               f"{r['first_frame']:.2f} | {r['pipelines_built']} ({r['pipeline_hits']}) | "
               f"{r['pipelines_s']:.2f} | **{r['total']:.2f}** |")
+    print("\nWhere the device's and the upload's seconds went (device: the loader's instance, the"
+          " physical device's choice, the logical device, the pipeline cache's file; upload:"
+          " images' and buffers' creation, the copy into staging memory, recording and submitting,"
+          " the wait at the end):\n")
+    print("| row | " + " | ".join(f"device: {k}" for k in _DEVICE_PARTS) + " | "
+          + " | ".join(f"upload: {k}" for k in _UPLOAD_PARTS) + " |")
+    print("|---|" + "---:|" * (len(_DEVICE_PARTS) + len(_UPLOAD_PARTS)))
+    for r in rows:
+        cells = [r.get("device_parts", {}).get(k) for k in _DEVICE_PARTS] + [
+            r.get("upload_parts", {}).get(k) for k in _UPLOAD_PARTS]
+        print(f"| {r['row']} | " + " | ".join("-" if v is None else f"{v:.3f}" for v in cells) + " |")
+
+
+_DEVICE_PARTS = ("instance", "choice", "device", "pipeline_cache")
+_UPLOAD_PARTS = ("create", "copy", "record", "wait")
 
 
 # --- part 2: many scenes --------------------------------------------------------------------

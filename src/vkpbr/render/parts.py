@@ -14,6 +14,7 @@ the device, which destroys what was made if making the rest fails.
 from __future__ import annotations
 
 import os
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -117,7 +118,9 @@ def open_device(device: str | int | None, validation: bool | None, sync_validati
         validation = os.environ.get("VKPBR_VALIDATION") == "1"
     dev = Device(device, validation=validation, sync_validation=sync_validation)
     try:
+        t = time.perf_counter()
         dev.pipeline_cache = PipelineCache(dev, cache_dir, shaders_digest())
+        dev.timings["pipeline_cache"] = time.perf_counter() - t  # (its file read and checked)
     except BaseException:
         dev.close()
         raise
