@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import os
 import threading
+from collections.abc import Callable
 from concurrent.futures import Future
 from pathlib import Path
 from typing import Any
@@ -30,7 +31,7 @@ import numpy as np
 from ..errors import VkpbrError
 from ..scene.types import Scene
 
-__all__ = ["SceneAhead", "load_ahead"]
+__all__ = ["SceneAhead", "load_ahead", "scene_ahead"]
 
 
 class SceneAhead(Future):
@@ -86,16 +87,22 @@ def load_ahead(path: str | os.PathLike[str], cache_dir: str | os.PathLike[str] |
     """Start loading `path` (through the bake cache in `cache_dir` when given) on a thread, and
     then, with `decode`, decoding its images; `load_kwargs` go to `load_scene` (strict,
     allow_outside_paths, variant). Returns the SceneAhead at once."""
+    cache = None if cache_dir is None else Path(cache_dir)
+    return scene_ahead(lambda: _load(Path(path), cache, dict(load_kwargs)), decode)
+
+
+def scene_ahead(load: Callable[[], Scene | None], decode: bool = True) -> SceneAhead:
+    """`load()` run on a thread (then, with `decode`, its scene's images decoded there): the
+    SceneAhead of its result, at once (a None result: the built-in scene, nothing decoded)."""
     ahead = SceneAhead()
     ahead.set_running_or_notify_cancel()
     if decode:
         ahead.decoded = Future()
         ahead.decoded.set_running_or_notify_cancel()
-    cache = None if cache_dir is None else Path(cache_dir)
 
     def work() -> None:
         try:
-            scene = _load(Path(path), cache, dict(load_kwargs))
+            scene = load()
         except BaseException as exc:  # noqa: BLE001 - handed to whoever asks for the scene
             ahead.set_exception(exc)
             if ahead.decoded is not None:
@@ -104,7 +111,7 @@ def load_ahead(path: str | os.PathLike[str], cache_dir: str | os.PathLike[str] |
         ahead.set_result(scene)
         if ahead.decoded is not None:
             try:
-                ahead.decoded.set_result(_decode(scene))
+                ahead.decoded.set_result(None if scene is None else _decode(scene))
             except BaseException as exc:  # noqa: BLE001 - raised where the pixels are used
                 ahead.decoded.set_exception(exc)
 
