@@ -23,7 +23,8 @@ device, the scene's upload (geometry, textures: decode + upload + mips) and the 
 GPU objects, auto's path choice (a measurement when nothing is recorded), the first frame's
 render call, the pipelines built in the process (the driver's reported cache hits) and their
 seconds, and file-to-first-frame (load + set-up + choice + first frame; Python's import of
-vkpbr is the separate "import" column).
+vkpbr is the separate "import" column), and file to first frame again in the same process on
+the same Renderer (`set_scene`: the device and its pipelines kept, as a job's next scene).
 
 Part 2, a job (docs/batch.md, "Many scenes"): `--scenes` entries cycling over the sample
 models under `--models` (every */glTF/*.gltf; consecutive entries are different scenes, so
@@ -101,9 +102,32 @@ def child(scene: str, size: tuple[int, int], cached: bool, serial: bool = False)
            "path": renderer.paths.choice.label if renderer.paths.choice else "rule",
            "device_name": renderer.device.info.name,
            "device_parts": getattr(renderer.device, "timings", {}),
-           "upload_parts": getattr(renderer.gpu_scene, "upload_stats", {})}
+           "upload_parts": getattr(renderer.gpu_scene, "upload_stats", {}),
+           "again": _again(renderer, scene, size, cache, serial)}
     renderer.close()
     return out
+
+
+def _again(renderer: object, scene: str, size: tuple[int, int], cache: Path | None,
+           serial: bool) -> float:
+    """File to first frame once more on the same Renderer (`set_scene`: the device, its
+    pipelines and the driver kept), as a job's next scene pays it: the scene read again (the
+    bake cache's file when `cache`), uploaded, its first frame rendered."""
+    from vkpbr.bake.ahead import load_ahead
+    from vkpbr.scene.loader import load_scene
+
+    t = time.perf_counter()
+    if serial:
+        path, root = Path(scene), None
+        if cache is not None:
+            from vkpbr.bake.bake import cached_bake
+
+            root, path = path.parent, cached_bake(path, cache)
+        renderer.set_scene(load_scene(path, root=root))
+    else:
+        renderer.set_scene(load_ahead(scene, cache))
+    renderer.render(size=size)
+    return time.perf_counter() - t
 
 
 def _bytecode() -> str:
@@ -145,14 +169,15 @@ def print_load_table(scene: Path, size: tuple[int, int], rows: list[dict], seria
     print(f"\n### {scene.name} file to first frame at {size[0]}x{size[1]} on {rows[0]['device_name']}"
           f" ({how}; auto: {rows[-1]['path']}; bytecode {rows[-1]['bytecode']})\n")
     print("| row | import | load | device | geometry | textures (decode wait) | other set-up "
-          "| path choice | first frame | pipelines (hits) | pipeline s | **file to first frame** |")
-    print("|---|" + "---:|" * 11)
+          "| path choice | first frame | pipelines (hits) | pipeline s | **file to first frame** "
+          "| again, device kept |")
+    print("|---|" + "---:|" * 12)
     for r in rows:
         print(f"| {r['row']} | {r['import']:.2f} | {r['load']:.2f} | {r['device']:.2f} | "
               f"{r['geometry']:.2f} | {r['textures']:.2f} ({r['decode_wait']:.2f}) | "
               f"{r['parts']:.2f} | {r['choice']:.2f} | "
               f"{r['first_frame']:.2f} | {r['pipelines_built']} ({r['pipeline_hits']}) | "
-              f"{r['pipelines_s']:.2f} | **{r['total']:.2f}** |")
+              f"{r['pipelines_s']:.2f} | **{r['total']:.2f}** | {r['again']:.2f} |")
     print("\nWhere the device's and the upload's seconds went (device: the loader's instance, the"
           " physical device's choice, the logical device, the pipeline cache's file; upload:"
           " images' and buffers' creation, the copy into staging memory, recording and submitting,"

@@ -389,10 +389,8 @@ class TextureUploader:
         """Upload what is queued (and wait for every batch); the staging buffers are freed."""
         try:
             self._submit()
-            t = time.perf_counter()
             while self._in_flight:
                 self._retire()
-            self.stats["wait"] += time.perf_counter() - t
         finally:
             while self._in_flight:  # (an error: still wait before freeing what the GPU reads)
                 self._retire(check=False)
@@ -421,6 +419,7 @@ class TextureUploader:
         buffer is free again."""
         cmd, fence, staging = self._in_flight.pop(0)
         vk, device = self.device.vk, self.device
+        t = time.perf_counter()
         try:
             if check:
                 device.wait_fences(vk.ffi.new("VkFence[1]", [fence]), "an upload")
@@ -430,6 +429,7 @@ class TextureUploader:
             vk.vkDestroyFence(device.handle, fence, None)
             device.free_command_buffer(cmd)
             self._free.append(staging)
+            self.stats["wait"] += time.perf_counter() - t
 
     def _submit(self) -> None:
         """Copy the queued levels into a staging buffer (on threads when large: NumPy
@@ -439,12 +439,12 @@ class TextureUploader:
             return
         device, vk = self.device, self.device.vk
         try:
-            t = time.perf_counter()
+            t, waited = time.perf_counter(), self.stats["wait"]
             total = sum(_slot_bytes(target, levels) for target, levels in self._pending)
-            staging = self._staging_for(total)
+            staging = self._staging_for(total)  # (it may wait for the batch before last)
             offsets_of = self._copy_in(staging, total)
             t_copied = time.perf_counter()
-            self.stats["copy"] += t_copied - t
+            self.stats["copy"] += t_copied - t - (self.stats["wait"] - waited)
             cmd = device.allocate_command_buffer()
             fence = None
             try:
