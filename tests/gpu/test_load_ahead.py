@@ -5,6 +5,7 @@ too (a cold cache, a warm one, a broken cache file baked again); its decoded ima
 
 from __future__ import annotations
 
+from concurrent.futures import Future
 from pathlib import Path
 
 import numpy as np
@@ -39,7 +40,9 @@ def test_loaded_ahead_renders_what_loaded_first_renders(make_renderer, model: Pa
     got = renderer.render(size=SIZE)
     assert len(decodes) == 1 and ahead.decoded is None  # decoded once, ahead; not kept
     assert renderer.timings["load_wait"] >= 0.0
-    renderer.set_scene(load_scene(model))
+    first = Future()  # any Future of a Scene is taken (loaded first here: decoded at upload)
+    first.set_result(load_scene(model))
+    renderer.set_scene(first)
     np.testing.assert_array_equal(got, renderer.render(size=SIZE))
     assert len(decodes) == 2
     cache = tmp_path / "cache"

@@ -380,11 +380,11 @@ class GpuScene:
         if all(img.pixels is not None for img in images):
             return [img.pixels for img in images], blocks
         max_size = int(self.device.limits.maxImageDimension2D)
-        if self._ahead is not None:
-            got = self._ahead.decoded_for(max_size)
-            self._ahead = None  # (its pixels are not kept beyond the upload)
-            if got is not None:
-                return list(got), blocks
+        decoded_for = getattr(self._ahead, "decoded_for", None)  # (any other Future: none)
+        self._ahead = None
+        got = decoded_for(max_size) if decoded_for is not None else None
+        if got is not None:  # (not kept here beyond the upload)
+            return list(got), blocks
         from vkpbr.scene.textures import decode_images
 
         pixels = decode_images(self.scene, max_size=max_size,  # a Scene: errors name its file
