@@ -57,8 +57,13 @@ class SceneAhead(Future):
 
 
 def _has_ktx2(scene: Scene) -> bool:
+    """Whether some image may be KTX2 (by its type, its file's name or its bytes)."""
+    from ..scene.gltf_codecs import KTX2_MAGIC
+
     return any((img.mime_type or "").lower() == "image/ktx2"
-               or str(img.path or "").lower().endswith(".ktx2") for img in scene.images)
+               or str(img.path or "").lower().endswith(".ktx2")
+               or (img.data is not None and bytes(img.data[:12]) == KTX2_MAGIC)
+               for img in scene.images)
 
 
 def _decode(scene: Scene) -> list[np.ndarray | None] | None:
