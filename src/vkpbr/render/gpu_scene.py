@@ -270,7 +270,18 @@ class GpuScene:
         return obj
 
     # --- geometry ---------------------------------------------------------------------------
-    def _upload_geometry(self, uploader: TextureUploader) -> None:
+    def _upload_geometry(self, uploader: TextureUploader | None = None) -> None:
+        """Every mesh's streams and indices (and the posed regions after them) through
+        `uploader`'s batches, sent by its caller; None: uploaded now (instances.py's regrowth)."""
+        if uploader is None:
+            uploader = TextureUploader(self.device)
+            try:
+                self._upload_geometry(uploader)
+            except BaseException:
+                uploader.abandon()
+                raise
+            uploader.flush()
+            return
         per_mesh = [prepare_mesh(m, self._tangent_uv_set(m), frames=False)
                     for m in self.scene.meshes]
         self.vertex_offsets = np.cumsum([0] + [m.vertex_count for m in self.scene.meshes])
