@@ -4,7 +4,7 @@ scene rendered in-process.
 
     python benchmarks/bench_load.py [--scene SPONZA.gltf] [--size 1280x720]
                                     [--models DIR] [--scenes 100] [--views 16] [--job-size 256x256]
-                                    [--no-job] [--no-load] [--ray] [--profile DIR]
+                                    [--no-job] [--no-load] [--ray] [--profile DIR] [--serial]
                                     [--json OUT.json]
 
 Part 1, one scene (default: the sample models' Sponza), each row a fresh process with its own
@@ -15,12 +15,16 @@ cache folder ($VKPBR_CACHE_DIR) in this order:
   bake (first)          through the bake cache (`--cache`), which bakes now
   warm bake + pipelines through the bake cache again: everything warm
   warm bake only        the pipeline cache and frame-path record removed first
-Columns: the scene's load (parse or bake-cache read), the Renderer's set-up split into the
+The scene is loaded on a thread while the Renderer makes its device (vkpbr.bake.ahead: the
+bake cache's look-up, the parse or the baked file's read, the images' decode), or with
+`--serial` first (as before). Columns: the scene's load (parse or bake-cache read; loaded
+ahead: only the wait for it after the device was made), the Renderer's set-up split into the
 device, the scene's upload (geometry, textures: decode + upload + mips) and the rest of its
 GPU objects, auto's path choice (a measurement when nothing is recorded), the first frame's
-render call, the pipelines built in the process (the driver's reported cache hits) and their
+render call (of which the environment's pre-filter, made first here), the pipelines built in the process (the driver's reported cache hits) and their
 seconds, and file-to-first-frame (load + set-up + choice + first frame; Python's import of
-vkpbr is the separate "import" column).
+vkpbr is the separate "import" column), and file to first frame again in the same process on
+the same Renderer (`set_scene`: the device and its pipelines kept, as a job's next scene).
 
 Part 2, a job (docs/batch.md, "Many scenes"): `--scenes` entries cycling over the sample
 models under `--models` (every */glTF/*.gltf; consecutive entries are different scenes, so
@@ -57,8 +61,10 @@ ROWS = (("cold", False, ()), ("warm pipelines", False, ()), ("bake (first)", Tru
 
 
 # --- part 1: one scene, a child process per row ---------------------------------------------
-def child(scene: str, size: tuple[int, int], cached: bool) -> dict:
-    """Runs in the child: load, set up, choose the path, first frame; the phases' seconds."""
+def child(scene: str, size: tuple[int, int], cached: bool, serial: bool = False) -> dict:
+    """Runs in the child: load, set up, choose the path, first frame; the phases' seconds.
+    The scene loads on a thread while the device is made (vkpbr.bake.ahead), unless `serial`
+    (load, then device): "load" is then the part of the load the device did not hide."""
     t0 = time.perf_counter()
     from vkpbr.config import default_cache_dir
     from vkpbr.render.options import RenderOptions
@@ -67,28 +73,64 @@ def child(scene: str, size: tuple[int, int], cached: bool) -> dict:
     from vkpbr.scene.loader import load_scene
 
     t_import = time.perf_counter()
-    path, root = Path(scene), None
-    if cached:
-        from vkpbr.bake.bake import cached_bake
+    cache = default_cache_dir() if cached else None
+    if serial:
+        path, root = Path(scene), None
+        if cached:
+            from vkpbr.bake.bake import cached_bake
 
-        root, path = path.parent, cached_bake(path, default_cache_dir())
-    loaded = load_scene(path, root=root)
+            root, path = path.parent, cached_bake(path, cache)
+        loaded = load_scene(path, root=root)
+    else:
+        from vkpbr.bake.ahead import load_ahead
+
+        loaded = load_ahead(scene, cache)
     t_load = time.perf_counter()
     renderer = Renderer(loaded, cache_dir=default_cache_dir())
     t_setup = time.perf_counter()
     renderer.choose_paths(renderer.offscreen_target(size, False), RenderOptions())
     t_choice = time.perf_counter()
+    renderer.environments.get(RenderOptions())  # the sky's pre-filter: the first frame's own
+    t_env = time.perf_counter()
     renderer.render(size=size)
     t_first = time.perf_counter()
-    out = {"import": t_import - t0, "load": t_load - t_import, **renderer.timings,
+    timings = dict(renderer.timings)
+    wait = timings.pop("load_wait", 0.0)
+    out = {"import": t_import - t0, "load": t_load - t_import + wait, **timings,
            "choice": t_choice - t_setup, "first_frame": t_first - t_choice,
+           "environment": t_env - t_choice,
            **pipeline_timings(renderer.device), "total": t_first - t_import,
            "decode_wait": getattr(renderer.gpu_scene, "decode_wait", float("nan")),
            "bytecode": _bytecode(),
            "path": renderer.paths.choice.label if renderer.paths.choice else "rule",
-           "device_name": renderer.device.info.name}
+           "device_name": renderer.device.info.name,
+           "device_parts": getattr(renderer.device, "timings", {}),
+           "upload_parts": getattr(renderer.gpu_scene, "upload_stats", {}),
+           "again": _again(renderer, scene, size, cache, serial)}
     renderer.close()
     return out
+
+
+def _again(renderer: object, scene: str, size: tuple[int, int], cache: Path | None,
+           serial: bool) -> float:
+    """File to first frame once more on the same Renderer (`set_scene`: the device, its
+    pipelines and the driver kept), as a job's next scene pays it: the scene read again (the
+    bake cache's file when `cache`), uploaded, its first frame rendered."""
+    from vkpbr.bake.ahead import load_ahead
+    from vkpbr.scene.loader import load_scene
+
+    t = time.perf_counter()
+    if serial:
+        path, root = Path(scene), None
+        if cache is not None:
+            from vkpbr.bake.bake import cached_bake
+
+            root, path = path.parent, cached_bake(path, cache)
+        renderer.set_scene(load_scene(path, root=root))
+    else:
+        renderer.set_scene(load_ahead(scene, cache))
+    renderer.render(size=size)
+    return time.perf_counter() - t
 
 
 def _bytecode() -> str:
@@ -102,7 +144,8 @@ def _bytecode() -> str:
             else "cached" if cached and all(cached) else "compiled")
 
 
-def load_table(scene: Path, size: tuple[int, int], profile: Path | None) -> list[dict]:
+def load_table(scene: Path, size: tuple[int, int], profile: Path | None,
+               serial: bool = False) -> list[dict]:
     cache = Path(tempfile.mkdtemp(prefix="vkpbr-bench-load-"))
     rows = []
     try:
@@ -115,6 +158,7 @@ def load_table(scene: Path, size: tuple[int, int], profile: Path | None) -> list
             if profile is not None:
                 profile.mkdir(parents=True, exist_ok=True)
                 cmd += ["--profile", str(profile / f"load-{name.replace(' ', '-')}.txt")]
+            cmd += ["--serial"] if serial else []
             got = subprocess.run(cmd + (["--cached"] if cached else []), env=env, check=True,
                                  capture_output=True, text=True)
             rows.append({"row": name, **json.loads(got.stdout.strip().splitlines()[-1])})
@@ -123,18 +167,35 @@ def load_table(scene: Path, size: tuple[int, int], profile: Path | None) -> list
     return rows
 
 
-def print_load_table(scene: Path, size: tuple[int, int], rows: list[dict]) -> None:
+def print_load_table(scene: Path, size: tuple[int, int], rows: list[dict], serial: bool) -> None:
+    how = "load, then device" if serial else "loaded on a thread while the device is made"
     print(f"\n### {scene.name} file to first frame at {size[0]}x{size[1]} on {rows[0]['device_name']}"
-          f" (auto: {rows[-1]['path']}; bytecode {rows[-1]['bytecode']})\n")
+          f" ({how}; auto: {rows[-1]['path']}; bytecode {rows[-1]['bytecode']})\n")
     print("| row | import | load | device | geometry | textures (decode wait) | other set-up "
-          "| path choice | first frame | pipelines (hits) | pipeline s | **file to first frame** |")
-    print("|---|" + "---:|" * 11)
+          "| path choice | first frame (environment) | pipelines (hits) | pipeline s | **file to first frame** "
+          "| again, device kept |")
+    print("|---|" + "---:|" * 12)
     for r in rows:
         print(f"| {r['row']} | {r['import']:.2f} | {r['load']:.2f} | {r['device']:.2f} | "
               f"{r['geometry']:.2f} | {r['textures']:.2f} ({r['decode_wait']:.2f}) | "
               f"{r['parts']:.2f} | {r['choice']:.2f} | "
-              f"{r['first_frame']:.2f} | {r['pipelines_built']} ({r['pipeline_hits']}) | "
-              f"{r['pipelines_s']:.2f} | **{r['total']:.2f}** |")
+              f"{r['first_frame']:.2f} ({r['environment']:.2f}) | {r['pipelines_built']} ({r['pipeline_hits']}) | "
+              f"{r['pipelines_s']:.2f} | **{r['total']:.2f}** | {r['again']:.2f} |")
+    print("\nWhere the device's and the upload's seconds went (device: the loader's instance, the"
+          " physical device's choice, the logical device, the pipeline cache's file; upload:"
+          " images' and buffers' creation, the copy into staging memory, recording and submitting,"
+          " the wait at the end):\n")
+    print("| row | " + " | ".join(f"device: {k}" for k in _DEVICE_PARTS) + " | "
+          + " | ".join(f"upload: {k}" for k in _UPLOAD_PARTS) + " |")
+    print("|---|" + "---:|" * (len(_DEVICE_PARTS) + len(_UPLOAD_PARTS)))
+    for r in rows:
+        cells = [r.get("device_parts", {}).get(k) for k in _DEVICE_PARTS] + [
+            r.get("upload_parts", {}).get(k) for k in _UPLOAD_PARTS]
+        print(f"| {r['row']} | " + " | ".join("-" if v is None else f"{v:.3f}" for v in cells) + " |")
+
+
+_DEVICE_PARTS = ("instance", "choice", "device", "pipeline_cache")
+_UPLOAD_PARTS = ("create", "copy", "record", "wait")
 
 
 # --- part 2: many scenes --------------------------------------------------------------------
@@ -280,20 +341,22 @@ def main() -> None:
     p.add_argument("--json", type=Path)
     p.add_argument("--profile", type=Path, metavar="DIR",
                    help="also write each row's cProfile (top 60 by cumulative time) into DIR")
+    p.add_argument("--serial", action="store_true",
+                   help="load the scene, then make the device (as before vkpbr.bake.ahead)")
     p.add_argument("--child", help=argparse.SUPPRESS)
     p.add_argument("--cached", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args()
     size = tuple(int(v) for v in args.size.split("x"))
     if args.child:
         if args.profile is None:
-            print(json.dumps(child(args.child, size, args.cached)))
+            print(json.dumps(child(args.child, size, args.cached, args.serial)))
             return
         import cProfile
         import io
         import pstats
 
         prof = cProfile.Profile()
-        got = prof.runcall(child, args.child, size, args.cached)
+        got = prof.runcall(child, args.child, size, args.cached, args.serial)
         text = io.StringIO()
         pstats.Stats(prof, stream=text).sort_stats("cumulative").print_stats(60)
         args.profile.write_text(text.getvalue())
@@ -301,8 +364,8 @@ def main() -> None:
         return
     out: dict = {}
     if not args.no_load:
-        out["load"] = load_table(args.scene, size, args.profile)
-        print_load_table(args.scene, size, out["load"])
+        out["load"] = load_table(args.scene, size, args.profile, args.serial)
+        print_load_table(args.scene, size, out["load"], args.serial)
     if not args.no_job:
         out["job"] = job_table(args)
     if args.json:

@@ -74,3 +74,29 @@ def test_upload_buffers_hold_their_parts_concatenated() -> None:
             for buffer in made:
                 buffer.destroy()
         device.check_validation()
+
+
+def test_buffers_ride_in_the_texture_batches() -> None:
+    """TextureUploader.add_buffer (a scene's vertex streams, render/gpu_scene.py): parts of
+    any dtype joined in one batch with images, one flush; under synchronization validation
+    (the batch's barrier orders the copies before the download's read)."""
+    rng = np.random.default_rng(6)
+    parts = [[rng.random((7, 3), np.float32), rng.random((1, 3), np.float32)],
+             [np.arange(5, dtype=np.uint32)], [rng.integers(0, 9, (3, 4), np.uint16)]]
+    px = rng.integers(0, 256, (6, 5, 4), np.uint8)
+    with Device(validation=True, sync_validation=True) as device:
+        uploader = TextureUploader(device)
+        made = [uploader.add_buffer(p, "storage|transfer_src", f"b{i}") for i, p in enumerate(parts)]
+        image = uploader.add(px, "unorm", name="t")
+        made.append(uploader.add_buffer([np.zeros(0, np.float32)], "vertex"))  # empty: no copy
+        uploader.submit()
+        assert len(uploader._in_flight) == 1 and uploader._pending == []
+        uploader.flush()
+        for buffer, p in zip(made, parts, strict=False):
+            want = np.concatenate([a.reshape(-1).view(np.uint8) for a in p])
+            np.testing.assert_array_equal(download_buffer(device, buffer)[: want.nbytes], want)
+        np.testing.assert_array_equal(_read(device, image, 0), px)
+        assert set(uploader.stats) == {"create", "copy", "record", "wait"}
+        for obj in (*made, image):
+            obj.destroy()
+        device.check_validation()

@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from vkpbr.scene.types import Camera, Light, Scene
 
 # BATCH_VIEWS and default_cache_dir are vkpbr.config's, named here too for older imports.
-__all__ = ["BATCH_VIEWS", "default_cache_dir", "load_scene_arg", "camera_from_args",
+__all__ = ["BATCH_VIEWS", "default_cache_dir", "load_scene_arg", "load_scene_ahead", "camera_from_args",
            "lights_from_args"]
 
 log = logging.getLogger(__name__)
@@ -60,6 +60,14 @@ def load_scene_arg(args: argparse.Namespace) -> Scene | None:
     log.info("scene %s: %d meshes, %d triangles, %d images, loaded in %.2f s", path,
              len(scene.meshes), scene.triangle_count, len(scene.images), time.perf_counter() - t0)
     return scene
+
+
+def load_scene_ahead(args: argparse.Namespace) -> Any:
+    """`load_scene_arg(args)` on a thread, its images decoded there too (vkpbr.bake.ahead):
+    a Future a Renderer takes as its scene, loading while the Renderer makes its device."""
+    from vkpbr.bake.ahead import scene_ahead
+
+    return scene_ahead(lambda: load_scene_arg(args))
 
 
 def camera_from_args(args: argparse.Namespace, renderer: Any) -> Camera:

@@ -11,7 +11,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from vkpbr.app.common import camera_from_args, lights_from_args, load_scene_arg
+from vkpbr.app.common import camera_from_args, lights_from_args, load_scene_ahead
 from vkpbr.app.log import say
 from vkpbr.app.options import add_options, render_options_from_args
 from vkpbr.app.parsing import EPILOG_FORMATTER, size_arg
@@ -79,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
     except ImportError:
         raise UsageError("the viewer needs the glfw package: pip install glfw (or install "
                          "vkpbr with scripts/setup.sh); `vkpbr render` needs no window") from None
-    scene = load_scene_arg(args)
+    scene = load_scene_ahead(args)  # loaded on a thread while the window and device are made
     from vkpbr.app.viewer import Viewer, ViewerConfig
 
     config = ViewerConfig(

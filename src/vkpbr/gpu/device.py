@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -116,8 +117,12 @@ class Device:
             extensions = (*extensions, *device.extensions)
             device = device.selector
         self._required_extensions = tuple(dict.fromkeys(extensions))
+        t0 = time.perf_counter()
         self.instance = Instance(validation=validation, sync_validation=sync_validation,
                                  extensions=tuple(dict.fromkeys(instance_extensions)))
+        # Seconds of its making (benchmarks/bench_load.py): the instance (the loader and its
+        # drivers), the physical device's choice and queries, the logical device and pool.
+        self.timings = {"instance": time.perf_counter() - t0}
         self.vk = vk = self.instance.vk
         self._children: list[Destroyable] = []
         self.handle = None
@@ -125,12 +130,14 @@ class Device:
         # it in, else made in memory by the first pipeline build.
         self.pipeline_cache: Any = None
         try:
+            t0 = time.perf_counter()
             self.info: PhysicalDeviceInfo = self.instance.choose_device(device)
             self.physical = self.info.handle
             self.properties = vk.vkGetPhysicalDeviceProperties(self.physical)
             self.limits = self.properties.limits
             self.memory_properties = vk.vkGetPhysicalDeviceMemoryProperties(self.physical)
             self.queue_family = self._graphics_queue_family()
+            t1 = time.perf_counter()
             self._create_device()
             self.queue = vk.vkGetDeviceQueue(self.handle, self.queue_family, 0)
             self.command_pool = vk.vkCreateCommandPool(
@@ -141,6 +148,7 @@ class Device:
                 ),
                 None,
             )
+            self.timings.update(choice=t1 - t0, device=time.perf_counter() - t1)
         except BaseException:
             self.close()
             raise

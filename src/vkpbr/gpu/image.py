@@ -8,6 +8,7 @@ copied level by level; otherwise its chain is made by successive linear blits on
 from __future__ import annotations
 
 import os
+import time
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -221,6 +222,25 @@ def _aligned(nbytes: int) -> int:
     return -(-nbytes // 16) * 16
 
 
+def _slot_bytes(target: Image | Buffer, arrays: list[np.ndarray]) -> int:
+    """Staging bytes of one queued upload: an image's levels each aligned, a buffer's parts
+    joined (TextureUploader._copy_in)."""
+    if isinstance(target, Buffer):
+        return _aligned(sum(a.nbytes for a in arrays))
+    return sum(_aligned(a.nbytes) for a in arrays)
+
+
+def _buffers_barrier(vk: Any, cmd: Any) -> None:
+    """The batch's buffer copies made available to every later read (vertex, index, storage,
+    indirect: any stage of a later submission)."""
+    vk.vkCmdPipelineBarrier2(cmd, vk.VkDependencyInfo(
+        memoryBarrierCount=1, pMemoryBarriers=[vk.VkMemoryBarrier2(
+            srcStageMask=vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+            srcAccessMask=vk.VK_ACCESS_2_TRANSFER_WRITE_BIT,
+            dstStageMask=vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+            dstAccessMask=vk.VK_ACCESS_2_MEMORY_READ_BIT)]))
+
+
 def _barrier(vk: Any, image: Image, old: int, new: int, src: tuple, dst: tuple,
              base_mip: int = 0, mips: int = 1, layers: int = 1) -> Any:
     return vk.VkImageMemoryBarrier2(
@@ -255,7 +275,8 @@ _PARALLEL_COPY_BYTES = 16 << 20
 
 class TextureUploader:
     """Uploads RGBA8 images with full mip chains (and BC7 ones with theirs: `add_blocks`),
-    batching many into one submission.
+    batching many into one submission; buffers too (`add_buffer`: a scene's vertex streams
+    ride in the textures' first batch, so a scene's upload waits once, at `flush`).
 
     Staging memory is bounded by twice `batch_bytes`: when a batch would exceed it, the batch
     is submitted and the next one copied into a second staging buffer while the GPU uploads
@@ -265,8 +286,12 @@ class TextureUploader:
     def __init__(self, device: Device, batch_bytes: int = 64 << 20) -> None:
         self.device = device
         self.batch_bytes = batch_bytes
-        self._pending: list[tuple[Image, list[np.ndarray]]] = []
+        self._pending: list[tuple[Image | Buffer, list[np.ndarray]]] = []
         self._pending_bytes = 0
+        # Seconds in each part of the upload (benchmarks/bench_load.py): creating images and
+        # buffers, copying into staging memory (with its allocation), recording and
+        # submitting, waiting for the GPU.
+        self.stats = {"create": 0.0, "copy": 0.0, "record": 0.0, "wait": 0.0}
         # Staging buffers: free ones, and (command buffer, fence, buffer) of submitted batches
         # not yet waited for (at most two: see _staging_for).
         self._free: list[Buffer] = []
@@ -299,7 +324,9 @@ class TextureUploader:
         usage = vk.VK_IMAGE_USAGE_SAMPLED_BIT | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT
         if levels > len(levels_data):  # the blits read the level above
             usage |= vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT
+        t = time.perf_counter()
         image = Image(self.device, w, h, format, usage, mip_levels=levels, name=name)
+        self.stats["create"] += time.perf_counter() - t
         nbytes = sum(a.nbytes for a in levels_data)
         if self._pending_bytes + nbytes > self.batch_bytes:
             self._submit()
@@ -326,6 +353,37 @@ class TextureUploader:
         self._pending.append((image, data))
         self._pending_bytes += nbytes
         return image
+
+    def add_buffer(self, parts: Sequence[np.ndarray], usage: int | str, name: str = "") -> Buffer:
+        """A device-local buffer of `usage` (gpu.buffer.buffer_usage) holding `parts` one after
+        another (their concatenation, each copied once into the staging memory), queued like
+        an image; readable by any command submitted after `flush` (or after this batch)."""
+        from vkpbr.gpu.buffer import buffer_usage
+
+        vk = self.device.vk
+        data = [np.ascontiguousarray(a) for a in parts]
+        nbytes = sum(a.nbytes for a in data)
+        t = time.perf_counter()
+        buffer = Buffer(self.device, nbytes, buffer_usage(vk, usage)
+                        | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT, name=name)
+        self.stats["create"] += time.perf_counter() - t
+        if nbytes == 0:
+            return buffer
+        if self._pending_bytes + nbytes > self.batch_bytes:
+            self._submit()
+        self._pending.append((buffer, data))
+        self._pending_bytes += _aligned(nbytes)
+        return buffer
+
+    def submit(self) -> None:
+        """Send what is queued to the GPU now, without waiting (`flush` waits)."""
+        self._submit()
+
+    def abandon(self) -> None:
+        """After an error: drop what is queued, wait for what was sent, free the staging."""
+        self._pending.clear()
+        self._pending_bytes = 0
+        self.flush()
 
     def flush(self) -> None:
         """Upload what is queued (and wait for every batch); the staging buffers are freed."""
@@ -361,6 +419,7 @@ class TextureUploader:
         buffer is free again."""
         cmd, fence, staging = self._in_flight.pop(0)
         vk, device = self.device.vk, self.device
+        t = time.perf_counter()
         try:
             if check:
                 device.wait_fences(vk.ffi.new("VkFence[1]", [fence]), "an upload")
@@ -370,6 +429,7 @@ class TextureUploader:
             vk.vkDestroyFence(device.handle, fence, None)
             device.free_command_buffer(cmd)
             self._free.append(staging)
+            self.stats["wait"] += time.perf_counter() - t
 
     def _submit(self) -> None:
         """Copy the queued levels into a staging buffer (on threads when large: NumPy
@@ -379,19 +439,28 @@ class TextureUploader:
             return
         device, vk = self.device, self.device.vk
         try:
-            total = sum(_aligned(a.nbytes) for _, levels in self._pending for a in levels)
-            staging = self._staging_for(total)
+            t, waited = time.perf_counter(), self.stats["wait"]
+            total = sum(_slot_bytes(target, levels) for target, levels in self._pending)
+            staging = self._staging_for(total)  # (it may wait for the batch before last)
             offsets_of = self._copy_in(staging, total)
+            t_copied = time.perf_counter()
+            self.stats["copy"] += t_copied - t - (self.stats["wait"] - waited)
             cmd = device.allocate_command_buffer()
             fence = None
             try:
                 vk.vkBeginCommandBuffer(cmd, vk.VkCommandBufferBeginInfo(
                     flags=vk.VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT))
-                for (image, levels), offsets in zip(self._pending, offsets_of, strict=True):
-                    if len(levels) > 1:
-                        self._record_levels(cmd, image, staging, offsets)
+                buffers, images = False, []
+                for (target, levels), offsets in zip(self._pending, offsets_of, strict=True):
+                    if isinstance(target, Buffer):
+                        vk.vkCmdCopyBuffer(cmd, staging.handle, target.handle, 1, [vk.VkBufferCopy(
+                            srcOffset=offsets[0], dstOffset=0, size=sum(a.nbytes for a in levels))])
+                        buffers = True
                     else:
-                        self._record_upload(cmd, image, staging, offsets[0])
+                        images.append((target, offsets))
+                _record_images(vk, cmd, staging.handle, images)
+                if buffers:  # the copies before any later submission's reads of them
+                    _buffers_barrier(vk, cmd)
                 vk.vkEndCommandBuffer(cmd)
                 fence = vk.vkCreateFence(device.handle, vk.VkFenceCreateInfo(), None)
                 vk.vkQueueSubmit(device.queue, 1, [vk.VkSubmitInfo(pCommandBuffers=[cmd])], fence)
@@ -402,6 +471,7 @@ class TextureUploader:
                 self._free.append(staging)
                 raise
             self._in_flight.append((cmd, fence, staging))
+            self.stats["record"] += time.perf_counter() - t_copied
         finally:
             self._pending.clear()
             self._pending_bytes = 0
@@ -410,16 +480,18 @@ class TextureUploader:
         """The queued levels copied into `staging`; each image's levels' offsets."""
         dst = staging.array(np.uint8, total)
         copies, offsets_of, offset = [], [], 0
-        for _, levels in self._pending:  # offsets multiples of 16: a BC7 block (RGBA8: 4)
+        for target, levels in self._pending:  # offsets multiples of 16: a BC7 block (RGBA8: 4)
             offsets_of.append([])
+            joined = isinstance(target, Buffer)  # a buffer's parts: one after another
             for a in levels:
                 copies.append((offset, a))
                 offsets_of[-1].append(offset)
-                offset += _aligned(a.nbytes)
+                offset += a.nbytes if joined else _aligned(a.nbytes)
+            offset = _aligned(offset)
 
         def copy(job: tuple[int, np.ndarray]) -> None:
             at, a = job
-            dst[at : at + a.nbytes] = a.reshape(-1)
+            dst[at : at + a.nbytes] = a.reshape(-1).view(np.uint8)  # (any dtype: buffers)
 
         if total >= _PARALLEL_COPY_BYTES and len(copies) > 1:
             with ThreadPoolExecutor(min(8, os.cpu_count() or 1)) as pool:
@@ -429,77 +501,78 @@ class TextureUploader:
                 copy(job)
         return offsets_of
 
-    def _record_levels(self, cmd: Any, image: Image, staging: Buffer, offsets: list[int]) -> None:
-        """Copy a whole mip chain from the staging buffer: one copy region per level."""
-        vk = self.device.vk
-        top = (vk.VK_PIPELINE_STAGE_2_NONE, vk.VK_ACCESS_2_NONE)
-        xfer_w = (vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT)
-        frag = (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT
-                | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT)
-        dst_l = vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
-        n = image.mip_levels
-        pipeline_barrier(vk, cmd, [_barrier(vk, image, vk.VK_IMAGE_LAYOUT_UNDEFINED, dst_l, top,
-                                            xfer_w, 0, n)])
-        regions = [
-            vk.VkBufferImageCopy(
-                bufferOffset=off,
-                imageSubresource=vk.VkImageSubresourceLayers(
-                    aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=k, baseArrayLayer=0,
-                    layerCount=1),
-                imageExtent=vk.VkExtent3D(width=max(image.width >> k, 1),
-                                          height=max(image.height >> k, 1), depth=1),
-            )
-            for k, off in enumerate(offsets)
-        ]
-        vk.vkCmdCopyBufferToImage(cmd, staging.handle, image.handle, dst_l, len(regions), regions)
-        pipeline_barrier(vk, cmd, [_barrier(vk, image, dst_l,
-                                            vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                                            xfer_w, frag, 0, n)])
 
-    def _record_upload(self, cmd: Any, image: Image, staging: Buffer, offset: int) -> None:
-        """Copy level 0, then make every further level by a linear blit from the one above."""
-        vk = self.device.vk
-        S = vk  # short alias for stage/access constants
-        top = (S.VK_PIPELINE_STAGE_2_NONE, S.VK_ACCESS_2_NONE)
-        xfer_w = (S.VK_PIPELINE_STAGE_2_TRANSFER_BIT, S.VK_ACCESS_2_TRANSFER_WRITE_BIT)
-        xfer_r = (S.VK_PIPELINE_STAGE_2_TRANSFER_BIT, S.VK_ACCESS_2_TRANSFER_READ_BIT)
-        frag = (S.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT
-                | S.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, S.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT)
-        undef, dst_l = S.VK_IMAGE_LAYOUT_UNDEFINED, S.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
-        src_l, ro = S.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, S.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
-        n = image.mip_levels
-        pipeline_barrier(vk, cmd, [_barrier(vk, image, undef, dst_l, top, xfer_w, 0, n)])
-        vk.vkCmdCopyBufferToImage(
-            cmd, staging.handle, image.handle, dst_l, 1,
-            [vk.VkBufferImageCopy(
-                bufferOffset=offset,
-                imageSubresource=vk.VkImageSubresourceLayers(
-                    aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=0, baseArrayLayer=0,
-                    layerCount=1),
-                imageExtent=vk.VkExtent3D(width=image.width, height=image.height, depth=1),
-            )],
-        )
-        w, h = image.width, image.height
-        for level in range(1, n):
-            # level-1 becomes a blit source; level stays a transfer destination.
-            pipeline_barrier(vk, cmd, [_barrier(vk, image, dst_l, src_l, xfer_w, xfer_r, level - 1)])
-            nw, nh = max(w // 2, 1), max(h // 2, 1)
-            vk.vkCmdBlitImage(
-                cmd, image.handle, src_l, image.handle, dst_l, 1,
-                [vk.VkImageBlit(
-                    srcSubresource=vk.VkImageSubresourceLayers(
-                        aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=level - 1,
-                        baseArrayLayer=0, layerCount=1),
-                    srcOffsets=[vk.VkOffset3D(0, 0, 0), vk.VkOffset3D(w, h, 1)],
-                    dstSubresource=vk.VkImageSubresourceLayers(
-                        aspectMask=vk.VK_IMAGE_ASPECT_COLOR_BIT, mipLevel=level,
-                        baseArrayLayer=0, layerCount=1),
-                    dstOffsets=[vk.VkOffset3D(0, 0, 0), vk.VkOffset3D(nw, nh, 1)],
-                )],
-                vk.VK_FILTER_LINEAR,
-            )
-            w, h = nw, nh
-        barriers = [_barrier(vk, image, dst_l, ro, xfer_w, frag, n - 1)]
-        if n > 1:
-            barriers.append(_barrier(vk, image, src_l, ro, xfer_r, frag, 0, n - 1))
-        pipeline_barrier(vk, cmd, barriers)
+# --- a batch's images, recorded with cffi's own struct initialisers --------------------------
+# The binding's struct constructors cost ~10 us of Python each, and a texture's mip chain takes
+# a barrier and a blit (7 structs) per level: Sponza's 72 images were ~0.1 s of recording.
+# Here each level's barriers of every image of the batch are one call, and the structs are
+# cffi initialisers from dicts (C speed); the commands are those recorded one image at a time
+# before (the same blits: the same texels).
+_COLOR = 0x1  # VK_IMAGE_ASPECT_COLOR_BIT
+
+
+def _subresource(level: int) -> dict:
+    return {"aspectMask": _COLOR, "mipLevel": level, "baseArrayLayer": 0, "layerCount": 1}
+
+
+def _barriers(vk: Any, cmd: Any, rows: list[tuple]) -> None:
+    """One vkCmdPipelineBarrier2 of image barriers, each (image, old, new, (src stage, access),
+    (dst stage, access), base level, levels)."""
+    if not rows:
+        return
+    ffi, ignored = vk.ffi, vk.VK_QUEUE_FAMILY_IGNORED
+    arr = ffi.new("VkImageMemoryBarrier2[]", [{
+        "sType": vk.VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2, "srcStageMask": src[0],
+        "srcAccessMask": src[1], "dstStageMask": dst[0], "dstAccessMask": dst[1],
+        "oldLayout": old, "newLayout": new, "srcQueueFamilyIndex": ignored,
+        "dstQueueFamilyIndex": ignored, "image": image.handle,
+        "subresourceRange": {"aspectMask": _COLOR, "baseMipLevel": base, "levelCount": count,
+                             "baseArrayLayer": 0, "layerCount": 1}}
+        for image, old, new, src, dst, base, count in rows])
+    vk.vkCmdPipelineBarrier2(cmd, ffi.new("VkDependencyInfo*", {
+        "sType": vk.VK_STRUCTURE_TYPE_DEPENDENCY_INFO, "imageMemoryBarrierCount": len(rows),
+        "pImageMemoryBarriers": arr}))
+
+
+def _record_images(vk: Any, cmd: Any, staging: Any, images: list[tuple[Image, list[int]]]) -> None:
+    """Each image's given levels copied from `staging` (at their offsets), the rest of its
+    chain made by linear blits from the level above; every level then shader-readable."""
+    if not images:
+        return
+    top = (vk.VK_PIPELINE_STAGE_2_NONE, vk.VK_ACCESS_2_NONE)
+    xfer_w = (vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT)
+    xfer_r = (vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT)
+    frag = (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+            vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT)
+    undef, dst_l = vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL
+    src_l, ro = vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL
+    _barriers(vk, cmd, [(im, undef, dst_l, top, xfer_w, 0, im.mip_levels) for im, _ in images])
+    ffi = vk.ffi
+    for im, offsets in images:
+        regions = ffi.new("VkBufferImageCopy[]", [{
+            "bufferOffset": off, "imageSubresource": _subresource(k),
+            "imageExtent": {"width": max(im.width >> k, 1), "height": max(im.height >> k, 1),
+                            "depth": 1}} for k, off in enumerate(offsets)])
+        vk.vkCmdCopyBufferToImage(cmd, staging, im.handle, dst_l, len(offsets), regions)
+    blitted = [im for im, offsets in images if im.mip_levels > len(offsets)]
+    for level in range(1, max((im.mip_levels for im in blitted), default=1)):
+        now = [im for im in blitted if im.mip_levels > level]
+        # Level - 1 becomes a blit source; level stays a transfer destination.
+        _barriers(vk, cmd, [(im, dst_l, src_l, xfer_w, xfer_r, level - 1, 1) for im in now])
+        for im in now:
+            w, h = max(im.width >> (level - 1), 1), max(im.height >> (level - 1), 1)
+            blit = ffi.new("VkImageBlit[1]", [{
+                "srcSubresource": _subresource(level - 1), "srcOffsets": [(0, 0, 0), (w, h, 1)],
+                "dstSubresource": _subresource(level),
+                "dstOffsets": [(0, 0, 0), (max(w // 2, 1), max(h // 2, 1), 1)]}])
+            vk.vkCmdBlitImage(cmd, im.handle, src_l, im.handle, dst_l, 1, blit, vk.VK_FILTER_LINEAR)
+    final = []
+    for im, offsets in images:
+        n = im.mip_levels
+        if n > len(offsets):  # levels 0..n-2 were blit sources; the last one a destination
+            final.append((im, dst_l, ro, xfer_w, frag, n - 1, 1))
+            if n > 1:
+                final.append((im, src_l, ro, xfer_r, frag, 0, n - 1))
+        else:
+            final.append((im, dst_l, ro, xfer_w, frag, 0, n))
+    _barriers(vk, cmd, final)

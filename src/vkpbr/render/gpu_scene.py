@@ -30,10 +30,11 @@ import concurrent.futures
 import dataclasses
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
-from vkpbr.gpu.buffer import Buffer, upload_buffer, upload_buffers
+from vkpbr.gpu.buffer import Buffer, upload_buffer
 from vkpbr.gpu.descriptors import DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec, TextureUploader
@@ -225,9 +226,13 @@ class GpuScene:
     """Owns the GPU copies of one Scene. Built by `Renderer`; destroy with `destroy()`."""
 
     def __init__(
-        self, device: Device, scene: Scene, material_layout: DescriptorSetLayout, slots: int = 1
+        self, device: Device, scene: Scene, material_layout: DescriptorSetLayout, slots: int = 1,
+        ahead: Any = None,
     ) -> None:
+        """`ahead`: the vkpbr.bake.ahead.SceneAhead that loaded `scene`, whose images decoded
+        while the device was made are used where this device would decode them the same."""
         self.device = device
+        self._ahead = ahead
         self.slots = slots  # frame slots: each has its own copy of the material blocks
         self.scene = scene
         self._owned: list = []
@@ -236,27 +241,47 @@ class GpuScene:
         # vertices after the meshes' (render/deform.py).
         self.deformed = deformed_records(scene)
         t0 = time.perf_counter()
-        # Decode images (Pillow, threads, GIL released) while the geometry streams are built.
-        with concurrent.futures.ThreadPoolExecutor(1) as pool:
-            decoding = pool.submit(self._decoded_pixels)
-            self._upload_geometry()
-            t1 = time.perf_counter()
-            pixels, blocks = decoding.result()
-            t_decoded = time.perf_counter()  # (textures' share spent waiting on the decode)
-        self._frames = self._start_frames()
-        self._upload_textures(pixels, blocks)
+        # Decode images (Pillow, threads, GIL released; loaded ahead: done already or under
+        # way) while the geometry streams are built and sent; the textures then go in the same
+        # uploader's batches, and the whole upload is waited for once (its flush).
+        uploader = TextureUploader(self.device)
+        try:
+            with concurrent.futures.ThreadPoolExecutor(1) as pool:
+                decoding = pool.submit(self._decoded_pixels)
+                self._upload_geometry(uploader)
+                uploader.submit()  # (copied on the GPU while the decode finishes)
+                t1 = time.perf_counter()
+                pixels, blocks = decoding.result()
+                t_decoded = time.perf_counter()  # (textures' share spent waiting on the decode)
+            self._frames = self._start_frames()
+            self._upload_textures(pixels, blocks, uploader)
+        except BaseException:
+            uploader.abandon()  # (no batch left in flight; the caller destroys the rest)
+            raise
         t2 = time.perf_counter()
         self._create_materials(material_layout)
         self.draws = self._build_draws()
         self.timings.update(geometry=t1 - t0, textures=t2 - t1, materials=time.perf_counter() - t2)
         self.decode_wait = t_decoded - t1  # (benchmarks/bench_load.py)
+        self.upload_stats = uploader.stats  # (the same: where the upload's seconds went)
 
     def _own(self, obj):  # noqa: ANN001, ANN202 - any gpu object
         self._owned.append(obj)
         return obj
 
     # --- geometry ---------------------------------------------------------------------------
-    def _upload_geometry(self) -> None:
+    def _upload_geometry(self, uploader: TextureUploader | None = None) -> None:
+        """Every mesh's streams and indices (and the posed regions after them) through
+        `uploader`'s batches, sent by its caller; None: uploaded now (instances.py's regrowth)."""
+        if uploader is None:
+            uploader = TextureUploader(self.device)
+            try:
+                self._upload_geometry(uploader)
+            except BaseException:
+                uploader.abandon()
+                raise
+            uploader.flush()
+            return
         per_mesh = [prepare_mesh(m, self._tangent_uv_set(m), frames=False)
                     for m in self.scene.meshes]
         self.vertex_offsets = np.cumsum([0] + [m.vertex_count for m in self.scene.meshes])
@@ -281,10 +306,12 @@ class GpuScene:
             uploads["colors"] = [np.full(4, 65535, np.uint16)]
         indices = [np.asarray(m.indices, dtype=np.uint32) for m in self.scene.meshes]
         # Every stream and the indices through one staging buffer and one submission (storage
-        # too: the compute path reads vertices in its shader, render/compute_path.py).
-        made = upload_buffers(self.device, [(arrays, "vertex|storage", name)
-                                            for name, arrays in uploads.items()]
-                              + [(indices or [np.zeros(3, np.uint32)], "index|storage", "indices")])
+        # too: the compute path reads vertices in its shader, render/compute_path.py), each
+        # mesh's part copied once into the staging memory.
+        made = [uploader.add_buffer(arrays, "vertex|storage", name)
+                for name, arrays in uploads.items()]
+        made.append(uploader.add_buffer(indices or [np.zeros(3, np.uint32)], "index|storage",
+                                        "indices"))
         buffers = dict(zip(uploads, made, strict=False))
         for name in STREAMS + optional:
             self.streams[name] = self._own(buffers[name])
@@ -363,9 +390,14 @@ class GpuScene:
         blocks: dict[int, list[np.ndarray]] = {}
         if all(img.pixels is not None for img in images):
             return [img.pixels for img in images], blocks
+        max_size = int(self.device.limits.maxImageDimension2D)
+        decoded_for = getattr(self._ahead, "decoded_for", None)  # (any other Future: none)
+        self._ahead = None
+        got = decoded_for(max_size) if decoded_for is not None else None
+        if got is not None:  # (not kept here beyond the upload)
+            return list(got), blocks
         from vkpbr.scene.textures import decode_images
 
-        max_size = int(self.device.limits.maxImageDimension2D)
         pixels = decode_images(self.scene, max_size=max_size,  # a Scene: errors name its file
                                blocks="bc7" if self.device.bc7_textures else None,
                                block_levels=blocks)
@@ -405,7 +437,8 @@ class GpuScene:
         return out
 
     def _upload_textures(self, decoded: list[np.ndarray | None],
-                         block_levels: dict[int, list[np.ndarray]]) -> None:
+                         block_levels: dict[int, list[np.ndarray]], uploader: TextureUploader
+                         ) -> None:
         pixels = list(decoded)
         self.scene_materials = self._merge_alpha_masks(pixels)
         # Which colour space each image is used in (base colour and emissive are sRGB).
@@ -415,7 +448,6 @@ class GpuScene:
                 ref = getattr(mat, f"{slot}_texture")
                 if ref is not None and 0 <= ref.image < len(pixels) and pixels[ref.image] is not None:
                     usage[(ref.image, slot in SRGB_TEXTURE_SLOTS)] = None
-        uploader = TextureUploader(self.device)
         self.images: dict[tuple[int, bool], Image] = {}
         for image_index, srgb in usage:
             fmt = "srgb" if srgb else "unorm"

@@ -14,6 +14,7 @@ the device, which destroys what was made if making the rest fails.
 from __future__ import annotations
 
 import os
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -117,7 +118,9 @@ def open_device(device: str | int | None, validation: bool | None, sync_validati
         validation = os.environ.get("VKPBR_VALIDATION") == "1"
     dev = Device(device, validation=validation, sync_validation=sync_validation)
     try:
+        t = time.perf_counter()
         dev.pipeline_cache = PipelineCache(dev, cache_dir, shaders_digest())
+        dev.timings["pipeline_cache"] = time.perf_counter() - t  # (its file read and checked)
     except BaseException:
         dev.close()
         raise
@@ -146,12 +149,14 @@ def lazy_compute(device: Device, scene: Scene, gs: GpuScene, layouts: list[Descr
 
 def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float, float, float],
                depth_prepass: bool | None, env_spec: EnvironmentSpec | None,
-               cache_dir: str | os.PathLike[str] | None, semantics: Any) -> FrameParts:
-    """The parts of frames of `scene` on `device` (the Renderer's arguments of those names)."""
+               cache_dir: str | os.PathLike[str] | None, semantics: Any,
+               ahead: Any = None) -> FrameParts:
+    """The parts of frames of `scene` on `device` (the Renderer's arguments of those names;
+    `ahead`: the SceneAhead it was loaded by, whose decoded images GpuScene takes)."""
     ring = FrameRing(device, queries_per_frame=STAMPS)
     layouts, shadows, pipeline_layout = create_layouts(device, ring.count)
     buffers, pool, slots = create_slots(device, layouts[0], layouts[2], ring.count)
-    gs = GpuScene(device, scene, layouts[1], ring.count)
+    gs = GpuScene(device, scene, layouts[1], ring.count, ahead=ahead)
     layout = DeformLayout(scene, gs.deformed) if gs.deformed else None
     state = scene_state(scene, gs.draws, layout)
     gpu_state = GpuSceneState(device, state, ring.count, scene, layout)

@@ -43,7 +43,7 @@ class Renderer:
     poses, visibility and animation time change between frames (docs/living-scenes.md).
     Parameters
     ----------
-    scene : the scene to draw; None renders the built-in PBR chart.
+    scene : the scene to draw, or a Future of one (vkpbr.bake.ahead); None: the built-in chart.
     device : device name substring or index (`vkpbr info` lists them); None picks the best.
     validation : enable the Khronos validation layer; any error raises ValidationError.
         None (default): on when the environment has VKPBR_VALIDATION=1 (how the test suite

@@ -11,7 +11,8 @@ folder's file in a new process), and auto's frame-path record. A Renderer after
 both make the same parts from the same scene.
 
 Timings of a scene's making (`Renderer.timings`): "setup" (all of it, seconds), "parts" (the
-GPU objects besides the scene's upload), the scene upload's "geometry", "textures" and
+GPU objects besides the scene's upload), "load_wait" (the wait for a scene loading on a thread,
+vkpbr.bake.ahead, once the device was made), the scene upload's "geometry", "textures" and
 "materials", and the pipeline cache's totals so far ("pipelines_built", "pipeline_hits",
 "pipelines_s").
 """
@@ -20,6 +21,7 @@ from __future__ import annotations
 
 import os
 import time
+from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Any
 
@@ -63,24 +65,31 @@ class SceneMaker:
         self.device = device
         self.args = (msaa, background, depth_prepass, env_spec, cache_dir, semantics)
 
-    def make(self, scene: Scene | None) -> MadeScene:
-        """The parts of `scene` (None: the built-in PBR chart); on failure, whatever was made
-        for it is destroyed again before the error propagates."""
+    def make(self, scene: Scene | Future | None) -> MadeScene:
+        """The parts of `scene` (None: the built-in PBR chart; a Future of one, such as
+        vkpbr.bake.ahead's SceneAhead: waited for here, after the device was made, and its
+        images decoded ahead used); on failure, whatever was made for it is destroyed again
+        before the error propagates."""
         t0 = time.perf_counter()
+        ahead = scene if isinstance(scene, Future) else None
+        if ahead is not None:
+            scene = ahead.result()  # (a load's error is raised here, as load_scene raises it)
+        load_wait = time.perf_counter() - t0  # (the part of the load the device did not hide)
         if scene is None:
             from vkpbr.scene.default import default_scene
 
             scene = default_scene()
         mark = self.device.live_children
         try:
-            parts = make_parts(self.device, scene, *self.args)
+            parts = make_parts(self.device, scene, *self.args, ahead=ahead)
         except BaseException:
             self.device.wait_idle()
             self.device.destroy_children(mark)
             raise
         setup = time.perf_counter() - t0
         upload = parts.gpu_scene.timings
-        timings = {"setup": setup, "parts": setup - sum(upload.values()), **upload,
+        timings = {"setup": setup, "load_wait": load_wait,
+                   "parts": setup - load_wait - sum(upload.values()), **upload,
                    **pipeline_timings(self.device)}
         return MadeScene(scene, parts, FramePath(parts), BatchPath(parts), mark, timings)
 
