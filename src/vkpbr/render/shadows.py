@@ -147,6 +147,15 @@ def plan_shadows(lights: Sequence[Light], enabled: bool = True, cubes_supported:
     return ShadowPlan(tuple(entries), layers, cubes, dropped)
 
 
+def _check_resolution(device: Device, resolution: Any) -> None:
+    """A one-line UsageError for a shadow resolution the device cannot hold."""
+    if not (isinstance(resolution, int) and 16 <= resolution <= int(device.limits.maxImageDimension2D)):
+        from vkpbr.errors import UsageError
+
+        raise UsageError(f"shadow resolution {resolution!r}: choose an integer from 16 "
+                         f"to {int(device.limits.maxImageDimension2D)}")
+
+
 class ShadowMaps:
     """The shadow resources of a renderer and the passes that fill them.
 
@@ -163,16 +172,10 @@ class ShadowMaps:
     def __init__(self, device: Device, material_layout: DescriptorSetLayout, slots: int,
                  resolution: int = DEFAULT_RESOLUTION, readable: bool = False,
                  frame_layout: DescriptorSetLayout | None = None) -> None:
-        if not (isinstance(resolution, int) and 16 <= resolution
-                <= int(device.limits.maxImageDimension2D)):
-            from vkpbr.errors import UsageError
-
-            raise UsageError(f"shadow resolution {resolution!r}: choose an integer from 16 "
-                             f"to {int(device.limits.maxImageDimension2D)}")
+        _check_resolution(device, resolution)
         self.device, self.resolution, self.readable = device, resolution, readable
-        self.cube_resolution = max(resolution // 2, 16)
+        self.cube_resolution, self._objects = max(resolution // 2, 16), []
         self.cubes_supported = bool(getattr(device, "image_cube_array", True))
-        self._objects: list[Any] = []
         self.set_layout = self._own(DescriptorSetLayout(device, [
             BindingSpec(b, k, s, n) for b, k, s, n in SET3_ROWS]))
         # The passes' own set 3: the matrices only, for the vertex stage (the main set names
@@ -198,7 +201,7 @@ class ShadowMaps:
         self._views = [self.buffer.array(np.float32, size // 4, i * self.stride)
                        for i in range(slots)]
         self.maps: LayeredDepth | None = None
-        self.cubes: LayeredDepth | None = None
+        self.cubes: LayeredDepth | None = None  # (the images: `ensure`)
         self._pipelines: dict[tuple, Pipeline] = {}
         # What each entry's layers hold: (image, first layer) -> (its matrices, alpha mask).
         # The scene is static, so equal matrices draw equal maps: a frame redraws only the
@@ -219,10 +222,9 @@ class ShadowMaps:
         self.world_stand_in = self._own(Buffer(device, 16, "storage", name="shadow depths stand-in"))
         self.world_depths: Buffer = self.world_stand_in
         self.frame_depths: Buffer = self.world_stand_in
-        # Where this frame's shading reads compute-drawn maps (`stale`): their buffer (True)
-        # or the images; frames in a row that redrew fewer than every layer.
-        self.reads_buffer = False
-        self._partial_frames = 0
+        # Compute-drawn maps read from their buffer this frame (else the images; `stale`),
+        # and the frames in a row that redrew fewer than every layer.
+        self.reads_buffer, self._partial_frames = False, 0
         self.ensure(ShadowPlan())
 
     def _own(self, obj: Any) -> Any:
