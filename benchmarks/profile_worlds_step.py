@@ -3,7 +3,7 @@ phases of a warm call, in microseconds per call, with the GPU's waits apart.
 
     python benchmarks/profile_worlds_step.py [--variant primitives|tabletop|helmet|box]
         [--worlds 4096] [--size 16] [--steps 30] [--torch] [--pipeline auto]
-        [--expand auto] [--prepared] [--cprofile 20]
+        [--expand auto] [--prepared] [--bare] [--cprofile 20]
 
 A step is what a simulator's loop does: new (W, N, 7) poses (position + quaternion x, y, z,
 w; benchmarks/tabletop.py's motion, made before the clock starts), then
@@ -19,7 +19,8 @@ are rewritten); "readback" copies the frames out; "Python" is the call less thos
 number to compare is the last row: the calling thread's CPU time per step (time.thread_time,
 less the readback's), its median over the steps; wall-clock rows count the time the thread
 waited for a core too (on lavapipe the GPU's threads share the CPU). Keep the GPU part small
-(--variant box, --size 8) on lavapipe. Not a test.
+(--variant box, --size 8) on lavapipe; `--bare` leaves the other phases' timers out (their
+own overhead, about 2 us a timed call, is then not in the CPU row). Not a test.
 """
 
 from __future__ import annotations
@@ -114,8 +115,11 @@ class Timers:
         self.on = False
         self.found: list[tuple[int, str]] = []
 
-    def install(self) -> None:
+    def install(self, only: tuple[str, ...] | None = None) -> None:
+        """Wrap every phase's function (`only`: just those labels)."""
         for depth, label, module, owner, attr in PHASES:
+            if only is not None and label not in only:
+                continue
             try:
                 mod = importlib.import_module(module)
             except ImportError:
@@ -190,6 +194,9 @@ def parse() -> argparse.Namespace:
                     help="renderer.batch_step(...) made once, called with each step's poses")
     ap.add_argument("--shadows", action="store_true", help="keep shadows on (off by default, "
                     "as bench_worlds.py: the worlds share the state's shadow maps)")
+    ap.add_argument("--bare", action="store_true",
+                    help="time only the waits and the readback (the CPU row without the other "
+                    "phases' timer overhead: the number to compare)")
     ap.add_argument("--cprofile", type=int, default=0,
                     help="also print cProfile's top N functions (own time) over the steps")
     return ap.parse_args()
@@ -210,7 +217,7 @@ def main() -> None:
         poses = torch.as_tensor(poses, device="cuda")
     size = (args.size, args.size)
     timers = Timers()
-    timers.install()
+    timers.install((*WAITS, *READBACK) if args.bare else None)
     with Renderer(scene) as r:
         r.world_slots(slots)
         cams = CameraBatch.from_poses(np.repeat(eye[None], args.worlds, 0), yfov)

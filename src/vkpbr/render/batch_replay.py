@@ -1,0 +1,161 @@
+"""A loop's batch step replayed: the last step's command buffer submitted again (issue 32).
+
+A simulator renders the same cameras at the same size with the same options every step;
+only the worlds' poses change, and those are data in buffers (the worlds kernel's inputs,
+render/worlds.py), never recorded state. So once a frame slot of the ring has drawn a step,
+the next step with the same plan that the ring hands that slot needs none of the frame's
+set-up (lights, environment, shadow plan, scene-state copy, frame blocks, world records,
+view records, post and AO plans, the FrameSpec and its recorder lookup): the slot's buffers
+hold what it would write again. What remains is the poses into the inputs, the submission
+(with CUDA's timeline values where the step is CUDA-ordered), the wait and the readback or
+torch wrapping (BatchPath's own tail).
+
+`Replays` keeps, per frame slot, the command buffer and how to finish the step, under a
+`ReplayKey`: the objects the plan is made of, compared by identity (held, so their ids stay
+theirs: the cameras, the options, the world slots, the world-of-view array) and the plain
+values besides (route, size, linear, batch, the state's version, the worlds' shape, the
+kernel's and the view buffers' generations). A step may replay only where:
+
+- nothing else drew since the last step of this key (the ring's frame count is the one
+  that step left: another render, batch or step in between may have redrawn shared shadow
+  maps, rebound sets or freed recordings), and the recording is still alive;
+- it has no `lights` argument (a list can change in place), no depth, no host-made world
+  records or per-world factors (written per call), no dataset outputs, post steps, lenses
+  or worlds' own shadow maps (their buffers are written per call), and its views fit one
+  submission (ambient occlusion replays: its images are fitted when the target is made, its
+  constants are recorded, as the recorder's reuse of the commands already has it);
+- the recording it replays redrew no shadow map (a replay never redraws one; the state's
+  maps are current when its version is unchanged).
+
+Anything else takes BatchPath's full path, which records (or finds) the commands and
+leaves them here for the slot's next step.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["ReplayKey", "Replays", "replay_key"]
+
+
+@dataclass(frozen=True)
+class ReplayKey:
+    """What a step's recording and its slot's buffers depend on: `objects` by identity
+    (kept alive by the key), `values` by equality."""
+
+    objects: tuple
+    values: tuple
+
+    def same(self, other: ReplayKey | None) -> bool:
+        return (other is not None and self.values == other.values
+                and all(a is b for a, b in zip(self.objects, other.objects, strict=True)))
+
+
+@dataclass
+class _Entry:
+    """A slot's last replayable step: its commands, their timestamps' names, and how its
+    results come back (`finish(frame, out, order)`: the colour, the depth)."""
+
+    cmd: Any
+    stamp_names: tuple[str, ...]
+    finish: Callable[[Any, Any, Any], tuple[Any, Any]]
+    cuda_owner: Any  # what the host waits CUDA's last clone of (None: no CUDA)
+    ordered: bool  # ordered against torch's stream on the GPU (render/cuda_order.py)
+
+
+def replay_key(path: Any, route: str, views: Any, size: tuple[int, int], lights: Any,
+               opts: Any, linear: bool, depth: bool, batch: int | str) -> ReplayKey | None:
+    """The call's ReplayKey, or None where it cannot replay (its lights, depth, host
+    records or factors are written per call)."""
+    call = path.world_call
+    if lights is not None or depth or route not in ("compute", "layered", "cuda"):
+        return None
+    worlds: tuple = ()
+    held: tuple = ()
+    if call is not None:
+        gw = call.gpu
+        if gw is None or call.records is not None or call.factors is not None:
+            return None
+        kernel = path.world_kernel
+        worlds = (gw.key, gw.cuda, len(call.world_of_view),
+                  -1 if kernel is None else kernel.generation)
+        held = (gw.slots, call.world_of_view, path.world_buffers)
+    state = path.parts.gpu_state.state
+    bv = path.views
+    return ReplayKey((path.parts, views, opts, *held),
+                     (route, int(size[0]), int(size[1]), bool(linear), batch, state.version,
+                      -1 if bv is None else bv.generation, worlds))
+
+
+class Replays:
+    """The replayable steps of one key, by frame slot (BatchPath owns one)."""
+
+    def __init__(self) -> None:
+        self.key: ReplayKey | None = None
+        self.number = -1  # the ring's frame count after the key's last step
+        self.entries: dict[int, _Entry] = {}
+        self.replayed = 0  # steps replayed (tests read it: a replay that never happens is a bug)
+
+    def entry(self, ring: Any, key: ReplayKey) -> _Entry | None:
+        """The entry of the slot the ring hands out next, where it may replay `key`."""
+        if ring.number != self.number or not key.same(self.key):
+            self.entries.clear()  # (something else drew in between, or another plan)
+            return None
+        got = self.entries.get(ring.number % ring.count)
+        if got is None or got.cmd.handle is None:  # (a freed recording: not replayable)
+            return None
+        return got
+
+    def stepped(self, ring: Any, key: ReplayKey | None, frame: Any, cmd: Any,
+                finish: Callable[[Any, Any, Any], tuple[Any, Any]] | None, cuda_owner: Any,
+                ordered: bool) -> None:
+        """A full step of `key` was submitted from `frame`'s slot: replayable there next
+        time where `finish` is given (else the slot's entry is dropped)."""
+        if key is None:
+            self.clear()
+            return
+        if not key.same(self.key):
+            self.entries.clear()
+            self.key = key
+        if finish is None:
+            self.entries.pop(frame.index, None)
+        else:
+            self.entries[frame.index] = _Entry(cmd, frame.stamp_names, finish, cuda_owner,
+                                               ordered)
+        self.number = ring.number
+
+    def clear(self) -> None:
+        self.key, self.number = None, -1
+        self.entries.clear()
+
+
+def replay(path: Any, key: ReplayKey, out: np.ndarray | None) -> tuple[Any, Any] | None:
+    """Submit the slot's recorded step again with this call's poses (None where the slot
+    has no replayable step of `key`): BatchPath.run's fast path."""
+    import time
+
+    replays = path.replays
+    ring = path.parts.ring
+    got = replays.entry(ring, key)
+    if got is None:
+        return None
+    path._t_start = time.perf_counter()
+    order = path._order(True) if got.ordered else None
+    path._ordered = order is not None
+    frame = ring.begin()  # (waits for the slot's last submission)
+    call = path.world_call
+    if call is not None:  # the poses into the kernel's inputs (sized and bound already)
+        kernel = path.world_kernel
+        kernel.order = order
+        call.gpu.fill(kernel)
+    path._submissions = 0
+    frame.stamp_names = got.stamp_names
+    path._submit_cmd(frame, got.cmd, order, got.cuda_owner)
+    replays.number = ring.number
+    path._submitted(frame, order)
+    replays.replayed += 1
+    return got.finish(frame, out, order)
