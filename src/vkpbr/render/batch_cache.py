@@ -145,10 +145,15 @@ class BatchCache:
         return made
 
     def cuda_index(self, device: Any) -> int:
-        """The CUDA device index of Vulkan `device` (by UUID, found once)."""
+        """The CUDA device index of Vulkan `device` (by UUID, found once; a UsageError where
+        CUDA is unavailable)."""
         if self._cuda is None or self._cuda[0] is not device:
-            from vkpbr.gpu.cuda import cuda_device_for
+            from vkpbr.errors import UsageError
+            from vkpbr.gpu.cuda import cuda_device_for, cuda_unavailable
 
+            why = cuda_unavailable()
+            if why is not None:
+                raise UsageError(f"worlds on CUDA: {why}")
             self._cuda = (device, cuda_device_for(device.uuid(), device.info.name))
         return self._cuda[1]
 

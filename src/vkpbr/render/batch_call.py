@@ -378,13 +378,8 @@ def _cuda_shape(prep: Prepared, slots: WorldSlots, worlds: Any, world_of_view: A
 
 
 def _same_gpu(renderer: Any, cache: BatchCache, tensor: Any) -> None:
-    from vkpbr.gpu.cuda import cuda_unavailable
-
     dev = renderer.device
-    why = cuda_unavailable()
-    if why is not None:
-        raise UsageError(f"worlds on CUDA: {why}")
-    index = cache.cuda_index(dev)  # (found once: cudaGetDeviceProperties is slow)
+    index = cache.cuda_index(dev)  # (found once, with CUDA's availability: both are slow)
     if tensor.device.index not in (None, index):
         raise UsageError(f"worlds: a tensor on {tensor.device}, but the renderer draws on "
                          f"cuda:{index} ({dev.info.name}); move it there with .to('cuda:{index}')")

@@ -12,7 +12,6 @@ it draws with (render/parts.py FrameParts), as the frame path is.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from collections import OrderedDict
@@ -62,6 +61,7 @@ class BatchPath:
         self.targets: dict[tuple, BatchTarget] = {}
         self._cuda_imports: dict[int, Any] = {}  # gpu/cuda.py CudaImport by target
         self._cuda_events: dict[int, Any] = {}  # torch.cuda.Event of a buffer's last clone
+        self._cuda_made_events: dict[int, Any] = {}  # the event of each buffer, made once
         self._exports: dict[int, Any] = {}  # the compute batch's exported colour, by atlas
         # The compute batch's atlases, by (extent, linear), least recently used first: two
         # are kept (a job's full batches and its last, shorter one), older ones destroyed.
@@ -493,9 +493,8 @@ class BatchPath:
         self._pending = None
         frame.wait()
         self._world_errors(frame.index, "the last step's ")
-        self._pending_stats = dataclasses.replace(
-            read_timings(self.parts.ring, frame, self.parts.slots[frame.index]), cpu_ms=cpu_ms,
-            wait_ms=0.0, readback_ms=0.0, driver_ms=0.0)
+        got = read_timings(self.parts.ring, frame, self.parts.slots[frame.index])
+        self._pending_stats = FrameStats(cpu_ms, 0.0, got.gpu_ms, 0.0, got.pass_ms, 0.0)
 
     def _world_errors(self, slot: int, which: str) -> None:
         """After a batch's fence: its worlds kernel's report of poses that are none (CUDA
@@ -583,16 +582,18 @@ class BatchPath:
         t_submitted = time.perf_counter()
         if order is not None:
             self._pending = (frame, 1e3 * (t_submitted - self._t_start))
-            self.stats = dataclasses.replace(self._pending_stats, cpu_ms=self._pending[1])
+            last = self._pending_stats  # (FrameStats made directly: replace() costs us)
+            self.stats = FrameStats(self._pending[1], last.wait_ms, last.gpu_ms,
+                                    last.readback_ms, last.pass_ms, last.driver_ms)
             return
         frame.wait()
         self._world_errors(frame.index, "")
         # The Python side up to the submit and the readback are added by the caller
         # (`_timed`); the wait is this submission's.
-        stats = dataclasses.replace(read_timings(p.ring, frame, p.slots[frame.index]),
-                                    cpu_ms=1e3 * (t_submitted - self._t_start), wait_ms=1e3 * (
-                                        time.perf_counter() - t_submitted), readback_ms=0.0,
-                                    driver_ms=0.0)
+        got = read_timings(p.ring, frame, p.slots[frame.index])
+        stats = FrameStats(1e3 * (t_submitted - self._t_start),
+                           1e3 * (time.perf_counter() - t_submitted), got.gpu_ms, 0.0,
+                           got.pass_ms, 0.0)
         # One call's timings: every submission's summed (a batch split by memory).
         self.stats = summed_stats(self.stats, stats) if self._submissions else stats
         self._submissions += 1
@@ -635,7 +636,9 @@ class BatchPath:
             imported = CudaImport(buf.export_fd(), buf.allocation_size, index)
             self._cuda_imports[id(buf)] = imported
         out = imported.tensor(shape, "<f4" if linear else "|u1").clone()
-        event = torch.cuda.Event()
+        event = self._cuda_made_events.get(id(buf))
+        if event is None:  # (one a buffer, recorded again each call: no new event a step)
+            event = self._cuda_made_events[id(buf)] = torch.cuda.Event()
         event.record()
         self._cuda_events[id(buf)] = event
         return out
@@ -656,6 +659,7 @@ class BatchPath:
         buf = self._exports.pop(id(target), None)
         if buf is not None:
             self._cuda_wait(buf)
+            self._cuda_made_events.pop(id(buf), None)
             imported = self._cuda_imports.pop(id(buf), None)
             if imported is not None:
                 imported.close()
@@ -684,6 +688,7 @@ class BatchPath:
 
     def _forget_cuda(self, target: BatchTarget) -> None:
         self._cuda_wait(target.color_readback)
+        self._cuda_made_events.pop(id(target.color_readback), None)
         imported = self._cuda_imports.pop(id(target.color_readback), None)
         if imported is not None:
             imported.close()

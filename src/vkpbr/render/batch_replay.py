@@ -42,17 +42,18 @@ import numpy as np
 __all__ = ["ReplayKey", "Replays", "replay_key"]
 
 
-@dataclass(frozen=True)
 class ReplayKey:
-    """What a step's recording and its slot's buffers depend on: `objects` by identity
-    (kept alive by the key), `values` by equality."""
+    """What a step's recording and its slot's buffers depend on: `objects` (kept alive by
+    the key, so that their ids, in `values`, stay theirs) and plain values; two keys are
+    the same plan where their values are equal (one tuple comparison, in C)."""
 
-    objects: tuple
-    values: tuple
+    __slots__ = ("objects", "values")
+
+    def __init__(self, objects: tuple, values: tuple) -> None:
+        self.objects, self.values = objects, values
 
     def same(self, other: ReplayKey | None) -> bool:
-        return (other is not None and self.values == other.values
-                and all(a is b for a, b in zip(self.objects, other.objects, strict=True)))
+        return other is not None and self.values == other.values
 
 
 @dataclass
@@ -74,21 +75,19 @@ def replay_key(path: Any, route: str, views: Any, size: tuple[int, int], lights:
     call = path.world_call
     if lights is not None or depth or route not in ("compute", "layered", "cuda"):
         return None
-    worlds: tuple = ()
-    held: tuple = ()
-    if call is not None:
-        gw = call.gpu
-        if gw is None or call.records is not None or call.factors is not None:
-            return None
-        kernel = path.world_kernel
-        worlds = (gw.key, gw.cuda, len(call.world_of_view),
-                  -1 if kernel is None else kernel.generation)
-        held = (gw.slots, call.world_of_view, path.world_buffers)
-    state = path.parts.gpu_state.state
-    bv = path.views
-    return ReplayKey((path.parts, views, opts, *held),
-                     (route, int(size[0]), int(size[1]), bool(linear), batch, state.version,
-                      -1 if bv is None else bv.generation, worlds))
+    bv, parts = path.views, path.parts
+    values = (route, int(size[0]), int(size[1]), bool(linear), batch, parts.gpu_state.state.version,
+              -1 if bv is None else bv.generation, id(parts), id(views), id(opts))
+    if call is None:
+        return ReplayKey((parts, views, opts), values)
+    gw = call.gpu
+    if gw is None or call.records is not None or call.factors is not None:
+        return None
+    kernel, wb, index = path.world_kernel, path.world_buffers, call.world_of_view
+    # (the GpuWorlds' key is its push constants: worlds, slots, floats, order, visibility)
+    return ReplayKey((parts, views, opts, gw.slots, index, wb), (
+        *values, gw.key, gw.cuda, -1 if kernel is None else kernel.generation,
+        id(gw.slots), id(index), id(wb)))
 
 
 class Replays:
