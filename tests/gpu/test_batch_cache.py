@@ -155,11 +155,23 @@ def test_other_slots_are_noticed(r: Any) -> None:
     p = world_poses(3, seed=6)[:, :1]  # one slot node's poses
     batch_cache(r).clear()
     r.world_slots(MOVED[:1])
-    first = batch(r, cams, p, world_expand="gpu")
+    first = replayed(r, cams, p, world_expand="gpu")
     r.world_slots(MOVED[1:])
     second = batch(r, cams, p, world_expand="gpu")
     assert not np.array_equal(first, second), "other slots changed nothing (test is moot)"
     assert np.array_equal(second, fresh(r, cams, p, world_expand="gpu"))
+
+
+def test_depth_after_replays_is_fresh(r: Any) -> None:
+    """Depth asked for after replayed steps: the colour and the depth as a fresh call gives
+    them (such calls take the full path; dataset outputs render view by view)."""
+    r.world_slots(MOVED)
+    cams = CameraBatch.from_cameras(cameras(3), CAMERA)
+    p = world_poses(3, seed=7)
+    replayed(r, cams, p, world_expand="gpu")
+    color, dist = batch(r, cams, p, world_expand="gpu", depth=True)
+    color2, dist2 = fresh(r, cams, p, world_expand="gpu", depth=True)
+    assert np.array_equal(color, color2) and np.array_equal(dist, dist2)
 
 
 def test_batch_step_takes_the_poses_each_call(r: Any) -> None:
