@@ -64,6 +64,8 @@ PHASES: tuple[tuple[int, str, str, str, str], ...] = (
     (2, "NumPy poses: records (world_records)", "vkpbr.render.batch_call", "", "world_records"),
     (1, "batch path (BatchPath.run)", "vkpbr.render.batch_path", "BatchPath", "run"),
     (2, "last CUDA-ordered step's fence", "vkpbr.render.batch_path", "BatchPath", "_finish_pending"),
+    (2, "replay key (replay_key)", "vkpbr.render.batch_path", "", "replay_key"),
+    (2, "replayed step (batch_replay.replay; the plan unchanged)", "vkpbr.render.batch_path", "", "replay"),
     (2, "atlas / target lookup", "vkpbr.render.batch_path", "BatchPath", "_atlas"),
     (2, "post steps (batch_post)", "vkpbr.render.batch_path", "", "batch_post"),
     (2, "view buffers (_views)", "vkpbr.render.batch_path", "BatchPath", "_views"),

@@ -181,7 +181,8 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
                                             outputs=wanted or None), depth, wanted, out)
     color, dist = r.batch_path.run(route, views, size, lights, opts, linear, depth, batch, out,
                                    call)
-    extra = tuple(n for n in wanted if n != "color")  # from their own pass, view by view
+    # (outputs besides the colour: from their own pass, view by view)
+    extra = tuple(n for n in wanted if n != "color") if wanted else ()
     frames = list(r.render_many(each, lights, size, opts, linear, outputs=extra)) if extra else []
     r.last_stats = r.batch_path.stats  # the batch's (not the outputs' passes)
     return batch_result(color, dist, depth, wanted, frames)
@@ -208,8 +209,8 @@ class WorldArgs:
 
     @property
     def any(self) -> bool:
-        return any(x is not None for x in (self.worlds, self.materials, self.lights,
-                                           self.environment))
+        return not (self.worlds is None and self.materials is None and self.lights is None
+                    and self.environment is None)
 
 
 NO_WORLDS = WorldArgs(None, None, "xyzw", None, "auto", None, "world", None, None)

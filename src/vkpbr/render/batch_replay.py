@@ -33,6 +33,7 @@ leaves them here for the slot's next step.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -135,8 +136,6 @@ class Replays:
 def replay(path: Any, key: ReplayKey, out: np.ndarray | None) -> tuple[Any, Any] | None:
     """Submit the slot's recorded step again with this call's poses (None where the slot
     has no replayable step of `key`): BatchPath.run's fast path."""
-    import time
-
     replays = path.replays
     ring = path.parts.ring
     got = replays.entry(ring, key)
