@@ -625,12 +625,10 @@ class BatchPath:
         """A torch tensor of `shape` from exported buffer `buf`: a clone (on torch's current
         stream) of the imported Vulkan memory; the next batch into the buffer waits for the
         clone (`_cuda_wait`)."""
-        import torch
-
-        from vkpbr.gpu.cuda import CudaImport, cuda_device_for
-
         imported = self._cuda_imports.get(id(buf))
-        if imported is None:
+        if imported is None:  # (the imports only here: a step's call does none)
+            from vkpbr.gpu.cuda import CudaImport, cuda_device_for
+
             dev = self.parts.device
             index = cuda_device_for(dev.uuid(), dev.info.name)
             imported = CudaImport(buf.export_fd(), buf.allocation_size, index)
@@ -638,6 +636,8 @@ class BatchPath:
         out = imported.tensor(shape, "<f4" if linear else "|u1").clone()
         event = self._cuda_made_events.get(id(buf))
         if event is None:  # (one a buffer, recorded again each call: no new event a step)
+            import torch
+
             event = self._cuda_made_events[id(buf)] = torch.cuda.Event()
         event.record()
         self._cuda_events[id(buf)] = event
