@@ -302,6 +302,10 @@ def report(args: argparse.Namespace, r: Renderer, timers: Timers, walls: list[fl
     print(f"| step wall clock, median (the timers' overhead in) | "
           f"{1e6 * statistics.median(walls):.1f} | | |")
     print(f"| GPU time of the last step (last_stats.gpu_ms) | {1e3 * r.last_stats.gpu_ms:.1f} | | |")
+    replays = getattr(getattr(r, "batch_path", None), "replays", None)
+    if replays is not None:  # (render/batch_replay.py: the warm steps' replays included)
+        print(f"| steps replayed (the plan unchanged: render/batch_replay.py) | "
+              f"{replays.replayed} of {n + 3} | | |")
 
 
 if __name__ == "__main__":

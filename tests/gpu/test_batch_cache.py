@@ -81,11 +81,10 @@ def test_repeated_calls_equal_a_fresh_call(r: Any) -> None:
             assert batch_cache(r).hits > hits, "a repeated call missed the cache"
             assert not np.array_equal(first, again), "the poses changed nothing (test is moot)"
             assert np.array_equal(again, fresh(r, cams, p2, **kw)), (pipeline, expand)
-            if expand == "gpu":  # (host-made records are written per call: never replayed)
-                replayed(r, cams, p1, **kw)
-                count = r.batch_path.replays.replayed
-                assert np.array_equal(batch(r, cams, p2, **kw), again), (pipeline, "replay")
-                assert r.batch_path.replays.replayed == count + 1, "not replayed"
+            replayed(r, cams, p1, **kw)  # (host-made records too: written again)
+            count = r.batch_path.replays.replayed
+            assert np.array_equal(batch(r, cams, p2, **kw), again), (pipeline, expand, "replay")
+            assert r.batch_path.replays.replayed == count + 1, "not replayed"
             step = r.batch_step(cams, SIZE, quaternion="wxyz", **NO_SHADOWS, **kw)
             assert np.array_equal(step(worlds=p2), again), (pipeline, expand)
             assert np.array_equal(step(worlds=p1), first), (pipeline, expand)

@@ -4,9 +4,10 @@ A simulator renders the same cameras at the same size with the same options ever
 only the worlds' poses change, and those are data in buffers (the worlds kernel's inputs,
 render/worlds.py), never recorded state. So once a frame slot of the ring has drawn a step,
 the next step with the same plan that the ring hands that slot needs none of the frame's
-set-up (lights, environment, shadow plan, scene-state copy, frame blocks, world records,
-view records, post and AO plans, the FrameSpec and its recorder lookup): the slot's buffers
-hold what it would write again. What remains is the poses into the inputs, the submission
+set-up (lights, environment, shadow plan, scene-state copy, frame blocks, view records, post
+and AO plans, the FrameSpec and its recorder lookup): the slot's buffers hold what it would
+write again. What remains is the poses into the inputs (or the host-made world records
+into the slot's region, world_expand="auto" on NumPy poses), the submission
 (with CUDA's timeline values where the step is CUDA-ordered), the wait and the readback or
 torch wrapping (BatchPath's own tail).
 
@@ -19,10 +20,10 @@ kernel's and the view buffers' generations). A step may replay only where:
 - nothing else drew since the last step of this key (the ring's frame count is the one
   that step left: another render, batch or step in between may have redrawn shared shadow
   maps, rebound sets or freed recordings), and the recording is still alive;
-- it has no `lights` argument (a list can change in place), no depth, no host-made world
-  records or per-world factors (written per call), no dataset outputs, post steps, lenses
-  or worlds' own shadow maps (their buffers are written per call), and its views fit one
-  submission (ambient occlusion replays: its images are fitted when the target is made, its
+- it has no `lights` argument (a list can change in place), no depth, no per-world
+  factors, dataset outputs, post steps, lenses or worlds' own shadow maps (their buffers
+  are written per call; host-made world records are written into the slot's region again,
+  as the full path does), and its views fit one submission (ambient occlusion replays: its images are fitted when the target is made, its
   constants are recorded, as the recorder's reuse of the commands already has it);
 - the recording it replays redrew no shadow map (a replay never redraws one; the state's
   maps are current when its version is unchanged).
@@ -71,8 +72,8 @@ class _Entry:
 
 def replay_key(path: Any, route: str, views: Any, size: tuple[int, int], lights: Any,
                opts: Any, linear: bool, depth: bool, batch: int | str) -> ReplayKey | None:
-    """The call's ReplayKey, or None where it cannot replay (its lights, depth, host
-    records or factors are written per call)."""
+    """The call's ReplayKey, or None where it cannot replay (its lights, depth or factors
+    are written per call)."""
     call = path.world_call
     if lights is not None or depth or route not in ("compute", "layered", "cuda"):
         return None
@@ -81,10 +82,13 @@ def replay_key(path: Any, route: str, views: Any, size: tuple[int, int], lights:
               -1 if bv is None else bv.generation, id(parts), id(views), id(opts))
     if call is None:
         return ReplayKey((parts, views, opts), values)
-    gw = call.gpu
-    if gw is None or call.records is not None or call.factors is not None:
+    gw, wb, index = call.gpu, path.world_buffers, call.world_of_view
+    if call.factors is not None or not call.poses:
         return None
-    kernel, wb, index = path.world_kernel, path.world_buffers, call.world_of_view
+    if gw is None:  # records made on the host: written into the slot's region again
+        return ReplayKey((parts, views, opts, index, wb), (
+            *values, "host", len(call.records), id(index), id(wb)))  # type: ignore[arg-type]
+    kernel = path.world_kernel
     # (the GpuWorlds' key is its push constants: worlds, slots, floats, order, visibility)
     return ReplayKey((parts, views, opts, gw.slots, index, wb), (
         *values, gw.key, gw.cuda, -1 if kernel is None else kernel.generation,
@@ -146,10 +150,13 @@ def replay(path: Any, key: ReplayKey, out: np.ndarray | None) -> tuple[Any, Any]
     path._ordered = order is not None
     frame = ring.begin()  # (waits for the slot's last submission)
     call = path.world_call
-    if call is not None:  # the poses into the kernel's inputs (sized and bound already)
-        kernel = path.world_kernel
+    if call is not None and call.gpu is not None:  # the poses into the kernel's inputs
+        kernel = path.world_kernel  # (sized and bound already)
         kernel.order = order
         call.gpu.fill(kernel)
+    elif call is not None:  # records made on the host: into the slot's region
+        path.world_buffers.write(frame.index, path.parts.gpu_state.state.draw_matrices(),
+                                 call.records)
     path._submissions = 0
     frame.stamp_names = got.stamp_names
     path._submit_cmd(frame, got.cmd, order, got.cuda_owner)
