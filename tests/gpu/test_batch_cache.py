@@ -161,6 +161,23 @@ def test_other_slots_are_noticed(r: Any) -> None:
     assert np.array_equal(second, fresh(r, cams, p, world_expand="gpu"))
 
 
+def test_replayed_world_shadows_equal_fresh_ones(r: Any) -> None:
+    """Worlds that move shadow casters draw their own maps every step (render/
+    world_shadows.py): a replayed step draws them from its poses as a fresh call does."""
+    r.world_slots(MOVED)
+    cams = CameraBatch.from_cameras(cameras(3), CAMERA)
+    p1, p2 = world_poses(3, seed=8), world_poses(3, seed=9)
+    kw = {"world_expand": "gpu", "shadows": True}
+    first = replayed(r, cams, p1, **kw)
+    # (the full steps before drew the worlds' own maps: their WorldJob was kept)
+    assert r.batch_path._wshadow is not None, "no world shadow maps (test is moot)"
+    count = r.batch_path.replays.replayed
+    second = batch(r, cams, p2, **kw)
+    assert r.batch_path.replays.replayed == count + 1, "not replayed"
+    assert not np.array_equal(first, second)
+    assert np.array_equal(second, fresh(r, cams, p2, **kw))
+
+
 def test_depth_after_replays_is_fresh(r: Any) -> None:
     """Depth asked for after replayed steps: the colour and the depth as a fresh call gives
     them (such calls take the full path; dataset outputs render view by view)."""

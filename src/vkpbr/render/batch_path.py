@@ -554,7 +554,7 @@ class BatchPath:
             shadows.forget()
             raise
         if self._replay is not None:  # (batch_replay.py: the slot's next step may replay it)
-            keep = finish is not None and self._wshadow is None and not any(redraw or ())
+            keep = finish is not None and not any(redraw or ())
             self.replays.stepped(p.ring, replay_key(self, *self._replay), frame, cmd,
                                  finish if keep else None, cuda_owner, order is not None)
         self._submitted(frame, order)

@@ -21,9 +21,10 @@ kernel's and the view buffers' generations). A step may replay only where:
   that step left: another render, batch or step in between may have redrawn shared shadow
   maps, rebound sets or freed recordings), and the recording is still alive;
 - it has no `lights` argument (a list can change in place), no depth, no per-world
-  factors, dataset outputs, post steps, lenses or worlds' own shadow maps (their buffers
-  are written per call; host-made world records are written into the slot's region again,
-  as the full path does), and its views fit one submission (ambient occlusion replays: its images are fitted when the target is made, its
+  factors, dataset outputs, post steps or lenses (their buffers are written per call;
+  host-made world records are written into the slot's region again, as the full path does;
+  the worlds' own shadow maps are drawn by the recording itself, every step), and its views
+  fit one submission (ambient occlusion replays: its images are fitted when the target is made, its
   constants are recorded, as the recorder's reuse of the commands already has it);
 - the recording it replays redrew no shadow map (a replay never redraws one; the state's
   maps are current when its version is unchanged).
