@@ -89,7 +89,7 @@ PHASES: tuple[tuple[int, str, str, str, str], ...] = (
     (3, "commands (recorder.command_buffer)", "vkpbr.render.recorder", "FrameRecorder", "command_buffer"),
     (3, "submit (Frame.submit)", "vkpbr.gpu.frames", "Frame", "submit"),
     (3, "GPU wait: a fence (Frame.wait, all)", "vkpbr.gpu.frames", "Frame", "wait"),
-    (3, "GPU timestamps (read_timings)", "vkpbr.render.batch_path", "", "read_timings"),
+    (3, "GPU timestamps (read_timings, when asked for)", "vkpbr.render.batch_replay", "", "read_timings"),
     (2, "readback: atlas tiles (read_tiles)", "vkpbr.gpu.target", "OffscreenTarget", "read_tiles"),
     (2, "readback: layers (read_color)", "vkpbr.gpu.batch_target", "BatchTarget", "read_color"),
     (2, "frames into torch (_cuda_tensor)", "vkpbr.render.batch_path", "BatchPath", "_cuda_tensor"),

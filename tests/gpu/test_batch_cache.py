@@ -190,6 +190,29 @@ def test_depth_after_replays_is_fresh(r: Any) -> None:
     assert np.array_equal(color, color2) and np.array_equal(dist, dist2)
 
 
+def test_a_steps_gpu_timings_are_read_when_asked_for(r: Any) -> None:
+    """last_stats of a (replayed) step: its GPU timings read from its slot's queries on first
+    use (render/batch_replay.py StepStats) while the slot holds them, NaN once it drew again
+    (never another step's); dataclasses.replace and asdict take them."""
+    import dataclasses
+    import math
+
+    r.world_slots(MOVED)
+    cams = CameraBatch.from_cameras(cameras(3), CAMERA)
+    replayed(r, cams, world_poses(3), world_expand="gpu")
+    stats = r.last_stats
+    if r.ring.query_pool is None:
+        pytest.skip("the device has no timestamp queries: no GPU timings to read")
+    assert stats.gpu_ms > 0 and math.isclose(sum(stats.pass_ms.values()), stats.gpu_ms)
+    assert dataclasses.asdict(dataclasses.replace(stats))["gpu_ms"] == stats.gpu_ms
+    batch(r, cams, world_poses(3), world_expand="gpu")
+    unread = r.last_stats  # (not read before its slot draws again)
+    for _ in range(r.ring.count):
+        batch(r, cams, world_poses(3), world_expand="gpu")
+    assert math.isnan(unread.gpu_ms) and unread.pass_ms == {}
+    assert r.last_stats.gpu_ms > 0
+
+
 def test_batch_step_takes_the_poses_each_call(r: Any) -> None:
     from vkpbr.errors import UsageError
 

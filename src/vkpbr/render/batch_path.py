@@ -26,10 +26,9 @@ from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH
 from vkpbr.render import layouts as L
 from vkpbr.render.ao import ao_pixel_bytes, prepare_ao
 from vkpbr.render.batch import MAX_LAYERS, BatchViews
-from vkpbr.render.batch_replay import Replays, replay, replay_key
+from vkpbr.render.batch_replay import Replays, StepStats, replay, replay_key
 from vkpbr.render.camera import linear_depth
 from vkpbr.render.cuda_order import CudaOrder
-from vkpbr.render.frame_path import read_timings
 from vkpbr.render.frames import FrameStats, summed_stats, write_frame_blocks
 from vkpbr.render.lighting import LightsArg
 from vkpbr.render.options import RenderOptions
@@ -493,8 +492,8 @@ class BatchPath:
         self._pending = None
         frame.wait()
         self._world_errors(frame.index, "the last step's ")
-        got = read_timings(self.parts.ring, frame, self.parts.slots[frame.index])
-        self._pending_stats = FrameStats(cpu_ms, 0.0, got.gpu_ms, 0.0, got.pass_ms, 0.0)
+        self._pending_stats = StepStats.of(self.parts.ring, frame,
+                                           self.parts.slots[frame.index], cpu_ms, 0.0)
 
     def _world_errors(self, slot: int, which: str) -> None:
         """After a batch's fence: its worlds kernel's report of poses that are none (CUDA
@@ -582,18 +581,17 @@ class BatchPath:
         t_submitted = time.perf_counter()
         if order is not None:
             self._pending = (frame, 1e3 * (t_submitted - self._t_start))
-            last = self._pending_stats  # (FrameStats made directly: replace() costs us)
-            self.stats = FrameStats(self._pending[1], last.wait_ms, last.gpu_ms,
-                                    last.readback_ms, last.pass_ms, last.driver_ms)
+            last = self._pending_stats  # (the last step's timings, read when asked for)
+            self.stats = last.with_cpu(self._pending[1]) if isinstance(last, StepStats) else \
+                FrameStats(self._pending[1])
             return
         frame.wait()
         self._world_errors(frame.index, "")
         # The Python side up to the submit and the readback are added by the caller
         # (`_timed`); the wait is this submission's.
-        got = read_timings(p.ring, frame, p.slots[frame.index])
-        stats = FrameStats(1e3 * (t_submitted - self._t_start),
-                           1e3 * (time.perf_counter() - t_submitted), got.gpu_ms, 0.0,
-                           got.pass_ms, 0.0)
+        stats = StepStats.of(p.ring, frame, p.slots[frame.index],
+                             1e3 * (t_submitted - self._t_start),
+                             1e3 * (time.perf_counter() - t_submitted))
         # One call's timings: every submission's summed (a batch split by memory).
         self.stats = summed_stats(self.stats, stats) if self._submissions else stats
         self._submissions += 1

@@ -35,6 +35,7 @@ leaves them here for the slot's next step.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -42,7 +43,10 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["ReplayKey", "Replays", "replay_key"]
+from vkpbr.render.frame_path import read_timings
+from vkpbr.render.frames import FrameStats
+
+__all__ = ["ReplayKey", "Replays", "StepStats", "replay_key"]
 
 
 class ReplayKey:
@@ -165,3 +169,60 @@ def replay(path: Any, key: ReplayKey, out: np.ndarray | None) -> tuple[Any, Any]
     path._submitted(frame, order)
     replays.replayed += 1
     return got.finish(frame, out, order)
+
+
+class StepStats(FrameStats):
+    """A batch step's FrameStats whose GPU timings (`gpu_ms`, `pass_ms`) are read from its
+    frame slot's timestamp queries when first asked for: a loop that does not read them
+    pays no query and no dict a step. They can be read until the slot draws again (three
+    steps later; NaN and {} after). Takes FrameStats' fields (dataclasses.replace and asdict
+    work: the timings are then read)."""
+
+    def __init__(self, cpu_ms: float = 0.0, wait_ms: float = 0.0, gpu_ms: float = math.nan,
+                 readback_ms: float = 0.0, pass_ms: dict[str, float] | None = None,
+                 driver_ms: float = 0.0) -> None:
+        self.cpu_ms, self.wait_ms = cpu_ms, wait_ms
+        self.readback_ms, self.driver_ms = readback_ms, driver_ms
+        self._timings: tuple[float, dict[str, float]] | None = (gpu_ms, pass_ms or {})
+        self._source: tuple | None = None  # (ring, frame, slot, the frame's number)
+
+    @classmethod
+    def of(cls, ring: Any, frame: Any, slot: Any, cpu_ms: float, wait_ms: float) -> StepStats:
+        """The stats of `frame`'s finished submission (its timings read on first use)."""
+        made = cls(cpu_ms, wait_ms)
+        made._timings, made._source = None, (ring, frame, slot, frame.number)
+        return made
+
+    def with_cpu(self, cpu_ms: float) -> StepStats:
+        """These stats with another `cpu_ms` (the timings still read on first use)."""
+        made = StepStats(cpu_ms, self.wait_ms, readback_ms=self.readback_ms,
+                         driver_ms=self.driver_ms)
+        made._timings, made._source = self._timings, self._source
+        return made
+
+    def _read(self) -> tuple[float, dict[str, float]]:
+        if self._timings is None:
+            ring, frame, slot, number = self._source  # type: ignore[misc]
+            if frame.number == number and frame.finished:
+                got = read_timings(ring, frame, slot)
+                self._timings = (got.gpu_ms, got.pass_ms)
+            else:  # (the slot drew again since: its queries hold another step's)
+                self._timings = (math.nan, {})
+        return self._timings
+
+    @property  # type: ignore[override]
+    def gpu_ms(self) -> float:
+        return self._read()[0]
+
+    @gpu_ms.setter
+    def gpu_ms(self, value: float) -> None:
+        self._timings = (value, self._read()[1])
+
+    @property  # type: ignore[override]
+    def pass_ms(self) -> dict[str, float]:
+        return self._read()[1]
+
+    @pass_ms.setter
+    def pass_ms(self, value: dict[str, float]) -> None:
+        self._timings = (self._read()[0], value)
+
