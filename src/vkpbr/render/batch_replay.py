@@ -6,26 +6,28 @@ render/worlds.py), never recorded state. So once a frame slot of the ring has dr
 the next step with the same plan that the ring hands that slot needs none of the frame's
 set-up (lights, environment, shadow plan, scene-state copy, frame blocks, view records, post
 and AO plans, the FrameSpec and its recorder lookup): the slot's buffers hold what it would
-write again. What remains is the poses into the inputs (or the host-made world records
-into the slot's region, world_expand="auto" on NumPy poses), the submission
-(with CUDA's timeline values where the step is CUDA-ordered), the wait and the readback or
-torch wrapping (BatchPath's own tail).
+write again. What remains is the poses into the inputs (or the host-made world records into
+the slot's region: world_expand="auto" on NumPy poses), the submission (with CUDA's
+timeline values where the step is CUDA-ordered), the wait and the readback or torch
+wrapping (BatchPath's own tail). A step's GPU timings are read only when asked for
+(`StepStats`).
 
 `Replays` keeps, per frame slot, the command buffer and how to finish the step, under a
-`ReplayKey`: the objects the plan is made of, compared by identity (held, so their ids stay
-theirs: the cameras, the options, the world slots, the world-of-view array) and the plain
-values besides (route, size, linear, batch, the state's version, the worlds' shape, the
-kernel's and the view buffers' generations). A step may replay only where:
+`ReplayKey`: the plain values of the plan (route, size, linear, batch, the state's version,
+the worlds' shape, the kernel's and the view buffers' generations) and the ids of the
+objects it is made of (the parts, the cameras, the options, the world slots, the
+world-of-view array, the world buffers: held by the key, so that their ids stay theirs).
+A step may replay only where:
 
 - nothing else drew since the last step of this key (the ring's frame count is the one
   that step left: another render, batch or step in between may have redrawn shared shadow
   maps, rebound sets or freed recordings), and the recording is still alive;
 - it has no `lights` argument (a list can change in place), no depth, no per-world
-  factors, dataset outputs, post steps or lenses (their buffers are written per call;
-  host-made world records are written into the slot's region again, as the full path does;
-  the worlds' own shadow maps are drawn by the recording itself, every step), and its views
-  fit one submission (ambient occlusion replays: its images are fitted when the target is made, its
-  constants are recorded, as the recorder's reuse of the commands already has it);
+  factors, dataset outputs, post steps or lenses (their buffers are written per call), and
+  its views fit one submission. Host-made world records are written into the slot's region
+  again, as the full path does; the worlds' own shadow maps are drawn by the recording
+  itself, every step; ambient occlusion replays (its images are fitted when the target is
+  made, its constants recorded: as the recorder's reuse of the commands has it);
 - the recording it replays redrew no shadow map (a replay never redraws one; the state's
   maps are current when its version is unchanged).
 
