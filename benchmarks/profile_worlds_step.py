@@ -3,7 +3,7 @@ phases of a warm call, in microseconds per call, with the GPU's waits apart.
 
     python benchmarks/profile_worlds_step.py [--variant primitives|tabletop|helmet|box]
         [--worlds 4096] [--size 16] [--steps 30] [--torch] [--pipeline auto]
-        [--expand auto] [--prepared] [--cprofile 20]
+        [--expand auto] [--prepared] [--bare] [--cprofile 20]
 
 A step is what a simulator's loop does: new (W, N, 7) poses (position + quaternion x, y, z,
 w; benchmarks/tabletop.py's motion, made before the clock starts), then
@@ -19,7 +19,8 @@ are rewritten); "readback" copies the frames out; "Python" is the call less thos
 number to compare is the last row: the calling thread's CPU time per step (time.thread_time,
 less the readback's), its median over the steps; wall-clock rows count the time the thread
 waited for a core too (on lavapipe the GPU's threads share the CPU). Keep the GPU part small
-(--variant box, --size 8) on lavapipe. Not a test.
+(--variant box, --size 8) on lavapipe; `--bare` leaves the other phases' timers out (their
+own overhead, about 2 us a timed call, is then not in the CPU row). Not a test.
 """
 
 from __future__ import annotations
@@ -63,6 +64,8 @@ PHASES: tuple[tuple[int, str, str, str, str], ...] = (
     (2, "NumPy poses: records (world_records)", "vkpbr.render.batch_call", "", "world_records"),
     (1, "batch path (BatchPath.run)", "vkpbr.render.batch_path", "BatchPath", "run"),
     (2, "last CUDA-ordered step's fence", "vkpbr.render.batch_path", "BatchPath", "_finish_pending"),
+    (2, "replay key (replay_key)", "vkpbr.render.batch_path", "", "replay_key"),
+    (2, "replayed step (batch_replay.replay; the plan unchanged)", "vkpbr.render.batch_path", "", "replay"),
     (2, "atlas / target lookup", "vkpbr.render.batch_path", "BatchPath", "_atlas"),
     (2, "post steps (batch_post)", "vkpbr.render.batch_path", "", "batch_post"),
     (2, "view buffers (_views)", "vkpbr.render.batch_path", "BatchPath", "_views"),
@@ -86,7 +89,7 @@ PHASES: tuple[tuple[int, str, str, str, str], ...] = (
     (3, "commands (recorder.command_buffer)", "vkpbr.render.recorder", "FrameRecorder", "command_buffer"),
     (3, "submit (Frame.submit)", "vkpbr.gpu.frames", "Frame", "submit"),
     (3, "GPU wait: a fence (Frame.wait, all)", "vkpbr.gpu.frames", "Frame", "wait"),
-    (3, "GPU timestamps (read_timings)", "vkpbr.render.batch_path", "", "read_timings"),
+    (3, "GPU timestamps (read_timings, when asked for)", "vkpbr.render.batch_replay", "", "read_timings"),
     (2, "readback: atlas tiles (read_tiles)", "vkpbr.gpu.target", "OffscreenTarget", "read_tiles"),
     (2, "readback: layers (read_color)", "vkpbr.gpu.batch_target", "BatchTarget", "read_color"),
     (2, "frames into torch (_cuda_tensor)", "vkpbr.render.batch_path", "BatchPath", "_cuda_tensor"),
@@ -96,6 +99,9 @@ PHASES: tuple[tuple[int, str, str, str, str], ...] = (
 # Frame.wait is every fence wait (ring.begin's and the last CUDA-ordered step's too)
 WAITS = ("GPU wait: a fence (Frame.wait, all)",)
 READBACK = ("readback: atlas tiles (read_tiles)", "readback: layers (read_color)")
+# The driver's own work in the calling thread (lavapipe's submit does work that NVIDIA's
+# driver does not): the last row leaves it out too, the Python alone
+DRIVER = ("submit (Frame.submit)", *WAITS)
 
 
 # The sample models' variants: the first mesh node turns in each world (tabletop.Spin)
@@ -114,8 +120,11 @@ class Timers:
         self.on = False
         self.found: list[tuple[int, str]] = []
 
-    def install(self) -> None:
+    def install(self, only: tuple[str, ...] | None = None) -> None:
+        """Wrap every phase's function (`only`: just those labels)."""
         for depth, label, module, owner, attr in PHASES:
+            if only is not None and label not in only:
+                continue
             try:
                 mod = importlib.import_module(module)
             except ImportError:
@@ -190,6 +199,9 @@ def parse() -> argparse.Namespace:
                     help="renderer.batch_step(...) made once, called with each step's poses")
     ap.add_argument("--shadows", action="store_true", help="keep shadows on (off by default, "
                     "as bench_worlds.py: the worlds share the state's shadow maps)")
+    ap.add_argument("--bare", action="store_true",
+                    help="time only the waits and the readback (the CPU row without the other "
+                    "phases' timer overhead: the number to compare)")
     ap.add_argument("--cprofile", type=int, default=0,
                     help="also print cProfile's top N functions (own time) over the steps")
     return ap.parse_args()
@@ -210,7 +222,7 @@ def main() -> None:
         poses = torch.as_tensor(poses, device="cuda")
     size = (args.size, args.size)
     timers = Timers()
-    timers.install()
+    timers.install((*DRIVER, *READBACK) if args.bare else None)
     with Renderer(scene) as r:
         r.world_slots(slots)
         cams = CameraBatch.from_poses(np.repeat(eye[None], args.worlds, 0), yfov)
@@ -233,6 +245,7 @@ def main() -> None:
         walls: list[float] = []
         python: list[float] = []  # each step's Python: its time less waits and readback
         cpu: list[float] = []  # each step's CPU time (the thread's) less the readback's
+        own: list[float] = []  # and less the driver's (submit, fence waits)
         stats_cpu: list[float] = []  # last_stats.cpu_ms (bench_world_batches' "Python ms")
         timers.on = True
         for s in range(3, 3 + args.steps):
@@ -250,15 +263,18 @@ def main() -> None:
             spent = {k: v - before.get(k, 0.0) for k, v in timers.total.items()}
             python.append(walls[-1] - sum(spent.get(k, 0.0) for k in (*WAITS, *READBACK)))
             cpu[-1] -= sum(timers.cpu.get(k, 0.0) - before_cpu.get(k, 0.0) for k in READBACK)
+            own.append(cpu[-1] - sum(timers.cpu.get(k, 0.0) - before_cpu.get(k, 0.0)
+                                     for k in DRIVER))
         timers.on = False
-        report(args, r, timers, walls, python, cpu, stats_cpu)
+        report(args, r, timers, walls, python, cpu, own, stats_cpu)
     if prof is not None:
         print(f"\ncProfile over the {args.steps} timed steps (its overhead inflates the times):")
         pstats.Stats(prof).sort_stats("tottime").print_stats(args.cprofile)
 
 
 def report(args: argparse.Namespace, r: Renderer, timers: Timers, walls: list[float],
-           python: list[float], cpu: list[float], stats_cpu: list[float]) -> None:
+           python: list[float], cpu: list[float], own: list[float], stats_cpu: list[float]
+           ) -> None:
     n = len(walls)
     us = {k: 1e6 * v / n for k, v in timers.total.items()}
     mode = "CUDA poses -> torch" if args.torch else f"NumPy poses -> NumPy (world_expand={args.expand})"
@@ -279,11 +295,17 @@ def report(args: argparse.Namespace, r: Renderer, timers: Timers, walls: list[fl
           f"{1e6 * statistics.median(python):.1f} | | |")
     print(f"| **Python per step: the thread's CPU time less the readback's, median** (min "
           f"{1e6 * min(cpu):.1f}) | | **{1e6 * statistics.median(cpu):.1f}** | |")
+    print(f"| **... and less the driver's (Frame.submit, fence waits): Python alone, median** "
+          f"(min {1e6 * min(own):.1f}) | | **{1e6 * statistics.median(own):.1f}** | |")
     print(f"| last_stats.cpu_ms: the batch path's Python up to its submission, median | "
           f"{1e6 * statistics.median(stats_cpu):.1f} | | |")
     print(f"| step wall clock, median (the timers' overhead in) | "
           f"{1e6 * statistics.median(walls):.1f} | | |")
     print(f"| GPU time of the last step (last_stats.gpu_ms) | {1e3 * r.last_stats.gpu_ms:.1f} | | |")
+    replays = getattr(getattr(r, "batch_path", None), "replays", None)
+    if replays is not None:  # (render/batch_replay.py: the warm steps' replays included)
+        print(f"| steps replayed (the plan unchanged: render/batch_replay.py) | "
+              f"{replays.replayed} of {n + 3} | | |")
 
 
 if __name__ == "__main__":

@@ -21,8 +21,8 @@ counters: no array is hashed or compared):
 
 The recorded commands, the view records and the worlds' buffers are the batch path's and
 already reused (render/batch_path.py): the poses are data in buffers, not recorded state.
-`BatchStep` (Renderer.batch_step) is the explicit form: the arguments given once, the poses
-each call, the same cache.
+`BatchStep` (Renderer.batch_step, render/batch_call.py) is the explicit form: the arguments
+given once, the poses each call, the same cache.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from vkpbr.render.batch_route import batch_route, check_out
 from vkpbr.render.options import RenderOptions
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 
-__all__ = ["BatchCache", "BatchStep", "Prepared", "WorldShape", "batch_cache", "batch_step"]
+__all__ = ["BatchCache", "Prepared", "WorldShape", "batch_cache"]
 
 KEPT = 8  # prepared calls kept (least recently used dropped): a loop uses one or two
 
@@ -145,10 +145,15 @@ class BatchCache:
         return made
 
     def cuda_index(self, device: Any) -> int:
-        """The CUDA device index of Vulkan `device` (by UUID, found once)."""
+        """The CUDA device index of Vulkan `device` (by UUID, found once; a UsageError where
+        CUDA is unavailable)."""
         if self._cuda is None or self._cuda[0] is not device:
-            from vkpbr.gpu.cuda import cuda_device_for
+            from vkpbr.errors import UsageError
+            from vkpbr.gpu.cuda import cuda_device_for, cuda_unavailable
 
+            why = cuda_unavailable()
+            if why is not None:
+                raise UsageError(f"worlds on CUDA: {why}")
             self._cuda = (device, cuda_device_for(device.uuid(), device.info.name))
         return self._cuda[1]
 
@@ -181,38 +186,3 @@ def _prepared_key(r: Any, cameras: Any, size: Any, options: RenderOptions | None
     except (TypeError, ValueError, IndexError):
         return None
     return key
-
-
-class BatchStep:
-    """A loop's render_batch made once (Renderer.batch_step): its cameras, size, options and
-    world arguments fixed, the poses (and visibility) given each call. Calling it is
-    `render_batch` with those arguments, through the same cache; `prepared` holds what the
-    key gave (the route, the options)."""
-
-    def __init__(self, renderer: Any, cameras: Any, size: tuple[int, int],
-                 kwargs: dict[str, Any]) -> None:
-        if not isinstance(cameras, CameraBatch):  # (so that the cache holds it)
-            cameras = as_camera_batch(cameras, renderer.default_camera())
-        self.renderer, self.cameras, self.size = renderer, cameras, (int(size[0]), int(size[1]))
-        for name in ("worlds", "world_visible", "cameras", "size"):
-            if name in kwargs:
-                from vkpbr.errors import UsageError
-
-                raise UsageError(f"batch_step: {name} is given each call, not to batch_step")
-        self.kwargs = kwargs
-
-    def __call__(self, worlds: Any = None, world_visible: Any = None, **more: Any) -> Any:
-        """render_batch(cameras, size, worlds=worlds, world_visible=world_visible, the step's
-        arguments, `more`)."""
-        kw = {**self.kwargs, **more} if more else self.kwargs
-        return self.renderer.render_batch(self.cameras, self.size, worlds=worlds,
-                                          world_visible=world_visible, **kw)
-
-
-def batch_step(renderer: Any, cameras: Any, size: tuple[int, int] = (128, 128),
-               **kwargs: Any) -> BatchStep:
-    """Renderer.batch_step: a loop's render_batch made once, e.g.
-    `step = r.batch_step(cams, (128, 128), device="cuda", shadows=False)`, then
-    `frames = step(worlds=poses)` each step. `kwargs`: render_batch's arguments but the
-    cameras, size, worlds and world_visible (given each call). docs/batch.md "Worlds"."""
-    return BatchStep(renderer, cameras, size, kwargs)

@@ -17,12 +17,12 @@ from typing import Any
 import numpy as np
 
 from vkpbr.errors import UsageError
-from vkpbr.render.batch_cache import BatchCache, Prepared, WorldShape, batch_cache, batch_step
+from vkpbr.render.batch_cache import BatchCache, Prepared, WorldShape, batch_cache
 from vkpbr.render.batch_route import batch_result, stack_views
 from vkpbr.render.lighting import LightsArg
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.worlds import GpuWorlds, WorldCall, base_factors
-from vkpbr.scene.camera_batch import CameraBatch
+from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 from vkpbr.scene.state import SceneState
 from vkpbr.scene.worlds import (
     WorldEnvironment,
@@ -35,7 +35,8 @@ from vkpbr.scene.worlds import (
     world_records,
 )
 
-__all__ = ["render_batch", "batch_call", "world_slots", "WorldsArg", "WorldArgs", "batch_step"]
+__all__ = ["render_batch", "batch_call", "world_slots", "WorldsArg", "WorldArgs", "BatchStep",
+           "batch_step"]
 
 WorldsArg = Any  # (W, N, 4, 4) | (W, N, 7) NumPy array or torch tensor
 
@@ -180,7 +181,8 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
                                             outputs=wanted or None), depth, wanted, out)
     color, dist = r.batch_path.run(route, views, size, lights, opts, linear, depth, batch, out,
                                    call)
-    extra = tuple(n for n in wanted if n != "color")  # from their own pass, view by view
+    # (outputs besides the colour: from their own pass, view by view)
+    extra = tuple(n for n in wanted if n != "color") if wanted else ()
     frames = list(r.render_many(each, lights, size, opts, linear, outputs=extra)) if extra else []
     r.last_stats = r.batch_path.stats  # the batch's (not the outputs' passes)
     return batch_result(color, dist, depth, wanted, frames)
@@ -207,8 +209,8 @@ class WorldArgs:
 
     @property
     def any(self) -> bool:
-        return any(x is not None for x in (self.worlds, self.materials, self.lights,
-                                           self.environment))
+        return not (self.worlds is None and self.materials is None and self.lights is None
+                    and self.environment is None)
 
 
 NO_WORLDS = WorldArgs(None, None, "xyzw", None, "auto", None, "world", None, None)
@@ -378,13 +380,8 @@ def _cuda_shape(prep: Prepared, slots: WorldSlots, worlds: Any, world_of_view: A
 
 
 def _same_gpu(renderer: Any, cache: BatchCache, tensor: Any) -> None:
-    from vkpbr.gpu.cuda import cuda_unavailable
-
     dev = renderer.device
-    why = cuda_unavailable()
-    if why is not None:
-        raise UsageError(f"worlds on CUDA: {why}")
-    index = cache.cuda_index(dev)  # (found once: cudaGetDeviceProperties is slow)
+    index = cache.cuda_index(dev)  # (found once, with CUDA's availability: both are slow)
     if tensor.device.index not in (None, index):
         raise UsageError(f"worlds: a tensor on {tensor.device}, but the renderer draws on "
                          f"cuda:{index} ({dev.info.name}); move it there with .to('cuda:{index}')")
@@ -453,3 +450,53 @@ def apply_world(state: SceneState, slots: WorldSlots, poses: WorldPoses, w: int)
         state.set_poses(slots.nodes[pick], poses.matrices[w, pick], space="world")
     if poses.visible is not None:
         state.set_visible(slots.nodes, poses.visible[w])
+
+
+class BatchStep:
+    """A loop's render_batch made once (Renderer.batch_step): its cameras, size, options and
+    world arguments fixed, the poses (and visibility) given each call. Calling it is
+    `render_batch` with those arguments, through the same cache and replays
+    (render/batch_replay.py), without render_batch's argument binding each call: the
+    arguments are bound here, once."""
+
+    def __init__(self, renderer: Any, cameras: Any, size: tuple[int, int],
+                 kwargs: dict[str, Any]) -> None:
+        import inspect
+
+        if not isinstance(cameras, CameraBatch):  # (so that the cache holds it)
+            cameras = as_camera_batch(cameras, renderer.default_camera())
+        self.renderer, self.cameras, self.size = renderer, cameras, (int(size[0]), int(size[1]))
+        for name in ("worlds", "world_visible", "cameras", "size"):
+            if name in kwargs:
+                raise UsageError(f"batch_step: {name} is given each call, not to batch_step")
+        self.kwargs = kwargs
+        params = inspect.signature(type(renderer).render_batch).parameters
+        bound = {k: v.default for k, v in params.items()
+                 if k not in ("self", "cameras", "size", "option_overrides")}
+        bound.update((k, v) for k, v in kwargs.items() if k in bound)
+        self._bound = bound
+        self._overrides = {k: v for k, v in kwargs.items() if k not in bound}
+
+    def __call__(self, worlds: Any = None, world_visible: Any = None, **more: Any) -> Any:
+        """render_batch(cameras, size, worlds=worlds, world_visible=world_visible, the step's
+        arguments, `more`)."""
+        if more:
+            return self.renderer.render_batch(self.cameras, self.size, worlds=worlds,
+                                              world_visible=world_visible,
+                                              **{**self.kwargs, **more})
+        b = self._bound
+        given = WorldArgs(worlds, b["world_of_view"], b["quaternion"], world_visible,
+                          b["world_expand"], b["world_materials"], b["space"], b["world_lights"],
+                          b["world_environment"], b["times"], b["animation"])
+        return render_batch(self.renderer, self.cameras, self.size, b["lights"], b["options"],
+                          b["linear"], b["depth"], b["outputs"], b["batch"], b["device"],
+                          b["out"], given, self._overrides)
+
+
+def batch_step(renderer: Any, cameras: Any, size: tuple[int, int] = (128, 128),
+               **kwargs: Any) -> BatchStep:
+    """Renderer.batch_step: a loop's render_batch made once, e.g.
+    `step = r.batch_step(cams, (128, 128), device="cuda", shadows=False)`, then
+    `frames = step(worlds=poses)` each step. `kwargs`: render_batch's arguments but the
+    cameras, size, worlds and world_visible (given each call). docs/batch.md "Worlds"."""
+    return BatchStep(renderer, cameras, size, kwargs)

@@ -12,7 +12,6 @@ it draws with (render/parts.py FrameParts), as the frame path is.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from collections import OrderedDict
@@ -27,9 +26,9 @@ from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH
 from vkpbr.render import layouts as L
 from vkpbr.render.ao import ao_pixel_bytes, prepare_ao
 from vkpbr.render.batch import MAX_LAYERS, BatchViews
+from vkpbr.render.batch_replay import Replays, StepStats, replay, replay_key
 from vkpbr.render.camera import linear_depth
 from vkpbr.render.cuda_order import CudaOrder
-from vkpbr.render.frame_path import read_timings
 from vkpbr.render.frames import FrameStats, summed_stats, write_frame_blocks
 from vkpbr.render.lighting import LightsArg
 from vkpbr.render.options import RenderOptions
@@ -61,6 +60,7 @@ class BatchPath:
         self.targets: dict[tuple, BatchTarget] = {}
         self._cuda_imports: dict[int, Any] = {}  # gpu/cuda.py CudaImport by target
         self._cuda_events: dict[int, Any] = {}  # torch.cuda.Event of a buffer's last clone
+        self._cuda_made_events: dict[int, Any] = {}  # the event of each buffer, made once
         self._exports: dict[int, Any] = {}  # the compute batch's exported colour, by atlas
         # The compute batch's atlases, by (extent, linear), least recently used first: two
         # are kept (a job's full batches and its last, shorter one), older ones destroyed.
@@ -81,6 +81,8 @@ class BatchPath:
         self._submissions = 0  # of the render_batch call under way (its stats summed)
         self._t_start = 0.0  # when the submission under way began (its Python time)
         self._memory: tuple[float, int, tuple[int, int]] | None = None  # _memory_available's
+        self.replays = Replays()  # the steps a loop's next ones replay (render/batch_replay.py)
+        self._replay: tuple | None = None  # replay_key's arguments of the call under way
 
     # --- whole batches ----------------------------------------------------------------------
     def run(self, route: str, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
@@ -95,9 +97,17 @@ class BatchPath:
         self._ordered = False
         self.world_call = worlds
         try:
+            key = replay_key(self, route, views, size, lights, opts, linear, depth, batch)
+            got = None if key is None else replay(self, key, out)
+            if got is not None:
+                return got
+            # (the full path leaves its recording for the next step of the plan: _run)
+            self._replay = None if key is None else (route, views, size, lights, opts, linear,
+                                                     depth, batch)
             return self._run_route(route, views, size, lights, opts, linear, depth, batch, out)
         finally:
             self.world_call = None
+            self._replay = None
 
     def _run_route(self, route: str, views: CameraBatch, size: tuple[int, int],
                    lights: LightsArg, opts: RenderOptions, linear: bool, depth: bool,
@@ -192,6 +202,13 @@ class BatchPath:
         frame, plan, terms = self._begin(post.views, post.size, lights, post.shading,
                                          post.linear, rows, shading_ao, start)
         set0 = bv.set0(frame.index, self.world_call is not None and self.world_call.poses)
+
+        def finish(fr: Any, into: np.ndarray | None, order: CudaOrder | None
+                   ) -> tuple[Any, np.ndarray | None]:
+            return self._compute_result(fr, target, n, size, into, terms if depth else None,
+                                        external, linear, order)
+
+        whole = post.drawn is None and not depth  # (replayable: render/batch_replay.py)
         self._run(frame, plan, opts, lambda redraw: p.recorder.command_buffer(
             target, frame, 0, FrameSpec(
                 "compute_batch", opts.tbn, opts.alpha_mask, plan, redraw, copy,
@@ -199,16 +216,25 @@ class BatchPath:
                 set0_id=id(set0), external_id=id(external), batch=(bv.generation, *self._world_key()),
                 ao=ao, post=post.post, post_tonemap=post.tonemap, lens=post.lens),
             FrameObjects(set0=set0, external=external), self._world_groups(), drawn=post.drawn),
-            (lambda: self._cuda_wait(external)) if cuda and order is None else None, order)
-        if cuda:
+            external, order, finish if whole and self._whole(views) else None)
+        return finish(frame, into, order)
+
+    def _compute_result(self, frame: Any, target: Any, n: int, size: tuple[int, int],
+                        into: np.ndarray | None, terms: ViewTerms | None, external: Any,
+                        linear: bool, order: CudaOrder | None) -> tuple[Any, np.ndarray | None]:
+        """A compute batch's submission's colour (a torch tensor where `external`: its
+        exported copy) and depth (where `terms`), once submitted."""
+        p = self.parts
+        if external is not None:
             p.device.check_validation()
             if order is not None:
                 order.frames_ready()
+            w, h = size
             return self._cuda_tensor(external, (n, h, w, 4), linear), None
         t_read = time.perf_counter()
         color = target.read_tiles(frame.index, n, size, into=into)
         dist = None
-        if depth:
+        if terms is not None:
             dist = linear_depth(target.read_tiles(frame.index, n, size, depth=True),
                                 terms.znear[:, None, None])
         self.stats.readback_ms += 1e3 * (time.perf_counter() - t_read)
@@ -290,16 +316,28 @@ class BatchPath:
         frame, plan, terms = self._begin(views, size, lights, opts, linear,
                                          ao=ao is not None and ao.shading, start=start)
         groups = bv.write_blend_groups(p.blend.orders(views.eye))
+
+        def finish(fr: Any, into: np.ndarray | None, order: Any) -> tuple[Any, np.ndarray | None]:
+            return self._layered_result(target, n, into, terms if depth else None, cuda, linear)
+
         self._run(frame, plan, opts, lambda redraw: bv.command_buffer(
             target, frame, n, opts.tbn, opts.alpha_mask, plan, groups, p.paths.prepass_for(target),
             redraw, self._world_key() if self.world_call is not None and self.world_call.poses else None,
-            self._world_groups(), ao),
-            (lambda: self._cuda_wait(target.color_readback)) if cuda else None)
+            self._world_groups(), ao), target.color_readback if cuda else None, None,
+            None if depth or not self._whole(views) else finish)
+        return finish(frame, into, None)
+
+    def _layered_result(self, target: BatchTarget, n: int, into: np.ndarray | None,
+                        terms: ViewTerms | None, cuda: bool, linear: bool
+                        ) -> tuple[Any, np.ndarray | None]:
+        """A layered batch's submission's colour (a torch tensor for `cuda`) and depth
+        (where `terms`), once submitted."""
         t_read = time.perf_counter()
         color = self._cuda_view(target, n, linear) if cuda else target.read_color(n, into)
-        dist = linear_depth(target.read_depth(n), terms.znear[:, None, None]) if depth else None
+        dist = None if terms is None else linear_depth(target.read_depth(n),
+                                                       terms.znear[:, None, None])
         self.stats.readback_ms += 1e3 * (time.perf_counter() - t_read)
-        p.device.check_validation()
+        self.parts.device.check_validation()
         return color, dist
 
     def _views(self, n: int, chunk_views: int) -> BatchViews:
@@ -454,9 +492,8 @@ class BatchPath:
         self._pending = None
         frame.wait()
         self._world_errors(frame.index, "the last step's ")
-        self._pending_stats = dataclasses.replace(
-            read_timings(self.parts.ring, frame, self.parts.slots[frame.index]), cpu_ms=cpu_ms,
-            wait_ms=0.0, readback_ms=0.0, driver_ms=0.0)
+        self._pending_stats = StepStats.of(self.parts.ring, frame,
+                                           self.parts.slots[frame.index], cpu_ms, 0.0)
 
     def _world_errors(self, slot: int, which: str) -> None:
         """After a batch's fence: its worlds kernel's report of poses that are none (CUDA
@@ -497,42 +534,64 @@ class BatchPath:
         return out or None
 
     def _run(self, frame: Any, plan: Any, opts: RenderOptions,
-             record: Callable[[tuple[bool, ...]], Any], before_submit: Callable[[], None] | None = None,
-             order: CudaOrder | None = None) -> None:
+             record: Callable[[tuple[bool, ...]], Any], cuda_owner: Any = None,
+             order: CudaOrder | None = None, finish: Callable[..., Any] | None = None) -> None:
         """Record (given which shadow maps to redraw), submit and wait for a submission; its
         timings into `stats`. The shadow maps' record is forgotten if it fails. With `order`
         (render/cuda_order.py) the submission waits for and signals CUDA's timelines and the
-        host does not wait: the next call does, and reads its timings then."""
+        host does not wait: the next call does, and reads its timings then. `cuda_owner`:
+        what CUDA's last clone read (waited for before the submission, unless ordered);
+        `finish`: how the step's results come back, where a later step may replay it."""
         p = self.parts
         shadows = p.shadow_frames.maps
         # (a batch of worlds' own maps are drawn whole, every submission; the images are not)
         redraw = None if self._wshadow else p.shadow_frames.stale(frame.index, plan, opts.alpha_mask)
         try:
             cmd = record(redraw)
-            if before_submit is not None:
-                before_submit()
-            if order is None:
-                frame.submit(cmd)
-            else:
-                frame.submit(cmd, wait=order.inputs.handle, signal=order.done.handle,
-                             values=order.submit_values())
+            self._submit_cmd(frame, cmd, order, cuda_owner)
         except BaseException:
             shadows.forget()
             raise
-        frame.stamped = p.ring.query_pool is not None
+        if self._replay is not None:  # (batch_replay.py: the slot's next step may replay it)
+            keep = finish is not None and not any(redraw or ())
+            self.replays.stepped(p.ring, replay_key(self, *self._replay), frame, cmd,
+                                 finish if keep else None, cuda_owner, order is not None)
+        self._submitted(frame, order)
+
+    def _whole(self, views: CameraBatch) -> bool:
+        """Whether a submission's `views` are the whole call's (one submission: replayable)."""
+        return self._replay is not None and views is self._replay[1]
+
+    def _submit_cmd(self, frame: Any, cmd: Any, order: CudaOrder | None, cuda_owner: Any) -> None:
+        """Submit `cmd` from `frame`'s slot (after CUDA's last clone of `cuda_owner`, unless
+        the submission is ordered on the GPU by `order`)."""
+        if cuda_owner is not None and order is None:
+            self._cuda_wait(cuda_owner)
+        if order is None:
+            frame.submit(cmd)
+        else:
+            frame.submit(cmd, wait=order.inputs.handle, signal=order.done.handle,
+                         values=order.submit_values())
+        frame.stamped = self.parts.ring.query_pool is not None
+
+    def _submitted(self, frame: Any, order: CudaOrder | None) -> None:
+        """After a submission: wait for it (unless CUDA-ordered: the next call does) and
+        keep its timings in `stats`."""
+        p = self.parts
         t_submitted = time.perf_counter()
         if order is not None:
             self._pending = (frame, 1e3 * (t_submitted - self._t_start))
-            self.stats = dataclasses.replace(self._pending_stats, cpu_ms=self._pending[1])
+            last = self._pending_stats  # (the last step's timings, read when asked for)
+            self.stats = last.with_cpu(self._pending[1]) if isinstance(last, StepStats) else \
+                FrameStats(self._pending[1])
             return
         frame.wait()
         self._world_errors(frame.index, "")
         # The Python side up to the submit and the readback are added by the caller
         # (`_timed`); the wait is this submission's.
-        stats = dataclasses.replace(read_timings(p.ring, frame, p.slots[frame.index]),
-                                    cpu_ms=1e3 * (t_submitted - self._t_start), wait_ms=1e3 * (
-                                        time.perf_counter() - t_submitted), readback_ms=0.0,
-                                    driver_ms=0.0)
+        stats = StepStats.of(p.ring, frame, p.slots[frame.index],
+                             1e3 * (t_submitted - self._t_start),
+                             1e3 * (time.perf_counter() - t_submitted))
         # One call's timings: every submission's summed (a batch split by memory).
         self.stats = summed_stats(self.stats, stats) if self._submissions else stats
         self._submissions += 1
@@ -564,18 +623,20 @@ class BatchPath:
         """A torch tensor of `shape` from exported buffer `buf`: a clone (on torch's current
         stream) of the imported Vulkan memory; the next batch into the buffer waits for the
         clone (`_cuda_wait`)."""
-        import torch
-
-        from vkpbr.gpu.cuda import CudaImport, cuda_device_for
-
         imported = self._cuda_imports.get(id(buf))
-        if imported is None:
+        if imported is None:  # (the imports only here: a step's call does none)
+            from vkpbr.gpu.cuda import CudaImport, cuda_device_for
+
             dev = self.parts.device
             index = cuda_device_for(dev.uuid(), dev.info.name)
             imported = CudaImport(buf.export_fd(), buf.allocation_size, index)
             self._cuda_imports[id(buf)] = imported
         out = imported.tensor(shape, "<f4" if linear else "|u1").clone()
-        event = torch.cuda.Event()
+        event = self._cuda_made_events.get(id(buf))
+        if event is None:  # (one a buffer, recorded again each call: no new event a step)
+            import torch
+
+            event = self._cuda_made_events[id(buf)] = torch.cuda.Event()
         event.record()
         self._cuda_events[id(buf)] = event
         return out
@@ -596,6 +657,7 @@ class BatchPath:
         buf = self._exports.pop(id(target), None)
         if buf is not None:
             self._cuda_wait(buf)
+            self._cuda_made_events.pop(id(buf), None)
             imported = self._cuda_imports.pop(id(buf), None)
             if imported is not None:
                 imported.close()
@@ -624,6 +686,7 @@ class BatchPath:
 
     def _forget_cuda(self, target: BatchTarget) -> None:
         self._cuda_wait(target.color_readback)
+        self._cuda_made_events.pop(id(target.color_readback), None)
         imported = self._cuda_imports.pop(id(target.color_readback), None)
         if imported is not None:
             imported.close()

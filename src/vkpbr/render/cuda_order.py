@@ -36,15 +36,20 @@ class CudaOrder:
         self._cuda_done = CudaTimeline(self.done.export_fd(), index)
         self.value = 0  # the last value signalled on either
         self._fresh = False  # inputs signalled for the next submission
+        self._step_stream: int | None = None  # torch's stream of the step under way
 
-    @staticmethod
-    def _stream() -> int:
-        import torch
+    def _stream(self) -> int:
+        """torch's current stream's handle, asked once a step (before_inputs: the step's
+        calls are on the stream current then; current_stream() costs microseconds)."""
+        if self._step_stream is None:
+            import torch
 
-        return int(torch.cuda.current_stream().cuda_stream)
+            self._step_stream = int(torch.cuda.current_stream().cuda_stream)
+        return self._step_stream
 
     def before_inputs(self) -> None:
         """Queue on torch's stream: wait until the last batch is done (its inputs read)."""
+        self._step_stream = None  # (a new step: the stream asked again)
         self._cuda_done.wait(self.value, self._stream())
 
     def inputs_written(self) -> None:
@@ -63,8 +68,9 @@ class CudaOrder:
 
     def frames_ready(self) -> None:
         """Queue on torch's stream: wait until the submitted batch is done (before the
-        frames' clone)."""
+        frames' clone); the step's end (the next asks for the stream again)."""
         self._cuda_done.wait(self.value, self._stream())
+        self._step_stream = None
 
     def destroy(self) -> None:
         import torch

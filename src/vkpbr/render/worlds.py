@@ -265,11 +265,12 @@ class WorldKernel:
     def write_numpy(self, poses: np.ndarray, visible: np.ndarray | None) -> None:
         """NumPy inputs: (W, N, 7 or 16) poses and (W, N) visibility into the host-visible
         inputs (GpuWorlds.fill's for NumPy arrays)."""
-        p = np.ascontiguousarray(poses, np.float32).ravel()
-        self.inputs[0].array(np.float32, p.size)[:] = p
+        # (converted as copied into the mapped inputs: one pass, no float32 temporary)
+        np.copyto(self.inputs[0].array(np.float32, poses.size), poses.reshape(-1),
+                  casting="same_kind")
         if visible is not None:
-            v = np.ascontiguousarray(visible, np.uint32).ravel()
-            self.inputs[1].array(np.uint32, v.size)[:] = v
+            np.copyto(self.inputs[1].array(np.uint32, visible.size), visible.reshape(-1),
+                      casting="unsafe")
 
     def write_cuda(self, poses: Any, visible: Any) -> None:
         """CUDA inputs: torch tensors (W, N, 7 or 16) and (W, N) copied device to device into
