@@ -72,6 +72,9 @@ FALLOFF = 0.2  # the last fifth of the radius fades a sample's weight to 0 (XeGT
 # the sphere's from 0.025 to 0.013 (tests/gpu/test_ao.py).
 RADIUS_MULTIPLIER = 1.457
 RADIUS_SHARE = 0.15  # the automatic radius: 15% of the scene's bounding radius (Sponza: 2.7 m)
+# XeGTAO's depth MIP chain (ao_prefilter.comp): levels of the view-space depth; a work group
+# of the prefilter makes a 16 x 16 block's levels, the image is a whole number of blocks.
+DEPTH_MIPS, MIP_ALIGN = 5, 16
 _SETS_PER_POOL = 16
 _PUSH = np.dtype([("tile", "<u4", 4), ("radius", "<f4"), ("falloff", "<f4"), ("slices", "<u4"),
                   ("steps", "<u4"), ("final_pass", "<u4"), ("read_mid", "<u4"), ("scale", "<u4"),
@@ -138,8 +141,9 @@ PREPASS_ROWS = (*(p for p in PASSES if p.prepass), AO_MASK_PASS)
 def ao_pixel_bytes(options: RenderOptions, slots: int) -> int:
     """Device bytes a view's pixel takes for GTAO where `options` turn it on (a batch's
     memory budget): each of the `slots` frame slots' "ao" image and the two working images,
-    4 bytes a pixel each (made for the largest frame or chunk of layers)."""
-    return 4 * (slots + 2) if options.ao != L.Ao.OFF and options.has_environment else 0
+    4 bytes a pixel each, and the depth MIPs, 4 / (1 - 1/4) (made for the largest frame or
+    chunk of layers)."""
+    return 4 * (slots + 2) + 6 if options.ao != L.Ao.OFF and options.has_environment else 0
 
 
 @dataclass
@@ -174,6 +178,9 @@ class AoImages:
         # (image, its layer 0's 2D view, its array view) each
         self.images: list[tuple[Image, ImageView, ImageView]] = []
         self.work: list[tuple[Image, ImageView, ImageView]] = []  # ao_raw, ao_mid (R32_UINT)
+        # The view-space depth MIPs: (image, [its sampled view (every level), each level's
+        # storage view] of layer 0 (2D), the same as array views)
+        self.mips: tuple[Image, list[ImageView], list[ImageView]] | None = None
         self._kernels: dict[str, ComputePipeline] = {}
         self._layout: DescriptorSetLayout | None = None
         self._sampler: Sampler | None = None
@@ -218,6 +225,7 @@ class AoImages:
             image = Image(self.device, w, h, fmt, use, layers=layers, name=name)
             made = (image, ImageView(image), ImageView(image, kind="2d_array"))
             (self.images if i < len(names) else self.work).append(made)
+        self.mips = _depth_mips(self.device, w, h, layers)
         with self.device.one_time_commands() as handle:
             cmd = Commands(self.device, handle)
             for image, _, _ in self.images:
@@ -233,44 +241,41 @@ class AoImages:
               extent: tuple[int, int], tiles: tuple[int, int, int, int] | None, copy_out: bool,
               timed: bool = True, generation: int = 0,
               layered: tuple[int, int] | None = None) -> list[Step]:
-        """The "ao" group's steps for one recording: GTAO, the denoise passes, at half
-        resolution the upsample (and, for the `ao` output, a copy into "out_ao"); adds "ao",
-        "ao_raw", "ao_mid" to `resources`. `extent`: the frame's (the images' top-left
-        corner); `tiles`: a batch's atlas (views, tile width, height, tiles a column);
-        `timed`: a timestamp after the last pass (FrameStats.pass_ms["ao"]); `generation`:
-        the target's (a recreated swapchain's depth views are new objects); `layered`: a
-        layered batch's chunk (its first view, views), a view a layer of the target's depth,
-        every layer in one dispatch (its z)."""
+        """The "ao" group's steps for one recording: the depth prefilter, GTAO, the denoise
+        passes, at half resolution the upsample (and, for the `ao` output, a copy into
+        "out_ao"); adds "ao", "ao_raw", "ao_mid", "ao_depth" to `resources`. `extent`: the
+        frame's (the images' top-left corner); `tiles`: a batch's atlas (views, tile width,
+        height, tiles a column); `timed`: a timestamp after the last pass
+        (FrameStats.pass_ms["ao"]); `generation`: the target's (a recreated swapchain's depth
+        views are new objects); `layered`: a layered batch's chunk (its first view, views), a
+        view a layer of the target's depth, every layer in one dispatch (its z)."""
         assert not self.stale(extent, layered[1] if layered else 1), "fit() first"
         w, h = extent
         image = self._resources(resources, frame_index)
         dset = self._set(resources["depth"].view, frame_index, generation, layered is not None)
         q = spec.quality
-        n, tw, th, rows = tiles if tiles is not None else (1, w, h, 1)
+        tiles = tiles if tiles is not None else (1, w, h, 1)
+        _, tw, th, rows = tiles
         first, depth_layers = layered if layered is not None else (0, 1)
         kernel = "_layers" if layered is not None else ""
         # The working images' corner: the tile grid at 1 / scale (tiles rounded up).
-        cols = -(-w // tw)
-        work = (cols * -(-tw // q.scale), rows * -(-th // q.scale))
+        work = (-(-w // tw) * -(-tw // q.scale), rows * -(-th // q.scale))
         depth = ("depth", "sampled")
 
         def push(final: int, read_mid: int, fused: int = 0) -> np.ndarray:
-            p = np.zeros((), _PUSH)
-            p["tile"], p["fused"] = (tw, th, rows, n), fused
-            p["radius"], p["falloff"] = spec.radius * RADIUS_MULTIPLIER, FALLOFF
-            p["slices"], p["steps"], p["scale"] = q.slices, q.steps, q.scale
-            p["final_pass"], p["read_mid"], p["first_view"] = final, read_mid, first
-            return p
+            return _push(spec, tiles, first, final, read_mid, fused)
 
-        # The denoise and the upsample name every image of their set: the shaders choose
-        # between the working images by a push constant, so each statically reads and writes
-        # both (and "ao", a storage image of the set, GENERAL when bound).
+        # The denoise and the upsample name every image of their set: the shaders
+        # choose between the working images by a push constant, so each statically reads and
+        # writes both (and "ao", a storage image of the set, GENERAL when bound).
         both = (depth, ("ao_raw", "storage"), ("ao_mid", "storage"), ("ao", "storage"))
         def run(name: str, p: np.ndarray, size: tuple[int, int]) -> Any:
             return self._dispatch(name + kernel, p, set0, dset, (*size, depth_layers))
 
-        steps = [Step("ao_gtao", run("ao_gtao", push(0, 0), work),
-                      (depth, ("ao_raw", "storage")), timed=self.profile)]
+        steps = [Step("ao_prefilter", run("ao_prefilter", push(0, 0), (-(-w // 2), -(-h // 2))),
+                      (depth, ("ao_depth", "storage")), timed=self.profile),
+                 Step("ao_gtao", run("ao_gtao", push(0, 0), work),
+                      (("ao_depth", "sampled"), ("ao_raw", "storage")), timed=self.profile)]
         src = "ao_raw"
         fused = int(self.fuse and q.scale > 1)  # (the upsample runs the last pass)
         for k in range(q.passes - fused):  # ao_raw -> ao_mid -> ao_raw ... (-> ao at full resolution)
@@ -295,6 +300,9 @@ class AoImages:
         resources["ao"] = ImageResource(image.handle, view=view.handle, layers=self.layers)
         for name, (img, _, v) in zip(("ao_raw", "ao_mid"), self.work, strict=True):
             resources[name] = ImageResource(img.handle, view=v.handle, layers=self.layers)
+        assert self.mips is not None
+        resources["ao_depth"] = ImageResource(self.mips[0].handle, layers=self.layers,
+                                              levels=DEPTH_MIPS)
         return image
 
     def _dispatch(self, name: str, push: np.ndarray, set0: Any, dset: Any,
@@ -315,7 +323,10 @@ class AoImages:
             self._layout = DescriptorSetLayout(self.device, [
                 BindingSpec(0, "sampler", ("compute",), "depth_map"),
                 *(BindingSpec(b, "storage_image", ("compute",), n)
-                  for b, n in ((1, "ao_raw"), (2, "ao_mid"), (3, "ao_out")))])
+                  for b, n in ((1, "ao_raw"), (2, "ao_mid"), (3, "ao_out"))),
+                BindingSpec(4, "sampler", ("compute",), "depth_mips"),
+                *(BindingSpec(5 + k, "storage_image", ("compute",), f"depth_mip{k}")
+                  for k in range(DEPTH_MIPS))])
         return self._layout
 
     def _kernel(self, name: str, push_bytes: int) -> ComputePipeline:
@@ -352,6 +363,11 @@ class AoImages:
             writer.storage_image(dset, 1, self.work[0][v])
             writer.storage_image(dset, 2, self.work[1][v])
             writer.storage_image(dset, 3, self.images[frame_index][v])
+            assert self.mips is not None
+            sampled, *levels = self.mips[v]
+            writer.sampler(dset, 4, sampled, self._depth_sampler())
+            for k, level in enumerate(levels):
+                writer.storage_image(dset, 5 + k, level)
             writer.update()
             self._sets[key] = (dset, generation)
         return self._sets[key][0]
@@ -368,7 +384,11 @@ class AoImages:
             for view in views:
                 view.destroy()
             image.destroy()
-        self.images, self.work, self._sets = [], [], {}
+        if self.mips is not None:
+            for view in (*self.mips[1], *self.mips[2]):
+                view.destroy()
+            self.mips[0].destroy()
+        self.images, self.work, self._sets, self.mips = [], [], {}, None
         for pool in self._pools:
             pool.destroy()
         self._pools, self._free, self.size = [], 0, None
@@ -384,6 +404,36 @@ class AoImages:
             if obj is not None:
                 obj.destroy()
         self._layout = self._sampler = None
+
+
+def _depth_mips(device: Device, w: int, h: int, layers: int
+                ) -> tuple[Image, list[ImageView], list[ImageView]]:
+    """The view-space depth MIPs for frames up to w x h (ao_prefilter.comp): R32F, level 0
+    rounded up to a multiple of MIP_ALIGN, so that each level's texels cover the frame (level
+    k is exactly level 0 / 2^k); AoImages.mips' views."""
+    vk = device.vk
+    image = Image(device, -(-w // MIP_ALIGN) * MIP_ALIGN, -(-h // MIP_ALIGN) * MIP_ALIGN,
+                  vk.VK_FORMAT_R32_SFLOAT,
+                  vk.VK_IMAGE_USAGE_STORAGE_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT,
+                  mip_levels=DEPTH_MIPS, layers=layers, name="ao depth mips")
+    flat, array = [ImageView(image)], [ImageView(image, kind="2d_array")]
+    for k in range(DEPTH_MIPS):
+        flat.append(ImageView(image, base_mip=k, mips=1))
+        array.append(ImageView(image, kind="2d_array", base_mip=k, mips=1))
+    return image, flat, array
+
+
+def _push(spec: AoSpec, tiles: tuple[int, int, int, int], first: int, final: int,
+          read_mid: int, fused: int) -> np.ndarray:
+    """The kernels' push constants (ao_common.glsl `Ao`): `tiles` (views, tile width, height,
+    tiles a column), the first view, the denoise's and upsample's switches."""
+    q, (n, tw, th, rows) = spec.quality, tiles
+    p = np.zeros((), _PUSH)
+    p["tile"], p["fused"] = (tw, th, rows, n), fused
+    p["radius"], p["falloff"] = spec.radius * RADIUS_MULTIPLIER, FALLOFF
+    p["slices"], p["steps"], p["scale"] = q.slices, q.steps, q.scale
+    p["final_pass"], p["read_mid"], p["first_view"] = final, read_mid, first
+    return p
 
 
 def _copy_image(cmd: Any, image: Image, resources: dict[str, Any], extent: tuple[int, int]

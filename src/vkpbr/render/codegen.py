@@ -65,9 +65,10 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("ao_gtao.comp.spv", "ao_gtao.comp"),
     Variant("ao_denoise.comp.spv", "ao_denoise.comp"),
     Variant("ao_upsample.comp.spv", "ao_upsample.comp"),
+    Variant("ao_prefilter.comp.spv", "ao_prefilter.comp"),
     # ... and their layered batch's builds (a view a layer of array images).
     *(Variant(f"{n}_layers.comp.spv", f"{n}.comp", (("AO_LAYERED", 1),))
-      for n in ("ao_gtao", "ao_denoise", "ao_upsample")),
+      for n in ("ao_prefilter", "ao_gtao", "ao_denoise", "ao_upsample")),
     # Its depth pre-pass's masked rows where a frame has no visibility image (MSAA, windows).
     Variant("pbr_depth_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1), ("DEPTH_ONLY", 1))),
     Variant("pbr_batch_depth_mask.frag.spv", "pbr.frag",

@@ -23,12 +23,26 @@ layout(set = 1, binding = 0) uniform sampler2DArray depth_map;
 layout(set = 1, binding = 1, r32ui) uniform uimage2DArray ao_raw;
 layout(set = 1, binding = 2, r32ui) uniform uimage2DArray ao_mid;
 layout(set = 1, binding = 3, r32f) uniform image2DArray ao_out;
+layout(set = 1, binding = 4) uniform sampler2DArray depth_mips;
+layout(set = 1, binding = 5, r32f) uniform writeonly image2DArray depth_mip0;
+layout(set = 1, binding = 6, r32f) uniform writeonly image2DArray depth_mip1;
+layout(set = 1, binding = 7, r32f) uniform writeonly image2DArray depth_mip2;
+layout(set = 1, binding = 8, r32f) uniform writeonly image2DArray depth_mip3;
+layout(set = 1, binding = 9, r32f) uniform writeonly image2DArray depth_mip4;
 #define AO_AT(p) ivec3((p), int(gl_GlobalInvocationID.z))
 #else
 layout(set = 1, binding = 0) uniform sampler2D depth_map;  // the target's depth (reversed-Z)
 layout(set = 1, binding = 1, r32ui) uniform uimage2D ao_raw;  // GTAO's term, packed
 layout(set = 1, binding = 2, r32ui) uniform uimage2D ao_mid;  // after the first denoise pass
 layout(set = 1, binding = 3, r32f) uniform image2D ao_out;  // the visibility shading reads
+// The view-space depth and its MIPs (ao_prefilter.comp writes them through the level views,
+// ao_gtao.comp reads them: render/ao.py DEPTH_MIPS levels).
+layout(set = 1, binding = 4) uniform sampler2D depth_mips;
+layout(set = 1, binding = 5, r32f) uniform writeonly image2D depth_mip0;
+layout(set = 1, binding = 6, r32f) uniform writeonly image2D depth_mip1;
+layout(set = 1, binding = 7, r32f) uniform writeonly image2D depth_mip2;
+layout(set = 1, binding = 8, r32f) uniform writeonly image2D depth_mip3;
+layout(set = 1, binding = 9, r32f) uniform writeonly image2D depth_mip4;
 #define AO_AT(p) (p)
 #endif
 
@@ -104,6 +118,12 @@ float ao_view_z(ivec2 p, float znear) {
     float d = texelFetch(depth_map, AO_AT(p), 0).r;
     return d > 0.0 ? znear / d : 1.0 / 0.0;
 }
+
+// The depth MIPs' levels (render/ao.py DEPTH_MIPS) and their largest value: the view-space
+// depth where nothing was drawn (XeGTAO_ClampDepth: finite, so that the MIP filter's sums
+// stay numbers).
+const int AO_MIPS = 5;
+const float AO_FAR = 3.0e38;
 
 // View space as XeGTAO's (x right, y up, z forward, into the screen) of the point at pixel
 // position `pix` of the tile (pixel centres at + 0.5, y down) with view-axis distance z. The
