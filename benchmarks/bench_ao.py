@@ -4,8 +4,8 @@ draws it, with `--ao off` and each GTAO preset (`gtao`: half resolution, the def
 `gtao-full`: full resolution, XeGTAO's High; `gtao-low`: half resolution, 2 slices of 2), at
 1920x1080 and 640x480; and a compute batch of 4,096 views of 128x128 each way. Prints GPU ms
 per frame (or per batch) and the "ao" step's own time (from the timestamps around it),
-medians; `--profile` adds each kernel's (GTAO, the denoise passes, the upsample: a timestamp
-after each). Targets (issue 33): the step <= 0.15 ms at 1080p on the H200. `--fuse both`
+medians; `--profile` adds each kernel's (the depth prefilter, GTAO, the denoise passes, the
+upsample: a timestamp after each). Targets (issue 33): the step <= 0.15 ms at 1080p on the H200. `--fuse both`
 runs the half-resolution presets twice: the last denoise pass as its own kernel (off, the
 default) and run by the upsample on the pixels it blends (on: render/ao.py AoImages.fuse).
 
@@ -31,7 +31,9 @@ from vkpbr.scene.loader import load_scene
 BATCH_VIEWS, BATCH_SIZE = 4096, (128, 128)
 
 
-KERNELS = ("ao_gtao", "ao_denoise0", "ao_denoise1", "ao")  # --profile: each timed apart
+# --profile: each timed apart (the depth prefilter, GTAO's main pass, the denoise passes, the
+# last kernel: the upsample at half resolution)
+KERNELS = ("ao_prefilter", "ao_gtao", "ao_denoise0", "ao_denoise1", "ao")
 
 
 def ao_times(r: Renderer, into: dict[str, list[float]]) -> None:
@@ -136,7 +138,7 @@ def main() -> None:
                 for ao in runs:
                     rows.append({"what": what, "ao": label(ao),
                                  **batch(r, args.batches, ao, args.views, pipeline)})
-    kernels = ["ao_gtao_ms", "ao_denoise0_ms", "ao_denoise1_ms", "ao_last_ms"]
+    kernels = [f"{k}_ms" for k in KERNELS[:-1]] + ["ao_last_ms"]
     cols = [k for k in kernels if any(k in row for row in rows)]
     print("| what | --ao | GPU ms | ao step ms |" + "".join(f" {k[:-3]} |" for k in cols))
     print("|---|---|---:|---:|" + "---:|" * len(cols))

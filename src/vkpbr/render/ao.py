@@ -414,7 +414,8 @@ def _depth_mips(device: Device, w: int, h: int, layers: int
     vk = device.vk
     image = Image(device, -(-w // MIP_ALIGN) * MIP_ALIGN, -(-h // MIP_ALIGN) * MIP_ALIGN,
                   vk.VK_FORMAT_R32_SFLOAT,
-                  vk.VK_IMAGE_USAGE_STORAGE_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT,
+                  vk.VK_IMAGE_USAGE_STORAGE_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT
+                  | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT,  # (tests read it back)
                   mip_levels=DEPTH_MIPS, layers=layers, name="ao depth mips")
     flat, array = [ImageView(image)], [ImageView(image, kind="2d_array")]
     for k in range(DEPTH_MIPS):
