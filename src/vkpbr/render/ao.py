@@ -9,12 +9,15 @@ gets this. `--ao gtao` (the default in the physically based mode with an environ
 takes it as its pre-pass, as for dataset outputs: alpha-masked surfaces are in its depth),
 the compute rasteriser, a compute batch's atlas -- and before the shading:
 
-1. `ao_gtao` (shaders/ao_gtao.comp): GTAO (Jimenez et al. 2016) as XeGTAO's main pass, at
-   the preset's resolution (PRESETS: the default half, one pixel of each 2 x 2): the
-   view-space normal made from the full-resolution depth in place, `slices` directions of
-   `steps` samples a side, the cosine-weighted visible arc integrated within the effect
-   radius (`RenderOptions.ao_radius`; 0: RADIUS_SHARE of the scene's bounding radius), with
-   the depth edges packed beside it.
+0. `ao_prefilter` (shaders/ao_prefilter.comp): XeGTAO's depth prefilter, the view-space
+   depth and DEPTH_MIPS - 1 coarser levels of it (its weighted average) in one dispatch.
+1. `ao_gtao` (shaders/ao_gtao.comp, a build per preset's slices x steps): GTAO (Jimenez et
+   al. 2016) as XeGTAO's main pass, at the preset's resolution (PRESETS: the default half,
+   one pixel of each 2 x 2): the view-space normal made from the full-resolution depth in
+   place, `slices` directions of `steps` samples a side (the far ones read from the coarser
+   levels), the cosine-weighted visible arc integrated within the effect radius
+   (`RenderOptions.ao_radius`; 0: RADIUS_SHARE of the scene's bounding radius), with the
+   depth edges packed beside it.
 2. `ao_denoise` (shaders/ao_denoise.comp), `passes` times: XeGTAO's edge-aware 3x3 spatial
    denoise; at full resolution the last pass writes the frame slot's "ao" image (R32F), at
    half resolution `ao_upsample` (shaders/ao_upsample.comp) does, a depth-aware bilinear
@@ -274,7 +277,7 @@ class AoImages:
 
         steps = [Step("ao_prefilter", run("ao_prefilter", push(0, 0), (-(-w // 2), -(-h // 2))),
                       (depth, ("ao_depth", "storage")), timed=self.profile),
-                 Step("ao_gtao", run("ao_gtao", push(0, 0), work),
+                 Step("ao_gtao", run(f"ao_gtao_{q.slices}x{q.steps}", push(0, 0), work),
                       (("ao_depth", "sampled"), ("ao_raw", "storage")), timed=self.profile)]
         src = "ao_raw"
         fused = int(self.fuse and q.scale > 1)  # (the upsample runs the last pass)
@@ -287,7 +290,7 @@ class AoImages:
             src = dst
         if q.scale > 1:
             steps.append(Step("ao_upsample", run(
-                "ao_upsample", push(1, int(src == "ao_mid"), fused), extent), both, timed=False))
+                "ao_upsample", push(1, int(src == "ao_mid"), fused), work), both, timed=False))
         steps[-1] = Step("ao", steps[-1].record, steps[-1].uses, timed=timed)
         if copy_out:
             steps.append(Step("ao_output", lambda cmd: _copy_image(cmd, image, resources, extent),

@@ -53,8 +53,8 @@ layout(push_constant) uniform Ao {
     uint views;  // views drawn (tiles past them are left alone)
     float radius;  // the effect radius, world units
     float falloff;  // share of the radius over which a sample's weight falls to 0 (XeGTAO)
-    uint slices;  // GTAO's slice directions a pixel
-    uint steps;  // samples a side of a slice
+    uint slices;  // GTAO's slice directions a pixel (ao_gtao.comp: its build's AO_SLICES)
+    uint steps;  // samples a side of a slice (its build's AO_STEPS)
     uint final_pass;  // ao_denoise.comp: the last pass (full blur; at full resolution -> out)
     uint read_mid;  // ao_denoise.comp, ao_upsample.comp: read ao_mid (else ao_raw)
     uint scale;  // 1: GTAO at full resolution; 2: at half (a pixel of the working images per

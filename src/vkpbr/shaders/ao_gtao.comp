@@ -18,7 +18,19 @@
 // lines). The final value's power is 1 (XeGTAO's default 2.2
 // is a look, not the integral: tests/gpu/test_ao.py checks this one against ray casting).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "ao_common.glsl"
+
+// The preset's slices and samples a side, fixed at build time (render/codegen.py builds one
+// kernel per preset, as XeGTAO does): the loops unroll, so that a pixel's samples are all
+// fetched before their results are needed (a loop over push constants waited on each pair).
+#ifndef AO_SLICES
+#define AO_SLICES 3
+#endif
+#ifndef AO_STEPS
+#define AO_STEPS 3
+#endif
+const uint SLICES = AO_SLICES, STEPS = AO_STEPS;
 
 const float PI = 3.14159265358979;
 const float PI_HALF = 1.57079632679490;
@@ -112,8 +124,8 @@ float gtao(ivec2 p, ivec2 lo, uvec2 tile_p, vec3 center, vec3 n, vec4 intr) {
     float min_s = too_close / screen_radius;
     vec2 noise = fract(0.5 + float(hilbert_index(tile_p.x % 64u, tile_p.y % 64u))
                        * vec2(0.75487766624669276005, 0.5698402909980532659114));
-    float slices = float(pc.slices), steps = float(pc.steps);
-    for (uint slice = 0u; slice < pc.slices; ++slice) {
+    const float slices = float(SLICES), steps = float(STEPS);
+    [[unroll]] for (uint slice = 0u; slice < SLICES; ++slice) {
         float phi = (float(slice) + noise.x) / slices * PI;
         vec2 omega = vec2(cos(phi), -sin(phi)) * screen_radius;  // pixels
         vec3 dir = vec3(cos(phi), sin(phi), 0.0);
@@ -126,8 +138,8 @@ float gtao(ivec2 p, ivec2 lo, uvec2 tile_p, vec3 center, vec3 n, vec4 intr) {
         float nn = sign_n * fast_acos(cos_n);
         float low0 = cos(nn + PI_HALF), low1 = cos(nn - PI_HALF);
         float h0c = low0, h1c = low1;
-        for (uint step = 0u; step < pc.steps; ++step) {
-            float step_noise = fract(noise.y + float(slice + step * pc.steps) * 0.6180339887498948);
+        [[unroll]] for (uint step = 0u; step < STEPS; ++step) {
+            float step_noise = fract(noise.y + float(slice + step * STEPS) * 0.6180339887498948);
             float s = (float(step) + step_noise) / steps;
             s = s * s + min_s;  // XeGTAO's sample distribution power 2: more samples near
             vec2 offset = s * omega;
