@@ -184,6 +184,7 @@ class AoImages:
         # The view-space depth MIPs: (image, [its sampled view (every level), each level's
         # storage view] of layer 0 (2D), the same as array views)
         self.mips: tuple[Image, list[ImageView], list[ImageView]] | None = None
+        self.mip_size = (0, 0)  # its level 0's
         self._kernels: dict[str, ComputePipeline] = {}
         self._layout: DescriptorSetLayout | None = None
         self._sampler: Sampler | None = None
@@ -203,19 +204,26 @@ class AoImages:
             writer.sampler(set2, AO_BINDING, self._stand_in[1], stand_in[1])
         writer.update()
 
-    def stale(self, extent: tuple[int, int], layers: int = 1) -> bool:
-        """Whether frames of `extent` (`layers`: a layered batch's chunk) need larger images
-        than the ones made (they only grow: a smaller frame uses their top-left corner, so
-        frames and batches of other sizes in turn neither wait for the device nor re-record)."""
+    def stale(self, extent: tuple[int, int], layers: int = 1,
+              tile: tuple[int, int] | None = None) -> bool:
+        """Whether frames of `extent` (`layers`: a layered batch's chunk; `tile`: a compute
+        batch's views' tile size) need larger images than the ones made (they only grow: a
+        smaller frame uses their top-left corner, so frames and batches of other sizes in
+        turn neither wait for the device nor re-record)."""
+        mips = mip_extent(extent, tile)
         return (self.size is None or extent[0] > self.size[0] or extent[1] > self.size[1]
-                or layers > self.layers)
+                or layers > self.layers or mips[0] > self.mip_size[0]
+                or mips[1] > self.mip_size[1])
 
-    def fit(self, extent: tuple[int, int], layers: int = 1) -> None:
-        """Images for frames of `extent` and `layers` (and of any size made before), bound in
-        every slot's set 2 (left in the sampled layout, as frames leave them). The caller
-        waits for the device and drops the recorded command buffers first (they name the old
-        images)."""
+    def fit(self, extent: tuple[int, int], layers: int = 1,
+            tile: tuple[int, int] | None = None) -> None:
+        """Images for frames of `extent` and `layers` (`tile`: as `stale`'s; and of any size
+        made before), bound in every slot's set 2 (left in the sampled layout, as frames
+        leave them). The caller waits for the device and drops the recorded command buffers
+        first (they name the old images)."""
         old, layers = self.size or (0, 0), max(int(layers), self.layers)
+        (mw, mh), (ow, oh) = mip_extent(extent, tile), self.mip_size
+        mips = (max(mw, ow), max(mh, oh))
         self._destroy_images()
         vk = self.device.vk
         w, h = max(int(extent[0]), old[0]), max(int(extent[1]), old[1])
@@ -228,7 +236,8 @@ class AoImages:
             image = Image(self.device, w, h, fmt, use, layers=layers, name=name)
             made = (image, ImageView(image), ImageView(image, kind="2d_array"))
             (self.images if i < len(names) else self.work).append(made)
-        self.mips = _depth_mips(self.device, w, h, layers)
+        self.mips = _depth_mips(self.device, *mips, layers)
+        self.mip_size = mips
         with self.device.one_time_commands() as handle:
             cmd = Commands(self.device, handle)
             for image, _, _ in self.images:
@@ -252,8 +261,9 @@ class AoImages:
         (FrameStats.pass_ms["ao"]); `generation`: the target's (a recreated swapchain's depth
         views are new objects); `layered`: a layered batch's chunk (its first view, views), a
         view a layer of the target's depth, every layer in one dispatch (its z)."""
-        assert not self.stale(extent, layered[1] if layered else 1), "fit() first"
         w, h = extent
+        assert not self.stale(extent, layered[1] if layered else 1,
+                              tiles[1:3] if tiles is not None else None), "fit() first"
         image = self._resources(resources, frame_index)
         dset = self._set(resources["depth"].view, frame_index, generation, layered is not None)
         q = spec.quality
@@ -275,7 +285,8 @@ class AoImages:
         def run(name: str, p: np.ndarray, size: tuple[int, int]) -> Any:
             return self._dispatch(name + kernel, p, set0, dset, (*size, depth_layers))
 
-        steps = [Step("ao_prefilter", run("ao_prefilter", push(0, 0), (-(-w // 2), -(-h // 2))),
+        mips = mip_extent(extent, (tw, th))
+        steps = [Step("ao_prefilter", run("ao_prefilter", push(0, 0), (mips[0] // 2, mips[1] // 2)),
                       (depth, ("ao_depth", "storage")), timed=self.profile),
                  Step("ao_gtao", run(f"ao_gtao_{q.slices}x{q.steps}", push(0, 0), work),
                       (("ao_depth", "sampled"), ("ao_raw", "storage")), timed=self.profile)]
@@ -391,7 +402,7 @@ class AoImages:
             for view in (*self.mips[1], *self.mips[2]):
                 view.destroy()
             self.mips[0].destroy()
-        self.images, self.work, self._sets, self.mips = [], [], {}, None
+        self.images, self.work, self._sets, self.mips, self.mip_size = [], [], {}, None, (0, 0)
         for pool in self._pools:
             pool.destroy()
         self._pools, self._free, self.size = [], 0, None
@@ -409,14 +420,22 @@ class AoImages:
         self._layout = self._sampler = None
 
 
+def mip_extent(extent: tuple[int, int], tile: tuple[int, int] | None = None
+               ) -> tuple[int, int]:
+    """The depth MIPs' level 0 for frames of `extent` in tiles of `tile` (None: one tile):
+    each tile's block rounded up to a multiple of MIP_ALIGN (ao_common.glsl ao_mip_base), so
+    that each level's texels group a tile's own pixels and level k is exactly level 0 / 2^k."""
+    tw, th = tile if tile is not None else extent
+    up = -(-int(tw) // MIP_ALIGN) * MIP_ALIGN, -(-int(th) // MIP_ALIGN) * MIP_ALIGN
+    return -(-int(extent[0]) // int(tw)) * up[0], -(-int(extent[1]) // int(th)) * up[1]
+
+
 def _depth_mips(device: Device, w: int, h: int, layers: int
                 ) -> tuple[Image, list[ImageView], list[ImageView]]:
-    """The view-space depth MIPs for frames up to w x h (ao_prefilter.comp): R32F, level 0
-    rounded up to a multiple of MIP_ALIGN, so that each level's texels cover the frame (level
-    k is exactly level 0 / 2^k); AoImages.mips' views."""
+    """The view-space depth MIPs, level 0 w x h (mip_extent; ao_prefilter.comp): R32F, its
+    views (AoImages.mips)."""
     vk = device.vk
-    image = Image(device, -(-w // MIP_ALIGN) * MIP_ALIGN, -(-h // MIP_ALIGN) * MIP_ALIGN,
-                  vk.VK_FORMAT_R32_SFLOAT,
+    image = Image(device, w, h, vk.VK_FORMAT_R32_SFLOAT,
                   vk.VK_IMAGE_USAGE_STORAGE_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT
                   | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT,  # (tests read it back)
                   mip_levels=DEPTH_MIPS, layers=layers, name="ao depth mips")
@@ -456,14 +475,16 @@ def _copy_image(cmd: Any, image: Image, resources: dict[str, Any], extent: tuple
 
 
 def prepare_ao(ao: AoImages, recorder: Any, options: RenderOptions, target: Any,
-               scene_radius: float, output: bool) -> AoSpec | None:
+               scene_radius: float, output: bool, tile: tuple[int, int] | None = None
+               ) -> AoSpec | None:
     """The ambient occlusion of a frame into `target` (ao_spec), with the images fitted to
-    its size: rare (a new size), so the device is waited for and the recordings that name
+    its size (`tile`: a compute batch's views' tile size, which the depth MIPs' blocks
+    follow): rare (a new size), so the device is waited for and the recordings that name
     the old images are dropped."""
     spec = ao_spec(options, target, scene_radius, output)
     layers = getattr(target, "layers", 1)  # (a layered batch's)
-    if spec is not None and ao.stale(target.extent, layers):
+    if spec is not None and ao.stale(target.extent, layers, tile):
         ao.device.wait_idle()
         recorder.free()
-        ao.fit(target.extent, layers)
+        ao.fit(target.extent, layers, tile)
     return spec

@@ -125,6 +125,18 @@ float ao_view_z(ivec2 p, float znear) {
 const int AO_MIPS = 5;
 const float AO_FAR = 3.0e38;
 
+// The depth MIPs hold each view's tile in a block of its own, the tile's size rounded up to a
+// multiple of 16 (the MIPs' texels group the tile's own pixels, as a frame's alone do: a batch
+// view's GTAO equals the view's rendered alone), in the tiles' grid: the block of the tile
+// whose first pixel is lo starts at ao_mip_base(lo) (a multiple of 16: its texel of level k
+// for tile pixel q is (base + q) >> k).
+ivec2 ao_mip_tile() {
+    return (ivec2(pc.tile_w, pc.tile_h) + 15) & ~15;
+}
+ivec2 ao_mip_base(ivec2 lo) {
+    return lo / ivec2(pc.tile_w, pc.tile_h) * ao_mip_tile();
+}
+
 // View space as XeGTAO's (x right, y up, z forward, into the screen) of the point at pixel
 // position `pix` of the tile (pixel centres at + 0.5, y down) with view-axis distance z. The
 // view record's intrinsics: NDC x = sx x / z + ox, NDC y (down) = -sy y / z + oy.

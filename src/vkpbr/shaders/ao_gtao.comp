@@ -93,12 +93,10 @@ float fast_acos(float x) {  // XeGTAO_FastACos (Lagarde), [-1, 1] -> [0, pi]
 // level 1 to 27.9, 2 to 55.7, 3 to 111, 4 beyond.
 const float MIP_SAMPLING_OFFSET = 3.3;
 
-// The view-space depth at pixel p from `level` of the depth MIPs (ao_prefilter.comp), on a
-// coarser level only where the texel's first pixel is in p's tile (`lo` its first pixel: a
-// texel straddling a batch tile's border holds the other tile's view), else a finer one.
+// The view-space depth at pixel p of the tile whose first pixel is lo (p in it) from `level`
+// of the depth MIPs (ao_prefilter.comp).
 float mip_z(ivec2 p, ivec2 lo, int level) {
-    while (level > 0 && any(lessThan((p >> level) << level, lo))) --level;
-    return texelFetch(depth_mips, AO_AT(p >> level), level).r;
+    return texelFetch(depth_mips, AO_AT((ao_mip_base(lo) + p - lo) >> level), level).r;
 }
 
 // The depth at a sample, as a view-space point; `inside`: whether the sample is in the tile
@@ -168,7 +166,7 @@ float gtao(ivec2 p, ivec2 lo, uvec2 tile_p, vec3 center, vec3 n, vec4 intr) {
 }
 
 float neighbour_z(ivec2 p, ivec2 lo) {
-    return texelFetch(depth_mips, AO_AT(ao_clamp(p, lo)), 0).r;
+    return mip_z(ao_clamp(p, lo), lo, 0);
 }
 
 void main() {

@@ -8,10 +8,10 @@
 // average of its four children (XeGTAO_DepthMIPFilter): a child nearer than the farthest by
 // more than 0.75 of the search radius gets no weight (an occluder in front does not pull a
 // background texel towards the eye, nor the reverse by half).
-// Tiles (a compute batch's atlas of views) need not be multiples of 16: a texel takes only
-// the children whose first pixel lies in the tile of its own first pixel (its view), so a
-// texel straddling a tile border holds its first pixel's view's depth alone, and ao_gtao.comp
-// reads a level only where the texel's first pixel is in the sample's tile.
+// A compute batch's atlas of views: each tile's levels are made in a block of their own
+// (ao_common.glsl ao_mip_base: the tile rounded up to a multiple of 16, so a work group lies
+// in one tile), its texels grouping the tile's pixels as a frame's alone (a texel past the
+// tile's edge takes only the children inside).
 #extension GL_GOOGLE_include_directive : require
 #include "ao_common.glsl"
 
@@ -31,7 +31,8 @@ float mip_filter(vec4 d, bvec4 present) {
     return min(far + dot(w, d - far) / dot(w, vec4(1.0)), AO_FAR);
 }
 
-// Whether the texel of `level` at c (its first pixel c << level) is in the tile [lo, hi).
+// Whether the texel of `level` at c (its first pixel c << level) is in the tile's block
+// [base, hi): a level-0 pixel of the MIPs, or past the tile (the block's padding).
 bool in_tile(ivec2 c, int level, ivec2 hi) {
     return all(lessThan(c << level, hi));
 }
@@ -45,24 +46,26 @@ float view_z(ivec2 p, bool valid, float znear) {
 void main() {
     ivec2 t = ivec2(gl_LocalInvocationID.xy);
     ivec2 c1 = ivec2(gl_GlobalInvocationID.xy);  // this invocation's texel of level 1
-    ivec2 p = c1 * 2;  // its first pixel
-    uint view;
-    ivec2 lo;
-    bool valid = ao_view(p, view, lo);  // (all four pixels' tiles start at or before p)
-    ivec2 hi = lo + ivec2(pc.tile_w, pc.tile_h);
+    ivec2 m = c1 * 2;  // its first pixel of level 0
+    ivec2 size = ivec2(pc.tile_w, pc.tile_h);
+    ivec2 tile = m / ao_mip_tile(), base = tile * ao_mip_tile();
+    ivec2 p = tile * size + (m - base);  // the frame's (the atlas's) pixel of m
+    uint index = uint(tile.x) * pc.rows + uint(tile.y), view = ao_view_of(index);
+    bool valid = uint(tile.y) < pc.rows && index < pc.views && all(lessThan(m - base, size));
     float znear = views[valid ? view : pc.first_view].eye_near.w;
-    bvec4 present = bvec4(true, in_tile(p + ivec2(1, 0), 0, hi), in_tile(p + ivec2(0, 1), 0, hi),
-                          in_tile(p + ivec2(1, 1), 0, hi));
+    ivec2 hi = base + size;
+    bvec4 present = bvec4(true, in_tile(m + ivec2(1, 0), 0, hi), in_tile(m + ivec2(0, 1), 0, hi),
+                          in_tile(m + ivec2(1, 1), 0, hi));
     vec4 d = vec4(view_z(p, valid, znear), view_z(p + ivec2(1, 0), valid && present.y, znear),
                   view_z(p + ivec2(0, 1), valid && present.z, znear),
                   view_z(p + ivec2(1, 1), valid && present.w, znear));
-    imageStore(depth_mip0, AO_AT(p), vec4(d.x));
-    imageStore(depth_mip0, AO_AT(p + ivec2(1, 0)), vec4(d.y));
-    imageStore(depth_mip0, AO_AT(p + ivec2(0, 1)), vec4(d.z));
-    imageStore(depth_mip0, AO_AT(p + ivec2(1, 1)), vec4(d.w));
-    float m = mip_filter(d, present);
-    imageStore(depth_mip1, AO_AT(c1), vec4(m));
-    scratch[t.x][t.y] = m;
+    imageStore(depth_mip0, AO_AT(m), vec4(d.x));
+    imageStore(depth_mip0, AO_AT(m + ivec2(1, 0)), vec4(d.y));
+    imageStore(depth_mip0, AO_AT(m + ivec2(0, 1)), vec4(d.z));
+    imageStore(depth_mip0, AO_AT(m + ivec2(1, 1)), vec4(d.w));
+    float mean = mip_filter(d, present);
+    imageStore(depth_mip1, AO_AT(c1), vec4(mean));
+    scratch[t.x][t.y] = mean;
     // Levels 2 to 4: the invocations at multiples of 2, 4, 8 of the group take the 2 x 2 of
     // the level above from shared memory (their children: stride / 2 apart).
     for (int level = 2; level < AO_MIPS; ++level) {
@@ -78,12 +81,12 @@ void main() {
             bvec4 cp = bvec4(true, in_tile(child + ivec2(1, 0), level - 1, hi),
                              in_tile(child + ivec2(0, 1), level - 1, hi),
                              in_tile(child + ivec2(1, 1), level - 1, hi));
-            m = mip_filter(cd, cp);
-            if (level == 2) imageStore(depth_mip2, AO_AT(c), vec4(m));
-            else if (level == 3) imageStore(depth_mip3, AO_AT(c), vec4(m));
-            else imageStore(depth_mip4, AO_AT(c), vec4(m));
+            mean = mip_filter(cd, cp);
+            if (level == 2) imageStore(depth_mip2, AO_AT(c), vec4(mean));
+            else if (level == 3) imageStore(depth_mip3, AO_AT(c), vec4(mean));
+            else imageStore(depth_mip4, AO_AT(c), vec4(mean));
         }
         barrier();
-        if (takes) scratch[t.x][t.y] = m;
+        if (takes) scratch[t.x][t.y] = mean;
     }
 }
