@@ -144,9 +144,9 @@ PREPASS_ROWS = (*(p for p in PASSES if p.prepass), AO_MASK_PASS)
 def ao_pixel_bytes(options: RenderOptions, slots: int) -> int:
     """Device bytes a view's pixel takes for GTAO where `options` turn it on (a batch's
     memory budget): each of the `slots` frame slots' "ao" image and the two working images,
-    4 bytes a pixel each, and the depth MIPs, 4 / (1 - 1/4) (made for the largest frame or
-    chunk of layers)."""
-    return 4 * (slots + 2) + 6 if options.ao != L.Ao.OFF and options.has_environment else 0
+    4 bytes a pixel each, and the depth MIPs, 4 / (1 - 1/4) times their tiles' rounding up
+    to 16 pixels (up to 1.5 in area: 8) (made for the largest frame or chunk of layers)."""
+    return 4 * (slots + 2) + 8 if options.ao != L.Ao.OFF and options.has_environment else 0
 
 
 @dataclass
