@@ -8,10 +8,12 @@ medians; `--profile` adds each kernel's (the depth prefilter, GTAO, the denoise 
 upsample: a timestamp after each). Targets (issue 33): the step <= 0.15 ms at 1080p on the H200. `--fuse both`
 runs the half-resolution presets twice: the last denoise pass as its own kernel (off, the
 default) and run by the upsample on the pixels it blends (on: render/ao.py AoImages.fuse).
+`--mip-offsets 3.3,4.3` runs each at each MIP level offset (AoImages.mip_offset: which depth
+MIP level GTAO's far samples read; 3.3, XeGTAO's, the default).
 
     python3 benchmarks/bench_ao.py --scene Sponza.gltf [--frames 300] [--batches 5] \
         [--modes off,gtao,gtao-full,gtao-low] [--profile] [--fuse off|on|both] \
-        [--batch-pipelines compute,forward] [--json out.json]
+        [--batch-pipelines compute,forward] [--mip-offsets 3.3,4.3] [--json out.json]
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import sys
 
 import numpy as np
 
+from vkpbr.render.ao import MIP_OFFSET
 from vkpbr.render.renderer import Renderer
 from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.loader import load_scene
@@ -94,12 +97,12 @@ def batch(r: Renderer, reps: int, ao: str, count: int, pipeline: str = "compute"
     return {k: statistics.median(v) for k, v in times.items()}
 
 
-def set_fuse(r: Renderer, fuse: bool) -> None:
-    """Fuse the last denoise pass into the upsample, or not; the recordings made the other
-    way are dropped (their steps differ)."""
+def set_fuse(r: Renderer, fuse: bool, mip_offset: float) -> None:
+    """Fuse the last denoise pass into the upsample, or not, and the MIP level offset; the
+    recordings made another way are dropped (their steps or push constants differ)."""
     r.device.wait_idle()
     r.parts.recorder.free()
-    r.parts.ao.fuse = fuse
+    r.parts.ao.fuse, r.parts.ao.mip_offset = fuse, mip_offset
 
 
 def main() -> None:
@@ -117,6 +120,9 @@ def main() -> None:
                     "layered batch), comma-separated")
     ap.add_argument("--fuse", choices=("off", "on", "both"), default="off",
                     help="the last denoise pass in the upsample (half resolution)")
+    ap.add_argument("--mip-offsets", default=str(MIP_OFFSET),
+                    help="GTAO's MIP level offsets to run, comma-separated (render/ao.py "
+                    "MIP_OFFSET, XeGTAO's DepthMIPSamplingOffset: larger reads finer levels)")
     ap.add_argument("--json")
     args = ap.parse_args()
     sizes = [tuple(int(v) for v in s.split("x")) for s in args.sizes.split(",")]
@@ -125,10 +131,11 @@ def main() -> None:
     fuses = {"off": [False], "on": [True], "both": [False, True]}[args.fuse]
     with Renderer(load_scene(args.scene)) as r:
         r.parts.ao.profile = args.profile
-        for fuse in fuses:
-            set_fuse(r, fuse)
+        for fuse, offset in [(f, float(o)) for f in fuses for o in args.mip_offsets.split(",")]:
+            set_fuse(r, fuse, offset)
             runs = [m for m in modes if not fuse or m in ("gtao", "gtao-low")]
-            label = (lambda ao: f"{ao} fused") if fuse else (lambda ao: ao)  # noqa: E731
+            tag = ("" if offset == MIP_OFFSET else f" mip {offset:g}") + (" fused" if fuse else "")
+            label = lambda ao, tag=tag: ao + tag  # noqa: E731
             for size in sizes:
                 for ao in runs:
                     rows.append({"what": f"frame {size[0]}x{size[1]}", "ao": label(ao),

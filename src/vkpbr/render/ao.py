@@ -81,7 +81,10 @@ DEPTH_MIPS, MIP_ALIGN = 5, 16
 _SETS_PER_POOL = 16
 _PUSH = np.dtype([("tile", "<u4", 4), ("radius", "<f4"), ("falloff", "<f4"), ("slices", "<u4"),
                   ("steps", "<u4"), ("final_pass", "<u4"), ("read_mid", "<u4"), ("scale", "<u4"),
-                  ("first_view", "<u4"), ("fused", "<u4")])
+                  ("first_view", "<u4"), ("fused", "<u4"), ("mip_offset", "<f4")])
+# XeGTAO's DepthMIPSamplingOffset: a sample len pixels out reads MIP level
+# round(log2(len) - MIP_OFFSET) (ao_gtao.comp); larger: finer levels, more cache lines.
+MIP_OFFSET = 3.3
 
 
 @dataclass(frozen=True)
@@ -178,6 +181,11 @@ class AoImages:
         # dispatches' gaps may cost more than the loads; benchmarks/bench_ao.py --fuse
         # measures both). Off until measured; set before the first frame, as `profile`.
         self.fuse = False
+        # The MIP level offset (MIP_OFFSET; bench_ao.py --mip-offsets tries others: at half
+        # resolution neighbouring working pixels are 2 pixels apart, so one level coarser may
+        # keep the far samples in cache as well; the accuracy tests hold for the default).
+        # Set before the first frame, as `profile`.
+        self.mip_offset = MIP_OFFSET
         # (image, its layer 0's 2D view, its array view) each
         self.images: list[tuple[Image, ImageView, ImageView]] = []
         self.work: list[tuple[Image, ImageView, ImageView]] = []  # ao_raw, ao_mid (R32_UINT)
@@ -276,7 +284,9 @@ class AoImages:
         depth = ("depth", "sampled")
 
         def push(final: int, read_mid: int, fused: int = 0) -> np.ndarray:
-            return _push(spec, tiles, first, final, read_mid, fused)
+            p = _push(spec, tiles, first, final, read_mid, fused)
+            p["mip_offset"] = self.mip_offset
+            return p
 
         # The denoise and the upsample name every image of their set: the shaders
         # choose between the working images by a push constant, so each statically reads and

@@ -61,6 +61,7 @@ layout(push_constant) uniform Ao {
                  // 2 x 2 of the frame's; ao_upsample.comp makes the full-resolution "ao")
     uint first_view;  // the view of the first tile (AO_LAYERED: of layer 0)
     uint fused;  // ao_upsample.comp: run the last denoise pass on the pixels it blends
+    float mip_offset;  // ao_gtao.comp: XeGTAO's DepthMIPSamplingOffset (render/ao.py MIP_OFFSET)
 } pc;
 
 // The view a tile (and, layered, the invocation's layer) stands for.
