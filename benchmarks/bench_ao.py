@@ -5,15 +5,15 @@ draws it, with `--ao off` and each GTAO preset (`gtao`: half resolution, the def
 1920x1080 and 640x480; and a compute batch of 4,096 views of 128x128 each way. Prints GPU ms
 per frame (or per batch) and the "ao" step's own time (from the timestamps around it),
 medians; `--profile` adds each kernel's (the depth prefilter, GTAO, the denoise passes, the
-upsample: a timestamp after each). Targets (issue 33): the step <= 0.15 ms at 1080p on the H200. `--fuse both`
-runs the half-resolution presets twice: the last denoise pass as its own kernel (off, the
+upsample: a timestamp after each). Targets (issue 33): the step <= 0.15 ms at 1080p on the
+H200. `--fuse both` runs the half-resolution presets twice: the last denoise pass as its own kernel (off, the
 default) and run by the upsample on the pixels it blends (on: render/ao.py AoImages.fuse).
-`--mip-offsets 3.3,4.3` runs each at each MIP level offset (AoImages.mip_offset: which depth
-MIP level GTAO's far samples read; 3.3, XeGTAO's, the default).
+`--mip-offsets 2.3,3.3` runs each at each MIP level offset (AoImages.mip_offset: which depth
+MIP level GTAO's far samples read; 3.3, XeGTAO's, the default; 2.3 reads a level coarser).
 
     python3 benchmarks/bench_ao.py --scene Sponza.gltf [--frames 300] [--batches 5] \
         [--modes off,gtao,gtao-full,gtao-low] [--profile] [--fuse off|on|both] \
-        [--batch-pipelines compute,forward] [--mip-offsets 3.3,4.3] [--json out.json]
+        [--batch-pipelines compute,forward] [--mip-offsets 2.3,3.3] [--json out.json]
 """
 
 from __future__ import annotations

@@ -182,9 +182,10 @@ class AoImages:
         # measures both). Off until measured; set before the first frame, as `profile`.
         self.fuse = False
         # The MIP level offset (MIP_OFFSET; bench_ao.py --mip-offsets tries others: at half
-        # resolution neighbouring working pixels are 2 pixels apart, so one level coarser may
-        # keep the far samples in cache as well; the accuracy tests hold for the default).
-        # Set before the first frame, as `profile`.
+        # resolution neighbouring working pixels are 2 pixels apart, so 2.3, a level coarser,
+        # may keep their far samples in cache as 3.3 does at full resolution; the accuracy
+        # tests hold for the default, docs/ambient-occlusion.md has 2.3's errors). Set before
+        # the first frame, as `profile`.
         self.mip_offset = MIP_OFFSET
         # (image, its layer 0's 2D view, its array view) each
         self.images: list[tuple[Image, ImageView, ImageView]] = []
