@@ -8,8 +8,8 @@
 // its own surface, never those across a depth edge). Where no neighbour is of its surface
 // (a feature thinner than a block) it takes the nearest in depth; background pixels get 1.
 // With pc.fused the last denoise pass runs here, on each working pixel it blends (one
-// dispatch and one barrier fewer, and no write and read of the working image between, for
-// one denoise a block of four pixels instead of a quarter of one a pixel: render/ao.py FUSE).
+// dispatch and one barrier fewer, and no write and read of the working image between; the
+// 2 x 2 working pixels' 4 x 4 neighbourhood loaded once: render/ao.py AoImages.fuse).
 #extension GL_GOOGLE_include_directive : require
 #include "ao_denoise.glsl"
 
@@ -49,12 +49,11 @@ void main() {
     float znear = views[view].eye_near.w;
     ivec2 wt = ao_work_tile();
     vec4 v, wz;
+    // (with pc.fused, the last denoise pass here: no pass of its own)
+    if (pc.fused != 0u) v = ao_denoise_block(wp, wlo);
     for (int k = 0; k < 4; ++k) {
         ivec2 w = wlo + min(wp - wlo + ivec2(k & 1, k >> 1), wt - 1);
-        if (pc.fused != 0u) {  // the last denoise pass here (no pass of its own)
-            uint centre;
-            v[k] = ao_denoise(w, wlo, true, centre);
-        } else {
+        if (pc.fused == 0u) {
             v[k] = ao_visibility(pc.read_mid != 0u ? imageLoad(ao_mid, AO_AT(w)).r
                                                    : imageLoad(ao_raw, AO_AT(w)).r);
         }
