@@ -37,10 +37,20 @@ bool in_tile(ivec2 c, int level, ivec2 hi) {
     return all(lessThan(c << level, hi));
 }
 
-float view_z(ivec2 p, bool valid, float znear) {
-    if (!valid) return AO_FAR;
-    float d = texelFetch(depth_map, AO_AT(p), 0).r;
-    return d > 0.0 ? min(znear / d, AO_FAR) : AO_FAR;
+float view_z(float d, bool valid, float znear) {
+    return valid && d > 0.0 ? min(znear / d, AO_FAR) : AO_FAR;
+}
+
+// The depth buffer's 2 x 2 pixels from p in one fetch (XeGTAO's GatherRed): at the corner
+// they share, x first ((x, y) of gather's w, z, x, y components).
+vec4 gather_depths(ivec2 p) {
+    vec2 uv = vec2(p + 1) / vec2(textureSize(depth_map, 0).xy);
+#if AO_LAYERED
+    vec4 g = textureGather(depth_map, vec3(uv, float(gl_GlobalInvocationID.z)));
+#else
+    vec4 g = textureGather(depth_map, uv);
+#endif
+    return g.wzxy;
 }
 
 void main() {
@@ -56,9 +66,9 @@ void main() {
     ivec2 hi = base + size;
     bvec4 present = bvec4(true, in_tile(m + ivec2(1, 0), 0, hi), in_tile(m + ivec2(0, 1), 0, hi),
                           in_tile(m + ivec2(1, 1), 0, hi));
-    vec4 d = vec4(view_z(p, valid, znear), view_z(p + ivec2(1, 0), valid && present.y, znear),
-                  view_z(p + ivec2(0, 1), valid && present.z, znear),
-                  view_z(p + ivec2(1, 1), valid && present.w, znear));
+    vec4 g = gather_depths(p);
+    vec4 d = vec4(view_z(g.x, valid, znear), view_z(g.y, valid && present.y, znear),
+                  view_z(g.z, valid && present.z, znear), view_z(g.w, valid && present.w, znear));
     imageStore(depth_mip0, AO_AT(m), vec4(d.x));
     imageStore(depth_mip0, AO_AT(m + ivec2(1, 0)), vec4(d.y));
     imageStore(depth_mip0, AO_AT(m + ivec2(0, 1)), vec4(d.z));
