@@ -88,11 +88,6 @@ float fast_acos(float x) {  // XeGTAO_FastACos (Lagarde), [-1, 1] -> [0, pi]
     return x >= 0.0 ? res : PI - res;
 }
 
-// XeGTAO's DepthMIPSamplingOffset (pc.mip_offset, 3.3: render/ao.py MIP_OFFSET): a sample
-// `len` pixels from the centre reads the MIP level log2(len) - 3.3, rounded (XeGTAO's
-// point-sampled SampleLevel): level 0 within 13.9 pixels, level 1 to 27.9, 2 to 55.7, 3 to
-// 111, 4 beyond.
-
 // The view-space depth at pixel p of the tile whose first pixel is lo (p in it) from `level`
 // of the depth MIPs (ao_prefilter.comp).
 float mip_z(ivec2 p, ivec2 lo, int level) {
@@ -141,6 +136,9 @@ float gtao(ivec2 p, ivec2 lo, uvec2 tile_p, vec3 center, vec3 n, vec4 intr) {
             float s = (float(step) + step_noise) / steps;
             s = s * s + min_s;  // XeGTAO's sample distribution power 2: more samples near
             vec2 offset = s * omega;
+            // The MIP level it reads: log2(len) - pc.mip_offset, rounded (XeGTAO's
+            // DepthMIPSamplingOffset, 3.3: render/ao.py MIP_OFFSET; its point-sampled
+            // SampleLevel): level 0 within 13.9 pixels, 1 to 27.9, 2 to 55.7, 3 to 111, 4 beyond.
             int level = clamp(int(floor(log2(length(offset)) - pc.mip_offset + 0.5)), 0,
                               AO_MIPS - 1);
             offset = round(offset);

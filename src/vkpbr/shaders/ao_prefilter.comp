@@ -2,12 +2,13 @@
 // ao_prefilter.comp: XeGTAO's depth prefilter (XeGTAO_PrefilterDepths16x16, MIT, Intel): the
 // frame's view-space depth (level 0: znear / depth, exactly what the main pass computed from
 // the depth buffer before) and 4 coarser MIP levels, in one dispatch: an invocation takes a
-// 2 x 2 block of pixels, a work group 16 x 16, the levels below level 1 made through shared
-// memory. ao_gtao.comp reads its far samples from the coarser levels (fewer cache lines for
+// 2 x 2 block of pixels (one gather), a work group 16 x 16, levels 2 to 4 made through
+// shared memory. ao_gtao.comp reads its far samples from the coarser levels (fewer cache lines for
 // the samples far along a slice, the main pass's cost). A coarser texel is XeGTAO's weighted
 // average of its four children (XeGTAO_DepthMIPFilter): a child nearer than the farthest by
 // more than 0.75 of the search radius gets no weight (an occluder in front does not pull a
-// background texel towards the eye, nor the reverse by half).
+// texel of the surface behind it towards the eye: the texel keeps the farther surface's
+// depth, as XeGTAO's, which errs towards less occlusion).
 // A compute batch's atlas of views: each tile's levels are made in a block of their own
 // (ao_common.glsl ao_mip_base: the tile rounded up to a multiple of 16, so a work group lies
 // in one tile), its texels grouping the tile's pixels as a frame's alone (a texel past the
