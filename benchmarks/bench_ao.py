@@ -4,14 +4,16 @@ draws it, with `--ao off` and each GTAO preset (`gtao`: half resolution, the def
 `gtao-full`: full resolution, XeGTAO's High; `gtao-low`: half resolution, 2 slices of 2), at
 1920x1080 and 640x480; and a compute batch of 4,096 views of 128x128 each way. Prints GPU ms
 per frame (or per batch) and the "ao" step's own time (from the timestamps around it),
-medians; `--profile` adds each kernel's (GTAO, the denoise passes, the upsample: a timestamp
-after each). Targets (issue 33): the step <= 0.15 ms at 1080p on the H200. `--fuse both`
-runs the half-resolution presets twice: the last denoise pass as its own kernel (off, the
+medians; `--profile` adds each kernel's (the depth prefilter, GTAO, the denoise passes, the
+upsample: a timestamp after each). Targets (issue 33): the step <= 0.15 ms at 1080p on the
+H200. `--fuse both` runs the half-resolution presets twice: the last denoise pass as its own kernel (off, the
 default) and run by the upsample on the pixels it blends (on: render/ao.py AoImages.fuse).
+`--mip-offsets 2.3,3.3` runs each at each MIP level offset (AoImages.mip_offset: which depth
+MIP level GTAO's far samples read; 3.3, XeGTAO's, the default; 2.3 reads a level coarser).
 
     python3 benchmarks/bench_ao.py --scene Sponza.gltf [--frames 300] [--batches 5] \
         [--modes off,gtao,gtao-full,gtao-low] [--profile] [--fuse off|on|both] \
-        [--batch-pipelines compute,forward] [--json out.json]
+        [--batch-pipelines compute,forward] [--mip-offsets 2.3,3.3] [--json out.json]
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import sys
 
 import numpy as np
 
+from vkpbr.render.ao import MIP_OFFSET
 from vkpbr.render.renderer import Renderer
 from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.loader import load_scene
@@ -31,7 +34,9 @@ from vkpbr.scene.loader import load_scene
 BATCH_VIEWS, BATCH_SIZE = 4096, (128, 128)
 
 
-KERNELS = ("ao_gtao", "ao_denoise0", "ao_denoise1", "ao")  # --profile: each timed apart
+# --profile: each timed apart (the depth prefilter, GTAO's main pass, the denoise passes, the
+# last kernel: the upsample at half resolution)
+KERNELS = ("ao_prefilter", "ao_gtao", "ao_denoise0", "ao_denoise1", "ao")
 
 
 def ao_times(r: Renderer, into: dict[str, list[float]]) -> None:
@@ -92,12 +97,12 @@ def batch(r: Renderer, reps: int, ao: str, count: int, pipeline: str = "compute"
     return {k: statistics.median(v) for k, v in times.items()}
 
 
-def set_fuse(r: Renderer, fuse: bool) -> None:
-    """Fuse the last denoise pass into the upsample, or not; the recordings made the other
-    way are dropped (their steps differ)."""
+def set_fuse(r: Renderer, fuse: bool, mip_offset: float) -> None:
+    """Fuse the last denoise pass into the upsample, or not, and the MIP level offset; the
+    recordings made another way are dropped (their steps or push constants differ)."""
     r.device.wait_idle()
     r.parts.recorder.free()
-    r.parts.ao.fuse = fuse
+    r.parts.ao.fuse, r.parts.ao.mip_offset = fuse, mip_offset
 
 
 def main() -> None:
@@ -115,6 +120,9 @@ def main() -> None:
                     "layered batch), comma-separated")
     ap.add_argument("--fuse", choices=("off", "on", "both"), default="off",
                     help="the last denoise pass in the upsample (half resolution)")
+    ap.add_argument("--mip-offsets", default=str(MIP_OFFSET),
+                    help="GTAO's MIP level offsets to run, comma-separated (render/ao.py "
+                    "MIP_OFFSET, XeGTAO's DepthMIPSamplingOffset: larger reads finer levels)")
     ap.add_argument("--json")
     args = ap.parse_args()
     sizes = [tuple(int(v) for v in s.split("x")) for s in args.sizes.split(",")]
@@ -123,10 +131,11 @@ def main() -> None:
     fuses = {"off": [False], "on": [True], "both": [False, True]}[args.fuse]
     with Renderer(load_scene(args.scene)) as r:
         r.parts.ao.profile = args.profile
-        for fuse in fuses:
-            set_fuse(r, fuse)
+        for fuse, offset in [(f, float(o)) for f in fuses for o in args.mip_offsets.split(",")]:
+            set_fuse(r, fuse, offset)
             runs = [m for m in modes if not fuse or m in ("gtao", "gtao-low")]
-            label = (lambda ao: f"{ao} fused") if fuse else (lambda ao: ao)  # noqa: E731
+            tag = ("" if offset == MIP_OFFSET else f" mip {offset:g}") + (" fused" if fuse else "")
+            label = lambda ao, tag=tag: ao + tag  # noqa: E731
             for size in sizes:
                 for ao in runs:
                     rows.append({"what": f"frame {size[0]}x{size[1]}", "ao": label(ao),
@@ -136,7 +145,7 @@ def main() -> None:
                 for ao in runs:
                     rows.append({"what": what, "ao": label(ao),
                                  **batch(r, args.batches, ao, args.views, pipeline)})
-    kernels = ["ao_gtao_ms", "ao_denoise0_ms", "ao_denoise1_ms", "ao_last_ms"]
+    kernels = [f"{k}_ms" for k in KERNELS[:-1]] + ["ao_last_ms"]
     cols = [k for k in kernels if any(k in row for row in rows)]
     print("| what | --ao | GPU ms | ao step ms |" + "".join(f" {k[:-3]} |" for k in cols))
     print("|---|---|---:|---:|" + "---:|" * len(cols))

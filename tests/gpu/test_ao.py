@@ -15,7 +15,7 @@ image, tested below), per `--ao` preset (render/ao.py PRESETS):
     sphere/plane   gtao        0.012   0.072   0.02, 0.09    (64 x 48, radius 0.5)
                    gtao-full   0.010   0.057   0.02, 0.09
                    gtao-low    0.022   0.115   0.03, 0.14
-    Sponza crop    gtao        0.024   0.110   0.035, 0.14   (400 pixels of the arcade's floor
+    Sponza crop    gtao        0.024   0.112   0.035, 0.14   (400 pixels of the arcade's floor
                                                   and wall at 160 x 90, 8 px off the border,
                                                   radius 1 m)
 

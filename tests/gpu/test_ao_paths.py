@@ -99,3 +99,72 @@ def test_the_upsample_may_run_the_last_denoise_pass(renderers) -> None:  # noqa:
         r.parts.ao.fuse, r.parts.ao.profile = False, False
     assert (apart < 0.9).any()
     assert np.abs(fused - apart).max() <= 2.0 / 65535.0
+
+
+def mip_levels(depth: np.ndarray, radius: float, levels: int) -> tuple[list[np.ndarray], int]:
+    """XeGTAO's depth MIPs (XeGTAO_DepthMIPFilter) of a frame's view-space `depth` (inf where
+    nothing was drawn) in NumPy: level k's texel is the weighted mean of its 2 x 2 children of
+    level k - 1 that lie in the frame (their first pixel), each weighted by how far it is in
+    front of the farthest (0 beyond 0.75 of the search radius `radius`); and how many
+    children took a weight strictly between 0 and 1 (the test sees the filter's falloff)."""
+    partial = 0
+    out = [np.minimum(depth, 3.0e38).astype(np.float64)]
+    h, w = depth.shape
+    r = 0.75 * radius
+    rng = AO.FALLOFF * r
+    for k in range(1, levels):
+        prev = out[-1]
+        th, tw = -(-h // (1 << k)), -(-w // (1 << k))
+        kids = np.full((4, th, tw), np.nan)
+        for i, (dy, dx) in enumerate(((0, 0), (0, 1), (1, 0), (1, 1))):
+            sub = prev[dy::2, dx::2][:th, :tw]
+            kids[i, :sub.shape[0], :sub.shape[1]] = sub
+        present = ~np.isnan(kids)
+        far = np.nanmax(kids, axis=0)
+        wgt = np.clip((far - kids) * (-1.0 / rng) + r * (1 - AO.FALLOFF) / rng + 1.0, 0, 1)
+        wgt = np.where(present, wgt, 0.0)
+        partial += int(((wgt > 0.01) & (wgt < 0.99) & (far < 3.0e38)).sum())
+        mean = far + np.nansum(wgt * (kids - far), axis=0) / wgt.sum(axis=0)
+        out.append(np.minimum(mean, 3.0e38))
+    return out, partial
+
+
+def test_depth_mips_are_xegtaos_filter(renderers) -> None:  # noqa: ANN001
+    """ao_prefilter.comp's levels against mip_levels' NumPy over the frame's `depth` output,
+    at a size no level divides (texels past the frame's edge average the children inside)."""
+    from vkpbr.gpu.image_io import read_level
+
+    r, (_, cam) = renderers[1], corner()
+    # (a radius at which some children fall in the weights' falloff: 177 of 2546)
+    size, radius = (W - 13, H - 11), 0.1  # 51 x 37
+    depth = r.render(camera=cam, size=size, outputs=("depth",), pipeline="compute",
+                     ao_radius=radius)["depth"]
+    r.device.wait_idle()
+    want, partial = mip_levels(depth, radius * AO.RADIUS_MULTIPLIER, AO.DEPTH_MIPS)
+    assert partial > 100
+    image = r.parts.ao.mips[0]
+    for k, ref in enumerate(want):
+        got = read_level(r.device, image, k, dtype=np.float32, channels=1)[0, ..., 0]
+        got = got[:ref.shape[0], :ref.shape[1]]
+        assert (ref < 3.0e38).any() and (ref >= 3.0e38).any(), k  # surfaces and background
+        np.testing.assert_allclose(got, ref, rtol=2e-6, err_msg=f"level {k}")
+
+
+def test_batch_views_take_their_tiles_mips(renderers) -> None:  # noqa: ANN001
+    """A compute batch's views in tiles no MIP level divides (60 x 50, a 2 x 2 grid) with a
+    radius whose samples read levels 1 to 3 (8: up to about 100 pixels) equal the views
+    rendered alone, to the 16 bits of the working image: each tile's MIPs group its own
+    pixels (ao_common.glsl ao_mip_base). With one grid over the atlas they did not (0.041 in
+    one view of 8)."""
+    from test_batch import cameras_of
+
+    r = renderers[1]
+    if r.compute_batch_unavailable() is not None:
+        pytest.skip(f"no compute batch here: {r.compute_batch_unavailable()}")
+    cams = cameras_of(r, 8, seed=3)
+    kw = {"pipeline": "compute", "ao_radius": 8.0, "view": "ao", "linear": True}
+    batch = r.render_batch(cams, (60, 50), **kw)
+    assert "ao" in r.last_stats.pass_ms  # (the compute batch, GTAO in its atlas)
+    for i, cam in enumerate(cams):
+        one = r.render(camera=cam, size=(60, 50), raster="compute", **kw)
+        assert np.abs(batch[i] - one).max() <= 2.0 / 65535.0, i

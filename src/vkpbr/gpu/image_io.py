@@ -79,11 +79,19 @@ def read_rgba16f(device: Device, image: Image, level: int = 0,
     -------
     (layers, h, w, 4) float32, h = max(H >> level, 1), w likewise.
     """
+    return read_level(device, image, level, layout).astype(np.float32)
+
+
+def read_level(device: Device, image: Image, level: int = 0, layout: str = "shader_read",
+               dtype: Any = np.float16, channels: int = 4) -> np.ndarray:
+    """Level `level` of every layer of an image of `channels` components of `dtype` (which
+    is in `layout` and stays so; made with the transfer-source usage), as (layers, h, w,
+    channels) `dtype`, h = max(H >> level, 1), w likewise."""
     vk = device.vk
     w, h = max(image.width >> level, 1), max(image.height >> level, 1)
     n = getattr(image, "layers", 1)
-    size = n * w * h * 8
-    dst = Buffer(device, size, "transfer_dst", host_visible=True)
+    count = n * w * h * channels
+    dst = Buffer(device, count * np.dtype(dtype).itemsize, "transfer_dst", host_visible=True)
     try:
         with device.one_time_commands() as raw:
             cmd = Commands(device, raw)
@@ -91,7 +99,7 @@ def read_rgba16f(device: Device, image: Image, level: int = 0,
             vk.vkCmdCopyImageToBuffer(raw, image.handle, vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
                                       dst.handle, 1, [_region(vk, level, n, w, h)])
             cmd.image_barrier(image, "transfer_src", layout, "transfer", "compute", level, 1)
-        out = dst.array(np.float16, n * h * w * 4).reshape(n, h, w, 4).astype(np.float32)
+        out = dst.array(dtype, count).reshape(n, h, w, channels).copy()
     finally:
         dst.destroy()
     return out

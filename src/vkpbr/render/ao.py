@@ -9,12 +9,15 @@ gets this. `--ao gtao` (the default in the physically based mode with an environ
 takes it as its pre-pass, as for dataset outputs: alpha-masked surfaces are in its depth),
 the compute rasteriser, a compute batch's atlas -- and before the shading:
 
-1. `ao_gtao` (shaders/ao_gtao.comp): GTAO (Jimenez et al. 2016) as XeGTAO's main pass, at
-   the preset's resolution (PRESETS: the default half, one pixel of each 2 x 2): the
-   view-space normal made from the full-resolution depth in place, `slices` directions of
-   `steps` samples a side, the cosine-weighted visible arc integrated within the effect
-   radius (`RenderOptions.ao_radius`; 0: RADIUS_SHARE of the scene's bounding radius), with
-   the depth edges packed beside it.
+0. `ao_prefilter` (shaders/ao_prefilter.comp): XeGTAO's depth prefilter, the view-space
+   depth and DEPTH_MIPS - 1 coarser levels of it (its weighted average) in one dispatch.
+1. `ao_gtao` (shaders/ao_gtao.comp, a build per preset's slices x steps): GTAO (Jimenez et
+   al. 2016) as XeGTAO's main pass, at the preset's resolution (PRESETS: the default half,
+   one pixel of each 2 x 2): the view-space normal made from the full-resolution depth in
+   place, `slices` directions of `steps` samples a side (the far ones read from the coarser
+   levels), the cosine-weighted visible arc integrated within the effect radius
+   (`RenderOptions.ao_radius`; 0: RADIUS_SHARE of the scene's bounding radius), with the
+   depth edges packed beside it.
 2. `ao_denoise` (shaders/ao_denoise.comp), `passes` times: XeGTAO's edge-aware 3x3 spatial
    denoise; at full resolution the last pass writes the frame slot's "ao" image (R32F), at
    half resolution `ao_upsample` (shaders/ao_upsample.comp) does, a depth-aware bilinear
@@ -72,10 +75,16 @@ FALLOFF = 0.2  # the last fifth of the radius fades a sample's weight to 0 (XeGT
 # the sphere's from 0.025 to 0.013 (tests/gpu/test_ao.py).
 RADIUS_MULTIPLIER = 1.457
 RADIUS_SHARE = 0.15  # the automatic radius: 15% of the scene's bounding radius (Sponza: 2.7 m)
+# XeGTAO's depth MIP chain (ao_prefilter.comp): levels of the view-space depth; a work group
+# of the prefilter makes a 16 x 16 block's levels, the image is a whole number of blocks.
+DEPTH_MIPS, MIP_ALIGN = 5, 16
 _SETS_PER_POOL = 16
 _PUSH = np.dtype([("tile", "<u4", 4), ("radius", "<f4"), ("falloff", "<f4"), ("slices", "<u4"),
                   ("steps", "<u4"), ("final_pass", "<u4"), ("read_mid", "<u4"), ("scale", "<u4"),
-                  ("first_view", "<u4"), ("fused", "<u4")])
+                  ("first_view", "<u4"), ("fused", "<u4"), ("mip_offset", "<f4")])
+# XeGTAO's DepthMIPSamplingOffset: a sample len pixels out reads MIP level
+# round(log2(len) - MIP_OFFSET) (ao_gtao.comp); larger: finer levels, more cache lines.
+MIP_OFFSET = 3.3
 
 
 @dataclass(frozen=True)
@@ -138,8 +147,9 @@ PREPASS_ROWS = (*(p for p in PASSES if p.prepass), AO_MASK_PASS)
 def ao_pixel_bytes(options: RenderOptions, slots: int) -> int:
     """Device bytes a view's pixel takes for GTAO where `options` turn it on (a batch's
     memory budget): each of the `slots` frame slots' "ao" image and the two working images,
-    4 bytes a pixel each (made for the largest frame or chunk of layers)."""
-    return 4 * (slots + 2) if options.ao != L.Ao.OFF and options.has_environment else 0
+    4 bytes a pixel each, and the depth MIPs, 4 / (1 - 1/4) times their tiles' rounding up
+    to 16 pixels (up to 1.5 in area: 8) (made for the largest frame or chunk of layers)."""
+    return 4 * (slots + 2) + 8 if options.ao != L.Ao.OFF and options.has_environment else 0
 
 
 @dataclass
@@ -171,9 +181,19 @@ class AoImages:
         # dispatches' gaps may cost more than the loads; benchmarks/bench_ao.py --fuse
         # measures both). Off until measured; set before the first frame, as `profile`.
         self.fuse = False
+        # The MIP level offset (MIP_OFFSET; bench_ao.py --mip-offsets tries others: at half
+        # resolution neighbouring working pixels are 2 pixels apart, so 2.3, a level coarser,
+        # may keep their far samples in cache as 3.3 does at full resolution; the accuracy
+        # tests hold for the default, docs/ambient-occlusion.md has 2.3's errors). Set before
+        # the first frame, as `profile`.
+        self.mip_offset = MIP_OFFSET
         # (image, its layer 0's 2D view, its array view) each
         self.images: list[tuple[Image, ImageView, ImageView]] = []
         self.work: list[tuple[Image, ImageView, ImageView]] = []  # ao_raw, ao_mid (R32_UINT)
+        # The view-space depth MIPs: (image, [its sampled view (every level), each level's
+        # storage view] of layer 0 (2D), the same as array views)
+        self.mips: tuple[Image, list[ImageView], list[ImageView]] | None = None
+        self.mip_size = (0, 0)  # its level 0's
         self._kernels: dict[str, ComputePipeline] = {}
         self._layout: DescriptorSetLayout | None = None
         self._sampler: Sampler | None = None
@@ -193,19 +213,26 @@ class AoImages:
             writer.sampler(set2, AO_BINDING, self._stand_in[1], stand_in[1])
         writer.update()
 
-    def stale(self, extent: tuple[int, int], layers: int = 1) -> bool:
-        """Whether frames of `extent` (`layers`: a layered batch's chunk) need larger images
-        than the ones made (they only grow: a smaller frame uses their top-left corner, so
-        frames and batches of other sizes in turn neither wait for the device nor re-record)."""
+    def stale(self, extent: tuple[int, int], layers: int = 1,
+              tile: tuple[int, int] | None = None) -> bool:
+        """Whether frames of `extent` (`layers`: a layered batch's chunk; `tile`: a compute
+        batch's views' tile size) need larger images than the ones made (they only grow: a
+        smaller frame uses their top-left corner, so frames and batches of other sizes in
+        turn neither wait for the device nor re-record)."""
+        mips = mip_extent(extent, tile)
         return (self.size is None or extent[0] > self.size[0] or extent[1] > self.size[1]
-                or layers > self.layers)
+                or layers > self.layers or mips[0] > self.mip_size[0]
+                or mips[1] > self.mip_size[1])
 
-    def fit(self, extent: tuple[int, int], layers: int = 1) -> None:
-        """Images for frames of `extent` and `layers` (and of any size made before), bound in
-        every slot's set 2 (left in the sampled layout, as frames leave them). The caller
-        waits for the device and drops the recorded command buffers first (they name the old
-        images)."""
+    def fit(self, extent: tuple[int, int], layers: int = 1,
+            tile: tuple[int, int] | None = None) -> None:
+        """Images for frames of `extent` and `layers` (`tile`: as `stale`'s; and of any size
+        made before), bound in every slot's set 2 (left in the sampled layout, as frames
+        leave them). The caller waits for the device and drops the recorded command buffers
+        first (they name the old images)."""
         old, layers = self.size or (0, 0), max(int(layers), self.layers)
+        (mw, mh), (ow, oh) = mip_extent(extent, tile), self.mip_size
+        mips = (max(mw, ow), max(mh, oh))
         self._destroy_images()
         vk = self.device.vk
         w, h = max(int(extent[0]), old[0]), max(int(extent[1]), old[1])
@@ -218,6 +245,8 @@ class AoImages:
             image = Image(self.device, w, h, fmt, use, layers=layers, name=name)
             made = (image, ImageView(image), ImageView(image, kind="2d_array"))
             (self.images if i < len(names) else self.work).append(made)
+        self.mips = _depth_mips(self.device, *mips, layers)
+        self.mip_size = mips
         with self.device.one_time_commands() as handle:
             cmd = Commands(self.device, handle)
             for image, _, _ in self.images:
@@ -233,44 +262,45 @@ class AoImages:
               extent: tuple[int, int], tiles: tuple[int, int, int, int] | None, copy_out: bool,
               timed: bool = True, generation: int = 0,
               layered: tuple[int, int] | None = None) -> list[Step]:
-        """The "ao" group's steps for one recording: GTAO, the denoise passes, at half
-        resolution the upsample (and, for the `ao` output, a copy into "out_ao"); adds "ao",
-        "ao_raw", "ao_mid" to `resources`. `extent`: the frame's (the images' top-left
-        corner); `tiles`: a batch's atlas (views, tile width, height, tiles a column);
-        `timed`: a timestamp after the last pass (FrameStats.pass_ms["ao"]); `generation`:
-        the target's (a recreated swapchain's depth views are new objects); `layered`: a
-        layered batch's chunk (its first view, views), a view a layer of the target's depth,
-        every layer in one dispatch (its z)."""
-        assert not self.stale(extent, layered[1] if layered else 1), "fit() first"
+        """The "ao" group's steps for one recording: the depth prefilter, GTAO, the denoise
+        passes, at half resolution the upsample (and, for the `ao` output, a copy into
+        "out_ao"); adds "ao", "ao_raw", "ao_mid", "ao_depth" to `resources`. `extent`: the
+        frame's (the images' top-left corner); `tiles`: a batch's atlas (views, tile width,
+        height, tiles a column); `timed`: a timestamp after the last pass
+        (FrameStats.pass_ms["ao"]); `generation`: the target's (a recreated swapchain's depth
+        views are new objects); `layered`: a layered batch's chunk (its first view, views), a
+        view a layer of the target's depth, every layer in one dispatch (its z)."""
         w, h = extent
+        assert not self.stale(extent, layered[1] if layered else 1,
+                              tiles[1:3] if tiles is not None else None), "fit() first"
         image = self._resources(resources, frame_index)
         dset = self._set(resources["depth"].view, frame_index, generation, layered is not None)
         q = spec.quality
-        n, tw, th, rows = tiles if tiles is not None else (1, w, h, 1)
+        tiles = tiles if tiles is not None else (1, w, h, 1)
+        _, tw, th, rows = tiles
         first, depth_layers = layered if layered is not None else (0, 1)
         kernel = "_layers" if layered is not None else ""
         # The working images' corner: the tile grid at 1 / scale (tiles rounded up).
-        cols = -(-w // tw)
-        work = (cols * -(-tw // q.scale), rows * -(-th // q.scale))
+        work = (-(-w // tw) * -(-tw // q.scale), rows * -(-th // q.scale))
         depth = ("depth", "sampled")
 
         def push(final: int, read_mid: int, fused: int = 0) -> np.ndarray:
-            p = np.zeros((), _PUSH)
-            p["tile"], p["fused"] = (tw, th, rows, n), fused
-            p["radius"], p["falloff"] = spec.radius * RADIUS_MULTIPLIER, FALLOFF
-            p["slices"], p["steps"], p["scale"] = q.slices, q.steps, q.scale
-            p["final_pass"], p["read_mid"], p["first_view"] = final, read_mid, first
+            p = _push(spec, tiles, first, final, read_mid, fused)
+            p["mip_offset"] = self.mip_offset
             return p
 
-        # The denoise and the upsample name every image of their set: the shaders choose
-        # between the working images by a push constant, so each statically reads and writes
-        # both (and "ao", a storage image of the set, GENERAL when bound).
+        # The denoise and the upsample name every image of their set: the shaders
+        # choose between the working images by a push constant, so each statically reads and
+        # writes both (and "ao", a storage image of the set, GENERAL when bound).
         both = (depth, ("ao_raw", "storage"), ("ao_mid", "storage"), ("ao", "storage"))
         def run(name: str, p: np.ndarray, size: tuple[int, int]) -> Any:
             return self._dispatch(name + kernel, p, set0, dset, (*size, depth_layers))
 
-        steps = [Step("ao_gtao", run("ao_gtao", push(0, 0), work),
-                      (depth, ("ao_raw", "storage")), timed=self.profile)]
+        mips = mip_extent(extent, (tw, th))
+        steps = [Step("ao_prefilter", run("ao_prefilter", push(0, 0), (mips[0] // 2, mips[1] // 2)),
+                      (depth, ("ao_depth", "storage")), timed=self.profile),
+                 Step("ao_gtao", run(f"ao_gtao_{q.slices}x{q.steps}", push(0, 0), work),
+                      (("ao_depth", "sampled"), ("ao_raw", "storage")), timed=self.profile)]
         src = "ao_raw"
         fused = int(self.fuse and q.scale > 1)  # (the upsample runs the last pass)
         for k in range(q.passes - fused):  # ao_raw -> ao_mid -> ao_raw ... (-> ao at full resolution)
@@ -282,7 +312,7 @@ class AoImages:
             src = dst
         if q.scale > 1:
             steps.append(Step("ao_upsample", run(
-                "ao_upsample", push(1, int(src == "ao_mid"), fused), extent), both, timed=False))
+                "ao_upsample", push(1, int(src == "ao_mid"), fused), work), both, timed=False))
         steps[-1] = Step("ao", steps[-1].record, steps[-1].uses, timed=timed)
         if copy_out:
             steps.append(Step("ao_output", lambda cmd: _copy_image(cmd, image, resources, extent),
@@ -295,6 +325,9 @@ class AoImages:
         resources["ao"] = ImageResource(image.handle, view=view.handle, layers=self.layers)
         for name, (img, _, v) in zip(("ao_raw", "ao_mid"), self.work, strict=True):
             resources[name] = ImageResource(img.handle, view=v.handle, layers=self.layers)
+        assert self.mips is not None
+        resources["ao_depth"] = ImageResource(self.mips[0].handle, layers=self.layers,
+                                              levels=DEPTH_MIPS)
         return image
 
     def _dispatch(self, name: str, push: np.ndarray, set0: Any, dset: Any,
@@ -315,7 +348,10 @@ class AoImages:
             self._layout = DescriptorSetLayout(self.device, [
                 BindingSpec(0, "sampler", ("compute",), "depth_map"),
                 *(BindingSpec(b, "storage_image", ("compute",), n)
-                  for b, n in ((1, "ao_raw"), (2, "ao_mid"), (3, "ao_out")))])
+                  for b, n in ((1, "ao_raw"), (2, "ao_mid"), (3, "ao_out"))),
+                BindingSpec(4, "sampler", ("compute",), "depth_mips"),
+                *(BindingSpec(5 + k, "storage_image", ("compute",), f"depth_mip{k}")
+                  for k in range(DEPTH_MIPS))])
         return self._layout
 
     def _kernel(self, name: str, push_bytes: int) -> ComputePipeline:
@@ -352,6 +388,11 @@ class AoImages:
             writer.storage_image(dset, 1, self.work[0][v])
             writer.storage_image(dset, 2, self.work[1][v])
             writer.storage_image(dset, 3, self.images[frame_index][v])
+            assert self.mips is not None
+            sampled, *levels = self.mips[v]
+            writer.sampler(dset, 4, sampled, self._depth_sampler())
+            for k, level in enumerate(levels):
+                writer.storage_image(dset, 5 + k, level)
             writer.update()
             self._sets[key] = (dset, generation)
         return self._sets[key][0]
@@ -368,7 +409,11 @@ class AoImages:
             for view in views:
                 view.destroy()
             image.destroy()
-        self.images, self.work, self._sets = [], [], {}
+        if self.mips is not None:
+            for view in (*self.mips[1], *self.mips[2]):
+                view.destroy()
+            self.mips[0].destroy()
+        self.images, self.work, self._sets, self.mips, self.mip_size = [], [], {}, None, (0, 0)
         for pool in self._pools:
             pool.destroy()
         self._pools, self._free, self.size = [], 0, None
@@ -384,6 +429,45 @@ class AoImages:
             if obj is not None:
                 obj.destroy()
         self._layout = self._sampler = None
+
+
+def mip_extent(extent: tuple[int, int], tile: tuple[int, int] | None = None
+               ) -> tuple[int, int]:
+    """The depth MIPs' level 0 for frames of `extent` in tiles of `tile` (None: one tile):
+    each tile's block rounded up to a multiple of MIP_ALIGN (ao_common.glsl ao_mip_base), so
+    that each level's texels group a tile's own pixels and level k is exactly level 0 / 2^k."""
+    tw, th = tile if tile is not None else extent
+    up = -(-int(tw) // MIP_ALIGN) * MIP_ALIGN, -(-int(th) // MIP_ALIGN) * MIP_ALIGN
+    return -(-int(extent[0]) // int(tw)) * up[0], -(-int(extent[1]) // int(th)) * up[1]
+
+
+def _depth_mips(device: Device, w: int, h: int, layers: int
+                ) -> tuple[Image, list[ImageView], list[ImageView]]:
+    """The view-space depth MIPs, level 0 w x h (mip_extent; ao_prefilter.comp): R32F, its
+    views (AoImages.mips)."""
+    vk = device.vk
+    image = Image(device, w, h, vk.VK_FORMAT_R32_SFLOAT,
+                  vk.VK_IMAGE_USAGE_STORAGE_BIT | vk.VK_IMAGE_USAGE_SAMPLED_BIT
+                  | vk.VK_IMAGE_USAGE_TRANSFER_SRC_BIT,  # (tests read it back)
+                  mip_levels=DEPTH_MIPS, layers=layers, name="ao depth mips")
+    flat, array = [ImageView(image)], [ImageView(image, kind="2d_array")]
+    for k in range(DEPTH_MIPS):
+        flat.append(ImageView(image, base_mip=k, mips=1))
+        array.append(ImageView(image, kind="2d_array", base_mip=k, mips=1))
+    return image, flat, array
+
+
+def _push(spec: AoSpec, tiles: tuple[int, int, int, int], first: int, final: int,
+          read_mid: int, fused: int) -> np.ndarray:
+    """The kernels' push constants (ao_common.glsl `Ao`): `tiles` (views, tile width, height,
+    tiles a column), the first view, the denoise's and upsample's switches."""
+    q, (n, tw, th, rows) = spec.quality, tiles
+    p = np.zeros((), _PUSH)
+    p["tile"], p["fused"] = (tw, th, rows, n), fused
+    p["radius"], p["falloff"] = spec.radius * RADIUS_MULTIPLIER, FALLOFF
+    p["slices"], p["steps"], p["scale"] = q.slices, q.steps, q.scale
+    p["final_pass"], p["read_mid"], p["first_view"] = final, read_mid, first
+    return p
 
 
 def _copy_image(cmd: Any, image: Image, resources: dict[str, Any], extent: tuple[int, int]
@@ -402,14 +486,16 @@ def _copy_image(cmd: Any, image: Image, resources: dict[str, Any], extent: tuple
 
 
 def prepare_ao(ao: AoImages, recorder: Any, options: RenderOptions, target: Any,
-               scene_radius: float, output: bool) -> AoSpec | None:
+               scene_radius: float, output: bool, tile: tuple[int, int] | None = None
+               ) -> AoSpec | None:
     """The ambient occlusion of a frame into `target` (ao_spec), with the images fitted to
-    its size: rare (a new size), so the device is waited for and the recordings that name
+    its size (`tile`: a compute batch's views' tile size, which the depth MIPs' blocks
+    follow): rare (a new size), so the device is waited for and the recordings that name
     the old images are dropped."""
     spec = ao_spec(options, target, scene_radius, output)
     layers = getattr(target, "layers", 1)  # (a layered batch's)
-    if spec is not None and ao.stale(target.extent, layers):
+    if spec is not None and ao.stale(target.extent, layers, tile):
         ao.device.wait_idle()
         recorder.free()
-        ao.fit(target.extent, layers)
+        ao.fit(target.extent, layers, tile)
     return spec

@@ -62,12 +62,16 @@ VARIANTS: tuple[Variant, ...] = (
               (("COMPUTE_SHADING", 1), ("KERNEL", 1), ("AGGREGATE", agg), ("OPAQUE_COPY", 1)))
       for agg in (1, 0)),
     # Screen-space ambient occlusion (render/ao.py): GTAO, then its spatial denoise.
-    Variant("ao_gtao.comp.spv", "ao_gtao.comp"),
+    # GTAO's main pass a build per preset's slices x steps (render/ao.py PRESETS: unrolled).
+    Variant("ao_prefilter.comp.spv", "ao_prefilter.comp"),
+    *(Variant(f"ao_gtao_{n}x{n}{suffix}.comp.spv", "ao_gtao.comp",
+              (("AO_SLICES", n), ("AO_STEPS", n), *layered))
+      for n in (3, 2) for suffix, layered in (("", ()), ("_layers", (("AO_LAYERED", 1),)))),
     Variant("ao_denoise.comp.spv", "ao_denoise.comp"),
     Variant("ao_upsample.comp.spv", "ao_upsample.comp"),
     # ... and their layered batch's builds (a view a layer of array images).
     *(Variant(f"{n}_layers.comp.spv", f"{n}.comp", (("AO_LAYERED", 1),))
-      for n in ("ao_gtao", "ao_denoise", "ao_upsample")),
+      for n in ("ao_prefilter", "ao_denoise", "ao_upsample")),
     # Its depth pre-pass's masked rows where a frame has no visibility image (MSAA, windows).
     Variant("pbr_depth_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1), ("DEPTH_ONLY", 1))),
     Variant("pbr_batch_depth_mask.frag.spv", "pbr.frag",

@@ -23,12 +23,26 @@ layout(set = 1, binding = 0) uniform sampler2DArray depth_map;
 layout(set = 1, binding = 1, r32ui) uniform uimage2DArray ao_raw;
 layout(set = 1, binding = 2, r32ui) uniform uimage2DArray ao_mid;
 layout(set = 1, binding = 3, r32f) uniform image2DArray ao_out;
+layout(set = 1, binding = 4) uniform sampler2DArray depth_mips;
+layout(set = 1, binding = 5, r32f) uniform writeonly image2DArray depth_mip0;
+layout(set = 1, binding = 6, r32f) uniform writeonly image2DArray depth_mip1;
+layout(set = 1, binding = 7, r32f) uniform writeonly image2DArray depth_mip2;
+layout(set = 1, binding = 8, r32f) uniform writeonly image2DArray depth_mip3;
+layout(set = 1, binding = 9, r32f) uniform writeonly image2DArray depth_mip4;
 #define AO_AT(p) ivec3((p), int(gl_GlobalInvocationID.z))
 #else
 layout(set = 1, binding = 0) uniform sampler2D depth_map;  // the target's depth (reversed-Z)
 layout(set = 1, binding = 1, r32ui) uniform uimage2D ao_raw;  // GTAO's term, packed
 layout(set = 1, binding = 2, r32ui) uniform uimage2D ao_mid;  // after the first denoise pass
 layout(set = 1, binding = 3, r32f) uniform image2D ao_out;  // the visibility shading reads
+// The view-space depth and its MIPs (ao_prefilter.comp writes them through the level views,
+// ao_gtao.comp reads them: render/ao.py DEPTH_MIPS levels).
+layout(set = 1, binding = 4) uniform sampler2D depth_mips;
+layout(set = 1, binding = 5, r32f) uniform writeonly image2D depth_mip0;
+layout(set = 1, binding = 6, r32f) uniform writeonly image2D depth_mip1;
+layout(set = 1, binding = 7, r32f) uniform writeonly image2D depth_mip2;
+layout(set = 1, binding = 8, r32f) uniform writeonly image2D depth_mip3;
+layout(set = 1, binding = 9, r32f) uniform writeonly image2D depth_mip4;
 #define AO_AT(p) (p)
 #endif
 
@@ -39,14 +53,15 @@ layout(push_constant) uniform Ao {
     uint views;  // views drawn (tiles past them are left alone)
     float radius;  // the effect radius, world units
     float falloff;  // share of the radius over which a sample's weight falls to 0 (XeGTAO)
-    uint slices;  // GTAO's slice directions a pixel
-    uint steps;  // samples a side of a slice
+    uint slices;  // GTAO's slice directions a pixel (ao_gtao.comp: its build's AO_SLICES)
+    uint steps;  // samples a side of a slice (its build's AO_STEPS)
     uint final_pass;  // ao_denoise.comp: the last pass (full blur; at full resolution -> out)
     uint read_mid;  // ao_denoise.comp, ao_upsample.comp: read ao_mid (else ao_raw)
     uint scale;  // 1: GTAO at full resolution; 2: at half (a pixel of the working images per
                  // 2 x 2 of the frame's; ao_upsample.comp makes the full-resolution "ao")
     uint first_view;  // the view of the first tile (AO_LAYERED: of layer 0)
     uint fused;  // ao_upsample.comp: run the last denoise pass on the pixels it blends
+    float mip_offset;  // ao_gtao.comp: XeGTAO's DepthMIPSamplingOffset (render/ao.py MIP_OFFSET)
 } pc;
 
 // The view a tile (and, layered, the invocation's layer) stands for.
@@ -103,6 +118,24 @@ ivec2 ao_frame_pixel(ivec2 w, ivec2 wlo, ivec2 lo) {
 float ao_view_z(ivec2 p, float znear) {
     float d = texelFetch(depth_map, AO_AT(p), 0).r;
     return d > 0.0 ? znear / d : 1.0 / 0.0;
+}
+
+// The depth MIPs' levels (render/ao.py DEPTH_MIPS) and their largest value: the view-space
+// depth where nothing was drawn (XeGTAO_ClampDepth: finite, so that the MIP filter's sums
+// stay numbers).
+const int AO_MIPS = 5;
+const float AO_FAR = 3.0e38;
+
+// The depth MIPs hold each view's tile in a block of its own, the tile's size rounded up to a
+// multiple of 16 (the MIPs' texels group the tile's own pixels, as a frame's alone do: a batch
+// view's GTAO equals the view's rendered alone), in the tiles' grid: the block of the tile
+// whose first pixel is lo starts at ao_mip_base(lo) (a multiple of 16: its texel of level k
+// for tile pixel q is (base + q) >> k).
+ivec2 ao_mip_tile() {
+    return (ivec2(pc.tile_w, pc.tile_h) + 15) & ~15;
+}
+ivec2 ao_mip_base(ivec2 lo) {
+    return lo / ivec2(pc.tile_w, pc.tile_h) * ao_mip_tile();
 }
 
 // View space as XeGTAO's (x right, y up, z forward, into the screen) of the point at pixel

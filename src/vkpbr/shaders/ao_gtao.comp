@@ -6,16 +6,31 @@
 // between the two horizons integrated analytically about the normal projected into the
 // slice, on the working pixels (render/ao.py PRESETS: at half resolution, the top-left pixel
 // of each 2 x 2 block; ao_upsample.comp brings it back). The view-space normal is made from
-// the full-resolution depth buffer in place
+// the full-resolution view-space depth in place
 // (XE_GTAO_GENERATE_NORMALS_INPLACE: of the four neighbour pairs, those not across a depth
 // edge), so one kernel serves every frame path. Slice angles and sample offsets are jittered
 // by a 64x64 Hilbert-curve R2 sequence (XeGTAO's spatio-temporal noise at frame 0), which the
 // denoise (ao_denoise.comp) averages away. The result is the visibility, 1 unoccluded; with
-// the depth edges it is packed into ao_raw. No depth MIPs: samples read the full-resolution
-// depth (exact, a little more bandwidth). The final value's power is 1 (XeGTAO's default 2.2
+// the depth edges it is packed into ao_raw. Depths come from ao_prefilter.comp's MIPs of the
+// view-space depth: the pixel and its neighbours from level 0 (the depth buffer's own values),
+// the samples far along a slice from coarser levels (XeGTAO's choice: the far samples of
+// neighbouring pixels scatter over the frame, and a coarse level keeps them in a few cache
+// lines). The final value's power is 1 (XeGTAO's default 2.2
 // is a look, not the integral: tests/gpu/test_ao.py checks this one against ray casting).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "ao_common.glsl"
+
+// The preset's slices and samples a side, fixed at build time (render/codegen.py builds one
+// kernel per preset, as XeGTAO does): the loops unroll, so that a pixel's samples are all
+// fetched before their results are needed (a loop over push constants waited on each pair).
+#ifndef AO_SLICES
+#define AO_SLICES 3
+#endif
+#ifndef AO_STEPS
+#define AO_STEPS 3
+#endif
+const uint SLICES = AO_SLICES, STEPS = AO_STEPS;
 
 const float PI = 3.14159265358979;
 const float PI_HALF = 1.57079632679490;
@@ -73,18 +88,23 @@ float fast_acos(float x) {  // XeGTAO_FastACos (Lagarde), [-1, 1] -> [0, pi]
     return x >= 0.0 ? res : PI - res;
 }
 
+// The view-space depth at pixel p of the tile whose first pixel is lo (p in it) from `level`
+// of the depth MIPs (ao_prefilter.comp).
+float mip_z(ivec2 p, ivec2 lo, int level) {
+    return texelFetch(depth_mips, AO_AT((ao_mip_base(lo) + p - lo) >> level), level).r;
+}
+
 // The depth at a sample, as a view-space point; `inside`: whether the sample is in the tile
 // (one outside is unknown: it gets no weight, as a sample beyond the radius. Clamped to the
 // border, as a clamping sampler would, it sat beside the slice, not in it, and on a plane
 // receding past the frame's edge made a horizon higher than the plane's: false occlusion).
-vec3 sample_pos(ivec2 p, ivec2 lo, float znear, vec4 intr, out bool inside) {
+vec3 sample_pos(ivec2 p, ivec2 lo, int level, vec4 intr, out bool inside) {
     ivec2 q = ao_clamp(p, lo);
     inside = q == p;
-    float z = min(ao_view_z(q, znear), 3.0e38);
-    return ao_view_pos(vec2(q - lo) + 0.5, z, intr);
+    return ao_view_pos(vec2(q - lo) + 0.5, mip_z(q, lo, level), intr);
 }
 
-float gtao(ivec2 p, ivec2 lo, uvec2 tile_p, vec3 center, vec3 n, float znear, vec4 intr) {
+float gtao(ivec2 p, ivec2 lo, uvec2 tile_p, vec3 center, vec3 n, vec4 intr) {
     vec3 view_vec = normalize(-center);
     // World radius in pixels at this depth: sx * size.x / 2 pixels a unit of x / z.
     float px_per_unit = intr.x * float(pc.tile_w) * 0.5 / center.z;
@@ -97,8 +117,8 @@ float gtao(ivec2 p, ivec2 lo, uvec2 tile_p, vec3 center, vec3 n, float znear, ve
     float min_s = too_close / screen_radius;
     vec2 noise = fract(0.5 + float(hilbert_index(tile_p.x % 64u, tile_p.y % 64u))
                        * vec2(0.75487766624669276005, 0.5698402909980532659114));
-    float slices = float(pc.slices), steps = float(pc.steps);
-    for (uint slice = 0u; slice < pc.slices; ++slice) {
+    const float slices = float(SLICES), steps = float(STEPS);
+    [[unroll]] for (uint slice = 0u; slice < SLICES; ++slice) {
         float phi = (float(slice) + noise.x) / slices * PI;
         vec2 omega = vec2(cos(phi), -sin(phi)) * screen_radius;  // pixels
         vec3 dir = vec3(cos(phi), sin(phi), 0.0);
@@ -111,14 +131,20 @@ float gtao(ivec2 p, ivec2 lo, uvec2 tile_p, vec3 center, vec3 n, float znear, ve
         float nn = sign_n * fast_acos(cos_n);
         float low0 = cos(nn + PI_HALF), low1 = cos(nn - PI_HALF);
         float h0c = low0, h1c = low1;
-        for (uint step = 0u; step < pc.steps; ++step) {
-            float step_noise = fract(noise.y + float(slice + step * pc.steps) * 0.6180339887498948);
+        [[unroll]] for (uint step = 0u; step < STEPS; ++step) {
+            float step_noise = fract(noise.y + float(slice + step * STEPS) * 0.6180339887498948);
             float s = (float(step) + step_noise) / steps;
             s = s * s + min_s;  // XeGTAO's sample distribution power 2: more samples near
-            vec2 offset = round(s * omega);
+            vec2 offset = s * omega;
+            // The MIP level it reads: log2(len) - pc.mip_offset, rounded (XeGTAO's
+            // DepthMIPSamplingOffset, 3.3: render/ao.py MIP_OFFSET; its point-sampled
+            // SampleLevel): level 0 within 13.9 pixels, 1 to 27.9, 2 to 55.7, 3 to 111, 4 beyond.
+            int level = clamp(int(floor(log2(length(offset)) - pc.mip_offset + 0.5)), 0,
+                              AO_MIPS - 1);
+            offset = round(offset);
             bool in0, in1;
-            vec3 d0 = sample_pos(p + ivec2(offset), lo, znear, intr, in0) - center;
-            vec3 d1 = sample_pos(p - ivec2(offset), lo, znear, intr, in1) - center;
+            vec3 d0 = sample_pos(p + ivec2(offset), lo, level, intr, in0) - center;
+            vec3 d1 = sample_pos(p - ivec2(offset), lo, level, intr, in1) - center;
             float l0 = length(d0), l1 = length(d1);
             float w0 = in0 ? clamp(l0 * falloff_mul + falloff_add, 0.0, 1.0) : 0.0;
             float w1 = in1 ? clamp(l1 * falloff_mul + falloff_add, 0.0, 1.0) : 0.0;
@@ -137,8 +163,8 @@ float gtao(ivec2 p, ivec2 lo, uvec2 tile_p, vec3 center, vec3 n, float znear, ve
     return max(visibility / slices, 0.03);
 }
 
-float neighbour_z(ivec2 p, ivec2 lo, float znear) {
-    return min(ao_view_z(ao_clamp(p, lo), znear), 3.0e38);
+float neighbour_z(ivec2 p, ivec2 lo) {
+    return mip_z(ao_clamp(p, lo), lo, 0);
 }
 
 void main() {
@@ -147,17 +173,16 @@ void main() {
     ivec2 wlo, lo;
     if (any(greaterThanEqual(wp, imageSize(ao_raw).xy)) || !ao_work_view(wp, view, wlo, lo)) return;
     ivec2 p = ao_frame_pixel(wp, wlo, lo);  // the frame's pixel it stands for
-    float znear = views[view].eye_near.w;
     vec4 intr = views[view].intrinsics;
-    float z = ao_view_z(p, znear);
-    if (isinf(z)) {  // nothing drawn: unoccluded, an edge all round
+    float z = neighbour_z(p, lo);  // (p is in its tile)
+    if (z >= AO_FAR) {  // nothing drawn: unoccluded, an edge all round
         imageStore(ao_raw, AO_AT(wp), uvec4(ao_pack(1.0, 0u)));
         return;
     }
-    float zl = neighbour_z(p + ivec2(-1, 0), lo, znear);
-    float zr = neighbour_z(p + ivec2(1, 0), lo, znear);
-    float zt = neighbour_z(p + ivec2(0, -1), lo, znear);
-    float zb = neighbour_z(p + ivec2(0, 1), lo, znear);
+    float zl = neighbour_z(p + ivec2(-1, 0), lo);
+    float zr = neighbour_z(p + ivec2(1, 0), lo);
+    float zt = neighbour_z(p + ivec2(0, -1), lo);
+    float zb = neighbour_z(p + ivec2(0, 1), lo);
     vec4 edges = calculate_edges(z, zl, zr, zt, zb);
     // The tile's border is an edge: the denoise never mixes in another view.
     ivec2 q = p - lo;
@@ -177,14 +202,14 @@ void main() {
         // pixels (scale apart; past the working tile's border, an edge).
         int s = int(pc.scale);
         ivec2 wq = wp - wlo, wt = ao_work_tile();
-        edges = calculate_edges(z, neighbour_z(p + ivec2(-s, 0), lo, znear),
-                                neighbour_z(p + ivec2(s, 0), lo, znear),
-                                neighbour_z(p + ivec2(0, -s), lo, znear),
-                                neighbour_z(p + ivec2(0, s), lo, znear))
+        edges = calculate_edges(z, neighbour_z(p + ivec2(-s, 0), lo),
+                                neighbour_z(p + ivec2(s, 0), lo),
+                                neighbour_z(p + ivec2(0, -s), lo),
+                                neighbour_z(p + ivec2(0, s), lo))
             * vec4(wq.x > 0, wq.x < wt.x - 1, wq.y > 0, wq.y < wt.y - 1);
     }
     // Nudged towards the eye against depth imprecision (XeGTAO's 0.99999 for 32-bit depths).
     vec3 center = ao_view_pos(pix, z * 0.99999, intr);
-    float v = dot(n, n) > 0.0 ? gtao(p, lo, uvec2(wp - wlo), center, n, znear, intr) : 1.0;
+    float v = dot(n, n) > 0.0 ? gtao(p, lo, uvec2(wp - wlo), center, n, intr) : 1.0;
     imageStore(ao_raw, AO_AT(wp), uvec4(ao_pack(v, pack_edges(edges))));
 }

@@ -8,8 +8,8 @@
 // its own surface, never those across a depth edge). Where no neighbour is of its surface
 // (a feature thinner than a block) it takes the nearest in depth; background pixels get 1.
 // With pc.fused the last denoise pass runs here, on each working pixel it blends (one
-// dispatch and one barrier fewer, and no write and read of the working image between, for
-// 2.25 denoises a pixel instead of a quarter of one: render/ao.py FUSE).
+// dispatch and one barrier fewer, and no write and read of the working image between; the
+// 2 x 2 working pixels' 4 x 4 neighbourhood loaded once: render/ao.py AoImages.fuse).
 #extension GL_GOOGLE_include_directive : require
 #include "ao_denoise.glsl"
 
@@ -18,44 +18,53 @@
 // angles, where every neighbour is down-weighted alike).
 const float DEPTH_SHARE = 0.02;
 
-void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    uint view;
-    ivec2 lo;
-    if (any(greaterThanEqual(p, imageSize(ao_out).xy)) || !ao_view(p, view, lo)) return;
-    float znear = views[view].eye_near.w;
-    float z = ao_view_z(p, znear);
-    if (isinf(z)) {
-        imageStore(ao_out, AO_AT(p), vec4(1.0, 0.0, 0.0, 0.0));
-        return;
-    }
-    ivec2 q = p - lo;
-    ivec2 wt = ao_work_tile();
-    ivec2 wlo = (lo / ivec2(pc.tile_w, pc.tile_h)) * wt;
-    ivec2 base = q >> 1;
-    vec2 f = vec2(q & 1) * 0.5;  // 0 on a working pixel, 0.5 between two
+// The visibility at frame pixel p (its view-axis distance z) from the 2 x 2 working pixels
+// around it (`v`, `wz`: their visibilities and their frame pixels' distances, x first; the
+// pixel lies on the first, between it and the next or among all four): its bilinear weights
+// (f: 0 on a working pixel, 0.5 between two), each times the depth weight.
+float upsample(vec2 f, float z, vec4 v, vec4 wz) {
     float sum = 0.0, weight = 0.0, nearest = 1.0, nearest_dz = 1.0 / 0.0;
     for (int j = 0; j < 2; ++j) {
         for (int i = 0; i < 2; ++i) {
             float bilinear = (i == 0 ? 1.0 - f.x : f.x) * (j == 0 ? 1.0 - f.y : f.y);
             if (bilinear == 0.0) continue;
-            ivec2 w = wlo + min(base + ivec2(i, j), wt - 1);
-            float v;
-            if (pc.fused != 0u) {  // the last denoise pass here (no pass of its own)
-                uint centre;
-                v = ao_denoise(w, wlo, true, centre);
-            } else {
-                v = ao_visibility(pc.read_mid != 0u ? imageLoad(ao_mid, AO_AT(w)).r
-                                                    : imageLoad(ao_raw, AO_AT(w)).r);
-            }
-            float dz = abs(ao_view_z(ao_frame_pixel(w, wlo, lo), znear) - z);  // inf: none
+            float dz = abs(wz[j * 2 + i] - z);  // inf: none
             float r = dz / (DEPTH_SHARE * z);
             float wgt = bilinear / (1.0 + r * r);
-            sum += wgt * v;
+            sum += wgt * v[j * 2 + i];
             weight += wgt;
-            if (dz < nearest_dz) { nearest_dz = dz; nearest = v; }
+            if (dz < nearest_dz) { nearest_dz = dz; nearest = v[j * 2 + i]; }
         }
     }
-    float v = weight > 1e-6 ? sum / weight : nearest;
-    imageStore(ao_out, AO_AT(p), vec4(v, 0.0, 0.0, 0.0));
+    return weight > 1e-6 ? sum / weight : nearest;
+}
+
+// An invocation a working pixel: the 2 x 2 frame pixels of its block, which all blend the
+// same 2 x 2 working pixels (each loaded, and with pc.fused denoised, once for the four).
+void main() {
+    ivec2 wp = ivec2(gl_GlobalInvocationID.xy);  // a working pixel
+    uint view;
+    ivec2 wlo, lo;
+    if (any(greaterThanEqual(wp, imageSize(ao_raw).xy)) || !ao_work_view(wp, view, wlo, lo)) return;
+    float znear = views[view].eye_near.w;
+    ivec2 wt = ao_work_tile();
+    vec4 v, wz;
+    // (with pc.fused, the last denoise pass here: no pass of its own)
+    if (pc.fused != 0u) v = ao_denoise_block(wp, wlo);
+    for (int k = 0; k < 4; ++k) {
+        ivec2 w = wlo + min(wp - wlo + ivec2(k & 1, k >> 1), wt - 1);
+        if (pc.fused == 0u) {
+            v[k] = ao_visibility(pc.read_mid != 0u ? imageLoad(ao_mid, AO_AT(w)).r
+                                                   : imageLoad(ao_raw, AO_AT(w)).r);
+        }
+        wz[k] = ao_view_z(ao_frame_pixel(w, wlo, lo), znear);
+    }
+    ivec2 first = lo + (wp - wlo) * 2, hi = lo + ivec2(pc.tile_w, pc.tile_h);
+    for (int k = 0; k < 4; ++k) {
+        ivec2 d = ivec2(k & 1, k >> 1), p = first + d;
+        if (any(greaterThanEqual(p, hi))) continue;  // (the last block of an odd size)
+        float z = ao_view_z(p, znear);
+        float out_v = isinf(z) ? 1.0 : upsample(vec2(d) * 0.5, z, v, wz);
+        imageStore(ao_out, AO_AT(p), vec4(out_v, 0.0, 0.0, 0.0));
+    }
 }
