@@ -15,7 +15,9 @@ import pytest
 from shadow_scenes import BLOCK, CAMERA, CARD, GROUND, LIGHTS, rect_scene
 
 SIZE = (96, 72)
-OPTS = {"shadow_resolution": 256, "env": "none"}
+# The raster units draw the maps unless a step says otherwise ("auto" would pick the compute
+# kernels on GPUs: the switch at STEPS[9] must be one everywhere).
+OPTS = {"shadow_resolution": 256, "env": "none", "shadow_raster": "hardware"}
 ALL = [LIGHTS["directional"], LIGHTS["spot"], LIGHTS["point"]]
 MOVED = dataclasses.replace(CAMERA, eye=(1.5, 4.0, 5.0))
 # A step of 3 cm: the nearer cascades cross their snapping grid (shadow_math.snap_texels),
