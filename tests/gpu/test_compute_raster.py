@@ -238,13 +238,29 @@ def _assert_equal_off_edges(hw: np.ndarray, cr: np.ndarray, most: float) -> None
     assert wrong.mean() <= most, wrong.mean()
 
 
-@pytest.mark.parametrize("count", [3, 1000])
-def test_screen_filling_triangles_split_into_chunks(count: int) -> None:
+@pytest.mark.parametrize(("count", "big_chunk"), [(3, None), (64, 1024)])
+def test_screen_filling_triangles_split_into_chunks(monkeypatch, count: int,  # noqa: ANN001
+                                                    big_chunk: int | None) -> None:
     """Triangles bigger than a band of RasterTuning.big_chunk (16,384 box pixels: 200x150 is
-    2 bands a triangle) are drawn by several work groups; 1,000 of them overflow the big list
-    (a sixteenth of the pixels, 1,875 entries), whose rest the listing invocation draws.
-    Either way each pixel shows the nearest triangle, as the raster units find it (the
-    nearest are listed last, past the big list's end when it overflows)."""
+    2 bands a triangle) are drawn by several work groups; with bands of 1,024 (30 a triangle)
+    64 of them overflow the big list (a sixteenth of the pixels, 1,875 entries: one
+    triangle's bands split across its end, the nearest past it), whose rest the listing
+    invocation draws. At the default bands that takes ~1,000 triangles, 15 times the fill on
+    lavapipe for the same paths. Either way each pixel shows the nearest triangle, as the
+    raster units find it (the nearest are listed last, past the big list's end when it
+    overflows)."""
+    import dataclasses
+
+    from vkpbr.render import compute_path
+
+    if big_chunk is not None:
+        tuning = dataclasses.replace(compute_path.RASTER_TUNING, big_chunk=big_chunk)
+        monkeypatch.setattr(compute_path, "RASTER_TUNING", tuning)
+    chunk = compute_path.RASTER_TUNING.big_chunk
+    bands = -(-150 // (chunk // 200))  # raster.comp chunk_rows: whole rows of the 200-wide box
+    capacity = 200 * 150 // 16
+    if count > 3:  # the list overflows, and not at a triangle's end
+        assert count * bands > capacity and capacity % bands != 0
     hw, cr = _instances_both_ways(_soup(_filling_triangles(count, count), [True, True]))
     assert (hw > 0).mean() >= 0.9, "the triangles are meant to fill the view"
     _assert_equal_off_edges(hw, cr, 0.01)

@@ -1,7 +1,12 @@
 """Issue 35: a glTF listing 29,000 materials (3 MB of JSON) of which its one mesh uses one.
 The GPU set-up writes every material's block but makes a material's descriptor set only when
-a draw first binds it (render/gpu_scene.py MaterialSets): 18 s of CPU before, ~1.5 s now; the frame is the one the same file with only its used material gives, pixel for pixel,
-on the forward and the compute path."""
+a draw first binds it (render/gpu_scene.py MaterialSets): 18 s of CPU before, ~1.5 s now; the
+frame is the one the same file with only its used material gives, pixel for pixel, on the
+forward and the compute path.
+
+The test lists 2,000 materials, not the issue's 29,000: no time is asserted, and the cause it
+guards, a descriptor set per material, shows in the count of sets as 2,000 against <= 2
+(loading and writing 29,000 blocks cost the suite ~8 s for no other check)."""
 
 from __future__ import annotations
 
@@ -10,7 +15,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from vkpbr import Renderer, load_scene
 
@@ -30,9 +34,11 @@ def _file(folder: Path, count: int) -> Path:
     return path
 
 
-@pytest.mark.timeout(300)
+COUNT = 2_000
+
+
 def test_unused_materials_cost_no_descriptor_sets(tmp_path: Path) -> None:
-    many = load_scene(_file(tmp_path, 29_000))
+    many = load_scene(_file(tmp_path, COUNT))
     one = load_scene(_file(tmp_path, 1))
     paths = ("forward", "compute")
     with Renderer(one) as r:
@@ -41,6 +47,6 @@ def test_unused_materials_cost_no_descriptor_sets(tmp_path: Path) -> None:
     with Renderer(many) as r:
         images = [r.render(size=(32, 24), pipeline=p) for p in paths]
         sets = r.gpu_scene.material_sets
-        assert len(sets) == 29_001 and len(sets._sets) <= 2  # the used one (and the default)
+        assert len(sets) == COUNT + 1 and len(sets._sets) <= 2  # the used one (and the default)
     for path, image, want in zip(paths, images, expected, strict=True):
         np.testing.assert_array_equal(image, want, err_msg=path)

@@ -92,10 +92,12 @@ def test_every_truncation_rejected(tmp_path: Path) -> None:
     write_comp5822mesh(make_scene(tmp_path), path)
     data = path.read_bytes()
     cut = tmp_path / "cut.comp5822mesh"
-    for n in range(len(data)):
-        cut.write_bytes(data[:n])
-        with pytest.raises(SceneError, match="cut.comp5822mesh"):
-            read_comp5822mesh(cut)
+    with cut.open("wb", buffering=0) as f:  # grown a byte at a time: data[:n] before each write
+        for n in range(len(data)):
+            assert cut.stat().st_size == n
+            with pytest.raises(SceneError, match="cut.comp5822mesh"):
+                read_comp5822mesh(cut)
+            f.write(data[n:n + 1])
     cut.write_bytes(data + b"\0")
     with pytest.raises(SceneError, match="trailing"):
         read_comp5822mesh(cut)

@@ -7,10 +7,12 @@ temporary folder and fail when a committed file is stale.
 
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
 import sys
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -251,25 +253,30 @@ def glslc() -> str:
     return path
 
 
+def _compile(variant: Variant, out_dir: Path) -> Path:
+    dst = out_dir / variant.output
+    cmd = [glslc(), "--target-env=vulkan1.3", "-I", str(SHADER_DIR)]
+    cmd += [f"-D{k}={val}" for k, val in variant.defines]
+    cmd += [str(SHADER_DIR / variant.source), "-o", str(dst)]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    if proc.returncode:
+        raise ShaderError(f"glslc failed on {variant.source} {variant.defines}:\n"
+                          f"{proc.stderr.strip()}")
+    return dst
+
+
 def compile_all(out_dir: Path = SPV_DIR, write_generated: bool = True) -> list[Path]:
-    """Compile every variant into out_dir; returns the written files.
+    """Compile every variant into out_dir; returns the written files, in VARIANTS' order.
 
     No -O: drivers optimise anyway, and unstripped names let tests read block layouts back.
+    One glslc process per variant, as many at once as there are cores (each is single-threaded;
+    the stale-SPIR-V test runs all ~90 of them).
     """
     if write_generated:
         GENERATED.write_text(generated_glsl())
     out_dir.mkdir(parents=True, exist_ok=True)
-    written = []
-    for v in VARIANTS:
-        dst = out_dir / v.output
-        cmd = [glslc(), "--target-env=vulkan1.3", "-I", str(SHADER_DIR)]
-        cmd += [f"-D{k}={val}" for k, val in v.defines]
-        cmd += [str(SHADER_DIR / v.source), "-o", str(dst)]
-        proc = subprocess.run(cmd, capture_output=True, text=True)
-        if proc.returncode:
-            raise ShaderError(f"glslc failed on {v.source} {v.defines}:\n{proc.stderr.strip()}")
-        written.append(dst)
-    return written
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+        return list(pool.map(lambda v: _compile(v, out_dir), VARIANTS))
 
 
 if __name__ == "__main__":
