@@ -18,33 +18,30 @@ layout(set = 0, binding = 0, std140) readonly buffer Views {
 #ifndef AO_LAYERED
 #define AO_LAYERED 0
 #endif
+// One set of bindings, its types by build (an array image a layered batch's, else 2D).
 #if AO_LAYERED
-layout(set = 1, binding = 0) uniform sampler2DArray depth_map;
-layout(set = 1, binding = 1, r32ui) uniform uimage2DArray ao_raw;
-layout(set = 1, binding = 2, r32ui) uniform uimage2DArray ao_mid;
-layout(set = 1, binding = 3, r32f) uniform image2DArray ao_out;
-layout(set = 1, binding = 4) uniform sampler2DArray depth_mips;
-layout(set = 1, binding = 5, r32f) uniform writeonly image2DArray depth_mip0;
-layout(set = 1, binding = 6, r32f) uniform writeonly image2DArray depth_mip1;
-layout(set = 1, binding = 7, r32f) uniform writeonly image2DArray depth_mip2;
-layout(set = 1, binding = 8, r32f) uniform writeonly image2DArray depth_mip3;
-layout(set = 1, binding = 9, r32f) uniform writeonly image2DArray depth_mip4;
+#define AO_SAMPLER sampler2DArray
+#define AO_UIMAGE uimage2DArray
+#define AO_IMAGE image2DArray
 #define AO_AT(p) ivec3((p), int(gl_GlobalInvocationID.z))
 #else
-layout(set = 1, binding = 0) uniform sampler2D depth_map;  // the target's depth (reversed-Z)
-layout(set = 1, binding = 1, r32ui) uniform uimage2D ao_raw;  // GTAO's term, packed
-layout(set = 1, binding = 2, r32ui) uniform uimage2D ao_mid;  // after the first denoise pass
-layout(set = 1, binding = 3, r32f) uniform image2D ao_out;  // the visibility shading reads
-// The view-space depth and its MIPs (ao_prefilter.comp writes them through the level views,
-// ao_gtao.comp reads them: render/ao.py DEPTH_MIPS levels).
-layout(set = 1, binding = 4) uniform sampler2D depth_mips;
-layout(set = 1, binding = 5, r32f) uniform writeonly image2D depth_mip0;
-layout(set = 1, binding = 6, r32f) uniform writeonly image2D depth_mip1;
-layout(set = 1, binding = 7, r32f) uniform writeonly image2D depth_mip2;
-layout(set = 1, binding = 8, r32f) uniform writeonly image2D depth_mip3;
-layout(set = 1, binding = 9, r32f) uniform writeonly image2D depth_mip4;
+#define AO_SAMPLER sampler2D
+#define AO_UIMAGE uimage2D
+#define AO_IMAGE image2D
 #define AO_AT(p) (p)
 #endif
+layout(set = 1, binding = 0) uniform AO_SAMPLER depth_map;  // the target's depth (reversed-Z)
+layout(set = 1, binding = 1, r32ui) uniform AO_UIMAGE ao_raw;  // GTAO's term, packed
+layout(set = 1, binding = 2, r32ui) uniform AO_UIMAGE ao_mid;  // after the first denoise pass
+layout(set = 1, binding = 3, r32f) uniform AO_IMAGE ao_out;  // the visibility shading reads
+// The view-space depth and its MIPs (ao_prefilter.comp writes them through the level views,
+// ao_gtao.comp reads them: render/ao.py DEPTH_MIPS levels).
+layout(set = 1, binding = 4) uniform AO_SAMPLER depth_mips;
+layout(set = 1, binding = 5, r32f) uniform writeonly AO_IMAGE depth_mip0;
+layout(set = 1, binding = 6, r32f) uniform writeonly AO_IMAGE depth_mip1;
+layout(set = 1, binding = 7, r32f) uniform writeonly AO_IMAGE depth_mip2;
+layout(set = 1, binding = 8, r32f) uniform writeonly AO_IMAGE depth_mip3;
+layout(set = 1, binding = 9, r32f) uniform writeonly AO_IMAGE depth_mip4;
 
 layout(push_constant) uniform Ao {
     uint tile_w;  // a view's pixels: the frame's size, or a batch's tile (column-major tiles)
