@@ -163,18 +163,12 @@ class _Table:
         spheres[:, 3] = UNBOUNDED_RADIUS
         first = 0
         self.masked: list[tuple[int, int, int]] = []  # (row, material, triangles)
-        self.opaque_rows = len(opaque)
-        self.opaque_triangles = 0  # the opaque rows' triangles, 0 .. this
         for row, (i, d) in enumerate(opaque + masked):
-            if row == len(opaque):
-                self.opaque_triangles = first
             rows[row, :4] = first, d.first_index, d.vertex_offset, i
             spheres[row] = _sphere(gs.scene.meshes[d.mesh].positions, d)
             if row >= len(opaque):
                 self.masked.append((row, d.material, d.index_count // 3))
             first += d.index_count // 3
-        if not masked:
-            self.opaque_triangles = first
         n = len(opaque)
         chunks = _chunks(rows[:n, 0].astype(np.int64),
                          np.array([d.index_count // 3 for _, d in opaque], np.int64))
@@ -314,7 +308,7 @@ class ShadowRaster:
                 spot |= 1 << e.first
         sizes = ((self.maps.maps.size, self.maps.cubes.size, self.cube_base, self.big_capacity)
                  if job is None else (job.map_size, job.cube_size, job.cube_base, job.big_capacity))
-        push[:16] = (table.opaque_triangles, max(table.opaque_rows, 1), 0, 0, sizes[0], sizes[1],
+        push[:16] = (0, 0, 0, 0, sizes[0], sizes[1],
                      sizes[2], self.max_layers, sizes[3], int(self.gs.has_colors), BIG_AREA,
                      BIG_CHUNK, MASKED_AREA, spot, table.chunks_at, table.chunks)
         bias = push.view(np.float32)

@@ -288,14 +288,19 @@ class ShadowMaps:
         w.update()
         return True
 
+    def _bind_depths(self, binding: int, buffer: Buffer | None) -> Buffer:
+        """`buffer` (or the stand-in) as set 3's storage `binding` in every slot's set."""
+        bound = self.world_stand_in if buffer is None else buffer
+        w = DescriptorWriter(self.device)
+        for s in self.sets:
+            w.storage(s, binding, bound)
+        w.update()
+        return bound
+
     def bind_world_depths(self, buffer: Buffer | None) -> None:
         """Set 3's ShadowWorldDepths: `buffer` (a batch of worlds' maps) or the stand-in.
         The caller waited for the device and frees the recordings (their sets changed)."""
-        self.world_depths = self.world_stand_in if buffer is None else buffer
-        w = DescriptorWriter(self.device)
-        for s in self.sets:
-            w.storage(s, 3, self.world_depths)
-        w.update()
+        self.world_depths = self._bind_depths(3, buffer)
 
     def bind_frame_depths(self, buffer: Buffer | None) -> None:
         """Set 3's ShadowDepths: the compute rasteriser's (new) depth buffer, or the stand-in
@@ -303,11 +308,7 @@ class ShadowMaps:
         bound them are stale: the caller frees them) and forgets the maps (a new buffer
         holds none of them)."""
         self.device.wait_idle()
-        self.frame_depths = self.world_stand_in if buffer is None else buffer
-        w = DescriptorWriter(self.device)
-        for s in self.sets:
-            w.storage(s, 4, self.frame_depths)
-        w.update()
+        self.frame_depths = self._bind_depths(4, buffer)
         self.forget()
 
     def compute_cube_base(self) -> int:

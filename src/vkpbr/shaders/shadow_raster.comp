@@ -69,8 +69,8 @@ layout(set = 4, binding = 42, std430) buffer Depths { uint depths[]; };
 layout(set = 4, binding = 43, std430) buffer Big { uint big[]; };
 
 layout(push_constant) uniform Raster {
-    uint triangles;  // of the caster rows this dispatch draws (KERNEL 4: its draw's)
-    uint rows;  // caster rows of the table
+    uint triangles;  // KERNEL 4: its draw's triangles
+    uint unused1;  // (KERNEL 1 reads its rows from the chunk list)
     uint row;  // KERNEL 4: the masked draw's row
     uint matrix;  // the dispatch's first layer's matrix (its layer z is matrix + z)
     uint map_size;  // texels a side: the 2D layers, the cube faces
@@ -147,7 +147,7 @@ struct Screen {
     int n;
     float area, bias;
     ivec2 lo, hi;
-    uint m, w, row;  // the layer's matrix, the world (of the dispatch's), the caster row
+    uint m, w;  // the layer's matrix, the world (of the dispatch's)
 #if KERNEL == 4
     mat3 inv_c;  // the inverse of the corners' (x, y, w) columns (`barycentrics`)
     vec2 tc[3];  // the vertices' texture coordinates of the base colour's set
@@ -163,13 +163,12 @@ vec3 texel(vec4 c, float size, inout float zmax) {
     return vec3((ndc.xy * 0.5 + 0.5) * size, ndc.z);
 }
 
-// Triangle (vertices vi, world positions wp) of caster row k in layer m of world w.
-bool screen(uvec3 vi, vec4 wp[3], uint k, uint m, uint w, out Screen t) {
+// Triangle (vertices vi, world positions wp) in layer m of world w.
+bool screen(uvec3 vi, vec4 wp[3], uint m, uint w, out Screen t) {
     vec4 c[3];
     for (int j = 0; j < 3; ++j) c[j] = layer_vp[m] * wp[j];  // as shadow.vert's
     t.m = m;
     t.w = w;
-    t.row = k;
 #if KERNEL == 4
     t.inv_c = inverse(mat3(c[0].xyw, c[1].xyw, c[2].xyw));
     bool second = u(material.base_color_uv_row0.w) > 0.5;
@@ -218,14 +217,14 @@ bool screen(uvec3 vi, vec4 wp[3], uint k, uint m, uint w, out Screen t) {
     return all(lessThan(t.lo, t.hi));
 }
 
-// Triangle g of caster row k in layer m of world w (KERNELs 2 and 4: one layer).
+// Triangle g of caster row k in layer m of world w (KERNEL 4: one layer a dispatch z).
 bool on_layer(uint g, uint k, uint m, uint w, out Screen t) {
     Caster a = caster(k, w);
     if (!layer_sees(a, m)) return false;
     uvec3 vi;
     vec4 wp[3];
     corners(a, g, vi, wp);
-    return screen(vi, wp, k, m, w, t);
+    return screen(vi, wp, m, w, t);
 }
 
 float box_area(Screen t) { return float(t.hi.x - t.lo.x) * float(t.hi.y - t.lo.y); }
@@ -398,7 +397,7 @@ void main() {
     for (uint l = 0u; l < pc.world.w; ++l) {
         if ((seen & (1u << l)) == 0u) continue;
         Screen t;
-        if (!screen(vi, wp, c.x, pc.matrix + l, w, t)) continue;
+        if (!screen(vi, wp, pc.matrix + l, w, t)) continue;
         if (box_area(t) > float(pc.big_area)) list_bands(t);
         else draw_layer(t, 0u, ALL_BANDS, 0, 1, 0, 1);
     }
