@@ -40,6 +40,20 @@ uint shadow_world() { return views[view_index].shadow_base; }
 uint shadow_world() { return 0u; }
 #endif
 
+// ShadowData's header flags (ShadowMaps.write, _choose_reads): the frame's maps are read from
+// ShadowDepths (bit 0), and the images' sampler filters linearly (bit 1).
+bool frame_maps_in_buffer() { return (shadow_data.world_layout.z & 1u) != 0u; }
+bool linear_filter() { return (shadow_data.world_layout.z & 2u) != 0u; }
+
+// A linear filter's first texel `i` and weights `f` at `uv` of a `size`-texel layer, the
+// weights in 1/256ths as samplers take them (subTexelPrecisionBits 8 on NVIDIA): a shadow's
+// edge then filters as the images' does.
+void filter_at(vec2 uv, int size, out ivec2 i, out vec2 f) {
+    vec2 t = uv * float(size) - 0.5;
+    f = floor(fract(t) * 256.0) / 256.0;
+    i = ivec2(floor(t));
+}
+
 // The depth bits of texel `i` of the frame's maps (`frame`) or the worlds'.
 uint depth_bits(bool frame, uint i) { return frame ? frame_depths[i] : world_depths[i]; }
 
@@ -53,13 +67,11 @@ float hand_texel(bool frame, uint base, int size, ivec2 p, float ref, bool clamp
 // the images' filter: world_layout.z bit 1 where it is linear (ShadowMaps.sampler: where the
 // device filters D32 linearly, NVIDIA), else nearest (lavapipe), so that both sides agree.
 float hand_compare(bool frame, uint base, int size, vec2 uv, float ref, bool clamp_edge) {
-    if ((shadow_data.world_layout.z & 2u) == 0u)
+    if (!linear_filter())
         return hand_texel(frame, base, size, ivec2(floor(uv * float(size))), ref, clamp_edge);
-    vec2 t = uv * float(size) - 0.5;
-    // The filter's weights in 1/256ths, as samplers take them (subTexelPrecisionBits 8 on
-    // NVIDIA): a shadow's edge then filters as the images' does.
-    vec2 f = floor(fract(t) * 256.0) / 256.0;
-    ivec2 i = ivec2(floor(t));
+    ivec2 i;
+    vec2 f;
+    filter_at(uv, size, i, f);
     float a = hand_texel(frame, base, size, i, ref, clamp_edge);
     float b = hand_texel(frame, base, size, i + ivec2(1, 0), ref, clamp_edge);
     float c = hand_texel(frame, base, size, i + ivec2(0, 1), ref, clamp_edge);
@@ -74,7 +86,7 @@ bool hand_layer(float layer, out bool frame, out uint base, out int size) {
     frame = world == 0u;
     size = int(shadow_data.params.x);
     base = (frame ? 0u : (world - 1u) * shadow_data.world_layout.x) + uint(layer + 0.5) * uint(size * size);
-    return !frame || (shadow_data.world_layout.z & 1u) != 0u;
+    return !frame || frame_maps_in_buffer();
 }
 
 // The 2D layers' and cubes' comparisons: the images', the frame's compute-drawn maps, or the
@@ -91,9 +103,10 @@ float compare_2d(vec2 uv, float layer, float ref) {
 // hand: the 4 x 4 texels they cover read once (16 loads, not 9 x 4), each weighted by the
 // taps' filter weights on it, per axis (1 - f, 1, 1, f) (every tap has the same fraction f).
 float hand_pcf_linear(bool frame, uint base, int size, vec2 uv, float ref) {
-    vec2 t = uv * float(size) - 0.5;
-    vec2 f = floor(fract(t) * 256.0) / 256.0;  // (hand_compare's weights)
-    ivec2 i = ivec2(floor(t)) - 1;
+    ivec2 i;
+    vec2 f;
+    filter_at(uv, size, i, f);
+    i -= 1;
     vec4 wx = vec4(1.0 - f.x, 1.0, 1.0, f.x), wy = vec4(1.0 - f.y, 1.0, 1.0, f.y);
     float sum = 0.0;
     for (int y = 0; y < 4; ++y) {
@@ -109,7 +122,7 @@ float hand_pcf_linear(bool frame, uint base, int size, vec2 uv, float ref) {
 float compare_cube(vec3 q, float cube, float ref) {
     uint world = shadow_world();
     bool frame = world == 0u;
-    if (frame && (shadow_data.world_layout.z & 1u) == 0u) return texture(shadow_cubes, vec4(q, cube), ref);
+    if (frame && !frame_maps_in_buffer()) return texture(shadow_cubes, vec4(q, cube), ref);
     // Vulkan's face selection and face coordinates (+X -X +Y -Y +Z -Z).
     vec3 a = abs(q);
     uint face;
@@ -138,7 +151,7 @@ float shadow_pcf_2d(float layer, vec3 ndc) {
     bool frame;
     uint base;
     int size;
-    if (SHADOW_PCF_HALF == 1 && shadow_data.params.w == 1.0 && (shadow_data.world_layout.z & 2u) != 0u
+    if (SHADOW_PCF_HALF == 1 && shadow_data.params.w == 1.0 && linear_filter()
         && hand_layer(layer, frame, base, size))
         return hand_pcf_linear(frame, base, size, uv, ndc.z);
     float step_uv = shadow_data.params.w / shadow_data.params.x;
