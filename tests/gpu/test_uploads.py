@@ -1,6 +1,5 @@
-"""Uploads in few submissions. `upload_buffers` (gpu/buffer.py): buffers of parts, each part
-copied once into one staging buffer, one submission; their bytes are the parts' concatenation.
-TextureUploader's batches (gpu/image.py): two staging buffers take turns, a batch copied
+"""Uploads in few submissions. TextureUploader's batches (gpu/image.py): buffers of parts
+(`add_buffer`: their bytes the parts' concatenation) and images; two staging buffers take turns, a batch copied
 into one while the GPU uploads the other's. Every level of every image read back equals
 what was given (level 0 of each, its chain then blitted), under the validation layer's
 synchronization checks (a staging buffer reused before the GPU is done with it is a hazard)."""
@@ -9,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vkpbr.gpu.buffer import Buffer, download_buffer, upload_buffers
+from vkpbr.gpu.buffer import Buffer, download_buffer
 from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image, TextureUploader, mip_levels
@@ -54,25 +53,6 @@ def test_batches_take_turns_and_every_image_arrives() -> None:
             np.testing.assert_array_equal(_read(device, image, 0), px)
         for image in images:
             image.destroy()
-        device.check_validation()
-
-
-def test_upload_buffers_hold_their_parts_concatenated() -> None:
-    rng = np.random.default_rng(5)
-    items = [([rng.random((7, 3), np.float32), rng.random((1, 3), np.float32)], "vertex|storage"),
-             ([np.arange(5, dtype=np.uint32)], "index|storage|transfer_src"),  # 20 bytes: unaligned
-             ([np.full(4, 65535, np.uint16), rng.integers(0, 9, (3, 4), np.uint16)], "vertex")]
-    with Device(validation=True) as device:
-        made = upload_buffers(device, [(parts, usage + "|transfer_src" * ("transfer_src" not in usage),
-                                        f"b{i}") for i, (parts, usage) in enumerate(items)])
-        try:
-            for buffer, (parts, _) in zip(made, items, strict=True):
-                want = np.concatenate([p.reshape(-1).view(np.uint8) for p in parts])
-                assert buffer.size == want.nbytes
-                np.testing.assert_array_equal(download_buffer(device, buffer), want)
-        finally:
-            for buffer in made:
-                buffer.destroy()
         device.check_validation()
 
 

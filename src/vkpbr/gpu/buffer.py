@@ -6,14 +6,13 @@ are then a NumPy copy into or out of `Buffer.array(...)`, with no Vulkan call at
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 from vkpbr.gpu.device import Device
 
-__all__ = ["Buffer", "upload_buffer", "upload_buffers"]
+__all__ = ["Buffer", "upload_buffer"]
 
 
 _USAGES = {
@@ -157,36 +156,6 @@ def upload_buffer(device: Device, data: np.ndarray, usage: int | str, name: str 
     finally:
         staging.destroy()
     return dst
-
-
-def upload_buffers(device: Device, items: Sequence[tuple[Sequence[np.ndarray], int | str, str]]
-                   ) -> list[Buffer]:
-    """Device-local buffers, each (parts, usage, name) filled with its parts' bytes one after
-    another (what their concatenation holds), through one staging buffer and one submission:
-    each part is copied once, straight into the staging memory (a scene's vertex streams:
-    no concatenated copy, no submission and wait per stream)."""
-    vk = device.vk
-    parts = [[np.ascontiguousarray(a) for a in arrays] for arrays, _, _ in items]
-    sizes = [sum(a.nbytes for a in arrays) for arrays in parts]
-    offsets = np.cumsum([0] + [(n + 15) // 16 * 16 for n in sizes]).tolist()  # 16-byte aligned
-    out = [Buffer(device, n, buffer_usage(vk, usage) | vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                  name=name) for n, (_, usage, name) in zip(sizes, items, strict=True)]
-    if offsets[-1] == 0:
-        return out
-    staging = Buffer(device, offsets[-1], vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT, host_visible=True)
-    try:
-        for arrays, at in zip(parts, offsets, strict=False):
-            for a in arrays:
-                staging.write(a, at)
-                at += a.nbytes
-        with device.one_time_commands() as cmd:
-            for dst, n, at in zip(out, sizes, offsets, strict=False):
-                if n:
-                    vk.vkCmdCopyBuffer(cmd, staging.handle, dst.handle, 1,
-                                       [vk.VkBufferCopy(srcOffset=at, dstOffset=0, size=n)])
-    finally:
-        staging.destroy()
-    return out
 
 
 def download_buffer(device: Device, buffer: Buffer, dtype: Any = np.uint8) -> np.ndarray:
