@@ -31,7 +31,7 @@ import numpy as np
 from ..errors import VkpbrError
 from ..scene.types import Scene
 
-__all__ = ["SceneAhead", "load_ahead", "scene_ahead"]
+__all__ = ["SceneAhead", "load_ahead", "scene_ahead", "may_hold_ktx2"]
 
 
 class SceneAhead(Future):
@@ -56,8 +56,9 @@ class SceneAhead(Future):
         return pixels
 
 
-def _has_ktx2(scene: Scene) -> bool:
-    """Whether some image may be KTX2 (by its type, its file's name or its bytes)."""
+def may_hold_ktx2(scene: Scene) -> bool:
+    """Whether some image may be KTX2 (by its type, its file's name or its bytes): its BC7
+    levels are the device's choice, made on upload, so nothing is decoded ahead."""
     from ..scene.gltf_codecs import KTX2_MAGIC
 
     return any((img.mime_type or "").lower() == "image/ktx2"
@@ -69,7 +70,7 @@ def _has_ktx2(scene: Scene) -> bool:
 def _decode(scene: Scene) -> list[np.ndarray | None] | None:
     from ..scene.textures import decode_images
 
-    if not scene.images or all(img.pixels is not None for img in scene.images) or _has_ktx2(scene):
+    if not scene.images or all(img.pixels is not None for img in scene.images) or may_hold_ktx2(scene):
         return None  # nothing to decode, or the device decides how (BC7)
     return decode_images(scene)
 

@@ -83,11 +83,11 @@ def predecode(scene: Any, max_size: int) -> Any:
     device's choice, made on upload)."""
     import dataclasses
 
+    from vkpbr.bake.ahead import may_hold_ktx2
     from vkpbr.scene.textures import decode_images
 
     images = getattr(scene, "images", None)
-    if not images or any((img.mime_type or "").endswith("ktx2")
-                         or str(img.path or "").lower().endswith(".ktx2") for img in images):
+    if not images or may_hold_ktx2(scene):
         return scene
     pixels = decode_images(scene, max_size=max_size)
     if any(p is None for p in pixels):  # missing or undecodable: the upload reports them
