@@ -129,16 +129,19 @@ def mip_levels(depth: np.ndarray, radius: float, levels: int) -> tuple[list[np.n
     return out, partial
 
 
-def test_depth_mips_are_xegtaos_filter(renderers) -> None:  # noqa: ANN001
+@pytest.mark.parametrize("raster", ["hardware", "compute"])
+def test_depth_mips_are_xegtaos_filter(renderers, raster: str) -> None:  # noqa: ANN001
     """ao_prefilter.comp's levels against mip_levels' NumPy over the frame's `depth` output,
-    at a size no level divides (texels past the frame's edge average the children inside)."""
+    at a size no level divides (texels past the frame's edge average the children inside);
+    from the depth image (the hardware raster) and from the compute rasteriser's buffer
+    (its AO_DEPTH_BUFFER build: no copy into the depth image)."""
     from vkpbr.gpu.image_io import read_level
 
     r, (_, cam) = renderers[1], corner()
     # (a radius at which some children fall in the weights' falloff: 177 of 2546)
     size, radius = (W - 13, H - 11), 0.1  # 51 x 37
     depth = r.render(camera=cam, size=size, outputs=("depth",), pipeline="compute",
-                     ao_radius=radius)["depth"]
+                     raster=raster, ao_radius=radius)["depth"]
     r.device.wait_idle()
     want, partial = mip_levels(depth, radius * AO.RADIUS_MULTIPLIER, AO.DEPTH_MIPS)
     assert partial > 100

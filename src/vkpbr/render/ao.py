@@ -51,6 +51,7 @@ from typing import Any
 
 import numpy as np
 
+from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.compute import ComputePipeline, groups
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
@@ -81,7 +82,8 @@ DEPTH_MIPS, MIP_ALIGN = 5, 16
 _SETS_PER_POOL = 16
 _PUSH = np.dtype([("tile", "<u4", 4), ("radius", "<f4"), ("falloff", "<f4"), ("slices", "<u4"),
                   ("steps", "<u4"), ("final_pass", "<u4"), ("read_mid", "<u4"), ("scale", "<u4"),
-                  ("first_view", "<u4"), ("fused", "<u4"), ("mip_offset", "<f4")])
+                  ("first_view", "<u4"), ("fused", "<u4"), ("mip_offset", "<f4"),
+                  ("depth_row", "<u4")])
 # XeGTAO's DepthMIPSamplingOffset: a sample len pixels out reads MIP level
 # round(log2(len) - MIP_OFFSET) (ao_gtao.comp); larger: finer levels, more cache lines.
 MIP_OFFSET = 3.3
@@ -199,7 +201,8 @@ class AoImages:
         self._sampler: Sampler | None = None
         self._pools: list[DescriptorPool] = []
         self._free = 0
-        self._sets: dict[tuple[int, int, bool], Any] = {}
+        self._sets: dict[tuple[int, int, bool, int], Any] = {}
+        self._stand_in_buffer = Buffer(device, 16, "storage", name="ao depths stand-in")
         # The stand-in: ao_map is an array (the layered batch's layers), so a 1x1 array.
         vk = device.vk
         image = Image(device, 1, 1, vk.VK_FORMAT_R32_SFLOAT, vk.VK_IMAGE_USAGE_SAMPLED_BIT,
@@ -261,7 +264,7 @@ class AoImages:
     def steps(self, resources: dict[str, Any], set0: Any, frame_index: int, spec: AoSpec,
               extent: tuple[int, int], tiles: tuple[int, int, int, int] | None, copy_out: bool,
               timed: bool = True, generation: int = 0,
-              layered: tuple[int, int] | None = None) -> list[Step]:
+              layered: tuple[int, int] | None = None, depth_buffer: Any = None) -> list[Step]:
         """The "ao" group's steps for one recording: the depth prefilter, GTAO, the denoise
         passes, at half resolution the upsample (and, for the `ao` output, a copy into
         "out_ao"); adds "ao", "ao_raw", "ao_mid", "ao_depth" to `resources`. `extent`: the
@@ -269,12 +272,15 @@ class AoImages:
         height, tiles a column); `timed`: a timestamp after the last pass
         (FrameStats.pass_ms["ao"]); `generation`: the target's (a recreated swapchain's depth
         views are new objects); `layered`: a layered batch's chunk (its first view, views), a
-        view a layer of the target's depth, every layer in one dispatch (its z)."""
+        view a layer of the target's depth, every layer in one dispatch (its z);
+        `depth_buffer`: the compute rasteriser's depths (resources' "raster_depths"), which
+        the prefilter reads in place of the depth image (then needing no copy)."""
         w, h = extent
         assert not self.stale(extent, layered[1] if layered else 1,
                               tiles[1:3] if tiles is not None else None), "fit() first"
         image = self._resources(resources, frame_index)
-        dset = self._set(resources["depth"].view, frame_index, generation, layered is not None)
+        dset = self._set(resources["depth"].view, frame_index, generation, layered is not None,
+                         depth_buffer)
         q = spec.quality
         tiles = tiles if tiles is not None else (1, w, h, 1)
         _, tw, th, rows = tiles
@@ -286,19 +292,22 @@ class AoImages:
 
         def push(final: int, read_mid: int, fused: int = 0) -> np.ndarray:
             p = _push(spec, tiles, first, final, read_mid, fused)
-            p["mip_offset"] = self.mip_offset
+            p["mip_offset"], p["depth_row"] = self.mip_offset, w
             return p
 
         # The denoise and the upsample name every image of their set: the shaders
         # choose between the working images by a push constant, so each statically reads and
         # writes both (and "ao", a storage image of the set, GENERAL when bound).
-        both = (depth, ("ao_raw", "storage"), ("ao_mid", "storage"), ("ao", "storage"))
+        both = (("ao_depth", "sampled"), ("ao_raw", "storage"), ("ao_mid", "storage"),
+                ("ao", "storage"))
         def run(name: str, p: np.ndarray, size: tuple[int, int]) -> Any:
             return self._dispatch(name + kernel, p, set0, dset, (*size, depth_layers))
 
         mips = mip_extent(extent, (tw, th))
-        steps = [Step("ao_prefilter", run("ao_prefilter", push(0, 0), (mips[0] // 2, mips[1] // 2)),
-                      (depth, ("ao_depth", "storage")), timed=self.profile),
+        source = depth if depth_buffer is None else ("raster_depths", "storage_read")
+        prefilter = "ao_prefilter" if depth_buffer is None else "ao_prefilter_buffer"
+        steps = [Step("ao_prefilter", run(prefilter, push(0, 0), (mips[0] // 2, mips[1] // 2)),
+                      (source, ("ao_depth", "storage")), timed=self.profile),
                  Step("ao_gtao", run(f"ao_gtao_{q.slices}x{q.steps}", push(0, 0), work),
                       (("ao_depth", "sampled"), ("ao_raw", "storage")), timed=self.profile)]
         src = "ao_raw"
@@ -351,7 +360,8 @@ class AoImages:
                   for b, n in ((1, "ao_raw"), (2, "ao_mid"), (3, "ao_out"))),
                 BindingSpec(4, "sampler", ("compute",), "depth_mips"),
                 *(BindingSpec(5 + k, "storage_image", ("compute",), f"depth_mip{k}")
-                  for k in range(DEPTH_MIPS))])
+                  for k in range(DEPTH_MIPS)),
+                BindingSpec(10, "storage", ("compute",), "AoRasterDepths")])
         return self._layout
 
     def _kernel(self, name: str, push_bytes: int) -> ComputePipeline:
@@ -368,13 +378,16 @@ class AoImages:
         return self._sampler
 
     def _set(self, depth_view: Any, frame_index: int, generation: int = 0,
-             layered: bool = False) -> Any:
+             layered: bool = False, depth_buffer: Any = None) -> Any:
         """The kernels' set 1 for a target's depth view and a slot's "ao" image. A set made
         for another generation of the target named a view since destroyed (a recreated
         swapchain's; the new one may have its handle value): made anew (the old one stays
         allocated until the images are next fitted: a few sets a window resize). `layered`:
-        the layered kernels' (array views of the images; `depth_view` an array's)."""
-        key = (int(self.device.vk.ffi.cast("uintptr_t", depth_view)), frame_index, layered)
+        the layered kernels' (array views of the images; `depth_view` an array's);
+        `depth_buffer`: the compute rasteriser's depths (binding 10; else a stand-in)."""
+        buffer = self._stand_in_buffer if depth_buffer is None else depth_buffer
+        key = (int(self.device.vk.ffi.cast("uintptr_t", depth_view)), frame_index, layered,
+               int(self.device.vk.ffi.cast("uintptr_t", buffer.handle)))
         if key not in self._sets or self._sets[key][1] != generation:
             layout = self._set_layout()
             if not self._pools or self._free == 0:
@@ -393,6 +406,7 @@ class AoImages:
             writer.sampler(dset, 4, sampled, self._depth_sampler())
             for k, level in enumerate(levels):
                 writer.storage_image(dset, 5 + k, level)
+            writer.storage(dset, 10, buffer)
             writer.update()
             self._sets[key] = (dset, generation)
         return self._sets[key][0]
@@ -422,6 +436,7 @@ class AoImages:
         self._destroy_images()
         self._stand_in[1].destroy()
         self._stand_in[0].destroy()
+        self._stand_in_buffer.destroy()
         for pipe in self._kernels.values():
             pipe.destroy()
         self._kernels.clear()

@@ -66,6 +66,8 @@ VARIANTS: tuple[Variant, ...] = (
     # Screen-space ambient occlusion (render/ao.py): GTAO, then its spatial denoise.
     # GTAO's main pass a build per preset's slices x steps (render/ao.py PRESETS: unrolled).
     Variant("ao_prefilter.comp.spv", "ao_prefilter.comp"),
+    # (from the compute rasteriser's depth buffer: no copy into the depth image for GTAO)
+    Variant("ao_prefilter_buffer.comp.spv", "ao_prefilter.comp", (("AO_DEPTH_BUFFER", 1),)),
     *(Variant(f"ao_gtao_{n}x{n}{suffix}.comp.spv", "ao_gtao.comp",
               (("AO_SLICES", n), ("AO_STEPS", n), *layered))
       for n in (3, 2) for suffix, layered in (("", ()), ("_layers", (("AO_LAYERED", 1),)))),

@@ -114,6 +114,7 @@ class FrameSteps:
             self.resources.update({f"out.{k}": _sized(v, own) for k, v in
                                    self.output.resources(image, frame_index).items()})
         self._color_written = self._depth_written = False
+        self._raster_depths = False  # (the compute rasteriser drew: its depths in a buffer)
         self._rendering: Rendering | None = None
 
     # --- the path -------------------------------------------------------------------------
@@ -241,10 +242,11 @@ class FrameSteps:
     def _raster(self) -> list[Step]:
         cs, spec = self._compute(), self.spec
         depth = (COPY_DEPTH in spec.copy or "blend" in self.classes
-                 or not spec.path.startswith("compute") or spec.ao is not None)
+                 or not spec.path.startswith("compute"))
         # The raster's depths: copied where anything reads them, else undefined, and nothing
-        # after tests them (no blended draw): the passes after load it, never clear it.
-        self._depth_written = True
+        # after tests them (no blended draw): the passes after load it, never clear it. GTAO
+        # reads them where the raster left them (its copy took 0.1 ms at 1080p on the H200).
+        self._depth_written = self._raster_depths = True
         self._color_written = True  # the resolve writes the clear colour where nothing covers
         self._close_rendering()
         return cs.raster_steps(self.target, self.frame_index, spec.alpha_mask,
@@ -287,7 +289,9 @@ class FrameSteps:
         # its visibility pass (paths.STEP_NAMES' one order).
         return self.r.ao.steps(self.resources, self.set0, self.frame_index, self.spec.ao,
                                self.target.extent, self.spec.tiles, copy_out,
-                               self.spec.path.startswith("compute"), self.target.generation)
+                               self.spec.path.startswith("compute"), self.target.generation,
+                               depth_buffer=self.resources["raster_depths"].buffer
+                               if self._raster_depths else None)
 
     def _ao_prepass(self) -> list[Step]:
         """The depth GTAO reads where the frame has no visibility image (render/ao.py

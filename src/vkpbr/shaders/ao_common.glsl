@@ -42,6 +42,12 @@ layout(set = 1, binding = 6, r32f) uniform writeonly AO_IMAGE depth_mip1;
 layout(set = 1, binding = 7, r32f) uniform writeonly AO_IMAGE depth_mip2;
 layout(set = 1, binding = 8, r32f) uniform writeonly AO_IMAGE depth_mip3;
 layout(set = 1, binding = 9, r32f) uniform writeonly AO_IMAGE depth_mip4;
+// The compute rasteriser's depths, a float a pixel of the frame (or the batch's atlas),
+// row-major: ao_prefilter.comp's AO_DEPTH_BUFFER build reads them where the frame was drawn
+// by the compute rasteriser (no copy into the depth image for GTAO alone); a stand-in else.
+layout(set = 1, binding = 10) readonly buffer AoRasterDepths {
+    float raster_depth[];
+};
 
 layout(push_constant) uniform Ao {
     uint tile_w;  // a view's pixels: the frame's size, or a batch's tile (column-major tiles)
@@ -59,6 +65,7 @@ layout(push_constant) uniform Ao {
     uint first_view;  // the view of the first tile (AO_LAYERED: of layer 0)
     uint fused;  // ao_upsample.comp: run the last denoise pass on the pixels it blends
     float mip_offset;  // ao_gtao.comp: XeGTAO's DepthMIPSamplingOffset (render/ao.py MIP_OFFSET)
+    uint depth_row;  // AO_DEPTH_BUFFER: the frame's width, raster_depth's row
 } pc;
 
 // The view a tile (and, layered, the invocation's layer) stands for.
@@ -110,13 +117,6 @@ ivec2 ao_frame_pixel(ivec2 w, ivec2 wlo, ivec2 lo) {
     return ao_clamp(lo + (w - wlo) * int(pc.scale), lo);
 }
 
-// Distance along the view axis at pixel p: znear / depth (reversed-Z, infinite far plane);
-// +inf where nothing was drawn (depth 0).
-float ao_view_z(ivec2 p, float znear) {
-    float d = texelFetch(depth_map, AO_AT(p), 0).r;
-    return d > 0.0 ? znear / d : 1.0 / 0.0;
-}
-
 // The depth MIPs' levels (render/ao.py DEPTH_MIPS) and their largest value: the view-space
 // depth where nothing was drawn (XeGTAO_ClampDepth: finite, so that the MIP filter's sums
 // stay numbers).
@@ -133,6 +133,14 @@ ivec2 ao_mip_tile() {
 }
 ivec2 ao_mip_base(ivec2 lo) {
     return lo / ivec2(pc.tile_w, pc.tile_h) * ao_mip_tile();
+}
+
+// Distance along the view axis at frame pixel p of the tile whose first pixel is lo: the depth
+// MIPs' level 0 (ao_prefilter.comp: znear / depth, reversed-Z, infinite far plane, the
+// depth buffer read once); +inf where nothing was drawn.
+float ao_view_z(ivec2 p, ivec2 lo) {
+    float z = texelFetch(depth_mips, AO_AT(ao_mip_base(lo) + p - lo), 0).r;
+    return z < AO_FAR ? z : 1.0 / 0.0;
 }
 
 // View space as XeGTAO's (x right, y up, z forward, into the screen) of the point at pixel

@@ -20,7 +20,7 @@ void main() {
         if (pc.read_mid != 0u) imageStore(ao_raw, AO_AT(p), uvec4(packed));
         else imageStore(ao_mid, AO_AT(p), uvec4(packed));
     } else {
-        bool background = texelFetch(depth_map, AO_AT(p), 0).r <= 0.0;
+        bool background = isinf(ao_view_z(p, lo));  // (scale 1: p is the frame's pixel)
         imageStore(ao_out, AO_AT(p), vec4(background ? 1.0 : v, 0.0, 0.0, 0.0));
     }
 }

@@ -15,6 +15,9 @@
 // tile's edge takes only the children inside).
 #extension GL_GOOGLE_include_directive : require
 #include "ao_common.glsl"
+#ifndef AO_DEPTH_BUFFER
+#define AO_DEPTH_BUFFER 0
+#endif
 
 shared float scratch[8][8];
 
@@ -44,7 +47,16 @@ float view_z(float d, bool valid, float znear) {
 
 // The depth buffer's 2 x 2 pixels from p in one fetch (XeGTAO's GatherRed): at the corner
 // they share, x first ((x, y) of gather's w, z, x, y components).
+// AO_DEPTH_BUFFER = 1: from the compute rasteriser's depths (the same floats the depth image
+// would hold after a copy); reads past the buffer's end clamped to its last pixel (like the
+// gather's clamped texels, those pixels are past the tile: `present` drops them).
 vec4 gather_depths(ivec2 p) {
+#if AO_DEPTH_BUFFER
+    uint i = uint(p.y) * pc.depth_row + uint(p.x), n = uint(raster_depth.length());
+    return vec4(raster_depth[min(i, n - 1u)], raster_depth[min(i + 1u, n - 1u)],
+                raster_depth[min(i + pc.depth_row, n - 1u)],
+                raster_depth[min(i + pc.depth_row + 1u, n - 1u)]);
+#else
     vec2 uv = vec2(p + 1) / vec2(textureSize(depth_map, 0).xy);
 #if AO_LAYERED
     vec4 g = textureGather(depth_map, vec3(uv, float(gl_GlobalInvocationID.z)));
@@ -52,6 +64,7 @@ vec4 gather_depths(ivec2 p) {
     vec4 g = textureGather(depth_map, uv);
 #endif
     return g.wzxy;
+#endif
 }
 
 void main() {

@@ -46,7 +46,6 @@ void main() {
     uint view;
     ivec2 wlo, lo;
     if (any(greaterThanEqual(wp, imageSize(ao_raw).xy)) || !ao_work_view(wp, view, wlo, lo)) return;
-    float znear = views[view].eye_near.w;
     ivec2 wt = ao_work_tile();
     vec4 v, wz;
     // (with pc.fused, the last denoise pass here: no pass of its own)
@@ -57,13 +56,13 @@ void main() {
             v[k] = ao_visibility(pc.read_mid != 0u ? imageLoad(ao_mid, AO_AT(w)).r
                                                    : imageLoad(ao_raw, AO_AT(w)).r);
         }
-        wz[k] = ao_view_z(ao_frame_pixel(w, wlo, lo), znear);
+        wz[k] = ao_view_z(ao_frame_pixel(w, wlo, lo), lo);
     }
     ivec2 first = lo + (wp - wlo) * 2, hi = lo + ivec2(pc.tile_w, pc.tile_h);
     for (int k = 0; k < 4; ++k) {
         ivec2 d = ivec2(k & 1, k >> 1), p = first + d;
         if (any(greaterThanEqual(p, hi))) continue;  // (the last block of an odd size)
-        float z = ao_view_z(p, znear);
+        float z = ao_view_z(p, lo);
         float out_v = isinf(z) ? 1.0 : upsample(vec2(d) * 0.5, z, v, wz);
         imageStore(ao_out, AO_AT(p), vec4(out_v, 0.0, 0.0, 0.0));
     }
