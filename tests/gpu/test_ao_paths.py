@@ -144,13 +144,17 @@ def test_depth_mips_are_xegtaos_filter(renderers, raster: str) -> None:  # noqa:
                      raster=raster, ao_radius=radius)["depth"]
     r.device.wait_idle()
     want, partial = mip_levels(depth, radius * AO.RADIUS_MULTIPLIER, AO.DEPTH_MIPS)
+    # The `depth` output is the shading's (its interpolated point), the MIPs' the raster's
+    # depths: the hardware's agree to 2e-6; the compute rasteriser's, interpolated at its own
+    # sample positions, 7.7e-5 apart (relative) on the H200 (run w; within 2e-6 on lavapipe).
+    rtol = 2e-6 if raster == "hardware" else 2e-4
     assert partial > 100
     image = r.parts.ao.mips[0]
     for k, ref in enumerate(want):
         got = read_level(r.device, image, k, dtype=np.float32, channels=1)[0, ..., 0]
         got = got[:ref.shape[0], :ref.shape[1]]
         assert (ref < 3.0e38).any() and (ref >= 3.0e38).any(), k  # surfaces and background
-        np.testing.assert_allclose(got, ref, rtol=2e-6, err_msg=f"level {k}")
+        np.testing.assert_allclose(got, ref, rtol=rtol, err_msg=f"level {k}")
 
 
 def test_batch_views_take_their_tiles_mips(renderers) -> None:  # noqa: ANN001
