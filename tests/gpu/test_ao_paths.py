@@ -157,12 +157,28 @@ def test_depth_mips_are_xegtaos_filter(renderers, raster: str) -> None:  # noqa:
         np.testing.assert_allclose(got, ref, rtol=rtol, err_msg=f"level {k}")
 
 
+def _mip_block(r, at: tuple[int, int], size: int = 64) -> list[np.ndarray]:  # noqa: ANN001
+    """Each level of the depth MIPs' block whose level-0 corner is `at` (x, y)."""
+    from vkpbr.gpu.image_io import read_level
+
+    r.device.wait_idle()
+    out = []
+    for k in range(AO.DEPTH_MIPS):
+        level = read_level(r.device, r.parts.ao.mips[0], k, dtype=np.float32, channels=1)[0, ..., 0]
+        y, x, n = at[1] >> k, at[0] >> k, size >> k
+        out.append(level[y:y + n, x:x + n])
+    return out
+
+
 def test_batch_views_take_their_tiles_mips(renderers) -> None:  # noqa: ANN001
-    """A compute batch's views in tiles no MIP level divides (60 x 50, a 2 x 2 grid) with a
-    radius whose samples read levels 1 to 3 (8: up to about 100 pixels) equal the views
-    rendered alone, to the 16 bits of the working image: each tile's MIPs group its own
-    pixels (ao_common.glsl ao_mip_base). With one grid over the atlas they did not (0.041 in
-    one view of 8)."""
+    """A compute batch's views in tiles no MIP level divides (60 x 50 in a 3 x 3 grid) with a
+    radius whose samples read levels 1 to 3 (8: up to about 100 pixels): each tile's MIP
+    block equals the view's own, rendered alone (ao_common.glsl ao_mip_base: each tile's MIPs
+    group its own pixels; with one grid over the atlas they did not, 0.041 in GTAO in one
+    view of 8), and so does its GTAO. The batch's rasteriser and the frame's place a pixel's
+    depth a few ulps apart (7e-7 in view-space depth on lavapipe), which GTAO's edges and
+    normals at the tiles' borders turn into 1/65535 on lavapipe and up to 103/65535 on the
+    H200 (session 15, runs z2 and z3: within 3 pixels of the borders): the bound is by device."""
     from test_batch import cameras_of
 
     r = renderers[1]
@@ -172,7 +188,13 @@ def test_batch_views_take_their_tiles_mips(renderers) -> None:  # noqa: ANN001
     kw = {"pipeline": "compute", "ao_radius": 8.0, "view": "ao", "linear": True}
     batch = r.render_batch(cams, (60, 50), **kw)
     assert "ao" in r.last_stats.pass_ms  # (the compute batch, GTAO in its atlas)
+    rows = r.parts.ao.mips[0].height // 64  # (tiles a column: 64 x 64 blocks)
+    blocks = [_mip_block(r, (64 * (i // rows), 64 * (i % rows))) for i in range(len(cams))]
+    lavapipe = r.device.info.name.startswith("llvmpipe")
+    bound = (2.0 if lavapipe else 128.0) / 65535.0
     for i, cam in enumerate(cams):
         one = r.render(camera=cam, size=(60, 50), raster="compute", **kw)
+        for k, (got, want) in enumerate(zip(blocks[i], _mip_block(r, (0, 0)), strict=True)):
+            np.testing.assert_allclose(got, want, rtol=1e-5, err_msg=f"view {i} level {k}")
         d = np.abs(batch[i] - one)
-        assert d.max() <= 2.0 / 65535.0, (i, float(d.max()) * 65535, int((d > 2.0 / 65535.0).sum()))
+        assert d.max() <= bound, (i, float(d.max()) * 65535, int((d > bound).sum()))
