@@ -21,6 +21,26 @@ settings.register_profile("report", phases=(Phase.explicit, Phase.reuse, Phase.g
                           print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
 
+# scripts/test.sh runs the suite on every core (pytest-xdist, up to 4 workers): a worker
+# takes a whole module at a time, so a module's renderer fixtures are made once, as in one
+# process; the folders whose tests share one machine-wide thing run in one worker, one
+# module after another: tests/distributed (local Ray clusters), tests/viewer (X displays
+# chosen by free number), tests/sample_viewer (Chromium and the Sample Viewer's server).
+_ONE_WORKER = ("tests/distributed/", "tests/viewer/", "tests/sample_viewer/")
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object:
+    from xdist.scheduler import LoadScopeScheduling
+
+    class ModulesAndFolders(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            path = nodeid.split("::", 1)[0]
+            return next((f for f in _ONE_WORKER if path.startswith(f)), path)
+
+    return ModulesAndFolders(config, log)
+
+
 # The sample models: $VKPBR_ASSETS, else .assets/models, else ../shared/assets (assets_path.py).
 # Tests that need them take the `assets` fixture, which skips with the folder's name when absent.
 

@@ -52,14 +52,15 @@ def test_trimming_returns_freed_heap_and_keeps_live_memory(soak) -> None:  # noq
 
 
 @pytest.mark.timeout(240)
-@pytest.mark.parametrize("leak_kib", [0, 4096])
+@pytest.mark.parametrize("leak_kib", [0, 8192])
 def test_a_short_soak_passes_and_a_leak_fails(soak, monkeypatch, capsys, leak_kib: int) -> None:  # noqa: ANN001
     """360 frames of the built-in scene at 16x16 on one renderer, in batches of 20, with the
     short run's bounds (40 MiB, 100 MiB per 1,000 frames: a 13 MiB block of lavapipe's is alive
     at some samples and not others, and inside the whole suite's process the heap moves by
     more, so the long tier's 8 MiB and 20 KiB per 1,000 frames are for 100,000-frame runs): no
-    leak passes; 4 MiB kept per batch (52 MiB over the 260 frames measured, 200 MiB per 1,000
-    frames) fails both."""
+    leak passes; 8 MiB kept per batch (104 MiB over the 260 frames measured, 400 MiB per
+    1,000 frames) fails both (with 4 MiB, 52 MiB, the floor once came out at +34.8 MiB, under
+    the bound, on a busy machine)."""
     import vkpbr
 
     kept: list[bytes] = []

@@ -288,31 +288,41 @@ class AoImages:
         kernel = "_layers" if layered is not None else ""
         # The working images' corner: the tile grid at 1 / scale (tiles rounded up).
         work = (-(-w // tw) * -(-tw // q.scale), rows * -(-th // q.scale))
-        depth = ("depth", "sampled")
 
         def push(final: int, read_mid: int, fused: int = 0) -> np.ndarray:
             p = _push(spec, tiles, first, final, read_mid, fused)
             p["mip_offset"], p["depth_row"] = self.mip_offset, w
             return p
 
+        def run(name: str, p: np.ndarray, size: tuple[int, int]) -> Any:
+            return self._dispatch(name + kernel, p, set0, dset, (*size, depth_layers))
+
+        mips = mip_extent(extent, (tw, th))
+        source = (("depth", "sampled") if depth_buffer is None
+                  else ("raster_depths", "storage_read"))
+        prefilter = "ao_prefilter" if depth_buffer is None else "ao_prefilter_buffer"
+        steps = [Step("ao_prefilter", run(prefilter, push(0, 0), (mips[0] // 2, mips[1] // 2)),
+                      (source, ("ao_depth", "storage")), timed=self.profile),
+                 Step("ao_gtao", run(f"ao_gtao_{q.slices}x{q.steps}", push(0, 0), work),
+                      (("ao_depth", "sampled"), ("ao_raw", "storage")), timed=self.profile),
+                 *self._filter_steps(run, push, q, work)]
+        steps[-1] = Step("ao", steps[-1].record, steps[-1].uses, timed=timed)
+        if copy_out:
+            steps.append(Step("ao_output", lambda cmd: _copy_image(cmd, image, resources, extent),
+                              (("ao", "transfer_src"), ("out_ao", "transfer_dst")), timed=False))
+        return steps
+
+    def _filter_steps(self, run: Any, push: Any, q: Any, work: tuple[int, int]) -> list[Step]:
+        """The denoise passes (ao_raw -> ao_mid -> ao_raw ... -> "ao" at full resolution)
+        and at half resolution the upsample (which, fused, runs the last pass)."""
         # The denoise and the upsample name every image of their set: the shaders
         # choose between the working images by a push constant, so each statically reads and
         # writes both (and "ao", a storage image of the set, GENERAL when bound).
         both = (("ao_depth", "sampled"), ("ao_raw", "storage"), ("ao_mid", "storage"),
                 ("ao", "storage"))
-        def run(name: str, p: np.ndarray, size: tuple[int, int]) -> Any:
-            return self._dispatch(name + kernel, p, set0, dset, (*size, depth_layers))
-
-        mips = mip_extent(extent, (tw, th))
-        source = depth if depth_buffer is None else ("raster_depths", "storage_read")
-        prefilter = "ao_prefilter" if depth_buffer is None else "ao_prefilter_buffer"
-        steps = [Step("ao_prefilter", run(prefilter, push(0, 0), (mips[0] // 2, mips[1] // 2)),
-                      (source, ("ao_depth", "storage")), timed=self.profile),
-                 Step("ao_gtao", run(f"ao_gtao_{q.slices}x{q.steps}", push(0, 0), work),
-                      (("ao_depth", "sampled"), ("ao_raw", "storage")), timed=self.profile)]
-        src = "ao_raw"
+        steps, src = [], "ao_raw"
         fused = int(self.fuse and q.scale > 1)  # (the upsample runs the last pass)
-        for k in range(q.passes - fused):  # ao_raw -> ao_mid -> ao_raw ... (-> ao at full resolution)
+        for k in range(q.passes - fused):
             final = k == q.passes - 1
             dst = "ao" if final and q.scale == 1 else ("ao_raw" if src == "ao_mid" else "ao_mid")
             steps.append(Step(f"ao_denoise{k}", run(
@@ -322,10 +332,6 @@ class AoImages:
         if q.scale > 1:
             steps.append(Step("ao_upsample", run(
                 "ao_upsample", push(1, int(src == "ao_mid"), fused), work), both, timed=False))
-        steps[-1] = Step("ao", steps[-1].record, steps[-1].uses, timed=timed)
-        if copy_out:
-            steps.append(Step("ao_output", lambda cmd: _copy_image(cmd, image, resources, extent),
-                              (("ao", "transfer_src"), ("out_ao", "transfer_dst")), timed=False))
         return steps
 
     def _resources(self, resources: dict[str, Any], frame_index: int) -> Image:
