@@ -10,9 +10,8 @@ export VKPBR_EXTRAS=${VKPBR_EXTRAS:-test,codecs,ray,sample-viewer}
 bash scripts/setup.sh
 .venv/bin/ruff check --quiet src tests benchmarks
 # On every core, at most 4 (pytest-xdist; tests/conftest.py keeps each module, and the
-# folders that share a machine-wide thing, in one worker): 2 workers on a 2-core machine
-# took the suite from 19:45 to 8:03 beside three other sessions (2026-12-04).
-# VKPBR_TEST_WORKERS=0: one process.
+# folders that share a machine-wide thing, in one worker): on a 2-core machine, 2 workers.
+# VKPBR_TEST_WORKERS=0: one process, no workers.
 cores=$(nproc 2>/dev/null || echo 1)
 workers=${VKPBR_TEST_WORKERS:-$(( cores < 4 ? cores : 4 ))}
 exec .venv/bin/python -m pytest -q -n "$workers" "$@"
