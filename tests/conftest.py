@@ -41,6 +41,13 @@ def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object:
     return ModulesAndFolders(config, log)
 
 
+# Reproducible frame paths: on a GPU `--pipeline auto` measures the paths once a renderer has
+# drawn for MEASURE_AFTER_S and may switch path mid-run (render/path_choice.py), so a module's
+# renderer could change path between two renders a test compares (the H200's test pass on 8
+# workers: 6 tests). The tests take the rule (CPUs: forward, as auto; GPUs: the compute path
+# with the compute rasteriser); tests/gpu/test_path_choice.py sets auto for its own tests.
+os.environ.setdefault("VKPBR_FRAME_PATHS", "rule")
+
 # The sample models: $VKPBR_ASSETS, else .assets/models, else ../shared/assets (assets_path.py).
 # Tests that need them take the `assets` fixture, which skips with the folder's name when absent.
 

@@ -18,6 +18,12 @@ from vkpbr.render.renderer import Renderer, RenderOptions
 SIZE = (48, 36)
 
 
+@pytest.fixture(autouse=True)
+def _auto(monkeypatch: pytest.MonkeyPatch) -> None:
+    """auto as a user gets it (tests/conftest.py gives the other tests the rule)."""
+    monkeypatch.setenv("VKPBR_FRAME_PATHS", "auto")
+
+
 def _unmeasured(r: Renderer) -> str:
     """`vkpbr info`'s autoFramePath line for `r`'s device with nothing recorded."""
     return "autoFramePath                " + ("forward (CPUs are not measured)" if r.device.info.kind == "cpu"
