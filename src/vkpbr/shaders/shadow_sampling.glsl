@@ -99,24 +99,50 @@ float compare_2d(vec2 uv, float layer, float ref) {
     return hand_compare(frame, base, size, uv, ref, false);
 }
 
-// shadow_pcf_2d's 3 x 3 taps a texel apart (PCF_RADIUS 1), each a linear 2 x 2 compare, by
-// hand: the 4 x 4 texels they cover read once (16 loads, not 9 x 4), each weighted by the
-// taps' filter weights on it, per axis (1 - f, 1, 1, f) (every tap has the same fraction f).
+// shadow_pcf_2d's 3 x 3 taps a texel apart (PCF_RADIUS 1), each a linear 2 x 2 compare: the
+// 4 x 4 texels they cover compared once (16, not 9 x 4), each weighted by the taps' filter
+// weights on it, per axis (1 - f, 1, 1, f) (every tap has the same fraction f). The texels'
+// compares come by hand (the kernels' buffers) or from the images (4 gathers), and both go
+// through this one sum, so a frame reads the same shadow either way, bit for bit (the
+// sampler's own linear filter, which the images used before, was up to 9/255 off the
+// by-hand one on the H200).
+float pcf_4x4(vec2 f, vec4 rows[4]) {
+    vec4 wx = vec4(1.0 - f.x, 1.0, 1.0, f.x), wy = vec4(1.0 - f.y, 1.0, 1.0, f.y);
+    float sum = 0.0;
+    for (int y = 0; y < 4; ++y) sum += wy[y] * dot(wx, rows[y]);
+    return sum / 9.0;
+}
+
 float hand_pcf_linear(bool frame, uint base, int size, vec2 uv, float ref) {
     ivec2 i;
     vec2 f;
     filter_at(uv, size, i, f);
     i -= 1;
-    vec4 wx = vec4(1.0 - f.x, 1.0, 1.0, f.x), wy = vec4(1.0 - f.y, 1.0, 1.0, f.y);
-    float sum = 0.0;
+    vec4 rows[4];
     for (int y = 0; y < 4; ++y) {
-        vec4 row = vec4(hand_texel(frame, base, size, i + ivec2(0, y), ref, false),
-                        hand_texel(frame, base, size, i + ivec2(1, y), ref, false),
-                        hand_texel(frame, base, size, i + ivec2(2, y), ref, false),
-                        hand_texel(frame, base, size, i + ivec2(3, y), ref, false));
-        sum += wy[y] * dot(wx, row);
+        rows[y] = vec4(hand_texel(frame, base, size, i + ivec2(0, y), ref, false),
+                       hand_texel(frame, base, size, i + ivec2(1, y), ref, false),
+                       hand_texel(frame, base, size, i + ivec2(2, y), ref, false),
+                       hand_texel(frame, base, size, i + ivec2(3, y), ref, false));
     }
-    return sum / 9.0;
+    return pcf_4x4(f, rows);
+}
+
+// The same 4 x 4 compares from the images: a gather of 2 x 2 compares at the corner its texels
+// share ((k + 1) / size for texels k, k + 1), its components (0, 1), (1, 1), (1, 0), (0, 0).
+float image_pcf_linear(float layer, int size, vec2 uv, float ref) {
+    ivec2 i;
+    vec2 f;
+    filter_at(uv, size, i, f);
+    vec2 at = vec2(i) / float(size);  // the corner of texels i - 1 and i
+    float step_uv = 2.0 / float(size);
+    vec4 a = textureGather(shadow_maps, vec3(at, layer), ref);
+    vec4 b = textureGather(shadow_maps, vec3(at + vec2(step_uv, 0.0), layer), ref);
+    vec4 c = textureGather(shadow_maps, vec3(at + vec2(0.0, step_uv), layer), ref);
+    vec4 d = textureGather(shadow_maps, vec3(at + vec2(step_uv), layer), ref);
+    vec4 rows[4] = vec4[](vec4(a.w, a.z, b.w, b.z), vec4(a.x, a.y, b.x, b.y),
+                          vec4(c.w, c.z, d.w, d.z), vec4(c.x, c.y, d.x, d.y));
+    return pcf_4x4(f, rows);
 }
 
 float compare_cube(vec3 q, float cube, float ref) {
@@ -151,9 +177,10 @@ float shadow_pcf_2d(float layer, vec3 ndc) {
     bool frame;
     uint base;
     int size;
-    if (SHADOW_PCF_HALF == 1 && shadow_data.params.w == 1.0 && linear_filter()
-        && hand_layer(layer, frame, base, size))
-        return hand_pcf_linear(frame, base, size, uv, ndc.z);
+    if (SHADOW_PCF_HALF == 1 && shadow_data.params.w == 1.0 && linear_filter()) {
+        return hand_layer(layer, frame, base, size) ? hand_pcf_linear(frame, base, size, uv, ndc.z)
+                                                    : image_pcf_linear(layer, size, uv, ndc.z);
+    }
     float step_uv = shadow_data.params.w / shadow_data.params.x;
     float sum = 0.0;
     for (int j = -SHADOW_PCF_HALF; j <= SHADOW_PCF_HALF; ++j)
