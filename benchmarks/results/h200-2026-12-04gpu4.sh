@@ -15,4 +15,4 @@ PY
 HYPOTHESIS_PROFILE=report timeout -s INT 300 python3 -m pytest -q -n 8 -p no:cacheprovider -rfE --tb=line tests/gpu/test_batch.py tests/gpu/test_frames_folder.py tests/gpu/test_shadow_cache.py tests/gpu/test_shadow_raster.py tests/gpu/test_shadows.py tests/gpu/test_world_shadows.py tests/gpu/test_compute_raster.py tests/gpu/test_leaks.py tests/gpu/test_instances.py > $OUT/gpu-tests.log 2>&1
 grep -E "^(FAILED|ERROR)|passed|failed|^E  |^/.*Error" $OUT/gpu-tests.log | cut -c1-300 | head -20
 S=$VKPBR_ASSETS/Sponza/glTF/Sponza.gltf
-for tree in .before1 .; do echo "## $tree"; PYTHONPATH=/tmp/site:$PWD/$tree/src timeout 100 python3 benchmarks/bench_shadows.py --scene $S --steps 2>&1 | grep "^|" | head -12; done
+for tree in .before1 .; do echo "## $tree"; PYTHONPATH=/tmp/site:$PWD/$tree/src timeout 100 python3 benchmarks/bench_shadows.py --scene $S --steps --frames 150 2>&1 | grep "^|" | head -12; done
