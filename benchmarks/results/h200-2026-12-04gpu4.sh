@@ -2,7 +2,7 @@
 # (a frame after a redraw, read by hand, against the cached frames after it: equal now?), the
 # shadow, batch and frames-folder tests, and the still/moving Sponza frame's cost of it.
 source benchmarks/gpu_env.sh
-export VKPBR_ASSETS=$PWD/.assets-final/models
+export VKPBR_ASSETS=$PWD/.assets-s/models
 timeout 60 python3 - <<'PY'
 import numpy as np
 from vkpbr.render.renderer import Renderer
