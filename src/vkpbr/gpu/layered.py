@@ -58,6 +58,9 @@ class LayeredDepth:
                            layers=self.layers, cube=cube)
         self.view = ImageView(self.image, aspect="depth",
                               kind="cube_array" if cube else "2d_array")
+        # Every layer as a 2D array (a cube's faces one by one): shaders that pick the face
+        # themselves gather from it (shaders/shadow_sampling.glsl compare_cube).
+        self.faces = ImageView(self.image, aspect="depth", kind="2d_array") if cube else self.view
         self._attachments: dict[tuple[int, int], ImageView] = {}
         # Hardware 2x2 PCF needs linear filtering of the depth format (NVIDIA, lavapipe: yes).
         self.filterable = device.format_supports(self.format, "SAMPLED_IMAGE_FILTER_LINEAR")
@@ -182,5 +185,7 @@ class LayeredDepth:
         for view in self._attachments.values():
             view.destroy()
         self._attachments.clear()
+        if self.faces is not self.view:
+            self.faces.destroy()
         self.view.destroy()
         self.image.destroy()

@@ -276,6 +276,9 @@ class ShadowMaps:
                 wrap_u="border", wrap_v="border", mag="linear" if linear else "nearest",
                 min="linear" if linear else "nearest", mipmaps=False, anisotropy=1.0,
                 compare="greater_or_equal")))
+            self.face_sampler = self._own(Sampler(self.device, SamplerSpec(
+                wrap_u="clamp", wrap_v="clamp", mag="nearest", min="nearest", mipmaps=False,
+                anisotropy=1.0, compare="greater_or_equal")))
         w = DescriptorWriter(self.device)
         size = HEADER_BYTES + 64 * MATRICES
         for i, (s, ps) in enumerate(zip(self.sets, self.pass_sets, strict=True)):
@@ -284,6 +287,7 @@ class ShadowMaps:
             w.sampler(s, 2, self.cubes.view, self.sampler)
             w.storage(s, 3, self.world_depths)
             w.storage(s, 4, self.frame_depths)
+            w.sampler(s, 5, self.cubes.faces, self.face_sampler)
             w.storage(ps, 0, self.buffer, size, i * self.stride)
         w.update()
         return True

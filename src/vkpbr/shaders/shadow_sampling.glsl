@@ -5,8 +5,11 @@
 //   y: layers (directional: its cascades)   z: near plane (spot, point)
 //   w: world size of a texel at unit distance along the light's axis (spot, point)
 // Depth is reversed (render/shadow_math.py): 1 nearest the light; a comparison sample is 1
-// where the receiver's depth >= the stored one (GREATER_OR_EQUAL), filtered 2x2 by hardware,
-// and PCF_TAPS x PCF_TAPS such samples a texel apart are averaged.
+// where the receiver's depth >= the stored one (GREATER_OR_EQUAL), filtered 2x2 (bilinear
+// weights in 1/256ths, computed here from gathered compares on devices that filter D32
+// linearly, so that the images and the compute rasteriser's buffer, read by hand, give the
+// same shadow; nearest elsewhere, as the sampler), and PCF_TAPS x PCF_TAPS such samples a
+// texel apart are averaged.
 // Bias, three parts: the passes' slope-scaled depth bias (render/shadows.py), the normal
 // offset here (the receiver moves along its geometric normal by params.z texels, more at
 // grazing light), and reversed-Z float depth's relative precision.
@@ -16,6 +19,8 @@
 
 layout(set = 3, binding = 1) uniform sampler2DArrayShadow shadow_maps;
 layout(set = 3, binding = 2) uniform samplerCubeArrayShadow shadow_cubes;
+// The cubes' faces as 2D layers (6 a cube, Vulkan's face order), clamped to each face's edge.
+layout(set = 3, binding = 5) uniform sampler2DArrayShadow shadow_cube_faces;
 
 const int SHADOW_PCF_HALF = 1;  // (2 * 1 + 1)^2 = 9 taps
 
@@ -145,10 +150,22 @@ float image_pcf_linear(float layer, int size, vec2 uv, float ref) {
     return pcf_4x4(f, rows);
 }
 
+// hand_compare's linear filter (clamp_edge) from a face of the images: one gather of the
+// 2 x 2 texels at the corner they share, weighed as hand_compare weighs them, so that a frame
+// compares alike whether its cube was just redrawn (read by hand) or cached.
+float face_compare(float layer, int size, vec2 uv, float ref) {
+    ivec2 i;
+    vec2 f;
+    filter_at(uv, size, i, f);
+    vec4 g = textureGather(shadow_cube_faces, vec3(vec2(i + 1) / float(size), layer), ref);
+    return mix(mix(g.w, g.z, f.x), mix(g.x, g.y, f.x), f.y);
+}
+
 float compare_cube(vec3 q, float cube, float ref) {
     uint world = shadow_world();
     bool frame = world == 0u;
-    if (frame && !frame_maps_in_buffer()) return texture(shadow_cubes, vec4(q, cube), ref);
+    bool images = frame && !frame_maps_in_buffer();
+    if (images && !linear_filter()) return texture(shadow_cubes, vec4(q, cube), ref);
     // Vulkan's face selection and face coordinates (+X -X +Y -Y +Z -Z).
     vec3 a = abs(q);
     uint face;
@@ -157,10 +174,12 @@ float compare_cube(vec3 q, float cube, float ref) {
     else if (a.y >= a.z) { face = q.y > 0.0 ? 2u : 3u; ma = a.y; sc = q.x; tc = q.y > 0.0 ? q.z : -q.z; }
     else { face = q.z > 0.0 ? 4u : 5u; ma = a.z; sc = q.z > 0.0 ? q.x : -q.x; tc = -q.y; }
     int size = int(shadow_data.params.y);
+    vec2 uv = 0.5 * vec2(sc, tc) / ma + 0.5;
+    if (images) return face_compare(float(6u * uint(cube + 0.5) + face), size, uv, ref);
     uint cubes = frame ? shadow_data.world_layout.w
                        : (world - 1u) * shadow_data.world_layout.x + shadow_data.world_layout.y;
     uint base = cubes + (6u * uint(cube + 0.5) + face) * uint(size * size);
-    return hand_compare(frame, base, size, 0.5 * vec2(sc, tc) / ma + 0.5, ref, true);
+    return hand_compare(frame, base, size, uv, ref, true);
 }
 
 // The receiver moved towards the light's side along its geometric normal, by `texel` world
