@@ -18,6 +18,7 @@ from typing import Any, Protocol
 from vkpbr.errors import GpuTimeoutError, VkpbrError
 from vkpbr.gpu.instance import Instance, PhysicalDeviceInfo
 from vkpbr.gpu.vk import live_objects, live_objects_by_kind
+from vkpbr.gpu.kept import KeptHandles
 
 # live_objects / live_objects_by_kind (counted in gpu/vk.py) are re-exported for leak tests.
 __all__ = ["Device", "DeviceRequest", "Destroyable", "DeviceObject", "anisotropy_usable",
@@ -71,18 +72,30 @@ class Destroyable(Protocol):
 class DeviceObject:
     """Base of the wrappers that own one handle of a Device, released by `_destroy_fn`.
 
-    `destroy()` is idempotent: it clears the handle before releasing it.
+    `destroy()` is idempotent: it clears the handle before releasing it. A wrapper whose
+    handle the device keeps (`_kept_handle`, gpu/kept.py) only lets go of it.
     """
 
     _destroy_fn = ""  # the vkDestroy* function name
     device: Device
     handle: Any = None
+    _shared = False  # the handle is the device's kept one (gpu/kept.py): not destroyed here
+
+    def _kept_handle(self, key: Any, make: Any) -> Any:
+        """`make()`'s handle, or on a device that keeps handles (Device.kept) the one kept
+        for `key` (this class's definition of it), made by `make()` the first time."""
+        kept = self.device.kept
+        if kept is None:
+            return make()
+        self._shared = True
+        return kept.get((type(self).__name__, key), self._destroy_fn, make)
 
     def destroy(self) -> None:
         if self.handle is None:
             return
         handle, self.handle = self.handle, None
-        getattr(self.device.vk, self._destroy_fn)(self.device.handle, handle, None)
+        if not self._shared:
+            getattr(self.device.vk, self._destroy_fn)(self.device.handle, handle, None)
         self.device.untrack(self)
 
 
@@ -129,6 +142,9 @@ class Device:
         # Its VkPipelineCache (gpu/pipeline_cache.py): set by the caller with a file to keep
         # it in, else made in memory by the first pipeline build.
         self.pipeline_cache: Any = None
+        # Immutable handles shared by their definition for the device's life (gpu/kept.py;
+        # a Renderer's device sets one); None: every wrapper makes and destroys its own.
+        self.kept: KeptHandles | None = None
         try:
             t0 = time.perf_counter()
             self.info: PhysicalDeviceInfo = self.instance.choose_device(device)
@@ -442,6 +458,8 @@ class Device:
                 vk.vkDeviceWaitIdle(self.handle)
             while self._children:
                 self._children.pop().destroy()
+            if getattr(self, "kept", None) is not None:
+                self.kept.destroy(vk, self.handle)
             if getattr(self, "command_pool", None) is not None:
                 vk.vkDestroyCommandPool(self.handle, self.command_pool, None)
                 self.command_pool = None

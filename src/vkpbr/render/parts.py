@@ -25,6 +25,7 @@ from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout
 from vkpbr.gpu.device import Device, DeviceRequest
 from vkpbr.gpu.frames import FrameRing
+from vkpbr.gpu.kept import KeptHandles
 from vkpbr.gpu.pipeline import PipelineLayout
 from vkpbr.gpu.pipeline_cache import PipelineCache
 from vkpbr.render import layouts as L
@@ -117,6 +118,7 @@ def open_device(device: str | int | None, validation: bool | None, sync_validati
     if validation is None:
         validation = os.environ.get("VKPBR_VALIDATION") == "1"
     dev = Device(device, validation=validation, sync_validation=sync_validation)
+    dev.kept = KeptHandles()  # layouts, pipelines, samplers shared across set_scene
     try:
         t = time.perf_counter()
         dev.pipeline_cache = PipelineCache(dev, cache_dir, shaders_digest())
