@@ -35,7 +35,7 @@ from vkpbr.render.blend_order import BlendOrder
 from vkpbr.render.compute_path import ComputeScene
 from vkpbr.render.deform import DeformKernel, DeformLayout
 from vkpbr.render.environment import EnvironmentSpec
-from vkpbr.render.environments import Environments
+from vkpbr.render.environments import Environments, EnvironmentStore
 from vkpbr.render.frames import Bounds, FrameSlot, bind_instances, create_slots
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.lighting import Lighting
@@ -51,7 +51,22 @@ from vkpbr.scene.semantics import semantic_ids
 from vkpbr.scene.state import SceneState
 from vkpbr.scene.types import Camera, Scene
 
-__all__ = ["FrameParts", "create_layouts", "make_parts", "open_device", "lazy_compute"]
+__all__ = ["DeviceParts", "FrameParts", "create_layouts", "make_parts", "open_device", "lazy_compute"]
+
+
+@dataclass(frozen=True, slots=True)
+class DeviceParts:
+    """What a Renderer's scenes share on its device, made once with it (render/scene_swap.py):
+    the pre-filtered environments (their images the device's: `Device.keeping`). The
+    device's kept handles (gpu/kept.py: layouts, pipelines, samplers) are shared the same
+    way; everything else is a scene's `FrameParts`."""
+
+    environments: EnvironmentStore
+
+    @staticmethod
+    def make(device: Device, env_spec: EnvironmentSpec | None,
+             cache_dir: str | os.PathLike[str] | None) -> DeviceParts:
+        return DeviceParts(EnvironmentStore(device, env_spec, cache_dir))
 
 
 @dataclass(frozen=True, slots=True)
@@ -104,7 +119,6 @@ class FrameParts:
         self.ao.destroy()
         if self.post.made is not None:
             self.post.made.destroy()
-        self.environments.destroy()
 
 
 def open_device(device: str | int | None, validation: bool | None, sync_validation: bool,
@@ -150,11 +164,12 @@ def lazy_compute(device: Device, scene: Scene, gs: GpuScene, layouts: list[Descr
 
 
 def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float, float, float],
-               depth_prepass: bool | None, env_spec: EnvironmentSpec | None,
+               depth_prepass: bool | None, shared: DeviceParts,
                cache_dir: str | os.PathLike[str] | None, semantics: Any,
                ahead: Any = None) -> FrameParts:
     """The parts of frames of `scene` on `device` (the Renderer's arguments of those names;
-    `ahead`: the SceneAhead it was loaded by, whose decoded images GpuScene takes)."""
+    `shared`: what the device's scenes share; `ahead`: the SceneAhead it was loaded by, whose
+    decoded images GpuScene takes)."""
     ring = FrameRing(device, queries_per_frame=STAMPS)
     layouts, shadows, pipeline_layout = create_layouts(device, ring.count)
     buffers, pool, slots = create_slots(device, layouts[0], layouts[2], ring.count)
@@ -180,7 +195,7 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     recorder = FrameRecorder(device, gs, pipeline_layout, ring, slots, paths.prepass_for,
                              shadows, compute, copies, post, deform, ao)
     bounds = LiveBounds(state, Bounds.of(*scene.bounds()))
-    environments = Environments(device, slots, recorder, env_spec, cache_dir)
+    environments = Environments(device, slots, recorder, shared.environments)
     return FrameParts(
         device, scene, ring, layouts, pipeline_layout, buffers, pool, slots, gs, ids, labels,
         copies, compute, post, recorder, state, deform, gpu_state, bounds, blend, paths,
