@@ -36,7 +36,7 @@ from vkpbr.render.compute_path import ComputeScene
 from vkpbr.render.deform import DeformKernel, DeformLayout
 from vkpbr.render.environment import EnvironmentSpec
 from vkpbr.render.environments import Environments, EnvironmentStore
-from vkpbr.render.frames import Bounds, FrameSlot, bind_instances, create_slots
+from vkpbr.render.frames import Bounds, FrameSlot, bind_instances, create_slots, fresh_slots
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.lighting import Lighting
 from vkpbr.render.path_choice import FramePaths, shaders_digest
@@ -56,17 +56,34 @@ __all__ = ["DeviceParts", "FrameParts", "create_layouts", "make_parts", "open_de
 
 @dataclass(frozen=True, slots=True)
 class DeviceParts:
-    """What a Renderer's scenes share on its device, made once with it (render/scene_swap.py):
-    the pre-filtered environments (their images the device's: `Device.keeping`). The
-    device's kept handles (gpu/kept.py: layouts, pipelines, samplers) are shared the same
-    way; everything else is a scene's `FrameParts`."""
+    """What a Renderer's scenes share on its device, made once with it (render/scene_swap.py)
+    under `Device.keeping` (outside a scene's count of device children): the frame ring, the
+    frame slots' buffers, pool and sets (each scene takes them as new slots, `fresh_slots`,
+    and writes its own bindings in their sets: instances, opaque copy, ambient occlusion,
+    environment) and the pre-filtered environments. The device's kept handles (gpu/kept.py:
+    layouts, pipelines, samplers) are shared the same way; everything else is a scene's
+    `FrameParts`."""
 
+    ring: FrameRing
+    frame_buffers: list[Buffer]
+    frame_pool: DescriptorPool
+    slots: list[FrameSlot]
     environments: EnvironmentStore
 
     @staticmethod
     def make(device: Device, env_spec: EnvironmentSpec | None,
              cache_dir: str | os.PathLike[str] | None) -> DeviceParts:
-        return DeviceParts(EnvironmentStore(device, env_spec, cache_dir))
+        with device.keeping():
+            ring = FrameRing(device, queries_per_frame=STAMPS)
+            set0, set2 = (DescriptorSetLayout(device, [BindingSpec(*row) for row in L.SETS[i]])
+                          for i in (0, 2))
+            buffers, pool, slots = create_slots(device, set0, set2, ring.count)
+        return DeviceParts(ring, buffers, pool, slots, EnvironmentStore(device, env_spec, cache_dir))
+
+    def frame_slots(self) -> tuple[FrameRing, list[FrameSlot]]:
+        """The ring and slots for a new scene, as new ones (the device idle)."""
+        self.ring.restart()
+        return self.ring, fresh_slots(self.slots)
 
 
 @dataclass(frozen=True, slots=True)
@@ -170,9 +187,9 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     """The parts of frames of `scene` on `device` (the Renderer's arguments of those names;
     `shared`: what the device's scenes share; `ahead`: the SceneAhead it was loaded by, whose
     decoded images GpuScene takes)."""
-    ring = FrameRing(device, queries_per_frame=STAMPS)
+    ring, slots = shared.frame_slots()
     layouts, shadows, pipeline_layout = create_layouts(device, ring.count)
-    buffers, pool, slots = create_slots(device, layouts[0], layouts[2], ring.count)
+    buffers, pool = shared.frame_buffers, shared.frame_pool
     gs = GpuScene(device, scene, layouts[1], ring.count, ahead=ahead)
     layout = DeformLayout(scene, gs.deformed) if gs.deformed else None
     state = scene_state(scene, gs.draws, layout)
