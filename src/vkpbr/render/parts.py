@@ -1,14 +1,17 @@
 """What frames of one scene are drawn with, made in order and given to those that draw.
 
-`make_parts` makes the scene's GPU objects (frame ring, descriptor layouts, frame slots, the
-scene's GPU copy, the opaque copies transmission samples, the shadow maps, the recorder) and
-the concerns that draw with them, each its own module's and given only what it needs:
-targets (render/targets.py), path choice (render/path_choice.py), environments
+`make_parts` makes the scene's GPU objects (descriptor layouts, the scene's GPU copy, the
+opaque copies transmission samples, the shadow maps, the recorder) and the concerns that
+draw with them, each its own module's and given only what it needs: targets
+(render/targets.py), path choice (render/path_choice.py), environments
 (render/environments.py), lighting (render/lighting.py), shadow maps per frame
-(render/shadow_frames.py) and the blended draws' order (render/blend_order.py). The frame
-path (render/frame_path.py) and the batch path (render/batch_path.py) draw with the
-`FrameParts`; the Renderer (render/renderer.py) holds them. Every GPU object is a child of
-the device, which destroys what was made if making the rest fails.
+(render/shadow_frames.py) and the blended draws' order (render/blend_order.py). What depends
+on no scene is the device's `DeviceParts`, made once and shared by a Renderer's scenes
+(render/scene_swap.py): the frame ring and slots, the pre-filtered environments, the shadow
+maps' images. The frame path (render/frame_path.py) and the batch path
+(render/batch_path.py) draw with the `FrameParts`; the Renderer (render/renderer.py) holds
+them. Every GPU object is a child of the device, which destroys what was made if making the
+rest fails.
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ from vkpbr.render.post_stage import PostKernels
 from vkpbr.render.recorder import STAMPS, FrameRecorder
 from vkpbr.render.scene_state import GpuSceneState, LiveBounds, scene_state
 from vkpbr.render.shadow_frames import ShadowFrames
+from vkpbr.render.shadow_images import ShadowImages
 from vkpbr.render.shadows import ShadowMaps
 from vkpbr.render.targets import Lazy, Targets
 from vkpbr.render.transmission import OpaqueCopies
@@ -60,7 +64,8 @@ class DeviceParts:
     under `Device.keeping` (outside a scene's count of device children): the frame ring, the
     frame slots' buffers, pool and sets (each scene takes them as new slots, `fresh_slots`,
     and writes its own bindings in their sets: instances, opaque copy, ambient occlusion,
-    environment) and the pre-filtered environments. The device's kept handles (gpu/kept.py:
+    environment), the pre-filtered environments and the shadow maps' images (a scene takes
+    those of its sizes, render/shadow_images.py). The device's kept handles (gpu/kept.py:
     layouts, pipelines, samplers) are shared the same way; everything else is a scene's
     `FrameParts`."""
 
@@ -69,6 +74,7 @@ class DeviceParts:
     frame_pool: DescriptorPool
     slots: list[FrameSlot]
     environments: EnvironmentStore
+    shadow_images: ShadowImages  # the shadow maps' images (render/shadow_images.py)
 
     @staticmethod
     def make(device: Device, env_spec: EnvironmentSpec | None,
@@ -78,7 +84,8 @@ class DeviceParts:
             set0, set2 = (DescriptorSetLayout(device, [BindingSpec(*row) for row in L.SETS[i]])
                           for i in (0, 2))
             buffers, pool, slots = create_slots(device, set0, set2, ring.count)
-        return DeviceParts(ring, buffers, pool, slots, EnvironmentStore(device, env_spec, cache_dir))
+        return DeviceParts(ring, buffers, pool, slots, EnvironmentStore(device, env_spec, cache_dir),
+                           ShadowImages(device))
 
     def frame_slots(self) -> tuple[FrameRing, list[FrameSlot]]:
         """The ring and slots for a new scene, as new ones (the device idle)."""
@@ -160,13 +167,14 @@ def open_device(device: str | int | None, validation: bool | None, sync_validati
     return dev
 
 
-def create_layouts(device: Device, frames: int
+def create_layouts(device: Device, frames: int, images: ShadowImages | None = None
                    ) -> tuple[list[DescriptorSetLayout], ShadowMaps, PipelineLayout]:
     """The frame's descriptor set layouts (L.SETS), the shadow maps (whose own layout is set
-    3: their sets are per frame slot, `frames` of them) and the pipeline layout of all four."""
+    3: their sets are per frame slot, `frames` of them; their images from `images`) and the
+    pipeline layout of all four."""
     layouts = [DescriptorSetLayout(device, [BindingSpec(b, k, s, n) for b, k, s, n in rows])
                for i, rows in sorted(L.SETS.items()) if i != 3]
-    shadows = ShadowMaps(device, layouts[1], frames, frame_layout=layouts[0])
+    shadows = ShadowMaps(device, layouts[1], frames, frame_layout=layouts[0], images=images)
     layouts.append(shadows.set_layout)
     return layouts, shadows, PipelineLayout(device, layouts, L.PUSH.size)
 
@@ -188,7 +196,7 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     `shared`: what the device's scenes share; `ahead`: the SceneAhead it was loaded by, whose
     decoded images GpuScene takes)."""
     ring, slots = shared.frame_slots()
-    layouts, shadows, pipeline_layout = create_layouts(device, ring.count)
+    layouts, shadows, pipeline_layout = create_layouts(device, ring.count, shared.shadow_images)
     buffers, pool = shared.frame_buffers, shared.frame_pool
     gs = GpuScene(device, scene, layouts[1], ring.count, ahead=ahead)
     layout = DeformLayout(scene, gs.deformed) if gs.deformed else None

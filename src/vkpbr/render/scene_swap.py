@@ -1,15 +1,16 @@
 """A Renderer's scene made and unmade on one device: `Renderer.set_scene` without a new device.
 
 `SceneMaker` holds what a Renderer was made with besides its scene (msaa, background, ...)
-and the `DeviceParts` its scenes share (render/parts.py: the pre-filtered environments), and
-makes a scene's `FrameParts` with the frame and batch paths that draw them, noting how many
-device children existed before; `unmake` closes them and destroys every device child made
-since (buffers, images, sets, the frame ring, ...), newest first. What is kept: the device,
-its queue and command pool, its pipeline cache (gpu/pipeline_cache.py), the handles it keeps
-(gpu/kept.py: set and pipeline layouts, pipelines and samplers, shared by every wrapper of
-the same definition, so the new scene's pipelines are neither compiled nor looked up in the
-driver's cache), the `DeviceParts` (made under `Device.keeping`: outside the scene's count)
-and auto's frame-path record. A Renderer after `set_scene(b)` renders what `Renderer(b)`
+and the `DeviceParts` its scenes share (render/parts.py: the frame ring and slots, the
+pre-filtered environments, the shadow maps' images), and makes a scene's `FrameParts` with
+the frame and batch paths that draw them, noting how many device children existed before;
+`unmake` closes them and destroys every device child made since (buffers, images,
+descriptor pools and sets, ...), newest first. What is kept: the device, its queue and
+command pool, its pipeline cache (gpu/pipeline_cache.py), the handles it keeps (gpu/kept.py:
+set and pipeline layouts, pipelines and samplers, shared by every wrapper of the same
+definition, so the new scene's pipelines are neither compiled nor looked up in the driver's
+cache), the `DeviceParts` (made under `Device.keeping`: outside the scenes' count) and
+auto's frame-path record. A Renderer after `set_scene(b)` renders what `Renderer(b)`
 renders, bit for bit, and a second round of swaps makes no Vulkan object the first did not
 (tests/gpu/test_scene_swap.py).
 
