@@ -31,6 +31,7 @@ from vkpbr.gpu.frames import FrameRing
 from vkpbr.gpu.kept import KeptHandles
 from vkpbr.gpu.pipeline import PipelineLayout
 from vkpbr.gpu.pipeline_cache import PipelineCache
+from vkpbr.gpu.target import OffscreenTarget
 from vkpbr.render import layouts as L
 from vkpbr.render.ao import AoImages
 from vkpbr.render.batch import draw_spheres
@@ -64,8 +65,9 @@ class DeviceParts:
     under `Device.keeping` (outside a scene's count of device children): the frame ring, the
     frame slots' buffers, pool and sets (each scene takes them as new slots, `fresh_slots`,
     and writes its own bindings in their sets: instances, opaque copy, ambient occlusion,
-    environment), the pre-filtered environments and the shadow maps' images (a scene takes
-    those of its sizes, render/shadow_images.py). The device's kept handles (gpu/kept.py:
+    environment), the pre-filtered environments, the shadow maps' images (a scene takes
+    those of its sizes, render/shadow_images.py) and the offscreen targets `render` draws
+    into (render/targets.py). The device's kept handles (gpu/kept.py:
     layouts, pipelines, samplers) are shared the same way; everything else is a scene's
     `FrameParts`."""
 
@@ -75,6 +77,7 @@ class DeviceParts:
     slots: list[FrameSlot]
     environments: EnvironmentStore
     shadow_images: ShadowImages  # the shadow maps' images (render/shadow_images.py)
+    targets: dict[tuple, OffscreenTarget]  # render/targets.py Targets' kept ones
 
     @staticmethod
     def make(device: Device, env_spec: EnvironmentSpec | None,
@@ -85,7 +88,7 @@ class DeviceParts:
                           for i in (0, 2))
             buffers, pool, slots = create_slots(device, set0, set2, ring.count)
         return DeviceParts(ring, buffers, pool, slots, EnvironmentStore(device, env_spec, cache_dir),
-                           ShadowImages(device))
+                           ShadowImages(device), {})
 
     def frame_slots(self) -> tuple[FrameRing, list[FrameSlot]]:
         """The ring and slots for a new scene, as new ones (the device idle)."""
@@ -224,7 +227,8 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     return FrameParts(
         device, scene, ring, layouts, pipeline_layout, buffers, pool, slots, gs, ids, labels,
         copies, compute, post, recorder, state, deform, gpu_state, bounds, blend, paths,
-        Targets(device, msaa, background, ring.count, recorder, compute, post), environments,
+        Targets(device, msaa, background, ring.count, recorder, compute, post, shared.targets),
+        environments,
         Lighting(scene, copies, environments, state),
         ShadowFrames(shadows, bounds, recorder, state,
                      np.array([d.casts_shadows for d in gs.draws], bool), paths), ao)

@@ -2,7 +2,10 @@
 new targets callers own, window swapchains and text overlays.
 
 `Targets` keeps one offscreen target per (size, colour kind) and one HDR target per size for
-frames with post steps (render/post_stage.py), checks sizes against the device's limits, makes the
+frames with post steps (render/post_stage.py) in `kept`, the device's (render/parts.py
+DeviceParts: a Renderer's scenes draw into the same ones; they and what they make on first
+use are made under `Device.keeping`, outside a scene's count; what a scene makes for a
+target, its recordings and compute sets, is the scene's), checks sizes against the device's limits, makes the
 dataset outputs' images of a target on first use, and destroys a caller's target with what
 was recorded or made for it (command buffers, the compute path's per-target buffers).
 `Lazy` is an object made on first use: the compute path's resources, the post kernels.
@@ -50,10 +53,11 @@ class Targets:
 
     def __init__(self, device: Device, msaa: int, background: tuple[float, float, float],
                  frames: int, recorder: FrameRecorder, compute: Lazy[ComputeScene],
-                 post: Lazy[PostKernels]) -> None:
+                 post: Lazy[PostKernels], kept: dict[tuple, OffscreenTarget] | None = None) -> None:
         self.device, self.msaa, self.background, self.frames = device, msaa, background, frames
         self.recorder, self.compute, self.post_kernels = recorder, compute, post
-        self._kept: dict[tuple, OffscreenTarget] = {}
+        self._kept: dict[tuple, OffscreenTarget] = {} if kept is None else kept
+        self._device_kept = kept is not None  # (its targets the device's: `_keep`)
 
     def offscreen(self, size: tuple[int, int], linear: bool = False) -> OffscreenTarget:
         """The offscreen target of `size` (W, H): sRGB uint8, or float32 `linear`."""
@@ -63,9 +67,19 @@ class Targets:
             raise UsageError(f"image size {w}x{h}: width and height must be positive integers")
         if w > limit or h > limit:
             raise UsageError(f"image size {w}x{h} exceeds this device's limit of {limit}x{limit}")
-        key = (int(w), int(h), linear)
+        return self._keep((int(w), int(h), linear))
+
+    def _keep(self, key: tuple) -> OffscreenTarget:
+        """The kept target of `key` ((w, h, linear) or (w, h, "post"): float), made now
+        (the device's, where `kept` was given) if there is none."""
         if key not in self._kept:
-            self._kept[key] = self.new((int(w), int(h)), linear)
+            if not self._device_kept:
+                self._kept[key] = self.new(key[:2], key[2] is not False)
+                return self._kept[key]
+            with self.device.keeping():
+                target = self.new(key[:2], key[2] is not False)
+            target.kept = True
+            self._kept[key] = target
         return self._kept[key]
 
     def new(self, size: tuple[int, int], linear: bool) -> OffscreenTarget:
@@ -80,10 +94,7 @@ class Targets:
         float colour (and depth, ids, outputs) of its size (or `extent`: a camera model's
         wider source, render/post.py lens_frame), kept here."""
         extent = target.extent if extent is None else extent
-        key = (*extent, "post")
-        if key not in self._kept:
-            self._kept[key] = self.new(extent, True)
-        hdr = self._kept[key]
+        hdr = self._keep((*extent, "post"))
         if COPY_OUTPUTS in copy:
             self.ensure_outputs(hdr)
         return hdr
