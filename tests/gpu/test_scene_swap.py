@@ -63,3 +63,9 @@ def test_set_scene_renders_what_a_fresh_renderer_renders(make_renderer, sample_s
     _equal(_frame(renderer), chart)
     assert renderer.timings["pipelines_built"] == built
     assert (live_objects(), device.live_children, len(device.kept)) == made
+
+    # A compute batch's atlas passes to the next scene's batches (render/targets.py atlas;
+    # its frames are checked by tests/gpu/test_compute_batch.py, atlases reused across calls).
+    atlas = renderer.batch_path._atlas((8, 8), False)
+    renderer.set_scene(textured)
+    assert renderer.batch_path._atlas((8, 8), False) is atlas and atlas.color.handle is not None

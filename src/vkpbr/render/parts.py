@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import os
 import time
+from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -66,8 +67,8 @@ class DeviceParts:
     frame slots' buffers, pool and sets (each scene takes them as new slots, `fresh_slots`,
     and writes its own bindings in their sets: instances, opaque copy, ambient occlusion,
     environment), the pre-filtered environments, the shadow maps' images (a scene takes
-    those of its sizes, render/shadow_images.py) and the offscreen targets `render` draws
-    into (render/targets.py). The device's kept handles (gpu/kept.py:
+    those of its sizes, render/shadow_images.py), the offscreen targets `render` draws
+    into and the compute batch's atlases (render/targets.py). The device's kept handles (gpu/kept.py:
     layouts, pipelines, samplers) are shared the same way; everything else is a scene's
     `FrameParts`."""
 
@@ -78,6 +79,7 @@ class DeviceParts:
     environments: EnvironmentStore
     shadow_images: ShadowImages  # the shadow maps' images (render/shadow_images.py)
     targets: dict[tuple, OffscreenTarget]  # render/targets.py Targets' kept ones
+    atlases: OrderedDict[tuple, OffscreenTarget]  # compute-batch atlases a scene gave back
 
     @staticmethod
     def make(device: Device, env_spec: EnvironmentSpec | None,
@@ -88,7 +90,7 @@ class DeviceParts:
                           for i in (0, 2))
             buffers, pool, slots = create_slots(device, set0, set2, ring.count)
         return DeviceParts(ring, buffers, pool, slots, EnvironmentStore(device, env_spec, cache_dir),
-                           ShadowImages(device), {})
+                           ShadowImages(device), {}, OrderedDict())
 
     def frame_slots(self) -> tuple[FrameRing, list[FrameSlot]]:
         """The ring and slots for a new scene, as new ones (the device idle)."""
@@ -227,7 +229,8 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     return FrameParts(
         device, scene, ring, layouts, pipeline_layout, buffers, pool, slots, gs, ids, labels,
         copies, compute, post, recorder, state, deform, gpu_state, bounds, blend, paths,
-        Targets(device, msaa, background, ring.count, recorder, compute, post, shared.targets),
+        Targets(device, msaa, background, ring.count, recorder, compute, post, shared.targets,
+                shared.atlases),
         environments,
         Lighting(scene, copies, environments, state),
         ShadowFrames(shadows, bounds, recorder, state,

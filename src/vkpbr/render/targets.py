@@ -13,6 +13,7 @@ was recorded or made for it (command buffers, the compute path's per-target buff
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Callable
 from typing import Any, Generic, TypeVar
 
@@ -28,7 +29,9 @@ from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.post_stage import PostKernels
 from vkpbr.render.recorder import FrameRecorder
 
-__all__ = ["Lazy", "Targets"]
+__all__ = ["Lazy", "Targets", "FREE_ATLASES"]
+
+FREE_ATLASES = 2  # compute-batch atlases kept between scenes (a job's full and last batches)
 
 T = TypeVar("T")
 
@@ -53,11 +56,15 @@ class Targets:
 
     def __init__(self, device: Device, msaa: int, background: tuple[float, float, float],
                  frames: int, recorder: FrameRecorder, compute: Lazy[ComputeScene],
-                 post: Lazy[PostKernels], kept: dict[tuple, OffscreenTarget] | None = None) -> None:
+                 post: Lazy[PostKernels], kept: dict[tuple, OffscreenTarget] | None = None,
+                 free_atlases: OrderedDict[tuple, OffscreenTarget] | None = None) -> None:
         self.device, self.msaa, self.background, self.frames = device, msaa, background, frames
         self.recorder, self.compute, self.post_kernels = recorder, compute, post
         self._kept: dict[tuple, OffscreenTarget] = {} if kept is None else kept
         self._device_kept = kept is not None  # (its targets the device's: `_keep`)
+        # Compute-batch atlases a scene before gave back (`give_atlas`), the oldest first.
+        self._free_atlases: OrderedDict[tuple, OffscreenTarget] = (
+            OrderedDict() if free_atlases is None else free_atlases)
 
     def offscreen(self, size: tuple[int, int], linear: bool = False) -> OffscreenTarget:
         """The offscreen target of `size` (W, H): sRGB uint8, or float32 `linear`."""
@@ -87,6 +94,29 @@ class Targets:
         render/batch_path.py; give it back with `drop`)."""
         return OffscreenTarget(self.device, size, "float" if linear else "srgb", self.msaa,
                                (*self.background, 0.0), compute=self.device.compute_path)
+
+    def atlas(self, extent: tuple[int, int], linear: bool) -> OffscreenTarget:
+        """A compute batch's atlas of `extent` (render/batch_path.py): one a scene before gave
+        back, else a new one (the device's where targets are, else the caller's to `drop`)."""
+        target = self._free_atlases.pop((*extent, linear), None)
+        if target is not None:
+            return target
+        if not self._device_kept:
+            return self.new(extent, linear)
+        with self.device.keeping():
+            target = self.new(extent, linear)
+        target.kept = True
+        return target
+
+    def give_atlas(self, target: OffscreenTarget) -> None:
+        """Done with atlas `target` (from `atlas`) at a scene's end, the device idle: kept for
+        the next scene's batches, at most FREE_ATLASES (the oldest destroyed)."""
+        if not target.kept:
+            self.drop(target)
+            return
+        self._free_atlases[(*target.extent, target.color_kind == "float")] = target
+        while len(self._free_atlases) > FREE_ATLASES:
+            self._free_atlases.popitem(last=False)[1].destroy()
 
     def post(self, target: FrameTarget, copy: tuple[str, ...],
              extent: tuple[int, int] | None = None) -> OffscreenTarget:
