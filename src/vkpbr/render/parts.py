@@ -8,7 +8,7 @@ draw with them, each its own module's and given only what it needs: targets
 (render/shadow_frames.py) and the blended draws' order (render/blend_order.py). What depends
 on no scene is the device's `DeviceParts`, made once and shared by a Renderer's scenes
 (render/scene_swap.py): the frame ring and slots, the pre-filtered environments, the shadow
-maps' images. The frame path (render/frame_path.py) and the batch path
+maps' images, the offscreen targets and the compute batch's atlases. The frame path (render/frame_path.py) and the batch path
 (render/batch_path.py) draw with the `FrameParts`; the Renderer (render/renderer.py) holds
 them. Every GPU object is a child of the device, which destroys what was made if making the
 rest fails.

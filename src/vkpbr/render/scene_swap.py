@@ -2,7 +2,8 @@
 
 `SceneMaker` holds what a Renderer was made with besides its scene (msaa, background, ...)
 and the `DeviceParts` its scenes share (render/parts.py: the frame ring and slots, the
-pre-filtered environments, the shadow maps' images), and makes a scene's `FrameParts` with
+pre-filtered environments, the shadow maps' images, the offscreen targets and compute-batch
+atlases), and makes a scene's `FrameParts` with
 the frame and batch paths that draw them, noting how many device children existed before;
 `unmake` closes them and destroys every device child made since (buffers, images,
 descriptor pools and sets, ...), newest first. What is kept: the device, its queue and
