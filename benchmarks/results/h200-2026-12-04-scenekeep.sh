@@ -1,10 +1,13 @@
 # H200 run (session 15, branch scenekeep, issue 32): a new scene on the same Renderer, before
 # and after keeping what depends on no scene across set_scene (gpu/kept.py: layouts,
-# pipelines, samplers; render/parts.py DeviceParts: frame ring, frame slots, environments).
-# Before = main's HEAD b1433b1, made next to this tree first:
-#   rm -rf .before2 && mkdir .before2 && git -C /work/main archive b1433b1 src benchmarks tests/assets_path.py | tar -x -C .before2
-# Carry .gl .whl .assets-final .before2. About 5 min (at most 9.7 with every timeout): the 100-scene job once per tree (bench_load.py,
-# about 2 min each), then bench_scene_swap.py twice per tree, interleaved (a few s each).
+# pipelines, samplers; render/parts.py DeviceParts: frame ring and slots, environments,
+# shadow map images, offscreen targets, compute-batch atlases).
+# Before = main without the branch (b1433b1 when written; after merging, the merge's first
+# parent), made next to this tree first:
+#   rm -rf .before2 && mkdir .before2 && git archive b1433b1 src benchmarks tests/assets_path.py | tar -x -C .before2
+# Carry .gl .whl .assets-final .before2. About 5 min (at most 9.7 with every timeout): the
+# 100-scene job once per tree (bench_load.py, about 2 min each), then bench_scene_swap.py
+# twice per tree, interleaved (a few s each; the before tree runs this tree's script).
 source benchmarks/gpu_env.sh
 A=$PWD/.assets-final/models
 t() { timeout "$1" "${@:2}"; }
