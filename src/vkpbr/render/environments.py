@@ -12,6 +12,7 @@ named by recorded command buffers, so it waits for the device and drops the reco
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 
@@ -37,7 +38,7 @@ class EnvironmentStore:
                  cache_dir: str | os.PathLike[str] | None = None) -> None:
         self.device, self._spec, self._cache_dir = device, spec, cache_dir
         self._baker: EnvironmentBaker | None = None
-        self._made: dict[tuple, Environment] = {}  # by env_key
+        self._made: dict[tuple, Environment] = {}  # by env_key (a file's: its size, time)
 
     @property
     def baker(self) -> EnvironmentBaker:
@@ -57,6 +58,10 @@ class EnvironmentStore:
 
         Raises SceneError (one line naming the file) for an unreadable panorama."""
         key = env_key(options)
+        if key[0] == "file":  # (a file written again under its name is another panorama)
+            with contextlib.suppress(OSError):  # (a missing one: load_panorama's error)
+                st = os.stat(key[1])
+                key = (*key, st.st_size, st.st_mtime_ns)
         env = self._made.get(key)
         if env is None:
             baker = self.baker
