@@ -469,6 +469,7 @@ class BatchStep:
         for name in ("worlds", "world_visible", "cameras", "size"):
             if name in kwargs:
                 raise UsageError(f"batch_step: {name} is given each call, not to batch_step")
+        self.view = _frames_view(kwargs)
         self.kwargs = kwargs
         params = inspect.signature(type(renderer).render_batch).parameters
         bound = {k: v.default for k, v in params.items()
@@ -480,6 +481,16 @@ class BatchStep:
     def __call__(self, worlds: Any = None, world_visible: Any = None, **more: Any) -> Any:
         """render_batch(cameras, size, worlds=worlds, world_visible=world_visible, the step's
         arguments, `more`)."""
+        if not self.view:
+            return self._call(worlds, world_visible, more)
+        path = self.renderer.batch_path
+        path.frames_view = True  # (the call's CUDA frames not cloned: _cuda_tensor)
+        try:
+            return self._call(worlds, world_visible, more)
+        finally:
+            path.frames_view = False
+
+    def _call(self, worlds: Any, world_visible: Any, more: dict[str, Any]) -> Any:
         if more:
             return self.renderer.render_batch(self.cameras, self.size, worlds=worlds,
                                               world_visible=world_visible,
@@ -493,10 +504,26 @@ class BatchStep:
                           b["out"], given, self._overrides)
 
 
+def _frames_view(kwargs: dict[str, Any]) -> bool:
+    """batch_step's `frames` ("copy", the default: each call's frames its own; "view": with
+    device="cuda", the frames as a view of the renderer's exported memory, no clone a step,
+    rewritten by the next call), taken out of `kwargs`."""
+    frames = kwargs.pop("frames", "copy")
+    if frames not in ("copy", "view"):
+        raise UsageError(f"batch_step: frames {frames!r}: choose 'copy' or 'view'")
+    if frames == "view" and kwargs.get("device", "cpu") != "cuda":
+        raise UsageError("batch_step: frames='view' is for device='cuda' (NumPy frames: give "
+                         "out= for no new array a step)")
+    return frames == "view"
+
+
 def batch_step(renderer: Any, cameras: Any, size: tuple[int, int] = (128, 128),
                **kwargs: Any) -> BatchStep:
     """Renderer.batch_step: a loop's render_batch made once, e.g.
     `step = r.batch_step(cams, (128, 128), device="cuda", shadows=False)`, then
     `frames = step(worlds=poses)` each step. `kwargs`: render_batch's arguments but the
-    cameras, size, worlds and world_visible (given each call). docs/batch.md "Worlds"."""
+    cameras, size, worlds and world_visible (given each call), and `frames`: "copy" (the
+    default) or "view" (device="cuda": the frames not cloned; valid until the next call;
+    work queued on torch's current stream before it reads them safely). docs/batch.md
+    "Worlds"."""
     return BatchStep(renderer, cameras, size, kwargs)

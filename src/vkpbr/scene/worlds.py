@@ -126,9 +126,10 @@ class WorldPoses:
     def matrices(self) -> np.ndarray:
         """(W, N, 4, 4) float64 world matrices (made from the rows on first use: the GPU
         expands rows itself)."""
-        if self.given.ndim == 4:
-            return self.given
-        return _rows_to_matrices(self.given, "wxyz" if self.wxyz else "xyzw")
+        given = np.asarray(self.given, np.float64)  # (float32 poses are kept as given)
+        if given.ndim == 4:
+            return given
+        return _rows_to_matrices(given, "wxyz" if self.wxyz else "xyzw")
 
     @classmethod
     def of(cls, poses: Any, slots: int, quaternion: str = "xyzw", visible: Any = None,
@@ -167,8 +168,12 @@ def check_space(space: str) -> bool:
     return space == "local"
 
 
+_KEPT = (np.dtype(bool), np.dtype(np.float32), np.dtype(np.float64))
+
+
 def _array(what: str, value: Any) -> np.ndarray:
-    """`value` as a float64 NumPy array (a CPU torch tensor or anything array-like)."""
+    """`value` as a NumPy array of bool, float32 or float64 (anything else as float64; a
+    CPU torch tensor or anything array-like)."""
     if hasattr(value, "detach") and hasattr(value, "device"):  # torch, not imported here
         if str(value.device) != "cpu":
             raise UsageError(f"{what}: a tensor on {value.device} reaches this path only "
@@ -176,7 +181,7 @@ def _array(what: str, value: Any) -> np.ndarray:
         value = value.detach().numpy()
     try:
         a = np.asarray(value)
-        if a.dtype == bool:
+        if a.dtype in _KEPT:  # (a loop's float32 poses: no copy a step; matrices converts)
             return a
         return a.astype(np.float64)
     except (TypeError, ValueError) as exc:
@@ -186,12 +191,18 @@ def _array(what: str, value: Any) -> np.ndarray:
 def _checked_rows(p: np.ndarray, quaternion: str) -> np.ndarray:
     if quaternion not in QUATERNION_ORDERS:
         raise UsageError(f"quaternion {quaternion!r}: choose 'xyzw' or 'wxyz'")
-    if not np.isfinite(p).all():
-        raise UsageError("worlds: a pose holds NaN or infinity")
-    q = p[..., 3:].reshape(-1, 4)
-    if np.einsum("ij,ij->i", q, q).min(initial=1.0) < 1e-24:
+    _check_finite(p)
+    q = p[..., 3:]  # (a view: no copy of the quaternions; einsum reads it strided)
+    if np.einsum("...i,...i->...", q, q).min(initial=1.0) < 1e-24:
         raise UsageError("worlds: a quaternion of length 0 is no rotation")
     return p
+
+
+def _check_finite(p: np.ndarray) -> None:
+    """UsageError where `p` holds NaN or infinity (np.isfinite's bool temporary: measured
+    faster than a sum's propagation on float32, whose pairwise sum is slow)."""
+    if not np.isfinite(p).all():
+        raise UsageError("worlds: a pose holds NaN or infinity")
 
 
 def _rows_to_matrices(p: np.ndarray, quaternion: str) -> np.ndarray:
@@ -205,8 +216,7 @@ def _rows_to_matrices(p: np.ndarray, quaternion: str) -> np.ndarray:
 
 
 def _checked_matrices(p: np.ndarray) -> np.ndarray:
-    if not np.isfinite(p).all():
-        raise UsageError("worlds: a pose holds NaN or infinity")
+    _check_finite(p)
     if np.abs(p[..., 3, :] - _LAST_ROW).max(initial=0.0) > 1e-6:
         raise UsageError("worlds: a matrix's last row must be 0 0 0 1 (an affine transform)")
     return p
