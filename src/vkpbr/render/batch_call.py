@@ -158,12 +158,14 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
                  options: RenderOptions | None, linear: bool, depth: bool,
                  outputs: Iterable[str] | None, batch: int | str, device: str,
                  out: np.ndarray | None, given: WorldArgs | None = None,
-                 overrides: dict[str, Any] | None = None) -> Any:
-    """Renderer.render_batch (its docstring says what each argument is)."""
+                 overrides: dict[str, Any] | None = None, prep: Prepared | None = None) -> Any:
+    """Renderer.render_batch (its docstring says what each argument is); `prep`: the call's
+    Prepared where the caller kept it (BatchStep)."""
     r = renderer
     # The cameras, options and route: made once for a loop's calls (render/batch_cache.py)
-    prep = batch_cache(r).prepared(r, cameras, size, options, overrides or {}, linear, depth,
-                                   outputs, device, out, _options)
+    if prep is None:
+        prep = batch_cache(r).prepared(r, cameras, size, options, overrides or {}, linear,
+                                       depth, outputs, device, out, _options)
     views, opts, route, wanted = prep.views, prep.opts, prep.route, prep.wanted
     g = given or NO_WORLDS
     if g.times is not None:
@@ -477,6 +479,7 @@ class BatchStep:
         bound.update((k, v) for k, v in kwargs.items() if k in bound)
         self._bound = bound
         self._overrides = {k: v for k, v in kwargs.items() if k not in bound}
+        self._prep: tuple[int, Prepared] | None = None  # (the cache's version, the Prepared)
 
     def __call__(self, worlds: Any = None, world_visible: Any = None, **more: Any) -> Any:
         """render_batch(cameras, size, worlds=worlds, world_visible=world_visible, the step's
@@ -496,12 +499,28 @@ class BatchStep:
                                               world_visible=world_visible,
                                               **{**self.kwargs, **more})
         b = self._bound
+        prep = self._prepared(b)
         given = WorldArgs(worlds, b["world_of_view"], b["quaternion"], world_visible,
                           b["world_expand"], b["world_materials"], b["space"], b["world_lights"],
                           b["world_environment"], b["times"], b["animation"])
         return render_batch(self.renderer, self.cameras, self.size, b["lights"], b["options"],
                           b["linear"], b["depth"], b["outputs"], b["batch"], b["device"],
-                          b["out"], given, self._overrides)
+                          b["out"], given, self._overrides, prep)
+
+    def _prepared(self, b: dict[str, Any]) -> Prepared:
+        """The call's Prepared: the one kept from the last call while the renderer's cache
+        holds it (not cleared, the same scene's parts), else the cache's lookup (which also
+        checks `out`, each call where one is given)."""
+        r, cache, kept = self.renderer, batch_cache(self.renderer), self._prep
+        if (kept is not None and kept[0] == cache.version and b["out"] is None
+                and kept[1].holds[0] is r.parts):
+            return kept[1]
+        prep = cache.prepared(r, self.cameras, self.size, b["options"], self._overrides,
+                              b["linear"], b["depth"], b["outputs"], b["device"], b["out"],
+                              _options)
+        # (kept only where the cache keeps it: a key of identities and plain values)
+        self._prep = (cache.version, prep) if cache.keeps(prep) else None
+        return prep
 
 
 def _frames_view(kwargs: dict[str, Any]) -> bool:

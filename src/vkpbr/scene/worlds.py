@@ -136,7 +136,24 @@ class WorldPoses:
            space: str = "world") -> WorldPoses:
         """Checked poses: (W, N, 4, 4) affine world matrices or (W, N, 7) position + unit
         quaternion rows (`quaternion` "xyzw" as SAPIEN/scipy, or "wxyz" as MuJoCo/Isaac);
-        `visible` (W, N) of bools. One-line UsageErrors name what is wrong."""
+        `visible` (W, N) of bools. One-line UsageErrors name what is wrong. A NumPy array
+        of the layout checked last (shape, dtype, slots, quaternion order, space; no
+        visibility) has only its values checked: a loop's steps give the same each time."""
+        layout = None
+        if type(poses) is np.ndarray and visible is None and poses.dtype in _KEPT[1:]:
+            layout = (poses.shape, poses.dtype, slots, quaternion, space)
+            if layout == _LAYOUT[0]:
+                p = poses[:, None] if poses.ndim == 2 else poses
+                (_row_values if p.ndim == 3 else _checked_matrices)(p)
+                return cls(p, None, quaternion == "wxyz", space == "local")
+        made = cls._of(poses, slots, quaternion, visible, space)
+        if layout is not None:
+            _LAYOUT[0] = layout
+        return made
+
+    @classmethod
+    def _of(cls, poses: Any, slots: int, quaternion: str, visible: Any, space: str
+            ) -> WorldPoses:
         p = _array("worlds", poses)
         if p.ndim == 2 and p.shape[-1] == 7 and slots == 1:
             p = p[:, None]
@@ -169,6 +186,9 @@ def check_space(space: str) -> bool:
 
 
 _KEPT = (np.dtype(bool), np.dtype(np.float32), np.dtype(np.float64))
+# WorldPoses.of's last checked layout of a NumPy array (shape, dtype, slots, quaternion,
+# space): a loop's next steps check only their values
+_LAYOUT: list[tuple | None] = [None]
 
 
 def _array(what: str, value: Any) -> np.ndarray:
@@ -191,6 +211,11 @@ def _array(what: str, value: Any) -> np.ndarray:
 def _checked_rows(p: np.ndarray, quaternion: str) -> np.ndarray:
     if quaternion not in QUATERNION_ORDERS:
         raise UsageError(f"quaternion {quaternion!r}: choose 'xyzw' or 'wxyz'")
+    return _row_values(p)
+
+
+def _row_values(p: np.ndarray) -> np.ndarray:
+    """`p`'s values checked (W, N, 7): finite, no quaternion of length 0."""
     _check_finite(p)
     q = p[..., 3:]  # (a view: no copy of the quaternions; einsum reads it strided)
     if np.einsum("...i,...i->...", q, q).min(initial=1.0) < 1e-24:
