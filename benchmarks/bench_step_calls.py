@@ -1,6 +1,6 @@
 """The Python calls of one replayed worlds step (issue 32, pystep3): every function a warm
 `batch_step(worlds=poses)` call enters, with its calls and own microseconds a step
-(cProfile), the calls in all, and the Python allocations a step (tracemalloc's blocks).
+(cProfile), the calls in all, and the peak of a step's allocations (tracemalloc).
 
     python benchmarks/bench_step_calls.py [--variant tabletop|primitives|box|helmet]
         [--worlds 64] [--size 8] [--steps 20] [--expand gpu|auto] [--top 40]
@@ -61,11 +61,10 @@ def main() -> None:
         blocks = []
         for s in range(args.steps):
             np.copyto(live, poses[s])
-            before = tracemalloc.take_snapshot()
+            tracemalloc.reset_peak()
+            base = tracemalloc.get_traced_memory()[0]
             step(worlds=live)
-            after = tracemalloc.take_snapshot()
-            blocks.append(sum(d.count_diff for d in after.compare_to(before, "lineno")
-                              if d.count_diff > 0))
+            blocks.append(tracemalloc.get_traced_memory()[1] - base)
         tracemalloc.stop()
         replayed = r.batch_path.replays.replayed - replayed
     st = pstats.Stats(prof)
@@ -74,8 +73,9 @@ def main() -> None:
     calls = sum(v[1] for v in st.stats.values()) / n  # (all calls, recursive ones too)
     print(f"## {args.variant}, W={args.worlds}, {args.size}x{args.size}, world_expand="
           f"{args.expand}, {n} steps ({replayed} of {2 * n} replayed)")
-    print(f"Python calls a step: {calls:.0f}; Python blocks allocated and kept over a step "
-          f"(tracemalloc, median): {sorted(blocks)[n // 2]}")
+    print(f"Python calls a step: {calls:.0f}; peak bytes allocated in a step (tracemalloc: "
+          f"Python objects and NumPy arrays, the returned frames included), median: "
+          f"{sorted(blocks)[n // 2]:,}")
     print("| function | calls a step | own us a step (cProfile, cold) |")
     print("|---|---:|---:|")
     for (file, line, name), v in rows[:args.top]:

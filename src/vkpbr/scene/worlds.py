@@ -217,8 +217,8 @@ def _checked_rows(p: np.ndarray, quaternion: str) -> np.ndarray:
 def _row_values(p: np.ndarray) -> np.ndarray:
     """`p`'s values checked (W, N, 7): finite, no quaternion of length 0."""
     _check_finite(p)
-    q = p[..., 3:]  # (a view: no copy of the quaternions; einsum reads it strided)
-    if np.einsum("...i,...i->...", q, q).min(initial=1.0) < 1e-24:
+    q = p[..., 3:]  # (a view: no copy of the quaternions, read strided)
+    if np.minimum.reduce(_square_norms(q, q), axis=None, initial=1.0) < 1e-24:
         raise UsageError("worlds: a quaternion of length 0 is no rotation")
     return p
 
@@ -226,8 +226,12 @@ def _row_values(p: np.ndarray) -> np.ndarray:
 def _check_finite(p: np.ndarray) -> None:
     """UsageError where `p` holds NaN or infinity (np.isfinite's bool temporary: measured
     faster than a sum's propagation on float32, whose pairwise sum is slow)."""
-    if not np.isfinite(p).all():
+    if not np.logical_and.reduce(np.isfinite(p), axis=None):
         raise UsageError("worlds: a pose holds NaN or infinity")
+
+
+# (..., 4) x (..., 4) -> (...) dot products: NumPy 2's vecdot ufunc (one C call), else einsum
+_square_norms = getattr(np, "vecdot", None) or (lambda a, b: np.einsum("...i,...i->...", a, b))
 
 
 def _rows_to_matrices(p: np.ndarray, quaternion: str) -> np.ndarray:
