@@ -75,7 +75,9 @@ class Frame:
         `values` (wait value, signal value) two timeline semaphores (gpu/timeline.py: the
         wait before any command)."""
         lib = self.device.vk.lib
-        check_result(lib.vkResetFences(self.device.handle, 1, self.fences), "vkResetFences")
+        result = lib.vkResetFences(self.device.handle, 1, self.fences)
+        if result:  # (check_result only for an error: a call less a step)
+            check_result(result, "vkResetFences")
         self._cmds[0] = cmd.handle
         mode = (wait, signal, values is None)
         if mode != self._mode:  # (a loop's steps submit alike: the struct as it was left)
@@ -84,8 +86,9 @@ class Frame:
         if values is not None:  # (only the timeline values change step to step)
             self._values[0], self._values[1] = values
         self.finished = False
-        check_result(lib.vkQueueSubmit(self.device.queue, 1, self._submit, self.fence),
-                     "vkQueueSubmit")
+        result = lib.vkQueueSubmit(self.device.queue, 1, self._submit, self.fence)
+        if result:
+            check_result(result, "vkQueueSubmit")
 
     def _fill(self, wait: Any, signal: Any, timeline: bool) -> None:
         """The submit info's semaphores, stage and chain for `submit`'s arguments."""

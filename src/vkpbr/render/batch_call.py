@@ -306,13 +306,14 @@ def _host_call(renderer: Any, plan: WorldPlan, expand: str,
         return WorldCall(index, records=world_records(state, slots, poses), factors=factors,
                          moved=slots.anchor >= 0)
     # The rows as given (7 floats: the kernel makes the rotation) or the matrices (16)
-    flat = poses.rows if poses.rows is not None else poses.matrices
+    rows = poses.rows
+    flat = rows if rows is not None else poses.matrices
     shown = poses.visible
 
     def fill(kernel: Any) -> None:
         kernel.write_numpy(flat, shown)
 
-    gw = GpuWorlds(slots, poses.count, 7 if poses.rows is not None else 16, poses.wxyz,
+    gw = GpuWorlds(slots, poses.count, 7 if rows is not None else 16, poses.wxyz,
                    shown is not None, fill, local=poses.local)
     return WorldCall(index, gpu=gw, factors=factors)
 
