@@ -140,7 +140,7 @@ class WorldPoses:
         of the layout checked last (shape, dtype, slots, quaternion order, space; no
         visibility) has only its values checked: a loop's steps give the same each time."""
         layout = None
-        if type(poses) is np.ndarray and visible is None and poses.dtype in _KEPT[1:]:
+        if type(poses) is np.ndarray and visible is None and poses.dtype in _KEPT:
             layout = (poses.shape, poses.dtype, slots, quaternion, space)
             if layout == _LAYOUT[0]:
                 p = poses[:, None] if poses.ndim == 2 else poses
@@ -154,7 +154,7 @@ class WorldPoses:
     @classmethod
     def _of(cls, poses: Any, slots: int, quaternion: str, visible: Any, space: str
             ) -> WorldPoses:
-        p = _array("worlds", poses)
+        p = _array("worlds", poses, keep=True)
         if p.ndim == 2 and p.shape[-1] == 7 and slots == 1:
             p = p[:, None]
         if p.ndim == 3 and p.shape[1:] == (slots, 7):
@@ -185,15 +185,16 @@ def check_space(space: str) -> bool:
     return space == "local"
 
 
-_KEPT = (np.dtype(bool), np.dtype(np.float32), np.dtype(np.float64))
+_KEPT = (np.dtype(np.float32), np.dtype(np.float64))  # poses read as given
 # WorldPoses.of's last checked layout of a NumPy array (shape, dtype, slots, quaternion,
 # space): a loop's next steps check only their values
 _LAYOUT: list[tuple | None] = [None]
 
 
-def _array(what: str, value: Any) -> np.ndarray:
-    """`value` as a NumPy array of bool, float32 or float64 (anything else as float64; a
-    CPU torch tensor or anything array-like)."""
+def _array(what: str, value: Any, keep: bool = False) -> np.ndarray:
+    """`value` as a float64 NumPy array, or bool (a CPU torch tensor or anything
+    array-like); `keep`: float32 kept as given too (the poses: no copy a step, read within
+    the call)."""
     if hasattr(value, "detach") and hasattr(value, "device"):  # torch, not imported here
         if str(value.device) != "cpu":
             raise UsageError(f"{what}: a tensor on {value.device} reaches this path only "
@@ -201,8 +202,8 @@ def _array(what: str, value: Any) -> np.ndarray:
         value = value.detach().numpy()
     try:
         a = np.asarray(value)
-        if a.dtype in _KEPT:  # (a loop's float32 poses: no copy a step; matrices converts)
-            return a
+        if a.dtype == bool or a.dtype == np.float64 or (keep and a.dtype == np.float32):
+            return a  # (float32 poses: WorldPoses.matrices converts them where needed)
         return a.astype(np.float64)
     except (TypeError, ValueError) as exc:
         raise UsageError(f"{what}: not an array of numbers ({exc})") from None
