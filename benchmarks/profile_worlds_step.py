@@ -3,7 +3,7 @@ phases of a warm call, in microseconds per call, with the GPU's waits apart.
 
     python benchmarks/profile_worlds_step.py [--variant primitives|tabletop|helmet|box]
         [--worlds 4096] [--size 16] [--steps 30] [--torch] [--pipeline auto]
-        [--expand auto] [--prepared] [--bare] [--cprofile 20]
+        [--expand auto] [--prepared [--frames view]] [--bare] [--cprofile 20]
 
 A step is what a simulator's loop does: new (W, N, 7) poses (position + quaternion x, y, z,
 w; benchmarks/tabletop.py's motion, made before the clock starts), then
@@ -197,6 +197,9 @@ def parse() -> argparse.Namespace:
     ap.add_argument("--expand", default="auto", help="world_expand for NumPy poses")
     ap.add_argument("--prepared", action="store_true",
                     help="renderer.batch_step(...) made once, called with each step's poses")
+    ap.add_argument("--frames", choices=("copy", "view"), default="copy",
+                    help="with --prepared --torch: batch_step(frames=...): 'view' hands the "
+                    "frames without a clone (docs/batch.md)")
     ap.add_argument("--shadows", action="store_true", help="keep shadows on (off by default, "
                     "as bench_worlds.py: the worlds share the state's shadow maps)")
     ap.add_argument("--bare", action="store_true",
@@ -233,6 +236,8 @@ def main() -> None:
             kw["world_expand"] = args.expand
         common = dict(quaternion="xyzw", space=space)
         if args.prepared:
+            if args.frames == "view":
+                kw["frames"] = "view"
             step = r.batch_step(cams, size, **common, **kw)  # type: ignore[attr-defined]
             call = lambda p: step(worlds=p)  # noqa: E731
         else:
@@ -279,7 +284,8 @@ def report(args: argparse.Namespace, r: Renderer, timers: Timers, walls: list[fl
     us = {k: 1e6 * v / n for k, v in timers.total.items()}
     mode = "CUDA poses -> torch" if args.torch else f"NumPy poses -> NumPy (world_expand={args.expand})"
     print(f"## {args.variant}, W={args.worlds}, {args.size}x{args.size}, {mode}, "
-          f"pipeline={args.pipeline}{', prepared step' if args.prepared else ''}, "
+          f"pipeline={args.pipeline}{', prepared step' if args.prepared else ''}"
+          f"{', frames=view' if args.frames == 'view' else ''}, "
           f"{r.device.info.name}, {n} steps")
     print("| phase | us per call | CPU us per call | calls per step |")
     print("|---|---:|---:|---:|")

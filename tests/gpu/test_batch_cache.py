@@ -219,3 +219,35 @@ def test_batch_step_takes_the_poses_each_call(r: Any) -> None:
     cams = CameraBatch.from_cameras(cameras(2), CAMERA)
     with pytest.raises(UsageError, match="worlds is given each call"):
         r.batch_step(cams, SIZE, worlds=world_poses(2))
+    with pytest.raises(UsageError, match="frames='view' is for device='cuda'"):
+        r.batch_step(cams, SIZE, frames="view")
+    with pytest.raises(UsageError, match="frames 'clone': choose 'copy' or 'view'"):
+        r.batch_step(cams, SIZE, device="cuda", frames="clone")
+
+
+def test_poses_changed_in_place_are_seen_by_replayed_steps(r: Any) -> None:
+    """A simulator writes its poses into the same float32 array every step (no copy is made
+    of it: render/worlds.py): each replayed step sees that step's values, equal to a fresh
+    call's pixels, and the NaN check still sees a bad value written in place."""
+    from vkpbr.errors import UsageError
+
+    r.world_slots(MOVED)
+    cams = CameraBatch.from_cameras(cameras(2), CAMERA)
+    a, b = world_poses(2, seed=7).astype(np.float32), world_poses(2, seed=8).astype(np.float32)
+    for expand in ("auto", "gpu"):
+        want_a = fresh(r, cams, a.copy(), world_expand=expand)
+        want_b = fresh(r, cams, b.copy(), world_expand=expand)
+        assert not np.array_equal(want_a, want_b), "the poses changed nothing (test is moot)"
+        step = r.batch_step(cams, SIZE, quaternion="wxyz", pipeline="forward", **NO_SHADOWS,
+                            world_expand=expand)
+        live = a.copy()
+        for _ in range(r.ring.count):  # (each slot records its step: the next ones replay)
+            step(worlds=live)
+        count = r.batch_path.replays.replayed
+        for want, src in ((want_b, b), (want_a, a), (want_b, b)):
+            np.copyto(live, src)  # (the same array, new values)
+            assert np.array_equal(step(worlds=live), want), expand
+        assert r.batch_path.replays.replayed == count + 3, "the steps were not replayed"
+        live[1, 0, 2] = np.nan
+        with pytest.raises(UsageError, match="NaN or infinity"):
+            step(worlds=live)

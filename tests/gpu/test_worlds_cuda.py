@@ -87,6 +87,35 @@ def test_back_to_back_steps_keep_their_frames(renderer) -> None:  # noqa: ANN001
         assert np.mean(np.abs(frames.cpu().numpy().astype(int) - want)) <= 0.05, seed
 
 
+def test_frames_as_a_view_follow_each_step(renderer) -> None:  # noqa: ANN001
+    """batch_step(frames="view"): the frames are the exported memory itself (the same tensor
+    each step, no clone), holding each step's frames when read before the next call (the
+    steps past the ring's slots replayed); equal to the cloned default's."""
+    import torch
+
+    r = renderer
+    buf = torch.zeros((3, 2, 7), device="cuda")
+    kw = dict(quaternion="wxyz", device="cuda", pipeline="compute", **NO_SHADOWS)
+    cams = cameras(3)
+    copied = r.batch_step(cams, (W, H), **kw)
+    want = {}
+    for seed in (1, 2):
+        buf.copy_(torch.as_tensor(world_poses(3, seed=seed), device="cuda"))
+        want[seed] = copied(worlds=buf).cpu().numpy()
+    assert not np.array_equal(want[1], want[2]), "the poses changed nothing (test is moot)"
+    viewed = r.batch_step(cams, (W, H), frames="view", **kw)
+    replayed = r.batch_path.replays.replayed
+    seen = []
+    for seed in (1, 2, 1, 2, 1, 2):
+        buf.copy_(torch.as_tensor(world_poses(3, seed=seed), device="cuda"))
+        got = viewed(worlds=buf)
+        seen.append(got)
+        assert np.array_equal(got.cpu().numpy(), want[seed]), seed  # (read before the next)
+    assert all(t is seen[0] for t in seen[1:]), "a new tensor a step (a clone?)"
+    assert r.batch_path.replays.replayed > replayed, "no step was replayed"
+    assert r.batch_path.frames_view is False  # (only during the view step's calls)
+
+
 @pytest.mark.parametrize("device", ["cpu", "cuda"])
 def test_nan_poses_on_the_gpu_are_hidden_and_reported(renderer, device: str) -> None:  # noqa: ANN001
     """CUDA poses are not read back before the batch: the kernel hides a world whose pose is

@@ -9,6 +9,7 @@ order Sascha Willems' renderheadless and vkguide's deletion queue use). Nothing 
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import time
 from collections.abc import Iterator
@@ -51,7 +52,12 @@ VK_TIMEOUT = 2  # VkResult: the wait timed out
 def gpu_timeout_ns() -> int:
     """$VKPBR_GPU_TIMEOUT_S (seconds, default 120) in nanoseconds: the longest wait for one
     submission (a frame, an upload). A GPU that never finishes is an error, not a hang."""
-    text = os.environ.get(GPU_TIMEOUT_ENV, "")
+    return _timeout_ns(os.environ.get(GPU_TIMEOUT_ENV, ""))
+
+
+@functools.lru_cache(maxsize=8)
+def _timeout_ns(text: str) -> int:
+    """gpu_timeout_ns of the variable's text (parsed once a value: every fence wait asks)."""
     try:
         seconds = float(text) if text else GPU_TIMEOUT_DEFAULT_S
     except ValueError:
@@ -405,15 +411,16 @@ class Device:
 
     def wait_fences(self, fences: Any, what: str) -> None:
         """Wait for a cffi `VkFence[1]` array; GpuTimeoutError after gpu_timeout_ns()."""
-        from vkpbr.gpu.vk import check_result
-
         timeout = gpu_timeout_ns()
         result = self.vk.lib.vkWaitForFences(self.handle, 1, fences, 1, timeout)
         if result == VK_TIMEOUT:
             raise GpuTimeoutError("vkWaitForFences", "VK_TIMEOUT", (
                 f"{self.info.name} did not finish {what} in {timeout / 1e9:g} s: the device "
                 f"looks hung (set {GPU_TIMEOUT_ENV} to wait longer for very large frames)"))
-        check_result(result, "vkWaitForFences")
+        if result != 0:  # (VK_SUCCESS: no call; check_result names any other)
+            from vkpbr.gpu.vk import check_result
+
+            check_result(result, "vkWaitForFences")
 
     def wait_idle(self) -> None:
         if self.handle is not None:

@@ -59,6 +59,7 @@ class Frame:
             "pWaitSemaphoreValues": self._values, "pSignalSemaphoreValues": self._values + 1})
         self._stages = (vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
                         vk.VK_PIPELINE_STAGE_ALL_COMMANDS_BIT)
+        self._mode: tuple | None = None  # submit's (wait, signal, no values) last filled in
 
     def wait(self) -> None:
         """Block until this frame's last submission has finished on the GPU."""
@@ -73,29 +74,40 @@ class Frame:
         colour-output stage) and signalling `signal` (semaphores of a swapchain), or with
         `values` (wait value, signal value) two timeline semaphores (gpu/timeline.py: the
         wait before any command)."""
-        vk = self.device.vk
-        lib = vk.lib
-        check_result(lib.vkResetFences(self.device.handle, 1, self.fences), "vkResetFences")
-        info = self._submit
+        lib = self.device.vk.lib
+        result = lib.vkResetFences(self.device.handle, 1, self.fences)
+        if result:  # (check_result only for an error: a call less a step)
+            check_result(result, "vkResetFences")
         self._cmds[0] = cmd.handle
+        mode = (wait, signal, values is None)
+        if mode != self._mode:  # (a loop's steps submit alike: the struct as it was left)
+            self._fill(wait, signal, values is not None)
+            self._mode = mode
+        if values is not None:  # (only the timeline values change step to step)
+            self._values[0], self._values[1] = values
+        self.finished = False
+        result = lib.vkQueueSubmit(self.device.queue, 1, self._submit, self.fence)
+        if result:
+            check_result(result, "vkQueueSubmit")
+
+    def _fill(self, wait: Any, signal: Any, timeline: bool) -> None:
+        """The submit info's semaphores, stage and chain for `submit`'s arguments."""
+        info = self._submit
         info.waitSemaphoreCount = 0 if wait is None else 1
         info.signalSemaphoreCount = 0 if signal is None else 1
         if wait is not None:
             self._wait[0] = wait
         if signal is not None:
             self._signal[0] = signal
-        if values is None:
-            info.pNext = vk.ffi.NULL
+        if not timeline:
+            info.pNext = self.device.vk.ffi.NULL
             self._stage[0] = self._stages[0]
         else:
             t = self._timeline
             t.waitSemaphoreValueCount = info.waitSemaphoreCount
             t.signalSemaphoreValueCount = info.signalSemaphoreCount
-            self._values[0], self._values[1] = values
             info.pNext = t
             self._stage[0] = self._stages[1]
-        self.finished = False
-        check_result(lib.vkQueueSubmit(self.device.queue, 1, info, self.fence), "vkQueueSubmit")
 
     def destroy(self) -> None:
         vk, dev = self.device.vk, self.device.handle

@@ -77,6 +77,7 @@ class BatchCache:
         self._cuda: tuple[Any, int] | None = None  # (device, its CUDA index)
         self._parts: Any = None  # the frame parts the entries were made with
         self.hits = self.misses = 0  # (tests read them: a cache that is never hit is a bug)
+        self.version = 0  # bumped when cleared: a BatchStep's kept Prepared is then made again
 
     def prepared(self, r: Any, cameras: Any, size: tuple[int, int],
                  options: RenderOptions | None, overrides: dict[str, Any], linear: bool,
@@ -157,7 +158,12 @@ class BatchCache:
             self._cuda = (device, cuda_device_for(device.uuid(), device.info.name))
         return self._cuda[1]
 
+    def keeps(self, prepared: Prepared) -> bool:
+        """Whether `prepared` is one of the kept calls (its key was one of identities)."""
+        return any(v is prepared for v in self._prepared.values())
+
     def clear(self) -> None:
+        self.version += 1
         self._prepared.clear()
         self._worlds.clear()
 

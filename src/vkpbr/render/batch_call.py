@@ -158,12 +158,14 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
                  options: RenderOptions | None, linear: bool, depth: bool,
                  outputs: Iterable[str] | None, batch: int | str, device: str,
                  out: np.ndarray | None, given: WorldArgs | None = None,
-                 overrides: dict[str, Any] | None = None) -> Any:
-    """Renderer.render_batch (its docstring says what each argument is)."""
+                 overrides: dict[str, Any] | None = None, prep: Prepared | None = None) -> Any:
+    """Renderer.render_batch (its docstring says what each argument is); `prep`: the call's
+    Prepared where the caller kept it (BatchStep)."""
     r = renderer
     # The cameras, options and route: made once for a loop's calls (render/batch_cache.py)
-    prep = batch_cache(r).prepared(r, cameras, size, options, overrides or {}, linear, depth,
-                                   outputs, device, out, _options)
+    if prep is None:
+        prep = batch_cache(r).prepared(r, cameras, size, options, overrides or {}, linear,
+                                       depth, outputs, device, out, _options)
     views, opts, route, wanted = prep.views, prep.opts, prep.route, prep.wanted
     g = given or NO_WORLDS
     if g.times is not None:
@@ -304,13 +306,14 @@ def _host_call(renderer: Any, plan: WorldPlan, expand: str,
         return WorldCall(index, records=world_records(state, slots, poses), factors=factors,
                          moved=slots.anchor >= 0)
     # The rows as given (7 floats: the kernel makes the rotation) or the matrices (16)
-    flat = poses.rows if poses.rows is not None else poses.matrices
+    rows = poses.rows
+    flat = rows if rows is not None else poses.matrices
     shown = poses.visible
 
     def fill(kernel: Any) -> None:
         kernel.write_numpy(flat, shown)
 
-    gw = GpuWorlds(slots, poses.count, 7 if poses.rows is not None else 16, poses.wxyz,
+    gw = GpuWorlds(slots, poses.count, 7 if rows is not None else 16, poses.wxyz,
                    shown is not None, fill, local=poses.local)
     return WorldCall(index, gpu=gw, factors=factors)
 
@@ -469,6 +472,7 @@ class BatchStep:
         for name in ("worlds", "world_visible", "cameras", "size"):
             if name in kwargs:
                 raise UsageError(f"batch_step: {name} is given each call, not to batch_step")
+        self.view = _frames_view(kwargs)
         self.kwargs = kwargs
         params = inspect.signature(type(renderer).render_batch).parameters
         bound = {k: v.default for k, v in params.items()
@@ -476,21 +480,61 @@ class BatchStep:
         bound.update((k, v) for k, v in kwargs.items() if k in bound)
         self._bound = bound
         self._overrides = {k: v for k, v in kwargs.items() if k not in bound}
+        self._prep: tuple[int, Prepared] | None = None  # (the cache's version, the Prepared)
 
     def __call__(self, worlds: Any = None, world_visible: Any = None, **more: Any) -> Any:
         """render_batch(cameras, size, worlds=worlds, world_visible=world_visible, the step's
         arguments, `more`)."""
+        if not self.view:
+            return self._call(worlds, world_visible, more)
+        path = self.renderer.batch_path
+        path.frames_view = True  # (the call's CUDA frames not cloned: _cuda_tensor)
+        try:
+            return self._call(worlds, world_visible, more)
+        finally:
+            path.frames_view = False
+
+    def _call(self, worlds: Any, world_visible: Any, more: dict[str, Any]) -> Any:
         if more:
             return self.renderer.render_batch(self.cameras, self.size, worlds=worlds,
                                               world_visible=world_visible,
                                               **{**self.kwargs, **more})
         b = self._bound
+        prep = self._prepared(b)
         given = WorldArgs(worlds, b["world_of_view"], b["quaternion"], world_visible,
                           b["world_expand"], b["world_materials"], b["space"], b["world_lights"],
                           b["world_environment"], b["times"], b["animation"])
         return render_batch(self.renderer, self.cameras, self.size, b["lights"], b["options"],
                           b["linear"], b["depth"], b["outputs"], b["batch"], b["device"],
-                          b["out"], given, self._overrides)
+                          b["out"], given, self._overrides, prep)
+
+    def _prepared(self, b: dict[str, Any]) -> Prepared:
+        """The call's Prepared: the one kept from the last call while the renderer's cache
+        holds it (not cleared, the same scene's parts), else the cache's lookup (which also
+        checks `out`, each call where one is given)."""
+        r, cache, kept = self.renderer, batch_cache(self.renderer), self._prep
+        if (kept is not None and kept[0] == cache.version and b["out"] is None
+                and kept[1].holds[0] is r.parts):
+            return kept[1]
+        prep = cache.prepared(r, self.cameras, self.size, b["options"], self._overrides,
+                              b["linear"], b["depth"], b["outputs"], b["device"], b["out"],
+                              _options)
+        # (kept only where the cache keeps it: a key of identities and plain values)
+        self._prep = (cache.version, prep) if cache.keeps(prep) else None
+        return prep
+
+
+def _frames_view(kwargs: dict[str, Any]) -> bool:
+    """batch_step's `frames` ("copy", the default: each call's frames its own; "view": with
+    device="cuda", the frames as a view of the renderer's exported memory, no clone a step,
+    rewritten by the next call), taken out of `kwargs`."""
+    frames = kwargs.pop("frames", "copy")
+    if frames not in ("copy", "view"):
+        raise UsageError(f"batch_step: frames {frames!r}: choose 'copy' or 'view'")
+    if frames == "view" and kwargs.get("device", "cpu") != "cuda":
+        raise UsageError("batch_step: frames='view' is for device='cuda' (NumPy frames: give "
+                         "out= for no new array a step)")
+    return frames == "view"
 
 
 def batch_step(renderer: Any, cameras: Any, size: tuple[int, int] = (128, 128),
@@ -498,5 +542,8 @@ def batch_step(renderer: Any, cameras: Any, size: tuple[int, int] = (128, 128),
     """Renderer.batch_step: a loop's render_batch made once, e.g.
     `step = r.batch_step(cams, (128, 128), device="cuda", shadows=False)`, then
     `frames = step(worlds=poses)` each step. `kwargs`: render_batch's arguments but the
-    cameras, size, worlds and world_visible (given each call). docs/batch.md "Worlds"."""
+    cameras, size, worlds and world_visible (given each call), and `frames`: "copy" (the
+    default) or "view" (device="cuda": the frames not cloned; valid until the next call;
+    work queued on torch's current stream before it reads them safely). docs/batch.md
+    "Worlds"."""
     return BatchStep(renderer, cameras, size, kwargs)

@@ -49,6 +49,10 @@ ATLASES_KEPT = 2  # compute-batch atlases kept between calls (BatchPath._atlas)
 MEMORY_AGE_S = 0.5  # how long a free-memory query serves the calls after it (per_submission)
 
 
+# _cuda_events' mark of a buffer handed out as the frames themselves (frames='view'), not cloned
+VIEWED = object()
+
+
 class BatchPath:
     """The batch path of frames drawn with `parts` (its GPU objects made on the first
     batch, destroyed by `close`). `stats`: the last call's timings, its submissions' summed."""
@@ -77,6 +81,8 @@ class BatchPath:
         self._pending: tuple[Any, float] | None = None  # (frame, its Python ms) not waited for
         self._pending_stats = FrameStats()  # the last waited CUDA-ordered submission's
         self._ordered = False  # the submission under way is CUDA-ordered
+        # BatchStep(frames='view'): the CUDA frames as a view of the exported memory (no clone)
+        self.frames_view = False
         self._last_views: tuple | None = None  # (batch, key, instance bases, terms) written
         self._submissions = 0  # of the render_batch call under way (its stats summed)
         self._t_start = 0.0  # when the submission under way began (its Python time)
@@ -632,7 +638,11 @@ class BatchPath:
             index = cuda_device_for(dev.uuid(), dev.info.name)
             imported = CudaImport(buf.export_fd(), buf.allocation_size, index)
             self._cuda_imports[id(buf)] = imported
-        out = imported.tensor(shape, "<f4" if linear else "|u1").clone()
+        view = imported.tensor(shape, "<f4" if linear else "|u1")
+        if self.frames_view:  # (valid until the next step: docs/batch.md "frames='view'")
+            self._cuda_events[id(buf)] = VIEWED  # (the next batch waits for torch's stream)
+            return view
+        out = view.clone()
         event = self._cuda_made_events.get(id(buf))
         if event is None:  # (one a buffer, recorded again each call: no new event a step)
             import torch
@@ -687,7 +697,11 @@ class BatchPath:
         """Before a batch writes an external target (or exported buffer): CUDA has finished
         copying the last one."""
         event = self._cuda_events.pop(id(owner), None)
-        if event is not None:
+        if event is VIEWED:  # (frames='view': what torch queued reading them since, done)
+            import torch
+
+            torch.cuda.current_stream().synchronize()
+        elif event is not None:
             event.synchronize()
 
     def _forget_cuda(self, target: BatchTarget) -> None:

@@ -13,6 +13,10 @@ inputs before they are written, the clone never reads frames before they are dra
 next batch never draws over frames before the clone read them (it waits for inputs n + 1,
 signalled after the clone). Python returns once the batch is submitted; the next call first
 waits for this batch's fence (the host's own buffers of the batch are then free to rewrite).
+A loop's next step on the same stream skips its first wait (done >= n, queued already by
+the clone's wait: stream order): two CUDA semaphore calls a step, not three. With
+batch_step(frames="view") there is no clone: what torch queues reading the frames before the
+next call is ordered before its inputs' signal, so before the next batch draws.
 """
 
 from __future__ import annotations
@@ -37,6 +41,9 @@ class CudaOrder:
         self.value = 0  # the last value signalled on either
         self._fresh = False  # inputs signalled for the next submission
         self._step_stream: int | None = None  # torch's stream of the step under way
+        # (value, stream) the last frames_ready queued a wait for on `done`: the next step's
+        # before_inputs on that stream, at that value, needs no second wait (stream order)
+        self._ready_at: tuple[int, int] | None = None
 
     def _stream(self) -> int:
         """torch's current stream's handle, asked once a step (before_inputs: the step's
@@ -50,7 +57,10 @@ class CudaOrder:
     def before_inputs(self) -> None:
         """Queue on torch's stream: wait until the last batch is done (its inputs read)."""
         self._step_stream = None  # (a new step: the stream asked again)
-        self._cuda_done.wait(self.value, self._stream())
+        stream = self._stream()
+        if self._ready_at != (self.value, stream):  # (else queued already: frames_ready)
+            self._cuda_done.wait(self.value, stream)
+        self._ready_at = None
 
     def inputs_written(self) -> None:
         """Queue on torch's stream: signal the next value once what is queued is done."""
@@ -69,7 +79,9 @@ class CudaOrder:
     def frames_ready(self) -> None:
         """Queue on torch's stream: wait until the submitted batch is done (before the
         frames' clone); the step's end (the next asks for the stream again)."""
-        self._cuda_done.wait(self.value, self._stream())
+        stream = self._stream()
+        self._cuda_done.wait(self.value, stream)
+        self._ready_at = (self.value, stream)
         self._step_stream = None
 
     def destroy(self) -> None:

@@ -193,6 +193,10 @@ class WorldKernel:
         self._errors = self.errors.array(np.uint32, self._error_stride // 4 * slots).reshape(
             slots, -1)[:, :2]
         self._errors[:] = (0, 0xFFFFFFFF)
+        # (the counts read as Python ints through a memoryview: a step's check of its slot's
+        # report costs an index, not a NumPy row and its tolist)
+        self._counts = memoryview(self.errors.array(np.uint32, self._error_stride // 4 * slots))
+        self._words = self._error_stride // 4
         self.order: Any = None  # render/cuda_order.py CudaOrder of the call, if any
 
     def _own(self, obj: Any) -> Any:
@@ -257,9 +261,11 @@ class WorldKernel:
     def take_errors(self, slot: int) -> tuple[int, int]:
         """(records whose pose was none, the lowest such world) of slot `slot`'s last batch
         (after its fence), and the report reset for its next."""
-        count, world = self._errors[slot].tolist()
-        if count:  # (else it is as reset: the kernel writes only where a pose is none)
-            self._errors[slot] = (0, 0xFFFFFFFF)
+        count = self._counts[slot * self._words]
+        if not count:  # (as reset: the kernel writes only where a pose is none)
+            return 0, 0xFFFFFFFF
+        world = self._counts[slot * self._words + 1]
+        self._errors[slot] = (0, 0xFFFFFFFF)
         return count, world
 
     def write_numpy(self, poses: np.ndarray, visible: np.ndarray | None) -> None:

@@ -126,17 +126,35 @@ class WorldPoses:
     def matrices(self) -> np.ndarray:
         """(W, N, 4, 4) float64 world matrices (made from the rows on first use: the GPU
         expands rows itself)."""
-        if self.given.ndim == 4:
-            return self.given
-        return _rows_to_matrices(self.given, "wxyz" if self.wxyz else "xyzw")
+        given = np.asarray(self.given, np.float64)  # (float32 poses are kept as given)
+        if given.ndim == 4:
+            return given
+        return _rows_to_matrices(given, "wxyz" if self.wxyz else "xyzw")
 
     @classmethod
     def of(cls, poses: Any, slots: int, quaternion: str = "xyzw", visible: Any = None,
            space: str = "world") -> WorldPoses:
         """Checked poses: (W, N, 4, 4) affine world matrices or (W, N, 7) position + unit
         quaternion rows (`quaternion` "xyzw" as SAPIEN/scipy, or "wxyz" as MuJoCo/Isaac);
-        `visible` (W, N) of bools. One-line UsageErrors name what is wrong."""
-        p = _array("worlds", poses)
+        `visible` (W, N) of bools. One-line UsageErrors name what is wrong. A NumPy array
+        of the layout checked last (shape, dtype, slots, quaternion order, space; no
+        visibility) has only its values checked: a loop's steps give the same each time."""
+        layout = None
+        if type(poses) is np.ndarray and visible is None and poses.dtype in _KEPT:
+            layout = (poses.shape, poses.dtype, slots, quaternion, space)
+            if layout == _LAYOUT[0]:
+                p = poses[:, None] if poses.ndim == 2 else poses
+                (_row_values if p.ndim == 3 else _checked_matrices)(p)
+                return cls(p, None, quaternion == "wxyz", space == "local")
+        made = cls._of(poses, slots, quaternion, visible, space)
+        if layout is not None:
+            _LAYOUT[0] = layout
+        return made
+
+    @classmethod
+    def _of(cls, poses: Any, slots: int, quaternion: str, visible: Any, space: str
+            ) -> WorldPoses:
+        p = _array("worlds", poses, keep=True)
         if p.ndim == 2 and p.shape[-1] == 7 and slots == 1:
             p = p[:, None]
         if p.ndim == 3 and p.shape[1:] == (slots, 7):
@@ -167,8 +185,16 @@ def check_space(space: str) -> bool:
     return space == "local"
 
 
-def _array(what: str, value: Any) -> np.ndarray:
-    """`value` as a float64 NumPy array (a CPU torch tensor or anything array-like)."""
+_KEPT = (np.dtype(np.float32), np.dtype(np.float64))  # poses read as given
+# WorldPoses.of's last checked layout of a NumPy array (shape, dtype, slots, quaternion,
+# space): a loop's next steps check only their values
+_LAYOUT: list[tuple | None] = [None]
+
+
+def _array(what: str, value: Any, keep: bool = False) -> np.ndarray:
+    """`value` as a float64 NumPy array, or bool (a CPU torch tensor or anything
+    array-like); `keep`: float32 kept as given too (the poses: no copy a step, read within
+    the call)."""
     if hasattr(value, "detach") and hasattr(value, "device"):  # torch, not imported here
         if str(value.device) != "cpu":
             raise UsageError(f"{what}: a tensor on {value.device} reaches this path only "
@@ -176,8 +202,8 @@ def _array(what: str, value: Any) -> np.ndarray:
         value = value.detach().numpy()
     try:
         a = np.asarray(value)
-        if a.dtype == bool:
-            return a
+        if a.dtype == bool or a.dtype == np.float64 or (keep and a.dtype == np.float32):
+            return a  # (float32 poses: WorldPoses.matrices converts them where needed)
         return a.astype(np.float64)
     except (TypeError, ValueError) as exc:
         raise UsageError(f"{what}: not an array of numbers ({exc})") from None
@@ -186,12 +212,27 @@ def _array(what: str, value: Any) -> np.ndarray:
 def _checked_rows(p: np.ndarray, quaternion: str) -> np.ndarray:
     if quaternion not in QUATERNION_ORDERS:
         raise UsageError(f"quaternion {quaternion!r}: choose 'xyzw' or 'wxyz'")
-    if not np.isfinite(p).all():
-        raise UsageError("worlds: a pose holds NaN or infinity")
-    q = p[..., 3:].reshape(-1, 4)
-    if np.einsum("ij,ij->i", q, q).min(initial=1.0) < 1e-24:
+    return _row_values(p)
+
+
+def _row_values(p: np.ndarray) -> np.ndarray:
+    """`p`'s values checked (W, N, 7): finite, no quaternion of length 0."""
+    _check_finite(p)
+    q = p[..., 3:]  # (a view: no copy of the quaternions, read strided)
+    if np.minimum.reduce(_square_norms(q, q), axis=None, initial=1.0) < 1e-24:
         raise UsageError("worlds: a quaternion of length 0 is no rotation")
     return p
+
+
+def _check_finite(p: np.ndarray) -> None:
+    """UsageError where `p` holds NaN or infinity (np.isfinite's bool temporary: measured
+    faster than a sum's propagation on float32, whose pairwise sum is slow)."""
+    if not np.logical_and.reduce(np.isfinite(p), axis=None):
+        raise UsageError("worlds: a pose holds NaN or infinity")
+
+
+# (..., 4) x (..., 4) -> (...) dot products: NumPy 2's vecdot ufunc (one C call), else einsum
+_square_norms = getattr(np, "vecdot", None) or (lambda a, b: np.einsum("...i,...i->...", a, b))
 
 
 def _rows_to_matrices(p: np.ndarray, quaternion: str) -> np.ndarray:
@@ -205,8 +246,7 @@ def _rows_to_matrices(p: np.ndarray, quaternion: str) -> np.ndarray:
 
 
 def _checked_matrices(p: np.ndarray) -> np.ndarray:
-    if not np.isfinite(p).all():
-        raise UsageError("worlds: a pose holds NaN or infinity")
+    _check_finite(p)
     if np.abs(p[..., 3, :] - _LAST_ROW).max(initial=0.0) > 1e-6:
         raise UsageError("worlds: a matrix's last row must be 0 0 0 1 (an affine transform)")
     return p
