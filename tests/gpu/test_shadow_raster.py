@@ -260,6 +260,39 @@ def test_frames_in_flight_and_batches(renderer) -> None:  # noqa: ANN001
         _compare_images(views["hardware"], views["compute"], f"{pipeline} batch")
 
 
+def test_image_frames_bind_kernels_without_the_by_hand_reads(renderer, monkeypatch) -> None:  # noqa: ANN001
+    """The compute path's shading kernels per read (shadow_sampling.glsl SHADOW_HAND_READS,
+    specialisation constant 3): a frame that reads the compute-drawn maps' buffer binds
+    kernels built with it 1; the next, whose catch-up copies every layer into the images
+    (SETTLE_FRAMES 1 here) and compares in hardware, binds other pipeline objects, built with
+    it 0 (the driver drops the by-hand code). Two 1-view compute batches, recorded anew."""
+    import vkpbr.render.shadows as shadows
+
+    cs = renderer.compute_scene()
+    real, bound = cs._pipeline, []
+
+    def spy(name, push_bytes, constants=()):  # noqa: ANN001, ANN202
+        pipe = real(name, push_bytes, constants)
+        if name.startswith("shade_"):
+            bound.append((constants, pipe))
+        return pipe
+
+    monkeypatch.setattr(cs, "_pipeline", spy)
+    monkeypatch.setattr(renderer.recorder, "_recorded", {})  # (recordings made with the spy)
+    monkeypatch.setattr(shadows, "SETTLE_FRAMES", 1)
+    renderer.shadows.forget()
+    seen = {}
+    for _ in range(2):
+        bound.clear()
+        renderer.render_batch([CAMERA], (32, 24), ALL, pipeline="compute", ao="off",
+                              shadow_raster="compute", shadow_resolution=256, env="none")
+        assert renderer.shadows.compute and bound
+        seen[renderer.shadows.reads_buffer] = list(bound)
+    assert set(seen) == {True, False}, seen.keys()  # the buffer, then the images
+    assert all(c[3] == 1 for c, _ in seen[True]) and all(c[3] == 0 for c, _ in seen[False])
+    assert not {id(p) for _, p in seen[True]} & {id(p) for _, p in seen[False]}
+
+
 def test_the_shading_reads_the_kernels_buffer(renderer, monkeypatch) -> None:  # noqa: ANN001
     """No copy step: the compute-drawn frame's shadow steps touch only the kernels' buffers,
     and their last, "shadows", hands the depth buffer to the shading (a read by compute and

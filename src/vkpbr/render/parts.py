@@ -183,6 +183,6 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
         device, scene, ring, layouts, pipeline_layout, buffers, pool, slots, gs, ids, labels,
         copies, compute, post, recorder, state, deform, gpu_state, bounds, blend, paths,
         Targets(device, msaa, background, ring.count, recorder, compute, post), environments,
-        Lighting(scene, copies, environments, state),
+        Lighting(scene, copies, environments, state, shadows),
         ShadowFrames(shadows, bounds, recorder, state,
                      np.array([d.casts_shadows for d in gs.draws], bool), paths), ao)
