@@ -266,7 +266,7 @@ def test_image_frames_bind_pipelines_without_the_by_hand_reads(renderer, monkeyp
     it 1 (the default); the next, whose catch-up copies every layer into the images
     (SETTLE_FRAMES 1 here) and compares in hardware, binds other pipeline objects, built with
     it 0 (the driver drops the by-hand code): the compute path's shading kernels (a 1-view
-    compute batch) and the fragment path's lit passes (a frame), recorded anew."""
+    compute batch, a frame) and the fragment path's lit passes (a frame), recorded anew."""
     import vkpbr.render.shadows as shadows
 
     cs, rec = renderer.compute_scene(), renderer.recorder
@@ -291,6 +291,7 @@ def test_image_frames_bind_pipelines_without_the_by_hand_reads(renderer, monkeyp
     opts = {"shadow_raster": "compute", "shadow_resolution": 256, "env": "none"}
     for draw in (lambda: renderer.render_batch([CAMERA], (32, 24), ALL, pipeline="compute",
                                                 ao="off", **opts),
+                 lambda: renderer.render(CAMERA, ALL, size=(32, 24), pipeline="compute", **opts),
                  lambda: renderer.render(CAMERA, ALL, size=(32, 24), pipeline="forward", **opts)):
         renderer.shadows.forget()
         seen = {}
