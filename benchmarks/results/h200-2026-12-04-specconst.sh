@@ -1,7 +1,7 @@
 # H200 run (session 15, helper specconst, issue 31): the by-hand shadow reads behind
 # specialisation constant 3 (shadow_sampling.glsl SHADOW_HAND_READS). Before: main's HEAD
-# before the branch (dd67b49), unpacked into .before1 first, here:
-#   mkdir -p .before1 && git archive dd67b49 src | tar -x -C .before1
+# merged into the branch (63d2223), unpacked into .before1 first, here:
+#   mkdir -p .before1 && git archive 63d2223 src | tar -x -C .before1
 # Carry .gl .whl .assets-s (Sponza) .before1. About 7 minutes (the timeouts sum to 540 s).
 # 1) the driver's statistics of the shading kernels built with the constant 1 (buffer-reading
 #    frames) and 0 (frames that compare in hardware): registers / instructions should drop at 0;

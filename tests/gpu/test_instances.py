@@ -116,7 +116,10 @@ def test_a_node_material_of_its_own(make_renderer) -> None:  # noqa: ANN001
     r.set_material(node="big sphere", base_color=(0.0, 0.0, 1.0))  # its own copy: no re-record
     for _ in range(r.ring.count):
         c = r.render(CAMERA, **kw)
-    assert r.recorder._recorded == recorded
+    # (every recording made before is the one kept; a slot the frames before did not take,
+    # where the GPU finished a frame before the next began, may record its first)
+    after = r.recorder._recorded
+    assert all(after.get(key) is rec for key, rec in recorded.items())
     assert np.all(c[big][:, 2] > 200) and np.all(c[big][:, :2] == 0)
     r.set_material("m0", base_color=(0.0, 1.0, 0.0))  # the shared material: the other node
     d = r.render(CAMERA, **kw)

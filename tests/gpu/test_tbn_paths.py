@@ -62,7 +62,10 @@ def test_tbn_paths_render_normal_mapped_models_alike(make_renderer, assets: Path
     # lavapipe; 18/255, PSNR 58.9 dB on the H200, whose sharper highlights move further).
     # (course: 4/255 on lavapipe, 6/255 on the H200 since the automatic camera frames the
     # model's bounds: larger on screen, its packed frames' 0.2 degrees show at more pixels.)
-    for lighting, max_diff in (("course", 6), ("pbr", 28)):  # (pbr: 26/255 on the H200)
+    # (pbr: 26/255 on the H200's forward path, 33 at 848 values of 49,152 on its compute path,
+    # which its tests take since session 15 (the frame-path rule): the vectors' frames equal
+    # each other there, so the 33 is the packed frames' own.)
+    for lighting, max_diff in (("course", 6), ("pbr", 36)):
         ref = r.render(size=(128, 128), tbn="vectors", lighting=lighting).astype(np.int16)
         for path in ("quat", "packed"):
             got = r.render(size=(128, 128), tbn=path, lighting=lighting).astype(np.int16)

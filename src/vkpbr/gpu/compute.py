@@ -21,7 +21,8 @@ from typing import Any
 from vkpbr.errors import VkpbrError
 from vkpbr.gpu.descriptors import DescriptorSetLayout
 from vkpbr.gpu.device import Device, DeviceObject
-from vkpbr.gpu.pipeline import PipelineLayout, ShaderModule
+from vkpbr.gpu.kept import address
+from vkpbr.gpu.pipeline import PipelineLayout, ShaderModule, shader_key
 from vkpbr.gpu.pipeline_cache import Feedback
 from vkpbr.gpu.vk import check_result
 
@@ -81,7 +82,17 @@ class ComputePipeline(DeviceObject):
                              "(VK_KHR_pipeline_executable_properties)")
         self.device = device
         self.layout = PipelineLayout(device, list(set_layouts), push_bytes, stages=("compute",))
-        module = ShaderModule(device, Path(spirv))
+        key = (shader_key(Path(spirv)), address(self.layout.handle, vk.ffi),
+               tuple(int(v) & 0xFFFFFFFF for v in specialization))
+        build = lambda: self._build(Path(spirv), specialization, capture_statistics)  # noqa: E731
+        # (a kernel whose statistics are read is its own: the flag changes the build)
+        self.handle = build() if capture_statistics else self._kept_handle(key, build)
+        device.track(self)
+
+    def _build(self, spirv: Path, specialization: Sequence[int], capture_statistics: bool) -> Any:
+        """The pipeline's handle, with its shader module made for the call only."""
+        vk, device = self.device.vk, self.device
+        module = ShaderModule(device, spirv)
         try:
             # Keep the stage struct referenced until the call returns: the binding copies it
             # into the create info, and the copy's pName points into the original's memory.
@@ -100,10 +111,9 @@ class ComputePipeline(DeviceObject):
             feedback = Feedback(device)  # the build goes through the device's pipeline cache
             info = vk.VkComputePipelineCreateInfo(pNext=feedback.info, flags=flags, stage=stage,
                                                   layout=self.layout.handle)
-            self.handle = feedback.build("compute", info)
+            return feedback.build("compute", info)
         finally:
             module.destroy()
-        device.track(self)
 
     def statistics(self) -> dict[str, float | int | bool]:
         """The driver's statistics of this kernel (made with `capture_statistics`), by the

@@ -52,21 +52,15 @@ class DescriptorSetLayout(DeviceObject):
         vk = device.vk
         self.device = device
         self.bindings = tuple(bindings)
-        self.handle = vk.vkCreateDescriptorSetLayout(
+        rows = [(b.binding, _descriptor_type(vk, b.kind), _stage_flags(vk, b.stages))
+                for b in self.bindings]
+        self.handle = self._kept_handle(tuple(rows), lambda: vk.vkCreateDescriptorSetLayout(
             device.handle,
-            vk.VkDescriptorSetLayoutCreateInfo(
-                pBindings=[
-                    vk.VkDescriptorSetLayoutBinding(
-                        binding=b.binding,
-                        descriptorType=_descriptor_type(vk, b.kind),
-                        descriptorCount=1,
-                        stageFlags=_stage_flags(vk, b.stages),
-                    )
-                    for b in self.bindings
-                ]
-            ),
-            None,
-        )
+            vk.VkDescriptorSetLayoutCreateInfo(pBindings=[
+                vk.VkDescriptorSetLayoutBinding(binding=b, descriptorType=t, descriptorCount=1,
+                                                stageFlags=f)
+                for b, t, f in rows]),
+            None))
         device.track(self)
 
 

@@ -17,6 +17,7 @@ from typing import Any, Protocol
 
 from vkpbr.errors import GpuTimeoutError, VkpbrError
 from vkpbr.gpu.instance import Instance, PhysicalDeviceInfo
+from vkpbr.gpu.kept import KeptHandles
 from vkpbr.gpu.vk import live_objects, live_objects_by_kind
 
 # live_objects / live_objects_by_kind (counted in gpu/vk.py) are re-exported for leak tests.
@@ -71,18 +72,30 @@ class Destroyable(Protocol):
 class DeviceObject:
     """Base of the wrappers that own one handle of a Device, released by `_destroy_fn`.
 
-    `destroy()` is idempotent: it clears the handle before releasing it.
+    `destroy()` is idempotent: it clears the handle before releasing it. A wrapper whose
+    handle the device keeps (`_kept_handle`, gpu/kept.py) only lets go of it.
     """
 
     _destroy_fn = ""  # the vkDestroy* function name
     device: Device
     handle: Any = None
+    _shared = False  # the handle is the device's kept one (gpu/kept.py): not destroyed here
+
+    def _kept_handle(self, key: Any, make: Any) -> Any:
+        """`make()`'s handle, or on a device that keeps handles (Device.kept) the one kept
+        for `key` (this class's definition of it), made by `make()` the first time."""
+        kept = self.device.kept
+        if kept is None:
+            return make()
+        self._shared = True
+        return kept.get((type(self).__name__, key), self._destroy_fn, make)
 
     def destroy(self) -> None:
         if self.handle is None:
             return
         handle, self.handle = self.handle, None
-        getattr(self.device.vk, self._destroy_fn)(self.device.handle, handle, None)
+        if not self._shared:
+            getattr(self.device.vk, self._destroy_fn)(self.device.handle, handle, None)
         self.device.untrack(self)
 
 
@@ -125,10 +138,16 @@ class Device:
         self.timings = {"instance": time.perf_counter() - t0}
         self.vk = vk = self.instance.vk
         self._children: list[Destroyable] = []
+        # Children made under `keeping()`: the device's for its life (not a scene's).
+        self._kept_children: list[Destroyable] = []
+        self._track_into = self._children
         self.handle = None
         # Its VkPipelineCache (gpu/pipeline_cache.py): set by the caller with a file to keep
         # it in, else made in memory by the first pipeline build.
         self.pipeline_cache: Any = None
+        # Immutable handles shared by their definition for the device's life (gpu/kept.py;
+        # a Renderer's device sets one); None: every wrapper makes and destroys its own.
+        self.kept: KeptHandles | None = None
         try:
             t0 = time.perf_counter()
             self.info: PhysicalDeviceInfo = self.instance.choose_device(device)
@@ -402,11 +421,24 @@ class Device:
 
     # --- lifetime ---------------------------------------------------------------------------
     def track(self, child: Destroyable) -> None:
-        self._children.append(child)
+        self._track_into.append(child)
 
     def untrack(self, child: Destroyable) -> None:
-        with contextlib.suppress(ValueError):
-            self._children.remove(child)
+        for children in (self._children, self._kept_children):
+            with contextlib.suppress(ValueError):
+                children.remove(child)
+                return
+
+    @contextlib.contextmanager
+    def keeping(self) -> Iterator[None]:
+        """Children made inside (on any thread) are the device's for its life: outside the
+        `live_children` count, so `destroy_children` (a scene's unmaking) leaves them;
+        `close` destroys them after the others. The caller makes nothing of a scene inside."""
+        outer, self._track_into = self._track_into, self._kept_children
+        try:
+            yield
+        finally:
+            self._track_into = outer
 
     @property
     def live_children(self) -> int:
@@ -423,7 +455,7 @@ class Device:
         """(device-local, host-visible) bytes of the live buffers and images this device made,
         as their memory requirements asked (benchmarks report a batch's footprint with it)."""
         local = host = 0
-        for child in self._children:
+        for child in self._children + self._kept_children:
             size = getattr(child, "allocation_size", None) or getattr(child, "bytes", 0)
             if getattr(child, "host_visible", False):
                 host += int(size)
@@ -440,8 +472,11 @@ class Device:
         if self.handle is not None and vk is not None:
             with contextlib.suppress(Exception):
                 vk.vkDeviceWaitIdle(self.handle)
-            while self._children:
-                self._children.pop().destroy()
+            for children in (self._children, self._kept_children):
+                while children:
+                    children.pop().destroy()
+            if getattr(self, "kept", None) is not None:
+                self.kept.destroy(vk, self.handle)
             if getattr(self, "command_pool", None) is not None:
                 vk.vkDestroyCommandPool(self.handle, self.command_pool, None)
                 self.command_pool = None

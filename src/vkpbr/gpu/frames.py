@@ -137,6 +137,14 @@ class FrameRing:
         for frame in self.frames:
             frame.wait()
 
+    def restart(self) -> None:
+        """Start over as a new ring would (every frame waited for first): frame numbers from
+        0, no earlier submission's timestamps (a renderer's next scene keeps its ring)."""
+        self.wait_all()
+        self.number = 0
+        for frame in self.frames:
+            frame.number, frame.stamped, frame.stamp_names = -1, False, ()
+
     # --- timestamps -------------------------------------------------------------------------
     def stamp(self, cmd: Commands, frame: Frame, slot: int) -> None:
         """Record timestamp `slot` of `frame` (0 = start: also resets the frame's queries)."""

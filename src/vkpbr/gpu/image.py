@@ -189,7 +189,7 @@ class Sampler(DeviceObject):
         use_aniso = device.anisotropy and aniso > 1.0 and spec.mipmaps
         filt = {"linear": vk.VK_FILTER_LINEAR, "nearest": vk.VK_FILTER_NEAREST}
         nearest = spec.mag == spec.min == "nearest" and not spec.mipmaps
-        self.handle = vk.vkCreateSampler(
+        self.handle = self._kept_handle(spec, lambda: vk.vkCreateSampler(
             device.handle,
             vk.VkSamplerCreateInfo(
                 magFilter=filt[spec.mag],
@@ -212,7 +212,7 @@ class Sampler(DeviceObject):
                 else vk.VK_BORDER_COLOR_FLOAT_OPAQUE_BLACK,
             ),
             None,
-        )
+        ))
         device.track(self)
 
 

@@ -11,6 +11,7 @@ queue, the first barrier also orders this frame's writes after the previous fram
 
 from __future__ import annotations
 
+import contextlib
 from typing import Any
 
 import numpy as np
@@ -58,7 +59,12 @@ class LayeredDepth:
                            layers=self.layers, cube=cube)
         self.view = ImageView(self.image, aspect="depth",
                               kind="cube_array" if cube else "2d_array")
+        # Every layer as a 2D array (a cube's faces one by one): shaders that pick the face
+        # themselves gather from it (shaders/shadow_sampling.glsl compare_cube).
+        self.faces = ImageView(self.image, aspect="depth", kind="2d_array") if cube else self.view
         self._attachments: dict[tuple[int, int], ImageView] = {}
+        # The device's for its life (render/shadow_images.py): its views made later are too.
+        self.kept = False
         # Hardware 2x2 PCF needs linear filtering of the depth format (NVIDIA, lavapipe: yes).
         self.filterable = device.format_supports(self.format, "SAMPLED_IMAGE_FILTER_LINEAR")
         with device.one_time_commands() as handle:  # the layout descriptors name, from the start
@@ -80,8 +86,9 @@ class LayeredDepth:
         if key not in self._attachments:
             if base < 0 or count < 1 or base + count > self.layers:
                 raise ValueError(f"layers {base}..{base + count - 1} outside 0..{self.layers - 1}")
-            self._attachments[key] = ImageView(self.image, aspect="depth", kind="2d_array",
-                                               base_layer=base, layer_count=count)
+            with self.device.keeping() if self.kept else contextlib.nullcontext():
+                self._attachments[key] = ImageView(self.image, aspect="depth", kind="2d_array",
+                                                   base_layer=base, layer_count=count)
         return self._attachments[key]
 
     # --- recording ---------------------------------------------------------------------------
@@ -182,5 +189,7 @@ class LayeredDepth:
         for view in self._attachments.values():
             view.destroy()
         self._attachments.clear()
+        if self.faces is not self.view:
+            self.faces.destroy()
         self.view.destroy()
         self.image.destroy()

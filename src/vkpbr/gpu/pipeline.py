@@ -16,9 +16,10 @@ from typing import Any
 from vkpbr.errors import ShaderError
 from vkpbr.gpu.descriptors import DescriptorSetLayout
 from vkpbr.gpu.device import Device, DeviceObject
+from vkpbr.gpu.kept import address, file_key
 from vkpbr.gpu.pipeline_cache import Feedback
 
-__all__ = ["VertexStream", "PipelineSpec", "PipelineLayout", "Pipeline", "ShaderModule"]
+__all__ = ["VertexStream", "PipelineSpec", "PipelineLayout", "Pipeline", "ShaderModule", "shader_key"]
 
 
 @dataclass(frozen=True)
@@ -61,6 +62,14 @@ class PipelineSpec:
     # The fragment shader's specialisation constants: (constant_id, 32-bit value) pairs; the
     # others keep the shader's defaults.
     fragment_constants: tuple[tuple[int, int], ...] = ()
+
+
+def shader_key(path: Path) -> tuple[str, int, int]:
+    """A shader file's key (gpu/kept.py file_key); a missing file raises as ShaderModule does."""
+    try:
+        return file_key(path)
+    except OSError as exc:
+        raise ShaderError(f"{path}: cannot read SPIR-V ({exc.strerror})") from None
 
 
 class ShaderModule(DeviceObject):
@@ -110,7 +119,9 @@ class PipelineLayout(DeviceObject):
                     size=push_constant_bytes,
                 )
             )
-        self.handle = vk.vkCreatePipelineLayout(
+        key = (tuple(address(s.handle, vk.ffi) for s in set_layouts), push_constant_bytes,
+               self.push_stages)
+        self.handle = self._kept_handle(key, lambda: vk.vkCreatePipelineLayout(
             device.handle,
             vk.VkPipelineLayoutCreateInfo(
                 pSetLayouts=[s.handle for s in set_layouts],
@@ -118,7 +129,7 @@ class PipelineLayout(DeviceObject):
                 pushConstantRangeCount=len(ranges),
             ),
             None,
-        )
+        ))
         device.track(self)
 
 
@@ -132,18 +143,23 @@ class Pipeline(DeviceObject):
         self.device = device
         self.spec = spec
         self.layout = layout
-        vert = ShaderModule(device, shader_dir / spec.vertex_shader)
+        shaders = [shader_dir / s for s in (spec.vertex_shader, spec.fragment_shader) if s]
+        key = (spec, address(layout.handle, device.vk.ffi), *map(shader_key, shaders))
+        self.handle = self._kept_handle(key, lambda: self._build(spec, layout, shader_dir))
+        device.track(self)
+
+    def _build(self, spec: PipelineSpec, layout: PipelineLayout, shader_dir: Path) -> Any:
+        """The pipeline's handle, with its shader modules made for the call only."""
+        vert = ShaderModule(self.device, shader_dir / spec.vertex_shader)
         frag = None
         try:
             if spec.fragment_shader is not None:
-                frag = ShaderModule(device, shader_dir / spec.fragment_shader)
-            self.handle = self._create(spec, layout, vert, frag)
+                frag = ShaderModule(self.device, shader_dir / spec.fragment_shader)
+            return self._create(spec, layout, vert, frag)
         finally:
-            # Modules are only needed while the pipeline is created.
             vert.destroy()
             if frag is not None:
                 frag.destroy()
-        device.track(self)
 
     def _create(self, spec: PipelineSpec, layout: PipelineLayout, vert: Any, frag: Any | None) -> Any:
         vk = self.device.vk

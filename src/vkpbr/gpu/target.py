@@ -19,6 +19,7 @@ the frames before it (gpu/graph.py). The swapchain is gpu/swapchain.py.
 
 from __future__ import annotations
 
+import contextlib
 import os
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Protocol
@@ -121,23 +122,32 @@ class OffscreenTarget:
             self.attachments.msaa_depth = self._own(ImageView(md, aspect="depth")).handle
         self._readbacks: dict[int, tuple[Buffer, Buffer]] = {}
 
+    # The device's for its life (Device.keeping): what it makes later is too (a renderer's
+    # targets outlive its scenes, render/targets.py).
+    kept = False
+
     def _own(self, obj: Any) -> Any:
         self._objects.append(obj)
         return obj
 
+    def _making(self) -> Any:
+        """Where what it makes on first use belongs: the device's if `kept`, else the caller's."""
+        return self.device.keeping() if self.kept else contextlib.nullcontext()
+
     def readback(self, frame_index: int) -> tuple[Buffer, Buffer]:
         """The (colour, depth) readback buffers of frame `frame_index`, made on first use."""
         if frame_index not in self._readbacks:
-            vk = self.device.vk
-            n = self.extent[0] * self.extent[1]
-            usage = vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
-            self._readbacks[frame_index] = (
-                self._own(Buffer(self.device, n * self.pixel_bytes, usage, host_visible=True,
+            with self._making():
+                self._readbacks[frame_index] = self._readback_buffers(frame_index)
+        return self._readbacks[frame_index]
+
+    def _readback_buffers(self, frame_index: int) -> tuple[Buffer, Buffer]:
+        n = self.extent[0] * self.extent[1]
+        usage = self.device.vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
+        return (self._own(Buffer(self.device, n * self.pixel_bytes, usage, host_visible=True,
                                  name=f"color readback {frame_index}")),
                 self._own(Buffer(self.device, n * 4, usage, host_visible=True,
-                                 name=f"depth readback {frame_index}")),
-            )
-        return self._readbacks[frame_index]
+                                 name=f"depth readback {frame_index}")))
 
     # --- the protocol -----------------------------------------------------------------------
     def acquire(self, frame: Frame) -> int:
@@ -225,22 +235,26 @@ class OffscreenTarget:
                  | vk.VK_IMAGE_USAGE_TRANSFER_DST_BIT)
         self.outputs = {}
         self._output_bytes = {}
-        for name, (fmt, nbytes) in formats.items():
-            image = self._own(Image(self.device, w, h, getattr(vk, fmt), usage, name=name))
-            self.outputs[name] = (image, self._own(ImageView(image)))
-            self._output_bytes[name] = nbytes
+        with self._making():
+            for name, (fmt, nbytes) in formats.items():
+                image = self._own(Image(self.device, w, h, getattr(vk, fmt), usage, name=name))
+                self.outputs[name] = (image, self._own(ImageView(image)))
+                self._output_bytes[name] = nbytes
         self._output_readbacks: dict[int, dict[str, Buffer]] = {}
         return True
 
     def _outputs_readback(self, frame_index: int) -> dict[str, Buffer]:
         if frame_index not in self._output_readbacks:
-            n = self.extent[0] * self.extent[1]
-            usage = self.device.vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
-            self._output_readbacks[frame_index] = {
-                name: self._own(Buffer(self.device, n * nbytes, usage, host_visible=True,
+            with self._making():
+                self._output_readbacks[frame_index] = self._output_buffers(frame_index)
+        return self._output_readbacks[frame_index]
+
+    def _output_buffers(self, frame_index: int) -> dict[str, Buffer]:
+        n = self.extent[0] * self.extent[1]
+        usage = self.device.vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
+        return {name: self._own(Buffer(self.device, n * nbytes, usage, host_visible=True,
                                        name=f"{name} readback {frame_index}"))
                 for name, nbytes in self._output_bytes.items()}
-        return self._output_readbacks[frame_index]
 
     def read_outputs(self, frame_index: int, dtypes: dict[str, tuple[str, int]]) -> dict[str, np.ndarray]:
         """Copies of the frame's outputs: GLSL name -> (H, W, channels) array of `dtypes`'

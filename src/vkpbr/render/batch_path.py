@@ -656,11 +656,13 @@ class BatchPath:
         if target is None:
             while len(self._atlases) >= ATLASES_KEPT:
                 self._drop_atlas(self._atlases.popitem(last=False)[1])
-            target = self.parts.targets.new(extent, linear)
+            target = self.parts.targets.atlas(extent, linear)  # (a scene before's, if kept)
         self._atlases[key] = target
         return target
 
-    def _drop_atlas(self, target: Any) -> None:
+    def _drop_atlas(self, target: Any, keep: bool = False) -> None:
+        """Destroy atlas `target` with what was made for it (`keep`: give it back to the
+        targets instead, for the next scene: render/targets.py give_atlas)."""
         buf = self._exports.pop(id(target), None)
         if buf is not None:
             self._cuda_wait(buf)
@@ -668,7 +670,10 @@ class BatchPath:
             imported = self._cuda_imports.pop(id(buf), None)
             if imported is not None:
                 imported.close()
-        self.parts.targets.drop(target)  # waits for the device
+        if keep:
+            self.parts.targets.give_atlas(target)
+        else:
+            self.parts.targets.drop(target)  # waits for the device
         if buf is not None:
             buf.destroy()
 
@@ -724,8 +729,8 @@ class BatchPath:
             self._forget_cuda(target)
             target.destroy()
         self.targets = {}
-        while self._atlases:  # with the compute batch's exported colour
-            self._drop_atlas(self._atlases.popitem(last=False)[1])
+        while self._atlases:  # with the compute batch's exported colour; kept, where kept
+            self._drop_atlas(self._atlases.popitem(last=False)[1], keep=True)
 
 
 def _joined(parts: list[np.ndarray], out: np.ndarray | None = None) -> np.ndarray:

@@ -1,14 +1,18 @@
 """The environments a renderer's frames sample, and the one bound in its frame slots.
 
-`Environments` pre-filters an environment (render/environment.py EnvironmentBaker: the
+`EnvironmentStore` pre-filters an environment (render/environment.py EnvironmentBaker: the
 built-in sky, a panorama file's, or a black one where none lights the frame) on the first
-frame that asks for it and keeps it, by source, for the renderer's life. Binding another one
-into the slots' set 2 is rare (a new environment): the sets may be in use by queued frames
-and named by recorded command buffers, so it waits for the device and drops the recordings.
+frame that asks for it and keeps it, by source, for the device's life: it depends on no
+scene, so a Renderer's scenes (render/scene_swap.py) share one store, made once, whose
+images are the device's (`Device.keeping`), not a scene's. `Environments` is one scene's
+view of it: the one bound in its frame slots. Binding another one into the slots' set 2 is
+rare (a new environment, or a new scene's slots): the sets may be in use by queued frames and
+named by recorded command buffers, so it waits for the device and drops the recordings.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 
@@ -21,23 +25,20 @@ from vkpbr.render.recorder import FrameRecorder
 from vkpbr.scene.environment import load_panorama
 from vkpbr.shading import SUN_DIRECTION
 
-__all__ = ["Environments", "env_key"]
+__all__ = ["EnvironmentStore", "Environments", "env_key"]
 
 
-class Environments:
-    """The environments of frames drawn with `slots` (see the module's docstring). `spec`:
-    the pre-filter's sizes (None: the GPU sizes, EnvironmentSpec.cpu() on a CPU device);
-    `cache_dir`: where the split-sum BRDF table is kept between processes (None: made once
-    per process)."""
+class EnvironmentStore:
+    """The pre-filtered environments of one device, by source (see the module's docstring).
+    `spec`: the pre-filter's sizes (None: the GPU sizes, EnvironmentSpec.cpu() on a CPU
+    device); `cache_dir`: where the split-sum BRDF table is kept between processes (None:
+    made once per process)."""
 
-    def __init__(self, device: Device, slots: list[FrameSlot], recorder: FrameRecorder,
-                 spec: EnvironmentSpec | None = None,
+    def __init__(self, device: Device, spec: EnvironmentSpec | None = None,
                  cache_dir: str | os.PathLike[str] | None = None) -> None:
-        self.device, self.slots, self.recorder = device, slots, recorder
-        self._spec, self._cache_dir = spec, cache_dir
+        self.device, self._spec, self._cache_dir = device, spec, cache_dir
         self._baker: EnvironmentBaker | None = None
-        self._made: dict[tuple, Environment] = {}  # by env_key
-        self._bound: Environment | None = None  # what every slot's set 2 samples
+        self._made: dict[tuple, Environment] = {}  # by env_key (a file's: its size, time)
 
     @property
     def baker(self) -> EnvironmentBaker:
@@ -47,7 +48,8 @@ class Environments:
             if spec is None:
                 spec = EnvironmentSpec.cpu() if self.device.info.kind == "cpu" else EnvironmentSpec()
             cache = Path(self._cache_dir) if self._cache_dir is not None else None
-            self._baker = EnvironmentBaker(self.device, spec, cache)
+            with self.device.keeping():
+                self._baker = EnvironmentBaker(self.device, spec, cache)
         return self._baker
 
     def get(self, options: RenderOptions) -> Environment:
@@ -56,17 +58,45 @@ class Environments:
 
         Raises SceneError (one line naming the file) for an unreadable panorama."""
         key = env_key(options)
+        if key[0] == "file":  # (a file written again under its name is another panorama)
+            with contextlib.suppress(OSError):  # (a missing one: load_panorama's error)
+                st = os.stat(key[1])
+                key = (*key, st.st_size, st.st_mtime_ns)
         env = self._made.get(key)
         if env is None:
             baker = self.baker
-            if key[0] == "black":
-                env = baker.from_constant((0.0, 0.0, 0.0))
-            elif key[0] == "sky":
-                env = baker.from_sky(SUN_DIRECTION)
-            else:
-                env = baker.from_panorama(load_panorama(key[1]), key[1])
+            pixels = load_panorama(key[1]) if key[0] == "file" else None  # (before any bake)
+            with self.device.keeping():  # (the bake's own temporaries it destroys itself)
+                if key[0] == "black":
+                    env = baker.from_constant((0.0, 0.0, 0.0))
+                elif key[0] == "sky":
+                    env = baker.from_sky(SUN_DIRECTION)
+                else:
+                    env = baker.from_panorama(pixels, key[1])
             self._made[key] = env
         return env
+
+    def destroy(self) -> None:
+        for env in self._made.values():
+            env.destroy()
+        self._made = {}
+        if self._baker is not None:
+            self._baker.destroy()
+            self._baker = None
+
+
+class Environments:
+    """The environment bound in the frame slots `slots` (drawn with `recorder`), from
+    `store` (the device's, shared with the Renderer's other scenes)."""
+
+    def __init__(self, device: Device, slots: list[FrameSlot], recorder: FrameRecorder,
+                 store: EnvironmentStore) -> None:
+        self.device, self.slots, self.recorder, self.store = device, slots, recorder, store
+        self._bound: Environment | None = None  # what every slot's set 2 samples
+
+    def get(self, options: RenderOptions) -> Environment:
+        """The environment frames with `options` sample (EnvironmentStore.get)."""
+        return self.store.get(options)
 
     def bind_for(self, options: RenderOptions) -> None:
         """Make every frame slot sample the environment `options` ask for."""
@@ -85,14 +115,6 @@ class Environments:
                 writer.sampler(slot.set2, binding, image.view, image.sampler)
         writer.update()
         self._bound = env
-
-    def destroy(self) -> None:
-        for env in self._made.values():
-            env.destroy()
-        self._made = {}
-        if self._baker is not None:
-            self._baker.destroy()
-            self._baker = None
 
 
 def env_key(options: RenderOptions) -> tuple:

@@ -28,7 +28,7 @@ from vkpbr.render.options import RenderOptions
 from vkpbr.render.views import camera_view_terms, pack_view
 from vkpbr.scene.types import Camera, Light
 
-__all__ = ["FrameSlot", "FrameStats", "FrameLighting", "create_slots", "write_frame_uniforms",
+__all__ = ["FrameSlot", "FrameStats", "FrameLighting", "create_slots", "fresh_slots", "write_frame_uniforms",
            "write_frame_view", "write_frame_blocks", "bind_instances",
            "light_records", "Bounds"]
 
@@ -146,6 +146,20 @@ def create_slots(
         ))
     writer.update()
     return [buffer, lights], pool, slots
+
+
+def fresh_slots(slots: list[FrameSlot]) -> list[FrameSlot]:
+    """`slots`' sets and blocks as new slots: nothing remembered of what they were written
+    with and the blocks zeroed, as `create_slots` made them (a renderer's next scene reuses
+    its slots; their sets' scene bindings are written again by the scene's parts)."""
+    out = []
+    for s in slots:
+        for block in (s.m_view, s.m_settings, s.m_lighting):
+            block[:] = bytes(len(block))
+        s.lights[:] = 0.0
+        out.append(FrameSlot(s.index, s.set0, s.set2, s.m_view, s.m_settings, s.m_lighting,
+                             s.lights, s.block_ranges))
+    return out
 
 
 def bind_instances(device: Device, sets0: list[Any],

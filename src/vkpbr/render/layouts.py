@@ -538,6 +538,9 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
         # The frame's maps where the compute rasteriser draws them (render/shadow_raster.py):
         # its depth buffer, read by hand (a stand-in where the raster units draw them).
         (4, "storage", ("fragment", "compute"), "ShadowDepths"),
+        # The cubes' faces as 2D layers, clamped to each face's edge (compare_cube picks the
+        # face and gathers its texels, as the by-hand read of ShadowDepths does).
+        (5, "sampler2DArrayShadow", ("fragment", "compute"), "shadow_cube_faces"),
     ),
 }
 # Sets whose GLSL declarations are not generated (codegen skips them).

@@ -1,20 +1,24 @@
 """What frames of one scene are drawn with, made in order and given to those that draw.
 
-`make_parts` makes the scene's GPU objects (frame ring, descriptor layouts, frame slots, the
-scene's GPU copy, the opaque copies transmission samples, the shadow maps, the recorder) and
-the concerns that draw with them, each its own module's and given only what it needs:
-targets (render/targets.py), path choice (render/path_choice.py), environments
+`make_parts` makes the scene's GPU objects (descriptor layouts, the scene's GPU copy, the
+opaque copies transmission samples, the shadow maps, the recorder) and the concerns that
+draw with them, each its own module's and given only what it needs: targets
+(render/targets.py), path choice (render/path_choice.py), environments
 (render/environments.py), lighting (render/lighting.py), shadow maps per frame
-(render/shadow_frames.py) and the blended draws' order (render/blend_order.py). The frame
-path (render/frame_path.py) and the batch path (render/batch_path.py) draw with the
-`FrameParts`; the Renderer (render/renderer.py) holds them. Every GPU object is a child of
-the device, which destroys what was made if making the rest fails.
+(render/shadow_frames.py) and the blended draws' order (render/blend_order.py). What depends
+on no scene is the device's `DeviceParts`, made once and shared by a Renderer's scenes
+(render/scene_swap.py): the frame ring and slots, the pre-filtered environments, the shadow
+maps' images, the offscreen targets and the compute batch's atlases. The frame path (render/frame_path.py) and the batch path
+(render/batch_path.py) draw with the `FrameParts`; the Renderer (render/renderer.py) holds
+them. Every GPU object is a child of the device, which destroys what was made if making the
+rest fails.
 """
 
 from __future__ import annotations
 
 import os
 import time
+from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -25,8 +29,10 @@ from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout
 from vkpbr.gpu.device import Device, DeviceRequest
 from vkpbr.gpu.frames import FrameRing
+from vkpbr.gpu.kept import KeptHandles
 from vkpbr.gpu.pipeline import PipelineLayout
 from vkpbr.gpu.pipeline_cache import PipelineCache
+from vkpbr.gpu.target import OffscreenTarget
 from vkpbr.render import layouts as L
 from vkpbr.render.ao import AoImages
 from vkpbr.render.batch import draw_spheres
@@ -34,8 +40,8 @@ from vkpbr.render.blend_order import BlendOrder
 from vkpbr.render.compute_path import ComputeScene
 from vkpbr.render.deform import DeformKernel, DeformLayout
 from vkpbr.render.environment import EnvironmentSpec
-from vkpbr.render.environments import Environments
-from vkpbr.render.frames import Bounds, FrameSlot, bind_instances, create_slots
+from vkpbr.render.environments import Environments, EnvironmentStore
+from vkpbr.render.frames import Bounds, FrameSlot, bind_instances, create_slots, fresh_slots
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.lighting import Lighting
 from vkpbr.render.path_choice import FramePaths, shaders_digest
@@ -43,6 +49,7 @@ from vkpbr.render.post_stage import PostKernels
 from vkpbr.render.recorder import STAMPS, FrameRecorder
 from vkpbr.render.scene_state import GpuSceneState, LiveBounds, scene_state
 from vkpbr.render.shadow_frames import ShadowFrames
+from vkpbr.render.shadow_images import ShadowImages
 from vkpbr.render.shadows import ShadowMaps
 from vkpbr.render.targets import Lazy, Targets
 from vkpbr.render.transmission import OpaqueCopies
@@ -50,7 +57,45 @@ from vkpbr.scene.semantics import semantic_ids
 from vkpbr.scene.state import SceneState
 from vkpbr.scene.types import Camera, Scene
 
-__all__ = ["FrameParts", "create_layouts", "make_parts", "open_device", "lazy_compute"]
+__all__ = ["DeviceParts", "FrameParts", "create_layouts", "make_parts", "open_device", "lazy_compute"]
+
+
+@dataclass(frozen=True, slots=True)
+class DeviceParts:
+    """What a Renderer's scenes share on its device, made once with it (render/scene_swap.py)
+    under `Device.keeping` (outside a scene's count of device children): the frame ring, the
+    frame slots' buffers, pool and sets (each scene takes them as new slots, `fresh_slots`,
+    and writes its own bindings in their sets: instances, opaque copy, ambient occlusion,
+    environment), the pre-filtered environments, the shadow maps' images (a scene takes
+    those of its sizes, render/shadow_images.py), the offscreen targets `render` draws
+    into and the compute batch's atlases (render/targets.py). The device's kept handles (gpu/kept.py:
+    layouts, pipelines, samplers) are shared the same way; everything else is a scene's
+    `FrameParts`."""
+
+    ring: FrameRing
+    frame_buffers: list[Buffer]
+    frame_pool: DescriptorPool
+    slots: list[FrameSlot]
+    environments: EnvironmentStore
+    shadow_images: ShadowImages  # the shadow maps' images (render/shadow_images.py)
+    targets: dict[tuple, OffscreenTarget]  # render/targets.py Targets' kept ones
+    atlases: OrderedDict[tuple, OffscreenTarget]  # compute-batch atlases a scene gave back
+
+    @staticmethod
+    def make(device: Device, env_spec: EnvironmentSpec | None,
+             cache_dir: str | os.PathLike[str] | None) -> DeviceParts:
+        with device.keeping():
+            ring = FrameRing(device, queries_per_frame=STAMPS)
+            set0, set2 = (DescriptorSetLayout(device, [BindingSpec(*row) for row in L.SETS[i]])
+                          for i in (0, 2))
+            buffers, pool, slots = create_slots(device, set0, set2, ring.count)
+        return DeviceParts(ring, buffers, pool, slots, EnvironmentStore(device, env_spec, cache_dir),
+                           ShadowImages(device), {}, OrderedDict())
+
+    def frame_slots(self) -> tuple[FrameRing, list[FrameSlot]]:
+        """The ring and slots for a new scene, as new ones (the device idle)."""
+        self.ring.restart()
+        return self.ring, fresh_slots(self.slots)
 
 
 @dataclass(frozen=True, slots=True)
@@ -103,7 +148,6 @@ class FrameParts:
         self.ao.destroy()
         if self.post.made is not None:
             self.post.made.destroy()
-        self.environments.destroy()
 
 
 def open_device(device: str | int | None, validation: bool | None, sync_validation: bool,
@@ -117,6 +161,7 @@ def open_device(device: str | int | None, validation: bool | None, sync_validati
     if validation is None:
         validation = os.environ.get("VKPBR_VALIDATION") == "1"
     dev = Device(device, validation=validation, sync_validation=sync_validation)
+    dev.kept = KeptHandles()  # layouts, pipelines, samplers shared across set_scene
     try:
         t = time.perf_counter()
         dev.pipeline_cache = PipelineCache(dev, cache_dir, shaders_digest())
@@ -127,13 +172,14 @@ def open_device(device: str | int | None, validation: bool | None, sync_validati
     return dev
 
 
-def create_layouts(device: Device, frames: int
+def create_layouts(device: Device, frames: int, images: ShadowImages | None = None
                    ) -> tuple[list[DescriptorSetLayout], ShadowMaps, PipelineLayout]:
     """The frame's descriptor set layouts (L.SETS), the shadow maps (whose own layout is set
-    3: their sets are per frame slot, `frames` of them) and the pipeline layout of all four."""
+    3: their sets are per frame slot, `frames` of them; their images from `images`) and the
+    pipeline layout of all four."""
     layouts = [DescriptorSetLayout(device, [BindingSpec(b, k, s, n) for b, k, s, n in rows])
                for i, rows in sorted(L.SETS.items()) if i != 3]
-    shadows = ShadowMaps(device, layouts[1], frames, frame_layout=layouts[0])
+    shadows = ShadowMaps(device, layouts[1], frames, frame_layout=layouts[0], images=images)
     layouts.append(shadows.set_layout)
     return layouts, shadows, PipelineLayout(device, layouts, L.PUSH.size)
 
@@ -148,14 +194,15 @@ def lazy_compute(device: Device, scene: Scene, gs: GpuScene, layouts: list[Descr
 
 
 def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float, float, float],
-               depth_prepass: bool | None, env_spec: EnvironmentSpec | None,
+               depth_prepass: bool | None, shared: DeviceParts,
                cache_dir: str | os.PathLike[str] | None, semantics: Any,
                ahead: Any = None) -> FrameParts:
     """The parts of frames of `scene` on `device` (the Renderer's arguments of those names;
-    `ahead`: the SceneAhead it was loaded by, whose decoded images GpuScene takes)."""
-    ring = FrameRing(device, queries_per_frame=STAMPS)
-    layouts, shadows, pipeline_layout = create_layouts(device, ring.count)
-    buffers, pool, slots = create_slots(device, layouts[0], layouts[2], ring.count)
+    `shared`: what the device's scenes share; `ahead`: the SceneAhead it was loaded by, whose
+    decoded images GpuScene takes)."""
+    ring, slots = shared.frame_slots()
+    layouts, shadows, pipeline_layout = create_layouts(device, ring.count, shared.shadow_images)
+    buffers, pool = shared.frame_buffers, shared.frame_pool
     gs = GpuScene(device, scene, layouts[1], ring.count, ahead=ahead)
     layout = DeformLayout(scene, gs.deformed) if gs.deformed else None
     state = scene_state(scene, gs.draws, layout)
@@ -178,11 +225,13 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     recorder = FrameRecorder(device, gs, pipeline_layout, ring, slots, paths.prepass_for,
                              shadows, compute, copies, post, deform, ao)
     bounds = LiveBounds(state, Bounds.of(*scene.bounds()))
-    environments = Environments(device, slots, recorder, env_spec, cache_dir)
+    environments = Environments(device, slots, recorder, shared.environments)
     return FrameParts(
         device, scene, ring, layouts, pipeline_layout, buffers, pool, slots, gs, ids, labels,
         copies, compute, post, recorder, state, deform, gpu_state, bounds, blend, paths,
-        Targets(device, msaa, background, ring.count, recorder, compute, post), environments,
+        Targets(device, msaa, background, ring.count, recorder, compute, post, shared.targets,
+                shared.atlases),
+        environments,
         Lighting(scene, copies, environments, state, shadows),
         ShadowFrames(shadows, bounds, recorder, state,
                      np.array([d.casts_shadows for d in gs.draws], bool), paths), ao)

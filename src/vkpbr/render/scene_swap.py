@@ -1,14 +1,19 @@
 """A Renderer's scene made and unmade on one device: `Renderer.set_scene` without a new device.
 
 `SceneMaker` holds what a Renderer was made with besides its scene (msaa, background, ...)
-and makes a scene's `FrameParts` (render/parts.py) with the frame and batch paths that draw
-them, noting how many device children existed before; `unmake` closes them and destroys
-every device child made since (buffers, images, pipelines, sets), newest first. What is
-kept: the device, its queue and command pool, and its pipeline cache (gpu/pipeline_cache.py),
-so the new scene's pipelines are the driver's cache hits (in memory, and from the cache
-folder's file in a new process), and auto's frame-path record. A Renderer after
-`set_scene(b)` renders what `Renderer(b)` renders, bit for bit (tests/gpu/test_scene_swap.py):
-both make the same parts from the same scene.
+and the `DeviceParts` its scenes share (render/parts.py: the frame ring and slots, the
+pre-filtered environments, the shadow maps' images, the offscreen targets and compute-batch
+atlases), and makes a scene's `FrameParts` with
+the frame and batch paths that draw them, noting how many device children existed before;
+`unmake` closes them and destroys every device child made since (buffers, images,
+descriptor pools and sets, ...), newest first. What is kept: the device, its queue and
+command pool, its pipeline cache (gpu/pipeline_cache.py), the handles it keeps (gpu/kept.py:
+set and pipeline layouts, pipelines and samplers, shared by every wrapper of the same
+definition, so the new scene's pipelines are neither compiled nor looked up in the driver's
+cache), the `DeviceParts` (made under `Device.keeping`: outside the scenes' count) and
+auto's frame-path record. A Renderer after `set_scene(b)` renders what `Renderer(b)`
+renders, bit for bit, and a second round of swaps makes no Vulkan object the first did not
+(tests/gpu/test_scene_swap.py).
 
 Timings of a scene's making (`Renderer.timings`): "setup" (all of it, seconds), "parts" (the
 GPU objects besides the scene's upload), "load_wait" (the wait for a scene loading on a thread,
@@ -29,7 +34,7 @@ from vkpbr.gpu.device import Device
 from vkpbr.render.batch_path import BatchPath
 from vkpbr.render.environment import EnvironmentSpec
 from vkpbr.render.frame_path import FramePath
-from vkpbr.render.parts import FrameParts, make_parts
+from vkpbr.render.parts import DeviceParts, FrameParts, make_parts
 from vkpbr.scene.types import Scene
 
 __all__ = ["SceneMaker", "MadeScene", "pipeline_timings"]
@@ -63,7 +68,8 @@ class SceneMaker:
                  depth_prepass: bool | None, env_spec: EnvironmentSpec | None,
                  cache_dir: str | os.PathLike[str] | None, semantics: Any) -> None:
         self.device = device
-        self.args = (msaa, background, depth_prepass, env_spec, cache_dir, semantics)
+        self.shared = DeviceParts.make(device, env_spec, cache_dir)  # (the scenes' shared)
+        self.args = (msaa, background, depth_prepass, self.shared, cache_dir, semantics)
 
     def make(self, scene: Scene | Future | None) -> MadeScene:
         """The parts of `scene` (None: the built-in PBR chart; a Future of one, such as

@@ -60,6 +60,7 @@ from vkpbr.gpu.pipeline import Pipeline, PipelineLayout, PipelineSpec, VertexStr
 from vkpbr.render import layouts as L
 from vkpbr.render import shadow_math as SM
 from vkpbr.render.codegen import SPV_DIR
+from vkpbr.render.shadow_images import ShadowImages
 from vkpbr.scene.types import Camera, Light
 
 __all__ = ["ShadowMaps", "ShadowPlan", "ShadowEntry", "plan_shadows", "MAX_LAYERS", "MAX_CUBES",
@@ -171,8 +172,10 @@ class ShadowMaps:
 
     def __init__(self, device: Device, material_layout: DescriptorSetLayout, slots: int,
                  resolution: int = DEFAULT_RESOLUTION, readable: bool = False,
-                 frame_layout: DescriptorSetLayout | None = None) -> None:
+                 frame_layout: DescriptorSetLayout | None = None,
+                 images: ShadowImages | None = None) -> None:
         _check_resolution(device, resolution)
+        self.images = images  # where its images come from and go back to (None: its own)
         self.device, self.resolution, self.readable = device, resolution, readable
         self.cube_resolution, self._objects = max(resolution // 2, 16), []
         self.cubes_supported = bool(getattr(device, "image_cube_array", True))
@@ -260,22 +263,21 @@ class ShadowMaps:
         self.device.wait_idle()
         self.forget()
         if not ok_maps:
-            if self.maps is not None:
-                self.maps.destroy()
-            self.maps = LayeredDepth(self.device, size_maps, need_maps,
-                                     readable=self.readable, name="shadow maps")
+            self._let_go(self.maps, "shadow maps")
+            self.maps = self._layered(size_maps, need_maps, False, "shadow maps")
         if not ok_cubes:
-            if self.cubes is not None:
-                self.cubes.destroy()
-            self.cubes = LayeredDepth(self.device, size_cubes, 6 * need_cubes,
-                                      cube=self.cubes_supported, readable=self.readable,
-                                      name="shadow cubes")
+            self._let_go(self.cubes, "shadow cubes")
+            self.cubes = self._layered(size_cubes, 6 * need_cubes, self.cubes_supported,
+                                       "shadow cubes")
         if not hasattr(self, "sampler"):
             linear = self.maps.filterable
             self.sampler = self._own(Sampler(self.device, SamplerSpec(
                 wrap_u="border", wrap_v="border", mag="linear" if linear else "nearest",
                 min="linear" if linear else "nearest", mipmaps=False, anisotropy=1.0,
                 compare="greater_or_equal")))
+            self.face_sampler = self._own(Sampler(self.device, SamplerSpec(
+                wrap_u="clamp", wrap_v="clamp", mag="nearest", min="nearest", mipmaps=False,
+                anisotropy=1.0, compare="greater_or_equal")))
         w = DescriptorWriter(self.device)
         size = HEADER_BYTES + 64 * MATRICES
         for i, (s, ps) in enumerate(zip(self.sets, self.pass_sets, strict=True)):
@@ -284,9 +286,24 @@ class ShadowMaps:
             w.sampler(s, 2, self.cubes.view, self.sampler)
             w.storage(s, 3, self.world_depths)
             w.storage(s, 4, self.frame_depths)
+            w.sampler(s, 5, self.cubes.faces, self.face_sampler)
             w.storage(ps, 0, self.buffer, size, i * self.stride)
         w.update()
         return True
+
+    def _layered(self, size: int, layers: int, cube: bool, name: str) -> LayeredDepth:
+        """A new image (from `images`, the device's, where given)."""
+        if self.images is not None:
+            return self.images.take(size, layers, cube, self.readable, name)
+        return LayeredDepth(self.device, size, layers, cube=cube, readable=self.readable,
+                            name=name)
+
+    def _let_go(self, image: LayeredDepth | None, name: str) -> None:
+        """Done with `image`: back to `images` where given, else destroyed."""
+        if image is not None and self.images is not None:
+            self.images.give(image, self.readable, name)
+        elif image is not None:
+            image.destroy()
 
     def _bind_depths(self, binding: int, buffer: Buffer | None) -> Buffer:
         """`buffer` (or the stand-in) as set 3's storage `binding` in every slot's set."""
@@ -557,9 +574,8 @@ class ShadowMaps:
         for p in self._pipelines.values():
             p.destroy()
         self._pipelines.clear()
-        for img in (self.maps, self.cubes):
-            if img is not None:
-                img.destroy()
+        self._let_go(self.maps, "shadow maps")
+        self._let_go(self.cubes, "shadow cubes")
         self.maps = self.cubes = None
         while self._objects:
             self._objects.pop().destroy()

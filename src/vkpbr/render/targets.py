@@ -2,7 +2,10 @@
 new targets callers own, window swapchains and text overlays.
 
 `Targets` keeps one offscreen target per (size, colour kind) and one HDR target per size for
-frames with post steps (render/post_stage.py), checks sizes against the device's limits, makes the
+frames with post steps (render/post_stage.py) in `kept`, the device's (render/parts.py
+DeviceParts: a Renderer's scenes draw into the same ones; they and what they make on first
+use are made under `Device.keeping`, outside a scene's count; what a scene makes for a
+target, its recordings and compute sets, is the scene's), checks sizes against the device's limits, makes the
 dataset outputs' images of a target on first use, and destroys a caller's target with what
 was recorded or made for it (command buffers, the compute path's per-target buffers).
 `Lazy` is an object made on first use: the compute path's resources, the post kernels.
@@ -10,6 +13,7 @@ was recorded or made for it (command buffers, the compute path's per-target buff
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Callable
 from typing import Any, Generic, TypeVar
 
@@ -25,7 +29,9 @@ from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.post_stage import PostKernels
 from vkpbr.render.recorder import FrameRecorder
 
-__all__ = ["Lazy", "Targets"]
+__all__ = ["Lazy", "Targets", "FREE_ATLASES"]
+
+FREE_ATLASES = 2  # compute-batch atlases kept between scenes (a job's full and last batches)
 
 T = TypeVar("T")
 
@@ -50,10 +56,15 @@ class Targets:
 
     def __init__(self, device: Device, msaa: int, background: tuple[float, float, float],
                  frames: int, recorder: FrameRecorder, compute: Lazy[ComputeScene],
-                 post: Lazy[PostKernels]) -> None:
+                 post: Lazy[PostKernels], kept: dict[tuple, OffscreenTarget] | None = None,
+                 free_atlases: OrderedDict[tuple, OffscreenTarget] | None = None) -> None:
         self.device, self.msaa, self.background, self.frames = device, msaa, background, frames
         self.recorder, self.compute, self.post_kernels = recorder, compute, post
-        self._kept: dict[tuple, OffscreenTarget] = {}
+        self._kept: dict[tuple, OffscreenTarget] = {} if kept is None else kept
+        self._device_kept = kept is not None  # (its targets the device's: `_keep`)
+        # Compute-batch atlases a scene before gave back (`give_atlas`), the oldest first.
+        self._free_atlases: OrderedDict[tuple, OffscreenTarget] = (
+            OrderedDict() if free_atlases is None else free_atlases)
 
     def offscreen(self, size: tuple[int, int], linear: bool = False) -> OffscreenTarget:
         """The offscreen target of `size` (W, H): sRGB uint8, or float32 `linear`."""
@@ -63,9 +74,19 @@ class Targets:
             raise UsageError(f"image size {w}x{h}: width and height must be positive integers")
         if w > limit or h > limit:
             raise UsageError(f"image size {w}x{h} exceeds this device's limit of {limit}x{limit}")
-        key = (int(w), int(h), linear)
+        return self._keep((int(w), int(h), linear))
+
+    def _keep(self, key: tuple) -> OffscreenTarget:
+        """The kept target of `key` ((w, h, linear) or (w, h, "post"): float), made now
+        (the device's, where `kept` was given) if there is none."""
         if key not in self._kept:
-            self._kept[key] = self.new((int(w), int(h)), linear)
+            if not self._device_kept:
+                self._kept[key] = self.new(key[:2], key[2] is not False)
+                return self._kept[key]
+            with self.device.keeping():
+                target = self.new(key[:2], key[2] is not False)
+            target.kept = True
+            self._kept[key] = target
         return self._kept[key]
 
     def new(self, size: tuple[int, int], linear: bool) -> OffscreenTarget:
@@ -74,16 +95,36 @@ class Targets:
         return OffscreenTarget(self.device, size, "float" if linear else "srgb", self.msaa,
                                (*self.background, 0.0), compute=self.device.compute_path)
 
+    def atlas(self, extent: tuple[int, int], linear: bool) -> OffscreenTarget:
+        """A compute batch's atlas of `extent` (render/batch_path.py): one a scene before gave
+        back, else a new one (the device's where targets are, else the caller's to `drop`)."""
+        target = self._free_atlases.pop((*extent, linear), None)
+        if target is not None:
+            return target
+        if not self._device_kept:
+            return self.new(extent, linear)
+        with self.device.keeping():
+            target = self.new(extent, linear)
+        target.kept = True
+        return target
+
+    def give_atlas(self, target: OffscreenTarget) -> None:
+        """Done with atlas `target` (from `atlas`) at a scene's end, the device idle: kept for
+        the next scene's batches, at most FREE_ATLASES (the oldest destroyed)."""
+        if not target.kept:
+            self.drop(target)
+            return
+        self._free_atlases[(*target.extent, target.color_kind == "float")] = target
+        while len(self._free_atlases) > FREE_ATLASES:
+            self._free_atlases.popitem(last=False)[1].destroy()
+
     def post(self, target: FrameTarget, copy: tuple[str, ...],
              extent: tuple[int, int] | None = None) -> OffscreenTarget:
         """The HDR target frames of `target` with post steps draw into (render/post_stage.py): the
         float colour (and depth, ids, outputs) of its size (or `extent`: a camera model's
         wider source, render/post.py lens_frame), kept here."""
         extent = target.extent if extent is None else extent
-        key = (*extent, "post")
-        if key not in self._kept:
-            self._kept[key] = self.new(extent, True)
-        hdr = self._kept[key]
+        hdr = self._keep((*extent, "post"))
         if COPY_OUTPUTS in copy:
             self.ensure_outputs(hdr)
         return hdr

@@ -169,10 +169,14 @@ ivec2 tile_origin() {
 #endif
 }
 
-// Framebuffer position (pixels, y down as the viewport maps it) and depth of a clip corner.
+// Position in the view's tile (pixels, y down as the viewport maps it) and depth of a clip
+// corner. In the tile, not the atlas: a batch's view is then covered with the very numbers
+// its frame alone is (edge functions at the same pixel centres, the same depths), whichever
+// tile it lands in; at the atlas's larger coordinates they rounded apart on the H200 (up to
+// 9/255 at tile edges, and GTAO's depths 7e-7 apart).
 vec3 screen(vec4 c) {
     vec3 ndc = c.xyz / c.w;
-    return vec3((ndc.xy * 0.5 + 0.5) * vec2(pc.tile_w, pc.tile_h) + vec2(tile_origin()), ndc.z);
+    return vec3((ndc.xy * 0.5 + 0.5) * vec2(pc.tile_w, pc.tile_h), ndc.z);
 }
 
 // Cover the screen triangle (s0, s1, s2), positive area, in its box [lo, hi): rows y0,
@@ -205,15 +209,15 @@ void cover(vec3 s0, vec3 s1, vec3 s2, uint id, ivec2 lo, ivec2 hi, int y0, int y
             float e0 = edge(s1.xy, s2.xy, p), e1 = edge(s2.xy, s0.xy, p), e2 = edge(s0.xy, s1.xy, p);
             if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) continue;
             float depth = clamp((e0 * s0.z + e1 * s1.z + e2 * s2.z) / area, 0.0, 1.0);
-            uint at = uint(y) * pc.width + uint(x);
+            ivec2 atlas = px + tile_origin();
+            uint at = uint(atlas.y) * pc.width + uint(atlas.x);
 #if ALPHA_TESTED
             // Nearer already stored (an equal depth loses to this later triangle): no test.
             if (uint(raster[at] >> 32) > floatBitsToUint(depth)) continue;
 #if KERNEL == 5
-            surface_point(tri, uvec2(px - tile_origin()), vec2(pc.tile_w, pc.tile_h));
+            surface_point(tri, uvec2(px), vec2(pc.tile_w, pc.tile_h));
 #else
-            surface_point(surface_triangle(draw, prim), uvec2(px - tile_origin()),
-                          vec2(pc.tile_w, pc.tile_h));
+            surface_point(surface_triangle(draw, prim), uvec2(px), vec2(pc.tile_w, pc.tile_h));
 #endif
             if (surface_base_color().a < MAT.alpha_cutoff) continue;  // as pbr.frag's ALPHA_MASK
 #endif
@@ -276,10 +280,10 @@ bool on_screen(uint g, out Screen t) {
     if (t.area == 0.0 || (t.area > 0.0 && !double_sided)) return false;
     vec2 lo2 = t.s[0].xy, hi2 = t.s[0].xy;
     for (int j = 1; j < t.n; ++j) { lo2 = min(lo2, t.s[j].xy); hi2 = max(hi2, t.s[j].xy); }
-    // Pixel centres inside the box: from ceil(lo - 0.5) to floor(hi - 0.5), within the tile.
-    ivec2 origin = tile_origin();
-    t.lo = max(ivec2(ceil(lo2 - 0.5)), origin);
-    t.hi = min(ivec2(floor(hi2 - 0.5)) + 1, origin + ivec2(pc.tile_w, pc.tile_h));
+    // Pixel centres inside the box: from ceil(lo - 0.5) to floor(hi - 0.5), within the tile
+    // (tile pixels: cover adds the tile's origin where it stores).
+    t.lo = max(ivec2(ceil(lo2 - 0.5)), ivec2(0));
+    t.hi = min(ivec2(floor(hi2 - 0.5)) + 1, ivec2(pc.tile_w, pc.tile_h));
     return all(lessThan(t.lo, t.hi));
 }
 

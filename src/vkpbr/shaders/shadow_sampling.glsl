@@ -5,8 +5,11 @@
 //   y: layers (directional: its cascades)   z: near plane (spot, point)
 //   w: world size of a texel at unit distance along the light's axis (spot, point)
 // Depth is reversed (render/shadow_math.py): 1 nearest the light; a comparison sample is 1
-// where the receiver's depth >= the stored one (GREATER_OR_EQUAL), filtered 2x2 by hardware,
-// and PCF_TAPS x PCF_TAPS such samples a texel apart are averaged.
+// where the receiver's depth >= the stored one (GREATER_OR_EQUAL), filtered 2x2 (bilinear
+// weights in 1/256ths, computed here from gathered compares on devices that filter D32
+// linearly, so that the images and the compute rasteriser's buffer, read by hand, give the
+// same shadow; nearest elsewhere, as the sampler), and PCF_TAPS x PCF_TAPS such samples a
+// texel apart are averaged.
 // Bias, three parts: the passes' slope-scaled depth bias (render/shadows.py), the normal
 // offset here (the receiver moves along its geometric normal by params.z texels, more at
 // grazing light), and reversed-Z float depth's relative precision.
@@ -16,6 +19,8 @@
 
 layout(set = 3, binding = 1) uniform sampler2DArrayShadow shadow_maps;
 layout(set = 3, binding = 2) uniform samplerCubeArrayShadow shadow_cubes;
+// The cubes' faces as 2D layers (6 a cube, Vulkan's face order), clamped to each face's edge.
+layout(set = 3, binding = 5) uniform sampler2DArrayShadow shadow_cube_faces;
 
 const int SHADOW_PCF_HALF = 1;  // (2 * 1 + 1)^2 = 9 taps
 
@@ -110,31 +115,69 @@ float compare_2d(vec2 uv, float layer, float ref) {
     return hand_compare(frame, base, size, uv, ref, false);
 }
 
-// shadow_pcf_2d's 3 x 3 taps a texel apart (PCF_RADIUS 1), each a linear 2 x 2 compare, by
-// hand: the 4 x 4 texels they cover read once (16 loads, not 9 x 4), each weighted by the
-// taps' filter weights on it, per axis (1 - f, 1, 1, f) (every tap has the same fraction f).
+// shadow_pcf_2d's 3 x 3 taps a texel apart (PCF_RADIUS 1), each a linear 2 x 2 compare: the
+// 4 x 4 texels they cover compared once (16, not 9 x 4), each weighted by the taps' filter
+// weights on it, per axis (1 - f, 1, 1, f) (every tap has the same fraction f). The texels'
+// compares come by hand (the kernels' buffers) or from the images (4 gathers), and both go
+// through this one sum, so a frame reads the same shadow either way, bit for bit (the
+// sampler's own linear filter, which the images used before, was up to 9/255 off the
+// by-hand one on the H200).
+float pcf_4x4(vec2 f, vec4 rows[4]) {
+    vec4 wx = vec4(1.0 - f.x, 1.0, 1.0, f.x), wy = vec4(1.0 - f.y, 1.0, 1.0, f.y);
+    float sum = 0.0;
+    for (int y = 0; y < 4; ++y) sum += wy[y] * dot(wx, rows[y]);
+    return sum / 9.0;
+}
+
 float hand_pcf_linear(bool frame, uint base, int size, vec2 uv, float ref) {
     ivec2 i;
     vec2 f;
     filter_at(uv, size, i, f);
     i -= 1;
-    vec4 wx = vec4(1.0 - f.x, 1.0, 1.0, f.x), wy = vec4(1.0 - f.y, 1.0, 1.0, f.y);
-    float sum = 0.0;
+    vec4 rows[4];
     for (int y = 0; y < 4; ++y) {
-        vec4 row = vec4(hand_texel(frame, base, size, i + ivec2(0, y), ref, false),
-                        hand_texel(frame, base, size, i + ivec2(1, y), ref, false),
-                        hand_texel(frame, base, size, i + ivec2(2, y), ref, false),
-                        hand_texel(frame, base, size, i + ivec2(3, y), ref, false));
-        sum += wy[y] * dot(wx, row);
+        rows[y] = vec4(hand_texel(frame, base, size, i + ivec2(0, y), ref, false),
+                       hand_texel(frame, base, size, i + ivec2(1, y), ref, false),
+                       hand_texel(frame, base, size, i + ivec2(2, y), ref, false),
+                       hand_texel(frame, base, size, i + ivec2(3, y), ref, false));
     }
-    return sum / 9.0;
+    return pcf_4x4(f, rows);
+}
+
+// The same 4 x 4 compares from the images: a gather of 2 x 2 compares at the corner its texels
+// share ((k + 1) / size for texels k, k + 1), its components (0, 1), (1, 1), (1, 0), (0, 0).
+float image_pcf_linear(float layer, int size, vec2 uv, float ref) {
+    ivec2 i;
+    vec2 f;
+    filter_at(uv, size, i, f);
+    vec2 at = vec2(i) / float(size);  // the corner of texels i - 1 and i
+    float step_uv = 2.0 / float(size);
+    vec4 a = textureGather(shadow_maps, vec3(at, layer), ref);
+    vec4 b = textureGather(shadow_maps, vec3(at + vec2(step_uv, 0.0), layer), ref);
+    vec4 c = textureGather(shadow_maps, vec3(at + vec2(0.0, step_uv), layer), ref);
+    vec4 d = textureGather(shadow_maps, vec3(at + vec2(step_uv), layer), ref);
+    vec4 rows[4] = vec4[](vec4(a.w, a.z, b.w, b.z), vec4(a.x, a.y, b.x, b.y),
+                          vec4(c.w, c.z, d.w, d.z), vec4(c.x, c.y, d.x, d.y));
+    return pcf_4x4(f, rows);
+}
+
+// hand_compare's linear filter (clamp_edge) from a face of the images: one gather of the
+// 2 x 2 texels at the corner they share, weighed as hand_compare weighs them, so that a frame
+// compares alike whether its cube was just redrawn (read by hand) or cached.
+float face_compare(float layer, int size, vec2 uv, float ref) {
+    ivec2 i;
+    vec2 f;
+    filter_at(uv, size, i, f);
+    vec4 g = textureGather(shadow_cube_faces, vec3(vec2(i + 1) / float(size), layer), ref);
+    return mix(mix(g.w, g.z, f.x), mix(g.x, g.y, f.x), f.y);
 }
 
 float compare_cube(vec3 q, float cube, float ref) {
     uint world = shadow_world();
     bool frame = world == 0u;
-    if (!SHADOW_HAND_READS || (frame && !frame_maps_in_buffer()))
-        return texture(shadow_cubes, vec4(q, cube), ref);
+    // (SHADOW_HAND_READS 0: the images, whatever the view's world says: no by-hand code)
+    bool images = !SHADOW_HAND_READS || (frame && !frame_maps_in_buffer());
+    if (images && !linear_filter()) return texture(shadow_cubes, vec4(q, cube), ref);
     // Vulkan's face selection and face coordinates (+X -X +Y -Y +Z -Z).
     vec3 a = abs(q);
     uint face;
@@ -143,10 +186,12 @@ float compare_cube(vec3 q, float cube, float ref) {
     else if (a.y >= a.z) { face = q.y > 0.0 ? 2u : 3u; ma = a.y; sc = q.x; tc = q.y > 0.0 ? q.z : -q.z; }
     else { face = q.z > 0.0 ? 4u : 5u; ma = a.z; sc = q.z > 0.0 ? q.x : -q.x; tc = -q.y; }
     int size = int(shadow_data.params.y);
+    vec2 uv = 0.5 * vec2(sc, tc) / ma + 0.5;
+    if (images) return face_compare(float(6u * uint(cube + 0.5) + face), size, uv, ref);
     uint cubes = frame ? shadow_data.world_layout.w
                        : (world - 1u) * shadow_data.world_layout.x + shadow_data.world_layout.y;
     uint base = cubes + (6u * uint(cube + 0.5) + face) * uint(size * size);
-    return hand_compare(frame, base, size, 0.5 * vec2(sc, tc) / ma + 0.5, ref, true);
+    return hand_compare(frame, base, size, uv, ref, true);
 }
 
 // The receiver moved towards the light's side along its geometric normal, by `texel` world
@@ -163,9 +208,10 @@ float shadow_pcf_2d(float layer, vec3 ndc) {
     bool frame;
     uint base;
     int size;
-    if (SHADOW_PCF_HALF == 1 && shadow_data.params.w == 1.0 && linear_filter()
-        && hand_layer(layer, frame, base, size))
-        return hand_pcf_linear(frame, base, size, uv, ndc.z);
+    if (SHADOW_PCF_HALF == 1 && shadow_data.params.w == 1.0 && linear_filter()) {
+        return hand_layer(layer, frame, base, size) ? hand_pcf_linear(frame, base, size, uv, ndc.z)
+                                                    : image_pcf_linear(layer, size, uv, ndc.z);
+    }
     float step_uv = shadow_data.params.w / shadow_data.params.x;
     float sum = 0.0;
     for (int j = -SHADOW_PCF_HALF; j <= SHADOW_PCF_HALF; ++j)
