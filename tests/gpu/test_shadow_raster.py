@@ -266,7 +266,8 @@ def test_image_frames_bind_pipelines_without_the_by_hand_reads(renderer, monkeyp
     it 1 (the default); the next, whose catch-up copies every layer into the images
     (SETTLE_FRAMES 1 here) and compares in hardware, binds other pipeline objects, built with
     it 0 (the driver drops the by-hand code): the compute path's shading kernels (a 1-view
-    compute batch, a frame) and the fragment path's lit passes (a frame), recorded anew."""
+    compute batch) and the fragment path's lit passes (a frame), recorded anew; every
+    recording's ShadeVariant (a compute-path frame's kernels) says the read it was made for."""
     import vkpbr.render.shadows as shadows
 
     cs, rec = renderer.compute_scene(), renderer.recorder
@@ -291,7 +292,6 @@ def test_image_frames_bind_pipelines_without_the_by_hand_reads(renderer, monkeyp
     opts = {"shadow_raster": "compute", "shadow_resolution": 256, "env": "none"}
     for draw in (lambda: renderer.render_batch([CAMERA], (32, 24), ALL, pipeline="compute",
                                                 ao="off", **opts),
-                 lambda: renderer.render(CAMERA, ALL, size=(32, 24), pipeline="compute", **opts),
                  lambda: renderer.render(CAMERA, ALL, size=(32, 24), pipeline="forward", **opts)):
         renderer.shadows.forget()
         seen = {}
@@ -303,6 +303,9 @@ def test_image_frames_bind_pipelines_without_the_by_hand_reads(renderer, monkeyp
         assert set(seen) == {True, False}, seen.keys()
         assert {c for c, _ in seen[True]} == {1} and {c for c, _ in seen[False]} == {0}, seen
         assert not {id(p) for _, p in seen[True]} & {id(p) for _, p in seen[False]}
+    keys = list(rec._recorded)  # (target, image, slot, FrameSpec, reads the buffer)
+    assert {k[4] for k in keys} == {True, False}
+    assert all(k[3].variant.hand_reads == k[4] for k in keys), keys
 
 
 def test_the_shading_reads_the_kernels_buffer(renderer, monkeypatch) -> None:  # noqa: ANN001
