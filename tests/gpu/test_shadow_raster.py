@@ -260,6 +260,54 @@ def test_frames_in_flight_and_batches(renderer) -> None:  # noqa: ANN001
         _compare_images(views["hardware"], views["compute"], f"{pipeline} batch")
 
 
+def test_image_frames_bind_pipelines_without_the_by_hand_reads(renderer, monkeypatch) -> None:  # noqa: ANN001
+    """Shading pipelines per read (shadow_sampling.glsl SHADOW_HAND_READS, specialisation
+    constant 3): a frame that reads the compute-drawn maps' buffer binds pipelines built with
+    it 1 (the default); the next, whose catch-up copies every layer into the images
+    (SETTLE_FRAMES 1 here) and compares in hardware, binds other pipeline objects, built with
+    it 0 (the driver drops the by-hand code): the compute path's shading kernels (a 1-view
+    compute batch) and the fragment path's lit passes (a frame), recorded anew; every
+    recording's ShadeVariant (a compute-path frame's kernels) says the read it was made for."""
+    import vkpbr.render.shadows as shadows
+
+    cs, rec = renderer.compute_scene(), renderer.recorder
+    real_kernel, real_pipeline, bound = cs._pipeline, rec.pipeline, []
+
+    def kernel(name, push_bytes, constants=()):  # noqa: ANN001, ANN202
+        pipe = real_kernel(name, push_bytes, constants)
+        if name.startswith("shade_"):
+            bound.append((constants[3], pipe))
+        return pipe
+
+    def pipeline(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+        pipe = real_pipeline(*args, **kwargs)
+        if pipe.spec.fragment_shader in ("pbr_opaque.frag.spv", "pbr_mask.frag.spv"):
+            bound.append((dict(pipe.spec.fragment_constants).get(3, 1), pipe))
+        return pipe
+
+    monkeypatch.setattr(cs, "_pipeline", kernel)
+    monkeypatch.setattr(rec, "pipeline", pipeline)
+    monkeypatch.setattr(rec, "_recorded", {})  # (recordings made with the spies)
+    monkeypatch.setattr(shadows, "SETTLE_FRAMES", 1)
+    opts = {"shadow_raster": "compute", "shadow_resolution": 256, "env": "none"}
+    for draw in (lambda: renderer.render_batch([CAMERA], (32, 24), ALL, pipeline="compute",
+                                                ao="off", **opts),
+                 lambda: renderer.render(CAMERA, ALL, size=(32, 24), pipeline="forward", **opts)):
+        renderer.shadows.forget()
+        seen = {}
+        for _ in range(2):  # the buffer, then the images
+            bound.clear()
+            draw()
+            assert renderer.shadows.compute and bound
+            seen[renderer.shadows.reads_buffer] = list(bound)
+        assert set(seen) == {True, False}, seen.keys()
+        assert {c for c, _ in seen[True]} == {1} and {c for c, _ in seen[False]} == {0}, seen
+        assert not {id(p) for _, p in seen[True]} & {id(p) for _, p in seen[False]}
+    keys = list(rec._recorded)  # (target, image, slot, FrameSpec, reads the buffer)
+    assert {k[4] for k in keys} == {True, False}
+    assert all(k[3].variant.hand_reads == k[4] for k in keys), keys
+
+
 def test_the_shading_reads_the_kernels_buffer(renderer, monkeypatch) -> None:  # noqa: ANN001
     """No copy step: the compute-drawn frame's shadow steps touch only the kernels' buffers,
     and their last, "shadows", hands the depth buffer to the shading (a read by compute and

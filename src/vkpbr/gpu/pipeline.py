@@ -8,6 +8,7 @@ objects) and dynamic viewport/scissor, so one pipeline serves every image size.
 
 from __future__ import annotations
 
+import struct
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -58,6 +59,9 @@ class PipelineSpec:
     # (constant, slope) depth bias factors (Vulkan's; negative pushes depth away under
     # reversed-Z); None: no bias.
     depth_bias: tuple[float, float] | None = None
+    # The fragment shader's specialisation constants: (constant_id, 32-bit value) pairs; the
+    # others keep the shader's defaults.
+    fragment_constants: tuple[tuple[int, int], ...] = ()
 
 
 def shader_key(path: Path) -> tuple[str, int, int]:
@@ -164,9 +168,19 @@ class Pipeline(DeviceObject):
                 stage=vk.VK_SHADER_STAGE_VERTEX_BIT, module=vert.handle, pName="main"
             ),
         ]
+        # (the constants' bytes stay referenced until the create call returns)
+        data = struct.pack(f"<{len(spec.fragment_constants)}I",
+                           *(int(v) & 0xFFFFFFFF for _, v in spec.fragment_constants))
         if frag is not None:
+            constants = None
+            if spec.fragment_constants:
+                constants = vk.VkSpecializationInfo(
+                    pMapEntries=[vk.VkSpecializationMapEntry(constantID=c, offset=4 * i, size=4)
+                                 for i, (c, _) in enumerate(spec.fragment_constants)],
+                    dataSize=len(data), pData=vk.ffi.from_buffer(data))
             stages.append(vk.VkPipelineShaderStageCreateInfo(
-                stage=vk.VK_SHADER_STAGE_FRAGMENT_BIT, module=frag.handle, pName="main"))
+                stage=vk.VK_SHADER_STAGE_FRAGMENT_BIT, module=frag.handle, pName="main",
+                pSpecializationInfo=constants))
         bindings = [
             vk.VkVertexInputBindingDescription(
                 binding=s.binding, stride=_FORMATS[s.format][1] if s.stride is None else s.stride,

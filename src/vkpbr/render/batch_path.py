@@ -219,7 +219,8 @@ class BatchPath:
         self._run(frame, plan, opts, lambda redraw: p.recorder.command_buffer(
             target, frame, 0, FrameSpec(
                 "compute_batch", opts.tbn, opts.alpha_mask, plan, redraw, copy,
-                variant=p.lighting.shade_variant(opts, shading_ao), tiles=(n, *post.size, rows),
+                variant=p.lighting.shade_variant(opts, shading_ao, self._hand_reads()),
+                tiles=(n, *post.size, rows),
                 set0_id=id(set0), external_id=id(external), batch=(bv.generation, *self._world_key()),
                 ao=ao, post=post.post, post_tonemap=post.tonemap, lens=post.lens),
             FrameObjects(set0=set0, external=external), self._world_groups(), drawn=post.drawn),
@@ -512,6 +513,11 @@ class BatchPath:
             raise UsageError(f"worlds: {which}world {world} has a pose with NaN or infinity, or "
                              f"a quaternion of length 0 ({count} draw records of such worlds "
                              "were hidden)")
+
+    def _hand_reads(self) -> bool:
+        """Whether the batch's shading reads shadow maps by hand: its worlds' own maps, or the
+        frame's compute-drawn maps from their buffer (after `_run`'s stale chose)."""
+        return self._wshadow is not None or self.parts.shadow_frames.maps.hand_reads
 
     def _world_key(self) -> tuple:
         """What a batch's recording of worlds depends on (nothing without worlds)."""

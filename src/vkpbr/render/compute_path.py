@@ -57,15 +57,20 @@ RASTER_PUSH_BYTES = 96  # raster.comp's push constants (20 uints, then the clear
 class ShadeVariant:
     """What a frame's shading kernels are specialised for (shade.glsl's specialisation
     constants): its lighting flags (FrameLighting.flags: shadows, image-based light, screen
-    transmission) and BRDF (Settings.brdf). The default is the general kernel. Each material
-    adds whether it has layers other than the defaults (gpu_scene.has_default_layers)."""
+    transmission) and BRDF (Settings.brdf), and whether it reads any shadow map by hand
+    (`hand_reads`: compute-drawn maps from their buffer, ShadowMaps.hand_reads, or a batch's
+    worlds' maps; false: every compare is the images' sampler's, and the driver drops the
+    by-hand code, shadow_sampling.glsl SHADOW_HAND_READS). The default is the general kernel.
+    Each material adds whether it has layers other than the defaults
+    (gpu_scene.has_default_layers)."""
 
     lighting_flags: int = 0xFFFFFFFF
     brdf: int = -1
+    hand_reads: bool = True
 
-    def constants(self, layers: bool) -> tuple[int, int, int]:
-        """shade.glsl's constants 0-2 for a material with (`layers`) or without layers."""
-        return self.lighting_flags, self.brdf, int(layers)
+    def constants(self, layers: bool) -> tuple[int, int, int, int]:
+        """shade.glsl's constants 0-3 for a material with (`layers`) or without layers."""
+        return self.lighting_flags, self.brdf, int(layers), int(self.hand_reads)
 
 
 GENERAL_SHADING = ShadeVariant()

@@ -40,10 +40,11 @@ class Lighting:
     """The lights and lighting terms of frames of `scene` (see the module's docstring)."""
 
     def __init__(self, scene: Scene, opaque_copies: OpaqueCopies,
-                 environments: Environments, state: Any = None) -> None:
-        # state: the living scene (vkpbr.scene.state): its lights follow animation pointers
+                 environments: Environments, state: Any = None, shadows: Any = None) -> None:
+        # state: the living scene (vkpbr.scene.state): its lights follow animation pointers;
+        # shadows: the ShadowMaps, whose frame's choice of reads the shading kernels follow
         self.scene, self.opaque_copies, self.environments = scene, opaque_copies, environments
-        self.state = state
+        self.state, self.shadows = state, shadows
         self._last: tuple[RenderOptions, bool, FrameLighting] | None = None
 
     def default_light(self) -> Light:
@@ -85,11 +86,16 @@ class Lighting:
         self._last = (options, ao, lighting)
         return lighting
 
-    def shade_variant(self, options: RenderOptions, ao: bool = False) -> ShadeVariant:
+    def shade_variant(self, options: RenderOptions, ao: bool = False,
+                      hand_reads: bool | None = None) -> ShadeVariant:
         """What the compute path's shading kernels are specialised for with `options` (and
-        `ao`, as frame_lighting's): the frame's lighting flags and BRDF
-        (render/compute_path.py ShadeVariant)."""
-        return ShadeVariant(self.frame_lighting(options, ao).flags, int(options.shading_brdf))
+        `ao`, as frame_lighting's): the frame's lighting flags and BRDF, and whether it reads
+        shadow maps by hand (`hand_reads`; None: as the shadow maps' last `stale` chose,
+        ShadowMaps.hand_reads) (render/compute_path.py ShadeVariant)."""
+        if hand_reads is None:
+            hand_reads = self.shadows is None or self.shadows.hand_reads
+        return ShadeVariant(self.frame_lighting(options, ao).flags, int(options.shading_brdf),
+                            hand_reads)
 
     def screen_transmission(self, options: RenderOptions) -> bool:
         """Whether frames with `options` draw the copy of the opaque scene that transmissive

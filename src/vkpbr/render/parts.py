@@ -232,6 +232,6 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
         Targets(device, msaa, background, ring.count, recorder, compute, post, shared.targets,
                 shared.atlases),
         environments,
-        Lighting(scene, copies, environments, state),
+        Lighting(scene, copies, environments, state, shadows),
         ShadowFrames(shadows, bounds, recorder, state,
                      np.array([d.casts_shadows for d in gs.draws], bool), paths), ao)

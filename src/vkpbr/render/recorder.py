@@ -36,6 +36,9 @@ from vkpbr.render.transmission import OpaqueCopies
 
 __all__ = ["FrameRecorder", "STAMPS", "FrameSpec", "FrameObjects"]
 
+# shadow_sampling.glsl's SHADOW_HAND_READS (shade.glsl's constants 0-2 are the compute path's).
+SHADOW_HAND_READS_ID = 3
+
 _TBN_STREAMS = {
     L.TbnMode.VECTORS: (("normals", "vec3"), ("tangents", "vec4")),
     L.TbnMode.QUAT: (("qtangents", "vec4"),),
@@ -104,6 +107,7 @@ class FrameRecorder:
         self._recorded: dict[tuple, _Recorded] = {}
         self._generations: dict[int, int] = {}
         self._pipelines: dict[tuple, Pipeline] = {}
+        self._by_spec: dict[PipelineSpec, Pipeline] = {}
 
     # --- pipelines --------------------------------------------------------------------------
     def pipeline(self, target: FrameTarget, tbn: L.TbnMode, p: PassSpec, prepass: bool,
@@ -111,8 +115,13 @@ class FrameRecorder:
         """The pipeline of pass `p` for `target`; `visibility`: its compute-path variant,
         writing (draw + 1, primitive) with pbr.frag's own coverage instead of a colour;
         `batch`: its batched-views variant (render/batch.py: the shaders' BATCH builds);
-        `copy`: its opaque-copy variant, writing linear radiance (render/transmission.py)."""
-        key = _pipeline_key(target, tbn, p, prepass, visibility, batch, copy)
+        `copy`: its opaque-copy variant, writing linear radiance (render/transmission.py).
+        A frame's shading passes lack the by-hand shadow reads (pbr.frag built with
+        shadow_sampling.glsl SHADOW_HAND_READS 0) unless it reads compute-drawn maps from their
+        buffer (ShadowMaps.hand_reads; the recording is keyed on it); a batch's keep them (a
+        batch of worlds reads its worlds' maps by hand)."""
+        hand = batch or visibility or self.shadows is None or self.shadows.hand_reads
+        key = (*_pipeline_key(target, tbn, p, prepass, visibility, batch, copy), hand)
         if key not in self._pipelines:
             gs = self.gpu_scene
             streams = [VertexStream(i, i, fmt, 0 if name == "colors" and not gs.has_colors else None)
@@ -136,7 +145,12 @@ class FrameRecorder:
                     spec, vertex_shader=spec.vertex_shader.replace("pbr_", "pbr_batch_").replace(
                         "background.vert", "background_batch.vert"),
                     fragment_shader=frag if frag is None else frag.replace("pbr_", "pbr_batch_"))
-            self._pipelines[key] = Pipeline(self.device, spec, self.pipeline_layout, SPV_DIR)
+            if not hand and (spec.fragment_shader or "").startswith("pbr_"):
+                spec = dataclasses.replace(spec, fragment_constants=((SHADOW_HAND_READS_ID, 0),))
+            # (passes the constant does not touch share one pipeline across `hand`)
+            if spec not in self._by_spec:
+                self._by_spec[spec] = Pipeline(self.device, spec, self.pipeline_layout, SPV_DIR)
+            self._pipelines[key] = self._by_spec[spec]
         return self._pipelines[key]
 
     def build_pipelines(self, target: FrameTarget, threads: int | None = None) -> None:

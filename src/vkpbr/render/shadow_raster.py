@@ -14,7 +14,9 @@ reads that buffer as it is, by hand (shaders/shadow_sampling.glsl hand_compare, 
 filter a batch of worlds' maps use too, with the images' sampler's compare, border and
 filter: nearest on lavapipe, which cannot filter D32 linearly, linear with 1/256 weights on
 NVIDIA; its 3 x 3 taps from their 4 x 4 texels, hand_pcf_linear); a frame that redraws some
-layers or none copies the redrawn ones into the images (`_copy`) and compares in hardware.
+layers or none copies the redrawn ones into the images (`_copy`) and compares in hardware,
+with shading pipelines built without the by-hand code (specialisation constant 3,
+SHADOW_HAND_READS 0: compute_path.ShadeVariant.hand_reads, recorder.FrameRecorder.pipeline).
 On the H200 (runs p, q): copying Sponza's 4 x 2048^2 texels into optimal-tiled D32 layers
 takes 0.73 ms, a quarter of the shadow work of a frame that redraws them all, while reading
 them by hand cost every frame's shading 0.04-0.07 ms (the still frame 0.88 -> 0.95 ms).

@@ -458,6 +458,13 @@ class ShadowMaps:
         return tuple(out)
 
     @property
+    def hand_reads(self) -> bool:
+        """Whether this frame's shading reads the frame's maps by hand (compute-drawn, from
+        their buffer): its shading kernels are the ones built with the by-hand code
+        (compute_path.ShadeVariant.hand_reads; the others compare only in hardware)."""
+        return self.compute and self.reads_buffer
+
+    @property
     def last_redraw(self) -> tuple[tuple[str, bool], ...]:
         """The latest frame's (kind, whether any of its layers were drawn) per plan entry."""
         return tuple((kind, n > 0) for kind, n in self.last_redrawn_layers)

@@ -33,6 +33,7 @@
 layout(constant_id = 0) const uint SHADE_LIGHTING_FLAGS = 0xFFFFFFFFu;  // ANDed with the frame's
 layout(constant_id = 1) const int SHADE_BRDF = -1;  // >= 0: the frame's Settings.brdf
 layout(constant_id = 2) const bool SHADE_LAYERS = true;  // false: the default layers
+// (constant 3, SHADOW_HAND_READS: whether any shadow map is read by hand, shadow_sampling.glsl)
 // A layer factor of the material, or (SHADE_LAYERS false) the default material's
 // (generated.glsl MATERIAL_DEFAULT_*: the defaults of scene/material_table.py's rows).
 #define LAYER_FACTOR(field) (SHADE_LAYERS ? MAT.field : MATERIAL_DEFAULT_##field)

@@ -45,9 +45,20 @@ uint shadow_world() { return views[view_index].shadow_base; }
 uint shadow_world() { return 0u; }
 #endif
 
+// Specialisation constant 3 (render/compute_path.py ShadeVariant.hand_reads): whether the
+// pipeline reads any map by hand (the frame's compute-drawn maps from ShadowDepths, or a
+// batch's worlds' maps). False in the compute path's kernels of frames that compare only in
+// hardware: every by-hand branch below is then a constant false that the driver folds away,
+// and with it hand_compare / hand_pcf_linear (their mere presence cost the H200's shading
+// kernels 0.015 ms a Sponza 1080p frame: registers and code size). True (the default) in
+// every other pipeline: the fragment path's and the buffer-reading frames', which branch on
+// the header's bit 0 at run time (a batch of worlds' kernels read the worlds' maps by hand
+// while the frame's, shadow_base 0, may be the images: the bit stays).
+layout(constant_id = 3) const bool SHADOW_HAND_READS = true;
+
 // ShadowData's header flags (ShadowMaps.write, _choose_reads): the frame's maps are read from
 // ShadowDepths (bit 0), and the images' sampler filters linearly (bit 1).
-bool frame_maps_in_buffer() { return (shadow_data.world_layout.z & 1u) != 0u; }
+bool frame_maps_in_buffer() { return SHADOW_HAND_READS && (shadow_data.world_layout.z & 1u) != 0u; }
 bool linear_filter() { return (shadow_data.world_layout.z & 2u) != 0u; }
 
 // A linear filter's first texel `i` and weights `f` at `uv` of a `size`-texel layer, the
@@ -91,7 +102,7 @@ bool hand_layer(float layer, out bool frame, out uint base, out int size) {
     frame = world == 0u;
     size = int(shadow_data.params.x);
     base = (frame ? 0u : (world - 1u) * shadow_data.world_layout.x) + uint(layer + 0.5) * uint(size * size);
-    return !frame || frame_maps_in_buffer();
+    return SHADOW_HAND_READS && (!frame || frame_maps_in_buffer());
 }
 
 // The 2D layers' and cubes' comparisons: the images', the frame's compute-drawn maps, or the
@@ -164,7 +175,8 @@ float face_compare(float layer, int size, vec2 uv, float ref) {
 float compare_cube(vec3 q, float cube, float ref) {
     uint world = shadow_world();
     bool frame = world == 0u;
-    bool images = frame && !frame_maps_in_buffer();
+    // (SHADOW_HAND_READS 0: the images, whatever the view's world says: no by-hand code)
+    bool images = !SHADOW_HAND_READS || (frame && !frame_maps_in_buffer());
     if (images && !linear_filter()) return texture(shadow_cubes, vec4(q, cube), ref);
     // Vulkan's face selection and face coordinates (+X -X +Y -Y +Z -Z).
     vec3 a = abs(q);
