@@ -35,9 +35,6 @@ def test_set_scene_renders_what_a_fresh_renderer_renders(make_renderer, sample_s
 
     renderer = make_renderer()  # the built-in chart first
     chart = _frame(renderer)
-    # (a batch first: on a GPU it takes the compute batch, whose atlas the device keeps for
-    # the scenes after: made before the count below, as the offscreen targets are)
-    renderer.render_batch([renderer.default_camera()] * 2, size=SIZE)
     device, cache = renderer.device, renderer.device.pipeline_cache
     before, kept = live_objects(), len(device.kept)
     renderer.world_slots(["sphere-m0-r0"])  # a node of the chart, gone with it
