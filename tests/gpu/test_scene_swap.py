@@ -36,7 +36,7 @@ def test_set_scene_renders_what_a_fresh_renderer_renders(make_renderer, sample_s
     renderer = make_renderer()  # the built-in chart first
     chart = _frame(renderer)
     device, cache = renderer.device, renderer.device.pipeline_cache
-    before, kept = live_objects(), len(device.kept)
+    children, kept = device.live_children, len(device.kept)
     renderer.world_slots(["sphere-m0-r0"])  # a node of the chart, gone with it
     renderer.set_scene(textured)
     with pytest.raises(UsageError, match="world_slots"):
@@ -50,8 +50,11 @@ def test_set_scene_renders_what_a_fresh_renderer_renders(make_renderer, sample_s
 
     renderer.set_scene(None)  # back to the chart: the same frame as before the swaps
     _equal(_frame(renderer), chart)
-    # Each swap destroyed what the scene before made, but the handles the device keeps.
-    assert live_objects() - len(device.kept) == before - kept
+    # Each swap destroyed what the scene before made (the device's children made for a scene;
+    # what the device keeps for its life, kept handles and parts such as a GPU's compute-batch
+    # atlases, is not a scene's: on the H200 the atlas's 14 objects counted here as a leak
+    # when every Vulkan object was counted). The second round below counts every object.
+    assert device.live_children == children
     assert len(device.kept) > kept  # (the textured scene's own pipelines, kept)
 
     # A second round makes nothing the first did not: no Vulkan object, no pipeline build.
