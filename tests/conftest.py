@@ -41,13 +41,6 @@ def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object:
     return ModulesAndFolders(config, log)
 
 
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Those folders' tests first (stable otherwise): each is one long scope of one worker
-    (the Sample Viewer's set-up alone is about a minute), which, started last, left the other
-    worker idle at the end of the run."""
-    items.sort(key=lambda item: not item.nodeid.startswith(_ONE_WORKER))
-
-
 # Reproducible frame paths: on a GPU `--pipeline auto` measures the paths once a renderer has
 # drawn for MEASURE_AFTER_S and may switch path mid-run (render/path_choice.py), so a module's
 # renderer could change path between two renders a test compares (the H200's test pass on 8
