@@ -142,12 +142,15 @@ class OffscreenTarget:
         return self._readbacks[frame_index]
 
     def _readback_buffers(self, frame_index: int) -> tuple[Buffer, Buffer]:
+        return (self._host_buffer(self.pixel_bytes, f"color readback {frame_index}"),
+                self._host_buffer(4, f"depth readback {frame_index}"))
+
+    def _host_buffer(self, pixel_bytes: int, name: str) -> Buffer:
+        """A host-visible transfer destination of `pixel_bytes` a pixel of the target."""
         n = self.extent[0] * self.extent[1]
-        usage = self.device.vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
-        return (self._own(Buffer(self.device, n * self.pixel_bytes, usage, host_visible=True,
-                                 name=f"color readback {frame_index}")),
-                self._own(Buffer(self.device, n * 4, usage, host_visible=True,
-                                 name=f"depth readback {frame_index}")))
+        return self._own(Buffer(self.device, n * pixel_bytes,
+                                self.device.vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                host_visible=True, name=name))
 
     # --- the protocol -----------------------------------------------------------------------
     def acquire(self, frame: Frame) -> int:
@@ -250,10 +253,7 @@ class OffscreenTarget:
         return self._output_readbacks[frame_index]
 
     def _output_buffers(self, frame_index: int) -> dict[str, Buffer]:
-        n = self.extent[0] * self.extent[1]
-        usage = self.device.vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
-        return {name: self._own(Buffer(self.device, n * nbytes, usage, host_visible=True,
-                                       name=f"{name} readback {frame_index}"))
+        return {name: self._host_buffer(nbytes, f"{name} readback {frame_index}")
                 for name, nbytes in self._output_bytes.items()}
 
     def read_outputs(self, frame_index: int, dtypes: dict[str, tuple[str, int]]) -> dict[str, np.ndarray]:
