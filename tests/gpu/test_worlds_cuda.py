@@ -116,6 +116,45 @@ def test_frames_as_a_view_follow_each_step(renderer) -> None:  # noqa: ANN001
     assert r.batch_path.frames_view is False  # (only during the view step's calls)
 
 
+def test_a_step_loop_takes_the_short_way_until_the_plan_changes(renderer) -> None:  # noqa: ANN001
+    """batch_step's short way (BatchStep._lane_step): once a step replayed, the steps with a
+    tensor alike skip render_batch's argument handling, and each step's frames are still its
+    poses' (the host path's, within 1 level). What changes the plan takes the full way: the
+    state moved between steps (set_poses: the replay key's version), a float64 tensor (the
+    full way converts it), another number of worlds; the frames follow all of them."""
+    import torch
+
+    r = renderer
+    cams = cameras(3)
+    kw = dict(quaternion="wxyz", pipeline="compute", **NO_SHADOWS)
+    want = {seed: r.render_batch(cams, (W, H), worlds=world_poses(3, seed=seed), **kw)
+            for seed in (1, 2)}
+    assert not np.array_equal(want[1], want[2]), "the poses changed nothing (test is moot)"
+    step = r.batch_step(cams, (W, H), device="cuda", **kw)
+    buf = torch.zeros((3, 2, 7), device="cuda")
+
+    def check(worlds: object, seed: int) -> None:
+        got = step(worlds=worlds).cpu().numpy()
+        assert np.mean(np.abs(got.astype(int) - want[seed])) <= 0.05, seed
+
+    for seed in (1, 2, 1, 2, 1, 2, 1):
+        buf.copy_(torch.as_tensor(world_poses(3, seed=seed), device="cuda"))
+        check(buf, seed)
+    assert step.lane_steps >= 2, "the loop never took the short way"
+    before = step.lane_steps
+    big = r.state.tree.find("big sphere")
+    r.set_poses(big, r.state.local[big].copy())
+    check(buf, 1)  # (the same pose: the state's version alone changed)
+    check(buf.double(), 1)
+    assert step.lane_steps == before, "a changed plan took the short way"
+    for seed in (2, 1, 2, 1):  # (back on it once a step replayed again)
+        buf.copy_(torch.as_tensor(world_poses(3, seed=seed), device="cuda"))
+        check(buf, seed)
+    assert step.lane_steps > before
+    with pytest.raises(UsageError, match="worlds"):  # (2 worlds for 3 views: checked again)
+        step(worlds=buf[:2].contiguous())
+
+
 @pytest.mark.parametrize("device", ["cpu", "cuda"])
 def test_nan_poses_on_the_gpu_are_hidden_and_reported(renderer, device: str) -> None:  # noqa: ANN001
     """CUDA poses are not read back before the batch: the kernel hides a world whose pose is

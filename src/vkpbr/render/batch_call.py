@@ -18,6 +18,7 @@ import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.render.batch_cache import BatchCache, Prepared, WorldShape, batch_cache
+from vkpbr.render.batch_replay import replay, replay_key
 from vkpbr.render.batch_route import batch_result, stack_views
 from vkpbr.render.lighting import LightsArg
 from vkpbr.render.options import RenderOptions
@@ -481,6 +482,8 @@ class BatchStep:
         self._bound = bound
         self._overrides = {k: v for k, v in kwargs.items() if k not in bound}
         self._prep: tuple[int, Prepared] | None = None  # (the cache's version, the Prepared)
+        self._lane: _Lane | None = None  # a replayed CUDA step's short way (`_lane_step`)
+        self.lane_steps = 0  # steps that took it (tests read it)
 
     def __call__(self, worlds: Any = None, world_visible: Any = None, **more: Any) -> Any:
         """render_batch(cameras, size, worlds=worlds, world_visible=world_visible, the step's
@@ -499,14 +502,77 @@ class BatchStep:
             return self.renderer.render_batch(self.cameras, self.size, worlds=worlds,
                                               world_visible=world_visible,
                                               **{**self.kwargs, **more})
+        if world_visible is None and self._lane is not None:
+            got = self._lane_step(self._lane, worlds)
+            if got is not None:
+                return got
         b = self._bound
         prep = self._prepared(b)
         given = WorldArgs(worlds, b["world_of_view"], b["quaternion"], world_visible,
                           b["world_expand"], b["world_materials"], b["space"], b["world_lights"],
                           b["world_environment"], b["times"], b["animation"])
-        return render_batch(self.renderer, self.cameras, self.size, b["lights"], b["options"],
-                          b["linear"], b["depth"], b["outputs"], b["batch"], b["device"],
-                          b["out"], given, self._overrides, prep)
+        result = render_batch(self.renderer, self.cameras, self.size, b["lights"], b["options"],
+                              b["linear"], b["depth"], b["outputs"], b["batch"], b["device"],
+                              b["out"], given, self._overrides, prep)
+        self._lane = self._make_lane(prep, worlds, world_visible)
+        return result
+
+    # --- the short way of a replayed CUDA step ----------------------------------------------
+    # A simulator's loop gives the same CUDA tensor (or one alike) each step. Once a step
+    # replayed (render/batch_replay.py), the next one alike needs none of render_batch's
+    # argument handling: the poses' checks that do not read values (shape, dtype, device,
+    # contiguity) hold for a tensor of the same signature, the Prepared and the WorldCall are
+    # the last step's, and the replay key is computed afresh (so that whatever would stop a
+    # replay on the full way stops it here: the state's version, the views, the kernel, the
+    # ring's frame count). Any difference takes the full way.
+    def _make_lane(self, prep: Prepared, worlds: Any, world_visible: Any) -> _Lane | None:
+        """The lane for steps like this one, where it replayed or may replay next time."""
+        b, r = self._bound, self.renderer
+        if (world_visible is not None or not _on_cuda(worlds) or b["out"] is not None
+                or b["lights"] is not None or b["depth"] or prep.wanted or b["times"] is not None
+                or b["world_materials"] is not None or b["world_lights"] is not None
+                or b["world_environment"] is not None or r.batch_path.replays.key is None
+                or not _fixed(b["world_of_view"]) or self._prep is None):
+            return None
+        signature = _signature(worlds)
+        if signature is None:
+            return None
+        held: list[Any] = [None]
+        call = _cuda_call(r, prep, worlds, b["world_of_view"], b["quaternion"], None, b["space"])
+        if call.gpu is None:
+            return None
+
+        def fill(kernel: Any) -> None:
+            kernel.write_cuda(held[0], None)
+
+        call = dataclasses.replace(call, gpu=dataclasses.replace(call.gpu, fill=fill))
+        return _Lane(signature, _slots(r), self._prep[0], prep, call, held)
+
+    def _lane_step(self, lane: _Lane, worlds: Any) -> Any:
+        """This step by the lane (its frames), or None where it must take the full way."""
+        r = self.renderer
+        prep = lane.prep
+        if (_signature(worlds) != lane.signature or _slots(r) is not lane.slots
+                or batch_cache(r).version != lane.version or prep.holds[0] is not r.parts):
+            return None
+        b, path = self._bound, r.batch_path
+        path._calls += 1
+        path._finish_pending()
+        path._ordered = False
+        path.world_call = lane.call
+        lane.held[0] = worlds
+        try:
+            key = replay_key(path, prep.route, prep.views, self.size, None, prep.opts,
+                             b["linear"], False, b["batch"])
+            got = None if key is None else replay(path, key, None)
+        finally:
+            path.world_call = None
+            lane.held[0] = None
+        if got is None:
+            return None
+        self.lane_steps += 1
+        r.last_stats = path.stats
+        return got[0]
 
     def _prepared(self, b: dict[str, Any]) -> Prepared:
         """The call's Prepared: the one kept from the last call while the renderer's cache
@@ -522,6 +588,37 @@ class BatchStep:
         # (kept only where the cache keeps it: a key of identities and plain values)
         self._prep = (cache.version, prep) if cache.keeps(prep) else None
         return prep
+
+
+@dataclass(frozen=True)
+class _Lane:
+    """What a BatchStep's short way keeps (`BatchStep._make_lane`): the poses' signature
+    (`_signature`), the world slots, the batch cache's version and the Prepared it was made
+    at, the step's WorldCall, whose fill writes the tensor in `held[0]` (set for the step)."""
+
+    signature: tuple
+    slots: WorldSlots
+    version: int
+    prep: Prepared
+    call: WorldCall
+    held: list[Any]
+
+
+def _signature(tensor: Any) -> tuple | None:
+    """What `_cuda_call`'s checks read of CUDA poses, where a step may skip them: shape, dtype,
+    device, contiguity, float32 without a gradient (None: not such a tensor)."""
+    import torch
+
+    if not _on_cuda(tensor) or tensor.requires_grad or tensor.dtype is not torch.float32 \
+            or not tensor.is_contiguous():
+        return None  # (the full way converts these: a new tensor each step)
+    return (tuple(tensor.shape), tensor.device)
+
+
+def _fixed(world_of_view: Any) -> bool:
+    """Whether `world_of_view` cannot change between steps (BatchCache.world_shape's rule)."""
+    return world_of_view is None or (isinstance(world_of_view, np.ndarray)
+                                     and not world_of_view.flags.writeable)
 
 
 def _frames_view(kwargs: dict[str, Any]) -> bool:

@@ -24,7 +24,20 @@ from __future__ import annotations
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.timeline import SharedTimeline
 
-__all__ = ["CudaOrder"]
+__all__ = ["CudaOrder", "current_stream"]
+
+
+def current_stream() -> int:
+    """torch's current CUDA stream's handle on its current device. torch.cuda.current_stream()
+    makes a Stream object through several Python calls (~10 us a step on the H200's host);
+    torch._C._cuda_getCurrentRawStream, what Triton's launcher calls, gives the same handle
+    in one (the public way where a torch lacks it)."""
+    import torch
+
+    raw = getattr(torch._C, "_cuda_getCurrentRawStream", None)
+    if raw is None:
+        return int(torch.cuda.current_stream().cuda_stream)
+    return int(raw(torch._C._cuda_getDevice()))
 
 
 class CudaOrder:
@@ -49,9 +62,7 @@ class CudaOrder:
         """torch's current stream's handle, asked once a step (before_inputs: the step's
         calls are on the stream current then; current_stream() costs microseconds)."""
         if self._step_stream is None:
-            import torch
-
-            self._step_stream = int(torch.cuda.current_stream().cuda_stream)
+            self._step_stream = current_stream()
         return self._step_stream
 
     def before_inputs(self) -> None:
