@@ -14,6 +14,7 @@ handle descriptors would be the renderer guessing CUDA's ABI. Everything here is
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 from vkpbr.errors import UsageError, VkpbrError
@@ -21,6 +22,7 @@ from vkpbr.errors import UsageError, VkpbrError
 __all__ = ["CudaImport", "CudaTimeline", "cuda_unavailable", "cuda_device_for"]
 
 
+@functools.cache  # (a step signals and waits through it: no import statement each call)
 def _runtime() -> Any:
     try:
         from cuda.bindings import runtime  # cuda-python >= 12.6
@@ -46,9 +48,8 @@ def cuda_unavailable() -> str | None:
 
 def _check(result: Any, call: str) -> Any:
     """cuda-python returns (error, *values): raise on an error, return the values."""
-    rt = _runtime()
     err, *values = result if isinstance(result, tuple) else (result,)
-    if err != rt.cudaError_t.cudaSuccess:
+    if err != _runtime().cudaError_t.cudaSuccess:
         raise VkpbrError(f"CUDA {call} failed: {getattr(err, 'name', err)}")
     return values[0] if len(values) == 1 else values
 
