@@ -191,6 +191,14 @@ bool screen(uvec3 vi, vec4 wp[3], uint m, uint w, out Screen t) {
     t.area = 0.0;
     for (int j = 1; j + 1 < t.n; ++j) t.area += edge(t.s[0].xy, t.s[j].xy, t.s[j + 1].xy);
     if (!(abs(t.area) > 0.0)) return false;  // degenerate (a hidden draw's zero matrix), or NaN
+    // The box of texel centres first: a small caster's triangles (a crowd's, 1-2 texels in a
+    // cascade) mostly hold no texel centre, and need no slopes or bias then.
+    vec2 lo2 = t.s[0].xy, hi2 = t.s[0].xy;
+    for (int j = 1; j < t.n; ++j) { lo2 = min(lo2, t.s[j].xy); hi2 = max(hi2, t.s[j].xy); }
+    int isize = int(size);
+    t.lo = clamp(ivec2(ceil(lo2 - 0.5)), ivec2(0), ivec2(isize));
+    t.hi = clamp(ivec2(floor(hi2 - 0.5)) + 1, ivec2(0), ivec2(isize));
+    if (!all(lessThan(t.lo, t.hi))) return false;
     // The plane's depth slopes in texels, from the polygon's largest fan triangle (all of
     // them lie in one plane): Vulkan's m = max(|dz/dx|, |dz/dy|).
     int best = 1;
@@ -209,12 +217,7 @@ bool screen(uvec3 vi, vec4 wp[3], uint m, uint w, out Screen t) {
     float r_unit = zmax > 0.0 ? ldexp(1.0, e - 1 - 23) : 0.0;
     uint kind = m >= pc.max_layers ? 2u : (pc.spot_layers >> m) & 1u;
     t.bias = slope * pc.bias_slope[kind] + r_unit * pc.bias_constant[kind];
-    vec2 lo2 = t.s[0].xy, hi2 = t.s[0].xy;
-    for (int j = 1; j < t.n; ++j) { lo2 = min(lo2, t.s[j].xy); hi2 = max(hi2, t.s[j].xy); }
-    int isize = int(size);
-    t.lo = clamp(ivec2(ceil(lo2 - 0.5)), ivec2(0), ivec2(isize));
-    t.hi = clamp(ivec2(floor(hi2 - 0.5)) + 1, ivec2(0), ivec2(isize));
-    return all(lessThan(t.lo, t.hi));
+    return true;
 }
 
 // Triangle g of caster row k in layer m of world w (KERNEL 4: one layer a dispatch z).
