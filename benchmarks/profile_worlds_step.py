@@ -272,6 +272,9 @@ def main() -> None:
                                      for k in DRIVER))
         timers.on = False
         report(args, r, timers, walls, python, cpu, own, stats_cpu)
+        if args.prepared:
+            print(f"| steps by batch_step's short way (BatchStep.lane_steps) | "
+                  f"{getattr(step, 'lane_steps', 'n/a')} of {args.steps + 3} | | |")
     if prof is not None:
         print(f"\ncProfile over the {args.steps} timed steps (its overhead inflates the times):")
         pstats.Stats(prof).sort_stats("tottime").print_stats(args.cprofile)
