@@ -71,7 +71,7 @@ class _CudaArray:
 
     def __init__(self, ptr: int, shape: tuple[int, ...], typestr: str, owner: Any) -> None:
         self.owner = owner  # keeps the import alive while a tensor views it
-        self.__cuda_array_interface__ = {"shape": shape, "typestr": typestr,
+        self.__cuda_array_interface__ = {"shape": tuple(shape), "typestr": typestr,
                                          "data": (int(ptr), False), "version": 3,
                                          "strides": None, "stream": None}
 

@@ -293,11 +293,10 @@ class WorldKernel:
         order = self.order
         if order is not None:  # ordered on the GPU (render/cuda_order.py): no host wait
             order.before_inputs()
-        p = poses.reshape(-1)
-        self._imports[0].tensor((p.numel(),), "<f4").copy_(p)
+        # (the inputs viewed in the poses' own shape: no reshape, a torch call less a step)
+        self._imports[0].tensor(poses.shape, "<f4").copy_(poses)
         if visible is not None:
-            v = visible.reshape(-1)
-            self._imports[1].tensor((v.numel(),), "<i4").copy_(v)
+            self._imports[1].tensor(visible.shape, "<i4").copy_(visible)
         if order is not None:
             order.inputs_written()
             return
