@@ -51,7 +51,7 @@ from vkpbr.render.recorder import FrameRecorder
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.render.steps import FrameSpec, FrameSteps
 from vkpbr.render.views import ViewTerms, fill_views
-from vkpbr.scene.types import Scene
+from vkpbr.scene.types import MeshBox, Scene, mesh_box
 
 __all__ = ["BatchViews", "draw_spheres", "MAX_LAYERS"]
 
@@ -60,16 +60,16 @@ _COMMAND_BYTES = 20  # VkDrawIndexedIndirectCommand
 _SHADING = tuple(p.name for p in PASSES if not p.prepass)  # (after GTAO's depth pre-pass)
 
 
-def draw_spheres(scene: Scene, draws: list[Draw]) -> np.ndarray:
+def draw_spheres(scene: Scene, draws: list[Draw], box: MeshBox | None = None) -> np.ndarray:
     """(D, 8) float32 per draw: the bounding sphere (centre, radius) of its mesh's box in the
     mesh's own space (the shaders place it with the draw's model matrix: frustum.glsl
     world_sphere), then (index count, first index, vertex offset, 0) as uint32 bits (what
-    batch_cull.comp reads)."""
+    batch_cull.comp reads). `box`: each mesh's (min, max) (GpuScene.mesh_box; None: computed)."""
+    box = mesh_box(scene) if box is None else box
     out = np.zeros((len(draws), 8), np.float32)
     ranges = out.view(np.uint32)
     for i, d in enumerate(draws):
-        p = scene.meshes[d.mesh].positions
-        lo, hi = p.min(axis=0).astype(np.float64), p.max(axis=0).astype(np.float64)
+        lo, hi = (v.astype(np.float64) for v in box(d.mesh))
         out[i, :3] = (lo + hi) / 2 if not d.deformed else 0.0
         out[i, 3] = (np.linalg.norm(hi - lo) / 2 * (1 + 1e-5) + 1e-6 if not d.deformed
                      else UNBOUNDED_RADIUS if d.unbounded  # (never culled)
@@ -92,7 +92,7 @@ class BatchViews:
         self._objects: list[Any] = []
         self.draw_count = len(gpu_scene.draws)
         self.bounds = self._own(upload_buffer(
-            device, draw_spheres(scene, gpu_scene.draws) if gpu_scene.draws
+            device, draw_spheres(scene, gpu_scene.draws, gpu_scene.mesh_box) if gpu_scene.draws
             else np.zeros(8, np.float32), "storage", name="batch draw bounds"))
         stages = ("compute",)
         self.cull_layout = self._own(DescriptorSetLayout(device, [

@@ -55,7 +55,7 @@ from vkpbr.render.targets import Lazy, Targets
 from vkpbr.render.transmission import OpaqueCopies
 from vkpbr.scene.semantics import semantic_ids
 from vkpbr.scene.state import SceneState
-from vkpbr.scene.types import Camera, Scene
+from vkpbr.scene.types import Camera, Scene, scene_bounds
 
 __all__ = ["DeviceParts", "FrameParts", "create_layouts", "make_parts", "open_device", "lazy_compute"]
 
@@ -189,7 +189,8 @@ def lazy_compute(device: Device, scene: Scene, gs: GpuScene, layouts: list[Descr
                  deform: DeformKernel | None) -> Lazy[ComputeScene]:
     """The compute path's resources for the scene's draws as they are now, made on first use."""
     return Lazy(lambda: ComputeScene(device, gs, dict(enumerate(layouts)), slots, ids,
-                                     draw_spheres(scene, gs.draws) if gs.draws else None,
+                                     draw_spheres(scene, gs.draws, gs.mesh_box) if gs.draws
+                                     else None,
                                      gpu_state, deform.prev_positions if deform else None))
 
 
@@ -205,7 +206,7 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     buffers, pool = shared.frame_buffers, shared.frame_pool
     gs = GpuScene(device, scene, layouts[1], ring.count, ahead=ahead)
     layout = DeformLayout(scene, gs.deformed) if gs.deformed else None
-    state = scene_state(scene, gs.draws, layout)
+    state = scene_state(scene, gs.draws, layout, gs.mesh_box)
     gpu_state = GpuSceneState(device, state, ring.count, scene, layout)
     gpu_state.first_posed = min(gs.posed_offsets, default=0)
     gpu_state.gpu_scene = gs
@@ -224,7 +225,7 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     ao = AoImages(device, [s.set2 for s in slots], layouts[0], gs.stand_in())
     recorder = FrameRecorder(device, gs, pipeline_layout, ring, slots, paths.prepass_for,
                              shadows, compute, copies, post, deform, ao)
-    bounds = LiveBounds(state, Bounds.of(*scene.bounds()))
+    bounds = LiveBounds(state, Bounds.of(*scene_bounds(scene, gs.mesh_box)))
     environments = Environments(device, slots, recorder, shared.environments)
     return FrameParts(
         device, scene, ring, layouts, pipeline_layout, buffers, pool, slots, gs, ids, labels,

@@ -22,16 +22,19 @@ from vkpbr.gpu.device import Device
 from vkpbr.render.deform import DeformLayout
 from vkpbr.render.frames import Bounds
 from vkpbr.scene.state import SceneState
-from vkpbr.scene.types import Scene
+from vkpbr.scene.types import MeshBox, Scene, mesh_box
 
 __all__ = ["GpuSceneState", "LiveBounds", "scene_state"]
 
 RECORD_BYTES = 2 * 64  # model + normal matrix
 
 
-def scene_state(scene: Scene, draws: list[Any], deform: DeformLayout | None = None) -> SceneState:
+def scene_state(scene: Scene, draws: list[Any], deform: DeformLayout | None = None,
+                box: MeshBox | None = None) -> SceneState:
     """The state of `scene` whose draw records (render/gpu_scene.py) are `draws`; `deform`:
-    the deformed records' layout (their models are the frames they are posed in)."""
+    the deformed records' layout (their models are the frames they are posed in); `box`:
+    each mesh's (min, max) (GpuScene.mesh_box; None: computed)."""
+    box = mesh_box(scene) if box is None else box
     tree = scene.node_tree()
     nodes = scene.nodes
     draw_tree = np.array([nodes[d.node].tree for d in draws], np.int64)
@@ -46,7 +49,7 @@ def scene_state(scene: Scene, draws: list[Any], deform: DeformLayout | None = No
         if d.deformed and not d.unbounded:  # posed within its frame's unit sphere (deform.py)
             boxes[i, 0], boxes[i, 1] = -1.0, 1.0
         elif len(p):
-            boxes[i] = p.min(axis=0), p.max(axis=0)
+            boxes[i] = box(d.mesh)
     rest = np.array([d.model for d in draws], np.float64).reshape(-1, 4, 4)
     state = SceneState(tree, draw_tree, local, boxes, rest, np.array([d.skinned for d in draws], bool))
     state.scene = scene

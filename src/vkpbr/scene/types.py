@@ -14,6 +14,7 @@ a `Scene`; the renderer consumes one. Conventions:
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -41,6 +42,9 @@ __all__ = [
     "AnimationChannel",
     "AnimationSampler",
     "expand_instances",
+    "MeshBox",
+    "mesh_box",
+    "scene_bounds",
     "TEXTURE_SLOTS",
     "SRGB_TEXTURE_SLOTS",
 ]
@@ -421,24 +425,7 @@ class Scene:
         empty scene gives two zero vectors. `CameraBatch.orbit / .sphere / .look_at_random
         (bounds=scene.bounds())` frame views with it; `Renderer.scene.bounds()` is the
         loaded scene's."""
-        lo = np.full(3, np.inf)
-        hi = np.full(3, -np.inf)
-        corners = np.array(
-            [[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=np.float64
-        )
-        for node in self.nodes:
-            p = self.meshes[node.mesh].positions
-            if len(p) == 0:
-                continue
-            pmin, pmax = p.min(axis=0), p.max(axis=0)
-            box = pmin + corners * (pmax - pmin)
-            for m in node.instance_matrices():  # every instance of EXT_mesh_gpu_instancing
-                world = box @ m[:3, :3].T + m[:3, 3]
-                lo = np.minimum(lo, world.min(axis=0))
-                hi = np.maximum(hi, world.max(axis=0))
-        if not np.all(np.isfinite(lo)):
-            return np.zeros(3), np.zeros(3)
-        return lo, hi
+        return scene_bounds(self)
 
     @property
     def triangle_count(self) -> int:
@@ -483,3 +470,38 @@ class Scene:
                    images=[Image(name=n, pixels=pixels) for n, pixels in parts.images],
                    nodes=[Node(mesh=mesh, matrix=matrix, name=n) for mesh, matrix, n in parts.nodes],
                    cameras=parts.cameras)
+
+
+MeshBox = Callable[[int], tuple[np.ndarray, np.ndarray]]  # mesh index -> (min, max)
+
+
+def mesh_box(scene: Scene) -> MeshBox:
+    """Mesh i's (min, max) over its positions, per axis in their dtype, computed when asked
+    (`scene_bounds`' default; a GpuScene computes each mesh's once for all its users)."""
+    def box(i: int) -> tuple[np.ndarray, np.ndarray]:
+        p = scene.meshes[i].positions
+        return p.min(axis=0), p.max(axis=0)
+
+    return box
+
+
+def scene_bounds(scene: Scene, box: MeshBox | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """`Scene.bounds()`, each mesh's own box from `box(mesh index)` (None: `mesh_box`)."""
+    box = mesh_box(scene) if box is None else box
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
+    corners = np.array(
+        [[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=np.float64
+    )
+    for node in scene.nodes:
+        if len(scene.meshes[node.mesh].positions) == 0:
+            continue
+        pmin, pmax = box(node.mesh)
+        corners_box = pmin + corners * (pmax - pmin)
+        for m in node.instance_matrices():  # every instance of EXT_mesh_gpu_instancing
+            world = corners_box @ m[:3, :3].T + m[:3, 3]
+            lo = np.minimum(lo, world.min(axis=0))
+            hi = np.maximum(hi, world.max(axis=0))
+    if not np.all(np.isfinite(lo)):
+        return np.zeros(3), np.zeros(3)
+    return lo, hi
