@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from vkpbr.gpu.device import Device
+from vkpbr.gpu.memory import Allocation
 
 __all__ = ["Buffer", "upload_buffer"]
 
@@ -40,7 +41,8 @@ def buffer_usage(vk: Any, usage: int | str) -> int:
 
 
 class Buffer:
-    """One VkBuffer with its own VkDeviceMemory (allocations are few and large here).
+    """One VkBuffer with a VkDeviceMemory of its own (from the device's kept ones:
+    gpu/memory.py; an exportable buffer's its own alone).
     `usage`: VkBufferUsageFlags or names (see `buffer_usage`)."""
 
     def __init__(
@@ -86,17 +88,20 @@ class Buffer:
         else:
             required = preferred = vk.VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT
         mtype = device.memory_type(req.memoryTypeBits, required, preferred)
-        self.memory = vk.vkAllocateMemory(
-            device.handle,
-            vk.VkMemoryAllocateInfo(
-                pNext=vk.VkExportMemoryAllocateInfo(handleTypes=_OPAQUE_FD(vk)) if exportable else None,
-                allocationSize=req.size, memoryTypeIndex=mtype),
-            None,
-        )
         self.allocation_size = int(req.size)
+        self._alloc: Allocation | None = None  # memory from (and back to) device.memory
+        if exportable:  # (its own: the allocation carries the export)
+            self.memory = vk.vkAllocateMemory(device.handle, vk.VkMemoryAllocateInfo(
+                pNext=vk.VkExportMemoryAllocateInfo(handleTypes=_OPAQUE_FD(vk)),
+                allocationSize=req.size, memoryTypeIndex=mtype), None)
+            if host_visible:
+                self._mapped = vk.vkMapMemory(device.handle, self.memory, 0, self.size, 0)
+        else:
+            self._alloc = device.memory.allocate(int(req.size), mtype, host_visible)
+            self.memory = self._alloc.memory
+            if host_visible:  # (the allocation is mapped whole, for its life)
+                self._mapped = memoryview(self._alloc.mapped)[:self.size]
         vk.vkBindBufferMemory(device.handle, self.handle, self.memory, 0)
-        if host_visible:
-            self._mapped = vk.vkMapMemory(device.handle, self.memory, 0, self.size, 0)
 
     def export_fd(self) -> int:
         """A new file descriptor of the buffer's memory (an `exportable` buffer); the caller
@@ -126,13 +131,17 @@ class Buffer:
         vk = self.device.vk
         dev = self.device.handle
         handle, self.handle = self.handle, None
+        alloc, self._alloc = self._alloc, None
         if self._mapped is not None:
-            vk.vkUnmapMemory(dev, self.memory)
+            if alloc is None:  # (else the allocation stays mapped for its next buffer)
+                vk.vkUnmapMemory(dev, self.memory)
             self._mapped = None
         vk.vkDestroyBuffer(dev, handle, None)
-        if self.memory is not None:
+        if alloc is not None:
+            self.device.memory.release(alloc)
+        elif self.memory is not None:
             vk.vkFreeMemory(dev, self.memory, None)
-            self.memory = None
+        self.memory = None
         self.device.untrack(self)
 
 

@@ -19,6 +19,7 @@ from typing import Any, Protocol
 from vkpbr.errors import GpuTimeoutError, VkpbrError
 from vkpbr.gpu.instance import Instance, PhysicalDeviceInfo
 from vkpbr.gpu.kept import KeptHandles
+from vkpbr.gpu.memory import MemoryRecycler
 from vkpbr.gpu.vk import live_objects, live_objects_by_kind
 
 # live_objects / live_objects_by_kind (counted in gpu/vk.py) are re-exported for leak tests.
@@ -154,6 +155,8 @@ class Device:
         # Immutable handles shared by their definition for the device's life (gpu/kept.py;
         # a Renderer's device sets one); None: every wrapper makes and destroys its own.
         self.kept: KeptHandles | None = None
+        # Freed memory kept for the next buffer or image of its type and size (gpu/memory.py)
+        self.memory = MemoryRecycler(self)
         try:
             t0 = time.perf_counter()
             self.info: PhysicalDeviceInfo = self.instance.choose_device(device)
@@ -482,6 +485,7 @@ class Device:
             for children in (self._children, self._kept_children):
                 while children:
                     children.pop().destroy()
+            self.memory.clear()
             if getattr(self, "kept", None) is not None:
                 self.kept.destroy(vk, self.handle)
             if getattr(self, "command_pool", None) is not None:

@@ -79,11 +79,8 @@ class Image:
         req = vk.vkGetImageMemoryRequirements(device.handle, self.handle)
         mtype = device.memory_type(req.memoryTypeBits, vk.VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)
         self.bytes = int(req.size)
-        self.memory = vk.vkAllocateMemory(
-            device.handle,
-            vk.VkMemoryAllocateInfo(allocationSize=req.size, memoryTypeIndex=mtype),
-            None,
-        )
+        self._alloc = device.memory.allocate(int(req.size), mtype, False)  # (gpu/memory.py)
+        self.memory = self._alloc.memory
         vk.vkBindImageMemory(device.handle, self.handle, self.memory, 0)
 
     def destroy(self) -> None:
@@ -92,7 +89,8 @@ class Image:
         vk, dev = self.device.vk, self.device.handle
         handle, self.handle = self.handle, None
         vk.vkDestroyImage(dev, handle, None)
-        vk.vkFreeMemory(dev, self.memory, None)
+        self.device.memory.release(self._alloc)
+        self.memory = None
         self.device.untrack(self)
 
 

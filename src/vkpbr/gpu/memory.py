@@ -1,0 +1,128 @@
+"""Device memory kept for reuse: freed allocations wait, by memory type and size class, for
+the next buffer or image that fits (issue 32, a job's scene changes).
+
+A scene change frees a scene's buffers and images and makes the next one's (render/
+scene_swap.py), and each one was its own VkDeviceMemory. NVIDIA's driver takes ~0.25 ms for
+a vkAllocateMemory and as long for a vkFreeMemory (H200, run f of 2026-12-04: 61 of each a
+swap, 30 of a small model's 77 ms), where lavapipe's are nearly free. Here a freed
+allocation of up to MAX_RECYCLED bytes is not freed but kept (mapped, where it was, for
+host-visible buffers), and an allocation asks first for a kept one of its memory type and
+size class: sizes rounded up to quarter octaves (at most 19% more memory than asked), so that
+a next scene's buffers of other sizes still fit. At most KEPT_BYTES wait at once (the oldest
+freed first beyond that); `clear` frees them all (the device's close, and an allocation the
+driver refuses, which is then asked again).
+
+Memory is bound at offset 0 of an allocation at least as large as asked and aligned as any
+allocation is, so a reused allocation is valid for the next buffer or image as a new one
+would be. Its contents are what its last user left (Vulkan leaves a new allocation's
+contents undefined too: nothing may read memory it did not write). Exportable memory (CUDA
+imports it) is never kept: its allocation carries the export.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+from typing import Any
+
+__all__ = ["MemoryRecycler", "MAX_RECYCLED", "KEPT_BYTES", "size_class"]
+
+MAX_RECYCLED = 64 << 20  # larger allocations are freed (few, and their memory is wanted back)
+KEPT_BYTES = 512 << 20  # at most this much kept at once
+PAGE = 4096
+
+
+def size_class(size: int) -> int:
+    """`size` rounded up to the smallest of the classes, 2^(k/4) rounded up to whole pages,
+    that holds it (a class's own size is its class: a kept allocation fits it again)."""
+    size = max(int(size), 1)
+
+    def cls(k: int) -> int:
+        return -(-max(math.ceil(2.0 ** (k / 4.0)), 1) // PAGE) * PAGE
+
+    k = math.ceil(4.0 * math.log2(size))
+    while cls(k) < size:  # (the float's rounding)
+        k += 1
+    while k > 0 and cls(k - 1) >= size:  # (pages round several classes to one size)
+        k -= 1
+    return cls(k)
+
+
+class Allocation:
+    """One VkDeviceMemory: its type, size and, for host-visible memory, its mapping (the whole
+    allocation, mapped once for its life)."""
+
+    __slots__ = ("memory", "type_index", "size", "mapped")
+
+    def __init__(self, memory: Any, type_index: int, size: int, mapped: Any = None) -> None:
+        self.memory, self.type_index, self.size, self.mapped = memory, type_index, size, mapped
+
+
+class MemoryRecycler:
+    """A device's kept allocations (Device.memory)."""
+
+    def __init__(self, device: Any) -> None:
+        self.device = device
+        self._kept: OrderedDict[int, tuple[tuple[int, int, bool], Allocation]] = OrderedDict()
+        self._by_key: dict[tuple[int, int, bool], list[Allocation]] = {}
+        self.kept_bytes = 0
+        self.limit = KEPT_BYTES  # at most this many bytes kept
+        self.reused = 0  # allocations served from the kept ones (tests and benchmarks read it)
+        self.made = 0
+
+    def allocate(self, size: int, type_index: int, mapped: bool) -> Allocation:
+        """An allocation of at least `size` bytes of memory type `type_index` (mapped whole
+        where `mapped`): a kept one of its size class, else a new one."""
+        if size <= MAX_RECYCLED:
+            size = size_class(size)
+            got = self._by_key.get((type_index, size, mapped))
+            if got:
+                alloc = got.pop()
+                del self._kept[id(alloc)]
+                self.kept_bytes -= alloc.size
+                self.reused += 1
+                return alloc
+        vk, dev = self.device.vk, self.device.handle
+        info = vk.VkMemoryAllocateInfo(allocationSize=size, memoryTypeIndex=type_index)
+        try:
+            memory = vk.vkAllocateMemory(dev, info, None)
+        except Exception:
+            if not self._kept:
+                raise
+            self.clear()  # (the kept memory may be what is missing: freed, then asked again)
+            memory = vk.vkAllocateMemory(dev, info, None)
+        self.made += 1
+        view = vk.vkMapMemory(dev, memory, 0, size, 0) if mapped else None
+        return Allocation(memory, type_index, size, view)
+
+    def release(self, alloc: Allocation) -> None:
+        """`alloc` is no longer bound to anything (its buffer or image destroyed): kept for
+        the next allocation of its class, or freed."""
+        if alloc.size > MAX_RECYCLED or alloc.size > self.limit:
+            self._free(alloc)
+            return
+        key = (alloc.type_index, alloc.size, alloc.mapped is not None)
+        self._by_key.setdefault(key, []).append(alloc)
+        self._kept[id(alloc)] = (key, alloc)
+        self.kept_bytes += alloc.size
+        while self.kept_bytes > self.limit:
+            self._drop_oldest()
+
+    def clear(self) -> None:
+        """Free every kept allocation."""
+        while self._kept:
+            self._drop_oldest()
+
+    def _drop_oldest(self) -> None:
+        _, (key, alloc) = self._kept.popitem(last=False)
+        self._by_key[key].remove(alloc)
+        self.kept_bytes -= alloc.size
+        self._free(alloc)
+
+    def _free(self, alloc: Allocation) -> None:
+        vk, dev = self.device.vk, self.device.handle
+        if alloc.mapped is not None:
+            vk.vkUnmapMemory(dev, alloc.memory)
+            alloc.mapped = None
+        vk.vkFreeMemory(dev, alloc.memory, None)
+        alloc.memory = None
