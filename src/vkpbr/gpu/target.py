@@ -300,8 +300,10 @@ class OffscreenTarget:
 
 # Big readbacks are copied by several threads: a copy into a fresh array is bound by page
 # faults, which one thread takes one at a time (256 MiB: 85 ms on one core, 46 ms on two; NumPy
-# releases the GIL in copyto). Below PARALLEL_BYTES the threads cost more than they save.
-PARALLEL_BYTES = 8 << 20
+# releases the GIL in copyto). Below PARALLEL_BYTES the threads cost more than they save: on
+# the H200's host (16 cores, benchmarks/bench_copy_out.py, 2026-12-04 run e) a 1080p RGBA8
+# frame (7.9 MiB) took 0.64 ms on one thread, 0.45 on four; 3.5 MiB gained nothing.
+PARALLEL_BYTES = 6 << 20
 _COPY_THREADS = max(1, min(8, os.cpu_count() or 1))
 _copy_pool: ThreadPoolExecutor | None = None
 
