@@ -25,7 +25,10 @@ renderer redraws only the cascades whose matrix changed (render/shadows.py Shado
 so a walking camera redraws its nearest cascade every few dozen frames instead of all four
 every frame, for 1/16 of the map's resolution. For the same reason the split range is
 rounded outwards to quarter octaves (`cascade_range`): an automatic far plane moves with the
-camera, and the splits, radii and matrices would move with it.
+camera, and the splits, radii and matrices would move with it. What a moving camera changes is
+then the snapped centres alone: `cascade_shape` keeps the rest of the fit (per projection,
+rounded range, light and resolution) and `cascade_columns` computes the centres in Python
+floats every frame, the same bytes as the NumPy fit (`_fit_cascades`) at a fifth of its cost.
 """
 
 from __future__ import annotations

@@ -11,7 +11,8 @@ choice and is what NVIDIA prefers, but Mesa 22.3's lavapipe draws a perspective 
 into the wrong layers (the cube faces came out mixed; orthographic cascades were right).
 
 Frame path: `write` fills the frame slot's matrices (host-visible storage buffer, per slot)
-and returns each light's `LightRecord.shadow` vec4; `record` draws the passes into the
+and returns each light's `LightRecord.shadow` vec4 (`write_cascades`: only the camera-fitted
+cascades, when a moving camera is all that changed); `record` draws the passes into the
 frame's command buffer before the main target begins. Command buffers are recorded once per
 `ShadowPlan` (which light has which layers), so lights that only move re-record nothing.
 
