@@ -99,3 +99,40 @@ def test_only_the_maps_that_changed_are_redrawn(pair) -> None:  # noqa: ANN001
     assert redrawn(MOVED, moved_point) == {"directional": False, "spot": False, "point": True}
     r.shadows.forget()
     assert redrawn(MOVED, moved_point) == {"directional": True, "spot": True, "point": True}
+
+
+def test_a_walk_refits_only_the_cascades_as_a_whole_write_would(pair) -> None:  # noqa: ANN001
+    """A walking camera's frames rewrite only the sun's cascades in their slot's ShadowData
+    (ShadowFrames.write: ShadowMaps.write_cascades, Python floats) and redraw the cascades
+    that crossed their snapping grid. Each must equal, in the ShadowData the shaders read and
+    in the image, bit for bit, the frame of a renderer that writes the whole ShadowData and
+    redraws every map (ShadowFrames.forget before each frame)."""
+    cached, fresh = pair
+
+    def shadow_data(r) -> bytes:  # noqa: ANN001 - the slot of the renderer's latest frame
+        ring = r.frame_path.parts.ring
+        return r.shadows._views[(ring.number - 1) % ring.count].tobytes()
+
+    for _ in range(3):  # every slot written whole for these lights
+        cached.render(CAMERA, ALL, size=SIZE, **OPTS)
+    whole = []
+    real_write = cached.shadows.write
+    cached.shadows.write = lambda *a, **k: whole.append(1) or real_write(*a, **k)  # counts
+    try:
+        layers, images = [], []
+        for i in range(1, 11):  # 3 cm a frame, as NUDGED
+            camera = dataclasses.replace(CAMERA, eye=(0.03 * i, 5.0, 6.0),
+                                         target=(0.3 + 0.03 * i, 0.0, 0.0))
+            got = cached.render(camera, ALL, size=SIZE, linear=True, **OPTS)
+            layers.append(dict(cached.shadows.last_redrawn_layers))
+            fresh.shadow_frames.forget()
+            want = fresh.render(camera, ALL, size=SIZE, linear=True, **OPTS)
+            assert shadow_data(cached) == shadow_data(fresh), i
+            assert np.array_equal(got, want), (i, float(np.abs(got - want).max()))
+            images.append(got)
+    finally:
+        del cached.shadows.write
+    assert whole == []  # every frame took the cascades' refit
+    assert all(n["spot"] == n["point"] == 0 for n in layers), layers
+    assert any(0 < n["directional"] < 4 for n in layers), layers  # some cascades kept
+    assert not np.array_equal(images[0], images[-1])

@@ -193,3 +193,29 @@ def test_perspective_near_scales_with_reach() -> None:
     far = max(np.linalg.norm([x, y, z]) for x in (LO[0], HI[0]) for y in (LO[1], HI[1])
               for z in (LO[2], HI[2]))
     assert S.perspective_near((0, 0, 0), 0.0, LO, HI) == pytest.approx(far * 1e-3)
+
+
+@settings(max_examples=200, deadline=None)
+@given(vec3, vec3, st.floats(10.0, 120.0), sizes, unit_ish, resolutions,
+       st.floats(0.01, 1.0), st.floats(2.0, 200.0))
+@example(eye=(0.0, 12.0, 0.0), target=(-1.0, 0.0, 0.0), fov=22.0, size=(320, 240),
+         direction=(-0.75, 1.0, 0.25), res=256, znear=0.1, ratio=600.0)  # centres rounded to 0
+def test_cascades_in_floats_equal_the_array_fit(eye, target, fov, size, direction, res,
+                                                znear, ratio) -> None:
+    """directional_cascades (cascade_columns: Python floats, the view's axes) gives the bytes
+    of the NumPy fit it replaced (slice spheres through the view matrix's inverse, then
+    `_fit_cascades`), unless a centre lies on a tie of the snapping grid, where the two
+    roundings of the last bit may differ (excluded here)."""
+    cam = _camera(eye, target, fov)
+    zfar = znear * ratio
+    splits = S.cascade_splits(*S.cascade_range(znear, zfar))
+    centres, radii = S._slice_spheres(cam, size, splits[:-1], splits[1:])
+    basis = S.light_basis(direction)
+    grid = S.snap_texels(res) * S.cascade_texel(radii, res)
+    at = (centres @ basis.T) / grid[:, None]
+    assume(np.all(np.abs(np.abs(at - np.floor(at)) - 0.5) > 1e-6))
+    want = S._fit_cascades(centres, radii, basis, LO, HI, res)
+    fit = S.directional_cascades(cam, size, direction, LO, HI, res, znear, zfar)
+    assert fit.matrices.tobytes() == want.tobytes()
+    assert fit.far.tobytes() == splits[1:].tobytes()
+    assert fit.texel.tobytes() == S.cascade_texel(radii, res).tobytes()

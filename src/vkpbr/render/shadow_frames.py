@@ -93,6 +93,12 @@ class ShadowFrames:
             self.recorder.free()
             self._rows.clear()
 
+    def forget(self) -> None:
+        """Write every slot's ShadowData whole on its next frame and redraw every map (what
+        a renderer new to these frames would do; tests compare the two)."""
+        self._rows.clear()
+        self.maps.forget()
+
     def stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool) -> tuple[range, ...]:
         """ShadowMaps.stale for frame `slot`, with the version of the state that last moved a
         caster: a map whose matrices and casters are unchanged is kept."""
@@ -115,6 +121,14 @@ class ShadowFrames:
         key = (view, plan, lights, sm.resolution, sm.compute, getattr(self.bounds, "version", 0))
         last = self._rows.get(slot.index)
         if last is not None and last[0] == key:
+            return last[1]
+        if view is not None and last is not None and type(last[0][0]) is tuple and last[0][1:] == key[1:]:
+            # Only the view changed since `write` filled the slot for a frame (a moving
+            # camera; not write_scene's or write_worlds' keys, whose first item is a str): the
+            # cascades alone follow it; the lights' rows and the rest of ShadowData stay.
+            sm.write_cascades(slot.index, plan, lights, camera, size, slot.znear, slot.zfar,
+                              self.bounds.corners[0], self.bounds.corners[-1])
+            self._rows[slot.index] = (key, last[1])
             return last[1]
         rows = sm.write(slot.index, plan, lights, camera, size, slot.znear, slot.zfar,
                         self.bounds.corners[0], self.bounds.corners[-1])

@@ -25,7 +25,10 @@ renderer redraws only the cascades whose matrix changed (render/shadows.py Shado
 so a walking camera redraws its nearest cascade every few dozen frames instead of all four
 every frame, for 1/16 of the map's resolution. For the same reason the split range is
 rounded outwards to quarter octaves (`cascade_range`): an automatic far plane moves with the
-camera, and the splits, radii and matrices would move with it.
+camera, and the splits, radii and matrices would move with it. What a moving camera changes is
+then the snapped centres alone: `cascade_shape` keeps the rest of the fit (per projection,
+rounded range, light and resolution) and `cascade_columns` computes the centres in Python
+floats every frame, the same bytes as the NumPy fit (`_fit_cascades`) at a fifth of its cost.
 """
 
 from __future__ import annotations
@@ -54,6 +57,9 @@ __all__ = [
     "fit_cascade",
     "cascade_texel",
     "directional_cascades",
+    "CascadeShape",
+    "cascade_shape",
+    "cascade_columns",
     "perspective_near",
     "spot_matrix",
     "spot_half_angle",
@@ -235,7 +241,7 @@ def _fit_cascades(centres: np.ndarray, radii: np.ndarray, basis: np.ndarray,
     half = 0.5 * resolution * texel
     grid = (snap_texels(resolution) * texel)[:, None]
     c = np.round((centres @ basis.T) / grid) * grid  # (n, 3) in the light's basis
-    nearest = float((_bounds_corners(scene_lo, scene_hi) @ basis[2]).min())
+    nearest = _nearest(basis, scene_lo, scene_hi)
     reach = radii + 0.5 * grid[:, 0]
     z_near = np.minimum(c[:, 2] - reach, nearest)
     z_far = np.maximum(c[:, 2] + reach, z_near + 1e-6 * np.maximum(radii, 1.0))
@@ -280,10 +286,122 @@ def directional_cascades(camera: Camera, size: tuple[int, int], direction: Seque
                          znear: float, zfar: float, count: int = CASCADES) -> CascadeFit:
     """Fit `count` cascades of a directional light travelling along `direction` to the view
     range [znear, zfar] (`cascade_range` of it) of `camera` rendering `size` (W, H) pixels."""
-    splits = _splits(cascade_range(znear, zfar), count)
-    centres, radii = _slice_spheres(camera, size, splits[:-1], splits[1:])
-    mats = _fit_cascades(centres, radii, light_basis(direction), scene_lo, scene_hi, resolution)
-    return CascadeFit(mats, splits[1:].copy(), cascade_texel(radii, resolution))
+    shape = cascade_shape(camera, size, direction, scene_lo, scene_hi, resolution, znear, zfar,
+                          count)
+    cols = cascade_columns(camera, shape)
+    mats = np.array(cols).reshape(-1, 4, 4).transpose(0, 2, 1)  # column-major -> row-major
+    return CascadeFit(np.ascontiguousarray(mats), shape.far.copy(), shape.texel.copy())
+
+
+@dataclass(frozen=True)
+class CascadeShape:
+    """What a directional light's cascades keep while the camera only moves: everything of
+    their fit but the snapped centres (a moving camera's frames differ in those alone).
+
+    slices : per cascade, Python floats: the slice sphere's centre in view space (x, y, z),
+        the square's half side, the snapping grid, the depth reach around the centre, the
+        least depth span, then the matrix's first two rows without their translations
+        (right / half, -up / half: 6 floats) and the light's travel direction (3).
+    basis : the light's (right, up, travel) rows, 9 Python floats.
+    nearest : the scene bounds' least depth along the light's travel.
+    far, texel : (n,) float64 read-only, CascadeFit's.
+    header : ShadowData's cascade_far (inf written as 3e38) and cascade_texel, 8 floats, for
+        the first four cascades (the rest zero, far 3e38), as ShadowMaps.write writes them.
+    """
+
+    slices: tuple[tuple[float, ...], ...]
+    basis: tuple[float, ...]
+    nearest: float
+    far: np.ndarray
+    texel: np.ndarray
+    header: tuple[float, ...]
+
+
+def cascade_shape(camera: Camera, size: tuple[int, int], direction: Sequence[float],
+                  scene_lo: Sequence[float], scene_hi: Sequence[float], resolution: int,
+                  znear: float, zfar: float, count: int = CASCADES) -> CascadeShape:
+    """The `CascadeShape` of `directional_cascades`' fit (kept: a walking camera's frames
+    share it while the projection, the rounded view range and the light stay)."""
+    return _cascade_shape(projection_terms(camera, size), cascade_range(znear, zfar), count,
+                          tuple(float(x) for x in direction),
+                          tuple(float(x) for x in scene_lo), tuple(float(x) for x in scene_hi),
+                          int(resolution))
+
+
+@functools.lru_cache(maxsize=64)
+def _cascade_shape(terms: tuple[float, float, float, float], view_range: tuple[float, float],
+                   count: int, direction: tuple[float, ...], scene_lo: tuple[float, ...],
+                   scene_hi: tuple[float, ...], resolution: int) -> CascadeShape:
+    # The same array operations as `_fit_cascades` (so the same floats), done once.
+    splits = _splits(view_range, count)
+    centre_v, radii = _view_slice_spheres(terms, tuple(splits[:-1]), tuple(splits[1:]))
+    basis = light_basis(direction)
+    texel = cascade_texel(radii, resolution)
+    half = 0.5 * resolution * texel
+    grid = snap_texels(resolution) * texel
+    reach = radii + 0.5 * grid
+    least = 1e-6 * np.maximum(radii, 1.0)
+    r, u, f = basis
+    slices = tuple((*(float(v) for v in centre_v[i]), float(half[i]), float(grid[i]),
+                    float(reach[i]), float(least[i]),
+                    *(float(v) for v in r / half[i]), *(float(v) for v in -u / half[i]),
+                    *(float(v) for v in f)) for i in range(count))
+    far = splits[1:].copy()
+    far.setflags(write=False)
+    texel.setflags(write=False)
+    n = min(count, 4)
+    header = (*(float(v) if math.isfinite(v) else 3.0e38 for v in far[:n]), *(3.0e38,) * (4 - n),
+              *(float(v) for v in texel[:n]), *(0.0,) * (4 - n))
+    return CascadeShape(slices, tuple(float(v) for v in basis.ravel()),
+                        _nearest(basis, scene_lo, scene_hi), far, texel, header)
+
+
+def _nearest(basis: np.ndarray, scene_lo: Sequence[float], scene_hi: Sequence[float]) -> float:
+    """The scene bounds' least depth along the light's travel (basis[2])."""
+    return float((_bounds_corners(scene_lo, scene_hi) @ basis[2]).min())
+
+
+def cascade_columns(camera: Camera, shape: CascadeShape) -> list[float]:
+    """The cascades' (4, 4) world -> clip matrices for `camera`, each column-major (as
+    ShadowData holds them, 16 floats a cascade, one list): `_fit_cascades`' maths in Python
+    floats. It runs every frame a camera moves, where NumPy's overhead on 3-vectors was most
+    of a walking frame's Python (~0.3 ms of ~0.7 on lavapipe's host); only the centres are
+    computed here, the rest is `shape`'s. The slice centre goes to world space by the view's
+    axes (look_at's rows, transposed: a rotation's inverse) instead of a 4x4 inverse, and to
+    the light's basis by three dot products: both differ from the NumPy path's in the last
+    bits at most, which the snapping rounds away (a centre exactly on a grid line aside)."""
+    eye, target, up = camera.eye, camera.target, camera.up
+    ex, ey, ez = float(eye[0]), float(eye[1]), float(eye[2])
+    fx, fy, fz = float(target[0]) - ex, float(target[1]) - ey, float(target[2]) - ez
+    n = math.sqrt(fx * fx + fy * fy + fz * fz)
+    fx, fy, fz = fx / n, fy / n, fz / n
+    ux, uy, uz = float(up[0]), float(up[1]), float(up[2])
+    sx, sy, sz = fy * uz - fz * uy, fz * ux - fx * uz, fx * uy - fy * ux
+    n = math.sqrt(sx * sx + sy * sy + sz * sz)
+    sx, sy, sz = sx / n, sy / n, sz / n
+    ux, uy, uz = sy * fz - sz * fy, sz * fx - sx * fz, sx * fy - sy * fx
+    r0, r1, r2, v0, v1, v2, t0, t1, t2 = shape.basis
+    nearest = shape.nearest
+    out: list[float] = []
+    for (cx, cy, cz, half, grid, reach, least, a0, a1, a2, b0, b1, b2,
+         d0, d1, d2) in shape.slices:
+        # view (x right, y up, -z forward) -> world
+        wx = ex + sx * cx + ux * cy - fx * cz
+        wy = ey + sy * cx + uy * cy - fy * cz
+        wz = ez + sz * cx + uz * cy - fz * cz
+        # -> the light's basis, snapped to the grid (round: half to even, as np.round)
+        lx = round((wx * r0 + wy * r1 + wz * r2) / grid) * grid
+        ly = round((wx * v0 + wy * v1 + wz * v2) / grid) * grid
+        lz = round((wx * t0 + wy * t1 + wz * t2) / grid) * grid
+        z_near = min(lz - reach, nearest)
+        z_far = max(lz + reach, z_near + least)
+        span = z_far - z_near
+        # + 0.0: -0.0 as 0.0 (ShadowMaps.stale compares the matrices' bytes; `_fit_cascades`)
+        out += (a0 + 0.0, b0 + 0.0, -d0 / span + 0.0, 0.0,
+                a1 + 0.0, b1 + 0.0, -d1 / span + 0.0, 0.0,
+                a2 + 0.0, b2 + 0.0, -d2 / span + 0.0, 0.0,
+                -lx / half + 0.0, ly / half + 0.0, z_far / span + 0.0, 1.0)
+    return out
 
 
 @functools.lru_cache(maxsize=64)

@@ -11,7 +11,8 @@ choice and is what NVIDIA prefers, but Mesa 22.3's lavapipe draws a perspective 
 into the wrong layers (the cube faces came out mixed; orthographic cascades were right).
 
 Frame path: `write` fills the frame slot's matrices (host-visible storage buffer, per slot)
-and returns each light's `LightRecord.shadow` vec4; `record` draws the passes into the
+and returns each light's `LightRecord.shadow` vec4 (`write_cascades`: only the camera-fitted
+cascades, when a moving camera is all that changed); `record` draws the passes into the
 frame's command buffer before the main target begins. Command buffers are recorded once per
 `ShadowPlan` (which light has which layers), so lights that only move re-record nothing.
 
@@ -354,18 +355,22 @@ class ShadowMaps:
         far = np.full(4, np.inf)
         texel = np.zeros(4)
         bounds = tuple(map(float, scene_lo)), tuple(map(float, scene_hi))  # hashable: the cache's key
+        followed = []  # camera-fitted cascades: (entry, shape), written after the matrices
         for e in plan.entries:
             light = lights[e.light]
             pos = tuple(getattr(light, "position", (0.0, 0.0, 0.0)))
             if e.kind == "directional":
                 if camera is None:
                     fit = SM.scene_cascade(light.direction, scene_lo, scene_hi, resolution)
+                    n = len(fit.matrices)
+                    mats[e.matrix_base:e.matrix_base + n] = fit.matrices
+                    far[:n], texel[:n] = fit.far, fit.texel
                 else:
-                    fit = SM.directional_cascades(camera, size, light.direction, scene_lo,
-                                                  scene_hi, resolution, znear, zfar, e.count)
-                n = len(fit.matrices)
-                mats[e.matrix_base:e.matrix_base + n] = fit.matrices
-                far[:n], texel[:n] = fit.far, fit.texel
+                    shape = SM.cascade_shape(camera, size, light.direction, scene_lo, scene_hi,
+                                             resolution, znear, zfar, e.count)
+                    followed.append((e, shape))
+                    n = len(shape.slices)
+                    far[:n], texel[:n] = shape.far, shape.texel
                 out[e.light] = (e.first, n, 0.0, 0.0)
                 continue
             outer = float(getattr(light, "outer_cone", math.pi / 4))
@@ -391,7 +396,34 @@ class ShadowMaps:
                                           self.compute_cube_base() if frame else 0)
         # mat4 is column-major in GLSL: each row-major matrix transposed.
         data[HEADER_FLOATS:].reshape(MATRICES, 4, 4)[:] = mats.transpose(0, 2, 1)
+        for e, shape in followed:  # (already column-major: the moving camera's `write_cascades`)
+            self._put_columns(data, e, SM.cascade_columns(camera, shape))
         return out
+
+    def write_cascades(self, slot: int, plan: ShadowPlan, lights: Sequence[Light],
+                       camera: Camera, size: tuple[int, int], znear: float, zfar: float,
+                       scene_lo: Sequence[float], scene_hi: Sequence[float]) -> None:
+        """Refit the camera-fitted cascades (directional lights) of frame `slot`, which
+        `write` filled for this `plan`, `lights` and scene last: what a moving camera changes
+        and nothing else, the same floats `write` would write. The walking camera's frame:
+        no NumPy (a few Python float operations a cascade and one slice write), where `write`
+        rebuilds every matrix and the header."""
+        data = self._views[slot]
+        header = None
+        for e in plan.entries:
+            if e.kind == "directional":
+                shape = SM.cascade_shape(camera, size, lights[e.light].direction, scene_lo,
+                                         scene_hi, self.resolution, znear, zfar, e.count)
+                self._put_columns(data, e, SM.cascade_columns(camera, shape))
+                header = shape.header  # (`write`'s far and texel: the last light's)
+        if header is not None:
+            data[0:8] = header
+
+    @staticmethod
+    def _put_columns(data: np.ndarray, e: ShadowEntry, columns: list[float]) -> None:
+        """An entry's column-major matrices (16 floats each) into a slot's ShadowData."""
+        start = HEADER_FLOATS + 16 * e.matrix_base
+        data[start:start + len(columns)] = columns
 
     def stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool, casters: int = 0
               ) -> tuple[range, ...]:
