@@ -383,6 +383,17 @@ class ShadowMaps:
                 out[e.light] = (e.first, 1, near, unit)
             else:
                 out[e.light] = (e.first, 6, near, 2.0 / cube_resolution)
+        self._write_header(data, far, texel, resolution, cube_resolution, world_layout)
+        # mat4 is column-major in GLSL: each row-major matrix transposed.
+        data[HEADER_FLOATS:].reshape(MATRICES, 4, 4)[:] = mats.transpose(0, 2, 1)
+        for e, shape in followed:  # (already column-major: the moving camera's `write_cascades`)
+            self._put_columns(data, e, SM.cascade_columns(camera, shape))
+        return out
+
+    def _write_header(self, data: np.ndarray, far: np.ndarray, texel: np.ndarray,
+                      resolution: int, cube_resolution: int, world_layout: tuple[int, int]) -> None:
+        """ShadowData's header: the cascades' far depths and texel sizes, the maps' sizes and
+        filter constants, the worlds' layout and the flags."""
         data[0:4] = np.where(np.isfinite(far), far, 3.0e38)
         data[4:8] = texel
         data[8:12] = (resolution, cube_resolution, NORMAL_OFFSET, PCF_RADIUS)
@@ -394,11 +405,6 @@ class ShadowMaps:
         flags = int(frame and self.reads_buffer) | 2 * int(self.maps.filterable)  # (`stale` sets bit 0)
         data[12:16].view(np.uint32)[:] = (*world_layout, flags,
                                           self.compute_cube_base() if frame else 0)
-        # mat4 is column-major in GLSL: each row-major matrix transposed.
-        data[HEADER_FLOATS:].reshape(MATRICES, 4, 4)[:] = mats.transpose(0, 2, 1)
-        for e, shape in followed:  # (already column-major: the moving camera's `write_cascades`)
-            self._put_columns(data, e, SM.cascade_columns(camera, shape))
-        return out
 
     def write_cascades(self, slot: int, plan: ShadowPlan, lights: Sequence[Light],
                        camera: Camera, size: tuple[int, int], znear: float, zfar: float,
