@@ -423,8 +423,13 @@ class TextureUploader:
                 device.wait_fences(vk.ffi.new("VkFence[1]", [fence]), "an upload")
             else:
                 device.wait_idle()
+        except BaseException:
+            vk.vkDestroyFence(device.handle, fence, None)  # (not known to be signalled)
+            fence = None
+            raise
         finally:
-            vk.vkDestroyFence(device.handle, fence, None)
+            if fence is not None:
+                device.give_fence(fence)  # (kept for the next batch: gpu/device.py)
             device.free_command_buffer(cmd)
             self._free.append(staging)
             self.stats["wait"] += time.perf_counter() - t
@@ -460,7 +465,7 @@ class TextureUploader:
                 if buffers:  # the copies before any later submission's reads of them
                     _buffers_barrier(vk, cmd)
                 vk.vkEndCommandBuffer(cmd)
-                fence = vk.vkCreateFence(device.handle, vk.VkFenceCreateInfo(), None)
+                fence = device.take_fence()
                 vk.vkQueueSubmit(device.queue, 1, [vk.VkSubmitInfo(pCommandBuffers=[cmd])], fence)
             except BaseException:
                 if fence is not None:
