@@ -302,9 +302,10 @@ class OffscreenTarget:
 # faults, which one thread takes one at a time (256 MiB: 85 ms on one core, 46 ms on two; NumPy
 # releases the GIL in copyto). Below PARALLEL_BYTES the threads cost more than they save: on
 # the H200's host (16 cores, benchmarks/bench_copy_out.py, 2026-12-04 run e) a 1080p RGBA8
-# frame (7.9 MiB) took 0.64 ms on one thread, 0.45 on four; 3.5 MiB gained nothing.
-PARALLEL_BYTES = 6 << 20
+# frame (7.9 MiB) took 0.64 ms on one thread, 0.45 on four; 3.5 MiB gained nothing. On two
+# cores two threads lost at 7.9 MiB (0.28 -> 0.43 ms) and broke even at 31.6 MiB.
 _COPY_THREADS = max(1, min(8, os.cpu_count() or 1))
+PARALLEL_BYTES = (6 << 20) if _COPY_THREADS >= 4 else (32 << 20)
 _copy_pool: ThreadPoolExecutor | None = None
 
 
