@@ -302,14 +302,18 @@ def test_only_default_layers_take_the_specialised_kernel(make_renderer) -> None:
     SHADE_LAYERS false) only where its layers are the defaults: every layered material
     here keeps them (its pixels are checked against the mirror above), a plain one does
     not, and the kernels a frame binds carry the frame's lighting flags and BRDF."""
-    from vkpbr.render.gpu_scene import GpuScene, has_default_layers
+    from vkpbr.render.gpu_scene import GpuScene, default_layer_mask, has_default_layers
 
     def block(mat: Material) -> np.ndarray:
         return GpuScene._material_block(mat, dict.fromkeys(L.MATERIAL_TEXTURES, False))
 
-    assert has_default_layers(block(Material(base_color_factor=(0.3, 0.4, 0.5, 1.0))))
+    plain = block(Material(base_color_factor=(0.3, 0.4, 0.5, 1.0)))
+    assert has_default_layers(plain)
     for name, mat in LAYERED.items():
         assert not has_default_layers(block(mat)), name
+    # (a scene's table at once, as the compute path asks: the same answer per material)
+    mixed = [plain, *(block(m) for m in LAYERED.values()), plain]
+    assert default_layer_mask(mixed).tolist() == [True, *[False] * len(LAYERED), True]
     r = make_renderer(plane_scene(LAYERED["clearcoat"]))
     if not r.device.compute_path:
         pytest.skip(f"{r.device.info.name} lacks the compute path's features")

@@ -41,7 +41,7 @@ from vkpbr.gpu.graph import BufferResource, Step
 from vkpbr.gpu.rendering import copy_buffer_to_image
 from vkpbr.render import layouts as L
 from vkpbr.render.codegen import SPV_DIR
-from vkpbr.render.gpu_scene import GpuScene, has_default_layers
+from vkpbr.render.gpu_scene import GpuScene, default_layer_mask
 
 __all__ = ["ComputeScene", "SHADE_GROUP", "ShadeVariant", "GENERAL_SHADING"]
 
@@ -286,7 +286,7 @@ class ComputeScene:
         # Which materials any opaque or masked draw uses: only those get a shading dispatch.
         self._pipelines: dict[tuple[str, tuple[int, ...]], ComputePipeline] = {}
         # Per material, whether it shades with layers other than the defaults (ShadeVariant).
-        self.layered = [not has_default_layers(b) for b in gs.material_blocks]
+        self.layered = [not d for d in default_layer_mask(gs.material_blocks).tolist()]
         self._stand_ins: dict[str, tuple[Any, Any]] | None = None
         self._targets: dict[int, _TargetResources] = {}
 
