@@ -43,7 +43,7 @@ from vkpbr.gpu.graph import BufferResource, Rendering, Step
 from vkpbr.render import layouts as L
 from vkpbr.render.ao import PREPASS_ROWS, AoSpec
 from vkpbr.render.codegen import SPV_DIR
-from vkpbr.render.deform import DEFORMED_RADIUS, UNBOUNDED_RADIUS
+from vkpbr.render.deform import draw_sphere
 from vkpbr.render.frames import FrameSlot
 from vkpbr.render.gpu_scene import Draw, GpuScene
 from vkpbr.render.passes import PASSES, PassContext, record_pass, record_passes
@@ -69,11 +69,7 @@ def draw_spheres(scene: Scene, draws: list[Draw], box: MeshBox | None = None) ->
     out = np.zeros((len(draws), 8), np.float32)
     ranges = out.view(np.uint32)
     for i, d in enumerate(draws):
-        lo, hi = (v.astype(np.float64) for v in box(d.mesh))
-        out[i, :3] = (lo + hi) / 2 if not d.deformed else 0.0
-        out[i, 3] = (np.linalg.norm(hi - lo) / 2 * (1 + 1e-5) + 1e-6 if not d.deformed
-                     else UNBOUNDED_RADIUS if d.unbounded  # (never culled)
-                     else DEFORMED_RADIUS)  # posed within its frame's unit sphere
+        out[i, :4] = draw_sphere(d, box)
         ranges[i, 4:7] = (d.index_count, d.first_index, d.vertex_offset & 0xFFFFFFFF)
     return out
 

@@ -40,9 +40,9 @@ from vkpbr.gpu.device import Device
 from vkpbr.gpu.graph import BufferResource, Step
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.scene.draw_table import blocks
-from vkpbr.scene.types import Mesh, Scene
+from vkpbr.scene.types import Mesh, MeshBox, Scene
 
-__all__ = ["Deformed", "deformed_records", "DeformLayout", "DeformKernel", "UNBOUNDED_RADIUS",
+__all__ = ["draw_sphere", "Deformed", "deformed_records", "DeformLayout", "DeformKernel", "UNBOUNDED_RADIUS",
            "convex_weights", "DEFORMED_RADIUS"]
 
 UNBOUNDED_RADIUS = 3.0e38  # a sphere no frustum test culls
@@ -242,6 +242,17 @@ def convex_weights(mesh: Mesh) -> bool:
     then a posed vertex is a blend of its joints' placements and lies in their spheres."""
     w = np.asarray(mesh.weights, np.float64)
     return bool(len(w) == 0 or (w.min() >= 0.0 and np.abs(w.sum(axis=1) - 1.0).max() <= 1e-3))
+
+
+def draw_sphere(d: Any, box: MeshBox) -> tuple[float, float, float, float]:
+    """A draw's bounding sphere (centre, radius) in its mesh's space, as the culling kernels
+    test it (frustum.glsl world_sphere): its mesh's box's (`box(mesh)`: min, max), a little
+    widened; a deformed draw's the unit sphere its posed vertices are written in, unbounded
+    (never culled) without one. One rule for the batch's and the shadow raster's tables."""
+    if d.deformed:
+        return (0.0, 0.0, 0.0, UNBOUNDED_RADIUS if d.unbounded else DEFORMED_RADIUS)
+    lo, hi = (v.astype(np.float64) for v in box(d.mesh))
+    return (*((lo + hi) / 2), float(np.linalg.norm(hi - lo) / 2 * (1 + 1e-5) + 1e-6))
 
 
 def rest_sphere(mesh: Mesh) -> tuple[np.ndarray, float]:

@@ -72,7 +72,7 @@ from vkpbr.gpu.compute import ComputePipeline
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.graph import BufferResource, Step
 from vkpbr.render.codegen import SPV_DIR
-from vkpbr.render.deform import DEFORMED_RADIUS, UNBOUNDED_RADIUS
+from vkpbr.render.deform import UNBOUNDED_RADIUS, draw_sphere
 
 __all__ = ["ShadowRaster", "WorldJob", "wants_compute", "SET_ROWS", "big_list_bytes"]
 
@@ -167,7 +167,7 @@ class _Table:
         self.masked: list[tuple[int, int, int]] = []  # (row, material, triangles)
         for row, (i, d) in enumerate(opaque + masked):
             rows[row, :4] = first, d.first_index, d.vertex_offset, i
-            spheres[row] = _sphere(gs.scene.meshes[d.mesh].positions, d)
+            spheres[row] = draw_sphere(d, gs.mesh_box)
             if row >= len(opaque):
                 self.masked.append((row, d.material, d.index_count // 3))
             first += d.index_count // 3
@@ -177,15 +177,6 @@ class _Table:
         self.chunks_at, self.chunks = 2 * len(rows), len(chunks)
         table = np.concatenate([rows.reshape(-1, 4), chunks]) if len(chunks) else rows
         self.buffer = upload_buffer(device, table, "storage", name="shadow caster table")
-
-
-def _sphere(positions: np.ndarray, d: Any) -> tuple[float, float, float, float]:
-    """A draw's bounding sphere in its mesh's space: its box's; a deformed draw's the unit
-    sphere its posed vertices are written in (render/deform.py), unbounded without one."""
-    if d.deformed:
-        return (0.0, 0.0, 0.0, UNBOUNDED_RADIUS if d.unbounded else DEFORMED_RADIUS)
-    lo, hi = positions.min(axis=0).astype(np.float64), positions.max(axis=0).astype(np.float64)
-    return (*((lo + hi) / 2), np.linalg.norm(hi - lo) / 2 * (1 + 1e-5) + 1e-6)
 
 
 class ShadowRaster:
