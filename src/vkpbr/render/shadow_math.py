@@ -57,6 +57,7 @@ __all__ = [
     "fit_cascade",
     "cascade_texel",
     "directional_cascades",
+    "NO_FAR",
     "CascadeShape",
     "cascade_shape",
     "cascade_columns",
@@ -91,6 +92,11 @@ def project(m: np.ndarray, points: np.ndarray) -> np.ndarray:
     """(N, 3) world points through the (4, 4) matrix `m` -> (N, 4) clip coordinates."""
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     return np.c_[p, np.ones(len(p))] @ np.asarray(m, dtype=np.float64).T
+
+
+# ShadowData's cascade_far for "no end" (a scene-wide cascade's infinite far, unused slots):
+# a finite float32 beyond any view depth. One value for `ShadowMaps.write` and `cascade_shape`.
+NO_FAR = 3.0e38
 
 
 def snap_texels(resolution: int) -> int:
@@ -305,8 +311,8 @@ class CascadeShape:
     basis : the light's (right, up, travel) rows, 9 Python floats.
     nearest : the scene bounds' least depth along the light's travel.
     far, texel : (n,) float64 read-only, CascadeFit's.
-    header : ShadowData's cascade_far (inf written as 3e38) and cascade_texel, 8 floats, for
-        the first four cascades (the rest zero, far 3e38), as ShadowMaps.write writes them.
+    header : ShadowData's cascade_far (inf written as NO_FAR) and cascade_texel, 8 floats, for
+        the first four cascades (the rest zero, far NO_FAR), as ShadowMaps.write writes them.
     """
 
     slices: tuple[tuple[float, ...], ...]
@@ -350,7 +356,7 @@ def _cascade_shape(terms: tuple[float, float, float, float], view_range: tuple[f
     far.setflags(write=False)
     texel.setflags(write=False)
     n = min(count, 4)
-    header = (*(float(v) if math.isfinite(v) else 3.0e38 for v in far[:n]), *(3.0e38,) * (4 - n),
+    header = (*(float(v) if math.isfinite(v) else NO_FAR for v in far[:n]), *(NO_FAR,) * (4 - n),
               *(float(v) for v in texel[:n]), *(0.0,) * (4 - n))
     return CascadeShape(slices, tuple(float(v) for v in basis.ravel()),
                         _nearest(basis, scene_lo, scene_hi), far, texel, header)

@@ -394,7 +394,7 @@ class ShadowMaps:
                       resolution: int, cube_resolution: int, world_layout: tuple[int, int]) -> None:
         """ShadowData's header: the cascades' far depths and texel sizes, the maps' sizes and
         filter constants, the worlds' layout and the flags."""
-        data[0:4] = np.where(np.isfinite(far), far, 3.0e38)
+        data[0:4] = np.where(np.isfinite(far), far, SM.NO_FAR)
         data[4:8] = texel
         data[8:12] = (resolution, cube_resolution, NORMAL_OFFSET, PCF_RADIUS)
         # A batch of worlds' layout of a world's maps in ShadowWorldDepths (texels: a world's,
