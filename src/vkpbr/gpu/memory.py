@@ -22,6 +22,7 @@ imports it) is never kept: its allocation carries the export.
 from __future__ import annotations
 
 import math
+import threading
 from collections import OrderedDict
 from typing import Any
 
@@ -69,19 +70,22 @@ class MemoryRecycler:
         self.limit = KEPT_BYTES  # at most this many bytes kept
         self.reused = 0  # allocations served from the kept ones (tests and benchmarks read it)
         self.made = 0
+        # (a device's objects may be made on another thread: Device.keeping)
+        self._lock = threading.Lock()
 
     def allocate(self, size: int, type_index: int, mapped: bool) -> Allocation:
         """An allocation of at least `size` bytes of memory type `type_index` (mapped whole
         where `mapped`): a kept one of its size class, else a new one."""
         if size <= MAX_RECYCLED:
             size = size_class(size)
-            got = self._by_key.get((type_index, size, mapped))
-            if got:
-                alloc = got.pop()
-                del self._kept[id(alloc)]
-                self.kept_bytes -= alloc.size
-                self.reused += 1
-                return alloc
+            with self._lock:
+                got = self._by_key.get((type_index, size, mapped))
+                if got:
+                    alloc = got.pop()
+                    del self._kept[id(alloc)]
+                    self.kept_bytes -= alloc.size
+                    self.reused += 1
+                    return alloc
         vk, dev = self.device.vk, self.device.handle
         info = vk.VkMemoryAllocateInfo(allocationSize=size, memoryTypeIndex=type_index)
         try:
@@ -102,16 +106,18 @@ class MemoryRecycler:
             self._free(alloc)
             return
         key = (alloc.type_index, alloc.size, alloc.mapped is not None)
-        self._by_key.setdefault(key, []).append(alloc)
-        self._kept[id(alloc)] = (key, alloc)
-        self.kept_bytes += alloc.size
-        while self.kept_bytes > self.limit:
-            self._drop_oldest()
+        with self._lock:
+            self._by_key.setdefault(key, []).append(alloc)
+            self._kept[id(alloc)] = (key, alloc)
+            self.kept_bytes += alloc.size
+            while self.kept_bytes > self.limit:
+                self._drop_oldest()
 
     def clear(self) -> None:
         """Free every kept allocation."""
-        while self._kept:
-            self._drop_oldest()
+        with self._lock:
+            while self._kept:
+                self._drop_oldest()
 
     def _drop_oldest(self) -> None:
         _, (key, alloc) = self._kept.popitem(last=False)
