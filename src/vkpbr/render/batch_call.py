@@ -511,10 +511,15 @@ class BatchStep:
         given = WorldArgs(worlds, b["world_of_view"], b["quaternion"], world_visible,
                           b["world_expand"], b["world_materials"], b["space"], b["world_lights"],
                           b["world_environment"], b["times"], b["animation"])
+        replays = self.renderer.batch_path.replays
+        replayed = replays.replayed
         result = render_batch(self.renderer, self.cameras, self.size, b["lights"], b["options"],
                               b["linear"], b["depth"], b["outputs"], b["batch"], b["device"],
                               b["out"], given, self._overrides, prep)
-        self._lane = self._make_lane(prep, worlds, world_visible)
+        # (a lane only once a step replayed: a loop whose steps never do, e.g. one that moves
+        # the state between them, makes none and pays nothing for it)
+        self._lane = (self._make_lane(prep, worlds, world_visible)
+                      if replays.replayed > replayed else None)
         return result
 
     # --- the short way of a replayed CUDA step ----------------------------------------------
@@ -531,8 +536,7 @@ class BatchStep:
         if (world_visible is not None or not _on_cuda(worlds) or b["out"] is not None
                 or b["lights"] is not None or b["depth"] or prep.wanted or b["times"] is not None
                 or b["world_materials"] is not None or b["world_lights"] is not None
-                or b["world_environment"] is not None or r.batch_path.replays.key is None
-                or not _fixed(b["world_of_view"]) or self._prep is None):
+                or b["world_environment"] is not None or not _fixed(b["world_of_view"]) or self._prep is None):
             return None
         signature = _signature(worlds)
         if signature is None:
