@@ -6,6 +6,9 @@ one-time submissions reuse their fence (Device.take_fence)."""
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
+
 import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
@@ -13,6 +16,15 @@ from hypothesis import strategies as st
 from vkpbr.gpu.buffer import Buffer, upload_buffer
 from vkpbr.gpu.device import Device, live_objects, live_objects_by_kind
 from vkpbr.gpu.memory import KEPT_BYTES, MAX_RECYCLED, PAGE, size_class
+
+
+@contextlib.contextmanager
+def validated() -> Iterator[Device]:
+    """A device with the Khronos validation layer (and synchronization validation); any
+    error it reported fails the test before the device closes."""
+    with Device(validation=True, sync_validation=True) as dev:
+        yield dev
+        dev.check_validation()
 
 
 @given(st.integers(1, 1 << 40))
@@ -25,7 +37,7 @@ def test_size_classes_hold_the_size_within_a_quarter_octave(size: int) -> None:
 
 def test_a_freed_allocation_serves_the_next_buffer_of_its_class() -> None:
     start = live_objects_by_kind().get("Memory", 0)
-    with Device() as dev:
+    with validated() as dev:
         mem = dev.memory
         a = Buffer(dev, 10_000, "storage", host_visible=True)
         first = a.memory
@@ -48,7 +60,7 @@ def test_a_freed_allocation_serves_the_next_buffer_of_its_class() -> None:
 
 
 def test_exportable_and_huge_allocations_are_not_kept() -> None:
-    with Device() as dev:
+    with validated() as dev:
         big = Buffer(dev, MAX_RECYCLED + 1, "storage")
         big.destroy()
         assert dev.memory.kept_bytes == 0
@@ -60,7 +72,7 @@ def test_exportable_and_huge_allocations_are_not_kept() -> None:
 
 def test_at_most_the_limit_waits() -> None:
     start = live_objects()
-    with Device() as dev:
+    with validated() as dev:
         assert dev.memory.limit == KEPT_BYTES
         dev.memory.limit = 1 << 20
         sizes = [100_000 * (i + 1) for i in range(12)]  # (several classes, 6.6 MB in all)
@@ -75,7 +87,7 @@ def test_one_time_submissions_reuse_their_fence_unsignalled() -> None:
     """Device.take_fence / give_fence: an upload's fence is reset and kept for the next (no
     vkCreateFence a submission: ~0.5 ms each on NVIDIA), and one taken is never signalled
     already (a wait on it would return before its submission ran)."""
-    with Device() as dev:
+    with validated() as dev:
         vk = dev.vk
         upload_buffer(dev, np.arange(64, dtype=np.float32), "storage").destroy()
         fences = live_objects_by_kind().get("Fence", 0)
