@@ -41,7 +41,7 @@ def main() -> None:
     args = ap.parse_args()
     size = tuple(int(x) for x in args.size.split("x"))
     with Renderer(load_scene(args.scene)) as r:
-        print(f"device: {r.device.info.name}; async readback: {getattr(r.device, "transfer_queue", None) is not None}")
+        print(f"device: {r.device.info.name}; async readback: {getattr(r.device, 'transfer_queue', None) is not None}")
         print("| camera | light | readback | GPU ms median | mean | copy ms | frames/s |")
         print("|---|---|---|---:|---:|---:|---:|")
         for camera, cams in (("still", [CAMERA] * args.frames), ("walk", walk(args.frames))):
