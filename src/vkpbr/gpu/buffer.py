@@ -54,10 +54,8 @@ class Buffer:
         name: str = "",
         exportable: bool = False,
         device_local: bool = False,
-        shared: bool = False,
     ) -> None:
-        """`shared`: used by each of the device's queues (`Device.queue_families`: concurrent
-        sharing, no ownership transfers), where it has more than one. `exportable`: its memory can be handed to another API as a POSIX file descriptor
+        """`exportable`: its memory can be handed to another API as a POSIX file descriptor
         (`export_fd`; VK_KHR_external_memory_fd: CUDA imports it, gpu/cuda.py).
         `device_local` (with `host_visible`): prefer memory that is both (the GPU reads it
         often, the host writes it), else plain host-visible memory."""
@@ -69,16 +67,12 @@ class Buffer:
         self.host_visible = host_visible
         self._mapped: Any = None
         self.memory = None
-        families = device.queue_families if shared else ()
-        concurrent = len(families) > 1
         self.handle = vk.vkCreateBuffer(
             device.handle,
             vk.VkBufferCreateInfo(
                 pNext=vk.VkExternalMemoryBufferCreateInfo(handleTypes=_OPAQUE_FD(vk))
                 if exportable else None,
-                size=self.size, usage=usage,
-                sharingMode=vk.VK_SHARING_MODE_CONCURRENT if concurrent else vk.VK_SHARING_MODE_EXCLUSIVE,
-                pQueueFamilyIndices=list(families) if concurrent else None,
+                size=self.size, usage=usage, sharingMode=vk.VK_SHARING_MODE_EXCLUSIVE
             ),
             None,
         )

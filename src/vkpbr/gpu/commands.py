@@ -22,13 +22,7 @@ __all__ = ["Commands"]
 
 
 class Commands:
-    """One primary command buffer being recorded (or recorded, ready to submit).
-
-    `then`: commands for the device's transfer queue that copy this one's results to the
-    host (gpu/target.py's async readback, set while recording its copy step): Frame.submit
-    submits them after this one, and the frame's fence follows them."""
-
-    then: Any = None
+    """One primary command buffer being recorded (or recorded, ready to submit)."""
 
     def __init__(self, device: Device, handle: Any = None) -> None:
         """`handle`: record into a command buffer someone else owns (e.g. one of
@@ -44,8 +38,6 @@ class Commands:
     # --- lifetime ---------------------------------------------------------------------------
     def begin(self) -> Commands:
         self.vk.vkBeginCommandBuffer(self.handle, self.vk.VkCommandBufferBeginInfo())
-        self.then = None  # (a recording's copy step sets it again)
-        self.copies: tuple = ()  # its (device buffer, host buffer) pairs (gpu/target.py)
         return self
 
     def end(self) -> None:

@@ -1,12 +1,5 @@
 """Logical device, graphics queue, command pool, memory types, and child-object lifetime.
 
-A device with a dedicated copy engine (a queue family that transfers but neither draws nor
-computes: NVIDIA's) gets a second queue there, `transfer_queue`, with its own command pool:
-offscreen frames copy their pixels to the host on it (gpu/target.py "async readback"), so a
-stream's readback over PCIe overlaps the next frame's work instead of following it on the
-graphics queue (Sponza 1080p on the H200: 0.16 ms of every frame). VKPBR_ASYNC_READBACK=0
-turns it off; lavapipe has one queue family, so its frames read back on the graphics queue.
-
 `Device` owns every object created through the gpu layer: children register themselves and
 `close()` destroys them in reverse creation order, then the device, then the instance (the
 order Sascha Willems' renderheadless and vkguide's deletion queue use). Nothing is freed from
@@ -54,7 +47,6 @@ def anisotropy_usable(info: PhysicalDeviceInfo, supported: bool) -> bool:
 
 # How long one submission may take before vkpbr reports a hung GPU instead of waiting forever.
 GPU_TIMEOUT_ENV = "VKPBR_GPU_TIMEOUT_S"
-ASYNC_READBACK_ENV = "VKPBR_ASYNC_READBACK"  # "0": no transfer queue (module docstring)
 GPU_TIMEOUT_DEFAULT_S = 120.0
 VK_TIMEOUT = 2  # VkResult: the wait timed out
 
@@ -178,15 +170,17 @@ class Device:
             self.limits = self.properties.limits
             self.memory_properties = vk.vkGetPhysicalDeviceMemoryProperties(self.physical)
             self.queue_family = self._graphics_queue_family()
-            self.transfer_family = self._transfer_queue_family()
             t1 = time.perf_counter()
             self._create_device()
             self.queue = vk.vkGetDeviceQueue(self.handle, self.queue_family, 0)
-            self.command_pool = self._command_pool(self.queue_family)
-            self.transfer_queue = self.transfer_pool = None
-            if self.transfer_family is not None:
-                self.transfer_queue = vk.vkGetDeviceQueue(self.handle, self.transfer_family, 0)
-                self.transfer_pool = self._command_pool(self.transfer_family)
+            self.command_pool = vk.vkCreateCommandPool(
+                self.handle,
+                vk.VkCommandPoolCreateInfo(
+                    flags=vk.VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT,
+                    queueFamilyIndex=self.queue_family,
+                ),
+                None,
+            )
             self.timings.update(choice=t1 - t0, device=time.perf_counter() - t1)
         except BaseException:
             self.close()
@@ -200,33 +194,6 @@ class Device:
             if fam.queueFlags & vk.VK_QUEUE_GRAPHICS_BIT:
                 return i
         raise VkpbrError(f"{self.info.name}: no graphics queue")
-
-    def _transfer_queue_family(self) -> int | None:
-        """A queue family that copies but neither draws nor computes (a copy engine), unless
-        VKPBR_ASYNC_READBACK=0; None where there is none."""
-        if os.environ.get(ASYNC_READBACK_ENV, "1") == "0":
-            return None
-        vk = self.vk
-        families = vk.vkGetPhysicalDeviceQueueFamilyProperties(self.physical)
-        other = vk.VK_QUEUE_GRAPHICS_BIT | vk.VK_QUEUE_COMPUTE_BIT
-        for i, fam in enumerate(families):
-            if fam.queueFlags & vk.VK_QUEUE_TRANSFER_BIT and not fam.queueFlags & other \
-                    and fam.queueCount > 0 and i != self.queue_family:
-                return i
-        return None
-
-    def _command_pool(self, family: int) -> Any:
-        vk = self.vk
-        return vk.vkCreateCommandPool(self.handle, vk.VkCommandPoolCreateInfo(
-            flags=vk.VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT, queueFamilyIndex=family),
-            None)
-
-    @property
-    def queue_families(self) -> tuple[int, ...]:
-        """The families this device's queues are of (a buffer both use is shared by them)."""
-        if self.transfer_family is None:
-            return (self.queue_family,)
-        return (self.queue_family, self.transfer_family)
 
     def _create_device(self) -> None:
         vk = self.vk
@@ -310,11 +277,12 @@ class Device:
             self.extensions.append("VK_KHR_pipeline_executable_properties")
         # Keep the queue info alive until vkCreateDevice returns: the binding copies structs
         # into arrays, and the copy's pQueuePriorities points into the original's memory.
-        queue_infos = [vk.VkDeviceQueueCreateInfo(queueFamilyIndex=family, pQueuePriorities=[1.0])
-                       for family in (self.queue_family, self.transfer_family) if family is not None]
+        queue_info = vk.VkDeviceQueueCreateInfo(
+            queueFamilyIndex=self.queue_family, pQueuePriorities=[1.0]
+        )
         info = vk.VkDeviceCreateInfo(
             pNext=features,
-            pQueueCreateInfos=queue_infos,
+            pQueueCreateInfos=[queue_info],
             ppEnabledExtensionNames=self.extensions,
         )
         self.handle = vk.vkCreateDevice(self.physical, info, None)
@@ -409,24 +377,20 @@ class Device:
                 return i
         return candidates[0]
 
-    def allocate_command_buffer(self, transfer: bool = False) -> Any:
-        """A primary command buffer for the graphics queue, or with `transfer` the transfer
-        queue (`transfer_queue`: free it with `free_command_buffer(cmd, transfer=True)`)."""
+    def allocate_command_buffer(self) -> Any:
         vk = self.vk
         return vk.vkAllocateCommandBuffers(
             self.handle,
             vk.VkCommandBufferAllocateInfo(
-                commandPool=self.transfer_pool if transfer else self.command_pool,
+                commandPool=self.command_pool,
                 level=vk.VK_COMMAND_BUFFER_LEVEL_PRIMARY,
                 commandBufferCount=1,
             ),
         )[0]
 
-    def free_command_buffer(self, cmd: Any, transfer: bool = False) -> None:
+    def free_command_buffer(self, cmd: Any) -> None:
         if self.handle is not None:
-            self.vk.vkFreeCommandBuffers(self.handle,
-                                         self.transfer_pool if transfer else self.command_pool,
-                                         1, [cmd])
+            self.vk.vkFreeCommandBuffers(self.handle, self.command_pool, 1, [cmd])
 
     @contextlib.contextmanager
     def one_time_commands(self) -> Iterator[Any]:
@@ -547,10 +511,9 @@ class Device:
                 vk.vkDestroyFence(self.handle, self._fences.pop(), None)
             if getattr(self, "kept", None) is not None:
                 self.kept.destroy(vk, self.handle)
-            for pool in ("command_pool", "transfer_pool"):
-                if getattr(self, pool, None) is not None:
-                    vk.vkDestroyCommandPool(self.handle, getattr(self, pool), None)
-                    setattr(self, pool, None)
+            if getattr(self, "command_pool", None) is not None:
+                vk.vkDestroyCommandPool(self.handle, self.command_pool, None)
+                self.command_pool = None
             handle, self.handle = self.handle, None
             vk.vkDestroyDevice(handle, None)
         if getattr(self, "instance", None) is not None:

@@ -60,23 +60,6 @@ class Frame:
         self._stages = (vk.VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
                         vk.VK_PIPELINE_STAGE_ALL_COMMANDS_BIT)
         self._mode: tuple | None = None  # submit's (wait, signal, no values) last filled in
-        # A frame whose commands copy to the host on the transfer queue (Commands.then): the
-        # graphics queue's submission signals `copied`, the transfer queue's waits on it and
-        # signals the fence (gpu/target.py, async readback).
-        self.copied = None
-        if device.transfer_queue is not None:
-            self.copied = vk.vkCreateSemaphore(device.handle, vk.VkSemaphoreCreateInfo(), None)
-            self._copied = ffi.new("VkSemaphore[1]", [self.copied])
-            self._then_cmds = ffi.new("VkCommandBuffer[1]")
-            self._then_stage = ffi.new("VkPipelineStageFlags[1]",
-                                       [vk.VK_PIPELINE_STAGE_TRANSFER_BIT])
-            self._submit_then = ffi.new("VkSubmitInfo[2]", [
-                {"sType": vk.VK_STRUCTURE_TYPE_SUBMIT_INFO, "commandBufferCount": 1,
-                 "pCommandBuffers": self._cmds, "signalSemaphoreCount": 1,
-                 "pSignalSemaphores": self._copied},
-                {"sType": vk.VK_STRUCTURE_TYPE_SUBMIT_INFO, "commandBufferCount": 1,
-                 "pCommandBuffers": self._then_cmds, "waitSemaphoreCount": 1,
-                 "pWaitSemaphores": self._copied, "pWaitDstStageMask": self._then_stage}])
 
     def wait(self) -> None:
         """Block until this frame's last submission has finished on the GPU."""
@@ -96,8 +79,6 @@ class Frame:
         if result:  # (check_result only for an error: a call less a step)
             check_result(result, "vkResetFences")
         self._cmds[0] = cmd.handle
-        if cmd.then is not None:
-            return self._submit_with_copy(cmd.then, wait, signal, values)
         mode = (wait, signal, values is None)
         if mode != self._mode:  # (a loop's steps submit alike: the struct as it was left)
             self._fill(wait, signal, values is not None)
@@ -108,63 +89,6 @@ class Frame:
         result = lib.vkQueueSubmit(self.device.queue, 1, self._submit, self.fence)
         if result:
             check_result(result, "vkQueueSubmit")
-
-    def _submit_with_copy(self, then: Any, wait: Any, signal: Any,
-                          values: tuple[int, int] | None) -> None:
-        """`submit` of a frame that copies to the host on the transfer queue: its commands
-        on the graphics queue (waiting for `wait`, signalling `copied`), then `then` on the
-        transfer queue (waiting for them, signalling `signal` and the fence)."""
-        if self.copied is None:
-            raise ValueError("a frame read back on the transfer queue needs the device's")
-        vk = self.device.vk
-        lib, ffi = vk.lib, vk.ffi
-        self._then_cmds[0] = then.handle
-        self.finished = False
-        infos = self._submit_then
-        if wait is not None or signal is not None or values is not None:
-            infos = self._with_semaphores(wait, signal, values)
-        result = lib.vkQueueSubmit(self.device.queue, 1, infos, ffi.NULL)
-        if not result:
-            result = lib.vkQueueSubmit(self.device.transfer_queue, 1, infos + 1, self.fence)
-        if result:
-            check_result(result, "vkQueueSubmit")
-
-    def _with_semaphores(self, wait: Any, signal: Any, values: tuple[int, int] | None) -> Any:
-        """`_submit_then`'s two submit infos with the caller's semaphores added: `wait` on
-        the graphics queue's, `signal` on the transfer queue's (timeline `values` where
-        given: the binary `copied` takes a value that is ignored). Made per call: only CUDA-
-        ordered batches read back into NumPy come here."""
-        vk = self.device.vk
-        ffi = vk.ffi
-        keep = []
-
-        def array(kind: str, items: list) -> Any:
-            keep.append(ffi.new(kind, items))
-            return keep[-1]
-
-        infos = ffi.new("VkSubmitInfo[2]")
-        infos[0] = self._submit_then[0]
-        infos[1] = self._submit_then[1]
-        stage = self._stages[1] if values is not None else self._stages[0]
-        if wait is not None:
-            infos[0].waitSemaphoreCount = 1
-            infos[0].pWaitSemaphores = array("VkSemaphore[1]", [wait])
-            infos[0].pWaitDstStageMask = array("VkPipelineStageFlags[1]", [stage])
-        if signal is not None:
-            infos[1].signalSemaphoreCount = 1
-            infos[1].pSignalSemaphores = array("VkSemaphore[1]", [signal])
-        if values is not None:
-            for info, (waits, signals) in zip(infos, ((values[0], 0), (0, values[1])), strict=True):
-                timeline = ffi.new("VkTimelineSemaphoreSubmitInfo*", {
-                    "sType": vk.VK_STRUCTURE_TYPE_TIMELINE_SEMAPHORE_SUBMIT_INFO,
-                    "waitSemaphoreValueCount": info.waitSemaphoreCount,
-                    "pWaitSemaphoreValues": array("uint64_t[1]", [waits]),
-                    "signalSemaphoreValueCount": info.signalSemaphoreCount,
-                    "pSignalSemaphoreValues": array("uint64_t[1]", [signals])})
-                keep.append(timeline)
-                info.pNext = timeline
-        self._kept_infos = (infos, keep)  # (alive until the next submit: the driver copied them)
-        return infos
 
     def _fill(self, wait: Any, signal: Any, timeline: bool) -> None:
         """The submit info's semaphores, stage and chain for `submit`'s arguments."""
@@ -190,9 +114,7 @@ class Frame:
         if self.fence is not None:
             vk.vkDestroyFence(dev, self.fence, None)
             vk.vkDestroySemaphore(dev, self.acquired, None)
-            if self.copied is not None:
-                vk.vkDestroySemaphore(dev, self.copied, None)
-            self.fence = self.acquired = self.copied = None
+            self.fence = self.acquired = None
 
 
 class FrameRing:

@@ -15,14 +15,6 @@ recorded command buffers are stale). The barriers between steps come from the gr
 of persistently mapped readback buffers per frame in flight, so reading frame i never races
 frame i+1's copy. Frames in flight share the images; a frame's first use of each waits for
 the frames before it (gpu/graph.py). The swapchain is gpu/swapchain.py.
-
-Async readback, where the device has a copy engine's queue (gpu/device.py transfer_queue):
-the frame's "copy" step copies its images into device-local twins of the readback buffers
-(shared by both queues; on the H200 ~0.01 ms for a 1080p frame), and commands recorded once
-per frame slot and set of buffers (`Commands.then`) copy those to the host buffers on the
-transfer queue after the frame (gpu/frames.py Frame.submit), whose fence they signal. The
-graphics queue's images are then free for the next frame while the PCIe copy (0.16 ms of
-every 1080p frame on the H200 when it ran there) overlaps it.
 """
 
 from __future__ import annotations
@@ -40,13 +32,7 @@ from vkpbr.gpu.device import Device
 from vkpbr.gpu.frames import Frame
 from vkpbr.gpu.graph import BufferResource, ImageResource, Step
 from vkpbr.gpu.image import Image, ImageView
-from vkpbr.gpu.rendering import (
-    Attachments,
-    barriers,
-    buffer_barrier,
-    copy_image_to_buffer,
-    external_ownership,
-)
+from vkpbr.gpu.rendering import Attachments, barriers, copy_image_to_buffer, external_ownership
 
 __all__ = ["FrameTarget", "OffscreenTarget", "COLOR_FORMATS", "COPY_COLOR", "COPY_DEPTH", "COPY_OUTPUTS"]
 
@@ -135,11 +121,6 @@ class OffscreenTarget:
             self.attachments.msaa_color = self._own(ImageView(mc)).handle
             self.attachments.msaa_depth = self._own(ImageView(md, aspect="depth")).handle
         self._readbacks: dict[int, tuple[Buffer, Buffer]] = {}
-        # Async readback (the module's docstring): each host buffer's device-local twin, and
-        # the transfer queue's commands per tuple of (twin, host buffer) pairs.
-        self.async_readback = device.transfer_queue is not None
-        self._twins: dict[Buffer, Buffer] = {}
-        self._transfers: dict[tuple, Commands] = {}
 
     # The device's for its life (Device.keeping): what it makes later is too (a renderer's
     # targets outlive its scenes, render/targets.py).
@@ -190,44 +171,14 @@ class OffscreenTarget:
             out["ids"] = ImageResource(self.visibility.handle,
                                               view=self.visibility_view.handle)
         color_buf, depth_buf = self.readback(frame_index)
-        out["color_readback"] = BufferResource(self._copied_into(color_buf))
-        out["depth_readback"] = BufferResource(self._copied_into(depth_buf))
+        out["color_readback"] = BufferResource(color_buf)
+        out["depth_readback"] = BufferResource(depth_buf)
         if self.outputs:
             buffers = self._outputs_readback(frame_index)
             for name, (img, view) in self.outputs.items():
                 out[name] = ImageResource(img.handle, view=view.handle)
-                out[name + "_readback"] = BufferResource(self._copied_into(buffers[name]))
+                out[name + "_readback"] = BufferResource(buffers[name])
         return out
-
-    def _copied_into(self, host: Buffer) -> Buffer:
-        """Where the frame's copy step writes what ends in the readback buffer `host`: its
-        device-local twin with async readback, else itself."""
-        if not self.async_readback:
-            return host
-        if host not in self._twins:
-            with self._making():
-                self._twins[host] = self._own(Buffer(
-                    self.device, host.size, self.device.vk.VK_BUFFER_USAGE_TRANSFER_DST_BIT
-                    | self.device.vk.VK_BUFFER_USAGE_TRANSFER_SRC_BIT, shared=True,
-                    name=host.name + " (device)"))
-        return self._twins[host]
-
-    def _transfer(self, pairs: tuple[tuple[Buffer, Buffer], ...]) -> Commands:
-        """The transfer queue's commands copying each (twin, host buffer) of `pairs` and
-        making the host buffers' contents visible to the host (recorded once)."""
-        if pairs not in self._transfers:
-            vk = self.device.vk
-            cmd = Commands(self.device, self.device.allocate_command_buffer(transfer=True))
-            cmd.begin()
-            for twin, host in pairs:
-                vk.vkCmdCopyBuffer(cmd.handle, twin.handle, host.handle, 1,
-                                   [vk.VkBufferCopy(srcOffset=0, dstOffset=0, size=host.size)])
-            written = (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_WRITE_BIT)
-            host_read = (vk.VK_PIPELINE_STAGE_2_HOST_BIT, vk.VK_ACCESS_2_HOST_READ_BIT)
-            barriers(cmd, [], [buffer_barrier(vk, host, written, host_read) for _, host in pairs])
-            cmd.end()
-            self._transfers[pairs] = cmd
-        return self._transfers[pairs]
 
     def finish_steps(self, image: int, frame_index: int, copy: tuple[str, ...],
                      tiles: tuple[int, int, int, int] | None = None, external: Any = None,
@@ -252,32 +203,24 @@ class OffscreenTarget:
             images.append((q + "depth", src.depth, True, depth_buf, 4, p + "depth_readback"))
         outputs = self._outputs_readback(frame_index) if COPY_OUTPUTS in copy else {}
         family, vk = self.device.queue_family, self.device.vk
-        hosts = [buf for *_, buf, _, _ in images if buf is not external] + list(outputs.values())
-        pairs = tuple((self._copied_into(h), h) for h in hosts) if self.async_readback else ()
 
         def record(cmd: Commands) -> None:
             if external is not None:
                 barriers(cmd, [], [external_ownership(vk, family, external, True)])
             for _, img, depth, buf, nbytes, _ in images:
-                copy_image_to_buffer(cmd, img.handle, depth,
-                                     buf if buf is external else self._copied_into(buf),
-                                     self.extent, tiles=tiles, pixel_bytes=nbytes)
+                copy_image_to_buffer(cmd, img.handle, depth, buf, self.extent, tiles=tiles,
+                                     pixel_bytes=nbytes)
             for name, buf in outputs.items():
-                copy_image_to_buffer(cmd, src.outputs[name][0].handle, False,  # type: ignore[index]
-                                     self._copied_into(buf), self.extent)
+                copy_image_to_buffer(cmd, src.outputs[name][0].handle, False, buf,  # type: ignore[index]
+                                     self.extent)
             if external is not None:
                 barriers(cmd, [], [external_ownership(vk, family, external, False)])
-            if pairs:  # (the host copies follow on the transfer queue: Commands.then)
-                cmd.copies = (*cmd.copies, *pairs)
-                cmd.then = self._transfer(cmd.copies)
 
         uses = [(name, "transfer_src") for name, *_ in images]
         uses += [(readback, "transfer_dst") for _, _, _, buf, _, readback in images
                  if buf is not external]
         uses += [(q + n, "transfer_src") for n in outputs]
         uses += [(f"{p}{n}_readback", "transfer_dst") for n in outputs]
-        if pairs:  # (made visible to the host by the transfer queue's commands)
-            return [Step("copy", record, tuple(uses))]
         host = tuple((n, "host_read") for n, u in uses if u == "transfer_dst")
         return [Step("copy", record, tuple(uses)), Step("readback", uses=host, timed=False)]
 
@@ -351,9 +294,6 @@ class OffscreenTarget:
         return self.readback(frame_index)[1].array(np.float32, w * h).reshape(h, w).copy()
 
     def destroy(self) -> None:
-        for cmd in self._transfers.values():
-            self.device.free_command_buffer(cmd.handle, transfer=True)
-        self._transfers.clear()
         while self._objects:
             self._objects.pop().destroy()
 

@@ -1,13 +1,8 @@
-"""Where a streamed frame's GPU time goes. Prints Markdown tables. Not a test.
+"""Where a streamed frame's readback goes on the GPU: `render_many` with and without
+readback into NumPy (the same frames), GPU ms a frame and its "copy" step's (timestamps),
+frames/s. Prints one Markdown table. Not a test.
 
-    python3 benchmarks/probe_stream.py --scene Sponza.gltf [--size 1920x1080] [--frames 300]
-
-1. `render_many` with and without readback into NumPy (the same frames; a still camera and
-   bench_paths' walk, the automatic sun or the scene's point light): GPU ms a frame, its
-   "copy" step's (timestamps) and frames/s.
-2. The walk with the sun, no readback, frames grouped by the shadow layers they redrew:
-   frames, mean GPU ms and the mean of each step over 0.01 ms (the compute shadow kernels
-   timed apart: shadow_raster.TIMED_STEPS).
+    python3 benchmarks/probe_readback.py --scene Sponza.gltf [--size 1920x1080] [--frames 300]
 """
 
 from __future__ import annotations
@@ -21,7 +16,6 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_paths import CAMERA, walk  # noqa: E402
 
-from vkpbr.render import shadow_raster  # noqa: E402
 from vkpbr.render.renderer import Renderer  # noqa: E402
 from vkpbr.scene.loader import load_scene  # noqa: E402
 
@@ -55,27 +49,6 @@ def main() -> None:
                 for readback in (False, True):
                     print("| " + " | ".join([camera, light, str(readback),
                                              *row(r, cams, size, readback, lights)]) + " |")
-        redraw_rows(r, args.frames, size)
-
-
-def redraw_rows(r: Renderer, frames: int, size: tuple[int, int]) -> None:
-    shadow_raster.TIMED_STEPS = True
-    sun = [r.automatic_sun()]
-    cams = walk(frames)
-    groups: dict[int, list] = {}
-    for i, _ in enumerate(r.render_many(cams[:20] + cams, sun, size=size, readback=False)):
-        if i >= 20:
-            layers = sum(n for _, n in r.shadows.last_redrawn_layers)
-            groups.setdefault(layers, []).append(r.last_stats)
-    shadow_raster.TIMED_STEPS = False
-    print("\n| layers redrawn | frames | GPU ms mean | steps over 0.01 ms (mean) |")
-    print("|---:|---:|---:|---|")
-    for layers, stats in sorted(groups.items()):
-        names = {k for s in stats for k in s.pass_ms}
-        means = {k: statistics.fmean(s.pass_ms.get(k, 0.0) for s in stats) for k in names}
-        steps = " ".join(f"{k} {v:.3f}" for k, v in sorted(means.items(), key=lambda kv: -kv[1])
-                         if v > 0.01)
-        print(f"| {layers} | {len(stats)} | {statistics.fmean(s.gpu_ms for s in stats):.3f} | {steps} |")
 
 
 if __name__ == "__main__":
