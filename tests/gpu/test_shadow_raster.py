@@ -383,6 +383,36 @@ def test_moving_frames_read_the_buffer_then_the_images_catch_up(renderer) -> Non
         renderer.set_pose(1, np.eye(4))
 
 
+def test_a_lone_redraw_of_every_layer_for_new_matrices_copies_them(renderer) -> None:  # noqa: ANN001
+    """ShadowMaps._choose_reads: a frame that redraws every layer because every matrix moved
+    (the sun turned a little, as a walking camera whose cascades all cross their grid at
+    once), its casters still, copies the layers into the images and compares in hardware (no
+    buffer reads, so no catch-up redraw SETTLE_FRAMES on); its image is the raster units'
+    from scratch. A second such frame in a row reads the buffer (a light moving every frame)."""
+    from vkpbr.render.shadows import SETTLE_FRAMES
+
+    opts = {"shadow_resolution": 256, "env": "none", "shadow_raster": "compute"}
+    sm = renderer.shadows
+    sun = LIGHTS["directional"]
+    for _ in range(SETTLE_FRAMES + 1):  # (settled: the images)
+        renderer.render(CAMERA, [sun], size=SIZE, **opts)
+    assert not sm.reads_buffer
+    turned = [dataclasses.replace(sun, direction=tuple(np.add(sun.direction, (0.05, 0.0, 0.02))))]
+    got = renderer.render(CAMERA, turned, size=SIZE, **opts)
+    assert all(n == 4 for _, n in sm.last_redrawn_layers), sm.last_redrawn_layers
+    assert not sm.reads_buffer
+    sm.forget()
+    hard = renderer.render(CAMERA, turned, size=SIZE, **{**opts, "shadow_raster": "hardware"})
+    _compare_images(hard, got, "a lone redraw of every layer, copied")
+    for _ in range(SETTLE_FRAMES + 1):  # (settled on the images again)
+        renderer.render(CAMERA, [sun], size=SIZE, **opts)
+    assert not sm.reads_buffer
+    renderer.render(CAMERA, turned, size=SIZE, **opts)
+    assert not sm.reads_buffer
+    renderer.render(CAMERA, [sun], size=SIZE, **opts)
+    assert sm.reads_buffer, "a second frame in a row redrawing every layer should read the buffer"
+
+
 def test_the_4x4_by_hand_pcf_equals_nine_taps(renderer, monkeypatch) -> None:  # noqa: ANN001
     """shadow_sampling.glsl hand_pcf_linear (the 3 x 3 linear taps of a by-hand compare
     from their 4 x 4 texels) against the nine taps it replaces: the same frame with taps

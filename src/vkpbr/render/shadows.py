@@ -24,8 +24,8 @@ Depth bias: slope-scaled in the pipelines (`DEPTH_BIAS`), normal offset in shade
 
 Drawn by compute shaders instead (`compute`, render/shadow_raster.py), the maps are that
 rasteriser's depth buffer (`read_maps` reads it). Where the shading reads them is chosen a
-frame at a time (`stale`, `reads_buffer`): a frame that redraws every layer (casters that
-move every frame) reads the buffer by hand (set 3's ShadowDepths, named in ShadowData's
+frame at a time (`stale`, `reads_buffer`): a frame that redraws every layer for moved
+casters (or after a frame that redrew them all) reads the buffer by hand (set 3's ShadowDepths, named in ShadowData's
 header: world_layout z bit 0, w = where its cubes start), no copy; a frame that redraws some
 or none (a still scene, a walking camera's nearest cascade) copies the redrawn layers into
 the images and compares in hardware (on the H200: copying Sponza's 4 x 2048^2 texels costs
@@ -229,6 +229,9 @@ class ShadowMaps:
         # Compute-drawn maps read from their buffer this frame (else the images; `stale`),
         # and the frames in a row that redrew fewer than every layer.
         self.reads_buffer, self._partial_frames = False, 0
+        # `_stale`'s frame: whether a layer was redrawn for its casters (or unknown contents),
+        # not only for a new matrix; and whether the frame before redrew every layer.
+        self._casters_moved, self._last_whole = False, False
         self.ensure(ShadowPlan())
 
     def _own(self, obj: Any) -> Any:
@@ -441,12 +444,20 @@ class ShadowMaps:
     def _choose_reads(self, slot: int, plan: ShadowPlan, redraw: tuple[range, ...]
                       ) -> tuple[range, ...]:
         """`reads_buffer` for frame `slot` (its ShadowData header's bit 0 set to match): a
-        frame that redraws every layer reads the buffer (a copy would cost more than the
-        by-hand compare); so do the next SETTLE_FRAMES - 1 frames (casters that move every
-        other frame do not pay a catch-up each time); after them the images catch up: every
-        layer is redrawn and copied (the redraw returned), and frames compare in hardware."""
+        frame that redraws every layer for moved casters (or maps of unknown contents), or
+        after a frame that did too, reads the buffer (a copy would cost more than the by-hand
+        compare); so do the next SETTLE_FRAMES - 1 frames (casters that move every other
+        frame do not pay a catch-up each time); after them the images catch up: every layer
+        is redrawn and copied (the redraw returned), and frames compare in hardware.
+        A lone frame that redraws every layer for new matrices alone (a walking camera whose
+        cascades all crossed their grid at once) copies them instead, as a frame that redraws
+        some does: reading the buffer would cost a catch-up redraw of every layer 8 frames on
+        (on the H200, Sponza's 4 sun cascades: ~2.9 ms for that frame)."""
         whole = tuple(range(6) if e.kind == "point" else range(e.count) for e in plan.entries)
-        if plan.entries and redraw == whole:
+        is_whole = bool(plan.entries) and redraw == whole
+        buffer = is_whole and (self._casters_moved or self._last_whole)
+        self._last_whole = is_whole
+        if buffer:
             self._partial_frames, reads = 0, True
         else:
             self._partial_frames += 1
@@ -474,8 +485,10 @@ class ShadowMaps:
         last = self._last_stale
         if last is not None and last[2] is plan and last[1] == key[1] and last[0] == key[0]:
             self.last_redrawn_layers = tuple((e.kind, 0) for e in plan.entries)
+            self._casters_moved = False
             return tuple(range(0) for _ in plan.entries)
         self._last_stale = key
+        self._casters_moved = False
         out = []
         for e in plan.entries:
             image = "cubes" if e.kind == "point" else "maps"
@@ -487,8 +500,10 @@ class ShadowMaps:
                 rows = mats[e.matrix_base:e.matrix_base + 6] if e.kind == "point" \
                     else mats[e.matrix_base + i]
                 held = (rows.tobytes(), alpha_mask, casters)
-                if self._drawn.get(where) != held:
+                before = self._drawn.get(where)
+                if before != held:
                     changed.append(i)
+                    self._casters_moved |= before is None or before[1:] != held[1:]
                 self._drawn[where] = held
             out.append(range(0) if not changed else
                        range(0, 6) if e.kind == "point" else range(changed[0], changed[-1] + 1))

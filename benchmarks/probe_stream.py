@@ -1,0 +1,90 @@
+"""Where a streamed frame's GPU time goes. Prints Markdown tables. Not a test.
+
+    python3 benchmarks/probe_stream.py --scene Sponza.gltf [--size 1920x1080] [--frames 300]
+
+1. `render_many` with and without readback into NumPy (the same frames; a still camera and
+   bench_paths' walk, the automatic sun or the scene's point light): GPU ms a frame, its
+   "copy" step's (timestamps) and frames/s.
+2. The walk with the sun, no readback, frames grouped by the shadow layers they redrew:
+   frames, mean GPU ms and the mean of each step over 0.01 ms (the compute shadow kernels
+   timed apart: shadow_raster.TIMED_STEPS).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_paths import CAMERA, walk  # noqa: E402
+
+from vkpbr.render import shadow_raster  # noqa: E402
+from vkpbr.render.renderer import Renderer  # noqa: E402
+from vkpbr.scene.loader import load_scene  # noqa: E402
+
+
+def row(r: Renderer, cams: list, size: tuple[int, int], readback: bool, lights: list | None) -> list[str]:
+    gpu, copy = [], []
+    for _ in r.render_many(cams[:20], lights, size=size, readback=readback):  # warm-up
+        pass
+    t = time.perf_counter()
+    for _ in r.render_many(cams, lights, size=size, readback=readback):
+        gpu.append(r.last_stats.gpu_ms)
+        copy.append(r.last_stats.pass_ms.get("copy", 0.0))
+    fps = len(cams) / (time.perf_counter() - t)
+    return [f"{statistics.median(gpu):.3f}", f"{statistics.fmean(gpu):.3f}",
+            f"{statistics.median(copy):.3f}", f"{fps:.0f}"]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--scene", required=True)
+    ap.add_argument("--size", default="1920x1080")
+    ap.add_argument("--frames", type=int, default=300)
+    args = ap.parse_args()
+    size = tuple(int(x) for x in args.size.split("x"))
+    with Renderer(load_scene(args.scene)) as r:
+        print(f"device: {r.device.info.name}")
+        print("| camera | light | readback | GPU ms median | mean | copy ms | frames/s |")
+        print("|---|---|---|---:|---:|---:|---:|")
+        for camera, cams in (("still", [CAMERA] * args.frames), ("walk", walk(args.frames))):
+            for light, lights in (("sun", [r.automatic_sun()]), ("point", None)):
+                for readback in (False, True):
+                    print("| " + " | ".join([camera, light, str(readback),
+                                             *row(r, cams, size, readback, lights)]) + " |")
+        redraw_rows(r, args.frames, size)
+
+
+def redraw_rows(r: Renderer, frames: int, size: tuple[int, int]) -> None:
+    shadow_raster.TIMED_STEPS = True
+    sun = [r.automatic_sun()]
+    cams = walk(frames)
+    drawn: list[int] = []  # layers each frame redrew, read as the next camera is asked for
+
+    def cameras():  # noqa: ANN202 - render_many draws frame k before it asks for camera k+1
+        for i, cam in enumerate(cams[:20] + cams):
+            if i:
+                drawn.append(sum(n for _, n in r.shadows.last_redrawn_layers))
+            yield cam
+
+    stats = [r.last_stats for _ in r.render_many(cameras(), sun, size=size, readback=False)]
+    drawn.append(sum(n for _, n in r.shadows.last_redrawn_layers))
+    groups: dict[int, list] = {}
+    for layers, s in list(zip(drawn, stats, strict=True))[20:]:
+        groups.setdefault(layers, []).append(s)
+    shadow_raster.TIMED_STEPS = False
+    print("\n| layers redrawn | frames | GPU ms mean | steps over 0.01 ms (mean) |")
+    print("|---:|---:|---:|---|")
+    for layers, stats in sorted(groups.items()):
+        names = {k for s in stats for k in s.pass_ms}
+        means = {k: statistics.fmean(s.pass_ms.get(k, 0.0) for s in stats) for k in names}
+        steps = " ".join(f"{k} {v:.3f}" for k, v in sorted(means.items(), key=lambda kv: -kv[1])
+                         if v > 0.01)
+        print(f"| {layers} | {len(stats)} | {statistics.fmean(s.gpu_ms for s in stats):.3f} | {steps} |")
+
+
+if __name__ == "__main__":
+    main()
