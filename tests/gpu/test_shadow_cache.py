@@ -20,9 +20,9 @@ SIZE = (96, 72)
 OPTS = {"shadow_resolution": 256, "env": "none", "shadow_raster": "hardware"}
 ALL = [LIGHTS["directional"], LIGHTS["spot"], LIGHTS["point"]]
 MOVED = dataclasses.replace(CAMERA, eye=(1.5, 4.0, 5.0))
-# A step of 3 cm: the nearer cascades cross their snapping grid (shadow_math.snap_texels),
+# A step of 6 cm: the nearer cascades cross their snapping grid (shadow_math.snap_texels),
 # the farther ones do not, so only some of the sun's layers are redrawn.
-NUDGED = dataclasses.replace(CAMERA, eye=(0.03, 5.0, 6.0), target=(0.33, 0.0, 0.0))
+NUDGED = dataclasses.replace(CAMERA, eye=(0.06, 5.0, 6.0), target=(0.36, 0.0, 0.0))
 POINT_MOVED = dataclasses.replace(LIGHTS["point"], position=(-0.4, 2.2, 0.6))
 
 

@@ -16,17 +16,22 @@ Cascades: the view range is split by the practical scheme (Zhang et al. 2006: a 
 logarithmic and uniform splits); each slice of the view frustum gets a bounding sphere
 computed in VIEW space (so its radius depends only on the projection and the splits, never
 on where the camera looks), the light's orthographic box is the sphere's square, its centre
-snapped to a grid of SNAP_TEXELS(resolution) whole shadow-map texels in light space (so a
+snapped to a grid of snap_texels(resolution) whole shadow-map texels in light space (so a
 moving camera moves the box by whole texels: no shimmering edges), and its depth range is
 extended towards the light to the scene's bounds, so that casters outside the view still cast
 into it, and away from the light to the scene's bounds too, so that the depth range (and with it
 the matrix) does not follow the camera's depth along the light: that had been a fifth of a
 walking camera's redraws (Sponza's walk: 0.39 -> 0.31 layers a frame); float32 depth keeps
-~1e-7 of the scene's depth along the light in any case. The coarse grid (1/16 of the map; the box is padded by half a step so the sphere
-stays inside) makes a cascade's matrix constant while the camera moves within a step: the
-renderer redraws only the cascades whose matrix changed (render/shadows.py ShadowMaps.stale),
-so a walking camera redraws its nearest cascade every few dozen frames instead of all four
-every frame, for 1/16 of the map's resolution. For the same reason the split range is
+~1e-7 of the scene's depth along the light in any case. The coarse grid (1/8 of the map; the
+box is padded by half a step so the sphere stays inside) makes a cascade's matrix constant
+while the camera moves within a step: the renderer redraws only the cascades whose matrix
+changed (render/shadows.py ShadowMaps.stale), so a walking camera redraws its nearest cascade
+every few dozen frames instead of all four every frame, for 1/8 of the map's resolution.
+Why 1/8 (1/16 until session 17): redraws go as 1 / step, and on the H200 a frame that
+redraws Sponza's nearest 2048^2 cascade costs ~1.2 ms more than one that redraws none (its
+floor's triangles cover the whole map at 0.8 mm a texel); at 1/8 the walk (2 cm a frame)
+redraws 0.16 layers a frame instead of 0.32, for texels 7% larger (2048 / 1790 against
+2048 / 1918 of the sphere's diameter). For the same reason the split range is
 rounded outwards to quarter octaves (`cascade_range`): an automatic far plane moves with the
 camera, and the splits, radii and matrices would move with it. What a moving camera changes is
 then the snapped centres alone: `cascade_shape` keeps the rest of the fit (per projection,
@@ -104,7 +109,7 @@ NO_FAR = 3.0e38
 
 def snap_texels(resolution: int) -> int:
     """The grid a cascade's centre is snapped to, in texels of a `resolution`-texel map."""
-    return max(resolution // 16, 1)
+    return max(resolution // 8, 1)
 
 
 def cascade_range(znear: float, zfar: float) -> tuple[float, float]:
