@@ -226,13 +226,16 @@ class ShadowMaps:
         self.world_stand_in = self._own(Buffer(device, 16, "storage", name="shadow depths stand-in"))
         self.world_depths: Buffer = self.world_stand_in
         self.frame_depths: Buffer = self.world_stand_in
-        # Compute-drawn maps read from their buffer this frame (else the images; `stale`),
-        # and the frames in a row that redrew fewer than every layer.
-        self.reads_buffer, self._partial_frames = False, 0
-        # `_stale`'s frame: whether a layer was redrawn for its casters (or unknown contents),
-        # not only for a new matrix; and whether the frame before redrew every layer.
-        self._casters_moved, self._last_whole = False, False
+        self._reset_reads()
         self.ensure(ShadowPlan())
+
+    def _reset_reads(self) -> None:
+        # Compute-drawn maps read from their buffer this frame (else the images; `stale`);
+        # the frames in a row that redrew fewer than every layer; whether `_stale`'s frame
+        # redrew a layer for its casters (or unknown contents), not only for a new matrix;
+        # whether the frame before redrew every layer.
+        self.reads_buffer, self._partial_frames = False, 0
+        self._casters_moved, self._last_whole = False, False
 
     def _own(self, obj: Any) -> Any:
         self._objects.append(obj)
