@@ -44,10 +44,17 @@ def main() -> None:
     ap.add_argument("--scene", required=True)
     ap.add_argument("--size", default="1920x1080")
     ap.add_argument("--frames", type=int, default=300)
+    ap.add_argument("--redraws-only", action="store_true",
+                    help="only part 2, the compute shadow kernels timed apart in every recording")
     args = ap.parse_args()
+    if args.redraws_only:
+        shadow_raster.TIMED_STEPS = True
     size = tuple(int(x) for x in args.size.split("x"))
     with Renderer(load_scene(args.scene)) as r:
         print(f"device: {r.device.info.name}")
+        if args.redraws_only:
+            redraw_rows(r, args.frames, size)
+            return
         print("| camera | light | readback | GPU ms median | mean | copy ms | frames/s |")
         print("|---|---|---|---:|---:|---:|---:|")
         for camera, cams in (("still", [CAMERA] * args.frames), ("walk", walk(args.frames))):
@@ -59,7 +66,8 @@ def main() -> None:
 
 
 def redraw_rows(r: Renderer, frames: int, size: tuple[int, int]) -> None:
-    shadow_raster.TIMED_STEPS = True
+    timed = shadow_raster.TIMED_STEPS
+    shadow_raster.TIMED_STEPS = True  # (recordings made before keep their steps untimed)
     sun = [r.automatic_sun()]
     cams = walk(frames)
     drawn: list[int] = []  # layers each frame redrew, read as the next camera is asked for
@@ -75,7 +83,7 @@ def redraw_rows(r: Renderer, frames: int, size: tuple[int, int]) -> None:
     groups: dict[int, list] = {}
     for layers, s in list(zip(drawn, stats, strict=True))[20:]:
         groups.setdefault(layers, []).append(s)
-    shadow_raster.TIMED_STEPS = False
+    shadow_raster.TIMED_STEPS = timed
     print("\n| layers redrawn | frames | GPU ms mean | steps over 0.01 ms (mean) |")
     print("|---:|---:|---:|---|")
     for layers, stats in sorted(groups.items()):
