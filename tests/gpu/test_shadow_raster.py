@@ -127,26 +127,6 @@ def test_every_layer_equals_the_raster_units(renderer, alpha_mask: bool) -> None
     assert not np.array_equal(hole[1][0], whole[1][0])  # the cut-out changes the spot map
 
 
-def test_masked_big_triangles_shared_by_slices_draw_the_same_texels(renderer, monkeypatch) -> None:  # noqa: ANN001
-    """shadow_raster.masked_slices: a masked draw's big triangles (the card's two, over
-    MASKED_AREA texels) covered by slices of work groups, each its share of their bands, give
-    the maps bit for bit that one work group covering each gives (atomicMax: order-free), for
-    every slice count from 1 to more than the triangles' bands."""
-    import vkpbr.render.shadow_raster as shadow_raster
-
-    opts = {"shadow_resolution": 512, "env": "none", "alpha_mask": True}
-    maps = {}
-    for slices in (1, 3, 32, 200):
-        monkeypatch.setattr(shadow_raster, "masked_slices", lambda groups, n=slices: n)
-        renderer.recorder.free()  # (recordings made with the old slice count)
-        maps[slices] = _maps(renderer, CAMERA, ALL, "compute", **opts)
-    for slices in (3, 32, 200):
-        for k in (1, 2):
-            np.testing.assert_array_equal(maps[1][k], maps[slices][k], err_msg=f"{slices} slices")
-    assert shadow_raster.MAX_SLICES < 200  # (200: most slices get no band at all)
-    assert (maps[1][1][:5] > 0).mean() > 0.1, "the maps are empty (test is moot)"
-
-
 def test_partial_redraws_and_the_choice(renderer) -> None:  # noqa: ANN001
     """A camera that moves redraws only the sun's cascades, by compute shaders, and they
     equal the raster units' all the same; "auto" is the raster units on a CPU and the

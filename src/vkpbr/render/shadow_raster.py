@@ -83,7 +83,6 @@ BIG_ENTRY = 24  # uints a listed band: its triangle set up (shadow_raster.comp s
 MASKED_AREA = 64  # masked triangles over this many box texels: the work group covers them
 PUSH_BYTES = 128  # shadow_raster.comp's push constants
 MAX_Z = 65535  # a dispatch's (world, layer) invocations in z
-MASKED_GROUPS, MAX_SLICES = 256, 32  # a masked draw's dispatch: work groups to aim at (`masked_slices`)
 MAX_LOOP_LAYERS = 32  # shadow_small's layers of a dispatch (a bit each in a uint)
 # Set 4: generated.glsl's compute-path bindings of the streams, then the kernels' own.
 SET_ROWS = ((3, "Indices"), (4, "Positions"), (5, "Texcoords0"), (6, "Texcoords1"),
@@ -113,14 +112,6 @@ class WorldJob:
     map_size: int
     cube_size: int
     generation: int = 0  # of the buffers (render/world_shadows.py): the sets made for them
-
-
-def masked_slices(groups: int) -> int:
-    """Slices of a masked draw's dispatch of `groups` work groups (all its layers and worlds):
-    enough that its big triangles, which each group covers itself, are shared by about
-    MASKED_GROUPS groups (shadow_raster.comp KERNEL 4; every slice repeats the draw's
-    triangle set-up, cheap beside a big triangle's texels), at most MAX_SLICES."""
-    return max(1, min(MAX_SLICES, MASKED_GROUPS // max(groups, 1)))
 
 
 def wants_compute(choice: Any, device: Any, measured: bool | None = None) -> bool:
@@ -369,7 +360,6 @@ class ShadowRaster:
         `world`: every world's layers of each job (`world_steps`)."""
         big_buffer = self.big if world is None else world.big
         dispatch = self._dispatcher(push, world)
-        worlds = 1 if world is None else world.worlds
 
         def bind(cmd: Any, name: str) -> None:
             cmd.bind_pipeline(self._pipeline(name))
@@ -401,10 +391,8 @@ class ShadowRaster:
             for matrix, layers, _ in jobs:
                 for row, material, triangles in table.masked:
                     cmd.bind_set(1, material_sets[material])
-                    groups = -(-triangles // SMALL_GROUP)
-                    push[0], push[1], push[2] = triangles, masked_slices(groups * layers * worlds), row
-                    dispatch(cmd, matrix, layers, groups, slices=int(push[1]))
-            push[1] = 0
+                    push[0], push[2] = triangles, row
+                    dispatch(cmd, matrix, layers, -(-triangles // SMALL_GROUP))
 
         return {"clear": clear, "small": small, "args": args, "big": big, "masked": masked}
 
@@ -415,10 +403,9 @@ class ShadowRaster:
         loops over the layers), at most MAX_Z a dispatch (worlds in runs)."""
         worlds = 1 if world is None else world.worlds
 
-        def dispatch(cmd: Any, matrix: int, layers: int, groups: int, layers_in_z: bool = True,
-                     slices: int = 1) -> None:
+        def dispatch(cmd: Any, matrix: int, layers: int, groups: int, layers_in_z: bool = True) -> None:
             push[3] = matrix
-            run = max(1, MAX_Z // (layers * slices))
+            run = max(1, MAX_Z // layers)
             for w0 in range(0, worlds, run):
                 n = min(run, worlds - w0)
                 if world is not None:
@@ -427,7 +414,7 @@ class ShadowRaster:
                     push[27] = layers
                 cmd.push(push)
                 cmd.dispatch(min(groups, MAX_GROUPS_X), -(-groups // MAX_GROUPS_X),
-                             n * layers * slices if layers_in_z else n)
+                             n * layers if layers_in_z else n)
 
         return dispatch
 

@@ -36,12 +36,7 @@
 //   factor x COLOR_0, as shadow_mask.frag) reaches the cutoff, sampled at the texel's
 //   perspective-correct texture coordinates with their per-texel differences as gradients
 //   (the quad differences the fragment shader's texture() takes). Triangles over
-//   pc.masked_area box texels are covered by the whole work group afterwards, in
-//   pc.slices slices (z = (world, layer, slice)): slice s's groups take the s-th share of
-//   each such triangle's bands, slice 0 the small triangles too. A draw of a few triangles is
-//   a work group or two, and its big ones (a leaf quad under the nearest cascade: 10^6 texels)
-//   had been covered by one group alone while the GPU idled (render/shadow_raster.py
-//   masked_slices).
+//   pc.masked_area box texels are covered by the whole work group afterwards.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #include "generated.glsl"
@@ -75,7 +70,7 @@ layout(set = 4, binding = 43, std430) buffer Big { uint big[]; };
 
 layout(push_constant) uniform Raster {
     uint triangles;  // KERNEL 4: its draw's triangles
-    uint slices;  // KERNEL 4: the slices sharing its big triangles (KERNEL 1: unused)
+    uint unused1;  // (KERNEL 1 reads its rows from the chunk list)
     uint row;  // KERNEL 4: the masked draw's row
     uint matrix;  // the dispatch's first layer's matrix (its layer z is matrix + z)
     uint map_size;  // texels a side: the 2D layers, the cube faces
@@ -410,10 +405,8 @@ void main() {
         else draw_layer(t, 0u, ALL_BANDS, 0, 1, 0, 1);
     }
 #else
-    uint slices = max(pc.slices, 1u);
-    uint slice = gl_GlobalInvocationID.z % slices, z = gl_GlobalInvocationID.z / slices;
-    uint m = pc.matrix + z % pc.world.w;
-    uint w = pc.world_at.x + z / pc.world.w;
+    uint m = pc.matrix + gl_GlobalInvocationID.z % pc.world.w;
+    uint w = pc.world_at.x + gl_GlobalInvocationID.z / pc.world.w;
     uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
     opaque_zero = uint(gl_NumWorkGroups.x == 0u);  // 0, unknown to the compiler (u())
     uint first = casters[2u * pc.row].x;
@@ -423,18 +416,15 @@ void main() {
         Screen t;
         if (on_layer(first + i, pc.row, m, w, t)) {
             if (box_area(t) > float(pc.masked_area)) group_big[atomicAdd(group_big_count, 1u)] = first + i;
-            else if (slice == 0u) draw_layer(t, 0u, ALL_BANDS, 0, 1, 0, 1);
+            else draw_layer(t, 0u, ALL_BANDS, 0, 1, 0, 1);
         }
     }
     barrier();
     for (uint k = 0u; k < group_big_count; ++k) {
         Screen t;
-        if (!on_layer(group_big[k], pc.row, m, w, t)) continue;
-        uint bands = band_count(t);  // this slice's share of them: [b0, b1)
-        uint b0 = bands * slice / slices, b1 = bands * (slice + 1u) / slices;
-        if (b0 < b1)
-            draw_layer(t, b0, b1 >= bands ? ALL_BANDS : b1, int(gl_SubgroupID),
-                       int(gl_NumSubgroups), int(gl_SubgroupInvocationID), int(gl_SubgroupSize));
+        if (on_layer(group_big[k], pc.row, m, w, t))
+            draw_layer(t, 0u, ALL_BANDS, int(gl_SubgroupID), int(gl_NumSubgroups),
+                       int(gl_SubgroupInvocationID), int(gl_SubgroupSize));
     }
 #endif
 #endif
