@@ -146,6 +146,23 @@ def test_a_pose_change_records_nothing(make_renderer) -> None:  # noqa: ANN001
     assert all(np.any(a != b) for a, b in zip(frames, frames[1:], strict=False))
 
 
+def test_moves_that_change_the_scene_bounds_record_nothing(make_renderer) -> None:  # noqa: ANN001
+    """A node moved far enough to change the scene's bounds every frame (an animated crowd's
+    do) re-records nothing either: the automatic GTAO radius, recorded into the frame's
+    commands, is the scene's as loaded (render/ao.py), not its moving bounds'."""
+    r = make_renderer(analytic_scene())
+    radii, recorded = [], {}
+    for step in range(4 * r.ring.count):
+        if step == 2 * r.ring.count:
+            recorded = dict(r.recorder._recorded)
+        r.set_poses("box", np.array([[4.0 + 3.0 * step, 0.5, -1.2, 0.0, 0.0, 0.0, 1.0]]))
+        r.render(CAMERA, size=(W, H))
+        radii.append(r.frame_path.parts.bounds.radius)
+    assert len(set(radii)) == len(radii), "the bounds did not move (test is moot)"
+    assert any(key[3].ao is not None for key in recorded), "no GTAO in the frames (test is moot)"
+    assert r.recorder._recorded == recorded
+
+
 def test_batches_see_the_posed_scene(make_renderer) -> None:  # noqa: ANN001
     scene = analytic_scene()
     r = make_renderer(scene)

@@ -16,7 +16,8 @@ the compute rasteriser, a compute batch's atlas -- and before the shading:
    one pixel of each 2 x 2): the view-space normal made from the full-resolution depth in
    place, `slices` directions of `steps` samples a side (the far ones read from the coarser
    levels), the cosine-weighted visible arc integrated within the effect radius
-   (`RenderOptions.ao_radius`; 0: RADIUS_SHARE of the scene's bounding radius), with the
+   (`RenderOptions.ao_radius`; 0: RADIUS_SHARE of the scene's bounding radius as loaded,
+   which a moving or animated scene does not change), with the
    depth edges packed beside it.
 2. `ao_denoise` (shaders/ao_denoise.comp), `passes` times: XeGTAO's edge-aware 3x3 spatial
    denoise; at full resolution the last pass writes the frame slot's "ao" image (R32F), at

@@ -90,6 +90,11 @@ class Bounds:
     corners: tuple[tuple[float, float, float], ...]
     radius: float
 
+    @property
+    def rest_radius(self) -> float:
+        """The radius of the scene as loaded (a still scene's: `radius`; LiveBounds')."""
+        return self.radius
+
     @classmethod
     def of(cls, lo: np.ndarray, hi: np.ndarray) -> Bounds:
         ok = bool(np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)))

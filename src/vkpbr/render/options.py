@@ -236,7 +236,8 @@ class RenderOptions:
         depth, in the physically based mode with an environment, on single-sample offscreen
         frames), "gtao-full" (full resolution), "gtao-low" (half, fewer samples) or "off".
     ao_radius : float
-        GTAO's effect radius in world units (>= 0; 0: 15% of the scene's bounding radius).
+        GTAO's effect radius in world units (>= 0; 0: 15% of the scene's bounding radius as
+        loaded, which moving nodes do not change).
     bloom : float
         Bloom strength, 0..1 (0: off): a post step (render/post_bloom.py) on the frame's HDR
         radiance before its tone map; the frame's total light is kept.

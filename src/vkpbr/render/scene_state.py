@@ -200,6 +200,10 @@ class LiveBounds:
     def __init__(self, state: SceneState, initial: Bounds) -> None:
         self.state = state
         self._bounds, self._version = initial, 0
+        # The bounds' radius as the scene was loaded: what a scale that must not follow the
+        # state frame by frame reads (render/ao.py's automatic radius: a value recorded into
+        # the frame's commands, which an animated scene's moving bounds re-recorded each frame).
+        self.rest_radius = initial.radius
 
     @property
     def version(self) -> int:
