@@ -125,9 +125,13 @@ def moving_views(r: Renderer, cams: list, moving: np.ndarray, rest: np.ndarray):
 
 
 def crowd_views(r: Renderer, man, cam: Camera, offsets: np.ndarray, k: int, count: int,  # noqa: ANN001, ANN201
-                frames: int, py: list):
-    """`cam` each frame, after posing every copy at its own time (one vectorised sample)."""
+                frames: int, py: list, repeat: int = 1):
+    """`cam` each frame, after posing every copy at its own time (one vectorised sample);
+    with `repeat` N, each pose's frame followed by N - 1 frames of the same pose."""
     for f in range(frames):
+        if f % repeat:
+            yield cam
+            continue
         t0 = time.perf_counter()
         pose = sample(man, offsets + f / 30.0)  # (count, k, 4, 4): one call
         roots = r.state.local[::k].copy()
@@ -240,7 +244,11 @@ def _steps(passes: list[dict]) -> str:
 
 
 def crowd_rows(assets: Path, counts: tuple[int, ...], frames: int,
-               size: tuple[int, int] = (1920, 1080)) -> list[dict]:
+               size: tuple[int, int] = (1920, 1080), repeat: int = 1) -> list[dict]:
+    """The crowd's frames, each after its poses (GPU ms of those frames alone); `repeat` N:
+    each posed frame followed by N - 1 of the same pose, so that the GPU stays busy while
+    Python poses the next (the H200 lowers its clocks when frames leave it idle: whether the
+    GPU ms of a posed frame is that of a busy GPU)."""
     man = load_scene(assets / "CesiumMan" / "glTF" / "CesiumMan.gltf")
     verts = sum(man.meshes[n.mesh].vertex_count for n in man.nodes)
     rows = []
@@ -252,17 +260,18 @@ def crowd_rows(assets: Path, counts: tuple[int, ...], frames: int,
         offsets = np.random.default_rng(1).random(count) * 2.0
         with Renderer(scene) as r:
             py, gpu, deform, wait, frame_py, passes = [], [], [], [], [], []
-            views = crowd_views(r, man, cam, offsets, k, count, frames + 20, py)
+            views = crowd_views(r, man, cam, offsets, k, count, (frames + 20) * repeat, py, repeat)
             for i, _ in enumerate(r.render_many(views, size=size, readback=False,
                                                 pipeline="compute", raster="compute")):
-                if i >= 20:
+                if i >= 20 * repeat and i % repeat == 0:
                     gpu.append(r.last_stats.gpu_ms)
                     frame_py.append(r.last_stats.cpu_ms)
                     deform.append(r.last_stats.pass_ms.get("deform", float("nan")))
                     wait.append(r.last_stats.pass_ms.get("deform_wait", float("nan")))
                     passes.append(dict(r.last_stats.pass_ms))
         mverts = count * verts / 1e6
-        rows.append({"row": f"crowd {count} CesiumMan {size[0]}x{size[1]}", "gpu_ms": _median(gpu),
+        label = f"crowd {count} CesiumMan {size[0]}x{size[1]}" + (f", each pose x{repeat}" if repeat > 1 else "")
+        rows.append({"row": label, "gpu_ms": _median(gpu),
                      "deform_ms": _median(deform), "deform_wait_ms": _median(wait),
                      "deform_ms_per_mvert": _median(deform) / mverts,
                      "python_ms": 1e3 * _median(py[20:]), "frame_python_ms": _median(frame_py),
@@ -347,6 +356,8 @@ def main() -> None:
     ap.add_argument("--crowds", default="100,1000")
     ap.add_argument("--only", default="poses,instances,walk,engine,crowd")
     ap.add_argument("--size", default="1920x1080", help="the crowd rows' image size, WxH")
+    ap.add_argument("--crowd-repeat", type=int, default=1,
+                    help="the crowd row: each pose's frame drawn N times (the GPU kept busy)")
     ap.add_argument("--json")
     ap.add_argument("--shadow-steps", action="store_true",
                     help="time the compute shadow kernels apart (shadow_raster.TIMED_STEPS)")
@@ -367,7 +378,8 @@ def main() -> None:
     if "crowd" in args.only.split(","):
         rows += crowd_rows(args.assets, tuple(int(c) for c in args.crowds.split(",")),
                            max(args.frames // 3, 30),
-                           tuple(int(v) for v in args.size.split("x")))  # type: ignore[arg-type]
+                           tuple(int(v) for v in args.size.split("x")),  # type: ignore[arg-type]
+                           max(args.crowd_repeat, 1))
     if "crowdinst" in args.only:
         rows += crowd_instance_rows(args.assets, tuple(int(c) for c in args.crowds.split(",")),
                                     max(args.frames // 3, 30),
