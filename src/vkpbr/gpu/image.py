@@ -7,16 +7,15 @@ copied level by level; otherwise its chain is made by successive linear blits on
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from vkpbr.gpu.buffer import Buffer
+from vkpbr.gpu.copy_threads import pool
 from vkpbr.gpu.device import Device, DeviceObject
 
 __all__ = ["Image", "ImageView", "Sampler", "SamplerSpec", "mip_levels", "TextureUploader"]
@@ -497,8 +496,7 @@ class TextureUploader:
             dst[at : at + a.nbytes] = a.reshape(-1).view(np.uint8)  # (any dtype: buffers)
 
         if total >= _PARALLEL_COPY_BYTES and len(copies) > 1:
-            with ThreadPoolExecutor(min(8, os.cpu_count() or 1)) as pool:
-                list(pool.map(copy, copies))
+            list(pool().map(copy, copies))
         else:
             for job in copies:
                 copy(job)

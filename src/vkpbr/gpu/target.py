@@ -20,14 +20,13 @@ the frames before it (gpu/graph.py). The swapchain is gpu/swapchain.py.
 from __future__ import annotations
 
 import contextlib
-import os
-from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Protocol
 
 import numpy as np
 
 from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.commands import Commands
+from vkpbr.gpu.copy_threads import THREADS, pool
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.frames import Frame
 from vkpbr.gpu.graph import BufferResource, ImageResource, Step
@@ -304,32 +303,19 @@ class OffscreenTarget:
 # the H200's host (16 cores, benchmarks/bench_copy_out.py, 2026-12-04 run e) a 1080p RGBA8
 # frame (7.9 MiB) took 0.64 ms on one thread, 0.45 on four; 3.5 MiB gained nothing. On two
 # cores two threads lost at 7.9 MiB (0.28 -> 0.43 ms) and broke even at 31.6 MiB.
-_COPY_THREADS = max(1, min(8, os.cpu_count() or 1))
-PARALLEL_BYTES = (6 << 20) if _COPY_THREADS >= 4 else (32 << 20)
-_copy_pool: ThreadPoolExecutor | None = None
-
-
-def _forget_copy_pool() -> None:
-    global _copy_pool
-    _copy_pool = None  # a forked child (multiprocessing, Ray's workers) has none of its threads
-
-
-os.register_at_fork(after_in_child=_forget_copy_pool)
+PARALLEL_BYTES = (6 << 20) if THREADS >= 4 else (32 << 20)
 
 
 def copy_out(mapped: np.ndarray, into: np.ndarray | None = None) -> np.ndarray:
     """`mapped` (a view of readback memory) copied into `into`, or into a new array; split
     along the first axis over threads when it is big."""
     out = np.empty_like(mapped) if into is None else into
-    parts = min(_COPY_THREADS, len(mapped)) if mapped.nbytes >= PARALLEL_BYTES else 1
+    parts = min(THREADS, len(mapped)) if mapped.nbytes >= PARALLEL_BYTES else 1
     if parts <= 1:
         np.copyto(out, mapped)
         return out
-    global _copy_pool
-    if _copy_pool is None:
-        _copy_pool = ThreadPoolExecutor(_COPY_THREADS, thread_name_prefix="vkpbr-readback")
     step = -(-len(mapped) // parts)
     spans = [slice(i, i + step) for i in range(0, len(mapped), step)]
-    for done in [_copy_pool.submit(np.copyto, out[s], mapped[s]) for s in spans]:
+    for done in [pool().submit(np.copyto, out[s], mapped[s]) for s in spans]:
         done.result()
     return out
