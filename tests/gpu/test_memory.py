@@ -83,6 +83,26 @@ def test_at_most_the_limit_waits() -> None:
     assert live_objects() == start
 
 
+def test_beyond_the_limit_mapped_memory_is_kept_longest() -> None:
+    """A scene change frees more device-local memory (textures) than the limit: the kept
+    mapped allocations (an upload's staging buffers, the costliest to make) stay, the
+    device-local ones are freed oldest first, and the mapped go only when nothing else is left."""
+    with validated() as dev:
+        dev.memory.limit = 1 << 20
+        staging = Buffer(dev, 300_000, "transfer_src", host_visible=True)
+        staging.destroy()  # (the oldest kept)
+        for b in [Buffer(dev, 100_000 * (i + 1), "storage") for i in range(8)]:
+            b.destroy()
+        mapped = [alloc for key, alloc in dev.memory._kept.values() if key[2]]
+        assert len(mapped) == 1 and dev.memory.kept_bytes <= 1 << 20
+        again = Buffer(dev, 300_000, "transfer_src", host_visible=True)
+        assert dev.memory.reused == 1, "the staging buffer's memory was not kept"
+        again.destroy()
+        for b in [Buffer(dev, 400_000, "transfer_src", host_visible=True) for _ in range(4)]:
+            b.destroy()  # (mapped alone beyond the limit: the oldest of them go)
+        assert dev.memory.kept_bytes <= 1 << 20
+
+
 def test_one_time_submissions_reuse_their_fence_unsignalled() -> None:
     """Device.take_fence / give_fence: an upload's fence is reset and kept for the next (no
     vkCreateFence a submission: ~0.5 ms each on NVIDIA), and one taken is never signalled

@@ -8,8 +8,8 @@ swap, 30 of a small model's 77 ms), where lavapipe's are nearly free. Here a fre
 allocation of up to MAX_RECYCLED bytes is not freed but kept (mapped, where it was, for
 host-visible buffers), and an allocation asks first for a kept one of its memory type and
 size class: sizes rounded up to quarter octaves (at most 19% more memory than asked), so that
-a next scene's buffers of other sizes still fit. At most KEPT_BYTES wait at once (the oldest
-freed first beyond that); `clear` frees them all (the device's close, and an allocation the
+a next scene's buffers of other sizes still fit. At most KEPT_BYTES wait at once (beyond
+that the oldest are freed, memory the host cannot see before mapped memory: `_drop_oldest`); `clear` frees them all (the device's close, and an allocation the
 driver refuses, which is then asked again).
 
 Memory is bound at offset 0 of an allocation at least as large as asked and aligned as any
@@ -120,7 +120,14 @@ class MemoryRecycler:
                 self._drop_oldest()
 
     def _drop_oldest(self) -> None:
-        _, (key, alloc) = self._kept.popitem(last=False)
+        """Free the oldest kept allocation that is not mapped, else the oldest: mapped
+        (host-visible) memory is what drivers take longest to make (NVIDIA pins its pages:
+        ~10 ms for an upload's 64 MiB staging buffer on the H200, run g), and a scene change
+        frees far more device-local memory (its textures) than the limit, which had pushed
+        the staging buffers out before the next scene's upload."""
+        oldest = next((k for k, (key, _) in self._kept.items() if not key[2]),
+                      next(iter(self._kept)))
+        key, alloc = self._kept.pop(oldest)
         self._by_key[key].remove(alloc)
         self.kept_bytes -= alloc.size
         self._free(alloc)
