@@ -9,8 +9,9 @@ allocation of up to MAX_RECYCLED bytes is not freed but kept (mapped, where it w
 host-visible buffers), and an allocation asks first for a kept one of its memory type and
 size class: sizes rounded up to quarter octaves (at most 19% more memory than asked), so that
 a next scene's buffers of other sizes still fit. At most KEPT_BYTES wait at once (beyond
-that the oldest are freed, memory the host cannot see before mapped memory: `_drop_oldest`); `clear` frees them all (the device's close, and an allocation the
-driver refuses, which is then asked again).
+that the oldest are freed, memory the host cannot see before mapped memory: `_drop_oldest`);
+`clear` frees them all (the device's close, and an allocation the driver refuses, which is
+then asked again).
 
 Memory is bound at offset 0 of an allocation at least as large as asked and aligned as any
 allocation is, so a reused allocation is valid for the next buffer or image as a new one

@@ -25,9 +25,10 @@ Depth bias: slope-scaled in the pipelines (`DEPTH_BIAS`), normal offset in shade
 Drawn by compute shaders instead (`compute`, render/shadow_raster.py), the maps are that
 rasteriser's depth buffer (`read_maps` reads it). Where the shading reads them is chosen a
 frame at a time (`stale`, `reads_buffer`): a frame that redraws every layer for moved
-casters (or after a frame that redrew them all) reads the buffer by hand (set 3's ShadowDepths, named in ShadowData's
-header: world_layout z bit 0, w = where its cubes start), no copy; a frame that redraws some
-or none (a still scene, a walking camera's nearest cascade) copies the redrawn layers into
+casters (or after a frame that redrew them all) reads the buffer by hand (set 3's
+ShadowDepths, named in ShadowData's header: world_layout z bit 0, w = where its cubes start),
+no copy; a frame that redraws some or none (a still scene, a walking camera's nearest
+cascade, a lone frame whose cascades all crossed their grid) copies the redrawn layers into
 the images and compares in hardware (on the H200: copying Sponza's 4 x 2048^2 texels costs
 0.73 ms, reading them by hand ~0.04-0.07 ms of every frame's shading). The images catch up
 when the frames leave the buffer (every layer redrawn and copied once). One cache (`stale`)
