@@ -508,13 +508,16 @@ def _copy_image(cmd: Any, image: Image, resources: dict[str, Any], extent: tuple
 
 
 def prepare_ao(ao: AoImages, recorder: Any, options: RenderOptions, target: Any,
-               scene_radius: float, output: bool, tile: tuple[int, int] | None = None
+               bounds: Any, output: bool, tile: tuple[int, int] | None = None
                ) -> AoSpec | None:
     """The ambient occlusion of a frame into `target` (ao_spec), with the images fitted to
     its size (`tile`: a compute batch's views' tile size, which the depth MIPs' blocks
     follow): rare (a new size), so the device is waited for and the recordings that name
-    the old images are dropped."""
-    spec = ao_spec(options, target, scene_radius, output)
+    the old images are dropped. `bounds`: the scene's (render/frames.py Bounds or
+    render/scene_state.py LiveBounds); the automatic radius is taken from its radius as
+    loaded, `rest_radius`: the spec is recorded into the frame's commands, and an animated
+    scene's moving bounds had re-recorded them every frame."""
+    spec = ao_spec(options, target, bounds.rest_radius, output)
     layers = getattr(target, "layers", 1)  # (a layered batch's)
     if spec is not None and ao.stale(target.extent, layers, tile):
         ao.device.wait_idle()

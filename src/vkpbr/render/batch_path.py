@@ -201,7 +201,7 @@ class BatchPath:
         # Post steps (render/post.py batch_post: colour noise, bloom, a lens): drawn into an
         # HDR atlas.
         post = batch_post(p, opts, views, size, grid, target, copy, linear)
-        ao = prepare_ao(p.ao, p.recorder, opts, post.drawn or target, p.bounds.rest_radius, False,
+        ao = prepare_ao(p.ao, p.recorder, opts, post.drawn or target, p.bounds, False,
                         post.size)
         shading_ao = ao is not None and ao.shading
         order = self._order(cuda)
@@ -320,7 +320,7 @@ class BatchPath:
         target = self._target(size, layers, n, linear, depth, cuda)
         self._t_start = time.perf_counter()
         bv = self._views(n, layers)
-        ao = prepare_ao(p.ao, p.recorder, opts, target, p.bounds.rest_radius, False)
+        ao = prepare_ao(p.ao, p.recorder, opts, target, p.bounds, False)
         frame, plan, terms = self._begin(views, size, lights, opts, linear,
                                          ao=ao is not None and ao.shading, start=start)
         groups = bv.write_blend_groups(p.blend.orders(views.eye))

@@ -119,7 +119,7 @@ class FramePath:
             check_lens(camera, target, p.device.compute_path)
             post = True
         drawn = p.targets.post(target, copy, extent) if post else target  # (HDR with post steps)
-        ao = prepare_ao(p.ao, p.recorder, options, drawn, p.bounds.rest_radius, COPY_OUTPUTS in copy)
+        ao = prepare_ao(p.ao, p.recorder, options, drawn, p.bounds, COPY_OUTPUTS in copy)
         # The camera's maths, once: the shadow cascades take its planes from the slot.
         write_frame_view(slot, view, extent, p.bounds)
         p.gpu_state.write_motion(slot.index, slot.vp, COPY_OUTPUTS in copy)

@@ -200,9 +200,8 @@ class LiveBounds:
     def __init__(self, state: SceneState, initial: Bounds) -> None:
         self.state = state
         self._bounds, self._version = initial, 0
-        # The bounds' radius as the scene was loaded: what a scale that must not follow the
-        # state frame by frame reads (render/ao.py's automatic radius: a value recorded into
-        # the frame's commands, which an animated scene's moving bounds re-recorded each frame).
+        # The bounds' radius as the scene was loaded: for a scale that must not follow the
+        # state frame by frame (render/ao.py prepare_ao's automatic radius).
         self.rest_radius = initial.radius
 
     @property

@@ -227,16 +227,10 @@ class ShadowMaps:
         self.world_stand_in = self._own(Buffer(device, 16, "storage", name="shadow depths stand-in"))
         self.world_depths: Buffer = self.world_stand_in
         self.frame_depths: Buffer = self.world_stand_in
-        self._reset_reads()
+        # Compute-drawn maps read from their buffer this frame (else the images; `stale`), the
+        # frames in a row that redrew fewer than every layer, whether the last redrew them all.
+        self.reads_buffer, self._partial_frames, self._last_whole = False, 0, False
         self.ensure(ShadowPlan())
-
-    def _reset_reads(self) -> None:
-        # Compute-drawn maps read from their buffer this frame (else the images; `stale`);
-        # the frames in a row that redrew fewer than every layer; whether `_stale`'s frame
-        # redrew a layer for its casters (or unknown contents), not only for a new matrix;
-        # whether the frame before redrew every layer.
-        self.reads_buffer, self._partial_frames = False, 0
-        self._casters_moved, self._last_whole = False, False
 
     def _own(self, obj: Any) -> Any:
         self._objects.append(obj)
@@ -442,11 +436,11 @@ class ShadowMaps:
               ) -> tuple[range, ...]:
         """Which layers of each of `plan`'s entries frame `slot` must draw (`_stale`); with
         compute-drawn maps, also where its shading reads them (`_choose_reads`)."""
-        redraw = self._stale(slot, plan, alpha_mask, casters)
-        return self._choose_reads(slot, plan, redraw) if self.compute else redraw
+        redraw, casters_moved = self._stale(slot, plan, alpha_mask, casters)
+        return self._choose_reads(slot, plan, redraw, casters_moved) if self.compute else redraw
 
-    def _choose_reads(self, slot: int, plan: ShadowPlan, redraw: tuple[range, ...]
-                      ) -> tuple[range, ...]:
+    def _choose_reads(self, slot: int, plan: ShadowPlan, redraw: tuple[range, ...],
+                      casters_moved: bool) -> tuple[range, ...]:
         """`reads_buffer` for frame `slot` (its ShadowData header's bit 0 set to match): a
         frame that redraws every layer for moved casters (or maps of unknown contents), or
         after a frame that did too, reads the buffer (a copy would cost more than the by-hand
@@ -459,7 +453,7 @@ class ShadowMaps:
         (on the H200, Sponza's 4 sun cascades: ~2.9 ms for that frame)."""
         whole = tuple(range(6) if e.kind == "point" else range(e.count) for e in plan.entries)
         is_whole = bool(plan.entries) and redraw == whole
-        buffer = is_whole and (self._casters_moved or self._last_whole)
+        buffer = is_whole and (casters_moved or self._last_whole)
         self._last_whole = is_whole
         if buffer:
             self._partial_frames, reads = 0, True
@@ -475,10 +469,11 @@ class ShadowMaps:
         return redraw
 
     def _stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool, casters: int = 0
-               ) -> tuple[range, ...]:
+               ) -> tuple[tuple[range, ...], bool]:
         """Which layers of each of `plan`'s entries frame `slot` must draw (a range of the
         entry's layers, empty for none): the span of those that hold other matrices (as
-        `write` left them for the slot) or other casters. A walking camera usually changes
+        `write` left them for the slot) or other casters; and whether any is redrawn for its
+        casters or unknown contents (not for a new matrix alone: `_choose_reads`). A walking camera usually changes
         only its nearest cascade (shadow_math's snapping grid). Marks them drawn: the frame's
         commands draw them and submissions run in order (`forget` if it is not submitted)."""
         mats = self._views[slot][HEADER_FLOATS:].reshape(MATRICES, 16)
@@ -489,10 +484,9 @@ class ShadowMaps:
         last = self._last_stale
         if last is not None and last[2] is plan and last[1] == key[1] and last[0] == key[0]:
             self.last_redrawn_layers = tuple((e.kind, 0) for e in plan.entries)
-            self._casters_moved = False
-            return tuple(range(0) for _ in plan.entries)
+            return tuple(range(0) for _ in plan.entries), False
         self._last_stale = key
-        self._casters_moved = False
+        casters_moved = False
         out = []
         for e in plan.entries:
             image = "cubes" if e.kind == "point" else "maps"
@@ -507,12 +501,12 @@ class ShadowMaps:
                 before = self._drawn.get(where)
                 if before != held:
                     changed.append(i)
-                    self._casters_moved |= before is None or before[1:] != held[1:]
+                    casters_moved |= before is None or before[1:] != held[1:]
                 self._drawn[where] = held
             out.append(range(0) if not changed else
                        range(0, 6) if e.kind == "point" else range(changed[0], changed[-1] + 1))
         self.last_redrawn_layers = tuple((e.kind, len(r)) for e, r in zip(plan.entries, out, strict=True))
-        return tuple(out)
+        return tuple(out), casters_moved
 
     @property
     def hand_reads(self) -> bool:
