@@ -194,7 +194,7 @@ def print_load_table(scene: Path, size: tuple[int, int], rows: list[dict], seria
         print(f"| {r['row']} | " + " | ".join("-" if v is None else f"{v:.3f}" for v in cells) + " |")
 
 
-_DEVICE_PARTS = ("instance", "choice", "device", "pipeline_cache")
+_DEVICE_PARTS = ("binding", "instance", "choice", "device", "pipeline_cache")
 _UPLOAD_PARTS = ("create", "copy", "record", "wait")
 
 

@@ -9,6 +9,11 @@ Runs the job once (cold bake cache, not profiled), then again warm (profiled whe
 the main thread's calls, sorted by cumulative and by own time), then each model's items on a
 warm actor (bench_load.one_scene_rates). Prints the warm job's views/s, the one-scene rate
 and the overhead per scene: (warm job seconds - one-scene seconds) / scenes.
+
+`--phases`: the warm job's main thread by phase instead of cProfile (whose accounting of
+the job's other threads misleads): wall-clock ms per scene inside each wrapped function
+(nested phases indented, counted in their parents too), and the rest of an item (its
+files' encoding waited for, the manifest) by difference.
 """
 
 from __future__ import annotations
@@ -32,6 +37,55 @@ DEFAULT = ("DamagedHelmet", "CesiumMilkTruck", "BoxAnimated", "MetalRoughSpheres
            "CesiumMan", "2CylinderEngine")
 
 
+# (depth, label, module, owner, attribute): the job's main thread, as Timers takes them
+JOB_PHASES: tuple[tuple[int, str, str, str, str], ...] = (
+    (0, "an item (RendererActor.render)", "vkpbr.distributed.actor", "RendererActor", "render"),
+    (1, "its scene (_renderer_for)", "vkpbr.distributed.actor", "RendererActor", "_renderer_for"),
+    (2, "the scene loaded ahead, waited for (_scene)", "vkpbr.distributed.actor", "RendererActor",
+     "_scene"),
+    (2, "set_scene", "vkpbr.render.renderer", "Renderer", "set_scene"),
+    (3, "textures' upload (_upload_textures)", "vkpbr.render.gpu_scene", "GpuScene",
+     "_upload_textures"),
+    (1, "next scene's load started (prefetch)", "vkpbr.distributed.actor", "RendererActor",
+     "prefetch"),
+    # (render_many's frames come from a generator: its phases are the item's own)
+    (1, "pipelines built (build_pipelines)", "vkpbr.render.recorder", "FrameRecorder",
+     "build_pipelines"),
+    (1, "commands recorded (command_buffer)", "vkpbr.render.recorder", "FrameRecorder",
+     "command_buffer"),
+    (1, "GPU waits (Frame.wait)", "vkpbr.gpu.frames", "Frame", "wait"),
+    (1, "readback (read_tiles)", "vkpbr.gpu.target", "OffscreenTarget", "read_tiles"),
+    (1, "pipeline cache saved (PipelineCache.save)", "vkpbr.gpu.pipeline_cache",
+     "PipelineCache", "save"),
+    (0, "manifest (driver._record)", "vkpbr.distributed.driver", "", "_record"),
+)
+
+
+def phase_timers() -> object:
+    """profile_worlds_step.Timers over JOB_PHASES, main thread only, switched on."""
+    from profile_worlds_step import Timers
+
+    timers = Timers(JOB_PHASES, main_only=True)
+    timers.install()
+    timers.on = True
+    return timers
+
+
+def print_phases(timers: object, wall: float, scenes: int) -> None:
+    print(f"\n| warm job, main thread | ms a scene | calls |  (wall {wall:.2f} s, {scenes} scenes)")
+    print("|---|---:|---:|")
+    for depth, label in timers.found:  # type: ignore[attr-defined]
+        total = timers.total.get(label, 0.0)  # type: ignore[attr-defined]
+        calls = timers.calls.get(label, 0)  # type: ignore[attr-defined]
+        print(f"| {'&nbsp;&nbsp;' * depth}{label} | {total / scenes * 1e3:.1f} | {calls} |")
+    items = timers.total.get(JOB_PHASES[0][1], 0.0)  # type: ignore[attr-defined]
+    inner = sum(timers.total.get(label, 0.0) for depth, label in timers.found  # type: ignore[attr-defined]
+                if depth == 1)
+    print(f"| &nbsp;&nbsp;the rest of the items (their files' encoding waited for, other Python) | "
+          f"{(items - inner) / scenes * 1e3:.1f} | |")
+    print(f"| outside items (the driver, manifests, folders) | {(wall - items) / scenes * 1e3:.1f} | |")
+
+
 def main() -> None:
     from assets_path import ASSETS
 
@@ -43,6 +97,8 @@ def main() -> None:
     p.add_argument("--size", default="32x32")
     p.add_argument("--profile", type=Path)
     p.add_argument("--top", type=int, default=50)
+    p.add_argument("--phases", action="store_true",
+                   help="time the warm job's main thread by phase (no cProfile)")
     a = p.parse_args()
     from bench_load import job_doc, one_scene_rates, run_job
 
@@ -53,9 +109,13 @@ def main() -> None:
         doc = job_doc(models, a.scenes, a.views, a.size, work / "out")
         cold = run_job(doc, "in-process job (cold bake cache)")
         prof = cProfile.Profile() if a.profile else None
+        timers = phase_timers() if a.phases else None
         t = time.perf_counter()
-        warm = prof.runcall(run_job, doc, "in-process job (warm)") if prof else run_job(doc, "warm")
+        warm = prof.runcall(run_job, doc, "in-process job (warm)") if prof else run_job(
+            doc, "in-process job (warm)")
         wall = time.perf_counter() - t
+        if timers is not None:
+            timers.on = False
         rates = one_scene_rates(doc, work / "one")
     finally:
         shutil.rmtree(work, ignore_errors=True)
@@ -71,6 +131,8 @@ def main() -> None:
               f"{rate * ideal / (a.views * a.scenes):.0%} | "
               f"{(r['seconds'] - ideal) / a.scenes * 1e3:.0f} |")
     print("per model views/s: " + ", ".join(f"{Path(k).stem} {v:.0f}" for k, v in rates.items()))
+    if timers is not None:
+        print_phases(timers, wall, a.scenes)
     if prof is not None:
         text = io.StringIO()
         st = pstats.Stats(prof, stream=text)

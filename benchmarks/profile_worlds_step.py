@@ -31,6 +31,7 @@ import importlib
 import pstats
 import statistics
 import sys
+import threading
 import time
 import warnings
 from collections.abc import Callable
@@ -111,9 +112,14 @@ MODELS = {"helmet": "DamagedHelmet/glTF/DamagedHelmet.gltf",
 
 class Timers:
     """Wraps each phase's function with a timer: total seconds and calls per label, while
-    `on`. A function calling itself (or a phase nested in itself) is counted once."""
+    `on`. A function calling itself (or a phase nested in itself) is counted once. `phases`:
+    (depth, label, module, owner, attribute) rows (default: a worlds step's); `main_only`:
+    calls on other threads are not counted."""
 
-    def __init__(self) -> None:
+    def __init__(self, phases: tuple[tuple[int, str, str, str, str], ...] = PHASES,
+                 main_only: bool = False) -> None:
+        self.phases = phases
+        self.main = threading.get_ident() if main_only else None
         self.total: dict[str, float] = {}
         self.cpu: dict[str, float] = {}  # the thread's CPU time (time.thread_time) inside
         self.calls: dict[str, int] = {}
@@ -122,7 +128,7 @@ class Timers:
 
     def install(self, only: tuple[str, ...] | None = None) -> None:
         """Wrap every phase's function (`only`: just those labels)."""
-        for depth, label, module, owner, attr in PHASES:
+        for depth, label, module, owner, attr in self.phases:
             if only is not None and label not in only:
                 continue
             try:
@@ -144,7 +150,8 @@ class Timers:
         inside = [0]
 
         def timed(*args: Any, **kwargs: Any) -> Any:
-            if not self.on or inside[0]:
+            if not self.on or inside[0] or (self.main is not None
+                                            and threading.get_ident() != self.main):
                 return fn(*args, **kwargs)
             inside[0] += 1
             t, c = time.perf_counter(), time.thread_time()

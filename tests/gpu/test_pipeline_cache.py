@@ -37,7 +37,8 @@ def _build_one(device: Device) -> None:
 def _cache(tmp_path: Path, salt: str = "shaders-a") -> tuple[Device, PipelineCache]:
     device = Device(validation=True)
     device.pipeline_cache = PipelineCache(device, tmp_path, salt)
-    return device, device.pipeline_cache
+    assert device.pipeline_cache.handle is not None  # (its file opens on a thread: waited for,
+    return device, device.pipeline_cache              # as the first pipeline's build waits)
 
 
 def _saved(tmp_path: Path, salt: str = "shaders-a") -> Path:
@@ -161,3 +162,15 @@ def test_unwritable_folder_is_a_warning(tmp_path: Path, caplog: pytest.LogCaptur
             device.close()
     assert any("not written" in r.getMessage() for r in caplog.records)
     assert np.all([not p.name.startswith(FILE_PREFIX) for p in tmp_path.iterdir()])
+
+
+def test_device_closed_while_its_cache_file_opens(tmp_path: Path) -> None:
+    """The cache's file opens on a thread: a device closed before anything asked for the
+    cache waits for it, destroys it, and leaves the file as it was (nothing was built)."""
+    path = _saved(tmp_path)
+    before = path.read_bytes()
+    for _ in range(3):
+        device = Device(validation=True)
+        device.pipeline_cache = PipelineCache(device, tmp_path, "shaders-a")
+        device.close()  # validation: no leaked VkPipelineCache, no call after the device's end
+    assert path.read_bytes() == before

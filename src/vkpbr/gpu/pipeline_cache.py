@@ -74,15 +74,57 @@ class PipelineCache(DeviceObject):
                                              ).hexdigest()[:12]
         self.path = (Path(folder) / f"{FILE_PREFIX}{self._device_digest}-{self._key.hex()[:12]}.bin"
                      if folder is not None else None)
-        initial = self._read() if self.path is not None else b""
-        self.loaded_bytes = len(initial)  # the driver's data given back to it (0: none)
-        vk = device.vk
-        blob = vk.ffi.from_buffer(initial) if initial else vk.ffi.NULL
-        self.handle = vk.vkCreatePipelineCache(device.handle, vk.VkPipelineCacheCreateInfo(
-            initialDataSize=len(initial), pInitialData=blob), None)
-        device.track(self)
-        self._saved = initial
+        self._handle: Any = None
+        self._loaded_bytes = 0
+        self._saved = b""
         self._built_at_save = 0
+        self._failure: BaseException | None = None
+        device.track(self)
+        # A file of many pipelines takes the NVIDIA driver a quarter of a second to read
+        # back (H200: 0.24 s of Sponza's warm start), and nothing needs it before the first
+        # pipeline is built: open it on a thread (the file's read, its checksum and
+        # vkCreatePipelineCache all let go of the GIL) while the scene uploads; `handle`
+        # waits for it.
+        self._opening: threading.Thread | None = threading.Thread(
+            target=self._open, name="vkpbr-pipeline-cache", daemon=True)
+        self._opening.start()
+
+    def _open(self) -> None:
+        try:
+            initial = self._read() if self.path is not None else b""
+            vk = self.device.vk
+            blob = vk.ffi.from_buffer(initial) if initial else vk.ffi.NULL
+            self._handle = vk.vkCreatePipelineCache(self.device.handle, vk.VkPipelineCacheCreateInfo(
+                initialDataSize=len(initial), pInitialData=blob), None)
+            self._loaded_bytes = len(initial)
+            self._saved = initial
+        except BaseException as exc:  # noqa: BLE001 - raised where the handle is asked for
+            self._failure = exc
+
+    def _wait_opened(self) -> None:
+        opening = self._opening
+        if opening is not None:
+            opening.join()
+            self._opening = None
+        if self._failure is not None:
+            failure, self._failure = self._failure, None
+            raise failure
+
+    @property
+    def handle(self) -> Any:  # type: ignore[override]
+        """The VkPipelineCache (waits for its file's opening)."""
+        self._wait_opened()
+        return self._handle
+
+    @handle.setter
+    def handle(self, value: Any) -> None:
+        self._handle = value
+
+    @property
+    def loaded_bytes(self) -> int:
+        """The driver's data given back to it from the file (0: none)."""
+        self._wait_opened()
+        return self._loaded_bytes
 
     # --- the file -------------------------------------------------------------------------
     def _read(self) -> bytes:
@@ -157,7 +199,13 @@ class PipelineCache(DeviceObject):
                 old.unlink(missing_ok=True)
 
     def destroy(self) -> None:
-        """Save (when it grew), then destroy the VkPipelineCache."""
+        """Save (when it grew), then destroy the VkPipelineCache (one that failed to open
+        has nothing to destroy: its error was for the pipelines that needed it)."""
+        try:
+            self._wait_opened()
+        except Exception:  # noqa: BLE001
+            self.device.untrack(self)
+            return
         if self.handle is not None:
             self.save()
         super().destroy()
