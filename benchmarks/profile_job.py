@@ -74,15 +74,17 @@ def phase_timers() -> object:
 def print_phases(timers: object, wall: float, scenes: int) -> None:
     print(f"\n| warm job, main thread | ms a scene | calls |  (wall {wall:.2f} s, {scenes} scenes)")
     print("|---|---:|---:|")
-    for depth, label in timers.found:  # type: ignore[attr-defined]
-        total = timers.total.get(label, 0.0)  # type: ignore[attr-defined]
-        calls = timers.calls.get(label, 0)  # type: ignore[attr-defined]
-        print(f"| {'&nbsp;&nbsp;' * depth}{label} | {total / scenes * 1e3:.1f} | {calls} |")
     items = timers.total.get(JOB_PHASES[0][1], 0.0)  # type: ignore[attr-defined]
     inner = sum(timers.total.get(label, 0.0) for depth, label in timers.found  # type: ignore[attr-defined]
                 if depth == 1)
-    print(f"| &nbsp;&nbsp;the rest of the items (their files' encoding waited for, other Python) | "
-          f"{(items - inner) / scenes * 1e3:.1f} | |")
+    rest = (f"| &nbsp;&nbsp;the rest of the items (their files' encoding waited for, other "
+            f"Python) | {(items - inner) / scenes * 1e3:.1f} | |")
+    for i, (depth, label) in enumerate(timers.found):  # type: ignore[attr-defined]
+        if depth == 0 and i:  # the item's own rows end here
+            print(rest)
+        total = timers.total.get(label, 0.0)  # type: ignore[attr-defined]
+        calls = timers.calls.get(label, 0)  # type: ignore[attr-defined]
+        print(f"| {'&nbsp;&nbsp;' * depth}{label} | {total / scenes * 1e3:.1f} | {calls} |")
     print(f"| outside items (the driver, manifests, folders) | {(wall - items) / scenes * 1e3:.1f} | |")
 
 

@@ -140,6 +140,39 @@ def test_next_scene_loads_ahead(tmp_path: Path, scenes: dict, reference: dict) -
     check_against(reference, tmp_path)
 
 
+def test_scene_changes_while_the_files_encode(tmp_path: Path, scenes: dict,
+                                             reference: dict) -> None:
+    """`switch` (the in-process driver's: the next item is of the scene loaded ahead): the
+    renderer changes scene inside the item's call, once its views are rendered, and the next
+    item starts on it; a next scene that does not load leaves this item whole and fails its
+    own item with one line."""
+    job = job_from_doc(job_doc(tmp_path, scenes), base=tmp_path)
+    items = job.items()
+    actor = RendererActor()
+    try:
+        for n, item in enumerate(items):
+            key = item.settings.scene_key()
+            ahead = next((i.settings for i in items[n + 1:] if i.settings.scene_key() != key), None)
+            switch = n + 1 < len(items) and items[n + 1].settings is ahead
+            after = items[n + 1].settings.scene_key() if switch else None
+            later = next((i.settings for i in items[n + 2:] if i.settings.scene_key() != after),
+                         None) if switch else None
+            (tmp_path / job.scenes[item.entry].settings.out.name).mkdir(exist_ok=True)
+            res = actor.render(item, ahead, switch, later)
+            assert res["ok"] == (item.entry != 3), res
+            if item.entry == 3:
+                assert "broken.gltf" in res["error"] and "\n" not in res["error"]
+            if switch and job.scenes[items[n + 1].entry].settings.scene is not None \
+                    and items[n + 1].entry != 3:
+                assert actor._key == ahead.scene_key()  # changed before this call returned
+                assert res["ok"] and all((tmp_path / job.scenes[item.entry].settings.out.name / f)
+                                         .is_file() for f in res["files"])
+    finally:
+        actor.close()
+    assert actor.loads == {"now": 1, "ahead": 4}
+    check_against(reference, tmp_path)
+
+
 def test_stopped_job_resumes(tmp_path: Path, scenes: dict, reference: dict,
                             capsys: pytest.CaptureFixture) -> None:
     doc = job_doc(tmp_path, scenes)

@@ -29,6 +29,9 @@ __all__ = ["RendererActor", "render_views", "load_renderer", "load_scene_for", "
 
 log = logging.getLogger(__name__)
 
+# Threads that encode an actor's files (PNG, EXR): half the cores, 2 to 8
+ENCODERS = min(8, max(2, (os.cpu_count() or 2) // 2))
+
 
 def render_views(renderer: Any, cameras: list[Any], lights: Any, settings: RenderSettings,
                  worlds: ItemWorlds | None = None, where: str = "worlds",
@@ -226,7 +229,9 @@ class RendererActor:
         self._renderer: Any = None
         self._renderer_args: tuple | None = None  # (msaa, semantics) it was made with
         self._bad_scenes: dict[tuple, str] = {}  # scene key -> why it cannot load
-        self._pool = ThreadPoolExecutor(2)  # encoding overlaps the next views' rendering
+        # Encoding overlaps the next views' rendering, and on a machine of many cores it is
+        # the slowest part of a small view's life (a 256x256 PNG: ~5 ms of a core)
+        self._pool = ThreadPoolExecutor(ENCODERS, thread_name_prefix="vkpbr-encode")
         self._loader = ThreadPoolExecutor(1, thread_name_prefix="vkpbr-next-scene")
         self._ahead: tuple[tuple, Future] | None = None  # (scene key, its load)
         self.loads = {"ahead": 0, "now": 0}  # scenes loaded on the thread / when needed
@@ -290,15 +295,20 @@ class RendererActor:
         self._key = key
         return self._renderer
 
-    def render(self, item: WorkItem, ahead: RenderSettings | None = None) -> dict[str, object]:
+    def render(self, item: WorkItem, ahead: RenderSettings | None = None,
+               switch: bool = False, later: RenderSettings | None = None) -> dict[str, object]:
         """Render and write `item`'s views; `ahead`: the settings of the scene expected next,
-        loaded on the prefetch thread meanwhile. Returns {"ok": True, "views", "files",
-        "cameras", "seconds", "pid"}, or {"ok": False, "error": one line, "retry": bool}:
-        an error in the input (a scene that does not load, a bad option) fails the same
-        way everywhere and is not retried."""
+        loaded on the prefetch thread meanwhile; `switch`: the next item is of that scene, so
+        the renderer changes to it while this item's files are encoded (the swap and the
+        encoding overlap; a scene that fails to load then is this actor's known bad scene,
+        reported by the next item), and `later`'s scene (the one after it) starts loading
+        then, a whole item ahead of its use. Returns {"ok": True, "views", "files", "cameras",
+        "seconds", "pid"}, or {"ok": False, "error": one line, "retry": bool}: an error in
+        the input (a scene that does not load, a bad option) fails the same way everywhere
+        and is not retried."""
         t0 = time.perf_counter()
         try:
-            return self._render(item, t0, ahead)
+            return self._render(item, t0, ahead, switch, later)
         except (SceneError, UsageError) as exc:
             if ahead is not None:  # this scene failed: the next one still loads meanwhile
                 self.prefetch(ahead)
@@ -308,8 +318,8 @@ class RendererActor:
             self.close()  # a device error may leave the Renderer unusable: start afresh
             return {"ok": False, "error": _one_line(exc), "retry": True, "pid": os.getpid()}
 
-    def _render(self, item: WorkItem, t0: float, ahead: RenderSettings | None
-                ) -> dict[str, object]:
+    def _render(self, item: WorkItem, t0: float, ahead: RenderSettings | None,
+                switch: bool = False, later: RenderSettings | None = None) -> dict[str, object]:
         from vkpbr.io import check_id_count, output_kind, output_path, write_output
 
         settings = item.settings
@@ -341,6 +351,10 @@ class RendererActor:
                 writes.append(self._pool.submit(write_output, out / file, frame[name],
                                                 output_kind(name), "outputs"))
             files += names
+        if switch and ahead is not None:
+            self._switch_to(ahead)
+            if later is not None:
+                self.prefetch(later)
         for w in writes:
             w.result()
         cache = getattr(renderer.device, "pipeline_cache", None)
@@ -350,6 +364,24 @@ class RendererActor:
         return {"ok": True, "views": list(item.frames), "files": files, "sizes": sizes,
                 "cameras": [camera_record(c) for c in cameras], "pid": os.getpid(),
                 "load_s": t_load - t0, "seconds": time.perf_counter() - t0}
+
+    def _switch_to(self, settings: RenderSettings) -> None:
+        """Change the renderer's scene to `settings`' now (its load ahead waited for), when
+        the renderer is kept for it (`set_scene`: the same msaa and semantics). A scene that
+        fails to load is recorded as bad (`_renderer_for`) for the next item to report; any
+        other failure leaves the next item to make its renderer afresh and try again."""
+        same = self._renderer is not None and self._renderer_args == (settings.msaa,
+                                                                      settings.semantics)
+        if not same or settings.scene_key() in self._bad_scenes:
+            return
+        try:
+            self._renderer_for(settings)
+        except (SceneError, UsageError):
+            pass  # kept in _bad_scenes: the next item's one line
+        except Exception:  # noqa: BLE001 - this item's views are done: the next one retries
+            log.warning("changing to the next scene (%s) failed; it is tried again for its item",
+                        settings.scene, exc_info=True)
+            self.close()
 
     def close(self) -> None:
         if self._renderer is not None:

@@ -284,9 +284,15 @@ def _run_here(job: Job, items: list[WorkItem], manifests: list[Manifest], result
                disable=None if progress is None else not progress, desc="vkpbr")
     t0 = time.perf_counter()
     try:
-        for item, ahead in zip(items, _scenes_after(items), strict=True):
+        aheads = _scenes_after(items)
+        for n, (item, ahead) in enumerate(zip(items, aheads, strict=True)):
+            # the next item is of another scene: the renderer changes to it during this
+            # item's encoding (an item tried again finds its scene already there), and the
+            # scene after that starts loading then
+            switch = n + 1 < len(items) and items[n + 1].settings is ahead
+            later = aheads[n + 1] if switch else None
             for attempt in range(1, job.retries + 2):
-                res = actor.render(item, ahead)
+                res = actor.render(item, ahead, switch, later)
                 if on_result is not None:
                     on_result(item, res)
                 if res.get("ok") or not res.get("retry") or attempt > job.retries:
