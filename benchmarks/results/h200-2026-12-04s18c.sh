@@ -8,6 +8,7 @@ A=$PWD/.assets-final/models
 export VKPBR_ASSETS=$A
 rows() { grep -E "^\||per model" | grep -v "^|---"; }
 echo "== job, this tree"; timeout 150 python3 benchmarks/bench_load.py --models $A --no-load --scenes 100 --views 16 2>&1 | rows
+cp -r src/vkpbr/shaders .before1/src/vkpbr/  # (unchanged since df46ebc; not carried twice)
 echo "== job, df46ebc"; PYTHONPATH=/tmp/site:$PWD/.before1/src timeout 150 python3 benchmarks/bench_load.py --models $A --no-load --scenes 100 --views 16 2>&1 | rows
 echo "== job phases"
 timeout 120 python3 benchmarks/profile_job.py --models $A --names DamagedHelmet,CesiumMilkTruck,BoxAnimated,MetalRoughSpheresNoTextures,CesiumMan,2CylinderEngine,Sponza \
