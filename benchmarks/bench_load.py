@@ -300,7 +300,9 @@ def job_table(args: argparse.Namespace) -> list[dict]:
     rows = []
     try:
         doc = job_doc(models, args.scenes, args.views, args.job_size, work / "out")
-        runs = ["in-process job (cold bake cache)", "in-process job (warm)", "no load ahead"]
+        named = {"cold": "in-process job (cold bake cache)", "warm": "in-process job (warm)",
+                 "sequential": "no load ahead"}
+        runs = [named[r] for r in args.job_runs.split(",") if r]
         for how in runs + (["Ray, 1 actor"] if args.ray else []):
             try:
                 rows.append({"run": how, **run_job(doc, how)})
@@ -343,6 +345,13 @@ def main() -> None:
                    help="also write each row's cProfile (top 60 by cumulative time) into DIR")
     p.add_argument("--serial", action="store_true",
                    help="load the scene, then make the device (as before vkpbr.bake.ahead)")
+    p.add_argument("--job-runs", default="cold,warm,sequential",
+                   help="the job's rows besides one scene: cold, warm, sequential (no load ahead)")
+    p.add_argument("--encoders", type=int,
+                   help="the actor's encoding threads (default: vkpbr's, distributed/actor.py)")
+    p.add_argument("--no-switch", action="store_true",
+                   help="the actor changes scene at the next item's start, not while the last "
+                   "item's files encode (as before session 18)")
     p.add_argument("--child", help=argparse.SUPPRESS)
     p.add_argument("--cached", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args()
@@ -367,6 +376,12 @@ def main() -> None:
         out["load"] = load_table(args.scene, size, args.profile, args.serial)
         print_load_table(args.scene, size, out["load"], args.serial)
     if not args.no_job:
+        from vkpbr.distributed import actor
+
+        if args.encoders:
+            actor.ENCODERS = args.encoders
+        if args.no_switch:
+            actor.RendererActor._change_early = lambda self, ahead, later: None
         out["job"] = job_table(args)
     if args.json:
         args.json.write_text(json.dumps(out, indent=1, default=str))

@@ -61,17 +61,30 @@ JOB_PHASES: tuple[tuple[int, str, str, str, str], ...] = (
 )
 
 
-def phase_timers() -> object:
-    """profile_worlds_step.Timers over JOB_PHASES, main thread only, switched on."""
+# The loads ahead, on the actor's loader thread
+LOADER_PHASES: tuple[tuple[int, str, str, str, str], ...] = (
+    (0, "a scene's load ahead (RendererActor._load)", "vkpbr.distributed.actor", "RendererActor",
+     "_load"),
+    (1, "read (load_scene_for: the bake cache's file, or a bake)", "vkpbr.distributed.actor", "",
+     "load_scene_for"),
+    (1, "textures decoded (predecode)", "vkpbr.distributed.actor", "", "predecode"),
+)
+
+
+def phase_timers() -> tuple[object, object]:
+    """profile_worlds_step.Timers over JOB_PHASES (main thread only) and LOADER_PHASES (any
+    thread), switched on."""
     from profile_worlds_step import Timers
 
-    timers = Timers(JOB_PHASES, main_only=True)
-    timers.install()
-    timers.on = True
+    timers = Timers(JOB_PHASES, main_only=True), Timers(LOADER_PHASES)
+    for t in timers:
+        t.install()
+        t.on = True
     return timers
 
 
-def print_phases(timers: object, wall: float, scenes: int) -> None:
+def print_phases(both: tuple[object, object], wall: float, scenes: int) -> None:
+    timers, loader = both
     print(f"\n| warm job, main thread | ms a scene | calls |  (wall {wall:.2f} s, {scenes} scenes)")
     print("|---|---:|---:|")
     items = timers.total.get(JOB_PHASES[0][1], 0.0)  # type: ignore[attr-defined]
@@ -86,6 +99,11 @@ def print_phases(timers: object, wall: float, scenes: int) -> None:
         calls = timers.calls.get(label, 0)  # type: ignore[attr-defined]
         print(f"| {'&nbsp;&nbsp;' * depth}{label} | {total / scenes * 1e3:.1f} | {calls} |")
     print(f"| outside items (the driver, manifests, folders) | {(wall - items) / scenes * 1e3:.1f} | |")
+    print("\n| the loader thread | ms a scene | calls |\n|---|---:|---:|")
+    for depth, label in loader.found:  # type: ignore[attr-defined]
+        total = loader.total.get(label, 0.0)  # type: ignore[attr-defined]
+        print(f"| {'&nbsp;&nbsp;' * depth}{label} | {total / scenes * 1e3:.1f} | "
+              f"{loader.calls.get(label, 0)} |")  # type: ignore[attr-defined]
 
 
 def main() -> None:
@@ -116,8 +134,8 @@ def main() -> None:
         warm = prof.runcall(run_job, doc, "in-process job (warm)") if prof else run_job(
             doc, "in-process job (warm)")
         wall = time.perf_counter() - t
-        if timers is not None:
-            timers.on = False
+        for t in timers or ():
+            t.on = False
         rates = one_scene_rates(doc, work / "one")
     finally:
         shutil.rmtree(work, ignore_errors=True)

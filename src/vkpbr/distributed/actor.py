@@ -352,9 +352,7 @@ class RendererActor:
                                                 output_kind(name), "outputs"))
             files += names
         if switch and ahead is not None:
-            self._switch_to(ahead)
-            if later is not None:
-                self.prefetch(later)
+            self._change_early(ahead, later)
         for w in writes:
             w.result()
         cache = getattr(renderer.device, "pipeline_cache", None)
@@ -364,6 +362,12 @@ class RendererActor:
         return {"ok": True, "views": list(item.frames), "files": files, "sizes": sizes,
                 "cameras": [camera_record(c) for c in cameras], "pid": os.getpid(),
                 "load_s": t_load - t0, "seconds": time.perf_counter() - t0}
+
+    def _change_early(self, ahead: RenderSettings, later: RenderSettings | None) -> None:
+        """The next item's scene (`ahead`) set now, and `later`'s load started."""
+        self._switch_to(ahead)
+        if later is not None:
+            self.prefetch(later)
 
     def _switch_to(self, settings: RenderSettings) -> None:
         """Change the renderer's scene to `settings`' now (its load ahead waited for), when
