@@ -352,6 +352,8 @@ def main() -> None:
     p.add_argument("--no-switch", action="store_true",
                    help="the actor changes scene at the next item's start, not while the last "
                    "item's files encode (as before session 18)")
+    p.add_argument("--switch-interval", type=float,
+                   help="Python's GIL switch interval in seconds for the job (default 0.005)")
     p.add_argument("--child", help=argparse.SUPPRESS)
     p.add_argument("--cached", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args()
@@ -380,6 +382,8 @@ def main() -> None:
 
         if args.encoders:
             actor.ENCODERS = args.encoders
+        if args.switch_interval:
+            sys.setswitchinterval(args.switch_interval)
         if args.no_switch:
             actor.RendererActor._change_early = lambda self, ahead, later: None
         out["job"] = job_table(args)

@@ -509,3 +509,43 @@ def test_nul_in_an_image_name_is_a_refused_texture(tree: tuple[Path, Path],
     assert decode_images(loaded) == [None, None]
     with pytest.raises(SceneError, match="not a valid file name"):
         load_scene(write_gltf(tree[0] / "t.gltf", "tri%00.bin"))
+
+
+def test_a_loads_folder_cache_resolves_as_realpath_does(tmp_path: Path) -> None:
+    """ResourcePolicy keeps its folders' realpaths for one load (scene/resources.py `_real`):
+    every name resolves exactly as os.path.realpath resolves it, the same policy asked
+    again included: linked folders, linked files (in and out), links to links, dangling
+    links, `..`, missing names, names that a link in the middle redirects."""
+    from vkpbr.scene.resources import ResourcePolicy, _real
+
+    scene_dir, outside = tmp_path / "scene", tmp_path / "outside"
+    (scene_dir / "tex" / "deep").mkdir(parents=True)
+    outside.mkdir()
+    (scene_dir / "tex" / "a.png").write_bytes(b"a")
+    (outside / "secret.png").write_bytes(b"s")
+    (scene_dir / "linked").symlink_to(scene_dir / "tex", target_is_directory=True)
+    (scene_dir / "out").symlink_to(outside, target_is_directory=True)
+    (scene_dir / "tex" / "leak.png").symlink_to(outside / "secret.png")
+    (scene_dir / "tex" / "chain.png").symlink_to(scene_dir / "tex" / "leak.png")
+    (scene_dir / "tex" / "dangling.png").symlink_to(tmp_path / "nowhere.png")
+    (scene_dir / "tex" / "up").symlink_to(tmp_path, target_is_directory=True)
+    names = ["tex/a.png", "linked/a.png", "out/secret.png", "tex/leak.png", "tex/chain.png",
+             "tex/dangling.png", "tex/missing.png", "tex/deep/../a.png", "tex/..", "..",
+             "tex/up/outside/secret.png", "linked/deep/../../out/secret.png", ".", "tex/",
+             "linked/leak.png", "../outside/secret.png"]
+    policy = ResourcePolicy(scene_dir / "scene.gltf")
+    for _ in range(2):  # the second time from the cache
+        for name in names:
+            path = scene_dir / name
+            assert _real(path, policy.folders) == Path(os.path.realpath(path)), name
+    refused = set()
+    for name in names:
+        try:
+            policy.resolve(name)
+        except ResourceRefused:
+            refused.add(name)
+    # refused: what lies outside, and folders (not regular files); missing names resolve
+    outside_names = {n for n in names if not Path(os.path.realpath(scene_dir / n)).is_relative_to(
+        os.path.realpath(scene_dir))}
+    folder_names = {n for n in names if (scene_dir / n).is_dir()}
+    assert refused == outside_names | folder_names
