@@ -229,3 +229,20 @@ def test_hand_outs_keep_scenes_together_and_hint_the_next(tmp_path: Path) -> Non
     assert hint.scene.stem == "a" and ahead[2] == key["a"]
     scenes[2] = key["a"]
     assert _next_scene(pending, 3, scenes, ahead) is None and 3 not in ahead  # all taken
+
+
+def test_an_item_switches_threads_quickly_and_puts_the_interval_back() -> None:
+    """RendererActor.render runs under quick_switches (the GIL handed over every 1 ms, not
+    5: its thread's Vulkan calls and the loading thread's reads wait less for it); the
+    process's interval is as it was afterwards, after an error too."""
+    import sys
+
+    from vkpbr.distributed.actor import SWITCH_INTERVAL, quick_switches
+
+    before = sys.getswitchinterval()
+    with quick_switches():
+        assert sys.getswitchinterval() == min(before, SWITCH_INTERVAL) <= 0.001
+    assert sys.getswitchinterval() == before
+    with pytest.raises(KeyError), quick_switches():
+        raise KeyError("x")
+    assert sys.getswitchinterval() == before

@@ -9,9 +9,11 @@ module imports without Ray, and tests and benchmarks can run it in-process.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import socket
+import sys
 import time
 from collections.abc import Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -31,6 +33,24 @@ log = logging.getLogger(__name__)
 
 # Threads that encode an actor's files (PNG, EXR): half the cores, 2 to 8
 ENCODERS = min(8, max(2, (os.cpu_count() or 2) // 2))
+# Python's GIL switch interval while an actor renders an item (the default is 5 ms). The
+# item's thread makes thousands of short Vulkan calls a scene change, the loading thread
+# thousands of small reads, and each gives up the GIL: with the encoding threads busy, each
+# waited up to the interval to get it back. H200, 50 scenes x 16 views of the 18 sample
+# models (benchmarks/results/h200-2026-12-04s18.md, run e): with 8 encoders, the cold job
+# 33.9 -> 54.0 views/s and the warm one 87.5 -> 95.8 at 1 ms.
+SWITCH_INTERVAL = 0.001
+
+
+@contextlib.contextmanager
+def quick_switches() -> Iterator[None]:
+    """Python's thread switch interval at most SWITCH_INTERVAL inside, as it was after."""
+    before = sys.getswitchinterval()
+    sys.setswitchinterval(min(before, SWITCH_INTERVAL))
+    try:
+        yield
+    finally:
+        sys.setswitchinterval(before)
 
 
 def render_views(renderer: Any, cameras: list[Any], lights: Any, settings: RenderSettings,
@@ -308,7 +328,8 @@ class RendererActor:
         and is not retried."""
         t0 = time.perf_counter()
         try:
-            return self._render(item, t0, ahead, switch, later)
+            with quick_switches():
+                return self._render(item, t0, ahead, switch, later)
         except (SceneError, UsageError) as exc:
             if ahead is not None:  # this scene failed: the next one still loads meanwhile
                 self.prefetch(ahead)

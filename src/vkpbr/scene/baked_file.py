@@ -399,7 +399,10 @@ def read_baked(path: str | os.PathLike[str], *, mmap: bool = False) -> BakedScen
         if mmap and os.fstat(f.fileno()).st_size > 0:
             buf = memoryview(_mmap.mmap(f.fileno(), 0, access=_mmap.ACCESS_READ))
         else:
-            buf = memoryview(bytearray(f.read()))  # writable views for the caller
+            size = os.fstat(f.fileno()).st_size
+            data = bytearray(size)  # writable views for the caller, read in place (one copy)
+            got = f.readinto(data)
+            buf = memoryview(data)[:got]
     sections = _parse_sections(buf, path)
     try:
         doc = decode_json(bytes(sections["scene"]), path, SCENE_JSON_LIMITS)
