@@ -14,8 +14,9 @@ import logging
 import os
 import socket
 import sys
+import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -26,13 +27,20 @@ from vkpbr.distributed.job import RenderSettings, WorkItem, view_times
 from vkpbr.distributed.manifest import camera_record
 from vkpbr.distributed.worlds import ItemWorlds
 from vkpbr.errors import SceneError, UsageError
+from vkpbr.io import Kind
 
 __all__ = ["RendererActor", "render_views", "load_renderer", "load_scene_for", "predecode"]
 
 log = logging.getLogger(__name__)
 
-# Threads that encode an actor's files (PNG, EXR): half the cores, 2 to 8
+# Threads that encode an actor's files (PNG, EXR): half the cores, 2 to 8; while the next
+# scene loads (a bake or a decode, on the loading thread), at most LOADING_ENCODERS of them
+# encode at once. H200 (benchmarks/results/h200-2026-12-04s18.md, runs d-f): 8 encoders
+# render one scene's views 2x faster than 2 (a 256x256 PNG is ~5 ms of a core), but they
+# took the GIL from a job's loading thread: 8 made a many-scene job with a cold bake cache
+# 20-40% slower than 2.
 ENCODERS = min(8, max(2, (os.cpu_count() or 2) // 2))
+LOADING_ENCODERS = 2
 # Python's GIL switch interval while an actor renders an item (the default is 5 ms). The
 # item's thread makes thousands of short Vulkan calls a scene change, the loading thread
 # thousands of small reads, and each gives up the GIL: with the encoding threads busy, each
@@ -232,6 +240,26 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
 
 
+class EncodeGate:
+    """At most `limit()` callers inside at once (asked again as they wait: it may change)."""
+
+    def __init__(self, limit: Callable[[], int]) -> None:
+        self._limit = limit
+        self._inside = 0
+        self._cond = threading.Condition()
+
+    def __enter__(self) -> None:
+        with self._cond:
+            while self._inside >= self._limit():
+                self._cond.wait(0.002)  # (the limit rises when a load ends: no one notifies)
+            self._inside += 1
+
+    def __exit__(self, *exc: object) -> None:
+        with self._cond:
+            self._inside -= 1
+            self._cond.notify()
+
+
 class RendererActor:
     """Renders work items with one Renderer, which changes scene (`Renderer.set_scene`: the
     device and its pipeline cache are kept) when an item's scene is not the last one's, and
@@ -252,9 +280,22 @@ class RendererActor:
         # Encoding overlaps the next views' rendering, and on a machine of many cores it is
         # the slowest part of a small view's life (a 256x256 PNG: ~5 ms of a core)
         self._pool = ThreadPoolExecutor(ENCODERS, thread_name_prefix="vkpbr-encode")
+        self._gate = EncodeGate(lambda: LOADING_ENCODERS if self._loading() else ENCODERS)
         self._loader = ThreadPoolExecutor(1, thread_name_prefix="vkpbr-next-scene")
         self._ahead: tuple[tuple, Future] | None = None  # (scene key, its load)
         self.loads = {"ahead": 0, "now": 0}  # scenes loaded on the thread / when needed
+
+    def _loading(self) -> bool:
+        """Whether a scene is loading ahead now."""
+        ahead = self._ahead
+        return ahead is not None and not ahead[1].done()
+
+    def _write(self, path: Path, array: np.ndarray, kind: Kind, option: str = "--out") -> None:
+        """One file written (`vkpbr.io.write_output`) through the encoding gate."""
+        from vkpbr.io import write_output
+
+        with self._gate:
+            write_output(path, array, kind, option)
 
     def info(self) -> dict[str, object]:
         return {"pid": os.getpid(), "host": socket.gethostname(), "device": self.device}
@@ -341,7 +382,7 @@ class RendererActor:
 
     def _render(self, item: WorkItem, t0: float, ahead: RenderSettings | None,
                 switch: bool = False, later: RenderSettings | None = None) -> dict[str, object]:
-        from vkpbr.io import check_id_count, output_kind, output_path, write_output
+        from vkpbr.io import check_id_count, output_kind, output_path
 
         settings = item.settings
         renderer = self._renderer_for(settings)
@@ -367,9 +408,9 @@ class RendererActor:
         for k, (_view, frame) in enumerate(zip(item.frames, frames, strict=True)):
             names = item.files_of(k)
             (out / names[0]).parent.mkdir(parents=True, exist_ok=True)  # a file_path's folder
-            writes.append(self._pool.submit(write_output, out / names[0], frame["color"], "color"))
+            writes.append(self._pool.submit(self._write, out / names[0], frame["color"], "color"))
             for name, file in zip(settings.outputs, names[1:], strict=True):
-                writes.append(self._pool.submit(write_output, out / file, frame[name],
+                writes.append(self._pool.submit(self._write, out / file, frame[name],
                                                 output_kind(name), "outputs"))
             files += names
         if switch and ahead is not None:

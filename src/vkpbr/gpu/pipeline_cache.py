@@ -84,10 +84,14 @@ class PipelineCache(DeviceObject):
         # back (H200: 0.24 s of Sponza's warm start), and nothing needs it before the first
         # pipeline is built: open it on a thread (the file's read, its checksum and
         # vkCreatePipelineCache all let go of the GIL) while the scene uploads; `handle`
-        # waits for it.
-        self._opening: threading.Thread | None = threading.Thread(
-            target=self._open, name="vkpbr-pipeline-cache", daemon=True)
-        self._opening.start()
+        # waits for it. Without a file, at once.
+        self._opening: threading.Thread | None = None
+        if self.path is not None and self.path.is_file():
+            self._opening = threading.Thread(target=self._open, name="vkpbr-pipeline-cache",
+                                             daemon=True)
+            self._opening.start()
+        else:
+            self._open()
 
     def _open(self) -> None:
         try:
