@@ -354,6 +354,8 @@ def main() -> None:
                    "item's files encode (as before session 18)")
     p.add_argument("--switch-interval", type=float,
                    help="Python's GIL switch interval in seconds for the job (default 0.005)")
+    p.add_argument("--actor-switch-interval", type=float,
+                   help="the interval an actor renders its items with (vkpbr's SWITCH_INTERVAL)")
     p.add_argument("--child", help=argparse.SUPPRESS)
     p.add_argument("--cached", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args()
@@ -382,6 +384,8 @@ def main() -> None:
 
         if args.encoders:
             actor.ENCODERS = args.encoders
+        if args.actor_switch_interval:
+            actor.SWITCH_INTERVAL = args.actor_switch_interval
         if args.switch_interval:
             sys.setswitchinterval(args.switch_interval)
         if args.no_switch:
