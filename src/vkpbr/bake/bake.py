@@ -49,7 +49,7 @@ from ..scene.loader import load_scene
 from ..scene.mips import mip_chain
 from ..scene.resources import ResourcePolicy, is_regular_file, read_resource
 from ..scene.textures import decode_images
-from ..scene.types import SRGB_TEXTURE_SLOTS, Mesh, Scene, expand_instances
+from ..scene.types import SRGB_TEXTURE_SLOTS, Mesh, Scene, expand_instances, points_box
 from .frames import (
     frame_angular_error_deg,
     pack_qtangent,
@@ -230,7 +230,7 @@ def bake_scene(scene: Scene, progress: bool = False) -> BakedScene:
         parts.append(attrs)
         nv, ni = len(attrs["positions"]), len(attrs["indices"])
         p = attrs["positions"]
-        lo, hi = (p.min(axis=0), p.max(axis=0)) if nv else (np.zeros(3), np.zeros(3))
+        lo, hi = points_box(p) if nv else (np.zeros(3), np.zeros(3))
         table[i] = (first_v, nv, first_i, ni, mesh.material, flags, lo, hi)
         first_v, first_i = first_v + nv, first_i + ni
     if first_v >= 2**32 or first_i >= 2**32:

@@ -40,7 +40,7 @@ from vkpbr.gpu.device import Device
 from vkpbr.gpu.graph import BufferResource, Step
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.scene.draw_table import blocks
-from vkpbr.scene.types import Mesh, MeshBox, Scene
+from vkpbr.scene.types import Mesh, MeshBox, Scene, points_box
 
 __all__ = ["draw_sphere", "Deformed", "deformed_records", "DeformLayout", "DeformKernel", "UNBOUNDED_RADIUS",
            "convex_weights", "DEFORMED_RADIUS"]
@@ -260,7 +260,8 @@ def rest_sphere(mesh: Mesh) -> tuple[np.ndarray, float]:
     p = np.asarray(mesh.positions, np.float64)
     if not len(p):
         return np.zeros(3), 0.0
-    c = (p.min(axis=0) + p.max(axis=0)) / 2
+    lo, hi = points_box(p)
+    c = (lo + hi) / 2
     return c, float(np.sqrt(((p - c) ** 2).sum(axis=1).max()))
 
 

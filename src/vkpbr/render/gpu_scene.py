@@ -49,6 +49,7 @@ from vkpbr.scene.types import (
     Scene,
     TextureRef,
     expand_instances,
+    points_box,
 )
 
 __all__ = ["GpuScene", "Draw", "prepare_mesh", "uv_transform_rows"]
@@ -286,7 +287,7 @@ class GpuScene:
         p = self.scene.meshes[mesh].positions
         got = self._boxes.get(mesh)
         if got is None or got[0] is not p:
-            lo, hi = p.min(axis=0), p.max(axis=0)
+            lo, hi = points_box(p)
             lo.flags.writeable = hi.flags.writeable = False
             got = self._boxes[mesh] = (p, lo, hi)
         return got[1], got[2]

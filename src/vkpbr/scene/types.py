@@ -44,6 +44,7 @@ __all__ = [
     "expand_instances",
     "MeshBox",
     "mesh_box",
+    "points_box",
     "scene_bounds",
     "TEXTURE_SLOTS",
     "SRGB_TEXTURE_SLOTS",
@@ -475,12 +476,23 @@ class Scene:
 MeshBox = Callable[[int], tuple[np.ndarray, np.ndarray]]  # mesh index -> (min, max)
 
 
+def points_box(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(min, max) per column of (N, K) points (N > 0), in their dtype: `points.min(axis=0)`
+    and `.max(axis=0)`, column by column. NumPy reduces a C-ordered (N, 3) array along axis 0
+    3 elements at a time, 12-18x slower than a column's strided reduction (0.11 ms against
+    9 us for 4,300 vertices, 13.7 against 0.76 ms for 528,000: MetalRoughSpheresNoTextures'
+    bounds were a third of its load from the bake cache)."""
+    cols = range(points.shape[1])
+    lo = np.array([points[:, k].min() for k in cols], dtype=points.dtype)
+    hi = np.array([points[:, k].max() for k in cols], dtype=points.dtype)
+    return lo, hi
+
+
 def mesh_box(scene: Scene) -> MeshBox:
     """Mesh i's (min, max) over its positions, per axis in their dtype, computed when asked
     (`scene_bounds`' default; a GpuScene computes each mesh's once for all its users)."""
     def box(i: int) -> tuple[np.ndarray, np.ndarray]:
-        p = scene.meshes[i].positions
-        return p.min(axis=0), p.max(axis=0)
+        return points_box(scene.meshes[i].positions)
 
     return box
 
