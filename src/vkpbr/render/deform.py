@@ -128,7 +128,8 @@ class DeformLayout:
         rs = self.records
         self.skinned = np.array([r.skin is not None for r in rs], bool)
         self.tree_nodes = np.array([r.tree for r in rs], np.int64)
-        self.bounded = np.array([r.skin is None or convex_weights(scene.meshes[r.mesh]) for r in rs], bool)
+        convex = {m: convex_weights(scene.meshes[m]) for m in {r.mesh for r in rs if r.skin is not None}}
+        self.bounded = np.array([r.skin is None or convex[r.mesh] for r in rs], bool)
         spheres = {m: rest_sphere(scene.meshes[m]) for m in {r.mesh for r in rs}}
         self.rest_centre = np.array([spheres[r.mesh][0] for r in rs]).reshape(-1, 3)
         self.rest_radius = np.array([spheres[r.mesh][1] for r in rs])

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import dataclasses
+import functools
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -683,7 +684,8 @@ class GpuScene:
         draws = []
         posed = {(r.node, r.instance): (offset, r.skin is not None)
                  for r, offset in zip(self.deformed, self.posed_offsets, strict=True)}
-        for node_index, instance, node in _draw_nodes(self.scene.nodes):
+        convex = functools.cache(lambda i: convex_weights(self.scene.meshes[i]))  # (a crowd's
+        for node_index, instance, node in _draw_nodes(self.scene.nodes):          # one mesh)
             if not 0 <= node.mesh < len(self.scene.meshes):
                 continue
             mesh = self.scene.meshes[node.mesh]
@@ -708,7 +710,7 @@ class GpuScene:
                 double_sided=bool(mat.double_sided), casts_shadows=bool(mat.casts_shadows),
                 center=m[:3, :3] @ center_local + m[:3, 3], node=node_index, instance=instance,
                 deformed=(node_index, instance) in posed, skinned=skinned,
-                unbounded=skinned and not convex_weights(mesh),
+                unbounded=skinned and not convex(node.mesh),
             ))
         draws.sort(key=lambda d: d.material)  # fewer material binds within each pass
         return draws
