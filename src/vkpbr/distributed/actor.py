@@ -27,7 +27,7 @@ from vkpbr.distributed.job import RenderSettings, WorkItem, view_times
 from vkpbr.distributed.manifest import camera_record
 from vkpbr.distributed.worlds import ItemWorlds
 from vkpbr.errors import SceneError, UsageError
-from vkpbr.io import Kind
+from vkpbr.io import Kind, write_output
 
 __all__ = ["RendererActor", "render_views", "load_renderer", "load_scene_for", "predecode"]
 
@@ -292,8 +292,6 @@ class RendererActor:
 
     def _write(self, path: Path, array: np.ndarray, kind: Kind, option: str = "--out") -> None:
         """One file written (`vkpbr.io.write_output`) through the encoding gate."""
-        from vkpbr.io import write_output
-
         with self._gate:
             write_output(path, array, kind, option)
 

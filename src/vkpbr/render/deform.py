@@ -26,6 +26,7 @@ debug modes) read the rest frames of deformed meshes.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -137,19 +138,15 @@ class DeformLayout:
         self._reach = [(k, r.tree, scene.meshes[r.mesh].morph_weights, reach[r.mesh])
                        for k, r in enumerate(rs) if len(reach[r.mesh])]
         skinned = [r for r in rs if r.skin is not None]
+        counts = [len(scene.skins[r.skin].joints) for r in skinned]
         # Once a mesh and joint count (a crowd's instances share theirs: 1.5 ms each, 1.5 s
         # for 1,000 CesiumMan when each record computed its own)
-        joints: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
-        for r in skinned:
-            key = (r.mesh, len(scene.skins[r.skin].joints))
-            if key not in joints:
-                joints[key] = joint_spheres(scene.meshes[r.mesh], key[1])
-        mine = [joints[(r.mesh, len(scene.skins[r.skin].joints))] for r in skinned]
+        spheres_of = functools.cache(lambda m, n: joint_spheres(scene.meshes[m], n))
+        mine = [spheres_of(r.mesh, n) for r, n in zip(skinned, counts, strict=True)]
         self.joint_centre = (np.concatenate([c for c, _ in mine]) if skinned
                              else np.zeros((0, 3)))
         self.joint_radius = (np.concatenate([rad for _, rad in mine]) if skinned
                              else np.zeros(0))
-        counts = [len(scene.skins[r.skin].joints) for r in skinned]
         self.joint_starts = np.cumsum([0] + counts[:-1]).astype(np.int64)
         self.joint_record = np.repeat(np.flatnonzero(self.skinned), counts).astype(np.int64)
 

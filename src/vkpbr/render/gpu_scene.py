@@ -684,8 +684,9 @@ class GpuScene:
         draws = []
         posed = {(r.node, r.instance): (offset, r.skin is not None)
                  for r, offset in zip(self.deformed, self.posed_offsets, strict=True)}
-        convex = functools.cache(lambda i: convex_weights(self.scene.meshes[i]))  # (a crowd's
-        for node_index, instance, node in _draw_nodes(self.scene.nodes):          # one mesh)
+        # Each mesh's weights tested once (a crowd's thousand nodes share one mesh)
+        convex = functools.cache(lambda i: convex_weights(self.scene.meshes[i]))
+        for node_index, instance, node in _draw_nodes(self.scene.nodes):
             if not 0 <= node.mesh < len(self.scene.meshes):
                 continue
             mesh = self.scene.meshes[node.mesh]

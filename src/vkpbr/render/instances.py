@@ -37,7 +37,7 @@ from vkpbr.render.parts import FrameParts, lazy_compute
 from vkpbr.render.scene_state import GpuSceneState
 from vkpbr.render.transmission import transmits
 from vkpbr.scene.state import NodeCopies
-from vkpbr.scene.types import Skin, points_box
+from vkpbr.scene.types import Skin
 
 __all__ = ["InstanceTable", "instance_api"]
 
@@ -247,7 +247,7 @@ def _grow(renderer: Any, mesh: int, count: int) -> None:
     gs.draws.extend(gs.instance_draws(mesh, count))
     ids = range(first + 1, first + count + 1)
     p = renderer.scene.meshes[mesh].positions
-    box = np.array(points_box(p)) if len(p) else np.zeros((2, 3))
+    box = np.array(gs.mesh_box(mesh)) if len(p) else np.zeros((2, 3))
     state.grow(count, box, [f"instance {i}" for i in ids])
     _made(renderer, mesh, first, count)
 
@@ -269,8 +269,7 @@ def _grow_deformed(renderer: Any, mesh: int, count: int) -> None:
     first, done = len(gs.draws), len(copies.roots)
     ids = range(first + 1, first + count + 1)
     bounded = src.skin is None or convex_weights(scene.meshes[mesh])
-    p = scene.meshes[mesh].positions
-    box = np.array([[-1.0] * 3, [1.0] * 3]) if bounded else np.array(points_box(p))
+    box = np.array([[-1.0] * 3, [1.0] * 3]) if bounded else np.array(gs.mesh_box(mesh))
     roots = state.grow(count, box, [f"instance {i}" for i in ids], copies, deformed=True,
                        skinned=src.skin is not None)
     records = []
