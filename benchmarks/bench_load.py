@@ -329,6 +329,18 @@ def job_table(args: argparse.Namespace) -> list[dict]:
     return rows
 
 
+def _positive(kind: type) -> object:
+    """An argparse type: a number of `kind` above 0 (else argparse's one-line usage error)."""
+    def parse(text: str) -> object:
+        value = kind(text)
+        if not value > 0:
+            raise argparse.ArgumentTypeError(f"{text}: expected a number above 0")
+        return value
+
+    parse.__name__ = kind.__name__
+    return parse
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--scene", type=Path, default=ASSETS / "Sponza" / "glTF" / "Sponza.gltf")
@@ -347,14 +359,14 @@ def main() -> None:
                    help="load the scene, then make the device (as before vkpbr.bake.ahead)")
     p.add_argument("--job-runs", default="cold,warm,sequential",
                    help="the job's rows besides one scene: cold, warm, sequential (no load ahead)")
-    p.add_argument("--encoders", type=int,
+    p.add_argument("--encoders", type=_positive(int),
                    help="the actor's encoding threads (default: vkpbr's, distributed/actor.py)")
     p.add_argument("--no-switch", action="store_true",
                    help="the actor changes scene at the next item's start, not while the last "
                    "item's files encode (as before session 18)")
-    p.add_argument("--switch-interval", type=float,
+    p.add_argument("--switch-interval", type=_positive(float),
                    help="Python's GIL switch interval in seconds for the job (default 0.005)")
-    p.add_argument("--actor-switch-interval", type=float,
+    p.add_argument("--actor-switch-interval", type=_positive(float),
                    help="the interval an actor renders its items with (vkpbr's SWITCH_INTERVAL)")
     p.add_argument("--child", help=argparse.SUPPRESS)
     p.add_argument("--cached", action="store_true", help=argparse.SUPPRESS)
