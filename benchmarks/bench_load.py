@@ -253,17 +253,20 @@ def one_scene_rates(doc: dict, work: Path) -> dict[str, float]:
     return rates
 
 
-def run_job(doc: dict, how: str) -> dict:
+def run_job(doc: dict, how: str, processes: int = 1) -> dict:
     from vkpbr.distributed import job_from_doc, render
-    from vkpbr.distributed.driver import IN_PROCESS
+    from vkpbr.distributed.driver import IN_PROCESS, PROCESSES
 
     for entry in doc["scenes"]:
         shutil.rmtree(entry["out"], ignore_errors=True)
+    if "cold" in how:  # (the bake cache and the pipeline cache both)
+        shutil.rmtree(os.environ["VKPBR_CACHE_DIR"], ignore_errors=True)
     job = job_from_doc(doc)
     if how == "no load ahead":
         return sequential(job)
-    result = render(job, IN_PROCESS if how.startswith("in-process") else None,
-                    actors=1, progress=False)
+    address = (PROCESSES if "processes" in how else IN_PROCESS if how.startswith("in-process")
+               else None)
+    result = render(job, address, actors=processes, progress=False)
     for line in result.summary()[1:4]:  # the first failures, if any (a model that needs a codec)
         print(f"  {how}: {line}", file=sys.stderr)
     return {"views": result.rendered, "seconds": result.render_seconds,
@@ -302,10 +305,13 @@ def job_table(args: argparse.Namespace) -> list[dict]:
         doc = job_doc(models, args.scenes, args.views, args.job_size, work / "out")
         named = {"cold": "in-process job (cold bake cache)", "warm": "in-process job (warm)",
                  "sequential": "no load ahead"}
-        runs = [named[r] for r in args.job_runs.split(",") if r]
-        for how in runs + (["Ray, 1 actor"] if args.ray else []):
+        runs = [(named[r], 1) for r in args.job_runs.split(",") if r]
+        for n in args.processes:
+            runs += [(f"{n} processes job ({r})", n) for r in ("cold", "warm")
+                     if r in args.job_runs.split(",")]
+        for how, n in runs + ([("Ray, 1 actor", 1)] if args.ray else []):
             try:
-                rows.append({"run": how, **run_job(doc, how)})
+                rows.append({"run": how, **run_job(doc, how, n)})
             except Exception as exc:  # noqa: BLE001 - Ray missing or failing: the other rows stand
                 print(f"{how}: not measured ({type(exc).__name__}: {exc})", file=sys.stderr)
         rates = one_scene_rates(doc, work / "one")  # after: the bake cache is warm by now
@@ -359,6 +365,9 @@ def main() -> None:
                    help="load the scene, then make the device (as before vkpbr.bake.ahead)")
     p.add_argument("--job-runs", default="cold,warm,sequential",
                    help="the job's rows besides one scene: cold, warm, sequential (no load ahead)")
+    p.add_argument("--processes", type=_positive(int), nargs="*", default=[], metavar="N",
+                   help="also the job's cold and warm rows (those in --job-runs) with N "
+                        "renderer processes (render(address=PROCESSES)), for each N")
     p.add_argument("--encoders", type=_positive(int),
                    help="the actor's encoding threads (default: vkpbr's, distributed/actor.py)")
     p.add_argument("--no-switch", action="store_true",

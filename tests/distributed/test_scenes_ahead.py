@@ -7,9 +7,11 @@ midway resumes and renders only what is missing."""
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import io
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +21,7 @@ from PIL import Image
 from vkpbr.app.cli import main
 from vkpbr.distributed import MANIFEST_NAME, job_from_doc, render
 from vkpbr.distributed.actor import RendererActor
-from vkpbr.distributed.driver import IN_PROCESS
+from vkpbr.distributed.driver import IN_PROCESS, PROCESSES
 
 SIZE = "48x32"
 POSES = ["3,1.2,2,0,0,0", "2,1,3,0,0,0", "-2,1.5,3,0,0,0"]
@@ -115,6 +117,83 @@ def test_in_process_job_equals_single_process(tmp_path: Path, scenes: dict, refe
     assert all("\n" not in f.error and "broken.gltf" in f.error for f in result.failures)
     check_against(reference, tmp_path)
     assert list((tmp_path / "cache").glob("pipelines-*.bin"))  # the renderer kept its pipelines
+
+
+def gone(pid: int) -> bool:
+    """Whether process `pid` has ended (and been waited for: no zombie left)."""
+    return not Path(f"/proc/{pid}").exists()
+
+
+def test_processes_job_equals_single_process(tmp_path: Path, scenes: dict, reference: dict,
+                                             capsys: pytest.CaptureFixture) -> None:
+    """`--processes 2`: two renderer processes share the items (an entry's items may go to
+    both); the same files as one process, the broken scene's items failed with one line each
+    and not retried, every worker ended when the job returns."""
+    (tmp_path / "job.json").write_text(json.dumps(job_doc(tmp_path, scenes)))
+    pids: set[int] = set()
+    result = render(tmp_path / "job.json", PROCESSES, actors=2,
+                    on_result=lambda item, res: pids.add(res["pid"]))
+    assert result.actors == 2 and result.actor_kind == "process" and not result.retries
+    assert result.rendered == 4 * len(POSES) and result.failed_views == len(POSES)
+    assert {f.entry for f in result.failures} == {3}
+    assert all("\n" not in f.error and f.error.count("broken.gltf") == 1
+               for f in result.failures)
+    check_against(reference, tmp_path)
+    assert len(pids) == 2 and os.getpid() not in pids and all(gone(p) for p in pids)
+    capsys.readouterr()
+    assert main(["batch", str(tmp_path / "job.json"), "--processes", "2"]) == 1  # (broken)
+    out = capsys.readouterr()
+    assert f"{len(POSES)} failed" in out.err and "on 2 processes" in out.err
+
+
+def test_a_killed_process_is_replaced(tmp_path: Path, scenes: dict, reference: dict) -> None:
+    """A renderer process killed between items (as by the kernel's out-of-memory killer): its
+    next item fails with "its renderer process ended", a new process takes its place and
+    renders that item again; the files are the same."""
+    import signal
+
+    killed: list[int] = []
+
+    def kill_first(item, res) -> None:  # noqa: ANN001
+        if not killed and res.get("ok"):
+            killed.append(res["pid"])
+            os.kill(res["pid"], signal.SIGKILL)
+
+    result = render(job_from_doc(job_doc(tmp_path, scenes), base=tmp_path), PROCESSES,
+                    actors=1, on_result=kill_first)
+    assert result.actors_lost == 1 and result.retries == 1
+    assert result.rendered == 4 * len(POSES) and {f.entry for f in result.failures} == {3}
+    check_against(reference, tmp_path)
+    assert gone(killed[0])
+
+
+def test_calls_to_an_ended_process_fail_at_once() -> None:
+    """Once a renderer process has ended and its answers' reader finished, a call to it fails
+    with ActorLost (saying how it ended) instead of waiting for an answer that cannot come."""
+    from vkpbr.distributed.processes import ActorLost, ProcessActor
+
+    actor = ProcessActor(encoders=2)
+    actor.kill()  # (joins its reader)
+    with pytest.raises(ActorLost, match="its renderer process ended \\(killed by SIGKILL\\)"):
+        actor.render(None, None).result(timeout=30)  # type: ignore[arg-type]
+    actor.close()
+
+
+@pytest.mark.parametrize(("argv", "problem"), [
+    (["--processes", "0"], "--processes: expected a whole number of at least 1, got '0'"),
+    (["--processes", "two"], "--processes: expected a whole number of at least 1, got 'two'"),
+    (["--processes", "--in-process"], "--in-process and --processes: choose one"),
+    (["--processes", "2", "--num-gpus", "0.5"], "num_cpus and num_gpus are Ray's resources"),
+])
+def test_processes_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture,
+                                 argv: list[str], problem: str) -> None:
+    (tmp_path / "poses.json").write_text(json.dumps(POSES))
+    (tmp_path / "job.json").write_text(json.dumps([{"cameras": "poses.json", "out": "o"}]))
+    with contextlib.suppress(SystemExit):
+        assert main(["batch", str(tmp_path / "job.json"), *argv]) != 0
+    err = capsys.readouterr().err.strip()
+    assert problem in err and "\n" not in err and "Traceback" not in err
+    assert not (tmp_path / "o").exists()
 
 
 def test_next_scene_loads_ahead(tmp_path: Path, scenes: dict, reference: dict) -> None:

@@ -26,6 +26,8 @@ examples:
   vkpbr batch job.json --ray auto --num-gpus 0.5   two actors on each GPU
   vkpbr batch job.json --in-process         no Ray: one renderer here, the next scene loading
                                             on a thread while this one renders
+  vkpbr batch job.json --processes          no Ray: renderer processes on this machine's GPU
+                                            (one per 4 cores, 1 to 8; --processes 4: four)
 """
 
 # `vkpbr render` options a --ray job does not carry (each actor uses the scene's camera and
@@ -61,8 +63,23 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--in-process", action="store_true",
                    help="render in this process without Ray (one renderer on the default "
                         "device; the same files and manifests, resumable alike)")
+    p.add_argument("--processes", nargs="?", const=0, type=_processes, metavar="N",
+                   help="render without Ray in N renderer processes of this machine (default "
+                        "device; alone: one per 4 cores, 1 to 8): a many-scene job's scene "
+                        "changes run side by side")
     add_ray_arguments(p, with_flag=False)
     p.set_defaults(run=run)
+
+
+def _processes(text: str) -> int:
+    """--processes N: a whole number of at least 1 (argparse's one line otherwise)."""
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number of at least 1, got {text!r}")
+    return n
 
 
 def _report(result: Any) -> int:
@@ -78,11 +95,20 @@ def _report(result: Any) -> int:
 def _render(job: Any, args: argparse.Namespace) -> int:
     from vkpbr.app.log import is_quiet
     from vkpbr.distributed import render
-    from vkpbr.distributed.driver import IN_PROCESS
+    from vkpbr.distributed.driver import IN_PROCESS, PROCESSES
 
-    address = IN_PROCESS if getattr(args, "in_process", False) else (
-        None if args.ray == "local" else args.ray)
-    result = render(job, address, actors=args.actors, num_gpus=args.num_gpus,
+    processes = getattr(args, "processes", None)
+    actors = args.actors
+    if getattr(args, "in_process", False) and processes is not None:
+        raise UsageError("--in-process and --processes: choose one (one renderer in this "
+                         "process, or N renderer processes)")
+    if processes is not None:
+        address, actors = PROCESSES, processes or actors  # (--processes alone: 0)
+    elif getattr(args, "in_process", False):
+        address = IN_PROCESS
+    else:
+        address = None if args.ray == "local" else args.ray
+    result = render(job, address, actors=actors, num_gpus=args.num_gpus,
                     progress=False if is_quiet() else None)
     return _report(result)
 

@@ -26,7 +26,7 @@ import numpy as np
 from vkpbr.distributed.job import RenderSettings, WorkItem, view_times
 from vkpbr.distributed.manifest import camera_record
 from vkpbr.distributed.worlds import ItemWorlds
-from vkpbr.errors import SceneError, UsageError
+from vkpbr.errors import SceneError, UsageError, VkpbrError
 from vkpbr.io import Kind, write_output
 
 __all__ = ["RendererActor", "render_views", "load_renderer", "load_scene_for", "predecode"]
@@ -269,18 +269,21 @@ class RendererActor:
     most one scene ahead (docs/batch.md, "Many scenes").
 
     device : the Vulkan device (name substring or index) the Renderer opens; None: the default.
+    encoders : threads that encode its files (None: ENCODERS).
     """
 
-    def __init__(self, device: str | int | None = None) -> None:
+    def __init__(self, device: str | int | None = None, encoders: int | None = None) -> None:
         self.device = device
+        encoders = encoders or ENCODERS
         self._key: tuple | None = None  # the scene the renderer draws
         self._renderer: Any = None
         self._renderer_args: tuple | None = None  # (msaa, semantics) it was made with
-        self._bad_scenes: dict[tuple, str] = {}  # scene key -> why it cannot load
+        self._bad_scenes: dict[tuple, VkpbrError] = {}  # scene key -> why it cannot load
         # Encoding overlaps the next views' rendering, and on a machine of many cores it is
         # the slowest part of a small view's life (a 256x256 PNG: ~5 ms of a core)
-        self._pool = ThreadPoolExecutor(ENCODERS, thread_name_prefix="vkpbr-encode")
-        self._gate = EncodeGate(lambda: LOADING_ENCODERS if self._loading() else ENCODERS)
+        self._pool = ThreadPoolExecutor(encoders, thread_name_prefix="vkpbr-encode")
+        self._gate = EncodeGate(lambda: min(LOADING_ENCODERS, encoders) if self._loading()
+                                else encoders)
         self._loader = ThreadPoolExecutor(1, thread_name_prefix="vkpbr-next-scene")
         self._ahead: tuple[tuple, Future] | None = None  # (scene key, its load)
         self.loads = {"ahead": 0, "now": 0}  # scenes loaded on the thread / when needed
@@ -331,7 +334,7 @@ class RendererActor:
     def _renderer_for(self, settings: RenderSettings) -> Any:
         key = settings.scene_key()
         if key in self._bad_scenes:
-            raise SceneError(settings.scene, self._bad_scenes[key])
+            raise self._bad_scenes[key]  # as it was first raised (its one line names the file)
         if key == self._key:
             return self._renderer
         same = self._renderer is not None and self._renderer_args == (settings.msaa,
@@ -346,7 +349,7 @@ class RendererActor:
                 self._renderer = load_renderer(settings, self.device, scene)
                 self._renderer_args = (settings.msaa, settings.semantics)
         except (SceneError, UsageError) as exc:
-            self._bad_scenes[key] = str(exc)
+            self._bad_scenes[key] = exc
             raise
         finally:
             if self._renderer is not None and self._renderer.device.handle is None:

@@ -24,6 +24,7 @@ import os
 import time
 import uuid
 from collections.abc import Callable
+from concurrent.futures import Future
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -44,13 +45,22 @@ from vkpbr.distributed.manifest import (
     remove_leftovers,
     start_frames_folder,
 )
+from vkpbr.distributed.processes import (
+    ActorLost,
+    ProcessActor,
+    default_processes,
+    encoders_for,
+    wait_one,
+)
+from vkpbr.errors import UsageError
 
 __all__ = ["render", "JobResult", "Failure", "ClusterError", "check_job", "import_ray",
-           "IN_PROCESS"]
+           "IN_PROCESS", "PROCESSES"]
 
 log = logging.getLogger(__name__)
 
 IN_PROCESS = "in-process"  # render(address=...): no Ray, one renderer in this process
+PROCESSES = "processes"  # render(address=..., actors=N): no Ray, N renderer processes here
 
 
 @dataclass(frozen=True)
@@ -73,6 +83,7 @@ class JobResult:
     skipped: int = 0  # done by an earlier run
     failures: list[Failure] = field(default_factory=list)
     actors: int = 0
+    actor_kind: str = "actor"  # what rendered: "actor" (Ray's, or this process), "process"
     actors_lost: int = 0
     retries: int = 0  # items given again after a failure or a lost actor
     seconds: float = 0.0
@@ -93,7 +104,7 @@ class JobResult:
         rate = self.rendered / self.render_seconds if self.render_seconds > 0 else 0.0
         lines = [f"{self.views} views: {self.rendered} rendered, {self.skipped} done before, "
                  f"{self.failed_views} failed; {self.seconds:.1f} s ({rate:.1f} views/s on "
-                 f"{self.actors} actor{'s' if self.actors != 1 else ''})"
+                 f"{self.actors} {_plural(self.actor_kind, self.actors)})"
                  + (f"; {self.actors_lost} actor(s) lost" if self.actors_lost else "")
                  + (f", {self.retries} item(s) retried" if self.retries else "")]
         for f in self.failures[:limit]:
@@ -101,6 +112,10 @@ class JobResult:
         if len(self.failures) > limit:
             lines.append(f"... and {len(self.failures) - limit} more failed items (see the manifests)")
         return lines
+
+
+def _plural(noun: str, n: int) -> str:
+    return noun if n == 1 else noun + ("es" if noun.endswith("s") else "s")
 
 
 def _as_job(job: Job | dict | list | str | os.PathLike[str]) -> Job:
@@ -205,7 +220,11 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
         Ray instance (with `local_cpus` CPUs; None: all). An initialised Ray is used as is.
         "in-process" (IN_PROCESS): no Ray; one renderer in this process renders the items in
         order, loading the next scene on a thread meanwhile (the same files and manifests).
-    actors : how many renderer actors (None: one per GPU, else one per CPU of the cluster).
+        "processes" (PROCESSES): no Ray; `actors` renderer processes on this machine's
+        default device, each with its own GIL (distributed/processes.py; a many-scene job's
+        scene changes run side by side).
+    actors : how many renderer actors (None: one per GPU, else one per CPU of the cluster;
+        with "processes", one per 4 cores, 1 to 8).
     num_cpus, num_gpus : Ray resources of each actor (None: 1 GPU and 1 CPU where the cluster
         has GPUs, else 1 CPU); num_gpus=0.5 puts two actors on each GPU.
     progress : a tqdm bar on stderr (views/s, ETA, failures); None: when stderr is a terminal.
@@ -221,8 +240,10 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
     job = _as_job(job)
     manifests = check_job(job)
     here = address == IN_PROCESS
-    ray = None if here else import_ray()
-    if address not in (None, "local", IN_PROCESS):
+    ray = None if address in (IN_PROCESS, PROCESSES) else import_ray()
+    if ray is None and (num_cpus is not None or num_gpus is not None):
+        raise UsageError(f"num_cpus and num_gpus are Ray's resources; {address!r} takes none")
+    if address not in (None, "local", IN_PROCESS, PROCESSES):
         preflight(address)  # unreachable: one line now, even when nothing is left to render
     result = JobResult(views=job.views)
     try:
@@ -230,7 +251,7 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
         result.skipped = sum(len(d) for d in done)
         items = job.items(done)
         if items:
-            started = False if here else connect(ray, address, local_cpus)
+            started = False if ray is None else connect(ray, address, local_cpus)
             made: list[tuple[SceneJob, Manifest, bool]] = []
             try:  # the folders are made last, right before the actors write into them
                 busy = {item.entry for item in items}
@@ -240,8 +261,9 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
                 if here:
                     _run_here(job, items, manifests, result, progress, on_result)
                 else:
-                    _run(ray, job, items, manifests, result, actors, num_cpus, num_gpus,
-                         progress, on_result)
+                    pool_of = (_ProcessActors(actors, len(items)) if ray is None else
+                               _RayActors(ray, actors, num_cpus, num_gpus))
+                    _run(pool_of, job, items, manifests, result, progress, on_result)
             except BaseException:
                 for scene, manifest, created in made:
                     abandon_frames_folder(scene, manifest, created)
@@ -311,26 +333,93 @@ def _run_here(job: Job, items: list[WorkItem], manifests: list[Manifest], result
         actor.close()
 
 
-def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], result: JobResult,
-         actors: int | None, num_cpus: float | None, num_gpus: float | None,
-         progress: bool | None, on_result: Callable[[WorkItem, dict], None] | None) -> None:
-    from ray.exceptions import RayActorError, RayError
+class _RayActors:
+    """Ray's renderer actors, for _run's loop."""
+
+    def __init__(self, ray: Any, actors: int | None, num_cpus: float | None,
+                 num_gpus: float | None) -> None:
+        self.ray = ray
+        self.count, resources = actor_plan(ray, actors, num_cpus, num_gpus)
+        self._cls = ray.remote(max_restarts=0, max_task_retries=0, **resources)(RayRenderer)
+        self._run_id = uuid.uuid4().hex[:8]
+        self.kind = "actor"
+
+    def start(self, n: int) -> Any:
+        return self._cls.options(name=f"vkpbr-renderer-{self._run_id}-{n}").remote()
+
+    @staticmethod
+    def call(handle: Any, item: WorkItem, ahead: Any) -> Any:
+        return handle.render.remote(item, ahead)
+
+    def wait_one(self, calls: list[Any]) -> Any:
+        return self.ray.wait(calls, num_returns=1)[0][0]
+
+    def get(self, call: Any) -> dict:
+        """The call's result; ActorLost when its actor died (killed, crashed, node lost)."""
+        from ray.exceptions import RayActorError, RayError
+
+        try:
+            return self.ray.get(call)
+        except RayActorError as exc:
+            why = (str(exc).strip().splitlines() or [""])[0][:160]
+            raise ActorLost(f"its renderer actor died ({type(exc).__name__}: {why})") from None
+        except RayError as exc:  # the call itself failed (an object lost, ...)
+            return {"ok": False, "error": str(exc).strip().splitlines()[0], "retry": True}
+
+    def end(self, handle: Any) -> None:
+        with contextlib.suppress(Exception):  # already gone
+            self.ray.kill(handle)
+
+
+class _ProcessActors:
+    """Renderer processes of this machine (distributed/processes.py), for _run's loop."""
+
+    def __init__(self, actors: int | None, items: int) -> None:
+        self.count = default_processes(items) if actors is None else actors
+        if self.count < 1:
+            raise UsageError(f"processes: expected at least 1, got {self.count}")
+        self._encoders = encoders_for(self.count)
+        self.kind = "process"
+
+    def start(self, n: int) -> ProcessActor:
+        return ProcessActor(self._encoders, name=f"vkpbr-renderer-{n}")
+
+    @staticmethod
+    def call(handle: ProcessActor, item: WorkItem, ahead: Any) -> Future:
+        return handle.render(item, ahead)
+
+    @staticmethod
+    def wait_one(calls: list[Future]) -> Future:
+        return wait_one(calls)
+
+    @staticmethod
+    def get(call: Future) -> dict:
+        return call.result()  # (ActorLost when the process ended first)
+
+    @staticmethod
+    def end(handle: ProcessActor) -> None:
+        handle.close()
+
+
+def _run(pool_of: _RayActors | _ProcessActors, job: Job, items: list[WorkItem],
+         manifests: list[Manifest], result: JobResult, progress: bool | None,
+         on_result: Callable[[WorkItem, dict], None] | None) -> None:
+    """The items handed to `pool_of`'s actors, one item each at a time (an actor's own scene
+    first, then the one it loads ahead); a lost actor is replaced and its item tried again."""
     from tqdm import tqdm
 
-    n, resources = actor_plan(ray, actors, num_cpus, num_gpus)
-    remote_cls = ray.remote(max_restarts=0, max_task_retries=0, **resources)(RayRenderer)
-    run_id = uuid.uuid4().hex[:8]
+    n = pool_of.count
     pool: dict[int, Any] = {}  # actor number -> handle
     made = 0
 
     def start_actor() -> None:
         nonlocal made
-        pool[made] = remote_cls.options(name=f"vkpbr-renderer-{run_id}-{made}").remote()
+        pool[made] = pool_of.start(made)
         made += 1
 
     for _ in range(n):
         start_actor()
-    result.actors = n
+    result.actors, result.actor_kind = n, pool_of.kind
     replacements = n
     idle = collections.deque(pool)
     pending = collections.deque(_Task(item) for item in items)
@@ -352,7 +441,7 @@ def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], r
             task.attempts += 1
             scenes[actor] = task.key
             hint = _next_scene(pending, actor, scenes, ahead)
-            in_flight[pool[actor].render.remote(task.item, hint)] = (actor, task)
+            in_flight[pool_of.call(pool[actor], task.item, hint)] = (actor, task)
             t_first = time.perf_counter() if t_first is None else t_first
 
     def fail(task: _Task, error: str, retry: bool, actor: int) -> None:
@@ -373,29 +462,26 @@ def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], r
     try:
         give_out()
         while in_flight:
-            ready, _ = ray.wait(list(in_flight), num_returns=1)
-            actor, task = in_flight.pop(ready[0])
+            ready = pool_of.wait_one(list(in_flight))
+            actor, task = in_flight.pop(ready)
             try:
-                res = ray.get(ready[0])
-            except RayActorError as exc:
+                res = pool_of.get(ready)
+            except ActorLost as exc:
                 # The actor is gone (killed, crashed, its node lost): replace it, retry the item.
                 result.actors_lost += 1
-                pool.pop(actor, None)
+                pool_of.end(pool.pop(actor))
                 scenes.pop(actor, None)
                 ahead.pop(actor, None)
                 if replacements > 0:
                     replacements -= 1
                     start_actor()
                     idle.append(made - 1)
-                why = (str(exc).strip().splitlines() or [""])[0][:160]
-                fail(task, f"its renderer actor died ({type(exc).__name__}: {why})", True, actor)
+                fail(task, str(exc), True, actor)
                 if not pool:  # nothing left to render on
                     while pending:
                         fail(pending.popleft(), "no renderer actor left", False, actor)
                 give_out()
                 continue
-            except RayError as exc:  # the call itself failed (an object lost, ...)
-                res = {"ok": False, "error": str(exc).strip().splitlines()[0], "retry": True}
             if on_result is not None:
                 on_result(task.item, res)
             if res.get("ok"):
@@ -409,6 +495,4 @@ def _run(ray: Any, job: Job, items: list[WorkItem], manifests: list[Manifest], r
         bar.close()
         result.render_seconds = time.perf_counter() - (t_first or time.perf_counter())
         for handle in pool.values():
-            with contextlib.suppress(Exception):  # already gone
-                ray.kill(handle)
-
+            pool_of.end(handle)
