@@ -266,11 +266,13 @@ def run_job(doc: dict, how: str, processes: int = 1) -> dict:
         return sequential(job)
     address = (PROCESSES if "processes" in how else IN_PROCESS if how.startswith("in-process")
                else None)
-    result = render(job, address, actors=processes, progress=False)
+    t0, firsts = time.perf_counter(), []
+    result = render(job, address, actors=processes, progress=False,
+                    on_result=lambda item, res: firsts.append(time.perf_counter() - t0))
     for line in result.summary()[1:4]:  # the first failures, if any (a model that needs a codec)
         print(f"  {how}: {line}", file=sys.stderr)
     return {"views": result.rendered, "seconds": result.render_seconds,
-            "failed": result.failed_views}
+            "failed": result.failed_views, "first": min(firsts, default=0.0)}
 
 
 def sequential(job: object) -> dict:
@@ -323,13 +325,14 @@ def job_table(args: argparse.Namespace) -> list[dict]:
         shutil.rmtree(work, ignore_errors=True)
     print(f"\n### {args.scenes} scenes ({len(models)} models: {', '.join(m.stem for m in models)})"
           f" x {args.views} views at {args.job_size}, PNG written\n")
-    print("| run | views | failed | s | views/s | of one scene in-process |")
-    print("|---|---:|---:|---:|---:|---:|")
+    print("| run | views | failed | s | views/s | of one scene in-process | first item done, s |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
     base = rows[0]["views"] / rows[0]["seconds"]
     for r in rows:
         rate = r["views"] / r["seconds"]
+        first = f"{r['first']:.2f}" if "first" in r else ""
         print(f"| {r['run']} | {r['views']} | {r['failed']} | {r['seconds']:.2f} | {rate:.1f} | "
-              f"{rate / base:.0%} |")
+              f"{rate / base:.0%} | {first} |")
     print("\none scene in-process, views/s per model: "
           + ", ".join(f"{k} {v:.0f}" for k, v in rows[0]["rates"].items()))
     return rows
@@ -368,6 +371,10 @@ def main() -> None:
     p.add_argument("--processes", type=_positive(int), nargs="*", default=[], metavar="N",
                    help="also the job's cold and warm rows (those in --job-runs) with N "
                         "renderer processes (render(address=PROCESSES)), for each N")
+    p.add_argument("--process-encoders", type=_positive(int), metavar="N",
+                   help="encoding threads of each renderer process (default: the cores shared)")
+    p.add_argument("--depth", type=_positive(int), metavar="N",
+                   help="items in flight a renderer process (default: processes.DEPTH)")
     p.add_argument("--encoders", type=_positive(int),
                    help="the actor's encoding threads (default: vkpbr's, distributed/actor.py)")
     p.add_argument("--no-switch", action="store_true",
@@ -405,6 +412,12 @@ def main() -> None:
 
         if args.encoders:
             actor.ENCODERS = args.encoders
+        from vkpbr.distributed import driver
+
+        if args.process_encoders:
+            driver.encoders_for = lambda n: args.process_encoders
+        if args.depth:
+            driver.DEPTH = args.depth
         if args.actor_switch_interval:
             actor.SWITCH_INTERVAL = args.actor_switch_interval
         if args.switch_interval:

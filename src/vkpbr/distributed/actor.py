@@ -50,6 +50,11 @@ LOADING_ENCODERS = 2
 SWITCH_INTERVAL = 0.001
 
 
+# What RendererActor.render asks about the next item once its views are rendered: (its
+# settings, the scene to load after it) when it is known and of another scene, else None
+Upcoming = Callable[[], "tuple[RenderSettings, RenderSettings | None] | None"]
+
+
 @contextlib.contextmanager
 def quick_switches() -> Iterator[None]:
     """Python's thread switch interval at most SWITCH_INTERVAL inside, as it was after."""
@@ -286,7 +291,8 @@ class RendererActor:
                                 else encoders)
         self._loader = ThreadPoolExecutor(1, thread_name_prefix="vkpbr-next-scene")
         self._ahead: tuple[tuple, Future] | None = None  # (scene key, its load)
-        self.loads = {"ahead": 0, "now": 0}  # scenes loaded on the thread / when needed
+        # scenes loaded on the thread / when needed; changed to during an item's encoding
+        self.loads = {"ahead": 0, "now": 0, "early": 0}
 
     def _loading(self) -> bool:
         """Whether a scene is loading ahead now."""
@@ -358,20 +364,24 @@ class RendererActor:
         return self._renderer
 
     def render(self, item: WorkItem, ahead: RenderSettings | None = None,
-               switch: bool = False, later: RenderSettings | None = None) -> dict[str, object]:
+               switch: bool = False, later: RenderSettings | None = None,
+               upcoming: Upcoming | None = None) -> dict[str, object]:
         """Render and write `item`'s views; `ahead`: the settings of the scene expected next,
         loaded on the prefetch thread meanwhile; `switch`: the next item is of that scene, so
         the renderer changes to it while this item's files are encoded (the swap and the
         encoding overlap; a scene that fails to load then is this actor's known bad scene,
         reported by the next item), and `later`'s scene (the one after it) starts loading
-        then, a whole item ahead of its use. Returns {"ok": True, "views", "files", "cameras",
+        then, a whole item ahead of its use; `upcoming` (without `switch`): asked once the
+        views are rendered for (the next item's settings, the scene after it) when the next
+        item is known by then and of another scene, which is then changed to as with `switch`
+        (a renderer process's next request: distributed/processes.py). Returns {"ok": True, "views", "files", "cameras",
         "seconds", "pid"}, or {"ok": False, "error": one line, "retry": bool}: an error in
         the input (a scene that does not load, a bad option) fails the same way everywhere
         and is not retried."""
         t0 = time.perf_counter()
         try:
             with quick_switches():
-                return self._render(item, t0, ahead, switch, later)
+                return self._render(item, t0, ahead, switch, later, upcoming)
         except (SceneError, UsageError) as exc:
             if ahead is not None:  # this scene failed: the next one still loads meanwhile
                 self.prefetch(ahead)
@@ -382,7 +392,8 @@ class RendererActor:
             return {"ok": False, "error": _one_line(exc), "retry": True, "pid": os.getpid()}
 
     def _render(self, item: WorkItem, t0: float, ahead: RenderSettings | None,
-                switch: bool = False, later: RenderSettings | None = None) -> dict[str, object]:
+                switch: bool = False, later: RenderSettings | None = None,
+                upcoming: Upcoming | None = None) -> dict[str, object]:
         from vkpbr.io import check_id_count, output_kind, output_path
 
         settings = item.settings
@@ -416,6 +427,8 @@ class RendererActor:
             files += names
         if switch and ahead is not None:
             self._change_early(ahead, later)
+        elif upcoming is not None and (following := upcoming()) is not None:
+            self._change_early(*following)
         for w in writes:
             w.result()
         cache = getattr(renderer.device, "pipeline_cache", None)
@@ -424,7 +437,8 @@ class RendererActor:
         sizes = [(out / f).stat().st_size for f in files]
         return {"ok": True, "views": list(item.frames), "files": files, "sizes": sizes,
                 "cameras": [camera_record(c) for c in cameras], "pid": os.getpid(),
-                "load_s": t_load - t0, "seconds": time.perf_counter() - t0}
+                "load_s": t_load - t0, "seconds": time.perf_counter() - t0,
+                "loads": dict(self.loads)}
 
     def _change_early(self, ahead: RenderSettings, later: RenderSettings | None) -> None:
         """The next item's scene (`ahead`) set now, and `later`'s load started."""
@@ -443,6 +457,7 @@ class RendererActor:
             return
         try:
             self._renderer_for(settings)
+            self.loads["early"] += 1
         except (SceneError, UsageError):
             pass  # kept in _bad_scenes: the next item's one line
         except Exception:  # noqa: BLE001 - this item's views are done: the next one retries

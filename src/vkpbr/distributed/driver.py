@@ -46,6 +46,7 @@ from vkpbr.distributed.manifest import (
     start_frames_folder,
 )
 from vkpbr.distributed.processes import (
+    DEPTH,
     ActorLost,
     ProcessActor,
     default_processes,
@@ -342,7 +343,7 @@ class _RayActors:
         self.count, resources = actor_plan(ray, actors, num_cpus, num_gpus)
         self._cls = ray.remote(max_restarts=0, max_task_retries=0, **resources)(RayRenderer)
         self._run_id = uuid.uuid4().hex[:8]
-        self.kind = "actor"
+        self.kind, self.depth = "actor", 1
 
     def start(self, n: int) -> Any:
         return self._cls.options(name=f"vkpbr-renderer-{self._run_id}-{n}").remote()
@@ -366,7 +367,7 @@ class _RayActors:
         except RayError as exc:  # the call itself failed (an object lost, ...)
             return {"ok": False, "error": str(exc).strip().splitlines()[0], "retry": True}
 
-    def end(self, handle: Any) -> None:
+    def end(self, handle: Any, now: bool = False) -> None:
         with contextlib.suppress(Exception):  # already gone
             self.ray.kill(handle)
 
@@ -379,7 +380,7 @@ class _ProcessActors:
         if self.count < 1:
             raise UsageError(f"processes: expected at least 1, got {self.count}")
         self._encoders = encoders_for(self.count)
-        self.kind = "process"
+        self.kind, self.depth = "process", DEPTH
 
     def start(self, n: int) -> ProcessActor:
         return ProcessActor(self._encoders, name=f"vkpbr-renderer-{n}")
@@ -397,15 +398,20 @@ class _ProcessActors:
         return call.result()  # (ActorLost when the process ended first)
 
     @staticmethod
-    def end(handle: ProcessActor) -> None:
-        handle.close()
+    def end(handle: ProcessActor, now: bool = False) -> None:
+        """Its work finished (`now`: killed, as a stopped job's: the files are atomic)."""
+        if now:
+            handle.kill()
+        else:
+            handle.close()
 
 
 def _run(pool_of: _RayActors | _ProcessActors, job: Job, items: list[WorkItem],
          manifests: list[Manifest], result: JobResult, progress: bool | None,
          on_result: Callable[[WorkItem, dict], None] | None) -> None:
-    """The items handed to `pool_of`'s actors, one item each at a time (an actor's own scene
-    first, then the one it loads ahead); a lost actor is replaced and its item tried again."""
+    """The items handed to `pool_of`'s actors, `pool_of.depth` items each at a time (an
+    actor's own scene first, then the one it loads ahead); a lost actor is replaced and its
+    items tried again."""
     from tqdm import tqdm
 
     n = pool_of.count
@@ -421,7 +427,7 @@ def _run(pool_of: _RayActors | _ProcessActors, job: Job, items: list[WorkItem],
         start_actor()
     result.actors, result.actor_kind = n, pool_of.kind
     replacements = n
-    idle = collections.deque(pool)
+    idle = collections.deque(a for a in pool for _ in range(pool_of.depth))  # free slots
     pending = collections.deque(_Task(item) for item in items)
     in_flight: dict[Any, tuple[int, _Task]] = {}
     bar = tqdm(total=sum(len(i.frames) for i in items), unit="view", dynamic_ncols=True,
@@ -435,6 +441,8 @@ def _run(pool_of: _RayActors | _ProcessActors, job: Job, items: list[WorkItem],
         nonlocal t_first
         while idle and pending:
             actor = idle.popleft()
+            if actor not in pool:  # a slot of a lost actor
+                continue
             k = _pick(pending, actor, (scenes.get(actor), ahead.get(actor)))
             task = pending[k]
             del pending[k]
@@ -467,15 +475,17 @@ def _run(pool_of: _RayActors | _ProcessActors, job: Job, items: list[WorkItem],
             try:
                 res = pool_of.get(ready)
             except ActorLost as exc:
-                # The actor is gone (killed, crashed, its node lost): replace it, retry the item.
-                result.actors_lost += 1
-                pool_of.end(pool.pop(actor))
-                scenes.pop(actor, None)
-                ahead.pop(actor, None)
-                if replacements > 0:
-                    replacements -= 1
-                    start_actor()
-                    idle.append(made - 1)
+                # The actor is gone (killed, crashed, its node lost): replace it (once, for
+                # all its items in flight), retry the item.
+                if actor in pool:
+                    result.actors_lost += 1
+                    pool_of.end(pool.pop(actor))
+                    scenes.pop(actor, None)
+                    ahead.pop(actor, None)
+                    if replacements > 0:
+                        replacements -= 1
+                        start_actor()
+                        idle.extend([made - 1] * pool_of.depth)
                 fail(task, str(exc), True, actor)
                 if not pool:  # nothing left to render on
                     while pending:
@@ -491,6 +501,11 @@ def _run(pool_of: _RayActors | _ProcessActors, job: Job, items: list[WorkItem],
                 fail(task, str(res.get("error")), bool(res.get("retry")), actor)
             idle.append(actor)
             give_out()
+    except BaseException:  # (stopped: its actors at once, their items in flight lost)
+        for handle in pool.values():
+            pool_of.end(handle, now=True)
+        pool.clear()
+        raise
     finally:
         bar.close()
         result.render_seconds = time.perf_counter() - (t_first or time.perf_counter())

@@ -22,9 +22,11 @@ from __future__ import annotations
 
 import collections
 import contextlib
+import functools
 import logging
 import os
 import pickle
+import queue
 import signal
 import subprocess
 import sys
@@ -41,6 +43,7 @@ log = logging.getLogger(__name__)
 # A worker's program (-c, not -m: the package imports this module before runpy would)
 WORKER = "from vkpbr.distributed.processes import serve; serve()"
 CLOSE_TIMEOUT_S = 30.0  # a worker asked to end that has not ended by then is killed
+DEPTH = 2  # requests in flight a worker: the next one known while this one renders
 
 
 class ActorLost(Exception):
@@ -62,7 +65,12 @@ def encoders_for(processes: int) -> int:
 # --- the worker ----------------------------------------------------------------------------
 def serve() -> None:
     """The worker's loop: a pickled (item, ahead) request a time on stdin, its actor's
-    result dict pickled back; ends at end of input. argv: encoders, log level."""
+    result dict pickled back, in order; ends at end of input. argv: encoders, log level.
+
+    The driver keeps DEPTH requests in flight, so the next item is often here before this
+    one's views are rendered: when it is of another scene, the renderer changes to it while
+    this item's files encode (RendererActor.render's `upcoming`; the in-process driver's
+    `switch`), and the scene after it starts loading then."""
     from vkpbr.app.log import cli_logging
     from vkpbr.distributed.actor import RendererActor, quick_switches
 
@@ -70,19 +78,40 @@ def serve() -> None:
     os.dup2(sys.stderr.fileno(), sys.stdout.fileno())  # prints (and layers') to stderr
     encoders, level = int(sys.argv[1]), int(sys.argv[2])
     verbosity = {logging.ERROR: -1, logging.WARNING: 0, logging.INFO: 1}.get(level, 2)
-    requests = sys.stdin.buffer
+    requests: queue.Queue = queue.Queue()
+    threading.Thread(target=_read_requests, args=(sys.stdin.buffer, requests),
+                     name="vkpbr-requests", daemon=True).start()
     with cli_logging(verbosity), quick_switches():
         actor = RendererActor(encoders=encoders)
         try:
-            while True:
-                try:
-                    item, ahead = pickle.load(requests)
-                except EOFError:
-                    return
-                pickle.dump(actor.render(item, ahead), answers, pickle.HIGHEST_PROTOCOL)
+            while (request := requests.get()) is not None:
+                item, ahead = request
+                res = actor.render(item, ahead, upcoming=functools.partial(
+                    _upcoming, requests, item.settings.scene_key()))
+                pickle.dump(res, answers, pickle.HIGHEST_PROTOCOL)
                 answers.flush()
         finally:
             actor.close()
+
+
+def _read_requests(stream: IO[bytes], requests: queue.Queue) -> None:
+    """Requests from `stream` into `requests`, then None (end of input, or a torn one)."""
+    try:
+        while True:
+            requests.put(pickle.load(stream))
+    except Exception:  # noqa: BLE001 - EOFError: the driver closed it (or ended)
+        requests.put(None)
+
+
+def _upcoming(requests: queue.Queue, key: tuple
+              ) -> tuple[RenderSettings, RenderSettings | None] | None:
+    """(the next request's settings, its scene to load ahead) when that request is here
+    already (left in the queue) and of another scene than `key`, else None."""
+    with requests.mutex:
+        following = requests.queue[0] if requests.queue else None
+    if following is None or following[0].settings.scene_key() == key:
+        return None
+    return following[0].settings, following[1]
 
 
 # --- the driver's side ---------------------------------------------------------------------
