@@ -43,6 +43,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -266,13 +267,20 @@ def run_job(doc: dict, how: str, processes: int = 1) -> dict:
         return sequential(job)
     address = (PROCESSES if "processes" in how else IN_PROCESS if how.startswith("in-process")
                else None)
-    t0, firsts = time.perf_counter(), []
+    t0, firsts, cpu0 = time.perf_counter(), [], _cpu_seconds()
     result = render(job, address, actors=processes, progress=False,
                     on_result=lambda item, res: firsts.append(time.perf_counter() - t0))
+    cores = (_cpu_seconds() - cpu0) / (time.perf_counter() - t0)
     for line in result.summary()[1:4]:  # the first failures, if any (a model that needs a codec)
         print(f"  {how}: {line}", file=sys.stderr)
     return {"views": result.rendered, "seconds": result.render_seconds,
-            "failed": result.failed_views, "first": min(firsts, default=0.0)}
+            "failed": result.failed_views, "first": min(firsts, default=0.0), "cores": cores}
+
+
+def _cpu_seconds() -> float:
+    """CPU time of this process and its ended children (renderer processes), user + system."""
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 def sequential(job: object) -> dict:
@@ -325,14 +333,16 @@ def job_table(args: argparse.Namespace) -> list[dict]:
         shutil.rmtree(work, ignore_errors=True)
     print(f"\n### {args.scenes} scenes ({len(models)} models: {', '.join(m.stem for m in models)})"
           f" x {args.views} views at {args.job_size}, PNG written\n")
-    print("| run | views | failed | s | views/s | of one scene in-process | first item done, s |")
-    print("|---|---:|---:|---:|---:|---:|---:|")
+    print("| run | views | failed | s | views/s | of one scene in-process | first item done, s "
+          "| cores busy |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
     base = rows[0]["views"] / rows[0]["seconds"]
     for r in rows:
         rate = r["views"] / r["seconds"]
         first = f"{r['first']:.2f}" if "first" in r else ""
+        cores = f"{r['cores']:.1f}" if "cores" in r else ""
         print(f"| {r['run']} | {r['views']} | {r['failed']} | {r['seconds']:.2f} | {rate:.1f} | "
-              f"{rate / base:.0%} | {first} |")
+              f"{rate / base:.0%} | {first} | {cores} |")
     print("\none scene in-process, views/s per model: "
           + ", ".join(f"{k} {v:.0f}" for k, v in rows[0]["rates"].items()))
     return rows

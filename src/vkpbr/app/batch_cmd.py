@@ -27,7 +27,7 @@ examples:
   vkpbr batch job.json --in-process         no Ray: one renderer here, the next scene loading
                                             on a thread while this one renders
   vkpbr batch job.json --processes          no Ray: renderer processes on this machine's GPU
-                                            (one per 4 cores, 1 to 8; --processes 4: four)
+                                            (3 for every 8 cores, 1 to 8; --processes 4: four)
 """
 
 # `vkpbr render` options a --ray job does not carry (each actor uses the scene's camera and
@@ -65,7 +65,7 @@ def add_parser(sub: Any) -> None:
                         "device; the same files and manifests, resumable alike)")
     p.add_argument("--processes", nargs="?", const=0, type=_processes, metavar="N",
                    help="render without Ray in N renderer processes of this machine (default "
-                        "device; alone: one per 4 cores, 1 to 8): a many-scene job's scene "
+                        "device; alone: 3 for every 8 cores, 1 to 8): a many-scene job's scene "
                         "changes run side by side")
     add_ray_arguments(p, with_flag=False)
     p.set_defaults(run=run)

@@ -225,7 +225,7 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
         default device, each with its own GIL (distributed/processes.py; a many-scene job's
         scene changes run side by side).
     actors : how many renderer actors (None: one per GPU, else one per CPU of the cluster;
-        with "processes", one per 4 cores, 1 to 8).
+        with "processes", 3 for every 8 cores, 1 to 8).
     num_cpus, num_gpus : Ray resources of each actor (None: 1 GPU and 1 CPU where the cluster
         has GPUs, else 1 CPU); num_gpus=0.5 puts two actors on each GPU.
     progress : a tqdm bar on stderr (views/s, ETA, failures); None: when stderr is a terminal.

@@ -51,9 +51,11 @@ class ActorLost(Exception):
 
 
 def default_processes(items: int) -> int:
-    """Renderer processes for a job of `items` work items: one per 4 cores (each keeps one
-    thread rendering, one loading and a few encoding busy), 1 to 8, at most one an item."""
-    return max(1, min(8, (os.cpu_count() or 2) // 4, items))
+    """Renderer processes for a job of `items` work items: 3 for every 8 cores (each keeps a
+    thread rendering, one loading and two encoding busy), 1 to 8, at most one an item. H200
+    with 16 cores, 100 scenes x 16 views (benchmarks/results/h200-2026-12-04s19.md, run b):
+    3, 4, 5, 6 processes 220, 251, 278, 291 views/s; one in this process 120."""
+    return max(1, min(8, (os.cpu_count() or 2) * 3 // 8, items))
 
 
 def encoders_for(processes: int) -> int:
