@@ -41,6 +41,7 @@ Prints Markdown tables. Not a test: asserts nothing but that the jobs succeed.
 from __future__ import annotations
 
 import argparse
+import collections
 import json
 import os
 import resource
@@ -268,13 +269,19 @@ def run_job(doc: dict, how: str, processes: int = 1) -> dict:
     address = (PROCESSES if "processes" in how else IN_PROCESS if how.startswith("in-process")
                else None)
     t0, firsts, cpu0 = time.perf_counter(), [], _cpu_seconds()
-    result = render(job, address, actors=processes, progress=False,
-                    on_result=lambda item, res: firsts.append(time.perf_counter() - t0))
+    phases: collections.Counter = collections.Counter()
+
+    def on_result(item: object, res: dict) -> None:
+        firsts.append(time.perf_counter() - t0)
+        phases.update(res.get("phases", {}))
+
+    result = render(job, address, actors=processes, progress=False, on_result=on_result)
     cores = (_cpu_seconds() - cpu0) / (time.perf_counter() - t0)
     for line in result.summary()[1:4]:  # the first failures, if any (a model that needs a codec)
         print(f"  {how}: {line}", file=sys.stderr)
     return {"views": result.rendered, "seconds": result.render_seconds,
-            "failed": result.failed_views, "first": min(firsts, default=0.0), "cores": cores}
+            "failed": result.failed_views, "first": min(firsts, default=0.0), "cores": cores,
+            "phases": {k: 1000 * v / max(1, len(firsts)) for k, v in phases.items()}}
 
 
 def _cpu_seconds() -> float:
@@ -343,6 +350,15 @@ def job_table(args: argparse.Namespace) -> list[dict]:
         cores = f"{r['cores']:.1f}" if "cores" in r else ""
         print(f"| {r['run']} | {r['views']} | {r['failed']} | {r['seconds']:.2f} | {rate:.1f} | "
               f"{rate / base:.0%} | {first} | {cores} |")
+    named = [r for r in rows if r.get("phases")]
+    if named:
+        keys = list(named[0]["phases"])
+        print("\nan item's ms (mean; wall clock of the thread that renders it, and its CPU):\n")
+        print("| run | " + " | ".join(keys) + " |")
+        print("|---|" + "---:|" * len(keys))
+        for r in named:
+            print(f"| {r['run']} | " + " | ".join(f"{r['phases'].get(k, 0):.1f}" for k in keys)
+                  + " |")
     print("\none scene in-process, views/s per model: "
           + ", ".join(f"{k} {v:.0f}" for k, v in rows[0]["rates"].items()))
     return rows

@@ -397,6 +397,7 @@ class RendererActor:
         from vkpbr.io import check_id_count, output_kind, output_path
 
         settings = item.settings
+        cpu0 = time.thread_time()
         renderer = self._renderer_for(settings)
         t_load = time.perf_counter()
         if ahead is not None:  # after this scene's load: the two do not contend
@@ -425,12 +426,15 @@ class RendererActor:
                 writes.append(self._pool.submit(self._write, out / file, frame[name],
                                                 output_kind(name), "outputs"))
             files += names
+        t_views = time.perf_counter()
         if switch and ahead is not None:
             self._change_early(ahead, later)
         elif upcoming is not None and (following := upcoming()) is not None:
             self._change_early(*following)
+        t_switch = time.perf_counter()
         for w in writes:
             w.result()
+        t_written = time.perf_counter()
         cache = getattr(renderer.device, "pipeline_cache", None)
         if cache is not None:  # Ray kills actors without close(): keep new pipelines now
             cache.save()
@@ -438,7 +442,11 @@ class RendererActor:
         return {"ok": True, "views": list(item.frames), "files": files, "sizes": sizes,
                 "cameras": [camera_record(c) for c in cameras], "pid": os.getpid(),
                 "load_s": t_load - t0, "seconds": time.perf_counter() - t0,
-                "loads": dict(self.loads)}
+                "loads": dict(self.loads),
+                # where the item's wall time went, and its thread's CPU time (benchmarks)
+                "phases": {"scene": t_load - t0, "views": t_views - t_load,
+                           "next scene": t_switch - t_views, "files": t_written - t_switch,
+                           "cpu": time.thread_time() - cpu0}}
 
     def _change_early(self, ahead: RenderSettings, later: RenderSettings | None) -> None:
         """The next item's scene (`ahead`) set now, and `later`'s load started."""
