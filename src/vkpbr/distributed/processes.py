@@ -8,9 +8,9 @@ each have their own GIL, device and scene; the driver hands them items as it han
 actors theirs (distributed/driver.py), so the files, manifests, retries and resumption are
 the same.
 
-A worker is `python -c WORKER` fed pickled requests on its stdin; it answers on its own
-copy of the stdout it was given, and points its stdout at its stderr, so that anything
-printed there (by Python or a Vulkan layer) cannot corrupt the answers. Not
+A worker is `python -c WORKER` (app/render_worker.py) fed pickled requests on its stdin; it
+answers on its own copy of the stdout it was given, and points its stdout at its stderr, so
+that anything printed there (by Python or a Vulkan layer) cannot corrupt the answers. Not
 multiprocessing's workers: its "spawn" imports the parent's `__main__` in every worker,
 which runs a user's script again where it lacks a main guard, and "fork" would copy a
 process that may hold a Vulkan device and threads. A worker ends when its stdin closes, so
@@ -22,11 +22,9 @@ from __future__ import annotations
 
 import collections
 import contextlib
-import functools
 import logging
 import os
 import pickle
-import queue
 import signal
 import subprocess
 import sys
@@ -36,12 +34,13 @@ from typing import IO
 
 from vkpbr.distributed.job import RenderSettings, WorkItem
 
-__all__ = ["ProcessActor", "ActorLost", "serve", "default_processes", "encoders_for"]
+__all__ = ["ProcessActor", "ActorLost", "default_processes", "encoders_for", "DEPTH", "WORKER"]
 
 log = logging.getLogger(__name__)
 
-# A worker's program (-c, not -m: the package imports this module before runpy would)
-WORKER = "from vkpbr.distributed.processes import serve; serve()"
+# A worker's program (app/render_worker.py: a process's main, with the CLI's one-line
+# diagnostics); -c, not -m: the package imports that module before runpy would
+WORKER = "from vkpbr.app.render_worker import serve; serve()"
 CLOSE_TIMEOUT_S = 30.0  # a worker asked to end that has not ended by then is killed
 DEPTH = 2  # requests in flight a worker: the next one known while this one renders
 
@@ -62,58 +61,6 @@ def encoders_for(processes: int) -> int:
     """Encoding threads of each of `processes` renderer processes: the cores shared out, 2
     to 8 each (as one process's actor.ENCODERS)."""
     return max(2, min(8, (os.cpu_count() or 2) // max(1, processes)))
-
-
-# --- the worker ----------------------------------------------------------------------------
-def serve() -> None:
-    """The worker's loop: a pickled (item, ahead) request a time on stdin, its actor's
-    result dict pickled back, in order; ends at end of input. argv: encoders, log level.
-
-    The driver keeps DEPTH requests in flight, so the next item is often here before this
-    one's views are rendered: when it is of another scene, the renderer changes to it while
-    this item's files encode (RendererActor.render's `upcoming`; the in-process driver's
-    `switch`), and the scene after it starts loading then."""
-    from vkpbr.app.log import cli_logging
-    from vkpbr.distributed.actor import RendererActor, quick_switches
-
-    answers = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
-    os.dup2(sys.stderr.fileno(), sys.stdout.fileno())  # prints (and layers') to stderr
-    encoders, level = int(sys.argv[1]), int(sys.argv[2])
-    verbosity = {logging.ERROR: -1, logging.WARNING: 0, logging.INFO: 1}.get(level, 2)
-    requests: queue.Queue = queue.Queue()
-    threading.Thread(target=_read_requests, args=(sys.stdin.buffer, requests),
-                     name="vkpbr-requests", daemon=True).start()
-    with cli_logging(verbosity), quick_switches():
-        actor = RendererActor(encoders=encoders)
-        try:
-            while (request := requests.get()) is not None:
-                item, ahead = request
-                res = actor.render(item, ahead, upcoming=functools.partial(
-                    _upcoming, requests, item.settings.scene_key()))
-                pickle.dump(res, answers, pickle.HIGHEST_PROTOCOL)
-                answers.flush()
-        finally:
-            actor.close()
-
-
-def _read_requests(stream: IO[bytes], requests: queue.Queue) -> None:
-    """Requests from `stream` into `requests`, then None (end of input, or a torn one)."""
-    try:
-        while True:
-            requests.put(pickle.load(stream))
-    except Exception:  # noqa: BLE001 - EOFError: the driver closed it (or ended)
-        requests.put(None)
-
-
-def _upcoming(requests: queue.Queue, key: tuple
-              ) -> tuple[RenderSettings, RenderSettings | None] | None:
-    """(the next request's settings, its scene to load ahead) when that request is here
-    already (left in the queue) and of another scene than `key`, else None."""
-    with requests.mutex:
-        following = requests.queue[0] if requests.queue else None
-    if following is None or following[0].settings.scene_key() == key:
-        return None
-    return following[0].settings, following[1]
 
 
 # --- the driver's side ---------------------------------------------------------------------

@@ -1,0 +1,75 @@
+"""A renderer process's main (`vkpbr batch --processes`): the worker that
+vkpbr.distributed.processes.ProcessActor starts as `python -c WORKER ENCODERS LOG_LEVEL`.
+
+It renders the work items it is sent with one RendererActor and answers each with the
+actor's result dict; its diagnostics are the CLI's one-line records on stderr (app/log.py) at
+the driver's level. The protocol: pickled (item, ahead) requests on stdin, pickled results
+in the same order on the stdout it was started with, which it keeps for its answers alone
+(its own stdout then points at stderr, so nothing printed by Python or a Vulkan layer can
+corrupt them); end of input ends it.
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import os
+import pickle
+import queue
+import sys
+import threading
+from typing import IO
+
+from vkpbr.app.log import cli_logging
+from vkpbr.distributed.actor import RendererActor, quick_switches
+from vkpbr.distributed.job import RenderSettings
+
+__all__ = ["serve"]
+
+
+def serve() -> None:
+    """The worker's loop: a request at a time, its result back, in order; argv: encoders,
+    log level.
+
+    The driver keeps processes.DEPTH requests in flight, so the next item is often here
+    before this one's views are rendered: when it is of another scene, the renderer changes
+    to it while this item's files encode (RendererActor.render's `upcoming`; the in-process
+    driver's `switch`), and the scene after it starts loading then."""
+    answers = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
+    os.dup2(sys.stderr.fileno(), sys.stdout.fileno())  # prints (and layers') to stderr
+    encoders, level = int(sys.argv[1]), int(sys.argv[2])
+    verbosity = {logging.ERROR: -1, logging.WARNING: 0, logging.INFO: 1}.get(level, 2)
+    requests: queue.Queue = queue.Queue()
+    threading.Thread(target=_read_requests, args=(sys.stdin.buffer, requests),
+                     name="vkpbr-requests", daemon=True).start()
+    with cli_logging(verbosity), quick_switches():
+        actor = RendererActor(encoders=encoders)
+        try:
+            while (request := requests.get()) is not None:
+                item, ahead = request
+                res = actor.render(item, ahead, upcoming=functools.partial(
+                    _upcoming, requests, item.settings.scene_key()))
+                pickle.dump(res, answers, pickle.HIGHEST_PROTOCOL)
+                answers.flush()
+        finally:
+            actor.close()
+
+
+def _read_requests(stream: IO[bytes], requests: queue.Queue) -> None:
+    """Requests from `stream` into `requests`, then None (end of input, or a torn one)."""
+    try:
+        while True:
+            requests.put(pickle.load(stream))
+    except Exception:  # noqa: BLE001 - EOFError: the driver closed it (or ended)
+        requests.put(None)
+
+
+def _upcoming(requests: queue.Queue, key: tuple
+              ) -> tuple[RenderSettings, RenderSettings | None] | None:
+    """(the next request's settings, its scene to load ahead) when that request is here
+    already (left in the queue) and of another scene than `key`, else None."""
+    with requests.mutex:
+        following = requests.queue[0] if requests.queue else None
+    if following is None or following[0].settings.scene_key() == key:
+        return None
+    return following[0].settings, following[1]
