@@ -322,7 +322,7 @@ def job_table(args: argparse.Namespace) -> list[dict]:
         doc = job_doc(models, args.scenes, args.views, args.job_size, work / "out")
         named = {"cold": "in-process job (cold bake cache)", "warm": "in-process job (warm)",
                  "sequential": "no load ahead"}
-        runs = [(named[r], 1) for r in args.job_runs.split(",") if r]
+        runs = [] if args.no_in_process else [(named[r], 1) for r in args.job_runs.split(",") if r]
         for n in args.processes:
             runs += [(f"{n} processes job ({r})", n) for r in ("cold", "warm")
                      if r in args.job_runs.split(",")]
@@ -399,6 +399,10 @@ def main() -> None:
                         "renderer processes (render(address=PROCESSES)), for each N")
     p.add_argument("--process-encoders", type=_positive(int), metavar="N",
                    help="encoding threads of each renderer process (default: the cores shared)")
+    p.add_argument("--no-in-process", action="store_true",
+                   help="only the --processes rows (and one scene's, for the ratio)")
+    p.add_argument("--loads-ahead", type=_positive(int), metavar="N",
+                   help="scenes a renderer process loads ahead (default: processes.LOADS_AHEAD)")
     p.add_argument("--depth", type=_positive(int), metavar="N",
                    help="items in flight a renderer process (default: processes.DEPTH)")
     p.add_argument("--encoders", type=_positive(int),
@@ -444,6 +448,8 @@ def main() -> None:
             driver.encoders_for = lambda n: args.process_encoders
         if args.depth:
             driver.DEPTH = args.depth
+        if args.loads_ahead:
+            driver.LOADS_AHEAD = args.loads_ahead
         if args.actor_switch_interval:
             actor.SWITCH_INTERVAL = args.actor_switch_interval
         if args.switch_interval:
