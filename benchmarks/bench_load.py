@@ -401,8 +401,6 @@ def main() -> None:
                    help="encoding threads of each renderer process (default: the cores shared)")
     p.add_argument("--no-in-process", action="store_true",
                    help="only the --processes rows (and one scene's, for the ratio)")
-    p.add_argument("--loads-ahead", type=_positive(int), metavar="N",
-                   help="scenes a renderer process loads ahead (default: processes.LOADS_AHEAD)")
     p.add_argument("--depth", type=_positive(int), metavar="N",
                    help="items in flight a renderer process (default: processes.DEPTH)")
     p.add_argument("--encoders", type=_positive(int),
@@ -448,8 +446,6 @@ def main() -> None:
             driver.encoders_for = lambda n: args.process_encoders
         if args.depth:
             driver.DEPTH = args.depth
-        if args.loads_ahead:
-            driver.LOADS_AHEAD = args.loads_ahead
         if args.actor_switch_interval:
             actor.SWITCH_INTERVAL = args.actor_switch_interval
         if args.switch_interval:

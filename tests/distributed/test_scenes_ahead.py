@@ -237,35 +237,6 @@ def test_next_scene_loads_ahead(tmp_path: Path, scenes: dict, reference: dict) -
     check_against(reference, tmp_path)
 
 
-def test_two_scenes_load_ahead(tmp_path: Path, scenes: dict, reference: dict) -> None:
-    """`loads_ahead=2` (a renderer process's): the scene after the next one loads too, on a
-    thread of its own, when it is named (`further`); a hint further ahead takes no room that
-    a nearer load holds, and the files are the same."""
-    job = job_from_doc(job_doc(tmp_path, scenes), base=tmp_path)
-    firsts = {}
-    for item in job.items():
-        firsts.setdefault(item.entry, item)
-    chart, model_a, model_b = firsts[0], firsts[1], firsts[2]
-    actor = RendererActor(loads_ahead=2)
-    try:
-        for item in (chart, model_a, model_b):
-            (tmp_path / job.scenes[item.entry].settings.out.name).mkdir(exist_ok=True)
-        assert actor.render(chart, model_a.settings, further=[model_b.settings,
-                                                              firsts[4].settings])["ok"]
-        # the two models load (the chart again: the renderer's own scene, not loaded)
-        assert list(actor._ahead) == [model_a.settings.scene_key(), model_b.settings.scene_key()]
-        actor.prefetch(firsts[3].settings, replace=False)  # full: a further hint is dropped
-        assert firsts[3].settings.scene_key() not in actor._ahead
-        assert actor.render(model_a)["ok"] and actor.render(model_b)["ok"]
-    finally:
-        actor.close()
-    assert actor.loads == {"now": 1, "ahead": 2, "early": 0}
-    for name, item in (("chart", chart), (MODELS[0], model_a), (MODELS[1], model_b)):
-        got = frames(tmp_path / job.scenes[item.entry].settings.out.name)
-        want = {f: b for f, b in frames(reference[name]).items() if f in got}
-        assert sorted(got) == sorted(want) and (not on_cpu() or got == want), name
-
-
 def test_scene_changes_while_the_files_encode(tmp_path: Path, scenes: dict,
                                              reference: dict) -> None:
     """`switch` (the in-process driver's: the next item is of the scene loaded ahead): the

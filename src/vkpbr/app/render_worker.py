@@ -1,5 +1,5 @@
 """A renderer process's main (`vkpbr batch --processes`): the worker that
-vkpbr.distributed.processes.ProcessActor starts as `python -c WORKER ENCODERS LOG_LEVEL LOADS_AHEAD`.
+vkpbr.distributed.processes.ProcessActor starts as `python -c WORKER ENCODERS LOG_LEVEL`.
 
 It renders the work items it is sent with one RendererActor and answers each with the
 actor's result dict; its diagnostics are the CLI's one-line records on stderr (app/log.py) at
@@ -29,7 +29,7 @@ __all__ = ["serve"]
 
 def serve() -> None:
     """The worker's loop: a request at a time, its result back, in order; argv: encoders,
-    log level, scenes to load ahead at most.
+    log level.
 
     The driver keeps processes.DEPTH requests in flight, so the next item is often here
     before this one's views are rendered: when it is of another scene, the renderer changes
@@ -37,19 +37,18 @@ def serve() -> None:
     driver's `switch`), and the scene after it starts loading then."""
     answers = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
     os.dup2(sys.stderr.fileno(), sys.stdout.fileno())  # prints (and layers') to stderr
-    encoders, level, loads_ahead = (int(a) for a in sys.argv[1:4])
+    encoders, level = int(sys.argv[1]), int(sys.argv[2])
     verbosity = {logging.ERROR: -1, logging.WARNING: 0, logging.INFO: 1}.get(level, 2)
     requests: queue.Queue = queue.Queue()
     threading.Thread(target=_read_requests, args=(sys.stdin.buffer, requests),
                      name="vkpbr-requests", daemon=True).start()
     with cli_logging(verbosity), quick_switches():
-        actor = RendererActor(encoders=encoders, loads_ahead=loads_ahead)
+        actor = RendererActor(encoders=encoders)
         try:
             while (request := requests.get()) is not None:
                 item, ahead = request
                 res = actor.render(item, ahead, upcoming=functools.partial(
-                    _upcoming, requests, item.settings.scene_key()),
-                    further=_further(requests))
+                    _upcoming, requests, item.settings.scene_key()))
                 pickle.dump(res, answers, pickle.HIGHEST_PROTOCOL)
                 answers.flush()
         finally:
@@ -63,14 +62,6 @@ def _read_requests(stream: IO[bytes], requests: queue.Queue) -> None:
             requests.put(pickle.load(stream))
     except Exception:  # noqa: BLE001 - EOFError: the driver closed it (or ended)
         requests.put(None)
-
-
-def _further(requests: queue.Queue) -> list[RenderSettings]:
-    """The scenes the requests already here will want, in order: each one's own, then the
-    one it says to load ahead."""
-    with requests.mutex:
-        waiting = [r for r in requests.queue if r is not None]
-    return [s for item, ahead in waiting for s in (item.settings, ahead) if s is not None]
 
 
 def _upcoming(requests: queue.Queue, key: tuple

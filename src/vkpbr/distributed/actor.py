@@ -16,7 +16,7 @@ import socket
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -275,12 +275,9 @@ class RendererActor:
 
     device : the Vulkan device (name substring or index) the Renderer opens; None: the default.
     encoders : threads that encode its files (None: ENCODERS).
-    loads_ahead : scenes loaded ahead at most, each on a thread of its own (a renderer
-        process is told two: distributed/processes.py).
     """
 
-    def __init__(self, device: str | int | None = None, encoders: int | None = None,
-                 loads_ahead: int = 1) -> None:
+    def __init__(self, device: str | int | None = None, encoders: int | None = None) -> None:
         self.device = device
         encoders = encoders or ENCODERS
         self._key: tuple | None = None  # the scene the renderer draws
@@ -292,15 +289,15 @@ class RendererActor:
         self._pool = ThreadPoolExecutor(encoders, thread_name_prefix="vkpbr-encode")
         self._gate = EncodeGate(lambda: min(LOADING_ENCODERS, encoders) if self._loading()
                                 else encoders)
-        self._loader = ThreadPoolExecutor(loads_ahead, thread_name_prefix="vkpbr-next-scene")
-        self._loads_ahead = loads_ahead
-        self._ahead: dict[tuple, Future] = {}  # scene key -> its load, oldest first
+        self._loader = ThreadPoolExecutor(1, thread_name_prefix="vkpbr-next-scene")
+        self._ahead: tuple[tuple, Future] | None = None  # (scene key, its load)
         # scenes loaded on the thread / when needed; changed to during an item's encoding
         self.loads = {"ahead": 0, "now": 0, "early": 0}
 
     def _loading(self) -> bool:
         """Whether a scene is loading ahead now."""
-        return any(not load.done() for load in list(self._ahead.values()))
+        ahead = self._ahead
+        return ahead is not None and not ahead[1].done()
 
     def _write(self, path: Path, array: np.ndarray, kind: Kind, option: str = "--out") -> None:
         """One file written (`vkpbr.io.write_output`) through the encoding gate."""
@@ -310,28 +307,19 @@ class RendererActor:
     def info(self) -> dict[str, object]:
         return {"pid": os.getpid(), "host": socket.gethostname(), "device": self.device}
 
-    def prefetch(self, settings: RenderSettings, replace: bool = True) -> None:
-        """Start loading `settings`' scene on a prefetch thread (not the current one, a
-        known bad one or one already ahead). At most `loads_ahead` scenes ahead: when that
-        many are kept, a load not yet started is dropped for this one, else the oldest
-        finished one (not with `replace` False: a hint further ahead); when all are under
-        way, this hint is dropped."""
+    def prefetch(self, settings: RenderSettings) -> None:
+        """Start loading `settings`' scene on the prefetch thread (not the current one, a
+        known bad one or the one already ahead). One scene ahead at most: a load not yet
+        started is replaced; one under way is left to finish and this hint dropped."""
         key = settings.scene_key()
-        if key == self._key or key in self._bad_scenes or key in self._ahead:
+        if key == self._key or key in self._bad_scenes:
             return
-        if len(self._ahead) >= self._loads_ahead:
-            if not replace:
-                return
-            loads = list(self._ahead.items())
-            drop = next((k for k, load in loads if load.cancel()), None)
-            drop = drop if drop is not None else next((k for k, load in loads if load.done()),
-                                                      None)
-            if drop is None:
-                return
-            del self._ahead[drop]
+        ahead = self._ahead  # a finished load of another scene is dropped, one under way kept
+        if ahead is not None and (ahead[0] == key or not (ahead[1].done() or ahead[1].cancel())):
+            return
         size = (int(self._renderer.device.limits.maxImageDimension2D)
                 if self._renderer is not None else None)
-        self._ahead[key] = self._loader.submit(self._load, settings, size)
+        self._ahead = (key, self._loader.submit(self._load, settings, size))
 
     @staticmethod
     def _load(settings: RenderSettings, max_size: int | None) -> Any:
@@ -339,12 +327,13 @@ class RendererActor:
         return predecode(scene, max_size) if max_size and scene is not None else scene
 
     def _scene(self, settings: RenderSettings, key: tuple) -> Any:
-        """`settings`' scene: its load ahead when there is one, else loaded now (the loads
-        ahead of other scenes are kept for their items, or dropped by later hints)."""
-        load = self._ahead.pop(key, None)
-        if load is not None:
+        """`settings`' scene: the one loaded ahead when it is that one, else loaded now."""
+        ahead, self._ahead = self._ahead, None
+        if ahead is not None and ahead[0] == key:
             self.loads["ahead"] += 1
-            return load.result()  # (its load's error, as loading now would raise it)
+            return ahead[1].result()  # (its load's error, as loading now would raise it)
+        if ahead is not None:
+            ahead[1].cancel()
         self.loads["now"] += 1
         return load_scene_for(settings)
 
@@ -376,8 +365,7 @@ class RendererActor:
 
     def render(self, item: WorkItem, ahead: RenderSettings | None = None,
                switch: bool = False, later: RenderSettings | None = None,
-               upcoming: Upcoming | None = None,
-               further: Sequence[RenderSettings] = ()) -> dict[str, object]:
+               upcoming: Upcoming | None = None) -> dict[str, object]:
         """Render and write `item`'s views; `ahead`: the settings of the scene expected next,
         loaded on the prefetch thread meanwhile; `switch`: the next item is of that scene, so
         the renderer changes to it while this item's files are encoded (the swap and the
@@ -386,15 +374,14 @@ class RendererActor:
         then, a whole item ahead of its use; `upcoming` (without `switch`): asked once the
         views are rendered for (the next item's settings, the scene after it) when the next
         item is known by then and of another scene, which is then changed to as with `switch`
-        (a renderer process's next request: distributed/processes.py); `further`: scenes
-        after `ahead`, in order, loaded ahead too while there is room (`loads_ahead`). Returns {"ok": True, "views", "files", "cameras",
+        (a renderer process's next request: distributed/processes.py). Returns {"ok": True, "views", "files", "cameras",
         "seconds", "pid"}, or {"ok": False, "error": one line, "retry": bool}: an error in
         the input (a scene that does not load, a bad option) fails the same way everywhere
         and is not retried."""
         t0 = time.perf_counter()
         try:
             with quick_switches():
-                return self._render(item, t0, ahead, switch, later, upcoming, further)
+                return self._render(item, t0, ahead, switch, later, upcoming)
         except (SceneError, UsageError) as exc:
             if ahead is not None:  # this scene failed: the next one still loads meanwhile
                 self.prefetch(ahead)
@@ -406,8 +393,7 @@ class RendererActor:
 
     def _render(self, item: WorkItem, t0: float, ahead: RenderSettings | None,
                 switch: bool = False, later: RenderSettings | None = None,
-                upcoming: Upcoming | None = None,
-                further: Sequence[RenderSettings] = ()) -> dict[str, object]:
+                upcoming: Upcoming | None = None) -> dict[str, object]:
         from vkpbr.io import check_id_count, output_kind, output_path
 
         settings = item.settings
@@ -416,8 +402,6 @@ class RendererActor:
         t_load = time.perf_counter()
         if ahead is not None:  # after this scene's load: the two do not contend
             self.prefetch(ahead)
-        for settings_after in further:
-            self.prefetch(settings_after, replace=False)
         times = view_times(item.poses, settings)
         if renderer.state.time is not None:  # an earlier item played the animation: the rest
             renderer.reset_pose()             # pose, as a fresh renderer draws it

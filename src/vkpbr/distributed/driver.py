@@ -47,7 +47,6 @@ from vkpbr.distributed.manifest import (
 )
 from vkpbr.distributed.processes import (
     DEPTH,
-    LOADS_AHEAD,
     ActorLost,
     ProcessActor,
     default_processes,
@@ -384,7 +383,7 @@ class _ProcessActors:
         self.kind, self.depth = "process", DEPTH
 
     def start(self, n: int) -> ProcessActor:
-        return ProcessActor(self._encoders, LOADS_AHEAD, name=f"vkpbr-renderer-{n}")
+        return ProcessActor(self._encoders, name=f"vkpbr-renderer-{n}")
 
     @staticmethod
     def call(handle: ProcessActor, item: WorkItem, ahead: Any) -> Future:

@@ -34,8 +34,7 @@ from typing import IO
 
 from vkpbr.distributed.job import RenderSettings, WorkItem
 
-__all__ = ["ProcessActor", "ActorLost", "default_processes", "encoders_for", "DEPTH",
-           "LOADS_AHEAD", "WORKER"]
+__all__ = ["ProcessActor", "ActorLost", "default_processes", "encoders_for", "DEPTH", "WORKER"]
 
 log = logging.getLogger(__name__)
 
@@ -44,10 +43,6 @@ log = logging.getLogger(__name__)
 WORKER = "from vkpbr.app.render_worker import serve; serve()"
 CLOSE_TIMEOUT_S = 30.0  # a worker asked to end that has not ended by then is killed
 DEPTH = 2  # requests in flight a worker: the next one known while this one renders
-# Scenes a worker loads ahead, each on a thread of its own: with several processes on one
-# GPU, an item's wait for its next scene's load was the largest part of its time
-# (benchmarks/results/h200-2026-12-04s19.md, run d), with half the cores idle.
-LOADS_AHEAD = 2
 
 
 class ActorLost(Exception):
@@ -73,14 +68,12 @@ class ProcessActor:
     """One renderer process: `render(item, ahead)` sends it an item and returns a Future of
     its result (ActorLost when the process ends first); a thread reads the answers."""
 
-    def __init__(self, encoders: int, loads_ahead: int = LOADS_AHEAD,
-                 name: str = "vkpbr-renderer") -> None:
+    def __init__(self, encoders: int, name: str = "vkpbr-renderer") -> None:
         # (this process's import path, so that the worker finds the same vkpbr)
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
         level = logging.getLogger("vkpbr").getEffectiveLevel()
-        argv = [sys.executable, "-c", WORKER, str(encoders), str(level), str(loads_ahead)]
-        self.process = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                        env=env)
+        self.process = subprocess.Popen([sys.executable, "-c", WORKER, str(encoders), str(level)],
+                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env)
         self._waiting: collections.deque[Future] = collections.deque()
         self._lock = threading.Lock()  # (the waiting futures, the requests, `_ended`)
         self._ended: str | None = None  # why no answer will come any more
