@@ -276,7 +276,8 @@ def run_job(doc: dict, how: str, processes: int = 1) -> dict:
         phases.update(res.get("phases", {}))
 
     result = render(job, address, actors=processes, progress=False, on_result=on_result)
-    cores = (_cpu_seconds() - cpu0) / (time.perf_counter() - t0)
+    wall, cpu1 = time.perf_counter() - t0, _cpu_seconds()
+    cores = ((cpu1[0] - cpu0[0]) / wall, (cpu1[1] - cpu0[1]) / wall)
     for line in result.summary()[1:4]:  # the first failures, if any (a model that needs a codec)
         print(f"  {how}: {line}", file=sys.stderr)
     return {"views": result.rendered, "seconds": result.render_seconds,
@@ -284,10 +285,12 @@ def run_job(doc: dict, how: str, processes: int = 1) -> dict:
             "phases": {k: 1000 * v / max(1, len(firsts)) for k, v in phases.items()}}
 
 
-def _cpu_seconds() -> float:
-    """CPU time of this process and its ended children (renderer processes), user + system."""
+def _cpu_seconds() -> tuple[float, float]:
+    """CPU time of this process and its ended children (renderer processes): (user + system,
+    system)."""
     own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+    system = own.ru_stime + kids.ru_stime
+    return own.ru_utime + kids.ru_utime + system, system
 
 
 def sequential(job: object) -> dict:
@@ -341,13 +344,13 @@ def job_table(args: argparse.Namespace) -> list[dict]:
     print(f"\n### {args.scenes} scenes ({len(models)} models: {', '.join(m.stem for m in models)})"
           f" x {args.views} views at {args.job_size}, PNG written\n")
     print("| run | views | failed | s | views/s | of one scene in-process | first item done, s "
-          "| cores busy |")
+          "| cores busy (in the kernel) |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|")
     base = rows[0]["views"] / rows[0]["seconds"]
     for r in rows:
         rate = r["views"] / r["seconds"]
         first = f"{r['first']:.2f}" if "first" in r else ""
-        cores = f"{r['cores']:.1f}" if "cores" in r else ""
+        cores = f"{r['cores'][0]:.1f} ({r['cores'][1]:.1f})" if "cores" in r else ""
         print(f"| {r['run']} | {r['views']} | {r['failed']} | {r['seconds']:.2f} | {rate:.1f} | "
               f"{rate / base:.0%} | {first} | {cores} |")
     named = [r for r in rows if r.get("phases")]

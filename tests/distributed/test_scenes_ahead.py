@@ -201,6 +201,7 @@ def test_calls_to_an_ended_process_fail_at_once() -> None:
     (["--processes", "0"], "--processes: expected a whole number of at least 1, got '0'"),
     (["--processes", "two"], "--processes: expected a whole number of at least 1, got 'two'"),
     (["--processes", "--in-process"], "--in-process and --processes: choose one"),
+    (["--processes", "--ray", "head:6379"], "--ray and --processes: choose one"),
     (["--processes", "2", "--num-gpus", "0.5"], "num_cpus and num_gpus are Ray's resources"),
 ])
 def test_processes_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture,

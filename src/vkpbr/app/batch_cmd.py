@@ -22,7 +22,9 @@ log = logging.getLogger(__name__)
 EPILOG = """\
 examples:
   vkpbr batch job.json                      a local Ray instance, one actor per CPU or GPU
+                                            (without Ray installed: as --processes)
   vkpbr batch job.json --ray head:6379      an existing Ray cluster
+  vkpbr batch job.json --ray                a local Ray instance (an error without Ray)
   vkpbr batch job.json --ray auto --num-gpus 0.5   two actors on each GPU
   vkpbr batch job.json --in-process         no Ray: one renderer here, the next scene loading
                                             on a thread while this one renders
@@ -57,9 +59,10 @@ def add_parser(sub: Any) -> None:
                                    "out folder records finished views) and exactly once.",
                        epilog=EPILOG, formatter_class=EPILOG_FORMATTER)
     p.add_argument("job", metavar="JOB.json", help="the job file (docs/distributed.md)")
-    p.add_argument("--ray", default="local", metavar="ADDRESS",
-                   help="a Ray cluster's HOST:PORT, ray://HOST:PORT or auto (default: start a "
-                        "local Ray instance)")
+    p.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
+                   help="a Ray cluster's HOST:PORT, ray://HOST:PORT or auto; alone: a local "
+                        "Ray instance (the default where Ray is installed; without it, "
+                        "--processes)")
     p.add_argument("--in-process", action="store_true",
                    help="render in this process without Ray (one renderer on the default "
                         "device; the same files and manifests, resumable alike)")
@@ -69,6 +72,15 @@ def add_parser(sub: Any) -> None:
                         "changes run side by side")
     add_ray_arguments(p, with_flag=False)
     p.set_defaults(run=run)
+
+
+def _has_ray() -> bool:
+    """Whether the ray extra imports (vkpbr batch's default then: a local Ray instance)."""
+    try:
+        import ray  # noqa: F401
+    except ImportError:
+        return False
+    return True
 
 
 def _processes(text: str) -> int:
@@ -95,6 +107,7 @@ def _report(result: Any) -> int:
 def _render(job: Any, args: argparse.Namespace) -> int:
     from vkpbr.app.log import is_quiet
     from vkpbr.distributed import render
+    from vkpbr.distributed.cluster import RAY_INSTALL
     from vkpbr.distributed.driver import IN_PROCESS, PROCESSES
 
     processes = getattr(args, "processes", None)
@@ -102,12 +115,19 @@ def _render(job: Any, args: argparse.Namespace) -> int:
     if getattr(args, "in_process", False) and processes is not None:
         raise UsageError("--in-process and --processes: choose one (one renderer in this "
                          "process, or N renderer processes)")
+    if processes is not None and args.ray is not None:
+        raise UsageError("--ray and --processes: choose one (a Ray cluster, or renderer "
+                         "processes of this machine)")
     if processes is not None:
         address, actors = PROCESSES, processes or actors  # (--processes alone: 0)
     elif getattr(args, "in_process", False):
         address = IN_PROCESS
+    elif args.ray is None and not _has_ray():
+        address = PROCESSES  # the documented fallback: no Ray, this machine's processes
+        log.info("ray is not installed: rendering on renderer processes of this machine "
+                 "(--processes; %s for a Ray cluster)", RAY_INSTALL)
     else:
-        address = None if args.ray == "local" else args.ray
+        address = None if args.ray in (None, "local") else args.ray
     result = render(job, address, actors=actors, num_gpus=args.num_gpus,
                     progress=False if is_quiet() else None)
     return _report(result)

@@ -23,6 +23,11 @@ from typing import Any
 
 import numpy as np
 
+try:
+    import resource  # (Unix: an item's thread's user and system time, for benchmarks)
+except ImportError:  # pragma: no cover - Windows
+    resource = None  # type: ignore[assignment]
+
 from vkpbr.distributed.job import RenderSettings, WorkItem, view_times
 from vkpbr.distributed.manifest import camera_record
 from vkpbr.distributed.worlds import ItemWorlds
@@ -240,6 +245,22 @@ def load_renderer(settings: RenderSettings, device: str | int | None = None,
                     semantics=settings.semantic_source())
 
 
+def _thread_cpu() -> tuple[float, float]:
+    """This thread's (user, system) CPU seconds; where the system has no per-thread
+    accounting (not Linux), all of its CPU time as user time."""
+    who = getattr(resource, "RUSAGE_THREAD", None) if resource is not None else None
+    if who is None:
+        return time.thread_time(), 0.0
+    got = resource.getrusage(who)
+    return got.ru_utime, got.ru_stime
+
+
+def _cpu_since(before: tuple[float, float]) -> dict[str, float]:
+    """{"cpu": user + system, "cpu system": system} of this thread since `before`."""
+    user, system = _thread_cpu()
+    return {"cpu": user - before[0] + system - before[1], "cpu system": system - before[1]}
+
+
 def _one_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
     return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
@@ -397,7 +418,7 @@ class RendererActor:
         from vkpbr.io import check_id_count, output_kind, output_path
 
         settings = item.settings
-        cpu0 = time.thread_time()
+        cpu0 = _thread_cpu()
         renderer = self._renderer_for(settings)
         t_load = time.perf_counter()
         if ahead is not None:  # after this scene's load: the two do not contend
@@ -446,7 +467,7 @@ class RendererActor:
                 # where the item's wall time went, and its thread's CPU time (benchmarks)
                 "phases": {"scene": t_load - t0, "views": t_views - t_load,
                            "next scene": t_switch - t_views, "files": t_written - t_switch,
-                           "cpu": time.thread_time() - cpu0}}
+                           **_cpu_since(cpu0)}}
 
     def _change_early(self, ahead: RenderSettings, later: RenderSettings | None) -> None:
         """The next item's scene (`ahead`) set now, and `later`'s load started."""
