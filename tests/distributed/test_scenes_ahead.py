@@ -185,6 +185,57 @@ def test_a_killed_process_is_replaced(tmp_path: Path, scenes: dict, reference: d
     assert gone(killed[0])
 
 
+def test_ctrl_c_stops_a_processes_job_in_one_line(tmp_path: Path) -> None:
+    """Ctrl-C (SIGINT to the terminal's process group: the driver and its workers) during a
+    `--processes` job: exit 130 with one line, no traceback from any process, no worker
+    left running, and a re-run renders only what is missing."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    poses = [f"{3 - k * 0.02:.2f},1.2,2,0,0,0" for k in range(100)]  # (long enough on a GPU)
+    (tmp_path / "poses.json").write_text(json.dumps(poses))
+    job = tmp_path / "job.json"
+    job.write_text(json.dumps({"views_per_item": 2, "scenes": [
+        {"cameras": "poses.json", "out": f"o{k}", "size": "32x24"} for k in range(3)]}))
+    marker = str(tmp_path / "cache")  # (finds this test's workers in /proc)
+    env = {**os.environ, "VKPBR_CACHE_DIR": marker}
+    proc = subprocess.Popen([sys.executable, "-m", "vkpbr", "batch", str(job), "--processes",
+                             "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=env, start_new_session=True)
+    deadline = time.monotonic() + 120
+    while not list(tmp_path.glob("o*/frame_*.png")) and time.monotonic() < deadline \
+            and proc.poll() is None:
+        time.sleep(0.05)
+    workers = [int(p.parent.name) for p in _ours(marker) if int(p.parent.name) != proc.pid]
+    assert workers
+    for pid in workers:  # (the first of a terminal's signals to reach them)
+        os.kill(pid, signal.SIGINT)
+    time.sleep(0.3)  # a worker that stopped on it would have printed its traceback by now
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and err.strip() and \
+        all(line.startswith("vkpbr") for line in err.strip().splitlines()), err
+    assert not _ours(marker)
+    assert main(["-q", "batch", str(job), "--processes", "2"]) == 0
+    for k in range(3):
+        assert len(list((tmp_path / f"o{k}").glob("frame_*.png"))) == len(poses)
+
+
+def _ours(marker: str) -> list[Path]:
+    """/proc/PID/environ of the processes whose environment holds `marker`."""
+    return [p for p in Path("/proc").glob("[0-9]*/environ") if marker.encode() in _read_or_empty(p)]
+
+
+def _read_or_empty(path: Path) -> bytes:
+    try:
+        return path.read_bytes()
+    except OSError:  # (a process that ended meanwhile, or not ours)
+        return b""
+
+
 def test_calls_to_an_ended_process_fail_at_once() -> None:
     """Once a renderer process has ended and its answers' reader finished, a call to it fails
     with ActorLost (saying how it ended) instead of waiting for an answer that cannot come."""

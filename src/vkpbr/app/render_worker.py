@@ -16,6 +16,7 @@ import logging
 import os
 import pickle
 import queue
+import signal
 import sys
 import threading
 from typing import IO
@@ -35,6 +36,10 @@ def serve() -> None:
     before this one's views are rendered: when it is of another scene, the renderer changes
     to it while this item's files encode (RendererActor.render's `upcoming`; the in-process
     driver's `switch`), and the scene after it starts loading then."""
+    # Ctrl-C reaches a terminal's whole process group: the driver handles it (ending its
+    # workers at once, their files atomic), so a worker neither stops on it nor prints a
+    # traceback of its own.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     answers = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
     os.dup2(sys.stderr.fileno(), sys.stdout.fileno())  # prints (and layers') to stderr
     encoders, level = int(sys.argv[1]), int(sys.argv[2])
