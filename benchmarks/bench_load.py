@@ -268,6 +268,8 @@ def run_job(doc: dict, how: str, processes: int = 1) -> dict:
         return sequential(job)
     address = (PROCESSES if "processes" in how else IN_PROCESS if how.startswith("in-process")
                else None)
+    if PROFILE_WORKERS is not None and address == PROCESSES:
+        _profile_workers(PROFILE_WORKERS / "".join(c if c.isalnum() else "-" for c in how))
     t0, firsts, cpu0 = time.perf_counter(), [], _cpu_seconds()
     phases: collections.Counter = collections.Counter()
 
@@ -283,6 +285,19 @@ def run_job(doc: dict, how: str, processes: int = 1) -> dict:
     return {"views": result.rendered, "seconds": result.render_seconds,
             "failed": result.failed_views, "first": min(firsts, default=0.0), "cores": cores,
             "phases": {k: 1000 * v / max(1, len(firsts)) for k, v in phases.items()}}
+
+
+PROFILE_WORKERS: Path | None = None  # --profile-workers
+
+
+def _profile_workers(folder: Path) -> None:
+    """Each renderer process's main thread (the one that renders) under cProfile from now
+    on, a file a process in `folder`, written when the job ends its workers (not killed)."""
+    from vkpbr.distributed import processes
+
+    folder.mkdir(parents=True, exist_ok=True)
+    processes.WORKER = ("import cProfile, os; from vkpbr.app.render_worker import serve; "
+                        f"cProfile.run('serve()', {str(folder)!r} + f'/{{os.getpid()}}.prof')")
 
 
 def _cpu_seconds() -> tuple[float, float]:
@@ -402,6 +417,9 @@ def main() -> None:
                         "renderer processes (render(address=PROCESSES)), for each N")
     p.add_argument("--process-encoders", type=_positive(int), metavar="N",
                    help="encoding threads of each renderer process (default: the cores shared)")
+    p.add_argument("--profile-workers", type=Path, metavar="DIR",
+                   help="run each renderer process's main thread under cProfile, its stats "
+                        "into DIR (benchmarks/profile_summary.py sums them)")
     p.add_argument("--no-in-process", action="store_true",
                    help="only the --processes rows (and one scene's, for the ratio)")
     p.add_argument("--depth", type=_positive(int), metavar="N",
@@ -449,6 +467,8 @@ def main() -> None:
             driver.encoders_for = lambda n: args.process_encoders
         if args.depth:
             driver.DEPTH = args.depth
+        global PROFILE_WORKERS
+        PROFILE_WORKERS = args.profile_workers
         if args.actor_switch_interval:
             actor.SWITCH_INTERVAL = args.actor_switch_interval
         if args.switch_interval:
