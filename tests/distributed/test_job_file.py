@@ -121,8 +121,11 @@ def test_missing_ray_extra_is_one_line(tmp_path: Path) -> None:
     shadow = tmp_path / "shadow" / "ray"
     shadow.mkdir(parents=True)
     (shadow / "__init__.py").write_text('raise ImportError("No module named \'ray\'")\n')
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(shadow.parent), str(SRC)]),
-           "VKPBR_VALIDATION": "1", "VKPBR_CACHE_DIR": str(tmp_path / "cache")}
+    # (ahead of the path the tests run with: the fallback's renderer needs its packages)
+    path = [str(shadow.parent), str(SRC), *filter(None, os.environ.get("PYTHONPATH", "").split(
+        os.pathsep))]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(path), "VKPBR_VALIDATION": "1",
+           "VKPBR_CACHE_DIR": str(tmp_path / "cache")}
     job = _job(tmp_path, tmp_path / "frames")
     fallback = subprocess.run([sys.executable, "-m", "vkpbr", "-v", "batch", str(job),
                                "--actors", "1"],
