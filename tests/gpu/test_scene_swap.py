@@ -72,3 +72,28 @@ def test_set_scene_renders_what_a_fresh_renderer_renders(make_renderer, sample_s
     atlas = renderer.batch_path._atlas((8, 8), False)
     renderer.set_scene(textured)
     assert renderer.batch_path._atlas((8, 8), False) is atlas and atlas.color.handle is not None
+
+
+def test_ambient_occlusion_images_pass_to_the_next_scene(make_renderer, sample_scene) -> None:  # noqa: ANN001
+    """The AO images and kernels are the device's (render/parts.py DeviceParts.ao): the next
+    scene takes them as they are, grown by an earlier larger frame, and its `ao` output and
+    colour equal a fresh renderer's; its kernels' sets are made anew (they named the last
+    scene's depth views and buffers)."""
+    helmet = sample_scene("DamagedHelmet")
+    chart_first = make_renderer()
+    ao_outputs = ("color", "ao")
+    fresh = make_renderer(helmet)
+    want = fresh.render(size=SIZE, outputs=ao_outputs)
+    fresh.close()
+
+    renderer = chart_first
+    renderer.render(size=(2 * SIZE[0], 2 * SIZE[1]), outputs=ao_outputs)  # (the images grow)
+    ao, images = renderer.parts.ao, list(renderer.parts.ao.images)
+    sets = dict(ao._sets)
+    renderer.set_scene(helmet)
+    assert renderer.parts.ao is ao and ao.images == images and not ao._sets
+    got = renderer.render(size=SIZE, outputs=ao_outputs)
+    assert float(np.mean(got["ao"])) < 1.0  # (occlusion was computed: the helmet's folds)
+    for name in ao_outputs:
+        assert np.array_equal(got[name], want[name]), name
+    assert sets and ao._sets  # (dropped with the last scene, made for this one's depths)

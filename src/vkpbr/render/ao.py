@@ -172,6 +172,11 @@ class AoImages:
 
     def __init__(self, device: Device, sets2: list[Any], set0_layout: DescriptorSetLayout,
                  stand_in: tuple[Any, Any]) -> None:
+        with device.keeping():
+            self._make(device, sets2, set0_layout, stand_in)
+
+    def _make(self, device: Device, sets2: list[Any], set0_layout: DescriptorSetLayout,
+              stand_in: tuple[Any, Any]) -> None:
         self.device, self.sets2, self.set0_layout = device, sets2, set0_layout
         self.size: tuple[int, int] | None = None
         self.layers = 1
@@ -228,12 +233,28 @@ class AoImages:
                 or layers > self.layers or mips[0] > self.mip_size[0]
                 or mips[1] > self.mip_size[1])
 
+    def new_scene(self, sets2: list[Any], set0_layout: DescriptorSetLayout) -> None:
+        """Taken by another scene of the device (render/parts.py DeviceParts): the images
+        and kernels stay (and stay bound in the slots' set 2, which the scenes share); the
+        kernels' sets, which named the last scene's depth views and buffers, are made
+        anew. `set0_layout`: the new scene's (the same kept handle; the last scene's
+        wrapper is gone). The caller waits for the device first."""
+        self.sets2, self.set0_layout = sets2, set0_layout
+        for pool in self._pools:
+            pool.destroy()
+        self._pools, self._free, self._sets = [], 0, {}
+
     def fit(self, extent: tuple[int, int], layers: int = 1,
             tile: tuple[int, int] | None = None) -> None:
         """Images for frames of `extent` and `layers` (`tile`: as `stale`'s; and of any size
         made before), bound in every slot's set 2 (left in the sampled layout, as frames
         leave them). The caller waits for the device and drops the recorded command buffers
         first (they name the old images)."""
+        with self.device.keeping():  # (the device's, as the images: shared by its scenes)
+            self._fit(extent, layers, tile)
+
+    def _fit(self, extent: tuple[int, int], layers: int,
+             tile: tuple[int, int] | None) -> None:
         old, layers = self.size or (0, 0), max(int(layers), self.layers)
         (mw, mh), (ow, oh) = mip_extent(extent, tile), self.mip_size
         mips = (max(mw, ow), max(mh, oh))
@@ -361,7 +382,12 @@ class AoImages:
     # --- kernels and sets -----------------------------------------------------------------
     def _set_layout(self) -> DescriptorSetLayout:
         if self._layout is None:
-            self._layout = DescriptorSetLayout(self.device, [
+            with self.device.keeping():
+                self._layout = self._new_set_layout()
+        return self._layout
+
+    def _new_set_layout(self) -> DescriptorSetLayout:
+        return DescriptorSetLayout(self.device, [
                 BindingSpec(0, "sampler", ("compute",), "depth_map"),
                 *(BindingSpec(b, "storage_image", ("compute",), n)
                   for b, n in ((1, "ao_raw"), (2, "ao_mid"), (3, "ao_out"))),
@@ -369,19 +395,20 @@ class AoImages:
                 *(BindingSpec(5 + k, "storage_image", ("compute",), f"depth_mip{k}")
                   for k in range(DEPTH_MIPS)),
                 BindingSpec(10, "storage", ("compute",), "AoRasterDepths")])
-        return self._layout
 
     def _kernel(self, name: str, push_bytes: int) -> ComputePipeline:
         if name not in self._kernels:
-            self._kernels[name] = ComputePipeline(self.device, SPV_DIR / f"{name}.comp.spv",
-                                                  [self.set0_layout, self._set_layout()],
-                                                  push_bytes=push_bytes)
+            with self.device.keeping():
+                self._kernels[name] = ComputePipeline(
+                    self.device, SPV_DIR / f"{name}.comp.spv",
+                    [self.set0_layout, self._set_layout()], push_bytes=push_bytes)
         return self._kernels[name]
 
     def _depth_sampler(self) -> Sampler:
         if self._sampler is None:  # texelFetch only: nearest, no mips
-            self._sampler = Sampler(self.device, SamplerSpec("clamp", "clamp", "nearest",
-                                                             "nearest", False, 1.0))
+            with self.device.keeping():
+                self._sampler = Sampler(self.device, SamplerSpec("clamp", "clamp", "nearest",
+                                                                 "nearest", False, 1.0))
         return self._sampler
 
     def _set(self, depth_view: Any, frame_index: int, generation: int = 0,
@@ -398,7 +425,8 @@ class AoImages:
         if key not in self._sets or self._sets[key][1] != generation:
             layout = self._set_layout()
             if not self._pools or self._free == 0:
-                self._pools.append(DescriptorPool(self.device, [(layout, _SETS_PER_POOL)]))
+                with self.device.keeping():
+                    self._pools.append(DescriptorPool(self.device, [(layout, _SETS_PER_POOL)]))
                 self._free = _SETS_PER_POOL
             dset = self._pools[-1].allocate(layout)
             self._free -= 1

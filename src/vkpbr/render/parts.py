@@ -19,7 +19,7 @@ from __future__ import annotations
 import os
 import time
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -68,7 +68,8 @@ class DeviceParts:
     and writes its own bindings in their sets: instances, opaque copy, ambient occlusion,
     environment), the pre-filtered environments, the shadow maps' images (a scene takes
     those of its sizes, render/shadow_images.py), the offscreen targets `render` draws
-    into and the compute batch's atlases (render/targets.py). The device's kept handles (gpu/kept.py:
+    into and the compute batch's atlases (render/targets.py), the ambient occlusion's
+    images and kernels (render/ao.py, made with the first scene). The device's kept handles (gpu/kept.py:
     layouts, pipelines, samplers) are shared the same way; everything else is a scene's
     `FrameParts`."""
 
@@ -80,6 +81,10 @@ class DeviceParts:
     shadow_images: ShadowImages  # the shadow maps' images (render/shadow_images.py)
     targets: dict[tuple, OffscreenTarget]  # render/targets.py Targets' kept ones
     atlases: OrderedDict[tuple, OffscreenTarget]  # compute-batch atlases a scene gave back
+    # The ambient occlusion's images and kernels (render/ao.py), made with the first scene
+    # and taken by each next one (AoImages.new_scene): a scene change had made and destroyed
+    # ~70 of its ~200 Vulkan objects and waited for the device twice for them
+    ao: list[AoImages] = field(default_factory=list)
 
     @staticmethod
     def make(device: Device, env_spec: EnvironmentSpec | None,
@@ -91,6 +96,16 @@ class DeviceParts:
             buffers, pool, slots = create_slots(device, set0, set2, ring.count)
         return DeviceParts(ring, buffers, pool, slots, EnvironmentStore(device, env_spec, cache_dir),
                            ShadowImages(device), {}, OrderedDict())
+
+    def ao_images(self, device: Device, slots: list[FrameSlot], set0_layout: DescriptorSetLayout,
+                  stand_in: tuple[Any, Any]) -> AoImages:
+        """The device's AoImages for a new scene (made with the first; the device idle)."""
+        sets2 = [s.set2 for s in slots]
+        if not self.ao:
+            self.ao.append(AoImages(device, sets2, set0_layout, stand_in))
+        else:
+            self.ao[0].new_scene(sets2, set0_layout)
+        return self.ao[0]
 
     def frame_slots(self) -> tuple[FrameRing, list[FrameSlot]]:
         """The ring and slots for a new scene, as new ones (the device idle)."""
@@ -144,8 +159,7 @@ class FrameParts:
         if self.deform is not None:
             self.deform.destroy()
         self.shadow_frames.maps.destroy()
-        self.opaque_copies.destroy()
-        self.ao.destroy()
+        self.opaque_copies.destroy()  # (the AO images are the device's: DeviceParts.ao)
         if self.post.made is not None:
             self.post.made.destroy()
 
@@ -222,7 +236,7 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     blend = BlendOrder(gs.draws, state)
     paths = FramePaths(device, msaa, scene.triangle_count, len(blend) > 0, depth_prepass,
                        cache_dir)
-    ao = AoImages(device, [s.set2 for s in slots], layouts[0], gs.stand_in())
+    ao = shared.ao_images(device, slots, layouts[0], gs.stand_in())
     recorder = FrameRecorder(device, gs, pipeline_layout, ring, slots, paths.prepass_for,
                              shadows, compute, copies, post, deform, ao)
     bounds = LiveBounds(state, Bounds.of(*scene_bounds(scene, gs.mesh_box)))

@@ -10,8 +10,9 @@ descriptor pools and sets, ...), newest first. What is kept: the device, its que
 command pool, its pipeline cache (gpu/pipeline_cache.py), the handles it keeps (gpu/kept.py:
 set and pipeline layouts, pipelines and samplers, shared by every wrapper of the same
 definition, so the new scene's pipelines are neither compiled nor looked up in the driver's
-cache), the `DeviceParts` (made under `Device.keeping`: outside the scenes' count) and
-auto's frame-path record. A Renderer after `set_scene(b)` renders what `Renderer(b)`
+cache), the `DeviceParts` (made under `Device.keeping`: outside the scenes' count; the
+ambient occlusion's images and kernels among them, made with the first scene) and auto's
+frame-path record. A Renderer after `set_scene(b)` renders what `Renderer(b)`
 renders, bit for bit, and a second round of swaps makes no Vulkan object the first did not
 (tests/gpu/test_scene_swap.py).
 
