@@ -96,13 +96,18 @@ class DescriptorPool(DeviceObject):
         device.track(self)
 
     def allocate(self, layout: DescriptorSetLayout) -> Any:
+        return self.allocate_many(layout, 1)[0]
+
+    def allocate_many(self, layout: DescriptorSetLayout, count: int) -> list[Any]:
+        """`count` sets of `layout` in one call (a call into the driver each set had cost a
+        scene's first frame one per material)."""
         vk = self.device.vk
-        return vk.vkAllocateDescriptorSets(
+        return list(vk.vkAllocateDescriptorSets(
             self.device.handle,
             vk.VkDescriptorSetAllocateInfo(
-                descriptorPool=self.handle, pSetLayouts=[layout.handle]
+                descriptorPool=self.handle, pSetLayouts=[layout.handle] * count
             ),
-        )[0]
+        ))
 
 
 

@@ -30,6 +30,7 @@ import concurrent.futures
 import dataclasses
 import functools
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -204,10 +205,11 @@ def _concat(arrays: list[np.ndarray], dtype: type, width: int) -> np.ndarray:
 
 
 class MaterialSets:
-    """Material i's descriptor set (its textures and its MATERIAL block), made the first time
-    a draw binds it (`sets[i]`): a file can list tens of thousands of materials that no
-    primitive uses, and a set costs ~0.5 ms of Python to write (16 bindings, each a struct of
-    the Vulkan binding), so unused ones cost nothing."""
+    """Material i's descriptor set (its textures and its MATERIAL block), made when a pass
+    about to bind it asks (`prepare`: a pass's sets in one allocation and one write) or the
+    first time it is indexed (`sets[i]`): a file can list tens of thousands of materials that
+    no primitive uses, and a set costs ~0.5 ms of Python to write (16 bindings, each a struct
+    of the Vulkan binding), so unused ones cost nothing."""
 
     def __init__(self, device: Device, pool: DescriptorPool, layout: DescriptorSetLayout,
                  ubo: Buffer, stride: int, textures: list[list[tuple[ImageView, Sampler]]],
@@ -224,16 +226,24 @@ class MaterialSets:
         if i not in self._sets:
             if not -len(self) <= i < len(self):
                 raise IndexError(f"material {i} of {len(self)}")
-            i %= len(self)
-            dset = self.pool.allocate(self.layout)
-            writer = DescriptorWriter(self.device)
+            self.prepare([i % len(self)])
+        return self._sets[i % len(self)]
+
+    def prepare(self, materials: Iterable[int]) -> None:
+        """The sets of `materials` (indices in range) that are not made yet, made at once:
+        one allocation and one write for all (a pass about to bind them: render/passes.py)."""
+        missing = sorted({int(i) for i in materials} - self._sets.keys())
+        if not missing:
+            return
+        writer = DescriptorWriter(self.device)
+        for i, dset in zip(missing, self.pool.allocate_many(self.layout, len(missing)),
+                           strict=True):
             for binding, (view, sampler) in enumerate(self.textures[i]):
                 writer.sampler(dset, binding, view, sampler)
             writer.uniform(dset, L.MATERIAL_BINDING, self.ubo, L.MATERIAL.size,
                            offset=self.base + i * self.stride)
-            writer.update()
             self._sets[i] = dset
-        return self._sets[i]
+        writer.update()
 
 
 class GpuScene:

@@ -170,6 +170,9 @@ def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[tupl
     if ctx.shadow_set is not None:
         cmd.bind_set(3, ctx.shadow_set)
     cmd.bind_vertex_buffers(ctx.vertex_buffers)
+    prepare = getattr(ctx.material_sets, "prepare", None)  # (MaterialSets: all at once)
+    if prepare is not None:
+        prepare(d.material for _, d in draws)
     bound = None
     runs = [(i, d, 1) for i, d in draws] if (instanced is not None or ctx.indirect is not None
                                              or p.back_to_front) else _instance_runs(draws)
