@@ -22,6 +22,7 @@ from vkpbr.app.cli import main
 from vkpbr.distributed import MANIFEST_NAME, job_from_doc, render
 from vkpbr.distributed.actor import RendererActor
 from vkpbr.distributed.driver import IN_PROCESS, PROCESSES
+from vkpbr.errors import UsageError
 
 SIZE = "48x32"
 POSES = ["3,1.2,2,0,0,0", "2,1,3,0,0,0", "-2,1.5,3,0,0,0"]
@@ -164,6 +165,34 @@ def test_a_process_changes_scene_while_the_files_encode(tmp_path: Path, scenes: 
     check_against(reference, tmp_path)
 
 
+def test_processes_open_the_devices_named_in_turn(tmp_path: Path, scenes: dict,
+                                                 reference: dict) -> None:
+    """`devices`: process k opens the k-th device named (modulo their count), by index or
+    name part as `--device` takes them; a name no device has fails that process's items in
+    one line naming it, while the other process renders."""
+    from vkpbr.gpu.device import Device
+
+    with Device() as device:
+        name = device.info.name
+    job = job_from_doc(job_doc(tmp_path, scenes), base=tmp_path)
+    results: list[dict] = []
+    result = render(job, PROCESSES, actors=2, devices=["0", name.split()[0]],
+                    on_result=lambda item, res: results.append(res))
+    assert result.rendered == 4 * len(POSES) and {f.entry for f in result.failures} == {3}
+    assert {r["device"] for r in results if r["ok"]} == {name}
+    assert len({r["pid"] for r in results}) == 2
+    check_against(reference, tmp_path)
+
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    result = render(job_from_doc(job_doc(bad, scenes), base=bad), PROCESSES, actors=2,
+                    devices=[0, "no-such-gpu"])
+    failed = [f.error for f in result.failures if f.entry != 3]
+    assert failed and all("no-such-gpu" in e and "\n" not in e for e in failed)
+    with pytest.raises(UsageError, match="devices: for renderer processes"):
+        render(job, IN_PROCESS, devices=[0])
+
+
 def test_a_killed_process_is_replaced(tmp_path: Path, scenes: dict, reference: dict) -> None:
     """A renderer process killed between items (as by the kernel's out-of-memory killer): its
     next item fails with "its renderer process ended", a new process takes its place and
@@ -254,6 +283,8 @@ def test_calls_to_an_ended_process_fail_at_once() -> None:
     (["--processes", "--in-process"], "--in-process and --processes: choose one"),
     (["--processes", "--ray", "head:6379"], "--ray and --processes: choose one"),
     (["--processes", "2", "--num-gpus", "0.5"], "num_cpus and num_gpus are Ray's resources"),
+    (["--in-process", "--devices", "0"], "--devices goes with --processes"),
+    (["--processes", "--devices", "0,,1"], "--devices: expected device indices or names"),
 ])
 def test_processes_bad_arguments(tmp_path: Path, capsys: pytest.CaptureFixture,
                                  argv: list[str], problem: str) -> None:

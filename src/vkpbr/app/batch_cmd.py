@@ -30,6 +30,8 @@ examples:
                                             on a thread while this one renders
   vkpbr batch job.json --processes          no Ray: renderer processes on this machine's GPU
                                             (3 for every 8 cores, 1 to 8; --processes 4: four)
+  vkpbr batch job.json --processes 16 --devices 0,1,2,3
+                                            sixteen processes over four GPUs, in turn
 """
 
 # `vkpbr render` options a --ray job does not carry (each actor uses the scene's camera and
@@ -70,6 +72,10 @@ def add_parser(sub: Any) -> None:
                    help="render without Ray in N renderer processes of this machine (default "
                         "device; alone: 3 for every 8 cores, 1 to 8): a many-scene job's scene "
                         "changes run side by side")
+    p.add_argument("--devices", type=_devices, metavar="LIST",
+                   help="with --processes: the GPUs the processes open in turn, as indices or "
+                        "name parts (`vkpbr info` lists them), e.g. 0,1,2,3 (default: the "
+                        "default device)")
     add_ray_arguments(p, with_flag=False)
     p.set_defaults(run=run)
 
@@ -81,6 +87,15 @@ def _has_ray() -> bool:
     except ImportError:
         return False
     return True
+
+
+def _devices(text: str) -> list[str]:
+    """--devices 0,1 (or name parts): non-empty items (argparse's one line otherwise)."""
+    items = [t.strip() for t in text.split(",")]
+    if not items or any(not t for t in items):
+        raise argparse.ArgumentTypeError(f"expected device indices or names separated by "
+                                         f"commas, got {text!r}")
+    return items
 
 
 def _processes(text: str) -> int:
@@ -128,7 +143,11 @@ def _render(job: Any, args: argparse.Namespace) -> int:
                  "(--processes; %s for a Ray cluster)", RAY_INSTALL)
     else:
         address = None if args.ray in (None, "local") else args.ray
-    result = render(job, address, actors=actors, num_gpus=args.num_gpus,
+    devices = getattr(args, "devices", None)
+    if devices is not None and address != PROCESSES:
+        raise UsageError("--devices goes with --processes (Ray places its actors on GPUs "
+                         "itself; --in-process uses one)")
+    result = render(job, address, actors=actors, num_gpus=args.num_gpus, devices=devices,
                     progress=False if is_quiet() else None)
     return _report(result)
 

@@ -1,5 +1,5 @@
 """A renderer process's main (`vkpbr batch --processes`): the worker that
-vkpbr.distributed.processes.ProcessActor starts as `python -c WORKER ENCODERS LOG_LEVEL`.
+vkpbr.distributed.processes.ProcessActor starts as `python -c WORKER ENCODERS LOG_LEVEL DEVICE` (DEVICE "": the default).
 
 It renders the work items it is sent with one RendererActor and answers each with the
 actor's result dict; its diagnostics are the CLI's one-line records on stderr (app/log.py) at
@@ -30,7 +30,7 @@ __all__ = ["serve"]
 
 def serve() -> None:
     """The worker's loop: a request at a time, its result back, in order; argv: encoders,
-    log level.
+    log level, device (an index or a name part; empty: the default).
 
     The driver keeps processes.DEPTH requests in flight, so the next item is often here
     before this one's views are rendered: when it is of another scene, the renderer changes
@@ -42,13 +42,14 @@ def serve() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     answers = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
     os.dup2(sys.stderr.fileno(), sys.stdout.fileno())  # prints (and layers') to stderr
-    encoders, level = int(sys.argv[1]), int(sys.argv[2])
+    encoders, level, device = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
     verbosity = {logging.ERROR: -1, logging.WARNING: 0, logging.INFO: 1}.get(level, 2)
     requests: queue.Queue = queue.Queue()
     threading.Thread(target=_read_requests, args=(sys.stdin.buffer, requests),
                      name="vkpbr-requests", daemon=True).start()
     with cli_logging(verbosity), quick_switches():
-        actor = RendererActor(encoders=encoders)
+        actor = RendererActor(int(device) if device.isdigit() else device or None,
+                              encoders=encoders)
         try:
             while (request := requests.get()) is not None:
                 item, ahead = request

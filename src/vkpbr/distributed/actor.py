@@ -462,6 +462,7 @@ class RendererActor:
         sizes = [(out / f).stat().st_size for f in files]
         return {"ok": True, "views": list(item.frames), "files": files, "sizes": sizes,
                 "cameras": [camera_record(c) for c in cameras], "pid": os.getpid(),
+                "device": renderer.device.info.name,
                 "load_s": t_load - t0, "seconds": time.perf_counter() - t0,
                 "loads": dict(self.loads),
                 # where the item's wall time went, and its thread's CPU time (benchmarks)

@@ -23,7 +23,7 @@ import logging
 import os
 import time
 import uuid
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from concurrent.futures import Future
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -210,7 +210,7 @@ def _finish_entry(scene: SceneJob, manifest: Manifest) -> bool:
 def render(job: Job | dict | list | str | os.PathLike[str], address: str | None = None, *,
            actors: int | None = None, num_cpus: float | None = None,
            num_gpus: float | None = None, progress: bool | None = None,
-           local_cpus: int | None = None,
+           local_cpus: int | None = None, devices: Sequence[str | int] | None = None,
            on_result: Callable[[WorkItem, dict], None] | None = None) -> JobResult:
     """Render a job on Ray; returns a JobResult (`.ok` False when items failed).
 
@@ -226,6 +226,9 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
         scene changes run side by side).
     actors : how many renderer actors (None: one per GPU, else one per CPU of the cluster;
         with "processes", 3 for every 8 cores, 1 to 8).
+    devices : with "processes", the Vulkan devices (indices or name parts, as `--device`)
+        the processes open in turn (process k the k-th modulo their count); None: the
+        default device. Ray places its actors on GPUs itself.
     num_cpus, num_gpus : Ray resources of each actor (None: 1 GPU and 1 CPU where the cluster
         has GPUs, else 1 CPU); num_gpus=0.5 puts two actors on each GPU.
     progress : a tqdm bar on stderr (views/s, ETA, failures); None: when stderr is a terminal.
@@ -244,6 +247,11 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
     ray = None if address in (IN_PROCESS, PROCESSES) else import_ray()
     if ray is None and (num_cpus is not None or num_gpus is not None):
         raise UsageError(f"num_cpus and num_gpus are Ray's resources; {address!r} takes none")
+    if devices is not None and address != PROCESSES:
+        raise UsageError("devices: for renderer processes (address 'processes'); Ray places "
+                         "its actors on GPUs itself")
+    if devices is not None and (not devices or any(str(d).strip() == "" for d in devices)):
+        raise UsageError(f"devices: expected device indices or names, got {list(devices)!r}")
     if address not in (None, "local", IN_PROCESS, PROCESSES):
         preflight(address)  # unreachable: one line now, even when nothing is left to render
     result = JobResult(views=job.views)
@@ -262,7 +270,7 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
                 if here:
                     _run_here(job, items, manifests, result, progress, on_result)
                 else:
-                    pool_of = (_ProcessActors(actors, len(items)) if ray is None else
+                    pool_of = (_ProcessActors(actors, len(items), devices) if ray is None else
                                _RayActors(ray, actors, num_cpus, num_gpus))
                     _run(pool_of, job, items, manifests, result, progress, on_result)
             except BaseException:
@@ -375,15 +383,18 @@ class _RayActors:
 class _ProcessActors:
     """Renderer processes of this machine (distributed/processes.py), for _run's loop."""
 
-    def __init__(self, actors: int | None, items: int) -> None:
+    def __init__(self, actors: int | None, items: int,
+                 devices: Sequence[str | int] | None = None) -> None:
         self.count = default_processes(items) if actors is None else actors
+        self._devices = list(devices or [])
         if self.count < 1:
             raise UsageError(f"processes: expected at least 1, got {self.count}")
         self._encoders = encoders_for(self.count)
         self.kind, self.depth = "process", DEPTH
 
     def start(self, n: int) -> ProcessActor:
-        return ProcessActor(self._encoders, name=f"vkpbr-renderer-{n}")
+        device = self._devices[n % len(self._devices)] if self._devices else None
+        return ProcessActor(self._encoders, device=device, name=f"vkpbr-renderer-{n}")
 
     @staticmethod
     def call(handle: ProcessActor, item: WorkItem, ahead: Any) -> Future:

@@ -65,15 +65,19 @@ def encoders_for(processes: int) -> int:
 
 # --- the driver's side ---------------------------------------------------------------------
 class ProcessActor:
-    """One renderer process: `render(item, ahead)` sends it an item and returns a Future of
-    its result (ActorLost when the process ends first); a thread reads the answers."""
+    """One renderer process on `device` (None: the default): `render(item, ahead)` sends it
+    an item and returns a Future of its result (ActorLost when the process ends first); a
+    thread reads the answers."""
 
-    def __init__(self, encoders: int, name: str = "vkpbr-renderer") -> None:
+    def __init__(self, encoders: int, device: str | int | None = None,
+                 name: str = "vkpbr-renderer") -> None:
         # (this process's import path, so that the worker finds the same vkpbr)
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
         level = logging.getLogger("vkpbr").getEffectiveLevel()
-        self.process = subprocess.Popen([sys.executable, "-c", WORKER, str(encoders), str(level)],
-                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env)
+        argv = [sys.executable, "-c", WORKER, str(encoders), str(level),
+                "" if device is None else str(device)]
+        self.process = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                        env=env)
         self._waiting: collections.deque[Future] = collections.deque()
         self._lock = threading.Lock()  # (the waiting futures, the requests, `_ended`)
         self._ended: str | None = None  # why no answer will come any more
