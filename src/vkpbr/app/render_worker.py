@@ -55,8 +55,11 @@ def serve() -> None:
                 item, ahead = request
                 res = actor.render(item, ahead, upcoming=functools.partial(
                     _upcoming, requests, item.settings.scene_key()))
-                pickle.dump(res, answers, pickle.HIGHEST_PROTOCOL)
-                answers.flush()
+                try:
+                    pickle.dump(res, answers, pickle.HIGHEST_PROTOCOL)
+                    answers.flush()
+                except OSError:  # the driver is gone (killed): nobody to answer, end quietly
+                    return
         finally:
             actor.close()
 

@@ -107,7 +107,10 @@ class ProcessActor:
         while True:
             try:
                 res = pickle.load(out)
-            except Exception:  # noqa: BLE001 - end of output or a torn answer: the process ended
+            except EOFError:  # the process ended
+                break
+            except Exception:  # noqa: BLE001 - a torn or unreadable answer: end the process
+                self.process.kill()  # (its futures fail below: no answer can be trusted)
                 break
             with self._lock:
                 future = self._waiting.popleft() if self._waiting else None
