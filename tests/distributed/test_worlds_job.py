@@ -273,6 +273,31 @@ def test_actor_renders_each_view_in_its_world(actor, tmp_path: Path, shadows: bo
     assert np.array_equal(r.render(cams[0], size=SIZE, **options), rest)  # the state put back
 
 
+def test_worlds_job_on_renderer_processes_equals_in_process(tmp_path: Path,
+                                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    """A job whose views carry world state renders the same files on renderer processes
+    (its items' worlds pickled to them) as in this process."""
+    from vkpbr.distributed import render
+    from vkpbr.distributed.driver import IN_PROCESS, PROCESSES
+
+    monkeypatch.setenv("VKPBR_VALIDATION", "1")
+    monkeypatch.setenv("VKPBR_CACHE_DIR", str(tmp_path / "cache"))
+    rows = world_rows(3, seed=7)
+    files = {}
+    for how in (IN_PROCESS, PROCESSES):
+        folder = tmp_path / how
+        folder.mkdir()
+        np.save(folder / "w.npy", rows)
+        doc = json.loads(write_job(folder, {"nodes": NODES, "poses": "w.npy",
+                                            "world_of_view": [2, 0, 1, 2]},
+                                   options={"ao": "off"}).read_text())
+        result = render(job_from_doc({"scenes": doc, "views_per_item": 2}, "job", folder), how,
+                        actors=2 if how == PROCESSES else None)
+        assert result.ok and result.rendered == len(POSES), result.summary()
+        files[how] = {p.name: p.read_bytes() for p in sorted((folder / "out").glob("frame_*"))}
+    assert files[IN_PROCESS] and files[PROCESSES] == files[IN_PROCESS]
+
+
 def test_actor_fails_an_item_whose_nodes_the_scene_lacks(actor, tmp_path: Path) -> None:  # noqa: ANN001
     """Names are checked against the scene on the actor: bad input, no retry, one line."""
     np.save(tmp_path / "w.npy", world_rows(4))
