@@ -70,15 +70,10 @@ def test_bloom_keeps_the_total_light(chart, strength, w, h, pipeline) -> None:  
     bloomed = chart.render(size=(w, h), linear=True, pipeline=pipeline, bloom=strength)
     bloomed = bloomed[..., :3].astype(np.float64)
     assert np.isfinite(bloomed).all()
-    # The chain keeps the mean but at the last row or column of an odd level, which counts
-    # twice (post_bloom.comp): the chart's darker edges weigh more there. Measured at
-    # strength 1: 0.01% off at 64x64 and 128x128, 1.1% at 64x65, 1.7% at 100x100 (found by
-    # this test at 64x65 against a 1% bound that power-of-two sizes alone had met); every
-    # size of 64-90 x 64-70 on both pipelines: at most 3.17% (73x65; this test had found
-    # 65x65, 3.15%, against a 2.5% bound); every third size of 1-90 x 1-63: at most 3.78%
-    # (13x13). The bounds hold those with a margin; an area-weighted odd level would remove
-    # the error (not done yet: the loss is of the edge texels' share, never a gain).
-    rel = 3.5e-2 if min(w, h) >= 64 else 5e-2
+    # Every step keeps the mean at every size (post_bloom.comp: area-exact resampling of odd
+    # levels). The 1 3 3 1 tent alone had counted an odd level's last row or column twice:
+    # 3.15% of the light lost at 65x65 (this test found it), 3.78% at 13x13; now ~1e-7.
+    rel = 1e-4
     assert bloomed.sum() == pytest.approx(plain.sum(), rel=rel, abs=1e-3)
     if not level_sizes((w, h)):  # too small for one level: nothing to spread
         np.testing.assert_allclose(bloomed, plain, rtol=1e-6, atol=1e-6)

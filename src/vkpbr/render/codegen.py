@@ -38,6 +38,9 @@ _POST_KERNELS = tuple(Variant(f"{p.name}.spv", p.name) for p in sorted(SHADER_DI
 
 VARIANTS: tuple[Variant, ...] = (
     *_POST_KERNELS,
+    # The bloom's steps between levels of other than 2:1 (odd sizes): exact area weights
+    # (post_bloom.comp ODD_LEVELS); the 2:1 steps keep their constant weights' kernel.
+    Variant("post_bloom_odd.comp.spv", "post_bloom.comp", (("ODD_LEVELS", 1),)),
     *(Variant(f"pbr_{m.name.lower()}.vert.spv", "pbr.vert", (("TBN_MODE", int(m)),)) for m in L.TbnMode),
     Variant("pbr_opaque.frag.spv", "pbr.frag", (("ALPHA_MASK", 0),)),
     Variant("pbr_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1),)),

@@ -60,6 +60,14 @@ def level_sizes(extent: tuple[int, int]) -> list[tuple[int, int]]:
     return sizes
 
 
+def _bloom_kernel(larger: tuple[int, int], smaller: tuple[int, int]) -> str:
+    """The bloom's build for a step between a level and the one below it: "post_bloom" where
+    it is 2:1 in both axes (constant weights), else "post_bloom_odd" (area weights: an odd
+    size's last row or column had counted twice)."""
+    even = all(big == 2 * small for big, small in zip(larger, smaller, strict=True))
+    return "post_bloom" if even else "post_bloom_odd"
+
+
 class Bloom(PostStep):
     option = "bloom"
 
@@ -82,16 +90,18 @@ class Bloom(PostStep):
         steps, src, src_name, src_tile = [], ctx.color_view, ctx.color_name, (tw, th)
         for name, view, size, extent in zip(names, views, sizes, atlas, strict=True):
             steps.append(Step(f"bloom_down.{name}", ctx.dispatch(
-                "post_bloom", push(_DOWN, src_tile, size), src, view, extent),
+                _bloom_kernel(src_tile, size), push(_DOWN, src_tile, size), src, view, extent),
                 ((src_name, "storage_read"), (name, "storage")), timed=False))
             src, src_name, src_tile = view, name, size
         for k in range(len(sizes) - 2, -1, -1):  # level k becomes the mean of levels k..
             steps.append(Step(f"bloom_up.{names[k]}", ctx.dispatch(
-                "post_bloom", push(_UP, sizes[k + 1], sizes[k], 1.0 / (len(sizes) - k)),
+                _bloom_kernel(sizes[k], sizes[k + 1]),
+                push(_UP, sizes[k + 1], sizes[k], 1.0 / (len(sizes) - k)),
                 views[k + 1], views[k], atlas[k]),
                 ((names[k + 1], "storage_read"), (names[k], "storage")), timed=False))
         steps.append(Step("bloom", ctx.dispatch(
-            "post_bloom", push(_MIX, sizes[0], (tw, th), value), views[0], ctx.color_view,
+            _bloom_kernel((tw, th), sizes[0]), push(_MIX, sizes[0], (tw, th), value), views[0],
+            ctx.color_view,
             ctx.extent), ((names[0], "storage_read"), (ctx.color_name, "storage"))))
         return steps
 
