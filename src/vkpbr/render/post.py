@@ -15,8 +15,9 @@ Bloom: bright light spreading over its surroundings, as a lens and an eye see it
 Filament's and pygfx's physically based bloom (shaders/post_bloom.comp): no threshold; the
 radiance downsampled into up to BLOOM_LEVELS half-size images, upsampled back averaging
 them, and the result mixed in: color = mix(color, bloom, strength). Each step keeps the
-image's mean but at the last row or column of an odd size, counted twice, so the frame's
-total radiance is kept within 0.5% at 64 pixels a side and more (3% in a 5 x 5 frame). `--bloom STRENGTH` (0..1; 0: off).
+image's mean at every size (a step between levels of other than 2:1, an odd size's, by
+exact area weights: the post_bloom_odd build), so the frame's total radiance is kept (to
+~1e-7; tests/gpu/test_post.py). `--bloom STRENGTH` (0..1; 0: off).
 """
 
 from __future__ import annotations
