@@ -464,7 +464,7 @@ def main() -> None:
         from vkpbr.distributed import driver
 
         if args.process_encoders:
-            driver.encoders_for = lambda n: args.process_encoders
+            driver.encoders_for = lambda n: args.process_encoders  # (the driver's name)
         if args.depth:
             driver.DEPTH = args.depth
         global PROFILE_WORKERS

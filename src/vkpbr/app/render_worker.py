@@ -22,7 +22,7 @@ import threading
 from typing import IO
 
 from vkpbr.app.log import cli_logging
-from vkpbr.distributed.actor import RendererActor, quick_switches
+from vkpbr.distributed.actor import RendererActor
 from vkpbr.distributed.job import RenderSettings
 
 __all__ = ["serve"]
@@ -47,7 +47,7 @@ def serve() -> None:
     requests: queue.Queue = queue.Queue()
     threading.Thread(target=_read_requests, args=(sys.stdin.buffer, requests),
                      name="vkpbr-requests", daemon=True).start()
-    with cli_logging(verbosity), quick_switches():
+    with cli_logging(verbosity):  # (each item runs under actor.quick_switches)
         actor = RendererActor(int(device) if device.isdigit() else device or None,
                               encoders=encoders)
         try:

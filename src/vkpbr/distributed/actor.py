@@ -34,9 +34,16 @@ from vkpbr.distributed.worlds import ItemWorlds
 from vkpbr.errors import SceneError, UsageError, VkpbrError
 from vkpbr.io import Kind, write_output
 
-__all__ = ["RendererActor", "render_views", "load_renderer", "load_scene_for", "predecode"]
+__all__ = ["RendererActor", "render_views", "load_renderer", "load_scene_for", "predecode",
+           "encoders_for"]
 
 log = logging.getLogger(__name__)
+
+def encoders_for(processes: int) -> int:
+    """Encoding threads of each of `processes` renderer processes on this machine: the cores
+    shared out between them, 2 to 8 each."""
+    return max(2, min(8, (os.cpu_count() or 2) // max(1, processes)))
+
 
 # Threads that encode an actor's files (PNG, EXR): half the cores, 2 to 8; while the next
 # scene loads (a bake or a decode, on the loading thread), at most LOADING_ENCODERS of them
@@ -44,7 +51,7 @@ log = logging.getLogger(__name__)
 # render one scene's views 2x faster than 2 (a 256x256 PNG is ~5 ms of a core), but they
 # took the GIL from a job's loading thread: 8 made a many-scene job with a cold bake cache
 # 20-40% slower than 2.
-ENCODERS = min(8, max(2, (os.cpu_count() or 2) // 2))
+ENCODERS = encoders_for(2)
 LOADING_ENCODERS = 2
 # Python's GIL switch interval while an actor renders an item (the default is 5 ms). The
 # item's thread makes thousands of short Vulkan calls a scene change, the loading thread
@@ -395,10 +402,10 @@ class RendererActor:
         then, a whole item ahead of its use; `upcoming` (without `switch`): asked once the
         views are rendered for (the next item's settings, the scene after it) when the next
         item is known by then and of another scene, which is then changed to as with `switch`
-        (a renderer process's next request: distributed/processes.py). Returns {"ok": True, "views", "files", "cameras",
-        "seconds", "pid"}, or {"ok": False, "error": one line, "retry": bool}: an error in
-        the input (a scene that does not load, a bad option) fails the same way everywhere
-        and is not retried."""
+        (a renderer process's next request: distributed/processes.py). Returns {"ok": True,
+        "views", "files", "cameras", "seconds", "pid", ...}, or {"ok": False, "error": one
+        line, "retry": bool}: an error in the input (a scene that does not load, a bad
+        option) fails the same way everywhere and is not retried."""
         t0 = time.perf_counter()
         try:
             with quick_switches():

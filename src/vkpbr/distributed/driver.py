@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from vkpbr.distributed.actor import encoders_for
 from vkpbr.distributed.cluster import (
     ClusterError,
     RayRenderer,
@@ -50,7 +51,6 @@ from vkpbr.distributed.processes import (
     ActorLost,
     ProcessActor,
     default_processes,
-    encoders_for,
     wait_one,
 )
 from vkpbr.errors import UsageError

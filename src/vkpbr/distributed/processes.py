@@ -34,7 +34,7 @@ from typing import IO
 
 from vkpbr.distributed.job import RenderSettings, WorkItem
 
-__all__ = ["ProcessActor", "ActorLost", "default_processes", "encoders_for", "DEPTH", "WORKER"]
+__all__ = ["ProcessActor", "ActorLost", "default_processes", "DEPTH", "WORKER"]
 
 log = logging.getLogger(__name__)
 
@@ -55,12 +55,6 @@ def default_processes(items: int) -> int:
     with 16 cores, 100 scenes x 16 views (benchmarks/results/h200-2026-12-04s19.md, run b):
     3, 4, 5, 6 processes 220, 251, 278, 291 views/s; one in this process 120."""
     return max(1, min(8, (os.cpu_count() or 2) * 3 // 8, items))
-
-
-def encoders_for(processes: int) -> int:
-    """Encoding threads of each of `processes` renderer processes: the cores shared out, 2
-    to 8 each (as one process's actor.ENCODERS)."""
-    return max(2, min(8, (os.cpu_count() or 2) // max(1, processes)))
 
 
 # --- the driver's side ---------------------------------------------------------------------

@@ -23,11 +23,14 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.pipeline import PipelineSpec
 from vkpbr.render.layouts import draw_push
+
+if TYPE_CHECKING:
+    from vkpbr.render.gpu_scene import MaterialSets
 
 __all__ = ["PassSpec", "PASSES", "classify", "record_pass", "record_passes", "PassContext"]
 
@@ -108,7 +111,7 @@ class PassContext:
     classes: list[str]  # classify() of each draw, for this frame's options
     pipeline: Callable[[PassSpec], Any]  # pass -> gpu.pipeline.Pipeline
     frame_sets: tuple[Any, Any]  # set 0 (camera, settings), set 2 (lighting)
-    material_sets: list[Any]
+    material_sets: MaterialSets  # the frame slot's (made as passes prepare them)
     vertex_buffers: list[Any]
     index_buffer: Any
     blend_order: tuple[int, ...] = ()  # indices into the blend-class draws, far to near
@@ -170,9 +173,7 @@ def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[tupl
     if ctx.shadow_set is not None:
         cmd.bind_set(3, ctx.shadow_set)
     cmd.bind_vertex_buffers(ctx.vertex_buffers)
-    prepare = getattr(ctx.material_sets, "prepare", None)  # (MaterialSets: all at once)
-    if prepare is not None:
-        prepare(d.material for _, d in draws)
+    ctx.material_sets.prepare(d.material for _, d in draws)  # (made at once: one write)
     bound = None
     runs = [(i, d, 1) for i, d in draws] if (instanced is not None or ctx.indirect is not None
                                              or p.back_to_front) else _instance_runs(draws)

@@ -47,6 +47,7 @@ vec3 load(ivec2 p) {
 // the level below blurred by T, then spread back by the transpose of that average times s
 // (each texel below gives away s, each texel above is a normalised mix): in the interior
 // the bilinear tent of Jimenez 2014. Both keep the mean; 5 taps an axis at most.
+#if ODD_LEVELS  // the general weights
 const float T[3] = float[](0.25, 0.5, 0.25);  // the blur, at offsets -1, 0, +1
 
 // Overlap of footprint j ([j s, (j+1) s), clipped to [0, n_above)) with texel k ([k, k+1)).
@@ -85,7 +86,50 @@ float[3] up_weights(int i, float s, int n, out int first) {
     return w;
 }
 
-// At even sizes (s = 2) the same, with constant weights: MODE_DOWN's 1 3 3 1 tent, MODE_UP's
+// The level above's (MODE_DOWN) or below's (MODE_UP) texels first - 1 + m, m in 0..4 an
+// axis, weighted by wx and wy (zero weights not read).
+vec3 taps5(ivec2 first, float wx[5], float wy[5]) {
+    vec3 sum = vec3(0.0);
+    for (int y = 0; y < 5; ++y) {
+        if (wy[y] == 0.0) continue;
+        vec3 row = vec3(0.0);
+        for (int x = 0; x < 5; ++x)
+            if (wx[x] != 0.0) row += wx[x] * load(first + ivec2(x - 1, y - 1));
+        sum += wy[y] * row;
+    }
+    return sum;
+}
+
+vec3 down(ivec2 p) {
+    ivec2 first;
+    vec2 s = vec2(pc.src_w, pc.src_h) / vec2(pc.dst_w, pc.dst_h);
+    float wx[5] = down_weights(p.x, s.x, int(pc.src_w), first.x);
+    float wy[5] = down_weights(p.y, s.y, int(pc.src_h), first.y);
+    return taps5(first, wx, wy);
+}
+
+// One axis of up: up_weights of the blurred texels first + m (m in 0..2) as weights of the
+// level below's texels first - 1 + m (m in 0..4), the blur T folded in.
+float[5] up_taps(int i, float s, int n, out int first) {
+    float u[3] = up_weights(i, s, n, first);
+    float w[5] = float[](0.0, 0.0, 0.0, 0.0, 0.0);
+    for (int m = 0; m < 3; ++m)
+        for (int d = 0; d < 3; ++d) w[m + d] += u[m] * T[d];
+    return w;
+}
+
+// The level below (src) at this level's pixel p (dst): blurred by T there (clamped reads),
+// then spread by up_weights.
+vec3 up(ivec2 p) {
+    ivec2 first;
+    vec2 s = vec2(pc.dst_w, pc.dst_h) / vec2(pc.src_w, pc.src_h);
+    float wx[5] = up_taps(p.x, s.x, int(pc.dst_w), first.x);
+    float wy[5] = up_taps(p.y, s.y, int(pc.dst_h), first.y);
+    return taps5(first, wx, wy);
+}
+
+#else  // every step 2:1 (render/post.py picks this build then): constant weights
+// At even sizes (s = 2) the resampling above has constant weights: MODE_DOWN's 1 3 3 1 tent, MODE_UP's
 // bilinear tent (1 5 7 3 or 3 7 5 1 by parity, / 16; its edge texels 12 4 and 4 12).
 vec3 down_even(ivec2 p) {
     const float w[4] = float[](1.0, 3.0, 3.0, 1.0);
@@ -115,49 +159,6 @@ vec3 up_even(ivec2 p) {
     return sum / 256.0;
 }
 
-#if ODD_LEVELS
-vec3 down(ivec2 p) {
-    ivec2 first;
-    vec2 s = vec2(pc.src_w, pc.src_h) / vec2(pc.dst_w, pc.dst_h);
-    float wx[5] = down_weights(p.x, s.x, int(pc.src_w), first.x);
-    float wy[5] = down_weights(p.y, s.y, int(pc.src_h), first.y);
-    vec3 sum = vec3(0.0);
-    for (int y = 0; y < 5; ++y) {
-        if (wy[y] == 0.0) continue;
-        vec3 row = vec3(0.0);
-        for (int x = 0; x < 5; ++x)
-            if (wx[x] != 0.0) row += wx[x] * load(first + ivec2(x - 1, y - 1));
-        sum += wy[y] * row;
-    }
-    return sum;
-}
-
-// The level below (src) at this level's pixel p (dst): blurred by T there (clamped reads),
-// then spread by up_weights.
-vec3 up(ivec2 p) {
-    ivec2 first;
-    vec2 s = vec2(pc.dst_w, pc.dst_h) / vec2(pc.src_w, pc.src_h);
-    float ux[3] = up_weights(p.x, s.x, int(pc.dst_w), first.x);
-    float uy[3] = up_weights(p.y, s.y, int(pc.dst_h), first.y);
-    // the blurred texels' weights on src texels first - 1 + m (m in 0..4)
-    float wx[5] = float[](0.0, 0.0, 0.0, 0.0, 0.0), wy[5] = wx;
-    for (int m = 0; m < 3; ++m)
-        for (int d = 0; d < 3; ++d) {
-            wx[m + d] += ux[m] * T[d];
-            wy[m + d] += uy[m] * T[d];
-        }
-    vec3 sum = vec3(0.0);
-    for (int y = 0; y < 5; ++y) {
-        if (wy[y] == 0.0) continue;
-        vec3 row = vec3(0.0);
-        for (int x = 0; x < 5; ++x)
-            if (wx[x] != 0.0) row += wx[x] * load(first + ivec2(x - 1, y - 1));
-        sum += wy[y] * row;
-    }
-    return sum;
-}
-
-#else  // every step 2:1 (render/post.py picks this build then): constant weights
 vec3 down(ivec2 p) { return down_even(p); }
 vec3 up(ivec2 p) { return up_even(p); }
 #endif
