@@ -265,6 +265,17 @@ def _read_or_empty(path: Path) -> bytes:
         return b""
 
 
+def test_no_more_processes_than_items(tmp_path: Path) -> None:
+    """`--processes 50` for a job of 2 items starts 2 processes, not 50."""
+    (tmp_path / "poses.json").write_text(json.dumps(POSES))
+    doc = {"views_per_item": 2, "scenes": [{"cameras": "poses.json", "out": "o", "size": SIZE}]}
+    pids: set[int] = set()
+    result = render(job_from_doc(doc, base=tmp_path), PROCESSES, actors=50,
+                    on_result=lambda item, res: pids.add(res["pid"]))
+    assert result.ok and result.actors == 2 and result.rendered == len(POSES)
+    assert len(pids) <= 2
+
+
 def test_calls_to_an_ended_process_fail_at_once() -> None:
     """Once a renderer process has ended and its answers' reader finished, a call to it fails
     with ActorLost (saying how it ended) instead of waiting for an answer that cannot come."""

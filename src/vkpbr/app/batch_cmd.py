@@ -70,8 +70,8 @@ def add_parser(sub: Any) -> None:
                         "device; the same files and manifests, resumable alike)")
     p.add_argument("--processes", nargs="?", const=0, type=_processes, metavar="N",
                    help="render without Ray in N renderer processes of this machine (default "
-                        "device; alone: 3 for every 8 cores, 1 to 8): a many-scene job's scene "
-                        "changes run side by side")
+                        "device; alone: 3 for every 8 cores, 1 to 8; at most one an item): a "
+                        "many-scene job's scene changes run side by side")
     p.add_argument("--devices", type=_devices, metavar="LIST",
                    help="with --processes: the GPUs the processes open in turn, as indices or "
                         "name parts (`vkpbr info` lists them), e.g. 0,1,2,3 (default: the "

@@ -225,7 +225,7 @@ def render(job: Job | dict | list | str | os.PathLike[str], address: str | None 
         default device, each with its own GIL (distributed/processes.py; a many-scene job's
         scene changes run side by side).
     actors : how many renderer actors (None: one per GPU, else one per CPU of the cluster;
-        with "processes", 3 for every 8 cores, 1 to 8).
+        with "processes", 3 for every 8 cores, 1 to 8; never more than the job's items).
     devices : with "processes", the Vulkan devices (indices or name parts, as `--device`)
         the processes open in turn (process k the k-th modulo their count); None: the
         default device. Ray places its actors on GPUs itself.
@@ -385,10 +385,11 @@ class _ProcessActors:
 
     def __init__(self, actors: int | None, items: int,
                  devices: Sequence[str | int] | None = None) -> None:
-        self.count = default_processes(items) if actors is None else actors
+        if actors is not None and actors < 1:
+            raise UsageError(f"processes: expected at least 1, got {actors}")
+        # (never more than there are items: a process more would only start and end)
+        self.count = default_processes(items) if actors is None else min(actors, items)
         self._devices = list(devices or [])
-        if self.count < 1:
-            raise UsageError(f"processes: expected at least 1, got {self.count}")
         self._encoders = encoders_for(self.count)
         self.kind, self.depth = "process", DEPTH
 
