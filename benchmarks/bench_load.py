@@ -108,9 +108,31 @@ def child(scene: str, size: tuple[int, int], cached: bool, serial: bool = False)
            "device_name": renderer.device.info.name,
            "device_parts": getattr(renderer.device, "timings", {}),
            "upload_parts": getattr(renderer.gpu_scene, "upload_stats", {}),
+           "builds": _builds(renderer.device, t0),
+           "marks": {"load": t_load - t0, "set-up": t_setup - t0, "choice": t_choice - t0,
+                     "environment": t_env - t0, "first frame": t_first - t0},
            "again": _again(renderer, scene, size, cache, serial)}
     renderer.close()
     return out
+
+
+def _builds(device: object, t0: float) -> list[tuple[str, float, float, bool]]:
+    """The device's pipeline builds so far: (shaders, start from `t0`, seconds, cache hit)."""
+    cache = getattr(device, "pipeline_cache", None)
+    return [(n, t - t0, s, h) for n, t, s, h in (cache.stats.builds if cache else [])]
+
+
+def print_builds(rows: list[dict]) -> None:
+    """Each row's pipeline builds, in order, with the phase each began in."""
+    for r in rows:
+        marks = sorted(r["marks"].items(), key=lambda kv: kv[1])
+        print(f"\n#### {r['row']}: {len(r['builds'])} pipeline builds, "
+              + ", ".join(f"{k} done at {v:.3f} s" for k, v in marks) + "\n")
+        print("| shaders | began, s | ms | hit | phase |")
+        print("|---|---:|---:|---|---|")
+        for name, start, sec, hit in r["builds"]:
+            phase = next((k for k, v in marks if start < v), "after")
+            print(f"| {name} | {start:.3f} | {1000 * sec:.1f} | {'yes' if hit else ''} | {phase} |")
 
 
 def _again(renderer: object, scene: str, size: tuple[int, int], cache: Path | None,
@@ -408,6 +430,8 @@ def main() -> None:
     p.add_argument("--json", type=Path)
     p.add_argument("--profile", type=Path, metavar="DIR",
                    help="also write each row's cProfile (top 60 by cumulative time) into DIR")
+    p.add_argument("--builds", action="store_true",
+                   help="also print every row's pipeline builds (shaders, when, how long)")
     p.add_argument("--serial", action="store_true",
                    help="load the scene, then make the device (as before vkpbr.bake.ahead)")
     p.add_argument("--job-runs", default="cold,warm,sequential",
@@ -456,6 +480,8 @@ def main() -> None:
     if not args.no_load:
         out["load"] = load_table(args.scene, size, args.profile, args.serial)
         print_load_table(args.scene, size, out["load"], args.serial)
+        if args.builds:
+            print_builds(out["load"])
     if not args.no_job:
         from vkpbr.distributed import actor
 

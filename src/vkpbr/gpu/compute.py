@@ -111,7 +111,7 @@ class ComputePipeline(DeviceObject):
             feedback = Feedback(device)  # the build goes through the device's pipeline cache
             info = vk.VkComputePipelineCreateInfo(pNext=feedback.info, flags=flags, stage=stage,
                                                   layout=self.layout.handle)
-            return feedback.build("compute", info)
+            return feedback.build("compute", info, spirv.name)
         finally:
             module.destroy()
 

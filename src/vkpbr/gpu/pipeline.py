@@ -254,5 +254,6 @@ class Pipeline(DeviceObject):
             ),
             layout=layout.handle,
         )
-        return feedback.build("graphics", info)
+        return feedback.build("graphics", info, "+".join(
+            s for s in (spec.vertex_shader, spec.fragment_shader) if s))
 

@@ -25,7 +25,7 @@ import logging
 import struct
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -54,6 +54,8 @@ class PipelineStats:
     built: int = 0
     hits: int = 0
     seconds: float = 0.0
+    # (what was built, when it began on perf_counter's clock, its seconds, the driver's hit)
+    builds: list[tuple[str, float, float, bool]] = field(default_factory=list)
 
 
 class PipelineCache(DeviceObject):
@@ -236,9 +238,9 @@ class Feedback:
             pNext=next_struct, pPipelineCreationFeedback=self.result,
             pipelineStageCreationFeedbackCount=0, pPipelineStageCreationFeedbacks=None)
 
-    def build(self, kind: str, info: Any) -> Any:
+    def build(self, kind: str, info: Any, name: str = "") -> Any:
         """One pipeline of `info` (whose pNext chain holds `self.info`), `kind` "graphics" or
-        "compute", through the device's pipeline cache."""
+        "compute", through the device's pipeline cache; `name` (its shaders) for the stats."""
         vk, device = self.device.vk, self.device
         cache = pipeline_cache(device)
         create = vk.vkCreateGraphicsPipelines if kind == "graphics" else vk.vkCreateComputePipelines
@@ -252,4 +254,5 @@ class Feedback:
             cache.stats.seconds += seconds
             cache.stats.built += 1
             cache.stats.hits += hit
+            cache.stats.builds.append((name or kind, t0, seconds, hit))
         return handle
