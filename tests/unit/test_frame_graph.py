@@ -10,12 +10,14 @@
 
 from __future__ import annotations
 
+import threading
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import pytest
 import vulkan as vk
 
-from vkpbr.gpu.graph import BufferResource, ImageResource, Tracker
+from vkpbr.gpu.graph import BufferResource, ImageResource, Step, Tracker, build_kernels
 
 
 @dataclass
@@ -105,3 +107,30 @@ def test_two_layouts_in_one_use_of_an_image_is_refused() -> None:
     t.use("buf", "storage|transfer_dst")  # a buffer has no layout: fine
     with pytest.raises(ValueError, match="two layouts"):
         t.use("img", "storage|transfer_dst")
+
+
+def test_a_recordings_kernels_are_made_at_once_and_their_errors_raised() -> None:
+    """Step.kernels: made together (two makers of two steps must be under way at once to
+    pass the barrier: KERNEL_THREADS is at least 2) before any step records, and a maker's
+    error is the recording's."""
+    together = threading.Barrier(2, timeout=30)
+    made: list[str] = []
+
+    def maker(name: str, wait: bool = True) -> Callable[[], str]:
+        def make() -> str:
+            if wait:
+                together.wait()
+            made.append(name)
+            return name
+        return make
+
+    steps = [Step("a", kernels=(maker("x"), maker("y", wait=False))),
+             Step("b", kernels=(maker("z"),))]
+    build_kernels(steps)
+    assert sorted(made) == ["x", "y", "z"]
+
+    def broken() -> None:
+        raise ValueError("no such kernel")
+
+    with pytest.raises(ValueError, match="no such kernel"):
+        build_kernels([Step("a", kernels=(broken, lambda: None))])

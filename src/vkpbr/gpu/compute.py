@@ -13,10 +13,12 @@ constants, and the barriers between dispatches (style.md: Vulkan vocabulary stay
 
 from __future__ import annotations
 
+import os
 import struct
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from vkpbr.errors import VkpbrError
 from vkpbr.gpu.descriptors import DescriptorSetLayout
@@ -26,7 +28,7 @@ from vkpbr.gpu.pipeline import PipelineLayout, ShaderModule, shader_key
 from vkpbr.gpu.pipeline_cache import Feedback
 from vkpbr.gpu.vk import check_result
 
-__all__ = ["ComputePipeline", "groups", "LAYOUTS", "STAGES"]
+__all__ = ["ComputePipeline", "groups", "make_at_once", "LAYOUTS", "STAGES"]
 
 # Image layouts and pipeline stages in words, for Commands.image_barrier.
 LAYOUTS = {
@@ -60,6 +62,21 @@ def groups(size: Sequence[int], local: Sequence[int]) -> tuple[int, int, int]:
     """Work groups covering `size` (x, y, z) with `local`-sized groups (rounded up)."""
     g = [-(-int(s) // int(t)) for s, t in zip(size, local, strict=True)]
     return g[0], g[1], g[2]
+
+
+KERNEL_THREADS = max(2, min(8, os.cpu_count() or 1))
+T = TypeVar("T")
+
+
+def make_at_once(makers: Sequence[Callable[[], T]]) -> list[T]:
+    """Each of `makers`' results, made on up to KERNEL_THREADS threads at once: pipeline
+    builds, whose compiles then overlap (the binding lets go of the GIL in its calls, and
+    the device's pipeline cache is internally synchronised). A maker's error is raised."""
+    if len(makers) < 2:
+        return [make() for make in makers]
+    with ThreadPoolExecutor(min(KERNEL_THREADS, len(makers)), "vkpbr-kernels") as pool:
+        futures = [pool.submit(make) for make in makers]
+    return [f.result() for f in futures]
 
 
 class ComputePipeline(DeviceObject):

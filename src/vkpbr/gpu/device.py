@@ -151,7 +151,9 @@ class Device:
         self._children: list[Destroyable] = []
         # Children made under `keeping()`: the device's for its life (not a scene's).
         self._kept_children: list[Destroyable] = []
-        self._track_into = self._children
+        # (per thread: the frame graph makes a recording's kernels, the device's and a
+        # scene's, on several threads at once)
+        self._keeping = threading.local()
         self.handle = None
         # Its VkPipelineCache (gpu/pipeline_cache.py): set by the caller with a file to keep
         # it in, else made in memory by the first pipeline build.
@@ -455,7 +457,7 @@ class Device:
 
     # --- lifetime ---------------------------------------------------------------------------
     def track(self, child: Destroyable) -> None:
-        self._track_into.append(child)
+        (self._kept_children if self.keeps_here() else self._children).append(child)
 
     def untrack(self, child: Destroyable) -> None:
         for children in (self._children, self._kept_children):
@@ -465,14 +467,20 @@ class Device:
 
     @contextlib.contextmanager
     def keeping(self) -> Iterator[None]:
-        """Children made inside (on any thread) are the device's for its life: outside the
+        """Children made inside, on this thread, are the device's for its life: outside the
         `live_children` count, so `destroy_children` (a scene's unmaking) leaves them;
-        `close` destroys them after the others. The caller makes nothing of a scene inside."""
-        outer, self._track_into = self._track_into, self._kept_children
+        `close` destroys them after the others. The caller makes nothing of a scene inside;
+        other threads' children stay theirs."""
+        local = self._keeping
+        local.depth = getattr(local, "depth", 0) + 1
         try:
             yield
         finally:
-            self._track_into = outer
+            local.depth -= 1
+
+    def keeps_here(self) -> bool:
+        """Whether this thread is inside `keeping()`."""
+        return getattr(self._keeping, "depth", 0) > 0
 
     @property
     def live_children(self) -> int:

@@ -46,23 +46,39 @@ class KeptHandles:
         self._by_key: dict[Hashable, Any] = {}
         self._made: list[tuple[str, Any]] = []  # (vkDestroy* name, handle), in making order
         self._lock = threading.Lock()
+        self._making: dict[Hashable, threading.Event] = {}  # keys being made, set when done
         self.hits = 0  # look-ups that found a handle (benchmarks: what a swap did not make)
 
     def __len__(self) -> int:
         return len(self._made)
 
     def get(self, key: Hashable, destroy_fn: str, make: Callable[[], Any]) -> Any:
-        """The handle of `key`, made by `make()` the first time (outside the lock: two
-        threads may both make one; both are kept, the first stored is shared)."""
-        with self._lock:
-            handle = self._by_key.get(key)
-            if handle is not None:
-                self.hits += 1
-                return handle
-        handle = make()
+        """The handle of `key`, made by `make()` the first time, outside the lock: a second
+        caller of a key being made waits for it (the frame graph makes a recording's
+        pipelines on several threads; two steps may share one), and makes it itself when
+        the first maker failed."""
+        while True:
+            with self._lock:
+                handle = self._by_key.get(key)
+                if handle is not None:
+                    self.hits += 1
+                    return handle
+                making = self._making.get(key)
+                if making is None:
+                    making = self._making[key] = threading.Event()
+                    break
+            making.wait()
+        try:
+            handle = make()
+        except BaseException:
+            with self._lock:
+                self._making.pop(key).set()
+            raise
         with self._lock:
             self._made.append((destroy_fn, handle))
-            return self._by_key.setdefault(key, handle)
+            self._by_key[key] = handle
+            self._making.pop(key).set()
+        return handle
 
     def destroy(self, vk: Any, device_handle: Any) -> None:
         """Destroy every handle, newest first (pipelines before their layouts)."""

@@ -47,6 +47,7 @@ a plane and a crop of Sponza (docs/ambient-occlusion.md states the errors).
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -316,19 +317,22 @@ class AoImages:
             p["mip_offset"], p["depth_row"] = self.mip_offset, w
             return p
 
-        def run(name: str, p: np.ndarray, size: tuple[int, int]) -> Any:
-            return self._dispatch(name + kernel, p, set0, dset, (*size, depth_layers))
+        def run(step: str, name: str, p: np.ndarray, size: tuple[int, int],
+                uses: tuple[tuple[str, str], ...], timed: bool) -> Step:
+            return Step(step, self._dispatch(name + kernel, p, set0, dset, (*size, depth_layers)),
+                        uses, timed=timed,
+                        kernels=(functools.partial(self._kernel, name + kernel, p.nbytes),))
 
         mips = mip_extent(extent, (tw, th))
         source = (("depth", "sampled") if depth_buffer is None
                   else ("raster_depths", "storage_read"))
         prefilter = "ao_prefilter" if depth_buffer is None else "ao_prefilter_buffer"
-        steps = [Step("ao_prefilter", run(prefilter, push(0, 0), (mips[0] // 2, mips[1] // 2)),
-                      (source, ("ao_depth", "storage")), timed=self.profile),
-                 Step("ao_gtao", run(f"ao_gtao_{q.slices}x{q.steps}", push(0, 0), work),
-                      (("ao_depth", "sampled"), ("ao_raw", "storage")), timed=self.profile),
+        steps = [run("ao_prefilter", prefilter, push(0, 0), (mips[0] // 2, mips[1] // 2),
+                     (source, ("ao_depth", "storage")), self.profile),
+                 run("ao_gtao", f"ao_gtao_{q.slices}x{q.steps}", push(0, 0), work,
+                     (("ao_depth", "sampled"), ("ao_raw", "storage")), self.profile),
                  *self._filter_steps(run, push, q, work)]
-        steps[-1] = Step("ao", steps[-1].record, steps[-1].uses, timed=timed)
+        steps[-1] = dataclasses.replace(steps[-1], name="ao", timed=timed)
         if copy_out:
             steps.append(Step("ao_output", lambda cmd: _copy_image(cmd, image, resources, extent),
                               (("ao", "transfer_src"), ("out_ao", "transfer_dst")), timed=False))
@@ -347,13 +351,12 @@ class AoImages:
         for k in range(q.passes - fused):
             final = k == q.passes - 1
             dst = "ao" if final and q.scale == 1 else ("ao_raw" if src == "ao_mid" else "ao_mid")
-            steps.append(Step(f"ao_denoise{k}", run(
-                "ao_denoise", push(int(final), int(src == "ao_mid")), work), both,
-                timed=self.profile))
+            steps.append(run(f"ao_denoise{k}", "ao_denoise", push(int(final), int(src == "ao_mid")),
+                             work, both, self.profile))
             src = dst
         if q.scale > 1:
-            steps.append(Step("ao_upsample", run(
-                "ao_upsample", push(1, int(src == "ao_mid"), fused), work), both, timed=False))
+            steps.append(run("ao_upsample", "ao_upsample", push(1, int(src == "ao_mid"), fused),
+                             work, both, False))
         return steps
 
     def _resources(self, resources: dict[str, Any], frame_index: int) -> Image:
@@ -369,10 +372,8 @@ class AoImages:
 
     def _dispatch(self, name: str, push: np.ndarray, set0: Any, dset: Any,
                   size: tuple[int, int, int]) -> Any:
-        pipe = self._kernel(name, push.nbytes)
-
         def record(cmd: Any) -> None:
-            cmd.bind_pipeline(pipe)
+            cmd.bind_pipeline(self._kernel(name, push.nbytes))
             cmd.bind_set(0, set0)
             cmd.bind_set(1, dset)
             cmd.push(push)

@@ -27,6 +27,7 @@ picks the path.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import astuple, dataclass
 from typing import Any
@@ -312,6 +313,20 @@ class ComputeScene:
         self.world_factors.array(np.float32, factors.size)[:] = factors.ravel()
         return grew
 
+    def makers(self, *kernels: tuple[Any, ...]) -> tuple[Callable[[], ComputePipeline], ...]:
+        """Calls that make the kernels of `kernels` ((name, push bytes[, constants]) each),
+        for a Step's `kernels` (the frame graph makes them ahead, at once)."""
+        return tuple(functools.partial(self._pipeline, *k) for k in kernels)
+
+    def _bin_makers(self, kernel: str, materials: list[int],
+                    tiles: tuple[int, int, int, int] | None = None,
+                    variant: ShadeVariant | None = None) -> tuple[Callable[[], ComputePipeline], ...]:
+        """The makers of `_dispatch_bins`'s kernels: one per specialisation its materials use."""
+        push_bytes = 32 if tiles else 16
+        constants = {variant.constants(self.layered[m]) if variant is not None else ()
+                     for m in materials}
+        return self.makers(*((kernel, push_bytes, c) for c in sorted(constants)))
+
     def _pipeline(self, name: str, push_bytes: int, constants: tuple[int, ...] = ()
                   ) -> ComputePipeline:
         """Kernel `name` (shaders/spv/<name>.comp.spv), specialised for `constants`."""
@@ -403,7 +418,9 @@ class ComputeScene:
         uses = ((p + "ids", "storage_read"), (p + "color", "storage"),
                 (p + "bins", "storage|transfer_dst"), (p + "args", "storage"),
                 (p + "pixels", "storage"))
-        return Step("classify", record, uses)
+        counted_kernels = kernels[1:] if counted else kernels
+        return Step("classify", record, uses,
+                    kernels=self.makers(*((name, 32) for name, _ in counted_kernels)))
 
     def shading_step(self, target: Any, frame_index: int, tbn: L.TbnMode,
                      frame_sets: dict[int, Any], material_sets: list[Any], materials: list[int],
@@ -419,7 +436,8 @@ class ComputeScene:
             self._dispatch_bins(cmd, res, frame_index, kernel, frame_sets, material_sets,
                                 materials, tiles, variant)
 
-        return Step("shading", record, self._bin_uses(prefix))
+        return Step("shading", record, self._bin_uses(prefix),
+                    kernels=self._bin_makers(kernel, materials, tiles, variant))
 
     def outputs_step(self, target: Any, frame_index: int, tbn: L.TbnMode,
                      frame_sets: dict[int, Any], material_sets: list[Any],
@@ -429,12 +447,15 @@ class ComputeScene:
         map) into the images named `outputs`."""
         res = self._resources(target)
 
+        kernel = f"shade_outputs_{tbn.name.lower()}"
+
         def record(cmd: Any) -> None:
-            self._dispatch_bins(cmd, res, frame_index, f"shade_outputs_{tbn.name.lower()}",
-                                frame_sets, material_sets, materials)
+            self._dispatch_bins(cmd, res, frame_index, kernel, frame_sets, material_sets,
+                                materials)
 
         return Step("outputs", record,
-                    self._bin_uses("") + tuple((name, "storage") for name in outputs))
+                    self._bin_uses("") + tuple((name, "storage") for name in outputs),
+                    kernels=self._bin_makers(kernel, materials))
 
     @staticmethod
     def _bin_uses(p: str) -> tuple[tuple[str, str], ...]:
@@ -446,13 +467,16 @@ class ComputeScene:
                         tiles: tuple[int, int, int, int] | None = None) -> Step:
         """"background": the environment behind the shaded pixels (background.comp), every
         pixel nothing covers, in the camera's direction (`tiles`: each view's of an atlas)."""
+        kernel = "background_batch" if tiles else "background_view"
+
         def record(cmd: Any) -> None:
-            cmd.bind_pipeline(self._pipeline("background_batch" if tiles else "background_view", 16))
+            cmd.bind_pipeline(self._pipeline(kernel, 16))
             self._bind_frame_sets(cmd, frame_sets, None, self._resources(target).sets[frame_index])
             cmd.push(np.array(tiles or (1, *target.extent, 1), np.uint32))
             cmd.dispatch(*groups((*target.extent, 1), (8, 8, 1)))
 
-        return Step("background", record, (("ids", "storage_read"), ("color", "storage")))
+        return Step("background", record, (("ids", "storage_read"), ("color", "storage")),
+                    kernels=self.makers((kernel, 16)))
 
     def raster_steps(self, target: Any, frame_index: int, alpha_mask: bool,
                      material_sets: list[Any], tiles: tuple[int, int, int, int] | None = None,
@@ -471,7 +495,8 @@ class ComputeScene:
         push = self._raster_push(res, target, alpha_mask, (views, tile_w, tile_h, rows))
         dset = res.sets[frame_index]
 
-        def kernel(name: str, size: tuple[int, int, int] | None) -> Callable[[Any], None]:
+        def kernel(step: str, name: str, size: tuple[int, int, int] | None,
+                   uses: tuple[tuple[str, str], ...], timed: bool = True) -> Step:
             def record(cmd: Any) -> None:
                 cmd.bind_pipeline(self._pipeline(name, RASTER_PUSH_BYTES))
                 if set0 is not None:
@@ -482,7 +507,8 @@ class ComputeScene:
                     cmd.dispatch_indirect(res.raster_big, 4)
                 elif size[0] and size[1]:
                     cmd.dispatch(*size)
-            return record
+            return Step(step, record, uses, timed=timed,
+                        kernels=self.makers((name, RASTER_PUSH_BYTES)))
 
         def clear(cmd: Any) -> None:
             for buffer in (res.raster, res.raster_big, res.raster_masked_big, res.bins):
@@ -495,17 +521,17 @@ class ComputeScene:
         steps = [
             Step("raster_clear", clear, tuple((b, "transfer_dst") for b in (
                 "raster", "raster_big", "raster_masked_big", "bins")), timed=False),
-            Step("raster_small", kernel(f"raster_small{suffix}", small),
-                 (("raster", "storage"), ("raster_big", "storage"))),
+            kernel("raster_small", f"raster_small{suffix}", small,
+                   (("raster", "storage"), ("raster_big", "storage"))),
             # (it also sizes the masked draws' raster_masked_big dispatches)
-            Step("raster_args", kernel("raster_args", (1, 1, 1)),
-                 (("raster_big", "storage"), ("raster_masked_big", "storage")), timed=False),
-            Step("raster_big", kernel(f"raster_big{suffix}", None), big)]
+            kernel("raster_args", "raster_args", (1, 1, 1),
+                   (("raster_big", "storage"), ("raster_masked_big", "storage")), timed=False),
+            kernel("raster_big", f"raster_big{suffix}", None, big)]
         if alpha_mask and self.masked_rows:
             steps += self._masked_steps(res, dset, push, material_sets, views, set0, suffix)
-        steps.append(Step("raster_resolve", kernel("raster_resolve", groups((w, h, 1), CLASSIFY_GROUP)),
-                          (("raster", "storage"), ("ids", "storage"), ("color", "storage"),
-                           ("bins", "storage"), ("raster_depths", "storage"))))
+        steps.append(kernel("raster_resolve", "raster_resolve", groups((w, h, 1), CLASSIFY_GROUP),
+                            (("raster", "storage"), ("ids", "storage"), ("color", "storage"),
+                             ("bins", "storage"), ("raster_depths", "storage"))))
         if depth:
             steps.append(Step("depth_copy", lambda cmd: copy_buffer_to_image(
                 cmd, res.raster_depths, target.depth.handle, True, target.extent),
@@ -548,9 +574,11 @@ class ComputeScene:
             return record
 
         return [Step("raster_masked", draws(f"raster_masked{suffix}", False),
-                     (("raster", "storage"), ("raster_masked_big", "storage"))),
+                     (("raster", "storage"), ("raster_masked_big", "storage")),
+                     kernels=self.makers((f"raster_masked{suffix}", RASTER_PUSH_BYTES))),
                 Step("raster_masked_big", draws(f"raster_masked_big{suffix}", True),
-                     (("raster", "storage"), ("raster_masked_big", "storage|indirect")))]
+                     (("raster", "storage"), ("raster_masked_big", "storage|indirect")),
+                     kernels=self.makers((f"raster_masked_big{suffix}", RASTER_PUSH_BYTES)))]
 
     def _dispatch_bins(self, cmd: Any, res: _TargetResources, frame_index: int, kernel: str,
                        frame_sets: dict[int, Any], material_sets: list[Any],

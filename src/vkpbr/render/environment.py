@@ -19,8 +19,10 @@ pre-filter of a 2k x 1k panorama costs milliseconds, less than reading its resul
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -29,7 +31,7 @@ import numpy as np
 
 from vkpbr.atomic import atomic_writer
 from vkpbr.gpu.commands import Commands
-from vkpbr.gpu.compute import ComputePipeline, groups
+from vkpbr.gpu.compute import ComputePipeline, groups, make_at_once
 from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayout, DescriptorWriter
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.image import Image, ImageView, Sampler, SamplerSpec
@@ -136,13 +138,17 @@ class EnvironmentBaker:
         self.layout_2d = DescriptorSetLayout(device, [BindingSpec(0, "sampler2D", stages, "src"),
                                                       BindingSpec(1, "storage_image", stages,
                                                                   "dst")])
-        def pipe(name: str, layout: DescriptorSetLayout, push: int) -> ComputePipeline:
-            return ComputePipeline(device, SPV_DIR / f"{name}.comp.spv", [layout], push)
-        self.equirect = pipe("env_equirect", self.layout_2d, 16)
-        self.sky = pipe("env_sky", self.layout_no_src, 128)
-        self.specular = pipe("env_specular", self.layout, 16)
-        self.irradiance = pipe("env_irradiance", self.layout, 16)
-        self.lut = pipe("env_brdf_lut", self.layout_no_src, 16)
+        keep = device.keeps_here()  # (the makers' threads keep what this one keeps)
+
+        def pipe(name: str, layout: DescriptorSetLayout, push: int) -> Callable[[], ComputePipeline]:
+            def make() -> ComputePipeline:
+                with device.keeping() if keep else contextlib.nullcontext():
+                    return ComputePipeline(device, SPV_DIR / f"{name}.comp.spv", [layout], push)
+            return make
+        self.equirect, self.sky, self.specular, self.irradiance, self.lut = make_at_once([
+            pipe("env_equirect", self.layout_2d, 16), pipe("env_sky", self.layout_no_src, 128),
+            pipe("env_specular", self.layout, 16), pipe("env_irradiance", self.layout, 16),
+            pipe("env_brdf_lut", self.layout_no_src, 16)])
         self.cube_sampler = Sampler(device, SamplerSpec("clamp", "clamp", anisotropy=1.0))
         self.lut_sampler = Sampler(device, SamplerSpec("clamp", "clamp", mipmaps=False,
                                                        anisotropy=1.0))

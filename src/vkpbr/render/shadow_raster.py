@@ -61,6 +61,7 @@ buffer, which the shading reads as it is (no copy: image layers could not hold t
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -339,15 +340,19 @@ class ShadowRaster:
     def _steps(self, record: dict[str, Callable[[Any], None]], table: _Table, depths: str,
                big_list: str) -> list[Step]:
         apart = TIMED_STEPS
+        made = {name: (functools.partial(self._pipeline, name),)
+                for name in ("small", "args", "big", "masked")}
         out = [Step("shadows.clear", record["clear"], ((depths, "transfer_dst"), (big_list, "transfer_dst")),
                     timed=False),
                Step("shadows.small", record["small"], ((depths, "storage"), (big_list, "storage")),
-                    timed=apart),
-               Step("shadows.args", record["args"], ((big_list, "storage"),), timed=False),
+                    timed=apart, kernels=made["small"]),
+               Step("shadows.args", record["args"], ((big_list, "storage"),), timed=False,
+                    kernels=made["args"]),
                Step("shadows.big", record["big"], ((depths, "storage"), (big_list, "storage|indirect")),
-                    timed=apart)]
+                    timed=apart, kernels=made["big"])]
         if table.masked:
-            out.append(Step("shadows.masked", record["masked"], ((depths, "storage"),), timed=apart))
+            out.append(Step("shadows.masked", record["masked"], ((depths, "storage"),), timed=apart,
+                            kernels=made["masked"]))
         # Nothing to record: its declared read puts the barrier from the kernels' writes to
         # every shader that reads the maps after it (the module's docstring).
         out.append(Step("shadows", uses=((depths, "storage_read|fragment_storage_read"),)))

@@ -12,6 +12,7 @@ passes draw over it (and test that depth without writing it: a pre-pass for them
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
@@ -173,7 +174,7 @@ class FrameSteps:
         compute = self.spec.path.startswith("compute") and copy_target.storage_view is not None
         sub = _CopySteps(self, copy_target, compute)
         steps = sub.steps(COPY_PATHS["compute" if compute else "forward"])
-        return [*(Step(f"transmission.{s.name}", s.record, s.uses, s.rendering, False, s.leaves)
+        return [*(dataclasses.replace(s, name=f"transmission.{s.name}", timed=False)
                   for s in steps), Step("transmission")]
 
     # --- fragment passes --------------------------------------------------------------------
@@ -202,8 +203,8 @@ class FrameSteps:
             return [Step(p.name, rendering=self._rendering)]
         ctx = self._context(visibility=False, prepass=prepass or over_visibility)
         shades = self.spec.ao is not None and not (p.prepass or p.fullscreen)
-        return [Step(p.name, _pass_recorder(ctx, p), (("ao", "sampled"),) if shades else (),
-                     rendering=self._rendering_for())]
+        return [_pass_step(p.name, ctx, p, (("ao", "sampled"),) if shades else (),
+                           rendering=self._rendering_for())]
 
     def _context(self, visibility: bool, prepass: bool, target: Any = None,
                  classes: list[str] | None = None, copy: bool = False) -> PassContext:
@@ -226,7 +227,7 @@ class FrameSteps:
         self._close_rendering()
         # The fragment path's own passes follow (forward_outputs) and take the timestamps.
         timed = self.spec.path.startswith("compute")
-        return [Step(n, _pass_recorder(ctx, _PASS_BY_NAME[n]), rendering=rendering, timed=timed)
+        return [_pass_step(n, ctx, _PASS_BY_NAME[n], rendering=rendering, timed=timed)
                 for n in _VISIBILITY_ROWS]
 
     # --- the compute path -------------------------------------------------------------------
@@ -273,8 +274,7 @@ class FrameSteps:
                                self.material_sets, self._shaded(), spec.tiles,
                                variant=spec.variant)
         if spec.ao is not None:  # reads the frame's GTAO (set 2 ao_map)
-            step = Step(step.name, step.record, (*step.uses, ("ao", "sampled")), step.rendering,
-                        step.timed, step.leaves)
+            step = dataclasses.replace(step, uses=(*step.uses, ("ao", "sampled")))
         return [step]
 
     def _ao(self) -> list[Step]:
@@ -305,7 +305,7 @@ class FrameSteps:
         rendering = Rendering("color", "depth", self.target.clear_color, 0.0)
         self._close_rendering()
         self._depth_written = self.target.samples == 1
-        return [Step(p.name, _pass_recorder(ctx, p), rendering=rendering, timed=False)
+        return [_pass_step(p.name, ctx, p, rendering=rendering, timed=False)
                 for p in PREPASS_ROWS if p.draw_class in self.classes or p is PREPASS_ROWS[0]]
 
     def _outputs(self) -> list[Step]:
@@ -406,13 +406,13 @@ class _CopySteps:
                 p = _PASS_BY_NAME[name]
                 if p.prepass and not prepass:
                     continue
-                out.append(Step(name, _pass_recorder(ctx, p), rendering=rendering))
+                out.append(_pass_step(name, ctx, p, rendering=rendering))
             return [*out, t.mip_step("mips", "copy.")]
         cs = f.r.compute_scene()
         f.resources.update(cs.buffers(t, "copy."))
         vis = f._context(True, False, t, self.classes)
         rendering = Rendering("copy.ids", "copy.depth", (0.0, 0.0, 0.0, 0.0), 0.0)
-        out += [Step(n, _pass_recorder(vis, _PASS_BY_NAME[n]), rendering=rendering)
+        out += [_pass_step(n, vis, _PASS_BY_NAME[n], rendering=rendering)
                 for n in _VISIBILITY_ROWS]
         sets = f.r.compute_sets(f.frame_index)
         materials = shaded_materials(f.gs.draws, self.classes)
@@ -421,8 +421,8 @@ class _CopySteps:
                 cs.shading_step(t, f.frame_index, f.spec.tbn, sets, f.material_sets,
                                 materials, copy=True, variant=f.spec.variant, prefix="copy.")]
         ctx = f._context(False, False, t, self.classes, copy=True)
-        out.append(Step("background", _pass_recorder(ctx, _PASS_BY_NAME["background"]),
-                        rendering=Rendering("copy.color", "copy.depth", None, None)))
+        out.append(_pass_step("background", ctx, _PASS_BY_NAME["background"],
+                              rendering=Rendering("copy.color", "copy.depth", None, None)))
         return [*out, t.mip_step("mips", "copy.")]
 
 
@@ -433,8 +433,13 @@ def _sized(resource: Any, extent: tuple[int, int] | None) -> Any:
     return dataclasses.replace(resource, extent=extent)
 
 
-def _pass_recorder(ctx: PassContext, p: PassSpec) -> Callable[[Commands], None]:
-    return lambda cmd: record_pass(cmd, ctx, p)
+def _pass_step(name: str, ctx: PassContext, p: PassSpec, uses: tuple[tuple[str, str], ...] = (),
+               rendering: Rendering | None = None, timed: bool = True) -> Step:
+    """Step `name` recording pass `p` (record_pass) with `ctx`; its pipeline made ahead
+    (Step.kernels) where the pass draws anything."""
+    draws = p.fullscreen or p.draw_class in ctx.classes
+    return Step(name, lambda cmd: record_pass(cmd, ctx, p), uses, rendering, timed,
+                kernels=(functools.partial(ctx.pipeline, p),) if draws else ())
 
 
 def _clear_outputs(cmd: Commands, outputs: dict[str, tuple[Any, Any]]) -> None:
