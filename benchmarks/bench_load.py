@@ -292,6 +292,9 @@ def run_job(doc: dict, how: str, processes: int = 1) -> dict:
                else None)
     if PROFILE_WORKERS is not None and address == PROCESSES:
         _profile_workers(PROFILE_WORKERS / "".join(c if c.isalnum() else "-" for c in how))
+    timed_calls = None
+    if TIME_VK_CALLS is not None and address == PROCESSES:
+        timed_calls = _time_vk_calls(TIME_VK_CALLS / "".join(c if c.isalnum() else "-" for c in how))
     t0, firsts, cpu0 = time.perf_counter(), [], _cpu_seconds()
     phases: collections.Counter = collections.Counter()
 
@@ -304,12 +307,30 @@ def run_job(doc: dict, how: str, processes: int = 1) -> dict:
     cores = ((cpu1[0] - cpu0[0]) / wall, (cpu1[1] - cpu0[1]) / wall)
     for line in result.summary()[1:4]:  # the first failures, if any (a model that needs a codec)
         print(f"  {how}: {line}", file=sys.stderr)
+    if timed_calls is not None:
+        import vk_call_timer
+
+        print(f"\n{how}: " + "\n".join(vk_call_timer.summary(timed_calls, max(1, len(firsts)))))
     return {"views": result.rendered, "seconds": result.render_seconds,
             "failed": result.failed_views, "first": min(firsts, default=0.0), "cores": cores,
             "phases": {k: 1000 * v / max(1, len(firsts)) for k, v in phases.items()}}
 
 
 PROFILE_WORKERS: Path | None = None  # --profile-workers
+TIME_VK_CALLS: Path | None = None  # --time-vk-calls
+
+
+def _time_vk_calls(folder: Path) -> Path:
+    """Each renderer process's Vulkan calls timed by name from now on (vk_call_timer.py),
+    a file a process in `folder`, written when it ends; the folder."""
+    from vkpbr.distributed import processes
+
+    shutil.rmtree(folder, ignore_errors=True)
+    here = str(Path(__file__).resolve().parent)
+    processes.WORKER = (f"import sys; sys.path.insert(0, {here!r}); import vk_call_timer; "
+                        f"vk_call_timer.install({str(folder)!r}); "
+                        "from vkpbr.app.render_worker import serve; serve()")
+    return folder
 
 
 def _profile_workers(folder: Path) -> None:
@@ -444,6 +465,9 @@ def main() -> None:
     p.add_argument("--profile-workers", type=Path, metavar="DIR",
                    help="run each renderer process's main thread under cProfile, its stats "
                         "into DIR (benchmarks/profile_summary.py sums them)")
+    p.add_argument("--time-vk-calls", type=Path, metavar="DIR",
+                   help="time each renderer process's Vulkan calls by name (vk_call_timer.py), "
+                        "their files in DIR; print the longest per item")
     p.add_argument("--no-in-process", action="store_true",
                    help="only the --processes rows (and one scene's, for the ratio)")
     p.add_argument("--depth", type=_positive(int), metavar="N",
@@ -493,8 +517,8 @@ def main() -> None:
             driver.encoders_for = lambda n: args.process_encoders  # (the driver's name)
         if args.depth:
             driver.DEPTH = args.depth
-        global PROFILE_WORKERS
-        PROFILE_WORKERS = args.profile_workers
+        global PROFILE_WORKERS, TIME_VK_CALLS
+        PROFILE_WORKERS, TIME_VK_CALLS = args.profile_workers, args.time_vk_calls
         if args.actor_switch_interval:
             actor.SWITCH_INTERVAL = args.actor_switch_interval
         if args.switch_interval:
