@@ -130,7 +130,7 @@ class BatchViews:
         self.capacity, self.chunk_views = max(views, self.capacity), chunk_views
         chunks = -(-self.capacity // chunk_views)  # any batch up to the capacity fits
         self.views = Buffer(dev, self.capacity * L.VIEW_RECORD.size, "storage", host_visible=True,
-                            name="batch views")
+                            device_local=True, name="batch views")
         self.commands = Buffer(dev, chunks * d * _COMMAND_BYTES, "storage|indirect|transfer_dst",
                                name="batch indirect draws")
         # The culling kernel's lists, then the blended draws' groups of views (written here:

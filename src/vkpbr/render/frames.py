@@ -121,10 +121,11 @@ def create_slots(
         offset += (block.size + align - 1) // align * align
     stride = offset
     buffer = Buffer(device, stride * count, "uniform|storage",
-                    host_visible=True, name="frame uniforms")
+                    host_visible=True, device_local=True, name="frame uniforms")
     s_align = int(device.limits.minStorageBufferOffsetAlignment)
     s_stride = (LIGHTS_BYTES + s_align - 1) // s_align * s_align
-    lights = Buffer(device, s_stride * count, "storage", host_visible=True, name="frame lights")
+    lights = Buffer(device, s_stride * count, "storage", host_visible=True, device_local=True,
+                    name="frame lights")
     pool = DescriptorPool(device, [(set0_layout, count), (set2_layout, count)])
     writer = DescriptorWriter(device)
     slots = []

@@ -122,7 +122,7 @@ class PostKernels:
             pool = DescriptorPool(self.device, [(layout, 1)])
             buffer = Buffer(self.device, KEY_BYTES * MAX_FRAME_SLOTS,
                             self.device.vk.VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, host_visible=True,
-                            name="post frame keys")
+                            device_local=True, name="post frame keys")
             dset = pool.allocate(layout)
             writer = DescriptorWriter(self.device)
             writer.storage(dset, 0, buffer)

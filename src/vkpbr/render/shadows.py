@@ -198,7 +198,7 @@ class ShadowMaps:
         self.matrix_bytes = size
         self.stride = (size + align - 1) // align * align
         self.buffer = self._own(Buffer(device, self.stride * slots, "storage", host_visible=True,
-                                       name="shadow matrices"))
+                                       device_local=True, name="shadow matrices"))
         self.pool = self._own(DescriptorPool(device, [(self.set_layout, slots),
                                                       (self.pass_layout, slots)]))
         self.sets = [self.pool.allocate(self.set_layout) for _ in range(slots)]
