@@ -15,7 +15,16 @@ from hypothesis import strategies as st
 
 from vkpbr.gpu.buffer import Buffer, upload_buffer
 from vkpbr.gpu.device import Device, live_objects, live_objects_by_kind
-from vkpbr.gpu.memory import KEPT_BYTES, MAX_RECYCLED, PAGE, size_class
+from vkpbr.gpu.memory import (
+    KEPT_BYTES,
+    LARGER,
+    MAX_RECYCLED,
+    MOST_KEPT,
+    PAGE,
+    fitting_classes,
+    kept_limit,
+    size_class,
+)
 
 
 @contextlib.contextmanager
@@ -73,7 +82,7 @@ def test_exportable_and_huge_allocations_are_not_kept() -> None:
 def test_at_most_the_limit_waits() -> None:
     start = live_objects()
     with validated() as dev:
-        assert dev.memory.limit == KEPT_BYTES
+        assert dev.memory.limit == kept_limit(dev._device_local_bytes()) >= KEPT_BYTES
         dev.memory.limit = 1 << 20
         sizes = [100_000 * (i + 1) for i in range(12)]  # (several classes, 6.6 MB in all)
         for b in [Buffer(dev, n, "storage") for n in sizes]:
@@ -125,3 +134,35 @@ def test_one_time_submissions_reuse_their_fence_unsignalled() -> None:
         fence = dev.take_fence()
         assert vk.lib.vkGetFenceStatus(dev.handle, fence) == vk.VK_NOT_READY
         dev.give_fence(fence)
+
+
+def test_a_kept_allocation_serves_smaller_requests_down_to_half_its_size() -> None:
+    """A job's next scene asks for other sizes than the last freed: a kept allocation serves
+    a request of up to LARGER classes below its own (at most half its size), the smallest
+    kept one that holds it first, never a request it cannot hold."""
+    with validated() as dev:
+        mem = dev.memory
+        big = Buffer(dev, 1 << 20, "storage")
+        small = Buffer(dev, 300_000, "storage")
+        big_memory, small_memory = big.memory, small.memory
+        big.destroy()
+        small.destroy()
+        assert fitting_classes(1 << 20)[0] == 1 << 20 and len(fitting_classes(1 << 20)) == LARGER + 1
+        got = Buffer(dev, 290_000, "storage")  # (both hold it: the smaller is taken)
+        assert got.memory == small_memory and mem.reused == 1
+        half = Buffer(dev, 500_000, "storage")  # (2^18.75 < n <= 2^19: four classes below)
+        assert half.memory == big_memory and mem.reused == 2
+        half.destroy()
+        under = Buffer(dev, 440_000, "storage")  # (2^18.5 < n <= 2^18.75: five below: its own)
+        assert under.memory != big_memory and mem.reused == 2
+        over = Buffer(dev, (1 << 20) + 1, "storage")  # (larger than any kept)
+        assert over.memory != big_memory and mem.reused == 2
+        for b in (got, under, over):
+            b.destroy()
+        dev.check_validation()
+
+
+def test_the_kept_limit_follows_the_device_memory_within_bounds() -> None:
+    assert kept_limit(0) == kept_limit(4 << 30) == KEPT_BYTES  # (lavapipe, small GPUs)
+    assert kept_limit(32 << 30) == 1 << 30
+    assert kept_limit(141 << 30) == MOST_KEPT  # (the H200)

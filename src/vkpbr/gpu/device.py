@@ -20,7 +20,7 @@ from typing import Any, Protocol
 from vkpbr.errors import GpuTimeoutError, VkpbrError
 from vkpbr.gpu.instance import Instance, PhysicalDeviceInfo
 from vkpbr.gpu.kept import KeptHandles
-from vkpbr.gpu.memory import MemoryRecycler
+from vkpbr.gpu.memory import MemoryRecycler, kept_limit
 from vkpbr.gpu.vk import live_objects, live_objects_by_kind, load
 
 # live_objects / live_objects_by_kind (counted in gpu/vk.py) are re-exported for leak tests.
@@ -174,6 +174,7 @@ class Device:
             self.properties = vk.vkGetPhysicalDeviceProperties(self.physical)
             self.limits = self.properties.limits
             self.memory_properties = vk.vkGetPhysicalDeviceMemoryProperties(self.physical)
+            self.memory.limit = kept_limit(self._device_local_bytes())
             self.queue_family = self._graphics_queue_family()
             t1 = time.perf_counter()
             self._create_device()
@@ -336,6 +337,13 @@ class Device:
         vk.vkGetPhysicalDeviceProperties2(self.physical, vk.VkPhysicalDeviceProperties2(
             sType=vk.VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, pNext=ids))
         return bytes(ids.deviceUUID)
+
+    def _device_local_bytes(self) -> int:
+        """The largest device-local heap's size."""
+        mp = self.memory_properties
+        return max((int(mp.memoryHeaps[i].size) for i in range(mp.memoryHeapCount)
+                    if mp.memoryHeaps[i].flags & self.vk.VK_MEMORY_HEAP_DEVICE_LOCAL_BIT),
+                   default=0)
 
     def memory_available(self) -> tuple[int, int]:
         """(device-local, host-visible) bytes free to allocate: the heaps' budgets less their

@@ -7,9 +7,13 @@ a vkAllocateMemory and as long for a vkFreeMemory (H200, run f of 2026-12-04: 61
 swap, 30 of a small model's 77 ms), where lavapipe's are nearly free. Here a freed
 allocation of up to MAX_RECYCLED bytes is not freed but kept (mapped, where it was, for
 host-visible buffers), and an allocation asks first for a kept one of its memory type and
-size class: sizes rounded up to quarter octaves (at most 19% more memory than asked), so that
-a next scene's buffers of other sizes still fit. At most KEPT_BYTES wait at once (beyond
-that the oldest are freed, memory the host cannot see before mapped memory: `_drop_oldest`);
+size class, else of one of the LARGER classes above (the smallest that holds it): sizes
+rounded up to quarter octaves (at most 19% more memory than asked; up to twice as much for a
+larger class's), so that a next scene's buffers and images of other sizes still fit (a job's
+items change models: in a 100-scene job on the H200 an item made 8.5-13 allocations, at
+0.5-1.3 ms each with one to six processes on the GPU, run s20c). At most `kept_limit`
+bytes wait at once (1/32 of the device's memory, 512 MiB to 2 GiB; beyond that the oldest
+are freed, memory the host cannot see before mapped memory: `_drop_oldest`);
 `clear` frees them all (the device's close, and an allocation the driver refuses, which is
 then asked again).
 
@@ -27,27 +31,53 @@ import threading
 from collections import OrderedDict
 from typing import Any
 
-__all__ = ["MemoryRecycler", "MAX_RECYCLED", "KEPT_BYTES", "size_class"]
+__all__ = ["MemoryRecycler", "MAX_RECYCLED", "KEPT_BYTES", "MOST_KEPT", "LARGER", "size_class",
+           "fitting_classes", "kept_limit"]
 
 MAX_RECYCLED = 64 << 20  # larger allocations are freed (few, and their memory is wanted back)
-KEPT_BYTES = 512 << 20  # at most this much kept at once
+KEPT_BYTES = 512 << 20  # at least this much may be kept at once (kept_limit)
+MOST_KEPT = 2 << 30  # and at most this much
 PAGE = 4096
+LARGER = 4  # a kept allocation serves requests down to this many classes below its own
+
+
+def _class_size(k: int) -> int:
+    """Class k's size: 2^(k/4) rounded up to whole pages."""
+    return -(-max(math.ceil(2.0 ** (k / 4.0)), 1) // PAGE) * PAGE
+
+
+def _class_index(size: int) -> int:
+    """The index k of the smallest class that holds `size` (several k of one page size: the
+    smallest)."""
+    size = max(int(size), 1)
+    k = math.ceil(4.0 * math.log2(size))
+    while _class_size(k) < size:  # (the float's rounding)
+        k += 1
+    while k > 0 and _class_size(k - 1) >= size:  # (pages round several classes to one size)
+        k -= 1
+    return k
 
 
 def size_class(size: int) -> int:
     """`size` rounded up to the smallest of the classes, 2^(k/4) rounded up to whole pages,
     that holds it (a class's own size is its class: a kept allocation fits it again)."""
-    size = max(int(size), 1)
+    return _class_size(_class_index(size))
 
-    def cls(k: int) -> int:
-        return -(-max(math.ceil(2.0 ** (k / 4.0)), 1) // PAGE) * PAGE
 
-    k = math.ceil(4.0 * math.log2(size))
-    while cls(k) < size:  # (the float's rounding)
-        k += 1
-    while k > 0 and cls(k - 1) >= size:  # (pages round several classes to one size)
-        k -= 1
-    return cls(k)
+def fitting_classes(size: int) -> list[int]:
+    """The classes a kept allocation may have to serve `size`: its own, then up to LARGER
+    classes above it (at most twice the size: a job's next scene has other sizes than the
+    last, and an allocation is bound at offset 0, valid for anything smaller)."""
+    k = _class_index(size)
+    return list(dict.fromkeys(_class_size(k + i) for i in range(LARGER + 1)))
+
+
+def kept_limit(device_local: int) -> int:
+    """How much freed memory a device keeps at once: 1/32 of its device-local heap, at least
+    KEPT_BYTES and at most MOST_KEPT (2 GiB of the H200's 141 GB: a job's scenes of tens to
+    hundreds of MiB of textures each, such as Sponza's 31 allocations of 5.3 MiB, had pushed
+    each other out of 512 MiB)."""
+    return max(KEPT_BYTES, min(MOST_KEPT, int(device_local) // 32))
 
 
 class Allocation:
@@ -78,15 +108,17 @@ class MemoryRecycler:
         """An allocation of at least `size` bytes of memory type `type_index` (mapped whole
         where `mapped`): a kept one of its size class, else a new one."""
         if size <= MAX_RECYCLED:
-            size = size_class(size)
+            classes = fitting_classes(size)
+            size = classes[0]
             with self._lock:
-                got = self._by_key.get((type_index, size, mapped))
-                if got:
-                    alloc = got.pop()
-                    del self._kept[id(alloc)]
-                    self.kept_bytes -= alloc.size
-                    self.reused += 1
-                    return alloc
+                for fits in classes:  # (the smallest kept one that holds it)
+                    got = self._by_key.get((type_index, fits, mapped))
+                    if got:
+                        alloc = got.pop()
+                        del self._kept[id(alloc)]
+                        self.kept_bytes -= alloc.size
+                        self.reused += 1
+                        return alloc
         vk, dev = self.device.vk, self.device.handle
         info = vk.VkMemoryAllocateInfo(allocationSize=size, memoryTypeIndex=type_index)
         try:
