@@ -7,6 +7,7 @@ COMPILE_BYTECODE=1 source benchmarks/gpu_env.sh
 A=$PWD/.assets-final/models
 export VKPBR_ASSETS=$A
 rows() { grep -E "^\||not measured|failed|item's|processes;" | grep -v "^|---"; }
+cp -r src/vkpbr/shaders .before2/src/vkpbr/  # (the SPIR-V is the same in both trees: not carried twice)
 python3 -m compileall -q -j 0 $PWD/.before2/src > /dev/null 2>&1
 timeout 100 python3 benchmarks/bench_load.py --models $A --no-load --scenes 100 --views 16 --job-runs warm --no-in-process --processes 6 > /dev/null 2>&1  # (fills the caches)
 for t in old new old new; do
