@@ -148,7 +148,7 @@ def test_foreign_file_is_ignored_and_stale_files_removed(
     finally:
         device.close()
     assert not old.exists()  # the same device's file of the old shaders is gone
-    assert [p.name for p in tmp_path.glob(f"{FILE_PREFIX}*")] == [cache.path.name]
+    assert [p.name for p in tmp_path.glob(f"{FILE_PREFIX}*.bin")] == [cache.path.name]
 
 
 def test_unwritable_folder_is_a_warning(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
@@ -174,3 +174,43 @@ def test_device_closed_while_its_cache_file_opens(tmp_path: Path) -> None:
         device.pipeline_cache = PipelineCache(device, tmp_path, "shaders-a")
         device.close()  # validation: no leaked VkPipelineCache, no call after the device's end
     assert path.read_bytes() == before
+
+
+def _build_other(device: Device) -> None:
+    """Another compute pipeline than `_build_one`'s (the BRDF table's kernel)."""
+    layout = DescriptorSetLayout(device, [BindingSpec(1, "storage_image", ("compute",))])
+    ComputePipeline(device, SPV_DIR / "env_brdf_lut.comp.spv", [layout], push_bytes=16)
+
+
+def test_caches_sharing_a_folder_merge_what_each_saved(tmp_path: Path) -> None:
+    """Two devices (a job's renderer processes) read the same file, build different
+    pipelines and save in turn: the second merges the first's saved data (under the lock
+    file) instead of writing over it, so a third finds both pipelines there."""
+    first, a = _cache(tmp_path)
+    second, b = _cache(tmp_path)
+    try:
+        _build_one(first)
+        _build_other(second)
+        assert a.save() and a.path is not None
+        one_alone = a.path.read_bytes()
+        assert b.save()
+        both = b.path.read_bytes()
+        first.check_validation()
+        second.check_validation()
+    finally:
+        first.close()
+        second.close()
+    third, c = _cache(tmp_path)
+    try:
+        assert c.loaded_bytes == len(both) - 80
+        if len(one_alone) - 80 == VK_HEADER_BYTES:
+            pytest.skip(f"{third.info.name} keeps no pipelines in its cache (its data is the "
+                        "32-byte header): the merge's content is checked where it does (the GPU)")
+        assert len(both) > len(one_alone)
+        _build_one(third)
+        _build_other(third)
+        assert c.stats.built == 2 and len(c.data()) == len(both) - 80  # (nothing new compiled)
+        if c.stats.hits:  # where the driver reports hits, both were
+            assert c.stats.hits == 2
+    finally:
+        third.close()

@@ -10,8 +10,9 @@ the same device's files of other shaders. Its contents are checked before the dr
 them (vkpbr's header: magic, that digest, the payload's length and SHA-256; then Vulkan's own
 header against the device): a corrupt, truncated or foreign file is ignored with one warning
 line and the pipelines are compiled afresh, never a crash. Writes are atomic
-(vkpbr.atomic), so processes sharing the folder (Ray's actors) never read half a file; the
-last writer's data is the file's.
+(vkpbr.atomic), so processes sharing the folder (Ray's actors, a job's renderer processes)
+never read half a file, and a save merges what others saved since (under a lock file), so
+the file holds every process's pipelines.
 
 `stats` counts the builds, the driver's reported cache hits (VK_PIPELINE_CREATION_FEEDBACK:
 drivers that do not report them leave `hits` 0) and the seconds spent building (summed over
@@ -20,11 +21,13 @@ the threads that build at once: FrameRecorder.build_pipelines).
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import logging
 import struct
 import threading
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -177,25 +180,47 @@ class PipelineCache(DeviceObject):
 
     def save(self) -> bool:
         """Write the cache to its file (atomically) when pipelines were built since it was
-        loaded or last saved and the driver's data changed; True when written. A folder that
-        cannot be written is a warning: the next process compiles again."""
+        loaded or last saved and the driver's data changed; True when written. What another
+        process wrote to the file since this one read it is merged in first
+        (vkMergePipelineCaches, under a lock file): processes sharing the folder (a job's
+        renderer processes, each building its scenes' variants) all keep theirs, where the
+        last writer's alone had been kept. A folder that cannot be written is a warning: the
+        next process compiles again."""
         if self.path is None or self.handle is None or self.stats.built == self._built_at_save:
             return False
         self._built_at_save = self.stats.built
-        payload = self.data()
-        if payload == self._saved:
-            return False
-        head = _HEADER.pack(MAGIC, self._key, hashlib.sha256(payload).digest(), len(payload))
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            with atomic_writer(self.path) as f:
-                f.write(head + payload)
+            with _locked(self.path.parent / f"{FILE_PREFIX}{self._device_digest}.lock"):
+                self._merge_file()
+                payload = self.data()
+                if payload == self._saved:
+                    return False
+                head = _HEADER.pack(MAGIC, self._key, hashlib.sha256(payload).digest(), len(payload))
+                with atomic_writer(self.path) as f:
+                    f.write(head + payload)
         except OSError as exc:
             log.warning("%s: pipeline cache not written (%s)", self.path, exc.strerror or exc)
             return False
         self._saved = payload
         self._remove_stale()
         return True
+
+    def _merge_file(self) -> None:
+        """Merge into this cache the file's data where another process wrote it since this
+        one read or wrote it (a damaged file is ignored, with `_read`'s note)."""
+        if self.path is None or not self.path.is_file():
+            return
+        theirs = self._read()
+        if not theirs or theirs == self._saved:
+            return
+        vk, dev = self.device.vk, self.device.handle
+        other = vk.vkCreatePipelineCache(dev, vk.VkPipelineCacheCreateInfo(
+            initialDataSize=len(theirs), pInitialData=vk.ffi.from_buffer(theirs)), None)
+        try:
+            vk.vkMergePipelineCaches(dev, self.handle, 1, [other])
+        finally:
+            vk.vkDestroyPipelineCache(dev, other, None)
 
     def _remove_stale(self) -> None:
         """This device's files of other shaders or drivers: never read again."""
@@ -215,6 +240,23 @@ class PipelineCache(DeviceObject):
         if self.handle is not None:
             self.save()
         super().destroy()
+
+
+@contextlib.contextmanager
+def _locked(path: Path) -> Iterator[None]:
+    """An exclusive lock on the file `path` (made if missing) while inside: where fcntl is
+    missing (Windows), none."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - POSIX only
+        yield
+        return
+    with open(path, "a") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
 
 
 def pipeline_cache(device: Device) -> PipelineCache:
