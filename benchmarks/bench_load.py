@@ -377,7 +377,9 @@ def job_table(args: argparse.Namespace) -> list[dict]:
     if not models:
         raise SystemExit(f"no */glTF/*.gltf under {args.models}")
     work = Path(tempfile.mkdtemp(prefix="vkpbr-bench-job-"))
-    os.environ["VKPBR_CACHE_DIR"] = str(work / "cache")
+    # (a fresh cache folder unless --cache-dir names one: "warm" alone is then warm only
+    # where a run before filled it; a "cold" row empties it)
+    os.environ["VKPBR_CACHE_DIR"] = str(args.cache_dir or work / "cache")
     rows = []
     try:
         doc = job_doc(models, args.scenes, args.views, args.job_size, work / "out")
@@ -465,6 +467,9 @@ def main() -> None:
     p.add_argument("--profile-workers", type=Path, metavar="DIR",
                    help="run each renderer process's main thread under cProfile, its stats "
                         "into DIR (benchmarks/profile_summary.py sums them)")
+    p.add_argument("--cache-dir", type=Path, metavar="DIR",
+                   help="the job's bake and pipeline caches in DIR, kept between runs (default: "
+                        "a new folder each run, so a run of --job-runs warm alone is cold)")
     p.add_argument("--time-vk-calls", type=Path, metavar="DIR",
                    help="time each renderer process's Vulkan calls by name (vk_call_timer.py), "
                         "their files in DIR; print the longest per item")

@@ -16,3 +16,6 @@ for t in old new old new; do
   echo "== $t"; PYTHONPATH=/tmp/site:$P timeout 100 python3 benchmarks/bench_load.py --models $A --no-load --scenes 100 --views 16 --job-runs warm --no-in-process --processes 6 2>&1 | rows | grep -v "^| run"
 done
 timeout 100 python3 benchmarks/bench_load.py --models $A --no-load --scenes 100 --views 16 --job-runs warm --no-in-process --processes 6 --time-vk-calls /tmp/vkt 2>&1 | rows | head -8
+# (Found after the run: bench_load's job made a new cache folder each run, so these "warm"
+# rows, the only row of their runs, ran with empty bake and pipeline caches: cold rows.
+# --cache-dir came with run g.)

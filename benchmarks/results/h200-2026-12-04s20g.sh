@@ -11,7 +11,7 @@ timeout -s INT 200 python3 -m pytest -q -n 8 -p no:cacheprovider -rfE --tb=short
 rows() { grep -E "^\||not measured|failed|item's|processes;" | grep -v "^|---"; }
 mkdir -p /tmp/old && cp -r src /tmp/old/ && cp -r .before2/src /tmp/old/
 python3 -m compileall -q -j 0 /tmp/old/src > /dev/null 2>&1
-job() { PYTHONPATH=/tmp/site:$1 VKPBR_CACHE_DIR=/tmp/cache-$2 timeout 100 python3 benchmarks/bench_load.py --models $A --no-load --scenes 100 --views 16 --job-runs warm --no-in-process --processes 6 2>&1; }
+job() { PYTHONPATH=/tmp/site:$1 timeout 100 python3 benchmarks/bench_load.py --models $A --no-load --scenes 100 --views 16 --job-runs warm --no-in-process --processes 6 --cache-dir /tmp/cache-$2 2>&1; }
 job /tmp/old/src old > /dev/null; job $PWD/src new > /dev/null  # (each tree's caches filled)
 for t in old new old new; do
   [ $t = old ] && P=/tmp/old/src || P=$PWD/src
