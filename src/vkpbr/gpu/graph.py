@@ -315,12 +315,15 @@ def build_kernels(steps: Sequence[Step]) -> None:
 
 def record_steps(cmd: Commands, steps: Sequence[Step],
                  resources: Mapping[str, ImageResource | BufferResource],
-                 extent: tuple[int, int], stamp: Callable[[str], None] = lambda name: None
-                 ) -> Tracker:
+                 extent: tuple[int, int], stamp: Callable[[str], None] = lambda name: None,
+                 build: bool = True) -> Tracker:
     """Record `steps` in order into `cmd` with the barriers their uses need, their renderings
     begun and ended, and `stamp(name)` after each timed step. Returns the tracker (tests read
-    what it derived). Every step's `kernels` are made first (`build_kernels`)."""
-    build_kernels(steps)
+    what it derived). Every step's `kernels` are made first (`build_kernels`) unless `build`
+    is False (the caller knows them made: a recording of steps recorded before, whose
+    threads would cost more than the look-ups)."""
+    if build:
+        build_kernels(steps)
     tracker = Tracker(cmd.vk, resources)
     open_scope: Rendering | None = None
     scopes = 0

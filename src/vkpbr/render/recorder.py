@@ -106,6 +106,7 @@ class FrameRecorder:
         self.ao = ao  # the ambient occlusion's images and kernels (render/ao.py AoImages)
         self._recorded: dict[tuple, _Recorded] = {}
         self._generations: dict[int, int] = {}
+        self._kernels_made: set[tuple] = set()  # (spec, reads buffer) of recordings made
         self._pipelines: dict[tuple, Pipeline] = {}
         self._by_spec: dict[PipelineSpec, Pipeline] = {}
 
@@ -197,22 +198,26 @@ class FrameRecorder:
             steps = FrameSteps(self, drawn or target, frame.index, image, spec, objects, groups,
                                output=target if drawn is not None else None)
             ids = (tid,) if drawn is None else (tid, id(drawn))
+            # (a step's kernels are made on threads once a plan: another slot's or image's
+            # recording of it, or a new blend order, finds them made)
+            planned = key[3:]
             rec = self._record(frame, steps.steps(), steps.resources, (drawn or target).extent,
-                               ids, objects.blend_order)
+                               ids, objects.blend_order, build=planned not in self._kernels_made)
+            self._kernels_made.add(planned)
             self._recorded[key] = rec
         frame.stamp_names = rec.stamp_names
         return rec.cmd
 
     def _record(self, frame: Frame, steps: list[Step], resources: dict[str, Any],
-                extent: tuple[int, int], targets: tuple[int, ...], order: tuple[int, ...]
-                ) -> _Recorded:
+                extent: tuple[int, int], targets: tuple[int, ...], order: tuple[int, ...],
+                build: bool = True) -> _Recorded:
         """Record `steps` (with the start timestamp and one after each timed step; the time
-        after the last timed step is "copy")."""
+        after the last timed step is "copy"); `build`: their kernels made first, at once."""
         cmd = Commands(self.device).begin()
         stamps = _Stamps(self.ring, cmd, frame)
         if not any(s.name == "copy" and s.timed for s in steps):
             steps = [*steps, Step("copy")]
-        record_steps(cmd, steps, resources, extent, stamps)
+        record_steps(cmd, steps, resources, extent, stamps, build)
         cmd.end()
         return _Recorded(cmd, order, tuple(stamps.names), targets)
 
