@@ -214,3 +214,22 @@ def test_caches_sharing_a_folder_merge_what_each_saved(tmp_path: Path) -> None:
             assert c.stats.hits == 2
     finally:
         third.close()
+
+
+def test_a_save_within_its_interval_waits_for_the_next(tmp_path: Path) -> None:
+    """A job saves after every item at most every SAVE_EVERY seconds (each save merges the
+    file back in): a save of new pipelines within the interval writes nothing, and the next
+    one without it (close's) writes them."""
+    device, cache = _cache(tmp_path)
+    try:
+        _build_one(device)
+        assert cache.save(min_interval=3600.0)  # (nothing written before: not within it)
+        if len(cache.data()) == VK_HEADER_BYTES:
+            pytest.skip(f"{device.info.name} keeps no pipelines in its cache (its data is the "
+                        "32-byte header): new data to hold back is checked where it does")
+        written = cache.path.read_bytes()
+        _build_other(device)
+        assert not cache.save(min_interval=3600.0) and cache.path.read_bytes() == written
+        assert cache.save() and len(cache.path.read_bytes()) > len(written)
+    finally:
+        device.close()

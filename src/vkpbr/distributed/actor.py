@@ -60,6 +60,10 @@ LOADING_ENCODERS = 2
 # models (benchmarks/results/h200-2026-12-04s18.md, run e): with 8 encoders, the cold job
 # 33.9 -> 54.0 views/s and the warm one 87.5 -> 95.8 at 1 ms.
 SWITCH_INTERVAL = 0.001
+# An item keeps the pipelines it compiled in the cache folder (Ray kills actors without
+# close), at most this often: each save of new pipelines merges the file's (every process's)
+# back in first, a read and a merge of a few MB (gpu/pipeline_cache.py); close saves the rest.
+SAVE_EVERY = 5.0
 
 
 # What RendererActor.render asks about the next item once its views are rendered: (its
@@ -465,7 +469,7 @@ class RendererActor:
         t_written = time.perf_counter()
         cache = getattr(renderer.device, "pipeline_cache", None)
         if cache is not None:  # Ray kills actors without close(): keep new pipelines now
-            cache.save()
+            cache.save(min_interval=SAVE_EVERY)  # (and at close, whatever is left)
         sizes = [(out / f).stat().st_size for f in files]
         return {"ok": True, "views": list(item.frames), "files": files, "sizes": sizes,
                 "cameras": [camera_record(c) for c in cameras], "pid": os.getpid(),

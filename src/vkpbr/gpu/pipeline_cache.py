@@ -83,6 +83,7 @@ class PipelineCache(DeviceObject):
         self._loaded_bytes = 0
         self._saved = b""
         self._built_at_save = 0
+        self._written_at = -float("inf")  # (time.monotonic of the last write)
         self._failure: BaseException | None = None
         device.track(self)
         # A file of many pipelines takes the NVIDIA driver a quarter of a second to read
@@ -178,24 +179,29 @@ class PipelineCache(DeviceObject):
                      "vkGetPipelineCacheData")
         return ffi.buffer(buf, size[0])[:]
 
-    def save(self) -> bool:
+    def save(self, min_interval: float = 0.0) -> bool:
         """Write the cache to its file (atomically) when pipelines were built since it was
-        loaded or last saved and the driver's data changed; True when written. What another
-        process wrote to the file since this one read it is merged in first
-        (vkMergePipelineCaches, under a lock file): processes sharing the folder (a job's
-        renderer processes, each building its scenes' variants) all keep theirs, where the
-        last writer's alone had been kept. A folder that cannot be written is a warning: the
-        next process compiles again."""
+        loaded or last saved and the driver's data holds something the file did not; True
+        when written. What another process wrote to the file since this one read it is
+        merged in first (vkMergePipelineCaches, under a lock file): processes sharing the
+        folder (a job's renderer processes, each building its scenes' variants) all keep
+        theirs, where the last writer's alone had been kept. `min_interval`: not within that
+        many seconds of the last write (a job saves after every item; the merge reads the
+        whole file back). A folder that cannot be written is a warning: the next process
+        compiles again."""
         if self.path is None or self.handle is None or self.stats.built == self._built_at_save:
             return False
+        if min_interval and time.monotonic() - self._written_at < min_interval:
+            return False  # (the builds stay counted as unsaved: a later save writes them)
         self._built_at_save = self.stats.built
+        payload = self.data()
+        if payload == self._saved:  # (cache hits: nothing the file lacks)
+            return False
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             with _locked(self.path.parent / f"{FILE_PREFIX}{self._device_digest}.lock"):
-                self._merge_file()
-                payload = self.data()
-                if payload == self._saved:
-                    return False
+                if self._merge_file():
+                    payload = self.data()
                 head = _HEADER.pack(MAGIC, self._key, hashlib.sha256(payload).digest(), len(payload))
                 with atomic_writer(self.path) as f:
                     f.write(head + payload)
@@ -203,17 +209,19 @@ class PipelineCache(DeviceObject):
             log.warning("%s: pipeline cache not written (%s)", self.path, exc.strerror or exc)
             return False
         self._saved = payload
+        self._written_at = time.monotonic()
         self._remove_stale()
         return True
 
-    def _merge_file(self) -> None:
+    def _merge_file(self) -> bool:
         """Merge into this cache the file's data where another process wrote it since this
-        one read or wrote it (a damaged file is ignored, with `_read`'s note)."""
+        one read or wrote it (a damaged file is ignored, with `_read`'s note); True when
+        merged."""
         if self.path is None or not self.path.is_file():
-            return
+            return False
         theirs = self._read()
         if not theirs or theirs == self._saved:
-            return
+            return False
         vk, dev = self.device.vk, self.device.handle
         other = vk.vkCreatePipelineCache(dev, vk.VkPipelineCacheCreateInfo(
             initialDataSize=len(theirs), pInitialData=vk.ffi.from_buffer(theirs)), None)
@@ -221,6 +229,7 @@ class PipelineCache(DeviceObject):
             vk.vkMergePipelineCaches(dev, self.handle, 1, [other])
         finally:
             vk.vkDestroyPipelineCache(dev, other, None)
+        return True
 
     def _remove_stale(self) -> None:
         """This device's files of other shaders or drivers: never read again."""
