@@ -119,7 +119,7 @@ def child(scene: str, size: tuple[int, int], cached: bool, serial: bool = False)
 def _builds(device: object, t0: float) -> list[tuple[str, float, float, bool]]:
     """The device's pipeline builds so far: (shaders, start from `t0`, seconds, cache hit)."""
     cache = getattr(device, "pipeline_cache", None)
-    return [(n, t - t0, s, h) for n, t, s, h in (cache.stats.builds if cache else [])]
+    return [(n, t - t0, s, h) for n, t, s, h, _ in (cache.stats.builds if cache else [])]
 
 
 def print_builds(rows: list[dict]) -> None:

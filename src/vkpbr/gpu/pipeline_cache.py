@@ -57,8 +57,9 @@ class PipelineStats:
     built: int = 0
     hits: int = 0
     seconds: float = 0.0
-    # (what was built, when it began on perf_counter's clock, its seconds, the driver's hit)
-    builds: list[tuple[str, float, float, bool]] = field(default_factory=list)
+    # (what was built, when it began on perf_counter's clock, its seconds, the driver's hit,
+    # the thread that built it)
+    builds: list[tuple[str, float, float, bool, str]] = field(default_factory=list)
 
 
 class PipelineCache(DeviceObject):
@@ -305,5 +306,6 @@ class Feedback:
             cache.stats.seconds += seconds
             cache.stats.built += 1
             cache.stats.hits += hit
-            cache.stats.builds.append((name or kind, t0, seconds, hit))
+            cache.stats.builds.append((name or kind, t0, seconds, hit,
+                                       threading.current_thread().name))
         return handle

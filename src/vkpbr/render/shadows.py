@@ -39,9 +39,10 @@ choose_raster), as does a new buffer (`bind_frame_depths`).
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -543,6 +544,16 @@ class ShadowMaps:
                 depth_bias=DEPTH_BIAS[kind])
             self._pipelines[key] = Pipeline(self.device, spec, self.pipeline_layout, SPV_DIR)
         return self._pipelines[key]
+
+    def makers(self, plan: ShadowPlan, draws: Sequence[Any], classes: Sequence[str],
+               has_colors: bool) -> tuple[Callable[[], Pipeline], ...]:
+        """Calls that make the pipelines `record` binds for `plan` (a Step's kernels: the
+        frame graph makes them at once), one per light kind and caster kind drawn."""
+        kinds = {c for d, c in zip(draws, classes, strict=True) if getattr(d, "casts_shadows", True)}
+        masked = [m for m, wanted in ((False, ("opaque", "opaque_double")), (True, ("mask", "blend")))
+                  if kinds & set(wanted)]
+        return tuple(functools.partial(self.pipeline, kind, m, not has_colors)
+                     for kind in sorted({e.kind for e in plan.entries}) for m in masked)
 
     def record(self, cmd: Commands, slot: int, plan: ShadowPlan, draws: Sequence[Any],
                classes: Sequence[str], material_sets: Sequence[Any], streams: dict[str, Any],

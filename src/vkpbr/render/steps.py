@@ -161,7 +161,8 @@ class FrameSteps:
             sm.record(cmd, self.frame_index, spec.plan, gs.draws, self.classes, self.material_sets,
                       gs.streams, gs.index_buffer, gs.has_colors, spec.redraw, self.set0)
 
-        return [Step("shadows", record)]
+        return [Step("shadows", record,
+                     kernels=sm.makers(spec.plan, gs.draws, self.classes, gs.has_colors))]
 
     def _transmission(self) -> list[Step]:
         """The frame slot's copy of the opaque scene: the opaque and masked draws that do not
