@@ -21,7 +21,10 @@ LIGHTS = [Light(kind="point", position=(0.5, 4.0, 2.0), intensity=30.0),
           Light(kind="directional", direction=(-0.3, -1.0, -0.4), intensity=2.0)]
 CHOICES = [dict(pipeline="forward"), dict(pipeline="compute"),
            dict(pipeline="compute", raster="compute"),
-           dict(pipeline="compute", raster="compute", shadow_raster="compute")]
+           dict(pipeline="compute", raster="compute", shadow_raster="compute"),
+           # (the post steps' kernels: the bloom's levels, sensor noise, the encode)
+           dict(pipeline="compute", bloom=0.5), dict(pipeline="forward", bloom=0.4,
+                                                       noise="realsense-d435")]
 
 
 def _first_frame_builds(renderer, **options) -> list[tuple[str, str]]:  # noqa: ANN001
@@ -33,7 +36,7 @@ def _first_frame_builds(renderer, **options) -> list[tuple[str, str]]:  # noqa: 
     return [(name, thread) for name, _, _, _, thread in stats.builds[start:]]
 
 
-@pytest.mark.parametrize("options", CHOICES, ids=lambda o: "-".join(o.values()))
+@pytest.mark.parametrize("options", CHOICES, ids=lambda o: "-".join(map(str, o.values())))
 def test_a_first_frame_compiles_nothing_on_its_own_thread(make_renderer, options) -> None:  # noqa: ANN001
     r = make_renderer()
     built = _first_frame_builds(r, **options)
@@ -47,7 +50,7 @@ def test_a_first_frame_compiles_nothing_on_its_own_thread(make_renderer, options
     assert len(r.device.pipeline_cache.stats.builds) == again  # (every one was made once)
 
 
-@pytest.mark.parametrize("options", CHOICES[:2], ids=lambda o: "-".join(o.values()))
+@pytest.mark.parametrize("options", CHOICES[:2], ids=lambda o: "-".join(map(str, o.values())))
 def test_masked_and_blended_materials_kernels_are_made_ahead(make_renderer, sample_scene,  # noqa: ANN001
                                                              options) -> None:
     r = make_renderer(sample_scene("AlphaBlendModeTest"))

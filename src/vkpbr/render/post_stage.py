@@ -20,9 +20,10 @@ gpu/graph.py orders them.
 
 from __future__ import annotations
 
+import functools
 import os
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
@@ -287,6 +288,9 @@ class PostContext:
     # and its keys' set (PostKernels.write_view_keys: a key a view, from 0).
     tiles: tuple[int, int, int, int] | None = None
     key_set: Any = None
+    # Calls that make the kernels `dispatch` handed out (the frame graph makes them at once:
+    # render/steps.py gives them to the post group's first step as its Step.kernels)
+    makers: list[Callable[[], ComputePipeline]] = field(default_factory=list)
 
     def view_tiles(self) -> tuple[int, int, int, int]:
         """(views, tile width, height, tiles a column): the atlas's, or the frame as one."""
@@ -310,12 +314,14 @@ class PostContext:
         (`set1`: another set of that layout, a batch's lens constants)."""
         kernels = self.kernels
         dset = kernels.image_set(src, dst, *more)
-        pipe = kernels.pipeline(name, push.nbytes, 2 + len(more), keys or set1 is not None)
+        make = functools.partial(kernels.pipeline, name, push.nbytes, 2 + len(more),
+                                 keys or set1 is not None)
+        self.makers.append(make)
         key_set = set1 if set1 is not None else (
             (self.key_set or kernels.keys()[1]) if keys else None)
 
         def record(cmd: Any) -> None:
-            cmd.bind_pipeline(pipe)
+            cmd.bind_pipeline(make())
             cmd.bind_set(0, dset)
             if key_set is not None:
                 cmd.bind_set(1, key_set)

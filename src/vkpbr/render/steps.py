@@ -358,13 +358,13 @@ class FrameSteps:
         steps = (lens_steps(ctx, self.spec.lens, self.output.extent, COPY_OUTPUTS in self.spec.copy)
                  if self.spec.lens else [])
         if store_only(self.spec.lens):  # a cube face's frame: a later one encodes
-            return steps
+            return _with_kernels(steps, ctx.makers)
         registry = post_steps()
         steps += [s for option, value in self.spec.post if option in registry
                   for s in registry[option]().steps(ctx, value)]  # ("hdr": none, post_stage)
         encode = encode_step(ctx, self.output, self.spec.post_tonemap)
         self._rendering = encode.rendering  # (the overlay draws on in it: out.color)
-        return [*steps, encode]
+        return _with_kernels([*steps, encode], ctx.makers)
 
     def _finish(self) -> list[Step]:
         if self.output is not self.target:  # depth and outputs from the frame's HDR target
@@ -432,6 +432,14 @@ def _sized(resource: Any, extent: tuple[int, int] | None) -> Any:
     if extent is None or not hasattr(resource, "extent"):
         return resource
     return dataclasses.replace(resource, extent=extent)
+
+
+def _with_kernels(steps: list[Step], makers: list[Callable[[], Any]]) -> list[Step]:
+    """`steps` with `makers` (the post kernels their records bind, made by PostContext.
+    dispatch) added to the first one's kernels: the frame graph makes them all at once."""
+    if not steps or not makers:
+        return steps
+    return [dataclasses.replace(steps[0], kernels=(*steps[0].kernels, *makers)), *steps[1:]]
 
 
 def _pass_step(name: str, ctx: PassContext, p: PassSpec, uses: tuple[tuple[str, str], ...] = (),
