@@ -60,3 +60,23 @@ def test_masked_and_blended_materials_kernels_are_made_ahead(make_renderer, samp
     assert [name for name, thread in built if thread == here] == []
     image = r.render(size=SIZE, lights=LIGHTS, **options)
     assert np.asarray(image).std() > 0  # (a frame was drawn with them)
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
+@pytest.mark.parametrize("ao", ["off", "gtao"])
+def test_a_first_batch_compiles_nothing_on_its_own_thread(make_renderer, pipeline: str,  # noqa: ANN001
+                                                          ao: str) -> None:
+    """The layered batch's chunks (their passes, the GTAO depth pre-pass) and the compute
+    batch's kernels are named by their steps too."""
+    r = make_renderer()
+    stats = r.device.pipeline_cache.stats
+    r.environments.get(RenderOptions())
+    r.render(size=SIZE, lights=LIGHTS, pipeline=pipeline, ao=ao)  # (the frame's own first)
+    start = len(stats.builds)
+    cams = [r.default_camera()] * 3
+    frames = r.render_batch(cams, size=(32, 24), lights=LIGHTS, pipeline=pipeline, ao=ao)
+    built = [(name, thread) for name, _, _, _, thread in stats.builds[start:]]
+    here = threading.current_thread().name
+    assert built, "the batch built no pipeline of its own: nothing was checked"
+    assert [name for name, thread in built if thread == here] == []
+    assert np.asarray(frames).std() > 0

@@ -46,7 +46,14 @@ from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.deform import draw_sphere
 from vkpbr.render.frames import FrameSlot
 from vkpbr.render.gpu_scene import Draw, GpuScene
-from vkpbr.render.passes import PASSES, PassContext, record_pass, record_passes
+from vkpbr.render.passes import (
+    PASSES,
+    PassContext,
+    pass_makers,
+    record_pass,
+    record_passes,
+    recorded_passes,
+)
 from vkpbr.render.recorder import FrameRecorder
 from vkpbr.render.shadows import ShadowPlan
 from vkpbr.render.steps import FrameSpec, FrameSteps
@@ -95,8 +102,7 @@ class BatchViews:
             BindingSpec(i, "storage", stages, n)
             for i, n in enumerate(("CullViews", "DrawBounds", "Commands", "CullVisible",
                                    "CullInstances"))]))
-        self.cull = self._own(ComputePipeline(device, SPV_DIR / "batch_cull.comp.spv",
-                                              [self.cull_layout], push_bytes=12))
+        self._cull: ComputePipeline | None = None  # (made with the first batch's kernels)
         # Two of each per slot: the renderer's state, and a batch of worlds' (render/worlds.py)
         self.pool = self._own(DescriptorPool(device, [(self.cull_layout, 2 * len(slots)),
                                                       (set0_layout, 2 * len(slots))]))
@@ -256,6 +262,14 @@ class BatchViews:
         made = {"cull": lambda fs: self._cull_steps(fs, views, on), "chunks": chunks, **(extra or {})}
         return self.recorder.command_buffer(target, frame, 0, spec, groups=made)
 
+    def cull_kernel(self) -> ComputePipeline:
+        """The culling kernel (made on first use: by the frame graph, with the batch's other
+        kernels at once)."""
+        if self._cull is None:
+            self._cull = self._own(ComputePipeline(self.device, SPV_DIR / "batch_cull.comp.spv",
+                                                   [self.cull_layout], push_bytes=12))
+        return self._cull
+
     def _cull_steps(self, fs: FrameSteps, views: int, worlds: bool) -> list[Step]:
         """The culling kernel: per view and draw, whether the view sees it, into the chunks'
         indirect draws and lists of views."""
@@ -263,14 +277,15 @@ class BatchViews:
                             visible=BufferResource(self.visible))
 
         def record(cmd: Commands) -> None:
-            cmd.bind_pipeline(self.cull)
+            cmd.bind_pipeline(self.cull_kernel())
             cmd.bind_set(0, (self.world_cull_sets if worlds else self.cull_sets)[fs.frame_index])
             cmd.push(np.array([views, self.draw_count, self.chunk_views], np.uint32))
             cmd.dispatch(*work_groups((views * self.draw_count, 1, 1), (64, 1, 1)))
 
         return [Step("cull_clear", lambda cmd: cmd.fill(self.commands),
                      (("commands", "transfer_dst"),), timed=False),
-                Step("cull", record, (("commands", "storage"), ("visible", "storage")))]
+                Step("cull", record, (("commands", "storage"), ("visible", "storage")),
+                     kernels=(self.cull_kernel,))]
 
     def _chunk_steps(self, fs: FrameSteps, target: BatchTarget, views: int, tbn: L.TbnMode,
                      groups: tuple, prepass: bool, worlds: bool) -> list[Step]:
@@ -297,7 +312,8 @@ class BatchViews:
                                       layers=target.layers)
                 steps.append(Step(f"chunk{chunk}", lambda cmd, ctx=ctx: record_passes(cmd, ctx),
                                   (("commands", "indirect"), ("visible", "vertex_read")),
-                                  rendering, timed=False))
+                                  rendering, timed=False,
+                                  kernels=pass_makers(ctx, recorded_passes(ctx))))
             last = chunk == chunks - 1
             steps.append(target.chunk_copy_step("views" if last else f"chunk{chunk}_copy",
                                                 chunk, n, timed=last))
@@ -315,7 +331,7 @@ class BatchViews:
         depth = Rendering("color", "depth", target.clear_color, 0.0, layers=target.layers)
         steps = [Step(f"chunk{chunk}_depth", lambda cmd: [record_pass(cmd, pre, p)
                                                           for p in PREPASS_ROWS],
-                      reads, depth, timed=False)]
+                      reads, depth, timed=False, kernels=pass_makers(pre, PREPASS_ROWS))]
         steps += self.recorder.ao.steps(fs.resources, ctx.frame_sets[0], fs.frame_index,
                                         fs.spec.ao, target.extent, None, False, False,
                                         layered=(chunk * self.chunk_views, n))
@@ -323,7 +339,8 @@ class BatchViews:
             target, tbn, p, True, batch=True))
         shade = Rendering("color", "depth", target.clear_color, None, layers=target.layers)
         return [*steps, Step(f"chunk{chunk}", lambda cmd: record_passes(cmd, over, _SHADING),
-                             (*reads, ("ao", "sampled")), shade, timed=False)]
+                             (*reads, ("ao", "sampled")), shade, timed=False,
+                             kernels=pass_makers(over, recorded_passes(over, _SHADING)))]
 
     def free_recordings(self) -> None:
         """The batches' recordings (they name these buffers and sets); the frames' stay."""

@@ -21,7 +21,8 @@ blended draws, which composite over it.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+import functools
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -128,12 +129,24 @@ class PassContext:
     blend_groups: tuple[tuple[tuple[int, ...], int, int], ...] | None = None
 
 
+def pass_makers(ctx: PassContext, passes: Iterable[PassSpec]) -> tuple[Callable[[], Any], ...]:
+    """Calls that make the pipelines `record_pass` binds for `passes` with `ctx` (a Step's
+    kernels: the frame graph makes them at once): those of the passes that draw anything."""
+    return tuple(functools.partial(ctx.pipeline, p) for p in passes
+                 if p.fullscreen or p.draw_class in ctx.classes)
+
+
+def recorded_passes(ctx: PassContext, names: tuple[str, ...] | None = None) -> list[PassSpec]:
+    """The passes `record_passes` records with `ctx` (those in `names`, default all)."""
+    return [p for p in PASSES
+            if (names is None or p.name in names) and not (p.prepass and not ctx.prepass)]
+
+
 def record_passes(cmd: Commands, ctx: PassContext, names: tuple[str, ...] | None = None) -> None:
     """Record the enabled passes of PASSES (those in `names`, default all) in one rendering
     (a batch's chunk of views: render/batch.py)."""
-    for p in PASSES:
-        if (names is None or p.name in names) and not (p.prepass and not ctx.prepass):
-            record_pass(cmd, ctx, p)
+    for p in recorded_passes(ctx, names):
+        record_pass(cmd, ctx, p)
 
 
 def record_pass(cmd: Commands, ctx: PassContext, p: PassSpec) -> None:

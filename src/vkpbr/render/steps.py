@@ -12,7 +12,6 @@ passes draw over it (and test that depth without writing it: a pre-pass for them
 from __future__ import annotations
 
 import dataclasses
-import functools
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
@@ -23,7 +22,7 @@ from vkpbr.render import layouts as L
 from vkpbr.render.ao import PREPASS_ROWS, AoSpec
 from vkpbr.render.compute_path import GENERAL_SHADING, ShadeVariant
 from vkpbr.render.lens_cube import store_only
-from vkpbr.render.passes import PASSES, PassContext, PassSpec, classify, record_pass
+from vkpbr.render.passes import PASSES, PassContext, PassSpec, classify, pass_makers, record_pass
 from vkpbr.render.paths import COPY_PATHS, PATHS
 from vkpbr.render.post import lens_steps, post_steps
 from vkpbr.render.post_stage import PostContext, encode_step
@@ -446,9 +445,8 @@ def _pass_step(name: str, ctx: PassContext, p: PassSpec, uses: tuple[tuple[str, 
                rendering: Rendering | None = None, timed: bool = True) -> Step:
     """Step `name` recording pass `p` (record_pass) with `ctx`; its pipeline made ahead
     (Step.kernels) where the pass draws anything."""
-    draws = p.fullscreen or p.draw_class in ctx.classes
     return Step(name, lambda cmd: record_pass(cmd, ctx, p), uses, rendering, timed,
-                kernels=(functools.partial(ctx.pipeline, p),) if draws else ())
+                kernels=pass_makers(ctx, (p,)))
 
 
 def _clear_outputs(cmd: Commands, outputs: dict[str, tuple[Any, Any]]) -> None:
