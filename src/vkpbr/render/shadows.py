@@ -198,8 +198,10 @@ class ShadowMaps:
         size = HEADER_BYTES + 64 * MATRICES
         self.matrix_bytes = size
         self.stride = (size + align - 1) // align * align
+        # (host memory, not device-local: `_stale` reads the matrices back every frame, and a
+        # read of the device's mapped memory crosses the bus uncached)
         self.buffer = self._own(Buffer(device, self.stride * slots, "storage", host_visible=True,
-                                       device_local=True, name="shadow matrices"))
+                                       name="shadow matrices"))
         self.pool = self._own(DescriptorPool(device, [(self.set_layout, slots),
                                                       (self.pass_layout, slots)]))
         self.sets = [self.pool.allocate(self.set_layout) for _ in range(slots)]
