@@ -242,6 +242,11 @@ def _at(region: tuple[Any, int, int]) -> tuple[Any, int, int]:
     return buffer, size, offset
 
 
+def _bin_push_bytes(tiles: tuple[int, int, int, int] | None) -> int:
+    """A bin kernel's push constants: the material, and a batch's atlas where `tiles`."""
+    return 32 if tiles else 16
+
+
 class ComputeScene:
     """The compute path's view of a GpuScene (built on the path's first frame).
 
@@ -322,10 +327,13 @@ class ComputeScene:
                     tiles: tuple[int, int, int, int] | None = None,
                     variant: ShadeVariant | None = None) -> tuple[Callable[[], ComputePipeline], ...]:
         """The makers of `_dispatch_bins`'s kernels: one per specialisation its materials use."""
-        push_bytes = 32 if tiles else 16
-        constants = {variant.constants(self.layered[m]) if variant is not None else ()
-                     for m in materials}
+        push_bytes = _bin_push_bytes(tiles)
+        constants = {self._bin_constants(m, variant) for m in materials}
         return self.makers(*((kernel, push_bytes, c) for c in sorted(constants)))
+
+    def _bin_constants(self, material: int, variant: ShadeVariant | None) -> tuple[int, ...]:
+        """A bin kernel's specialisation for `material` (none without a variant)."""
+        return variant.constants(self.layered[material]) if variant is not None else ()
 
     def _pipeline(self, name: str, push_bytes: int, constants: tuple[int, ...] = ()
                   ) -> ComputePipeline:
@@ -586,13 +594,13 @@ class ComputeScene:
                        variant: ShadeVariant | None = None) -> None:
         """One indirect dispatch of `kernel` per material of `materials`, its set 1 bound;
         `variant`: the kernel specialised per material (ShadeVariant), else the general one."""
-        push_bytes = 32 if tiles else 16
+        push_bytes = _bin_push_bytes(tiles)
         bound = None
         material = np.zeros(8 if tiles else 4, np.uint32)
         if tiles:
             material[1:5] = tiles
         for m in materials:
-            constants = variant.constants(self.layered[m]) if variant is not None else ()
+            constants = self._bin_constants(m, variant)
             if constants != bound:  # pipelines share the layout: the sets stay bound
                 cmd.bind_pipeline(self._pipeline(kernel, push_bytes, constants))
                 if bound is None:
