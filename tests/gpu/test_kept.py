@@ -121,5 +121,6 @@ def test_keeping_is_this_threads_only() -> None:
         assert not dev.keeps_here() and dev.live_children == mark + 1
         dev.destroy_children(mark)
         assert other.handle is None and kept.handle is not None
+        dev.check_validation()
     finally:
         dev.close()

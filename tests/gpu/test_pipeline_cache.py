@@ -231,5 +231,6 @@ def test_a_save_within_its_interval_waits_for_the_next(tmp_path: Path) -> None:
         _build_other(device)
         assert not cache.save(min_interval=3600.0) and cache.path.read_bytes() == written
         assert cache.save() and len(cache.path.read_bytes()) > len(written)
+        device.check_validation()
     finally:
         device.close()
