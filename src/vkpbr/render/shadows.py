@@ -198,8 +198,7 @@ class ShadowMaps:
         size = HEADER_BYTES + 64 * MATRICES
         self.matrix_bytes = size
         self.stride = (size + align - 1) // align * align
-        # (host memory, not device-local: `_stale` reads the matrices back every frame, and a
-        # read of the device's mapped memory crosses the bus uncached)
+        # (host memory: `_stale` reads them back every frame, uncached from device memory)
         self.buffer = self._own(Buffer(device, self.stride * slots, "storage", host_visible=True,
                                        name="shadow matrices"))
         self.pool = self._own(DescriptorPool(device, [(self.set_layout, slots),
