@@ -169,15 +169,25 @@ def _bytecode() -> str:
 
 
 def load_table(scene: Path, size: tuple[int, int], profile: Path | None,
-               serial: bool = False) -> list[dict]:
+               serial: bool = False, rows_wanted: list[str] | None = None,
+               fresh_driver_cache: bool = False) -> list[dict]:
+    """The rows of ROWS (those named in `rows_wanted`, in ROWS' order, each as often as
+    named), each a child process; `fresh_driver_cache`: each child with an empty NVIDIA
+    shader disk cache of its own (a cold row as on a fresh machine, every time)."""
     cache = Path(tempfile.mkdtemp(prefix="vkpbr-bench-load-"))
     rows = []
+    plan = [r for r in ROWS for _ in range(rows_wanted.count(r[0]) if rows_wanted else 1)]
     try:
-        for name, cached, remove in ROWS:
+        for name, cached, remove in plan:
+            if name == "cold":
+                shutil.rmtree(cache, ignore_errors=True)
+                cache.mkdir()
             for pattern in remove:
                 for f in cache.glob(pattern):
                     f.unlink()
             env = {**os.environ, "VKPBR_CACHE_DIR": str(cache)}
+            if fresh_driver_cache:  # (the driver's own cache of compiled shaders, NVIDIA's)
+                env["__GL_SHADER_DISK_CACHE_PATH"] = tempfile.mkdtemp(dir=cache)
             cmd = [sys.executable, __file__, "--child", str(scene), "--size", f"{size[0]}x{size[1]}"]
             if profile is not None:
                 profile.mkdir(parents=True, exist_ok=True)
@@ -455,6 +465,11 @@ def main() -> None:
                    help="also write each row's cProfile (top 60 by cumulative time) into DIR")
     p.add_argument("--builds", action="store_true",
                    help="also print every row's pipeline builds (shaders, when, how long)")
+    p.add_argument("--rows", help="only these rows of part 1, comma-separated, each as often "
+                   "as named (cold,cold: twice)")
+    p.add_argument("--fresh-driver-cache", action="store_true",
+                   help="each row with an empty shader disk cache of the driver's own (NVIDIA: "
+                   "__GL_SHADER_DISK_CACHE_PATH), so every cold row is cold")
     p.add_argument("--serial", action="store_true",
                    help="load the scene, then make the device (as before vkpbr.bake.ahead)")
     p.add_argument("--job-runs", default="cold,warm,sequential",
@@ -507,7 +522,9 @@ def main() -> None:
         return
     out: dict = {}
     if not args.no_load:
-        out["load"] = load_table(args.scene, size, args.profile, args.serial)
+        out["load"] = load_table(args.scene, size, args.profile, args.serial,
+                                 args.rows.split(",") if args.rows else None,
+                                 args.fresh_driver_cache)
         print_load_table(args.scene, size, out["load"], args.serial)
         if args.builds:
             print_builds(out["load"])

@@ -87,11 +87,13 @@ def make_renderer() -> Iterator[Callable[..., object]]:
 
     made: list[Renderer] = []
 
-    def factory(scene=None, **kwargs):  # noqa: ANN001, ANN202
+    def factory(scene=None, wait_ahead=True, **kwargs):  # noqa: ANN001, ANN202
         kwargs.setdefault("validation", True)
         kwargs.setdefault("sync_validation", os.environ.get("VKPBR_SYNC_VALIDATION", "1") != "0")
         r = Renderer(scene, **kwargs)
         made.append(r)
+        if wait_ahead:  # the kernels a GPU compiles ahead (render/kernels_ahead.py) done, so
+            r.device.wait_background()  # that tests counting a frame's builds count its own
         return r
 
     yield factory

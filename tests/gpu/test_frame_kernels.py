@@ -27,6 +27,13 @@ CHOICES = [dict(pipeline="forward"), dict(pipeline="compute"),
                                                        noise="realsense-d435")]
 
 
+@pytest.fixture(autouse=True)
+def _no_kernels_ahead(monkeypatch) -> None:  # noqa: ANN001
+    """What is checked here is the frame graph's own making: a GPU's renderer would have made
+    the compute path's kernels ahead (render/kernels_ahead.py, tests/gpu/test_kernels_ahead.py)."""
+    monkeypatch.setenv("VKPBR_KERNELS_AHEAD", "0")
+
+
 def _first_frame_builds(renderer, **options) -> list[tuple[str, str]]:  # noqa: ANN001
     """(shaders, thread) of each pipeline the first frame built, the sky's bake apart."""
     stats = renderer.device.pipeline_cache.stats

@@ -64,7 +64,8 @@ def groups(size: Sequence[int], local: Sequence[int]) -> tuple[int, int, int]:
     return g[0], g[1], g[2]
 
 
-KERNEL_THREADS = max(2, min(8, os.cpu_count() or 1))
+# Threads that compile a recording's kernels at once (benchmarks set VKPBR_KERNEL_THREADS).
+KERNEL_THREADS = int(os.environ.get("VKPBR_KERNEL_THREADS", 0)) or max(2, min(8, os.cpu_count() or 1))
 T = TypeVar("T")
 
 
@@ -72,7 +73,7 @@ def make_at_once(makers: Sequence[Callable[[], T]]) -> list[T]:
     """Each of `makers`' results, made on up to KERNEL_THREADS threads at once: pipeline
     builds, whose compiles then overlap (the binding lets go of the GIL in its calls, and
     the device's pipeline cache is internally synchronised). A maker's error is raised."""
-    if len(makers) < 2:
+    if len(makers) < 2 or KERNEL_THREADS < 2:
         return [make() for make in makers]
     with ThreadPoolExecutor(min(KERNEL_THREADS, len(makers)), "vkpbr-kernels") as pool:
         futures = [pool.submit(make) for make in makers]

@@ -13,7 +13,8 @@ import functools
 import os
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from concurrent.futures import Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -167,6 +168,10 @@ class Device:
         # create one and as long to destroy it (H200, run h: 20 a scene change's uploads).
         self._fences: list[Any] = []
         self._fences_lock = threading.Lock()
+        # Work on the device's own threads (`in_background`: kernels compiled ahead), which
+        # `close` waits for: none may still be in a Vulkan call when the device goes.
+        self._background: dict[str, ThreadPoolExecutor] = {}
+        self._background_work: list[Future] = []
         try:
             t0 = time.perf_counter()
             self.info: PhysicalDeviceInfo = self.instance.choose_device(device)
@@ -516,8 +521,25 @@ class Device:
     def check_validation(self) -> None:
         self.instance.check()
 
+    def in_background(self, work: Callable[[], Any], threads: int, group: str = "ahead") -> Future:
+        """`work()` on one of the device's `threads` threads of `group` (made with the
+        group's first call; kernels compiled ahead, render/kernels_ahead.py); `close` waits
+        for it (and drops what has not begun)."""
+        if group not in self._background:
+            self._background[group] = ThreadPoolExecutor(threads, f"vkpbr-{group}")
+        future = self._background[group].submit(work)
+        self._background_work = [f for f in self._background_work if not f.done()] + [future]
+        return future
+
+    def wait_background(self) -> None:
+        """Until the work given to `in_background` so far is done."""
+        wait(list(self._background_work))
+
     def close(self) -> None:
         """Destroy every child (reverse order), the device, then the instance. Idempotent."""
+        for pool in getattr(self, "_background", {}).values():
+            pool.shutdown(wait=True, cancel_futures=True)
+        self._background = {}
         vk = self.vk if hasattr(self, "vk") else None
         if self.handle is not None and vk is not None:
             with contextlib.suppress(Exception):

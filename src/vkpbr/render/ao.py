@@ -388,21 +388,13 @@ class AoImages:
         return self._layout
 
     def _new_set_layout(self) -> DescriptorSetLayout:
-        return DescriptorSetLayout(self.device, [
-                BindingSpec(0, "sampler", ("compute",), "depth_map"),
-                *(BindingSpec(b, "storage_image", ("compute",), n)
-                  for b, n in ((1, "ao_raw"), (2, "ao_mid"), (3, "ao_out"))),
-                BindingSpec(4, "sampler", ("compute",), "depth_mips"),
-                *(BindingSpec(5 + k, "storage_image", ("compute",), f"depth_mip{k}")
-                  for k in range(DEPTH_MIPS)),
-                BindingSpec(10, "storage", ("compute",), "AoRasterDepths")])
+        return ao_set_layout(self.device)
 
     def _kernel(self, name: str, push_bytes: int) -> ComputePipeline:
         if name not in self._kernels:
             with self.device.keeping():
-                self._kernels[name] = ComputePipeline(
-                    self.device, SPV_DIR / f"{name}.comp.spv",
-                    [self.set0_layout, self._set_layout()], push_bytes=push_bytes)
+                self._kernels[name] = ao_kernel(self.device, self.set0_layout,
+                                                self._set_layout(), name, push_bytes)
         return self._kernels[name]
 
     def _depth_sampler(self) -> Sampler:
@@ -506,6 +498,34 @@ def _depth_mips(device: Device, w: int, h: int, layers: int
         flat.append(ImageView(image, base_mip=k, mips=1))
         array.append(ImageView(image, kind="2d_array", base_mip=k, mips=1))
     return image, flat, array
+
+
+def ao_set_layout(device: Device) -> DescriptorSetLayout:
+    """The kernels' set 1 (set 0: the frame's). A kept handle: one layout a device."""
+    return DescriptorSetLayout(device, [
+        BindingSpec(0, "sampler", ("compute",), "depth_map"),
+        *(BindingSpec(b, "storage_image", ("compute",), n)
+          for b, n in ((1, "ao_raw"), (2, "ao_mid"), (3, "ao_out"))),
+        BindingSpec(4, "sampler", ("compute",), "depth_mips"),
+        *(BindingSpec(5 + k, "storage_image", ("compute",), f"depth_mip{k}")
+          for k in range(DEPTH_MIPS)),
+        BindingSpec(10, "storage", ("compute",), "AoRasterDepths")])
+
+
+def ao_kernel(device: Device, set0_layout: DescriptorSetLayout, set_layout: DescriptorSetLayout,
+              name: str, push_bytes: int = _PUSH.itemsize) -> ComputePipeline:
+    """Kernel `name` (shaders/spv/<name>.comp.spv) with the frame's set 0 and `set_layout`."""
+    return ComputePipeline(device, SPV_DIR / f"{name}.comp.spv", [set0_layout, set_layout],
+                           push_bytes=push_bytes)
+
+
+def first_frame_kernels(quality: AoQuality, depth_buffer: bool) -> list[str]:
+    """The kernels one view's `steps` bind with `quality` (`depth_buffer`: the prefilter
+    reads the compute rasteriser's depths): render/kernels_ahead.py makes them ahead."""
+    prefilter = "ao_prefilter_buffer" if depth_buffer else "ao_prefilter"
+    return [prefilter, f"ao_gtao_{quality.slices}x{quality.steps}",
+            *(["ao_denoise"] if quality.passes else []),  # (AoImages.fuse off)
+            *(["ao_upsample"] if quality.scale > 1 else [])]
 
 
 def _push(spec: AoSpec, tiles: tuple[int, int, int, int], first: int, final: int,

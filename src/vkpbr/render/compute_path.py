@@ -242,9 +242,59 @@ def _at(region: tuple[Any, int, int]) -> tuple[Any, int, int]:
     return buffer, size, offset
 
 
-def _bin_push_bytes(tiles: tuple[int, int, int, int] | None) -> int:
+def bin_push_bytes(tiles: tuple[int, int, int, int] | None) -> int:
     """A bin kernel's push constants: the material, and a batch's atlas where `tiles`."""
     return 32 if tiles else 16
+
+
+def compute_layouts(device: Device, frame_layouts: dict[int, DescriptorSetLayout]
+                    ) -> list[DescriptorSetLayout]:
+    """The compute path's kernels' set layouts: the frame's (by set number), then the compute
+    set (L.COMPUTE_SET). Kept handles (gpu/kept.py): equal definitions make one layout, so
+    kernels made ahead (render/kernels_ahead.py) are the frame's own."""
+    set_layout = DescriptorSetLayout(device, [
+        BindingSpec(b, "storage" if kind == "block" else kind, ("compute",), name)
+        for b, kind, name in L.COMPUTE_SET])
+    return [frame_layouts[i] for i in range(max(frame_layouts) + 1)] + [set_layout]
+
+
+def compute_kernel(device: Device, layouts: list[DescriptorSetLayout], name: str,
+                   push_bytes: int, constants: tuple[int, ...] = ()) -> ComputePipeline:
+    """The compute path's kernel `name` (shaders/spv/<name>.comp.spv), specialised for
+    `constants`."""
+    return ComputePipeline(device, SPV_DIR / f"{name}.comp.spv", layouts, push_bytes=push_bytes,
+                           specialization=constants)
+
+
+def first_frame_kernels(aggregate: bool, masked: bool) -> list[tuple[str, int]]:
+    """(name, push bytes) of the kernels a frame of one view through the compute rasteriser
+    binds besides its shading (raster_steps, classify_step counted, background_step):
+    render/kernels_ahead.py makes them while the scene uploads (tests/gpu/test_kernels_ahead.py
+    checks them against a first frame's). `aggregate`: ComputeScene.aggregate; `masked`: the
+    scene has masked draws."""
+    names = ["raster_small", "raster_args", "raster_big",
+             *(["raster_masked", "raster_masked_big"] if masked else []), "raster_resolve"]
+    return ([(n, RASTER_PUSH_BYTES) for n in names]
+            + [("classify_offsets", 32), (f"classify_scatter{'' if aggregate else '_plain'}", 32),
+               ("background_view", 16)])
+
+
+def shading_kernel(tbn: L.TbnMode, tiles: bool = False, copy: bool = False) -> str:
+    """The shading step's kernel for vertices of `tbn` (a compute batch's atlas: `tiles`;
+    the transmission's copy: `copy`)."""
+    return f"shade_{'batch_' if tiles else 'copy_' if copy else ''}{tbn.name.lower()}"
+
+
+def layered_materials(gs: GpuScene) -> list[bool]:
+    """Per material, whether it shades with layers other than the defaults (ShadeVariant)."""
+    return [not d for d in default_layer_mask(gs.material_blocks).tolist()]
+
+
+def shading_constants(layered: list[bool], materials: list[int], variant: ShadeVariant
+                      ) -> list[tuple[int, ...]]:
+    """The shading kernel's specialisations for `materials` (ComputeScene.layered: each
+    material's), one per kind of material they are."""
+    return sorted({variant.constants(layered[m]) for m in materials})
 
 
 class ComputeScene:
@@ -281,10 +331,8 @@ class ComputeScene:
         # A batch of worlds' material factors (render/worlds.py), grown by set_world_factors.
         self.world_factors = Buffer(device, 48, "storage", host_visible=True, name="world factors")
         self.set_index = max(frame_layouts) + 1
-        self.set_layout = self._own(DescriptorSetLayout(device, [
-            BindingSpec(b, "storage" if kind == "block" else kind, ("compute",), name)
-            for b, kind, name in L.COMPUTE_SET]))
-        self.layouts = [frame_layouts[i] for i in range(self.set_index)] + [self.set_layout]
+        self.layouts = compute_layouts(device, frame_layouts)
+        self.set_layout = self._own(self.layouts[-1])
         self.material_count = len(gs.materials)
         # Subgroup-aggregated atomics on GPUs; one atomic a pixel on CPUs, where the subgroup
         # loop costs ~10x more (classify.comp). Tests set it to run both kernels on lavapipe.
@@ -292,7 +340,7 @@ class ComputeScene:
         # Which materials any opaque or masked draw uses: only those get a shading dispatch.
         self._pipelines: dict[tuple[str, tuple[int, ...]], ComputePipeline] = {}
         # Per material, whether it shades with layers other than the defaults (ShadeVariant).
-        self.layered = [not d for d in default_layer_mask(gs.material_blocks).tolist()]
+        self.layered = layered_materials(gs)
         self._stand_ins: dict[str, tuple[Any, Any]] | None = None
         self._targets: dict[int, _TargetResources] = {}
 
@@ -327,9 +375,10 @@ class ComputeScene:
                     tiles: tuple[int, int, int, int] | None = None,
                     variant: ShadeVariant | None = None) -> tuple[Callable[[], ComputePipeline], ...]:
         """The makers of `_dispatch_bins`'s kernels: one per specialisation its materials use."""
-        push_bytes = _bin_push_bytes(tiles)
-        constants = {self._bin_constants(m, variant) for m in materials}
-        return self.makers(*((kernel, push_bytes, c) for c in sorted(constants)))
+        push_bytes = bin_push_bytes(tiles)
+        constants = ([()] if variant is None
+                     else shading_constants(self.layered, materials, variant))
+        return self.makers(*((kernel, push_bytes, c) for c in constants))
 
     def _bin_constants(self, material: int, variant: ShadeVariant | None) -> tuple[int, ...]:
         """A bin kernel's specialisation for `material` (none without a variant)."""
@@ -340,9 +389,8 @@ class ComputeScene:
         """Kernel `name` (shaders/spv/<name>.comp.spv), specialised for `constants`."""
         key = (name, constants)
         if key not in self._pipelines:
-            self._pipelines[key] = self._own(ComputePipeline(
-                self.device, SPV_DIR / f"{name}.comp.spv", self.layouts, push_bytes=push_bytes,
-                specialization=constants))
+            self._pipelines[key] = self._own(compute_kernel(self.device, self.layouts, name,
+                                                            push_bytes, constants))
         return self._pipelines[key]
 
     def kernel_statistics(self) -> dict[str, dict[str, float | int | bool]]:
@@ -438,7 +486,7 @@ class ComputeScene:
         over its bin with its own set 1 bound (`tiles`: a compute batch's atlas; `copy`: the
         transmission's copy; `variant`: what the kernels are specialised for)."""
         res = self._resources(target)
-        kernel = f"shade_{'batch_' if tiles else 'copy_' if copy else ''}{tbn.name.lower()}"
+        kernel = shading_kernel(tbn, tiles is not None, copy)
 
         def record(cmd: Any) -> None:
             self._dispatch_bins(cmd, res, frame_index, kernel, frame_sets, material_sets,
@@ -594,7 +642,7 @@ class ComputeScene:
                        variant: ShadeVariant | None = None) -> None:
         """One indirect dispatch of `kernel` per material of `materials`, its set 1 bound;
         `variant`: the kernel specialised per material (ShadeVariant), else the general one."""
-        push_bytes = _bin_push_bytes(tiles)
+        push_bytes = bin_push_bytes(tiles)
         bound = None
         material = np.zeros(8 if tiles else 4, np.uint32)
         if tiles:

@@ -54,7 +54,7 @@ from vkpbr.scene.types import (
     points_box,
 )
 
-__all__ = ["GpuScene", "Draw", "prepare_mesh", "uv_transform_rows"]
+__all__ = ["GpuScene", "Draw", "draw_nodes", "material_block", "prepare_mesh", "uv_transform_rows"]
 
 _SWIZZLE = {0: "rrrr", 1: "gggg", 2: "bbbb", 3: "aaaa"}
 # Tangent-space normals and other linear vectors (RGB as stored, no swizzle).
@@ -584,7 +584,7 @@ class GpuScene:
                                                        shared and slot == "metallic")
                 has[slot] = present
                 bound.append((view, sampler))
-            block = self._material_block(mat, has)
+            block = material_block(mat, has)
             if shared and has["metallic"]:
                 block["flags"] |= L.MATERIAL_SHARED_METALLIC_ROUGHNESS
             self.material_blocks.append(block)
@@ -657,38 +657,6 @@ class GpuScene:
         """(buffer, offset, size) of slot `slot`'s MATERIAL table (the compute path's)."""
         return self.material_table, slot * self._table_stride, self._table_bytes
 
-    @staticmethod
-    def _material_block(mat: Material, has: dict[str, bool]) -> np.ndarray:
-        b = L.MATERIAL.zeros()
-        for p in PARAMS:  # scene/material_table.py: the Material field is the block member
-            b[p.name] = getattr(mat, p.name)
-        for slot in L.MATERIAL_TEXTURES:
-            rows = uv_transform_rows(getattr(mat, f"{slot}_texture"))
-            b[f"{slot}_uv_row0"], b[f"{slot}_uv_row1"] = rows
-        flags = 0
-        if has["clearcoat_normal"]:
-            flags |= L.MATERIAL_HAS_CLEARCOAT_NORMAL_MAP
-        if has["anisotropy"]:
-            flags |= L.MATERIAL_HAS_ANISOTROPY_MAP
-        if mat.unlit:
-            flags |= L.MATERIAL_UNLIT
-        if mat.glossiness:
-            flags |= L.MATERIAL_GLOSSINESS
-        if has["normal"]:
-            flags |= L.MATERIAL_HAS_NORMAL_MAP
-        if has["occlusion"]:
-            flags |= L.MATERIAL_HAS_OCCLUSION_MAP
-        if has["emissive"]:
-            flags |= L.MATERIAL_HAS_EMISSIVE_MAP
-        if any(has[slot] for slot in L.LAYER_TEXTURES):
-            flags |= L.MATERIAL_HAS_LAYER_MAPS
-        if mat.double_sided:
-            flags |= L.MATERIAL_DOUBLE_SIDED
-        if mat.alpha_mode == "blend":
-            flags |= L.MATERIAL_BLEND
-        b["flags"] = flags
-        return b
-
     # --- draws ------------------------------------------------------------------------------
     def _build_draws(self) -> list[Draw]:
         draws = []
@@ -696,7 +664,7 @@ class GpuScene:
                  for r, offset in zip(self.deformed, self.posed_offsets, strict=True)}
         # Each mesh's weights tested once (a crowd's thousand nodes share one mesh)
         convex = functools.cache(lambda i: convex_weights(self.scene.meshes[i]))
-        for node_index, instance, node in _draw_nodes(self.scene.nodes):
+        for node_index, instance, node in draw_nodes(self.scene.nodes):
             if not 0 <= node.mesh < len(self.scene.meshes):
                 continue
             mesh = self.scene.meshes[node.mesh]
@@ -735,8 +703,42 @@ class GpuScene:
             self._owned.pop().destroy()
 
 
+def material_block(mat: Material, has: dict[str, bool]) -> np.ndarray:
+    """A material's MATERIAL block (layouts.MATERIAL) for `mat` with the texture slots
+    `has` says are bound."""
+    b = L.MATERIAL.zeros()
+    for p in PARAMS:  # scene/material_table.py: the Material field is the block member
+        b[p.name] = getattr(mat, p.name)
+    for slot in L.MATERIAL_TEXTURES:
+        rows = uv_transform_rows(getattr(mat, f"{slot}_texture"))
+        b[f"{slot}_uv_row0"], b[f"{slot}_uv_row1"] = rows
+    flags = 0
+    if has["clearcoat_normal"]:
+        flags |= L.MATERIAL_HAS_CLEARCOAT_NORMAL_MAP
+    if has["anisotropy"]:
+        flags |= L.MATERIAL_HAS_ANISOTROPY_MAP
+    if mat.unlit:
+        flags |= L.MATERIAL_UNLIT
+    if mat.glossiness:
+        flags |= L.MATERIAL_GLOSSINESS
+    if has["normal"]:
+        flags |= L.MATERIAL_HAS_NORMAL_MAP
+    if has["occlusion"]:
+        flags |= L.MATERIAL_HAS_OCCLUSION_MAP
+    if has["emissive"]:
+        flags |= L.MATERIAL_HAS_EMISSIVE_MAP
+    if any(has[slot] for slot in L.LAYER_TEXTURES):
+        flags |= L.MATERIAL_HAS_LAYER_MAPS
+    if mat.double_sided:
+        flags |= L.MATERIAL_DOUBLE_SIDED
+    if mat.alpha_mode == "blend":
+        flags |= L.MATERIAL_BLEND
+    b["flags"] = flags
+    return b
+
+
 # --- EXT_mesh_gpu_instancing -------------------------------------------------------------------
-def _draw_nodes(nodes: list[Node]) -> list[tuple[int, int, Node]]:
+def draw_nodes(nodes: list[Node]) -> list[tuple[int, int, Node]]:
     """(index in scene.nodes, instance or -1, node) per draw record: a node with `instances`
     (EXT_mesh_gpu_instancing) gets one record per instance (its world matrix, its instance id
     in the dataset outputs), kept adjacent; the frame's passes draw a node's records as one

@@ -29,7 +29,7 @@ from vkpbr.scene.types import Light, Scene
 from vkpbr.scene.validate import validate_lights
 from vkpbr.shading import AMBIENT, SUN_DIRECTION
 
-__all__ = ["Lighting", "LightsArg", "automatic_sun"]
+__all__ = ["Lighting", "LightsArg", "automatic_sun", "lighting_flags", "screen_transmission"]
 
 # What a caller may give as the lights of a frame: None (the scene's, or the lighting mode's
 # default), one Light, or a sequence of them (empty: no punctual light at all).
@@ -99,23 +99,42 @@ class Lighting:
 
     def screen_transmission(self, options: RenderOptions) -> bool:
         """Whether frames with `options` draw the copy of the opaque scene that transmissive
-        surfaces see through (render/transmission.py): the scene has one, and the frame
-        shades with the physically based mode's glTF BRDF (the layers' only)."""
-        return (self.opaque_copies.present and options.lighting == L.Lighting.PBR
-                and options.shading_brdf == L.Brdf.GLTF)
+        surfaces see through (render/transmission.py): see `screen_transmission`."""
+        return screen_transmission(options, self.opaque_copies.present)
 
     def _frame_lighting(self, options: RenderOptions) -> FrameLighting:
         if options.lighting == L.Lighting.COURSE:
             return FrameLighting(mode=int(L.Lighting.COURSE), ambient=AMBIENT)
-        flags = ((L.LIGHTING_SHADOWS if options.shadows else 0)
-                 | (L.LIGHTING_SCREEN_TRANSMISSION if self.screen_transmission(options) else 0))
+        flags = lighting_flags(options, self.opaque_copies.present)
         if not options.has_environment:
             return FrameLighting(mode=int(L.Lighting.PBR), flags=flags)
-        flags |= L.LIGHTING_IBL | (L.LIGHTING_BACKGROUND if options.draws_background else 0)
         return FrameLighting(mode=int(L.Lighting.PBR), flags=flags,
                              env_intensity=options.env_intensity,
                              env_rotation=math.radians(options.env_rotation),
                              env_max_lod=float(self.environments.get(options).max_lod))
+
+
+def screen_transmission(options: RenderOptions, transmissive: bool) -> bool:
+    """Whether frames with `options` draw the copy of the opaque scene that transmissive
+    surfaces see through: the scene has one (`transmissive`), and the frame shades with the
+    physically based mode's glTF BRDF (the layers' only)."""
+    return (transmissive and options.lighting == L.Lighting.PBR
+            and options.shading_brdf == L.Brdf.GLTF)
+
+
+def lighting_flags(options: RenderOptions, transmissive: bool, ao: bool = False) -> int:
+    """The Lighting block's flags (L.LIGHTING_*) of the physically based mode's frames with
+    `options` in a scene with (`transmissive`) or without a transmissive surface; `ao`: as
+    Lighting.frame_lighting's. (The course's mode has none but LIGHTING_AO.)"""
+    flags = L.LIGHTING_AO if ao else 0
+    if options.lighting == L.Lighting.COURSE:
+        return flags
+    flags |= ((L.LIGHTING_SHADOWS if options.shadows else 0)
+              | (L.LIGHTING_SCREEN_TRANSMISSION if screen_transmission(options, transmissive)
+                 else 0))
+    if options.has_environment:
+        flags |= L.LIGHTING_IBL | (L.LIGHTING_BACKGROUND if options.draws_background else 0)
+    return flags
 
 
 @functools.lru_cache(maxsize=64)

@@ -211,12 +211,18 @@ def lazy_compute(device: Device, scene: Scene, gs: GpuScene, layouts: list[Descr
 def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float, float, float],
                depth_prepass: bool | None, shared: DeviceParts,
                cache_dir: str | os.PathLike[str] | None, semantics: Any,
-               ahead: Any = None) -> FrameParts:
+               ahead: Any = None, kernels_ahead: bool = False) -> FrameParts:
     """The parts of frames of `scene` on `device` (the Renderer's arguments of those names;
     `shared`: what the device's scenes share; `ahead`: the SceneAhead it was loaded by, whose
-    decoded images GpuScene takes)."""
+    decoded images GpuScene takes; `kernels_ahead`: begin a first frame's likely kernels on
+    the device's threads as soon as what they need exists, render/kernels_ahead.py)."""
     ring, slots = shared.frame_slots()
     layouts, shadows, pipeline_layout = create_layouts(device, ring.count, shared.shadow_images)
+    if kernels_ahead:
+        from vkpbr.render import kernels_ahead as ahead_kernels
+
+        ahead_kernels.start_shading(device, layouts, scene)
+        ahead_kernels.start(device, layouts, any(m.alpha_mode == "mask" for m in scene.materials))
     buffers, pool = shared.frame_buffers, shared.frame_pool
     gs = GpuScene(device, scene, layouts[1], ring.count, ahead=ahead)
     layout = DeformLayout(scene, gs.deformed) if gs.deformed else None

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from vkpbr.gpu.device import Device
+from vkpbr.render import kernels_ahead
 from vkpbr.render.batch_path import BatchPath
 from vkpbr.render.environment import EnvironmentSpec
 from vkpbr.render.frame_path import FramePath
@@ -71,6 +72,10 @@ class SceneMaker:
         self.device = device
         self.shared = DeviceParts.make(device, env_spec, cache_dir)  # (the scenes' shared)
         self.args = (msaa, background, depth_prepass, self.shared, cache_dir, semantics)
+        # The device's first scene makes its first frame's likely kernels while it uploads
+        # (render/kernels_ahead.py): with nothing cached, most of its first frame's time.
+        # A later scene's are mostly made (kept handles) or in the pipeline cache.
+        self.kernels_ahead = kernels_ahead.wanted(device)
 
     def make(self, scene: Scene | Future | None) -> MadeScene:
         """The parts of `scene` (None: the built-in PBR chart; a Future of one, such as
@@ -88,7 +93,9 @@ class SceneMaker:
             scene = default_scene()
         mark = self.device.live_children
         try:
-            parts = make_parts(self.device, scene, *self.args, ahead=ahead)
+            parts = make_parts(self.device, scene, *self.args, ahead=ahead,
+                               kernels_ahead=self.kernels_ahead)
+            self.kernels_ahead = False
         except BaseException:
             self.device.wait_idle()
             self.device.destroy_children(mark)

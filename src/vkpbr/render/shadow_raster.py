@@ -180,6 +180,26 @@ class _Table:
         self.buffer = upload_buffer(device, table, "storage", name="shadow caster table")
 
 
+def raster_layouts(device: Any, frame_layout: DescriptorSetLayout,
+                   material_layout: DescriptorSetLayout) -> list[DescriptorSetLayout]:
+    """The kernels' set layouts: sets 0 and 1 (Instances; a masked draw's material), two
+    empty ones, then set 4 (SET_ROWS). Kept handles: kernels made ahead
+    (render/kernels_ahead.py) are the maps' own."""
+    empty = DescriptorSetLayout(device, [])
+    own = DescriptorSetLayout(device, [BindingSpec(b, "storage", ("compute",), name)
+                                       for b, name in SET_ROWS])
+    return [frame_layout, material_layout, empty, empty, own]
+
+
+def raster_kernel(device: Any, layouts: list[DescriptorSetLayout], name: str) -> ComputePipeline:
+    """Kernel `name` (KERNELS) of shaders/shadow_raster.comp."""
+    return ComputePipeline(device, SPV_DIR / f"shadow_{name}.comp.spv", layouts,
+                           push_bytes=PUSH_BYTES)
+
+
+KERNELS = ("small", "args", "big", "masked")  # the last only where masked draws cast
+
+
 class ShadowRaster:
     """The compute side of a renderer's ShadowMaps (`maps`) for the scene `gs` (GpuScene).
 
@@ -197,10 +217,9 @@ class ShadowRaster:
         self.device, self.maps, self.gs, self.slots = device, maps, gs, slots
         self.max_layers, self.depth_bias = max_layers, depth_bias
         self._owned: list[Any] = []
-        self.set_layout = self._own(DescriptorSetLayout(device, [
-            BindingSpec(b, "storage", ("compute",), name) for b, name in SET_ROWS]))
-        empty = self._own(DescriptorSetLayout(device, []))
-        self.layouts = [frame_layout, material_layout, empty, empty, self.set_layout]
+        self.layouts = raster_layouts(device, frame_layout, material_layout)
+        self.set_layout = self._own(self.layouts[-1])
+        self._own(self.layouts[2])
         self._pipelines: dict[str, ComputePipeline] = {}
         self._tables: dict[tuple, _Table] = {}
         self._sets: dict[tuple, Any] = {}  # (table key, slot) -> set, for the buffers below
@@ -216,9 +235,7 @@ class ShadowRaster:
 
     def _pipeline(self, name: str) -> ComputePipeline:
         if name not in self._pipelines:
-            self._pipelines[name] = self._own(ComputePipeline(
-                self.device, SPV_DIR / f"shadow_{name}.comp.spv", self.layouts,
-                push_bytes=PUSH_BYTES))
+            self._pipelines[name] = self._own(raster_kernel(self.device, self.layouts, name))
         return self._pipelines[name]
 
     # --- resources -------------------------------------------------------------------------
@@ -340,8 +357,7 @@ class ShadowRaster:
     def _steps(self, record: dict[str, Callable[[Any], None]], table: _Table, depths: str,
                big_list: str) -> list[Step]:
         apart = TIMED_STEPS
-        made = {name: (functools.partial(self._pipeline, name),)
-                for name in ("small", "args", "big", "masked")}
+        made = {name: (functools.partial(self._pipeline, name),) for name in KERNELS}
         out = [Step("shadows.clear", record["clear"], ((depths, "transfer_dst"), (big_list, "transfer_dst")),
                     timed=False),
                Step("shadows.small", record["small"], ((depths, "storage"), (big_list, "storage")),
