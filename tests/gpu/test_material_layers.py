@@ -302,10 +302,10 @@ def test_only_default_layers_take_the_specialised_kernel(make_renderer) -> None:
     SHADE_LAYERS false) only where its layers are the defaults: every layered material
     here keeps them (its pixels are checked against the mirror above), a plain one does
     not, and the kernels a frame binds carry the frame's lighting flags and BRDF."""
-    from vkpbr.render.gpu_scene import GpuScene, default_layer_mask, has_default_layers
+    from vkpbr.render.gpu_scene import default_layer_mask, has_default_layers, material_block
 
     def block(mat: Material) -> np.ndarray:
-        return GpuScene._material_block(mat, dict.fromkeys(L.MATERIAL_TEXTURES, False))
+        return material_block(mat, dict.fromkeys(L.MATERIAL_TEXTURES, False))
 
     plain = block(Material(base_color_factor=(0.3, 0.4, 0.5, 1.0)))
     assert has_default_layers(plain)

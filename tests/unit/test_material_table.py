@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 from vkpbr.errors import SceneError
 from vkpbr.render import codegen
 from vkpbr.render import layouts as L
-from vkpbr.render.gpu_scene import GpuScene
+from vkpbr.render.gpu_scene import material_block
 from vkpbr.scene.loader import load_scene
 from vkpbr.scene.material_table import PARAMS, TEXTURES, MaterialParam
 from vkpbr.scene.types import TEXTURE_SLOTS, Material, Node, Scene
@@ -110,7 +110,7 @@ def _file(tmp: Path, material: dict) -> Path:
 
 
 def _block(material: Material) -> np.ndarray:
-    return GpuScene._material_block(material, dict.fromkeys(L.MATERIAL_TEXTURES, False))
+    return material_block(material, dict.fromkeys(L.MATERIAL_TEXTURES, False))
 
 
 def _row(path: str) -> MaterialParam:

@@ -75,9 +75,16 @@ def make_at_once(makers: Sequence[Callable[[], T]]) -> list[T]:
     the device's pipeline cache is internally synchronised). A maker's error is raised."""
     if len(makers) < 2 or KERNEL_THREADS < 2:
         return [make() for make in makers]
-    with ThreadPoolExecutor(min(KERNEL_THREADS, len(makers)), "vkpbr-kernels") as pool:
+    pool = ThreadPoolExecutor(min(KERNEL_THREADS, len(makers)), "vkpbr-kernels")
+    try:
         futures = [pool.submit(make) for make in makers]
-    return [f.result() for f in futures]
+        return [f.result() for f in futures]
+    finally:
+        # Also when a signal's exception (Ctrl-C, the CLI's SIGTERM) interrupts the wait: the
+        # builds under way end before it propagates, or the device could be closed under a
+        # thread still in vkCreateComputePipelines (a segfault at exit on the H200); those
+        # not begun are dropped.
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 class ComputePipeline(DeviceObject):

@@ -1,0 +1,42 @@
+"""gpu/compute.py `make_at_once`: a signal's exception in the calling thread (Ctrl-C, the
+CLI's SIGTERM raising `Terminated`) propagates only after the makers under way have ended:
+a renderer closed next must not destroy its device under a thread still compiling (on the
+H200 a SIGTERM during a cold first frame's compiles had ended `vkpbr render` in SIGSEGV)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+
+import pytest
+
+from vkpbr.gpu import compute
+
+
+def test_an_interrupt_waits_for_the_makers_under_way(monkeypatch) -> None:  # noqa: ANN001
+    monkeypatch.setattr(compute, "KERNEL_THREADS", 2)
+    began, ended = threading.Event(), threading.Event()
+
+    def slow() -> str:
+        began.set()
+        time.sleep(0.5)
+        ended.set()
+        return "slow"
+
+    def interrupt() -> None:
+        began.wait(5)
+        time.sleep(0.1)  # (the caller is waiting for the makers by now)
+        os.kill(os.getpid(), signal.SIGINT)  # (Python runs the handler in the main thread)
+
+    threading.Thread(target=interrupt, daemon=True).start()
+    with pytest.raises(KeyboardInterrupt):
+        compute.make_at_once([slow, lambda: "quick"])
+    assert ended.is_set(), "the interrupt propagated while a maker was still running"
+
+
+def test_results_come_in_the_makers_order(monkeypatch) -> None:  # noqa: ANN001
+    monkeypatch.setattr(compute, "KERNEL_THREADS", 3)
+    makers = [lambda i=i: (time.sleep(0.01 * (5 - i)), i)[1] for i in range(5)]
+    assert compute.make_at_once(makers) == list(range(5))
