@@ -66,6 +66,17 @@ def test_a_renderer_closed_while_its_kernels_compile(monkeypatch, make_renderer)
     assert r.device.instance.errors == []
 
 
+def test_a_scene_made_with_kernels_ahead_counts_as_one_made_without(monkeypatch,  # noqa: ANN001
+                                                                     make_renderer) -> None:
+    """What the guess makes is the device's (kept), not the scene's: the first scene's
+    children are as many as the same scene's made again (set_scene, nothing ahead)."""
+    monkeypatch.setenv("VKPBR_KERNELS_AHEAD", "1")
+    r = make_renderer()
+    first = r.device.live_children
+    r.set_scene(None)
+    assert r.device.live_children == first
+
+
 @pytest.mark.parametrize("mode", [None, "0"])
 def test_nothing_is_made_ahead_on_a_cpu_or_when_turned_off(monkeypatch, make_renderer,  # noqa: ANN001
                                                            mode: str | None) -> None:

@@ -69,19 +69,20 @@ def start(device: Device, frame_layouts: list[DescriptorSetLayout], masked: bool
     parts.create_layouts) on `device`'s background threads; `masked`: the scene has
     masked materials."""
     options = options or RenderOptions()
-    layouts = compute_path.compute_layouts(device, dict(enumerate(frame_layouts)))
+    with device.keeping():  # (the layouts' wrappers: the device's, not the scene's children)
+        layouts = compute_path.compute_layouts(device, dict(enumerate(frame_layouts)))
+        shadows = shadow_raster.raster_layouts(device, frame_layouts[0], frame_layouts[1])
+        ao_layout = ao.ao_set_layout(device)
     aggregate = device.info.kind != "cpu"  # (ComputeScene.aggregate)
     makers = [(name, functools.partial(compute_path.compute_kernel, device, layouts, name, push))
               for name, push in compute_path.first_frame_kernels(aggregate, masked)]
     if options.shadows:
-        shadows = shadow_raster.raster_layouts(device, frame_layouts[0], frame_layouts[1])
         makers += [(f"shadow_{name}", functools.partial(shadow_raster.raster_kernel, device,
                                                         shadows, name))
                    for name in shadow_raster.KERNELS if masked or name != "masked"]
     if options.ao != L.Ao.OFF and options.has_environment:
         quality = ao.PRESETS.get(options.ao, ao.PRESETS[L.Ao.GTAO])
-        set_layout = ao.ao_set_layout(device)
-        makers += [(name, functools.partial(ao.ao_kernel, device, frame_layouts[0], set_layout, name))
+        makers += [(name, functools.partial(ao.ao_kernel, device, frame_layouts[0], ao_layout, name))
                    for name in ao.first_frame_kernels(quality, depth_buffer=True)]
     _begin(device, makers)
 
@@ -93,7 +94,8 @@ def start_shading(device: Device, frame_layouts: list[DescriptorSetLayout], scen
     and material blocks: each texture a material names taken as bound), on threads of their
     own (not queued behind `start`'s: they take the longest)."""
     options = options or RenderOptions()
-    layouts = compute_path.compute_layouts(device, dict(enumerate(frame_layouts)))
+    with device.keeping():
+        layouts = compute_path.compute_layouts(device, dict(enumerate(frame_layouts)))
     materials = [*scene.materials, Material(name="vkpbr-default")]
     used = [mesh.material if 0 <= mesh.material < len(scene.materials) else len(materials) - 1
             for mesh in (scene.meshes[node.mesh] for _, _, node in draw_nodes(scene.nodes)
