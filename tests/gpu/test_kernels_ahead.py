@@ -77,14 +77,16 @@ def test_a_scene_made_with_kernels_ahead_counts_as_one_made_without(monkeypatch,
     assert r.device.live_children == first
 
 
-@pytest.mark.parametrize("mode", [None, "0"])
+@pytest.mark.parametrize("mode", [None, "0", "msaa"])
 def test_nothing_is_made_ahead_on_a_cpu_or_when_turned_off(monkeypatch, make_renderer,  # noqa: ANN001
                                                            mode: str | None) -> None:
+    """Not on CPUs (auto's forward path), not when turned off, not where frames cannot take
+    the compute path (MSAA; a window's device)."""
     if mode is None:
         monkeypatch.delenv("VKPBR_KERNELS_AHEAD", raising=False)
     else:
-        monkeypatch.setenv("VKPBR_KERNELS_AHEAD", mode)
-    r = make_renderer()
+        monkeypatch.setenv("VKPBR_KERNELS_AHEAD", "0" if mode == "0" else "1")
+    r = make_renderer(msaa=4) if mode == "msaa" else make_renderer()
     if mode is None and r.device.info.kind != "cpu":
         pytest.skip("a GPU makes them ahead by default (the test above)")
     r.device.wait_background()

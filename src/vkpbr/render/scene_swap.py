@@ -75,7 +75,9 @@ class SceneMaker:
         # The device's first scene makes its first frame's likely kernels while it uploads
         # (render/kernels_ahead.py): with nothing cached, most of its first frame's time.
         # A later scene's are mostly made (kept handles) or in the pipeline cache.
-        self.kernels_ahead = kernels_ahead.wanted(device)
+        # (not for a window's device or MSAA: their frames take the fragment path)
+        self.kernels_ahead = (kernels_ahead.wanted(device) and msaa <= 1
+                              and "VK_KHR_swapchain" not in device.extensions)
 
     def make(self, scene: Scene | Future | None) -> MadeScene:
         """The parts of `scene` (None: the built-in PBR chart; a Future of one, such as
