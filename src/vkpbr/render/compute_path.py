@@ -247,6 +247,12 @@ def bin_push_bytes(tiles: tuple[int, int, int, int] | None) -> int:
     return 32 if tiles else 16
 
 
+def aggregates(device: Device) -> bool:
+    """Whether the classification's kernels aggregate their atomics over subgroups: on GPUs;
+    on CPUs one atomic a pixel, where the subgroup loop costs ~10x more (classify.comp)."""
+    return device.info.kind != "cpu"
+
+
 def compute_layouts(device: Device, frame_layouts: dict[int, DescriptorSetLayout]
                     ) -> list[DescriptorSetLayout]:
     """The compute path's kernels' set layouts: the frame's (by set number), then the compute
@@ -334,9 +340,8 @@ class ComputeScene:
         self.layouts = compute_layouts(device, frame_layouts)
         self.set_layout = self._own(self.layouts[-1])
         self.material_count = len(gs.materials)
-        # Subgroup-aggregated atomics on GPUs; one atomic a pixel on CPUs, where the subgroup
-        # loop costs ~10x more (classify.comp). Tests set it to run both kernels on lavapipe.
-        self.aggregate = device.info.kind != "cpu"
+        # (tests set it to run both kinds of kernels on lavapipe)
+        self.aggregate = aggregates(device)
         # Which materials any opaque or masked draw uses: only those get a shading dispatch.
         self._pipelines: dict[tuple[str, tuple[int, ...]], ComputePipeline] = {}
         # Per material, whether it shades with layers other than the defaults (ShadeVariant).

@@ -68,7 +68,7 @@ class Deformed:
 
 
 def deformed_records(scene: Scene) -> list[Deformed]:
-    """The scene's deformed draw records, in draw-record order (GpuScene.s draw_nodes)."""
+    """The scene's deformed draw records, in draw-record order (gpu_scene.draw_nodes)."""
     tree = scene.node_tree()
     out: list[Deformed] = []
     for i, node in enumerate(scene.nodes):

@@ -54,7 +54,7 @@ from vkpbr.scene.types import (
     points_box,
 )
 
-__all__ = ["GpuScene", "Draw", "draw_nodes", "material_block", "prepare_mesh", "uv_transform_rows"]
+__all__ = ["GpuScene", "Draw", "drawn", "draw_nodes", "material_block", "prepare_mesh", "uv_transform_rows"]
 
 _SWIZZLE = {0: "rrrr", 1: "gggg", 2: "bbbb", 3: "aaaa"}
 # Tangent-space normals and other linear vectors (RGB as stored, no swizzle).
@@ -664,13 +664,8 @@ class GpuScene:
                  for r, offset in zip(self.deformed, self.posed_offsets, strict=True)}
         # Each mesh's weights tested once (a crowd's thousand nodes share one mesh)
         convex = functools.cache(lambda i: convex_weights(self.scene.meshes[i]))
-        for node_index, instance, node in draw_nodes(self.scene.nodes):
-            if not 0 <= node.mesh < len(self.scene.meshes):
-                continue
+        for node_index, instance, node, mat_index in drawn(self.scene):
             mesh = self.scene.meshes[node.mesh]
-            if len(mesh.indices) == 0:
-                continue
-            mat_index = mesh.material if 0 <= mesh.material < len(self.scene.materials) else self.default_material
             mat = self.materials[mat_index]
             m = np.asarray(node.matrix, dtype=np.float64)
             offset, skinned = posed.get((node_index, instance), (int(self.vertex_offsets[node.mesh]), False))
@@ -735,6 +730,17 @@ def material_block(mat: Material, has: dict[str, bool]) -> np.ndarray:
         flags |= L.MATERIAL_BLEND
     b["flags"] = flags
     return b
+
+
+def drawn(scene: Scene) -> list[tuple[int, int, Node, int]]:
+    """(index in scene.nodes, instance or -1, node, material) of each draw record GpuScene
+    makes: nodes (and their instances, `draw_nodes`) whose mesh exists and has triangles; a
+    mesh without a material of the scene's takes the default one after them (index
+    len(scene.materials), GpuScene.default_material)."""
+    meshes, count = scene.meshes, len(scene.materials)
+    return [(i, k, node, m if 0 <= (m := meshes[node.mesh].material) < count else count)
+            for i, k, node in draw_nodes(scene.nodes)
+            if 0 <= node.mesh < len(meshes) and len(meshes[node.mesh].indices)]
 
 
 # --- EXT_mesh_gpu_instancing -------------------------------------------------------------------

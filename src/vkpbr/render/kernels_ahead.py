@@ -9,11 +9,12 @@ set layouts existed. Most need nothing the upload makes: the compute rasteriser'
 classification's and the background's (compute_path.first_frame_kernels), the shadow maps'
 compute rasteriser's (shadow_raster.KERNELS) and the ambient occlusion's
 (ao.first_frame_kernels) need only the set layouts and whether the scene has masked
-materials: `start` has the device make them on its background threads (Device.in_background)
-as soon as the layouts exist. The shading kernels, the longest to compile (~0.5 s), are
-specialised for each kind of material the draws shade and for the lighting: `start_shading`
-derives those from the scene as GpuScene will (before it uploads anything) and begins them
-first, on threads of their own. Each list is begun longest first (by its SPIR-V's size).
+materials. The shading kernels, the longest to compile (~0.5 s), are specialised for each
+kind of material the draws shade and for the lighting, which `start` derives from the scene
+as GpuScene will (gpu_scene.drawn, material_block) before it uploads anything. `start` has
+the device make them all on its background threads (Device.in_background) as soon as the
+layouts exist, the shading kernels first, on threads of their own; each list is begun
+longest first (by its SPIR-V's size).
 
 A kernel made here is the device's kept handle (gpu/kept.py) of the same definition that
 the frame's steps make (the same SPIR-V, set layouts, push constants and specialisation):
@@ -39,14 +40,14 @@ from vkpbr.gpu.descriptors import DescriptorSetLayout
 from vkpbr.gpu.device import Device
 from vkpbr.render import ao, compute_path, shadow_raster
 from vkpbr.render import layouts as L
-from vkpbr.render.gpu_scene import default_layer_mask, draw_nodes, material_block
+from vkpbr.render.gpu_scene import default_layer_mask, drawn, material_block
 from vkpbr.render.lighting import lighting_flags
 from vkpbr.render.options import RenderOptions
 from vkpbr.render.passes import classify
 from vkpbr.render.steps import shaded_materials
 from vkpbr.scene.types import Material, Scene
 
-__all__ = ["wanted", "start", "start_shading"]
+__all__ = ["wanted", "start"]
 
 log = logging.getLogger(__name__)
 
@@ -63,19 +64,30 @@ def wanted(device: Device) -> bool:
     return mode == "1" if mode in ("0", "1") else device.info.kind != "cpu"
 
 
-def start(device: Device, frame_layouts: list[DescriptorSetLayout], masked: bool,
+def start(device: Device, frame_layouts: list[DescriptorSetLayout], scene: Scene,
           options: RenderOptions | None = None) -> None:
-    """Begin the kernels of a first frame that need only the frame's set layouts (0-3:
-    parts.create_layouts) on `device`'s background threads; `masked`: the scene has
-    masked materials."""
+    """Begin, on `device`'s background threads, the kernels a first frame of `scene` with
+    `options` (default: RenderOptions()) binds, given the frame's set layouts (0-3:
+    parts.create_layouts): the shading kernels first, on threads of their own (the longest
+    to compile, not queued behind the others), then the rest."""
     options = options or RenderOptions()
     with device.keeping():  # (the layouts' wrappers: the device's, not the scene's children)
         layouts = compute_path.compute_layouts(device, dict(enumerate(frame_layouts)))
         shadows = shadow_raster.raster_layouts(device, frame_layouts[0], frame_layouts[1])
         ao_layout = ao.ao_set_layout(device)
-    aggregate = device.info.kind != "cpu"  # (ComputeScene.aggregate)
+    materials = [*scene.materials, Material(name="vkpbr-default")]
+    draws = [SimpleNamespace(material=m, alpha_mode=materials[m].alpha_mode,
+                             double_sided=materials[m].double_sided)
+             for _, _, _, m in drawn(scene)]
+    kernel, push = compute_path.shading_kernel(options.tbn), compute_path.bin_push_bytes(None)
+    _begin(device, [(kernel, functools.partial(compute_path.compute_kernel, device, layouts,
+                                               kernel, push, c))
+                    for c in _shading_constants(materials, draws, options)],
+           group="ahead-shading", threads=2)
+    masked = any(d.alpha_mode == "mask" for d in draws)
     makers = [(name, functools.partial(compute_path.compute_kernel, device, layouts, name, push))
-              for name, push in compute_path.first_frame_kernels(aggregate, masked)]
+              for name, push in compute_path.first_frame_kernels(compute_path.aggregates(device),
+                                                                 masked)]
     if options.shadows:
         makers += [(f"shadow_{name}", functools.partial(shadow_raster.raster_kernel, device,
                                                         shadows, name))
@@ -87,38 +99,22 @@ def start(device: Device, frame_layouts: list[DescriptorSetLayout], masked: bool
     _begin(device, makers)
 
 
-def start_shading(device: Device, frame_layouts: list[DescriptorSetLayout], scene: Scene,
-                  options: RenderOptions | None = None) -> None:
-    """Begin the compute path's shading kernels that a first frame of `scene` with `options`
-    specialises, one per kind of material its draws shade (as GpuScene will make its draws
-    and material blocks: each texture a material names taken as bound), on threads of their
-    own (not queued behind `start`'s: they take the longest)."""
-    options = options or RenderOptions()
-    with device.keeping():
-        layouts = compute_path.compute_layouts(device, dict(enumerate(frame_layouts)))
-    materials = [*scene.materials, Material(name="vkpbr-default")]
-    used = [mesh.material if 0 <= mesh.material < len(scene.materials) else len(materials) - 1
-            for mesh in (scene.meshes[node.mesh] for _, _, node in draw_nodes(scene.nodes)
-                         if 0 <= node.mesh < len(scene.meshes))
-            if len(mesh.indices)]
-    draws = [SimpleNamespace(material=m, alpha_mode=materials[m].alpha_mode,
-                             double_sided=materials[m].double_sided) for m in used]
+def _shading_constants(materials: list[Material], draws: list[SimpleNamespace],
+                       options: RenderOptions) -> list[tuple[int, ...]]:
+    """The shading kernel's specialisations a first frame with `options` takes for `draws`
+    (material, alpha_mode, double_sided each), as GpuScene will make its material blocks
+    (each texture a material names taken as bound) and Lighting its flags."""
     classes = [classify(d.alpha_mode, d.double_sided, options.alpha_mask) for d in draws]
     blocks = [material_block(m, {slot: getattr(m, f"{slot}_texture") is not None
                                  for slot in L.MATERIAL_TEXTURES}) for m in materials]
     layered = [not d for d in default_layer_mask(blocks).tolist()]
-    transmissive = any(materials[m].transmission_factor > 0.0 for m in used)
+    transmissive = any(materials[d.material].transmission_factor > 0.0 for d in draws)
     ao_on = options.ao != L.Ao.OFF and options.has_environment
     # A first frame draws every map layer for casters it has not seen, and its shading reads
     # them from the buffer by hand (ShadowMaps._choose_reads)
     variant = compute_path.ShadeVariant(lighting_flags(options, transmissive, ao_on),
                                         int(options.shading_brdf), hand_reads=True)
-    kernel = compute_path.shading_kernel(options.tbn)
-    push = compute_path.bin_push_bytes(None)
-    constants = compute_path.shading_constants(layered, shaded_materials(draws, classes), variant)
-    _begin(device, [(kernel, functools.partial(compute_path.compute_kernel, device, layouts,
-                                               kernel, push, c)) for c in constants],
-           group="ahead-shading", threads=2)
+    return compute_path.shading_constants(layered, shaded_materials(draws, classes), variant)
 
 
 def _begin(device: Device, makers: list[tuple[str, Maker]], group: str = "ahead",

@@ -221,8 +221,7 @@ def make_parts(device: Device, scene: Scene, msaa: int, background: tuple[float,
     if kernels_ahead:
         from vkpbr.render import kernels_ahead as ahead_kernels
 
-        ahead_kernels.start_shading(device, layouts, scene)
-        ahead_kernels.start(device, layouts, any(m.alpha_mode == "mask" for m in scene.materials))
+        ahead_kernels.start(device, layouts, scene)
     buffers, pool = shared.frame_buffers, shared.frame_pool
     gs = GpuScene(device, scene, layouts[1], ring.count, ahead=ahead)
     layout = DeformLayout(scene, gs.deformed) if gs.deformed else None
