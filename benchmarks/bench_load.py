@@ -504,6 +504,10 @@ def main() -> None:
     p.add_argument("--child", help=argparse.SUPPRESS)
     p.add_argument("--cached", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args()
+    unknown = set(args.rows.split(",")) - {r[0] for r in ROWS} if args.rows else set()
+    if unknown:
+        p.error(f"--rows: no row {', '.join(sorted(unknown))} (the rows: "
+                f"{', '.join(r[0] for r in ROWS)})")
     size = tuple(int(v) for v in args.size.split("x"))
     if args.child:
         if args.profile is None:

@@ -40,3 +40,13 @@ def test_results_come_in_the_makers_order(monkeypatch) -> None:  # noqa: ANN001
     monkeypatch.setattr(compute, "KERNEL_THREADS", 3)
     makers = [lambda i=i: (time.sleep(0.01 * (5 - i)), i)[1] for i in range(5)]
     assert compute.make_at_once(makers) == list(range(5))
+
+
+@pytest.mark.parametrize("given,want", [("1", 1), ("12", 12), (" 3 ", 3), ("0", None),
+                                        ("-2", None), ("abc", None), ("2.5", None), ("", None)])
+def test_kernel_threads_from_the_environment(monkeypatch, given: str, want: int | None) -> None:  # noqa: ANN001
+    """VKPBR_KERNEL_THREADS as a benchmark sets it; anything but a positive whole number
+    leaves the default (2 to 8 by the cores), never an error at import."""
+    monkeypatch.setenv("VKPBR_KERNEL_THREADS", given)
+    default = max(2, min(8, os.cpu_count() or 1))
+    assert compute._kernel_threads() == (default if want is None else want)

@@ -64,8 +64,16 @@ def groups(size: Sequence[int], local: Sequence[int]) -> tuple[int, int, int]:
     return g[0], g[1], g[2]
 
 
-# Threads that compile a recording's kernels at once (benchmarks set VKPBR_KERNEL_THREADS).
-KERNEL_THREADS = int(os.environ.get("VKPBR_KERNEL_THREADS", 0)) or max(2, min(8, os.cpu_count() or 1))
+def _kernel_threads() -> int:
+    """Threads that compile a recording's kernels at once: VKPBR_KERNEL_THREADS where it is
+    a positive whole number (benchmarks; 1: one after another), else 2 to 8 by the cores."""
+    given = os.environ.get("VKPBR_KERNEL_THREADS", "").strip()
+    if given.isdigit() and int(given) > 0:
+        return int(given)
+    return max(2, min(8, os.cpu_count() or 1))
+
+
+KERNEL_THREADS = _kernel_threads()
 T = TypeVar("T")
 
 
