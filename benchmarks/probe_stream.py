@@ -27,16 +27,26 @@ from vkpbr.scene.loader import load_scene  # noqa: E402
 
 
 def row(r: Renderer, cams: list, size: tuple[int, int], readback: bool, lights: list | None) -> list[str]:
-    gpu, copy = [], []
+    """GPU ms (median, mean), the copy step's, frames/s, and where the host's time a frame
+    went (means): the frame's draw (`cpu_ms`), its wait for the GPU, its readback, and the
+    rest (the generator and this loop)."""
+    gpu, copy, cpu, wait, read = [], [], [], [], []
     for _ in r.render_many(cams[:20], lights, size=size, readback=readback):  # warm-up
         pass
     t = time.perf_counter()
     for _ in r.render_many(cams, lights, size=size, readback=readback):
-        gpu.append(r.last_stats.gpu_ms)
-        copy.append(r.last_stats.pass_ms.get("copy", 0.0))
-    fps = len(cams) / (time.perf_counter() - t)
+        s = r.last_stats
+        gpu.append(s.gpu_ms)
+        copy.append(s.pass_ms.get("copy", 0.0))
+        cpu.append(s.cpu_ms)
+        wait.append(s.wait_ms)
+        read.append(s.readback_ms)
+    wall = time.perf_counter() - t
+    host = [statistics.fmean(x) for x in (cpu, wait, read)]
+    rest = 1e3 * wall / len(cams) - sum(host)
     return [f"{statistics.median(gpu):.3f}", f"{statistics.fmean(gpu):.3f}",
-            f"{statistics.median(copy):.3f}", f"{fps:.0f}"]
+            f"{statistics.median(copy):.3f}", f"{len(cams) / wall:.0f}",
+            " / ".join(f"{x:.3f}" for x in (*host, rest))]
 
 
 def main() -> None:
@@ -44,6 +54,10 @@ def main() -> None:
     ap.add_argument("--scene", required=True)
     ap.add_argument("--size", default="1920x1080")
     ap.add_argument("--frames", type=int, default=300)
+    ap.add_argument("--cameras", default="still,walk", help="part 1's cameras: still, walk or both")
+    ap.add_argument("--profile", type=Path, metavar="FILE",
+                    help="also write the walk + sun's frames into NumPy under cProfile (top 50 "
+                         "by own time) into FILE")
     ap.add_argument("--redraws-only", action="store_true",
                     help="only part 2, the compute shadow kernels timed apart in every recording")
     args = ap.parse_args()
@@ -55,14 +69,37 @@ def main() -> None:
         if args.redraws_only:
             redraw_rows(r, args.frames, size)
             return
-        print("| camera | light | readback | GPU ms median | mean | copy ms | frames/s |")
-        print("|---|---|---|---:|---:|---:|---:|")
+        print("| camera | light | readback | GPU ms median | mean | copy ms | frames/s "
+              "| host ms a frame: draw / wait / readback / rest |")
+        print("|---|---|---|---:|---:|---:|---:|---|")
+        chosen = args.cameras.split(",")
         for camera, cams in (("still", [CAMERA] * args.frames), ("walk", walk(args.frames))):
+            if camera not in chosen:
+                continue
             for light, lights in (("sun", [r.automatic_sun()]), ("point", None)):
                 for readback in (False, True):
                     print("| " + " | ".join([camera, light, str(readback),
                                              *row(r, cams, size, readback, lights)]) + " |")
+        if args.profile:
+            profile_walk(r, args.frames, size, args.profile)
         redraw_rows(r, args.frames, size)
+
+
+def profile_walk(r: Renderer, frames: int, size: tuple[int, int], into: Path) -> None:
+    """The walk + sun into NumPy under cProfile: its top 50 functions by own time."""
+    import cProfile
+    import io
+    import pstats
+
+    cams, sun = walk(frames), [r.automatic_sun()]
+    prof = cProfile.Profile()
+    prof.enable()
+    for _ in r.render_many(cams, sun, size=size):
+        pass
+    prof.disable()
+    text = io.StringIO()
+    pstats.Stats(prof, stream=text).sort_stats("tottime").print_stats(50)
+    into.write_text(text.getvalue())
 
 
 def redraw_rows(r: Renderer, frames: int, size: tuple[int, int]) -> None:
