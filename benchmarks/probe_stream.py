@@ -33,6 +33,7 @@ def row(r: Renderer, cams: list, size: tuple[int, int], readback: bool, lights: 
     gpu, copy, cpu, wait, read = [], [], [], [], []
     for _ in r.render_many(cams[:20], lights, size=size, readback=readback):  # warm-up
         pass
+    recordings = len(r.parts.recorder._recorded)
     t = time.perf_counter()
     for _ in r.render_many(cams, lights, size=size, readback=readback):
         s = r.last_stats
@@ -42,11 +43,14 @@ def row(r: Renderer, cams: list, size: tuple[int, int], readback: bool, lights: 
         wait.append(s.wait_ms)
         read.append(s.readback_ms)
     wall = time.perf_counter() - t
+    recorded = len(r.parts.recorder._recorded) - recordings
     host = [statistics.fmean(x) for x in (cpu, wait, read)]
     rest = 1e3 * wall / len(cams) - sum(host)
     return [f"{statistics.median(gpu):.3f}", f"{statistics.fmean(gpu):.3f}",
             f"{statistics.median(copy):.3f}", f"{len(cams) / wall:.0f}",
-            " / ".join(f"{x:.3f}" for x in (*host, rest))]
+            " / ".join(f"{x:.3f}" for x in (*host, rest)),
+            f"{statistics.median(cpu):.3f} / {sorted(cpu)[int(0.95 * len(cpu))]:.3f} / {max(cpu):.1f}",
+            str(recorded), f"{sum(c for c in cpu if c > 5):.0f}"]
 
 
 def main() -> None:
@@ -70,8 +74,9 @@ def main() -> None:
             redraw_rows(r, args.frames, size)
             return
         print("| camera | light | readback | GPU ms median | mean | copy ms | frames/s "
-              "| host ms a frame: draw / wait / readback / rest |")
-        print("|---|---|---|---:|---:|---:|---:|---|")
+              "| host ms a frame: draw / wait / readback / rest | draw ms median / p95 / max "
+              "| recordings made | ms in draws over 5 ms |")
+        print("|---|---|---|---:|---:|---:|---:|---|---|---:|---:|")
         chosen = args.cameras.split(",")
         for camera, cams in (("still", [CAMERA] * args.frames), ("walk", walk(args.frames))):
             if camera not in chosen:
