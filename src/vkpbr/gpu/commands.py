@@ -3,8 +3,17 @@
 A `Commands` wraps one primary command buffer. Passes call `bind_pipeline`, `bind_sets`,
 `draw_indexed`, ... and never see a Vulkan enum; this keeps every Vulkan call in `gpu/`
 (style.md: "Vulkan vocabulary stays in gpu/"). Recording happens once per mode set (command
-buffers are reused frame after frame), so these go through the binding's checked wrappers;
-the per-frame hot path (submit, fences) lives in gpu/frames.py on raw entry points.
+buffers are reused frame after frame), but a recording is not rare: a walking camera's shadow
+cascades redraw other layers and record a frame anew for each new set of layers (17 of 600
+frames of bench_shadows' walk), and a first frame, a scene change and a batch of a new size
+record too; the frame waits for it while the GPU's queue drains (7-10 ms a Sponza frame on
+the H200, benchmarks/results/h200-2026-12-05s22.md). So the commands recorded most (binds,
+push constants, dispatches, draws, fills, timestamps) call the C entry points through
+`vulkan.lib` (vkCmd* return nothing: no error to translate), with the arguments the binding
+would have converted made here once (0.5 us a call against 2.2 through the binding's
+wrapper on lavapipe's host), and barriers are built with `ffi.new` (the binding's struct
+constructors cost ~20 us each). The per-frame hot path (submit, fences) lives in
+gpu/frames.py on raw entry points too.
 """
 
 from __future__ import annotations
@@ -29,6 +38,8 @@ class Commands:
         `device.one_time_commands()`); `free()` then leaves it alone."""
         self.device = device
         self.vk = device.vk
+        self.lib, self.ffi = device.vk.lib, device.vk.ffi
+        self._set = self.ffi.new("VkDescriptorSet[1]")  # (copied by each call: reusable)
         self._owned = handle is None
         self.handle = device.allocate_command_buffer() if handle is None else handle
         self._layout: Any = None  # the pipeline layout of the last bound pipeline
@@ -58,62 +69,61 @@ class Commands:
         compute = getattr(pipeline, "bind_point", "graphics") == "compute"
         self._bind_point = (vk.VK_PIPELINE_BIND_POINT_COMPUTE if compute
                             else vk.VK_PIPELINE_BIND_POINT_GRAPHICS)
-        vk.vkCmdBindPipeline(self.handle, self._bind_point, pipeline.handle)
+        self.lib.vkCmdBindPipeline(self.handle, self._bind_point, pipeline.handle)
         self._layout = pipeline.layout.handle
         self._push_stages = getattr(pipeline.layout, "push_stages", self._push_stages)
 
     def bind_set(self, index: int, descriptor_set: Any) -> None:
-        vk = self.vk
-        vk.vkCmdBindDescriptorSets(self.handle, self._bind_point, self._layout,
-                                   index, 1, [descriptor_set], 0, None)
+        self._set[0] = descriptor_set
+        self.lib.vkCmdBindDescriptorSets(self.handle, self._bind_point, self._layout,
+                                         index, 1, self._set, 0, self.ffi.NULL)
 
     def bind_vertex_buffers(self, buffers: list[Buffer]) -> None:
         handles = [b.handle for b in buffers]
         self.vk.vkCmdBindVertexBuffers(self.handle, 0, len(handles), handles, [0] * len(handles))
 
     def bind_index_buffer(self, buffer: Buffer) -> None:
-        self.vk.vkCmdBindIndexBuffer(self.handle, buffer.handle, 0, self.vk.VK_INDEX_TYPE_UINT32)
+        self.lib.vkCmdBindIndexBuffer(self.handle, buffer.handle, 0, self.vk.VK_INDEX_TYPE_UINT32)
 
     def push(self, data: np.ndarray) -> None:
         """Push constants for the bound pipeline layout's stages, from offset 0."""
-        vk = self.vk
-        vk.vkCmdPushConstants(self.handle, self._layout, self._push_stages,
-                              0, data.nbytes, vk.ffi.from_buffer(data))
+        self.lib.vkCmdPushConstants(self.handle, self._layout, self._push_stages,
+                                    0, data.nbytes, self.ffi.from_buffer(data))
 
     # --- draws ------------------------------------------------------------------------------
     def draw_indexed(self, index_count: int, first_index: int, vertex_offset: int,
                      first_instance: int = 0, instances: int = 1) -> None:
         """`instances` instances from `first_instance` (the shader's gl_InstanceIndex: a small
         per-draw index without a push constant, e.g. the shadow passes' matrix and layer)."""
-        self.vk.vkCmdDrawIndexed(self.handle, index_count, instances, first_index, vertex_offset,
-                                 first_instance)
+        self.lib.vkCmdDrawIndexed(self.handle, index_count, instances, first_index, vertex_offset,
+                                  first_instance)
 
     def draw_indirect(self, buffer: Buffer) -> None:
         """One VkDrawIndirectCommand at the start of `buffer`."""
-        self.vk.vkCmdDrawIndirect(self.handle, buffer.handle, 0, 1, 16)
+        self.lib.vkCmdDrawIndirect(self.handle, buffer.handle, 0, 1, 16)
 
     def draw_indexed_indirect(self, buffer: Buffer, offset: int) -> None:
         """One VkDrawIndexedIndirectCommand (20 bytes) at `offset` of `buffer` (GPU-written)."""
-        self.vk.vkCmdDrawIndexedIndirect(self.handle, buffer.handle, offset, 1, 20)
+        self.lib.vkCmdDrawIndexedIndirect(self.handle, buffer.handle, offset, 1, 20)
 
     def draw(self, vertex_count: int, first_vertex: int = 0, instances: int = 1,
              first_instance: int = 0) -> None:
         """Non-indexed draw without vertex buffers (a fullscreen triangle: 3)."""
-        self.vk.vkCmdDraw(self.handle, vertex_count, instances, first_vertex, first_instance)
+        self.lib.vkCmdDraw(self.handle, vertex_count, instances, first_vertex, first_instance)
 
     # --- compute ----------------------------------------------------------------------------
     def dispatch(self, x: int, y: int = 1, z: int = 1) -> None:
-        self.vk.vkCmdDispatch(self.handle, x, y, z)
+        self.lib.vkCmdDispatch(self.handle, x, y, z)
 
     def dispatch_indirect(self, buffer: Buffer, offset: int = 0) -> None:
         """A dispatch whose group counts are 3 uint32 at `offset` of `buffer` (GPU-written)."""
-        self.vk.vkCmdDispatchIndirect(self.handle, buffer.handle, offset)
+        self.lib.vkCmdDispatchIndirect(self.handle, buffer.handle, offset)
 
     def fill(self, buffer: Buffer, value: int = 0, offset: int = 0, size: int | None = None) -> None:
         """Set every uint32 of `buffer` (or of `size` bytes from `offset`) to `value` (a
         transfer write)."""
-        self.vk.vkCmdFillBuffer(self.handle, buffer.handle, offset,
-                                buffer.size - offset if size is None else size, value)
+        self.lib.vkCmdFillBuffer(self.handle, buffer.handle, offset,
+                                 buffer.size - offset if size is None else size, value)
 
     def memory_barrier(self, src: str, dst: str) -> None:
         """A global memory dependency from stages `src` to `dst`, each "|"-joined words of
@@ -145,9 +155,12 @@ class Commands:
             return st, ac
 
         (ss, sa), (ds, da) = mask(src), mask(dst)
-        vk.vkCmdPipelineBarrier2(self.handle, vk.VkDependencyInfo(
-            memoryBarrierCount=1, pMemoryBarriers=[vk.VkMemoryBarrier2(
-                srcStageMask=ss, srcAccessMask=sa, dstStageMask=ds, dstAccessMask=da)]))
+        barrier = self.ffi.new("VkMemoryBarrier2*", {
+            "sType": vk.VK_STRUCTURE_TYPE_MEMORY_BARRIER_2, "srcStageMask": ss,
+            "srcAccessMask": sa, "dstStageMask": ds, "dstAccessMask": da})
+        self.lib.vkCmdPipelineBarrier2(self.handle, self.ffi.new("VkDependencyInfo*", {
+            "sType": vk.VK_STRUCTURE_TYPE_DEPENDENCY_INFO, "memoryBarrierCount": 1,
+            "pMemoryBarriers": barrier}))
 
     def image_barrier(self, image: Any, old: str, new: str, src: str, dst: str,
                       base_mip: int = 0, mips: int | None = None) -> None:
@@ -199,11 +212,11 @@ class Commands:
 
     # --- queries ----------------------------------------------------------------------------
     def reset_queries(self, pool: Any, first: int, count: int) -> None:
-        self.vk.vkCmdResetQueryPool(self.handle, pool, first, count)
+        self.lib.vkCmdResetQueryPool(self.handle, pool, first, count)
 
     def timestamp(self, pool: Any, query: int, after_all: bool = True) -> None:
         """Write a timestamp once all earlier commands finished (`after_all`), or at once."""
         vk = self.vk
         stage = (vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT if after_all
                  else vk.VK_PIPELINE_STAGE_2_NONE)
-        vk.vkCmdWriteTimestamp2(self.handle, stage, pool, query)
+        self.lib.vkCmdWriteTimestamp2(self.handle, stage, pool, query)

@@ -9,25 +9,29 @@ makes its own."""
 from __future__ import annotations
 
 import os
+import threading
 from concurrent.futures import ThreadPoolExecutor
 
 __all__ = ["THREADS", "pool"]
 
 THREADS = max(1, min(8, os.cpu_count() or 1))
 _pool: ThreadPoolExecutor | None = None
+_making = threading.Lock()
 
 
 def pool() -> ThreadPoolExecutor:
     """The process's copy threads (THREADS of them)."""
     global _pool
     if _pool is None:
-        _pool = ThreadPoolExecutor(THREADS, thread_name_prefix="vkpbr-copy")
+        with _making:  # (a stream's collector thread may ask first, beside the caller's)
+            if _pool is None:
+                _pool = ThreadPoolExecutor(THREADS, thread_name_prefix="vkpbr-copy")
     return _pool
 
 
 def _forget() -> None:
-    global _pool
-    _pool = None
+    global _pool, _making
+    _pool, _making = None, threading.Lock()
 
 
 os.register_at_fork(after_in_child=_forget)

@@ -31,7 +31,14 @@ from typing import Any
 
 from vkpbr.gpu.commands import Commands
 from vkpbr.gpu.compute import make_at_once
-from vkpbr.gpu.rendering import Attachments, barriers, begin_rendering, end_rendering
+from vkpbr.gpu.rendering import (
+    Attachments,
+    barriers,
+    begin_rendering,
+    buffer_barrier,
+    end_rendering,
+    image_barrier,
+)
 
 __all__ = ["Use", "USES", "ImageResource", "BufferResource", "Rendering", "Step",
            "record_steps", "build_kernels", "Tracker"]
@@ -261,24 +268,13 @@ class Tracker:
     def _barrier(self, res: ImageResource | BufferResource, src: tuple[int, int], m: _Mask,
                  old: int | None) -> None:
         vk = self.vk
-        dst_access = m.accesses
+        dst = (m.stages, m.accesses)
         if isinstance(res, BufferResource):
-            self.buffers.append(vk.VkBufferMemoryBarrier2(
-                srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=m.stages,
-                dstAccessMask=dst_access, srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-                dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, buffer=res.buffer.handle,
-                offset=0, size=res.buffer.size))
+            self.buffers.append(buffer_barrier(vk, res.buffer, src, dst))
             return
-        aspect = vk.VK_IMAGE_ASPECT_DEPTH_BIT if res.depth else vk.VK_IMAGE_ASPECT_COLOR_BIT
         new = m.layout if m.layout is not None else old
-        self.images.append(vk.VkImageMemoryBarrier2(
-            srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=m.stages,
-            dstAccessMask=dst_access, oldLayout=old, newLayout=new,
-            srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-            dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, image=res.handle,
-            subresourceRange=vk.VkImageSubresourceRange(
-                aspectMask=aspect, baseMipLevel=0, levelCount=res.levels, baseArrayLayer=0,
-                layerCount=res.layers)))
+        self.images.append(image_barrier(vk, res.handle, res.depth, old, new, src, dst,
+                                         layers=res.layers, levels=res.levels))
 
     @property
     def pending(self) -> bool:

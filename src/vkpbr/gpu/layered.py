@@ -68,13 +68,12 @@ class LayeredDepth:
         # Hardware 2x2 PCF needs linear filtering of the depth format (NVIDIA, lavapipe: yes).
         self.filterable = device.format_supports(self.format, "SAMPLED_IMAGE_FILTER_LINEAR")
         with device.one_time_commands() as handle:  # the layout descriptors name, from the start
-            vk.vkCmdPipelineBarrier2(handle, vk.VkDependencyInfo(
-                imageMemoryBarrierCount=1, pImageMemoryBarriers=[self._barrier(
-                    vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                    (vk.VK_PIPELINE_STAGE_2_NONE, vk.VK_ACCESS_2_NONE),
-                    (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT
-                     | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                     vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT))]))
+            barriers(Commands(device, handle), [self._barrier(
+                vk.VK_IMAGE_LAYOUT_UNDEFINED, vk.VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                (vk.VK_PIPELINE_STAGE_2_NONE, vk.VK_ACCESS_2_NONE),
+                (vk.VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT
+                 | vk.VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                 vk.VK_ACCESS_2_SHADER_SAMPLED_READ_BIT))])
 
     def _barrier(self, old: int, new: int, src: tuple[int, int], dst: tuple[int, int]) -> Any:
         return image_barrier(self.device.vk, self.image.handle, True, old, new, src, dst,
@@ -166,10 +165,10 @@ class LayeredDepth:
         xfer = (vk.VK_PIPELINE_STAGE_2_COPY_BIT, vk.VK_ACCESS_2_TRANSFER_READ_BIT)
         try:
             with device.one_time_commands() as handle:
+                cmd = Commands(device, handle)
+
                 def barrier(old: int, new: int, a: tuple, b: tuple) -> None:
-                    vk.vkCmdPipelineBarrier2(handle, vk.VkDependencyInfo(
-                        imageMemoryBarrierCount=1, pImageMemoryBarriers=[
-                            self._barrier(old, new, a, b)]))
+                    barriers(cmd, [self._barrier(old, new, a, b)])
                 barrier(ro, src, frag, xfer)
                 vk.vkCmdCopyImageToBuffer(handle, self.image.handle, src, buf.handle, 1, [
                     vk.VkBufferImageCopy(
@@ -178,8 +177,7 @@ class LayeredDepth:
                             baseArrayLayer=0, layerCount=self.layers),
                         imageExtent=vk.VkExtent3D(width=self.size, height=self.size, depth=1))])
                 barrier(src, ro, xfer, frag)
-                vk.vkCmdPipelineBarrier2(handle, vk.VkDependencyInfo(
-                    bufferMemoryBarrierCount=1, pBufferMemoryBarriers=[host_read_barrier(vk, buf)]))
+                barriers(cmd, [], [host_read_barrier(vk, buf)])
             return buf.array(np.float32, n * self.layers).reshape(
                 self.layers, self.size, self.size).copy()
         finally:

@@ -14,7 +14,7 @@ import numpy as np
 
 from vkpbr.gpu.commands import Commands
 
-__all__ = ["Attachments", "begin_rendering", "begin_depth_rendering", "end_rendering", "image_barrier", "barriers",
+__all__ = ["Attachments", "begin_rendering", "begin_depth_rendering", "end_rendering", "image_barrier", "buffer_barrier", "barriers",
            "copy_image_to_buffer", "host_read_barrier", "redraw_barriers", "copy_out_barriers"]
 
 
@@ -31,15 +31,30 @@ class Attachments:
 
 
 def image_barrier(vk: Any, image: Any, depth: bool, old: int, new: int, src: tuple[int, int],
-                  dst: tuple[int, int], layers: int = 1) -> Any:
-    """A VkImageMemoryBarrier2 over mip 0, layers 0..`layers`-1 of `image` (a VkImage handle)."""
-    aspect = vk.VK_IMAGE_ASPECT_DEPTH_BIT if depth else vk.VK_IMAGE_ASPECT_COLOR_BIT
-    return vk.VkImageMemoryBarrier2(
-        srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=dst[0], dstAccessMask=dst[1],
-        oldLayout=old, newLayout=new, srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-        dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED, image=image,
-        subresourceRange=vk.VkImageSubresourceRange(
-            aspectMask=aspect, baseMipLevel=0, levelCount=1, baseArrayLayer=0, layerCount=layers))
+                  dst: tuple[int, int], layers: int = 1, levels: int = 1) -> Any:
+    """A VkImageMemoryBarrier2 over mips 0..`levels`-1, layers 0..`layers`-1 of `image` (a
+    VkImage handle), made with `ffi.new` (a recording makes dozens: the binding's struct
+    constructor costs ~20 us each, this ~2)."""
+    ignored = vk.VK_QUEUE_FAMILY_IGNORED
+    return vk.ffi.new("VkImageMemoryBarrier2*", {
+        "sType": vk.VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2, "srcStageMask": src[0],
+        "srcAccessMask": src[1], "dstStageMask": dst[0], "dstAccessMask": dst[1],
+        "oldLayout": old, "newLayout": new, "srcQueueFamilyIndex": ignored,
+        "dstQueueFamilyIndex": ignored, "image": image,
+        "subresourceRange": {
+            "aspectMask": vk.VK_IMAGE_ASPECT_DEPTH_BIT if depth else vk.VK_IMAGE_ASPECT_COLOR_BIT,
+            "baseMipLevel": 0, "levelCount": levels, "baseArrayLayer": 0, "layerCount": layers}})
+
+
+def buffer_barrier(vk: Any, buffer: Any, src: tuple[int, int], dst: tuple[int, int]) -> Any:
+    """A VkBufferMemoryBarrier2 over the whole of `buffer` (a gpu.buffer.Buffer), made with
+    `ffi.new` (as `image_barrier`)."""
+    ignored = vk.VK_QUEUE_FAMILY_IGNORED
+    return vk.ffi.new("VkBufferMemoryBarrier2*", {
+        "sType": vk.VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER_2, "srcStageMask": src[0],
+        "srcAccessMask": src[1], "dstStageMask": dst[0], "dstAccessMask": dst[1],
+        "srcQueueFamilyIndex": ignored, "dstQueueFamilyIndex": ignored,
+        "buffer": buffer.handle, "offset": 0, "size": buffer.size})
 
 
 def redraw_barriers(vk: Any, images: list[tuple[Any, bool]], layers: int = 1) -> list[Any]:
@@ -70,10 +85,27 @@ def copy_out_barriers(vk: Any, images: list[tuple[Any, bool]], layers: int = 1) 
 
 
 def barriers(cmd: Commands, images: list[Any], buffers: list[Any] = ()) -> None:
-    vk = cmd.vk
-    vk.vkCmdPipelineBarrier2(cmd.handle, vk.VkDependencyInfo(
-        pImageMemoryBarriers=list(images) or None, imageMemoryBarrierCount=len(images),
-        pBufferMemoryBarriers=list(buffers) or None, bufferMemoryBarrierCount=len(buffers)))
+    """One vkCmdPipelineBarrier2 of `images` and `buffers` barriers (`image_barrier`'s and
+    `buffer_barrier`'s pointers, or the binding's structs), through the C entry point."""
+    if not images and not buffers:
+        return
+    vk, ffi = cmd.vk, cmd.ffi
+    info = ffi.new("VkDependencyInfo*", {"sType": vk.VK_STRUCTURE_TYPE_DEPENDENCY_INFO})
+    keep = [_array(ffi, "VkImageMemoryBarrier2", images),
+            _array(ffi, "VkBufferMemoryBarrier2", buffers)]
+    info.imageMemoryBarrierCount, info.pImageMemoryBarriers = len(images), keep[0]
+    info.bufferMemoryBarrierCount, info.pBufferMemoryBarriers = len(buffers), keep[1]
+    cmd.lib.vkCmdPipelineBarrier2(cmd.handle, info)
+
+
+def _array(ffi: Any, ctype: str, items: list[Any]) -> Any:
+    """`items` (pointers to or structs of `ctype`) copied into one C array (NULL for none)."""
+    if not items:
+        return ffi.NULL
+    arr = ffi.new(f"{ctype}[]", len(items))
+    for i, item in enumerate(items):
+        arr[i] = item[0] if ffi.typeof(item).kind == "pointer" else item
+    return arr
 
 
 def attachment_stage(vk: Any, depth: bool) -> tuple[int, int, int]:
@@ -191,15 +223,6 @@ def copy_buffer_to_image(cmd: Commands, buffer: Any, image: Any, depth: bool,
         imageExtent=vk.VkExtent3D(width=extent[0], height=extent[1], depth=1))
     vk.vkCmdCopyBufferToImage(cmd.handle, buffer.handle, image,
                               vk.VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, [region])
-
-
-def buffer_barrier(vk: Any, buffer: Any, src: tuple[int, int], dst: tuple[int, int]) -> Any:
-    """A VkBufferMemoryBarrier2 over the whole of `buffer` (a gpu.buffer.Buffer)."""
-    return vk.VkBufferMemoryBarrier2(
-        srcStageMask=src[0], srcAccessMask=src[1], dstStageMask=dst[0], dstAccessMask=dst[1],
-        srcQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-        dstQueueFamilyIndex=vk.VK_QUEUE_FAMILY_IGNORED,
-        buffer=buffer.handle, offset=0, size=buffer.size)
 
 
 def tile_regions(vk: Any, tiles: tuple[int, int, int, int], offset: int, pixel_bytes: int,
