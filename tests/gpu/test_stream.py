@@ -29,8 +29,26 @@ def cameras(n: int) -> list[Camera]:
     return out
 
 
+MADE: list[frame_path.ThreadPoolExecutor] = []  # the streams' collectors, as each test made them
+
+
+@pytest.fixture(autouse=True)
+def made(monkeypatch: pytest.MonkeyPatch) -> list:
+    """The collectors the streams of the test make (frame_path's ThreadPoolExecutor, counted)."""
+    MADE.clear()
+
+    class Counted(frame_path.ThreadPoolExecutor):
+        def __init__(self, *args, **kwargs) -> None:  # noqa: ANN002, ANN003
+            MADE.append(self)
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(frame_path, "ThreadPoolExecutor", Counted)
+    return MADE
+
+
 def collectors() -> list[threading.Thread]:
-    return [t for t in threading.enumerate() if t.name.startswith("vkpbr-collect")]
+    """The test's collectors' threads still running."""
+    return [t for ex in MADE for t in list(ex._threads) if t.is_alive()]
 
 
 @pytest.fixture(scope="module")
@@ -87,21 +105,13 @@ def test_an_error_mid_stream_ends_it_cleanly(make_renderer, scene) -> None:  # n
                                   list(r.render_many(cams, size=SIZE))[2])
 
 
-def test_one_frame_makes_no_thread(make_renderer, scene, monkeypatch) -> None:  # noqa: ANN001
+def test_one_frame_makes_no_thread(make_renderer, scene, made) -> None:  # noqa: ANN001
     """render() (a stream of one frame) and a stream without readback hand nothing to a
     thread: only streams of two frames or more into NumPy make one."""
-    made = []
-
-    class Counted(frame_path.ThreadPoolExecutor):
-        def __init__(self, *args, **kwargs) -> None:  # noqa: ANN002, ANN003
-            made.append(1)
-            super().__init__(*args, **kwargs)
-
-    monkeypatch.setattr(frame_path, "ThreadPoolExecutor", Counted)
     r = make_renderer(scene)
     r.render(size=SIZE)
     for _ in r.render_many(cameras(4), size=SIZE, readback=False):
         pass
     assert made == []
     list(r.render_many(cameras(2), size=SIZE))
-    assert made == [1]
+    assert len(made) == 1

@@ -268,11 +268,13 @@ class OffscreenTarget:
         return True
 
     # --- readback ---------------------------------------------------------------------------
-    def read_color(self, frame_index: int) -> np.ndarray:
-        """A copy of the frame's colour: (H, W, 4) uint8 ("srgb") or float32 ("float")."""
+    def read_color(self, frame_index: int, split: bool = True) -> np.ndarray:
+        """A copy of the frame's colour: (H, W, 4) uint8 ("srgb") or float32 ("float"),
+        copied on the copy threads where it is big, unless not `split` (`copy_out`)."""
         dtype = np.uint8 if self.color_kind == "srgb" else np.float32
         w, h = self.extent
-        return copy_out(self.readback(frame_index)[0].array(dtype, w * h * 4).reshape(h, w, 4))
+        return copy_out(self.readback(frame_index)[0].array(dtype, w * h * 4).reshape(h, w, 4),
+                        split=split)
 
     def read_tiles(self, frame_index: int, views: int, size: tuple[int, int],
                    depth: bool = False, into: np.ndarray | None = None) -> np.ndarray:
@@ -306,11 +308,13 @@ class OffscreenTarget:
 PARALLEL_BYTES = (6 << 20) if THREADS >= 4 else (32 << 20)
 
 
-def copy_out(mapped: np.ndarray, into: np.ndarray | None = None) -> np.ndarray:
+def copy_out(mapped: np.ndarray, into: np.ndarray | None = None, split: bool = True) -> np.ndarray:
     """`mapped` (a view of readback memory) copied into `into`, or into a new array; split
-    along the first axis over threads when it is big."""
+    along the first axis over threads when it is big and `split` (False: a caller that is
+    itself a thread beside the one that draws, render_many's collector, copies alone: the
+    copy threads' hand-offs would take the GIL from the drawing thread)."""
     out = np.empty_like(mapped) if into is None else into
-    parts = min(THREADS, len(mapped)) if mapped.nbytes >= PARALLEL_BYTES else 1
+    parts = min(THREADS, len(mapped)) if split and mapped.nbytes >= PARALLEL_BYTES else 1
     if parts <= 1:
         np.copyto(out, mapped)
         return out

@@ -249,9 +249,11 @@ class FramePath:
                 args = (sub.frame, lens_depth, target, depth, readback, outputs)
                 if collector is None and readback and pending:  # (a second frame: worth a thread)
                     collector = ThreadPoolExecutor(1, thread_name_prefix="vkpbr-collect")
-                    pending = collections.deque(collector.submit(d.collect, *d.args)
+                    pending = collections.deque(collector.submit(d.collect, *d.args, False)
                                                 for d in pending)  # (one thread reads timestamps)
-                pending.append(collector.submit(self.collect, *args) if collector is not None
+                # (the collector copies alone: split over the copy threads, their hand-offs
+                # took the GIL from this thread's draws: H200 run c, 0.68 -> 0.81 ms a copy)
+                pending.append(collector.submit(self.collect, *args, False) if collector is not None
                                else _Deferred(self.collect, args))
             while pending:
                 yield pending.popleft().result()
@@ -271,10 +273,12 @@ class FramePath:
         return (*(c for c in copy if c not in (COPY_DEPTH, COPY_OUTPUTS)), COPY_OUTPUTS)
 
     def collect(self, frame: Frame, lens_depth: bool, target: OffscreenTarget, depth: bool,
-                readback: bool, outputs: tuple[str, ...] = ()) -> tuple[Any, FrameStats]:
+                readback: bool, outputs: tuple[str, ...] = (), split: bool = True
+                ) -> tuple[Any, FrameStats]:
         """Wait for `frame`; its timings, and with `readback` its colour (and depth, dataset
         outputs) from `target`: (what `render` returns or None, a copy of its stats).
-        `lens_depth`: the depth is the resampled output's (a camera model's frame)."""
+        `lens_depth`: the depth is the resampled output's (a camera model's frame); `split`:
+        a big colour copied on the copy threads (`copy_out`)."""
         slot = self.parts.slots[frame.index]
         stats = slot.stats
         t0 = time.perf_counter()
@@ -284,7 +288,7 @@ class FramePath:
         read_timings(self.parts.ring, frame, slot)
         if not readback:
             return None, dataclasses.replace(stats, readback_ms=0.0)
-        color = target.read_color(frame.index)
+        color = target.read_color(frame.index, split)
         images = None
         if outputs or lens_depth:
             dtypes = {name: (dt, ch) for name, (_, _, dt, ch) in L.OUTPUT_IMAGES.items()}
