@@ -232,9 +232,12 @@ class Renderer:
         self.paths.choose(target, opts, self)  # before the first frame: never inside `draw`
         frames = self.frame_path.stream(cameras, self.default_camera(), target, frame_lights,
                                         opts, linear, depth, readback, wanted, driver_time)
-        for result, stats in frames:
-            self.last_stats = stats  # each frame's as it comes
-            yield result
+        try:
+            for result, stats in frames:
+                self.last_stats = stats  # each frame's as it comes
+                yield result
+        finally:  # (closed now, not when collected: its frames in flight, its collector thread)
+            frames.close()
 
     def render_batch(self, cameras: CameraBatch | np.ndarray | Iterable[Camera | Any],
                      size: tuple[int, int] = (128, 128), lights: LightsArg = None,
