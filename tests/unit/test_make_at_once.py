@@ -50,3 +50,16 @@ def test_kernel_threads_from_the_environment(monkeypatch, given: str, want: int 
     monkeypatch.setenv("VKPBR_KERNEL_THREADS", given)
     default = max(2, min(8, os.cpu_count() or 1))
     assert compute._kernel_threads() == (default if want is None else want)
+
+
+def test_makers_that_make_at_once_themselves_finish(monkeypatch) -> None:  # noqa: ANN001
+    """Makers on every kept thread, each making at once again (an environment's kernels
+    made inside a step's maker): they make in their own threads, nothing waits for ever."""
+    monkeypatch.setattr(compute, "KERNEL_THREADS", 2)
+    inner = [lambda i=i: i for i in range(3)]
+    outer = [lambda: compute.make_at_once(inner) for _ in range(4)]
+    done: list = []
+    t = threading.Thread(target=lambda: done.append(compute.make_at_once(outer)), daemon=True)
+    t.start()
+    t.join(10)
+    assert done == [[[0, 1, 2]] * 4]

@@ -15,8 +15,9 @@ from __future__ import annotations
 
 import os
 import struct
+import threading
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, wait
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -80,19 +81,53 @@ T = TypeVar("T")
 def make_at_once(makers: Sequence[Callable[[], T]]) -> list[T]:
     """Each of `makers`' results, made on up to KERNEL_THREADS threads at once: pipeline
     builds, whose compiles then overlap (the binding lets go of the GIL in its calls, and
-    the device's pipeline cache is internally synchronised). A maker's error is raised."""
-    if len(makers) < 2 or KERNEL_THREADS < 2:
+    the device's pipeline cache is internally synchronised). A maker's error is raised.
+    The threads are the process's, kept (`_kernel_pool`): most calls find every kernel made
+    already (a recording of a new shadow redraw, a new blend order), and a pool made and
+    joined each time had cost such a recording ~8 ms of thread starts on the H200's host
+    (benchmarks/profile_record.py, 2026-12-05 run e)."""
+    if len(makers) < 2 or KERNEL_THREADS < 2 or _on_kernel_thread():
+        # (a maker that makes at once itself makes in its own thread: the kept pool's
+        # threads all waiting for work queued behind them would wait for ever)
         return [make() for make in makers]
-    pool = ThreadPoolExecutor(min(KERNEL_THREADS, len(makers)), "vkpbr-kernels")
+    futures = [_kernel_pool(KERNEL_THREADS).submit(make) for make in makers]
     try:
-        futures = [pool.submit(make) for make in makers]
         return [f.result() for f in futures]
     finally:
         # Also when a signal's exception (Ctrl-C, the CLI's SIGTERM) interrupts the wait: the
         # builds under way end before it propagates, or the device could be closed under a
         # thread still in vkCreateComputePipelines (a segfault at exit on the H200); those
         # not begun are dropped.
-        pool.shutdown(wait=True, cancel_futures=True)
+        for f in futures:
+            f.cancel()
+        wait(futures)
+
+
+_kernel_pools: dict[int, ThreadPoolExecutor] = {}  # by size (benchmarks and tests set it)
+_kernel_pools_lock = threading.Lock()
+
+
+def _kernel_pool(threads: int) -> ThreadPoolExecutor:
+    """The process's kept pool of `threads` kernel threads (made on first use)."""
+    with _kernel_pools_lock:
+        pool = _kernel_pools.get(threads)
+        if pool is None:
+            pool = _kernel_pools[threads] = ThreadPoolExecutor(threads, "vkpbr-kernels")
+        return pool
+
+
+def _on_kernel_thread() -> bool:
+    return threading.current_thread().name.startswith("vkpbr-kernels")
+
+
+def _forget_kernel_pools() -> None:
+    """A forked child has none of its parent's threads: it makes its own."""
+    global _kernel_pools_lock
+    _kernel_pools.clear()
+    _kernel_pools_lock = threading.Lock()
+
+
+os.register_at_fork(after_in_child=_forget_kernel_pools)
 
 
 class ComputePipeline(DeviceObject):
