@@ -209,6 +209,9 @@ def parse() -> argparse.Namespace:
                     "frames without a clone (docs/batch.md)")
     ap.add_argument("--shadows", action="store_true", help="keep shadows on (off by default, "
                     "as bench_worlds.py: the worlds share the state's shadow maps)")
+    ap.add_argument("--in-place", action="store_true",
+                    help="with --torch --prepared: each step's poses written into the renderer's "
+                         "input (batch_step.worlds_input), read with no copy")
     ap.add_argument("--bare", action="store_true",
                     help="time only the waits and the readback (the CPU row without the other "
                     "phases' timer overhead: the number to compare)")
@@ -220,6 +223,8 @@ def parse() -> argparse.Namespace:
 def main() -> None:
     args = parse()
     torch = None
+    if args.in_place and not (args.torch and args.prepared):
+        raise SystemExit("--in-place is for --torch --prepared (batch_step's CUDA input)")
     if args.torch:
         try:
             import torch
@@ -253,6 +258,10 @@ def main() -> None:
         for s in range(3):  # warm: targets, recordings, imports
             call(poses[s])
         sync()
+        # --in-place: the simulator writes each step's poses into the renderer's own input
+        # (batch_step.worlds_input(); its write is the simulator's work, outside the step's
+        # time as the precomputed poses' making is), and the step reads them with no copy
+        given = step.worlds_input() if args.in_place else None
         prof = cProfile.Profile() if args.cprofile else None
         walls: list[float] = []
         python: list[float] = []  # each step's Python: its time less waits and readback
@@ -262,10 +271,12 @@ def main() -> None:
         timers.on = True
         for s in range(3, 3 + args.steps):
             before, before_cpu = dict(timers.total), dict(timers.cpu)
+            if given is not None:
+                given.copy_(poses[s])
             if prof is not None:
                 prof.enable()
             t, c = time.perf_counter(), time.thread_time()
-            call(poses[s])
+            call(poses[s] if given is None else given)
             walls.append(time.perf_counter() - t)
             cpu.append(time.thread_time() - c)
             stats_cpu.append(r.last_stats.cpu_ms / 1e3)
@@ -295,7 +306,8 @@ def report(args: argparse.Namespace, r: Renderer, timers: Timers, walls: list[fl
     mode = "CUDA poses -> torch" if args.torch else f"NumPy poses -> NumPy (world_expand={args.expand})"
     print(f"## {args.variant}, W={args.worlds}, {args.size}x{args.size}, {mode}, "
           f"pipeline={args.pipeline}{', prepared step' if args.prepared else ''}"
-          f"{', frames=view' if args.frames == 'view' else ''}, "
+          f"{', frames=view' if args.frames == 'view' else ''}"
+          f"{', poses in place' if args.in_place else ''}, "
           f"{r.device.info.name}, {n} steps")
     print("| phase | us per call | CPU us per call | calls per step |")
     print("|---|---:|---:|---:|")

@@ -157,6 +157,43 @@ def test_a_step_loop_takes_the_short_way_until_the_plan_changes(renderer) -> Non
         step(worlds=buf[:2].contiguous())
 
 
+def test_poses_written_into_the_renderers_input_are_read_in_place(renderer) -> None:  # noqa: ANN001
+    """batch_step.worlds_input(): a simulator writes each step's poses into the renderer's
+    own input memory (no copy a step); each step's frames are its poses' (the host path's,
+    within 1 level), on the full way and the short one; a step given another tensor copies
+    it as before; after a step of more worlds the old tensor is still mapped memory and a
+    new one is asked for; before any CUDA step there is none (one line)."""
+    import torch
+
+    r = renderer
+    cams = cameras(3)
+    kw = dict(quaternion="wxyz", pipeline="compute", **NO_SHADOWS)
+    want = {seed: r.render_batch(cams, (W, H), worlds=world_poses(3, seed=seed), **kw)
+            for seed in (1, 2)}
+    assert not np.array_equal(want[1], want[2]), "the poses changed nothing (test is moot)"
+    step = r.batch_step(cams, (W, H), device="cuda", **kw)
+    with pytest.raises(UsageError, match="call the step once") as err:
+        step.worlds_input()
+    assert "\n" not in str(err.value)
+    step(worlds=torch.as_tensor(world_poses(3, seed=2), device="cuda", dtype=torch.float32))
+    poses = step.worlds_input()
+    assert poses.shape == (3, 2, 7) and poses.dtype == torch.float32 and poses.is_cuda
+    assert poses.data_ptr() == r.batch_path.world_kernel._imports[0].ptr  # (the input itself)
+    for seed in (1, 2, 1, 2, 1, 2, 1):
+        poses.copy_(torch.as_tensor(world_poses(3, seed=seed), device="cuda"))  # "the simulator"
+        got = step(worlds=poses).cpu().numpy()
+        assert np.mean(np.abs(got.astype(int) - want[seed])) <= 0.05, seed
+    assert step.lane_steps >= 2, "the loop never took the short way"
+    other = torch.as_tensor(world_poses(3, seed=2), device="cuda", dtype=torch.float32)
+    got = step(worlds=other).cpu().numpy()  # (copied into the input)
+    assert np.mean(np.abs(got.astype(int) - want[2])) <= 0.05
+    more = r.batch_step(cameras(40), (W, H), device="cuda", **kw)
+    more(worlds=torch.as_tensor(world_poses(40, seed=4), device="cuda", dtype=torch.float32))
+    poses.zero_()  # (the replaced input: still mapped, nothing crashes)
+    torch.cuda.synchronize()
+    assert more.worlds_input().shape == (40, 2, 7)
+
+
 @pytest.mark.parametrize("device", ["cpu", "cuda"])
 def test_nan_poses_on_the_gpu_are_hidden_and_reported(renderer, device: str) -> None:  # noqa: ANN001
     """CUDA poses are not read back before the batch: the kernel hides a world whose pose is

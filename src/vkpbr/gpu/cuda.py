@@ -94,6 +94,7 @@ class CudaImport:
         self.ptr = int(_check(rt.cudaExternalMemoryGetMappedBuffer(self._ext, buf),
                               "cudaExternalMemoryGetMappedBuffer"))
         self._views: dict[tuple[tuple[int, ...], str], Any] = {}  # tensor()'s, by shape and type
+        self.lent = False  # a tensor of it was handed to a caller (its owner closes it last)
 
     def tensor(self, shape: tuple[int, ...], dtype: str = "|u1") -> Any:
         """A torch tensor viewing the start of the buffer (no copy): valid until the memory

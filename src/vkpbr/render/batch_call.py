@@ -483,6 +483,7 @@ class BatchStep:
         self._overrides = {k: v for k, v in kwargs.items() if k not in bound}
         self._prep: tuple[int, Prepared] | None = None  # (the cache's version, the Prepared)
         self._lane: _Lane | None = None  # a replayed CUDA step's short way (`_lane_step`)
+        self._cuda_shape: tuple[int, ...] | None = None  # the last CUDA poses' (worlds_input)
         self.lane_steps = 0  # steps that took it (tests read it)
 
     def __call__(self, worlds: Any = None, world_visible: Any = None, **more: Any) -> Any:
@@ -520,6 +521,8 @@ class BatchStep:
         # the state between them, makes none and pays nothing for it)
         self._lane = (self._make_lane(prep, worlds, world_visible)
                       if replays.replayed > replayed else None)
+        if _on_cuda(worlds):
+            self._cuda_shape = tuple(worlds.shape)
         return result
 
     # --- the short way of a replayed CUDA step ----------------------------------------------
@@ -577,6 +580,22 @@ class BatchStep:
         self.lane_steps += 1
         r.last_stats = path.stats
         return got[0]
+
+    def worlds_input(self) -> Any:
+        """The next step's poses in the renderer's own input memory: a float32 CUDA tensor of
+        the last step's CUDA poses' shape, which a step given it reads in place, with no
+        copy (what a simulator that can write its poses into a given tensor saves a step:
+        docs/batch.md "Worlds"). Write it on torch's current stream (a step's end queues the
+        wait for the batch that read it on that stream: earlier writes elsewhere must be
+        ordered by the caller). Valid while the renderer is open; after a step of more
+        worlds, ask again (the old one still reads as memory, but the batch no longer)."""
+        shape = self._cuda_shape
+        kernel = self.renderer.batch_path.world_kernel
+        view = None if shape is None or kernel is None else kernel.input_view(shape)
+        if view is None:
+            raise UsageError("batch_step.worlds_input: call the step once with CUDA poses "
+                             "(device='cuda' worlds) first: their shape sizes the input")
+        return view
 
     def _prepared(self, b: dict[str, Any]) -> Prepared:
         """The call's Prepared: the one kept from the last call while the renderer's cache

@@ -186,6 +186,9 @@ class WorldKernel:
         self._bound: tuple = ()
         self.generation = 0  # bumped when the sets change (recordings name them)
         self._imports: list[Any] = []  # gpu/cuda.py CudaImport of the inputs (cuda)
+        # Imports of inputs since replaced whose poses view a caller holds (`input_view`):
+        # kept mapped until `destroy`, so a tensor handed out never views freed memory.
+        self._lent: list[Any] = []
         # worlds.comp's report of poses that are none (count, lowest world), per slot
         self._error_stride = max(8, int(device.limits.minStorageBufferOffsetAlignment))
         self.errors = Buffer(device, self._error_stride * slots, "storage", host_visible=True,
@@ -278,6 +281,18 @@ class WorldKernel:
             np.copyto(self.inputs[1].array(np.uint32, visible.size), visible.reshape(-1),
                       casting="unsafe")
 
+    def input_view(self, shape: tuple[int, ...]) -> Any:
+        """A float32 CUDA tensor of `shape` viewing the exported poses input itself: poses
+        written there (on torch's current stream) are read by the next batch given this
+        tensor, without `write_cuda`'s copy. Valid while the renderer lives (inputs replaced
+        for a bigger batch stay mapped: `_lent`). Needs the CUDA inputs made (a CUDA batch
+        of at least these poses ran)."""
+        count = int(np.prod(shape))
+        if not self._imports or count > self._input_floats:
+            return None
+        self._imports[0].lent = True
+        return self._imports[0].tensor(tuple(int(n) for n in shape), "<f4")
+
     def write_cuda(self, poses: Any, visible: Any) -> None:
         """CUDA inputs: torch tensors (W, N, 7 or 16) and (W, N) copied device to device into
         the exported inputs on torch's current stream, then that stream waited for (the
@@ -293,8 +308,11 @@ class WorldKernel:
         order = self.order
         if order is not None:  # ordered on the GPU (render/cuda_order.py): no host wait
             order.before_inputs()
-        # (the inputs viewed in the poses' own shape: no reshape, a torch call less a step)
-        self._imports[0].tensor(poses.shape, "<f4").copy_(poses)
+        # (the inputs viewed in the poses' own shape: no reshape, a torch call less a step;
+        # poses that are that view, `input_view`'s, were written in place: no copy)
+        inputs = self._imports[0].tensor(poses.shape, "<f4")
+        if poses.data_ptr() != inputs.data_ptr():
+            inputs.copy_(poses)
         if visible is not None:
             self._imports[1].tensor(visible.shape, "<i4").copy_(visible)
         if order is not None:
@@ -319,13 +337,20 @@ class WorldKernel:
 
         return [Step("worlds", record)]
 
-    def _close_imports(self) -> None:
+    def _close_imports(self, lent_too: bool = False) -> None:
         for imported in self._imports:
-            imported.close()
+            if getattr(imported, "lent", False) and not lent_too:
+                self._lent.append(imported)  # (a caller's tensor views it: closed at destroy)
+            else:
+                imported.close()
         self._imports = []
+        if lent_too:
+            for imported in self._lent:
+                imported.close()
+            self._lent = []
 
     def destroy(self) -> None:
-        self._close_imports()
+        self._close_imports(lent_too=True)
         self.errors.destroy()
         for b in (*self.inputs, *self.tables):
             b.destroy()
