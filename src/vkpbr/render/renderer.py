@@ -10,6 +10,7 @@ import dataclasses
 import os
 import time
 from collections.abc import Iterable, Iterator, Mapping
+from contextlib import closing
 from typing import Any
 
 import numpy as np
@@ -207,17 +208,15 @@ class Renderer:
                     ) -> Iterator[np.ndarray | tuple[np.ndarray, np.ndarray] | dict[str, np.ndarray] | None]:
         """Render one frame per camera, yielding what `render` returns, in order.
 
-        Up to `ring.count` frames are queued on the GPU: while frame i renders, Python
-        writes frame i+1's uniforms and submits it, and copies frame i-1 out of its own
-        persistently mapped readback buffer. Nothing is allocated per frame but the returned
-        arrays. Each frame is bit-for-bit what `render` gives for its camera.
+        Up to `ring.count` frames are queued on the GPU: while frame i renders, Python writes
+        frame i+1's uniforms and submits it as a thread of the stream copies frame i-1 out of
+        its mapped readback buffer (render/frame_path.py). Each is bit-for-bit `render`'s.
         `readback=False` yields None per finished frame instead (benchmarks: render only).
         `batch` N: the cameras N at a time through `render_batch` (one submission each; its
         shadow maps of directional lights are one map over the scene), where the device has
         layered rendering; None: frame by frame.
-        `driver_time`: each frame's `last_stats.driver_ms` (the part of `cpu_ms` spent in the
-        driver: `draw`'s), for benchmarks that split Python from the driver.
-        `times`: one animation time per camera (`render`'s `time`), frame by frame.
+        `driver_time`: each frame's `last_stats.driver_ms` (`cpu_ms`' part in the driver:
+        benchmarks). `times`: one animation time per camera (`render`'s `time`).
         """
         opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
         cameras = with_times(self.state, cameras, times, animation)
@@ -232,12 +231,10 @@ class Renderer:
         self.paths.choose(target, opts, self)  # before the first frame: never inside `draw`
         frames = self.frame_path.stream(cameras, self.default_camera(), target, frame_lights,
                                         opts, linear, depth, readback, wanted, driver_time)
-        try:
+        with closing(frames):  # (closed with this generator, not when collected: its thread)
             for result, stats in frames:
                 self.last_stats = stats  # each frame's as it comes
                 yield result
-        finally:  # (closed now, not when collected: its frames in flight, its collector thread)
-            frames.close()
 
     def render_batch(self, cameras: CameraBatch | np.ndarray | Iterable[Camera | Any],
                      size: tuple[int, int] = (128, 128), lights: LightsArg = None,
