@@ -23,3 +23,27 @@ def test_copy_out_is_the_source(views: int, into: bool) -> None:
 def test_small_copies_stay_on_the_caller() -> None:
     src = np.arange(24, dtype=np.float32).reshape(2, 3, 4)
     np.testing.assert_array_equal(copy_out(src), src)
+
+
+@pytest.mark.parametrize("mib", [8, 32])
+def test_a_collector_copies_a_frame_alone_below_its_limit(monkeypatch, mib: int) -> None:  # noqa: ANN001
+    """split=False (render_many's collector thread): a 1080p RGBA8 frame (under ALONE_BYTES)
+    is copied on the calling thread, a bigger one (4K, float32 frames) still on the copy
+    threads; both are the source, whole."""
+    from vkpbr.gpu import target
+
+    handed: list[int] = []
+    real = target.pool
+
+    def counted():  # noqa: ANN202
+        handed.append(1)
+        return real()
+
+    monkeypatch.setattr(target, "pool", counted)
+    rows = (mib << 20) // (4 * 1024)
+    src = np.random.default_rng(mib).integers(0, 256, (rows, 1024, 4), dtype=np.uint8)
+    np.testing.assert_array_equal(copy_out(src, split=False), src)
+    if src.nbytes < target.ALONE_BYTES or src.nbytes < PARALLEL_BYTES:
+        assert handed == []
+    else:
+        assert handed, "a frame over ALONE_BYTES was copied by one thread"

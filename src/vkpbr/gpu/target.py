@@ -308,13 +308,20 @@ class OffscreenTarget:
 PARALLEL_BYTES = (6 << 20) if THREADS >= 4 else (32 << 20)
 
 
+# A caller that is itself a thread beside the one that draws (render_many's collector) copies
+# a frame below this alone: the copy threads' hand-offs took the GIL from the drawing thread
+# (H200, Sponza 1080p RGBA8, 7.9 MiB: 0.68 -> 0.81 ms a copy split, the draws slower too);
+# a bigger one (4K, float32 frames) still splits, or one thread's copy would outlast a frame.
+ALONE_BYTES = 24 << 20
+
+
 def copy_out(mapped: np.ndarray, into: np.ndarray | None = None, split: bool = True) -> np.ndarray:
     """`mapped` (a view of readback memory) copied into `into`, or into a new array; split
-    along the first axis over threads when it is big and `split` (False: a caller that is
-    itself a thread beside the one that draws, render_many's collector, copies alone: the
-    copy threads' hand-offs would take the GIL from the drawing thread)."""
+    along the first axis over threads when it is big (with `split` False, only from
+    ALONE_BYTES)."""
     out = np.empty_like(mapped) if into is None else into
-    parts = min(THREADS, len(mapped)) if split and mapped.nbytes >= PARALLEL_BYTES else 1
+    big = mapped.nbytes >= (PARALLEL_BYTES if split else max(PARALLEL_BYTES, ALONE_BYTES))
+    parts = min(THREADS, len(mapped)) if big else 1
     if parts <= 1:
         np.copyto(out, mapped)
         return out
