@@ -7,7 +7,7 @@ buffers are reused frame after frame), but a recording is not rare: a walking ca
 cascades redraw other layers and record a frame anew for each new set of layers (17 of 600
 frames of bench_shadows' walk), and a first frame, a scene change and a batch of a new size
 record too; the frame waits for it while the GPU's queue drains (7-10 ms a Sponza frame on
-the H200, benchmarks/results/h200-2026-12-05s22.md). So the commands recorded most (binds,
+the H200, benchmarks/results/h200-2026-12-04s22.md). So the commands recorded most (binds,
 push constants, dispatches, draws, fills, timestamps) call the C entry points through
 `vulkan.lib` (vkCmd* return nothing: no error to translate), with the arguments the binding
 would have converted made here once (0.5 us a call against 2.2 through the binding's

@@ -85,7 +85,7 @@ def make_at_once(makers: Sequence[Callable[[], T]]) -> list[T]:
     The threads are the process's, kept (`_kernel_pool`): most calls find every kernel made
     already (a recording of a new shadow redraw, a new blend order), and a pool made and
     joined each time had cost such a recording ~8 ms of thread starts on the H200's host
-    (benchmarks/profile_record.py, 2026-12-05 run e)."""
+    (benchmarks/profile_record.py; benchmarks/results/h200-2026-12-04s22.md, run e)."""
     if len(makers) < 2 or KERNEL_THREADS < 2 or _on_kernel_thread():
         # (a maker that makes at once itself makes in its own thread: the kept pool's
         # threads all waiting for work queued behind them would wait for ever)
