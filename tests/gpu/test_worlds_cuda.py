@@ -116,6 +116,17 @@ def test_frames_as_a_view_follow_each_step(renderer) -> None:  # noqa: ANN001
     assert r.batch_path.frames_view is False  # (only during the view step's calls)
 
 
+def three_worlds(r) -> tuple[list, dict, dict]:  # noqa: ANN001
+    """Three views of three worlds, the compute path's keywords, and the host path's frames
+    of the worlds posed by seeds 1 and 2 (which must differ)."""
+    cams = cameras(3)
+    kw = dict(quaternion="wxyz", pipeline="compute", **NO_SHADOWS)
+    want = {seed: r.render_batch(cams, (W, H), worlds=world_poses(3, seed=seed), **kw)
+            for seed in (1, 2)}
+    assert not np.array_equal(want[1], want[2]), "the poses changed nothing (test is moot)"
+    return cams, kw, want
+
+
 def test_a_step_loop_takes_the_short_way_until_the_plan_changes(renderer) -> None:  # noqa: ANN001
     """batch_step's short way (BatchStep._lane_step): once a step replayed, the steps with a
     tensor alike skip render_batch's argument handling, and each step's frames are still its
@@ -125,11 +136,7 @@ def test_a_step_loop_takes_the_short_way_until_the_plan_changes(renderer) -> Non
     import torch
 
     r = renderer
-    cams = cameras(3)
-    kw = dict(quaternion="wxyz", pipeline="compute", **NO_SHADOWS)
-    want = {seed: r.render_batch(cams, (W, H), worlds=world_poses(3, seed=seed), **kw)
-            for seed in (1, 2)}
-    assert not np.array_equal(want[1], want[2]), "the poses changed nothing (test is moot)"
+    cams, kw, want = three_worlds(r)
     step = r.batch_step(cams, (W, H), device="cuda", **kw)
     buf = torch.zeros((3, 2, 7), device="cuda")
 
@@ -166,11 +173,7 @@ def test_poses_written_into_the_renderers_input_are_read_in_place(renderer) -> N
     import torch
 
     r = renderer
-    cams = cameras(3)
-    kw = dict(quaternion="wxyz", pipeline="compute", **NO_SHADOWS)
-    want = {seed: r.render_batch(cams, (W, H), worlds=world_poses(3, seed=seed), **kw)
-            for seed in (1, 2)}
-    assert not np.array_equal(want[1], want[2]), "the poses changed nothing (test is moot)"
+    cams, kw, want = three_worlds(r)
     step = r.batch_step(cams, (W, H), device="cuda", **kw)
     with pytest.raises(UsageError, match="call the step once") as err:
         step.worlds_input()
