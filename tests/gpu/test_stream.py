@@ -1,5 +1,5 @@
 """render_many's stream (render/frame_path.py FramePath.stream): from its second frame on, each
-frame is collected (waited for, copied into NumPy) on a thread of the stream's own while the
+frame is collected (waited for, copied into NumPy) on the device's collector thread while the
 next is drawn. What a user must not see change: the frames, their order and their stats, the
 abandoned generator's clean-up, errors in the middle of a stream; and a single `render()`
 makes no thread. On lavapipe with the validation layer (synchronization validation too)."""
@@ -7,13 +7,11 @@ makes no thread. On lavapipe with the validation layer (synchronization validati
 from __future__ import annotations
 
 import dataclasses
-import threading
 
 import numpy as np
 import pytest
 
 from vkpbr.errors import UsageError
-from vkpbr.render import frame_path
 from vkpbr.scene.camera import Camera
 from vkpbr.scene.default import default_scene
 
@@ -29,26 +27,14 @@ def cameras(n: int) -> list[Camera]:
     return out
 
 
-MADE: list[frame_path.ThreadPoolExecutor] = []  # the streams' collectors, as each test made them
+def collecting(r) -> list:  # noqa: ANN001
+    """The collects of `r`'s streams not finished (the device's collector thread's work)."""
+    return [f for f in r.device._background_work if not f.done()]
 
 
-@pytest.fixture(autouse=True)
-def made(monkeypatch: pytest.MonkeyPatch) -> list:
-    """The collectors the streams of the test make (frame_path's ThreadPoolExecutor, counted)."""
-    MADE.clear()
-
-    class Counted(frame_path.ThreadPoolExecutor):
-        def __init__(self, *args, **kwargs) -> None:  # noqa: ANN002, ANN003
-            MADE.append(self)
-            super().__init__(*args, **kwargs)
-
-    monkeypatch.setattr(frame_path, "ThreadPoolExecutor", Counted)
-    return MADE
-
-
-def collectors() -> list[threading.Thread]:
-    """The test's collectors' threads still running."""
-    return [t for ex in MADE for t in list(ex._threads) if t.is_alive()]
+def collector(r) -> object:  # noqa: ANN001
+    """`r`'s device's collector pool (None before a stream needed it)."""
+    return r.device._background.get("collect")
 
 
 @pytest.fixture(scope="module")
@@ -68,23 +54,24 @@ def test_streamed_frames_are_each_cameras_render(make_renderer, scene) -> None: 
         streamed.append(got)
         assert r.last_stats.gpu_ms == r.last_stats.gpu_ms  # (not NaN: its own timestamps)
     assert len(streamed) == len(cams)
+    assert collector(r) is not None  # (the frames from the second on were collected there)
     for i, (a, b) in enumerate(zip(alone, streamed, strict=True)):
         assert a.keys() == b.keys()
         for name in a:
             np.testing.assert_array_equal(a[name], b[name], err_msg=f"view {i}: {name}")
-    assert not collectors()
+    assert not collecting(r)
 
 
 def test_an_abandoned_stream_leaves_nothing_running(make_renderer, scene) -> None:  # noqa: ANN001
-    """Two frames taken of six, the generator closed: its collector is gone, and the next
-    frames are right."""
+    """Two frames taken of six, the generator closed: none of its collects is left, and the
+    next frames are right."""
     r = make_renderer(scene)
     cams = cameras(6)
     stream = r.render_many(cams, size=SIZE)
     first = [next(stream), next(stream)]
-    assert collectors()  # (the second frame on: collected on the stream's thread)
+    assert collector(r) is not None  # (the second frame on: collected on the device's thread)
     stream.close()
-    assert not collectors()
+    assert not collecting(r)
     np.testing.assert_array_equal(first[1], r.render(cams[1], size=SIZE))
     np.testing.assert_array_equal(next(iter(r.render_many(cams[4:], size=SIZE))),
                                   r.render(cams[4], size=SIZE))
@@ -100,18 +87,30 @@ def test_an_error_mid_stream_ends_it_cleanly(make_renderer, scene) -> None:  # n
         for frame in r.render_many([cams[0], cams[1], "not a camera", cams[2]], size=SIZE):
             got.append(frame)
     assert len(got) <= 2
-    assert not collectors()
+    assert not collecting(r)
     np.testing.assert_array_equal(r.render(cams[2], size=SIZE),
                                   list(r.render_many(cams, size=SIZE))[2])
 
 
-def test_one_frame_makes_no_thread(make_renderer, scene, made) -> None:  # noqa: ANN001
+def test_one_frame_makes_no_thread(make_renderer, scene) -> None:  # noqa: ANN001
     """render() (a stream of one frame) and a stream without readback hand nothing to a
-    thread: only streams of two frames or more into NumPy make one."""
+    thread: only streams of two frames or more into NumPy use the device's collector."""
     r = make_renderer(scene)
     r.render(size=SIZE)
     for _ in r.render_many(cameras(4), size=SIZE, readback=False):
         pass
-    assert made == []
+    assert collector(r) is None
     list(r.render_many(cameras(2), size=SIZE))
-    assert len(made) == 1
+    assert collector(r) is not None
+
+
+def test_a_renderer_closed_under_an_open_stream(make_renderer, scene) -> None:  # noqa: ANN001
+    """A stream left open (frames queued on the collector) and its renderer closed: the
+    close finishes the collect under way and drops the rest, and the stream, closed after,
+    waits for nothing: no crash, no validation error (the fixture checks the layer's)."""
+    r = make_renderer(scene)
+    stream = r.render_many(cameras(6), size=SIZE)
+    next(stream)
+    r.close()
+    assert r.device.handle is None
+    stream.close()

@@ -531,6 +531,13 @@ class Device:
         self._background_work = [f for f in self._background_work if not f.done()] + [future]
         return future
 
+    def stop_background(self, group: str) -> None:
+        """`group`'s work under way finished, the rest dropped (its futures cancelled), its
+        threads ended (the next `in_background` of the group makes them again)."""
+        pool = self._background.pop(group, None)
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+
     def wait_background(self) -> None:
         """Until the work given to `in_background` so far is done."""
         wait(list(self._background_work))

@@ -18,12 +18,13 @@ import collections
 import dataclasses
 import time
 from collections.abc import Iterable, Iterator
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import CancelledError, Future, wait
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from vkpbr.errors import UsageError
 from vkpbr.gpu.frames import Frame, FrameRing
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, COPY_OUTPUTS, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
@@ -220,16 +221,15 @@ class FramePath:
         """render_many's frames (None cameras: `base`): (what `collect` reads, the frame's
         stats) per camera, in order, with up to the ring's count of frames queued.
         With `readback`, from the second frame on each frame is collected (waited for, copied
-        out) on a thread of the stream's own as soon as it is submitted, while this thread
-        draws the next: a frame's draw and the last one's copy into NumPy overlap instead of
-        adding up (Sponza's walk with the sun at 1080p on the H200: a draw 0.15-0.47 ms, a copy
-        0.57-0.67 ms). The frames still come in order, and a slot is drawn again only once
-        its frame was collected."""
+        out) on the device's collector thread as soon as it is submitted (`_later`), while
+        this thread draws the next: a frame's draw and the last one's copy into NumPy overlap
+        instead of adding up (Sponza's walk with the sun at 1080p on the H200: a draw
+        0.15-0.47 ms, a copy 0.57-0.67 ms). The frames still come in order, and a slot is
+        drawn again only once its frame was collected."""
         copy = ((COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)) if readback else ()
         if outputs and readback:
             copy = (*copy, COPY_OUTPUTS)
         pending: collections.deque[Future | _Deferred] = collections.deque()
-        collector: ThreadPoolExecutor | None = None
         noisy = options.noise is not None and options.noise.depth
         try:
             for camera in cameras:
@@ -242,29 +242,41 @@ class FramePath:
                     self.parts.device.limits.maxImageDimension2D)), CubeFrame)
                 while pending and (len(pending) == self.parts.ring.count or cube):
                     # (a cube frame's face frames take the ring's slots: none may be queued)
-                    yield pending.popleft().result()
+                    yield _taken(pending.popleft())
                 sub = self.draw(target, camera, lights, options,
                                 copy=self._lens_copy(target, copy) if lens_depth else copy,
                                 linear=linear, timings=False, driver_time=driver_time)
                 args = (sub.frame, lens_depth, target, depth, readback, outputs)
-                if collector is None and readback and pending:  # (a second frame: worth a thread)
-                    collector = ThreadPoolExecutor(1, thread_name_prefix="vkpbr-collect")
-                    pending = collections.deque(collector.submit(d.collect, *d.args, False)
-                                                for d in pending)  # (one thread reads timestamps)
-                # (the collector copies alone: split over the copy threads, their hand-offs
-                # took the GIL from this thread's draws: H200 run c, 0.68 -> 0.81 ms a copy)
-                pending.append(collector.submit(self.collect, *args, False) if collector is not None
-                               else _Deferred(self.collect, args))
+                if readback and pending and isinstance(pending[0], _Deferred):  # (a second frame)
+                    pending = collections.deque(self._later(d.args) for d in pending)
+                pending.append(self._later(args) if readback and pending else _Deferred(self.collect, args))
             while pending:
-                yield pending.popleft().result()
+                yield _taken(pending.popleft())
         finally:
-            # An abandoned generator leaves frames queued: finish them before anything reuses
-            # them (the collector's collects too: they read the frames' slots).
-            if collector is not None:
-                collector.shutdown(wait=True)
-            for got in pending:
-                if isinstance(got, _Deferred):
-                    got.args[0].wait()
+            self._finish(pending)
+
+    def _later(self, args: tuple) -> Future:
+        """`collect(*args)` on the device's collector thread (one: it alone reads timestamps,
+        and a stream's frames are collected in order), copying the frame alone (split over
+        the copy threads, their hand-offs took the GIL from the drawing thread: H200 run c,
+        0.68 -> 0.81 ms a copy). The device's: no thread made a stream, and a device closed
+        under an open stream finishes the collect under way first (Device.close)."""
+        return self.parts.device.in_background(lambda: self.collect(*args, False), 1, "collect")
+
+    def _finish(self, pending: collections.deque) -> None:
+        """An abandoned stream: its collects not begun dropped, the one under way finished
+        (it reads a slot the next frame may draw into), the frames not handed to the thread
+        waited for (a slot's next draw waits for its frame's fence anyway)."""
+        for got in pending:
+            # (not `wait` on them all: a collect a closed device dropped is cancelled but
+            # never "notified", and `wait` would wait for it for ever)
+            if isinstance(got, Future) and not got.cancel():
+                wait([got])
+        if self.parts.device.handle is None:
+            return  # (the device was closed under the stream: nothing is left to wait for)
+        for got in pending:
+            if isinstance(got, _Deferred):
+                got.args[0].wait()
 
     def _lens_copy(self, target: OffscreenTarget, copy: tuple[str, ...]) -> tuple[str, ...]:
         """What a camera model's frame copies for `copy` with depth: the outputs (its depth
@@ -305,6 +317,15 @@ class FramePath:
         stats = dataclasses.replace(stats)
         self.parts.device.check_validation()
         return result, stats
+
+
+def _taken(got: Future | _Deferred) -> tuple[Any, FrameStats]:
+    """A collect's result; one line where the renderer was closed before it ran."""
+    try:
+        return got.result()
+    except CancelledError:
+        raise UsageError("render_many: the renderer was closed while its frames were being "
+                         "read; render again with an open renderer") from None
 
 
 class _Deferred:

@@ -110,7 +110,9 @@ class SceneMaker:
         return MadeScene(scene, parts, FramePath(parts), BatchPath(parts), mark, timings)
 
     def unmake(self, made: MadeScene) -> None:
-        """Close `made`'s parts and paths and destroy the device children made for them."""
+        """Close `made`'s parts and paths and destroy the device children made for them
+        (a stream of its frames left open: the collect under way first, the rest dropped)."""
+        self.device.stop_background("collect")
         self.device.wait_idle()
         made.batch_path.close()
         made.parts.close()
