@@ -223,7 +223,9 @@ def test_ctrl_c_stops_a_processes_job_in_one_line(tmp_path: Path) -> None:
     import sys
     import time
 
-    poses = [f"{3 - k * 0.02:.2f},1.2,2,0,0,0" for k in range(100)]  # (long enough on a GPU)
+    # (long enough that the job is still running when the signals come, on a GPU or on
+    # lavapipe: 100 poses a scene had finished first once a recording got faster)
+    poses = [f"{3 - k * 0.005:.3f},1.2,2,0,0,0" for k in range(400)]
     (tmp_path / "poses.json").write_text(json.dumps(poses))
     job = tmp_path / "job.json"
     job.write_text(json.dumps({"views_per_item": 2, "scenes": [

@@ -21,7 +21,7 @@ def test_an_interrupt_waits_for_the_makers_under_way(monkeypatch) -> None:  # no
 
     def slow() -> str:
         began.set()
-        time.sleep(0.5)
+        time.sleep(2.0)  # (the signal, 0.1 s after it began, lands in the wait on a busy host)
         ended.set()
         return "slow"
 
