@@ -4,7 +4,10 @@ and how that changes with several processes on one GPU.
 
     import vk_call_timer; vk_call_timer.install(folder)   # before vkpbr imports the binding
 
-At exit the process writes `folder/<pid>.json`: {name: [calls, seconds]}.
+At exit the process writes `folder/<pid>.json`: {name: [calls, seconds]}. Calls made
+through `vulkan.lib` directly are not seen: the frame's hot path (gpu/frames.py: submit,
+fences, timestamps) and, since session 22, the commands a recording makes most
+(gpu/commands.py: binds, pushes, dispatches, draws, fills, barriers).
 """
 
 from __future__ import annotations
