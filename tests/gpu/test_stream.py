@@ -114,3 +114,21 @@ def test_a_renderer_closed_under_an_open_stream(make_renderer, scene) -> None:  
     r.close()
     assert r.device.handle is None
     stream.close()
+
+
+def test_waiting_for_the_background_after_its_collects_were_dropped(make_renderer, scene) -> None:  # noqa: ANN001
+    """A collect under way and one queued, the collector stopped (a scene's unmaking): the
+    queued one is dropped, and waiting for the device's background returns."""
+    import threading
+
+    r = make_renderer(scene)
+    release = threading.Event()
+    r.device.in_background(lambda: release.wait(5), 1, "collect")
+    queued = r.device.in_background(lambda: None, 1, "collect")
+    threading.Timer(0.2, release.set).start()
+    r.device.stop_background("collect")
+    assert queued.cancelled()
+    waited = threading.Thread(target=r.device.wait_background, daemon=True)
+    waited.start()
+    waited.join(5)
+    assert not waited.is_alive(), "wait_background waited for a dropped collect"

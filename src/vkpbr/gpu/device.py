@@ -539,8 +539,9 @@ class Device:
             pool.shutdown(wait=True, cancel_futures=True)
 
     def wait_background(self) -> None:
-        """Until the work given to `in_background` so far is done."""
-        wait(list(self._background_work))
+        """Until the work given to `in_background` so far is done (or dropped: a future
+        `stop_background` cancelled is never "notified", and `wait` would wait for it)."""
+        wait([f for f in self._background_work if not f.done()])
 
     def close(self) -> None:
         """Destroy every child (reverse order), the device, then the instance. Idempotent."""

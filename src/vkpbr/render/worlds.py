@@ -339,7 +339,7 @@ class WorldKernel:
 
     def _close_imports(self, lent_too: bool = False) -> None:
         for imported in self._imports:
-            if getattr(imported, "lent", False) and not lent_too:
+            if imported.lent and not lent_too:
                 self._lent.append(imported)  # (a caller's tensor views it: closed at destroy)
             else:
                 imported.close()
