@@ -136,3 +136,33 @@ def test_a_walk_refits_only_the_cascades_as_a_whole_write_would(pair) -> None:  
     assert all(n["spot"] == n["point"] == 0 for n in layers), layers
     assert any(0 < n["directional"] < 4 for n in layers), layers  # some cascades kept
     assert not np.array_equal(images[0], images[-1])
+
+
+def test_a_walk_scrolls_the_cascades_it_moves_by_whole_texels(pair) -> None:  # noqa: ANN001
+    """Compute-drawn cascades that a walking camera moves by whole texels (its snapping grid)
+    keep their texels, moved, and draw only the strip that came into view
+    (shadow_math.layer_scroll, ShadowMaps._write_clips, shadow_raster.comp's save and move
+    kernels). Every frame's maps equal those of a renderer that redraws every map: the
+    depths within 4 float32 ulps of 1 (the moved matrix rounds a vertex's last bits another
+    way), the texels covered alike, and the images equal. A scroll the wrong way, by the
+    wrong amount or drawn outside its strip differs by whole depths."""
+    cached, fresh = pair
+    opts = {**OPTS, "shadow_raster": "compute"}
+    for _ in range(3):
+        cached.render(CAMERA, ALL, size=SIZE, **opts)
+    scrolled = []
+    for i in range(1, 28):  # 3 cm a frame: the nearer cascades cross their grid
+        camera = dataclasses.replace(CAMERA, eye=(0.03 * i, 5.0, 6.0),
+                                     target=(0.3 + 0.03 * i, 0.0, 0.0))
+        got = cached.render(camera, ALL, size=SIZE, linear=True, **opts)
+        scrolled += cached.shadows.last_scrolled
+        fresh.shadow_frames.forget()
+        want = fresh.render(camera, ALL, size=SIZE, linear=True, **opts)
+        (maps, cubes), (maps_want, cubes_want) = cached.shadows.read_maps(), fresh.shadows.read_maps()
+        assert np.array_equal(cubes, cubes_want), i
+        assert np.array_equal(maps > 0, maps_want > 0), i  # the same texels covered
+        assert float(np.abs(maps - maps_want).max()) <= 4 * 2.0 ** -23, i
+        assert np.array_equal(got, want), (i, float(np.abs(got - want).max()))
+    step = opts["shadow_resolution"] // 8  # shadow_math.snap_texels
+    assert len(scrolled) >= 3, scrolled
+    assert all(sorted((abs(dx), abs(dy))) == [0, step] for _, dx, dy in scrolled), scrolled

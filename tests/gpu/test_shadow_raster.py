@@ -331,8 +331,9 @@ def test_the_shading_reads_the_kernels_buffer(renderer, monkeypatch) -> None:  #
     renderer.shadows.forget()
     got = renderer.render(CAMERA, spot, size=SIZE, shadow_raster="compute", **opts)
     steps = [s for s in recorded[-1] if s.name.startswith("shadows")]
-    assert [s.name for s in steps] == ["shadows.clear", "shadows.small", "shadows.args",
-                                       "shadows.big", "shadows.masked", "shadows"]
+    assert [s.name for s in steps] == ["shadows.save", "shadows.clear", "shadows.move",
+                                       "shadows.small", "shadows.args", "shadows.big",
+                                       "shadows.masked", "shadows"]
     uses = {u for s in steps for _, u in s.all_uses()}
     assert not any("transfer_src" in u for u in uses), uses  # (the copy's)
     assert steps[-1].uses == (("shadow_depths", "storage_read|fragment_storage_read"),)

@@ -118,7 +118,8 @@ VARIANTS: tuple[Variant, ...] = (
     # Shadow maps drawn by compute shaders (render/shadow_raster.py).
     *(Variant(f"shadow_{name}.comp.spv", "shadow_raster.comp",
               (("COMPUTE_SHADING", 1), ("KERNEL", k)))
-      for k, name in ((1, "small"), (3, "args"), (2, "big"), (4, "masked"))),
+      for k, name in ((1, "small"), (3, "args"), (2, "big"), (4, "masked"), (5, "save"),
+                      (6, "move"))),
 )
 
 

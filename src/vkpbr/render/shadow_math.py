@@ -69,6 +69,7 @@ __all__ = [
     "CascadeShape",
     "cascade_shape",
     "cascade_columns",
+    "layer_scroll",
     "perspective_near",
     "spot_matrix",
     "spot_half_angle",
@@ -419,6 +420,30 @@ def cascade_columns(camera: Camera, shape: CascadeShape) -> list[float]:
                 a2 + 0.0, b2 + 0.0, -d2 / span + 0.0, 0.0,
                 -lx / half + 0.0, ly / half + 0.0, z_far / span + 0.0, 1.0)
     return out
+
+
+def layer_scroll(before: np.ndarray, after: np.ndarray, resolution: int
+                 ) -> tuple[int, int] | None:
+    """The whole texels (dx, dy) a cascade's map moves by from matrix `before` to `after`
+    (16 float32 each, column-major, as ShadowData holds them): a map texel at (x, y) for
+    `before` is at (x + dx, y + dy) for `after`. None where they differ in more than the
+    translation across the light, by other than whole texels, along both axes at once, or by
+    the whole map (no texel kept). A walking camera's cascade crosses its snapping grid by
+    one step of snap_texels along one axis at a time: the kernels then move the map's texels
+    and draw only the strip that came into view (render/shadows.py ShadowMaps.stale).
+    Texel x = (clip x * 0.5 + 0.5) * resolution, so a clip translation t moves it by
+    t * resolution / 2."""
+    b = np.asarray(before, np.float32).reshape(16)
+    a = np.asarray(after, np.float32).reshape(16)
+    same = b.view(np.uint32) == a.view(np.uint32)
+    if not (same[:12].all() and same[14:].all()) or same[12:14].all():
+        return None
+    shift = (a[12:14].astype(np.float64) - b[12:14].astype(np.float64)) * (0.5 * resolution)
+    whole = np.round(shift)
+    if not np.all(np.abs(shift - whole) < 1e-3) or np.count_nonzero(whole) != 1 \
+            or np.abs(whole).max() >= resolution:
+        return None
+    return int(whole[0]), int(whole[1])
 
 
 @functools.lru_cache(maxsize=64)

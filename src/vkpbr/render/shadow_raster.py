@@ -74,6 +74,7 @@ from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayo
 from vkpbr.gpu.graph import BufferResource, Step
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.deform import UNBOUNDED_RADIUS, draw_sphere
+from vkpbr.render.shadows import CLIP_AT
 
 __all__ = ["ShadowRaster", "WorldJob", "wants_compute", "SET_ROWS", "big_list_bytes"]
 
@@ -87,7 +88,9 @@ MAX_Z = 65535  # a dispatch's (world, layer) invocations in z
 MAX_LOOP_LAYERS = 32  # shadow_small's layers of a dispatch (a bit each in a uint)
 # Set 4: generated.glsl's compute-path bindings of the streams, then the kernels' own.
 SET_ROWS = ((3, "Indices"), (4, "Positions"), (5, "Texcoords0"), (6, "Texcoords1"),
-            (7, "Colors"), (40, "ShadowMatrices"), (41, "Casters"), (42, "Depths"), (43, "Big"))
+            (7, "Colors"), (40, "ShadowMatrices"), (41, "Casters"), (42, "Depths"), (43, "Big"),
+            (44, "Scratch"))
+TEXEL_GROUP = 256  # shadow_save / shadow_move: one texel an invocation
 _OPAQUE, _MASKED = ("opaque", "opaque_double"), ("mask", "blend")
 _KINDS = ("directional", "spot", "point")  # shadow_raster.comp's bias index
 # Timestamps after each kernel (benchmarks/bench_shadows.py --steps): FrameStats.pass_ms then
@@ -197,7 +200,7 @@ def raster_kernel(device: Any, layouts: list[DescriptorSetLayout], name: str) ->
                            push_bytes=PUSH_BYTES)
 
 
-KERNELS = ("small", "args", "big", "masked")  # the last only where masked draws cast
+KERNELS = ("save", "move", "small", "args", "big", "masked")  # the last only where masked draws cast
 
 
 class ShadowRaster:
@@ -227,6 +230,7 @@ class ShadowRaster:
         self._images: tuple[int, int] | None = None  # the maps' images the buffers fit
         self.depths: Buffer | None = None
         self.big: Buffer | None = None
+        self.scratch: Buffer | None = None
         self.big_capacity = 0
 
     def _own(self, obj: Any) -> Any:
@@ -249,7 +253,7 @@ class ShadowRaster:
         key = (id(maps), id(cubes), maps.layers, maps.size, cubes.layers, cubes.size)
         if self._images == key:
             return False
-        for buffer in (self.depths, self.big):
+        for buffer in (self.depths, self.big, self.scratch):
             if buffer is not None:
                 self._owned.remove(buffer)
                 buffer.destroy()
@@ -262,6 +266,9 @@ class ShadowRaster:
         texels = self.cube_base + cubes.layers * cubes.size * cubes.size
         self.depths = self._own(Buffer(self.device, 4 * texels, "storage|transfer_dst|transfer_src",
                                        name="shadow depths"))
+        # A scrolled cascade's texels while they move (the 2D layers', as in `depths`).
+        self.scratch = self._own(Buffer(self.device, 4 * max(self.cube_base, 1), "storage",
+                                        name="shadow scroll scratch"))
         # Bands of ~BIG_CHUNK texels (96 bytes each: the band and its triangle's set-up);
         # what does not fit is drawn by the invocation that found it. Sponza's 4 cascades
         # at 2048 list ~111 k of the 262 k.
@@ -291,7 +298,9 @@ class ShadowRaster:
             buffers = {"Indices": self.gs.index_buffer, "Positions": streams["positions"],
                        "Texcoords0": streams["texcoords"], "Texcoords1": streams["texcoords1"],
                        "Colors": streams["colors"], "Casters": table.buffer,
-                       "Depths": depths, "Big": big}
+                       "Depths": depths, "Big": big,
+                       # (a batch of worlds' maps never scroll: its kernels read no rows)
+                       "Scratch": self.scratch if job is None else big}
             w = DescriptorWriter(self.device)
             for s in range(self.slots):
                 dset = pool.allocate(self.set_layout)
@@ -308,7 +317,8 @@ class ShadowRaster:
     def resources(self) -> dict[str, BufferResource]:
         """The graph resources the steps name (after `steps` made them)."""
         return {"shadow_depths": BufferResource(self.depths),
-                "shadow_big": BufferResource(self.big)}
+                "shadow_big": BufferResource(self.big),
+                "shadow_scratch": BufferResource(self.scratch)}
 
     # --- steps -----------------------------------------------------------------------------
     def _push(self, plan: Any, table: _Table, job: WorldJob | None = None) -> np.ndarray:
@@ -322,6 +332,7 @@ class ShadowRaster:
         push[:16] = (0, 0, 0, 0, sizes[0], sizes[1],
                      sizes[2], self.max_layers, sizes[3], int(self.gs.has_colors), BIG_AREA,
                      BIG_CHUNK, MASKED_AREA, spot, table.chunks_at, table.chunks)
+        push[29] = CLIP_AT if job is None else 0  # the 2D layers' rows (world_at.y)
         bias = push.view(np.float32)
         for k, kind in enumerate(_KINDS):
             bias[16 + k], bias[20 + k] = self.depth_bias[kind]
@@ -346,7 +357,7 @@ class ShadowRaster:
                 if len(r)]
 
         record = self._records(table, dset, push, jobs, material_sets, set0)
-        out = self._steps(record, table, "shadow_depths", "shadow_big")
+        out = self._steps(record, table, "shadow_depths", "shadow_big", "shadow_scratch")
         if copy:  # the images the shading compares in hardware get the redrawn layers
             # (the buffer stays declared read by the shaders too: their descriptor set binds
             # it, and synchronization validation counts a bound buffer as read)
@@ -355,11 +366,24 @@ class ShadowRaster:
         return out
 
     def _steps(self, record: dict[str, Callable[[Any], None]], table: _Table, depths: str,
-               big_list: str) -> list[Step]:
+               big_list: str, scratch: str | None = None) -> list[Step]:
+        """`scratch`: a frame's drawn layers start as their rows say, by the save and move
+        kernels (cleared, kept or scrolled); without it (a batch of worlds) they are filled."""
         apart = TIMED_STEPS
         made = {name: (functools.partial(self._pipeline, name),) for name in KERNELS}
-        out = [Step("shadows.clear", record["clear"], ((depths, "transfer_dst"), (big_list, "transfer_dst")),
-                    timed=False),
+        out = []
+        if scratch is None:
+            out.append(Step("shadows.clear", record["clear"],
+                            ((depths, "transfer_dst"), (big_list, "transfer_dst")), timed=False))
+        else:
+            if "save" in record:
+                out.append(Step("shadows.save", record["save"], ((depths, "storage_read"),
+                                                                 (scratch, "storage")),
+                                timed=False, kernels=made["save"]))
+            out += [Step("shadows.clear", record["clear"], ((big_list, "transfer_dst"),), timed=False),
+                    Step("shadows.move", record["move"], ((depths, "storage"), (scratch, "storage_read")),
+                         timed=False, kernels=made["move"])]
+        out += [
                Step("shadows.small", record["small"], ((depths, "storage"), (big_list, "storage")),
                     timed=apart, kernels=made["small"]),
                Step("shadows.args", record["args"], ((big_list, "storage"),), timed=False,
@@ -387,8 +411,26 @@ class ShadowRaster:
             cmd.bind_set(0, set0)
             cmd.bind_set(4, dset)
 
+        # A frame's layers start as their rows say (2D layers kept, scrolled or cleared,
+        # cube faces cleared: the save and move kernels); a batch of worlds' maps are filled.
+        flat = [j for j in jobs if j[2].kind != "point"] if world is None else []
+
+        def texel_groups(e: Any) -> int:
+            size = (self.maps.cubes if e.kind == "point" else self.maps.maps).size
+            return -(-size * size // TEXEL_GROUP)
+
+        def save(cmd: Any) -> None:
+            bind(cmd, "save")
+            for matrix, layers, e in flat:
+                dispatch(cmd, matrix, layers, texel_groups(e))
+
         def clear(cmd: Any) -> None:
-            self._clear(cmd, jobs, world)
+            self._clear(cmd, world)
+
+        def move(cmd: Any) -> None:
+            bind(cmd, "move")
+            for matrix, layers, e in jobs:
+                dispatch(cmd, matrix, layers, texel_groups(e))
 
         def small(cmd: Any) -> None:
             bind(cmd, "small")
@@ -415,7 +457,9 @@ class ShadowRaster:
                     push[0], push[2] = triangles, row
                     dispatch(cmd, matrix, layers, -(-triangles // SMALL_GROUP))
 
-        return {"clear": clear, "small": small, "args": args, "big": big, "masked": masked}
+        out = {"clear": clear, "move": move, "small": small, "args": args, "big": big,
+               "masked": masked}
+        return {**out, "save": save} if flat else out
 
     def _dispatcher(self, push: np.ndarray, world: WorldJob | None
                     ) -> Callable[[Any, int, int, int], None]:
@@ -439,16 +483,15 @@ class ShadowRaster:
 
         return dispatch
 
-    def _clear(self, cmd: Any, jobs: list[tuple[int, int, Any]], world: WorldJob | None) -> None:
-        """Depth 0: the farthest (reversed-Z), as the passes clear; the drawn layers only (a
-        batch of worlds: all of them, after the last submission's reads); the big list."""
+    def _clear(self, cmd: Any, world: WorldJob | None) -> None:
+        """The big list emptied; a batch of worlds' maps at depth 0, the farthest
+        (reversed-Z), as the passes clear (after the last submission's reads). A frame's
+        drawn layers are cleared, kept or scrolled by the move kernel instead."""
         if world is not None:
             cmd.memory_barrier("compute|fragment", "transfer")
             cmd.fill(world.depths, 0, 0, 4 * world.worlds * world.stride)
             cmd.fill(world.big, 0, 0, 16)
             return
-        for offset, size in self._spans(jobs):
-            cmd.fill(self.depths, 0, offset, size)
         cmd.fill(self.big, 0, 0, 16)  # the count and the dispatch size
 
     def world_steps(self, slot: int, plan: Any, job: WorldJob, classes: Sequence[str],

@@ -77,6 +77,15 @@ MAX_CUBES = 4  # point lights with shadows
 MATRICES = MAX_LAYERS + 6 * MAX_CUBES  # the 2D layers' matrices, then 6 per cube
 HEADER_BYTES = 64  # shaders/shadow_data.glsl: cascade_far, cascade_texel, params, world_layout
 HEADER_FLOATS = HEADER_BYTES // 4
+# After the matrices, a uvec4 a 2D layer for the compute kernels (shaders/shadow_raster.comp
+# clip_row; the shading never reads them): how a redrawn layer is drawn this frame
+# (ShadowMaps.stale): the texels drawn, [lo, hi) packed x | y << 16; the texels the kept map
+# moves by, (dx & 0xffff) | dy << 16; and its mode: CLIP_FULL cleared and drawn whole,
+# CLIP_KEEP kept as it is (unchanged, within the span of redrawn layers), CLIP_SCROLL moved
+# by whole texels with the strip that came into view drawn (shadow_math.layer_scroll).
+CLIP_AT = MATRICES  # where the rows start, in mat4s after the header (4 rows a mat4)
+CLIP_FULL, CLIP_KEEP, CLIP_SCROLL = 0, 1, 2
+DATA_BYTES = HEADER_BYTES + 64 * MATRICES + 16 * MAX_LAYERS  # a slot's, rows included
 DEFAULT_RESOLUTION = 2048
 # (constant, slope) depth bias of the passes, in Vulkan's units; negative: away from the light
 # under reversed-Z. Per projection: orthographic depth is linear in distance, perspective
@@ -195,7 +204,7 @@ class ShadowMaps:
             device, [frame_layout or empty, material_layout, empty, self.pass_layout],
             L.PUSH.size))
         align = int(device.limits.minStorageBufferOffsetAlignment)
-        size = HEADER_BYTES + 64 * MATRICES
+        size = DATA_BYTES
         self.matrix_bytes = size
         self.stride = (size + align - 1) // align * align
         # (host memory: `_stale` reads them back every frame, uncached from device memory)
@@ -207,6 +216,8 @@ class ShadowMaps:
         self.pass_sets = [self.pool.allocate(self.pass_layout) for _ in range(slots)]
         self._views = [self.buffer.array(np.float32, size // 4, i * self.stride)
                        for i in range(slots)]
+        self._clips = [v[HEADER_FLOATS + 16 * MATRICES:].view(np.uint32).reshape(MAX_LAYERS, 4)
+                       for v in self._views]
         self.maps: LayeredDepth | None = None
         self.cubes: LayeredDepth | None = None  # (the images: `ensure`)
         self._pipelines: dict[tuple, Pipeline] = {}
@@ -217,6 +228,7 @@ class ShadowMaps:
         self._drawn: dict[tuple[str, int, int], tuple[bytes, bool]] = {}  # (image, first, layer)
         self._last_stale: tuple | None = None  # stale()'s last inputs, while _drawn holds them
         self.last_redrawn_layers: tuple[tuple[str, int], ...] = ()  # latest frame: (kind, layers drawn)
+        self.last_scrolled: tuple[tuple[int, int, int], ...] = ()  # latest frame: (layer, dx, dy)
         self._warned = False
         # Drawn by compute shaders (render/shadow_raster.py) instead of the raster units: the
         # frames' choice (ShadowFrames.prepare, RenderOptions.shadow_raster).
@@ -388,7 +400,9 @@ class ShadowMaps:
                 out[e.light] = (e.first, 6, near, 2.0 / cube_resolution)
         self._write_header(data, far, texel, resolution, cube_resolution, world_layout)
         # mat4 is column-major in GLSL: each row-major matrix transposed.
-        data[HEADER_FLOATS:].reshape(MATRICES, 4, 4)[:] = mats.transpose(0, 2, 1)
+        data[HEADER_FLOATS:HEADER_FLOATS + 16 * MATRICES].reshape(MATRICES, 4, 4)[:] = \
+            mats.transpose(0, 2, 1)
+        self._clips[slot][:] = (0, resolution | resolution << 16, 0, CLIP_FULL)
         for e, shape in followed:  # (already column-major: the moving camera's `write_cascades`)
             self._put_columns(data, e, SM.cascade_columns(camera, shape))
         return out
@@ -437,9 +451,41 @@ class ShadowMaps:
     def stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool, casters: int = 0
               ) -> tuple[range, ...]:
         """Which layers of each of `plan`'s entries frame `slot` must draw (`_stale`); with
-        compute-drawn maps, also where its shading reads them (`_choose_reads`)."""
-        redraw, casters_moved = self._stale(slot, plan, alpha_mask, casters)
-        return self._choose_reads(slot, plan, redraw, casters_moved) if self.compute else redraw
+        compute-drawn maps, also where its shading reads them (`_choose_reads`) and how each
+        redrawn 2D layer is drawn (`_write_clips`: a cascade the camera moved by whole texels
+        keeps its texels, moved, and draws the strip that came into view)."""
+        redraw, casters_moved, how = self._stale(slot, plan, alpha_mask, casters)
+        if not self.compute:
+            return redraw
+        redraw = self._choose_reads(slot, plan, redraw, casters_moved)
+        self._write_clips(slot, plan, redraw, how)
+        return redraw
+
+    def _write_clips(self, slot: int, plan: ShadowPlan, redraw: tuple[range, ...],
+                     how: dict[int, tuple[int, int] | None]) -> None:
+        """Frame `slot`'s rows (CLIP_AT) of the 2D layers it redraws: `how` names the changed
+        ones (a shift: scrolled; None: drawn whole); the others in a redrawn span are kept
+        (the buffer holds them as `_drawn` says, whichever side the shading reads)."""
+        rows, size = self._clips[slot], self.resolution
+        full = size | size << 16
+        scrolled = []
+        for e, layers in zip(plan.entries, redraw, strict=True):
+            if e.kind == "point":
+                continue
+            for i in layers:
+                m = e.first + i
+                if m not in how:
+                    rows[m] = (0, 0, 0, CLIP_KEEP)
+                elif how[m] is None:
+                    rows[m] = (0, full, 0, CLIP_FULL)
+                else:
+                    dx, dy = how[m]
+                    x0, x1 = (0, dx) if dx > 0 else (size + dx, size) if dx < 0 else (0, size)
+                    y0, y1 = (0, dy) if dy > 0 else (size + dy, size) if dy < 0 else (0, size)
+                    rows[m] = (x0 | y0 << 16, x1 | y1 << 16, (dx & 0xFFFF) | (dy & 0xFFFF) << 16,
+                               CLIP_SCROLL)
+                    scrolled.append((m, dx, dy))
+        self.last_scrolled = tuple(scrolled)
 
     def _choose_reads(self, slot: int, plan: ShadowPlan, redraw: tuple[range, ...],
                       casters_moved: bool) -> tuple[range, ...]:
@@ -471,14 +517,16 @@ class ShadowMaps:
         return redraw
 
     def _stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool, casters: int = 0
-               ) -> tuple[tuple[range, ...], bool]:
+               ) -> tuple[tuple[range, ...], bool, dict[int, tuple[int, int] | None]]:
         """Which layers of each of `plan`'s entries frame `slot` must draw (a range of the
         entry's layers, empty for none): the span of those that hold other matrices (as
-        `write` left them for the slot) or other casters; and whether any is redrawn for its
-        casters or unknown contents (not for a new matrix alone: `_choose_reads`). A walking camera usually changes
+        `write` left them for the slot) or other casters; whether any is redrawn for its
+        casters or unknown contents (not for a new matrix alone: `_choose_reads`); and the
+        changed 2D layers by matrix index: the whole texels a cascade's map moved by where
+        its matrix moved alone (`layer_scroll`), else None. A walking camera usually changes
         only its nearest cascade (shadow_math's snapping grid). Marks them drawn: the frame's
         commands draw them and submissions run in order (`forget` if it is not submitted)."""
-        mats = self._views[slot][HEADER_FLOATS:].reshape(MATRICES, 16)
+        mats = self._views[slot][HEADER_FLOATS:HEADER_FLOATS + 16 * MATRICES].reshape(MATRICES, 16)
         # The usual frame: the same matrices, casters and plan as the previous call (any
         # slot), whose layers are drawn already: nothing to compare entry by entry.
         # `casters`: the scene state's version that last moved a caster (0: never).
@@ -486,10 +534,10 @@ class ShadowMaps:
         last = self._last_stale
         if last is not None and last[2] is plan and last[1] == key[1] and last[0] == key[0]:
             self.last_redrawn_layers = tuple((e.kind, 0) for e in plan.entries)
-            return tuple(range(0) for _ in plan.entries), False
+            return tuple(range(0) for _ in plan.entries), False, {}
         self._last_stale = key
         casters_moved = False
-        out = []
+        out, how = [], {}
         for e in plan.entries:
             image = "cubes" if e.kind == "point" else "maps"
             # A cube's six faces change together (one position): one key for the six.
@@ -503,12 +551,17 @@ class ShadowMaps:
                 before = self._drawn.get(where)
                 if before != held:
                     changed.append(i)
-                    casters_moved |= before is None or before[1:] != held[1:]
+                    moved = before is None or before[1:] != held[1:]
+                    casters_moved |= moved
+                    if e.kind != "point":
+                        how[e.first + i] = None if moved or e.kind != "directional" else \
+                            SM.layer_scroll(np.frombuffer(before[0], np.float32), rows,
+                                            self.resolution)
                 self._drawn[where] = held
             out.append(range(0) if not changed else
                        range(0, 6) if e.kind == "point" else range(changed[0], changed[-1] + 1))
         self.last_redrawn_layers = tuple((e.kind, len(r)) for e, r in zip(plan.entries, out, strict=True))
-        return tuple(out), casters_moved
+        return tuple(out), casters_moved, how
 
     @property
     def hand_reads(self) -> bool:

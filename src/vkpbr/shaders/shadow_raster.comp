@@ -37,6 +37,13 @@
 //   perspective-correct texture coordinates with their per-texel differences as gradients
 //   (the quad differences the fragment shader's texture() takes). Triangles over
 //   pc.masked_area box texels are covered by the whole work group afterwards.
+// KERNEL 5 (shadow_save) and KERNEL 6 (shadow_move): a redrawn layer's start (one
+//   invocation a texel, layer z), as its row after the matrices says (`clip_row`, written by
+//   render/shadows.py ShadowMaps.stale; a cube face's: cleared): CLIP_FULL cleared (depth 0,
+//   the farthest under reversed-Z); CLIP_KEEP left as it is;
+//   CLIP_SCROLL (a cascade the camera moved by whole texels) saved into `scratch` by KERNEL 5,
+//   then moved by (dx, dy) by KERNEL 6, the texels that came into view cleared. KERNELs 1, 2
+//   and 4 then draw only the row's [lo, hi) texels of the layer (`screen`).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #include "generated.glsl"
@@ -45,6 +52,8 @@
 
 #if KERNEL == 2
 layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;
+#elif KERNEL == 5 || KERNEL == 6
+layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;  // shadow_raster.TEXEL_GROUP
 #elif KERNEL == 3
 layout(local_size_x = 1, local_size_y = 1, local_size_z = 1) in;
 #else
@@ -67,6 +76,8 @@ layout(set = 4, binding = 42, std430) buffer Depths { uint depths[]; };
 // [0] entries listed, [1..3] KERNEL 2's dispatch size, from 4 BIG_ENTRY-uint entries: a
 // band and its triangle's Screen as KERNEL 1 set it up (`store_band`).
 layout(set = 4, binding = 43, std430) buffer Big { uint big[]; };
+// A scrolled layer's texels while they move (KERNELs 5, 6): the 2D layers' texels, as `depths`.
+layout(set = 4, binding = 44, std430) buffer Scratch { uint scratch[]; };
 
 layout(push_constant) uniform Raster {
     uint triangles;  // KERNEL 4: its draw's triangles
@@ -88,7 +99,7 @@ layout(push_constant) uniform Raster {
     vec4 bias_constant;  // DEPTH_BIAS by light kind: directional, spot, point
     vec4 bias_slope;
     uvec4 world;  // records a world, the first world's first record, texels a world, layers a world
-    uvec4 world_at;  // x: the dispatch's first world
+    uvec4 world_at;  // x: the dispatch's first world; y: the clip rows' first mat4 (0: none)
 } pc;
 
 const uint BIG_LIST = 4u, BIG_ENTRY = 24u;  // render/shadow_raster.py BIG_ENTRY
@@ -96,6 +107,19 @@ const uint MAX_GROUPS = 65535u;
 const uint BIG_SUBGROUPS = 8u;  // KERNEL 2's bands a work group (256 lanes of subgroups of 32)
 
 #if KERNEL != 3
+const uint CLIP_FULL = 0u, CLIP_KEEP = 1u, CLIP_SCROLL = 2u;  // render/shadows.py's
+
+// 2D layer m's row after the matrices (render/shadows.py CLIP_AT): [lo, hi) packed x | y << 16,
+// the move (dx & 0xffff) | dy << 16, the mode. Where there are none (pc.world_at.y 0: a batch
+// of worlds' maps) or for a cube face: drawn whole.
+uvec4 clip_row(uint m) {
+    if (pc.world_at.y == 0u || m >= pc.max_layers) {
+        uint s = m < pc.max_layers ? pc.map_size : pc.cube_size;
+        return uvec4(0u, s | (s << 16), 0u, CLIP_FULL);
+    }
+    return floatBitsToUint(layer_vp[pc.world_at.y + m / 4u][m % 4u]);
+}
+
 uint layer_size(uint m) { return m < pc.max_layers ? pc.map_size : pc.cube_size; }
 uint layer_base(uint m, uint w) {
     uint s = layer_size(m);
@@ -198,6 +222,11 @@ bool screen(uvec3 vi, vec4 wp[3], uint m, uint w, out Screen t) {
     int isize = int(size);
     t.lo = clamp(ivec2(ceil(lo2 - 0.5)), ivec2(0), ivec2(isize));
     t.hi = clamp(ivec2(floor(hi2 - 0.5)) + 1, ivec2(0), ivec2(isize));
+    if (pc.world_at.y != 0u && m < pc.max_layers) {  // the layer's texels drawn this frame
+        uvec4 clip = clip_row(m);
+        t.lo = max(t.lo, ivec2(clip.x & 0xffffu, clip.x >> 16));
+        t.hi = min(t.hi, ivec2(clip.y & 0xffffu, clip.y >> 16));
+    }
     if (!all(lessThan(t.lo, t.hi))) return false;
     // The plane's depth slopes in texels, from the polygon's largest fan triangle (all of
     // them lie in one plane): Vulkan's m = max(|dz/dx|, |dz/dy|).
@@ -360,7 +389,26 @@ shared uint group_big_count;
 #endif  // KERNEL != 3
 
 void main() {
-#if KERNEL == 3
+#if KERNEL == 5 || KERNEL == 6
+    uint m = pc.matrix + gl_GlobalInvocationID.z;
+    uvec4 clip = clip_row(m);
+    uint size = layer_size(m);
+    uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 256u;
+    if (clip.w == CLIP_KEEP || i >= size * size) return;
+    uint at = layer_base(m, 0u) + i;
+#if KERNEL == 5
+    if (clip.w == CLIP_SCROLL) scratch[at] = depths[at];
+#else
+    uint value = 0u;
+    if (clip.w == CLIP_SCROLL) {  // the new texel (x, y) is the old (x - dx, y - dy)
+        ivec2 from = ivec2(i % size, i / size)
+                     - ivec2(bitfieldExtract(int(clip.z), 0, 16), bitfieldExtract(int(clip.z), 16, 16));
+        if (all(greaterThanEqual(from, ivec2(0))) && all(lessThan(from, ivec2(size))))
+            value = scratch[layer_base(m, 0u) + uint(from.y) * size + uint(from.x)];
+    }
+    depths[at] = value;
+#endif
+#elif KERNEL == 3
     big[1] = max(min((big[0] + BIG_SUBGROUPS - 1u) / BIG_SUBGROUPS, MAX_GROUPS), 1u);
     big[2] = 1u;
     big[3] = 1u;
