@@ -62,6 +62,9 @@ def main() -> None:
     ap.add_argument("--profile", type=Path, metavar="FILE",
                     help="also write the walk + sun's frames into NumPy under cProfile (top 50 "
                          "by own time) into FILE")
+    ap.add_argument("--shadow-raster", default="auto",
+                    help="what draws part 2's shadow maps: auto, compute or hardware (lavapipe's "
+                         "auto is hardware: compute to time the kernels there)")
     ap.add_argument("--redraws-only", action="store_true",
                     help="only part 2, the compute shadow kernels timed apart in every recording")
     args = ap.parse_args()
@@ -71,7 +74,7 @@ def main() -> None:
     with Renderer(load_scene(args.scene)) as r:
         print(f"device: {r.device.info.name}")
         if args.redraws_only:
-            redraw_rows(r, args.frames, size)
+            redraw_rows(r, args.frames, size, args.shadow_raster)
             return
         print("| camera | light | readback | GPU ms median | mean | copy ms | frames/s "
               "| host ms a frame: draw / wait / readback / rest | draw ms median / p95 / max "
@@ -87,7 +90,7 @@ def main() -> None:
                                              *row(r, cams, size, readback, lights)]) + " |")
         if args.profile:
             profile_walk(r, args.frames, size, args.profile)
-        redraw_rows(r, args.frames, size)
+        redraw_rows(r, args.frames, size, args.shadow_raster)
 
 
 def profile_walk(r: Renderer, frames: int, size: tuple[int, int], into: Path) -> None:
@@ -107,33 +110,40 @@ def profile_walk(r: Renderer, frames: int, size: tuple[int, int], into: Path) ->
     into.write_text(text.getvalue())
 
 
-def redraw_rows(r: Renderer, frames: int, size: tuple[int, int]) -> None:
+def redraw_rows(r: Renderer, frames: int, size: tuple[int, int], raster: str = "auto") -> None:
+    """The walk with the sun, its frames grouped by the layers they redrew and of those the
+    layers scrolled (moved by whole texels, their new strip drawn: ShadowMaps.last_scrolled)."""
     timed = shadow_raster.TIMED_STEPS
     shadow_raster.TIMED_STEPS = True  # (recordings made before keep their steps untimed)
     sun = [r.automatic_sun()]
     cams = walk(frames)
-    drawn: list[int] = []  # layers each frame redrew, read as the next camera is asked for
+    drawn: list[tuple[int, int]] = []  # layers each frame redrew, scrolled: read as the next camera is asked for
+
+    def redrawn() -> tuple[int, int]:
+        return sum(n for _, n in r.shadows.last_redrawn_layers), len(getattr(r.shadows, "last_scrolled", ()))
 
     def cameras():  # noqa: ANN202 - render_many draws frame k before it asks for camera k+1
         for i, cam in enumerate(cams[:20] + cams):
             if i:
-                drawn.append(sum(n for _, n in r.shadows.last_redrawn_layers))
+                drawn.append(redrawn())
             yield cam
 
-    stats = [r.last_stats for _ in r.render_many(cameras(), sun, size=size, readback=False)]
-    drawn.append(sum(n for _, n in r.shadows.last_redrawn_layers))
-    groups: dict[int, list] = {}
+    stats = [r.last_stats for _ in r.render_many(cameras(), sun, size=size, readback=False,
+                                                 shadow_raster=raster)]
+    drawn.append(redrawn())
+    groups: dict[tuple[int, int], list] = {}
     for layers, s in list(zip(drawn, stats, strict=True))[20:]:
         groups.setdefault(layers, []).append(s)
     shadow_raster.TIMED_STEPS = timed
-    print("\n| layers redrawn | frames | GPU ms mean | steps over 0.01 ms (mean) |")
-    print("|---:|---:|---:|---|")
-    for layers, stats in sorted(groups.items()):
+    print("\n| layers redrawn | of them scrolled | frames | GPU ms mean | steps over 0.01 ms (mean) |")
+    print("|---:|---:|---:|---:|---|")
+    for (layers, scrolled), stats in sorted(groups.items()):
         names = {k for s in stats for k in s.pass_ms}
         means = {k: statistics.fmean(s.pass_ms.get(k, 0.0) for s in stats) for k in names}
         steps = " ".join(f"{k} {v:.3f}" for k, v in sorted(means.items(), key=lambda kv: -kv[1])
                          if v > 0.01)
-        print(f"| {layers} | {len(stats)} | {statistics.fmean(s.gpu_ms for s in stats):.3f} | {steps} |")
+        print(f"| {layers} | {scrolled} | {len(stats)} | {statistics.fmean(s.gpu_ms for s in stats):.3f} "
+              f"| {steps} |")
 
 
 if __name__ == "__main__":

@@ -219,3 +219,61 @@ def test_cascades_in_floats_equal_the_array_fit(eye, target, fov, size, directio
     assert fit.matrices.tobytes() == want.tobytes()
     assert fit.far.tobytes() == splits[1:].tobytes()
     assert fit.texel.tobytes() == S.cascade_texel(radii, res).tobytes()
+
+
+def _texels(cols: list[float], points: np.ndarray, resolution: int) -> np.ndarray:
+    """World points' texel (x, y) in the map of column-major matrix `cols` (float32, as the
+    kernels read it): (ndc * 0.5 + 0.5) * resolution."""
+    m = np.asarray(cols, np.float32).astype(np.float64).reshape(4, 4).T
+    clip = S.project(m, points)
+    return (clip[:, :2] / clip[:, 3:] * 0.5 + 0.5) * resolution
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(-20, 20), st.floats(-20, 20), st.floats(0.01, 0.6), st.floats(0, 2 * math.pi),
+       st.sampled_from([256, 1024, 2048]))
+def test_a_scroll_moves_every_point_by_its_whole_texels(x: float, z: float, step: float,
+                                                        heading: float, resolution: int) -> None:
+    """layer_scroll of a walking camera's cascade matrices (cascade_columns before and after a
+    step): where it gives (dx, dy), every point of the scene lands (dx, dy) texels from where
+    it was, within 1e-3 of a texel (so the moved texels are the map the new matrix draws); it
+    is a whole grid step along one axis (the snapping); and it gives None where the matrices
+    differ otherwise."""
+    lo, hi = (-30.0, -2.0, -30.0), (30.0, 12.0, 30.0)
+    sun = (0.35, -1.0, 0.25)
+    a = Camera(eye=(x, 1.7, z), target=(x + math.cos(heading), 1.6, z + math.sin(heading)))
+    b = Camera(eye=(x + step * math.cos(heading), 1.7, z + step * math.sin(heading)),
+               target=(x + (1 + step) * math.cos(heading), 1.6, z + (1 + step) * math.sin(heading)))
+    shape = S.cascade_shape(a, (640, 480), sun, lo, hi, resolution, 0.1, 60.0)
+    assert shape == S.cascade_shape(b, (640, 480), sun, lo, hi, resolution, 0.1, 60.0)
+    before, after = S.cascade_columns(a, shape), S.cascade_columns(b, shape)
+    points = np.random.default_rng(0).uniform(lo, hi, (64, 3))
+    for k in range(len(before) // 16):
+        old, new = before[16 * k:16 * k + 16], after[16 * k:16 * k + 16]
+        moved = S.layer_scroll(np.array(old, np.float32), np.array(new, np.float32), resolution)
+        if moved is None:
+            continue
+        dx, dy = moved
+        assert sorted((abs(dx), abs(dy)))[0] == 0 and max(abs(dx), abs(dy)) % S.snap_texels(resolution) == 0
+        shift = _texels(new, points, resolution) - _texels(old, points, resolution)
+        assert np.abs(shift - (dx, dy)).max() < 1e-3, (k, moved, shift[:3])
+
+
+def test_a_scroll_is_only_a_whole_texel_move_along_one_axis() -> None:
+    """layer_scroll's None: the same matrix, a scale or depth change, half a texel, both axes
+    at once, the whole map."""
+    m = np.eye(4, dtype=np.float32).T.reshape(16).copy()  # column-major: [12], [13] translate
+    def moved(**at: float) -> np.ndarray:  # noqa: ANN202
+        out = m.copy()
+        for i, v in at.items():
+            out[int(i[1:])] += v
+        return out
+    res = 256
+    assert S.layer_scroll(m, moved(t12=2 * 32 / res), res) == (32, 0)
+    assert S.layer_scroll(m, moved(t13=-2 * 3 / res), res) == (0, -3)
+    assert S.layer_scroll(m, m.copy(), res) is None
+    assert S.layer_scroll(m, moved(t0=0.01), res) is None  # a scale
+    assert S.layer_scroll(m, moved(t14=0.01), res) is None  # the depth
+    assert S.layer_scroll(m, moved(t12=1.0 / res), res) is None  # half a texel
+    assert S.layer_scroll(m, moved(t12=2 / res, t13=2 / res), res) is None  # both axes
+    assert S.layer_scroll(m, moved(t12=2.0), res) is None  # the whole map

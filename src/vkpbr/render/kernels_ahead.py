@@ -89,9 +89,14 @@ def start(device: Device, frame_layouts: list[DescriptorSetLayout], scene: Scene
               for name, push in compute_path.first_frame_kernels(compute_path.aggregates(device),
                                                                  masked)]
     if options.shadows:
+        # (the save kernel serves 2D layers: the automatic sun's cascades where the scene has
+        # no lights, a directional or spot light's; a point light's cube never scrolls)
+        flat = not scene.lights or any(getattr(light, "kind", "point") != "point"
+                                       and getattr(light, "shadows", True) for light in scene.lights)
         makers += [(f"shadow_{name}", functools.partial(shadow_raster.raster_kernel, device,
                                                         shadows, name))
-                   for name in shadow_raster.KERNELS if masked or name != "masked"]
+                   for name in shadow_raster.KERNELS
+                   if (masked or name != "masked") and (flat or name != "save")]
     if options.ao != L.Ao.OFF and options.has_environment:
         quality = ao.PRESETS.get(options.ao, ao.PRESETS[L.Ao.GTAO])
         makers += [(name, functools.partial(ao.ao_kernel, device, frame_layouts[0], ao_layout, name))

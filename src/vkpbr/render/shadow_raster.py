@@ -27,8 +27,15 @@ them by hand cost every frame's shading 0.04-0.07 ms (the still frame 0.88 -> 0.
 - The shading knows from ShadowData's header (ShadowMaps.write, bit 0 set per frame by
   ShadowMaps._choose_reads): world_layout.z bit 0 (read the buffer, set 3's ShadowDepths),
   .w the cubes' first texel; clear: the images, compared by the sampler.
-- Layers not redrawn (ShadowMaps.stale's cache) keep their texels: `_clear` fills only the
-  redrawn layers, so a cached layer is valid in the buffer as it was in the images. A switch
+- Layers not redrawn (ShadowMaps.stale's cache) keep their texels: only the redrawn layers
+  start anew, so a cached layer is valid in the buffer as it was in the images. How a
+  redrawn layer starts is its row after the matrices in ShadowData (render/shadows.py CLIP_AT,
+  written by ShadowMaps.stale; the move kernel, "shadows.move"): cleared; kept (unchanged,
+  within a redrawn span); or, where a walking camera moved a cascade by whole texels along one
+  axis (shadow_math.layer_scroll), its texels moved (saved into `scratch` first,
+  "shadows.save") and only the strip that came into view drawn: the drawing kernels clip each
+  2D layer's texels to its row's. Rows are data, so a scrolled frame replays the recording of
+  a redrawn one. A switch
   between the compute kernels and the raster units (RenderOptions.shadow_raster, or "auto"
   following render/path_choice.py's measured choice) forgets the cache (ShadowFrames.
   choose_raster): the new side redraws every layer, nothing stale is read. New buffers (new
@@ -39,10 +46,11 @@ them by hand cost every frame's shading 0.04-0.07 ms (the still frame 0.88 -> 0.
   fragment shaders (their sets bind it either way): the frame graph puts
   the barrier from the kernels' writes before it, so every shading step after it (fragment
   passes, compute shading, the transmission's copy, a batch's) sees the maps without each
-  naming them. The next frame's clear is the buffer's first use in its recording, which the
-  graph orders after every earlier command (gpu/graph.py: ALL_COMMANDS), this frame's reads
-  included; a frame that redraws nothing touches it not at all and reads what the last
-  drawing frame made visible.
+  naming them. The next frame's save (or move, where it draws no 2D layer) is the buffer's
+  first use in its recording, which the graph orders after every earlier command
+  (gpu/graph.py: ALL_COMMANDS), this frame's reads included; a frame
+  that redraws nothing touches it not at all and reads what the last drawing frame made
+  visible.
 
 Triangles whose box exceeds BIG_AREA texels (a floor under a whole cascade) are listed as
 bands of rows and drawn by work groups, as the main compute rasteriser does (raster.comp);
