@@ -82,7 +82,6 @@ from vkpbr.gpu.descriptors import BindingSpec, DescriptorPool, DescriptorSetLayo
 from vkpbr.gpu.graph import BufferResource, Step
 from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.deform import UNBOUNDED_RADIUS, draw_sphere
-from vkpbr.render.shadows import CLIP_AT
 
 __all__ = ["ShadowRaster", "WorldJob", "wants_compute", "SET_ROWS", "big_list_bytes"]
 
@@ -340,7 +339,7 @@ class ShadowRaster:
         push[:16] = (0, 0, 0, 0, sizes[0], sizes[1],
                      sizes[2], self.max_layers, sizes[3], int(self.gs.has_colors), BIG_AREA,
                      BIG_CHUNK, MASKED_AREA, spot, table.chunks_at, table.chunks)
-        push[29] = CLIP_AT if job is None else 0  # the 2D layers' rows (world_at.y)
+        push[29] = self.maps.clip_at if job is None else 0  # the 2D layers' rows (world_at.y)
         bias = push.view(np.float32)
         for k, kind in enumerate(_KINDS):
             bias[16 + k], bias[20 + k] = self.depth_bias[kind]
@@ -419,26 +418,8 @@ class ShadowRaster:
             cmd.bind_set(0, set0)
             cmd.bind_set(4, dset)
 
-        # A frame's layers start as their rows say (2D layers kept, scrolled or cleared,
-        # cube faces cleared: the save and move kernels); a batch of worlds' maps are filled.
-        flat = [j for j in jobs if j[2].kind != "point"] if world is None else []
-
-        def texel_groups(e: Any) -> int:
-            size = (self.maps.cubes if e.kind == "point" else self.maps.maps).size
-            return -(-size * size // TEXEL_GROUP)
-
-        def save(cmd: Any) -> None:
-            bind(cmd, "save")
-            for matrix, layers, e in flat:
-                dispatch(cmd, matrix, layers, texel_groups(e))
-
         def clear(cmd: Any) -> None:
             self._clear(cmd, world)
-
-        def move(cmd: Any) -> None:
-            bind(cmd, "move")
-            for matrix, layers, e in jobs:
-                dispatch(cmd, matrix, layers, texel_groups(e))
 
         def small(cmd: Any) -> None:
             bind(cmd, "small")
@@ -465,9 +446,28 @@ class ShadowRaster:
                     push[0], push[2] = triangles, row
                     dispatch(cmd, matrix, layers, -(-triangles // SMALL_GROUP))
 
-        out = {"clear": clear, "move": move, "small": small, "args": args, "big": big,
-               "masked": masked}
-        return {**out, "save": save} if flat else out
+        out = {"clear": clear, "small": small, "args": args, "big": big, "masked": masked}
+        return out if world is not None else {**out, **self._starts(jobs, bind, dispatch)}
+
+    def _starts(self, jobs: list[tuple[int, int, Any]], bind: Callable[[Any, str], None],
+                dispatch: Callable[..., None]) -> dict[str, Callable[[Any], None]]:
+        """A frame's "move" (every drawn layer starts as its row says: 2D layers kept,
+        scrolled or cleared, cube faces cleared) and, where 2D layers are drawn, its "save"
+        (a scrolled layer's texels into `scratch` first)."""
+        flat = [j for j in jobs if j[2].kind != "point"]
+
+        def texel_groups(e: Any) -> int:
+            size = (self.maps.cubes if e.kind == "point" else self.maps.maps).size
+            return -(-size * size // TEXEL_GROUP)
+
+        def run(name: str, drawn: list[tuple[int, int, Any]]) -> Callable[[Any], None]:
+            def record(cmd: Any) -> None:
+                bind(cmd, name)
+                for matrix, layers, e in drawn:
+                    dispatch(cmd, matrix, layers, texel_groups(e))
+            return record
+
+        return {"move": run("move", jobs), **({"save": run("save", flat)} if flat else {})}
 
     def _dispatcher(self, push: np.ndarray, world: WorldJob | None
                     ) -> Callable[[Any, int, int, int], None]:

@@ -86,6 +86,7 @@ HEADER_FLOATS = HEADER_BYTES // 4
 CLIP_AT = MATRICES  # where the rows start, in mat4s after the header (4 rows a mat4)
 CLIP_FULL, CLIP_KEEP, CLIP_SCROLL = 0, 1, 2
 DATA_BYTES = HEADER_BYTES + 64 * MATRICES + 16 * MAX_LAYERS  # a slot's, rows included
+CLIP_FLOATS = HEADER_FLOATS + 16 * CLIP_AT  # where the rows start in a slot's floats
 DEFAULT_RESOLUTION = 2048
 # (constant, slope) depth bias of the passes, in Vulkan's units; negative: away from the light
 # under reversed-Z. Per projection: orthographic depth is linear in distance, perspective
@@ -210,14 +211,11 @@ class ShadowMaps:
         # (host memory: `_stale` reads them back every frame, uncached from device memory)
         self.buffer = self._own(Buffer(device, self.stride * slots, "storage", host_visible=True,
                                        name="shadow matrices"))
-        self.pool = self._own(DescriptorPool(device, [(self.set_layout, slots),
-                                                      (self.pass_layout, slots)]))
+        self.pool = self._own(DescriptorPool(device, [(self.set_layout, slots), (self.pass_layout, slots)]))
         self.sets = [self.pool.allocate(self.set_layout) for _ in range(slots)]
         self.pass_sets = [self.pool.allocate(self.pass_layout) for _ in range(slots)]
-        self._views = [self.buffer.array(np.float32, size // 4, i * self.stride)
-                       for i in range(slots)]
-        self._clips = [v[HEADER_FLOATS + 16 * MATRICES:].view(np.uint32).reshape(MAX_LAYERS, 4)
-                       for v in self._views]
+        self._views = [self.buffer.array(np.float32, size // 4, i * self.stride) for i in range(slots)]
+        self._clips = [v[CLIP_FLOATS:].view(np.uint32).reshape(MAX_LAYERS, 4) for v in self._views]
         self.maps: LayeredDepth | None = None
         self.cubes: LayeredDepth | None = None  # (the images: `ensure`)
         self._pipelines: dict[tuple, Pipeline] = {}
@@ -245,6 +243,8 @@ class ShadowMaps:
         # frames in a row that redrew fewer than every layer, whether the last redrew them all.
         self.reads_buffer, self._partial_frames, self._last_whole = False, 0, False
         self.ensure(ShadowPlan())
+
+    clip_at = CLIP_AT  # (read by render/shadow_raster.py, which does not import this module)
 
     def _own(self, obj: Any) -> Any:
         self._objects.append(obj)
