@@ -2,7 +2,7 @@
 recorded anew N times (the recordings dropped before each), under cProfile. Not a test.
 
     python3 benchmarks/profile_record.py --scene Sponza.gltf [--size 1920x1080] [--times 10]
-        [--sun] [--sort tottime|cumtime]
+        [--sun] [--compute] [--sort tottime|cumtime]
 
 Prints each recording's milliseconds and the top 40 functions of the recordings alone.
 """
@@ -26,11 +26,16 @@ def main() -> None:
     ap.add_argument("--times", type=int, default=10)
     ap.add_argument("--sun", action="store_true", help="lit by the automatic sun (its cascades)")
     ap.add_argument("--sort", default="tottime")
+    ap.add_argument("--compute", action="store_true",
+                    help="the compute path, its rasteriser and compute-drawn shadow maps (the "
+                         "H200's auto; lavapipe's is the fragment path)")
     args = ap.parse_args()
     size = tuple(int(x) for x in args.size.split("x"))
+    opts = ({"pipeline": "compute", "raster": "compute", "shadow_raster": "compute"}
+            if args.compute else {})
     with Renderer(load_scene(args.scene)) as r:
         lights = [r.automatic_sun()] if args.sun else None
-        r.render(size=size, lights=lights)  # the kernels, the path's choice
+        r.render(size=size, lights=lights, **opts)  # the kernels, the path's choice
         original = recorder_module.FrameRecorder._record
         prof, ms = cProfile.Profile(), []
 
@@ -47,7 +52,7 @@ def main() -> None:
         try:
             for _ in range(args.times):
                 r.parts.recorder.free()
-                r.render(size=size, lights=lights)
+                r.render(size=size, lights=lights, **opts)
         finally:
             recorder_module.FrameRecorder._record = original
         print(f"device: {r.device.info.name}; recordings (ms): " + " ".join(f"{m:.2f}" for m in ms))
