@@ -43,14 +43,20 @@ def _cofactors(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return cof, det  # cof[row][column][...]
 
 
+def determinant_of_parts(a00: np.ndarray, a01: np.ndarray, a02: np.ndarray,
+                         a10: np.ndarray, a11: np.ndarray, a12: np.ndarray,
+                         a20: np.ndarray, a21: np.ndarray, a22: np.ndarray) -> np.ndarray:
+    """det of 3x3 matrices given as their nine parts (arrays alike): cofactors of row 0."""
+    return (a00 * (a11 * a22 - a12 * a21) - a01 * (a10 * a22 - a12 * a20)
+            + a02 * (a10 * a21 - a11 * a20))
+
+
 def determinants(a: np.ndarray) -> np.ndarray:
     """det of (N, 3, 3) matrices, a block at a time."""
     out = np.empty(len(a))
     for b in blocks(len(a)):
         m = a[b]
-        out[b] = (m[:, 0, 0] * (m[:, 1, 1] * m[:, 2, 2] - m[:, 1, 2] * m[:, 2, 1])
-                  - m[:, 0, 1] * (m[:, 1, 0] * m[:, 2, 2] - m[:, 1, 2] * m[:, 2, 0])
-                  + m[:, 0, 2] * (m[:, 1, 0] * m[:, 2, 1] - m[:, 1, 1] * m[:, 2, 0]))
+        out[b] = determinant_of_parts(*(m[:, i, j] for i in range(3) for j in range(3)))
     return out
 
 
