@@ -140,8 +140,24 @@ Caster caster(uint k, uint w) {
 }
 
 // Whether layer m's frustum meets the caster's sphere (one test instead of three vertices:
-// most of a scene's draws miss a near cascade or a cube face).
-bool layer_sees(Caster a, uint m) { return sphere_visible(layer_vp[m], a.sphere); }
+// most of a scene's draws miss a near cascade or a cube face), and where the layer draws
+// only some of its texels this frame (its clip row: kept, none; scrolled, the strip that came
+// into view), whether the sphere's box in texels meets them (a scrolled layer is a cascade:
+// orthographic, so the box is the centre's texel +- the radius scaled by the matrix's rows;
+// a texel of slack for rounding).
+bool layer_sees(Caster a, uint m) {
+    if (!sphere_visible(layer_vp[m], a.sphere)) return false;
+    if (pc.world_at.y == 0u || m >= pc.max_layers) return true;
+    uvec4 clip = clip_row(m);
+    if (clip.w != CLIP_SCROLL) return clip.w == CLIP_FULL;
+    mat4 vp = layer_vp[m];
+    float half_size = 0.5 * float(pc.map_size);
+    vec2 centre = ((vp * vec4(a.sphere.xyz, 1.0)).xy + 1.0) * half_size;
+    vec2 reach = a.sphere.w * half_size * vec2(length(vp_row(vp, 0).xyz), length(vp_row(vp, 1).xyz))
+                 + 1.0;
+    vec2 lo = vec2(clip.x & 0xffffu, clip.x >> 16), hi = vec2(clip.y & 0xffffu, clip.y >> 16);
+    return all(greaterThan(centre + reach, lo)) && all(lessThan(centre - reach, hi));
+}
 
 // Triangle g of the caster: its vertex indices and world positions (model x position).
 void corners(Caster a, uint g, out uvec3 vi, out vec4 wp[3]) {
