@@ -8,11 +8,14 @@ depend on the camera (spot, point) are not redrawn when only the camera moves.""
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 
 import numpy as np
 import pytest
 from shadow_scenes import BLOCK, CAMERA, CARD, GROUND, LIGHTS, rect_scene
+
+from vkpbr.render.shadow_frames import SETTLED_FRAMES
 
 SIZE = (96, 72)
 # The raster units draw the maps unless a step says otherwise ("auto" would pick the compute
@@ -167,3 +170,57 @@ def test_a_walk_scrolls_the_cascades_it_moves_by_whole_texels(pair) -> None:  # 
     assert len(scrolled) >= 3, scrolled
     assert all(sorted((abs(dx), abs(dy))) == [0, step] for _, dx, dy in scrolled), scrolled
     assert {dx + dy > 0 for _, dx, dy in scrolled} == {True, False}, scrolled  # both ways
+
+
+def test_casters_that_never_moved_keep_maps_of_their_own(pair) -> None:  # noqa: ANN001
+    """Compute-drawn maps where some casters moved and others did not
+    (ShadowFrames.split, shadows.Redraw): the maps of those that did not are kept apart,
+    redrawn only when their layer's matrix changes (or scrolled: a walking camera) or the
+    set of moved casters changes, and a frame copies them in and draws the moved casters
+    over them. Every frame's maps and image equal, bit for bit, those of one pass over every
+    caster (the other renderer, its split turned off and every map redrawn): a texel's depth
+    is the same from either pass, and the nearest wins either way. First the block moves
+    every frame (its shadow, and the card's on it) and the camera every third; then the
+    block rests until it settles (SETTLED_FRAMES, 3 here) and the card moves: the kept maps
+    are redrawn once with the block where it came to rest. The sun's cascades, the spot map
+    and the point light's cube all take part."""
+    cached, fresh = pair
+    opts = {**OPTS, "shadow_raster": "compute"}
+    rest = [r.state.local[1:3].copy() for r in pair]
+    fresh.parts.shadow_frames.split = lambda moved: None  # one pass over every caster
+    cached.parts.shadow_frames._versions = collections.deque(maxlen=3)
+    kept_redraws, splits = [], []
+    try:
+        for i in range(20):
+            node, step = (1, i) if i < 12 else (2, i - 12) if i >= 15 else (None, 0)
+            for r, m in zip(pair, rest, strict=True):
+                if node is not None:
+                    moved = m[node - 1].copy()
+                    moved[:3, 3] += (0.04 * step, 0.03 * (step % 3), -0.02 * step)
+                    r.set_pose(node, moved)
+            camera = dataclasses.replace(CAMERA, eye=(0.06 * min(i // 3, 3), 5.0, 6.0),
+                                         target=(0.3 + 0.06 * min(i // 3, 3), 0.0, 0.0))
+            got = cached.render(camera, ALL, size=SIZE, linear=True, **opts)
+            kept_redraws.append(dict(cached.shadows.last_kept_layers))
+            splits.append(cached.parts.shadow_frames._split[1])
+            fresh.shadow_frames.forget()
+            want = fresh.render(camera, ALL, size=SIZE, linear=True, **opts)
+            for a, b in zip(cached.shadows.read_maps(), fresh.shadows.read_maps(), strict=True):
+                assert np.array_equal(a, b), i
+            assert np.array_equal(got, want), (i, float(np.abs(got - want).max()))
+    finally:
+        del fresh.parts.shadow_frames.split
+        cached.parts.shadow_frames._versions = collections.deque(maxlen=SETTLED_FRAMES)
+        for r, m in zip(pair, rest, strict=True):
+            r.set_poses([1, 2], m)
+    # The kept maps were drawn whole once, then only where the camera moved a cascade: the
+    # spot map and the cube never again while the block moved.
+    assert kept_redraws[0] == {"directional": 4, "spot": 1, "point": 6}, kept_redraws[0]
+    assert all(k and k["spot"] == k["point"] == 0 for k in kept_redraws[1:12]), kept_redraws
+    assert any(k["directional"] for k in kept_redraws[3:12:3]), kept_redraws
+    assert not any(k["directional"] for k in kept_redraws[1:3]), kept_redraws
+    # The block at rest settles; the card moving is a new set: every kept map redrawn once.
+    assert kept_redraws[12:15] == [{}, {}, {}] and splits[13] is None is splits[14], splits[12:15]
+    assert kept_redraws[15] == {"directional": 4, "spot": 1, "point": 6}, kept_redraws[15]
+    assert splits[15][0] != splits[11][0] and splits[15][1][2] and not splits[15][1][1], splits[15]
+    assert all(k["spot"] == k["point"] == 0 for k in kept_redraws[16:]), kept_redraws

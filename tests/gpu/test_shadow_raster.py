@@ -331,9 +331,17 @@ def test_the_shading_reads_the_kernels_buffer(renderer, monkeypatch) -> None:  #
     renderer.shadows.forget()
     got = renderer.render(CAMERA, spot, size=SIZE, shadow_raster="compute", **opts)
     steps = [s for s in recorded[-1] if s.name.startswith("shadows")]
-    assert [s.name for s in steps] == ["shadows.save", "shadows.clear", "shadows.move",
-                                       "shadows.small", "shadows.args", "shadows.big",
-                                       "shadows.masked", "shadows"]
+    # (one pass; or, where an earlier test of this module moved a caster, the maps of those
+    # that never moved drawn apart first, then copied in: no save, nothing scrolls; a pass
+    # whose casters hold no masked draw has no masked kernel)
+    drawing = ["shadows.clear", "shadows.move", "shadows.small", "shadows.args", "shadows.big",
+               "shadows.masked", "shadows"]
+    unmasked = [n for n in drawing if n != "shadows.masked"]
+    names = [s.name for s in steps]
+    kept = [n.replace("kept.", "") for n in names if n.startswith("shadows.kept.")]
+    final = names[len(kept):]
+    assert final == ["shadows.save", *drawing] if not kept else final in (drawing, unmasked), names
+    assert kept in ([], ["shadows.save", *drawing[:-1]], ["shadows.save", *unmasked[:-1]]), names
     uses = {u for s in steps for _, u in s.all_uses()}
     assert not any("transfer_src" in u for u in uses), uses  # (the copy's)
     assert steps[-1].uses == (("shadow_depths", "storage_read|fragment_storage_read"),)

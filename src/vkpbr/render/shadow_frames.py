@@ -14,6 +14,7 @@ buffers are fitted here, before the frame asks which layers are stale.
 
 from __future__ import annotations
 
+import collections
 from typing import Any
 
 import numpy as np
@@ -27,7 +28,15 @@ from vkpbr.render.shadow_raster import wants_compute
 from vkpbr.render.shadows import ShadowMaps, ShadowPlan, plan_shadows
 from vkpbr.scene.types import Camera, Light
 
-__all__ = ["ShadowFrames"]
+__all__ = ["ShadowFrames", "SETTLED_FRAMES", "MAX_SPLITS"]
+
+# A caster that has not moved for this many frames counts as one that never moved again
+# (ShadowFrames.split): its shadow joins the kept maps.
+SETTLED_FRAMES = 120
+# Sets of moved casters a renderer keeps maps apart for (each has its caster tables and
+# descriptor sets on the GPU); past them its maps are drawn in one pass, as before: a scene
+# whose moving casters keep changing gains little from the split and must not grow.
+MAX_SPLITS = 16
 
 
 class ShadowFrames:
@@ -42,6 +51,11 @@ class ShadowFrames:
         self.paths = paths  # render/path_choice.py FramePaths: shadow_raster auto follows its choice
         self._plan: tuple[tuple, ShadowPlan] = ((), ShadowPlan())
         self._rows: dict[int, tuple[tuple, np.ndarray | None]] = {}  # by slot: (key, rows)
+        # `split`'s answer for a state version and casters, and its casters that moved (their
+        # bytes and id: a new set is a new id).
+        self._split: tuple[tuple, tuple[int, np.ndarray] | None] = ((), None)
+        self._moved: tuple[tuple, int, np.ndarray | None] = ((), 0, None)
+        self._versions: collections.deque[int] = collections.deque(maxlen=SETTLED_FRAMES)
 
     def plan(self, lights: tuple[Light, ...], options: RenderOptions) -> ShadowPlan:
         """Which of the frame's lights get shadow maps (none in course mode or with shadows
@@ -103,7 +117,33 @@ class ShadowFrames:
         """ShadowMaps.stale for frame `slot`, with the version of the state that last moved a
         caster: a map whose matrices and casters are unchanged is kept."""
         moved = 0 if self.state is None else self.state.changed_since(self.casters)
-        return self.maps.stale(slot, plan, alpha_mask, moved)
+        return self.maps.stale(slot, plan, alpha_mask, moved, self.split(moved))
+
+    def split(self, moved: int) -> tuple[int, np.ndarray] | None:
+        """The casters that moved in the last SETTLED_FRAMES frames, as (an id, a bool per
+        draw), where compute kernels draw the maps and other casters did not move: the maps
+        keep those apart (ShadowMaps.stale), so that an animated character in a still scene
+        redraws its own shadow, not the scene's. None where none moved or all did (one
+        pass, as before), and past MAX_SPLITS sets. A new set of moved casters is a new id
+        (the kept maps then hold other casters: they are redrawn)."""
+        if self.state is not None:
+            self._versions.append(self.state.version)  # (a frame's: SETTLED_FRAMES ago first)
+        if not moved or self.state is None or self.casters is None or not self.maps.compute \
+                or self._moved[1] >= MAX_SPLITS:
+            return None
+        settled = self._versions[0] if len(self._versions) == self._versions.maxlen else 0
+        key = (self.state.version, settled, id(self.casters), len(self.casters))
+        if self._split[0] == key:
+            return self._split[1]
+        dynamic = self.casters & (self.state.draw_versions > settled)  # (a draw's last change)
+        split = None
+        if 0 < int(dynamic.sum()) < int(self.casters.sum()):
+            which = (dynamic.tobytes(), key[2:])  # (new casters: a new mask, kept maps redrawn)
+            if which != self._moved[0]:
+                self._moved = (which, self._moved[1] + 1, dynamic)
+            split = (self._moved[1], self._moved[2])
+        self._split = (key, split)
+        return split
 
     def write(self, slot: FrameSlot, plan: ShadowPlan, lights: tuple[Light, ...],
               camera: Camera, size: tuple[int, int]) -> np.ndarray | None:

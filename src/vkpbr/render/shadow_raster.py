@@ -166,9 +166,11 @@ class _Table:
     sphere in the mesh's space (float32 bits; a deformed draw's never culls). After the
     rows, the opaque rows' chunks (`_chunks`) from uvec4 `chunks_at`."""
 
-    def __init__(self, device: Any, gs: Any, classes: Sequence[str]) -> None:
+    def __init__(self, device: Any, gs: Any, classes: Sequence[str],
+                 only: np.ndarray | None = None) -> None:
         casters = [(i, d, c) for i, (d, c) in enumerate(zip(gs.draws, classes, strict=True))
-                   if getattr(d, "casts_shadows", True) and d.index_count >= 3]
+                   if getattr(d, "casts_shadows", True) and d.index_count >= 3
+                   and (only is None or only[i])]
         opaque = [(i, d) for i, d, c in casters if c in _OPAQUE]
         masked = [(i, d) for i, d, c in casters if c in _MASKED]
         rows = np.zeros((max(len(opaque) + len(masked), 1), 8), np.uint32)
@@ -207,6 +209,12 @@ def raster_kernel(device: Any, layouts: list[DescriptorSetLayout], name: str) ->
                            push_bytes=PUSH_BYTES)
 
 
+def _jobs(plan: Any, redraw: Sequence[range]) -> list[tuple[int, int, Any]]:
+    """(first matrix, layers, entry) of each plan entry's drawn range."""
+    return [(e.matrix_base + r.start, len(r), e) for e, r in zip(plan.entries, redraw, strict=True)
+            if len(r)]
+
+
 KERNELS = ("save", "move", "small", "args", "big", "masked")  # the last only where masked draws cast
 
 
@@ -238,6 +246,7 @@ class ShadowRaster:
         self.depths: Buffer | None = None
         self.big: Buffer | None = None
         self.scratch: Buffer | None = None
+        self.kept: Buffer | None = None  # (`_kept_depths`)
         self.big_capacity = 0
 
     def _own(self, obj: Any) -> Any:
@@ -260,10 +269,11 @@ class ShadowRaster:
         key = (id(maps), id(cubes), maps.layers, maps.size, cubes.layers, cubes.size)
         if self._images == key:
             return False
-        for buffer in (self.depths, self.big, self.scratch):
+        for buffer in (self.depths, self.big, self.scratch, self.kept):
             if buffer is not None:
                 self._owned.remove(buffer)
                 buffer.destroy()
+        self.kept = None
         for pool in self._pools:
             self._owned.remove(pool)
             pool.destroy()
@@ -286,18 +296,28 @@ class ShadowRaster:
         self.maps.bind_frame_depths(self.depths)
         return True
 
-    def _table(self, classes: Sequence[str]) -> tuple[tuple, _Table]:
-        key = (len(self.gs.draws), tuple(classes))
+    def _table(self, classes: Sequence[str], only: np.ndarray | None = None) -> tuple[tuple, _Table]:
+        """The caster table of `classes` (of `only` those draws where given), made once."""
+        key = (len(self.gs.draws), tuple(classes), None if only is None else only.tobytes())
         if key not in self._tables:
-            table = _Table(self.device, self.gs, classes)
+            table = _Table(self.device, self.gs, classes, only)
             self._own(table.buffer)
             self._tables[key] = table
         return key, self._tables[key]
 
-    def _set(self, key: tuple, table: _Table, slot: int, job: WorldJob | None = None) -> Any:
+    def _set(self, key: tuple, table: _Table, slot: int, job: WorldJob | None = None,
+             role: str = "frame") -> Any:
+        """Slot `slot`'s set 4 for `table`: into the frame's maps ("frame"), the kept maps of
+        the casters that never moved ("kept", `Redraw`), or the frame's over those ("moved":
+        their Scratch), or a batch of worlds' (`job`)."""
         depths, big = (self.depths, self.big) if job is None else (job.depths, job.big)
-        if job is not None:
-            key = (*key, "worlds", job.generation)
+        # (a batch of worlds' maps never scroll: its kernels read no rows)
+        scratch = self.scratch if job is None else big
+        if role == "kept":
+            depths = self._kept_depths()
+        elif role == "moved":
+            scratch = self._kept_depths()
+        key = (*key, role) if job is None else (*key, "worlds", job.generation)
         if (key, slot) not in self._sets:
             pool = self._own(DescriptorPool(self.device, [(self.set_layout, self.slots)]))
             self._pools.append(pool)
@@ -305,9 +325,7 @@ class ShadowRaster:
             buffers = {"Indices": self.gs.index_buffer, "Positions": streams["positions"],
                        "Texcoords0": streams["texcoords"], "Texcoords1": streams["texcoords1"],
                        "Colors": streams["colors"], "Casters": table.buffer,
-                       "Depths": depths, "Big": big,
-                       # (a batch of worlds' maps never scroll: its kernels read no rows)
-                       "Scratch": self.scratch if job is None else big}
+                       "Depths": depths, "Big": big, "Scratch": scratch}
             w = DescriptorWriter(self.device)
             for s in range(self.slots):
                 dset = pool.allocate(self.set_layout)
@@ -321,14 +339,27 @@ class ShadowRaster:
             w.update()
         return self._sets[(key, slot)]
 
+    def _kept_depths(self) -> Buffer:
+        """The kept maps of the casters that never moved (`Redraw`): laid out as `depths`,
+        made on first use (the buffers' `fit` lets them go with the others)."""
+        if self.kept is None:
+            self.kept = self._own(Buffer(self.device, self.depths.size, "storage",
+                                         name="shadow kept depths"))
+        return self.kept
+
     def resources(self) -> dict[str, BufferResource]:
         """The graph resources the steps name (after `steps` made them)."""
-        return {"shadow_depths": BufferResource(self.depths),
-                "shadow_big": BufferResource(self.big),
-                "shadow_scratch": BufferResource(self.scratch)}
+        out = {"shadow_depths": BufferResource(self.depths), "shadow_big": BufferResource(self.big),
+               "shadow_scratch": BufferResource(self.scratch)}
+        if self.kept is not None:
+            out["shadow_kept"] = BufferResource(self.kept)
+        return out
 
     # --- steps -----------------------------------------------------------------------------
-    def _push(self, plan: Any, table: _Table, job: WorldJob | None = None) -> np.ndarray:
+    def _push(self, plan: Any, table: _Table, job: WorldJob | None = None,
+              rows: int | None = None) -> np.ndarray:
+        """The kernels' push constants; `rows`: the set of clip rows they read (the frame's
+        by default; none for a batch of worlds)."""
         push = np.zeros(PUSH_BYTES // 4, np.uint32)
         spot = 0
         for e in plan.entries:
@@ -339,7 +370,7 @@ class ShadowRaster:
         push[:16] = (0, 0, 0, 0, sizes[0], sizes[1],
                      sizes[2], self.max_layers, sizes[3], int(self.gs.has_colors), BIG_AREA,
                      BIG_CHUNK, MASKED_AREA, spot, table.chunks_at, table.chunks)
-        push[29] = self.maps.clip_at if job is None else 0  # the 2D layers' rows (world_at.y)
+        push[29] = 0 if job is not None else self.maps.clip_at if rows is None else rows  # world_at.y
         bias = push.view(np.float32)
         for k, kind in enumerate(_KINDS):
             bias[16 + k], bias[20 + k] = self.depth_bias[kind]
@@ -356,15 +387,16 @@ class ShadowRaster:
             redraw = tuple(range(e.count) for e in plan.entries)
         if self._images is None:  # (prepare fits them: new ones here would forget `redraw`)
             raise RuntimeError("ShadowRaster.steps before fit()")
-        key, table = self._table(classes)
-        dset = self._set(key, table, slot)
-        push = self._push(plan, table)
         # Per drawn entry: its first matrix, layers, and where they go in the images.
-        jobs = [(e.matrix_base + r.start, len(r), e) for e, r in zip(plan.entries, redraw, strict=True)
-                if len(r)]
-
-        record = self._records(table, dset, push, jobs, material_sets, set0)
-        out = self._steps(record, table, "shadow_depths", "shadow_big", "shadow_scratch")
+        jobs = _jobs(plan, redraw)
+        split = getattr(redraw, "split", None)  # (render/shadows.py Redraw)
+        if split is None:
+            key, table = self._table(classes)
+            record = self._records(table, self._set(key, table, slot), self._push(plan, table),
+                                   jobs, material_sets, set0)
+            out = self._steps(record, table, "shadow_depths", "shadow_big", "shadow_scratch")
+        else:
+            out = self._split_steps(slot, plan, redraw, jobs, classes, material_sets, set0)
         if copy:  # the images the shading compares in hardware get the redrawn layers
             # (the buffer stays declared read by the shaders too: their descriptor set binds
             # it, and synchronization validation counts a bound buffer as read)
@@ -372,33 +404,56 @@ class ShadowRaster:
                            (("shadow_depths", "transfer_src|storage_read|fragment_storage_read"),))
         return out
 
+    def _split_steps(self, slot: int, plan: Any, redraw: Any, jobs: list[tuple[int, int, Any]],
+                     classes: Sequence[str], material_sets: Sequence[Any], set0: Any) -> list[Step]:
+        """A `Redraw`'s steps: the kept maps' layers `redraw.kept` drawn from the casters
+        that never moved (their rows the second set: kept, scrolled or cleared), then every
+        drawn layer copied from them (the first set's CLIP_COPY rows) and the casters that
+        moved drawn over it."""
+        moved = redraw.split[1]
+        out = []
+        kept_jobs = _jobs(plan, redraw.kept)
+        if kept_jobs:
+            key, table = self._table(classes, ~moved)
+            record = self._records(table, self._set(key, table, slot, role="kept"),
+                                   self._push(plan, table, rows=self.maps.kept_clip_at), kept_jobs,
+                                   material_sets, set0)
+            out += self._steps(record, table, "shadow_kept", "shadow_big", "shadow_scratch",
+                               "shadows.kept.")[:-1]
+        key, table = self._table(classes, moved)
+        record = self._records(table, self._set(key, table, slot, role="moved"),
+                               self._push(plan, table), jobs, material_sets, set0)
+        record.pop("save", None)  # (copied in: nothing scrolls)
+        return out + self._steps(record, table, "shadow_depths", "shadow_big", "shadow_kept")
+
     def _steps(self, record: dict[str, Callable[[Any], None]], table: _Table, depths: str,
-               big_list: str, scratch: str | None = None) -> list[Step]:
+               big_list: str, scratch: str | None = None, prefix: str = "shadows.") -> list[Step]:
         """`scratch`: a frame's drawn layers start as their rows say, by the save and move
-        kernels (cleared, kept or scrolled); without it (a batch of worlds) they are filled."""
+        kernels (cleared, kept, scrolled or copied from `scratch`); without it (a batch of
+        worlds) they are filled. `prefix`: the steps' names' (the last, "shadows", aside)."""
         apart = TIMED_STEPS
         made = {name: (functools.partial(self._pipeline, name),) for name in KERNELS}
         out = []
         if scratch is None:
-            out.append(Step("shadows.clear", record["clear"],
+            out.append(Step(prefix + "clear", record["clear"],
                             ((depths, "transfer_dst"), (big_list, "transfer_dst")), timed=False))
         else:
             if "save" in record:
-                out.append(Step("shadows.save", record["save"], ((depths, "storage_read"),
-                                                                 (scratch, "storage")),
+                out.append(Step(prefix + "save", record["save"], ((depths, "storage_read"),
+                                                                  (scratch, "storage")),
                                 timed=False, kernels=made["save"]))
-            out += [Step("shadows.clear", record["clear"], ((big_list, "transfer_dst"),), timed=False),
-                    Step("shadows.move", record["move"], ((depths, "storage"), (scratch, "storage_read")),
+            out += [Step(prefix + "clear", record["clear"], ((big_list, "transfer_dst"),), timed=False),
+                    Step(prefix + "move", record["move"], ((depths, "storage"), (scratch, "storage_read")),
                          timed=False, kernels=made["move"])]
         out += [
-               Step("shadows.small", record["small"], ((depths, "storage"), (big_list, "storage")),
+               Step(prefix + "small", record["small"], ((depths, "storage"), (big_list, "storage")),
                     timed=apart, kernels=made["small"]),
-               Step("shadows.args", record["args"], ((big_list, "storage"),), timed=False,
+               Step(prefix + "args", record["args"], ((big_list, "storage"),), timed=False,
                     kernels=made["args"]),
-               Step("shadows.big", record["big"], ((depths, "storage"), (big_list, "storage|indirect")),
+               Step(prefix + "big", record["big"], ((depths, "storage"), (big_list, "storage|indirect")),
                     timed=apart, kernels=made["big"])]
         if table.masked:
-            out.append(Step("shadows.masked", record["masked"], ((depths, "storage"),), timed=apart,
+            out.append(Step(prefix + "masked", record["masked"], ((depths, "storage"),), timed=apart,
                             kernels=made["masked"]))
         # Nothing to record: its declared read puts the barrier from the kernels' writes to
         # every shader that reads the maps after it (the module's docstring).

@@ -66,7 +66,7 @@ from vkpbr.render.codegen import SPV_DIR
 from vkpbr.render.shadow_images import ShadowImages
 from vkpbr.scene.types import Camera, Light
 
-__all__ = ["ShadowMaps", "ShadowPlan", "ShadowEntry", "plan_shadows", "MAX_LAYERS", "MAX_CUBES",
+__all__ = ["ShadowMaps", "ShadowPlan", "ShadowEntry", "Redraw", "plan_shadows", "MAX_LAYERS", "MAX_CUBES",
            "HEADER_BYTES", "MATRICES", "DEPTH_BIAS", "NORMAL_OFFSET", "PCF_RADIUS",
            "DEFAULT_RESOLUTION", "SET3_ROWS"]
 
@@ -77,15 +77,19 @@ MAX_CUBES = 4  # point lights with shadows
 MATRICES = MAX_LAYERS + 6 * MAX_CUBES  # the 2D layers' matrices, then 6 per cube
 HEADER_BYTES = 64  # shaders/shadow_data.glsl: cascade_far, cascade_texel, params, world_layout
 HEADER_FLOATS = HEADER_BYTES // 4
-# After the matrices, a uvec4 a 2D layer for the compute kernels (shaders/shadow_raster.comp
-# clip_row; the shading never reads them): how a redrawn layer is drawn this frame
-# (ShadowMaps.stale): the texels drawn, [lo, hi) packed x | y << 16; the texels the kept map
-# moves by, (dx & 0xffff) | dy << 16; and its mode: CLIP_FULL cleared and drawn whole,
-# CLIP_KEEP kept as it is (unchanged, within the span of redrawn layers), CLIP_SCROLL moved
-# by whole texels with the strip that came into view drawn (shadow_math.layer_scroll).
+# After the matrices, two sets of a uvec4 a layer (a matrix) for the compute kernels
+# (shaders/shadow_raster.comp clip_row; the shading never reads them): how a redrawn layer is
+# drawn this frame (ShadowMaps.stale): the texels drawn, [lo, hi) packed x | y << 16; the
+# texels the kept map moves by, (dx & 0xffff) | dy << 16; and its mode: CLIP_FULL cleared and
+# drawn whole, CLIP_KEEP kept as it is (unchanged, within the span of redrawn layers),
+# CLIP_SCROLL moved by whole texels with the strip that came into view drawn
+# (shadow_math.layer_scroll), CLIP_COPY the map of the casters that never moved copied in
+# and the moved ones drawn over it. The frame's maps read the first set; where the casters
+# that never moved have maps of their own (`Redraw`), those are drawn by the second.
 CLIP_AT = MATRICES  # where the rows start, in mat4s after the header (4 rows a mat4)
-CLIP_FULL, CLIP_KEEP, CLIP_SCROLL = 0, 1, 2
-DATA_BYTES = HEADER_BYTES + 64 * MATRICES + 16 * MAX_LAYERS  # a slot's, rows included
+KEPT_CLIP_AT = CLIP_AT + MATRICES // 4  # the second set's
+CLIP_FULL, CLIP_KEEP, CLIP_SCROLL, CLIP_COPY = 0, 1, 2, 3
+DATA_BYTES = HEADER_BYTES + 64 * MATRICES + 2 * 16 * MATRICES  # a slot's, rows included
 CLIP_FLOATS = HEADER_FLOATS + 16 * CLIP_AT  # where the rows start in a slot's floats
 DEFAULT_RESOLUTION = 2048
 # (constant, slope) depth bias of the passes, in Vulkan's units; negative: away from the light
@@ -128,6 +132,35 @@ class ShadowPlan:
         """Whether the maps' matrices depend on the view: directional lights' cascades do,
         spot and point lights' maps do not."""
         return any(e.kind == "directional" for e in self.entries)
+
+
+class Redraw(tuple):
+    """A frame's redrawn layers (a range per plan entry, as `ShadowMaps.stale` returns them)
+    where the casters that never moved keep maps of their own (compute-drawn maps): `kept`,
+    the layers of those maps redrawn first (a range per entry), and `split`, (its id, a bool
+    per draw: the casters that moved), whose casters are drawn over the kept maps copied in.
+    Equal (and hashed) by all three: a recording's key (render/steps.py FrameSpec)."""
+
+    kept: tuple[range, ...]
+    split: tuple[int, np.ndarray]
+
+    def __new__(cls, ranges: tuple[range, ...], kept: tuple[range, ...],
+                split: tuple[int, np.ndarray]) -> Redraw:
+        out = super().__new__(cls, ranges)
+        out.kept, out.split = kept, split
+        return out
+
+    def _key(self) -> tuple:
+        return tuple(self), self.kept, self.split[0]
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Redraw) and self._key() == other._key()
+
+    def __ne__(self, other: object) -> bool:
+        return not self == other
+
+    def __hash__(self) -> int:
+        return hash(self._key())
 
 
 def _kind(light: Light) -> str:
@@ -205,8 +238,7 @@ class ShadowMaps:
             device, [frame_layout or empty, material_layout, empty, self.pass_layout],
             L.PUSH.size))
         align = int(device.limits.minStorageBufferOffsetAlignment)
-        size = DATA_BYTES
-        self.matrix_bytes = size
+        self.matrix_bytes = size = DATA_BYTES
         self.stride = (size + align - 1) // align * align
         # (host memory: `_stale` reads them back every frame, uncached from device memory)
         self.buffer = self._own(Buffer(device, self.stride * slots, "storage", host_visible=True,
@@ -215,18 +247,11 @@ class ShadowMaps:
         self.sets = [self.pool.allocate(self.set_layout) for _ in range(slots)]
         self.pass_sets = [self.pool.allocate(self.pass_layout) for _ in range(slots)]
         self._views = [self.buffer.array(np.float32, size // 4, i * self.stride) for i in range(slots)]
-        self._clips = [v[CLIP_FLOATS:].view(np.uint32).reshape(MAX_LAYERS, 4) for v in self._views]
+        self._clips = [v[CLIP_FLOATS:].view(np.uint32).reshape(2, MATRICES, 4) for v in self._views]
         self.maps: LayeredDepth | None = None
         self.cubes: LayeredDepth | None = None  # (the images: `ensure`)
         self._pipelines: dict[tuple, Pipeline] = {}
-        # What each entry's layers hold: (image, first layer) -> (its matrices, alpha mask).
-        # The scene is static, so equal matrices draw equal maps: a frame redraws only the
-        # entries whose matrices changed (a camera-fitted sun's cascades when the camera
-        # moves; spot and point lights, and a batch's scene-wide sun, when the light does).
-        self._drawn: dict[tuple[str, int, int], tuple[bytes, bool]] = {}  # (image, first, layer)
-        self._last_stale: tuple | None = None  # stale()'s last inputs, while _drawn holds them
-        self.last_redrawn_layers: tuple[tuple[str, int], ...] = ()  # latest frame: (kind, layers drawn)
-        self.last_scrolled: tuple[tuple[int, int, int], ...] = ()  # latest frame: (layer, dx, dy)
+        self._start_records()
         self._warned = False
         # Drawn by compute shaders (render/shadow_raster.py) instead of the raster units: the
         # frames' choice (ShadowFrames.prepare, RenderOptions.shadow_raster).
@@ -244,7 +269,21 @@ class ShadowMaps:
         self.reads_buffer, self._partial_frames, self._last_whole = False, 0, False
         self.ensure(ShadowPlan())
 
-    clip_at = CLIP_AT  # (read by render/shadow_raster.py, which does not import this module)
+    # (read by render/shadow_raster.py, which does not import this module)
+    clip_at, kept_clip_at = CLIP_AT, KEPT_CLIP_AT
+
+    def _start_records(self) -> None:
+        """What each entry's layers hold: (image, first layer, layer) -> (its matrices, alpha
+        mask, casters). The scene is static, so equal matrices draw equal maps: a frame redraws
+        only the entries whose matrices changed (a camera-fitted sun's cascades when the camera
+        moves; spot and point lights, and a batch's scene-wide sun, when the light does)."""
+        self._drawn: dict[tuple[str, int, int], tuple] = {}
+        self._kept: dict[tuple[str, int, int], tuple] = {}  # the same for the kept maps (`Redraw`)
+        self._last_stale: tuple | None = None  # stale()'s last inputs, while _drawn holds them
+        self.last_redrawn_layers: tuple[tuple[str, int], ...] = ()  # latest frame: (kind, layers drawn)
+        # The latest frame's scrolled layers (matrix, dx, dy) and kept maps' redrawn layers.
+        self.last_scrolled: tuple = ()
+        self.last_kept_layers: tuple = ()
 
     def _own(self, obj: Any) -> Any:
         self._objects.append(obj)
@@ -402,7 +441,9 @@ class ShadowMaps:
         # mat4 is column-major in GLSL: each row-major matrix transposed.
         data[HEADER_FLOATS:HEADER_FLOATS + 16 * MATRICES].reshape(MATRICES, 4, 4)[:] = \
             mats.transpose(0, 2, 1)
-        self._clips[slot][:] = (0, resolution | resolution << 16, 0, CLIP_FULL)
+        rows = self._clips[slot]
+        rows[:, :MAX_LAYERS] = (0, resolution | resolution << 16, 0, CLIP_FULL)
+        rows[:, MAX_LAYERS:] = (0, cube_resolution | cube_resolution << 16, 0, CLIP_FULL)
         for e, shape in followed:  # (already column-major: the moving camera's `write_cascades`)
             self._put_columns(data, e, SM.cascade_columns(camera, shape))
         return out
@@ -448,29 +489,44 @@ class ShadowMaps:
         start = HEADER_FLOATS + 16 * e.matrix_base
         data[start:start + len(columns)] = columns
 
-    def stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool, casters: int = 0
-              ) -> tuple[range, ...]:
+    def stale(self, slot: int, plan: ShadowPlan, alpha_mask: bool, casters: int = 0,
+              split: tuple[int, np.ndarray] | None = None) -> tuple[range, ...]:
         """Which layers of each of `plan`'s entries frame `slot` must draw (`_stale`); with
         compute-drawn maps, also where its shading reads them (`_choose_reads`) and how each
-        redrawn 2D layer is drawn (`_write_clips`: a cascade the camera moved by whole texels
-        keeps its texels, moved, and draws the strip that came into view)."""
+        redrawn layer is drawn (`_write_clips`: a cascade the camera moved by whole texels
+        keeps its texels, moved, and draws the strip that came into view). `split`: (its id,
+        a bool per draw) the casters that have moved, where others never did
+        (ShadowFrames.split): the maps of those that never did are kept apart and redrawn only
+        when their layer's matrix changes, and a frame copies them in and draws the moved
+        casters over them (a `Redraw`)."""
         redraw, casters_moved, how = self._stale(slot, plan, alpha_mask, casters)
         if not self.compute:
             return redraw
         redraw = self._choose_reads(slot, plan, redraw, casters_moved)
-        self._write_clips(slot, plan, redraw, how)
-        return redraw
+        self.last_kept_layers = ()
+        if split is None or not any(redraw):
+            self.last_scrolled = self._write_clips(slot, 0, plan, redraw, how)
+            return redraw
+        kept, kept_how = self._stale_kept(slot, plan, redraw, (alpha_mask, split[0]))
+        self.last_kept_layers = tuple((e.kind, len(r)) for e, r in zip(plan.entries, kept, strict=True))
+        self.last_scrolled = self._write_clips(slot, 1, plan, kept, kept_how)
+        self._write_copies(slot, plan, redraw)
+        return Redraw(redraw, kept, split)
 
-    def _write_clips(self, slot: int, plan: ShadowPlan, redraw: tuple[range, ...],
-                     how: dict[int, tuple[int, int] | None]) -> None:
-        """Frame `slot`'s rows (CLIP_AT) of the 2D layers it redraws: `how` names the changed
-        ones (a shift: scrolled; None: drawn whole); the others in a redrawn span are kept
-        (the buffer holds them as `_drawn` says, whichever side the shading reads)."""
-        rows, size = self._clips[slot], self.resolution
-        full = size | size << 16
+    def _write_clips(self, slot: int, rows_set: int, plan: ShadowPlan, redraw: tuple[range, ...],
+                     how: dict[int, tuple[int, int] | None]) -> tuple[tuple[int, int, int], ...]:
+        """Frame `slot`'s rows (set `rows_set`: CLIP_AT, KEPT_CLIP_AT) of the layers it
+        redraws: `how` names the changed 2D ones (a shift: scrolled; None: drawn whole); the
+        others in a redrawn span are kept (the buffer holds them as `_drawn` or `_kept`
+        says, whichever side the shading reads); cube faces are drawn whole. Returns the
+        scrolled layers (matrix, dx, dy)."""
+        rows, size = self._clips[slot][rows_set], self.resolution
+        full, faces = size | size << 16, self.cube_resolution | self.cube_resolution << 16
         scrolled = []
         for e, layers in zip(plan.entries, redraw, strict=True):
             if e.kind == "point":
+                if layers:
+                    rows[e.matrix_base:e.matrix_base + 6] = (0, faces, 0, CLIP_FULL)
                 continue
             for i in layers:
                 m = e.first + i
@@ -485,7 +541,42 @@ class ShadowMaps:
                     rows[m] = (x0 | y0 << 16, x1 | y1 << 16, (dx & 0xFFFF) | (dy & 0xFFFF) << 16,
                                CLIP_SCROLL)
                     scrolled.append((m, dx, dy))
-        self.last_scrolled = tuple(scrolled)
+        return tuple(scrolled)
+
+    def _write_copies(self, slot: int, plan: ShadowPlan, redraw: tuple[range, ...]) -> None:
+        """Frame `slot`'s first set of rows where the kept maps are copied in: every layer it
+        draws starts as its kept map (CLIP_COPY) and the moved casters are drawn whole."""
+        rows = self._clips[slot][0]
+        for e, layers in zip(plan.entries, redraw, strict=True):
+            size = self.cube_resolution if e.kind == "point" else self.resolution
+            for i in layers:
+                rows[e.matrix_base + i] = (0, size | size << 16, 0, CLIP_COPY)
+
+    def _stale_kept(self, slot: int, plan: ShadowPlan, redraw: tuple[range, ...], key: tuple
+                    ) -> tuple[tuple[range, ...], dict[int, tuple[int, int] | None]]:
+        """Of the layers frame `slot` draws, those whose kept map (the casters that never
+        moved, `key`: the alpha mask and the split's id) holds other matrices or other
+        casters, as spans per entry, and how each changed 2D one is drawn (`_stale`'s `how`:
+        a cascade moved by whole texels scrolls). Marks them drawn."""
+        mats = self._views[slot][HEADER_FLOATS:HEADER_FLOATS + 16 * MATRICES].reshape(MATRICES, 16)
+        out, how = [], {}
+        for e, layers in zip(plan.entries, redraw, strict=True):
+            point = e.kind == "point"
+            changed = []
+            for i in (range(1) if point and layers else range(0) if point else layers):
+                where = ("cubes" if point else "maps", e.first, i)
+                rows = mats[e.matrix_base:e.matrix_base + 6] if point else mats[e.matrix_base + i]
+                held, before = (rows.tobytes(), key), self._kept.get(where)
+                if before != held:
+                    changed.append(i)
+                    if not point:
+                        moved = before is None or before[1] != key or e.kind != "directional"
+                        how[e.first + i] = None if moved else SM.layer_scroll(
+                            np.frombuffer(before[0], np.float32), rows, self.resolution)
+                self._kept[where] = held
+            out.append(range(0) if not changed else range(0, 6) if point
+                       else range(changed[0], changed[-1] + 1))
+        return tuple(out), how
 
     def _choose_reads(self, slot: int, plan: ShadowPlan, redraw: tuple[range, ...],
                       casters_moved: bool) -> tuple[range, ...]:
@@ -578,6 +669,7 @@ class ShadowMaps:
     def forget(self) -> None:
         """The maps' contents are unknown (a frame marked drawn was not submitted)."""
         self._drawn.clear()
+        self._kept.clear()
         self._last_stale = None
 
     # --- pipelines and passes ---------------------------------------------------------------

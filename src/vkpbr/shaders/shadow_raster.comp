@@ -39,11 +39,12 @@
 //   pc.masked_area box texels are covered by the whole work group afterwards.
 // KERNEL 5 (shadow_save) and KERNEL 6 (shadow_move): a redrawn layer's start (one
 //   invocation a texel, layer z), as its row after the matrices says (`clip_row`, written by
-//   render/shadows.py ShadowMaps.stale; a cube face's: cleared): CLIP_FULL cleared (depth 0,
-//   the farthest under reversed-Z); CLIP_KEEP left as it is;
-//   CLIP_SCROLL (a cascade the camera moved by whole texels) saved into `scratch` by KERNEL 5,
-//   then moved by (dx, dy) by KERNEL 6, the texels that came into view cleared. KERNELs 1, 2
-//   and 4 then draw only the row's [lo, hi) texels of the layer (`screen`).
+//   render/shadows.py ShadowMaps.stale): CLIP_FULL cleared (depth 0, the farthest under
+//   reversed-Z); CLIP_KEEP left as it is; CLIP_SCROLL (a cascade the camera moved by whole
+//   texels) saved into `scratch` by KERNEL 5, then moved by (dx, dy) by KERNEL 6, the texels
+//   that came into view cleared; CLIP_COPY (the casters that moved drawn over the kept map of
+//   those that never did) copied from `scratch`, bound to that map. KERNELs 1, 2 and 4 then
+//   draw only the row's [lo, hi) texels of the layer (`screen`), and none where it is kept.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #include "generated.glsl"
@@ -76,7 +77,8 @@ layout(set = 4, binding = 42, std430) buffer Depths { uint depths[]; };
 // [0] entries listed, [1..3] KERNEL 2's dispatch size, from 4 BIG_ENTRY-uint entries: a
 // band and its triangle's Screen as KERNEL 1 set it up (`store_band`).
 layout(set = 4, binding = 43, std430) buffer Big { uint big[]; };
-// A scrolled layer's texels while they move (KERNELs 5, 6): the 2D layers' texels, as `depths`.
+// A scrolled layer's texels while they move (KERNELs 5, 6): the 2D layers' texels, as `depths`;
+// for a CLIP_COPY layer, the map of the casters that never moved (every layer, as `depths`).
 layout(set = 4, binding = 44, std430) buffer Scratch { uint scratch[]; };
 
 layout(push_constant) uniform Raster {
@@ -107,13 +109,13 @@ const uint MAX_GROUPS = 65535u;
 const uint BIG_SUBGROUPS = 8u;  // KERNEL 2's bands a work group (256 lanes of subgroups of 32)
 
 #if KERNEL != 3
-const uint CLIP_FULL = 0u, CLIP_KEEP = 1u, CLIP_SCROLL = 2u;  // render/shadows.py's
+const uint CLIP_FULL = 0u, CLIP_KEEP = 1u, CLIP_SCROLL = 2u, CLIP_COPY = 3u;  // render/shadows.py's
 
-// 2D layer m's row after the matrices (render/shadows.py CLIP_AT): [lo, hi) packed x | y << 16,
-// the move (dx & 0xffff) | dy << 16, the mode. Where there are none (pc.world_at.y 0: a batch
-// of worlds' maps) or for a cube face: drawn whole.
+// Layer m's row after the matrices (render/shadows.py CLIP_AT; the pass's set of rows from
+// mat4 pc.world_at.y): [lo, hi) packed x | y << 16, the move (dx & 0xffff) | dy << 16, the
+// mode. Where there are none (pc.world_at.y 0: a batch of worlds' maps): drawn whole.
 uvec4 clip_row(uint m) {
-    if (pc.world_at.y == 0u || m >= pc.max_layers) {
+    if (pc.world_at.y == 0u) {
         uint s = m < pc.max_layers ? pc.map_size : pc.cube_size;
         return uvec4(0u, s | (s << 16), 0u, CLIP_FULL);
     }
@@ -147,9 +149,9 @@ Caster caster(uint k, uint w) {
 // a texel of slack for rounding).
 bool layer_sees(Caster a, uint m) {
     if (!sphere_visible(layer_vp[m], a.sphere)) return false;
-    if (pc.world_at.y == 0u || m >= pc.max_layers) return true;
+    if (pc.world_at.y == 0u) return true;
     uvec4 clip = clip_row(m);
-    if (clip.w != CLIP_SCROLL) return clip.w == CLIP_FULL;
+    if (clip.w != CLIP_SCROLL) return clip.w != CLIP_KEEP;
     mat4 vp = layer_vp[m];
     float half_size = 0.5 * float(pc.map_size);
     vec2 centre = ((vp * vec4(a.sphere.xyz, 1.0)).xy + 1.0) * half_size;
@@ -238,7 +240,7 @@ bool screen(uvec3 vi, vec4 wp[3], uint m, uint w, out Screen t) {
     int isize = int(size);
     t.lo = clamp(ivec2(ceil(lo2 - 0.5)), ivec2(0), ivec2(isize));
     t.hi = clamp(ivec2(floor(hi2 - 0.5)) + 1, ivec2(0), ivec2(isize));
-    if (pc.world_at.y != 0u && m < pc.max_layers) {  // the layer's texels drawn this frame
+    if (pc.world_at.y != 0u) {  // the layer's texels drawn this frame
         uvec4 clip = clip_row(m);
         t.lo = max(t.lo, ivec2(clip.x & 0xffffu, clip.x >> 16));
         t.hi = min(t.hi, ivec2(clip.y & 0xffffu, clip.y >> 16));
@@ -415,7 +417,7 @@ void main() {
 #if KERNEL == 5
     if (clip.w == CLIP_SCROLL) scratch[at] = depths[at];
 #else
-    uint value = 0u;
+    uint value = clip.w == CLIP_COPY ? scratch[at] : 0u;
     if (clip.w == CLIP_SCROLL) {  // the new texel (x, y) is the old (x - dx, y - dy)
         ivec2 from = ivec2(i % size, i / size)
                      - ivec2(bitfieldExtract(int(clip.z), 0, 16), bitfieldExtract(int(clip.z), 16, 16));
