@@ -18,9 +18,12 @@ rasteriser, as `vkpbr bench` draws Sponza):
                        layers redrawn per frame (mean).
   walk + point         the same walk lit by the preset point light (its cube stays cached):
                        render() once a frame, what issue 31 compares the sun's walk with.
-  still / 100 moving   Sponza with the sun, a still camera; still, and 100 of its nodes moved
-                       every frame (every moved node a caster: the cascades redraw each frame):
-                       frames/s through render_many (no readback, as bench_living.py).
+  still / N moving     Sponza with the sun, a still camera; still, and N of its nodes moved
+                       every frame (--moving: 3 and 100; every moved node a caster: the
+                       cascades redraw each frame): frames/s through render_many (no readback,
+                       as bench_living.py). Compute-drawn maps keep the casters that did not
+                       move apart (render/shadow_frames.py split); "one pass" rows draw every
+                       caster each frame instead, as before session 23.
 """
 
 from __future__ import annotations
@@ -40,6 +43,7 @@ from bench_paths import CAMERA, walk  # noqa: E402
 
 from vkpbr.render import shadow_raster  # noqa: E402
 from vkpbr.render.renderer import Renderer  # noqa: E402
+from vkpbr.render.shadow_frames import SETTLED_FRAMES  # noqa: E402
 from vkpbr.scene.loader import load_scene  # noqa: E402
 
 MODES = ("hardware", "compute")
@@ -105,8 +109,10 @@ def walk_rows(r: Renderer, frames: int) -> list[dict]:
     return rows
 
 
-def moving_rows(scene_path: Path, frames: int) -> list[dict]:
-    """bench_living.py's Sponza rows with the sun: still, and 100 nodes moved each frame."""
+def moving_rows(scene_path: Path, frames: int, counts: tuple[int, ...] = (3, 100),
+                size: tuple[int, int] = SIZE) -> list[dict]:
+    """bench_living.py's Sponza rows with the sun: still, and `counts` nodes moved each frame
+    (with compute-drawn maps, also in one pass over every caster)."""
     scene = load_scene(scene_path)
     scene.tree = None  # one node holds all 103 primitives: a node each, so that 100 can move
     for node in scene.nodes:
@@ -114,30 +120,50 @@ def moving_rows(scene_path: Path, frames: int) -> list[dict]:
     rows = []
     with Renderer(scene) as r:
         sun = [r.automatic_sun()]
-        moving = np.arange(min(100, len(r.state)))
-        rest = r.state.local[moving].copy()
+        rest = r.state.local.copy()
+        runs = [("still", 0, False)] + [(f"{n} moving{' one pass' if one else ''}", n, one)
+                                        for n in counts for one in (False, True)]
         for mode in MODES:
-            for label in ("still", "100 moving"):
-                def views(moves: bool = label != "still") -> Iterator:
-                    for step in range(frames + 30):
-                        if moves:
-                            m = rest.copy()
-                            m[:, 1, 3] += 0.01 * np.sin(step * 0.1 + np.arange(len(m)))
-                            r.set_poses(moving, m)
-                        yield CAMERA
-                t0, gpu, ms = 0.0, [], []
-                for i, _ in enumerate(r.render_many(views(), sun, size=SIZE, readback=False,
-                                                    shadow_raster=mode, **COMMON)):
-                    if i == 30:
-                        t0 = time.perf_counter()
-                    if i >= 30:
-                        gpu.append(r.last_stats.gpu_ms)
-                        ms.append(_shadow_ms(r))
-                fps = frames / (time.perf_counter() - t0)
-                rows.append({"row": f"sponza sun {label}", "shadow_raster": mode, "fps_render_many": fps,
-                             "gpu_ms": _median(gpu), "shadows_ms": _median(ms)})
-                r.reset_pose()
+            for label, count, one_pass in runs:
+                if one_pass and mode != "compute":
+                    continue
+                frames_ = r.parts.shadow_frames
+                if one_pass:
+                    frames_.split = lambda moved: None  # (every caster each frame, one pass)
+                rows.append({"row": f"sponza sun {label}", "shadow_raster": mode,
+                             **_moving_run(r, sun, rest, count, frames, mode, size)})
+                if one_pass:
+                    del frames_.split
     return rows
+
+
+def _moving_run(r: Renderer, sun: list, rest: np.ndarray, count: int, frames: int, mode: str,
+                size: tuple[int, int]) -> dict:
+    """frames/s, GPU ms and shadow ms of `frames` frames whose first `count` nodes move a
+    little each frame (after 30 frames of warm-up), then every node back at rest, settled."""
+    moving = np.arange(min(count, len(r.state)))
+
+    def views() -> Iterator:
+        for step in range(frames + 30):
+            if count:
+                m = rest[moving].copy()
+                m[:, 1, 3] += 0.01 * np.sin(step * 0.1 + np.arange(len(m)))
+                r.set_poses(moving, m)
+            yield CAMERA
+    t0, gpu, ms = 0.0, [], []
+    for i, _ in enumerate(r.render_many(views(), sun, size=size, readback=False,
+                                        shadow_raster=mode, **COMMON)):
+        if i == 30:
+            t0 = time.perf_counter()
+        if i >= 30:
+            gpu.append(r.last_stats.gpu_ms)
+            ms.append(_shadow_ms(r))
+    fps = frames / (time.perf_counter() - t0)
+    r.set_poses(np.arange(len(r.state)), rest)
+    for _ in r.render_many([CAMERA] * (SETTLED_FRAMES + 1), sun, size=size, readback=False,
+                           shadow_raster=mode, **COMMON):
+        pass  # (the moved nodes settle: the next run's split is its own)
+    return {"fps_render_many": fps, "gpu_ms": _median(gpu), "shadows_ms": _median(ms)}
 
 
 def main() -> None:
@@ -153,6 +179,7 @@ def main() -> None:
                     help="time the compute kernels apart (the maps rows' small/big/masked ms; "
                     "'shadows' is then the last kernel's end to the barrier that hands the maps "
                     "to the shading: ~0, there is no copy)")
+    ap.add_argument("--moving", default="3,100", help="the moving rows' numbers of moved nodes")
     ap.add_argument("--json")
     args = ap.parse_args()
     global SIZE
@@ -168,7 +195,8 @@ def main() -> None:
             if "walk" in args.only:
                 rows += walk_rows(r, args.frames)
     if "moving" in args.only:
-        rows += moving_rows(args.scene, args.frames)
+        rows += moving_rows(args.scene, args.frames, tuple(int(n) for n in args.moving.split(",")),
+                            SIZE)
     keys = ("shadows_ms", "shading_ms", "layers", "fps_render_many", "fps_render", "gpu_ms")
     print("| row | shadow_raster | " + " | ".join(keys) + " | steps (ms) |\n|---|---|"
           + "---:|" * len(keys) + "---|")
