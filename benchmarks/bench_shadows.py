@@ -41,9 +41,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_paths import CAMERA, walk  # noqa: E402
 
-from vkpbr.render import shadow_raster  # noqa: E402
+from vkpbr.render import shadow_frames, shadow_raster  # noqa: E402
 from vkpbr.render.renderer import Renderer  # noqa: E402
-from vkpbr.render.shadow_frames import SETTLED_FRAMES  # noqa: E402
+
+# Frames after which moved nodes settle (0 in a tree before session 23's kept maps: A/B runs).
+SETTLED_FRAMES = getattr(shadow_frames, "SETTLED_FRAMES", 0)
 from vkpbr.scene.loader import load_scene  # noqa: E402
 
 MODES = ("hardware", "compute")

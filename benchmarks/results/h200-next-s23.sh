@@ -1,8 +1,8 @@
 # H200, for the next session with a device (session 23 had none): scrolling cascades
-# (47643fd..) against the tree before them (141412e, carried as .old/src:
+# (47643fd..) and kept maps (c3446ca..) against the tree before them (141412e, carried as .old/src:
 # `git archive 141412e src | tar -x -C .old`), alternating in one lease.
-# Carry .gl .whl .assets-s .old. Writes $OUT/{redraws,probe,walk}-{old,new}-N.txt; one pass (N,
-# default 1) a call: `N=2 bash ...` for the second (a pass is ~4 min).
+# Carry .gl .whl .assets-s .old. Writes $OUT/{redraws,probe,walk,moving}-{old,new}-N.txt; one pass (N,
+# default 1) a call: `N=2 bash ...` for the second (a pass is ~5 min; the old tree's moving rows run the new bench_shadows: their "one pass" rows equal its plain ones).
 source benchmarks/gpu_env.sh
 S=$PWD/.assets-s/models/Sponza/glTF/Sponza.gltf
 for n in ${N:-1}; do
@@ -11,8 +11,10 @@ for n in ${N:-1}; do
     env $P timeout 60 python3 benchmarks/probe_stream.py --scene $S --frames 400 --redraws-only > $OUT/redraws-$tree-$n.txt 2>&1
     env $P timeout 60 python3 benchmarks/probe_stream.py --scene $S --frames 600 --cameras walk > $OUT/probe-$tree-$n.txt 2>&1
     env $P timeout 70 python3 benchmarks/bench_shadows.py --scene $S --only walk --frames 600 > $OUT/walk-$tree-$n.txt 2>&1
+    env $P timeout 90 python3 benchmarks/bench_shadows.py --scene $S --only moving --moving 3,100 --frames 300 > $OUT/moving-$tree-$n.txt 2>&1
     echo "== $tree $n"; grep -E "^\| [0-9]" $OUT/redraws-$tree-$n.txt | cut -c1-160
     grep -E "^\| walk" $OUT/probe-$tree-$n.txt | cut -d'|' -f2-9; grep -E "^\| walk \+" $OUT/walk-$tree-$n.txt | cut -d'|' -f2-8
+    grep -E "^\| sponza sun" $OUT/moving-$tree-$n.txt | cut -d'|' -f2-9
   done
 done
 [ "${N:-1}" = 1 ] && timeout 120 python3 -m pytest -q -p no:cacheprovider tests/gpu/test_shadow_cache.py tests/gpu/test_shadow_raster.py > $OUT/tests.txt 2>&1; tail -3 $OUT/tests.txt
