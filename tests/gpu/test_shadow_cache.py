@@ -200,6 +200,11 @@ def test_casters_that_never_moved_keep_maps_of_their_own(pair) -> None:  # noqa:
                     r.set_pose(node, moved)
             camera = dataclasses.replace(CAMERA, eye=(0.06 * min(i // 3, 3), 5.0, 6.0),
                                          target=(0.3 + 0.06 * min(i // 3, 3), 0.0, 0.0))
+            if i == 5:  # a batch in between: its scene-wide sun map, over the kept maps too
+                got = cached.render_batch([camera, MOVED], SIZE, ALL, linear=True, **opts)
+                want = fresh.render_batch([camera, MOVED], SIZE, ALL, linear=True, **opts)
+                assert cached.shadows.last_kept_layers  # (the batch drew over kept maps)
+                assert np.array_equal(got, want), float(np.abs(got - want).max())
             got = cached.render(camera, ALL, size=SIZE, linear=True, **opts)
             kept_redraws.append(dict(cached.shadows.last_kept_layers))
             splits.append(cached.parts.shadow_frames._split[1])
