@@ -229,3 +229,31 @@ def test_casters_that_never_moved_keep_maps_of_their_own(pair) -> None:  # noqa:
     assert kept_redraws[15] == {"directional": 4, "spot": 1, "point": 6}, kept_redraws[15]
     assert splits[15][0] != splits[11][0] and splits[15][1][2] and not splits[15][1][1], splits[15]
     assert all(k["spot"] == k["point"] == 0 for k in kept_redraws[16:]), kept_redraws
+
+
+def test_past_max_splits_the_maps_are_drawn_in_one_pass(pair) -> None:  # noqa: ANN001
+    """A renderer that has kept maps apart for MAX_SPLITS sets of moving casters draws its
+    maps in one pass from then on (each set has caster tables and descriptor sets on the
+    GPU: a scene whose moving casters keep changing must not grow), the same maps."""
+    from vkpbr.render.shadow_frames import MAX_SPLITS
+
+    cached, fresh = pair
+    opts = {**OPTS, "shadow_raster": "compute"}
+    frames = cached.parts.shadow_frames
+    rest = cached.state.local[1].copy()
+    before = frames._moved
+    frames._moved = (before[0], MAX_SPLITS, before[2])
+    try:
+        for i in range(1, 3):
+            moved = rest.copy()
+            moved[0, 3] += 0.05 * i
+            for r in pair:
+                r.set_pose(1, moved)
+            got = cached.render(CAMERA, ALL, size=SIZE, linear=True, **opts)
+            assert cached.shadows.last_kept_layers == () and any(d for _, d in cached.shadows.last_redraw)
+            fresh.shadow_frames.forget()
+            assert np.array_equal(got, fresh.render(CAMERA, ALL, size=SIZE, linear=True, **opts))
+    finally:
+        frames._moved = before
+        for r in pair:
+            r.set_pose(1, rest)
