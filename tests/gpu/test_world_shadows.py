@@ -111,3 +111,38 @@ def test_a_world_holds_one_layer_a_light() -> None:
     assert 4 * (stride - cube_base) * 1000 / 2 ** 20 == 375.0  # a point light: MiB per 1,000 worlds
     for light in (SUN, SPOT):  # 250 MiB per 1,000 worlds
         assert 4 * world_layout(world_plan(plan_shadows([light])), 256)[0] * 1000 / 2 ** 20 == 250.0
+
+
+@pytest.mark.parametrize("pipeline", ["compute", "forward"])
+def test_casters_the_worlds_do_not_move_are_drawn_once(r, pipeline: str) -> None:  # noqa: ANN001
+    """The spheres and the ground are no world's (no slot moves them): their maps are drawn
+    once into a kept map that every world's maps copy before its own box is drawn over it
+    (render/world_shadows.py). Every world's maps, and the views, equal bit for bit those of
+    one pass over every caster in every world (WorldShadows.keep_still False); the kept map is
+    drawn again only when what it holds changes (here: a light moved)."""
+    from vkpbr.gpu.buffer import download_buffer
+
+    if pipeline == "compute" and r.compute_batch_unavailable() is not None:
+        pytest.skip(f"no compute batch here: {r.compute_batch_unavailable()}")
+    ws_of = lambda: r.batch_path.world_shadows  # noqa: E731
+    moved_spot = Light(kind="spot", position=(0.2, 4.0, 0.9), direction=(0.0, -1.0, 0.0),
+                       intensity=40.0, falloff="inverse_square", outer_cone=0.9)
+    for lights in ([SPOT, POINT, SUN], [SPOT, POINT, SUN], [moved_spot, POINT, SUN]):
+        runs = {}
+        for keep in (True, False):
+            r.render_batch([CAMERA] * 2, (W, H), worlds=POSES, lights=lights, pipeline=pipeline,
+                           **OPTS)  # (the first fits the buffers)
+            ws = ws_of()
+            ws.keep_still = keep
+            key = ws._kept_key
+            views = r.render_batch([CAMERA] * 2, (W, H), worlds=POSES, lights=lights,
+                                   pipeline=pipeline, **OPTS)
+            stride = r.batch_path._wshadow[1].stride
+            maps = download_buffer(r.device, ws.depths, np.float32)[:2 * stride]
+            runs[keep] = (views, maps, key, ws._kept_key, r.batch_path._wshadow[1].kept)
+        ws.keep_still = True
+        (views, maps, before, after, kept), (views1, maps1, *_rest) = runs[True], runs[False]
+        assert kept is not None and _rest[2] is None  # (kept: the map copied in; one pass: none)
+        assert np.array_equal(maps, maps1) and maps.max() > 0
+        assert np.array_equal(views, views1)
+        assert before == after  # (drawn when the lights came, by the first call: not again)

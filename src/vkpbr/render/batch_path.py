@@ -383,6 +383,10 @@ class BatchPath:
         write_frame_blocks(slot, frame_lights, opts, linear, p.lighting.frame_lighting(opts, ao),
                            rows)
         base = self._write_worlds(frame.index, start, len(views))
+        if ws is not None and ws[1].kept is not None:  # (after the state's records: the kept map's)
+            assert self.world_shadows is not None and self.views is not None
+            self.world_shadows.prepare_kept(p, self.views.set0(frame.index, True), frame.index,
+                                            ws[0], ws[1], ws[2], opts.alpha_mask)
         shadow_base = None  # each view's world's own maps: 1 + its world
         if ws is not None and self.world_call is not None:
             shadow_base = (1 + self.world_call.world_of_view[start:start + len(views)]).astype(np.uint32)
@@ -409,7 +413,8 @@ class BatchPath:
         if made:  # set 3 rewritten: every recording that binds it
             p.recorder.free()
             self.free_recordings()
-        self._wshadow = (wplan, job)
+        moved = ws.moved_casters(call, p.gpu_scene.draws)
+        self._wshadow = (wplan, ws.with_kept(job, p.gpu_scene.draws, moved), moved)
         return self._wshadow
 
     def _view_records(self, views: CameraBatch, size: tuple[int, int], atlas_rows: int,
@@ -526,7 +531,8 @@ class BatchPath:
             return ()
         kernel = self.world_kernel
         ws = self._wshadow
-        shadows = () if ws is None else (ws[0], ws[1].worlds, ws[1].stride, ws[1].generation)
+        shadows = () if ws is None else (ws[0], ws[1].worlds, ws[1].stride, ws[1].generation,
+                                         None if ws[1].kept is None else (id(ws[1].kept), ws[2].tobytes()))
         return (*call.key, kernel.generation if kernel is not None and call.gpu else 0, shadows)
 
     def _world_groups(self) -> dict[str, Any] | None:
@@ -540,7 +546,7 @@ class BatchPath:
             assert bv is not None  # (its set 0 names the worlds' records, either batch's)
             out["shadows"] = lambda fs: raster.world_steps(
                 fs.frame_index, ws[0], ws[1], fs.classes, fs.material_sets,
-                bv.set0(fs.frame_index, True), fs.resources)
+                bv.set0(fs.frame_index, True), fs.resources, ws[2])
         if call is not None and call.gpu is not None and kernel is not None:
             d = self.world_buffers.draws  # type: ignore[union-attr]
             out["worlds"] = lambda fs: kernel.steps(fs.frame_index, call.gpu, d)

@@ -69,6 +69,7 @@ buffer, which the shading reads as it is (no copy: image layers could not hold t
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -123,6 +124,11 @@ class WorldJob:
     map_size: int
     cube_size: int
     generation: int = 0  # of the buffers (render/world_shadows.py): the sets made for them
+    # The kept map of the casters the worlds do not move (one world's layout), which every
+    # world's maps copy before the moved casters are drawn (WorldShadows.kept), or None: all
+    # casters drawn in every world.
+    kept: Buffer | None = None
+    first_record: int | None = None  # the first world's first record (None: `draws`)
 
 
 def wants_compute(choice: Any, device: Any, measured: bool | None = None) -> bool:
@@ -207,6 +213,11 @@ def raster_kernel(device: Any, layouts: list[DescriptorSetLayout], name: str) ->
     """Kernel `name` (KERNELS) of shaders/shadow_raster.comp."""
     return ComputePipeline(device, SPV_DIR / f"shadow_{name}.comp.spv", layouts,
                            push_bytes=PUSH_BYTES)
+
+
+def _whole(plan: Any) -> tuple[range, ...]:
+    """Every layer of each plan entry."""
+    return tuple(range(e.count) for e in plan.entries)
 
 
 def _jobs(plan: Any, redraw: Sequence[range]) -> list[tuple[int, int, Any]]:
@@ -311,13 +322,14 @@ class ShadowRaster:
         the casters that never moved ("kept", `Redraw`), or the frame's over those ("moved":
         their Scratch), or a batch of worlds' (`job`)."""
         depths, big = (self.depths, self.big) if job is None else (job.depths, job.big)
-        # (a batch of worlds' maps never scroll: its kernels read no rows)
-        scratch = self.scratch if job is None else big
+        # (a batch of worlds' maps never scroll: their scratch is the kept map they copy)
+        scratch = self.scratch if job is None else job.kept if job.kept is not None else big
         if role == "kept":
             depths = self._kept_depths()
         elif role == "moved":
             scratch = self._kept_depths()
-        key = (*key, role) if job is None else (*key, "worlds", job.generation)
+        key = (*key, role) if job is None else (*key, "worlds", job.generation, id(job.depths),
+                                                 id(job.kept))
         if (key, slot) not in self._sets:
             pool = self._own(DescriptorPool(self.device, [(self.set_layout, self.slots)]))
             self._pools.append(pool)
@@ -358,8 +370,8 @@ class ShadowRaster:
     # --- steps -----------------------------------------------------------------------------
     def _push(self, plan: Any, table: _Table, job: WorldJob | None = None,
               rows: int | None = None) -> np.ndarray:
-        """The kernels' push constants; `rows`: the set of clip rows they read (the frame's
-        by default; none for a batch of worlds)."""
+        """The kernels' push constants; `rows`: the set of clip rows they read (by default
+        the frame's, and none for a batch of worlds)."""
         push = np.zeros(PUSH_BYTES // 4, np.uint32)
         spot = 0
         for e in plan.entries:
@@ -370,7 +382,7 @@ class ShadowRaster:
         push[:16] = (0, 0, 0, 0, sizes[0], sizes[1],
                      sizes[2], self.max_layers, sizes[3], int(self.gs.has_colors), BIG_AREA,
                      BIG_CHUNK, MASKED_AREA, spot, table.chunks_at, table.chunks)
-        push[29] = 0 if job is not None else self.maps.clip_at if rows is None else rows  # world_at.y
+        push[29] = rows if rows is not None else 0 if job is not None else self.maps.clip_at  # world_at.y
         bias = push.view(np.float32)
         for k, kind in enumerate(_KINDS):
             bias[16 + k], bias[20 + k] = self.depth_bias[kind]
@@ -502,17 +514,24 @@ class ShadowRaster:
                     dispatch(cmd, matrix, layers, -(-triangles // SMALL_GROUP))
 
         out = {"clear": clear, "small": small, "args": args, "big": big, "masked": masked}
-        return out if world is not None else {**out, **self._starts(jobs, bind, dispatch)}
+        if world is not None and world.kept is None:
+            return out  # (filled: `_clear`)
+        return {**out, **self._starts(jobs, bind, dispatch, world)}
 
     def _starts(self, jobs: list[tuple[int, int, Any]], bind: Callable[[Any, str], None],
-                dispatch: Callable[..., None]) -> dict[str, Callable[[Any], None]]:
+                dispatch: Callable[..., None], world: WorldJob | None = None
+                ) -> dict[str, Callable[[Any], None]]:
         """A frame's "move" (every drawn layer starts as its row says: 2D layers kept,
-        scrolled or cleared, cube faces cleared) and, where 2D layers are drawn, its "save"
-        (a scrolled layer's texels into `scratch` first)."""
-        flat = [j for j in jobs if j[2].kind != "point"]
+        scrolled, cleared or copied) and, where 2D layers are drawn, its "save" (a scrolled
+        layer's texels into `scratch` first); a batch of worlds' "move" alone (every world's
+        layers copied from the kept map)."""
+        flat = [j for j in jobs if j[2].kind != "point"] if world is None else []
 
         def texel_groups(e: Any) -> int:
-            size = (self.maps.cubes if e.kind == "point" else self.maps.maps).size
+            if world is not None:
+                size = world.cube_size if e.kind == "point" else world.map_size
+            else:
+                size = (self.maps.cubes if e.kind == "point" else self.maps.maps).size
             return -(-size * size // TEXEL_GROUP)
 
         def run(name: str, drawn: list[tuple[int, int, Any]]) -> Callable[[Any], None]:
@@ -537,7 +556,8 @@ class ShadowRaster:
             for w0 in range(0, worlds, run):
                 n = min(run, worlds - w0)
                 if world is not None:
-                    push[24:29] = (world.draws, world.draws, world.stride, layers, w0)
+                    first = world.draws if world.first_record is None else world.first_record
+                    push[24:29] = (world.draws, first, world.stride, layers, w0)
                 else:
                     push[27] = layers
                 cmd.push(push)
@@ -549,28 +569,51 @@ class ShadowRaster:
     def _clear(self, cmd: Any, world: WorldJob | None) -> None:
         """The big list emptied; a batch of worlds' maps at depth 0, the farthest
         (reversed-Z), as the passes clear (after the last submission's reads). A frame's
-        drawn layers are cleared, kept or scrolled by the move kernel instead."""
-        if world is not None:
+        drawn layers are cleared, kept or scrolled by the move kernel instead, and so are
+        the worlds' maps that copy a kept map."""
+        if world is not None and world.kept is None:
             cmd.memory_barrier("compute|fragment", "transfer")
             cmd.fill(world.depths, 0, 0, 4 * world.worlds * world.stride)
             cmd.fill(world.big, 0, 0, 16)
             return
-        cmd.fill(self.big, 0, 0, 16)  # the count and the dispatch size
+        cmd.fill(self.big if world is None else world.big, 0, 0, 16)  # the count and the dispatch size
 
     def world_steps(self, slot: int, plan: Any, job: WorldJob, classes: Sequence[str],
-                    material_sets: Sequence[Any], set0: Any, resources: dict[str, Any]
-                    ) -> list[Step]:
+                    material_sets: Sequence[Any], set0: Any, resources: dict[str, Any],
+                    moved: np.ndarray | None = None) -> list[Step]:
         """The steps that draw every layer of `plan` (render/world_shadows.py's plan: one
         layer a directional light) for each of `job`'s worlds into `job.depths`; the last,
-        "shadows", orders them before the shading's reads (as `steps`')."""
-        key, table = self._table(classes)
+        "shadows", orders them before the shading's reads (as `steps`'). With `job.kept`,
+        every world's layers copy that kept map first (the clip rows' CLIP_COPY: ShadowMaps.
+        write_world_rows) and only the casters `moved` (a bool per draw) are drawn over it."""
+        key, table = self._table(classes, moved if job.kept is not None else None)
         dset = self._set(key, table, slot, job)
-        push = self._push(plan, table, job)
-        jobs = [(e.matrix_base, e.count, e) for e in plan.entries]
-        record = self._records(table, dset, push, jobs, material_sets, set0, job)
+        push = self._push(plan, table, job, self.maps.clip_at if job.kept is not None else None)
+        record = self._records(table, dset, push, _jobs(plan, _whole(plan)), material_sets, set0, job)
         resources.update({"shadow_world_depths": BufferResource(job.depths),
                           "shadow_world_big": BufferResource(job.big)})
-        return self._steps(record, table, "shadow_world_depths", "shadow_world_big")
+        if job.kept is None:
+            return self._steps(record, table, "shadow_world_depths", "shadow_world_big")
+        resources["shadow_world_kept"] = BufferResource(job.kept)
+        return self._steps(record, table, "shadow_world_depths", "shadow_world_big",
+                           "shadow_world_kept")
+
+    def world_kept_steps(self, slot: int, plan: Any, job: WorldJob, classes: Sequence[str],
+                         material_sets: Sequence[Any], set0: Any, resources: dict[str, Any],
+                         moved: np.ndarray) -> list[Step]:
+        """The steps that draw `job.kept`, the map every world of `job` copies: `plan`'s
+        layers from the casters the worlds do not move (not `moved`), placed by the state's
+        own records (every world's record of such a caster is the state's: render/worlds.py),
+        as one world's maps."""
+        kept = dataclasses.replace(job, depths=job.kept, worlds=1, first_record=0, kept=None)
+        key, table = self._table(classes, ~moved)
+        dset = self._set(key, table, slot, kept)
+        record = self._records(table, dset, self._push(plan, table, kept),
+                               _jobs(plan, _whole(plan)), material_sets, set0, kept)
+        resources.update({"shadow_world_kept": BufferResource(job.kept),
+                          "shadow_world_big": BufferResource(job.big)})
+        return self._steps(record, table, "shadow_world_kept", "shadow_world_big",
+                           prefix="shadows.kept.")
 
     def _spans(self, jobs: list[tuple[int, int, Any]]) -> list[tuple[int, int]]:
         """(byte offset, bytes) of the drawn layers' depths in `depths`, a span a job."""

@@ -552,6 +552,18 @@ class ShadowMaps:
             for i in layers:
                 rows[e.matrix_base + i] = (0, size | size << 16, 0, CLIP_COPY)
 
+    def write_world_rows(self, slot: int, plan: ShadowPlan, map_size: int, cube_size: int) -> None:
+        """Frame `slot`'s first set of rows for a batch of worlds' maps that copy a kept map
+        (render/world_shadows.py): every layer of the world `plan` copied in whole."""
+        rows = self._clips[slot][0]
+        for e in plan.entries:
+            size = cube_size if e.kind == "point" else map_size
+            rows[e.matrix_base:e.matrix_base + e.count] = (0, size | size << 16, 0, CLIP_COPY)
+
+    def matrices_bytes(self, slot: int) -> bytes:
+        """Frame `slot`'s matrices as ShadowData holds them (what its maps are drawn with)."""
+        return self._views[slot][HEADER_FLOATS:HEADER_FLOATS + 16 * MATRICES].tobytes()
+
     def _stale_kept(self, slot: int, plan: ShadowPlan, redraw: tuple[range, ...], key: tuple
                     ) -> tuple[tuple[range, ...], dict[int, tuple[int, int] | None]]:
         """Of the layers frame `slot` draws, those whose kept map (the casters that never

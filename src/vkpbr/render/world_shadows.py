@@ -20,16 +20,29 @@ a one-line error past either, before any GPU work).
 
 Worlds that move no caster (their slot nodes carry no shadow-casting draw; worlds that only
 set materials or lights) keep the renderer's state's maps, shared: nothing differs.
+
+Casters the worlds do not move (a table, the floor: draws under no world slot, whose record
+is the state's in every world) are drawn once into a kept map of one world's layout
+(`WorldShadows.prepare_kept`, a submission of its own, again only when the light, the
+state's poses of those casters, the alpha mask or the set of moved casters change), which
+every world's maps copy (the move kernel's CLIP_COPY rows: ShadowMaps.write_world_rows)
+before the casters its poses move are drawn over it: per world only its own casters' texels,
+not the floor's under every world. Bit for bit the maps of one pass over every caster
+(tests/gpu/test_world_shadows.py); `WorldShadows.keep_still = False` draws them that way.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.gpu.buffer import Buffer
+from vkpbr.gpu.commands import Commands
+from vkpbr.gpu.graph import record_steps
+from vkpbr.render.passes import classify
 from vkpbr.render.shadow_raster import WorldJob, big_list_bytes
 from vkpbr.render.shadows import ShadowEntry, ShadowPlan
 
@@ -84,20 +97,71 @@ class WorldShadows:
         self.big_capacity = 0
         self.generation = 0  # bumped when the buffers are remade (the raster's sets name them)
         self._casts: tuple[Any, np.ndarray] | None = None  # (draws, casters(draws))
+        self.keep_still = True  # the casters the worlds do not move drawn once (the module's docstring)
+        self.kept: Buffer | None = None  # their map (one world's layout)
+        self._kept_key: tuple | None = None  # what `kept` holds
+
+    def _caster_mask(self, draws: Any) -> np.ndarray:
+        if self._casts is None or self._casts[0] is not draws:
+            self._casts = (draws, casters(draws))
+        return self._casts[1]
+
+    def moved_casters(self, call: Any, draws: Any) -> np.ndarray | None:
+        """The shadow casters a call's worlds move (a bool per draw), None where it is not
+        known which (every caster is then each world's own)."""
+        moved = call.gpu.slots.anchor >= 0 if call.gpu is not None else call.moved
+        if moved is None:
+            return None
+        casts = self._caster_mask(draws)
+        out = np.zeros(len(casts), bool)
+        n = min(len(casts), len(moved))
+        out[:n] = np.asarray(moved, bool)[:n] & casts[:n]
+        return out
+
+    def with_kept(self, job: WorldJob, draws: Any, moved: np.ndarray | None) -> WorldJob:
+        """`job` with the kept map where some casters are the worlds' own and others not."""
+        casts = self._caster_mask(draws)
+        if not self.keep_still or moved is None or not moved.any() or not (casts & ~moved).any():
+            return job
+        if self.kept is None or self.kept.size < 4 * job.stride:
+            if self.kept is not None:
+                self.device.wait_idle()
+                self.kept.destroy()
+            self.kept = Buffer(self.device, 4 * job.stride, "storage|transfer_dst",
+                               name="world shadow kept map")
+            self._kept_key = None
+        return dataclasses.replace(job, kept=self.kept)
+
+    def prepare_kept(self, parts: Any, set0: Any, frame_index: int, plan: ShadowPlan, job: WorldJob,
+                     moved: np.ndarray, alpha_mask: bool) -> None:
+        """The slot's rows that copy the kept map into every world's layers, and the kept
+        map drawn (a submission of its own, waited for) where what it holds changed: the
+        slot's matrices (written before), the casters' state, the alpha mask, the moved set."""
+        maps = parts.shadow_frames.maps
+        maps.write_world_rows(frame_index, plan, job.map_size, job.cube_size)
+        still = self._caster_mask(parts.gpu_scene.draws) & ~moved
+        key = (maps.matrices_bytes(frame_index), alpha_mask, still.tobytes(),
+               parts.state.changed_since(still) if parts.state is not None else 0,
+               id(self.kept), job.stride, job.map_size)
+        if key == self._kept_key:
+            return
+        gs = parts.gpu_scene
+        raster = maps.compute_raster(gs)
+        classes = [classify(d.alpha_mode, d.double_sided, alpha_mask) for d in gs.draws]
+        resources: dict[str, Any] = {}
+        steps = raster.world_kept_steps(frame_index, plan, job, classes,
+                                        gs.slot_material_sets[frame_index], set0, resources, moved)
+        with self.device.one_time_commands() as handle:
+            record_steps(Commands(self.device, handle), steps, resources, (1, 1))
+        self._kept_key = key
 
     def moves_casters(self, call: Any, draws: Any) -> bool:
         """Whether a call's worlds (render/worlds.py WorldCall) move a draw that casts
         shadows: the cheap check that keeps the state's maps where no shadow can change."""
         if not call.poses:
             return False
-        moved = call.gpu.slots.anchor >= 0 if call.gpu is not None else call.moved
-        if moved is None:
-            return True
-        if self._casts is None or self._casts[0] is not draws:
-            self._casts = (draws, casters(draws))
-        casts = self._casts[1]
-        n = min(len(casts), len(moved))
-        return bool(np.any(np.asarray(moved, bool)[:n] & casts[:n]))
+        moved = self.moved_casters(call, draws)
+        return True if moved is None else bool(moved.any())
 
     def job(self, plan: ShadowPlan, resolution: int, worlds: int, draws: int) -> tuple[WorldJob, bool]:
         """The maps of `worlds` worlds (`plan`: world_plan's) and whether the buffers were
@@ -114,7 +178,7 @@ class WorldShadows:
             self.device.wait_idle()
             self._free()
             self.bytes = max(need, min(2 * self.bytes, limit))
-            self.depths = Buffer(self.device, self.bytes, "storage|transfer_dst",
+            self.depths = Buffer(self.device, self.bytes, "storage|transfer_dst|transfer_src",
                                  name="world shadow depths")
             # Bands of big triangles (96 bytes each: a band and its triangle's set-up), one
             # for every 512 texels (~5% of the maps' bytes); the rest are drawn by the
@@ -131,10 +195,11 @@ class WorldShadows:
     def _free(self) -> None:
         if self.depths is not None:
             self.maps.bind_world_depths(None)
-        for b in (self.depths, self.big):
+        for b in (self.depths, self.big, self.kept):
             if b is not None:
                 b.destroy()
-        self.depths = self.big = None
+        self.depths = self.big = self.kept = None
+        self._kept_key = None
         self.bytes = 0
 
     def destroy(self) -> None:

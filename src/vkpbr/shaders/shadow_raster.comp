@@ -408,16 +408,19 @@ shared uint group_big_count;
 
 void main() {
 #if KERNEL == 5 || KERNEL == 6
-    uint m = pc.matrix + gl_GlobalInvocationID.z;
+    // z is (world, layer) as the drawing kernels' (a frame's maps: world 0 of one); `scratch`
+    // holds one world's layout (a batch of worlds: the kept map every world copies).
+    uint m = pc.matrix + gl_GlobalInvocationID.z % pc.world.w;
+    uint w = pc.world_at.x + gl_GlobalInvocationID.z / pc.world.w;
     uvec4 clip = clip_row(m);
     uint size = layer_size(m);
     uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 256u;
     if (clip.w == CLIP_KEEP || i >= size * size) return;
-    uint at = layer_base(m, 0u) + i;
+    uint at = layer_base(m, w) + i;
 #if KERNEL == 5
     if (clip.w == CLIP_SCROLL) scratch[at] = depths[at];
 #else
-    uint value = clip.w == CLIP_COPY ? scratch[at] : 0u;
+    uint value = clip.w == CLIP_COPY ? scratch[layer_base(m, 0u) + i] : 0u;
     if (clip.w == CLIP_SCROLL) {  // the new texel (x, y) is the old (x - dx, y - dy)
         ivec2 from = ivec2(i % size, i / size)
                      - ivec2(bitfieldExtract(int(clip.z), 0, 16), bitfieldExtract(int(clip.z), 16, 16));
