@@ -1,7 +1,7 @@
 # H200, for the next session with a device (session 23 had none): scrolling cascades
 # (47643fd..) and kept maps (c3446ca..) against the tree before them (141412e, carried as .old/src:
 # `git archive 141412e src | tar -x -C .old`), alternating in one lease.
-# Carry .gl .whl .assets-s .old. Writes $OUT/{redraws,probe,walk,moving}-{old,new}-N.txt; one pass (N,
+# Carry .gl .whl .assets-s .old. Writes $OUT/{redraws,probe,walk,moving}-{old,new}-N.txt (and N=2: kept-*.txt); one pass (N,
 # default 1) a call: `N=2 bash ...` for the second (a pass is ~5 min; the old tree's moving rows run the new bench_shadows: their "one pass" rows equal its plain ones).
 source benchmarks/gpu_env.sh
 S=$PWD/.assets-s/models/Sponza/glTF/Sponza.gltf
@@ -17,4 +17,7 @@ for n in ${N:-1}; do
     grep -E "^\| sponza sun" $OUT/moving-$tree-$n.txt | cut -d'|' -f2-9
   done
 done
+# Worlds' own maps with and without the kept map (the new tree alone: keep_still alternates).
+[ "${N:-1}" = 2 ] && timeout 120 python3 benchmarks/probe_world_kept.py --worlds 1024 --size 128x128 --steps 4 --rounds 2 --steps-apart > $OUT/kept-tabletop.txt 2>&1; tail -3 $OUT/kept-tabletop.txt
+[ "${N:-1}" = 2 ] && timeout 120 python3 benchmarks/probe_world_kept.py --sponza $S --worlds 256 --steps 2 --rounds 2 > $OUT/kept-sponza.txt 2>&1; tail -3 $OUT/kept-sponza.txt
 [ "${N:-1}" = 1 ] && timeout 120 python3 -m pytest -q -p no:cacheprovider tests/gpu/test_shadow_cache.py tests/gpu/test_shadow_raster.py > $OUT/tests.txt 2>&1; tail -3 $OUT/tests.txt
