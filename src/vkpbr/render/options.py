@@ -215,8 +215,10 @@ class RenderOptions:
         take W x layers x this^2 x 4 bytes (256: a point light's cube 384 KiB a world).
     shadow_raster : RasterPath or str
         What draws the shadow maps: "auto" (compute shaders on GPUs, whose few raster units
-        are the limit of a redrawn map; the raster units on CPUs), "hardware" (the raster
-        units) or "compute" (compute shaders: render/shadow_raster.py, the same maps).
+        are the limit of a redrawn map; the raster units on CPUs, but compute shaders while
+        the casters that move hold under a tenth of the casters' triangles: the still ones'
+        kept maps are then copied in), "hardware" (the raster units) or "compute" (compute
+        shaders: render/shadow_raster.py, the same maps).
     env : str
         The environment of the physically based mode: "sky" (the built-in Preetham sky
         matched to the automatic sun), "none" (no image-based light, black background) or

@@ -37,6 +37,11 @@ SETTLED_FRAMES = 120
 # descriptor sets on the GPU); past them its maps are drawn in one pass, as before: a scene
 # whose moving casters keep changing gains little from the split and must not grow.
 MAX_SPLITS = 16
+# On a CPU "auto" draws the maps by the raster units (lavapipe rasterises a whole map ~5x
+# faster than it runs the compute kernels), but by the kernels while the casters that move
+# hold under this share of the casters' triangles: their maps are then the kept maps' copy
+# and the moving casters alone (an animated model in a still scene).
+CPU_COMPUTE_SHARE = 0.1
 
 
 class ShadowFrames:
@@ -56,6 +61,7 @@ class ShadowFrames:
         self._split: tuple[tuple, tuple[int, np.ndarray] | None] = ((), None)
         self._moved: tuple[tuple, int, np.ndarray | None] = ((), 0, None)
         self._versions: collections.deque[int] = collections.deque(maxlen=SETTLED_FRAMES)
+        self._triangles: tuple[Any, np.ndarray] = (None, np.zeros(0, np.int64))  # per draw
 
     def plan(self, lights: tuple[Light, ...], options: RenderOptions) -> ShadowPlan:
         """Which of the frame's lights get shadow maps (none in course mode or with shadows
@@ -82,8 +88,11 @@ class ShadowFrames:
         """Draw the maps by compute shaders or the raster units, as `options` say
         (shadow_raster.wants_compute); a change drops the recordings made the other way."""
         choice = getattr(self.paths, "choice", None)
-        compute = wants_compute(options.shadow_raster, self.maps.device,
-                                None if choice is None else choice.compute_raster)
+        if options.shadow_raster.name.lower() == "auto" and self.maps.device.info.kind == "cpu":
+            compute = self._few_moving()
+        else:
+            compute = wants_compute(options.shadow_raster, self.maps.device,
+                                    None if choice is None else choice.compute_raster)
         limit = int(self.maps.device.limits.maxStorageBufferRange)
         if compute and self.maps.compute_bytes() > limit:  # every layer in one binding
             if options.shadow_raster.name.lower() == "compute":
@@ -98,6 +107,21 @@ class ShadowFrames:
             self.recorder.free()
             self.maps.forget()  # the other side's layers hold none of what was drawn
             self._rows.clear()  # ShadowData's header says which side the shading reads
+
+    def _few_moving(self) -> bool:
+        """Whether casters moved in the last SETTLED_FRAMES frames (`split`'s), others did
+        not, and the moving ones hold under CPU_COMPUTE_SHARE of the casters' triangles."""
+        if self.state is None or self.casters is None or not self.state.version:
+            return False
+        settled = self._versions[0] if len(self._versions) == self._versions.maxlen else 0
+        moving = self.casters & (self.state.draw_versions > settled)
+        if not moving.any() or moving.sum() == self.casters.sum():
+            return False
+        if self._triangles[0] is not self.casters:
+            draws = self.recorder.gpu_scene.draws
+            self._triangles = (self.casters, np.array([d.index_count // 3 for d in draws], np.int64))
+        triangles = self._triangles[1]
+        return int(triangles[moving].sum()) < CPU_COMPUTE_SHARE * int(triangles[self.casters].sum())
 
     def ensure(self, plan: ShadowPlan, options: RenderOptions | None = None) -> None:
         """Maps that hold `plan` (of `options`' resolution, where given)."""
