@@ -257,3 +257,30 @@ def test_past_max_splits_the_maps_are_drawn_in_one_pass(pair) -> None:  # noqa: 
         frames._moved = before
         for r in pair:
             r.set_pose(1, rest)
+
+
+def test_auto_takes_the_kernels_on_a_cpu_while_few_casters_move() -> None:
+    """shadow_raster "auto": compute kernels on GPUs; on a CPU the raster units, but the
+    kernels while the casters that moved (in the last SETTLED_FRAMES frames) hold under
+    CPU_COMPUTE_SHARE of the casters' triangles, where the still ones' kept maps are copied
+    in (render/shadow_frames.py). 20 spheres alike: one moving is 5% of them, three 15%."""
+    from vkpbr import Renderer
+    from vkpbr.scene.synthetic import sphere_field
+
+    with Renderer(sphere_field(20, rings=4, segments=8, materials=2), validation=True) as r:
+        sun = [LIGHTS["directional"]]
+        cpu = r.device.info.kind == "cpu"
+
+        def drawn(moving: list[int], frames: int = 3) -> bool:
+            for i in range(frames):
+                for n in moving:
+                    pose = r.state.local[n].copy()
+                    pose[1, 3] += 0.01 * (i + 1)
+                    r.set_pose(n, pose)
+                r.render(CAMERA, sun, size=(32, 24), shadow_resolution=128, env="none")
+            return r.shadows.compute
+
+        assert drawn([]) is (not cpu)  # nothing moves: the raster units on a CPU
+        assert drawn([3]) is True  # 5% of the triangles
+        assert drawn([3, 7, 11]) is (not cpu)  # 15%
+        r.check_validation()
