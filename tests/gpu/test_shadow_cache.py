@@ -284,3 +284,40 @@ def test_auto_takes_the_kernels_on_a_cpu_while_few_casters_move() -> None:
         assert drawn([3]) is True  # 5% of the triangles
         assert drawn([3, 7, 11]) is (not cpu)  # 15%
         r.check_validation()
+
+
+def test_kept_maps_scroll_with_a_walking_camera(pair) -> None:  # noqa: ANN001
+    """A moving caster (the block, every frame) seen by a walking camera (3 cm a frame): the
+    still casters' kept cascades scroll when the camera moves them by whole texels, and each
+    frame copies them in and draws the block over them. The maps equal one pass's over every
+    caster within 4 float32 ulps (a scrolled map's last bits: the scroll test's bound), the
+    same texels covered, the images equal."""
+    cached, fresh = pair
+    opts = {**OPTS, "shadow_raster": "compute"}
+    rest = [r.state.local[1].copy() for r in pair]
+    fresh.parts.shadow_frames.split = lambda moved: None
+    scrolled, kept = [], []
+    try:
+        for i in range(1, 28):
+            for r, m in zip(pair, rest, strict=True):
+                moved = m.copy()
+                moved[:3, 3] += (0.01 * i, 0.0, 0.02 * (i % 4))
+                r.set_pose(1, moved)
+            camera = dataclasses.replace(CAMERA, eye=(0.03 * i, 5.0, 6.0),
+                                         target=(0.3 + 0.03 * i, 0.0, 0.0))
+            got = cached.render(camera, ALL, size=SIZE, linear=True, **opts)
+            scrolled += cached.shadows.last_scrolled
+            kept.append(bool(cached.shadows.last_kept_layers))
+            fresh.shadow_frames.forget()
+            want = fresh.render(camera, ALL, size=SIZE, linear=True, **opts)
+            (maps, cubes), (maps_want, cubes_want) = cached.shadows.read_maps(), fresh.shadows.read_maps()
+            assert np.array_equal(cubes, cubes_want), i
+            assert np.array_equal(maps > 0, maps_want > 0), i
+            assert float(np.abs(maps - maps_want).max()) <= 4 * 2.0 ** -23, i
+            assert np.array_equal(got, want), (i, float(np.abs(got - want).max()))
+    finally:
+        del fresh.parts.shadow_frames.split
+        for r, m in zip(pair, rest, strict=True):
+            r.set_pose(1, m)
+    assert all(kept), kept
+    assert len(scrolled) >= 2, scrolled  # (the kept cascades moved by whole texels)
