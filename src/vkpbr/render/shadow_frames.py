@@ -30,7 +30,7 @@ from vkpbr.scene.types import Camera, Light
 
 __all__ = ["ShadowFrames", "SETTLED_FRAMES", "MAX_SPLITS"]
 
-# A caster that has not moved for this many frames counts as one that never moved again
+# A caster that has not moved for this many frames counts as still again
 # (ShadowFrames.split): its shadow joins the kept maps.
 SETTLED_FRAMES = 120
 # Sets of moved casters a renderer keeps maps apart for (each has its caster tables and

@@ -319,7 +319,7 @@ class ShadowRaster:
     def _set(self, key: tuple, table: _Table, slot: int, job: WorldJob | None = None,
              role: str = "frame") -> Any:
         """Slot `slot`'s set 4 for `table`: into the frame's maps ("frame"), the kept maps of
-        the casters that never moved ("kept", `Redraw`), or the frame's over those ("moved":
+        the still casters ("kept", `Redraw`), or the frame's over those ("moved":
         their Scratch), or a batch of worlds' (`job`)."""
         depths, big = (self.depths, self.big) if job is None else (job.depths, job.big)
         # (a batch of worlds' maps never scroll: their scratch is the kept map they copy)
@@ -352,7 +352,7 @@ class ShadowRaster:
         return self._sets[(key, slot)]
 
     def _kept_depths(self) -> Buffer:
-        """The kept maps of the casters that never moved (`Redraw`): laid out as `depths`,
+        """The kept maps of the still casters (`Redraw`): laid out as `depths`,
         made on first use (the buffers' `fit` lets them go with the others)."""
         if self.kept is None:
             self.kept = self._own(Buffer(self.device, self.depths.size, "storage",
@@ -419,7 +419,7 @@ class ShadowRaster:
     def _split_steps(self, slot: int, plan: Any, redraw: Any, jobs: list[tuple[int, int, Any]],
                      classes: Sequence[str], material_sets: Sequence[Any], set0: Any) -> list[Step]:
         """A `Redraw`'s steps: the kept maps' layers `redraw.kept` drawn from the casters
-        that never moved (their rows the second set: kept, scrolled or cleared), then every
+        that did not move lately (their rows the second set: kept, scrolled or cleared), then every
         drawn layer copied from them (the first set's CLIP_COPY rows) and the casters that
         moved drawn over it."""
         moved = redraw.split[1]

@@ -83,9 +83,10 @@ HEADER_FLOATS = HEADER_BYTES // 4
 # texels the kept map moves by, (dx & 0xffff) | dy << 16; and its mode: CLIP_FULL cleared and
 # drawn whole, CLIP_KEEP kept as it is (unchanged, within the span of redrawn layers),
 # CLIP_SCROLL moved by whole texels with the strip that came into view drawn
-# (shadow_math.layer_scroll), CLIP_COPY the map of the casters that never moved copied in
-# and the moved ones drawn over it. The frame's maps read the first set; where the casters
-# that never moved have maps of their own (`Redraw`), those are drawn by the second.
+# (shadow_math.layer_scroll), CLIP_COPY the still casters' kept map copied in and the moving
+# ones drawn over it. The frame's maps read the first set; where the still casters (those
+# that did not move in the last SETTLED_FRAMES frames) have maps of their own (`Redraw`),
+# those are drawn by the second.
 CLIP_AT = MATRICES  # where the rows start, in mat4s after the header (4 rows a mat4)
 KEPT_CLIP_AT = CLIP_AT + MATRICES // 4  # the second set's
 CLIP_FULL, CLIP_KEEP, CLIP_SCROLL, CLIP_COPY = 0, 1, 2, 3
@@ -136,7 +137,8 @@ class ShadowPlan:
 
 class Redraw(tuple):
     """A frame's redrawn layers (a range per plan entry, as `ShadowMaps.stale` returns them)
-    where the casters that never moved keep maps of their own (compute-drawn maps): `kept`,
+    where the still casters (render/shadow_frames.py split) keep maps of their own
+    (compute-drawn maps): `kept`,
     the layers of those maps redrawn first (a range per entry), and `split`, (its id, a bool
     per draw: the casters that moved), whose casters are drawn over the kept maps copied in.
     Equal (and hashed) by all three: a recording's key (render/steps.py FrameSpec)."""
@@ -495,8 +497,8 @@ class ShadowMaps:
         compute-drawn maps, also where its shading reads them (`_choose_reads`) and how each
         redrawn layer is drawn (`_write_clips`: a cascade the camera moved by whole texels
         keeps its texels, moved, and draws the strip that came into view). `split`: (its id,
-        a bool per draw) the casters that have moved, where others never did
-        (ShadowFrames.split): the maps of those that never did are kept apart and redrawn only
+        a bool per draw) the casters that moved lately, where others did not
+        (ShadowFrames.split): the maps of those that did not are kept apart and redrawn only
         when their layer's matrix changes, and a frame copies them in and draws the moved
         casters over them (a `Redraw`)."""
         redraw, casters_moved, how = self._stale(slot, plan, alpha_mask, casters)

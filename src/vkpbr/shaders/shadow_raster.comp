@@ -42,8 +42,9 @@
 //   render/shadows.py ShadowMaps.stale): CLIP_FULL cleared (depth 0, the farthest under
 //   reversed-Z); CLIP_KEEP left as it is; CLIP_SCROLL (a cascade the camera moved by whole
 //   texels) saved into `scratch` by KERNEL 5, then moved by (dx, dy) by KERNEL 6, the texels
-//   that came into view cleared; CLIP_COPY (the casters that moved drawn over the kept map of
-//   those that never did) copied from `scratch`, bound to that map. KERNELs 1, 2 and 4 then
+//   that came into view cleared; CLIP_COPY (the moving casters drawn over the still ones'
+//   kept map; a batch of worlds' maps over the map of what no world moves) copied from
+//   `scratch`, bound to that map. KERNELs 1, 2 and 4 then
 //   draw only the row's [lo, hi) texels of the layer (`screen`), and none where it is kept.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
@@ -78,7 +79,7 @@ layout(set = 4, binding = 42, std430) buffer Depths { uint depths[]; };
 // band and its triangle's Screen as KERNEL 1 set it up (`store_band`).
 layout(set = 4, binding = 43, std430) buffer Big { uint big[]; };
 // A scrolled layer's texels while they move (KERNELs 5, 6): the 2D layers' texels, as `depths`;
-// for a CLIP_COPY layer, the map of the casters that never moved (every layer, as `depths`).
+// for a CLIP_COPY layer, the still casters' kept map (every layer, as `depths`).
 layout(set = 4, binding = 44, std430) buffer Scratch { uint scratch[]; };
 
 layout(push_constant) uniform Raster {
