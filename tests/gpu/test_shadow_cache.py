@@ -141,6 +141,21 @@ def test_a_walk_refits_only_the_cascades_as_a_whole_write_would(pair) -> None:  
     assert not np.array_equal(images[0], images[-1])
 
 
+def assert_scrolled_alike(maps: np.ndarray, want: np.ndarray, image: np.ndarray,
+                          image_want: np.ndarray, frame: int) -> None:
+    """A scrolled cascade's map against a full redraw's: the moved matrix rounds a vertex's
+    last bits another way, so its depths may differ by 4 float32 ulps of 1, and a texel
+    centre within an ulp of an edge may be covered on one side only (at most one texel in
+    10,000: on lavapipe none, and the images equal); a scroll the wrong way, by the wrong
+    amount or drawn outside its strip differs in whole depths and thousands of texels."""
+    covered, covered_want = maps > 0, want > 0
+    assert np.count_nonzero(covered != covered_want) <= maps.size // 10_000, frame
+    both = covered & covered_want
+    assert float(np.abs(maps - want)[both].max(initial=0.0)) <= 4 * 2.0 ** -23, frame
+    assert np.count_nonzero(np.any(image != image_want, axis=-1)) <= image.shape[0] * image.shape[1] // 1000, (
+        frame, float(np.abs(image - image_want).max()))
+
+
 def test_a_walk_scrolls_the_cascades_it_moves_by_whole_texels(pair) -> None:  # noqa: ANN001
     """Compute-drawn cascades that a walking camera moves by whole texels (its snapping grid)
     keep their texels, moved, and draw only the strip that came into view
@@ -163,9 +178,7 @@ def test_a_walk_scrolls_the_cascades_it_moves_by_whole_texels(pair) -> None:  # 
         want = fresh.render(camera, ALL, size=SIZE, linear=True, **opts)
         (maps, cubes), (maps_want, cubes_want) = cached.shadows.read_maps(), fresh.shadows.read_maps()
         assert np.array_equal(cubes, cubes_want), i
-        assert np.array_equal(maps > 0, maps_want > 0), i  # the same texels covered
-        assert float(np.abs(maps - maps_want).max()) <= 4 * 2.0 ** -23, i
-        assert np.array_equal(got, want), (i, float(np.abs(got - want).max()))
+        assert_scrolled_alike(maps, maps_want, got, want, i)
     step = opts["shadow_resolution"] // 8  # shadow_math.snap_texels
     assert len(scrolled) >= 3, scrolled
     assert all(sorted((abs(dx), abs(dy))) == [0, step] for _, dx, dy in scrolled), scrolled
@@ -312,9 +325,7 @@ def test_kept_maps_scroll_with_a_walking_camera(pair) -> None:  # noqa: ANN001
             want = fresh.render(camera, ALL, size=SIZE, linear=True, **opts)
             (maps, cubes), (maps_want, cubes_want) = cached.shadows.read_maps(), fresh.shadows.read_maps()
             assert np.array_equal(cubes, cubes_want), i
-            assert np.array_equal(maps > 0, maps_want > 0), i
-            assert float(np.abs(maps - maps_want).max()) <= 4 * 2.0 ** -23, i
-            assert np.array_equal(got, want), (i, float(np.abs(got - want).max()))
+            assert_scrolled_alike(maps, maps_want, got, want, i)
     finally:
         del fresh.parts.shadow_frames.split
         for r, m in zip(pair, rest, strict=True):
