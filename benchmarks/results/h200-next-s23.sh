@@ -17,6 +17,8 @@ for n in ${N:-1}; do
     grep -E "^\| sponza sun" $OUT/moving-$tree-$n.txt | cut -d'|' -f2-9
   done
 done
+# `vkpbr bench`'s Sponza rows (BENCHMARKS.md's), the new tree: still, 100 moving, 3 moving.
+[ "${N:-1}" = 2 ] && timeout 150 python3 -m vkpbr bench --sponza $S --scenario sponza-1080p --scenario sponza-moving-1080p --scenario sponza-few-moving-1080p > $OUT/bench.txt 2>&1; tail -4 $OUT/bench.txt
 # Worlds' own maps with and without the kept map (the new tree alone: keep_still alternates).
 [ "${N:-1}" = 2 ] && timeout 120 python3 benchmarks/probe_world_kept.py --worlds 1024 --size 128x128 --steps 4 --rounds 2 --steps-apart > $OUT/kept-tabletop.txt 2>&1; tail -3 $OUT/kept-tabletop.txt
 [ "${N:-1}" = 2 ] && timeout 120 python3 benchmarks/probe_world_kept.py --sponza $S --worlds 256 --steps 2 --rounds 2 > $OUT/kept-sponza.txt 2>&1; tail -3 $OUT/kept-sponza.txt

@@ -151,6 +151,9 @@ SCENARIOS: dict[str, tuple] = {
     # redrawn every frame: the moved nodes cast shadows).
     "sponza-moving-1080p": (_sponza_parts, (1920, 1080), {"moving": 100}),
     "sponza-moving-480p": (_sponza_parts, (640, 480), {"moving": 100}),
+    # 3 of them moved (an animated model in a still scene): compute-drawn maps copy the still
+    # casters' kept maps and draw the 3 over them (render/shadow_frames.py split).
+    "sponza-few-moving-1080p": (_sponza_parts, (1920, 1080), {"moving": 3}),
 }
 
 
