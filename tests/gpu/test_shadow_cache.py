@@ -332,3 +332,26 @@ def test_kept_maps_scroll_with_a_walking_camera(pair) -> None:  # noqa: ANN001
             r.set_pose(1, m)
     assert all(kept), kept
     assert len(scrolled) >= 2, scrolled  # (the kept cascades moved by whole texels)
+
+
+def test_an_animated_file_draws_over_its_still_casters_kept_maps(sample_scene) -> None:  # noqa: ANN001
+    """BoxAnimated (glTF animation: one box turns and moves, the other stands still) played
+    at ten times with compute-drawn maps: every frame draws the moving box over the still
+    one's kept maps, and equals bit for bit the frame of one pass over both (another
+    renderer, its split turned off, every map redrawn)."""
+    from vkpbr import Renderer
+
+    a, b = (Renderer(sample_scene("BoxAnimated"), validation=True) for _ in range(2))
+    try:
+        b.parts.shadow_frames.split = lambda moved: None
+        cam = a.default_camera()
+        for t in np.linspace(0.0, 3.0, 10):
+            got = a.render(cam, size=(96, 72), time=float(t), shadow_raster="compute", linear=True)
+            assert a.shadows.last_kept_layers, t
+            b.shadow_frames.forget()
+            want = b.render(cam, size=(96, 72), time=float(t), shadow_raster="compute", linear=True)
+            assert np.array_equal(got, want), (t, float(np.abs(got - want).max()))
+        a.check_validation()
+    finally:
+        a.close()
+        b.close()
