@@ -237,7 +237,7 @@ def test_a_scroll_moves_every_point_by_its_whole_texels(x: float, z: float, step
     """layer_scroll of a walking camera's cascade matrices (cascade_columns before and after a
     step): where it gives (dx, dy), every point of the scene lands (dx, dy) texels from where
     it was, within 1e-3 of a texel (so the moved texels are the map the new matrix draws); it
-    is a whole grid step along one axis (the snapping); and it gives None where the matrices
+    is whole grid steps along each axis (the snapping); and it gives None where the matrices
     differ otherwise."""
     lo, hi = (-30.0, -2.0, -30.0), (30.0, 12.0, 30.0)
     sun = (0.35, -1.0, 0.25)
@@ -254,14 +254,14 @@ def test_a_scroll_moves_every_point_by_its_whole_texels(x: float, z: float, step
         if moved is None:
             continue
         dx, dy = moved
-        assert sorted((abs(dx), abs(dy)))[0] == 0 and max(abs(dx), abs(dy)) % S.snap_texels(resolution) == 0
+        assert (dx, dy) != (0, 0) and dx % S.snap_texels(resolution) == dy % S.snap_texels(resolution) == 0
         shift = _texels(new, points, resolution) - _texels(old, points, resolution)
         assert np.abs(shift - (dx, dy)).max() < 1e-3, (k, moved, shift[:3])
 
 
 def test_a_scroll_is_only_a_whole_texel_move_along_one_axis() -> None:
-    """layer_scroll's None: the same matrix, a scale or depth change, half a texel, both axes
-    at once, the whole map."""
+    """layer_scroll's moves, along one axis or both, and its None: the same matrix, a scale or
+    depth change, half a texel, the whole map along an axis."""
     m = np.eye(4, dtype=np.float32).T.reshape(16).copy()  # column-major: [12], [13] translate
     def moved(**at: float) -> np.ndarray:  # noqa: ANN202
         out = m.copy()
@@ -275,5 +275,6 @@ def test_a_scroll_is_only_a_whole_texel_move_along_one_axis() -> None:
     assert S.layer_scroll(m, moved(t0=0.01), res) is None  # a scale
     assert S.layer_scroll(m, moved(t14=0.01), res) is None  # the depth
     assert S.layer_scroll(m, moved(t12=1.0 / res), res) is None  # half a texel
-    assert S.layer_scroll(m, moved(t12=2 / res, t13=2 / res), res) is None  # both axes
+    assert S.layer_scroll(m, moved(t12=2 / res, t13=-4 / res), res) == (1, -2)  # both axes
     assert S.layer_scroll(m, moved(t12=2.0), res) is None  # the whole map
+    assert S.layer_scroll(m, moved(t12=2 / res, t13=2.0), res) is None

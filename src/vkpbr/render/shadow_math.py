@@ -427,10 +427,10 @@ def layer_scroll(before: np.ndarray, after: np.ndarray, resolution: int
     """The whole texels (dx, dy) a cascade's map moves by from matrix `before` to `after`
     (16 float32 each, column-major, as ShadowData holds them): a map texel at (x, y) for
     `before` is at (x + dx, y + dy) for `after`. None where they differ in more than the
-    translation across the light, by other than whole texels, along both axes at once, or by
-    the whole map (no texel kept). A walking camera's cascade crosses its snapping grid by
-    one step of snap_texels along one axis at a time: the kernels then move the map's texels
-    and draw only the strip that came into view (render/shadows.py ShadowMaps.stale).
+    translation across the light, by other than whole texels, or by the whole map along an
+    axis (no texel kept). A walking camera's cascade crosses its snapping grid by a step of
+    snap_texels along one axis or both: the kernels then move the map's texels and draw only
+    the strips that came into view (render/shadows.py ShadowMaps.stale).
     Texel x = (clip x * 0.5 + 0.5) * resolution, so a clip translation t moves it by
     t * resolution / 2."""
     b = np.asarray(before, np.float32).reshape(16)
@@ -440,8 +440,7 @@ def layer_scroll(before: np.ndarray, after: np.ndarray, resolution: int
         return None
     shift = (a[12:14].astype(np.float64) - b[12:14].astype(np.float64)) * (0.5 * resolution)
     whole = np.round(shift)
-    if not np.all(np.abs(shift - whole) < 1e-3) or np.count_nonzero(whole) != 1 \
-            or np.abs(whole).max() >= resolution:
+    if not np.all(np.abs(shift - whole) < 1e-3) or np.abs(whole).max() >= resolution:
         return None
     return int(whole[0]), int(whole[1])
 

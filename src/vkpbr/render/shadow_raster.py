@@ -31,10 +31,10 @@ them by hand cost every frame's shading 0.04-0.07 ms (the still frame 0.88 -> 0.
   start anew, so a cached layer is valid in the buffer as it was in the images. How a
   redrawn layer starts is its row after the matrices in ShadowData (render/shadows.py CLIP_AT,
   written by ShadowMaps.stale; the move kernel, "shadows.move"): cleared; kept (unchanged,
-  within a redrawn span); or, where a walking camera moved a cascade by whole texels along one
-  axis (shadow_math.layer_scroll), its texels moved (saved into `scratch` first,
-  "shadows.save") and only the strip that came into view drawn: the drawing kernels clip each
-  2D layer's texels to its row's. Rows are data, so a scrolled frame replays the recording of
+  within a redrawn span); or, where a walking camera moved a cascade by whole texels
+  (shadow_math.layer_scroll), its texels moved (saved into `scratch` first, "shadows.save")
+  and only the strips that came into view drawn: the drawing kernels clip each layer's
+  texels to its row's (shadow_raster.comp clip_box). Rows are data, so a scrolled frame replays the recording of
   a redrawn one. A switch
   between the compute kernels and the raster units (RenderOptions.shadow_raster, or "auto"
   following render/path_choice.py's measured choice) forgets the cache (ShadowFrames.

@@ -82,7 +82,8 @@ HEADER_FLOATS = HEADER_BYTES // 4
 # drawn this frame (ShadowMaps.stale): the texels drawn, [lo, hi) packed x | y << 16; the
 # texels the kept map moves by, (dx & 0xffff) | dy << 16; and its mode: CLIP_FULL cleared and
 # drawn whole, CLIP_KEEP kept as it is (unchanged, within the span of redrawn layers),
-# CLIP_SCROLL moved by whole texels with the strip that came into view drawn
+# CLIP_SCROLL moved by whole texels with the strips that came into view drawn (then the
+# texels drawn are the columns [lo.x, hi.x) and the rows [lo.y, hi.y))
 # (shadow_math.layer_scroll), CLIP_COPY the still casters' kept map copied in and the moving
 # ones drawn over it. The frame's maps read the first set; where the still casters (those
 # that did not move in the last SETTLED_FRAMES frames) have maps of their own (`Redraw`),
@@ -536,10 +537,10 @@ class ShadowMaps:
                     rows[m] = (0, 0, 0, CLIP_KEEP)
                 elif how[m] is None:
                     rows[m] = (0, full, 0, CLIP_FULL)
-                else:
+                else:  # the strips that came into view: columns [x0, x1), rows [y0, y1)
                     dx, dy = how[m]
-                    x0, x1 = (0, dx) if dx > 0 else (size + dx, size) if dx < 0 else (0, size)
-                    y0, y1 = (0, dy) if dy > 0 else (size + dy, size) if dy < 0 else (0, size)
+                    x0, x1 = (0, dx) if dx > 0 else (size + dx, size) if dx < 0 else (0, 0)
+                    y0, y1 = (0, dy) if dy > 0 else (size + dy, size) if dy < 0 else (0, 0)
                     rows[m] = (x0 | y0 << 16, x1 | y1 << 16, (dx & 0xFFFF) | (dy & 0xFFFF) << 16,
                                CLIP_SCROLL)
                     scrolled.append((m, dx, dy))

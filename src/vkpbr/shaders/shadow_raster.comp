@@ -113,8 +113,10 @@ const uint BIG_SUBGROUPS = 8u;  // KERNEL 2's bands a work group (256 lanes of s
 const uint CLIP_FULL = 0u, CLIP_KEEP = 1u, CLIP_SCROLL = 2u, CLIP_COPY = 3u;  // render/shadows.py's
 
 // Layer m's row after the matrices (render/shadows.py CLIP_AT; the pass's set of rows from
-// mat4 pc.world_at.y): [lo, hi) packed x | y << 16, the move (dx & 0xffff) | dy << 16, the
-// mode. Where there are none (pc.world_at.y 0: a batch of worlds' maps): drawn whole.
+// mat4 pc.world_at.y): the texels drawn packed x | y << 16 (lo, hi: the box [lo, hi); for
+// CLIP_SCROLL the strips that came into view, columns [lo.x, hi.x) and rows [lo.y, hi.y)),
+// the move (dx & 0xffff) | dy << 16, the mode. Where there are none (pc.world_at.y 0: a batch
+// of worlds' maps): drawn whole.
 uvec4 clip_row(uint m) {
     if (pc.world_at.y == 0u) {
         uint s = m < pc.max_layers ? pc.map_size : pc.cube_size;
@@ -124,6 +126,26 @@ uvec4 clip_row(uint m) {
 }
 
 uint layer_size(uint m) { return m < pc.max_layers ? pc.map_size : pc.cube_size; }
+
+// Box [lo, hi) (texels, x and y) as a layer's row draws it: within its box; for a scrolled
+// layer, the box around the box's parts in either strip (a superset of the texels that came
+// into view: what it draws beyond them is what the moved texels hold already, to the last
+// bits). Empty: lo >= hi.
+void clip_box(uvec4 clip, uint size, inout vec2 lo, inout vec2 hi) {
+    vec2 a = vec2(clip.x & 0xffffu, clip.x >> 16), b = vec2(clip.y & 0xffffu, clip.y >> 16);
+    if (clip.w != CLIP_SCROLL) {
+        lo = max(lo, a);
+        hi = min(hi, b);
+        return;
+    }
+    bool columns = a.x < b.x && lo.x < b.x && hi.x > a.x;  // the box meets the columns strip
+    bool rows = a.y < b.y && lo.y < b.y && hi.y > a.y;
+    vec2 l = vec2(float(size)), h = vec2(0.0);
+    if (columns) { l = min(l, vec2(max(lo.x, a.x), lo.y)); h = max(h, vec2(min(hi.x, b.x), hi.y)); }
+    if (rows) { l = min(l, vec2(lo.x, max(lo.y, a.y))); h = max(h, vec2(hi.x, min(hi.y, b.y))); }
+    lo = l;
+    hi = h;
+}
 uint layer_base(uint m, uint w) {
     uint s = layer_size(m);
     return w * pc.world.z
@@ -158,8 +180,9 @@ bool layer_sees(Caster a, uint m) {
     vec2 centre = ((vp * vec4(a.sphere.xyz, 1.0)).xy + 1.0) * half_size;
     vec2 reach = a.sphere.w * half_size * vec2(length(vp_row(vp, 0).xyz), length(vp_row(vp, 1).xyz))
                  + 1.0;
-    vec2 lo = vec2(clip.x & 0xffffu, clip.x >> 16), hi = vec2(clip.y & 0xffffu, clip.y >> 16);
-    return all(greaterThan(centre + reach, lo)) && all(lessThan(centre - reach, hi));
+    vec2 lo = centre - reach, hi = centre + reach;
+    clip_box(clip, pc.map_size, lo, hi);
+    return all(lessThan(lo, hi));
 }
 
 // Triangle g of the caster: its vertex indices and world positions (model x position).
@@ -242,9 +265,10 @@ bool screen(uvec3 vi, vec4 wp[3], uint m, uint w, out Screen t) {
     t.lo = clamp(ivec2(ceil(lo2 - 0.5)), ivec2(0), ivec2(isize));
     t.hi = clamp(ivec2(floor(hi2 - 0.5)) + 1, ivec2(0), ivec2(isize));
     if (pc.world_at.y != 0u) {  // the layer's texels drawn this frame
-        uvec4 clip = clip_row(m);
-        t.lo = max(t.lo, ivec2(clip.x & 0xffffu, clip.x >> 16));
-        t.hi = min(t.hi, ivec2(clip.y & 0xffffu, clip.y >> 16));
+        vec2 lo = vec2(t.lo), hi = vec2(t.hi);
+        clip_box(clip_row(m), uint(isize), lo, hi);
+        t.lo = ivec2(lo);
+        t.hi = ivec2(hi);
     }
     if (!all(lessThan(t.lo, t.hi))) return false;
     // The plane's depth slopes in texels, from the polygon's largest fan triangle (all of
