@@ -98,7 +98,7 @@ MAX_LOOP_LAYERS = 32  # shadow_small's layers of a dispatch (a bit each in a uin
 SET_ROWS = ((3, "Indices"), (4, "Positions"), (5, "Texcoords0"), (6, "Texcoords1"),
             (7, "Colors"), (40, "ShadowMatrices"), (41, "Casters"), (42, "Depths"), (43, "Big"),
             (44, "Scratch"))
-TEXEL_GROUP = 256  # shadow_save / shadow_move: one texel an invocation
+TEXEL_GROUP = 256 * 16  # shadow_save / shadow_move: texels a work group (runs of 256: TEXEL_RUN)
 _OPAQUE, _MASKED = ("opaque", "opaque_double"), ("mask", "blend")
 _KINDS = ("directional", "spot", "point")  # shadow_raster.comp's bias index
 # Timestamps after each kernel (benchmarks/bench_shadows.py --steps): FrameStats.pass_ms then

@@ -55,7 +55,7 @@
 #if KERNEL == 2
 layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;
 #elif KERNEL == 5 || KERNEL == 6
-layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;  // shadow_raster.TEXEL_GROUP
+layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;  // shadow_raster.TEXEL_GROUP / TEXEL_RUN
 #elif KERNEL == 3
 layout(local_size_x = 1, local_size_y = 1, local_size_z = 1) in;
 #else
@@ -106,6 +106,7 @@ layout(push_constant) uniform Raster {
 } pc;
 
 const uint BIG_LIST = 4u, BIG_ENTRY = 24u;  // render/shadow_raster.py BIG_ENTRY
+const uint TEXEL_RUN = 16u;  // KERNELs 5, 6: runs of 256 texels a work group (shadow_raster.TEXEL_GROUP)
 const uint MAX_GROUPS = 65535u;
 const uint BIG_SUBGROUPS = 8u;  // KERNEL 2's bands a work group (256 lanes of subgroups of 32)
 
@@ -131,8 +132,8 @@ uint layer_size(uint m) { return m < pc.max_layers ? pc.map_size : pc.cube_size;
 // layer, the box around the box's parts in either strip (a superset of the texels that came
 // into view: what it draws beyond them is what the moved texels hold already, to the last
 // bits). Empty: lo >= hi.
-void clip_box(uvec4 clip, uint size, inout vec2 lo, inout vec2 hi) {
-    vec2 a = vec2(clip.x & 0xffffu, clip.x >> 16), b = vec2(clip.y & 0xffffu, clip.y >> 16);
+void clip_box(uvec4 clip, inout ivec2 lo, inout ivec2 hi) {
+    ivec2 a = ivec2(clip.x & 0xffffu, clip.x >> 16), b = ivec2(clip.y & 0xffffu, clip.y >> 16);
     if (clip.w != CLIP_SCROLL) {
         lo = max(lo, a);
         hi = min(hi, b);
@@ -140,11 +141,12 @@ void clip_box(uvec4 clip, uint size, inout vec2 lo, inout vec2 hi) {
     }
     bool columns = a.x < b.x && lo.x < b.x && hi.x > a.x;  // the box meets the columns strip
     bool rows = a.y < b.y && lo.y < b.y && hi.y > a.y;
-    vec2 l = vec2(float(size)), h = vec2(0.0);
-    if (columns) { l = min(l, vec2(max(lo.x, a.x), lo.y)); h = max(h, vec2(min(hi.x, b.x), hi.y)); }
-    if (rows) { l = min(l, vec2(lo.x, max(lo.y, a.y))); h = max(h, vec2(hi.x, min(hi.y, b.y))); }
-    lo = l;
-    hi = h;
+    // (one strip: the box clipped to it; both: the box around the two parts)
+    ivec2 l = rows ? ivec2(lo.x, columns ? lo.y : max(lo.y, a.y)) : ivec2(max(lo.x, a.x), lo.y);
+    ivec2 h = rows ? ivec2(hi.x, columns ? hi.y : min(hi.y, b.y)) : ivec2(min(hi.x, b.x), hi.y);
+    bool any_part = columns || rows;
+    lo = any_part ? l : ivec2(1);
+    hi = any_part ? h : ivec2(0);
 }
 uint layer_base(uint m, uint w) {
     uint s = layer_size(m);
@@ -180,8 +182,8 @@ bool layer_sees(Caster a, uint m) {
     vec2 centre = ((vp * vec4(a.sphere.xyz, 1.0)).xy + 1.0) * half_size;
     vec2 reach = a.sphere.w * half_size * vec2(length(vp_row(vp, 0).xyz), length(vp_row(vp, 1).xyz))
                  + 1.0;
-    vec2 lo = centre - reach, hi = centre + reach;
-    clip_box(clip, pc.map_size, lo, hi);
+    ivec2 lo = ivec2(floor(centre - reach)), hi = ivec2(ceil(centre + reach));
+    clip_box(clip, lo, hi);
     return all(lessThan(lo, hi));
 }
 
@@ -264,12 +266,7 @@ bool screen(uvec3 vi, vec4 wp[3], uint m, uint w, out Screen t) {
     int isize = int(size);
     t.lo = clamp(ivec2(ceil(lo2 - 0.5)), ivec2(0), ivec2(isize));
     t.hi = clamp(ivec2(floor(hi2 - 0.5)) + 1, ivec2(0), ivec2(isize));
-    if (pc.world_at.y != 0u) {  // the layer's texels drawn this frame
-        vec2 lo = vec2(t.lo), hi = vec2(t.hi);
-        clip_box(clip_row(m), uint(isize), lo, hi);
-        t.lo = ivec2(lo);
-        t.hi = ivec2(hi);
-    }
+    if (pc.world_at.y != 0u) clip_box(clip_row(m), t.lo, t.hi);  // the layer's texels drawn this frame
     if (!all(lessThan(t.lo, t.hi))) return false;
     // The plane's depth slopes in texels, from the polygon's largest fan triangle (all of
     // them lie in one plane): Vulkan's m = max(|dz/dx|, |dz/dy|).
@@ -434,26 +431,35 @@ shared uint group_big_count;
 void main() {
 #if KERNEL == 5 || KERNEL == 6
     // z is (world, layer) as the drawing kernels' (a frame's maps: world 0 of one); `scratch`
-    // holds one world's layout (a batch of worlds: the kept map every world copies).
-    uint m = pc.matrix + gl_GlobalInvocationID.z % pc.world.w;
-    uint w = pc.world_at.x + gl_GlobalInvocationID.z / pc.world.w;
-    uvec4 clip = clip_row(m);
-    uint size = layer_size(m);
-    uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 256u;
-    if (clip.w == CLIP_KEEP || i >= size * size) return;
-    uint at = layer_base(m, w) + i;
-#if KERNEL == 5
-    if (clip.w == CLIP_SCROLL) scratch[at] = depths[at];
-#else
-    uint value = clip.w == CLIP_COPY ? scratch[layer_base(m, 0u) + i] : 0u;
-    if (clip.w == CLIP_SCROLL) {  // the new texel (x, y) is the old (x - dx, y - dy)
-        ivec2 from = ivec2(i % size, i / size)
-                     - ivec2(bitfieldExtract(int(clip.z), 0, 16), bitfieldExtract(int(clip.z), 16, 16));
-        if (all(greaterThanEqual(from, ivec2(0))) && all(lessThan(from, ivec2(size))))
-            value = scratch[layer_base(m, 0u) + uint(from.y) * size + uint(from.x)];
+    // holds one world's layout (a batch of worlds: the kept map every world copies). A work
+    // group takes TEXEL_RUN runs of 256 texels (a texel an invocation a run: coalesced), so
+    // that a CPU device (lavapipe) runs a sixteenth of the invocations.
+    uint z = gl_WorkGroupID.z, m = pc.matrix + z, w = 0u;
+    if (pc.world.z != 0u) {  // (a frame's: z is the layer; a division per group otherwise)
+        m = pc.matrix + z % pc.world.w;
+        w = pc.world_at.x + z / pc.world.w;
     }
-    depths[at] = value;
+    uvec4 clip = clip_row(m);
+    if (clip.w == CLIP_KEEP) return;
+    uint size = layer_size(m), texels = size * size;
+    uint first = (gl_WorkGroupID.x + gl_WorkGroupID.y * gl_NumWorkGroups.x) * 256u * TEXEL_RUN;
+    uint base = layer_base(m, w), kept = layer_base(m, 0u);
+    ivec2 move = ivec2(bitfieldExtract(int(clip.z), 0, 16), bitfieldExtract(int(clip.z), 16, 16));
+    for (uint r = 0u; r < TEXEL_RUN; ++r) {
+        uint i = first + r * 256u + gl_LocalInvocationIndex;
+        if (i >= texels) return;
+#if KERNEL == 5
+        if (clip.w == CLIP_SCROLL) scratch[base + i] = depths[base + i];
+#else
+        uint value = clip.w == CLIP_COPY ? scratch[kept + i] : 0u;
+        if (clip.w == CLIP_SCROLL) {  // the new texel (x, y) is the old (x - dx, y - dy)
+            ivec2 from = ivec2(i % size, i / size) - move;
+            if (all(greaterThanEqual(from, ivec2(0))) && all(lessThan(from, ivec2(size))))
+                value = scratch[kept + uint(from.y) * size + uint(from.x)];
+        }
+        depths[base + i] = value;
 #endif
+    }
 #elif KERNEL == 3
     big[1] = max(min((big[0] + BIG_SUBGROUPS - 1u) / BIG_SUBGROUPS, MAX_GROUPS), 1u);
     big[2] = 1u;
