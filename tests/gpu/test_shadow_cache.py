@@ -380,3 +380,31 @@ def test_an_animated_file_draws_over_its_still_casters_kept_maps(sample_scene) -
     finally:
         a.close()
         b.close()
+
+
+def test_streamed_frames_draw_over_kept_maps_alike(pair) -> None:  # noqa: ANN001
+    """`render_many` (frames in flight sharing the kept maps and the depth buffer) of a walk
+    while the block moves: every frame equals the one-pass renderer's stream of the same
+    walk, bit for bit, and synchronization validation finds no hazard between a frame's
+    kept pass and the frames before it reading those maps."""
+    cached, fresh = pair
+    opts = {**OPTS, "shadow_raster": "compute"}
+    rest = cached.state.local[1].copy()
+    fresh.parts.shadow_frames.split = lambda moved: None
+
+    def walk(r):  # noqa: ANN001, ANN202
+        for i in range(18):
+            pose = rest.copy()
+            pose[:3, 3] += (0.03 * i, 0.0, 0.01 * (i % 5))
+            r.set_pose(1, pose)
+            yield dataclasses.replace(CAMERA, eye=(0.03 * i, 5.0, 6.0),
+                                      target=(0.3 + 0.03 * i, 0.0, 0.0))
+    try:
+        got = list(cached.render_many(walk(cached), ALL, size=SIZE, linear=True, **opts))
+        want = list(fresh.render_many(walk(fresh), ALL, size=SIZE, linear=True, **opts))
+    finally:
+        del fresh.parts.shadow_frames.split
+        for r in pair:
+            r.set_pose(1, rest)
+    assert all(np.array_equal(g, w) for g, w in zip(got, want, strict=True))
+    assert not np.array_equal(got[0], got[-1])
