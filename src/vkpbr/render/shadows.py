@@ -503,10 +503,10 @@ class ShadowMaps:
         when their layer's matrix changes, and a frame copies them in and draws the moved
         casters over them (a `Redraw`)."""
         redraw, casters_moved, how = self._stale(slot, plan, alpha_mask, casters)
+        self.last_scrolled = self.last_kept_layers = ()
         if not self.compute:
             return redraw
         redraw = self._choose_reads(slot, plan, redraw, casters_moved)
-        self.last_kept_layers = ()
         if split is None or not any(redraw):
             self.last_scrolled = self._write_clips(slot, 0, plan, redraw, how)
             return redraw
