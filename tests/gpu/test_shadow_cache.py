@@ -408,3 +408,31 @@ def test_streamed_frames_draw_over_kept_maps_alike(pair) -> None:  # noqa: ANN00
             r.set_pose(1, rest)
     assert all(np.array_equal(g, w) for g, w in zip(got, want, strict=True))
     assert not np.array_equal(got[0], got[-1])
+
+
+def test_kept_maps_follow_every_option_change(pair) -> None:  # noqa: ANN001
+    """The block moving every frame while the options change one at a time (the alpha mask,
+    the map size, the raster units and back, the frame path): every frame equals the
+    one-pass renderer's bit for bit, and the frames drawn by the compute kernels draw over
+    kept maps (none by the raster units)."""
+    cached, fresh = pair
+    rest = cached.state.local[1].copy()
+    fresh.parts.shadow_frames.split = lambda moved: None
+    steps = [{}, {"alpha_mask": False}, {}, {"shadow_resolution": 128}, {"shadow_raster": "hardware"},
+             {}, {"pipeline": "compute"}, {}]
+    try:
+        for i, change in enumerate(steps):
+            opts = {**OPTS, "shadow_raster": "compute", **change}
+            for r in pair:
+                pose = rest.copy()
+                pose[0, 3] += 0.05 * (i + 1)
+                r.set_pose(1, pose)
+            got = cached.render(CAMERA, ALL, size=SIZE, linear=True, **opts)
+            assert bool(cached.shadows.last_kept_layers) is (opts["shadow_raster"] == "compute"), i
+            fresh.shadow_frames.forget()
+            want = fresh.render(CAMERA, ALL, size=SIZE, linear=True, **opts)
+            assert np.array_equal(got, want), (i, change, float(np.abs(got - want).max()))
+    finally:
+        del fresh.parts.shadow_frames.split
+        for r in pair:
+            r.set_pose(1, rest)
