@@ -227,7 +227,9 @@ def test_casters_that_never_moved_keep_maps_of_their_own(pair) -> None:  # noqa:
     rest = [r.state.local[1:3].copy() for r in pair]
     fresh.parts.shadow_frames.split = lambda moved: None  # one pass over every caster
     cached.parts.shadow_frames._versions = collections.deque(maxlen=3)
-    kept_redraws, splits = [], []
+    kept_redraws, splits, latest = [], [], [None]
+    real_split = cached.parts.shadow_frames.split
+    cached.parts.shadow_frames.split = lambda moved: latest.__setitem__(0, real_split(moved)) or latest[0]
     try:
         for i in range(20):
             node, step = (1, i) if i < 12 else (2, i - 12) if i >= 15 else (None, 0)
@@ -245,14 +247,14 @@ def test_casters_that_never_moved_keep_maps_of_their_own(pair) -> None:  # noqa:
                 assert np.array_equal(got, want), float(np.abs(got - want).max())
             got = cached.render(camera, ALL, size=SIZE, linear=True, **opts)
             kept_redraws.append(dict(cached.shadows.last_kept_layers))
-            splits.append(cached.parts.shadow_frames._split[1])
+            splits.append(latest[0])  # (the frame's split: its id, the moving casters)
             fresh.shadow_frames.forget()
             want = fresh.render(camera, ALL, size=SIZE, linear=True, **opts)
             for a, b in zip(cached.shadows.read_maps(), fresh.shadows.read_maps(), strict=True):
                 assert np.array_equal(a, b), i
             assert np.array_equal(got, want), (i, float(np.abs(got - want).max()))
     finally:
-        del fresh.parts.shadow_frames.split
+        del fresh.parts.shadow_frames.split, cached.parts.shadow_frames.split
         cached.parts.shadow_frames._versions = collections.deque(maxlen=SETTLED_FRAMES)
         for r, m in zip(pair, rest, strict=True):
             r.set_poses([1, 2], m)

@@ -404,7 +404,8 @@ class BatchPath:
         if self.world_shadows is None:
             self.world_shadows = WorldShadows(p.shadow_frames.maps)
         ws = self.world_shadows
-        if not ws.moves_casters(call, p.gpu_scene.draws):
+        moved = ws.moved_casters(call, p.gpu_scene.draws)  # (None: not known which: all)
+        if moved is not None and not moved.any():  # the state's maps hold every world's
             return None
         d = max(len(p.gpu_scene.draws), 1)
         worlds = call.gpu.worlds if call.gpu is not None else len(call.records) // d  # type: ignore[arg-type]
@@ -413,7 +414,6 @@ class BatchPath:
         if made:  # set 3 rewritten: every recording that binds it
             p.recorder.free()
             self.free_recordings()
-        moved = ws.moved_casters(call, p.gpu_scene.draws)
         self._wshadow = (wplan, ws.with_kept(job, p.gpu_scene.draws, moved), moved)
         return self._wshadow
 

@@ -56,9 +56,9 @@ class ShadowFrames:
         self.paths = paths  # render/path_choice.py FramePaths: shadow_raster auto follows its choice
         self._plan: tuple[tuple, ShadowPlan] = ((), ShadowPlan())
         self._rows: dict[int, tuple[tuple, np.ndarray | None]] = {}  # by slot: (key, rows)
-        # `split`'s answer for a state version and casters, and its casters that moved (their
-        # bytes and id: a new set is a new id).
-        self._split: tuple[tuple, tuple[int, np.ndarray] | None] = ((), None)
+        # `_moving`'s answer for a state version, a settled version and the casters; `split`'s
+        # casters that moved (their bytes and the casters: a new set is a new id), its id.
+        self._moving_mask: tuple[tuple, np.ndarray | None] = ((), None)
         self._moved: tuple[tuple, int, np.ndarray | None] = ((), 0, None)
         self._versions: collections.deque[int] = collections.deque(maxlen=SETTLED_FRAMES)
         self._triangles: tuple[Any, np.ndarray] = (None, np.zeros(0, np.int64))  # per draw
@@ -108,14 +108,24 @@ class ShadowFrames:
             self.maps.forget()  # the other side's layers hold none of what was drawn
             self._rows.clear()  # ShadowData's header says which side the shading reads
 
-    def _few_moving(self) -> bool:
-        """Whether casters moved in the last SETTLED_FRAMES frames (`split`'s), others did
-        not, and the moving ones hold under CPU_COMPUTE_SHARE of the casters' triangles."""
+    def _moving(self) -> np.ndarray | None:
+        """The casters that moved in the last SETTLED_FRAMES frames (a bool per draw) where
+        others did not; None where none moved or all did (or there is no state)."""
         if self.state is None or self.casters is None or not self.state.version:
-            return False
+            return None
         settled = self._versions[0] if len(self._versions) == self._versions.maxlen else 0
-        moving = self.casters & (self.state.draw_versions > settled)
-        if not moving.any() or moving.sum() == self.casters.sum():
+        key = (self.state.version, settled, id(self.casters), len(self.casters))
+        if self._moving_mask[0] != key:
+            moving = self.casters & (self.state.draw_versions > settled)  # (a draw's last change)
+            some = 0 < int(moving.sum()) < int(self.casters.sum())
+            self._moving_mask = (key, moving if some else None)
+        return self._moving_mask[1]
+
+    def _few_moving(self) -> bool:
+        """Whether some casters moved lately and others did not (`_moving`), and the moving
+        ones hold under CPU_COMPUTE_SHARE of the casters' triangles."""
+        moving = self._moving()
+        if moving is None:
             return False
         if self._triangles[0] is not self.casters:
             draws = self.recorder.gpu_scene.draws
@@ -152,22 +162,15 @@ class ShadowFrames:
         (the kept maps then hold other casters: they are redrawn)."""
         if self.state is not None:
             self._versions.append(self.state.version)  # (a frame's: SETTLED_FRAMES ago first)
-        if not moved or self.state is None or self.casters is None or not self.maps.compute \
-                or self._moved[1] >= MAX_SPLITS:
+        if not moved or not self.maps.compute or self._moved[1] >= MAX_SPLITS:
             return None
-        settled = self._versions[0] if len(self._versions) == self._versions.maxlen else 0
-        key = (self.state.version, settled, id(self.casters), len(self.casters))
-        if self._split[0] == key:
-            return self._split[1]
-        dynamic = self.casters & (self.state.draw_versions > settled)  # (a draw's last change)
-        split = None
-        if 0 < int(dynamic.sum()) < int(self.casters.sum()):
-            which = (dynamic.tobytes(), key[2:])  # (new casters: a new mask, kept maps redrawn)
-            if which != self._moved[0]:
-                self._moved = (which, self._moved[1] + 1, dynamic)
-            split = (self._moved[1], self._moved[2])
-        self._split = (key, split)
-        return split
+        moving = self._moving()
+        if moving is None:
+            return None
+        which = (moving.tobytes(), id(self.casters), len(self.casters))  # (new casters: a new set)
+        if which != self._moved[0]:
+            self._moved = (which, self._moved[1] + 1, moving)
+        return self._moved[1], self._moved[2]
 
     def write(self, slot: FrameSlot, plan: ShadowPlan, lights: tuple[Light, ...],
               camera: Camera, size: tuple[int, int]) -> np.ndarray | None:

@@ -250,6 +250,8 @@ class ShadowMaps:
         self.sets = [self.pool.allocate(self.set_layout) for _ in range(slots)]
         self.pass_sets = [self.pool.allocate(self.pass_layout) for _ in range(slots)]
         self._views = [self.buffer.array(np.float32, size // 4, i * self.stride) for i in range(slots)]
+        # Each slot's matrices (16 floats each, column-major) and clip rows (2 sets).
+        self._mats = [v[HEADER_FLOATS:CLIP_FLOATS].reshape(MATRICES, 16) for v in self._views]
         self._clips = [v[CLIP_FLOATS:].view(np.uint32).reshape(2, MATRICES, 4) for v in self._views]
         self.maps: LayeredDepth | None = None
         self.cubes: LayeredDepth | None = None  # (the images: `ensure`)
@@ -442,8 +444,7 @@ class ShadowMaps:
                 out[e.light] = (e.first, 6, near, 2.0 / cube_resolution)
         self._write_header(data, far, texel, resolution, cube_resolution, world_layout)
         # mat4 is column-major in GLSL: each row-major matrix transposed.
-        data[HEADER_FLOATS:HEADER_FLOATS + 16 * MATRICES].reshape(MATRICES, 4, 4)[:] = \
-            mats.transpose(0, 2, 1)
+        self._mats[slot].reshape(MATRICES, 4, 4)[:] = mats.transpose(0, 2, 1)
         rows = self._clips[slot]
         rows[:, :MAX_LAYERS] = (0, resolution | resolution << 16, 0, CLIP_FULL)
         rows[:, MAX_LAYERS:] = (0, cube_resolution | cube_resolution << 16, 0, CLIP_FULL)
@@ -565,33 +566,43 @@ class ShadowMaps:
 
     def matrices_bytes(self, slot: int) -> bytes:
         """Frame `slot`'s matrices as ShadowData holds them (what its maps are drawn with)."""
-        return self._views[slot][HEADER_FLOATS:HEADER_FLOATS + 16 * MATRICES].tobytes()
+        return self._mats[slot].tobytes()
 
     def _stale_kept(self, slot: int, plan: ShadowPlan, redraw: tuple[range, ...], key: tuple
                     ) -> tuple[tuple[range, ...], dict[int, tuple[int, int] | None]]:
-        """Of the layers frame `slot` draws, those whose kept map (the casters that never
-        moved, `key`: the alpha mask and the split's id) holds other matrices or other
-        casters, as spans per entry, and how each changed 2D one is drawn (`_stale`'s `how`:
-        a cascade moved by whole texels scrolls). Marks them drawn."""
-        mats = self._views[slot][HEADER_FLOATS:HEADER_FLOATS + 16 * MATRICES].reshape(MATRICES, 16)
+        """Of the layers frame `slot` draws, those whose kept map (the still casters, `key`:
+        the alpha mask and the split's id) holds other matrices or other casters, as spans per
+        entry, and how each changed 2D one is drawn (`_compare`). Marks them drawn."""
         out, how = [], {}
         for e, layers in zip(plan.entries, redraw, strict=True):
-            point = e.kind == "point"
-            changed = []
-            for i in (range(1) if point and layers else range(0) if point else layers):
-                where = ("cubes" if point else "maps", e.first, i)
-                rows = mats[e.matrix_base:e.matrix_base + 6] if point else mats[e.matrix_base + i]
-                held, before = (rows.tobytes(), key), self._kept.get(where)
-                if before != held:
-                    changed.append(i)
-                    if not point:
-                        moved = before is None or before[1] != key or e.kind != "directional"
-                        how[e.first + i] = None if moved else SM.layer_scroll(
-                            np.frombuffer(before[0], np.float32), rows, self.resolution)
-                self._kept[where] = held
-            out.append(range(0) if not changed else range(0, 6) if point
-                       else range(changed[0], changed[-1] + 1))
+            indices = (range(1) if layers else range(0)) if e.kind == "point" else layers
+            drawn, _ = self._compare(self._kept, self._mats[slot], e, indices, key, how)
+            out.append(drawn)
         return tuple(out), how
+
+    def _compare(self, held: dict, mats: np.ndarray, e: ShadowEntry, indices: range, key: tuple,
+                 how: dict[int, tuple[int, int] | None]) -> tuple[range, bool]:
+        """Entry `e`'s layers `indices` (a cube's six faces are its layer 0: one position)
+        against what `held` (the maps' records: `_drawn`, `_kept`) says they hold, marked as
+        holding `mats`' matrices and `key` (what else they were drawn with) from now on.
+        Returns the span of those that differ and whether any differs in `key` (or is
+        unknown); records in `how` each differing 2D layer's drawing: the whole texels its map
+        moved by where a directional light's matrix moved alone (`layer_scroll`), else None."""
+        image, point = ("cubes", True) if e.kind == "point" else ("maps", False)
+        changed, other_key = [], False
+        for i in indices:
+            rows = mats[e.matrix_base:e.matrix_base + 6] if point else mats[e.matrix_base + i]
+            now, before = (rows.tobytes(), key), held.get((image, e.first, i))
+            if before != now:
+                changed.append(i)
+                moved = before is None or before[1] != key
+                other_key |= moved
+                if not point:
+                    how[e.first + i] = None if moved or e.kind != "directional" else \
+                        SM.layer_scroll(np.frombuffer(before[0], np.float32), rows, self.resolution)
+            held[(image, e.first, i)] = now
+        span = range(0) if not changed else range(0, 6) if point else range(changed[0], changed[-1] + 1)
+        return span, other_key
 
     def _choose_reads(self, slot: int, plan: ShadowPlan, redraw: tuple[range, ...],
                       casters_moved: bool) -> tuple[range, ...]:
@@ -632,7 +643,7 @@ class ShadowMaps:
         its matrix moved alone (`layer_scroll`), else None. A walking camera usually changes
         only its nearest cascade (shadow_math's snapping grid). Marks them drawn: the frame's
         commands draw them and submissions run in order (`forget` if it is not submitted)."""
-        mats = self._views[slot][HEADER_FLOATS:HEADER_FLOATS + 16 * MATRICES].reshape(MATRICES, 16)
+        mats = self._mats[slot]
         # The usual frame: the same matrices, casters and plan as the previous call (any
         # slot), whose layers are drawn already: nothing to compare entry by entry.
         # `casters`: the scene state's version that last moved a caster (0: never).
@@ -645,27 +656,10 @@ class ShadowMaps:
         casters_moved = False
         out, how = [], {}
         for e in plan.entries:
-            image = "cubes" if e.kind == "point" else "maps"
-            # A cube's six faces change together (one position): one key for the six.
-            layers = (range(1) if e.kind == "point" else range(e.count))
-            changed = []
-            for i in layers:
-                where = (image, e.first, i)
-                rows = mats[e.matrix_base:e.matrix_base + 6] if e.kind == "point" \
-                    else mats[e.matrix_base + i]
-                held = (rows.tobytes(), alpha_mask, casters)
-                before = self._drawn.get(where)
-                if before != held:
-                    changed.append(i)
-                    moved = before is None or before[1:] != held[1:]
-                    casters_moved |= moved
-                    if e.kind != "point":
-                        how[e.first + i] = None if moved or e.kind != "directional" else \
-                            SM.layer_scroll(np.frombuffer(before[0], np.float32), rows,
-                                            self.resolution)
-                self._drawn[where] = held
-            out.append(range(0) if not changed else
-                       range(0, 6) if e.kind == "point" else range(changed[0], changed[-1] + 1))
+            indices = range(1) if e.kind == "point" else range(e.count)
+            drawn, moved = self._compare(self._drawn, mats, e, indices, key[1], how)
+            out.append(drawn)
+            casters_moved |= moved
         self.last_redrawn_layers = tuple((e.kind, len(r)) for e, r in zip(plan.entries, out, strict=True))
         return tuple(out), casters_moved, how
 

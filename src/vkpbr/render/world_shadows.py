@@ -107,8 +107,9 @@ class WorldShadows:
         return self._casts[1]
 
     def moved_casters(self, call: Any, draws: Any) -> np.ndarray | None:
-        """The shadow casters a call's worlds move (a bool per draw), None where it is not
-        known which (every caster is then each world's own)."""
+        """The shadow casters a call's worlds (render/worlds.py WorldCall) move (a bool per
+        draw), None where it is not known which (every caster is then each world's own).
+        None of them: the state's maps, shared, are every world's (no shadow can change)."""
         moved = call.gpu.slots.anchor >= 0 if call.gpu is not None else call.moved
         if moved is None:
             return None
@@ -154,14 +155,6 @@ class WorldShadows:
         with self.device.one_time_commands() as handle:
             record_steps(Commands(self.device, handle), steps, resources, (1, 1))
         self._kept_key = key
-
-    def moves_casters(self, call: Any, draws: Any) -> bool:
-        """Whether a call's worlds (render/worlds.py WorldCall) move a draw that casts
-        shadows: the cheap check that keeps the state's maps where no shadow can change."""
-        if not call.poses:
-            return False
-        moved = self.moved_casters(call, draws)
-        return True if moved is None else bool(moved.any())
 
     def job(self, plan: ShadowPlan, resolution: int, worlds: int, draws: int) -> tuple[WorldJob, bool]:
         """The maps of `worlds` worlds (`plan`: world_plan's) and whether the buffers were
