@@ -323,6 +323,7 @@ def run(args: argparse.Namespace) -> int:
         phases = {**renderer.timings, **pipeline_timings(renderer.device)}  # pipelines: so far
         log.info("set-up by phase: %s", ", ".join(  # -v: where the load's time went
             f"{k} {v:.3f} s" if isinstance(v, float) else f"{k} {v}" for k, v in phases.items()))
+    t_closed = time.perf_counter()  # (the frames and the Renderer's close are not the write's)
     write_image_atomic(out, image)
     t_write = time.perf_counter()
     extra = "".join(f", {_output_path(out, n).name}" for n in (args.outputs or ()))
@@ -333,6 +334,6 @@ def run(args: argparse.Namespace) -> int:
     if per_frame:
         per_frame.sort()
         timing += f", per frame {1e3 * per_frame[len(per_frame) // 2]:.2f} ms (median of {len(per_frame)})"
-    timing += f", GPU {stats.gpu_ms:.2f} ms, write {1e3 * (t_write - t_first):.0f} ms"
+    timing += f", GPU {stats.gpu_ms:.2f} ms, write {1e3 * (t_write - t_closed):.0f} ms"
     say(timing)
     return 0
