@@ -107,6 +107,26 @@ def test_each_kind_matches_the_spec(make_renderer, lights: list[Light]) -> None:
     assert_close_on_raster(got, want, rtol=2e-3, atol=2e-5)
 
 
+# A light at the eye (a headlight, a ring light around the lens): l = v at every pixel,
+# where h.v of unit vectors rounds above 1 (Schlick's (1 - h.v)^5 of a negative base had
+# made NaN pixels: a tenth of the default scene's).
+HEADLIGHT = Light(kind="point", position=CAMERA.eye, color=(1.0, 0.9, 0.8), intensity=12.0,
+                  falloff="inverse_square")
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "compute", "batch"])
+def test_a_light_at_the_eye_matches_the_spec(make_renderer, pipeline: str) -> None:
+    r = make_renderer(plane_scene())
+    if pipeline == "batch":
+        got = r.render_batch([CAMERA, CAMERA], (W, H), [HEADLIGHT], linear=True, env="none")[1, ..., :3]
+    else:
+        got = render(r, [HEADLIGHT], pipeline=pipeline)
+    assert np.isfinite(got).all(), f"{np.count_nonzero(~np.isfinite(got).all(axis=-1))} NaN pixels"
+    want = expected([HEADLIGHT])
+    assert want.max() > 0.05
+    assert_close_on_raster(got, want, rtol=2e-3, atol=2e-5)
+
+
 def test_spot_cone_and_range_windows_are_visible(make_renderer) -> None:
     """The windows bite in the image: pixels beyond the spot's outer cone and the point
     light's range are black, pixels inside are lit (and the NumPy test above matches both)."""

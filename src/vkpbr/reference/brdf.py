@@ -93,8 +93,9 @@ def d_blinn_phong(n_dot_h: np.ndarray, alpha: np.ndarray) -> np.ndarray:
 
 
 def f_schlick(f0: np.ndarray, v_dot_h: np.ndarray) -> np.ndarray:
-    """Schlick: F0 + (1 - F0)(1 - h.v)^5."""
-    return f0 + (1.0 - f0) * np.power(1.0 - v_dot_h, 5.0)[..., None]
+    """Schlick: F0 + (1 - F0)(1 - h.v)^5 (the base kept >= 0, as brdf.glsl keeps it: h.v
+    rounds above 1 where l = v)."""
+    return f0 + (1.0 - f0) * np.power(np.maximum(1.0 - v_dot_h, 0.0), 5.0)[..., None]
 
 
 def g_cook_torrance(n_dot_h, n_dot_v, n_dot_l, v_dot_h):  # noqa: ANN001, ANN201

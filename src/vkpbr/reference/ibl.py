@@ -62,7 +62,7 @@ def gltf_brdf(n: np.ndarray, v: np.ndarray, l: np.ndarray, c: np.ndarray,
     alpha = np.asarray(roughness, dtype=np.float64) ** 2
     spec = (_v_smith_ggx_correlated(np.maximum(n_dot_l, 0.0), np.maximum(n_dot_v, 0.0), alpha)
             * d_ggx(n_dot_h, alpha))[..., None]
-    fc = ((1.0 - v_dot_h) ** 5)[..., None]
+    fc = (np.maximum(1.0 - v_dot_h, 0.0) ** 5)[..., None]
     c = np.asarray(c, dtype=np.float64)
     dielectric_f = 0.04 + 0.96 * fc
     dielectric = (1.0 - dielectric_f) * c / PI + dielectric_f * spec  # fresnel_mix(1.5, ...)

@@ -15,9 +15,11 @@ float d_blinn_phong(float n_dot_h, float alpha) {
     return (ap + 2.0) / (2.0 * PI) * pow(n_dot_h, ap);
 }
 
-// Schlick's Fresnel approximation (Schlick 1994): F0 + (1 - F0)(1 - h.v)^5.
+// Schlick's Fresnel approximation (Schlick 1994): F0 + (1 - F0)(1 - h.v)^5. h.v of unit
+// vectors rounds above 1 where l = v (a light at the eye: a headlight), and pow of a
+// negative base is NaN: the base is kept >= 0.
 vec3 f_schlick(vec3 f0, float v_dot_h) {
-    return f0 + (1.0 - f0) * pow(1.0 - v_dot_h, 5.0);
+    return f0 + (1.0 - f0) * pow(max(1.0 - v_dot_h, 0.0), 5.0);
 }
 
 // Cook-Torrance masking (Cook & Torrance 1982): min(1, 2(n.h)(n.v)/(v.h), 2(n.h)(n.l)/(v.h)).

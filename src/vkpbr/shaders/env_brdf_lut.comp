@@ -24,7 +24,7 @@ void main() {
         if (n_dot_l <= 0.0 || v_dot_h <= 0.0) continue;
         // f cos / pdf_l with pdf_l = D (n.h) / (4 v.h): V (n.l) 4 (v.h) / (n.h).
         float w = v_smith_ggx_correlated(n_dot_l, n_dot_v, alpha) * n_dot_l * 4.0 * v_dot_h / h.z;
-        float fc = pow(1.0 - v_dot_h, 5.0);
+        float fc = pow(max(1.0 - v_dot_h, 0.0), 5.0);  // (v.h rounds above 1 where h = v)
         a += (1.0 - fc) * w;
         b += fc * w;
     }
