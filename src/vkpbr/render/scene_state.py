@@ -107,6 +107,8 @@ class GpuSceneState:
         self._values: tuple[int, np.ndarray] | None = None  # (version, deform floats)
         self._materials_written = [0] * count  # the slots hold the file's factors at first
         self.gpu_scene: Any = None  # whose material blocks set_material overrides
+        # (material version, the alpha factor of each masked or blended draw: 0 for others)
+        self._alphas: tuple[int, np.ndarray | None] = (-1, None)
         for slot in range(count):  # every slot holds the rest pose from the start
             self.write(slot)
 
@@ -149,6 +151,8 @@ class GpuSceneState:
         """Bring slot `slot`'s copy up to the state (after the slot's fence: its previous
         frame has finished reading it); nothing when it already holds this version.
         Returns `slots[slot]` (the frame slot, for the caller) when `slots` is given."""
+        if self._alphas[0] != self.state.material_version:
+            self._touch_alpha_changes()
         version = self.state.version
         last = self._written[slot]
         if last == version:
@@ -168,6 +172,28 @@ class GpuSceneState:
             self.buffer.array(np.float32, values.size, slot * self.stride + self.deform_at)[:] = values
         self._written[slot] = version
         return None if slots is None else slots[slot]
+
+    def _touch_alpha_changes(self) -> None:
+        """Masked and blended draws whose material's alpha factor changed (set_material, an
+        animation pointer) are touched in the state (SceneState.touch_draws): the alpha
+        cutoff shapes their shadows, so the maps' caches, which follow the draws' versions,
+        must redraw them. Other factors only shade: they change no map."""
+        gs = self.gpu_scene
+        if gs is None:
+            return
+        alpha_of = np.array([float(b["base_color_factor"][3]) for b in gs.material_blocks])
+        for i, fields in self.state.materials.items():
+            if "base_color_factor" in fields and i < len(alpha_of):
+                factor = fields["base_color_factor"]
+                alpha_of[i] = factor[3] if len(factor) > 3 else 1.0
+        cut = np.array([d.alpha_mode in ("mask", "blend") for d in gs.draws], bool)
+        alphas = np.where(cut, alpha_of[np.array([d.material for d in gs.draws], np.int64)], 0.0)
+        last = self._alphas[1]
+        if last is not None and len(last) == len(alphas):
+            changed = np.flatnonzero(alphas != last)
+            if len(changed):
+                self.state.touch_draws(changed)
+        self._alphas = (self.state.material_version, alphas)
 
     def _write_materials(self, slot: int) -> None:
         """Slot `slot`'s material blocks: the file's, with the state's overrides."""

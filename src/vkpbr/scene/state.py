@@ -300,6 +300,13 @@ class SceneState:
             self.material_version += 1
         self._changed(np.arange(len(self.tree)))
 
+    def touch_draws(self, draws: np.ndarray) -> None:
+        """Count `draws` as changed though no node did (render/scene_state.py: a masked or
+        blended material's alpha factor, whose cutoff shapes their shadows): what follows the
+        draws' versions (the shadow maps' caches, their moving casters) redraws them."""
+        self.version += 1
+        self.draw_versions[np.asarray(draws, np.int64)] = self.version
+
     def _changed(self, idx: np.ndarray) -> None:
         """Nodes whose local transform, visibility or weights changed (their subtrees'
         draws follow at the next frame)."""
