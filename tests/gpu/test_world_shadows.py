@@ -146,3 +146,37 @@ def test_casters_the_worlds_do_not_move_are_drawn_once(r, pipeline: str) -> None
         assert np.array_equal(maps, maps1) and maps.max() > 0
         assert np.array_equal(views, views1)
         assert before == after  # (drawn when the lights came, by the first call: not again)
+
+
+def test_a_masked_materials_alpha_per_world_shadows_each_world_alike() -> None:
+    """World base colour alphas of an alpha-masked material (the holed card of the shadow
+    scene) over and under its cutoff: the card and its shadow show in one world and in
+    neither in the other. The worlds' maps are drawn with the state's factors, so such a
+    call renders view by view (batch_call._alpha_differs): each view equals `render` with
+    that world's set_material, bit for bit, with or without poses; an RGB-only factor stays
+    in the batch. world_lights with such alphas cannot go view by view: a one-line error."""
+    from shadow_scenes import BLOCK, CARD, GROUND, LIGHTS, rect_scene
+    from shadow_scenes import CAMERA as CARD_CAMERA
+
+    from vkpbr.render.renderer import Renderer
+
+    lights = [LIGHTS["spot"], LIGHTS["point"]]
+    opts = {"world_shadow_resolution": 256, "shadow_resolution": 256, "env": "none",
+            "pipeline": "compute"}
+    alphas = np.array([[[1.0, 1.0, 1.0, 1.0]], [[1.0, 1.0, 1.0, 0.2]]])
+    with Renderer(rect_scene((GROUND, BLOCK, CARD)), validation=True) as rr:
+        rr.world_slots([1], materials=["m2"])
+        poses = np.stack([rr.state.local[[1]].copy()] * 2)
+        for worlds in (None, poses):
+            got = rr.render_batch([CARD_CAMERA] * 2, (W, H), lights, worlds=worlds,
+                                  world_materials={"base_color": alphas}, **opts)
+            for w in range(2):
+                rr.set_material("m2", base_color=tuple(alphas[w, 0]))
+                want = rr.render(CARD_CAMERA, lights, size=(W, H), **opts)
+                assert np.array_equal(got[w], want), (w, worlds is None)
+            rr.set_material("m2", base_color=(1.0, 1.0, 1.0, 1.0))
+            assert np.count_nonzero(np.any(got[0] != got[1], axis=-1)) > 50  # the alpha shows
+        with pytest.raises(UsageError, match="alpha differs between worlds"):
+            rr.render_batch([CARD_CAMERA] * 2, (W, H), lights, world_materials={"base_color": alphas},
+                            world_lights={"intensity": np.ones((2, 2))}, **opts)
+        rr.check_validation()

@@ -244,7 +244,29 @@ def _worlds_of(r: Any, prep: Prepared, lights: LightsArg, g: WorldArgs
     # (the frame's lights: what world_lights gives per world, and the factors' base rows)
     frame = () if not lit and g.materials is None else r.frame_lights(opts, lights)
     plan = _world_plan(r, prep, g, len(frame))
+    if route == "compute" and opts.shadows and _alpha_differs(r, plan.materials):
+        if lit:
+            raise UsageError("world_materials: a masked or blended material's alpha differs "
+                             "between worlds, which the batch's shadow maps do not follow, "
+                             "and world_lights/world_environment need the batch: give every "
+                             "world that material's alpha, or shadows=False")
+        route = "views"  # (view by view: each world's maps drawn with its own alpha)
     return route, _host_call(r, plan, g.expand, _factor_blocks(r, plan, frame, opts)), plan
+
+
+def _alpha_differs(r: Any, wm: WorldMaterials | None) -> bool:
+    """Whether worlds give a masked or blended material another base colour alpha than the
+    state's: its cutoff shapes the material's shadows, and the worlds' shadow maps are
+    drawn with the state's factors (the material table), so such a call goes view by view
+    (docs/batch.md); a world's own alpha still decides what its views see."""
+    if wm is None or "base_color" not in wm.values:
+        return False
+    cut = np.array([r.gpu_scene.materials[int(m)].alpha_mode in ("mask", "blend")
+                    for m in wm.materials], bool)
+    if not cut.any():
+        return False
+    state_alpha = base_factors(r.gpu_scene, r.state)[wm.materials[cut], 0, 3]
+    return bool(np.any(wm.values["base_color"][:, cut, 3] != state_alpha))
 
 
 def _times_of(r: Any, views: CameraBatch, route: str, g: WorldArgs
