@@ -24,3 +24,6 @@ done
 [ "${N:-1}" = 3 ] && timeout 120 python3 benchmarks/probe_world_kept.py --worlds 1024 --size 128x128 --steps 4 --rounds 2 --steps-apart > $OUT/kept-tabletop.txt 2>&1; tail -3 $OUT/kept-tabletop.txt
 [ "${N:-1}" = 3 ] && timeout 120 python3 benchmarks/probe_world_kept.py --sponza $S --worlds 256 --steps 2 --rounds 2 > $OUT/kept-sponza.txt 2>&1; tail -3 $OUT/kept-sponza.txt
 [ "${N:-1}" = 1 ] && timeout 120 python3 -m pytest -q -p no:cacheprovider tests/gpu/test_shadow_cache.py tests/gpu/test_shadow_raster.py > $OUT/tests.txt 2>&1; tail -3 $OUT/tests.txt
+# N=4 (session 24, no device either): its new tests on the NVIDIA driver (the headlight's
+# NaN fix, the caches' random sequences, the worlds' masked alpha), and the GPU test pass.
+[ "${N:-1}" = 4 ] && VKPBR_ASSETS=$PWD/.assets-s/models HYPOTHESIS_PROFILE=report timeout -s INT 500 python3 -m pytest -q -n 8 -p no:cacheprovider -rfE --tb=short tests/gpu tests/unit tests/test_import_graph.py > $OUT/gpu-tests.log 2>&1; tail -5 $OUT/gpu-tests.log

@@ -417,7 +417,8 @@ class RendererActor:
         except (SceneError, UsageError) as exc:
             if ahead is not None:  # this scene failed: the next one still loads meanwhile
                 self.prefetch(ahead)
-            return {"ok": False, "error": _one_line(exc), "retry": False, "pid": os.getpid()}
+            return {"ok": False, "error": _one_line(exc), "retry": False, "pid": os.getpid(),
+                    "loads": dict(self.loads)}  # (a scene that failed to load counts too)
         except Exception as exc:  # noqa: BLE001 - reported to the driver, which retries elsewhere
             log.exception("work item %s failed", item.label())
             self.close()  # a device error may leave the Renderer unusable: start afresh
