@@ -6,7 +6,6 @@ once auto's path is chosen (render/path_choice.py); `render_batch` the batch pat
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import time
 from collections.abc import Iterable, Iterator, Mapping
@@ -25,7 +24,7 @@ from vkpbr.render.frame_path import Submitted
 from vkpbr.render.frames import FrameStats
 from vkpbr.render.instances import instance_api
 from vkpbr.render.lighting import LightsArg, automatic_sun
-from vkpbr.render.options import RenderOptions
+from vkpbr.render.options import RenderOptions, with_overrides
 from vkpbr.render.outputs import OUTPUTS, frame_outputs
 from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.parts import FrameParts, open_device
@@ -218,7 +217,7 @@ class Renderer:
         `driver_time`: each frame's `last_stats.driver_ms` (`cpu_ms`' part in the driver:
         benchmarks). `times`: one animation time per camera (`render`'s `time`).
         """
-        opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
+        opts = with_overrides(options, option_overrides)
         cameras = with_times(self.state, cameras, times, animation)
         if batch is not None and readback and self.device.batch_views and times is None:
             for chunk, names in chunked(cameras, batch, self.default_camera(), outputs):
