@@ -14,7 +14,6 @@ from typing import Any
 
 import numpy as np
 
-from vkpbr.errors import UsageError
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, FrameTarget
 from vkpbr.render import outputs as O
 from vkpbr.render.batch_call import WorldArgs, WorldsArg, batch_call, batch_step, world_slots
@@ -29,7 +28,7 @@ from vkpbr.render.outputs import OUTPUTS, frame_outputs
 from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.parts import FrameParts, open_device
 from vkpbr.render.scene_state import with_times
-from vkpbr.render.scene_swap import SceneMaker
+from vkpbr.render.scene_swap import SceneMaker, checked_args, checked_scene
 from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.types import Camera, Light, Scene
 from vkpbr.scene.worlds import WorldSlots
@@ -71,8 +70,7 @@ class Renderer:
                  cache_dir: str | os.PathLike[str] | None = None,
                  semantics: str | os.PathLike[str] | Mapping[str, int | str] = "mesh") -> None:
         t0 = time.perf_counter()
-        if msaa not in (1, 4):
-            raise UsageError(f"msaa {msaa}: choose 1 or 4")
+        background = checked_args(msaa, background, env_spec)
         self.msaa, self.background, self.depth_prepass = msaa, background, depth_prepass
         self.device = open_device(device, validation, sync_validation, window_extensions, cache_dir)
         self._maker = SceneMaker(self.device, msaa, background, depth_prepass, env_spec,
@@ -85,6 +83,7 @@ class Renderer:
         """Draw `scene` (None: the built-in one) from now on, on the same device and pipeline
         cache (render/scene_swap.py): as `Renderer(scene)` would; targets made before and
         `world_slots` are gone."""
+        checked_scene(scene)  # (before the scene drawn now is gone)
         if self._made is not None:
             self._maker.unmake(self._made)
             self._made = self.parts = self.batch_path = None
