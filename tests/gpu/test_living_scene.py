@@ -262,6 +262,9 @@ def test_bad_arguments_of_the_living_scene_api_are_one_line(make_renderer) -> No
         (lambda: r.set_weights("box", "x"), "set_weights: expected numbers, got str"),
         (lambda: r.set_material(0, base_color="red"), "set_material: base_color: expected numbers"),
         (lambda: r.set_material(0, metallic="x"), "set_material: metallic: expected numbers"),
+        (lambda: r.set_material(0, emissive=(1e308, 0, 0)), "emissive must be 3 finite"),
+        (lambda: r.set_material(0, base_color=np.zeros((5, 4))),  # (its repr has 5 lines)
+         r"base_color must be 3 or 4 finite number\(s\), got ndarray of shape \(5, 4\)"),
         (lambda: r.add_instances(0, "x"), "add_instances: expected numbers, got str"),
         (lambda: r.add_instances(0, [[1, 2], [3]]), "add_instances: expected numbers"),
         (lambda: r.set_time("x"), "animation time: expected a number of seconds, got str"),
@@ -285,6 +288,8 @@ def test_bad_arguments_of_the_living_scene_api_are_one_line(make_renderer) -> No
         assert "\n" not in str(err.value)
     r.set_poses([], np.zeros((0, 4, 4)))  # no nodes, no poses: nothing to do
     assert r.add_instances(0, np.zeros((0, 7))).shape == (0,)
+    r.remove_instances([])  # (no ids: [] is float64 to NumPy, and had been refused so)
+    r.move_instances([], np.zeros((0, 4, 4)))
     assert np.array_equal(r.render(CAMERA, size=(W, H)), before)
     ids = r.add_instances(0, np.eye(4))  # one (4, 4) matrix, as one (7,) row is taken
     assert ids.shape == (1,)

@@ -197,6 +197,8 @@ def _live(renderer: Any, ids: Any) -> np.ndarray:
     """The draws of instance ids `ids`, every one made by add_instances and not removed;
     a one-line error naming the first that is not (nothing changes)."""
     arr = np.asarray(ids).reshape(-1)
+    if not arr.size and ids is not None:  # ([] is float64 to NumPy: no ids, nothing to do)
+        return np.zeros(0, np.int64)
     if arr.dtype.kind not in "iu":
         raise UsageError(f"instance ids must be integers, got {arr.dtype}")
     table: InstanceTable = renderer._instance_table
