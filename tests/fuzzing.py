@@ -99,6 +99,8 @@ def mutate_bytes(data: bytes, rng: random.Random) -> bytes:
     if kind < 0.3:
         at = rng.randrange(max(len(data), 1))
         return bytes(data[:at] + bytes(rng.randrange(256) for _ in range(rng.randint(1, 8))) + data[at:])
+    if not data:  # nothing to flip (an earlier edit emptied it): a few bytes instead
+        return bytes(rng.randrange(256) for _ in range(rng.randint(1, 8)))
     for _ in range(rng.randint(1, 6)):
         at = rng.randrange(len(data))
         data[at] = rng.choice([0, 0xFF, 0x7F, 0x80, rng.randrange(256), data[at] ^ (1 << rng.randrange(8))])

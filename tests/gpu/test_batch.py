@@ -229,6 +229,7 @@ def test_sample_model(assets, make_renderer) -> None:  # noqa: ANN001
 
 @pytest.mark.parametrize("cameras, batch, message", [
     ([], "auto", "the batch is empty"),
+    (np.zeros((0, 4, 4)), "auto", "the batch is empty"),  # (was a ValueError from concatenate)
     (np.zeros((3, 3, 3)), "auto", "poses must have shape (B, 4, 4)"),
     ("0,0,5,0,0,0", "auto", "expected a list of cameras"),
     (None, 0, "batch 0: expected a positive number"),

@@ -148,6 +148,9 @@ def test_docs_example_poses_render(capsys, tmp_path: Path) -> None:
     (["render", "--env-background", "maybe"], "argument --env-background: invalid choice"),
     (["render", "no-such-file.gltf"], "no such file"),
     (["render", "--cameras", "missing.json", "--out", "d"], "No such file"),
+    # (5,000 digits: int() refuses past 4,300; "²" is a digit int() refuses: the fuzz suite's)
+    (["render", "--device", "9" * 5000], "--device 9999999999...9999999999: no such device"),
+    (["render", "--device", "\u00b2"], "no device matches"),
 ])
 def test_bad_input_is_one_line_and_nonzero(capsys, tmp_path: Path, monkeypatch, argv, message) -> None:  # noqa: ANN001
     monkeypatch.chdir(tmp_path)

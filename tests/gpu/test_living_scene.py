@@ -205,6 +205,12 @@ def test_moving_a_caster_redraws_its_shadow_map(make_renderer) -> None:  # noqa:
     (7, np.eye(4)[None], {}, "out of range"),
     ("box", np.zeros((1, 7)) + [0, 0, 0, 0, 0, 0, 1], {"quaternion": "zyxw"}, "quaternion"),
     ("box", np.eye(4)[None], {"space": "camera"}, "space"),
+    # (found by hand: a RecursionError, a TypeError, ValueErrors of np.asarray)
+    (2**63, np.eye(4)[None], {}, "node index 9223372036854775808 is out of range"),
+    ([10**40], np.eye(4)[None], {}, "node index 1e20 or more is out of range"),
+    (None, np.eye(4)[None], {}, "nodes: expected an index, a name"),
+    ("box", "abc", {}, "set_poses: expected numbers, got str"),
+    ("box", [[1, 2], [3]], {}, "set_poses: expected numbers, got list of length 2"),
 ])
 def test_bad_poses_are_one_line_errors(make_renderer, nodes, poses, kw, message) -> None:  # noqa: ANN001
     r = make_renderer(analytic_scene())
@@ -243,3 +249,47 @@ def test_material_overrides_match_a_scene_loaded_with_them(make_renderer) -> Non
         r.set_material("nope", metallic=0.5)
     r.reset_pose()
     assert np.array_equal(before, r.render(CAMERA, size=(W, H)))
+
+
+def test_bad_arguments_of_the_living_scene_api_are_one_line(make_renderer) -> None:  # noqa: ANN001
+    """The state's and instances' calls given strings, ragged lists, no rows, a scalar time or
+    as many times as cameras not (found by hand: each had raised a ValueError or TypeError from
+    NumPy, zip or float deep inside); what is well-formed but empty is taken."""
+    r = make_renderer(analytic_scene())
+    before = r.render(CAMERA, size=(W, H))
+    bad = [
+        (lambda: r.set_pose("box", "x"), "set_pose: expected numbers, got str"),
+        (lambda: r.set_weights("box", "x"), "set_weights: expected numbers, got str"),
+        (lambda: r.set_material(0, base_color="red"), "set_material: base_color: expected numbers"),
+        (lambda: r.set_material(0, metallic="x"), "set_material: metallic: expected numbers"),
+        (lambda: r.set_material(0, emissive=(1e308, 0, 0)), "emissive must be 3 finite"),
+        (lambda: r.set_material(0, base_color=np.zeros((5, 4))),  # (its repr has 5 lines)
+         r"base_color must be 3 or 4 finite number\(s\), got ndarray of shape \(5, 4\)"),
+        (lambda: r.add_instances(0, "x"), "add_instances: expected numbers, got str"),
+        (lambda: r.add_instances(0, [[1, 2], [3]]), "add_instances: expected numbers"),
+        (lambda: r.set_time("x"), "animation time: expected a number of seconds, got str"),
+        (lambda: r.set_time(None), "animation time: expected a number of seconds, got None"),
+        (lambda: r.set_time(float("nan")), "animation time must be finite"),
+        (lambda: r.set_time(0.5, 0.5), "no animation is named 0.5"),
+        (lambda: r.render(CAMERA, size=(W, H), time="x"), "animation time: expected"),
+        (lambda: r.render(CAMERA, size=(W, H), nope=1), "unknown render option 'nope'"),
+        (lambda: list(r.render_many([CAMERA] * 2, size=(W, H), times=[0.0])), "times: 1 for 2"),
+        (lambda: list(r.render_many(iter([CAMERA] * 2), size=(W, H), times=iter([0.0]))),
+         "times: fewer than the cameras"),
+        (lambda: list(r.render_many([CAMERA], size=(W, H), times=iter([0.0, 1.0]))),
+         "times: more than the cameras"),
+        (lambda: list(r.render_many([CAMERA], size=(W, H), times=0.5)), "times: expected one a frame"),
+        (lambda: list(r.render_many(5, size=(W, H))), "cameras: expected one a frame"),
+        (lambda: list(r.render_many([CAMERA], size=(W, H), times=[None])), "animation time"),
+    ]
+    for call, message in bad:
+        with pytest.raises(UsageError, match=message) as err:
+            call()
+        assert "\n" not in str(err.value)
+    r.set_poses([], np.zeros((0, 4, 4)))  # no nodes, no poses: nothing to do
+    assert r.add_instances(0, np.zeros((0, 7))).shape == (0,)
+    r.remove_instances([])  # (no ids: [] is float64 to NumPy, and had been refused so)
+    r.move_instances([], np.zeros((0, 4, 4)))
+    assert np.array_equal(r.render(CAMERA, size=(W, H)), before)
+    ids = r.add_instances(0, np.eye(4))  # one (4, 4) matrix, as one (7,) row is taken
+    assert ids.shape == (1,)

@@ -166,3 +166,27 @@ def test_the_kept_limit_follows_the_device_memory_within_bounds() -> None:
     assert kept_limit(0) == kept_limit(4 << 30) == KEPT_BYTES  # (lavapipe, small GPUs)
     assert kept_limit(32 << 30) == 1 << 30
     assert kept_limit(141 << 30) == MOST_KEPT  # (the H200)
+
+
+def test_an_image_larger_than_its_heap_is_refused_and_the_device_stays_valid() -> None:
+    """An image whose memory exceeds the whole heap (render(size=(16384, 16384)) on lavapipe's
+    2 GiB heap; found by hand): one OutOfDeviceMemoryError before vkAllocateMemory (which Vulkan
+    forbids to ask for more than a heap: the validation layer's error had failed every later
+    check of the device), the half-made image destroyed at once (its close had raised an
+    AttributeError), and the device goes on (validated() checks it)."""
+    import pytest
+
+    from vkpbr.errors import OutOfDeviceMemoryError
+    from vkpbr.gpu.image import Image
+
+    with validated() as dev:
+        vk = dev.vk
+        mp = dev.memory_properties
+        heap = max(int(mp.memoryHeaps[i].size) for i in range(mp.memoryHeapCount))
+        layer = 16384 * 16384 * 16  # bytes of one RGBA32F layer
+        before = live_objects_by_kind().get("Image", 0)
+        with pytest.raises(OutOfDeviceMemoryError, match="VK_ERROR_OUT_OF_DEVICE_MEMORY"):
+            Image(dev, 16384, 16384, vk.VK_FORMAT_R32G32B32A32_SFLOAT,
+                  vk.VK_IMAGE_USAGE_SAMPLED_BIT, layers=heap // layer + 1)
+        assert live_objects_by_kind().get("Image", 0) == before
+        Buffer(dev, 1 << 20, "storage").destroy()  # (the device still makes things)

@@ -201,3 +201,33 @@ def test_render_batch_last_stats_are_the_calls() -> None:
     both = summed_stats(a, b)
     assert (both.cpu_ms, both.wait_ms, both.gpu_ms, both.readback_ms) == (11.0, 22.0, 33.0, 44.0)
     assert both.pass_ms == {"bloom": 5.5, "copy": 1.0}
+
+
+def test_the_renderers_own_arguments_are_one_line() -> None:
+    """A path where a Scene goes (Renderer("x.gltf"), set_scene(5)), a colour name as the
+    background, another object as env_spec, semantics=5, outputs=5 (found by hand: an
+    AttributeError or an AssertionError deep in the parts' making, a TypeError from the
+    Vulkan binding's clear value, a TypeError iterating 5): one UsageError line each, and
+    set_scene's leaves the scene drawn before."""
+    import pytest
+
+    from vkpbr.errors import UsageError
+    from vkpbr.render.renderer import Renderer
+
+    for kwargs, message in (({"scene": "x.gltf"}, "scene: expected a Scene .* got str"),
+                            ({"background": "red"}, "background: expected a 3 matrix, got str"),
+                            ({"background": (1, 2)}, "background: expected 3 items, got 2"),
+                            ({"background": (float("nan"), 0, 0)}, r"background\[0\]: nan is not finite"),
+                            ({"env_spec": "cpu"}, "env_spec: expected an EnvironmentSpec, got str"),
+                            ({"semantics": 5}, "semantics: expected mesh, material, extras")):
+        with pytest.raises(UsageError, match=message) as err:
+            Renderer(**{"validation": True, **kwargs})
+        assert "\n" not in str(err.value)
+    with Renderer(validation=True) as r:
+        before = r.render(size=(16, 12))
+        with pytest.raises(UsageError, match="scene: expected a Scene .* got int"):
+            r.set_scene(5)
+        with pytest.raises(UsageError, match="outputs: expected names from color"):
+            r.render(size=(16, 12), outputs=5)
+        assert np.array_equal(r.render(size=(16, 12)), before)
+        r.check_validation()

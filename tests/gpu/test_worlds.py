@@ -133,12 +133,38 @@ def test_new_poses_rerecord_nothing_and_leave_the_state(make_renderer) -> None: 
 @pytest.mark.parametrize(("kwargs", "message"), [
     ({"worlds": np.zeros((3, 2, 7))}, "world_slots"),
     ({"world_of_view": np.zeros(3, int)}, "need worlds"),
+    # (found by hand: a ValueError, a TypeError from deep inside, or world_of_view ignored)
+    ({"times": ["a", "b", "c"]}, "finite animation times"),
+    ({"times": [1j] * 3}, "finite animation times"),
+    ({"times": [0.0] * 3, "world_of_view": np.zeros(3, int)}, "without worlds="),
+    ({"nope": 1}, "unknown render option 'nope'"),
+    ({"options": "fast"}, "options: expected a RenderOptions, got str"),
+    ({"lights": 5}, "lights: expected a Light or a list of them, got int"),
 ])
 def test_errors_before_any_gpu_work(make_renderer, kwargs: dict, message: str) -> None:  # noqa: ANN001
     r = make_renderer(analytic_scene())
     with pytest.raises(UsageError, match=message) as err:
         r.render_batch([CAMERA] * 3, (W, H), **kwargs)
     assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize(("size", "message"), [
+    ((0, 0), "must be positive integers"), ((-1, 6), "must be positive integers"),
+    ((8.5, 6), "must be positive integers"), ((float("nan"), 6), "must be positive integers"),
+    ((8,), r"tuple of length 1: expected \(width, height\)"), ("8x6", "'8x6': expected"),
+    (None, "None: expected"), ((8, 6, 1), "expected"), ((100000, 8), "exceeds this device's limit"),
+])
+def test_bad_sizes_are_one_line_in_every_call(make_renderer, size: object, message: str) -> None:  # noqa: ANN001
+    """render, render_batch (which had taken (8.5, 6) and raised ZeroDivisionError, IndexError,
+    ValueError or a Vulkan OverflowError for the others) and batch_step: the same check."""
+    r = make_renderer(analytic_scene())
+    for call in (lambda: r.render(CAMERA, size=size),
+                 lambda: r.render_batch([CAMERA] * 2, size),
+                 lambda: r.batch_step([CAMERA] * 2, size)()):
+        with pytest.raises(UsageError, match=message) as err:
+            call()
+        assert "\n" not in str(err.value) and str(err.value).startswith("image size")
+    assert r.render_batch([CAMERA] * 2, (W, H)).shape == (2, H, W, 4)  # (and it renders on)
 
 
 @pytest.mark.parametrize(("which", "message"), [

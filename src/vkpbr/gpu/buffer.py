@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from vkpbr.gpu.device import Device
-from vkpbr.gpu.memory import Allocation
+from vkpbr.gpu.memory import Allocation, check_heap
 
 __all__ = ["Buffer", "upload_buffer"]
 
@@ -91,6 +91,7 @@ class Buffer:
         self.allocation_size = int(req.size)
         self._alloc: Allocation | None = None  # memory from (and back to) device.memory
         if exportable:  # (its own: the allocation carries the export)
+            check_heap(device, int(req.size), mtype)
             self.memory = vk.vkAllocateMemory(device.handle, vk.VkMemoryAllocateInfo(
                 pNext=vk.VkExportMemoryAllocateInfo(handleTypes=_OPAQUE_FD(vk)),
                 allocationSize=req.size, memoryTypeIndex=mtype), None)

@@ -78,9 +78,14 @@ class Image:
         req = vk.vkGetImageMemoryRequirements(device.handle, self.handle)
         mtype = device.memory_type(req.memoryTypeBits, vk.VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)
         self.bytes = int(req.size)
-        self._alloc = device.memory.allocate(int(req.size), mtype, False)  # (gpu/memory.py)
-        self.memory = self._alloc.memory
-        vk.vkBindImageMemory(device.handle, self.handle, self.memory, 0)
+        self._alloc: Any = None
+        try:  # (no memory for it: the image goes now, not half-made at the device's close)
+            self._alloc = device.memory.allocate(int(req.size), mtype, False)  # (gpu/memory.py)
+            self.memory = self._alloc.memory
+            vk.vkBindImageMemory(device.handle, self.handle, self.memory, 0)
+        except BaseException:
+            self.destroy()
+            raise
 
     def destroy(self) -> None:
         if self.handle is None:
@@ -88,7 +93,9 @@ class Image:
         vk, dev = self.device.vk, self.device.handle
         handle, self.handle = self.handle, None
         vk.vkDestroyImage(dev, handle, None)
-        self.device.memory.release(self._alloc)
+        if self._alloc is not None:
+            self.device.memory.release(self._alloc)
+            self._alloc = None
         self.memory = None
         self.device.untrack(self)
 

@@ -230,11 +230,15 @@ class Instance:
             raise NoVulkanError("vkEnumeratePhysicalDevices", "no devices", INSTALL_HINT)
         if selector is None or selector == "":
             return min(devices, key=lambda d: (_KIND_RANK[d.kind], d.index))
-        if isinstance(selector, int) or str(selector).isdigit():
-            idx = int(selector)
+        text = str(selector)
+        # (isdecimal: "²" is a digit int() refuses; past 18 digits no index exists, and
+        # int() refuses past 4,300)
+        if isinstance(selector, int) or text.isdecimal():
+            idx = int(selector) if isinstance(selector, int) or len(text) <= 18 else -1
             if not 0 <= idx < len(devices):
+                shown = text if len(text) <= 24 else f"{text[:10]}...{text[-10:]}"
                 raise UsageError(
-                    f"--device {idx}: no such device (have {len(devices)}; see `vkpbr info`)"
+                    f"--device {shown}: no such device (have {len(devices)}; see `vkpbr info`)"
                 )
             return devices[idx]
         matches = [d for d in devices if str(selector).lower() in d.name.lower()]

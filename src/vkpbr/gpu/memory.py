@@ -32,7 +32,7 @@ from collections import OrderedDict
 from typing import Any
 
 __all__ = ["MemoryRecycler", "MAX_RECYCLED", "KEPT_BYTES", "MOST_KEPT", "LARGER", "size_class",
-           "fitting_classes", "kept_limit"]
+           "fitting_classes", "kept_limit", "check_heap"]
 
 MAX_RECYCLED = 64 << 20  # larger allocations are freed (few, and their memory is wanted back)
 KEPT_BYTES = 512 << 20  # at least this much may be kept at once (kept_limit)
@@ -120,6 +120,7 @@ class MemoryRecycler:
                         self.reused += 1
                         return alloc
         vk, dev = self.device.vk, self.device.handle
+        check_heap(self.device, size, type_index)
         info = vk.VkMemoryAllocateInfo(allocationSize=size, memoryTypeIndex=type_index)
         try:
             memory = vk.vkAllocateMemory(dev, info, None)
@@ -172,3 +173,19 @@ class MemoryRecycler:
             alloc.mapped = None
         vk.vkFreeMemory(dev, alloc.memory, None)
         alloc.memory = None
+
+
+def check_heap(device: Any, size: int, type_index: int) -> None:
+    """Raise OutOfDeviceMemoryError where `size` bytes exceed the whole heap of memory type
+    `type_index`: Vulkan forbids asking that of vkAllocateMemory (VUID-vkAllocateMemory-
+    pAllocateInfo-01713, which the validation layer reports and keeps: every later check of
+    the device failed), so it is refused here, as the driver would refuse a smaller excess."""
+    from vkpbr.errors import OutOfDeviceMemoryError
+
+    mp = device.memory_properties
+    heap = int(mp.memoryHeaps[mp.memoryTypes[type_index].heapIndex].size)
+    if size > heap:
+        raise OutOfDeviceMemoryError("vkAllocateMemory", "VK_ERROR_OUT_OF_DEVICE_MEMORY",
+                                     f"{size / 2**30:.1f} GiB asked of a heap of "
+                                     f"{heap / 2**30:.1f} GiB (ask for smaller images or "
+                                     "fewer views at once)")

@@ -36,6 +36,7 @@ import numpy as np
 
 from vkpbr.render.batch_route import batch_route, check_out
 from vkpbr.render.options import RenderOptions
+from vkpbr.scene._checks import frame_size
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 
 __all__ = ["BatchCache", "Prepared", "WorldShape", "batch_cache"]
@@ -85,6 +86,7 @@ class BatchCache:
                  out: np.ndarray | None, make_options: Callable[..., RenderOptions]) -> Prepared:
         """The call's Prepared: cached where its key can be made of identities and plain
         values, else made now (and not kept)."""
+        frame_size(size, int(r.device.limits.maxImageDimension2D))  # (before the key: int(8.5))
         if self._parts is not r.parts:  # a new scene: nothing made for the old one holds
             self.clear()
             self._parts = r.parts

@@ -21,8 +21,9 @@ from vkpbr.render.batch_cache import BatchCache, Prepared, WorldShape, batch_cac
 from vkpbr.render.batch_replay import replay, replay_key
 from vkpbr.render.batch_route import batch_result, stack_views
 from vkpbr.render.lighting import LightsArg
-from vkpbr.render.options import RenderOptions
+from vkpbr.render.options import RenderOptions, with_overrides
 from vkpbr.render.worlds import GpuWorlds, WorldCall, base_factors
+from vkpbr.scene._checks import frame_size
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 from vkpbr.scene.state import SceneState
 from vkpbr.scene.worlds import (
@@ -85,12 +86,12 @@ def _options(options: RenderOptions | None, overrides: dict[str, Any]) -> Render
         key = (options, tuple(sorted(overrides.items())))
         hash(key)
     except TypeError:  # (an unhashable override value: made each time)
-        return dataclasses.replace(options or RenderOptions(), **overrides)
+        return with_overrides(options, overrides)
     made = _OPTIONS.get(key)
     if made is None:
         if len(_OPTIONS) > 64:
             _OPTIONS.clear()
-        made = _OPTIONS[key] = dataclasses.replace(options or RenderOptions(), **overrides)
+        made = _OPTIONS[key] = with_overrides(options, overrides)
     return made
 
 
@@ -279,10 +280,14 @@ def _times_of(r: Any, views: CameraBatch, route: str, g: WorldArgs
     ("views" and no plan: render_many(times=))."""
     from vkpbr.scene.animation import animation_indices, sample
 
-    if g.any:
+    if g.any or g.world_of_view is not None or g.visible is not None:
         raise UsageError("times= poses every view's world itself: give it without worlds=, "
-                         "world_materials=, world_lights= or world_environment=")
-    t = np.asarray(g.times, dtype=np.float64).reshape(-1) if np.ndim(g.times) else None
+                         "world_of_view=, world_visible=, world_materials=, world_lights= or "
+                         "world_environment=")
+    try:
+        t = np.asarray(g.times, dtype=np.float64).reshape(-1) if np.ndim(g.times) else None
+    except (TypeError, ValueError):  # (strings, complex numbers, ragged lists)
+        t = None
     if t is None or len(t) != len(views) or not np.isfinite(t).all():
         raise UsageError(f"times: {len(views)} finite animation times (one a view) expected")
     scene, state = r.scene, r.state
@@ -491,7 +496,8 @@ class BatchStep:
 
         if not isinstance(cameras, CameraBatch):  # (so that the cache holds it)
             cameras = as_camera_batch(cameras, renderer.default_camera())
-        self.renderer, self.cameras, self.size = renderer, cameras, (int(size[0]), int(size[1]))
+        limit = int(renderer.device.limits.maxImageDimension2D)
+        self.renderer, self.cameras, self.size = renderer, cameras, frame_size(size, limit)
         for name in ("worlds", "world_visible", "cameras", "size"):
             if name in kwargs:
                 raise UsageError(f"batch_step: {name} is given each call, not to batch_step")

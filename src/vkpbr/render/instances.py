@@ -36,7 +36,7 @@ from vkpbr.render.gpu_scene import LAZY_STREAMS
 from vkpbr.render.parts import FrameParts, lazy_compute
 from vkpbr.render.scene_state import GpuSceneState
 from vkpbr.render.transmission import transmits
-from vkpbr.scene.state import NodeCopies
+from vkpbr.scene.state import NodeCopies, numbers
 from vkpbr.scene.types import Skin
 
 __all__ = ["InstanceTable", "instance_api"]
@@ -139,8 +139,8 @@ def _add(renderer: Any, mesh: int | str, matrices: np.ndarray, time_offsets: Any
                          "is neither skinned nor morphed (nothing of it is animated)")
     if not len(renderer.scene.meshes[m].indices):
         raise UsageError(f"add_instances: mesh {renderer.scene.meshes[m].name!r} has no triangles")
-    p = np.asarray(matrices, np.float64)
-    n = len(p) if p.ndim in (2, 3) else 1
+    p = numbers(matrices, "add_instances")
+    n = len(p) if p.ndim in (2, 3) and p.shape != (4, 4) else 1  # (one (4, 4) as one (7,))
     p = _poses_of(p, n)
     if p.shape[-1] == 7:
         _check_rows(p)
@@ -148,6 +148,8 @@ def _add(renderer: Any, mesh: int | str, matrices: np.ndarray, time_offsets: Any
     else:
         _check_matrices(p)
     offsets = _offsets(time_offsets, n)
+    if not n:  # (no matrices: no instances, nothing grown)
+        return np.zeros(0, np.int64)
     table: InstanceTable = renderer._instance_table
     free = table.free.setdefault(m, [])
     if len(free) < n:  # at least doubles the mesh's records: few regrowths
@@ -182,7 +184,7 @@ def _offsets(value: Any, n: int) -> np.ndarray:
     """(n,) time offsets: one number for all, or one each; finite."""
     if value is None:
         return np.zeros(n)
-    v = np.asarray(value, np.float64).reshape(-1)
+    v = numbers(value, "add_instances: time_offsets").reshape(-1)
     if len(v) == 1:
         v = np.full(n, v[0])
     if len(v) != n or not np.all(np.isfinite(v)):
@@ -195,6 +197,8 @@ def _live(renderer: Any, ids: Any) -> np.ndarray:
     """The draws of instance ids `ids`, every one made by add_instances and not removed;
     a one-line error naming the first that is not (nothing changes)."""
     arr = np.asarray(ids).reshape(-1)
+    if not arr.size and ids is not None:  # ([] is float64 to NumPy: no ids, nothing to do)
+        return np.zeros(0, np.int64)
     if arr.dtype.kind not in "iu":
         raise UsageError(f"instance ids must be integers, got {arr.dtype}")
     table: InstanceTable = renderer._instance_table

@@ -17,6 +17,7 @@ import math
 from collections.abc import Iterable
 from typing import Any
 
+from vkpbr.errors import UsageError
 from vkpbr.render import layouts as L
 from vkpbr.render.compute_path import ShadeVariant
 from vkpbr.render.environments import Environments
@@ -67,6 +68,9 @@ class Lighting:
             else:
                 chosen = (automatic_sun(float(options.env_rotation)),)
         else:
+            if isinstance(lights, (str, bytes)) or not isinstance(lights, Light | Iterable):
+                raise UsageError(f"lights: expected a Light or a list of them, got "
+                                 f"{type(lights).__name__}")
             chosen = (lights,) if isinstance(lights, Light) else tuple(lights)
             validate_lights(chosen)
         if options.lighting == L.Lighting.COURSE:

@@ -30,7 +30,7 @@ from vkpbr.render.layouts import (
 from vkpbr.scene.environment import ENV_SUFFIXES
 
 __all__ = ["RenderOptions", "ENUM_FIELDS", "POST_OPTIONS", "PostOption", "SensorNoise",
-           "NOISE_PRESETS", "parse_noise"]
+           "NOISE_PRESETS", "parse_noise", "with_overrides"]
 
 
 @dataclass(frozen=True)
@@ -372,3 +372,20 @@ class RenderOptions:
         mode chooses), e.g. for JSON."""
         return {f.name: (str(v) if f.name in ENUM_FIELDS and v is not None else v)
                 for f in fields(self) for v in (getattr(self, f.name),)}
+
+
+def with_overrides(options: Any, overrides: dict[str, Any]) -> RenderOptions:
+    """`options` (None: the defaults) updated by render's keyword overrides (view="d", ...):
+    a one-line UsageError for options that are not a RenderOptions or a name it has no field
+    of (where dataclasses.replace raised a TypeError)."""
+    if options is not None and not isinstance(options, RenderOptions):
+        raise UsageError(f"options: expected a RenderOptions, got {type(options).__name__}")
+    unknown = [name for name in overrides if name not in _OVERRIDABLE]
+    if unknown:
+        raise UsageError(f"unknown render option {unknown[0]!r} (RenderOptions' fields: "
+                         f"{', '.join(sorted(_OVERRIDABLE)[:6])} ...; Renderer(msaa=...) "
+                         "takes the renderer's own)")
+    return dataclasses.replace(options or RenderOptions(), **overrides)
+
+
+_OVERRIDABLE = frozenset(f.name for f in fields(RenderOptions) if f.init)

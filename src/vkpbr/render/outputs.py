@@ -48,6 +48,9 @@ def check_outputs(outputs: Iterable[str] | None, target: OffscreenTarget, paths:
     frames of `target`); their images of `target` made on first use."""
     if outputs is None:
         return ()
+    if not isinstance(outputs, str | Iterable):
+        raise UsageError(f"outputs: expected names from {', '.join(OUTPUTS)}, got "
+                         f"{type(outputs).__name__}")
     wanted = tuple(outputs) if not isinstance(outputs, str) else (outputs,)
     unknown = [n for n in wanted if n not in OUTPUTS]
     if unknown:

@@ -6,7 +6,6 @@ once auto's path is chosen (render/path_choice.py); `render_batch` the batch pat
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import time
 from collections.abc import Iterable, Iterator, Mapping
@@ -15,7 +14,6 @@ from typing import Any
 
 import numpy as np
 
-from vkpbr.errors import UsageError
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, FrameTarget
 from vkpbr.render import outputs as O
 from vkpbr.render.batch_call import WorldArgs, WorldsArg, batch_call, batch_step, world_slots
@@ -25,12 +23,12 @@ from vkpbr.render.frame_path import Submitted
 from vkpbr.render.frames import FrameStats
 from vkpbr.render.instances import instance_api
 from vkpbr.render.lighting import LightsArg, automatic_sun
-from vkpbr.render.options import RenderOptions
+from vkpbr.render.options import RenderOptions, with_overrides
 from vkpbr.render.outputs import OUTPUTS, frame_outputs
 from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.parts import FrameParts, open_device
 from vkpbr.render.scene_state import with_times
-from vkpbr.render.scene_swap import SceneMaker
+from vkpbr.render.scene_swap import SceneMaker, checked_args, checked_scene
 from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.types import Camera, Light, Scene
 from vkpbr.scene.worlds import WorldSlots
@@ -72,8 +70,7 @@ class Renderer:
                  cache_dir: str | os.PathLike[str] | None = None,
                  semantics: str | os.PathLike[str] | Mapping[str, int | str] = "mesh") -> None:
         t0 = time.perf_counter()
-        if msaa not in (1, 4):
-            raise UsageError(f"msaa {msaa}: choose 1 or 4")
+        background = checked_args(msaa, background, env_spec)
         self.msaa, self.background, self.depth_prepass = msaa, background, depth_prepass
         self.device = open_device(device, validation, sync_validation, window_extensions, cache_dir)
         self._maker = SceneMaker(self.device, msaa, background, depth_prepass, env_spec,
@@ -86,6 +83,7 @@ class Renderer:
         """Draw `scene` (None: the built-in one) from now on, on the same device and pipeline
         cache (render/scene_swap.py): as `Renderer(scene)` would; targets made before and
         `world_slots` are gone."""
+        checked_scene(scene)  # (before the scene drawn now is gone)
         if self._made is not None:
             self._maker.unmake(self._made)
             self._made = self.parts = self.batch_path = None
@@ -218,7 +216,7 @@ class Renderer:
         `driver_time`: each frame's `last_stats.driver_ms` (`cpu_ms`' part in the driver:
         benchmarks). `times`: one animation time per camera (`render`'s `time`).
         """
-        opts = dataclasses.replace(options or RenderOptions(), **option_overrides)
+        opts = with_overrides(options, option_overrides)
         cameras = with_times(self.state, cameras, times, animation)
         if batch is not None and readback and self.device.batch_views and times is None:
             for chunk, names in chunked(cameras, batch, self.default_camera(), outputs):

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from vkpbr.errors import UsageError
 from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.device import Device
 from vkpbr.render.deform import DeformLayout
@@ -64,13 +65,29 @@ def scene_state(scene: Scene, draws: list[Any], deform: DeformLayout | None = No
 def with_times(state: SceneState, cameras: Iterable[Any], times: Iterable[float] | None,
                animation: Any) -> Iterator[Any]:
     """`cameras`, each taken after posing `state` at its time (render_many's per-frame
-    times: each frame slot copies the state when its frame is drawn); `times` None: as is."""
+    times: each frame slot copies the state when its frame is drawn); `times` None: as is.
+    One-line UsageErrors for what is not a list, and for as many times as cameras."""
+    for name, given in (("cameras", cameras), ("times", times)):
+        if isinstance(given, (str, bytes)) or not isinstance(given, Iterable | None) or (
+                isinstance(given, np.ndarray) and given.ndim == 0):
+            raise UsageError(f"{name}: expected one a frame (a list), got {type(given).__name__}")
     if times is None:
         yield from cameras
         return
-    for camera, t in zip(cameras, times, strict=True):
+    if hasattr(cameras, "__len__") and hasattr(times, "__len__") and len(cameras) != len(times):
+        raise UsageError(f"times: {len(times)} for {len(cameras)} cameras (one a camera)")
+    left = iter(times)
+    for camera in cameras:
+        t = next(left, _NO_TIME)
+        if t is _NO_TIME:
+            raise UsageError("times: fewer than the cameras (one a camera)")
         state.set_time(t, animation)
         yield camera
+    if next(left, _NO_TIME) is not _NO_TIME:
+        raise UsageError("times: more than the cameras (one a camera)")
+
+
+_NO_TIME = object()  # (with_times: the times ran out)
 
 
 class GpuSceneState:

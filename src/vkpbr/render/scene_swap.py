@@ -31,12 +31,14 @@ from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Any
 
+from vkpbr.errors import UsageError
 from vkpbr.gpu.device import Device
 from vkpbr.render import kernels_ahead
 from vkpbr.render.batch_path import BatchPath
 from vkpbr.render.environment import EnvironmentSpec
 from vkpbr.render.frame_path import FramePath
 from vkpbr.render.parts import DeviceParts, FrameParts, make_parts
+from vkpbr.scene._checks import vec3
 from vkpbr.scene.types import Scene
 
 __all__ = ["SceneMaker", "MadeScene", "pipeline_timings"]
@@ -61,6 +63,25 @@ def pipeline_timings(device: Device) -> dict[str, float]:
         return {"pipelines_built": 0, "pipeline_hits": 0, "pipelines_s": 0.0}
     st = cache.stats
     return {"pipelines_built": st.built, "pipeline_hits": st.hits, "pipelines_s": st.seconds}
+
+
+def checked_args(msaa: Any, background: Any, env_spec: Any) -> tuple[float, float, float]:
+    """The Renderer's msaa, background and env_spec checked before a device is opened (one
+    line each; a background of a string had reached Vulkan's clear value as a TypeError, an
+    env_spec of another type the pre-filter as an AttributeError); the background as 3 floats."""
+    if msaa not in (1, 4):
+        raise UsageError(f"msaa {msaa}: choose 1 or 4")
+    if env_spec is not None and not isinstance(env_spec, EnvironmentSpec):
+        raise UsageError(f"env_spec: expected an EnvironmentSpec, got {type(env_spec).__name__}")
+    return vec3(background, "background")
+
+
+def checked_scene(scene: Any) -> None:
+    """A UsageError unless `scene` is a Scene, a Future of one or None (a path had failed deep
+    in the parts' making with an AttributeError)."""
+    if scene is not None and not isinstance(scene, Scene | Future):
+        raise UsageError(f"scene: expected a Scene (vkpbr.load_scene(path) loads a file), a "
+                         f"Future of one or None, got {type(scene).__name__}")
 
 
 class SceneMaker:

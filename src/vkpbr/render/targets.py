@@ -19,7 +19,6 @@ from typing import Any, Generic, TypeVar
 
 import numpy as np
 
-from vkpbr.errors import UsageError
 from vkpbr.gpu.device import Device
 from vkpbr.gpu.swapchain import Surface, Swapchain
 from vkpbr.gpu.target import COPY_OUTPUTS, FrameTarget, OffscreenTarget
@@ -28,6 +27,7 @@ from vkpbr.render.compute_path import ComputeScene
 from vkpbr.render.overlay import TextOverlay
 from vkpbr.render.post_stage import PostKernels
 from vkpbr.render.recorder import FrameRecorder
+from vkpbr.scene._checks import frame_size
 
 __all__ = ["Lazy", "Targets", "FREE_ATLASES"]
 
@@ -68,13 +68,8 @@ class Targets:
 
     def offscreen(self, size: tuple[int, int], linear: bool = False) -> OffscreenTarget:
         """The offscreen target of `size` (W, H): sRGB uint8, or float32 `linear`."""
-        w, h = size
-        limit = int(self.device.limits.maxImageDimension2D)
-        if not (isinstance(w, int | np.integer) and isinstance(h, int | np.integer)) or w <= 0 or h <= 0:
-            raise UsageError(f"image size {w}x{h}: width and height must be positive integers")
-        if w > limit or h > limit:
-            raise UsageError(f"image size {w}x{h} exceeds this device's limit of {limit}x{limit}")
-        return self._keep((int(w), int(h), linear))
+        w, h = frame_size(size, int(self.device.limits.maxImageDimension2D))
+        return self._keep((w, h, linear))
 
     def _keep(self, key: tuple) -> OffscreenTarget:
         """The kept target of `key` ((w, h, linear) or (w, h, "post"): float), made now

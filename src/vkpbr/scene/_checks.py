@@ -16,8 +16,8 @@ import numpy as np
 
 from vkpbr.errors import UsageError
 
-__all__ = ["Vec3", "context", "convention_arg", "describe", "matrix", "real", "rigid_pose",
-           "shown", "size_arg", "vec3"]
+__all__ = ["Vec3", "context", "convention_arg", "describe", "frame_size", "matrix", "real",
+           "rigid_pose", "shown", "size_arg", "vec3"]
 
 Vec3 = tuple[float, float, float]
 
@@ -119,6 +119,21 @@ def size_arg(value: object, what: str) -> tuple[int, int]:
             raise UsageError(f"{what}: {label} must be a positive integer, got {shown(v)}")
         out.append(int(v))
     return out[0], out[1]
+
+
+def frame_size(value: object, limit: int) -> tuple[int, int]:
+    """A frame's (width, height) as the renderer takes it: two positive integers (NumPy's
+    too), each at most `limit` (the device's maxImageDimension2D)."""
+    try:
+        w, h = value  # type: ignore[misc]
+    except (TypeError, ValueError):
+        raise UsageError(f"image size {shown(value)}: expected (width, height)") from None
+    if not (isinstance(w, int | np.integer) and isinstance(h, int | np.integer)) or w <= 0 or h <= 0:
+        raise UsageError(f"image size {shown(w)}x{shown(h)}: width and height must be positive "
+                         "integers")
+    if w > limit or h > limit:
+        raise UsageError(f"image size {w}x{h} exceeds this device's limit of {limit}x{limit}")
+    return int(w), int(h)
 
 
 def convention_arg(value: object, what: str) -> str:

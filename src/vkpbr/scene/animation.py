@@ -18,7 +18,8 @@ docs/animation.md:
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -30,7 +31,7 @@ from vkpbr.scene.tree import quaternion_matrices as rotation_matrices
 from vkpbr.scene.types import Animation, AnimationSampler, Scene, Skin
 
 __all__ = ["Pose", "sample", "sample_sampler", "joint_matrices", "trs_matrices",
-           "quaternion_matrices", "animation_indices"]
+           "quaternion_matrices", "animation_indices", "animation_time"]
 
 
 @dataclass
@@ -71,7 +72,8 @@ def animation_indices(scene: Scene, animation: int | str | Sequence[int | str] |
     n = len(scene.animations)
     if animation is None:
         return list(range(n))
-    refs = [animation] if isinstance(animation, (int, np.integer, str)) else list(animation)
+    one = isinstance(animation, (int, np.integer, str)) or not isinstance(animation, Iterable)
+    refs = [animation] if one else list(animation)
     out = []
     for ref in refs:
         if isinstance(ref, (int, np.integer)) and not isinstance(ref, bool):
@@ -86,6 +88,21 @@ def animation_indices(scene: Scene, animation: int | str | Sequence[int | str] |
             raise UsageError(f"no animation is named {ref!r} (the scene has: {shown})")
         out.append(names.index(ref))
     return out
+
+
+def animation_time(time: object) -> float:
+    """One animation time in seconds (`set_time`'s, `render`'s `time`, one of `times`): a
+    finite number (NumPy's and 0-d arrays too); a one-line UsageError for anything else."""
+    try:
+        if isinstance(time, (str, bytes)):
+            raise TypeError
+        t = float(time)  # type: ignore[arg-type]
+    except (TypeError, ValueError, OverflowError):
+        raise UsageError("animation time: expected a number of seconds, got "
+                         f"{type(time).__name__}") from None
+    if not math.isfinite(t):
+        raise UsageError(f"animation time must be finite, got {t}")
+    return t
 
 
 def sample(scene: Scene, time: float | np.ndarray,

@@ -245,6 +245,8 @@ class CameraBatch:
         (once: the batch cannot change afterwards)."""
         if self._valid:  # type: ignore[attr-defined]
             return
+        if not len(self):  # (a (0, 4, 4) array of poses, a look-at of no eyes)
+            raise UsageError("cameras: the batch is empty")
         with np.errstate(all="ignore"):  # NaN and inf are what is being looked for
             bad = self._bad_views()
         if bad.any():

@@ -87,8 +87,11 @@ def semantic_ids(scene: Any, draws: Sequence[Any], source: str | Mapping[str, La
         mapping, where = load_semantic_mapping(source), str(source)
     elif isinstance(source, Mapping):
         mapping, where = checked_mapping(source, "(given)"), "(given)"
-    else:
+    elif isinstance(source, str):  # (one of SEMANTIC_SOURCES)
         mapping, where = None, ""
+    else:
+        raise UsageError(f"semantics: expected {', '.join(SEMANTIC_SOURCES)}, a mapping or a "
+                         f"JSON file of {{name: id or label}}, got {type(source).__name__}")
     nodes, meshes, materials = scene.nodes, scene.meshes, scene.materials
 
     def node_name(d: Any) -> str:

@@ -28,6 +28,7 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from vkpbr.errors import UsageError
+from vkpbr.scene._checks import describe
 from vkpbr.scene.draw_table import (
     DrawTable,
     blocks,
@@ -149,7 +150,7 @@ class SceneState:
         """Set one node's (4, 4) transform, or its (7,) position + quaternion x, y, z, w
         (`set_poses` for many)."""
         self.set_poses([node] if isinstance(node, (int, np.integer)) else self.tree.indices(node)[:1],
-                       np.asarray(matrix, np.float64)[None], space)
+                       numbers(matrix, "set_pose")[None], space)
 
     def set_visible(self, nodes: NodeRef | Iterable[NodeRef] | np.ndarray,
                     mask: bool | Sequence[bool] | np.ndarray = True) -> None:
@@ -166,7 +167,7 @@ class SceneState:
     def set_weights(self, node: NodeRef, weights: Sequence[float] | np.ndarray) -> None:
         """Set the morph target weights of the mesh `node` shows (glTF `weights`)."""
         idx = self.tree.indices(node)
-        w = np.asarray(weights, np.float64).reshape(-1)
+        w = numbers(weights, "set_weights").reshape(-1)
         if not np.all(np.isfinite(w)):
             raise UsageError("set_weights: a weight is NaN or infinite")
         for i in idx:
@@ -180,7 +181,9 @@ class SceneState:
         keyframes clamp to its ends."""
         if self.scene is None:
             raise UsageError("set_time: this state has no scene to animate")
-        from vkpbr.scene.animation import animation_indices, sample
+        from vkpbr.scene.animation import animation_indices, animation_time, sample
+
+        time = animation_time(time)  # (checked where nothing is animated too)
 
         chosen = animation_indices(self.scene, animation)
         nodes = sorted({ch.node for i in chosen for ch in self.scene.animations[i].channels
@@ -633,13 +636,22 @@ def pose_matrices(rows: np.ndarray, order: str = "xyzw") -> np.ndarray:
 
 def _poses_of(poses: np.ndarray, n: int) -> np.ndarray:
     """`poses` as (n, 7) rows or (n, 4, 4) matrices (one pose may come without its axis)."""
-    p = np.asarray(poses, dtype=np.float64)
+    p = numbers(poses, "set_poses")
     if n == 1 and p.shape in ((4, 4), (7,)):
         p = p[None]
     if p.shape in ((n, 7), (n, 4, 4)):
         return p
     raise UsageError(f"set_poses: poses of shape {p.shape} for {n} node(s); give "
                      f"({n}, 4, 4) matrices or ({n}, 7) position + quaternion rows")
+
+
+def numbers(value: object, what: str) -> np.ndarray:
+    """`value` as a float64 array; a one-line UsageError for what NumPy cannot make one of
+    (a string, a ragged list, None inside), where np.asarray raised a ValueError."""
+    try:
+        return np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        raise UsageError(f"{what}: expected numbers, got {describe(value)}") from None
 
 
 def _finite(p: np.ndarray) -> None:
@@ -666,6 +678,8 @@ def _check_matrices(p: np.ndarray) -> None:
     contiguous rows: 10,000 poses 0.32 -> 0.18 ms on the 2-core machine, where each test on
     the strided parts of the (N, 4, 4) array had touched all of it)."""
     _finite(p)
+    if not len(p):  # (no nodes: nothing to check, and no maximum of nothing)
+        return
     c = p.reshape(len(p), 16).T[_CHECKED_PARTS]  # (13, N)
     if max(np.abs(c[9:12]).max(), np.abs(c[12] - 1.0).max()) > 1e-6:
         raise UsageError("set_poses: a matrix's last row must be 0 0 0 1 (an affine "
@@ -689,19 +703,26 @@ def _pointed_light(light: Light, member: str, value: np.ndarray) -> Light:
     return light
 
 
+def _shown(value: object) -> str:
+    """`value` in a one-line message: its repr, or (an array's has lines) its type and shape."""
+    text = repr(value)
+    return text if len(text) <= 60 and "\n" not in text else describe(value)
+
+
 def _factor(field: str, value: object) -> tuple[float, ...]:
     """A material factor checked: its size and range (UsageError naming it)."""
-    v = np.asarray(value, np.float64).reshape(-1)
-    sizes = {"base_color_factor": (3, 4), "emissive_factor": (3,)}.get(field, (1,))
     name = field.removesuffix("_factor")
-    if len(v) not in sizes or not np.all(np.isfinite(v)):
+    v = numbers(value, f"set_material: {name}").reshape(-1)
+    sizes = {"base_color_factor": (3, 4), "emissive_factor": (3,)}.get(field, (1,))
+    # (finite as the GPU's float32 holds them: 1e308 had become infinity there)
+    if len(v) not in sizes or not np.all(np.abs(v) <= np.finfo(np.float32).max):
         raise UsageError(f"set_material: {name} must be {' or '.join(map(str, sizes))} finite "
-                         f"number(s), got {value!r}")
+                         f"number(s), got {_shown(value)}")
     if field == "emissive_factor":
         if np.any(v < 0):
-            raise UsageError(f"set_material: emissive must be >= 0, got {value!r}")
+            raise UsageError(f"set_material: emissive must be >= 0, got {_shown(value)}")
     elif np.any((v < 0) | (v > 1)):
-        raise UsageError(f"set_material: {name} must be within [0, 1], got {value!r}")
+        raise UsageError(f"set_material: {name} must be within [0, 1], got {_shown(value)}")
     if field == "base_color_factor" and len(v) == 3:
         v = np.append(v, 1.0)
     return tuple(float(x) for x in v)

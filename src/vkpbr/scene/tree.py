@@ -140,18 +140,24 @@ class NodeTree:
         sequence of them. Raises UsageError naming what matches nothing or is out of range."""
         if isinstance(nodes, (int, np.integer, str)):
             nodes = [nodes]
+        elif not isinstance(nodes, Iterable):
+            raise UsageError(f"nodes: expected an index, a name, a path, a pattern or a list of "
+                             f"them, got {type(nodes).__name__}")
         arr = np.asarray(nodes) if not isinstance(nodes, np.ndarray) else nodes
         if arr.dtype.kind in "iu":
+            if arr.dtype.kind == "u" and arr.size and int(arr.max()) >= len(self):
+                raise self._out_of_range(int(arr.max()))  # (before int64 wraps 2**63 negative)
             idx = arr.astype(np.int64, copy=False).ravel()
             if len(idx) and (idx.min() < 0 or idx.max() >= len(self)):  # two reductions
                 bad = idx[(idx < 0) | (idx >= len(self))]
-                raise UsageError(f"node index {int(bad[0])} is out of range: the scene has "
-                                 f"{len(self)} nodes (0..{len(self) - 1})")
+                raise self._out_of_range(int(bad[0]))
             return idx
         out: list[np.ndarray] = []
-        for ref in list(nodes):
-            if isinstance(ref, (int, np.integer)):
-                out.append(self.indices(int(ref)))
+        for ref in list(arr.ravel() if isinstance(nodes, np.ndarray) else nodes):
+            if isinstance(ref, (int, np.integer)):  # (past int64: NumPy made objects of them)
+                if not 0 <= ref < len(self):
+                    raise self._out_of_range(int(ref))
+                out.append(np.array([ref], np.int64))
                 continue
             hit = self.find(str(ref))
             if not len(hit):
@@ -159,6 +165,11 @@ class NodeTree:
                                  "patterns such as 'wheel*' match names and paths)")
             out.append(hit)
         return np.concatenate(out) if out else np.zeros(0, np.int64)
+
+    def _out_of_range(self, i: int) -> UsageError:
+        shown = i if abs(i) < 10**20 else f"{'-' if i < 0 else ''}1e20 or more"
+        return UsageError(f"node index {shown} is out of range: the scene has {len(self)} "
+                          f"nodes (0..{len(self) - 1})")
 
 
 def _identity_trs(k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
