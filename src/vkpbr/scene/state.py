@@ -452,6 +452,9 @@ class SceneState:
         rows = np.zeros(len(self.draw_tree), bool)
         rows[self.deform_draws] = True
         self._update_draws(rows, self.deform.frames(self._world, self.weights), rest=True)  # type: ignore[attr-defined]
+        if self.version:  # (new instances: the draws posed before keep their nodes' poses,
+            # which the rows above, on the models as loaded, had undone)
+            self._changed(self.draw_tree[self.deform_draws])
 
     def _flush_pending(self) -> None:
         """The quaternion rows set_poses kept, as local matrices (in call order)."""
