@@ -162,6 +162,24 @@ def test_times_per_frame_of_a_sequence(make_renderer, sample_scene) -> None:  # 
     assert not np.array_equal(seq[0], seq[2])
 
 
+@pytest.mark.parametrize("model", ["CesiumMan", "AnimatedMorphCube", "BoxAnimated"])
+def test_a_batch_of_times_leaves_the_state_as_it_was(make_renderer, sample_scene, model: str) -> None:  # noqa: ANN001
+    """render_batch(times=) poses its views, not the renderer: skins and morphs (view by view
+    through render_many(times=)) leave the state's time and poses as before the call, as the
+    node animations' worlds do; each view equals render(time=) of its time."""
+    scene = sample_scene(model)
+    r = make_renderer(scene)
+    r.set_time(0.3)
+    cam = r.default_camera()
+    before = r.render(cam, size=(W, H), lights=[], pipeline="forward")
+    times = [0.9, 1.6]
+    batch = r.render_batch([cam, cam], (W, H), lights=[], pipeline="forward", times=times)
+    assert r.state.time == 0.3
+    assert np.array_equal(r.render(cam, size=(W, H), lights=[], pipeline="forward"), before)
+    for t, view in zip(times, batch, strict=True):
+        assert np.array_equal(view, r.render(cam, size=(W, H), lights=[], pipeline="forward", time=t))
+
+
 @pytest.mark.parametrize("model", [m for m, _ in MODELS])
 def test_the_culling_spheres_hold_every_posed_vertex(sample_scene, model: str) -> None:  # noqa: ANN001
     """DeformLayout.frames (each deformed record's culling sphere, the frame its vertices are

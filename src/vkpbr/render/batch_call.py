@@ -179,7 +179,9 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
         frames = r.render_many((views.camera(i) for i in range(len(views))), lights, size, opts,
                                linear, depth, outputs=wanted or None, times=g.times,
                                animation=g.animation)
-        return stack_views(r, frames, depth, wanted, out)
+        # (the state as it was afterwards, as where the times are worlds: a batch poses its
+        # views, not the renderer)
+        return stack_views(r, _restoring(frames, apply_saved(r.state)), depth, wanted, out)
     if route == "views":  # (render/batch_route.py says when)
         return stack_views(r, r.render_many(each, lights, size, opts, linear, depth,
                                             outputs=wanted or None), depth, wanted, out)
@@ -438,14 +440,16 @@ def _each_view(state: SceneState, views: CameraBatch, plan: WorldPlan | None) ->
 
 
 def apply_saved(state: SceneState) -> Any:
-    """A function that puts `state`'s poses, visibility and material overrides back as they
-    are now."""
+    """A function that puts `state`'s poses, visibility, material overrides, morph weights,
+    animation pointers and time back as they are now."""
     local, visible = state.local.copy(), state.visible.copy()
     materials = {k: dict(v) for k, v in state.materials.items()}
+    animated = (dict(state.weights), dict(state.pointers), state.time, state._chosen)
     every = np.arange(len(state.tree))
 
     def restore() -> None:
         state.local[:] = local
+        state.weights, state.pointers, state.time, state._chosen = animated
         state.set_visible(every, visible)  # (a change: the frames copy the state again)
         if state.materials != materials:
             state.materials = materials
@@ -453,6 +457,14 @@ def apply_saved(state: SceneState) -> Any:
             state.version += 1
 
     return restore
+
+
+def _restoring(frames: Iterator[Any], restore: Any) -> Iterator[Any]:
+    """`frames`, then `restore()` (also where the caller stops early or an error ends them)."""
+    try:
+        yield from frames
+    finally:
+        restore()
 
 
 def apply_materials(state: SceneState, wm: WorldMaterials, w: int) -> None:
