@@ -376,3 +376,23 @@ def test_per_view_times_equal_render_at_each_time(make_renderer, model: str) -> 
         r.render_batch([cam] * 2, (48, 36), times=[0.0, float("nan")], **kw)
     with pytest.raises(UsageError, match="without worlds"):
         r.render_batch([cam] * 2, (48, 36), times=[0.0, 1.0], worlds=np.zeros((2, 1, 7)), **kw)
+
+
+def test_growing_world_factors_drops_the_frames_recordings(make_renderer) -> None:  # noqa: ANN001
+    """A batch whose worlds' factors outgrow their buffer rewrites the compute path's sets:
+    `render`'s recorded frames, which bind them too, are recorded again (they had been
+    submitted with the old buffer destroyed: a validation error), and draw as before."""
+    r = make_renderer(analytic_scene())
+    if r.compute_batch_unavailable() is not None:
+        pytest.skip(f"no compute batch here: {r.compute_batch_unavailable()}")
+    r.world_slots(MOVED, materials=["m2"])
+    first = r.render(CAMERA, size=(W, H), pipeline="compute", **NO_SHADOWS)
+    for worlds in (1, 8):  # (the second outgrows the first's buffer)
+        for _ in range(r.ring.count):  # every frame slot's recording made (then replayed)
+            r.render(CAMERA, size=(W, H), pipeline="compute", **NO_SHADOWS)
+        r.render_batch(cameras(worlds), (W, H), pipeline="compute", **NO_SHADOWS,
+                       world_materials={"base_color": np.full((worlds, 1, 3), 0.5)})
+        for _ in range(r.ring.count):
+            got = r.render(CAMERA, size=(W, H), pipeline="compute", **NO_SHADOWS)
+            r.check_validation()
+            assert np.array_equal(got, first)

@@ -447,7 +447,10 @@ class BatchPath:
         if call.factors is not None:
             if self._factor_writes != self._calls:
                 if self.parts.compute().set_world_factors(call.factors.reshape(-1, 4)):
-                    self.free_recordings()  # (its sets were rewritten)
+                    # (the compute path's sets were rewritten: every recording that bound
+                    # them, the frames' as well as the batches', is stale)
+                    self.free_recordings()
+                    self.parts.recorder.free()
                 self._factor_writes = self._calls
             stride = call.factors.shape[1]  # a world's block (shaders/worlds.glsl)
             factor_base = (1 + index * stride).astype(np.uint32)
