@@ -198,6 +198,9 @@ def test_moving_a_caster_redraws_its_shadow_map(make_renderer) -> None:  # noqa:
 @pytest.mark.parametrize(("nodes", "poses", "kw", "message"), [
     ("box", np.zeros((2, 7)), {}, "shape"),
     ("box", np.full((1, 4, 4), np.nan), {}, "NaN"),
+    # (found by hand: accepted, overflowing in the frame's matrices)
+    ("box", np.array([[1e308, 0, 0, 0, 0, 0, 1.0]]), {}, "beyond"),
+    ("box", np.array([[0, 0, 0, 0, 0, 0, 1e200]]), {}, "beyond"),
     ("box", np.ones((1, 4, 4)), {}, "last row"),
     ("box", np.diag([1.0, 0.0, 1.0, 1.0])[None], {}, "singular"),
     ("box", np.array([[0, 0, 0, 0, 0, 0, 0.0]]), {}, "length 0"),

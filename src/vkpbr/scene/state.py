@@ -657,10 +657,24 @@ def numbers(value: object, what: str) -> np.ndarray:
         raise UsageError(f"{what}: expected numbers, got {describe(value)}") from None
 
 
+# Pose numbers past this are garbage, not poses (a simulator's blown-up state): as a camera's
+# (scene/camera.py), and far from float64's overflow in the products of the frame's matrices.
+POSE_LIMIT = 1e15
+
+
 def _finite(p: np.ndarray) -> None:
-    # One sum first (a NaN or infinity makes it non-finite); the exact test only if not.
-    if not np.isfinite(np.add.reduce(p, axis=None)) and not np.isfinite(p).all():
+    """Every number finite and within +-POSE_LIMIT. One dot product of the poses with
+    themselves first (a BLAS pass: NaN, infinity or a number past the limit makes it exceed
+    POSE_LIMIT^2, or NaN); the exact tests only then."""
+    flat = p.reshape(-1)
+    with np.errstate(over="ignore", invalid="ignore"):  # (overflow is what it looks for)
+        if float(np.dot(flat, flat)) <= POSE_LIMIT * POSE_LIMIT:
+            return
+    if not np.isfinite(p).all():
         raise UsageError("set_poses: a pose holds NaN or infinity")
+    if float(np.abs(p).max()) > POSE_LIMIT:
+        raise UsageError(f"set_poses: a pose holds a number beyond +-{POSE_LIMIT:.0e} (a "
+                         "simulation that blew up?); give positions within it")
 
 
 def _check_rows(p: np.ndarray) -> None:
