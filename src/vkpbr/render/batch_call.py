@@ -22,7 +22,8 @@ from vkpbr.render.batch_replay import replay, replay_key
 from vkpbr.render.batch_route import batch_result, stack_views
 from vkpbr.render.lighting import LightsArg
 from vkpbr.render.options import RenderOptions, with_overrides
-from vkpbr.render.worlds import GpuWorlds, WorldCall, base_factors
+from vkpbr.render.scene_state import base_factors
+from vkpbr.render.worlds import GpuWorlds, WorldCall
 from vkpbr.scene._checks import frame_size
 from vkpbr.scene.camera_batch import CameraBatch, as_camera_batch
 from vkpbr.scene.state import SceneState

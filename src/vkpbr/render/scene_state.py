@@ -25,7 +25,7 @@ from vkpbr.render.frames import Bounds
 from vkpbr.scene.state import SceneState
 from vkpbr.scene.types import MeshBox, Scene, mesh_box
 
-__all__ = ["GpuSceneState", "LiveBounds", "scene_state"]
+__all__ = ["GpuSceneState", "LiveBounds", "base_factors", "scene_state"]
 
 RECORD_BYTES = 2 * 64  # model + normal matrix
 
@@ -90,6 +90,30 @@ def with_times(state: SceneState, cameras: Iterable[Any], times: Iterable[float]
 _NO_TIME = object()  # (with_times: the times ran out)
 
 
+def base_factors(gpu_scene: Any, state: Any) -> np.ndarray:
+    """(M, 3, 4) each material's factors as the renderer's state has them (the file's, with
+    set_material's overrides): base colour; emissive, metallic; roughness (WorldFactors).
+    The blocks' columns at once; only the overridden materials (a few) one by one."""
+    blocks = gpu_scene.material_blocks
+    table = np.array(blocks, dtype=blocks[0].dtype) if blocks else None
+    out = np.zeros((len(blocks), 3, 4))
+    if table is None:
+        return out
+    out[:, 0] = table["base_color_factor"]
+    out[:, 1, :3] = table["emissive_factor"]
+    out[:, 1, 3] = table["metallic_factor"]
+    out[:, 2, 0] = table["roughness_factor"]
+    rows = {"base_color_factor": (0, slice(0, 4)), "emissive_factor": (1, slice(0, 3)),
+            "metallic_factor": (1, slice(3, 4)), "roughness_factor": (2, slice(0, 1))}
+    for i, fields in state.materials.items():
+        if i >= len(out):  # (not a block of the table)
+            continue
+        for field, value in fields.items():
+            row, cols = rows[field]
+            out[i, row, cols] = np.asarray(value, np.float64).reshape(-1)[:cols.stop - cols.start]
+    return out
+
+
 class GpuSceneState:
     """`state`'s Instances records, a copy per frame slot (`count` of them), and where the
     scene has skins or morph targets (`deform`: render/deform.py's DeformLayout) the deform
@@ -126,6 +150,7 @@ class GpuSceneState:
         self.gpu_scene: Any = None  # whose material blocks set_material overrides
         # (material version, the alpha factor of each masked or blended draw: 0 for others)
         self._alphas: tuple[int, np.ndarray | None] = (-1, None)
+        self._draws_key: tuple[tuple, Any] = ((), None)  # (_draw_materials)
         for slot in range(count):  # every slot holds the rest pose from the start
             self.write(slot)
 
@@ -194,23 +219,28 @@ class GpuSceneState:
         """Masked and blended draws whose material's alpha factor changed (set_material, an
         animation pointer) are touched in the state (SceneState.touch_draws): the alpha
         cutoff shapes their shadows, so the maps' caches, which follow the draws' versions,
-        must redraw them. Other factors only shade: they change no map."""
+        must redraw them. Other factors only shade: they change no map. (Once per material
+        change, vectorised: a dataset loop sets materials every frame.)"""
         gs = self.gpu_scene
         if gs is None:
             return
-        alpha_of = np.array([float(b["base_color_factor"][3]) for b in gs.material_blocks])
-        for i, fields in self.state.materials.items():
-            if "base_color_factor" in fields and i < len(alpha_of):
-                factor = fields["base_color_factor"]
-                alpha_of[i] = factor[3] if len(factor) > 3 else 1.0
-        cut = np.array([d.alpha_mode in ("mask", "blend") for d in gs.draws], bool)
-        alphas = np.where(cut, alpha_of[np.array([d.material for d in gs.draws], np.int64)], 0.0)
+        material, cut = self._draw_materials(gs)
+        alphas = np.where(cut, base_factors(gs, self.state)[material, 0, 3], 0.0)
         last = self._alphas[1]
         if last is not None and len(last) == len(alphas):
             changed = np.flatnonzero(alphas != last)
             if len(changed):
                 self.state.touch_draws(changed)
         self._alphas = (self.state.material_version, alphas)
+
+    def _draw_materials(self, gs: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Each draw's material and whether its alpha cuts (masked or blended), made again
+        only when the draws or the materials grew (new instances, a node's own material)."""
+        key = (len(gs.draws), len(gs.material_blocks))
+        if self._draws_key[0] != key:
+            self._draws_key = (key, (np.array([d.material for d in gs.draws], np.int64),
+                                     np.array([d.alpha_mode in ("mask", "blend") for d in gs.draws], bool)))
+        return self._draws_key[1]
 
     def _write_materials(self, slot: int) -> None:
         """Slot `slot`'s material blocks: the file's, with the state's overrides."""

@@ -82,30 +82,6 @@ class WorldCall:
                 self.factors is not None)
 
 
-def base_factors(gpu_scene: Any, state: Any) -> np.ndarray:
-    """(M, 3, 4) each material's factors as the renderer's state has them (the file's, with
-    set_material's overrides): base colour; emissive, metallic; roughness (WorldFactors).
-    The blocks' columns at once; only the overridden materials (a few) one by one."""
-    blocks = gpu_scene.material_blocks
-    table = np.array(blocks, dtype=blocks[0].dtype) if blocks else None
-    out = np.zeros((len(blocks), 3, 4))
-    if table is None:
-        return out
-    out[:, 0] = table["base_color_factor"]
-    out[:, 1, :3] = table["emissive_factor"]
-    out[:, 1, 3] = table["metallic_factor"]
-    out[:, 2, 0] = table["roughness_factor"]
-    rows = {"base_color_factor": (0, slice(0, 4)), "emissive_factor": (1, slice(0, 3)),
-            "metallic_factor": (1, slice(3, 4)), "roughness_factor": (2, slice(0, 1))}
-    for i, fields in state.materials.items():
-        if i >= len(out):  # (not a block of the table)
-            continue
-        for field, value in fields.items():
-            row, cols = rows[field]
-            out[i, row, cols] = np.asarray(value, np.float64).reshape(-1)[:cols.stop - cols.start]
-    return out
-
-
 class WorldBuffers:
     """Per frame slot, a buffer of the state's and `capacity` worlds' draw records (grown,
     never shrunk)."""

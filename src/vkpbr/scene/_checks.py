@@ -45,8 +45,13 @@ def describe(value: object) -> str:
     return type(value).__name__
 
 
-def shown(value: object) -> str:
-    """`value` for a one-line message: the repr of a short scalar, else `describe`."""
+def shown(value: object, sequences: bool = False) -> str:
+    """`value` for a one-line message: the repr of a short scalar (with `sequences`, of a
+    short list or tuple too: "(1.2, 0.5, 0.5)"), else `describe`."""
+    if sequences and isinstance(value, (list, tuple)):
+        text = repr(value)
+        if len(text) <= 60 and "\n" not in text:
+            return text
     if value is None or isinstance(value, (bool, int, float, str, np.generic)):
         text = repr(value.item() if isinstance(value, np.generic) else value)
         if len(text) <= 40:

@@ -28,7 +28,7 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from vkpbr.errors import UsageError
-from vkpbr.scene._checks import describe
+from vkpbr.scene._checks import describe, shown
 from vkpbr.scene.draw_table import (
     DrawTable,
     blocks,
@@ -720,12 +720,6 @@ def _pointed_light(light: Light, member: str, value: np.ndarray) -> Light:
     return light
 
 
-def _shown(value: object) -> str:
-    """`value` in a one-line message: its repr, or (an array's has lines) its type and shape."""
-    text = repr(value)
-    return text if len(text) <= 60 and "\n" not in text else describe(value)
-
-
 def _factor(field: str, value: object) -> tuple[float, ...]:
     """A material factor checked: its size and range (UsageError naming it)."""
     name = field.removesuffix("_factor")
@@ -734,12 +728,12 @@ def _factor(field: str, value: object) -> tuple[float, ...]:
     # (finite as the GPU's float32 holds them: 1e308 had become infinity there)
     if len(v) not in sizes or not np.all(np.abs(v) <= np.finfo(np.float32).max):
         raise UsageError(f"set_material: {name} must be {' or '.join(map(str, sizes))} finite "
-                         f"number(s), got {_shown(value)}")
+                         f"number(s), got {shown(value, sequences=True)}")
     if field == "emissive_factor":
         if np.any(v < 0):
-            raise UsageError(f"set_material: emissive must be >= 0, got {_shown(value)}")
+            raise UsageError(f"set_material: emissive must be >= 0, got {shown(value, sequences=True)}")
     elif np.any((v < 0) | (v > 1)):
-        raise UsageError(f"set_material: {name} must be within [0, 1], got {_shown(value)}")
+        raise UsageError(f"set_material: {name} must be within [0, 1], got {shown(value, sequences=True)}")
     if field == "base_color_factor" and len(v) == 3:
         v = np.append(v, 1.0)
     return tuple(float(x) for x in v)
