@@ -8,7 +8,7 @@ source benchmarks/gpu_env.sh
 S=$PWD/.assets-s/models/Sponza/glTF/Sponza.gltf
 OLD=$PYTHONPATH; NEW=/tmp/site:$PWD/.bar/src
 export VKPBR_ASSETS=$PWD/.assets-s/models
-PYTHONPATH=$NEW timeout 120 python3 -m pytest -q -n 4 -p no:cacheprovider -rfE --tb=short tests/gpu/test_stream.py tests/gpu/test_frame_sequences.py tests/gpu/test_shadow_raster.py > $OUT/tests.txt 2>&1
+PYTHONPATH=$NEW timeout 120 python3 -m pytest -q -n 4 -p no:cacheprovider -rfE --tb=short tests/gpu/test_frame_overlap.py tests/gpu/test_stream.py tests/gpu/test_frame_sequences.py tests/gpu/test_shadow_raster.py > $OUT/tests.txt 2>&1
 grep -E "^(FAILED|ERROR|E )|passed|failed" $OUT/tests.txt | cut -c1-300 | head -20
 for i in 1 2; do
   for tree in old new; do
