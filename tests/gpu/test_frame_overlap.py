@@ -52,7 +52,7 @@ def test_frames_in_flight_need_no_closing_barrier_and_equal_render(renderer, pip
                 renderer.render_many(WALK, LIGHTS_ON, size=SIZE, depth=True, **opts)]
     alone = [renderer.render(cam, LIGHTS_ON, size=SIZE, depth=True, **opts) for cam in WALK]
     batch = renderer.render_batch(WALK[:3], SIZE, LIGHTS_ON, **opts)
-    assert graph.TAIL_WAITS == before, "a copy touched a resource last that is not `copied`"
+    assert before == graph.TAIL_WAITS, "a copy touched a resource last that is not `copied`"
     for i, ((c, d), (c1, d1)) in enumerate(zip(streamed, alone, strict=True)):
         assert np.array_equal(c, c1), f"frame {i}: render_many's colour differs from render()'s"
         assert np.array_equal(d, d1), f"frame {i}: render_many's depth differs from render()'s"
