@@ -573,10 +573,10 @@ class ComputeScene:
             return Step(step, record, uses, timed=timed,
                         kernels=self.makers((name, RASTER_PUSH_BYTES)))
 
-        # raster_clear zeroes the four buffers (the bins: raster_resolve counts them).
+        # raster_clear zeroes the per-pixel buffer, the bins (raster_resolve counts them) and
+        # the lists' heads (raster.comp KERNEL 7).
         cleared = ("raster", "raster_big", "raster_masked_big", "bins")
-        words = max(res.raster.size // 8, res.raster_big.size // 4,
-                    res.raster_masked_big.size // 4, res.bins.size // 16)
+        words = max(res.raster.size // 8, 4 * len(self.masked_rows), res.bins.size // 16, 4)
         c = -(-words // CLEAR_GROUP)
         n = -(-self.triangles // RASTER_SMALL_GROUP)
         # raster_args sizes raster_big's dispatch from the count raster_small listed.

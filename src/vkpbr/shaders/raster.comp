@@ -29,10 +29,12 @@
 //   read -- counted in its material's bin (bin_tiles.glsl: classify.comp's count), and its depth
 //   into raster_depths (copied into the depth buffer: a copy, where a screen-filling
 //   fragment pass writing gl_FragDepth cost 0.30 ms at 1080p on the H200's few raster SMs).
-// KERNEL 7 (raster_clear): invocation i zeroes element i of raster, raster_big,
-//   raster_masked_big and the bins (whole buffers) before KERNEL 1: a kernel, not
-//   vkCmdFillBuffer, so that what follows waits for shaders only and not for the frame
-//   before's readback copy (gpu/graph.py: transfers share one stage under validation).
+// KERNEL 7 (raster_clear): invocation i zeroes element i of raster and of the bins, and of
+//   the lists' heads (raster_big's count and dispatch size, each masked segment's): what is
+//   read before it is written (a list's entries are written below its count first; clearing
+//   the whole lists had cost Sponza 67 MB of writes a frame). A kernel, not vkCmdFillBuffer,
+//   so that what follows waits for shaders only, not for the frame before's readback copy
+//   (gpu/graph.py: validation layers before 1.3.275 count a fill as a copy).
 // BATCH = 1 (render/batch_path.py's compute batch): `views` views tiled `rows` to a column in
 // one atlas (column-major, so a column of tiles is one copy into view-major memory), each `tile` pixels, each with its view's VP; the work's z index is the view.
 // One view (BATCH 0) is the same with the frame's view and the whole target as the tile.
@@ -396,8 +398,8 @@ void main() {
 #elif KERNEL == 7
     uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 256u;
     if (i < uint(raster.length())) raster[i] = 0ul;
-    if (i < uint(raster_big.length())) raster_big[i] = 0u;
-    if (i < uint(raster_masked_big.length())) raster_masked_big[i] = 0u;
+    if (i < BIG_LIST) raster_big[i] = 0u;
+    if (i < 4u * pc.masked_draws) raster_masked_big[i] = 0u;
     if (i < uint(bins.length())) bins[i] = uvec4(0u);
 #elif KERNEL == 5
     uint first = raster_draws[pc.draw].x;
