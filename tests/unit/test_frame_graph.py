@@ -1,7 +1,9 @@
 # gpu/graph.py's barrier derivation, checked against the Vulkan specification's rules for
 # synchronisation (no device needed: the barriers are the structs the tracker would record).
 # - A frame's first use of a resource waits for every earlier command and makes every write
-#   available (a recording replays after any other), and discards the contents (UNDEFINED).
+#   available (a recording replays after any other), and discards the contents (UNDEFINED);
+#   every earlier command but copies where the resource is not `copied` (no copy touches it
+#   last in any recording, or the recording that did closes with a barrier after the copy).
 # - Write after write or read: a dependency from the earlier stages (an execution dependency
 #   only, access 0, after reads alone).
 # - Read after write: the write made visible to the reader's stage and access, once.
@@ -45,11 +47,66 @@ READ, WRITE = vk.VK_ACCESS_2_SHADER_STORAGE_READ_BIT, vk.VK_ACCESS_2_SHADER_STOR
 GENERAL = vk.VK_IMAGE_LAYOUT_GENERAL
 
 
-def test_first_use_waits_for_everything_and_discards() -> None:
+NOT_COPIES = (vk.VK_PIPELINE_STAGE_2_ALL_GRAPHICS_BIT | COMPUTE | vk.VK_PIPELINE_STAGE_2_CLEAR_BIT
+              | vk.VK_PIPELINE_STAGE_2_BLIT_BIT | vk.VK_PIPELINE_STAGE_2_RESOLVE_BIT)
+
+
+def test_first_use_waits_for_everything_but_copies_and_discards() -> None:
     t = tracker()
     t.use("img", "storage")
-    assert barrier(t) == (vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, vk.VK_ACCESS_2_MEMORY_WRITE_BIT,
+    assert barrier(t) == (NOT_COPIES, vk.VK_ACCESS_2_MEMORY_WRITE_BIT,
                           COMPUTE, READ | WRITE, vk.VK_IMAGE_LAYOUT_UNDEFINED, GENERAL)
+    assert not NOT_COPIES & (vk.VK_PIPELINE_STAGE_2_COPY_BIT | vk.VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT)
+
+
+def test_first_use_of_a_copied_resource_waits_for_everything() -> None:
+    t = Tracker(vk, {"out": ImageResource(vk.ffi.NULL, copied=True),
+                     "readback": BufferResource(FakeBuffer(vk.ffi.NULL, 64), copied=True)})
+    t.use("out", "storage")
+    assert barrier(t)[:2] == (vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, vk.VK_ACCESS_2_MEMORY_WRITE_BIT)
+    t.use("readback", "transfer_dst")
+    assert barrier(t)[:2] == (vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, vk.VK_ACCESS_2_MEMORY_WRITE_BIT)
+
+
+@dataclass
+class FakeCommands:  # what Tracker.flush hands gpu.rendering.barriers
+    vk: object = vk
+    recorded: list = None
+
+    def __post_init__(self) -> None:
+        self.recorded = []
+
+
+def closing_barriers(resources: dict, uses: list[tuple[str, str]]) -> list:
+    """The barriers `Tracker.close` adds after `uses` (each flushed as recorded)."""
+    t = Tracker(vk, resources)
+    for name, use in uses:
+        t.use(name, use)
+        t.images, t.buffers = [], []
+    t.flush = lambda cmd: cmd.recorded.extend(t.images + t.buffers)  # type: ignore[method-assign]
+    cmd = FakeCommands()
+    t.close(cmd)
+    return cmd.recorded
+
+
+def test_a_recording_whose_copy_touches_a_resource_last_closes_after_it() -> None:
+    from vkpbr.gpu import graph
+
+    before = dict(graph.TAIL_WAITS)
+    buf = BufferResource(FakeBuffer(vk.ffi.NULL, 64))
+    (b,) = closing_barriers({"buf": buf}, [("buf", "storage"), ("buf", "transfer_src")])
+    assert b.srcStageMask & vk.VK_PIPELINE_STAGE_2_COPY_BIT
+    assert b.dstStageMask == vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT
+    assert graph.TAIL_WAITS["buf"] == before.get("buf", 0) + 1
+    img = ImageResource(vk.ffi.NULL)
+    (i,) = closing_barriers({"img": img}, [("img", "storage"), ("img", "transfer_src")])
+    assert (i.oldLayout, i.newLayout) == (vk.VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,) * 2
+    # None where a copy did not touch it last, or where it is `copied` (its next first use
+    # waits for every earlier command).
+    assert closing_barriers({"buf": buf}, [("buf", "transfer_src"), ("buf", "storage")]) == []
+    assert closing_barriers({"buf": buf}, [("buf", "storage"), ("buf", "storage_read")]) == []
+    copied = BufferResource(FakeBuffer(vk.ffi.NULL, 64), copied=True)
+    assert closing_barriers({"buf": copied}, [("buf", "transfer_dst"), ("buf", "host_read")]) == []
 
 
 def test_read_after_write_is_made_visible_once() -> None:

@@ -88,13 +88,13 @@ class BatchTarget:
         between queue families themselves."""
         out: dict[str, ImageResource | BufferResource] = {
             "color": ImageResource(self.color.handle, layers=self.layers,
-                                   view=self.attachments.color),
+                                   view=self.attachments.color, copied=True),
             "depth": ImageResource(self.depth.handle, depth=True, layers=self.layers,
-                                   view=self.attachments.depth)}
+                                   view=self.attachments.depth, copied=True)}
         if not self.external:
-            out["color_readback"] = BufferResource(self.color_readback)
+            out["color_readback"] = BufferResource(self.color_readback, copied=True)
         if self.depth_readback is not None:
-            out["depth_readback"] = BufferResource(self.depth_readback)
+            out["depth_readback"] = BufferResource(self.depth_readback, copied=True)
         return out
 
     def chunk_copy_step(self, name: str, chunk: int, views: int, timed: bool) -> Step:

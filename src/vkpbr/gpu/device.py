@@ -423,6 +423,14 @@ class Device:
                 ),
             )
             yield cmd
+            # Its writes before any later command (a frame's first use of a resource does
+            # not wait for copies: gpu/graph.py).
+            vk.vkCmdPipelineBarrier2(cmd, vk.VkDependencyInfo(
+                memoryBarrierCount=1, pMemoryBarriers=[vk.VkMemoryBarrier2(
+                    srcStageMask=vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                    srcAccessMask=vk.VK_ACCESS_2_MEMORY_WRITE_BIT,
+                    dstStageMask=vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                    dstAccessMask=vk.VK_ACCESS_2_MEMORY_READ_BIT | vk.VK_ACCESS_2_MEMORY_WRITE_BIT)]))
             vk.vkEndCommandBuffer(cmd)
             fence = self.take_fence()
             try:

@@ -235,14 +235,15 @@ def _slot_bytes(target: Image | Buffer, arrays: list[np.ndarray]) -> int:
 
 
 def _buffers_barrier(vk: Any, cmd: Any) -> None:
-    """The batch's buffer copies made available to every later read (vertex, index, storage,
-    indirect: any stage of a later submission)."""
+    """The batch's buffer copies made available to every later read or write (vertex,
+    index, storage, indirect: any stage of a later submission, whose graph does not wait for
+    copies: gpu/graph.py)."""
     vk.vkCmdPipelineBarrier2(cmd, vk.VkDependencyInfo(
         memoryBarrierCount=1, pMemoryBarriers=[vk.VkMemoryBarrier2(
             srcStageMask=vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT,
             srcAccessMask=vk.VK_ACCESS_2_TRANSFER_WRITE_BIT,
             dstStageMask=vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-            dstAccessMask=vk.VK_ACCESS_2_MEMORY_READ_BIT)]))
+            dstAccessMask=vk.VK_ACCESS_2_MEMORY_READ_BIT | vk.VK_ACCESS_2_MEMORY_WRITE_BIT)]))
 
 
 def _barrier(vk: Any, image: Image, old: int, new: int, src: tuple, dst: tuple,

@@ -248,8 +248,8 @@ class Swapchain:
     def resources(self, image: int, frame_index: int) -> dict[str, ImageResource]:
         """Image `image` and its depth as graph resources ("color", "depth"). The acquire semaphore is waited at
         COLOR_ATTACHMENT_OUTPUT; a frame's first use of an image waits for all earlier
-        commands (gpu/graph.py), which chains on it."""
-        return {"color": ImageResource(self.images[image], view=self.views[image]),
+        commands (`copied`: a screenshot's copy; gpu/graph.py), which chains on it."""
+        return {"color": ImageResource(self.images[image], view=self.views[image], copied=True),
                 "depth": ImageResource(self.depth_images[image].handle, depth=True,
                                        view=self.depth_views[image].handle)}
 

@@ -158,9 +158,11 @@ class OffscreenTarget:
     def resources(self, image: int, frame_index: int) -> dict[str, ImageResource | BufferResource]:
         """The images and readback buffers of frame `frame_index` as graph resources:
         "color", "depth" (with their MSAA images), "ids" (the compute path's visibility image),
-        "color_readback", "depth_readback" and the outputs' images by their names."""
-        color = ImageResource(self.color.handle, view=self.attachments.color)
-        depth = ImageResource(self.depth.handle, depth=True, view=self.attachments.depth)
+        "color_readback", "depth_readback" and the outputs' images by their names (all but
+        "ids" `copied`: the frame's readback copies them last)."""
+        color = ImageResource(self.color.handle, view=self.attachments.color, copied=True)
+        depth = ImageResource(self.depth.handle, depth=True, view=self.attachments.depth,
+                              copied=True)
         if self.samples > 1:
             color.msaa = ImageResource(self._msaa[0].handle, view=self.attachments.msaa_color)
             depth.msaa = ImageResource(self._msaa[1].handle, depth=True,
@@ -170,13 +172,13 @@ class OffscreenTarget:
             out["ids"] = ImageResource(self.visibility.handle,
                                               view=self.visibility_view.handle)
         color_buf, depth_buf = self.readback(frame_index)
-        out["color_readback"] = BufferResource(color_buf)
-        out["depth_readback"] = BufferResource(depth_buf)
+        out["color_readback"] = BufferResource(color_buf, copied=True)
+        out["depth_readback"] = BufferResource(depth_buf, copied=True)
         if self.outputs:
             buffers = self._outputs_readback(frame_index)
             for name, (img, view) in self.outputs.items():
-                out[name] = ImageResource(img.handle, view=view.handle)
-                out[name + "_readback"] = BufferResource(buffers[name])
+                out[name] = ImageResource(img.handle, view=view.handle, copied=True)
+                out[name + "_readback"] = BufferResource(buffers[name], copied=True)
         return out
 
     def finish_steps(self, image: int, frame_index: int, copy: tuple[str, ...],

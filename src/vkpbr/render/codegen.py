@@ -113,13 +113,13 @@ VARIANTS: tuple[Variant, ...] = (
     *(Variant(f"raster_{name}{'_batch' if batch else ''}.comp.spv", "raster.comp",
               (("COMPUTE_SHADING", 1), ("KERNEL", k), ("BATCH", batch)))
       for k, name in ((1, "small"), (4, "args"), (2, "big"), (3, "resolve"), (5, "masked"),
-                      (6, "masked_big"))
+                      (6, "masked_big"), (7, "clear"))
       for batch in (0, 1) if not batch or k in (1, 2, 5, 6)),
     # Shadow maps drawn by compute shaders (render/shadow_raster.py).
     *(Variant(f"shadow_{name}.comp.spv", "shadow_raster.comp",
               (("COMPUTE_SHADING", 1), ("KERNEL", k)))
       for k, name in ((1, "small"), (3, "args"), (2, "big"), (4, "masked"), (5, "save"),
-                      (6, "move"))),
+                      (6, "move"), (7, "clear"))),
 )
 
 

@@ -51,6 +51,7 @@ SHADE_GROUP = 64  # shade.comp's work group: pixels of one bin
 RASTER_SMALL_GROUP = 64  # raster_small: one triangle an invocation
 RASTER_DOUBLE_SIDED, RASTER_MASKED, RASTER_BLENDED = 1, 2, 4
 MAX_GROUPS_X = 65535  # maxComputeWorkGroupCount[0] every Vulkan device has
+CLEAR_GROUP = 256  # raster.comp's KERNEL 7 (raster_clear): an element of each buffer an invocation
 RASTER_PUSH_BYTES = 96  # raster.comp's push constants (20 uints, then the clear colour)
 
 
@@ -278,7 +279,7 @@ def first_frame_kernels(aggregate: bool, masked: bool) -> list[tuple[str, int]]:
     render/kernels_ahead.py makes them while the scene uploads (tests/gpu/test_kernels_ahead.py
     checks them against a first frame's). `aggregate`: ComputeScene.aggregate; `masked`: the
     scene has masked draws."""
-    names = ["raster_small", "raster_args", "raster_big",
+    names = ["raster_clear", "raster_small", "raster_args", "raster_big",
              *(["raster_masked", "raster_masked_big"] if masked else []), "raster_resolve"]
     return ([(n, RASTER_PUSH_BYTES) for n in names]
             + [("classify_offsets", 32), (f"classify_scatter{'' if aggregate else '_plain'}", 32),
@@ -439,11 +440,12 @@ class ComputeScene:
 
     # --- steps (render/paths.py lists them; gpu/graph.py derives their barriers) ----------
     def buffers(self, target: Any, prefix: str = "") -> dict[str, BufferResource]:
-        """`target`'s buffers as graph resources, named as the steps below use them."""
+        """`target`'s buffers as graph resources, named as the steps below use them (the
+        raster depths `copied`: the depth's copy reads them last)."""
         res = self._resources(target)
-        return {prefix + name: BufferResource(getattr(res, name)) for name in (
-            "bins", "args", "pixels", "raster", "raster_depths", "raster_big",
-            "raster_masked_big")}
+        return {prefix + name: BufferResource(getattr(res, name), copied=name == "raster_depths")
+                for name in ("bins", "args", "pixels", "raster", "raster_depths", "raster_big",
+                             "raster_masked_big")}
 
     def classify_step(self, target: Any, frame_index: int, frame_sets: dict[int, Any],
                       material_sets: list[Any], clear_color: tuple[float, ...],
@@ -477,7 +479,7 @@ class ComputeScene:
 
         p = prefix
         uses = ((p + "ids", "storage_read"), (p + "color", "storage"),
-                (p + "bins", "storage|transfer_dst"), (p + "args", "storage"),
+                (p + "bins", "storage" if counted else "storage|transfer_dst"), (p + "args", "storage"),
                 (p + "pixels", "storage"))
         counted_kernels = kernels[1:] if counted else kernels
         return Step("classify", record, uses,
@@ -571,17 +573,18 @@ class ComputeScene:
             return Step(step, record, uses, timed=timed,
                         kernels=self.makers((name, RASTER_PUSH_BYTES)))
 
-        def clear(cmd: Any) -> None:
-            for buffer in (res.raster, res.raster_big, res.raster_masked_big, res.bins):
-                cmd.fill(buffer, 0)  # (the bins: raster_resolve counts them)
-
+        # raster_clear zeroes the per-pixel buffer, the bins (raster_resolve counts them) and
+        # the lists' heads (raster.comp KERNEL 7).
+        cleared = ("raster", "raster_big", "raster_masked_big", "bins")
+        words = max(res.raster.size // 8, 4 * len(self.masked_rows), res.bins.size // 16, 4)
+        c = -(-words // CLEAR_GROUP)
         n = -(-self.triangles // RASTER_SMALL_GROUP)
         # raster_args sizes raster_big's dispatch from the count raster_small listed.
         small = (min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), views)
         big = (("raster", "storage"), ("raster_big", "storage|indirect"))
         steps = [
-            Step("raster_clear", clear, tuple((b, "transfer_dst") for b in (
-                "raster", "raster_big", "raster_masked_big", "bins")), timed=False),
+            kernel("raster_clear", "raster_clear", (min(c, MAX_GROUPS_X), -(-c // MAX_GROUPS_X), 1),
+                   tuple((b, "storage") for b in cleared), timed=False),
             kernel("raster_small", f"raster_small{suffix}", small,
                    (("raster", "storage"), ("raster_big", "storage"))),
             # (it also sizes the masked draws' raster_masked_big dispatches)

@@ -226,7 +226,7 @@ def _jobs(plan: Any, redraw: Sequence[range]) -> list[tuple[int, int, Any]]:
             if len(r)]
 
 
-KERNELS = ("save", "move", "small", "args", "big", "masked")  # the last only where masked draws cast
+KERNELS = ("clear", "save", "move", "small", "args", "big", "masked")  # the last only where masked draws cast
 
 
 class ShadowRaster:
@@ -360,8 +360,10 @@ class ShadowRaster:
         return self.kept
 
     def resources(self) -> dict[str, BufferResource]:
-        """The graph resources the steps name (after `steps` made them)."""
-        out = {"shadow_depths": BufferResource(self.depths), "shadow_big": BufferResource(self.big),
+        """The graph resources the steps name (after `steps` made them); the depths
+        `copied`: a frame that redraws some layers copies them into the images last."""
+        out = {"shadow_depths": BufferResource(self.depths, copied=True),
+               "shadow_big": BufferResource(self.big),
                "shadow_scratch": BufferResource(self.scratch)}
         if self.kept is not None:
             out["shadow_kept"] = BufferResource(self.kept)
@@ -454,7 +456,8 @@ class ShadowRaster:
                 out.append(Step(prefix + "save", record["save"], ((depths, "storage_read"),
                                                                   (scratch, "storage")),
                                 timed=False, kernels=made["save"]))
-            out += [Step(prefix + "clear", record["clear"], ((big_list, "transfer_dst"),), timed=False),
+            out += [Step(prefix + "clear", record["clear"], ((big_list, "storage"),), timed=False,
+                         kernels=made["clear"]),
                     Step(prefix + "move", record["move"], ((depths, "storage"), (scratch, "storage_read")),
                          timed=False, kernels=made["move"])]
         out += [
@@ -486,7 +489,12 @@ class ShadowRaster:
             cmd.bind_set(4, dset)
 
         def clear(cmd: Any) -> None:
-            self._clear(cmd, world)
+            if world is not None and world.kept is None:
+                self._clear(cmd, world)
+                return
+            bind(cmd, "clear")  # the big list emptied (a kernel: shadow_raster.comp KERNEL 7)
+            cmd.push(push)
+            cmd.dispatch(1)
 
         def small(cmd: Any) -> None:
             bind(cmd, "small")
@@ -566,17 +574,14 @@ class ShadowRaster:
 
         return dispatch
 
-    def _clear(self, cmd: Any, world: WorldJob | None) -> None:
-        """The big list emptied; a batch of worlds' maps at depth 0, the farthest
-        (reversed-Z), as the passes clear (after the last submission's reads). A frame's
+    def _clear(self, cmd: Any, world: WorldJob) -> None:
+        """A batch of worlds' maps at depth 0, the farthest (reversed-Z), as the passes
+        clear (after the last submission's reads), and their big list emptied. A frame's
         drawn layers are cleared, kept or scrolled by the move kernel instead, and so are
-        the worlds' maps that copy a kept map."""
-        if world is not None and world.kept is None:
-            cmd.memory_barrier("compute|fragment", "transfer")
-            cmd.fill(world.depths, 0, 0, 4 * world.worlds * world.stride)
-            cmd.fill(world.big, 0, 0, 16)
-            return
-        cmd.fill(self.big if world is None else world.big, 0, 0, 16)  # the count and the dispatch size
+        the worlds' maps that copy a kept map (their big list: the clear kernel)."""
+        cmd.memory_barrier("compute|fragment", "transfer")
+        cmd.fill(world.depths, 0, 0, 4 * world.worlds * world.stride)
+        cmd.fill(world.big, 0, 0, 16)
 
     def world_steps(self, slot: int, plan: Any, job: WorldJob, classes: Sequence[str],
                     material_sets: Sequence[Any], set0: Any, resources: dict[str, Any],

@@ -29,6 +29,12 @@
 //   read -- counted in its material's bin (bin_tiles.glsl: classify.comp's count), and its depth
 //   into raster_depths (copied into the depth buffer: a copy, where a screen-filling
 //   fragment pass writing gl_FragDepth cost 0.30 ms at 1080p on the H200's few raster SMs).
+// KERNEL 7 (raster_clear): invocation i zeroes element i of raster and of the bins, and of
+//   the lists' heads (raster_big's count and dispatch size, each masked segment's): what is
+//   read before it is written (a list's entries are written below its count first; clearing
+//   the whole lists had cost Sponza 67 MB of writes a frame). A kernel, not vkCmdFillBuffer,
+//   so that what follows waits for shaders only, not for the frame before's readback copy
+//   (gpu/graph.py: validation layers before 1.3.275 count a fill as a copy).
 // BATCH = 1 (render/batch_path.py's compute batch): `views` views tiled `rows` to a column in
 // one atlas (column-major, so a column of tiles is one copy into view-major memory), each `tile` pixels, each with its view's VP; the work's z index is the view.
 // One view (BATCH 0) is the same with the frame's view and the whole target as the tile.
@@ -58,6 +64,8 @@ layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;  // 256 invoc
 layout(local_size_x = 16, local_size_y = 16, local_size_z = 1) in;  // compute_path.CLASSIFY_GROUP
 #elif KERNEL == 4
 layout(local_size_x = 1, local_size_y = 1, local_size_z = 1) in;
+#elif KERNEL == 7
+layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;  // compute_path.CLEAR_GROUP
 #elif KERNEL == 5
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;  // compute_path.RASTER_SMALL_GROUP
 #else
@@ -387,6 +395,12 @@ void main() {
 #if KERNEL == 1
     uint g = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
     if (g < pc.triangles) raster_one(g);
+#elif KERNEL == 7
+    uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 256u;
+    if (i < uint(raster.length())) raster[i] = 0ul;
+    if (i < BIG_LIST) raster_big[i] = 0u;
+    if (i < 4u * pc.masked_draws) raster_masked_big[i] = 0u;
+    if (i < uint(bins.length())) bins[i] = uvec4(0u);
 #elif KERNEL == 5
     uint first = raster_draws[pc.draw].x;
     uint count = (pc.draw + 1u < pc.draws ? raster_draws[pc.draw + 1u].x : pc.triangles) - first;

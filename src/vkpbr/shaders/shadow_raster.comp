@@ -56,7 +56,7 @@
 layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;
 #elif KERNEL == 5 || KERNEL == 6
 layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;  // shadow_raster.TEXEL_GROUP / TEXEL_RUN
-#elif KERNEL == 3
+#elif KERNEL == 3 || KERNEL == 7
 layout(local_size_x = 1, local_size_y = 1, local_size_z = 1) in;
 #else
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;  // shadow_raster.SMALL_GROUP
@@ -460,6 +460,11 @@ void main() {
         depths[base + i] = value;
 #endif
     }
+#elif KERNEL == 7
+    big[0] = 0u;  // the list's count and dispatch size, before KERNEL 1 (a kernel rather than a
+    big[1] = 0u;  // fill: raster.comp's KERNEL 7 says why)
+    big[2] = 0u;
+    big[3] = 0u;
 #elif KERNEL == 3
     big[1] = max(min((big[0] + BIG_SUBGROUPS - 1u) / BIG_SUBGROUPS, MAX_GROUPS), 1u);
     big[2] = 1u;
