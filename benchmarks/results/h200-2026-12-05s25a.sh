@@ -1,5 +1,5 @@
 # H200 run a (session 25; sessions 23 and 24 had no device): the GPU test pass at this
-# session's starting tree (c5170cd: the scrolling cascades, kept maps, the headlight's NaN fix,
+# tree (the scrolling cascades, kept maps, the headlight's NaN fix, frames beside the readback copy,
 # the caches' random-sequence tests, worlds' masked alpha), validation on; then the worlds'
 # kept map on the tabletop (probe_world_kept.py, keep_still alternating in one process).
 # Carry .gl .whl .assets-g (the sample models but Sponza and BoomBox: their tests skip here).

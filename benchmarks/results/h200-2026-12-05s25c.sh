@@ -1,12 +1,13 @@
-# H200 run c (session 25): frames that overlap the one before's readback copy (branch
-# `overlap`: gpu/graph.py's first uses wait for every stage but copies, the compute path's
-# early clears are kernels; carried as .bar/src) against this tree (main, 40bb7ba),
+# H200 run c (session 25): frames that overlap the one before's readback copy (this tree,
+# branch `overlap` merged: gpu/graph.py's first uses wait for every stage but copies, the
+# compute path's early clears are kernels) against the tree before (40bb7ba, carried as
+# .old/src: `git archive 40bb7ba src | tar -x -C .old`),
 # alternating twice: probe_stream's walk, bench_shadows' walk (render_many), vkpbr bench's
 # Sponza orbit. First the stream and frame-path tests on the new tree (frames in flight
-# against render()). Carry .gl .whl .assets-s .bar.
+# against render()). Carry .gl .whl .assets-s .old.
 source benchmarks/gpu_env.sh
 S=$PWD/.assets-s/models/Sponza/glTF/Sponza.gltf
-OLD=$PYTHONPATH; NEW=/tmp/site:$PWD/.bar/src
+NEW=$PYTHONPATH; OLD=/tmp/site:$PWD/.old/src
 export VKPBR_ASSETS=$PWD/.assets-s/models
 PYTHONPATH=$NEW timeout 120 python3 -m pytest -q -n 4 -p no:cacheprovider -rfE --tb=short tests/gpu/test_frame_overlap.py tests/gpu/test_stream.py tests/gpu/test_frame_sequences.py tests/gpu/test_shadow_raster.py > $OUT/tests.txt 2>&1
 grep -E "^(FAILED|ERROR|E )|passed|failed" $OUT/tests.txt | cut -c1-300 | head -20
