@@ -74,6 +74,18 @@ def _timeout_ns(text: str) -> int:
 COMPUTE_PATH_FEATURES = ("geometryShader", "shaderStorageImageWriteWithoutFormat",
                          "subgroupOperations")
 
+
+def before_later_commands(vk: Any, cmd: Any, stages: int, writes: int) -> None:
+    """A barrier at the end of a submission made outside the frame graph (an upload): the
+    writes of `stages` before any later command's reads and writes (a frame's first use of
+    a resource does not wait for copies: gpu/graph.py)."""
+    vk.vkCmdPipelineBarrier2(cmd, vk.VkDependencyInfo(
+        memoryBarrierCount=1, pMemoryBarriers=[vk.VkMemoryBarrier2(
+            srcStageMask=stages, srcAccessMask=writes,
+            dstStageMask=vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+            dstAccessMask=vk.VK_ACCESS_2_MEMORY_READ_BIT | vk.VK_ACCESS_2_MEMORY_WRITE_BIT)]))
+
+
 class Destroyable(Protocol):
     def destroy(self) -> None: ...
 
@@ -423,14 +435,8 @@ class Device:
                 ),
             )
             yield cmd
-            # Its writes before any later command (a frame's first use of a resource does
-            # not wait for copies: gpu/graph.py).
-            vk.vkCmdPipelineBarrier2(cmd, vk.VkDependencyInfo(
-                memoryBarrierCount=1, pMemoryBarriers=[vk.VkMemoryBarrier2(
-                    srcStageMask=vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                    srcAccessMask=vk.VK_ACCESS_2_MEMORY_WRITE_BIT,
-                    dstStageMask=vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                    dstAccessMask=vk.VK_ACCESS_2_MEMORY_READ_BIT | vk.VK_ACCESS_2_MEMORY_WRITE_BIT)]))
+            before_later_commands(vk, cmd, vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                                  vk.VK_ACCESS_2_MEMORY_WRITE_BIT)
             vk.vkEndCommandBuffer(cmd)
             fence = self.take_fence()
             try:

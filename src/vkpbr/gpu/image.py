@@ -16,7 +16,7 @@ import numpy as np
 
 from vkpbr.gpu.buffer import Buffer
 from vkpbr.gpu.copy_threads import pool
-from vkpbr.gpu.device import Device, DeviceObject
+from vkpbr.gpu.device import Device, DeviceObject, before_later_commands
 
 __all__ = ["Image", "ImageView", "Sampler", "SamplerSpec", "mip_levels", "TextureUploader"]
 
@@ -232,18 +232,6 @@ def _slot_bytes(target: Image | Buffer, arrays: list[np.ndarray]) -> int:
     if isinstance(target, Buffer):
         return _aligned(sum(a.nbytes for a in arrays))
     return sum(_aligned(a.nbytes) for a in arrays)
-
-
-def _buffers_barrier(vk: Any, cmd: Any) -> None:
-    """The batch's buffer copies made available to every later read or write (vertex,
-    index, storage, indirect: any stage of a later submission, whose graph does not wait for
-    copies: gpu/graph.py)."""
-    vk.vkCmdPipelineBarrier2(cmd, vk.VkDependencyInfo(
-        memoryBarrierCount=1, pMemoryBarriers=[vk.VkMemoryBarrier2(
-            srcStageMask=vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT,
-            srcAccessMask=vk.VK_ACCESS_2_TRANSFER_WRITE_BIT,
-            dstStageMask=vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-            dstAccessMask=vk.VK_ACCESS_2_MEMORY_READ_BIT | vk.VK_ACCESS_2_MEMORY_WRITE_BIT)]))
 
 
 def _barrier(vk: Any, image: Image, old: int, new: int, src: tuple, dst: tuple,
@@ -469,8 +457,9 @@ class TextureUploader:
                     else:
                         images.append((target, offsets))
                 _record_images(vk, cmd, staging.handle, images)
-                if buffers:  # the copies before any later submission's reads of them
-                    _buffers_barrier(vk, cmd)
+                if buffers:  # the copies before any later submission's uses of them
+                    before_later_commands(vk, cmd, vk.VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+                                          vk.VK_ACCESS_2_TRANSFER_WRITE_BIT)
                 vk.vkEndCommandBuffer(cmd)
                 fence = device.take_fence()
                 vk.vkQueueSubmit(device.queue, 1, [vk.VkSubmitInfo(pCommandBuffers=[cmd])], fence)
