@@ -24,9 +24,9 @@ closes the recording with a barrier after that copy (correct, only slower: `TAIL
 counts them). For the same reason a frame's early clears are kernels, not vkCmdFillBuffer:
 a fill is a "transfer_dst" use (COPY | CLEAR: validation layers before 1.3.275 count it a
 copy), so what follows one waits for every earlier copy. Submissions made outside the graph
-(uploads) end with their own barriers for any later command. What keeps contents between frames (the shadow maps' layers that are not
-redrawn, a mip chain's levels) is transitioned by the step that owns it, and told to the
-graph by the step's `leaves`.
+(uploads) end with their own barriers for any later command. What keeps contents between
+frames (the shadow maps' layers that are not redrawn, a mip chain's levels) is transitioned
+by the step that owns it, and told to the graph by the step's `leaves`.
 
 This module knows Vulkan and nothing of the renderer: resource and step names are the
 caller's.
@@ -217,13 +217,17 @@ class Tracker:
     masks: dict[str, _Mask] = field(default_factory=dict)
     images: list[Any] = field(default_factory=list)
     buffers: list[Any] = field(default_factory=list)
-    names: dict[int, str] = field(default_factory=dict)  # id(resource) -> its name
+    seen: dict[int, tuple[str, ImageResource | BufferResource]] = field(default_factory=dict)
+    before: int = field(init=False, default=0)  # _BEFORE's stages (a first use's wait)
+
+    def __post_init__(self) -> None:
+        self.before = _flags(self.vk, "PIPELINE_STAGE", _BEFORE)
 
     def use(self, name: str, use: str, scope: int = -1) -> None:
         """Queue the barrier `use` of resource `name` needs (none when nothing came before
         it that it must wait for); `scope`: the rendering it is attached in."""
         res = self.resources[name]
-        self.names.setdefault(id(res), name)
+        self.seen.setdefault(id(res), (name, res))
         self._use(res, use, scope)
         if isinstance(res, ImageResource) and res.msaa is not None and use in _ATTACHMENT_USES:
             self._use(res.msaa, use, scope)  # drawn into, resolved into `res`
@@ -237,8 +241,7 @@ class Tracker:
         if layout == -1:
             raise ValueError(f"use {use!r} asks two layouts of one image")
         if state is None:  # the frame's first use: after every earlier command (but copies)
-            before = (vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT if res.copied
-                      else _flags(vk, "PIPELINE_STAGE", _BEFORE))
+            before = vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT if res.copied else self.before
             self._barrier(res, (before, vk.VK_ACCESS_2_MEMORY_WRITE_BIT), m,
                           vk.VK_IMAGE_LAYOUT_UNDEFINED)
             self.states[key] = self._after(m, use, scope, layout)
@@ -280,7 +283,7 @@ class Tracker:
     def leave(self, name: str, use: str) -> None:
         """Resource `name` is now as `use` left it (the step's own barriers did that)."""
         res = self.resources[name]
-        self.names.setdefault(id(res), name)
+        self.seen.setdefault(id(res), (name, res))
         m = _mask(self.vk, use, self.masks)
         self.states[id(res)] = _State(layout=m.layout or 0, write=None, read_stages=m.stages,
                                       visible=(m.stages, m.accesses), use=use)
@@ -304,17 +307,16 @@ class Tracker:
         outside = vk.VK_PIPELINE_STAGE_2_COPY_BIT | vk.VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT
         later = (vk.VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
                  vk.VK_ACCESS_2_MEMORY_READ_BIT | vk.VK_ACCESS_2_MEMORY_WRITE_BIT)
-        for key, state in self.states.items():
-            res = self.resources[self.names[key]] if key in self.names else None
+        for key, (name, res) in self.seen.items():
+            state = self.states[key]
             stages = state.read_stages | (state.write[0] if state.write else 0)
-            if res is None or res.copied or not stages & outside:
+            if res.copied or not stages & outside:
                 continue
             src = (stages & ~vk.VK_PIPELINE_STAGE_2_HOST_BIT,
                    state.write[1] if state.write else vk.VK_ACCESS_2_NONE)
             image = isinstance(res, ImageResource)
             self._barrier(res, src, _Mask(*later, state.layout if image else None, False),
                           state.layout if image else None)
-            name = self.names[key]
             TAIL_WAITS[name] = TAIL_WAITS.get(name, 0) + 1
         self.flush(cmd)
 
