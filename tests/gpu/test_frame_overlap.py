@@ -74,7 +74,9 @@ def test_a_copy_of_a_resource_not_marked_copied_closes_its_recording(renderer) -
     from vkpbr import Renderer
 
     fresh = Renderer(rect_scene((GROUND, BLOCK, CARD)), validation=True)
+    instance = fresh.device.instance
     try:
         assert np.array_equal(after, fresh.render(WALK[1], LIGHTS_ON, size=SIZE, **opts))
     finally:
         fresh.close()
+    assert instance.errors == [], instance.errors[:3]
