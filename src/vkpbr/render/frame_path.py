@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from vkpbr.errors import UsageError
+from vkpbr.gpu.copy_threads import THREADS
 from vkpbr.gpu.frames import Frame, FrameRing
 from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, COPY_OUTPUTS, FrameTarget, OffscreenTarget
 from vkpbr.render import layouts as L
@@ -54,6 +55,14 @@ class Submitted:
     frame: Frame | None
     image: int
     ok: bool
+
+
+# Threads that collect a stream's frames, each a whole frame (wait, timestamps, copy out of its
+# readback slot): two where there are 4 cores or more, so that consecutive frames' copies run
+# side by side. One thread's copy of a 1080p RGBA8 frame out of mapped memory took 0.9-0.98 ms
+# on the H200's host (session 25, probe_stream.py), longer than the GPU's 0.82 ms walk frame:
+# the stream ran at the copy's rate. Each frame still costs the drawing thread one hand-off.
+COLLECTORS = 2 if THREADS >= 4 else 1
 
 
 def read_timings(ring: FrameRing, frame: Frame, slot: FrameSlot) -> FrameStats:
@@ -256,12 +265,13 @@ class FramePath:
             self._finish(pending)
 
     def _later(self, args: tuple) -> Future:
-        """`collect(*args)` on the device's collector thread (one: it alone reads timestamps,
-        and a stream's frames are collected in order), copying the frame alone (split over
-        the copy threads, their hand-offs took the GIL from the drawing thread: H200 run c,
-        0.68 -> 0.81 ms a copy). The device's: no thread made a stream, and a device closed
-        under an open stream finishes the collect under way first (Device.close)."""
-        return self.parts.device.in_background(lambda: self.collect(*args, False), 1, "collect")
+        """`collect(*args)` on one of the device's COLLECTORS threads, copying the frame alone
+        (not split over the copy threads: their hand-offs took the GIL from the drawing
+        thread, H200 run c, 0.68 -> 0.81 ms a copy); the stream takes the results in order.
+        The device's: no thread made a stream, and a device closed under an open stream
+        finishes the collects under way first (Device.close)."""
+        return self.parts.device.in_background(lambda: self.collect(*args, False), COLLECTORS,
+                                               "collect")
 
     def _finish(self, pending: collections.deque) -> None:
         """An abandoned stream: its collects not begun dropped, the one under way finished
