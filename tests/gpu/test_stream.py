@@ -138,3 +138,35 @@ def test_waiting_for_the_background_after_its_collects_were_dropped(make_rendere
     waited.start()
     waited.join(5)
     assert not waited.is_alive(), "wait_background waited for a dropped collect"
+
+
+def test_collectors_read_their_own_frames_timestamps(make_renderer, scene) -> None:  # noqa: ANN001
+    """Several collector threads read timestamps at once (FrameRing.timings_ms: a C call
+    that releases the GIL fills a results array): each frame's times must be its own. Three
+    frames of different sizes drawn into the ring's three slots, then each read 3,000 times
+    on its own thread: every read equals the frame's value read alone."""
+    import threading
+
+    r = make_renderer(scene)
+    ring = r.parts.ring
+    if ring.query_pool is None:
+        pytest.skip(f"{r.device.info.name} has no timestamp queries")
+    sizes = [(8, 8), (96, 72), (32, 24)]
+    for size, camera in zip(sizes, cameras(3), strict=True):
+        r.render(camera, size=size)  # (one slot each: the ring's frames in turn)
+    frames = [f for f in ring.frames if f.stamped]
+    alone = [ring.timings_ms(f, len(f.stamp_names) + 1) for f in frames]
+    wrong: list[int] = []
+
+    def read(i: int) -> None:
+        for _ in range(3000):
+            if ring.timings_ms(frames[i], len(frames[i].stamp_names) + 1) != alone[i]:
+                wrong.append(i)
+
+    threads = [threading.Thread(target=read, args=(i,)) for i in range(len(frames))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(frames) == ring.count and len({tuple(a) for a in alone}) > 1
+    assert not wrong, f"{len(wrong)} reads got another frame's timestamps"

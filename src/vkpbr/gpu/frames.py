@@ -131,7 +131,9 @@ class FrameRing:
         if device.timestamps:
             self.query_pool = vk.vkCreateQueryPool(device.handle, vk.VkQueryPoolCreateInfo(
                 queryType=vk.VK_QUERY_TYPE_TIMESTAMP, queryCount=count * queries_per_frame), None)
-        self._stamps = vk.ffi.new("uint64_t[]", queries_per_frame)
+        # One results array a frame: frames are read on several collector threads at once
+        # (render/frame_path.py COLLECTORS), and the C call that fills it releases the GIL.
+        self._stamps = [vk.ffi.new("uint64_t[]", queries_per_frame) for _ in range(count)]
         self._period_ms = float(device.limits.timestampPeriod) * 1e-6
         self.frames = [Frame(device, i, i * queries_per_frame, queries_per_frame)
                        for i in range(count)]
@@ -171,14 +173,14 @@ class FrameRing:
         submission (call after it finished); NaNs without timestamps."""
         if self.query_pool is None or not frame.stamped or slots < 2:
             return [math.nan] * max(slots - 1, 0)
-        vk = self.device.vk
+        vk, stamps = self.device.vk, self._stamps[frame.index]
         result = vk.lib.vkGetQueryPoolResults(
             self.device.handle, self.query_pool, frame.query_base, slots, 8 * slots,
-            self._stamps, 8, vk.VK_QUERY_RESULT_64_BIT)
+            stamps, 8, vk.VK_QUERY_RESULT_64_BIT)
         if result != vk.VK_SUCCESS:
             check_result(result, "vkGetQueryPoolResults")  # VK_NOT_READY raises as well
-        t0 = self._stamps[0]
-        return [(self._stamps[i] - t0) * self._period_ms for i in range(1, slots)]
+        t0 = stamps[0]
+        return [(stamps[i] - t0) * self._period_ms for i in range(1, slots)]
 
     # --- lifetime ---------------------------------------------------------------------------
     def destroy(self) -> None:
