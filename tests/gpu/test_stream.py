@@ -44,14 +44,18 @@ def scene():  # noqa: ANN201
     return dataclasses.replace(s, nodes=[s.nodes[0], s.nodes[7], s.nodes[-3]])
 
 
-@pytest.mark.parametrize("collectors", [1, 2, 3])
-def test_streamed_frames_are_each_cameras_render(make_renderer, scene, monkeypatch,  # noqa: ANN001
-                                                 collectors: int) -> None:
+@pytest.fixture(params=[1, 2, 3])
+def collectors(request, monkeypatch) -> int:  # noqa: ANN001
+    """The stream's collector threads: one (machines of fewer than 4 cores) or several
+    collecting frames side by side (frame_path.COLLECTORS), whatever this machine's count."""
+    monkeypatch.setattr(frame_path, "COLLECTORS", request.param)
+    return request.param
+
+
+def test_streamed_frames_are_each_cameras_render(make_renderer, scene, collectors: int) -> None:  # noqa: ANN001
     """Seven views through render_many (colour, depth and the dataset outputs), against
     render() of each: bit for bit, in order, each frame's own stats; with one collector
-    thread (machines of fewer than 4 cores) and with several collecting frames side by side
-    (the frames handed back in order however their collects finish)."""
-    monkeypatch.setattr(frame_path, "COLLECTORS", collectors)
+    thread and with several (the frames handed back in order however their collects end)."""
     r = make_renderer(scene)
     cams = cameras(7)
     alone = [r.render(c, size=SIZE, depth=True, outputs=["normal", "instance"]) for c in cams]
@@ -68,7 +72,7 @@ def test_streamed_frames_are_each_cameras_render(make_renderer, scene, monkeypat
     assert not collecting(r)
 
 
-def test_an_abandoned_stream_leaves_nothing_running(make_renderer, scene) -> None:  # noqa: ANN001
+def test_an_abandoned_stream_leaves_nothing_running(make_renderer, scene, collectors) -> None:  # noqa: ANN001
     """Two frames taken of six, the generator closed: none of its collects is left, and the
     next frames are right."""
     r = make_renderer(scene)
@@ -83,7 +87,7 @@ def test_an_abandoned_stream_leaves_nothing_running(make_renderer, scene) -> Non
                                   r.render(cams[4], size=SIZE))
 
 
-def test_an_error_mid_stream_ends_it_cleanly(make_renderer, scene) -> None:  # noqa: ANN001
+def test_an_error_mid_stream_ends_it_cleanly(make_renderer, scene, collectors) -> None:  # noqa: ANN001
     """A bad third camera: the first two frames come, then its one-line error; nothing left
     running, and the renderer renders on."""
     r = make_renderer(scene)
@@ -110,7 +114,7 @@ def test_one_frame_makes_no_thread(make_renderer, scene) -> None:  # noqa: ANN00
     assert collector(r) is not None
 
 
-def test_a_renderer_closed_under_an_open_stream(make_renderer, scene) -> None:  # noqa: ANN001
+def test_a_renderer_closed_under_an_open_stream(make_renderer, scene, collectors) -> None:  # noqa: ANN001
     """A stream left open (frames queued on the collector) and its renderer closed: the
     close finishes the collect under way and drops the rest, and the stream, closed after,
     waits for nothing: no crash, no validation error (the fixture checks the layer's)."""
