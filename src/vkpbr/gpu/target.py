@@ -211,9 +211,10 @@ class OffscreenTarget:
             for _, img, depth, buf, nbytes, _ in images:
                 copy_image_to_buffer(cmd, img.handle, depth, buf, self.extent, tiles=tiles,
                                      pixel_bytes=nbytes)
-            for name, buf in outputs.items():
+            for name, buf in outputs.items():  # (an atlas's: view by view, as the colour)
                 copy_image_to_buffer(cmd, src.outputs[name][0].handle, False, buf,  # type: ignore[index]
-                                     self.extent)
+                                     self.extent, tiles=tiles,
+                                     pixel_bytes=src._output_bytes[name])
             if external is not None:
                 barriers(cmd, [], [external_ownership(vk, family, external, False)])
 
@@ -264,6 +265,15 @@ class OffscreenTarget:
         buffers = self._outputs_readback(frame_index)
         return {name: buffers[name].array(np.dtype(dt), w * h * ch).reshape(h, w, ch).copy()
                 for name, (dt, ch) in dtypes.items()}
+
+    def read_output_tiles(self, frame_index: int, views: int, size: tuple[int, int],
+                          dtypes: dict[str, tuple[str, int]]) -> dict[str, np.ndarray]:
+        """Copies of an atlas frame's outputs (record_end's `tiles`): GLSL name -> (views,
+        H, W, channels) array of `dtypes`' (NumPy dtype name, channels)."""
+        w, h = size
+        buffers = self._outputs_readback(frame_index)
+        return {name: buffers[name].array(np.dtype(dt), views * w * h * ch)
+                .reshape(views, h, w, ch).copy() for name, (dt, ch) in dtypes.items()}
 
     def submit(self, frame: Frame, cmd: Commands, image: int) -> bool:
         frame.submit(cmd)

@@ -186,13 +186,16 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
     if route == "views":  # (render/batch_route.py says when)
         return stack_views(r, r.render_many(each, lights, size, opts, linear, depth,
                                             outputs=wanted or None), depth, wanted, out)
-    color, dist = r.batch_path.run(route, views, size, lights, opts, linear, depth, batch, out,
-                                   call)
-    # (outputs besides the colour: from their own pass, view by view)
+    # (outputs besides the colour: the compute batch's own, else from their own frames, view
+    # by view)
     extra = tuple(n for n in wanted if n != "color") if wanted else ()
-    frames = list(r.render_many(each, lights, size, opts, linear, outputs=extra)) if extra else []
+    tiled = bool(extra) and route == "compute"
+    color, dist = r.batch_path.run(route, views, size, lights, opts, linear, depth, batch, out,
+                                   call, tiled)
+    frames = (list(r.render_many(each, lights, size, opts, linear, outputs=extra))
+              if extra and not tiled else [])
     r.last_stats = r.batch_path.stats  # the batch's (not the outputs' passes)
-    return batch_result(color, dist, depth, wanted, frames)
+    return batch_result(color, dist, depth, wanted, frames, r.batch_path.images if tiled else None)
 
 
 batch_call = render_batch  # (the name renderer.py imports: its own method is render_batch)

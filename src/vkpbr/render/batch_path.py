@@ -22,7 +22,7 @@ import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.gpu.batch_target import BatchTarget
-from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH
+from vkpbr.gpu.target import COPY_COLOR, COPY_DEPTH, COPY_OUTPUTS
 from vkpbr.render import layouts as L
 from vkpbr.render.ao import ao_pixel_bytes, prepare_ao
 from vkpbr.render.batch import MAX_LAYERS, BatchViews
@@ -45,6 +45,8 @@ __all__ = ["BatchPath", "COMPUTE_BYTES"]
 # Device bytes a pixel of a compute batch's atlas needs besides its colour: depth 4, the
 # visibility image 8, the rasteriser's depth|triangle 8, the pixel list 4, the big list ~1.
 COMPUTE_BYTES = 25
+# ... and with dataset outputs: their images (layouts.OUTPUT_IMAGES) and as much readback.
+OUTPUT_BYTES = 2 * sum(nbytes for _, nbytes, _, _ in L.OUTPUT_IMAGES.values())
 ATLASES_KEPT = 2  # compute-batch atlases kept between calls (BatchPath._atlas)
 MEMORY_AGE_S = 0.5  # how long a free-memory query serves the calls after it (per_submission)
 
@@ -55,11 +57,15 @@ VIEWED = object()
 
 class BatchPath:
     """The batch path of frames drawn with `parts` (its GPU objects made on the first
-    batch, destroyed by `close`). `stats`: the last call's timings, its submissions' summed."""
+    batch, destroyed by `close`). `stats`: the last call's timings, its submissions' summed;
+    `images`: the last compute batch's dataset output images asked for, GLSL name -> (views,
+    H, W, channels), and "camera_rotation" (views, 3, 3), each view's rotation of world
+    normals into its camera's axes (None where it asked none)."""
 
     def __init__(self, parts: FrameParts) -> None:
         self.parts = parts
         self.stats = FrameStats()
+        self.images: dict[str, np.ndarray] | None = None
         self.views: BatchViews | None = None
         self.targets: dict[tuple, BatchTarget] = {}
         self._cuda_imports: dict[int, Any] = {}  # gpu/cuda.py CudaImport by target
@@ -93,23 +99,29 @@ class BatchPath:
     # --- whole batches ----------------------------------------------------------------------
     def run(self, route: str, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
             opts: RenderOptions, linear: bool, depth: bool, batch: int | str,
-            out: np.ndarray | None = None, worlds: WorldCall | None = None
-            ) -> tuple[Any, np.ndarray | None]:
+            out: np.ndarray | None = None, worlds: WorldCall | None = None,
+            outputs: bool = False) -> tuple[Any, np.ndarray | None]:
         """A render_batch call taking `route` (render/batch_route.py; not "views"): the colour
         (a torch tensor for "cuda") and the depth or None; the call's timings in `stats`.
-        `worlds`: each view sees its world (render/worlds.py)."""
+        `worlds`: each view sees its world (render/worlds.py); `outputs` (the compute batch):
+        the dataset output images too, into `images`."""
         self._calls += 1
         self._finish_pending()
         self._ordered = False
         self.world_call = worlds
+        self.images = None
         try:
-            key = replay_key(self, route, views, size, lights, opts, linear, depth, batch)
+            key = None if outputs else replay_key(self, route, views, size, lights, opts, linear,
+                                                  depth, batch)
             got = None if key is None else replay(self, key, out)
             if got is not None:
                 return got
             # (the full path leaves its recording for the next step of the plan: _run)
             self._replay = None if key is None else (route, views, size, lights, opts, linear,
                                                      depth, batch)
+            if outputs:
+                return self.render_compute(views, size, lights, opts, linear, depth, batch,
+                                           out=out, outputs=True)
             return self._run_route(route, views, size, lights, opts, linear, depth, batch, out)
         finally:
             self.world_call = None
@@ -144,12 +156,13 @@ class BatchPath:
 
     def render_compute(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
                        opts: RenderOptions, linear: bool, depth: bool, batch: int | str,
-                       cuda: bool = False, out: np.ndarray | None = None
+                       cuda: bool = False, out: np.ndarray | None = None, outputs: bool = False
                        ) -> tuple[Any, np.ndarray | None]:
         """The compute batch: each submission's views tiled in one atlas target, rasterised
         and shaded in compute shaders (render/compute_path.py's kernels, BATCH builds).
         `cuda`: the colour as one torch tensor (the atlas's tiles copied into exported memory
-        that CUDA imports, as the layered batch's)."""
+        that CUDA imports, as the layered batch's); `outputs`: the dataset output images too
+        (`images`, each output's tiles read back as the colour's)."""
         limits = self.parts.device.limits
         most = int(limits.maxImageDimension2D)
         # (a lens batch draws its views' wider source pinholes: render/post.py batch_post)
@@ -157,7 +170,7 @@ class BatchPath:
         # The atlas fits the image size limit, and its rasteriser buffer (8 bytes a pixel) one
         # storage-buffer binding; sized for this call's views, not more.
         extra = (COMPUTE_BYTES + batch_post_bytes(opts, views, size, (w, h))
-                 + ao_pixel_bytes(opts, len(self.parts.slots)))
+                 + ao_pixel_bytes(opts, len(self.parts.slots)) + (OUTPUT_BYTES if outputs else 0))
         per = min(self.per_submission(size, linear, depth, batch, extra),
                   (most // w) * (most // h), int(limits.maxStorageBufferRange) // (8 * w * h),
                   len(views))
@@ -169,15 +182,19 @@ class BatchPath:
         rows = max(1, min(per, most // h, max(math.ceil(math.sqrt(per)), -(-per // (most // w)))))
         cols = -(-per // rows)
         self._submissions = 0
-        colors, depths = [], []
+        colors, depths, images = [], [], []
         for start in range(0, len(views), per):
             stop = min(start + per, len(views))
             color, dist = self._submit_compute(_slice(views, start, stop),
                                                (int(size[0]), int(size[1])), (cols, rows),
                                                lights, opts, linear, depth, cuda,
-                                               None if out is None else out[start:stop], start)
+                                               None if out is None else out[start:stop], start,
+                                               outputs)
             colors.append(color)
             depths.append(dist)
+            images.append(self.images)
+        if outputs:  # (each submission's, joined as the colours)
+            self.images = {n: _joined([got[n] for got in images]) for n in images[0]}
         if cuda:
             import torch
 
@@ -186,11 +203,13 @@ class BatchPath:
 
     def _submit_compute(self, views: CameraBatch, size: tuple[int, int], grid: tuple[int, int],
                         lights: LightsArg, opts: RenderOptions, linear: bool, depth: bool,
-                        cuda: bool = False, into: np.ndarray | None = None, start: int = 0
-                        ) -> tuple[Any, np.ndarray | None]:
+                        cuda: bool = False, into: np.ndarray | None = None, start: int = 0,
+                        outputs: bool = False) -> tuple[Any, np.ndarray | None]:
         p, n = self.parts, len(views)
         (w, h), (cols, rows) = size, grid
         target = self._atlas((cols * w, rows * h), linear)
+        if outputs:  # (before any recording: making them rebuilds the atlas's compute set)
+            p.targets.ensure_outputs(target)
         external = self._exported(target, cols * rows * w * h) if cuda else None
         # The compute batch reads only the ViewRecords: keep whatever chunking the buffers
         # have (a new one reallocates them).
@@ -198,6 +217,7 @@ class BatchPath:
         bv = self._views(n, chunk or max(1, min(n, MAX_LAYERS)))
         self._t_start = time.perf_counter()
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
+        copy = (*copy, COPY_OUTPUTS) if outputs else copy
         # Post steps (render/post.py batch_post: colour noise, bloom, a lens): drawn into an
         # HDR atlas.
         post = batch_post(p, opts, views, size, grid, target, copy, linear)
@@ -213,9 +233,10 @@ class BatchPath:
         def finish(fr: Any, into: np.ndarray | None, order: CudaOrder | None
                    ) -> tuple[Any, np.ndarray | None]:
             return self._compute_result(fr, target, n, size, into, terms if depth else None,
-                                        external, linear, order)
+                                        external, linear, order, terms if outputs else None)
 
-        whole = post.drawn is None and not depth  # (replayable: render/batch_replay.py)
+        # (replayable: render/batch_replay.py)
+        whole = post.drawn is None and not depth and not outputs
         self._run(frame, plan, opts, lambda redraw: p.recorder.command_buffer(
             target, frame, 0, FrameSpec(
                 "compute_batch", opts.tbn, opts.alpha_mask, plan, redraw, copy,
@@ -229,9 +250,11 @@ class BatchPath:
 
     def _compute_result(self, frame: Any, target: Any, n: int, size: tuple[int, int],
                         into: np.ndarray | None, terms: ViewTerms | None, external: Any,
-                        linear: bool, order: CudaOrder | None) -> tuple[Any, np.ndarray | None]:
+                        linear: bool, order: CudaOrder | None, outputs: ViewTerms | None = None
+                        ) -> tuple[Any, np.ndarray | None]:
         """A compute batch's submission's colour (a torch tensor where `external`: its
-        exported copy) and depth (where `terms`), once submitted."""
+        exported copy) and depth (where `terms`), once submitted; with `outputs` (the views'
+        terms) its dataset output images into `images`."""
         p = self.parts
         if external is not None:
             p.device.check_validation()
@@ -245,6 +268,10 @@ class BatchPath:
         if terms is not None:
             dist = linear_depth(target.read_tiles(frame.index, n, size, depth=True),
                                 terms.znear[:, None, None])
+        if outputs is not None:
+            dtypes = {name: (dt, ch) for name, (_, _, dt, ch) in L.OUTPUT_IMAGES.items()}
+            self.images = target.read_output_tiles(frame.index, n, size, dtypes)
+            self.images["camera_rotation"] = view_rotations(outputs, n)
         self.stats.readback_ms += 1e3 * (time.perf_counter() - t_read)
         p.device.check_validation()
         return color, dist
@@ -754,6 +781,13 @@ class BatchPath:
         self.targets = {}
         while self._atlases:  # with the compute batch's exported colour; kept, where kept
             self._drop_atlas(self._atlases.popitem(last=False)[1], keep=True)
+
+
+def view_rotations(terms: ViewTerms, n: int) -> np.ndarray:
+    """(n, 3, 3) float32: each view's rotation of row vectors from world axes into its
+    camera's (`normal @ R`), as `render` applies its slot's to the normal_camera output."""
+    columns = [np.broadcast_to(np.asarray(v, np.float64), (n,)) for v in terms.rotation]
+    return np.stack(columns, -1).reshape(n, 3, 3).transpose(0, 2, 1).astype(np.float32)
 
 
 def _joined(parts: list[np.ndarray], out: np.ndarray | None = None) -> np.ndarray:

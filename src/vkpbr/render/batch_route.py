@@ -26,18 +26,23 @@ from vkpbr.errors import UsageError
 from vkpbr.render import layouts as L
 from vkpbr.render.camera import as_camera
 from vkpbr.render.options import RenderOptions
-from vkpbr.render.outputs import check_outputs
+from vkpbr.render.outputs import OUTPUTS, check_outputs, frame_outputs
 from vkpbr.render.parts import FrameParts
 from vkpbr.render.post import batch_post_supported
 from vkpbr.render.post_stage import enabled_post
 from vkpbr.scene.camera_batch import CameraBatch
 from vkpbr.scene.types import Camera
 
-__all__ = ["ROUTES", "batch_result", "batch_route", "check_out", "chunked", "per_view",
-           "stack_frames"]
+__all__ = ["ROUTES", "TILED_OUTPUTS", "batch_result", "batch_route", "check_out", "chunked",
+           "per_view", "stack_frames"]
 
 ROUTES = ("cuda", "compute", "layered", "views")
 
+
+# The dataset outputs the compute batch writes itself (render/batch_path.py, shade.comp's
+# BATCH OUTPUTS build): all but "motion" (a batch's views are no sequence: render_many's
+# frames give each view's motion from the view before) and "ao" (GTAO's own output copy).
+TILED_OUTPUTS = frozenset(OUTPUTS) - {"motion", "ao"}
 
 def batch_route(parts: FrameParts, batch: CameraBatch, size: tuple[int, int], opts: RenderOptions,
                 linear: bool, depth: bool, outputs: Iterable[str] | None, device: str,
@@ -65,11 +70,14 @@ def batch_route(parts: FrameParts, batch: CameraBatch, size: tuple[int, int], op
     targets, paths = parts.targets, parts.paths
     wanted = (check_outputs(outputs, targets.offscreen(size, linear), paths, targets)
               if outputs else ())
-    # The dataset outputs but colour come from their own pass (as `render` makes them).
+    # The compute batch writes the dataset outputs of TILED_OUTPUTS in its own pass over
+    # the atlas (not with post steps); the others come from their own frames, view by view
+    # (as `render` makes them).
     extra = any(n != "color" for n in wanted)
+    tiled = not extra or (set(wanted) <= TILED_OUTPUTS and not post)
     explicit_compute = (opts.pipeline == L.PipelinePath.COMPUTE
                         and paths.uses_compute(targets.offscreen(size, linear), opts))
-    if paths.takes_compute_batch(opts) and not extra and tiled_post:
+    if paths.takes_compute_batch(opts) and tiled and tiled_post:
         return "compute", wanted
     if not parts.device.batch_views or targets.msaa > 1 or explicit_compute or post:
         return "views", wanted
@@ -77,11 +85,15 @@ def batch_route(parts: FrameParts, batch: CameraBatch, size: tuple[int, int], op
 
 
 def batch_result(color: Any, dist: np.ndarray | None, depth: bool, wanted: tuple[str, ...],
-                 frames: Sequence[dict[str, np.ndarray]] = ()) -> Any:
+                 frames: Sequence[dict[str, np.ndarray]] = (),
+                 images: dict[str, np.ndarray] | None = None) -> Any:
     """What render_batch returns: the colour (and depth), or {name: (B, ...) array} of
-    `wanted` with the outputs but colour from `frames` (render_many's, a dict each)."""
+    `wanted` with the outputs but colour from the compute batch's output `images` (BatchPath
+    .images) or else from `frames` (render_many's, a dict each)."""
     if not wanted:
         return (color, dist) if depth else color
+    if images is not None:
+        return frame_outputs(images, color, wanted, images["camera_rotation"])
     result: dict[str, np.ndarray] = {"color": color} if "color" in wanted else {}
     for name in wanted:
         if name != "color":

@@ -55,6 +55,10 @@ VARIANTS: tuple[Variant, ...] = (
               (("COMPUTE_SHADING", 1), ("BATCH", batch))) for name, batch in (("view", 0), ("batch", 1))),
     *(Variant(f"shade_outputs_{m.name.lower()}.comp.spv", "shade.comp",
               (("TBN_MODE", int(m)), ("COMPUTE_SHADING", 1), ("OUTPUTS", 1))) for m in L.TbnMode),
+    # ... and a compute batch's (render/batch_path.py): each pixel's view is its tile's.
+    *(Variant(f"shade_batch_outputs_{m.name.lower()}.comp.spv", "shade.comp",
+              (("TBN_MODE", int(m)), ("COMPUTE_SHADING", 1), ("OUTPUTS", 1), ("BATCH", 1)))
+      for m in L.TbnMode),
     *(Variant(f"classify_{name}{'' if agg else '_plain'}.comp.spv", "classify.comp",
               (("COMPUTE_SHADING", 1), ("KERNEL", k), ("AGGREGATE", agg)))
       for k, name in ((1, "count"), (2, "offsets"), (3, "scatter")) for agg in (1, 0)

@@ -504,21 +504,22 @@ class ComputeScene:
 
     def outputs_step(self, target: Any, frame_index: int, tbn: L.TbnMode,
                      frame_sets: dict[int, Any], material_sets: list[Any],
-                     materials: list[int], outputs: tuple[str, ...]) -> Step:
+                     materials: list[int], outputs: tuple[str, ...],
+                     tiles: tuple[int, int, int, int] | None = None) -> Step:
         """"outputs": the dataset outputs (ids, normals, distances) of the classified pixels
         (shade.comp's OUTPUTS variant, per material: the shading normal reads its normal
-        map) into the images named `outputs`."""
+        map) into the images named `outputs` (`tiles`: a compute batch's atlas)."""
         res = self._resources(target)
 
-        kernel = f"shade_outputs_{tbn.name.lower()}"
+        kernel = f"shade_{'batch_' if tiles else ''}outputs_{tbn.name.lower()}"
 
         def record(cmd: Any) -> None:
             self._dispatch_bins(cmd, res, frame_index, kernel, frame_sets, material_sets,
-                                materials)
+                                materials, tiles)
 
         return Step("outputs", record,
                     self._bin_uses("") + tuple((name, "storage") for name in outputs),
-                    kernels=self._bin_makers(kernel, materials))
+                    kernels=self._bin_makers(kernel, materials, tiles))
 
     @staticmethod
     def _bin_uses(p: str) -> tuple[tuple[str, str], ...]:

@@ -65,7 +65,9 @@ def check_outputs(outputs: Iterable[str] | None, target: OffscreenTarget, paths:
 
 def frame_outputs(images: dict[str, np.ndarray], color: np.ndarray, wanted: tuple[str, ...],
                   camera_rotation: np.ndarray) -> dict[str, np.ndarray]:
-    """The outputs' arrays from the target's output images (render/layouts.py OUTPUT_IMAGES).
+    """The outputs' arrays from the target's output images (render/layouts.py OUTPUT_IMAGES;
+    a frame's (H, W, C) with its camera's (3, 3) rotation, or a batch's (B, H, W, C) with
+    each view's (B, 3, 3)).
     Blended and background pixels are not in the ids (only what the visibility pass draws:
     opaque and alpha-masked surfaces, alpha-masked texels cut out as from the colour)."""
     ids, dr = images["out_ids"], images["out_depth_range"]
@@ -79,12 +81,21 @@ def frame_outputs(images: dict[str, np.ndarray], color: np.ndarray, wanted: tupl
         "normal": lambda: normal.copy(),
         # float32 throughout: a float64 rotation made NumPy promote and loop (40 ms at
         # 1080p on the CI machine, against 7 ms; within 5e-7 of it).
-        "normal_camera": lambda: normal @ np.asarray(camera_rotation, np.float32),
+        "normal_camera": lambda: to_camera(normal, camera_rotation),
         "normal_geometric": lambda: images["out_normal_geometric"][..., :3].copy(),
         "motion": lambda: dr[..., 2:4].copy(),
         "ao": lambda: images["out_ao"][..., 0].copy(),
     }
     return {name: available[name]() for name in wanted}
+
+
+def to_camera(normal: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+    """World normals (..., 3) in camera axes: `normal @ rotation`, one (3, 3) rotation for a
+    frame's or one per view (B, 3, 3) for a batch's (B, H, W, 3)."""
+    r = np.asarray(rotation, np.float32)
+    if r.ndim == 2:
+        return normal @ r
+    return (normal.reshape(len(r), -1, 3) @ r).reshape(normal.shape)
 
 
 def instances(scene: Scene, gpu_scene: GpuScene, semantic_ids: np.ndarray,

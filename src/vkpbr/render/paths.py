@@ -62,8 +62,9 @@ PATHS: dict[str, tuple[str, ...]] = {
     "compute_raster": (*_FRAME_HEAD, "outputs_clear", "raster", "ao", *_SHADE_COMPUTE,
                        *_AFTER_SHADING),
     # Batches: every view of a call in one submission (render/batch_path.py).
-    "compute_batch": ("deform", "worlds", "shadows", "raster", "ao", "classify", "shading",
-                      "background_compute", "post", "finish"),
+    # (with dataset outputs: their images cleared first, written after the shading)
+    "compute_batch": ("deform", "worlds", "shadows", "outputs_clear", "raster", "ao", "classify",
+                      "shading", "outputs", "background_compute", "post", "finish"),
     "layered_batch": ("deform", "worlds", "shadows", "cull", "chunks", "finish"),
 }
 # The transmission's copy of the opaque scene (render/transmission.py), drawn as the frame is.

@@ -314,7 +314,7 @@ class FrameSteps:
         cs = self._compute()
         names = tuple(self.target.outputs)
         return [cs.outputs_step(self.target, self.frame_index, self.spec.tbn, self._frame_sets(),
-                                self.material_sets, self._shaded(), names)]
+                                self.material_sets, self._shaded(), names, self.spec.tiles)]
 
     def _outputs_clear(self) -> list[Step]:
         if COPY_OUTPUTS not in self.spec.copy:
