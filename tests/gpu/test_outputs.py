@@ -66,8 +66,9 @@ def analytic_scene() -> Scene:
     return Scene("analytic", meshes=meshes, materials=materials, nodes=nodes, cameras=[CAMERA])
 
 
-def ray_cast(scene: Scene) -> dict[str, np.ndarray]:
-    """First hits of the pixel-centre rays: node index (-1 = none), t, interpolated normal."""
+def ray_cast(scene: Scene, camera: Camera = CAMERA) -> dict[str, np.ndarray]:
+    """First hits of `camera`'s pixel-centre rays (W x H): node index (-1 = none), t,
+    interpolated normal."""
     tris, normals, owner = [], [], []
     for k, node in enumerate(scene.nodes):
         mesh = scene.meshes[node.mesh]
@@ -78,8 +79,8 @@ def ray_cast(scene: Scene) -> dict[str, np.ndarray]:
         normals.append(mesh.normals.astype(np.float64)[idx])
         owner.append(np.full(len(idx), k))
     tri, nrm, own = np.concatenate(tris), np.concatenate(normals), np.concatenate(owner)
-    eye = np.asarray(CAMERA.eye, np.float64)
-    d = pixel_rays(CAMERA, W, H).reshape(-1, 3)
+    eye = np.asarray(camera.eye, np.float64)
+    d = pixel_rays(camera, W, H).reshape(-1, 3)
     best, best_t, bary = first_hits(tri, eye, d, chunk=128)
     best_b = bary[:, 1:]
     hit = best >= 0
@@ -87,7 +88,7 @@ def ray_cast(scene: Scene) -> dict[str, np.ndarray]:
     b0 = 1 - best_b.sum(-1)
     n = (b0[:, None] * nrm[best, 0] + best_b[:, :1] * nrm[best, 1] + best_b[:, 1:] * nrm[best, 2])
     n /= np.maximum(np.linalg.norm(n, axis=-1, keepdims=True), 1e-12)
-    forward = basis(CAMERA)[2]
+    forward = basis(camera)[2]
     return {"node": np.where(hit, own[best], -1).reshape(H, W),
             "range": best_t.reshape(H, W), "depth": (best_t * (d @ forward)).reshape(H, W),
             "normal": np.where(hit[:, None], n, 0).reshape(H, W, 3),

@@ -185,6 +185,7 @@ class OffscreenTarget:
                      tiles: tuple[int, int, int, int] | None = None, external: Any = None,
                      prefix: str = "", sources: OffscreenTarget | None = None) -> list[Step]:
         """"copy": what `copy` names copied into frame `frame_index`'s readback buffers
+        (COPY_OUTPUTS: every output image, or those of them `copy` names too)
         (`tiles`, an atlas of a compute batch (views, tile width, height, tiles a column):
         colour and depth view by view, read_tiles; `external`: the colour into that exported
         buffer instead, for CUDA: taken back from the external queue family before the copy,
@@ -203,6 +204,8 @@ class OffscreenTarget:
         if COPY_DEPTH in copy:
             images.append((q + "depth", src.depth, True, depth_buf, 4, p + "depth_readback"))
         outputs = self._outputs_readback(frame_index) if COPY_OUTPUTS in copy else {}
+        named = [n for n in copy if n in outputs]  # (`copy` may name the images it reads)
+        outputs = {n: outputs[n] for n in named} if named else outputs
         family, vk = self.device.queue_family, self.device.vk
 
         def record(cmd: Commands) -> None:

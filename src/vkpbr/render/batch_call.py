@@ -22,6 +22,7 @@ from vkpbr.render.batch_replay import replay, replay_key
 from vkpbr.render.batch_route import batch_result, stack_views
 from vkpbr.render.lighting import LightsArg
 from vkpbr.render.options import RenderOptions, with_overrides
+from vkpbr.render.outputs import output_images
 from vkpbr.render.scene_state import base_factors
 from vkpbr.render.worlds import GpuWorlds, WorldCall
 from vkpbr.scene._checks import frame_size
@@ -191,7 +192,7 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
     extra = tuple(n for n in wanted if n != "color") if wanted else ()
     tiled = bool(extra) and route == "compute"
     color, dist = r.batch_path.run(route, views, size, lights, opts, linear, depth, batch, out,
-                                   call, tiled)
+                                   call, output_images(extra) if tiled else ())
     frames = (list(r.render_many(each, lights, size, opts, linear, outputs=extra))
               if extra and not tiled else [])
     r.last_stats = r.batch_path.stats  # the batch's (not the outputs' passes)

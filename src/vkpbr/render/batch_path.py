@@ -45,8 +45,9 @@ __all__ = ["BatchPath", "COMPUTE_BYTES"]
 # Device bytes a pixel of a compute batch's atlas needs besides its colour: depth 4, the
 # visibility image 8, the rasteriser's depth|triangle 8, the pixel list 4, the big list ~1.
 COMPUTE_BYTES = 25
-# ... and with dataset outputs: their images (layouts.OUTPUT_IMAGES) and as much readback.
-OUTPUT_BYTES = 2 * sum(nbytes for _, nbytes, _, _ in L.OUTPUT_IMAGES.values())
+# ... and with dataset outputs: their images (layouts.OUTPUT_IMAGES), as many bytes of
+# host-visible readback.
+OUTPUT_BYTES = sum(nbytes for _, nbytes, _, _ in L.OUTPUT_IMAGES.values())
 ATLASES_KEPT = 2  # compute-batch atlases kept between calls (BatchPath._atlas)
 MEMORY_AGE_S = 0.5  # how long a free-memory query serves the calls after it (per_submission)
 
@@ -100,11 +101,11 @@ class BatchPath:
     def run(self, route: str, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
             opts: RenderOptions, linear: bool, depth: bool, batch: int | str,
             out: np.ndarray | None = None, worlds: WorldCall | None = None,
-            outputs: bool = False) -> tuple[Any, np.ndarray | None]:
+            outputs: tuple[str, ...] = ()) -> tuple[Any, np.ndarray | None]:
         """A render_batch call taking `route` (render/batch_route.py; not "views"): the colour
         (a torch tensor for "cuda") and the depth or None; the call's timings in `stats`.
         `worlds`: each view sees its world (render/worlds.py); `outputs` (the compute batch):
-        the dataset output images too, into `images`."""
+        these dataset output images too (layouts.OUTPUT_IMAGES' names), into `images`."""
         self._calls += 1
         self._finish_pending()
         self._ordered = False
@@ -121,7 +122,7 @@ class BatchPath:
                                                      depth, batch)
             if outputs:
                 return self.render_compute(views, size, lights, opts, linear, depth, batch,
-                                           out=out, outputs=True)
+                                           out=out, outputs=outputs)
             return self._run_route(route, views, size, lights, opts, linear, depth, batch, out)
         finally:
             self.world_call = None
@@ -156,13 +157,13 @@ class BatchPath:
 
     def render_compute(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
                        opts: RenderOptions, linear: bool, depth: bool, batch: int | str,
-                       cuda: bool = False, out: np.ndarray | None = None, outputs: bool = False
-                       ) -> tuple[Any, np.ndarray | None]:
+                       cuda: bool = False, out: np.ndarray | None = None,
+                       outputs: tuple[str, ...] = ()) -> tuple[Any, np.ndarray | None]:
         """The compute batch: each submission's views tiled in one atlas target, rasterised
         and shaded in compute shaders (render/compute_path.py's kernels, BATCH builds).
         `cuda`: the colour as one torch tensor (the atlas's tiles copied into exported memory
-        that CUDA imports, as the layered batch's); `outputs`: the dataset output images too
-        (`images`, each output's tiles read back as the colour's)."""
+        that CUDA imports, as the layered batch's); `outputs`: these dataset output images
+        too (`images`, their tiles read back as the colour's)."""
         limits = self.parts.device.limits
         most = int(limits.maxImageDimension2D)
         # (a lens batch draws its views' wider source pinholes: render/post.py batch_post)
@@ -171,7 +172,8 @@ class BatchPath:
         # storage-buffer binding; sized for this call's views, not more.
         extra = (COMPUTE_BYTES + batch_post_bytes(opts, views, size, (w, h))
                  + ao_pixel_bytes(opts, len(self.parts.slots)) + (OUTPUT_BYTES if outputs else 0))
-        per = min(self.per_submission(size, linear, depth, batch, extra),
+        read = sum(L.OUTPUT_IMAGES[n][1] for n in outputs)  # (readback bytes a pixel)
+        per = min(self.per_submission(size, linear, depth, batch, extra, read),
                   (most // w) * (most // h), int(limits.maxStorageBufferRange) // (8 * w * h),
                   len(views))
         if per < 1:
@@ -204,7 +206,7 @@ class BatchPath:
     def _submit_compute(self, views: CameraBatch, size: tuple[int, int], grid: tuple[int, int],
                         lights: LightsArg, opts: RenderOptions, linear: bool, depth: bool,
                         cuda: bool = False, into: np.ndarray | None = None, start: int = 0,
-                        outputs: bool = False) -> tuple[Any, np.ndarray | None]:
+                        outputs: tuple[str, ...] = ()) -> tuple[Any, np.ndarray | None]:
         p, n = self.parts, len(views)
         (w, h), (cols, rows) = size, grid
         target = self._atlas((cols * w, rows * h), linear)
@@ -217,7 +219,7 @@ class BatchPath:
         bv = self._views(n, chunk or max(1, min(n, MAX_LAYERS)))
         self._t_start = time.perf_counter()
         copy = (COPY_COLOR, COPY_DEPTH) if depth else (COPY_COLOR,)
-        copy = (*copy, COPY_OUTPUTS) if outputs else copy
+        copy = (*copy, COPY_OUTPUTS, *outputs) if outputs else copy  # (only the images read)
         # Post steps (render/post.py batch_post: colour noise, bloom, a lens): drawn into an
         # HDR atlas.
         post = batch_post(p, opts, views, size, grid, target, copy, linear)
@@ -233,7 +235,8 @@ class BatchPath:
         def finish(fr: Any, into: np.ndarray | None, order: CudaOrder | None
                    ) -> tuple[Any, np.ndarray | None]:
             return self._compute_result(fr, target, n, size, into, terms if depth else None,
-                                        external, linear, order, terms if outputs else None)
+                                        external, linear, order,
+                                        (terms, outputs) if outputs else None)
 
         # (replayable: render/batch_replay.py)
         whole = post.drawn is None and not depth and not outputs
@@ -250,11 +253,12 @@ class BatchPath:
 
     def _compute_result(self, frame: Any, target: Any, n: int, size: tuple[int, int],
                         into: np.ndarray | None, terms: ViewTerms | None, external: Any,
-                        linear: bool, order: CudaOrder | None, outputs: ViewTerms | None = None
+                        linear: bool, order: CudaOrder | None,
+                        outputs: tuple[ViewTerms, tuple[str, ...]] | None = None
                         ) -> tuple[Any, np.ndarray | None]:
         """A compute batch's submission's colour (a torch tensor where `external`: its
         exported copy) and depth (where `terms`), once submitted; with `outputs` (the views'
-        terms) its dataset output images into `images`."""
+        terms, the output images copied) those images into `images`."""
         p = self.parts
         if external is not None:
             p.device.check_validation()
@@ -269,9 +273,10 @@ class BatchPath:
             dist = linear_depth(target.read_tiles(frame.index, n, size, depth=True),
                                 terms.znear[:, None, None])
         if outputs is not None:
-            dtypes = {name: (dt, ch) for name, (_, _, dt, ch) in L.OUTPUT_IMAGES.items()}
+            views, names = outputs
+            dtypes = {name: L.OUTPUT_IMAGES[name][2:] for name in names}
             self.images = target.read_output_tiles(frame.index, n, size, dtypes)
-            self.images["camera_rotation"] = view_rotations(outputs, n)
+            self.images["camera_rotation"] = view_rotations(views, n)
         self.stats.readback_ms += 1e3 * (time.perf_counter() - t_read)
         p.device.check_validation()
         return color, dist
@@ -304,17 +309,17 @@ class BatchPath:
         return parts[0] if len(parts) == 1 else torch.cat(parts)
 
     def per_submission(self, size: tuple[int, int], linear: bool, depth: bool,
-                       batch: int | str, pixel_extra: int = 4) -> int:
+                       batch: int | str, pixel_extra: int = 4, host_extra: int = 0) -> int:
         """Views per submission: `batch`, checked against the free memory, or for "auto" as
         many as fit in a quarter of it (device and host-visible readback), at most 65,536.
         `pixel_extra`: device bytes a pixel besides its colour (the layered batch's depth, or
-        COMPUTE_BYTES)."""
+        COMPUTE_BYTES); `host_extra`: readback bytes a pixel besides the colour and depth."""
         w, h = int(size[0]), int(size[1])
         pixel = 16 if linear else 4
         local, host = self._memory_available()
         device_view = (w * h * (pixel + pixel_extra) + L.VIEW_RECORD.size
                        + 4 * len(self.parts.gpu_scene.draws))
-        host_view = w * h * (pixel + (4 if depth else 0))
+        host_view = w * h * (pixel + (4 if depth else 0) + host_extra)
         fits = max(1, min(local // device_view, host // host_view))  # all of the free memory
         if batch == "auto":
             return max(1, min(fits // 4, 1 << 16))

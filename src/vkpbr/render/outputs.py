@@ -14,12 +14,14 @@ import numpy as np
 
 from vkpbr.errors import UsageError
 from vkpbr.gpu.target import OffscreenTarget
+from vkpbr.render import layouts as L
 from vkpbr.render.gpu_scene import GpuScene
 from vkpbr.render.path_choice import FramePaths
 from vkpbr.render.targets import Targets
 from vkpbr.scene.types import Scene
 
-__all__ = ["OUTPUTS", "check_outputs", "frame_outputs", "instances", "max_id"]
+__all__ = ["OUTPUTS", "OUTPUT_SOURCES", "check_outputs", "frame_outputs", "instances", "max_id",
+           "output_images", "to_camera"]
 
 # Dataset outputs of render(outputs=...): name -> what it is (docs/outputs.md).
 OUTPUTS = {
@@ -40,6 +42,19 @@ OUTPUTS = {
     "ao": "(H, W) float32 screen-space ambient occlusion (GTAO, render/ao.py): visibility of "
           "the image-based light, 1 unoccluded; 1 = background",
 }
+
+
+# The output images (render/layouts.py OUTPUT_IMAGES) each output reads.
+OUTPUT_SOURCES = {"depth": "out_depth_range", "range": "out_depth_range", "instance": "out_ids",
+                  "semantic": "out_ids", "normal": "out_normal", "normal_camera": "out_normal",
+                  "normal_geometric": "out_normal_geometric", "motion": "out_depth_range",
+                  "ao": "out_ao"}
+
+
+def output_images(wanted: Iterable[str]) -> tuple[str, ...]:
+    """The output images `wanted` reads, in OUTPUT_IMAGES' order ("color": none)."""
+    names = {OUTPUT_SOURCES[n] for n in wanted if n in OUTPUT_SOURCES}
+    return tuple(n for n in L.OUTPUT_IMAGES if n in names)
 
 
 def check_outputs(outputs: Iterable[str] | None, target: OffscreenTarget, paths: FramePaths,
@@ -70,21 +85,22 @@ def frame_outputs(images: dict[str, np.ndarray], color: np.ndarray, wanted: tupl
     each view's (B, 3, 3)).
     Blended and background pixels are not in the ids (only what the visibility pass draws:
     opaque and alpha-masked surfaces, alpha-masked texels cut out as from the colour)."""
-    ids, dr = images["out_ids"], images["out_depth_range"]
-    normal = images["out_normal"][..., :3]
+    def part(name: str, channels: slice | int) -> np.ndarray:
+        return images[name][..., channels]
+
     available = {
         "color": lambda: color,
-        "depth": lambda: dr[..., 0].copy(),
-        "range": lambda: dr[..., 1].copy(),
-        "instance": lambda: ids[..., 0].copy(),
-        "semantic": lambda: ids[..., 1].copy(),
-        "normal": lambda: normal.copy(),
+        "depth": lambda: part("out_depth_range", 0).copy(),
+        "range": lambda: part("out_depth_range", 1).copy(),
+        "instance": lambda: part("out_ids", 0).copy(),
+        "semantic": lambda: part("out_ids", 1).copy(),
+        "normal": lambda: part("out_normal", slice(0, 3)).copy(),
         # float32 throughout: a float64 rotation made NumPy promote and loop (40 ms at
         # 1080p on the CI machine, against 7 ms; within 5e-7 of it).
-        "normal_camera": lambda: to_camera(normal, camera_rotation),
-        "normal_geometric": lambda: images["out_normal_geometric"][..., :3].copy(),
-        "motion": lambda: dr[..., 2:4].copy(),
-        "ao": lambda: images["out_ao"][..., 0].copy(),
+        "normal_camera": lambda: to_camera(part("out_normal", slice(0, 3)), camera_rotation),
+        "normal_geometric": lambda: part("out_normal_geometric", slice(0, 3)).copy(),
+        "motion": lambda: part("out_depth_range", slice(2, 4)).copy(),
+        "ao": lambda: part("out_ao", 0).copy(),
     }
     return {name: available[name]() for name in wanted}
 
