@@ -178,7 +178,8 @@ class OffscreenTarget:
             buffers = self._outputs_readback(frame_index)
             for name, (img, view) in self.outputs.items():
                 out[name] = ImageResource(img.handle, view=view.handle, copied=True)
-                out[name + "_readback"] = BufferResource(buffers[name], copied=True)
+                if name in buffers:
+                    out[name + "_readback"] = BufferResource(buffers[name], copied=True)
         return out
 
     def finish_steps(self, image: int, frame_index: int, copy: tuple[str, ...],
@@ -249,17 +250,26 @@ class OffscreenTarget:
                 self.outputs[name] = (image, self._own(ImageView(image)))
                 self._output_bytes[name] = nbytes
         self._output_readbacks: dict[int, dict[str, Buffer]] = {}
+        self._read_names: set[str] | None = None  # (None: every output is read back)
         return True
 
-    def _outputs_readback(self, frame_index: int) -> dict[str, Buffer]:
-        if frame_index not in self._output_readbacks:
-            with self._making():
-                self._output_readbacks[frame_index] = self._output_buffers(frame_index)
-        return self._output_readbacks[frame_index]
+    def read_back_only(self, names: tuple[str, ...]) -> None:
+        """Make readback buffers only for the output images `names` (and those named
+        before): a compute batch's atlas, whose 60 bytes a pixel of outputs would take
+        gigabytes of host memory a frame slot for images nobody asked for."""
+        self._read_names = (self._read_names or set()) | set(names)
 
-    def _output_buffers(self, frame_index: int) -> dict[str, Buffer]:
-        return {name: self._host_buffer(nbytes, f"{name} readback {frame_index}")
-                for name, nbytes in self._output_bytes.items()}
+    def _outputs_readback(self, frame_index: int) -> dict[str, Buffer]:
+        """The frame's outputs' readback buffers (of `read_back_only`'s names), made on
+        first use."""
+        names = self._output_bytes if self._read_names is None else self._read_names
+        have = self._output_readbacks.setdefault(frame_index, {})
+        missing = [n for n in names if n not in have]
+        if missing:
+            with self._making():
+                have.update({n: self._host_buffer(self._output_bytes[n], f"{n} readback {frame_index}")
+                             for n in missing})
+        return have
 
     def read_outputs(self, frame_index: int, dtypes: dict[str, tuple[str, int]]) -> dict[str, np.ndarray]:
         """Copies of the frame's outputs: GLSL name -> (H, W, channels) array of `dtypes`'

@@ -212,6 +212,7 @@ class BatchPath:
         target = self._atlas((cols * w, rows * h), linear)
         if outputs:  # (before any recording: making them rebuilds the atlas's compute set)
             p.targets.ensure_outputs(target)
+            target.read_back_only(outputs)
         external = self._exported(target, cols * rows * w * h) if cuda else None
         # The compute batch reads only the ViewRecords: keep whatever chunking the buffers
         # have (a new one reallocates them).

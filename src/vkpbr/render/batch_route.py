@@ -77,7 +77,7 @@ def batch_route(parts: FrameParts, batch: CameraBatch, size: tuple[int, int], op
     tiled = not extra or (set(wanted) <= TILED_OUTPUTS and not post)
     explicit_compute = (opts.pipeline == L.PipelinePath.COMPUTE
                         and paths.uses_compute(targets.offscreen(size, linear), opts))
-    if paths.takes_compute_batch(opts) and tiled and tiled_post:
+    if paths.takes_compute_batch(opts, extra) and tiled and tiled_post:
         return "compute", wanted
     if not parts.device.batch_views or targets.msaa > 1 or explicit_compute or post:
         return "views", wanted
