@@ -3,7 +3,9 @@
 # the collector count set before each benchmark (with 1 it is the tree before exactly),
 # alternating 1, 2, 3 twice: probe_stream's walk, bench_shadows' walk (render_many),
 # vkpbr bench's Sponza orbit. First the stream and frame-overlap tests (frames against
-# render() with 1, 2 and 3 collectors); last set_poses' Python. Carry .gl .whl .assets-peers.
+# render() with 1, 2 and 3 collectors); then set_poses' Python, and dataset outputs in
+# batches (bench_batch_outputs.py: the compute batch's own outputs pass against the layered
+# batch + view by view, the way before, in the same process). Carry .gl .whl .assets-peers.
 source benchmarks/gpu_env.sh
 S=$PWD/.assets-peers/models/Sponza/glTF/Sponza.gltf
 export VKPBR_ASSETS=$PWD/.assets-peers/models
@@ -22,7 +24,7 @@ else:
     sys.argv = sys.argv[2:]
     runpy.run_path(sys.argv[0], run_name="__main__")
 PY
-timeout 120 python3 -m pytest -q -n 4 -p no:cacheprovider -rfE --tb=short tests/gpu/test_stream.py tests/gpu/test_frame_overlap.py > $OUT/tests.txt 2>&1
+timeout 120 python3 -m pytest -q -n 4 -p no:cacheprovider -rfE --tb=short tests/gpu/test_stream.py tests/gpu/test_frame_overlap.py tests/gpu/test_batch_outputs.py > $OUT/tests.txt 2>&1
 grep -E "^(FAILED|ERROR|E )|passed|failed" $OUT/tests.txt | cut -c1-300 | head -20
 for i in 1 2; do
   for n in 1 2 3; do
@@ -36,3 +38,5 @@ for i in 1 2; do
 done
 timeout 60 python3 benchmarks/bench_living.py --assets $VKPBR_ASSETS --only poses > $OUT/poses.txt 2>&1
 tail -8 $OUT/poses.txt
+timeout 150 python3 benchmarks/bench_batch_outputs.py --scenes helmet,sponza --sizes 128x128 --batches 256,4096 > $OUT/batch-outputs.txt 2>&1
+cat $OUT/batch-outputs.txt | tail -8
