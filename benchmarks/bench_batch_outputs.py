@@ -19,10 +19,11 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+HERE = Path(__file__).resolve().parent
+sys.path[:0] = [str(HERE), str(HERE / "peers")]
+import common as peers  # noqa: E402  (the peers' scenario: poses, scene paths)
 from bench_batch import load, poses_for  # noqa: E402
 
-import common as peers  # noqa: E402  (bench_batch put benchmarks/peers on the path)
 from vkpbr.render.renderer import Renderer  # noqa: E402
 from vkpbr.scene.camera_batch import CameraBatch  # noqa: E402
 
