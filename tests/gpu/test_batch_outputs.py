@@ -47,14 +47,14 @@ def analytic():
 
 
 def test_outputs_come_from_the_batch_itself(analytic) -> None:  # noqa: ANN001
-    """Every output but motion and ao is the compute batch's own (no view drawn again);
-    motion and ao still come from each view's own frame."""
+    """Every output but motion is the compute batch's own (no view drawn again); motion
+    still comes from each view's own frame."""
     r = analytic
     ring = r.parts.ring
     before = ring.number
     r.render_batch(around(3, 1), (W, H), POINT, pipeline="compute", outputs=ALL)
     assert ring.number - before == 1  # (one submission: the batch's)
-    assert "outputs" in r.last_stats.pass_ms and set(ALL) <= TILED_OUTPUTS
+    assert "outputs" in r.last_stats.pass_ms and {*ALL, "ao"} <= TILED_OUTPUTS
     before = ring.number
     r.render_batch(around(2, 1), (W, H), POINT, pipeline="compute", outputs=["color", "motion"])
     assert ring.number - before == 2  # (view by view: a frame each)
@@ -129,6 +129,25 @@ def test_worlds_outputs_from_the_batch(analytic) -> None:  # noqa: ANN001
         mats = [pose_matrix(row) for row in poses[w]]
         cast = ray_cast(moved_scene(r.scene, MOVED, mats))
         assert_outputs_match({k: v[w] for k, v in got.items()}, cast, r.scene)
+
+
+@pytest.mark.parametrize("ao", ["gtao", "off"])
+def test_ao_output_equals_each_views(analytic, ao: str) -> None:  # noqa: ANN001
+    """The "ao" output from the batch's GTAO over its views' tiles (computed when asked for,
+    with ao="off" too, as `render` does): each view's equals the view rendered alone."""
+    r = analytic
+    cams = around(5, seed=2)
+    ring = r.parts.ring
+    before = ring.number
+    got = r.render_batch(cams, (W, H), POINT, pipeline="compute", outputs=["ao", "color"], ao=ao)
+    assert ring.number - before == 1
+    for i, cam in enumerate(cams):
+        one = r.render(cam, size=(W, H), lights=POINT, pipeline="compute", raster="compute",
+                       outputs=["ao", "color"], ao=ao)
+        np.testing.assert_allclose(got["ao"][i], one["ao"], atol=1e-5, err_msg=f"view {i}")
+        d = np.abs(got["color"][i][..., :3].astype(int) - one["color"][..., :3])
+        assert d.mean() <= 1.0 and np.percentile(d, 99) <= 3, f"view {i}: colour"
+    assert got["ao"].min() < 0.9 and got["ao"].max() == 1.0  # (occlusion seen; sky unoccluded)
 
 
 def test_motion_still_renders_view_by_view(analytic) -> None:  # noqa: ANN001

@@ -238,16 +238,16 @@ def _worlds_of(r: Any, prep: Prepared, lights: LightsArg, g: WorldArgs
     lit = g.lights is not None or g.environment is not None
     if lit and route != "compute":
         raise UsageError("world_lights and world_environment render in the compute batch only "
-                         "(pipeline='compute' on a GPU with 64-bit atomics; no motion or ao "
-                         "output, post steps or MSAA)")
+                         "(pipeline='compute' on a GPU with 64-bit atomics; no motion output, "
+                         "post steps or MSAA)")
     if g.materials is not None and route == "layered":
         route = "views"  # (the fragment path's batch has no per-world materials yet)
     if g.worlds is not None and _on_cuda(g.worlds):
         if route == "views" or g.materials is not None or lit:
             raise UsageError("worlds on CUDA render in the batch only, without world_materials, "
                              "world_lights or world_environment (give those with NumPy poses); "
-                             "this call may render view by view (the motion or ao output, post "
-                             "steps, MSAA, the fragment path's batch)")
+                             "this call may render view by view (the motion output, post steps, "
+                             "MSAA, the fragment path's batch)")
         return route, _cuda_call(r, prep, g.worlds, g.world_of_view, g.quaternion, g.visible,
                                  g.space), None
     # (the frame's lights: what world_lights gives per world, and the factors' base rows)

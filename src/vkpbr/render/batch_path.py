@@ -224,8 +224,8 @@ class BatchPath:
         # Post steps (render/post.py batch_post: colour noise, bloom, a lens): drawn into an
         # HDR atlas.
         post = batch_post(p, opts, views, size, grid, target, copy, linear)
-        ao = prepare_ao(p.ao, p.recorder, opts, post.drawn or target, p.bounds, False,
-                        post.size)
+        ao = prepare_ao(p.ao, p.recorder, opts, post.drawn or target, p.bounds,
+                        "out_ao" in outputs, post.size)
         shading_ao = ao is not None and ao.shading
         order = self._order(cuda)
         self._ordered = order is not None  # (the worlds' inputs are written in _begin)

@@ -40,9 +40,10 @@ ROUTES = ("cuda", "compute", "layered", "views")
 
 
 # The dataset outputs the compute batch writes itself (render/batch_path.py, shade.comp's
-# BATCH OUTPUTS build): all but "motion" (a batch's views are no sequence: render_many's
-# frames give each view's motion from the view before) and "ao" (GTAO's own output copy).
-TILED_OUTPUTS = frozenset(OUTPUTS) - {"motion", "ao"}
+# BATCH OUTPUTS build; "ao" from its GTAO over the views' tiles): all but "motion" (a
+# batch's views are no sequence: render_many's frames give each view's motion from the
+# view before).
+TILED_OUTPUTS = frozenset(OUTPUTS) - {"motion"}
 
 def batch_route(parts: FrameParts, batch: CameraBatch, size: tuple[int, int], opts: RenderOptions,
                 linear: bool, depth: bool, outputs: Iterable[str] | None, device: str,
