@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from pinhole import basis
 from test_outputs import ALL, CAMERA, H, W, analytic_scene, ray_cast, silhouette_band
 
@@ -163,14 +165,21 @@ def test_motion_still_renders_view_by_view(analytic) -> None:  # noqa: ANN001
     assert np.abs(got["motion"][1:]).max() > 0
 
 
-@pytest.mark.parametrize("names", [("normal_camera",), ("semantic", "range"), ("depth", "color")])
-def test_a_few_outputs_copy_only_their_images(analytic, names: tuple[str, ...]) -> None:  # noqa: ANN001
-    """Outputs asked for alone (the batch copies back only the images they read): what
-    they are in the call that asks for all of them, in the order asked."""
+@settings(max_examples=12, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(names=st.lists(st.sampled_from(sorted(TILED_OUTPUTS)), min_size=1, max_size=4,
+                      unique=True),
+       views=st.integers(1, 7), per=st.sampled_from(["auto", 1, 3]), depth=st.booleans())
+def test_any_outputs_any_split_equal_the_full_call(analytic, names: list[str], views: int,  # noqa: ANN001
+                                                   per: int | str, depth: bool) -> None:
+    """Any outputs asked for (the batch copies back only the images they read), in any
+    order, with depth or not, the views in one submission or split: each array is what the
+    call asking every output in one submission gives."""
     r = analytic
-    cams = around(4, seed=8)
-    every = r.render_batch(cams, (W, H), POINT, pipeline="compute", outputs=ALL)
-    some = r.render_batch(cams, (W, H), POINT, pipeline="compute", outputs=names)
-    assert tuple(some) == names
+    cams = around(views, seed=views)
+    every = r.render_batch(cams, (W, H), POINT, pipeline="compute", outputs=[*ALL, "ao"])
+    some = r.render_batch(cams, (W, H), POINT, pipeline="compute", outputs=names, batch=per,
+                          depth=depth)
+    assert list(some) == names
     for name in names:
-        assert np.array_equal(some[name], every[name]), name
+        assert some[name].shape[0] == views and np.array_equal(some[name], every[name]), name

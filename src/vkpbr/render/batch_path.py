@@ -120,7 +120,7 @@ class BatchPath:
             # (the full path leaves its recording for the next step of the plan: _run)
             self._replay = None if key is None else (route, views, size, lights, opts, linear,
                                                      depth, batch)
-            if outputs:
+            if outputs:  # (batch_call asks them of the compute route alone)
                 return self.render_compute(views, size, lights, opts, linear, depth, batch,
                                            out=out, outputs=outputs)
             return self._run_route(route, views, size, lights, opts, linear, depth, batch, out)
