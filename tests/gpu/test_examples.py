@@ -37,6 +37,7 @@ def _varied(image: np.ndarray) -> bool:
 @pytest.mark.parametrize("name, shape", [
     ("render_default", (48, 64, 4)), ("render_views", (48, 4 * 64, 4)),
     ("render_turntable", (2 * 48, 4 * 64, 4)), ("render_glass", (48, 64, 4)),
+    ("batch_outputs", (4 * 48, 4 * 64, 4)),
 ])
 def test_image_examples(tmp_path: Path, name: str, shape: tuple[int, ...]) -> None:
     out = tmp_path / f"{name}.png"
