@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from image_checks import assert_batch_view
 from PIL import Image
 
 from vkpbr.app.cli import main
@@ -268,7 +269,7 @@ def test_actor_renders_each_view_in_its_world(actor, tmp_path: Path, shadows: bo
     for v, w in enumerate([2, 0, 1, 2]):
         got = np.asarray(Image.open(tmp_path / "out" / f"frame_{v:05d}.png"))
         want = _alone(r, cams[v], rows[w], shown[w], **options)
-        assert np.array_equal(got, want), f"view {v} (world {w})"
+        assert_batch_view(got, want, f"view {v} (world {w})")
     assert not np.array_equal(np.asarray(Image.open(tmp_path / "out" / "frame_00000.png")), rest)
     assert np.array_equal(r.render(cams[0], size=SIZE, **options), rest)  # the state put back
 
@@ -340,7 +341,7 @@ def test_actor_renders_material_overrides_per_world(actor, tmp_path: Path, shado
             want = r.render(cams[v], size=SIZE, ao="off", shadows=shadows)
             r.state.reset()
             got = np.asarray(Image.open(tmp_path / "out" / f"frame_{v:05d}.png"))
-            assert np.array_equal(got, want), (worlds.keys(), v)
+            assert_batch_view(got, want, f"{worlds.keys()} view {v}")
         assert not np.array_equal(np.asarray(Image.open(tmp_path / "out" / "frame_00000.png")), rest)
         for f in (tmp_path / "out").iterdir():
             f.unlink()

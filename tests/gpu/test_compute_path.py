@@ -95,13 +95,14 @@ def test_asking_for_compute_where_it_cannot_run_is_one_line(make_renderer) -> No
     assert r.render(size=(32, 24), pipeline="auto").shape == (24, 32, 4)  # auto: forward
 
 
-def test_auto_takes_the_compute_path_on_gpus_only(make_renderer) -> None:  # noqa: ANN001
-    """auto: compute on a GPU's single-sample offscreen target, forward on CPUs and with MSAA
-    (docs/compute-path.md); the explicit choices are obeyed."""
+def test_auto_takes_the_compute_path_where_it_can(make_renderer) -> None:  # noqa: ANN001
+    """auto: compute on a single-sample offscreen target of a device that has the compute
+    path (GPUs and, since session 26, CPUs: lavapipe measured it 1.6-2x the fragment path),
+    forward with MSAA (docs/compute-path.md); the explicit choices are obeyed."""
     r = make_renderer()
     target = r.offscreen_target((32, 24))
-    on_gpu = r.device.info.kind != "cpu" and r.device.compute_path
-    assert r.uses_compute(target, RenderOptions(pipeline=PipelinePath.AUTO)) == on_gpu
+    assert r.uses_compute(target, RenderOptions(pipeline=PipelinePath.AUTO)) == bool(
+        r.device.compute_path)
     assert not r.uses_compute(target, RenderOptions(pipeline=PipelinePath.FORWARD))
     if r.device.compute_path:
         assert r.uses_compute(target, RenderOptions(pipeline=PipelinePath.COMPUTE))

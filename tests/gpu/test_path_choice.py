@@ -95,17 +95,21 @@ def test_a_read_only_cache_is_no_error(chart, tmp_path: Path) -> None:  # noqa: 
         ro.chmod(0o700)
 
 
-def test_auto_on_a_cpu_takes_the_forward_path_without_measuring(tmp_path: Path) -> None:
+def test_auto_on_a_cpu_takes_the_compute_path_without_measuring(tmp_path: Path) -> None:
+    """CPUs take RULE_CPU, the compute path with the raster units (lavapipe measured it 1.6-2x
+    the forward path: docs/compute-path.md), without measuring: the frame is that path's."""
     with Renderer(validation=True, cache_dir=tmp_path) as r:
         if r.device.info.kind != "cpu":  # the GPU pass: auto measures there (tests above)
             pytest.skip(f"{r.device.info.name} is not a CPU")
-        r.render(size=SIZE)
+        auto = r.render(size=SIZE)
         assert not (tmp_path / pc.CACHE_FILE).exists()
         target = r.new_offscreen_target(SIZE, linear=False)
         try:
-            assert not r.uses_compute(target, RenderOptions())
+            assert r.uses_compute(target, RenderOptions())
+            assert not r.paths.uses_compute_raster(RenderOptions(), target)
         finally:
             r.drop_target(target)
+        assert np.array_equal(auto, r.render(size=SIZE, pipeline="compute", raster="hardware"))
         assert r.device.instance.errors == []
 
 

@@ -95,6 +95,8 @@ def test_scripted_session_matches_headless(offscreen: bool, request, tmp_path: P
         assert (o.alpha_mask, o.normal_mapping, o.occlusion, o.exposure) == (False, False, False, 0.0)
         assert "vkpbr render" in capsys.readouterr().out  # the print-camera event
         image, camera, light, options, size = viewer.last_screenshot
+        if not offscreen:  # (a window's frames take the fragment path, whatever auto takes)
+            options = dataclasses.replace(options, pipeline="forward")
         headless = viewer.renderer.render(camera, light, size, options)
         assert image.shape == headless.shape == (132, 176, 4)
         diff = np.abs(image.astype(int) - headless.astype(int))
@@ -115,12 +117,13 @@ def test_cli_frames_screenshot_matches_render(display: str, tmp_path: Path) -> N
 
     cam = "0.8,2.9,7.5,0.3,2.0,0.0"
     # The final image with GTAO (render/ao.py): the window draws it through its own depth
-    # pre-pass (paths.py forward_ao), `render` through its visibility pass: the same pixels.
+    # pre-pass (paths.py forward_ao), `render` through its visibility pass: the same pixels
+    # (both the fragment path: a window's frames take it, whatever auto takes offscreen).
     modes = ["--tbn", "packed", "--no-occlusion", "--ao", "gtao"]
     assert main(["view", "--size", "96x72", "--camera", cam, "--frames", "3", "--no-vsync",
                  "--screenshot", str(tmp_path / "v.png"), "--validation", *modes]) == 0
     assert main(["render", "--size", "96x72", "--camera", cam, "--out", str(tmp_path / "r.png"),
-                 "--validation", *modes]) == 0
+                 "--validation", "--pipeline", "forward", *modes]) == 0
     v = np.asarray(Image.open(tmp_path / "v.png"))
     r = np.asarray(Image.open(tmp_path / "r.png"))
     assert np.array_equal(v, r)

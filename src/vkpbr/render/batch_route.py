@@ -8,9 +8,9 @@ fragment path's batch: render/batch.py), or "views": view by view through render
 exactly as `render` draws it, where the device has no layered rendering, with MSAA (the batch
 target is single-sample), the compute path asked for, or post steps the compute batch does
 not take (render/post.py batch_post_supported; the layered batch takes none).
-"auto" takes the compute batch on GPUs where it can (the H200 measured it 4-5x the layered
-batch: BENCHMARKS.md), else the layered batch, bit for bit what `render` draws with
-pipeline="forward". `render_many(batch=N)` goes through render_batch N cameras at a time
+"auto" takes the compute batch where it can (the H200 measured it 4-5x the layered batch:
+BENCHMARKS.md; lavapipe 1.2-5x at 128x128 and more), else the layered batch, bit for bit
+what `render` draws with pipeline="forward". `render_many(batch=N)` goes through render_batch N cameras at a time
 (`chunked`), yielding view by view (`per_view`).
 """
 
@@ -78,7 +78,7 @@ def batch_route(parts: FrameParts, batch: CameraBatch, size: tuple[int, int], op
     tiled = not extra or (set(wanted) <= TILED_OUTPUTS and not post)
     explicit_compute = (opts.pipeline == L.PipelinePath.COMPUTE
                         and paths.uses_compute(targets.offscreen(size, linear), opts))
-    if paths.takes_compute_batch(opts, extra) and tiled and tiled_post:
+    if paths.takes_compute_batch(opts) and tiled and tiled_post:
         return "compute", wanted
     if not parts.device.batch_views or targets.msaa > 1 or explicit_compute or post:
         return "views", wanted

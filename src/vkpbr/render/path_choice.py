@@ -15,8 +15,10 @@ measures at the first auto frame MEASURE_AFTER_S after its first one: a process 
 that long (the viewer, a job, a benchmark) pays the measurement once for every later process,
 at most a tenth of its time; a one-shot `vkpbr render` never does. Frames of one renderer
 may so change path once, mid-run (the paths agree within 1/255: docs/compute-path.md).
-CPUs (lavapipe) take the forward path without measuring: the compute path is the slower
-there and the measurement would cost seconds. A device without timestamps, or a cache file
+CPUs (lavapipe) take the compute path with the raster units without measuring (the
+measurement would cost seconds there): since session 26, when lavapipe measured it 1.6-2x the
+forward path (the chart at 1280x720 245 ms a frame against 401, Sponza at 640x360 202 against
+400; the compute rasteriser the slower of the two there at 640x480). A device without timestamps, or a cache file
 that cannot be read, falls back to the rule. $VKPBR_FRAME_PATHS=rule never measures
 (reproducible runs: one path from the first frame to the last); =measure measures at the
 first auto frame, on CPUs too.
@@ -84,7 +86,10 @@ class PathChoice:
 
 
 RULE_GPU = PathChoice(compute=True, compute_raster=True)
-RULE_CPU = PathChoice(compute=False, compute_raster=False)
+# CPUs: the compute path with the raster units (lavapipe, session 26: 1.6-2x the forward
+# path; its compute rasteriser the slower at 640x480: DamagedHelmet 12.7 frames/s against
+# 15.4, Sponza 2.7 against 4.1).
+RULE_CPU = PathChoice(compute=True, compute_raster=False)
 
 
 class FrameStream(Protocol):
@@ -281,10 +286,10 @@ class FramePaths:
             return False
         # auto: on GPUs, what measured fastest on the device (until it is measured, the
         # compute path where the target allows it: the H200 measured it 1.5-3.9x faster at
-        # 128x128 to 1920x1080); the fragment path on CPUs (lavapipe: the slower of the two).
+        # 128x128 to 1920x1080); on CPUs the compute path too (lavapipe: 1.6-2x, session 26).
         if self.choice is not None:  # measured (or read back) for this device
             return self.choice.compute and self.compute_unavailable(target) is None
-        return self.device.info.kind != "cpu" and self.compute_unavailable(target) is None
+        return self.compute_unavailable(target) is None
 
     def uses_compute_raster(self, options: RenderOptions, target: FrameTarget) -> bool:
         """Whether the compute path's visibility buffer comes from the compute rasteriser
@@ -318,16 +323,13 @@ class FramePaths:
             return "the scene has blended materials (drawn by the fragment path)"
         return None
 
-    def takes_compute_batch(self, options: RenderOptions, outputs: bool = False) -> bool:
-        """Whether render_batch takes the compute batch: pipeline "compute", or "auto" on a GPU
-        or for dataset `outputs` (the fragment path's layered batch on CPUs, which draws every
-        view again for them: lavapipe, DamagedHelmet at 128x128, 32 views with four outputs,
-        22-23 views/s against 94 through the compute batch), where
-        `compute_batch_unavailable` is None."""
-        if options.pipeline == L.PipelinePath.FORWARD or self.compute_batch_unavailable():
-            return False
-        return (options.pipeline == L.PipelinePath.COMPUTE or self.device.info.kind != "cpu"
-                or outputs)
+    def takes_compute_batch(self, options: RenderOptions) -> bool:
+        """Whether render_batch takes the compute batch: pipeline "compute" or "auto", where
+        `compute_batch_unavailable` is None (else the fragment path's layered batch). On CPUs
+        too since session 26, as `render`'s auto takes the compute path there: lavapipe
+        measured it as fast as the layered batch at 64x48 and 1.2-5x at 128x128 and more
+        (4-6x with dataset outputs, for which the layered batch draws every view again)."""
+        return options.pipeline != L.PipelinePath.FORWARD and not self.compute_batch_unavailable()
 
     def choose(self, target: FrameTarget, options: RenderOptions, stream: FrameStream) -> None:
         """Before auto frames of `target` where it can take the compute path: the rule, the

@@ -267,10 +267,10 @@ class Renderer:
         times, animation : (B,) animation times, one a view (`render`'s `time`; its worlds).
 
         Returns (B, H, W, 4) uint8 sRGB (float32 with `linear`), (colour, depth) with `depth`,
-        {name: (B, ...)} with `outputs`. pipeline="forward" (and "auto" on CPUs without
-        dataset outputs): view i is `render` of `CameraBatch.camera(i)` (in its world) bit for
-        bit; "compute" (and "auto" otherwise): within 1/255 of `render(pipeline="compute")`.
-        Shadow maps are shared.
+        {name: (B, ...)} with `outputs`. pipeline="forward" (and "auto" where the compute batch
+        is unavailable): view i is `render` of `CameraBatch.camera(i)` (in its world) bit for
+        bit; "compute" and "auto": within 1/255 of `render(pipeline="compute")`. Shadow maps
+        are shared.
         """
         return batch_call(self, cameras, size, lights, options, linear, depth, outputs, batch,
                           device, out, WorldArgs(worlds, world_of_view, quaternion, world_visible,
