@@ -105,3 +105,17 @@ def test_struct_packer_writes_the_numpy_layout(block) -> None:  # noqa: ANN001
     buf = bytearray(block.size)
     block.packer.pack_into(buf, 0, *flat)
     assert bytes(buf) == arr.tobytes()
+
+
+def test_every_output_has_its_place_in_the_output_images() -> None:
+    """OUTPUT_PARTS (render/outputs.py) names, for every dataset output but the colour, an
+    image of OUTPUT_IMAGES and channels that image has."""
+    from vkpbr.render import layouts as L
+    from vkpbr.render.outputs import OUTPUT_PARTS, OUTPUTS
+
+    assert set(OUTPUT_PARTS) == set(OUTPUTS) - {"color"}
+    for name, (image, channels) in OUTPUT_PARTS.items():
+        count = L.OUTPUT_IMAGES[image][3]
+        picked = range(count)[channels]
+        assert (len(picked) if isinstance(picked, range) else 1) > 0, name
+        assert (max(picked) if isinstance(picked, range) else picked) < count, name

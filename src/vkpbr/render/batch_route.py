@@ -10,8 +10,8 @@ target is single-sample), the compute path asked for, or post steps the compute 
 not take (render/post.py batch_post_supported; the layered batch takes none).
 "auto" takes the compute batch where it can (the H200 measured it 4-5x the layered batch:
 BENCHMARKS.md; lavapipe 1.2-5x at 128x128 and more), else the layered batch, bit for bit
-what `render` draws with pipeline="forward". `render_many(batch=N)` goes through render_batch N cameras at a time
-(`chunked`), yielding view by view (`per_view`).
+what `render` draws with pipeline="forward". `render_many(batch=N)` goes through
+render_batch N cameras at a time (`chunked`), yielding view by view (`per_view`).
 """
 
 from __future__ import annotations
@@ -44,6 +44,7 @@ ROUTES = ("cuda", "compute", "layered", "views")
 # batch's views are no sequence: render_many's frames give each view's motion from the
 # view before).
 TILED_OUTPUTS = frozenset(OUTPUTS) - {"motion"}
+
 
 def batch_route(parts: FrameParts, batch: CameraBatch, size: tuple[int, int], opts: RenderOptions,
                 linear: bool, depth: bool, outputs: Iterable[str] | None, device: str,

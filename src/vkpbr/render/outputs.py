@@ -20,7 +20,7 @@ from vkpbr.render.path_choice import FramePaths
 from vkpbr.render.targets import Targets
 from vkpbr.scene.types import Scene
 
-__all__ = ["OUTPUTS", "OUTPUT_SOURCES", "check_outputs", "frame_outputs", "instances", "max_id",
+__all__ = ["OUTPUTS", "OUTPUT_PARTS", "check_outputs", "frame_outputs", "instances", "max_id",
            "output_images", "to_camera"]
 
 # Dataset outputs of render(outputs=...): name -> what it is (docs/outputs.md).
@@ -44,16 +44,19 @@ OUTPUTS = {
 }
 
 
-# The output images (render/layouts.py OUTPUT_IMAGES) each output reads.
-OUTPUT_SOURCES = {"depth": "out_depth_range", "range": "out_depth_range", "instance": "out_ids",
-                  "semantic": "out_ids", "normal": "out_normal", "normal_camera": "out_normal",
-                  "normal_geometric": "out_normal_geometric", "motion": "out_depth_range",
-                  "ao": "out_ao"}
+# Where each output is in the output images (render/layouts.py OUTPUT_IMAGES, written by
+# shade.comp's OUTPUTS builds and the GTAO step): (image, channels).
+OUTPUT_PARTS: dict[str, tuple[str, int | slice]] = {
+    "depth": ("out_depth_range", 0), "range": ("out_depth_range", 1),
+    "instance": ("out_ids", 0), "semantic": ("out_ids", 1),
+    "normal": ("out_normal", slice(0, 3)), "normal_camera": ("out_normal", slice(0, 3)),
+    "normal_geometric": ("out_normal_geometric", slice(0, 3)),
+    "motion": ("out_depth_range", slice(2, 4)), "ao": ("out_ao", 0)}
 
 
 def output_images(wanted: Iterable[str]) -> tuple[str, ...]:
     """The output images `wanted` reads, in OUTPUT_IMAGES' order ("color": none)."""
-    names = {OUTPUT_SOURCES[n] for n in wanted if n in OUTPUT_SOURCES}
+    names = {OUTPUT_PARTS[n][0] for n in wanted if n in OUTPUT_PARTS}
     return tuple(n for n in L.OUTPUT_IMAGES if n in names)
 
 
@@ -85,24 +88,20 @@ def frame_outputs(images: dict[str, np.ndarray], color: np.ndarray, wanted: tupl
     each view's (B, 3, 3)).
     Blended and background pixels are not in the ids (only what the visibility pass draws:
     opaque and alpha-masked surfaces, alpha-masked texels cut out as from the colour)."""
-    def part(name: str, channels: slice | int) -> np.ndarray:
-        return images[name][..., channels]
+    def part(name: str) -> np.ndarray:
+        image, channels = OUTPUT_PARTS[name]
+        return images[image][..., channels]
 
-    available = {
-        "color": lambda: color,
-        "depth": lambda: part("out_depth_range", 0).copy(),
-        "range": lambda: part("out_depth_range", 1).copy(),
-        "instance": lambda: part("out_ids", 0).copy(),
-        "semantic": lambda: part("out_ids", 1).copy(),
-        "normal": lambda: part("out_normal", slice(0, 3)).copy(),
-        # float32 throughout: a float64 rotation made NumPy promote and loop (40 ms at
-        # 1080p on the CI machine, against 7 ms; within 5e-7 of it).
-        "normal_camera": lambda: to_camera(part("out_normal", slice(0, 3)), camera_rotation),
-        "normal_geometric": lambda: part("out_normal_geometric", slice(0, 3)).copy(),
-        "motion": lambda: part("out_depth_range", slice(2, 4)).copy(),
-        "ao": lambda: part("out_ao", 0).copy(),
-    }
-    return {name: available[name]() for name in wanted}
+    def made(name: str) -> np.ndarray:
+        if name == "color":
+            return color
+        if name == "normal_camera":
+            # float32 throughout: a float64 rotation made NumPy promote and loop (40 ms at
+            # 1080p on the CI machine, against 7 ms; within 5e-7 of it).
+            return to_camera(part(name), camera_rotation)
+        return part(name).copy()
+
+    return {name: made(name) for name in wanted}
 
 
 def to_camera(normal: np.ndarray, rotation: np.ndarray) -> np.ndarray:
