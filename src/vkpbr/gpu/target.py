@@ -273,11 +273,9 @@ class OffscreenTarget:
 
     def read_outputs(self, frame_index: int, dtypes: dict[str, tuple[str, int]]) -> dict[str, np.ndarray]:
         """Copies of the frame's outputs: GLSL name -> (H, W, channels) array of `dtypes`'
-        (NumPy dtype name, channels)."""
-        w, h = self.extent
-        buffers = self._outputs_readback(frame_index)
-        return {name: buffers[name].array(np.dtype(dt), w * h * ch).reshape(h, w, ch).copy()
-                for name, (dt, ch) in dtypes.items()}
+        (NumPy dtype name, channels): `read_output_tiles` of the one view the frame is."""
+        return {name: tiles[0] for name, tiles in
+                self.read_output_tiles(frame_index, 1, self.extent, dtypes).items()}
 
     def read_output_tiles(self, frame_index: int, views: int, size: tuple[int, int],
                           dtypes: dict[str, tuple[str, int]]) -> dict[str, np.ndarray]:

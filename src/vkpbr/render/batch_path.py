@@ -120,21 +120,21 @@ class BatchPath:
             # (the full path leaves its recording for the next step of the plan: _run)
             self._replay = None if key is None else (route, views, size, lights, opts, linear,
                                                      depth, batch)
-            if outputs:  # (batch_call asks them of the compute route alone)
-                return self.render_compute(views, size, lights, opts, linear, depth, batch,
-                                           out=out, outputs=outputs)
-            return self._run_route(route, views, size, lights, opts, linear, depth, batch, out)
+            return self._run_route(route, views, size, lights, opts, linear, depth, batch, out,
+                                   outputs)
         finally:
             self.world_call = None
             self._replay = None
 
     def _run_route(self, route: str, views: CameraBatch, size: tuple[int, int],
                    lights: LightsArg, opts: RenderOptions, linear: bool, depth: bool,
-                   batch: int | str, out: np.ndarray | None) -> tuple[Any, np.ndarray | None]:
+                   batch: int | str, out: np.ndarray | None, outputs: tuple[str, ...] = ()
+                   ) -> tuple[Any, np.ndarray | None]:
         if route == "cuda":
             return self.render_cuda(views, size, lights, opts, linear, batch), None
         if route == "compute":
-            return self.render_compute(views, size, lights, opts, linear, depth, batch, out=out)
+            return self.render_compute(views, size, lights, opts, linear, depth, batch, out=out,
+                                       outputs=outputs)
         return self.render(views, size, lights, opts, linear, depth, batch, out)
 
     def render(self, views: CameraBatch, size: tuple[int, int], lights: LightsArg,
