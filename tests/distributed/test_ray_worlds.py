@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from image_checks import assert_batch_view
 from PIL import Image
 from test_ray_job import assert_same_files, check_exactly_once
 from test_worlds_job import NODES, world_rows
@@ -39,7 +38,8 @@ def alone(renderer, camera, rows: np.ndarray, shown: np.ndarray) -> np.ndarray: 
     renderer.set_poses(NODES, rows, space="world")
     renderer.set_visible([n for n, s in zip(NODES, shown, strict=True) if not s], False)
     try:
-        return renderer.render(camera, size=SIZE, **NO_SHADOWS)
+        # (the compute batch's rasteriser: the same bytes in a batch as alone on lavapipe)
+        return renderer.render(camera, size=SIZE, raster="compute", **NO_SHADOWS)
     finally:
         renderer.state.reset()
 
@@ -68,7 +68,7 @@ def test_ray_job_with_worlds(cluster: dict, make_renderer, capsys, tmp_path: Pat
     r = make_renderer()
     cams = [p.camera(r.default_camera()) for p in parse_poses(POSES, "poses")]
     for v in range(len(POSES)):
-        assert_batch_view(frame(tmp_path / "batched", v), alone(r, cams[v], rows[v], shown[v]), f"view {v}")
+        assert np.array_equal(frame(tmp_path / "batched", v), alone(r, cams[v], rows[v], shown[v])), v
     single = tmp_path / "single"
     assert main(["-q", "render", "--cameras", str(tmp_path / "poses.json"), "--worlds",
                  str(tmp_path / "worlds.json"), "--out", str(single), "--size", "64x48",
@@ -91,5 +91,5 @@ def test_ray_job_with_worlds(cluster: dict, make_renderer, capsys, tmp_path: Pat
     for v in range(len(POSES)):
         now = frame(tmp_path / "batched", v)
         assert np.array_equal(now, before[v]) == (v != 2), v
-    assert_batch_view(frame(tmp_path / "batched", 2), alone(r, cams[2], rows[2], shown[2]), "view 2")
+    assert np.array_equal(frame(tmp_path / "batched", 2), alone(r, cams[2], rows[2], shown[2]))
     assert (tmp_path / "batched" / "transforms.json").is_file()

@@ -364,22 +364,29 @@ def test_kept_maps_scroll_with_a_walking_camera(pair) -> None:  # noqa: ANN001
 def test_an_animated_file_draws_over_its_still_casters_kept_maps(sample_scene) -> None:  # noqa: ANN001
     """BoxAnimated (glTF animation: one box turns and moves, the other stands still) played
     at ten times with compute-drawn maps: every frame draws the moving box over the still
-    one's kept maps, and equals the frame of one pass over both (another renderer, its split
-    turned off, every map redrawn) to float rounding."""
+    one's kept maps, and equals bit for bit the frame of one pass over both (another
+    renderer, its split turned off, every map redrawn) on the forward path, whose shading
+    reads the maps' images alike in both; on auto's path (the compute path, on CPUs too)
+    within 1e-6 (lavapipe rounds the two renderers' shading kernels, which read a frame's
+    freshly drawn maps from their buffer, 1-2 ulp apart)."""
     from vkpbr import Renderer
 
     a, b = (Renderer(sample_scene("BoxAnimated"), validation=True) for _ in range(2))
     try:
         b.parts.shadow_frames.split = lambda moved: None
         cam = a.default_camera()
-        for t in np.linspace(0.0, 3.0, 10):
-            got = a.render(cam, size=(96, 72), time=float(t), shadow_raster="compute", linear=True)
-            assert a.shadows.last_kept_layers, t
-            b.shadow_frames.forget()
-            want = b.render(cam, size=(96, 72), time=float(t), shadow_raster="compute", linear=True)
-            # (1e-6: the two renderers' shading kernels may be specialised apart, reading the
-            # maps from the kept buffer or the images, which lavapipe rounds differently)
-            np.testing.assert_allclose(got, want, rtol=0, atol=1e-6, err_msg=f"t={t}")
+        for path in ("forward", "auto"):
+            for t in np.linspace(0.0, 3.0, 10):
+                got = a.render(cam, size=(96, 72), time=float(t), shadow_raster="compute",
+                               linear=True, pipeline=path)
+                assert a.shadows.last_kept_layers, t
+                b.shadow_frames.forget()
+                want = b.render(cam, size=(96, 72), time=float(t), shadow_raster="compute",
+                                linear=True, pipeline=path)
+                if path == "forward":
+                    assert np.array_equal(got, want), (t, float(np.abs(got - want).max()))
+                else:
+                    np.testing.assert_allclose(got, want, rtol=0, atol=1e-6, err_msg=f"t={t}")
         a.check_validation()
     finally:
         a.close()
