@@ -388,6 +388,7 @@ def test_an_animated_file_draws_over_its_still_casters_kept_maps(sample_scene) -
                 else:
                     np.testing.assert_allclose(got, want, rtol=0, atol=1e-6, err_msg=f"t={t}")
         a.check_validation()
+        b.check_validation()
     finally:
         a.close()
         b.close()
