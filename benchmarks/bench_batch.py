@@ -5,7 +5,8 @@
                                      [--batches 1,16,64,256,1024,4096] [--reps 3] [--json OUT.jsonl]
 
 Scenes: "default" (the built-in chart scene, an orbit about its default camera's target),
-"helmet" (DamagedHelmet: one textured object) and "sponza", both with the poses of the peers'
+"alphablend" (AlphaBlendModeTest: blended materials; the chart's orbit), "helmet"
+(DamagedHelmet: one textured object) and "sponza", both with the poses of the peers'
 batch scenario (benchmarks/peers/common.py `batch_poses`: a seeded orbit) and one point light
 at (0, 4, 0); a scene whose glTF is not in the sample-models folder is skipped. Per scene, size
 and B: four warm-up calls (every slot of the frame ring recorded, the shadow maps drawn), then
@@ -60,6 +61,11 @@ sys.path.insert(0, str(HERE / "peers"))
 import common as peers  # noqa: E402  (the peers' scenario: poses, scene paths; NumPy only)
 
 
+# Scenes of this benchmark's own (a ring about the default camera's target, as "default"):
+# AlphaBlendModeTest's blended materials (the compute batch draws them since session 27).
+OWN_SCENES = {"alphablend": "AlphaBlendModeTest/glTF/AlphaBlendModeTest.gltf"}
+
+
 def load(key: str):  # noqa: ANN201
     """The scene of `key`, or None when its glTF is missing."""
     with warnings.catch_warnings():
@@ -68,7 +74,7 @@ def load(key: str):  # noqa: ANN201
             from vkpbr.scene.default import default_scene
 
             return default_scene()
-        path = peers.ASSETS / peers.BATCH_SCENES[key]
+        path = peers.ASSETS / OWN_SCENES.get(key, peers.BATCH_SCENES.get(key, key))
         if not path.exists():
             return None
         from vkpbr.scene.loader import load_scene
@@ -80,8 +86,8 @@ def load(key: str):  # noqa: ANN201
 
 def poses_for(key: str, r: Renderer, count: int) -> np.ndarray:
     """(count, 4, 4) OpenGL world-from-camera poses: the peers' orbit, or (default scene) a
-    seeded ring about the default camera's target at its distance."""
-    if key != "default":
+    seeded ring about the default camera's target at its distance (the other scenes too)."""
+    if key in peers.BATCH_SCENES:
         return peers.batch_poses(key, count)
     cam = r.default_camera()
     eye, target = np.asarray(cam.eye, float), np.asarray(cam.target, float)
@@ -130,7 +136,7 @@ def run_scene(key: str, sizes: list[tuple[int, int]], batches: list[int], reps: 
               many_max: int, max_mib: float | None, pipeline: str = "auto") -> list[dict]:
     scene = load(key)
     if scene is None:
-        print(f"skipped {key}: {peers.ASSETS / peers.BATCH_SCENES[key]} not found", file=sys.stderr)
+        print(f"skipped {key}: its glTF is not under {peers.ASSETS}", file=sys.stderr)
         return []
     rows = []
     torch = torch_cuda()

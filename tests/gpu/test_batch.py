@@ -314,6 +314,31 @@ def test_blended_draws_in_each_views_order(make_renderer) -> None:  # noqa: ANN0
                        "blended spheres")
 
 
+def test_blended_order_of_each_world(make_renderer) -> None:  # noqa: ANN001
+    """A batch of worlds that moves the blended spheres: each view's blended draws are drawn
+    in its own world's back-to-front order (not the renderer's state's), bit for bit what
+    `render` of that world alone draws."""
+    r = make_renderer(blended_spheres())
+    if not r.device.batch_views:
+        pytest.skip("no layered rendering on this device")
+    nodes = [1, 2, 3, 4, 5]
+    r.world_slots(nodes)
+    poses = np.zeros((5, 5, 7))
+    poses[..., 6] = 1.0  # (x, y, z, w) identity rotations
+    poses[..., :3] = np.random.default_rng(8).uniform(-1.2, 1.2, (5, 5, 3))
+    cams = cameras_of(r, 5, seed=9)
+    got = layered(r, cams, size=SIZE, worlds=poses, shadows=False)
+    reordered = 0
+    for b, cam in enumerate(cams):
+        state_order = r.blend_order(cam.eye)
+        r.set_poses(nodes, poses[b], space="world")
+        reordered += r.blend_order(cam.eye) != state_order
+        want = r.render(cam, size=SIZE, pipeline="forward", ao="off", shadows=False)
+        r.reset_pose()
+        assert np.array_equal(got[b], want), f"view {b}"
+    assert reordered >= 3, "the worlds should reorder the blended spheres"
+
+
 @pytest.mark.parametrize("pipeline", ["auto", "compute"])
 def test_frames_for_cuda_reach_the_exported_memory(chart, monkeypatch, pipeline: str) -> None:  # noqa: ANN001
     """device="cuda" copies the frames into device memory exported as a file descriptor

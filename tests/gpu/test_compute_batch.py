@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_batch import SIZE, cameras_of
+from test_batch import SIZE, blended_spheres, cameras_of
 from test_compute_path import assert_same
 
 from vkpbr.scene.types import Light
@@ -69,15 +69,84 @@ def test_submissions_depth_linear_and_options(chart) -> None:  # noqa: ANN001
             assert_same(one, got[i], f"{options} view {i}")
 
 
-def test_blended_scenes_render_view_by_view(make_renderer, sample_scene) -> None:  # noqa: ANN001
-    """A scene with blended materials: the compute batch declines (the fragment path draws
-    them) and each view is exactly the compute path's render of it."""
+def test_blended_draws_in_the_atlas(make_renderer) -> None:  # noqa: ANN001
+    """Blended materials in the compute batch: the raster units draw each group of views that
+    share a back-to-front order into their tiles of the atlas (pbr.vert's ATLAS build: the
+    view's clip space mapped onto its tile, clipped to it by clip distances) over the
+    compute-rasterised depth. Each view within the batch's bound of the compute path's
+    render of it, from cameras around and inside the spheres that disagree on the order (a
+    draw spilling out of its tile would change a neighbour), in one submission and in
+    three; GTAO on."""
+    r = make_renderer(blended_spheres())
+    assert r.compute_batch_unavailable() is None, r.compute_batch_unavailable()
+    cams = cameras_of(r, 12, seed=21)
+    assert len({r.blend_order(c.eye) for c in cams}) >= 4, "the cameras should disagree"
+    singles = alone(r, cams, ao="gtao")
+    for batch in ("auto", 5):
+        got = r.render_batch(cams, SIZE, POINT, pipeline="compute", batch=batch, ao="gtao")
+        assert "blend" in r.last_stats.pass_ms
+        for i, one in enumerate(singles):
+            assert_same(one, got[i], f"batch={batch} view {i}")
+
+
+def test_blended_sample_model(make_renderer, sample_scene) -> None:  # noqa: ANN001
+    """AlphaBlendModeTest (a glTF sample: blended, masked and opaque materials side by side)
+    in the compute batch: each view within the bound of the compute path's render."""
     r = make_renderer(sample_scene("AlphaBlendModeTest"))
-    assert "blended" in (r.compute_batch_unavailable() or "")
-    cams = cameras_of(r, 3, seed=2)
-    batch = r.render_batch(cams, SIZE, POINT, pipeline="compute")
-    for i, c in enumerate(cams):
-        assert np.array_equal(batch[i], r.render(c, size=SIZE, lights=POINT, pipeline="compute"))
+    assert r.compute_batch_unavailable() is None, r.compute_batch_unavailable()
+    cams = cameras_of(r, 6, seed=2)
+    got = r.render_batch(cams, SIZE, POINT, pipeline="compute")
+    for i, one in enumerate(alone(r, cams)):
+        assert_same(one, got[i], f"view {i}")
+
+
+def test_blended_worlds(make_renderer) -> None:  # noqa: ANN001
+    """A batch of worlds that moves blended spheres and sets their factors, lights and
+    environment: each view within the batch's bound of `render` of its world alone (set
+    through set_poses, set_material, the lights and the environment options). The views'
+    back-to-front orders come from their worlds' poses, not the renderer's state (they
+    differ here: drawn in the state's order, overlapping spheres would composite wrongly)."""
+    import dataclasses
+
+    r = make_renderer(blended_spheres())
+    nodes, materials = [1, 2, 3, 4, 5], [1, 2, 3, 4, 5]
+    r.world_slots(nodes, materials=materials)
+    rng = np.random.default_rng(3)
+    worlds = 4
+    poses = np.zeros((worlds, 5, 7))
+    poses[..., 6] = 1.0  # (x, y, z, w) identity rotations
+    poses[..., :3] = rng.uniform(-1.2, 1.2, (worlds, 5, 3))
+    base = rng.uniform(0.1, 1.0, (worlds, 5, 4))
+    base[..., 3] = [r.scene.materials[m].base_color_factor[3] for m in materials]
+    factors = {"base_color": base, "roughness": rng.uniform(0.2, 1.0, (worlds, 5))}
+    intensity = rng.uniform(10.0, 60.0, (worlds, 1))
+    env = {"intensity": np.array([0.3, 1.0, 2.0, 0.7]), "rotation": np.array([0.0, 90.0, 200.0, 10.0])}
+    which = np.array([0, 1, 2, 3, 1, 2])
+    cams = cameras_of(r, len(which), seed=4)
+    opts = {"shadows": False, "ao": "off"}
+    got = r.render_batch(cams, SIZE, POINT, worlds=poses, world_of_view=which,
+                         world_materials=factors, world_lights={"intensity": intensity},
+                         world_environment=env, pipeline="compute", **opts)
+    reordered = 0
+    for b, cam in enumerate(cams):
+        w = which[b]
+        state_order = r.blend_order(cam.eye)
+        before = {k: dict(v) for k, v in r.state.materials.items()}
+        for k, m in enumerate(materials):
+            r.set_material(m, base_color=base[w, k], roughness=float(factors["roughness"][w, k]))
+        r.set_poses(nodes, poses[w], space="world")
+        reordered += r.blend_order(cam.eye) != state_order
+        try:
+            want = r.render(cam, size=SIZE, lights=[dataclasses.replace(
+                POINT[0], intensity=float(intensity[w, 0]))], env_intensity=float(env["intensity"][w]),
+                env_rotation=float(env["rotation"][w]), pipeline="compute", raster="compute", **opts)
+        finally:
+            r.state.materials = before
+            r.state.material_version += 1
+            r.state.version += 1
+            r.reset_pose()
+        assert_same(want, got[b], f"view {b} (world {w})")
+    assert reordered >= 3, "the worlds should reorder the blended spheres"
 
 
 def test_cli_cameras_through_the_compute_batch(tmp_path, capsys) -> None:  # noqa: ANN001

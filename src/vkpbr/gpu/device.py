@@ -246,6 +246,9 @@ class Device:
         # Timeline semaphores shared with CUDA (gpu/timeline.py: batches whose inputs and
         # frames live in torch tensors), where the driver exports them.
         self.timeline_semaphores = bool(supported["timelineSemaphore"])
+        # A compute batch's blended draws (render/batch_path.py): each view drawn into its
+        # tile of the atlas, clipped to it by the vertex shader's clip distances.
+        self.atlas_blend = bool(self.compute_raster and supported["shaderClipDistance"])
         f12 = vk.VkPhysicalDeviceVulkan12Features(
             pNext=f13, shaderOutputLayer=on[self.layered_shadows],
             shaderBufferInt64Atomics=on[self.compute_raster],
@@ -262,13 +265,15 @@ class Device:
             self.format_supports(getattr(vk, f"VK_FORMAT_BC7_{space}_BLOCK"),
                                  "SAMPLED_IMAGE_FILTER_LINEAR") for space in ("SRGB", "UNORM"))
         # Only what vkpbr uses: dynamic rendering, synchronization2, maintenance4, anisotropic
-        # filtering, layered rendering and cube-map arrays (shadows), the compute path's, BC7.
+        # filtering, layered rendering and cube-map arrays (shadows), the compute path's, BC7,
+        # clip distances (the compute batch's blended draws).
         core = vk.VkPhysicalDeviceFeatures(
             samplerAnisotropy=vk.VK_TRUE if self.anisotropy else vk.VK_FALSE,
             imageCubeArray=on[self.image_cube_array], geometryShader=on[self.compute_path],
             drawIndirectFirstInstance=on[self.batch_views],
             shaderStorageImageWriteWithoutFormat=on[self.compute_path],
-            shaderInt64=on[self.compute_raster], textureCompressionBC=on[self.bc7_textures])
+            shaderInt64=on[self.compute_raster], textureCompressionBC=on[self.bc7_textures],
+            shaderClipDistance=on[self.atlas_blend])
         available = {
             e.extensionName
             for e in vk.vkEnumerateDeviceExtensionProperties(self.physical, None)
@@ -338,6 +343,7 @@ class Device:
                 "shaderDrawParameters": f11.shaderDrawParameters,
                 "geometryShader": core.geometryShader,
                 "shaderInt64": core.shaderInt64,
+                "shaderClipDistance": core.shaderClipDistance,
                 "textureCompressionBC": core.textureCompressionBC,
                 "shaderBufferInt64Atomics": f12.shaderBufferInt64Atomics,
                 "timelineSemaphore": f12.timelineSemaphore,

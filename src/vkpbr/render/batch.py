@@ -117,6 +117,9 @@ class BatchViews:
         self._buffers: list[Buffer] = []
         self._identity = 0  # (ensure says)
         self.generation = 0  # its buffers' (recordings name them)
+        # A batch of worlds' WorldFactors blocks (shaders/worlds.glsl), grown by
+        # set_world_factors; every set 0 binds it (factor_base 0: no view reads it).
+        self.factors = Buffer(device, 48, "storage", host_visible=True, name="world factors")
 
     def _own(self, obj: Any) -> Any:
         self._objects.append(obj)
@@ -176,7 +179,25 @@ class BatchViews:
             writer.uniform(set0, 1, settings_buf, L.SETTINGS.size, settings_at)
             writer.storage(set0, 2, self.visible)
             writer.storage(set0, 3, state_buf, state_size, state_at)
+            writer.storage(set0, 4, self.factors)
         writer.update()
+
+    def set_world_factors(self, factors: np.ndarray) -> bool:
+        """Write a batch of worlds' WorldFactors blocks ((K, 4) float32, shaders/worlds.glsl);
+        True when the buffer grew (every set 0 rebound, the recordings naming them freed)."""
+        grew = factors.nbytes > self.factors.size
+        if grew:
+            self.device.wait_idle()
+            self.free_recordings()
+            self.factors.destroy()
+            self.factors = Buffer(self.device, max(factors.nbytes, 2 * self.factors.size),
+                                  "storage", host_visible=True, name="world factors")
+            writer = DescriptorWriter(self.device)
+            for set0 in (*self.sets0, *self.world_sets0):
+                writer.storage(set0, 4, self.factors)
+            writer.update()
+        self.factors.array(np.float32, factors.size)[:] = factors.ravel()
+        return grew
 
     def set0(self, frame_index: int, worlds: bool) -> Any:
         """Frame slot `frame_index`'s set 0 of a batch (of worlds, with `worlds`)."""
@@ -348,7 +369,7 @@ class BatchViews:
 
     def destroy(self) -> None:
         self.free_recordings()
-        for b in self._buffers:
+        for b in (*self._buffers, self.factors):
             b.destroy()
         self._buffers = []
         while self._objects:

@@ -232,6 +232,10 @@ class BatchPath:
         frame, plan, terms = self._begin(post.views, post.size, lights, post.shading,
                                          post.linear, rows, shading_ao, start)
         set0 = bv.set0(frame.index, self.world_call is not None and self.world_call.poses)
+        # Blended draws: each group of views sharing a back-to-front order draws them into
+        # its views' tiles (the layered batch's groups, every chunk's in one atlas).
+        groups = (tuple(g for chunk in bv.write_blend_groups(self._blend_orders(post.views, start))
+                        for g in chunk) if len(p.blend) else ())
 
         def finish(fr: Any, into: np.ndarray | None, order: CudaOrder | None
                    ) -> tuple[Any, np.ndarray | None]:
@@ -248,7 +252,8 @@ class BatchPath:
                 tiles=(n, *post.size, rows),
                 set0_id=id(set0), external_id=id(external), batch=(bv.generation, *self._world_key()),
                 ao=ao, post=post.post, post_tonemap=post.tonemap, lens=post.lens),
-            FrameObjects(set0=set0, external=external), self._world_groups(), drawn=post.drawn),
+            FrameObjects(groups, set0=set0, external=external), self._world_groups(),
+            drawn=post.drawn),
             external, order, finish if whole and self._whole(views) else None)
         return finish(frame, into, order)
 
@@ -356,7 +361,7 @@ class BatchPath:
         ao = prepare_ao(p.ao, p.recorder, opts, target, p.bounds, False)
         frame, plan, terms = self._begin(views, size, lights, opts, linear,
                                          ao=ao is not None and ao.shading, start=start)
-        groups = bv.write_blend_groups(p.blend.orders(views.eye))
+        groups = bv.write_blend_groups(self._blend_orders(views, start))
 
         def finish(fr: Any, into: np.ndarray | None, order: Any) -> tuple[Any, np.ndarray | None]:
             return self._layered_result(target, n, into, terms if depth else None, cuda, linear)
@@ -367,6 +372,17 @@ class BatchPath:
             self._world_groups(), ao), target.color_readback if cuda else None, None,
             None if depth or not self._whole(views) else finish)
         return finish(frame, into, None)
+
+    def _blend_orders(self, views: CameraBatch, start: int) -> np.ndarray:
+        """The blended draws' back-to-front order of each of `views` (the call's views from
+        `start` on): placed by its world's draw records where the host made them (as `render`
+        of that world orders them), else as the renderer's state places them (worlds the GPU
+        expands: docs/batch.md)."""
+        blend, call = self.parts.blend, self.world_call
+        if call is not None and call.records is not None:
+            return blend.world_orders(views.eye, call.records,
+                                      call.world_of_view[start:start + len(views)])
+        return blend.orders(views.eye)
 
     def _layered_result(self, target: BatchTarget, n: int, into: np.ndarray | None,
                         terms: ViewTerms | None, cuda: bool, linear: bool
@@ -479,11 +495,8 @@ class BatchPath:
         factor_base = None
         if call.factors is not None:
             if self._factor_writes != self._calls:
-                if self.parts.compute().set_world_factors(call.factors.reshape(-1, 4)):
-                    # (the compute path's sets were rewritten: every recording that bound
-                    # them, the frames' as well as the batches', is stale)
-                    self.free_recordings()
-                    self.parts.recorder.free()
+                assert self.views is not None  # (made before the submission's frame)
+                self.views.set_world_factors(call.factors.reshape(-1, 4))
                 self._factor_writes = self._calls
             stride = call.factors.shape[1]  # a world's block (shaders/worlds.glsl)
             factor_base = (1 + index * stride).astype(np.uint32)

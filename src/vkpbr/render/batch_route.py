@@ -3,7 +3,8 @@
 `batch_route` checks the call's arguments (where the result goes, `out=`, the dataset
 outputs, post steps) and picks one of ROUTES: "cuda" (the colour into a torch tensor on the
 GPU), "compute" (the compute batch: all views in one atlas, rasterised and shaded in compute
-shaders) where the device has the compute rasteriser and no draw blends, "layered" (the
+shaders; blended draws by the raster units into each view's tile) where the device has the
+compute rasteriser (and, for a scene with blended draws, clip distances), "layered" (the
 fragment path's batch: render/batch.py), or "views": view by view through render_many, each
 exactly as `render` draws it, where the device has no layered rendering, with MSAA (the batch
 target is single-sample), the compute path asked for, or post steps the compute batch does

@@ -50,5 +50,26 @@ class BlendOrder:
         centers = self.centers
         if len(centers) < 2:
             return np.broadcast_to(np.arange(len(centers)), (len(eyes), len(centers)))
-        d = np.sum((centers[None, :, :] - eyes[:, None, :]) ** 2, axis=2)
-        return np.argsort(-d, axis=1, kind="stable")
+        return _farthest_first(centers[None, :, :], eyes)
+
+    def world_orders(self, eyes: np.ndarray, records: np.ndarray, world_of_view: np.ndarray
+                     ) -> np.ndarray:
+        """`orders` for views that each see their own world: view b's blended draws placed
+        by world `world_of_view[b]`'s draw records (`records`: (W * D, 2, 4, 4) float32,
+        each world's D records as GLSL's column-major pairs, render/worlds.py), as `render`
+        of that world alone orders them."""
+        if len(self.centers) < 2 or self.state is None:
+            return self.orders(eyes)
+        draws = len(self.blended)
+        # (transposed models: m[..., 3, :3] is the translation, m[..., :3, :3] M's transpose)
+        m = records.reshape(-1, draws, 2, 4, 4)[:, self.blended, 0]
+        local = self.state.mesh_boxes[: draws][self.blended].mean(axis=1)
+        centers = np.einsum("wkji,kj->wki", m[..., :3, :3], local) + m[..., 3, :3]
+        return _farthest_first(centers[world_of_view], eyes)
+
+
+def _farthest_first(centers: np.ndarray, eyes: np.ndarray) -> np.ndarray:
+    """(B, K) indices into the K centres of each view ((1 or B, K, 3)), farthest first from
+    its eye ((B, 3)); equal distances keep the draws' order."""
+    d = np.sum((centers - eyes[:, None, :]) ** 2, axis=2)
+    return np.argsort(-d, axis=1, kind="stable")

@@ -101,6 +101,9 @@ VARIANTS: tuple[Variant, ...] = (
     # and the per-view culling kernel writing the instanced indirect draws.
     *(Variant(f"pbr_batch_{m.name.lower()}.vert.spv", "pbr.vert", (("TBN_MODE", int(m)), ("BATCH", 1)))
       for m in L.TbnMode),
+    # ... and the compute batch's blended draws: each view into its tile of the atlas.
+    *(Variant(f"pbr_atlas_{m.name.lower()}.vert.spv", "pbr.vert",
+              (("TBN_MODE", int(m)), ("BATCH", 1), ("ATLAS", 1))) for m in L.TbnMode),
     Variant("pbr_batch_opaque.frag.spv", "pbr.frag", (("ALPHA_MASK", 0), ("BATCH", 1))),
     Variant("pbr_batch_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1), ("BATCH", 1))),
     Variant("background_batch.vert.spv", "background.vert", (("BATCH", 1),)),

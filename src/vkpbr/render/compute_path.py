@@ -209,7 +209,7 @@ class _TargetResources:
                    "RasterDepthIds": self.raster, "RasterBig": self.raster_big,
                    "RasterSpheres": scene.raster_spheres, "RasterDepths": self.raster_depths,
                    "RasterMaskedBig": self.raster_masked_big,
-                   "PrevPositions": scene.prev_positions, "WorldFactors": scene.world_factors}
+                   "PrevPositions": scene.prev_positions}
         images = {"out_image": target.storage_view, "visibility": target.visibility_view}
         # The dataset outputs' images once the target has them, else 1x1 stand-ins (no kernel
         # but the outputs one touches them; every binding is written all the same).
@@ -335,8 +335,6 @@ class ComputeScene:
                                                       name="raster draw spheres"))
         self.prev_positions = prev_positions if prev_positions is not None else self._own(
             upload_buffer(device, np.zeros(3, np.float32), "storage", name="no posed vertices"))
-        # A batch of worlds' material factors (render/worlds.py), grown by set_world_factors.
-        self.world_factors = Buffer(device, 48, "storage", host_visible=True, name="world factors")
         self.set_index = max(frame_layouts) + 1
         self.layouts = compute_layouts(device, frame_layouts)
         self.set_layout = self._own(self.layouts[-1])
@@ -353,24 +351,6 @@ class ComputeScene:
     def _own(self, obj: Any) -> Any:
         self._owned.append(obj)
         return obj
-
-    def set_world_factors(self, factors: np.ndarray) -> bool:
-        """Write a batch of worlds' WorldFactors ((K, 4) float32, shaders/worlds.glsl); True when
-        the buffer grew (every target's sets were rewritten: the caller frees recordings)."""
-        grew = factors.nbytes > self.world_factors.size
-        if grew:
-            self.device.wait_idle()
-            self.world_factors.destroy()
-            self.world_factors = Buffer(self.device, max(factors.nbytes, 2 * self.world_factors.size),
-                                        "storage", host_visible=True, name="world factors")
-            binding = next(b for b, _, n in L.COMPUTE_SET if n == "WorldFactors")
-            writer = DescriptorWriter(self.device)
-            for res in self._targets.values():
-                for dset in res.sets:
-                    writer.storage(dset, binding, self.world_factors)
-            writer.update()
-        self.world_factors.array(np.float32, factors.size)[:] = factors.ravel()
-        return grew
 
     def makers(self, *kernels: tuple[Any, ...]) -> tuple[Callable[[], ComputePipeline], ...]:
         """Calls that make the kernels of `kernels` ((name, push bytes[, constants]) each),
@@ -695,7 +675,6 @@ class ComputeScene:
                 obj.destroy()
 
     def destroy(self) -> None:
-        self.world_factors.destroy()
         while self._owned:
             self._owned.pop().destroy()
 

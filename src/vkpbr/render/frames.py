@@ -137,10 +137,11 @@ def create_slots(
         writer.uniform(set0, 1, buffer, L.SETTINGS.size, settings)
         writer.uniform(set2, 0, buffer, L.LIGHTING.size, lighting)
         writer.storage(set2, 1, lights, LIGHTS_BYTES, i * s_stride)
-        # A stand-in for the batch's visible lists (render/batch.py binds its own set 0):
-        # every binding written, none read by the frame shaders.
+        # Stand-ins for the batch's visible lists and world factors (render/batch.py binds
+        # its own set 0): every binding written, none read by the frame shaders.
         writer.storage(set0, 2, lights, LIGHTS_BYTES, i * s_stride)
         writer.storage(set0, 3, lights, LIGHTS_BYTES, i * s_stride)  # the scene's: bind_instances
+        writer.storage(set0, 4, lights, LIGHTS_BYTES, i * s_stride)  # (a batch's WorldFactors)
         slots.append(FrameSlot(
             index=i, set0=set0, set2=set2,
             m_view=memoryview(buffer.array(np.uint8, L.VIEW_RECORD.size, view)),

@@ -430,26 +430,25 @@ COMPUTE_SET: tuple[tuple[int, str, str], ...] = (
     # uniform block, which lavapipe 22.3 would compile a variant of the shader for per new set
     # of values (never freed) and, once a loop depends on one, crash compiling. (The views
     # are set 0's storage buffer, read there by every path.)
-    (15, "storage", "WorldFactors"),  # a batch of worlds' material factors
-    (16, "block", "Settings"),
-    (17, "block", "Lighting"),
-    (18, "storage", "Materials"),
+    (15, "block", "Settings"),
+    (16, "block", "Lighting"),
+    (17, "storage", "Materials"),
     # Dataset outputs (Renderer.render(outputs=...)), written by shade.comp's OUTPUTS variant.
-    (19, "storage_image", "out_ids"),  # instance, semantic
-    (20, "storage_image", "out_normal"),  # world shading normal (normal-mapped)
-    (21, "storage_image", "out_normal_geometric"),  # world interpolated vertex normal
-    (22, "storage_image", "out_depth_range"),  # distance along the view axis, to the eye; motion
+    (18, "storage_image", "out_ids"),  # instance, semantic
+    (19, "storage_image", "out_normal"),  # world shading normal (normal-mapped)
+    (20, "storage_image", "out_normal_geometric"),  # world interpolated vertex normal
+    (21, "storage_image", "out_depth_range"),  # distance along the view axis, to the eye; motion
     # The compute rasteriser (raster.comp).
-    (23, "storage", "RasterDraws"),
-    (24, "storage", "RasterDepthIds"),
-    (25, "storage", "RasterBig"),
-    (26, "storage", "RasterSpheres"),  # per draw its mesh's bounding sphere (culling)
-    (27, "storage", "RasterDepths"),  # resolved: copied into the depth buffer
-    (28, "storage", "RasterMaskedBig"),
+    (22, "storage", "RasterDraws"),
+    (23, "storage", "RasterDepthIds"),
+    (24, "storage", "RasterBig"),
+    (25, "storage", "RasterSpheres"),  # per draw its mesh's bounding sphere (culling)
+    (26, "storage", "RasterDepths"),  # resolved: copied into the depth buffer
+    (27, "storage", "RasterMaskedBig"),
     # The motion output (render/scene_state.py): the frame slot's previous view and draw
     # matrices, and the deformed vertices' previous positions (render/deform.py).
-    (29, "storage", "Motion"),
-    (30, "storage", "PrevPositions"),
+    (28, "storage", "Motion"),
+    (29, "storage", "PrevPositions"),
 )
 # GLSL declarations of the storage images (their formats and access).
 STORAGE_IMAGES = {
@@ -485,9 +484,11 @@ class LightKind(Named):
 PUSH = Std140Block("Draw", "draw", (("index", "uvec4"),))
 
 
-def draw_push(index: int) -> np.ndarray:
-    """The PUSH bytes of draw record `index`."""
-    return np.array([index, 0, 0, 0], np.uint32)
+def draw_push(index: int, atlas: tuple[int, int] = (0, 0), material: int = 0) -> np.ndarray:
+    """The PUSH bytes of draw record `index` (and in a compute batch the `atlas` size, which
+    pbr.vert's ATLAS build maps each view's tile into, and the draw's `material`, whose
+    factors a world may set: pbr.frag's BATCH build)."""
+    return np.array([index, *atlas, material], np.uint32)
 
 BLOCKS = (SETTINGS, MATERIAL, LIGHTING, PUSH)
 
@@ -503,6 +504,10 @@ SETS: dict[int, tuple[tuple[int, str, tuple[str, ...], str], ...]] = {
         (2, "storage", ("vertex",), "VisibleViews"),
         # The scene state's matrices, the slot's copy (render/scene_state.py).
         (3, "storage", ("vertex", "compute"), "Instances"),
+        # A batch of worlds' material factors, lights and environment (render/batch.py
+        # BatchViews: its views' factor_base; frames bind a stand-in they never read). In set
+        # 0 so that the compute batch's kernels and its blended draws' pbr.frag read one table.
+        (4, "storage", ("fragment", "compute"), "WorldFactors"),
     ),
     1: (
         *((i, "sampler", ("fragment", "compute"), f"{slot}_map")

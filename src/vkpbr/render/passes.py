@@ -127,6 +127,9 @@ class PassContext:
     # A batch's blended draws: per group of views sharing one back-to-front order, (order,
     # first instance, instances): the group's views are listed from that first instance on.
     blend_groups: tuple[tuple[tuple[int, ...], int, int], ...] | None = None
+    # A compute batch's atlas size: its blended draws map each view into its tile (pbr.vert
+    # ATLAS, told the size by the push); None elsewhere.
+    atlas: tuple[int, int] | None = None
 
 
 def pass_makers(ctx: PassContext, passes: Iterable[PassSpec]) -> tuple[Callable[[], Any], ...]:
@@ -194,7 +197,7 @@ def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[tupl
         if d.material != bound:
             cmd.bind_set(1, ctx.material_sets[d.material])
             bound = d.material
-        cmd.push(draw_push(index))
+        cmd.push(draw_push(index) if ctx.atlas is None else draw_push(index, ctx.atlas, d.material))
         if instanced is not None:
             cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset,
                              first_instance=instanced[0], instances=instanced[1])

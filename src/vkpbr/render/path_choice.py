@@ -245,7 +245,7 @@ class FramePaths:
     its rasteriser), with or without the depth pre-pass; auto's choice once `choose` has
     made it (until then, and where it cannot, the rule: RULE_GPU's on GPUs, RULE_CPU's on
     CPUs). `triangles`: the scene's; `blended`: whether it has blended draws (which the
-    compute batch cannot draw); `depth_prepass` and `cache_dir` as the Renderer's."""
+    compute batch draws into its atlas with clip distances); `depth_prepass` and `cache_dir` as the Renderer's."""
 
     def __init__(self, device: Device, msaa: int, triangles: int, blended: bool,
                  depth_prepass: bool | None, cache_dir: str | os.PathLike[str] | None) -> None:
@@ -319,8 +319,8 @@ class FramePaths:
             return "the device lacks 64-bit storage-buffer atomics"
         if self.msaa > 1:
             return "MSAA"
-        if self.blended:
-            return "the scene has blended materials (drawn by the fragment path)"
+        if self.blended and not self.device.atlas_blend:
+            return "the scene has blended materials and the device lacks clip distances"
         return None
 
     def takes_compute_batch(self, options: RenderOptions) -> bool:

@@ -62,9 +62,10 @@ PATHS: dict[str, tuple[str, ...]] = {
     "compute_raster": (*_FRAME_HEAD, "outputs_clear", "raster", "ao", *_SHADE_COMPUTE,
                        *_AFTER_SHADING),
     # Batches: every view of a call in one submission (render/batch_path.py).
-    # (with dataset outputs: their images cleared first, written after the shading)
+    # (with dataset outputs: their images cleared first, written after the shading; the
+    # blended draws by the raster units, each view's into its tile of the atlas)
     "compute_batch": ("deform", "worlds", "shadows", "outputs_clear", "raster", "ao", "classify",
-                      "shading", "outputs", "background_compute", "post", "finish"),
+                      "shading", "outputs", "background_compute", "blend", "post", "finish"),
     "layered_batch": ("deform", "worlds", "shadows", "cull", "chunks", "finish"),
 }
 # The transmission's copy of the opaque scene (render/transmission.py), drawn as the frame is.

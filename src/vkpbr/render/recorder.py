@@ -78,11 +78,12 @@ class _Stamps:
 
 
 def _pipeline_key(target: FrameTarget, tbn: L.TbnMode, p: PassSpec, prepass: bool,
-                  visibility: bool = False, batch: bool = False, copy: bool = False) -> tuple:
+                  visibility: bool = False, batch: bool = False, copy: bool = False,
+                  atlas: bool = False) -> tuple:
     """What a pass's pipeline for `target` depends on (FrameRecorder.pipeline's arguments)."""
     return (target.color_format, target.depth_format, target.samples,
             None if p.fullscreen else tbn, p.name, prepass and p.after_prepass, visibility,
-            batch, copy)
+            batch, copy, atlas)
 
 
 class FrameRecorder:
@@ -112,17 +113,19 @@ class FrameRecorder:
 
     # --- pipelines --------------------------------------------------------------------------
     def pipeline(self, target: FrameTarget, tbn: L.TbnMode, p: PassSpec, prepass: bool,
-                 visibility: bool = False, batch: bool = False, copy: bool = False) -> Pipeline:
+                 visibility: bool = False, batch: bool = False, copy: bool = False,
+                 atlas: bool = False) -> Pipeline:
         """The pipeline of pass `p` for `target`; `visibility`: its compute-path variant,
         writing (draw + 1, primitive) with pbr.frag's own coverage instead of a colour;
         `batch`: its batched-views variant (render/batch.py: the shaders' BATCH builds);
-        `copy`: its opaque-copy variant, writing linear radiance (render/transmission.py).
+        `copy`: its opaque-copy variant, writing linear radiance (render/transmission.py);
+        `atlas` (with `batch`): a compute batch's, each view drawn into its tile of the atlas.
         A frame's shading passes lack the by-hand shadow reads (pbr.frag built with
         shadow_sampling.glsl SHADOW_HAND_READS 0) unless it reads compute-drawn maps from their
         buffer (ShadowMaps.hand_reads; the recording is keyed on it); a batch's keep them (a
         batch of worlds reads its worlds' maps by hand)."""
         hand = batch or visibility or self.shadows is None or self.shadows.hand_reads
-        key = (*_pipeline_key(target, tbn, p, prepass, visibility, batch, copy), hand)
+        key = (*_pipeline_key(target, tbn, p, prepass, visibility, batch, copy, atlas), hand)
         if key not in self._pipelines:
             gs = self.gpu_scene
             streams = [VertexStream(i, i, fmt, 0 if name == "colors" and not gs.has_colors else None)
@@ -143,7 +146,8 @@ class FrameRecorder:
             if batch:
                 frag = spec.fragment_shader
                 spec = dataclasses.replace(
-                    spec, vertex_shader=spec.vertex_shader.replace("pbr_", "pbr_batch_").replace(
+                    spec, vertex_shader=spec.vertex_shader.replace(
+                        "pbr_", "pbr_atlas_" if atlas else "pbr_batch_").replace(
                         "background.vert", "background_batch.vert"),
                     fragment_shader=frag if frag is None else frag.replace("pbr_", "pbr_batch_"))
             if not hand and (spec.fragment_shader or "").startswith("pbr_"):

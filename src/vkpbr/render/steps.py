@@ -70,10 +70,11 @@ class FrameSpec(NamedTuple):
 
 class FrameObjects(NamedTuple):
     """The objects a recording draws with that its key names by id (FrameSpec's *_id) or
-    not at all: the blended draws' order (a new order re-records), the overlay, a batch's
-    views' set 0 and the CUDA buffer the colour goes into."""
+    not at all: the blended draws' order (a new order re-records; a compute batch's: its
+    groups of views, PassContext.blend_groups), the overlay, a batch's views' set 0 and the
+    CUDA buffer the colour goes into."""
 
-    blend_order: tuple[int, ...] = ()
+    blend_order: tuple = ()
     overlay: Any = None
     set0: Any = None
     external: Any = None
@@ -210,13 +211,19 @@ class FrameSteps:
                  classes: list[str] | None = None, copy: bool = False) -> PassContext:
         target = self.target if target is None else target
         tbn = self.spec.tbn
+        # A compute batch's blended draws: each group of views sharing an order (the batch
+        # path's FrameObjects.blend_order) drawn into their tiles of the atlas.
+        atlas = self.spec.path == "compute_batch"
         return PassContext(
             draws=self.gs.draws, classes=self.classes if classes is None else classes,
-            pipeline=lambda p: self.r.pipeline(target, tbn, p, prepass, visibility, copy=copy),
+            pipeline=lambda p: self.r.pipeline(target, tbn, p, prepass, visibility, batch=atlas,
+                                               copy=copy, atlas=atlas),
             frame_sets=(self.set0, self.slot.set2), material_sets=self.material_sets,
             vertex_buffers=[self.gs.streams[n] for n in self.streams],
-            index_buffer=self.gs.index_buffer, blend_order=self.objects.blend_order,
-            prepass=prepass, shadow_set=self.shadow_set)
+            index_buffer=self.gs.index_buffer,
+            blend_order=() if atlas else self.objects.blend_order,
+            blend_groups=self.objects.blend_order if atlas else None,
+            atlas=target.extent if atlas else None, prepass=prepass, shadow_set=self.shadow_set)
 
     def _visibility(self) -> list[Step]:
         """The opaque and masked rows into the visibility image (draw + 1, primitive) with

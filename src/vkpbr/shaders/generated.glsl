@@ -227,6 +227,9 @@ layout(set = 0, binding = 2, std430) readonly buffer VisibleViews {
 layout(set = 0, binding = 3, std430) readonly buffer Instances {
     mat4 instance_matrices[];
 };
+layout(set = 0, binding = 4, std430) readonly buffer WorldFactors {
+    vec4 world_factors[];
+};
 layout(set = 1, binding = 0) uniform sampler2D base_color_map;
 layout(set = 1, binding = 1) uniform sampler2D metallic_map;
 layout(set = 1, binding = 2) uniform sampler2D roughness_map;
@@ -379,17 +382,14 @@ layout(set = 4, binding = 13, std430) buffer BinArgs {
 layout(set = 4, binding = 14, std430) buffer PixelList {
     uint pixel_list[];
 };
-layout(set = 4, binding = 15, std430) readonly buffer WorldFactors {
-    vec4 world_factors[];
-};
-layout(set = 4, binding = 16, std140) readonly buffer Settings {
+layout(set = 4, binding = 15, std140) readonly buffer Settings {
     int view;
     int brdf;
     int tonemap;
     uint flags;
     float exposure;
 } settings;
-layout(set = 4, binding = 17, std140) readonly buffer Lighting {
+layout(set = 4, binding = 16, std140) readonly buffer Lighting {
     uint light_count;
     int mode;
     uint flags;
@@ -397,37 +397,37 @@ layout(set = 4, binding = 17, std140) readonly buffer Lighting {
     vec4 env_rotation;
     vec4 ambient_color;
 } lighting;
-layout(set = 4, binding = 18, std140) readonly buffer Materials {
+layout(set = 4, binding = 17, std140) readonly buffer Materials {
     MaterialRecord materials[];
 };
-layout(set = 4, binding = 19, rg32ui) writeonly uniform uimage2D out_ids;
-layout(set = 4, binding = 20) writeonly uniform image2D out_normal;
-layout(set = 4, binding = 21) writeonly uniform image2D out_normal_geometric;
-layout(set = 4, binding = 22) writeonly uniform image2D out_depth_range;
-layout(set = 4, binding = 23, std430) readonly buffer RasterDraws {
+layout(set = 4, binding = 18, rg32ui) writeonly uniform uimage2D out_ids;
+layout(set = 4, binding = 19) writeonly uniform image2D out_normal;
+layout(set = 4, binding = 20) writeonly uniform image2D out_normal_geometric;
+layout(set = 4, binding = 21) writeonly uniform image2D out_depth_range;
+layout(set = 4, binding = 22, std430) readonly buffer RasterDraws {
     uvec4 raster_draws[];
 };
 #if RASTER_INT64  // GL_EXT_shader_explicit_arithmetic_types_int64
-layout(set = 4, binding = 24, std430) buffer RasterDepthIds {
+layout(set = 4, binding = 23, std430) buffer RasterDepthIds {
     uint64_t raster[];
 };
 #endif
-layout(set = 4, binding = 25, std430) buffer RasterBig {
+layout(set = 4, binding = 24, std430) buffer RasterBig {
     uint raster_big[];
 };
-layout(set = 4, binding = 26, std430) readonly buffer RasterSpheres {
+layout(set = 4, binding = 25, std430) readonly buffer RasterSpheres {
     vec4 raster_spheres[];
 };
-layout(set = 4, binding = 27, std430) buffer RasterDepths {
+layout(set = 4, binding = 26, std430) buffer RasterDepths {
     float raster_depths[];
 };
-layout(set = 4, binding = 28, std430) buffer RasterMaskedBig {
+layout(set = 4, binding = 27, std430) buffer RasterMaskedBig {
     uint raster_masked_big[];
 };
-layout(set = 4, binding = 29, std430) readonly buffer Motion {
+layout(set = 4, binding = 28, std430) readonly buffer Motion {
     vec4 motion[];
 };
-layout(set = 4, binding = 30, std430) readonly buffer PrevPositions {
+layout(set = 4, binding = 29, std430) readonly buffer PrevPositions {
     float prev_positions[];
 };
 #else  // the compute path has its own push constants

@@ -30,6 +30,9 @@ layout(location = 0) out vec4 out_color;
 #endif
 
 #define MAT material
+#if BATCH  // the draw's material (the push's w), whose factors a world may set (worlds.glsl)
+#define MATERIAL_INDEX draw.index.w
+#endif
 #define SAMPLE(name) texture(name##_map, texture_uv(MAT.name##_uv_row0, MAT.name##_uv_row1))
 #include "shade.glsl"
 

@@ -4,9 +4,12 @@
 // The camera is views[view_index] (generated.glsl): the frame's one view, or with BATCH = 1
 // a view of a batch (render/batch.py): instance i of a draw is the view visible_views[i]
 // (the culling kernel lists the views that see the draw from its firstInstance on), drawn
-// with that view's VP into its layer of the batch target.
+// with that view's VP into its layer of the batch target. ATLAS = 1 (with BATCH) builds the
+// compute batch's blended draws (render/batch_path.py): the view is drawn into its tile of
+// the batch's one atlas image instead of a layer (views[].viewport; the atlas's size is the
+// push's yz), its own frustum's sides clipping it to that tile.
 #extension GL_GOOGLE_include_directive : require
-#if BATCH
+#if BATCH && !ATLAS
 #extension GL_ARB_shader_viewport_layer_array : require
 #endif
 #include "generated.glsl"
@@ -45,6 +48,24 @@ layout(location = 6) flat out uint v_draw;  // firstInstance of the draw: its in
 layout(location = 7) flat out uint v_view;  // the view of the batch (Views)
 #endif
 layout(location = 8) flat out float v_model_scale;  // |model x axis| (the volume's thickness)
+
+#if ATLAS
+out float gl_ClipDistance[4];
+
+// `clip` (the view's own clip space) in the atlas's: the view's NDC square mapped onto its
+// `tile` (x, y, width, height pixels) of an `atlas`-sized image, a linear map of the clip
+// coordinates (so interpolation stays perspective-correct); the tile's edges are the view's
+// frustum sides, w +- x and w +- y, as clip distances.
+vec4 atlas_position(vec4 clip, uvec4 tile, vec2 atlas) {
+    gl_ClipDistance[0] = clip.w + clip.x;
+    gl_ClipDistance[1] = clip.w - clip.x;
+    gl_ClipDistance[2] = clip.w + clip.y;
+    gl_ClipDistance[3] = clip.w - clip.y;
+    vec2 scale = vec2(tile.zw) / atlas;
+    vec2 offset = (2.0 * vec2(tile.xy) + vec2(tile.zw)) / atlas - 1.0;
+    return vec4(clip.xy * scale + offset * clip.w, clip.zw);
+}
+#endif
 
 void main() {
 #if TBN_MODE == 0
@@ -85,7 +106,14 @@ void main() {
     v_bitangent = mat3(model) * b;
 #if BATCH
     v_view = view_index;
+#endif
+#if ATLAS
+    gl_Position = atlas_position(views[view_index].VP * world, views[view_index].viewport,
+                                 vec2(draw.index.yz));
+#else
+#if BATCH
     gl_Layer = int(views[view_index].layer);
 #endif
     gl_Position = views[view_index].VP * world;
+#endif
 }

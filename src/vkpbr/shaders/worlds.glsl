@@ -1,19 +1,20 @@
-// worlds.glsl: a batch of worlds' per-view overrides (render/worlds.py, WorldFactors): each
-// view of a compute batch of worlds names its world's block of WorldFactors by
-// views[view_index].factor_base (0: none, every frame and plain batch). A block, in vec4s:
+// worlds.glsl: a batch of worlds' per-view overrides (render/worlds.py, WorldFactors, set 0):
+// each view of a batch of worlds names its world's block of WorldFactors by
+// views[view_index].factor_base (0: none, every frame and plain batch), read by the compute
+// batch's kernels and by pbr.frag's BATCH build (its blended draws). A block, in vec4s:
 //   [header: uint bits (lights at, environment at, has lights, has environment)
 //    | 3 a material: base colour; emissive, metallic; roughness
 //    | 1 a light: rgb colour x intensity | 1 the environment: intensity, cos, sin of its turn]
-// at factor_base - 1. Elsewhere (the fragment path, frames) the macros read the frame's own.
+// at factor_base - 1. Elsewhere (frames) the macros read the frame's own.
 #ifndef WORLDS_GLSL
 #define WORLDS_GLSL
 
-#if BATCH && COMPUTE_SHADING
+#if BATCH
 uint world_base() { return views[view_index].factor_base; }
 
 // A world's four factors of the material MATERIAL_INDEX (the includer's), else the table's;
 // only these fields are read (a copy of the whole record per use cost lavapipe 5x).
-#ifdef MATERIAL_INDEX  // (the shading and rasterising kernels; not the background's)
+#ifdef MATERIAL_INDEX  // (the shading and rasterising kernels, pbr.frag; not the background's)
 vec4 world_material_row(uint row) {
     return world_factors[world_base() + 3u * MATERIAL_INDEX + row];
 }
