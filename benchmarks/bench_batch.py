@@ -60,7 +60,6 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE / "peers"))
 import common as peers  # noqa: E402  (the peers' scenario: poses, scene paths; NumPy only)
 
-
 # Scenes of this benchmark's own (a ring about the default camera's target, as "default"):
 # AlphaBlendModeTest's blended materials (the compute batch draws them since session 27).
 OWN_SCENES = {"alphablend": "AlphaBlendModeTest/glTF/AlphaBlendModeTest.gltf"}
