@@ -314,6 +314,21 @@ def test_blended_draws_in_each_views_order(make_renderer) -> None:  # noqa: ANN0
                        "blended spheres")
 
 
+@pytest.mark.parametrize("pipeline", ["forward", "compute"])
+def test_new_blended_orders_keep_no_old_recordings(make_renderer, pipeline: str) -> None:  # noqa: ANN001
+    """A dataset's loop: every call new cameras, so new back-to-front orders of the blended
+    draws. Each order re-records the frame slot's commands in place; the recordings the
+    renderer holds stay bounded (the layered batch had kept one per order: a command buffer
+    a call, never freed until the renderer closed)."""
+    r = make_renderer(blended_spheres())
+    counts = []
+    for i in range(12):
+        cams = cameras_of(r, 6, seed=300 + i)
+        r.render_batch(cams, SIZE, pipeline=pipeline, ao="off")
+        counts.append(len(r.recorder._recorded))
+    assert counts[-1] == counts[5], counts  # (the ring's slots and the frame's own, then flat)
+
+
 def test_blended_order_of_each_world(make_renderer) -> None:  # noqa: ANN001
     """A batch of worlds that moves the blended spheres: each view's blended draws are drawn
     in its own world's back-to-front order (not the renderer's state's), bit for bit what

@@ -56,7 +56,7 @@ from vkpbr.render.passes import (
 )
 from vkpbr.render.recorder import FrameRecorder
 from vkpbr.render.shadows import ShadowPlan
-from vkpbr.render.steps import FrameSpec, FrameSteps
+from vkpbr.render.steps import FrameObjects, FrameSpec, FrameSteps
 from vkpbr.render.views import ViewTerms, fill_views
 from vkpbr.scene.types import MeshBox, Scene, mesh_box
 
@@ -273,15 +273,18 @@ class BatchViews:
         what the worlds' steps depend on, render/worlds.py); `extra`: groups made elsewhere
         (the worlds' kernel); `ao`: each chunk's GTAO (render/ao.py) between a depth pre-pass
         and its passes."""
+        # (the groups are the recording's blended order, not its key: a new order re-records
+        # the slot's commands in place, where a key per order had kept every one recorded)
         spec = FrameSpec("layered_batch", tbn, alpha_mask, plan, redraw,
-                         batch=(views, groups, prepass, self.generation, worlds), ao=ao)
+                         batch=(views, prepass, self.generation, worlds), ao=ao)
         on = worlds is not None
 
         def chunks(fs: FrameSteps) -> list[Step]:
-            return self._chunk_steps(fs, target, views, tbn, groups, prepass, on)
+            return self._chunk_steps(fs, target, views, tbn, fs.objects.blend_order, prepass, on)
 
         made = {"cull": lambda fs: self._cull_steps(fs, views, on), "chunks": chunks, **(extra or {})}
-        return self.recorder.command_buffer(target, frame, 0, spec, groups=made)
+        return self.recorder.command_buffer(target, frame, 0, spec, FrameObjects(groups),
+                                            groups=made)
 
     def cull_kernel(self) -> ComputePipeline:
         """The culling kernel (made on first use: by the frame graph, with the batch's other
