@@ -59,3 +59,24 @@ def test_instanced_sphere_field_draws_the_separate_one(make_renderer, options: d
     a, b = nodes.render(size=size, **options), inst.render(size=size, **options)
     assert a[..., :3].std() > 10  # spheres over the sky, not a flat image
     assert np.array_equal(a, b)
+
+
+def test_recordings_stay_bounded_when_a_loop_changes_a_keyed_value(make_renderer, monkeypatch) -> None:  # noqa: ANN001
+    """A dataset that draws every image with its own bloom strength (a value of the
+    recording's key): each new value records anew, and past RECORDINGS_KEPT a frame slot's
+    least recently used recordings are freed (they had piled up, one a frame, until the
+    renderer closed); a freed one's options drawn again are recorded again, the same
+    pixels."""
+    from vkpbr.render import recorder
+
+    monkeypatch.setattr(recorder, "RECORDINGS_KEPT", 3)
+    r = make_renderer()
+    strengths = np.linspace(0.05, 0.6, 14)
+    first = r.render(size=(48, 36), bloom=float(strengths[0]))
+    counts = []
+    for s in strengths[1:]:
+        r.render(size=(48, 36), bloom=float(s))
+        counts.append(len(r.recorder._recorded))
+    slots = len(r.parts.slots)
+    assert max(counts) <= 3 * slots and counts[-1] == 3 * slots, counts
+    assert np.array_equal(r.render(size=(48, 36), bloom=float(strengths[0])), first)

@@ -52,6 +52,10 @@ _BASE_STREAMS = (("positions", "vec3"), ("texcoords", "vec2"), ("texcoords1", "v
 # Timestamp queries a frame slot has: the start and one after each timed step (the longest
 # path times about 20).
 STAMPS = 48
+# Recordings kept per frame slot, the least recently used freed past it: a key holds values a
+# loop may change every call (a post step's noise seed or bloom strength, a camera model's
+# constants), and each new value records anew; the viewer's every mode is far fewer.
+RECORDINGS_KEPT = 32
 
 
 @dataclass
@@ -60,6 +64,7 @@ class _Recorded:
     blend_order: tuple[int, ...]
     stamp_names: tuple[str, ...]
     targets: tuple[int, ...]  # id() of the targets it draws into (the user's, an HDR one)
+    used: int = 0  # when it was last handed out (FrameRecorder._uses)
 
 
 class _Stamps:
@@ -106,6 +111,7 @@ class FrameRecorder:
         self.deform = deform  # skins and morph targets (render/deform.py); None: none
         self.ao = ao  # the ambient occlusion's images and kernels (render/ao.py AoImages)
         self._recorded: dict[tuple, _Recorded] = {}
+        self._uses = 0  # recordings handed out (_Recorded.used: the least recently used go)
         self._generations: dict[int, int] = {}
         self._kernels_made: set[tuple] = set()  # (spec, reads buffer) of recordings made
         self._pipelines: dict[tuple, Pipeline] = {}
@@ -196,7 +202,8 @@ class FrameRecorder:
         sm = self.shadows
         key = (tid, image, frame.index, spec, sm is not None and sm.compute and sm.reads_buffer)
         rec = self._recorded.get(key)
-        if rec is None or rec.blend_order != objects.blend_order:
+        made = rec is None or rec.blend_order != objects.blend_order
+        if made:
             if rec is not None:  # the camera moved enough to reorder blended draws
                 rec.cmd.free()
             steps = FrameSteps(self, drawn or target, frame.index, image, spec, objects, groups,
@@ -209,8 +216,23 @@ class FrameRecorder:
                                ids, objects.blend_order, build=planned not in self._kernels_made)
             self._kernels_made.add(planned)
             self._recorded[key] = rec
+        self._uses += 1
+        rec.used = self._uses  # type: ignore[union-attr]
+        if made and len(self._recorded) > RECORDINGS_KEPT:
+            self._evict(frame.index)
         frame.stamp_names = rec.stamp_names
         return rec.cmd
+
+    def _evict(self, slot: int) -> None:
+        """Free frame slot `slot`'s least recently used recordings past RECORDINGS_KEPT. Only
+        the slot being recorded: its last submission has finished (FrameRing.begin waited
+        for it), so none of its recordings is pending; other slots' may be."""
+        mine = [k for k in self._recorded if k[2] == slot]
+        if len(mine) <= RECORDINGS_KEPT:
+            return
+        mine.sort(key=lambda k: self._recorded[k].used)
+        for k in mine[:len(mine) - RECORDINGS_KEPT]:
+            self._recorded.pop(k).cmd.free()
 
     def _record(self, frame: Frame, steps: list[Step], resources: dict[str, Any],
                 extent: tuple[int, int], targets: tuple[int, ...], order: tuple[int, ...],
