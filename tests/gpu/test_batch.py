@@ -504,3 +504,24 @@ def test_random_cameras_batch_equals_single_frames(chart, data) -> None:  # noqa
     singles = [chart.render(c, size=size, pipeline="forward", ao="off", depth=True) for c in cams]
     assert_views_equal(color, [s[0] for s in singles], "colour")
     assert_views_equal(depth, [s[1] for s in singles], "depth")
+
+
+def test_batches_of_many_sizes_keep_a_few_targets(make_renderer) -> None:  # noqa: ANN001
+    """A dataset that renders every image at its own size: the renderer keeps the layered
+    batch's targets of the two most recently used sizes and its offscreen targets of six,
+    destroying older ones with what names them. GTAO's descriptor sets are keyed by a depth
+    view's handle: one kept for a destroyed view whose handle value a new view took read the
+    destroyed one (lavapipe crashed after about 12 sizes). Without the validation layer,
+    whose handles are its own and hide the driver's reuse; every 8th size's views against
+    `render`'s."""
+    r = make_renderer(validation=False, sync_validation=False)
+    cam = r.default_camera()
+    rng = np.random.default_rng(0)
+    for i in range(25):
+        size = (int(rng.integers(60, 200)), int(rng.integers(60, 150)))
+        got = r.render_batch([cam] * 3, size, pipeline="forward", ao="gtao")
+        assert len(r.batch_path.targets) <= 2
+        if i % 8 == 0:
+            want = r.render(cam, size=size, pipeline="forward", ao="gtao")
+            assert np.array_equal(got[0], want) and np.array_equal(got[2], want), size
+    assert len(r.targets._kept) <= 6

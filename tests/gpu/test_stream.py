@@ -174,3 +174,23 @@ def test_collectors_read_their_own_frames_timestamps(make_renderer, scene) -> No
         t.join()
     assert len(frames) == ring.count and len({tuple(a) for a in alone}) > 1
     assert not wrong, f"{len(wrong)} reads got another frame's timestamps"
+
+
+def test_an_open_stream_keeps_its_target_through_other_sizes(make_renderer, scene, monkeypatch) -> None:  # noqa: ANN001
+    """Frames of other sizes rendered between a stream's frames: the renderer keeps targets
+    of a few sizes (render/targets.py TARGETS_KEPT, here 1) and destroys the least recently
+    used, but never one an open stream draws into; the stream's frames are still each
+    camera's render."""
+    from vkpbr.render import targets
+
+    monkeypatch.setattr(targets, "TARGETS_KEPT", 1)
+    r = make_renderer(scene)
+    cams = cameras(4)
+    stream = r.render_many(cams, size=SIZE)
+    got = [next(stream)]
+    for k, size in enumerate([(40, 30), (56, 40), (32, 32)]):
+        r.render(cams[k], size=size)
+        got.append(next(stream))
+    assert len(r.targets._kept) == 2  # (the stream's and the last one's)
+    for i, frame in enumerate(got):
+        np.testing.assert_array_equal(frame, r.render(cams[i], size=SIZE), err_msg=f"view {i}")

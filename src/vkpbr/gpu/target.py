@@ -124,6 +124,9 @@ class OffscreenTarget:
     # The device's for its life (Device.keeping): what it makes later is too (a renderer's
     # targets outlive its scenes, render/targets.py).
     kept = False
+    # Open frame streams drawing into it (render/frame_path.py stream): a renderer keeps its
+    # targets of a few sizes and destroys the least recently used, never one a stream holds.
+    streams = 0
 
     def _own(self, obj: Any) -> Any:
         self._objects.append(obj)

@@ -49,6 +49,7 @@ COMPUTE_BYTES = 25
 # host-visible readback.
 OUTPUT_BYTES = sum(nbytes for _, nbytes, _, _ in L.OUTPUT_IMAGES.values())
 ATLASES_KEPT = 2  # compute-batch atlases kept between calls (BatchPath._atlas)
+BATCH_TARGETS_KEPT = 2  # layered-batch targets kept between calls (BatchPath._target)
 MEMORY_AGE_S = 0.5  # how long a free-memory query serves the calls after it (per_submission)
 
 
@@ -666,20 +667,34 @@ class BatchPath:
 
     def _target(self, size: tuple[int, int], layers: int, views: int, linear: bool,
                 depth: bool, cuda: bool) -> BatchTarget:
+        """The layered batch's target for these views, made (or grown) on first use; the
+        BATCH_TARGETS_KEPT most recently used are kept, older ones destroyed (a dataset that
+        batches every image at its own size had kept one per size)."""
         key = (tuple(size), layers, linear, depth, cuda)
-        target = self.targets.get(key)
+        target = self.targets.pop(key, None)
         if target is not None and target.capacity >= views:
+            self.targets[key] = target  # (the most recently used last)
             return target
         if target is not None:
-            self.parts.device.wait_idle()
-            self.free_recordings()
-            self._forget_cuda(target)
-            target.destroy()
+            self._drop_target(target)
         target = BatchTarget(self.parts.device, size, layers, views, "float" if linear else "srgb",
                              depth, clear_color=(*self.parts.targets.background, 0.0),
                              external=cuda)
+        while len(self.targets) >= BATCH_TARGETS_KEPT:
+            self._drop_target(self.targets.pop(next(iter(self.targets))))
         self.targets[key] = target
         return target
+
+    def _drop_target(self, target: BatchTarget) -> None:
+        """Destroy layered target `target` once the device is idle, with its recordings,
+        CUDA imports and GTAO's sets naming its depth view (a later view may get its handle
+        value: a set kept for it would read the destroyed one)."""
+        self.parts.device.wait_idle()
+        self.free_recordings()
+        self._forget_cuda(target)
+        if self.parts.recorder.ao is not None:
+            self.parts.recorder.ao.forget(target.attachments.depth)
+        target.destroy()
 
     # --- CUDA -------------------------------------------------------------------------------
     def _cuda_view(self, target: BatchTarget, views: int, linear: bool) -> Any:

@@ -240,6 +240,7 @@ class FramePath:
             copy = (*copy, COPY_OUTPUTS)
         pending: collections.deque[Future | _Deferred] = collections.deque()
         noisy = options.noise is not None and options.noise.depth
+        target.streams += 1  # (kept while the stream is open: render/targets.py)
         try:
             for camera in cameras:
                 camera = base if camera is None else as_camera(camera, base)
@@ -263,6 +264,7 @@ class FramePath:
                 yield _taken(pending.popleft())
         finally:
             self._finish(pending)
+            target.streams -= 1
 
     def _later(self, args: tuple) -> Future:
         """`collect(*args)` on one of the device's COLLECTORS threads, copying the frame alone

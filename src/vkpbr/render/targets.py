@@ -2,7 +2,8 @@
 new targets callers own, window swapchains and text overlays.
 
 `Targets` keeps one offscreen target per (size, colour kind) and one HDR target per size for
-frames with post steps (render/post_stage.py) in `kept`, the device's (render/parts.py
+frames with post steps (render/post_stage.py) in `kept`, the TARGETS_KEPT most recently
+used, the device's (render/parts.py
 DeviceParts: a Renderer's scenes draw into the same ones; they and what they make on first
 use are made under `Device.keeping`, outside a scene's count; what a scene makes for a
 target, its recordings and compute sets, is the scene's), checks sizes against the device's limits, makes the
@@ -32,6 +33,10 @@ from vkpbr.scene._checks import frame_size
 __all__ = ["Lazy", "Targets", "FREE_ATLASES"]
 
 FREE_ATLASES = 2  # compute-batch atlases kept between scenes (a job's full and last batches)
+# Offscreen and HDR targets kept (of different sizes), the least recently used destroyed past
+# it: a dataset that renders every image at its own size had kept a target (and its compute
+# buffers, GTAO images, recordings) per size until the renderer closed.
+TARGETS_KEPT = 6
 
 T = TypeVar("T")
 
@@ -73,16 +78,30 @@ class Targets:
 
     def _keep(self, key: tuple) -> OffscreenTarget:
         """The kept target of `key` ((w, h, linear) or (w, h, "post"): float), made now
-        (the device's, where `kept` was given) if there is none."""
-        if key not in self._kept:
-            if not self._device_kept:
-                self._kept[key] = self.new(key[:2], key[2] is not False)
-                return self._kept[key]
+        (the device's, where `kept` was given) if there is none; the kept ones in the order
+        they were last asked for, past TARGETS_KEPT the oldest destroyed."""
+        target = self._kept.pop(key, None)
+        if target is not None:
+            self._kept[key] = target  # (the most recently used last)
+            return target
+        if not self._device_kept:
+            target = self.new(key[:2], key[2] is not False)
+        else:
             with self.device.keeping():
                 target = self.new(key[:2], key[2] is not False)
             target.kept = True
-            self._kept[key] = target
-        return self._kept[key]
+        self._kept[key] = target
+        self._evict()
+        return target
+
+    def _evict(self) -> None:
+        """Destroy the least recently used kept targets past TARGETS_KEPT that no open
+        frame stream draws into (`drop`: waits for the device)."""
+        for key in list(self._kept)[:-1]:  # (never the one just made)
+            if len(self._kept) <= TARGETS_KEPT:
+                return
+            if not self._kept[key].streams:
+                self.drop(self._kept.pop(key))
 
     def new(self, size: tuple[int, int], linear: bool) -> OffscreenTarget:
         """A new offscreen target of `size` the caller owns (the compute batch's atlases:
