@@ -531,3 +531,23 @@ def test_ldr_png_lights_as_its_linear_exr(e2e, rng) -> None:  # noqa: ANN001
     exr = e2e_render(r, str(folder / "photo.exr"), env_intensity=3.0)
     assert png.max() > 0.05
     np.testing.assert_allclose(png, exr, rtol=1e-6, atol=1e-6)
+
+
+def test_environments_kept_are_bounded(e2e, rng, monkeypatch) -> None:  # noqa: ANN001
+    """A dataset that lights every image with another panorama: the renderer keeps the
+    ENVIRONMENTS_KEPT (here 2) most recently used pre-filtered environments, destroying
+    older ones (each had been kept for the device's life: ~70 MiB for a 4096x2048 one); an
+    environment used again after it was destroyed is pre-filtered again, the same pixels."""
+    from vkpbr.render import environments
+
+    monkeypatch.setattr(environments, "ENVIRONMENTS_KEPT", 2)
+    r, folder = e2e
+    paths = []
+    for i in range(5):
+        paths.append(folder / f"random{i}.exr")
+        write_exr(paths[-1], rng.uniform(0.0, 2.0, (16, 32, 3)))
+    first = e2e_render(r, str(paths[0]))
+    for path in paths[1:]:
+        e2e_render(r, str(path))
+        assert len(r.parts.environments.store._made) <= 2
+    np.testing.assert_array_equal(e2e_render(r, str(paths[0])), first)

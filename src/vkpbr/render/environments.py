@@ -2,7 +2,8 @@
 
 `EnvironmentStore` pre-filters an environment (render/environment.py EnvironmentBaker: the
 built-in sky, a panorama file's, or a black one where none lights the frame) on the first
-frame that asks for it and keeps it, by source, for the device's life: it depends on no
+frame that asks for it and keeps it, by source, while it is among the ENVIRONMENTS_KEPT most
+recently used: it depends on no
 scene, so a Renderer's scenes (render/scene_swap.py) share one store, made once, whose
 images are the device's (`Device.keeping`), not a scene's. `Environments` is one scene's
 view of it: the one bound in its frame slots. Binding another one into the slots' set 2 is
@@ -25,7 +26,12 @@ from vkpbr.render.recorder import FrameRecorder
 from vkpbr.scene.environment import load_panorama
 from vkpbr.shading import SUN_DIRECTION
 
-__all__ = ["EnvironmentStore", "Environments", "env_key"]
+__all__ = ["EnvironmentStore", "Environments", "env_key", "ENVIRONMENTS_KEPT"]
+
+# Pre-filtered environments kept, the least recently bound destroyed past it: a dataset that
+# lights every image with another panorama had kept each (a 4096x2048 one's radiance cube
+# and pre-filtered chain: ~70 MiB of device memory) for the device's life.
+ENVIRONMENTS_KEPT = 4
 
 
 class EnvironmentStore:
@@ -62,8 +68,10 @@ class EnvironmentStore:
             with contextlib.suppress(OSError):  # (a missing one: load_panorama's error)
                 st = os.stat(key[1])
                 key = (*key, st.st_size, st.st_mtime_ns)
-        env = self._made.get(key)
-        if env is None:
+        env = self._made.pop(key, None)
+        if env is not None:
+            self._made[key] = env  # (the most recently used last)
+        else:
             baker = self.baker
             pixels = load_panorama(key[1]) if key[0] == "file" else None  # (before any bake)
             with self.device.keeping():  # (the bake's own temporaries it destroys itself)
@@ -75,6 +83,16 @@ class EnvironmentStore:
                     env = baker.from_panorama(pixels, key[1])
             self._made[key] = env
         return env
+
+    def trim(self, bound: Environment) -> None:
+        """Destroy the least recently used environments past ENVIRONMENTS_KEPT, never
+        `bound` (the one the frame slots sample). The caller has the device idle and the
+        recordings that sampled the others dropped (Environments._bind)."""
+        for key in list(self._made):
+            if len(self._made) <= ENVIRONMENTS_KEPT:
+                return
+            if self._made[key] is not bound:
+                self._made.pop(key).destroy()
 
     def destroy(self) -> None:
         for env in self._made.values():
@@ -115,6 +133,7 @@ class Environments:
                 writer.sampler(slot.set2, binding, image.view, image.sampler)
         writer.update()
         self._bound = env
+        self.store.trim(env)
 
 
 def env_key(options: RenderOptions) -> tuple:
