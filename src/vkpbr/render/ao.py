@@ -209,6 +209,7 @@ class AoImages:
         self._pools: list[DescriptorPool] = []
         self._free = 0
         self._sets: dict[tuple[int, int, bool, int], Any] = {}
+        self._spare: list[Any] = []  # sets `forget` dropped: the next _set's (no new pools)
         self._stand_in_buffer = Buffer(device, 16, "storage", name="ao depths stand-in")
         # The stand-in: ao_map is an array (the layered batch's layers), so a 1x1 array.
         vk = device.vk
@@ -243,7 +244,7 @@ class AoImages:
         self.sets2, self.set0_layout = sets2, set0_layout
         for pool in self._pools:
             pool.destroy()
-        self._pools, self._free, self._sets = [], 0, {}
+        self._pools, self._free, self._sets, self._spare = [], 0, {}, []
 
     def fit(self, extent: tuple[int, int], layers: int = 1,
             tile: tuple[int, int] | None = None) -> None:
@@ -416,13 +417,7 @@ class AoImages:
         key = (int(self.device.vk.ffi.cast("uintptr_t", depth_view)), frame_index, layered,
                int(self.device.vk.ffi.cast("uintptr_t", buffer.handle)))
         if key not in self._sets or self._sets[key][1] != generation:
-            layout = self._set_layout()
-            if not self._pools or self._free == 0:
-                with self.device.keeping():
-                    self._pools.append(DescriptorPool(self.device, [(layout, _SETS_PER_POOL)]))
-                self._free = _SETS_PER_POOL
-            dset = self._pools[-1].allocate(layout)
-            self._free -= 1
+            dset = self._spare.pop() if self._spare else self._new_set()
             writer = DescriptorWriter(self.device)
             writer.sampler(dset, 0, _Handle(depth_view), self._depth_sampler())
             v = 2 if layered else 1
@@ -439,12 +434,23 @@ class AoImages:
             self._sets[key] = (dset, generation)
         return self._sets[key][0]
 
+    def _new_set(self) -> Any:
+        layout = self._set_layout()
+        if not self._pools or self._free == 0:
+            with self.device.keeping():
+                self._pools.append(DescriptorPool(self.device, [(layout, _SETS_PER_POOL)]))
+            self._free = _SETS_PER_POOL
+        self._free -= 1
+        return self._pools[-1].allocate(layout)
+
     def forget(self, depth_view: Any) -> None:
-        """Drop the sets naming `depth_view` (a target's, about to be destroyed: a later view
-        may get its handle value)."""
+        """Drop the sets naming `depth_view` (a target's, about to be destroyed, the device
+        idle and its recordings dropped: a later view may get its handle value); they are
+        written again for the next targets' views (a loop of ever new sizes makes no new
+        pools)."""
         handle = int(self.device.vk.ffi.cast("uintptr_t", depth_view))
         for key in [k for k in self._sets if k[0] == handle]:
-            del self._sets[key]
+            self._spare.append(self._sets.pop(key)[0])
 
     def _destroy_images(self) -> None:
         for image, *views in [*self.images, *self.work]:
@@ -458,7 +464,7 @@ class AoImages:
         self.images, self.work, self._sets, self.mips, self.mip_size = [], [], {}, None, (0, 0)
         for pool in self._pools:
             pool.destroy()
-        self._pools, self._free, self.size = [], 0, None
+        self._pools, self._free, self._spare, self.size = [], 0, [], None
 
     def destroy(self) -> None:
         self._destroy_images()

@@ -127,7 +127,7 @@ def _face(ctx: PostContext, slot: int, kind: str, size: int) -> tuple[str, Any, 
     """(resource name, view, Image) of face `slot`'s image `kind` (a kept transient)."""
     name, fmt = f"cube{slot}.{kind}", dict(FACE_IMAGES)[kind]
     view = ctx.transient(name, (size, size), fmt)
-    return name, view, ctx.kernels.transient(name, (size, size), fmt)[0]
+    return name, view, ctx.kernels.transient(name, (size, size), fmt, ctx.extent)[0]
 
 
 def cube_steps(ctx: PostContext, marker: tuple[float, ...], extent: tuple[int, int],

@@ -92,6 +92,10 @@ class PostKernels:
         self._free: dict[int, int] = {}
         self._pipelines: dict[str, ComputePipeline] = {}
         self._sets: dict[tuple[int, ...], Any] = {}
+        # Sets `forget` dropped (their views destroyed, nothing pending names them), by
+        # their view count: the next image_set's, so that new sizes make no new pools.
+        self._spare: dict[int, list[Any]] = {}
+        # by (name, extent, format, owner: the frame size it serves; `release`)
         self._images: dict[tuple, tuple[Image, ImageView]] = {}
         self._keys: tuple[DescriptorSetLayout, Any, Buffer, DescriptorPool] | None = None
         # A compute batch's rows a view ("keys", "lens"; one batch is in flight at a time: its
@@ -198,6 +202,13 @@ class PostKernels:
         """The set binding `views` (VkImageViews) as storage images 0, 1, ...: a kernel's
         source(s) then destination(s)."""
         key = tuple(int(self.device.vk.ffi.cast("uintptr_t", v)) for v in views)
+        if key not in self._sets and self._spare.get(len(views)):
+            dset = self._spare[len(views)].pop()
+            writer = DescriptorWriter(self.device)
+            for binding, view in enumerate(views):
+                writer.storage_image(dset, binding, _Handle(view))
+            writer.update()
+            self._sets[key] = dset
         if key not in self._sets:
             n, layout = len(views), self.set_layout(len(views))
             if not self._free.get(n):
@@ -218,20 +229,31 @@ class PostKernels:
         get its handle value, and the cache is keyed by it)."""
         handle = int(self.device.vk.ffi.cast("uintptr_t", view))
         for key in [k for k in self._sets if handle in k]:
-            del self._sets[key]  # (the set stays in its pool until the pool goes)
+            # (the set stays in its pool, for the next image_set of as many views)
+            self._spare.setdefault(len(key), []).append(self._sets.pop(key))
 
-    def transient(self, name: str, extent: tuple[int, int], fmt: str = HDR_FORMAT
-                  ) -> tuple[Image, ImageView]:
+    def transient(self, name: str, extent: tuple[int, int], fmt: str = HDR_FORMAT,
+                  owner: tuple[int, int] | None = None) -> tuple[Image, ImageView]:
         """Transient image `name` of `extent` (`fmt`: RGBA32F unless told, storage), made on
-        first use. Frames in flight share it: a frame's first use waits for the frames before
-        (gpu/graph.py)."""
-        key = (name, extent, fmt)
+        first use, for frames of size `owner` (`release`). Frames in flight share it: a
+        frame's first use waits for the frames before (gpu/graph.py)."""
+        key = (name, extent, fmt, owner)
         if key not in self._images:
             vk = self.device.vk
             image = Image(self.device, extent[0], extent[1], getattr(vk, fmt),
                           vk.VK_IMAGE_USAGE_STORAGE_BIT, name=f"post {name}")
             self._images[key] = (image, ImageView(image))
         return self._images[key]
+
+    def release(self, owner: tuple[int, int]) -> None:
+        """Destroy the transient images made for frames of size `owner`, whose HDR target
+        render/targets.py destroyed (the device idle, its recordings dropped), and recycle
+        the sets naming them: a loop of ever new sizes keeps none."""
+        for key in [k for k in self._images if k[3] == owner]:
+            image, view = self._images.pop(key)
+            self.forget(view.handle)
+            view.destroy()
+            image.destroy()
 
     def destroy(self) -> None:
         for image, view in self._images.values():
@@ -248,7 +270,7 @@ class PostKernels:
         for pools in self._pools.values():
             for pool in pools:
                 pool.destroy()
-        self._pools, self._sets, self._free = {}, {}, {}
+        self._pools, self._sets, self._free, self._spare = {}, {}, {}, {}
         for layout in self._layouts.values():
             layout.destroy()
         self._layouts.clear()
@@ -302,7 +324,7 @@ class PostContext:
 
     def transient(self, name: str, extent: tuple[int, int], fmt: str = HDR_FORMAT) -> Any:
         """Transient image `name` as a graph resource (added to the frame's); its view."""
-        image, view = self.kernels.transient(name, extent, fmt)
+        image, view = self.kernels.transient(name, extent, fmt, self.extent)
         self.resources[name] = ImageResource(image.handle, view=view.handle, extent=extent)
         return view.handle
 

@@ -102,6 +102,8 @@ class Targets:
                 return
             if not self._kept[key].streams:
                 self.drop(self._kept.pop(key))
+                if key[2] == "post" and self.post_kernels.made is not None:
+                    self.post_kernels.made.release(key[:2])  # (its post steps' images)
 
     def new(self, size: tuple[int, int], linear: bool) -> OffscreenTarget:
         """A new offscreen target of `size` the caller owns (the compute batch's atlases:
