@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from test_batch import SIZE, blended_spheres, cameras_of
 from test_compute_path import assert_same
 
@@ -87,6 +89,46 @@ def test_blended_draws_in_the_atlas(make_renderer) -> None:  # noqa: ANN001
         assert "blend" in r.last_stats.pass_ms
         for i, one in enumerate(singles):
             assert_same(one, got[i], f"batch={batch} view {i}")
+
+
+@pytest.fixture(scope="module")
+def spheres():
+    from vkpbr.render.renderer import Renderer
+
+    with Renderer(blended_spheres(), validation=True) as r:
+        if r.compute_batch_unavailable() is not None:
+            pytest.skip(f"no compute batch here: {r.compute_batch_unavailable()}")
+        yield r
+        assert r.device.instance.errors == []
+
+
+SPHERE_CAMERAS = 10
+
+
+@settings(max_examples=10, deadline=None, derandomize=True)
+@given(picked=st.lists(st.integers(0, SPHERE_CAMERAS - 1), min_size=1, max_size=8),
+       per=st.sampled_from(["auto", 1, 2, 5]))
+def test_blended_views_in_any_atlas(spheres, picked: list[int], per: int | str) -> None:  # noqa: ANN001
+    """Any views of the translucent spheres, in any order and repeated, one submission or
+    split (so each view lands in another tile of atlases of other shapes): each view within
+    the batch's bound of that camera rendered alone (a blended draw clipped wrongly at its
+    tile's edges would show in its neighbours or itself)."""
+    cams = cameras_of(spheres, SPHERE_CAMERAS, seed=33)
+    got = spheres.render_batch([cams[i] for i in picked], SIZE, POINT, pipeline="compute",
+                               batch=per)
+    singles = _spheres_alone(spheres, cams)
+    for k, i in enumerate(picked):
+        assert_same(singles[i], got[k], f"camera {i} as view {k} of {len(picked)}")
+
+
+_ALONE: dict = {}
+
+
+def _spheres_alone(r, cams: list) -> list[np.ndarray]:  # noqa: ANN001
+    """Each camera rendered alone, once for the module's renderer (hypothesis asks again)."""
+    if id(r) not in _ALONE:
+        _ALONE[id(r)] = alone(r, cams)
+    return _ALONE[id(r)]
 
 
 def test_blended_sample_model(make_renderer, sample_scene) -> None:  # noqa: ANN001
