@@ -236,12 +236,9 @@ def _worlds_of(r: Any, prep: Prepared, lights: LightsArg, g: WorldArgs
             raise UsageError("world_of_view and world_visible need worlds= (the worlds' poses)")
         return route, None, None
     lit = g.lights is not None or g.environment is not None
-    if lit and route != "compute":
-        raise UsageError("world_lights and world_environment render in the compute batch only "
-                         "(pipeline='compute' on a GPU with 64-bit atomics; no motion output, "
-                         "post steps or MSAA)")
-    if g.materials is not None and route == "layered":
-        route = "views"  # (the fragment path's batch has no per-world materials yet)
+    if lit and route not in ("compute", "layered"):
+        raise UsageError("world_lights and world_environment render in a batch only (no "
+                         "motion output, post steps, camera models or MSAA)")
     if g.worlds is not None and _on_cuda(g.worlds):
         if route == "views" or g.materials is not None or lit:
             raise UsageError("worlds on CUDA render in the batch only, without world_materials, "
@@ -253,7 +250,7 @@ def _worlds_of(r: Any, prep: Prepared, lights: LightsArg, g: WorldArgs
     # (the frame's lights: what world_lights gives per world, and the factors' base rows)
     frame = () if not lit and g.materials is None else r.frame_lights(opts, lights)
     plan = _world_plan(r, prep, g, len(frame))
-    if route == "compute" and opts.shadows and _alpha_differs(r, plan.materials):
+    if route in ("compute", "layered") and opts.shadows and _alpha_differs(r, plan.materials):
         if lit:
             raise UsageError("world_materials: a masked or blended material's alpha differs "
                              "between worlds, which the batch's shadow maps do not follow, "

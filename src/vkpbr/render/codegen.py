@@ -107,6 +107,7 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("pbr_batch_opaque.frag.spv", "pbr.frag", (("ALPHA_MASK", 0), ("BATCH", 1))),
     Variant("pbr_batch_mask.frag.spv", "pbr.frag", (("ALPHA_MASK", 1), ("BATCH", 1))),
     Variant("background_batch.vert.spv", "background.vert", (("BATCH", 1),)),
+    Variant("background_batch.frag.spv", "background.frag", (("BATCH", 1),)),
     Variant("batch_cull.comp.spv", "batch_cull.comp", (("STRUCTS_ONLY", 1),)),
     Variant("deform.comp.spv", "deform.comp", (("STRUCTS_ONLY", 1),)),
     Variant("worlds.comp.spv", "worlds.comp"),

@@ -485,9 +485,9 @@ PUSH = Std140Block("Draw", "draw", (("index", "uvec4"),))
 
 
 def draw_push(index: int, atlas: tuple[int, int] = (0, 0), material: int = 0) -> np.ndarray:
-    """The PUSH bytes of draw record `index` (and in a compute batch the `atlas` size, which
-    pbr.vert's ATLAS build maps each view's tile into, and the draw's `material`, whose
-    factors a world may set: pbr.frag's BATCH build)."""
+    """The PUSH bytes of draw record `index`, the draw's `material` (whose factors a world
+    of a batch may set: pbr.frag's BATCH build) and in a compute batch the `atlas` size,
+    which pbr.vert's ATLAS build maps each view's tile into."""
     return np.array([index, *atlas, material], np.uint32)
 
 BLOCKS = (SETTINGS, MATERIAL, LIGHTING, PUSH)

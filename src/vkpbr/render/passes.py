@@ -197,7 +197,7 @@ def _record_draws(cmd: Commands, ctx: PassContext, p: PassSpec, draws: list[tupl
         if d.material != bound:
             cmd.bind_set(1, ctx.material_sets[d.material])
             bound = d.material
-        cmd.push(draw_push(index) if ctx.atlas is None else draw_push(index, ctx.atlas, d.material))
+        cmd.push(draw_push(index, ctx.atlas or (0, 0), d.material))
         if instanced is not None:
             cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset,
                              first_instance=instanced[0], instances=instanced[1])

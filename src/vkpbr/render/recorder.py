@@ -155,7 +155,8 @@ class FrameRecorder:
                     spec, vertex_shader=spec.vertex_shader.replace(
                         "pbr_", "pbr_atlas_" if atlas else "pbr_batch_").replace(
                         "background.vert", "background_batch.vert"),
-                    fragment_shader=frag if frag is None else frag.replace("pbr_", "pbr_batch_"))
+                    fragment_shader=frag if frag is None else frag.replace(
+                        "pbr_", "pbr_batch_").replace("background.frag", "background_batch.frag"))
             if not hand and (spec.fragment_shader or "").startswith("pbr_"):
                 spec = dataclasses.replace(spec, fragment_constants=((SHADOW_HAND_READS_ID, 0),))
             # (passes the constant does not touch share one pipeline across `hand`)

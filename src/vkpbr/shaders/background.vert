@@ -15,12 +15,16 @@
 #include "generated.glsl"
 
 layout(location = 0) out vec3 ray;
+#if BATCH
+layout(location = 1) flat out uint v_view;  // (its world's environment: background.frag)
+#endif
 
 void main() {
     vec2 p = vec2(float((gl_VertexIndex << 1) & 2), float(gl_VertexIndex & 2)) * 2.0 - 1.0;
     gl_Position = vec4(p, 0.0, 1.0);
 #if BATCH
     view_index = uint(gl_InstanceIndex);
+    v_view = view_index;
     gl_Layer = int(views[view_index].layer);
 #endif
     ray = (views[view_index].inv_VP * vec4(p, 0.0, 1.0)).xyz;
