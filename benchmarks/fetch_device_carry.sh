@@ -7,8 +7,8 @@
 #   .whl          vkpbr's core wheels the device lacks (3 MiB)
 #   .whl-extra    imagecodecs, a core dependency, apart for its size (28 MiB)
 #   .assets-tests the sample models but Sponza and BoomBox: the GPU test pass (14 MiB)
-#   .assets-peers Sponza with its JPEGs at quality 75 and PNGs recompressed, and DamagedHelmet:
-#                 the benchmarks (26 MiB)
+#   .assets-peers Sponza with its JPEGs at quality 75 and PNGs recompressed, DamagedHelmet and
+#                 AlphaBlendModeTest (bench_batch.py's alphablend): the benchmarks (30 MiB)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ASSETS=${VKPBR_ASSETS:-../shared/assets}
@@ -38,7 +38,7 @@ for m in AlphaBlendModeTest DamagedHelmet MetalRoughSpheresNoTextures NormalTang
          NormalTangentTest OrientationTest TextureCoordinateTest; do
   cp -r "$ASSETS/$m" .assets-tests/models/
 done
-cp -r "$ASSETS/DamagedHelmet" .assets-peers/models/
+cp -r "$ASSETS/DamagedHelmet" "$ASSETS/AlphaBlendModeTest" .assets-peers/models/
 .venv/bin/python - "$ASSETS/Sponza/glTF" .assets-peers/models/Sponza/glTF <<'EOF'
 import shutil
 import sys
