@@ -28,7 +28,7 @@ the median of `--reps` timed calls of `render_batch(CameraBatch.from_poses(poses
   of `render_batch(..., device="cuda")` + `torch.cuda.synchronize()`, the views a (B, H, W, 4)
   tensor on the GPU (no host copy).
 
-`--pipeline` auto (the default: the compute batch on GPUs, the layered batch on CPUs),
+`--pipeline` auto (the default: the compute batch, where the device has it),
 forward (the layered batch: pbr.frag BATCH) or compute (render_batch(pipeline="compute"): one
 atlas, rasterised and shaded in compute shaders; into torch too), rows "scene (PIPELINE)".
 
