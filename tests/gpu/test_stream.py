@@ -194,3 +194,29 @@ def test_an_open_stream_keeps_its_target_through_other_sizes(make_renderer, scen
     assert len(r.targets._kept) == 2  # (the stream's and the last one's)
     for i, frame in enumerate(got):
         np.testing.assert_array_equal(frame, r.render(cams[i], size=SIZE), err_msg=f"view {i}")
+
+
+def test_frames_rendered_inside_a_stream_wait_for_its_copies(make_renderer, scene, monkeypatch) -> None:  # noqa: ANN001
+    """`render()` of the stream's own size between its frames takes the ring's next slot,
+    whose frame a collector thread may still be copying out (here made slow): it waits for
+    that copy before drawing into the slot, so the stream's frames stay each camera's
+    render."""
+    import time
+
+    collect = frame_path.FramePath.collect
+
+    def slow(self, *args, **kwargs):  # noqa: ANN001, ANN002, ANN003, ANN202
+        if kwargs.get("split", True) is False or (len(args) > 6 and args[6] is False):
+            time.sleep(0.25)  # (a collector thread's copy: the stream's second frame on)
+        return collect(self, *args, **kwargs)
+
+    r = make_renderer(scene)
+    cams = cameras(6)
+    want = [r.render(c, size=SIZE) for c in cams]
+    monkeypatch.setattr(frame_path.FramePath, "collect", slow)
+    got = []
+    for i, frame in enumerate(r.render_many(cams, size=SIZE)):
+        got.append(frame)
+        r.render(cams[(i + 2) % len(cams)], size=SIZE)  # (into the slot of a frame being read)
+    for i, frame in enumerate(got):
+        np.testing.assert_array_equal(frame, want[i], err_msg=f"view {i}")

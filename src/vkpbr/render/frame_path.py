@@ -84,6 +84,9 @@ class FramePath:
         self._post_options: tuple[RenderOptions, RenderOptions] | None = None
         self._post: tuple[RenderOptions, tuple] | None = None
         self.cube_prev: dict[tuple, Any] = {}  # each cube face's last view (render/lens_cube.py)
+        # An open stream's collects on the collector threads, by frame slot: a frame drawn
+        # into that slot meanwhile (a `render()` between the stream's frames) waits for it.
+        self._collecting: dict[int, Future] = {}
 
     def draw(self, target: FrameTarget, camera: Camera, lights: tuple[Light, ...],
              options: RenderOptions, overlay: TextOverlay | None = None, copy: tuple[str, ...] = (),
@@ -116,6 +119,9 @@ class FramePath:
         clock = time.thread_time if driver_time else _no_clock
         c0 = clock()
         frame = p.ring.begin()  # waits for the frame's previous submission
+        reading = self._collecting.pop(frame.index, None)
+        if reading is not None and not reading.done():
+            wait([reading])  # (its copy out of the readback this frame draws into)
         slot = p.gpu_state.write(frame.index, p.slots)  # the slot, its scene state up to date
         if timings:
             read_timings(p.ring, frame, slot)
@@ -252,7 +258,7 @@ class FramePath:
                     self.parts.device.limits.maxImageDimension2D)), CubeFrame)
                 while pending and (len(pending) == self.parts.ring.count or cube):
                     # (a cube frame's face frames take the ring's slots: none may be queued)
-                    yield _taken(pending.popleft())
+                    yield self._take(pending.popleft())
                 sub = self.draw(target, camera, lights, options,
                                 copy=self._lens_copy(target, copy) if lens_depth else copy,
                                 linear=linear, timings=False, driver_time=driver_time)
@@ -261,10 +267,19 @@ class FramePath:
                     pending = collections.deque(self._later(d.args) for d in pending)
                 pending.append(self._later(args) if readback and pending else _Deferred(self.collect, args))
             while pending:
-                yield _taken(pending.popleft())
+                yield self._take(pending.popleft())
         finally:
             self._finish(pending)
             target.streams -= 1
+
+    def _take(self, got: Future | _Deferred) -> tuple[Any, FrameStats]:
+        """A stream's next frame (`_taken`), its collect no longer one a draw waits for (nor
+        one that keeps the frame's arrays alive)."""
+        taken = _taken(got)
+        for slot, reading in list(self._collecting.items()):
+            if reading is got:
+                del self._collecting[slot]
+        return taken
 
     def _later(self, args: tuple) -> Future:
         """`collect(*args)` on one of the device's COLLECTORS threads, copying the frame alone
@@ -272,8 +287,10 @@ class FramePath:
         thread, H200 run c, 0.68 -> 0.81 ms a copy); the stream takes the results in order.
         The device's: no thread made a stream, and a device closed under an open stream
         finishes the collects under way first (Device.close)."""
-        return self.parts.device.in_background(lambda: self.collect(*args, False), COLLECTORS,
-                                               "collect")
+        got = self.parts.device.in_background(lambda: self.collect(*args, False), COLLECTORS,
+                                              "collect")
+        self._collecting[args[0].index] = got
+        return got
 
     def _finish(self, pending: collections.deque) -> None:
         """An abandoned stream: its collects not begun dropped, the one under way finished
