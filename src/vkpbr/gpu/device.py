@@ -180,6 +180,11 @@ class Device:
         # create one and as long to destroy it (H200, run h: 20 a scene change's uploads).
         self._fences: list[Any] = []
         self._fences_lock = threading.Lock()
+        # One thread's frames, batches and scene changes at a time (the renderer takes it):
+        # the queue, the command pool, the frame ring and the kept targets are shared, and
+        # Vulkan leaves the first two to the caller to synchronise. Re-entrant: a frame drawn
+        # inside a stream of the same thread is the supported way to interleave.
+        self.lock = threading.RLock()
         # Work on the device's own threads (`in_background`: kernels compiled ahead), which
         # `close` waits for: none may still be in a Vulkan call when the device goes.
         self._background: dict[str, ThreadPoolExecutor] = {}

@@ -164,7 +164,18 @@ def render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: Lig
                  out: np.ndarray | None, given: WorldArgs | None = None,
                  overrides: dict[str, Any] | None = None, prep: Prepared | None = None) -> Any:
     """Renderer.render_batch (its docstring says what each argument is); `prep`: the call's
-    Prepared where the caller kept it (BatchStep)."""
+    Prepared where the caller kept it (BatchStep). Other threads' frames and batches wait
+    (gpu/device.py Device.lock)."""
+    with renderer.device.lock:
+        return _render_batch(renderer, cameras, size, lights, options, linear, depth, outputs,
+                             batch, device, out, given, overrides, prep)
+
+
+def _render_batch(renderer: Any, cameras: Any, size: tuple[int, int], lights: LightsArg,
+                  options: RenderOptions | None, linear: bool, depth: bool,
+                  outputs: Iterable[str] | None, batch: int | str, device: str,
+                  out: np.ndarray | None, given: WorldArgs | None,
+                  overrides: dict[str, Any] | None, prep: Prepared | None) -> Any:
     r = renderer
     # The cameras, options and route: made once for a loop's calls (render/batch_cache.py)
     if prep is None:
@@ -531,15 +542,16 @@ class BatchStep:
 
     def __call__(self, worlds: Any = None, world_visible: Any = None, **more: Any) -> Any:
         """render_batch(cameras, size, worlds=worlds, world_visible=world_visible, the step's
-        arguments, `more`)."""
-        if not self.view:
-            return self._call(worlds, world_visible, more)
-        path = self.renderer.batch_path
-        path.frames_view = True  # (the call's CUDA frames not cloned: _cuda_tensor)
-        try:
-            return self._call(worlds, world_visible, more)
-        finally:
-            path.frames_view = False
+        arguments, `more`); other threads' frames and batches wait (Device.lock)."""
+        with self.renderer.device.lock:
+            if not self.view:
+                return self._call(worlds, world_visible, more)
+            path = self.renderer.batch_path
+            path.frames_view = True  # (the call's CUDA frames not cloned: _cuda_tensor)
+            try:
+                return self._call(worlds, world_visible, more)
+            finally:
+                path.frames_view = False
 
     def _call(self, worlds: Any, world_visible: Any, more: dict[str, Any]) -> Any:
         if more:

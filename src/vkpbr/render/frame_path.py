@@ -98,12 +98,13 @@ class FramePath:
         t0 = time.perf_counter()
         lens = (lens_frame(camera, target.extent, int(self.parts.device.limits.maxImageDimension2D))
                 if source is None else LensFrame(source))
-        if isinstance(lens, CubeFrame):
-            return draw_cube(self, target, camera, lens, lights=lights, options=options,
-                             overlay=overlay, copy=copy, linear=linear, timings=timings,
-                             driver_time=driver_time)
-        return self._draw(t0, target, camera, lens, lights, options, overlay, copy, linear,
-                          timings, driver_time)
+        with self.parts.device.lock:  # (the device's queue and ring: one thread's at a time)
+            if isinstance(lens, CubeFrame):
+                return draw_cube(self, target, camera, lens, lights=lights, options=options,
+                                 overlay=overlay, copy=copy, linear=linear, timings=timings,
+                                 driver_time=driver_time)
+            return self._draw(t0, target, camera, lens, lights, options, overlay, copy, linear,
+                              timings, driver_time)
 
     def _draw(self, t0: float, target: FrameTarget, camera: Camera, lens: LensFrame | None,
               lights: tuple[Light, ...], options: RenderOptions, overlay: TextOverlay | None,
@@ -119,9 +120,7 @@ class FramePath:
         clock = time.thread_time if driver_time else _no_clock
         c0 = clock()
         frame = p.ring.begin()  # waits for the frame's previous submission
-        reading = self._collecting.pop(frame.index, None)
-        if reading is not None and not reading.done():
-            wait([reading])  # (its copy out of the readback this frame draws into)
+        self._copied(frame.index)
         slot = p.gpu_state.write(frame.index, p.slots)  # the slot, its scene state up to date
         if timings:
             read_timings(p.ring, frame, slot)
@@ -271,6 +270,13 @@ class FramePath:
         finally:
             self._finish(pending)
             target.streams -= 1
+
+    def _copied(self, slot: int) -> None:
+        """Wait for an open stream's collect of frame slot `slot`'s last frame, if one is
+        still copying out the readback the next frame of the slot draws into."""
+        reading = self._collecting.pop(slot, None)
+        if reading is not None and not reading.done():
+            wait([reading])
 
     def _take(self, got: Future | _Deferred) -> tuple[Any, FrameStats]:
         """A stream's next frame (`_taken`), its collect no longer one a draw waits for (nor

@@ -223,16 +223,17 @@ class Renderer:
                 got = self.render_batch(chunk, size, lights, opts, linear, depth, names)
                 yield from per_view(got, len(chunk), depth)
             return
-        frame_lights = self.lighting.frame_lights(opts, lights)
-        target = self.targets.offscreen(size, linear)
-        wanted = O.check_outputs(outputs, target, self.paths, self.targets)
-        self.paths.choose(target, opts, self)  # before the first frame: never inside `draw`
-        frames = self.frame_path.stream(cameras, self.default_camera(), target, frame_lights,
-                                        opts, linear, depth, readback, wanted, driver_time)
-        with closing(frames):  # (closed with this generator, not when collected: its thread)
-            for result, stats in frames:
-                self.last_stats = stats  # each frame's as it comes
-                yield result
+        with self.device.lock:  # (other threads' frames wait: gpu/device.py Device.lock)
+            frame_lights = self.lighting.frame_lights(opts, lights)
+            target = self.targets.offscreen(size, linear)
+            wanted = O.check_outputs(outputs, target, self.paths, self.targets)
+            self.paths.choose(target, opts, self)  # before the first frame: never inside `draw`
+            frames = self.frame_path.stream(cameras, self.default_camera(), target, frame_lights,
+                                            opts, linear, depth, readback, wanted, driver_time)
+            with closing(frames):  # (closed with this generator, not when collected: its thread)
+                for result, stats in frames:
+                    self.last_stats = stats  # each frame's as it comes
+                    yield result
 
     def render_batch(self, cameras: CameraBatch | np.ndarray | Iterable[Camera | Any],
                      size: tuple[int, int] = (128, 128), lights: LightsArg = None,

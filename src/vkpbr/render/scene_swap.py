@@ -114,15 +114,16 @@ class SceneMaker:
             from vkpbr.scene.default import default_scene
 
             scene = default_scene()
-        mark = self.device.live_children
-        try:
-            parts = make_parts(self.device, scene, *self.args, ahead=ahead,
-                               kernels_ahead=self.kernels_ahead)
-            self.kernels_ahead = False
-        except BaseException:
-            self.device.wait_idle()
-            self.device.destroy_children(mark)
-            raise
+        with self.device.lock:  # (another thread's frames finish first)
+            mark = self.device.live_children
+            try:
+                parts = make_parts(self.device, scene, *self.args, ahead=ahead,
+                                   kernels_ahead=self.kernels_ahead)
+                self.kernels_ahead = False
+            except BaseException:
+                self.device.wait_idle()
+                self.device.destroy_children(mark)
+                raise
         setup = time.perf_counter() - t0
         upload = parts.gpu_scene.timings
         timings = {"setup": setup, "load_wait": load_wait,
@@ -133,8 +134,9 @@ class SceneMaker:
     def unmake(self, made: MadeScene) -> None:
         """Close `made`'s parts and paths and destroy the device children made for them
         (a stream of its frames left open: the collect under way first, the rest dropped)."""
-        self.device.stop_background("collect")
-        self.device.wait_idle()
-        made.batch_path.close()
-        made.parts.close()
-        self.device.destroy_children(made.mark)
+        with self.device.lock:  # (another thread's frames finish first)
+            self.device.stop_background("collect")
+            self.device.wait_idle()
+            made.batch_path.close()
+            made.parts.close()
+            self.device.destroy_children(made.mark)
