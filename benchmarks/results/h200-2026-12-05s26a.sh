@@ -1,6 +1,7 @@
 # H200 run a (session 26): render_many's frames collected by several threads side by side
 # (render/frame_path.py COLLECTORS: 2 where there are 4 cores or more; before: 1). One tree,
-# the collector count set before each benchmark (with 1 it is the tree before exactly),
+# the collector count set before each benchmark (benchmarks/with_collectors.py; with 1 it
+# is the tree before exactly),
 # alternating 1, 2, 3 twice: probe_stream's walk, bench_shadows' walk (render_many),
 # vkpbr bench's Sponza orbit. First the stream and frame-overlap tests (frames against
 # render() with 1, 2 and 3 collectors); then set_poses' Python, and dataset outputs in
@@ -9,30 +10,15 @@
 source benchmarks/gpu_env.sh
 S=$PWD/.assets-peers/models/Sponza/glTF/Sponza.gltf
 export VKPBR_ASSETS=$PWD/.assets-peers/models
-cat > /tmp/wc.py <<'PY'
-# collectors, then a script (or -m module) and its arguments
-import runpy
-import sys
-
-import vkpbr.render.frame_path as f
-
-f.COLLECTORS = int(sys.argv[1])
-if sys.argv[2] == "-m":
-    sys.argv = sys.argv[3:]
-    runpy.run_module(sys.argv[0], run_name="__main__", alter_sys=True)
-else:
-    sys.argv = sys.argv[2:]
-    runpy.run_path(sys.argv[0], run_name="__main__")
-PY
 timeout 120 python3 -m pytest -q -n 4 -p no:cacheprovider -rfE --tb=short tests/gpu/test_stream.py tests/gpu/test_frame_overlap.py tests/gpu/test_batch_outputs.py > $OUT/tests.txt 2>&1
 grep -E "^(FAILED|ERROR|E )|passed|failed" $OUT/tests.txt | cut -c1-300 | head -20
 for i in 1 2; do
   for n in 1 2 3; do
     L=$OUT/c$n-$i.txt
     echo "## collectors $n ($i)" | tee $L
-    timeout 80 python3 /tmp/wc.py $n benchmarks/probe_stream.py --scene $S --frames 600 --cameras walk >> $L 2>&1
-    timeout 90 python3 /tmp/wc.py $n benchmarks/bench_shadows.py --scene $S --only walk --frames 600 >> $L 2>&1
-    timeout 60 python3 /tmp/wc.py $n -m vkpbr bench --frames 300 --sponza $S --scenario sponza-1080p >> $L 2>&1
+    timeout 80 python3 benchmarks/with_collectors.py $n benchmarks/probe_stream.py --scene $S --frames 600 --cameras walk >> $L 2>&1
+    timeout 90 python3 benchmarks/with_collectors.py $n benchmarks/bench_shadows.py --scene $S --only walk --frames 600 >> $L 2>&1
+    timeout 60 python3 benchmarks/with_collectors.py $n -m vkpbr bench --frames 300 --sponza $S --scenario sponza-1080p >> $L 2>&1
     grep -E "^\| walk \| sun|^\| sponza" $L | cut -c1-150; grep -E "^\| walk \+" $L | cut -d'|' -f2-8
   done
 done

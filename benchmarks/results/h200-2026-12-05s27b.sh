@@ -9,30 +9,15 @@ source benchmarks/gpu_env.sh
 S=$PWD/.assets-peers/models/Sponza/glTF/Sponza.gltf
 export VKPBR_ASSETS=$PWD/.assets-peers/models
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
-cat > /tmp/wc.py <<'PY'
-# collectors, then a script (or -m module) and its arguments
-import runpy
-import sys
-
-import vkpbr.render.frame_path as f
-
-f.COLLECTORS = int(sys.argv[1])
-if sys.argv[2] == "-m":
-    sys.argv = sys.argv[3:]
-    runpy.run_module(sys.argv[0], run_name="__main__", alter_sys=True)
-else:
-    sys.argv = sys.argv[2:]
-    runpy.run_path(sys.argv[0], run_name="__main__")
-PY
 timeout 100 python3 -m pytest -q -n 4 -p no:cacheprovider -rfE --tb=short tests/gpu/test_stream.py tests/gpu/test_frame_overlap.py tests/gpu/test_batch_outputs.py > $OUT/tests.txt 2>&1
 grep -E "^(FAILED|ERROR|E )|passed|failed" $OUT/tests.txt | cut -c1-300 | head -20
 L=$OUT/collectors.txt
 for i in 1 2; do
   for n in 1 2 3; do
     echo "## collectors $n ($i)" | tee -a $L
-    timeout 45 python3 /tmp/wc.py $n benchmarks/probe_stream.py --scene $S --frames 600 --cameras walk > /tmp/one.txt 2>&1
-    timeout 60 python3 /tmp/wc.py $n benchmarks/bench_shadows.py --scene $S --only walk --frames 600 >> /tmp/one.txt 2>&1
-    timeout 40 python3 /tmp/wc.py $n -m vkpbr bench --frames 300 --sponza $S --scenario sponza-1080p >> /tmp/one.txt 2>&1
+    timeout 45 python3 benchmarks/with_collectors.py $n benchmarks/probe_stream.py --scene $S --frames 600 --cameras walk > /tmp/one.txt 2>&1
+    timeout 60 python3 benchmarks/with_collectors.py $n benchmarks/bench_shadows.py --scene $S --only walk --frames 600 >> /tmp/one.txt 2>&1
+    timeout 40 python3 benchmarks/with_collectors.py $n -m vkpbr bench --frames 300 --sponza $S --scenario sponza-1080p >> /tmp/one.txt 2>&1
     cat /tmp/one.txt >> $L
     grep -E "^\| walk \| sun|^\| sponza" /tmp/one.txt | cut -c1-150; grep -E "^\| walk \+" /tmp/one.txt | cut -d'|' -f2-8
   done
