@@ -18,7 +18,7 @@ from concurrent.futures import Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from vkpbr.errors import GpuTimeoutError, VkpbrError
+from vkpbr.errors import GpuTimeoutError, UsageError, VkpbrError
 from vkpbr.gpu.instance import Instance, PhysicalDeviceInfo
 from vkpbr.gpu.kept import KeptHandles
 from vkpbr.gpu.memory import MemoryRecycler, kept_limit
@@ -88,6 +88,25 @@ def before_later_commands(vk: Any, cmd: Any, stages: int, writes: int) -> None:
 
 class Destroyable(Protocol):
     def destroy(self) -> None: ...
+
+
+class DeviceLock:
+    """`Device.lock`: a re-entrant lock that, once the device is closed, raises instead (a
+    frame recorded on a destroyed device aborted the process in the driver)."""
+
+    def __init__(self, device: Device) -> None:
+        self._lock = threading.RLock()
+        self._device = device
+
+    def __enter__(self) -> DeviceLock:
+        self._lock.acquire()
+        if self._device.handle is None:
+            self._lock.release()
+            raise UsageError("this renderer is closed: make a new Renderer")
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._lock.release()
 
 
 class DeviceObject:
@@ -184,7 +203,7 @@ class Device:
         # the queue, the command pool, the frame ring and the kept targets are shared, and
         # Vulkan leaves the first two to the caller to synchronise. Re-entrant: a frame drawn
         # inside a stream of the same thread is the supported way to interleave.
-        self.lock = threading.RLock()
+        self.lock = DeviceLock(self)
         # Work on the device's own threads (`in_background`: kernels compiled ahead), which
         # `close` waits for: none may still be in a Vulkan call when the device goes.
         self._background: dict[str, ThreadPoolExecutor] = {}

@@ -30,6 +30,7 @@ from vkpbr.errors import (
     DeviceLostError,
     NoVulkanError,
     OutOfDeviceMemoryError,
+    UsageError,
     VulkanError,
 )
 
@@ -73,13 +74,24 @@ class SafeVulkan:
         return value
 
 
+# Calls whose first argument may be NULL; every other call's first is a dispatchable handle
+# (instance, device, queue, command buffer), which NULL makes the driver abort the process.
+_NULL_FIRST = frozenset({"vkCreateInstance", "vkEnumerateInstanceExtensionProperties",
+                         "vkEnumerateInstanceLayerProperties", "vkEnumerateInstanceVersion",
+                         "vkGetInstanceProcAddr"})
+
+
 def _safe_call(fn: Any, name: str) -> Any:
     raw = _raw_binding()
     caught = (raw.VkError, raw.VkException)
+    null_first = name in _NULL_FIRST
 
     # try/except rather than `with translate_errors(name)`: the same errors, without a
     # context manager's ~3 us on each of the ~700 calls a scene change makes (issue 32).
     def call(*args: Any, **kwargs: Any) -> Any:
+        if args and args[0] is None and not null_first:  # (a closed device's handle)
+            raise UsageError(f"{name}: the device is closed (a closed renderer's, or its "
+                             "objects'): make a new Renderer")
         try:
             return fn(*args, **kwargs)
         except caught as exc:
