@@ -54,3 +54,48 @@ def test_a_closed_renderer_says_so(call: str) -> None:
         calls[call]()
     assert "\n" not in str(got.value)
     r.close()  # (again: idempotent)
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="os.fork: POSIX only")
+def test_a_forked_child_is_told_to_make_its_own_renderer() -> None:
+    """A Renderer made before a fork (torch's DataLoader workers fork by default on Linux):
+    in the child, drawing with it raises one line saying so (it hung: the driver's threads
+    stayed in the parent), a Renderer made in the child renders, and the parent's still
+    works afterwards."""
+    import os
+    import select
+
+    import numpy as np
+
+    from vkpbr.render.renderer import Renderer
+
+    with Renderer(validation=True) as r:
+        want = r.render(size=(32, 32))
+        read, write = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # the child: report, then leave without running the parent's clean-up
+            lines = []
+            for attempt in (lambda: r.render(size=(32, 32)),
+                            lambda: r.add_instances(r.scene.nodes[0].mesh, np.eye(4)[None])):
+                try:
+                    attempt()
+                    lines.append("drew")
+                except Exception as exc:  # noqa: BLE001 (reported to the parent)
+                    lines.append(f"{type(exc).__name__}: {exc}")
+            with Renderer() as own:
+                lines.append(f"own {own.render(size=(32, 32)).shape}")
+            os.write(write, "\n".join(lines).encode())
+            os._exit(0)
+        os.close(write)
+        ready, _, _ = select.select([read], [], [], 60.0)
+        if not ready:
+            os.kill(pid, 9)
+            os.waitpid(pid, 0)
+            pytest.fail("the forked child hung")
+        got = os.read(read, 65536).decode().splitlines()
+        os.close(read)
+        os.waitpid(pid, 0)
+        assert got[0].startswith("UsageError: this renderer was made before this process was forked")
+        assert got[1].startswith("UsageError: ") and "forked" in got[1]
+        assert got[2] == "own (32, 32, 4)"
+        assert np.array_equal(r.render(size=(32, 32)), want)

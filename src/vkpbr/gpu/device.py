@@ -13,6 +13,7 @@ import functools
 import os
 import threading
 import time
+import weakref
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass
@@ -91,8 +92,9 @@ class Destroyable(Protocol):
 
 
 class DeviceLock:
-    """`Device.lock`: a re-entrant lock that, once the device is closed, raises instead (a
-    frame recorded on a destroyed device aborted the process in the driver)."""
+    """`Device.lock`: a re-entrant lock that, once the device is closed (or in a forked
+    child), raises instead (a frame recorded on a destroyed device aborted the process in the
+    driver; one on a parent's device hung the child)."""
 
     def __init__(self, device: Device) -> None:
         self._lock = threading.RLock()
@@ -102,6 +104,10 @@ class DeviceLock:
         self._lock.acquire()
         if self._device.handle is None:
             self._lock.release()
+            if self._device.forked:
+                raise UsageError("this renderer was made before this process was forked (a "
+                                 "torch DataLoader worker, multiprocessing's fork): make the "
+                                 "Renderer in the process that renders with it")
             raise UsageError("this renderer is closed: make a new Renderer")
         return self
 
@@ -148,6 +154,23 @@ class DeviceRequest:
     selector: str | int | None = None
     instance_extensions: tuple[str, ...] = ()
     extensions: tuple[str, ...] = ()
+
+
+# The devices of this process, forgotten in a forked child (`_forked_child`).
+_DEVICES: weakref.WeakSet[Device] = weakref.WeakSet()
+
+
+def _forked_child() -> None:
+    """In a forked child the parent's devices cannot be used (the driver's threads and locks
+    stayed in the parent: a frame on one hung): their handles are forgotten, so each use
+    says so (DeviceLock, the binding's wrapper) and closing destroys nothing of the parent's.
+    A device made in the child works."""
+    for device in list(_DEVICES):
+        device.forked, device.handle, device.instance = True, None, None
+        device._background = {}
+
+
+os.register_at_fork(after_in_child=_forked_child)
 
 
 class Device:
@@ -204,6 +227,8 @@ class Device:
         # Vulkan leaves the first two to the caller to synchronise. Re-entrant: a frame drawn
         # inside a stream of the same thread is the supported way to interleave.
         self.lock = DeviceLock(self)
+        self.forked = False  # (a forked child's copy of a parent's device: _forked_child)
+        _DEVICES.add(self)
         # Work on the device's own threads (`in_background`: kernels compiled ahead), which
         # `close` waits for: none may still be in a Vulkan call when the device goes.
         self._background: dict[str, ThreadPoolExecutor] = {}

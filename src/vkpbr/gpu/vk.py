@@ -90,8 +90,8 @@ def _safe_call(fn: Any, name: str) -> Any:
     # context manager's ~3 us on each of the ~700 calls a scene change makes (issue 32).
     def call(*args: Any, **kwargs: Any) -> Any:
         if args and args[0] is None and not null_first:  # (a closed device's handle)
-            raise UsageError(f"{name}: the device is closed (a closed renderer's, or its "
-                             "objects'): make a new Renderer")
+            raise UsageError(f"{name}: the device is closed, or was made before this process "
+                             "was forked: make a new Renderer")
         try:
             return fn(*args, **kwargs)
         except caught as exc:
