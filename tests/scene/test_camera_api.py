@@ -399,3 +399,21 @@ def test_scene_camera_imports_without_vulkan() -> None:
             "assert not [m for m in sys.modules if m.startswith('vulkan') and sys.modules[m]]\n")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
+
+
+@pytest.mark.parametrize("size", [(True, 4), (4, False), (np.bool_(True), 3), (0, 3), (-1, 3),
+                                  (2.5, 3), ("a", 3), (3,), 7, (20000, 3)])
+def test_a_bad_frame_size_is_one_line(size: object) -> None:
+    """What `render(size=...)` refuses: not two positive integers (booleans neither: True is
+    no width), or beyond the device's limit."""
+    from vkpbr.scene._checks import frame_size
+
+    with pytest.raises(UsageError) as got:
+        frame_size(size, 16384)
+    assert "\n" not in str(got.value)
+
+
+def test_a_frame_size_of_numpy_integers() -> None:
+    from vkpbr.scene._checks import frame_size
+
+    assert frame_size((np.int64(3), np.uint16(5)), 100) == (3, 5)

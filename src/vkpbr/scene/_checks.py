@@ -133,7 +133,8 @@ def frame_size(value: object, limit: int) -> tuple[int, int]:
         w, h = value  # type: ignore[misc]
     except (TypeError, ValueError):
         raise UsageError(f"image size {shown(value)}: expected (width, height)") from None
-    if not (isinstance(w, int | np.integer) and isinstance(h, int | np.integer)) or w <= 0 or h <= 0:
+    if (not (isinstance(w, int | np.integer) and isinstance(h, int | np.integer))
+            or isinstance(w, bool | np.bool_) or isinstance(h, bool | np.bool_) or w <= 0 or h <= 0):
         raise UsageError(f"image size {shown(w)}x{shown(h)}: width and height must be positive "
                          "integers")
     if w > limit or h > limit:
