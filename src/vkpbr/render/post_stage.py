@@ -202,27 +202,25 @@ class PostKernels:
         """The set binding `views` (VkImageViews) as storage images 0, 1, ...: a kernel's
         source(s) then destination(s)."""
         key = tuple(int(self.device.vk.ffi.cast("uintptr_t", v)) for v in views)
-        if key not in self._sets and self._spare.get(len(views)):
-            dset = self._spare[len(views)].pop()
-            writer = DescriptorWriter(self.device)
-            for binding, view in enumerate(views):
-                writer.storage_image(dset, binding, _Handle(view))
-            writer.update()
-            self._sets[key] = dset
         if key not in self._sets:
-            n, layout = len(views), self.set_layout(len(views))
-            if not self._free.get(n):
-                self._pools.setdefault(n, []).append(
-                    DescriptorPool(self.device, [(layout, _SETS_PER_POOL)]))
-                self._free[n] = _SETS_PER_POOL
-            dset = self._pools[n][-1].allocate(layout)
-            self._free[n] -= 1
+            spare = self._spare.get(len(views))
+            dset = spare.pop() if spare else self._new_set(len(views))
             writer = DescriptorWriter(self.device)
             for binding, view in enumerate(views):
                 writer.storage_image(dset, binding, _Handle(view))
             writer.update()
             self._sets[key] = dset
         return self._sets[key]
+
+    def _new_set(self, n: int) -> Any:
+        """A set of `n` storage images from the pools (a new pool when they are full)."""
+        layout = self.set_layout(n)
+        if not self._free.get(n):
+            self._pools.setdefault(n, []).append(
+                DescriptorPool(self.device, [(layout, _SETS_PER_POOL)]))
+            self._free[n] = _SETS_PER_POOL
+        self._free[n] -= 1
+        return self._pools[n][-1].allocate(layout)
 
     def forget(self, view: Any) -> None:
         """Drop the sets naming `view` (a VkImageView about to be destroyed: a later view may

@@ -134,7 +134,7 @@ def frame_size(value: object, limit: int) -> tuple[int, int]:
     except (TypeError, ValueError):
         raise UsageError(f"image size {shown(value)}: expected (width, height)") from None
     if (not (isinstance(w, int | np.integer) and isinstance(h, int | np.integer))
-            or isinstance(w, bool | np.bool_) or isinstance(h, bool | np.bool_) or w <= 0 or h <= 0):
+            or isinstance(w, bool) or isinstance(h, bool) or w <= 0 or h <= 0):  # (True: no width)
         raise UsageError(f"image size {shown(w)}x{shown(h)}: width and height must be positive "
                          "integers")
     if w > limit or h > limit:

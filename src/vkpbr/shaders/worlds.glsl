@@ -1,7 +1,8 @@
 // worlds.glsl: a batch of worlds' per-view overrides (render/worlds.py, WorldFactors, set 0):
 // each view of a batch of worlds names its world's block of WorldFactors by
 // views[view_index].factor_base (0: none, every frame and plain batch), read by the compute
-// batch's kernels and by pbr.frag's BATCH build (its blended draws). A block, in vec4s:
+// batch's kernels and by the BATCH builds of pbr.frag (the layered batch's draws, the compute
+// batch's blended ones) and background.frag. A block, in vec4s:
 //   [header: uint bits (lights at, environment at, has lights, has environment)
 //    | 3 a material: base colour; emissive, metallic; roughness
 //    | 1 a light: rgb colour x intensity | 1 the environment: intensity, cos, sin of its turn]
