@@ -82,8 +82,8 @@ def test_a_forked_child_is_told_to_make_its_own_renderer() -> None:
                     lines.append("drew")
                 except Exception as exc:  # noqa: BLE001 (reported to the parent)
                     lines.append(f"{type(exc).__name__}: {exc}")
-            with Renderer() as own:
-                lines.append(f"own {own.render(size=(32, 32)).shape}")
+            with Renderer(validation=True) as own:
+                lines.append(f"own {own.render(size=(32, 32)).shape} {len(own.device.instance.errors)}")
             os.write(write, "\n".join(lines).encode())
             os._exit(0)
         os.close(write)
@@ -97,5 +97,5 @@ def test_a_forked_child_is_told_to_make_its_own_renderer() -> None:
         os.waitpid(pid, 0)
         assert got[0].startswith("UsageError: this renderer was made before this process was forked")
         assert got[1].startswith("UsageError: ") and "forked" in got[1]
-        assert got[2] == "own (32, 32, 4)"
+        assert got[2] == "own (32, 32, 4) 0"  # (validation on in the child too: no error)
         assert np.array_equal(r.render(size=(32, 32)), want)
